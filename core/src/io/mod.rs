@@ -1,0 +1,1 @@
+//! Reading and writing the toolkit's files (placeholder, being written).

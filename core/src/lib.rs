@@ -1,0 +1,10 @@
+//! aacmm-core: the geometric model of D-H measuring arms and everything that
+//! evaluates it — parameters, the generic (autodiff) model, the generated kernel,
+//! data files, metrics, the campaign simulator.
+//!
+//! Data flows one way: files → typed data set → kernel → residuals/metrics →
+//! solver → report; no module reaches back up that chain.
+
+pub mod io;
+pub mod metrics;
+pub mod params;

@@ -1,0 +1,256 @@
+//! Geometric parameters of a D-H chain with a probe offset.
+//!
+//! Inside the toolkit lengths are millimetres and angles radians; units are
+//! converted only where a user touches them (files, flags, reports).
+//! The parameter order is fixed and is the paper's column order (method.md §2):
+//! `a1..an, d1..dn, α1..αn, θ1..θn, Bx, By, Bz`.
+
+use std::fmt;
+
+/// One link of a standard Denavit–Hartenberg chain:
+/// `A = Rz(θ + q) · Tz(d) · Tx(a) · Rx(α)`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DhJoint {
+    /// Common-normal length `a`, mm.
+    pub a: f64,
+    /// Offset along the previous z axis `d`, mm.
+    pub d: f64,
+    /// Link twist `α` (the paper's β), rad.
+    pub alpha: f64,
+    /// Encoder zero offset `θ⁰`, rad: the joint angle is `q + θ`.
+    pub theta: f64,
+}
+
+/// The kind of a geometric parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ParamKind {
+    /// Link length `a` (mm).
+    A,
+    /// Link offset `d` (mm).
+    D,
+    /// Link twist `α` (rad).
+    Alpha,
+    /// Encoder zero offset `θ` (rad).
+    Theta,
+    /// Probe offset component in the last frame (mm).
+    Probe,
+}
+
+impl ParamKind {
+    /// Whether the parameter is a length (mm) rather than an angle (rad).
+    ///
+    /// ```
+    /// use aacmm_core::params::ParamKind;
+    /// assert!(ParamKind::Probe.is_length());
+    /// assert!(!ParamKind::Theta.is_length());
+    /// ```
+    pub fn is_length(self) -> bool {
+        matches!(self, ParamKind::A | ParamKind::D | ParamKind::Probe)
+    }
+}
+
+/// One parameter of an `n`-joint chain: its kind and its joint (0-based), or
+/// the probe axis (0 = x, 1 = y, 2 = z) for [`ParamKind::Probe`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ParamId {
+    /// What the parameter is.
+    pub kind: ParamKind,
+    /// Joint index (0-based), or probe axis.
+    pub index: usize,
+}
+
+impl ParamId {
+    /// The parameter's position in the fixed order for an `n`-joint chain.
+    ///
+    /// ```
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// let bz = ParamId { kind: ParamKind::Probe, index: 2 };
+    /// assert_eq!(bz.column(6), 26);
+    /// let theta1 = ParamId { kind: ParamKind::Theta, index: 0 };
+    /// assert_eq!(theta1.column(6), 18);
+    /// ```
+    pub fn column(self, n: usize) -> usize {
+        let block = match self.kind {
+            ParamKind::A => 0,
+            ParamKind::D => 1,
+            ParamKind::Alpha => 2,
+            ParamKind::Theta => 3,
+            ParamKind::Probe => 4,
+        };
+        block * n + self.index
+    }
+
+    /// The parameter at `column` of an `n`-joint chain, if there is one.
+    ///
+    /// ```
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// assert_eq!(ParamId::from_column(6, 7).unwrap().to_string(), "d2");
+    /// assert!(ParamId::from_column(6, 27).is_none());
+    /// ```
+    pub fn from_column(n: usize, column: usize) -> Option<ParamId> {
+        let (kind, index) = match column / n {
+            0 => (ParamKind::A, column % n),
+            1 => (ParamKind::D, column % n),
+            2 => (ParamKind::Alpha, column % n),
+            3 => (ParamKind::Theta, column % n),
+            _ if column < param_count(n) => (ParamKind::Probe, column - 4 * n),
+            _ => return None,
+        };
+        Some(ParamId { kind, index })
+    }
+
+    /// All parameters of an `n`-joint chain in the fixed order.
+    ///
+    /// ```
+    /// use aacmm_core::params::ParamId;
+    /// let names: Vec<String> = ParamId::all(6).map(|p| p.to_string()).collect();
+    /// assert_eq!(names.len(), 27);
+    /// assert_eq!(names[12], "alpha1");
+    /// assert_eq!(names[26], "Bz");
+    /// ```
+    pub fn all(n: usize) -> impl Iterator<Item = ParamId> {
+        (0..param_count(n)).filter_map(move |c| ParamId::from_column(n, c))
+    }
+}
+
+impl fmt::Display for ParamId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let i = self.index + 1;
+        match self.kind {
+            ParamKind::A => write!(f, "a{i}"),
+            ParamKind::D => write!(f, "d{i}"),
+            ParamKind::Alpha => write!(f, "alpha{i}"),
+            ParamKind::Theta => write!(f, "theta{i}"),
+            ParamKind::Probe => write!(f, "B{}", ["x", "y", "z"][self.index]),
+        }
+    }
+}
+
+/// Number of geometric parameters of an `n`-joint chain with a probe offset.
+///
+/// ```
+/// assert_eq!(aacmm_core::params::param_count(6), 27);
+/// assert_eq!(aacmm_core::params::param_count(7), 31);
+/// ```
+pub fn param_count(n: usize) -> usize {
+    4 * n + 3
+}
+
+/// The geometry of a D-H chain: its joints (base to probe) and the probe
+/// centre in the last frame (mm).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DhParams {
+    /// Links, base to probe.
+    pub joints: Vec<DhJoint>,
+    /// Probe centre in the last link's frame, mm.
+    pub probe: [f64; 3],
+}
+
+impl DhParams {
+    /// The paper's nominal 6-joint arm (Table 1 of method.md): twists ∓90°,
+    /// probe 100 mm along the last z axis.
+    ///
+    /// ```
+    /// let arm = aacmm_core::params::DhParams::paper_nominal();
+    /// assert_eq!(arm.joints[0].d, 375.0);
+    /// assert_eq!(arm.probe, [0.0, 0.0, 100.0]);
+    /// ```
+    pub fn paper_nominal() -> DhParams {
+        let h = std::f64::consts::FRAC_PI_2;
+        let rows = [
+            (-h, 50.0, 375.0),
+            (h, -55.0, 0.0),
+            (-h, 35.0, 250.0),
+            (h, -35.0, 0.0),
+            (-h, 35.0, 270.0),
+            (h, -35.0, 0.0),
+        ];
+        DhParams {
+            joints: rows
+                .iter()
+                .map(|&(alpha, a, d)| DhJoint {
+                    a,
+                    d,
+                    alpha,
+                    theta: 0.0,
+                })
+                .collect(),
+            probe: [0.0, 0.0, 100.0],
+        }
+    }
+
+    /// Number of joints.
+    pub fn joint_count(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Number of parameters, `4n + 3`.
+    pub fn param_count(&self) -> usize {
+        param_count(self.joints.len())
+    }
+
+    /// The value of one parameter (mm or rad).
+    ///
+    /// ```
+    /// use aacmm_core::params::{DhParams, ParamId, ParamKind};
+    /// let arm = DhParams::paper_nominal();
+    /// assert_eq!(arm.get(ParamId { kind: ParamKind::A, index: 1 }), -55.0);
+    /// ```
+    pub fn get(&self, id: ParamId) -> f64 {
+        match id.kind {
+            ParamKind::A => self.joints[id.index].a,
+            ParamKind::D => self.joints[id.index].d,
+            ParamKind::Alpha => self.joints[id.index].alpha,
+            ParamKind::Theta => self.joints[id.index].theta,
+            ParamKind::Probe => self.probe[id.index],
+        }
+    }
+
+    /// A mutable reference to one parameter.
+    pub fn get_mut(&mut self, id: ParamId) -> &mut f64 {
+        match id.kind {
+            ParamKind::A => &mut self.joints[id.index].a,
+            ParamKind::D => &mut self.joints[id.index].d,
+            ParamKind::Alpha => &mut self.joints[id.index].alpha,
+            ParamKind::Theta => &mut self.joints[id.index].theta,
+            ParamKind::Probe => &mut self.probe[id.index],
+        }
+    }
+
+    /// The explicit conversion to the flat vector in the fixed order.
+    ///
+    /// ```
+    /// let v = aacmm_core::params::DhParams::paper_nominal().to_vec();
+    /// assert_eq!(v.len(), 27);
+    /// assert_eq!(v[6], 375.0); // d1
+    /// ```
+    pub fn to_vec(&self) -> Vec<f64> {
+        ParamId::all(self.joint_count())
+            .map(|id| self.get(id))
+            .collect()
+    }
+
+    /// The inverse of [`DhParams::to_vec`]; `None` unless `v.len() == 4n + 3`
+    /// for some `n ≥ 1`.
+    ///
+    /// ```
+    /// use aacmm_core::params::DhParams;
+    /// let arm = DhParams::paper_nominal();
+    /// assert_eq!(DhParams::from_slice(&arm.to_vec()), Some(arm));
+    /// assert_eq!(DhParams::from_slice(&[0.0; 5]), None);
+    /// ```
+    pub fn from_slice(v: &[f64]) -> Option<DhParams> {
+        if v.len() < 7 || (v.len() - 3) % 4 != 0 {
+            return None;
+        }
+        let n = (v.len() - 3) / 4;
+        let mut p = DhParams {
+            joints: vec![DhJoint::default(); n],
+            probe: [0.0; 3],
+        };
+        for (id, &x) in ParamId::all(n).zip(v) {
+            *p.get_mut(id) = x;
+        }
+        Some(p)
+    }
+}
