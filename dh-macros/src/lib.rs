@@ -1,1 +1,27 @@
+//! `dh_chain!`: generates the closed-form kernel of a Denavit–Hartenberg chain
+//! at compile time. All the work is in `aacmm-codegen`; this crate parses,
+//! calls it, and turns its errors into `compile_error!` at the offending span.
+//!
+//! ```
+//! aacmm_dh_macros::dh_chain! {
+//!     /// A planar-free 2-joint test chain.
+//!     pub mod two { joints = 2, probe = true }
+//! }
+//! // Zero geometry except a probe 10 mm along the last z axis.
+//! let z = [0.0f64; 2];
+//! let one = [1.0f64; 2];
+//! let p = two::position(&one, &z, &one, &z, &z, &z, &[0.0, 0.0, 10.0], &one, &z);
+//! assert_eq!(p, [0.0, 0.0, 10.0]);
+//! ```
 
+use proc_macro::TokenStream;
+
+/// `dh_chain! { [attrs] [vis] mod NAME { joints = N[, probe = true|false] } }`
+/// expands to a module with `JOINTS`, `PARAMS` and the generic functions
+/// `position`, `position_jacobian` and `joint_jacobian`.
+#[proc_macro]
+pub fn dh_chain(input: TokenStream) -> TokenStream {
+    aacmm_codegen::expand(input.into())
+        .unwrap_or_else(syn::Error::into_compile_error)
+        .into()
+}

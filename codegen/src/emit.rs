@@ -1,0 +1,262 @@
+//! Kernel expressions → Rust tokens: one `let` per live operation, in
+//! evaluation order, generic over the scalar type so the same code runs on
+//! `f64`, on SIMD lanes and on dual numbers.
+
+use proc_macro2::{Ident, Literal, Span, TokenStream};
+use quote::{format_ident, quote};
+
+use crate::chain::KernelExprs;
+use crate::graph::{Graph, Id, Input, Node};
+
+fn operand(g: &Graph, id: Id) -> TokenStream {
+    match g.node(id) {
+        Node::Input(input) => {
+            let (array, index) = match input {
+                Input::CosQ(j) => ("cq", j),
+                Input::SinQ(j) => ("sq", j),
+                Input::CosTheta(j) => ("ct", j),
+                Input::SinTheta(j) => ("st", j),
+                Input::CosAlpha(j) => ("ca", j),
+                Input::SinAlpha(j) => ("sa", j),
+                Input::A(j) => ("a", j),
+                Input::D(j) => ("d", j),
+                Input::Probe(k) => ("b", k),
+            };
+            let array = Ident::new(array, Span::call_site());
+            let index = Literal::usize_unsuffixed(index);
+            quote!(#array[#index])
+        }
+        Node::Const(bits) => {
+            let value = Literal::f64_suffixed(f64::from_bits(bits));
+            quote!(S::from(#value))
+        }
+        _ => {
+            let t = temp(id);
+            quote!(#t)
+        }
+    }
+}
+
+fn temp(id: Id) -> Ident {
+    format_ident!("t{}", id.index())
+}
+
+/// The `let` statements that compute `outputs`.
+fn body(g: &Graph, outputs: &[Id]) -> TokenStream {
+    let lets = g.reachable(outputs).into_iter().filter_map(|id| {
+        let value = match g.node(id) {
+            Node::Add(a, b) => {
+                let (a, b) = (operand(g, a), operand(g, b));
+                quote!(#a + #b)
+            }
+            Node::Sub(a, b) => {
+                let (a, b) = (operand(g, a), operand(g, b));
+                quote!(#a - #b)
+            }
+            Node::Mul(a, b) => {
+                let (a, b) = (operand(g, a), operand(g, b));
+                quote!(#a * #b)
+            }
+            Node::Neg(a) => {
+                let a = operand(g, a);
+                quote!(-#a)
+            }
+            Node::Input(_) | Node::Const(_) => return None,
+        };
+        let t = temp(id);
+        Some(quote!(let #t: S = #value;))
+    });
+    quote!(#(#lets)*)
+}
+
+fn vec3(g: &Graph, v: &[Id; 3]) -> TokenStream {
+    let [x, y, z] = v.map(|id| operand(g, id));
+    quote!([#x, #y, #z])
+}
+
+/// The items of a generated kernel module (without the `mod` around them).
+pub fn kernel_items(k: &KernelExprs) -> TokenStream {
+    let g = &k.graph;
+    let n = Literal::usize_unsuffixed(k.spec.joints);
+    let p = Literal::usize_unsuffixed(k.spec.param_count());
+    let probe_arg = if k.spec.probe {
+        quote!(b: &[S; 3],)
+    } else {
+        quote!()
+    };
+    let args = quote! {
+        ct: &[S; #n], st: &[S; #n], ca: &[S; #n], sa: &[S; #n],
+        a: &[S; #n], d: &[S; #n], #probe_arg
+        cq: &[S; #n], sq: &[S; #n]
+    };
+    let bounds = quote! {
+        S: ::core::marker::Copy
+            + ::core::ops::Add<Output = S>
+            + ::core::ops::Sub<Output = S>
+            + ::core::ops::Mul<Output = S>
+            + ::core::ops::Neg<Output = S>
+            + ::core::convert::From<f64>
+    };
+    let attrs = quote! {
+        #[inline(always)]
+        #[allow(clippy::all, clippy::pedantic, clippy::too_many_arguments, unused_variables)]
+    };
+
+    let position_body = body(g, &k.position);
+    let position = vec3(g, &k.position);
+
+    let jac_outputs: Vec<Id> = k
+        .param_jacobian
+        .iter()
+        .flatten()
+        .chain(&k.frame_position)
+        .copied()
+        .collect();
+    let jac_body = body(g, &jac_outputs);
+    let jac_stores = k.param_jacobian.iter().enumerate().map(|(i, col)| {
+        let i = Literal::usize_unsuffixed(i);
+        let v = vec3(g, col);
+        quote!(jac[#i] = #v;)
+    });
+    let frame_position = vec3(g, &k.frame_position);
+
+    let joint_outputs: Vec<Id> = k
+        .joint_jacobian
+        .iter()
+        .flatten()
+        .chain(&k.frame_position)
+        .copied()
+        .collect();
+    let joint_body = body(g, &joint_outputs);
+    let joint_stores = k.joint_jacobian.iter().enumerate().map(|(i, col)| {
+        let i = Literal::usize_unsuffixed(i);
+        let v = vec3(g, col);
+        quote!(jac[#i] = #v;)
+    });
+
+    let order = if k.spec.probe {
+        "`a1..an, d1..dn, α1..αn, θ1..θn, Bx, By, Bz`"
+    } else {
+        "`a1..an, d1..dn, α1..αn, θ1..θn`"
+    };
+    let args_doc = "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
+        `ca, sa` (cos, sin of the twists α), `a`, `d` (mm) and the probe offset `b` (mm); \
+        per pose `cq, sq` (cos, sin of the encoder readings).";
+    let jac_doc = format!(
+        "Probe position and `∂p/∂parameter` into `jac`, one column per parameter in the order {order}. {args_doc}"
+    );
+    quote! {
+        /// Number of joints of this chain.
+        pub const JOINTS: usize = #n;
+        /// Number of geometric parameters of this chain.
+        pub const PARAMS: usize = #p;
+
+        #[doc = "Probe position (mm) by the right-to-left product."]
+        #[doc = #args_doc]
+        #attrs
+        pub fn position<S>(#args) -> [S; 3] where #bounds {
+            #position_body
+            #position
+        }
+
+        #[doc = #jac_doc]
+        #attrs
+        pub fn position_jacobian<S>(#args, jac: &mut [[S; 3]; #p]) -> [S; 3] where #bounds {
+            #jac_body
+            #(#jac_stores)*
+            #frame_position
+        }
+
+        #[doc = "Probe position and `∂p/∂q_i` (mm/rad) into `jac`, one column per joint."]
+        #[doc = #args_doc]
+        #attrs
+        pub fn joint_jacobian<S>(#args, jac: &mut [[S; 3]; #n]) -> [S; 3] where #bounds {
+            #joint_body
+            #(#joint_stores)*
+            #frame_position
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::chain::{ChainSpec, expand_chain};
+
+    fn items(joints: usize) -> (KernelExprs, syn::File) {
+        let k = expand_chain(ChainSpec {
+            joints,
+            probe: true,
+        });
+        let file = syn::parse2(kernel_items(&k)).expect("generated code parses as Rust items");
+        (k, file)
+    }
+
+    fn function<'a>(file: &'a syn::File, name: &str) -> &'a syn::ItemFn {
+        file.items
+            .iter()
+            .find_map(|item| match item {
+                syn::Item::Fn(f) if f.sig.ident == name => Some(f),
+                _ => None,
+            })
+            .expect("function generated")
+    }
+
+    /// One `let` per live operation: nothing is computed twice, nothing dead.
+    #[test]
+    fn one_let_per_live_operation() {
+        let (k, file) = items(6);
+        let lets = |name: &str| {
+            function(&file, name)
+                .block
+                .stmts
+                .iter()
+                .filter(|s| matches!(s, syn::Stmt::Local(_)))
+                .count()
+        };
+        assert_eq!(lets("position"), k.graph.op_count(&k.position).total());
+        let jac: Vec<Id> = k
+            .param_jacobian
+            .iter()
+            .flatten()
+            .chain(&k.frame_position)
+            .copied()
+            .collect();
+        assert_eq!(lets("position_jacobian"), k.graph.op_count(&jac).total());
+    }
+
+    /// The straight-line code stays small: a regression guard on the folding
+    /// and sharing (the counts are those of the current generator; a change
+    /// that grows them should be looked at, not waved through).
+    #[test]
+    fn operation_counts_stay_small() {
+        let (k, _) = items(6);
+        let pos = k.graph.op_count(&k.position);
+        let jac: Vec<Id> = k
+            .param_jacobian
+            .iter()
+            .flatten()
+            .chain(&k.frame_position)
+            .copied()
+            .collect();
+        let jac = k.graph.op_count(&jac);
+        // Position: 6 links × (6 angle addition + 14 link update) = 120.
+        assert!(pos.total() <= 120, "position: {pos:?}");
+        // Frames, then two cross products per joint: 422 today.
+        assert!(jac.total() <= 425, "position + jacobian: {jac:?}");
+    }
+
+    #[test]
+    fn no_matrix_products_or_calls_in_the_per_pose_code() {
+        let (_, file) = items(7);
+        for name in ["position", "position_jacobian", "joint_jacobian"] {
+            let text = quote!(#file).to_string();
+            assert!(!text.contains("sin ("), "{name}");
+            let block = &function(&file, name).block;
+            let body = quote!(#block).to_string();
+            // Only operators, indexing and `S::from` constants: no calls.
+            let calls = body.matches('(').count() - body.matches("S :: from (").count();
+            assert_eq!(calls, 0, "{name} has a call: {body}");
+        }
+    }
+}
