@@ -271,10 +271,10 @@ mod tests {
             Point {
                 a: (0..n).map(|_| next(300.0)).collect(),
                 d: (0..n).map(|_| next(300.0)).collect(),
-                alpha: (0..n).map(|_| next(3.14)).collect(),
-                theta: (0..n).map(|_| next(3.14)).collect(),
+                alpha: (0..n).map(|_| next(3.0)).collect(),
+                theta: (0..n).map(|_| next(3.0)).collect(),
                 b: [next(100.0), next(100.0), next(100.0)],
-                q: (0..n).map(|_| next(3.14)).collect(),
+                q: (0..n).map(|_| next(3.0)).collect(),
             }
         }
 
