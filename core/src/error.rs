@@ -1,0 +1,177 @@
+//! Errors in user input, located as precisely as the input allows.
+//!
+//! Every message names the file; where known, also the 1-based line and the
+//! field (a TOML key or a CSV column). Readers never panic on bad input and
+//! never drop data silently: they either return the data or one of these.
+
+/// A problem with user input, located precisely.
+///
+/// [`Display`](std::fmt::Display) always starts with the file name, then the line
+/// and the field where known:
+///
+/// ```
+/// use aacmm_core::error::InputError;
+/// let e = InputError::field("arm.toml", 7, "alpha", "expected a number, found a string");
+/// assert_eq!(e.to_string(), "arm.toml:7: field `alpha`: expected a number, found a string");
+/// let e = InputError::field("arm.toml", 0, "length_unit", "missing");
+/// assert_eq!(e.to_string(), "arm.toml: field `length_unit`: missing");
+/// assert_eq!(e.line(), None);
+/// ```
+#[derive(Debug, thiserror::Error)]
+pub enum InputError {
+    /// A problem with one field (TOML key, CSV column). `line` is 1-based;
+    /// 0 means the field concerns the whole file (e.g. a missing key), and the
+    /// message then has no line number.
+    #[error("{}", located(file, *line, Some(field), message))]
+    Field {
+        /// File name as given by the caller.
+        file: String,
+        /// 1-based line, or 0 for the whole file.
+        line: usize,
+        /// The key or column concerned.
+        field: String,
+        /// What is wrong, and what is expected.
+        message: String,
+    },
+    /// A problem with one line as a whole (syntax, column count).
+    #[error("{}", located(file, *line, None, message))]
+    Line {
+        /// File name as given by the caller.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong, and what is expected.
+        message: String,
+    },
+    /// A problem with the file as a whole (e.g. no data).
+    #[error("{file}: {message}")]
+    File {
+        /// File name as given by the caller.
+        file: String,
+        /// What is wrong, and what is expected.
+        message: String,
+    },
+    /// The file could not be read or written.
+    #[error("{file}: {source}")]
+    Io {
+        /// File name as given by the caller.
+        file: String,
+        /// The underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// `file:line: field `f`: message`, leaving out the unknown parts.
+fn located(file: &str, line: usize, field: Option<&str>, message: &str) -> String {
+    let mut s = String::from(file);
+    if line > 0 {
+        s.push_str(&format!(":{line}"));
+    }
+    s.push_str(": ");
+    if let Some(field) = field {
+        s.push_str(&format!("field `{field}`: "));
+    }
+    s.push_str(message);
+    s
+}
+
+impl InputError {
+    /// A [`InputError::Field`] error (`line` 0 = the whole file).
+    pub fn field(
+        file: impl Into<String>,
+        line: usize,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> InputError {
+        InputError::Field {
+            file: file.into(),
+            line,
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// A [`InputError::Line`] error.
+    pub fn line_error(
+        file: impl Into<String>,
+        line: usize,
+        message: impl Into<String>,
+    ) -> InputError {
+        InputError::Line {
+            file: file.into(),
+            line,
+            message: message.into(),
+        }
+    }
+
+    /// A [`InputError::File`] error.
+    pub fn file_error(file: impl Into<String>, message: impl Into<String>) -> InputError {
+        InputError::File {
+            file: file.into(),
+            message: message.into(),
+        }
+    }
+
+    /// An [`InputError::Io`] error.
+    pub fn io(file: impl Into<String>, source: std::io::Error) -> InputError {
+        InputError::Io {
+            file: file.into(),
+            source,
+        }
+    }
+
+    /// The file concerned.
+    ///
+    /// ```
+    /// use aacmm_core::error::InputError;
+    /// assert_eq!(InputError::file_error("p.csv", "no data rows").file(), "p.csv");
+    /// ```
+    pub fn file(&self) -> &str {
+        match self {
+            InputError::Field { file, .. }
+            | InputError::Line { file, .. }
+            | InputError::File { file, .. }
+            | InputError::Io { file, .. } => file,
+        }
+    }
+
+    /// The 1-based line concerned, if the error is about one line.
+    ///
+    /// ```
+    /// use aacmm_core::error::InputError;
+    /// assert_eq!(InputError::line_error("p.csv", 4, "bad").line(), Some(4));
+    /// assert_eq!(InputError::file_error("p.csv", "bad").line(), None);
+    /// ```
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            InputError::Field { line, .. } | InputError::Line { line, .. } if *line > 0 => {
+                Some(*line)
+            }
+            _ => None,
+        }
+    }
+
+    /// The field (TOML key or CSV column) concerned, if the error is about one.
+    ///
+    /// ```
+    /// use aacmm_core::error::InputError;
+    /// assert_eq!(InputError::field("p.csv", 4, "q2", "bad").field_name(), Some("q2"));
+    /// ```
+    pub fn field_name(&self) -> Option<&str> {
+        match self {
+            InputError::Field { field, .. } => Some(field),
+            _ => None,
+        }
+    }
+
+    /// The message without the location.
+    pub fn message(&self) -> String {
+        match self {
+            InputError::Field { message, .. }
+            | InputError::Line { message, .. }
+            | InputError::File { message, .. } => message.clone(),
+            InputError::Io { source, .. } => source.to_string(),
+        }
+    }
+}

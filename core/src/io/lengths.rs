@@ -1,0 +1,390 @@
+//! Reference-length files: calibrated distances between touched points, CSV
+//! with the header `point_a,point_b,distance` and an optional fourth column
+//! `uncertainty`.
+//!
+//! ```text
+//! point_a,point_b,distance,uncertainty
+//! S1,S2,500.0012,0.0005
+//! S2,S3,299.9987,
+//! ```
+//!
+//! Distances and uncertainties are in mm; the uncertainty is a standard
+//! uncertainty (k = 1), `>= 0`. With the `uncertainty` column, an empty cell
+//! means "not stated". The CSV dialect is described in the [`io`](super)
+//! module docs.
+
+use std::collections::HashSet;
+use std::io::Write;
+use std::path::Path;
+
+use super::text::{check_header, check_row_width, fmt_f64, parse_f64, quote, read_text, records};
+use crate::error::InputError;
+
+/// One reference length between two labelled points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceLength {
+    /// Label of the first point.
+    pub a: String,
+    /// Label of the second point (different from `a`).
+    pub b: String,
+    /// Distance, mm, `> 0`.
+    pub distance: f64,
+    /// Standard uncertainty of the distance, mm, `>= 0`, if stated.
+    pub uncertainty: Option<f64>,
+    /// 1-based line in the source file (for messages).
+    pub line: usize,
+}
+
+const COLUMNS: [&str; 4] = ["point_a", "point_b", "distance", "uncertainty"];
+const SHAPE: &str = "point_a,point_b,distance` or `point_a,point_b,distance,uncertainty";
+
+/// Reads a reference-length file; messages name the file as `path` displays.
+///
+/// ```no_run
+/// let lengths = aacmm_core::io::read_lengths(std::path::Path::new("lengths.csv"))?;
+/// # Ok::<(), aacmm_core::error::InputError>(())
+/// ```
+pub fn read_lengths(path: &Path) -> Result<Vec<ReferenceLength>, InputError> {
+    let (file, text) = read_text(path)?;
+    parse_lengths(&text, &file)
+}
+
+/// Parses the text of a reference-length file; `file` is the name used in
+/// messages.
+///
+/// ```
+/// use aacmm_core::io::parse_lengths;
+/// let l = parse_lengths("point_a,point_b,distance\nS1,S2,500.25\n", "l.csv").unwrap();
+/// assert_eq!((l[0].a.as_str(), l[0].b.as_str(), l[0].distance), ("S1", "S2", 500.25));
+/// assert_eq!((l[0].uncertainty, l[0].line), (None, 2));
+///
+/// let e = parse_lengths("point_a,point_b,distance\nS1,S2,-1\n", "l.csv").unwrap_err();
+/// assert_eq!(e.to_string(), "l.csv:2: field `distance`: must be positive, got -1");
+/// ```
+pub fn parse_lengths(text: &str, file: &str) -> Result<Vec<ReferenceLength>, InputError> {
+    let recs = records(text, file)?;
+    let Some((header, rows)) = recs.split_first() else {
+        return Err(InputError::file_error(
+            file,
+            format!("empty file; expected the header `{SHAPE}` and one row per length"),
+        ));
+    };
+    let ncols = if header.fields.len() >= 4 { 4 } else { 3 };
+    check_header(header, file, &COLUMNS[..ncols], SHAPE)?;
+    let columns = &header.fields;
+
+    let mut out = Vec::with_capacity(rows.len());
+    for row in rows {
+        check_row_width(row, file, columns)?;
+        let f = &row.fields;
+        let line = row.line;
+        for (i, name) in COLUMNS[..2].iter().enumerate() {
+            if f[i].is_empty() {
+                return Err(InputError::field(file, line, *name, "empty point label"));
+            }
+        }
+        if f[0] == f[1] {
+            return Err(InputError::field(
+                file,
+                line,
+                "point_b",
+                format!(
+                    "same point as point_a (`{}`): a length needs two points",
+                    f[0]
+                ),
+            ));
+        }
+        let distance = parse_f64(&f[2], file, line, "distance")?;
+        if distance <= 0.0 {
+            return Err(InputError::field(
+                file,
+                line,
+                "distance",
+                format!("must be positive, got {}", f[2]),
+            ));
+        }
+        let uncertainty = match f.get(3) {
+            None => None,
+            Some(s) if s.is_empty() => None,
+            Some(s) => {
+                let u = parse_f64(s, file, line, "uncertainty")?;
+                if u < 0.0 {
+                    return Err(InputError::field(
+                        file,
+                        line,
+                        "uncertainty",
+                        format!("must not be negative, got {s}"),
+                    ));
+                }
+                Some(u)
+            }
+        };
+        out.push(ReferenceLength {
+            a: f[0].clone(),
+            b: f[1].clone(),
+            distance,
+            uncertainty,
+            line,
+        });
+    }
+    if out.is_empty() {
+        return Err(InputError::file_error(
+            file,
+            format!("no data rows after the header (line {})", header.line),
+        ));
+    }
+    Ok(out)
+}
+
+/// Checks that every point of `lengths` is among `known` (e.g. the labels of
+/// a poses file); the error names `file` (the lengths file), the line and the
+/// field (`point_a` or `point_b`) of the first unknown point.
+///
+/// ```
+/// use aacmm_core::io::{check_lengths_against, parse_lengths};
+/// let l = parse_lengths("point_a,point_b,distance\nS1,S2,500\nS1,S9,300\n", "l.csv").unwrap();
+/// assert!(check_lengths_against(&l, &["S1", "S2", "S9"], "l.csv").is_ok());
+/// let e = check_lengths_against(&l, &["S1", "S2"], "l.csv").unwrap_err();
+/// assert!(e.to_string().starts_with("l.csv:3: field `point_b`: unknown point `S9`"));
+/// ```
+pub fn check_lengths_against<S: AsRef<str>>(
+    lengths: &[ReferenceLength],
+    known: &[S],
+    file: &str,
+) -> Result<(), InputError> {
+    let set: HashSet<&str> = known.iter().map(AsRef::as_ref).collect();
+    for l in lengths {
+        for (field, label) in [("point_a", &l.a), ("point_b", &l.b)] {
+            if !set.contains(label.as_str()) {
+                let mut names: Vec<&str> = set.iter().copied().collect();
+                names.sort_unstable();
+                let shown = names
+                    .iter()
+                    .take(10)
+                    .map(|n| format!("`{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                let more = if names.len() > 10 {
+                    format!(" and {} more", names.len() - 10)
+                } else {
+                    String::new()
+                };
+                let known_text = if names.is_empty() {
+                    "there are no known points".to_string()
+                } else {
+                    format!("known points: {shown}{more}")
+                };
+                return Err(InputError::field(
+                    file,
+                    l.line,
+                    field,
+                    format!("unknown point `{label}`; {known_text}"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Writes reference lengths in the file format: deterministic bytes, numbers
+/// in the shortest form that reads back bit-exactly. The `uncertainty` column
+/// is written when any length states one (empty cells for the others).
+/// `line` is not written.
+///
+/// ```
+/// use aacmm_core::io::{ReferenceLength, write_lengths};
+/// let l = ReferenceLength { a: "S1".into(), b: "S2".into(), distance: 500.0, uncertainty: None, line: 0 };
+/// let mut out = Vec::new();
+/// write_lengths(&mut out, &[l]).unwrap();
+/// assert_eq!(String::from_utf8(out).unwrap(), "point_a,point_b,distance\nS1,S2,500.0\n");
+/// ```
+pub fn write_lengths(mut w: impl Write, lengths: &[ReferenceLength]) -> std::io::Result<()> {
+    let with_u = lengths.iter().any(|l| l.uncertainty.is_some());
+    let ncols = if with_u { 4 } else { 3 };
+    w.write_all(format!("{}\n", COLUMNS[..ncols].join(",")).as_bytes())?;
+    for l in lengths {
+        let mut line = format!("{},{},{}", quote(&l.a), quote(&l.b), fmt_f64(l.distance));
+        if with_u {
+            line.push(',');
+            if let Some(u) = l.uncertainty {
+                line.push_str(&fmt_f64(u));
+            }
+        }
+        line.push('\n');
+        w.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const F: &str = "ref-lengths.csv";
+
+    fn err(text: &str) -> InputError {
+        parse_lengths(text, F).unwrap_err()
+    }
+
+    #[track_caller]
+    fn assert_at(e: &InputError, line: usize, field: Option<&str>, needle: &str) {
+        let s = e.to_string();
+        assert!(s.starts_with(F), "{s}");
+        assert_eq!(e.line(), (line > 0).then_some(line), "{s}");
+        if line > 0 {
+            assert!(s.starts_with(&format!("{F}:{line}: ")), "{s}");
+        }
+        assert_eq!(e.field_name(), field, "{s}");
+        if let Some(field) = field {
+            assert!(s.contains(&format!("field `{field}`")), "{s}");
+        }
+        assert!(s.contains(needle), "expected {needle:?} in {s}");
+    }
+
+    #[test]
+    fn parses_with_and_without_uncertainty() {
+        let l = parse_lengths(
+            "# c\npoint_a,point_b,distance,uncertainty\nA,B,100.5,0.001\nB,C,200,\nC,A,300,0\n",
+            F,
+        )
+        .unwrap();
+        assert_eq!(l.len(), 3);
+        assert_eq!(l[0].uncertainty, Some(0.001));
+        assert_eq!(l[1].uncertainty, None);
+        assert_eq!(l[2].uncertainty, Some(0.0));
+        assert_eq!(l.iter().map(|l| l.line).collect::<Vec<_>>(), [3, 4, 5]);
+    }
+
+    #[test]
+    fn header_errors() {
+        assert_at(&err(""), 0, None, "empty file");
+        assert_at(&err("point_a,point_b,distance\n"), 0, None, "no data rows");
+        assert_at(
+            &err("point_a,point_b\nA,B\n"),
+            1,
+            Some("distance"),
+            "missing column 3",
+        );
+        assert_at(
+            &err("point_a,point_b,dist\nA,B,1\n"),
+            1,
+            Some("dist"),
+            "expected `distance`",
+        );
+        assert_at(
+            &err("point_b,point_a,distance\nA,B,1\n"),
+            1,
+            Some("point_b"),
+            "expected `point_a`",
+        );
+        assert_at(
+            &err("point_a,point_b,distance,u\nA,B,1,0\n"),
+            1,
+            Some("u"),
+            "expected `uncertainty`",
+        );
+        assert_at(
+            &err("point_a,point_b,distance,uncertainty,x\nA,B,1,0,1\n"),
+            1,
+            Some("x"),
+            "unexpected column 5",
+        );
+        assert_at(
+            &err("point_a,point_a,distance\nA,B,1\n"),
+            1,
+            Some("point_a"),
+            "duplicate column",
+        );
+        assert_at(
+            &err("point_a,point_b,distance,distance\nA,B,1,1\n"),
+            1,
+            Some("distance"),
+            "duplicate column",
+        );
+    }
+
+    #[test]
+    fn row_errors() {
+        let h = "point_a,point_b,distance,uncertainty\n";
+        let e = |row: &str| err(&format!("{h}A,B,1,0\n{row}\n"));
+        assert_at(&e("A,A,5,"), 3, Some("point_b"), "same point");
+        assert_at(&e(",B,5,"), 3, Some("point_a"), "empty point label");
+        assert_at(&e("A,,5,"), 3, Some("point_b"), "empty point label");
+        assert_at(&e("A,B,0,"), 3, Some("distance"), "must be positive, got 0");
+        assert_at(&e("A,B,-2.5,"), 3, Some("distance"), "must be positive");
+        assert_at(&e("A,B,inf,"), 3, Some("distance"), "not a finite number");
+        assert_at(&e("A,B,nan,"), 3, Some("distance"), "not a finite number");
+        assert_at(&e("A,B,ten,"), 3, Some("distance"), "not a number");
+        assert_at(&e("A,B,,"), 3, Some("distance"), "missing value");
+        assert_at(
+            &e("A,B,5,-0.1"),
+            3,
+            Some("uncertainty"),
+            "must not be negative",
+        );
+        assert_at(
+            &e("A,B,5,NaN"),
+            3,
+            Some("uncertainty"),
+            "not a finite number",
+        );
+        assert_at(&e("A,B,5"), 3, Some("uncertainty"), "missing");
+        assert_at(&e("A,B,5,1,2"), 3, None, "the row has 5 columns");
+    }
+
+    #[test]
+    fn unknown_points() {
+        let l = parse_lengths("point_a,point_b,distance\nA,B,1\nB,C,2\n", F).unwrap();
+        let known = vec!["A".to_string(), "B".to_string(), "C".to_string()];
+        assert!(check_lengths_against(&l, &known, F).is_ok());
+        let e = check_lengths_against(&l, &["A", "C"], F).unwrap_err();
+        assert_at(
+            &e,
+            2,
+            Some("point_b"),
+            "unknown point `B`; known points: `A`, `C`",
+        );
+        let e = check_lengths_against(&l, &["B", "C"], F).unwrap_err();
+        assert_at(&e, 2, Some("point_a"), "unknown point `A`");
+        let e = check_lengths_against::<&str>(&l, &[], F).unwrap_err();
+        assert_at(&e, 2, Some("point_a"), "no known points");
+        let many: Vec<String> = (0..15).map(|i| format!("P{i:02}")).collect();
+        let e = check_lengths_against(&l, &many, F).unwrap_err();
+        assert!(e.to_string().contains("and 5 more"), "{e}");
+    }
+
+    #[test]
+    fn round_trip_bit_exact() {
+        let lengths = vec![
+            ReferenceLength {
+                a: "A".into(),
+                b: "B, 2".into(),
+                distance: 0.1 + 0.2,
+                uncertainty: Some(1e-4 / 3.0),
+                line: 2,
+            },
+            ReferenceLength {
+                a: "#c".into(),
+                b: "A".into(),
+                distance: 1234.567890123,
+                uncertainty: None,
+                line: 3,
+            },
+        ];
+        let mut out = Vec::new();
+        write_lengths(&mut out, &lengths).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let back = parse_lengths(&text, F).unwrap();
+        assert_eq!(back, lengths);
+        for (x, y) in back.iter().zip(&lengths) {
+            assert_eq!(x.distance.to_bits(), y.distance.to_bits());
+            assert_eq!(
+                x.uncertainty.map(f64::to_bits),
+                y.uncertainty.map(f64::to_bits)
+            );
+        }
+        let mut again = Vec::new();
+        write_lengths(&mut again, &back).unwrap();
+        assert_eq!(String::from_utf8(again).unwrap(), text);
+    }
+}

@@ -1,0 +1,665 @@
+//! Poses files: one touch per row, CSV with the header `point,q1,...,qn`.
+//!
+//! ```text
+//! # socket touches, degrees
+//! point,q1,q2,q3,q4,q5,q6
+//! S1,10.5,-45.0,30.0,0.0,60.0,90.0
+//! S1,-20.0,-40.0,35.5,10.0,55.0,-90.0
+//! ```
+//!
+//! `point` labels the physical point (socket) touched; rows with the same
+//! label touch the same point. The angles are the encoder readings `q` in the
+//! unit the caller states (files do not carry it). The CSV dialect is
+//! described in the [`io`](super) module docs.
+
+use std::io::Write;
+use std::path::Path;
+
+use super::Warning;
+use super::text::{
+    Record, check_row_width, check_unique_columns, fmt_f64, parse_f64, quote, read_text, records,
+};
+use super::units::AngleUnit;
+use crate::error::InputError;
+
+/// The radians hint is given only for at least this many rows.
+pub const RADIANS_HINT_MIN_ROWS: usize = 20;
+
+/// The touches of a poses file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Poses {
+    /// Per row, the label of the point touched.
+    pub labels: Vec<String>,
+    /// Number of joints (angle columns).
+    pub joints: usize,
+    /// Per row, the `joints` encoder readings, rad.
+    pub q: Vec<Vec<f64>>,
+    /// Per row, its 1-based line in the source file (for messages).
+    pub lines: Vec<usize>,
+}
+
+impl Poses {
+    /// Number of rows (touches).
+    pub fn len(&self) -> usize {
+        self.q.len()
+    }
+
+    /// Whether there are no rows.
+    pub fn is_empty(&self) -> bool {
+        self.q.is_empty()
+    }
+}
+
+/// Reads a poses file with angles in `unit`; if `expected_joints` is given,
+/// the file must have that many angle columns. Returns the poses and any
+/// warnings (for the caller to print).
+///
+/// ```no_run
+/// use aacmm_core::io::{AngleUnit, read_poses};
+/// let (poses, warnings) = read_poses(std::path::Path::new("poses.csv"), AngleUnit::Deg, Some(6))?;
+/// for w in &warnings {
+///     eprintln!("warning: {w}");
+/// }
+/// # Ok::<(), aacmm_core::error::InputError>(())
+/// ```
+pub fn read_poses(
+    path: &Path,
+    unit: AngleUnit,
+    expected_joints: Option<usize>,
+) -> Result<(Poses, Vec<Warning>), InputError> {
+    let (file, text) = read_text(path)?;
+    parse_poses(&text, &file, unit, expected_joints)
+}
+
+/// Parses the text of a poses file; `file` is the name used in messages.
+///
+/// ```
+/// use aacmm_core::io::{AngleUnit, parse_poses};
+/// let text = "point,q1,q2\nS1,90,0\nS1,0,-180\n";
+/// let (poses, warnings) = parse_poses(text, "p.csv", AngleUnit::Deg, Some(2)).unwrap();
+/// assert_eq!(poses.labels, ["S1", "S1"]);
+/// assert_eq!(poses.q[0][0], std::f64::consts::FRAC_PI_2);
+/// assert_eq!(poses.lines, [2, 3]);
+/// assert!(warnings.is_empty());
+///
+/// let err = parse_poses(text, "p.csv", AngleUnit::Deg, Some(6)).unwrap_err();
+/// assert!(err.to_string().starts_with("p.csv:1: field `q3`: the header has 2 joint columns"));
+/// ```
+pub fn parse_poses(
+    text: &str,
+    file: &str,
+    unit: AngleUnit,
+    expected_joints: Option<usize>,
+) -> Result<(Poses, Vec<Warning>), InputError> {
+    let recs = records(text, file)?;
+    let Some((header, rows)) = recs.split_first() else {
+        return Err(InputError::file_error(
+            file,
+            "empty file; expected the header `point,q1,...,qn` and one row per touch",
+        ));
+    };
+    let joints = check_poses_header(header, file, expected_joints)?;
+    let columns = &header.fields;
+
+    let mut poses = Poses {
+        labels: Vec::with_capacity(rows.len()),
+        joints,
+        q: Vec::with_capacity(rows.len()),
+        lines: Vec::with_capacity(rows.len()),
+    };
+    for row in rows {
+        check_row_width(row, file, columns)?;
+        let label = &row.fields[0];
+        if label.is_empty() {
+            return Err(InputError::field(
+                file,
+                row.line,
+                "point",
+                "empty label: each row must name the point touched",
+            ));
+        }
+        let q = row.fields[1..]
+            .iter()
+            .zip(&columns[1..])
+            .map(|(s, col)| parse_f64(s, file, row.line, col))
+            .collect::<Result<Vec<f64>, _>>()?;
+        poses.labels.push(label.clone());
+        poses.q.push(q);
+        poses.lines.push(row.line);
+    }
+    if poses.is_empty() {
+        return Err(InputError::file_error(
+            file,
+            format!("no data rows after the header (line {})", header.line),
+        ));
+    }
+
+    let warnings = unit_warnings(&poses, file, unit);
+    for q in &mut poses.q {
+        for x in q.iter_mut() {
+            *x = unit.to_internal(*x);
+        }
+    }
+    Ok((poses, warnings))
+}
+
+/// Checks the header `point,q1,...,qn`; returns `n`.
+fn check_poses_header(
+    header: &Record,
+    file: &str,
+    expected_joints: Option<usize>,
+) -> Result<usize, InputError> {
+    check_unique_columns(header, file)?;
+    let cols = &header.fields;
+    let n = cols.len() - 1;
+    let shape = |n: usize| {
+        if n == 0 {
+            "point,q1,...,qn".to_string()
+        } else {
+            format!("point,q1,...,q{n}")
+        }
+    };
+    let want_n = expected_joints.unwrap_or(n);
+    if cols[0] != "point" {
+        return Err(InputError::field(
+            file,
+            header.line,
+            cols[0].clone(),
+            format!(
+                "unexpected column 1 in the header: expected `point`; the header must be \
+                 `{}`",
+                shape(want_n)
+            ),
+        ));
+    }
+    if n == 0 {
+        return Err(InputError::field(
+            file,
+            header.line,
+            "q1",
+            format!(
+                "missing joint columns in the header; the header must be `{}`",
+                shape(want_n)
+            ),
+        ));
+    }
+    for (i, col) in cols.iter().enumerate().skip(1) {
+        let want = format!("q{i}");
+        if *col != want {
+            return Err(InputError::field(
+                file,
+                header.line,
+                col.clone(),
+                format!(
+                    "unexpected column {} in the header: expected `{want}`; the header must \
+                     be `{}`",
+                    i + 1,
+                    shape(want_n)
+                ),
+            ));
+        }
+    }
+    if let Some(m) = expected_joints
+        && m != n
+    {
+        let (field, what) = if n > m {
+            (format!("q{}", m + 1), "unexpected column")
+        } else {
+            (format!("q{}", n + 1), "missing column")
+        };
+        return Err(InputError::field(
+            file,
+            header.line,
+            field,
+            format!(
+                "the header has {n} joint columns (q1..q{n}) but the arm has {m} joints \
+                 ({what}); the header must be `{}`",
+                shape(m)
+            ),
+        ));
+    }
+    Ok(n)
+}
+
+/// Hints when the angles look like the other unit (`q` still in `unit`).
+fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
+    let turn = std::f64::consts::TAU;
+    let mut warnings = Vec::new();
+    match unit {
+        AngleUnit::Deg => {
+            let small = poses.q.iter().flatten().all(|x| x.abs() < turn);
+            if small && poses.len() >= RADIANS_HINT_MIN_ROWS {
+                warnings.push(Warning {
+                    file: file.to_string(),
+                    line: None,
+                    field: None,
+                    message: format!(
+                        "angles declared in degrees, but every |q| in all {} rows is below \
+                         2π (6.28°): these angles look like radians; pass --angle-unit rad \
+                         if so",
+                        poses.len()
+                    ),
+                });
+            }
+        }
+        AngleUnit::Rad => {
+            let big = poses.q.iter().zip(&poses.lines).find_map(|(q, &line)| {
+                q.iter()
+                    .position(|x| x.abs() > turn)
+                    .map(|j| (line, j, q[j]))
+            });
+            if let Some((line, j, x)) = big {
+                warnings.push(Warning {
+                    file: file.to_string(),
+                    line: Some(line),
+                    field: Some(format!("q{}", j + 1)),
+                    message: format!(
+                        "angles declared in radians, but |{x}| is more than a full turn \
+                         (2π): these angles look like degrees; pass --angle-unit deg if so"
+                    ),
+                });
+            }
+        }
+    }
+    warnings
+}
+
+/// Writes poses in the poses-file format with angles in `unit`:
+/// deterministic bytes, numbers in the shortest form that reads back to the
+/// same value (bit-exact in rad; in deg see
+/// [`AngleUnit::from_internal_exact`]), labels quoted only where needed.
+/// `lines` is not written. Inconsistent `poses` (row lengths, label count)
+/// give an [`std::io::ErrorKind::InvalidInput`] error.
+///
+/// ```
+/// use aacmm_core::io::{AngleUnit, Poses, write_poses};
+/// let poses = Poses {
+///     labels: vec!["S1".into(), "S2".into()],
+///     joints: 2,
+///     q: vec![vec![std::f64::consts::FRAC_PI_2, 0.0], vec![-0.5, 1e-9]],
+///     lines: vec![2, 3],
+/// };
+/// let mut out = Vec::new();
+/// write_poses(&mut out, &poses, AngleUnit::Rad).unwrap();
+/// assert_eq!(
+///     String::from_utf8(out).unwrap(),
+///     "point,q1,q2\nS1,1.5707963267948966,0.0\nS2,-0.5,1e-9\n"
+/// );
+/// ```
+pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io::Result<()> {
+    if poses.labels.len() != poses.q.len() {
+        return Err(invalid(format!(
+            "{} labels for {} rows of angles",
+            poses.labels.len(),
+            poses.q.len()
+        )));
+    }
+    let mut header = String::from("point");
+    for j in 1..=poses.joints {
+        header.push_str(&format!(",q{j}"));
+    }
+    header.push('\n');
+    w.write_all(header.as_bytes())?;
+    for (i, (label, q)) in poses.labels.iter().zip(&poses.q).enumerate() {
+        if q.len() != poses.joints {
+            return Err(invalid(format!(
+                "row {} has {} angles, expected {}",
+                i + 1,
+                q.len(),
+                poses.joints
+            )));
+        }
+        let mut line = quote(label).into_owned();
+        for &x in q {
+            line.push(',');
+            line.push_str(&fmt_f64(unit.from_internal_exact(x)));
+        }
+        line.push('\n');
+        w.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn invalid(message: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    const F: &str = "touches.csv";
+
+    fn err(text: &str, expected: Option<usize>) -> InputError {
+        parse_poses(text, F, AngleUnit::Deg, expected).unwrap_err()
+    }
+
+    /// The error names the file, the line (0 = none) and the field.
+    #[track_caller]
+    fn assert_at(e: &InputError, line: usize, field: Option<&str>, needle: &str) {
+        let s = e.to_string();
+        assert!(s.starts_with(F), "{s}");
+        assert_eq!(e.file(), F);
+        assert_eq!(e.line(), (line > 0).then_some(line), "{s}");
+        if line > 0 {
+            assert!(s.starts_with(&format!("{F}:{line}: ")), "{s}");
+        }
+        assert_eq!(e.field_name(), field, "{s}");
+        if let Some(field) = field {
+            assert!(s.contains(&format!("field `{field}`")), "{s}");
+        }
+        assert!(s.contains(needle), "expected {needle:?} in {s}");
+    }
+
+    #[test]
+    fn parses_comments_quotes_units() {
+        let text =
+            "# header comment\npoint,q1,q2\nS1,180,-90\n# mid comment\n\"S 2\", 0.5 ,1e-3\n\n\n";
+        let (p, w) = parse_poses(text, F, AngleUnit::Deg, Some(2)).unwrap();
+        assert!(w.is_empty());
+        assert_eq!(p.joints, 2);
+        assert_eq!(p.labels, ["S1", "S 2"]);
+        assert_eq!(p.lines, [3, 5]);
+        assert_eq!(p.q[0], [std::f64::consts::PI, -std::f64::consts::FRAC_PI_2]);
+        assert_eq!(p.q[1], [0.5f64.to_radians(), 1e-3f64.to_radians()]);
+        let (r, _) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
+        assert_eq!(r.q[1], [0.5, 1e-3]);
+    }
+
+    #[test]
+    fn empty_file_and_no_rows() {
+        assert_at(&err("", None), 0, None, "empty file");
+        assert_at(&err("# only a comment\n", None), 0, None, "empty file");
+        assert_at(&err("point,q1\n", None), 0, None, "no data rows");
+        assert_at(&err("point,q1\n# c\n\n", None), 0, None, "no data rows");
+    }
+
+    #[test]
+    fn header_errors() {
+        assert_at(
+            &err("point,q1,q1\nS,1,2\n", None),
+            1,
+            Some("q1"),
+            "duplicate column",
+        );
+        assert_at(
+            &err("point,q1,point\nS,1,2\n", None),
+            1,
+            Some("point"),
+            "duplicate column",
+        );
+        assert_at(
+            &err("label,q1\nS,1\n", None),
+            1,
+            Some("label"),
+            "expected `point`",
+        );
+        assert_at(
+            &err("q1,point\nS,1\n", None),
+            1,
+            Some("q1"),
+            "expected `point`",
+        );
+        assert_at(
+            &err("point\nS\n", None),
+            1,
+            Some("q1"),
+            "missing joint columns",
+        );
+        assert_at(
+            &err("point,q1,q3\nS,1,2\n", None),
+            1,
+            Some("q3"),
+            "expected `q2`; the header must be `point,q1,...,q2`",
+        );
+        assert_at(
+            &err("point,q1,x\nS,1,2\n", None),
+            1,
+            Some("x"),
+            "expected `q2`",
+        );
+        assert_at(
+            &err("point,Q1\nS,1\n", None),
+            1,
+            Some("Q1"),
+            "expected `q1`",
+        );
+        // Header on a later line, after comments.
+        assert_at(
+            &err("# c\n# d\npoint,q2\nS,1\n", None),
+            3,
+            Some("q2"),
+            "expected `q1`",
+        );
+    }
+
+    #[test]
+    fn joint_count_mismatch() {
+        let e = err("point,q1,q2,q3,q4,q5\nS,1,2,3,4,5\n", Some(6));
+        assert_at(&e, 1, Some("q6"), "the header has 5 joint columns");
+        assert!(e.to_string().contains("the arm has 6 joints"));
+        assert!(e.to_string().contains("point,q1,...,q6"));
+        let e = err("point,q1,q2,q3,q4,q5,q6,q7\nS,1,2,3,4,5,6,7\n", Some(6));
+        assert_at(&e, 1, Some("q7"), "has 7 joint columns");
+    }
+
+    #[test]
+    fn row_errors() {
+        assert_at(
+            &err("point,q1,q2\nS,1,2\nS,1\n", None),
+            3,
+            Some("q2"),
+            "the row has 2 columns, the header 3",
+        );
+        assert_at(
+            &err("point,q1,q2\nS,1,2,3\n", None),
+            2,
+            None,
+            "the row has 4 columns, the header 3",
+        );
+        assert_at(
+            &err("point,q1,q2\n,1,2\n", None),
+            2,
+            Some("point"),
+            "empty label",
+        );
+        assert_at(
+            &err("point,q1,q2\n \"\" ,1,2\n", None),
+            2,
+            Some("point"),
+            "empty label",
+        );
+        assert_at(
+            &err("point,q1,q2\nS,1,x2\n", None),
+            2,
+            Some("q2"),
+            "`x2` is not a number",
+        );
+        assert_at(
+            &err("point,q1,q2\nS,1,\n", None),
+            2,
+            Some("q2"),
+            "missing value",
+        );
+        assert_at(
+            &err("point,q1,q2\nS,NaN,1\n", None),
+            2,
+            Some("q1"),
+            "not a finite number",
+        );
+        assert_at(
+            &err("point,q1,q2\nS,1,-inf\n", None),
+            2,
+            Some("q2"),
+            "not a finite number",
+        );
+        assert_at(
+            &err("point,q1,q2\nS,1,1e999\n", None),
+            2,
+            Some("q2"),
+            "out of range",
+        );
+        assert_at(
+            &err("point,q1,q2\nS,\"1,2\n", None),
+            2,
+            None,
+            "unterminated quote",
+        );
+        assert_at(&err("point,q1\nS,1\n\nS,2\n", None), 3, None, "blank line");
+        assert_at(
+            &err("point,q1\nS,1\n   \nS,2\n", None),
+            3,
+            None,
+            "blank line",
+        );
+        assert_at(&err("\npoint,q1\nS,1\n", None), 1, None, "blank line");
+        // CRLF line endings count lines the same way.
+        assert_at(
+            &err("point,q1\r\nS,1\r\nS,x\r\n", None),
+            3,
+            Some("q1"),
+            "`x` is not a number",
+        );
+    }
+
+    fn rows(n: usize, value: f64) -> String {
+        let mut s = String::from("point,q1,q2\n");
+        for i in 0..n {
+            s.push_str(&format!("P{},{value},{}\n", i % 3, -value));
+        }
+        s
+    }
+
+    #[test]
+    fn radians_hint() {
+        let (_, w) = parse_poses(&rows(20, 1.5), F, AngleUnit::Deg, None).unwrap();
+        assert_eq!(w.len(), 1);
+        assert_eq!(w[0].file, F);
+        assert!(w[0].to_string().starts_with("touches.csv: "));
+        assert!(
+            w[0].message
+                .contains("look like radians; pass --angle-unit rad")
+        );
+        // Too few rows, large angles, or radians declared: no hint.
+        assert!(
+            parse_poses(&rows(19, 1.5), F, AngleUnit::Deg, None)
+                .unwrap()
+                .1
+                .is_empty()
+        );
+        assert!(
+            parse_poses(&rows(30, 45.0), F, AngleUnit::Deg, None)
+                .unwrap()
+                .1
+                .is_empty()
+        );
+        assert!(
+            parse_poses(&rows(30, 1.5), F, AngleUnit::Rad, None)
+                .unwrap()
+                .1
+                .is_empty()
+        );
+    }
+
+    #[test]
+    fn degrees_hint() {
+        let text = "point,q1,q2\nS,1,2\nS,0.5,-90\nS,1,2\n";
+        let (_, w) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
+        assert_eq!(w.len(), 1);
+        assert_eq!(w[0].line, Some(3));
+        assert_eq!(w[0].field.as_deref(), Some("q2"));
+        assert!(w[0].to_string().starts_with("touches.csv:3: field `q2`: "));
+        assert!(w[0].message.contains("look like degrees"));
+    }
+
+    fn random_poses(seed: u64, joints: usize, rows: usize) -> Poses {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let labels = ["S1", "socket 2", "#3", "a,b", "q\"x", " pad "];
+        Poses {
+            labels: (0..rows)
+                .map(|i| labels[i % labels.len()].to_string())
+                .collect(),
+            joints,
+            q: (0..rows)
+                .map(|_| (0..joints).map(|_| rng.random_range(-4.0..4.0)).collect())
+                .collect(),
+            lines: (2..rows + 2).collect(),
+        }
+    }
+
+    #[test]
+    fn round_trip_rad_bit_exact() {
+        let p = random_poses(1, 7, 50);
+        let mut out = Vec::new();
+        write_poses(&mut out, &p, AngleUnit::Rad).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let (back, _) = parse_poses(&text, F, AngleUnit::Rad, Some(7)).unwrap();
+        assert_eq!(back.labels, p.labels);
+        assert_eq!(back.lines, p.lines);
+        for (a, b) in back.q.iter().flatten().zip(p.q.iter().flatten()) {
+            assert_eq!(a.to_bits(), b.to_bits());
+        }
+        // Writing again gives identical bytes.
+        let mut again = Vec::new();
+        write_poses(&mut again, &back, AngleUnit::Rad).unwrap();
+        assert_eq!(String::from_utf8(again).unwrap(), text);
+    }
+
+    #[test]
+    fn round_trip_deg() {
+        // Values read from a degree file are written back exactly.
+        let text = "point,q1,q2,q3\nA,0.1,-90.0,179.999\nB,12.345,1e-5,-0.0\n";
+        let (p, _) = parse_poses(text, F, AngleUnit::Deg, None).unwrap();
+        let mut out = Vec::new();
+        write_poses(&mut out, &p, AngleUnit::Deg).unwrap();
+        assert_eq!(String::from_utf8(out).unwrap(), text);
+        // Arbitrary radians through degrees: within 1 ulp, mostly exact.
+        let p = random_poses(2, 6, 200);
+        let mut out = Vec::new();
+        write_poses(&mut out, &p, AngleUnit::Deg).unwrap();
+        let (back, _) =
+            parse_poses(std::str::from_utf8(&out).unwrap(), F, AngleUnit::Deg, None).unwrap();
+        let (mut exact, mut total) = (0, 0);
+        for (a, b) in back.q.iter().flatten().zip(p.q.iter().flatten()) {
+            assert!((a - b).abs() <= b.abs() * f64::EPSILON, "{a} {b}");
+            exact += usize::from(a.to_bits() == b.to_bits());
+            total += 1;
+        }
+        assert!(exact * 10 >= total * 9, "{exact}/{total} exact");
+    }
+
+    #[test]
+    fn write_rejects_inconsistent_poses() {
+        let mut p = random_poses(3, 2, 3);
+        p.q[1].pop();
+        let e = write_poses(Vec::new(), &p, AngleUnit::Rad).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        let mut p = random_poses(3, 2, 3);
+        p.labels.pop();
+        assert!(write_poses(Vec::new(), &p, AngleUnit::Rad).is_err());
+    }
+
+    #[test]
+    fn read_from_disk() {
+        let dir = std::env::temp_dir().join(format!("aacmm-io-poses-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("p.csv");
+        std::fs::write(&path, "point,q1\nS,1\nS,oops\n").unwrap();
+        let e = read_poses(&path, AngleUnit::Deg, None).unwrap_err();
+        let s = e.to_string();
+        assert!(
+            s.starts_with(&format!("{}:3: field `q1`", path.display())),
+            "{s}"
+        );
+        std::fs::write(&path, b"point,q1\nS,1\n\xff,2\n").unwrap();
+        let e = read_poses(&path, AngleUnit::Deg, None).unwrap_err();
+        assert_eq!(e.line(), Some(3), "{e}");
+        assert!(e.to_string().contains("UTF-8"));
+        let missing = dir.join("missing.csv");
+        let e = read_poses(&missing, AngleUnit::Deg, None).unwrap_err();
+        assert!(matches!(e, InputError::Io { .. }));
+        assert!(e.to_string().starts_with(&missing.display().to_string()));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
