@@ -1,0 +1,331 @@
+//! Length figures: the paper's eq. 19 (no reference) and errors against
+//! calibrated reference lengths (ISO 10360-12 `E_Uni`, ASME B89.4.22
+//! volumetric test).
+
+use super::{MetricsError, PointStats, Summary, centroid, check_touches, distance};
+use serde::{Deserialize, Serialize};
+
+/// The paper's length error (eq. 19) between points `a` and `b`; mm.
+///
+/// Eq. 19 uses **no reference length** (method.md §8.4): it measures
+/// repeatability, not scale.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairLengthError {
+    /// First point's label.
+    pub a: String,
+    /// Second point's label.
+    pub b: String,
+    /// Touch pairs used: `n = min(n_a, n_b)`.
+    pub pairs: usize,
+    /// `|x̄_a − x̄_b|`, centroids over all touches.
+    pub centroid_distance: f64,
+    /// `(1/n) Σ_k (|x_ak − x_bk| − |x̄_a − x̄_b|)` (eq. 19).
+    pub d_error: f64,
+}
+
+/// The paper's length error (eq. 19): touch `k` of `a` is paired with touch
+/// `k` of `b` for `k < n = min(n_a, n_b)` (extra touches of the longer list
+/// are not paired but still count in its centroid), and
+/// `d_error = (1/n) Σ_k (|x_ak − x_bk| − |x̄_a − x̄_b|)`.
+///
+/// No reference length enters (method.md §8.4): a touch-by-touch distance is
+/// compared with the distance between centroids, so this is repeatability seen
+/// again, not scale. With equal counts `d_error ≥ 0`.
+///
+/// # Errors
+///
+/// As [`super::point_stats`], for either point.
+///
+/// ```
+/// use aacmm_core::metrics::pair_length_error;
+/// // "a" touched 3 times at the origin; "b" at (10,0,0), (0,10,0), (-10,0,0):
+/// // every touch distance is 10, the centroid of b is (0, 10/3, 0).
+/// let a = [[0.0; 3]; 3];
+/// let b = [[10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [-10.0, 0.0, 0.0]];
+/// let p = pair_length_error("a", &a, "b", &b).unwrap();
+/// assert_eq!(p.pairs, 3);
+/// assert!((p.centroid_distance - 10.0 / 3.0).abs() < 1e-12);
+/// assert!((p.d_error - 20.0 / 3.0).abs() < 1e-12); // 10 − 10/3
+/// ```
+pub fn pair_length_error(
+    a: &str,
+    touches_a: &[[f64; 3]],
+    b: &str,
+    touches_b: &[[f64; 3]],
+) -> Result<PairLengthError, MetricsError> {
+    check_touches(a, touches_a)?;
+    check_touches(b, touches_b)?;
+    let centroid_distance = distance(&centroid(touches_a), &centroid(touches_b));
+    let pairs = touches_a.len().min(touches_b.len());
+    let excess: f64 = touches_a
+        .iter()
+        .zip(touches_b)
+        .map(|(p, q)| distance(p, q) - centroid_distance)
+        .sum();
+    Ok(PairLengthError {
+        a: a.to_owned(),
+        b: b.to_owned(),
+        pairs,
+        centroid_distance,
+        d_error: excess / pairs as f64,
+    })
+}
+
+/// A calibrated distance between two measured points (ball bar, cone plate,
+/// step gauge), mm. Independent of the file format that carries it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceDistance {
+    /// First point's label.
+    pub a: String,
+    /// Second point's label.
+    pub b: String,
+    /// Calibrated distance `L`, mm.
+    pub distance: f64,
+}
+
+/// Error of one measured length against its reference; mm.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceError {
+    /// First point's label.
+    pub a: String,
+    /// Second point's label.
+    pub b: String,
+    /// Calibrated distance `L`.
+    pub reference: f64,
+    /// `|x̄_a − x̄_b|`.
+    pub measured: f64,
+    /// `measured − reference` (ISO 10360-12 `E = L_meas − L_cal`).
+    pub error: f64,
+}
+
+/// Compares the centroid distance of `reference.a` and `reference.b`, looked
+/// up in `points`, with the calibrated distance: `error = |x̄_a − x̄_b| − L`.
+///
+/// # Errors
+///
+/// [`MetricsError::InvalidReference`] when `a == b` or `L` is not finite and
+/// positive; [`MetricsError::UnknownLabel`] when a label is not in `points`.
+///
+/// ```
+/// use aacmm_core::metrics::{point_stats, reference_error, ReferenceDistance};
+/// let p = point_stats("p", &[[0.0; 3]; 3]).unwrap();
+/// let q = point_stats("q", &[[0.0, 0.0, 99.98]; 3]).unwrap();
+/// let bar = ReferenceDistance { a: "p".into(), b: "q".into(), distance: 100.0 };
+/// let r = reference_error(&bar, &[p, q]).unwrap();
+/// assert!((r.error - -0.02).abs() < 1e-9); // 99.98 − 100
+/// ```
+pub fn reference_error(
+    reference: &ReferenceDistance,
+    points: &[PointStats],
+) -> Result<ReferenceError, MetricsError> {
+    let ReferenceDistance {
+        a,
+        b,
+        distance: length,
+    } = reference;
+    if a == b || !length.is_finite() || *length <= 0.0 {
+        return Err(MetricsError::InvalidReference {
+            a: a.clone(),
+            b: b.clone(),
+            distance: *length,
+        });
+    }
+    let centroid_of = |label: &str| {
+        points
+            .iter()
+            .find(|p| p.label == label)
+            .map(|p| p.centroid)
+            .ok_or_else(|| MetricsError::UnknownLabel {
+                label: label.to_owned(),
+            })
+    };
+    let measured = distance(&centroid_of(a)?, &centroid_of(b)?);
+    Ok(ReferenceError {
+        a: a.clone(),
+        b: b.clone(),
+        reference: *length,
+        measured,
+        error: measured - length,
+    })
+}
+
+/// Summary of reference-length errors `E_1..E_m`; mm. The ASME B89.4.22
+/// volumetric-test figures are `max |E|`, `2·RMS` and the range
+/// (unverified which the standard quotes).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceSummary {
+    /// Min, mean, max and population std of the signed errors.
+    pub error: Summary,
+    /// `max |E_i|`.
+    pub max_abs: f64,
+    /// `RMS = sqrt((1/m) Σ E_i²)`.
+    pub rms: f64,
+    /// `2·RMS`.
+    pub two_rms: f64,
+}
+
+impl ReferenceSummary {
+    /// Summarises signed errors; `None` when there are none.
+    ///
+    /// ```
+    /// use aacmm_core::metrics::ReferenceSummary;
+    /// // errors 3 and −4: RMS = sqrt((9 + 16)/2) = sqrt(12.5)
+    /// let s = ReferenceSummary::of(&[3.0, -4.0]).unwrap();
+    /// assert_eq!((s.error.min, s.error.max, s.max_abs), (-4.0, 3.0, 4.0));
+    /// assert!((s.rms - 12.5f64.sqrt()).abs() < 1e-15);
+    /// assert_eq!(s.two_rms, 2.0 * s.rms);
+    /// ```
+    pub fn of(errors: &[f64]) -> Option<ReferenceSummary> {
+        let error = Summary::of(errors)?;
+        let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+        Some(ReferenceSummary {
+            error,
+            max_abs: error.max.abs().max(error.min.abs()),
+            rms,
+            two_rms: 2.0 * rms,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{evaluate, point_stats};
+    use super::*;
+
+    fn x(v: f64) -> [f64; 3] {
+        [v, 0.0, 0.0]
+    }
+
+    #[test]
+    fn eq19_with_equal_counts() {
+        // a: x = 0, 0, 3 → centroid 1; b: x = 10, 10, 10 → centroid 10; |x̄_a − x̄_b| = 9
+        // touch distances 10, 10, 7 → excesses 1, 1, −2 → d_error 0
+        let a = [x(0.0), x(0.0), x(3.0)];
+        let b = [x(10.0); 3];
+        let p = pair_length_error("a", &a, "b", &b).unwrap();
+        assert_eq!((p.pairs, p.centroid_distance, p.d_error), (3, 9.0, 0.0));
+    }
+
+    #[test]
+    fn eq19_with_unequal_counts_uses_common_count() {
+        // a: 3 touches at 0 → centroid 0
+        // b: x = 10, 10, 10, 40 → centroid 70/4 = 17.5 (all 4 touches)
+        // n = min(3, 4) = 3 pairs, distances 10, 10, 10 → d_error = 10 − 17.5 = −7.5
+        let a = [x(0.0); 3];
+        let b = [x(10.0), x(10.0), x(10.0), x(40.0)];
+        let ab = pair_length_error("a", &a, "b", &b).unwrap();
+        assert_eq!(
+            (ab.pairs, ab.centroid_distance, ab.d_error),
+            (3, 17.5, -7.5)
+        );
+        let ba = pair_length_error("b", &b, "a", &a).unwrap();
+        assert_eq!(
+            (ba.pairs, ba.centroid_distance, ba.d_error),
+            (3, 17.5, -7.5)
+        );
+        assert_eq!((ba.a.as_str(), ba.b.as_str()), ("b", "a"));
+    }
+
+    #[test]
+    fn eq19_pairs_touches_by_row_order_in_evaluate() {
+        // Interleaved rows: a's touches are x = 0, 0, 3, b's are 10, 13, 10.
+        // Centroids 1 and 11 → 10; pairs (0,10), (0,13), (3,10) → 10, 13, 7 → d_error 0
+        let labels = ["a", "b", "a", "b", "b", "a"];
+        let points = [x(0.0), x(10.0), x(0.0), x(13.0), x(10.0), x(3.0)];
+        let ev = evaluate(&labels, &points, &[]).unwrap();
+        assert_eq!(ev.pair_length[0].centroid_distance, 10.0);
+        assert_eq!(ev.pair_length[0].d_error, 0.0);
+    }
+
+    #[test]
+    fn eq19_is_not_negative_with_equal_counts() {
+        // mean_k |x_ak − x_bk| ≥ |mean_k (x_ak − x_bk)| = |x̄_a − x̄_b| (triangle inequality)
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..200 {
+            let a: Vec<[f64; 3]> = (0..5).map(|_| [next(), next(), next()]).collect();
+            let b: Vec<[f64; 3]> = (0..5).map(|_| [1.0 + next(), next(), next()]).collect();
+            assert!(pair_length_error("a", &a, "b", &b).unwrap().d_error >= -1e-12);
+        }
+    }
+
+    #[test]
+    fn eq19_checks_both_points() {
+        let err = pair_length_error("a", &[x(0.0); 3], "b", &[x(1.0); 2]).unwrap_err();
+        assert_eq!(
+            err,
+            MetricsError::TooFewTouches {
+                label: "b".into(),
+                touches: 2
+            }
+        );
+    }
+
+    fn two_points() -> Vec<PointStats> {
+        // centroids (0,0,0) and (3,4,0): distance 5
+        vec![
+            point_stats("p", &[[0.0; 3]; 3]).unwrap(),
+            point_stats("q", &[[3.0, 4.0, 0.0]; 3]).unwrap(),
+        ]
+    }
+
+    fn bar(a: &str, b: &str, distance: f64) -> ReferenceDistance {
+        ReferenceDistance {
+            a: a.into(),
+            b: b.into(),
+            distance,
+        }
+    }
+
+    #[test]
+    fn reference_error_is_measured_minus_reference() {
+        // 5 − 5.5 = −0.5, either direction
+        for r in [bar("p", "q", 5.5), bar("q", "p", 5.5)] {
+            let e = reference_error(&r, &two_points()).unwrap();
+            assert_eq!((e.reference, e.measured, e.error), (5.5, 5.0, -0.5));
+        }
+    }
+
+    #[test]
+    fn reference_summary_figures() {
+        // errors 0.01, −0.03: mean −0.01, std sqrt((0.02² + 0.02²)/2) = 0.02,
+        // max |E| 0.03, RMS sqrt((0.0001 + 0.0009)/2) = sqrt(0.0005)
+        let s = ReferenceSummary::of(&[0.01, -0.03]).unwrap();
+        assert_eq!((s.error.count, s.error.min, s.error.max), (2, -0.03, 0.01));
+        assert!((s.error.mean - -0.01).abs() < 1e-15);
+        assert!((s.error.std - 0.02).abs() < 1e-15);
+        assert_eq!(s.max_abs, 0.03);
+        assert!((s.rms - 0.0005f64.sqrt()).abs() < 1e-15);
+        assert!((s.two_rms - 2.0 * 0.0005f64.sqrt()).abs() < 1e-15);
+        assert_eq!(ReferenceSummary::of(&[]), None);
+    }
+
+    #[test]
+    fn reference_naming_unknown_point() {
+        assert_eq!(
+            reference_error(&bar("p", "zz", 5.0), &two_points()),
+            Err(MetricsError::UnknownLabel { label: "zz".into() })
+        );
+    }
+
+    #[test]
+    fn invalid_references() {
+        for r in [
+            bar("p", "p", 5.0),
+            bar("p", "q", 0.0),
+            bar("p", "q", -1.0),
+            bar("p", "q", f64::NAN),
+        ] {
+            let err = reference_error(&r, &two_points()).unwrap_err();
+            assert!(
+                matches!(err, MetricsError::InvalidReference { .. }),
+                "{r:?}: {err:?}"
+            );
+        }
+    }
+}

@@ -1,0 +1,275 @@
+//! Human-readable fixed-width rendering of an [`Evaluation`].
+
+use super::{Evaluation, Summary};
+
+impl Evaluation {
+    /// Renders the report as fixed-width plain-text tables for a terminal:
+    /// lengths in mm with 4 decimals (0.1 µm), units in the column headers,
+    /// rows in the report's order.
+    ///
+    /// ```
+    /// use aacmm_core::metrics::evaluate;
+    /// let touches = [[1.0, 1.0, 0.0], [-1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]];
+    /// let ev = evaluate(&["socket"; 4], &touches, &[]).unwrap();
+    /// let table = ev.to_table();
+    /// assert!(table.contains("e [mm]"));
+    /// assert!(table.contains("1.4142")); // e = √2
+    /// assert!(table.contains("3.2660")); // 2s = 2·sqrt(4·2/3)
+    /// ```
+    pub fn to_table(&self) -> String {
+        [
+            self.points_table(),
+            self.spread_table(),
+            self.pair_table(),
+            self.reference_table(),
+        ]
+        .join("\n")
+    }
+
+    fn points_table(&self) -> String {
+        let rows = self.points.iter().map(|p| {
+            let mut row = vec![p.label.clone(), p.touches.to_string()];
+            row.extend(p.centroid.iter().chain(&p.half_range).map(|&v| mm(v)));
+            row
+        });
+        render(
+            "Points: centroid and per-axis half-range (max - min)/2 (FARO SPAT routine)",
+            &[
+                "point",
+                "n",
+                "X [mm]",
+                "Y [mm]",
+                "Z [mm]",
+                "hr X [mm]",
+                "hr Y [mm]",
+                "hr Z [mm]",
+            ],
+            1,
+            rows,
+        )
+    }
+
+    fn spread_table(&self) -> String {
+        let rows = self.points.iter().map(|p| {
+            let mut row = vec![p.label.clone(), p.touches.to_string()];
+            row.extend([p.e, p.sigma, p.oa, p.delta_max, p.two_s].map(mm));
+            row
+        });
+        let per_point = render(
+            "Single-point articulation: paper eq. 9-12 (e, sigma, OA) and ASME B89.4.22 SPAT \
+             (delta_max, 2s; unverified which one vendors quote)",
+            &[
+                "point",
+                "n",
+                "e [mm]",
+                "sigma [mm]",
+                "e+3sigma [mm]",
+                "delta_max [mm]",
+                "2s [mm]",
+            ],
+            1,
+            rows,
+        );
+        let summaries = [
+            ("e (paper Fig. 6)", &self.single_point_e),
+            ("delta_max", &self.single_point_delta_max),
+            ("2s", &self.single_point_two_s),
+        ];
+        let across = render(
+            "Across points (std = population)",
+            &SUMMARY_HEADER,
+            1,
+            summaries.iter().map(|(name, s)| summary_row(name, s)),
+        );
+        format!("{per_point}\n{across}")
+    }
+
+    fn pair_table(&self) -> String {
+        let title = "Length error, paper eq. 19 (no reference length: repeatability, not scale)";
+        if self.pair_length.is_empty() {
+            return format!("{title}\n  no pairs: a single point was measured\n");
+        }
+        let rows = self.pair_length.iter().map(|p| {
+            vec![
+                p.a.clone(),
+                p.b.clone(),
+                p.pairs.to_string(),
+                mm(p.centroid_distance),
+                mm(p.d_error),
+            ]
+        });
+        let pairs = render(
+            title,
+            &["a", "b", "n", "|ca - cb| [mm]", "d_error [mm]"],
+            2,
+            rows,
+        );
+        let summary = self
+            .pair_length_summary
+            .iter()
+            .map(|s| summary_row("d_error (Fig. 7)", s));
+        let across = render(
+            "Across pairs (std = population)",
+            &SUMMARY_HEADER,
+            1,
+            summary,
+        );
+        format!("{pairs}\n{across}")
+    }
+
+    fn reference_table(&self) -> String {
+        let title = "Reference lengths: error = measured - reference (ISO 10360-12 E_Uni)";
+        let Some(summary) = &self.reference_summary else {
+            return format!("{title}\n  none given\n");
+        };
+        let rows = self.reference.iter().map(|r| {
+            vec![
+                r.a.clone(),
+                r.b.clone(),
+                mm(r.reference),
+                mm(r.measured),
+                mm(r.error),
+            ]
+        });
+        let header = ["a", "b", "reference [mm]", "measured [mm]", "error [mm]"];
+        let errors = render(title, &header, 2, rows);
+        let mut row = summary_row("error", &summary.error);
+        row.extend([summary.max_abs, summary.rms, summary.two_rms].map(mm));
+        let mut header = SUMMARY_HEADER.to_vec();
+        header.extend(["max |error| [mm]", "RMS [mm]", "2 RMS [mm]"]);
+        let across = render(
+            "Across references (ASME B89.4.22 volumetric-style; unverified which the standard quotes)",
+            &header,
+            1,
+            [row],
+        );
+        format!("{errors}\n{across}")
+    }
+}
+
+const SUMMARY_HEADER: [&str; 6] = [
+    "figure",
+    "count",
+    "min [mm]",
+    "mean [mm]",
+    "max [mm]",
+    "std [mm]",
+];
+
+fn summary_row(name: &str, s: &Summary) -> Vec<String> {
+    let mut row = vec![name.to_owned(), s.count.to_string()];
+    row.extend([s.min, s.mean, s.max, s.std].map(mm));
+    row
+}
+
+/// A length in mm to 4 decimals, without a "-0.0000".
+fn mm(v: f64) -> String {
+    let s = format!("{v:.4}");
+    if s == "-0.0000" {
+        "0.0000".to_owned()
+    } else {
+        s
+    }
+}
+
+/// A titled table: each column as wide as its widest cell, the first `left`
+/// columns left-aligned (labels), the others right-aligned (numbers).
+fn render(
+    title: &str,
+    header: &[&str],
+    left: usize,
+    rows: impl IntoIterator<Item = Vec<String>>,
+) -> String {
+    let mut lines: Vec<Vec<String>> = vec![header.iter().map(|h| h.to_string()).collect()];
+    lines.extend(rows);
+    let widths: Vec<usize> = (0..header.len())
+        .map(|c| {
+            lines
+                .iter()
+                .map(|l| l[c].chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let mut out = format!("{title}\n");
+    for line in &lines {
+        let cells: Vec<String> = line
+            .iter()
+            .zip(&widths)
+            .enumerate()
+            .map(|(c, (cell, &w))| {
+                if c < left {
+                    format!("{cell:<w$}")
+                } else {
+                    format!("{cell:>w$}")
+                }
+            })
+            .collect();
+        out.push_str("  ");
+        out.push_str(cells.join("  ").trim_end());
+        out.push('\n');
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{ReferenceDistance, evaluate};
+    use super::*;
+
+    #[test]
+    fn negative_zero_is_printed_as_zero() {
+        assert_eq!(mm(-1e-9), "0.0000");
+        assert_eq!(mm(-0.00005001), "-0.0001");
+        assert_eq!(mm(1.23456), "1.2346");
+    }
+
+    #[test]
+    fn columns_are_aligned() {
+        let t = render(
+            "T",
+            &["name", "v"],
+            1,
+            [vec!["long-name".into(), "1.0000".into()]],
+        );
+        assert_eq!(t, "T\n  name            v\n  long-name  1.0000\n");
+    }
+
+    #[test]
+    fn full_report_has_every_section() {
+        // p at the origin, q at (0, 0, 100.001): centroid distance 100.001
+        let labels = ["p", "p", "p", "q", "q", "q"];
+        let points = [
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+            [0.0, 0.0, 100.001],
+            [0.0, 0.0, 100.001],
+            [0.0, 0.0, 100.001],
+        ];
+        let bar = ReferenceDistance {
+            a: "p".into(),
+            b: "q".into(),
+            distance: 100.0,
+        };
+        let t = evaluate(&labels, &points, &[bar]).unwrap().to_table();
+        for needle in [
+            "Points",
+            "Single-point",
+            "eq. 19",
+            "Reference lengths",
+            "100.0010",
+            "0.0010",
+        ] {
+            assert!(t.contains(needle), "missing {needle:?} in\n{t}");
+        }
+        assert!(t.contains("unverified which the standard quotes"));
+    }
+
+    #[test]
+    fn single_point_report_says_what_is_missing() {
+        let t = evaluate(&["p"; 3], &[[0.0; 3]; 3], &[]).unwrap().to_table();
+        assert!(t.contains("no pairs"));
+        assert!(t.contains("none given"));
+    }
+}
