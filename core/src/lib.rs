@@ -5,6 +5,9 @@
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
 
+pub mod error;
+pub mod generic;
 pub mod io;
+pub mod kernel;
 pub mod metrics;
 pub mod params;

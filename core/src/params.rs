@@ -240,7 +240,7 @@ impl DhParams {
     /// assert_eq!(DhParams::from_slice(&[0.0; 5]), None);
     /// ```
     pub fn from_slice(v: &[f64]) -> Option<DhParams> {
-        if v.len() < 7 || (v.len() - 3) % 4 != 0 {
+        if v.len() < 7 || !(v.len() - 3).is_multiple_of(4) {
             return None;
         }
         let n = (v.len() - 3) / 4;

@@ -1,0 +1,492 @@
+//! The generated kernel: closed-form probe position and Jacobians of the 6- and
+//! 7-joint chains, expanded at compile time by `dh_chain!`, and the batch API
+//! that feeds it prepared data.
+//!
+//! Trig is split by how often it changes: sin/cos of the encoder readings once
+//! per data set ([`PreparedPoses`]), of the zero offsets and twists once per
+//! parameter set ([`PreparedParams`]); the per-pose code only multiplies and
+//! adds. Batches run four poses at a time in SIMD lanes ([`lanes`]); the
+//! lanes do exactly the scalar operations, so results are bit-identical to the
+//! one-pose functions whatever the CPU.
+
+pub mod lanes;
+
+use std::ops::{Add, Mul, Neg, Sub};
+
+use thiserror::Error;
+
+use crate::params::{DhParams, param_count};
+use lanes::{LANES, Lanes, dispatch};
+
+aacmm_dh_macros::dh_chain! {
+    /// The 6-joint measuring arm (27 parameters).
+    pub mod arm6 { joints = 6, probe = true }
+}
+
+aacmm_dh_macros::dh_chain! {
+    /// The 7-joint (7-axis) arm (31 parameters).
+    pub mod arm7 { joints = 7, probe = true }
+}
+
+/// Wrong shapes handed to the kernel.
+#[derive(Debug, Error, Clone, PartialEq, Eq)]
+pub enum KernelError {
+    /// The arm and the data disagree on the number of joints.
+    #[error("the arm has {expected} joints but the data has {got}")]
+    JointCount {
+        /// The arm's joints.
+        expected: usize,
+        /// The data's joints.
+        got: usize,
+    },
+    /// A parameter vector of the wrong length.
+    #[error("expected {expected} parameters, got {got}")]
+    ParamCount {
+        /// Parameters of the arm.
+        expected: usize,
+        /// Parameters given.
+        got: usize,
+    },
+    /// No generated kernel for this many joints.
+    #[error("no kernel for {0} joints: the toolkit generates 6- and 7-joint kernels")]
+    Unsupported(usize),
+}
+
+/// What the generated code computes with: `f64`, SIMD lanes, dual numbers.
+pub trait Scalar:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self> + From<f64>
+{
+}
+
+impl<S> Scalar for S where
+    S: Copy + Add<Output = S> + Sub<Output = S> + Mul<Output = S> + Neg<Output = S> + From<f64>
+{
+}
+
+/// Per-parameter-set inputs of the generated code: lengths (mm) and the
+/// sin/cos of the zero offsets and twists.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Consts<S, const N: usize> {
+    /// cos θ⁰.
+    pub ct: [S; N],
+    /// sin θ⁰.
+    pub st: [S; N],
+    /// cos α.
+    pub ca: [S; N],
+    /// sin α.
+    pub sa: [S; N],
+    /// a, mm.
+    pub a: [S; N],
+    /// d, mm.
+    pub d: [S; N],
+    /// Probe offset, mm.
+    pub b: [S; 3],
+}
+
+/// A parameter set prepared for the kernel: trig computed once.
+pub type PreparedParams<const N: usize> = Consts<f64, N>;
+
+impl<const N: usize> Consts<f64, N> {
+    /// Prepares `params`; fails if the arm does not have `N` joints.
+    ///
+    /// ```
+    /// use aacmm_core::{kernel::PreparedParams, params::DhParams};
+    /// let k = PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+    /// assert_eq!(k.ca[0], (-std::f64::consts::FRAC_PI_2).cos());
+    /// assert!(PreparedParams::<7>::new(&DhParams::paper_nominal()).is_err());
+    /// ```
+    pub fn new(params: &DhParams) -> Result<Self, KernelError> {
+        if params.joint_count() != N {
+            return Err(KernelError::JointCount {
+                expected: N,
+                got: params.joint_count(),
+            });
+        }
+        let j = &params.joints;
+        Ok(Consts {
+            ct: std::array::from_fn(|i| j[i].theta.cos()),
+            st: std::array::from_fn(|i| j[i].theta.sin()),
+            ca: std::array::from_fn(|i| j[i].alpha.cos()),
+            sa: std::array::from_fn(|i| j[i].alpha.sin()),
+            a: std::array::from_fn(|i| j[i].a),
+            d: std::array::from_fn(|i| j[i].d),
+            b: params.probe,
+        })
+    }
+
+    /// The same constants in another scalar type (every lane the same).
+    pub fn splat<S: From<f64>>(&self) -> Consts<S, N> {
+        let s = |v: &[f64; N]| v.map(S::from);
+        Consts {
+            ct: s(&self.ct),
+            st: s(&self.st),
+            ca: s(&self.ca),
+            sa: s(&self.sa),
+            a: s(&self.a),
+            d: s(&self.d),
+            b: self.b.map(S::from),
+        }
+    }
+}
+
+/// The generated functions of an `N`-joint chain. Implemented by [`Dh`] for
+/// the chains the toolkit generates (6 and 7 joints).
+pub trait Chain<const N: usize> {
+    /// Number of geometric parameters, `4N + 3`.
+    const PARAMS: usize;
+    /// Probe position (mm).
+    fn position<S: Scalar>(k: &Consts<S, N>, cq: &[S; N], sq: &[S; N]) -> [S; 3];
+    /// Probe position and `∂p/∂parameter` into `jac` (`PARAMS` columns).
+    fn position_jacobian<S: Scalar>(
+        k: &Consts<S, N>,
+        cq: &[S; N],
+        sq: &[S; N],
+        jac: &mut [[S; 3]],
+    ) -> [S; 3];
+    /// Probe position and `∂p/∂q` into `jac`.
+    fn joint_jacobian<S: Scalar>(
+        k: &Consts<S, N>,
+        cq: &[S; N],
+        sq: &[S; N],
+        jac: &mut [[S; 3]; N],
+    ) -> [S; 3];
+}
+
+/// The generated D-H kernels; see [`Chain`].
+#[derive(Clone, Copy, Debug)]
+pub struct Dh;
+
+macro_rules! impl_chain {
+    ($n:literal, $m:ident) => {
+        impl Chain<$n> for Dh {
+            const PARAMS: usize = $m::PARAMS;
+
+            #[inline(always)]
+            fn position<S: Scalar>(k: &Consts<S, $n>, cq: &[S; $n], sq: &[S; $n]) -> [S; 3] {
+                $m::position(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.b, cq, sq)
+            }
+
+            #[inline(always)]
+            fn position_jacobian<S: Scalar>(
+                k: &Consts<S, $n>,
+                cq: &[S; $n],
+                sq: &[S; $n],
+                jac: &mut [[S; 3]],
+            ) -> [S; 3] {
+                let jac: &mut [[S; 3]; $m::PARAMS] = jac
+                    .try_into()
+                    .expect("jacobian buffer holds 4n + 3 columns");
+                $m::position_jacobian(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.b, cq, sq, jac)
+            }
+
+            #[inline(always)]
+            fn joint_jacobian<S: Scalar>(
+                k: &Consts<S, $n>,
+                cq: &[S; $n],
+                sq: &[S; $n],
+                jac: &mut [[S; 3]; $n],
+            ) -> [S; 3] {
+                $m::joint_jacobian(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.b, cq, sq, jac)
+            }
+        }
+    };
+}
+
+impl_chain!(6, arm6);
+impl_chain!(7, arm7);
+
+/// Encoder readings of a data set with their sin/cos, computed once and laid
+/// out joint by joint (structure of arrays) so that four poses load as one
+/// SIMD vector.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedPoses<const N: usize> {
+    cos: [Vec<f64>; N],
+    sin: [Vec<f64>; N],
+}
+
+impl<const N: usize> PreparedPoses<N> {
+    /// Prepares readings `q` (rad), one row per pose.
+    ///
+    /// ```
+    /// use aacmm_core::kernel::PreparedPoses;
+    /// let poses = PreparedPoses::new(&[[0.0; 6], [0.5; 6]]);
+    /// assert_eq!(poses.len(), 2);
+    /// assert_eq!(poses.trig(1).1[3], 0.5f64.sin());
+    /// ```
+    pub fn new(q: &[[f64; N]]) -> Self {
+        PreparedPoses {
+            cos: std::array::from_fn(|j| q.iter().map(|r| r[j].cos()).collect()),
+            sin: std::array::from_fn(|j| q.iter().map(|r| r[j].sin()).collect()),
+        }
+    }
+
+    /// Prepares rows of any length, failing unless each has `N` readings.
+    ///
+    /// ```
+    /// use aacmm_core::kernel::PreparedPoses;
+    /// assert!(PreparedPoses::<6>::from_rows(&[vec![0.0; 6]]).is_ok());
+    /// assert!(PreparedPoses::<6>::from_rows(&[vec![0.0; 7]]).is_err());
+    /// ```
+    pub fn from_rows(rows: &[Vec<f64>]) -> Result<Self, KernelError> {
+        let q: Vec<[f64; N]> = rows
+            .iter()
+            .map(|r| {
+                r.as_slice()
+                    .try_into()
+                    .map_err(|_| KernelError::JointCount {
+                        expected: N,
+                        got: r.len(),
+                    })
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Self::new(&q))
+    }
+
+    /// Number of poses.
+    pub fn len(&self) -> usize {
+        self.cos[0].len()
+    }
+
+    /// Whether there are no poses.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// cos and sin of pose `i`'s readings.
+    #[inline(always)]
+    pub fn trig(&self, i: usize) -> ([f64; N], [f64; N]) {
+        (
+            std::array::from_fn(|j| self.cos[j][i]),
+            std::array::from_fn(|j| self.sin[j][i]),
+        )
+    }
+
+    #[inline(always)]
+    fn trig_lanes(&self, i: usize) -> ([Lanes; N], [Lanes; N]) {
+        (
+            std::array::from_fn(|j| Lanes::load(&self.cos[j][i..i + LANES])),
+            std::array::from_fn(|j| Lanes::load(&self.sin[j][i..i + LANES])),
+        )
+    }
+}
+
+/// Probe position of one pose with readings `q` (rad).
+///
+/// ```
+/// use aacmm_core::{kernel, params::DhParams};
+/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+/// let p = kernel::position(&k, &[0.0; 6]);
+/// assert!((p[2] - 995.0).abs() < 1e-9);
+/// ```
+pub fn position<const N: usize>(k: &PreparedParams<N>, q: &[f64; N]) -> [f64; 3]
+where
+    Dh: Chain<N>,
+{
+    Dh::position(k, &q.map(f64::cos), &q.map(f64::sin))
+}
+
+/// Probe position and `∂p/∂q` of one pose (rad); what inverse kinematics needs.
+///
+/// ```
+/// use aacmm_core::{kernel, params::DhParams};
+/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+/// let (_, jq) = kernel::joint_jacobian(&k, &[0.0; 6]);
+/// assert!((jq[0][1] + 5.0).abs() < 1e-9); // joint 1 moves the probe along −y
+/// ```
+pub fn joint_jacobian<const N: usize>(
+    k: &PreparedParams<N>,
+    q: &[f64; N],
+) -> ([f64; 3], [[f64; 3]; N])
+where
+    Dh: Chain<N>,
+{
+    let mut jac = [[0.0; 3]; N];
+    let p = Dh::joint_jacobian(k, &q.map(f64::cos), &q.map(f64::sin), &mut jac);
+    (p, jac)
+}
+
+/// Probe positions of every pose, in pose order, into `out`.
+///
+/// # Panics
+/// If `out.len() != poses.len()`.
+///
+/// ```
+/// use aacmm_core::{kernel, params::DhParams};
+/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+/// let q: Vec<[f64; 6]> = (0..9).map(|i| [0.1 * i as f64; 6]).collect();
+/// let poses = kernel::PreparedPoses::new(&q);
+/// let mut out = vec![[0.0; 3]; 9];
+/// kernel::positions(&k, &poses, &mut out);
+/// assert_eq!(out[7], kernel::position(&k, &q[7])); // bit-identical to one pose
+/// ```
+pub fn positions<const N: usize>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses<N>,
+    out: &mut [[f64; 3]],
+) where
+    Dh: Chain<N>,
+{
+    assert_eq!(out.len(), poses.len(), "one output per pose");
+    dispatch!(positions_impl::<N>(k, poses, out));
+}
+
+#[inline(always)]
+fn positions_impl<const N: usize>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses<N>,
+    out: &mut [[f64; 3]],
+) where
+    Dh: Chain<N>,
+{
+    let kl: Consts<Lanes, N> = k.splat();
+    let full = poses.len() / LANES * LANES;
+    for i in (0..full).step_by(LANES) {
+        let (cq, sq) = poses.trig_lanes(i);
+        let p = Dh::position(&kl, &cq, &sq);
+        for (l, o) in out[i..i + LANES].iter_mut().enumerate() {
+            *o = p.map(|v| v.0[l]);
+        }
+    }
+    for (i, o) in out.iter_mut().enumerate().skip(full) {
+        let (cq, sq) = poses.trig(i);
+        *o = Dh::position(k, &cq, &sq);
+    }
+}
+
+/// Calls `f(pose, position, jacobian)` for every pose in order, with the
+/// `3 × (4N+3)` parameter Jacobian as columns — the form a least-squares
+/// solver uses to accumulate `JᵀJ` and `Jᵀr` without materialising `J`.
+///
+/// ```
+/// use aacmm_core::{kernel, params::DhParams};
+/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+/// let poses = kernel::PreparedPoses::new(&[[0.0; 6]; 5]);
+/// let mut count = 0;
+/// kernel::for_each_jacobian(&k, &poses, |_, p, jac| {
+///     assert_eq!(jac.len(), 27);
+///     assert_eq!(jac[6], [0.0, 0.0, 1.0]); // ∂p/∂d1
+///     assert!((p[2] - 995.0).abs() < 1e-9);
+///     count += 1;
+/// });
+/// assert_eq!(count, 5);
+/// ```
+pub fn for_each_jacobian<const N: usize>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses<N>,
+    mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+) where
+    Dh: Chain<N>,
+{
+    let kl: Consts<Lanes, N> = k.splat();
+    let params = <Dh as Chain<N>>::PARAMS;
+    let mut jl = vec![[Lanes::from(0.0); 3]; params];
+    let mut jac = vec![[0.0; 3]; params];
+    let full = poses.len() / LANES * LANES;
+    for i in (0..full).step_by(LANES) {
+        let (cq, sq) = poses.trig_lanes(i);
+        let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
+        for l in 0..LANES {
+            for (c, col) in jac.iter_mut().zip(&jl) {
+                *c = col.map(|v| v.0[l]);
+            }
+            f(i + l, &p.map(|v| v.0[l]), &jac);
+        }
+    }
+    for i in full..poses.len() {
+        let (cq, sq) = poses.trig(i);
+        let p = Dh::position_jacobian(k, &cq, &sq, &mut jac);
+        f(i, &p, &jac);
+    }
+}
+
+/// Positions and parameter Jacobians of every pose: `out_pos[i]` and the
+/// columns `out_jac[i·P .. (i+1)·P]` with `P = 4N + 3`.
+///
+/// # Panics
+/// If the buffers do not hold one position and `P` columns per pose.
+///
+/// ```
+/// use aacmm_core::{kernel, params::DhParams};
+/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+/// let poses = kernel::PreparedPoses::new(&[[0.2; 6]; 6]);
+/// let (mut pos, mut jac) = (vec![[0.0; 3]; 6], vec![[0.0; 3]; 6 * 27]);
+/// kernel::jacobians(&k, &poses, &mut pos, &mut jac);
+/// assert_eq!(jac[5 * 27 + 6], [0.0, 0.0, 1.0]); // ∂p/∂d1 of the last pose
+/// ```
+pub fn jacobians<const N: usize>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses<N>,
+    out_pos: &mut [[f64; 3]],
+    out_jac: &mut [[f64; 3]],
+) where
+    Dh: Chain<N>,
+{
+    let params = <Dh as Chain<N>>::PARAMS;
+    assert_eq!(out_pos.len(), poses.len(), "one position per pose");
+    assert_eq!(
+        out_jac.len(),
+        poses.len() * params,
+        "4n + 3 columns per pose"
+    );
+    dispatch!(jacobians_impl::<N>(k, poses, out_pos, out_jac));
+}
+
+#[inline(always)]
+fn jacobians_impl<const N: usize>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses<N>,
+    out_pos: &mut [[f64; 3]],
+    out_jac: &mut [[f64; 3]],
+) where
+    Dh: Chain<N>,
+{
+    let kl: Consts<Lanes, N> = k.splat();
+    let params = <Dh as Chain<N>>::PARAMS;
+    let mut jl = vec![[Lanes::from(0.0); 3]; params];
+    let full = poses.len() / LANES * LANES;
+    for i in (0..full).step_by(LANES) {
+        let (cq, sq) = poses.trig_lanes(i);
+        let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
+        for l in 0..LANES {
+            out_pos[i + l] = p.map(|v| v.0[l]);
+            let cols = &mut out_jac[(i + l) * params..(i + l + 1) * params];
+            for (c, col) in cols.iter_mut().zip(&jl) {
+                *c = col.map(|v| v.0[l]);
+            }
+        }
+    }
+    for i in full..poses.len() {
+        let (cq, sq) = poses.trig(i);
+        out_pos[i] = Dh::position_jacobian(k, &cq, &sq, &mut out_jac[i * params..(i + 1) * params]);
+    }
+}
+
+/// Probe position of an arm with any supported joint count, for one pose —
+/// the convenience entry for callers that hold a runtime-sized arm.
+///
+/// ```
+/// use aacmm_core::{kernel, params::DhParams};
+/// let p = kernel::position_dyn(&DhParams::paper_nominal(), &[0.0; 6]).unwrap();
+/// assert!((p[2] - 995.0).abs() < 1e-9);
+/// assert!(kernel::position_dyn(&DhParams::paper_nominal(), &[0.0; 7]).is_err());
+/// ```
+pub fn position_dyn(params: &DhParams, q: &[f64]) -> Result<[f64; 3], KernelError> {
+    if q.len() != params.joint_count() {
+        return Err(KernelError::JointCount {
+            expected: params.joint_count(),
+            got: q.len(),
+        });
+    }
+    debug_assert_eq!(params.param_count(), param_count(q.len()));
+    match q.len() {
+        6 => Ok(position(
+            &PreparedParams::<6>::new(params)?,
+            q.try_into().expect("6 readings"),
+        )),
+        7 => Ok(position(
+            &PreparedParams::<7>::new(params)?,
+            q.try_into().expect("7 readings"),
+        )),
+        n => Err(KernelError::Unsupported(n)),
+    }
+}

@@ -1,0 +1,178 @@
+//! The generated kernel against its oracles, over random parameter sets near
+//! and far from nominal and random joint angles, for 6 and 7 joints:
+//! position against the generic nalgebra model, parameter and joint
+//! Jacobians against num-dual autodiff and central differences.
+
+use aacmm_core::generic;
+use aacmm_core::kernel::{self, Chain, Dh, PreparedParams, PreparedPoses};
+use aacmm_core::params::{DhJoint, DhParams};
+use proptest::prelude::*;
+use std::f64::consts::PI;
+
+/// A 7-joint arm: the paper's 6 plus a short wrist link.
+fn nominal(n: usize) -> DhParams {
+    let mut arm = DhParams::paper_nominal();
+    if n == 7 {
+        arm.joints.push(DhJoint {
+            a: 20.0,
+            d: 60.0,
+            alpha: -PI / 2.0,
+            theta: 0.0,
+        });
+    }
+    arm
+}
+
+/// Parameter sets near nominal (small errors, the calibration case) or far
+/// (anything: a newly assembled arm, a wrong model).
+fn arm(n: usize) -> impl Strategy<Value = DhParams> {
+    let near = prop::collection::vec(-1.0f64..1.0, 4 * n + 3).prop_map(move |e| {
+        let mut p = nominal(n).to_vec();
+        for (i, (v, e)) in p.iter_mut().zip(e).enumerate() {
+            let angle = (2 * n..4 * n).contains(&i);
+            *v += if angle { 0.01 * e } else { 2.0 * e };
+        }
+        DhParams::from_slice(&p).expect("4n + 3 values")
+    });
+    let far = (
+        prop::collection::vec(-500.0f64..500.0, 2 * n),
+        prop::collection::vec(-PI..PI, 2 * n),
+        prop::collection::vec(-200.0f64..200.0, 3),
+    )
+        .prop_map(|(len, ang, b)| {
+            let mut v = len;
+            v.extend(ang);
+            v.extend(b);
+            DhParams::from_slice(&v).expect("4n + 3 values")
+        });
+    prop_oneof![near, far]
+}
+
+fn readings(n: usize) -> impl Strategy<Value = Vec<f64>> {
+    prop::collection::vec(-PI..PI, n)
+}
+
+/// Largest column norm: the scale the Jacobian tolerances are relative to.
+fn scale(cols: &[[f64; 3]]) -> f64 {
+    cols.iter()
+        .map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt())
+        .fold(1.0, f64::max)
+}
+
+fn check_columns(got: &[[f64; 3]], want: &[[f64; 3]], rel: f64) -> Result<(), TestCaseError> {
+    prop_assert_eq!(got.len(), want.len());
+    for (c, (g, w)) in got.iter().zip(want).enumerate() {
+        let s = scale(std::slice::from_ref(w)).max(1.0);
+        for r in 0..3 {
+            prop_assert!(
+                (g[r] - w[r]).abs() <= rel * s,
+                "column {} row {}: {} vs {} (scale {})",
+                c,
+                r,
+                g[r],
+                w[r],
+                s
+            );
+        }
+    }
+    Ok(())
+}
+
+fn kernel_matches<const N: usize, const P: usize>(
+    params: &DhParams,
+    q: &[f64],
+) -> Result<(), TestCaseError>
+where
+    Dh: Chain<N>,
+{
+    let k = PreparedParams::<N>::new(params).unwrap();
+    let q: [f64; N] = q.try_into().unwrap();
+
+    let want = generic::position(&params.to_vec(), &q);
+    let got = kernel::position(&k, &q);
+    for r in 0..3 {
+        prop_assert!((got[r] - want[r]).abs() <= 1e-9, "{:?} vs {:?}", got, want);
+    }
+
+    let poses = PreparedPoses::new(&[q]);
+    let mut pos = [[0.0; 3]];
+    let mut jac = vec![[0.0; 3]; P];
+    kernel::jacobians(&k, &poses, &mut pos, &mut jac);
+    for r in 0..3 {
+        prop_assert!((pos[0][r] - want[r]).abs() <= 1e-9);
+    }
+    let dual = generic::param_jacobian_dual::<P>(params, &q).unwrap();
+    check_columns(&jac, &dual, 1e-9)?;
+    let central = generic::param_jacobian_central(params, &q, 1e-5).unwrap();
+    check_columns(&jac, &central, 1e-6)?;
+
+    let (p, jq) = kernel::joint_jacobian(&k, &q);
+    for r in 0..3 {
+        prop_assert!((p[r] - want[r]).abs() <= 1e-9);
+    }
+    let dual_q = generic::joint_jacobian_dual::<N>(params, &q).unwrap();
+    check_columns(&jq, &dual_q, 1e-9)?;
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+
+    #[test]
+    fn six_joint_kernel_matches_oracles(params in arm(6), q in readings(6)) {
+        kernel_matches::<6, 27>(&params, &q)?;
+    }
+
+    #[test]
+    fn seven_joint_kernel_matches_oracles(params in arm(7), q in readings(7)) {
+        kernel_matches::<7, 31>(&params, &q)?;
+    }
+}
+
+/// The batch paths (SIMD lanes plus a scalar tail) give the one-pose results
+/// bit for bit, for every batch length around the lane width.
+#[test]
+fn batches_equal_single_poses_bit_for_bit() {
+    let params = nominal(6);
+    let k = PreparedParams::<6>::new(&params).unwrap();
+    for len in 0..11 {
+        let q: Vec<[f64; 6]> = (0..len)
+            .map(|i| std::array::from_fn(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 3.0))
+            .collect();
+        let poses = PreparedPoses::new(&q);
+        let mut pos = vec![[0.0; 3]; len];
+        kernel::positions(&k, &poses, &mut pos);
+        let mut jpos = vec![[0.0; 3]; len];
+        let mut jac = vec![[0.0; 3]; len * 27];
+        kernel::jacobians(&k, &poses, &mut jpos, &mut jac);
+        let mut seen = 0;
+        kernel::for_each_jacobian(&k, &poses, |i, p, cols| {
+            assert_eq!(i, seen);
+            seen += 1;
+            assert_eq!(*p, jpos[i]);
+            assert_eq!(cols, &jac[i * 27..(i + 1) * 27]);
+        });
+        assert_eq!(seen, len);
+        for i in 0..len {
+            let (cq, sq) = poses.trig(i);
+            assert_eq!(pos[i], <Dh as Chain<6>>::position(&k, &cq, &sq));
+            let mut one = vec![[0.0; 3]; 27];
+            let p = <Dh as Chain<6>>::position_jacobian(&k, &cq, &sq, &mut one);
+            assert_eq!(p, jpos[i]);
+            assert_eq!(one, &jac[i * 27..(i + 1) * 27]);
+        }
+    }
+}
+
+#[test]
+fn shape_errors_are_typed_not_panics() {
+    let six = nominal(6);
+    assert!(PreparedParams::<7>::new(&six).is_err());
+    assert!(PreparedPoses::<6>::from_rows(&[vec![0.0; 5]]).is_err());
+    assert!(generic::param_jacobian_dual::<31>(&six, &[0.0; 6]).is_err());
+    assert!(generic::param_jacobian_central(&six, &[0.0; 7], 1e-6).is_err());
+    assert_eq!(
+        kernel::position_dyn(&DhParams::from_slice(&[0.0; 23]).unwrap(), &[0.0; 5]),
+        Err(kernel::KernelError::Unsupported(5))
+    );
+}
