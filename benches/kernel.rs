@@ -1,1 +1,84 @@
-fn main(){}
+//! Kernel speed: batches of 1000 seeded random poses of the paper's arm with a
+//! perturbed parameter set, grouped by operation. Ids compare the generated
+//! kernel with the generic nalgebra model (position) and with num-dual
+//! autodiff and central differences on the generic model (Jacobian).
+
+use aacmm::generic;
+use aacmm::kernel::{self, PreparedParams, PreparedPoses};
+use aacmm::params::DhParams;
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::f64::consts::PI;
+use std::hint::black_box;
+
+const POSES: usize = 1000;
+
+fn inputs() -> (DhParams, Vec<[f64; 6]>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(2021);
+    let mut v = DhParams::paper_nominal().to_vec();
+    for x in &mut v {
+        *x += rng.random_range(-0.01..0.01);
+    }
+    let params = DhParams::from_slice(&v).expect("27 values");
+    let q = (0..POSES)
+        .map(|_| std::array::from_fn(|_| rng.random_range(-PI..PI)))
+        .collect();
+    (params, q)
+}
+
+fn position(c: &mut Criterion) {
+    let (params, q) = inputs();
+    let k = PreparedParams::<6>::new(&params).expect("6 joints");
+    let poses = PreparedPoses::new(&q);
+    let flat = params.to_vec();
+    let mut out = vec![[0.0; 3]; POSES];
+    let mut g = c.benchmark_group("position");
+    g.throughput(Throughput::Elements(POSES as u64));
+    g.bench_function(BenchmarkId::from_parameter("generated"), |b| {
+        b.iter(|| kernel::positions(black_box(&k), black_box(&poses), &mut out))
+    });
+    g.bench_function(BenchmarkId::from_parameter("generic"), |b| {
+        b.iter(|| {
+            for (o, q) in out.iter_mut().zip(&q) {
+                *o = generic::position(black_box(&flat), q);
+            }
+        })
+    });
+    g.finish();
+}
+
+fn jacobian(c: &mut Criterion) {
+    let (params, q) = inputs();
+    let k = PreparedParams::<6>::new(&params).expect("6 joints");
+    let poses = PreparedPoses::new(&q);
+    let mut pos = vec![[0.0; 3]; POSES];
+    let mut jac = vec![[0.0; 3]; POSES * 27];
+    let mut g = c.benchmark_group("jacobian");
+    g.throughput(Throughput::Elements(POSES as u64));
+    g.bench_function(BenchmarkId::from_parameter("generated"), |b| {
+        b.iter(|| kernel::jacobians(black_box(&k), black_box(&poses), &mut pos, &mut jac))
+    });
+    g.bench_function(BenchmarkId::from_parameter("num-dual"), |b| {
+        b.iter(|| {
+            for q in &q {
+                black_box(
+                    generic::param_jacobian_dual::<27>(black_box(&params), q).expect("6 joints"),
+                );
+            }
+        })
+    });
+    g.bench_function(BenchmarkId::from_parameter("finite-diff"), |b| {
+        b.iter(|| {
+            for q in &q {
+                black_box(
+                    generic::param_jacobian_central(black_box(&params), q, 1e-6).expect("6 joints"),
+                );
+            }
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, position, jacobian);
+criterion_main!(benches);
