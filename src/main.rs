@@ -1,1 +1,45 @@
-fn main() {}
+//! `aacmm`: the command-line front end. Each subcommand lives in its own file
+//! under `commands/`; this file only parses and dispatches.
+
+mod commands;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Calibration toolkit for articulated arm coordinate measuring machines.
+///
+/// Units are explicit: arm files state theirs, poses are degrees unless
+/// `--angle-unit rad`, every length written is mm.
+#[derive(Parser)]
+#[command(name = "aacmm", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Forward kinematics: the probe position of every pose (CSV point,x,y,z in mm).
+    Points(commands::points::Args),
+    /// Simulate a calibration campaign with a known true arm.
+    Simulate(commands::simulate::Args),
+    /// Evaluate an arm on measured poses: single-point and length metrics.
+    Evaluate(commands::evaluate::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Points(args) => commands::points::run(args),
+        Command::Simulate(args) => commands::simulate::run(args),
+        Command::Evaluate(args) => commands::evaluate::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -172,7 +172,7 @@ fn shape_errors_are_typed_not_panics() {
     assert!(generic::param_jacobian_dual::<31>(&six, &[0.0; 6]).is_err());
     assert!(generic::param_jacobian_central(&six, &[0.0; 7], 1e-6).is_err());
     assert_eq!(
-        kernel::position_dyn(&DhParams::from_slice(&[0.0; 23]).unwrap(), &[0.0; 5]),
+        kernel::positions_dyn(&DhParams::from_slice(&[0.0; 23]).unwrap(), &[vec![0.0; 5]]),
         Err(kernel::KernelError::Unsupported(5))
     );
 }

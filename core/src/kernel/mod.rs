@@ -15,7 +15,7 @@ use std::ops::{Add, Mul, Neg, Sub};
 
 use thiserror::Error;
 
-use crate::params::{DhParams, param_count};
+use crate::params::DhParams;
 use lanes::{LANES, Lanes, dispatch};
 
 aacmm_dh_macros::dh_chain! {
@@ -461,32 +461,31 @@ fn jacobians_impl<const N: usize>(
     }
 }
 
-/// Probe position of an arm with any supported joint count, for one pose —
-/// the convenience entry for callers that hold a runtime-sized arm.
+/// Probe positions of rows of readings `q` (rad), in row order, through the
+/// generated kernel of the arm's joint count — the entry for callers that
+/// hold a runtime-sized arm.
 ///
 /// ```
 /// use aacmm_core::{kernel, params::DhParams};
-/// let p = kernel::position_dyn(&DhParams::paper_nominal(), &[0.0; 6]).unwrap();
-/// assert!((p[2] - 995.0).abs() < 1e-9);
-/// assert!(kernel::position_dyn(&DhParams::paper_nominal(), &[0.0; 7]).is_err());
+/// let arm = DhParams::paper_nominal();
+/// let p = kernel::positions_dyn(&arm, &[vec![0.0; 6]]).unwrap();
+/// assert!((p[0][2] - 995.0).abs() < 1e-9);
+/// assert!(kernel::positions_dyn(&arm, &[vec![0.0; 7]]).is_err());
 /// ```
-pub fn position_dyn(params: &DhParams, q: &[f64]) -> Result<[f64; 3], KernelError> {
-    if q.len() != params.joint_count() {
-        return Err(KernelError::JointCount {
-            expected: params.joint_count(),
-            got: q.len(),
-        });
+pub fn positions_dyn(params: &DhParams, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>, KernelError> {
+    fn run<const N: usize>(params: &DhParams, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>, KernelError>
+    where
+        Dh: Chain<N>,
+    {
+        let k = PreparedParams::<N>::new(params)?;
+        let poses = PreparedPoses::<N>::from_rows(q)?;
+        let mut out = vec![[0.0; 3]; poses.len()];
+        positions(&k, &poses, &mut out);
+        Ok(out)
     }
-    debug_assert_eq!(params.param_count(), param_count(q.len()));
-    match q.len() {
-        6 => Ok(position(
-            &PreparedParams::<6>::new(params)?,
-            q.try_into().expect("6 readings"),
-        )),
-        7 => Ok(position(
-            &PreparedParams::<7>::new(params)?,
-            q.try_into().expect("7 readings"),
-        )),
+    match params.joint_count() {
+        6 => run::<6>(params, q),
+        7 => run::<7>(params, q),
         n => Err(KernelError::Unsupported(n)),
     }
 }
