@@ -52,12 +52,11 @@ fn jacobian(c: &mut Criterion) {
     let (params, q) = inputs();
     let k = PreparedParams::<6>::new(&params).expect("6 joints");
     let poses = PreparedPoses::new(&q);
-    let mut pos = vec![[0.0; 3]; POSES];
-    let mut jac = vec![[0.0; 3]; POSES * 27];
+    let mut out = kernel::Jacobians::new(POSES, 27);
     let mut g = c.benchmark_group("jacobian");
     g.throughput(Throughput::Elements(POSES as u64));
     g.bench_function(BenchmarkId::from_parameter("generated"), |b| {
-        b.iter(|| kernel::jacobians(black_box(&k), black_box(&poses), &mut pos, &mut jac))
+        b.iter(|| kernel::jacobians(black_box(&k), black_box(&poses), &mut out))
     });
     g.bench_function(BenchmarkId::from_parameter("num-dual"), |b| {
         b.iter(|| {

@@ -4,7 +4,7 @@
 //! Jacobians against num-dual autodiff and central differences.
 
 use aacmm_core::generic;
-use aacmm_core::kernel::{self, Chain, Dh, PreparedParams, PreparedPoses};
+use aacmm_core::kernel::{self, Chain, Dh, Jacobians, PreparedParams, PreparedPoses};
 use aacmm_core::params::{DhJoint, DhParams};
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -95,12 +95,13 @@ where
     }
 
     let poses = PreparedPoses::new(&[q]);
-    let mut pos = [[0.0; 3]];
-    let mut jac = vec![[0.0; 3]; P];
-    kernel::jacobians(&k, &poses, &mut pos, &mut jac);
+    let mut batch = Jacobians::new(1, P);
+    kernel::jacobians(&k, &poses, &mut batch);
+    let pos = batch.position(0);
     for r in 0..3 {
-        prop_assert!((pos[0][r] - want[r]).abs() <= 1e-9);
+        prop_assert!((pos[r] - want[r]).abs() <= 1e-9);
     }
+    let jac: Vec<[f64; 3]> = (0..P).map(|c| batch.column(0, c)).collect();
     let dual = generic::param_jacobian_dual::<P>(params, &q).unwrap();
     check_columns(&jac, &dual, 1e-9)?;
     let central = generic::param_jacobian_central(params, &q, 1e-5).unwrap();
@@ -142,9 +143,13 @@ fn batches_equal_single_poses_bit_for_bit() {
         let poses = PreparedPoses::new(&q);
         let mut pos = vec![[0.0; 3]; len];
         kernel::positions(&k, &poses, &mut pos);
-        let mut jpos = vec![[0.0; 3]; len];
-        let mut jac = vec![[0.0; 3]; len * 27];
-        kernel::jacobians(&k, &poses, &mut jpos, &mut jac);
+        let mut batch = Jacobians::new(len, 27);
+        kernel::jacobians(&k, &poses, &mut batch);
+        let jpos: Vec<[f64; 3]> = (0..len).map(|i| batch.position(i)).collect();
+        let jac: Vec<[f64; 3]> = (0..len)
+            .flat_map(|i| (0..27).map(move |c| (i, c)))
+            .map(|(i, c)| batch.column(i, c))
+            .collect();
         let mut seen = 0;
         kernel::for_each_jacobian(&k, &poses, |i, p, cols| {
             assert_eq!(i, seen);

@@ -16,7 +16,7 @@ use std::ops::{Add, Mul, Neg, Sub};
 use thiserror::Error;
 
 use crate::params::DhParams;
-use lanes::{LANES, Lanes, dispatch};
+use lanes::{Batch, LANES, dispatch};
 
 aacmm_dh_macros::dh_chain! {
     /// The 6-joint measuring arm (27 parameters).
@@ -261,12 +261,17 @@ impl<const N: usize> PreparedPoses<N> {
         )
     }
 
+    // Plain loops, not `array::from_fn`: its closure is not always inlined,
+    // and out of line the AVX loads become calls.
     #[inline(always)]
-    fn trig_lanes(&self, i: usize) -> ([Lanes; N], [Lanes; N]) {
-        (
-            std::array::from_fn(|j| Lanes::load(&self.cos[j][i..i + LANES])),
-            std::array::from_fn(|j| Lanes::load(&self.sin[j][i..i + LANES])),
-        )
+    fn trig_lanes<L: Batch>(&self, i: usize) -> ([L; N], [L; N]) {
+        let mut c = [L::from(0.0); N];
+        let mut s = [L::from(0.0); N];
+        for j in 0..N {
+            c[j] = L::load(&self.cos[j][i..]);
+            s[j] = L::load(&self.sin[j][i..]);
+        }
+        (c, s)
     }
 }
 
@@ -331,21 +336,19 @@ pub fn positions<const N: usize>(
 }
 
 #[inline(always)]
-fn positions_impl<const N: usize>(
+fn positions_impl<const N: usize, L: Batch>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses<N>,
     out: &mut [[f64; 3]],
 ) where
     Dh: Chain<N>,
 {
-    let kl: Consts<Lanes, N> = k.splat();
+    let kl: Consts<L, N> = k.splat();
     let full = poses.len() / LANES * LANES;
     for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes(i);
+        let (cq, sq) = poses.trig_lanes::<L>(i);
         let p = Dh::position(&kl, &cq, &sq);
-        for (l, o) in out[i..i + LANES].iter_mut().enumerate() {
-            *o = p.map(|v| v.0[l]);
-        }
+        transpose(&[p], &mut out[i..i + LANES]);
     }
     for (i, o) in out.iter_mut().enumerate().skip(full) {
         let (cq, sq) = poses.trig(i);
@@ -373,91 +376,186 @@ fn positions_impl<const N: usize>(
 pub fn for_each_jacobian<const N: usize>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses<N>,
-    mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+    f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
 ) where
     Dh: Chain<N>,
 {
-    let kl: Consts<Lanes, N> = k.splat();
-    let params = <Dh as Chain<N>>::PARAMS;
-    let mut jl = vec![[Lanes::from(0.0); 3]; params];
-    let mut jac = vec![[0.0; 3]; params];
-    let full = poses.len() / LANES * LANES;
-    for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes(i);
-        let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
-        for l in 0..LANES {
-            for (c, col) in jac.iter_mut().zip(&jl) {
-                *c = col.map(|v| v.0[l]);
-            }
-            f(i + l, &p.map(|v| v.0[l]), &jac);
+    dispatch!(for_each_lane_jacobian::<N>(k, poses, f));
+}
+
+/// Probe positions and parameter Jacobians of a batch of poses, stored
+/// structure-of-arrays: for each output (a position coordinate, or one row of
+/// one parameter column) the values of all poses are contiguous, which is how
+/// the SIMD lanes produce them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Jacobians {
+    len: usize,
+    params: usize,
+    /// `[coordinate][pose]`.
+    pos: Vec<f64>,
+    /// `[parameter][coordinate][pose]`.
+    jac: Vec<f64>,
+}
+
+impl Jacobians {
+    /// Zeroed storage for `len` poses and `params` parameters.
+    pub fn new(len: usize, params: usize) -> Jacobians {
+        Jacobians {
+            len,
+            params,
+            pos: vec![0.0; 3 * len],
+            jac: vec![0.0; 3 * params * len],
         }
     }
-    for i in full..poses.len() {
-        let (cq, sq) = poses.trig(i);
-        let p = Dh::position_jacobian(k, &cq, &sq, &mut jac);
-        f(i, &p, &jac);
+
+    /// Number of poses.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no poses.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Number of parameters (columns).
+    pub fn params(&self) -> usize {
+        self.params
+    }
+
+    /// Probe position of pose `i` (mm).
+    pub fn position(&self, i: usize) -> [f64; 3] {
+        [0, 1, 2].map(|r| self.pos[r * self.len + i])
+    }
+
+    /// `∂p/∂parameter_c` of pose `i`.
+    pub fn column(&self, i: usize, c: usize) -> [f64; 3] {
+        [0, 1, 2].map(|r| self.jac[(3 * c + r) * self.len + i])
+    }
+
+    /// `∂p_r/∂parameter_c` of every pose, contiguous.
+    pub fn row(&self, c: usize, r: usize) -> &[f64] {
+        let start = (3 * c + r) * self.len;
+        &self.jac[start..start + self.len]
+    }
+
+    #[inline(always)]
+    fn set(&mut self, i: usize, p: [f64; 3], cols: &[[f64; 3]]) {
+        for (r, v) in p.into_iter().enumerate() {
+            self.pos[r * self.len + i] = v;
+        }
+        for (c, col) in cols.iter().enumerate() {
+            for (r, &v) in col.iter().enumerate() {
+                self.jac[(3 * c + r) * self.len + i] = v;
+            }
+        }
     }
 }
 
-/// Positions and parameter Jacobians of every pose: `out_pos[i]` and the
-/// columns `out_jac[i·P .. (i+1)·P]` with `P = 4N + 3`.
+/// Positions and parameter Jacobians of every pose into `out`.
 ///
 /// # Panics
-/// If the buffers do not hold one position and `P` columns per pose.
+/// If `out` was not made for `poses.len()` poses and `4N + 3` parameters.
 ///
 /// ```
 /// use aacmm_core::{kernel, params::DhParams};
 /// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
 /// let poses = kernel::PreparedPoses::new(&[[0.2; 6]; 6]);
-/// let (mut pos, mut jac) = (vec![[0.0; 3]; 6], vec![[0.0; 3]; 6 * 27]);
-/// kernel::jacobians(&k, &poses, &mut pos, &mut jac);
-/// assert_eq!(jac[5 * 27 + 6], [0.0, 0.0, 1.0]); // ∂p/∂d1 of the last pose
+/// let mut out = kernel::Jacobians::new(6, 27);
+/// kernel::jacobians(&k, &poses, &mut out);
+/// assert_eq!(out.column(5, 6), [0.0, 0.0, 1.0]); // ∂p/∂d1 of the last pose
+/// assert_eq!(out.row(6, 2), &[1.0; 6]);
 /// ```
 pub fn jacobians<const N: usize>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses<N>,
-    out_pos: &mut [[f64; 3]],
-    out_jac: &mut [[f64; 3]],
+    out: &mut Jacobians,
 ) where
     Dh: Chain<N>,
 {
-    let params = <Dh as Chain<N>>::PARAMS;
-    assert_eq!(out_pos.len(), poses.len(), "one position per pose");
+    assert_eq!(out.len, poses.len(), "storage for every pose");
     assert_eq!(
-        out_jac.len(),
-        poses.len() * params,
-        "4n + 3 columns per pose"
+        out.params,
+        <Dh as Chain<N>>::PARAMS,
+        "storage for 4n + 3 columns"
     );
-    dispatch!(jacobians_impl::<N>(k, poses, out_pos, out_jac));
+    dispatch!(jacobians_impl::<N>(k, poses, out));
 }
 
 #[inline(always)]
-fn jacobians_impl<const N: usize>(
+fn jacobians_impl<const N: usize, L: Batch>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses<N>,
-    out_pos: &mut [[f64; 3]],
-    out_jac: &mut [[f64; 3]],
+    out: &mut Jacobians,
 ) where
     Dh: Chain<N>,
 {
-    let kl: Consts<Lanes, N> = k.splat();
+    let kl: Consts<L, N> = k.splat();
     let params = <Dh as Chain<N>>::PARAMS;
-    let mut jl = vec![[Lanes::from(0.0); 3]; params];
+    let len = out.len;
+    let mut jl = vec![[L::from(0.0); 3]; params];
     let full = poses.len() / LANES * LANES;
     for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes(i);
+        let (cq, sq) = poses.trig_lanes::<L>(i);
         let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
-        for l in 0..LANES {
-            out_pos[i + l] = p.map(|v| v.0[l]);
-            let cols = &mut out_jac[(i + l) * params..(i + l + 1) * params];
-            for (c, col) in cols.iter_mut().zip(&jl) {
-                *c = col.map(|v| v.0[l]);
+        for (r, v) in p.into_iter().enumerate() {
+            v.store(&mut out.pos[r * len + i..]);
+        }
+        for (c, col) in jl.iter().enumerate() {
+            for (r, v) in col.iter().enumerate() {
+                v.store(&mut out.jac[(3 * c + r) * len + i..]);
             }
+        }
+    }
+    let mut cols = vec![[0.0; 3]; params];
+    for i in full..poses.len() {
+        let (cq, sq) = poses.trig(i);
+        let p = Dh::position_jacobian(k, &cq, &sq, &mut cols);
+        out.set(i, p, &cols);
+    }
+}
+
+#[inline(always)]
+fn for_each_lane_jacobian<const N: usize, L: Batch>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses<N>,
+    mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+) where
+    Dh: Chain<N>,
+{
+    let kl: Consts<L, N> = k.splat();
+    let params = <Dh as Chain<N>>::PARAMS;
+    let mut jl = vec![[L::from(0.0); 3]; params];
+    let mut tile = vec![[0.0; 3]; LANES * params];
+    let mut pos = [[0.0; 3]; LANES];
+    let full = poses.len() / LANES * LANES;
+    for i in (0..full).step_by(LANES) {
+        let (cq, sq) = poses.trig_lanes::<L>(i);
+        let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
+        transpose(&[p], &mut pos);
+        transpose(&jl, &mut tile);
+        for (l, cols) in tile.chunks_exact(params).enumerate() {
+            f(i + l, &pos[l], cols);
         }
     }
     for i in full..poses.len() {
         let (cq, sq) = poses.trig(i);
-        out_pos[i] = Dh::position_jacobian(k, &cq, &sq, &mut out_jac[i * params..(i + 1) * params]);
+        let p = Dh::position_jacobian(k, &cq, &sq, &mut tile[..params]);
+        f(i, &p, &tile[..params]);
+    }
+}
+
+/// Lanes (column-major across poses) to one block of columns per pose:
+/// `dst[l·C + c] = cols[c]` of lane `l`, for `C = cols.len()` columns.
+#[inline(always)]
+fn transpose<L: Batch>(cols: &[[L; 3]], dst: &mut [[f64; 3]]) {
+    let c_count = cols.len();
+    let dst = &mut dst[..LANES * c_count];
+    for (c, col) in cols.iter().enumerate() {
+        let [x, y, z] = [col[0].to_array(), col[1].to_array(), col[2].to_array()];
+        for l in 0..LANES {
+            dst[l * c_count + c] = [x[l], y[l], z[l]];
+        }
     }
 }
 
