@@ -31,7 +31,8 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("{}: {}", args.arm.display(), args.data.display()))?;
     match &args.out {
         Some(path) => {
-            let file = File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
+            let file =
+                File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
             let mut w = BufWriter::new(file);
             write_points(&mut w, &poses.labels, &xyz)
                 .and_then(|_| w.flush())
