@@ -1,0 +1,171 @@
+//! `aacmm points`: forward kinematics of every row, 6 and 7 joints, and
+//! errors that name file, line and field.
+
+use crate::util::{aacmm, assert_clean_error, example, stdout, temp_dir, write};
+use aacmm::generic;
+use aacmm::io::read_arm;
+
+const POSES: &str = "point,q1,q2,q3,q4,q5,q6\n\
+    S1,0,0,0,0,0,0\n\
+    S1,10,20,30,40,50,60\n\
+    S2,-170,95.5,-30,12,-80,179\n";
+
+fn parse_rows(text: &str) -> Vec<(String, [f64; 3])> {
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (f[0].to_string(), [1, 2, 3].map(|i| f[i].parse().unwrap()))
+        })
+        .collect()
+}
+
+#[test]
+fn writes_every_row_in_order_matching_the_generic_model() {
+    let dir = temp_dir("points-six");
+    let data = write(&dir, "poses.csv", POSES);
+    let arm = example("paper-table-1.toml");
+    let o = aacmm(&["points", "--arm", arm.to_str().unwrap(), "--data", &data]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = stdout(&o);
+    assert!(text.starts_with("point,x,y,z\n"));
+    let rows = parse_rows(&text);
+    let params = read_arm(&arm).unwrap().params.to_vec();
+    let q_deg: [[f64; 6]; 3] = [
+        [0.0; 6],
+        [10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
+        [-170.0, 95.5, -30.0, 12.0, -80.0, 179.0],
+    ];
+    assert_eq!(rows.len(), 3);
+    for ((label, xyz), (q, want_label)) in rows.iter().zip(q_deg.iter().zip(["S1", "S1", "S2"])) {
+        assert_eq!(label, want_label);
+        let want = generic::position(&params, &q.map(f64::to_radians));
+        for k in 0..3 {
+            // Output is written to 1e-6 mm.
+            assert!((xyz[k] - want[k]).abs() <= 6e-7, "{xyz:?} vs {want:?}");
+        }
+    }
+}
+
+#[test]
+fn out_file_and_radians() {
+    let dir = temp_dir("points-out");
+    let data = write(
+        &dir,
+        "poses.csv",
+        "point,q1,q2,q3,q4,q5,q6\nP,0,0,0,0,0,0\n",
+    );
+    let out = dir.join("points.csv");
+    let arm = example("paper-table-1.toml");
+    let o = aacmm(&[
+        "points",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--data",
+        &data,
+        "--angle-unit",
+        "rad",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    assert!(o.stdout.is_empty());
+    let text = std::fs::read_to_string(out).unwrap();
+    assert_eq!(text, "point,x,y,z\nP,-5.000000,0.000000,995.000000\n");
+}
+
+#[test]
+fn seven_joint_arm_uses_its_own_kernel() {
+    let dir = temp_dir("points-seven");
+    let mut arm = std::fs::read_to_string(example("paper-table-1.toml")).unwrap();
+    arm = arm.replace(
+        "[probe]",
+        "[[joint]]\ntheta = 0.0\nalpha = -90.0\na = 20.0\nd = 60.0\n\n[probe]",
+    );
+    let arm = write(&dir, "arm7.toml", &arm);
+    let data = write(
+        &dir,
+        "poses.csv",
+        "point,q1,q2,q3,q4,q5,q6,q7\nP,5,10,15,20,25,30,35\n",
+    );
+    let o = aacmm(&["points", "--arm", &arm, "--data", &data]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows = parse_rows(&stdout(&o));
+    let params = read_arm(std::path::Path::new(&arm))
+        .unwrap()
+        .params
+        .to_vec();
+    let q = [5.0f64, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0].map(f64::to_radians);
+    let want = generic::position(&params, &q);
+    for k in 0..3 {
+        assert!((rows[0].1[k] - want[k]).abs() <= 6e-7);
+    }
+    // A 6-column poses file does not fit a 7-joint arm.
+    let six = write(&dir, "six.csv", POSES);
+    let o = aacmm(&["points", "--arm", &arm, "--data", &six]);
+    assert_clean_error(&o, &["six.csv:1"]);
+}
+
+#[test]
+fn bad_files_name_file_line_and_field() {
+    let dir = temp_dir("points-bad");
+    let arm = example("paper-table-1.toml");
+    let arm = arm.to_str().unwrap();
+    let cases: &[(&str, &str, &[&str])] = &[
+        (
+            "nan.csv",
+            "point,q1,q2,q3,q4,q5,q6\nS1,0,0,NaN,0,0,0\n",
+            &["nan.csv:2", "q3"],
+        ),
+        (
+            "short.csv",
+            "point,q1,q2,q3,q4,q5,q6\nS1,0,0,0\n",
+            &["short.csv:2", "q4"],
+        ),
+        (
+            "text.csv",
+            "point,q1,q2,q3,q4,q5,q6\nS1,0,0,0,0,zero,0\n",
+            &["text.csv:2", "q5"],
+        ),
+        (
+            "header.csv",
+            "point,q1,q2,q3,q4,q6,q5\nS1,0,0,0,0,0,0\n",
+            &["header.csv:1"],
+        ),
+    ];
+    for (name, text, expect) in cases {
+        let data = write(&dir, name, text);
+        let o = aacmm(&["points", "--arm", arm, "--data", &data]);
+        assert_clean_error(&o, expect);
+    }
+    let data = write(&dir, "ok.csv", POSES);
+    let arms: &[(&str, &str, &[&str])] = &[
+        (
+            "unit.toml",
+            "name = \"x\"\nlength_unit = \"inch\"\nangle_unit = \"deg\"\n",
+            &["unit.toml:2", "length_unit"],
+        ),
+        (
+            "missing.toml",
+            "name = \"x\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n[[joint]]\ntheta = 0.0\nalpha = 0.0\na = 1.0\n[probe]\nx = 0.0\ny = 0.0\nz = 0.0\n",
+            &["missing.toml:4", "`d`"],
+        ),
+    ];
+    for (name, text, expect) in arms {
+        let bad = write(&dir, name, text);
+        let o = aacmm(&["points", "--arm", &bad, "--data", &data]);
+        assert_clean_error(&o, expect);
+    }
+    let o = aacmm(&[
+        "points",
+        "--arm",
+        arm,
+        "--data",
+        &data,
+        "--angle-unit",
+        "grad",
+    ]);
+    assert_clean_error(&o, &["grad"]);
+    let o = aacmm(&["points", "--arm", "/nonexistent/arm.toml", "--data", &data]);
+    assert_clean_error(&o, &["/nonexistent/arm.toml"]);
+}
