@@ -113,6 +113,18 @@ where
     }
     let dual_q = generic::joint_jacobian_dual::<N>(params, &q).unwrap();
     check_columns(&jq, &dual_q, 1e-9)?;
+    let flat = params.to_vec();
+    let h = 1e-5;
+    let central_q: Vec<[f64; 3]> = (0..N)
+        .map(|j| {
+            let (mut plus, mut minus) = (q, q);
+            plus[j] += h;
+            minus[j] -= h;
+            let (p, m) = (generic::position(&flat, &plus), generic::position(&flat, &minus));
+            [0, 1, 2].map(|r| (p[r] - m[r]) / (2.0 * h))
+        })
+        .collect();
+    check_columns(&jq, &central_q, 1e-6)?;
     Ok(())
 }
 
