@@ -51,14 +51,14 @@ pub enum InputError {
         /// What is wrong, and what is expected.
         message: String,
     },
-    /// The file could not be read or written.
-    #[error("{file}: {source}")]
+    /// The file could not be read or written. The OS error is part of the
+    /// message, not a separate `source`, so error chains print it once.
+    #[error("{file}: {error}")]
     Io {
         /// File name as given by the caller.
         file: String,
         /// The underlying error.
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -117,7 +117,7 @@ impl InputError {
     pub fn io(file: impl Into<String>, source: std::io::Error) -> InputError {
         InputError::Io {
             file: file.into(),
-            source,
+            error: source,
         }
     }
 
@@ -171,7 +171,7 @@ impl InputError {
             InputError::Field { message, .. }
             | InputError::Line { message, .. }
             | InputError::File { message, .. } => message.clone(),
-            InputError::Io { source, .. } => source.to_string(),
+            InputError::Io { error, .. } => error.to_string(),
         }
     }
 }

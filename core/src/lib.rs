@@ -11,3 +11,4 @@ pub mod io;
 pub mod kernel;
 pub mod metrics;
 pub mod params;
+pub mod simulate;

@@ -120,7 +120,10 @@ where
             let (mut plus, mut minus) = (q, q);
             plus[j] += h;
             minus[j] -= h;
-            let (p, m) = (generic::position(&flat, &plus), generic::position(&flat, &minus));
+            let (p, m) = (
+                generic::position(&flat, &plus),
+                generic::position(&flat, &minus),
+            );
             [0, 1, 2].map(|r| (p[r] - m[r]) / (2.0 * h))
         })
         .collect();

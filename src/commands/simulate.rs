@@ -1,11 +1,219 @@
-//! `aacmm simulate` (being written).
+//! `aacmm simulate`: a calibration campaign with a known true arm — what the
+//! encoders would read, the true sockets, reference lengths and the true arm
+//! — written so that a calibration can be checked against the truth.
 
-use anyhow::Result;
+use std::path::PathBuf;
 
-/// Simulate a calibration campaign.
+use aacmm::io::read_arm;
+use aacmm::simulate::{
+    CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG,
+    ErrorModel, SimError, SocketPlan, pair_count, simulate, write_campaign,
+};
+use anyhow::{Result, anyhow, bail};
+use clap::{ArgGroup, ValueEnum};
+
+/// Default number of reference lengths (fewer if the sockets make fewer pairs).
+const DEFAULT_REFERENCE_LENGTHS: usize = 3;
+
+/// Simulate a calibration campaign: a true arm touches K sockets N times each
+/// in different articulations; writes poses.csv (encoder readings, degrees),
+/// lengths.csv (mm), sockets.csv (true centres, mm), true_arm.toml and
+/// campaign.toml (every setting and the seed) into --out. Same seed, same bytes.
 #[derive(clap::Args)]
-pub struct Args {}
-
-pub fn run(_args: Args) -> Result<()> {
-    anyhow::bail!("simulate is not implemented yet")
+#[command(group(ArgGroup::new("truth").required(true).args(["true_arm", "errors"])))]
+#[command(group(ArgGroup::new("where").required(true).args(["sockets", "sockets_file"])))]
+pub struct Args {
+    /// Nominal arm file (TOML, 6 or 7 joints); its joint limits, if any, bound
+    /// every simulated reading.
+    #[arg(long, value_name = "NOMINAL.toml")]
+    arm: PathBuf,
+    /// True arm file (same joint count as the nominal); exclusive with --errors.
+    #[arg(long = "true", value_name = "TRUE.toml")]
+    true_arm: Option<PathBuf>,
+    /// Errors that make the true arm from the nominal.
+    #[arg(long, value_enum, value_name = "MODEL")]
+    errors: Option<Errors>,
+    /// Multiplier on the random models' default standard deviations [default: 1].
+    #[arg(
+        long,
+        value_name = "X",
+        requires = "errors",
+        allow_negative_numbers = true
+    )]
+    error_scale: Option<f64>,
+    /// Number of sockets, spread over the true arm's reachable volume
+    /// (near/middle/far from the base axis, at 30–80 % of its reach).
+    #[arg(long, value_name = "K", allow_negative_numbers = true)]
+    sockets: Option<usize>,
+    /// Socket centres from a point file (CSV `point,x,y,z`, mm) instead of --sockets.
+    #[arg(long, value_name = "FILE", conflicts_with = "sockets")]
+    sockets_file: Option<PathBuf>,
+    /// Touches per socket (at least 3), each a different articulation (some
+    /// joint at least 20° away from every other touch of the socket).
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    poses: usize,
+    /// Seed of every random draw (0 to 2^63 - 1); recorded in campaign.toml.
+    #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
+    seed: u64,
+    /// Standard deviation of the Gaussian noise on each encoder reading, degrees.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    encoder_noise: f64,
+    /// Standard deviation of the probe seating per axis, mm (the ball never
+    /// sits twice in exactly the same place).
+    #[arg(
+        long,
+        value_name = "MM",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    probe_noise: f64,
+    /// Number of reference lengths (distinct socket pairs, preferring long
+    /// ones) [default: 3, or the number of pairs if fewer; 0 = none].
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
+    reference_lengths: Option<usize>,
+    /// Standard uncertainty of the reference lengths, mm: the recorded
+    /// distances get Gaussian noise of this size and lengths.csv states it.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    length_uncertainty: Option<f64>,
+    /// Output directory (created if missing; the campaign's files in it are replaced).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
 }
+
+/// The error models of `--errors`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Errors {
+    /// The paper's identified errors (Table 2; 6-joint arms only).
+    Paper,
+    /// Gaussian errors on every parameter: lengths σ 0.4 mm, twists 0.07°,
+    /// zero offsets 0.45° (the RMS of Table 2), times --error-scale.
+    Random,
+    /// A newly assembled arm: random errors, but zero offsets anywhere in ±180°.
+    Assembled,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let nominal = read_arm(&args.arm)?;
+    let joints = nominal.params.joint_count();
+    let errors = match (&args.true_arm, args.errors) {
+        (Some(path), _) => ErrorModel::File {
+            arm: read_arm(path)?,
+        },
+        (None, Some(Errors::Paper)) => {
+            if args.error_scale.is_some() {
+                bail!(
+                    "--error-scale: applies to --errors random|assembled, not to the paper's fixed errors"
+                );
+            }
+            ErrorModel::Paper
+        }
+        (None, Some(model)) => {
+            let scale = args.error_scale.unwrap_or(1.0);
+            if !(scale.is_finite() && scale >= 0.0) {
+                bail!("--error-scale: must be finite and not negative, got {scale}");
+            }
+            ErrorModel::random(scale, model == Errors::Assembled)
+        }
+        (None, None) => bail!("give --true TRUE.toml or --errors paper|random|assembled"),
+    };
+    let sockets = match (&args.sockets_file, args.sockets) {
+        (Some(path), _) => SocketPlan::from_file(path)?,
+        (None, Some(count)) => SocketPlan::Spread { count },
+        (None, None) => bail!("give --sockets K or --sockets-file FILE"),
+    };
+    let count = sockets.count();
+    let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses);
+    settings.nominal_file = Some(args.arm.display().to_string());
+    settings.sockets = sockets;
+    settings.encoder_noise_deg = args.encoder_noise;
+    settings.probe_noise_mm = args.probe_noise;
+    settings.reference_lengths = args
+        .reference_lengths
+        .unwrap_or_else(|| DEFAULT_REFERENCE_LENGTHS.min(pair_count(count)));
+    settings.length_uncertainty_mm = args.length_uncertainty;
+    settings.validate(joints).map_err(flag_error)?;
+
+    let campaign = simulate(&nominal, &settings).map_err(flag_error)?;
+    let written = write_campaign(&args.out, &campaign, &settings)?;
+
+    let st = &campaign.stats;
+    eprintln!(
+        "nominal arm `{}` ({}, {joints} joints)",
+        nominal.name,
+        args.arm.display()
+    );
+    eprintln!(
+        "true arm: {}",
+        match &args.true_arm {
+            Some(path) => format!("{} ({})", settings.errors.describe(), path.display()),
+            None => settings.errors.describe(),
+        }
+    );
+    let placed = match &args.sockets_file {
+        Some(path) => format!("from {}", path.display()),
+        None => "spread over the reachable volume".to_string(),
+    };
+    eprintln!(
+        "{count} socket{} {placed}, {} touches each: {} poses ({} IK starts: {} not converged, \
+         {} outside joint limits, {} too close to an earlier touch; largest residual {:.1e} mm)",
+        if count == 1 { "" } else { "s" },
+        settings.poses_per_socket,
+        campaign.poses.len(),
+        st.ik_starts,
+        st.not_converged,
+        st.outside_limits,
+        st.too_close,
+        st.max_residual_mm
+    );
+    eprintln!(
+        "noise: encoders {}°, probe seating {} mm; {} reference lengths{}; seed {}",
+        settings.encoder_noise_deg,
+        settings.probe_noise_mm,
+        campaign.lengths.len(),
+        settings
+            .length_uncertainty_mm
+            .map(|u| format!(" (uncertainty {u} mm)"))
+            .unwrap_or_default(),
+        settings.seed
+    );
+    if campaign.lengths.is_empty() {
+        eprintln!(
+            "no reference lengths: lengths.csv not written (without one, the arm's scale cannot \
+             be calibrated)"
+        );
+    }
+    for path in &written {
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// A settings error in terms of the flag the user typed.
+fn flag_error(e: SimError) -> anyhow::Error {
+    let SimError::Setting { name, message } = &e else {
+        return e.into();
+    };
+    let flag = match name.as_str() {
+        "seed" => "--seed",
+        "sockets" => "--sockets",
+        "sockets.points" => "--sockets-file",
+        "poses_per_socket" => "--poses",
+        "encoder_noise_deg" => "--encoder-noise",
+        "probe_noise_mm" => "--probe-noise",
+        "reference_lengths" => "--reference-lengths",
+        "length_uncertainty_mm" => "--length-uncertainty",
+        n if n.starts_with("errors.") => "--error-scale",
+        _ => return e.into(),
+    };
+    anyhow!("{flag}: {message}")
+}
+
+// The defaults quoted in the help text are the library's.
+const _: () = assert!(DEFAULT_LENGTH_SIGMA_MM == 0.4);
+const _: () = assert!(DEFAULT_TWIST_SIGMA_DEG == 0.07);
+const _: () = assert!(DEFAULT_ZERO_SIGMA_DEG == 0.45);

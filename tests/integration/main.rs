@@ -1,1 +1,7 @@
+//! Integration tests of the whole toolkit, the CLI included: one binary, one
+//! module per command.
 
+mod evaluate;
+mod points;
+mod simulate;
+mod util;

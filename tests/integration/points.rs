@@ -97,8 +97,8 @@ fn seven_joint_arm_uses_its_own_kernel() {
         .to_vec();
     let q = [5.0f64, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0].map(f64::to_radians);
     let want = generic::position(&params, &q);
-    for k in 0..3 {
-        assert!((rows[0].1[k] - want[k]).abs() <= 6e-7);
+    for (got, want) in rows[0].1.iter().zip(want) {
+        assert!((got - want).abs() <= 6e-7);
     }
     // A 6-column poses file does not fit a 7-joint arm.
     let six = write(&dir, "six.csv", POSES);

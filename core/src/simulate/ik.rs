@@ -1,0 +1,101 @@
+//! Inverse kinematics for a point: damped least squares (Levenberg–Marquardt)
+//! on the kernel's analytic `3 × N` joint Jacobian.
+//!
+//! A measuring arm is redundant for a point (six or seven joints, three
+//! constraints), so the solution reached depends on the start: random starts
+//! give genuinely different articulations of the same point.
+
+use nalgebra::{Matrix3, Vector3};
+
+use crate::kernel::{Chain, Dh, PreparedParams, joint_jacobian};
+
+/// Residual below which a solution is accepted, mm.
+pub const IK_TOLERANCE_MM: f64 = 1e-10;
+/// Iterations allowed per start.
+pub const IK_MAX_ITERATIONS: usize = 200;
+
+/// The outcome of one inverse-kinematics run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IkSolution<const N: usize> {
+    /// Encoder readings reached, rad (not wrapped).
+    pub q: [f64; N],
+    /// Distance from the probe centre to the target, mm.
+    pub residual_mm: f64,
+    /// Iterations used.
+    pub iterations: usize,
+}
+
+impl<const N: usize> IkSolution<N> {
+    /// Whether the residual is below [`IK_TOLERANCE_MM`].
+    pub fn converged(&self) -> bool {
+        self.residual_mm < IK_TOLERANCE_MM
+    }
+}
+
+/// Readings `q` that put the probe centre of the arm `k` at `target` (mm),
+/// starting from `start`: Levenberg–Marquardt with the step
+/// `Δq = Jᵀ (J Jᵀ + μI)⁻¹ r`, `μ` divided by 3 after a step that lowers the
+/// residual and multiplied by 4 after one that does not. Stops when the
+/// residual is below [`IK_TOLERANCE_MM`] or after [`IK_MAX_ITERATIONS`].
+///
+/// ```
+/// use aacmm_core::{kernel, params::DhParams, simulate::solve_point};
+/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+/// let target = kernel::position(&k, &[0.3, -0.5, 0.2, 1.0, -0.4, 0.7]);
+/// let s = solve_point(&k, target, [0.0, -1.0, 0.5, 0.5, 0.0, 0.0]);
+/// assert!(s.converged());
+/// let p = kernel::position(&k, &s.q);
+/// assert!((0..3).all(|i| (p[i] - target[i]).abs() < 1e-10));
+/// ```
+pub fn solve_point<const N: usize>(
+    k: &PreparedParams<N>,
+    target: [f64; 3],
+    start: [f64; N],
+) -> IkSolution<N>
+where
+    Dh: Chain<N>,
+{
+    let eval = |q: &[f64; N]| {
+        let (p, jac) = joint_jacobian(k, q);
+        let r = Vector3::new(target[0] - p[0], target[1] - p[1], target[2] - p[2]);
+        (r, jac)
+    };
+    let mut q = start;
+    let (mut r, mut jac) = eval(&q);
+    let mut err = r.norm();
+    let mut mu = 1e-3 * jjt(&jac).trace() / 3.0;
+    let mut iterations = 0;
+    while err >= IK_TOLERANCE_MM && iterations < IK_MAX_ITERATIONS {
+        iterations += 1;
+        let a = jjt(&jac) + Matrix3::identity() * mu;
+        let Some(y) = a.lu().solve(&r) else {
+            mu = mu * 4.0 + f64::MIN_POSITIVE;
+            continue;
+        };
+        let trial: [f64; N] =
+            std::array::from_fn(|j| q[j] + jac[j][0] * y[0] + jac[j][1] * y[1] + jac[j][2] * y[2]);
+        let (r_new, jac_new) = eval(&trial);
+        let err_new = r_new.norm();
+        if err_new < err {
+            (q, r, jac, err) = (trial, r_new, jac_new, err_new);
+            mu /= 3.0;
+        } else {
+            mu = mu * 4.0 + f64::MIN_POSITIVE;
+        }
+    }
+    IkSolution {
+        q,
+        residual_mm: err,
+        iterations,
+    }
+}
+
+/// `J Jᵀ` of the columns `∂p/∂q_j`.
+fn jjt<const N: usize>(jac: &[[f64; 3]; N]) -> Matrix3<f64> {
+    let mut m = Matrix3::zeros();
+    for col in jac {
+        let c = Vector3::from(*col);
+        m += c * c.transpose();
+    }
+    m
+}

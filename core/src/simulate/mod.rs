@@ -1,0 +1,278 @@
+//! The campaign simulator: a known true arm touches sockets in many
+//! articulations, and the encoders record what a real campaign would give.
+//!
+//! 1. **True arm** ([`true_arm`]): the nominal plus the paper's Table 2
+//!    errors, random errors (optionally with zero offsets anywhere in ±180°:
+//!    a newly assembled arm), or a given arm.
+//! 2. **Sockets** ([`place_sockets`]): spread over the true arm's
+//!    comfortable volume (near/middle/far from the base axis, well apart), or
+//!    given.
+//! 3. **Touches** ([`find_touches`]): for each socket, `N` articulations by
+//!    inverse kinematics on the true arm ([`solve_point`], Levenberg–Marquardt
+//!    on the kernel's joint Jacobian) from random starts, within joint limits,
+//!    each at least [`CampaignSettings::min_pose_separation_deg`] from the
+//!    others in some joint. The probe seats at the socket centre plus
+//!    Gaussian noise; the encoders read the true angles plus Gaussian noise.
+//! 4. **Reference lengths** ([`reference_lengths`]): true distances between
+//!    distinct socket pairs, optionally with their own noise and uncertainty.
+//!
+//! With zero noise, the true arm puts the probe centre on each socket centre
+//! to within 1e-9 mm at every recorded pose.
+//!
+//! **Determinism.** Every draw comes from a ChaCha8 generator seeded with
+//! [`CampaignSettings::seed`], one stream per purpose (true arm, sockets,
+//! seating, IK starts, encoders, lengths — [`streams`]), each used in a fixed
+//! order. The same settings give the same bytes (same build and platform);
+//! and changing one purpose's setting does not change the others' draws, so
+//! e.g. the same seed with more encoder noise gives the same true arm and
+//! sockets.
+//!
+//! ```
+//! use aacmm_core::{io::Arm, kernel, params::DhParams, simulate::*};
+//! let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
+//! let settings = CampaignSettings::new(42, ErrorModel::Paper, 3, 4);
+//! let c = simulate(&nominal, &settings).unwrap();
+//! assert_eq!(c.poses.len(), 12);
+//! assert_eq!(c.poses.labels[4], "S2");
+//! // Zero noise: the true arm reproduces the socket at every pose.
+//! let p = kernel::positions_dyn(&c.true_arm.params, &c.poses.q).unwrap();
+//! let s2 = c.sockets[1].1;
+//! assert!((0..3).all(|i| (p[4][i] - s2[i]).abs() < 1e-9));
+//! ```
+
+mod error;
+mod files;
+mod ik;
+mod lengths;
+mod settings;
+mod sockets;
+mod touches;
+mod truth;
+
+#[cfg(test)]
+mod tests;
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+pub use error::SimError;
+pub use files::{
+    CAMPAIGN_FILE, CAMPAIGN_FORMAT, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, TRUE_ARM_FILE,
+    campaign_to_toml, parse_campaign, read_campaign, write_campaign,
+};
+pub use ik::{IK_MAX_ITERATIONS, IK_TOLERANCE_MM, IkSolution, solve_point};
+pub use lengths::reference_lengths;
+pub use settings::{
+    CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,
+    DEFAULT_STARTS_PER_POSE, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG, ErrorModel,
+    MAX_POSES_PER_SOCKET, MAX_SOCKETS, MIN_POSES_PER_SOCKET, SocketPlan, SocketPoint, pair_count,
+};
+pub use sockets::{
+    MIN_AXIS_DISTANCE, MIN_SOCKET_SEPARATION, REACH_BAND, SOCKET_CANDIDATES, place_sockets,
+    random_configuration, round_nm, shoulder,
+};
+pub use touches::{Touch, TouchPlan, find_touches, separation, within_limits};
+pub use truth::{PAPER_PROBE_ERROR, PAPER_TABLE_2, true_arm, wrap};
+
+use crate::io::{AngleUnit, Arm, Poses, ReferenceLength};
+use crate::kernel::{Chain, Dh, KernelError, PreparedParams, position};
+
+/// The random streams of a campaign: each purpose draws from
+/// `ChaCha8Rng::seed_from_u64(seed)` with its own stream number.
+pub mod streams {
+    /// The true arm's random errors.
+    pub const TRUE_ARM: u64 = 1;
+    /// Socket placement.
+    pub const SOCKETS: u64 = 2;
+    /// Probe seating noise.
+    pub const SEATING: u64 = 3;
+    /// Inverse-kinematics starts.
+    pub const IK_STARTS: u64 = 4;
+    /// Encoder noise.
+    pub const ENCODERS: u64 = 5;
+    /// Reference-length pairs and their noise.
+    pub const LENGTHS: u64 = 6;
+}
+
+/// The generator of one purpose's draws (see [`streams`]).
+///
+/// ```
+/// use aacmm_core::simulate::{rng, streams};
+/// use rand::RngExt;
+/// let a: f64 = rng(3, streams::SOCKETS).random();
+/// let b: f64 = rng(3, streams::SOCKETS).random();
+/// let c: f64 = rng(3, streams::ENCODERS).random();
+/// assert_eq!(a, b);
+/// assert_ne!(a, c);
+/// ```
+pub fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut r = ChaCha8Rng::seed_from_u64(seed);
+    r.set_stream(stream);
+    r
+}
+
+/// Counts of the touch search, for summaries.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SimStats {
+    /// Inverse-kinematics starts tried.
+    pub ik_starts: usize,
+    /// Iterations over all starts.
+    pub ik_iterations: usize,
+    /// Starts that did not converge.
+    pub not_converged: usize,
+    /// Converged solutions outside the joint limits.
+    pub outside_limits: usize,
+    /// Converged solutions too close to an earlier touch of the socket.
+    pub too_close: usize,
+    /// Largest distance between the true arm's probe centre at a touch's
+    /// true readings and the point touched, mm.
+    pub max_residual_mm: f64,
+}
+
+/// A simulated campaign.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Campaign {
+    /// The nominal arm (what a calibration starts from).
+    pub nominal: Arm,
+    /// The true arm (what a calibration should find).
+    pub true_arm: Arm,
+    /// True socket centres, mm, in order (`S1..SK` unless given).
+    pub sockets: Vec<(String, [f64; 3])>,
+    /// Every touch: the point seated and the true readings.
+    pub touches: Vec<Touch>,
+    /// What the encoders read, rad, one row per touch, labelled by socket —
+    /// the true readings plus encoder noise, wrapped to `[-π, π)` for joints
+    /// without limits, and rounded to values that `poses.csv` (degrees)
+    /// holds exactly.
+    pub poses: Poses,
+    /// Reference lengths between sockets.
+    pub lengths: Vec<ReferenceLength>,
+    /// Counts of the touch search.
+    pub stats: SimStats,
+}
+
+/// Simulates a campaign of `settings` on `nominal` (6 or 7 joints). Errors,
+/// never panics, on bad settings or an impossible campaign.
+///
+/// ```
+/// use aacmm_core::{io::Arm, params::DhParams, simulate::*};
+/// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+/// let bad = CampaignSettings::new(1, ErrorModel::Paper, 0, 10);
+/// let e = simulate(&nominal, &bad).unwrap_err();
+/// assert_eq!(e.to_string(), "setting `sockets`: at least one socket is needed");
+/// ```
+pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, SimError> {
+    let n = nominal.params.joint_count();
+    check_limits(nominal)?;
+    settings.validate(n)?;
+    match n {
+        6 => simulate_n::<6>(nominal, settings),
+        7 => simulate_n::<7>(nominal, settings),
+        n => Err(KernelError::Unsupported(n).into()),
+    }
+}
+
+fn simulate_n<const N: usize>(
+    nominal: &Arm,
+    settings: &CampaignSettings,
+) -> Result<Campaign, SimError>
+where
+    Dh: Chain<N>,
+{
+    let seed = settings.seed;
+    let true_arm = true_arm(nominal, &settings.errors, &mut rng(seed, streams::TRUE_ARM))?;
+    check_limits(&true_arm)?;
+    let sockets = match &settings.sockets {
+        SocketPlan::Spread { count } => {
+            place_sockets::<N>(&true_arm, *count, &mut rng(seed, streams::SOCKETS))?
+        }
+        SocketPlan::Given { points, .. } => points
+            .iter()
+            .map(|p| (p.label.clone(), [p.x, p.y, p.z].map(round_nm)))
+            .collect(),
+    };
+    let plan = TouchPlan {
+        poses: settings.poses_per_socket,
+        probe_noise_mm: settings.probe_noise_mm,
+        min_separation: settings.min_pose_separation_deg.to_radians(),
+        starts_per_pose: settings.starts_per_pose,
+    };
+    let mut stats = SimStats::default();
+    let touches = find_touches::<N>(
+        &true_arm,
+        &sockets,
+        &plan,
+        &mut rng(seed, streams::SEATING),
+        &mut rng(seed, streams::IK_STARTS),
+        &mut stats,
+    )?;
+
+    let k = PreparedParams::<N>::new(&true_arm.params)?;
+    let mut enc = rng(seed, streams::ENCODERS);
+    let sigma = settings.encoder_noise_deg.to_radians();
+    let mut q = Vec::with_capacity(touches.len());
+    for t in &touches {
+        let qt: [f64; N] = std::array::from_fn(|j| t.q[j]);
+        let p = position(&k, &qt);
+        let r = (0..3)
+            .map(|i| (p[i] - t.point[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        stats.max_residual_mm = stats.max_residual_mm.max(r);
+        q.push(
+            t.q.iter()
+                .zip(&true_arm.limits)
+                .map(|(&x, lim)| {
+                    let read = x + sigma * truth::normal(&mut enc);
+                    exact_in_degrees(if lim.is_some() { read } else { wrap(read) })
+                })
+                .collect(),
+        );
+    }
+    let poses = Poses {
+        labels: touches
+            .iter()
+            .map(|t| sockets[t.socket].0.clone())
+            .collect(),
+        joints: N,
+        lines: (2..touches.len() + 2).collect(),
+        q,
+    };
+    let lengths = reference_lengths(
+        &sockets,
+        settings.reference_lengths,
+        settings.length_uncertainty_mm,
+        &mut rng(seed, streams::LENGTHS),
+    )?;
+    Ok(Campaign {
+        nominal: nominal.clone(),
+        true_arm,
+        sockets,
+        touches,
+        poses,
+        lengths,
+        stats,
+    })
+}
+
+/// The nearest angle (rad) that a degree value in `poses.csv` reads back to
+/// exactly.
+fn exact_in_degrees(x: f64) -> f64 {
+    AngleUnit::Deg.to_internal(AngleUnit::Deg.from_internal_exact(x))
+}
+
+/// Joint limits must be finite with `min < max`.
+fn check_limits(arm: &Arm) -> Result<(), SimError> {
+    for (j, lim) in arm.limits.iter().enumerate() {
+        if let Some([lo, hi]) = lim
+            && !(lo.is_finite() && hi.is_finite() && lo < hi)
+        {
+            return Err(SimError::Model(format!(
+                "arm `{}`, joint {}: limits [{lo}, {hi}] rad must be finite with min < max",
+                arm.name,
+                j + 1
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,133 @@
+//! Socket placement: positions spread over the part of the workspace that
+//! the true arm reaches comfortably, in many articulations.
+
+use std::f64::consts::PI;
+
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+
+use super::SimError;
+use crate::io::Arm;
+use crate::kernel::{Chain, Dh, PreparedParams, position};
+
+/// Random configurations whose probe centres are the candidate positions
+/// (at least this many; more for many sockets).
+pub const SOCKET_CANDIDATES: usize = 4000;
+/// The comfortable volume: distance from the shoulder between these
+/// fractions of the arm's reach.
+pub const REACH_BAND: [f64; 2] = [0.3, 0.8];
+/// Sockets are at least this fraction of the reach apart.
+pub const MIN_SOCKET_SEPARATION: f64 = 0.05;
+/// Sockets are at least this fraction of the reach from the base axis,
+/// clear of the arm's own base column.
+pub const MIN_AXIS_DISTANCE: f64 = 0.2;
+
+/// A random configuration: each reading uniform within its joint's limits,
+/// or in `[-π, π)` for a joint without limits.
+pub fn random_configuration<const N: usize>(
+    limits: &[Option<[f64; 2]>],
+    rng: &mut ChaCha8Rng,
+) -> [f64; N] {
+    std::array::from_fn(|j| match limits.get(j).copied().flatten() {
+        Some([lo, hi]) => rng.random_range(lo..=hi),
+        None => rng.random_range(-PI..PI),
+    })
+}
+
+/// The shoulder: the point of the base axis at height `d1`, where the arm's
+/// reach is measured from.
+pub fn shoulder(arm: &Arm) -> [f64; 3] {
+    [0.0, 0.0, arm.params.joints.first().map_or(0.0, |j| j.d)]
+}
+
+/// `count` socket centres `S1..Scount` for the true arm.
+///
+/// Candidates are the probe centres of random configurations (within the
+/// joint limits), so every one is reachable. Those whose distance from the
+/// [`shoulder`] is within [`REACH_BAND`] of the reach (the largest distance
+/// seen), that lie above the mounting plane (the base frame's `z = 0`, as on
+/// a bench; no other obstacle is modelled) and at least [`MIN_AXIS_DISTANCE`]
+/// of the reach from the base axis are split into three equal strata by distance from the base axis —
+/// near, middle, far, as in ASME B89.4.22 — and socket `i` is taken from
+/// stratum `i mod 3`: the first at random, each next the candidate farthest
+/// from the sockets already placed (farthest-point sampling), which must be
+/// at least [`MIN_SOCKET_SEPARATION`] of the reach from all of them
+/// (another stratum is tried before giving up). Centres are rounded to 1 nm
+/// (6 decimals in mm), so that `sockets.csv` holds them exactly.
+pub fn place_sockets<const N: usize>(
+    arm: &Arm,
+    count: usize,
+    rng: &mut ChaCha8Rng,
+) -> Result<Vec<(String, [f64; 3])>, SimError>
+where
+    Dh: Chain<N>,
+{
+    let k = PreparedParams::<N>::new(&arm.params)?;
+    let c = shoulder(arm);
+    let pool = SOCKET_CANDIDATES.max(200 * count);
+    let points: Vec<[f64; 3]> = (0..pool)
+        .map(|_| position(&k, &random_configuration::<N>(&arm.limits, rng)))
+        .collect();
+    let reach = points.iter().map(|p| dist(p, &c)).fold(0.0, f64::max);
+    let mut band: Vec<[f64; 3]> = points
+        .into_iter()
+        .filter(|p| {
+            let r = dist(p, &c) / reach;
+            (REACH_BAND[0]..=REACH_BAND[1]).contains(&r)
+                && p[2] >= 0.0
+                && p[0].hypot(p[1]) >= MIN_AXIS_DISTANCE * reach
+        })
+        .collect();
+    band.sort_by(|a, b| a[0].hypot(a[1]).total_cmp(&b[0].hypot(b[1])));
+    let strata: Vec<usize> = (0..band.len()).map(|i| i * 3 / band.len().max(1)).collect();
+    let min_sep = MIN_SOCKET_SEPARATION * reach;
+    let mut nearest = vec![f64::INFINITY; band.len()];
+    let mut out = Vec::with_capacity(count);
+    for i in 0..count {
+        let stratum = i % 3;
+        let pick = if i == 0 {
+            let members: Vec<usize> = (0..band.len()).filter(|&c| strata[c] == stratum).collect();
+            (!members.is_empty()).then(|| members[rng.random_range(0..members.len())])
+        } else {
+            farthest(&nearest, |c| strata[c] == stratum, min_sep)
+                .or_else(|| farthest(&nearest, |_| true, min_sep))
+        };
+        let Some(pick) = pick else {
+            return Err(SimError::SocketsNotPlaced {
+                wanted: count,
+                placed: i,
+                min_separation_mm: min_sep,
+            });
+        };
+        let p = band[pick];
+        for (d, q) in nearest.iter_mut().zip(&band) {
+            *d = d.min(dist(q, &p));
+        }
+        out.push((format!("S{}", i + 1), p.map(round_nm)));
+    }
+    Ok(out)
+}
+
+/// The candidate (among those `keep` accepts) farthest from the placed
+/// sockets, if it is at least `min_sep` from all of them.
+fn farthest(nearest: &[f64], keep: impl Fn(usize) -> bool, min_sep: f64) -> Option<usize> {
+    let (best, d) = nearest
+        .iter()
+        .enumerate()
+        .filter(|&(c, _)| keep(c))
+        .max_by(|a, b| a.1.total_cmp(b.1))?;
+    (*d >= min_sep).then_some(best)
+}
+
+/// `x` rounded to 6 decimals: the value `{:.6}` prints and reads back exactly.
+///
+/// ```
+/// assert_eq!(aacmm_core::simulate::round_nm(1.0 / 3.0), 0.333333);
+/// ```
+pub fn round_nm(x: f64) -> f64 {
+    format!("{x:.6}").parse().unwrap_or(x)
+}
+
+fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}

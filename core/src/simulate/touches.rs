@@ -1,0 +1,139 @@
+//! Touches: for each socket, `N` genuinely different articulations found by
+//! inverse kinematics on the true arm from random starts.
+
+use rand_chacha::ChaCha8Rng;
+
+use super::ik::solve_point;
+use super::sockets::random_configuration;
+use super::truth::{normal, wrap};
+use super::{SimError, SimStats};
+use crate::io::Arm;
+use crate::kernel::{Chain, Dh, PreparedParams};
+
+/// One simulated touch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Touch {
+    /// Index of the socket touched.
+    pub socket: usize,
+    /// Where the probe centre actually sat (socket centre plus seating
+    /// noise), mm.
+    pub point: [f64; 3],
+    /// The true readings that put the true arm's probe there, rad, each in
+    /// `[-π, π)` (or shifted by a turn into the joint's limits).
+    pub q: Vec<f64>,
+}
+
+/// What the touch search needs besides the arm and the sockets.
+#[derive(Clone, Copy, Debug)]
+pub struct TouchPlan {
+    /// Touches per socket.
+    pub poses: usize,
+    /// σ of the probe seating per axis, mm.
+    pub probe_noise_mm: f64,
+    /// Minimum pose separation (largest joint difference), rad.
+    pub min_separation: f64,
+    /// Budget of IK starts per requested touch.
+    pub starts_per_pose: usize,
+}
+
+/// The touches of every socket, socket by socket. For each touch the seating
+/// point is drawn first (`seat_rng`, three normal draws, even at zero
+/// noise), then IK starts (`start_rng`) are tried until a solution converges
+/// (residual < [`IK_TOLERANCE_MM`](super::IK_TOLERANCE_MM)), lies within the
+/// joint limits and differs from every earlier touch of the socket by at
+/// least `min_separation` in some joint (differences wrapped to ±π). A socket
+/// gets `poses × starts_per_pose` starts in all; then
+/// [`SimError::TooFewPoses`].
+pub fn find_touches<const N: usize>(
+    arm: &Arm,
+    sockets: &[(String, [f64; 3])],
+    plan: &TouchPlan,
+    seat_rng: &mut ChaCha8Rng,
+    start_rng: &mut ChaCha8Rng,
+    stats: &mut SimStats,
+) -> Result<Vec<Touch>, SimError>
+where
+    Dh: Chain<N>,
+{
+    let k = PreparedParams::<N>::new(&arm.params)?;
+    let budget = plan.poses * plan.starts_per_pose;
+    let mut touches = Vec::with_capacity(sockets.len() * plan.poses);
+    for (s, (label, centre)) in sockets.iter().enumerate() {
+        let mut accepted: Vec<[f64; N]> = Vec::with_capacity(plan.poses);
+        let mut attempts = 0;
+        while accepted.len() < plan.poses {
+            let point: [f64; 3] =
+                std::array::from_fn(|i| centre[i] + plan.probe_noise_mm * normal(seat_rng));
+            let q = loop {
+                if attempts == budget {
+                    return Err(SimError::TooFewPoses {
+                        socket: label.clone(),
+                        wanted: plan.poses,
+                        found: accepted.len(),
+                        attempts,
+                        min_separation_deg: plan.min_separation.to_degrees(),
+                    });
+                }
+                attempts += 1;
+                stats.ik_starts += 1;
+                let start = random_configuration::<N>(&arm.limits, start_rng);
+                let sol = solve_point(&k, point, start);
+                stats.ik_iterations += sol.iterations;
+                if !sol.converged() {
+                    stats.not_converged += 1;
+                    continue;
+                }
+                let Some(q) = within_limits(sol.q, &arm.limits) else {
+                    stats.outside_limits += 1;
+                    continue;
+                };
+                if accepted
+                    .iter()
+                    .any(|a| separation(a, &q) < plan.min_separation)
+                {
+                    stats.too_close += 1;
+                    continue;
+                }
+                break q;
+            };
+            accepted.push(q);
+            touches.push(Touch {
+                socket: s,
+                point,
+                q: q.to_vec(),
+            });
+        }
+    }
+    Ok(touches)
+}
+
+/// The readings wrapped to `[-π, π)` and, where a joint has limits, shifted
+/// by a whole turn into them if that helps; `None` if some joint stays
+/// outside its limits.
+pub fn within_limits<const N: usize>(q: [f64; N], limits: &[Option<[f64; 2]>]) -> Option<[f64; N]> {
+    use std::f64::consts::TAU;
+    let mut out = q.map(wrap);
+    for (j, x) in out.iter_mut().enumerate() {
+        if let Some([lo, hi]) = limits.get(j).copied().flatten() {
+            *x = [*x, *x + TAU, *x - TAU]
+                .into_iter()
+                .find(|v| (lo..=hi).contains(v))?;
+        }
+    }
+    Some(out)
+}
+
+/// The largest joint difference of two poses, each wrapped to ±π, rad.
+///
+/// ```
+/// use aacmm_core::simulate::separation;
+/// let pi = std::f64::consts::PI;
+/// let d = separation(&[pi - 0.1, 0.0], &[-pi + 0.1, 0.05]);
+/// assert!((d - 0.2).abs() < 1e-12);
+/// ```
+pub fn separation(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| wrap(x - y).abs())
+        .fold(0.0, f64::max)
+}

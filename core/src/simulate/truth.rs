@@ -1,0 +1,134 @@
+//! The true arm: the nominal plus an error model.
+
+use std::f64::consts::PI;
+
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use super::{ErrorModel, SimError};
+use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, parse_arm};
+
+/// The paper's identified errors (method.md §7, Table 2), per joint:
+/// `(Δθ deg, Δβ deg, Δa mm, Δd mm)`; joint 6 has no `Δθ`, `Δβ`.
+pub const PAPER_TABLE_2: [(f64, f64, f64, f64); 6] = [
+    (0.131, 0.124, 0.061, 0.186),
+    (0.446, 0.065, -1.106, -0.416),
+    (-0.735, -0.021, 0.121, 0.041),
+    (0.126, -0.057, -0.673, -0.038),
+    (-0.513, 0.034, -0.076, -0.124),
+    (0.0, 0.0, 0.306, 0.177),
+];
+
+/// The paper's probe error `(ΔBx, ΔBy, ΔBz)`, mm.
+pub const PAPER_PROBE_ERROR: [f64; 3] = [0.0, 0.0, 0.094];
+
+/// The true arm for `model` on `nominal`, drawing from `rng` (only the random
+/// model draws: per joint `a, d, α, θ`, then `Bx, By, Bz`). The result is
+/// canonical: written as an arm file in mm and degrees and read back it is
+/// the same arm, bit for bit. Joint limits are the nominal's, or for a given
+/// true arm its own where it states them.
+///
+/// ```
+/// use aacmm_core::{io::Arm, params::DhParams, simulate::{ErrorModel, true_arm}};
+/// use rand::SeedableRng;
+/// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+/// let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);
+/// let t = true_arm(&nominal, &ErrorModel::Paper, &mut rng).unwrap();
+/// assert!((t.params.joints[1].a - (-55.0 - 1.106)).abs() < 1e-12);
+/// assert!((t.params.probe[2] - 100.094).abs() < 1e-12);
+/// ```
+pub fn true_arm(nominal: &Arm, model: &ErrorModel, rng: &mut ChaCha8Rng) -> Result<Arm, SimError> {
+    let n = nominal.params.joint_count();
+    let deg = |x: f64| x.to_radians();
+    let mut arm = nominal.clone();
+    arm.limits.resize(n, None);
+    match model {
+        ErrorModel::Paper => {
+            if n != 6 {
+                return Err(SimError::Model(format!(
+                    "the paper's Table 2 errors are for a 6-joint arm; the nominal arm has {n} \
+                     joints"
+                )));
+            }
+            for (j, &(dt, db, da, dd)) in arm.params.joints.iter_mut().zip(&PAPER_TABLE_2) {
+                j.theta += deg(dt);
+                j.alpha += deg(db);
+                j.a += da;
+                j.d += dd;
+            }
+            for (b, db) in arm.params.probe.iter_mut().zip(PAPER_PROBE_ERROR) {
+                *b += db;
+            }
+            arm.name = format!("true: {} + paper Table 2 errors", nominal.name);
+        }
+        ErrorModel::Random {
+            length_sigma_mm: sl,
+            twist_sigma_deg: st,
+            zero_sigma_deg: sz,
+            zero_uniform,
+        } => {
+            for j in arm.params.joints.iter_mut() {
+                j.a += sl * normal(rng);
+                j.d += sl * normal(rng);
+                j.alpha += deg(st * normal(rng));
+                j.theta = if *zero_uniform {
+                    wrap(j.theta + rng.random_range(-PI..PI))
+                } else {
+                    j.theta + deg(sz * normal(rng))
+                };
+            }
+            for b in arm.params.probe.iter_mut() {
+                *b += sl * normal(rng);
+            }
+            arm.name = format!("true: {} + {}", nominal.name, model.describe());
+        }
+        ErrorModel::File { arm: given } => {
+            if given.params.joint_count() != n {
+                return Err(SimError::Model(format!(
+                    "the true arm `{}` has {} joints, the nominal arm {n}",
+                    given.name,
+                    given.params.joint_count()
+                )));
+            }
+            arm.params = given.params.clone();
+            for (lim, own) in arm.limits.iter_mut().zip(&given.limits) {
+                if own.is_some() {
+                    *lim = *own;
+                }
+            }
+            arm.name = given.name.clone();
+        }
+    }
+    Ok(canonical(arm))
+}
+
+/// The arm as it reads back from its own mm/degree arm file.
+fn canonical(arm: Arm) -> Arm {
+    parse_arm(
+        &arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg),
+        "true arm",
+    )
+    .unwrap_or(arm)
+}
+
+/// A standard normal draw.
+pub(crate) fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// `x` wrapped to `[-π, π)`.
+///
+/// ```
+/// use aacmm_core::simulate::wrap;
+/// assert!((wrap(3.0 * std::f64::consts::PI) + std::f64::consts::PI).abs() < 1e-12);
+/// assert_eq!(wrap(0.5), 0.5);
+/// ```
+pub fn wrap(x: f64) -> f64 {
+    use std::f64::consts::TAU;
+    if (-PI..PI).contains(&x) {
+        x
+    } else {
+        (x + PI).rem_euclid(TAU) - PI
+    }
+}
