@@ -34,7 +34,10 @@
 //! d_error = (1/n) Σ_{k=1..n} ( |x_ik − x_jk| − |x̄_i − x̄_j| )
 //! ```
 //!
-//! where the centroids use all touches of each point. **Eq. 19 uses no
+//! where the centroids use all touches of each point; `d_error_abs` is the
+//! same with absolute values inside the sum — our reading of the paper's
+//! reported figures, since the printed formula is of second order in the
+//! scatter (see [`pair_length_error`]). **Eq. 19 uses no
 //! reference length** (method.md §8.4): it compares touch-by-touch distances
 //! with the distance between centroids, so it measures repeatability again,
 //! not scale. A uniformly shrunk arm scores as well as a correct one. With
@@ -206,6 +209,8 @@ pub struct Evaluation {
     pub pair_length: Vec<PairLengthError>,
     /// `d_error` across pairs (Fig. 7); `None` with a single point.
     pub pair_length_summary: Option<Summary>,
+    /// `d_error_abs` across pairs; `None` with a single point.
+    pub pair_length_abs_summary: Option<Summary>,
     /// Error against every given reference length.
     pub reference: Vec<ReferenceError>,
     /// Summary of the reference errors; `None` when none were given.
@@ -269,6 +274,12 @@ pub fn evaluate<S: AsRef<str>>(
         single_point_two_s: across_points(|p| p.two_s),
         pair_length_summary: Summary::of(
             &pair_length.iter().map(|p| p.d_error).collect::<Vec<_>>(),
+        ),
+        pair_length_abs_summary: Summary::of(
+            &pair_length
+                .iter()
+                .map(|p| p.d_error_abs)
+                .collect::<Vec<_>>(),
         ),
         reference_summary: ReferenceSummary::of(
             &reference.iter().map(|r| r.error).collect::<Vec<_>>(),

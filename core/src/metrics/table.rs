@@ -96,18 +96,31 @@ impl Evaluation {
                 p.pairs.to_string(),
                 mm(p.centroid_distance),
                 mm(p.d_error),
+                mm(p.d_error_abs),
             ]
         });
         let pairs = render(
             title,
-            &["a", "b", "n", "|ca - cb| [mm]", "d_error [mm]"],
+            &[
+                "a",
+                "b",
+                "n",
+                "|ca - cb| [mm]",
+                "d_error [mm]",
+                "|d|_error [mm]",
+            ],
             2,
             rows,
         );
-        let summary = self
-            .pair_length_summary
-            .iter()
-            .map(|s| summary_row("d_error (Fig. 7)", s));
+        let summary = [
+            ("d_error (eq. 19 as printed)", &self.pair_length_summary),
+            (
+                "|d|_error (abs. values, Fig. 7?)",
+                &self.pair_length_abs_summary,
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(name, s)| s.as_ref().map(|s| summary_row(name, s)));
         let across = render(
             "Across pairs (std = population)",
             &SUMMARY_HEADER,
