@@ -74,6 +74,17 @@ fn vec3(g: &Graph, v: &[Id; 3]) -> TokenStream {
     quote!([#x, #y, #z])
 }
 
+/// The `let`s for `cols` and `position`, and the stores `jac[i] = [..];`.
+fn columns(g: &Graph, cols: &[[Id; 3]], position: &[Id; 3]) -> (TokenStream, TokenStream) {
+    let outputs: Vec<Id> = cols.iter().flatten().chain(position).copied().collect();
+    let stores = cols.iter().enumerate().map(|(i, col)| {
+        let i = Literal::usize_unsuffixed(i);
+        let v = vec3(g, col);
+        quote!(jac[#i] = #v;)
+    });
+    (body(g, &outputs), quote!(#(#stores)*))
+}
+
 /// The items of a generated kernel module (without the `mod` around them).
 pub fn kernel_items(k: &KernelExprs) -> TokenStream {
     let g = &k.graph;
@@ -105,34 +116,9 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
     let position_body = body(g, &k.position);
     let position = vec3(g, &k.position);
 
-    let jac_outputs: Vec<Id> = k
-        .param_jacobian
-        .iter()
-        .flatten()
-        .chain(&k.frame_position)
-        .copied()
-        .collect();
-    let jac_body = body(g, &jac_outputs);
-    let jac_stores = k.param_jacobian.iter().enumerate().map(|(i, col)| {
-        let i = Literal::usize_unsuffixed(i);
-        let v = vec3(g, col);
-        quote!(jac[#i] = #v;)
-    });
+    let (jac_body, jac_stores) = columns(g, &k.param_jacobian, &k.frame_position);
+    let (joint_body, joint_stores) = columns(g, &k.joint_jacobian, &k.frame_position);
     let frame_position = vec3(g, &k.frame_position);
-
-    let joint_outputs: Vec<Id> = k
-        .joint_jacobian
-        .iter()
-        .flatten()
-        .chain(&k.frame_position)
-        .copied()
-        .collect();
-    let joint_body = body(g, &joint_outputs);
-    let joint_stores = k.joint_jacobian.iter().enumerate().map(|(i, col)| {
-        let i = Literal::usize_unsuffixed(i);
-        let v = vec3(g, col);
-        quote!(jac[#i] = #v;)
-    });
 
     let order = if k.spec.probe {
         "`a1..an, d1..dn, α1..αn, θ1..θn, Bx, By, Bz`"
@@ -163,7 +149,7 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
         #attrs
         pub fn position_jacobian<S>(#args, jac: &mut [[S; 3]; #p]) -> [S; 3] where #bounds {
             #jac_body
-            #(#jac_stores)*
+            #jac_stores
             #frame_position
         }
 
@@ -172,7 +158,7 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
         #attrs
         pub fn joint_jacobian<S>(#args, jac: &mut [[S; 3]; #n]) -> [S; 3] where #bounds {
             #joint_body
-            #(#joint_stores)*
+            #joint_stores
             #frame_position
         }
     }

@@ -4,8 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm::io::{AngleUnit, Poses, ReferenceLength, check_lengths_against, read_lengths};
-use aacmm::kernel::positions_dyn;
+use aacmm::io::{Poses, ReferenceLength, check_lengths_against, read_lengths};
 use aacmm::metrics::{Evaluation, MetricsError, ReferenceDistance, evaluate};
 use anyhow::{Context, Result, anyhow};
 use serde::Serialize;
@@ -13,15 +12,8 @@ use serde::Serialize;
 /// Evaluate an arm on measured poses.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Arm file (TOML).
-    #[arg(long)]
-    arm: PathBuf,
-    /// Poses file (CSV `point,q1,...,qn`); every point needs at least 3 touches.
-    #[arg(long)]
-    data: PathBuf,
-    /// Unit of the angles in the poses file.
-    #[arg(long, default_value = "deg", value_parser = super::angle_unit)]
-    angle_unit: AngleUnit,
+    #[command(flatten)]
+    input: super::ArmAndPoses,
     /// Reference lengths (CSV `point_a,point_b,distance[,uncertainty]`, mm).
     #[arg(long)]
     lengths: Option<PathBuf>,
@@ -42,7 +34,7 @@ struct Report<'a> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let (arm, poses) = super::read_arm_and_poses(&args.arm, &args.data, args.angle_unit)?;
+    let (arm, poses) = args.input.read()?;
     let lengths = match &args.lengths {
         Some(path) => {
             let lengths = read_lengths(path)?;
@@ -51,8 +43,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => Vec::new(),
     };
-    let xyz = positions_dyn(&arm.params, &poses.q)
-        .with_context(|| format!("{}: {}", args.arm.display(), args.data.display()))?;
+    let xyz = args.input.positions(&arm, &poses)?;
     let references: Vec<ReferenceDistance> = lengths
         .iter()
         .map(|l| ReferenceDistance {
@@ -61,21 +52,28 @@ pub fn run(args: Args) -> Result<()> {
             distance: l.distance,
         })
         .collect();
-    let evaluation = evaluate(&poses.labels, &xyz, &references)
-        .map_err(|e| locate(e, &args.data, &poses, args.lengths.as_deref(), &lengths))?;
+    let evaluation = evaluate(&poses.labels, &xyz, &references).map_err(|e| {
+        locate(
+            e,
+            &args.input.data,
+            &poses,
+            args.lengths.as_deref(),
+            &lengths,
+        )
+    })?;
 
     println!(
         "arm `{}` ({}) on {}",
         arm.name,
-        args.arm.display(),
-        args.data.display()
+        args.input.arm.display(),
+        args.input.data.display()
     );
     print!("{}", evaluation.to_table());
     if let Some(path) = &args.json {
         let report = Report {
             arm: &arm.name,
-            arm_file: args.arm.display().to_string(),
-            data_file: args.data.display().to_string(),
+            arm_file: args.input.arm.display().to_string(),
+            data_file: args.input.data.display().to_string(),
             lengths_file: args.lengths.as_ref().map(|p| p.display().to_string()),
             length_unit: "mm",
             evaluation: &evaluation,

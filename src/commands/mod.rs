@@ -5,10 +5,11 @@ pub mod evaluate;
 pub mod points;
 pub mod simulate;
 
-use std::path::Path;
+use std::path::PathBuf;
 
 use aacmm::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
-use anyhow::Result;
+use aacmm::kernel::positions_dyn;
+use anyhow::{Context, Result};
 
 /// Prints warnings to stderr, where they cannot be mistaken for output.
 pub fn report(warnings: &[Warning]) {
@@ -17,12 +18,36 @@ pub fn report(warnings: &[Warning]) {
     }
 }
 
-/// Reads an arm file and a poses file whose joint count must match it.
-pub fn read_arm_and_poses(arm: &Path, data: &Path, unit: AngleUnit) -> Result<(Arm, Poses)> {
-    let arm = read_arm(arm)?;
-    let (poses, warnings) = read_poses(data, unit, Some(arm.params.joint_count()))?;
-    report(&warnings);
-    Ok((arm, poses))
+/// The arm and the poses it is applied to: the flags `points` and
+/// `evaluate` share.
+#[derive(clap::Args)]
+pub struct ArmAndPoses {
+    /// Arm file (TOML) with 6 or 7 `[[joint]]` entries.
+    #[arg(long)]
+    pub arm: PathBuf,
+    /// Poses file (CSV `point,q1,...,qn`).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Unit of the angles in the poses file.
+    #[arg(long, default_value = "deg", value_parser = angle_unit)]
+    pub angle_unit: AngleUnit,
+}
+
+impl ArmAndPoses {
+    /// Reads both files; the poses must have the arm's joint count.
+    pub fn read(&self) -> Result<(Arm, Poses)> {
+        let arm = read_arm(&self.arm)?;
+        let (poses, warnings) =
+            read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
+        report(&warnings);
+        Ok((arm, poses))
+    }
+
+    /// Probe positions of every pose (mm), in row order.
+    pub fn positions(&self, arm: &Arm, poses: &Poses) -> Result<Vec<[f64; 3]>> {
+        positions_dyn(&arm.params, &poses.q)
+            .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))
+    }
 }
 
 /// Parses `--angle-unit` values with the library's own unit names.

@@ -228,17 +228,7 @@ mod tests {
 
     #[track_caller]
     fn assert_at(e: &InputError, line: usize, field: Option<&str>, needle: &str) {
-        let s = e.to_string();
-        assert!(s.starts_with(F), "{s}");
-        assert_eq!(e.line(), (line > 0).then_some(line), "{s}");
-        if line > 0 {
-            assert!(s.starts_with(&format!("{F}:{line}: ")), "{s}");
-        }
-        assert_eq!(e.field_name(), field, "{s}");
-        if let Some(field) = field {
-            assert!(s.contains(&format!("field `{field}`")), "{s}");
-        }
-        assert!(s.contains(needle), "expected {needle:?} in {s}");
+        crate::io::testing::assert_at(e, F, line, field, needle);
     }
 
     #[test]

@@ -130,3 +130,27 @@ mod tests {
         }
     }
 }
+
+/// What the readers' tests share.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::InputError;
+
+    /// The error names `file`, the line (0 = none) and the field, and its
+    /// message contains `needle`.
+    #[track_caller]
+    pub fn assert_at(e: &InputError, file: &str, line: usize, field: Option<&str>, needle: &str) {
+        let s = e.to_string();
+        assert!(s.starts_with(file), "{s}");
+        assert_eq!(e.file(), file);
+        assert_eq!(e.line(), (line > 0).then_some(line), "{s}");
+        if line > 0 {
+            assert!(s.starts_with(&format!("{file}:{line}: ")), "{s}");
+        }
+        assert_eq!(e.field_name(), field, "{s}");
+        if let Some(field) = field {
+            assert!(s.contains(&format!("field `{field}`")), "{s}");
+        }
+        assert!(s.contains(needle), "expected {needle:?} in {s}");
+    }
+}
