@@ -178,6 +178,16 @@ mod tests {
         (k, file)
     }
 
+    /// Everything `position_jacobian` computes.
+    fn jacobian_outputs(k: &KernelExprs) -> Vec<Id> {
+        k.param_jacobian
+            .iter()
+            .flatten()
+            .chain(&k.frame_position)
+            .copied()
+            .collect()
+    }
+
     fn function<'a>(file: &'a syn::File, name: &str) -> &'a syn::ItemFn {
         file.items
             .iter()
@@ -201,14 +211,10 @@ mod tests {
                 .count()
         };
         assert_eq!(lets("position"), k.graph.op_count(&k.position).total());
-        let jac: Vec<Id> = k
-            .param_jacobian
-            .iter()
-            .flatten()
-            .chain(&k.frame_position)
-            .copied()
-            .collect();
-        assert_eq!(lets("position_jacobian"), k.graph.op_count(&jac).total());
+        assert_eq!(
+            lets("position_jacobian"),
+            k.graph.op_count(&jacobian_outputs(&k)).total()
+        );
     }
 
     /// The straight-line code stays small: a regression guard on the folding
@@ -218,14 +224,7 @@ mod tests {
     fn operation_counts_stay_small() {
         let (k, _) = items(6);
         let pos = k.graph.op_count(&k.position);
-        let jac: Vec<Id> = k
-            .param_jacobian
-            .iter()
-            .flatten()
-            .chain(&k.frame_position)
-            .copied()
-            .collect();
-        let jac = k.graph.op_count(&jac);
+        let jac = k.graph.op_count(&jacobian_outputs(&k));
         // Position: 6 links × (6 angle addition + 14 link update) = 120.
         assert!(pos.total() <= 120, "position: {pos:?}");
         // Frames, then two cross products per joint: 422 today.
