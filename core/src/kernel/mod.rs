@@ -587,3 +587,43 @@ pub fn positions_dyn(params: &DhParams, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>,
         n => Err(KernelError::Unsupported(n)),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::lanes::Lanes;
+    use super::*;
+
+    /// The portable lanes (what CPUs without AVX2 run) give the one-pose
+    /// results bit for bit, like the AVX path the integration tests see here.
+    #[test]
+    fn portable_lanes_equal_single_poses() {
+        let k = PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+        let q: Vec<[f64; 6]> = (0..7)
+            .map(|i| std::array::from_fn(|j| ((i * 5 + j) as f64 * 0.61).sin() * 3.0))
+            .collect();
+        let poses = PreparedPoses::new(&q);
+        let mut pos = vec![[0.0; 3]; q.len()];
+        positions_impl::<6, Lanes>(&k, &poses, &mut pos);
+        let mut batch = Jacobians::new(q.len(), 27);
+        jacobians_impl::<6, Lanes>(&k, &poses, &mut batch);
+        let mut seen = 0;
+        for_each_lane_jacobian::<6, Lanes>(&k, &poses, |i, p, cols| {
+            assert_eq!(*p, batch.position(i));
+            for (c, col) in cols.iter().enumerate() {
+                assert_eq!(*col, batch.column(i, c));
+            }
+            seen += 1;
+        });
+        assert_eq!(seen, q.len());
+        for (i, qi) in q.iter().enumerate() {
+            assert_eq!(pos[i], position(&k, qi));
+            let (cq, sq) = poses.trig(i);
+            let mut cols = vec![[0.0; 3]; 27];
+            let p = <Dh as Chain<6>>::position_jacobian(&k, &cq, &sq, &mut cols);
+            assert_eq!(p, batch.position(i));
+            for (c, col) in cols.iter().enumerate() {
+                assert_eq!(*col, batch.column(i, c));
+            }
+        }
+    }
+}
