@@ -7,6 +7,7 @@
 
 pub mod error;
 pub mod generic;
+pub mod geometry;
 pub mod io;
 pub mod kernel;
 pub mod metrics;

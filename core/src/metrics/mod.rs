@@ -87,6 +87,7 @@ pub use length::{
 };
 pub use point::{PointStats, point_stats};
 
+pub(crate) use crate::geometry::{centroid, distance};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
@@ -357,21 +358,6 @@ fn all_pairs(groups: &[(&str, Vec<[f64; 3]>)]) -> Result<Vec<PairLengthError>, M
         }
     }
     Ok(pairs)
-}
-
-/// Mean of the touches.
-fn centroid(touches: &[[f64; 3]]) -> [f64; 3] {
-    let n = touches.len() as f64;
-    std::array::from_fn(|k| touches.iter().map(|p| p[k]).sum::<f64>() / n)
-}
-
-/// Euclidean distance.
-fn distance(p: &[f64; 3], q: &[f64; 3]) -> f64 {
-    p.iter()
-        .zip(q)
-        .map(|(a, b)| (a - b).powi(2))
-        .sum::<f64>()
-        .sqrt()
 }
 
 #[cfg(test)]

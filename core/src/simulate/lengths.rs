@@ -6,6 +6,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::SimError;
 use super::truth::normal;
+use crate::geometry::distance;
 use crate::io::ReferenceLength;
 
 /// `count` distinct socket pairs and their true distances (mm), chosen with
@@ -31,9 +32,7 @@ pub fn reference_lengths(
     let mut pairs: Vec<(usize, usize, f64)> = Vec::new();
     for i in 0..sockets.len() {
         for j in i + 1..sockets.len() {
-            let (a, b) = (sockets[i].1, sockets[j].1);
-            let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
-            pairs.push((i, j, d));
+            pairs.push((i, j, distance(&sockets[i].1, &sockets[j].1)));
         }
     }
     if count > pairs.len() {

@@ -7,6 +7,7 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
 use super::SimError;
+use crate::geometry::distance;
 use crate::io::Arm;
 use crate::kernel::{Chain, Dh, PreparedParams, position};
 
@@ -68,11 +69,11 @@ where
     let points: Vec<[f64; 3]> = (0..pool)
         .map(|_| position(&k, &random_configuration::<N>(&arm.limits, rng)))
         .collect();
-    let reach = points.iter().map(|p| dist(p, &c)).fold(0.0, f64::max);
+    let reach = points.iter().map(|p| distance(p, &c)).fold(0.0, f64::max);
     let mut band: Vec<[f64; 3]> = points
         .into_iter()
         .filter(|p| {
-            let r = dist(p, &c) / reach;
+            let r = distance(p, &c) / reach;
             (REACH_BAND[0]..=REACH_BAND[1]).contains(&r)
                 && p[2] >= 0.0
                 && p[0].hypot(p[1]) >= MIN_AXIS_DISTANCE * reach
@@ -101,7 +102,7 @@ where
         };
         let p = band[pick];
         for (d, q) in nearest.iter_mut().zip(&band) {
-            *d = d.min(dist(q, &p));
+            *d = d.min(distance(q, &p));
         }
         out.push((format!("S{}", i + 1), p.map(round_nm)));
     }
@@ -126,8 +127,4 @@ fn farthest(nearest: &[f64], keep: impl Fn(usize) -> bool, min_sep: f64) -> Opti
 /// ```
 pub fn round_nm(x: f64) -> f64 {
     format!("{x:.6}").parse().unwrap_or(x)
-}
-
-fn dist(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }

@@ -48,7 +48,7 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
-    (0..3).map(|i| (a[i] - b[i]).powi(2)).sum::<f64>().sqrt()
+    crate::geometry::distance(&a, &b)
 }
 
 /// The true arm's probe centre at every recorded pose, against its socket.
