@@ -126,6 +126,15 @@ impl fmt::Display for ParamId {
     }
 }
 
+/// The joint counts the toolkit generates a kernel for. File readers, the
+/// kernel and codegen's instantiations agree on this one list: an arm with
+/// another count is rejected where it is read, naming its file.
+///
+/// ```
+/// assert!(aacmm_core::params::SUPPORTED_JOINTS.contains(&6));
+/// ```
+pub const SUPPORTED_JOINTS: [usize; 2] = [6, 7];
+
 /// Number of geometric parameters of an `n`-joint chain with a probe offset.
 ///
 /// ```
