@@ -3,9 +3,9 @@
 //! kernel with the generic nalgebra model (position) and with num-dual
 //! autodiff and central differences on the generic model (Jacobian).
 
-use aacmm::generic;
-use aacmm::kernel::{self, PreparedParams, PreparedPoses};
-use aacmm::params::DhParams;
+use aacmm_core::generic;
+use aacmm_core::kernel::{self, ArmKernel, PreparedPoses};
+use aacmm_core::params::DhParams;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -29,14 +29,14 @@ fn inputs() -> (DhParams, Vec<[f64; 6]>) {
 
 fn position(c: &mut Criterion) {
     let (params, q) = inputs();
-    let k = PreparedParams::<6>::new(&params).expect("6 joints");
-    let poses = PreparedPoses::new(&q);
+    let k = ArmKernel::new(&params).expect("6 joints");
+    let poses = PreparedPoses::new(6, &q).expect("6 readings per pose");
     let flat = params.to_vec();
     let mut out = vec![[0.0; 3]; POSES];
     let mut g = c.benchmark_group("position");
     g.throughput(Throughput::Elements(POSES as u64));
     g.bench_function(BenchmarkId::from_parameter("generated"), |b| {
-        b.iter(|| kernel::positions(black_box(&k), black_box(&poses), &mut out))
+        b.iter(|| black_box(&k).positions(black_box(&poses), 0..POSES, &mut out))
     });
     g.bench_function(BenchmarkId::from_parameter("generic"), |b| {
         b.iter(|| {
@@ -50,13 +50,13 @@ fn position(c: &mut Criterion) {
 
 fn jacobian(c: &mut Criterion) {
     let (params, q) = inputs();
-    let k = PreparedParams::<6>::new(&params).expect("6 joints");
-    let poses = PreparedPoses::new(&q);
+    let k = ArmKernel::new(&params).expect("6 joints");
+    let poses = PreparedPoses::new(6, &q).expect("6 readings per pose");
     let mut out = kernel::Jacobians::new(POSES, 27);
     let mut g = c.benchmark_group("jacobian");
     g.throughput(Throughput::Elements(POSES as u64));
     g.bench_function(BenchmarkId::from_parameter("generated"), |b| {
-        b.iter(|| kernel::jacobians(black_box(&k), black_box(&poses), &mut out))
+        b.iter(|| black_box(&k).jacobians(black_box(&poses), &mut out))
     });
     g.bench_function(BenchmarkId::from_parameter("num-dual"), |b| {
         b.iter(|| {

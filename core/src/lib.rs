@@ -5,7 +5,9 @@
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
 
+pub mod dataset;
 pub mod error;
+#[cfg(feature = "reference-model")]
 pub mod generic;
 pub mod geometry;
 pub mod io;

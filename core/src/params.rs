@@ -135,6 +135,20 @@ impl fmt::Display for ParamId {
 /// ```
 pub const SUPPORTED_JOINTS: [usize; 2] = [6, 7];
 
+/// The supported joint counts in words, for messages: `6- and 7-joint arms`.
+///
+/// ```
+/// assert_eq!(aacmm_core::params::supported_joints_text(), "6- and 7-joint arms");
+/// ```
+pub fn supported_joints_text() -> String {
+    let names: Vec<String> = SUPPORTED_JOINTS.iter().map(|n| format!("{n}-")).collect();
+    match names.split_last() {
+        Some((last, [])) => format!("{last}joint arms"),
+        Some((last, rest)) => format!("{} and {last}joint arms", rest.join(", ")),
+        None => "no arms".to_string(),
+    }
+}
+
 /// Number of geometric parameters of an `n`-joint chain with a probe offset.
 ///
 /// ```

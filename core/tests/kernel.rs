@@ -4,7 +4,7 @@
 //! Jacobians against num-dual autodiff and central differences.
 
 use aacmm_core::generic;
-use aacmm_core::kernel::{self, Chain, Dh, Jacobians, PreparedParams, PreparedPoses};
+use aacmm_core::kernel::{self, ArmKernel, Chain, Dh, Jacobians, PreparedParams, PreparedPoses};
 use aacmm_core::params::{DhJoint, DhParams};
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -94,9 +94,12 @@ where
         prop_assert!((got[r] - want[r]).abs() <= 1e-9, "{:?} vs {:?}", got, want);
     }
 
-    let poses = PreparedPoses::new(&[q]);
+    let poses = PreparedPoses::new(N, &[q]).unwrap();
     let mut batch = Jacobians::new(1, P);
-    kernel::jacobians(&k, &poses, &mut batch);
+    ArmKernel::new(params)
+        .unwrap()
+        .jacobians(&poses, &mut batch)
+        .unwrap();
     let pos = batch.position(0);
     for r in 0..3 {
         prop_assert!((pos[r] - want[r]).abs() <= 1e-9);
@@ -151,30 +154,32 @@ proptest! {
 fn batches_equal_single_poses_bit_for_bit() {
     let params = nominal(6);
     let k = PreparedParams::<6>::new(&params).unwrap();
+    let arm = ArmKernel::new(&params).unwrap();
     for len in 0..11 {
         let q: Vec<[f64; 6]> = (0..len)
             .map(|i| std::array::from_fn(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 3.0))
             .collect();
-        let poses = PreparedPoses::new(&q);
+        let poses = PreparedPoses::new(6, &q).unwrap();
         let mut pos = vec![[0.0; 3]; len];
-        kernel::positions(&k, &poses, &mut pos);
+        arm.positions(&poses, 0..len, &mut pos).unwrap();
         let mut batch = Jacobians::new(len, 27);
-        kernel::jacobians(&k, &poses, &mut batch);
+        arm.jacobians(&poses, &mut batch).unwrap();
         let jpos: Vec<[f64; 3]> = (0..len).map(|i| batch.position(i)).collect();
         let jac: Vec<[f64; 3]> = (0..len)
             .flat_map(|i| (0..27).map(move |c| (i, c)))
             .map(|(i, c)| batch.column(i, c))
             .collect();
         let mut seen = 0;
-        kernel::for_each_jacobian(&k, &poses, |i, p, cols| {
+        arm.for_each_jacobian(&poses, 0..len, |i, p, cols| {
             assert_eq!(i, seen);
             seen += 1;
             assert_eq!(*p, jpos[i]);
             assert_eq!(cols, &jac[i * 27..(i + 1) * 27]);
-        });
+        })
+        .unwrap();
         assert_eq!(seen, len);
         for i in 0..len {
-            let (cq, sq) = poses.trig(i);
+            let (cq, sq) = (q[i].map(f64::cos), q[i].map(f64::sin));
             assert_eq!(pos[i], <Dh as Chain<6>>::position(&k, &cq, &sq));
             let mut one = vec![[0.0; 3]; 27];
             let p = <Dh as Chain<6>>::position_jacobian(&k, &cq, &sq, &mut one);
@@ -188,11 +193,11 @@ fn batches_equal_single_poses_bit_for_bit() {
 fn shape_errors_are_typed_not_panics() {
     let six = nominal(6);
     assert!(PreparedParams::<7>::new(&six).is_err());
-    assert!(PreparedPoses::<6>::from_rows(&[vec![0.0; 5]]).is_err());
+    assert!(PreparedPoses::new(6, &[vec![0.0; 5]]).is_err());
     assert!(generic::param_jacobian_dual::<31>(&six, &[0.0; 6]).is_err());
     assert!(generic::param_jacobian_central(&six, &[0.0; 7], 1e-6).is_err());
     assert_eq!(
-        kernel::positions_dyn(&DhParams::from_slice(&[0.0; 23]).unwrap(), &[vec![0.0; 5]]),
+        ArmKernel::new(&DhParams::from_slice(&[0.0; 23]).unwrap()),
         Err(kernel::KernelError::Unsupported(5))
     );
 }

@@ -2,12 +2,13 @@
 //! measured poses — the paper's and the standards' (see `aacmm_core::metrics`
 //! for every formula).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use aacmm::io::{Poses, ReferenceLength, check_lengths_against, read_lengths};
-use aacmm::metrics::{Evaluation, MetricsError, ReferenceDistance, evaluate};
-use anyhow::{Context, Result, anyhow};
-use serde::Serialize;
+use aacmm_core::dataset::DataSet;
+use aacmm_core::io::read_lengths;
+use aacmm_core::metrics::{Evaluation, PairLengthError, evaluate, pair_length_errors};
+use anyhow::{Context, Result};
+use serde::{Serialize, Serializer};
 
 /// Evaluate an arm on measured poses.
 #[derive(clap::Args)]
@@ -20,6 +21,10 @@ pub struct Args {
     /// Also write every figure as JSON (lengths in mm).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Also list the paper's eq. 19 for every pair of points (table and
+    /// JSON). Pairs grow as the square of the points; they are streamed.
+    #[arg(long)]
+    pairs: bool,
 }
 
 /// The JSON report: what was evaluated, and the figures.
@@ -31,36 +36,46 @@ struct Report<'a> {
     lengths_file: Option<String>,
     length_unit: &'static str,
     evaluation: &'a Evaluation,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pair_length: Option<Pairs<'a>>,
+}
+
+/// Eq. 19 rows serialised as they are computed, never collected.
+struct Pairs<'a> {
+    data: &'a DataSet,
+    xyz: &'a [[f64; 3]],
+    evaluation: &'a Evaluation,
+}
+
+impl Pairs<'_> {
+    fn rows(&self) -> impl Iterator<Item = PairLengthError> + '_ {
+        pair_length_errors(self.data, self.xyz, &self.evaluation.points)
+    }
+}
+
+impl Serialize for Pairs<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(self.rows())
+    }
 }
 
 pub fn run(args: Args) -> Result<()> {
     let (arm, poses) = args.input.read()?;
-    let lengths = match &args.lengths {
-        Some(path) => {
-            let lengths = read_lengths(path)?;
-            check_lengths_against(&lengths, &poses.labels, &path.display().to_string())?;
-            lengths
-        }
-        None => Vec::new(),
+    let kernel = args.input.kernel(&arm)?;
+    let mut data = DataSet::from_poses(&poses, &args.input.data.display().to_string())?;
+    drop(poses);
+    if let Some(path) = &args.lengths {
+        data = data.with_lengths(&read_lengths(path)?, &path.display().to_string())?;
+    }
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    let evaluation =
+        evaluate(&data, &xyz).with_context(|| format!("arm {}", args.input.arm.display()))?;
+    let pairs = Pairs {
+        data: &data,
+        xyz: &xyz,
+        evaluation: &evaluation,
     };
-    let xyz = args.input.positions(&arm, &poses)?;
-    let references: Vec<ReferenceDistance> = lengths
-        .iter()
-        .map(|l| ReferenceDistance {
-            a: l.a.clone(),
-            b: l.b.clone(),
-            distance: l.distance,
-        })
-        .collect();
-    let evaluation = evaluate(&poses.labels, &xyz, &references).map_err(|e| {
-        locate(
-            e,
-            &args.input.data,
-            &poses,
-            args.lengths.as_deref(),
-            &lengths,
-        )
-    })?;
 
     println!(
         "arm `{}` ({}) on {}",
@@ -69,6 +84,10 @@ pub fn run(args: Args) -> Result<()> {
         args.input.data.display()
     );
     print!("{}", evaluation.to_table());
+    if args.pairs {
+        let mut out = std::io::stdout().lock();
+        aacmm_core::metrics::write_pair_table(&mut out, pairs.rows(), data.points())?;
+    }
     if let Some(path) = &args.json {
         let report = Report {
             arm: &arm.name,
@@ -77,47 +96,16 @@ pub fn run(args: Args) -> Result<()> {
             lengths_file: args.lengths.as_ref().map(|p| p.display().to_string()),
             length_unit: "mm",
             evaluation: &evaluation,
+            pair_length: args.pairs.then_some(pairs),
         };
-        let text = serde_json::to_string_pretty(&report)?;
-        std::fs::write(path, text + "\n")
+        let file = std::fs::File::create(path)
+            .with_context(|| format!("{}: cannot create", path.display()))?;
+        let mut w = std::io::BufWriter::new(file);
+        serde_json::to_writer_pretty(&mut w, &report)
+            .map_err(std::io::Error::from)
+            .and_then(|()| std::io::Write::write_all(&mut w, b"\n"))
+            .and_then(|()| std::io::Write::flush(&mut w))
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(())
-}
-
-/// Points a metrics error at the file and line it comes from.
-fn locate(
-    e: MetricsError,
-    data: &Path,
-    poses: &Poses,
-    lengths_file: Option<&Path>,
-    lengths: &[ReferenceLength],
-) -> anyhow::Error {
-    let first_line = |label: &str| {
-        poses
-            .labels
-            .iter()
-            .position(|l| l == label)
-            .map(|i| poses.lines[i])
-    };
-    match &e {
-        MetricsError::TooFewTouches { label, .. } => match first_line(label) {
-            Some(line) => anyhow!("{}:{line}: field `point`: {e}", data.display()),
-            None => anyhow!("{}: {e}", data.display()),
-        },
-        MetricsError::NonFinite { row, .. } => {
-            let line = poses.lines.get(*row).copied().unwrap_or(0);
-            anyhow!("{}:{line}: {e}", data.display())
-        }
-        MetricsError::UnknownLabel { label } | MetricsError::InvalidReference { a: label, .. } => {
-            let file = lengths_file.map_or_else(String::new, |p| p.display().to_string());
-            match lengths.iter().find(|l| &l.a == label || &l.b == label) {
-                Some(l) => anyhow!("{file}:{}: {e}", l.line),
-                None => anyhow!("{file}: {e}"),
-            }
-        }
-        MetricsError::Empty | MetricsError::LengthMismatch { .. } => {
-            anyhow!("{}: {e}", data.display())
-        }
-    }
 }

@@ -7,8 +7,8 @@ pub mod simulate;
 
 use std::path::PathBuf;
 
-use aacmm::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
-use aacmm::kernel::positions_dyn;
+use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
+use aacmm_core::kernel::ArmKernel;
 use anyhow::{Context, Result};
 
 /// Prints warnings to stderr, where they cannot be mistaken for output.
@@ -43,14 +43,20 @@ impl ArmAndPoses {
         Ok((arm, poses))
     }
 
+    /// The arm prepared for its generated kernel.
+    pub fn kernel(&self, arm: &Arm) -> Result<ArmKernel> {
+        ArmKernel::new(&arm.params).with_context(|| self.arm.display().to_string())
+    }
+
     /// Probe positions of every pose (mm), in row order.
     pub fn positions(&self, arm: &Arm, poses: &Poses) -> Result<Vec<[f64; 3]>> {
-        positions_dyn(&arm.params, &poses.q)
+        self.kernel(arm)?
+            .positions_of(&poses.q)
             .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))
     }
 }
 
 /// Parses `--angle-unit` values with the library's own unit names.
 pub fn angle_unit(s: &str) -> Result<AngleUnit, String> {
-    s.parse().map_err(|e: aacmm::io::UnknownUnit| e.to_string())
+    s.parse().map_err(|e: aacmm_core::io::UnknownUnit| e.to_string())
 }

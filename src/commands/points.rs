@@ -4,7 +4,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 
-use aacmm::io::write_points;
+use aacmm_core::io::write_points;
 use anyhow::{Context, Result};
 
 /// Forward kinematics for every row of a poses file.

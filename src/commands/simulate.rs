@@ -4,8 +4,8 @@
 
 use std::path::PathBuf;
 
-use aacmm::io::read_arm;
-use aacmm::simulate::{
+use aacmm_core::io::read_arm;
+use aacmm_core::simulate::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG,
     ErrorModel, SimError, SocketPlan, pair_count, simulate, write_campaign,
 };

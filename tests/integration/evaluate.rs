@@ -23,6 +23,7 @@ fn reports_table_and_json() {
         &lengths,
         "--json",
         json.to_str().unwrap(),
+        "--pairs",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let table = stdout(&o);
@@ -34,12 +35,12 @@ fn reports_table_and_json() {
     assert_eq!(report["length_unit"], "mm");
     let ev = &report["evaluation"];
     assert_eq!(ev["points"].as_array().unwrap().len(), 2);
-    assert_eq!(ev["pair_length"].as_array().unwrap().len(), 1);
+    assert_eq!(report["pair_length"].as_array().unwrap().len(), 1);
     // Reference error = centroid distance − 500 mm.
     let measured = ev["reference"][0]["measured"].as_f64().unwrap();
     let error = ev["reference"][0]["error"].as_f64().unwrap();
     assert!((error - (measured - 500.0)).abs() < 1e-12);
-    let centroid_distance = ev["pair_length"][0]["centroid_distance"].as_f64().unwrap();
+    let centroid_distance = report["pair_length"][0]["centroid_distance"].as_f64().unwrap();
     assert_eq!(measured, centroid_distance);
 }
 

@@ -2,8 +2,8 @@
 //! errors that name file, line and field.
 
 use crate::util::{aacmm, assert_clean_error, example, stdout, temp_dir, write};
-use aacmm::generic;
-use aacmm::io::read_arm;
+use aacmm_core::generic;
+use aacmm_core::io::read_arm;
 
 const POSES: &str = "point,q1,q2,q3,q4,q5,q6\n\
     S1,0,0,0,0,0,0\n\

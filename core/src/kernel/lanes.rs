@@ -3,19 +3,22 @@
 //! equal one-pose results bit for bit whichever lane type runs.
 //!
 //! Two lane types implement [`Batch`]: [`Lanes`], plain arrays that compile
-//! to SSE2 everywhere, and on x86-64 [`Avx`], explicit 256-bit AVX vectors,
-//! used only inside [`with_avx2`] after the CPU was checked. (LLVM's
+//! to SSE2 everywhere, and on x86-64 `Avx`, explicit 256-bit AVX vectors,
+//! used only inside `with_avx2` after the CPU was checked. (LLVM's
 //! auto-vectorizer left the position kernel scalar, hence the intrinsics.)
+//!
+//! The module is private to the crate: no code outside it can make an `Avx`
+//! value, so no safe public API reaches an instruction the CPU might lack.
 
 use std::ops::{Add, Mul, Neg, Sub};
 
 use super::Scalar;
 
 /// Poses per batch.
-pub const LANES: usize = 4;
+pub(crate) const LANES: usize = 4;
 
 /// A lane type the batch loops can run the generated code on.
-pub trait Batch: Scalar {
+pub(crate) trait Batch: Scalar {
     /// Loads the first [`LANES`] values of `v`.
     fn load(v: &[f64]) -> Self;
     /// The lanes as an array.
@@ -26,7 +29,7 @@ pub trait Batch: Scalar {
 
 /// Portable lanes: one value per pose.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Lanes(pub [f64; LANES]);
+pub(crate) struct Lanes(pub(crate) [f64; LANES]);
 
 impl Batch for Lanes {
     #[inline(always)]
@@ -77,7 +80,7 @@ impl Neg for Lanes {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub use avx::{Avx, with_avx2};
+pub(crate) use avx::{Avx, with_avx2};
 
 #[cfg(target_arch = "x86_64")]
 mod avx {
@@ -91,7 +94,7 @@ mod avx {
     /// made only by code that [`with_avx2`] runs — so the intrinsics below
     /// are always supported where they execute.
     #[derive(Clone, Copy, Debug)]
-    pub struct Avx(__m256d);
+    pub(crate) struct Avx(__m256d);
 
     impl Batch for Avx {
         #[inline(always)]
@@ -158,28 +161,31 @@ mod avx {
     /// # Safety
     /// The CPU must support AVX2.
     #[target_feature(enable = "avx2")]
-    pub unsafe fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+    pub(crate) unsafe fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
         f()
     }
 }
 
-/// Runs `$run::<N, L>(args)` with `L` = [`Avx`] where the CPU has AVX2, else
-/// with `L` = [`Lanes`].
+/// Evaluates to `$run::<N, L>(args)` with `L` = `Avx` where the CPU has
+/// AVX2, else with `L` = [`Lanes`]. An expression: it never returns from its
+/// caller.
 macro_rules! dispatch {
     ($run:ident::<$n:ident>($($arg:expr),*)) => {{
         #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: AVX2 was just detected.
-                return unsafe {
-                    $crate::kernel::lanes::with_avx2(
-                        #[inline(always)]
-                        || $run::<$n, $crate::kernel::lanes::Avx>($($arg),*),
-                    )
-                };
+        let out = if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: AVX2 was just detected.
+            unsafe {
+                $crate::kernel::lanes::with_avx2(
+                    #[inline(always)]
+                    || $run::<$n, $crate::kernel::lanes::Avx>($($arg),*),
+                )
             }
-        }
-        $run::<$n, $crate::kernel::lanes::Lanes>($($arg),*)
+        } else {
+            $run::<$n, $crate::kernel::lanes::Lanes>($($arg),*)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let out = $run::<$n, $crate::kernel::lanes::Lanes>($($arg),*);
+        out
     }};
 }
 pub(crate) use dispatch;

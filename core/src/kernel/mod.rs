@@ -1,22 +1,34 @@
 //! The generated kernel: closed-form probe position and Jacobians of the 6- and
-//! 7-joint chains, expanded at compile time by `dh_chain!`, and the batch API
-//! that feeds it prepared data.
+//! 7-joint chains, expanded at compile time by `dh_chain!`, behind one
+//! runtime-sized type, [`ArmKernel`], that every caller uses.
 //!
 //! Trig is split by how often it changes: sin/cos of the encoder readings once
 //! per data set ([`PreparedPoses`]), of the zero offsets and twists once per
-//! parameter set ([`PreparedParams`]); the per-pose code only multiplies and
-//! adds. Batches run four poses at a time in SIMD lanes ([`lanes`]); the
-//! lanes do exactly the scalar operations, so results are bit-identical to the
-//! one-pose functions whatever the CPU.
+//! parameter set (inside [`ArmKernel`]); the per-pose code only multiplies and
+//! adds. Batches run four poses at a time in SIMD lanes (a crate-private
+//! module: nothing outside the crate can run a lane instruction the CPU might
+//! lack); the lanes do exactly the scalar operations, so results are
+//! bit-identical to the one-pose functions whatever the CPU.
+//!
+//! [`ArmKernel`] is the only place that knows which joint counts have a
+//! generated chain ([`SUPPORTED_JOINTS`](crate::params::SUPPORTED_JOINTS));
+//! the const-generic layer below it ([`Chain`], [`PreparedParams`],
+//! [`position`], [`joint_jacobian`]) is public for oracles and tests.
+//!
+//! ```compile_fail
+//! // The SIMD lanes are not reachable from outside the crate.
+//! use aacmm_core::kernel::lanes::Avx;
+//! ```
 
-pub mod lanes;
+mod arm;
+mod lanes;
 
 use std::ops::{Add, Mul, Neg, Sub};
 
 use thiserror::Error;
 
 use crate::params::DhParams;
-use lanes::{Batch, LANES, dispatch};
+use lanes::{Batch, LANES};
 
 aacmm_dh_macros::dh_chain! {
     /// The 6-joint measuring arm (27 parameters).
@@ -48,8 +60,29 @@ pub enum KernelError {
         got: usize,
     },
     /// No generated kernel for this many joints.
-    #[error("no kernel for {0} joints: the toolkit generates 6- and 7-joint kernels")]
+    #[error(
+        "no kernel for {0} joints: the toolkit generates kernels for {text}",
+        text = crate::params::supported_joints_text()
+    )]
     Unsupported(usize),
+    /// An output buffer of the wrong length.
+    #[error("output holds {got} entries, {expected} needed")]
+    OutputLength {
+        /// Entries needed.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
+    /// A pose range beyond the data.
+    #[error("poses {start}..{end} requested of {len}")]
+    Range {
+        /// First pose requested.
+        start: usize,
+        /// One past the last pose requested.
+        end: usize,
+        /// Poses available.
+        len: usize,
+    },
 }
 
 /// What the generated code computes with: `f64`, SIMD lanes, dual numbers.
@@ -199,62 +232,57 @@ impl_chain!(7, arm7);
 /// out joint by joint (structure of arrays) so that four poses load as one
 /// SIMD vector.
 #[derive(Clone, Debug, PartialEq)]
-pub struct PreparedPoses<const N: usize> {
-    cos: [Vec<f64>; N],
-    sin: [Vec<f64>; N],
+pub struct PreparedPoses {
+    joints: usize,
+    len: usize,
+    /// `cos[j][i]`: cos of joint `j`'s reading at pose `i`.
+    cos: Vec<Vec<f64>>,
+    sin: Vec<Vec<f64>>,
 }
 
-impl<const N: usize> PreparedPoses<N> {
-    /// Prepares readings `q` (rad), one row per pose.
+impl PreparedPoses {
+    /// Prepares readings (rad), one row of `joints` readings per pose.
     ///
     /// ```
     /// use aacmm_core::kernel::PreparedPoses;
-    /// let poses = PreparedPoses::new(&[[0.0; 6], [0.5; 6]]);
-    /// assert_eq!(poses.len(), 2);
-    /// assert_eq!(poses.trig(1).1[3], 0.5f64.sin());
+    /// let poses = PreparedPoses::new(6, &[[0.0; 6], [0.5; 6]]).unwrap();
+    /// assert_eq!((poses.len(), poses.joints()), (2, 6));
+    /// assert!(PreparedPoses::new(6, &[vec![0.0; 7]]).is_err());
     /// ```
-    pub fn new(q: &[[f64; N]]) -> Self {
-        PreparedPoses {
-            cos: std::array::from_fn(|j| q.iter().map(|r| r[j].cos()).collect()),
-            sin: std::array::from_fn(|j| q.iter().map(|r| r[j].sin()).collect()),
+    pub fn new<R: AsRef<[f64]>>(joints: usize, rows: &[R]) -> Result<Self, KernelError> {
+        if let Some(r) = rows.iter().find(|r| r.as_ref().len() != joints) {
+            return Err(KernelError::JointCount {
+                expected: joints,
+                got: r.as_ref().len(),
+            });
         }
-    }
-
-    /// Prepares rows of any length, failing unless each has `N` readings.
-    ///
-    /// ```
-    /// use aacmm_core::kernel::PreparedPoses;
-    /// assert!(PreparedPoses::<6>::from_rows(&[vec![0.0; 6]]).is_ok());
-    /// assert!(PreparedPoses::<6>::from_rows(&[vec![0.0; 7]]).is_err());
-    /// ```
-    pub fn from_rows(rows: &[Vec<f64>]) -> Result<Self, KernelError> {
-        let q: Vec<[f64; N]> = rows
-            .iter()
-            .map(|r| {
-                r.as_slice()
-                    .try_into()
-                    .map_err(|_| KernelError::JointCount {
-                        expected: N,
-                        got: r.len(),
-                    })
-            })
-            .collect::<Result<_, _>>()?;
-        Ok(Self::new(&q))
+        let column = |j: usize, f: fn(f64) -> f64| rows.iter().map(|r| f(r.as_ref()[j])).collect();
+        Ok(PreparedPoses {
+            joints,
+            len: rows.len(),
+            cos: (0..joints).map(|j| column(j, f64::cos)).collect(),
+            sin: (0..joints).map(|j| column(j, f64::sin)).collect(),
+        })
     }
 
     /// Number of poses.
     pub fn len(&self) -> usize {
-        self.cos[0].len()
+        self.len
     }
 
     /// Whether there are no poses.
     pub fn is_empty(&self) -> bool {
-        self.len() == 0
+        self.len == 0
     }
 
-    /// cos and sin of pose `i`'s readings.
+    /// Readings per pose.
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// cos and sin of pose `i`'s readings; the caller has checked `N`.
     #[inline(always)]
-    pub fn trig(&self, i: usize) -> ([f64; N], [f64; N]) {
+    pub(crate) fn trig<const N: usize>(&self, i: usize) -> ([f64; N], [f64; N]) {
         (
             std::array::from_fn(|j| self.cos[j][i]),
             std::array::from_fn(|j| self.sin[j][i]),
@@ -264,7 +292,7 @@ impl<const N: usize> PreparedPoses<N> {
     // Plain loops, not `array::from_fn`: its closure is not always inlined,
     // and out of line the AVX loads become calls.
     #[inline(always)]
-    fn trig_lanes<L: Batch>(&self, i: usize) -> ([L; N], [L; N]) {
+    fn trig_lanes<const N: usize, L: Batch>(&self, i: usize) -> ([L; N], [L; N]) {
         let mut c = [L::from(0.0); N];
         let mut s = [L::from(0.0); N];
         for j in 0..N {
@@ -308,79 +336,6 @@ where
     let mut jac = [[0.0; 3]; N];
     let p = Dh::joint_jacobian(k, &q.map(f64::cos), &q.map(f64::sin), &mut jac);
     (p, jac)
-}
-
-/// Probe positions of every pose, in pose order, into `out`.
-///
-/// # Panics
-/// If `out.len() != poses.len()`.
-///
-/// ```
-/// use aacmm_core::{kernel, params::DhParams};
-/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
-/// let q: Vec<[f64; 6]> = (0..9).map(|i| [0.1 * i as f64; 6]).collect();
-/// let poses = kernel::PreparedPoses::new(&q);
-/// let mut out = vec![[0.0; 3]; 9];
-/// kernel::positions(&k, &poses, &mut out);
-/// assert_eq!(out[7], kernel::position(&k, &q[7])); // bit-identical to one pose
-/// ```
-pub fn positions<const N: usize>(
-    k: &PreparedParams<N>,
-    poses: &PreparedPoses<N>,
-    out: &mut [[f64; 3]],
-) where
-    Dh: Chain<N>,
-{
-    assert_eq!(out.len(), poses.len(), "one output per pose");
-    dispatch!(positions_impl::<N>(k, poses, out));
-}
-
-#[inline(always)]
-fn positions_impl<const N: usize, L: Batch>(
-    k: &PreparedParams<N>,
-    poses: &PreparedPoses<N>,
-    out: &mut [[f64; 3]],
-) where
-    Dh: Chain<N>,
-{
-    let kl: Consts<L, N> = k.splat();
-    let full = poses.len() / LANES * LANES;
-    for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<L>(i);
-        let p = Dh::position(&kl, &cq, &sq);
-        transpose(&[p], &mut out[i..i + LANES]);
-    }
-    for (i, o) in out.iter_mut().enumerate().skip(full) {
-        let (cq, sq) = poses.trig(i);
-        *o = Dh::position(k, &cq, &sq);
-    }
-}
-
-/// Calls `f(pose, position, jacobian)` for every pose in order, with the
-/// `3 × (4N+3)` parameter Jacobian as columns — the form a least-squares
-/// solver uses to accumulate `JᵀJ` and `Jᵀr` without materialising `J`.
-///
-/// ```
-/// use aacmm_core::{kernel, params::DhParams};
-/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
-/// let poses = kernel::PreparedPoses::new(&[[0.0; 6]; 5]);
-/// let mut count = 0;
-/// kernel::for_each_jacobian(&k, &poses, |_, p, jac| {
-///     assert_eq!(jac.len(), 27);
-///     assert_eq!(jac[6], [0.0, 0.0, 1.0]); // ∂p/∂d1
-///     assert!((p[2] - 995.0).abs() < 1e-9);
-///     count += 1;
-/// });
-/// assert_eq!(count, 5);
-/// ```
-pub fn for_each_jacobian<const N: usize>(
-    k: &PreparedParams<N>,
-    poses: &PreparedPoses<N>,
-    f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
-) where
-    Dh: Chain<N>,
-{
-    dispatch!(for_each_lane_jacobian::<N>(k, poses, f));
 }
 
 /// Probe positions and parameter Jacobians of a batch of poses, stored
@@ -452,40 +407,32 @@ impl Jacobians {
     }
 }
 
-/// Positions and parameter Jacobians of every pose into `out`.
-///
-/// # Panics
-/// If `out` was not made for `poses.len()` poses and `4N + 3` parameters.
-///
-/// ```
-/// use aacmm_core::{kernel, params::DhParams};
-/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
-/// let poses = kernel::PreparedPoses::new(&[[0.2; 6]; 6]);
-/// let mut out = kernel::Jacobians::new(6, 27);
-/// kernel::jacobians(&k, &poses, &mut out);
-/// assert_eq!(out.column(5, 6), [0.0, 0.0, 1.0]); // ∂p/∂d1 of the last pose
-/// assert_eq!(out.row(6, 2), &[1.0; 6]);
-/// ```
-pub fn jacobians<const N: usize>(
+#[inline(always)]
+fn positions_impl<const N: usize, L: Batch>(
     k: &PreparedParams<N>,
-    poses: &PreparedPoses<N>,
-    out: &mut Jacobians,
+    poses: &PreparedPoses,
+    start: usize,
+    out: &mut [[f64; 3]],
 ) where
     Dh: Chain<N>,
 {
-    assert_eq!(out.len, poses.len(), "storage for every pose");
-    assert_eq!(
-        out.params,
-        <Dh as Chain<N>>::PARAMS,
-        "storage for 4n + 3 columns"
-    );
-    dispatch!(jacobians_impl::<N>(k, poses, out));
+    let kl: Consts<L, N> = k.splat();
+    let full = out.len() / LANES * LANES;
+    for o in (0..full).step_by(LANES) {
+        let (cq, sq) = poses.trig_lanes::<N, L>(start + o);
+        let p = Dh::position(&kl, &cq, &sq);
+        transpose(&[p], &mut out[o..o + LANES]);
+    }
+    for (o, slot) in out.iter_mut().enumerate().skip(full) {
+        let (cq, sq) = poses.trig::<N>(start + o);
+        *slot = Dh::position(k, &cq, &sq);
+    }
 }
 
 #[inline(always)]
 fn jacobians_impl<const N: usize, L: Batch>(
     k: &PreparedParams<N>,
-    poses: &PreparedPoses<N>,
+    poses: &PreparedPoses,
     out: &mut Jacobians,
 ) where
     Dh: Chain<N>,
@@ -496,7 +443,7 @@ fn jacobians_impl<const N: usize, L: Batch>(
     let mut jl = vec![[L::from(0.0); 3]; params];
     let full = poses.len() / LANES * LANES;
     for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<L>(i);
+        let (cq, sq) = poses.trig_lanes::<N, L>(i);
         let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
         for (r, v) in p.into_iter().enumerate() {
             v.store(&mut out.pos[r * len + i..]);
@@ -509,7 +456,7 @@ fn jacobians_impl<const N: usize, L: Batch>(
     }
     let mut cols = vec![[0.0; 3]; params];
     for i in full..poses.len() {
-        let (cq, sq) = poses.trig(i);
+        let (cq, sq) = poses.trig::<N>(i);
         let p = Dh::position_jacobian(k, &cq, &sq, &mut cols);
         out.set(i, p, &cols);
     }
@@ -518,7 +465,8 @@ fn jacobians_impl<const N: usize, L: Batch>(
 #[inline(always)]
 fn for_each_lane_jacobian<const N: usize, L: Batch>(
     k: &PreparedParams<N>,
-    poses: &PreparedPoses<N>,
+    poses: &PreparedPoses,
+    range: std::ops::Range<usize>,
     mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
 ) where
     Dh: Chain<N>,
@@ -528,9 +476,9 @@ fn for_each_lane_jacobian<const N: usize, L: Batch>(
     let mut jl = vec![[L::from(0.0); 3]; params];
     let mut tile = vec![[0.0; 3]; LANES * params];
     let mut pos = [[0.0; 3]; LANES];
-    let full = poses.len() / LANES * LANES;
-    for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<L>(i);
+    let full = range.start + range.len() / LANES * LANES;
+    for i in (range.start..full).step_by(LANES) {
+        let (cq, sq) = poses.trig_lanes::<N, L>(i);
         let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
         transpose(&[p], &mut pos);
         transpose(&jl, &mut tile);
@@ -538,8 +486,8 @@ fn for_each_lane_jacobian<const N: usize, L: Batch>(
             f(i + l, &pos[l], cols);
         }
     }
-    for i in full..poses.len() {
-        let (cq, sq) = poses.trig(i);
+    for i in full..range.end {
+        let (cq, sq) = poses.trig::<N>(i);
         let p = Dh::position_jacobian(k, &cq, &sq, &mut tile[..params]);
         f(i, &p, &tile[..params]);
     }
@@ -559,35 +507,7 @@ fn transpose<L: Batch>(cols: &[[L; 3]], dst: &mut [[f64; 3]]) {
     }
 }
 
-/// Probe positions of rows of readings `q` (rad), in row order, through the
-/// generated kernel of the arm's joint count — the entry for callers that
-/// hold a runtime-sized arm.
-///
-/// ```
-/// use aacmm_core::{kernel, params::DhParams};
-/// let arm = DhParams::paper_nominal();
-/// let p = kernel::positions_dyn(&arm, &[vec![0.0; 6]]).unwrap();
-/// assert!((p[0][2] - 995.0).abs() < 1e-9);
-/// assert!(kernel::positions_dyn(&arm, &[vec![0.0; 7]]).is_err());
-/// ```
-pub fn positions_dyn(params: &DhParams, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>, KernelError> {
-    fn run<const N: usize>(params: &DhParams, q: &[Vec<f64>]) -> Result<Vec<[f64; 3]>, KernelError>
-    where
-        Dh: Chain<N>,
-    {
-        let k = PreparedParams::<N>::new(params)?;
-        let poses = PreparedPoses::<N>::from_rows(q)?;
-        let mut out = vec![[0.0; 3]; poses.len()];
-        positions(&k, &poses, &mut out);
-        Ok(out)
-    }
-    match params.joint_count() {
-        6 => run::<6>(params, q),
-        7 => run::<7>(params, q),
-        n => Err(KernelError::Unsupported(n)),
-    }
-}
-
+pub use arm::ArmKernel;
 #[cfg(test)]
 mod tests {
     use super::lanes::Lanes;
@@ -601,13 +521,13 @@ mod tests {
         let q: Vec<[f64; 6]> = (0..7)
             .map(|i| std::array::from_fn(|j| ((i * 5 + j) as f64 * 0.61).sin() * 3.0))
             .collect();
-        let poses = PreparedPoses::new(&q);
+        let poses = PreparedPoses::new(6, &q).unwrap();
         let mut pos = vec![[0.0; 3]; q.len()];
-        positions_impl::<6, Lanes>(&k, &poses, &mut pos);
+        positions_impl::<6, Lanes>(&k, &poses, 0, &mut pos);
         let mut batch = Jacobians::new(q.len(), 27);
         jacobians_impl::<6, Lanes>(&k, &poses, &mut batch);
         let mut seen = 0;
-        for_each_lane_jacobian::<6, Lanes>(&k, &poses, |i, p, cols| {
+        for_each_lane_jacobian::<6, Lanes>(&k, &poses, 0..q.len(), |i, p, cols| {
             assert_eq!(*p, batch.position(i));
             for (c, col) in cols.iter().enumerate() {
                 assert_eq!(*col, batch.column(i, c));
@@ -617,7 +537,7 @@ mod tests {
         assert_eq!(seen, q.len());
         for (i, qi) in q.iter().enumerate() {
             assert_eq!(pos[i], position(&k, qi));
-            let (cq, sq) = poses.trig(i);
+            let (cq, sq) = poses.trig::<6>(i);
             let mut cols = vec![[0.0; 3]; 27];
             let p = <Dh as Chain<6>>::position_jacobian(&k, &cq, &sq, &mut cols);
             assert_eq!(p, batch.position(i));

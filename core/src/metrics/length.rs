@@ -3,6 +3,7 @@
 //! volumetric test).
 
 use super::{MetricsError, PointStats, Summary, centroid, check_touches, distance};
+use crate::dataset::DataSet;
 use serde::{Deserialize, Serialize};
 
 /// The paper's length error (eq. 19) between points `a` and `b`; mm.
@@ -69,34 +70,85 @@ pub fn pair_length_error(
 ) -> Result<PairLengthError, MetricsError> {
     check_touches(a, touches_a)?;
     check_touches(b, touches_b)?;
-    let centroid_distance = distance(&centroid(touches_a), &centroid(touches_b));
-    let pairs = touches_a.len().min(touches_b.len());
-    let excess: Vec<f64> = touches_a
-        .iter()
-        .zip(touches_b)
-        .map(|(p, q)| distance(p, q) - centroid_distance)
-        .collect();
-    let mean = |v: &mut dyn Iterator<Item = f64>| v.sum::<f64>() / pairs as f64;
+    let (pairs, centroid_distance, d_error, d_error_abs) = eq19(
+        touches_a,
+        touches_b,
+        &centroid(touches_a),
+        &centroid(touches_b),
+    );
     Ok(PairLengthError {
         a: a.to_owned(),
         b: b.to_owned(),
         pairs,
         centroid_distance,
-        d_error: mean(&mut excess.iter().copied()),
-        d_error_abs: mean(&mut excess.iter().map(|e| e.abs())),
+        d_error,
+        d_error_abs,
     })
 }
 
-/// A calibrated distance between two measured points (ball bar, cone plate,
-/// step gauge), mm. Independent of the file format that carries it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ReferenceDistance {
-    /// First point's label.
-    pub a: String,
-    /// Second point's label.
-    pub b: String,
-    /// Calibrated distance `L`, mm.
-    pub distance: f64,
+/// Eq. 19 of two touch lists with their centroids: `(n, |x̄_a − x̄_b|,
+/// d_error, d_error_abs)`. Allocates nothing: it runs for every pair.
+#[inline]
+pub(super) fn eq19(
+    touches_a: &[[f64; 3]],
+    touches_b: &[[f64; 3]],
+    ca: &[f64; 3],
+    cb: &[f64; 3],
+) -> (usize, f64, f64, f64) {
+    let centroid_distance = distance(ca, cb);
+    let pairs = touches_a.len().min(touches_b.len());
+    let (mut sum, mut sum_abs) = (0.0, 0.0);
+    for (p, q) in touches_a.iter().zip(touches_b) {
+        let excess = distance(p, q) - centroid_distance;
+        sum += excess;
+        sum_abs += excess.abs();
+    }
+    let n = pairs as f64;
+    (pairs, centroid_distance, sum / n, sum_abs / n)
+}
+
+/// Eq. 19 for every pair of points `i < j` of the data set (its point
+/// order), computed as the iterator is advanced: the pairs grow as the square
+/// of the points, so they are streamed, never collected. `stats` are the
+/// points' figures from [`super::evaluate`] (for their centroids).
+///
+/// ```
+/// use aacmm_core::{dataset::DataSet, metrics::{evaluate, pair_length_errors}};
+/// let labels = ["a", "b", "c"].repeat(3);
+/// let xyz: Vec<[f64; 3]> = (0..9).map(|r| [(r % 3) as f64 * 10.0, 0.0, 0.0]).collect();
+/// let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+/// let xyz = data.to_touch_order(&xyz);
+/// let ev = evaluate(&data, &xyz).unwrap();
+/// let pairs: Vec<_> = pair_length_errors(&data, &xyz, &ev.points).collect();
+/// assert_eq!(pairs.len(), 3);
+/// assert_eq!((pairs[2].a.as_str(), pairs[2].b.as_str()), ("b", "c"));
+/// assert_eq!(pairs[2].centroid_distance, 10.0);
+/// ```
+pub fn pair_length_errors<'a>(
+    data: &'a DataSet,
+    xyz: &'a [[f64; 3]],
+    stats: &'a [PointStats],
+) -> impl Iterator<Item = PairLengthError> + 'a {
+    let points = data.points();
+    (0..points.len()).flat_map(move |i| {
+        (i + 1..points.len()).map(move |j| {
+            let (pa, pb) = (&points[i], &points[j]);
+            let (pairs, centroid_distance, d_error, d_error_abs) = eq19(
+                &xyz[pa.touches.clone()],
+                &xyz[pb.touches.clone()],
+                &stats[i].centroid,
+                &stats[j].centroid,
+            );
+            PairLengthError {
+                a: pa.label.clone(),
+                b: pb.label.clone(),
+                pairs,
+                centroid_distance,
+                d_error,
+                d_error_abs,
+            }
+        })
+    })
 }
 
 /// Error of one measured length against its reference; mm.
@@ -112,57 +164,6 @@ pub struct ReferenceError {
     pub measured: f64,
     /// `measured − reference` (ISO 10360-12 `E = L_meas − L_cal`).
     pub error: f64,
-}
-
-/// Compares the centroid distance of `reference.a` and `reference.b`, looked
-/// up in `points`, with the calibrated distance: `error = |x̄_a − x̄_b| − L`.
-///
-/// # Errors
-///
-/// [`MetricsError::InvalidReference`] when `a == b` or `L` is not finite and
-/// positive; [`MetricsError::UnknownLabel`] when a label is not in `points`.
-///
-/// ```
-/// use aacmm_core::metrics::{point_stats, reference_error, ReferenceDistance};
-/// let p = point_stats("p", &[[0.0; 3]; 3]).unwrap();
-/// let q = point_stats("q", &[[0.0, 0.0, 99.98]; 3]).unwrap();
-/// let bar = ReferenceDistance { a: "p".into(), b: "q".into(), distance: 100.0 };
-/// let r = reference_error(&bar, &[p, q]).unwrap();
-/// assert!((r.error - -0.02).abs() < 1e-9); // 99.98 − 100
-/// ```
-pub fn reference_error(
-    reference: &ReferenceDistance,
-    points: &[PointStats],
-) -> Result<ReferenceError, MetricsError> {
-    let ReferenceDistance {
-        a,
-        b,
-        distance: length,
-    } = reference;
-    if a == b || !length.is_finite() || *length <= 0.0 {
-        return Err(MetricsError::InvalidReference {
-            a: a.clone(),
-            b: b.clone(),
-            distance: *length,
-        });
-    }
-    let centroid_of = |label: &str| {
-        points
-            .iter()
-            .find(|p| p.label == label)
-            .map(|p| p.centroid)
-            .ok_or_else(|| MetricsError::UnknownLabel {
-                label: label.to_owned(),
-            })
-    };
-    let measured = distance(&centroid_of(a)?, &centroid_of(b)?);
-    Ok(ReferenceError {
-        a: a.clone(),
-        b: b.clone(),
-        reference: *length,
-        measured,
-        error: measured - length,
-    })
 }
 
 /// Summary of reference-length errors `E_1..E_m`; mm. The ASME B89.4.22
@@ -205,7 +206,7 @@ impl ReferenceSummary {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{evaluate, point_stats};
+    use super::super::tests::{eval, pairs};
     use super::*;
 
     #[test]
@@ -259,9 +260,9 @@ mod tests {
         // Centroids 1 and 11 → 10; pairs (0,10), (0,13), (3,10) → 10, 13, 7 → d_error 0
         let labels = ["a", "b", "a", "b", "b", "a"];
         let points = [x(0.0), x(10.0), x(0.0), x(13.0), x(10.0), x(3.0)];
-        let ev = evaluate(&labels, &points, &[]).unwrap();
-        assert_eq!(ev.pair_length[0].centroid_distance, 10.0);
-        assert_eq!(ev.pair_length[0].d_error, 0.0);
+        let pair = pairs(&labels, &points);
+        assert_eq!(pair[0].centroid_distance, 10.0);
+        assert_eq!(pair[0].d_error, 0.0);
     }
 
     #[test]
@@ -293,27 +294,14 @@ mod tests {
         );
     }
 
-    fn two_points() -> Vec<PointStats> {
-        // centroids (0,0,0) and (3,4,0): distance 5
-        vec![
-            point_stats("p", &[[0.0; 3]; 3]).unwrap(),
-            point_stats("q", &[[3.0, 4.0, 0.0]; 3]).unwrap(),
-        ]
-    }
-
-    fn bar(a: &str, b: &str, distance: f64) -> ReferenceDistance {
-        ReferenceDistance {
-            a: a.into(),
-            b: b.into(),
-            distance,
-        }
-    }
-
     #[test]
     fn reference_error_is_measured_minus_reference() {
-        // 5 − 5.5 = −0.5, either direction
-        for r in [bar("p", "q", 5.5), bar("q", "p", 5.5)] {
-            let e = reference_error(&r, &two_points()).unwrap();
+        // centroids (0,0,0) and (3,4,0): distance 5; 5 − 5.5 = −0.5, either direction
+        let labels = ["p", "p", "p", "q", "q", "q"];
+        let points = [[0.0; 3], [0.0; 3], [0.0; 3], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0]];
+        for r in [("p", "q", 5.5), ("q", "p", 5.5)] {
+            let ev = eval(&labels, &points, &[r]).unwrap();
+            let e = &ev.reference[0];
             assert_eq!((e.reference, e.measured, e.error), (5.5, 5.0, -0.5));
         }
     }
@@ -332,27 +320,4 @@ mod tests {
         assert_eq!(ReferenceSummary::of(&[]), None);
     }
 
-    #[test]
-    fn reference_naming_unknown_point() {
-        assert_eq!(
-            reference_error(&bar("p", "zz", 5.0), &two_points()),
-            Err(MetricsError::UnknownLabel { label: "zz".into() })
-        );
-    }
-
-    #[test]
-    fn invalid_references() {
-        for r in [
-            bar("p", "p", 5.0),
-            bar("p", "q", 0.0),
-            bar("p", "q", -1.0),
-            bar("p", "q", f64::NAN),
-        ] {
-            let err = reference_error(&r, &two_points()).unwrap_err();
-            assert!(
-                matches!(err, MetricsError::InvalidReference { .. }),
-                "{r:?}: {err:?}"
-            );
-        }
-    }
 }

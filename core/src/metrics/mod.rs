@@ -57,7 +57,7 @@
 //! # Example
 //!
 //! ```
-//! use aacmm_core::metrics::{evaluate, ReferenceDistance};
+//! use aacmm_core::{dataset::DataSet, io::parse_lengths, metrics::evaluate};
 //!
 //! // Socket "p" touched at the four corners of a square of side 2 around
 //! // (0, 0, 0); socket "q" four times at exactly (100.01, 0, 0).
@@ -66,8 +66,9 @@
 //!     [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0],
 //!     [100.01, 0.0, 0.0], [100.01, 0.0, 0.0], [100.01, 0.0, 0.0], [100.01, 0.0, 0.0],
 //! ];
-//! let bar = ReferenceDistance { a: "p".into(), b: "q".into(), distance: 100.0 };
-//! let ev = evaluate(&labels, &points, &[bar]).unwrap();
+//! let bar = parse_lengths("point_a,point_b,distance\np,q,100\n", "l.csv").unwrap();
+//! let data = DataSet::from_labels(&labels, "m.csv").unwrap().with_lengths(&bar, "l.csv").unwrap();
+//! let ev = evaluate(&data, &data.to_touch_order(&points)).unwrap();
 //!
 //! assert_eq!(ev.points[0].label, "p");
 //! assert!((ev.points[0].e - 2f64.sqrt()).abs() < 1e-12); // δ = √2 for every corner
@@ -82,42 +83,36 @@ mod point;
 mod table;
 
 pub use length::{
-    PairLengthError, ReferenceDistance, ReferenceError, ReferenceSummary, pair_length_error,
-    reference_error,
+    PairLengthError, ReferenceError, ReferenceSummary, pair_length_error, pair_length_errors,
 };
 pub use point::{PointStats, point_stats};
+pub use table::write_pair_table;
 
+pub use crate::dataset::MIN_TOUCHES;
+use crate::dataset::DataSet;
 pub(crate) use crate::geometry::{centroid, distance};
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
 
-/// Fewest touches a point needs: `2s` divides by `n − 1`, and fewer than three
-/// touches say next to nothing about articulation error.
-pub const MIN_TOUCHES: usize = 3;
-
-/// Why the metrics could not be computed. Every variant names what the caller
-/// needs to point the user at the offending input (label, row).
+/// Why the metrics could not be computed. Every variant says where the
+/// offending value came from.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum MetricsError {
-    /// No measured points at all.
-    #[error("no measured points")]
-    Empty,
-    /// `labels` and `points` differ in length.
-    #[error("{labels} labels but {points} points")]
+    /// The positions do not match the data set, one per touch.
+    #[error("{got} positions for {expected} touches")]
     LengthMismatch {
-        /// Number of labels given.
-        labels: usize,
-        /// Number of points given.
-        points: usize,
+        /// Touches in the data set.
+        expected: usize,
+        /// Positions given.
+        got: usize,
     },
     /// A coordinate is NaN or infinite.
-    #[error("point `{label}`, row {row}: coordinate is not a finite number")]
+    #[error("{at}: point `{label}`: computed position is not a finite number")]
     NonFinite {
-        /// Label of the offending row.
+        /// Label of the offending touch.
         label: String,
-        /// 0-based index into the point slice passed to the reporting function
-        /// (for [`evaluate`], the input row).
-        row: usize,
+        /// Where the touch came from (`file:line`), or its index among the
+        /// touches passed to [`point_stats`].
+        at: String,
     },
     /// A point has fewer than [`MIN_TOUCHES`] touches.
     #[error("point `{label}` has {touches} touch(es); at least {MIN_TOUCHES} are needed")]
@@ -127,25 +122,11 @@ pub enum MetricsError {
         /// How many touches it has.
         touches: usize,
     },
-    /// A reference length names a point that was not measured.
-    #[error("reference length names point `{label}`, which was not measured")]
-    UnknownLabel {
-        /// The unknown label.
-        label: String,
-    },
-    /// A reference length joins a point to itself, or its distance is not a
-    /// finite positive number.
-    #[error(
-        "reference length `{a}`–`{b}` = {distance} mm: needs two different points \
-         and a finite positive distance"
-    )]
-    InvalidReference {
-        /// First point's label.
-        a: String,
-        /// Second point's label.
-        b: String,
-        /// The distance given, mm.
-        distance: f64,
+    /// A figure overflowed (positions far too large to compare).
+    #[error("{figure} is not a finite number: the positions are too large to compare")]
+    Overflow {
+        /// The figure that overflowed.
+        figure: String,
     },
 }
 
@@ -192,10 +173,52 @@ impl Summary {
             std: variance.sqrt(),
         })
     }
+
+    fn is_finite(&self) -> bool {
+        [self.min, self.mean, self.max, self.std]
+            .iter()
+            .all(|v| v.is_finite())
+    }
 }
 
-/// Everything [`evaluate`] computes; lists are in first-appearance order of
-/// the labels (pairs `i < j` in that order, references in input order).
+/// A [`Summary`] accumulated one value at a time in constant memory
+/// (Welford's update), for lists too long to hold: eq. 19 over all pairs.
+#[derive(Clone, Copy, Debug, Default)]
+struct Running {
+    count: usize,
+    min: f64,
+    max: f64,
+    mean: f64,
+    m2: f64,
+}
+
+impl Running {
+    fn push(&mut self, v: f64) {
+        if self.count == 0 {
+            (self.min, self.max) = (v, v);
+        }
+        self.count += 1;
+        self.min = self.min.min(v);
+        self.max = self.max.max(v);
+        let d = v - self.mean;
+        self.mean += d / self.count as f64;
+        self.m2 += d * (v - self.mean);
+    }
+
+    fn summary(&self) -> Option<Summary> {
+        (self.count > 0).then(|| Summary {
+            count: self.count,
+            min: self.min,
+            mean: self.mean,
+            max: self.max,
+            std: (self.m2.max(0.0) / self.count as f64).sqrt(),
+        })
+    }
+}
+
+/// Everything [`evaluate`] computes; lists are in the data set's point order
+/// (references in file order). Per-pair eq. 19 rows, which grow as the
+/// square of the points, are not kept: [`pair_length_errors`] streams them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Evaluation {
     /// Per-point figures (paper eq. 9–12, SPAT).
@@ -206,118 +229,138 @@ pub struct Evaluation {
     pub single_point_delta_max: Summary,
     /// `2s` across points (SPAT, unverified which figure vendors quote).
     pub single_point_two_s: Summary,
-    /// The paper's length error (eq. 19) for every pair of points.
-    pub pair_length: Vec<PairLengthError>,
-    /// `d_error` across pairs (Fig. 7); `None` with a single point.
+    /// `d_error` (eq. 19) across all pairs of points (Fig. 7); `None` with a
+    /// single point.
     pub pair_length_summary: Option<Summary>,
     /// `d_error_abs` across pairs; `None` with a single point.
     pub pair_length_abs_summary: Option<Summary>,
-    /// Error against every given reference length.
+    /// Error against every reference length of the data set.
     pub reference: Vec<ReferenceError>,
     /// Summary of the reference errors; `None` when none were given.
     pub reference_summary: Option<ReferenceSummary>,
 }
 
-/// Computes every metric of the module for labelled points and optional
-/// reference lengths (see the module documentation for the formulas).
-///
-/// `labels[r]` names the physical point measured in row `r` of `points`.
+/// Computes every metric of the module for the probe positions `xyz` of the
+/// data set's touches (in its touch order; see the module documentation for
+/// the formulas). Memory is linear in the touches: pairs are summarised as
+/// they are computed.
 ///
 /// # Errors
 ///
-/// [`MetricsError::LengthMismatch`], [`MetricsError::Empty`],
-/// [`MetricsError::NonFinite`] (with the input row),
-/// [`MetricsError::TooFewTouches`] (the first such point),
-/// [`MetricsError::UnknownLabel`] and [`MetricsError::InvalidReference`].
+/// [`MetricsError::LengthMismatch`]; [`MetricsError::NonFinite`] naming the
+/// file and line of the first non-finite position;
+/// [`MetricsError::Overflow`] when a figure is not finite.
 ///
 /// ```
-/// use aacmm_core::metrics::{evaluate, MetricsError};
+/// use aacmm_core::{dataset::DataSet, metrics::evaluate};
 /// // Socket "a" at x = 0, 0, 0, 4 (centroid 1, δ = 1, 1, 1, 3);
 /// // socket "b" three times at (10, 0, 0).
 /// let labels = ["a", "b", "a", "b", "a", "b", "a"];
 /// let x = |v: f64| [v, 0.0, 0.0];
 /// let points = [x(0.0), x(10.0), x(0.0), x(10.0), x(0.0), x(10.0), x(4.0)];
-/// let ev = evaluate(&labels, &points, &[]).unwrap();
+/// let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+/// let ev = evaluate(&data, &data.to_touch_order(&points)).unwrap();
 /// assert_eq!(ev.points[0].e, 1.5); // (1 + 1 + 1 + 3) / 4
 /// assert_eq!(ev.points[0].delta_max, 3.0);
 /// assert_eq!(ev.points[0].two_s, 4.0); // 2·sqrt((1 + 1 + 1 + 9) / 3)
 /// // eq. 19 pairs the first three touches: distances 10, 10, 10 vs 9 between centroids.
-/// assert_eq!(ev.pair_length[0].pairs, 3);
-/// assert_eq!(ev.pair_length[0].d_error, 1.0);
+/// assert_eq!(ev.pair_length_summary.unwrap().mean, 1.0);
 /// assert_eq!(ev.reference_summary, None);
-///
-/// let err = evaluate(&["a", "a"], &[x(0.0), x(1.0)], &[]).unwrap_err();
-/// assert_eq!(err, MetricsError::TooFewTouches { label: "a".into(), touches: 2 });
 /// ```
-pub fn evaluate<S: AsRef<str>>(
-    labels: &[S],
-    points: &[[f64; 3]],
-    references: &[ReferenceDistance],
-) -> Result<Evaluation, MetricsError> {
-    check_rows(labels, points)?;
-    let groups = group_by_label(labels, points);
-    let stats = groups
+pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsError> {
+    if xyz.len() != data.len() {
+        return Err(MetricsError::LengthMismatch {
+            expected: data.len(),
+            got: xyz.len(),
+        });
+    }
+    for point in data.points() {
+        if let Some(i) = point.touches.clone().find(|&i| !is_finite(&xyz[i])) {
+            return Err(MetricsError::NonFinite {
+                label: point.label.clone(),
+                at: data.source().touch(i).to_string(),
+            });
+        }
+    }
+    let stats = data
+        .points()
         .iter()
-        .map(|(label, touches)| point_stats(label, touches))
+        .map(|p| point_stats(&p.label, &xyz[p.touches.clone()]))
         .collect::<Result<Vec<_>, _>>()?;
-    let pair_length = all_pairs(&groups)?;
-    let reference = references
+    let (mut signed, mut abs) = (Running::default(), Running::default());
+    for pair in pair_length_errors(data, xyz, &stats) {
+        signed.push(pair.d_error);
+        abs.push(pair.d_error_abs);
+    }
+    let reference: Vec<ReferenceError> = data
+        .references()
         .iter()
-        .map(|r| reference_error(r, &stats))
-        .collect::<Result<Vec<_>, _>>()?;
+        .map(|r| {
+            let measured = distance(&stats[r.a].centroid, &stats[r.b].centroid);
+            ReferenceError {
+                a: stats[r.a].label.clone(),
+                b: stats[r.b].label.clone(),
+                reference: r.distance,
+                measured,
+                error: measured - r.distance,
+            }
+        })
+        .collect();
     let across_points = |figure: fn(&PointStats) -> f64| {
         let values: Vec<f64> = stats.iter().map(figure).collect();
-        Summary::of(&values).expect("check_rows rejects empty input")
+        Summary::of(&values).expect("a data set has points")
     };
-    Ok(Evaluation {
+    let ev = Evaluation {
         single_point_e: across_points(|p| p.e),
         single_point_delta_max: across_points(|p| p.delta_max),
         single_point_two_s: across_points(|p| p.two_s),
-        pair_length_summary: Summary::of(
-            &pair_length.iter().map(|p| p.d_error).collect::<Vec<_>>(),
-        ),
-        pair_length_abs_summary: Summary::of(
-            &pair_length
-                .iter()
-                .map(|p| p.d_error_abs)
-                .collect::<Vec<_>>(),
-        ),
+        pair_length_summary: signed.summary(),
+        pair_length_abs_summary: abs.summary(),
         reference_summary: ReferenceSummary::of(
             &reference.iter().map(|r| r.error).collect::<Vec<_>>(),
         ),
         points: stats,
-        pair_length,
         reference,
-    })
+    };
+    ev.check_finite()?;
+    Ok(ev)
 }
 
-/// Rejects mismatched lengths, empty input and non-finite coordinates.
-fn check_rows<S: AsRef<str>>(labels: &[S], points: &[[f64; 3]]) -> Result<(), MetricsError> {
-    if labels.len() != points.len() {
-        return Err(MetricsError::LengthMismatch {
-            labels: labels.len(),
-            points: points.len(),
-        });
-    }
-    if points.is_empty() {
-        return Err(MetricsError::Empty);
-    }
-    check_finite(labels.iter().map(AsRef::as_ref).zip(points))
-}
-
-/// The first row (0-based, in iteration order) with a non-finite coordinate.
-fn check_finite<'a>(
-    rows: impl Iterator<Item = (&'a str, &'a [f64; 3])>,
-) -> Result<(), MetricsError> {
-    for (row, (label, p)) in rows.enumerate() {
-        if !p.iter().all(|c| c.is_finite()) {
-            return Err(MetricsError::NonFinite {
-                label: label.to_owned(),
-                row,
-            });
+impl Evaluation {
+    /// Every figure must be finite: positions near `f64::MAX` make sums
+    /// overflow where each position alone is finite.
+    fn check_finite(&self) -> Result<(), MetricsError> {
+        let overflow = |figure: &str| {
+            Err(MetricsError::Overflow {
+                figure: figure.to_string(),
+            })
+        };
+        for p in &self.points {
+            let values = [p.e, p.sigma, p.oa, p.delta_max, p.two_s];
+            if !(values.iter().chain(&p.centroid).chain(&p.half_range)).all(|v| v.is_finite()) {
+                return overflow(&format!("a figure of point `{}`", p.label));
+            }
         }
+        let summaries = [
+            Some(self.single_point_e),
+            Some(self.single_point_delta_max),
+            Some(self.single_point_two_s),
+            self.pair_length_summary,
+            self.pair_length_abs_summary,
+            self.reference_summary.map(|r| r.error),
+        ];
+        if !summaries.iter().flatten().all(Summary::is_finite) {
+            return overflow("a summary across points");
+        }
+        if let Some(r) = self.reference.iter().find(|r| !r.measured.is_finite()) {
+            return overflow(&format!("the distance `{}`–`{}`", r.a, r.b));
+        }
+        Ok(())
     }
-    Ok(())
+}
+
+fn is_finite(p: &[f64; 3]) -> bool {
+    p.iter().all(|c| c.is_finite())
 }
 
 /// Checks what every per-point function needs: enough, finite touches.
@@ -328,41 +371,53 @@ fn check_touches(label: &str, touches: &[[f64; 3]]) -> Result<(), MetricsError> 
             touches: touches.len(),
         });
     }
-    check_finite(touches.iter().map(|p| (label, p)))
-}
-
-/// Rows grouped by label, labels in order of first appearance, touches in row
-/// order.
-fn group_by_label<'a, S: AsRef<str>>(
-    labels: &'a [S],
-    points: &[[f64; 3]],
-) -> Vec<(&'a str, Vec<[f64; 3]>)> {
-    let mut index: HashMap<&str, usize> = HashMap::new();
-    let mut groups: Vec<(&str, Vec<[f64; 3]>)> = Vec::new();
-    for (label, p) in labels.iter().map(AsRef::as_ref).zip(points) {
-        let i = *index.entry(label).or_insert_with(|| {
-            groups.push((label, Vec::new()));
-            groups.len() - 1
+    if let Some(row) = touches.iter().position(|p| !is_finite(p)) {
+        return Err(MetricsError::NonFinite {
+            label: label.to_owned(),
+            at: format!("touch {row}"),
         });
-        groups[i].1.push(*p);
     }
-    groups
-}
-
-/// Eq. 19 for every pair `i < j` of groups.
-fn all_pairs(groups: &[(&str, Vec<[f64; 3]>)]) -> Result<Vec<PairLengthError>, MetricsError> {
-    let mut pairs = Vec::new();
-    for (i, (a, touches_a)) in groups.iter().enumerate() {
-        for (b, touches_b) in &groups[i + 1..] {
-            pairs.push(pair_length_error(a, touches_a, b, touches_b)?);
-        }
-    }
-    Ok(pairs)
+    Ok(())
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+    use crate::io::ReferenceLength;
+
+    /// `evaluate` on points given in row order with labels and references
+    /// `(a, b, L)`.
+    pub(crate) fn eval<S: AsRef<str>>(
+        labels: &[S],
+        points: &[[f64; 3]],
+        refs: &[(&str, &str, f64)],
+    ) -> Result<Evaluation, MetricsError> {
+        let lengths: Vec<ReferenceLength> = refs
+            .iter()
+            .enumerate()
+            .map(|(i, &(a, b, distance))| ReferenceLength {
+                a: a.into(),
+                b: b.into(),
+                distance,
+                uncertainty: None,
+                line: i + 2,
+            })
+            .collect();
+        let data = DataSet::from_labels(labels, "m.csv")
+            .unwrap()
+            .with_lengths(&lengths, "l.csv")
+            .unwrap();
+        assert_eq!(points.len(), labels.len(), "test points per label");
+        evaluate(&data, &data.to_touch_order(points))
+    }
+
+    /// The eq. 19 rows of points in row order.
+    pub(crate) fn pairs<S: AsRef<str>>(labels: &[S], points: &[[f64; 3]]) -> Vec<PairLengthError> {
+        let data = DataSet::from_labels(labels, "m.csv").unwrap();
+        let xyz = data.to_touch_order(points);
+        let stats = evaluate(&data, &xyz).unwrap().points;
+        pair_length_errors(&data, &xyz, &stats).collect()
+    }
 
     fn x(v: f64) -> [f64; 3] {
         [v, 0.0, 0.0]
@@ -386,13 +441,14 @@ mod tests {
 
     #[test]
     fn groups_keep_first_appearance_order() {
-        let labels = ["b", "a", "b", "c", "a", "b"];
-        let points: Vec<[f64; 3]> = (0..6).map(|r| x(r as f64)).collect();
-        let groups = group_by_label(&labels, &points);
-        let order: Vec<&str> = groups.iter().map(|g| g.0).collect();
+        let labels = ["b", "a", "b", "c", "a", "b", "c", "a", "c"];
+        let points: Vec<[f64; 3]> = (0..9).map(|r| x(r as f64)).collect();
+        let ev = eval(&labels, &points, &[]).unwrap();
+        let order: Vec<&str> = ev.points.iter().map(|p| p.label.as_str()).collect();
         assert_eq!(order, ["b", "a", "c"]);
-        assert_eq!(groups[0].1, [x(0.0), x(2.0), x(5.0)]);
-        assert_eq!(groups[1].1, [x(1.0), x(4.0)]);
+        // b: rows 0, 2, 5 → centroid 7/3; a: rows 1, 4, 7 → centroid 4.
+        assert!((ev.points[0].centroid[0] - 7.0 / 3.0).abs() < 1e-12);
+        assert_eq!(ev.points[1].centroid[0], 4.0);
     }
 
     #[test]
@@ -404,17 +460,17 @@ mod tests {
             .map(|s| s.to_string())
             .collect();
         let points: Vec<[f64; 3]> = (0..9).map(|r| [r as f64, (r * r) as f64, 1.0]).collect();
-        let first = evaluate(&labels, &points, &[]).unwrap();
+        let first = eval(&labels, &points, &[]).unwrap();
         for _ in 0..5 {
-            assert_eq!(evaluate(&labels, &points, &[]).unwrap(), first);
+            assert_eq!(eval(&labels, &points, &[]).unwrap(), first);
         }
         let names: Vec<&str> = first.points.iter().map(|p| p.label.as_str()).collect();
         assert_eq!(names, ["s3", "s1", "s2"]);
-        let pairs: Vec<(&str, &str)> = first
-            .pair_length
-            .iter()
-            .map(|p| (p.a.as_str(), p.b.as_str()))
+        let pairs: Vec<(String, String)> = pairs(&labels, &points)
+            .into_iter()
+            .map(|p| (p.a, p.b))
             .collect();
+        let pairs: Vec<(&str, &str)> = pairs.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
         assert_eq!(pairs, [("s3", "s1"), ("s3", "s2"), ("s1", "s2")]);
     }
 
@@ -424,7 +480,7 @@ mod tests {
         // "q": x = 10, 10, 10   → e 0,   δ_max 0, 2s 0
         let labels = ["p", "p", "p", "p", "q", "q", "q"];
         let points = [x(0.0), x(0.0), x(0.0), x(4.0), x(10.0), x(10.0), x(10.0)];
-        let ev = evaluate(&labels, &points, &[]).unwrap();
+        let ev = eval(&labels, &points, &[]).unwrap();
         let e = ev.single_point_e;
         // e: [1.5, 0] → mean 0.75, std 0.75
         assert_eq!(
@@ -439,9 +495,34 @@ mod tests {
     }
 
     #[test]
+    fn streamed_pair_summary_equals_the_summary_of_the_rows() {
+        let labels: Vec<String> = (0..40).map(|r| format!("s{}", r % 8)).collect();
+        let points: Vec<[f64; 3]> = (0..40)
+            .map(|r| [(r as f64 * 0.7).sin() * 300.0, (r as f64).cos(), r as f64])
+            .collect();
+        let ev = eval(&labels, &points, &[]).unwrap();
+        let rows = pairs(&labels, &points);
+        assert_eq!(rows.len(), 28);
+        let of = |f: fn(&PairLengthError) -> f64| {
+            Summary::of(&rows.iter().map(f).collect::<Vec<_>>()).unwrap()
+        };
+        for (streamed, direct) in [
+            (ev.pair_length_summary.unwrap(), of(|p| p.d_error)),
+            (ev.pair_length_abs_summary.unwrap(), of(|p| p.d_error_abs)),
+        ] {
+            assert_eq!(
+                (streamed.count, streamed.min, streamed.max),
+                (direct.count, direct.min, direct.max)
+            );
+            assert!((streamed.mean - direct.mean).abs() < 1e-12);
+            assert!((streamed.std - direct.std).abs() < 1e-12);
+        }
+    }
+
+    #[test]
     fn single_point_has_no_pairs_and_no_reference_summary() {
-        let ev = evaluate(&["p"; 3], &[x(0.0), x(1.0), x(2.0)], &[]).unwrap();
-        assert!(ev.pair_length.is_empty());
+        let ev = eval(&["p"; 3], &[x(0.0), x(1.0), x(2.0)], &[]).unwrap();
+        assert!(pairs(&["p"; 3], &[x(0.0), x(1.0), x(2.0)]).is_empty());
         assert_eq!(ev.pair_length_summary, None);
         assert_eq!(ev.reference_summary, None);
     }
@@ -449,70 +530,44 @@ mod tests {
     #[test]
     fn accepts_owned_labels() {
         let labels = vec!["p".to_string(); 3];
-        assert!(evaluate(&labels, &[x(0.0); 3], &[]).is_ok());
-    }
-
-    #[test]
-    fn empty_input_is_an_error() {
-        let none: [&str; 0] = [];
-        assert_eq!(evaluate(&none, &[], &[]), Err(MetricsError::Empty));
+        assert!(eval(&labels, &[x(0.0); 3], &[]).is_ok());
     }
 
     #[test]
     fn mismatched_lengths_are_an_error() {
+        let data = DataSet::from_labels(&["p"; 3], "m.csv").unwrap();
         assert_eq!(
-            evaluate(&["p", "p"], &[x(0.0); 3], &[]),
+            evaluate(&data, &[x(0.0); 2]),
             Err(MetricsError::LengthMismatch {
-                labels: 2,
-                points: 3
+                expected: 3,
+                got: 2
             })
         );
     }
 
     #[test]
-    fn first_point_with_too_few_touches_is_named() {
-        // "q" (1 touch) appears before "r" (2 touches); "p" has enough.
-        let labels = ["p", "q", "p", "r", "p", "r"];
-        let err = evaluate(&labels, &[x(0.0); 6], &[]).unwrap_err();
-        assert_eq!(
-            err,
-            MetricsError::TooFewTouches {
-                label: "q".into(),
-                touches: 1
-            }
-        );
-        assert!(err.to_string().contains("`q` has 1 touch"));
-    }
-
-    #[test]
-    fn non_finite_coordinate_names_the_input_row() {
+    fn non_finite_coordinate_names_the_input_line() {
         let labels = ["p", "q", "p", "q", "p", "q"];
         let mut points = [x(0.0); 6];
         points[3][1] = f64::NAN;
+        // Row 3 is line 5 of the file (header on line 1).
         assert_eq!(
-            evaluate(&labels, &points, &[]),
+            eval(&labels, &points, &[]),
             Err(MetricsError::NonFinite {
                 label: "q".into(),
-                row: 3
+                at: "m.csv:5".into()
             })
         );
     }
 
     #[test]
-    fn unknown_reference_label_is_an_error() {
-        let bar = ReferenceDistance {
-            a: "p".into(),
-            b: "nowhere".into(),
-            distance: 1.0,
-        };
-        let err = evaluate(&["p"; 3], &[x(0.0); 3], &[bar]).unwrap_err();
-        assert_eq!(
-            err,
-            MetricsError::UnknownLabel {
-                label: "nowhere".into()
-            }
-        );
-        assert!(err.to_string().contains("`nowhere`"));
+    fn overflowing_figures_are_errors_not_nulls() {
+        let big = f64::MAX / 2.0;
+        let labels = ["p", "p", "p"];
+        let points = [x(-big), x(big), x(big)];
+        let e = eval(&labels, &points, &[]).unwrap_err();
+        assert!(matches!(e, MetricsError::Overflow { .. }), "{e}");
+        assert!(e.to_string().contains("point `p`"), "{e}");
     }
 
     #[test]
@@ -521,12 +576,7 @@ mod tests {
         // with a tolerance rather than exactly.
         let labels = ["p", "q", "p", "q", "p", "q"];
         let points = [x(0.0), x(10.0), x(0.1), x(10.0), x(0.2), x(10.1)];
-        let bar = ReferenceDistance {
-            a: "q".into(),
-            b: "p".into(),
-            distance: 9.9,
-        };
-        let ev = evaluate(&labels, &points, &[bar]).unwrap();
+        let ev = eval(&labels, &points, &[("q", "p", 9.9)]).unwrap();
         let back: Evaluation = serde_json::from_str(&serde_json::to_string(&ev).unwrap()).unwrap();
         let (ev, back) = (
             serde_json::to_value(&ev).unwrap(),

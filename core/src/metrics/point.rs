@@ -34,7 +34,7 @@ pub struct PointStats {
 /// # Errors
 ///
 /// [`MetricsError::TooFewTouches`] below [`super::MIN_TOUCHES`] touches;
-/// [`MetricsError::NonFinite`] with `row` indexing `touches`.
+/// [`MetricsError::NonFinite`] naming the index into `touches`.
 ///
 /// ```
 /// use aacmm_core::metrics::point_stats;
@@ -149,7 +149,7 @@ mod tests {
             point_stats("p", &touches),
             Err(MetricsError::NonFinite {
                 label: "p".into(),
-                row: 2
+                at: "touch 2".into()
             })
         );
     }

@@ -1,6 +1,86 @@
 //! Human-readable fixed-width rendering of an [`Evaluation`].
 
-use super::{Evaluation, Summary};
+use std::io::{self, Write};
+
+use super::{Evaluation, PairLengthError, Summary};
+use crate::dataset::Point;
+
+/// Writes eq. 19 for every pair as a table, row by row as `pairs` yields
+/// them: the column widths come from the labels, so nothing is collected.
+///
+/// ```
+/// use aacmm_core::{dataset::DataSet, metrics::{evaluate, pair_length_errors, write_pair_table}};
+/// let data = DataSet::from_labels(&["a", "a", "a", "bb", "bb", "bb"], "m.csv").unwrap();
+/// let xyz = [[0.0; 3], [0.0; 3], [0.0; 3], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0]];
+/// let ev = evaluate(&data, &xyz).unwrap();
+/// let mut out = Vec::new();
+/// write_pair_table(&mut out, pair_length_errors(&data, &xyz, &ev.points), data.points()).unwrap();
+/// let text = String::from_utf8(out).unwrap();
+/// assert!(text.lines().nth(2).unwrap().starts_with("  a  bb  3"), "{text}");
+/// assert!(text.contains("5.0000"));
+/// ```
+pub fn write_pair_table(
+    w: &mut impl Write,
+    pairs: impl Iterator<Item = PairLengthError>,
+    points: &[Point],
+) -> io::Result<()> {
+    let header = [
+        "a",
+        "b",
+        "n",
+        "|ca - cb| [mm]",
+        "d_error [mm]",
+        "|d|_error [mm]",
+    ];
+    let label = points
+        .iter()
+        .map(|p| p.label.chars().count())
+        .max()
+        .unwrap_or(0);
+    let widths = [
+        label.max(1),
+        label.max(1),
+        points
+            .iter()
+            .map(|p| p.touches.len().to_string().len())
+            .max()
+            .unwrap_or(1)
+            .max(1),
+        14,
+        12,
+        14,
+    ];
+    let line = |cells: [String; 6]| {
+        let mut s = String::new();
+        for (c, (cell, w)) in cells.iter().zip(widths).enumerate() {
+            if c < 2 {
+                s.push_str(&format!("  {cell:<w$}"));
+            } else {
+                s.push_str(&format!("  {cell:>w$}"));
+            }
+        }
+        s.truncate(s.trim_end().len());
+        s.push('\n');
+        s
+    };
+    writeln!(
+        w,
+        "Length error per pair, paper eq. 19 (no reference length: repeatability, not scale)"
+    )?;
+    w.write_all(line(header.map(String::from)).as_bytes())?;
+    for p in pairs {
+        let row = [
+            p.a,
+            p.b,
+            p.pairs.to_string(),
+            mm(p.centroid_distance),
+            mm(p.d_error),
+            mm(p.d_error_abs),
+        ];
+        w.write_all(line(row).as_bytes())?;
+    }
+    Ok(())
+}
 
 impl Evaluation {
     /// Renders the report as fixed-width plain-text tables for a terminal:
@@ -8,9 +88,10 @@ impl Evaluation {
     /// rows in the report's order.
     ///
     /// ```
-    /// use aacmm_core::metrics::evaluate;
+    /// use aacmm_core::{dataset::DataSet, metrics::evaluate};
     /// let touches = [[1.0, 1.0, 0.0], [-1.0, 1.0, 0.0], [-1.0, -1.0, 0.0], [1.0, -1.0, 0.0]];
-    /// let ev = evaluate(&["socket"; 4], &touches, &[]).unwrap();
+    /// let data = DataSet::from_labels(&["socket"; 4], "m.csv").unwrap();
+    /// let ev = evaluate(&data, &touches).unwrap();
     /// let table = ev.to_table();
     /// assert!(table.contains("e [mm]"));
     /// assert!(table.contains("1.4142")); // e = √2
@@ -86,32 +167,9 @@ impl Evaluation {
 
     fn pair_table(&self) -> String {
         let title = "Length error, paper eq. 19 (no reference length: repeatability, not scale)";
-        if self.pair_length.is_empty() {
+        if self.pair_length_summary.is_none() {
             return format!("{title}\n  no pairs: a single point was measured\n");
         }
-        let rows = self.pair_length.iter().map(|p| {
-            vec![
-                p.a.clone(),
-                p.b.clone(),
-                p.pairs.to_string(),
-                mm(p.centroid_distance),
-                mm(p.d_error),
-                mm(p.d_error_abs),
-            ]
-        });
-        let pairs = render(
-            title,
-            &[
-                "a",
-                "b",
-                "n",
-                "|ca - cb| [mm]",
-                "d_error [mm]",
-                "|d|_error [mm]",
-            ],
-            2,
-            rows,
-        );
         let summary = [
             ("d_error (eq. 19 as printed)", &self.pair_length_summary),
             (
@@ -121,13 +179,12 @@ impl Evaluation {
         ]
         .into_iter()
         .filter_map(|(name, s)| s.as_ref().map(|s| summary_row(name, s)));
-        let across = render(
-            "Across pairs (std = population)",
+        render(
+            &format!("{title}, across all pairs of points (std = population)"),
             &SUMMARY_HEADER,
             1,
             summary,
-        );
-        format!("{pairs}\n{across}")
+        )
     }
 
     fn reference_table(&self) -> String {
@@ -227,7 +284,7 @@ fn render(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{ReferenceDistance, evaluate};
+    use super::super::tests::eval;
     use super::*;
 
     #[test]
@@ -260,12 +317,7 @@ mod tests {
             [0.0, 0.0, 100.001],
             [0.0, 0.0, 100.001],
         ];
-        let bar = ReferenceDistance {
-            a: "p".into(),
-            b: "q".into(),
-            distance: 100.0,
-        };
-        let t = evaluate(&labels, &points, &[bar]).unwrap().to_table();
+        let t = eval(&labels, &points, &[("p", "q", 100.0)]).unwrap().to_table();
         for needle in [
             "Points",
             "Single-point",
@@ -281,7 +333,7 @@ mod tests {
 
     #[test]
     fn single_point_report_says_what_is_missing() {
-        let t = evaluate(&["p"; 3], &[[0.0; 3]; 3], &[]).unwrap().to_table();
+        let t = eval(&["p"; 3], &[[0.0; 3]; 3], &[]).unwrap().to_table();
         assert!(t.contains("no pairs"));
         assert!(t.contains("none given"));
     }

@@ -7,7 +7,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::kernel::{Chain, Dh, PreparedParams, joint_jacobian};
+use crate::kernel::{ArmKernel, KernelError};
 
 /// Residual below which a solution is accepted, mm.
 pub const IK_TOLERANCE_MM: f64 = 1e-10;
@@ -15,17 +15,17 @@ pub const IK_TOLERANCE_MM: f64 = 1e-10;
 pub const IK_MAX_ITERATIONS: usize = 200;
 
 /// The outcome of one inverse-kinematics run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct IkSolution<const N: usize> {
+#[derive(Clone, Debug, PartialEq)]
+pub struct IkSolution {
     /// Encoder readings reached, rad (not wrapped).
-    pub q: [f64; N],
+    pub q: Vec<f64>,
     /// Distance from the probe centre to the target, mm.
     pub residual_mm: f64,
     /// Iterations used.
     pub iterations: usize,
 }
 
-impl<const N: usize> IkSolution<N> {
+impl IkSolution {
     /// Whether the residual is below [`IK_TOLERANCE_MM`].
     pub fn converged(&self) -> bool {
         self.residual_mm < IK_TOLERANCE_MM
@@ -39,29 +39,27 @@ impl<const N: usize> IkSolution<N> {
 /// residual is below [`IK_TOLERANCE_MM`] or after [`IK_MAX_ITERATIONS`].
 ///
 /// ```
-/// use aacmm_core::{kernel, params::DhParams, simulate::solve_point};
-/// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
-/// let target = kernel::position(&k, &[0.3, -0.5, 0.2, 1.0, -0.4, 0.7]);
-/// let s = solve_point(&k, target, [0.0, -1.0, 0.5, 0.5, 0.0, 0.0]);
+/// use aacmm_core::{kernel::ArmKernel, params::DhParams, simulate::solve_point};
+/// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+/// let target = k.position(&[0.3, -0.5, 0.2, 1.0, -0.4, 0.7]).unwrap();
+/// let s = solve_point(&k, target, &[0.0, -1.0, 0.5, 0.5, 0.0, 0.0]).unwrap();
 /// assert!(s.converged());
-/// let p = kernel::position(&k, &s.q);
+/// let p = k.position(&s.q).unwrap();
 /// assert!((0..3).all(|i| (p[i] - target[i]).abs() < 1e-10));
 /// ```
-pub fn solve_point<const N: usize>(
-    k: &PreparedParams<N>,
+pub fn solve_point(
+    k: &ArmKernel,
     target: [f64; 3],
-    start: [f64; N],
-) -> IkSolution<N>
-where
-    Dh: Chain<N>,
-{
-    let eval = |q: &[f64; N]| {
-        let (p, jac) = joint_jacobian(k, q);
+    start: &[f64],
+) -> Result<IkSolution, KernelError> {
+    let eval = |q: &[f64]| {
+        let mut jac = vec![[0.0; 3]; q.len()];
+        let p = k.joint_jacobian(q, &mut jac)?;
         let r = Vector3::new(target[0] - p[0], target[1] - p[1], target[2] - p[2]);
-        (r, jac)
+        Ok::<_, KernelError>((r, jac))
     };
-    let mut q = start;
-    let (mut r, mut jac) = eval(&q);
+    let mut q = start.to_vec();
+    let (mut r, mut jac) = eval(&q)?;
     let mut err = r.norm();
     let mut mu = 1e-3 * jjt(&jac).trace() / 3.0;
     let mut iterations = 0;
@@ -72,9 +70,10 @@ where
             mu = mu * 4.0 + f64::MIN_POSITIVE;
             continue;
         };
-        let trial: [f64; N] =
-            std::array::from_fn(|j| q[j] + jac[j][0] * y[0] + jac[j][1] * y[1] + jac[j][2] * y[2]);
-        let (r_new, jac_new) = eval(&trial);
+        let trial: Vec<f64> = (0..q.len())
+            .map(|j| q[j] + jac[j][0] * y[0] + jac[j][1] * y[1] + jac[j][2] * y[2])
+            .collect();
+        let (r_new, jac_new) = eval(&trial)?;
         let err_new = r_new.norm();
         if err_new < err {
             (q, r, jac, err) = (trial, r_new, jac_new, err_new);
@@ -83,15 +82,15 @@ where
             mu = mu * 4.0 + f64::MIN_POSITIVE;
         }
     }
-    IkSolution {
+    Ok(IkSolution {
         q,
         residual_mm: err,
         iterations,
-    }
+    })
 }
 
 /// `J Jᵀ` of the columns `∂p/∂q_j`.
-fn jjt<const N: usize>(jac: &[[f64; 3]; N]) -> Matrix3<f64> {
+fn jjt(jac: &[[f64; 3]]) -> Matrix3<f64> {
     let mut m = Matrix3::zeros();
     for col in jac {
         let c = Vector3::from(*col);

@@ -35,7 +35,7 @@
 //! assert_eq!(c.poses.len(), 12);
 //! assert_eq!(c.poses.labels[4], "S2");
 //! // Zero noise: the true arm reproduces the socket at every pose.
-//! let p = kernel::positions_dyn(&c.true_arm.params, &c.poses.q).unwrap();
+//! let p = kernel::ArmKernel::new(&c.true_arm.params).unwrap().positions_of(&c.poses.q).unwrap();
 //! let s2 = c.sockets[1].1;
 //! assert!((0..3).all(|i| (p[4][i] - s2[i]).abs() < 1e-9));
 //! ```
@@ -75,7 +75,9 @@ pub use touches::{Touch, TouchPlan, find_touches, separation, within_limits};
 pub use truth::{PAPER_PROBE_ERROR, PAPER_TABLE_2, true_arm, wrap};
 
 use crate::io::{AngleUnit, Arm, Poses, ReferenceLength};
-use crate::kernel::{Chain, Dh, KernelError, PreparedParams, position};
+use crate::dataset::DataSet;
+use crate::error::InputError;
+use crate::kernel::ArmKernel;
 
 /// The random streams of a campaign: each purpose draws from
 /// `ChaCha8Rng::seed_from_u64(seed)` with its own stream number.
@@ -165,26 +167,13 @@ pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, 
     let n = nominal.params.joint_count();
     check_limits(nominal)?;
     settings.validate(n)?;
-    match n {
-        6 => simulate_n::<6>(nominal, settings),
-        7 => simulate_n::<7>(nominal, settings),
-        n => Err(KernelError::Unsupported(n).into()),
-    }
-}
-
-fn simulate_n<const N: usize>(
-    nominal: &Arm,
-    settings: &CampaignSettings,
-) -> Result<Campaign, SimError>
-where
-    Dh: Chain<N>,
-{
+    ArmKernel::new(&nominal.params)?;
     let seed = settings.seed;
     let true_arm = true_arm(nominal, &settings.errors, &mut rng(seed, streams::TRUE_ARM))?;
     check_limits(&true_arm)?;
     let sockets = match &settings.sockets {
         SocketPlan::Spread { count } => {
-            place_sockets::<N>(&true_arm, *count, &mut rng(seed, streams::SOCKETS))?
+            place_sockets(&true_arm, *count, &mut rng(seed, streams::SOCKETS))?
         }
         SocketPlan::Given { points, .. } => points
             .iter()
@@ -198,7 +187,7 @@ where
         starts_per_pose: settings.starts_per_pose,
     };
     let mut stats = SimStats::default();
-    let touches = find_touches::<N>(
+    let touches = find_touches(
         &true_arm,
         &sockets,
         &plan,
@@ -207,13 +196,12 @@ where
         &mut stats,
     )?;
 
-    let k = PreparedParams::<N>::new(&true_arm.params)?;
+    let k = ArmKernel::new(&true_arm.params)?;
     let mut enc = rng(seed, streams::ENCODERS);
     let sigma = settings.encoder_noise_deg.to_radians();
     let mut q = Vec::with_capacity(touches.len());
     for t in &touches {
-        let qt: [f64; N] = std::array::from_fn(|j| t.q[j]);
-        let p = position(&k, &qt);
+        let p = k.position(&t.q)?;
         let r = (0..3)
             .map(|i| (p[i] - t.point[i]).powi(2))
             .sum::<f64>()
@@ -234,7 +222,7 @@ where
             .iter()
             .map(|t| sockets[t.socket].0.clone())
             .collect(),
-        joints: N,
+        joints: n,
         lines: (2..touches.len() + 2).collect(),
         q,
     };
@@ -253,6 +241,25 @@ where
         lengths,
         stats,
     })
+}
+
+impl Campaign {
+    /// The campaign as the data set a calibration reads: touches grouped by
+    /// socket, reference lengths, and the source named as the campaign's
+    /// files ([`POSES_FILE`], [`LENGTHS_FILE`]) with their lines.
+    ///
+    /// ```
+    /// use aacmm_core::{io::Arm, params::DhParams, simulate::*};
+    /// let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
+    /// let mut settings = CampaignSettings::new(3, ErrorModel::Paper, 3, 4);
+    /// settings.reference_lengths = 2;
+    /// let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+    /// assert_eq!((data.points().len(), data.len(), data.references().len()), (3, 12, 2));
+    /// assert_eq!(data.source().touch(4).to_string(), "poses.csv:6");
+    /// ```
+    pub fn data_set(&self) -> Result<DataSet, InputError> {
+        DataSet::from_poses(&self.poses, POSES_FILE)?.with_lengths(&self.lengths, LENGTHS_FILE)
+    }
 }
 
 /// The nearest angle (rad) that a degree value in `poses.csv` reads back to

@@ -9,7 +9,7 @@ use rand_chacha::ChaCha8Rng;
 use super::SimError;
 use crate::geometry::distance;
 use crate::io::Arm;
-use crate::kernel::{Chain, Dh, PreparedParams, position};
+use crate::kernel::ArmKernel;
 
 /// Random configurations whose probe centres are the candidate positions
 /// (at least this many; more for many sockets).
@@ -25,14 +25,14 @@ pub const MIN_AXIS_DISTANCE: f64 = 0.2;
 
 /// A random configuration: each reading uniform within its joint's limits,
 /// or in `[-π, π)` for a joint without limits.
-pub fn random_configuration<const N: usize>(
-    limits: &[Option<[f64; 2]>],
-    rng: &mut ChaCha8Rng,
-) -> [f64; N] {
-    std::array::from_fn(|j| match limits.get(j).copied().flatten() {
-        Some([lo, hi]) => rng.random_range(lo..=hi),
-        None => rng.random_range(-PI..PI),
-    })
+pub fn random_configuration(limits: &[Option<[f64; 2]>], rng: &mut ChaCha8Rng) -> Vec<f64> {
+    limits
+        .iter()
+        .map(|lim| match lim {
+            Some([lo, hi]) => rng.random_range(*lo..=*hi),
+            None => rng.random_range(-PI..PI),
+        })
+        .collect()
 }
 
 /// The shoulder: the point of the base axis at height `d1`, where the arm's
@@ -55,20 +55,18 @@ pub fn shoulder(arm: &Arm) -> [f64; 3] {
 /// at least [`MIN_SOCKET_SEPARATION`] of the reach from all of them
 /// (another stratum is tried before giving up). Centres are rounded to 1 nm
 /// (6 decimals in mm), so that `sockets.csv` holds them exactly.
-pub fn place_sockets<const N: usize>(
+pub fn place_sockets(
     arm: &Arm,
     count: usize,
     rng: &mut ChaCha8Rng,
-) -> Result<Vec<(String, [f64; 3])>, SimError>
-where
-    Dh: Chain<N>,
-{
-    let k = PreparedParams::<N>::new(&arm.params)?;
+) -> Result<Vec<(String, [f64; 3])>, SimError> {
+    let k = ArmKernel::new(&arm.params)?;
     let c = shoulder(arm);
     let pool = SOCKET_CANDIDATES.max(200 * count);
-    let points: Vec<[f64; 3]> = (0..pool)
-        .map(|_| position(&k, &random_configuration::<N>(&arm.limits, rng)))
+    let configurations: Vec<Vec<f64>> = (0..pool)
+        .map(|_| random_configuration(&arm.limits, rng))
         .collect();
+    let points = k.positions_of(&configurations)?;
     let reach = points.iter().map(|p| distance(p, &c)).fold(0.0, f64::max);
     let mut band: Vec<[f64; 3]> = points
         .into_iter()

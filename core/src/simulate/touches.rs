@@ -8,7 +8,7 @@ use super::sockets::random_configuration;
 use super::truth::{normal, wrap};
 use super::{SimError, SimStats};
 use crate::io::Arm;
-use crate::kernel::{Chain, Dh, PreparedParams};
+use crate::kernel::ArmKernel;
 
 /// One simulated touch.
 #[derive(Clone, Debug, PartialEq)]
@@ -44,22 +44,19 @@ pub struct TouchPlan {
 /// least `min_separation` in some joint (differences wrapped to ±π). A socket
 /// gets `poses × starts_per_pose` starts in all; then
 /// [`SimError::TooFewPoses`].
-pub fn find_touches<const N: usize>(
+pub fn find_touches(
     arm: &Arm,
     sockets: &[(String, [f64; 3])],
     plan: &TouchPlan,
     seat_rng: &mut ChaCha8Rng,
     start_rng: &mut ChaCha8Rng,
     stats: &mut SimStats,
-) -> Result<Vec<Touch>, SimError>
-where
-    Dh: Chain<N>,
-{
-    let k = PreparedParams::<N>::new(&arm.params)?;
+) -> Result<Vec<Touch>, SimError> {
+    let k = ArmKernel::new(&arm.params)?;
     let budget = plan.poses * plan.starts_per_pose;
     let mut touches = Vec::with_capacity(sockets.len() * plan.poses);
     for (s, (label, centre)) in sockets.iter().enumerate() {
-        let mut accepted: Vec<[f64; N]> = Vec::with_capacity(plan.poses);
+        let mut accepted: Vec<Vec<f64>> = Vec::with_capacity(plan.poses);
         let mut attempts = 0;
         while accepted.len() < plan.poses {
             let point: [f64; 3] =
@@ -76,8 +73,8 @@ where
                 }
                 attempts += 1;
                 stats.ik_starts += 1;
-                let start = random_configuration::<N>(&arm.limits, start_rng);
-                let sol = solve_point(&k, point, start);
+                let start = random_configuration(&arm.limits, start_rng);
+                let sol = solve_point(&k, point, &start)?;
                 stats.ik_iterations += sol.iterations;
                 if !sol.converged() {
                     stats.not_converged += 1;
@@ -96,12 +93,12 @@ where
                 }
                 break q;
             };
-            accepted.push(q);
             touches.push(Touch {
                 socket: s,
                 point,
-                q: q.to_vec(),
+                q: q.clone(),
             });
+            accepted.push(q);
         }
     }
     Ok(touches)
@@ -110,9 +107,9 @@ where
 /// The readings wrapped to `[-π, π)` and, where a joint has limits, shifted
 /// by a whole turn into them if that helps; `None` if some joint stays
 /// outside its limits.
-pub fn within_limits<const N: usize>(q: [f64; N], limits: &[Option<[f64; 2]>]) -> Option<[f64; N]> {
+pub fn within_limits(q: Vec<f64>, limits: &[Option<[f64; 2]>]) -> Option<Vec<f64>> {
     use std::f64::consts::TAU;
-    let mut out = q.map(wrap);
+    let mut out: Vec<f64> = q.into_iter().map(wrap).collect();
     for (j, x) in out.iter_mut().enumerate() {
         if let Some([lo, hi]) = limits.get(j).copied().flatten() {
             *x = [*x, *x + TAU, *x - TAU]

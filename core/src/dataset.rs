@@ -1,0 +1,396 @@
+//! The data set: what every stage after the files works on.
+//!
+//! Files → [`DataSet`] → kernel → residuals → solver → report. A data set
+//! holds the touches grouped by point (each point's touches contiguous, points
+//! in order of first appearance, touches in file order within a point), their
+//! readings with sin/cos prepared once for the kernel, and the reference
+//! lengths by point index. Labels are checked once, here: every point has at
+//! least [`MIN_TOUCHES`] touches and every reference names two known,
+//! different points, at most once per pair. Where each value came from lives
+//! in a separate [`SourceMap`], so a later stage (metrics, a solver) can
+//! report a problem at `file:line` without the caller translating errors.
+
+use std::collections::HashMap;
+use std::fmt;
+use std::ops::Range;
+
+use crate::error::InputError;
+use crate::io::{Poses, ReferenceLength};
+use crate::kernel::PreparedPoses;
+
+/// Fewest touches a point needs: the sample spread `2s` divides by `n − 1`,
+/// and fewer than three touches say next to nothing about articulation error.
+pub const MIN_TOUCHES: usize = 3;
+
+/// One physical point (cone socket) and its touches.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// The label used in the files.
+    pub label: String,
+    /// Its touches: indices into the data set's touch order.
+    pub touches: Range<usize>,
+}
+
+/// A calibrated distance between two points of the data set, mm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reference {
+    /// Index of the first point.
+    pub a: usize,
+    /// Index of the second point (different from `a`).
+    pub b: usize,
+    /// The calibrated distance `L`, mm, `> 0`.
+    pub distance: f64,
+    /// Its standard uncertainty (k = 1), mm, if stated.
+    pub uncertainty: Option<f64>,
+}
+
+/// A place in an input file: `file:line`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Location<'a> {
+    /// The file's name as given by the user.
+    pub file: &'a str,
+    /// 1-based line; 0 when unknown.
+    pub line: usize,
+}
+
+impl fmt::Display for Location<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            0 => write!(f, "{}", self.file),
+            line => write!(f, "{}:{line}", self.file),
+        }
+    }
+}
+
+/// Where the values of a data set came from.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct SourceMap {
+    poses_file: String,
+    /// Per touch (data-set order), its line in the poses file.
+    touch_lines: Vec<usize>,
+    /// Per touch (data-set order), its row in the poses file (0-based).
+    touch_rows: Vec<usize>,
+    lengths_file: String,
+    /// Per reference, its line in the lengths file.
+    reference_lines: Vec<usize>,
+}
+
+impl SourceMap {
+    /// Where touch `i` (data-set order) came from.
+    pub fn touch(&self, i: usize) -> Location<'_> {
+        Location {
+            file: &self.poses_file,
+            line: self.touch_lines.get(i).copied().unwrap_or(0),
+        }
+    }
+
+    /// The row of the poses file that touch `i` (data-set order) was read
+    /// from, 0-based: how to put results back in file order.
+    pub fn touch_row(&self, i: usize) -> usize {
+        self.touch_rows[i]
+    }
+
+    /// Where reference `r` came from.
+    pub fn reference(&self, r: usize) -> Location<'_> {
+        Location {
+            file: &self.lengths_file,
+            line: self.reference_lines.get(r).copied().unwrap_or(0),
+        }
+    }
+
+    /// The poses file's name.
+    pub fn poses_file(&self) -> &str {
+        &self.poses_file
+    }
+}
+
+/// Touches grouped by point, prepared for the kernel, with reference lengths
+/// and the source of every value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataSet {
+    joints: usize,
+    points: Vec<Point>,
+    /// Readings (rad), touch-major: `q[i·joints + j]`.
+    q: Vec<f64>,
+    poses: PreparedPoses,
+    references: Vec<Reference>,
+    source: SourceMap,
+}
+
+impl DataSet {
+    /// Groups the rows of a poses file by point; `file` names it in errors.
+    ///
+    /// # Errors
+    /// A point with fewer than [`MIN_TOUCHES`] touches (at its first line,
+    /// field `point`); an empty file.
+    ///
+    /// ```
+    /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}};
+    /// let text = "point,q1\nA,1\nB,2\nA,3\nB,4\nA,5\nB,6\n";
+    /// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Rad, None).unwrap();
+    /// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+    /// assert_eq!(data.points()[1].label, "B");
+    /// assert_eq!(data.points()[1].touches, 3..6);
+    /// assert_eq!(data.reading(4), &[4.0]);
+    /// assert_eq!(data.source().touch(4).to_string(), "p.csv:5");
+    ///
+    /// let (few, _) = parse_poses("point,q1\nA,1\nA,2\n", "f.csv", AngleUnit::Rad, None).unwrap();
+    /// let e = DataSet::from_poses(&few, "f.csv").unwrap_err();
+    /// assert!(e.to_string().starts_with("f.csv:2: field `point`: point `A` has 2 touches"));
+    /// ```
+    pub fn from_poses(poses: &Poses, file: &str) -> Result<DataSet, InputError> {
+        if poses.is_empty() {
+            return Err(InputError::file_error(file, "no touches"));
+        }
+        let mut index: HashMap<&str, usize> = HashMap::new();
+        let mut rows_of: Vec<(&str, Vec<usize>)> = Vec::new();
+        for (row, label) in poses.labels.iter().enumerate() {
+            let p = *index.entry(label.as_str()).or_insert_with(|| {
+                rows_of.push((label.as_str(), Vec::new()));
+                rows_of.len() - 1
+            });
+            rows_of[p].1.push(row);
+        }
+        let line_of = |row: usize| poses.lines.get(row).copied().unwrap_or(0);
+        for (label, rows) in &rows_of {
+            if rows.len() < MIN_TOUCHES {
+                return Err(InputError::field(
+                    file,
+                    line_of(rows[0]),
+                    "point",
+                    format!(
+                        "point `{label}` has {} touch{}; at least {MIN_TOUCHES} are needed",
+                        rows.len(),
+                        if rows.len() == 1 { "" } else { "es" }
+                    ),
+                ));
+            }
+        }
+        let joints = poses.joints;
+        let order: Vec<usize> = rows_of.iter().flat_map(|(_, r)| r.iter().copied()).collect();
+        let mut start = 0;
+        let points = rows_of
+            .iter()
+            .map(|(label, rows)| {
+                let touches = start..start + rows.len();
+                start = touches.end;
+                Point {
+                    label: label.to_string(),
+                    touches,
+                }
+            })
+            .collect();
+        let q: Vec<f64> = order
+            .iter()
+            .flat_map(|&r| poses.q[r].iter().copied())
+            .collect();
+        let poses_prepared = prepare(joints, &q, order.len());
+        Ok(DataSet {
+            joints,
+            points,
+            q,
+            poses: poses_prepared,
+            references: Vec::new(),
+            source: SourceMap {
+                poses_file: file.to_string(),
+                touch_lines: order.iter().map(|&r| line_of(r)).collect(),
+                touch_rows: order,
+                ..SourceMap::default()
+            },
+        })
+    }
+
+    /// A data set of labelled points without readings (`joints() == 0`): for
+    /// figures computed from positions measured elsewhere, and for tests.
+    ///
+    /// ```
+    /// use aacmm_core::dataset::DataSet;
+    /// let data = DataSet::from_labels(&["A", "B", "A", "B", "A", "B"], "m.csv").unwrap();
+    /// assert_eq!(data.to_touch_order(&[0, 1, 2, 3, 4, 5]), [0, 2, 4, 1, 3, 5]);
+    /// ```
+    pub fn from_labels<S: AsRef<str>>(labels: &[S], file: &str) -> Result<DataSet, InputError> {
+        let poses = Poses {
+            labels: labels.iter().map(|l| l.as_ref().to_string()).collect(),
+            joints: 0,
+            q: vec![Vec::new(); labels.len()],
+            lines: (2..labels.len() + 2).collect(),
+        };
+        DataSet::from_poses(&poses, file)
+    }
+
+    /// Values given per row of the poses file, put in touch order.
+    pub fn to_touch_order<T: Copy>(&self, by_row: &[T]) -> Vec<T> {
+        self.source.touch_rows.iter().map(|&r| by_row[r]).collect()
+    }
+
+    /// Adds reference lengths read from `file`, naming the points by label.
+    ///
+    /// # Errors
+    /// An unknown point (field `point_a` or `point_b`), a length joining a
+    /// point to itself, or a pair given twice (in either order).
+    ///
+    /// ```
+    /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_lengths, parse_poses}};
+    /// let text = "point,q1\nA,1\nA,2\nA,3\nB,4\nB,5\nB,6\n";
+    /// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Rad, None).unwrap();
+    /// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+    /// let l = parse_lengths("point_a,point_b,distance\nB,A,100\n", "l.csv").unwrap();
+    /// let data = data.with_lengths(&l, "l.csv").unwrap();
+    /// assert_eq!((data.references()[0].a, data.references()[0].b), (1, 0));
+    ///
+    /// let bad = parse_lengths("point_a,point_b,distance\nA,C,100\n", "l.csv").unwrap();
+    /// let e = DataSet::from_poses(&poses, "p.csv").unwrap().with_lengths(&bad, "l.csv").unwrap_err();
+    /// assert!(e.to_string().starts_with("l.csv:2: field `point_b`: unknown point `C`"));
+    /// ```
+    pub fn with_lengths(
+        mut self,
+        lengths: &[ReferenceLength],
+        file: &str,
+    ) -> Result<DataSet, InputError> {
+        let labels: Vec<&str> = self.points.iter().map(|p| p.label.as_str()).collect();
+        crate::io::check_lengths_against(lengths, &labels, file)?;
+        let index: HashMap<&str, usize> = labels.iter().enumerate().map(|(i, l)| (*l, i)).collect();
+        let mut seen: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut references = Vec::with_capacity(lengths.len());
+        for l in lengths {
+            let (a, b) = (index[l.a.as_str()], index[l.b.as_str()]);
+            if a == b {
+                return Err(InputError::field(
+                    file,
+                    l.line,
+                    "point_b",
+                    format!("same point as point_a (`{}`): a length needs two points", l.a),
+                ));
+            }
+            if let Some(first) = seen.insert((a.min(b), a.max(b)), l.line) {
+                return Err(InputError::field(
+                    file,
+                    l.line,
+                    "point_b",
+                    format!(
+                        "the pair `{}`–`{}` is already given on line {first}; give each \
+                         reference length once",
+                        l.a, l.b
+                    ),
+                ));
+            }
+            references.push(Reference {
+                a,
+                b,
+                distance: l.distance,
+                uncertainty: l.uncertainty,
+            });
+        }
+        self.references = references;
+        self.source.lengths_file = file.to_string();
+        self.source.reference_lines = lengths.iter().map(|l| l.line).collect();
+        Ok(self)
+    }
+
+    /// Readings per touch.
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// Number of touches.
+    pub fn len(&self) -> usize {
+        self.poses.len()
+    }
+
+    /// Whether there are no touches (never, for a data set that was built).
+    pub fn is_empty(&self) -> bool {
+        self.poses.is_empty()
+    }
+
+    /// The points, in order of first appearance.
+    pub fn points(&self) -> &[Point] {
+        &self.points
+    }
+
+    /// The readings of touch `i` (rad).
+    pub fn reading(&self, i: usize) -> &[f64] {
+        &self.q[i * self.joints..(i + 1) * self.joints]
+    }
+
+    /// The readings with their sin/cos, for the kernel.
+    pub fn poses(&self) -> &PreparedPoses {
+        &self.poses
+    }
+
+    /// The reference lengths, in file order.
+    pub fn references(&self) -> &[Reference] {
+        &self.references
+    }
+
+    /// Where every value came from.
+    pub fn source(&self) -> &SourceMap {
+        &self.source
+    }
+
+    /// The data set restricted to the points `keep` (indices, in the order
+    /// given) and the references among them: a cross-validation fold.
+    ///
+    /// ```
+    /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}};
+    /// let text = "point,q1\nA,1\nA,2\nA,3\nB,4\nB,5\nB,6\n";
+    /// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Rad, None).unwrap();
+    /// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+    /// let b = data.subset(&[1]);
+    /// assert_eq!((b.len(), b.points()[0].touches.clone()), (3, 0..3));
+    /// assert_eq!(b.source().touch(0).to_string(), "p.csv:5");
+    /// ```
+    pub fn subset(&self, keep: &[usize]) -> DataSet {
+        let mut new_index = vec![usize::MAX; self.points.len()];
+        let mut points = Vec::with_capacity(keep.len());
+        let mut touches: Vec<usize> = Vec::new();
+        for (n, &p) in keep.iter().enumerate() {
+            new_index[p] = n;
+            let range = &self.points[p].touches;
+            points.push(Point {
+                label: self.points[p].label.clone(),
+                touches: touches.len()..touches.len() + range.len(),
+            });
+            touches.extend(range.clone());
+        }
+        let q: Vec<f64> = touches
+            .iter()
+            .flat_map(|&i| self.reading(i).iter().copied())
+            .collect();
+        let poses = prepare(self.joints, &q, touches.len());
+        let mut reference_lines = Vec::new();
+        let references = self
+            .references
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| new_index[r.a] != usize::MAX && new_index[r.b] != usize::MAX)
+            .map(|(i, r)| {
+                reference_lines.push(self.source.reference_lines[i]);
+                Reference {
+                    a: new_index[r.a],
+                    b: new_index[r.b],
+                    ..*r
+                }
+            })
+            .collect();
+        DataSet {
+            joints: self.joints,
+            points,
+            q,
+            poses,
+            references,
+            source: SourceMap {
+                poses_file: self.source.poses_file.clone(),
+                touch_lines: touches.iter().map(|&i| self.source.touch_lines[i]).collect(),
+                touch_rows: touches.iter().map(|&i| self.source.touch_rows[i]).collect(),
+                lengths_file: self.source.lengths_file.clone(),
+                reference_lines,
+            },
+        }
+    }
+}
+
+/// Touch-major readings (`len` rows of `joints`) prepared for the kernel.
+fn prepare(joints: usize, q: &[f64], len: usize) -> PreparedPoses {
+    let rows: Vec<&[f64]> = (0..len).map(|i| &q[i * joints..(i + 1) * joints]).collect();
+    PreparedPoses::new(joints, &rows).expect("every row has `joints` readings")
+}
