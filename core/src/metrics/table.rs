@@ -16,7 +16,7 @@ use crate::dataset::Point;
 /// let mut out = Vec::new();
 /// write_pair_table(&mut out, pair_length_errors(&data, &xyz, &ev.points), data.points()).unwrap();
 /// let text = String::from_utf8(out).unwrap();
-/// assert!(text.lines().nth(2).unwrap().starts_with("  a  bb  3"), "{text}");
+/// assert!(text.lines().nth(2).unwrap().starts_with("  a   bb  3"), "{text}");
 /// assert!(text.contains("5.0000"));
 /// ```
 pub fn write_pair_table(
