@@ -5,13 +5,16 @@
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
 
+pub mod calibrate;
 pub mod dataset;
 pub mod error;
 #[cfg(feature = "reference-model")]
 pub mod generic;
 pub mod geometry;
+pub mod identify;
 pub mod io;
 pub mod kernel;
 pub mod metrics;
 pub mod params;
+pub mod residuals;
 pub mod simulate;

@@ -1,0 +1,275 @@
+//! Levenberg–Marquardt on the reduced normal equations
+//! ([`crate::residuals`]): Marquardt's diagonal scaling (so mm and rad need
+//! no hand-tuned units), Nielsen's damping update, MINPACK-style stopping
+//! tests, and a trial step costing positions only.
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::CalibrationError;
+use crate::dataset::DataSet;
+use crate::kernel::ArmKernel;
+use crate::params::DhParams;
+use crate::residuals::{Normal, Weights, cost, normal_equations};
+
+/// Why the solver stopped, as MINPACK's `info` or Ceres' termination type.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// The relative cost reduction, actual and predicted, fell below `ftol`.
+    CostTolerance,
+    /// The scaled step fell below `xtol` relative to the scaled parameters.
+    StepTolerance,
+    /// Every column is orthogonal to the residuals within `gtol`.
+    GradientTolerance,
+    /// The residuals vanished (exact data).
+    ZeroResidual,
+    /// The iteration budget ran out first.
+    MaxIterations,
+    /// No step lowered the cost even with huge damping: a minimum to machine
+    /// precision, or a numerical failure.
+    NoProgress,
+}
+
+impl Termination {
+    /// Whether the result is a converged minimum.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::Termination;
+    /// assert!(Termination::CostTolerance.was_successful());
+    /// assert!(!Termination::MaxIterations.was_successful());
+    /// ```
+    pub fn was_successful(self) -> bool {
+        !matches!(self, Termination::MaxIterations)
+    }
+
+    /// A sentence for summaries.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Termination::CostTolerance => "relative cost reduction below ftol",
+            Termination::StepTolerance => "relative step below xtol",
+            Termination::GradientTolerance => "gradient below gtol",
+            Termination::ZeroResidual => "residuals vanished",
+            Termination::MaxIterations => "iteration limit reached",
+            Termination::NoProgress => "no step lowers the cost (minimum to machine precision)",
+        }
+    }
+}
+
+/// Tolerances and limits of [`levenberg_marquardt`]; a builder.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LmOptions {
+    /// Iteration limit (accepted or rejected steps).
+    pub max_iterations: usize,
+    /// Relative cost reduction that counts as converged.
+    pub ftol: f64,
+    /// Relative scaled step that counts as converged.
+    pub xtol: f64,
+    /// Largest cosine between a column and the residuals at a minimum.
+    pub gtol: f64,
+    /// Worker threads for the normal equations (results do not depend on it).
+    pub threads: usize,
+}
+
+impl Default for LmOptions {
+    fn default() -> Self {
+        LmOptions {
+            max_iterations: 200,
+            ftol: 1e-12,
+            xtol: 1e-12,
+            gtol: 1e-12,
+            threads: 1,
+        }
+    }
+}
+
+impl LmOptions {
+    /// Sets the iteration limit.
+    pub fn max_iterations(mut self, n: usize) -> Self {
+        self.max_iterations = n;
+        self
+    }
+    /// Sets `ftol`.
+    pub fn ftol(mut self, v: f64) -> Self {
+        self.ftol = v;
+        self
+    }
+    /// Sets `xtol`.
+    pub fn xtol(mut self, v: f64) -> Self {
+        self.xtol = v;
+        self
+    }
+    /// Sets `gtol`.
+    pub fn gtol(mut self, v: f64) -> Self {
+        self.gtol = v;
+        self
+    }
+    /// Sets the worker threads.
+    pub fn threads(mut self, n: usize) -> Self {
+        self.threads = n.max(1);
+        self
+    }
+}
+
+/// One iteration, for the report's progress figure.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LmIteration {
+    /// 1-based.
+    pub iteration: usize,
+    /// Cost `Σ r²` after the iteration.
+    pub cost: f64,
+    /// Damping used.
+    pub lambda: f64,
+    /// Whether the step was taken.
+    pub accepted: bool,
+}
+
+/// What [`levenberg_marquardt`] returns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LmResult {
+    /// The parameters at the end (fixed ones unchanged).
+    pub params: DhParams,
+    /// Why it stopped.
+    pub termination: Termination,
+    /// Iterations (steps tried).
+    pub iterations: usize,
+    /// Cost evaluations (positions only).
+    pub cost_evaluations: usize,
+    /// Jacobian evaluations (normal equations).
+    pub jacobian_evaluations: usize,
+    /// Cost at the start and per iteration.
+    pub initial_cost: f64,
+    /// Per iteration.
+    pub history: Vec<LmIteration>,
+    /// The normal equations at the result.
+    pub normal: Normal,
+}
+
+/// Minimises the weighted cost over the parameters `free` (indices in the
+/// fixed order of [`crate::params`]) from `start`.
+///
+/// Never returns NaN: a trial step with a non-finite cost is rejected like
+/// any step that does not lower the cost.
+pub fn levenberg_marquardt(
+    start: &DhParams,
+    data: &DataSet,
+    weights: &Weights,
+    free: &[usize],
+    options: &LmOptions,
+) -> Result<LmResult, CalibrationError> {
+    let p = free.len();
+    let mut x = start.to_vec();
+    let kernel_at = |x: &[f64]| -> Result<ArmKernel, CalibrationError> {
+        let params = DhParams::from_slice(x).ok_or(CalibrationError::Shape)?;
+        Ok(ArmKernel::new(&params)?)
+    };
+    let mut normal = normal_equations(&kernel_at(&x)?, data, weights, free, options.threads)?;
+    if !normal.cost().is_finite() {
+        return Err(CalibrationError::NonFiniteStart);
+    }
+    let initial_cost = normal.cost();
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    let mut history = Vec::new();
+    let mut scale = vec![0.0f64; p];
+    let mut lambda = 1e-3;
+    let mut nu = 2.0;
+    let (mut cost_evaluations, mut jacobian_evaluations) = (0, 1);
+    let mut termination = Termination::MaxIterations;
+    for iteration in 1..=options.max_iterations {
+        let f = normal.cost();
+        if f <= f64::MIN_POSITIVE {
+            termination = Termination::ZeroResidual;
+            break;
+        }
+        for (s, c) in scale.iter_mut().zip(0..p) {
+            *s = s.max(normal.jtj[c * p + c]).max(f64::MIN_POSITIVE);
+        }
+        let g = DVector::from_column_slice(&normal.jtr);
+        let gmax = (0..p)
+            .map(|c| g[c].abs() / (normal.jtj[c * p + c].max(f64::MIN_POSITIVE) * f).sqrt())
+            .fold(0.0, f64::max);
+        if gmax <= options.gtol {
+            termination = Termination::GradientTolerance;
+            break;
+        }
+        let n = DMatrix::from_row_slice(p, p, &normal.jtj);
+        let mut a = n.clone();
+        for c in 0..p {
+            a[(c, c)] += lambda * scale[c];
+        }
+        let step = a.cholesky().map(|ch| -ch.solve(&g));
+        let Some(delta) = step.filter(|d| d.iter().all(|v| v.is_finite())) else {
+            lambda *= nu;
+            nu *= 2.0;
+            history.push(LmIteration {
+                iteration,
+                cost: f,
+                lambda,
+                accepted: false,
+            });
+            continue;
+        };
+        let mut trial = x.clone();
+        for (c, &col) in free.iter().enumerate() {
+            trial[col] += delta[c];
+        }
+        let f_new = cost(&kernel_at(&trial)?, data, weights, &mut xyz)?;
+        cost_evaluations += 1;
+        // |r + Jδ|² = f + 2δᵀg + δᵀNδ
+        let predicted = -(2.0 * delta.dot(&g) + delta.dot(&(&n * &delta)));
+        let actual = f - f_new;
+        let rho = if predicted > 0.0 { actual / predicted } else { -1.0 };
+        let scaled = |v: &[f64]| -> f64 {
+            (0..p)
+                .map(|c| scale[c] * v[c] * v[c])
+                .sum::<f64>()
+                .sqrt()
+        };
+        let xs: Vec<f64> = free.iter().map(|&c| x[c]).collect();
+        let small_step = scaled(delta.as_slice()) <= options.xtol * (scaled(&xs) + options.xtol);
+        if rho > 0.0 && f_new.is_finite() {
+            x = trial;
+            normal = normal_equations(&kernel_at(&x)?, data, weights, free, options.threads)?;
+            jacobian_evaluations += 1;
+            lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+            nu = 2.0;
+            history.push(LmIteration {
+                iteration,
+                cost: normal.cost(),
+                lambda,
+                accepted: true,
+            });
+            if actual <= options.ftol * f && predicted <= options.ftol * f {
+                termination = Termination::CostTolerance;
+                break;
+            }
+            if small_step {
+                termination = Termination::StepTolerance;
+                break;
+            }
+        } else {
+            lambda *= nu;
+            nu *= 2.0;
+            history.push(LmIteration {
+                iteration,
+                cost: f,
+                lambda,
+                accepted: false,
+            });
+            if small_step || lambda > 1e16 {
+                termination = Termination::NoProgress;
+                break;
+            }
+        }
+    }
+    Ok(LmResult {
+        params: DhParams::from_slice(&x).ok_or(CalibrationError::Shape)?,
+        termination,
+        iterations: history.len(),
+        cost_evaluations,
+        jacobian_evaluations,
+        initial_cost,
+        history,
+        normal,
+    })
+}

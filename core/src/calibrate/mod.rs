@@ -1,0 +1,377 @@
+//! Calibration: the parameters that make the touches agree.
+//!
+//! [`calibrate`] fits the free parameters by Levenberg–Marquardt ([`lm`]) on
+//! the weighted residuals of [`crate::residuals`], then reports what a
+//! metrologist signs off on:
+//!
+//! - **uncertainty**: `σ̂² = Σr² / (m − p)` with `m` residual rows
+//!   (`3·touches + lengths`) and `p` every unknown fitted (the free
+//!   parameters and `3` centre coordinates per point, eliminated but fitted
+//!   all the same); covariance `σ̂² (JᵀJ)⁻¹` of the free parameters, σ in mm
+//!   or deg, correlations `|ρ| > 0.9`; fixed parameters with the reason;
+//! - **weights**: `1/σ` from the stated noise; without it, a first fit with
+//!   unit weights estimates the touch σ from its touch residuals
+//!   (`Σr²_touch / (3·touches − 3·points − free)`), and a second fit uses it,
+//!   so that reference lengths are weighed against touches correctly.
+//!
+//! Validation on held-out data lives in [`validate`].
+
+pub mod lm;
+pub mod validate;
+
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+pub use lm::{LmIteration, LmOptions, LmResult, Termination, levenberg_marquardt};
+
+use crate::dataset::DataSet;
+use crate::identify::{Correlation, Identification, identify, strong_correlations, to_user, unit};
+use crate::kernel::{ArmKernel, KernelError};
+use crate::params::{DhParams, ParamId, ParamKind};
+use crate::residuals::{Noise, Weights};
+
+/// Why a calibration could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum CalibrationError {
+    /// The kernel refused the arm or the data.
+    #[error(transparent)]
+    Kernel(#[from] KernelError),
+    /// A parameter vector of the wrong length (a bug, not user input).
+    #[error("internal: parameter vector of the wrong length")]
+    Shape,
+    /// The start arm gives non-finite positions.
+    #[error("the start arm gives positions that are not finite numbers")]
+    NonFiniteStart,
+    /// A name in the fixed set is not a parameter of the arm.
+    #[error("unknown parameter `{name}`; parameters are {expected}")]
+    UnknownParameter {
+        /// The name given.
+        name: String,
+        /// The accepted names.
+        expected: String,
+    },
+    /// More unknowns than residuals.
+    #[error(
+        "{residuals} residuals for {unknowns} unknowns ({free} free parameters + 3 per point): \
+         touch more points or fix more parameters"
+    )]
+    TooFewResiduals {
+        /// Residual rows.
+        residuals: usize,
+        /// Unknowns.
+        unknowns: usize,
+        /// Free parameters.
+        free: usize,
+    },
+    /// Cross-validation folds that cannot be made.
+    #[error("{0}")]
+    Folds(String),
+}
+
+/// Which parameters stay at their start values.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FixSpec {
+    /// [`identify`]'s recommended set.
+    Auto,
+    /// These parameters (by their position in the fixed order).
+    Columns(Vec<usize>),
+}
+
+impl FixSpec {
+    /// Parses `auto` or comma-separated names (`theta1,d1,Bx`; `beta…` is
+    /// accepted for `alpha…`) for an `n`-joint arm.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::FixSpec;
+    /// assert_eq!(FixSpec::parse("auto", 6).unwrap(), FixSpec::Auto);
+    /// assert_eq!(FixSpec::parse("theta1, d1,beta6", 6).unwrap(), FixSpec::Columns(vec![18, 6, 17]));
+    /// assert!(FixSpec::parse("theta9", 6).unwrap_err().to_string().contains("unknown parameter `theta9`"));
+    /// ```
+    pub fn parse(s: &str, joints: usize) -> Result<FixSpec, CalibrationError> {
+        if s.trim() == "auto" {
+            return Ok(FixSpec::Auto);
+        }
+        let names: Vec<String> = ParamId::all(joints).map(|p| p.to_string()).collect();
+        s.split(',')
+            .map(str::trim)
+            .filter(|t| !t.is_empty())
+            .map(|t| {
+                let canonical = match t.strip_prefix("beta") {
+                    Some(rest) => format!("alpha{rest}"),
+                    None => t.to_string(),
+                };
+                names
+                    .iter()
+                    .position(|n| *n == canonical)
+                    .ok_or_else(|| CalibrationError::UnknownParameter {
+                        name: t.to_string(),
+                        expected: format!("{} … {}", names[0], names[names.len() - 1]),
+                    })
+            })
+            .collect::<Result<Vec<usize>, _>>()
+            .map(FixSpec::Columns)
+    }
+}
+
+/// Settings of [`calibrate`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CalibrateOptions {
+    /// The fixed set.
+    pub fix: FixSpec,
+    /// What is known of the noise.
+    pub noise: Noise,
+    /// The solver's tolerances.
+    pub lm: LmOptions,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions {
+            fix: FixSpec::Auto,
+            noise: Noise {
+                length_default_mm: DEFAULT_LENGTH_SIGMA_MM,
+                ..Noise::default()
+            },
+            lm: LmOptions::default(),
+        }
+    }
+}
+
+/// σ of a reference length whose file states none, mm.
+pub const DEFAULT_LENGTH_SIGMA_MM: f64 = 0.001;
+
+/// One parameter's result, in user units (mm or deg).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Estimate {
+    /// Name (`a1`, `alpha3`, `Bz`, …).
+    pub name: String,
+    /// `mm` or `deg`.
+    pub unit: String,
+    /// Start value.
+    pub nominal: f64,
+    /// Calibrated value.
+    pub calibrated: f64,
+    /// `calibrated − nominal`.
+    pub correction: f64,
+    /// Standard uncertainty; `None` for a fixed parameter.
+    pub sigma: Option<f64>,
+    /// Why it is fixed; `None` for a free parameter.
+    pub fixed: Option<String>,
+}
+
+/// Residual and unknown counts, and the a-posteriori variance factor.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Dof {
+    /// Touch residual rows (3 per touch).
+    pub touch_rows: usize,
+    /// Length residual rows.
+    pub length_rows: usize,
+    /// Free parameters.
+    pub free_parameters: usize,
+    /// Eliminated centre coordinates (3 per point).
+    pub centre_coordinates: usize,
+    /// `m − p`.
+    pub degrees_of_freedom: usize,
+    /// `σ̂ = sqrt(Σr² / (m − p))`; 1 when the weights are right.
+    pub sigma0: f64,
+    /// The touch σ used for the weights (stated noise: the median over
+    /// touches; otherwise estimated), mm.
+    pub touch_sigma_mm: f64,
+    /// Whether the touch σ was estimated from the fit.
+    pub touch_sigma_estimated: bool,
+}
+
+/// The solver's account of itself.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SolverSummary {
+    /// `lm`.
+    pub method: String,
+    /// Why it stopped.
+    pub termination: Termination,
+    /// Whether that is a converged minimum.
+    pub successful: bool,
+    /// Iterations of the final fit.
+    pub iterations: usize,
+    /// Cost evaluations (positions only), all fits.
+    pub cost_evaluations: usize,
+    /// Jacobian evaluations, all fits.
+    pub jacobian_evaluations: usize,
+    /// Cost `Σr²` at the start of the final fit.
+    pub initial_cost: f64,
+    /// Cost at the end.
+    pub final_cost: f64,
+    /// Cost per iteration of the final fit.
+    pub history: Vec<LmIteration>,
+    /// The tolerances.
+    pub options: LmOptions,
+}
+
+/// What [`calibrate`] returns.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Calibration {
+    /// The calibrated geometry (mm, rad; zero offsets wrapped to ±180°).
+    #[serde(skip)]
+    pub params: DhParams,
+    /// Per parameter, in the fixed order.
+    pub parameters: Vec<Estimate>,
+    /// Free-parameter pairs with `|ρ| > 0.9`.
+    pub correlations: Vec<Correlation>,
+    /// Counts and the variance factor.
+    pub dof: Dof,
+    /// The solver.
+    pub solver: SolverSummary,
+    /// The identifiability analysis behind `--fix auto`.
+    pub identification: Option<Identification>,
+}
+
+/// Calibrates `start` (the nominal arm) on `data`.
+///
+/// ```
+/// use aacmm_core::{calibrate::*, io::Arm, params::DhParams, simulate::*};
+/// let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
+/// let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 8, 10);
+/// settings.reference_lengths = 3;
+/// let campaign = simulate(&nominal, &settings).unwrap();
+/// let data = campaign.data_set().unwrap();
+/// let c = calibrate(&nominal.params, &data, &CalibrateOptions::default()).unwrap();
+/// assert!(c.solver.successful);
+/// assert_eq!(c.parameters.iter().filter(|p| p.fixed.is_none()).count(), 21);
+/// ```
+pub fn calibrate(
+    start: &DhParams,
+    data: &DataSet,
+    options: &CalibrateOptions,
+) -> Result<Calibration, CalibrationError> {
+    let kernel = ArmKernel::new(start)?;
+    let threads = options.lm.threads;
+    let stated = options.noise.stated();
+    let mut weights = Weights::new(&kernel, data, &options.noise, 1.0)?;
+    let (free, identification, reasons) = match &options.fix {
+        FixSpec::Auto => {
+            let id = identify(start, data, &weights, threads)?;
+            let free = id.free_columns();
+            let reasons: Vec<(String, String)> =
+                id.fixed.iter().map(|f| (f.name.clone(), f.reason.clone())).collect();
+            (free, Some(id), reasons)
+        }
+        FixSpec::Columns(fixed) => {
+            let free: Vec<usize> = (0..start.param_count()).filter(|c| !fixed.contains(c)).collect();
+            let reasons = fixed
+                .iter()
+                .filter_map(|&c| ParamId::from_column(start.joint_count(), c))
+                .map(|id| (id.to_string(), "fixed by the user".to_string()))
+                .collect();
+            (free, None, reasons)
+        }
+    };
+    let touch_rows = 3 * data.len();
+    let length_rows = data.references().len();
+    let centre_coordinates = 3 * data.points().len();
+    let unknowns = free.len() + centre_coordinates;
+    if touch_rows + length_rows <= unknowns {
+        return Err(CalibrationError::TooFewResiduals {
+            residuals: touch_rows + length_rows,
+            unknowns,
+            free: free.len(),
+        });
+    }
+    let mut fit = levenberg_marquardt(start, data, &weights, &free, &options.lm)?;
+    let (mut cost_evaluations, mut jacobian_evaluations) =
+        (fit.cost_evaluations, fit.jacobian_evaluations);
+    let mut touch_sigma = median(&weights.touch.iter().map(|w| 1.0 / w).collect::<Vec<_>>());
+    if !stated {
+        // Unit weights: the touch residuals are mm. Estimate σ and refit so
+        // that the lengths weigh right against the touches.
+        let touch_dof = touch_rows.saturating_sub(centre_coordinates + free.len()).max(1);
+        touch_sigma = (fit.normal.touch_cost / touch_dof as f64).sqrt().max(1e-9);
+        if length_rows > 0 {
+            weights = Weights::new(&kernel, data, &options.noise, touch_sigma)?;
+            fit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
+            cost_evaluations += fit.cost_evaluations;
+            jacobian_evaluations += fit.jacobian_evaluations;
+        } else {
+            let w2 = 1.0 / (touch_sigma * touch_sigma);
+            fit.normal.jtj.iter_mut().for_each(|v| *v *= w2);
+            fit.normal.touch_cost *= w2;
+            fit.initial_cost *= w2;
+            for h in &mut fit.history {
+                h.cost *= w2;
+            }
+        }
+    }
+    let degrees_of_freedom = touch_rows + length_rows - unknowns;
+    let sigma0 = (fit.normal.cost() / degrees_of_freedom as f64).sqrt();
+    let p = free.len();
+    let n = DMatrix::from_row_slice(p, p, &fit.normal.jtj);
+    let cov = match n.cholesky() {
+        Some(ch) => ch.inverse() * (sigma0 * sigma0),
+        None => DMatrix::from_element(p, p, f64::INFINITY),
+    };
+    let joints = start.joint_count();
+    let ids: Vec<ParamId> = ParamId::all(joints).collect();
+    let names: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
+    let mut params = fit.params.clone();
+    for j in &mut params.joints {
+        j.theta = crate::simulate::wrap(j.theta);
+    }
+    let parameters = ids
+        .iter()
+        .enumerate()
+        .map(|(c, &id)| {
+            let (nominal, calibrated) = (to_user(id, start.get(id)), to_user(id, params.get(id)));
+            let correction = if id.kind == ParamKind::Theta {
+                crate::simulate::wrap(params.get(id) - start.get(id)).to_degrees()
+            } else {
+                calibrated - nominal
+            };
+            let sigma = free
+                .iter()
+                .position(|&f| f == c)
+                .map(|a| to_user(id, cov[(a, a)].max(0.0).sqrt()));
+            Estimate {
+                name: names[c].clone(),
+                unit: unit(id).into(),
+                nominal,
+                calibrated,
+                correction,
+                sigma: sigma.filter(|s| s.is_finite()),
+                fixed: reasons.iter().find(|(n, _)| *n == names[c]).map(|(_, r)| r.clone()),
+            }
+        })
+        .collect();
+    Ok(Calibration {
+        parameters,
+        correlations: strong_correlations(&cov, &free, &names),
+        dof: Dof {
+            touch_rows,
+            length_rows,
+            free_parameters: p,
+            centre_coordinates,
+            degrees_of_freedom,
+            sigma0,
+            touch_sigma_mm: touch_sigma,
+            touch_sigma_estimated: !stated,
+        },
+        solver: SolverSummary {
+            method: "lm".into(),
+            termination: fit.termination,
+            successful: fit.termination.was_successful(),
+            iterations: fit.iterations,
+            cost_evaluations,
+            jacobian_evaluations,
+            initial_cost: fit.initial_cost,
+            final_cost: fit.normal.cost(),
+            history: fit.history,
+            options: options.lm,
+        },
+        identification,
+        params,
+    })
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
+}

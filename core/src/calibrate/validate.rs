@@ -1,0 +1,157 @@
+//! Validation: the figures of an arm before and after calibration, on the
+//! data it was fitted to and on data held out from the fit.
+
+use serde::{Deserialize, Serialize};
+
+use super::{CalibrateOptions, CalibrationError, calibrate};
+use crate::dataset::DataSet;
+use crate::kernel::ArmKernel;
+use crate::metrics::{MetricsError, evaluate};
+use crate::params::DhParams;
+
+/// The figures a calibration is judged by, mm.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Figures {
+    /// Points evaluated.
+    pub points: usize,
+    /// Mean over points of the paper's `e` (single-point repeatability).
+    pub e_mean: f64,
+    /// Largest `e`.
+    pub e_max: f64,
+    /// Mean over points of the SPAT `2s`.
+    pub two_s_mean: f64,
+    /// Largest `δ_max` over points (SPAT).
+    pub delta_max: f64,
+    /// Reference lengths evaluated.
+    pub lengths: usize,
+    /// RMS of the reference-length errors; `None` without lengths.
+    pub length_rms: Option<f64>,
+    /// Largest `|error|`; `None` without lengths.
+    pub length_max: Option<f64>,
+}
+
+/// The figures of `params` on `data`.
+pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, CalibrationError> {
+    let k = ArmKernel::new(params)?;
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    k.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    let ev = evaluate(data, &xyz).map_err(|e: MetricsError| CalibrationError::Folds(e.to_string()))?;
+    Ok(Figures {
+        points: ev.points.len(),
+        e_mean: ev.single_point_e.mean,
+        e_max: ev.single_point_e.max,
+        two_s_mean: ev.single_point_two_s.mean,
+        delta_max: ev.single_point_delta_max.max,
+        lengths: ev.reference.len(),
+        length_rms: ev.reference_summary.map(|s| s.rms),
+        length_max: ev.reference_summary.map(|s| s.max_abs),
+    })
+}
+
+/// Before and after on one data set.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BeforeAfter {
+    /// With the start (nominal) arm.
+    pub before: Figures,
+    /// With the calibrated arm.
+    pub after: Figures,
+}
+
+/// Before and after of `start` → `calibrated` on `data`.
+pub fn before_after(
+    start: &DhParams,
+    calibrated: &DhParams,
+    data: &DataSet,
+) -> Result<BeforeAfter, CalibrationError> {
+    Ok(BeforeAfter {
+        before: figures(start, data)?,
+        after: figures(calibrated, data)?,
+    })
+}
+
+/// One cross-validation fold: the points held out, and the figures there of
+/// the arm fitted without them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Fold {
+    /// Labels of the held-out points.
+    pub held_out: Vec<String>,
+    /// Before and after on the held-out points.
+    pub figures: BeforeAfter,
+    /// Whether the fold's fit converged.
+    pub successful: bool,
+}
+
+/// `k`-fold cross-validation over points: points joined by a reference
+/// length stay in one fold (so every fold is also scored on lengths where it
+/// has them); groups are dealt to folds in an order shuffled by `seed`.
+pub fn cross_validate(
+    start: &DhParams,
+    data: &DataSet,
+    options: &CalibrateOptions,
+    k: usize,
+    seed: u64,
+) -> Result<Vec<Fold>, CalibrationError> {
+    let groups = length_groups(data);
+    if k < 2 || k > groups.len() {
+        return Err(CalibrationError::Folds(format!(
+            "--cross-validate {k}: needs 2 to {} folds ({} groups of points joined by \
+             reference lengths)",
+            groups.len(),
+            groups.len()
+        )));
+    }
+    let mut order: Vec<usize> = (0..groups.len()).collect();
+    {
+        use rand::seq::SliceRandom;
+        order.shuffle(&mut crate::simulate::rng(seed, 7));
+    }
+    let mut folds: Vec<Vec<usize>> = vec![Vec::new(); k];
+    for (i, &g) in order.iter().enumerate() {
+        folds[i % k].extend(&groups[g]);
+    }
+    folds
+        .iter()
+        .map(|held| {
+            let mut held = held.clone();
+            held.sort_unstable();
+            let train: Vec<usize> = (0..data.points().len()).filter(|p| !held.contains(p)).collect();
+            let train_data = data.subset(&train);
+            let test_data = data.subset(&held);
+            let fit = calibrate(start, &train_data, options)?;
+            Ok(Fold {
+                held_out: held.iter().map(|&p| data.points()[p].label.clone()).collect(),
+                figures: before_after(start, &fit.params, &test_data)?,
+                successful: fit.solver.successful,
+            })
+        })
+        .collect()
+}
+
+/// Points grouped so that each reference length joins points of one group;
+/// groups in order of their first point.
+fn length_groups(data: &DataSet) -> Vec<Vec<usize>> {
+    let n = data.points().len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for r in data.references() {
+        let (a, b) = (root(&mut parent, r.a), root(&mut parent, r.b));
+        parent[a.max(b)] = a.min(b);
+    }
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut index = vec![usize::MAX; n];
+    for p in 0..n {
+        let r = root(&mut parent, p);
+        if index[r] == usize::MAX {
+            index[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[index[r]].push(p);
+    }
+    groups
+}

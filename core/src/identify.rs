@@ -1,0 +1,470 @@
+//! Identifiability: which parameters a data set can determine, and how well.
+//!
+//! The analysis runs on the Jacobian `J` of the weighted residuals
+//! ([`crate::residuals`]) at a given arm, with columns scaled so that mm and
+//! rad compare: an angle column is divided by the arm's reach `R` (sum of
+//! `|a|`, `|d|` and `|B|`), i.e. angles are measured as the arc they sweep at
+//! the reach, in mm. Singular values of the scaled `J` are the square roots
+//! of the eigenvalues of `D JᵀJ D`.
+//!
+//! Structural rules, applied whatever the noise does to the singular values:
+//!
+//! 1. **Base motion** — touches compared with their own centroid, and
+//!    distances between centroids, do not change when the whole measurement
+//!    rotates about or slides along the base axis: `theta1` and `d1` are
+//!    never identifiable. (Their columns are not zero — the residual vectors
+//!    rotate — but the cost is flat along them.)
+//! 2. **Scale** — without a reference length, scaling every length
+//!    parameter by `s` scales every residual by `s`: the cost is least at an
+//!    arm shrunk to nothing. Noise lifts that singular value above zero, so a
+//!    threshold misses it; the direction `(a, d, 0, 0, B)` is projected out.
+//! 3. **Redundant last link** — `a6` and `Bx`, `d6` and `By` move the probe
+//!    identically, and `theta6`, `alpha6` and `B` parameterise the probe
+//!    direction twice. These are exact, so the threshold finds them; the
+//!    relations are reported.
+//!
+//! The numerical rank counts singular values above `rank_tolerance × s_max`
+//! after rule 1's columns are removed and rule 2's direction projected out.
+//! The recommended fixed set comes from Cholesky with diagonal pivoting on
+//! the scaled matrix (equivalent to QR with column pivoting on the scaled
+//! `J`), ties broken towards the paper's choice (θ1, d1, θ6, α6, Bx, By).
+
+use nalgebra::{DMatrix, SymmetricEigen};
+use serde::{Deserialize, Serialize};
+
+use crate::dataset::DataSet;
+use crate::kernel::{ArmKernel, KernelError};
+use crate::params::{DhParams, ParamId, ParamKind};
+use crate::residuals::{Weights, normal_equations};
+
+/// Relative singular-value threshold of the numerical rank.
+pub const RANK_TOLERANCE: f64 = 1e-7;
+
+/// The paper's fixed set, preferred when the pivoting ties.
+const PAPER_FIXED: [(ParamKind, usize); 6] = [
+    (ParamKind::Theta, 0),
+    (ParamKind::D, 0),
+    (ParamKind::Theta, 5),
+    (ParamKind::Alpha, 5),
+    (ParamKind::Probe, 0),
+    (ParamKind::Probe, 1),
+];
+
+/// A structural rule that fired.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Rule {
+    /// Short name: `base-motion`, `scale`.
+    pub name: String,
+    /// What it means.
+    pub explanation: String,
+}
+
+/// A direction the data cannot see, as a relation between named parameters
+/// (scaled units: angles as mm of arc at the reach).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Relation {
+    /// Singular value of the direction (scaled), or 0 for a structural one.
+    pub singular_value: f64,
+    /// `(parameter, coefficient)`, largest first; coefficients of a unit
+    /// vector in scaled units.
+    pub terms: Vec<(String, f64)>,
+    /// Readable: `a6 - 1.000 Bx`.
+    pub text: String,
+}
+
+/// A parameter the analysis recommends fixing, and why.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Fixed {
+    /// Parameter name.
+    pub name: String,
+    /// Why it is fixed.
+    pub reason: String,
+}
+
+/// A parameter left free: its predicted uncertainty and identifiability.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FreeParameter {
+    /// Parameter name.
+    pub name: String,
+    /// `mm` or `deg`.
+    pub unit: String,
+    /// Predicted standard uncertainty at the stated noise, in `unit`.
+    pub sigma: f64,
+    /// Cosine between the parameter's axis and the identifiable subspace
+    /// (1 = fully identifiable), in scaled units.
+    pub identifiability: f64,
+}
+
+/// A strong correlation between two free parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Correlation {
+    /// First parameter.
+    pub a: String,
+    /// Second parameter.
+    pub b: String,
+    /// Correlation coefficient.
+    pub rho: f64,
+}
+
+/// The result of [`identify`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Identification {
+    /// Parameter names in the fixed order.
+    pub parameters: Vec<String>,
+    /// The reach `R` dividing angle columns, mm.
+    pub reach_mm: f64,
+    /// How columns were scaled, in words.
+    pub scaling: String,
+    /// Singular values of the scaled Jacobian, descending, all columns.
+    pub singular_values: Vec<f64>,
+    /// Singular values after the structural rules (removed columns and
+    /// projected directions), descending.
+    pub analysed_singular_values: Vec<f64>,
+    /// Threshold: `RANK_TOLERANCE × s_max`.
+    pub threshold: f64,
+    /// Identifiable parameter combinations.
+    pub rank: usize,
+    /// `s_max / s_min` over the identifiable part.
+    pub condition_number: f64,
+    /// Structural rules that fired.
+    pub rules: Vec<Rule>,
+    /// Unidentifiable directions among the analysed parameters.
+    pub null_relations: Vec<Relation>,
+    /// Weak directions (singular value below 1e-3 of `s_max`, above the threshold).
+    pub weak_relations: Vec<Relation>,
+    /// The recommended fixed set, with reasons.
+    pub fixed: Vec<Fixed>,
+    /// The free parameters with predicted σ.
+    pub free: Vec<FreeParameter>,
+    /// Free-parameter pairs with `|ρ| > 0.9`.
+    pub correlations: Vec<Correlation>,
+}
+
+impl Identification {
+    /// Column indices of the recommended free parameters.
+    pub fn free_columns(&self) -> Vec<usize> {
+        self.free
+            .iter()
+            .filter_map(|f| self.parameters.iter().position(|p| *p == f.name))
+            .collect()
+    }
+}
+
+/// The arm's reach: `Σ|a| + Σ|d| + |B|`, mm.
+pub fn reach(params: &DhParams) -> f64 {
+    let links: f64 = params.joints.iter().map(|j| j.a.abs() + j.d.abs()).sum();
+    let b = params.probe.iter().map(|v| v * v).sum::<f64>().sqrt();
+    (links + b).max(1.0)
+}
+
+/// The unit of a parameter for users.
+pub fn unit(id: ParamId) -> &'static str {
+    if id.kind.is_length() { "mm" } else { "deg" }
+}
+
+/// A value of parameter `id` in user units (mm or deg).
+pub fn to_user(id: ParamId, v: f64) -> f64 {
+    if id.kind.is_length() { v } else { v.to_degrees() }
+}
+
+/// Analyses what `data` (weighted by `weights`) can identify at `params`.
+pub fn identify(
+    params: &DhParams,
+    data: &DataSet,
+    weights: &Weights,
+    threads: usize,
+) -> Result<Identification, KernelError> {
+    let n = params.joint_count();
+    let np = params.param_count();
+    let ids: Vec<ParamId> = ParamId::all(n).collect();
+    let names: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
+    let kernel = ArmKernel::new(params)?;
+    let all: Vec<usize> = (0..np).collect();
+    let normal = normal_equations(&kernel, data, weights, &all, threads)?;
+    let r = reach(params);
+    let d: Vec<f64> = ids
+        .iter()
+        .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / r })
+        .collect();
+    let ns = DMatrix::from_fn(np, np, |a, b| normal.jtj[a * np + b] * d[a] * d[b]);
+    let singular_values = singular(&ns);
+
+    // Rule 1: base motion.
+    let base = [
+        ParamId { kind: ParamKind::Theta, index: 0 }.column(n),
+        ParamId { kind: ParamKind::D, index: 0 }.column(n),
+    ];
+    let mut rules = vec![Rule {
+        name: "base-motion".into(),
+        explanation: "theta1 and d1 are never identifiable: touches compared with their \
+                      centroids and distances between centroids do not see a rotation about, \
+                      or a slide along, the base axis"
+            .into(),
+    }];
+    let cols: Vec<usize> = (0..np).filter(|c| !base.contains(c)).collect();
+    let k = cols.len();
+    let unprojected = DMatrix::from_fn(k, k, |a, b| ns[(cols[a], cols[b])]);
+    let mut m = unprojected.clone();
+    // Rule 2: scale.
+    let scale_dir = if data.references().is_empty() {
+        let v = nalgebra::DVector::from_fn(k, |a, _| {
+            let id = ids[cols[a]];
+            if id.kind.is_length() { params.get(id) } else { 0.0 }
+        });
+        // The scale direction up to the exact null directions (which are
+        // unidentifiable anyway): without this, projecting `v` would merely
+        // trade one of them for it.
+        let e0 = SymmetricEigen::new(unprojected.clone());
+        let emax = e0.eigenvalues.iter().copied().fold(0.0, f64::max);
+        let mut v = v.normalize();
+        for (i, &e) in e0.eigenvalues.iter().enumerate() {
+            if e.max(0.0).sqrt() <= RANK_TOLERANCE * emax.sqrt() {
+                let u = e0.eigenvectors.column(i);
+                v -= u * u.dot(&v);
+            }
+        }
+        let v = v.normalize();
+        let p = DMatrix::identity(k, k) - &v * v.transpose();
+        m = &p * m * &p;
+        rules.push(Rule {
+            name: "scale".into(),
+            explanation: "no reference length: scaling every length (a, d, B) scales every \
+                          residual, so the data cannot fix the arm's size; give at least one \
+                          reference length"
+                .into(),
+        });
+        Some(v)
+    } else {
+        None
+    };
+    let eig = SymmetricEigen::new(m.clone());
+    let mut order: Vec<usize> = (0..k).collect();
+    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+    let sv: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i].max(0.0).sqrt()).collect();
+    let smax = sv.first().copied().unwrap_or(0.0);
+    let threshold = RANK_TOLERANCE * smax;
+    let rank = sv.iter().filter(|&&s| s > threshold).count();
+    let relation = |i: usize, s: f64| {
+        let v = eig.eigenvectors.column(order[i]);
+        let mut terms: Vec<(String, f64)> = (0..k)
+            .filter(|&a| v[a].abs() > 0.05)
+            .map(|a| (names[cols[a]].clone(), v[a]))
+            .collect();
+        terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        if let Some(first) = terms.first()
+            && first.1 < 0.0
+        {
+            terms.iter_mut().for_each(|t| t.1 = -t.1);
+        }
+        Relation { singular_value: s, text: relation_text(&terms), terms }
+    };
+    let mut null_relations: Vec<Relation> = (rank..k)
+        .filter(|&i| {
+            // The projected scale direction is reported by its rule.
+            let v = eig.eigenvectors.column(order[i]);
+            scale_dir.as_ref().is_none_or(|s| s.dot(&v).abs() < 0.9)
+        })
+        .map(|i| relation(i, sv[i]))
+        .collect();
+    null_relations.sort_by(|a, b| a.text.cmp(&b.text));
+    let weak_relations = (0..rank)
+        .filter(|&i| sv[i] < 1e-3 * smax)
+        .map(|i| relation(i, sv[i]))
+        .collect();
+    let condition_number = if rank > 0 { smax / sv[rank - 1] } else { f64::INFINITY };
+
+    // Recommended free set: pivoted Cholesky on the analysed matrix.
+    let preferred_fixed: Vec<usize> = PAPER_FIXED
+        .iter()
+        .map(|&(kind, index)| ParamId { kind, index }.column(n))
+        .collect();
+    let pivots = pivoted_cholesky(&m, rank, |a| preferred_fixed.contains(&cols[a]));
+    let mut free_cols: Vec<usize> = pivots.iter().map(|&a| cols[a]).collect();
+    free_cols.sort_unstable();
+    // The column fixed for scale: free without the scale rule, fixed with it.
+    let scale_fixed: Vec<usize> = if scale_dir.is_some() {
+        pivoted_cholesky(&unprojected, rank + 1, |a| preferred_fixed.contains(&cols[a]))
+            .into_iter()
+            .map(|a| cols[a])
+            .filter(|c| !free_cols.contains(c))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let mut fixed: Vec<Fixed> = base
+        .iter()
+        .map(|&c| Fixed {
+            name: names[c].clone(),
+            reason: "base motion: never identifiable".into(),
+        })
+        .collect();
+    for &c in &cols {
+        if free_cols.contains(&c) {
+            continue;
+        }
+        let reason = if scale_fixed.contains(&c) {
+            "scale: no reference length fixes the arm's size".to_string()
+        } else {
+            format!("redundant: {}", dependence(&ns, &ids, &d, c, &free_cols))
+        };
+        fixed.push(Fixed { name: names[c].clone(), reason });
+    }
+    fixed.sort_by_key(|f| names.iter().position(|n| *n == f.name));
+
+    // Predicted σ of the free parameters (weights carry the noise).
+    let q = free_cols.len();
+    let nf = DMatrix::from_fn(q, q, |a, b| normal.jtj[free_cols[a] * np + free_cols[b]]);
+    let cov = nf.clone().try_inverse().unwrap_or_else(|| DMatrix::from_element(q, q, f64::NAN));
+    let basis: Vec<usize> = order[..rank].to_vec();
+    let free = free_cols
+        .iter()
+        .enumerate()
+        .map(|(a, &c)| {
+            let row = cols.iter().position(|&x| x == c).expect("free columns are analysed");
+            let ident = basis
+                .iter()
+                .map(|&i| eig.eigenvectors[(row, i)].powi(2))
+                .sum::<f64>()
+                .sqrt();
+            FreeParameter {
+                name: names[c].clone(),
+                unit: unit(ids[c]).into(),
+                sigma: to_user(ids[c], cov[(a, a)].max(0.0).sqrt()),
+                identifiability: ident,
+            }
+        })
+        .collect();
+    let correlations = strong_correlations(&cov, &free_cols, &names);
+    Ok(Identification {
+        parameters: names,
+        reach_mm: r,
+        scaling: format!(
+            "angle columns divided by the reach R = {r:.1} mm (an angle counts as the arc it \
+             sweeps at R); length columns unscaled"
+        ),
+        singular_values,
+        analysed_singular_values: sv,
+        threshold,
+        rank,
+        condition_number,
+        rules,
+        null_relations,
+        weak_relations,
+        fixed,
+        free,
+        correlations,
+    })
+}
+
+/// Singular values of a matrix whose Gram matrix is `n`, descending.
+fn singular(n: &DMatrix<f64>) -> Vec<f64> {
+    let mut s: Vec<f64> = SymmetricEigen::new(n.clone())
+        .eigenvalues
+        .iter()
+        .map(|e| e.max(0.0).sqrt())
+        .collect();
+    s.sort_by(|a, b| b.total_cmp(a));
+    s
+}
+
+/// The first `rank` pivots of Cholesky with diagonal pivoting; among
+/// diagonals within 1e-9 of the largest, a column `prefer_fixed` rejects is
+/// taken last.
+fn pivoted_cholesky(m: &DMatrix<f64>, rank: usize, prefer_fixed: impl Fn(usize) -> bool) -> Vec<usize> {
+    let k = m.nrows();
+    let mut a = m.clone();
+    let mut left: Vec<usize> = (0..k).collect();
+    let mut pivots = Vec::with_capacity(rank);
+    for _ in 0..rank {
+        let best = left.iter().map(|&c| a[(c, c)]).fold(0.0, f64::max);
+        let tie = |c: usize| a[(c, c)] >= best * (1.0 - 1e-9);
+        let pick = left
+            .iter()
+            .copied()
+            .filter(|&c| tie(c))
+            .min_by_key(|&c| (prefer_fixed(c), c))
+            .expect("rank ≤ columns");
+        pivots.push(pick);
+        left.retain(|&c| c != pick);
+        let d = a[(pick, pick)];
+        if d <= 0.0 {
+            break;
+        }
+        let col: Vec<f64> = (0..k).map(|r| a[(r, pick)]).collect();
+        for &r in &left {
+            for &c in &left {
+                a[(r, c)] -= col[r] * col[c] / d;
+            }
+        }
+    }
+    pivots
+}
+
+/// Column `c` as a combination of the free columns (regression on the
+/// scaled matrix), in words with physical coefficients: `theta6 acts like
+/// 100.0 mm/rad × a6` is the paper's `Δa6 = Bz·Δθ6`.
+fn dependence(ns: &DMatrix<f64>, ids: &[ParamId], d: &[f64], c: usize, free: &[usize]) -> String {
+    let q = free.len();
+    let nf = DMatrix::from_fn(q, q, |a, b| ns[(free[a], free[b])]);
+    let rhs = nalgebra::DVector::from_fn(q, |a, _| ns[(free[a], c)]);
+    let Some(coef) = nf.cholesky().map(|ch| ch.solve(&rhs)) else {
+        return "depends on the free parameters".into();
+    };
+    let mut terms: Vec<(usize, f64)> = (0..q).filter(|&a| coef[a].abs() > 0.05).map(|a| (a, coef[a])).collect();
+    terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+    terms.truncate(4);
+    let unit = |id: ParamId| if id.kind.is_length() { "mm" } else { "rad" };
+    let parts: Vec<String> = terms
+        .iter()
+        .map(|&(a, k)| {
+            let (f, fixed) = (ids[free[a]], ids[c]);
+            // col_c·d_c = Σ k·col_a·d_a  ⇒  col_c = Σ (k·d_a/d_c)·col_a
+            let physical = k * d[free[a]] / d[c];
+            let ratio = if unit(f) == unit(fixed) {
+                String::new()
+            } else {
+                format!(" {}/{}", unit(f), unit(fixed))
+            };
+            format!("{physical:.4}{ratio} × {f}")
+        })
+        .collect();
+    if parts.is_empty() {
+        return format!("{} moves no touch relative to the others", ids[c]);
+    }
+    format!("{} acts like {}", ids[c], parts.join(" + "))
+}
+
+fn relation_text(terms: &[(String, f64)]) -> String {
+    let mut s = String::new();
+    for (i, (name, c)) in terms.iter().enumerate() {
+        let sign = if *c < 0.0 { "-" } else { "+" };
+        if i == 0 {
+            if *c < 0.0 {
+                s.push('-');
+            }
+        } else {
+            s.push_str(&format!(" {sign} "));
+        }
+        s.push_str(&format!("{:.3} {name}", c.abs()));
+    }
+    s
+}
+
+/// Pairs of free parameters with `|ρ| > 0.9`.
+pub(crate) fn strong_correlations(cov: &DMatrix<f64>, free: &[usize], names: &[String]) -> Vec<Correlation> {
+    let q = free.len();
+    let mut out = Vec::new();
+    for a in 0..q {
+        for b in a + 1..q {
+            let rho = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+            if rho.abs() > 0.9 {
+                out.push(Correlation {
+                    a: names[free[a]].clone(),
+                    b: names[free[b]].clone(),
+                    rho,
+                });
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,91 @@
+//! Calibration on simulated campaigns with a known true arm.
+
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, calibrate};
+use aacmm_core::identify::identify;
+use aacmm_core::io::Arm;
+use aacmm_core::kernel::ArmKernel;
+use aacmm_core::params::{DhParams, ParamId};
+use aacmm_core::residuals::{Noise, Weights};
+use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
+
+fn nominal() -> Arm {
+    Arm::without_limits("nominal", DhParams::paper_nominal())
+}
+
+fn campaign(seed: u64, encoder_deg: f64, probe_mm: f64) -> aacmm_core::simulate::Campaign {
+    let mut s = CampaignSettings::new(seed, ErrorModel::Paper, 10, 10);
+    s.reference_lengths = 3;
+    s.encoder_noise_deg = encoder_deg;
+    s.probe_noise_mm = probe_mm;
+    simulate(&nominal(), &s).unwrap()
+}
+
+const UNOBSERVABLE: &str = "theta1,d1,theta6,alpha6,Bx,By";
+
+#[test]
+fn zero_noise_recovers_every_identifiable_parameter() {
+    let c = campaign(3, 0.0, 0.0);
+    let data = c.data_set().unwrap();
+    let options = CalibrateOptions {
+        fix: FixSpec::parse(UNOBSERVABLE, 6).unwrap(),
+        ..CalibrateOptions::default()
+    };
+    let cal = calibrate(&c.nominal.params, &data, &options).unwrap();
+    assert!(cal.solver.successful, "{:?}", cal.solver.termination);
+    let fixed = FixSpec::parse(UNOBSERVABLE, 6).unwrap();
+    let FixSpec::Columns(fixed) = fixed else { unreachable!() };
+    for (c_, id) in ParamId::all(6).enumerate() {
+        if fixed.contains(&c_) {
+            continue;
+        }
+        let (got, want) = (cal.params.get(id), c.true_arm.params.get(id));
+        assert!((got - want).abs() <= 1e-6, "{id}: {got} vs {want}");
+    }
+    // Held-out touches of the same true arm: positions agree up to the base motion.
+    let fresh = campaign(4, 0.0, 0.0);
+    let mut moved = fresh.true_arm.params.clone();
+    moved.joints[0].theta = cal.params.joints[0].theta;
+    moved.joints[0].d = cal.params.joints[0].d;
+    let (a, b) = (ArmKernel::new(&moved).unwrap(), ArmKernel::new(&cal.params).unwrap());
+    for q in &fresh.poses.q {
+        let (p, r) = (a.position(q).unwrap(), b.position(q).unwrap());
+        let d = (0..3).map(|k| (p[k] - r[k]).powi(2)).sum::<f64>().sqrt();
+        assert!(d <= 1e-6, "{d}");
+    }
+}
+
+#[test]
+fn identify_finds_rank_20_without_lengths_and_21_with() {
+    let c = campaign(1, 0.005, 0.01);
+    let data = c.data_set().unwrap();
+    let k = ArmKernel::new(&c.nominal.params).unwrap();
+    let noise = Noise {
+        encoder_rad: Some(0.005f64.to_radians()),
+        probe_mm: Some(0.01),
+        length_default_mm: 0.001,
+        length_weight: None,
+    };
+    let w = Weights::new(&k, &data, &noise, 1.0).unwrap();
+    let with = identify(&c.nominal.params, &data, &w, 1).unwrap();
+    assert_eq!(with.rank, 21, "{:?}", with.analysed_singular_values);
+    let bare = aacmm_core::dataset::DataSet::from_poses(&c.poses, "poses.csv").unwrap();
+    let w = Weights::new(&k, &bare, &noise, 1.0).unwrap();
+    let without = identify(&c.nominal.params, &bare, &w, 1).unwrap();
+    assert_eq!(without.rank, 20, "{:?}", without.analysed_singular_values);
+    assert!(without.rules.iter().any(|r| r.name == "scale"));
+    assert!(!with.rules.iter().any(|r| r.name == "scale"));
+    // With lengths, the recommended fixed set is the unobservable one.
+    let mut fixed: Vec<&str> = with.fixed.iter().map(|f| f.name.as_str()).collect();
+    fixed.sort_unstable();
+    assert_eq!(fixed, ["Bx", "By", "alpha6", "d1", "theta1", "theta6"]);
+    // Without, one length parameter more, fixed for scale.
+    assert_eq!(without.fixed.len(), 7);
+    assert!(without.fixed.iter().any(|f| f.reason.starts_with("scale")));
+    // The redundant last link shows up as relations between named parameters.
+    let texts: Vec<&str> = with.null_relations.iter().map(|r| r.text.as_str()).collect();
+    assert_eq!(texts.len(), 4, "{texts:?}");
+    assert!(texts.iter().any(|t| t.contains("a6") && t.contains("Bx")), "{texts:?}");
+    assert!(texts.iter().any(|t| t.contains("d6") && t.contains("By")), "{texts:?}");
+    println!("{texts:#?}\n{:#?}\n{:#?}", with.fixed, without.fixed);
+
+}
