@@ -167,7 +167,10 @@ impl DataSet {
             }
         }
         let joints = poses.joints;
-        let order: Vec<usize> = rows_of.iter().flat_map(|(_, r)| r.iter().copied()).collect();
+        let order: Vec<usize> = rows_of
+            .iter()
+            .flat_map(|(_, r)| r.iter().copied())
+            .collect();
         let mut start = 0;
         let points = rows_of
             .iter()
@@ -259,7 +262,10 @@ impl DataSet {
                     file,
                     l.line,
                     "point_b",
-                    format!("same point as point_a (`{}`): a length needs two points", l.a),
+                    format!(
+                        "same point as point_a (`{}`): a length needs two points",
+                        l.a
+                    ),
                 ));
             }
             if let Some(first) = seen.insert((a.min(b), a.max(b)), l.line) {
@@ -380,7 +386,10 @@ impl DataSet {
             references,
             source: SourceMap {
                 poses_file: self.source.poses_file.clone(),
-                touch_lines: touches.iter().map(|&i| self.source.touch_lines[i]).collect(),
+                touch_lines: touches
+                    .iter()
+                    .map(|&i| self.source.touch_lines[i])
+                    .collect(),
                 touch_rows: touches.iter().map(|&i| self.source.touch_rows[i]).collect(),
                 lengths_file: self.source.lengths_file.clone(),
                 reference_lines,

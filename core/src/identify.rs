@@ -164,7 +164,11 @@ pub fn unit(id: ParamId) -> &'static str {
 
 /// A value of parameter `id` in user units (mm or deg).
 pub fn to_user(id: ParamId, v: f64) -> f64 {
-    if id.kind.is_length() { v } else { v.to_degrees() }
+    if id.kind.is_length() {
+        v
+    } else {
+        v.to_degrees()
+    }
 }
 
 /// Analyses what `data` (weighted by `weights`) can identify at `params`.
@@ -191,8 +195,16 @@ pub fn identify(
 
     // Rule 1: base motion.
     let base = [
-        ParamId { kind: ParamKind::Theta, index: 0 }.column(n),
-        ParamId { kind: ParamKind::D, index: 0 }.column(n),
+        ParamId {
+            kind: ParamKind::Theta,
+            index: 0,
+        }
+        .column(n),
+        ParamId {
+            kind: ParamKind::D,
+            index: 0,
+        }
+        .column(n),
     ];
     let mut rules = vec![Rule {
         name: "base-motion".into(),
@@ -209,7 +221,11 @@ pub fn identify(
     let scale_dir = if data.references().is_empty() {
         let v = nalgebra::DVector::from_fn(k, |a, _| {
             let id = ids[cols[a]];
-            if id.kind.is_length() { params.get(id) } else { 0.0 }
+            if id.kind.is_length() {
+                params.get(id)
+            } else {
+                0.0
+            }
         });
         // The scale direction up to the exact null directions (which are
         // unidentifiable anyway): without this, projecting `v` would merely
@@ -240,7 +256,10 @@ pub fn identify(
     let eig = SymmetricEigen::new(m.clone());
     let mut order: Vec<usize> = (0..k).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-    let sv: Vec<f64> = order.iter().map(|&i| eig.eigenvalues[i].max(0.0).sqrt()).collect();
+    let sv: Vec<f64> = order
+        .iter()
+        .map(|&i| eig.eigenvalues[i].max(0.0).sqrt())
+        .collect();
     let smax = sv.first().copied().unwrap_or(0.0);
     let threshold = RANK_TOLERANCE * smax;
     let rank = sv.iter().filter(|&&s| s > threshold).count();
@@ -256,7 +275,11 @@ pub fn identify(
         {
             terms.iter_mut().for_each(|t| t.1 = -t.1);
         }
-        Relation { singular_value: s, text: relation_text(&terms), terms }
+        Relation {
+            singular_value: s,
+            text: relation_text(&terms),
+            terms,
+        }
     };
     let mut null_relations: Vec<Relation> = (rank..k)
         .filter(|&i| {
@@ -271,7 +294,11 @@ pub fn identify(
         .filter(|&i| sv[i] < 1e-3 * smax)
         .map(|i| relation(i, sv[i]))
         .collect();
-    let condition_number = if rank > 0 { smax / sv[rank - 1] } else { f64::INFINITY };
+    let condition_number = if rank > 0 {
+        smax / sv[rank - 1]
+    } else {
+        f64::INFINITY
+    };
 
     // Recommended free set: pivoted Cholesky on the analysed matrix.
     let preferred_fixed: Vec<usize> = PAPER_FIXED
@@ -283,11 +310,13 @@ pub fn identify(
     free_cols.sort_unstable();
     // The column fixed for scale: free without the scale rule, fixed with it.
     let scale_fixed: Vec<usize> = if scale_dir.is_some() {
-        pivoted_cholesky(&unprojected, rank + 1, |a| preferred_fixed.contains(&cols[a]))
-            .into_iter()
-            .map(|a| cols[a])
-            .filter(|c| !free_cols.contains(c))
-            .collect()
+        pivoted_cholesky(&unprojected, rank + 1, |a| {
+            preferred_fixed.contains(&cols[a])
+        })
+        .into_iter()
+        .map(|a| cols[a])
+        .filter(|c| !free_cols.contains(c))
+        .collect()
     } else {
         Vec::new()
     };
@@ -307,20 +336,29 @@ pub fn identify(
         } else {
             format!("redundant: {}", dependence(&ns, &ids, &d, c, &free_cols))
         };
-        fixed.push(Fixed { name: names[c].clone(), reason });
+        fixed.push(Fixed {
+            name: names[c].clone(),
+            reason,
+        });
     }
     fixed.sort_by_key(|f| names.iter().position(|n| *n == f.name));
 
     // Predicted σ of the free parameters (weights carry the noise).
     let q = free_cols.len();
     let nf = DMatrix::from_fn(q, q, |a, b| normal.jtj[free_cols[a] * np + free_cols[b]]);
-    let cov = nf.clone().try_inverse().unwrap_or_else(|| DMatrix::from_element(q, q, f64::NAN));
+    let cov = nf
+        .clone()
+        .try_inverse()
+        .unwrap_or_else(|| DMatrix::from_element(q, q, f64::NAN));
     let basis: Vec<usize> = order[..rank].to_vec();
     let free = free_cols
         .iter()
         .enumerate()
         .map(|(a, &c)| {
-            let row = cols.iter().position(|&x| x == c).expect("free columns are analysed");
+            let row = cols
+                .iter()
+                .position(|&x| x == c)
+                .expect("free columns are analysed");
             let ident = basis
                 .iter()
                 .map(|&i| eig.eigenvectors[(row, i)].powi(2))
@@ -370,7 +408,11 @@ fn singular(n: &DMatrix<f64>) -> Vec<f64> {
 /// The first `rank` pivots of Cholesky with diagonal pivoting; among
 /// diagonals within 1e-9 of the largest, a column `prefer_fixed` rejects is
 /// taken last.
-fn pivoted_cholesky(m: &DMatrix<f64>, rank: usize, prefer_fixed: impl Fn(usize) -> bool) -> Vec<usize> {
+fn pivoted_cholesky(
+    m: &DMatrix<f64>,
+    rank: usize,
+    prefer_fixed: impl Fn(usize) -> bool,
+) -> Vec<usize> {
     let k = m.nrows();
     let mut a = m.clone();
     let mut left: Vec<usize> = (0..k).collect();
@@ -410,7 +452,10 @@ fn dependence(ns: &DMatrix<f64>, ids: &[ParamId], d: &[f64], c: usize, free: &[u
     let Some(coef) = nf.cholesky().map(|ch| ch.solve(&rhs)) else {
         return "depends on the free parameters".into();
     };
-    let mut terms: Vec<(usize, f64)> = (0..q).filter(|&a| coef[a].abs() > 0.05).map(|a| (a, coef[a])).collect();
+    let mut terms: Vec<(usize, f64)> = (0..q)
+        .filter(|&a| coef[a].abs() > 0.05)
+        .map(|a| (a, coef[a]))
+        .collect();
     terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
     terms.truncate(4);
     let unit = |id: ParamId| if id.kind.is_length() { "mm" } else { "rad" };
@@ -451,7 +496,11 @@ fn relation_text(terms: &[(String, f64)]) -> String {
 }
 
 /// Pairs of free parameters with `|ρ| > 0.9`.
-pub(crate) fn strong_correlations(cov: &DMatrix<f64>, free: &[usize], names: &[String]) -> Vec<Correlation> {
+pub(crate) fn strong_correlations(
+    cov: &DMatrix<f64>,
+    free: &[usize],
+    names: &[String],
+) -> Vec<Correlation> {
     let q = free.len();
     let mut out = Vec::new();
     for a in 0..q {

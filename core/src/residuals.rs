@@ -4,30 +4,33 @@
 //! are nuisance unknowns, eliminated (variable projection). Residual kinds, a
 //! closed set ([`ResidualKind`]):
 //!
-//! - **touch** `i` of point `k`: `r_i = w_i (p(q_i; x) − c_k)` (3 rows), with
-//!   `w_i = 1/σ_i` and `σ_i² = σ_probe² + σ_enc² ‖∂p/∂q‖²_F / 3` — probe
-//!   seating plus encoder noise carried through the joint Jacobian at the
-//!   arm the fit starts from (fixed during the fit, so the cost is one
-//!   function);
+//! - **touch** `i` of point `k`: `r_i = L_iᵀ (p(q_i; x) − c_k)` (3 rows),
+//!   whitened by its covariance `Σ_i = σ_probe² I + σ_enc² J_q J_qᵀ`
+//!   (`L_i L_iᵀ = A_i = Σ_i⁻¹`) — probe seating plus encoder noise carried
+//!   through the joint Jacobian `J_q` at the arm the fit starts from (fixed
+//!   during the fit, so the cost is one function). Encoder noise moves the
+//!   probe mostly across the arm, so the 3 × 3 weight matters; without
+//!   stated noise, `A_i = I/σ²`;
 //! - **reference length** between points `a`, `b`:
-//!   `r = w_L (|c_a − c_b| − L)` with `σ_L² = u_L² + 1/W_a + 1/W_b`, the
-//!   stated uncertainty plus the variance of both centroids along the line
-//!   (`W_k = Σ_{i∈k} w_i²`), or `w_L = 1/σ` from `--length-weight`.
+//!   `r = w_L (|c_a − c_b| − L)` with `σ_L² = u_L² + uᵀ(C_a + C_b)u`, the
+//!   stated uncertainty plus the variance of both centroids along the unit
+//!   vector `u` between them (`C_k = (Σ_{i∈k} A_i)⁻¹`), or `w_L = 1/σ` from
+//!   `--length-weight`.
 //!
-//! For fixed `x` the touch cost `Σ_i w_i² |p_i − c_k|²` is least at the
-//! weighted centroid `c_k = Σ w_i² p_i / W_k`, so the centres are replaced
+//! For fixed `x` the touch cost `Σ_i (p_i − c)ᵀA_i(p_i − c)` is least at the
+//! weighted centroid `c_k = (Σ A_i)⁻¹ Σ A_i p_i`, so the centres are replaced
 //! by centroids: the normal matrix stays `p × p` (`p` ≤ 31) whatever the
 //! number of points, each touch costs only its own Jacobian, and the
 //! reduced matrix is exactly the Schur complement one gets by carrying the
-//! centres as parameters. Per point, with `J_i` the free columns of `∂p/∂x`:
+//! centres as parameters. Per point, with `J_i` the free columns of `∂p/∂x`
+//! and `S = Σ A_i`, `G = Σ A_i J_i`:
 //!
 //! ```text
-//! JᵀJ  += Σ w_i² J_iᵀJ_i − (Σ w_i² J_i)ᵀ(Σ w_i² J_i) / W_k
-//! Jᵀr  += Σ w_i² J_iᵀ p_i − (Σ w_i² J_i)ᵀ c_k
+//! JᵀJ  += Σ J_iᵀA_iJ_i − Gᵀ S⁻¹ G
+//! Jᵀr  += Σ J_iᵀA_i p_i − Gᵀ c_k
 //! ```
 //!
-//! and a length adds `w_L² gᵀg`, `g = u_abᵀ (J̄_a − J̄_b)`,
-//! `J̄_k = Σ w_i² J_i / W_k`. The lengths use the touch centroids (their
+//! and a length adds `w_L² gᵀg`, `g = uᵀ (J̄_a − J̄_b)`, `J̄_k = S⁻¹G`. The lengths use the touch centroids (their
 //! uncertainty folded into `σ_L`) rather than pulling the centres: a
 //! reference length is one scalar against 3·n touch rows per point.
 //! Degrees of freedom: `m − p` with `m = 3·touches + lengths` and
@@ -71,18 +74,47 @@ impl Noise {
     }
 }
 
-/// Weights of every residual: `1/σ` (1/mm).
+/// A symmetric 3 × 3 matrix: `[xx, yy, zz, xy, xz, yz]`.
+pub type Sym3 = [f64; 6];
+
+/// `A·v` for a symmetric `A`.
+#[inline(always)]
+fn sym_mul(a: &Sym3, v: &[f64; 3]) -> [f64; 3] {
+    [
+        a[0] * v[0] + a[3] * v[1] + a[4] * v[2],
+        a[3] * v[0] + a[1] * v[1] + a[5] * v[2],
+        a[4] * v[0] + a[5] * v[1] + a[2] * v[2],
+    ]
+}
+
+/// The inverse of a symmetric positive-definite 3 × 3 matrix (adjugate).
+fn sym_inv(a: &Sym3) -> Sym3 {
+    let [xx, yy, zz, xy, xz, yz] = *a;
+    let c = [
+        yy * zz - yz * yz,
+        xx * zz - xz * xz,
+        xx * yy - xy * xy,
+        xz * yz - xy * zz,
+        xy * yz - xz * yy,
+        xy * xz - xx * yz,
+    ];
+    let det = xx * c[0] + xy * c[3] + xz * c[4];
+    c.map(|v| v / det)
+}
+
+/// Weights of every residual.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Weights {
-    /// Per touch (data-set order).
-    pub touch: Vec<f64>,
-    /// Per reference length.
+    /// Per touch (data-set order), the inverse covariance `A_i = Σ_i⁻¹` of its
+    /// position, 1/mm².
+    pub touch: Vec<Sym3>,
+    /// Per reference length, `1/σ_L` (1/mm).
     pub length: Vec<f64>,
 }
 
 impl Weights {
     /// Weights from `noise` at the arm `kernel` (the fit's start). Without
-    /// stated touch noise every touch has weight `1/touch_sigma_mm`.
+    /// stated touch noise every touch has `A = I/touch_sigma_mm²`.
     ///
     /// ```
     /// use aacmm_core::{kernel::ArmKernel, params::DhParams, residuals::*};
@@ -92,7 +124,8 @@ impl Weights {
     /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
     /// let noise = Noise { probe_mm: Some(0.01), ..Noise::default() };
     /// let w = Weights::new(&k, &data, &noise, 1.0).unwrap();
-    /// assert!((w.touch[0] - 100.0).abs() < 1e-9); // 1 / 0.01 mm
+    /// assert!((w.touch[0][0] - 1e4).abs() < 1e-6); // 1 / (0.01 mm)²
+    /// assert!(w.touch[0][3].abs() < 1e-9);
     /// ```
     pub fn new(
         kernel: &ArmKernel,
@@ -101,38 +134,79 @@ impl Weights {
         touch_sigma_mm: f64,
     ) -> Result<Weights, KernelError> {
         let touch = if noise.stated() {
-            let enc = noise.encoder_rad.unwrap_or(0.0);
-            let probe = noise.probe_mm.unwrap_or(0.0);
+            let e2 = noise.encoder_rad.unwrap_or(0.0).powi(2);
+            let p2 = noise.probe_mm.unwrap_or(0.0).powi(2);
             let mut jq = vec![[0.0; 3]; data.joints()];
             (0..data.len())
                 .map(|i| {
                     kernel.joint_jacobian(data.reading(i), &mut jq)?;
-                    let frob: f64 = jq.iter().flatten().map(|v| v * v).sum();
-                    Ok(1.0 / (probe * probe + enc * enc * frob / 3.0).sqrt())
+                    let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
+                    let cov = [
+                        p2 + s(0, 0),
+                        p2 + s(1, 1),
+                        p2 + s(2, 2),
+                        s(0, 1),
+                        s(0, 2),
+                        s(1, 2),
+                    ];
+                    Ok(sym_inv(&cov))
                 })
-                .collect::<Result<Vec<f64>, KernelError>>()?
+                .collect::<Result<Vec<Sym3>, KernelError>>()?
         } else {
-            vec![1.0 / touch_sigma_mm; data.len()]
+            let w = 1.0 / (touch_sigma_mm * touch_sigma_mm);
+            vec![[w, w, w, 0.0, 0.0, 0.0]; data.len()]
         };
-        let big_w = |k: usize| {
-            data.points()[k]
-                .touches
-                .clone()
-                .map(|i| touch[i] * touch[i])
-                .sum::<f64>()
-        };
+        // Centroid covariances: (Σ A_i)⁻¹ per point.
+        let centroid_cov: Vec<Sym3> = data
+            .points()
+            .iter()
+            .map(|p| {
+                let mut sum = [0.0; 6];
+                for i in p.touches.clone() {
+                    for (s, v) in sum.iter_mut().zip(&touch[i]) {
+                        *s += v;
+                    }
+                }
+                sym_inv(&sum)
+            })
+            .collect();
         let length = data
             .references()
             .iter()
             .map(|r| match noise.length_weight {
-                Some(w) => w,
+                Some(w) => Ok(w),
                 None => {
-                    let u = r.uncertainty.unwrap_or(noise.length_default_mm);
-                    1.0 / (u * u + 1.0 / big_w(r.a) + 1.0 / big_w(r.b)).sqrt()
+                    let (ca, cb) = (
+                        kernel.position(data.reading(data.points()[r.a].touches.start))?,
+                        kernel.position(data.reading(data.points()[r.b].touches.start))?,
+                    );
+                    let d: [f64; 3] = std::array::from_fn(|k| ca[k] - cb[k]);
+                    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+                        .sqrt()
+                        .max(f64::MIN_POSITIVE);
+                    let u = d.map(|v| v / n);
+                    let along = |c: &Sym3| {
+                        let cu = sym_mul(c, &u);
+                        u[0] * cu[0] + u[1] * cu[1] + u[2] * cu[2]
+                    };
+                    let ul = r.uncertainty.unwrap_or(noise.length_default_mm);
+                    Ok(1.0
+                        / (ul * ul + along(&centroid_cov[r.a]) + along(&centroid_cov[r.b])).sqrt())
                 }
             })
-            .collect();
+            .collect::<Result<Vec<f64>, KernelError>>()?;
         Ok(Weights { touch, length })
+    }
+
+    /// A typical touch σ, mm: the median over touches of `sqrt(trace(Σ_i)/3)`.
+    pub fn typical_touch_sigma(&self) -> f64 {
+        let mut s: Vec<f64> = self
+            .touch
+            .iter()
+            .map(|a| (sym_inv(a)[..3].iter().sum::<f64>() / 3.0).sqrt())
+            .collect();
+        s.sort_by(f64::total_cmp);
+        s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
     }
 }
 
@@ -161,15 +235,16 @@ impl Normal {
     }
 }
 
-/// Per-point sums: `Σ w² J` (3 × p), `Σ w² Jᵀ p̃`, `Σ w² p̃`, `W`, with `p̃`
-/// the position relative to the point's first touch (no cancellation of
-/// metre-sized coordinates).
+/// Per-point sums: `G = Σ A J` (3 × p), `Σ Jᵀ A p̃`, `Σ A p̃`, `Σ p̃ᵀA p̃`,
+/// `S = Σ A`, with `p̃` the position relative to the point's first touch (no
+/// cancellation of metre-sized coordinates).
 struct PointSums {
-    sj: Vec<[f64; 3]>,
-    sjp: Vec<f64>,
-    sp: [f64; 3],
-    spp: f64,
-    w: f64,
+    g: Vec<[f64; 3]>,
+    jap: Vec<f64>,
+    ap: [f64; 3],
+    pap: f64,
+    s: Sym3,
+    started: bool,
     origin: [f64; 3],
 }
 
@@ -257,37 +332,42 @@ pub fn normal_equations(
 impl PointSums {
     fn new(p: usize) -> PointSums {
         PointSums {
-            sj: vec![[0.0; 3]; p],
-            sjp: vec![0.0; p],
-            sp: [0.0; 3],
-            spp: 0.0,
-            w: 0.0,
+            g: vec![[0.0; 3]; p],
+            jap: vec![0.0; p],
+            ap: [0.0; 3],
+            pap: 0.0,
+            s: [0.0; 6],
+            started: false,
             origin: [0.0; 3],
         }
     }
 
-    /// Adds one touch: position, weight², free Jacobian columns.
+    /// Adds one touch: position, weight, free Jacobian columns.
     #[inline]
-    fn add(&mut self, pos: &[f64; 3], w2: f64, jac: &[[f64; 3]], free: &[usize], jtj: &mut [f64]) {
-        if self.w == 0.0 {
+    fn add(&mut self, pos: &[f64; 3], a: &Sym3, jac: &[[f64; 3]], free: &[usize], jtj: &mut [f64]) {
+        if !self.started {
             self.origin = *pos;
+            self.started = true;
         }
         let p = free.len();
         let d: [f64; 3] = std::array::from_fn(|k| pos[k] - self.origin[k]);
-        for (s, v) in self.sp.iter_mut().zip(&d) {
-            *s += w2 * v;
+        let ad = sym_mul(a, &d);
+        for k in 0..3 {
+            self.ap[k] += ad[k];
         }
-        self.spp += w2 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        self.w += w2;
-        for (a, &ca) in free.iter().enumerate() {
-            let wa = jac[ca].map(|v| v * w2);
-            let s = &mut self.sj[a];
-            s[0] += wa[0];
-            s[1] += wa[1];
-            s[2] += wa[2];
-            self.sjp[a] += wa[0] * d[0] + wa[1] * d[1] + wa[2] * d[2];
-            let row = &mut jtj[a * p..a * p + a + 1];
-            for (r, &cb) in row.iter_mut().zip(&free[..=a]) {
+        self.pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+        for (s, v) in self.s.iter_mut().zip(a) {
+            *s += v;
+        }
+        for (i, &ci) in free.iter().enumerate() {
+            let wa = sym_mul(a, &jac[ci]);
+            let g = &mut self.g[i];
+            g[0] += wa[0];
+            g[1] += wa[1];
+            g[2] += wa[2];
+            self.jap[i] += wa[0] * d[0] + wa[1] * d[1] + wa[2] * d[2];
+            let row = &mut jtj[i * p..i * p + i + 1];
+            for (r, &cb) in row.iter_mut().zip(&free[..=i]) {
                 let jb = jac[cb];
                 *r += wa[0] * jb[0] + wa[1] * jb[1] + wa[2] * jb[2];
             }
@@ -297,24 +377,23 @@ impl PointSums {
     /// Closes the point: its Schur term into the lower triangle of `jtj`,
     /// its gradient and cost; resets for the next point.
     fn finish(&mut self, part: &mut Partial, need_mean: bool) {
-        let p = self.sjp.len();
-        let w = self.w;
-        let c: [f64; 3] = std::array::from_fn(|k| self.sp[k] / w);
-        // Σ w²|p̃ − c̃|² = Σ w²|p̃|² − W|c̃|²
-        part.cost += self.spp - w * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        for a in 0..p {
-            let sa = self.sj[a];
-            part.jtr[a] += self.sjp[a] - (sa[0] * c[0] + sa[1] * c[1] + sa[2] * c[2]);
-            for b in 0..=a {
-                let sb = self.sj[b];
-                part.jtj[a * p + b] -= (sa[0] * sb[0] + sa[1] * sb[1] + sa[2] * sb[2]) / w;
+        let p = self.jap.len();
+        let cinv = sym_inv(&self.s);
+        let c = sym_mul(&cinv, &self.ap);
+        // Σ p̃ᵀAp̃ − cᵀ S c, with S c = Σ A p̃
+        part.cost += self.pap - (c[0] * self.ap[0] + c[1] * self.ap[1] + c[2] * self.ap[2]);
+        let mean: Vec<[f64; 3]> = self.g.iter().map(|g| sym_mul(&cinv, g)).collect();
+        for i in 0..p {
+            let gi = self.g[i];
+            part.jtr[i] += self.jap[i] - (gi[0] * c[0] + gi[1] * c[1] + gi[2] * c[2]);
+            for (b, mb) in mean.iter().enumerate().take(i + 1) {
+                part.jtj[i * p + b] -= gi[0] * mb[0] + gi[1] * mb[1] + gi[2] * mb[2];
             }
         }
         part.centroids
             .push(std::array::from_fn(|k| c[k] + self.origin[k]));
         if need_mean {
-            part.mean_j
-                .push(self.sj.iter().map(|s| s.map(|v| v / w)).collect());
+            part.mean_j.push(mean);
         }
         *self = PointSums::new(p);
     }
@@ -347,8 +426,7 @@ fn chunk(
             point += 1;
         }
         finite &= pos.iter().all(|v| v.is_finite());
-        let w = weights.touch[i];
-        sums.add(pos, w * w, jac, free, &mut part.jtj);
+        sums.add(pos, &weights.touch[i], jac, free, &mut part.jtj);
     })?;
     sums.finish(&mut part, need_mean);
     for a in 0..p {
@@ -408,23 +486,30 @@ pub fn cost(
     let mut centroids = Vec::with_capacity(data.points().len());
     for point in data.points() {
         let origin = xyz[point.touches.start];
-        let (mut sp, mut spp, mut w) = ([0.0; 3], 0.0, 0.0);
+        let (mut ap, mut pap, mut sum) = ([0.0; 3], 0.0, [0.0; 6]);
         for i in point.touches.clone() {
-            let w2 = weights.touch[i] * weights.touch[i];
+            let a = &weights.touch[i];
             let d: [f64; 3] = std::array::from_fn(|k| xyz[i][k] - origin[k]);
+            let ad = sym_mul(a, &d);
             for k in 0..3 {
-                sp[k] += w2 * d[k];
+                ap[k] += ad[k];
             }
-            spp += w2 * (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            w += w2;
+            pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+            for (s, v) in sum.iter_mut().zip(a) {
+                *s += v;
+            }
         }
-        let c: [f64; 3] = std::array::from_fn(|k| sp[k] / w);
-        total += spp - w * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        let c = sym_mul(&sym_inv(&sum), &ap);
+        total += pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
         centroids.push(std::array::from_fn(|k| c[k] + origin[k]));
     }
     for (r, &w) in data.references().iter().zip(&weights.length) {
         let res = w * (crate::geometry::distance(&centroids[r.a], &centroids[r.b]) - r.distance);
         total += res * res;
     }
-    Ok(if total.is_finite() { total } else { f64::INFINITY })
+    Ok(if total.is_finite() {
+        total
+    } else {
+        f64::INFINITY
+    })
 }

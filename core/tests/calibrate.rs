@@ -1,6 +1,6 @@
 //! Calibration on simulated campaigns with a known true arm.
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, calibrate};
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, calibrate, validate};
 use aacmm_core::identify::identify;
 use aacmm_core::io::Arm;
 use aacmm_core::kernel::ArmKernel;
@@ -33,7 +33,9 @@ fn zero_noise_recovers_every_identifiable_parameter() {
     let cal = calibrate(&c.nominal.params, &data, &options).unwrap();
     assert!(cal.solver.successful, "{:?}", cal.solver.termination);
     let fixed = FixSpec::parse(UNOBSERVABLE, 6).unwrap();
-    let FixSpec::Columns(fixed) = fixed else { unreachable!() };
+    let FixSpec::Columns(fixed) = fixed else {
+        unreachable!()
+    };
     for (c_, id) in ParamId::all(6).enumerate() {
         if fixed.contains(&c_) {
             continue;
@@ -46,7 +48,10 @@ fn zero_noise_recovers_every_identifiable_parameter() {
     let mut moved = fresh.true_arm.params.clone();
     moved.joints[0].theta = cal.params.joints[0].theta;
     moved.joints[0].d = cal.params.joints[0].d;
-    let (a, b) = (ArmKernel::new(&moved).unwrap(), ArmKernel::new(&cal.params).unwrap());
+    let (a, b) = (
+        ArmKernel::new(&moved).unwrap(),
+        ArmKernel::new(&cal.params).unwrap(),
+    );
     for q in &fresh.poses.q {
         let (p, r) = (a.position(q).unwrap(), b.position(q).unwrap());
         let d = (0..3).map(|k| (p[k] - r[k]).powi(2)).sum::<f64>().sqrt();
@@ -82,10 +87,81 @@ fn identify_finds_rank_20_without_lengths_and_21_with() {
     assert_eq!(without.fixed.len(), 7);
     assert!(without.fixed.iter().any(|f| f.reason.starts_with("scale")));
     // The redundant last link shows up as relations between named parameters.
-    let texts: Vec<&str> = with.null_relations.iter().map(|r| r.text.as_str()).collect();
+    let texts: Vec<&str> = with
+        .null_relations
+        .iter()
+        .map(|r| r.text.as_str())
+        .collect();
     assert_eq!(texts.len(), 4, "{texts:?}");
-    assert!(texts.iter().any(|t| t.contains("a6") && t.contains("Bx")), "{texts:?}");
-    assert!(texts.iter().any(|t| t.contains("d6") && t.contains("By")), "{texts:?}");
+    assert!(
+        texts.iter().any(|t| t.contains("a6") && t.contains("Bx")),
+        "{texts:?}"
+    );
+    assert!(
+        texts.iter().any(|t| t.contains("d6") && t.contains("By")),
+        "{texts:?}"
+    );
     println!("{texts:#?}\n{:#?}\n{:#?}", with.fixed, without.fixed);
+}
 
+/// Noisy campaigns, the unobservable set fixed: the σ are honest (the
+/// truth lies within 3σ̂ and the normalised errors have RMS near 1), and a
+/// fresh campaign of the same true arm is measured nearly as well as the
+/// true arm measures it.
+#[test]
+fn uncertainties_are_honest_over_seeds() {
+    let seeds = 50u64;
+    let options = CalibrateOptions {
+        fix: FixSpec::parse(UNOBSERVABLE, 6).unwrap(),
+        noise: Noise {
+            encoder_rad: Some(0.005f64.to_radians()),
+            probe_mm: Some(0.01),
+            length_default_mm: 0.001,
+            length_weight: None,
+        },
+        ..CalibrateOptions::default()
+    };
+    let (mut inside, mut total, mut sum_z2) = (0usize, 0usize, 0.0);
+    // Held-out figures averaged over the seeds: ours and the true arm's.
+    let (mut e_ours, mut e_true, mut len_ours, mut len_true) = (0.0, 0.0, 0.0, 0.0);
+    for seed in 0..seeds {
+        let c = campaign(100 + seed, 0.005, 0.01);
+        let data = c.data_set().unwrap();
+        let cal = calibrate(&c.nominal.params, &data, &options).unwrap();
+        assert!(cal.solver.successful);
+        for (id, est) in ParamId::all(6).zip(&cal.parameters) {
+            let Some(sigma) = est.sigma else { continue };
+            let truth = aacmm_core::identify::to_user(id, c.true_arm.params.get(id));
+            let mut err = est.calibrated - truth;
+            if id.kind == aacmm_core::params::ParamKind::Theta {
+                err = (err + 180.0).rem_euclid(360.0) - 180.0;
+            }
+            let z = err / sigma;
+            sum_z2 += z * z;
+            total += 1;
+            inside += usize::from(z.abs() <= 3.0);
+        }
+        // Held out: fresh sockets of the same true arm.
+        let mut s = CampaignSettings::new(10_000 + seed, ErrorModel::Paper, 10, 10);
+        s.reference_lengths = 3;
+        s.encoder_noise_deg = 0.005;
+        s.probe_noise_mm = 0.01;
+        let fresh = simulate(&nominal(), &s).unwrap().data_set().unwrap();
+        let truth = validate::figures(&c.true_arm.params, &fresh).unwrap();
+        let ours = validate::figures(&cal.params, &fresh).unwrap();
+        e_ours += ours.e_mean;
+        e_true += truth.e_mean;
+        len_ours += ours.length_rms.unwrap();
+        len_true += truth.length_rms.unwrap();
+    }
+    let coverage = inside as f64 / total as f64;
+    let rms_z = (sum_z2 / total as f64).sqrt();
+    let (e_ratio, len_ratio) = (e_ours / e_true, len_ours / len_true);
+    println!(
+        "coverage {coverage:.4}, rms z {rms_z:.3}, held-out e ratio {e_ratio:.4}, length RMS ratio {len_ratio:.4}"
+    );
+    assert!(coverage >= 0.99, "{coverage}");
+    assert!((0.7..=1.4).contains(&rms_z), "{rms_z}");
+    assert!(e_ratio <= 1.08, "{e_ratio}");
+    assert!(len_ratio <= 1.30, "{len_ratio}");
 }

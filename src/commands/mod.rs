@@ -58,5 +58,6 @@ impl ArmAndPoses {
 
 /// Parses `--angle-unit` values with the library's own unit names.
 pub fn angle_unit(s: &str) -> Result<AngleUnit, String> {
-    s.parse().map_err(|e: aacmm_core::io::UnknownUnit| e.to_string())
+    s.parse()
+        .map_err(|e: aacmm_core::io::UnknownUnit| e.to_string())
 }

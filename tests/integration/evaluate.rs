@@ -40,7 +40,9 @@ fn reports_table_and_json() {
     let measured = ev["reference"][0]["measured"].as_f64().unwrap();
     let error = ev["reference"][0]["error"].as_f64().unwrap();
     assert!((error - (measured - 500.0)).abs() < 1e-12);
-    let centroid_distance = report["pair_length"][0]["centroid_distance"].as_f64().unwrap();
+    let centroid_distance = report["pair_length"][0]["centroid_distance"]
+        .as_f64()
+        .unwrap();
     assert_eq!(measured, centroid_distance);
 }
 

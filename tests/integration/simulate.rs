@@ -86,7 +86,10 @@ fn paper_like_campaign_is_complete_and_reproducible() {
     assert!(campaign.contains("model = \"paper\""), "{campaign}");
     // Noise as asked: the true arm's points scatter about their sockets by
     // roughly the noise (0.005° at up to ~1 m is ~0.09 mm; seating 0.01 mm).
-    let p = ArmKernel::new(&arm.params).unwrap().positions_of(&poses.q).unwrap();
+    let p = ArmKernel::new(&arm.params)
+        .unwrap()
+        .positions_of(&poses.q)
+        .unwrap();
     let centre = |l: &str| sockets.iter().find(|s| s.0 == l).unwrap().1;
     let worst = p
         .iter()
@@ -141,7 +144,10 @@ fn zero_noise_campaign_reproduces_sockets() {
     let arm = read_arm(&dir.join("true_arm.toml")).unwrap();
     let (poses, _) = read_poses(&dir.join("poses.csv"), AngleUnit::Deg, Some(6)).unwrap();
     let sockets = read_points(&dir.join("sockets.csv")).unwrap();
-    let p = ArmKernel::new(&arm.params).unwrap().positions_of(&poses.q).unwrap();
+    let p = ArmKernel::new(&arm.params)
+        .unwrap()
+        .positions_of(&poses.q)
+        .unwrap();
     for (p, l) in p.iter().zip(&poses.labels) {
         let c = sockets.iter().find(|s| &s.0 == l).unwrap().1;
         let e = (0..3).map(|i| (p[i] - c[i]).powi(2)).sum::<f64>().sqrt();

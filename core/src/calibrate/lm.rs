@@ -218,13 +218,13 @@ pub fn levenberg_marquardt(
         // |r + Jδ|² = f + 2δᵀg + δᵀNδ
         let predicted = -(2.0 * delta.dot(&g) + delta.dot(&(&n * &delta)));
         let actual = f - f_new;
-        let rho = if predicted > 0.0 { actual / predicted } else { -1.0 };
-        let scaled = |v: &[f64]| -> f64 {
-            (0..p)
-                .map(|c| scale[c] * v[c] * v[c])
-                .sum::<f64>()
-                .sqrt()
+        let rho = if predicted > 0.0 {
+            actual / predicted
+        } else {
+            -1.0
         };
+        let scaled =
+            |v: &[f64]| -> f64 { (0..p).map(|c| scale[c] * v[c] * v[c]).sum::<f64>().sqrt() };
         let xs: Vec<f64> = free.iter().map(|&c| x[c]).collect();
         let small_step = scaled(delta.as_slice()) <= options.xtol * (scaled(&xs) + options.xtol);
         if rho > 0.0 && f_new.is_finite() {

@@ -101,13 +101,12 @@ impl FixSpec {
                     Some(rest) => format!("alpha{rest}"),
                     None => t.to_string(),
                 };
-                names
-                    .iter()
-                    .position(|n| *n == canonical)
-                    .ok_or_else(|| CalibrationError::UnknownParameter {
+                names.iter().position(|n| *n == canonical).ok_or_else(|| {
+                    CalibrationError::UnknownParameter {
                         name: t.to_string(),
                         expected: format!("{} … {}", names[0], names[names.len() - 1]),
-                    })
+                    }
+                })
             })
             .collect::<Result<Vec<usize>, _>>()
             .map(FixSpec::Columns)
@@ -175,8 +174,8 @@ pub struct Dof {
     pub degrees_of_freedom: usize,
     /// `σ̂ = sqrt(Σr² / (m − p))`; 1 when the weights are right.
     pub sigma0: f64,
-    /// The touch σ used for the weights (stated noise: the median over
-    /// touches; otherwise estimated), mm.
+    /// The touch σ behind the weights, mm: with stated noise the median over
+    /// touches of `sqrt(trace Σ_i / 3)`; otherwise estimated from the fit.
     pub touch_sigma_mm: f64,
     /// Whether the touch σ was estimated from the fit.
     pub touch_sigma_estimated: bool,
@@ -251,12 +250,17 @@ pub fn calibrate(
         FixSpec::Auto => {
             let id = identify(start, data, &weights, threads)?;
             let free = id.free_columns();
-            let reasons: Vec<(String, String)> =
-                id.fixed.iter().map(|f| (f.name.clone(), f.reason.clone())).collect();
+            let reasons: Vec<(String, String)> = id
+                .fixed
+                .iter()
+                .map(|f| (f.name.clone(), f.reason.clone()))
+                .collect();
             (free, Some(id), reasons)
         }
         FixSpec::Columns(fixed) => {
-            let free: Vec<usize> = (0..start.param_count()).filter(|c| !fixed.contains(c)).collect();
+            let free: Vec<usize> = (0..start.param_count())
+                .filter(|c| !fixed.contains(c))
+                .collect();
             let reasons = fixed
                 .iter()
                 .filter_map(|&c| ParamId::from_column(start.joint_count(), c))
@@ -279,11 +283,13 @@ pub fn calibrate(
     let mut fit = levenberg_marquardt(start, data, &weights, &free, &options.lm)?;
     let (mut cost_evaluations, mut jacobian_evaluations) =
         (fit.cost_evaluations, fit.jacobian_evaluations);
-    let mut touch_sigma = median(&weights.touch.iter().map(|w| 1.0 / w).collect::<Vec<_>>());
+    let mut touch_sigma = weights.typical_touch_sigma();
     if !stated {
         // Unit weights: the touch residuals are mm. Estimate σ and refit so
         // that the lengths weigh right against the touches.
-        let touch_dof = touch_rows.saturating_sub(centre_coordinates + free.len()).max(1);
+        let touch_dof = touch_rows
+            .saturating_sub(centre_coordinates + free.len())
+            .max(1);
         touch_sigma = (fit.normal.touch_cost / touch_dof as f64).sqrt().max(1e-9);
         if length_rows > 0 {
             weights = Weights::new(&kernel, data, &options.noise, touch_sigma)?;
@@ -336,7 +342,10 @@ pub fn calibrate(
                 calibrated,
                 correction,
                 sigma: sigma.filter(|s| s.is_finite()),
-                fixed: reasons.iter().find(|(n, _)| *n == names[c]).map(|(_, r)| r.clone()),
+                fixed: reasons
+                    .iter()
+                    .find(|(n, _)| *n == names[c])
+                    .map(|(_, r)| r.clone()),
             }
         })
         .collect();
@@ -368,10 +377,4 @@ pub fn calibrate(
         identification,
         params,
     })
-}
-
-fn median(v: &[f64]) -> f64 {
-    let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s.get(s.len() / 2).copied().unwrap_or(f64::NAN)
 }

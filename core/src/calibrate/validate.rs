@@ -35,7 +35,8 @@ pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, Calibration
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
     k.positions(data.poses(), 0..data.len(), &mut xyz)?;
-    let ev = evaluate(data, &xyz).map_err(|e: MetricsError| CalibrationError::Folds(e.to_string()))?;
+    let ev =
+        evaluate(data, &xyz).map_err(|e: MetricsError| CalibrationError::Folds(e.to_string()))?;
     Ok(Figures {
         points: ev.points.len(),
         e_mean: ev.single_point_e.mean,
@@ -114,12 +115,17 @@ pub fn cross_validate(
         .map(|held| {
             let mut held = held.clone();
             held.sort_unstable();
-            let train: Vec<usize> = (0..data.points().len()).filter(|p| !held.contains(p)).collect();
+            let train: Vec<usize> = (0..data.points().len())
+                .filter(|p| !held.contains(p))
+                .collect();
             let train_data = data.subset(&train);
             let test_data = data.subset(&held);
             let fit = calibrate(start, &train_data, options)?;
             Ok(Fold {
-                held_out: held.iter().map(|&p| data.points()[p].label.clone()).collect(),
+                held_out: held
+                    .iter()
+                    .map(|&p| data.points()[p].label.clone())
+                    .collect(),
                 figures: before_after(start, &fit.params, &test_data)?,
                 successful: fit.solver.successful,
             })

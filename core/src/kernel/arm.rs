@@ -6,8 +6,8 @@ use std::ops::Range;
 
 use super::lanes::dispatch;
 use super::{
-    Chain, Dh, Jacobians, KernelError, PreparedParams, PreparedPoses,
-    for_each_lane_jacobian, jacobians_impl, positions_impl,
+    Chain, Dh, Jacobians, KernelError, PreparedParams, PreparedPoses, for_each_lane_jacobian,
+    jacobians_impl, positions_impl,
 };
 use crate::params::DhParams;
 
@@ -231,11 +231,7 @@ impl ArmKernel {
     /// k.joint_jacobian(&[0.0; 6], &mut jq).unwrap();
     /// assert!((jq[0][1] + 5.0).abs() < 1e-9); // joint 1 moves the probe along −y
     /// ```
-    pub fn joint_jacobian(
-        &self,
-        q: &[f64],
-        jac: &mut [[f64; 3]],
-    ) -> Result<[f64; 3], KernelError> {
+    pub fn joint_jacobian(&self, q: &[f64], jac: &mut [[f64; 3]]) -> Result<[f64; 3], KernelError> {
         self.apply(OnePose {
             q,
             jac: Some((jac, false)),

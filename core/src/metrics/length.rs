@@ -298,7 +298,14 @@ mod tests {
     fn reference_error_is_measured_minus_reference() {
         // centroids (0,0,0) and (3,4,0): distance 5; 5 − 5.5 = −0.5, either direction
         let labels = ["p", "p", "p", "q", "q", "q"];
-        let points = [[0.0; 3], [0.0; 3], [0.0; 3], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0]];
+        let points = [
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+            [3.0, 4.0, 0.0],
+            [3.0, 4.0, 0.0],
+            [3.0, 4.0, 0.0],
+        ];
         for r in [("p", "q", 5.5), ("q", "p", 5.5)] {
             let ev = eval(&labels, &points, &[r]).unwrap();
             let e = &ev.reference[0];
@@ -319,5 +326,4 @@ mod tests {
         assert!((s.two_rms - 2.0 * 0.0005f64.sqrt()).abs() < 1e-15);
         assert_eq!(ReferenceSummary::of(&[]), None);
     }
-
 }

@@ -88,8 +88,8 @@ pub use length::{
 pub use point::{PointStats, point_stats};
 pub use table::write_pair_table;
 
-pub use crate::dataset::MIN_TOUCHES;
 use crate::dataset::DataSet;
+pub use crate::dataset::MIN_TOUCHES;
 pub(crate) use crate::geometry::{centroid, distance};
 use serde::{Deserialize, Serialize};
 
@@ -470,7 +470,10 @@ pub(crate) mod tests {
             .into_iter()
             .map(|p| (p.a, p.b))
             .collect();
-        let pairs: Vec<(&str, &str)> = pairs.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
+        let pairs: Vec<(&str, &str)> = pairs
+            .iter()
+            .map(|(a, b)| (a.as_str(), b.as_str()))
+            .collect();
         assert_eq!(pairs, [("s3", "s1"), ("s3", "s2"), ("s1", "s2")]);
     }
 

@@ -317,7 +317,9 @@ mod tests {
             [0.0, 0.0, 100.001],
             [0.0, 0.0, 100.001],
         ];
-        let t = eval(&labels, &points, &[("p", "q", 100.0)]).unwrap().to_table();
+        let t = eval(&labels, &points, &[("p", "q", 100.0)])
+            .unwrap()
+            .to_table();
         for needle in [
             "Points",
             "Single-point",

@@ -74,9 +74,9 @@ pub use sockets::{
 pub use touches::{Touch, TouchPlan, find_touches, separation, within_limits};
 pub use truth::{PAPER_PROBE_ERROR, PAPER_TABLE_2, true_arm, wrap};
 
-use crate::io::{AngleUnit, Arm, Poses, ReferenceLength};
 use crate::dataset::DataSet;
 use crate::error::InputError;
+use crate::io::{AngleUnit, Arm, Poses, ReferenceLength};
 use crate::kernel::ArmKernel;
 
 /// The random streams of a campaign: each purpose draws from

@@ -53,7 +53,10 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 
 /// The true arm's probe centre at every recorded pose, against its socket.
 fn max_socket_error(c: &Campaign) -> f64 {
-    let p = ArmKernel::new(&c.true_arm.params).unwrap().positions_of(&c.poses.q).unwrap();
+    let p = ArmKernel::new(&c.true_arm.params)
+        .unwrap()
+        .positions_of(&c.poses.q)
+        .unwrap();
     p.iter()
         .zip(&c.touches)
         .map(|(p, t)| dist(*p, c.sockets[t.socket].1))
@@ -358,7 +361,10 @@ fn noise_has_the_stated_size() {
     let rms = (e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt();
     assert!((rms / 0.02 - 1.0).abs() < 0.2, "seating rms {rms} mm");
     // The true arm still reaches each seated point exactly.
-    let p = ArmKernel::new(&seat.true_arm.params).unwrap().positions_of(&seat.poses.q).unwrap();
+    let p = ArmKernel::new(&seat.true_arm.params)
+        .unwrap()
+        .positions_of(&seat.poses.q)
+        .unwrap();
     for (p, t) in p.iter().zip(&seat.touches) {
         assert!(dist(*p, t.point) <= 1e-9);
     }
