@@ -9,6 +9,8 @@ use aacmm::metrics::{Evaluation, MetricsError, ReferenceDistance, evaluate};
 use anyhow::{Context, Result, anyhow};
 use serde::Serialize;
 
+use crate::output::Stdout;
+
 /// Evaluate an arm on measured poses.
 #[derive(clap::Args)]
 pub struct Args {
@@ -62,13 +64,18 @@ pub fn run(args: Args) -> Result<()> {
         )
     })?;
 
-    println!(
-        "arm `{}` ({}) on {}",
-        arm.name,
-        args.input.arm.display(),
-        args.input.data.display()
-    );
-    print!("{}", evaluation.to_table());
+    // The JSON file is written even if stdout fails (e.g. `| head -1`).
+    let printed = (|| {
+        let mut out = Stdout::new();
+        out.print(format_args!(
+            "arm `{}` ({}) on {}\n",
+            arm.name,
+            args.input.arm.display(),
+            args.input.data.display()
+        ))?;
+        out.print(evaluation.to_table())?;
+        out.finish()
+    })();
     if let Some(path) = &args.json {
         let report = Report {
             arm: &arm.name,
@@ -82,7 +89,7 @@ pub fn run(args: Args) -> Result<()> {
         std::fs::write(path, text + "\n")
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
-    Ok(())
+    printed
 }
 
 /// Points a metrics error at the file and line it comes from.

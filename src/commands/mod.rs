@@ -11,11 +11,11 @@ use aacmm::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
 use aacmm::kernel::positions_dyn;
 use anyhow::{Context, Result};
 
+use crate::output::warn;
+
 /// Prints warnings to stderr, where they cannot be mistaken for output.
-pub fn report(warnings: &[Warning]) {
-    for w in warnings {
-        eprintln!("warning: {w}");
-    }
+pub fn report(warnings: &[Warning]) -> Result<()> {
+    warnings.iter().try_for_each(warn)
 }
 
 /// The arm and the poses it is applied to: the flags `points` and
@@ -39,7 +39,7 @@ impl ArmAndPoses {
         let arm = read_arm(&self.arm)?;
         let (poses, warnings) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
-        report(&warnings);
+        report(&warnings)?;
         Ok((arm, poses))
     }
 

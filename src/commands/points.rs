@@ -7,6 +7,8 @@ use std::path::PathBuf;
 use aacmm::io::write_points;
 use anyhow::{Context, Result};
 
+use crate::output::Stdout;
+
 /// Forward kinematics for every row of a poses file.
 #[derive(clap::Args)]
 pub struct Args {
@@ -30,8 +32,9 @@ pub fn run(args: Args) -> Result<()> {
                 .with_context(|| format!("{}: cannot write", path.display()))?;
         }
         None => {
-            let mut w = BufWriter::new(std::io::stdout().lock());
-            write_points(&mut w, &poses.labels, &xyz).and_then(|_| w.flush())?;
+            let mut out = Stdout::new();
+            out.write_with(|w| write_points(w, &poses.labels, &xyz))?;
+            out.finish()?;
         }
     }
     Ok(())

@@ -12,6 +12,8 @@ use aacmm::simulate::{
 use anyhow::{Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
 
+use crate::output::note;
+
 /// Default number of reference lengths (fewer if the sockets make fewer pairs).
 const DEFAULT_REFERENCE_LENGTHS: usize = 3;
 
@@ -142,23 +144,23 @@ pub fn run(args: Args) -> Result<()> {
     let written = write_campaign(&args.out, &campaign, &settings)?;
 
     let st = &campaign.stats;
-    eprintln!(
+    note(format_args!(
         "nominal arm `{}` ({}, {joints} joints)",
         nominal.name,
         args.arm.display()
-    );
-    eprintln!(
+    ))?;
+    note(format_args!(
         "true arm: {}",
         match &args.true_arm {
             Some(path) => format!("{} ({})", settings.errors.describe(), path.display()),
             None => settings.errors.describe(),
         }
-    );
+    ))?;
     let placed = match &args.sockets_file {
         Some(path) => format!("from {}", path.display()),
         None => "spread over the reachable volume".to_string(),
     };
-    eprintln!(
+    note(format_args!(
         "{count} socket{} {placed}, {} touches each: {} poses ({} IK starts: {} not converged, \
          {} outside joint limits, {} too close to an earlier touch; largest residual {:.1e} mm)",
         if count == 1 { "" } else { "s" },
@@ -169,8 +171,8 @@ pub fn run(args: Args) -> Result<()> {
         st.outside_limits,
         st.too_close,
         st.max_residual_mm
-    );
-    eprintln!(
+    ))?;
+    note(format_args!(
         "noise: encoders {}°, probe seating {} mm; {} reference lengths{}; seed {}",
         settings.encoder_noise_deg,
         settings.probe_noise_mm,
@@ -180,15 +182,15 @@ pub fn run(args: Args) -> Result<()> {
             .map(|u| format!(" (uncertainty {u} mm)"))
             .unwrap_or_default(),
         settings.seed
-    );
+    ))?;
     if campaign.lengths.is_empty() {
-        eprintln!(
+        note(
             "no reference lengths: lengths.csv not written (without one, the arm's scale cannot \
-             be calibrated)"
-        );
+             be calibrated)",
+        )?;
     }
     for path in &written {
-        eprintln!("wrote {}", path.display());
+        note(format_args!("wrote {}", path.display()))?;
     }
     Ok(())
 }

@@ -5,4 +5,5 @@ mod campaign;
 mod evaluate;
 mod points;
 mod simulate;
+mod streams;
 mod util;
