@@ -3,6 +3,7 @@
 
 mod commands;
 mod output;
+mod paths;
 
 use std::io::Write;
 use std::process::ExitCode;

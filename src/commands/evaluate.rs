@@ -10,6 +10,7 @@ use anyhow::{Context, Result, anyhow};
 use serde::Serialize;
 
 use crate::output::Stdout;
+use crate::paths::check_output_file;
 
 /// Evaluate an arm on measured poses.
 #[derive(clap::Args)]
@@ -36,6 +37,14 @@ struct Report<'a> {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(json) = &args.json {
+        let mut inputs = vec![
+            ("--arm", args.input.arm.as_path()),
+            ("--data", &args.input.data),
+        ];
+        inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
+        check_output_file("--json", json, &inputs)?;
+    }
     let (arm, poses) = args.input.read()?;
     let lengths = match &args.lengths {
         Some(path) => {

@@ -8,6 +8,7 @@ use aacmm::io::write_points;
 use anyhow::{Context, Result};
 
 use crate::output::Stdout;
+use crate::paths::check_output_file;
 
 /// Forward kinematics for every row of a poses file.
 #[derive(clap::Args)]
@@ -20,6 +21,13 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(out) = &args.out {
+        let inputs = [
+            ("--arm", args.input.arm.as_path()),
+            ("--data", &args.input.data),
+        ];
+        check_output_file("--out", out, &inputs)?;
+    }
     let (arm, poses) = args.input.read()?;
     let xyz = args.input.positions(&arm, &poses)?;
     match &args.out {

@@ -6,13 +6,15 @@ use std::path::PathBuf;
 
 use aacmm::io::read_arm;
 use aacmm::simulate::{
-    CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG,
-    ErrorModel, SimError, SocketPlan, pair_count, simulate, write_campaign,
+    CAMPAIGN_FILE, CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG,
+    DEFAULT_ZERO_SIGMA_DEG, ErrorModel, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, SimError,
+    SocketPlan, TRUE_ARM_FILE, pair_count, simulate, write_campaign,
 };
 use anyhow::{Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
 
 use crate::output::note;
+use crate::paths::{Input, check_output_dir};
 
 /// Default number of reference lengths (fewer if the sockets make fewer pairs).
 const DEFAULT_REFERENCE_LENGTHS: usize = 3;
@@ -100,6 +102,18 @@ enum Errors {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let mut inputs: Vec<Input> = vec![("--arm", &args.arm)];
+    inputs.extend(args.true_arm.as_deref().map(|p| ("--true", p)));
+    inputs.extend(args.sockets_file.as_deref().map(|p| ("--sockets-file", p)));
+    let outputs = [
+        POSES_FILE,
+        LENGTHS_FILE,
+        SOCKETS_FILE,
+        TRUE_ARM_FILE,
+        CAMPAIGN_FILE,
+    ];
+    check_output_dir("--out", &args.out, &outputs, &inputs)?;
+
     let nominal = read_arm(&args.arm)?;
     let joints = nominal.params.joint_count();
     let errors = match (&args.true_arm, args.errors) {

@@ -3,6 +3,7 @@
 
 mod campaign;
 mod evaluate;
+mod out_paths;
 mod points;
 mod simulate;
 mod streams;
