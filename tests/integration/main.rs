@@ -5,6 +5,7 @@ mod campaign;
 mod evaluate;
 mod out_paths;
 mod points;
+mod sim_messages;
 mod simulate;
 mod streams;
 mod util;

@@ -460,6 +460,15 @@ fn impossible_settings_are_errors() {
         err(&|s| s.poses_per_socket = usize::MAX)
             .starts_with("setting `poses_per_socket`: at most")
     );
+    // More touches than separated articulations exist: refused up front,
+    // with the reason.
+    let many = err(&|s| s.poses_per_socket = MAX_POSES_PER_SOCKET + 1);
+    assert!(
+        many.starts_with(&format!(
+            "setting `poses_per_socket`: at most {MAX_POSES_PER_SOCKET} touches per socket"
+        )) && many.contains("at least 20° in some joint"),
+        "{many}"
+    );
     assert!(
         err(&|s| s.errors = ErrorModel::random(-1.0, false))
             .starts_with("setting `errors.length_sigma_mm`")
