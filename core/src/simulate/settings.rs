@@ -2,11 +2,13 @@
 //! besides the nominal arm — and their validation.
 
 use std::collections::HashSet;
+use std::collections::hash_map::{Entry, HashMap};
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use super::SimError;
+use super::sockets::round_nm;
 use crate::io::{Arm, read_points};
 
 /// Default standard deviation of the random length errors (`a`, `d`, probe),
@@ -176,6 +178,33 @@ impl SocketPlan {
         Ok(SocketPlan::Given {
             file: Some(path.display().to_string()),
             points,
+        })
+    }
+
+    /// The first two given sockets at the same place (equal centres once
+    /// rounded to 1 nm, as simulated), by index: `(earlier, later)`.
+    ///
+    /// ```
+    /// use aacmm_core::simulate::{SocketPlan, SocketPoint};
+    /// let p = |label: &str, x| SocketPoint { label: label.into(), x, y: 0.0, z: 0.0 };
+    /// let plan = SocketPlan::Given { file: None, points: vec![p("A", 1.0), p("B", 2.0), p("C", 1.0)] };
+    /// assert_eq!(plan.same_place(), Some((0, 2)));
+    /// ```
+    pub fn same_place(&self) -> Option<(usize, usize)> {
+        let SocketPlan::Given { points, .. } = self else {
+            return None;
+        };
+        let mut seen: HashMap<[u64; 3], usize> = HashMap::with_capacity(points.len());
+        points.iter().enumerate().find_map(|(j, p)| {
+            // +0.0 makes -0 and 0 the same place.
+            let key = [p.x, p.y, p.z].map(|v| (round_nm(v) + 0.0).to_bits());
+            match seen.entry(key) {
+                Entry::Occupied(i) => Some((*i.get(), j)),
+                Entry::Vacant(v) => {
+                    v.insert(j);
+                    None
+                }
+            }
         })
     }
 
@@ -351,6 +380,17 @@ impl CampaignSettings {
                         format!("socket `{}` has a non-finite coordinate", p.label),
                     );
                 }
+            }
+            if let Some((i, j)) = self.sockets.same_place() {
+                let (a, b) = (&points[i], &points[j]);
+                return bad(
+                    "sockets.points",
+                    format!(
+                        "sockets `{}` and `{}` are at the same place ({}, {}, {} mm): every \
+                         socket must be a different point",
+                        a.label, b.label, b.x, b.y, b.z
+                    ),
+                );
             }
         }
         Ok(())
