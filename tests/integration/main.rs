@@ -1,6 +1,7 @@
 //! Integration tests of the whole toolkit, the CLI included: one binary, one
 //! module per command.
 
+mod arm_checks;
 mod campaign;
 mod evaluate;
 mod out_paths;
