@@ -2,7 +2,10 @@
 //! under `commands/`; this file only parses and dispatches.
 
 mod commands;
+mod output;
+mod paths;
 
+use std::io::Write;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -29,7 +32,10 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage(&e),
+    };
     let result = match cli.command {
         Command::Points(args) => commands::points::run(args),
         Command::Simulate(args) => commands::simulate::run(args),
@@ -37,9 +43,23 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+        Err(e) => ExitCode::from(output::exit_code(&e)),
+    }
+}
+
+/// Help, version or a usage error, written (and checked) like any output:
+/// help and version on stdout, usage errors on stderr.
+fn usage(e: &clap::Error) -> ExitCode {
+    let written = e.print().and_then(|()| {
+        if e.use_stderr() {
+            std::io::stderr().flush()
+        } else {
+            std::io::stdout().flush()
         }
+    });
+    match written {
+        Ok(()) => ExitCode::from(u8::try_from(e.exit_code()).unwrap_or(1)),
+        Err(_) if e.use_stderr() => ExitCode::FAILURE,
+        Err(w) => ExitCode::from(output::exit_code(&output::stdout_error(w))),
     }
 }

@@ -10,6 +10,9 @@ use aacmm_core::metrics::{Evaluation, PairLengthError, evaluate, pair_length_err
 use anyhow::{Context, Result};
 use serde::{Serialize, Serializer};
 
+use crate::output::Stdout;
+use crate::paths::check_output_file;
+
 /// Evaluate an arm on measured poses.
 #[derive(clap::Args)]
 pub struct Args {
@@ -60,6 +63,14 @@ impl Serialize for Pairs<'_> {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(json) = &args.json {
+        let mut inputs = vec![
+            ("--arm", args.input.arm.as_path()),
+            ("--data", &args.input.data),
+        ];
+        inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
+        check_output_file("--json", json, &inputs)?;
+    }
     let (arm, poses) = args.input.read()?;
     let kernel = args.input.kernel(&arm)?;
     let mut data = DataSet::from_poses(&poses, &args.input.data.display().to_string())?;
@@ -77,17 +88,23 @@ pub fn run(args: Args) -> Result<()> {
         evaluation: &evaluation,
     };
 
-    println!(
-        "arm `{}` ({}) on {}",
-        arm.name,
-        args.input.arm.display(),
-        args.input.data.display()
-    );
-    print!("{}", evaluation.to_table());
-    if args.pairs {
-        let mut out = std::io::stdout().lock();
-        aacmm_core::metrics::write_pair_table(&mut out, pairs.rows(), data.points())?;
-    }
+    // The JSON file is written even if stdout fails (e.g. `| head -1`).
+    let printed = (|| {
+        let mut out = Stdout::new();
+        out.print(format_args!(
+            "arm `{}` ({}) on {}\n",
+            arm.name,
+            args.input.arm.display(),
+            args.input.data.display()
+        ))?;
+        out.print(evaluation.to_table())?;
+        if args.pairs {
+            out.write_with(|w| {
+                aacmm_core::metrics::write_pair_table(w, pairs.rows(), data.points())
+            })?;
+        }
+        out.finish()
+    })();
     if let Some(path) = &args.json {
         let report = Report {
             arm: &arm.name,
@@ -107,5 +124,5 @@ pub fn run(args: Args) -> Result<()> {
             .and_then(|()| std::io::Write::flush(&mut w))
             .with_context(|| format!("{}: cannot write", path.display()))?;
     }
-    Ok(())
+    printed
 }

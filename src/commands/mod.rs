@@ -11,11 +11,65 @@ use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
 use aacmm_core::kernel::ArmKernel;
 use anyhow::{Context, Result};
 
+use crate::output::warn;
+
 /// Prints warnings to stderr, where they cannot be mistaken for output.
-pub fn report(warnings: &[Warning]) {
-    for w in warnings {
-        eprintln!("warning: {w}");
+pub fn report(warnings: &[Warning]) -> Result<()> {
+    warnings.iter().try_for_each(warn)
+}
+
+/// Readings this far (rad) beyond a limit are still within it: a limit and a
+/// reading written in different units may differ by rounding.
+const LIMIT_SLACK: f64 = 1e-12;
+
+/// One warning for the readings outside the arm's joint limits, if any: how
+/// many, and where the first one is (`file` is the poses file as named in
+/// messages, `unit` the unit its angles are written in).
+pub fn limit_warning(arm: &Arm, poses: &Poses, file: &str, unit: AngleUnit) -> Option<Warning> {
+    let mut count = 0;
+    let mut joints: Vec<usize> = Vec::new();
+    let mut first = None;
+    for (row, q) in poses.q.iter().enumerate() {
+        for (j, (&x, limit)) in q.iter().zip(&arm.limits).enumerate() {
+            let Some([lo, hi]) = *limit else { continue };
+            let (bound, sign) = if x < lo - LIMIT_SLACK {
+                (lo, "<")
+            } else if x > hi + LIMIT_SLACK {
+                (hi, ">")
+            } else {
+                continue;
+            };
+            count += 1;
+            if !joints.contains(&j) {
+                joints.push(j);
+            }
+            first.get_or_insert((row, j, x, sign, bound));
+        }
     }
+    let (row, j, x, sign, bound) = first?;
+    let show = |v: f64| match unit {
+        AngleUnit::Deg => format!("{}°", unit.from_internal_exact(v)),
+        AngleUnit::Rad => format!("{v} rad"),
+    };
+    let readings = if count == 1 { "reading" } else { "readings" };
+    let more = if joints.len() > 1 {
+        joints.sort_unstable();
+        let names: Vec<String> = joints.iter().map(|j| format!("q{}", j + 1)).collect();
+        format!(" in {}", names.join(", "))
+    } else {
+        String::new()
+    };
+    Some(Warning {
+        file: file.to_string(),
+        line: poses.lines.get(row).copied(),
+        field: Some(format!("q{}", j + 1)),
+        message: format!(
+            "{count} {readings}{more} outside the arm's joint limits (first: {} {sign} {}); \
+             check the arm file, the angle unit and the encoder zeros",
+            show(x),
+            show(bound)
+        ),
+    })
 }
 
 /// The arm and the poses it is applied to: the flags `points` and
@@ -34,12 +88,18 @@ pub struct ArmAndPoses {
 }
 
 impl ArmAndPoses {
-    /// Reads both files; the poses must have the arm's joint count.
+    /// Reads both files; the poses must have the arm's joint count. Warns
+    /// (stderr) about suspicious poses, readings outside the arm's joint
+    /// limits included.
     pub fn read(&self) -> Result<(Arm, Poses)> {
         let arm = read_arm(&self.arm)?;
         let (poses, warnings) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
-        report(&warnings);
+        report(&warnings)?;
+        let file = self.data.display().to_string();
+        if let Some(w) = limit_warning(&arm, &poses, &file, self.angle_unit) {
+            warn(w)?;
+        }
         Ok((arm, poses))
     }
 

@@ -7,6 +7,9 @@ use std::path::PathBuf;
 use aacmm_core::io::write_points;
 use anyhow::{Context, Result};
 
+use crate::output::Stdout;
+use crate::paths::check_output_file;
+
 /// Forward kinematics for every row of a poses file.
 #[derive(clap::Args)]
 pub struct Args {
@@ -18,6 +21,13 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(out) = &args.out {
+        let inputs = [
+            ("--arm", args.input.arm.as_path()),
+            ("--data", &args.input.data),
+        ];
+        check_output_file("--out", out, &inputs)?;
+    }
     let (arm, poses) = args.input.read()?;
     let xyz = args.input.positions(&arm, &poses)?;
     match &args.out {
@@ -30,8 +40,9 @@ pub fn run(args: Args) -> Result<()> {
                 .with_context(|| format!("{}: cannot write", path.display()))?;
         }
         None => {
-            let mut w = BufWriter::new(std::io::stdout().lock());
-            write_points(&mut w, &poses.labels, &xyz).and_then(|_| w.flush())?;
+            let mut out = Stdout::new();
+            out.write_with(|w| write_points(w, &poses.labels, &xyz))?;
+            out.finish()?;
         }
     }
     Ok(())

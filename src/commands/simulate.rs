@@ -2,15 +2,19 @@
 //! encoders would read, the true sockets, reference lengths and the true arm
 //! — written so that a calibration can be checked against the truth.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use aacmm_core::io::read_arm;
 use aacmm_core::simulate::{
-    CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG,
-    ErrorModel, SimError, SocketPlan, pair_count, simulate, write_campaign,
+    CAMPAIGN_FILE, CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG,
+    DEFAULT_ZERO_SIGMA_DEG, ErrorModel, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, SimError,
+    SocketPlan, TRUE_ARM_FILE, pair_count, simulate, write_campaign,
 };
 use anyhow::{Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
+
+use crate::output::note;
+use crate::paths::{Input, check_output_dir};
 
 /// Default number of reference lengths (fewer if the sockets make fewer pairs).
 const DEFAULT_REFERENCE_LENGTHS: usize = 3;
@@ -98,6 +102,18 @@ enum Errors {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let mut inputs: Vec<Input> = vec![("--arm", &args.arm)];
+    inputs.extend(args.true_arm.as_deref().map(|p| ("--true", p)));
+    inputs.extend(args.sockets_file.as_deref().map(|p| ("--sockets-file", p)));
+    let outputs = [
+        POSES_FILE,
+        LENGTHS_FILE,
+        SOCKETS_FILE,
+        TRUE_ARM_FILE,
+        CAMPAIGN_FILE,
+    ];
+    check_output_dir("--out", &args.out, &outputs, &inputs)?;
+
     let nominal = read_arm(&args.arm)?;
     let joints = nominal.params.joint_count();
     let errors = match (&args.true_arm, args.errors) {
@@ -121,11 +137,17 @@ pub fn run(args: Args) -> Result<()> {
         }
         (None, None) => bail!("give --true TRUE.toml or --errors paper|random|assembled"),
     };
-    let sockets = match (&args.sockets_file, args.sockets) {
-        (Some(path), _) => SocketPlan::from_file(path)?,
-        (None, Some(count)) => SocketPlan::Spread { count },
+    let (sockets, file) = match (&args.sockets_file, args.sockets) {
+        (Some(path), _) => {
+            let plan = SocketPlan::from_file(path)?;
+            let file = SocketsFile::new(path, &plan);
+            file.check_places(&plan)?;
+            (plan, Some(file))
+        }
+        (None, Some(count)) => (SocketPlan::Spread { count }, None),
         (None, None) => bail!("give --sockets K or --sockets-file FILE"),
     };
+    let located = |e| flag_error(e, file.as_ref());
     let count = sockets.count();
     let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses);
     settings.nominal_file = Some(args.arm.display().to_string());
@@ -136,29 +158,29 @@ pub fn run(args: Args) -> Result<()> {
         .reference_lengths
         .unwrap_or_else(|| DEFAULT_REFERENCE_LENGTHS.min(pair_count(count)));
     settings.length_uncertainty_mm = args.length_uncertainty;
-    settings.validate(joints).map_err(flag_error)?;
+    settings.validate(joints).map_err(located)?;
 
-    let campaign = simulate(&nominal, &settings).map_err(flag_error)?;
+    let campaign = simulate(&nominal, &settings).map_err(located)?;
     let written = write_campaign(&args.out, &campaign, &settings)?;
 
     let st = &campaign.stats;
-    eprintln!(
+    note(format_args!(
         "nominal arm `{}` ({}, {joints} joints)",
         nominal.name,
         args.arm.display()
-    );
-    eprintln!(
+    ))?;
+    note(format_args!(
         "true arm: {}",
         match &args.true_arm {
             Some(path) => format!("{} ({})", settings.errors.describe(), path.display()),
             None => settings.errors.describe(),
         }
-    );
+    ))?;
     let placed = match &args.sockets_file {
         Some(path) => format!("from {}", path.display()),
         None => "spread over the reachable volume".to_string(),
     };
-    eprintln!(
+    note(format_args!(
         "{count} socket{} {placed}, {} touches each: {} poses ({} IK starts: {} not converged, \
          {} outside joint limits, {} too close to an earlier touch; largest residual {:.1e} mm)",
         if count == 1 { "" } else { "s" },
@@ -169,8 +191,8 @@ pub fn run(args: Args) -> Result<()> {
         st.outside_limits,
         st.too_close,
         st.max_residual_mm
-    );
-    eprintln!(
+    ))?;
+    note(format_args!(
         "noise: encoders {}°, probe seating {} mm; {} reference lengths{}; seed {}",
         settings.encoder_noise_deg,
         settings.probe_noise_mm,
@@ -180,24 +202,112 @@ pub fn run(args: Args) -> Result<()> {
             .map(|u| format!(" (uncertainty {u} mm)"))
             .unwrap_or_default(),
         settings.seed
-    );
+    ))?;
     if campaign.lengths.is_empty() {
-        eprintln!(
+        note(
             "no reference lengths: lengths.csv not written (without one, the arm's scale cannot \
-             be calibrated)"
-        );
+             be calibrated)",
+        )?;
     }
     for path in &written {
-        eprintln!("wrote {}", path.display());
+        note(format_args!("wrote {}", path.display()))?;
     }
     Ok(())
 }
 
-/// A settings error in terms of the flag the user typed.
-fn flag_error(e: SimError) -> anyhow::Error {
+/// A `--sockets-file` and the line of each of its sockets, for messages.
+struct SocketsFile {
+    name: String,
+    /// The sockets' labels, in order.
+    labels: Vec<String>,
+    /// Per socket, its line in the file (empty if it could not be told).
+    lines: Vec<usize>,
+}
+
+impl SocketsFile {
+    fn new(path: &Path, plan: &SocketPlan) -> SocketsFile {
+        let text = std::fs::read_to_string(path).unwrap_or_default();
+        let mut lines = row_lines(&text);
+        if lines.len() != plan.count() {
+            lines.clear();
+        }
+        let labels = match plan {
+            SocketPlan::Given { points, .. } => points.iter().map(|p| p.label.clone()).collect(),
+            SocketPlan::Spread { .. } => Vec::new(),
+        };
+        SocketsFile {
+            name: path.display().to_string(),
+            labels,
+            lines,
+        }
+    }
+
+    /// `file:line` of socket `i`, or just the file.
+    fn at(&self, i: usize) -> String {
+        match self.lines.get(i) {
+            Some(line) => format!("{}:{line}", self.name),
+            None => self.name.clone(),
+        }
+    }
+
+    /// `file:line` of the socket labelled `label`.
+    fn at_label(&self, label: &str) -> String {
+        match self.labels.iter().position(|l| l == label) {
+            Some(i) => self.at(i),
+            None => self.name.clone(),
+        }
+    }
+
+    /// Two sockets at the same place would make a zero reference length and
+    /// touches that cannot tell them apart.
+    fn check_places(&self, plan: &SocketPlan) -> Result<()> {
+        let (Some((i, j)), SocketPlan::Given { points, .. }) = (plan.same_place(), plan) else {
+            return Ok(());
+        };
+        let (a, b) = (&points[i], &points[j]);
+        let first = match self.lines.get(i) {
+            Some(line) => format!("line {line}"),
+            None => "earlier".to_string(),
+        };
+        bail!(
+            "{}: field `point`: socket `{}` is at the same place as socket `{}` ({first}): \
+             ({}, {}, {}) mm; every socket must be a different point",
+            self.at(j),
+            b.label,
+            a.label,
+            b.x,
+            b.y,
+            b.z
+        )
+    }
+}
+
+/// The 1-based lines of the data rows of a CSV file with a header, as the
+/// io readers count them: blank lines and `#` comments are not rows.
+fn row_lines(text: &str) -> Vec<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let t = l.trim_start_matches('\u{feff}').trim();
+            !t.is_empty() && !t.starts_with('#')
+        })
+        .map(|(i, _)| i + 1)
+        .skip(1)
+        .collect()
+}
+
+/// A settings error in terms of the flag the user typed; a socket of a
+/// sockets file is named by its file and line.
+fn flag_error(e: SimError, file: Option<&SocketsFile>) -> anyhow::Error {
+    if let (SimError::TooFewPoses { socket, .. }, Some(f)) = (&e, file) {
+        return anyhow!("{}: {e}", f.at_label(socket));
+    }
     let SimError::Setting { name, message } = &e else {
         return e.into();
     };
+    if let (Some(f), "sockets.points") = (file, name.as_str()) {
+        return anyhow!("--sockets-file {}: {message}", f.name);
+    }
     let flag = match name.as_str() {
         "seed" => "--seed",
         "sockets" => "--sockets",

@@ -1,8 +1,12 @@
 //! Integration tests of the whole toolkit, the CLI included: one binary, one
 //! module per command.
 
+mod arm_checks;
 mod campaign;
 mod evaluate;
+mod out_paths;
 mod points;
+mod sim_messages;
 mod simulate;
+mod streams;
 mod util;

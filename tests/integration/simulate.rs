@@ -221,7 +221,7 @@ fn bad_input_is_a_clear_error() {
     ]);
     assert!(e.contains("cannot be used with"), "{e}");
     std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("sockets.csv");
+    let file = dir.join("my-sockets.csv");
     std::fs::write(&file, "point,x,y,z\nA,1,2,oops\n").unwrap();
     let f = file.to_str().unwrap();
     let e = fail(&[

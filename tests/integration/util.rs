@@ -6,10 +6,14 @@ use std::process::{Command, Output};
 
 /// Runs the built `aacmm` binary with `args`.
 pub fn aacmm(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_aacmm"))
-        .args(args)
-        .output()
-        .expect("the aacmm binary runs")
+    command(args).output().expect("the aacmm binary runs")
+}
+
+/// The built `aacmm` binary with `args`, to be given its streams and run.
+pub fn command(args: &[&str]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_aacmm"));
+    c.args(args);
+    c
 }
 
 /// A fresh, empty folder for one test.

@@ -19,8 +19,8 @@ use crate::dataset::Point;
 /// assert!(text.lines().nth(2).unwrap().starts_with("  a   bb  3"), "{text}");
 /// assert!(text.contains("5.0000"));
 /// ```
-pub fn write_pair_table(
-    w: &mut impl Write,
+pub fn write_pair_table<W: Write + ?Sized>(
+    w: &mut W,
     pairs: impl Iterator<Item = PairLengthError>,
     points: &[Point],
 ) -> io::Result<()> {

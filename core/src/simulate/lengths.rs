@@ -60,6 +60,17 @@ pub fn reference_lengths(
         .enumerate()
         .map(|(row, p)| {
             let (i, j, d) = pairs[p];
+            if d.is_nan() || d <= 0.0 {
+                // Not the noise: the sockets themselves coincide.
+                return Err(SimError::setting(
+                    "sockets.points",
+                    format!(
+                        "sockets `{}` and `{}` are at the same place: no reference length \
+                         between them",
+                        sockets[i].0, sockets[j].0
+                    ),
+                ));
+            }
             let distance = match uncertainty {
                 Some(u) => d + u * normal(rng),
                 None => d,

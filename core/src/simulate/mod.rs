@@ -65,7 +65,8 @@ pub use lengths::reference_lengths;
 pub use settings::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,
     DEFAULT_STARTS_PER_POSE, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG, ErrorModel,
-    MAX_POSES_PER_SOCKET, MAX_SOCKETS, MIN_POSES_PER_SOCKET, SocketPlan, SocketPoint, pair_count,
+    MAX_POSES_PER_SOCKET, MAX_SOCKETS, MAX_STARTS_PER_POSE, MIN_POSES_PER_SOCKET, SocketPlan,
+    SocketPoint, pair_count,
 };
 pub use sockets::{
     MIN_AXIS_DISTANCE, MIN_SOCKET_SEPARATION, REACH_BAND, SOCKET_CANDIDATES, place_sockets,

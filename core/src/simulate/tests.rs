@@ -398,6 +398,17 @@ fn reference_lengths_are_true_distances_of_distinct_long_pairs() {
     all.sort_by(|a, b| b.total_cmp(a));
     assert!(c.lengths.iter().all(|l| l.distance >= all[13]));
     assert!(c.lengths.windows(2).all(|w| w[0].distance >= w[1].distance));
+    // Coinciding sockets are the sockets' fault, not the uncertainty's.
+    let twins = vec![
+        ("A".to_string(), [1.0, 2.0, 3.0]),
+        ("B".into(), [1.0, 2.0, 3.0]),
+    ];
+    let e = reference_lengths(&twins, 1, None, &mut rng(1, streams::LENGTHS)).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("setting `sockets.points`: sockets `A` and `B` are at the same place"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -465,6 +476,34 @@ fn impossible_settings_are_errors() {
     assert!(
         err(&|s| s.poses_per_socket = usize::MAX)
             .starts_with("setting `poses_per_socket`: at most")
+    );
+    // More touches than separated articulations exist: refused up front,
+    // with the reason.
+    let many = err(&|s| s.poses_per_socket = MAX_POSES_PER_SOCKET + 1);
+    assert!(
+        many.starts_with(&format!(
+            "setting `poses_per_socket`: at most {MAX_POSES_PER_SOCKET} touches per socket"
+        )) && many.contains("at least 20° in some joint"),
+        "{many}"
+    );
+    // Two sockets at the same place, named by their labels.
+    let same = |s: &mut CampaignSettings| {
+        let p = |label: &str, x: f64| SocketPoint {
+            label: label.into(),
+            x,
+            y: 100.0,
+            z: 400.0,
+        };
+        s.sockets = SocketPlan::Given {
+            file: None,
+            points: vec![p("A", 300.0), p("B", 200.0), p("C", 300.0000000001)],
+        };
+        s.reference_lengths = 0;
+    };
+    assert_eq!(
+        err(&same),
+        "setting `sockets.points`: sockets `A` and `C` are at the same place \
+         (300.0000000001, 100, 400 mm): every socket must be a different point"
     );
     assert!(
         err(&|s| s.errors = ErrorModel::random(-1.0, false))

@@ -1,0 +1,110 @@
+//! `aacmm simulate` fails fast and blames the right input: too many touches
+//! per socket, two sockets at one place, a socket out of reach.
+
+use std::path::Path;
+use std::process::{Output, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::util::{assert_clean_error, command, example, stderr, temp_dir, write};
+
+/// Runs `aacmm simulate` on the paper's nominal arm with the paper's errors;
+/// a run longer than `limit` is killed and fails the test.
+fn simulate(extra: &[&str], out: &Path, limit: Duration) -> Output {
+    let arm = example("paper-table-1.toml");
+    let mut args = vec![
+        "simulate",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--errors",
+        "paper",
+        "--seed",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    let mut child = command(&args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("`aacmm simulate {extra:?}` still running after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A point the paper's arm reaches in many articulations (socket S1 of the
+/// shipped campaign).
+const REACHABLE: &str = "143.413053,63.660416,861.184613";
+
+#[test]
+fn too_many_poses_per_socket_fail_at_once_with_the_reason() {
+    let dir = temp_dir("sim-many-poses");
+    let o = simulate(
+        &["--sockets", "1", "--poses", "10000"],
+        &dir,
+        Duration::from_secs(10),
+    );
+    assert_clean_error(
+        &o,
+        &["--poses: at most 1000 touches per socket, got 10000", "20°"],
+    );
+    assert!(!dir.join("poses.csv").exists());
+    // The maximum itself is within reach.
+    let o = simulate(
+        &["--sockets", "1", "--poses", "1000"],
+        &dir,
+        Duration::from_secs(120),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("1000 poses"), "{}", stderr(&o));
+}
+
+#[test]
+fn sockets_at_the_same_place_are_blamed_on_the_sockets_file() {
+    let dir = temp_dir("sim-same-place");
+    let sockets = write(
+        &dir,
+        "sockets.csv",
+        &format!("point,x,y,z\n# twins\nA,{REACHABLE}\nB,{REACHABLE}\n"),
+    );
+    let o = simulate(
+        &["--sockets-file", &sockets, "--poses", "3"],
+        &dir.join("out"),
+        Duration::from_secs(60),
+    );
+    assert_clean_error(
+        &o,
+        &[&format!(
+            "{sockets}:4: field `point`: socket `B` is at the same place as socket `A` (line 3)"
+        )],
+    );
+    assert!(
+        !stderr(&o).contains("--length-uncertainty"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn an_unreachable_socket_names_the_file_and_line() {
+    let dir = temp_dir("sim-unreachable");
+    let sockets = write(
+        &dir,
+        "sockets.csv",
+        &format!("point,x,y,z\nA,{REACHABLE}\nFar,5000,0,0\n"),
+    );
+    let o = simulate(
+        &["--sockets-file", &sockets, "--poses", "3"],
+        &dir.join("out"),
+        Duration::from_secs(60),
+    );
+    assert_clean_error(&o, &[&format!("{sockets}:3: socket `Far`: found 0 of 3")]);
+}
