@@ -2,6 +2,7 @@
 //! under `commands/`; this file only parses and dispatches.
 
 mod commands;
+mod finite;
 mod output;
 mod paths;
 

@@ -6,9 +6,10 @@ use std::path::{Path, PathBuf};
 
 use aacmm::io::{Poses, ReferenceLength, check_lengths_against, read_lengths};
 use aacmm::metrics::{Evaluation, MetricsError, ReferenceDistance, evaluate};
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result, anyhow, bail};
 use serde::Serialize;
 
+use crate::finite::first_non_finite;
 use crate::output::Stdout;
 use crate::paths::check_output_file;
 
@@ -72,6 +73,14 @@ pub fn run(args: Args) -> Result<()> {
             &lengths,
         )
     })?;
+    if let Some(figure) = first_non_finite(&evaluation) {
+        bail!(
+            "{}: on {}, the figure `{figure}` overflows (not a finite number): the probe \
+             positions are too large for the statistics; check the arm's lengths and units",
+            args.input.arm.display(),
+            args.input.data.display()
+        );
+    }
 
     // The JSON file is written even if stdout fails (e.g. `| head -1`).
     let printed = (|| {

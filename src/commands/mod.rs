@@ -1,5 +1,5 @@
 //! The subcommands, and what they share: reading an arm and its poses with
-//! warnings printed, never dropped.
+//! warnings printed, never dropped, and probe positions that are numbers.
 
 pub mod evaluate;
 pub mod points;
@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use aacmm::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
 use aacmm::kernel::positions_dyn;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 
 use crate::output::warn;
 
@@ -103,10 +103,23 @@ impl ArmAndPoses {
         Ok((arm, poses))
     }
 
-    /// Probe positions of every pose (mm), in row order.
+    /// Probe positions of every pose (mm), in row order. A position that is
+    /// not a finite number is the arm's fault (the poses are finite when
+    /// read): the error names the arm file and the first such pose.
     pub fn positions(&self, arm: &Arm, poses: &Poses) -> Result<Vec<[f64; 3]>> {
-        positions_dyn(&arm.params, &poses.q)
-            .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))
+        let xyz = positions_dyn(&arm.params, &poses.q)
+            .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))?;
+        if let Some(row) = xyz.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+            bail!(
+                "{}: the arm's geometry gives a probe position that is not a finite number \
+                 ({:?} mm) for the pose at {}:{}; check the arm's lengths and units",
+                self.arm.display(),
+                xyz[row],
+                self.data.display(),
+                poses.lines.get(row).copied().unwrap_or(0)
+            );
+        }
+        Ok(xyz)
     }
 }
 
