@@ -80,8 +80,15 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut xyz = vec![[0.0; 3]; data.len()];
     kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
-    let evaluation =
-        evaluate(&data, &xyz).with_context(|| format!("arm {}", args.input.arm.display()))?;
+    args.input
+        .check_finite(&xyz, |i| data.source().touch(i).line)?;
+    let evaluation = evaluate(&data, &xyz).with_context(|| {
+        format!(
+            "{}: on {}",
+            args.input.arm.display(),
+            args.input.data.display()
+        )
+    })?;
     let pairs = Pairs {
         data: &data,
         xyz: &xyz,

@@ -1,5 +1,5 @@
 //! The subcommands, and what they share: reading an arm and its poses with
-//! warnings printed, never dropped.
+//! warnings printed, never dropped, and probe positions that are numbers.
 
 pub mod evaluate;
 pub mod points;
@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
 use aacmm_core::kernel::ArmKernel;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 
 use crate::output::warn;
 
@@ -110,9 +110,29 @@ impl ArmAndPoses {
 
     /// Probe positions of every pose (mm), in row order.
     pub fn positions(&self, arm: &Arm, poses: &Poses) -> Result<Vec<[f64; 3]>> {
-        self.kernel(arm)?
+        let xyz = self
+            .kernel(arm)?
             .positions_of(&poses.q)
-            .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))
+            .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))?;
+        self.check_finite(&xyz, |row| poses.lines.get(row).copied().unwrap_or(0))?;
+        Ok(xyz)
+    }
+
+    /// A position that is not a finite number is the arm's fault (the poses
+    /// are finite when read): the error names the arm file and the first
+    /// such pose (`line` maps an index of `xyz` to its line in the poses file).
+    pub fn check_finite(&self, xyz: &[[f64; 3]], line: impl Fn(usize) -> usize) -> Result<()> {
+        if let Some(i) = xyz.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+            bail!(
+                "{}: the arm's geometry gives a probe position that is not a finite number \
+                 ({:?} mm) for the pose at {}:{}; check the arm's lengths and units",
+                self.arm.display(),
+                xyz[i],
+                self.data.display(),
+                line(i)
+            );
+        }
+        Ok(())
     }
 }
 

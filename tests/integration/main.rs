@@ -1,5 +1,5 @@
 //! Integration tests of the whole toolkit, the CLI included: one binary, one
-//! module per command.
+//! module per command, and one per concern the commands share.
 
 mod arm_checks;
 mod campaign;

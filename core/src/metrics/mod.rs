@@ -123,7 +123,10 @@ pub enum MetricsError {
         touches: usize,
     },
     /// A figure overflowed (positions far too large to compare).
-    #[error("{figure} is not a finite number: the positions are too large to compare")]
+    #[error(
+        "the figure `{figure}` overflows (not a finite number): the probe positions are too \
+         large for the statistics; check the arm's lengths and units"
+    )]
     Overflow {
         /// The figure that overflowed.
         figure: String,
@@ -335,25 +338,28 @@ impl Evaluation {
                 figure: figure.to_string(),
             })
         };
-        for p in &self.points {
+        for (i, p) in self.points.iter().enumerate() {
             let values = [p.e, p.sigma, p.oa, p.delta_max, p.two_s];
             if !(values.iter().chain(&p.centroid).chain(&p.half_range)).all(|v| v.is_finite()) {
-                return overflow(&format!("a figure of point `{}`", p.label));
+                return overflow(&format!("points[{i}]"));
             }
         }
         let summaries = [
-            Some(self.single_point_e),
-            Some(self.single_point_delta_max),
-            Some(self.single_point_two_s),
-            self.pair_length_summary,
-            self.pair_length_abs_summary,
-            self.reference_summary.map(|r| r.error),
+            ("single_point_e", Some(self.single_point_e)),
+            ("single_point_delta_max", Some(self.single_point_delta_max)),
+            ("single_point_two_s", Some(self.single_point_two_s)),
+            ("pair_length_summary", self.pair_length_summary),
+            ("pair_length_abs_summary", self.pair_length_abs_summary),
+            ("reference_summary", self.reference_summary.map(|r| r.error)),
         ];
-        if !summaries.iter().flatten().all(Summary::is_finite) {
-            return overflow("a summary across points");
+        if let Some((name, _)) = summaries
+            .iter()
+            .find(|(_, s)| s.is_some_and(|s| !s.is_finite()))
+        {
+            return overflow(name);
         }
-        if let Some(r) = self.reference.iter().find(|r| !r.measured.is_finite()) {
-            return overflow(&format!("the distance `{}`–`{}`", r.a, r.b));
+        if let Some(i) = self.reference.iter().position(|r| !r.measured.is_finite()) {
+            return overflow(&format!("reference[{i}]"));
         }
         Ok(())
     }
@@ -570,7 +576,7 @@ pub(crate) mod tests {
         let points = [x(-big), x(big), x(big)];
         let e = eval(&labels, &points, &[]).unwrap_err();
         assert!(matches!(e, MetricsError::Overflow { .. }), "{e}");
-        assert!(e.to_string().contains("point `p`"), "{e}");
+        assert!(e.to_string().contains("`points[0]`"), "{e}");
     }
 
     #[test]
