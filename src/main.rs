@@ -29,6 +29,10 @@ enum Command {
     Simulate(commands::simulate::Args),
     /// Evaluate an arm on measured poses: single-point and length metrics.
     Evaluate(commands::evaluate::Args),
+    /// Identifiability: which parameters the data can determine, and which to fix.
+    Identify(commands::identify::Args),
+    /// Calibrate an arm from touches and reference lengths.
+    Calibrate(commands::calibrate::Args),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +44,8 @@ fn main() -> ExitCode {
         Command::Points(args) => commands::points::run(args),
         Command::Simulate(args) => commands::simulate::run(args),
         Command::Evaluate(args) => commands::evaluate::run(args),
+        Command::Identify(args) => commands::identify::run(args),
+        Command::Calibrate(args) => commands::calibrate::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -59,16 +59,17 @@ pub struct Rule {
     pub explanation: String,
 }
 
-/// A direction the data cannot see, as a relation between named parameters
-/// (scaled units: angles as mm of arc at the reach).
+/// A direction the data cannot see, as a relation between named parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Relation {
     /// Singular value of the direction (scaled), or 0 for a structural one.
     pub singular_value: f64,
-    /// `(parameter, coefficient)`, largest first; coefficients of a unit
-    /// vector in scaled units.
+    /// `(parameter, coefficient)`: moving the parameters by these amounts
+    /// (mm, rad) together moves no touch — for a null relation, the first
+    /// is the dependent parameter with coefficient 1; for a weak direction, a
+    /// unit vector in scaled units.
     pub terms: Vec<(String, f64)>,
-    /// Readable: `a6 - 1.000 Bx`.
+    /// Readable: `∂p/∂Bx = +1.0000 ∂p/∂a6`.
     pub text: String,
 }
 
@@ -128,7 +129,8 @@ pub struct Identification {
     pub condition_number: f64,
     /// Structural rules that fired.
     pub rules: Vec<Rule>,
-    /// Unidentifiable directions among the analysed parameters.
+    /// Unidentifiable directions among the analysed parameters, one per
+    /// redundant fixed parameter (the structural ones are in `rules`).
     pub null_relations: Vec<Relation>,
     /// Weak directions (singular value below 1e-3 of `s_max`, above the threshold).
     pub weak_relations: Vec<Relation>,
@@ -281,15 +283,6 @@ pub fn identify(
             terms,
         }
     };
-    let mut null_relations: Vec<Relation> = (rank..k)
-        .filter(|&i| {
-            // The projected scale direction is reported by its rule.
-            let v = eig.eigenvectors.column(order[i]);
-            scale_dir.as_ref().is_none_or(|s| s.dot(&v).abs() < 0.9)
-        })
-        .map(|i| relation(i, sv[i]))
-        .collect();
-    null_relations.sort_by(|a, b| a.text.cmp(&b.text));
     let weak_relations = (0..rank)
         .filter(|&i| sv[i] < 1e-3 * smax)
         .map(|i| relation(i, sv[i]))
@@ -320,6 +313,7 @@ pub fn identify(
     } else {
         Vec::new()
     };
+    let mut null_relations = Vec::new();
     let mut fixed: Vec<Fixed> = base
         .iter()
         .map(|&c| Fixed {
@@ -334,7 +328,10 @@ pub fn identify(
         let reason = if scale_fixed.contains(&c) {
             "scale: no reference length fixes the arm's size".to_string()
         } else {
-            format!("redundant: {}", dependence(&ns, &ids, &d, c, &free_cols))
+            let relation = dependence(&ns, &ids, &d, c, &free_cols);
+            let reason = format!("redundant: {}", relation.text);
+            null_relations.push(relation);
+            reason
         };
         fixed.push(Fixed {
             name: names[c].clone(),
@@ -443,15 +440,27 @@ fn pivoted_cholesky(
 }
 
 /// Column `c` as a combination of the free columns (regression on the
-/// scaled matrix), in words with physical coefficients: `theta6 acts like
-/// 100.0 mm/rad × a6` is the paper's `Δa6 = Bz·Δθ6`.
-fn dependence(ns: &DMatrix<f64>, ids: &[ParamId], d: &[f64], c: usize, free: &[usize]) -> String {
+/// scaled matrix): the null direction it makes, with the coefficients in
+/// physical units — `∂p/∂theta6 = 100.0000 mm/rad ∂p/∂a6` is the paper's
+/// `Δa6 = Bz·Δθ6`. The singular value is that of the unit direction in
+/// scaled units.
+fn dependence(ns: &DMatrix<f64>, ids: &[ParamId], d: &[f64], c: usize, free: &[usize]) -> Relation {
     let q = free.len();
     let nf = DMatrix::from_fn(q, q, |a, b| ns[(free[a], free[b])]);
     let rhs = nalgebra::DVector::from_fn(q, |a, _| ns[(free[a], c)]);
-    let Some(coef) = nf.cholesky().map(|ch| ch.solve(&rhs)) else {
-        return "depends on the free parameters".into();
-    };
+    let coef = nf
+        .cholesky()
+        .map(|ch| ch.solve(&rhs))
+        .unwrap_or_else(|| nalgebra::DVector::zeros(q));
+    // Scaled direction: e_c − Σ coef_a e_a.
+    let np = ns.nrows();
+    let mut v = nalgebra::DVector::zeros(np);
+    v[c] = 1.0;
+    for a in 0..q {
+        v[free[a]] -= coef[a];
+    }
+    let v = v.normalize();
+    let singular_value = (v.transpose() * ns * &v)[(0, 0)].max(0.0).sqrt();
     let mut terms: Vec<(usize, f64)> = (0..q)
         .filter(|&a| coef[a].abs() > 0.05)
         .map(|a| (a, coef[a]))
@@ -459,24 +468,35 @@ fn dependence(ns: &DMatrix<f64>, ids: &[ParamId], d: &[f64], c: usize, free: &[u
     terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
     terms.truncate(4);
     let unit = |id: ParamId| if id.kind.is_length() { "mm" } else { "rad" };
+    let physical: Vec<(String, f64)> = terms
+        .iter()
+        .map(|&(a, k)| (ids[free[a]].to_string(), k * d[free[a]] / d[c]))
+        .collect();
     let parts: Vec<String> = terms
         .iter()
-        .map(|&(a, k)| {
-            let (f, fixed) = (ids[free[a]], ids[c]);
-            // col_c·d_c = Σ k·col_a·d_a  ⇒  col_c = Σ (k·d_a/d_c)·col_a
-            let physical = k * d[free[a]] / d[c];
-            let ratio = if unit(f) == unit(fixed) {
+        .zip(&physical)
+        .map(|(&(a, _), (name, k))| {
+            let f = ids[free[a]];
+            let ratio = if unit(f) == unit(ids[c]) {
                 String::new()
             } else {
-                format!(" {}/{}", unit(f), unit(fixed))
+                format!(" {}/{}", unit(f), unit(ids[c]))
             };
-            format!("{physical:.4}{ratio} × {f}")
+            format!("{k:+.4}{ratio} ∂p/∂{name}")
         })
         .collect();
-    if parts.is_empty() {
-        return format!("{} moves no touch relative to the others", ids[c]);
+    let text = if parts.is_empty() {
+        format!("∂p/∂{} moves no touch relative to the others", ids[c])
+    } else {
+        format!("∂p/∂{} = {}", ids[c], parts.join(" "))
+    };
+    let mut all = vec![(ids[c].to_string(), 1.0)];
+    all.extend(physical.into_iter().map(|(n, k)| (n, -k)));
+    Relation {
+        singular_value,
+        terms: all,
+        text,
     }
-    format!("{} acts like {}", ids[c], parts.join(" + "))
 }
 
 fn relation_text(terms: &[(String, f64)]) -> String {

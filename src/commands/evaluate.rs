@@ -122,14 +122,7 @@ pub fn run(args: Args) -> Result<()> {
             evaluation: &evaluation,
             pair_length: args.pairs.then_some(pairs),
         };
-        let file = std::fs::File::create(path)
-            .with_context(|| format!("{}: cannot create", path.display()))?;
-        let mut w = std::io::BufWriter::new(file);
-        serde_json::to_writer_pretty(&mut w, &report)
-            .map_err(std::io::Error::from)
-            .and_then(|()| std::io::Write::write_all(&mut w, b"\n"))
-            .and_then(|()| std::io::Write::flush(&mut w))
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+        super::write_json(path, &report)?;
     }
     printed
 }

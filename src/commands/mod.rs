@@ -1,7 +1,10 @@
 //! The subcommands, and what they share: reading an arm and its poses with
 //! warnings printed, never dropped, and probe positions that are numbers.
 
+pub mod calibrate;
 pub mod evaluate;
+pub mod fit;
+pub mod identify;
 pub mod points;
 pub mod simulate;
 
@@ -140,4 +143,17 @@ impl ArmAndPoses {
 pub fn angle_unit(s: &str) -> Result<AngleUnit, String> {
     s.parse()
         .map_err(|e: aacmm_core::io::UnknownUnit| e.to_string())
+}
+
+/// Writes `value` as pretty JSON (and a final newline) to `path`.
+pub fn write_json(path: &std::path::Path, value: &impl serde::Serialize) -> Result<()> {
+    use std::io::Write;
+    let file = std::fs::File::create(path)
+        .with_context(|| format!("{}: cannot create", path.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    serde_json::to_writer_pretty(&mut w, value)
+        .map_err(std::io::Error::from)
+        .and_then(|()| w.write_all(b"\n"))
+        .and_then(|()| w.flush())
+        .with_context(|| format!("{}: cannot write", path.display()))
 }

@@ -1,0 +1,154 @@
+//! `aacmm identify`: which parameters the data can determine, how well, and
+//! which to fix (see `aacmm_core::identify` for the method).
+
+use std::path::PathBuf;
+
+use aacmm_core::identify::{Identification, identify};
+use aacmm_core::residuals::Weights;
+use anyhow::{Context, Result};
+use serde::Serialize;
+
+use super::fit::FitInput;
+use crate::output::Stdout;
+use crate::paths::check_output_file;
+
+/// Identifiability of the arm's parameters from the data.
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    fit: FitInput,
+    /// Also write everything as JSON.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    arm: &'a str,
+    arm_file: String,
+    data_file: String,
+    lengths_file: Option<String>,
+    touches: usize,
+    points: usize,
+    reference_lengths: usize,
+    noise: String,
+    identification: &'a Identification,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if let Some(json) = &args.json {
+        check_output_file("--json", json, &args.fit.paths())?;
+    }
+    let noise = args.fit.noise()?;
+    let (arm, data) = args.fit.read()?;
+    let kernel = args.fit.input.kernel(&arm)?;
+    // Without stated noise the singular values are in units of a 0.01 mm touch.
+    let assumed = !noise.stated();
+    let weights = Weights::new(&kernel, &data, &noise, 0.01)?;
+    let id = identify(&arm.params, &data, &weights, threads())
+        .with_context(|| args.fit.input.arm.display().to_string())?;
+    let noise_text = if assumed {
+        "not stated: σ as for a 0.01 mm touch".to_string()
+    } else {
+        format!(
+            "encoders {}°, probe {} mm",
+            args.fit.encoder_noise.unwrap_or(0.0),
+            args.fit.probe_noise.unwrap_or(0.0)
+        )
+    };
+    let mut out = Stdout::new();
+    out.print(format_args!(
+        "arm `{}` ({}) on {}: {} touches of {} points, {} reference lengths\nnoise: {noise_text}\n\n",
+        arm.name,
+        args.fit.input.arm.display(),
+        args.fit.input.data.display(),
+        data.len(),
+        data.points().len(),
+        data.references().len()
+    ))?;
+    out.print(table(&id))?;
+    out.finish()?;
+    if let Some(path) = &args.json {
+        let report = Report {
+            arm: &arm.name,
+            arm_file: args.fit.input.arm.display().to_string(),
+            data_file: args.fit.input.data.display().to_string(),
+            lengths_file: args.fit.lengths.as_ref().map(|p| p.display().to_string()),
+            touches: data.len(),
+            points: data.points().len(),
+            reference_lengths: data.references().len(),
+            noise: noise_text,
+            identification: &id,
+        };
+        super::write_json(path, &report)?;
+    }
+    Ok(())
+}
+
+/// Worker threads for the normal equations (results do not depend on it).
+pub fn threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+fn table(id: &Identification) -> String {
+    let mut s = String::new();
+    let sv: Vec<String> = id
+        .singular_values
+        .iter()
+        .map(|v| format!("{v:.3e}"))
+        .collect();
+    s += &format!("Scaling: {}\n", id.scaling);
+    s += &format!(
+        "Singular values of the scaled Jacobian (all {} columns):\n",
+        sv.len()
+    );
+    for chunk in sv.chunks(9) {
+        s += &format!("  {}\n", chunk.join("  "));
+    }
+    s += "\nStructural rules (hold whatever the noise does to the singular values):\n";
+    for r in &id.rules {
+        s += &format!("  {}: {}\n", r.name, r.explanation);
+    }
+    s += &format!(
+        "\nRank: {} identifiable combinations (threshold {:.2e} = 1e-7 × s_max, after the rules); \
+         condition number of the identifiable part {:.1}\n",
+        id.rank, id.threshold, id.condition_number
+    );
+    if !id.null_relations.is_empty() {
+        s += "\nUnidentifiable directions (one per redundant parameter; s = singular value of the scaled direction):\n";
+        for r in &id.null_relations {
+            s += &format!("  s = {:.1e}  {}\n", r.singular_value, r.text);
+        }
+    }
+    if !id.weak_relations.is_empty() {
+        s += "\nWeak directions (s < 1e-3 s_max):\n";
+        for r in &id.weak_relations {
+            s += &format!("  s = {:.1e}  {}\n", r.singular_value, r.text);
+        }
+    }
+    let names: Vec<&str> = id.fixed.iter().map(|f| f.name.as_str()).collect();
+    s += &format!(
+        "\nRecommended fixed set (--fix auto): {}\n",
+        names.join(",")
+    );
+    let w = id.fixed.iter().map(|f| f.name.len()).max().unwrap_or(0);
+    for f in &id.fixed {
+        s += &format!("  {:<w$}  {}\n", f.name, f.reason);
+    }
+    s += "\nFree parameters at the stated noise:\n  parameter  unit   predicted sigma  identifiability\n";
+    for f in &id.free {
+        s += &format!(
+            "  {:<9}  {:<4}  {:>15.3e}  {:>15.4}\n",
+            f.name, f.unit, f.sigma, f.identifiability
+        );
+    }
+    if id.correlations.is_empty() {
+        s += "\nNo pair of free parameters correlates with |rho| > 0.9.\n";
+    } else {
+        s += "\nCorrelations |rho| > 0.9:\n";
+        for c in &id.correlations {
+            s += &format!("  {:<8} {:<8} {:+.4}\n", c.a, c.b, c.rho);
+        }
+    }
+    s
+}
