@@ -1,0 +1,220 @@
+//! `aacmm identify` and `aacmm calibrate` on the shipped example campaign.
+
+use crate::util::{aacmm, assert_clean_error, example, stdout, temp_dir};
+
+fn campaign(file: &str) -> String {
+    example("paper-campaign").join(file).display().to_string()
+}
+
+fn arm() -> String {
+    example("paper-table-1.toml").display().to_string()
+}
+
+#[test]
+fn identify_reports_rank_rules_and_the_fixed_set() {
+    let dir = temp_dir("identify");
+    let json = dir.join("id.json");
+    let (arm, poses, lengths) = (arm(), campaign("poses.csv"), campaign("lengths.csv"));
+    let noise = ["--encoder-noise", "0.005", "--probe-noise", "0.01"];
+    let mut args = vec![
+        "identify",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--lengths",
+        &lengths,
+    ];
+    args.extend(noise);
+    args.extend(["--json", json.to_str().unwrap()]);
+    let o = aacmm(&args);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("Rank: 21 identifiable"), "{text}");
+    assert!(
+        text.contains("--fix auto): d1,alpha6,theta1,theta6,Bx,By"),
+        "{text}"
+    );
+    assert!(
+        text.contains("∂p/∂theta6 = +100.0000 mm/rad ∂p/∂a6"),
+        "{text}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(report["identification"]["rank"], 21);
+    assert_eq!(
+        report["identification"]["free"].as_array().unwrap().len(),
+        21
+    );
+
+    let mut bare = vec!["identify", "--arm", &arm, "--data", &poses];
+    bare.extend(noise);
+    let text = stdout(&aacmm(&bare));
+    assert!(text.contains("Rank: 20 identifiable"), "{text}");
+    assert!(text.contains("scale: no reference length"), "{text}");
+}
+
+#[test]
+fn calibrate_writes_an_arm_every_command_loads_and_the_same_bytes_twice() {
+    let dir = temp_dir("calibrate");
+    let (arm, poses, lengths) = (arm(), campaign("poses.csv"), campaign("lengths.csv"));
+    let run = |out: &str| {
+        let out = dir.join(out);
+        let o = aacmm(&[
+            "calibrate",
+            "--arm",
+            &arm,
+            "--data",
+            &poses,
+            "--lengths",
+            &lengths,
+            "--encoder-noise",
+            "0.005",
+            "--probe-noise",
+            "0.01",
+            "--cross-validate",
+            "3",
+            "--seed",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", crate::util::stderr(&o));
+        (stdout(&o), out)
+    };
+    let (text, first) = run("a");
+    let (_, second) = run("b");
+    for f in ["calibrated.toml", "calibration.json"] {
+        assert_eq!(
+            std::fs::read(first.join(f)).unwrap(),
+            std::fs::read(second.join(f)).unwrap(),
+            "{f} differs between runs"
+        );
+    }
+    assert!(text.contains("degrees of freedom"), "{text}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(first.join("calibration.json")).unwrap())
+            .unwrap();
+    let cal = &report["calibration"];
+    assert_eq!(cal["solver"]["successful"], true);
+    let dof = &cal["dof"];
+    // m − p: 300 touch rows + 5 lengths − (21 parameters + 30 centre coordinates)
+    assert_eq!(dof["degrees_of_freedom"], 254);
+    let sigma0 = dof["sigma0"].as_f64().unwrap();
+    assert!((0.8..1.25).contains(&sigma0), "{sigma0}");
+    // The fit beats the nominal arm by far on the fitted and held-out points.
+    let v = &report["validation"];
+    let after = v["fitted"]["after"]["e_mean"].as_f64().unwrap();
+    let before = v["fitted"]["before"]["e_mean"].as_f64().unwrap();
+    assert!(after < before / 30.0, "{before} -> {after}");
+    for fold in v["cross_validation"]["folds"].as_array().unwrap() {
+        assert!(
+            fold["figures"]["after"]["e_mean"].as_f64().unwrap() < 0.1,
+            "{fold}"
+        );
+    }
+    // The calibrated arm is an ordinary arm file, and evaluate agrees with
+    // the report on the fitted data.
+    let calibrated = first.join("calibrated.toml");
+    let json = dir.join("ev.json");
+    let o = aacmm(&[
+        "evaluate",
+        "--arm",
+        calibrated.to_str().unwrap(),
+        "--data",
+        &poses,
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let ev: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let e = ev["evaluation"]["single_point_e"]["mean"].as_f64().unwrap();
+    assert!((e - after).abs() < 1e-9, "{e} vs {after}");
+}
+
+#[test]
+fn calibrate_validates_on_held_out_files() {
+    let dir = temp_dir("calibrate-validate");
+    let fresh = dir.join("fresh");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm(),
+        "--true",
+        &campaign("true_arm.toml"),
+        "--sockets",
+        "6",
+        "--poses",
+        "8",
+        "--seed",
+        "9",
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--reference-lengths",
+        "3",
+        "--out",
+        fresh.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let out = dir.join("out");
+    let (held, held_lengths) = (fresh.join("poses.csv"), fresh.join("lengths.csv"));
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm(),
+        "--data",
+        &campaign("poses.csv"),
+        "--lengths",
+        &campaign("lengths.csv"),
+        "--validate",
+        held.to_str().unwrap(),
+        "--validate-lengths",
+        held_lengths.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    assert!(stdout(&o).contains("held out, after"));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap())
+            .unwrap();
+    let h = &report["validation"]["held_out"]["figures"];
+    assert!(h["after"]["e_mean"].as_f64().unwrap() < 0.1, "{h}");
+    assert!(h["after"]["length_rms"].as_f64().unwrap() < 0.05, "{h}");
+}
+
+#[test]
+fn calibrate_errors_are_clear() {
+    let dir = temp_dir("calibrate-bad");
+    let out = dir.join("out");
+    let (arm, poses) = (arm(), campaign("poses.csv"));
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--fix",
+        "theta1,gamma2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_error(&o, &["--fix", "unknown parameter `gamma2`"]);
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--cross-validate",
+        "50",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_error(&o, &["--cross-validate 50"]);
+    let o = aacmm(&["calibrate", "--arm", &arm, "--data", &poses, "--out", &arm]);
+    assert_clean_error(&o, &["--out"]);
+}
