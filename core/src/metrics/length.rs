@@ -89,7 +89,7 @@ pub fn pair_length_error(
 /// Eq. 19 of two touch lists with their centroids: `(n, |x̄_a − x̄_b|,
 /// d_error, d_error_abs)`. Allocates nothing: it runs for every pair.
 #[inline]
-pub(super) fn eq19(
+pub(crate) fn eq19(
     touches_a: &[[f64; 3]],
     touches_b: &[[f64; 3]],
     ca: &[f64; 3],

@@ -184,8 +184,52 @@ impl Summary {
     }
 }
 
-/// A [`Summary`] accumulated one value at a time in constant memory
-/// (Welford's update), for lists too long to hold: eq. 19 over all pairs.
+/// Sums of values shifted by the first one: no division per value, so the
+/// hot loop over all pairs is not bound by a dependent division (Welford's
+/// update is); turned into a [`Running`] per chunk.
+#[derive(Clone, Copy, Debug, Default)]
+struct Shifted {
+    count: usize,
+    shift: f64,
+    sum: f64,
+    sum_sq: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Shifted {
+    #[inline(always)]
+    fn push(&mut self, v: f64) {
+        if self.count == 0 {
+            (self.shift, self.min, self.max) = (v, v, v);
+        }
+        self.count += 1;
+        let d = v - self.shift;
+        self.sum += d;
+        self.sum_sq += d * d;
+        self.min = self.min.min(v);
+        self.max = self.max.max(v);
+    }
+
+    fn running(&self) -> Running {
+        if self.count == 0 {
+            return Running::default();
+        }
+        let n = self.count as f64;
+        let mean_d = self.sum / n;
+        Running {
+            count: self.count,
+            min: self.min,
+            max: self.max,
+            mean: self.shift + mean_d,
+            m2: (self.sum_sq - self.sum * mean_d).max(0.0),
+        }
+    }
+}
+
+/// A [`Summary`] of a list too long to hold (eq. 19 over all pairs), as
+/// count, extremes, mean and the sum of squared deviations, so that the
+/// summaries of parts merge exactly.
 #[derive(Clone, Copy, Debug, Default)]
 struct Running {
     count: usize,
@@ -196,16 +240,23 @@ struct Running {
 }
 
 impl Running {
-    fn push(&mut self, v: f64) {
-        if self.count == 0 {
-            (self.min, self.max) = (v, v);
+    /// The summary of both lists together (Chan et al.'s pairwise update).
+    fn merge(&self, o: &Running) -> Running {
+        if o.count == 0 {
+            return *self;
         }
-        self.count += 1;
-        self.min = self.min.min(v);
-        self.max = self.max.max(v);
-        let d = v - self.mean;
-        self.mean += d / self.count as f64;
-        self.m2 += d * (v - self.mean);
+        if self.count == 0 {
+            return *o;
+        }
+        let n = (self.count + o.count) as f64;
+        let d = o.mean - self.mean;
+        Running {
+            count: self.count + o.count,
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+            mean: self.mean + d * o.count as f64 / n,
+            m2: self.m2 + o.m2 + d * d * self.count as f64 * o.count as f64 / n,
+        }
     }
 
     fn summary(&self) -> Option<Summary> {
@@ -290,11 +341,7 @@ pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsE
         .iter()
         .map(|p| point_stats(&p.label, &xyz[p.touches.clone()]))
         .collect::<Result<Vec<_>, _>>()?;
-    let (mut signed, mut abs) = (Running::default(), Running::default());
-    for pair in pair_length_errors(data, xyz, &stats) {
-        signed.push(pair.d_error);
-        abs.push(pair.d_error_abs);
-    }
+    let (signed, abs) = pair_summaries(data, xyz, &stats);
     let reference: Vec<ReferenceError> = data
         .references()
         .iter()
@@ -363,6 +410,42 @@ impl Evaluation {
         }
         Ok(())
     }
+}
+
+/// Eq. 19 summarised over all pairs `i < j`, in constant memory. Rows `i`
+/// are split into chunks of fixed size that run on up to two threads; the
+/// chunks' summaries are merged in row order, so the result does not depend
+/// on the threads.
+fn pair_summaries(data: &DataSet, xyz: &[[f64; 3]], stats: &[PointStats]) -> (Running, Running) {
+    const ROWS_PER_CHUNK: usize = 64;
+    let points = data.points();
+    let rows = |range: std::ops::Range<usize>| {
+        let (mut signed, mut abs) = (Shifted::default(), Shifted::default());
+        for i in range {
+            let ta = &xyz[points[i].touches.clone()];
+            for j in i + 1..points.len() {
+                let (_, _, d, d_abs) = length::eq19(
+                    ta,
+                    &xyz[points[j].touches.clone()],
+                    &stats[i].centroid,
+                    &stats[j].centroid,
+                );
+                signed.push(d);
+                abs.push(d_abs);
+            }
+        }
+        (signed.running(), abs.running())
+    };
+    let chunks: Vec<std::ops::Range<usize>> = (0..points.len())
+        .step_by(ROWS_PER_CHUNK)
+        .map(|s| s..(s + ROWS_PER_CHUNK).min(points.len()))
+        .collect();
+    let threads = if points.len() > 2 * ROWS_PER_CHUNK { 2 } else { 1 };
+    let parts = crate::residuals::parallel_map(&chunks, threads, |r| rows(r.clone()));
+    parts.into_iter().fold(
+        (Running::default(), Running::default()),
+        |(s, a), (ps, pa)| (s.merge(&ps), a.merge(&pa)),
+    )
 }
 
 fn is_finite(p: &[f64; 3]) -> bool {
