@@ -277,7 +277,7 @@ pub fn normal_equations(
         .step_by(POINTS_PER_CHUNK)
         .map(|s| s..(s + POINTS_PER_CHUNK).min(np))
         .collect();
-    let need_mean = data.references().len() > 0;
+    let need_mean = !data.references().is_empty();
     let run = |c: &Range<usize>| chunk(kernel, data, weights, free, c.clone(), need_mean);
     let partials: Vec<Result<Partial, KernelError>> = if threads <= 1 || chunks.len() < 4 {
         chunks.iter().map(run).collect()
@@ -352,8 +352,8 @@ impl PointSums {
         let p = free.len();
         let d: [f64; 3] = std::array::from_fn(|k| pos[k] - self.origin[k]);
         let ad = sym_mul(a, &d);
-        for k in 0..3 {
-            self.ap[k] += ad[k];
+        for (s, v) in self.ap.iter_mut().zip(&ad) {
+            *s += v;
         }
         self.pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
         for (s, v) in self.s.iter_mut().zip(a) {
@@ -491,8 +491,8 @@ pub fn cost(
             let a = &weights.touch[i];
             let d: [f64; 3] = std::array::from_fn(|k| xyz[i][k] - origin[k]);
             let ad = sym_mul(a, &d);
-            for k in 0..3 {
-                ap[k] += ad[k];
+            for (s, v) in ap.iter_mut().zip(&ad) {
+                *s += v;
             }
             pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
             for (s, v) in sum.iter_mut().zip(a) {

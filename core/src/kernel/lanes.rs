@@ -82,7 +82,10 @@ impl Neg for Lanes {
 #[cfg(target_arch = "x86_64")]
 pub(crate) use avx::{Avx, with_avx2};
 
+// The only unsafe code of the toolkit: AVX intrinsics, reached only after
+// the CPU was checked (`dispatch!`).
 #[cfg(target_arch = "x86_64")]
+#[allow(unsafe_code)]
 mod avx {
     use super::{Batch, LANES};
     use std::arch::x86_64::*;
@@ -174,6 +177,7 @@ macro_rules! dispatch {
         #[cfg(target_arch = "x86_64")]
         let out = if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: AVX2 was just detected.
+            #[allow(unsafe_code)]
             unsafe {
                 $crate::kernel::lanes::with_avx2(
                     #[inline(always)]

@@ -45,7 +45,7 @@
 //! the distance of the means); with unequal counts it can be. Summary over all
 //! pairs: the paper's Fig. 7 numbers.
 //!
-//! # Per reference length — [`reference_error`]
+//! # Per reference length — [`ReferenceError`]
 //!
 //! For a calibrated distance `L` between points `a` and `b` (ball bar, cone
 //! plate, step gauge): `error = |x̄_a − x̄_b| − L`, as in ISO 10360-12 `E_Uni`
@@ -440,7 +440,11 @@ fn pair_summaries(data: &DataSet, xyz: &[[f64; 3]], stats: &[PointStats]) -> (Ru
         .step_by(ROWS_PER_CHUNK)
         .map(|s| s..(s + ROWS_PER_CHUNK).min(points.len()))
         .collect();
-    let threads = if points.len() > 2 * ROWS_PER_CHUNK { 2 } else { 1 };
+    let threads = if points.len() > 2 * ROWS_PER_CHUNK {
+        2
+    } else {
+        1
+    };
     let parts = crate::residuals::parallel_map(&chunks, threads, |r| rows(r.clone()));
     parts.into_iter().fold(
         (Running::default(), Running::default()),
@@ -609,6 +613,32 @@ pub(crate) mod tests {
             assert!((streamed.mean - direct.mean).abs() < 1e-12);
             assert!((streamed.std - direct.std).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn pair_summary_of_many_chunks_equals_the_summary_of_the_rows() {
+        // 200 points: four chunks of rows on two threads, merged.
+        let labels: Vec<String> = (0..600).map(|r| format!("s{}", r % 200)).collect();
+        let points: Vec<[f64; 3]> = (0..600)
+            .map(|r| {
+                [
+                    (r as f64 * 0.37).sin() * 400.0,
+                    (r as f64 * 0.11).cos() * 300.0,
+                    r as f64,
+                ]
+            })
+            .collect();
+        let ev = eval(&labels, &points, &[]).unwrap();
+        let rows = pairs(&labels, &points);
+        assert_eq!(rows.len(), 200 * 199 / 2);
+        let direct = Summary::of(&rows.iter().map(|p| p.d_error_abs).collect::<Vec<_>>()).unwrap();
+        let streamed = ev.pair_length_abs_summary.unwrap();
+        assert_eq!(
+            (streamed.count, streamed.min, streamed.max),
+            (direct.count, direct.min, direct.max)
+        );
+        assert!((streamed.mean - direct.mean).abs() < 1e-9 * direct.mean.abs());
+        assert!((streamed.std - direct.std).abs() < 1e-9 * direct.std);
     }
 
     #[test]
