@@ -537,3 +537,146 @@ pub(crate) fn strong_correlations(
     }
     out
 }
+
+/// The directions of `params`' parameter space that `data` cannot see and
+/// that the free set `free` leaves open, in words: base motion (always),
+/// scale (without reference lengths) and the exact redundancies. Empty when
+/// the fixed set blocks every one — the fit is then well posed.
+pub fn open_directions(
+    params: &DhParams,
+    data: &DataSet,
+    weights: &Weights,
+    free: &[usize],
+    threads: usize,
+) -> Result<Vec<String>, KernelError> {
+    let n = params.joint_count();
+    let np = params.param_count();
+    let ids: Vec<ParamId> = ParamId::all(n).collect();
+    let kernel = ArmKernel::new(params)?;
+    let all: Vec<usize> = (0..np).collect();
+    let normal = normal_equations(&kernel, data, weights, &all, threads)?;
+    let r = reach(params);
+    let d: Vec<f64> = ids
+        .iter()
+        .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / r })
+        .collect();
+    let ns = DMatrix::from_fn(np, np, |a, b| normal.jtj[a * np + b] * d[a] * d[b]);
+    // Unseen directions, in scaled coordinates, with names.
+    let mut unseen: Vec<(String, nalgebra::DVector<f64>)> = Vec::new();
+    let unit = |c: usize| nalgebra::DVector::from_fn(np, |a, _| if a == c { 1.0 } else { 0.0 });
+    unseen.push((
+        "rotation about the base axis (theta1)".into(),
+        unit(
+            ParamId {
+                kind: ParamKind::Theta,
+                index: 0,
+            }
+            .column(n),
+        ),
+    ));
+    unseen.push((
+        "slide along the base axis (d1)".into(),
+        unit(
+            ParamId {
+                kind: ParamKind::D,
+                index: 0,
+            }
+            .column(n),
+        ),
+    ));
+    if data.references().is_empty() {
+        let v = nalgebra::DVector::from_fn(np, |a, _| {
+            if ids[a].kind.is_length() {
+                params.get(ids[a])
+            } else {
+                0.0
+            }
+        });
+        unseen.push(("scale (no reference length)".into(), v));
+    }
+    let eig = SymmetricEigen::new(ns.clone());
+    let smax = eig.eigenvalues.iter().copied().fold(0.0, f64::max).sqrt();
+    for (i, &e) in eig.eigenvalues.iter().enumerate() {
+        if e.max(0.0).sqrt() <= RANK_TOLERANCE * smax {
+            unseen.push((
+                "a redundancy of the parameters".into(),
+                eig.eigenvectors.column(i).into_owned(),
+            ));
+        }
+    }
+    // A combination of unseen directions with no component on a fixed
+    // parameter moves only free ones: the fixed set leaves it open. Count the
+    // open dimensions; a direction is named when leaving it out closes one.
+    let fixed: Vec<usize> = (0..np).filter(|c| !free.contains(c)).collect();
+    let open_dims = |dirs: &[&nalgebra::DVector<f64>]| -> usize {
+        if dirs.is_empty() {
+            return 0;
+        }
+        let basis = DMatrix::from_fn(np, dirs.len(), |a, j| dirs[j][a] / dirs[j].norm());
+        let svd = basis.svd(true, false);
+        let u = svd.u.expect("requested");
+        // An orthonormal basis of the span (singular values come in no
+        // guaranteed order).
+        let span: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&j| svd.singular_values[j] > 1e-9)
+            .collect();
+        let rank = span.len();
+        let on_fixed = DMatrix::from_fn(fixed.len(), rank, |a, j| u[(fixed[a], span[j])]);
+        let blocked = if fixed.is_empty() {
+            0
+        } else {
+            on_fixed
+                .svd(false, false)
+                .singular_values
+                .iter()
+                .filter(|&&s| s > 1e-6)
+                .count()
+        };
+        rank - blocked
+    };
+    let all_dirs: Vec<&nalgebra::DVector<f64>> = unseen.iter().map(|(_, v)| v).collect();
+    let total = open_dims(&all_dirs);
+    if total == 0 {
+        return Ok(Vec::new());
+    }
+    let mut open: Vec<String> = Vec::new();
+    for j in 0..unseen.len() {
+        let others: Vec<&nalgebra::DVector<f64>> = (0..unseen.len())
+            .filter(|&i| i != j)
+            .map(|i| &unseen[i].1)
+            .collect();
+        if open_dims(&others) < total && !open.contains(&unseen[j].0) {
+            open.push(unseen[j].0.clone());
+        }
+    }
+    if open.is_empty() {
+        // Mixed redundancies: name the free parameters of the open combination.
+        let basis = DMatrix::from_fn(np, all_dirs.len(), |a, j| {
+            all_dirs[j][a] / all_dirs[j].norm()
+        });
+        let svd = basis.svd(true, false);
+        let u = svd.u.expect("requested");
+        let span: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&j| svd.singular_values[j] > 1e-9)
+            .collect();
+        let ub = DMatrix::from_fn(np, span.len(), |a, j| u[(a, span[j])]);
+        let on_fixed = DMatrix::from_fn(fixed.len(), span.len(), |a, j| ub[(fixed[a], j)]);
+        let gram = on_fixed.transpose() * on_fixed;
+        let eig = SymmetricEigen::new(gram);
+        for (i, &e) in eig.eigenvalues.iter().enumerate() {
+            if e > 1e-12 {
+                continue;
+            }
+            let w = &ub * eig.eigenvectors.column(i);
+            let big = w.amax();
+            let mut names: Vec<(f64, String)> = (0..np)
+                .filter(|&a| w[a].abs() > 0.1 * big)
+                .map(|a| (w[a].abs(), ids[a].to_string()))
+                .collect();
+            names.sort_by(|x, y| y.0.total_cmp(&x.0));
+            let names: Vec<String> = names.into_iter().take(4).map(|(_, n)| n).collect();
+            open.push(format!("a redundancy of {}", names.join(" with ")));
+        }
+    }
+    Ok(open)
+}

@@ -165,3 +165,43 @@ fn uncertainties_are_honest_over_seeds() {
     assert!(e_ratio <= 1.08, "{e_ratio}");
     assert!(len_ratio <= 1.30, "{len_ratio}");
 }
+
+#[test]
+fn a_fixed_set_that_leaves_an_unseen_direction_is_refused() {
+    let c = campaign(5, 0.005, 0.01);
+    let with_lengths = c.data_set().unwrap();
+    let bare = aacmm_core::dataset::DataSet::from_poses(&c.poses, "poses.csv").unwrap();
+    let fix = |names: &str| CalibrateOptions {
+        fix: FixSpec::parse(names, 6).unwrap(),
+        ..CalibrateOptions::default()
+    };
+    // The paper's fixed set is enough with a reference length…
+    assert!(calibrate(&c.nominal.params, &with_lengths, &fix(UNOBSERVABLE)).is_ok());
+    // …but not without one: scale stays open.
+    let e = calibrate(&c.nominal.params, &bare, &fix(UNOBSERVABLE)).unwrap_err();
+    assert!(e.to_string().contains("scale"), "{e}");
+    // Fixing a length more closes it; d1 does not (a slide along the base axis).
+    assert!(
+        calibrate(
+            &c.nominal.params,
+            &bare,
+            &fix(&format!("{UNOBSERVABLE},d3"))
+        )
+        .is_ok()
+    );
+    // Leaving theta1 or a redundant pair free is refused too.
+    let e = calibrate(
+        &c.nominal.params,
+        &with_lengths,
+        &fix("d1,theta6,alpha6,Bx,By"),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("theta1"), "{e}");
+    let e = calibrate(
+        &c.nominal.params,
+        &with_lengths,
+        &fix("theta1,d1,theta6,alpha6,By"),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("redundan"), "{e}");
+}

@@ -25,7 +25,9 @@ use serde::{Deserialize, Serialize};
 pub use lm::{LmIteration, LmOptions, LmResult, Termination, levenberg_marquardt};
 
 use crate::dataset::DataSet;
-use crate::identify::{Correlation, Identification, identify, strong_correlations, to_user, unit};
+use crate::identify::{
+    Correlation, Identification, identify, open_directions, strong_correlations, to_user, unit,
+};
 use crate::kernel::{ArmKernel, KernelError};
 use crate::params::{DhParams, ParamId, ParamKind};
 use crate::residuals::{Noise, Weights};
@@ -62,6 +64,16 @@ pub enum CalibrationError {
         unknowns: usize,
         /// Free parameters.
         free: usize,
+    },
+    /// The fixed set leaves a direction the data cannot see.
+    #[error(
+        "the free parameters include directions the data cannot see: {}; fix more \
+         parameters (--fix auto chooses them)",
+        directions.join("; ")
+    )]
+    Unidentifiable {
+        /// The open directions, in words.
+        directions: Vec<String>,
     },
     /// Cross-validation folds that cannot be made.
     #[error("{0}")]
@@ -261,6 +273,10 @@ pub fn calibrate(
             let free: Vec<usize> = (0..start.param_count())
                 .filter(|c| !fixed.contains(c))
                 .collect();
+            let directions = open_directions(start, data, &weights, &free, threads)?;
+            if !directions.is_empty() {
+                return Err(CalibrationError::Unidentifiable { directions });
+            }
             let reasons = fixed
                 .iter()
                 .filter_map(|&c| ParamId::from_column(start.joint_count(), c))
