@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm::io::{Poses, ReferenceLength, check_lengths_against, read_lengths};
+use aacmm::io::{Poses, ReferenceLength, check_lengths_against, read_lengths, source_name};
 use aacmm::metrics::{Evaluation, MetricsError, ReferenceDistance, evaluate};
 use anyhow::{Context, Result, anyhow};
 use serde::Serialize;
@@ -38,7 +38,7 @@ pub fn run(args: Args) -> Result<()> {
     let lengths = match &args.lengths {
         Some(path) => {
             let lengths = read_lengths(path)?;
-            check_lengths_against(&lengths, &poses.labels, &path.display().to_string())?;
+            check_lengths_against(&lengths, &poses.labels, &source_name(path))?;
             lengths
         }
         None => Vec::new(),
@@ -65,16 +65,16 @@ pub fn run(args: Args) -> Result<()> {
     println!(
         "arm `{}` ({}) on {}",
         arm.name,
-        args.input.arm.display(),
-        args.input.data.display()
+        source_name(&args.input.arm),
+        source_name(&args.input.data)
     );
     print!("{}", evaluation.to_table());
     if let Some(path) = &args.json {
         let report = Report {
             arm: &arm.name,
-            arm_file: args.input.arm.display().to_string(),
-            data_file: args.input.data.display().to_string(),
-            lengths_file: args.lengths.as_ref().map(|p| p.display().to_string()),
+            arm_file: source_name(&args.input.arm),
+            data_file: source_name(&args.input.data),
+            lengths_file: args.lengths.as_deref().map(source_name),
             length_unit: "mm",
             evaluation: &evaluation,
         };
@@ -102,22 +102,22 @@ fn locate(
     };
     match &e {
         MetricsError::TooFewTouches { label, .. } => match first_line(label) {
-            Some(line) => anyhow!("{}:{line}: field `point`: {e}", data.display()),
-            None => anyhow!("{}: {e}", data.display()),
+            Some(line) => anyhow!("{}:{line}: field `point`: {e}", source_name(data)),
+            None => anyhow!("{}: {e}", source_name(data)),
         },
         MetricsError::NonFinite { row, .. } => {
             let line = poses.lines.get(*row).copied().unwrap_or(0);
-            anyhow!("{}:{line}: {e}", data.display())
+            anyhow!("{}:{line}: {e}", source_name(data))
         }
         MetricsError::UnknownLabel { label } | MetricsError::InvalidReference { a: label, .. } => {
-            let file = lengths_file.map_or_else(String::new, |p| p.display().to_string());
+            let file = lengths_file.map_or_else(String::new, source_name);
             match lengths.iter().find(|l| &l.a == label || &l.b == label) {
                 Some(l) => anyhow!("{file}:{}: {e}", l.line),
                 None => anyhow!("{file}: {e}"),
             }
         }
         MetricsError::Empty | MetricsError::LengthMismatch { .. } => {
-            anyhow!("{}: {e}", data.display())
+            anyhow!("{}: {e}", source_name(data))
         }
     }
 }
