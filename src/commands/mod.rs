@@ -7,7 +7,7 @@ pub mod simulate;
 
 use std::path::PathBuf;
 
-use aacmm::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
+use aacmm::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses, source_name};
 use aacmm::kernel::positions_dyn;
 use anyhow::{Context, Result};
 
@@ -25,7 +25,7 @@ pub struct ArmAndPoses {
     /// Arm file (TOML) with 6 or 7 `[[joint]]` entries.
     #[arg(long)]
     pub arm: PathBuf,
-    /// Poses file (CSV `point,q1,...,qn`).
+    /// Poses file (CSV `point,q1,...,qn`); `-` reads standard input.
     #[arg(long)]
     pub data: PathBuf,
     /// Unit of the angles in the poses file.
@@ -34,9 +34,11 @@ pub struct ArmAndPoses {
 }
 
 impl ArmAndPoses {
-    /// Reads both files; the poses must have the arm's joint count.
+    /// Reads both files, printing their warnings; the poses must have the
+    /// arm's joint count.
     pub fn read(&self) -> Result<(Arm, Poses)> {
-        let arm = read_arm(&self.arm)?;
+        let (arm, warnings) = read_arm(&self.arm)?;
+        report(&warnings);
         let (poses, warnings) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
         report(&warnings);
@@ -46,7 +48,7 @@ impl ArmAndPoses {
     /// Probe positions of every pose (mm), in row order.
     pub fn positions(&self, arm: &Arm, poses: &Poses) -> Result<Vec<[f64; 3]>> {
         positions_dyn(&arm.params, &poses.q)
-            .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))
+            .with_context(|| format!("{}: {}", source_name(&self.arm), source_name(&self.data)))
     }
 }
 

@@ -4,7 +4,9 @@
 
 use std::path::PathBuf;
 
-use aacmm::io::read_arm;
+use aacmm::io::{read_arm, source_name};
+
+use super::report;
 use aacmm::simulate::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG,
     ErrorModel, SimError, SocketPlan, pair_count, simulate, write_campaign,
@@ -98,12 +100,15 @@ enum Errors {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let nominal = read_arm(&args.arm)?;
+    let (nominal, warnings) = read_arm(&args.arm)?;
+    report(&warnings);
     let joints = nominal.params.joint_count();
     let errors = match (&args.true_arm, args.errors) {
-        (Some(path), _) => ErrorModel::File {
-            arm: read_arm(path)?,
-        },
+        (Some(path), _) => {
+            let (arm, warnings) = read_arm(path)?;
+            report(&warnings);
+            ErrorModel::File { arm }
+        }
         (None, Some(Errors::Paper)) => {
             if args.error_scale.is_some() {
                 bail!(
@@ -128,7 +133,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let count = sockets.count();
     let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses);
-    settings.nominal_file = Some(args.arm.display().to_string());
+    settings.nominal_file = Some(source_name(&args.arm));
     settings.sockets = sockets;
     settings.encoder_noise_deg = args.encoder_noise;
     settings.probe_noise_mm = args.probe_noise;
@@ -145,17 +150,17 @@ pub fn run(args: Args) -> Result<()> {
     eprintln!(
         "nominal arm `{}` ({}, {joints} joints)",
         nominal.name,
-        args.arm.display()
+        source_name(&args.arm)
     );
     eprintln!(
         "true arm: {}",
         match &args.true_arm {
-            Some(path) => format!("{} ({})", settings.errors.describe(), path.display()),
+            Some(path) => format!("{} ({})", settings.errors.describe(), source_name(path)),
             None => settings.errors.describe(),
         }
     );
     let placed = match &args.sockets_file {
-        Some(path) => format!("from {}", path.display()),
+        Some(path) => format!("from {}", source_name(path)),
         None => "spread over the reachable volume".to_string(),
     };
     eprintln!(
