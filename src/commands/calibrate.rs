@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use aacmm_core::calibrate::validate::{BeforeAfter, Figures, Fold, before_after, cross_validate};
 use aacmm_core::calibrate::{CalibrateOptions, Calibration, FixSpec, LmOptions, calibrate};
+use aacmm_core::io::source_name;
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
 use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
@@ -128,18 +129,15 @@ pub fn run(args: Args) -> Result<()> {
         noise,
         lm: LmOptions::default().threads(super::identify::threads()),
     };
-    let arm_file = args.fit.input.arm.display().to_string();
+    let arm_file = source_name(&args.fit.input.arm);
     let started = Instant::now();
     let cal = calibrate(&arm.params, &data, &options).with_context(|| arm_file.clone())?;
     let fit_time = started.elapsed();
     let fitted = before_after(&arm.params, &cal.params, &data)?;
     let held = match (&held_out, &args.validate) {
         (Some(h), Some(path)) => Some(HeldOut {
-            data_file: path.display().to_string(),
-            lengths_file: args
-                .validate_lengths
-                .as_ref()
-                .map(|p| p.display().to_string()),
+            data_file: source_name(path),
+            lengths_file: args.validate_lengths.as_ref().map(|p| source_name(p)),
             figures: before_after(&arm.params, &cal.params, h)?,
         }),
         _ => None,
@@ -166,8 +164,8 @@ pub fn run(args: Args) -> Result<()> {
     let report = Report {
         arm: &arm.name,
         arm_file: arm_file.clone(),
-        data_file: args.fit.input.data.display().to_string(),
-        lengths_file: args.fit.lengths.as_ref().map(|p| p.display().to_string()),
+        data_file: source_name(&args.fit.input.data),
+        lengths_file: args.fit.lengths.as_deref().map(source_name),
         method: args.method,
         fix: &args.fix,
         noise: &options.noise,

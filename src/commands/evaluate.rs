@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::read_lengths;
+use aacmm_core::io::{read_lengths, source_name};
 use aacmm_core::metrics::{Evaluation, PairLengthError, evaluate, pair_length_errors};
 use anyhow::{Context, Result};
 use serde::{Serialize, Serializer};
@@ -73,10 +73,10 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (arm, poses) = args.input.read()?;
     let kernel = args.input.kernel(&arm)?;
-    let mut data = DataSet::from_poses(&poses, &args.input.data.display().to_string())?;
+    let mut data = DataSet::from_poses(&poses, &source_name(&args.input.data))?;
     drop(poses);
     if let Some(path) = &args.lengths {
-        data = data.with_lengths(&read_lengths(path)?, &path.display().to_string())?;
+        data = data.with_lengths(&read_lengths(path)?, &source_name(path))?;
     }
     let mut xyz = vec![[0.0; 3]; data.len()];
     kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
@@ -115,9 +115,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.json {
         let report = Report {
             arm: &arm.name,
-            arm_file: args.input.arm.display().to_string(),
-            data_file: args.input.data.display().to_string(),
-            lengths_file: args.lengths.as_ref().map(|p| p.display().to_string()),
+            arm_file: source_name(&args.input.arm),
+            data_file: source_name(&args.input.data),
+            lengths_file: args.lengths.as_deref().map(source_name),
             length_unit: "mm",
             evaluation: &evaluation,
             pair_length: args.pairs.then_some(pairs),

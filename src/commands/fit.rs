@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::dataset::DataSet;
+use aacmm_core::io::source_name;
 use aacmm_core::io::{AngleUnit, Arm, read_lengths};
 use aacmm_core::residuals::Noise;
 use anyhow::{Result, bail};
@@ -89,9 +90,9 @@ pub fn data_set(
     data: &Path,
     lengths: Option<&Path>,
 ) -> Result<DataSet> {
-    let mut set = DataSet::from_poses(poses, &data.display().to_string())?;
+    let mut set = DataSet::from_poses(poses, &source_name(data))?;
     if let Some(path) = lengths {
-        set = set.with_lengths(&read_lengths(path)?, &path.display().to_string())?;
+        set = set.with_lengths(&read_lengths(path)?, &source_name(path))?;
     }
     Ok(set)
 }

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use aacmm_core::identify::{Identification, identify};
+use aacmm_core::io::source_name;
 use aacmm_core::residuals::Weights;
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -46,7 +47,7 @@ pub fn run(args: Args) -> Result<()> {
     let assumed = !noise.stated();
     let weights = Weights::new(&kernel, &data, &noise, 0.01)?;
     let id = identify(&arm.params, &data, &weights, threads())
-        .with_context(|| args.fit.input.arm.display().to_string())?;
+        .with_context(|| source_name(&args.fit.input.arm))?;
     let noise_text = if assumed {
         "not stated: σ as for a 0.01 mm touch".to_string()
     } else {
@@ -71,9 +72,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.json {
         let report = Report {
             arm: &arm.name,
-            arm_file: args.fit.input.arm.display().to_string(),
-            data_file: args.fit.input.data.display().to_string(),
-            lengths_file: args.fit.lengths.as_ref().map(|p| p.display().to_string()),
+            arm_file: source_name(&args.fit.input.arm),
+            data_file: source_name(&args.fit.input.data),
+            lengths_file: args.fit.lengths.as_deref().map(source_name),
             touches: data.len(),
             points: data.points().len(),
             reference_lengths: data.references().len(),

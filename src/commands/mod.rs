@@ -10,7 +10,7 @@ pub mod simulate;
 
 use std::path::PathBuf;
 
-use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses};
+use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses, source_name};
 use aacmm_core::kernel::ArmKernel;
 use anyhow::{Context, Result, bail};
 
@@ -82,7 +82,7 @@ pub struct ArmAndPoses {
     /// Arm file (TOML) with 6 or 7 `[[joint]]` entries.
     #[arg(long)]
     pub arm: PathBuf,
-    /// Poses file (CSV `point,q1,...,qn`).
+    /// Poses file (CSV `point,q1,...,qn`); `-` reads standard input.
     #[arg(long)]
     pub data: PathBuf,
     /// Unit of the angles in the poses file.
@@ -95,11 +95,12 @@ impl ArmAndPoses {
     /// (stderr) about suspicious poses, readings outside the arm's joint
     /// limits included.
     pub fn read(&self) -> Result<(Arm, Poses)> {
-        let arm = read_arm(&self.arm)?;
+        let (arm, warnings) = read_arm(&self.arm)?;
+        report(&warnings)?;
         let (poses, warnings) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
         report(&warnings)?;
-        let file = self.data.display().to_string();
+        let file = source_name(&self.data);
         if let Some(w) = limit_warning(&arm, &poses, &file, self.angle_unit) {
             warn(w)?;
         }
@@ -108,7 +109,7 @@ impl ArmAndPoses {
 
     /// The arm prepared for its generated kernel.
     pub fn kernel(&self, arm: &Arm) -> Result<ArmKernel> {
-        ArmKernel::new(&arm.params).with_context(|| self.arm.display().to_string())
+        ArmKernel::new(&arm.params).with_context(|| source_name(&self.arm))
     }
 
     /// Probe positions of every pose (mm), in row order.

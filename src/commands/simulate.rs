@@ -4,7 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::io::read_arm;
+use aacmm_core::io::{read_arm, source_name};
+
+use super::report;
 use aacmm_core::simulate::{
     CAMPAIGN_FILE, CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG,
     DEFAULT_ZERO_SIGMA_DEG, ErrorModel, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, SimError,
@@ -114,12 +116,15 @@ pub fn run(args: Args) -> Result<()> {
     ];
     check_output_dir("--out", &args.out, &outputs, &inputs)?;
 
-    let nominal = read_arm(&args.arm)?;
+    let (nominal, warnings) = read_arm(&args.arm)?;
+    report(&warnings)?;
     let joints = nominal.params.joint_count();
     let errors = match (&args.true_arm, args.errors) {
-        (Some(path), _) => ErrorModel::File {
-            arm: read_arm(path)?,
-        },
+        (Some(path), _) => {
+            let (arm, warnings) = read_arm(path)?;
+            report(&warnings)?;
+            ErrorModel::File { arm }
+        }
         (None, Some(Errors::Paper)) => {
             if args.error_scale.is_some() {
                 bail!(
@@ -150,7 +155,7 @@ pub fn run(args: Args) -> Result<()> {
     let located = |e| flag_error(e, file.as_ref());
     let count = sockets.count();
     let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses);
-    settings.nominal_file = Some(args.arm.display().to_string());
+    settings.nominal_file = Some(source_name(&args.arm));
     settings.sockets = sockets;
     settings.encoder_noise_deg = args.encoder_noise;
     settings.probe_noise_mm = args.probe_noise;
@@ -172,12 +177,12 @@ pub fn run(args: Args) -> Result<()> {
     note(format_args!(
         "true arm: {}",
         match &args.true_arm {
-            Some(path) => format!("{} ({})", settings.errors.describe(), path.display()),
+            Some(path) => format!("{} ({})", settings.errors.describe(), source_name(path)),
             None => settings.errors.describe(),
         }
     ))?;
     let placed = match &args.sockets_file {
-        Some(path) => format!("from {}", path.display()),
+        Some(path) => format!("from {}", source_name(path)),
         None => "spread over the reachable volume".to_string(),
     };
     note(format_args!(

@@ -30,7 +30,7 @@ fn writes_every_row_in_order_matching_the_generic_model() {
     let text = stdout(&o);
     assert!(text.starts_with("point,x,y,z\n"));
     let rows = parse_rows(&text);
-    let params = read_arm(&arm).unwrap().params.to_vec();
+    let params = read_arm(&arm).unwrap().0.params.to_vec();
     let q_deg: [[f64; 6]; 3] = [
         [0.0; 6],
         [10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
@@ -93,6 +93,7 @@ fn seven_joint_arm_uses_its_own_kernel() {
     let rows = parse_rows(&stdout(&o));
     let params = read_arm(std::path::Path::new(&arm))
         .unwrap()
+        .0
         .params
         .to_vec();
     let q = [5.0f64, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0].map(f64::to_radians);

@@ -73,7 +73,7 @@ fn sockets_at_the_same_place_are_blamed_on_the_sockets_file() {
     let sockets = write(
         &dir,
         "sockets.csv",
-        &format!("point,x,y,z\n# twins\nA,{REACHABLE}\nB,{REACHABLE}\n"),
+        &format!("# twins\npoint,x,y,z\nA,{REACHABLE}\nB,{REACHABLE}\n"),
     );
     let o = simulate(
         &["--sockets-file", &sockets, "--poses", "3"],

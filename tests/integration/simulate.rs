@@ -70,7 +70,7 @@ fn paper_like_campaign_is_complete_and_reproducible() {
     assert!(stderr.contains("100 poses"), "{stderr}");
 
     // The five files exist and read back.
-    let arm = read_arm(&a.join("true_arm.toml")).unwrap();
+    let (arm, _) = read_arm(&a.join("true_arm.toml")).unwrap();
     assert_eq!(arm.params.joint_count(), 6);
     assert!((arm.params.probe[2] - 100.094).abs() < 1e-12);
     let (poses, warnings) = read_poses(&a.join("poses.csv"), AngleUnit::Deg, Some(6)).unwrap();
@@ -141,7 +141,7 @@ fn zero_noise_campaign_reproduces_sockets() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let arm = read_arm(&dir.join("true_arm.toml")).unwrap();
+    let (arm, _) = read_arm(&dir.join("true_arm.toml")).unwrap();
     let (poses, _) = read_poses(&dir.join("poses.csv"), AngleUnit::Deg, Some(6)).unwrap();
     let sockets = read_points(&dir.join("sockets.csv")).unwrap();
     let p = ArmKernel::new(&arm.params)

@@ -5,7 +5,7 @@
 //! length_unit = "mm"      # "mm" or "m"; required, never guessed
 //! angle_unit = "deg"      # "deg" or "rad"; required, never guessed
 //!
-//! [[joint]]               # one per joint, base to probe (1 to 7 joints)
+//! [[joint]]               # one per joint, base to probe (6 or 7 joints)
 //! theta = 0.0             # encoder zero offset θ⁰
 //! alpha = -90.0           # link twist (the paper's β; `beta` is accepted instead)
 //! a = 50.0
@@ -21,23 +21,31 @@
 //! `name` is optional (default empty). Lengths (`a`, `d`, probe) are in
 //! `length_unit`, angles (`theta`, `alpha`, `limits`) in `angle_unit`.
 //! Integers are accepted where numbers are expected. Unknown keys are errors
-//! (a typo is never ignored), as are non-finite numbers, a missing key, zero
-//! or more than [`MAX_JOINTS`] joints, and limits with `min >= max`.
-//! The toolkit's kernels are for 6- and 7-joint arms; 1 to 7 joints parse.
+//! (a typo is never ignored), as are non-finite numbers, a missing key, a
+//! joint count the toolkit has no kernel for (see
+//! [`SUPPORTED_JOINTS`](crate::params::SUPPORTED_JOINTS)), and limits with
+//! `min >= max`. A unit that looks wrong (lengths over 10 m in metres, angles
+//! over a full turn in radians) gives a [`Warning`].
+//!
+//! The schema is a serde type; serde's messages are reworded here so that
+//! every error names the key, its line, and the joint or table it is in.
 
-use std::fmt::Write as _;
+use std::ops::Range;
 use std::path::Path;
 
+use serde::{Deserialize, Serialize};
 use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
-use super::text::{fmt_f64, line_of, read_text, suggest};
+use super::Warning;
+use super::text::{line_of, read_text, suggest};
 use super::units::{AngleUnit, LengthUnit};
 use crate::error::InputError;
-use crate::params::{DhJoint, DhParams};
+use crate::params::{DhJoint, DhParams, SUPPORTED_JOINTS};
 
-/// The most joints an arm file may have.
-pub const MAX_JOINTS: usize = 7;
+/// In an arm file in metres, a length above this (m) draws a warning: no
+/// measuring arm is that long, so the lengths are likely millimetres.
+pub const PLAUSIBLE_METRES: f64 = 10.0;
 
 /// An arm: its name, its geometry (mm, rad) and its optional joint limits.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,85 +77,59 @@ impl Arm {
     }
 }
 
-/// Reads an arm file; messages name the file as `path` displays.
+/// Reads an arm file (standard input for `-`); returns the arm and any
+/// warnings (for the caller to print). Messages name the file as
+/// [`source_name`](super::source_name) gives it.
 ///
 /// ```no_run
-/// let arm = aacmm_core::io::read_arm(std::path::Path::new("arm.toml"))?;
+/// let (arm, warnings) = aacmm_core::io::read_arm(std::path::Path::new("arm.toml"))?;
 /// println!("{} joints", arm.params.joint_count());
 /// # Ok::<(), aacmm_core::error::InputError>(())
 /// ```
-pub fn read_arm(path: &Path) -> Result<Arm, InputError> {
+pub fn read_arm(path: &Path) -> Result<(Arm, Vec<Warning>), InputError> {
     let (file, text) = read_text(path)?;
     parse_arm(&text, &file)
 }
 
 /// Parses the text of an arm file; `file` is the name used in messages.
+/// Returns the arm and any warnings.
 ///
 /// ```
-/// let text = r#"
-/// length_unit = "m"
-/// angle_unit = "deg"
-/// [[joint]]
-/// theta = 0
-/// alpha = 90
-/// a = 0.05
-/// d = 0.375
-/// limits = [-90, 90]
-/// [probe]
-/// x = 0
-/// y = 0
-/// z = 0.1
-/// "#;
-/// let arm = aacmm_core::io::parse_arm(text, "arm.toml").unwrap();
+/// let joint = "[[joint]]\ntheta = 0\nalpha = 90\na = 0.05\nd = 0.375\nlimits = [-90, 90]\n";
+/// let text = format!(
+///     "length_unit = \"m\"\nangle_unit = \"deg\"\n{}[probe]\nx = 0\ny = 0\nz = 0.1\n",
+///     joint.repeat(6)
+/// );
+/// let (arm, warnings) = aacmm_core::io::parse_arm(&text, "arm.toml").unwrap();
 /// assert_eq!(arm.params.joints[0].d, 375.0);
 /// assert_eq!(arm.params.joints[0].alpha, std::f64::consts::FRAC_PI_2);
 /// assert_eq!(arm.params.probe, [0.0, 0.0, 100.0]);
 /// assert_eq!(arm.limits[0].unwrap()[1], std::f64::consts::FRAC_PI_2);
+/// assert!(warnings.is_empty());
 ///
-/// let err = aacmm_core::io::parse_arm(&text.replace("alpha", "alpah"), "arm.toml");
-/// assert!(err.unwrap_err().to_string().starts_with("arm.toml:6: field `alpah`: unknown key"));
+/// let err = aacmm_core::io::parse_arm(&text.replacen("alpha", "alpah", 1), "arm.toml");
+/// assert!(err.unwrap_err().to_string().starts_with("arm.toml:5: field `alpah`: unknown key"));
+/// let five = text.replacen(joint, "", 1);
+/// assert_eq!(
+///     aacmm_core::io::parse_arm(&five, "arm.toml").unwrap_err().to_string(),
+///     "arm.toml:27: field `joint`: 5 joints; the toolkit has kernels for 6- and 7-joint arms"
+/// );
 /// ```
-pub fn parse_arm(text: &str, file: &str) -> Result<Arm, InputError> {
-    let doc = DeTable::parse(text).map_err(|e| syntax_error(text, file, &e))?;
-    let p = Parser { text, file };
-    let root = doc.get_ref();
-    p.deny_unknown(
-        root,
-        &["name", "length_unit", "angle_unit", "joint", "probe"],
-        "at the top level",
-    )?;
-
-    let name = match root.get_key_value("name") {
-        None => String::new(),
-        Some((_, v)) => match v.get_ref() {
-            DeValue::String(s) => s.to_string(),
-            other => {
-                return Err(p.err(v, "name", format!("expected a string, found {}", a(other))));
-            }
-        },
-    };
-    let length_unit: LengthUnit = p.unit(root, "length_unit", LengthUnit::NAMES)?;
-    let angle_unit: AngleUnit = p.unit(root, "angle_unit", AngleUnit::NAMES)?;
-
-    let joint_tables = p.joint_tables(root)?;
-    let mut joints = Vec::with_capacity(joint_tables.len());
-    let mut limits = Vec::with_capacity(joint_tables.len());
-    for (i, &(at, table)) in joint_tables.iter().enumerate() {
-        let (joint, lim) = p.joint(i + 1, at, table, length_unit, angle_unit)?;
-        joints.push(joint);
-        limits.push(lim);
-    }
-
-    let probe = p.probe(root, length_unit)?;
-    Ok(Arm {
-        name,
-        params: DhParams { joints, probe },
-        limits,
-    })
+pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputError> {
+    let doc = DeTable::parse(text).map_err(|e| {
+        let message = format!("TOML syntax: {}", e.message());
+        match e.span() {
+            Some(span) => InputError::line_error(file, line_of(text, span.start), message),
+            None => InputError::file_error(file, message),
+        }
+    })?;
+    let schema = ArmFile::deserialize(toml::de::Deserializer::from(doc.clone()))
+        .map_err(|e| schema_error(text, file, doc.get_ref(), &e))?;
+    schema.to_arm(text, file)
 }
 
 /// Writes an arm in the arm-file schema with the given units: deterministic
-/// bytes, numbers in the shortest form that reads back to the same value
+/// bytes, numbers with the fewest digits that read back to the same value
 /// (bit-exact in mm and rad; in deg and m bit-exact whenever some decimal
 /// converts back exactly, else within 1 ulp — see
 /// [`AngleUnit::from_internal_exact`]). Missing `limits` entries are written
@@ -160,32 +142,11 @@ pub fn parse_arm(text: &str, file: &str) -> Result<Arm, InputError> {
 /// let arm = Arm::without_limits("nominal", DhParams::paper_nominal());
 /// let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg);
 /// assert!(text.contains("alpha = -90.0\na = 50.0\nd = 375.0\n"));
-/// assert_eq!(parse_arm(&text, "out.toml").unwrap(), arm);
+/// assert_eq!(parse_arm(&text, "out.toml").unwrap().0, arm);
 /// ```
 pub fn arm_to_toml(arm: &Arm, length_unit: LengthUnit, angle_unit: AngleUnit) -> String {
-    let len = |x: f64| toml_f64(length_unit.from_internal_exact(x));
-    let ang = |x: f64| toml_f64(angle_unit.from_internal_exact(x));
-    let mut s = String::new();
-    // Writing to a String cannot fail.
-    let _ = writeln!(s, "name = {}", toml_string(&arm.name));
-    let _ = writeln!(s, "length_unit = \"{}\"", length_unit.name());
-    let _ = writeln!(s, "angle_unit = \"{}\"", angle_unit.name());
-    for (i, j) in arm.params.joints.iter().enumerate() {
-        let _ = writeln!(s, "\n[[joint]]");
-        let _ = writeln!(s, "theta = {}", ang(j.theta));
-        let _ = writeln!(s, "alpha = {}", ang(j.alpha));
-        let _ = writeln!(s, "a = {}", len(j.a));
-        let _ = writeln!(s, "d = {}", len(j.d));
-        if let Some([lo, hi]) = arm.limits.get(i).copied().flatten() {
-            let _ = writeln!(s, "limits = [{}, {}]", ang(lo), ang(hi));
-        }
-    }
-    let [x, y, z] = arm.params.probe;
-    let _ = writeln!(s, "\n[probe]");
-    let _ = writeln!(s, "x = {}", len(x));
-    let _ = writeln!(s, "y = {}", len(y));
-    let _ = writeln!(s, "z = {}", len(z));
-    s
+    toml::to_string(&ArmFile::new(arm, length_unit, angle_unit))
+        .expect("strings, numbers, arrays and tables always serialize to TOML")
 }
 
 /// Writes an arm file (see [`arm_to_toml`]).
@@ -206,338 +167,441 @@ pub fn write_arm(
         .map_err(|e| InputError::io(path.display().to_string(), e))
 }
 
-/// A TOML float literal that reads back to exactly `x`.
-fn toml_f64(x: f64) -> String {
-    if x.is_nan() {
-        "nan".to_string()
-    } else if x.is_infinite() {
-        if x > 0.0 { "inf" } else { "-inf" }.to_string()
-    } else {
-        fmt_f64(x)
-    }
+/// The arm-file schema, values in the file's units, with their places in
+/// the text (for messages).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ArmFile {
+    #[serde(default)]
+    name: String,
+    #[serde(serialize_with = "by_name", deserialize_with = "from_name")]
+    length_unit: LengthUnit,
+    #[serde(serialize_with = "by_name", deserialize_with = "from_name")]
+    angle_unit: AngleUnit,
+    joint: Spanned<Vec<Spanned<JointFile>>>,
+    probe: ProbeFile,
 }
 
-/// A TOML basic string.
-fn toml_string(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\t' => out.push_str("\\t"),
-            '\r' => out.push_str("\\r"),
-            c if c.is_control() => {
-                let _ = write!(out, "\\u{:04X}", c as u32);
-            }
-            c => out.push(c),
+/// One `[[joint]]` table.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields, expecting = "a table")]
+struct JointFile {
+    theta: Spanned<f64>,
+    #[serde(alias = "beta")]
+    alpha: Spanned<f64>,
+    a: Spanned<f64>,
+    d: Spanned<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    limits: Option<Spanned<Vec<Spanned<f64>>>>,
+}
+
+/// The `[probe]` table.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields, expecting = "a table ([probe] with x, y, z)")]
+struct ProbeFile {
+    x: Spanned<f64>,
+    y: Spanned<f64>,
+    z: Spanned<f64>,
+}
+
+/// A unit by its name.
+fn by_name<S: serde::Serializer>(unit: &impl std::fmt::Display, s: S) -> Result<S::Ok, S::Error> {
+    s.collect_str(unit)
+}
+
+/// A unit from its name, with [`UnknownUnit`](super::UnknownUnit)'s message.
+fn from_name<'de, D, U>(d: D) -> Result<U, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    U: std::str::FromStr<Err = super::UnknownUnit>,
+{
+    String::deserialize(d)?
+        .parse()
+        .map_err(serde::de::Error::custom)
+}
+
+/// A value to write (its place in a text is not known yet).
+fn new<T>(value: T) -> Spanned<T> {
+    Spanned::new(0..0, value)
+}
+
+impl ArmFile {
+    /// `arm` in the given units, to write.
+    pub(crate) fn new(arm: &Arm, lu: LengthUnit, au: AngleUnit) -> ArmFile {
+        let len = |x: f64| new(lu.from_internal_exact(x));
+        let ang = |x: f64| au.from_internal_exact(x);
+        let joints = arm.params.joints.iter().enumerate();
+        let [x, y, z] = arm.params.probe;
+        ArmFile {
+            name: arm.name.clone(),
+            length_unit: lu,
+            angle_unit: au,
+            joint: new(joints
+                .map(|(i, j)| {
+                    new(JointFile {
+                        theta: new(ang(j.theta)),
+                        alpha: new(ang(j.alpha)),
+                        a: len(j.a),
+                        d: len(j.d),
+                        limits: arm
+                            .limits
+                            .get(i)
+                            .copied()
+                            .flatten()
+                            .map(|[lo, hi]| new(vec![new(ang(lo)), new(ang(hi))])),
+                    })
+                })
+                .collect()),
+            probe: ProbeFile {
+                x: len(x),
+                y: len(y),
+                z: len(z),
+            },
         }
     }
-    out.push('"');
-    out
-}
 
-/// A TOML syntax error, located.
-fn syntax_error(text: &str, file: &str, e: &toml::de::Error) -> InputError {
-    let message = format!("TOML syntax: {}", e.message());
-    match e.span() {
-        Some(span) => InputError::line_error(file, line_of(text, span.start), message),
-        None => InputError::file_error(file, message),
+    /// `arm` in mm and degrees if that reads back to exactly `arm`, else in
+    /// mm and radians (always exact): how a campaign stores its arms.
+    pub(crate) fn exact(arm: &Arm) -> ArmFile {
+        let deg = ArmFile::new(arm, LengthUnit::Mm, AngleUnit::Deg);
+        match deg.to_arm("", "") {
+            Ok((back, _)) if back == *arm => deg,
+            _ => ArmFile::new(arm, LengthUnit::Mm, AngleUnit::Rad),
+        }
+    }
+
+    /// The arm (mm, rad) and the warnings, after the checks serde cannot
+    /// express; `text` and `file` locate the messages.
+    pub(crate) fn to_arm(&self, text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputError> {
+        let joints = self.joint.get_ref();
+        if !SUPPORTED_JOINTS.contains(&joints.len()) {
+            // Blame the first joint too many, or the last.
+            let max = SUPPORTED_JOINTS.iter().max().copied().unwrap_or(0);
+            let blamed = joints.get(max).or(joints.last());
+            let line = line_of(text, blamed.map_or(self.joint.span(), |j| j.span()).start);
+            return Err(InputError::field(
+                file,
+                line,
+                "joint",
+                unsupported(joints.len()),
+            ));
+        }
+        let numbers = self.numbers();
+        if let Some((ctx, field, v)) = numbers.iter().find(|(_, _, v)| !v.get_ref().is_finite()) {
+            let line = line_of(text, v.span().start);
+            let raw = text.get(v.span()).unwrap_or("?");
+            let message = format!("{ctx}`{raw}` is not a finite number");
+            return Err(InputError::field(file, line, *field, message));
+        }
+
+        let (lu, au) = (self.length_unit, self.angle_unit);
+        let mut arm = Arm {
+            name: self.name.clone(),
+            params: DhParams {
+                joints: Vec::with_capacity(joints.len()),
+                probe: [&self.probe.x, &self.probe.y, &self.probe.z]
+                    .map(|v| lu.to_internal(*v.get_ref())),
+            },
+            limits: Vec::with_capacity(joints.len()),
+        };
+        for (i, j) in joints.iter().map(Spanned::get_ref).enumerate() {
+            let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
+            let [a, d] = [&j.a, &j.d].map(|v| lu.to_internal(*v.get_ref()));
+            arm.params.joints.push(DhJoint { a, d, alpha, theta });
+            let limits = match j.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
+                None => None,
+                Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
+                    Some([lo, hi].map(|x| au.to_internal(*x.get_ref())))
+                }
+                Some((l, values)) => {
+                    let message = match values {
+                        [lo, hi] => format!(
+                            "min {} must be less than max {}",
+                            lo.get_ref(),
+                            hi.get_ref()
+                        ),
+                        _ => format!(
+                            "expected `[min, max]` in {au}, found {} values",
+                            values.len()
+                        ),
+                    };
+                    let line = line_of(text, l.span().start);
+                    return Err(InputError::field(
+                        file,
+                        line,
+                        "limits",
+                        format!("joint {}: {message}", i + 1),
+                    ));
+                }
+            };
+            arm.limits.push(limits);
+        }
+        Ok((arm, self.unit_warnings(text, file)))
+    }
+
+    /// Every number of the file, base to probe, with its context and key.
+    fn numbers(&self) -> Vec<(String, &'static str, &Spanned<f64>)> {
+        let mut out = Vec::new();
+        for (i, j) in self
+            .joint
+            .get_ref()
+            .iter()
+            .map(Spanned::get_ref)
+            .enumerate()
+        {
+            let ctx = format!("joint {}: ", i + 1);
+            for (field, v) in [
+                ("theta", &j.theta),
+                ("alpha", &j.alpha),
+                ("a", &j.a),
+                ("d", &j.d),
+            ] {
+                out.push((ctx.clone(), field, v));
+            }
+            for v in j.limits.iter().flat_map(|l| l.get_ref()) {
+                out.push((ctx.clone(), "limits", v));
+            }
+        }
+        let p = &self.probe;
+        for (field, v) in [("x", &p.x), ("y", &p.y), ("z", &p.z)] {
+            out.push(("[probe]: ".to_string(), field, v));
+        }
+        out
+    }
+
+    /// Warnings where the stated unit looks wrong: a length over
+    /// [`PLAUSIBLE_METRES`] in metres, a twist or zero offset over a full
+    /// turn in radians.
+    fn unit_warnings(&self, text: &str, file: &str) -> Vec<Warning> {
+        let numbers = self.numbers();
+        let first = |fields: &[&str], limit: f64| {
+            numbers
+                .iter()
+                .find(|(_, f, v)| fields.contains(f) && v.get_ref().abs() > limit)
+        };
+        let long = (self.length_unit == LengthUnit::M)
+            .then(|| first(&["a", "d", "x", "y", "z"], PLAUSIBLE_METRES))
+            .flatten()
+            .map(|(_, field, v)| {
+                let message = format!(
+                    "lengths declared in metres (length_unit = \"m\"), but |{}| m is longer \
+                     than any arm ({PLAUSIBLE_METRES} m): these lengths look like millimetres; \
+                     write length_unit = \"mm\" if so",
+                    v.get_ref()
+                );
+                (field, v, message)
+            });
+        let turn = (self.angle_unit == AngleUnit::Rad)
+            .then(|| first(&["theta", "alpha"], std::f64::consts::TAU))
+            .flatten()
+            .map(|(_, field, v)| {
+                let message = format!(
+                    "angles declared in radians (angle_unit = \"rad\"), but |{}| is more than \
+                     a full turn (2π): these angles look like degrees; write angle_unit = \"deg\" \
+                     if so",
+                    v.get_ref()
+                );
+                (field, v, message)
+            });
+        (long.into_iter().chain(turn))
+            .map(|(field, v, message)| Warning {
+                file: file.to_string(),
+                line: Some(line_of(text, v.span().start)),
+                field: Some(field.to_string()),
+                message,
+            })
+            .collect()
     }
 }
 
-/// "a string", "an integer", ...
-fn a(v: &DeValue<'_>) -> String {
-    let t = v.type_str();
-    let article = if t.starts_with(['a', 'e', 'i', 'o', 'u']) {
+/// Why an arm with `n` joints cannot be used (`n` not supported).
+fn unsupported(n: usize) -> String {
+    if n == 0 {
+        return "no joints: add one [[joint]] table per joint, base to probe".into();
+    }
+    let max = SUPPORTED_JOINTS.iter().max().copied().unwrap_or(0);
+    let kinds = SUPPORTED_JOINTS.map(|n| n.to_string()).join("- and ");
+    if n > max {
+        format!(
+            "{n} joints; at most {max} are supported (the toolkit has kernels for {kinds}-joint arms)"
+        )
+    } else {
+        format!("{n} joints; the toolkit has kernels for {kinds}-joint arms")
+    }
+}
+
+/// The tables of an arm file.
+#[derive(Clone, Copy)]
+enum Place {
+    Top,
+    Joint(usize),
+    Probe,
+}
+
+/// Where `offset` is in the arm file: the table that holds it, and the key
+/// there whose key or value spans it.
+fn locate<'a>(root: &'a DeTable<'a>, offset: usize) -> (Place, &'a DeTable<'a>, Option<String>) {
+    let covers = |s: Range<usize>| s.contains(&offset) || s.start == offset;
+    let key_at = |t: &DeTable<'_>| {
+        t.iter()
+            .find(|(k, v)| covers(k.span()) || covers(v.span()))
+            .map(|(k, _)| k.get_ref().to_string())
+    };
+    if let Some(DeValue::Array(items)) = root.get("joint").map(Spanned::get_ref) {
+        for (i, item) in items.iter().enumerate() {
+            match item.get_ref() {
+                DeValue::Table(t) if covers(item.span()) || key_at(t).is_some() => {
+                    return (Place::Joint(i + 1), t, key_at(t));
+                }
+                _ if covers(item.span()) => {
+                    return (Place::Joint(i + 1), root, Some("joint".into()));
+                }
+                _ => {}
+            }
+        }
+    }
+    if let Some((_, v)) = root.get_key_value("probe")
+        && let DeValue::Table(t) = v.get_ref()
+        && (covers(v.span()) || key_at(t).is_some())
+    {
+        return (Place::Probe, t, key_at(t));
+    }
+    (Place::Top, root, key_at(root))
+}
+
+/// A serde error in the arm file's terms: the key, its line, the joint or
+/// table it is in, and what is expected.
+fn schema_error(text: &str, file: &str, root: &DeTable<'_>, e: &toml::de::Error) -> InputError {
+    let message = e.message();
+    let span = e.span().unwrap_or(0..0);
+    let line = line_of(text, span.start);
+    let (place, table, key) = locate(root, span.start);
+    let ctx = match place {
+        Place::Top => String::new(),
+        Place::Joint(i) => format!("joint {i}: "),
+        Place::Probe => "[probe]: ".to_string(),
+    };
+    // serde puts names in backticks: "unknown field `alpah`, expected one of `theta`, …".
+    let names: Vec<&str> = message.split('`').skip(1).step_by(2).collect();
+    let name = names.first().copied().unwrap_or("?");
+    if message.starts_with("unknown field") {
+        let known = names.get(1..).unwrap_or_default();
+        // serde reports the first unknown key in key order; report the first in the file.
+        let first = (table.iter())
+            .filter(|(k, _)| !known.contains(&&**k.get_ref()))
+            .min_by_key(|(k, _)| k.span().start);
+        let (key, line) = first.map_or((name.to_string(), line), |(k, _)| {
+            (k.get_ref().to_string(), line_of(text, k.span().start))
+        });
+        let place = match place {
+            Place::Top => "at the top level".to_string(),
+            Place::Joint(i) => format!("in joint {i}"),
+            Place::Probe => "in [probe]".to_string(),
+        };
+        let hint = suggest(&key, known).map(|s| format!(" (did you mean `{s}`?)"));
+        let expected: Vec<String> = known.iter().map(|k| format!("`{k}`")).collect();
+        let message = format!(
+            "unknown key {place}{}; expected one of {}",
+            hint.unwrap_or_default(),
+            expected.join(", ")
+        );
+        return InputError::field(file, line, key, message);
+    }
+    if message.starts_with("missing field") {
+        let whole_file = ["length_unit", "angle_unit", "joint", "probe"].contains(&name);
+        let line = if whole_file { 0 } else { line };
+        return InputError::field(file, line, name, missing(name, &ctx));
+    }
+    if message.starts_with("duplicate field `alpha`") {
+        let beta = table.get_key_value("beta");
+        let line = beta.map_or(line, |(k, _)| line_of(text, k.span().start));
+        let message = format!(
+            "{ctx}both `alpha` and `beta` given; they name the same parameter (the link \
+             twist), keep one"
+        );
+        return InputError::field(file, line, "beta", message);
+    }
+    let Some(key) = key else {
+        return InputError::line_error(file, line, format!("{ctx}{message}"));
+    };
+    let raw = text.get(span.clone()).unwrap_or("?");
+    let problem = if message == "floating-point number overflowed" {
+        format!("`{raw}` is not a finite number")
+    } else if message.starts_with("invalid type: integer") && message.contains(" as ") {
+        format!("integer `{raw}` out of range; write it as a float")
+    } else if let Some((found, expected)) =
+        (message.strip_prefix("invalid type: ")).and_then(|m| m.rsplit_once(", expected "))
+    {
+        // Where the error is about the whole value, its TOML type (serde
+        // calls a datetime a map).
+        let value = table.get(key.as_str()).filter(|v| v.span() == span);
+        let found = value.map_or(found, |v| v.get_ref().type_str());
+        // Limits are in the file's angle unit, if it names one.
+        let angle_unit = match root.get("angle_unit").map(Spanned::get_ref) {
+            Some(DeValue::String(unit)) => format!(" in {unit}"),
+            _ => String::new(),
+        };
+        invalid_type(&key, found, expected, &angle_unit)
+    } else {
+        message.to_string()
+    };
+    InputError::field(file, line, key, format!("{ctx}{problem}"))
+}
+
+/// What to say about the missing key `key` (`ctx`: the joint it is missing from).
+fn missing(key: &str, ctx: &str) -> String {
+    match key {
+        "joint" => "no joints: add one [[joint]] table per joint, base to probe".to_string(),
+        "probe" => "missing [probe] table: the probe centre `x`, `y`, `z` in the last joint's \
+                    frame, in length_unit"
+            .to_string(),
+        "x" | "y" | "z" => "[probe]: missing; [probe] needs `x`, `y` and `z`".to_string(),
+        _ => match unit_choices(key) {
+            Some(choices) => format!("missing; add {choices} (units are never guessed)"),
+            None => format!(
+                "{ctx}missing; every [[joint]] needs `theta`, `alpha` (or `beta`), `a` and `d`"
+            ),
+        },
+    }
+}
+
+/// "expected …, found …" for a value of the wrong type; `found` and
+/// `expected` are serde's words (`integer `7``, `f64`, `a sequence`) or a
+/// TOML type name; `in_angle_unit` (` in deg`) completes the limits' shape.
+fn invalid_type(key: &str, found: &str, expected: &str, in_angle_unit: &str) -> String {
+    let expected = match (expected, key) {
+        ("a sequence", "joint") => "[[joint]] tables (an array of tables, one per joint)".into(),
+        ("a sequence", _) => format!("`[min, max]`{in_angle_unit}"),
+        ("f64", _) => "a number".into(),
+        (e, k) => unit_choices(k).map_or(e.to_string(), |c| format!("{e} ({c})")),
+    };
+    let serde_words = [
+        ("floating point", "float"),
+        ("sequence", "array"),
+        ("map", "table"),
+    ];
+    let found = serde_words
+        .iter()
+        .find(|(w, _)| found.starts_with(w))
+        .map_or(found, |(_, t)| t);
+    let found = found.split(' ').next().unwrap_or(found);
+    let article = if found.starts_with(['a', 'e', 'i', 'o', 'u']) {
         "an"
     } else {
         "a"
     };
-    format!("{article} {t}")
+    format!("expected {expected}, found {article} {found}")
 }
 
-type Val<'i> = Spanned<DeValue<'i>>;
-
-/// The joint fields, in file order.
-const JOINT_KEYS: [&str; 6] = ["theta", "alpha", "beta", "a", "d", "limits"];
-const PROBE_KEYS: [&str; 3] = ["x", "y", "z"];
-
-struct Parser<'t> {
-    text: &'t str,
-    file: &'t str,
-}
-
-impl Parser<'_> {
-    fn line<T>(&self, s: &Spanned<T>) -> usize {
-        line_of(self.text, s.span().start)
-    }
-
-    fn err<T>(&self, at: &Spanned<T>, field: &str, message: impl Into<String>) -> InputError {
-        InputError::field(self.file, self.line(at), field, message)
-    }
-
-    /// Errors on the first key (in file order) not in `known`.
-    fn deny_unknown(
-        &self,
-        table: &DeTable<'_>,
-        known: &[&str],
-        place: &str,
-    ) -> Result<(), InputError> {
-        let unknown = table
-            .iter()
-            .filter(|(k, _)| !known.contains(&k.get_ref().as_ref()))
-            .min_by_key(|(k, _)| k.span().start);
-        if let Some((k, _)) = unknown {
-            let key: &str = k.get_ref();
-            let expected = known
-                .iter()
-                .map(|k| format!("`{k}`"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let hint = suggest(key, known)
-                .map(|s| format!(" (did you mean `{s}`?)"))
-                .unwrap_or_default();
-            let msg = format!("unknown key {place}{hint}; expected one of {expected}");
-            return Err(self.err(k, key, msg));
-        }
-        Ok(())
-    }
-
-    /// A required unit key at the top level.
-    fn unit<U>(&self, root: &DeTable<'_>, key: &str, names: &[&str]) -> Result<U, InputError>
-    where
-        U: std::str::FromStr<Err = super::units::UnknownUnit>,
-    {
-        let choices = names
-            .iter()
-            .map(|n| format!("`{key} = \"{n}\"`"))
-            .collect::<Vec<_>>()
-            .join(" or ");
-        let Some((_, v)) = root.get_key_value(key) else {
-            return Err(InputError::field(
-                self.file,
-                0,
-                key,
-                format!("missing; add {choices} (units are never guessed)"),
-            ));
-        };
-        match v.get_ref() {
-            DeValue::String(s) => s.parse::<U>().map_err(|e| self.err(v, key, e.to_string())),
-            other => Err(self.err(
-                v,
-                key,
-                format!("expected a string ({choices}), found {}", a(other)),
-            )),
-        }
-    }
-
-    /// The `[[joint]]` tables, checked for count.
-    fn joint_tables<'d, 'i>(
-        &self,
-        root: &'d DeTable<'i>,
-    ) -> Result<Vec<(&'d Val<'i>, &'d DeTable<'i>)>, InputError> {
-        let Some((key, v)) = root.get_key_value("joint") else {
-            return Err(InputError::field(
-                self.file,
-                0,
-                "joint",
-                "no joints: add one [[joint]] table per joint, base to probe",
-            ));
-        };
-        let DeValue::Array(items) = v.get_ref() else {
-            return Err(self.err(
-                key,
-                "joint",
-                format!(
-                    "expected [[joint]] tables (an array of tables, one per joint), found {}",
-                    a(v.get_ref())
-                ),
-            ));
-        };
-        if items.is_empty() {
-            return Err(self.err(
-                key,
-                "joint",
-                "no joints: add one [[joint]] table per joint, base to probe",
-            ));
-        }
-        let mut tables = Vec::with_capacity(items.len());
-        for (i, item) in items.iter().enumerate() {
-            let DeValue::Table(table) = item.get_ref() else {
-                return Err(self.err(
-                    item,
-                    "joint",
-                    format!(
-                        "joint {}: expected a table, found {}",
-                        i + 1,
-                        a(item.get_ref())
-                    ),
-                ));
-            };
-            if i == MAX_JOINTS {
-                return Err(self.err(
-                    item,
-                    "joint",
-                    format!(
-                        "{} joints; at most {MAX_JOINTS} are supported (the kernels are for \
-                         6- and 7-joint arms)",
-                        items.len()
-                    ),
-                ));
-            }
-            tables.push((item, table));
-        }
-        Ok(tables)
-    }
-
-    /// A finite number (float or integer).
-    fn number(&self, v: &Val<'_>, field: &str, ctx: &str) -> Result<f64, InputError> {
-        let x = match v.get_ref() {
-            DeValue::Float(f) => f.as_str().parse::<f64>().ok(),
-            DeValue::Integer(i) => match i64::from_str_radix(i.as_str(), i.radix()) {
-                Ok(i) => Some(i as f64),
-                Err(_) => {
-                    return Err(self.err(
-                        v,
-                        field,
-                        format!("{ctx}integer `{i}` out of range; write it as a float"),
-                    ));
-                }
-            },
-            other => {
-                return Err(self.err(
-                    v,
-                    field,
-                    format!("{ctx}expected a number, found {}", a(other)),
-                ));
-            }
-        };
-        match x {
-            Some(x) if x.is_finite() => Ok(x),
-            _ => {
-                let raw = self.text.get(v.span()).unwrap_or("?");
-                Err(self.err(v, field, format!("{ctx}`{raw}` is not a finite number")))
-            }
-        }
-    }
-
-    /// A required number in a table.
-    fn required(
-        &self,
-        table: &DeTable<'_>,
-        at: &Val<'_>,
-        key: &str,
-        ctx: &str,
-        needs: &str,
-    ) -> Result<f64, InputError> {
-        match table.get_key_value(key) {
-            Some((_, v)) => self.number(v, key, ctx),
-            None => Err(self.err(at, key, format!("{ctx}missing; {needs}"))),
-        }
-    }
-
-    /// One `[[joint]]` table (`n` 1-based).
-    fn joint(
-        &self,
-        n: usize,
-        at: &Val<'_>,
-        t: &DeTable<'_>,
-        lu: LengthUnit,
-        au: AngleUnit,
-    ) -> Result<(DhJoint, Option<[f64; 2]>), InputError> {
-        let ctx = format!("joint {n}: ");
-        self.deny_unknown(t, &JOINT_KEYS, &format!("in joint {n}"))?;
-        let needs = "every [[joint]] needs `theta`, `alpha` (or `beta`), `a` and `d`";
-        let alpha_key = match (t.get_key_value("alpha"), t.get_key_value("beta")) {
-            (Some(_), Some((kb, _))) => {
-                return Err(self.err(
-                    kb,
-                    "beta",
-                    format!(
-                        "{ctx}both `alpha` and `beta` given; they name the same parameter \
-                         (the link twist), keep one"
-                    ),
-                ));
-            }
-            (None, Some(_)) => "beta",
-            _ => "alpha",
-        };
-        let theta = au.to_internal(self.required(t, at, "theta", &ctx, needs)?);
-        let alpha = au.to_internal(self.required(t, at, alpha_key, &ctx, needs)?);
-        let a = lu.to_internal(self.required(t, at, "a", &ctx, needs)?);
-        let d = lu.to_internal(self.required(t, at, "d", &ctx, needs)?);
-        let limits = match t.get_key_value("limits") {
-            None => None,
-            Some((_, v)) => Some(self.limits(v, &ctx, au)?),
-        };
-        Ok((DhJoint { a, d, alpha, theta }, limits))
-    }
-
-    /// `limits = [min, max]`, converted to rad.
-    fn limits(&self, v: &Val<'_>, ctx: &str, au: AngleUnit) -> Result<[f64; 2], InputError> {
-        let shape = format!("expected `[min, max]` in {au}");
-        let DeValue::Array(items) = v.get_ref() else {
-            return Err(self.err(
-                v,
-                "limits",
-                format!("{ctx}{shape}, found {}", a(v.get_ref())),
-            ));
-        };
-        if items.len() != 2 {
-            return Err(self.err(
-                v,
-                "limits",
-                format!("{ctx}{shape}, found {} values", items.len()),
-            ));
-        }
-        let lo = self.number(&items[0], "limits", ctx)?;
-        let hi = self.number(&items[1], "limits", ctx)?;
-        if lo >= hi {
-            return Err(self.err(
-                v,
-                "limits",
-                format!("{ctx}min {lo} must be less than max {hi}"),
-            ));
-        }
-        Ok([au.to_internal(lo), au.to_internal(hi)])
-    }
-
-    /// The `[probe]` table, mm.
-    fn probe(&self, root: &DeTable<'_>, lu: LengthUnit) -> Result<[f64; 3], InputError> {
-        let Some((key, v)) = root.get_key_value("probe") else {
-            return Err(InputError::field(
-                self.file,
-                0,
-                "probe",
-                "missing [probe] table: the probe centre `x`, `y`, `z` in the last \
-                 joint's frame, in length_unit",
-            ));
-        };
-        let DeValue::Table(t) = v.get_ref() else {
-            return Err(self.err(
-                key,
-                "probe",
-                format!(
-                    "expected a table ([probe] with x, y, z), found {}",
-                    a(v.get_ref())
-                ),
-            ));
-        };
-        self.deny_unknown(t, &PROBE_KEYS, "in [probe]")?;
-        let mut out = [0.0; 3];
-        for (o, key) in out.iter_mut().zip(PROBE_KEYS) {
-            *o = lu.to_internal(self.required(
-                t,
-                v,
-                key,
-                "[probe]: ",
-                "[probe] needs `x`, `y` and `z`",
-            )?);
-        }
-        Ok(out)
-    }
+/// `` `length_unit = "mm"` or `length_unit = "m"` `` for a unit key.
+fn unit_choices(key: &str) -> Option<String> {
+    let names = match key {
+        "length_unit" => LengthUnit::NAMES,
+        "angle_unit" => AngleUnit::NAMES,
+        _ => return None,
+    };
+    let choices: Vec<String> = names.iter().map(|n| format!("`{key} = \"{n}\"`")).collect();
+    Some(choices.join(" or "))
 }
 
 #[cfg(test)]
@@ -564,6 +628,30 @@ beta = 90
 a = -55.0
 d = 0.0
 
+[[joint]]
+theta = 0.0
+alpha = -90.0
+a = 35.0
+d = 250.0
+
+[[joint]]
+theta = 0.0
+alpha = 90.0
+a = -35.0
+d = 0.0
+
+[[joint]]
+theta = 0.0
+alpha = -90.0
+a = 35.0
+d = 270.0
+
+[[joint]]
+theta = 0.0
+alpha = 90.0
+a = -35.0
+d = 0.0
+
 [probe]
 x = 0.0
 y = 0.0
@@ -587,24 +675,28 @@ z = 100.0
 
     #[test]
     fn parses_good_file() {
-        let arm = parse_arm(GOOD, F).unwrap();
+        let (arm, warnings) = parse_arm(GOOD, F).unwrap();
+        assert!(warnings.is_empty(), "{warnings:?}");
         assert_eq!(arm.name, "paper-table-1");
         let j = &arm.params.joints;
-        assert_eq!(j.len(), 2);
+        assert_eq!(j.len(), 6);
         assert_eq!(j[0].alpha, -std::f64::consts::FRAC_PI_2);
         assert_eq!((j[0].a, j[0].d, j[0].theta), (50.0, 375.0, 0.0));
         assert_eq!(j[1].alpha, std::f64::consts::FRAC_PI_2); // from `beta`, an integer
         assert_eq!(j[1].theta, 0.5f64.to_radians());
         assert_eq!(arm.params.probe, [0.0, 0.0, 100.0]);
         let pi = std::f64::consts::PI;
-        assert_eq!(arm.limits, vec![Some([-pi, pi]), None]);
+        assert_eq!(
+            arm.limits,
+            vec![Some([-pi, pi]), None, None, None, None, None]
+        );
     }
 
     #[test]
     fn units_convert() {
         let text = edit("length_unit = \"mm\"", "length_unit = \"m\"")
             .replace("angle_unit = \"deg\"", "angle_unit = \"rad\"");
-        let arm = parse_arm(&text, F).unwrap();
+        let (arm, _) = parse_arm(&text, F).unwrap();
         assert_eq!(arm.params.joints[0].d, 375_000.0);
         assert_eq!(arm.params.joints[0].alpha, -90.0);
         assert_eq!(arm.params.probe[2], 100_000.0);
@@ -613,7 +705,7 @@ z = 100.0
 
     #[test]
     fn name_is_optional() {
-        let arm = parse_arm(&edit("name = \"paper-table-1\"\n", ""), F).unwrap();
+        let (arm, _) = parse_arm(&edit("name = \"paper-table-1\"\n", ""), F).unwrap();
         assert_eq!(arm.name, "");
         assert_at(
             &err(&edit("\"paper-table-1\"", "7")),
@@ -696,7 +788,7 @@ z = 100.0
         );
         assert_at(
             &err(&edit("z = 100.0", "z = 100.0\nw = 1")),
-            22,
+            46,
             Some("w"),
             "unknown key in [probe]",
         );
@@ -708,7 +800,7 @@ z = 100.0
         );
         assert_at(
             &err(&format!("{GOOD}[extra]\n")),
-            22,
+            46,
             Some("extra"),
             "unknown key at the top level",
         );
@@ -787,18 +879,24 @@ z = 100.0
         );
         assert_at(
             &err(&edit("z = 100.0", "z = true")),
-            21,
+            45,
             Some("z"),
             "[probe]: expected a number, found a boolean",
         );
         assert_at(
             &err(&edit("z = 100.0", "z = 99999999999999999999")),
-            21,
+            45,
             Some("z"),
             "[probe]: integer `99999999999999999999` out of range; write it as a float",
         );
+        assert_at(
+            &err(&edit("theta = 0.5", "theta = 1979-05-27")),
+            13,
+            Some("theta"),
+            "joint 2: expected a number, found a datetime",
+        );
         // Integers in other radixes are numbers.
-        let arm = parse_arm(&edit("d = 375.0", "d = 0x10"), F).unwrap();
+        let (arm, _) = parse_arm(&edit("d = 375.0", "d = 0x10"), F).unwrap();
         assert_eq!(arm.params.joints[0].d, 16.0);
     }
 
@@ -826,7 +924,7 @@ z = 100.0
             &err(&edit("[-180.0, 180.0]", "180.0")),
             10,
             Some("limits"),
-            "found a float",
+            "expected `[min, max]` in deg, found a float",
         );
         assert_at(
             &err(&edit("[-180.0, 180.0]", "[-180.0, inf]")),
@@ -867,7 +965,7 @@ z = 100.0
         );
         let joint = "[[joint]]\ntheta = 0\nalpha = 0\na = 0\nd = 1\n";
         let seven = format!("{no_joints}{}", joint.repeat(7));
-        assert_eq!(parse_arm(&seven, F).unwrap().params.joint_count(), 7);
+        assert_eq!(parse_arm(&seven, F).unwrap().0.params.joint_count(), 7);
         let eight = format!("{seven}{joint}");
         // The eighth [[joint]] header is on line 6 + 7 * 5 + 1.
         assert_at(
@@ -879,12 +977,79 @@ z = 100.0
     }
 
     #[test]
+    fn unsupported_joint_counts_are_rejected() {
+        // Five joints: one error naming the file, the last [[joint]] and the
+        // kernels there are (it used to parse, and fail later on the poses header).
+        let five = edit(
+            "\n[[joint]]\ntheta = 0.0\nalpha = 90.0\na = -35.0\nd = 0.0\n\n[probe]",
+            "\n[probe]",
+        );
+        let e = err(&five);
+        assert_at(
+            &e,
+            30,
+            Some("joint"),
+            "5 joints; the toolkit has kernels for 6- and 7-joint arms",
+        );
+        assert_eq!(
+            e.to_string(),
+            "my-arm.toml:30: field `joint`: 5 joints; the toolkit has kernels for 6- and \
+             7-joint arms"
+        );
+        let one = "length_unit = \"mm\"\nangle_unit = \"deg\"\n[[joint]]\ntheta = 0\nalpha = 0\n\
+                   a = 0\nd = 1\n[probe]\nx = 0\ny = 0\nz = 0\n";
+        assert_at(
+            &err(one),
+            3,
+            Some("joint"),
+            "1 joints; the toolkit has kernels",
+        );
+        // The message follows the list of supported counts.
+        assert_eq!(
+            SUPPORTED_JOINTS,
+            [6, 7],
+            "update the messages asserted here"
+        );
+        assert!(unsupported(5).ends_with("kernels for 6- and 7-joint arms"));
+    }
+
+    #[test]
+    fn implausible_units_warn() {
+        // Millimetre values declared as metres: |d| = 375 m.
+        let text = edit("length_unit = \"mm\"", "length_unit = \"m\"");
+        let (_, w) = parse_arm(&text, F).unwrap();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!((w[0].line, w[0].field.as_deref()), (Some(8), Some("a")));
+        assert!(
+            w[0].to_string()
+                .starts_with("my-arm.toml:8: field `a`: lengths declared in metres"),
+            "{}",
+            w[0]
+        );
+        assert!(w[0].message.contains("look like millimetres"), "{}", w[0]);
+        // Degree values declared as radians: |alpha| = 90.
+        let text = edit("angle_unit = \"deg\"", "angle_unit = \"rad\"");
+        let (_, w) = parse_arm(&text, F).unwrap();
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert_eq!((w[0].line, w[0].field.as_deref()), (Some(7), Some("alpha")));
+        assert!(w[0].message.contains("look like degrees"), "{}", w[0]);
+        // Plausible values in m and rad: no warning; the probe counts as a length.
+        let arm = Arm::without_limits("n", DhParams::paper_nominal());
+        let text = arm_to_toml(&arm, LengthUnit::M, AngleUnit::Rad);
+        assert_eq!(parse_arm(&text, F).unwrap().1, vec![]);
+        let far = text.replace("z = 0.1\n", "z = -12.5\n");
+        let (_, w) = parse_arm(&far, F).unwrap();
+        assert_eq!(w[0].field.as_deref(), Some("z"), "{w:?}");
+        assert!(w[0].message.contains("|-12.5| m"), "{}", w[0]);
+    }
+
+    #[test]
     fn probe_required() {
         let text = GOOD[..GOOD.find("[probe]").unwrap()].to_string();
         assert_at(&err(&text), 0, Some("probe"), "missing [probe] table");
         assert_at(
             &err(&edit("y = 0.0\n", "")),
-            18,
+            42,
             Some("y"),
             "[probe]: missing",
         );
@@ -895,14 +1060,14 @@ z = 100.0
             "expected a table",
         );
         // Other TOML spellings of the same table are fine.
-        let arm = parse_arm(&format!("probe = {{ x = 1, y = 2, z = 3 }}\n{text}"), F).unwrap();
+        let (arm, _) = parse_arm(&format!("probe = {{ x = 1, y = 2, z = 3 }}\n{text}"), F).unwrap();
         assert_eq!(arm.params.probe, [1.0, 2.0, 3.0]);
     }
 
     #[test]
     fn write_is_deterministic_and_round_trips_bits() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        for n in 1..=MAX_JOINTS {
+        for n in SUPPORTED_JOINTS {
             let joints = (0..n)
                 .map(|_| DhJoint {
                     a: rng.random_range(-100.0..100.0),
@@ -925,7 +1090,7 @@ z = 100.0
                 limits,
             };
             let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Rad);
-            let back = parse_arm(&text, F).unwrap();
+            let (back, _) = parse_arm(&text, F).unwrap();
             assert_eq!(back.name, arm.name);
             assert_eq!(back.limits, arm.limits);
             let bits = |a: &Arm| {
@@ -938,7 +1103,8 @@ z = 100.0
             assert_eq!(bits(&back), bits(&arm));
             assert_eq!(arm_to_toml(&back, LengthUnit::Mm, AngleUnit::Rad), text);
             // Through deg and m: within 1 ulp.
-            let back = parse_arm(&arm_to_toml(&arm, LengthUnit::M, AngleUnit::Deg), F).unwrap();
+            let (back, _) =
+                parse_arm(&arm_to_toml(&arm, LengthUnit::M, AngleUnit::Deg), F).unwrap();
             for (x, y) in back.params.to_vec().iter().zip(arm.params.to_vec()) {
                 assert!((x - y).abs() <= y.abs() * f64::EPSILON, "{x} {y}");
             }
@@ -947,12 +1113,12 @@ z = 100.0
 
     #[test]
     fn user_file_round_trips_in_its_units() {
-        let arm = parse_arm(GOOD, F).unwrap();
+        let (arm, _) = parse_arm(GOOD, F).unwrap();
         let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg);
         // The user's numbers come back as written (integers as floats, `beta` as `alpha`).
         let expected = GOOD.replace("beta = 90", "alpha = 90.0");
         assert_eq!(text, expected);
-        assert_eq!(parse_arm(&text, F).unwrap(), arm);
+        assert_eq!(parse_arm(&text, F).unwrap().0, arm);
     }
 
     #[test]
@@ -961,7 +1127,7 @@ z = 100.0
         let text = arm_to_toml(&arm, LengthUnit::M, AngleUnit::Deg);
         assert!(text.contains("a = 0.05\nd = 0.375\n"), "{text}");
         assert!(text.contains("z = 0.1\n"), "{text}");
-        assert_eq!(parse_arm(&text, F).unwrap(), arm);
+        assert_eq!(parse_arm(&text, F).unwrap(), (arm, vec![]));
     }
 
     #[test]
@@ -990,7 +1156,7 @@ z = 100.0
         let path = dir.join("arm.toml");
         let arm = Arm::without_limits("nominal", DhParams::paper_nominal());
         write_arm(&path, &arm, LengthUnit::Mm, AngleUnit::Deg).unwrap();
-        assert_eq!(read_arm(&path).unwrap(), arm);
+        assert_eq!(read_arm(&path).unwrap(), (arm.clone(), vec![]));
         std::fs::write(
             &path,
             "length_unit = \"mm\"\nangle_unit = \"deg\"\n[[joint]]\nalpah = 1\n",

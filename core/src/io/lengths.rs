@@ -13,11 +13,11 @@
 //! means "not stated". The CSV dialect is described in the [`io`](super)
 //! module docs.
 
-use std::collections::HashSet;
+use std::collections::{BTreeSet, HashMap};
 use std::io::Write;
 use std::path::Path;
 
-use super::text::{check_header, check_row_width, fmt_f64, parse_f64, quote, read_text, records};
+use super::text::{check_header, fmt_f64, parse_f64, quote, read_text, table};
 use crate::error::InputError;
 
 /// One reference length between two labelled points.
@@ -38,7 +38,8 @@ pub struct ReferenceLength {
 const COLUMNS: [&str; 4] = ["point_a", "point_b", "distance", "uncertainty"];
 const SHAPE: &str = "point_a,point_b,distance` or `point_a,point_b,distance,uncertainty";
 
-/// Reads a reference-length file; messages name the file as `path` displays.
+/// Reads a reference-length file (standard input for `-`); messages name the
+/// file as [`source_name`](super::source_name) gives it.
 ///
 /// ```no_run
 /// let lengths = aacmm_core::io::read_lengths(std::path::Path::new("lengths.csv"))?;
@@ -50,7 +51,7 @@ pub fn read_lengths(path: &Path) -> Result<Vec<ReferenceLength>, InputError> {
 }
 
 /// Parses the text of a reference-length file; `file` is the name used in
-/// messages.
+/// messages. Each pair of points may be given once (in either order).
 ///
 /// ```
 /// use aacmm_core::io::parse_lengths;
@@ -62,76 +63,61 @@ pub fn read_lengths(path: &Path) -> Result<Vec<ReferenceLength>, InputError> {
 /// assert_eq!(e.to_string(), "l.csv:2: field `distance`: must be positive, got -1");
 /// ```
 pub fn parse_lengths(text: &str, file: &str) -> Result<Vec<ReferenceLength>, InputError> {
-    let recs = records(text, file)?;
-    let Some((header, rows)) = recs.split_first() else {
-        return Err(InputError::file_error(
-            file,
-            format!("empty file; expected the header `{SHAPE}` and one row per length"),
-        ));
-    };
-    let ncols = if header.fields.len() >= 4 { 4 } else { 3 };
-    check_header(header, file, &COLUMNS[..ncols], SHAPE)?;
-    let columns = &header.fields;
-
+    let (_, rows) = table(text, file, SHAPE, "one row per length", |header| {
+        let ncols = if header.fields.len() >= 4 { 4 } else { 3 };
+        check_header(header, file, &COLUMNS[..ncols], SHAPE)
+    })?;
+    let mut pairs: HashMap<(String, String), usize> = HashMap::new();
     let mut out = Vec::with_capacity(rows.len());
     for row in rows {
-        check_row_width(row, file, columns)?;
-        let f = &row.fields;
         let line = row.line;
-        for (i, name) in COLUMNS[..2].iter().enumerate() {
-            if f[i].is_empty() {
-                return Err(InputError::field(file, line, *name, "empty point label"));
+        let error =
+            |field: &str, message: String| Err(InputError::field(file, line, field, message));
+        let mut f = row.fields.into_iter();
+        let (a, b) = (f.next().unwrap_or_default(), f.next().unwrap_or_default());
+        let (distance, uncertainty) = (f.next().unwrap_or_default(), f.next());
+        for (field, label) in [("point_a", &a), ("point_b", &b)] {
+            if label.is_empty() {
+                return error(field, "empty point label".into());
             }
         }
-        if f[0] == f[1] {
-            return Err(InputError::field(
-                file,
-                line,
+        if a == b {
+            return error(
                 "point_b",
-                format!(
-                    "same point as point_a (`{}`): a length needs two points",
-                    f[0]
-                ),
-            ));
+                format!("same point as point_a (`{a}`): a length needs two points"),
+            );
         }
-        let distance = parse_f64(&f[2], file, line, "distance")?;
-        if distance <= 0.0 {
-            return Err(InputError::field(
-                file,
-                line,
-                "distance",
-                format!("must be positive, got {}", f[2]),
-            ));
+        let d = parse_f64(&distance, file, line, "distance")?;
+        if d <= 0.0 {
+            return error("distance", format!("must be positive, got {distance}"));
         }
-        let uncertainty = match f.get(3) {
+        let u = match uncertainty.filter(|s| !s.is_empty()) {
             None => None,
-            Some(s) if s.is_empty() => None,
-            Some(s) => {
-                let u = parse_f64(s, file, line, "uncertainty")?;
-                if u < 0.0 {
-                    return Err(InputError::field(
-                        file,
-                        line,
-                        "uncertainty",
-                        format!("must not be negative, got {s}"),
-                    ));
+            Some(s) => match parse_f64(&s, file, line, "uncertainty")? {
+                u if u < 0.0 => {
+                    return error("uncertainty", format!("must not be negative, got {s}"));
                 }
-                Some(u)
-            }
+                u => Some(u),
+            },
         };
+        let pair = if a < b {
+            (a.clone(), b.clone())
+        } else {
+            (b.clone(), a.clone())
+        };
+        if let Some(first) = pairs.insert(pair, line) {
+            return error(
+                "point_b",
+                format!("the pair `{a}`–`{b}` is already given on line {first}"),
+            );
+        }
         out.push(ReferenceLength {
-            a: f[0].clone(),
-            b: f[1].clone(),
-            distance,
-            uncertainty,
+            a,
+            b,
+            distance: d,
+            uncertainty: u,
             line,
         });
-    }
-    if out.is_empty() {
-        return Err(InputError::file_error(
-            file,
-            format!("no data rows after the header (line {})", header.line),
-        ));
     }
     Ok(out)
 }
@@ -152,38 +138,21 @@ pub fn check_lengths_against<S: AsRef<str>>(
     known: &[S],
     file: &str,
 ) -> Result<(), InputError> {
-    let set: HashSet<&str> = known.iter().map(AsRef::as_ref).collect();
-    for l in lengths {
-        for (field, label) in [("point_a", &l.a), ("point_b", &l.b)] {
-            if !set.contains(label.as_str()) {
-                let mut names: Vec<&str> = set.iter().copied().collect();
-                names.sort_unstable();
-                let shown = names
-                    .iter()
-                    .take(10)
-                    .map(|n| format!("`{n}`"))
-                    .collect::<Vec<_>>()
-                    .join(", ");
-                let more = if names.len() > 10 {
-                    format!(" and {} more", names.len() - 10)
-                } else {
-                    String::new()
-                };
-                let known_text = if names.is_empty() {
-                    "there are no known points".to_string()
-                } else {
-                    format!("known points: {shown}{more}")
-                };
-                return Err(InputError::field(
-                    file,
-                    l.line,
-                    field,
-                    format!("unknown point `{label}`; {known_text}"),
-                ));
-            }
-        }
-    }
-    Ok(())
+    let set: BTreeSet<&str> = known.iter().map(AsRef::as_ref).collect();
+    let unknown = (lengths.iter())
+        .flat_map(|l| [(l.line, "point_a", &l.a), (l.line, "point_b", &l.b)])
+        .find(|(_, _, label)| !set.contains(label.as_str()));
+    let Some((line, field, label)) = unknown else {
+        return Ok(());
+    };
+    let shown: Vec<String> = set.iter().take(10).map(|n| format!("`{n}`")).collect();
+    let known_text = match set.len() {
+        0 => "there are no known points".to_string(),
+        n if n > 10 => format!("known points: {} and {} more", shown.join(", "), n - 10),
+        _ => format!("known points: {}", shown.join(", ")),
+    };
+    let message = format!("unknown point `{label}`; {known_text}");
+    Err(InputError::field(file, line, field, message))
 }
 
 /// Writes reference lengths in the file format: deterministic bytes, numbers
@@ -320,6 +289,30 @@ mod tests {
         );
         assert_at(&e("A,B,5"), 3, Some("uncertainty"), "missing");
         assert_at(&e("A,B,5,1,2"), 3, None, "the row has 5 columns");
+    }
+
+    #[test]
+    fn a_pair_is_given_once() {
+        // The same unordered pair twice (either order, any distance) was
+        // silently counted twice.
+        let h = "point_a,point_b,distance\n";
+        for again in ["S1,S2,500", "S2,S1,500", "S1,S2,499.5", "S2,S1,1"] {
+            let text = format!("{h}S1,S2,500\nS1,S3,300\n{again}\n");
+            assert_at(
+                &err(&text),
+                4,
+                Some("point_b"),
+                "is already given on line 2",
+            );
+        }
+        let e = err(&format!("{h}S1,S2,500\nS2,S3,1\nS2,S1,500\n"));
+        assert_eq!(
+            e.to_string(),
+            "ref-lengths.csv:4: field `point_b`: the pair `S2`–`S1` is already given on line 2"
+        );
+        // Pairs sharing a point are distinct.
+        let l = parse_lengths(&format!("{h}S1,S2,1\nS2,S3,1\nS3,S1,1\n"), F).unwrap();
+        assert_eq!(l.len(), 3);
     }
 
     #[test]

@@ -11,21 +11,25 @@
 //! error is an [`InputError`] naming the file and, where known, the 1-based line
 //! and the field; nothing panics on bad input; nothing is dropped silently
 //! (unknown keys and columns are errors). Legal but suspicious data yields a
-//! [`Warning`], returned to the caller to print.
+//! [`Warning`], returned to the caller to print. Every `read_*` function reads
+//! standard input for the path `-` (the Unix convention), named `<stdin>` in
+//! messages ([`source_name`]).
 //!
 //! CSV dialect (all CSV files): comma-separated, one record per line (`\n` or
 //! `\r\n`), fields trimmed of surrounding spaces and tabs, double quotes
-//! around a field allowed (`""` inside quotes is one `"`), lines whose first
-//! non-blank character is `#` are comments, and blank lines are allowed only at
-//! the end of the file. A UTF-8 byte-order mark is ignored. Writers produce
-//! exactly this dialect, deterministically, with numbers in the shortest form
-//! that reads back bit-exactly (except [`points`], fixed 6 decimals).
+//! around a field allowed (`""` inside quotes is one `"`; the quoted content is
+//! kept as is). Lines whose first non-blank character is `#` are comments
+//! only before the header: after the header every non-blank line is a record,
+//! so a row labelled `#S1` is data. Blank lines are allowed only at the end of
+//! the file. A UTF-8 byte-order mark is ignored. Writers produce exactly this
+//! dialect, deterministically, with numbers in the shortest form that reads
+//! back bit-exactly (except [`points`], fixed 6 decimals).
 
 pub mod arm;
 pub mod lengths;
 pub mod points;
 pub mod poses;
-mod text;
+pub(crate) mod text;
 pub mod units;
 
 use std::fmt;
@@ -37,6 +41,7 @@ pub use lengths::{
 };
 pub use points::{parse_points, read_points, write_points};
 pub use poses::{Poses, parse_poses, read_poses, write_poses};
+pub use text::source_name;
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
 
 /// Legal but suspicious input, located like an [`InputError`]. Readers

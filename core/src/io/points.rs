@@ -13,7 +13,7 @@ use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
-use super::text::{check_header, check_row_width, parse_f64, quote, read_text, records};
+use super::text::{check_header, parse_f64, quote, read_text, table};
 use crate::error::InputError;
 
 const COLUMNS: [&str; 4] = ["point", "x", "y", "z"];
@@ -49,7 +49,8 @@ pub fn write_points<S: AsRef<str>>(
     Ok(())
 }
 
-/// Reads a point file; messages name the file as `path` displays.
+/// Reads a point file (standard input for `-`); messages name the file as
+/// [`source_name`](super::source_name) gives it.
 ///
 /// ```no_run
 /// let sockets = aacmm_core::io::read_points(std::path::Path::new("sockets.csv"))?;
@@ -70,23 +71,17 @@ pub fn read_points(path: &Path) -> Result<Vec<(String, [f64; 3])>, InputError> {
 /// assert!(e.to_string().starts_with("s.csv:3: field `point`: duplicate label `S1`"));
 /// ```
 pub fn parse_points(text: &str, file: &str) -> Result<Vec<(String, [f64; 3])>, InputError> {
-    let recs = records(text, file)?;
-    let Some((header, rows)) = recs.split_first() else {
-        return Err(InputError::file_error(
-            file,
-            format!("empty file; expected the header `{SHAPE}` and one row per point"),
-        ));
-    };
-    check_header(header, file, &COLUMNS, SHAPE)?;
-    let mut seen: HashMap<&str, usize> = HashMap::new();
+    let (_, rows) = table(text, file, SHAPE, "one row per point", |header| {
+        check_header(header, file, &COLUMNS, SHAPE)
+    })?;
+    let mut seen: HashMap<String, usize> = HashMap::new();
     let mut out = Vec::with_capacity(rows.len());
     for row in rows {
-        check_row_width(row, file, &header.fields)?;
         let label = &row.fields[0];
         if label.is_empty() {
             return Err(InputError::field(file, row.line, "point", "empty label"));
         }
-        if let Some(first) = seen.insert(label, row.line) {
+        if let Some(first) = seen.insert(label.clone(), row.line) {
             return Err(InputError::field(
                 file,
                 row.line,
@@ -102,12 +97,6 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<(String, [f64; 3])>, I
             *v = parse_f64(s, file, row.line, col)?;
         }
         out.push((label.clone(), xyz));
-    }
-    if out.is_empty() {
-        return Err(InputError::file_error(
-            file,
-            format!("no data rows after the header (line {})", header.line),
-        ));
     }
     Ok(out)
 }
@@ -177,7 +166,7 @@ mod tests {
             "blank line",
         );
         assert_at(
-            &err("point,x,y,z\nA,1,2,3\n# moved\nA,1,2,3\n"),
+            &err("point,x,y,z\nA,1,2,3\n#moved,1,2,3\nA,1,2,3\n"),
             4,
             Some("point"),
             "duplicate label `A` (first on line 2)",

@@ -16,9 +16,7 @@ use std::io::Write;
 use std::path::Path;
 
 use super::Warning;
-use super::text::{
-    Record, check_row_width, check_unique_columns, fmt_f64, parse_f64, quote, read_text, records,
-};
+use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, table};
 use super::units::AngleUnit;
 use crate::error::InputError;
 
@@ -50,9 +48,9 @@ impl Poses {
     }
 }
 
-/// Reads a poses file with angles in `unit`; if `expected_joints` is given,
-/// the file must have that many angle columns. Returns the poses and any
-/// warnings (for the caller to print).
+/// Reads a poses file (standard input for `-`) with angles in `unit`; if
+/// `expected_joints` is given, the file must have that many angle columns.
+/// Returns the poses and any warnings (for the caller to print).
 ///
 /// ```no_run
 /// use aacmm_core::io::{AngleUnit, read_poses};
@@ -91,25 +89,21 @@ pub fn parse_poses(
     unit: AngleUnit,
     expected_joints: Option<usize>,
 ) -> Result<(Poses, Vec<Warning>), InputError> {
-    let recs = records(text, file)?;
-    let Some((header, rows)) = recs.split_first() else {
-        return Err(InputError::file_error(
-            file,
-            "empty file; expected the header `point,q1,...,qn` and one row per touch",
-        ));
-    };
-    let joints = check_poses_header(header, file, expected_joints)?;
+    let shape = "point,q1,...,qn";
+    let per_row = "one row per touch";
+    let (header, rows) = table(text, file, shape, per_row, |h| {
+        check_poses_header(h, file, expected_joints)
+    })?;
     let columns = &header.fields;
-
     let mut poses = Poses {
         labels: Vec::with_capacity(rows.len()),
-        joints,
+        joints: columns.len() - 1,
         q: Vec::with_capacity(rows.len()),
         lines: Vec::with_capacity(rows.len()),
     };
     for row in rows {
-        check_row_width(row, file, columns)?;
-        let label = &row.fields[0];
+        let mut fields = row.fields.into_iter();
+        let label = fields.next().unwrap_or_default();
         if label.is_empty() {
             return Err(InputError::field(
                 file,
@@ -118,150 +112,98 @@ pub fn parse_poses(
                 "empty label: each row must name the point touched",
             ));
         }
-        let q = row.fields[1..]
-            .iter()
+        let q = fields
             .zip(&columns[1..])
-            .map(|(s, col)| parse_f64(s, file, row.line, col))
+            .map(|(s, col)| parse_f64(&s, file, row.line, col))
             .collect::<Result<Vec<f64>, _>>()?;
-        poses.labels.push(label.clone());
+        poses.labels.push(label);
         poses.q.push(q);
         poses.lines.push(row.line);
     }
-    if poses.is_empty() {
-        return Err(InputError::file_error(
-            file,
-            format!("no data rows after the header (line {})", header.line),
-        ));
-    }
 
     let warnings = unit_warnings(&poses, file, unit);
-    for q in &mut poses.q {
-        for x in q.iter_mut() {
-            *x = unit.to_internal(*x);
-        }
+    for x in poses.q.iter_mut().flatten() {
+        *x = unit.to_internal(*x);
     }
     Ok((poses, warnings))
 }
 
-/// Checks the header `point,q1,...,qn`; returns `n`.
+/// Checks the header `point,q1,...,qn`, and `n` against `expected_joints`.
 fn check_poses_header(
     header: &Record,
     file: &str,
     expected_joints: Option<usize>,
-) -> Result<usize, InputError> {
-    check_unique_columns(header, file)?;
-    let cols = &header.fields;
-    let n = cols.len() - 1;
-    let shape = |n: usize| {
-        if n == 0 {
-            "point,q1,...,qn".to_string()
-        } else {
-            format!("point,q1,...,q{n}")
-        }
+) -> Result<(), InputError> {
+    let n = header.fields.len() - 1;
+    let shape = |n: usize| match n {
+        0 => "point,q1,...,qn".to_string(),
+        n => format!("point,q1,...,q{n}"),
     };
-    let want_n = expected_joints.unwrap_or(n);
-    if cols[0] != "point" {
-        return Err(InputError::field(
-            file,
-            header.line,
-            cols[0].clone(),
-            format!(
-                "unexpected column 1 in the header: expected `point`; the header must be \
-                 `{}`",
-                shape(want_n)
-            ),
-        ));
-    }
+    let want = shape(expected_joints.unwrap_or(n));
+    let names: Vec<String> = (1..=n).map(|j| format!("q{j}")).collect();
+    let expected: Vec<&str> = ["point"]
+        .into_iter()
+        .chain(names.iter().map(String::as_str))
+        .collect();
+    check_header(header, file, &expected, &want)?;
+    let error =
+        |field: String, message: String| Err(InputError::field(file, header.line, field, message));
     if n == 0 {
-        return Err(InputError::field(
-            file,
-            header.line,
-            "q1",
-            format!(
-                "missing joint columns in the header; the header must be `{}`",
-                shape(want_n)
-            ),
-        ));
+        let message = format!("missing joint columns in the header; the header must be `{want}`");
+        return error("q1".into(), message);
     }
-    for (i, col) in cols.iter().enumerate().skip(1) {
-        let want = format!("q{i}");
-        if *col != want {
-            return Err(InputError::field(
-                file,
-                header.line,
-                col.clone(),
+    match expected_joints {
+        Some(m) if m != n => {
+            let (field, what) = if n > m {
+                (format!("q{}", m + 1), "unexpected column")
+            } else {
+                (format!("q{}", n + 1), "missing column")
+            };
+            error(
+                field,
                 format!(
-                    "unexpected column {} in the header: expected `{want}`; the header must \
-                     be `{}`",
-                    i + 1,
-                    shape(want_n)
+                    "the header has {n} joint columns (q1..q{n}) but the arm has {m} joints \
+                     ({what}); the header must be `{want}`"
                 ),
-            ));
+            )
         }
+        _ => Ok(()),
     }
-    if let Some(m) = expected_joints
-        && m != n
-    {
-        let (field, what) = if n > m {
-            (format!("q{}", m + 1), "unexpected column")
-        } else {
-            (format!("q{}", n + 1), "missing column")
-        };
-        return Err(InputError::field(
-            file,
-            header.line,
-            field,
-            format!(
-                "the header has {n} joint columns (q1..q{n}) but the arm has {m} joints \
-                 ({what}); the header must be `{}`",
-                shape(m)
-            ),
-        ));
-    }
-    Ok(n)
 }
 
 /// Hints when the angles look like the other unit (`q` still in `unit`).
 fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
     let turn = std::f64::consts::TAU;
-    let mut warnings = Vec::new();
+    let warning = |line, field, message| Warning {
+        file: file.to_string(),
+        line,
+        field,
+        message,
+    };
+    let all_small = || poses.q.iter().flatten().all(|x| x.abs() < turn);
     match unit {
-        AngleUnit::Deg => {
-            let small = poses.q.iter().flatten().all(|x| x.abs() < turn);
-            if small && poses.len() >= RADIANS_HINT_MIN_ROWS {
-                warnings.push(Warning {
-                    file: file.to_string(),
-                    line: None,
-                    field: None,
-                    message: format!(
-                        "angles declared in degrees, but every |q| in all {} rows is below \
-                         2π (6.28°): these angles look like radians; pass --angle-unit rad \
-                         if so",
-                        poses.len()
-                    ),
-                });
-            }
+        AngleUnit::Deg if poses.len() >= RADIANS_HINT_MIN_ROWS && all_small() => {
+            let message = format!(
+                "angles declared in degrees, but every |q| in all {} rows is below 2π (6.28°): \
+                 these angles look like radians; pass --angle-unit rad if so",
+                poses.len()
+            );
+            vec![warning(None, None, message)]
         }
-        AngleUnit::Rad => {
-            let big = poses.q.iter().zip(&poses.lines).find_map(|(q, &line)| {
-                q.iter()
-                    .position(|x| x.abs() > turn)
-                    .map(|j| (line, j, q[j]))
-            });
-            if let Some((line, j, x)) = big {
-                warnings.push(Warning {
-                    file: file.to_string(),
-                    line: Some(line),
-                    field: Some(format!("q{}", j + 1)),
-                    message: format!(
-                        "angles declared in radians, but |{x}| is more than a full turn \
-                         (2π): these angles look like degrees; pass --angle-unit deg if so"
-                    ),
-                });
-            }
-        }
+        AngleUnit::Deg => vec![],
+        AngleUnit::Rad => (poses.q.iter().zip(&poses.lines))
+            .find_map(|(q, &line)| {
+                let j = q.iter().position(|x| x.abs() > turn)?;
+                let message = format!(
+                    "angles declared in radians, but |{}| is more than a full turn (2π): these \
+                     angles look like degrees; pass --angle-unit deg if so",
+                    q[j]
+                );
+                Some(warning(Some(line), Some(format!("q{}", j + 1)), message))
+            })
+            .into_iter()
+            .collect(),
     }
-    warnings
 }
 
 /// Writes poses in the poses-file format with angles in `unit`:
@@ -343,13 +285,13 @@ mod tests {
 
     #[test]
     fn parses_comments_quotes_units() {
-        let text =
-            "# header comment\npoint,q1,q2\nS1,180,-90\n# mid comment\n\"S 2\", 0.5 ,1e-3\n\n\n";
+        // Comments only before the header (a `# mid comment` row would be data).
+        let text = "# header comment\n# more\npoint,q1,q2\nS1,180,-90\n\"S 2\", 0.5 ,1e-3\n\n\n";
         let (p, w) = parse_poses(text, F, AngleUnit::Deg, Some(2)).unwrap();
         assert!(w.is_empty());
         assert_eq!(p.joints, 2);
         assert_eq!(p.labels, ["S1", "S 2"]);
-        assert_eq!(p.lines, [3, 5]);
+        assert_eq!(p.lines, [4, 5]);
         assert_eq!(p.q[0], [std::f64::consts::PI, -std::f64::consts::FRAC_PI_2]);
         assert_eq!(p.q[1], [0.5f64.to_radians(), 1e-3f64.to_radians()]);
         let (r, _) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
@@ -357,11 +299,29 @@ mod tests {
     }
 
     #[test]
+    fn hash_labelled_rows_are_data() {
+        // Only before the header is a `#` line a comment; a row labelled `#S1`
+        // was silently dropped as one.
+        let text = "# touches\npoint,q1\nS0,1\n#S1,2\n # S2 ,3\n";
+        let (p, _) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
+        assert_eq!(p.labels, ["S0", "#S1", "# S2"]);
+        assert_eq!(p.lines, [3, 4, 5]);
+        assert_eq!(p.q[1], [2.0]);
+        // A comment-like line after the header is a row like any other.
+        assert_at(
+            &err("point,q1,q2\nS,1,2\n# note\n", None),
+            3,
+            Some("q1"),
+            "missing: the row has 1 columns, the header 3",
+        );
+    }
+
+    #[test]
     fn empty_file_and_no_rows() {
         assert_at(&err("", None), 0, None, "empty file");
         assert_at(&err("# only a comment\n", None), 0, None, "empty file");
         assert_at(&err("point,q1\n", None), 0, None, "no data rows");
-        assert_at(&err("point,q1\n# c\n\n", None), 0, None, "no data rows");
+        assert_at(&err("# c\npoint,q1\n\n \n", None), 0, None, "no data rows");
     }
 
     #[test]

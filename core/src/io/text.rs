@@ -1,28 +1,64 @@
-//! Shared plumbing of the readers and writers: reading a file as UTF-8,
-//! byte offsets to lines, the CSV dialect (see the `io` module docs), number
-//! parsing and formatting.
+//! Shared plumbing of the readers and writers: reading a file (or standard
+//! input) as UTF-8, byte offsets to lines, the CSV dialect (see the `io`
+//! module docs), number parsing and formatting.
+//!
+//! The dialect is read here, not by the `csv` crate, which reports wrong
+//! lines after blank lines and with CRLF (BurntSushi/rust-csv#208, #395),
+//! trims inside quotes, reads ` "a,b"` as two fields, and silently takes
+//! `"a"b` as `ab` and an unclosed quote as the rest of the file.
 
 use std::borrow::Cow;
 use std::collections::HashMap;
+use std::io::Read;
 use std::path::Path;
 
 use crate::error::InputError;
 
-/// Reads a whole file as UTF-8; returns the name to use in messages and the
-/// text. Invalid UTF-8 is reported with its line.
+/// The name readers give `path` in messages: `<stdin>` for `-`, else the
+/// path as it displays.
+///
+/// ```
+/// use aacmm_core::io::source_name;
+/// assert_eq!(source_name(std::path::Path::new("-")), "<stdin>");
+/// assert_eq!(source_name(std::path::Path::new("data/p.csv")), "data/p.csv");
+/// ```
+pub fn source_name(path: &Path) -> String {
+    if path.as_os_str() == "-" {
+        "<stdin>".to_string()
+    } else {
+        path.display().to_string()
+    }
+}
+
+/// Reads a whole file as UTF-8, or standard input for the path `-` (the Unix
+/// convention); returns the name to use in messages ([`source_name`]) and
+/// the text.
 pub(crate) fn read_text(path: &Path) -> Result<(String, String), InputError> {
-    let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| InputError::io(&file, e))?;
+    let file = source_name(path);
+    if path.as_os_str() == "-" {
+        read_from(file, std::io::stdin().lock())
+    } else {
+        match std::fs::File::open(path) {
+            Ok(f) => read_from(file, f),
+            Err(e) => Err(InputError::io(file, e)),
+        }
+    }
+}
+
+/// Reads everything from `r` as UTF-8 text named `file`; invalid UTF-8 is
+/// reported with its line.
+fn read_from(file: String, mut r: impl Read) -> Result<(String, String), InputError> {
+    let mut bytes = Vec::new();
+    if let Err(e) = r.read_to_end(&mut bytes) {
+        return Err(InputError::io(file, e));
+    }
     match String::from_utf8(bytes) {
         Ok(text) => Ok((file, text)),
         Err(e) => {
             let at = e.utf8_error().valid_up_to();
             let line = 1 + e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count();
-            Err(InputError::line_error(
-                file,
-                line,
-                "not valid UTF-8 text (save the file as UTF-8)",
-            ))
+            let message = "not valid UTF-8 text (save the file as UTF-8)";
+            Err(InputError::line_error(file, line, message))
         }
     }
 }
@@ -49,8 +85,40 @@ pub(crate) struct Record {
     pub fields: Vec<String>,
 }
 
-/// Splits CSV text into records, skipping comments and trailing blank lines;
-/// a blank line followed by more data is an error.
+/// The header and the data rows of a CSV file, each row as wide as the
+/// header. Errors on an empty file or one without data rows; `shape` and
+/// `rows_are` complete the message (`point,x,y,z`, `one row per point`).
+pub(crate) fn table(
+    text: &str,
+    file: &str,
+    shape: &str,
+    rows_are: &str,
+    check_header: impl FnOnce(&Record) -> Result<(), InputError>,
+) -> Result<(Record, Vec<Record>), InputError> {
+    let mut recs = records(text, file)?.into_iter();
+    let Some(header) = recs.next() else {
+        return Err(InputError::file_error(
+            file,
+            format!("empty file; expected the header `{shape}` and {rows_are}"),
+        ));
+    };
+    check_header(&header)?;
+    let rows: Vec<Record> = recs.collect();
+    if rows.is_empty() {
+        return Err(InputError::file_error(
+            file,
+            format!("no data rows after the header (line {})", header.line),
+        ));
+    }
+    for row in &rows {
+        check_row_width(row, file, &header.fields)?;
+    }
+    Ok((header, rows))
+}
+
+/// Splits CSV text into records: comment lines (first non-blank character
+/// `#`) are skipped before the first record (the header) only; blank lines
+/// are allowed only at the end.
 pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out = Vec::new();
@@ -63,16 +131,21 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
             pending_blank.get_or_insert(line);
             continue;
         }
-        if trimmed.starts_with('#') {
+        if out.is_empty() && trimmed.starts_with('#') {
             continue;
         }
         if let Some(blank) = pending_blank {
+            let hint = if out.is_empty() {
+                ", or start it with `#` to make it a comment"
+            } else {
+                ""
+            };
             return Err(InputError::line_error(
                 file,
                 blank,
                 format!(
                     "blank line before more data (line {line}); only trailing blank lines \
-                     are allowed: delete it, or start it with `#` to make it a comment"
+                     are allowed: delete it{hint}"
                 ),
             ));
         }
@@ -84,74 +157,51 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
     Ok(out)
 }
 
-/// Splits one line into fields (see the dialect in the `io` module docs).
-fn split_fields(line_text: &str, file: &str, line: usize) -> Result<Vec<String>, InputError> {
+/// Splits one line into fields: commas separate fields, spaces and tabs
+/// around a field are dropped, and a field may be quoted (`"a,b"`, with `""`
+/// for one `"` inside), which keeps its content exactly.
+fn split_fields(text: &str, file: &str, line: usize) -> Result<Vec<String>, InputError> {
+    let err = |message: String| Err(InputError::line_error(file, line, message));
     let mut fields = Vec::new();
-    let mut chars = line_text.chars().peekable();
+    let mut rest = text;
     loop {
-        // Start of a field.
-        while chars.peek().is_some_and(|&c| c == ' ' || c == '\t') {
-            chars.next();
-        }
-        let mut field = String::new();
-        if chars.peek() == Some(&'"') {
-            chars.next();
-            let column = fields.len() + 1;
-            loop {
+        let column = fields.len() + 1;
+        rest = rest.trim_start_matches([' ', '\t']);
+        if let Some(quoted) = rest.strip_prefix('"') {
+            let mut field = String::new();
+            let mut chars = quoted.char_indices().peekable();
+            let end = loop {
                 match chars.next() {
-                    None => {
-                        return Err(InputError::line_error(
-                            file,
-                            line,
-                            format!("unterminated quote in column {column}"),
-                        ));
+                    None => return err(format!("unterminated quote in column {column}")),
+                    Some((_, '"')) if chars.next_if(|&(_, c)| c == '"').is_some() => {
+                        field.push('"')
                     }
-                    Some('"') if chars.peek() == Some(&'"') => {
-                        chars.next();
-                        field.push('"');
-                    }
-                    Some('"') => break,
-                    Some(c) => field.push(c),
+                    Some((i, '"')) => break i + 1,
+                    Some((_, c)) => field.push(c),
                 }
+            };
+            rest = quoted[end..].trim_start_matches([' ', '\t']);
+            if let Some(c) = rest.chars().next().filter(|&c| c != ',') {
+                return err(format!(
+                    "unexpected `{c}` after the closing quote of column {column}"
+                ));
             }
-            while chars.peek().is_some_and(|&c| c == ' ' || c == '\t') {
-                chars.next();
-            }
-            match chars.peek() {
-                None | Some(',') => {}
-                Some(&c) => {
-                    return Err(InputError::line_error(
-                        file,
-                        line,
-                        format!("unexpected `{c}` after the closing quote of column {column}"),
-                    ));
-                }
-            }
+            fields.push(field);
         } else {
-            while let Some(&c) = chars.peek() {
-                if c == ',' {
-                    break;
-                }
-                if c == '"' {
-                    return Err(InputError::line_error(
-                        file,
-                        line,
-                        format!(
-                            "stray `\"` in column {}; quote the whole field, and double \
-                             quotes inside it",
-                            fields.len() + 1
-                        ),
-                    ));
-                }
-                field.push(c);
-                chars.next();
+            let end = rest.find(',').unwrap_or(rest.len());
+            let field = rest[..end].trim_end_matches([' ', '\t']);
+            if field.contains('"') {
+                return err(format!(
+                    "stray `\"` in column {column}; quote the whole field, and double quotes \
+                     inside it"
+                ));
             }
-            field.truncate(field.trim_end_matches([' ', '\t']).len());
+            fields.push(field.to_string());
+            rest = &rest[end..];
         }
-        fields.push(field);
-        match chars.next() {
-            Some(',') => continue,
-            _ => return Ok(fields),
+        match rest.strip_prefix(',') {
+            Some(after) => rest = after,
+            None => return Ok(fields),
         }
     }
 }
@@ -159,11 +209,9 @@ fn split_fields(line_text: &str, file: &str, line: usize) -> Result<Vec<String>,
 /// Quotes a field for writing if reading it back would otherwise change it.
 pub(crate) fn quote(field: &str) -> Cow<'_, str> {
     let needs = field.is_empty()
-        || field.starts_with('#')
-        || field.starts_with([' ', '\t'])
+        || field.starts_with([' ', '\t', '\u{feff}'])
         || field.ends_with([' ', '\t'])
-        || field.contains([',', '"', '\n', '\r'])
-        || field.starts_with('\u{feff}');
+        || field.contains([',', '"', '\n', '\r']);
     if needs {
         Cow::Owned(format!("\"{}\"", field.replace('"', "\"\"")))
     } else {
@@ -171,74 +219,42 @@ pub(crate) fn quote(field: &str) -> Cow<'_, str> {
     }
 }
 
-/// Errors on a repeated column name in a header.
-pub(crate) fn check_unique_columns(header: &Record, file: &str) -> Result<(), InputError> {
-    let mut seen: HashMap<&str, usize> = HashMap::new();
-    for (i, name) in header.fields.iter().enumerate() {
-        if let Some(first) = seen.insert(name, i + 1) {
-            return Err(InputError::field(
-                file,
-                header.line,
-                name.clone(),
-                format!(
-                    "duplicate column (columns {first} and {}) in the header",
-                    i + 1
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
 /// Checks a header against the expected column names: the same names, in the
-/// same order. `expected_text` is shown in messages (e.g. `point,x,y,z`).
+/// same order, none repeated. `shape` is shown in messages (e.g. `point,x,y,z`).
 pub(crate) fn check_header(
     header: &Record,
     file: &str,
     expected: &[&str],
-    expected_text: &str,
+    shape: &str,
 ) -> Result<(), InputError> {
-    check_unique_columns(header, file)?;
-    for (i, want) in expected.iter().enumerate() {
-        match header.fields.get(i) {
-            Some(got) if got == want => {}
-            Some(got) => {
-                return Err(InputError::field(
-                    file,
-                    header.line,
-                    got.clone(),
-                    format!(
-                        "unexpected column {} in the header: expected `{want}`; the header \
-                         must be exactly `{expected_text}`",
-                        i + 1
-                    ),
-                ));
-            }
-            None => {
-                return Err(InputError::field(
-                    file,
-                    header.line,
-                    *want,
-                    format!(
-                        "missing column {} in the header; the header must be exactly \
-                         `{expected_text}`",
-                        i + 1
-                    ),
-                ));
-            }
+    let got = &header.fields;
+    let mut seen: HashMap<&str, usize> = HashMap::new();
+    for (i, name) in got.iter().enumerate() {
+        if let Some(first) = seen.insert(name, i + 1) {
+            let message = format!(
+                "duplicate column (columns {first} and {}) in the header",
+                i + 1
+            );
+            return Err(InputError::field(file, header.line, name.clone(), message));
         }
     }
-    if let Some(extra) = header.fields.get(expected.len()) {
-        return Err(InputError::field(
-            file,
-            header.line,
-            extra.clone(),
-            format!(
-                "unexpected column {} in the header; the header must be exactly \
-                 `{expected_text}`",
-                expected.len() + 1
+    for i in 0..got.len().max(expected.len()) {
+        let column = i + 1;
+        let (field, what) = match (got.get(i), expected.get(i)) {
+            (Some(g), Some(w)) if g == w => continue,
+            (Some(g), Some(w)) => (
+                g.as_str(),
+                format!("unexpected column {column} in the header: expected `{w}`"),
             ),
-        ));
+            (None, Some(w)) => (*w, format!("missing column {column} in the header")),
+            (Some(g), None) => (
+                g.as_str(),
+                format!("unexpected column {column} in the header"),
+            ),
+            (None, None) => continue,
+        };
+        let message = format!("{what}; the header must be `{shape}`");
+        return Err(InputError::field(file, header.line, field, message));
     }
     Ok(())
 }
@@ -251,8 +267,6 @@ pub(crate) fn check_row_width(
 ) -> Result<(), InputError> {
     let (got, want) = (row.fields.len(), columns.len());
     if got < want {
-        // `got == 1` with an empty field is an all-blank row: still name the
-        // first missing column.
         return Err(InputError::field(
             file,
             row.line,
@@ -275,30 +289,16 @@ pub(crate) fn check_row_width(
 
 /// Parses a finite number from a CSV field.
 pub(crate) fn parse_f64(s: &str, file: &str, line: usize, field: &str) -> Result<f64, InputError> {
-    if s.is_empty() {
-        return Err(InputError::field(file, line, field, "missing value"));
-    }
-    match s.parse::<f64>() {
-        Ok(x) if x.is_finite() => Ok(x),
-        Ok(x) if x.is_nan() || s.to_ascii_lowercase().contains("inf") => Err(InputError::field(
-            file,
-            line,
-            field,
-            format!("`{s}` is not a finite number"),
-        )),
-        Ok(_) => Err(InputError::field(
-            file,
-            line,
-            field,
-            format!("`{s}` is out of range of finite numbers"),
-        )),
-        Err(_) => Err(InputError::field(
-            file,
-            line,
-            field,
-            format!("`{s}` is not a number"),
-        )),
-    }
+    let problem = match s.parse::<f64>() {
+        Ok(x) if x.is_finite() => return Ok(x),
+        _ if s.is_empty() => "missing value".to_string(),
+        Ok(x) if x.is_nan() || s.to_ascii_lowercase().contains("inf") => {
+            format!("`{s}` is not a finite number")
+        }
+        Ok(_) => format!("`{s}` is out of range of finite numbers"),
+        Err(_) => format!("`{s}` is not a number"),
+    };
+    Err(InputError::field(file, line, field, problem))
 }
 
 /// The candidate closest to `got` by edit distance, if it is close (a typo).
@@ -376,12 +376,21 @@ mod tests {
 
     #[test]
     fn records_skip_comments_and_trailing_blanks() {
-        let t = "\u{feff}# c\nh1,h2\r\n  # c2\n1,2\n\n \n# end\n";
+        // Comments only before the header: after it, `# c2` is a record.
+        let t = "\u{feff}# c\nh1,h2\r\n  # c2\n1,2\n\n \n";
         let r = records(t, "f").unwrap();
-        assert_eq!(r.len(), 2);
+        assert_eq!(r.len(), 3);
         assert_eq!(r[0].line, 2);
         assert_eq!(r[0].fields, ["h1", "h2"]);
-        assert_eq!(r[1].line, 4);
+        assert_eq!(
+            (r[1].line, r[1].fields.as_slice()),
+            (3, ["# c2".to_string()].as_slice())
+        );
+        assert_eq!(r[2].line, 4);
+        // A comment after the header and a blank line is data after a blank line.
+        let e = records("h\n1\n\n# end\n", "f.csv").unwrap_err();
+        assert!(e.to_string().starts_with("f.csv:3: blank line"), "{e}");
+        assert!(!e.to_string().contains("comment"), "{e}");
         let e = records("h\n\n1\n", "f.csv").unwrap_err();
         assert_eq!(e.line(), Some(2));
         assert!(e.to_string().starts_with("f.csv:2: blank line"), "{e}");
@@ -432,6 +441,19 @@ mod tests {
         assert_eq!(suggest("b", &keys), Some("a"));
         assert_eq!(suggest("zzzzzz", &keys), None);
         assert_eq!(suggest("alpha", &keys), None);
+    }
+
+    #[test]
+    fn stdin_is_named_and_read_like_a_file() {
+        assert_eq!(source_name(Path::new("-")), "<stdin>");
+        assert_eq!(source_name(Path::new("./-")), "./-");
+        let (name, text) = read_from(source_name(Path::new("-")), &b"point,q1\n"[..]).unwrap();
+        assert_eq!((name.as_str(), text.as_str()), ("<stdin>", "point,q1\n"));
+        let e = read_from("<stdin>".into(), &b"a\n\xff"[..]).unwrap_err();
+        assert!(
+            e.to_string().starts_with("<stdin>:2: not valid UTF-8"),
+            "{e}"
+        );
     }
 
     #[test]

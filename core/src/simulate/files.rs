@@ -7,12 +7,14 @@ use serde::{Deserialize, Serialize};
 
 use super::{Campaign, CampaignSettings, SimError};
 use crate::error::InputError;
+use crate::io::arm::ArmFile;
 use crate::io::{
     AngleUnit, Arm, LengthUnit, arm_to_toml, parse_arm, write_lengths, write_points, write_poses,
 };
 
-/// The `format` key of `campaign.toml`.
-pub const CAMPAIGN_FORMAT: &str = "aacmm-campaign-1";
+/// The `format` key of `campaign.toml` (2: arms are TOML tables, no longer
+/// arm-file text in a string).
+pub const CAMPAIGN_FORMAT: &str = "aacmm-campaign-2";
 
 /// The poses file of a campaign (encoder readings, degrees).
 pub const POSES_FILE: &str = "poses.csv";
@@ -36,18 +38,20 @@ struct CampaignFile {
     /// Joints of the nominal (and true) arm.
     joints: usize,
     settings: CampaignSettings,
-    nominal: Nominal,
+    /// The nominal arm, an arm file as a table.
+    #[serde(with = "arm_table")]
+    nominal: Arm,
 }
 
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Nominal {
-    #[serde(with = "arm_text")]
-    arm: Arm,
+/// Just the format, to tell an old or foreign file from a broken one.
+#[derive(Deserialize)]
+struct Format {
+    format: Option<String>,
 }
 
 /// The text of `campaign.toml` for a campaign on `nominal`: a comment, the
-/// format, the settings (seed first) and the nominal arm as arm-file text.
+/// format, the settings (seed first) and the nominal arm as a table
+/// (`[nominal]`, `[[nominal.joint]]`, `[nominal.probe]`).
 ///
 /// ```
 /// use aacmm_core::{io::Arm, params::DhParams, simulate::*};
@@ -63,9 +67,7 @@ pub fn campaign_to_toml(nominal: &Arm, settings: &CampaignSettings) -> Result<St
         generator: format!("aacmm-core {}", env!("CARGO_PKG_VERSION")),
         joints: nominal.params.joint_count(),
         settings: settings.clone(),
-        nominal: Nominal {
-            arm: nominal.clone(),
-        },
+        nominal: nominal.clone(),
     };
     let body = toml::to_string(&file)
         .map_err(|e| SimError::setting("settings", format!("cannot be written as TOML: {e}")))?;
@@ -79,7 +81,7 @@ pub fn campaign_to_toml(nominal: &Arm, settings: &CampaignSettings) -> Result<St
 /// Parses the text of `campaign.toml`; `file` names it in messages. Returns
 /// the nominal arm and the settings, validated.
 pub fn parse_campaign(text: &str, file: &str) -> Result<(Arm, CampaignSettings), SimError> {
-    let parsed: CampaignFile = toml::from_str(text).map_err(|e| {
+    let located = |e: toml::de::Error| {
         let line = e.span().map_or(0, |s| {
             1 + text[..s.start.min(text.len())].matches('\n').count()
         });
@@ -89,20 +91,15 @@ pub fn parse_campaign(text: &str, file: &str) -> Result<(Arm, CampaignSettings),
         } else {
             InputError::file_error(file, message)
         }
-    })?;
-    if parsed.format != CAMPAIGN_FORMAT {
-        return Err(InputError::field(
-            file,
-            0,
-            "format",
-            format!(
-                "expected \"{CAMPAIGN_FORMAT}\", found \"{}\"",
-                parsed.format
-            ),
-        )
-        .into());
+    };
+    let format = toml::from_str::<Format>(text).map_err(located)?.format;
+    if format.as_deref() != Some(CAMPAIGN_FORMAT) {
+        let found = format.map_or("none".to_string(), |f| format!("\"{f}\""));
+        let message = format!("expected \"{CAMPAIGN_FORMAT}\", found {found}");
+        return Err(InputError::field(file, 0, "format", message).into());
     }
-    let joints = parsed.nominal.arm.params.joint_count();
+    let parsed: CampaignFile = toml::from_str(text).map_err(located)?;
+    let joints = parsed.nominal.params.joint_count();
     if parsed.joints != joints {
         return Err(InputError::field(
             file,
@@ -113,7 +110,7 @@ pub fn parse_campaign(text: &str, file: &str) -> Result<(Arm, CampaignSettings),
         .into());
     }
     parsed.settings.validate(joints)?;
-    Ok((parsed.nominal.arm, parsed.settings))
+    Ok((parsed.nominal, parsed.settings))
 }
 
 /// Reads `campaign.toml` (see [`parse_campaign`]).
@@ -125,8 +122,7 @@ pub fn parse_campaign(text: &str, file: &str) -> Result<(Arm, CampaignSettings),
 /// # Ok::<(), aacmm_core::simulate::SimError>(())
 /// ```
 pub fn read_campaign(path: &Path) -> Result<(Arm, CampaignSettings), SimError> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| InputError::io(&file, e))?;
+    let (file, text) = crate::io::text::read_text(path)?;
     parse_campaign(&text, &file)
 }
 
@@ -192,22 +188,29 @@ pub fn write_campaign(
     Ok(files.into_iter().map(|(p, _)| p).collect())
 }
 
-/// Serde adapter: an [`Arm`] as arm-file text (mm and degrees when that
-/// reads back bit-exactly, else mm and radians).
-pub(crate) mod arm_text {
+/// Serde adapter: an [`Arm`] as an arm-file table, in mm and degrees when
+/// that reads back bit-exactly, else in mm and radians. Read through
+/// [`toml::Table`] and arm-file text, so that it works where serde buffers the
+/// value (the internally tagged `model = "file"`) and is checked like an arm
+/// file; messages name the field, and the table's line is the caller's.
+pub(crate) mod arm_table {
+    use serde::de::Error as _;
+
     use super::*;
 
     pub fn serialize<S: serde::Serializer>(arm: &Arm, s: S) -> Result<S::Ok, S::Error> {
-        let deg = arm_to_toml(arm, LengthUnit::Mm, AngleUnit::Deg);
-        let text = match parse_arm(&deg, "arm") {
-            Ok(back) if back == *arm => deg,
-            _ => arm_to_toml(arm, LengthUnit::Mm, AngleUnit::Rad),
-        };
-        s.serialize_str(&text)
+        ArmFile::exact(arm).serialize(s)
     }
 
     pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Arm, D::Error> {
-        let text = String::deserialize(d)?;
-        parse_arm(&text, "embedded arm").map_err(serde::de::Error::custom)
+        let table = toml::Table::deserialize(d)?;
+        let text = toml::to_string(&table).map_err(D::Error::custom)?;
+        match parse_arm(&text, "arm") {
+            Ok((arm, _)) => Ok(arm),
+            Err(e) => Err(D::Error::custom(match e.field_name() {
+                Some(field) => format!("field `{field}`: {}", e.message()),
+                None => e.message(),
+            })),
+        }
     }
 }

@@ -76,8 +76,8 @@ pub enum ErrorModel {
     },
     /// A given true arm (same joint count as the nominal).
     File {
-        /// The true arm; written into `campaign.toml` as arm-file text.
-        #[serde(with = "super::files::arm_text")]
+        /// The true arm; written into `campaign.toml` as an arm-file table.
+        #[serde(with = "super::files::arm_table")]
         arm: Arm,
     },
 }
@@ -176,7 +176,7 @@ impl SocketPlan {
             .map(|(label, [x, y, z])| SocketPoint { label, x, y, z })
             .collect();
         Ok(SocketPlan::Given {
-            file: Some(path.display().to_string()),
+            file: Some(crate::io::source_name(path)),
             points,
         })
     }

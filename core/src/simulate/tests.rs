@@ -316,7 +316,7 @@ fn written_files_read_back_exactly() {
     let (poses, warnings) = read_poses(&dir.join(POSES_FILE), AngleUnit::Deg, Some(6)).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     assert_eq!(poses, c.poses); // bit-exact, lines included
-    assert_eq!(read_arm(&dir.join(TRUE_ARM_FILE)).unwrap(), c.true_arm);
+    assert_eq!(read_arm(&dir.join(TRUE_ARM_FILE)).unwrap().0, c.true_arm);
     assert_eq!(read_points(&dir.join(SOCKETS_FILE)).unwrap(), c.sockets);
     let lengths = read_lengths(&dir.join(LENGTHS_FILE)).unwrap();
     assert_eq!(lengths, c.lengths);
@@ -584,7 +584,7 @@ fn campaign_toml_errors_are_located() {
             .to_string()
             .starts_with("setting `poses_per_socket`")
     );
-    let e = parse_campaign(&text.replace("aacmm-campaign-1", "other"), "c.toml").unwrap_err();
+    let e = parse_campaign(&text.replace(CAMPAIGN_FORMAT, "other"), "c.toml").unwrap_err();
     assert!(e.to_string().starts_with("c.toml: field `format`"), "{e}");
 }
 
@@ -593,7 +593,7 @@ fn true_arm_is_canonical() {
     for seed in 0..20 {
         let t = true_arm(&paper(), &ErrorModel::random(1.0, true), &mut rng(seed, 1)).unwrap();
         let text = crate::io::arm_to_toml(&t, crate::io::LengthUnit::Mm, AngleUnit::Deg);
-        assert_eq!(crate::io::parse_arm(&text, "t").unwrap(), t);
+        assert_eq!(crate::io::parse_arm(&text, "t").unwrap().0, t);
     }
     // Readings written in degrees read back bit-exactly.
     let s = CampaignSettings::new(3, ErrorModel::random(1.0, true), 3, 4);
@@ -644,4 +644,38 @@ fn given_true_arm_and_sockets_survive_campaign_toml() {
     let (nominal, back) = parse_campaign(&text, "c.toml").unwrap();
     assert_eq!((nominal, &back), (paper(), &s));
     assert_eq!(simulate(&paper(), &back).unwrap(), c);
+}
+
+#[test]
+fn campaign_arms_are_tables_and_old_files_are_named() {
+    let mut given = paper();
+    given.name = "measured".into();
+    let s = CampaignSettings::new(1, ErrorModel::File { arm: given }, 3, 4);
+    let text = campaign_to_toml(&paper(), &s).unwrap();
+    assert!(
+        text.contains("\n[nominal]\nname = \"paper-table-1\"\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains("\n[[nominal.joint]]\ntheta = 0.0\nalpha = -90.0\n"),
+        "{text}"
+    );
+    assert!(
+        text.contains("\n[settings.errors.arm]\nname = \"measured\"\n"),
+        "{text}"
+    );
+    // A bad embedded arm is reported like an arm file, at its table.
+    let bad = text.replacen("length_unit = \"mm\"", "length_unit = \"inch\"", 1);
+    let e = parse_campaign(&bad, "c.toml").unwrap_err().to_string();
+    assert!(
+        e.contains("field `length_unit`: unknown length unit `inch`"),
+        "{e}"
+    );
+    // A version-1 file (arms as strings) is named as such, not as a type error.
+    let old = text.replace(CAMPAIGN_FORMAT, "aacmm-campaign-1");
+    let e = parse_campaign(&old, "c.toml").unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "c.toml: field `format`: expected \"aacmm-campaign-2\", found \"aacmm-campaign-1\""
+    );
 }

@@ -105,11 +105,13 @@ pub fn true_arm(nominal: &Arm, model: &ErrorModel, rng: &mut ChaCha8Rng) -> Resu
 
 /// The arm as it reads back from its own mm/degree arm file.
 fn canonical(arm: Arm) -> Arm {
-    parse_arm(
+    match parse_arm(
         &arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg),
         "true arm",
-    )
-    .unwrap_or(arm)
+    ) {
+        Ok((canonical, _)) => canonical,
+        Err(_) => arm,
+    }
 }
 
 /// A standard normal draw.
