@@ -5,8 +5,8 @@
 //! in order of first appearance, touches in file order within a point), their
 //! readings with sin/cos prepared once for the kernel, and the reference
 //! lengths by point index. Labels are checked once, here: every point has at
-//! least [`MIN_TOUCHES`] touches and every reference names two known,
-//! different points, at most once per pair. Where each value came from lives
+//! least [`MIN_TOUCHES`] touches and every reference names known points (the
+//! lengths reader refuses self-pairs and repeated pairs). Where each value came from lives
 //! in a separate [`SourceMap`], so a later stage (metrics, a solver) can
 //! report a problem at `file:line` without the caller translating errors.
 
@@ -229,8 +229,9 @@ impl DataSet {
     /// Adds reference lengths read from `file`, naming the points by label.
     ///
     /// # Errors
-    /// An unknown point (field `point_a` or `point_b`), a length joining a
-    /// point to itself, or a pair given twice (in either order).
+    /// An unknown point (field `point_a` or `point_b`). (A length joining a
+    /// point to itself, or a pair given twice, is refused by
+    /// [`parse_lengths`](crate::io::parse_lengths) already.)
     ///
     /// ```
     /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_lengths, parse_poses}};
@@ -253,33 +254,11 @@ impl DataSet {
         let labels: Vec<&str> = self.points.iter().map(|p| p.label.as_str()).collect();
         crate::io::check_lengths_against(lengths, &labels, file)?;
         let index: HashMap<&str, usize> = labels.iter().enumerate().map(|(i, l)| (*l, i)).collect();
-        let mut seen: HashMap<(usize, usize), usize> = HashMap::new();
+        // The file reader already refused a point joined to itself and a
+        // pair given twice; what is left is whether the labels exist.
         let mut references = Vec::with_capacity(lengths.len());
         for l in lengths {
             let (a, b) = (index[l.a.as_str()], index[l.b.as_str()]);
-            if a == b {
-                return Err(InputError::field(
-                    file,
-                    l.line,
-                    "point_b",
-                    format!(
-                        "same point as point_a (`{}`): a length needs two points",
-                        l.a
-                    ),
-                ));
-            }
-            if let Some(first) = seen.insert((a.min(b), a.max(b)), l.line) {
-                return Err(InputError::field(
-                    file,
-                    l.line,
-                    "point_b",
-                    format!(
-                        "the pair `{}`–`{}` is already given on line {first}; give each \
-                         reference length once",
-                        l.a, l.b
-                    ),
-                ));
-            }
             references.push(Reference {
                 a,
                 b,
