@@ -173,6 +173,44 @@ pub fn to_user(id: ParamId, v: f64) -> f64 {
     }
 }
 
+/// The normal matrix of all columns at an arm, and its scaled form
+/// `D JᵀJ D` (angle columns divided by the reach).
+struct Scaled {
+    ids: Vec<ParamId>,
+    normal: crate::residuals::Normal,
+    reach: f64,
+    /// Column scale: 1 for lengths, `1/reach` for angles.
+    d: Vec<f64>,
+    ns: DMatrix<f64>,
+}
+
+impl Scaled {
+    fn at(
+        params: &DhParams,
+        data: &DataSet,
+        weights: &Weights,
+        threads: usize,
+    ) -> Result<Scaled, KernelError> {
+        let ids: Vec<ParamId> = ParamId::all(params.joint_count()).collect();
+        let np = ids.len();
+        let all: Vec<usize> = (0..np).collect();
+        let normal = normal_equations(&ArmKernel::new(params)?, data, weights, &all, threads)?;
+        let reach = reach(params);
+        let d: Vec<f64> = ids
+            .iter()
+            .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / reach })
+            .collect();
+        let ns = DMatrix::from_fn(np, np, |a, b| normal.jtj[a * np + b] * d[a] * d[b]);
+        Ok(Scaled {
+            ids,
+            normal,
+            reach,
+            d,
+            ns,
+        })
+    }
+}
+
 /// Analyses what `data` (weighted by `weights`) can identify at `params`.
 pub fn identify(
     params: &DhParams,
@@ -181,18 +219,15 @@ pub fn identify(
     threads: usize,
 ) -> Result<Identification, KernelError> {
     let n = params.joint_count();
-    let np = params.param_count();
-    let ids: Vec<ParamId> = ParamId::all(n).collect();
+    let Scaled {
+        ids,
+        normal,
+        reach: r,
+        d,
+        ns,
+    } = Scaled::at(params, data, weights, threads)?;
+    let np = ids.len();
     let names: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
-    let kernel = ArmKernel::new(params)?;
-    let all: Vec<usize> = (0..np).collect();
-    let normal = normal_equations(&kernel, data, weights, &all, threads)?;
-    let r = reach(params);
-    let d: Vec<f64> = ids
-        .iter()
-        .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / r })
-        .collect();
-    let ns = DMatrix::from_fn(np, np, |a, b| normal.jtj[a * np + b] * d[a] * d[b]);
     let singular_values = singular(&ns);
 
     // Rule 1: base motion.
@@ -550,17 +585,8 @@ pub fn open_directions(
     threads: usize,
 ) -> Result<Vec<String>, KernelError> {
     let n = params.joint_count();
-    let np = params.param_count();
-    let ids: Vec<ParamId> = ParamId::all(n).collect();
-    let kernel = ArmKernel::new(params)?;
-    let all: Vec<usize> = (0..np).collect();
-    let normal = normal_equations(&kernel, data, weights, &all, threads)?;
-    let r = reach(params);
-    let d: Vec<f64> = ids
-        .iter()
-        .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / r })
-        .collect();
-    let ns = DMatrix::from_fn(np, np, |a, b| normal.jtj[a * np + b] * d[a] * d[b]);
+    let Scaled { ids, ns, .. } = Scaled::at(params, data, weights, threads)?;
+    let np = ids.len();
     // Unseen directions, in scaled coordinates, with names.
     let mut unseen: Vec<(String, nalgebra::DVector<f64>)> = Vec::new();
     let unit = |c: usize| nalgebra::DVector::from_fn(np, |a, _| if a == c { 1.0 } else { 0.0 });
