@@ -414,7 +414,7 @@ mod tests {
             "empty label",
         );
         assert_at(
-            &err("point,q1,q2\n \"\" ,1,2\n", None),
+            &err("point,q1,q2\n\"\" ,1,2\n", None),
             2,
             Some("point"),
             "empty label",
@@ -524,7 +524,7 @@ mod tests {
 
     fn random_poses(seed: u64, joints: usize, rows: usize) -> Poses {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let labels = ["S1", "socket 2", "#3", "a,b", "q\"x", " pad "];
+        let labels = ["S1", "socket 2", "#3", "a,b", "q\"x", "\"q\""];
         Poses {
             labels: (0..rows)
                 .map(|i| labels[i % labels.len()].to_string())
