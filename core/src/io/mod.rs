@@ -28,7 +28,8 @@
 //! ignored (at the start of the file or of the header). A message names a
 //! record by its first line. Writers produce this dialect, deterministically,
 //! with numbers in the shortest form that reads back bit-exactly (except
-//! [`points`], fixed 6 decimals).
+//! [`points`], fixed 6 decimals); they refuse labels with surrounding
+//! whitespace, which would not read back.
 
 pub mod arm;
 pub mod lengths;

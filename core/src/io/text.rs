@@ -186,17 +186,26 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
     Err(InputError::line_error(file, line, message))
 }
 
-/// Quotes a field for writing if reading it back would otherwise change it.
-pub(crate) fn quote(field: &str) -> Cow<'_, str> {
-    let needs = field.is_empty()
-        || field.starts_with([' ', '\t', '\u{feff}'])
-        || field.ends_with([' ', '\t'])
-        || field.contains([',', '"', '\n', '\r']);
-    if needs {
-        Cow::Owned(format!("\"{}\"", field.replace('"', "\"\"")))
-    } else {
-        Cow::Borrowed(field)
+/// A label as a CSV field to write, quoted where reading would otherwise
+/// split or change it; an [`invalid`] error for surrounding whitespace,
+/// which reading trims, quoted or not.
+pub(crate) fn quote(label: &str) -> std::io::Result<Cow<'_, str>> {
+    if label.trim() != label {
+        let message = format!("label {label:?}: surrounding whitespace does not read back");
+        return Err(invalid(message));
     }
+    Ok(
+        if label.is_empty() || label.contains([',', '"', '\n', '\r']) {
+            Cow::Owned(format!("\"{}\"", label.replace('"', "\"\"")))
+        } else {
+            Cow::Borrowed(label)
+        },
+    )
+}
+
+/// An [`std::io::ErrorKind::InvalidInput`] error: what a writer cannot write.
+pub(crate) fn invalid(message: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
 }
 
 /// Checks a header against the expected column names: the same names, in the
@@ -361,10 +370,14 @@ mod tests {
             "a\nb",
             "\u{feff}x",
         ] {
-            let q = quote(s);
+            let q = quote(s).unwrap();
             assert_eq!(fields(&q), [s], "{s:?} -> {q}");
         }
-        assert_eq!(quote("S1"), "S1");
+        assert_eq!(quote("S1").unwrap(), "S1");
+        for s in [" a", "a ", "\ta", "a\r"] {
+            let e = quote(s).unwrap_err();
+            assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput, "{s:?}");
+        }
     }
 
     #[test]
