@@ -158,7 +158,8 @@ pub fn check_lengths_against<S: AsRef<str>>(
 /// Writes reference lengths in the file format: deterministic bytes, numbers
 /// in the shortest form that reads back bit-exactly. The `uncertainty` column
 /// is written when any length states one (empty cells for the others).
-/// `line` is not written.
+/// `line` is not written. A label with surrounding whitespace (reading trims
+/// it) gives an [`std::io::ErrorKind::InvalidInput`] error.
 ///
 /// ```
 /// use aacmm_core::io::{ReferenceLength, write_lengths};
@@ -172,7 +173,7 @@ pub fn write_lengths(mut w: impl Write, lengths: &[ReferenceLength]) -> std::io:
     let ncols = if with_u { 4 } else { 3 };
     w.write_all(format!("{}\n", COLUMNS[..ncols].join(",")).as_bytes())?;
     for l in lengths {
-        let mut line = format!("{},{},{}", quote(&l.a), quote(&l.b), fmt_f64(l.distance));
+        let mut line = format!("{},{},{}", quote(&l.a)?, quote(&l.b)?, fmt_f64(l.distance));
         if with_u {
             line.push(',');
             if let Some(u) = l.uncertainty {
@@ -369,5 +370,9 @@ mod tests {
         let mut again = Vec::new();
         write_lengths(&mut again, &back).unwrap();
         assert_eq!(String::from_utf8(again).unwrap(), text);
+        let mut padded = lengths;
+        padded[1].b = "\tA".into();
+        let e = write_lengths(Vec::new(), &padded).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
     }
 }

@@ -15,15 +15,21 @@
 //! standard input for the path `-` (the Unix convention), named `<stdin>` in
 //! messages ([`source_name`]).
 //!
-//! CSV dialect (all CSV files): comma-separated, one record per line (`\n` or
-//! `\r\n`), fields trimmed of surrounding spaces and tabs, double quotes
-//! around a field allowed (`""` inside quotes is one `"`; the quoted content is
-//! kept as is). Lines whose first non-blank character is `#` are comments
-//! only before the header: after the header every non-blank line is a record,
-//! so a row labelled `#S1` is data. Blank lines are allowed only at the end of
-//! the file. A UTF-8 byte-order mark is ignored. Writers produce exactly this
-//! dialect, deterministically, with numbers in the shortest form that reads
-//! back bit-exactly (except [`points`], fixed 6 decimals).
+//! CSV dialect (all CSV files), read by the `csv` crate: comma-separated,
+//! one record per line (`\n` or `\r\n`). A double quote opens a quoted field
+//! only as the field's first character (elsewhere, even after a space, it is
+//! an ordinary character); inside quotes, commas and line breaks are kept and
+//! `""` is one `"`; text after the closing quote is appended to the field
+//! (`"a"b` reads `ab`); a quote left open is an error. Fields are trimmed of
+//! surrounding whitespace, quoted or not. Lines whose first non-blank
+//! character is `#` are comments only before the header: after the header
+//! every non-blank line is a record, so a row labelled `#S1` is data. Blank
+//! lines are allowed only at the end of the file. A UTF-8 byte-order mark is
+//! ignored (at the start of the file or of the header). A message names a
+//! record by its first line. Writers produce this dialect, deterministically,
+//! with numbers in the shortest form that reads back bit-exactly (except
+//! [`points`], fixed 6 decimals); they refuse labels with surrounding
+//! whitespace, which would not read back.
 
 pub mod arm;
 pub mod lengths;

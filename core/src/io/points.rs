@@ -13,7 +13,7 @@ use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
-use super::text::{check_header, parse_f64, quote, read_text, table};
+use super::text::{check_header, invalid, parse_f64, quote, read_text, table};
 use crate::error::InputError;
 
 const COLUMNS: [&str; 4] = ["point", "x", "y", "z"];
@@ -22,7 +22,8 @@ const SHAPE: &str = "point,x,y,z";
 /// Writes labelled points, mm, with a fixed 6 decimals (1 nm: far below any
 /// arm's accuracy, so the file is exact for practical purposes but not a
 /// bit-exact round trip). Deterministic bytes; labels quoted only where
-/// needed. `labels` and `xyz` of different lengths give an
+/// needed. `labels` and `xyz` of different lengths, or a label with
+/// surrounding whitespace (reading trims it), give an
 /// [`std::io::ErrorKind::InvalidInput`] error.
 ///
 /// ```
@@ -36,14 +37,12 @@ pub fn write_points<S: AsRef<str>>(
     xyz: &[[f64; 3]],
 ) -> std::io::Result<()> {
     if labels.len() != xyz.len() {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            format!("{} labels for {} points", labels.len(), xyz.len()),
-        ));
+        let message = format!("{} labels for {} points", labels.len(), xyz.len());
+        return Err(invalid(message));
     }
     w.write_all(format!("{SHAPE}\n").as_bytes())?;
     for (label, [x, y, z]) in labels.iter().zip(xyz) {
-        let line = format!("{},{x:.6},{y:.6},{z:.6}\n", quote(label.as_ref()));
+        let line = format!("{},{x:.6},{y:.6},{z:.6}\n", quote(label.as_ref())?);
         w.write_all(line.as_bytes())?;
     }
     Ok(())
@@ -205,6 +204,8 @@ mod tests {
     #[test]
     fn write_rejects_mismatch() {
         let e = write_points(Vec::new(), &["A", "B"], &[[0.0; 3]]).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        let e = write_points(Vec::new(), &["A "], &[[0.0; 3]]).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
     }
 }

@@ -16,7 +16,7 @@ use std::io::Write;
 use std::path::Path;
 
 use super::Warning;
-use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, table};
+use super::text::{Record, check_header, fmt_f64, invalid, parse_f64, quote, read_text, table};
 use super::units::AngleUnit;
 use crate::error::InputError;
 
@@ -211,7 +211,8 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
 /// same value (bit-exact in rad; in deg see
 /// [`AngleUnit::from_internal_exact`]), labels quoted only where needed.
 /// `lines` is not written. Inconsistent `poses` (row lengths, label count)
-/// give an [`std::io::ErrorKind::InvalidInput`] error.
+/// or a label with surrounding whitespace (reading trims it) give an
+/// [`std::io::ErrorKind::InvalidInput`] error.
 ///
 /// ```
 /// use aacmm_core::io::{AngleUnit, Poses, write_poses};
@@ -251,7 +252,7 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
                 poses.joints
             )));
         }
-        let mut line = quote(label).into_owned();
+        let mut line = quote(label)?.into_owned();
         for &x in q {
             line.push(',');
             line.push_str(&fmt_f64(unit.from_internal_exact(x)));
@@ -260,10 +261,6 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
         w.write_all(line.as_bytes())?;
     }
     Ok(())
-}
-
-fn invalid(message: String) -> std::io::Error {
-    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
 }
 
 #[cfg(test)]
@@ -414,7 +411,7 @@ mod tests {
             "empty label",
         );
         assert_at(
-            &err("point,q1,q2\n \"\" ,1,2\n", None),
+            &err("point,q1,q2\n\"\" ,1,2\n", None),
             2,
             Some("point"),
             "empty label",
@@ -524,7 +521,7 @@ mod tests {
 
     fn random_poses(seed: u64, joints: usize, rows: usize) -> Poses {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        let labels = ["S1", "socket 2", "#3", "a,b", "q\"x", " pad "];
+        let labels = ["S1", "socket 2", "#3", "a,b", "q\"x", "\"q\""];
         Poses {
             labels: (0..rows)
                 .map(|i| labels[i % labels.len()].to_string())
@@ -587,6 +584,10 @@ mod tests {
         let mut p = random_poses(3, 2, 3);
         p.labels.pop();
         assert!(write_poses(Vec::new(), &p, AngleUnit::Rad).is_err());
+        let mut p = random_poses(3, 2, 3);
+        p.labels[2] = " pad ".into();
+        let e = write_poses(Vec::new(), &p, AngleUnit::Rad).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
     }
 
     #[test]

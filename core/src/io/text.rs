@@ -1,16 +1,13 @@
 //! Shared plumbing of the readers and writers: reading a file (or standard
 //! input) as UTF-8, byte offsets to lines, the CSV dialect (see the `io`
-//! module docs), number parsing and formatting.
-//!
-//! The dialect is read here, not by the `csv` crate, which reports wrong
-//! lines after blank lines and with CRLF (BurntSushi/rust-csv#208, #395),
-//! trims inside quotes, reads ` "a,b"` as two fields, and silently takes
-//! `"a"b` as `ab` and an unclosed quote as the rest of the file.
+//! module docs) on top of the `csv` crate, number parsing and formatting.
 
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
+
+use csv::{ReaderBuilder, StringRecord, Terminator, Trim};
 
 use crate::error::InputError;
 
@@ -116,107 +113,99 @@ pub(crate) fn table(
     Ok((header, rows))
 }
 
-/// Splits CSV text into records: comment lines (first non-blank character
-/// `#`) are skipped before the first record (the header) only; blank lines
-/// are allowed only at the end.
+/// Splits CSV text into records. The `csv` crate tokenizes; this layer keeps
+/// the rules of the dialect (see the `io` module docs) and the lines: each
+/// record's line comes from its byte offset, which the crate gets right where
+/// its line counter is not (after blank lines, with CRLF: rust-csv#208, #395).
 pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut out = Vec::new();
-    let mut pending_blank: Option<usize> = None;
-    for (i, raw) in text.split('\n').enumerate() {
-        let line = i + 1;
-        let content = raw.strip_suffix('\r').unwrap_or(raw);
-        let trimmed = content.trim();
-        if trimmed.is_empty() {
-            pending_blank.get_or_insert(line);
+    let starts: Vec<usize> = std::iter::once(0)
+        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+        .collect();
+    let line = |at: usize| starts.partition_point(|&s| s <= at);
+    // Comments before the header are not tokenized (a quote in one would
+    // open a field); blank lines there are remembered, as blank lines are
+    // errors before more data.
+    let (mut body, mut blank) = (0, None);
+    for l in text.split_inclusive('\n') {
+        match l.trim() {
+            "" => _ = blank.get_or_insert(body),
+            t if t.starts_with('#') => {}
+            _ => break,
+        }
+        body += l.len();
+    }
+    // The crate drops a byte-order mark starting its input: drop it here, so
+    // that the offsets below point past it.
+    let body = text.len() - text[body..].trim_start_matches('\u{feff}').len();
+    // A sentinel record after the text: a quote left open swallows it.
+    let input = text.as_bytes()[body..].chain(&b"\n\0"[..]);
+    let mut reader = ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(Trim::All)
+        .terminator(Terminator::Any(b'\n'))
+        .from_reader(input);
+    let (mut out, mut rec) = (Vec::new(), StringRecord::new());
+    let unreadable = |e: csv::Error| InputError::file_error(file, e.to_string());
+    while reader.read_record(&mut rec).map_err(unreadable)? {
+        // The crate's offset is before the empty lines it skipped.
+        let at = (body + rec.position().map_or(0, |p| p.byte() as usize)).min(text.len());
+        let start = text.len() - text[at..].trim_start_matches('\n').len();
+        if start == text.len() {
+            return Ok(out);
+        }
+        if start > at {
+            blank.get_or_insert(at);
+        }
+        let end = (body + reader.position().byte() as usize).min(text.len());
+        if text[start..end].trim().is_empty() {
+            blank.get_or_insert(start);
             continue;
         }
-        if out.is_empty() && trimmed.starts_with('#') {
-            continue;
-        }
-        if let Some(blank) = pending_blank {
+        if let Some(blank) = blank {
             let hint = if out.is_empty() {
                 ", or start it with `#` to make it a comment"
             } else {
                 ""
             };
-            return Err(InputError::line_error(
-                file,
-                blank,
-                format!(
-                    "blank line before more data (line {line}); only trailing blank lines \
-                     are allowed: delete it{hint}"
-                ),
-            ));
+            let message = format!(
+                "blank line before more data (line {}); only trailing blank lines are \
+                 allowed: delete it{hint}",
+                line(start)
+            );
+            return Err(InputError::line_error(file, line(blank), message));
         }
         out.push(Record {
-            line,
-            fields: split_fields(content, file, line)?,
+            line: line(start),
+            fields: rec.iter().map(String::from).collect(),
         });
     }
-    Ok(out)
+    let (line, column) = out.last().map_or((1, 1), |r| (r.line, r.fields.len()));
+    let message = format!("unterminated quote in column {column}");
+    Err(InputError::line_error(file, line, message))
 }
 
-/// Splits one line into fields: commas separate fields, spaces and tabs
-/// around a field are dropped, and a field may be quoted (`"a,b"`, with `""`
-/// for one `"` inside), which keeps its content exactly.
-fn split_fields(text: &str, file: &str, line: usize) -> Result<Vec<String>, InputError> {
-    let err = |message: String| Err(InputError::line_error(file, line, message));
-    let mut fields = Vec::new();
-    let mut rest = text;
-    loop {
-        let column = fields.len() + 1;
-        rest = rest.trim_start_matches([' ', '\t']);
-        if let Some(quoted) = rest.strip_prefix('"') {
-            let mut field = String::new();
-            let mut chars = quoted.char_indices().peekable();
-            let end = loop {
-                match chars.next() {
-                    None => return err(format!("unterminated quote in column {column}")),
-                    Some((_, '"')) if chars.next_if(|&(_, c)| c == '"').is_some() => {
-                        field.push('"')
-                    }
-                    Some((i, '"')) => break i + 1,
-                    Some((_, c)) => field.push(c),
-                }
-            };
-            rest = quoted[end..].trim_start_matches([' ', '\t']);
-            if let Some(c) = rest.chars().next().filter(|&c| c != ',') {
-                return err(format!(
-                    "unexpected `{c}` after the closing quote of column {column}"
-                ));
-            }
-            fields.push(field);
+/// A label as a CSV field to write, quoted where reading would otherwise
+/// split or change it; an [`invalid`] error for surrounding whitespace,
+/// which reading trims, quoted or not.
+pub(crate) fn quote(label: &str) -> std::io::Result<Cow<'_, str>> {
+    if label.trim() != label {
+        let message = format!("label {label:?}: surrounding whitespace does not read back");
+        return Err(invalid(message));
+    }
+    Ok(
+        if label.is_empty() || label.contains([',', '"', '\n', '\r']) {
+            Cow::Owned(format!("\"{}\"", label.replace('"', "\"\"")))
         } else {
-            let end = rest.find(',').unwrap_or(rest.len());
-            let field = rest[..end].trim_end_matches([' ', '\t']);
-            if field.contains('"') {
-                return err(format!(
-                    "stray `\"` in column {column}; quote the whole field, and double quotes \
-                     inside it"
-                ));
-            }
-            fields.push(field.to_string());
-            rest = &rest[end..];
-        }
-        match rest.strip_prefix(',') {
-            Some(after) => rest = after,
-            None => return Ok(fields),
-        }
-    }
+            Cow::Borrowed(label)
+        },
+    )
 }
 
-/// Quotes a field for writing if reading it back would otherwise change it.
-pub(crate) fn quote(field: &str) -> Cow<'_, str> {
-    let needs = field.is_empty()
-        || field.starts_with([' ', '\t', '\u{feff}'])
-        || field.ends_with([' ', '\t'])
-        || field.contains([',', '"', '\n', '\r']);
-    if needs {
-        Cow::Owned(format!("\"{}\"", field.replace('"', "\"\"")))
-    } else {
-        Cow::Borrowed(field)
-    }
+/// An [`std::io::ErrorKind::InvalidInput`] error: what a writer cannot write.
+pub(crate) fn invalid(message: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
 }
 
 /// Checks a header against the expected column names: the same names, in the
@@ -341,37 +330,54 @@ fn edit_distance(a: &str, b: &str) -> usize {
 mod tests {
     use super::*;
 
+    /// The fields of `line`, read as the second record (after a header).
     fn fields(line: &str) -> Vec<String> {
-        split_fields(line, "f", 1).unwrap()
+        records(&format!("h\n{line}"), "f")
+            .unwrap()
+            .remove(1)
+            .fields
     }
 
     #[test]
     fn splitting() {
         assert_eq!(fields("a,b , c"), ["a", "b", "c"]);
-        assert_eq!(fields(""), [""]);
         assert_eq!(fields("a,"), ["a", ""]);
-        assert_eq!(
-            fields("\"a,b\", \"x\"\"y\" ,\" s \""),
-            ["a,b", "x\"y", " s "]
-        );
-        assert_eq!(fields("\"\""), [""]);
-        let e = split_fields("a,\"b", "f.csv", 4).unwrap_err().to_string();
-        assert_eq!(e, "f.csv:4: unterminated quote in column 2");
-        let e = split_fields("a,\"b\"c", "f.csv", 4)
-            .unwrap_err()
-            .to_string();
-        assert!(e.starts_with("f.csv:4: unexpected `c`"), "{e}");
-        let e = split_fields("a,b\"c", "f.csv", 4).unwrap_err().to_string();
-        assert!(e.starts_with("f.csv:4: stray"), "{e}");
+        assert_eq!(fields("\"a,b\",\"x\"\"y\" ,\"\""), ["a,b", "x\"y", ""]);
+        // The csv crate's dialect: quoted fields are trimmed too; a quote
+        // opens a quoted field only as the field's first character (else it
+        // is literal); text after a closing quote is appended; a quoted field
+        // may span lines.
+        assert_eq!(fields("\" s \",\"x\" "), ["s", "x"]);
+        assert_eq!(fields("a, \"b\",c\"d"), ["a", "\"b\"", "c\"d"]);
+        assert_eq!(fields("\"a\"b,c"), ["ab", "c"]);
+        assert_eq!(fields("\"a\n\nb\",c"), ["a\n\nb", "c"]);
+        let e = records("# 1\n# 2\n# 3\na,\"b\n", "f.csv").unwrap_err();
+        assert_eq!(e.to_string(), "f.csv:4: unterminated quote in column 2");
+        let e = records("h\n1\n\"2\n3\n", "f.csv").unwrap_err();
+        assert_eq!(e.to_string(), "f.csv:3: unterminated quote in column 1");
     }
 
     #[test]
     fn quoting_round_trips() {
-        for s in ["a", "", "#x", " a", "a ", "a,b", "x\"y", "S 1", "\u{feff}x"] {
-            let q = quote(s);
+        for s in [
+            "a",
+            "",
+            "#x",
+            "a,b",
+            "x\"y",
+            "\"x",
+            "S 1",
+            "a\nb",
+            "\u{feff}x",
+        ] {
+            let q = quote(s).unwrap();
             assert_eq!(fields(&q), [s], "{s:?} -> {q}");
         }
-        assert_eq!(quote("S1"), "S1");
+        assert_eq!(quote("S1").unwrap(), "S1");
+        for s in [" a", "a ", "\ta", "a\r"] {
+            let e = quote(s).unwrap_err();
+            assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput, "{s:?}");
+        }
     }
 
     #[test]
@@ -395,6 +401,21 @@ mod tests {
         assert_eq!(e.line(), Some(2));
         assert!(e.to_string().starts_with("f.csv:2: blank line"), "{e}");
         assert!(records("", "f").unwrap().is_empty());
+        assert!(records("\u{feff}# c\n\n", "f").unwrap().is_empty());
+        // CRLF blank lines, and lines after a quoted field spanning lines.
+        let e = records("h\r\n1\r\n\r\n2\r\n", "f.csv").unwrap_err();
+        assert!(e.to_string().starts_with("f.csv:3: blank line"), "{e}");
+        let e = records("h\n\n\n1\n", "f.csv").unwrap_err();
+        assert!(e.to_string().starts_with("f.csv:2: blank line"), "{e}");
+        assert!(e.to_string().contains("(line 4)"), "{e}");
+        let r = records("h\n\"a\n\nb\",1\nc\n\n", "f").unwrap();
+        let lines: Vec<usize> = r.iter().map(|r| r.line).collect();
+        assert_eq!(lines, [1, 2, 5]);
+        // Blank lines before the header are errors too, with a hint.
+        let e = records("# c\n\n# d\nh\n", "f.csv").unwrap_err();
+        assert!(e.to_string().starts_with("f.csv:2: blank line"), "{e}");
+        assert!(e.to_string().contains("(line 4)"), "{e}");
+        assert!(e.to_string().contains("comment"), "{e}");
     }
 
     #[test]
