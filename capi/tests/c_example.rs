@@ -426,3 +426,31 @@ fn the_header_compiles_as_cpp() {
         .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("include"))
         .arg(&src));
 }
+
+/// The minimal program of the README's C library section compiles against
+/// the static library and runs.
+#[test]
+fn the_readme_example_runs() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let section = &readme[readme
+        .find("## The C library")
+        .expect("README has a C library section")..];
+    let start = section.find("```c\n").expect("a ```c block") + "```c\n".len();
+    let code = &section[start..start + section[start..].find("```").unwrap()];
+    let src = Path::new(env!("CARGO_TARGET_TMPDIR")).join("readme.c");
+    std::fs::write(&src, code).unwrap();
+    let exe = Path::new(env!("CARGO_TARGET_TMPDIR")).join("readme");
+    let capi = Path::new(env!("CARGO_MANIFEST_DIR"));
+    run(Command::new(cc())
+        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+        .arg(capi.join("include"))
+        .arg(&src)
+        .arg(lib_dir().join("libaacmm_capi.a"))
+        .args(["-lm", "-lpthread", "-ldl", "-o"])
+        .arg(&exe));
+    let out = run(Command::new(&exe).current_dir(root()));
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 3, "{out}");
+    assert!(lines[0].starts_with("pose 0: "), "{out}");
+    assert!(lines[2].starts_with("converged: yes after "), "{out}");
+}
