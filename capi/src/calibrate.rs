@@ -791,3 +791,89 @@ pub unsafe extern "C" fn aacmm_calibration_report(
         unsafe { string_out(&c.report, buf, buf_len, len) }
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn length(a: u32, b: u32, distance_mm: f64, uncertainty_mm: f64) -> AacmmReferenceLength {
+        AacmmReferenceLength {
+            point_a: a,
+            point_b: b,
+            distance_mm,
+            uncertainty_mm,
+        }
+    }
+
+    /// Three points of three touches each, 6 joints.
+    fn touches() -> (Vec<f64>, Vec<u32>) {
+        let points = vec![7, 7, 7, 3, 3, 3, 9, 9, 9];
+        let q = (0..points.len() * 6)
+            .map(|i| (i as f64 * 0.3).sin())
+            .collect();
+        (q, points)
+    }
+
+    fn message(e: Error) -> (AacmmStatus, String) {
+        (e.status, e.message)
+    }
+
+    #[test]
+    fn arrays_are_checked_like_files() {
+        let (q, points) = touches();
+        let ok = array_data(6, &q, &points, &[length(7, 9, 500.0, f64::NAN)]).unwrap();
+        assert_eq!(ok.points()[1].label, "3");
+        assert_eq!((ok.references()[0].a, ok.references()[0].b), (0, 2));
+        assert_eq!(ok.references()[0].uncertainty, None);
+        let cases = [
+            (
+                length(7, 7, 500.0, f64::NAN),
+                "lengths[0]: point_b = point_a = 7",
+            ),
+            (length(7, 4, 500.0, f64::NAN), "lengths[0]: unknown point 4"),
+            (length(7, 3, -1.0, f64::NAN), "lengths[0]: distance_mm = -1"),
+            (length(7, 3, 1.0, -0.1), "lengths[0]: uncertainty_mm = -0.1"),
+        ];
+        for (l, expected) in cases {
+            let (status, m) = message(array_data(6, &q, &points, &[l]).unwrap_err());
+            assert_eq!(status, AacmmStatus::Input);
+            assert!(m.starts_with(expected), "{m}");
+        }
+        let twice = [length(7, 3, 1.0, 0.0), length(3, 7, 1.0, 0.0)];
+        let (_, m) = message(array_data(6, &q, &points, &twice).unwrap_err());
+        assert!(
+            m.starts_with("lengths[1]: the pair 3–7 is given twice"),
+            "{m}"
+        );
+        let (_, m) = message(array_data(6, &q[..48], &points[..8], &[]).unwrap_err());
+        assert!(m.starts_with("points[6]: point 9 has 2 touches"), "{m}");
+        let mut nan = q.clone();
+        nan[4] = f64::NAN;
+        let (_, m) = message(array_data(6, &nan, &points, &[]).unwrap_err());
+        assert!(m.starts_with("q[4] = NaN"), "{m}");
+    }
+
+    #[test]
+    fn options_are_checked_like_flags() {
+        let mut o = aacmm_calibrate_options_default();
+        // SAFETY: `o` is a live options struct with a NULL `fix`.
+        let s = unsafe { settings(&o, 6) }.unwrap();
+        assert_eq!(s.options.fix, FixSpec::Auto);
+        assert_eq!(s.options.noise.encoder_rad, None);
+        assert_eq!(s.options.noise.length_default_mm, DEFAULT_LENGTH_SIGMA_MM);
+        o.probe_noise_mm = -1.0;
+        // SAFETY: as above.
+        let e = unsafe { settings(&o, 6) }.err().unwrap();
+        assert_eq!(e.status, AacmmStatus::InvalidArgument);
+        o = aacmm_calibrate_options_default();
+        o.fix = c"theta1, d1".as_ptr();
+        // SAFETY: `fix` points to a NUL-terminated literal.
+        let s = unsafe { settings(&o, 6) }.unwrap();
+        assert_eq!(s.options.fix, FixSpec::Columns(vec![18, 6]));
+        o.cross_validate = 1;
+        // SAFETY: as above.
+        assert!(unsafe { settings(&o, 6) }.is_err());
+        // SAFETY: NULL options are the defaults.
+        assert!(unsafe { settings(std::ptr::null(), 6) }.is_ok());
+    }
+}
