@@ -7,11 +7,15 @@
 //! cargo run --release -p aacmm-capi --example positions_timing
 //! ```
 //!
-//! Both run on the main thread of their own process, so that they get the
-//! same allocator arena. Prints, per side, the median and the fastest
-//! wall-clock call and the processor time per call (user + system: on a
-//! loaded machine the steadiest figure), and the C/Rust ratios. A timing,
-//! not a test: CI does not run it.
+//! Both sides are the same program, one in C and one in Rust (this
+//! example re-run as `positions_timing --rust N REPS`): a fresh process that
+//! fills the same buffers in the same order and times the same calls on its
+//! main thread, so that the allocator sees the same history (each call
+//! allocates the poses' sin/cos, 96 MB for 10⁶ poses, and page-faults it in:
+//! a different heap history alone moves the timing by several percent).
+//! Prints, per side, the median and the fastest wall-clock call and the
+//! processor time per call (user + system: on a loaded machine the steadiest
+//! figure), and the C/Rust ratios. A timing, not a test: CI does not run it.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -37,17 +41,20 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-/// This thread's processor time so far, ns (Linux; `None` elsewhere).
+/// This thread's processor time so far, ns (Linux; `None` elsewhere): the
+/// same clock as C's `clock()` in a one-thread process.
 fn cpu_ns() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
     text.split_whitespace().next()?.parse().ok()
 }
 
-fn c_side(exe: &Path) -> Timing {
-    let out = Command::new(exe)
+/// One side's run: a fresh process printing
+/// `<tag> N MEDIAN_NS MIN_NS CPU_NS CHECKSUM`.
+fn side(cmd: &mut Command) -> Timing {
+    let out = cmd
         .args([POSES.to_string(), REPS.to_string()])
         .output()
-        .expect("run the C program");
+        .expect("run a timing process");
     assert!(out.status.success(), "{out:?}");
     let text = String::from_utf8(out.stdout).unwrap();
     let f: Vec<f64> = text
@@ -62,45 +69,58 @@ fn c_side(exe: &Path) -> Timing {
     }
 }
 
-fn rust_side(kernel: &ArmKernel, rows: &[[f64; 6]]) -> Timing {
-    let mut out = vec![[0.0; 3]; rows.len()];
-    let call = |out: &mut [[f64; 3]]| {
-        let poses = PreparedPoses::new(6, rows).unwrap();
-        kernel.positions(&poses, 0..rows.len(), out).unwrap();
+/// The Rust side: what `tests/c/bench.c` does, through the Rust API.
+fn rust_child(n: usize, reps: usize) {
+    let q: Vec<f64> = (0..n * 6)
+        .map(|i| 3.0 * (0.37 * i as f64 + 0.1).sin())
+        .collect();
+    let mut p = vec![0.0; n * 3];
+    let mut times = Vec::with_capacity(reps);
+    let kernel = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+    let call = |p: &mut [f64]| {
+        let poses = PreparedPoses::new(6, q.as_chunks::<6>().0).unwrap();
+        kernel
+            .positions(&poses, 0..n, p.as_chunks_mut::<3>().0)
+            .unwrap();
     };
-    call(&mut out);
-    let mut times = Vec::with_capacity(REPS);
+    call(&mut p);
     let mut checksum = 0.0;
     let cpu0 = cpu_ns();
-    for _ in 0..REPS {
+    for _ in 0..reps {
         let t0 = Instant::now();
-        call(&mut out);
+        call(&mut p);
         times.push(t0.elapsed().as_secs_f64() * 1e9);
-        checksum += out[0][0] + out[rows.len() - 1][2];
+        checksum += p[0] + p[n * 3 - 1];
     }
     let cpu = match (cpu0, cpu_ns()) {
-        (Some(a), Some(b)) => (b - a) / REPS as f64,
+        (Some(a), Some(b)) => (b - a) / reps as f64,
         _ => f64::NAN,
     };
-    assert!(checksum.is_finite());
     let fastest = times.iter().copied().fold(f64::INFINITY, f64::min);
-    Timing {
-        median: median(times),
-        fastest,
-        cpu,
-    }
+    println!(
+        "rust_positions {n} {:.0} {fastest:.0} {cpu:.0} {checksum:.17}",
+        median(times)
+    );
 }
 
-/// The static library cargo built with this example.
+/// The static library cargo built with this example: in `deps/` (cargo
+/// copies it up to the profile directory only for `cargo build -p
+/// aacmm-capi`, so a copy there may be stale).
 fn static_lib() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
     let profile = exe.parent().and_then(Path::parent).unwrap();
-    let lib = profile.join("libaacmm_capi.a");
+    let lib = profile.join("deps/libaacmm_capi.a");
     assert!(lib.is_file(), "{} not found", lib.display());
     lib
 }
 
 fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    if let [_, flag, n, reps] = args.as_slice()
+        && flag == "--rust"
+    {
+        return rust_child(n.parse().unwrap(), reps.parse().unwrap());
+    }
     if cfg!(debug_assertions) {
         eprintln!("note: a debug build; time with --release");
     }
@@ -116,14 +136,11 @@ fn main() {
         .status()
         .expect("run cc");
     assert!(status.success(), "cc failed");
-    let rows: Vec<[f64; 6]> = (0..POSES)
-        .map(|i| std::array::from_fn(|j| 3.0 * (0.37 * (6 * i + j) as f64 + 0.1).sin()))
-        .collect();
-    let kernel = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+    let this = std::env::current_exe().unwrap();
     let (mut c, mut rust) = (Vec::new(), Vec::new());
     for _ in 0..ROUNDS {
-        c.push(c_side(&exe));
-        rust.push(rust_side(&kernel, &rows));
+        c.push(side(&mut Command::new(&exe)));
+        rust.push(side(Command::new(&this).arg("--rust")));
     }
     let _ = std::fs::remove_file(&exe);
     let summary = |t: &[Timing]| Timing {
