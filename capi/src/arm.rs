@@ -388,10 +388,13 @@ pub unsafe extern "C" fn aacmm_jacobians(
         let n = pose_count(q_len, joints)?;
         expect_len("p_len", p_len, 3 * n, "3 per pose")?;
         let per_pose = 3 * params;
+        let expected = per_pose
+            .checked_mul(n)
+            .ok_or_else(|| Error::length(format!("q_len = {q_len}: too many poses")))?;
         expect_len(
             "jac_len",
             jac_len,
-            per_pose * n,
+            expected,
             "3 · (4 · joints + 3) per pose",
         )?;
         disjoint(&[
@@ -472,4 +475,80 @@ pub unsafe extern "C" fn aacmm_joint_jacobian(
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nominal() -> *mut AacmmArm {
+        let params = DhParams::paper_nominal().to_vec();
+        let mut arm = std::ptr::null_mut();
+        // SAFETY: `params` holds 27 doubles; `arm` is writable.
+        let status = unsafe { aacmm_arm_from_params(6, params.as_ptr(), 27, &mut arm) };
+        assert_eq!(status, AacmmStatus::Ok);
+        arm
+    }
+
+    #[test]
+    fn empty_batches_are_fine_and_huge_ones_are_refused() {
+        let arm = nominal();
+        let null = std::ptr::null_mut();
+        // SAFETY: zero-length buffers may be NULL; the huge lengths are
+        // refused before any pointer is used.
+        unsafe {
+            assert_eq!(aacmm_positions(arm, null, 0, null, 0), AacmmStatus::Ok);
+            assert_eq!(
+                aacmm_jacobians(arm, null, 0, null, 0, null, 0),
+                AacmmStatus::Ok
+            );
+            let huge = usize::MAX / 6 * 6;
+            let q = [0.0f64; 6];
+            let mut p = [0.0f64; 3];
+            let status = aacmm_jacobians(
+                arm,
+                q.as_ptr(),
+                huge,
+                p.as_mut_ptr(),
+                huge / 2,
+                p.as_mut_ptr(),
+                3,
+            );
+            assert_eq!(status, AacmmStatus::Length);
+            assert_eq!(
+                aacmm_positions(arm, q.as_ptr(), huge, p.as_mut_ptr(), 3),
+                AacmmStatus::Length
+            );
+            aacmm_arm_free(arm);
+        }
+    }
+
+    #[test]
+    fn params_round_trip_and_are_checked() {
+        let arm = nominal();
+        let mut back = [0.0; 27];
+        let mut joints = 0;
+        // SAFETY: live handle, writable buffers of the stated lengths.
+        unsafe {
+            assert_eq!(
+                aacmm_arm_params(arm, back.as_mut_ptr(), 27),
+                AacmmStatus::Ok
+            );
+            assert_eq!(aacmm_arm_joints(arm, &mut joints), AacmmStatus::Ok);
+            assert_eq!(
+                aacmm_arm_params(arm, back.as_mut_ptr(), 26),
+                AacmmStatus::Length
+            );
+            aacmm_arm_free(arm);
+        }
+        assert_eq!(back.to_vec(), DhParams::paper_nominal().to_vec());
+        assert_eq!(joints, 6);
+        let mut bad = DhParams::paper_nominal().to_vec();
+        bad[3] = f64::INFINITY;
+        let mut out = std::ptr::null_mut();
+        // SAFETY: as above.
+        let status = unsafe { aacmm_arm_from_params(6, bad.as_ptr(), 27, &mut out) };
+        assert_eq!(status, AacmmStatus::InvalidArgument);
+        assert!(out.is_null());
+    }
 }

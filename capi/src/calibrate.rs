@@ -306,7 +306,16 @@ fn run(start: &Arm, data: &DataSet, s: &Settings, src: Sources) -> Result<AacmmC
     let fitted = before_after(&start.params, &cal.params, data)?;
     let folds = match s.cross_validate {
         0 => None,
-        k => Some(cross_validate(&start.params, data, &s.options, k, s.seed)?),
+        k => Some(
+            cross_validate(&start.params, data, &s.options, k, s.seed).map_err(|e| {
+                let e = Error::from(e);
+                Error::new(
+                    e.status,
+                    e.message
+                        .replace("--cross-validate", "options.cross_validate ="),
+                )
+            })?,
+        ),
     };
     let report = Report {
         arm: &start.name,
