@@ -271,17 +271,23 @@ unsafe fn settings(
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
     };
-    Ok(Settings {
-        options: CalibrateOptions {
-            fix: FixSpec::parse(&fix, joints)?,
-            noise: Noise {
-                encoder_rad: stated(o.encoder_noise_rad),
-                probe_mm: stated(o.probe_noise_mm),
-                length_default_mm: o.length_uncertainty_mm,
-                length_weight: stated(o.length_weight),
-            },
-            lm: LmOptions::default().threads(threads),
+    // `..default()`: settings this version of the C API does not know (a
+    // solver choice is coming) keep the library's defaults, which are the
+    // command line's.
+    #[allow(clippy::needless_update)]
+    let options = CalibrateOptions {
+        fix: FixSpec::parse(&fix, joints)?,
+        noise: Noise {
+            encoder_rad: stated(o.encoder_noise_rad),
+            probe_mm: stated(o.probe_noise_mm),
+            length_default_mm: o.length_uncertainty_mm,
+            length_weight: stated(o.length_weight),
         },
+        lm: LmOptions::default().threads(threads),
+        ..CalibrateOptions::default()
+    };
+    Ok(Settings {
+        options,
         fix,
         cross_validate: o.cross_validate,
         seed: o.seed,

@@ -261,6 +261,7 @@ fn the_c_program_agrees_with_the_rust_api() {
         .with_lengths(&read_lengths(&at(LENGTHS)).unwrap(), LENGTHS)
         .unwrap();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    #[allow(clippy::needless_update)] // settings to come keep their defaults
     let options = CalibrateOptions {
         fix: FixSpec::parse("auto", 6).unwrap(),
         noise: Noise {
@@ -270,6 +271,7 @@ fn the_c_program_agrees_with_the_rust_api() {
             length_weight: None,
         },
         lm: LmOptions::default().threads(threads),
+        ..CalibrateOptions::default()
     };
     let cal = calibrate(&arm.params, &data, &options).unwrap();
     assert!(cal.solver.successful);
