@@ -23,7 +23,7 @@
 //! Integers are accepted where numbers are expected. Unknown keys are errors
 //! (a typo is never ignored), as are non-finite numbers, a missing key, a
 //! joint count the toolkit has no kernel for (see
-//! [`SUPPORTED_JOINTS`](crate::params::SUPPORTED_JOINTS)), and limits with
+//! [`SUPPORTED_JOINTS`]), and limits with
 //! `min >= max`. A unit that looks wrong (lengths over 10 m in metres, angles
 //! over a full turn in radians) gives a [`Warning`].
 //!

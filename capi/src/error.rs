@@ -1,0 +1,220 @@
+//! Result codes, the thread-local last-error message, and [`guard`]: the
+//! wrapper every entry point runs its body in, so that an error becomes a
+//! code plus a message and a panic never unwinds into C.
+
+use std::cell::RefCell;
+use std::ffi::c_char;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use aacmm_core::calibrate::CalibrationError;
+use aacmm_core::error::InputError;
+use aacmm_core::kernel::KernelError;
+
+use crate::ptr::copy_str;
+
+/// What a call returns: `AACMM_STATUS_OK` (0), or why it failed. On failure
+/// `aacmm_last_error_message` describes the error, and output handles are
+/// set to `NULL`.
+#[repr(i32)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AacmmStatus {
+    /// Success.
+    Ok = 0,
+    /// A required pointer argument is `NULL` (or a buffer pointer is `NULL`
+    /// while its length is not 0).
+    NullPointer = 1,
+    /// A buffer length does not match what the arm and the other arguments
+    /// imply (e.g. `p_len != 3 · q_len / joints`).
+    Length = 2,
+    /// An argument's value is out of range: a non-finite parameter, an
+    /// unknown method, an unknown parameter name, a negative noise, a
+    /// misaligned or overlapping buffer, a path that is not valid text.
+    InvalidArgument = 3,
+    /// The arm has a joint count the toolkit generates no kernel for
+    /// (it has kernels for 6- and 7-joint arms).
+    Unsupported = 4,
+    /// A file could not be read (missing, unreadable).
+    Io = 5,
+    /// A file or an input array has invalid content: the message names the
+    /// file (or array), line and field.
+    Input = 6,
+    /// The calibration cannot run on this data: too few residuals, a fixed
+    /// set that leaves a direction the data cannot see, a start arm that
+    /// gives non-finite positions.
+    Calibration = 7,
+    /// A string did not fit the caller's buffer: a truncated, NUL-terminated
+    /// copy was written and the full length reported.
+    BufferTooSmall = 8,
+    /// An internal error (a bug in aacmm) was caught; the host process is
+    /// unaffected and the message says what happened.
+    Panic = 99,
+}
+
+/// An error on its way to C: a code and a message.
+#[derive(Debug)]
+pub(crate) struct Error {
+    pub(crate) status: AacmmStatus,
+    pub(crate) message: String,
+}
+
+impl Error {
+    pub(crate) fn new(status: AacmmStatus, message: impl Into<String>) -> Error {
+        Error {
+            status,
+            message: message.into(),
+        }
+    }
+
+    pub(crate) fn null(name: &str) -> Error {
+        Error::new(AacmmStatus::NullPointer, format!("`{name}` is NULL"))
+    }
+
+    pub(crate) fn length(message: impl Into<String>) -> Error {
+        Error::new(AacmmStatus::Length, message)
+    }
+
+    pub(crate) fn invalid(message: impl Into<String>) -> Error {
+        Error::new(AacmmStatus::InvalidArgument, message)
+    }
+}
+
+impl From<InputError> for Error {
+    fn from(e: InputError) -> Error {
+        let status = match e {
+            InputError::Io { .. } => AacmmStatus::Io,
+            _ => AacmmStatus::Input,
+        };
+        Error::new(status, e.to_string())
+    }
+}
+
+impl From<KernelError> for Error {
+    fn from(e: KernelError) -> Error {
+        let status = match e {
+            KernelError::Unsupported(_) => AacmmStatus::Unsupported,
+            _ => AacmmStatus::Length,
+        };
+        Error::new(status, e.to_string())
+    }
+}
+
+impl From<CalibrationError> for Error {
+    fn from(e: CalibrationError) -> Error {
+        let status = match &e {
+            CalibrationError::Kernel(KernelError::Unsupported(_)) => AacmmStatus::Unsupported,
+            CalibrationError::Kernel(_) => AacmmStatus::Length,
+            CalibrationError::UnknownParameter { .. } | CalibrationError::Folds(_) => {
+                AacmmStatus::InvalidArgument
+            }
+            _ => AacmmStatus::Calibration,
+        };
+        Error::new(status, e.to_string())
+    }
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+}
+
+fn set_last_error(message: String) {
+    // `try_with`: during thread teardown the slot may be gone; the code
+    // still reaches the caller.
+    let _ = LAST_ERROR.try_with(|slot| *slot.borrow_mut() = message);
+}
+
+/// Runs an entry point's body: `Ok` → `AACMM_STATUS_OK`; an error → its code,
+/// with its message stored as the thread's last error; a panic → caught,
+/// `AACMM_STATUS_PANIC`.
+pub(crate) fn guard(body: impl FnOnce() -> Result<(), Error>) -> AacmmStatus {
+    match catch_unwind(AssertUnwindSafe(body)) {
+        Ok(Ok(())) => AacmmStatus::Ok,
+        Ok(Err(e)) => {
+            set_last_error(e.message);
+            e.status
+        }
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "a panic without a message".to_string());
+            set_last_error(format!(
+                "internal error in aacmm (please report it): {what}"
+            ));
+            AacmmStatus::Panic
+        }
+    }
+}
+
+/// Runs a body that returns a value rather than a code (version, frees,
+/// sizes); a panic gives `fallback`.
+pub(crate) fn guard_value<T>(fallback: T, body: impl FnOnce() -> T) -> T {
+    catch_unwind(AssertUnwindSafe(body)).unwrap_or(fallback)
+}
+
+/// Copies the message of the last failed call on this thread into `buf`.
+///
+/// Writes at most `buf_len - 1` bytes of UTF-8 (cut at a character
+/// boundary) and a terminating NUL; writes nothing when `buf` is `NULL` or
+/// `buf_len` is 0. Returns the full length of the message in bytes, without
+/// the NUL (0 when no call on this thread has failed), like `snprintf`: a
+/// return value `>= buf_len` means the copy was truncated.
+///
+/// The message describes the most recent call that returned an error;
+/// successful calls leave it unchanged. Each thread has its own.
+///
+/// # Safety
+///
+/// `buf` is `NULL` or points to at least `buf_len` writable bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_last_error_message(buf: *mut c_char, buf_len: usize) -> usize {
+    guard_value(0, || {
+        LAST_ERROR
+            .try_with(|slot| {
+                let message = slot.borrow();
+                if !buf.is_null() {
+                    // SAFETY: `buf` is not NULL and the caller guarantees
+                    // `buf_len` writable bytes there.
+                    unsafe { copy_str(&message, buf, buf_len) };
+                }
+                message.len()
+            })
+            .unwrap_or(0)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_becomes_a_code_and_a_message() {
+        let status = guard(|| panic!("boom {}", 7));
+        assert_eq!(status, AacmmStatus::Panic);
+        let mut buf = [0 as c_char; 128];
+        // SAFETY: `buf` has 128 writable bytes.
+        let n = unsafe { aacmm_last_error_message(buf.as_mut_ptr(), buf.len()) };
+        // SAFETY: `copy_str` NUL-terminated it.
+        let text = unsafe { std::ffi::CStr::from_ptr(buf.as_ptr()) };
+        assert_eq!(text.to_bytes().len(), n);
+        assert!(text.to_str().unwrap().ends_with("boom 7"), "{text:?}");
+        assert_eq!(guard_value(5, || -> i32 { panic!("x") }), 5);
+    }
+
+    #[test]
+    fn the_message_is_per_thread_and_kept_across_successes() {
+        assert_eq!(
+            guard(|| Err(Error::invalid("first"))),
+            AacmmStatus::InvalidArgument
+        );
+        assert_eq!(guard(|| Ok(())), AacmmStatus::Ok);
+        // SAFETY: a NULL buffer of length 0 only asks for the length.
+        let len = unsafe { aacmm_last_error_message(std::ptr::null_mut(), 0) };
+        assert_eq!(len, 5);
+        let other = std::thread::spawn(|| {
+            // SAFETY: as above.
+            unsafe { aacmm_last_error_message(std::ptr::null_mut(), 0) }
+        });
+        assert_eq!(other.join().unwrap(), 0);
+    }
+}

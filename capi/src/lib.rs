@@ -1,0 +1,58 @@
+//! The C ABI of aacmm: the generated arm kernel and the calibrator as a C
+//! library (`cdylib` and `staticlib`), declared by the cbindgen-generated
+//! header `capi/include/aacmm.h`.
+//!
+//! Conventions, for every function:
+//!
+//! - lengths in mm, angles in rad; parameters in the toolkit's fixed order
+//!   `a1..an, d1..dn, alpha1..alphan, theta1..thetan, Bx, By, Bz`;
+//! - arrays are row-major and passed with their length in elements, which
+//!   must match what the arm and the other arguments imply
+//!   (`AACMM_STATUS_LENGTH` otherwise);
+//! - every function that can fail returns an [`AacmmStatus`]; the message of
+//!   the last failure on the calling thread is copied out by
+//!   [`aacmm_last_error_message`]; `NULL` pointers, wrong lengths, misaligned
+//!   or overlapping buffers give codes, never a crash;
+//! - every entry point catches panics: a bug inside gives
+//!   `AACMM_STATUS_PANIC`, never an unwind into C or an abort of the host;
+//! - handles (`AacmmArm`, `AacmmCalibration`) are opaque, immutable once
+//!   made, usable from several threads at once, and released by their
+//!   `…_free` function.
+//!
+//! Only `aacmm_`-prefixed symbols are exported.
+
+// An FFI layer cannot avoid `unsafe`: it dereferences raw pointers from C
+// and exports unmangled symbols. The workspace denies `unsafe_code`; this
+// crate alone allows it, and every block states why it is sound in a
+// `// SAFETY:` comment (clippy's `undocumented_unsafe_blocks`). The checks
+// behind those comments live in `ptr`.
+#![allow(unsafe_code)]
+
+mod arm;
+mod calibrate;
+mod error;
+mod ptr;
+
+use std::ffi::c_char;
+
+pub use arm::{
+    AacmmArm, aacmm_arm_free, aacmm_arm_from_file, aacmm_arm_from_params, aacmm_arm_joints,
+    aacmm_arm_params, aacmm_arm_warnings, aacmm_jacobians, aacmm_joint_jacobian, aacmm_param_count,
+    aacmm_positions,
+};
+pub use calibrate::{
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AacmmAngleUnit, AacmmCalibrateOptions,
+    AacmmCalibration, AacmmCalibrationSummary, AacmmMethod, AacmmReferenceLength, AacmmTermination,
+    aacmm_calibrate, aacmm_calibrate_files, aacmm_calibrate_options_default, aacmm_calibration_arm,
+    aacmm_calibration_fixed, aacmm_calibration_free, aacmm_calibration_params,
+    aacmm_calibration_report, aacmm_calibration_sigmas, aacmm_calibration_summary,
+};
+pub use error::{AacmmStatus, aacmm_last_error_message};
+
+/// The library's version (`MAJOR.MINOR.PATCH`, the workspace's version), as
+/// a static NUL-terminated string: do not free it.
+#[unsafe(no_mangle)]
+pub extern "C" fn aacmm_version() -> *const c_char {
+    const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "\0");
+    VERSION.as_ptr().cast()
+}

@@ -1,0 +1,338 @@
+/*
+ * A C program against the aacmm C API: the demo of every function, and the
+ * program the Rust test `c_example` compiles (with the system C compiler,
+ * against include/aacmm.h and the built library), runs and checks.
+ *
+ *   example ARM.toml POSES.csv LENGTHS.csv
+ *
+ * It prints one tagged line per result; doubles are printed as the 16 hex
+ * digits of their bits, so that the test can compare them with the Rust
+ * API bit for bit:
+ *
+ *   version, arm_params, q, positions, jac_positions, jacobians,
+ *   joint_q, joint_p, joint_jac, nominal_positions, error, files_params,
+ *   files_sigmas, files_fixed, files_summary, report, arrays_params,
+ *   calibrated_positions
+ *
+ * Its own checks (expected error codes, arrays == files) make it exit with
+ * status 1 and a message on stderr when they fail.
+ */
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "aacmm.h"
+
+#define PI 3.14159265358979323846
+#define POSES 13 /* not a multiple of the kernel's 4 lanes: the tail runs too */
+
+static int failures = 0;
+
+static void fail(const char *what) {
+    char message[512];
+    aacmm_last_error_message(message, sizeof message);
+    fprintf(stderr, "example: %s (last error: %s)\n", what, message);
+    failures++;
+}
+
+/* Stops on an unexpected status: nothing after it would make sense. */
+static void ok(AacmmStatus status, const char *what) {
+    if (status != AACMM_STATUS_OK) {
+        char message[512];
+        aacmm_last_error_message(message, sizeof message);
+        fprintf(stderr, "example: %s failed with status %d: %s\n", what, (int)status, message);
+        exit(1);
+    }
+}
+
+static void print_bits(const char *tag, const double *v, size_t n) {
+    printf("%s", tag);
+    for (size_t i = 0; i < n; i++) {
+        uint64_t bits;
+        memcpy(&bits, &v[i], sizeof bits);
+        printf(" %016" PRIx64, bits);
+    }
+    printf("\n");
+}
+
+/* An error path: prints `error NAME CODE MESSAGE` and checks the code. */
+static void expect(AacmmStatus got, AacmmStatus want, const char *name) {
+    char message[512];
+    aacmm_last_error_message(message, sizeof message);
+    printf("error %s %d %s\n", name, (int)got, message);
+    if (got != want) {
+        fprintf(stderr, "example: %s gave status %d, expected %d\n", name, (int)got, (int)want);
+        failures++;
+    }
+}
+
+/* ---- a small reader for the CSV files (what a host program has anyway) ---- */
+
+#define MAX_TOUCHES 4096
+#define MAX_POINTS 256
+#define MAX_LENGTHS 256
+
+static char labels[MAX_POINTS][64];
+static size_t label_count = 0;
+
+static uint32_t point_id(const char *label) {
+    for (size_t i = 0; i < label_count; i++) {
+        if (strcmp(labels[i], label) == 0) {
+            return (uint32_t)i;
+        }
+    }
+    if (label_count == MAX_POINTS) {
+        fprintf(stderr, "example: too many points\n");
+        exit(1);
+    }
+    snprintf(labels[label_count], sizeof labels[0], "%s", label);
+    return (uint32_t)label_count++;
+}
+
+/* Splits a line at commas in place; returns the number of fields. */
+static size_t split(char *line, char **fields, size_t max) {
+    size_t n = 0;
+    line[strcspn(line, "\r\n")] = '\0';
+    for (char *f = line; n < max;) {
+        fields[n++] = f;
+        char *comma = strchr(f, ',');
+        if (comma == NULL) {
+            break;
+        }
+        *comma = '\0';
+        f = comma + 1;
+    }
+    return n;
+}
+
+/* Poses file `point,q1,...,qn` in degrees → readings in rad and point ids. */
+static size_t read_poses(const char *path, size_t joints, double *q, uint32_t *points) {
+    FILE *f = fopen(path, "r");
+    char line[1024];
+    char *fields[16];
+    size_t n = 0;
+    int header = 1;
+    if (f == NULL) {
+        perror(path);
+        exit(1);
+    }
+    while (fgets(line, sizeof line, f) != NULL) {
+        if (line[0] == '#' || line[0] == '\n') {
+            continue;
+        }
+        if (header) {
+            header = 0;
+            continue;
+        }
+        if (split(line, fields, 16) != joints + 1 || n == MAX_TOUCHES) {
+            fprintf(stderr, "example: %s: unexpected row\n", path);
+            exit(1);
+        }
+        points[n] = point_id(fields[0]);
+        for (size_t j = 0; j < joints; j++) {
+            /* The toolkit's degrees → radians: x · (π / 180). */
+            q[n * joints + j] = strtod(fields[1 + j], NULL) * (PI / 180.0);
+        }
+        n++;
+    }
+    fclose(f);
+    return n;
+}
+
+/* Lengths file `point_a,point_b,distance[,uncertainty]`. */
+static size_t read_lengths(const char *path, AacmmReferenceLength *lengths) {
+    FILE *f = fopen(path, "r");
+    char line[1024];
+    char *fields[8];
+    size_t n = 0;
+    int header = 1;
+    if (f == NULL) {
+        perror(path);
+        exit(1);
+    }
+    while (fgets(line, sizeof line, f) != NULL) {
+        if (line[0] == '#' || line[0] == '\n') {
+            continue;
+        }
+        if (header) {
+            header = 0;
+            continue;
+        }
+        size_t k = split(line, fields, 8);
+        if (k < 3 || n == MAX_LENGTHS) {
+            fprintf(stderr, "example: %s: unexpected row\n", path);
+            exit(1);
+        }
+        lengths[n].point_a = point_id(fields[0]);
+        lengths[n].point_b = point_id(fields[1]);
+        lengths[n].distance_mm = strtod(fields[2], NULL);
+        lengths[n].uncertainty_mm = (k > 3 && fields[3][0] != '\0') ? strtod(fields[3], NULL) : NAN;
+        n++;
+    }
+    fclose(f);
+    return n;
+}
+
+/* ---- the program ---- */
+
+int main(int argc, char **argv) {
+    if (argc != 4) {
+        fprintf(stderr, "usage: %s ARM.toml POSES.csv LENGTHS.csv\n", argv[0]);
+        return 2;
+    }
+    const char *arm_path = argv[1], *poses_path = argv[2], *lengths_path = argv[3];
+    printf("version %s\n", aacmm_version());
+
+    /* An arm from its file. */
+    AacmmArm *arm = NULL;
+    size_t joints = 0;
+    ok(aacmm_arm_from_file(arm_path, &arm), "aacmm_arm_from_file");
+    ok(aacmm_arm_joints(arm, &joints), "aacmm_arm_joints");
+    const size_t n_params = aacmm_param_count(joints);
+    double params[31];
+    ok(aacmm_arm_params(arm, params, n_params), "aacmm_arm_params");
+    print_bits("arm_params", params, n_params);
+
+    /* Positions and Jacobians of a batch of poses. */
+    static double q[POSES * 7], p[POSES * 3], p2[POSES * 3], jac[POSES * 3 * 31];
+    for (size_t i = 0; i < POSES * joints; i++) {
+        q[i] = 3.0 * sin(0.37 * (double)i + 0.1);
+    }
+    print_bits("q", q, POSES * joints);
+    ok(aacmm_positions(arm, q, POSES * joints, p, POSES * 3), "aacmm_positions");
+    print_bits("positions", p, POSES * 3);
+    ok(aacmm_jacobians(arm, q, POSES * joints, p2, POSES * 3, jac, POSES * 3 * n_params),
+       "aacmm_jacobians");
+    print_bits("jac_positions", p2, POSES * 3);
+    print_bits("jacobians", jac, POSES * 3 * n_params);
+
+    /* The joint Jacobian of one pose. */
+    double jp[3], jq[3 * 7];
+    ok(aacmm_joint_jacobian(arm, q + 5 * joints, joints, jp, 3, jq, 3 * joints),
+       "aacmm_joint_jacobian");
+    print_bits("joint_q", q + 5 * joints, joints);
+    print_bits("joint_p", jp, 3);
+    print_bits("joint_jac", jq, 3 * joints);
+
+    /* An arm from its parameters: the paper's nominal arm, mm and rad. */
+    const double h = PI / 2;
+    const double nominal[27] = {
+        50, -55, 35, -35, 35, -35,       /* a1..a6 */
+        375, 0, 250, 0, 270, 0,          /* d1..d6 */
+        -h, h, -h, h, -h, h,             /* alpha1..alpha6 */
+        0, 0, 0, 0, 0, 0,                /* theta1..theta6 */
+        0, 0, 100,                       /* Bx, By, Bz */
+    };
+    AacmmArm *made = NULL;
+    ok(aacmm_arm_from_params(6, nominal, 27, &made), "aacmm_arm_from_params");
+    ok(aacmm_positions(made, q, POSES * 6, p, POSES * 3), "aacmm_positions (params arm)");
+    print_bits("nominal_positions", p, POSES * 3);
+
+    /* Error paths: codes, never crashes. */
+    AacmmArm *none = (AacmmArm *)&none; /* must be reset to NULL on error */
+    expect(aacmm_positions(NULL, q, 6, p, 3), AACMM_STATUS_NULL_POINTER, "null_arm");
+    expect(aacmm_positions(arm, NULL, 6, p, 3), AACMM_STATUS_NULL_POINTER, "null_q");
+    expect(aacmm_arm_from_file("no/such/arm.toml", &none), AACMM_STATUS_IO, "missing_file");
+    if (none != NULL) {
+        fail("a failed aacmm_arm_from_file left *out set");
+    }
+    expect(aacmm_arm_from_file(poses_path, &none), AACMM_STATUS_INPUT, "not_an_arm_file");
+    expect(aacmm_arm_from_file(NULL, &none), AACMM_STATUS_NULL_POINTER, "null_path");
+    expect(aacmm_positions(arm, q, 7, p, 3), AACMM_STATUS_LENGTH, "q_len_not_a_multiple");
+    expect(aacmm_positions(arm, q, 12, p, 3), AACMM_STATUS_LENGTH, "p_len_short");
+    expect(aacmm_jacobians(arm, q, 6, p, 3, jac, 3 * n_params - 1), AACMM_STATUS_LENGTH,
+           "jac_len_short");
+    expect(aacmm_joint_jacobian(arm, q, joints + 1, jp, 3, jq, 3 * joints), AACMM_STATUS_LENGTH,
+           "joint_q_len");
+    expect(aacmm_arm_from_params(6, nominal, 26, &none), AACMM_STATUS_LENGTH, "params_len");
+    expect(aacmm_arm_from_params(5, nominal, 23, &none), AACMM_STATUS_UNSUPPORTED, "five_joints");
+    expect(aacmm_positions(arm, q, 6, q, 3), AACMM_STATUS_INVALID_ARGUMENT, "overlap");
+    expect(aacmm_calibration_params(NULL, params, n_params), AACMM_STATUS_NULL_POINTER,
+           "null_calibration");
+    expect(aacmm_calibrate_files(arm_path, "no/such/poses.csv", NULL, AACMM_ANGLE_DEG, NULL, NULL),
+           AACMM_STATUS_NULL_POINTER, "null_out");
+    AacmmCalibration *cal = NULL;
+    expect(aacmm_calibrate_files(arm_path, "no/such/poses.csv", NULL, AACMM_ANGLE_DEG, NULL, &cal),
+           AACMM_STATUS_IO, "missing_poses");
+    AacmmCalibrateOptions bad = aacmm_calibrate_options_default();
+    bad.fix = "theta1,theta9";
+    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
+           AACMM_STATUS_INVALID_ARGUMENT, "unknown_parameter");
+    bad = aacmm_calibrate_options_default();
+    bad.method = 7;
+    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
+           AACMM_STATUS_INVALID_ARGUMENT, "unknown_method");
+    size_t needed = aacmm_last_error_message(NULL, 0);
+    char tiny[8];
+    if (aacmm_last_error_message(tiny, sizeof tiny) != needed || strlen(tiny) != sizeof tiny - 1) {
+        fail("aacmm_last_error_message did not truncate to the buffer");
+    }
+
+    /* Calibration from the files, with the README's flags:
+     * --encoder-noise 0.005 (deg) --probe-noise 0.01 --cross-validate 3. */
+    AacmmCalibrateOptions options = aacmm_calibrate_options_default();
+    options.encoder_noise_rad = 0.005 * (PI / 180.0);
+    options.probe_noise_mm = 0.01;
+    options.cross_validate = 3;
+    ok(aacmm_calibrate_files(arm_path, poses_path, lengths_path, AACMM_ANGLE_DEG, &options, &cal),
+       "aacmm_calibrate_files");
+    double calibrated[31], sigma[31];
+    bool fixed[31];
+    AacmmCalibrationSummary summary;
+    ok(aacmm_calibration_params(cal, calibrated, n_params), "aacmm_calibration_params");
+    ok(aacmm_calibration_sigmas(cal, sigma, n_params), "aacmm_calibration_sigmas");
+    ok(aacmm_calibration_fixed(cal, fixed, n_params), "aacmm_calibration_fixed");
+    ok(aacmm_calibration_summary(cal, &summary), "aacmm_calibration_summary");
+    print_bits("files_params", calibrated, n_params);
+    print_bits("files_sigmas", sigma, n_params);
+    printf("files_fixed");
+    for (size_t c = 0; c < n_params; c++) {
+        printf(" %d", fixed[c] ? 1 : 0);
+    }
+    printf("\n");
+    printf("files_summary %d %d %zu %zu %zu\n", (int)summary.termination, summary.successful ? 1 : 0,
+           summary.iterations, summary.free_parameters, summary.degrees_of_freedom);
+    size_t report_len = 0;
+    expect(aacmm_calibration_report(cal, NULL, 0, &report_len), AACMM_STATUS_BUFFER_TOO_SMALL,
+           "report_size");
+    char *report = malloc(report_len + 1);
+    ok(aacmm_calibration_report(cal, report, report_len + 1, &report_len),
+       "aacmm_calibration_report");
+    printf("report %s\n", report);
+    free(report);
+
+    /* The calibrated arm as a handle. */
+    AacmmArm *after = NULL;
+    ok(aacmm_calibration_arm(cal, &after), "aacmm_calibration_arm");
+    ok(aacmm_positions(after, q, POSES * joints, p, POSES * 3), "aacmm_positions (calibrated)");
+    print_bits("calibrated_positions", p, POSES * 3);
+    aacmm_arm_free(after);
+
+    /* Calibration from arrays: the same campaign, read by this program. */
+    static double touches[MAX_TOUCHES * 7];
+    static uint32_t points[MAX_TOUCHES];
+    static AacmmReferenceLength lengths[MAX_LENGTHS];
+    size_t n = read_poses(poses_path, joints, touches, points);
+    size_t m = read_lengths(lengths_path, lengths);
+    AacmmCalibration *from_arrays = NULL;
+    expect(aacmm_calibrate(arm, touches, n * joints, points, n - 1, lengths, m, &options,
+                           &from_arrays),
+           AACMM_STATUS_LENGTH, "points_len");
+    ok(aacmm_calibrate(arm, touches, n * joints, points, n, lengths, m, &options, &from_arrays),
+       "aacmm_calibrate");
+    double arrays[31];
+    ok(aacmm_calibration_params(from_arrays, arrays, n_params), "aacmm_calibration_params");
+    print_bits("arrays_params", arrays, n_params);
+    if (memcmp(arrays, calibrated, n_params * sizeof(double)) != 0) {
+        fail("arrays and files gave different parameters");
+    }
+
+    aacmm_calibration_free(from_arrays);
+    aacmm_calibration_free(cal);
+    aacmm_arm_free(made);
+    aacmm_arm_free(arm);
+    aacmm_arm_free(NULL);
+    return failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,458 @@
+//! The C program `tests/c/example.c`, compiled by the system C compiler
+//! (`cc`, or `$CC`) against `include/aacmm.h` and the library cargo built for
+//! this test (static and shared), run on the shipped example campaign, and
+//! checked against the Rust API: positions and Jacobians bit for bit, the
+//! calibration equal to `calibrate()` on the same files and options (what
+//! `aacmm calibrate` runs), the error paths with their documented codes.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use aacmm_core::calibrate::validate::cross_validate;
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, calibrate};
+use aacmm_core::dataset::DataSet;
+use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses, source_name};
+use aacmm_core::kernel::{ArmKernel, Jacobians, PreparedPoses};
+use aacmm_core::params::{DhParams, ParamKind};
+use aacmm_core::residuals::Noise;
+
+const ARM: &str = "examples/paper-table-1.toml";
+const POSES: &str = "examples/paper-campaign/poses.csv";
+const LENGTHS: &str = "examples/paper-campaign/lengths.csv";
+
+/// The workspace root: the example paths are relative to it.
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("capi/ is in the workspace")
+        .to_path_buf()
+}
+
+/// The directory holding the `staticlib` and `cdylib` cargo built (with all
+/// the library's crate types) before this test: the test binary's own
+/// `deps/` directory, or the profile directory they are copied to.
+fn lib_dir() -> PathBuf {
+    let exe = std::env::current_exe().expect("the test's path");
+    let deps = exe.parent().expect("deps/").to_path_buf();
+    let profile = deps.parent().expect("the profile directory").to_path_buf();
+    for dir in [deps, profile] {
+        if dir.join("libaacmm_capi.a").is_file() && dir.join("libaacmm_capi.so").is_file() {
+            return dir;
+        }
+    }
+    panic!(
+        "libaacmm_capi.a / libaacmm_capi.so not found next to {}; build them with \
+         `cargo build -p aacmm-capi` (same profile as the test)",
+        exe.display()
+    );
+}
+
+fn run(cmd: &mut Command) -> String {
+    let out = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
+    assert!(
+        out.status.success(),
+        "{cmd:?} failed ({}):\n{}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("UTF-8 output")
+}
+
+fn cc() -> String {
+    std::env::var("CC").unwrap_or_else(|_| "cc".to_string())
+}
+
+/// Compiles `example.c`; `link` is the library part of the command line.
+fn compile(name: &str, link: &[String]) -> PathBuf {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let capi = Path::new(env!("CARGO_MANIFEST_DIR"));
+    run(Command::new(cc())
+        .args([
+            "-std=c11",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-pedantic",
+            "-O2",
+            "-I",
+        ])
+        .arg(capi.join("include"))
+        .arg(capi.join("tests/c/example.c"))
+        .args(link)
+        .arg("-o")
+        .arg(&out));
+    out
+}
+
+/// The program's output: tag → the rest of the line (`error` lines by name).
+struct Output {
+    lines: HashMap<String, String>,
+}
+
+impl Output {
+    fn parse(text: &str) -> Output {
+        let mut lines = HashMap::new();
+        for line in text.lines() {
+            let (tag, rest) = line.split_once(' ').unwrap_or((line, ""));
+            let (key, value) = match tag {
+                "error" => {
+                    let (name, rest) = rest.split_once(' ').expect("error NAME CODE MESSAGE");
+                    (format!("error {name}"), rest.to_string())
+                }
+                _ => (tag.to_string(), rest.to_string()),
+            };
+            assert!(lines.insert(key, value).is_none(), "tag twice: {line}");
+        }
+        Output { lines }
+    }
+
+    fn get(&self, tag: &str) -> &str {
+        self.lines
+            .get(tag)
+            .unwrap_or_else(|| panic!("no `{tag}` line"))
+    }
+
+    fn doubles(&self, tag: &str) -> Vec<f64> {
+        self.get(tag)
+            .split_whitespace()
+            .map(|h| f64::from_bits(u64::from_str_radix(h, 16).expect("hex bits")))
+            .collect()
+    }
+
+    fn error_code(&self, name: &str) -> i32 {
+        let v = self.get(&format!("error {name}"));
+        v.split_whitespace().next().unwrap().parse().unwrap()
+    }
+}
+
+/// Bitwise equality with the index of the first difference.
+fn assert_bits(what: &str, c: &[f64], rust: &[f64]) {
+    assert_eq!(c.len(), rust.len(), "{what}: lengths");
+    if let Some(i) = (0..c.len()).find(|&i| c[i].to_bits() != rust[i].to_bits()) {
+        panic!("{what}[{i}]: C {:e} vs Rust {:e}", c[i], rust[i]);
+    }
+}
+
+#[test]
+fn the_c_program_agrees_with_the_rust_api() {
+    let dir = lib_dir();
+    let static_exe = compile(
+        "example-static",
+        &[
+            dir.join("libaacmm_capi.a").display().to_string(),
+            "-lm".into(),
+            "-lpthread".into(),
+            "-ldl".into(),
+        ],
+    );
+    let shared_exe = compile(
+        "example-shared",
+        &[
+            format!("-L{}", dir.display()),
+            "-laacmm_capi".into(),
+            format!("-Wl,-rpath,{}", dir.display()),
+            "-lm".into(),
+        ],
+    );
+    let args = [ARM, POSES, LENGTHS];
+    let text = run(Command::new(&static_exe).args(args).current_dir(root()));
+    let shared = run(Command::new(&shared_exe).args(args).current_dir(root()));
+    assert_eq!(text, shared, "the static and the shared library disagree");
+    let out = Output::parse(&text);
+    assert_eq!(out.get("version"), env!("CARGO_PKG_VERSION"));
+
+    // The arm, and the kernel on the C program's poses.
+    let (arm, _) = read_arm(&root().join(ARM)).unwrap();
+    assert_bits(
+        "arm_params",
+        &out.doubles("arm_params"),
+        &arm.params.to_vec(),
+    );
+    let kernel = ArmKernel::new(&arm.params).unwrap();
+    let q = out.doubles("q");
+    let rows: Vec<&[f64]> = q.chunks(6).collect();
+    let n = rows.len();
+    assert_eq!(n, 13);
+    let poses = PreparedPoses::new(6, &rows).unwrap();
+    let mut positions = vec![[0.0; 3]; n];
+    kernel.positions(&poses, 0..n, &mut positions).unwrap();
+    assert_bits(
+        "positions",
+        &out.doubles("positions"),
+        positions.as_flattened(),
+    );
+    let mut jac = Jacobians::new(n, 27);
+    kernel.jacobians(&poses, &mut jac).unwrap();
+    let jac_positions: Vec<f64> = (0..n).flat_map(|i| jac.position(i)).collect();
+    assert_bits(
+        "jac_positions",
+        &out.doubles("jac_positions"),
+        &jac_positions,
+    );
+    // n × 3 × 27, row-major.
+    let mut expected = Vec::with_capacity(n * 81);
+    for i in 0..n {
+        for k in 0..3 {
+            expected.extend((0..27).map(|c| jac.column(i, c)[k]));
+        }
+    }
+    assert_bits("jacobians", &out.doubles("jacobians"), &expected);
+    let jq = out.doubles("joint_q");
+    let mut cols = [[0.0; 3]; 6];
+    let p = kernel.joint_jacobian(&jq, &mut cols).unwrap();
+    assert_bits("joint_p", &out.doubles("joint_p"), &p);
+    let expected: Vec<f64> = (0..3)
+        .flat_map(|k| cols.iter().map(move |c| c[k]))
+        .collect();
+    assert_bits("joint_jac", &out.doubles("joint_jac"), &expected);
+    let nominal = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+    nominal.positions(&poses, 0..n, &mut positions).unwrap();
+    assert_bits(
+        "nominal_positions",
+        &out.doubles("nominal_positions"),
+        positions.as_flattened(),
+    );
+
+    // The error paths and their documented codes.
+    for (name, code) in [
+        ("null_arm", 1),
+        ("null_q", 1),
+        ("null_path", 1),
+        ("null_calibration", 1),
+        ("null_out", 1),
+        ("q_len_not_a_multiple", 2),
+        ("p_len_short", 2),
+        ("jac_len_short", 2),
+        ("joint_q_len", 2),
+        ("params_len", 2),
+        ("points_len", 2),
+        ("overlap", 3),
+        ("unknown_parameter", 3),
+        ("unknown_method", 3),
+        ("five_joints", 4),
+        ("missing_file", 5),
+        ("missing_poses", 5),
+        ("not_an_arm_file", 6),
+        ("report_size", 8),
+    ] {
+        assert_eq!(
+            out.error_code(name),
+            code,
+            "{name}: {}",
+            out.get(&format!("error {name}"))
+        );
+    }
+    assert!(
+        out.get("error missing_file").contains("no/such/arm.toml"),
+        "the message names the file"
+    );
+
+    // The calibration: what `aacmm calibrate --arm ARM --data POSES
+    // --lengths LENGTHS --encoder-noise 0.005 --probe-noise 0.01
+    // --cross-validate 3` computes, through the same library calls.
+    let at = |p: &str| root().join(p);
+    let (poses_file, _) = read_poses(&at(POSES), AngleUnit::Deg, Some(6)).unwrap();
+    let data = DataSet::from_poses(&poses_file, &source_name(Path::new(POSES)))
+        .unwrap()
+        .with_lengths(&read_lengths(&at(LENGTHS)).unwrap(), LENGTHS)
+        .unwrap();
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    #[allow(clippy::needless_update)] // settings to come keep their defaults
+    let options = CalibrateOptions {
+        fix: FixSpec::parse("auto", 6).unwrap(),
+        noise: Noise {
+            encoder_rad: Some(0.005f64.to_radians()),
+            probe_mm: Some(0.01),
+            length_default_mm: 0.001,
+            length_weight: None,
+        },
+        lm: LmOptions::default().threads(threads),
+        ..CalibrateOptions::default()
+    };
+    let cal = calibrate(&arm.params, &data, &options).unwrap();
+    assert!(cal.solver.successful);
+    assert_bits(
+        "files_params",
+        &out.doubles("files_params"),
+        &cal.params.to_vec(),
+    );
+    assert_bits(
+        "arrays_params",
+        &out.doubles("arrays_params"),
+        &cal.params.to_vec(),
+    );
+    let sigmas: Vec<f64> = cal
+        .parameters
+        .iter()
+        .zip(aacmm_core::params::ParamId::all(6))
+        .map(|(e, id)| {
+            let s = e.sigma.unwrap_or(f64::NAN);
+            match id.kind {
+                ParamKind::Alpha | ParamKind::Theta => s.to_radians(),
+                _ => s,
+            }
+        })
+        .collect();
+    assert_bits("files_sigmas", &out.doubles("files_sigmas"), &sigmas);
+    let fixed: Vec<&str> = cal
+        .parameters
+        .iter()
+        .map(|e| if e.fixed.is_some() { "1" } else { "0" })
+        .collect();
+    assert_eq!(out.get("files_fixed"), fixed.join(" "));
+    assert_eq!(
+        out.get("files_summary"),
+        format!(
+            "0 1 {} {} {}",
+            cal.solver.iterations, cal.dof.free_parameters, cal.dof.degrees_of_freedom
+        ),
+        "termination 0 = cost tolerance, successful"
+    );
+    assert_eq!(
+        serde_json::to_value(cal.solver.termination).unwrap(),
+        "cost_tolerance"
+    );
+    let after = ArmKernel::new(&cal.params).unwrap();
+    after.positions(&poses, 0..n, &mut positions).unwrap();
+    assert_bits(
+        "calibrated_positions",
+        &out.doubles("calibrated_positions"),
+        positions.as_flattened(),
+    );
+
+    // The report: calibration.json's fields, the same calibration. Both
+    // sides go through JSON text (serde_json's parser may miss the last bit
+    // of a float, the same way for the same text).
+    fn json<T: serde::Serialize>(v: &T) -> serde_json::Value {
+        serde_json::from_str(&serde_json::to_string(v).unwrap()).unwrap()
+    }
+    let report: serde_json::Value = serde_json::from_str(out.get("report")).unwrap();
+    assert_eq!(report["calibration"], json(&cal));
+    let folds = cross_validate(&arm.params, &data, &options, 3, 0).unwrap();
+    assert_eq!(
+        report["validation"]["cross_validation"]["folds"],
+        json(&folds)
+    );
+    for (key, value) in [
+        ("arm", "paper-table-1"),
+        ("arm_file", ARM),
+        ("data_file", POSES),
+        ("lengths_file", LENGTHS),
+        ("method", "lm"),
+        ("fix", "auto"),
+    ] {
+        assert_eq!(report[key], value, "{key}");
+    }
+    assert_eq!(report["touches"], 100);
+    assert_eq!(report["reference_lengths"], 5);
+    assert!(report["validation"]["held_out"].is_null());
+}
+
+/// The shared library exports the C API and nothing else.
+#[cfg(target_os = "linux")]
+#[test]
+fn only_aacmm_symbols_are_exported() {
+    let so = lib_dir().join("libaacmm_capi.so");
+    let symbols = run(Command::new("nm")
+        .args(["-D", "--defined-only", "--format=posix"])
+        .arg(&so));
+    let names: Vec<&str> = symbols
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .collect();
+    assert!(names.contains(&"aacmm_positions"), "{symbols}");
+    let foreign: Vec<&&str> = names.iter().filter(|n| !n.starts_with("aacmm_")).collect();
+    assert!(
+        foreign.is_empty(),
+        "exported without the prefix: {foreign:?}"
+    );
+}
+
+/// Every function of the header is exported (and nothing is declared that
+/// the library lacks).
+#[cfg(target_os = "linux")]
+#[test]
+fn the_header_declares_what_the_library_exports() {
+    let header =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("include/aacmm.h"))
+            .unwrap();
+    let mut declared: Vec<String> = header
+        .split(|c: char| !(c.is_alphanumeric() || c == '_'))
+        .filter(|w| w.starts_with("aacmm_"))
+        .map(str::to_string)
+        .collect();
+    declared.sort();
+    declared.dedup();
+    let so = lib_dir().join("libaacmm_capi.so");
+    let symbols = run(Command::new("nm")
+        .args(["-D", "--defined-only", "--format=posix"])
+        .arg(&so));
+    let mut exported: Vec<String> = symbols
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .map(str::to_string)
+        .collect();
+    exported.sort();
+    assert_eq!(declared, exported);
+}
+
+/// The header compiles as C++ too (`extern "C"`), where a C++ compiler is
+/// installed.
+#[test]
+fn the_header_compiles_as_cpp() {
+    let cxx = std::env::var("CXX").unwrap_or_else(|_| "c++".to_string());
+    if Command::new(&cxx).arg("--version").output().is_err() {
+        eprintln!("no C++ compiler `{cxx}`: skipped");
+        return;
+    }
+    let src = Path::new(env!("CARGO_TARGET_TMPDIR")).join("header.cpp");
+    std::fs::write(
+        &src,
+        "#include \"aacmm.h\"\nint main() { return aacmm_param_count(6) == 27 ? 0 : 1; }\n",
+    )
+    .unwrap();
+    run(Command::new(cxx)
+        .args([
+            "-std=c++11",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-pedantic",
+            "-fsyntax-only",
+            "-I",
+        ])
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("include"))
+        .arg(&src));
+}
+
+/// The minimal program of the README's C library section compiles against
+/// the static library and runs.
+#[test]
+fn the_readme_example_runs() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let section = &readme[readme
+        .find("## The C library")
+        .expect("README has a C library section")..];
+    let start = section.find("```c\n").expect("a ```c block") + "```c\n".len();
+    let code = &section[start..start + section[start..].find("```").unwrap()];
+    let src = Path::new(env!("CARGO_TARGET_TMPDIR")).join("readme.c");
+    std::fs::write(&src, code).unwrap();
+    let exe = Path::new(env!("CARGO_TARGET_TMPDIR")).join("readme");
+    let capi = Path::new(env!("CARGO_MANIFEST_DIR"));
+    run(Command::new(cc())
+        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-pedantic", "-I"])
+        .arg(capi.join("include"))
+        .arg(&src)
+        .arg(lib_dir().join("libaacmm_capi.a"))
+        .args(["-lm", "-lpthread", "-ldl", "-o"])
+        .arg(&exe));
+    let out = run(Command::new(&exe).current_dir(root()));
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 3, "{out}");
+    assert!(lines[0].starts_with("pose 0: "), "{out}");
+    assert!(lines[2].starts_with("converged: yes after "), "{out}");
+}
