@@ -5,8 +5,8 @@ use std::ffi::{CStr, c_char};
 
 use aacmm_core::calibrate::validate::{BeforeAfter, Fold, before_after, cross_validate};
 use aacmm_core::calibrate::{
-    CalibrateOptions, Calibration, DEFAULT_LENGTH_SIGMA_MM, FixSpec, LmOptions, Termination,
-    calibrate,
+    CalibrateOptions, Calibration, DEFAULT_LENGTH_SIGMA_MM, FixSpec, LmOptions, Method,
+    Termination, calibrate,
 };
 use aacmm_core::dataset::{DataSet, MIN_TOUCHES};
 use aacmm_core::io::{
@@ -24,9 +24,29 @@ use crate::ptr;
 /// constants.
 pub type AacmmMethod = u32;
 
-/// Levenberg–Marquardt from the start arm (the only solver of this version;
-/// more methods will get further constants, never renumbering this one).
+/// Levenberg–Marquardt from the start arm (`--method lm`).
 pub const AACMM_METHOD_LM: AacmmMethod = 0;
+
+/// The paper's simulated annealing alone (`--method sa`).
+pub const AACMM_METHOD_SA: AacmmMethod = 1;
+
+/// The paper's hybrid, annealing then LM (`--method hybrid`).
+pub const AACMM_METHOD_HYBRID: AacmmMethod = 2;
+
+/// Converges from encoder zeros unknown in ±180° (`--method global`, the
+/// default).
+pub const AACMM_METHOD_GLOBAL: AacmmMethod = 3;
+
+/// The library's method of a C constant.
+fn method(m: AacmmMethod) -> Option<Method> {
+    match m {
+        AACMM_METHOD_LM => Some(Method::Lm),
+        AACMM_METHOD_SA => Some(Method::Sa),
+        AACMM_METHOD_HYBRID => Some(Method::Hybrid),
+        AACMM_METHOD_GLOBAL => Some(Method::Global),
+        _ => None,
+    }
+}
 
 /// The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
 /// `AACMM_ANGLE_RAD`.
@@ -45,7 +65,8 @@ pub const AACMM_ANGLE_RAD: AacmmAngleUnit = 1;
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct AacmmCalibrateOptions {
-    /// The solver: `AACMM_METHOD_LM` (default).
+    /// The solver: `AACMM_METHOD_GLOBAL` (default), `_LM`, `_SA` or
+    /// `_HYBRID`.
     pub method: AacmmMethod,
     /// Parameters held at their start values: `NULL` or `"auto"` (the
     /// recommended set of the identifiability analysis; default), or
@@ -53,8 +74,8 @@ pub struct AacmmCalibrateOptions {
     /// `"theta1,d1,theta6,alpha6,Bx,By"` (`beta…` is accepted for
     /// `alpha…`): the command line's `--fix`. Read during the call only.
     pub fix: *const c_char,
-    /// Seed of the cross-validation fold assignment (and of the stochastic
-    /// solvers to come); `lm` itself does not use it. Default 0.
+    /// Seed of every random draw: the solvers' moves and starts, the
+    /// cross-validation folds. Default 0.
     pub seed: u64,
     /// `k`-fold cross-validation over points for the report (0 = none, the
     /// default; otherwise 2 or more): `--cross-validate`.
@@ -108,6 +129,8 @@ pub enum AacmmTermination {
     MaxIterations = 4,
     /// No step lowered the cost: a minimum to machine precision.
     NoProgress = 5,
+    /// Annealing alone (`AACMM_METHOD_SA`) ended by its own rule.
+    Annealed = 6,
 }
 
 impl From<Termination> for AacmmTermination {
@@ -119,6 +142,7 @@ impl From<Termination> for AacmmTermination {
             Termination::ZeroResidual => AacmmTermination::ZeroResidual,
             Termination::MaxIterations => AacmmTermination::MaxIterations,
             Termination::NoProgress => AacmmTermination::NoProgress,
+            Termination::Annealed => AacmmTermination::Annealed,
         }
     }
 }
@@ -199,7 +223,7 @@ struct CrossValidation<'a> {
 #[unsafe(no_mangle)]
 pub extern "C" fn aacmm_calibrate_options_default() -> AacmmCalibrateOptions {
     AacmmCalibrateOptions {
-        method: AACMM_METHOD_LM,
+        method: AACMM_METHOD_GLOBAL,
         fix: std::ptr::null(),
         seed: 0,
         cross_validate: 0,
@@ -234,12 +258,13 @@ unsafe fn settings(
         // SAFETY: by the contract.
         *unsafe { ptr::object(options, "options") }?
     };
-    if o.method != AACMM_METHOD_LM {
+    let Some(solver) = method(o.method) else {
         return Err(Error::invalid(format!(
-            "method = {}: this version has AACMM_METHOD_LM ({AACMM_METHOD_LM}) only",
+            "method = {}: one of AACMM_METHOD_LM ({AACMM_METHOD_LM}), _SA ({AACMM_METHOD_SA}), \
+             _HYBRID ({AACMM_METHOD_HYBRID}), _GLOBAL ({AACMM_METHOD_GLOBAL})",
             o.method
         )));
-    }
+    };
     for (name, v) in [
         ("encoder_noise_rad", o.encoder_noise_rad),
         ("probe_noise_mm", o.probe_noise_mm),
@@ -271,11 +296,12 @@ unsafe fn settings(
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
     };
-    // `..default()`: settings this version of the C API does not know (a
-    // solver choice is coming) keep the library's defaults, which are the
+    // `..default()`: settings the C API does not expose (annealing
+    // schedule, start budget) keep the library's defaults, which are the
     // command line's.
-    #[allow(clippy::needless_update)]
     let options = CalibrateOptions {
+        method: solver,
+        seed: o.seed,
         fix: FixSpec::parse(&fix, joints)?,
         noise: Noise {
             encoder_rad: stated(o.encoder_noise_rad),

@@ -41,9 +41,10 @@ pub use arm::{
     aacmm_positions,
 };
 pub use calibrate::{
-    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AacmmAngleUnit, AacmmCalibrateOptions,
-    AacmmCalibration, AacmmCalibrationSummary, AacmmMethod, AacmmReferenceLength, AacmmTermination,
-    aacmm_calibrate, aacmm_calibrate_files, aacmm_calibrate_options_default, aacmm_calibration_arm,
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_GLOBAL, AACMM_METHOD_HYBRID, AACMM_METHOD_LM,
+    AACMM_METHOD_SA, AacmmAngleUnit, AacmmCalibrateOptions, AacmmCalibration,
+    AacmmCalibrationSummary, AacmmMethod, AacmmReferenceLength, AacmmTermination, aacmm_calibrate,
+    aacmm_calibrate_files, aacmm_calibrate_options_default, aacmm_calibration_arm,
     aacmm_calibration_fixed, aacmm_calibration_free, aacmm_calibration_params,
     aacmm_calibration_report, aacmm_calibration_sigmas, aacmm_calibration_summary,
 };

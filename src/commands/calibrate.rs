@@ -6,7 +6,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aacmm_core::calibrate::validate::{BeforeAfter, Figures, Fold, before_after, cross_validate};
-use aacmm_core::calibrate::{CalibrateOptions, Calibration, FixSpec, LmOptions, calibrate};
+use aacmm_core::calibrate::{
+    AnnealOptions, CalibrateOptions, Calibration, FixSpec, GlobalOptions, LmOptions, SwitchRule,
+    calibrate_observed,
+};
 use aacmm_core::io::source_name;
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
 use anyhow::{Context, Result, bail};
@@ -21,6 +24,9 @@ use crate::paths::check_output_dir;
 pub const CALIBRATED_FILE: &str = "calibrated.toml";
 /// Everything the calibration found, as JSON.
 pub const REPORT_FILE: &str = "calibration.json";
+/// Wall times per phase (apart from calibration.json, which is the same
+/// bytes for the same seed).
+pub const TIMING_FILE: &str = "timing.json";
 
 /// Calibrate an arm from touches (and reference lengths).
 #[derive(clap::Args)]
@@ -31,9 +37,13 @@ pub struct Args {
     /// recommended set) or names such as `theta1,d1,theta6,alpha6,Bx,By`.
     #[arg(long, default_value = "auto", value_name = "auto|NAMES")]
     fix: String,
-    /// The solver.
-    #[arg(long, value_enum, default_value = "lm")]
+    /// The solver: `global` converges from encoder zeros unknown anywhere in
+    /// ±180°; `lm` only from a near start; `sa` and `hybrid` are the
+    /// paper's annealing alone and annealing then LM.
+    #[arg(long, value_enum, default_value = "global")]
     method: Method,
+    #[command(flatten)]
+    solver: SolverFlags,
     /// Held-out poses to validate on (same CSV format as --data).
     #[arg(long, value_name = "POSES.csv")]
     validate: Option<PathBuf>,
@@ -44,7 +54,8 @@ pub struct Args {
     /// length stay in one fold).
     #[arg(long, value_name = "K")]
     cross_validate: Option<usize>,
-    /// Seed of the fold assignment.
+    /// Seed of every random draw (annealing moves, global starts,
+    /// cross-validation folds): the same seed gives the same files.
     #[arg(long, default_value_t = 0, value_name = "S")]
     seed: u64,
     /// Output directory: calibrated.toml and calibration.json.
@@ -53,11 +64,113 @@ pub struct Args {
 }
 
 /// Solvers.
-#[derive(Clone, Copy, Debug, ValueEnum, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
 enum Method {
     /// Levenberg–Marquardt from the nominal arm.
     Lm,
+    /// The paper's simulated annealing alone.
+    Sa,
+    /// The paper's hybrid: annealing, then LM from its best point.
+    Hybrid,
+    /// Multi-start on the circles of the zero offsets, then LM.
+    Global,
+}
+
+impl From<Method> for aacmm_core::calibrate::Method {
+    fn from(m: Method) -> Self {
+        use aacmm_core::calibrate::Method as M;
+        match m {
+            Method::Lm => M::Lm,
+            Method::Sa => M::Sa,
+            Method::Hybrid => M::Hybrid,
+            Method::Global => M::Global,
+        }
+    }
+}
+
+/// The solvers' settings (defaults in docs/calibration.md).
+#[derive(clap::Args)]
+struct SolverFlags {
+    /// Annealing: start temperature T0, mm of energy.
+    #[arg(long, value_name = "MM", default_value_t = AnnealOptions::default().t0)]
+    sa_t0: f64,
+    /// Annealing: cooling factor alpha (T <- alpha T), between 0 and 1.
+    #[arg(long, value_name = "A", default_value_t = AnnealOptions::default().cooling)]
+    sa_cooling: f64,
+    /// Annealing: moves per temperature L.
+    #[arg(long, value_name = "L", default_value_t = AnnealOptions::default().chain)]
+    sa_chain: usize,
+    /// Annealing: stop below this temperature, mm.
+    #[arg(long, value_name = "MM", default_value_t = AnnealOptions::default().t_min)]
+    sa_t_min: f64,
+    /// Annealing: stop below this energy epsilon, mm (0 = never).
+    #[arg(long, value_name = "MM", default_value_t = AnnealOptions::default().target)]
+    sa_target: f64,
+    /// Annealing: move range of lengths, mm.
+    #[arg(long, value_name = "MM", default_value_t = AnnealOptions::default().step_mm)]
+    sa_step_mm: f64,
+    /// Annealing: move range of twists, degrees.
+    #[arg(long, value_name = "DEG", default_value_t = AnnealOptions::default().twist_step_deg)]
+    sa_twist_step: f64,
+    /// Annealing: move range of zero offsets, degrees.
+    #[arg(long, value_name = "DEG", default_value_t = AnnealOptions::default().zero_step_deg)]
+    sa_zero_step: f64,
+    /// Annealing: energy evaluation budget.
+    #[arg(long, value_name = "N", default_value_t = AnnealOptions::default().max_evaluations)]
+    sa_max_evaluations: usize,
+    /// Hybrid: window s0 of the switching rule, temperatures.
+    #[arg(long, value_name = "S0", default_value_t = SwitchRule::default().window)]
+    switch_window: usize,
+    /// Hybrid: threshold epsilon1 of the switching rule.
+    #[arg(long, value_name = "E1", default_value_t = SwitchRule::default().epsilon)]
+    switch_epsilon: f64,
+    /// Global: most starts.
+    #[arg(long, value_name = "N", default_value_t = GlobalOptions::default().max_starts)]
+    global_starts: usize,
+    /// Global: starts that must reach the lowest cost.
+    #[arg(long, value_name = "N", default_value_t = GlobalOptions::default().confirmations)]
+    global_confirmations: usize,
+}
+
+impl SolverFlags {
+    fn options(&self) -> Result<(AnnealOptions, SwitchRule, GlobalOptions)> {
+        let anneal = AnnealOptions {
+            t0: self.sa_t0,
+            cooling: self.sa_cooling,
+            chain: self.sa_chain,
+            t_min: self.sa_t_min,
+            target: self.sa_target,
+            step_mm: self.sa_step_mm,
+            twist_step_deg: self.sa_twist_step,
+            zero_step_deg: self.sa_zero_step,
+            max_evaluations: self.sa_max_evaluations,
+        };
+        anneal.check().map_err(|e| anyhow::anyhow!("--sa-…: {e}"))?;
+        if self.switch_window == 0
+            || !(self.switch_epsilon.is_finite() && self.switch_epsilon >= 0.0)
+        {
+            bail!(
+                "--switch-window {} --switch-epsilon {}: a window of at least 1 and a threshold ≥ 0",
+                self.switch_window,
+                self.switch_epsilon
+            );
+        }
+        if self.global_starts == 0 || self.global_confirmations == 0 {
+            bail!("--global-starts and --global-confirmations: at least 1");
+        }
+        Ok((
+            anneal,
+            SwitchRule {
+                window: self.switch_window,
+                epsilon: self.switch_epsilon,
+            },
+            GlobalOptions {
+                max_starts: self.global_starts,
+                confirmations: self.global_confirmations,
+                ..GlobalOptions::default()
+            },
+        ))
+    }
 }
 
 #[derive(Serialize)]
@@ -66,7 +179,6 @@ struct Report<'a> {
     arm_file: String,
     data_file: String,
     lengths_file: Option<String>,
-    method: Method,
     fix: &'a str,
     noise: &'a aacmm_core::residuals::Noise,
     units: Units,
@@ -75,6 +187,19 @@ struct Report<'a> {
     reference_lengths: usize,
     calibration: &'a Calibration,
     validation: Validation<'a>,
+}
+
+#[derive(Serialize)]
+struct Timing<'a> {
+    fit_ms: f64,
+    total_ms: f64,
+    phases: Vec<PhaseTime<'a>>,
+}
+
+#[derive(Serialize)]
+struct PhaseTime<'a> {
+    name: &'a str,
+    ms: f64,
 }
 
 #[derive(Serialize)]
@@ -111,7 +236,12 @@ pub fn run(args: Args) -> Result<()> {
             .as_deref()
             .map(|p| ("--validate-lengths", p)),
     );
-    check_output_dir("--out", &args.out, &[CALIBRATED_FILE, REPORT_FILE], &inputs)?;
+    check_output_dir(
+        "--out",
+        &args.out,
+        &[CALIBRATED_FILE, REPORT_FILE, TIMING_FILE],
+        &inputs,
+    )?;
     let noise = args.fit.noise()?;
     let (arm, data) = args.fit.read()?;
     let fix = FixSpec::parse(&args.fix, arm.params.joint_count()).context("--fix")?;
@@ -124,14 +254,26 @@ pub fn run(args: Args) -> Result<()> {
         )?),
         None => None,
     };
+    let (anneal, switch, global) = args.solver.options()?;
     let options = CalibrateOptions {
         fix,
         noise,
+        method: args.method.into(),
         lm: LmOptions::default().threads(super::identify::threads()),
+        anneal,
+        switch,
+        global,
+        seed: args.seed,
     };
     let arm_file = source_name(&args.fit.input.arm);
     let started = Instant::now();
-    let cal = calibrate(&arm.params, &data, &options).with_context(|| arm_file.clone())?;
+    let cal = {
+        let mut bar = super::progress::Bar::new();
+        calibrate_observed(&arm.params, &data, &options, &mut |phase, f| {
+            bar.show(phase, f)
+        })
+        .with_context(|| arm_file.clone())?
+    };
     let fit_time = started.elapsed();
     let fitted = before_after(&arm.params, &cal.params, &data)?;
     let held = match (&held_out, &args.validate) {
@@ -166,7 +308,6 @@ pub fn run(args: Args) -> Result<()> {
         arm_file: arm_file.clone(),
         data_file: source_name(&args.fit.input.data),
         lengths_file: args.fit.lengths.as_deref().map(source_name),
-        method: args.method,
         fix: &args.fix,
         noise: &options.noise,
         units: Units {
@@ -189,18 +330,41 @@ pub fn run(args: Args) -> Result<()> {
     let json_path = args.out.join(REPORT_FILE);
     super::write_json(&json_path, &report)?;
 
+    let timing = Timing {
+        fit_ms: fit_time.as_secs_f64() * 1e3,
+        total_ms: total_time.as_secs_f64() * 1e3,
+        phases: cal
+            .solver
+            .phases
+            .iter()
+            .map(|p| PhaseTime {
+                name: &p.name,
+                ms: p.seconds * 1e3,
+            })
+            .collect(),
+    };
+    let timing_path = args.out.join(TIMING_FILE);
+    super::write_json(&timing_path, &timing)?;
+
     let mut out = Stdout::new();
     out.print(summary(&report))?;
     out.print(format_args!(
-        "wrote {}\nwrote {}\n",
+        "wrote {}\nwrote {}\nwrote {}\n",
         toml_path.display(),
-        json_path.display()
+        json_path.display(),
+        timing_path.display()
     ))?;
     out.finish()?;
+    let phases: Vec<String> = timing
+        .phases
+        .iter()
+        .map(|p| format!("{} {:.1} ms", p.name, p.ms))
+        .collect();
     note(format_args!(
-        "time: fit {:.1} ms, with validation {:.1} ms",
-        fit_time.as_secs_f64() * 1e3,
-        total_time.as_secs_f64() * 1e3
+        "time: fit {:.1} ms ({}), with validation {:.1} ms",
+        timing.fit_ms,
+        phases.join(", "),
+        timing.total_ms
     ))?;
     if !cal.solver.successful {
         bail!(
@@ -219,10 +383,11 @@ fn summary(r: &Report) -> String {
         "calibrated `{}` ({}) on {}: {} touches of {} points, {} reference lengths\n\n",
         r.arm, r.arm_file, r.data_file, r.touches, r.points, r.reference_lengths
     );
+    t += &method_lines(s);
     t += &format!(
         "Solver: {} — {} after {} iterations ({} cost and {} Jacobian evaluations); \
          cost {:.6e} -> {:.6e}\n",
-        s.method,
+        s.method.name(),
         s.termination.describe(),
         s.iterations,
         s.cost_evaluations,
@@ -309,5 +474,67 @@ fn summary(r: &Report) -> String {
         }
     }
     t += "\n";
+    t
+}
+
+/// What the method did, before the final LM's line.
+fn method_lines(s: &aacmm_core::calibrate::SolverSummary) -> String {
+    let mut t = String::new();
+    if let Some(a) = &s.anneal {
+        let o = &a.options;
+        t += &format!(
+            "Annealing: T0 {} mm, alpha {}, L {}, T_min {} mm, epsilon {} mm, ranges {} mm / {} deg \
+             (twists) / {} deg (zeros); {} temperatures, {} energy evaluations; energy {:.4} -> \
+             {:.4} mm; stopped: {}\n",
+            o.t0,
+            o.cooling,
+            o.chain,
+            o.t_min,
+            o.target,
+            o.step_mm,
+            o.twist_step_deg,
+            o.zero_step_deg,
+            a.temperatures.len(),
+            a.evaluations,
+            a.start_energy,
+            a.best_energy,
+            a.stop.describe()
+        );
+        if let (Some(rule), Some(last)) = (&a.switch_rule, a.temperatures.last()) {
+            t += &format!(
+                "Switch (s0 {}, epsilon1 {}): at T = {:.3e} mm, energy {:.4} mm, after {} \
+                 evaluations\n",
+                rule.window, rule.epsilon, last.temperature, last.best, a.evaluations
+            );
+        }
+    }
+    if let Some(g) = &s.global {
+        t += &format!(
+            "Global: {} start(s) on the circles of {}; lowest cost reached {} time(s); stopped: {}{}\n",
+            g.minima.len(),
+            g.circles.join(", "),
+            g.best_hits,
+            g.stop.describe(),
+            if g.sign_changes.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; signs put in the nominal convention: {}",
+                    g.sign_changes.join(", ")
+                )
+            }
+        );
+    }
+    let phases: Vec<String> = s
+        .phases
+        .iter()
+        .map(|p| {
+            format!(
+                "{} ({} cost, {} Jacobian)",
+                p.name, p.cost_evaluations, p.jacobian_evaluations
+            )
+        })
+        .collect();
+    t += &format!("Phases: {}\n", phases.join("; "));
     t
 }

@@ -6,6 +6,7 @@ pub mod evaluate;
 pub mod fit;
 pub mod identify;
 pub mod points;
+pub mod progress;
 pub mod simulate;
 
 use std::path::PathBuf;

@@ -29,6 +29,8 @@ pub enum Termination {
     /// No step lowered the cost even with huge damping: a minimum to machine
     /// precision, or a numerical failure.
     NoProgress,
+    /// Annealing alone (`sa`) ended by its own rule; no LM ran.
+    Annealed,
 }
 
 impl Termination {
@@ -52,6 +54,7 @@ impl Termination {
             Termination::ZeroResidual => "residuals vanished",
             Termination::MaxIterations => "iteration limit reached",
             Termination::NoProgress => "no step lowers the cost (minimum to machine precision)",
+            Termination::Annealed => "annealing ended (no LM)",
         }
     }
 }

@@ -14,14 +14,24 @@
 //!   (`Σr²_touch / (3·touches − 3·points − free)`), and a second fit uses it,
 //!   so that reference lengths are weighed against touches correctly.
 //!
+//! Solvers ([`Method`]): `lm` from the start arm; `sa`, the paper's
+//! annealing ([`anneal`]) on its own; `hybrid`, the paper's annealing with
+//! its switching rule, then LM; `global` ([`global`]), which converges from
+//! encoder zeros unknown anywhere in ±180°.
+//!
 //! Validation on held-out data lives in [`validate`].
 
+pub mod anneal;
+pub mod energy;
+pub mod global;
 pub mod lm;
 pub mod validate;
 
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
+pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
+pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub use lm::{LmIteration, LmOptions, LmResult, Termination, levenberg_marquardt};
 
 use crate::dataset::DataSet;
@@ -30,7 +40,7 @@ use crate::identify::{
 };
 use crate::kernel::{ArmKernel, KernelError};
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Noise, Weights};
+use crate::residuals::{Noise, Weights, normal_equations};
 
 /// Why a calibration could not run.
 #[derive(Debug, thiserror::Error)]
@@ -78,6 +88,84 @@ pub enum CalibrationError {
     /// Cross-validation folds that cannot be made.
     #[error("{0}")]
     Folds(String),
+    /// A solver setting out of range.
+    #[error("{0}")]
+    Options(String),
+}
+
+/// The solvers of [`calibrate`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Levenberg–Marquardt from the start arm.
+    Lm,
+    /// The paper's simulated annealing alone (method.md §5).
+    Sa,
+    /// The paper's hybrid: annealing until its switching rule, then LM (§6).
+    Hybrid,
+    /// Converges from encoder zeros unknown in ±180° ([`global`]).
+    #[default]
+    Global,
+}
+
+impl Method {
+    /// Every method, in the order of the comparison table.
+    pub const ALL: [Method; 4] = [Method::Lm, Method::Sa, Method::Hybrid, Method::Global];
+
+    /// The name used on the command line and in reports.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::Method;
+    /// assert_eq!(Method::Hybrid.name(), "hybrid");
+    /// assert_eq!(Method::parse("global"), Some(Method::Global));
+    /// assert_eq!(Method::parse("ceres"), None);
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Lm => "lm",
+            Method::Sa => "sa",
+            Method::Hybrid => "hybrid",
+            Method::Global => "global",
+        }
+    }
+
+    /// The method of a name.
+    pub fn parse(s: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == s)
+    }
+}
+
+/// Work and time of one phase of a solver. The time is not serialised, so
+/// that the same seed gives the same `calibration.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Phase {
+    /// What ran: `anneal`, `lm`, `circle sweeps`, …
+    pub name: String,
+    /// Cost or energy evaluations (positions only).
+    pub cost_evaluations: usize,
+    /// Jacobian evaluations.
+    pub jacobian_evaluations: usize,
+    /// Wall time, s.
+    #[serde(skip)]
+    pub seconds: f64,
+}
+
+impl Phase {
+    /// An empty phase.
+    pub fn new(name: &str) -> Phase {
+        Phase {
+            name: name.to_string(),
+            cost_evaluations: 0,
+            jacobian_evaluations: 0,
+            seconds: 0.0,
+        }
+    }
+
+    fn add_lm(&mut self, fit: &LmResult, seconds: f64) {
+        self.cost_evaluations += fit.cost_evaluations;
+        self.jacobian_evaluations += fit.jacobian_evaluations;
+        self.seconds += seconds;
+    }
 }
 
 /// Which parameters stay at their start values.
@@ -132,8 +220,18 @@ pub struct CalibrateOptions {
     pub fix: FixSpec,
     /// What is known of the noise.
     pub noise: Noise,
-    /// The solver's tolerances.
+    /// The solver.
+    pub method: Method,
+    /// LM's tolerances (every method but `sa` ends with LM).
     pub lm: LmOptions,
+    /// The annealer's settings (`sa`, `hybrid`).
+    pub anneal: AnnealOptions,
+    /// The hybrid's switching rule.
+    pub switch: SwitchRule,
+    /// The global method's settings.
+    pub global: GlobalOptions,
+    /// Seed of every random draw (annealing moves, starts).
+    pub seed: u64,
 }
 
 impl Default for CalibrateOptions {
@@ -144,7 +242,12 @@ impl Default for CalibrateOptions {
                 length_default_mm: DEFAULT_LENGTH_SIGMA_MM,
                 ..Noise::default()
             },
+            method: Method::default(),
             lm: LmOptions::default(),
+            anneal: AnnealOptions::default(),
+            switch: SwitchRule::default(),
+            global: GlobalOptions::default(),
+            seed: 0,
         }
     }
 }
@@ -196,9 +299,10 @@ pub struct Dof {
 /// The solver's account of itself.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SolverSummary {
-    /// `lm`.
-    pub method: String,
-    /// Why it stopped.
+    /// The method that ran.
+    pub method: Method,
+    /// Why the final LM stopped (`sa`: the annealing's stop, mapped to
+    /// [`Termination::Annealed`]).
     pub termination: Termination,
     /// Whether that is a converged minimum.
     pub successful: bool,
@@ -216,6 +320,21 @@ pub struct SolverSummary {
     pub history: Vec<LmIteration>,
     /// The tolerances.
     pub options: LmOptions,
+    /// Work per phase, in order.
+    pub phases: Vec<Phase>,
+    /// The annealing (`sa`, `hybrid`).
+    pub anneal: Option<AnnealTrace>,
+    /// The global search (`global`).
+    pub global: Option<GlobalTrace>,
+}
+
+/// The correlation matrix of the free parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CorrelationMatrix {
+    /// The free parameters, in the fixed order.
+    pub parameters: Vec<String>,
+    /// `ρ_ij`, row by row.
+    pub rho: Vec<Vec<f64>>,
 }
 
 /// What [`calibrate`] returns.
@@ -228,6 +347,8 @@ pub struct Calibration {
     pub parameters: Vec<Estimate>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
     pub correlations: Vec<Correlation>,
+    /// Every correlation of the free parameters.
+    pub correlation_matrix: CorrelationMatrix,
     /// Counts and the variance factor.
     pub dof: Dof,
     /// The solver.
@@ -253,6 +374,17 @@ pub fn calibrate(
     start: &DhParams,
     data: &DataSet,
     options: &CalibrateOptions,
+) -> Result<Calibration, CalibrationError> {
+    calibrate_observed(start, data, options, &mut |_, _| {})
+}
+
+/// [`calibrate`], telling `progress` the phase running and the fraction of
+/// it done (for a progress bar).
+pub fn calibrate_observed(
+    start: &DhParams,
+    data: &DataSet,
+    options: &CalibrateOptions,
+    progress: &mut dyn FnMut(&str, f64),
 ) -> Result<Calibration, CalibrationError> {
     let kernel = ArmKernel::new(start)?;
     let threads = options.lm.threads;
@@ -296,9 +428,40 @@ pub fn calibrate(
             free: free.len(),
         });
     }
-    let mut fit = levenberg_marquardt(start, data, &weights, &free, &options.lm)?;
-    let (mut cost_evaluations, mut jacobian_evaluations) =
-        (fit.cost_evaluations, fit.jacobian_evaluations);
+    let degrees_of_freedom = touch_rows + length_rows - unknowns;
+    let solved = solve(
+        start,
+        data,
+        &weights,
+        &free,
+        options,
+        stated.then_some(degrees_of_freedom),
+        progress,
+    )?;
+    let Solved {
+        mut fit,
+        mut phases,
+        anneal,
+        mut global,
+    } = solved;
+    let mut cost_evaluations: usize = phases.iter().map(|p| p.cost_evaluations).sum();
+    let mut jacobian_evaluations: usize = phases.iter().map(|p| p.jacobian_evaluations).sum();
+    let sign_changes = global::normalize_signs(&mut fit.params, start, &free);
+    if !sign_changes.is_empty() {
+        // Same positions, other signs: the normal equations change sign
+        // pattern, so recompute them for the covariance.
+        fit.normal = normal_equations(
+            &ArmKernel::new(&fit.params)?,
+            data,
+            &weights,
+            &free,
+            threads,
+        )?;
+        jacobian_evaluations += 1;
+    }
+    if let Some(g) = &mut global {
+        g.sign_changes = sign_changes;
+    }
     let mut touch_sigma = weights.typical_touch_sigma();
     if !stated {
         // Unit weights: the touch residuals are mm. Estimate σ and refit so
@@ -309,9 +472,24 @@ pub fn calibrate(
         touch_sigma = (fit.normal.touch_cost / touch_dof as f64).sqrt().max(1e-9);
         if length_rows > 0 {
             weights = Weights::new(&kernel, data, &options.noise, touch_sigma)?;
-            fit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
-            cost_evaluations += fit.cost_evaluations;
-            jacobian_evaluations += fit.jacobian_evaluations;
+            let timer = std::time::Instant::now();
+            if options.method == Method::Sa {
+                fit.normal = normal_equations(
+                    &ArmKernel::new(&fit.params)?,
+                    data,
+                    &weights,
+                    &free,
+                    threads,
+                )?;
+                jacobian_evaluations += 1;
+            } else {
+                fit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
+                let mut phase = Phase::new("lm, reweighted");
+                phase.add_lm(&fit, timer.elapsed().as_secs_f64());
+                cost_evaluations += phase.cost_evaluations;
+                jacobian_evaluations += phase.jacobian_evaluations;
+                phases.push(phase);
+            }
         } else {
             let w2 = 1.0 / (touch_sigma * touch_sigma);
             fit.normal.jtj.iter_mut().for_each(|v| *v *= w2);
@@ -322,7 +500,6 @@ pub fn calibrate(
             }
         }
     }
-    let degrees_of_freedom = touch_rows + length_rows - unknowns;
     let sigma0 = (fit.normal.cost() / degrees_of_freedom as f64).sqrt();
     let p = free.len();
     let n = DMatrix::from_row_slice(p, p, &fit.normal.jtj);
@@ -365,9 +542,29 @@ pub fn calibrate(
             }
         })
         .collect();
+    let free_names: Vec<String> = free.iter().map(|&c| names[c].clone()).collect();
+    let rho = (0..p)
+        .map(|a| {
+            (0..p)
+                .map(|b| {
+                    let r = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+                    if r.is_finite() { r } else { 0.0 }
+                })
+                .collect()
+        })
+        .collect();
+    let successful = fit.termination.was_successful()
+        && global.as_ref().is_none_or(|g| g.stop.confirmed())
+        && anneal
+            .as_ref()
+            .is_none_or(|a| a.stop != AnnealStop::EvaluationBudget);
     Ok(Calibration {
         parameters,
         correlations: strong_correlations(&cov, &free, &names),
+        correlation_matrix: CorrelationMatrix {
+            parameters: free_names,
+            rho,
+        },
         dof: Dof {
             touch_rows,
             length_rows,
@@ -379,9 +576,9 @@ pub fn calibrate(
             touch_sigma_estimated: !stated,
         },
         solver: SolverSummary {
-            method: "lm".into(),
+            method: options.method,
             termination: fit.termination,
-            successful: fit.termination.was_successful(),
+            successful,
             iterations: fit.iterations,
             cost_evaluations,
             jacobian_evaluations,
@@ -389,8 +586,124 @@ pub fn calibrate(
             final_cost: fit.normal.cost(),
             history: fit.history,
             options: options.lm,
+            phases,
+            anneal,
+            global,
         },
         identification,
         params,
     })
 }
+
+/// What a solver hands back to [`calibrate`].
+struct Solved {
+    fit: LmResult,
+    phases: Vec<Phase>,
+    anneal: Option<AnnealTrace>,
+    global: Option<GlobalTrace>,
+}
+
+/// Runs `options.method` on the free columns.
+fn solve(
+    start: &DhParams,
+    data: &DataSet,
+    weights: &Weights,
+    free: &[usize],
+    options: &CalibrateOptions,
+    stated_dof: Option<usize>,
+    progress: &mut dyn FnMut(&str, f64),
+) -> Result<Solved, CalibrationError> {
+    let mut rng = crate::simulate::rng(options.seed, SOLVER_STREAM);
+    let timer = std::time::Instant::now();
+    match options.method {
+        Method::Lm => {
+            let fit = levenberg_marquardt(start, data, weights, free, &options.lm)?;
+            let mut phase = Phase::new("lm");
+            phase.add_lm(&fit, timer.elapsed().as_secs_f64());
+            Ok(Solved {
+                fit,
+                phases: vec![phase],
+                anneal: None,
+                global: None,
+            })
+        }
+        Method::Sa | Method::Hybrid => {
+            let hybrid = options.method == Method::Hybrid;
+            let (best, trace) = anneal::anneal_observed(
+                start,
+                data,
+                free,
+                &options.anneal,
+                hybrid.then_some(&options.switch),
+                &mut rng,
+                &mut |f| progress("anneal", f),
+            )?;
+            let mut phases = vec![Phase {
+                cost_evaluations: trace.evaluations,
+                seconds: timer.elapsed().as_secs_f64(),
+                ..Phase::new("anneal")
+            }];
+            let fit = if hybrid {
+                let timer = std::time::Instant::now();
+                let fit = levenberg_marquardt(&best, data, weights, free, &options.lm)?;
+                let mut phase = Phase::new("lm");
+                phase.add_lm(&fit, timer.elapsed().as_secs_f64());
+                phases.push(phase);
+                fit
+            } else {
+                let normal = normal_equations(
+                    &ArmKernel::new(&best)?,
+                    data,
+                    weights,
+                    free,
+                    options.lm.threads,
+                )?;
+                phases[0].jacobian_evaluations = 1;
+                let kernel = ArmKernel::new(start)?;
+                let mut xyz = vec![[0.0; 3]; data.len()];
+                LmResult {
+                    params: best,
+                    termination: if trace.stop == AnnealStop::EvaluationBudget {
+                        Termination::MaxIterations
+                    } else {
+                        Termination::Annealed
+                    },
+                    iterations: 0,
+                    cost_evaluations: 0,
+                    jacobian_evaluations: 1,
+                    initial_cost: crate::residuals::cost(&kernel, data, weights, &mut xyz)?,
+                    history: Vec::new(),
+                    normal,
+                }
+            };
+            Ok(Solved {
+                fit,
+                phases,
+                anneal: Some(trace),
+                global: None,
+            })
+        }
+        Method::Global => {
+            let problem = global::GlobalProblem {
+                data,
+                weights,
+                free,
+                lm: &options.lm,
+                stated_dof,
+            };
+            let (fit, trace, phases) =
+                global::global(start, &problem, &options.global, &mut rng, &mut |f| {
+                    progress("global", f)
+                })?;
+            Ok(Solved {
+                fit,
+                phases,
+                anneal: None,
+                global: Some(trace),
+            })
+        }
+    }
+}
+
+/// The random stream of the solvers (apart from the simulator's streams).
+const SOLVER_STREAM: u64 = 0x50_4c_56;
