@@ -6,20 +6,27 @@
 //! it has many basins; LM from nominal finds the right one rarely. So:
 //!
 //! 1. **LM from the start** (nominal). When the noise is stated, a fit at
-//!    the noise floor — `σ̂² ≤ 1 + k·sqrt(2/dof)`, `k` standard deviations of
-//!    `χ²/dof` above 1 — cannot be beaten by more than noise: accepted at
-//!    once, so a good start costs one LM.
-//! 2. **Multi-start on the torus.** Each start draws the free zero offsets
-//!    uniformly on their circles (everything else at the start values), then
-//!    runs coordinate sweeps — each zero offset in turn set to the best of
-//!    `K` equally spaced angles, the cost being cheap (positions only) — an
-//!    LM over the zero offsets alone, and a full LM. The sweeps exploit that
-//!    each unknown is an angle: a sweep sees the whole circle, where a
-//!    gradient sees only the slope underfoot.
-//! 3. **Stopping rule.** Stop at the noise floor (stated noise), or when the
-//!    lowest cost found has been reached from `confirmations` different
-//!    starts (minima compared by cost: equivalent parameter sets — `θ_i + π`
-//!    with `a_i`, `α_i` negated — fit identically), or after `max_starts`.
+//!    the noise floor — `χ² ≤ dof·(1 + k·sqrt(2/dof))`, `k` standard
+//!    deviations of `χ²/dof` above 1, with the touches weighed at the fit
+//!    ([`Weights`] carry the encoder noise through the arm's joint Jacobian,
+//!    so they depend on the zeros) — cannot be beaten by more than noise:
+//!    accepted at once, so a good start costs one LM.
+//! 2. **A grid over the torus.** Each unknown is an angle, so the free zero
+//!    offsets live on a torus, which a coarse grid covers completely: `K`
+//!    angles per circle (8 for the 4 free zeros of a 6-joint arm: 4096
+//!    cells), the cost at each cell with everything else at the start
+//!    values — positions only, about a microsecond per cell for 100
+//!    touches. The right cell is within `π/K` of the truth in every zero,
+//!    inside the basin of an LM over the zeros alone, and lengths and twists
+//!    near nominal keep it among the lowest. The lowest grid cells that are
+//!    local minima among their neighbours are refined, lowest first, by that
+//!    zeros-only LM and then the full LM, until one reaches the noise floor.
+//! 3. **Random starts, and the stopping rule.** Without stated noise (or if
+//!    no candidate reaches the floor), random zeros on the circles, refined
+//!    the same way, until the lowest cost has been reached from
+//!    `confirmations` starts (minima compared by cost: equivalent parameter
+//!    sets — `θ_i + π` with `a_i`, `α_i` negated — fit identically), or the
+//!    start budget is spent (then the result is flagged unconfirmed).
 //!
 //! The result is reported in the nominal arm's sign convention
 //! ([`normalize_signs`]).
@@ -32,21 +39,24 @@ use super::{CalibrationError, Phase};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Weights, cost};
+use crate::residuals::{Noise, Weights, cost};
 
-/// Settings of the global method; a builder. Defaults: 200 starts at most,
-/// 2 confirmations, 12 angles per sweep, 2 sweep passes, noise floor at 5
-/// standard deviations.
+/// Settings of the global method; a builder. Defaults: a torus grid of at
+/// most 4096 cells (8 angles per circle for 4 circles), 8 grid
+/// candidates refined, then at most 100 random starts, 2 confirmations,
+/// the noise floor at 5 standard deviations.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GlobalOptions {
-    /// Most multi-start runs.
+    /// Most cells of the grid over the zero-offset torus (the angles per
+    /// circle are the most that keep `angles^circles` within it, at least 4).
+    pub grid_cells: usize,
+    /// Lowest grid cells (local minima of the grid) refined by LM.
+    pub candidates: usize,
+    /// Most random starts after the grid candidates.
     pub max_starts: usize,
-    /// Starts that must reach the lowest cost before it is accepted.
+    /// Starts that must reach the lowest cost before it is accepted
+    /// (without stated noise, or when the noise floor is not reached).
     pub confirmations: usize,
-    /// Angles per circle sweep.
-    pub sweep_angles: usize,
-    /// Passes of sweeps over the zero offsets per start.
-    pub sweep_passes: usize,
     /// Noise floor: `σ̂² ≤ 1 + k·sqrt(2/dof)` with this `k`.
     pub noise_floor_k: f64,
 }
@@ -54,17 +64,17 @@ pub struct GlobalOptions {
 impl Default for GlobalOptions {
     fn default() -> Self {
         GlobalOptions {
-            max_starts: 200,
+            grid_cells: 4096,
+            candidates: 8,
+            max_starts: 100,
             confirmations: 2,
-            sweep_angles: 12,
-            sweep_passes: 2,
             noise_floor_k: 5.0,
         }
     }
 }
 
 impl GlobalOptions {
-    /// Sets the start budget.
+    /// Sets the random-start budget.
     pub fn max_starts(mut self, n: usize) -> Self {
         self.max_starts = n;
         self
@@ -113,7 +123,11 @@ pub struct GlobalTrace {
     pub stop: GlobalStop,
     /// The zero offsets searched on their circles.
     pub circles: Vec<String>,
-    /// Cost of each start's minimum, in order (the first from the start arm).
+    /// Angles per circle of the grid (0 when the start sufficed).
+    pub grid_angles: usize,
+    /// Cost of each start's minimum, in order (the first from the start
+    /// arm, then the grid candidates, then random starts), with the weights
+    /// at that minimum.
     pub minima: Vec<f64>,
     /// Starts that reached the lowest cost.
     pub best_hits: usize,
@@ -128,11 +142,13 @@ fn same_minimum(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-6 * a.abs().max(b.abs()) + 1e-12
 }
 
-/// What [`global`] needs beyond the data.
+/// What [`global`] needs beyond the start.
 pub struct GlobalProblem<'a> {
     /// The data.
     pub data: &'a DataSet,
-    /// The weights.
+    /// The noise, to weigh the touches at each minimum.
+    pub noise: &'a Noise,
+    /// The weights at the start arm.
     pub weights: &'a Weights,
     /// Free columns.
     pub free: &'a [usize],
@@ -140,6 +156,34 @@ pub struct GlobalProblem<'a> {
     pub lm: &'a LmOptions,
     /// Degrees of freedom; with stated noise, enables the noise floor.
     pub stated_dof: Option<usize>,
+}
+
+/// The minima found so far.
+#[derive(Default)]
+struct Found {
+    best: Option<Minimum>,
+    hits: usize,
+    minima: Vec<f64>,
+}
+
+impl Found {
+    fn record(&mut self, m: Minimum) {
+        self.minima.push(m.cost);
+        match &self.best {
+            Some(b) if same_minimum(m.cost, b.cost) => self.hits += 1,
+            Some(b) if m.cost > b.cost => {}
+            _ => {
+                self.best = Some(m);
+                self.hits = 1;
+            }
+        }
+    }
+}
+
+/// One start's minimum, weighed at itself.
+struct Minimum {
+    fit: LmResult,
+    cost: f64,
 }
 
 /// Runs the global method from `start`; returns the best LM result (in the
@@ -157,6 +201,7 @@ pub fn global<R: Rng>(
         free,
         lm,
         stated_dof,
+        ..
     } = *problem;
     let joints = start.joint_count();
     let circles: Vec<usize> = free
@@ -170,18 +215,21 @@ pub fn global<R: Rng>(
     });
     let mut phases = vec![
         Phase::new("lm from start"),
-        Phase::new("circle sweeps"),
+        Phase::new("torus grid"),
         Phase::new("zero-offset lm"),
-        Phase::new("multi-start lm"),
+        Phase::new("lm"),
     ];
+    let mut found = Found::default();
     let timer = std::time::Instant::now();
     let first = levenberg_marquardt(start, data, weights, free, lm)?;
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
-    let mut minima = vec![first.normal.cost()];
-    let mut best = first;
-    let mut hits = 1;
+    let first = reweigh(first, problem, &mut phases[0])?;
+    let at_floor = |m: &Minimum| floor.is_some_and(|f| m.cost <= f);
+    let mut angles = 0;
     let stop = 'search: {
-        if floor.is_some_and(|f| best.normal.cost() <= f) {
+        let done = at_floor(&first);
+        found.record(first);
+        if done {
             break 'search GlobalStop::NoiseFloor;
         }
         if circles.is_empty() {
@@ -194,38 +242,53 @@ pub fn global<R: Rng>(
             gtol: 1e-8,
             ..*lm
         };
-        let mut xyz = vec![[0.0; 3]; data.len()];
+        let refine = |x: &DhParams, phases: &mut Vec<Phase>| -> Result<Minimum, CalibrationError> {
+            let timer = std::time::Instant::now();
+            let zeros = levenberg_marquardt(x, data, weights, &circles, &zero_lm)?;
+            phases[2].add_lm(&zeros, timer.elapsed().as_secs_f64());
+            let timer = std::time::Instant::now();
+            let fit = levenberg_marquardt(&zeros.params, data, weights, free, lm)?;
+            phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
+            reweigh(fit, problem, &mut phases[3])
+        };
+        // The grid over the torus, and its lowest local minima.
+        let timer = std::time::Instant::now();
+        let (grid_angles, cells) = torus_grid(start, &circles, problem, options)?;
+        angles = grid_angles;
+        phases[1].cost_evaluations += grid_angles.pow(circles.len() as u32);
+        phases[1].seconds += timer.elapsed().as_secs_f64();
+        let total = cells.len() + options.max_starts;
+        let mut tried = 0;
+        for x in cells {
+            tried += 1;
+            progress(tried as f64 / total as f64);
+            let m = refine(&x, &mut phases)?;
+            let done = at_floor(&m);
+            found.record(m);
+            if done {
+                break 'search GlobalStop::NoiseFloor;
+            }
+        }
+        if floor.is_none() && found.hits >= options.confirmations {
+            break 'search GlobalStop::Agreement;
+        }
+        // Random starts until the lowest cost is confirmed.
         let mut x = start.clone();
-        for s in 1..options.max_starts {
-            progress(s as f64 / options.max_starts as f64);
+        for _ in 0..options.max_starts {
+            tried += 1;
+            progress(tried as f64 / total as f64);
             x.clone_from(start);
             for &c in &circles {
                 let id = ParamId::from_column(joints, c).ok_or(CalibrationError::Shape)?;
                 *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             }
-            let timer = std::time::Instant::now();
-            let evaluations = sweep(&mut x, &circles, problem, options, &mut xyz)?;
-            phases[1].cost_evaluations += evaluations;
-            phases[1].seconds += timer.elapsed().as_secs_f64();
-            let timer = std::time::Instant::now();
-            let zeros = levenberg_marquardt(&x, data, weights, &circles, &zero_lm)?;
-            phases[2].add_lm(&zeros, timer.elapsed().as_secs_f64());
-            let timer = std::time::Instant::now();
-            let fit = levenberg_marquardt(&zeros.params, data, weights, free, lm)?;
-            phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
-            let f = fit.normal.cost();
-            minima.push(f);
-            let b = best.normal.cost();
-            if same_minimum(f, b) {
-                hits += 1;
-            } else if f < b {
-                best = fit;
-                hits = 1;
-            }
-            if floor.is_some_and(|fl| best.normal.cost() <= fl) {
+            let m = refine(&x, &mut phases)?;
+            let done = at_floor(&m);
+            found.record(m);
+            if done {
                 break 'search GlobalStop::NoiseFloor;
             }
-            if hits >= options.confirmations {
+            if found.hits >= options.confirmations {
                 break 'search GlobalStop::Agreement;
             }
         }
@@ -239,52 +302,127 @@ pub fn global<R: Rng>(
             .map(|id| id.to_string())
             .collect()
     };
+    let best = found.best.ok_or(CalibrationError::Shape)?;
     let trace = GlobalTrace {
         options: *options,
         stop,
         circles: names(&circles),
-        minima,
-        best_hits: hits,
+        grid_angles: angles,
+        minima: found.minima,
+        best_hits: found.hits,
         noise_floor_cost: floor,
         sign_changes: Vec::new(),
     };
-    Ok((best, trace, phases))
+    Ok((best.fit, trace, phases))
 }
 
-/// Coordinate sweeps: each zero offset in `circles` set, in turn, to the
-/// best of `K` equally spaced angles (its current value competing).
-/// Returns the cost evaluations.
-fn sweep(
-    x: &mut DhParams,
+/// A minimum's cost with the touches weighed at it: the encoder noise moves
+/// the probe along directions that depend on the arm, and an arm whose
+/// zeros were 90° off weighs its touches wrongly. With stated noise, refits
+/// with those weights (one or two LM steps); without, the weights do not
+/// depend on the arm.
+fn reweigh(
+    fit: LmResult,
+    problem: &GlobalProblem,
+    phase: &mut Phase,
+) -> Result<Minimum, CalibrationError> {
+    if problem.stated_dof.is_none() {
+        let cost = fit.normal.cost();
+        return Ok(Minimum { fit, cost });
+    }
+    let timer = std::time::Instant::now();
+    let kernel = ArmKernel::new(&fit.params)?;
+    let weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
+    let refit = levenberg_marquardt(
+        &fit.params,
+        problem.data,
+        &weights,
+        problem.free,
+        problem.lm,
+    )?;
+    phase.add_lm(&refit, timer.elapsed().as_secs_f64());
+    let cost = refit.normal.cost();
+    Ok(Minimum { fit: refit, cost })
+}
+
+/// The cost on a grid of `K` angles per circle (everything else at the
+/// start); returns `K` and the lowest `candidates` grid cells that are
+/// local minima among their `2·circles` neighbours, lowest first.
+fn torus_grid(
+    start: &DhParams,
     circles: &[usize],
     problem: &GlobalProblem,
     options: &GlobalOptions,
-    xyz: &mut [[f64; 3]],
-) -> Result<usize, CalibrationError> {
-    let joints = x.joint_count();
-    let k = options.sweep_angles.max(2);
-    let mut evaluations = 0;
-    let mut f_best = cost(&ArmKernel::new(x)?, problem.data, problem.weights, xyz)?;
-    evaluations += 1;
-    for _ in 0..options.sweep_passes {
-        for &c in circles {
-            let id = ParamId::from_column(joints, c).ok_or(CalibrationError::Shape)?;
-            let keep = x.get(id);
-            let mut best_angle = keep;
-            for step in 1..k {
-                let angle = keep + std::f64::consts::TAU * step as f64 / k as f64;
-                *x.get_mut(id) = angle;
-                let f = cost(&ArmKernel::new(x)?, problem.data, problem.weights, xyz)?;
-                evaluations += 1;
-                if f < f_best {
-                    f_best = f;
-                    best_angle = angle;
-                }
-            }
-            *x.get_mut(id) = crate::simulate::wrap(best_angle);
-        }
+) -> Result<(usize, Vec<DhParams>), CalibrationError> {
+    let joints = start.joint_count();
+    let c = circles.len() as u32;
+    let mut k = 4usize;
+    while (k + 1)
+        .checked_pow(c)
+        .is_some_and(|n| n <= options.grid_cells)
+    {
+        k += 1;
     }
-    Ok(evaluations)
+    let cells = k.pow(c);
+    let ids: Vec<ParamId> = circles
+        .iter()
+        .map(|&col| ParamId::from_column(joints, col).ok_or(CalibrationError::Shape))
+        .collect::<Result<_, _>>()?;
+    let angle = |i: usize| -> f64 {
+        crate::simulate::wrap(std::f64::consts::TAU * i as f64 / k as f64 - std::f64::consts::PI)
+    };
+    let digits = |mut cell: usize| -> Vec<usize> {
+        (0..c)
+            .map(|_| {
+                let d = cell % k;
+                cell /= k;
+                d
+            })
+            .collect()
+    };
+    let mut x = start.clone();
+    let mut xyz = vec![[0.0; 3]; problem.data.len()];
+    let mut costs = Vec::with_capacity(cells);
+    for cell in 0..cells {
+        for (id, d) in ids.iter().zip(digits(cell)) {
+            *x.get_mut(*id) = angle(d);
+        }
+        let f = cost(
+            &ArmKernel::new(&x)?,
+            problem.data,
+            problem.weights,
+            &mut xyz,
+        )?;
+        costs.push(if f.is_finite() { f } else { f64::INFINITY });
+    }
+    let mut minima: Vec<usize> = (0..cells)
+        .filter(|&cell| {
+            let d = digits(cell);
+            (0..c as usize).all(|axis| {
+                [1, k - 1].iter().all(|&step| {
+                    let mut n = d.clone();
+                    n[axis] = (n[axis] + step) % k;
+                    let other = n.iter().rev().fold(0, |acc, &v| acc * k + v);
+                    costs[cell] <= costs[other]
+                })
+            })
+        })
+        .collect();
+    minima.sort_by(|&a, &b| costs[a].total_cmp(&costs[b]).then(a.cmp(&b)));
+    minima.truncate(options.candidates);
+    Ok((
+        k,
+        minima
+            .into_iter()
+            .map(|cell| {
+                let mut x = start.clone();
+                for (id, d) in ids.iter().zip(digits(cell)) {
+                    *x.get_mut(*id) = angle(d);
+                }
+                x
+            })
+            .collect(),
+    ))
 }
 
 /// Puts `params` into the sign convention of `nominal` where the fit left a

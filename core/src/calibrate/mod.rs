@@ -462,43 +462,75 @@ pub fn calibrate_observed(
     if let Some(g) = &mut global {
         g.sign_changes = sign_changes;
     }
-    let mut touch_sigma = weights.typical_touch_sigma();
+    let mut touch_sigma = 1.0;
     if !stated {
-        // Unit weights: the touch residuals are mm. Estimate σ and refit so
-        // that the lengths weigh right against the touches.
+        // Unit weights: the touch residuals are mm. Estimate σ so that the
+        // lengths weigh right against the touches.
         let touch_dof = touch_rows
             .saturating_sub(centre_coordinates + free.len())
             .max(1);
         touch_sigma = (fit.normal.touch_cost / touch_dof as f64).sqrt().max(1e-9);
-        if length_rows > 0 {
-            weights = Weights::new(&kernel, data, &options.noise, touch_sigma)?;
-            let timer = std::time::Instant::now();
-            if options.method == Method::Sa {
-                fit.normal = normal_equations(
-                    &ArmKernel::new(&fit.params)?,
-                    data,
-                    &weights,
-                    &free,
-                    threads,
-                )?;
-                jacobian_evaluations += 1;
-            } else {
-                fit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
-                let mut phase = Phase::new("lm, reweighted");
-                phase.add_lm(&fit, timer.elapsed().as_secs_f64());
-                cost_evaluations += phase.cost_evaluations;
-                jacobian_evaluations += phase.jacobian_evaluations;
-                phases.push(phase);
-            }
+    }
+    if stated || length_rows > 0 {
+        // Weigh at the solution, not at the start: encoder noise moves the
+        // probe along directions that depend on the arm, and the lengths'
+        // weights on the centroids' directions — both far off when the
+        // zeros were.
+        weights = Weights::new(
+            &ArmKernel::new(&fit.params)?,
+            data,
+            &options.noise,
+            touch_sigma,
+        )?;
+        let timer = std::time::Instant::now();
+        if options.method == Method::Sa {
+            fit.normal = normal_equations(
+                &ArmKernel::new(&fit.params)?,
+                data,
+                &weights,
+                &free,
+                threads,
+            )?;
+            jacobian_evaluations += 1;
         } else {
-            let w2 = 1.0 / (touch_sigma * touch_sigma);
-            fit.normal.jtj.iter_mut().for_each(|v| *v *= w2);
-            fit.normal.touch_cost *= w2;
-            fit.initial_cost *= w2;
-            for h in &mut fit.history {
-                h.cost *= w2;
+            let refit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
+            if stated {
+                // Same units: one history, the descent then the polish.
+                let mut history = std::mem::take(&mut fit.history);
+                let n = history.len();
+                history.extend(refit.history.iter().map(|h| LmIteration {
+                    iteration: h.iteration + n,
+                    ..*h
+                }));
+                let initial_cost = fit.initial_cost;
+                fit = LmResult {
+                    history,
+                    initial_cost,
+                    iterations: refit.iterations + n,
+                    ..refit
+                };
+            } else {
+                fit = refit;
             }
+            let mut phase = Phase::new("lm, weighed at the solution");
+            phase.cost_evaluations = fit.cost_evaluations;
+            phase.jacobian_evaluations = fit.jacobian_evaluations;
+            phase.seconds = timer.elapsed().as_secs_f64();
+            cost_evaluations += phase.cost_evaluations;
+            jacobian_evaluations += phase.jacobian_evaluations;
+            phases.push(phase);
         }
+    } else {
+        let w2 = 1.0 / (touch_sigma * touch_sigma);
+        fit.normal.jtj.iter_mut().for_each(|v| *v *= w2);
+        fit.normal.touch_cost *= w2;
+        fit.initial_cost *= w2;
+        for h in &mut fit.history {
+            h.cost *= w2;
+        }
+    }
+    if stated {
+        touch_sigma = weights.typical_touch_sigma();
     }
     let sigma0 = (fit.normal.cost() / degrees_of_freedom as f64).sqrt();
     let p = free.len();
@@ -686,6 +718,7 @@ fn solve(
         Method::Global => {
             let problem = global::GlobalProblem {
                 data,
+                noise: &options.noise,
                 weights,
                 free,
                 lm: &options.lm,
