@@ -124,6 +124,10 @@ enum AacmmTermination
    * No step lowered the cost: a minimum to machine precision.
    */
   AACMM_TERMINATION_NO_PROGRESS = 5,
+  /**
+   * Annealing alone (`AACMM_METHOD_SA`) ended by its own rule.
+   */
+  AACMM_TERMINATION_ANNEALED = 6,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -163,7 +167,8 @@ typedef uint32_t AacmmMethod;
  */
 typedef struct {
   /**
-   * The solver: `AACMM_METHOD_LM` (default).
+   * The solver: `AACMM_METHOD_GLOBAL` (default), `_LM`, `_SA` or
+   * `_HYBRID`.
    */
   AacmmMethod method;
   /**
@@ -175,8 +180,8 @@ typedef struct {
    */
   const char *fix;
   /**
-   * Seed of the cross-validation fold assignment (and of the stochastic
-   * solvers to come); `lm` itself does not use it. Default 0.
+   * Seed of every random draw: the solvers' moves and starts, the
+   * cross-validation folds. Default 0.
    */
   uint64_t seed;
   /**
@@ -285,10 +290,25 @@ typedef struct {
 } AacmmCalibrationSummary;
 
 /**
- * Levenberg–Marquardt from the start arm (the only solver of this version;
- * more methods will get further constants, never renumbering this one).
+ * Levenberg–Marquardt from the start arm (`--method lm`).
  */
 #define AACMM_METHOD_LM 0
+
+/**
+ * The paper's simulated annealing alone (`--method sa`).
+ */
+#define AACMM_METHOD_SA 1
+
+/**
+ * The paper's hybrid, annealing then LM (`--method hybrid`).
+ */
+#define AACMM_METHOD_HYBRID 2
+
+/**
+ * Converges from encoder zeros unknown in ±180° (`--method global`, the
+ * default).
+ */
+#define AACMM_METHOD_GLOBAL 3
 
 /**
  * Angles in degrees (the command line's default).

@@ -205,3 +205,174 @@ fn a_fixed_set_that_leaves_an_unseen_direction_is_refused() {
     .unwrap_err();
     assert!(e.to_string().contains("redundan"), "{e}");
 }
+
+fn stated_noise() -> Noise {
+    Noise {
+        encoder_rad: Some(0.005f64.to_radians()),
+        probe_mm: Some(0.01),
+        length_default_mm: 0.001,
+        length_weight: None,
+    }
+}
+
+/// A newly assembled arm (zeros anywhere in ±180°), 10 × 10 touches, 3
+/// lengths, noise as in the comparison; held-out sockets of the
+/// same true arm.
+fn assembled(seed: u64) -> (aacmm_core::simulate::Campaign, aacmm_core::dataset::DataSet) {
+    let settings = |seed, errors| {
+        let mut s = CampaignSettings::new(seed, errors, 10, 10);
+        s.reference_lengths = 3;
+        s.encoder_noise_deg = 0.005;
+        s.probe_noise_mm = 0.01;
+        s
+    };
+    let c = simulate(&nominal(), &settings(seed, ErrorModel::random(1.0, true))).unwrap();
+    let file = ErrorModel::File {
+        arm: c.true_arm.clone(),
+    };
+    let fresh = simulate(&nominal(), &settings(1_000_000 + seed, file))
+        .unwrap()
+        .data_set()
+        .unwrap();
+    (c, fresh)
+}
+
+#[test]
+fn global_converges_from_unknown_zeros_where_lm_fails() {
+    use aacmm_core::calibrate::{GlobalStop, Method};
+    // Seeds whose LM from nominal ends in a wrong basin.
+    for seed in [4, 5] {
+        let (c, fresh) = assembled(seed);
+        let data = c.data_set().unwrap();
+        let options = |method| CalibrateOptions {
+            noise: stated_noise(),
+            method,
+            ..CalibrateOptions::default()
+        };
+        let lm = calibrate(&c.nominal.params, &data, &options(Method::Lm)).unwrap();
+        let global = calibrate(&c.nominal.params, &data, &options(Method::Global)).unwrap();
+        assert!(
+            lm.dof.sigma0 > 100.0,
+            "seed {seed}: LM σ0 {}",
+            lm.dof.sigma0
+        );
+        assert!(global.solver.successful);
+        assert!(
+            global.dof.sigma0 < 1.3,
+            "seed {seed}: σ0 {}",
+            global.dof.sigma0
+        );
+        let trace = global.solver.global.as_ref().unwrap();
+        assert_eq!(trace.stop, GlobalStop::NoiseFloor);
+        assert!(trace.minima.len() >= 2, "the grid was needed");
+        let truth = validate::figures(&c.true_arm.params, &fresh).unwrap();
+        let ours = validate::figures(&global.params, &fresh).unwrap();
+        assert!(
+            ours.e_mean <= 1.1 * truth.e_mean,
+            "seed {seed}: held-out e {} vs true {}",
+            ours.e_mean,
+            truth.e_mean
+        );
+        // Reported in the nominal sign convention: twists near nominal.
+        for (j, (fit, nom)) in global
+            .params
+            .joints
+            .iter()
+            .zip(&c.nominal.params.joints)
+            .enumerate()
+        {
+            assert!(
+                (fit.alpha - nom.alpha).abs() < 0.1,
+                "seed {seed} joint {}: alpha {} vs {}",
+                j + 1,
+                fit.alpha,
+                nom.alpha
+            );
+        }
+    }
+}
+
+#[test]
+fn global_without_stated_noise_stops_on_agreement() {
+    use aacmm_core::calibrate::{GlobalStop, Method};
+    let (c, fresh) = assembled(1);
+    let data = c.data_set().unwrap();
+    let options = CalibrateOptions {
+        method: Method::Global,
+        ..CalibrateOptions::default()
+    };
+    let cal = calibrate(&c.nominal.params, &data, &options).unwrap();
+    let trace = cal.solver.global.as_ref().unwrap();
+    assert_eq!(trace.stop, GlobalStop::Agreement);
+    assert!(trace.best_hits >= 2);
+    assert!(trace.noise_floor_cost.is_none());
+    let truth = validate::figures(&c.true_arm.params, &fresh).unwrap();
+    let ours = validate::figures(&cal.params, &fresh).unwrap();
+    assert!(
+        ours.e_mean <= 1.1 * truth.e_mean,
+        "{} vs {}",
+        ours.e_mean,
+        truth.e_mean
+    );
+}
+
+#[test]
+fn same_seed_same_bytes_whatever_the_threads() {
+    use aacmm_core::calibrate::{LmOptions, Method};
+    let (c, _) = assembled(4);
+    let data = c.data_set().unwrap();
+    for method in [Method::Sa, Method::Hybrid, Method::Global] {
+        let run = |threads: usize, seed: u64| {
+            let options = CalibrateOptions {
+                noise: stated_noise(),
+                method,
+                lm: LmOptions::default().threads(threads),
+                anneal: aacmm_core::calibrate::AnnealOptions::default().chain(10),
+                seed,
+                ..CalibrateOptions::default()
+            };
+            serde_json::to_string(&calibrate(&c.nominal.params, &data, &options).unwrap()).unwrap()
+        };
+        let one = run(1, 5);
+        assert_eq!(one, run(2, 5), "{method:?}");
+        if method == Method::Sa {
+            assert_ne!(one, run(1, 6), "another seed, other moves");
+        }
+    }
+}
+
+#[test]
+fn the_hybrid_anneals_then_switches_to_lm() {
+    use aacmm_core::calibrate::{AnnealStop, Method, Termination};
+    let c = campaign(5, 0.005, 0.01);
+    let data = c.data_set().unwrap();
+    let options = |method| CalibrateOptions {
+        noise: stated_noise(),
+        method,
+        ..CalibrateOptions::default()
+    };
+    let hybrid = calibrate(&c.nominal.params, &data, &options(Method::Hybrid)).unwrap();
+    let a = hybrid.solver.anneal.as_ref().unwrap();
+    assert_eq!(a.stop, AnnealStop::Switched);
+    assert!(a.best_energy < a.start_energy);
+    let best = a.temperatures.iter().map(|t| t.best);
+    assert!(
+        best.clone().zip(best.skip(1)).all(|(x, y)| y <= x),
+        "best never rises"
+    );
+    assert!(hybrid.solver.successful);
+    assert_eq!(
+        hybrid
+            .solver
+            .phases
+            .iter()
+            .map(|p| p.name.as_str())
+            .collect::<Vec<_>>()[..2],
+        ["anneal", "lm"]
+    );
+    // The paper's annealing alone ends far from the minimum LM finds.
+    let sa = calibrate(&c.nominal.params, &data, &options(Method::Sa)).unwrap();
+    assert_eq!(sa.solver.termination, Termination::Annealed);
+    assert_eq!(sa.solver.anneal.as_ref().unwrap().stop, AnnealStop::Cooled);
+    assert!(sa.solver.final_cost > 10.0 * hybrid.solver.final_cost);
+}

@@ -218,3 +218,108 @@ fn calibrate_errors_are_clear() {
     let o = aacmm(&["calibrate", "--arm", &arm, "--data", &poses, "--out", &arm]);
     assert_clean_error(&o, &["--out"]);
 }
+
+#[test]
+fn every_method_says_what_ran_and_how_long_each_phase_took() {
+    let dir = temp_dir("calibrate-methods");
+    let (arm, poses, lengths) = (arm(), campaign("poses.csv"), campaign("lengths.csv"));
+    let run = |method: &str, extra: &[&str]| {
+        let out = dir.join(method);
+        let mut args = vec![
+            "calibrate",
+            "--arm",
+            &arm,
+            "--data",
+            &poses,
+            "--lengths",
+            &lengths,
+            "--encoder-noise",
+            "0.005",
+            "--probe-noise",
+            "0.01",
+            "--method",
+            method,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{method}: {}", crate::util::stderr(&o));
+        // Not a terminal: no progress bar on stderr.
+        let err = crate::util::stderr(&o);
+        assert!(!err.contains('\r') && !err.contains("=>"), "{err}");
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap())
+                .unwrap();
+        let timing: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("timing.json")).unwrap())
+                .unwrap();
+        (stdout(&o), report, timing)
+    };
+    let (text, report, timing) = run("sa", &["--sa-chain", "20", "--sa-t0", "0.5"]);
+    let solver = &report["calibration"]["solver"];
+    assert_eq!(solver["method"], "sa");
+    assert_eq!(solver["termination"], "annealed");
+    assert_eq!(solver["anneal"]["options"]["chain"], 20);
+    assert_eq!(solver["anneal"]["options"]["t0"], 0.5);
+    assert!(
+        text.contains("Annealing: T0 0.5 mm, alpha 0.9, L 20"),
+        "{text}"
+    );
+    assert_eq!(timing["phases"][0]["name"], "anneal");
+    assert!(timing["phases"][0]["ms"].as_f64().unwrap() > 0.0);
+    // calibration.json holds no times (same bytes for the same seed).
+    assert!(solver["phases"][0].get("seconds").is_none());
+
+    let (text, report, _) = run("hybrid", &[]);
+    let solver = &report["calibration"]["solver"];
+    assert_eq!(solver["anneal"]["stop"], "switched");
+    assert!(
+        text.contains("Switch (s0 5, epsilon1 0.0001): at T = "),
+        "{text}"
+    );
+    assert_eq!(solver["phases"][1]["name"], "lm");
+
+    let (text, report, _) = run("global", &[]);
+    let solver = &report["calibration"]["solver"];
+    assert_eq!(solver["global"]["stop"], "noise_floor");
+    assert!(
+        text.contains("Global: 1 start(s) on the circles of theta2, theta3, theta4, theta5"),
+        "{text}"
+    );
+}
+
+#[test]
+fn bad_solver_settings_are_clean_errors() {
+    let dir = temp_dir("calibrate-bad-solver");
+    let (arm, poses) = (arm(), campaign("poses.csv"));
+    let out = dir.join("out");
+    let base = [
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    for (extra, expect) in [
+        (
+            ["--sa-cooling", "1.5"],
+            "cooling factor 1.5: must lie strictly between 0 and 1",
+        ),
+        (
+            ["--sa-t0", "0"],
+            "start temperature 0: must be a finite number > 0",
+        ),
+        (
+            ["--global-starts", "0"],
+            "--global-starts and --global-confirmations",
+        ),
+        (["--method", "ceres"], "invalid value 'ceres' for '--method"),
+    ] {
+        let mut args = base.to_vec();
+        args.extend(extra);
+        assert_clean_error(&aacmm(&args), &[expect]);
+    }
+}

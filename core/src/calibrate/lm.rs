@@ -70,8 +70,14 @@ pub struct LmOptions {
     pub xtol: f64,
     /// Largest cosine between a column and the residuals at a minimum.
     pub gtol: f64,
-    /// Worker threads for the normal equations (results do not depend on it).
+    /// Worker threads for the normal equations (results do not depend on
+    /// it, so neither does the serialised form: same bytes on any machine).
+    #[serde(skip, default = "one")]
     pub threads: usize,
+}
+
+fn one() -> usize {
+    1
 }
 
 impl Default for LmOptions {
