@@ -154,6 +154,28 @@ pub struct LmResult {
     pub normal: Normal,
 }
 
+impl LmResult {
+    /// This fit followed by `refit` (which started where this one ended):
+    /// one history, iterations numbered on, this fit's initial cost and
+    /// both fits' evaluations.
+    pub fn then(self, refit: LmResult) -> LmResult {
+        let mut history = self.history;
+        let n = history.len();
+        history.extend(refit.history.iter().map(|h| LmIteration {
+            iteration: h.iteration + n,
+            ..*h
+        }));
+        LmResult {
+            history,
+            initial_cost: self.initial_cost,
+            iterations: self.iterations + refit.iterations,
+            cost_evaluations: self.cost_evaluations + refit.cost_evaluations,
+            jacobian_evaluations: self.jacobian_evaluations + refit.jacobian_evaluations,
+            ..refit
+        }
+    }
+}
+
 /// Minimises the weighted cost over the parameters `free` (indices in the
 /// fixed order of [`crate::params`]) from `start`.
 ///

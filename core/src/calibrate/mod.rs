@@ -312,7 +312,7 @@ pub struct SolverSummary {
     pub cost_evaluations: usize,
     /// Jacobian evaluations, all fits.
     pub jacobian_evaluations: usize,
-    /// Cost `Σr²` at the start of the final fit.
+    /// Cost `Σr²` of the start arm, weighed as the final fit.
     pub initial_cost: f64,
     /// Cost at the end.
     pub final_cost: f64,
@@ -494,28 +494,13 @@ pub fn calibrate_observed(
             jacobian_evaluations += 1;
         } else {
             let refit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
-            if stated {
-                // Same units: one history, the descent then the polish.
-                let mut history = std::mem::take(&mut fit.history);
-                let n = history.len();
-                history.extend(refit.history.iter().map(|h| LmIteration {
-                    iteration: h.iteration + n,
-                    ..*h
-                }));
-                let initial_cost = fit.initial_cost;
-                fit = LmResult {
-                    history,
-                    initial_cost,
-                    iterations: refit.iterations + n,
-                    ..refit
-                };
-            } else {
-                fit = refit;
-            }
             let mut phase = Phase::new("lm, weighed at the solution");
-            phase.cost_evaluations = fit.cost_evaluations;
-            phase.jacobian_evaluations = fit.jacobian_evaluations;
+            phase.cost_evaluations = refit.cost_evaluations;
+            phase.jacobian_evaluations = refit.jacobian_evaluations;
             phase.seconds = timer.elapsed().as_secs_f64();
+            // With stated noise the weights keep their units: one history,
+            // the descent then the polish. Otherwise the units changed.
+            fit = if stated { fit.then(refit) } else { refit };
             cost_evaluations += phase.cost_evaluations;
             jacobian_evaluations += phase.jacobian_evaluations;
             phases.push(phase);
@@ -531,6 +516,14 @@ pub fn calibrate_observed(
     }
     if stated {
         touch_sigma = weights.typical_touch_sigma();
+    }
+    // The start arm's cost under the final weights: "cost A -> B" compares
+    // like with like whatever the method did in between.
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    let mut initial_cost = crate::residuals::cost(&kernel, data, &weights, &mut xyz)?;
+    cost_evaluations += 1;
+    if !stated && length_rows == 0 {
+        initial_cost /= touch_sigma * touch_sigma;
     }
     let sigma0 = (fit.normal.cost() / degrees_of_freedom as f64).sqrt();
     let p = free.len();
@@ -614,7 +607,7 @@ pub fn calibrate_observed(
             iterations: fit.iterations,
             cost_evaluations,
             jacobian_evaluations,
-            initial_cost: fit.initial_cost,
+            initial_cost,
             final_cost: fit.normal.cost(),
             history: fit.history,
             options: options.lm,
