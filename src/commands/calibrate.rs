@@ -17,13 +17,16 @@ use clap::ValueEnum;
 use serde::Serialize;
 
 use super::fit::{FitInput, read_other};
-use crate::output::{Stdout, note};
+use crate::output::{Stdout, note, warn};
 use crate::paths::check_output_dir;
 
 /// The calibrated arm, in the arm-file schema.
 pub const CALIBRATED_FILE: &str = "calibrated.toml";
 /// Everything the calibration found, as JSON.
 pub const REPORT_FILE: &str = "calibration.json";
+/// σ̂ above which a fit under stated noise is flagged.
+const SIGMA0_WARNING: f64 = 3.0;
+
 /// Wall times per phase (apart from calibration.json, which is the same
 /// bytes for the same seed).
 pub const TIMING_FILE: &str = "timing.json";
@@ -366,6 +369,18 @@ pub fn run(args: Args) -> Result<()> {
         phases.join(", "),
         timing.total_ms
     ))?;
+    // χ²/dof far above 1 under stated noise: the model does not explain the
+    // data — a wrong basin, or noise stated too small.
+    if !cal.dof.touch_sigma_estimated && cal.dof.sigma0 > SIGMA0_WARNING {
+        warn(format_args!(
+            "sigma0 = {:.1}: the fit leaves residuals {:.1} times the stated noise; a wrong \
+             minimum (method {} from far-off zeros? try --method global) or noise stated too \
+             small",
+            cal.dof.sigma0,
+            cal.dof.sigma0,
+            cal.solver.method.name()
+        ))?;
+    }
     if !cal.solver.successful {
         bail!(
             "the solver did not converge ({}); the files were written for inspection",
