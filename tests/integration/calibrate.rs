@@ -10,6 +10,29 @@ fn arm() -> String {
     example("paper-table-1.toml").display().to_string()
 }
 
+/// `aacmm calibrate` on the shipped campaign with its lengths and noise,
+/// into `out`, with `extra` flags.
+fn calibrate_shipped(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let (arm, poses, lengths) = (arm(), campaign("poses.csv"), campaign("lengths.csv"));
+    let mut args = vec![
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--lengths",
+        &lengths,
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    aacmm(&args)
+}
+
 #[test]
 fn identify_reports_rank_rules_and_the_fixed_set() {
     let dir = temp_dir("identify");
@@ -57,28 +80,10 @@ fn identify_reports_rank_rules_and_the_fixed_set() {
 #[test]
 fn calibrate_writes_an_arm_every_command_loads_and_the_same_bytes_twice() {
     let dir = temp_dir("calibrate");
-    let (arm, poses, lengths) = (arm(), campaign("poses.csv"), campaign("lengths.csv"));
+    let poses = campaign("poses.csv");
     let run = |out: &str| {
         let out = dir.join(out);
-        let o = aacmm(&[
-            "calibrate",
-            "--arm",
-            &arm,
-            "--data",
-            &poses,
-            "--lengths",
-            &lengths,
-            "--encoder-noise",
-            "0.005",
-            "--probe-noise",
-            "0.01",
-            "--cross-validate",
-            "3",
-            "--seed",
-            "2",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = calibrate_shipped(&out, &["--cross-validate", "3", "--seed", "2"]);
         assert!(o.status.success(), "{}", crate::util::stderr(&o));
         (stdout(&o), out)
     };
@@ -222,28 +227,11 @@ fn calibrate_errors_are_clear() {
 #[test]
 fn every_method_says_what_ran_and_how_long_each_phase_took() {
     let dir = temp_dir("calibrate-methods");
-    let (arm, poses, lengths) = (arm(), campaign("poses.csv"), campaign("lengths.csv"));
     let run = |method: &str, extra: &[&str]| {
         let out = dir.join(method);
-        let mut args = vec![
-            "calibrate",
-            "--arm",
-            &arm,
-            "--data",
-            &poses,
-            "--lengths",
-            &lengths,
-            "--encoder-noise",
-            "0.005",
-            "--probe-noise",
-            "0.01",
-            "--method",
-            method,
-            "--out",
-            out.to_str().unwrap(),
-        ];
+        let mut args = vec!["--method", method];
         args.extend(extra);
-        let o = aacmm(&args);
+        let o = calibrate_shipped(&out, &args);
         assert!(o.status.success(), "{method}: {}", crate::util::stderr(&o));
         // Not a terminal: no progress bar on stderr.
         let err = crate::util::stderr(&o);

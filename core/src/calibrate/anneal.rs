@@ -67,33 +67,15 @@ impl Default for AnnealOptions {
     }
 }
 
-impl AnnealOptions {
-    /// Sets `T0`.
-    pub fn t0(mut self, v: f64) -> Self {
-        self.t0 = v;
-        self
-    }
-    /// Sets `α`.
-    pub fn cooling(mut self, v: f64) -> Self {
-        self.cooling = v;
-        self
-    }
-    /// Sets `L`.
-    pub fn chain(mut self, v: usize) -> Self {
-        self.chain = v;
-        self
-    }
-    /// Sets `T_min`.
-    pub fn t_min(mut self, v: f64) -> Self {
-        self.t_min = v;
-        self
-    }
-    /// Sets `ε`.
-    pub fn target(mut self, v: f64) -> Self {
-        self.target = v;
-        self
-    }
+setters!(AnnealOptions {
+    t0: f64, "Sets `T0`.";
+    cooling: f64, "Sets `α`.";
+    chain: usize, "Sets `L`.";
+    t_min: f64, "Sets `T_min`.";
+    target: f64, "Sets `ε`.";
+});
 
+impl AnnealOptions {
     /// Checks the settings; the message names the setting.
     ///
     /// ```

@@ -73,18 +73,10 @@ impl Default for GlobalOptions {
     }
 }
 
-impl GlobalOptions {
-    /// Sets the random-start budget.
-    pub fn max_starts(mut self, n: usize) -> Self {
-        self.max_starts = n;
-        self
-    }
-    /// Sets the confirmations.
-    pub fn confirmations(mut self, n: usize) -> Self {
-        self.confirmations = n.max(1);
-        self
-    }
-}
+setters!(GlobalOptions {
+    max_starts: usize, "Sets the random-start budget.";
+    confirmations: usize, "Sets the confirmations (at least 1 is used).";
+});
 
 /// Why the global method stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

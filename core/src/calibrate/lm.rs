@@ -92,27 +92,14 @@ impl Default for LmOptions {
     }
 }
 
+setters!(LmOptions {
+    max_iterations: usize, "Sets the iteration limit.";
+    ftol: f64, "Sets `ftol`.";
+    xtol: f64, "Sets `xtol`.";
+    gtol: f64, "Sets `gtol`.";
+});
+
 impl LmOptions {
-    /// Sets the iteration limit.
-    pub fn max_iterations(mut self, n: usize) -> Self {
-        self.max_iterations = n;
-        self
-    }
-    /// Sets `ftol`.
-    pub fn ftol(mut self, v: f64) -> Self {
-        self.ftol = v;
-        self
-    }
-    /// Sets `xtol`.
-    pub fn xtol(mut self, v: f64) -> Self {
-        self.xtol = v;
-        self
-    }
-    /// Sets `gtol`.
-    pub fn gtol(mut self, v: f64) -> Self {
-        self.gtol = v;
-        self
-    }
     /// Sets the worker threads.
     pub fn threads(mut self, n: usize) -> Self {
         self.threads = n.max(1);

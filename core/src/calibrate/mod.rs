@@ -21,6 +21,22 @@
 //!
 //! Validation on held-out data lives in [`validate`].
 
+/// Builder setters: `setters!(Type { field: type, "doc"; … })`, each
+/// `fn field(self, v) -> Self`.
+macro_rules! setters {
+    ($t:ty { $($field:ident: $ty:ty, $doc:literal;)* }) => {
+        impl $t {
+            $(
+                #[doc = $doc]
+                pub fn $field(mut self, v: $ty) -> Self {
+                    self.$field = v;
+                    self
+                }
+            )*
+        }
+    };
+}
+
 pub mod anneal;
 pub mod energy;
 pub mod global;
@@ -446,17 +462,20 @@ pub fn calibrate_observed(
     } = solved;
     let mut cost_evaluations: usize = phases.iter().map(|p| p.cost_evaluations).sum();
     let mut jacobian_evaluations: usize = phases.iter().map(|p| p.jacobian_evaluations).sum();
+    let normal_at = |params: &DhParams, weights: &Weights| -> Result<_, CalibrationError> {
+        Ok(normal_equations(
+            &ArmKernel::new(params)?,
+            data,
+            weights,
+            &free,
+            threads,
+        )?)
+    };
     let sign_changes = global::normalize_signs(&mut fit.params, start, &free);
     if !sign_changes.is_empty() {
         // Same positions, other signs: the normal equations change sign
         // pattern, so recompute them for the covariance.
-        fit.normal = normal_equations(
-            &ArmKernel::new(&fit.params)?,
-            data,
-            &weights,
-            &free,
-            threads,
-        )?;
+        fit.normal = normal_at(&fit.params, &weights)?;
         jacobian_evaluations += 1;
     }
     if let Some(g) = &mut global {
@@ -484,13 +503,7 @@ pub fn calibrate_observed(
         )?;
         let timer = std::time::Instant::now();
         if options.method == Method::Sa {
-            fit.normal = normal_equations(
-                &ArmKernel::new(&fit.params)?,
-                data,
-                &weights,
-                &free,
-                threads,
-            )?;
+            fit.normal = normal_at(&fit.params, &weights)?;
             jacobian_evaluations += 1;
         } else {
             let refit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
