@@ -246,6 +246,10 @@ struct PointSums {
     s: Sym3,
     started: bool,
     origin: [f64; 3],
+    /// Scratch, one touch: the free columns of `J` and of `A·J`, one slice
+    /// per coordinate, so the `JᵀAJ` update runs over contiguous memory.
+    j: [Vec<f64>; 3],
+    aj: [Vec<f64>; 3],
 }
 
 /// What one chunk of points contributes.
@@ -339,7 +343,19 @@ impl PointSums {
             s: [0.0; 6],
             started: false,
             origin: [0.0; 3],
+            j: std::array::from_fn(|_| vec![0.0; p]),
+            aj: std::array::from_fn(|_| vec![0.0; p]),
         }
+    }
+
+    /// Ready for the next point, keeping the buffers.
+    fn reset(&mut self) {
+        self.g.fill([0.0; 3]);
+        self.jap.fill(0.0);
+        self.ap = [0.0; 3];
+        self.pap = 0.0;
+        self.s = [0.0; 6];
+        self.started = false;
     }
 
     /// Adds one touch: position, weight, free Jacobian columns.
@@ -359,17 +375,27 @@ impl PointSums {
         for (s, v) in self.s.iter_mut().zip(a) {
             *s += v;
         }
+        let [jx, jy, jz] = &mut self.j;
+        let [ax, ay, az] = &mut self.aj;
         for (i, &ci) in free.iter().enumerate() {
-            let wa = sym_mul(a, &jac[ci]);
+            let j = jac[ci];
+            let wa = sym_mul(a, &j);
             let g = &mut self.g[i];
             g[0] += wa[0];
             g[1] += wa[1];
             g[2] += wa[2];
             self.jap[i] += wa[0] * d[0] + wa[1] * d[1] + wa[2] * d[2];
-            let row = &mut jtj[i * p..i * p + i + 1];
-            for (r, &cb) in row.iter_mut().zip(&free[..=i]) {
-                let jb = jac[cb];
-                *r += wa[0] * jb[0] + wa[1] * jb[1] + wa[2] * jb[2];
+            (jx[i], jy[i], jz[i]) = (j[0], j[1], j[2]);
+            (ax[i], ay[i], az[i]) = (wa[0], wa[1], wa[2]);
+        }
+        // Lower triangle of JᵀAJ: row i gets (AJ)_iᵀ J_b for b ≤ i.
+        for i in 0..p {
+            let (x, y, z) = (ax[i], ay[i], az[i]);
+            let row = &mut jtj[i * p..=i * p + i];
+            for (((r, jbx), jby), jbz) in
+                row.iter_mut().zip(&jx[..=i]).zip(&jy[..=i]).zip(&jz[..=i])
+            {
+                *r += x * jbx + y * jby + z * jbz;
             }
         }
     }
@@ -395,7 +421,7 @@ impl PointSums {
         if need_mean {
             part.mean_j.push(mean);
         }
-        *self = PointSums::new(p);
+        self.reset();
     }
 }
 
