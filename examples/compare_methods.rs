@@ -44,6 +44,7 @@ fn case(name: &str) -> Option<ErrorModel> {
         "paper" => Some(ErrorModel::Paper),
         "random3" => Some(ErrorModel::random(3.0, false)),
         "assembled" => Some(ErrorModel::random(1.0, true)),
+        "assembled3" => Some(ErrorModel::random(3.0, true)),
         _ => None,
     }
 }
@@ -52,6 +53,7 @@ fn describe(name: &str) -> &'static str {
     match name {
         "paper" => "`--errors paper`",
         "random3" => "`--errors random --error-scale 3`",
+        "assembled3" => "`--errors assembled --error-scale 3`",
         _ => "`--errors assembled`",
     }
 }
@@ -83,11 +85,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .split(',')
         .map(str::to_string)
         .collect();
-    let methods: Vec<Method> = args
+    // `hybrid@180`: the method with the annealing's zero-offset range set
+    // to 180° (the default 2° suits the paper's small errors).
+    let methods: Vec<(Method, Option<f64>, String)> = args
         .get(2)
         .map_or("lm,sa,hybrid,global", String::as_str)
         .split(',')
-        .map(|m| Method::parse(m).ok_or(format!("unknown method `{m}`")))
+        .map(|m| {
+            let (name, range) = m.split_once('@').map_or((m, None), |(n, r)| (n, Some(r)));
+            let method = Method::parse(name).ok_or(format!("unknown method `{m}`"))?;
+            let range = range
+                .map(|r| r.parse::<f64>().map_err(|e| format!("`{m}`: {e}")))
+                .transpose()?;
+            let label = match range {
+                Some(r) => format!("`{name}`, zero range {r}°"),
+                None => format!("`{name}`"),
+            };
+            Ok::<_, String>((method, range, label))
+        })
         .collect::<Result<_, _>>()?;
     let nominal = Arm::without_limits("paper-table-1", DhParams::paper_nominal());
     let noise = Noise {
@@ -110,7 +125,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             };
             let fresh = simulate(&nominal, &settings(1_000_000 + seed, fresh_arm))?.data_set()?;
             let truth = validate::figures(&campaign.true_arm.params, &fresh)?.e_mean;
-            for (method, tally) in methods.iter().zip(&mut tallies) {
+            for ((method, range, label), tally) in methods.iter().zip(&mut tallies) {
                 let mut options = CalibrateOptions {
                     noise,
                     method: *method,
@@ -118,6 +133,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     seed,
                     ..CalibrateOptions::default()
                 };
+                if let Some(r) = range {
+                    options.anneal.zero_step_deg = *r;
+                }
                 if let Some(cells) = std::env::var("COMPARE_GRID_CELLS")
                     .ok()
                     .and_then(|v| v.parse().ok())
@@ -151,17 +169,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 } else if std::env::var_os("COMPARE_VERBOSE").is_some() {
                     eprintln!(
                         "{name} seed {seed} {}: held-out e {e:.4} vs true {truth:.4}",
-                        method.name()
+                        label
                     );
                 }
             }
         }
-        for (method, t) in methods.iter().zip(&mut tallies) {
+        for ((_, _, label), t) in methods.iter().zip(&mut tallies) {
             let max = t.ms.iter().copied().fold(0.0, f64::max);
             println!(
-                "| {} | `{}` | {}/{} | {}/{} | {:.1} ms | {:.1} ms | {:.0} |",
+                "| {} | {} | {}/{} | {}/{} | {:.1} ms | {:.1} ms | {:.0} |",
                 describe(name),
-                method.name(),
+                label,
                 t.ok,
                 t.runs,
                 t.global_minimum,

@@ -160,7 +160,13 @@ fn the_c_program_agrees_with_the_rust_api() {
     );
     let args = [ARM, POSES, LENGTHS];
     let text = run(Command::new(&static_exe).args(args).current_dir(root()));
-    let shared = run(Command::new(&shared_exe).args(args).current_dir(root()));
+    // cargo's LD_LIBRARY_PATH names the profile directory too, where a
+    // `cargo build` of an older tree may have left another copy: load the
+    // library this test found, not that one.
+    let shared = run(Command::new(&shared_exe)
+        .args(args)
+        .current_dir(root())
+        .env("LD_LIBRARY_PATH", &dir));
     assert_eq!(text, shared, "the static and the shared library disagree");
     let out = Output::parse(&text);
     assert_eq!(out.get("version"), env!("CARGO_PKG_VERSION"));

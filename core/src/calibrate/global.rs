@@ -5,7 +5,7 @@
 //! cost is smooth in every parameter, but on the torus of the zero offsets
 //! it has many basins; LM from nominal finds the right one rarely. So:
 //!
-//! 1. **LM from the start** (nominal). When the noise is stated, a fit at
+//! 1. **LM from the start** (nominal), at most 30 iterations. When the noise is stated, a fit at
 //!    the noise floor — `χ² ≤ dof·(1 + k·sqrt(2/dof))`, `k` standard
 //!    deviations of `χ²/dof` above 1, with the touches weighed at the fit
 //!    ([`Weights`] carry the encoder noise through the arm's joint Jacobian,
@@ -13,10 +13,9 @@
 //!    accepted at once, so a good start costs one LM.
 //! 2. **A grid over the torus.** Each unknown is an angle, so the free zero
 //!    offsets live on a torus, which a coarse grid covers completely: `K`
-//!    angles per circle (8 for the 4 free zeros of a 6-joint arm: 4096
+//!    angles per circle (6 for the 4 free zeros of a 6-joint arm: 1296
 //!    cells), the cost at each cell with everything else at the start
-//!    values — positions only, about a microsecond per cell for 100
-//!    touches. The right cell is within `π/K` of the truth in every zero,
+//!    values — positions only, about 2 µs per cell for 100 touches. The right cell is within `π/K` of the truth in every zero,
 //!    inside the basin of an LM over the zeros alone, and lengths and twists
 //!    near nominal keep it among the lowest. The lowest grid cells that are
 //!    local minima among their neighbours are refined, lowest first, by that
@@ -42,7 +41,7 @@ use crate::params::{DhParams, ParamId, ParamKind};
 use crate::residuals::{Noise, Weights, cost};
 
 /// Settings of the global method; a builder. Defaults: a torus grid of at
-/// most 4096 cells (8 angles per circle for 4 circles), 8 grid
+/// most 1296 cells (6 angles per circle for 4 circles), 8 grid
 /// candidates refined, then at most 100 random starts, 2 confirmations,
 /// the noise floor at 5 standard deviations.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -59,16 +58,20 @@ pub struct GlobalOptions {
     pub confirmations: usize,
     /// Noise floor: `σ̂² ≤ 1 + k·sqrt(2/dof)` with this `k`.
     pub noise_floor_k: f64,
+    /// Iteration limit of the LM from the start (a start that needs more is
+    /// in the wrong basin; its minimum is still recorded).
+    pub start_iterations: usize,
 }
 
 impl Default for GlobalOptions {
     fn default() -> Self {
         GlobalOptions {
-            grid_cells: 4096,
+            grid_cells: 1296,
             candidates: 8,
             max_starts: 100,
             confirmations: 2,
             noise_floor_k: 5.0,
+            start_iterations: 30,
         }
     }
 }
@@ -213,7 +216,14 @@ pub fn global<R: Rng>(
     ];
     let mut found = Found::default();
     let timer = std::time::Instant::now();
-    let first = levenberg_marquardt(start, data, weights, free, lm)?;
+    // From a good start LM converges in a handful of iterations; one that
+    // wanders longer is in the wrong basin, and the grid will do better.
+    let first_lm = if circles.is_empty() {
+        *lm
+    } else {
+        lm.max_iterations(lm.max_iterations.min(options.start_iterations))
+    };
+    let first = levenberg_marquardt(start, data, weights, free, &first_lm)?;
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
     let first = reweigh(first, problem, &mut phases[0])?;
     let at_floor = |m: &Minimum| floor.is_some_and(|f| m.cost <= f);
