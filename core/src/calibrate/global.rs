@@ -225,7 +225,13 @@ pub fn global<R: Rng>(
     };
     let first = levenberg_marquardt(start, data, weights, free, &first_lm)?;
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
-    let first = reweigh(first, problem, &mut phases[0])?;
+    // A start cut off by the cap is not at the floor: no reweighing.
+    let first = if first.termination == super::Termination::MaxIterations {
+        let cost = first.normal.cost();
+        Minimum { fit: first, cost }
+    } else {
+        reweigh(first, problem, &mut phases[0])?
+    };
     let at_floor = |m: &Minimum| floor.is_some_and(|f| m.cost <= f);
     let mut angles = 0;
     let stop = 'search: {
