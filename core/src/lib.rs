@@ -16,5 +16,6 @@ pub mod io;
 pub mod kernel;
 pub mod metrics;
 pub mod params;
+pub mod report;
 pub mod residuals;
 pub mod simulate;

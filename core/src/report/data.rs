@@ -1,0 +1,266 @@
+//! What the figures draw, computed from the positions with the metrics:
+//! one [`Evaluated`] per data set and arm, eq. 19 per pair (streamed), the
+//! per-touch residual lengths.
+
+use plotters::style::RGBColor;
+
+use super::svg::{BLUE, GREY, Marker, Shape, VERMILLION};
+use super::{Arms, MAX_PAIR_MARKERS, Measured, ReportError};
+use crate::dataset::DataSet;
+use crate::geometry::distance;
+use crate::metrics::{Evaluation, evaluate, pair_length_errors};
+
+/// Which arm gave the positions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Stage {
+    /// Before calibration (grey).
+    Before,
+    /// After calibration, or the one arm evaluated (colour).
+    After,
+}
+
+/// One data set measured by one arm, with its metrics.
+#[derive(Clone, Debug)]
+pub(crate) struct Evaluated<'a> {
+    /// Index of the data set among the [`Measured`].
+    pub set: usize,
+    /// Its name (`fitted`, `held out`, `held out 2`, or `measured`).
+    pub set_name: String,
+    /// The data set.
+    pub data: &'a DataSet,
+    /// Held out from the fit.
+    pub held_out: bool,
+    /// Which arm.
+    pub stage: Stage,
+    /// Probe positions, touch order, mm.
+    pub xyz: &'a [[f64; 3]],
+    /// The metrics.
+    pub ev: Evaluation,
+}
+
+impl Evaluated<'_> {
+    /// The series' name: the arm and the data (`nominal, fitted`).
+    pub(crate) fn name(&self, arms: &Arms) -> String {
+        let arm = match self.stage {
+            Stage::Before => &arms.before,
+            Stage::After => &arms.after,
+        };
+        format!("{arm}, {}", self.set_name)
+    }
+
+    /// Grey before; blue (fitted) or vermillion (held out) after.
+    pub(crate) fn color(&self) -> RGBColor {
+        match (self.stage, self.held_out) {
+            (Stage::Before, _) => GREY,
+            (Stage::After, false) => BLUE,
+            (Stage::After, true) => VERMILLION,
+        }
+    }
+
+    /// Dots for fitted points, triangles for held-out ones.
+    pub(crate) fn marker(&self) -> Marker {
+        let shape = if self.held_out {
+            Shape::Triangle
+        } else {
+            Shape::Dot
+        };
+        Marker::new(shape, self.color())
+    }
+}
+
+/// Evaluates every data set with every arm: for each data set, before (if
+/// given) then after.
+pub(crate) fn evaluate_all<'a>(
+    measured: &[Measured<'a>],
+) -> Result<Vec<Evaluated<'a>>, ReportError> {
+    let held_total = measured.iter().filter(|m| m.held_out).count();
+    let mut held_seen = 0;
+    let mut out = Vec::new();
+    for (set, m) in measured.iter().enumerate() {
+        let set_name = if m.held_out {
+            held_seen += 1;
+            if held_total > 1 {
+                format!("held out {held_seen}")
+            } else {
+                "held out".to_string()
+            }
+        } else if m.before.is_some() {
+            "fitted".to_string()
+        } else {
+            "measured".to_string()
+        };
+        let stages = [(Stage::Before, m.before), (Stage::After, Some(m.after))];
+        for (stage, xyz) in stages {
+            let Some(xyz) = xyz else { continue };
+            if xyz.len() != m.data.len() {
+                return Err(ReportError::Positions {
+                    what: format!(
+                        "{set_name}, {}",
+                        if stage == Stage::Before {
+                            "before"
+                        } else {
+                            "after"
+                        }
+                    ),
+                    expected: m.data.len(),
+                    got: xyz.len(),
+                });
+            }
+            out.push(Evaluated {
+                set,
+                set_name: set_name.clone(),
+                data: m.data,
+                held_out: m.held_out,
+                stage,
+                xyz,
+                ev: evaluate(m.data, xyz)?,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Eq. 19 of one series: `(centroid distance, |d|_error)` per pair, or the
+/// mean `|d|_error` per distance bin when there are more than
+/// [`MAX_PAIR_MARKERS`] pairs.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Pairs {
+    /// Every pair, in the data set's order.
+    Each(Vec<(f64, f64)>),
+    /// `(bin centre, mean |d|_error, pairs)` per non-empty bin, of `count`
+    /// pairs in all.
+    Binned {
+        /// The bins.
+        bins: Vec<(f64, f64, usize)>,
+        /// Pairs in all.
+        count: usize,
+    },
+}
+
+/// Distance bins of [`Pairs::Binned`].
+const PAIR_BINS: usize = 40;
+
+/// Eq. 19 of `e`, streamed: memory does not grow with the pairs.
+pub(crate) fn pairs(e: &Evaluated) -> Pairs {
+    let n = e.ev.points.len();
+    let count = n * n.saturating_sub(1) / 2;
+    let rows = || pair_length_errors(e.data, e.xyz, &e.ev.points);
+    if count <= MAX_PAIR_MARKERS {
+        return Pairs::Each(
+            rows()
+                .map(|p| (p.centroid_distance, p.d_error_abs))
+                .collect(),
+        );
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for (i, a) in e.ev.points.iter().enumerate() {
+        for b in &e.ev.points[i + 1..] {
+            let d = distance(&a.centroid, &b.centroid);
+            lo = lo.min(d);
+            hi = hi.max(d);
+        }
+    }
+    let width = ((hi - lo) / PAIR_BINS as f64).max(f64::MIN_POSITIVE);
+    let mut sums = vec![(0.0f64, 0usize); PAIR_BINS];
+    for p in rows() {
+        let k = (((p.centroid_distance - lo) / width) as usize).min(PAIR_BINS - 1);
+        sums[k].0 += p.d_error_abs;
+        sums[k].1 += 1;
+    }
+    let bins = sums
+        .iter()
+        .enumerate()
+        .filter(|(_, (_, c))| *c > 0)
+        .map(|(k, (s, c))| (lo + (k as f64 + 0.5) * width, s / *c as f64, *c))
+        .collect();
+    Pairs::Binned { bins, count }
+}
+
+/// `δ_i = |x_i − x̄|` of every touch of `e`, touch order, mm.
+pub(crate) fn deltas(e: &Evaluated) -> Vec<f64> {
+    let mut out = Vec::with_capacity(e.xyz.len());
+    for (point, stats) in e.data.points().iter().zip(&e.ev.points) {
+        out.extend(
+            e.xyz[point.touches.clone()]
+                .iter()
+                .map(|x| distance(x, &stats.centroid)),
+        );
+    }
+    out
+}
+
+/// The median of `values` (empty: `None`).
+pub(crate) fn median(values: &[f64]) -> Option<f64> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    Some(if v.len() % 2 == 1 {
+        v[m]
+    } else {
+        (v[m - 1] + v[m]) / 2.0
+    })
+}
+
+/// The data sets of `evaluated`, in order, once each: (set index, name,
+/// data, held out).
+pub(crate) fn sets<'a, 'b>(
+    evaluated: &'b [Evaluated<'a>],
+) -> Vec<(usize, &'b str, &'a DataSet, bool)> {
+    let mut out: Vec<(usize, &str, &DataSet, bool)> = Vec::new();
+    for e in evaluated {
+        if !out.iter().any(|(s, ..)| *s == e.set) {
+            out.push((e.set, &e.set_name, e.data, e.held_out));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), Some(2.5));
+        assert_eq!(median(&[]), None);
+    }
+
+    #[test]
+    fn many_pairs_are_binned_with_every_pair_counted() {
+        // 70 points: 2415 pairs, more than MAX_PAIR_MARKERS.
+        let labels: Vec<String> = (0..210).map(|r| format!("p{}", r % 70)).collect();
+        let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+        let rows: Vec<[f64; 3]> = (0..210)
+            .map(|r| {
+                let p = (r % 70) as f64;
+                [
+                    p * 10.0 + (r / 70) as f64 * 0.01,
+                    (p * 0.3).sin() * 50.0,
+                    0.0,
+                ]
+            })
+            .collect();
+        let xyz = data.to_touch_order(&rows);
+        let ev = evaluate(&data, &xyz).unwrap();
+        let e = Evaluated {
+            set: 0,
+            set_name: "fitted".into(),
+            data: &data,
+            held_out: false,
+            stage: Stage::After,
+            xyz: &xyz,
+            ev,
+        };
+        let Pairs::Binned { bins, count } = pairs(&e) else {
+            panic!("expected bins")
+        };
+        assert_eq!(count, 70 * 69 / 2);
+        assert_eq!(bins.iter().map(|b| b.2).sum::<usize>(), count);
+        assert!(bins.len() <= PAIR_BINS);
+        assert_eq!(deltas(&e).len(), 210);
+    }
+}

@@ -1,0 +1,305 @@
+//! The page: well-formed XHTML-compatible HTML (it parses as XML too), the
+//! style inline, every figure inline as SVG; no script, no link to
+//! anything outside the page.
+
+use super::data::Evaluated;
+use super::tables;
+use super::{
+    CalibrationInput, EvaluationInput, Figure, IDENTIFIABILITY_SVG, LENGTHS_SVG, PARAMETERS_SVG,
+    RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG,
+};
+
+/// Escapes `&`, `<`, `>`, `"` and `'` for HTML/XML text and attributes.
+///
+/// ```
+/// assert_eq!(aacmm_core::report::escape("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");
+/// ```
+pub fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// The style sheet: system fonts only, figures scale down with the window.
+const STYLE: &str = "
+body { font-family: system-ui, -apple-system, 'Segoe UI', Roboto, 'Helvetica Neue', Arial, sans-serif;
+  color: #222; margin: 0 auto; padding: 0 20px 40px; max-width: 1440px; line-height: 1.4; }
+h1 { font-size: 1.6em; margin: 18px 0 6px; }
+h2 { font-size: 1.25em; margin: 30px 0 8px; padding-top: 10px; border-top: 2px solid #ddd; }
+h3 { font-size: 1.0em; margin: 14px 0 4px; }
+p { margin: 6px 0; max-width: 75em; }
+nav { font-size: 0.95em; margin: 6px 0 10px; }
+nav a { margin-right: 14px; color: #0072B2; }
+.row { display: flex; flex-wrap: wrap; gap: 18px; align-items: flex-start; }
+figure { margin: 0; flex: 0 1 960px; }
+figure svg { max-width: 100%; height: auto; border: 1px solid #e4e4e4; }
+figcaption { font-size: 0.92em; color: #444; margin-top: 4px; max-width: 960px; }
+.side { flex: 1 1 380px; min-width: 320px; }
+table { border-collapse: collapse; margin: 6px 0 12px; font-size: 0.9em; }
+caption { text-align: left; font-weight: 600; padding: 4px 0; }
+th, td { border-bottom: 1px solid #e2e2e2; padding: 3px 8px; vertical-align: top; }
+th { background: #f4f4f4; text-align: left; font-weight: 600; }
+td.n { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+td.w { max-width: 30em; }
+tr.after td { background: #f3f8fc; }
+tr.held.after td { background: #fcf5f0; }
+.inputs th { background: none; font-weight: 600; padding-left: 0; }
+.note { color: #555; font-size: 0.92em; }
+.bad { color: #b2182b; font-weight: 600; }
+.good { color: #1b7837; font-weight: 600; }
+footer { margin-top: 30px; font-size: 0.85em; color: #666; border-top: 1px solid #ddd; padding-top: 8px; }
+";
+
+/// An SVG document without anything a page cannot hold inline.
+fn inline(svg: &str) -> &str {
+    svg.trim_start_matches("<?xml version=\"1.0\" encoding=\"UTF-8\"?>")
+        .trim()
+}
+
+/// The start of a page, through its heading and inputs.
+fn head(title: &str, inputs: &[(String, String)], nav: &[(&str, &str)]) -> String {
+    let mut h = String::new();
+    h += "<!DOCTYPE html>\n<html lang=\"en\" xmlns=\"http://www.w3.org/1999/xhtml\">\n<head>\n\
+          <meta charset=\"utf-8\"/>\n\
+          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"/>\n";
+    h += &format!("<title>{}</title>\n", escape(title));
+    h += &format!("<style>{STYLE}</style>\n</head>\n<body>\n");
+    h += &format!("<header>\n<h1>{}</h1>\n", escape(title));
+    if !inputs.is_empty() {
+        h += "<table class=\"inputs\">\n";
+        for (k, v) in inputs {
+            h += &format!("<tr><th>{}</th><td>{}</td></tr>\n", escape(k), escape(v));
+        }
+        h += "</table>\n";
+    }
+    h += "<nav>";
+    for (id, name) in nav {
+        h += &format!("<a href=\"#{id}\">{}</a>", escape(name));
+    }
+    h += "</nav>\n</header>\n";
+    h
+}
+
+/// The end of a page: what wrote it and the figure files beside it.
+fn foot(figures: &[Figure]) -> String {
+    let files: Vec<&str> = figures.iter().map(|f| f.file).collect();
+    format!(
+        "<footer>Written by aacmm {}. Every figure is also a file beside this page: {}. \
+         Lengths in mm, angles in degrees; σ is a standard uncertainty (k = 1).</footer>\n\
+         </body>\n</html>\n",
+        env!("CARGO_PKG_VERSION"),
+        escape(&files.join(", "))
+    )
+}
+
+/// A section: heading, an introduction, the figure with its caption, and
+/// what goes beside it (tables).
+fn section(
+    id: &str,
+    heading: &str,
+    intro: &str,
+    figure: Option<&Figure>,
+    caption: &str,
+    side: &str,
+    below: &str,
+) -> String {
+    let mut s = format!("<section id=\"{id}\">\n<h2>{}</h2>\n", escape(heading));
+    if !intro.is_empty() {
+        s += &format!("<p>{intro}</p>\n");
+    }
+    s += "<div class=\"row\">\n";
+    if let Some(f) = figure {
+        s += &format!(
+            "<figure>\n{}\n<figcaption>{caption} <span class=\"note\">(file {})</span></figcaption>\n</figure>\n",
+            inline(&f.svg),
+            escape(f.file)
+        );
+    }
+    if !side.is_empty() {
+        s += &format!("<div class=\"side\">\n{side}</div>\n");
+    }
+    s += "</div>\n";
+    s += below;
+    s += "</section>\n";
+    s
+}
+
+/// The figure with file name `file`.
+fn find<'a>(figures: &'a [Figure], file: &str) -> Option<&'a Figure> {
+    figures.iter().find(|f| f.file == file)
+}
+
+/// Caption of figure 1.
+const POINTS_CAPTION: &str = "Each marker is one point (cone socket): e = (1/n) Σ |x_i − x̄| over its n touches \
+     (paper eq. 9–10). Grey: the arm before calibration; colour: after. Dots: points the fit used; \
+     triangles: points held out from it. Dashed: the mean over the points, the paper's \
+     single-point figure (1.873 → 0.127 mm in its experiment).";
+
+/// Caption of figure 2.
+const LENGTHS_CAPTION: &str = "Top: the paper's eq. 19 with absolute values for every pair of points, against the \
+     distance of the pair's centroids (the printed eq. 19, without them, is of second order and \
+     shown only in the table). Eq. 19 uses no reference length: it is repeatability seen again, \
+     blind to scale. Bottom: the error of each calibrated reference length, |x̄_a − x̄_b| − L \
+     (ISO 10360-12 E_Uni): the only test of scale. Before and after have panels of their own \
+     because they differ by orders of magnitude.";
+
+/// Caption of figure 5.
+const RESIDUALS_CAPTION: &str = "How far each touch lies from its point's centroid, in bins of equal width on a log \
+     scale, so that before and after share one axis. After a good calibration what remains is \
+     the touch noise: one narrow hump, with no tail of outlying touches.";
+
+/// The calibration report page.
+pub(crate) fn calibration_page(
+    input: &CalibrationInput,
+    evaluated: &[Evaluated],
+    figures: &[Figure],
+) -> String {
+    let cal = input.calibration;
+    let json = input.calibration_json.as_deref();
+    let nav = [
+        ("summary", "Summary"),
+        ("single-point", "1 Single point"),
+        ("lengths", "2 Lengths"),
+        ("parameters", "3 Parameters"),
+        ("identifiability", "4 Identifiability"),
+        ("residuals", "5 Residuals"),
+        ("solver", "6 Solver"),
+    ];
+    let mut page = head(&input.title, &input.inputs, &nav);
+    page += &format!(
+        "<section id=\"summary\">\n<h2>Summary</h2>\n{}{}</section>\n",
+        tables::verdict(cal, evaluated, &input.arms),
+        tables::glance(evaluated, &input.arms)
+    );
+    page += &section(
+        "single-point",
+        "1. Single-point error per point, before and after",
+        "",
+        find(figures, SINGLE_POINT_SVG),
+        POINTS_CAPTION,
+        &tables::validation(&input.validation, &input.arms),
+        "",
+    );
+    page += &section(
+        "lengths",
+        "2. Length errors, before and after",
+        "",
+        find(figures, LENGTHS_SVG),
+        LENGTHS_CAPTION,
+        &tables::lengths(evaluated, &input.arms),
+        &tables::references(evaluated, &input.arms, None),
+    );
+    let truths = super::figures::parameters::true_errors(cal, input.truth);
+    page += &section(
+        "parameters",
+        "3. Parameters: corrections with ± 2σ",
+        &tables::parameters_intro(cal),
+        find(figures, PARAMETERS_SVG),
+        "Correction = calibrated − nominal. Bars: ± 2σ (k = 2) from the covariance \
+         σ̂0² (JᵀJ)⁻¹; a bar shorter than its dot is smaller than the dot's radius on this \
+         scale (the table gives every σ). Crosses: parameters held at nominal, with the reason; \
+         the data cannot determine them, so their errors are absorbed by the others.",
+        "",
+        &tables::parameters(cal, json, &truths),
+    );
+    page += &section(
+        "identifiability",
+        "4. Identifiability",
+        "",
+        find(figures, IDENTIFIABILITY_SVG),
+        "Left: singular values of the weighted Jacobian with angle columns scaled by the reach \
+         (an angle counts as the arc it sweeps there); below the threshold a direction is not \
+         determined by the data and a parameter along it is fixed. Right: the correlation \
+         coefficients ρ of the free parameters from the covariance; |ρ| > 0.9 is written in the \
+         cell.",
+        &tables::identification(cal, json),
+        "",
+    );
+    page += &section(
+        "residuals",
+        "5. Residuals per touch, before and after",
+        "",
+        find(figures, RESIDUALS_SVG),
+        RESIDUALS_CAPTION,
+        &tables::residuals(evaluated, &input.arms),
+        "",
+    );
+    page += &section(
+        "solver",
+        "6. Solver",
+        "",
+        find(figures, SOLVER_SVG),
+        "Left: the cost Σr² of the weighted residuals (touches against their centroids, \
+         reference lengths) at each iteration of the final Levenberg–Marquardt fit; with the \
+         weights right it ends near m − p, the degrees of freedom. Right: for the annealing \
+         methods (sa, hybrid), the energy of the paper's SA (OA = e + 3σ, mm) as the \
+         temperature falls, and the share of moves accepted at each temperature; for global, \
+         the cost each start ended at.",
+        &tables::solver(cal, json),
+        "",
+    );
+    page += &foot(figures);
+    page
+}
+
+/// The evaluation report page.
+pub(crate) fn evaluation_page(
+    input: &EvaluationInput,
+    evaluated: &[Evaluated],
+    figures: &[Figure],
+) -> String {
+    let json = input.evaluation_json.as_deref();
+    let nav = [
+        ("single-point", "1 Single point"),
+        ("lengths", "2 Lengths"),
+        ("residuals", "3 Residuals"),
+    ];
+    let arms = super::Arms {
+        before: String::new(),
+        after: input.arm.clone(),
+    };
+    let mut page = head(&input.title, &input.inputs, &nav);
+    let e = &evaluated[0];
+    page += &section(
+        "single-point",
+        "1. Single-point error per point",
+        "",
+        find(figures, SINGLE_POINT_SVG),
+        "Each marker is one point (cone socket): e = (1/n) Σ |x_i − x̄| over its n touches \
+         (paper eq. 9–10); dashed: the mean over the points (the paper's Fig. 6 figure).",
+        &tables::points_summary(e, json),
+        &tables::points(e, json),
+    );
+    page += &section(
+        "lengths",
+        "2. Length errors",
+        "",
+        find(figures, LENGTHS_SVG),
+        "Top: the paper's eq. 19 with absolute values for every pair of points, against the \
+         distance of the pair's centroids; eq. 19 uses no reference length and cannot see \
+         scale. Bottom: the error of each reference length, |x̄_a − x̄_b| − L (ISO 10360-12 \
+         E_Uni), the only test of scale.",
+        &tables::lengths(evaluated, &arms),
+        &tables::references(evaluated, &arms, json),
+    );
+    page += &section(
+        "residuals",
+        "3. Residuals per touch",
+        "",
+        find(figures, RESIDUALS_SVG),
+        RESIDUALS_CAPTION,
+        &tables::residuals(evaluated, &arms),
+        "",
+    );
+    page += &foot(figures);
+    page
+}

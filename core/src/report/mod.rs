@@ -1,0 +1,328 @@
+//! Reports: what a calibration or an evaluation found, as one self-contained
+//! HTML page (inline SVG and CSS; no script, no network, no other file) and
+//! each figure as its own SVG file.
+//!
+//! Data flows one way (files → data set → kernel → residuals → solver →
+//! report): this module takes plain data — a [`Calibration`], the data sets
+//! with the probe positions the compared arms give for them ([`Measured`]),
+//! the validation figures ([`BeforeAfter`]) — and computes nothing but what
+//! it shows, with [`crate::metrics`]. It never runs a solver.
+//!
+//! | figure | file | calibration | evaluation |
+//! |---|---|---|---|
+//! | single-point error `e` per point (paper Fig. 6) | [`SINGLE_POINT_SVG`] | ✓ | ✓ |
+//! | length errors: eq. 19 `\|d\|_error` per pair, reference lengths (Fig. 7) | [`LENGTHS_SVG`] | ✓ | ✓ |
+//! | parameter corrections ± 2σ, fixed ones with the reason | [`PARAMETERS_SVG`] | ✓ | |
+//! | singular values and threshold; correlation heat map | [`IDENTIFIABILITY_SVG`] | ✓ | |
+//! | histogram of the per-touch residual lengths `δ = \|x − x̄\|` | [`RESIDUALS_SVG`] | ✓ | ✓ |
+//! | LM cost per iteration; annealing energy against temperature | [`SOLVER_SVG`] | ✓ | |
+//!
+//! Before calibration is drawn grey, after in colour (blue for fitted
+//! points, vermillion for held-out ones); fitted points are dots, held-out
+//! points triangles. Every axis and table header states its unit.
+//!
+//! **Agreement with the JSON.** Where a number of the report is also in a
+//! JSON file written beside it, its cell carries `data-json` (a JSON Pointer,
+//! RFC 6901, into that file) and `data-value` (the number, shortest
+//! round-trip form), so a tool can check that both say the same.
+//!
+//! **Determinism.** The same input gives the same bytes: no time, no
+//! randomness, integer pixel coordinates.
+//!
+//! **Size.** Memory and output are linear in the touches: eq. 19's pairs,
+//! which grow as the square of the points, are streamed and drawn one
+//! marker per pair only up to [`MAX_PAIR_MARKERS`] per series; beyond, as
+//! the mean per distance bin.
+
+mod data;
+mod figures;
+mod html;
+mod svg;
+mod tables;
+
+use crate::calibrate::Calibration;
+use crate::calibrate::validate::BeforeAfter;
+use crate::dataset::DataSet;
+use crate::kernel::{ArmKernel, KernelError};
+use crate::metrics::MetricsError;
+use crate::params::DhParams;
+
+pub use html::escape;
+
+/// The page.
+pub const HTML_FILE: &str = "report.html";
+/// Single-point error `e` per point, before and after (paper Fig. 6).
+pub const SINGLE_POINT_SVG: &str = "single-point-errors.svg";
+/// Length errors: eq. 19 per pair and against reference lengths (Fig. 7).
+pub const LENGTHS_SVG: &str = "length-errors.svg";
+/// Parameter corrections with ± 2σ.
+pub const PARAMETERS_SVG: &str = "parameter-corrections.svg";
+/// Singular values and the correlation matrix.
+pub const IDENTIFIABILITY_SVG: &str = "identifiability.svg";
+/// Per-touch residual lengths, before and after.
+pub const RESIDUALS_SVG: &str = "residuals.svg";
+/// The solver's progress.
+pub const SOLVER_SVG: &str = "solver-progress.svg";
+
+/// Every file [`calibration_report`] writes, page first.
+pub const CALIBRATION_FILES: [&str; 7] = [
+    HTML_FILE,
+    SINGLE_POINT_SVG,
+    LENGTHS_SVG,
+    PARAMETERS_SVG,
+    IDENTIFIABILITY_SVG,
+    RESIDUALS_SVG,
+    SOLVER_SVG,
+];
+
+/// Every file [`evaluation_report`] writes, page first.
+pub const EVALUATION_FILES: [&str; 4] = [HTML_FILE, SINGLE_POINT_SVG, LENGTHS_SVG, RESIDUALS_SVG];
+
+/// Eq. 19 pairs drawn one marker each, per series; more are drawn as the
+/// mean per distance bin.
+pub const MAX_PAIR_MARKERS: usize = 2000;
+
+/// Why a report could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// The positions do not fit the data set.
+    #[error("report: {what}: {got} positions for {expected} touches")]
+    Positions {
+        /// Which positions (`fitted, before`, …).
+        what: String,
+        /// Touches of the data set.
+        expected: usize,
+        /// Positions given.
+        got: usize,
+    },
+    /// The metrics refused the positions (non-finite, too few touches).
+    #[error("report: {0}")]
+    Metrics(#[from] MetricsError),
+    /// The kernel refused an arm ([`positions`]).
+    #[error("report: {0}")]
+    Kernel(#[from] KernelError),
+    /// Plotters failed to draw a figure.
+    #[error("report: figure {file}: {message}")]
+    Draw {
+        /// The figure's file name.
+        file: &'static str,
+        /// Plotters' message.
+        message: String,
+    },
+}
+
+/// One figure: its file name, its title and the SVG document.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Figure {
+    /// File name (one of the `*_SVG` constants).
+    pub file: &'static str,
+    /// Title, as in the page.
+    pub title: String,
+    /// The SVG document.
+    pub svg: String,
+}
+
+/// A report: the page and its figures, ready to be written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// The self-contained page ([`HTML_FILE`]); it holds every figure.
+    pub html: String,
+    /// The figures, each also a file of its own.
+    pub figures: Vec<Figure>,
+}
+
+impl Report {
+    /// Every file of the report as (file name, content), page first.
+    pub fn files(&self) -> impl Iterator<Item = (&str, &str)> {
+        std::iter::once((HTML_FILE, self.html.as_str()))
+            .chain(self.figures.iter().map(|f| (f.file, f.svg.as_str())))
+    }
+}
+
+/// One data set as measured by the arms compared: probe positions (mm) of
+/// its touches in the data set's touch order.
+#[derive(Clone, Copy, Debug)]
+pub struct Measured<'a> {
+    /// The touches (points, reference lengths, where they came from).
+    pub data: &'a DataSet,
+    /// Whether the data were held out from the fit (drawn as triangles).
+    pub held_out: bool,
+    /// Positions with the arm before calibration (grey); `None` when one
+    /// arm is evaluated.
+    pub before: Option<&'a [[f64; 3]]>,
+    /// Positions with the arm after calibration (or the one arm evaluated).
+    pub after: &'a [[f64; 3]],
+}
+
+/// Probe positions of every touch of `data` (its touch order) with the arm
+/// `params`, mm: what [`Measured`] holds.
+///
+/// ```
+/// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}, params::DhParams, report};
+/// let text = "point,q1,q2,q3,q4,q5,q6\nA,0,0,0,0,0,0\nA,0,0,0,0,0,1\nA,0,0,0,0,1,0\n";
+/// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
+/// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+/// let xyz = report::positions(&DhParams::paper_nominal(), &data).unwrap();
+/// assert_eq!(xyz.len(), 3);
+/// ```
+pub fn positions(params: &DhParams, data: &DataSet) -> Result<Vec<[f64; 3]>, ReportError> {
+    let kernel = ArmKernel::new(params)?;
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    Ok(xyz)
+}
+
+/// Names of the two arms compared, for legends and tables.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Arms {
+    /// The arm before calibration (`nominal`).
+    pub before: String,
+    /// The arm after calibration (`calibrated`), or the one arm evaluated.
+    pub after: String,
+}
+
+/// One row pair of the validation table: figures of the arm before and
+/// after calibration on one data set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ValidationRow<'a> {
+    /// What the data are (`fitted`, `held out (v.csv)`, `fold 1 (3 points)`).
+    pub name: String,
+    /// Whether the data were held out from the fit.
+    pub held_out: bool,
+    /// The figures.
+    pub figures: &'a BeforeAfter,
+    /// JSON Pointer of the same figures in the JSON written beside the
+    /// report (e.g. `/validation/fitted`), if any.
+    pub json: Option<String>,
+}
+
+/// What [`calibration_report`] shows.
+#[derive(Clone, Debug)]
+pub struct CalibrationInput<'a> {
+    /// The page's heading.
+    pub title: String,
+    /// What went in, as (what, value) lines: files, noise, method, seed.
+    pub inputs: Vec<(String, String)>,
+    /// The calibration.
+    pub calibration: &'a Calibration,
+    /// JSON Pointer of the calibration in the JSON written beside the
+    /// report (e.g. `/calibration`), if any.
+    pub calibration_json: Option<String>,
+    /// The data sets with positions before and after: the fitted data and
+    /// any held-out data.
+    pub measured: Vec<Measured<'a>>,
+    /// Names of the arms.
+    pub arms: Arms,
+    /// Rows of the validation table (fitted, held out, cross-validation).
+    pub validation: Vec<ValidationRow<'a>>,
+    /// The true arm, when known (simulations): its errors are drawn beside
+    /// the corrections.
+    pub truth: Option<&'a DhParams>,
+}
+
+/// What [`evaluation_report`] shows.
+#[derive(Clone, Debug)]
+pub struct EvaluationInput<'a> {
+    /// The page's heading.
+    pub title: String,
+    /// What went in, as (what, value) lines.
+    pub inputs: Vec<(String, String)>,
+    /// The data set and the positions the arm gives (`before` is `None`).
+    pub measured: Measured<'a>,
+    /// The arm's name.
+    pub arm: String,
+    /// JSON Pointer of the evaluation in the JSON written beside the report
+    /// (e.g. `/evaluation`), if any.
+    pub evaluation_json: Option<String>,
+}
+
+/// The report of a calibration: the page and six figures
+/// ([`CALIBRATION_FILES`]).
+///
+/// # Errors
+///
+/// [`ReportError::Positions`] when positions do not fit their data set;
+/// [`ReportError::Metrics`] for positions the metrics refuse;
+/// [`ReportError::Draw`] if plotters fails.
+///
+/// ```
+/// use aacmm_core::{calibrate::*, io::Arm, params::DhParams, report::*, simulate::*};
+/// let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
+/// let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 5, 6);
+/// settings.reference_lengths = 2;
+/// let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+/// let options = CalibrateOptions { method: Method::Lm, ..CalibrateOptions::default() };
+/// let cal = calibrate(&nominal.params, &data, &options).unwrap();
+/// let before = positions(&nominal.params, &data).unwrap();
+/// let after = positions(&cal.params, &data).unwrap();
+/// let fitted = validate::before_after(&nominal.params, &cal.params, &data).unwrap();
+/// let report = calibration_report(&CalibrationInput {
+///     title: "Calibration".into(),
+///     inputs: vec![],
+///     calibration: &cal,
+///     calibration_json: None,
+///     measured: vec![Measured { data: &data, held_out: false, before: Some(&before), after: &after }],
+///     arms: Arms { before: "nominal".into(), after: "calibrated".into() },
+///     validation: vec![ValidationRow { name: "fitted".into(), held_out: false, figures: &fitted, json: None }],
+///     truth: None,
+/// })
+/// .unwrap();
+/// assert_eq!(report.files().count(), CALIBRATION_FILES.len());
+/// assert!(report.html.starts_with("<!DOCTYPE html>"));
+/// assert!(!report.html.contains("<script"));
+/// ```
+pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportError> {
+    let evaluated = data::evaluate_all(&input.measured)?;
+    let figures = vec![
+        figures::points::figure(&evaluated, &input.arms)?,
+        figures::lengths::figure(&evaluated, &input.arms)?,
+        figures::parameters::figure(input.calibration, input.truth)?,
+        figures::identifiability::figure(input.calibration)?,
+        figures::residuals::figure(&evaluated, &input.arms)?,
+        figures::solver::figure(input.calibration)?,
+    ];
+    let html = html::calibration_page(input, &evaluated, &figures);
+    Ok(Report { html, figures })
+}
+
+/// The report of one arm on one data set: the page and three figures
+/// ([`EVALUATION_FILES`]).
+///
+/// # Errors
+///
+/// As [`calibration_report`].
+///
+/// ```
+/// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}, params::DhParams, report::*};
+/// let text = "point,q1,q2,q3,q4,q5,q6\n\
+///     A,0,0,0,0,0,0\nA,0,0,0,0,0,1\nA,0,0,0,0,1,0\n\
+///     B,10,20,30,40,50,60\nB,10,20,30,40,50,61\nB,10,20,30,40,51,61\n";
+/// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
+/// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+/// let xyz = positions(&DhParams::paper_nominal(), &data).unwrap();
+/// let report = evaluation_report(&EvaluationInput {
+///     title: "Evaluation".into(),
+///     inputs: vec![("poses".into(), "p.csv".into())],
+///     measured: Measured { data: &data, held_out: false, before: None, after: &xyz },
+///     arm: "nominal".into(),
+///     evaluation_json: None,
+/// })
+/// .unwrap();
+/// let names: Vec<&str> = report.files().map(|(name, _)| name).collect();
+/// assert_eq!(names, EVALUATION_FILES);
+/// ```
+pub fn evaluation_report(input: &EvaluationInput) -> Result<Report, ReportError> {
+    let measured = [input.measured];
+    let evaluated = data::evaluate_all(&measured)?;
+    let arms = Arms {
+        before: String::new(),
+        after: input.arm.clone(),
+    };
+    let figures = vec![
+        figures::points::figure(&evaluated, &arms)?,
+        figures::lengths::figure(&evaluated, &arms)?,
+        figures::residuals::figure(&evaluated, &arms)?,
+    ];
+    let html = html::evaluation_page(input, &evaluated, &figures);
+    Ok(Report { html, figures })
+}

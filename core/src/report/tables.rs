@@ -1,0 +1,778 @@
+//! The tables beside the figures. A number that is also in the JSON
+//! written beside the report carries `data-json` (its JSON Pointer) and
+//! `data-value` (the number in full), so that the two can be checked
+//! against each other.
+
+use super::data::{Evaluated, Stage, deltas, median};
+use super::html::escape;
+use super::{Arms, ValidationRow};
+use crate::calibrate::Calibration;
+use crate::calibrate::validate::Figures;
+
+/// One cell.
+struct Cell {
+    text: String,
+    /// JSON Pointer and full value, when the number is in the JSON.
+    json: Option<(String, String)>,
+    numeric: bool,
+}
+
+impl Cell {
+    /// A missing number.
+    fn none() -> Cell {
+        Cell {
+            text: "-".to_string(),
+            json: None,
+            numeric: true,
+        }
+    }
+
+    /// A text cell.
+    fn text(s: &str) -> Cell {
+        Cell {
+            text: escape(s),
+            json: None,
+            numeric: false,
+        }
+    }
+
+    /// Markup as is (already escaped).
+    fn markup(s: String) -> Cell {
+        Cell {
+            text: s,
+            json: None,
+            numeric: false,
+        }
+    }
+
+    /// A number with `decimals` decimals; `-` when not finite.
+    fn num(v: f64, decimals: usize) -> Cell {
+        Cell {
+            text: if v.is_finite() {
+                super::svg::number(v, decimals)
+            } else {
+                "-".to_string()
+            },
+            json: None,
+            numeric: true,
+        }
+    }
+
+    /// A number in scientific notation with `digits` after the point.
+    fn sci(v: f64, digits: usize) -> Cell {
+        Cell {
+            text: if v.is_finite() {
+                format!("{v:.digits$e}")
+            } else {
+                "-".to_string()
+            },
+            json: None,
+            numeric: true,
+        }
+    }
+
+    /// An integer.
+    fn int(v: usize) -> Cell {
+        Cell {
+            text: v.to_string(),
+            json: None,
+            numeric: true,
+        }
+    }
+
+    /// Marks the cell as `pointer` in the JSON (`base` + `path`), holding
+    /// `value`; nothing when there is no JSON.
+    fn at(mut self, base: Option<&str>, path: &str, value: f64) -> Cell {
+        if let Some(b) = base {
+            self.json = Some((format!("{b}/{path}"), format!("{value:?}")));
+        }
+        self
+    }
+
+    fn html(&self) -> String {
+        let class = if self.numeric { " class=\"n\"" } else { "" };
+        match &self.json {
+            Some((p, v)) => format!(
+                "<td{class} data-json=\"{}\" data-value=\"{}\">{}</td>",
+                escape(p),
+                escape(v),
+                self.text
+            ),
+            None => format!("<td{class}>{}</td>", self.text),
+        }
+    }
+}
+
+/// A table: caption, header, rows (with a row class).
+fn table(caption: &str, head: &[&str], rows: &[(String, Vec<Cell>)]) -> String {
+    let mut t = format!("<table>\n<caption>{}</caption>\n<tr>", escape(caption));
+    for h in head {
+        t += &format!("<th>{}</th>", escape(h));
+    }
+    t += "</tr>\n";
+    for (class, cells) in rows {
+        if class.is_empty() {
+            t += "<tr>";
+        } else {
+            t += &format!("<tr class=\"{class}\">");
+        }
+        for c in cells {
+            t += &c.html();
+        }
+        t += "</tr>\n";
+    }
+    t += "</table>\n";
+    t
+}
+
+/// The row class of a series: `after`, `held after`, or none.
+fn row_class(e: &Evaluated) -> String {
+    match (e.stage, e.held_out) {
+        (Stage::Before, _) => String::new(),
+        (Stage::After, false) => "after".to_string(),
+        (Stage::After, true) => "held after".to_string(),
+    }
+}
+
+/// A few sentences on the result.
+pub(crate) fn verdict(cal: &Calibration, evaluated: &[Evaluated], arms: &Arms) -> String {
+    let s = &cal.solver;
+    let d = &cal.dof;
+    let mut p = String::from("<p>");
+    if s.successful {
+        p += &format!(
+            "<span class=\"good\">The solver converged</span> ({}: {}).",
+            escape(s.method.name()),
+            escape(s.termination.describe())
+        );
+    } else {
+        p += &format!(
+            "<span class=\"bad\">The solver did not converge</span> ({}: {}): treat the \
+             result with suspicion.",
+            escape(s.method.name()),
+            escape(s.termination.describe())
+        );
+    }
+    p += &format!(
+        " σ̂0 = {:.4} with {} degrees of freedom ({}); touch σ {:.4} mm {}.",
+        d.sigma0,
+        d.degrees_of_freedom,
+        if (0.5..=2.0).contains(&d.sigma0) {
+            "about 1: the residuals are as large as the stated noise"
+        } else if d.sigma0 > 2.0 {
+            "well above 1: the residuals exceed the stated noise — noise understated, outliers or a model error"
+        } else {
+            "well below 1: the stated noise is larger than the residuals"
+        },
+        d.touch_sigma_mm,
+        if d.touch_sigma_estimated {
+            "(estimated from the fit)"
+        } else {
+            "(from the stated noise)"
+        }
+    );
+    for e in evaluated.iter().filter(|e| e.stage == Stage::After) {
+        let before = evaluated
+            .iter()
+            .find(|b| b.set == e.set && b.stage == Stage::Before);
+        if let Some(b) = before {
+            p += &format!(
+                " On the {} points, e falls from {:.4} mm ({}) to {:.4} mm ({}).",
+                escape(&e.set_name),
+                b.ev.single_point_e.mean,
+                escape(&arms.before),
+                e.ev.single_point_e.mean,
+                escape(&arms.after)
+            );
+        }
+    }
+    if !evaluated.iter().any(|e| e.held_out) {
+        p += " No held-out data were given (--validate): the figures after calibration are on \
+              the data the fit used.";
+    }
+    p += "</p>\n";
+    p
+}
+
+/// The headline figures per data set and arm.
+pub(crate) fn glance(evaluated: &[Evaluated], arms: &Arms) -> String {
+    let rows: Vec<(String, Vec<Cell>)> = evaluated
+        .iter()
+        .map(|e| {
+            let ev = &e.ev;
+            let pair = ev.pair_length_abs_summary.map_or(f64::NAN, |s| s.mean);
+            let (rms, max) = ev
+                .reference_summary
+                .map_or((f64::NAN, f64::NAN), |r| (r.rms, r.max_abs));
+            (
+                row_class(e),
+                vec![
+                    Cell::text(&e.name(arms)),
+                    Cell::int(ev.points.len()),
+                    Cell::num(ev.single_point_e.mean, 4),
+                    Cell::num(ev.single_point_e.std, 4),
+                    Cell::num(pair, 4),
+                    Cell::num(rms, 4),
+                    Cell::num(max, 4),
+                ],
+            )
+        })
+        .collect();
+    table(
+        "At a glance (paper: e mean 1.873 → 0.127 mm, length error mean 1.038 → 0.092 mm)",
+        &[
+            "arm, data",
+            "points",
+            "e mean [mm]",
+            "e std [mm]",
+            "|d|_error mean [mm]",
+            "reference RMS [mm]",
+            "reference max |error| [mm]",
+        ],
+        &rows,
+    )
+}
+
+/// The validation table, as `calibration.json` has it.
+pub(crate) fn validation(rows: &[ValidationRow], arms: &Arms) -> String {
+    let mut out: Vec<(String, Vec<Cell>)> = Vec::new();
+    for r in rows {
+        let held = r.held_out;
+        for (stage, f, key, arm) in [
+            ("before", &r.figures.before, "before", &arms.before),
+            ("after", &r.figures.after, "after", &arms.after),
+        ] {
+            let base = r.json.as_ref().map(|j| format!("{j}/{key}"));
+            let class = match (stage, held) {
+                ("after", true) => "held after",
+                ("after", false) => "after",
+                _ => "",
+            };
+            out.push((
+                class.to_string(),
+                figure_cells(&format!("{}, {arm}", r.name), f, base.as_deref()),
+            ));
+        }
+    }
+    table(
+        "Validation: the figures before and after (mm)",
+        &[
+            "data, arm",
+            "points",
+            "e mean [mm]",
+            "e max [mm]",
+            "2s mean [mm]",
+            "δ_max [mm]",
+            "lengths",
+            "length RMS [mm]",
+            "length max |error| [mm]",
+        ],
+        &out,
+    ) + "<p class=\"note\">e: the paper's single-point error; 2s and δ_max: the ASME B89.4.22 \
+         single-point articulation test; length: error against the reference lengths. Folds: \
+         k-fold cross-validation over points, each fold's points scored by an arm fitted \
+         without them.</p>\n"
+}
+
+/// The cells of one [`Figures`] row.
+fn figure_cells(name: &str, f: &Figures, base: Option<&str>) -> Vec<Cell> {
+    let opt = |v: Option<f64>, key: &str| match v {
+        Some(v) => Cell::num(v, 4).at(base, key, v),
+        None => Cell::none(),
+    };
+    vec![
+        Cell::text(name),
+        Cell::int(f.points).at(base, "points", f.points as f64),
+        Cell::num(f.e_mean, 4).at(base, "e_mean", f.e_mean),
+        Cell::num(f.e_max, 4).at(base, "e_max", f.e_max),
+        Cell::num(f.two_s_mean, 4).at(base, "two_s_mean", f.two_s_mean),
+        Cell::num(f.delta_max, 4).at(base, "delta_max", f.delta_max),
+        Cell::int(f.lengths).at(base, "lengths", f.lengths as f64),
+        opt(f.length_rms, "length_rms"),
+        opt(f.length_max, "length_max"),
+    ]
+}
+
+/// Eq. 19 over the pairs, both forms.
+pub(crate) fn lengths(evaluated: &[Evaluated], arms: &Arms) -> String {
+    let rows: Vec<(String, Vec<Cell>)> = evaluated
+        .iter()
+        .filter_map(|e| {
+            let abs = e.ev.pair_length_abs_summary?;
+            let signed = e.ev.pair_length_summary?;
+            Some((
+                row_class(e),
+                vec![
+                    Cell::text(&e.name(arms)),
+                    Cell::int(abs.count),
+                    Cell::num(abs.min, 4),
+                    Cell::num(abs.mean, 4),
+                    Cell::num(abs.max, 4),
+                    Cell::num(abs.std, 4),
+                    Cell::num(signed.mean, 4),
+                ],
+            ))
+        })
+        .collect();
+    if rows.is_empty() {
+        return "<p class=\"note\">No pairs of points: eq. 19 needs two points.</p>\n".to_string();
+    }
+    table(
+        "Eq. 19 over all pairs of points (paper Fig. 7: 1.038 → 0.092 mm mean)",
+        &[
+            "arm, data",
+            "pairs",
+            "|d|_error min [mm]",
+            "mean [mm]",
+            "max [mm]",
+            "std [mm]",
+            "d_error as printed, mean [mm]",
+        ],
+        &rows,
+    ) + "<p class=\"note\">|d|_error: eq. 19 with absolute values, our reading of the paper's \
+         figures; d_error: eq. 19 as printed, of second order in the scatter. Std: population \
+         (divides by the count).</p>\n"
+}
+
+/// Every reference length, before and after.
+pub(crate) fn references(evaluated: &[Evaluated], arms: &Arms, json: Option<&str>) -> String {
+    let mut rows: Vec<(String, Vec<Cell>)> = Vec::new();
+    for e in evaluated {
+        let base = json;
+        for (i, r) in e.ev.reference.iter().enumerate() {
+            let path = |k: &str| format!("reference/{i}/{k}");
+            rows.push((
+                row_class(e),
+                vec![
+                    Cell::text(&e.name(arms)),
+                    Cell::text(&r.a),
+                    Cell::text(&r.b),
+                    Cell::num(r.reference, 4).at(base, &path("reference"), r.reference),
+                    Cell::num(r.measured, 4).at(base, &path("measured"), r.measured),
+                    Cell::num(r.error, 4).at(base, &path("error"), r.error),
+                ],
+            ));
+        }
+    }
+    if rows.is_empty() {
+        return "<p class=\"note\">No reference lengths: nothing here tests the arm's scale \
+                (method.md §8.2).</p>\n"
+            .to_string();
+    }
+    table(
+        "Reference lengths: error = measured − reference (ISO 10360-12 E_Uni)",
+        &[
+            "arm, data",
+            "point a",
+            "point b",
+            "reference L [mm]",
+            "measured [mm]",
+            "error [mm]",
+        ],
+        &rows,
+    )
+}
+
+/// A sentence on what was fixed and why.
+pub(crate) fn parameters_intro(cal: &Calibration) -> String {
+    let free = cal.parameters.iter().filter(|p| p.fixed.is_none()).count();
+    format!(
+        "{free} of {} parameters were fitted; {} were held at their nominal values (the reasons \
+         are in the tables).",
+        cal.parameters.len(),
+        cal.parameters.len() - free
+    )
+}
+
+/// The parameter tables: lengths (mm) and angles (deg).
+pub(crate) fn parameters(
+    cal: &Calibration,
+    json: Option<&str>,
+    truths: &[(String, Option<f64>)],
+) -> String {
+    let has_truth = truths.iter().any(|(_, t)| t.is_some());
+    let mut out = String::new();
+    for (unit, caption) in [
+        ("mm", "Lengths a, d and the probe B"),
+        ("deg", "Angles: twists alpha, zero offsets theta"),
+    ] {
+        let mut head = vec![
+            "parameter".to_string(),
+            format!("nominal [{unit}]"),
+            format!("calibrated [{unit}]"),
+            format!("correction [{unit}]"),
+            format!("σ [{unit}]"),
+            format!("2σ [{unit}]"),
+        ];
+        if has_truth {
+            head.push(format!("true error [{unit}]"));
+            head.push("(correction − true)/σ".to_string());
+        }
+        head.push("fixed because".to_string());
+        let rows: Vec<(String, Vec<Cell>)> = cal
+            .parameters
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| (p.unit == "mm") == (unit == "mm"))
+            .map(|(i, p)| {
+                let path = |k: &str| format!("parameters/{i}/{k}");
+                let mut cells = vec![
+                    Cell::text(&p.name),
+                    Cell::num(p.nominal, 6).at(json, &path("nominal"), p.nominal),
+                    Cell::num(p.calibrated, 6).at(json, &path("calibrated"), p.calibrated),
+                    Cell::num(p.correction, 6).at(json, &path("correction"), p.correction),
+                ];
+                match p.sigma {
+                    Some(s) => {
+                        cells.push(Cell::num(s, 6).at(json, &path("sigma"), s));
+                        cells.push(Cell::num(2.0 * s, 6));
+                    }
+                    None => {
+                        cells.push(Cell::none());
+                        cells.push(Cell::none());
+                    }
+                }
+                if has_truth {
+                    let t = truths.get(i).and_then(|t| t.1);
+                    cells.push(t.map_or(Cell::none(), |t| Cell::num(t, 6)));
+                    let z = match (t, p.sigma) {
+                        (Some(t), Some(s)) if s > 0.0 => (p.correction - t) / s,
+                        _ => f64::NAN,
+                    };
+                    cells.push(Cell::num(z, 2));
+                }
+                cells.push(Cell::markup(format!(
+                    "<span class=\"note\">{}</span>",
+                    escape(p.fixed.as_deref().unwrap_or(""))
+                )));
+                (String::new(), cells)
+            })
+            .collect();
+        let head: Vec<&str> = head.iter().map(String::as_str).collect();
+        out += &table(caption, &head, &rows);
+    }
+    if cal.correlations.is_empty() {
+        out += "<p class=\"note\">No pair of free parameters correlates with |ρ| &gt; 0.9.</p>\n";
+    } else {
+        let list: Vec<String> = cal
+            .correlations
+            .iter()
+            .map(|c| format!("{}/{} {:+.3}", c.a, c.b, c.rho))
+            .collect();
+        out += &format!(
+            "<p class=\"note\">Correlations |ρ| &gt; 0.9: {}.</p>\n",
+            escape(&list.join(", "))
+        );
+    }
+    out
+}
+
+/// The identifiability analysis in numbers.
+pub(crate) fn identification(cal: &Calibration, json: Option<&str>) -> String {
+    let Some(id) = &cal.identification else {
+        return "<p class=\"note\">The fixed set was given by the user: no identifiability \
+                analysis ran (aacmm identify gives it). Every free direction was checked to be \
+                seen by the data.</p>\n"
+            .to_string();
+    };
+    let base = json.map(|j| format!("{j}/identification"));
+    let base = base.as_deref();
+    let rows = vec![
+        (
+            String::new(),
+            vec![
+                Cell::text("rank (identifiable combinations)"),
+                Cell::int(id.rank).at(base, "rank", id.rank as f64),
+            ],
+        ),
+        (
+            String::new(),
+            vec![
+                Cell::text("rank threshold (scaled)"),
+                Cell::sci(id.threshold, 3).at(base, "threshold", id.threshold),
+            ],
+        ),
+        (
+            String::new(),
+            vec![
+                Cell::text("condition number of the identifiable part"),
+                Cell::num(id.condition_number, 1).at(base, "condition_number", id.condition_number),
+            ],
+        ),
+        (
+            String::new(),
+            vec![
+                Cell::text("reach R dividing angle columns [mm]"),
+                Cell::num(id.reach_mm, 1).at(base, "reach_mm", id.reach_mm),
+            ],
+        ),
+    ];
+    let mut out = table("Identifiability", &["figure", "value"], &rows);
+    let rules: Vec<(String, Vec<Cell>)> = id
+        .rules
+        .iter()
+        .map(|r| {
+            (
+                String::new(),
+                vec![Cell::text(&r.name), Cell::text(&r.explanation)],
+            )
+        })
+        .chain(id.null_relations.iter().map(|r| {
+            (
+                String::new(),
+                vec![
+                    Cell::text(&format!("redundant (s = {:.1e})", r.singular_value)),
+                    Cell::text(&r.text),
+                ],
+            )
+        }))
+        .collect();
+    if !rules.is_empty() {
+        out += &table(
+            "What the data cannot see",
+            &["rule or direction", "explanation"],
+            &rules,
+        );
+    }
+    out
+}
+
+/// The residual lengths per series.
+pub(crate) fn residuals(evaluated: &[Evaluated], arms: &Arms) -> String {
+    let rows: Vec<(String, Vec<Cell>)> = evaluated
+        .iter()
+        .map(|e| {
+            let d = deltas(e);
+            let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len().max(1) as f64).sqrt();
+            let max = d.iter().copied().fold(0.0, f64::max);
+            (
+                row_class(e),
+                vec![
+                    Cell::text(&e.name(arms)),
+                    Cell::int(d.len()),
+                    Cell::num(median(&d).unwrap_or(f64::NAN), 4),
+                    Cell::num(rms, 4),
+                    Cell::num(max, 4),
+                ],
+            )
+        })
+        .collect();
+    table(
+        "Per-touch distance δ from the point's centroid",
+        &[
+            "arm, data",
+            "touches",
+            "median δ [mm]",
+            "RMS δ [mm]",
+            "max δ [mm]",
+        ],
+        &rows,
+    )
+}
+
+/// The solver summary.
+pub(crate) fn solver(cal: &Calibration, json: Option<&str>) -> String {
+    let s = &cal.solver;
+    let d = &cal.dof;
+    let sb = json.map(|j| format!("{j}/solver"));
+    let sb = sb.as_deref();
+    let db = json.map(|j| format!("{j}/dof"));
+    let db = db.as_deref();
+    let row = |name: &str, c: Cell| (String::new(), vec![Cell::text(name), c]);
+    let mut rows = vec![
+        row("method", Cell::text(s.method.name())),
+        row("stopped", Cell::text(s.termination.describe())),
+        row(
+            "converged",
+            Cell::text(if s.successful { "yes" } else { "no" }),
+        ),
+        row(
+            "iterations of the final LM",
+            Cell::int(s.iterations).at(sb, "iterations", s.iterations as f64),
+        ),
+        row(
+            "cost evaluations (positions only)",
+            Cell::int(s.cost_evaluations).at(sb, "cost_evaluations", s.cost_evaluations as f64),
+        ),
+        row(
+            "Jacobian evaluations",
+            Cell::int(s.jacobian_evaluations).at(
+                sb,
+                "jacobian_evaluations",
+                s.jacobian_evaluations as f64,
+            ),
+        ),
+        row(
+            "cost Σr² at the start of the final fit",
+            Cell::sci(s.initial_cost, 6).at(sb, "initial_cost", s.initial_cost),
+        ),
+        row(
+            "cost Σr² at the end",
+            Cell::sci(s.final_cost, 6).at(sb, "final_cost", s.final_cost),
+        ),
+        row(
+            "residual rows: touches (3 each) + lengths",
+            Cell::text(&format!("{} + {}", d.touch_rows, d.length_rows)),
+        ),
+        row(
+            "unknowns: free parameters + centre coordinates",
+            Cell::text(&format!("{} + {}", d.free_parameters, d.centre_coordinates)),
+        ),
+        row(
+            "degrees of freedom m − p",
+            Cell::int(d.degrees_of_freedom).at(
+                db,
+                "degrees_of_freedom",
+                d.degrees_of_freedom as f64,
+            ),
+        ),
+        row(
+            "σ̂0 = sqrt(cost / (m − p))",
+            Cell::num(d.sigma0, 4).at(db, "sigma0", d.sigma0),
+        ),
+        row(
+            "touch σ behind the weights [mm]",
+            Cell::num(d.touch_sigma_mm, 4).at(db, "touch_sigma_mm", d.touch_sigma_mm),
+        ),
+    ];
+    for p in &s.phases {
+        rows.push(row(
+            &format!("phase {}", p.name),
+            Cell::text(&format!(
+                "{} cost, {} Jacobian evaluations",
+                p.cost_evaluations, p.jacobian_evaluations
+            )),
+        ));
+    }
+    if let Some(a) = &s.anneal {
+        let ab = sb.map(|b| format!("{b}/anneal"));
+        let ab = ab.as_deref();
+        let o = &a.options;
+        rows.push(row(
+            "annealing settings",
+            Cell::text(&format!(
+                "T0 {} mm, cooling {}, chain {}, T_min {} mm, target {} mm",
+                o.t0, o.cooling, o.chain, o.t_min, o.target
+            )),
+        ));
+        rows.push(row(
+            "annealing energy at the start [mm]",
+            Cell::num(a.start_energy, 4).at(ab, "start_energy", a.start_energy),
+        ));
+        rows.push(row(
+            "annealing best energy [mm]",
+            Cell::num(a.best_energy, 4).at(ab, "best_energy", a.best_energy),
+        ));
+        rows.push(row(
+            "annealing evaluations",
+            Cell::int(a.evaluations).at(ab, "evaluations", a.evaluations as f64),
+        ));
+        rows.push(row("annealing stopped", Cell::text(a.stop.describe())));
+    }
+    if let Some(g) = &s.global {
+        rows.push(row(
+            "global: starts, lowest reached",
+            Cell::text(&format!("{}, {} times", g.minima.len(), g.best_hits)),
+        ));
+        rows.push(row("global stopped", Cell::text(g.stop.describe())));
+        if !g.sign_changes.is_empty() {
+            rows.push(row(
+                "signs put in the nominal convention",
+                Cell::text(&g.sign_changes.join(", ")),
+            ));
+        }
+    }
+    table("Solver", &["figure", "value"], &rows)
+}
+
+/// The summary across points of one evaluation.
+pub(crate) fn points_summary(e: &Evaluated, json: Option<&str>) -> String {
+    let ev = &e.ev;
+    let mut rows = Vec::new();
+    for (name, key, s) in [
+        (
+            "e (paper Fig. 6)",
+            "single_point_e",
+            Some(ev.single_point_e),
+        ),
+        (
+            "δ_max",
+            "single_point_delta_max",
+            Some(ev.single_point_delta_max),
+        ),
+        ("2s", "single_point_two_s", Some(ev.single_point_two_s)),
+        (
+            "|d|_error (eq. 19, abs.)",
+            "pair_length_abs_summary",
+            ev.pair_length_abs_summary,
+        ),
+        (
+            "d_error (eq. 19 as printed)",
+            "pair_length_summary",
+            ev.pair_length_summary,
+        ),
+    ] {
+        let Some(s) = s else { continue };
+        let path = |k: &str| format!("{key}/{k}");
+        rows.push((
+            String::new(),
+            vec![
+                Cell::text(name),
+                Cell::int(s.count).at(json, &path("count"), s.count as f64),
+                Cell::num(s.min, 4).at(json, &path("min"), s.min),
+                Cell::num(s.mean, 4).at(json, &path("mean"), s.mean),
+                Cell::num(s.max, 4).at(json, &path("max"), s.max),
+                Cell::num(s.std, 4).at(json, &path("std"), s.std),
+            ],
+        ));
+    }
+    table(
+        "Across points and pairs (std = population)",
+        &[
+            "figure",
+            "count",
+            "min [mm]",
+            "mean [mm]",
+            "max [mm]",
+            "std [mm]",
+        ],
+        &rows,
+    )
+}
+
+/// Every point of one evaluation.
+pub(crate) fn points(e: &Evaluated, json: Option<&str>) -> String {
+    let rows: Vec<(String, Vec<Cell>)> =
+        e.ev.points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let path = |k: &str| format!("points/{i}/{k}");
+                (
+                    String::new(),
+                    vec![
+                        Cell::text(&p.label),
+                        Cell::int(p.touches).at(json, &path("touches"), p.touches as f64),
+                        Cell::num(p.e, 4).at(json, &path("e"), p.e),
+                        Cell::num(p.sigma, 4).at(json, &path("sigma"), p.sigma),
+                        Cell::num(p.oa, 4).at(json, &path("oa"), p.oa),
+                        Cell::num(p.delta_max, 4).at(json, &path("delta_max"), p.delta_max),
+                        Cell::num(p.two_s, 4).at(json, &path("two_s"), p.two_s),
+                    ],
+                )
+            })
+            .collect();
+    table(
+        "Per point: paper eq. 9–12 and the ASME B89.4.22 single-point test",
+        &[
+            "point",
+            "touches",
+            "e [mm]",
+            "σ [mm]",
+            "e + 3σ [mm]",
+            "δ_max [mm]",
+            "2s [mm]",
+        ],
+        &rows,
+    )
+}
