@@ -20,6 +20,8 @@ use super::fit::{FitInput, read_other};
 use crate::output::{Stdout, note, warn};
 use crate::paths::check_output_dir;
 
+mod report;
+
 /// The calibrated arm, in the arm-file schema.
 pub const CALIBRATED_FILE: &str = "calibrated.toml";
 /// Everything the calibration found, as JSON.
@@ -61,7 +63,8 @@ pub struct Args {
     /// cross-validation folds): the same seed gives the same files.
     #[arg(long, default_value_t = 0, value_name = "S")]
     seed: u64,
-    /// Output directory: calibrated.toml and calibration.json.
+    /// Output directory: calibrated.toml, calibration.json, timing.json and
+    /// the report (report.html and one SVG per figure).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
 }
@@ -242,7 +245,11 @@ pub fn run(args: Args) -> Result<()> {
     check_output_dir(
         "--out",
         &args.out,
-        &[CALIBRATED_FILE, REPORT_FILE, TIMING_FILE],
+        &[
+            &[CALIBRATED_FILE, REPORT_FILE, TIMING_FILE][..],
+            &aacmm_core::report::CALIBRATION_FILES,
+        ]
+        .concat(),
         &inputs,
     )?;
     let noise = args.fit.noise()?;
@@ -348,6 +355,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let timing_path = args.out.join(TIMING_FILE);
     super::write_json(&timing_path, &timing)?;
+    let wrote_report = report::write(&args, &arm, &data, held_out.as_ref(), &report)?;
 
     let mut out = Stdout::new();
     out.print(summary(&report))?;
@@ -357,6 +365,7 @@ pub fn run(args: Args) -> Result<()> {
         json_path.display(),
         timing_path.display()
     ))?;
+    out.print(wrote_report)?;
     out.finish()?;
     let phases: Vec<String> = timing
         .phases

@@ -7,6 +7,7 @@ pub mod fit;
 pub mod identify;
 pub mod points;
 pub mod progress;
+pub mod report;
 pub mod simulate;
 
 use std::path::PathBuf;
