@@ -7,11 +7,12 @@ use std::path::PathBuf;
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::{read_lengths, source_name};
 use aacmm_core::metrics::{Evaluation, PairLengthError, evaluate, pair_length_errors};
+use aacmm_core::report::{EVALUATION_FILES, EvaluationInput, Measured, evaluation_report};
 use anyhow::{Context, Result};
 use serde::{Serialize, Serializer};
 
 use crate::output::Stdout;
-use crate::paths::check_output_file;
+use crate::paths::{check_output_dir, check_output_file};
 
 /// Evaluate an arm on measured poses.
 #[derive(clap::Args)]
@@ -28,6 +29,11 @@ pub struct Args {
     /// JSON). Pairs grow as the square of the points; they are streamed.
     #[arg(long)]
     pairs: bool,
+    /// Also write a report into this directory: report.html (one
+    /// self-contained page) and each figure as an SVG — single-point
+    /// errors, length errors, residuals.
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
 }
 
 /// The JSON report: what was evaluated, and the figures.
@@ -63,13 +69,16 @@ impl Serialize for Pairs<'_> {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let mut inputs = vec![
+        ("--arm", args.input.arm.as_path()),
+        ("--data", &args.input.data),
+    ];
+    inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
     if let Some(json) = &args.json {
-        let mut inputs = vec![
-            ("--arm", args.input.arm.as_path()),
-            ("--data", &args.input.data),
-        ];
-        inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
         check_output_file("--json", json, &inputs)?;
+    }
+    if let Some(dir) = &args.report {
+        check_output_dir("--report", dir, &EVALUATION_FILES, &inputs)?;
     }
     let (arm, poses) = args.input.read()?;
     let kernel = args.input.kernel(&arm)?;
@@ -124,5 +133,57 @@ pub fn run(args: Args) -> Result<()> {
         };
         super::write_json(path, &report)?;
     }
+    if let Some(dir) = &args.report {
+        let input = EvaluationInput {
+            title: format!("Evaluation of arm `{}`", arm.name),
+            inputs: report_inputs(&args, &arm.name, &data),
+            measured: Measured {
+                data: &data,
+                held_out: false,
+                before: None,
+                after: &xyz,
+            },
+            arm: arm.name.clone(),
+            evaluation_json: args.json.as_ref().map(|_| "/evaluation".to_string()),
+        };
+        let page = evaluation_report(&input).context("--report")?;
+        super::report::write("--report", dir, &page)?;
+    }
     printed
+}
+
+/// What went in, for the report's heading.
+fn report_inputs(args: &Args, arm: &str, data: &DataSet) -> Vec<(String, String)> {
+    let mut lines = vec![
+        (
+            "arm".to_string(),
+            format!("`{arm}` ({})", source_name(&args.input.arm)),
+        ),
+        (
+            "touches".to_string(),
+            format!(
+                "{}: {} touches of {} points",
+                source_name(&args.input.data),
+                data.len(),
+                data.points().len()
+            ),
+        ),
+        (
+            "reference lengths".to_string(),
+            match &args.lengths {
+                Some(l) => format!("{}: {}", source_name(l), data.references().len()),
+                None => "none (scale is not tested)".to_string(),
+            },
+        ),
+    ];
+    if let Some(json) = &args.json {
+        lines.push((
+            "written beside".to_string(),
+            format!(
+                "{} (every number of the tables that is also there is marked with its place)",
+                source_name(json)
+            ),
+        ));
+    }
+    lines
 }

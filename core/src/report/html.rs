@@ -40,10 +40,10 @@ p { margin: 6px 0; max-width: 75em; }
 nav { font-size: 0.95em; margin: 6px 0 10px; }
 nav a { margin-right: 14px; color: #0072B2; }
 .row { display: flex; flex-wrap: wrap; gap: 18px; align-items: flex-start; }
-figure { margin: 0; flex: 0 1 960px; }
+figure { margin: 0; flex: 0 1 900px; }
 figure svg { max-width: 100%; height: auto; border: 1px solid #e4e4e4; }
 figcaption { font-size: 0.92em; color: #444; margin-top: 4px; max-width: 960px; }
-.side { flex: 1 1 380px; min-width: 320px; }
+.side { flex: 1 1 400px; min-width: 320px; overflow-x: auto; }
 table { border-collapse: collapse; margin: 6px 0 12px; font-size: 0.9em; }
 caption { text-align: left; font-weight: 600; padding: 4px 0; }
 th, td { border-bottom: 1px solid #e2e2e2; padding: 3px 8px; vertical-align: top; }
@@ -186,8 +186,8 @@ pub(crate) fn calibration_page(
         "",
         find(figures, SINGLE_POINT_SVG),
         POINTS_CAPTION,
-        &tables::validation(&input.validation, &input.arms),
         "",
+        &tables::validation(&input.validation, &input.arms),
     );
     page += &section(
         "lengths",
@@ -195,8 +195,9 @@ pub(crate) fn calibration_page(
         "",
         find(figures, LENGTHS_SVG),
         LENGTHS_CAPTION,
-        &tables::lengths(evaluated, &input.arms),
-        &tables::references(evaluated, &input.arms, None),
+        "",
+        &(tables::lengths(evaluated, &input.arms)
+            + &tables::references(evaluated, &input.arms, None)),
     );
     let truths = super::figures::parameters::true_errors(cal, input.truth);
     page += &section(
@@ -288,8 +289,8 @@ pub(crate) fn evaluation_page(
          distance of the pair's centroids; eq. 19 uses no reference length and cannot see \
          scale. Bottom: the error of each reference length, |x̄_a − x̄_b| − L (ISO 10360-12 \
          E_Uni), the only test of scale.",
-        &tables::lengths(evaluated, &arms),
-        &tables::references(evaluated, &arms, json),
+        "",
+        &(tables::lengths(evaluated, &arms) + &tables::references(evaluated, &arms, json)),
     );
     page += &section(
         "residuals",

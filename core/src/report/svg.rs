@@ -67,6 +67,9 @@ const SENTINEL: char = '\u{E000}';
 /// Separates the fields of a sentinel.
 const SEP: char = '\u{E001}';
 
+/// The shortest log axis, decades.
+pub(crate) const MIN_LOG_SPAN: f64 = 0.7;
+
 /// Width of every figure, px.
 pub(crate) const WIDTH: u32 = 960;
 
@@ -415,7 +418,9 @@ impl Axis {
     }
 
     /// A log10 axis covering the positive `lo..=hi` (non-positive or
-    /// non-finite bounds are replaced by the other bound); at least a decade.
+    /// non-finite bounds are replaced by the other bound); at least
+    /// [`MIN_LOG_SPAN`] decades. Labels are plain decimals when every one
+    /// is between 0.001 and 10000, else all `me±k`.
     pub(crate) fn log(lo: f64, hi: f64, desc: &str) -> Axis {
         let ok = |v: f64| v.is_finite() && v > 0.0;
         let (lo, hi) = match (ok(lo), ok(hi)) {
@@ -428,14 +433,15 @@ impl Axis {
         let pad = ((b - a) * 0.06).max(0.12);
         a -= pad;
         b += pad;
-        if b - a < 1.0 {
+        if b - a < MIN_LOG_SPAN {
             let mid = (a + b) / 2.0;
-            a = mid - 0.5;
-            b = mid + 0.5;
+            a = mid - MIN_LOG_SPAN / 2.0;
+            b = mid + MIN_LOG_SPAN / 2.0;
         }
         let mut ticks = Vec::new();
         let mut minor = Vec::new();
         let dense = b - a <= 3.5;
+        let very_dense = b - a <= 1.6;
         let sparse_every = ((b - a) / 8.0).ceil().max(1.0) as i64;
         for k in (a.floor() as i64)..=(b.ceil() as i64) {
             for m in 1..10 {
@@ -446,15 +452,20 @@ impl Axis {
                 let labelled = if m == 1 {
                     k.rem_euclid(sparse_every) == 0
                 } else {
-                    dense && (m == 2 || m == 5)
+                    (dense && (m == 2 || m == 5)) || (very_dense && m == 3)
                 };
                 if labelled {
-                    ticks.push((c, log_label(m, k)));
+                    ticks.push((c, (m, k)));
                 } else if b - a <= 8.0 {
                     minor.push(c);
                 }
             }
         }
+        let plain = ticks.iter().all(|(_, (_, k))| (-3..=3).contains(k));
+        let ticks = ticks
+            .into_iter()
+            .map(|(c, (m, k))| (c, log_label(m, k, plain)))
+            .collect();
         Axis {
             desc: desc.to_string(),
             range: a..b,
@@ -587,14 +598,12 @@ pub(crate) fn number(v: f64, decimals: usize) -> String {
     }
 }
 
-/// The label of `m·10^k` on a log axis: plain decimals from 0.001 to
-/// 50000, else `me±k`.
-fn log_label(m: u32, k: i64) -> String {
-    if (-3..=4).contains(&k) {
+/// The label of `m·10^k` on a log axis: a plain decimal (`0.05`, `2000`)
+/// or `me±k` (`5e-6`, `2e5`).
+fn log_label(m: u32, k: i64, plain: bool) -> String {
+    if plain {
         let v = format!("{m}e{k}").parse::<f64>().unwrap_or(0.0);
         format!("{v}")
-    } else if m == 1 {
-        format!("1e{k}")
     } else {
         format!("{m}e{k}")
     }
@@ -698,7 +707,11 @@ mod tests {
             assert!(a.range.end > a.range.start, "{lo} {hi}");
             assert!(!a.ticks.is_empty(), "{lo} {hi}");
             let l = Axis::log(lo, hi, "x");
-            assert!(l.range.end - l.range.start >= 1.0, "{lo} {hi}");
+            assert!(
+                l.range.end - l.range.start >= MIN_LOG_SPAN - 1e-12,
+                "{lo} {hi}"
+            );
+            assert!(l.ticks.len() >= 2, "{lo} {hi}");
             assert!(!l.ticks.is_empty(), "{lo} {hi}");
         }
     }
@@ -710,7 +723,11 @@ mod tests {
         assert_eq!(labels, ["0.05", "0.1", "0.2", "0.5", "1", "2", "5"]);
         assert_eq!(a.at(0.1), -1.0);
         let wide = Axis::log(1e-8, 1e3, "s");
-        assert!(wide.ticks.iter().all(|(_, l)| l.starts_with('1')));
+        // Only decades on a wide axis.
+        assert!(wide.ticks.iter().all(|(_, l)| {
+            let v: f64 = l.parse().unwrap();
+            (v.log10() - v.log10().round()).abs() < 1e-9
+        }));
         assert!(
             wide.ticks.iter().any(|(_, l)| l == "1e-6"),
             "{:?}",

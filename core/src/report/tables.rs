@@ -269,9 +269,14 @@ pub(crate) fn validation(rows: &[ValidationRow], arms: &Arms) -> String {
         ],
         &out,
     ) + "<p class=\"note\">e: the paper's single-point error; 2s and δ_max: the ASME B89.4.22 \
-         single-point articulation test; length: error against the reference lengths. Folds: \
-         k-fold cross-validation over points, each fold's points scored by an arm fitted \
-         without them.</p>\n"
+         single-point articulation test; length: error against the reference lengths."
+        + if rows.iter().any(|r| r.name.starts_with("fold")) {
+            " Folds: k-fold cross-validation over points, each fold's points scored by an arm \
+             fitted without them."
+        } else {
+            ""
+        }
+        + "</p>\n"
 }
 
 /// The cells of one [`Figures`] row.

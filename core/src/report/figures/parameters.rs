@@ -4,7 +4,7 @@
 //! arm is simulated.
 
 use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, VPos};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{frame, header_height};
 use crate::calibrate::{Calibration, Estimate};
@@ -49,7 +49,9 @@ pub(crate) fn true_errors(
 /// first colon (`base motion`, `redundant`, `scale`).
 pub(crate) fn short_reason(reason: &str) -> String {
     let head = reason.split(':').next().unwrap_or(reason).trim();
-    let head = head.strip_prefix("fixed ").unwrap_or(head);
+    if head == "fixed by the user" {
+        return "user's choice".to_string();
+    }
     head.chars().take(18).collect()
 }
 
@@ -64,7 +66,7 @@ pub(crate) fn figure(cal: &Calibration, truth: Option<&DhParams>) -> Result<Figu
         ),
         (
             Key::Marker(Marker::new(Shape::Cross, GREY)),
-            "fixed at nominal (reason written above)".to_string(),
+            "fixed at nominal, with the reason".to_string(),
         ),
     ];
     if has_truth {
@@ -136,7 +138,7 @@ fn panel(
     // Room above for the reasons of fixed parameters.
     let span = (hi - lo).max(1e-6);
     let x = Axis::categories(&names, 40, "parameter");
-    let y = Axis::linear(lo - 0.04 * span, hi + 0.25 * span, true, y_desc);
+    let y = Axis::linear(lo - 0.12 * span, hi + 0.25 * span, true, y_desc);
     let mut chart = chart(area, title, &x, &y, 72)?;
     group(area, Class::Guide, "zero", 1, || {
         dashed(
@@ -175,22 +177,30 @@ fn panel(
         Ok(())
     })?;
     group(area, Class::Series, "fixed parameters", fixed.len(), || {
-        let reason_style = font(11.5)
+        // The reason runs away from the true error, so that they do not
+        // overlap: up from the cross, or down when the truth lies above.
+        let up = font(11.5)
             .color(&GREY)
             .transform(FontTransform::Rotate270)
-            .pos(plotters::style::text_anchor::Pos::new(
-                HPos::Left,
-                VPos::Center,
-            ));
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        let down = font(11.5)
+            .color(&GREY)
+            .transform(FontTransform::Rotate90)
+            .pos(Pos::new(HPos::Left, VPos::Center));
         for (i, p) in &fixed {
             let xi = *i as f64;
             chart.draw_series(std::iter::once(
                 Marker::new(Shape::Cross, GREY).at((xi, p.correction)),
             ))?;
             let reason = short_reason(p.fixed.as_deref().unwrap_or(""));
+            let truth_above = truths[which[*i]].1.is_some_and(|t| t > p.correction);
+            let (offset, style) = if truth_above {
+                ((0, 10), down.clone())
+            } else {
+                ((0, -10), up.clone())
+            };
             chart.draw_series(std::iter::once(
-                EmptyElement::at((xi, p.correction))
-                    + Text::new(reason, (0, -10), reason_style.clone()),
+                EmptyElement::at((xi, p.correction)) + Text::new(reason, offset, style),
             ))?;
         }
         Ok(())
@@ -224,6 +234,6 @@ mod tests {
             "base motion"
         );
         assert_eq!(short_reason("redundant: ∂p/∂alpha6 = …"), "redundant");
-        assert_eq!(short_reason("fixed by the user"), "by the user");
+        assert_eq!(short_reason("fixed by the user"), "user's choice");
     }
 }
