@@ -7,6 +7,7 @@ mod campaign;
 mod evaluate;
 mod out_paths;
 mod points;
+mod report;
 mod sim_messages;
 mod simulate;
 mod streams;

@@ -40,6 +40,9 @@ mod html;
 mod svg;
 mod tables;
 
+#[cfg(test)]
+mod tests;
+
 use crate::calibrate::Calibration;
 use crate::calibrate::validate::BeforeAfter;
 use crate::dataset::DataSet;

@@ -133,26 +133,27 @@ fn finish(raw: &str, title: &str) -> Option<String> {
     while i < lines.len() {
         let line = lines[i];
         let sentinel = lines.get(i + 1).and_then(|s| s.strip_prefix(SENTINEL));
-        if line.starts_with("<text") && lines.get(i + 2) == Some(&"</text>") {
-            if let Some(s) = sentinel {
-                let fields: Vec<&str> = s.split(SEP).collect();
-                match fields.as_slice() {
-                    ["begin", class, name, points] => {
-                        out.push_str(&format!(
-                            "<g class=\"{class}\" data-name=\"{name}\" data-points=\"{points}\">\n\
-                             <title>{name}: {points} points</title>\n"
-                        ));
-                        depth += 1;
-                    }
-                    ["end"] => {
-                        depth = depth.checked_sub(1)?;
-                        out.push_str("</g>\n");
-                    }
-                    _ => return None,
+        if line.starts_with("<text")
+            && lines.get(i + 2) == Some(&"</text>")
+            && let Some(s) = sentinel
+        {
+            let fields: Vec<&str> = s.split(SEP).collect();
+            match fields.as_slice() {
+                ["begin", class, name, points] => {
+                    out.push_str(&format!(
+                        "<g class=\"{class}\" data-name=\"{name}\" data-points=\"{points}\">\n\
+                         <title>{name}: {points} points</title>\n"
+                    ));
+                    depth += 1;
                 }
-                i += 3;
-                continue;
+                ["end"] => {
+                    depth = depth.checked_sub(1)?;
+                    out.push_str("</g>\n");
+                }
+                _ => return None,
             }
+            i += 3;
+            continue;
         }
         out.push_str(line);
         out.push('\n');

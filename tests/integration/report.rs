@@ -1,0 +1,270 @@
+//! The reports of `calibrate --out` and `evaluate --report`: every file
+//! there, every SVG is XML, the page holds nothing from outside, and every
+//! number it shares with the JSON is the same number.
+
+use std::path::Path;
+
+use aacmm_core::report::{CALIBRATION_FILES, EVALUATION_FILES, HTML_FILE};
+use roxmltree::{Document, ParsingOptions};
+
+use crate::util::{aacmm, assert_clean_error, example, stderr, temp_dir};
+
+fn shipped(file: &str) -> String {
+    example("paper-campaign").join(file).display().to_string()
+}
+
+fn arm() -> String {
+    example("paper-table-1.toml").display().to_string()
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Parses the page as XML (it is written so that it is).
+fn page(html: &str) -> Document<'_> {
+    let options = ParsingOptions {
+        allow_dtd: true,
+        ..ParsingOptions::default()
+    };
+    Document::parse_with_options(html, options).expect("report.html is well-formed XML")
+}
+
+/// Nothing the page refers to is outside it.
+#[track_caller]
+fn assert_self_contained(html: &str) {
+    let lower = html.to_lowercase();
+    for bad in [
+        "<script", "src=", "<link", "@import", "url(", "<iframe", "<img", "<object",
+    ] {
+        assert!(!lower.contains(bad), "report.html holds `{bad}`");
+    }
+    for n in page(html).descendants() {
+        if let Some(href) = n.attribute("href") {
+            assert!(href.starts_with('#'), "a link out of the page: {href}");
+        }
+    }
+}
+
+/// Every `data-json` cell against the JSON: the same number, shown
+/// rounded from it. Returns how many cells were checked.
+#[track_caller]
+fn assert_agrees_with_json(html: &str, json: &serde_json::Value) -> usize {
+    let doc = page(html);
+    let mut checked = 0;
+    for n in doc.descendants().filter(|n| n.has_attribute("data-json")) {
+        let pointer = n.attribute("data-json").unwrap();
+        let in_json = json
+            .pointer(pointer)
+            .and_then(serde_json::Value::as_f64)
+            .unwrap_or_else(|| panic!("{pointer}: not a number in the JSON"));
+        let value: f64 = n.attribute("data-value").unwrap().parse().unwrap();
+        assert_eq!(value, in_json, "{pointer}");
+        let shown = n.text().unwrap().trim();
+        let decimals = shown.split_once('.').map_or(0, |(_, d)| {
+            d.split_once('e').map_or(d.len(), |(m, _)| m.len())
+        });
+        let shown: f64 = shown.parse().unwrap();
+        let tolerance = if n.text().unwrap().contains('e') {
+            // d.dddddde±k: relative.
+            value.abs() * 10f64.powi(-(decimals as i32)) * 0.51
+        } else {
+            10f64.powi(-(decimals as i32)) * 0.51
+        };
+        assert!(
+            (shown - value).abs() <= tolerance + 1e-12,
+            "{pointer}: shows {shown}, is {value}"
+        );
+        checked += 1;
+    }
+    checked
+}
+
+#[test]
+fn calibrate_report_is_self_contained_and_says_what_calibration_json_says() {
+    let dir = temp_dir("report-calibrate");
+    let fresh = dir.join("fresh");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm(),
+        "--true",
+        &shipped("true_arm.toml"),
+        "--sockets",
+        "4",
+        "--poses",
+        "5",
+        "--seed",
+        "9",
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--reference-lengths",
+        "2",
+        "--out",
+        fresh.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run = |name: &str| {
+        let out = dir.join(name);
+        let o = aacmm(&[
+            "calibrate",
+            "--arm",
+            &arm(),
+            "--data",
+            &shipped("poses.csv"),
+            "--lengths",
+            &shipped("lengths.csv"),
+            "--encoder-noise",
+            "0.005",
+            "--probe-noise",
+            "0.01",
+            "--method",
+            "lm",
+            "--validate",
+            fresh.join("poses.csv").to_str().unwrap(),
+            "--validate-lengths",
+            fresh.join("lengths.csv").to_str().unwrap(),
+            "--cross-validate",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            crate::util::stdout(&o).contains(&format!("wrote {}", out.join(HTML_FILE).display())),
+            "{}",
+            crate::util::stdout(&o)
+        );
+        out
+    };
+    let out = run("a");
+    for file in CALIBRATION_FILES {
+        let text = read(&out.join(file));
+        if file.ends_with(".svg") {
+            let doc = Document::parse(&text).unwrap_or_else(|e| panic!("{file}: {e}"));
+            assert!(doc.root_element().has_tag_name("svg"), "{file}");
+            // The page holds the same figure.
+            assert!(read(&out.join(HTML_FILE)).contains(text.trim()), "{file}");
+        }
+    }
+    let html = read(&out.join(HTML_FILE));
+    assert_self_contained(&html);
+    let json: serde_json::Value =
+        serde_json::from_str(&read(&out.join("calibration.json"))).unwrap();
+    let checked = assert_agrees_with_json(&html, &json);
+    // 27 parameters × nominal, calibrated, correction + 21 σ; 4 validation
+    // data sets (fitted, held out, 2 folds) × before and after × 6 to 8
+    // figures; the solver and identifiability figures.
+    assert!(checked >= 27 * 3 + 21 + 4 * 2 * 6 + 10, "{checked} cells");
+    for pointer in [
+        "/calibration/parameters/26/correction",
+        "/calibration/dof/sigma0",
+        "/calibration/solver/final_cost",
+        "/calibration/identification/rank",
+        "/validation/held_out/figures/after/length_rms",
+        "/validation/cross_validation/folds/1/figures/after/e_mean",
+    ] {
+        assert!(
+            html.contains(&format!("data-json=\"{pointer}\"")),
+            "{pointer}"
+        );
+    }
+    // The held-out points are in the figures: the single-point figure has
+    // a series per data set and arm.
+    let fig = read(&out.join("single-point-errors.svg"));
+    let doc = Document::parse(&fig).unwrap();
+    let series: Vec<(&str, &str)> = doc
+        .descendants()
+        .filter(|n| n.attribute("class") == Some("series"))
+        .map(|n| {
+            (
+                n.attribute("data-name").unwrap(),
+                n.attribute("data-points").unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        series,
+        [
+            ("nominal, fitted", "10"),
+            ("calibrated, fitted", "10"),
+            ("nominal, held out", "4"),
+            ("calibrated, held out", "4")
+        ]
+    );
+    // Same input, same bytes.
+    let again = run("b");
+    for file in CALIBRATION_FILES {
+        assert_eq!(
+            read(&out.join(file)),
+            read(&again.join(file)),
+            "{file} differs"
+        );
+    }
+}
+
+#[test]
+fn evaluate_report_writes_three_figures_and_agrees_with_its_json() {
+    let dir = temp_dir("report-evaluate");
+    let (out, json) = (dir.join("report"), dir.join("ev.json"));
+    let o = aacmm(&[
+        "evaluate",
+        "--arm",
+        &arm(),
+        "--data",
+        &shipped("poses.csv"),
+        "--lengths",
+        &shipped("lengths.csv"),
+        "--json",
+        json.to_str().unwrap(),
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut written: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    written.sort();
+    let mut expected: Vec<String> = EVALUATION_FILES.iter().map(|s| s.to_string()).collect();
+    expected.sort();
+    assert_eq!(written, expected);
+    let html = read(&out.join(HTML_FILE));
+    assert_self_contained(&html);
+    let json: serde_json::Value = serde_json::from_str(&read(&json)).unwrap();
+    // 10 points × 6 figures, 5 summaries × 5, 5 references × 3.
+    assert_eq!(assert_agrees_with_json(&html, &json), 60 + 25 + 15);
+}
+
+#[test]
+fn report_paths_are_checked_before_any_work() {
+    let dir = temp_dir("report-paths");
+    let out = dir.join("out");
+    std::fs::create_dir_all(out.join(HTML_FILE)).unwrap();
+    let o = aacmm(&[
+        "evaluate",
+        "--arm",
+        &arm(),
+        "--data",
+        &shipped("poses.csv"),
+        "--report",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_error(&o, &["--report", "report.html is a directory"]);
+    assert!(
+        crate::util::stdout(&o).is_empty(),
+        "no work before the check"
+    );
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm(),
+        "--data",
+        &shipped("poses.csv"),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_error(&o, &["--out", "report.html is a directory"]);
+}
