@@ -240,8 +240,9 @@ pub(crate) fn calibration_page(
         "",
         find(figures, SOLVER_SVG),
         "Left: the cost Σr² of the weighted residuals (touches against their centroids, \
-         reference lengths) at each iteration of the final Levenberg–Marquardt fit; with the \
-         weights right it ends near m − p, the degrees of freedom. Right: for the annealing \
+         reference lengths) at each iteration of the final Levenberg–Marquardt fit, from the \
+         start arm's cost (iteration 0; for hybrid and global their search runs between 0 and \
+         1); with the weights right it ends near m − p, the degrees of freedom. Right: for the annealing \
          methods (sa, hybrid), the energy of the paper's SA (OA = e + 3σ, mm) as the \
          temperature falls, and the share of moves accepted at each temperature; for global, \
          the cost each start ended at.",

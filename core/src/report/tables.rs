@@ -608,7 +608,7 @@ pub(crate) fn solver(cal: &Calibration, json: Option<&str>) -> String {
             ),
         ),
         row(
-            "cost Σr² at the start of the final fit",
+            "cost Σr² of the start arm (final weights)",
             Cell::sci(s.initial_cost, 6).at(sb, "initial_cost", s.initial_cost),
         ),
         row(

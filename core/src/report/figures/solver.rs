@@ -27,7 +27,7 @@ pub(crate) fn figure(cal: &Calibration) -> Result<Figure, ReportError> {
     let mut entries = vec![
         (
             Key::Marker(Marker::new(Shape::Dot, BLUE)),
-            "LM: cost Σr² after an accepted step (0 = start)".to_string(),
+            "LM: cost Σr² after an accepted step (0: the start arm)".to_string(),
         ),
         (
             Key::Marker(Marker::new(Shape::Cross, PURPLE)),
@@ -56,6 +56,15 @@ pub(crate) fn figure(cal: &Calibration) -> Result<Figure, ReportError> {
             Key::Marker(Marker::new(Shape::Dot, VERMILLION)),
             "global: the lowest".to_string(),
         ));
+        if s.global
+            .as_ref()
+            .is_some_and(|g| g.noise_floor_cost.is_some())
+        {
+            entries.push((
+                Key::Line(PURPLE, 1, true),
+                "global: the noise floor (a fit there stops the search)".to_string(),
+            ));
+        }
     }
     let height = header_height(&entries) + PANEL;
     let svg = render(SOLVER_SVG, TITLE, (WIDTH, height), |root| {
