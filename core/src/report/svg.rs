@@ -383,7 +383,9 @@ impl Axis {
     /// A linear axis covering `lo..=hi` with a margin; `zero` keeps 0 in
     /// range. Degenerate or non-finite input gives a small range around it.
     pub(crate) fn linear(lo: f64, hi: f64, zero: bool, desc: &str) -> Axis {
-        let (mut lo, mut hi) = finite_span(lo, hi);
+        let (lo, hi) = finite_span(lo, hi);
+        // Far beyond any length in mm, and the margins stay finite.
+        let (mut lo, mut hi) = (lo.clamp(-1e300, 1e300), hi.clamp(-1e300, 1e300));
         if zero {
             lo = lo.min(0.0);
             hi = hi.max(0.0);
@@ -400,14 +402,18 @@ impl Axis {
         );
         let step = nice_step((hi - lo) / 6.0);
         let decimals = decimals_of(step);
-        let first = (lo / step).ceil() as i64;
-        let last = (hi / step).floor() as i64;
-        let ticks = (first..=last)
-            .map(|k| {
-                let v = k as f64 * step;
-                (v, number(v, decimals))
-            })
-            .collect();
+        let (first, last) = ((lo / step).ceil(), (hi / step).floor());
+        let ticks = if last - first <= 20.0 && decimals < 12 {
+            (first as i64..=last as i64)
+                .map(|k| {
+                    let v = k as f64 * step;
+                    (v, number(v, decimals))
+                })
+                .collect()
+        } else {
+            // Spans beyond round numbers (huge or overflowing values).
+            vec![(lo, format!("{lo:.3e}")), (hi, format!("{hi:.3e}"))]
+        };
         Axis {
             desc: desc.to_string(),
             range: lo..hi,
@@ -706,6 +712,10 @@ mod tests {
         ] {
             let a = Axis::linear(lo, hi, false, "x");
             assert!(a.range.end > a.range.start, "{lo} {hi}");
+            assert!(
+                a.range.start.is_finite() && a.range.end.is_finite(),
+                "{lo} {hi}"
+            );
             assert!(!a.ticks.is_empty(), "{lo} {hi}");
             let l = Axis::log(lo, hi, "x");
             assert!(

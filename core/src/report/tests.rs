@@ -417,3 +417,36 @@ fn a_user_fixed_set_reads_as_the_users_choice() {
     let svg = figure(&r, PARAMETERS_SVG);
     assert_eq!(svg.matches("user&apos;s choice").count(), 6, "{svg}");
 }
+
+#[test]
+fn one_point_without_lengths_says_what_cannot_be_drawn() {
+    let c = case();
+    let one = c.data.subset(&[2]);
+    let xyz = positions(&c.nominal, &one).unwrap();
+    let r = evaluation_report(&EvaluationInput {
+        title: "one point".into(),
+        inputs: vec![],
+        measured: Measured {
+            data: &one,
+            held_out: false,
+            before: None,
+            after: &xyz,
+        },
+        arm: "nominal".into(),
+        evaluation_json: None,
+    })
+    .unwrap();
+    let lengths = figure(&r, LENGTHS_SVG);
+    assert!(
+        lengths.contains("A single point has no pairs."),
+        "{lengths}"
+    );
+    assert!(
+        lengths.contains("No reference lengths were given:"),
+        "{lengths}"
+    );
+    assert!(r.html.contains("No pairs of points"));
+    for f in &r.figures {
+        Document::parse(&f.svg).unwrap();
+    }
+}

@@ -5,7 +5,9 @@ use plotters::style::text_anchor::{HPos, VPos};
 
 use super::{frame, header_height, short};
 use crate::report::data::{Evaluated, sets};
-use crate::report::svg::{Axis, Class, GREY, Key, WIDTH, chart, dashed, font_at, group, render};
+use crate::report::svg::{
+    Axis, Class, GREY, Key, Marker, WIDTH, chart, dashed, font_at, group, render,
+};
 use crate::report::{Arms, Figure, ReportError, SINGLE_POINT_SVG};
 
 /// Point labels shown on the axis at most (every k-th beyond).
@@ -33,7 +35,10 @@ pub(crate) fn figure(evaluated: &[Evaluated], arms: &Arms) -> Result<Figure, Rep
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
             (a.min(v), b.max(v))
         });
-    let x = Axis::categories(&labels, MAX_LABELS, "point (socket)");
+    // As many labels as fit side by side (about 7 px a character).
+    let widest = labels.iter().map(|l| l.chars().count()).max().unwrap_or(1);
+    let fit = (760 / (widest * 7 + 12)).clamp(2, MAX_LABELS);
+    let x = Axis::categories(&labels, fit, "point (socket)");
     let y = Axis::log(lo, hi, "e [mm], log scale");
     let entries: Vec<(Key, String)> = evaluated
         .iter()
@@ -92,7 +97,13 @@ pub(crate) fn figure(evaluated: &[Evaluated], arms: &Arms) -> Result<Figure, Rep
                     )
                 },
             )?;
-            let marker = e.marker();
+            // Smaller markers when many points share the width.
+            let size = match labels.len() {
+                0..=60 => 4,
+                61..=200 => 3,
+                _ => 2,
+            };
+            let marker = Marker { size, ..e.marker() };
             group(&area, Class::Series, &e.name(arms), n, || {
                 chart.draw_series(
                     e.ev.points
