@@ -177,13 +177,22 @@ pub(crate) fn verdict(cal: &Calibration, evaluated: &[Evaluated], arms: &Arms) -
             .find(|b| b.set == e.set && b.stage == Stage::Before);
         if let Some(b) = before {
             p += &format!(
-                " On the {} points, e falls from {:.4} mm ({}) to {:.4} mm ({}).",
+                " On the {} points, e falls from {:.4} mm ({}) to {:.4} mm ({})",
                 escape(&e.set_name),
                 b.ev.single_point_e.mean,
                 escape(&arms.before),
                 e.ev.single_point_e.mean,
                 escape(&arms.after)
             );
+            if let (Some(rb), Some(ra)) = (b.ev.reference_summary, e.ev.reference_summary) {
+                p += &format!(
+                    " and the RMS error of its {} reference lengths from {:.4} mm to {:.4} mm",
+                    e.ev.reference.len(),
+                    rb.rms,
+                    ra.rms
+                );
+            }
+            p += ".";
         }
     }
     if !evaluated.iter().any(|e| e.held_out) {
