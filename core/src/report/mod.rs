@@ -136,6 +136,16 @@ pub struct Report {
 
 impl Report {
     /// Every file of the report as (file name, content), page first.
+    ///
+    /// ```
+    /// use aacmm_core::report::{Figure, Report, RESIDUALS_SVG};
+    /// let r = Report {
+    ///     html: "<!DOCTYPE html>".into(),
+    ///     figures: vec![Figure { file: RESIDUALS_SVG, title: "t".into(), svg: "<svg/>".into() }],
+    /// };
+    /// let names: Vec<&str> = r.files().map(|(name, _)| name).collect();
+    /// assert_eq!(names, ["report.html", "residuals.svg"]);
+    /// ```
     pub fn files(&self) -> impl Iterator<Item = (&str, &str)> {
         std::iter::once((HTML_FILE, self.html.as_str()))
             .chain(self.figures.iter().map(|f| (f.file, f.svg.as_str())))

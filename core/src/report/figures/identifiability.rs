@@ -97,7 +97,11 @@ fn singular_panel(area: &Area, id: &Identification) -> DrawResult {
     let n = all.len().max(analysed.len()).max(1);
     let labels: Vec<String> = (1..=n).map(|i| i.to_string()).collect();
     let x = Axis::categories(&labels, 14, "index (descending)");
-    let y = Axis::log(lo, hi, "singular value (scaled), log scale");
+    let y = Axis::log(
+        lo,
+        hi,
+        "singular value of the weighted, scaled Jacobian, log scale",
+    );
     let mut chart = chart(
         area,
         &format!(

@@ -275,7 +275,11 @@ fn global_panel(area: &Area, g: &GlobalTrace, dof: f64) -> DrawResult {
         });
     let labels: Vec<String> = (1..=g.minima.len()).map(|i| i.to_string()).collect();
     let x = Axis::categories(&labels, 16, "start (1 = from the start arm)");
-    let y = Axis::log(lo, hi, "cost Σr² at the start's minimum, log scale");
+    let y = Axis::log(
+        lo,
+        hi,
+        "cost Σr² at the start's minimum (dimensionless), log scale",
+    );
     let mut chart = chart(area, &title, &x, &y, 64)?;
     if let Some(floor) = g.noise_floor_cost {
         group(area, Class::Guide, "noise floor", 1, || {
