@@ -254,10 +254,12 @@ fn chart_only<'a, 'b>(
 
 /// The cost of every start's minimum (`global`).
 fn global_panel(area: &Area, g: &GlobalTrace, dof: f64) -> DrawResult {
+    let plural =
+        |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
     let title = format!(
-        "global: {} starts, the lowest reached {} times",
-        g.minima.len(),
-        g.best_hits
+        "global: {}, the lowest reached {}",
+        plural(g.minima.len(), "start", "starts"),
+        plural(g.best_hits, "time", "times")
     );
     if g.minima.is_empty() {
         return message(area, "global", &["No start finished."]);
