@@ -359,7 +359,7 @@ impl PointSums {
     }
 
     /// Adds one touch: position, weight, free Jacobian columns.
-    #[inline]
+    #[inline(always)]
     fn add(&mut self, pos: &[f64; 3], a: &Sym3, jac: &[[f64; 3]], free: &[usize], jtj: &mut [f64]) {
         if !self.started {
             self.origin = *pos;
@@ -446,14 +446,21 @@ fn chunk(
     let mut sums = PointSums::new(p);
     let mut point = points.start;
     let mut finite = true;
-    kernel.for_each_jacobian(data.poses(), touches, |i, pos, jac| {
-        if i == all[point].touches.end {
-            sums.finish(&mut part, need_mean);
-            point += 1;
-        }
-        finite &= pos.iter().all(|v| v.is_finite());
-        sums.add(pos, &weights.touch[i], jac, free, &mut part.jtj);
-    })?;
+    // Inlined into the kernel's loop, so the accumulation is compiled with
+    // the same target features (AVX2 where the CPU has it).
+    kernel.for_each_jacobian(
+        data.poses(),
+        touches,
+        #[inline(always)]
+        |i, pos, jac| {
+            if i == all[point].touches.end {
+                sums.finish(&mut part, need_mean);
+                point += 1;
+            }
+            finite &= pos.iter().all(|v| v.is_finite());
+            sums.add(pos, &weights.touch[i], jac, free, &mut part.jtj);
+        },
+    )?;
     sums.finish(&mut part, need_mean);
     for a in 0..p {
         for b in 0..a {
