@@ -80,7 +80,7 @@
 
 mod length;
 mod point;
-mod table;
+pub(crate) mod table;
 
 pub use length::{
     PairLengthError, ReferenceError, ReferenceSummary, pair_length_error, pair_length_errors,

@@ -217,7 +217,8 @@ impl Evaluation {
     }
 }
 
-const SUMMARY_HEADER: [&str; 6] = [
+/// Columns of a summary row (the text tables and the HTML report).
+pub(crate) const SUMMARY_HEADER: [&str; 6] = [
     "figure",
     "count",
     "min [mm]",

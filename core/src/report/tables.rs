@@ -742,14 +742,7 @@ pub(crate) fn points_summary(e: &Evaluated, json: Option<&str>) -> String {
     }
     table(
         "Across points and pairs (std = population)",
-        &[
-            "figure",
-            "count",
-            "min [mm]",
-            "mean [mm]",
-            "max [mm]",
-            "std [mm]",
-        ],
+        &crate::metrics::table::SUMMARY_HEADER,
         &rows,
     )
 }
