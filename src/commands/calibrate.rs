@@ -269,7 +269,7 @@ pub fn run(args: Args) -> Result<()> {
         fix,
         noise,
         method: args.method.into(),
-        lm: LmOptions::default().threads(super::identify::threads()),
+        lm: LmOptions::default().threads(args.fit.threads()),
         anneal,
         switch,
         global,

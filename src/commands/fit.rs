@@ -34,6 +34,9 @@ pub struct FitInput {
     /// uncertainties).
     #[arg(long, value_name = "W")]
     pub length_weight: Option<f64>,
+    /// Worker threads (default: every core); results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
 }
 
 impl FitInput {
@@ -73,6 +76,14 @@ impl FitInput {
             length_default_mm: self.length_uncertainty,
             length_weight: self.length_weight.filter(|&w| w > 0.0),
         })
+    }
+
+    /// The worker threads: `--threads`, or every core.
+    pub fn threads(&self) -> usize {
+        self.threads.map_or_else(
+            || std::thread::available_parallelism().map_or(1, |n| n.get()),
+            usize::from,
+        )
     }
 
     /// The arm and the data set (touches grouped by point, lengths added).

@@ -46,7 +46,7 @@ pub fn run(args: Args) -> Result<()> {
     // Without stated noise the singular values are in units of a 0.01 mm touch.
     let assumed = !noise.stated();
     let weights = Weights::new(&kernel, &data, &noise, 0.01)?;
-    let id = identify(&arm.params, &data, &weights, threads())
+    let id = identify(&arm.params, &data, &weights, args.fit.threads())
         .with_context(|| source_name(&args.fit.input.arm))?;
     let noise_text = if assumed {
         "not stated: σ as for a 0.01 mm touch".to_string()
@@ -87,10 +87,6 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 /// Worker threads for the normal equations (results do not depend on it).
-pub fn threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
-}
-
 fn table(id: &Identification) -> String {
     let mut s = String::new();
     let sv: Vec<String> = id

@@ -311,3 +311,24 @@ fn bad_solver_settings_are_clean_errors() {
         assert_clean_error(&aacmm(&args), &[expect]);
     }
 }
+
+#[test]
+fn same_seed_same_files_whatever_the_thread_count() {
+    let dir = temp_dir("calibrate-threads");
+    let run = |threads: &str| {
+        let out = dir.join(threads);
+        let o = calibrate_shipped(&out, &["--threads", threads, "--seed", "3"]);
+        assert!(o.status.success(), "{}", crate::util::stderr(&o));
+        out
+    };
+    let (one, two) = (run("1"), run("2"));
+    for f in ["calibrated.toml", "calibration.json", "report.html"] {
+        assert_eq!(
+            std::fs::read(one.join(f)).unwrap(),
+            std::fs::read(two.join(f)).unwrap(),
+            "{f} differs between 1 and 2 threads"
+        );
+    }
+    let o = calibrate_shipped(&dir.join("zero"), &["--threads", "0"]);
+    assert_clean_error(&o, &["--threads"]);
+}
