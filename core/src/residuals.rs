@@ -198,6 +198,39 @@ impl Weights {
         Ok(Weights { touch, length })
     }
 
+    /// The largest relative change from `other` to `self` of any touch's
+    /// weight matrix (Frobenius norm) or any length's weight; infinite when
+    /// the shapes differ.
+    ///
+    /// ```
+    /// use aacmm_core::residuals::Weights;
+    /// let a = Weights { touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]], length: vec![2.0] };
+    /// let b = Weights { touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]], length: vec![2.2] };
+    /// assert!((b.relative_change(&a) - 0.1).abs() < 1e-12);
+    /// assert_eq!(a.relative_change(&a), 0.0);
+    /// ```
+    pub fn relative_change(&self, other: &Weights) -> f64 {
+        if self.touch.len() != other.touch.len() || self.length.len() != other.length.len() {
+            return f64::INFINITY;
+        }
+        // Off-diagonal entries count twice in the Frobenius norm.
+        let norm = |a: &Sym3| {
+            (a[..3].iter().map(|v| v * v).sum::<f64>()
+                + 2.0 * a[3..].iter().map(|v| v * v).sum::<f64>())
+            .sqrt()
+        };
+        let touch = self.touch.iter().zip(&other.touch).map(|(a, b)| {
+            let d: Sym3 = std::array::from_fn(|k| a[k] - b[k]);
+            norm(&d) / norm(b)
+        });
+        let length = self
+            .length
+            .iter()
+            .zip(&other.length)
+            .map(|(a, b)| (a - b).abs() / b.abs());
+        touch.chain(length).fold(0.0, f64::max)
+    }
+
     /// A typical touch σ, mm: the median over touches of `sqrt(trace(Σ_i)/3)`.
     pub fn typical_touch_sigma(&self) -> f64 {
         let mut s: Vec<f64> = self
