@@ -19,7 +19,8 @@
 //!    inside the basin of an LM over the zeros alone, and lengths and twists
 //!    near nominal keep it among the lowest. The lowest grid cells that are
 //!    local minima among their neighbours are refined, lowest first, by that
-//!    zeros-only LM and then the full LM, until one reaches the noise floor.
+//!    zeros-only LM and then the full LM (at most 30 iterations, as from
+//!    the start), until one reaches the noise floor.
 //! 3. **Random starts, and the stopping rule.** Without stated noise (or if
 //!    no candidate reaches the floor), random zeros on the circles, refined
 //!    the same way, until the lowest cost has been reached from
@@ -58,8 +59,9 @@ pub struct GlobalOptions {
     pub confirmations: usize,
     /// Noise floor: `σ̂² ≤ 1 + k·sqrt(2/dof)` with this `k`.
     pub noise_floor_k: f64,
-    /// Iteration limit of the LM from the start (a start that needs more is
-    /// in the wrong basin; its minimum is still recorded).
+    /// Iteration limit of the LM from each start — the start arm, a grid
+    /// cell, a random draw (one that needs more is in a wrong basin; where
+    /// it stopped is still recorded).
     pub start_iterations: usize,
 }
 
@@ -218,20 +220,14 @@ pub fn global<R: Rng>(
     let timer = std::time::Instant::now();
     // From a good start LM converges in a handful of iterations; one that
     // wanders longer is in the wrong basin, and the grid will do better.
-    let first_lm = if circles.is_empty() {
+    let start_lm = if circles.is_empty() {
         *lm
     } else {
         lm.max_iterations(lm.max_iterations.min(options.start_iterations))
     };
-    let first = levenberg_marquardt(start, data, weights, free, &first_lm)?;
+    let first = levenberg_marquardt(start, data, weights, free, &start_lm)?;
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
-    // A start cut off by the cap is not at the floor: no reweighing.
-    let first = if first.termination == super::Termination::MaxIterations {
-        let cost = first.normal.cost();
-        Minimum { fit: first, cost }
-    } else {
-        reweigh(first, problem, &mut phases[0])?
-    };
+    let first = settle(first, problem, &mut phases[0])?;
     let at_floor = |m: &Minimum| floor.is_some_and(|f| m.cost <= f);
     let mut angles = 0;
     let stop = 'search: {
@@ -255,9 +251,9 @@ pub fn global<R: Rng>(
             let zeros = levenberg_marquardt(x, data, weights, &circles, &zero_lm)?;
             phases[2].add_lm(&zeros, timer.elapsed().as_secs_f64());
             let timer = std::time::Instant::now();
-            let fit = levenberg_marquardt(&zeros.params, data, weights, free, lm)?;
+            let fit = levenberg_marquardt(&zeros.params, data, weights, free, &start_lm)?;
             phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
-            reweigh(fit, problem, &mut phases[3])
+            settle(fit, problem, &mut phases[3])
         };
         // The grid over the torus, and its lowest local minima.
         let timer = std::time::Instant::now();
@@ -322,6 +318,21 @@ pub fn global<R: Rng>(
         sign_changes: Vec::new(),
     };
     Ok((best.fit, trace, phases))
+}
+
+/// A start's result: reweighed ([`reweigh`]) when its LM converged; one
+/// cut off by the iteration cap is in a wrong basin (or crawling), and is
+/// recorded as it is.
+fn settle(
+    fit: LmResult,
+    problem: &GlobalProblem,
+    phase: &mut Phase,
+) -> Result<Minimum, CalibrationError> {
+    if fit.termination == super::Termination::MaxIterations {
+        let cost = fit.normal.cost();
+        return Ok(Minimum { fit, cost });
+    }
+    reweigh(fit, problem, phase)
 }
 
 /// A minimum's cost with the touches weighed at it: the encoder noise moves
