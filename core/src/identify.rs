@@ -184,30 +184,36 @@ struct Scaled {
     ns: DMatrix<f64>,
 }
 
+/// The normal equations of every column at `params`: what [`identify`] and
+/// [`open_directions`] analyse, and (restricted to the free columns) where
+/// a fit from `params` starts.
+pub(crate) fn full_normal(
+    params: &DhParams,
+    data: &DataSet,
+    weights: &Weights,
+    threads: usize,
+) -> Result<crate::residuals::Normal, KernelError> {
+    let all: Vec<usize> = (0..params.param_count()).collect();
+    normal_equations(&ArmKernel::new(params)?, data, weights, &all, threads)
+}
+
 impl Scaled {
-    fn at(
-        params: &DhParams,
-        data: &DataSet,
-        weights: &Weights,
-        threads: usize,
-    ) -> Result<Scaled, KernelError> {
+    fn at(params: &DhParams, normal: crate::residuals::Normal) -> Scaled {
         let ids: Vec<ParamId> = ParamId::all(params.joint_count()).collect();
         let np = ids.len();
-        let all: Vec<usize> = (0..np).collect();
-        let normal = normal_equations(&ArmKernel::new(params)?, data, weights, &all, threads)?;
         let reach = reach(params);
         let d: Vec<f64> = ids
             .iter()
             .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / reach })
             .collect();
         let ns = DMatrix::from_fn(np, np, |a, b| normal.jtj[a * np + b] * d[a] * d[b]);
-        Ok(Scaled {
+        Scaled {
             ids,
             normal,
             reach,
             d,
             ns,
-        })
+        }
     }
 }
 
@@ -218,6 +224,19 @@ pub fn identify(
     weights: &Weights,
     threads: usize,
 ) -> Result<Identification, KernelError> {
+    Ok(identify_from(
+        params,
+        data,
+        full_normal(params, data, weights, threads)?,
+    ))
+}
+
+/// [`identify`] from the normal equations of every column at `params`.
+pub(crate) fn identify_from(
+    params: &DhParams,
+    data: &DataSet,
+    normal: crate::residuals::Normal,
+) -> Identification {
     let n = params.joint_count();
     let Scaled {
         ids,
@@ -225,7 +244,7 @@ pub fn identify(
         reach: r,
         d,
         ns,
-    } = Scaled::at(params, data, weights, threads)?;
+    } = Scaled::at(params, normal);
     let np = ids.len();
     let names: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
     let singular_values = singular(&ns);
@@ -405,7 +424,7 @@ pub fn identify(
         })
         .collect();
     let correlations = strong_correlations(&cov, &free_cols, &names);
-    Ok(Identification {
+    Identification {
         parameters: names,
         reach_mm: r,
         scaling: format!(
@@ -423,7 +442,7 @@ pub fn identify(
         fixed,
         free,
         correlations,
-    })
+    }
 }
 
 /// Singular values of a matrix whose Gram matrix is `n`, descending.
@@ -584,8 +603,19 @@ pub fn open_directions(
     free: &[usize],
     threads: usize,
 ) -> Result<Vec<String>, KernelError> {
+    let normal = full_normal(params, data, weights, threads)?;
+    Ok(open_directions_from(params, data, normal, free))
+}
+
+/// [`open_directions`] from the normal equations of every column.
+pub(crate) fn open_directions_from(
+    params: &DhParams,
+    data: &DataSet,
+    normal: crate::residuals::Normal,
+    free: &[usize],
+) -> Vec<String> {
     let n = params.joint_count();
-    let Scaled { ids, ns, .. } = Scaled::at(params, data, weights, threads)?;
+    let Scaled { ids, ns, .. } = Scaled::at(params, normal);
     let np = ids.len();
     // Unseen directions, in scaled coordinates, with names.
     let mut unseen: Vec<(String, nalgebra::DVector<f64>)> = Vec::new();
@@ -663,7 +693,7 @@ pub fn open_directions(
     let all_dirs: Vec<&nalgebra::DVector<f64>> = unseen.iter().map(|(_, v)| v).collect();
     let total = open_dims(&all_dirs);
     if total == 0 {
-        return Ok(Vec::new());
+        return Vec::new();
     }
     let mut open: Vec<String> = Vec::new();
     for j in 0..unseen.len() {
@@ -704,5 +734,5 @@ pub fn open_directions(
             open.push(format!("a redundancy of {}", names.join(" with ")));
         }
     }
-    Ok(open)
+    open
 }

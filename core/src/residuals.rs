@@ -266,6 +266,29 @@ impl Normal {
     pub fn cost(&self) -> f64 {
         self.touch_cost + self.length_cost
     }
+
+    /// The normal equations over `cols`, a subset of these columns: every
+    /// term (touch, centroid elimination, length) is bilinear in the
+    /// columns, so the reduced system of a subset is the principal
+    /// submatrix. `None` when a column is not among these.
+    pub fn restrict(&self, cols: &[usize]) -> Option<Normal> {
+        let at: Vec<usize> = cols
+            .iter()
+            .map(|c| self.free.iter().position(|f| f == c))
+            .collect::<Option<_>>()?;
+        let p = self.free.len();
+        Some(Normal {
+            free: cols.to_vec(),
+            jtj: at
+                .iter()
+                .flat_map(|&a| at.iter().map(move |&b| self.jtj[a * p + b]))
+                .collect(),
+            jtr: at.iter().map(|&a| self.jtr[a]).collect(),
+            touch_cost: self.touch_cost,
+            length_cost: self.length_cost,
+            centroids: self.centroids.clone(),
+        })
+    }
 }
 
 /// Per-point sums: `G = Σ A J` (3 × p), `Σ Jᵀ A p̃`, `Σ A p̃`, `Σ p̃ᵀA p̃`,

@@ -366,8 +366,8 @@ fn the_hybrid_anneals_then_switches_to_lm() {
             .phases
             .iter()
             .map(|p| p.name.as_str())
-            .collect::<Vec<_>>()[..2],
-        ["anneal", "lm"]
+            .collect::<Vec<_>>()[..3],
+        ["identify", "anneal", "lm"]
     );
     // The paper's annealing alone ends far from the minimum LM finds.
     let sa = calibrate(&c.nominal.params, &data, &options(Method::Sa)).unwrap();

@@ -254,8 +254,9 @@ fn every_method_says_what_ran_and_how_long_each_phase_took() {
         text.contains("Annealing: T0 0.5 mm, alpha 0.9, L 20"),
         "{text}"
     );
-    assert_eq!(timing["phases"][0]["name"], "anneal");
-    assert!(timing["phases"][0]["ms"].as_f64().unwrap() > 0.0);
+    assert_eq!(timing["phases"][0]["name"], "identify");
+    assert_eq!(timing["phases"][1]["name"], "anneal");
+    assert!(timing["phases"][1]["ms"].as_f64().unwrap() > 0.0);
     // calibration.json holds no times (same bytes for the same seed).
     assert!(solver["phases"][0].get("seconds").is_none());
 
@@ -266,7 +267,7 @@ fn every_method_says_what_ran_and_how_long_each_phase_took() {
         text.contains("Switch (s0 5, epsilon1 0.0001): at T = "),
         "{text}"
     );
-    assert_eq!(solver["phases"][1]["name"], "lm");
+    assert_eq!(solver["phases"][2]["name"], "lm");
 
     let (text, report, _) = run("global", &[]);
     let solver = &report["calibration"]["solver"];

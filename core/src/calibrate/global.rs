@@ -34,7 +34,7 @@
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
-use super::lm::{LmOptions, LmResult, levenberg_marquardt};
+use super::lm::{LmOptions, LmResult, levenberg_marquardt, levenberg_marquardt_from};
 use super::{CalibrationError, Phase};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
@@ -153,6 +153,8 @@ pub struct GlobalProblem<'a> {
     pub lm: &'a LmOptions,
     /// Degrees of freedom; with stated noise, enables the noise floor.
     pub stated_dof: Option<usize>,
+    /// The normal equations at the start over `free`, when already computed.
+    pub start_normal: Option<crate::residuals::Normal>,
 }
 
 /// The minima found so far.
@@ -225,7 +227,10 @@ pub fn global<R: Rng>(
     } else {
         lm.max_iterations(lm.max_iterations.min(options.start_iterations))
     };
-    let first = levenberg_marquardt(start, data, weights, free, &start_lm)?;
+    let first = match problem.start_normal.clone() {
+        Some(normal) => levenberg_marquardt_from(start, normal, data, weights, &start_lm)?,
+        None => levenberg_marquardt(start, data, weights, free, &start_lm)?,
+    };
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
     let first = settle(first, problem, &mut phases[0])?;
     let at_floor = |m: &Minimum| floor.is_some_and(|f| m.cost <= f);

@@ -175,13 +175,35 @@ pub fn levenberg_marquardt(
     free: &[usize],
     options: &LmOptions,
 ) -> Result<LmResult, CalibrationError> {
+    let normal = normal_equations(
+        &ArmKernel::new(start)?,
+        data,
+        weights,
+        free,
+        options.threads,
+    )?;
+    let mut fit = levenberg_marquardt_from(start, normal, data, weights, options)?;
+    fit.jacobian_evaluations += 1;
+    Ok(fit)
+}
+
+/// [`levenberg_marquardt`] from the normal equations already computed at
+/// `start` (over the free columns `normal.free`), which it does not count.
+pub fn levenberg_marquardt_from(
+    start: &DhParams,
+    normal: Normal,
+    data: &DataSet,
+    weights: &Weights,
+    options: &LmOptions,
+) -> Result<LmResult, CalibrationError> {
+    let free = &normal.free.clone();
     let p = free.len();
     let mut x = start.to_vec();
     let kernel_at = |x: &[f64]| -> Result<ArmKernel, CalibrationError> {
         let params = DhParams::from_slice(x).ok_or(CalibrationError::Shape)?;
         Ok(ArmKernel::new(&params)?)
     };
-    let mut normal = normal_equations(&kernel_at(&x)?, data, weights, free, options.threads)?;
+    let mut normal = normal;
     if !normal.cost().is_finite() {
         return Err(CalibrationError::NonFiniteStart);
     }
@@ -191,7 +213,7 @@ pub fn levenberg_marquardt(
     let mut scale = vec![0.0f64; p];
     let mut lambda = 1e-3;
     let mut nu = 2.0;
-    let (mut cost_evaluations, mut jacobian_evaluations) = (0, 1);
+    let (mut cost_evaluations, mut jacobian_evaluations) = (0, 0);
     let mut termination = Termination::MaxIterations;
     for iteration in 1..=options.max_iterations {
         let f = normal.cost();

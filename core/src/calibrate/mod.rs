@@ -48,11 +48,14 @@ use serde::{Deserialize, Serialize};
 
 pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
-pub use lm::{LmIteration, LmOptions, LmResult, Termination, levenberg_marquardt};
+pub use lm::{
+    LmIteration, LmOptions, LmResult, Termination, levenberg_marquardt, levenberg_marquardt_from,
+};
 
 use crate::dataset::DataSet;
 use crate::identify::{
-    Correlation, Identification, identify, open_directions, strong_correlations, to_user, unit,
+    Correlation, Identification, identify_from, open_directions_from, strong_correlations, to_user,
+    unit,
 };
 use crate::kernel::{ArmKernel, KernelError};
 use crate::params::{DhParams, ParamId, ParamKind};
@@ -411,9 +414,13 @@ pub fn calibrate_observed(
     let threads = options.lm.threads;
     let stated = options.noise.stated();
     let mut weights = Weights::new(&kernel, data, &options.noise, 1.0)?;
+    // One pass over the data at the start serves the identifiability
+    // analysis and, restricted to the free columns, the first LM step.
+    let timer = std::time::Instant::now();
+    let full = crate::identify::full_normal(start, data, &weights, threads)?;
     let (free, identification, reasons) = match &options.fix {
         FixSpec::Auto => {
-            let id = identify(start, data, &weights, threads)?;
+            let id = identify_from(start, data, full.clone());
             let free = id.free_columns();
             let reasons: Vec<(String, String)> = id
                 .fixed
@@ -426,7 +433,7 @@ pub fn calibrate_observed(
             let free: Vec<usize> = (0..start.param_count())
                 .filter(|c| !fixed.contains(c))
                 .collect();
-            let directions = open_directions(start, data, &weights, &free, threads)?;
+            let directions = open_directions_from(start, data, full.clone(), &free);
             if !directions.is_empty() {
                 return Err(CalibrationError::Unidentifiable { directions });
             }
@@ -450,11 +457,17 @@ pub fn calibrate_observed(
         });
     }
     let degrees_of_freedom = touch_rows + length_rows - unknowns;
+    let identify_phase = Phase {
+        jacobian_evaluations: 1,
+        seconds: timer.elapsed().as_secs_f64(),
+        ..Phase::new("identify")
+    };
+    let start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
     let solved = solve(
         start,
+        start_normal,
         data,
         &weights,
-        &free,
         options,
         stated.then_some(degrees_of_freedom),
         progress,
@@ -465,6 +478,7 @@ pub fn calibrate_observed(
         anneal,
         mut global,
     } = solved;
+    phases.insert(0, identify_phase);
     let mut cost_evaluations: usize = phases.iter().map(|p| p.cost_evaluations).sum();
     let mut jacobian_evaluations: usize = phases.iter().map(|p| p.jacobian_evaluations).sum();
     let normal_at = |params: &DhParams, weights: &Weights| -> Result<_, CalibrationError> {
@@ -658,18 +672,20 @@ struct Solved {
 /// Runs `options.method` on the free columns.
 fn solve(
     start: &DhParams,
+    start_normal: crate::residuals::Normal,
     data: &DataSet,
     weights: &Weights,
-    free: &[usize],
     options: &CalibrateOptions,
     stated_dof: Option<usize>,
     progress: &mut dyn FnMut(&str, f64),
 ) -> Result<Solved, CalibrationError> {
+    let free = &start_normal.free.clone();
     let mut rng = crate::simulate::rng(options.seed, SOLVER_STREAM);
     let timer = std::time::Instant::now();
     match options.method {
         Method::Lm => {
-            let fit = levenberg_marquardt(start, data, weights, free, &options.lm)?;
+            let fit =
+                lm::levenberg_marquardt_from(start, start_normal, data, weights, &options.lm)?;
             let mut phase = Phase::new("lm");
             phase.add_lm(&fit, timer.elapsed().as_secs_f64());
             Ok(Solved {
@@ -743,6 +759,7 @@ fn solve(
                 free,
                 lm: &options.lm,
                 stated_dof,
+                start_normal: Some(start_normal),
             };
             let (fit, trace, phases) =
                 global::global(start, &problem, &options.global, &mut rng, &mut |f| {
