@@ -375,3 +375,20 @@ fn the_hybrid_anneals_then_switches_to_lm() {
     assert_eq!(sa.solver.anneal.as_ref().unwrap().stop, AnnealStop::Cooled);
     assert!(sa.solver.final_cost > 10.0 * hybrid.solver.final_cost);
 }
+
+#[test]
+fn the_free_columns_system_is_the_restriction_of_the_full_one() {
+    use aacmm_core::residuals::normal_equations;
+    let c = campaign(9, 0.005, 0.01);
+    let data = c.data_set().unwrap();
+    let kernel = ArmKernel::new(&c.nominal.params).unwrap();
+    let weights = Weights::new(&kernel, &data, &stated_noise(), 1.0).unwrap();
+    let all: Vec<usize> = (0..27).collect();
+    let full = normal_equations(&kernel, &data, &weights, &all, 1).unwrap();
+    let free: Vec<usize> = vec![1, 0, 7, 12, 19, 26];
+    let direct = normal_equations(&kernel, &data, &weights, &free, 1).unwrap();
+    // Same products summed in the same order: equal to the bit.
+    assert_eq!(full.restrict(&free).unwrap(), direct);
+    assert!(full.restrict(&[27]).is_none());
+    assert!(direct.restrict(&[2]).is_none());
+}
