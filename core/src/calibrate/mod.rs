@@ -191,7 +191,7 @@ impl Phase {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FixSpec {
-    /// [`identify`]'s recommended set.
+    /// [`identify`](crate::identify::identify)'s recommended set.
     Auto,
     /// These parameters (by their position in the fixed order).
     Columns(Vec<usize>),
