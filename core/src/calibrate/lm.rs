@@ -16,9 +16,11 @@ use crate::residuals::{Normal, Weights, cost, normal_equations};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Termination {
-    /// The relative cost reduction, actual and predicted, fell below `ftol`.
+    /// The next step's relative cost reduction, actual and predicted, is
+    /// below `ftol` (the step is not taken).
     CostTolerance,
-    /// The scaled step fell below `xtol` relative to the scaled parameters.
+    /// The next scaled step is below `xtol` relative to the scaled
+    /// parameters (not taken).
     StepTolerance,
     /// Every column is orthogonal to the residuals within `gtol`.
     GradientTolerance,
@@ -268,6 +270,17 @@ pub fn levenberg_marquardt_from(
         let xs: Vec<f64> = free.iter().map(|&c| x[c]).collect();
         let small_step = scaled(delta.as_slice()) <= options.xtol * (scaled(&xs) + options.xtol);
         if rho > 0.0 && f_new.is_finite() {
+            // A step too small to matter is not taken: the result stays
+            // where its normal equations were computed (they give the
+            // covariance), and the Jacobian pass at the step's end is saved.
+            if actual <= options.ftol * f && predicted <= options.ftol * f {
+                termination = Termination::CostTolerance;
+                break;
+            }
+            if small_step {
+                termination = Termination::StepTolerance;
+                break;
+            }
             x = trial;
             normal = normal_equations(&kernel_at(&x)?, data, weights, free, options.threads)?;
             jacobian_evaluations += 1;
@@ -279,14 +292,6 @@ pub fn levenberg_marquardt_from(
                 lambda,
                 accepted: true,
             });
-            if actual <= options.ftol * f && predicted <= options.ftol * f {
-                termination = Termination::CostTolerance;
-                break;
-            }
-            if small_step {
-                termination = Termination::StepTolerance;
-                break;
-            }
         } else {
             lambda *= nu;
             nu *= 2.0;

@@ -514,26 +514,26 @@ pub fn calibrate_observed(
         // probe along directions that depend on the arm, and the lengths'
         // weights on the centroids' directions — both far off when the
         // zeros were.
-        let previous = std::mem::replace(
-            &mut weights,
-            Weights::new(
-                &ArmKernel::new(&fit.params)?,
-                data,
-                &options.noise,
-                touch_sigma,
-            )?,
-        );
+        let at_solution = Weights::new(
+            &ArmKernel::new(&fit.params)?,
+            data,
+            &options.noise,
+            touch_sigma,
+        )?;
         let timer = std::time::Instant::now();
-        // Weights that moved by under REWEIGH_TOLERANCE move the estimate by
-        // a like fraction of its σ (shipped campaign, lm: weights 3 % off,
-        // no parameter moved by more than 3.4 % of its σ): no refit, only
-        // the normal equations under the new weights (for σ̂ and the
-        // covariance).
-        let settled = stated && weights.relative_change(&previous) <= REWEIGH_TOLERANCE;
-        if options.method == Method::Sa || settled {
+        // Weights that moved by under REWEIGH_TOLERANCE would move the
+        // estimate by a like fraction of its σ and its σ not at all (shipped
+        // campaign, lm: weights 3 % off moved no parameter by more than
+        // 3.4 % of its σ, and σ by 1e-5 of itself): the fit's weights stand.
+        let settled = stated && at_solution.relative_change(&weights) <= REWEIGH_TOLERANCE;
+        if settled {
+            // The fit's weights, normal equations and history stand.
+        } else if options.method == Method::Sa {
+            weights = at_solution;
             fit.normal = normal_at(&fit.params, &weights)?;
             jacobian_evaluations += 1;
         } else {
+            weights = at_solution;
             let refit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
             let mut phase = Phase::new("lm, weighed at the solution");
             phase.cost_evaluations = refit.cost_evaluations;
