@@ -166,7 +166,9 @@ struct Found {
 }
 
 impl Found {
-    fn record(&mut self, m: Minimum) {
+    /// Records a start's minimum; whether it is at the noise `floor`.
+    fn record(&mut self, m: Minimum, floor: Option<f64>) -> bool {
+        let at_floor = floor.is_some_and(|f| m.cost <= f);
         self.minima.push(m.cost);
         match &self.best {
             Some(b) if same_minimum(m.cost, b.cost) => self.hits += 1,
@@ -176,6 +178,7 @@ impl Found {
                 self.hits = 1;
             }
         }
+        at_floor
     }
 }
 
@@ -233,12 +236,9 @@ pub fn global<R: Rng>(
     };
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
     let first = settle(first, problem, &mut phases[0])?;
-    let at_floor = |m: &Minimum| floor.is_some_and(|f| m.cost <= f);
     let mut angles = 0;
     let stop = 'search: {
-        let done = at_floor(&first);
-        found.record(first);
-        if done {
+        if found.record(first, floor) {
             break 'search GlobalStop::NoiseFloor;
         }
         if circles.is_empty() {
@@ -272,9 +272,7 @@ pub fn global<R: Rng>(
             tried += 1;
             progress(tried as f64 / total as f64);
             let m = refine(&x, &mut phases)?;
-            let done = at_floor(&m);
-            found.record(m);
-            if done {
+            if found.record(m, floor) {
                 break 'search GlobalStop::NoiseFloor;
             }
         }
@@ -292,9 +290,7 @@ pub fn global<R: Rng>(
                 *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             }
             let m = refine(&x, &mut phases)?;
-            let done = at_floor(&m);
-            found.record(m);
-            if done {
+            if found.record(m, floor) {
                 break 'search GlobalStop::NoiseFloor;
             }
             if found.hits >= options.confirmations {
@@ -392,41 +388,36 @@ fn torus_grid(
         .iter()
         .map(|&col| ParamId::from_column(joints, col).ok_or(CalibrationError::Shape))
         .collect::<Result<_, _>>()?;
-    let angle = |i: usize| -> f64 {
-        crate::simulate::wrap(std::f64::consts::TAU * i as f64 / k as f64 - std::f64::consts::PI)
-    };
-    let digits = |mut cell: usize| -> Vec<usize> {
-        (0..c)
-            .map(|_| {
-                let d = cell % k;
-                cell /= k;
-                d
-            })
-            .collect()
+    // Cell index = Σ digit_axis · k^axis; digit i is the angle −π + 2πi/k.
+    let strides: Vec<usize> = (0..c).map(|axis| k.pow(axis)).collect();
+    let digit = |cell: usize, stride: usize| cell / stride % k;
+    let place = |x: &mut DhParams, cell: usize| {
+        for (id, &stride) in ids.iter().zip(&strides) {
+            let i = digit(cell, stride);
+            *x.get_mut(*id) = crate::simulate::wrap(
+                std::f64::consts::TAU * i as f64 / k as f64 - std::f64::consts::PI,
+            );
+        }
     };
     let mut x = start.clone();
     let mut xyz = vec![[0.0; 3]; problem.data.len()];
     let mut costs = Vec::with_capacity(cells);
     for cell in 0..cells {
-        for (id, d) in ids.iter().zip(digits(cell)) {
-            *x.get_mut(*id) = angle(d);
-        }
-        let f = cost(
+        place(&mut x, cell);
+        // Never NaN: a non-finite cost is +∞.
+        costs.push(cost(
             &ArmKernel::new(&x)?,
             problem.data,
             problem.weights,
             &mut xyz,
-        )?;
-        costs.push(if f.is_finite() { f } else { f64::INFINITY });
+        )?);
     }
     let mut minima: Vec<usize> = (0..cells)
         .filter(|&cell| {
-            let d = digits(cell);
-            (0..c as usize).all(|axis| {
+            strides.iter().all(|&stride| {
+                let d = digit(cell, stride);
                 [1, k - 1].iter().all(|&step| {
-                    let mut n = d.clone();
-                    n[axis] = (n[axis] + step) % k;
-                    let other = n.iter().rev().fold(0, |acc, &v| acc * k + v);
+                    let other = cell - d * stride + (d + step) % k * stride;
                     costs[cell] <= costs[other]
                 })
             })
@@ -440,9 +431,7 @@ fn torus_grid(
             .into_iter()
             .map(|cell| {
                 let mut x = start.clone();
-                for (id, d) in ids.iter().zip(digits(cell)) {
-                    *x.get_mut(*id) = angle(d);
-                }
+                place(&mut x, cell);
                 x
             })
             .collect(),
