@@ -536,9 +536,7 @@ pub fn calibrate_observed(
             weights = at_solution;
             let refit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
             let mut phase = Phase::new("lm, weighed at the solution");
-            phase.cost_evaluations = refit.cost_evaluations;
-            phase.jacobian_evaluations = refit.jacobian_evaluations;
-            phase.seconds = timer.elapsed().as_secs_f64();
+            phase.add_lm(&refit, timer.elapsed().as_secs_f64());
             // With stated noise the weights keep their units: one history,
             // the descent then the polish. Otherwise the units changed.
             fit = if stated { fit.then(refit) } else { refit };
@@ -550,7 +548,6 @@ pub fn calibrate_observed(
         let w2 = 1.0 / (touch_sigma * touch_sigma);
         fit.normal.jtj.iter_mut().for_each(|v| *v *= w2);
         fit.normal.touch_cost *= w2;
-        fit.initial_cost *= w2;
         for h in &mut fit.history {
             h.cost *= w2;
         }
@@ -727,8 +724,6 @@ fn solve(
                     options.lm.threads,
                 )?;
                 phases[0].jacobian_evaluations = 1;
-                let kernel = ArmKernel::new(start)?;
-                let mut xyz = vec![[0.0; 3]; data.len()];
                 LmResult {
                     params: best,
                     termination: if trace.stop == AnnealStop::EvaluationBudget {
@@ -739,7 +734,7 @@ fn solve(
                     iterations: 0,
                     cost_evaluations: 0,
                     jacobian_evaluations: 1,
-                    initial_cost: crate::residuals::cost(&kernel, data, weights, &mut xyz)?,
+                    initial_cost: start_normal.cost(),
                     history: Vec::new(),
                     normal,
                 }
