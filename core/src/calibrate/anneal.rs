@@ -297,6 +297,9 @@ pub fn anneal_observed<R: Rng>(
         let tau = t / options.t0;
         let mut accepted = 0usize;
         for _ in 0..options.chain {
+            // Every move rewrites all free parameters of `trial` from
+            // `current` and the fixed ones never change, so `trial` needs no
+            // resync after a rejection or a swap.
             for (id, range) in ids.iter().zip(&ranges) {
                 *trial.get_mut(*id) = current.get(*id) + range * generate(tau, rng);
             }
@@ -312,15 +315,11 @@ pub fn anneal_observed<R: Rng>(
                     e_best = e_current;
                     best.clone_from(&current);
                 }
-            } else {
-                trial.clone_from(&current);
             }
             if energy.evaluations >= options.max_evaluations {
                 break;
             }
         }
-        // After a swap `trial` holds the previous state: resync it.
-        trial.clone_from(&current);
         temperatures.push(AnnealStep {
             temperature: t,
             energy: e_current,
