@@ -1,37 +1,9 @@
 //! `aacmm identify` and `aacmm calibrate` on the shipped example campaign.
 
-use crate::util::{aacmm, assert_clean_error, example, stdout, temp_dir};
-
-fn campaign(file: &str) -> String {
-    example("paper-campaign").join(file).display().to_string()
-}
-
-fn arm() -> String {
-    example("paper-table-1.toml").display().to_string()
-}
-
-/// `aacmm calibrate` on the shipped campaign with its lengths and noise,
-/// into `out`, with `extra` flags.
-fn calibrate_shipped(out: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    let (arm, poses, lengths) = (arm(), campaign("poses.csv"), campaign("lengths.csv"));
-    let mut args = vec![
-        "calibrate",
-        "--arm",
-        &arm,
-        "--data",
-        &poses,
-        "--lengths",
-        &lengths,
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(extra);
-    aacmm(&args)
-}
+use crate::util::{
+    aacmm, assert_clean_error, calibrate_shipped, shipped as campaign, shipped_arm as arm,
+    simulate_held_out, stdout, temp_dir,
+};
 
 #[test]
 fn identify_reports_rank_rules_and_the_fixed_set() {
@@ -142,28 +114,7 @@ fn calibrate_writes_an_arm_every_command_loads_and_the_same_bytes_twice() {
 fn calibrate_validates_on_held_out_files() {
     let dir = temp_dir("calibrate-validate");
     let fresh = dir.join("fresh");
-    let o = aacmm(&[
-        "simulate",
-        "--arm",
-        &arm(),
-        "--true",
-        &campaign("true_arm.toml"),
-        "--sockets",
-        "6",
-        "--poses",
-        "8",
-        "--seed",
-        "9",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--reference-lengths",
-        "3",
-        "--out",
-        fresh.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    simulate_held_out(&fresh, "6", "8", "3");
     let out = dir.join("out");
     let (held, held_lengths) = (fresh.join("poses.csv"), fresh.join("lengths.csv"));
     let o = aacmm(&[

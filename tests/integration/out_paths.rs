@@ -5,15 +5,13 @@
 
 use std::path::Path;
 
-use crate::util::{aacmm, assert_clean_error, example, stdout, temp_dir, write};
+use crate::util::{
+    aacmm, assert_clean_error, example, shipped_arm as arm, stdout, temp_dir, write,
+};
 
 const POSES: &str = "point,q1,q2,q3,q4,q5,q6\n\
     A,0,0,0,0,0,0\nA,0,0,0,0,0,1\nA,0,0,0,0,1,0\n\
     B,10,20,30,40,50,60\nB,10,20,30,40,50,61\nB,10,20,30,40,51,61\n";
-
-fn arm() -> String {
-    example("paper-table-1.toml").display().to_string()
-}
 
 #[test]
 fn points_refuses_to_overwrite_its_input() {

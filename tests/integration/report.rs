@@ -7,15 +7,10 @@ use std::path::Path;
 use aacmm_core::report::{CALIBRATION_FILES, EVALUATION_FILES, HTML_FILE};
 use roxmltree::{Document, ParsingOptions};
 
-use crate::util::{aacmm, assert_clean_error, example, stderr, temp_dir};
-
-fn shipped(file: &str) -> String {
-    example("paper-campaign").join(file).display().to_string()
-}
-
-fn arm() -> String {
-    example("paper-table-1.toml").display().to_string()
-}
+use crate::util::{
+    aacmm, assert_clean_error, calibrate_shipped, shipped, shipped_arm as arm, simulate_held_out,
+    stderr, temp_dir,
+};
 
 fn read(path: &Path) -> String {
     std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
@@ -84,53 +79,22 @@ fn assert_agrees_with_json(html: &str, json: &serde_json::Value) -> usize {
 fn calibrate_report_is_self_contained_and_says_what_calibration_json_says() {
     let dir = temp_dir("report-calibrate");
     let fresh = dir.join("fresh");
-    let o = aacmm(&[
-        "simulate",
-        "--arm",
-        &arm(),
-        "--true",
-        &shipped("true_arm.toml"),
-        "--sockets",
-        "4",
-        "--poses",
-        "5",
-        "--seed",
-        "9",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--reference-lengths",
-        "2",
-        "--out",
-        fresh.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    simulate_held_out(&fresh, "4", "5", "2");
     let run = |name: &str| {
         let out = dir.join(name);
-        let o = aacmm(&[
-            "calibrate",
-            "--arm",
-            &arm(),
-            "--data",
-            &shipped("poses.csv"),
-            "--lengths",
-            &shipped("lengths.csv"),
-            "--encoder-noise",
-            "0.005",
-            "--probe-noise",
-            "0.01",
-            "--method",
-            "lm",
-            "--validate",
-            fresh.join("poses.csv").to_str().unwrap(),
-            "--validate-lengths",
-            fresh.join("lengths.csv").to_str().unwrap(),
-            "--cross-validate",
-            "2",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = calibrate_shipped(
+            &out,
+            &[
+                "--method",
+                "lm",
+                "--validate",
+                fresh.join("poses.csv").to_str().unwrap(),
+                "--validate-lengths",
+                fresh.join("lengths.csv").to_str().unwrap(),
+                "--cross-validate",
+                "2",
+            ],
+        );
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(
             crate::util::stdout(&o).contains(&format!("wrote {}", out.join(HTML_FILE).display())),

@@ -9,7 +9,7 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-use crate::util::{command, example, stderr, temp_dir, write};
+use crate::util::{command, shipped_arm as arm, stderr, temp_dir, write};
 
 /// A poses file of `points` points touched 3 times each: `3 × points` rows.
 fn many_poses(dir: &Path, points: usize) -> String {
@@ -21,10 +21,6 @@ fn many_poses(dir: &Path, points: usize) -> String {
         }
     }
     write(dir, "many.csv", &text)
-}
-
-fn arm() -> String {
-    example("paper-table-1.toml").display().to_string()
 }
 
 fn dev_full() -> Stdio {

@@ -31,6 +31,66 @@ pub fn example(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// The shipped nominal arm, `examples/paper-table-1.toml`.
+pub fn shipped_arm() -> String {
+    example("paper-table-1.toml").display().to_string()
+}
+
+/// A file of the shipped campaign, `examples/paper-campaign/`.
+pub fn shipped(file: &str) -> String {
+    example("paper-campaign").join(file).display().to_string()
+}
+
+/// `aacmm calibrate` on the shipped campaign with its lengths and noise,
+/// into `out`, with `extra` flags.
+pub fn calibrate_shipped(out: &Path, extra: &[&str]) -> Output {
+    let (arm, poses, lengths) = (shipped_arm(), shipped("poses.csv"), shipped("lengths.csv"));
+    let mut args = vec![
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--lengths",
+        &lengths,
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--out",
+        out.to_str().expect("UTF-8 path"),
+    ];
+    args.extend(extra);
+    aacmm(&args)
+}
+
+/// Fresh sockets of the shipped campaign's true arm (`aacmm simulate
+/// --true`, seed 9, the shipped noise) into `out`, for held-out data.
+pub fn simulate_held_out(out: &Path, sockets: &str, poses: &str, lengths: &str) {
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &shipped_arm(),
+        "--true",
+        &shipped("true_arm.toml"),
+        "--sockets",
+        sockets,
+        "--poses",
+        poses,
+        "--seed",
+        "9",
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--reference-lengths",
+        lengths,
+        "--out",
+        out.to_str().expect("UTF-8 path"),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 /// Writes `text` to `dir/name` and returns the path as a string.
 pub fn write(dir: &Path, name: &str, text: &str) -> String {
     let path = dir.join(name);
