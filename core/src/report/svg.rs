@@ -669,6 +669,23 @@ pub(crate) fn dashed(
     Ok(())
 }
 
+/// A dashed horizontal line across the whole x axis at `y` (plot
+/// coordinates): zero lines, thresholds, floors.
+pub(crate) fn dashed_across(
+    chart: &mut Chart,
+    x: &Axis,
+    y: f64,
+    color: RGBColor,
+    width: u32,
+) -> DrawResult {
+    dashed(
+        chart,
+        vec![(x.range.start, y), (x.range.end, y)],
+        color,
+        width,
+    )
+}
+
 /// A message centred in `area`, for a panel with nothing to draw.
 pub(crate) fn message(area: &Area, title: &str, lines: &[&str]) -> DrawResult {
     let (w, h) = area.dim_in_pixel();

@@ -10,7 +10,7 @@ use crate::calibrate::Calibration;
 use crate::identify::Identification;
 use crate::report::svg::{
     Area, Axis, BLUE, Class, DrawResult, GREY, INK, Key, Marker, PURPLE, Shape, WIDTH, chart,
-    dashed, font, font_at, group, message, render,
+    dashed_across, font, font_at, group, message, render,
 };
 use crate::report::{Figure, IDENTIFIABILITY_SVG, ReportError};
 
@@ -120,12 +120,7 @@ fn singular_panel(area: &Area, id: &Identification) -> DrawResult {
             [(x.range.start, y.range.start), (x.range.end, t)],
             PURPLE.mix(0.08).filled(),
         )))?;
-        dashed(
-            &mut chart,
-            vec![(x.range.start, t), (x.range.end, t)],
-            PURPLE,
-            2,
-        )
+        dashed_across(&mut chart, &x, t, PURPLE, 2)
     })?;
     for (name, values, color, dx) in [
         ("all columns", all, GREY, -0.12),

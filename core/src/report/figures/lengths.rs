@@ -7,7 +7,8 @@
 use super::{frame, header_height, short};
 use crate::report::data::{Evaluated, Pairs, Stage, pairs};
 use crate::report::svg::{
-    Area, Axis, Class, GREY, Key, Marker, Shape, WIDTH, chart, dashed, group, message, render,
+    Area, Axis, Class, GREY, Key, Marker, Shape, WIDTH, chart, dashed_across, group, message,
+    render,
 };
 use crate::report::{Arms, Figure, LENGTHS_SVG, ReportError};
 
@@ -153,12 +154,7 @@ fn reference_panel(area: &Area, mine: &[&Evaluated], arms: &Arms, arm: &str) -> 
     let y = Axis::linear(y0, y1, true, "error |x̄_a − x̄_b| − L [mm]");
     let mut chart = chart(area, &title, &x, &y, 72)?;
     group(area, Class::Guide, "zero error", 1, || {
-        dashed(
-            &mut chart,
-            vec![(x.range.start, 0.0), (x.range.end, 0.0)],
-            GREY,
-            1,
-        )
+        dashed_across(&mut chart, &x, 0.0, GREY, 1)
     })?;
     for e in with {
         let marker = reference_marker(e);

@@ -11,8 +11,8 @@ use crate::calibrate::{Calibration, Estimate};
 use crate::identify::to_user;
 use crate::params::{DhParams, ParamId, ParamKind};
 use crate::report::svg::{
-    Area, Axis, BLUE, Class, DrawResult, GREEN, GREY, Key, Marker, Shape, WIDTH, chart, dashed,
-    font, group, render,
+    Area, Axis, BLUE, Class, DrawResult, GREEN, GREY, Key, Marker, Shape, WIDTH, chart,
+    dashed_across, font, group, render,
 };
 use crate::report::{Figure, PARAMETERS_SVG, ReportError};
 
@@ -141,12 +141,7 @@ fn panel(
     let y = Axis::linear(lo - 0.12 * span, hi + 0.25 * span, true, y_desc);
     let mut chart = chart(area, title, &x, &y, 72)?;
     group(area, Class::Guide, "zero", 1, || {
-        dashed(
-            &mut chart,
-            vec![(x.range.start, 0.0), (x.range.end, 0.0)],
-            GREY,
-            1,
-        )
+        dashed_across(&mut chart, &x, 0.0, GREY, 1)
     })?;
     let free: Vec<(usize, &&Estimate)> = params
         .iter()

@@ -10,7 +10,7 @@ use super::{frame, header_height};
 use crate::calibrate::{AnnealTrace, Calibration, GlobalTrace, SolverSummary};
 use crate::report::svg::{
     Area, Axis, BLUE, Class, DrawResult, GREEN, GREY, Key, Marker, PURPLE, Shape, VERMILLION,
-    WIDTH, chart, dashed, group, message, render,
+    WIDTH, chart, dashed_across, group, message, render,
 };
 use crate::report::{Figure, ReportError, SOLVER_SVG};
 
@@ -135,12 +135,7 @@ fn lm_panel(area: &Area, s: &SolverSummary, dof: f64) -> DrawResult {
     let y = Axis::log(lo, hi, "cost Σr² (weighted, dimensionless), log scale");
     let mut chart = chart(area, &title, &x, &y, 64)?;
     group(area, Class::Guide, "m − p", 1, || {
-        dashed(
-            &mut chart,
-            vec![(x.range.start, y.at(dof)), (x.range.end, y.at(dof))],
-            GREEN,
-            2,
-        )
+        dashed_across(&mut chart, &x, y.at(dof), GREEN, 2)
     })?;
     group(area, Class::Series, "accepted", accepted.len(), || {
         chart.draw_series(std::iter::once(PathElement::new(
@@ -285,12 +280,7 @@ fn global_panel(area: &Area, g: &GlobalTrace, dof: f64) -> DrawResult {
     let mut chart = chart(area, &title, &x, &y, 64)?;
     if let Some(floor) = g.noise_floor_cost {
         group(area, Class::Guide, "noise floor", 1, || {
-            dashed(
-                &mut chart,
-                vec![(x.range.start, y.at(floor)), (x.range.end, y.at(floor))],
-                PURPLE,
-                1,
-            )
+            dashed_across(&mut chart, &x, y.at(floor), PURPLE, 1)
         })?;
     }
     group(area, Class::Series, "minima", g.minima.len(), || {
