@@ -152,30 +152,26 @@ impl SolverFlags {
             max_evaluations: self.sa_max_evaluations,
         };
         anneal.check().map_err(|e| anyhow::anyhow!("--sa-…: {e}"))?;
-        if self.switch_window == 0
-            || !(self.switch_epsilon.is_finite() && self.switch_epsilon >= 0.0)
-        {
-            bail!(
-                "--switch-window {} --switch-epsilon {}: a window of at least 1 and a threshold ≥ 0",
+        let switch = SwitchRule {
+            window: self.switch_window,
+            epsilon: self.switch_epsilon,
+        };
+        switch.check().map_err(|e| {
+            anyhow::anyhow!(
+                "--switch-window {} --switch-epsilon {}: {e}",
                 self.switch_window,
                 self.switch_epsilon
-            );
-        }
-        if self.global_starts == 0 || self.global_confirmations == 0 {
-            bail!("--global-starts and --global-confirmations: at least 1");
-        }
-        Ok((
-            anneal,
-            SwitchRule {
-                window: self.switch_window,
-                epsilon: self.switch_epsilon,
-            },
-            GlobalOptions {
-                max_starts: self.global_starts,
-                confirmations: self.global_confirmations,
-                ..GlobalOptions::default()
-            },
-        ))
+            )
+        })?;
+        let global = GlobalOptions {
+            max_starts: self.global_starts,
+            confirmations: self.global_confirmations,
+            ..GlobalOptions::default()
+        };
+        global
+            .check()
+            .map_err(|e| anyhow::anyhow!("--global-starts and --global-confirmations: {e}"))?;
+        Ok((anneal, switch, global))
     }
 }
 

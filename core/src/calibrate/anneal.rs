@@ -138,6 +138,27 @@ impl Default for SwitchRule {
 }
 
 impl SwitchRule {
+    /// Checks the rule; the message names the setting.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::SwitchRule;
+    /// assert!(SwitchRule::default().check().is_ok());
+    /// let e = SwitchRule { window: 0, epsilon: 1e-4 }.check().unwrap_err();
+    /// assert_eq!(e, "switch window 0: at least one temperature");
+    /// ```
+    pub fn check(&self) -> Result<(), String> {
+        if self.window == 0 {
+            return Err("switch window 0: at least one temperature".into());
+        }
+        if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
+            return Err(format!(
+                "switch threshold {}: must be a finite number ≥ 0",
+                self.epsilon
+            ));
+        }
+        Ok(())
+    }
+
     /// Whether the fitness history `p` (one per temperature, newest last)
     /// has stopped changing.
     ///
@@ -257,6 +278,9 @@ pub fn anneal_observed<R: Rng>(
     progress: &mut dyn FnMut(f64),
 ) -> Result<(DhParams, AnnealTrace), CalibrationError> {
     options.check().map_err(CalibrationError::Options)?;
+    if let Some(rule) = switch {
+        rule.check().map_err(CalibrationError::Options)?;
+    }
     let joints = start.joint_count();
     let ids: Vec<ParamId> = free
         .iter()

@@ -80,8 +80,30 @@ impl Default for GlobalOptions {
 
 setters!(GlobalOptions {
     max_starts: usize, "Sets the random-start budget.";
-    confirmations: usize, "Sets the confirmations (at least 1 is used).";
+    confirmations: usize, "Sets the confirmations.";
 });
+
+impl GlobalOptions {
+    /// Checks the settings; the message names the setting.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::GlobalOptions;
+    /// assert!(GlobalOptions::default().check().is_ok());
+    /// let e = GlobalOptions::default().confirmations(0).check().unwrap_err();
+    /// assert_eq!(e, "confirmations 0: at least 1");
+    /// ```
+    pub fn check(&self) -> Result<(), String> {
+        for (name, v) in [
+            ("start budget", self.max_starts),
+            ("confirmations", self.confirmations),
+        ] {
+            if v == 0 {
+                return Err(format!("{name} 0: at least 1"));
+            }
+        }
+        Ok(())
+    }
+}
 
 /// Why the global method stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -197,6 +219,7 @@ pub fn global<R: Rng>(
     rng: &mut R,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(LmResult, GlobalTrace, Vec<Phase>), CalibrationError> {
+    options.check().map_err(CalibrationError::Options)?;
     let GlobalProblem {
         data,
         weights,
