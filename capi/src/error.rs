@@ -6,7 +6,7 @@ use std::cell::RefCell;
 use std::ffi::c_char;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use aacmm_core::calibrate::CalibrationError;
+use aacmm_core::calibrate::{CalibrationError, OptionError};
 use aacmm_core::error::InputError;
 use aacmm_core::kernel::KernelError;
 
@@ -103,12 +103,33 @@ impl From<CalibrationError> for Error {
         let status = match &e {
             CalibrationError::Kernel(KernelError::Unsupported(_)) => AacmmStatus::Unsupported,
             CalibrationError::Kernel(_) => AacmmStatus::Length,
-            CalibrationError::UnknownParameter { .. } | CalibrationError::Folds(_) => {
-                AacmmStatus::InvalidArgument
-            }
+            CalibrationError::Option(o) => return Error::from(o.clone()),
             _ => AacmmStatus::Calibration,
         };
         Error::new(status, e.to_string())
+    }
+}
+
+/// The C field of each library setting ([`OptionError::field`]); settings
+/// the C API does not expose keep their library path.
+const FIELDS: [(&str, &str); 7] = [
+    ("noise.encoder_rad", "encoder_noise_rad"),
+    ("noise.probe_mm", "probe_noise_mm"),
+    ("noise.length_default_mm", "length_uncertainty_mm"),
+    ("noise.length_weight", "length_weight"),
+    ("fix", "fix"),
+    ("threads", "threads"),
+    ("cross_validate", "cross_validate"),
+];
+
+impl From<OptionError> for Error {
+    /// `AACMM_STATUS_INVALID_ARGUMENT`, naming the options struct's field.
+    fn from(o: OptionError) -> Error {
+        let field = FIELDS
+            .iter()
+            .find(|(lib, _)| *lib == o.field)
+            .map_or(o.field, |(_, c)| *c);
+        Error::invalid(format!("options.{field} = {}: {}", o.value, o.reason))
     }
 }
 

@@ -203,6 +203,135 @@ impl DataSet {
         })
     }
 
+    /// A data set read from a poses file (angles in degrees) and an optional
+    /// lengths file, for an arm of `joints` joints; `-` reads standard
+    /// input. Reader warnings are dropped: read the files with
+    /// [`crate::io::read_poses`] to keep them.
+    ///
+    /// # Errors
+    ///
+    /// The readers' errors, naming file, line and field.
+    pub fn from_files(
+        poses: impl AsRef<std::path::Path>,
+        lengths: Option<impl AsRef<std::path::Path>>,
+        joints: usize,
+    ) -> Result<DataSet, InputError> {
+        let path = poses.as_ref();
+        let (p, _) = crate::io::read_poses(path, crate::io::AngleUnit::Deg, Some(joints))?;
+        let data = DataSet::from_poses(&p, &crate::io::source_name(path))?;
+        match lengths {
+            Some(l) => {
+                let l = l.as_ref();
+                data.with_lengths(&crate::io::read_lengths(l)?, &crate::io::source_name(l))
+            }
+            None => Ok(data),
+        }
+    }
+
+    /// A data set from arrays: a point label per touch, the touch's joint
+    /// readings (rad, one row per touch, every row as long), and reference
+    /// lengths between labels. Messages name `<arrays>` and the 1-based
+    /// row (touch) or length.
+    ///
+    /// ```
+    /// use aacmm_core::{DataSet, io::ReferenceLength};
+    /// let labels = ["A", "A", "A", "B", "B", "B"];
+    /// let q: Vec<Vec<f64>> = (0..6).map(|i| vec![0.1 * i as f64; 6]).collect();
+    /// let ab = ReferenceLength { a: "A".into(), b: "B".into(), distance: 500.0, uncertainty: None, line: 1 };
+    /// let data = DataSet::from_touches(&labels, &q, &[ab]).unwrap();
+    /// assert_eq!((data.len(), data.points().len(), data.references().len()), (6, 2, 1));
+    /// let e = DataSet::from_touches(&labels[..5], &q[..5], &[]).unwrap_err();
+    /// assert!(e.to_string().starts_with("<arrays>:4: field `point`: point `B` has 2 touches"), "{e}");
+    /// ```
+    ///
+    /// # Errors
+    ///
+    /// Rows of unequal length, non-finite readings, too few touches per
+    /// point, lengths that are not positive or name unknown points.
+    pub fn from_touches<S: AsRef<str>, Q: AsRef<[f64]>>(
+        labels: &[S],
+        readings: &[Q],
+        lengths: &[ReferenceLength],
+    ) -> Result<DataSet, InputError> {
+        const FILE: &str = "<arrays>";
+        if labels.len() != readings.len() {
+            return Err(InputError::file_error(
+                FILE,
+                format!(
+                    "{} labels for {} rows of readings",
+                    labels.len(),
+                    readings.len()
+                ),
+            ));
+        }
+        let joints = readings.first().map_or(0, |r| r.as_ref().len());
+        let mut q = Vec::with_capacity(readings.len());
+        for (i, row) in readings.iter().enumerate() {
+            let row = row.as_ref();
+            if row.len() != joints {
+                return Err(InputError::line_error(
+                    FILE,
+                    i + 1,
+                    format!("{} readings, the first row has {joints}", row.len()),
+                ));
+            }
+            if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                return Err(InputError::field(
+                    FILE,
+                    i + 1,
+                    format!("q{}", j + 1),
+                    format!("{}: readings must be finite", row[j]),
+                ));
+            }
+            q.push(row.to_vec());
+        }
+        let mut pairs = std::collections::HashSet::new();
+        for (i, l) in lengths.iter().enumerate() {
+            let bad = |field: &str, m: String| Err(InputError::field(FILE, i + 1, field, m));
+            let pair = if l.a < l.b {
+                (&l.a, &l.b)
+            } else {
+                (&l.b, &l.a)
+            };
+            if !pairs.insert(pair) {
+                return bad(
+                    "point_b",
+                    format!("the pair {}–{} is given twice", l.a, l.b),
+                );
+            }
+            if !(l.distance.is_finite() && l.distance > 0.0) {
+                return bad(
+                    "distance",
+                    format!("{}: must be a positive number", l.distance),
+                );
+            }
+            if let Some(u) = l.uncertainty.filter(|u| !(u.is_finite() && *u >= 0.0)) {
+                return bad("uncertainty", format!("{u}: must be a finite number ≥ 0"));
+            }
+            if l.a == l.b {
+                return bad(
+                    "point_b",
+                    format!("`{}` again: a length needs two points", l.a),
+                );
+            }
+        }
+        let poses = Poses {
+            labels: labels.iter().map(|l| l.as_ref().to_string()).collect(),
+            joints,
+            q,
+            lines: (1..=labels.len()).collect(),
+        };
+        let lengths: Vec<ReferenceLength> = lengths
+            .iter()
+            .enumerate()
+            .map(|(i, l)| ReferenceLength {
+                line: i + 1,
+                ..l.clone()
+            })
+            .collect();
+        DataSet::from_poses(&poses, FILE)?.with_lengths(&lengths, FILE)
+    }
+
     /// A data set of labelled points without readings (`joints() == 0`): for
     /// figures computed from positions measured elsewhere, and for tests.
     ///

@@ -76,8 +76,9 @@ pub struct Relation {
 /// A parameter the analysis recommends fixing, and why.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Fixed {
-    /// Parameter name.
-    pub name: String,
+    /// The parameter (its name in JSON).
+    #[serde(rename = "name")]
+    pub id: ParamId,
     /// Why it is fixed.
     pub reason: String,
 }
@@ -85,8 +86,9 @@ pub struct Fixed {
 /// A parameter left free: its predicted uncertainty and identifiability.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FreeParameter {
-    /// Parameter name.
-    pub name: String,
+    /// The parameter (its name in JSON).
+    #[serde(rename = "name")]
+    pub id: ParamId,
     /// `mm` or `deg`.
     pub unit: String,
     /// Predicted standard uncertainty at the stated noise, in `unit`.
@@ -145,31 +147,8 @@ pub struct Identification {
 impl Identification {
     /// Column indices of the recommended free parameters.
     pub fn free_columns(&self) -> Vec<usize> {
-        self.free
-            .iter()
-            .filter_map(|f| self.parameters.iter().position(|p| *p == f.name))
-            .collect()
-    }
-}
-
-/// The arm's reach: `Σ|a| + Σ|d| + |B|`, mm.
-pub fn reach(params: &DhParams) -> f64 {
-    let links: f64 = params.joints.iter().map(|j| j.a.abs() + j.d.abs()).sum();
-    let b = params.probe.iter().map(|v| v * v).sum::<f64>().sqrt();
-    (links + b).max(1.0)
-}
-
-/// The unit of a parameter for users.
-pub fn unit(id: ParamId) -> &'static str {
-    if id.kind.is_length() { "mm" } else { "deg" }
-}
-
-/// A value of parameter `id` in user units (mm or deg).
-pub fn to_user(id: ParamId, v: f64) -> f64 {
-    if id.kind.is_length() {
-        v
-    } else {
-        v.to_degrees()
+        let joints = (self.parameters.len().saturating_sub(3)) / 4;
+        self.free.iter().map(|f| f.id.column(joints)).collect()
     }
 }
 
@@ -201,7 +180,7 @@ impl Scaled {
     fn at(params: &DhParams, normal: crate::residuals::Normal) -> Scaled {
         let ids: Vec<ParamId> = ParamId::all(params.joint_count()).collect();
         let np = ids.len();
-        let reach = reach(params);
+        let reach = params.reach();
         let d: Vec<f64> = ids
             .iter()
             .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / reach })
@@ -371,7 +350,7 @@ pub(crate) fn identify_from(
     let mut fixed: Vec<Fixed> = base
         .iter()
         .map(|&c| Fixed {
-            name: names[c].clone(),
+            id: ids[c],
             reason: "base motion: never identifiable".into(),
         })
         .collect();
@@ -387,12 +366,9 @@ pub(crate) fn identify_from(
             null_relations.push(relation);
             reason
         };
-        fixed.push(Fixed {
-            name: names[c].clone(),
-            reason,
-        });
+        fixed.push(Fixed { id: ids[c], reason });
     }
-    fixed.sort_by_key(|f| names.iter().position(|n| *n == f.name));
+    fixed.sort_by_key(|f| f.id.column(n));
 
     // Predicted σ of the free parameters (weights carry the noise).
     let q = free_cols.len();
@@ -416,9 +392,9 @@ pub(crate) fn identify_from(
                 .sum::<f64>()
                 .sqrt();
             FreeParameter {
-                name: names[c].clone(),
-                unit: unit(ids[c]).into(),
-                sigma: to_user(ids[c], cov[(a, a)].max(0.0).sqrt()),
+                id: ids[c],
+                unit: ids[c].unit().into(),
+                sigma: ids[c].to_user(cov[(a, a)].max(0.0).sqrt()),
                 identifiability: ident,
             }
         })

@@ -4,6 +4,26 @@
 //!
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
+//!
+//! The front door: read an arm and its touches, make a [`Problem`], run it.
+//!
+//! ```
+//! use aacmm_core::{CalibrateOptions, DataSet, Problem, read_arm};
+//! # let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+//! let (arm, _) = read_arm(format!("{root}/examples/paper-table-1.toml").as_ref())?;
+//! let data = DataSet::from_files(
+//!     format!("{root}/examples/paper-campaign/poses.csv"),
+//!     Some(format!("{root}/examples/paper-campaign/lengths.csv")),
+//!     arm.params.joint_count(),
+//! )?;
+//! let report = Problem::new(arm, data, CalibrateOptions::default())?.run()?;
+//! for p in report.calibration.parameters.iter().filter(|p| p.fixed.is_none()) {
+//!     let u = p.user();
+//!     println!("{:<7} {:>12.4} ± {:.4} {}", u.name, u.calibrated, u.sigma.unwrap_or(f64::NAN), u.unit);
+//! }
+//! assert!(report.is_usable());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod calibrate;
 pub mod dataset;
@@ -16,6 +36,18 @@ pub mod io;
 pub mod kernel;
 pub mod metrics;
 pub mod params;
+pub mod random;
+#[cfg(feature = "report")]
 pub mod report;
 pub mod residuals;
+pub mod session;
 pub mod simulate;
+
+pub use calibrate::{CalibrateOptions, Calibration, CalibrationError, FixSpec, Method, calibrate};
+pub use dataset::DataSet;
+pub use io::{Arm, read_arm};
+pub use metrics::evaluate;
+pub use params::{DhParams, ParamId};
+pub use residuals::Noise;
+pub use session::{CalibrationReport, Problem};
+pub use simulate::simulate;

@@ -54,8 +54,13 @@ pub enum ResidualKind {
     Length,
 }
 
-/// What is known of the measurement noise; `None` = not stated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// σ of a reference length whose file states none, mm.
+pub const DEFAULT_LENGTH_SIGMA_MM: f64 = 0.001;
+
+/// What is known of the measurement noise; `None` = not stated. The
+/// default states no touch noise and [`DEFAULT_LENGTH_SIGMA_MM`] for
+/// lengths without their own uncertainty.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Noise {
     /// σ of each encoder reading, rad.
     pub encoder_rad: Option<f64>,
@@ -67,10 +72,57 @@ pub struct Noise {
     pub length_weight: Option<f64>,
 }
 
+impl Default for Noise {
+    fn default() -> Self {
+        Noise {
+            encoder_rad: None,
+            probe_mm: None,
+            length_default_mm: DEFAULT_LENGTH_SIGMA_MM,
+            length_weight: None,
+        }
+    }
+}
+
 impl Noise {
     /// Whether any touch noise was stated.
     pub fn stated(&self) -> bool {
         self.encoder_rad.is_some() || self.probe_mm.is_some()
+    }
+
+    /// Checks the values: each finite and `≥ 0` (a length weight `> 0`),
+    /// and stated touch noise not zero on both counts.
+    ///
+    /// ```
+    /// use aacmm_core::residuals::Noise;
+    /// assert!(Noise::default().check().is_ok());
+    /// let zero = Noise { encoder_rad: Some(0.0), probe_mm: Some(0.0), ..Noise::default() };
+    /// assert_eq!(zero.check().unwrap_err().field, "noise.probe_mm");
+    /// let negative = Noise { probe_mm: Some(-0.01), ..Noise::default() };
+    /// assert_eq!(negative.check().unwrap_err().field, "noise.probe_mm");
+    /// ```
+    pub fn check(&self) -> Result<(), crate::calibrate::OptionError> {
+        use crate::calibrate::{OptionError, options::check_nonnegative};
+        for (field, v) in [
+            ("noise.encoder_rad", self.encoder_rad),
+            ("noise.probe_mm", self.probe_mm),
+        ] {
+            if let Some(v) = v {
+                check_nonnegative(field, v, true)?;
+            }
+        }
+        check_nonnegative("noise.length_default_mm", self.length_default_mm, true)?;
+        if let Some(w) = self.length_weight {
+            check_nonnegative("noise.length_weight", w, false)?;
+        }
+        let zero = |v: Option<f64>| v.unwrap_or(0.0) == 0.0;
+        if self.stated() && zero(self.encoder_rad) && zero(self.probe_mm) {
+            return Err(OptionError::new(
+                "noise.probe_mm",
+                0,
+                "encoder and probe noise both 0: a touch needs some uncertainty",
+            ));
+        }
+        Ok(())
     }
 }
 

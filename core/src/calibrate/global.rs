@@ -35,6 +35,7 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use super::lm::{LmOptions, LmResult, levenberg_marquardt, levenberg_marquardt_from};
+use super::options::OptionError;
 use super::{CalibrationError, Phase};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
@@ -84,24 +85,39 @@ setters!(GlobalOptions {
 });
 
 impl GlobalOptions {
-    /// Checks the settings; the message names the setting.
+    /// Checks the settings; the error names the setting
+    /// (`global.max_starts`, …).
     ///
     /// ```
     /// use aacmm_core::calibrate::GlobalOptions;
     /// assert!(GlobalOptions::default().check().is_ok());
     /// let e = GlobalOptions::default().confirmations(0).check().unwrap_err();
-    /// assert_eq!(e, "confirmations 0: at least 1");
+    /// assert_eq!(e.to_string(), "global.confirmations = 0: at least 1");
     /// ```
-    pub fn check(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("start budget", self.max_starts),
-            ("confirmations", self.confirmations),
+    pub fn check(&self) -> Result<(), OptionError> {
+        for (field, v) in [
+            ("global.grid_cells", self.grid_cells),
+            ("global.max_starts", self.max_starts),
+            ("global.confirmations", self.confirmations),
+            ("global.start_iterations", self.start_iterations),
         ] {
             if v == 0 {
-                return Err(format!("{name} 0: at least 1"));
+                return Err(OptionError::new(field, 0, "at least 1"));
             }
         }
-        Ok(())
+        if self.confirmations > self.max_starts + self.candidates + 1 {
+            return Err(OptionError::new(
+                "global.confirmations",
+                self.confirmations,
+                format!(
+                    "more than the {} starts there can be ({} random, {} grid, the start arm)",
+                    self.max_starts + self.candidates + 1,
+                    self.max_starts,
+                    self.candidates
+                ),
+            ));
+        }
+        super::options::check_nonnegative("global.noise_floor_k", self.noise_floor_k, false)
     }
 }
 
@@ -219,7 +235,7 @@ pub fn global<R: Rng>(
     rng: &mut R,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(LmResult, GlobalTrace, Vec<Phase>), CalibrationError> {
-    options.check().map_err(CalibrationError::Options)?;
+    options.check()?;
     let GlobalProblem {
         data,
         weights,
@@ -417,7 +433,7 @@ fn torus_grid(
     let place = |x: &mut DhParams, cell: usize| {
         for (id, &stride) in ids.iter().zip(&strides) {
             let i = digit(cell, stride);
-            *x.get_mut(*id) = crate::simulate::wrap(
+            *x.get_mut(*id) = crate::params::wrap(
                 std::f64::consts::TAU * i as f64 / k as f64 - std::f64::consts::PI,
             );
         }
@@ -493,13 +509,13 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
     let n = params.joint_count();
     let id = |kind, index| ParamId { kind, index };
     let is_free = |p: ParamId| free.contains(&p.column(n));
-    let reach = crate::identify::reach(nominal);
+    let reach = nominal.reach();
     let mut changed = Vec::new();
     for i in 0..n {
         let (a, al) = (params.joints[i].a, params.joints[i].alpha);
         let (na, nal) = (nominal.joints[i].a, nominal.joints[i].alpha);
         let dist =
-            |a: f64, al: f64| ((a - na) / reach).powi(2) + crate::simulate::wrap(al - nal).powi(2);
+            |a: f64, al: f64| ((a - na) / reach).powi(2) + crate::params::wrap(al - nal).powi(2);
         if dist(-a, -al) >= dist(a, al) {
             continue;
         }
@@ -528,7 +544,7 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
         for p in plan {
             let v = params.get_mut(p);
             if p.kind == ParamKind::Theta {
-                *v = crate::simulate::wrap(*v + std::f64::consts::PI);
+                *v = crate::params::wrap(*v + std::f64::consts::PI);
             } else if *v != 0.0 {
                 *v = -*v;
             } else {

@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
+use super::options::{OptionError, check_nonnegative};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::params::DhParams;
@@ -28,12 +29,19 @@ pub enum Termination {
     ZeroResidual,
     /// The iteration budget ran out first.
     MaxIterations,
-    /// No step lowered the cost even with huge damping: a minimum to machine
-    /// precision, or a numerical failure.
+    /// No step lowered the cost even with huge damping, and the gradient
+    /// test passes at [`MACHINE_PRECISION_GTOL`]: a minimum to machine
+    /// precision.
+    MachinePrecision,
+    /// No step lowered the cost even with huge damping, yet the gradient is
+    /// not small: not a converged minimum (a numerical failure, or a cost
+    /// that is not smooth there).
     NoProgress,
-    /// Annealing alone (`sa`) ended by its own rule; no LM ran.
-    Annealed,
 }
+
+/// The gradient test (largest cosine between a column and the residuals)
+/// that a stalled LM must pass to count as converged.
+pub const MACHINE_PRECISION_GTOL: f64 = 1e-6;
 
 impl Termination {
     /// Whether the result is a converged minimum.
@@ -42,9 +50,11 @@ impl Termination {
     /// use aacmm_core::calibrate::Termination;
     /// assert!(Termination::CostTolerance.was_successful());
     /// assert!(!Termination::MaxIterations.was_successful());
+    /// assert!(!Termination::NoProgress.was_successful());
+    /// assert!(Termination::MachinePrecision.was_successful());
     /// ```
     pub fn was_successful(self) -> bool {
-        !matches!(self, Termination::MaxIterations)
+        !matches!(self, Termination::MaxIterations | Termination::NoProgress)
     }
 
     /// A sentence for summaries.
@@ -55,8 +65,12 @@ impl Termination {
             Termination::GradientTolerance => "gradient below gtol",
             Termination::ZeroResidual => "residuals vanished",
             Termination::MaxIterations => "iteration limit reached",
-            Termination::NoProgress => "no step lowers the cost (minimum to machine precision)",
-            Termination::Annealed => "annealing ended (no LM)",
+            Termination::MachinePrecision => {
+                "no step lowers the cost and the gradient is nil (minimum to machine precision)"
+            }
+            Termination::NoProgress => {
+                "no step lowers the cost, yet the gradient is not small (not converged)"
+            }
         }
     }
 }
@@ -102,6 +116,31 @@ setters!(LmOptions {
 });
 
 impl LmOptions {
+    /// Checks the settings; the error names the setting (`lm.ftol`, …,
+    /// `threads`).
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::LmOptions;
+    /// assert!(LmOptions::default().check().is_ok());
+    /// assert_eq!(LmOptions::default().max_iterations(0).check().unwrap_err().field, "lm.max_iterations");
+    /// ```
+    pub fn check(&self) -> Result<(), OptionError> {
+        if self.max_iterations == 0 {
+            return Err(OptionError::new("lm.max_iterations", 0, "at least 1"));
+        }
+        for (field, v) in [
+            ("lm.ftol", self.ftol),
+            ("lm.xtol", self.xtol),
+            ("lm.gtol", self.gtol),
+        ] {
+            check_nonnegative(field, v, true)?;
+        }
+        if self.threads == 0 {
+            return Err(OptionError::new("threads", 0, "at least 1"));
+        }
+        Ok(())
+    }
+
     /// Sets the worker threads.
     pub fn threads(mut self, n: usize) -> Self {
         self.threads = n.max(1);
@@ -302,7 +341,11 @@ pub fn levenberg_marquardt_from(
                 accepted: false,
             });
             if small_step || lambda > 1e16 {
-                termination = Termination::NoProgress;
+                termination = if gmax <= MACHINE_PRECISION_GTOL {
+                    Termination::MachinePrecision
+                } else {
+                    Termination::NoProgress
+                };
                 break;
             }
         }
