@@ -8,6 +8,7 @@ mod evaluate;
 mod out_paths;
 mod points;
 mod report;
+mod session;
 mod sim_messages;
 mod simulate;
 mod streams;
