@@ -5,23 +5,20 @@
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
 //!
-//! The front door: read an arm and its touches, make a [`Problem`], run it.
+//! The front door: read an arm and its touches, make a [`Problem`], run it
+//! (the README's Rust example, run from the repository's root):
 //!
 //! ```
+//! # std::env::set_current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).unwrap();
 //! use aacmm_core::{CalibrateOptions, DataSet, Problem, read_arm};
-//! # let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
-//! let (arm, _) = read_arm(format!("{root}/examples/paper-table-1.toml").as_ref())?;
-//! let data = DataSet::from_files(
-//!     format!("{root}/examples/paper-campaign/poses.csv"),
-//!     Some(format!("{root}/examples/paper-campaign/lengths.csv")),
-//!     arm.params.joint_count(),
-//! )?;
+//!
+//! let (arm, _) = read_arm("examples/paper-table-1.toml".as_ref())?;
+//! let data = DataSet::from_files("examples/paper-campaign/poses.csv", Some("examples/paper-campaign/lengths.csv"), 6)?;
 //! let report = Problem::new(arm, data, CalibrateOptions::default())?.run()?;
-//! for p in report.calibration.parameters.iter().filter(|p| p.fixed.is_none()) {
-//!     let u = p.user();
-//!     println!("{:<7} {:>12.4} ± {:.4} {}", u.name, u.calibrated, u.sigma.unwrap_or(f64::NAN), u.unit);
-//! }
 //! assert!(report.is_usable());
+//! for p in report.calibration.parameters.iter().filter(|p| p.fixed.is_none()).map(|p| p.user()) {
+//!     println!("{:<7} {:>12.4} ± {:.4} {}", p.name, p.calibrated, p.sigma.unwrap_or(f64::NAN), p.unit);
+//! }
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 

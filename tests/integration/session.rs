@@ -80,3 +80,35 @@ fn the_cli_writes_the_library_sessions_report() {
         assert_eq!(back.calibration.solver.method, method);
     }
 }
+
+/// The visible, non-empty lines of the first ```rust block of `text`
+/// (doc-comment prefixes and hidden `# ` lines removed).
+fn rust_block(text: &str, prefix: &str) -> Vec<String> {
+    let lines: Vec<String> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix(prefix).map(str::trim_end))
+        .map(str::to_string)
+        .collect();
+    let start = lines
+        .iter()
+        .position(|l| l == "```rust" || l == "```")
+        .expect("a code block");
+    lines[start + 1..]
+        .iter()
+        .take_while(|l| !l.starts_with("```"))
+        .filter(|l| !l.starts_with("# ") && !l.is_empty())
+        .cloned()
+        .collect()
+}
+
+#[test]
+fn the_readmes_rust_example_is_the_crates_doc_test() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let section = &readme[readme.find("## From Rust").expect("a Rust section")..];
+    let lib = std::fs::read_to_string(root.join("core/src/lib.rs")).unwrap();
+    let doc = &lib[lib.find("//! The front door").unwrap()..];
+    let (a, b) = (rust_block(section, ""), rust_block(doc, "//! "));
+    assert!(a.len() >= 5 && a.len() <= 10, "{a:?}");
+    assert_eq!(a, b);
+}
