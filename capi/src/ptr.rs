@@ -224,10 +224,8 @@ mod tests {
             slot.write(i == 1);
         }
         // SAFETY: every element was written above.
-        assert_eq!(
-            unsafe { buf.map(|b| b.assume_init()) },
-            [false, true, false]
-        );
+        let flags = unsafe { buf.map(|b| b.assume_init()) };
+        assert_eq!(flags, [false, true, false]);
         // SAFETY: refused before any use.
         assert!(unsafe { output::<f64>(std::ptr::null_mut(), 1, "p") }.is_err());
     }
