@@ -602,7 +602,7 @@ unsafe fn per_parameter<T: Copy>(
     // SAFETY: by the contract.
     let out = unsafe { ptr::output(out, len, "out") }?;
     for (c, id) in ParamId::all(joints).enumerate() {
-        out[c] = value(cal, c, id);
+        out[c].write(value(cal, c, id));
     }
     Ok(())
 }

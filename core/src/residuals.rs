@@ -581,12 +581,16 @@ fn chunk(
     Ok(part)
 }
 
-/// `f` over `items` on `threads` scoped threads, results in item order.
+/// `f` over `items` on `threads` scoped threads, results in item order; on
+/// the calling thread when one thread (or one item) is all there is.
 pub(crate) fn parallel_map<T: Sync, R: Send>(
     items: &[T],
     threads: usize,
     f: impl Fn(&T) -> R + Sync,
 ) -> Vec<R> {
+    if threads <= 1 || items.len() <= 1 {
+        return items.iter().map(f).collect();
+    }
     let next = std::sync::atomic::AtomicUsize::new(0);
     let mut slots: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
     let done = std::sync::Mutex::new(Vec::new());
@@ -653,4 +657,63 @@ pub fn cost(
     } else {
         f64::INFINITY
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{AngleUnit, parse_lengths, parse_poses};
+    use crate::params::DhParams;
+
+    /// 1000 points of 3 touches with stated noise and reference lengths:
+    /// 16 chunks of points, so 2 and 4 threads really split the work (one
+    /// thread below 4 chunks). The normal equations, their cost and the
+    /// centroids are the same bits on 1, 2 and 4 threads.
+    #[test]
+    fn normal_equations_are_the_same_bits_on_any_thread_count() {
+        let n = 1000;
+        let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
+        for p in 0..n {
+            for k in 0..3 {
+                let q: Vec<String> = (0..6)
+                    .map(|j| {
+                        let base = ((p * 7 + j * 13) as f64 * 0.37).sin() * 120.0;
+                        format!("{}", base + (k * 20 + j) as f64 * 0.5)
+                    })
+                    .collect();
+                text.push_str(&format!("P{p},{}\n", q.join(",")));
+            }
+        }
+        let (poses, _) = parse_poses(&text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
+        let mut lengths = String::from("point_a,point_b,distance\n");
+        for i in 0..20 {
+            lengths.push_str(&format!("P{i},P{},{}\n", n - 1 - i, 500 + i));
+        }
+        let data = DataSet::from_poses(&poses, "p.csv")
+            .unwrap()
+            .with_lengths(&parse_lengths(&lengths, "l.csv").unwrap(), "l.csv")
+            .unwrap();
+        assert_eq!(data.points().len(), n);
+        assert!(n > 4 * POINTS_PER_CHUNK, "enough chunks to run in parallel");
+        let kernel = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+        let noise = Noise {
+            encoder_rad: Some(1e-4),
+            probe_mm: Some(0.01),
+            length_default_mm: 0.001,
+            length_weight: None,
+        };
+        let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        let free: Vec<usize> = (0..27).collect();
+        let bits = |threads: usize| {
+            let ne = normal_equations(&kernel, &data, &weights, &free, threads).unwrap();
+            let mut v: Vec<u64> = ne.jtj.iter().chain(&ne.jtr).map(|x| x.to_bits()).collect();
+            v.extend([ne.touch_cost, ne.length_cost, ne.cost()].map(f64::to_bits));
+            v.extend(ne.centroids.iter().flatten().map(|x| x.to_bits()));
+            assert!(ne.length_cost > 0.0 && ne.touch_cost > 0.0);
+            v
+        };
+        let one = bits(1);
+        assert_eq!(bits(2), one);
+        assert_eq!(bits(4), one);
+    }
 }

@@ -64,10 +64,7 @@ impl FitInput {
 
     /// The worker threads: `--threads`, or every core.
     pub fn threads(&self) -> usize {
-        self.threads.map_or_else(
-            || std::thread::available_parallelism().map_or(1, |n| n.get()),
-            usize::from,
-        )
+        super::worker_threads(self.threads)
     }
 
     /// The arm and the data set (touches grouped by point, lengths added).

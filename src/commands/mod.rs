@@ -77,6 +77,14 @@ pub fn limit_warning(arm: &Arm, poses: &Poses, file: &str, unit: AngleUnit) -> O
     })
 }
 
+/// Worker threads for a `--threads` flag: its value, or every core.
+pub fn worker_threads(flag: Option<u16>) -> usize {
+    flag.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        usize::from,
+    )
+}
+
 /// The arm and the poses it is applied to: the flags `points` and
 /// `evaluate` share.
 #[derive(clap::Args)]
