@@ -469,20 +469,29 @@ fn pivoted_cholesky(
     let mut left: Vec<usize> = (0..k).collect();
     let mut pivots = Vec::with_capacity(rank);
     for _ in 0..rank {
-        let best = left.iter().map(|&c| a[(c, c)]).fold(0.0, f64::max);
+        // Rounding can leave every remaining diagonal slightly negative (or
+        // NaN, from a matrix that is all rounding): nothing left to pivot on,
+        // so the free set is smaller than the numerical rank.
+        let best = left
+            .iter()
+            .map(|&c| a[(c, c)])
+            .filter(|d| d.is_finite())
+            .fold(f64::NEG_INFINITY, f64::max);
+        if best.is_nan() || best <= 0.0 {
+            break;
+        }
         let tie = |c: usize| a[(c, c)] >= best * (1.0 - 1e-9);
-        let pick = left
+        let Some(pick) = left
             .iter()
             .copied()
             .filter(|&c| tie(c))
             .min_by_key(|&c| (prefer_fixed(c), c))
-            .expect("rank ≤ columns");
+        else {
+            break;
+        };
         pivots.push(pick);
         left.retain(|&c| c != pick);
         let d = a[(pick, pick)];
-        if d <= 0.0 {
-            break;
-        }
         let col: Vec<f64> = (0..k).map(|r| a[(r, pick)]).collect();
         for &r in &left {
             for &c in &left {
@@ -735,4 +744,31 @@ pub(crate) fn open_directions_from(
         }
     }
     open
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every remaining diagonal slightly negative (rounding on a matrix of
+    /// almost nothing): no pivot is left, and the free set ends there rather
+    /// than panicking.
+    #[test]
+    fn pivoting_stops_on_negative_diagonals() {
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![
+            -1e-30, -2e-30, -3e-30,
+        ]));
+        assert_eq!(pivoted_cholesky(&m, 3, |_| false), Vec::<usize>::new());
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![4.0, -1e-30, 1.0]));
+        assert_eq!(pivoted_cholesky(&m, 3, |_| false), vec![0, 2]);
+    }
+
+    /// NaN diagonals are never pivots.
+    #[test]
+    fn pivoting_skips_nan_diagonals() {
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![f64::NAN, 2.0, f64::NAN]));
+        assert_eq!(pivoted_cholesky(&m, 3, |_| false), vec![1]);
+        let m = DMatrix::from_element(2, 2, f64::NAN);
+        assert_eq!(pivoted_cholesky(&m, 2, |_| false), Vec::<usize>::new());
+    }
 }
