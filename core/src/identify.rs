@@ -755,9 +755,7 @@ mod tests {
     /// than panicking.
     #[test]
     fn pivoting_stops_on_negative_diagonals() {
-        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![
-            -1e-30, -2e-30, -3e-30,
-        ]));
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![-1e-30, -2e-30, -3e-30]));
         assert_eq!(pivoted_cholesky(&m, 3, |_| false), Vec::<usize>::new());
         let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![4.0, -1e-30, 1.0]));
         assert_eq!(pivoted_cholesky(&m, 3, |_| false), vec![0, 2]);
