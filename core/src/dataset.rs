@@ -22,6 +22,12 @@ use crate::kernel::PreparedPoses;
 /// and fewer than three touches say next to nothing about articulation error.
 pub const MIN_TOUCHES: usize = 3;
 
+/// Least joint-angle range (degrees) that counts as articulation: a data set
+/// in which no point's touches span this much in any joint was taken
+/// without moving the arm (the same pose read again, encoder noise at most),
+/// and cannot say anything about its geometry.
+pub const MIN_ARTICULATION_DEG: f64 = 1.0;
+
 /// One physical point (cone socket) and its touches.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
@@ -117,12 +123,65 @@ pub struct DataSet {
     source: SourceMap,
 }
 
+/// Refuses readings in which no point is articulated: every point's touches
+/// lie within [`MIN_ARTICULATION_DEG`] of each other in every joint. Such a
+/// campaign (each socket touched in one pose, perhaps read several times)
+/// has a Jacobian of rounding and noise only. `rows_of` lists each point's
+/// rows; readings are in radians. A data set without readings is exempt.
+fn check_articulation(
+    rows_of: &[(&str, Vec<usize>)],
+    poses: &Poses,
+    file: &str,
+) -> Result<(), InputError> {
+    if poses.joints == 0 {
+        return Ok(());
+    }
+    // The widest range: (range in rad, joint, point label).
+    let mut widest = (0.0_f64, 0, "");
+    for (label, rows) in rows_of {
+        for j in 0..poses.joints {
+            let (lo, hi) = rows
+                .iter()
+                .filter_map(|&r| poses.q.get(r).and_then(|q| q.get(j)).copied())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                    (lo.min(x), hi.max(x))
+                });
+            let range = hi - lo;
+            if range > widest.0 {
+                widest = (range, j, label);
+            }
+        }
+    }
+    if widest.0.to_degrees() >= MIN_ARTICULATION_DEG {
+        return Ok(());
+    }
+    let (range, j, label) = widest;
+    let at = if range > 0.0 {
+        format!(
+            "the widest range of a joint at one point is {:.4}° (q{} at point `{label}`)",
+            range.to_degrees(),
+            j + 1
+        )
+    } else {
+        "every point's touches have identical readings".to_string()
+    };
+    Err(InputError::file_error(
+        file,
+        format!(
+            "no articulation: {at}; each point must be touched in many different poses \
+             (joint ranges of at least {MIN_ARTICULATION_DEG}°, in practice tens of degrees) \
+             for the touches to say anything about the arm"
+        ),
+    ))
+}
+
 impl DataSet {
     /// Groups the rows of a poses file by point; `file` names it in errors.
     ///
     /// # Errors
     /// A point with fewer than [`MIN_TOUCHES`] touches (at its first line,
-    /// field `point`); an empty file.
+    /// field `point`); an empty file; readings without articulation (no
+    /// point's touches span [`MIN_ARTICULATION_DEG`] in any joint).
     ///
     /// ```
     /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}};
@@ -187,6 +246,7 @@ impl DataSet {
             .iter()
             .flat_map(|&r| poses.q[r].iter().copied())
             .collect();
+        check_articulation(&rows_of, poses, file)?;
         let poses_prepared = prepare(joints, &q, order.len());
         Ok(DataSet {
             joints,
@@ -510,4 +570,38 @@ impl DataSet {
 fn prepare(joints: usize, q: &[f64], len: usize) -> PreparedPoses {
     let rows: Vec<&[f64]> = (0..len).map(|i| &q[i * joints..(i + 1) * joints]).collect();
     PreparedPoses::new(joints, &rows).expect("every row has `joints` readings")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{AngleUnit, parse_poses};
+
+    fn data(text: &str) -> Result<DataSet, InputError> {
+        let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, None).unwrap();
+        DataSet::from_poses(&poses, "p.csv")
+    }
+
+    /// Each socket touched in one pose, read three times: refused, naming the
+    /// problem (this once reached `identify` and panicked there).
+    #[test]
+    fn static_touches_are_refused() {
+        let e = data("point,q1,q2\nA,10,20\nA,10,20\nA,10,20\nB,30,40\nB,30,40\nB,30,40\n")
+            .unwrap_err();
+        assert_eq!(e.file(), "p.csv");
+        assert!(e.to_string().contains("no articulation"), "{e}");
+        assert!(e.to_string().contains("identical readings"), "{e}");
+    }
+
+    /// Encoder noise alone is not articulation; the message says how far the
+    /// widest joint moved, and where.
+    #[test]
+    fn jitter_is_not_articulation() {
+        let e = data("point,q1,q2\nA,10,20\nA,10.01,20\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
+            .unwrap_err();
+        assert!(e.to_string().contains("0.0200° (q2 at point `A`)"), "{e}");
+        // One articulated point is enough.
+        data("point,q1,q2\nA,10,20\nA,10.01,25\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
+            .unwrap();
+    }
 }

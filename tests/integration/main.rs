@@ -4,6 +4,7 @@
 mod arm_checks;
 mod calibrate;
 mod campaign;
+mod edges;
 mod evaluate;
 mod out_paths;
 mod points;
