@@ -19,3 +19,4 @@ pub mod params;
 pub mod report;
 pub mod residuals;
 pub mod simulate;
+pub mod urdf;
