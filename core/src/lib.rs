@@ -16,6 +16,7 @@ pub mod io;
 pub mod kernel;
 pub mod metrics;
 pub mod params;
+pub mod placements;
 pub mod report;
 pub mod residuals;
 pub mod simulate;
