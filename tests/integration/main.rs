@@ -5,6 +5,7 @@ mod arm_checks;
 mod calibrate;
 mod campaign;
 mod evaluate;
+mod mukca;
 mod out_paths;
 mod points;
 mod report;
