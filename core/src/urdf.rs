@@ -424,13 +424,16 @@ impl Urdf {
 /// A URDF chain as a D-H arm.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DhConversion {
-    /// The arm, mm and rad: [`generic::position`](crate::generic) of it at
+    /// The arm, mm and rad: the generic model's `position` of it at
     /// `q` is the tip at `q` in the D-H base frame.
     pub params: DhParams,
     /// The D-H base frame in the URDF root frame (metres): tip in the root
     /// frame = `base · (D-H probe position / 1000)`.
     pub base: Isometry3<f64>,
 }
+
+/// A joint axis: a point on it and its unit direction.
+type Axis = (Point3<f64>, Vector3<f64>);
 
 /// Below this, `|z_a × z_b|` counts two unit axes as parallel.
 const PARALLEL: f64 = 1e-9;
@@ -465,7 +468,7 @@ impl Chain {
 
     /// The joint axes at `q = 0` in the root frame: a point on each and its
     /// unit direction; and the tip.
-    fn axes(&self) -> (Vec<(Point3<f64>, Vector3<f64>)>, Point3<f64>) {
+    fn axes(&self) -> (Vec<Axis>, Point3<f64>) {
         let mut t = Isometry3::identity();
         let mut axes = Vec::new();
         for s in &self.steps {
@@ -689,6 +692,8 @@ mod tests {
     }
 
     #[test]
+    // 1.5708 and 3.1416 are what published URDFs write; that is the point.
+    #[allow(clippy::approx_constant)]
     fn snapping_rounds_right_angles_only() {
         let mut notes = Vec::new();
         let v = snap([1.5708, -3.1416, 0.001], 1e-4, |i, _, to, _| {

@@ -31,11 +31,14 @@ fn load(name: &str) -> (aacmm_core::io::Arm, DataSet) {
     (arm, data)
 }
 
+/// A data folder, its labels with their touch counts, and its lengths.
+type Expected = (&'static str, &'static [(&'static str, usize)], usize);
+
 /// Every MUKCa row is there: the touch counts of the source files
 /// (examples/mukca/README.md), label by label.
 #[test]
 fn shipped_data_is_complete() {
-    let expect: [(&str, &[(&str, usize)], usize); 3] = [
+    let expect: [Expected; 3] = [
         (
             "kinova-1",
             &[
