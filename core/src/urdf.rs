@@ -27,10 +27,11 @@
 //!
 //! Published URDFs often round right angles (`1.5708` for π/2, `3.1416` for
 //! π). Taken literally, two axes meant to be parallel become skew by 10⁻⁵ rad
-//! and meet kilometres away, and the D-H arm gets a `d` of that size: exact,
-//! but useless as a start for a calibration. [`UrdfOptions::snap_rad`] rounds
-//! every `rpy` component within that distance of a multiple of π/2 to it and
-//! reports each rounding ([`Urdf::snapped`]).
+//! and meet kilometres away, and the D-H arm would get a `d` of that size,
+//! useless as a start for a calibration and short of digits: [`Chain::to_dh`]
+//! refuses a common normal more than 100 m away. [`UrdfOptions::snap_rad`]
+//! rounds every `rpy` component within that distance of a multiple of π/2 to
+//! it and reports each rounding ([`Urdf::snapped`]).
 
 use std::collections::HashMap;
 
@@ -432,6 +433,10 @@ pub struct DhConversion {
     pub base: Isometry3<f64>,
 }
 
+/// Farther than this (m) from the previous frame, a common normal means two
+/// axes meant to be parallel: no arm is that large.
+const FAR_M: f64 = 100.0;
+
 /// A joint axis: a point on it and its unit direction.
 type Axis = (Point3<f64>, Vector3<f64>);
 
@@ -486,7 +491,9 @@ impl Chain {
     /// The D-H arm of this chain (see the module docs for the conventions).
     ///
     /// # Errors
-    /// A chain without revolute joints.
+    /// A chain without revolute joints; two consecutive axes so nearly
+    /// parallel (but not within 10⁻⁹ rad) that their common normal is more
+    /// than 100 m away.
     ///
     /// ```
     /// use aacmm_core::urdf::{parse_urdf, UrdfOptions};
@@ -532,6 +539,22 @@ impl Chain {
                 let b = z_prev.dot(&z);
                 let denom = 1.0 - b * b;
                 let s = (w.dot(&z_prev) - b * w.dot(&z)) / denom;
+                if s.abs() > FAR_M {
+                    return Err(InputError::file_error(
+                        "URDF chain",
+                        format!(
+                            "the axes of `{}` and `{}` are parallel within {:.1e} rad, so their \
+                             common normal is {:.0} m away: the D-H arm would be exact but \
+                             useless (and lose digits). Round the URDF's near-right angles \
+                             (UrdfOptions::snap_rad, urdf_to_dh --snap-rad) if they are meant \
+                             to be parallel",
+                            self.joints[i - 1],
+                            self.joints[i],
+                            c.norm().asin(),
+                            s.abs()
+                        ),
+                    ));
+                }
                 (o_prev + z_prev * s, x)
             } else {
                 let x = perpendicular(point_next - o_prev, z_prev).unwrap_or(x_prev);
@@ -657,6 +680,36 @@ mod tests {
             let worst = worst_mm(&chain, &dh, &mut rng, 200);
             // 1e-9 m = 1e-6 mm.
             assert!(worst < 1e-6, "trial {trial}: {worst} mm\n{text}");
+        }
+    }
+
+    /// The robots of examples/mukca, with the right angles snapped (as the
+    /// arm files are made); as written, the Kinova's axes 2 and 3 (1.5708,
+    /// -3.1416) meet 38 km away, which is refused.
+    #[test]
+    fn shipped_urdfs_agree_to_a_nanometre() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/mukca/urdf");
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for (file, joints) in [("gen3lite.urdf", 6), ("panda.urdf", 7)] {
+            let text = std::fs::read_to_string(dir.join(file)).unwrap();
+            let urdf = parse_urdf(&text, file, UrdfOptions::default()).unwrap();
+            let chain = urdf.chain(None, "ball_link").unwrap();
+            assert_eq!(chain.joints.len(), joints);
+            let dh = chain.to_dh().unwrap();
+            let worst = worst_mm(&chain, &dh, &mut rng, 1000);
+            assert!(worst < 1e-6, "{file}: {worst} mm");
+            let as_written = parse_urdf(&text, file, UrdfOptions { snap_rad: 0.0 }).unwrap();
+            let dh = as_written.chain(None, "ball_link").unwrap().to_dh();
+            if file == "gen3lite.urdf" {
+                let e = dh.unwrap_err().to_string();
+                assert!(
+                    e.contains("`joint_2` and `joint_3` are parallel within 7.3e-6 rad"),
+                    "{e}"
+                );
+            } else {
+                // The Panda's URDF writes π/2 to full precision: nothing to snap.
+                assert_eq!(dh.unwrap().params, chain.to_dh().unwrap().params);
+            }
         }
     }
 
