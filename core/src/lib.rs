@@ -33,12 +33,14 @@ pub mod io;
 pub mod kernel;
 pub mod metrics;
 pub mod params;
+pub mod placements;
 pub mod random;
 #[cfg(feature = "report")]
 pub mod report;
 pub mod residuals;
 pub mod session;
 pub mod simulate;
+pub mod urdf;
 
 pub use calibrate::{CalibrateOptions, Calibration, CalibrationError, FixSpec, Method, calibrate};
 pub use dataset::DataSet;
