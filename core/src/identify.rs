@@ -35,7 +35,7 @@ use serde::{Deserialize, Serialize};
 use crate::dataset::DataSet;
 use crate::kernel::{ArmKernel, KernelError};
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Weights, normal_equations};
+use crate::residuals::{Noise, Weights, normal_equations};
 
 /// Relative singular-value threshold of the numerical rank.
 pub const RANK_TOLERANCE: f64 = 1e-7;
@@ -230,17 +230,20 @@ impl Scaled {
     }
 }
 
-/// Analyses what `data` (weighted by `weights`) can identify at `params`.
+/// Analyses what `data` can identify at `params`, the touches weighed from
+/// `noise` (without stated noise, as a 0.01 mm touch).
 pub fn identify(
     params: &DhParams,
     data: &DataSet,
-    weights: &Weights,
+    noise: &Noise,
     threads: usize,
 ) -> Result<Identification, KernelError> {
+    // Without stated noise, σ as for a 0.01 mm touch.
+    let weights = Weights::new(&ArmKernel::new(params)?, data, noise, 0.01)?;
     Ok(identify_from(
         params,
         data,
-        full_normal(params, data, weights, threads)?,
+        full_normal(params, data, &weights, threads)?,
     ))
 }
 
@@ -626,7 +629,8 @@ pub(crate) fn strong_correlations(
 /// that the free set `free` leaves open, in words: base motion (always),
 /// scale (without reference lengths) and the exact redundancies. Empty when
 /// the fixed set blocks every one — the fit is then well posed.
-pub fn open_directions(
+#[cfg(test)]
+pub(crate) fn open_directions(
     params: &DhParams,
     data: &DataSet,
     weights: &Weights,
@@ -637,7 +641,8 @@ pub fn open_directions(
     Ok(open_directions_from(params, data, normal, free))
 }
 
-/// [`open_directions`] from the normal equations of every column.
+/// The free directions the data cannot see, from the normal equations of
+/// every column.
 pub(crate) fn open_directions_from(
     params: &DhParams,
     data: &DataSet,
@@ -818,7 +823,7 @@ mod tests {
         };
         let kernel = ArmKernel::new(&params).unwrap();
         let weights = Weights::new(&kernel, &data, &noise, 0.01).unwrap();
-        let id = identify(&params, &data, &weights, 1).unwrap();
+        let id = identify(&params, &data, &noise, 1).unwrap();
         assert!(
             id.rules.iter().any(|r| r.name == "not-finite"),
             "{:?}",

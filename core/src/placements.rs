@@ -113,7 +113,7 @@ fn percent(before: f64, after: f64) -> f64 {
 /// Holds out each placement of `data` in turn (see the module docs).
 ///
 /// # Errors
-/// Fewer than two placements ([`CalibrationError::Folds`]); any error of a
+/// Fewer than two placements ([`CalibrationError::Option`] on `placements`); any error of a
 /// fold's calibration, or of its figures.
 pub fn leave_one_placement_out(
     start: &DhParams,

@@ -127,7 +127,7 @@ impl Noise {
 }
 
 /// A symmetric 3 × 3 matrix: `[xx, yy, zz, xy, xz, yz]`.
-pub type Sym3 = [f64; 6];
+pub(crate) type Sym3 = [f64; 6];
 
 /// `A·v` for a symmetric `A`.
 #[inline(always)]
@@ -156,7 +156,7 @@ fn sym_inv(a: &Sym3) -> Sym3 {
 
 /// Weights of every residual.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Weights {
+pub(crate) struct Weights {
     /// Per touch (data-set order), the inverse covariance `A_i = Σ_i⁻¹` of its
     /// position, 1/mm².
     pub touch: Vec<Sym3>,
@@ -167,18 +167,6 @@ pub struct Weights {
 impl Weights {
     /// Weights from `noise` at the arm `kernel` (the fit's start). Without
     /// stated touch noise every touch has `A = I/touch_sigma_mm²`.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::ArmKernel, params::DhParams, residuals::*};
-    /// # use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}};
-    /// # let (poses, _) = parse_poses("point,q1,q2,q3,q4,q5,q6\nA,0,0,0,0,0,0\nA,1,0,0,0,0,0\nA,2,0,0,0,0,0\n", "p.csv", AngleUnit::Deg, Some(6)).unwrap();
-    /// # let data = DataSet::from_poses(&poses, "p.csv").unwrap();
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let noise = Noise { probe_mm: Some(0.01), ..Noise::default() };
-    /// let w = Weights::new(&k, &data, &noise, 1.0).unwrap();
-    /// assert!((w.touch[0][0] - 1e4).abs() < 1e-6); // 1 / (0.01 mm)²
-    /// assert!(w.touch[0][3].abs() < 1e-9);
-    /// ```
     pub fn new(
         kernel: &ArmKernel,
         data: &DataSet,
@@ -253,14 +241,6 @@ impl Weights {
     /// The largest relative change from `other` to `self` of any touch's
     /// weight matrix (Frobenius norm) or any length's weight; infinite when
     /// the shapes differ.
-    ///
-    /// ```
-    /// use aacmm_core::residuals::Weights;
-    /// let a = Weights { touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]], length: vec![2.0] };
-    /// let b = Weights { touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]], length: vec![2.2] };
-    /// assert!((b.relative_change(&a) - 0.1).abs() < 1e-12);
-    /// assert_eq!(a.relative_change(&a), 0.0);
-    /// ```
     pub fn relative_change(&self, other: &Weights) -> f64 {
         if self.touch.len() != other.touch.len() || self.length.len() != other.length.len() {
             return f64::INFINITY;
@@ -298,7 +278,7 @@ impl Weights {
 /// The reduced normal equations at one parameter set: `JᵀJ` and `Jᵀr` over
 /// the free columns, the cost `Σ r²`, and its parts.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Normal {
+pub(crate) struct Normal {
     /// Free columns, in order (indices into the full parameter vector).
     pub free: Vec<usize>,
     /// `JᵀJ`, row-major `p × p`.
@@ -377,7 +357,7 @@ const POINTS_PER_CHUNK: usize = 64;
 /// The normal equations of the weighted residuals at `kernel`, over the
 /// columns `free`. Chunks of points run on up to `threads` threads; the
 /// result does not depend on `threads`.
-pub fn normal_equations(
+pub(crate) fn normal_equations(
     kernel: &ArmKernel,
     data: &DataSet,
     weights: &Weights,
@@ -665,7 +645,7 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(
 
 /// The cost `Σ r²` alone (positions only, no Jacobian): what a trial step
 /// or an annealing move needs. `xyz` is a buffer of one position per touch.
-pub fn cost(
+pub(crate) fn cost(
     kernel: &ArmKernel,
     data: &DataSet,
     weights: &Weights,
@@ -704,11 +684,84 @@ pub fn cost(
     })
 }
 
+/// The weighted cost `Σ r²` of the arm `params` on `data`, with every
+/// residual weighed from `noise` at the arm `weighed_at` (so that two arms
+/// compare under the same weights). Without stated touch noise a touch
+/// weighs as a 1 mm σ.
+///
+/// ```
+/// use aacmm_core::{DhParams, residuals::{Noise, weighted_cost}, simulate::*, Arm};
+/// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+/// let c = simulate(&nominal, &CampaignSettings::new(2, ErrorModel::Paper, 4, 6)).unwrap();
+/// let data = c.data_set().unwrap();
+/// let noise = Noise { probe_mm: Some(0.01), ..Noise::default() };
+/// let truth = &c.true_arm.params;
+/// let at_truth = weighted_cost(truth, truth, &data, &noise).unwrap();
+/// let at_nominal = weighted_cost(&nominal.params, truth, &data, &noise).unwrap();
+/// assert!(at_truth < at_nominal);
+/// ```
+///
+/// # Errors
+///
+/// The kernel's, for an arm it cannot evaluate.
+pub fn weighted_cost(
+    params: &crate::params::DhParams,
+    weighed_at: &crate::params::DhParams,
+    data: &DataSet,
+    noise: &Noise,
+) -> Result<f64, KernelError> {
+    let weights = Weights::new(&ArmKernel::new(weighed_at)?, data, noise, 1.0)?;
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    cost(&ArmKernel::new(params)?, data, &weights, &mut xyz)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::io::{AngleUnit, parse_lengths, parse_poses};
     use crate::params::DhParams;
+
+    #[test]
+    fn relative_change_is_the_largest_relative_difference() {
+        let a = Weights {
+            touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
+            length: vec![2.0],
+        };
+        let b = Weights {
+            touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
+            length: vec![2.2],
+        };
+        assert!((b.relative_change(&a) - 0.1).abs() < 1e-12);
+        assert_eq!(a.relative_change(&a), 0.0);
+    }
+
+    /// The free columns' normal equations are the full system's principal
+    /// submatrix, to the bit (what the first LM step reuses).
+    #[test]
+    fn the_free_columns_system_is_the_restriction_of_the_full_one() {
+        use crate::simulate::{CampaignSettings, ErrorModel, simulate};
+        let nominal = crate::io::Arm::without_limits("n", DhParams::paper_nominal());
+        let mut settings = CampaignSettings::new(9, ErrorModel::Paper, 10, 10);
+        settings.reference_lengths = 3;
+        settings.encoder_noise_deg = 0.005;
+        settings.probe_noise_mm = 0.01;
+        let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+        let kernel = ArmKernel::new(&nominal.params).unwrap();
+        let noise = Noise {
+            encoder_rad: Some(0.005f64.to_radians()),
+            probe_mm: Some(0.01),
+            ..Noise::default()
+        };
+        let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        let all: Vec<usize> = (0..27).collect();
+        let full = normal_equations(&kernel, &data, &weights, &all, 1).unwrap();
+        let free: Vec<usize> = vec![1, 0, 7, 12, 19, 26];
+        let direct = normal_equations(&kernel, &data, &weights, &free, 1).unwrap();
+        // Same products summed in the same order: equal to the bit.
+        assert_eq!(full.restrict(&free).unwrap(), direct);
+        assert!(full.restrict(&[27]).is_none());
+        assert!(direct.restrict(&[2]).is_none());
+    }
 
     /// 1000 points of 3 touches with stated noise and reference lengths:
     /// 16 chunks of points, so 2 and 4 threads really split the work (one

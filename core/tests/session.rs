@@ -39,7 +39,8 @@ fn refused(change: impl Fn(&mut CalibrateOptions)) -> &'static str {
 
 #[test]
 fn every_invalid_option_is_refused_by_its_field() {
-    let cases: Vec<(&str, Box<dyn Fn(&mut CalibrateOptions)>)> = vec![
+    type Change = Box<dyn Fn(&mut CalibrateOptions)>;
+    let cases: Vec<(&str, Change)> = vec![
         (
             "noise.encoder_rad",
             Box::new(|o| o.noise.encoder_rad = Some(-1e-4)),

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use aacmm_core::identify::{Identification, identify};
 use aacmm_core::io::source_name;
-use aacmm_core::residuals::Weights;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
@@ -43,11 +42,10 @@ pub fn run(args: Args) -> Result<()> {
     let noise = args.fit.noise();
     noise.check().map_err(super::fit::flag_error)?;
     let (arm, data) = args.fit.read()?;
-    let kernel = args.fit.input.kernel(&arm)?;
+    args.fit.input.kernel(&arm)?;
     // Without stated noise the singular values are in units of a 0.01 mm touch.
     let assumed = !noise.stated();
-    let weights = Weights::new(&kernel, &data, &noise, 0.01)?;
-    let id = identify(&arm.params, &data, &weights, args.fit.threads())
+    let id = identify(&arm.params, &data, &noise, args.fit.threads())
         .with_context(|| source_name(&args.fit.input.arm))?;
     let noise_text = if assumed {
         "not stated: σ as for a 0.01 mm touch".to_string()

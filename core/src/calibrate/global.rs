@@ -8,7 +8,7 @@
 //! 1. **LM from the start** (nominal), at most 30 iterations. When the noise is stated, a fit at
 //!    the noise floor — `χ² ≤ dof·(1 + k·sqrt(2/dof))`, `k` standard
 //!    deviations of `χ²/dof` above 1, with the touches weighed at the fit
-//!    ([`Weights`] carry the encoder noise through the arm's joint Jacobian,
+//!    (the weights carry the encoder noise through the arm's joint Jacobian,
 //!    so they depend on the zeros) — cannot be beaten by more than noise:
 //!    accepted at once, so a good start costs one LM.
 //! 2. **A grid over the torus.** Each unknown is an angle, so the free zero
@@ -178,7 +178,7 @@ fn same_minimum(a: f64, b: f64) -> bool {
 }
 
 /// What [`global`] needs beyond the start.
-pub struct GlobalProblem<'a> {
+pub(crate) struct GlobalProblem<'a> {
     /// The data.
     pub data: &'a DataSet,
     /// The noise, to weigh the touches at each minimum.
@@ -228,7 +228,7 @@ struct Minimum {
 
 /// Runs the global method from `start`; returns the best LM result (in the
 /// start's sign convention), its account, and the work per phase.
-pub fn global<R: Rng>(
+pub(crate) fn global<R: Rng>(
     start: &DhParams,
     problem: &GlobalProblem,
     options: &GlobalOptions,

@@ -75,7 +75,7 @@ impl Termination {
     }
 }
 
-/// Tolerances and limits of [`levenberg_marquardt`]; a builder.
+/// Tolerances and limits of Levenberg–Marquardt; a builder.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LmOptions {
     /// Iteration limit (accepted or rejected steps).
@@ -161,7 +161,7 @@ pub struct LmIteration {
     pub accepted: bool,
 }
 
-/// What [`levenberg_marquardt`] returns.
+/// What a Levenberg–Marquardt fit returns.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LmResult {
     /// The parameters at the end (fixed ones unchanged).
@@ -179,7 +179,7 @@ pub struct LmResult {
     /// Per iteration.
     pub history: Vec<LmIteration>,
     /// The normal equations at the result.
-    pub normal: Normal,
+    pub(crate) normal: Normal,
 }
 
 impl LmResult {
@@ -209,7 +209,7 @@ impl LmResult {
 ///
 /// Never returns NaN: a trial step with a non-finite cost is rejected like
 /// any step that does not lower the cost.
-pub fn levenberg_marquardt(
+pub(crate) fn levenberg_marquardt(
     start: &DhParams,
     data: &DataSet,
     weights: &Weights,
@@ -230,7 +230,7 @@ pub fn levenberg_marquardt(
 
 /// [`levenberg_marquardt`] from the normal equations already computed at
 /// `start` (over the free columns `normal.free`), which it does not count.
-pub fn levenberg_marquardt_from(
+pub(crate) fn levenberg_marquardt_from(
     start: &DhParams,
     normal: Normal,
     data: &DataSet,
