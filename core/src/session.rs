@@ -644,10 +644,20 @@ fn method_lines(s: &crate::calibrate::SolverSummary) -> String {
         }
     }
     if let Some(g) = &s.global {
+        let searched = if g.circles.is_empty() {
+            "no zero offset is free, so the start arm's LM is the search".to_string()
+        } else {
+            let n = g.minima.len();
+            format!(
+                "{n} {} (the start arm, {} grid cell(s), {} random start(s)) on the circles of {}",
+                if n == 1 { "minimum" } else { "minima" },
+                g.grid_starts,
+                g.random_starts,
+                g.circles.join(", ")
+            )
+        };
         t += &format!(
-            "Global: {} start(s) on the circles of {}; lowest cost reached {} time(s); stopped: {}{}\n",
-            g.minima.len(),
-            g.circles.join(", "),
+            "Global: {searched}; lowest cost reached {} time(s); stopped: {}{}\n",
             g.best_hits,
             g.stop.describe(),
             if g.sign_changes.is_empty() {

@@ -224,7 +224,10 @@ fn every_method_says_what_ran_and_how_long_each_phase_took() {
     let solver = &report["calibration"]["solver"];
     assert_eq!(solver["global"]["stop"], "noise_floor");
     assert!(
-        text.contains("Global: 1 start(s) on the circles of theta2, theta3, theta4, theta5"),
+        text.contains(
+            "Global: 1 minimum (the start arm, 0 grid cell(s), 0 random start(s)) on the circles \
+             of theta2, theta3, theta4, theta5"
+        ),
         "{text}"
     );
 }

@@ -164,6 +164,10 @@ pub struct GlobalTrace {
     /// arm, then the grid candidates, then random starts), with the weights
     /// at that minimum.
     pub minima: Vec<f64>,
+    /// Grid cells refined (after the start arm).
+    pub grid_starts: usize,
+    /// Random starts refined (after the grid).
+    pub random_starts: usize,
     /// Starts that reached the lowest cost.
     pub best_hits: usize,
     /// The noise-floor cost, when the noise is stated.
@@ -276,6 +280,7 @@ pub(crate) fn global<R: Rng>(
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
     let first = settle(first, problem, &mut phases[0])?;
     let mut angles = 0;
+    let (mut grid_starts, mut random_starts) = (0, 0);
     let stop = 'search: {
         if found.record(first, floor) {
             break 'search GlobalStop::NoiseFloor;
@@ -309,6 +314,7 @@ pub(crate) fn global<R: Rng>(
         let mut tried = 0;
         for x in cells {
             tried += 1;
+            grid_starts += 1;
             progress(tried as f64 / total as f64);
             let m = refine(&x, &mut phases)?;
             if found.record(m, floor) {
@@ -322,6 +328,7 @@ pub(crate) fn global<R: Rng>(
         let mut x = start.clone();
         for _ in 0..options.max_starts {
             tried += 1;
+            random_starts += 1;
             progress(tried as f64 / total as f64);
             x.clone_from(start);
             for &c in &circles {
@@ -346,13 +353,25 @@ pub(crate) fn global<R: Rng>(
             .map(|id| id.to_string())
             .collect()
     };
-    let best = found.best.ok_or(CalibrationError::Shape)?;
+    let mut best = found.best.ok_or(CalibrationError::Shape)?;
+    if best.fit.termination == super::Termination::MaxIterations {
+        // The lowest start was cut off by the per-start cap: finish its
+        // descent with the full LM rather than report it unconverged.
+        let timer = std::time::Instant::now();
+        let fit = levenberg_marquardt(&best.fit.params, data, weights, free, lm)?;
+        phases.push(Phase::new("lm, best start finished"));
+        let last = phases.len() - 1;
+        phases[last].add_lm(&fit, timer.elapsed().as_secs_f64());
+        best = reweigh(fit, problem, &mut phases[last])?;
+    }
     let trace = GlobalTrace {
         options: *options,
         stop,
         circles: names(&circles),
         grid_angles: angles,
         minima: found.minima,
+        grid_starts,
+        random_starts,
         best_hits: found.hits,
         noise_floor_cost: floor,
         sign_changes: Vec::new(),
@@ -362,14 +381,26 @@ pub(crate) fn global<R: Rng>(
 
 /// A start's result: reweighed ([`reweigh`]) when its LM converged; one
 /// cut off by the iteration cap is in a wrong basin (or crawling), and is
-/// recorded as it is.
+/// recorded where it stopped, its cost under the weights at that point.
 fn settle(
     fit: LmResult,
     problem: &GlobalProblem,
     phase: &mut Phase,
 ) -> Result<Minimum, CalibrationError> {
     if fit.termination == super::Termination::MaxIterations {
-        let cost = fit.normal.cost();
+        // Compared with converged starts, which are weighed at themselves:
+        // weigh this one at itself too (no refit), or a start whose weights
+        // happen to be kind looks lowest.
+        let cost = match problem.stated_dof {
+            Some(_) => {
+                let kernel = ArmKernel::new(&fit.params)?;
+                let weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
+                let mut xyz = vec![[0.0; 3]; problem.data.len()];
+                phase.cost_evaluations += 1;
+                cost(&kernel, problem.data, &weights, &mut xyz)?
+            }
+            None => fit.normal.cost(),
+        };
         return Ok(Minimum { fit, cost });
     }
     reweigh(fit, problem, phase)
