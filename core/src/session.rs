@@ -25,12 +25,11 @@ use crate::calibrate::validate::{
     BeforeAfter, Figures, Fold, before_after, check_folds, cross_validate,
 };
 use crate::calibrate::{
-    CalibrateOptions, Calibration, CalibrationError, Context, FixSpec, OptionError, Solver,
-    calibrate_with,
+    CalibrateOptions, Calibration, CalibrationError, Context, OptionError, Solver, calibrate_with,
 };
 use crate::dataset::DataSet;
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
-use crate::params::{DhParams, ParamId};
+use crate::params::DhParams;
 use crate::residuals::Noise;
 
 /// The calibrated arm, in the arm-file schema.
@@ -279,13 +278,79 @@ pub struct CalibrationReport {
     pub validation: Validation,
     /// The readers' warnings.
     pub warnings: Vec<String>,
+    /// Whether the calibration may be used, and if not, why.
+    pub verdict: Verdict,
+}
+
+/// Whether a calibration may be used: exit 0 of the command line.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Verdict {
+    /// Usable.
+    pub usable: bool,
+    /// Why not (empty when usable).
+    pub reasons: Vec<String>,
+    /// What a metrologist should know although the result is usable (a χ²
+    /// verdict outside its range, a poor fit accepted on request).
+    pub notes: Vec<String>,
+}
+
+impl Verdict {
+    /// The verdict on `calibration` and its validation on the fitted data.
+    fn of(calibration: &Calibration, fitted: &BeforeAfter, accept_poor_fit: bool) -> Verdict {
+        let (mut reasons, mut notes) = (Vec::new(), Vec::new());
+        let solver = &calibration.solver;
+        if !solver.is_solution_usable() {
+            reasons.push(format!(
+                "the solver did not reach a confirmed minimum ({})",
+                solver.stop.describe()
+            ));
+        }
+        let gross = &calibration.checks.gross_corrections;
+        if !gross.is_empty() {
+            let what: Vec<String> = gross.iter().map(|g| g.describe()).collect();
+            reasons.push(format!(
+                "the calibrated arm is not the nominal arm's geometry — a mirror image, a \
+                 collapsed arm or a unit mistake: {}",
+                what.join("; ")
+            ));
+        }
+        let mut poor = Vec::new();
+        if let Some(chi) = &calibration.checks.chi_square {
+            if chi.far_outside() {
+                poor.push(chi.describe());
+            } else if chi.verdict != crate::calibrate::checks::ChiSquareVerdict::Consistent {
+                notes.push(chi.describe());
+            }
+        }
+        let (before, after) = (fitted.before.e_mean, fitted.after.e_mean);
+        if after.is_nan() || after > before {
+            poor.push(format!(
+                "the calibrated arm is worse than the nominal on its own data (mean e {before:.4} \
+                 → {after:.4} mm): a mislabelled touch or a wrong minimum?"
+            ));
+        }
+        if accept_poor_fit {
+            notes.extend(
+                poor.into_iter()
+                    .map(|p| format!("accepted on request: {p}")),
+            );
+        } else {
+            reasons.extend(poor);
+        }
+        Verdict {
+            usable: reasons.is_empty(),
+            reasons,
+            notes,
+        }
+    }
 }
 
 impl CalibrationReport {
-    /// Whether the calibration is usable (the solver converged to a
-    /// confirmed minimum).
+    /// Whether the calibration is usable: the solver reached a confirmed
+    /// minimum, the arm is the nominal arm's kind of geometry, and (unless
+    /// a poor fit was accepted) the χ² test and the fitted data agree.
     pub fn is_usable(&self) -> bool {
-        self.calibration.solver.is_solution_usable()
+        self.verdict.usable
     }
 
     /// `calibration.json`: pretty JSON and a final newline, the same bytes
@@ -352,7 +417,7 @@ impl CalibrationReport {
             d.degrees_of_freedom
         );
         t += &format!(
-            "sigma0 = sqrt(cost/dof) = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n\n",
+            "sigma0 = sqrt(cost/dof) = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n",
             d.sigma0,
             d.touch_sigma_mm,
             if d.touch_sigma_estimated {
@@ -361,6 +426,14 @@ impl CalibrationReport {
                 " (from the stated noise)"
             }
         );
+        if let Some(chi) = &c.checks.chi_square {
+            t += &format!("Fit quality: {}\n", chi.describe());
+        }
+        t += &if r.verdict.usable {
+            "Verdict: usable\n\n".to_string()
+        } else {
+            format!("Verdict: NOT usable — {}\n\n", r.verdict.reasons.join("; "))
+        };
         t += "Parameters (mm, deg; sigma = standard uncertainty, k = 1):\n";
         t += &format!(
             "  {:<8} {:<4} {:>14} {:>14} {:>12} {:>10}  {}\n",
@@ -532,19 +605,6 @@ pub enum WriteError {
     Report(#[from] CalibrationError),
 }
 
-/// The fixed set in words: `auto`, or the parameters' names.
-fn fix_text(fix: &FixSpec, joints: usize) -> String {
-    match fix {
-        FixSpec::Auto => "auto".to_string(),
-        FixSpec::Columns(c) => c
-            .iter()
-            .filter_map(|&c| ParamId::from_column(joints, c))
-            .map(|id| id.to_string())
-            .collect::<Vec<_>>()
-            .join(","),
-    }
-}
-
 /// Calibrates `problem` with `solver`, validates the result on the fitted
 /// and held-out data, and cross-validates when asked (each fold with the
 /// same solver's method).
@@ -587,12 +647,13 @@ pub fn run(
         None => None,
     };
     let s = &problem.sources;
+    let verdict = Verdict::of(&calibration, &fitted, options.accept_poor_fit);
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
         data_file: s.data_file.clone(),
         lengths_file: s.lengths_file.clone(),
-        fix: fix_text(&options.fix, start.joint_count()),
+        fix: options.fix.describe(start.joint_count()),
         noise: options.noise,
         seed: ctx.seed,
         units: Units {
@@ -609,6 +670,7 @@ pub fn run(
             cross_validation,
         },
         warnings: s.warnings.clone(),
+        verdict,
     })
 }
 

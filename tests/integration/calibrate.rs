@@ -195,7 +195,31 @@ fn every_method_says_what_ran_and_how_long_each_phase_took() {
                 .unwrap();
         (stdout(&o), report, timing)
     };
-    let (text, report, timing) = run("sa", &["--sa-chain", "20", "--sa-t0", "0.5"]);
+    // The paper's annealing alone stops far above the noise floor: usable
+    // only on request, and the χ² verdict says why.
+    let refused = calibrate_shipped(
+        &dir.join("sa-refused"),
+        &["--method", "sa", "--sa-chain", "20", "--sa-t0", "0.5"],
+    );
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(
+        crate::util::stderr(&refused).contains("residuals larger than the stated noise explains"),
+        "{}",
+        crate::util::stderr(&refused)
+    );
+    let (text, report, timing) = run(
+        "sa",
+        &["--sa-chain", "20", "--sa-t0", "0.5", "--accept-poor-fit"],
+    );
+    assert_eq!(report["verdict"]["usable"], true);
+    assert!(
+        report["verdict"]["notes"][0]
+            .as_str()
+            .unwrap()
+            .starts_with("accepted on request: χ²"),
+        "{}",
+        report["verdict"]
+    );
     let solver = &report["calibration"]["solver"];
     assert_eq!(solver["method"], "sa");
     assert_eq!(solver["stop"]["anneal"], "cooled");

@@ -4,10 +4,11 @@
 
 use nalgebra::DMatrix;
 
+use super::checks::{ChiSquare, gross_corrections};
 use super::lm::{LmIteration, levenberg_marquardt};
 use super::{
-    CalibrateOptions, Calibration, CalibrationError, CorrelationMatrix, Dof, Estimate, Method,
-    Outcome, Phase, SolverSummary,
+    CalibrateOptions, Calibration, CalibrationError, Checks, CorrelationMatrix, Dof, Estimate,
+    Method, Outcome, Phase, SolverSummary,
 };
 use crate::dataset::DataSet;
 use crate::identify::{Identification, strong_correlations};
@@ -204,13 +205,14 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     let ids: Vec<ParamId> = ParamId::all(start.joint_count()).collect();
     for j in &mut params.joints {
         j.theta = wrap(j.theta);
+        j.alpha = wrap(j.alpha);
     }
     let parameters = ids
         .iter()
         .enumerate()
         .map(|(c, &id)| {
             let (nominal, calibrated) = (start.get(id), params.get(id));
-            let correction = if id.kind == ParamKind::Theta {
+            let correction = if matches!(id.kind, ParamKind::Theta | ParamKind::Alpha) {
                 wrap(calibrated - nominal)
             } else {
                 calibrated - nominal
@@ -279,6 +281,10 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             global,
         },
         identification,
+        checks: Checks {
+            gross_corrections: gross_corrections(&params, start, &free),
+            chi_square: stated.then(|| ChiSquare::new(normal.cost(), degrees_of_freedom)),
+        },
         params,
     })
 }

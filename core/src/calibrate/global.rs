@@ -205,13 +205,26 @@ struct Found {
     best: Option<Minimum>,
     hits: usize,
     minima: Vec<f64>,
+    /// The lowest minimum whose geometry is implausible (a mirror image, a
+    /// collapsed arm): never accepted, returned only when no plausible
+    /// minimum was found, for the checks to refuse it by name.
+    implausible: Option<Minimum>,
 }
 
 impl Found {
-    /// Records a start's minimum; whether it is at the noise `floor`.
-    fn record(&mut self, m: Minimum, floor: Option<f64>) -> bool {
-        let at_floor = floor.is_some_and(|f| m.cost <= f);
+    /// Records a start's minimum; whether it is at the noise floor (`floor`:
+    /// the band of costs the stated noise explains). A minimum whose
+    /// geometry is implausible is recorded but neither accepted nor
+    /// counted.
+    fn record(&mut self, m: Minimum, floor: Option<(f64, f64)>, plausible: bool) -> bool {
         self.minima.push(m.cost);
+        if !plausible {
+            if self.implausible.as_ref().is_none_or(|b| m.cost < b.cost) {
+                self.implausible = Some(m);
+            }
+            return false;
+        }
+        let at_floor = floor.is_some_and(|(lo, hi)| (lo..=hi).contains(&m.cost));
         match &self.best {
             Some(b) if same_minimum(m.cost, b.cost) => self.hits += 1,
             Some(b) if m.cost > b.cost => {}
@@ -254,10 +267,24 @@ pub(crate) fn global<R: Rng>(
         .copied()
         .filter(|&c| ParamId::from_column(joints, c).is_some_and(|id| id.kind == ParamKind::Theta))
         .collect();
+    // The band of costs the stated noise explains: χ²/dof within k standard
+    // deviations of 1. Below it the noise is overstated and every basin
+    // looks like the floor, so none is accepted on that ground.
     let floor = stated_dof.map(|dof| {
         let dof = dof.max(1) as f64;
-        dof * (1.0 + options.noise_floor_k * (2.0 / dof).sqrt())
+        let k = options.noise_floor_k * (2.0 / dof).sqrt();
+        (dof * (1.0 - k).max(0.0), dof * (1.0 + k))
     });
+    // A minimum is a candidate only if its geometry is the nominal arm's
+    // kind (not its mirror image, not collapsed): the cost cannot tell.
+    let plausible = |fit: &LmResult| {
+        let mut p = fit.params.clone();
+        super::global::normalize_signs(&mut p, start, free);
+        for j in &mut p.joints {
+            j.alpha = crate::params::wrap(j.alpha);
+        }
+        super::checks::gross_corrections(&p, start, free).is_empty()
+    };
     let mut phases = vec![
         Phase::new("lm from start"),
         Phase::new("torus grid"),
@@ -278,11 +305,14 @@ pub(crate) fn global<R: Rng>(
         None => levenberg_marquardt(start, data, weights, free, &start_lm)?,
     };
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
-    let first = settle(first, problem, &mut phases[0])?;
+    // A cut-off start within this cost of the floor is finished.
+    let promising = floor.map(|(_, hi)| 10.0 * hi);
+    let first = settle(first, problem, &mut phases[0], promising)?;
     let mut angles = 0;
     let (mut grid_starts, mut random_starts) = (0, 0);
     let stop = 'search: {
-        if found.record(first, floor) {
+        let ok = plausible(&first.fit);
+        if found.record(first, floor, ok) {
             break 'search GlobalStop::NoiseFloor;
         }
         if circles.is_empty() {
@@ -302,7 +332,7 @@ pub(crate) fn global<R: Rng>(
             let timer = std::time::Instant::now();
             let fit = levenberg_marquardt(&zeros.params, data, weights, free, &start_lm)?;
             phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
-            settle(fit, problem, &mut phases[3])
+            settle(fit, problem, &mut phases[3], promising)
         };
         // The grid over the torus, and its lowest local minima.
         let timer = std::time::Instant::now();
@@ -317,7 +347,8 @@ pub(crate) fn global<R: Rng>(
             grid_starts += 1;
             progress(tried as f64 / total as f64);
             let m = refine(&x, &mut phases)?;
-            if found.record(m, floor) {
+            let ok = plausible(&m.fit);
+            if found.record(m, floor, ok) {
                 break 'search GlobalStop::NoiseFloor;
             }
         }
@@ -336,10 +367,58 @@ pub(crate) fn global<R: Rng>(
                 *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             }
             let m = refine(&x, &mut phases)?;
-            if found.record(m, floor) {
+            let ok = plausible(&m.fit);
+            if found.record(m, floor, ok) {
                 break 'search GlobalStop::NoiseFloor;
             }
             if found.hits >= options.confirmations {
+                break 'search GlobalStop::Agreement;
+            }
+        }
+        // Only implausible minima at the floor (a mirror image of the arm
+        // fits exactly as well): restart from the nominal geometry with
+        // that minimum's zero offsets, as they are and reversed, which
+        // leads into the proper twin's basin.
+        let lowest_implausible = |f: &Found| match (&f.implausible, &f.best) {
+            (Some(i), Some(b)) => i.cost < b.cost,
+            (Some(_), None) => true,
+            _ => false,
+        };
+        if lowest_implausible(&found)
+            && let Some(m) = &found.implausible
+        {
+            // Its zero offsets in the nominal sign convention (the flips
+            // that keep positions put back), so that they pair with the
+            // nominal lengths and twists.
+            let mut zeros = m.fit.params.clone();
+            normalize_signs(&mut zeros, start, free);
+            let twins: Vec<DhParams> = [1.0, -1.0]
+                .iter()
+                .map(|&sign| {
+                    let mut x = start.clone();
+                    for &c in &circles {
+                        if let Some(id) = ParamId::from_column(joints, c) {
+                            *x.get_mut(id) = crate::params::wrap(sign * zeros.get(id));
+                        }
+                    }
+                    x
+                })
+                .collect();
+            for x in twins {
+                // Weighed at the restart itself: its zeros are the minimum's,
+                // and weights from the start arm's zeros would slow LM down
+                // past any cap.
+                let timer = std::time::Instant::now();
+                let here = Weights::new(&ArmKernel::new(&x)?, data, problem.noise, 1.0)?;
+                let fit = levenberg_marquardt(&x, data, &here, free, lm)?;
+                phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
+                let m = reweigh(fit, problem, &mut phases[3])?;
+                let ok = plausible(&m.fit);
+                if found.record(m, floor, ok) {
+                    break 'search GlobalStop::NoiseFloor;
+                }
+            }
+            if floor.is_none() && found.hits >= options.confirmations {
                 break 'search GlobalStop::Agreement;
             }
         }
@@ -353,7 +432,14 @@ pub(crate) fn global<R: Rng>(
             .map(|id| id.to_string())
             .collect()
     };
-    let mut best = found.best.ok_or(CalibrationError::Shape)?;
+    // The lowest minimum, plausible or not: an implausible one (a mirror
+    // image) is then refused by the checks by name, not hidden behind a
+    // worse plausible start.
+    let mut best = match (found.best, found.implausible) {
+        (Some(b), Some(i)) if i.cost < b.cost && stop == GlobalStop::StartBudget => i,
+        (Some(b), _) => b,
+        (None, i) => i.ok_or(CalibrationError::Shape)?,
+    };
     if best.fit.termination == super::Termination::MaxIterations {
         // The lowest start was cut off by the per-start cap: finish its
         // descent with the full LM rather than report it unconverged.
@@ -373,7 +459,7 @@ pub(crate) fn global<R: Rng>(
         grid_starts,
         random_starts,
         best_hits: found.hits,
-        noise_floor_cost: floor,
+        noise_floor_cost: floor.map(|(_, hi)| hi),
         sign_changes: Vec::new(),
     };
     Ok((best.fit, trace, phases))
@@ -386,7 +472,25 @@ fn settle(
     fit: LmResult,
     problem: &GlobalProblem,
     phase: &mut Phase,
+    promising: Option<f64>,
 ) -> Result<Minimum, CalibrationError> {
+    if fit.termination == super::Termination::MaxIterations
+        && promising.is_some_and(|p| fit.normal.cost() <= p)
+    {
+        // Cut off close to the noise floor: a good basin crawled into
+        // slowly. Finish the descent, so that the geometry judged is the
+        // minimum's, not a point on the way to it.
+        let timer = std::time::Instant::now();
+        let done = levenberg_marquardt(
+            &fit.params,
+            problem.data,
+            problem.weights,
+            problem.free,
+            problem.lm,
+        )?;
+        phase.add_lm(&done, timer.elapsed().as_secs_f64());
+        return settle(done, problem, phase, None);
+    }
     if fit.termination == super::Termination::MaxIterations {
         // Compared with converged starts, which are weighed at themselves:
         // weigh this one at itself too (no refit), or a start whose weights
@@ -570,6 +674,12 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
         }
         let zero = |p: &ParamId| p.kind != ParamKind::Theta && params.get(*p) == 0.0;
         if !plan.iter().all(|p| is_free(*p) || zero(p)) {
+            // The half turn cannot pass the last joint by negating its twist
+            // (held fixed): it passes as `−a_n` and a half turn of the probe
+            // about `Rx(−α_n)·z`, when the parameters that moves are free.
+            if !absorbed {
+                last_joint_route(params, i, free, &mut changed);
+            }
             continue;
         }
         for p in plan {
@@ -585,4 +695,57 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
         }
     }
     changed
+}
+
+/// The flip of joint `i` (`θ_i + π`, `−a_i`, `−α_i`) with its half turn
+/// carried through the joints after it by negating their `a` and `α` up to
+/// the last joint, and through the last joint as `−a_n` with the probe
+/// turned by π about `Rx(−α_n)·z` (`Rz(π)·Tx(a)·Rx(α)·B = Tx(−a)·Rx(α)·
+/// R_u(π)·B`). Applied, and the names changed appended to `changed`, only
+/// when every value it changes is free (or zero and stays zero).
+fn last_joint_route(
+    params: &mut DhParams,
+    i: usize,
+    free: &[usize],
+    changed: &mut Vec<String>,
+) -> bool {
+    let n = params.joint_count();
+    let id = |kind, index| ParamId { kind, index };
+    let is_free = |p: ParamId| free.contains(&p.column(n));
+    let mut negate = vec![id(ParamKind::A, i), id(ParamKind::Alpha, i)];
+    for j in i + 1..n - 1 {
+        negate.extend([id(ParamKind::A, j), id(ParamKind::Alpha, j)]);
+    }
+    negate.push(id(ParamKind::A, n - 1));
+    let alpha = params.joints[n - 1].alpha;
+    let u = [0.0, alpha.sin(), alpha.cos()];
+    let b = params.probe;
+    let ub: f64 = (0..3).map(|k| u[k] * b[k]).sum();
+    let turned: [f64; 3] = std::array::from_fn(|k| 2.0 * ub * u[k] - b[k]);
+    let probe_ok = (0..3).all(|k| {
+        is_free(id(ParamKind::Probe, k)) || (turned[k] - b[k]).abs() <= 1e-12 * b[k].abs().max(1.0)
+    });
+    let theta = id(ParamKind::Theta, i);
+    let ok =
+        is_free(theta) && probe_ok && negate.iter().all(|&p| is_free(p) || params.get(p) == 0.0);
+    if !ok {
+        return false;
+    }
+    let t = params.get_mut(theta);
+    *t = crate::params::wrap(*t + std::f64::consts::PI);
+    changed.push(theta.to_string());
+    for p in negate {
+        let v = params.get_mut(p);
+        if *v != 0.0 {
+            *v = -*v;
+            changed.push(p.to_string());
+        }
+    }
+    for (k, v) in turned.into_iter().enumerate() {
+        if params.probe[k] != v {
+            params.probe[k] = v;
+            changed.push(id(ParamKind::Probe, k).to_string());
+        }
+    }
+    true
 }

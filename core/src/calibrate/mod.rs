@@ -39,6 +39,7 @@ macro_rules! setters {
 
 pub mod anneal;
 pub mod assess;
+pub mod checks;
 pub mod energy;
 pub mod global;
 pub mod lm;
@@ -361,6 +362,18 @@ pub struct CorrelationMatrix {
     pub rho: Vec<Vec<f64>>,
 }
 
+/// The checks a metrologist makes before signing off ([`checks`]).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Checks {
+    /// Free parameters moved implausibly far from nominal: a mirror image
+    /// of the arm, a collapsed arm, or a unit mistake. Empty when the arm is
+    /// plausible.
+    pub gross_corrections: Vec<checks::GrossCorrection>,
+    /// The χ² test of the residuals against the stated noise (`None`
+    /// without stated noise: the touch σ was estimated from the fit).
+    pub chi_square: Option<checks::ChiSquare>,
+}
+
 /// What [`calibrate`] returns.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Calibration {
@@ -380,6 +393,8 @@ pub struct Calibration {
     pub solver: SolverSummary,
     /// The identifiability analysis behind the automatic fixed set.
     pub identification: Option<Identification>,
+    /// Plausibility of the arm and of the fit.
+    pub checks: Checks,
 }
 
 impl Calibration {
@@ -461,6 +476,14 @@ pub fn calibrate_with(
             (free, None, reasons)
         }
     };
+    if free.is_empty() {
+        return Err(OptionError::new(
+            "fix",
+            options.fix.describe(start.joint_count()),
+            "every parameter is fixed: nothing is left to calibrate",
+        )
+        .into());
+    }
     let counts = assess::Counts::new(data, free.len());
     if counts.residuals() <= counts.unknowns() {
         return Err(CalibrationError::TooFewResiduals {

@@ -131,6 +131,26 @@ impl FixSpec {
     }
 }
 
+impl FixSpec {
+    /// In words: `auto`, or the names of the parameters fixed.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::FixSpec;
+    /// assert_eq!(FixSpec::Columns(vec![18, 6]).describe(6), "theta1,d1");
+    /// ```
+    pub fn describe(&self, joints: usize) -> String {
+        match self {
+            FixSpec::Auto => "auto".to_string(),
+            FixSpec::Columns(c) => c
+                .iter()
+                .filter_map(|&c| ParamId::from_column(joints, c))
+                .map(|id| id.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+        }
+    }
+}
+
 /// σ of a reference length whose file states none, mm.
 pub const DEFAULT_LENGTH_SIGMA_MM: f64 = crate::residuals::DEFAULT_LENGTH_SIGMA_MM;
 
@@ -153,6 +173,11 @@ pub struct CalibrateOptions {
     pub global: GlobalOptions,
     /// Seed of every random draw (annealing moves, starts, folds).
     pub seed: u64,
+    /// Call a fit usable even when its χ² is far outside the stated noise or
+    /// the calibrated arm is worse than the nominal on its own data (never
+    /// a mirror-image or collapsed arm).
+    #[serde(default)]
+    pub accept_poor_fit: bool,
 }
 
 impl Default for CalibrateOptions {
@@ -166,6 +191,7 @@ impl Default for CalibrateOptions {
             switch: SwitchRule::default(),
             global: GlobalOptions::default(),
             seed: 0,
+            accept_poor_fit: false,
         }
     }
 }

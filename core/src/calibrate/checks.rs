@@ -1,0 +1,271 @@
+//! What a metrologist checks before signing off, beyond convergence: that
+//! the calibrated arm is still the nominal arm's kind of geometry (not its
+//! mirror image, not folded to a point, not scaled by a unit mistake), and
+//! that the residuals agree with the stated noise (a χ² test, both tails).
+//!
+//! The cost (touch scatter about centroids, distances between centroids) is
+//! the same for an arm and for its mirror image, and an arm folded to a
+//! point scatters nothing: neither can be told from the right arm by the fit
+//! alone. What tells them apart is the nominal geometry: after the sign
+//! convention is restored ([`super::global::normalize_signs`]), a proper
+//! calibration moves lengths by millimetres and twists by fractions of a
+//! degree; a mirror twin flips the signs of link lengths or turns twists by
+//! about 180°, and a collapse takes links to zero.
+
+use serde::{Deserialize, Serialize};
+
+use crate::params::{DhParams, ParamId, ParamKind, wrap};
+
+/// A length may move from nominal by this fraction of its nominal value…
+pub const LENGTH_TOLERANCE: f64 = 0.25;
+/// …or by this fraction of the arm's reach, whichever is larger.
+pub const REACH_TOLERANCE: f64 = 0.02;
+/// A twist may move from nominal by this much, degrees.
+pub const TWIST_TOLERANCE_DEG: f64 = 15.0;
+
+/// A free parameter (or a combination of the last link's) that moved
+/// implausibly far from nominal.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GrossCorrection {
+    /// The parameter's name, or the last link's combination
+    /// (`probe radius about axis 6`, `probe height along axis 6`).
+    pub name: String,
+    /// `mm` or `deg`.
+    pub unit: String,
+    /// Nominal value, in `unit`.
+    pub nominal: f64,
+    /// Calibrated value, in `unit`.
+    pub calibrated: f64,
+    /// The largest move accepted, in `unit`.
+    pub tolerance: f64,
+}
+
+impl GrossCorrection {
+    /// In words.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} {:.4} → {:.4} {} (more than ±{:.4})",
+            self.name, self.nominal, self.calibrated, self.unit, self.tolerance
+        )
+    }
+}
+
+/// The probe centre relative to the last joint's axis, in the last joint's
+/// base frame: its distance from the axis and its height along it — what
+/// the last zero offset cannot change. (`A_n = Rz(θ+q)·Tz(d)·Tx(a)·Rx(α)`
+/// puts the probe at `Rz(θ+q)·(a + Bx, By cos α − Bz sin α, d + By sin α +
+/// Bz cos α)`.)
+fn last_link(p: &DhParams) -> (f64, f64) {
+    let j = p.joints[p.joint_count() - 1];
+    let [bx, by, bz] = p.probe;
+    let (s, c) = j.alpha.sin_cos();
+    let (x, y, z) = (j.a + bx, by * c - bz * s, j.d + by * s + bz * c);
+    (x.hypot(y), z)
+}
+
+/// The free parameters of `calibrated` (columns `free`) that moved from
+/// `nominal` by more than a plausible manufacturing or assembly error:
+/// lengths by more than [`LENGTH_TOLERANCE`] of their value or
+/// [`REACH_TOLERANCE`] of the reach, twists by more than
+/// [`TWIST_TOLERANCE_DEG`]. Zero offsets are not checked (an assembled
+/// arm's may be anywhere), and neither are the last link's parameters one
+/// by one: with the last zero offset unknown, the probe may turn about the
+/// last axis, so its distance from that axis and its height along it are
+/// checked instead. Empty for a plausible arm.
+///
+/// ```
+/// use aacmm_core::calibrate::checks::gross_corrections;
+/// use aacmm_core::params::DhParams;
+/// let nominal = DhParams::paper_nominal();
+/// let all: Vec<usize> = (0..27).collect();
+/// let mut near = nominal.clone();
+/// near.joints[2].d += 0.8;
+/// assert!(gross_corrections(&near, &nominal, &all).is_empty());
+/// let mut mirrored = nominal.clone();
+/// mirrored.joints[2].d = -mirrored.joints[2].d; // 250 → −250 mm
+/// let gross = gross_corrections(&mirrored, &nominal, &all);
+/// assert_eq!(gross[0].name, "d3");
+/// let mut collapsed = nominal.clone();
+/// collapsed.probe[2] = 0.0; // the probe folded onto the last link
+/// let names: Vec<String> = gross_corrections(&collapsed, &nominal, &all).into_iter().map(|g| g.name).collect();
+/// assert_eq!(names, ["probe radius about axis 6"]);
+/// ```
+pub fn gross_corrections(
+    calibrated: &DhParams,
+    nominal: &DhParams,
+    free: &[usize],
+) -> Vec<GrossCorrection> {
+    let n = nominal.joint_count();
+    let reach = nominal.reach();
+    let length_tolerance = |v0: f64| (LENGTH_TOLERANCE * v0.abs()).max(REACH_TOLERANCE * reach);
+    let last = n - 1;
+    let in_last_link = |id: ParamId| {
+        id.kind == ParamKind::Probe
+            || (id.index == last
+                && matches!(id.kind, ParamKind::A | ParamKind::D | ParamKind::Alpha))
+    };
+    let mut gross: Vec<GrossCorrection> = free
+        .iter()
+        .filter_map(|&c| ParamId::from_column(n, c))
+        .filter(|&id| id.kind != ParamKind::Theta && !in_last_link(id))
+        .filter_map(|id| {
+            let (v0, v) = (nominal.get(id), calibrated.get(id));
+            let (moved, tolerance) = match id.kind {
+                ParamKind::Alpha => (wrap(v - v0).abs(), TWIST_TOLERANCE_DEG.to_radians()),
+                _ => ((v - v0).abs(), length_tolerance(v0)),
+            };
+            (moved.is_nan() || moved > tolerance).then(|| GrossCorrection {
+                name: id.to_string(),
+                unit: id.unit().to_string(),
+                nominal: id.to_user(v0),
+                calibrated: id.to_user(v),
+                tolerance: id.to_user(tolerance),
+            })
+        })
+        .collect();
+    let ((r0, h0), (r, h)) = (last_link(nominal), last_link(calibrated));
+    for (what, v0, v) in [("radius about", r0, r), ("height along", h0, h)] {
+        let tolerance = length_tolerance(v0);
+        let moved = (v - v0).abs();
+        if moved.is_nan() || moved > tolerance {
+            gross.push(GrossCorrection {
+                name: format!("probe {what} axis {n}"),
+                unit: "mm".to_string(),
+                nominal: v0,
+                calibrated: v,
+                tolerance,
+            });
+        }
+    }
+    gross
+}
+
+/// The χ² test of the fit under stated noise: is `Σr²` what `dof` degrees
+/// of freedom of residuals at the stated noise give?
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChiSquare {
+    /// `Σr²` (weighted cost).
+    pub statistic: f64,
+    /// Degrees of freedom.
+    pub dof: usize,
+    /// `P(χ²_dof ≥ statistic)`: small when the residuals are larger than
+    /// the noise explains.
+    pub p_upper: f64,
+    /// `P(χ²_dof ≤ statistic)`: small when they are smaller (noise
+    /// overstated).
+    pub p_lower: f64,
+    /// What the test says.
+    pub verdict: ChiSquareVerdict,
+}
+
+/// The verdict of [`ChiSquare`], at [`CHI_SQUARE_ALPHA`] in each tail.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChiSquareVerdict {
+    /// The residuals agree with the stated noise.
+    Consistent,
+    /// Larger than the stated noise explains: noise understated, a model
+    /// error, outliers, or a wrong minimum.
+    ResidualsTooLarge,
+    /// Smaller than the stated noise explains: the noise is overstated, so
+    /// the uncertainties are too large and the fit cannot be judged.
+    ResidualsTooSmall,
+}
+
+/// Significance of the χ² test in each tail.
+pub const CHI_SQUARE_ALPHA: f64 = 0.001;
+
+/// Far outside: a fit this improbable is not usable without
+/// `accept_poor_fit` (both tails).
+pub const CHI_SQUARE_REFUSE: f64 = 1e-9;
+
+impl ChiSquare {
+    /// The test of `statistic` on `dof` degrees of freedom.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::checks::{ChiSquare, ChiSquareVerdict};
+    /// assert_eq!(ChiSquare::new(1000.0, 1000).verdict, ChiSquareVerdict::Consistent);
+    /// assert_eq!(ChiSquare::new(9000.0, 1000).verdict, ChiSquareVerdict::ResidualsTooLarge);
+    /// assert_eq!(ChiSquare::new(111.0, 1000).verdict, ChiSquareVerdict::ResidualsTooSmall);
+    /// let t = ChiSquare::new(1000.0, 1000);
+    /// assert!((t.p_upper - 0.5).abs() < 0.02 && (t.p_lower - 0.5).abs() < 0.02);
+    /// ```
+    pub fn new(statistic: f64, dof: usize) -> ChiSquare {
+        let p_upper = chi_square_upper(statistic, dof);
+        let p_lower = 1.0 - p_upper;
+        let verdict = if p_upper < CHI_SQUARE_ALPHA {
+            ChiSquareVerdict::ResidualsTooLarge
+        } else if p_lower < CHI_SQUARE_ALPHA {
+            ChiSquareVerdict::ResidualsTooSmall
+        } else {
+            ChiSquareVerdict::Consistent
+        };
+        ChiSquare {
+            statistic,
+            dof,
+            p_upper,
+            p_lower,
+            verdict,
+        }
+    }
+
+    /// Whether the fit is far outside the stated noise, in either tail.
+    pub fn far_outside(&self) -> bool {
+        self.p_upper < CHI_SQUARE_REFUSE || self.p_lower < CHI_SQUARE_REFUSE
+    }
+
+    /// In words.
+    pub fn describe(&self) -> String {
+        let s0 = (self.statistic / self.dof.max(1) as f64).sqrt();
+        match self.verdict {
+            ChiSquareVerdict::Consistent => format!(
+                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): consistent with the stated noise \
+                 (P above {:.3}, below {:.3})",
+                self.statistic, self.dof, self.p_upper, self.p_lower
+            ),
+            ChiSquareVerdict::ResidualsTooLarge => format!(
+                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): residuals larger than the stated noise \
+                 explains (P = {:.1e}): noise understated, outliers, a model error or a wrong \
+                 minimum",
+                self.statistic, self.dof, self.p_upper
+            ),
+            ChiSquareVerdict::ResidualsTooSmall => format!(
+                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): residuals smaller than the stated noise \
+                 explains (P = {:.1e}): the noise is overstated, so the uncertainties are too \
+                 large and the fit cannot be judged",
+                self.statistic, self.dof, self.p_lower
+            ),
+        }
+    }
+}
+
+/// `P(χ²_k ≥ x)` by the Wilson–Hilferty cube-root normal approximation
+/// (accurate to a few per cent of the tail for `k ≥ 10`, better beyond).
+fn chi_square_upper(x: f64, k: usize) -> f64 {
+    let k = k.max(1) as f64;
+    if x.is_nan() || x <= 0.0 {
+        return 1.0;
+    }
+    let v = 2.0 / (9.0 * k);
+    let z = ((x / k).cbrt() - (1.0 - v)) / v.sqrt();
+    0.5 * erfc(z / std::f64::consts::SQRT_2)
+}
+
+/// The complementary error function (W. J. Cody's rational approximations
+/// via the Numerical Recipes `erfcc` form; relative error < 1.2e-7).
+pub(crate) fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.265_512_23
+            + t * (1.000_023_68
+                + t * (0.374_091_96
+                    + t * (0.096_784_18
+                        + t * (-0.186_288_06
+                            + t * (0.278_868_07
+                                + t * (-1.135_203_98
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
+            .exp();
+    if x >= 0.0 { r } else { 2.0 - r }
+}
