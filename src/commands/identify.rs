@@ -45,7 +45,8 @@ pub fn run(args: Args) -> Result<()> {
     let kernel = args.fit.input.kernel(&arm)?;
     // Without stated noise the singular values are in units of a 0.01 mm touch.
     let assumed = !noise.stated();
-    let weights = Weights::new(&kernel, &data, &noise, 0.01)?;
+    let weights =
+        Weights::new(&kernel, &data, &noise, 0.01).map_err(|e| super::noise_flags(e, &args.fit))?;
     let id = identify(&arm.params, &data, &weights, args.fit.threads())
         .with_context(|| source_name(&args.fit.input.arm))?;
     let noise_text = if assumed {

@@ -83,6 +83,26 @@ pub enum KernelError {
         /// Poses available.
         len: usize,
     },
+    /// The stated noise gives weights that are not finite numbers (a σ so
+    /// large that its square overflows, or so small that it vanishes): the
+    /// message names the noise concerned.
+    #[error("{message}")]
+    Noise {
+        /// Which weights: the touches' (encoder and probe noise) or a
+        /// reference length's (its uncertainty, or the length weight).
+        of: NoiseOf,
+        /// What is wrong, with the values concerned.
+        message: String,
+    },
+}
+
+/// Which noise made weights that are not finite (see [`KernelError::Noise`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoiseOf {
+    /// The touches': encoder and probe noise, or the assumed touch σ.
+    Touches,
+    /// A reference length's: its uncertainty or the length weight.
+    Lengths,
 }
 
 /// What the generated code computes with: `f64`, SIMD lanes, dual numbers.
