@@ -8,6 +8,7 @@ mod edges;
 mod evaluate;
 mod out_paths;
 mod points;
+mod readme;
 mod report;
 mod sim_messages;
 mod simulate;
