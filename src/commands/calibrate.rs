@@ -67,6 +67,10 @@ pub struct Args {
     /// the report (report.html and one SVG per figure).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Overwrite an earlier calibration in --out (without it, a directory
+    /// that holds calibrated.toml or calibration.json is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 /// Solvers.
@@ -247,6 +251,12 @@ pub fn run(args: Args) -> Result<()> {
         ]
         .concat(),
         &inputs,
+    )?;
+    crate::paths::keep_earlier_results(
+        "--out",
+        &args.out,
+        &[CALIBRATED_FILE, REPORT_FILE],
+        args.force,
     )?;
     let noise = args.fit.noise()?;
     let (arm, data) = args.fit.read()?;

@@ -188,3 +188,59 @@ fn huge_probe_noise_blames_the_noise() {
     assert_clean_error(&o, &["--probe-noise: σ = 1000000 mm", "reach"]);
     assert!(!stderr(&o).contains("out of reach"), "{}", stderr(&o));
 }
+
+/// `--out a/b/c` with `a/b` missing is refused before any work (it once
+/// created the whole tree, although the README says a missing directory is
+/// refused); `--out c` in an existing directory is created.
+#[test]
+fn out_creates_only_its_last_directory() {
+    let dir = temp_dir("edges-out-parents");
+    let deep = dir.join("a").join("b").join("c");
+    let o = crate::util::calibrate_shipped(&deep, &[]);
+    assert_clean_error(&o, &["--out", "does not exist", "only the last directory"]);
+    assert!(
+        !dir.join("a").exists(),
+        "created {}",
+        dir.join("a").display()
+    );
+    let shallow = dir.join("c");
+    let o = crate::util::calibrate_shipped(&shallow, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(shallow.join("calibrated.toml").is_file());
+}
+
+/// An earlier calibration in `--out` is kept unless `--force` (it was
+/// overwritten silently, and `--help` did not say so).
+#[test]
+fn earlier_calibration_is_kept_without_force() {
+    let dir = temp_dir("edges-out-force");
+    let out = dir.join("cal");
+    let o = crate::util::calibrate_shipped(&out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let marker = "# an earlier calibration\n";
+    let calibrated = out.join("calibrated.toml");
+    let first = std::fs::read_to_string(&calibrated).unwrap();
+    std::fs::write(&calibrated, format!("{marker}{first}")).unwrap();
+    let o = crate::util::calibrate_shipped(&out, &[]);
+    assert_clean_error(
+        &o,
+        &[
+            "--out",
+            "earlier results (calibrated.toml, calibration.json)",
+            "--force",
+        ],
+    );
+    assert!(
+        std::fs::read_to_string(&calibrated)
+            .unwrap()
+            .starts_with(marker)
+    );
+    let o = crate::util::calibrate_shipped(&out, &["--force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&calibrated).unwrap(), first);
+    let help = crate::util::stdout(&aacmm(&["calibrate", "--help"]));
+    assert!(
+        help.contains("--force") && help.contains("Overwrite an earlier calibration"),
+        "{help}"
+    );
+}

@@ -10,7 +10,9 @@ fn readme() -> String {
 /// The fenced block that starts with `$ <command>`: the command, and its
 /// lines.
 fn block(readme: &str, command_start: &str) -> (String, Vec<String>) {
-    let at = readme.find(command_start).expect("the README shows the command");
+    let at = readme
+        .find(command_start)
+        .expect("the README shows the command");
     let end = at + readme[at..].find("\n```").expect("the block ends");
     let mut lines = readme[at..end].lines().map(str::to_string);
     let command = lines.next().unwrap();
