@@ -451,6 +451,8 @@ pub(crate) fn identify_from(
         .iter()
         .enumerate()
         .map(|(a, &c)| {
+            // Invariant: the free columns are pivots of the analysed matrix,
+            // whose columns are `cols`.
             let row = cols
                 .iter()
                 .position(|&x| x == c)

@@ -226,6 +226,8 @@ macro_rules! impl_chain {
                 sq: &[S; $n],
                 jac: &mut [[S; 3]],
             ) -> [S; 3] {
+                // Invariant: every caller sizes `jac` from the chain's
+                // PARAMS (the public entry points check the length first).
                 let jac: &mut [[S; 3]; $m::PARAMS] = jac
                     .try_into()
                     .expect("jacobian buffer holds 4n + 3 columns");
