@@ -3,8 +3,11 @@
 //!
 //! ```text
 //! cargo run --release --example compare_methods -- [SEEDS] [CASES] [METHODS]
-//! cargo run --release --example compare_methods -- 100 paper,random3,assembled lm,sa,hybrid,global
+//! cargo run --release --example compare_methods -- 100 paper,random3,assembled,assembled3 lm,sa,hybrid,hybrid@180,global
 //! ```
+//!
+//! Without arguments it prints the README's table: the second line's
+//! [`DEFAULT_SEEDS`], [`DEFAULT_CASES`] and [`DEFAULT_METHODS`].
 //!
 //! Each campaign: the paper's nominal arm, 10 sockets × 10 touches, 3
 //! reference lengths, encoder noise 0.005°, probe noise 0.01 mm (stated to
@@ -24,6 +27,13 @@ use aacmm_core::io::Arm;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::{Noise, weighted_cost};
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
+
+/// Campaigns per case when no argument says otherwise.
+const DEFAULT_SEEDS: u64 = 100;
+/// The README's cases, in its order.
+const DEFAULT_CASES: &str = "paper,random3,assembled,assembled3";
+/// The README's methods, in its order (`hybrid@180`: with a 180° zero range).
+const DEFAULT_METHODS: &str = "lm,sa,hybrid,hybrid@180,global";
 
 const ENCODER_DEG: f64 = 0.005;
 const PROBE_MM: f64 = 0.01;
@@ -77,10 +87,10 @@ fn median(v: &mut [f64]) -> f64 {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let seeds: u64 = args.first().map_or(Ok(100), |s| s.parse())?;
+    let seeds: u64 = args.first().map_or(Ok(DEFAULT_SEEDS), |s| s.parse())?;
     let cases: Vec<String> = args
         .get(1)
-        .map_or("paper,random3,assembled", String::as_str)
+        .map_or(DEFAULT_CASES, String::as_str)
         .split(',')
         .map(str::to_string)
         .collect();
@@ -88,7 +98,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // to 180° (the default 2° suits the paper's small errors).
     let methods: Vec<(Method, Option<f64>, String)> = args
         .get(2)
-        .map_or("lm,sa,hybrid,global", String::as_str)
+        .map_or(DEFAULT_METHODS, String::as_str)
         .split(',')
         .map(|m| {
             let (name, range) = m.split_once('@').map_or((m, None), |(n, r)| (n, Some(r)));

@@ -8,7 +8,7 @@ mod paths;
 use std::io::Write;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Calibration toolkit for articulated arm coordinate measuring machines.
 ///
@@ -21,22 +21,36 @@ struct Cli {
     command: Command,
 }
 
+/// Negative numbers are values, not flags, in every subcommand: `--x -0.5`
+/// works as `--x=-0.5` does (no option of aacmm is a digit).
 #[derive(Subcommand)]
 enum Command {
     /// Forward kinematics: the probe position of every pose (CSV point,x,y,z in mm).
+    #[command(allow_negative_numbers = true)]
     Points(commands::points::Args),
     /// Simulate a calibration campaign with a known true arm.
+    #[command(allow_negative_numbers = true)]
     Simulate(commands::simulate::Args),
     /// Evaluate an arm on measured poses: single-point and length metrics.
+    #[command(allow_negative_numbers = true)]
     Evaluate(commands::evaluate::Args),
     /// Identifiability: which parameters the data can determine, and which to fix.
+    #[command(allow_negative_numbers = true)]
     Identify(commands::identify::Args),
     /// Calibrate an arm from touches and reference lengths.
+    #[command(allow_negative_numbers = true)]
     Calibrate(commands::calibrate::Args),
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let matches = match Cli::command().try_get_matches() {
+        Ok(m) => m,
+        Err(e) => return usage(&e),
+    };
+    if let Err(e) = one_stdin(&Cli::command(), &matches) {
+        return ExitCode::from(output::exit_code(&e));
+    }
+    let cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
         Err(e) => return usage(&e),
     };
@@ -51,6 +65,39 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => ExitCode::from(output::exit_code(&e)),
     }
+}
+
+/// Flags whose path is written, not read: `-` there is standard output.
+const OUTPUT_FLAGS: [&str; 3] = ["out", "json", "report"];
+
+/// Refuses `-` (standard input) for more than one input file, before any
+/// is read: the second would otherwise find standard input used up and
+/// report it as an empty file.
+fn one_stdin(cli: &clap::Command, matches: &clap::ArgMatches) -> anyhow::Result<()> {
+    let Some((name, sub)) = matches.subcommand() else {
+        return Ok(());
+    };
+    let Some(command) = cli.find_subcommand(name) else {
+        return Ok(());
+    };
+    let path = clap::builder::ValueParser::path_buf().type_id();
+    let stdin: Vec<String> = command
+        .get_arguments()
+        .filter(|a| a.get_value_parser().type_id() == path)
+        .filter(|a| !OUTPUT_FLAGS.contains(&a.get_id().as_str()))
+        .filter(|a| {
+            sub.get_raw(a.get_id().as_str())
+                .is_some_and(|mut v| v.any(|v| v == "-"))
+        })
+        .map(|a| format!("--{}", a.get_long().unwrap_or(a.get_id().as_str())))
+        .collect();
+    if stdin.len() > 1 {
+        anyhow::bail!(
+            "{}: each is `-` (standard input), which can be read once; give all but one as a file",
+            stdin.join(" and ")
+        );
+    }
+    Ok(())
 }
 
 /// Help, version or a usage error, written (and checked) like any output:

@@ -35,8 +35,9 @@ pub fn check_output_file(flag: &str, path: &Path, inputs: &[Input]) -> Result<()
 }
 
 /// `dir`, given with `flag`, can take the files `names`: it is a directory or
-/// does not exist yet (it will be created), none of the files is a directory,
-/// and none is one of the `inputs`.
+/// does not exist yet in a directory that does (it will be created, as
+/// `mkdir` would: a missing parent is more likely a typo than a wish), none
+/// of the files is a directory, and none is one of the `inputs`.
 pub fn check_output_dir(flag: &str, dir: &Path, names: &[&str], inputs: &[Input]) -> Result<()> {
     let shown = dir.display();
     if dir.as_os_str().is_empty() {
@@ -44,6 +45,19 @@ pub fn check_output_dir(flag: &str, dir: &Path, names: &[&str], inputs: &[Input]
     }
     if dir.exists() && !dir.is_dir() {
         bail!("{flag} {shown}: exists and is not a directory");
+    }
+    if !dir.exists() {
+        let parent = match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        if !parent.is_dir() {
+            bail!(
+                "{flag} {shown}: directory {} does not exist; only the last directory of \
+                 {flag} is created (create the others first)",
+                parent.display()
+            );
+        }
     }
     for name in names {
         let path = dir.join(name);
@@ -54,6 +68,29 @@ pub fn check_output_dir(flag: &str, dir: &Path, names: &[&str], inputs: &[Input]
             );
         }
         not_an_input(flag, &path, inputs)?;
+    }
+    Ok(())
+}
+
+/// Refuses to write over earlier results in `dir` (given with `flag`): any
+/// of the files `markers` already there means a previous run's results,
+/// which a metrologist keeps unless told otherwise (`--force`).
+pub fn keep_earlier_results(flag: &str, dir: &Path, markers: &[&str], force: bool) -> Result<()> {
+    if force {
+        return Ok(());
+    }
+    let found: Vec<&str> = markers
+        .iter()
+        .copied()
+        .filter(|name| dir.join(name).exists())
+        .collect();
+    if !found.is_empty() {
+        bail!(
+            "{flag} {}: already holds earlier results ({}); give --force to overwrite them, \
+             or another directory",
+            dir.display(),
+            found.join(", ")
+        );
     }
     Ok(())
 }

@@ -94,6 +94,7 @@ impl From<KernelError> for Error {
     fn from(e: KernelError) -> Error {
         let status = match e {
             KernelError::Unsupported(_) => AacmmStatus::Unsupported,
+            KernelError::Noise { .. } => AacmmStatus::InvalidArgument,
             _ => AacmmStatus::Length,
         };
         Error::new(status, e.to_string())
@@ -104,6 +105,7 @@ impl From<CalibrationError> for Error {
     fn from(e: CalibrationError) -> Error {
         let status = match &e {
             CalibrationError::Kernel(KernelError::Unsupported(_)) => AacmmStatus::Unsupported,
+            CalibrationError::Kernel(KernelError::Noise { .. }) => AacmmStatus::InvalidArgument,
             CalibrationError::Kernel(_) => AacmmStatus::Length,
             CalibrationError::Option(o) => return Error::from(o.clone()),
             _ => AacmmStatus::Calibration,

@@ -569,6 +569,8 @@ impl DataSet {
 /// Touch-major readings (`len` rows of `joints`) prepared for the kernel.
 fn prepare(joints: usize, q: &[f64], len: usize) -> PreparedPoses {
     let rows: Vec<&[f64]> = (0..len).map(|i| &q[i * joints..(i + 1) * joints]).collect();
+    // Invariant: each row is a `joints`-long slice of `q` by construction,
+    // and `PreparedPoses::new` fails only on a row of another length.
     PreparedPoses::new(joints, &rows).expect("every row has `joints` readings")
 }
 

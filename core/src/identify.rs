@@ -198,7 +198,7 @@ struct Scaled {
 }
 
 /// The normal equations of every column at `params`: what [`identify`] and
-/// [`open_directions`] analyse, and (restricted to the free columns) where
+/// [`open_directions_from`] analyse, and (restricted to the free columns) where
 /// a fit from `params` starts.
 pub(crate) fn full_normal(
     params: &DhParams,
@@ -430,6 +430,8 @@ pub(crate) fn identify_from(
         .iter()
         .enumerate()
         .map(|(a, &c)| {
+            // Invariant: the free columns are pivots of the analysed matrix,
+            // whose columns are `cols`.
             let row = cols
                 .iter()
                 .position(|&x| x == c)
@@ -627,22 +629,9 @@ pub(crate) fn strong_correlations(
 
 /// The directions of `params`' parameter space that `data` cannot see and
 /// that the free set `free` leaves open, in words: base motion (always),
-/// scale (without reference lengths) and the exact redundancies. Empty when
-/// the fixed set blocks every one — the fit is then well posed.
-#[cfg(test)]
-pub(crate) fn open_directions(
-    params: &DhParams,
-    data: &DataSet,
-    weights: &Weights,
-    free: &[usize],
-    threads: usize,
-) -> Result<Vec<String>, KernelError> {
-    let normal = full_normal(params, data, weights, threads)?;
-    Ok(open_directions_from(params, data, normal, free))
-}
-
-/// The free directions the data cannot see, from the normal equations of
-/// every column.
+/// scale (without reference lengths) and the exact redundancies, from the
+/// normal equations of every column. Empty when the fixed set blocks every
+/// one — the fit is then well posed.
 pub(crate) fn open_directions_from(
     params: &DhParams,
     data: &DataSet,
@@ -792,14 +781,14 @@ mod tests {
         assert_eq!(pivoted_cholesky(&m, 3, |_| false), vec![0, 2]);
     }
 
-    /// Weights that overflow (an encoder σ of 1e-300 rad) once sent the
-    /// eigen and singular value decompositions into an endless loop on NaN;
-    /// now the analysis says the normal equations are not finite.
+    /// Normal equations that overflow (a huge weight times a huge
+    /// Jacobian: inf, and inf − inf = NaN) once sent the eigen and singular
+    /// value decompositions into an endless loop on NaN; now the analysis
+    /// says the normal equations are not finite.
     #[test]
-    fn overflowing_weights_are_named_not_looped_on() {
+    fn overflowing_normal_equations_are_named_not_looped_on() {
         use crate::io::{AngleUnit, parse_poses};
         use crate::kernel::ArmKernel;
-        use crate::residuals::Noise;
         let params = DhParams::paper_nominal();
         let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
         for (p, k) in [("A", 0.0), ("B", 40.0)] {
@@ -817,13 +806,13 @@ mod tests {
         }
         let (poses, _) = parse_poses(&text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
         let data = DataSet::from_poses(&poses, "p.csv").unwrap();
-        let noise = Noise {
-            encoder_rad: Some(1e-300),
-            ..Noise::default()
-        };
         let kernel = ArmKernel::new(&params).unwrap();
-        let weights = Weights::new(&kernel, &data, &noise, 0.01).unwrap();
-        let id = identify(&params, &data, &noise, 1).unwrap();
+        let weights =
+            Weights::new(&kernel, &data, &crate::residuals::Noise::default(), 0.01).unwrap();
+        let mut normal = full_normal(&params, &data, &weights, 1).unwrap();
+        normal.jtj[0] = f64::INFINITY;
+        normal.jtj[1] = f64::NAN;
+        let id = identify_from(&params, &data, normal.clone());
         assert!(
             id.rules.iter().any(|r| r.name == "not-finite"),
             "{:?}",
@@ -832,7 +821,7 @@ mod tests {
         assert_eq!(id.rank, 0);
         assert!(id.free.iter().all(|f| f.sigma == f64::INFINITY));
         let all: Vec<usize> = (0..params.param_count()).collect();
-        let open = open_directions(&params, &data, &weights, &all, 1).unwrap();
+        let open = open_directions_from(&params, &data, normal, &all);
         assert!(open[0].contains("not finite"), "{open:?}");
     }
 

@@ -41,7 +41,7 @@ use std::ops::Range;
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::DataSet;
-use crate::kernel::{ArmKernel, KernelError};
+use crate::kernel::{ArmKernel, KernelError, NoiseOf};
 
 /// The residual kinds of a calibration: a closed set, matched exhaustively
 /// wherever residuals are counted or reported.
@@ -123,6 +123,93 @@ impl Noise {
             ));
         }
         Ok(())
+    }
+}
+
+/// Refuses weights that are not finite numbers, naming the noise that made
+/// them: a σ whose square overflows (the weight is 0/0), or one that
+/// vanishes (the weight is 1/0). Positions are finite here, so the noise is
+/// the only cause.
+fn check_weights(
+    touch: &[Sym3],
+    length: &[f64],
+    noise: &Noise,
+    touch_sigma_mm: f64,
+    data: &DataSet,
+) -> Result<(), KernelError> {
+    let overflow = "a σ this large overflows and one this small vanishes in double precision";
+    let advice = format!(
+        "{overflow}; state the instrument's noise (typically 0.001–0.1° per encoder and \
+         0.001–0.1 mm for the probe)"
+    );
+    // A weight matrix must be finite with a positive diagonal (an
+    // overflowing covariance can also invert to exact zeros).
+    let bad = |a: &Sym3| !a.iter().all(|v| v.is_finite()) || !a[..3].iter().all(|&v| v > 0.0);
+    if let Some(i) = touch.iter().position(bad) {
+        let stated = match (noise.encoder_rad, noise.probe_mm) {
+            (None, None) => format!("an assumed touch σ of {} mm", short(touch_sigma_mm)),
+            (e, p) => [
+                e.map(|e| {
+                    format!(
+                        "encoder noise σ = {}° ({} rad)",
+                        short(e.to_degrees()),
+                        short(e)
+                    )
+                }),
+                p.map(|p| format!("probe noise σ = {} mm", short(p))),
+            ]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>()
+            .join(" and "),
+        };
+        return Err(KernelError::Noise {
+            of: NoiseOf::Touches,
+            message: format!(
+                "the touch weights are not finite positive numbers with {stated} (first at \
+                 {}); {advice}",
+                data.source().touch(i)
+            ),
+        });
+    }
+    // A length weight given as 0 means "ignore the lengths"; one computed
+    // as 0 means an uncertainty that overflowed.
+    let given = noise.length_weight.is_some();
+    if let Some(r) = length
+        .iter()
+        .position(|w| !(w.is_finite() && (*w > 0.0 || given)))
+    {
+        let sigma = match noise.length_weight {
+            Some(w) => format!("a length weight of {} 1/mm", short(w)),
+            None => format!(
+                "a length uncertainty of {} mm",
+                short(
+                    data.references()[r]
+                        .uncertainty
+                        .unwrap_or(noise.length_default_mm)
+                )
+            ),
+        };
+        return Err(KernelError::Noise {
+            of: NoiseOf::Lengths,
+            message: format!(
+                "the weight of the reference length at {} is not a finite positive number \
+                 with {sigma}; {overflow}; give the uncertainty of the calibrated length \
+                 (typically 0.0005–0.01 mm)",
+                data.source().reference(r)
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// A number for a message: plain when of ordinary size, else in `e`
+/// notation (`1e300`, not three hundred digits).
+pub fn short(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e15).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }
 
@@ -235,6 +322,7 @@ impl Weights {
                 }
             })
             .collect::<Result<Vec<f64>, KernelError>>()?;
+        check_weights(&touch, &length, noise, touch_sigma_mm, data)?;
         Ok(Weights { touch, length })
     }
 

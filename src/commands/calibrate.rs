@@ -59,6 +59,10 @@ pub struct Args {
     /// the report (report.html and one SVG per figure).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Overwrite an earlier calibration in --out (without it, a directory
+    /// that holds calibrated.toml or calibration.json is refused).
+    #[arg(long)]
+    force: bool,
 }
 
 /// Solvers.
@@ -175,6 +179,12 @@ pub fn run(args: Args) -> Result<()> {
         .concat(),
         &inputs,
     )?;
+    crate::paths::keep_earlier_results(
+        "--out",
+        &args.out,
+        &[CALIBRATED_FILE, REPORT_FILE],
+        args.force,
+    )?;
     let noise = args.fit.noise();
     let (arm, data, warnings) = args.fit.read_with_warnings()?;
     let joints = arm.params.joint_count();
@@ -221,7 +231,9 @@ pub fn run(args: Args) -> Result<()> {
         let mut show = |phase: &str, f: f64| bar.show(phase, f);
         let mut ctx = Context::new(args.fit.threads(), args.seed).observed(&mut show);
         let solver = problem.options().method.solver();
-        session::run(&problem, &*solver, &mut ctx).with_context(|| arm_file.clone())?
+        session::run(&problem, &*solver, &mut ctx)
+            .with_context(|| arm_file.clone())
+            .map_err(|e| super::noise_flags(e, &args.fit))?
     };
     let total = started.elapsed().as_secs_f64();
 

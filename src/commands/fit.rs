@@ -144,7 +144,15 @@ pub fn flag_error(e: impl Into<CalibrationError>) -> anyhow::Error {
 
 fn option_error(o: &OptionError) -> anyhow::Error {
     match FLAGS.iter().find(|(field, _)| *field == o.field) {
-        Some((_, flag)) if o.field.starts_with("noise.encoder") => anyhow!("{flag}: {}", o.reason),
+        // The library holds the encoder noise in radians; the flag is in
+        // degrees.
+        Some((_, flag)) if o.field == "noise.encoder_rad" => match o.value.parse::<f64>() {
+            Ok(rad) if rad.is_finite() => {
+                let deg = (rad.to_degrees() * 1e12).round() / 1e12;
+                anyhow!("{flag} {deg}: {}", o.reason)
+            }
+            _ => anyhow!("{flag} {}: {}", o.value, o.reason),
+        },
         Some((_, flag)) => anyhow!("{flag} {}: {}", o.value, o.reason),
         None => anyhow!("{o}"),
     }

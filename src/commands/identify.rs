@@ -46,7 +46,8 @@ pub fn run(args: Args) -> Result<()> {
     // Without stated noise the singular values are in units of a 0.01 mm touch.
     let assumed = !noise.stated();
     let id = identify(&arm.params, &data, &noise, args.fit.threads())
-        .with_context(|| source_name(&args.fit.input.arm))?;
+        .with_context(|| source_name(&args.fit.input.arm))
+        .map_err(|e| super::noise_flags(e, &args.fit))?;
     let noise_text = if assumed {
         "not stated: σ as for a 0.01 mm touch".to_string()
     } else {

@@ -13,7 +13,8 @@ pub mod simulate;
 use std::path::PathBuf;
 
 use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses, source_name};
-use aacmm_core::kernel::ArmKernel;
+use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf};
+use aacmm_core::residuals::short;
 use anyhow::{Context, Result, bail};
 
 use crate::output::warn;
@@ -172,4 +173,43 @@ pub fn write_json(path: &std::path::Path, value: &impl serde::Serialize) -> Resu
         .and_then(|()| w.write_all(b"\n"))
         .and_then(|()| w.flush())
         .with_context(|| format!("{}: cannot write", path.display()))
+}
+
+/// A library error about weights that are not finite (a
+/// [`KernelError::Noise`], alone or inside a calibration error), restated
+/// with the flags that set the noise — the library knows no flag names.
+/// Other errors pass through.
+pub fn noise_flags(e: impl Into<anyhow::Error>, fit: &fit::FitInput) -> anyhow::Error {
+    let e: anyhow::Error = e.into();
+    let kernel = e.downcast_ref::<KernelError>().or_else(|| {
+        match e.downcast_ref::<aacmm_core::calibrate::CalibrationError>() {
+            Some(aacmm_core::calibrate::CalibrationError::Kernel(k)) => Some(k),
+            _ => None,
+        }
+    });
+    let Some(KernelError::Noise { of, message }) = kernel else {
+        return e;
+    };
+    let show = |flag: &str, v: Option<f64>| v.map(|v| format!("{flag} {}", short(v)));
+    let flags: Vec<String> = match of {
+        NoiseOf::Touches => [
+            show("--encoder-noise", fit.encoder_noise),
+            show("--probe-noise", fit.probe_noise),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
+        NoiseOf::Lengths => [
+            show("--length-uncertainty", Some(fit.length_uncertainty)),
+            show("--length-weight", fit.length_weight),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
+    };
+    if flags.is_empty() {
+        e
+    } else {
+        anyhow::anyhow!("{}: {message}", flags.join(", "))
+    }
 }

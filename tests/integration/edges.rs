@@ -1,7 +1,7 @@
 //! Edges found by trying the CLI as a new user would: inputs that once
 //! panicked, and messages that once blamed the wrong thing.
 
-use crate::util::{aacmm, assert_clean_error, shipped, shipped_arm, temp_dir, write};
+use crate::util::{aacmm, assert_clean_error, shipped, shipped_arm, stderr, temp_dir, write};
 
 /// The shipped campaign reduced to the first row of each socket, repeated
 /// ten times (`jitter`: with ±0.01° added, as encoder noise would).
@@ -56,4 +56,191 @@ fn static_data_is_an_error_not_a_panic() {
         ]);
         assert_clean_error(&o, &[&data, "no articulation"]);
     }
+}
+
+/// A noise σ whose weights overflow once reached the solver, which blamed
+/// the arm file ("the start arm gives positions that are not finite
+/// numbers"); the error now names the flag and its value.
+#[test]
+fn overflowing_noise_names_the_flag() {
+    let (arm, data) = (shipped_arm(), shipped("poses.csv"));
+    for (flag, value) in [("--encoder-noise", "1e300"), ("--encoder-noise", "1e-300")] {
+        let o = aacmm(&["identify", "--arm", &arm, "--data", &data, flag, value]);
+        assert_clean_error(&o, &[&format!("error: {flag} {value}: "), "not finite"]);
+        assert!(!stderr(&o).contains(".toml"), "{}", stderr(&o));
+    }
+    let lengths = shipped("lengths.csv");
+    let o = aacmm(&[
+        "identify",
+        "--arm",
+        &arm,
+        "--data",
+        &data,
+        "--lengths",
+        &lengths,
+        "--encoder-noise",
+        "0.005",
+        "--length-uncertainty",
+        "1e300",
+    ]);
+    assert_clean_error(
+        &o,
+        &["error: --length-uncertainty 1e300: ", "lengths.csv:2"],
+    );
+}
+
+/// `--flag -0.5` is a value, as `--flag=-0.5` is: clap once read `-0` as
+/// an unknown flag.
+#[test]
+fn negative_numbers_need_no_equals_sign() {
+    let (arm, data) = (shipped_arm(), shipped("poses.csv"));
+    let o = aacmm(&[
+        "identify",
+        "--arm",
+        &arm,
+        "--data",
+        &data,
+        "--encoder-noise",
+        "-0.5",
+    ]);
+    assert_clean_error(&o, &["--encoder-noise -0.5: must be a finite number ≥ 0"]);
+    let dir = temp_dir("edges-negative");
+    let out = dir.join("sim").display().to_string();
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm,
+        "--errors",
+        "paper",
+        "--sockets",
+        "2",
+        "--poses",
+        "4",
+        "--seed",
+        "1",
+        "--probe-noise",
+        "-1",
+        "--out",
+        &out,
+    ]);
+    assert_clean_error(&o, &["--probe-noise", "-1"]);
+    assert!(
+        !stderr(&o).contains("unexpected argument"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// Standard input can be read once: `-` for two inputs is refused before
+/// either is read (the second once reported `<stdin>: empty file`).
+#[test]
+fn two_inputs_from_stdin_are_refused_up_front() {
+    let arm = shipped_arm();
+    let o = aacmm(&["identify", "--arm", &arm, "--data", "-", "--lengths", "-"]);
+    assert_clean_error(
+        &o,
+        &["--data and --lengths: each is `-` (standard input), which can be read once"],
+    );
+    let o = aacmm(&["points", "--arm", "-", "--data", "-"]);
+    assert_clean_error(&o, &["--arm and --data"]);
+    // One input from standard input is fine.
+    let poses = std::fs::read_to_string(shipped("poses.csv")).unwrap();
+    let mut child = crate::util::command(&["points", "--arm", &arm, "--data", "-"])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(poses.as_bytes())
+        .unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// A probe noise far beyond any seating noise is the flag's fault, not the
+/// sockets' ("may be out of reach").
+#[test]
+fn huge_probe_noise_blames_the_noise() {
+    let dir = temp_dir("edges-probe-noise");
+    let out = dir.join("sim").display().to_string();
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &shipped_arm(),
+        "--errors",
+        "paper",
+        "--sockets",
+        "3",
+        "--poses",
+        "5",
+        "--seed",
+        "1",
+        "--probe-noise",
+        "1e6",
+        "--out",
+        &out,
+    ]);
+    assert_clean_error(&o, &["--probe-noise: σ = 1000000 mm", "reach"]);
+    assert!(!stderr(&o).contains("out of reach"), "{}", stderr(&o));
+}
+
+/// `--out a/b/c` with `a/b` missing is refused before any work (it once
+/// created the whole tree, although the README says a missing directory is
+/// refused); `--out c` in an existing directory is created.
+#[test]
+fn out_creates_only_its_last_directory() {
+    let dir = temp_dir("edges-out-parents");
+    let deep = dir.join("a").join("b").join("c");
+    let o = crate::util::calibrate_shipped(&deep, &[]);
+    assert_clean_error(&o, &["--out", "does not exist", "only the last directory"]);
+    assert!(
+        !dir.join("a").exists(),
+        "created {}",
+        dir.join("a").display()
+    );
+    let shallow = dir.join("c");
+    let o = crate::util::calibrate_shipped(&shallow, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(shallow.join("calibrated.toml").is_file());
+}
+
+/// An earlier calibration in `--out` is kept unless `--force` (it was
+/// overwritten silently, and `--help` did not say so).
+#[test]
+fn earlier_calibration_is_kept_without_force() {
+    let dir = temp_dir("edges-out-force");
+    let out = dir.join("cal");
+    let o = crate::util::calibrate_shipped(&out, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let marker = "# an earlier calibration\n";
+    let calibrated = out.join("calibrated.toml");
+    let first = std::fs::read_to_string(&calibrated).unwrap();
+    std::fs::write(&calibrated, format!("{marker}{first}")).unwrap();
+    let o = crate::util::calibrate_shipped(&out, &[]);
+    assert_clean_error(
+        &o,
+        &[
+            "--out",
+            "earlier results (calibrated.toml, calibration.json)",
+            "--force",
+        ],
+    );
+    assert!(
+        std::fs::read_to_string(&calibrated)
+            .unwrap()
+            .starts_with(marker)
+    );
+    let o = crate::util::calibrate_shipped(&out, &["--force"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&calibrated).unwrap(), first);
+    let help = crate::util::stdout(&aacmm(&["calibrate", "--help"]));
+    assert!(
+        help.contains("--force") && help.contains("Overwrite an earlier calibration"),
+        "{help}"
+    );
 }

@@ -9,6 +9,7 @@ mod evaluate;
 mod mukca;
 mod out_paths;
 mod points;
+mod readme;
 mod report;
 mod session;
 mod sim_messages;

@@ -145,6 +145,8 @@ pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputErr
 /// assert_eq!(parse_arm(&text, "out.toml").unwrap().0, arm);
 /// ```
 pub fn arm_to_toml(arm: &Arm, length_unit: LengthUnit, angle_unit: AngleUnit) -> String {
+    // Invariant: an `ArmFile` holds only strings, floats (TOML has inf and
+    // nan), arrays and tables, which always serialize.
     toml::to_string(&ArmFile::new(arm, length_unit, angle_unit))
         .expect("strings, numbers, arrays and tables always serialize to TOML")
 }

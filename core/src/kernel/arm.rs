@@ -109,6 +109,7 @@ impl KernelOp for OnePose<'_> {
             }
             Some((jac, false)) => {
                 check_len(N, jac.len())?;
+                // Invariant: `check_len` just returned Ok for length N.
                 let jac: &mut [[f64; 3]; N] = jac.try_into().expect("length checked");
                 Ok(Dh::joint_jacobian(k, &cq, &sq, jac))
             }

@@ -36,6 +36,8 @@ pub(crate) struct Lanes(pub(crate) [f64; LANES]);
 impl Batch for Lanes {
     #[inline(always)]
     fn load(v: &[f64]) -> Lanes {
+        // Invariant: `v[..LANES]` is exactly LANES long (the slice panics
+        // first if `v` were shorter, and batch callers pass whole lanes).
         Lanes(v[..LANES].try_into().expect("4 values"))
     }
 
@@ -160,6 +162,7 @@ mod avx {
     impl Batch for Avx {
         #[inline(always)]
         fn load(v: &[f64]) -> Avx {
+            // Invariant: `v[..LANES]` is exactly LANES long.
             let v: &[f64; LANES] = v[..LANES].try_into().expect("4 values");
             // SAFETY: AVX is present (type invariant); `v` holds 4 values.
             Avx(unsafe { _mm256_loadu_pd(v.as_ptr()) })
@@ -175,6 +178,7 @@ mod avx {
 
         #[inline(always)]
         fn store(self, dst: &mut [f64]) {
+            // Invariant: `dst[..LANES]` is exactly LANES long.
             let dst: &mut [f64; LANES] = (&mut dst[..LANES]).try_into().expect("4 values");
             // SAFETY: AVX is present (type invariant); `dst` holds 4 values.
             unsafe { _mm256_storeu_pd(dst.as_mut_ptr(), self.0) };

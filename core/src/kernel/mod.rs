@@ -83,6 +83,26 @@ pub enum KernelError {
         /// Poses available.
         len: usize,
     },
+    /// The stated noise gives weights that are not finite numbers (a σ so
+    /// large that its square overflows, or so small that it vanishes): the
+    /// message names the noise concerned.
+    #[error("{message}")]
+    Noise {
+        /// Which weights: the touches' (encoder and probe noise) or a
+        /// reference length's (its uncertainty, or the length weight).
+        of: NoiseOf,
+        /// What is wrong, with the values concerned.
+        message: String,
+    },
+}
+
+/// Which noise made weights that are not finite (see [`KernelError::Noise`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoiseOf {
+    /// The touches': encoder and probe noise, or the assumed touch σ.
+    Touches,
+    /// A reference length's: its uncertainty or the length weight.
+    Lengths,
 }
 
 /// What the generated code computes with: `f64`, SIMD lanes, dual numbers.
@@ -206,6 +226,8 @@ macro_rules! impl_chain {
                 sq: &[S; $n],
                 jac: &mut [[S; 3]],
             ) -> [S; 3] {
+                // Invariant: every caller sizes `jac` from the chain's
+                // PARAMS (the public entry points check the length first).
                 let jac: &mut [[S; 3]; $m::PARAMS] = jac
                     .try_into()
                     .expect("jacobian buffer holds 4n + 3 columns");

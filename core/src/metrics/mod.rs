@@ -389,6 +389,8 @@ pub fn evaluate_threads(
         .collect();
     let across_points = |figure: fn(&PointStats) -> f64| {
         let values: Vec<f64> = stats.iter().map(figure).collect();
+        // Invariant: a built data set has at least one point (`DataSet`
+        // refuses a file without touches), so `values` is not empty.
         Summary::of(&values).expect("a data set has points")
     };
     let ev = Evaluation {

@@ -55,6 +55,8 @@ pub fn point_stats(label: &str, touches: &[[f64; 3]]) -> Result<PointStats, Metr
     let n = touches.len();
     let centroid = centroid(touches);
     let deltas: Vec<f64> = touches.iter().map(|x| distance(x, &centroid)).collect();
+    // Invariant: `check_touches` above refused fewer than MIN_TOUCHES
+    // touches, so `deltas` is not empty.
     let delta = Summary::of(&deltas).expect("check_touches guarantees touches");
     let sum_sq: f64 = deltas.iter().map(|d| d * d).sum();
     Ok(PointStats {

@@ -120,6 +120,31 @@ pub struct Campaign {
     pub stats: SimStats,
 }
 
+/// Largest probe seating noise, as a fraction of the arm's reach: beyond it
+/// the seated points scatter out of the workspace, and inverse kinematics
+/// would blame the sockets.
+pub const MAX_PROBE_NOISE_OF_REACH: f64 = 0.01;
+
+/// Refuses a probe seating noise that is no seating noise (see
+/// [`MAX_PROBE_NOISE_OF_REACH`]), naming the setting.
+fn check_probe_noise(nominal: &Arm, sigma_mm: f64) -> Result<(), SimError> {
+    let reach = nominal.params.reach();
+    let max = MAX_PROBE_NOISE_OF_REACH * reach;
+    if sigma_mm > max {
+        return Err(SimError::setting(
+            "probe_noise_mm",
+            format!(
+                "σ = {} mm is more than {}% of the arm's reach ({reach:.0} mm), at most {max:.1} mm: \
+                 the ball would be seated that far from its socket, out of the workspace \
+                 (a real seating noise is 0.001–0.05 mm)",
+                crate::residuals::short(sigma_mm),
+                MAX_PROBE_NOISE_OF_REACH * 100.0
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Simulates a campaign of `settings` on `nominal` (6 or 7 joints). Errors,
 /// never panics, on bad settings or an impossible campaign.
 ///
@@ -134,6 +159,7 @@ pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, 
     let n = nominal.params.joint_count();
     check_limits(nominal)?;
     settings.validate(n)?;
+    check_probe_noise(nominal, settings.probe_noise_mm)?;
     ArmKernel::new(&nominal.params)?;
     let seed = settings.seed;
     let true_arm = true_arm(nominal, &settings.errors, &mut rng(seed, streams::TRUE_ARM))?;

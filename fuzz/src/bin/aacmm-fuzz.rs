@@ -34,6 +34,13 @@ fn main() -> ExitCode {
             summary.cases,
             started.elapsed().as_secs_f64()
         )?;
+        if target == "calibrate" {
+            let names: Vec<&str> = aacmm_fuzz::degenerate::bases()
+                .iter()
+                .map(|b| b.name.as_str())
+                .collect();
+            writeln!(out, "campaigns: {}", names.join(", "))?;
+        }
         for (outcome, n) in &summary.outcomes {
             writeln!(out, "  {n:>10}  {outcome}")?;
         }
