@@ -78,7 +78,10 @@ impl<'py> Readings<'py> {
     /// Appends the readings of `rows` to `buf`, row-major, as given.
     fn copy(&self, rows: Range<usize>, buf: &mut Vec<f64>) {
         let j = self.joints;
-        if let Ok(all) = self.array.as_slice() {
+        // `as_slice` also accepts Fortran order: only C order is row-major.
+        if self.array.is_c_contiguous()
+            && let Ok(all) = self.array.as_slice()
+        {
             buf.extend_from_slice(&all[rows.start * j..rows.end * j]);
             return;
         }
