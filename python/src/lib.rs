@@ -5,7 +5,7 @@
 //! Arrays go in and out as numpy arrays without per-element Python work;
 //! the GIL is released while the kernel, the metrics, the identification,
 //! the simulator and the calibrator run; every error becomes a Python
-//! exception with the library's message ([`error`]), and no panic crosses
+//! exception with the library's message (module `error`), and no panic crosses
 //! into Python. The typed surface is `aacmm.pyi` beside this crate.
 
 mod arm;

@@ -135,3 +135,18 @@ def test_the_gil_is_released_during_calibration(arm, data):
         t.join()
     assert took > 0.05, took
     assert max(gaps) < took / 2, (max(gaps), took)
+
+
+def test_the_example_script_runs(tmp_path):
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    script = REPO / "python" / "examples" / "calibrate_campaign.py"
+    done = subprocess.run(
+        [sys.executable, str(script), str(tmp_path)], cwd=REPO, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    assert "e mean: 3.6515 mm -> 0.0520 mm" in done.stdout
+    assert (tmp_path / "calibration.json").read_text().startswith('{\n  "arm": "paper-table-1"')
