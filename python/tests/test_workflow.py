@@ -150,3 +150,23 @@ def test_the_example_script_runs(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "e mean: 3.6515 mm -> 0.0520 mm" in done.stdout
     assert (tmp_path / "calibration.json").read_text().startswith('{\n  "arm": "paper-table-1"')
+
+
+def test_the_readme_python_example_prints_what_the_readme_says():
+    import re
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    readme = (REPO / "README.md").read_text()
+    m = re.search(
+        r'```sh\npython3 -m venv v && v/bin/pip install \./python\nv/bin/python -c "\n(.*?)"\n```\n\n```text\n(.*?)```',
+        readme,
+        re.S,
+    )
+    assert m, "the README's Python example is not where the test looks"
+    code, printed = m.groups()
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == printed
