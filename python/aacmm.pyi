@@ -7,6 +7,7 @@ theta1..thetan, Bx, By, Bz`` (see :func:`param_names`).
 """
 
 import os
+import pathlib
 from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -187,7 +188,7 @@ class Campaign:
     def lengths(self) -> List[_Length]: ...
     @property
     def data(self) -> DataSet: ...
-    def write(self, dir: _Path) -> List[str]:
+    def write(self, dir: _Path) -> List[pathlib.Path]:
         """Writes poses.csv, lengths.csv, sockets.csv, true_arm.toml,
         campaign.toml (the bytes of ``aacmm simulate``)."""
 
