@@ -29,16 +29,14 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use aacmm_core::calibrate::validate::before_after;
-use aacmm_core::calibrate::{CalibrateOptions, Calibration, Method, calibrate};
+use aacmm_core::calibrate::{CalibrateOptions, Calibration, Method};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::read_arm;
 use aacmm_core::metrics::{Evaluation, Summary, evaluate};
 use aacmm_core::params::DhParams;
-use aacmm_core::report::{
-    Arms, CalibrationInput, Measured, ValidationRow, calibration_report, positions,
-};
+use aacmm_core::report::positions;
 use aacmm_core::residuals::Noise;
+use aacmm_core::session::{CalibrationReport, HeldOutData, Problem, Sources};
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate, write_campaign};
 use anyhow::{Context, Result};
 
@@ -93,18 +91,31 @@ fn main() -> Result<()> {
         ..CalibrateOptions::default()
     };
     let truth = &campaign.true_arm.params;
-    let mut fits: Vec<(Method, Calibration, f64)> = Vec::new();
+    let mut fits: Vec<(Method, Problem, CalibrationReport, f64)> = Vec::new();
     for method in [Method::Hybrid, Method::Global] {
-        let started = Instant::now();
-        let cal = calibrate(
-            &nominal.params,
-            &data,
-            &CalibrateOptions {
+        let problem = Problem::new(
+            nominal.clone(),
+            data.clone(),
+            CalibrateOptions {
                 method,
                 ..options.clone()
             },
-        )?;
-        fits.push((method, cal, started.elapsed().as_secs_f64()));
+        )?
+        .with_held_out(HeldOutData {
+            data: held.clone(),
+            data_file: "held-out/poses.csv".to_string(),
+            lengths_file: Some("held-out/lengths.csv".to_string()),
+        })?
+        .with_sources(Sources {
+            arm_file: "examples/paper-table-1.toml".to_string(),
+            data_file: "campaign/poses.csv".to_string(),
+            lengths_file: Some("campaign/lengths.csv".to_string()),
+            warnings: Vec::new(),
+        })
+        .with_truth(truth.clone());
+        let started = Instant::now();
+        let report = problem.run()?;
+        fits.push((method, problem, report, started.elapsed().as_secs_f64()));
     }
 
     println!(
@@ -141,7 +152,7 @@ fn main() -> Result<()> {
         std::iter::once(("nominal (before)".to_string(), &nominal.params))
             .chain(
                 fits.iter()
-                    .map(|(m, c, _)| (format!("{} (after)", m.name()), &c.params)),
+                    .map(|(m, _, r, _)| (format!("{} (after)", m.name()), &r.calibration.params)),
             )
             .chain(std::iter::once((
                 "true arm (the noise floor)".to_string(),
@@ -169,7 +180,8 @@ fn main() -> Result<()> {
         "max |corr - true|/sigma",
         "max |corr - true|"
     );
-    for (method, cal, seconds) in &fits {
+    for (method, _, report, seconds) in &fits {
+        let cal = &report.calibration;
         let (z, worst) = recovery(cal, truth);
         println!(
             "{:<8} {:>9} {:>10} {:>5.1} ms {:>10.4} {:>22.2} {:>19.4} mm",
@@ -183,84 +195,10 @@ fn main() -> Result<()> {
         );
     }
 
-    let fitted_before = positions(&nominal.params, &data)?;
-    let held_before = positions(&nominal.params, &held)?;
-    for (method, cal, _) in &fits {
-        let fitted_after = positions(&cal.params, &data)?;
-        let held_after = positions(&cal.params, &held)?;
-        let fitted = before_after(&nominal.params, &cal.params, &data)?;
-        let held_figures = before_after(&nominal.params, &cal.params, &held)?;
-        let report = calibration_report(&CalibrationInput {
-            title: format!("The paper's experiment, simulated: calibration by `{}`", method.name()),
-            inputs: vec![
-                (
-                    "nominal arm".to_string(),
-                    "paper Table 1 (examples/paper-table-1.toml)".to_string(),
-                ),
-                (
-                    "true arm".to_string(),
-                    "Table 1 + Table 2 errors (simulated; its errors are drawn beside the corrections)"
-                        .to_string(),
-                ),
-                (
-                    "touches".to_string(),
-                    format!("campaign/: 10 sockets x 10 touches, 3 reference lengths, seed {SEED}"),
-                ),
-                (
-                    "held out".to_string(),
-                    format!("held-out/: 10 other sockets of the same true arm, seed {HELD_OUT_SEED}"),
-                ),
-                (
-                    "noise".to_string(),
-                    format!("encoders {ENCODER_NOISE_DEG} deg, probe seating {PROBE_NOISE_MM} mm per axis"),
-                ),
-                (
-                    "method".to_string(),
-                    format!("{}; --fix auto; seed {SOLVER_SEED}", method.name()),
-                ),
-            ],
-            calibration: cal,
-            calibration_json: None,
-            measured: vec![
-                Measured {
-                    data: &data,
-                    held_out: false,
-                    before: Some(&fitted_before),
-                    after: &fitted_after,
-                },
-                Measured {
-                    data: &held,
-                    held_out: true,
-                    before: Some(&held_before),
-                    after: &held_after,
-                },
-            ],
-            arms: Arms {
-                before: "nominal".to_string(),
-                after: method.name().to_string(),
-            },
-            validation: vec![
-                ValidationRow {
-                    name: "fitted".to_string(),
-                    held_out: false,
-                    figures: &fitted,
-                    json: None,
-                },
-                ValidationRow {
-                    name: "held out".to_string(),
-                    held_out: true,
-                    figures: &held_figures,
-                    json: None,
-                },
-            ],
-            truth: Some(truth),
-        })?;
+    for (method, problem, report, seconds) in &fits {
         let dir = out.join(method.name());
         std::fs::create_dir_all(&dir).with_context(|| dir.display().to_string())?;
-        for (name, text) in report.files() {
-            let path = dir.join(name);
-            std::fs::write(&path, text).with_context(|| path.display().to_string())?;
-        }
+        report.write(problem, &dir, *seconds)?;
     }
     let shown = std::env::current_dir()
         .ok()
@@ -309,10 +247,9 @@ fn recovery(cal: &Calibration, truth: &DhParams) -> (f64, f64) {
     let mut worst: f64 = 0.0;
     for (id, p) in aacmm_core::params::ParamId::all(truth.joint_count()).zip(&cal.parameters) {
         let Some(sigma) = p.sigma else { continue };
-        let true_value = aacmm_core::identify::to_user(id, truth.get(id));
-        let err = p.calibrated - true_value;
+        let err = p.calibrated - truth.get(id);
         z = z.max(err.abs() / sigma);
-        if p.unit == "mm" {
+        if id.kind.is_length() {
             worst = worst.max(err.abs());
         }
     }

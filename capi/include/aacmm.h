@@ -121,13 +121,20 @@ enum AacmmTermination
    */
   AACMM_TERMINATION_MAX_ITERATIONS = 4,
   /**
-   * No step lowered the cost: a minimum to machine precision.
+   * No step lowered the cost, yet the gradient is not small: not
+   * converged.
    */
   AACMM_TERMINATION_NO_PROGRESS = 5,
   /**
-   * Annealing alone (`AACMM_METHOD_SA`) ended by its own rule.
+   * No step lowered the cost and the gradient is nil: a minimum to
+   * machine precision.
    */
-  AACMM_TERMINATION_ANNEALED = 6,
+  AACMM_TERMINATION_MACHINE_PRECISION = 6,
+  /**
+   * No LM ran: annealing alone (`AACMM_METHOD_SA`); its own stop decides
+   * `successful`.
+   */
+  AACMM_TERMINATION_NO_LM = 7,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -251,12 +258,17 @@ typedef struct {
  */
 typedef struct {
   /**
-   * Why the solver stopped.
+   * The method that ran (`AACMM_METHOD_…`).
+   */
+  AacmmMethod method;
+  /**
+   * Why the final LM stopped.
    */
   AacmmTermination termination;
   /**
-   * Whether that is a converged minimum (every termination but
-   * `AACMM_TERMINATION_MAX_ITERATIONS`).
+   * Whether the result is usable: the final LM converged and the
+   * method's own stop is not a spent budget (an unconfirmed global
+   * search, an annealing out of evaluations).
    */
   bool successful;
   /**
@@ -639,15 +651,15 @@ AacmmStatus aacmm_calibration_summary(const AacmmCalibration *cal,
 AacmmStatus aacmm_calibration_arm(const AacmmCalibration *cal, AacmmArm **out);
 
 /**
- * The report as one line of JSON (UTF-8), copied into `buf` like
+ * The report as JSON (UTF-8), copied into `buf` like
  * `aacmm_last_error_message`; `*len` gets its full length in bytes without
  * the NUL. Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the copy was
  * truncated (`buf` may be `NULL` with `buf_len` 0 to ask for the length).
  *
- * The report has the fields of the command line's `calibration.json`
- * (parameters in mm and deg there, as its `units` says; `validation` has
- * the before/after figures on the fitted data and the cross-validation
- * folds, `held_out` is null) and `warnings`, the readers' warnings.
+ * The report is the command line's `calibration.json`, byte for byte on
+ * the same inputs and options (parameters in mm and deg there, as its
+ * `units` says; `validation.held_out` is null, as the C API does not
+ * validate on held-out data; `warnings` holds the readers' warnings).
  *
  * # Safety
  *

@@ -248,7 +248,7 @@ pub unsafe extern "C" fn aacmm_arm_params(
         expect_len("params_len", params_len, values.len(), "4 · joints + 3")?;
         // SAFETY: by the contract.
         let out = unsafe { ptr::output(params, params_len, "params") }?;
-        out.copy_from_slice(&values);
+        ptr::write_all(out, &values);
         Ok(())
     })
 }
@@ -345,8 +345,19 @@ pub unsafe extern "C" fn aacmm_positions(
         // SAFETY: by the contract; `p` does not overlap `q` (checked).
         let (q, p) = unsafe { (ptr::input(q, q_len, "q")?, ptr::output(p, p_len, "p")?) };
         let poses = prepare(joints, q)?;
-        arm.kernel
-            .positions(&poses, 0..n, p.as_chunks_mut::<3>().0)?;
+        // The kernel writes through `&mut [[f64; 3]]`, which must not refer
+        // to the caller's possibly uninitialised memory: each chunk goes to
+        // the stack first and is copied out (one write of `p`, no zeroing
+        // pass). Chunks start at multiples of 4 poses, so the SIMD batches are
+        // the same as in one call.
+        const CHUNK: usize = 256;
+        let mut chunk = [[0.0; 3]; CHUNK];
+        for (start, dst) in (0..n).step_by(CHUNK).zip(p.chunks_mut(3 * CHUNK)) {
+            let m = dst.len() / 3;
+            arm.kernel
+                .positions(&poses, start..start + m, &mut chunk[..m])?;
+            ptr::write_all(dst, chunk[..m].as_flattened());
+        }
         Ok(())
     })
 }
@@ -412,11 +423,11 @@ pub unsafe extern "C" fn aacmm_jacobians(
         };
         let poses = prepare(joints, q)?;
         arm.kernel.for_each_jacobian(&poses, 0..n, |i, pos, cols| {
-            p[3 * i..3 * i + 3].copy_from_slice(pos);
+            ptr::write_all(&mut p[3 * i..3 * i + 3], pos);
             let block = &mut jac[per_pose * i..per_pose * (i + 1)];
             for (c, col) in cols.iter().enumerate() {
                 for (k, &v) in col.iter().enumerate() {
-                    block[k * params + c] = v;
+                    block[k * params + c].write(v);
                 }
             }
         })?;
@@ -467,10 +478,10 @@ pub unsafe extern "C" fn aacmm_joint_jacobian(
             )
         };
         let mut cols = vec![[0.0; 3]; joints];
-        p.copy_from_slice(&arm.kernel.joint_jacobian(q, &mut cols)?);
+        ptr::write_all(p, &arm.kernel.joint_jacobian(q, &mut cols)?);
         for (j, col) in cols.iter().enumerate() {
             for (k, &v) in col.iter().enumerate() {
-                jac[k * joints + j] = v;
+                jac[k * joints + j].write(v);
             }
         }
         Ok(())
@@ -521,6 +532,34 @@ mod tests {
             );
             aacmm_arm_free(arm);
         }
+    }
+
+    /// Positions go out through stack chunks of 256 poses: 601 poses (two
+    /// full chunks and a tail that is not a multiple of the 4 lanes) into an
+    /// uninitialised buffer give the Rust API's bits, in order.
+    #[test]
+    fn chunked_positions_fill_an_uninitialised_buffer() {
+        let arm = nominal();
+        let n = 601;
+        let q: Vec<f64> = (0..6 * n).map(|i| (i as f64 * 0.37).sin() * 3.0).collect();
+        let mut p: Vec<f64> = Vec::with_capacity(3 * n);
+        // SAFETY: live handle; `q` holds `6n` doubles; `p` has room for
+        // `3n` (uninitialised) doubles, all written on success.
+        unsafe {
+            let status = aacmm_positions(arm, q.as_ptr(), 6 * n, p.as_mut_ptr(), 3 * n);
+            assert_eq!(status, AacmmStatus::Ok);
+            p.set_len(3 * n);
+        }
+        let rows: Vec<&[f64]> = q.chunks(6).collect();
+        // SAFETY: live handle, freed below and not used after.
+        let expected = unsafe { handle(arm) }
+            .unwrap()
+            .kernel
+            .positions_of(&rows)
+            .unwrap();
+        assert_eq!(p, expected.as_flattened());
+        // SAFETY: live handle, not used after.
+        unsafe { aacmm_arm_free(arm) };
     }
 
     #[test]

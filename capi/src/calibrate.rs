@@ -3,18 +3,14 @@
 use std::collections::{HashMap, HashSet};
 use std::ffi::{CStr, c_char};
 
-use aacmm_core::calibrate::validate::{BeforeAfter, Fold, before_after, cross_validate};
-use aacmm_core::calibrate::{
-    CalibrateOptions, Calibration, DEFAULT_LENGTH_SIGMA_MM, FixSpec, LmOptions, Method,
-    Termination, calibrate,
-};
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, Method, Termination};
 use aacmm_core::dataset::{DataSet, MIN_TOUCHES};
 use aacmm_core::io::{
     AngleUnit, Arm, Poses, ReferenceLength, read_arm, read_lengths, read_poses, source_name,
 };
-use aacmm_core::params::{ParamId, ParamKind};
-use aacmm_core::residuals::Noise;
-use serde::Serialize;
+use aacmm_core::params::ParamId;
+use aacmm_core::residuals::{DEFAULT_LENGTH_SIGMA_MM, Noise};
+use aacmm_core::session::{CalibrationReport, Problem, Sources};
 
 use crate::arm::{AacmmArm, handle, pose_count, string_out};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
@@ -45,6 +41,16 @@ fn method(m: AacmmMethod) -> Option<Method> {
         AACMM_METHOD_HYBRID => Some(Method::Hybrid),
         AACMM_METHOD_GLOBAL => Some(Method::Global),
         _ => None,
+    }
+}
+
+/// The C constant of a library method.
+fn method_code(m: Method) -> AacmmMethod {
+    match m {
+        Method::Lm => AACMM_METHOD_LM,
+        Method::Sa => AACMM_METHOD_SA,
+        Method::Hybrid => AACMM_METHOD_HYBRID,
+        Method::Global => AACMM_METHOD_GLOBAL,
     }
 }
 
@@ -127,22 +133,28 @@ pub enum AacmmTermination {
     ZeroResidual = 3,
     /// The iteration limit was reached first: not converged.
     MaxIterations = 4,
-    /// No step lowered the cost: a minimum to machine precision.
+    /// No step lowered the cost, yet the gradient is not small: not
+    /// converged.
     NoProgress = 5,
-    /// Annealing alone (`AACMM_METHOD_SA`) ended by its own rule.
-    Annealed = 6,
+    /// No step lowered the cost and the gradient is nil: a minimum to
+    /// machine precision.
+    MachinePrecision = 6,
+    /// No LM ran: annealing alone (`AACMM_METHOD_SA`); its own stop decides
+    /// `successful`.
+    NoLm = 7,
 }
 
-impl From<Termination> for AacmmTermination {
-    fn from(t: Termination) -> Self {
+impl From<Option<Termination>> for AacmmTermination {
+    fn from(t: Option<Termination>) -> Self {
         match t {
-            Termination::CostTolerance => AacmmTermination::CostTolerance,
-            Termination::StepTolerance => AacmmTermination::StepTolerance,
-            Termination::GradientTolerance => AacmmTermination::GradientTolerance,
-            Termination::ZeroResidual => AacmmTermination::ZeroResidual,
-            Termination::MaxIterations => AacmmTermination::MaxIterations,
-            Termination::NoProgress => AacmmTermination::NoProgress,
-            Termination::Annealed => AacmmTermination::Annealed,
+            Some(Termination::CostTolerance) => AacmmTermination::CostTolerance,
+            Some(Termination::StepTolerance) => AacmmTermination::StepTolerance,
+            Some(Termination::GradientTolerance) => AacmmTermination::GradientTolerance,
+            Some(Termination::ZeroResidual) => AacmmTermination::ZeroResidual,
+            Some(Termination::MaxIterations) => AacmmTermination::MaxIterations,
+            Some(Termination::NoProgress) => AacmmTermination::NoProgress,
+            Some(Termination::MachinePrecision) => AacmmTermination::MachinePrecision,
+            None => AacmmTermination::NoLm,
         }
     }
 }
@@ -151,10 +163,13 @@ impl From<Termination> for AacmmTermination {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct AacmmCalibrationSummary {
-    /// Why the solver stopped.
+    /// The method that ran (`AACMM_METHOD_…`).
+    pub method: AacmmMethod,
+    /// Why the final LM stopped.
     pub termination: AacmmTermination,
-    /// Whether that is a converged minimum (every termination but
-    /// `AACMM_TERMINATION_MAX_ITERATIONS`).
+    /// Whether the result is usable: the final LM converged and the
+    /// method's own stop is not a spent budget (an unconfirmed global
+    /// search, an annealing out of evaluations).
     pub successful: bool,
     /// Iterations of the final fit.
     pub iterations: usize,
@@ -175,48 +190,9 @@ pub struct AacmmCalibrationSummary {
 /// The result of a calibration. Opaque; released by
 /// `aacmm_calibration_free`. Never modified after it is made.
 pub struct AacmmCalibration {
-    calibration: Calibration,
+    report: CalibrationReport,
     calibrated: Arm,
-    report: String,
-}
-
-/// The report: the fields of the command line's `calibration.json`, with
-/// `warnings` added (the command line prints them instead).
-#[derive(Serialize)]
-struct Report<'a> {
-    arm: &'a str,
-    arm_file: &'a str,
-    data_file: &'a str,
-    lengths_file: Option<&'a str>,
-    method: &'static str,
-    fix: &'a str,
-    noise: &'a Noise,
-    units: Units,
-    touches: usize,
-    points: usize,
-    reference_lengths: usize,
-    calibration: &'a Calibration,
-    validation: Validation<'a>,
-    warnings: &'a [String],
-}
-
-#[derive(Serialize)]
-struct Units {
-    lengths: &'static str,
-    angles: &'static str,
-}
-
-#[derive(Serialize)]
-struct Validation<'a> {
-    fitted: BeforeAfter,
-    held_out: Option<()>,
-    cross_validation: Option<CrossValidation<'a>>,
-}
-
-#[derive(Serialize)]
-struct CrossValidation<'a> {
-    folds: &'a [Fold],
-    seed: u64,
+    json: String,
 }
 
 /// The defaults of every option (those of `aacmm calibrate`).
@@ -235,13 +211,11 @@ pub extern "C" fn aacmm_calibrate_options_default() -> AacmmCalibrateOptions {
     }
 }
 
-/// The options in the library's terms, checked as the command line checks
-/// its flags.
+/// The options in the library's terms (checked by the library when the
+/// problem is made), and the fold count.
 struct Settings {
     options: CalibrateOptions,
-    fix: String,
     cross_validate: usize,
-    seed: u64,
 }
 
 /// # Safety
@@ -260,28 +234,11 @@ unsafe fn settings(
     };
     let Some(solver) = method(o.method) else {
         return Err(Error::invalid(format!(
-            "method = {}: one of AACMM_METHOD_LM ({AACMM_METHOD_LM}), _SA ({AACMM_METHOD_SA}), \
-             _HYBRID ({AACMM_METHOD_HYBRID}), _GLOBAL ({AACMM_METHOD_GLOBAL})",
+            "options.method = {}: one of AACMM_METHOD_LM ({AACMM_METHOD_LM}), _SA \
+             ({AACMM_METHOD_SA}), _HYBRID ({AACMM_METHOD_HYBRID}), _GLOBAL ({AACMM_METHOD_GLOBAL})",
             o.method
         )));
     };
-    for (name, v) in [
-        ("encoder_noise_rad", o.encoder_noise_rad),
-        ("probe_noise_mm", o.probe_noise_mm),
-        ("length_uncertainty_mm", o.length_uncertainty_mm),
-        ("length_weight", o.length_weight),
-    ] {
-        if !(v.is_finite() && v >= 0.0) {
-            return Err(Error::invalid(format!(
-                "options.{name} = {v}: must be a finite number >= 0"
-            )));
-        }
-    }
-    if o.cross_validate == 1 {
-        return Err(Error::invalid(
-            "options.cross_validate = 1: 0 (none) or 2 or more folds",
-        ));
-    }
     let fix = if o.fix.is_null() {
         "auto".to_string()
     } else {
@@ -291,7 +248,9 @@ unsafe fn settings(
             .map_err(|_| Error::invalid("options.fix is not valid UTF-8"))?
             .to_string()
     };
-    let stated = |v: f64| (v > 0.0).then_some(v);
+    // 0 = not stated; anything else goes to the library, which refuses
+    // negative and non-finite values by field.
+    let stated = |v: f64| (v != 0.0).then_some(v);
     let threads = match o.threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
@@ -312,81 +271,52 @@ unsafe fn settings(
         lm: LmOptions::default().threads(threads),
         ..CalibrateOptions::default()
     };
+    options.check(joints)?;
+    if o.cross_validate == 1 {
+        return Err(Error::invalid(
+            "options.cross_validate = 1: 0 (none) or 2 or more folds",
+        ));
+    }
     Ok(Settings {
         options,
-        fix,
         cross_validate: o.cross_validate,
-        seed: o.seed,
     })
 }
 
-/// Where the inputs came from, for the report.
-struct Sources<'a> {
-    arm: &'a str,
-    data: &'a str,
-    lengths: Option<&'a str>,
-    warnings: Vec<String>,
-}
-
-/// Calibrates and builds the result: what the command line does, without
-/// held-out validation.
-fn run(start: &Arm, data: &DataSet, s: &Settings, src: Sources) -> Result<AacmmCalibration, Error> {
-    let cal = calibrate(&start.params, data, &s.options).map_err(|e| {
-        let e = Error::from(e);
-        Error::new(e.status, format!("{}: {}", src.arm, e.message))
-    })?;
-    let fitted = before_after(&start.params, &cal.params, data)?;
-    let folds = match s.cross_validate {
-        0 => None,
-        k => Some(
-            cross_validate(&start.params, data, &s.options, k, s.seed).map_err(|e| {
-                let e = Error::from(e);
-                Error::new(
-                    e.status,
-                    e.message
-                        .replace("--cross-validate", "options.cross_validate ="),
-                )
-            })?,
-        ),
-    };
-    let report = Report {
-        arm: &start.name,
-        arm_file: src.arm,
-        data_file: src.data,
-        lengths_file: src.lengths,
-        method: "lm",
-        fix: &s.fix,
-        noise: &s.options.noise,
-        units: Units {
-            lengths: "mm",
-            angles: "deg",
-        },
-        touches: data.len(),
-        points: data.points().len(),
-        reference_lengths: data.references().len(),
-        calibration: &cal,
-        validation: Validation {
-            fitted,
-            held_out: None,
-            cross_validation: folds.as_deref().map(|f| CrossValidation {
-                folds: f,
-                seed: s.seed,
-            }),
-        },
-        warnings: &src.warnings,
-    };
-    let report = serde_json::to_string(&report)
-        .map_err(|e| Error::new(AacmmStatus::Panic, format!("report: {e}")))?;
-    let calibrated = Arm {
-        name: format!("{}-calibrated", start.name),
-        params: cal.params.clone(),
-        limits: start.limits.clone(),
-    };
+/// Calibrates and builds the result: the library's session (what the
+/// command line runs), without held-out validation.
+fn run(
+    start: &Arm,
+    data: DataSet,
+    s: Settings,
+    sources: Sources,
+) -> Result<AacmmCalibration, Error> {
+    let mut problem = Problem::new(start.clone(), data, s.options)
+        .map_err(|e| in_file(e, &sources.arm_file))?
+        .with_sources(sources);
+    if s.cross_validate != 0 {
+        problem = problem.with_cross_validation(s.cross_validate)?;
+    }
+    let report = problem
+        .run()
+        .map_err(|e| in_file(e, &problem.sources().arm_file))?;
     Ok(AacmmCalibration {
-        calibration: cal,
-        calibrated,
+        calibrated: report.calibrated_arm(start),
+        json: report.to_json(),
         report,
     })
+}
+
+/// A calibration error, named after the arm file unless it is a refused
+/// option (which names its field).
+fn in_file(e: aacmm_core::CalibrationError, arm: &str) -> Error {
+    let option = matches!(e, aacmm_core::CalibrationError::Option(_));
+    let e = Error::from(e);
+    if option {
+        e
+    } else {
+        Error::new(e.status, format!("{arm}: {}", e.message))
+    }
 }
 
 /// Calibrates the arm of an arm file on a poses file and an optional
@@ -456,13 +386,13 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
         if let (Some(path), Some(file)) = (&lengths_path, &lengths_file) {
             data = data.with_lengths(&read_lengths(path)?, file)?;
         }
-        let src = Sources {
-            arm: &arm_file,
-            data: &data_file,
-            lengths: lengths_file.as_deref(),
+        let sources = Sources {
+            arm_file,
+            data_file,
+            lengths_file,
             warnings: warnings.iter().map(ToString::to_string).collect(),
         };
-        let result = run(&arm, &data, &s, src)?;
+        let result = run(&arm, data, s, sources)?;
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })
@@ -525,13 +455,13 @@ pub unsafe extern "C" fn aacmm_calibrate(
         // SAFETY: by the contract.
         let s = unsafe { settings(options, joints) }?;
         let data = array_data(joints, q, points, lengths)?;
-        let src = Sources {
-            arm: &start.source,
-            data: "<arrays>",
-            lengths: (!lengths.is_empty()).then_some("<arrays>"),
+        let sources = Sources {
+            arm_file: start.source.clone(),
+            data_file: "<arrays>".to_string(),
+            lengths_file: (!lengths.is_empty()).then(|| "<arrays>".to_string()),
             warnings: start.warnings.clone(),
         };
-        let result = run(&start.arm, &data, &s, src)?;
+        let result = run(&start.arm, data, s, sources)?;
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })
@@ -672,7 +602,7 @@ unsafe fn per_parameter<T: Copy>(
     // SAFETY: by the contract.
     let out = unsafe { ptr::output(out, len, "out") }?;
     for (c, id) in ParamId::all(joints).enumerate() {
-        out[c] = value(cal, c, id);
+        out[c].write(value(cal, c, id));
     }
     Ok(())
 }
@@ -717,12 +647,8 @@ pub unsafe extern "C" fn aacmm_calibration_sigmas(
     guard(|| {
         // SAFETY: forwarded contract.
         unsafe {
-            per_parameter(cal, sigma, sigma_len, |c, i, id| {
-                let s = c.calibration.parameters[i].sigma.unwrap_or(f64::NAN);
-                match id.kind {
-                    ParamKind::Alpha | ParamKind::Theta => s.to_radians(),
-                    _ => s,
-                }
+            per_parameter(cal, sigma, sigma_len, |c, i, _| {
+                c.report.calibration.parameters[i].sigma.unwrap_or(f64::NAN)
             })
         }
     })
@@ -745,7 +671,7 @@ pub unsafe extern "C" fn aacmm_calibration_fixed(
         // SAFETY: forwarded contract.
         unsafe {
             per_parameter(cal, fixed, fixed_len, |c, i, _| {
-                c.calibration.parameters[i].fixed.is_some()
+                c.report.calibration.parameters[i].fixed.is_some()
             })
         }
     })
@@ -764,9 +690,10 @@ pub unsafe extern "C" fn aacmm_calibration_summary(
 ) -> AacmmStatus {
     guard(|| {
         // SAFETY: by the contract.
-        let c = &unsafe { result(cal) }?.calibration;
+        let c = &unsafe { result(cal) }?.report.calibration;
         let value = AacmmCalibrationSummary {
-            termination: c.solver.termination.into(),
+            method: method_code(c.solver.method),
+            termination: c.solver.stop.lm().into(),
             successful: c.solver.successful,
             iterations: c.solver.iterations,
             free_parameters: c.dof.free_parameters,
@@ -804,15 +731,15 @@ pub unsafe extern "C" fn aacmm_calibration_arm(
     })
 }
 
-/// The report as one line of JSON (UTF-8), copied into `buf` like
+/// The report as JSON (UTF-8), copied into `buf` like
 /// `aacmm_last_error_message`; `*len` gets its full length in bytes without
 /// the NUL. Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the copy was
 /// truncated (`buf` may be `NULL` with `buf_len` 0 to ask for the length).
 ///
-/// The report has the fields of the command line's `calibration.json`
-/// (parameters in mm and deg there, as its `units` says; `validation` has
-/// the before/after figures on the fitted data and the cross-validation
-/// folds, `held_out` is null) and `warnings`, the readers' warnings.
+/// The report is the command line's `calibration.json`, byte for byte on
+/// the same inputs and options (parameters in mm and deg there, as its
+/// `units` says; `validation.held_out` is null, as the C API does not
+/// validate on held-out data; `warnings` holds the readers' warnings).
 ///
 /// # Safety
 ///
@@ -829,7 +756,7 @@ pub unsafe extern "C" fn aacmm_calibration_report(
         // SAFETY: by the contract.
         let c = unsafe { result(cal) }?;
         // SAFETY: by the contract.
-        unsafe { string_out(&c.report, buf, buf_len, len) }
+        unsafe { string_out(&c.json, buf, buf_len, len) }
     })
 }
 
@@ -906,6 +833,20 @@ mod tests {
         // SAFETY: as above.
         let e = unsafe { settings(&o, 6) }.err().unwrap();
         assert_eq!(e.status, AacmmStatus::InvalidArgument);
+        assert_eq!(
+            e.message,
+            "options.probe_noise_mm = -1: must be a finite number ≥ 0"
+        );
+        o.probe_noise_mm = 0.0;
+        o.threads = 0;
+        o.length_uncertainty_mm = f64::NAN;
+        // SAFETY: as above.
+        let e = unsafe { settings(&o, 6) }.err().unwrap();
+        assert!(
+            e.message.starts_with("options.length_uncertainty_mm = NaN"),
+            "{}",
+            e.message
+        );
         o = aacmm_calibrate_options_default();
         o.fix = c"theta1, d1".as_ptr();
         // SAFETY: `fix` points to a NUL-terminated literal.

@@ -2,13 +2,15 @@
 //! wrapper every entry point runs its body in, so that an error becomes a
 //! code plus a message and a panic never unwinds into C.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::ffi::c_char;
 use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Once;
 
-use aacmm_core::calibrate::CalibrationError;
+use aacmm_core::calibrate::{CalibrationError, OptionError};
 use aacmm_core::error::InputError;
 use aacmm_core::kernel::KernelError;
+use aacmm_core::residuals::WORKER_THREAD_NAME;
 
 use crate::ptr::copy_str;
 
@@ -103,17 +105,76 @@ impl From<CalibrationError> for Error {
         let status = match &e {
             CalibrationError::Kernel(KernelError::Unsupported(_)) => AacmmStatus::Unsupported,
             CalibrationError::Kernel(_) => AacmmStatus::Length,
-            CalibrationError::UnknownParameter { .. } | CalibrationError::Folds(_) => {
-                AacmmStatus::InvalidArgument
-            }
+            CalibrationError::Option(o) => return Error::from(o.clone()),
             _ => AacmmStatus::Calibration,
         };
         Error::new(status, e.to_string())
     }
 }
 
+/// The C field of each library setting ([`OptionError::field`]); settings
+/// the C API does not expose keep their library path.
+const FIELDS: [(&str, &str); 7] = [
+    ("noise.encoder_rad", "encoder_noise_rad"),
+    ("noise.probe_mm", "probe_noise_mm"),
+    ("noise.length_default_mm", "length_uncertainty_mm"),
+    ("noise.length_weight", "length_weight"),
+    ("fix", "fix"),
+    ("threads", "threads"),
+    ("cross_validate", "cross_validate"),
+];
+
+impl From<OptionError> for Error {
+    /// `AACMM_STATUS_INVALID_ARGUMENT`, naming the options struct's field.
+    fn from(o: OptionError) -> Error {
+        let field = FIELDS
+            .iter()
+            .find(|(lib, _)| *lib == o.field)
+            .map_or(o.field, |(_, c)| *c);
+        Error::invalid(format!("options.{field} = {}: {}", o.value, o.reason))
+    }
+}
+
 thread_local! {
     static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
+    /// How many guarded calls this thread is inside (a guarded body may
+    /// call another entry point).
+    static GUARDED: Cell<usize> = const { Cell::new(0) };
+    /// Where the last quiet panic on this thread happened, for its message.
+    static PANIC_AT: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// Installs, once per process, a panic hook that stays silent for panics
+/// inside a guarded call or on the library's worker threads: the host's
+/// stderr is the host's, and the call's status and message already say
+/// what happened. Other panics (the host's own, if it is Rust) go to the
+/// hook that was installed before.
+fn install_quiet_hook() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            let guarded = GUARDED.try_with(Cell::get).unwrap_or(0) > 0;
+            let worker = std::thread::current().name() == Some(WORKER_THREAD_NAME);
+            if guarded || worker {
+                if let Some(at) = info.location() {
+                    let _ = PANIC_AT.try_with(|slot| *slot.borrow_mut() = Some(at.to_string()));
+                }
+            } else {
+                previous(info);
+            }
+        }));
+    });
+}
+
+/// Runs `body` counted as a guarded call on this thread (see
+/// [`install_quiet_hook`]), catching a panic.
+fn quietly<T>(body: impl FnOnce() -> T) -> std::thread::Result<T> {
+    install_quiet_hook();
+    let _ = GUARDED.try_with(|g| g.set(g.get() + 1));
+    let result = catch_unwind(AssertUnwindSafe(body));
+    let _ = GUARDED.try_with(|g| g.set(g.get().saturating_sub(1)));
+    result
 }
 
 fn set_last_error(message: String) {
@@ -124,9 +185,10 @@ fn set_last_error(message: String) {
 
 /// Runs an entry point's body: `Ok` → `AACMM_STATUS_OK`; an error → its code,
 /// with its message stored as the thread's last error; a panic → caught,
-/// `AACMM_STATUS_PANIC`.
+/// `AACMM_STATUS_PANIC`, and nothing printed (the message, with where it
+/// happened, is the thread's last error).
 pub(crate) fn guard(body: impl FnOnce() -> Result<(), Error>) -> AacmmStatus {
-    match catch_unwind(AssertUnwindSafe(body)) {
+    match quietly(body) {
         Ok(Ok(())) => AacmmStatus::Ok,
         Ok(Err(e)) => {
             set_last_error(e.message);
@@ -138,8 +200,14 @@ pub(crate) fn guard(body: impl FnOnce() -> Result<(), Error>) -> AacmmStatus {
                 .map(|s| s.to_string())
                 .or_else(|| payload.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "a panic without a message".to_string());
+            let at = PANIC_AT
+                .try_with(|slot| slot.borrow_mut().take())
+                .ok()
+                .flatten()
+                .map(|at| format!(" (at {at})"))
+                .unwrap_or_default();
             set_last_error(format!(
-                "internal error in aacmm (please report it): {what}"
+                "internal error in aacmm (please report it): {what}{at}"
             ));
             AacmmStatus::Panic
         }
@@ -149,7 +217,7 @@ pub(crate) fn guard(body: impl FnOnce() -> Result<(), Error>) -> AacmmStatus {
 /// Runs a body that returns a value rather than a code (version, frees,
 /// sizes); a panic gives `fallback`.
 pub(crate) fn guard_value<T>(fallback: T, body: impl FnOnce() -> T) -> T {
-    catch_unwind(AssertUnwindSafe(body)).unwrap_or(fallback)
+    quietly(body).unwrap_or(fallback)
 }
 
 /// Copies the message of the last failed call on this thread into `buf`.
@@ -197,8 +265,73 @@ mod tests {
         // SAFETY: `copy_str` NUL-terminated it.
         let text = unsafe { std::ffi::CStr::from_ptr(buf.as_ptr()) };
         assert_eq!(text.to_bytes().len(), n);
-        assert!(text.to_str().unwrap().ends_with("boom 7"), "{text:?}");
+        assert!(
+            text.to_str()
+                .unwrap()
+                .contains(": boom 7 (at capi/src/error.rs:"),
+            "{text:?}"
+        );
         assert_eq!(guard_value(5, || -> i32 { panic!("x") }), 5);
+    }
+
+    /// Set in the child process of [`panics_print_nothing`].
+    const CHILD: &str = "AACMM_CAPI_QUIET_PANIC_CHILD";
+
+    /// Panics inside guarded calls, on the calling thread and on a library
+    /// worker thread; in the child process only (it checks nothing itself).
+    #[test]
+    fn quiet_panic_child() {
+        if std::env::var_os(CHILD).is_none() {
+            return;
+        }
+        assert_eq!(guard(|| panic!("boom on the caller")), AacmmStatus::Panic);
+        let status = guard(|| {
+            std::thread::scope(|s| {
+                std::thread::Builder::new()
+                    .name(WORKER_THREAD_NAME.into())
+                    .spawn_scoped(s, || panic!("boom on a worker"))
+                    .map(|_| ())
+                    .map_err(|e| Error::invalid(e.to_string()))
+            })
+        });
+        assert_eq!(status, AacmmStatus::Panic);
+        assert_eq!(guard_value(3, || -> i32 { panic!("boom in a value") }), 3);
+        println!("child done");
+    }
+
+    /// A panic caught by the guard prints nothing on the host's stderr (no
+    /// message, no backtrace), even with `RUST_BACKTRACE=1`: run in a child
+    /// process, whose stderr is the test's to read.
+    #[test]
+    fn panics_print_nothing() {
+        if std::env::var_os(CHILD).is_some() {
+            return;
+        }
+        let exe = std::env::current_exe().expect("the test binary");
+        let out = std::process::Command::new(exe)
+            .args(["--exact", "error::tests::quiet_panic_child", "--nocapture"])
+            .env(CHILD, "1")
+            .env("RUST_BACKTRACE", "1")
+            .output()
+            .expect("the test binary runs");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stdout}\n{stderr}");
+        assert!(stdout.contains("child done"), "{stdout}");
+        assert!(!stderr.contains("boom"), "{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+
+    #[test]
+    fn the_message_names_where_the_panic_happened() {
+        assert_eq!(guard(|| panic!("located")), AacmmStatus::Panic);
+        let mut buf = [0 as c_char; 256];
+        // SAFETY: `buf` has 256 writable bytes.
+        unsafe { aacmm_last_error_message(buf.as_mut_ptr(), buf.len()) };
+        // SAFETY: `copy_str` NUL-terminated it.
+        let text = unsafe { std::ffi::CStr::from_ptr(buf.as_ptr()) };
+        let text = text.to_str().unwrap();
+        assert!(text.contains("located (at capi/src/error.rs:"), "{text}");
     }
 
     #[test]

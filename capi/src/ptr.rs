@@ -5,6 +5,7 @@
 //! stated in each function's `# Safety` section.
 
 use std::ffi::{CStr, c_char};
+use std::mem::MaybeUninit;
 use std::path::PathBuf;
 
 use crate::error::Error;
@@ -51,25 +52,41 @@ pub(crate) unsafe fn input<'a, T>(ptr: *const T, len: usize, name: &str) -> Resu
     Ok(unsafe { std::slice::from_raw_parts(ptr, len) })
 }
 
-/// `len` writable elements at `ptr` as a slice; an empty slice when `len`
-/// is 0.
+/// `len` writable elements at `ptr` as a slice of [`MaybeUninit`]; an empty
+/// slice when `len` is 0. The caller's memory may be uninitialised (C
+/// output buffers often are), and a reference to an uninitialised `T` is
+/// undefined behaviour even for `f64` or `bool`; a `MaybeUninit<T>` may hold
+/// anything, so this slice is sound whatever the buffer holds. Fill it with
+/// [`MaybeUninit::write`] or [`write_all`]; never read it.
 ///
 /// # Safety
 ///
-/// Unless `len` is 0, `ptr` is `NULL` or points to `len` values of `T` that
-/// nothing else reads or writes during `'a` (they need not be initialised:
-/// `T` is a plain number type whose every bit pattern is valid).
+/// Unless `len` is 0, `ptr` is `NULL` or points to `len` writable values of
+/// `T` that nothing else reads or writes during `'a`.
 pub(crate) unsafe fn output<'a, T: Copy>(
     ptr: *mut T,
     len: usize,
     name: &str,
-) -> Result<&'a mut [T], Error> {
+) -> Result<&'a mut [MaybeUninit<T>], Error> {
     check(ptr, len, name)?;
     if len == 0 {
         return Ok(&mut []);
     }
-    // SAFETY: as in `input`; the caller guarantees exclusive access.
-    Ok(unsafe { std::slice::from_raw_parts_mut(ptr, len) })
+    // SAFETY: `check` made sure `ptr` is non-null, aligned and `len` values
+    // fit in `isize`; `MaybeUninit<T>` has `T`'s layout and every content
+    // (initialised or not) is valid for it; the caller guarantees the memory
+    // is writable and not accessed elsewhere while the slice lives.
+    Ok(unsafe { std::slice::from_raw_parts_mut(ptr.cast::<MaybeUninit<T>>(), len) })
+}
+
+/// Writes `src` into the first `src.len()` elements of `dst` (at most
+/// `dst.len()`); what `write_copy_of_slice` does from Rust 1.93, above the
+/// crate's MSRV.
+pub(crate) fn write_all<T: Copy>(dst: &mut [MaybeUninit<T>], src: &[T]) {
+    debug_assert!(src.len() <= dst.len());
+    for (slot, &v) in dst.iter_mut().zip(src) {
+        slot.write(v);
+    }
 }
 
 /// Refuses buffers that share memory: an output that overlaps an input (or
@@ -195,6 +212,22 @@ mod tests {
         // SAFETY: as above.
         assert!(unsafe { copy_str("aσ", buf.as_mut_ptr(), 4) });
         assert_eq!(buf[3], 0);
+    }
+
+    #[test]
+    fn outputs_are_written_without_reading() {
+        // Uninitialised `bool`s: only `MaybeUninit` may refer to them.
+        let mut buf = [MaybeUninit::<bool>::uninit(); 3];
+        // SAFETY: `buf` holds 3 writable `bool`s, used only through `out`.
+        let out = unsafe { output(buf.as_mut_ptr().cast::<bool>(), 3, "flags") }.unwrap();
+        for (i, slot) in out.iter_mut().enumerate() {
+            slot.write(i == 1);
+        }
+        // SAFETY: every element was written above.
+        let flags = unsafe { buf.map(|b| b.assume_init()) };
+        assert_eq!(flags, [false, true, false]);
+        // SAFETY: refused before any use.
+        assert!(unsafe { output::<f64>(std::ptr::null_mut(), 1, "p") }.is_err());
     }
 
     #[test]

@@ -22,6 +22,12 @@ use crate::kernel::PreparedPoses;
 /// and fewer than three touches say next to nothing about articulation error.
 pub const MIN_TOUCHES: usize = 3;
 
+/// Least joint-angle range (degrees) that counts as articulation: a data set
+/// in which no point's touches span this much in any joint was taken
+/// without moving the arm (the same pose read again, encoder noise at most),
+/// and cannot say anything about its geometry.
+pub const MIN_ARTICULATION_DEG: f64 = 1.0;
+
 /// One physical point (cone socket) and its touches.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
@@ -117,12 +123,65 @@ pub struct DataSet {
     source: SourceMap,
 }
 
+/// Refuses readings in which no point is articulated: every point's touches
+/// lie within [`MIN_ARTICULATION_DEG`] of each other in every joint. Such a
+/// campaign (each socket touched in one pose, perhaps read several times)
+/// has a Jacobian of rounding and noise only. `rows_of` lists each point's
+/// rows; readings are in radians. A data set without readings is exempt.
+fn check_articulation(
+    rows_of: &[(&str, Vec<usize>)],
+    poses: &Poses,
+    file: &str,
+) -> Result<(), InputError> {
+    if poses.joints == 0 {
+        return Ok(());
+    }
+    // The widest range: (range in rad, joint, point label).
+    let mut widest = (0.0_f64, 0, "");
+    for (label, rows) in rows_of {
+        for j in 0..poses.joints {
+            let (lo, hi) = rows
+                .iter()
+                .filter_map(|&r| poses.q.get(r).and_then(|q| q.get(j)).copied())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                    (lo.min(x), hi.max(x))
+                });
+            let range = hi - lo;
+            if range > widest.0 {
+                widest = (range, j, label);
+            }
+        }
+    }
+    if widest.0.to_degrees() >= MIN_ARTICULATION_DEG {
+        return Ok(());
+    }
+    let (range, j, label) = widest;
+    let at = if range > 0.0 {
+        format!(
+            "the widest range of a joint at one point is {:.4}° (q{} at point `{label}`)",
+            range.to_degrees(),
+            j + 1
+        )
+    } else {
+        "every point's touches have identical readings".to_string()
+    };
+    Err(InputError::file_error(
+        file,
+        format!(
+            "no articulation: {at}; each point must be touched in many different poses \
+             (joint ranges of at least {MIN_ARTICULATION_DEG}°, in practice tens of degrees) \
+             for the touches to say anything about the arm"
+        ),
+    ))
+}
+
 impl DataSet {
     /// Groups the rows of a poses file by point; `file` names it in errors.
     ///
     /// # Errors
     /// A point with fewer than [`MIN_TOUCHES`] touches (at its first line,
-    /// field `point`); an empty file.
+    /// field `point`); an empty file; readings without articulation (no
+    /// point's touches span [`MIN_ARTICULATION_DEG`] in any joint).
     ///
     /// ```
     /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}};
@@ -187,6 +246,7 @@ impl DataSet {
             .iter()
             .flat_map(|&r| poses.q[r].iter().copied())
             .collect();
+        check_articulation(&rows_of, poses, file)?;
         let poses_prepared = prepare(joints, &q, order.len());
         Ok(DataSet {
             joints,
@@ -201,6 +261,135 @@ impl DataSet {
                 ..SourceMap::default()
             },
         })
+    }
+
+    /// A data set read from a poses file (angles in degrees) and an optional
+    /// lengths file, for an arm of `joints` joints; `-` reads standard
+    /// input. Reader warnings are dropped: read the files with
+    /// [`crate::io::read_poses`] to keep them.
+    ///
+    /// # Errors
+    ///
+    /// The readers' errors, naming file, line and field.
+    pub fn from_files(
+        poses: impl AsRef<std::path::Path>,
+        lengths: Option<impl AsRef<std::path::Path>>,
+        joints: usize,
+    ) -> Result<DataSet, InputError> {
+        let path = poses.as_ref();
+        let (p, _) = crate::io::read_poses(path, crate::io::AngleUnit::Deg, Some(joints))?;
+        let data = DataSet::from_poses(&p, &crate::io::source_name(path))?;
+        match lengths {
+            Some(l) => {
+                let l = l.as_ref();
+                data.with_lengths(&crate::io::read_lengths(l)?, &crate::io::source_name(l))
+            }
+            None => Ok(data),
+        }
+    }
+
+    /// A data set from arrays: a point label per touch, the touch's joint
+    /// readings (rad, one row per touch, every row as long), and reference
+    /// lengths between labels. Messages name `<arrays>` and the 1-based
+    /// row (touch) or length.
+    ///
+    /// ```
+    /// use aacmm_core::{DataSet, io::ReferenceLength};
+    /// let labels = ["A", "A", "A", "B", "B", "B"];
+    /// let q: Vec<Vec<f64>> = (0..6).map(|i| vec![0.1 * i as f64; 6]).collect();
+    /// let ab = ReferenceLength { a: "A".into(), b: "B".into(), distance: 500.0, uncertainty: None, line: 1 };
+    /// let data = DataSet::from_touches(&labels, &q, &[ab]).unwrap();
+    /// assert_eq!((data.len(), data.points().len(), data.references().len()), (6, 2, 1));
+    /// let e = DataSet::from_touches(&labels[..5], &q[..5], &[]).unwrap_err();
+    /// assert!(e.to_string().starts_with("<arrays>:4: field `point`: point `B` has 2 touches"), "{e}");
+    /// ```
+    ///
+    /// # Errors
+    ///
+    /// Rows of unequal length, non-finite readings, too few touches per
+    /// point, lengths that are not positive or name unknown points.
+    pub fn from_touches<S: AsRef<str>, Q: AsRef<[f64]>>(
+        labels: &[S],
+        readings: &[Q],
+        lengths: &[ReferenceLength],
+    ) -> Result<DataSet, InputError> {
+        const FILE: &str = "<arrays>";
+        if labels.len() != readings.len() {
+            return Err(InputError::file_error(
+                FILE,
+                format!(
+                    "{} labels for {} rows of readings",
+                    labels.len(),
+                    readings.len()
+                ),
+            ));
+        }
+        let joints = readings.first().map_or(0, |r| r.as_ref().len());
+        let mut q = Vec::with_capacity(readings.len());
+        for (i, row) in readings.iter().enumerate() {
+            let row = row.as_ref();
+            if row.len() != joints {
+                return Err(InputError::line_error(
+                    FILE,
+                    i + 1,
+                    format!("{} readings, the first row has {joints}", row.len()),
+                ));
+            }
+            if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                return Err(InputError::field(
+                    FILE,
+                    i + 1,
+                    format!("q{}", j + 1),
+                    format!("{}: readings must be finite", row[j]),
+                ));
+            }
+            q.push(row.to_vec());
+        }
+        let mut pairs = std::collections::HashSet::new();
+        for (i, l) in lengths.iter().enumerate() {
+            let bad = |field: &str, m: String| Err(InputError::field(FILE, i + 1, field, m));
+            let pair = if l.a < l.b {
+                (&l.a, &l.b)
+            } else {
+                (&l.b, &l.a)
+            };
+            if !pairs.insert(pair) {
+                return bad(
+                    "point_b",
+                    format!("the pair {}–{} is given twice", l.a, l.b),
+                );
+            }
+            if !(l.distance.is_finite() && l.distance > 0.0) {
+                return bad(
+                    "distance",
+                    format!("{}: must be a positive number", l.distance),
+                );
+            }
+            if let Some(u) = l.uncertainty.filter(|u| !(u.is_finite() && *u >= 0.0)) {
+                return bad("uncertainty", format!("{u}: must be a finite number ≥ 0"));
+            }
+            if l.a == l.b {
+                return bad(
+                    "point_b",
+                    format!("`{}` again: a length needs two points", l.a),
+                );
+            }
+        }
+        let poses = Poses {
+            labels: labels.iter().map(|l| l.as_ref().to_string()).collect(),
+            joints,
+            q,
+            lines: (1..=labels.len()).collect(),
+        };
+        let lengths: Vec<ReferenceLength> = lengths
+            .iter()
+            .enumerate()
+            .map(|(i, l)| ReferenceLength {
+                line: i + 1,
+                ..l.clone()
+            })
+            .collect();
+        DataSet::from_poses(&poses, FILE)?.with_lengths(&lengths, FILE)
     }
 
     /// A data set of labelled points without readings (`joints() == 0`): for
@@ -381,4 +570,38 @@ impl DataSet {
 fn prepare(joints: usize, q: &[f64], len: usize) -> PreparedPoses {
     let rows: Vec<&[f64]> = (0..len).map(|i| &q[i * joints..(i + 1) * joints]).collect();
     PreparedPoses::new(joints, &rows).expect("every row has `joints` readings")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{AngleUnit, parse_poses};
+
+    fn data(text: &str) -> Result<DataSet, InputError> {
+        let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, None).unwrap();
+        DataSet::from_poses(&poses, "p.csv")
+    }
+
+    /// Each socket touched in one pose, read three times: refused, naming the
+    /// problem (this once reached `identify` and panicked there).
+    #[test]
+    fn static_touches_are_refused() {
+        let e = data("point,q1,q2\nA,10,20\nA,10,20\nA,10,20\nB,30,40\nB,30,40\nB,30,40\n")
+            .unwrap_err();
+        assert_eq!(e.file(), "p.csv");
+        assert!(e.to_string().contains("no articulation"), "{e}");
+        assert!(e.to_string().contains("identical readings"), "{e}");
+    }
+
+    /// Encoder noise alone is not articulation; the message says how far the
+    /// widest joint moved, and where.
+    #[test]
+    fn jitter_is_not_articulation() {
+        let e = data("point,q1,q2\nA,10,20\nA,10.01,20\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
+            .unwrap_err();
+        assert!(e.to_string().contains("0.0200° (q2 at point `A`)"), "{e}");
+        // One articulated point is enough.
+        data("point,q1,q2\nA,10,20\nA,10.01,25\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
+            .unwrap();
+    }
 }

@@ -29,16 +29,50 @@
 //! the scaled matrix (equivalent to QR with column pivoting on the scaled
 //! `J`), ties broken towards the paper's choice (θ1, d1, θ6, α6, Bx, By).
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::{DMatrix, DVector, Dyn, SVD, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::DataSet;
 use crate::kernel::{ArmKernel, KernelError};
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Weights, normal_equations};
+use crate::residuals::{Noise, Weights, normal_equations};
 
 /// Relative singular-value threshold of the numerical rank.
 pub const RANK_TOLERANCE: f64 = 1e-7;
+
+/// Iterations allowed to an eigen or singular value decomposition: far more
+/// than a finite matrix of this size needs. (nalgebra's `new` iterates
+/// until convergence, which a matrix holding NaN never reaches.)
+const MAX_ITERATIONS: usize = 100_000;
+
+/// Why nothing can be analysed when the normal equations overflow.
+const NOT_FINITE: &str = "the normal equations are not finite numbers: a noise σ so small, \
+                          or data so large, that the weighted Jacobian overflows; nothing \
+                          can be analysed";
+
+/// The eigen decomposition of a symmetric matrix; for a matrix that is not
+/// finite, or one that does not converge, all eigenvalues 0 (nothing seen).
+fn eigen(m: DMatrix<f64>) -> SymmetricEigen<f64, Dyn> {
+    let k = m.nrows();
+    let finite = m.iter().all(|v| v.is_finite());
+    finite
+        .then(|| SymmetricEigen::try_new(m, f64::EPSILON, MAX_ITERATIONS))
+        .flatten()
+        .unwrap_or_else(|| SymmetricEigen {
+            eigenvectors: DMatrix::identity(k, k),
+            eigenvalues: DVector::zeros(k),
+        })
+}
+
+/// The left singular vectors and the singular values of a finite matrix;
+/// `None` for one that is not finite or does not converge.
+fn left_singular(m: DMatrix<f64>) -> Option<(DMatrix<f64>, DVector<f64>)> {
+    if !m.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let svd = SVD::try_new(m, true, false, f64::EPSILON, MAX_ITERATIONS)?;
+    Some((svd.u?, svd.singular_values))
+}
 
 /// The paper's fixed set, preferred when the pivoting ties.
 const PAPER_FIXED: [(ParamKind, usize); 6] = [
@@ -76,8 +110,9 @@ pub struct Relation {
 /// A parameter the analysis recommends fixing, and why.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Fixed {
-    /// Parameter name.
-    pub name: String,
+    /// The parameter (its name in JSON).
+    #[serde(rename = "name")]
+    pub id: ParamId,
     /// Why it is fixed.
     pub reason: String,
 }
@@ -85,8 +120,9 @@ pub struct Fixed {
 /// A parameter left free: its predicted uncertainty and identifiability.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FreeParameter {
-    /// Parameter name.
-    pub name: String,
+    /// The parameter (its name in JSON).
+    #[serde(rename = "name")]
+    pub id: ParamId,
     /// `mm` or `deg`.
     pub unit: String,
     /// Predicted standard uncertainty at the stated noise, in `unit`.
@@ -145,31 +181,8 @@ pub struct Identification {
 impl Identification {
     /// Column indices of the recommended free parameters.
     pub fn free_columns(&self) -> Vec<usize> {
-        self.free
-            .iter()
-            .filter_map(|f| self.parameters.iter().position(|p| *p == f.name))
-            .collect()
-    }
-}
-
-/// The arm's reach: `Σ|a| + Σ|d| + |B|`, mm.
-pub fn reach(params: &DhParams) -> f64 {
-    let links: f64 = params.joints.iter().map(|j| j.a.abs() + j.d.abs()).sum();
-    let b = params.probe.iter().map(|v| v * v).sum::<f64>().sqrt();
-    (links + b).max(1.0)
-}
-
-/// The unit of a parameter for users.
-pub fn unit(id: ParamId) -> &'static str {
-    if id.kind.is_length() { "mm" } else { "deg" }
-}
-
-/// A value of parameter `id` in user units (mm or deg).
-pub fn to_user(id: ParamId, v: f64) -> f64 {
-    if id.kind.is_length() {
-        v
-    } else {
-        v.to_degrees()
+        let joints = (self.parameters.len().saturating_sub(3)) / 4;
+        self.free.iter().map(|f| f.id.column(joints)).collect()
     }
 }
 
@@ -201,7 +214,7 @@ impl Scaled {
     fn at(params: &DhParams, normal: crate::residuals::Normal) -> Scaled {
         let ids: Vec<ParamId> = ParamId::all(params.joint_count()).collect();
         let np = ids.len();
-        let reach = reach(params);
+        let reach = params.reach();
         let d: Vec<f64> = ids
             .iter()
             .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / reach })
@@ -217,17 +230,20 @@ impl Scaled {
     }
 }
 
-/// Analyses what `data` (weighted by `weights`) can identify at `params`.
+/// Analyses what `data` can identify at `params`, the touches weighed from
+/// `noise` (without stated noise, as a 0.01 mm touch).
 pub fn identify(
     params: &DhParams,
     data: &DataSet,
-    weights: &Weights,
+    noise: &Noise,
     threads: usize,
 ) -> Result<Identification, KernelError> {
+    // Without stated noise, σ as for a 0.01 mm touch.
+    let weights = Weights::new(&ArmKernel::new(params)?, data, noise, 0.01)?;
     Ok(identify_from(
         params,
         data,
-        full_normal(params, data, weights, threads)?,
+        full_normal(params, data, &weights, threads)?,
     ))
 }
 
@@ -247,6 +263,9 @@ pub(crate) fn identify_from(
     } = Scaled::at(params, normal);
     let np = ids.len();
     let names: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
+    // Overflowing normal equations are analysed as seeing nothing, and say so.
+    let overflow = !ns.iter().all(|v| v.is_finite());
+    let ns = if overflow { DMatrix::zeros(np, np) } else { ns };
     let singular_values = singular(&ns);
 
     // Rule 1: base motion.
@@ -269,6 +288,12 @@ pub(crate) fn identify_from(
                       or a slide along, the base axis"
             .into(),
     }];
+    if overflow {
+        rules.push(Rule {
+            name: "not-finite".into(),
+            explanation: NOT_FINITE.into(),
+        });
+    }
     let cols: Vec<usize> = (0..np).filter(|c| !base.contains(c)).collect();
     let k = cols.len();
     let unprojected = DMatrix::from_fn(k, k, |a, b| ns[(cols[a], cols[b])]);
@@ -286,7 +311,7 @@ pub(crate) fn identify_from(
         // The scale direction up to the exact null directions (which are
         // unidentifiable anyway): without this, projecting `v` would merely
         // trade one of them for it.
-        let e0 = SymmetricEigen::new(unprojected.clone());
+        let e0 = eigen(unprojected.clone());
         let emax = e0.eigenvalues.iter().copied().fold(0.0, f64::max);
         let mut v = v.normalize();
         for (i, &e) in e0.eigenvalues.iter().enumerate() {
@@ -309,7 +334,7 @@ pub(crate) fn identify_from(
     } else {
         None
     };
-    let eig = SymmetricEigen::new(m.clone());
+    let eig = eigen(m.clone());
     let mut order: Vec<usize> = (0..k).collect();
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let sv: Vec<f64> = order
@@ -371,7 +396,7 @@ pub(crate) fn identify_from(
     let mut fixed: Vec<Fixed> = base
         .iter()
         .map(|&c| Fixed {
-            name: names[c].clone(),
+            id: ids[c],
             reason: "base motion: never identifiable".into(),
         })
         .collect();
@@ -387,20 +412,19 @@ pub(crate) fn identify_from(
             null_relations.push(relation);
             reason
         };
-        fixed.push(Fixed {
-            name: names[c].clone(),
-            reason,
-        });
+        fixed.push(Fixed { id: ids[c], reason });
     }
-    fixed.sort_by_key(|f| names.iter().position(|n| *n == f.name));
+    fixed.sort_by_key(|f| f.id.column(n));
 
     // Predicted σ of the free parameters (weights carry the noise).
     let q = free_cols.len();
     let nf = DMatrix::from_fn(q, q, |a, b| normal.jtj[free_cols[a] * np + free_cols[b]]);
-    let cov = nf
-        .clone()
-        .try_inverse()
-        .unwrap_or_else(|| DMatrix::from_element(q, q, f64::NAN));
+    // A singular (or overflowing) free block leaves σ unbounded.
+    let cov = Some(nf)
+        .filter(|nf| !overflow && nf.iter().all(|v| v.is_finite()))
+        .and_then(DMatrix::try_inverse)
+        .filter(|c| c.iter().all(|v| v.is_finite()))
+        .unwrap_or_else(|| DMatrix::from_element(q, q, f64::INFINITY));
     let basis: Vec<usize> = order[..rank].to_vec();
     let free = free_cols
         .iter()
@@ -416,9 +440,9 @@ pub(crate) fn identify_from(
                 .sum::<f64>()
                 .sqrt();
             FreeParameter {
-                name: names[c].clone(),
-                unit: unit(ids[c]).into(),
-                sigma: to_user(ids[c], cov[(a, a)].max(0.0).sqrt()),
+                id: ids[c],
+                unit: ids[c].unit().into(),
+                sigma: ids[c].to_user(cov[(a, a)].max(0.0).sqrt()),
                 identifiability: ident,
             }
         })
@@ -447,7 +471,7 @@ pub(crate) fn identify_from(
 
 /// Singular values of a matrix whose Gram matrix is `n`, descending.
 fn singular(n: &DMatrix<f64>) -> Vec<f64> {
-    let mut s: Vec<f64> = SymmetricEigen::new(n.clone())
+    let mut s: Vec<f64> = eigen(n.clone())
         .eigenvalues
         .iter()
         .map(|e| e.max(0.0).sqrt())
@@ -469,20 +493,29 @@ fn pivoted_cholesky(
     let mut left: Vec<usize> = (0..k).collect();
     let mut pivots = Vec::with_capacity(rank);
     for _ in 0..rank {
-        let best = left.iter().map(|&c| a[(c, c)]).fold(0.0, f64::max);
+        // Rounding can leave every remaining diagonal slightly negative (or
+        // NaN, from a matrix that is all rounding): nothing left to pivot on,
+        // so the free set is smaller than the numerical rank.
+        let best = left
+            .iter()
+            .map(|&c| a[(c, c)])
+            .filter(|d| d.is_finite())
+            .fold(f64::NEG_INFINITY, f64::max);
+        if best.is_nan() || best <= 0.0 {
+            break;
+        }
         let tie = |c: usize| a[(c, c)] >= best * (1.0 - 1e-9);
-        let pick = left
+        let Some(pick) = left
             .iter()
             .copied()
             .filter(|&c| tie(c))
             .min_by_key(|&c| (prefer_fixed(c), c))
-            .expect("rank ≤ columns");
+        else {
+            break;
+        };
         pivots.push(pick);
         left.retain(|&c| c != pick);
         let d = a[(pick, pick)];
-        if d <= 0.0 {
-            break;
-        }
         let col: Vec<f64> = (0..k).map(|r| a[(r, pick)]).collect();
         for &r in &left {
             for &c in &left {
@@ -596,7 +629,8 @@ pub(crate) fn strong_correlations(
 /// that the free set `free` leaves open, in words: base motion (always),
 /// scale (without reference lengths) and the exact redundancies. Empty when
 /// the fixed set blocks every one — the fit is then well posed.
-pub fn open_directions(
+#[cfg(test)]
+pub(crate) fn open_directions(
     params: &DhParams,
     data: &DataSet,
     weights: &Weights,
@@ -607,7 +641,8 @@ pub fn open_directions(
     Ok(open_directions_from(params, data, normal, free))
 }
 
-/// [`open_directions`] from the normal equations of every column.
+/// The free directions the data cannot see, from the normal equations of
+/// every column.
 pub(crate) fn open_directions_from(
     params: &DhParams,
     data: &DataSet,
@@ -617,6 +652,9 @@ pub(crate) fn open_directions_from(
     let n = params.joint_count();
     let Scaled { ids, ns, .. } = Scaled::at(params, normal);
     let np = ids.len();
+    if !ns.iter().all(|v| v.is_finite()) {
+        return vec![format!("every direction ({NOT_FINITE})")];
+    }
     // Unseen directions, in scaled coordinates, with names.
     let mut unseen: Vec<(String, nalgebra::DVector<f64>)> = Vec::new();
     let unit = |c: usize| nalgebra::DVector::from_fn(np, |a, _| if a == c { 1.0 } else { 0.0 });
@@ -650,7 +688,7 @@ pub(crate) fn open_directions_from(
         });
         unseen.push(("scale (no reference length)".into(), v));
     }
-    let eig = SymmetricEigen::new(ns.clone());
+    let eig = eigen(ns.clone());
     let smax = eig.eigenvalues.iter().copied().fold(0.0, f64::max).sqrt();
     for (i, &e) in eig.eigenvalues.iter().enumerate() {
         if e.max(0.0).sqrt() <= RANK_TOLERANCE * smax {
@@ -669,24 +707,25 @@ pub(crate) fn open_directions_from(
             return 0;
         }
         let basis = DMatrix::from_fn(np, dirs.len(), |a, j| dirs[j][a] / dirs[j].norm());
-        let svd = basis.svd(true, false);
-        let u = svd.u.expect("requested");
+        // A basis that does not decompose (a direction of overflowing
+        // length) counts as wholly open: the fit is refused, not trusted.
+        let Some((u, singular_values)) = left_singular(basis) else {
+            return dirs.len();
+        };
         // An orthonormal basis of the span (singular values come in no
         // guaranteed order).
-        let span: Vec<usize> = (0..svd.singular_values.len())
-            .filter(|&j| svd.singular_values[j] > 1e-9)
+        let span: Vec<usize> = (0..singular_values.len())
+            .filter(|&j| singular_values[j] > 1e-9)
             .collect();
         let rank = span.len();
         let on_fixed = DMatrix::from_fn(fixed.len(), rank, |a, j| u[(fixed[a], span[j])]);
         let blocked = if fixed.is_empty() {
             0
         } else {
-            on_fixed
-                .svd(false, false)
-                .singular_values
-                .iter()
-                .filter(|&&s| s > 1e-6)
-                .count()
+            match left_singular(on_fixed) {
+                Some((_, s)) => s.iter().filter(|&&s| s > 1e-6).count(),
+                None => 0,
+            }
         };
         rank - blocked
     };
@@ -710,15 +749,16 @@ pub(crate) fn open_directions_from(
         let basis = DMatrix::from_fn(np, all_dirs.len(), |a, j| {
             all_dirs[j][a] / all_dirs[j].norm()
         });
-        let svd = basis.svd(true, false);
-        let u = svd.u.expect("requested");
-        let span: Vec<usize> = (0..svd.singular_values.len())
-            .filter(|&j| svd.singular_values[j] > 1e-9)
+        let Some((u, singular_values)) = left_singular(basis) else {
+            return vec!["a combination of the directions above".into()];
+        };
+        let span: Vec<usize> = (0..singular_values.len())
+            .filter(|&j| singular_values[j] > 1e-9)
             .collect();
         let ub = DMatrix::from_fn(np, span.len(), |a, j| u[(a, span[j])]);
         let on_fixed = DMatrix::from_fn(fixed.len(), span.len(), |a, j| ub[(fixed[a], j)]);
         let gram = on_fixed.transpose() * on_fixed;
-        let eig = SymmetricEigen::new(gram);
+        let eig = eigen(gram);
         for (i, &e) in eig.eigenvalues.iter().enumerate() {
             if e > 1e-12 {
                 continue;
@@ -735,4 +775,73 @@ pub(crate) fn open_directions_from(
         }
     }
     open
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every remaining diagonal slightly negative (rounding on a matrix of
+    /// almost nothing): no pivot is left, and the free set ends there rather
+    /// than panicking.
+    #[test]
+    fn pivoting_stops_on_negative_diagonals() {
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![-1e-30, -2e-30, -3e-30]));
+        assert_eq!(pivoted_cholesky(&m, 3, |_| false), Vec::<usize>::new());
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![4.0, -1e-30, 1.0]));
+        assert_eq!(pivoted_cholesky(&m, 3, |_| false), vec![0, 2]);
+    }
+
+    /// Weights that overflow (an encoder σ of 1e-300 rad) once sent the
+    /// eigen and singular value decompositions into an endless loop on NaN;
+    /// now the analysis says the normal equations are not finite.
+    #[test]
+    fn overflowing_weights_are_named_not_looped_on() {
+        use crate::io::{AngleUnit, parse_poses};
+        use crate::kernel::ArmKernel;
+        use crate::residuals::Noise;
+        let params = DhParams::paper_nominal();
+        let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
+        for (p, k) in [("A", 0.0), ("B", 40.0)] {
+            for i in 0..4 {
+                let i = f64::from(i);
+                text += &format!(
+                    "{p},{k},{},{},{},{},{}\n",
+                    10.0 * i,
+                    5.0 * i,
+                    -7.0 * i,
+                    3.0 * i,
+                    i
+                );
+            }
+        }
+        let (poses, _) = parse_poses(&text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
+        let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+        let noise = Noise {
+            encoder_rad: Some(1e-300),
+            ..Noise::default()
+        };
+        let kernel = ArmKernel::new(&params).unwrap();
+        let weights = Weights::new(&kernel, &data, &noise, 0.01).unwrap();
+        let id = identify(&params, &data, &noise, 1).unwrap();
+        assert!(
+            id.rules.iter().any(|r| r.name == "not-finite"),
+            "{:?}",
+            id.rules
+        );
+        assert_eq!(id.rank, 0);
+        assert!(id.free.iter().all(|f| f.sigma == f64::INFINITY));
+        let all: Vec<usize> = (0..params.param_count()).collect();
+        let open = open_directions(&params, &data, &weights, &all, 1).unwrap();
+        assert!(open[0].contains("not finite"), "{open:?}");
+    }
+
+    /// NaN diagonals are never pivots.
+    #[test]
+    fn pivoting_skips_nan_diagonals() {
+        let m = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![f64::NAN, 2.0, f64::NAN]));
+        assert_eq!(pivoted_cholesky(&m, 3, |_| false), vec![1]);
+        let m = DMatrix::from_element(2, 2, f64::NAN);
+        assert_eq!(pivoted_cholesky(&m, 2, |_| false), Vec::<usize>::new());
+    }
 }

@@ -4,6 +4,23 @@
 //!
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
+//!
+//! The front door: read an arm and its touches, make a [`Problem`], run it
+//! (the README's Rust example, run from the repository's root):
+//!
+//! ```
+//! # std::env::set_current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).unwrap();
+//! use aacmm_core::{CalibrateOptions, DataSet, Problem, read_arm};
+//!
+//! let (arm, _) = read_arm("examples/paper-table-1.toml".as_ref())?;
+//! let data = DataSet::from_files("examples/paper-campaign/poses.csv", Some("examples/paper-campaign/lengths.csv"), 6)?;
+//! let report = Problem::new(arm, data, CalibrateOptions::default())?.run()?;
+//! assert!(report.is_usable());
+//! for p in report.calibration.parameters.iter().filter(|p| p.fixed.is_none()).map(|p| p.user()) {
+//!     println!("{:<7} {:>12.4} ± {:.4} {}", p.name, p.calibrated, p.sigma.unwrap_or(f64::NAN), p.unit);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod calibrate;
 pub mod dataset;
@@ -16,6 +33,20 @@ pub mod io;
 pub mod kernel;
 pub mod metrics;
 pub mod params;
+pub mod placements;
+pub mod random;
+#[cfg(feature = "report")]
 pub mod report;
 pub mod residuals;
+pub mod session;
 pub mod simulate;
+pub mod urdf;
+
+pub use calibrate::{CalibrateOptions, Calibration, CalibrationError, FixSpec, Method, calibrate};
+pub use dataset::DataSet;
+pub use io::{Arm, read_arm};
+pub use metrics::evaluate;
+pub use params::{DhParams, ParamId};
+pub use residuals::Noise;
+pub use session::{CalibrationReport, Problem};
+pub use simulate::simulate;

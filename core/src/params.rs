@@ -111,6 +111,116 @@ impl ParamId {
     pub fn all(n: usize) -> impl Iterator<Item = ParamId> {
         (0..param_count(n)).filter_map(move |c| ParamId::from_column(n, c))
     }
+
+    /// The parameter of an `n`-joint chain named `name` (`a1`, `alpha3`,
+    /// `theta6`, `Bz`; `beta…` is accepted for `alpha…`, the paper's name).
+    ///
+    /// ```
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// assert_eq!(ParamId::parse("beta2", 6), Some(ParamId { kind: ParamKind::Alpha, index: 1 }));
+    /// assert_eq!(ParamId::parse("theta7", 6), None);
+    /// ```
+    pub fn parse(name: &str, n: usize) -> Option<ParamId> {
+        name.parse::<ParamId>()
+            .ok()
+            .filter(|id| id.index < if id.kind == ParamKind::Probe { 3 } else { n })
+    }
+
+    /// The unit users see the parameter in: `mm` or `deg`.
+    ///
+    /// ```
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// assert_eq!(ParamId { kind: ParamKind::Theta, index: 0 }.unit(), "deg");
+    /// assert_eq!(ParamId { kind: ParamKind::Probe, index: 2 }.unit(), "mm");
+    /// ```
+    pub fn unit(self) -> &'static str {
+        if self.kind.is_length() { "mm" } else { "deg" }
+    }
+
+    /// A value of this parameter (mm or rad) in user units (mm or deg).
+    ///
+    /// ```
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// let alpha1 = ParamId { kind: ParamKind::Alpha, index: 0 };
+    /// assert_eq!(alpha1.to_user(std::f64::consts::PI), 180.0);
+    /// ```
+    pub fn to_user(self, v: f64) -> f64 {
+        if self.kind.is_length() {
+            v
+        } else {
+            v.to_degrees()
+        }
+    }
+
+    /// The inverse of [`ParamId::to_user`].
+    ///
+    /// ```
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// let theta2 = ParamId { kind: ParamKind::Theta, index: 1 };
+    /// assert_eq!(theta2.from_user(180.0), std::f64::consts::PI);
+    /// ```
+    pub fn from_user(self, v: f64) -> f64 {
+        if self.kind.is_length() {
+            v
+        } else {
+            v.to_radians()
+        }
+    }
+}
+
+/// Parameters appear in files by name (`a1`, `alpha3`, `Bz`).
+impl serde::Serialize for ParamId {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for ParamId {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<ParamId, D::Error> {
+        let name = String::deserialize(d)?;
+        name.parse().map_err(serde::de::Error::custom)
+    }
+}
+
+impl std::str::FromStr for ParamId {
+    type Err = String;
+
+    /// A parameter by name, whatever the joint count (`a12` is the twelfth
+    /// joint's `a`).
+    ///
+    /// ```
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// let id: ParamId = "theta3".parse().unwrap();
+    /// assert_eq!(id, ParamId { kind: ParamKind::Theta, index: 2 });
+    /// assert!("q3".parse::<ParamId>().is_err());
+    /// ```
+    fn from_str(name: &str) -> Result<ParamId, String> {
+        let probe = ["Bx", "By", "Bz"].iter().position(|b| *b == name);
+        if let Some(index) = probe {
+            return Ok(ParamId {
+                kind: ParamKind::Probe,
+                index,
+            });
+        }
+        let kinds = [
+            ("alpha", ParamKind::Alpha),
+            ("beta", ParamKind::Alpha),
+            ("theta", ParamKind::Theta),
+            ("a", ParamKind::A),
+            ("d", ParamKind::D),
+        ];
+        for (prefix, kind) in kinds {
+            if let Some(rest) = name.strip_prefix(prefix)
+                && let Ok(i) = rest.parse::<usize>()
+                && i >= 1
+                && !rest.starts_with('0')
+                && !rest.starts_with('+')
+            {
+                return Ok(ParamId { kind, index: i - 1 });
+            }
+        }
+        Err(format!("`{name}` is not a parameter name"))
+    }
 }
 
 impl fmt::Display for ParamId {
@@ -160,8 +270,8 @@ pub fn param_count(n: usize) -> usize {
 }
 
 /// The geometry of a D-H chain: its joints (base to probe) and the probe
-/// centre in the last frame (mm).
-#[derive(Clone, Debug, PartialEq)]
+/// centre in the last frame (mm). The default has no joints.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct DhParams {
     /// Links, base to probe.
     pub joints: Vec<DhJoint>,
@@ -240,6 +350,19 @@ impl DhParams {
         }
     }
 
+    /// The arm's reach, a length scale for its parameters: `Σ|a| + Σ|d| +
+    /// |B|`, mm (at least 1).
+    ///
+    /// ```
+    /// let arm = aacmm_core::params::DhParams::paper_nominal();
+    /// assert_eq!(arm.reach(), 50.0 + 55.0 + 35.0 * 4.0 + 375.0 + 250.0 + 270.0 + 100.0);
+    /// ```
+    pub fn reach(&self) -> f64 {
+        let links: f64 = self.joints.iter().map(|j| j.a.abs() + j.d.abs()).sum();
+        let b = self.probe.iter().map(|v| v * v).sum::<f64>().sqrt();
+        (links + b).max(1.0)
+    }
+
     /// The explicit conversion to the flat vector in the fixed order.
     ///
     /// ```
@@ -275,5 +398,21 @@ impl DhParams {
             *p.get_mut(id) = x;
         }
         Some(p)
+    }
+}
+
+/// `x` wrapped to `[-π, π)`: zero offsets are angles on a circle.
+///
+/// ```
+/// use aacmm_core::params::wrap;
+/// assert!((wrap(3.0 * std::f64::consts::PI) + std::f64::consts::PI).abs() < 1e-12);
+/// assert_eq!(wrap(0.5), 0.5);
+/// ```
+pub fn wrap(x: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    if (-PI..PI).contains(&x) {
+        x
+    } else {
+        (x + PI).rem_euclid(TAU) - PI
     }
 }

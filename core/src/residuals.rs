@@ -54,8 +54,13 @@ pub enum ResidualKind {
     Length,
 }
 
-/// What is known of the measurement noise; `None` = not stated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+/// σ of a reference length whose file states none, mm.
+pub const DEFAULT_LENGTH_SIGMA_MM: f64 = 0.001;
+
+/// What is known of the measurement noise; `None` = not stated. The
+/// default states no touch noise and [`DEFAULT_LENGTH_SIGMA_MM`] for
+/// lengths without their own uncertainty.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Noise {
     /// σ of each encoder reading, rad.
     pub encoder_rad: Option<f64>,
@@ -67,15 +72,62 @@ pub struct Noise {
     pub length_weight: Option<f64>,
 }
 
+impl Default for Noise {
+    fn default() -> Self {
+        Noise {
+            encoder_rad: None,
+            probe_mm: None,
+            length_default_mm: DEFAULT_LENGTH_SIGMA_MM,
+            length_weight: None,
+        }
+    }
+}
+
 impl Noise {
     /// Whether any touch noise was stated.
     pub fn stated(&self) -> bool {
         self.encoder_rad.is_some() || self.probe_mm.is_some()
     }
+
+    /// Checks the values: each finite and `≥ 0` (a length weight `> 0`),
+    /// and stated touch noise not zero on both counts.
+    ///
+    /// ```
+    /// use aacmm_core::residuals::Noise;
+    /// assert!(Noise::default().check().is_ok());
+    /// let zero = Noise { encoder_rad: Some(0.0), probe_mm: Some(0.0), ..Noise::default() };
+    /// assert_eq!(zero.check().unwrap_err().field, "noise.probe_mm");
+    /// let negative = Noise { probe_mm: Some(-0.01), ..Noise::default() };
+    /// assert_eq!(negative.check().unwrap_err().field, "noise.probe_mm");
+    /// ```
+    pub fn check(&self) -> Result<(), crate::calibrate::OptionError> {
+        use crate::calibrate::{OptionError, options::check_nonnegative};
+        for (field, v) in [
+            ("noise.encoder_rad", self.encoder_rad),
+            ("noise.probe_mm", self.probe_mm),
+        ] {
+            if let Some(v) = v {
+                check_nonnegative(field, v, true)?;
+            }
+        }
+        check_nonnegative("noise.length_default_mm", self.length_default_mm, true)?;
+        if let Some(w) = self.length_weight {
+            check_nonnegative("noise.length_weight", w, false)?;
+        }
+        let zero = |v: Option<f64>| v.unwrap_or(0.0) == 0.0;
+        if self.stated() && zero(self.encoder_rad) && zero(self.probe_mm) {
+            return Err(OptionError::new(
+                "noise.probe_mm",
+                0,
+                "encoder and probe noise both 0: a touch needs some uncertainty",
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// A symmetric 3 × 3 matrix: `[xx, yy, zz, xy, xz, yz]`.
-pub type Sym3 = [f64; 6];
+pub(crate) type Sym3 = [f64; 6];
 
 /// `A·v` for a symmetric `A`.
 #[inline(always)]
@@ -104,7 +156,7 @@ fn sym_inv(a: &Sym3) -> Sym3 {
 
 /// Weights of every residual.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Weights {
+pub(crate) struct Weights {
     /// Per touch (data-set order), the inverse covariance `A_i = Σ_i⁻¹` of its
     /// position, 1/mm².
     pub touch: Vec<Sym3>,
@@ -115,18 +167,6 @@ pub struct Weights {
 impl Weights {
     /// Weights from `noise` at the arm `kernel` (the fit's start). Without
     /// stated touch noise every touch has `A = I/touch_sigma_mm²`.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::ArmKernel, params::DhParams, residuals::*};
-    /// # use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}};
-    /// # let (poses, _) = parse_poses("point,q1,q2,q3,q4,q5,q6\nA,0,0,0,0,0,0\nA,1,0,0,0,0,0\nA,2,0,0,0,0,0\n", "p.csv", AngleUnit::Deg, Some(6)).unwrap();
-    /// # let data = DataSet::from_poses(&poses, "p.csv").unwrap();
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let noise = Noise { probe_mm: Some(0.01), ..Noise::default() };
-    /// let w = Weights::new(&k, &data, &noise, 1.0).unwrap();
-    /// assert!((w.touch[0][0] - 1e4).abs() < 1e-6); // 1 / (0.01 mm)²
-    /// assert!(w.touch[0][3].abs() < 1e-9);
-    /// ```
     pub fn new(
         kernel: &ArmKernel,
         data: &DataSet,
@@ -201,14 +241,6 @@ impl Weights {
     /// The largest relative change from `other` to `self` of any touch's
     /// weight matrix (Frobenius norm) or any length's weight; infinite when
     /// the shapes differ.
-    ///
-    /// ```
-    /// use aacmm_core::residuals::Weights;
-    /// let a = Weights { touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]], length: vec![2.0] };
-    /// let b = Weights { touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]], length: vec![2.2] };
-    /// assert!((b.relative_change(&a) - 0.1).abs() < 1e-12);
-    /// assert_eq!(a.relative_change(&a), 0.0);
-    /// ```
     pub fn relative_change(&self, other: &Weights) -> f64 {
         if self.touch.len() != other.touch.len() || self.length.len() != other.length.len() {
             return f64::INFINITY;
@@ -246,7 +278,7 @@ impl Weights {
 /// The reduced normal equations at one parameter set: `JᵀJ` and `Jᵀr` over
 /// the free columns, the cost `Σ r²`, and its parts.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Normal {
+pub(crate) struct Normal {
     /// Free columns, in order (indices into the full parameter vector).
     pub free: Vec<usize>,
     /// `JᵀJ`, row-major `p × p`.
@@ -325,7 +357,7 @@ const POINTS_PER_CHUNK: usize = 64;
 /// The normal equations of the weighted residuals at `kernel`, over the
 /// columns `free`. Chunks of points run on up to `threads` threads; the
 /// result does not depend on `threads`.
-pub fn normal_equations(
+pub(crate) fn normal_equations(
     kernel: &ArmKernel,
     data: &DataSet,
     weights: &Weights,
@@ -529,33 +561,82 @@ fn chunk(
     Ok(part)
 }
 
-/// `f` over `items` on `threads` scoped threads, results in item order.
+/// The name of the worker threads the library starts: a host that silences
+/// the panic messages of library code (the C API does) recognises them by it.
+pub const WORKER_THREAD_NAME: &str = "aacmm-worker";
+
+/// `f` over `items` on `threads` scoped threads, results in item order; on
+/// the calling thread when one thread (or one item) is all there is.
+///
+/// A panic in `f` reaches the caller with its own payload (not the scope's
+/// "a scoped thread panicked"), so the caller's `catch_unwind` sees what
+/// went wrong. A worker the system refuses to start is replaced by the
+/// calling thread.
 pub(crate) fn parallel_map<T: Sync, R: Send>(
     items: &[T],
     threads: usize,
     f: impl Fn(&T) -> R + Sync,
 ) -> Vec<R> {
+    use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
+    use std::sync::{Mutex, PoisonError};
+    if threads <= 1 || items.len() <= 1 {
+        return items.iter().map(f).collect();
+    }
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut slots: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
-    let done = std::sync::Mutex::new(Vec::new());
-    std::thread::scope(|s| {
-        for _ in 0..threads.min(items.len()) {
-            s.spawn(|| {
-                let mut mine = Vec::new();
-                loop {
-                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    if i >= items.len() {
-                        break;
-                    }
-                    mine.push((i, f(&items[i])));
+    let done = Mutex::new(Vec::new());
+    let panicked = Mutex::new(None);
+    let work = || {
+        let run = catch_unwind(AssertUnwindSafe(|| {
+            let mut mine = Vec::new();
+            loop {
+                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if i >= items.len() {
+                    break;
                 }
-                done.lock().expect("no worker panics").extend(mine);
-            });
+                mine.push((i, f(&items[i])));
+            }
+            mine
+        }));
+        // Neither lock is held while `f` runs, so a poisoned one holds
+        // complete data.
+        match run {
+            Ok(mine) => done
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .extend(mine),
+            Err(payload) => {
+                panicked
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .get_or_insert(payload);
+            }
+        }
+    };
+    std::thread::scope(|s| {
+        let mut all_started = true;
+        for _ in 0..threads.min(items.len()) {
+            let started = std::thread::Builder::new()
+                .name(WORKER_THREAD_NAME.into())
+                .spawn_scoped(s, work);
+            all_started &= started.is_ok();
+        }
+        if !all_started {
+            work();
         }
     });
-    for (i, r) in done.into_inner().expect("no worker panics") {
+    if let Some(payload) = panicked
+        .into_inner()
+        .unwrap_or_else(PoisonError::into_inner)
+    {
+        resume_unwind(payload);
+    }
+    let mut slots: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
+    for (i, r) in done.into_inner().unwrap_or_else(PoisonError::into_inner) {
         slots[i] = Some(r);
     }
+    // Every index below `items.len()` was taken by exactly one loop, which
+    // either finished it (its result is in `done`) or panicked (resumed
+    // above); a refused worker's share is run by the caller.
     slots
         .into_iter()
         .map(|r| r.expect("every item ran"))
@@ -564,7 +645,7 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(
 
 /// The cost `Σ r²` alone (positions only, no Jacobian): what a trial step
 /// or an annealing move needs. `xyz` is a buffer of one position per touch.
-pub fn cost(
+pub(crate) fn cost(
     kernel: &ArmKernel,
     data: &DataSet,
     weights: &Weights,
@@ -601,4 +682,136 @@ pub fn cost(
     } else {
         f64::INFINITY
     })
+}
+
+/// The weighted cost `Σ r²` of the arm `params` on `data`, with every
+/// residual weighed from `noise` at the arm `weighed_at` (so that two arms
+/// compare under the same weights). Without stated touch noise a touch
+/// weighs as a 1 mm σ.
+///
+/// ```
+/// use aacmm_core::{DhParams, residuals::{Noise, weighted_cost}, simulate::*, Arm};
+/// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+/// let c = simulate(&nominal, &CampaignSettings::new(2, ErrorModel::Paper, 4, 6)).unwrap();
+/// let data = c.data_set().unwrap();
+/// let noise = Noise { probe_mm: Some(0.01), ..Noise::default() };
+/// let truth = &c.true_arm.params;
+/// let at_truth = weighted_cost(truth, truth, &data, &noise).unwrap();
+/// let at_nominal = weighted_cost(&nominal.params, truth, &data, &noise).unwrap();
+/// assert!(at_truth < at_nominal);
+/// ```
+///
+/// # Errors
+///
+/// The kernel's, for an arm it cannot evaluate.
+pub fn weighted_cost(
+    params: &crate::params::DhParams,
+    weighed_at: &crate::params::DhParams,
+    data: &DataSet,
+    noise: &Noise,
+) -> Result<f64, KernelError> {
+    let weights = Weights::new(&ArmKernel::new(weighed_at)?, data, noise, 1.0)?;
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    cost(&ArmKernel::new(params)?, data, &weights, &mut xyz)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{AngleUnit, parse_lengths, parse_poses};
+    use crate::params::DhParams;
+
+    #[test]
+    fn relative_change_is_the_largest_relative_difference() {
+        let a = Weights {
+            touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
+            length: vec![2.0],
+        };
+        let b = Weights {
+            touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
+            length: vec![2.2],
+        };
+        assert!((b.relative_change(&a) - 0.1).abs() < 1e-12);
+        assert_eq!(a.relative_change(&a), 0.0);
+    }
+
+    /// The free columns' normal equations are the full system's principal
+    /// submatrix, to the bit (what the first LM step reuses).
+    #[test]
+    fn the_free_columns_system_is_the_restriction_of_the_full_one() {
+        use crate::simulate::{CampaignSettings, ErrorModel, simulate};
+        let nominal = crate::io::Arm::without_limits("n", DhParams::paper_nominal());
+        let mut settings = CampaignSettings::new(9, ErrorModel::Paper, 10, 10);
+        settings.reference_lengths = 3;
+        settings.encoder_noise_deg = 0.005;
+        settings.probe_noise_mm = 0.01;
+        let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+        let kernel = ArmKernel::new(&nominal.params).unwrap();
+        let noise = Noise {
+            encoder_rad: Some(0.005f64.to_radians()),
+            probe_mm: Some(0.01),
+            ..Noise::default()
+        };
+        let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        let all: Vec<usize> = (0..27).collect();
+        let full = normal_equations(&kernel, &data, &weights, &all, 1).unwrap();
+        let free: Vec<usize> = vec![1, 0, 7, 12, 19, 26];
+        let direct = normal_equations(&kernel, &data, &weights, &free, 1).unwrap();
+        // Same products summed in the same order: equal to the bit.
+        assert_eq!(full.restrict(&free).unwrap(), direct);
+        assert!(full.restrict(&[27]).is_none());
+        assert!(direct.restrict(&[2]).is_none());
+    }
+
+    /// 1000 points of 3 touches with stated noise and reference lengths:
+    /// 16 chunks of points, so 2 and 4 threads really split the work (one
+    /// thread below 4 chunks). The normal equations, their cost and the
+    /// centroids are the same bits on 1, 2 and 4 threads.
+    #[test]
+    fn normal_equations_are_the_same_bits_on_any_thread_count() {
+        let n = 1000;
+        let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
+        for p in 0..n {
+            for k in 0..3 {
+                let q: Vec<String> = (0..6)
+                    .map(|j| {
+                        let base = ((p * 7 + j * 13) as f64 * 0.37).sin() * 120.0;
+                        format!("{}", base + (k * 20 + j) as f64 * 0.5)
+                    })
+                    .collect();
+                text.push_str(&format!("P{p},{}\n", q.join(",")));
+            }
+        }
+        let (poses, _) = parse_poses(&text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
+        let mut lengths = String::from("point_a,point_b,distance\n");
+        for i in 0..20 {
+            lengths.push_str(&format!("P{i},P{},{}\n", n - 1 - i, 500 + i));
+        }
+        let data = DataSet::from_poses(&poses, "p.csv")
+            .unwrap()
+            .with_lengths(&parse_lengths(&lengths, "l.csv").unwrap(), "l.csv")
+            .unwrap();
+        assert_eq!(data.points().len(), n);
+        assert!(n > 4 * POINTS_PER_CHUNK, "enough chunks to run in parallel");
+        let kernel = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+        let noise = Noise {
+            encoder_rad: Some(1e-4),
+            probe_mm: Some(0.01),
+            length_default_mm: 0.001,
+            length_weight: None,
+        };
+        let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        let free: Vec<usize> = (0..27).collect();
+        let bits = |threads: usize| {
+            let ne = normal_equations(&kernel, &data, &weights, &free, threads).unwrap();
+            let mut v: Vec<u64> = ne.jtj.iter().chain(&ne.jtr).map(|x| x.to_bits()).collect();
+            v.extend([ne.touch_cost, ne.length_cost, ne.cost()].map(f64::to_bits));
+            v.extend(ne.centroids.iter().flatten().map(|x| x.to_bits()));
+            assert!(ne.length_cost > 0.0 && ne.touch_cost > 0.0);
+            v
+        };
+        let one = bits(1);
+        assert_eq!(bits(2), one);
+        assert_eq!(bits(4), one);
+    }
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::{read_lengths, source_name};
-use aacmm_core::metrics::{Evaluation, PairLengthError, evaluate, pair_length_errors};
+use aacmm_core::metrics::{Evaluation, PairLengthError, evaluate_threads, pair_length_errors};
 use aacmm_core::report::{EVALUATION_FILES, EvaluationInput, Measured, evaluation_report};
 use anyhow::{Context, Result};
 use serde::{Serialize, Serializer};
@@ -34,6 +34,10 @@ pub struct Args {
     /// errors, length errors, residuals.
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
+    /// Worker threads for the pairs of points (default: every core);
+    /// results do not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    threads: Option<u16>,
 }
 
 /// The JSON report: what was evaluated, and the figures.
@@ -91,7 +95,8 @@ pub fn run(args: Args) -> Result<()> {
     kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
     args.input
         .check_finite(&xyz, |i| data.source().touch(i).line)?;
-    let evaluation = evaluate(&data, &xyz).with_context(|| {
+    let threads = super::worker_threads(args.threads);
+    let evaluation = evaluate_threads(&data, &xyz, threads).with_context(|| {
         format!(
             "{}: on {}",
             args.input.arm.display(),

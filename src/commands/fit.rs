@@ -4,11 +4,12 @@
 use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
+use aacmm_core::calibrate::{CalibrationError, OptionError};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::source_name;
 use aacmm_core::io::{AngleUnit, Arm, read_lengths};
 use aacmm_core::residuals::Noise;
-use anyhow::{Result, bail};
+use anyhow::{Result, anyhow};
 
 use super::ArmAndPoses;
 
@@ -50,48 +51,33 @@ impl FitInput {
         v
     }
 
-    /// The noise flags, checked and in internal units.
-    pub fn noise(&self) -> Result<Noise> {
-        for (flag, v) in [
-            ("--encoder-noise", self.encoder_noise),
-            ("--probe-noise", self.probe_noise),
-            ("--length-uncertainty", Some(self.length_uncertainty)),
-            ("--length-weight", self.length_weight),
-        ] {
-            if let Some(v) = v
-                && !(v.is_finite() && v >= 0.0)
-            {
-                bail!("{flag} {v}: must be a finite number ≥ 0");
-            }
-        }
-        if self.encoder_noise.unwrap_or(0.0) == 0.0
-            && self.probe_noise.unwrap_or(0.0) == 0.0
-            && (self.encoder_noise.is_some() || self.probe_noise.is_some())
-        {
-            bail!("--encoder-noise and --probe-noise are both 0: a touch needs some uncertainty");
-        }
-        Ok(Noise {
+    /// The noise flags in internal units (the library checks them:
+    /// [`Noise::check`], with [`flag_error`] naming the flag).
+    pub fn noise(&self) -> Noise {
+        Noise {
             encoder_rad: self.encoder_noise.map(f64::to_radians),
             probe_mm: self.probe_noise,
             length_default_mm: self.length_uncertainty,
-            length_weight: self.length_weight.filter(|&w| w > 0.0),
-        })
+            length_weight: self.length_weight.filter(|&w| w != 0.0),
+        }
     }
 
     /// The worker threads: `--threads`, or every core.
     pub fn threads(&self) -> usize {
-        self.threads.map_or_else(
-            || std::thread::available_parallelism().map_or(1, |n| n.get()),
-            usize::from,
-        )
+        super::worker_threads(self.threads)
     }
 
     /// The arm and the data set (touches grouped by point, lengths added).
     pub fn read(&self) -> Result<(Arm, DataSet)> {
-        let (arm, poses) = self.input.read()?;
+        self.read_with_warnings().map(|(arm, data, _)| (arm, data))
+    }
+
+    /// [`FitInput::read`], with the warnings printed kept for the report.
+    pub fn read_with_warnings(&self) -> Result<(Arm, DataSet, Vec<String>)> {
+        let (arm, poses, warnings) = self.input.read_with_warnings()?;
         self.input.kernel(&arm)?;
         let data = data_set(&poses, &self.input.data, self.lengths.as_deref())?;
-        Ok((arm, data))
+        Ok((arm, data, warnings))
     }
 }
 
@@ -118,4 +104,48 @@ pub fn read_other(
     let (poses, warnings) = aacmm_core::io::read_poses(data, unit, Some(arm.params.joint_count()))?;
     super::report(&warnings)?;
     data_set(&poses, data, lengths)
+}
+
+/// The command-line flag of each library setting ([`OptionError::field`]).
+const FLAGS: [(&str, &str); 22] = [
+    ("noise.encoder_rad", "--encoder-noise"),
+    ("noise.probe_mm", "--probe-noise"),
+    ("noise.length_default_mm", "--length-uncertainty"),
+    ("noise.length_weight", "--length-weight"),
+    ("fix", "--fix"),
+    ("threads", "--threads"),
+    ("cross_validate", "--cross-validate"),
+    ("anneal.t0", "--sa-t0"),
+    ("anneal.cooling", "--sa-cooling"),
+    ("anneal.chain", "--sa-chain"),
+    ("anneal.t_min", "--sa-t-min"),
+    ("anneal.target", "--sa-target"),
+    ("anneal.step_mm", "--sa-step-mm"),
+    ("anneal.twist_step_deg", "--sa-twist-step"),
+    ("anneal.zero_step_deg", "--sa-zero-step"),
+    ("anneal.max_evaluations", "--sa-max-evaluations"),
+    ("switch.window", "--switch-window"),
+    ("switch.epsilon", "--switch-epsilon"),
+    ("global.max_starts", "--global-starts"),
+    ("global.confirmations", "--global-confirmations"),
+    ("lm.max_iterations", "(LM iteration limit)"),
+    ("global.start_iterations", "(LM iterations per start)"),
+];
+
+/// A library error in the command line's words: a refused setting names
+/// its flag (the value as typed is on the command line; the library's may
+/// be in internal units), anything else passes through.
+pub fn flag_error(e: impl Into<CalibrationError>) -> anyhow::Error {
+    match e.into() {
+        CalibrationError::Option(o) => option_error(&o),
+        other => anyhow::Error::new(other),
+    }
+}
+
+fn option_error(o: &OptionError) -> anyhow::Error {
+    match FLAGS.iter().find(|(field, _)| *field == o.field) {
+        Some((_, flag)) if o.field.starts_with("noise.encoder") => anyhow!("{flag}: {}", o.reason),
+        Some((_, flag)) => anyhow!("{flag} {}: {}", o.value, o.reason),
+        None => anyhow!("{o}"),
+    }
 }

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 
 use aacmm_core::identify::{Identification, identify};
 use aacmm_core::io::source_name;
-use aacmm_core::residuals::Weights;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
@@ -40,13 +39,13 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(json) = &args.json {
         check_output_file("--json", json, &args.fit.paths())?;
     }
-    let noise = args.fit.noise()?;
+    let noise = args.fit.noise();
+    noise.check().map_err(super::fit::flag_error)?;
     let (arm, data) = args.fit.read()?;
-    let kernel = args.fit.input.kernel(&arm)?;
+    args.fit.input.kernel(&arm)?;
     // Without stated noise the singular values are in units of a 0.01 mm touch.
     let assumed = !noise.stated();
-    let weights = Weights::new(&kernel, &data, &noise, 0.01)?;
-    let id = identify(&arm.params, &data, &weights, args.fit.threads())
+    let id = identify(&arm.params, &data, &noise, args.fit.threads())
         .with_context(|| source_name(&args.fit.input.arm))?;
     let noise_text = if assumed {
         "not stated: σ as for a 0.01 mm touch".to_string()
@@ -123,20 +122,23 @@ fn table(id: &Identification) -> String {
             s += &format!("  s = {:.1e}  {}\n", r.singular_value, r.text);
         }
     }
-    let names: Vec<&str> = id.fixed.iter().map(|f| f.name.as_str()).collect();
+    let names: Vec<String> = id.fixed.iter().map(|f| f.id.to_string()).collect();
     s += &format!(
         "\nRecommended fixed set (--fix auto): {}\n",
         names.join(",")
     );
-    let w = id.fixed.iter().map(|f| f.name.len()).max().unwrap_or(0);
-    for f in &id.fixed {
-        s += &format!("  {:<w$}  {}\n", f.name, f.reason);
+    let w = names.iter().map(String::len).max().unwrap_or(0);
+    for (f, name) in id.fixed.iter().zip(&names) {
+        s += &format!("  {name:<w$}  {}\n", f.reason);
     }
     s += "\nFree parameters at the stated noise:\n  parameter  unit   predicted sigma  identifiability\n";
     for f in &id.free {
         s += &format!(
             "  {:<9}  {:<4}  {:>15.3e}  {:>15.4}\n",
-            f.name, f.unit, f.sigma, f.identifiability
+            f.id.to_string(),
+            f.unit,
+            f.sigma,
+            f.identifiability
         );
     }
     if id.correlations.is_empty() {

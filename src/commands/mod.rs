@@ -77,6 +77,14 @@ pub fn limit_warning(arm: &Arm, poses: &Poses, file: &str, unit: AngleUnit) -> O
     })
 }
 
+/// Worker threads for a `--threads` flag: its value, or every core.
+pub fn worker_threads(flag: Option<u16>) -> usize {
+    flag.map_or_else(
+        || std::thread::available_parallelism().map_or(1, |n| n.get()),
+        usize::from,
+    )
+}
+
 /// The arm and the poses it is applied to: the flags `points` and
 /// `evaluate` share.
 #[derive(clap::Args)]
@@ -97,16 +105,21 @@ impl ArmAndPoses {
     /// (stderr) about suspicious poses, readings outside the arm's joint
     /// limits included.
     pub fn read(&self) -> Result<(Arm, Poses)> {
-        let (arm, warnings) = read_arm(&self.arm)?;
-        report(&warnings)?;
-        let (poses, warnings) =
+        self.read_with_warnings()
+            .map(|(arm, poses, _)| (arm, poses))
+    }
+
+    /// [`ArmAndPoses::read`], with the warnings printed kept as text.
+    pub fn read_with_warnings(&self) -> Result<(Arm, Poses, Vec<String>)> {
+        let (arm, mut warnings) = read_arm(&self.arm)?;
+        let (poses, more) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
-        report(&warnings)?;
+        warnings.extend(more);
         let file = source_name(&self.data);
-        if let Some(w) = limit_warning(&arm, &poses, &file, self.angle_unit) {
-            warn(w)?;
-        }
-        Ok((arm, poses))
+        warnings.extend(limit_warning(&arm, &poses, &file, self.angle_unit));
+        report(&warnings)?;
+        let text = warnings.iter().map(ToString::to_string).collect();
+        Ok((arm, poses, text))
     }
 
     /// The arm prepared for its generated kernel.

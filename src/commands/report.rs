@@ -17,12 +17,3 @@ pub fn write(flag: &str, dir: &Path, report: &Report) -> Result<PathBuf> {
     }
     Ok(dir.join(HTML_FILE))
 }
-
-/// The line that says what was written.
-pub fn wrote(page: &Path, report: &Report) -> String {
-    format!(
-        "wrote {} (with {} figures, each also an .svg beside it)\n",
-        page.display(),
-        report.figures.len()
-    )
-}

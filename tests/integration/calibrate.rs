@@ -198,7 +198,7 @@ fn every_method_says_what_ran_and_how_long_each_phase_took() {
     let (text, report, timing) = run("sa", &["--sa-chain", "20", "--sa-t0", "0.5"]);
     let solver = &report["calibration"]["solver"];
     assert_eq!(solver["method"], "sa");
-    assert_eq!(solver["termination"], "annealed");
+    assert_eq!(solver["stop"]["anneal"], "cooled");
     assert_eq!(solver["anneal"]["options"]["chain"], 20);
     assert_eq!(solver["anneal"]["options"]["t0"], 0.5);
     assert!(
@@ -224,7 +224,10 @@ fn every_method_says_what_ran_and_how_long_each_phase_took() {
     let solver = &report["calibration"]["solver"];
     assert_eq!(solver["global"]["stop"], "noise_floor");
     assert!(
-        text.contains("Global: 1 start(s) on the circles of theta2, theta3, theta4, theta5"),
+        text.contains(
+            "Global: 1 minimum (the start arm, 0 grid cell(s), 0 random start(s)) on the circles \
+             of theta2, theta3, theta4, theta5"
+        ),
         "{text}"
     );
 }
@@ -245,21 +248,28 @@ fn bad_solver_settings_are_clean_errors() {
     ];
     for (extra, expect) in [
         (
-            ["--sa-cooling", "1.5"],
-            "cooling factor 1.5: must lie strictly between 0 and 1",
+            "--sa-cooling=1.5",
+            "--sa-cooling 1.5: must lie strictly between 0 and 1",
+        ),
+        ("--sa-t0=0", "--sa-t0 0: must be a finite number > 0"),
+        ("--global-starts=0", "--global-starts 0: at least 1"),
+        (
+            "--global-confirmations=500",
+            "--global-confirmations 500: more than the 109 starts there can be",
         ),
         (
-            ["--sa-t0", "0"],
-            "start temperature 0: must be a finite number > 0",
+            "--probe-noise=-1",
+            "--probe-noise -1: must be a finite number ≥ 0",
         ),
         (
-            ["--global-starts", "0"],
-            "--global-starts and --global-confirmations",
+            "--encoder-noise=nan",
+            "--encoder-noise: must be a finite number ≥ 0",
         ),
-        (["--method", "ceres"], "invalid value 'ceres' for '--method"),
+        ("--fix=d1,d1", "--fix 6: column 6 (d1) is listed twice"),
+        ("--method=ceres", "invalid value 'ceres' for '--method"),
     ] {
         let mut args = base.to_vec();
-        args.extend(extra);
+        args.push(extra);
         assert_clean_error(&aacmm(&args), &[expect]);
     }
 }

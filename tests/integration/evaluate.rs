@@ -88,3 +88,69 @@ fn errors_point_at_file_and_line() {
     ]);
     assert_clean_error(&o, &["neg.csv:2", "distance"]);
 }
+
+/// 1000 points of 3 touches with reference lengths (the pairs of points split
+/// into 16 chunks, so 2 and 4 threads share the work): the JSON is the same
+/// bytes on 1, 2 and 4 threads; `--threads 0` is refused.
+#[test]
+fn json_is_the_same_bytes_on_any_thread_count() {
+    let dir = temp_dir("evaluate-threads");
+    let mut poses = String::from("point,q1,q2,q3,q4,q5,q6\n");
+    for p in 0..1000 {
+        for k in 0..3 {
+            let q: Vec<String> = (0..6)
+                .map(|j| {
+                    let base = ((p * 7 + j * 13) as f64 * 0.37).sin() * 120.0;
+                    format!("{:.4}", base + (k * 20 + j) as f64 * 0.5)
+                })
+                .collect();
+            poses.push_str(&format!("P{p},{}\n", q.join(",")));
+        }
+    }
+    let data = write(&dir, "poses.csv", &poses);
+    let mut lengths = String::from("point_a,point_b,distance\n");
+    for i in 0..20 {
+        lengths.push_str(&format!("P{i},P{},{}\n", 999 - i, 500 + i));
+    }
+    let lengths = write(&dir, "lengths.csv", &lengths);
+    let arm = example("paper-table-1.toml");
+    let run = |threads: &str| {
+        let json = dir.join(format!("t{threads}.json"));
+        let o = aacmm(&[
+            "evaluate",
+            "--arm",
+            arm.to_str().unwrap(),
+            "--data",
+            &data,
+            "--lengths",
+            &lengths,
+            "--json",
+            json.to_str().unwrap(),
+            "--threads",
+            threads,
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (std::fs::read(json).unwrap(), stdout(&o))
+    };
+    let (one, table) = run("1");
+    let report: serde_json::Value = serde_json::from_slice(&one).unwrap();
+    let ev = &report["evaluation"];
+    assert_eq!(ev["points"].as_array().unwrap().len(), 1000);
+    assert_eq!(ev["pair_length_summary"]["count"], 1000 * 999 / 2);
+    assert_eq!(ev["reference"].as_array().unwrap().len(), 20);
+    for threads in ["2", "4"] {
+        let (bytes, text) = run(threads);
+        assert!(bytes == one, "JSON differs between 1 and {threads} threads");
+        assert_eq!(text, table, "table differs between 1 and {threads} threads");
+    }
+    let o = aacmm(&[
+        "evaluate",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--data",
+        &data,
+        "--threads",
+        "0",
+    ]);
+    assert_clean_error(&o, &["--threads"]);
+}

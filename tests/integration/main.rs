@@ -4,10 +4,13 @@
 mod arm_checks;
 mod calibrate;
 mod campaign;
+mod edges;
 mod evaluate;
+mod mukca;
 mod out_paths;
 mod points;
 mod report;
+mod session;
 mod sim_messages;
 mod simulate;
 mod streams;

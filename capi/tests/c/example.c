@@ -11,7 +11,8 @@
  *
  *   version, arm_params, q, positions, jac_positions, jacobians,
  *   joint_q, joint_p, joint_jac, nominal_positions, error, files_params,
- *   files_sigmas, files_fixed, files_summary, report, arrays_params,
+ *   files_sigmas, files_fixed, files_summary, report (newlines and
+ *   backslashes escaped as \\n and \\\\), arrays_params,
  *   calibrated_positions
  *
  * Its own checks (expected error codes, arrays == files) make it exit with
@@ -292,15 +293,27 @@ int main(int argc, char **argv) {
         printf(" %d", fixed[c] ? 1 : 0);
     }
     printf("\n");
-    printf("files_summary %d %d %zu %zu %zu\n", (int)summary.termination, summary.successful ? 1 : 0,
-           summary.iterations, summary.free_parameters, summary.degrees_of_freedom);
+    printf("files_summary %d %d %zu %zu %zu %u\n", (int)summary.termination,
+           summary.successful ? 1 : 0, summary.iterations, summary.free_parameters,
+           summary.degrees_of_freedom, (unsigned)summary.method);
     size_t report_len = 0;
     expect(aacmm_calibration_report(cal, NULL, 0, &report_len), AACMM_STATUS_BUFFER_TOO_SMALL,
            "report_size");
     char *report = malloc(report_len + 1);
     ok(aacmm_calibration_report(cal, report, report_len + 1, &report_len),
        "aacmm_calibration_report");
-    printf("report %s\n", report);
+    /* One line: newlines and backslashes escaped (the test undoes it). */
+    printf("report ");
+    for (const char *c = report; *c; c++) {
+        if (*c == '\n') {
+            printf("\\n");
+        } else if (*c == '\\') {
+            printf("\\\\");
+        } else {
+            putchar(*c);
+        }
+    }
+    printf("\n");
     free(report);
 
     /* The calibrated arm as a handle. */

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
 use super::energy::Energy;
+use super::options::{OptionError, check_nonnegative};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::params::{DhParams, ParamId, ParamKind};
@@ -78,43 +79,46 @@ setters!(AnnealOptions {
 });
 
 impl AnnealOptions {
-    /// Checks the settings; the message names the setting.
+    /// Checks the settings; the error names the setting (`anneal.t0`, …).
     ///
     /// ```
     /// use aacmm_core::calibrate::AnnealOptions;
     /// assert!(AnnealOptions::default().check().is_ok());
     /// let e = AnnealOptions::default().cooling(1.0).check().unwrap_err();
-    /// assert_eq!(e, "cooling factor 1: must lie strictly between 0 and 1");
+    /// assert_eq!(e.to_string(), "anneal.cooling = 1: must lie strictly between 0 and 1");
     /// ```
-    pub fn check(&self) -> Result<(), String> {
-        let positive = [
-            ("start temperature", self.t0),
-            ("minimum temperature", self.t_min),
-            ("length step", self.step_mm),
-            ("twist step", self.twist_step_deg),
-            ("zero-offset step", self.zero_step_deg),
-        ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{name} {v}: must be a finite number > 0"));
-            }
+    pub fn check(&self) -> Result<(), OptionError> {
+        for (field, v) in [
+            ("anneal.t0", self.t0),
+            ("anneal.t_min", self.t_min),
+            ("anneal.step_mm", self.step_mm),
+            ("anneal.twist_step_deg", self.twist_step_deg),
+            ("anneal.zero_step_deg", self.zero_step_deg),
+        ] {
+            check_nonnegative(field, v, false)?;
         }
         if !(self.cooling > 0.0 && self.cooling < 1.0) {
-            return Err(format!(
-                "cooling factor {}: must lie strictly between 0 and 1",
-                self.cooling
+            return Err(OptionError::new(
+                "anneal.cooling",
+                self.cooling,
+                "must lie strictly between 0 and 1",
             ));
         }
         if self.chain == 0 {
-            return Err("chain length 0: at least one move per temperature".into());
-        }
-        if !(self.target.is_finite() && self.target >= 0.0) {
-            return Err(format!(
-                "stopping energy {}: must be a finite number ≥ 0",
-                self.target
+            return Err(OptionError::new(
+                "anneal.chain",
+                0,
+                "at least one move per temperature",
             ));
         }
-        Ok(())
+        if self.max_evaluations == 0 {
+            return Err(OptionError::new(
+                "anneal.max_evaluations",
+                0,
+                "at least one evaluation",
+            ));
+        }
+        check_nonnegative("anneal.target", self.target, true)
     }
 }
 
@@ -138,25 +142,24 @@ impl Default for SwitchRule {
 }
 
 impl SwitchRule {
-    /// Checks the rule; the message names the setting.
+    /// Checks the rule; the error names the setting (`switch.window`,
+    /// `switch.epsilon`).
     ///
     /// ```
     /// use aacmm_core::calibrate::SwitchRule;
     /// assert!(SwitchRule::default().check().is_ok());
     /// let e = SwitchRule { window: 0, epsilon: 1e-4 }.check().unwrap_err();
-    /// assert_eq!(e, "switch window 0: at least one temperature");
+    /// assert_eq!(e.to_string(), "switch.window = 0: at least one temperature");
     /// ```
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), OptionError> {
         if self.window == 0 {
-            return Err("switch window 0: at least one temperature".into());
-        }
-        if !(self.epsilon.is_finite() && self.epsilon >= 0.0) {
-            return Err(format!(
-                "switch threshold {}: must be a finite number ≥ 0",
-                self.epsilon
+            return Err(OptionError::new(
+                "switch.window",
+                0,
+                "at least one temperature",
             ));
         }
-        Ok(())
+        check_nonnegative("switch.epsilon", self.epsilon, true)
     }
 
     /// Whether the fitness history `p` (one per temperature, newest last)
@@ -277,9 +280,9 @@ pub fn anneal_observed<R: Rng>(
     rng: &mut R,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(DhParams, AnnealTrace), CalibrationError> {
-    options.check().map_err(CalibrationError::Options)?;
+    options.check()?;
     if let Some(rule) = switch {
-        rule.check().map_err(CalibrationError::Options)?;
+        rule.check()?;
     }
     let joints = start.joint_count();
     let ids: Vec<ParamId> = free

@@ -8,7 +8,7 @@
 //! 1. **LM from the start** (nominal), at most 30 iterations. When the noise is stated, a fit at
 //!    the noise floor — `χ² ≤ dof·(1 + k·sqrt(2/dof))`, `k` standard
 //!    deviations of `χ²/dof` above 1, with the touches weighed at the fit
-//!    ([`Weights`] carry the encoder noise through the arm's joint Jacobian,
+//!    (the weights carry the encoder noise through the arm's joint Jacobian,
 //!    so they depend on the zeros) — cannot be beaten by more than noise:
 //!    accepted at once, so a good start costs one LM.
 //! 2. **A grid over the torus.** Each unknown is an angle, so the free zero
@@ -35,6 +35,7 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use super::lm::{LmOptions, LmResult, levenberg_marquardt, levenberg_marquardt_from};
+use super::options::OptionError;
 use super::{CalibrationError, Phase};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
@@ -84,24 +85,39 @@ setters!(GlobalOptions {
 });
 
 impl GlobalOptions {
-    /// Checks the settings; the message names the setting.
+    /// Checks the settings; the error names the setting
+    /// (`global.max_starts`, …).
     ///
     /// ```
     /// use aacmm_core::calibrate::GlobalOptions;
     /// assert!(GlobalOptions::default().check().is_ok());
     /// let e = GlobalOptions::default().confirmations(0).check().unwrap_err();
-    /// assert_eq!(e, "confirmations 0: at least 1");
+    /// assert_eq!(e.to_string(), "global.confirmations = 0: at least 1");
     /// ```
-    pub fn check(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("start budget", self.max_starts),
-            ("confirmations", self.confirmations),
+    pub fn check(&self) -> Result<(), OptionError> {
+        for (field, v) in [
+            ("global.grid_cells", self.grid_cells),
+            ("global.max_starts", self.max_starts),
+            ("global.confirmations", self.confirmations),
+            ("global.start_iterations", self.start_iterations),
         ] {
             if v == 0 {
-                return Err(format!("{name} 0: at least 1"));
+                return Err(OptionError::new(field, 0, "at least 1"));
             }
         }
-        Ok(())
+        if self.confirmations > self.max_starts + self.candidates + 1 {
+            return Err(OptionError::new(
+                "global.confirmations",
+                self.confirmations,
+                format!(
+                    "more than the {} starts there can be ({} random, {} grid, the start arm)",
+                    self.max_starts + self.candidates + 1,
+                    self.max_starts,
+                    self.candidates
+                ),
+            ));
+        }
+        super::options::check_nonnegative("global.noise_floor_k", self.noise_floor_k, false)
     }
 }
 
@@ -148,6 +164,10 @@ pub struct GlobalTrace {
     /// arm, then the grid candidates, then random starts), with the weights
     /// at that minimum.
     pub minima: Vec<f64>,
+    /// Grid cells refined (after the start arm).
+    pub grid_starts: usize,
+    /// Random starts refined (after the grid).
+    pub random_starts: usize,
     /// Starts that reached the lowest cost.
     pub best_hits: usize,
     /// The noise-floor cost, when the noise is stated.
@@ -162,7 +182,7 @@ fn same_minimum(a: f64, b: f64) -> bool {
 }
 
 /// What [`global`] needs beyond the start.
-pub struct GlobalProblem<'a> {
+pub(crate) struct GlobalProblem<'a> {
     /// The data.
     pub data: &'a DataSet,
     /// The noise, to weigh the touches at each minimum.
@@ -212,14 +232,14 @@ struct Minimum {
 
 /// Runs the global method from `start`; returns the best LM result (in the
 /// start's sign convention), its account, and the work per phase.
-pub fn global<R: Rng>(
+pub(crate) fn global<R: Rng>(
     start: &DhParams,
     problem: &GlobalProblem,
     options: &GlobalOptions,
     rng: &mut R,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(LmResult, GlobalTrace, Vec<Phase>), CalibrationError> {
-    options.check().map_err(CalibrationError::Options)?;
+    options.check()?;
     let GlobalProblem {
         data,
         weights,
@@ -260,6 +280,7 @@ pub fn global<R: Rng>(
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
     let first = settle(first, problem, &mut phases[0])?;
     let mut angles = 0;
+    let (mut grid_starts, mut random_starts) = (0, 0);
     let stop = 'search: {
         if found.record(first, floor) {
             break 'search GlobalStop::NoiseFloor;
@@ -293,6 +314,7 @@ pub fn global<R: Rng>(
         let mut tried = 0;
         for x in cells {
             tried += 1;
+            grid_starts += 1;
             progress(tried as f64 / total as f64);
             let m = refine(&x, &mut phases)?;
             if found.record(m, floor) {
@@ -306,6 +328,7 @@ pub fn global<R: Rng>(
         let mut x = start.clone();
         for _ in 0..options.max_starts {
             tried += 1;
+            random_starts += 1;
             progress(tried as f64 / total as f64);
             x.clone_from(start);
             for &c in &circles {
@@ -330,13 +353,25 @@ pub fn global<R: Rng>(
             .map(|id| id.to_string())
             .collect()
     };
-    let best = found.best.ok_or(CalibrationError::Shape)?;
+    let mut best = found.best.ok_or(CalibrationError::Shape)?;
+    if best.fit.termination == super::Termination::MaxIterations {
+        // The lowest start was cut off by the per-start cap: finish its
+        // descent with the full LM rather than report it unconverged.
+        let timer = std::time::Instant::now();
+        let fit = levenberg_marquardt(&best.fit.params, data, weights, free, lm)?;
+        phases.push(Phase::new("lm, best start finished"));
+        let last = phases.len() - 1;
+        phases[last].add_lm(&fit, timer.elapsed().as_secs_f64());
+        best = reweigh(fit, problem, &mut phases[last])?;
+    }
     let trace = GlobalTrace {
         options: *options,
         stop,
         circles: names(&circles),
         grid_angles: angles,
         minima: found.minima,
+        grid_starts,
+        random_starts,
         best_hits: found.hits,
         noise_floor_cost: floor,
         sign_changes: Vec::new(),
@@ -346,14 +381,26 @@ pub fn global<R: Rng>(
 
 /// A start's result: reweighed ([`reweigh`]) when its LM converged; one
 /// cut off by the iteration cap is in a wrong basin (or crawling), and is
-/// recorded as it is.
+/// recorded where it stopped, its cost under the weights at that point.
 fn settle(
     fit: LmResult,
     problem: &GlobalProblem,
     phase: &mut Phase,
 ) -> Result<Minimum, CalibrationError> {
     if fit.termination == super::Termination::MaxIterations {
-        let cost = fit.normal.cost();
+        // Compared with converged starts, which are weighed at themselves:
+        // weigh this one at itself too (no refit), or a start whose weights
+        // happen to be kind looks lowest.
+        let cost = match problem.stated_dof {
+            Some(_) => {
+                let kernel = ArmKernel::new(&fit.params)?;
+                let weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
+                let mut xyz = vec![[0.0; 3]; problem.data.len()];
+                phase.cost_evaluations += 1;
+                cost(&kernel, problem.data, &weights, &mut xyz)?
+            }
+            None => fit.normal.cost(),
+        };
         return Ok(Minimum { fit, cost });
     }
     reweigh(fit, problem, phase)
@@ -417,7 +464,7 @@ fn torus_grid(
     let place = |x: &mut DhParams, cell: usize| {
         for (id, &stride) in ids.iter().zip(&strides) {
             let i = digit(cell, stride);
-            *x.get_mut(*id) = crate::simulate::wrap(
+            *x.get_mut(*id) = crate::params::wrap(
                 std::f64::consts::TAU * i as f64 / k as f64 - std::f64::consts::PI,
             );
         }
@@ -493,13 +540,13 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
     let n = params.joint_count();
     let id = |kind, index| ParamId { kind, index };
     let is_free = |p: ParamId| free.contains(&p.column(n));
-    let reach = crate::identify::reach(nominal);
+    let reach = nominal.reach();
     let mut changed = Vec::new();
     for i in 0..n {
         let (a, al) = (params.joints[i].a, params.joints[i].alpha);
         let (na, nal) = (nominal.joints[i].a, nominal.joints[i].alpha);
         let dist =
-            |a: f64, al: f64| ((a - na) / reach).powi(2) + crate::simulate::wrap(al - nal).powi(2);
+            |a: f64, al: f64| ((a - na) / reach).powi(2) + crate::params::wrap(al - nal).powi(2);
         if dist(-a, -al) >= dist(a, al) {
             continue;
         }
@@ -528,7 +575,7 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
         for p in plan {
             let v = params.get_mut(p);
             if p.kind == ParamKind::Theta {
-                *v = crate::simulate::wrap(*v + std::f64::consts::PI);
+                *v = crate::params::wrap(*v + std::f64::consts::PI);
             } else if *v != 0.0 {
                 *v = -*v;
             } else {

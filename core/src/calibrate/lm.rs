@@ -7,6 +7,7 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
+use super::options::{OptionError, check_nonnegative};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::params::DhParams;
@@ -28,12 +29,19 @@ pub enum Termination {
     ZeroResidual,
     /// The iteration budget ran out first.
     MaxIterations,
-    /// No step lowered the cost even with huge damping: a minimum to machine
-    /// precision, or a numerical failure.
+    /// No step lowered the cost even with huge damping, and the gradient
+    /// test passes at [`MACHINE_PRECISION_GTOL`]: a minimum to machine
+    /// precision.
+    MachinePrecision,
+    /// No step lowered the cost even with huge damping, yet the gradient is
+    /// not small: not a converged minimum (a numerical failure, or a cost
+    /// that is not smooth there).
     NoProgress,
-    /// Annealing alone (`sa`) ended by its own rule; no LM ran.
-    Annealed,
 }
+
+/// The gradient test (largest cosine between a column and the residuals)
+/// that a stalled LM must pass to count as converged.
+pub const MACHINE_PRECISION_GTOL: f64 = 1e-6;
 
 impl Termination {
     /// Whether the result is a converged minimum.
@@ -42,9 +50,11 @@ impl Termination {
     /// use aacmm_core::calibrate::Termination;
     /// assert!(Termination::CostTolerance.was_successful());
     /// assert!(!Termination::MaxIterations.was_successful());
+    /// assert!(!Termination::NoProgress.was_successful());
+    /// assert!(Termination::MachinePrecision.was_successful());
     /// ```
     pub fn was_successful(self) -> bool {
-        !matches!(self, Termination::MaxIterations)
+        !matches!(self, Termination::MaxIterations | Termination::NoProgress)
     }
 
     /// A sentence for summaries.
@@ -55,13 +65,17 @@ impl Termination {
             Termination::GradientTolerance => "gradient below gtol",
             Termination::ZeroResidual => "residuals vanished",
             Termination::MaxIterations => "iteration limit reached",
-            Termination::NoProgress => "no step lowers the cost (minimum to machine precision)",
-            Termination::Annealed => "annealing ended (no LM)",
+            Termination::MachinePrecision => {
+                "no step lowers the cost and the gradient is nil (minimum to machine precision)"
+            }
+            Termination::NoProgress => {
+                "no step lowers the cost, yet the gradient is not small (not converged)"
+            }
         }
     }
 }
 
-/// Tolerances and limits of [`levenberg_marquardt`]; a builder.
+/// Tolerances and limits of Levenberg–Marquardt; a builder.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LmOptions {
     /// Iteration limit (accepted or rejected steps).
@@ -102,6 +116,31 @@ setters!(LmOptions {
 });
 
 impl LmOptions {
+    /// Checks the settings; the error names the setting (`lm.ftol`, …,
+    /// `threads`).
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::LmOptions;
+    /// assert!(LmOptions::default().check().is_ok());
+    /// assert_eq!(LmOptions::default().max_iterations(0).check().unwrap_err().field, "lm.max_iterations");
+    /// ```
+    pub fn check(&self) -> Result<(), OptionError> {
+        if self.max_iterations == 0 {
+            return Err(OptionError::new("lm.max_iterations", 0, "at least 1"));
+        }
+        for (field, v) in [
+            ("lm.ftol", self.ftol),
+            ("lm.xtol", self.xtol),
+            ("lm.gtol", self.gtol),
+        ] {
+            check_nonnegative(field, v, true)?;
+        }
+        if self.threads == 0 {
+            return Err(OptionError::new("threads", 0, "at least 1"));
+        }
+        Ok(())
+    }
+
     /// Sets the worker threads.
     pub fn threads(mut self, n: usize) -> Self {
         self.threads = n.max(1);
@@ -122,7 +161,7 @@ pub struct LmIteration {
     pub accepted: bool,
 }
 
-/// What [`levenberg_marquardt`] returns.
+/// What a Levenberg–Marquardt fit returns.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LmResult {
     /// The parameters at the end (fixed ones unchanged).
@@ -140,7 +179,7 @@ pub struct LmResult {
     /// Per iteration.
     pub history: Vec<LmIteration>,
     /// The normal equations at the result.
-    pub normal: Normal,
+    pub(crate) normal: Normal,
 }
 
 impl LmResult {
@@ -170,7 +209,7 @@ impl LmResult {
 ///
 /// Never returns NaN: a trial step with a non-finite cost is rejected like
 /// any step that does not lower the cost.
-pub fn levenberg_marquardt(
+pub(crate) fn levenberg_marquardt(
     start: &DhParams,
     data: &DataSet,
     weights: &Weights,
@@ -191,7 +230,7 @@ pub fn levenberg_marquardt(
 
 /// [`levenberg_marquardt`] from the normal equations already computed at
 /// `start` (over the free columns `normal.free`), which it does not count.
-pub fn levenberg_marquardt_from(
+pub(crate) fn levenberg_marquardt_from(
     start: &DhParams,
     normal: Normal,
     data: &DataSet,
@@ -302,7 +341,11 @@ pub fn levenberg_marquardt_from(
                 accepted: false,
             });
             if small_step || lambda > 1e16 {
-                termination = Termination::NoProgress;
+                termination = if gmax <= MACHINE_PRECISION_GTOL {
+                    Termination::MachinePrecision
+                } else {
+                    Termination::NoProgress
+                };
                 break;
             }
         }

@@ -38,49 +38,60 @@ macro_rules! setters {
 }
 
 pub mod anneal;
+pub mod assess;
 pub mod energy;
 pub mod global;
 pub mod lm;
+pub mod options;
+pub mod solver;
 pub mod validate;
 
-use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
-pub use lm::{
-    LmIteration, LmOptions, LmResult, Termination, levenberg_marquardt, levenberg_marquardt_from,
-};
+pub use lm::{LmIteration, LmOptions, LmResult, Termination};
+pub use options::{CalibrateOptions, DEFAULT_LENGTH_SIGMA_MM, FixSpec, OptionError};
+pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
-use crate::identify::{
-    Correlation, Identification, identify_from, open_directions_from, strong_correlations, to_user,
-    unit,
-};
+use crate::identify::{Correlation, Identification, identify_from, open_directions_from};
 use crate::kernel::{ArmKernel, KernelError};
-use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Noise, Weights, normal_equations};
+use crate::metrics::MetricsError;
+use crate::params::{DhParams, ParamId};
+use crate::residuals::Weights;
 
 /// Why a calibration could not run.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum CalibrationError {
+    /// A setting out of range.
+    #[error(transparent)]
+    Option(#[from] OptionError),
     /// The kernel refused the arm or the data.
     #[error(transparent)]
     Kernel(#[from] KernelError),
+    /// The metrics refused positions (validation).
+    #[error(transparent)]
+    Metrics(#[from] MetricsError),
+    /// The data were read for another joint count than the arm's.
+    #[error("the arm has {arm} joints, the data {data}")]
+    Joints {
+        /// The arm's joints.
+        arm: usize,
+        /// The data's joints.
+        data: usize,
+    },
+    /// The report could not be drawn.
+    #[cfg(feature = "report")]
+    #[error(transparent)]
+    Report(#[from] crate::report::ReportError),
     /// A parameter vector of the wrong length (a bug, not user input).
     #[error("internal: parameter vector of the wrong length")]
     Shape,
     /// The start arm gives non-finite positions.
     #[error("the start arm gives positions that are not finite numbers")]
     NonFiniteStart,
-    /// A name in the fixed set is not a parameter of the arm.
-    #[error("unknown parameter `{name}`; parameters are {expected}")]
-    UnknownParameter {
-        /// The name given.
-        name: String,
-        /// The accepted names.
-        expected: String,
-    },
     /// More unknowns than residuals.
     #[error(
         "{residuals} residuals for {unknowns} unknowns ({free} free parameters + 3 per point): \
@@ -97,19 +108,13 @@ pub enum CalibrationError {
     /// The fixed set leaves a direction the data cannot see.
     #[error(
         "the free parameters include directions the data cannot see: {}; fix more \
-         parameters (--fix auto chooses them)",
+         parameters (the automatic fixed set chooses them)",
         directions.join("; ")
     )]
     Unidentifiable {
         /// The open directions, in words.
         directions: Vec<String>,
     },
-    /// Cross-validation folds that cannot be made.
-    #[error("{0}")]
-    Folds(String),
-    /// A solver setting out of range.
-    #[error("{0}")]
-    Options(String),
 }
 
 /// The solvers of [`calibrate`].
@@ -180,108 +185,37 @@ impl Phase {
         }
     }
 
-    fn add_lm(&mut self, fit: &LmResult, seconds: f64) {
+    pub(crate) fn add_lm(&mut self, fit: &LmResult, seconds: f64) {
         self.cost_evaluations += fit.cost_evaluations;
         self.jacobian_evaluations += fit.jacobian_evaluations;
         self.seconds += seconds;
     }
 }
 
-/// Which parameters stay at their start values.
+/// One parameter's result, in internal units (mm, rad). Files show it in
+/// user units (mm, deg) as an [`EstimateRecord`]; reading one back
+/// converts degrees to radians (exact to the last bit or two).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum FixSpec {
-    /// [`identify`](crate::identify::identify)'s recommended set.
-    Auto,
-    /// These parameters (by their position in the fixed order).
-    Columns(Vec<usize>),
-}
-
-impl FixSpec {
-    /// Parses `auto` or comma-separated names (`theta1,d1,Bx`; `beta…` is
-    /// accepted for `alpha…`) for an `n`-joint arm.
-    ///
-    /// ```
-    /// use aacmm_core::calibrate::FixSpec;
-    /// assert_eq!(FixSpec::parse("auto", 6).unwrap(), FixSpec::Auto);
-    /// assert_eq!(FixSpec::parse("theta1, d1,beta6", 6).unwrap(), FixSpec::Columns(vec![18, 6, 17]));
-    /// assert!(FixSpec::parse("theta9", 6).unwrap_err().to_string().contains("unknown parameter `theta9`"));
-    /// ```
-    pub fn parse(s: &str, joints: usize) -> Result<FixSpec, CalibrationError> {
-        if s.trim() == "auto" {
-            return Ok(FixSpec::Auto);
-        }
-        let names: Vec<String> = ParamId::all(joints).map(|p| p.to_string()).collect();
-        s.split(',')
-            .map(str::trim)
-            .filter(|t| !t.is_empty())
-            .map(|t| {
-                let canonical = match t.strip_prefix("beta") {
-                    Some(rest) => format!("alpha{rest}"),
-                    None => t.to_string(),
-                };
-                names.iter().position(|n| *n == canonical).ok_or_else(|| {
-                    CalibrationError::UnknownParameter {
-                        name: t.to_string(),
-                        expected: format!("{} … {}", names[0], names[names.len() - 1]),
-                    }
-                })
-            })
-            .collect::<Result<Vec<usize>, _>>()
-            .map(FixSpec::Columns)
-    }
-}
-
-/// Settings of [`calibrate`].
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CalibrateOptions {
-    /// The fixed set.
-    pub fix: FixSpec,
-    /// What is known of the noise.
-    pub noise: Noise,
-    /// The solver.
-    pub method: Method,
-    /// LM's tolerances (every method but `sa` ends with LM).
-    pub lm: LmOptions,
-    /// The annealer's settings (`sa`, `hybrid`).
-    pub anneal: AnnealOptions,
-    /// The hybrid's switching rule.
-    pub switch: SwitchRule,
-    /// The global method's settings.
-    pub global: GlobalOptions,
-    /// Seed of every random draw (annealing moves, starts).
-    pub seed: u64,
-}
-
-impl Default for CalibrateOptions {
-    fn default() -> Self {
-        CalibrateOptions {
-            fix: FixSpec::Auto,
-            noise: Noise {
-                length_default_mm: DEFAULT_LENGTH_SIGMA_MM,
-                ..Noise::default()
-            },
-            method: Method::default(),
-            lm: LmOptions::default(),
-            anneal: AnnealOptions::default(),
-            switch: SwitchRule::default(),
-            global: GlobalOptions::default(),
-            seed: 0,
-        }
-    }
-}
-
-/// Largest relative change of the weights at the solution, against those of
-/// the fit, that needs no refit: the estimate moves by about this fraction
-/// of its σ.
-pub const REWEIGH_TOLERANCE: f64 = 0.05;
-
-/// σ of a reference length whose file states none, mm.
-pub const DEFAULT_LENGTH_SIGMA_MM: f64 = 0.001;
-
-/// One parameter's result, in user units (mm or deg).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(into = "EstimateRecord", try_from = "EstimateRecord")]
 pub struct Estimate {
+    /// The parameter.
+    pub id: ParamId,
+    /// Start value, mm or rad.
+    pub nominal: f64,
+    /// Calibrated value, mm or rad (zero offsets wrapped to ±π).
+    pub calibrated: f64,
+    /// `calibrated − nominal` (for zero offsets wrapped to ±π).
+    pub correction: f64,
+    /// Standard uncertainty; `None` for a fixed parameter (or one the data
+    /// do not determine).
+    pub sigma: Option<f64>,
+    /// Why it is fixed; `None` for a free parameter.
+    pub fixed: Option<String>,
+}
+
+/// An [`Estimate`] as users see it: named, in mm or deg.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EstimateRecord {
     /// Name (`a1`, `alpha3`, `Bz`, …).
     pub name: String,
     /// `mm` or `deg`.
@@ -292,10 +226,69 @@ pub struct Estimate {
     pub calibrated: f64,
     /// `calibrated − nominal`.
     pub correction: f64,
-    /// Standard uncertainty; `None` for a fixed parameter.
+    /// Standard uncertainty (k = 1).
     pub sigma: Option<f64>,
-    /// Why it is fixed; `None` for a free parameter.
+    /// Why it is fixed.
     pub fixed: Option<String>,
+}
+
+impl Estimate {
+    /// The estimate in user units.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::Estimate;
+    /// use aacmm_core::params::{ParamId, ParamKind};
+    /// let e = Estimate {
+    ///     id: ParamId { kind: ParamKind::Theta, index: 1 },
+    ///     nominal: 0.0, calibrated: std::f64::consts::FRAC_PI_2, correction: std::f64::consts::FRAC_PI_2,
+    ///     sigma: None, fixed: None,
+    /// };
+    /// let r = e.user();
+    /// assert_eq!((r.name.as_str(), r.unit.as_str(), r.calibrated), ("theta2", "deg", 90.0));
+    /// ```
+    pub fn user(&self) -> EstimateRecord {
+        let u = |v: f64| self.id.to_user(v);
+        EstimateRecord {
+            name: self.id.to_string(),
+            unit: self.id.unit().to_string(),
+            nominal: u(self.nominal),
+            calibrated: u(self.calibrated),
+            correction: u(self.correction),
+            sigma: self.sigma.map(u),
+            fixed: self.fixed.clone(),
+        }
+    }
+}
+
+impl From<Estimate> for EstimateRecord {
+    fn from(e: Estimate) -> Self {
+        e.user()
+    }
+}
+
+impl TryFrom<EstimateRecord> for Estimate {
+    type Error = String;
+
+    fn try_from(r: EstimateRecord) -> Result<Self, String> {
+        let id: ParamId = r.name.parse()?;
+        if r.unit != id.unit() {
+            return Err(format!(
+                "{}: unit `{}`, expected `{}`",
+                r.name,
+                r.unit,
+                id.unit()
+            ));
+        }
+        let f = |v: f64| id.from_user(v);
+        Ok(Estimate {
+            id,
+            nominal: f(r.nominal),
+            calibrated: f(r.calibrated),
+            correction: f(r.correction),
+            sigma: r.sigma.map(f),
+            fixed: r.fixed,
+        })
+    }
 }
 
 /// Residual and unknown counts, and the a-posteriori variance factor.
@@ -325,10 +318,10 @@ pub struct Dof {
 pub struct SolverSummary {
     /// The method that ran.
     pub method: Method,
-    /// Why the final LM stopped (`sa`: the annealing's stop, mapped to
-    /// [`Termination::Annealed`]).
-    pub termination: Termination,
-    /// Whether that is a converged minimum.
+    /// Why it stopped: the method's own reason and the final LM's.
+    pub stop: Stop,
+    /// Whether the result is a usable solution
+    /// ([`Stop::is_solution_usable`]).
     pub successful: bool,
     /// Iterations of the final fit.
     pub iterations: usize,
@@ -352,19 +345,27 @@ pub struct SolverSummary {
     pub global: Option<GlobalTrace>,
 }
 
+impl SolverSummary {
+    /// Whether the result is usable (Ceres' `IsSolutionUsable`).
+    pub fn is_solution_usable(&self) -> bool {
+        self.successful
+    }
+}
+
 /// The correlation matrix of the free parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CorrelationMatrix {
     /// The free parameters, in the fixed order.
-    pub parameters: Vec<String>,
+    pub parameters: Vec<ParamId>,
     /// `ρ_ij`, row by row.
     pub rho: Vec<Vec<f64>>,
 }
 
 /// What [`calibrate`] returns.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Calibration {
-    /// The calibrated geometry (mm, rad; zero offsets wrapped to ±180°).
+    /// The calibrated geometry (mm, rad; zero offsets wrapped to ±π):
+    /// `parameters`' calibrated values (rebuilt from them when read back).
     #[serde(skip)]
     pub params: DhParams,
     /// Per parameter, in the fixed order.
@@ -377,11 +378,28 @@ pub struct Calibration {
     pub dof: Dof,
     /// The solver.
     pub solver: SolverSummary,
-    /// The identifiability analysis behind `--fix auto`.
+    /// The identifiability analysis behind the automatic fixed set.
     pub identification: Option<Identification>,
 }
 
-/// Calibrates `start` (the nominal arm) on `data`.
+impl Calibration {
+    /// The calibrated parameters as a vector in the fixed order (mm, rad):
+    /// what [`DhParams::from_slice`] takes.
+    pub fn calibrated_vector(&self) -> Vec<f64> {
+        self.parameters.iter().map(|p| p.calibrated).collect()
+    }
+
+    /// Restores [`Calibration::params`] from the estimates, after reading a
+    /// calibration back from JSON.
+    pub fn restore_params(&mut self) {
+        if let Some(p) = DhParams::from_slice(&self.calibrated_vector()) {
+            self.params = p;
+        }
+    }
+}
+
+/// Calibrates `start` (the nominal arm) on `data` with `options.method`,
+/// `options.lm.threads` threads and `options.seed`.
 ///
 /// ```
 /// use aacmm_core::{calibrate::*, io::Arm, params::DhParams, simulate::*};
@@ -399,34 +417,32 @@ pub fn calibrate(
     data: &DataSet,
     options: &CalibrateOptions,
 ) -> Result<Calibration, CalibrationError> {
-    calibrate_observed(start, data, options, &mut |_, _| {})
+    let mut ctx = Context::new(options.lm.threads, options.seed);
+    calibrate_with(start, data, options, &*options.method.solver(), &mut ctx)
 }
 
-/// [`calibrate`], telling `progress` the phase running and the fraction of
-/// it done (for a progress bar).
-pub fn calibrate_observed(
+/// [`calibrate`] with a given solver and context (threads, seed, progress
+/// observer). Checks every setting first ([`CalibrateOptions::check`]).
+pub fn calibrate_with(
     start: &DhParams,
     data: &DataSet,
     options: &CalibrateOptions,
-    progress: &mut dyn FnMut(&str, f64),
+    solver: &dyn Solver,
+    ctx: &mut Context,
 ) -> Result<Calibration, CalibrationError> {
+    options.check(start.joint_count())?;
     let kernel = ArmKernel::new(start)?;
-    let threads = options.lm.threads;
-    let stated = options.noise.stated();
-    let mut weights = Weights::new(&kernel, data, &options.noise, 1.0)?;
+    let weights = Weights::new(&kernel, data, &options.noise, 1.0)?;
     // One pass over the data at the start serves the identifiability
-    // analysis and, restricted to the free columns, the first LM step.
+    // analysis and, restricted to the free columns, the first step.
     let timer = std::time::Instant::now();
-    let full = crate::identify::full_normal(start, data, &weights, threads)?;
+    let full = crate::identify::full_normal(start, data, &weights, ctx.threads)?;
     let (free, identification, reasons) = match &options.fix {
         FixSpec::Auto => {
             let id = identify_from(start, data, full.clone());
             let free = id.free_columns();
-            let reasons: Vec<(String, String)> = id
-                .fixed
-                .iter()
-                .map(|f| (f.name.clone(), f.reason.clone()))
-                .collect();
+            let reasons: Vec<(ParamId, String)> =
+                id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
             (free, Some(id), reasons)
         }
         FixSpec::Columns(fixed) => {
@@ -440,335 +456,49 @@ pub fn calibrate_observed(
             let reasons = fixed
                 .iter()
                 .filter_map(|&c| ParamId::from_column(start.joint_count(), c))
-                .map(|id| (id.to_string(), "fixed by the user".to_string()))
+                .map(|id| (id, "fixed by the user".to_string()))
                 .collect();
             (free, None, reasons)
         }
     };
-    let touch_rows = 3 * data.len();
-    let length_rows = data.references().len();
-    let centre_coordinates = 3 * data.points().len();
-    let unknowns = free.len() + centre_coordinates;
-    if touch_rows + length_rows <= unknowns {
+    let counts = assess::Counts::new(data, free.len());
+    if counts.residuals() <= counts.unknowns() {
         return Err(CalibrationError::TooFewResiduals {
-            residuals: touch_rows + length_rows,
-            unknowns,
+            residuals: counts.residuals(),
+            unknowns: counts.unknowns(),
             free: free.len(),
         });
     }
-    let degrees_of_freedom = touch_rows + length_rows - unknowns;
     let identify_phase = Phase {
         jacobian_evaluations: 1,
         seconds: timer.elapsed().as_secs_f64(),
         ..Phase::new("identify")
     };
     let start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
-    let solved = solve(
+    let task = Task {
         start,
-        start_normal,
         data,
-        &weights,
+        free: &free,
         options,
-        stated.then_some(degrees_of_freedom),
-        progress,
-    )?;
-    let Solved {
-        mut fit,
-        mut phases,
-        anneal,
-        mut global,
-    } = solved;
-    phases.insert(0, identify_phase);
-    let mut cost_evaluations: usize = phases.iter().map(|p| p.cost_evaluations).sum();
-    let mut jacobian_evaluations: usize = phases.iter().map(|p| p.jacobian_evaluations).sum();
-    let normal_at = |params: &DhParams, weights: &Weights| -> Result<_, CalibrationError> {
-        Ok(normal_equations(
-            &ArmKernel::new(params)?,
+        stated_dof: options.noise.stated().then_some(counts.dof()),
+        weights: &weights,
+        start_normal,
+    };
+    let mut outcome = solver.solve(task, ctx)?;
+    outcome.phases.insert(0, identify_phase);
+    assess::assess(
+        assess::Setup {
+            start,
             data,
+            options,
+            method: solver.method(),
+            threads: ctx.threads,
+            free,
+            identification,
+            reasons,
             weights,
-            &free,
-            threads,
-        )?)
-    };
-    let sign_changes = global::normalize_signs(&mut fit.params, start, &free);
-    if !sign_changes.is_empty() {
-        // Same positions, other signs: the normal equations change sign
-        // pattern, so recompute them for the covariance.
-        fit.normal = normal_at(&fit.params, &weights)?;
-        jacobian_evaluations += 1;
-    }
-    if let Some(g) = &mut global {
-        g.sign_changes = sign_changes;
-    }
-    let mut touch_sigma = 1.0;
-    if !stated {
-        // Unit weights: the touch residuals are mm. Estimate σ so that the
-        // lengths weigh right against the touches.
-        let touch_dof = touch_rows
-            .saturating_sub(centre_coordinates + free.len())
-            .max(1);
-        touch_sigma = (fit.normal.touch_cost / touch_dof as f64).sqrt().max(1e-9);
-    }
-    if stated || length_rows > 0 {
-        // Weigh at the solution, not at the start: encoder noise moves the
-        // probe along directions that depend on the arm, and the lengths'
-        // weights on the centroids' directions — both far off when the
-        // zeros were.
-        let at_solution = Weights::new(
-            &ArmKernel::new(&fit.params)?,
-            data,
-            &options.noise,
-            touch_sigma,
-        )?;
-        let timer = std::time::Instant::now();
-        // Weights that moved by under REWEIGH_TOLERANCE would move the
-        // estimate by a like fraction of its σ and its σ not at all (shipped
-        // campaign, lm: weights 3 % off moved no parameter by more than
-        // 3.4 % of its σ, and σ by 1e-5 of itself): the fit's weights stand.
-        let settled = stated && at_solution.relative_change(&weights) <= REWEIGH_TOLERANCE;
-        if settled {
-            // The fit's weights, normal equations and history stand.
-        } else if options.method == Method::Sa {
-            weights = at_solution;
-            fit.normal = normal_at(&fit.params, &weights)?;
-            jacobian_evaluations += 1;
-        } else {
-            weights = at_solution;
-            let refit = levenberg_marquardt(&fit.params, data, &weights, &free, &options.lm)?;
-            let mut phase = Phase::new("lm, weighed at the solution");
-            phase.add_lm(&refit, timer.elapsed().as_secs_f64());
-            // With stated noise the weights keep their units: one history,
-            // the descent then the polish. Otherwise the units changed.
-            fit = if stated { fit.then(refit) } else { refit };
-            cost_evaluations += phase.cost_evaluations;
-            jacobian_evaluations += phase.jacobian_evaluations;
-            phases.push(phase);
-        }
-    } else {
-        let w2 = 1.0 / (touch_sigma * touch_sigma);
-        fit.normal.jtj.iter_mut().for_each(|v| *v *= w2);
-        fit.normal.touch_cost *= w2;
-        for h in &mut fit.history {
-            h.cost *= w2;
-        }
-    }
-    if stated {
-        touch_sigma = weights.typical_touch_sigma();
-    }
-    // The start arm's cost under the final weights: "cost A -> B" compares
-    // like with like whatever the method did in between.
-    let mut xyz = vec![[0.0; 3]; data.len()];
-    let mut initial_cost = crate::residuals::cost(&kernel, data, &weights, &mut xyz)?;
-    cost_evaluations += 1;
-    if !stated && length_rows == 0 {
-        initial_cost /= touch_sigma * touch_sigma;
-    }
-    let sigma0 = (fit.normal.cost() / degrees_of_freedom as f64).sqrt();
-    let p = free.len();
-    let n = DMatrix::from_row_slice(p, p, &fit.normal.jtj);
-    let cov = match n.cholesky() {
-        Some(ch) => ch.inverse() * (sigma0 * sigma0),
-        None => DMatrix::from_element(p, p, f64::INFINITY),
-    };
-    let joints = start.joint_count();
-    let ids: Vec<ParamId> = ParamId::all(joints).collect();
-    let names: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
-    let mut params = fit.params.clone();
-    for j in &mut params.joints {
-        j.theta = crate::simulate::wrap(j.theta);
-    }
-    let parameters = ids
-        .iter()
-        .enumerate()
-        .map(|(c, &id)| {
-            let (nominal, calibrated) = (to_user(id, start.get(id)), to_user(id, params.get(id)));
-            let correction = if id.kind == ParamKind::Theta {
-                crate::simulate::wrap(params.get(id) - start.get(id)).to_degrees()
-            } else {
-                calibrated - nominal
-            };
-            let sigma = free
-                .iter()
-                .position(|&f| f == c)
-                .map(|a| to_user(id, cov[(a, a)].max(0.0).sqrt()));
-            Estimate {
-                name: names[c].clone(),
-                unit: unit(id).into(),
-                nominal,
-                calibrated,
-                correction,
-                sigma: sigma.filter(|s| s.is_finite()),
-                fixed: reasons
-                    .iter()
-                    .find(|(n, _)| *n == names[c])
-                    .map(|(_, r)| r.clone()),
-            }
-        })
-        .collect();
-    let free_names: Vec<String> = free.iter().map(|&c| names[c].clone()).collect();
-    let rho = (0..p)
-        .map(|a| {
-            (0..p)
-                .map(|b| {
-                    let r = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
-                    if r.is_finite() { r } else { 0.0 }
-                })
-                .collect()
-        })
-        .collect();
-    let successful = fit.termination.was_successful()
-        && global.as_ref().is_none_or(|g| g.stop.confirmed())
-        && anneal
-            .as_ref()
-            .is_none_or(|a| a.stop != AnnealStop::EvaluationBudget);
-    Ok(Calibration {
-        parameters,
-        correlations: strong_correlations(&cov, &free, &names),
-        correlation_matrix: CorrelationMatrix {
-            parameters: free_names,
-            rho,
+            counts,
         },
-        dof: Dof {
-            touch_rows,
-            length_rows,
-            free_parameters: p,
-            centre_coordinates,
-            degrees_of_freedom,
-            sigma0,
-            touch_sigma_mm: touch_sigma,
-            touch_sigma_estimated: !stated,
-        },
-        solver: SolverSummary {
-            method: options.method,
-            termination: fit.termination,
-            successful,
-            iterations: fit.iterations,
-            cost_evaluations,
-            jacobian_evaluations,
-            initial_cost,
-            final_cost: fit.normal.cost(),
-            history: fit.history,
-            options: options.lm,
-            phases,
-            anneal,
-            global,
-        },
-        identification,
-        params,
-    })
+        outcome,
+    )
 }
-
-/// What a solver hands back to [`calibrate`].
-struct Solved {
-    fit: LmResult,
-    phases: Vec<Phase>,
-    anneal: Option<AnnealTrace>,
-    global: Option<GlobalTrace>,
-}
-
-/// Runs `options.method` on the free columns.
-fn solve(
-    start: &DhParams,
-    start_normal: crate::residuals::Normal,
-    data: &DataSet,
-    weights: &Weights,
-    options: &CalibrateOptions,
-    stated_dof: Option<usize>,
-    progress: &mut dyn FnMut(&str, f64),
-) -> Result<Solved, CalibrationError> {
-    let free = &start_normal.free.clone();
-    let mut rng = crate::simulate::rng(options.seed, SOLVER_STREAM);
-    let timer = std::time::Instant::now();
-    match options.method {
-        Method::Lm => {
-            let fit =
-                lm::levenberg_marquardt_from(start, start_normal, data, weights, &options.lm)?;
-            let mut phase = Phase::new("lm");
-            phase.add_lm(&fit, timer.elapsed().as_secs_f64());
-            Ok(Solved {
-                fit,
-                phases: vec![phase],
-                anneal: None,
-                global: None,
-            })
-        }
-        Method::Sa | Method::Hybrid => {
-            let hybrid = options.method == Method::Hybrid;
-            let (best, trace) = anneal::anneal_observed(
-                start,
-                data,
-                free,
-                &options.anneal,
-                hybrid.then_some(&options.switch),
-                &mut rng,
-                &mut |f| progress("anneal", f),
-            )?;
-            let mut phases = vec![Phase {
-                cost_evaluations: trace.evaluations,
-                seconds: timer.elapsed().as_secs_f64(),
-                ..Phase::new("anneal")
-            }];
-            let fit = if hybrid {
-                let timer = std::time::Instant::now();
-                let fit = levenberg_marquardt(&best, data, weights, free, &options.lm)?;
-                let mut phase = Phase::new("lm");
-                phase.add_lm(&fit, timer.elapsed().as_secs_f64());
-                phases.push(phase);
-                fit
-            } else {
-                let normal = normal_equations(
-                    &ArmKernel::new(&best)?,
-                    data,
-                    weights,
-                    free,
-                    options.lm.threads,
-                )?;
-                phases[0].jacobian_evaluations = 1;
-                LmResult {
-                    params: best,
-                    termination: if trace.stop == AnnealStop::EvaluationBudget {
-                        Termination::MaxIterations
-                    } else {
-                        Termination::Annealed
-                    },
-                    iterations: 0,
-                    cost_evaluations: 0,
-                    jacobian_evaluations: 1,
-                    initial_cost: start_normal.cost(),
-                    history: Vec::new(),
-                    normal,
-                }
-            };
-            Ok(Solved {
-                fit,
-                phases,
-                anneal: Some(trace),
-                global: None,
-            })
-        }
-        Method::Global => {
-            let problem = global::GlobalProblem {
-                data,
-                noise: &options.noise,
-                weights,
-                free,
-                lm: &options.lm,
-                stated_dof,
-                start_normal: Some(start_normal),
-            };
-            let (fit, trace, phases) =
-                global::global(start, &problem, &options.global, &mut rng, &mut |f| {
-                    progress("global", f)
-                })?;
-            Ok(Solved {
-                fit,
-                phases,
-                anneal: None,
-                global: Some(trace),
-            })
-        }
-    }
-}
-
-/// The random stream of the solvers (apart from the simulator's streams).
-const SOLVER_STREAM: u64 = 0x50_4c_56;

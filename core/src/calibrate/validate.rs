@@ -3,10 +3,10 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{CalibrateOptions, CalibrationError, calibrate};
+use super::{CalibrateOptions, CalibrationError, OptionError, calibrate};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
-use crate::metrics::{MetricsError, evaluate};
+use crate::metrics::evaluate;
 use crate::params::DhParams;
 
 /// The figures a calibration is judged by, mm.
@@ -35,8 +35,7 @@ pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, Calibration
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
     k.positions(data.poses(), 0..data.len(), &mut xyz)?;
-    let ev =
-        evaluate(data, &xyz).map_err(|e: MetricsError| CalibrationError::Folds(e.to_string()))?;
+    let ev = evaluate(data, &xyz)?;
     Ok(Figures {
         points: ev.points.len(),
         e_mean: ev.single_point_e.mean,
@@ -92,19 +91,12 @@ pub fn cross_validate(
     k: usize,
     seed: u64,
 ) -> Result<Vec<Fold>, CalibrationError> {
+    check_folds(data, k)?;
     let groups = length_groups(data);
-    if k < 2 || k > groups.len() {
-        return Err(CalibrationError::Folds(format!(
-            "--cross-validate {k}: needs 2 to {} folds ({} groups of points joined by \
-             reference lengths)",
-            groups.len(),
-            groups.len()
-        )));
-    }
     let mut order: Vec<usize> = (0..groups.len()).collect();
     {
         use rand::seq::SliceRandom;
-        order.shuffle(&mut crate::simulate::rng(seed, 7));
+        order.shuffle(&mut crate::random::rng(seed, crate::random::streams::FOLDS));
     }
     let mut folds: Vec<Vec<usize>> = vec![Vec::new(); k];
     for (i, &g) in order.iter().enumerate() {
@@ -131,6 +123,23 @@ pub fn cross_validate(
             })
         })
         .collect()
+}
+
+/// Checks a fold count `k` for `data`: 2 to the number of groups of points
+/// joined by reference lengths.
+pub fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
+    let groups = length_groups(data).len();
+    if k < 2 || k > groups {
+        return Err(OptionError::new(
+            "cross_validate",
+            k,
+            format!(
+                "needs 2 to {groups} folds ({groups} groups of points joined by reference \
+                 lengths)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Points grouped so that each reference length joins points of one group;

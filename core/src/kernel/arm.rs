@@ -4,7 +4,7 @@
 
 use std::ops::Range;
 
-use super::lanes::dispatch;
+use super::lanes::{self, Batch, LaneOp};
 use super::{
     Chain, Dh, Jacobians, KernelError, PreparedParams, PreparedPoses, for_each_lane_jacobian,
     jacobians_impl, positions_impl,
@@ -116,6 +116,13 @@ impl KernelOp for OnePose<'_> {
     }
 }
 
+/// A batch operation with the arm's chain known: the [`LaneOp`] that
+/// [`lanes::run`] runs on the widest lanes the CPU has.
+struct OnChain<'k, const N: usize, O> {
+    k: &'k PreparedParams<N>,
+    op: O,
+}
+
 struct Positions<'a> {
     poses: &'a PreparedPoses,
     start: usize,
@@ -128,8 +135,19 @@ impl KernelOp for Positions<'_> {
     where
         Dh: Chain<N>,
     {
-        let Positions { poses, start, out } = self;
-        dispatch!(positions_impl::<N>(k, poses, start, out))
+        lanes::run(OnChain { k, op: self })
+    }
+}
+
+impl<const N: usize> LaneOp for OnChain<'_, N, Positions<'_>>
+where
+    Dh: Chain<N>,
+{
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let Positions { poses, start, out } = self.op;
+        positions_impl::<N, L>(self.k, poses, start, out)
     }
 }
 
@@ -145,9 +163,20 @@ impl KernelOp for AllJacobians<'_> {
         Dh: Chain<N>,
     {
         check_len(<Dh as Chain<N>>::PARAMS, self.out.params())?;
-        let AllJacobians { poses, out } = self;
-        dispatch!(jacobians_impl::<N>(k, poses, out));
+        lanes::run(OnChain { k, op: self });
         Ok(())
+    }
+}
+
+impl<const N: usize> LaneOp for OnChain<'_, N, AllJacobians<'_>>
+where
+    Dh: Chain<N>,
+{
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let AllJacobians { poses, out } = self.op;
+        jacobians_impl::<N, L>(self.k, poses, out)
     }
 }
 
@@ -163,8 +192,20 @@ impl<F: FnMut(usize, &[f64; 3], &[[f64; 3]])> KernelOp for EachJacobian<'_, F> {
     where
         Dh: Chain<N>,
     {
-        let EachJacobian { poses, range, f } = self;
-        dispatch!(for_each_lane_jacobian::<N>(k, poses, range, f))
+        lanes::run(OnChain { k, op: self })
+    }
+}
+
+impl<const N: usize, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneOp
+    for OnChain<'_, N, EachJacobian<'_, F>>
+where
+    Dh: Chain<N>,
+{
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let EachJacobian { poses, range, f } = self.op;
+        for_each_lane_jacobian::<N, L>(self.k, poses, range, f)
     }
 }
 

@@ -3,12 +3,14 @@
 //! equal one-pose results bit for bit whichever lane type runs.
 //!
 //! Two lane types implement [`Batch`]: [`Lanes`], plain arrays that compile
-//! to SSE2 everywhere, and on x86-64 `Avx`, explicit 256-bit AVX vectors,
-//! used only inside `with_avx2` after the CPU was checked. (LLVM's
-//! auto-vectorizer left the position kernel scalar, hence the intrinsics.)
+//! to SSE2 everywhere, and on x86-64 `Avx`, explicit 256-bit AVX vectors.
+//! (LLVM's auto-vectorizer left the position kernel scalar, hence the
+//! intrinsics.) Batch loops are [`LaneOp`]s and [`run`] picks the lane type.
 //!
-//! The module is private to the crate: no code outside it can make an `Avx`
-//! value, so no safe public API reaches an instruction the CPU might lack.
+//! `Avx` is private to its submodule, and the only path to it is a function
+//! that takes an `AvxToken`, a zero-sized proof returned only by runtime CPU
+//! feature detection: no safe function of the crate, public or not, can
+//! execute an AVX instruction on a CPU that lacks it.
 
 use std::ops::{Add, Mul, Neg, Sub};
 
@@ -79,25 +81,81 @@ impl Neg for Lanes {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-pub(crate) use avx::{Avx, with_avx2};
+/// A batch loop generic over the lane type: what [`run`] runs on the widest
+/// lanes the CPU supports. Its output cannot depend on the lane type, so no
+/// lane value leaves `run` except through the loop's own results.
+pub(crate) trait LaneOp {
+    /// What the loop returns.
+    type Output;
+    /// Runs the loop with lane type `L`.
+    fn run<L: Batch>(self) -> Self::Output;
+}
 
-// The only unsafe code of the toolkit: AVX intrinsics, reached only after
-// the CPU was checked (`dispatch!`).
+/// Runs `op` with AVX lanes where the CPU has AVX2 (checked once per call,
+/// a cached flag), else with the portable [`Lanes`]; the results are the
+/// same bits either way.
+#[inline(always)]
+pub(crate) fn run<O: LaneOp>(op: O) -> O::Output {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(token) = avx::AvxToken::detect() {
+        return avx::run(token, op);
+    }
+    op.run::<Lanes>()
+}
+
+// The only unsafe code of the toolkit: AVX intrinsics.
+//
+// Why they are sound: the lane type `Avx` is private to this module, so code
+// elsewhere can neither name it nor call its constructors (`From<f64>`,
+// `Batch::load`). The one place that instantiates generic lane code with
+// `Avx` is `run`, which takes an `AvxToken`, and the only way to get a token
+// is `AvxToken::detect`, which returns one only where the CPU has AVX2. So an
+// `Avx` value, and every intrinsic below, exists only in a process that has
+// checked its CPU.
 #[cfg(target_arch = "x86_64")]
 #[allow(unsafe_code)]
 mod avx {
-    use super::{Batch, LANES};
+    use super::{Batch, LANES, LaneOp};
     use std::arch::x86_64::*;
     use std::ops::{Add, Mul, Neg, Sub};
 
+    /// Proof that the CPU supports AVX2: made only by [`AvxToken::detect`].
+    /// Zero-sized, so carrying it costs nothing.
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct AvxToken(());
+
+    impl AvxToken {
+        /// A token if the CPU supports AVX2 (a cached flag after the first
+        /// call), else `None`.
+        #[inline(always)]
+        pub(crate) fn detect() -> Option<AvxToken> {
+            std::arch::is_x86_feature_detected!("avx2").then_some(AvxToken(()))
+        }
+    }
+
+    /// Runs `op` with [`Avx`] lanes in a function compiled for AVX2, so that
+    /// the inlined lane code uses 256-bit registers. The token is the proof
+    /// that the CPU can execute it.
+    #[inline(always)]
+    pub(crate) fn run<O: LaneOp>(_: AvxToken, op: O) -> O::Output {
+        // SAFETY: `run_avx2` needs AVX2; the token exists only where
+        // `detect` found it.
+        unsafe { run_avx2(op) }
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn run_avx2<O: LaneOp>(op: O) -> O::Output {
+        op.run::<Avx>()
+    }
+
     /// Four lanes in one AVX register.
     ///
-    /// Invariant: values of this type exist only on CPUs with AVX2 — they are
-    /// made only by code that [`with_avx2`] runs — so the intrinsics below
-    /// are always supported where they execute.
+    /// Invariant: values of this type exist only on CPUs with AVX2. The type
+    /// is private to this module and only [`run`] (which takes an
+    /// [`AvxToken`]) hands it to generic code, so every constructor below runs
+    /// downstream of a successful [`AvxToken::detect`].
     #[derive(Clone, Copy, Debug)]
-    pub(crate) struct Avx(__m256d);
+    struct Avx(__m256d);
 
     impl Batch for Avx {
         #[inline(always)]
@@ -126,7 +184,8 @@ mod avx {
     impl From<f64> for Avx {
         #[inline(always)]
         fn from(v: f64) -> Avx {
-            // SAFETY: AVX is present (type invariant).
+            // SAFETY: AVX is present (type invariant: this constructor is
+            // reachable only through `run`, see the module comment).
             Avx(unsafe { _mm256_set1_pd(v) })
         }
     }
@@ -157,39 +216,4 @@ mod avx {
             Avx(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
         }
     }
-
-    /// Runs `f` in a function compiled for AVX2, so that the inlined lane
-    /// code uses 256-bit registers.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2.
-    #[target_feature(enable = "avx2")]
-    pub(crate) unsafe fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
-        f()
-    }
 }
-
-/// Evaluates to `$run::<N, L>(args)` with `L` = `Avx` where the CPU has
-/// AVX2, else with `L` = [`Lanes`]. An expression: it never returns from its
-/// caller.
-macro_rules! dispatch {
-    ($run:ident::<$n:ident>($($arg:expr),*)) => {{
-        #[cfg(target_arch = "x86_64")]
-        let out = if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: AVX2 was just detected.
-            #[allow(unsafe_code)]
-            unsafe {
-                $crate::kernel::lanes::with_avx2(
-                    #[inline(always)]
-                    || $run::<$n, $crate::kernel::lanes::Avx>($($arg),*),
-                )
-            }
-        } else {
-            $run::<$n, $crate::kernel::lanes::Lanes>($($arg),*)
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let out = $run::<$n, $crate::kernel::lanes::Lanes>($($arg),*);
-        out
-    }};
-}
-pub(crate) use dispatch;

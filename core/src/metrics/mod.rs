@@ -297,7 +297,8 @@ pub struct Evaluation {
 /// Computes every metric of the module for the probe positions `xyz` of the
 /// data set's touches (in its touch order; see the module documentation for
 /// the formulas). Memory is linear in the touches: pairs are summarised as
-/// they are computed.
+/// they are computed, on up to [`DEFAULT_THREADS`] threads;
+/// [`evaluate_threads`] takes the count.
 ///
 /// # Errors
 ///
@@ -322,6 +323,36 @@ pub struct Evaluation {
 /// assert_eq!(ev.reference_summary, None);
 /// ```
 pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsError> {
+    evaluate_threads(data, xyz, DEFAULT_THREADS)
+}
+
+/// The threads [`evaluate`] uses for the pairs of points.
+pub const DEFAULT_THREADS: usize = 2;
+
+/// [`evaluate`] with the pairs of points (eq. 19, quadratic in the points:
+/// the only part that costs) on up to `threads` threads; 0 counts as 1. The
+/// rows of pairs are cut into chunks of a fixed size whose summaries are
+/// merged in row order, so the result is the same bits whatever `threads`.
+///
+/// # Errors
+///
+/// As [`evaluate`].
+///
+/// ```
+/// use aacmm_core::{dataset::DataSet, metrics::{evaluate, evaluate_threads}};
+/// let labels: Vec<String> = (0..600).map(|i| format!("s{}", i % 200)).collect();
+/// let xyz: Vec<[f64; 3]> = (0..600).map(|i| [(i as f64).sin() * 500.0, i as f64, 0.0]).collect();
+/// let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+/// let xyz = data.to_touch_order(&xyz);
+/// let one = evaluate_threads(&data, &xyz, 1).unwrap();
+/// assert_eq!(one, evaluate_threads(&data, &xyz, 3).unwrap());
+/// assert_eq!(one, evaluate(&data, &xyz).unwrap());
+/// ```
+pub fn evaluate_threads(
+    data: &DataSet,
+    xyz: &[[f64; 3]],
+    threads: usize,
+) -> Result<Evaluation, MetricsError> {
     if xyz.len() != data.len() {
         return Err(MetricsError::LengthMismatch {
             expected: data.len(),
@@ -341,7 +372,7 @@ pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsE
         .iter()
         .map(|p| point_stats(&p.label, &xyz[p.touches.clone()]))
         .collect::<Result<Vec<_>, _>>()?;
-    let (signed, abs) = pair_summaries(data, xyz, &stats);
+    let (signed, abs) = pair_summaries(data, xyz, &stats, threads);
     let reference: Vec<ReferenceError> = data
         .references()
         .iter()
@@ -413,10 +444,16 @@ impl Evaluation {
 }
 
 /// Eq. 19 summarised over all pairs `i < j`, in constant memory. Rows `i`
-/// are split into chunks of fixed size that run on up to two threads; the
+/// are split into chunks of fixed size that run on up to `threads` threads
+/// (one below three chunks: too little work to pay for a thread); the
 /// chunks' summaries are merged in row order, so the result does not depend
 /// on the threads.
-fn pair_summaries(data: &DataSet, xyz: &[[f64; 3]], stats: &[PointStats]) -> (Running, Running) {
+fn pair_summaries(
+    data: &DataSet,
+    xyz: &[[f64; 3]],
+    stats: &[PointStats],
+    threads: usize,
+) -> (Running, Running) {
     const ROWS_PER_CHUNK: usize = 64;
     let points = data.points();
     let rows = |range: std::ops::Range<usize>| {
@@ -440,11 +477,7 @@ fn pair_summaries(data: &DataSet, xyz: &[[f64; 3]], stats: &[PointStats]) -> (Ru
         .step_by(ROWS_PER_CHUNK)
         .map(|s| s..(s + ROWS_PER_CHUNK).min(points.len()))
         .collect();
-    let threads = if points.len() > 2 * ROWS_PER_CHUNK {
-        2
-    } else {
-        1
-    };
+    let threads = if chunks.len() > 2 { threads } else { 1 };
     let parts = crate::residuals::parallel_map(&chunks, threads, |r| rows(r.clone()));
     parts.into_iter().fold(
         (Running::default(), Running::default()),
@@ -639,6 +672,56 @@ pub(crate) mod tests {
         );
         assert!((streamed.mean - direct.mean).abs() < 1e-9 * direct.mean.abs());
         assert!((streamed.std - direct.std).abs() < 1e-9 * direct.std);
+    }
+
+    /// 1000 points (16 chunks of pair rows, so 2 and 4 threads really split
+    /// the work) with reference lengths: the same JSON bytes on 1, 2 and 4
+    /// threads.
+    #[test]
+    fn evaluation_is_the_same_bytes_on_any_thread_count() {
+        let n = 1000;
+        let labels: Vec<String> = (0..3 * n).map(|r| format!("s{}", r % n)).collect();
+        let points: Vec<[f64; 3]> = (0..3 * n)
+            .map(|r| {
+                let (p, k) = ((r % n) as f64, (r / n) as f64);
+                [
+                    (p * 0.37).sin() * 400.0 + (k * 1.3 + p).sin() * 0.05,
+                    (p * 0.11).cos() * 300.0 + (k * 0.7 - p).cos() * 0.05,
+                    p + k * 0.01,
+                ]
+            })
+            .collect();
+        let refs: Vec<(String, String, f64)> = (0..20)
+            .map(|i| (format!("s{i}"), format!("s{}", 999 - i), 500.0 + i as f64))
+            .collect();
+        let lengths: Vec<ReferenceLength> = refs
+            .iter()
+            .enumerate()
+            .map(|(i, (a, b, distance))| ReferenceLength {
+                a: a.clone(),
+                b: b.clone(),
+                distance: *distance,
+                uncertainty: None,
+                line: i + 2,
+            })
+            .collect();
+        let data = DataSet::from_labels(&labels, "m.csv")
+            .unwrap()
+            .with_lengths(&lengths, "l.csv")
+            .unwrap();
+        assert_eq!(data.points().len(), n);
+        let xyz = data.to_touch_order(&points);
+        let json = |threads| {
+            serde_json::to_string(&evaluate_threads(&data, &xyz, threads).unwrap()).unwrap()
+        };
+        let one = json(1);
+        assert!(
+            one.contains("\"pair_length_summary\":{\"count\":499500"),
+            "{}",
+            &one[..200]
+        );
+        assert_eq!(json(2), one);
+        assert_eq!(json(4), one);
     }
 
     #[test]

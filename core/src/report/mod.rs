@@ -37,6 +37,7 @@
 mod data;
 mod figures;
 mod html;
+mod session;
 mod svg;
 mod tables;
 
@@ -51,6 +52,7 @@ use crate::metrics::MetricsError;
 use crate::params::DhParams;
 
 pub use html::escape;
+pub use session::session_report;
 
 /// The page.
 pub const HTML_FILE: &str = "report.html";

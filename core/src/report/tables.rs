@@ -143,14 +143,14 @@ pub(crate) fn verdict(cal: &Calibration, evaluated: &[Evaluated], arms: &Arms) -
         p += &format!(
             "<span class=\"good\">The solver converged</span> ({}: {}).",
             escape(s.method.name()),
-            escape(s.termination.describe())
+            escape(&s.stop.describe())
         );
     } else {
         p += &format!(
             "<span class=\"bad\">The solver did not converge</span> ({}: {}): treat the \
              result with suspicion.",
             escape(s.method.name()),
-            escape(s.termination.describe())
+            escape(&s.stop.describe())
         );
     }
     p += &format!(
@@ -426,8 +426,9 @@ pub(crate) fn parameters(
         let rows: Vec<(String, Vec<Cell>)> = cal
             .parameters
             .iter()
+            .map(|p| p.user())
             .enumerate()
-            .filter(|(_, p)| (p.unit == "mm") == (unit == "mm"))
+            .filter(|(_, p)| p.unit == unit)
             .map(|(i, p)| {
                 let path = |k: &str| format!("parameters/{i}/{k}");
                 let mut cells = vec![
@@ -595,7 +596,7 @@ pub(crate) fn solver(cal: &Calibration, json: Option<&str>) -> String {
     let row = |name: &str, c: Cell| (String::new(), vec![Cell::text(name), c]);
     let mut rows = vec![
         row("method", Cell::text(s.method.name())),
-        row("stopped", Cell::text(s.termination.describe())),
+        row("stopped", Cell::text(&s.stop.describe())),
         row(
             "converged",
             Cell::text(if s.successful { "yes" } else { "no" }),

@@ -52,9 +52,7 @@ mod truth;
 #[cfg(test)]
 mod tests;
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-
+pub use crate::params::wrap;
 pub use error::SimError;
 pub use files::{
     CAMPAIGN_FILE, CAMPAIGN_FORMAT, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, TRUE_ARM_FILE,
@@ -73,46 +71,14 @@ pub use sockets::{
     random_configuration, round_nm, shoulder,
 };
 pub use touches::{Touch, TouchPlan, find_touches, separation, within_limits};
-pub use truth::{PAPER_PROBE_ERROR, PAPER_TABLE_2, true_arm, wrap};
+pub use truth::{PAPER_PROBE_ERROR, PAPER_TABLE_2, true_arm};
 
 use crate::dataset::DataSet;
 use crate::error::InputError;
 use crate::io::{AngleUnit, Arm, Poses, ReferenceLength};
 use crate::kernel::ArmKernel;
 
-/// The random streams of a campaign: each purpose draws from
-/// `ChaCha8Rng::seed_from_u64(seed)` with its own stream number.
-pub mod streams {
-    /// The true arm's random errors.
-    pub const TRUE_ARM: u64 = 1;
-    /// Socket placement.
-    pub const SOCKETS: u64 = 2;
-    /// Probe seating noise.
-    pub const SEATING: u64 = 3;
-    /// Inverse-kinematics starts.
-    pub const IK_STARTS: u64 = 4;
-    /// Encoder noise.
-    pub const ENCODERS: u64 = 5;
-    /// Reference-length pairs and their noise.
-    pub const LENGTHS: u64 = 6;
-}
-
-/// The generator of one purpose's draws (see [`streams`]).
-///
-/// ```
-/// use aacmm_core::simulate::{rng, streams};
-/// use rand::RngExt;
-/// let a: f64 = rng(3, streams::SOCKETS).random();
-/// let b: f64 = rng(3, streams::SOCKETS).random();
-/// let c: f64 = rng(3, streams::ENCODERS).random();
-/// assert_eq!(a, b);
-/// assert_ne!(a, c);
-/// ```
-pub fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
-    let mut r = ChaCha8Rng::seed_from_u64(seed);
-    r.set_stream(stream);
-    r
-}
+pub use crate::random::{rng, streams};
 
 /// Counts of the touch search, for summaries.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

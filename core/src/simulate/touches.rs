@@ -5,10 +5,11 @@ use rand_chacha::ChaCha8Rng;
 
 use super::ik::solve_point;
 use super::sockets::random_configuration;
-use super::truth::{normal, wrap};
+use super::truth::normal;
 use super::{SimError, SimStats};
 use crate::io::Arm;
 use crate::kernel::ArmKernel;
+use crate::params::wrap;
 
 /// One simulated touch.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,6 +8,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use super::{ErrorModel, SimError};
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, parse_arm};
+use crate::params::wrap;
 
 /// The paper's identified errors (method.md §7, Table 2), per joint:
 /// `(Δθ deg, Δβ deg, Δa mm, Δd mm)`; joint 6 has no `Δθ`, `Δβ`.
@@ -117,20 +118,4 @@ fn canonical(arm: Arm) -> Arm {
 /// A standard normal draw.
 pub(crate) fn normal(rng: &mut ChaCha8Rng) -> f64 {
     StandardNormal.sample(rng)
-}
-
-/// `x` wrapped to `[-π, π)`.
-///
-/// ```
-/// use aacmm_core::simulate::wrap;
-/// assert!((wrap(3.0 * std::f64::consts::PI) + std::f64::consts::PI).abs() < 1e-12);
-/// assert_eq!(wrap(0.5), 0.5);
-/// ```
-pub fn wrap(x: f64) -> f64 {
-    use std::f64::consts::TAU;
-    if (-PI..PI).contains(&x) {
-        x
-    } else {
-        (x + PI).rem_euclid(TAU) - PI
-    }
 }

@@ -151,14 +151,15 @@ fn singular_panel(area: &Area, id: &Identification) -> DrawResult {
 /// The correlation matrix as a heat map, with a colour bar.
 fn heat_map(area: &Area, cal: &Calibration) -> DrawResult {
     let m = &cal.correlation_matrix;
-    let p = m.parameters.len();
+    let names: Vec<String> = m.parameters.iter().map(|id| id.to_string()).collect();
+    let p = names.len();
     let title = "correlation ρ of the free parameters";
     if p == 0 {
         return message(area, title, &["No free parameters."]);
     }
     let (map, bar) = area.split_horizontally(area.dim_in_pixel().0 - 70);
-    let x = Axis::categories(&m.parameters, 40, "");
-    let reversed: Vec<String> = m.parameters.iter().rev().cloned().collect();
+    let x = Axis::categories(&names, 40, "");
+    let reversed: Vec<String> = names.iter().rev().cloned().collect();
     let y = Axis::categories(&reversed, 40, "");
     let mut chart = ChartBuilder::on(&map)
         .margin_top(6)
@@ -167,7 +168,7 @@ fn heat_map(area: &Area, cal: &Calibration) -> DrawResult {
         .x_label_area_size(58)
         .y_label_area_size(58)
         .build_cartesian_2d(x.coord(), y.coord())?;
-    let fx = |v: &f64| label_of(&m.parameters, *v);
+    let fx = |v: &f64| label_of(&names, *v);
     let fy = |v: &f64| label_of(&reversed, *v);
     chart
         .configure_mesh()

@@ -7,8 +7,8 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::{frame, header_height};
-use crate::calibrate::{Calibration, Estimate};
-use crate::identify::to_user;
+use crate::calibrate::{Calibration, EstimateRecord};
+
 use crate::params::{DhParams, ParamId, ParamKind};
 use crate::report::svg::{
     Area, Axis, BLUE, Class, DrawResult, GREEN, GREY, Key, Marker, Shape, WIDTH, chart,
@@ -35,12 +35,12 @@ pub(crate) fn true_errors(
         .map(|(id, p)| {
             let t = truth.filter(|t| t.joint_count() == joints).map(|t| {
                 if id.kind == ParamKind::Theta {
-                    crate::simulate::wrap(t.get(id) - (p.nominal.to_radians())).to_degrees()
+                    crate::params::wrap(t.get(id) - p.nominal).to_degrees()
                 } else {
-                    to_user(id, t.get(id)) - p.nominal
+                    id.to_user(t.get(id) - p.nominal)
                 }
             });
-            (p.name.clone(), t)
+            (id.to_string(), t)
         })
         .collect()
 }
@@ -76,10 +76,10 @@ pub(crate) fn figure(cal: &Calibration, truth: Option<&DhParams>) -> Result<Figu
         ));
     }
     let lengths: Vec<usize> = (0..cal.parameters.len())
-        .filter(|&i| cal.parameters[i].unit == "mm")
+        .filter(|&i| cal.parameters[i].id.kind.is_length())
         .collect();
     let angles: Vec<usize> = (0..cal.parameters.len())
-        .filter(|&i| cal.parameters[i].unit != "mm")
+        .filter(|&i| !cal.parameters[i].id.kind.is_length())
         .collect();
     let height = header_height(&entries) + 2 * PANEL;
     let svg = render(PARAMETERS_SVG, TITLE, (WIDTH, height), |root| {
@@ -118,9 +118,9 @@ fn panel(
     title: &str,
     y_desc: &str,
 ) -> DrawResult {
-    let params: Vec<&Estimate> = which.iter().map(|&i| &cal.parameters[i]).collect();
+    let params: Vec<EstimateRecord> = which.iter().map(|&i| cal.parameters[i].user()).collect();
     let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
-    let bar = |p: &Estimate| p.sigma.filter(|s| s.is_finite()).map(|s| 2.0 * s);
+    let bar = |p: &EstimateRecord| p.sigma.filter(|s| s.is_finite()).map(|s| 2.0 * s);
     let mut lo = 0.0f64;
     let mut hi = 0.0f64;
     for (k, p) in params.iter().enumerate() {
@@ -143,12 +143,12 @@ fn panel(
     group(area, Class::Guide, "zero", 1, || {
         dashed_across(&mut chart, &x, 0.0, GREY, 1)
     })?;
-    let free: Vec<(usize, &&Estimate)> = params
+    let free: Vec<(usize, &EstimateRecord)> = params
         .iter()
         .enumerate()
         .filter(|(_, p)| p.fixed.is_none())
         .collect();
-    let fixed: Vec<(usize, &&Estimate)> = params
+    let fixed: Vec<(usize, &EstimateRecord)> = params
         .iter()
         .enumerate()
         .filter(|(_, p)| p.fixed.is_some())

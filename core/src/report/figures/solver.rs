@@ -100,10 +100,7 @@ fn lm_panel(area: &Area, s: &SolverSummary, dof: f64) -> DrawResult {
         return message(
             area,
             &title,
-            &[
-                "No LM iteration ran",
-                &format!("({}).", s.termination.describe()),
-            ],
+            &["No LM iteration ran", &format!("({}).", s.stop.describe())],
         );
     }
     let mut accepted = vec![(0usize, s.initial_cost)];

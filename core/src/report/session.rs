@@ -1,29 +1,35 @@
-//! `calibrate --out DIR`: the report (report.html and one SVG per figure)
-//! beside calibration.json, from the very numbers written there.
+//! The report of a calibration session: drawn from the very numbers of its
+//! [`CalibrationReport`] (`calibration.json`), with every table cell shared
+//! with that file marked by its JSON Pointer.
 
-use aacmm_core::dataset::DataSet;
-use aacmm_core::io::Arm;
-use aacmm_core::report::{
-    Arms, CalibrationInput, Measured, ValidationRow, calibration_report, positions,
+use super::{
+    Arms, CalibrationInput, Measured, Report, ReportError, ValidationRow, calibration_report,
+    positions,
 };
-use anyhow::{Context, Result};
+use crate::session::{CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE};
 
-use super::{Args, Report};
-
-/// Writes the report of `report` into `--out`; returns the line to print.
-pub(super) fn write(
-    args: &Args,
-    arm: &Arm,
-    data: &DataSet,
-    held_out: Option<&DataSet>,
-    report: &Report,
-) -> Result<String> {
-    let cal = report.calibration;
-    let fitted_before = positions(&arm.params, data)?;
+/// The report (page and figures) of `report`, the session run on `problem`.
+///
+/// # Errors
+///
+/// As [`calibration_report`].
+pub fn session_report(
+    report: &CalibrationReport,
+    problem: &Problem,
+) -> Result<Report, ReportError> {
+    let cal = &report.calibration;
+    let start = &problem.arm().params;
+    let data = problem.data();
+    let fitted_before = positions(start, data)?;
     let fitted_after = positions(&cal.params, data)?;
-    let held = held_out
+    let held = problem
+        .held_out()
         .map(|h| {
-            Ok::<_, anyhow::Error>((h, positions(&arm.params, h)?, positions(&cal.params, h)?))
+            Ok::<_, ReportError>((
+                &h.data,
+                positions(start, &h.data)?,
+                positions(&cal.params, &h.data)?,
+            ))
         })
         .transpose()?;
     let mut measured = vec![Measured {
@@ -65,9 +71,9 @@ pub(super) fn write(
             });
         }
     }
-    let input = CalibrationInput {
+    calibration_report(&CalibrationInput {
         title: format!("Calibration of arm `{}`", report.arm),
-        inputs: inputs(args, report),
+        inputs: inputs(report),
         calibration: cal,
         calibration_json: Some("/calibration".to_string()),
         measured,
@@ -76,15 +82,12 @@ pub(super) fn write(
             after: "calibrated".to_string(),
         },
         validation,
-        truth: None,
-    };
-    let page = calibration_report(&input).context("--out")?;
-    let path = crate::commands::report::write("--out", &args.out, &page)?;
-    Ok(crate::commands::report::wrote(&path, &page))
+        truth: problem.truth(),
+    })
 }
 
 /// What went in, for the page's heading.
-fn inputs(args: &Args, r: &Report) -> Vec<(String, String)> {
+fn inputs(r: &CalibrationReport) -> Vec<(String, String)> {
     let n = r.noise;
     let noise = match (n.encoder_rad, n.probe_mm) {
         (None, None) => "not stated: the touch σ is estimated from the fit".to_string(),
@@ -118,7 +121,7 @@ fn inputs(args: &Args, r: &Report) -> Vec<(String, String)> {
     ];
     if let Some(h) = &r.validation.held_out {
         lines.push((
-            "held out (--validate)".to_string(),
+            "held out".to_string(),
             match &h.lengths_file {
                 Some(l) => format!("{} with lengths {l}", h.data_file),
                 None => h.data_file.clone(),
@@ -129,10 +132,10 @@ fn inputs(args: &Args, r: &Report) -> Vec<(String, String)> {
     lines.push((
         "method, fixed set, seed".to_string(),
         format!(
-            "{}; --fix {}; seed {}",
+            "{}; fixed: {}; seed {}",
             r.calibration.solver.method.name(),
             r.fix,
-            args.seed
+            r.seed
         ),
     ));
     if let Some(cv) = &r.validation.cross_validation {
@@ -144,12 +147,8 @@ fn inputs(args: &Args, r: &Report) -> Vec<(String, String)> {
     lines.push((
         "written beside this page".to_string(),
         format!(
-            "{}, {}, {} (every number of the tables below that is also in {} is marked \
-             with its place there)",
-            super::CALIBRATED_FILE,
-            super::REPORT_FILE,
-            super::TIMING_FILE,
-            super::REPORT_FILE
+            "{CALIBRATED_FILE}, {REPORT_FILE}, {TIMING_FILE} (every number of the tables below \
+             that is also in {REPORT_FILE} is marked with its place there)"
         ),
     ));
     lines

@@ -1,0 +1,284 @@
+//! What follows every solver, once: the sign convention, the weights at the
+//! solution (and a refit when they moved), the touch σ, the covariance,
+//! correlations and degrees of freedom.
+
+use nalgebra::DMatrix;
+
+use super::lm::{LmIteration, levenberg_marquardt};
+use super::{
+    CalibrateOptions, Calibration, CalibrationError, CorrelationMatrix, Dof, Estimate, Method,
+    Outcome, Phase, SolverSummary,
+};
+use crate::dataset::DataSet;
+use crate::identify::{Identification, strong_correlations};
+use crate::kernel::ArmKernel;
+use crate::params::{DhParams, ParamId, ParamKind, wrap};
+use crate::residuals::{Weights, normal_equations};
+
+/// Largest relative change of the weights at the solution, against those of
+/// the fit, that needs no refit: the estimate moves by about this fraction
+/// of its σ.
+pub const REWEIGH_TOLERANCE: f64 = 0.05;
+
+/// Residual rows and unknowns of a fit.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Counts {
+    touch_rows: usize,
+    length_rows: usize,
+    centre_coordinates: usize,
+    free: usize,
+}
+
+impl Counts {
+    pub(crate) fn new(data: &DataSet, free: usize) -> Counts {
+        Counts {
+            touch_rows: 3 * data.len(),
+            length_rows: data.references().len(),
+            centre_coordinates: 3 * data.points().len(),
+            free,
+        }
+    }
+
+    pub(crate) fn residuals(self) -> usize {
+        self.touch_rows + self.length_rows
+    }
+
+    pub(crate) fn unknowns(self) -> usize {
+        self.free + self.centre_coordinates
+    }
+
+    /// `m − p` (at least 1 once [`super::calibrate_with`] checked it).
+    pub(crate) fn dof(self) -> usize {
+        self.residuals().saturating_sub(self.unknowns()).max(1)
+    }
+
+    /// The touches' own degrees of freedom, for a σ estimated from them.
+    fn touch_dof(self) -> usize {
+        self.touch_rows
+            .saturating_sub(self.centre_coordinates + self.free)
+            .max(1)
+    }
+}
+
+/// What [`assess`] needs besides the solver's outcome.
+pub(crate) struct Setup<'a> {
+    pub start: &'a DhParams,
+    pub data: &'a DataSet,
+    pub options: &'a CalibrateOptions,
+    pub method: Method,
+    pub threads: usize,
+    pub free: Vec<usize>,
+    pub identification: Option<Identification>,
+    pub reasons: Vec<(ParamId, String)>,
+    /// The weights the solver fitted under (at the start arm).
+    pub weights: Weights,
+    pub counts: Counts,
+}
+
+/// Reweighs at the solution, refits when the weights moved, and computes
+/// the covariance, correlations and dof: the same for every solver.
+pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, CalibrationError> {
+    let Setup {
+        start,
+        data,
+        options,
+        method,
+        threads,
+        free,
+        identification,
+        reasons,
+        mut weights,
+        counts,
+    } = setup;
+    let Outcome {
+        mut params,
+        mut stop,
+        mut iterations,
+        mut history,
+        mut phases,
+        anneal,
+        mut global,
+        mut normal,
+    } = outcome;
+    let lm = options.lm.threads(threads);
+    let stated = options.noise.stated();
+    let normal_at = |params: &DhParams, weights: &Weights| -> Result<_, CalibrationError> {
+        Ok(normal_equations(
+            &ArmKernel::new(params)?,
+            data,
+            weights,
+            &free,
+            threads,
+        )?)
+    };
+    let mut extra_jacobians = 0;
+    let mut extra_costs = 0;
+    let sign_changes = super::global::normalize_signs(&mut params, start, &free);
+    if !sign_changes.is_empty() {
+        // Same positions, other signs: the normal equations change sign
+        // pattern, so recompute them for the covariance.
+        normal = normal_at(&params, &weights)?;
+        extra_jacobians += 1;
+    }
+    if let Some(g) = &mut global {
+        g.sign_changes = sign_changes;
+    }
+    let mut touch_sigma = 1.0;
+    if !stated {
+        // Unit weights: the touch residuals are mm. Estimate σ so that the
+        // lengths weigh right against the touches.
+        touch_sigma = (normal.touch_cost / counts.touch_dof() as f64)
+            .sqrt()
+            .max(1e-9);
+    }
+    if stated || counts.length_rows > 0 {
+        // Weigh at the solution, not at the start: encoder noise moves the
+        // probe along directions that depend on the arm, and the lengths'
+        // weights on the centroids' directions — both far off when the
+        // zeros were.
+        let at_solution =
+            Weights::new(&ArmKernel::new(&params)?, data, &options.noise, touch_sigma)?;
+        let timer = std::time::Instant::now();
+        // Weights that moved by under REWEIGH_TOLERANCE would move the
+        // estimate by a like fraction of its σ and its σ not at all (shipped
+        // campaign, lm: weights 3 % off moved no parameter by more than
+        // 3.4 % of its σ, and σ by 1e-5 of itself): the fit's weights stand.
+        let settled = stated && at_solution.relative_change(&weights) <= REWEIGH_TOLERANCE;
+        if settled {
+            // The fit's weights, normal equations and history stand.
+        } else if stop.lm().is_none() {
+            // No LM ran (annealing alone): none runs now either.
+            weights = at_solution;
+            normal = normal_at(&params, &weights)?;
+            extra_jacobians += 1;
+        } else {
+            weights = at_solution;
+            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm)?;
+            let mut phase = Phase::new("lm, weighed at the solution");
+            phase.add_lm(&refit, timer.elapsed().as_secs_f64());
+            phases.push(phase);
+            // With stated noise the weights keep their units: one history,
+            // the descent then the polish. Otherwise the units changed.
+            let n = if stated { history.len() } else { 0 };
+            if !stated {
+                history.clear();
+                iterations = 0;
+            }
+            history.extend(refit.history.iter().map(|h| LmIteration {
+                iteration: h.iteration + n,
+                ..*h
+            }));
+            iterations += refit.iterations;
+            stop = stop.with_lm(refit.termination);
+            params = refit.params;
+            normal = refit.normal;
+        }
+    } else {
+        let w2 = 1.0 / (touch_sigma * touch_sigma);
+        normal.jtj.iter_mut().for_each(|v| *v *= w2);
+        normal.touch_cost *= w2;
+        for h in &mut history {
+            h.cost *= w2;
+        }
+    }
+    if stated {
+        touch_sigma = weights.typical_touch_sigma();
+    }
+    // The start arm's cost under the final weights: "cost A -> B" compares
+    // like with like whatever the method did in between.
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    let mut initial_cost =
+        crate::residuals::cost(&ArmKernel::new(start)?, data, &weights, &mut xyz)?;
+    extra_costs += 1;
+    if !stated && counts.length_rows == 0 {
+        initial_cost /= touch_sigma * touch_sigma;
+    }
+    let degrees_of_freedom = counts.dof();
+    let sigma0 = (normal.cost() / degrees_of_freedom as f64).sqrt();
+    let p = free.len();
+    let n = DMatrix::from_row_slice(p, p, &normal.jtj);
+    let cov = match n.cholesky() {
+        Some(ch) => ch.inverse() * (sigma0 * sigma0),
+        None => DMatrix::from_element(p, p, f64::INFINITY),
+    };
+    let ids: Vec<ParamId> = ParamId::all(start.joint_count()).collect();
+    for j in &mut params.joints {
+        j.theta = wrap(j.theta);
+    }
+    let parameters = ids
+        .iter()
+        .enumerate()
+        .map(|(c, &id)| {
+            let (nominal, calibrated) = (start.get(id), params.get(id));
+            let correction = if id.kind == ParamKind::Theta {
+                wrap(calibrated - nominal)
+            } else {
+                calibrated - nominal
+            };
+            let sigma = free
+                .iter()
+                .position(|&f| f == c)
+                .map(|a| cov[(a, a)].max(0.0).sqrt());
+            Estimate {
+                id,
+                nominal,
+                calibrated,
+                correction,
+                sigma: sigma.filter(|s| s.is_finite()),
+                fixed: reasons
+                    .iter()
+                    .find(|(r, _)| *r == id)
+                    .map(|(_, why)| why.clone()),
+            }
+        })
+        .collect();
+    let rho = (0..p)
+        .map(|a| {
+            (0..p)
+                .map(|b| {
+                    let r = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+                    if r.is_finite() { r } else { 0.0 }
+                })
+                .collect()
+        })
+        .collect();
+    let names: Vec<String> = ids.iter().map(ParamId::to_string).collect();
+    let cost_evaluations = extra_costs + phases.iter().map(|p| p.cost_evaluations).sum::<usize>();
+    let jacobian_evaluations =
+        extra_jacobians + phases.iter().map(|p| p.jacobian_evaluations).sum::<usize>();
+    Ok(Calibration {
+        parameters,
+        correlations: strong_correlations(&cov, &free, &names),
+        correlation_matrix: CorrelationMatrix {
+            parameters: free.iter().map(|&c| ids[c]).collect(),
+            rho,
+        },
+        dof: Dof {
+            touch_rows: counts.touch_rows,
+            length_rows: counts.length_rows,
+            free_parameters: p,
+            centre_coordinates: counts.centre_coordinates,
+            degrees_of_freedom,
+            sigma0,
+            touch_sigma_mm: touch_sigma,
+            touch_sigma_estimated: !stated,
+        },
+        solver: SolverSummary {
+            method,
+            stop,
+            successful: stop.is_solution_usable(),
+            iterations,
+            cost_evaluations,
+            jacobian_evaluations,
+            initial_cost,
+            final_cost: normal.cost(),
+            history,
+            options: lm,
+            phases,
+            anneal,
+            global,
+        },
+        identification,
+        params,
+    })
+}

@@ -1,0 +1,214 @@
+//! The settings of a calibration, and the one place that checks them.
+//!
+//! Every setting is checked before any work starts ([`CalibrateOptions::check`],
+//! called by [`crate::session::Problem::new`]); a setting out of range is an
+//! [`OptionError`] naming the setting's path in [`CalibrateOptions`]
+//! (`noise.probe_mm`, `anneal.cooling`, `fix`). Front ends map those paths to
+//! their own spelling: the command line to its flags, the C API to its struct
+//! fields.
+
+use serde::{Deserialize, Serialize};
+
+use super::{AnnealOptions, GlobalOptions, LmOptions, Method, SwitchRule};
+use crate::params::{ParamId, param_count};
+use crate::residuals::Noise;
+
+/// A setting out of range: which one (its path in [`CalibrateOptions`],
+/// e.g. `noise.probe_mm`, `anneal.cooling`, `global.max_starts`, `fix`,
+/// `threads`, `cross_validate`) and why.
+///
+/// ```
+/// use aacmm_core::calibrate::{CalibrateOptions, OptionError};
+/// let mut o = CalibrateOptions::default();
+/// o.anneal.cooling = 1.5;
+/// let e: OptionError = o.check(6).unwrap_err();
+/// assert_eq!(e.field, "anneal.cooling");
+/// assert_eq!(e.to_string(), "anneal.cooling = 1.5: must lie strictly between 0 and 1");
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{field} = {value}: {reason}")]
+#[non_exhaustive]
+pub struct OptionError {
+    /// The setting's path in [`CalibrateOptions`] (or `cross_validate`).
+    pub field: &'static str,
+    /// The value refused, as text (in the setting's own unit).
+    pub value: String,
+    /// Why it is refused.
+    pub reason: String,
+}
+
+impl OptionError {
+    /// A refusal of `value` for `field`, because of `reason`.
+    pub fn new(
+        field: &'static str,
+        value: impl std::fmt::Display,
+        reason: impl Into<String>,
+    ) -> OptionError {
+        OptionError {
+            field,
+            value: value.to_string(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// `Ok` when `v` is finite and `> 0` (or `≥ 0` with `zero_ok`).
+pub(crate) fn check_nonnegative(
+    field: &'static str,
+    v: f64,
+    zero_ok: bool,
+) -> Result<(), OptionError> {
+    let ok = v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
+    if ok {
+        Ok(())
+    } else {
+        let bound = if zero_ok { "≥ 0" } else { "> 0" };
+        Err(OptionError::new(
+            field,
+            v,
+            format!("must be a finite number {bound}"),
+        ))
+    }
+}
+
+/// Which parameters stay at their start values.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FixSpec {
+    /// [`identify`](crate::identify::identify)'s recommended set.
+    Auto,
+    /// These parameters (by their position in the fixed order).
+    Columns(Vec<usize>),
+}
+
+impl FixSpec {
+    /// Parses `auto` or comma-separated names (`theta1,d1,Bx`; `beta…` is
+    /// accepted for `alpha…`) for an `n`-joint arm.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::FixSpec;
+    /// assert_eq!(FixSpec::parse("auto", 6).unwrap(), FixSpec::Auto);
+    /// assert_eq!(FixSpec::parse("theta1, d1,beta6", 6).unwrap(), FixSpec::Columns(vec![18, 6, 17]));
+    /// let e = FixSpec::parse("theta9", 6).unwrap_err();
+    /// assert_eq!(e.field, "fix");
+    /// assert!(e.reason.contains("unknown parameter `theta9`"));
+    /// let e = FixSpec::parse("auto,theta1", 6).unwrap_err();
+    /// assert!(e.reason.contains("`auto` stands alone"), "{e}");
+    /// ```
+    pub fn parse(s: &str, joints: usize) -> Result<FixSpec, OptionError> {
+        if s.trim() == "auto" {
+            return Ok(FixSpec::Auto);
+        }
+        let names: Vec<String> = ParamId::all(joints).map(|p| p.to_string()).collect();
+        s.split(',')
+            .map(str::trim)
+            .filter(|t| !t.is_empty())
+            .map(|t| {
+                if t == "auto" {
+                    return Err(OptionError::new(
+                        "fix",
+                        s,
+                        "`auto` stands alone (the recommended set); otherwise list the \
+                         parameters to fix",
+                    ));
+                }
+                ParamId::parse(t, joints)
+                    .map(|id| id.column(joints))
+                    .ok_or_else(|| {
+                        OptionError::new(
+                            "fix",
+                            s,
+                            format!(
+                                "unknown parameter `{t}`; parameters are {} … {}",
+                                names[0],
+                                names[names.len() - 1]
+                            ),
+                        )
+                    })
+            })
+            .collect::<Result<Vec<usize>, _>>()
+            .map(FixSpec::Columns)
+    }
+}
+
+/// σ of a reference length whose file states none, mm.
+pub const DEFAULT_LENGTH_SIGMA_MM: f64 = crate::residuals::DEFAULT_LENGTH_SIGMA_MM;
+
+/// Settings of a calibration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CalibrateOptions {
+    /// The fixed set.
+    pub fix: FixSpec,
+    /// What is known of the noise.
+    pub noise: Noise,
+    /// The solver.
+    pub method: Method,
+    /// LM's tolerances (every method but `sa` ends with LM).
+    pub lm: LmOptions,
+    /// The annealer's settings (`sa`, `hybrid`).
+    pub anneal: AnnealOptions,
+    /// The hybrid's switching rule.
+    pub switch: SwitchRule,
+    /// The global method's settings.
+    pub global: GlobalOptions,
+    /// Seed of every random draw (annealing moves, starts, folds).
+    pub seed: u64,
+}
+
+impl Default for CalibrateOptions {
+    fn default() -> Self {
+        CalibrateOptions {
+            fix: FixSpec::Auto,
+            noise: Noise::default(),
+            method: Method::default(),
+            lm: LmOptions::default(),
+            anneal: AnnealOptions::default(),
+            switch: SwitchRule::default(),
+            global: GlobalOptions::default(),
+            seed: 0,
+        }
+    }
+}
+
+impl CalibrateOptions {
+    /// Checks every setting for an arm of `joints` joints: the first one
+    /// out of range is refused by its path.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::{CalibrateOptions, FixSpec};
+    /// assert!(CalibrateOptions::default().check(6).is_ok());
+    /// let o = CalibrateOptions { fix: FixSpec::Columns(vec![3, 27]), ..Default::default() };
+    /// assert_eq!(o.check(6).unwrap_err().field, "fix");
+    /// ```
+    pub fn check(&self, joints: usize) -> Result<(), OptionError> {
+        self.noise.check()?;
+        if let FixSpec::Columns(columns) = &self.fix {
+            let count = param_count(joints);
+            if let Some(&c) = columns.iter().find(|&&c| c >= count) {
+                return Err(OptionError::new(
+                    "fix",
+                    c,
+                    format!(
+                        "column {c}: a {joints}-joint arm has parameters 0 to {}",
+                        count - 1
+                    ),
+                ));
+            }
+            let mut sorted = columns.clone();
+            sorted.sort_unstable();
+            if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+                let name =
+                    ParamId::from_column(joints, w[0]).map_or(String::new(), |p| format!(" ({p})"));
+                return Err(OptionError::new(
+                    "fix",
+                    w[0],
+                    format!("column {}{name} is listed twice", w[0]),
+                ));
+            }
+        }
+        self.lm.check()?;
+        self.anneal.check()?;
+        self.switch.check()?;
+        self.global.check()
+    }
+}

@@ -1,0 +1,375 @@
+//! The solvers behind one trait: each takes the same [`Task`] (start arm,
+//! data, weights, free columns, settings) and a [`Context`] (threads,
+//! seed, progress observer), and returns an [`Outcome`] with its own
+//! [`Stop`] reason. What follows a solve — reweighing at the solution,
+//! covariance, dof — is [`super::assess`], the same for every solver.
+
+use serde::{Deserialize, Serialize};
+
+use super::anneal::{self, AnnealStop, AnnealTrace};
+use super::global::{self, GlobalStop, GlobalTrace};
+use super::lm::{self, LmIteration, LmResult, Termination, levenberg_marquardt};
+use super::{CalibrateOptions, CalibrationError, Method, Phase};
+use crate::dataset::DataSet;
+use crate::kernel::ArmKernel;
+use crate::params::DhParams;
+use crate::random::{rng, streams};
+use crate::residuals::{Normal, Weights, normal_equations};
+
+/// Told `(phase, fraction done)` as a solver runs.
+pub type Observer<'a> = &'a mut dyn FnMut(&str, f64);
+
+/// How a solver runs: worker threads, the seed of its random stream
+/// ([`crate::random`]), and an observer told the phase running and the
+/// fraction of it done (for a progress bar). Results never depend on the
+/// threads.
+pub struct Context<'a> {
+    /// Worker threads (≥ 1).
+    pub threads: usize,
+    /// Seed of the solver's random stream.
+    pub seed: u64,
+    /// Told `(phase, fraction done)`, if any.
+    pub observer: Option<Observer<'a>>,
+}
+
+impl<'a> Context<'a> {
+    /// A context with no observer.
+    ///
+    /// ```
+    /// let ctx = aacmm_core::calibrate::Context::new(2, 7);
+    /// assert_eq!((ctx.threads, ctx.seed), (2, 7));
+    /// ```
+    pub fn new(threads: usize, seed: u64) -> Context<'a> {
+        Context {
+            threads: threads.max(1),
+            seed,
+            observer: None,
+        }
+    }
+
+    /// This context, telling `observer` the progress.
+    pub fn observed(mut self, observer: Observer<'a>) -> Context<'a> {
+        self.observer = Some(observer);
+        self
+    }
+
+    /// Tells the observer that `fraction` of `phase` is done.
+    pub fn observe(&mut self, phase: &str, fraction: f64) {
+        if let Some(o) = self.observer.as_mut() {
+            o(phase, fraction);
+        }
+    }
+}
+
+/// What every solver works on. Made by [`super::calibrate_with`] after the
+/// settings and the identifiability were checked.
+pub struct Task<'a> {
+    /// The start arm.
+    pub start: &'a DhParams,
+    /// The touches and lengths.
+    pub data: &'a DataSet,
+    /// The free columns (fixed order).
+    pub free: &'a [usize],
+    /// The settings (noise, tolerances, the solvers' own settings).
+    pub options: &'a CalibrateOptions,
+    /// Degrees of freedom when the noise is stated (enables noise-floor
+    /// tests), else `None`.
+    pub stated_dof: Option<usize>,
+    pub(crate) weights: &'a Weights,
+    pub(crate) start_normal: Normal,
+}
+
+/// Why a solver stopped: its own reason, and the final LM's where one ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Stop {
+    /// Levenberg–Marquardt from the start arm.
+    Lm(Termination),
+    /// The paper's annealing alone: no LM ran.
+    Anneal(AnnealStop),
+    /// Annealing, then LM from its best point.
+    Hybrid {
+        /// Why the annealing stopped.
+        anneal: AnnealStop,
+        /// Why the LM stopped.
+        lm: Termination,
+    },
+    /// The global search, then its best start's LM.
+    Global {
+        /// Why the search stopped.
+        search: GlobalStop,
+        /// Why the best start's LM stopped.
+        lm: Termination,
+    },
+}
+
+impl Stop {
+    /// Whether the result is a usable solution (Ceres'
+    /// `IsSolutionUsable`): the final LM converged, and the method's own
+    /// stop is not a spent budget.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::{GlobalStop, Stop, Termination};
+    /// assert!(Stop::Lm(Termination::CostTolerance).is_solution_usable());
+    /// assert!(!Stop::Lm(Termination::NoProgress).is_solution_usable());
+    /// let unconfirmed = Stop::Global { search: GlobalStop::StartBudget, lm: Termination::CostTolerance };
+    /// assert!(!unconfirmed.is_solution_usable());
+    /// ```
+    pub fn is_solution_usable(self) -> bool {
+        match self {
+            Stop::Lm(t) => t.was_successful(),
+            Stop::Anneal(a) => a != AnnealStop::EvaluationBudget,
+            Stop::Hybrid { anneal, lm } => {
+                anneal != AnnealStop::EvaluationBudget && lm.was_successful()
+            }
+            Stop::Global { search, lm } => search.confirmed() && lm.was_successful(),
+        }
+    }
+
+    /// The final LM's termination, if one ran.
+    pub fn lm(self) -> Option<Termination> {
+        match self {
+            Stop::Lm(t) | Stop::Hybrid { lm: t, .. } | Stop::Global { lm: t, .. } => Some(t),
+            Stop::Anneal(_) => None,
+        }
+    }
+
+    /// The same stop with the final LM's termination replaced (after a
+    /// refit under the weights at the solution).
+    pub(crate) fn with_lm(self, t: Termination) -> Stop {
+        match self {
+            Stop::Lm(_) => Stop::Lm(t),
+            Stop::Hybrid { anneal, .. } => Stop::Hybrid { anneal, lm: t },
+            Stop::Global { search, .. } => Stop::Global { search, lm: t },
+            Stop::Anneal(a) => Stop::Anneal(a),
+        }
+    }
+
+    /// A sentence for summaries: what stopped the method, and the final
+    /// LM.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::{GlobalStop, Stop, Termination};
+    /// let s = Stop::Global { search: GlobalStop::StartBudget, lm: Termination::CostTolerance };
+    /// assert_eq!(
+    ///     s.describe(),
+    ///     "start budget spent without confirmation; final LM: relative cost reduction below ftol"
+    /// );
+    /// ```
+    pub fn describe(self) -> String {
+        match self {
+            Stop::Lm(t) => t.describe().to_string(),
+            Stop::Anneal(a) => format!("annealing: {} (no LM)", a.describe()),
+            Stop::Hybrid { anneal, lm } => {
+                format!("annealing: {}; LM: {}", anneal.describe(), lm.describe())
+            }
+            Stop::Global { search, lm } => {
+                format!("{}; final LM: {}", search.describe(), lm.describe())
+            }
+        }
+    }
+}
+
+/// What a solver returns.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// The parameters found (fixed ones unchanged).
+    pub params: DhParams,
+    /// Why it stopped.
+    pub stop: Stop,
+    /// Iterations of the final LM (0 without one).
+    pub iterations: usize,
+    /// Cost per iteration of the final LM.
+    pub history: Vec<LmIteration>,
+    /// Work per phase, in order.
+    pub phases: Vec<Phase>,
+    /// The annealing's account (`sa`, `hybrid`).
+    pub anneal: Option<AnnealTrace>,
+    /// The global search's account.
+    pub global: Option<GlobalTrace>,
+    /// The normal equations at `params` under the task's weights.
+    pub(crate) normal: Normal,
+}
+
+impl Outcome {
+    fn from_lm(fit: LmResult, stop: Stop, phases: Vec<Phase>) -> Outcome {
+        Outcome {
+            params: fit.params,
+            stop,
+            iterations: fit.iterations,
+            history: fit.history,
+            phases,
+            anneal: None,
+            global: None,
+            normal: fit.normal,
+        }
+    }
+}
+
+/// A calibration method.
+pub trait Solver {
+    /// The method, for reports.
+    fn method(&self) -> Method;
+
+    /// Minimises the task's cost over its free columns.
+    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError>;
+}
+
+/// Levenberg–Marquardt from the start arm.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Lm;
+
+/// The paper's simulated annealing: alone, or (`hybrid`) until its
+/// switching rule fires, then LM.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Anneal {
+    /// Switch to LM by the paper's rule.
+    pub hybrid: bool,
+}
+
+/// Converges from encoder zeros unknown in ±180° ([`super::global`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Global;
+
+impl Method {
+    /// The solver of this method.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::Method;
+    /// assert_eq!(Method::Hybrid.solver().method(), Method::Hybrid);
+    /// ```
+    pub fn solver(self) -> Box<dyn Solver> {
+        match self {
+            Method::Lm => Box::new(Lm),
+            Method::Sa => Box::new(Anneal { hybrid: false }),
+            Method::Hybrid => Box::new(Anneal { hybrid: true }),
+            Method::Global => Box::new(Global),
+        }
+    }
+}
+
+/// The task's LM settings with the context's threads.
+fn lm_options(task: &Task, ctx: &Context) -> lm::LmOptions {
+    task.options.lm.threads(ctx.threads)
+}
+
+impl Solver for Lm {
+    fn method(&self) -> Method {
+        Method::Lm
+    }
+
+    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
+        let timer = std::time::Instant::now();
+        let options = lm_options(&task, ctx);
+        let fit = lm::levenberg_marquardt_from(
+            task.start,
+            task.start_normal,
+            task.data,
+            task.weights,
+            &options,
+        )?;
+        let mut phase = Phase::new("lm");
+        phase.add_lm(&fit, timer.elapsed().as_secs_f64());
+        let stop = Stop::Lm(fit.termination);
+        Ok(Outcome::from_lm(fit, stop, vec![phase]))
+    }
+}
+
+impl Solver for Anneal {
+    fn method(&self) -> Method {
+        if self.hybrid {
+            Method::Hybrid
+        } else {
+            Method::Sa
+        }
+    }
+
+    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
+        let timer = std::time::Instant::now();
+        let options = lm_options(&task, ctx);
+        let mut rng = rng(ctx.seed, streams::SOLVER);
+        let (best, trace) = anneal::anneal_observed(
+            task.start,
+            task.data,
+            task.free,
+            &task.options.anneal,
+            self.hybrid.then_some(&task.options.switch),
+            &mut rng,
+            &mut |f| ctx.observe("anneal", f),
+        )?;
+        let mut phases = vec![Phase {
+            cost_evaluations: trace.evaluations,
+            seconds: timer.elapsed().as_secs_f64(),
+            ..Phase::new("anneal")
+        }];
+        let mut outcome = if self.hybrid {
+            let timer = std::time::Instant::now();
+            let fit = levenberg_marquardt(&best, task.data, task.weights, task.free, &options)?;
+            let mut phase = Phase::new("lm");
+            phase.add_lm(&fit, timer.elapsed().as_secs_f64());
+            phases.push(phase);
+            let stop = Stop::Hybrid {
+                anneal: trace.stop,
+                lm: fit.termination,
+            };
+            Outcome::from_lm(fit, stop, phases)
+        } else {
+            // No LM: the normal equations at the best point give the
+            // covariance.
+            let normal = normal_equations(
+                &ArmKernel::new(&best)?,
+                task.data,
+                task.weights,
+                task.free,
+                ctx.threads,
+            )?;
+            phases[0].jacobian_evaluations = 1;
+            Outcome {
+                params: best,
+                stop: Stop::Anneal(trace.stop),
+                iterations: 0,
+                history: Vec::new(),
+                phases,
+                anneal: None,
+                global: None,
+                normal,
+            }
+        };
+        outcome.anneal = Some(trace);
+        Ok(outcome)
+    }
+}
+
+impl Solver for Global {
+    fn method(&self) -> Method {
+        Method::Global
+    }
+
+    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
+        let options = lm_options(&task, ctx);
+        let mut rng = rng(ctx.seed, streams::SOLVER);
+        let problem = global::GlobalProblem {
+            data: task.data,
+            noise: &task.options.noise,
+            weights: task.weights,
+            free: task.free,
+            lm: &options,
+            stated_dof: task.stated_dof,
+            start_normal: Some(task.start_normal),
+        };
+        let (fit, trace, phases) = global::global(
+            task.start,
+            &problem,
+            &task.options.global,
+            &mut rng,
+            &mut |f| ctx.observe("global", f),
+        )?;
+        let stop = Stop::Global {
+            search: trace.stop,
+            lm: fit.termination,
+        };
+        let mut outcome = Outcome::from_lm(fit, stop, phases);
+        outcome.global = Some(trace);
+        Ok(outcome)
+    }
+}

@@ -1,0 +1,685 @@
+//! The calibration session every front end runs: a [`Problem`] (arm, data,
+//! settings, optional held-out data and cross-validation, where the inputs
+//! came from) checked once when it is made; [`run`] calibrates, validates
+//! and cross-validates it and returns one [`CalibrationReport`] — the schema
+//! of `calibration.json`, the input of the HTML report, what the C API's
+//! report function returns. The command line, the C API and the examples
+//! are shells around this module.
+//!
+//! ```
+//! use aacmm_core::{Arm, CalibrateOptions, Problem, params::DhParams, simulate::*};
+//! let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
+//! let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 8, 10);
+//! settings.reference_lengths = 3;
+//! let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+//! let report = Problem::new(nominal, data, CalibrateOptions::default()).unwrap().run().unwrap();
+//! assert!(report.is_usable());
+//! assert!(report.validation.fitted.after.e_mean < report.validation.fitted.before.e_mean);
+//! ```
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::calibrate::validate::{
+    BeforeAfter, Figures, Fold, before_after, check_folds, cross_validate,
+};
+use crate::calibrate::{
+    CalibrateOptions, Calibration, CalibrationError, Context, FixSpec, OptionError, Solver,
+    calibrate_with,
+};
+use crate::dataset::DataSet;
+use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
+use crate::params::{DhParams, ParamId};
+use crate::residuals::Noise;
+
+/// The calibrated arm, in the arm-file schema.
+pub const CALIBRATED_FILE: &str = "calibrated.toml";
+/// Everything the calibration found, as JSON ([`CalibrationReport`]).
+pub const REPORT_FILE: &str = "calibration.json";
+/// Wall times per phase (apart from [`REPORT_FILE`], which is the same
+/// bytes for the same seed).
+pub const TIMING_FILE: &str = "timing.json";
+
+/// Where the inputs came from, for the report: names as users gave them
+/// (paths, `<stdin>`, `<arrays>`), and the readers' warnings.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sources {
+    /// The arm file.
+    pub arm_file: String,
+    /// The poses file.
+    pub data_file: String,
+    /// The reference-lengths file, if any.
+    pub lengths_file: Option<String>,
+    /// Warnings of the readers, kept in the report.
+    pub warnings: Vec<String>,
+}
+
+/// Data held out from the fit, to validate on.
+#[derive(Clone, Debug)]
+pub struct HeldOutData {
+    /// The touches (and lengths).
+    pub data: DataSet,
+    /// Its poses file.
+    pub data_file: String,
+    /// Its lengths file, if any.
+    pub lengths_file: Option<String>,
+}
+
+/// A calibration problem: the start (nominal) arm, the data, the settings —
+/// all checked when it is made — and what to validate on.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    arm: Arm,
+    data: DataSet,
+    options: CalibrateOptions,
+    held_out: Option<HeldOutData>,
+    cross_validate: Option<usize>,
+    sources: Sources,
+    truth: Option<DhParams>,
+}
+
+impl Problem {
+    /// Checks every setting against the arm and the data.
+    ///
+    /// # Errors
+    ///
+    /// [`CalibrationError::Option`] naming the setting out of range;
+    /// [`CalibrationError::Joints`] when the data have another joint count.
+    ///
+    /// ```
+    /// use aacmm_core::{Arm, CalibrateOptions, Problem, params::DhParams, simulate::*};
+    /// use aacmm_core::calibrate::CalibrationError;
+    /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+    /// let data = simulate(&nominal, &CampaignSettings::new(1, ErrorModel::Paper, 4, 6))
+    ///     .unwrap().data_set().unwrap();
+    /// let mut options = CalibrateOptions::default();
+    /// options.noise.probe_mm = Some(-1.0);
+    /// match Problem::new(nominal, data, options) {
+    ///     Err(CalibrationError::Option(e)) => assert_eq!(e.field, "noise.probe_mm"),
+    ///     _ => panic!("negative noise accepted"),
+    /// }
+    /// ```
+    pub fn new(
+        arm: Arm,
+        data: DataSet,
+        options: CalibrateOptions,
+    ) -> Result<Problem, CalibrationError> {
+        let joints = arm.params.joint_count();
+        if data.joints() != joints {
+            return Err(CalibrationError::Joints {
+                arm: joints,
+                data: data.joints(),
+            });
+        }
+        options.check(joints)?;
+        Ok(Problem {
+            arm,
+            data,
+            options,
+            held_out: None,
+            cross_validate: None,
+            sources: Sources::default(),
+            truth: None,
+        })
+    }
+
+    /// Validates on `held_out` too.
+    ///
+    /// # Errors
+    ///
+    /// [`CalibrationError::Joints`] when it has another joint count.
+    pub fn with_held_out(mut self, held_out: HeldOutData) -> Result<Problem, CalibrationError> {
+        if held_out.data.joints() != self.data.joints() {
+            return Err(CalibrationError::Joints {
+                arm: self.arm.params.joint_count(),
+                data: held_out.data.joints(),
+            });
+        }
+        self.held_out = Some(held_out);
+        Ok(self)
+    }
+
+    /// Cross-validates over `k` folds of points (seeded by the options'
+    /// seed).
+    ///
+    /// # Errors
+    ///
+    /// An [`OptionError`] on `cross_validate` unless `2 ≤ k ≤` the groups
+    /// of points joined by reference lengths.
+    pub fn with_cross_validation(mut self, k: usize) -> Result<Problem, OptionError> {
+        check_folds(&self.data, k)?;
+        self.cross_validate = Some(k);
+        Ok(self)
+    }
+
+    /// Names the inputs in the report.
+    pub fn with_sources(mut self, sources: Sources) -> Problem {
+        self.sources = sources;
+        self
+    }
+
+    /// The true arm, when known (a simulation): the report draws its
+    /// errors beside the corrections.
+    pub fn with_truth(mut self, truth: DhParams) -> Problem {
+        self.truth = Some(truth);
+        self
+    }
+
+    /// The true arm, if known.
+    pub fn truth(&self) -> Option<&DhParams> {
+        self.truth.as_ref()
+    }
+
+    /// The start arm.
+    pub fn arm(&self) -> &Arm {
+        &self.arm
+    }
+
+    /// The data fitted.
+    pub fn data(&self) -> &DataSet {
+        &self.data
+    }
+
+    /// The settings.
+    pub fn options(&self) -> &CalibrateOptions {
+        &self.options
+    }
+
+    /// The held-out data, if any.
+    pub fn held_out(&self) -> Option<&HeldOutData> {
+        self.held_out.as_ref()
+    }
+
+    /// The inputs' names.
+    pub fn sources(&self) -> &Sources {
+        &self.sources
+    }
+
+    /// [`run`] with the method, threads and seed of the options.
+    ///
+    /// # Errors
+    ///
+    /// As [`run`].
+    pub fn run(&self) -> Result<CalibrationReport, CalibrationError> {
+        let mut ctx = Context::new(self.options.lm.threads, self.options.seed);
+        run(self, &*self.options.method.solver(), &mut ctx)
+    }
+}
+
+/// Units of the values in a [`CalibrationReport`] meant for people.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Units {
+    /// `mm`.
+    pub lengths: String,
+    /// `deg`.
+    pub angles: String,
+}
+
+/// Held-out validation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeldOut {
+    /// Its poses file.
+    pub data_file: String,
+    /// Its lengths file.
+    pub lengths_file: Option<String>,
+    /// Before and after there.
+    pub figures: BeforeAfter,
+}
+
+/// Cross-validation over points.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrossValidation {
+    /// One entry per fold.
+    pub folds: Vec<Fold>,
+    /// Seed of the fold assignment.
+    pub seed: u64,
+}
+
+/// The figures of the start and calibrated arms on the data.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Validation {
+    /// On the fitted data.
+    pub fitted: BeforeAfter,
+    /// On held-out data.
+    pub held_out: Option<HeldOut>,
+    /// Cross-validation folds.
+    pub cross_validation: Option<CrossValidation>,
+}
+
+/// Everything a calibration session found: the schema of
+/// `calibration.json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationReport {
+    /// The start arm's name.
+    pub arm: String,
+    /// Its file.
+    pub arm_file: String,
+    /// The poses file.
+    pub data_file: String,
+    /// The lengths file.
+    pub lengths_file: Option<String>,
+    /// The fixed set: `auto` or the names fixed.
+    pub fix: String,
+    /// The noise (internal units: rad, mm).
+    pub noise: Noise,
+    /// Seed of every random draw.
+    pub seed: u64,
+    /// Units of the parameter tables.
+    pub units: Units,
+    /// Touches fitted.
+    pub touches: usize,
+    /// Points fitted.
+    pub points: usize,
+    /// Reference lengths fitted.
+    pub reference_lengths: usize,
+    /// The calibration.
+    pub calibration: Calibration,
+    /// Before and after.
+    pub validation: Validation,
+    /// The readers' warnings.
+    pub warnings: Vec<String>,
+}
+
+impl CalibrationReport {
+    /// Whether the calibration is usable (the solver converged to a
+    /// confirmed minimum).
+    pub fn is_usable(&self) -> bool {
+        self.calibration.solver.is_solution_usable()
+    }
+
+    /// `calibration.json`: pretty JSON and a final newline, the same bytes
+    /// for the same inputs and seed.
+    pub fn to_json(&self) -> String {
+        let mut s = serde_json::to_string_pretty(self)
+            .expect("the report holds only strings, numbers, arrays and maps");
+        s.push('\n');
+        s
+    }
+
+    /// Reads a report back (the calibrated parameters are rebuilt from the
+    /// estimates).
+    ///
+    /// # Errors
+    ///
+    /// The JSON error when `text` is not a report.
+    pub fn from_json(text: &str) -> Result<CalibrationReport, serde_json::Error> {
+        let mut r: CalibrationReport = serde_json::from_str(text)?;
+        r.calibration.restore_params();
+        Ok(r)
+    }
+
+    /// The calibrated arm: named `<start>-calibrated`, with the start arm's
+    /// joint limits.
+    pub fn calibrated_arm(&self, start: &Arm) -> Arm {
+        Arm {
+            name: format!("{}-calibrated", start.name),
+            params: self.calibration.params.clone(),
+            limits: start.limits.clone(),
+        }
+    }
+
+    /// The summary every front end prints: the solver, the dof, every
+    /// parameter with σ, the correlations and the validation table.
+    pub fn summary(&self) -> String {
+        let r = self;
+        let c = &r.calibration;
+        let s = &c.solver;
+        let d = &c.dof;
+        let mut t = format!(
+            "calibrated `{}` ({}) on {}: {} touches of {} points, {} reference lengths\n\n",
+            r.arm, r.arm_file, r.data_file, r.touches, r.points, r.reference_lengths
+        );
+        t += &method_lines(s);
+        t += &format!(
+            "Solver: {} — {} after {} iterations ({} cost and {} Jacobian evaluations); \
+             cost {:.6e} -> {:.6e}\n",
+            s.method.name(),
+            s.stop.describe(),
+            s.iterations,
+            s.cost_evaluations,
+            s.jacobian_evaluations,
+            s.initial_cost,
+            s.final_cost
+        );
+        t += &format!(
+            "Residuals: {} touch rows + {} length rows; unknowns: {} parameters + {} centre \
+             coordinates; {} degrees of freedom\n",
+            d.touch_rows,
+            d.length_rows,
+            d.free_parameters,
+            d.centre_coordinates,
+            d.degrees_of_freedom
+        );
+        t += &format!(
+            "sigma0 = sqrt(cost/dof) = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n\n",
+            d.sigma0,
+            d.touch_sigma_mm,
+            if d.touch_sigma_estimated {
+                " (estimated from the fit)"
+            } else {
+                " (from the stated noise)"
+            }
+        );
+        t += "Parameters (mm, deg; sigma = standard uncertainty, k = 1):\n";
+        t += &format!(
+            "  {:<8} {:<4} {:>14} {:>14} {:>12} {:>10}  {}\n",
+            "name", "unit", "nominal", "calibrated", "correction", "sigma", "fixed because"
+        );
+        for p in c.parameters.iter().map(|p| p.user()) {
+            t += &format!(
+                "  {:<8} {:<4} {:>14.6} {:>14.6} {:>12.6} {:>10}  {}\n",
+                p.name,
+                p.unit,
+                p.nominal,
+                p.calibrated,
+                p.correction,
+                p.sigma.map_or("-".to_string(), |s| format!("{s:.6}")),
+                p.fixed.as_deref().unwrap_or("")
+            );
+        }
+        if c.correlations.is_empty() {
+            t += "No pair of free parameters correlates with |rho| > 0.9.\n";
+        } else {
+            t += "Correlations |rho| > 0.9:";
+            for x in &c.correlations {
+                t += &format!("  {}/{} {:+.3}", x.a, x.b, x.rho);
+            }
+            t += "\n";
+        }
+        t += "\nValidation (mm): e = mean single-point error, 2s and delta_max (SPAT), length RMS/max\n";
+        t += &format!(
+            "  {:<28} {:>8} {:>8} {:>9} {:>10} {:>10}\n",
+            "data", "e", "2s", "delta_max", "len RMS", "len max"
+        );
+        let mut row = |name: &str, f: &Figures| {
+            let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
+            t += &format!(
+                "  {:<28} {:>8.4} {:>8.4} {:>9.4} {:>10} {:>10}\n",
+                name,
+                f.e_mean,
+                f.two_s_mean,
+                f.delta_max,
+                opt(f.length_rms),
+                opt(f.length_max)
+            );
+        };
+        let v = &r.validation;
+        row("fitted, before", &v.fitted.before);
+        row("fitted, after", &v.fitted.after);
+        if let Some(h) = &v.held_out {
+            row("held out, before", &h.figures.before);
+            row("held out, after", &h.figures.after);
+        }
+        if let Some(cv) = &v.cross_validation {
+            for (i, f) in cv.folds.iter().enumerate() {
+                row(
+                    &format!("fold {} ({} pts), before", i + 1, f.held_out.len()),
+                    &f.figures.before,
+                );
+                row(
+                    &format!("fold {} ({} pts), after", i + 1, f.held_out.len()),
+                    &f.figures.after,
+                );
+            }
+        }
+        t += "\n";
+        t
+    }
+
+    /// `timing.json`: the wall time of every phase, ms.
+    pub fn timing_json(&self, total_seconds: f64) -> String {
+        #[derive(Serialize)]
+        struct PhaseTime<'a> {
+            name: &'a str,
+            ms: f64,
+        }
+        #[derive(Serialize)]
+        struct Timing<'a> {
+            fit_ms: f64,
+            total_ms: f64,
+            phases: Vec<PhaseTime<'a>>,
+        }
+        let phases = &self.calibration.solver.phases;
+        let timing = Timing {
+            fit_ms: phases.iter().map(|p| p.seconds).sum::<f64>() * 1e3,
+            total_ms: total_seconds * 1e3,
+            phases: phases
+                .iter()
+                .map(|p| PhaseTime {
+                    name: &p.name,
+                    ms: p.seconds * 1e3,
+                })
+                .collect(),
+        };
+        let mut s = serde_json::to_string_pretty(&timing).expect("numbers and strings");
+        s.push('\n');
+        s
+    }
+
+    /// The files a session writes, by name: [`CALIBRATED_FILE`],
+    /// [`REPORT_FILE`], [`TIMING_FILE`] and (with the `report` feature) the
+    /// HTML report and its figures.
+    ///
+    /// # Errors
+    ///
+    /// The report's, when a figure cannot be drawn.
+    pub fn files(
+        &self,
+        problem: &Problem,
+        total_seconds: f64,
+    ) -> Result<Vec<(String, String)>, CalibrationError> {
+        let calibrated = self.calibrated_arm(problem.arm());
+        let mut files = vec![
+            (
+                CALIBRATED_FILE.to_string(),
+                arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg),
+            ),
+            (REPORT_FILE.to_string(), self.to_json()),
+            (TIMING_FILE.to_string(), self.timing_json(total_seconds)),
+        ];
+        #[cfg(feature = "report")]
+        {
+            let page = crate::report::session_report(self, problem)?;
+            files.extend(
+                page.files()
+                    .map(|(name, text)| (name.to_string(), text.to_string())),
+            );
+        }
+        Ok(files)
+    }
+
+    /// Writes [`CalibrationReport::files`] into `dir` (which must exist);
+    /// returns the paths written.
+    ///
+    /// # Errors
+    ///
+    /// The first file that cannot be written, with its path.
+    pub fn write(
+        &self,
+        problem: &Problem,
+        dir: &Path,
+        total_seconds: f64,
+    ) -> Result<Vec<std::path::PathBuf>, WriteError> {
+        let files = self.files(problem, total_seconds)?;
+        let mut written = Vec::with_capacity(files.len());
+        for (name, text) in files {
+            let path = dir.join(name);
+            std::fs::write(&path, text).map_err(|source| WriteError::Io {
+                path: path.display().to_string(),
+                source,
+            })?;
+            written.push(path);
+        }
+        Ok(written)
+    }
+}
+
+/// Why a session's files could not be written.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum WriteError {
+    /// A file could not be written.
+    #[error("{path}: cannot write: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The system's reason.
+        source: std::io::Error,
+    },
+    /// The report could not be drawn.
+    #[error(transparent)]
+    Report(#[from] CalibrationError),
+}
+
+/// The fixed set in words: `auto`, or the parameters' names.
+fn fix_text(fix: &FixSpec, joints: usize) -> String {
+    match fix {
+        FixSpec::Auto => "auto".to_string(),
+        FixSpec::Columns(c) => c
+            .iter()
+            .filter_map(|&c| ParamId::from_column(joints, c))
+            .map(|id| id.to_string())
+            .collect::<Vec<_>>()
+            .join(","),
+    }
+}
+
+/// Calibrates `problem` with `solver`, validates the result on the fitted
+/// and held-out data, and cross-validates when asked (each fold with the
+/// same solver's method).
+///
+/// # Errors
+///
+/// The calibration's, when it cannot run (the data cannot determine the
+/// free parameters, the kernel refuses the arm).
+pub fn run(
+    problem: &Problem,
+    solver: &dyn Solver,
+    ctx: &mut Context,
+) -> Result<CalibrationReport, CalibrationError> {
+    let start = &problem.arm.params;
+    let data = &problem.data;
+    let options = &problem.options;
+    let calibration = calibrate_with(start, data, options, solver, ctx)?;
+    let fitted = before_after(start, &calibration.params, data)?;
+    let held_out = match &problem.held_out {
+        Some(h) => Some(HeldOut {
+            data_file: h.data_file.clone(),
+            lengths_file: h.lengths_file.clone(),
+            figures: before_after(start, &calibration.params, &h.data)?,
+        }),
+        None => None,
+    };
+    let cross_validation = match problem.cross_validate {
+        Some(k) => {
+            let fold_options = CalibrateOptions {
+                method: solver.method(),
+                lm: options.lm.threads(ctx.threads),
+                seed: ctx.seed,
+                ..options.clone()
+            };
+            Some(CrossValidation {
+                folds: cross_validate(start, data, &fold_options, k, ctx.seed)?,
+                seed: ctx.seed,
+            })
+        }
+        None => None,
+    };
+    let s = &problem.sources;
+    Ok(CalibrationReport {
+        arm: problem.arm.name.clone(),
+        arm_file: s.arm_file.clone(),
+        data_file: s.data_file.clone(),
+        lengths_file: s.lengths_file.clone(),
+        fix: fix_text(&options.fix, start.joint_count()),
+        noise: options.noise,
+        seed: ctx.seed,
+        units: Units {
+            lengths: "mm".to_string(),
+            angles: "deg".to_string(),
+        },
+        touches: data.len(),
+        points: data.points().len(),
+        reference_lengths: data.references().len(),
+        calibration,
+        validation: Validation {
+            fitted,
+            held_out,
+            cross_validation,
+        },
+        warnings: s.warnings.clone(),
+    })
+}
+
+/// What the method did, before the final LM's line.
+fn method_lines(s: &crate::calibrate::SolverSummary) -> String {
+    let mut t = String::new();
+    if let Some(a) = &s.anneal {
+        let o = &a.options;
+        t += &format!(
+            "Annealing: T0 {} mm, alpha {}, L {}, T_min {} mm, epsilon {} mm, ranges {} mm / {} deg \
+             (twists) / {} deg (zeros); {} temperatures, {} energy evaluations; energy {:.4} -> \
+             {:.4} mm; stopped: {}\n",
+            o.t0,
+            o.cooling,
+            o.chain,
+            o.t_min,
+            o.target,
+            o.step_mm,
+            o.twist_step_deg,
+            o.zero_step_deg,
+            a.temperatures.len(),
+            a.evaluations,
+            a.start_energy,
+            a.best_energy,
+            a.stop.describe()
+        );
+        if let (Some(rule), Some(last)) = (&a.switch_rule, a.temperatures.last()) {
+            t += &format!(
+                "Switch (s0 {}, epsilon1 {}): at T = {:.3e} mm, energy {:.4} mm, after {} \
+                 evaluations\n",
+                rule.window, rule.epsilon, last.temperature, last.best, a.evaluations
+            );
+        }
+    }
+    if let Some(g) = &s.global {
+        let searched = if g.circles.is_empty() {
+            "no zero offset is free, so the start arm's LM is the search".to_string()
+        } else {
+            let n = g.minima.len();
+            format!(
+                "{n} {} (the start arm, {} grid cell(s), {} random start(s)) on the circles of {}",
+                if n == 1 { "minimum" } else { "minima" },
+                g.grid_starts,
+                g.random_starts,
+                g.circles.join(", ")
+            )
+        };
+        t += &format!(
+            "Global: {searched}; lowest cost reached {} time(s); stopped: {}{}\n",
+            g.best_hits,
+            g.stop.describe(),
+            if g.sign_changes.is_empty() {
+                String::new()
+            } else {
+                format!(
+                    "; signs put in the nominal convention: {}",
+                    g.sign_changes.join(", ")
+                )
+            }
+        );
+    }
+    let phases: Vec<String> = s
+        .phases
+        .iter()
+        .map(|p| {
+            format!(
+                "{} ({} cost, {} Jacobian)",
+                p.name, p.cost_evaluations, p.jacobian_evaluations
+            )
+        })
+        .collect();
+    t += &format!("Phases: {}\n", phases.join("; "));
+    t
+}

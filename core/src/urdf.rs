@@ -1,0 +1,793 @@
+//! A nominal D-H arm from a URDF robot description.
+//!
+//! Robot makers publish their kinematics as URDF: a tree of links joined by
+//! joints, each joint placed in its parent link's frame by an `origin`
+//! (`xyz` in metres, `rpy` in radians, `R = Rz(yaw)·Ry(pitch)·Rx(roll)`) and
+//! turning about its `axis`. This module reads the subset that describes a
+//! serial arm — `revolute` and `continuous` joints, `fixed` joints (flanges,
+//! tools, the probe ball), their origins, axes and limits — follows the chain
+//! from a root link to a tip link (the probe centre), and converts it to the
+//! toolkit's standard D-H arm (`A_i = Rz(θ_i + q_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)`,
+//! probe `B` in the last frame; see [`crate::params`]).
+//!
+//! The conversion is exact: with the same joint readings `q`, the D-H arm's
+//! probe and the URDF's tip agree up to one fixed rigid motion, the
+//! [`DhConversion::base`] (the D-H base frame must have its z axis on the
+//! first joint axis; the URDF root frame need not). Calibration figures —
+//! the spread of a socket's touches, distances between sockets — do not
+//! depend on that rigid motion, so the arm file needs only the D-H part.
+//!
+//! Conventions of the conversion, so that the same URDF always gives the same
+//! arm: frame 0 has its origin at the point of the first axis nearest the
+//! root origin and its x axis along the root x axis made perpendicular to the
+//! first axis; where two consecutive axes are parallel, the common normal is
+//! taken through the previous frame's origin (`d = 0`, the textbook choice);
+//! the last joint has `a = d = α = θ = 0`, so the probe vector is the tip in
+//! the frame of the last axis at `q_n = 0`.
+//!
+//! Published URDFs often round right angles (`1.5708` for π/2, `3.1416` for
+//! π). Taken literally, two axes meant to be parallel become skew by 10⁻⁵ rad
+//! and meet kilometres away, and the D-H arm would get a `d` of that size,
+//! useless as a start for a calibration and short of digits: [`Chain::to_dh`]
+//! refuses a common normal more than 100 m away. [`UrdfOptions::snap_rad`]
+//! rounds every `rpy` component within that distance of a multiple of π/2 to
+//! it and reports each rounding ([`Urdf::snapped`]).
+
+use std::collections::HashMap;
+
+use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
+
+use crate::error::InputError;
+use crate::params::{DhJoint, DhParams};
+
+/// How [`parse_urdf`] reads angles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UrdfOptions {
+    /// `rpy` components within this many radians of a multiple of π/2 are
+    /// set to it; `0` keeps every value as written.
+    pub snap_rad: f64,
+}
+
+impl Default for UrdfOptions {
+    /// Rounds within 10⁻⁴ rad: `1.5708` and `3.1416` (off by 4·10⁻⁶ and
+    /// 7·10⁻⁶) are snapped, deliberate small angles of a calibrated URDF
+    /// (10⁻³ rad and up) are not.
+    fn default() -> Self {
+        UrdfOptions { snap_rad: 1e-4 }
+    }
+}
+
+/// The kind of a URDF joint, as far as a serial arm needs it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointKind {
+    /// Turns about its axis (`revolute` or `continuous`).
+    Revolute,
+    /// Rigid (`fixed`).
+    Fixed,
+    /// Anything else (`prismatic`, `floating`, `planar`): readable, but not
+    /// part of a chain this toolkit models.
+    Other,
+}
+
+/// One joint of a URDF file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfJoint {
+    /// The joint's name.
+    pub name: String,
+    /// The `type` attribute as written.
+    pub type_name: String,
+    /// What the type means here.
+    pub kind: JointKind,
+    /// Parent link.
+    pub parent: String,
+    /// Child link.
+    pub child: String,
+    /// The child frame in the parent frame (metres), after snapping.
+    pub origin: Isometry3<f64>,
+    /// Unit axis in the child frame.
+    pub axis: Vector3<f64>,
+    /// `[lower, upper]` of a `revolute` joint, rad.
+    pub limits: Option<[f64; 2]>,
+    /// 1-based line of the `<joint>` element.
+    pub line: usize,
+}
+
+/// A parsed URDF: its joints, in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Urdf {
+    /// The file name used in messages.
+    pub file: String,
+    /// The robot's `name` attribute.
+    pub name: String,
+    /// Every joint.
+    pub joints: Vec<UrdfJoint>,
+    /// One note per `rpy` component [`UrdfOptions::snap_rad`] rounded:
+    /// `line 12: joint_3 roll -3.1416 → -π (7.3e-6 rad)`.
+    pub snapped: Vec<String>,
+}
+
+/// Parses the joints of a URDF; `file` names it in messages.
+///
+/// # Errors
+/// Malformed XML (at its line); a root element other than `<robot>`; a joint
+/// without a name, type, parent or child; an `xyz`, `rpy` or `axis` that is
+/// not three finite numbers; a zero axis; a link that is the child of two
+/// joints.
+///
+/// ```
+/// use aacmm_core::urdf::{parse_urdf, UrdfOptions};
+/// let text = r#"<robot name="r">
+///   <joint name="j1" type="revolute">
+///     <parent link="base"/><child link="l1"/>
+///     <origin xyz="0 0 0.1" rpy="0 0 0"/><axis xyz="0 0 1"/>
+///   </joint>
+///   <joint name="j2" type="revolute">
+///     <parent link="l1"/><child link="l2"/>
+///     <origin xyz="0 0 0.2" rpy="1.5708 0 0"/><axis xyz="0 0 1"/>
+///   </joint>
+/// </robot>"#;
+/// let urdf = parse_urdf(text, "r.urdf", UrdfOptions::default()).unwrap();
+/// assert_eq!(urdf.joints.len(), 2);
+/// assert_eq!(urdf.snapped.len(), 1); // 1.5708 → π/2
+/// let bad = text.replace("0 0 0.2", "0 0 x");
+/// let e = parse_urdf(&bad, "r.urdf", UrdfOptions::default()).unwrap_err();
+/// assert!(e.to_string().starts_with("r.urdf:8: field `xyz`"), "{e}");
+/// ```
+pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, InputError> {
+    let doc = roxmltree::Document::parse(text).map_err(|e| {
+        InputError::line_error(
+            file,
+            e.pos().row as usize,
+            format!("not well-formed XML: {e}"),
+        )
+    })?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "robot" {
+        return Err(InputError::line_error(
+            file,
+            line(&doc, root),
+            format!(
+                "the root element is <{}>; a URDF has <robot>",
+                root.tag_name().name()
+            ),
+        ));
+    }
+    let mut urdf = Urdf {
+        file: file.to_string(),
+        name: root.attribute("name").unwrap_or_default().to_string(),
+        joints: Vec::new(),
+        snapped: Vec::new(),
+    };
+    let mut child_of: HashMap<String, usize> = HashMap::new();
+    for node in root.children().filter(|n| n.has_tag_name("joint")) {
+        let at = line(&doc, node);
+        let attr = |name: &str| -> Result<String, InputError> {
+            node.attribute(name)
+                .map(str::to_string)
+                .ok_or_else(|| InputError::field(file, at, name, "missing on <joint>"))
+        };
+        let name = attr("name")?;
+        let type_name = attr("type")?;
+        let kind = match type_name.as_str() {
+            "revolute" | "continuous" => JointKind::Revolute,
+            "fixed" => JointKind::Fixed,
+            _ => JointKind::Other,
+        };
+        let link_of = |tag: &str| -> Result<String, InputError> {
+            let el = node
+                .children()
+                .find(|c| c.has_tag_name(tag))
+                .ok_or_else(|| {
+                    InputError::field(file, at, tag, format!("joint `{name}` has no <{tag}>"))
+                })?;
+            el.attribute("link").map(str::to_string).ok_or_else(|| {
+                InputError::field(
+                    file,
+                    line(&doc, el),
+                    "link",
+                    format!("<{tag}> without `link`"),
+                )
+            })
+        };
+        let parent = link_of("parent")?;
+        let child = link_of("child")?;
+        let origin_el = node.children().find(|c| c.has_tag_name("origin"));
+        let (xyz, rpy) = match origin_el {
+            Some(el) => {
+                let l = line(&doc, el);
+                (
+                    triple(el.attribute("xyz"), [0.0; 3], file, l, "xyz")?,
+                    triple(el.attribute("rpy"), [0.0; 3], file, l, "rpy")?,
+                )
+            }
+            None => ([0.0; 3], [0.0; 3]),
+        };
+        let rpy = snap(rpy, options.snap_rad, |i, from, to, by| {
+            urdf.snapped.push(format!(
+                "line {}: {name} {} {from} → {to} ({by:.1e} rad)",
+                origin_el.map_or(at, |el| line(&doc, el)),
+                ["roll", "pitch", "yaw"][i]
+            ));
+        });
+        // URDF's default axis is x.
+        let axis_el = node.children().find(|c| c.has_tag_name("axis"));
+        let axis = match axis_el {
+            Some(el) => triple(
+                el.attribute("xyz"),
+                [1.0, 0.0, 0.0],
+                file,
+                line(&doc, el),
+                "axis",
+            )?,
+            None => [1.0, 0.0, 0.0],
+        };
+        let axis = Vector3::from(axis);
+        if kind == JointKind::Revolute && axis.norm() == 0.0 {
+            return Err(InputError::field(
+                file,
+                axis_el.map_or(at, |el| line(&doc, el)),
+                "axis",
+                format!("joint `{name}` turns about a zero axis"),
+            ));
+        }
+        let limits = node
+            .children()
+            .find(|c| c.has_tag_name("limit"))
+            .filter(|_| type_name == "revolute")
+            .and_then(|el| {
+                let lo = el.attribute("lower")?.trim().parse::<f64>().ok()?;
+                let hi = el.attribute("upper")?.trim().parse::<f64>().ok()?;
+                (lo.is_finite() && hi.is_finite() && lo < hi).then_some([lo, hi])
+            });
+        if let Some(&other) = child_of.get(&child) {
+            return Err(InputError::field(
+                file,
+                at,
+                "child",
+                format!(
+                    "link `{child}` is already the child of joint `{}` (line {}); a URDF is a tree",
+                    urdf.joints[other].name, urdf.joints[other].line
+                ),
+            ));
+        }
+        child_of.insert(child.clone(), urdf.joints.len());
+        urdf.joints.push(UrdfJoint {
+            name,
+            type_name,
+            kind,
+            parent,
+            child,
+            origin: Isometry3::from_parts(
+                Translation3::from(Vector3::from(xyz)),
+                UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+            ),
+            axis: if axis.norm() > 0.0 {
+                axis.normalize()
+            } else {
+                axis
+            },
+            limits,
+            line: at,
+        });
+    }
+    Ok(urdf)
+}
+
+fn line(doc: &roxmltree::Document, node: roxmltree::Node) -> usize {
+    doc.text_pos_at(node.range().start).row as usize
+}
+
+/// Three whitespace-separated finite numbers, or `default` when absent.
+fn triple(
+    value: Option<&str>,
+    default: [f64; 3],
+    file: &str,
+    line: usize,
+    field: &str,
+) -> Result<[f64; 3], InputError> {
+    let Some(text) = value else {
+        return Ok(default);
+    };
+    let parsed: Vec<Option<f64>> = text
+        .split_whitespace()
+        .map(|t| t.parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect();
+    match parsed.as_slice() {
+        [Some(a), Some(b), Some(c)] => Ok([*a, *b, *c]),
+        _ => Err(InputError::field(
+            file,
+            line,
+            field,
+            format!("`{text}` is not three finite numbers"),
+        )),
+    }
+}
+
+/// Rounds components within `tol` of a multiple of π/2; `note(i, from, to,
+/// by)` for each one changed.
+fn snap(v: [f64; 3], tol: f64, mut note: impl FnMut(usize, f64, String, f64)) -> [f64; 3] {
+    let h = std::f64::consts::FRAC_PI_2;
+    let mut out = v;
+    for (i, x) in v.iter().enumerate() {
+        let k = (x / h).round();
+        let to = k * h;
+        let by = (x - to).abs();
+        if by > 0.0 && by <= tol {
+            out[i] = to;
+            let name = match k as i64 {
+                0 => "0".to_string(),
+                1 => "π/2".to_string(),
+                -1 => "-π/2".to_string(),
+                2 => "π".to_string(),
+                -2 => "-π".to_string(),
+                k if k % 2 == 0 => format!("{}π", k / 2),
+                k => format!("{k}π/2"),
+            };
+            note(i, *x, name, by);
+        }
+    }
+    out
+}
+
+/// One step of a chain, root to tip.
+#[derive(Clone, Debug, PartialEq)]
+enum Step {
+    /// A rigid transform (a fixed joint's origin, or a revolute joint's
+    /// origin before its rotation).
+    Rigid(Isometry3<f64>),
+    /// A rotation by the next reading about this unit axis.
+    Turn(Vector3<f64>),
+}
+
+/// The serial chain from a root link to a tip link.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chain {
+    /// The revolute joints, root to tip: the columns `q1..qn` of a poses file.
+    pub joints: Vec<String>,
+    /// Their `[lower, upper]` limits, rad, where the URDF states them.
+    pub limits: Vec<Option<[f64; 2]>>,
+    steps: Vec<Step>,
+}
+
+impl Urdf {
+    /// The chain from `root` (or, without one, the link that is no joint's
+    /// child above `tip`) down to `tip`.
+    ///
+    /// # Errors
+    /// An unknown tip link; a root not above the tip; a joint on the way that
+    /// is neither revolute nor fixed (named, with its line).
+    pub fn chain(&self, root: Option<&str>, tip: &str) -> Result<Chain, InputError> {
+        let by_child: HashMap<&str, &UrdfJoint> =
+            self.joints.iter().map(|j| (j.child.as_str(), j)).collect();
+        let known = self
+            .joints
+            .iter()
+            .any(|j| j.child == tip || j.parent == tip);
+        if !known {
+            return Err(InputError::file_error(
+                &self.file,
+                format!("no link `{tip}` is joined to the robot (the tip must be a link's name)"),
+            ));
+        }
+        let mut path: Vec<&UrdfJoint> = Vec::new();
+        let mut link = tip;
+        while Some(link) != root {
+            match by_child.get(link) {
+                Some(j) => {
+                    path.push(j);
+                    link = &j.parent;
+                }
+                None if root.is_none() => break,
+                None => {
+                    return Err(InputError::file_error(
+                        &self.file,
+                        format!(
+                            "link `{}` is not above `{tip}`: going up from it ends at `{link}`",
+                            root.unwrap_or_default()
+                        ),
+                    ));
+                }
+            }
+        }
+        path.reverse();
+        let mut chain = Chain {
+            joints: Vec::new(),
+            limits: Vec::new(),
+            steps: Vec::new(),
+        };
+        for j in path {
+            match j.kind {
+                JointKind::Revolute => {
+                    chain.steps.push(Step::Rigid(j.origin));
+                    chain.steps.push(Step::Turn(j.axis));
+                    chain.joints.push(j.name.clone());
+                    chain.limits.push(j.limits);
+                }
+                JointKind::Fixed => chain.steps.push(Step::Rigid(j.origin)),
+                JointKind::Other => {
+                    return Err(InputError::field(
+                        &self.file,
+                        j.line,
+                        "type",
+                        format!(
+                            "joint `{}` on the way to `{tip}` is `{}`; a D-H arm has revolute \
+                             and fixed joints only",
+                            j.name, j.type_name
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(chain)
+    }
+}
+
+/// A URDF chain as a D-H arm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DhConversion {
+    /// The arm, mm and rad: the generic model's `position` of it at
+    /// `q` is the tip at `q` in the D-H base frame.
+    pub params: DhParams,
+    /// The D-H base frame in the URDF root frame (metres): tip in the root
+    /// frame = `base · (D-H probe position / 1000)`.
+    pub base: Isometry3<f64>,
+}
+
+/// Farther than this (m) from the previous frame, a common normal means two
+/// axes meant to be parallel: no arm is that large.
+const FAR_M: f64 = 100.0;
+
+/// A joint axis: a point on it and its unit direction.
+type Axis = (Point3<f64>, Vector3<f64>);
+
+/// Below this, `|z_a × z_b|` counts two unit axes as parallel.
+const PARALLEL: f64 = 1e-9;
+
+impl Chain {
+    /// The tip in the root frame at readings `q` (rad), metres.
+    ///
+    /// # Panics
+    /// If `q` has not one reading per joint (a programming error).
+    pub fn position(&self, q: &[f64]) -> [f64; 3] {
+        let t = self.transform(q);
+        let p = t.translation.vector;
+        [p.x, p.y, p.z]
+    }
+
+    fn transform(&self, q: &[f64]) -> Isometry3<f64> {
+        assert_eq!(q.len(), self.joints.len(), "one reading per joint");
+        let mut t = Isometry3::identity();
+        let mut next = q.iter();
+        for s in &self.steps {
+            match s {
+                Step::Rigid(o) => t *= o,
+                Step::Turn(axis) => {
+                    let angle = *next.next().expect("checked length");
+                    let r = UnitQuaternion::from_scaled_axis(axis * angle);
+                    t *= Isometry3::from_parts(Translation3::identity(), r);
+                }
+            }
+        }
+        t
+    }
+
+    /// The joint axes at `q = 0` in the root frame: a point on each and its
+    /// unit direction; and the tip.
+    fn axes(&self) -> (Vec<Axis>, Point3<f64>) {
+        let mut t = Isometry3::identity();
+        let mut axes = Vec::new();
+        for s in &self.steps {
+            match s {
+                Step::Rigid(o) => t *= o,
+                Step::Turn(axis) => axes.push((
+                    Point3::from(t.translation.vector),
+                    (t.rotation * axis).normalize(),
+                )),
+            }
+        }
+        (axes, Point3::from(t.translation.vector))
+    }
+
+    /// The D-H arm of this chain (see the module docs for the conventions).
+    ///
+    /// # Errors
+    /// A chain without revolute joints; two consecutive axes so nearly
+    /// parallel (but not within 10⁻⁹ rad) that their common normal is more
+    /// than 100 m away.
+    ///
+    /// ```
+    /// use aacmm_core::urdf::{parse_urdf, UrdfOptions};
+    /// let text = r#"<robot name="r">
+    ///   <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    ///     <origin xyz="0 0 0.1"/><axis xyz="0 0 1"/></joint>
+    ///   <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    ///     <origin xyz="0.3 0 0"/><axis xyz="0 0 1"/></joint>
+    ///   <joint name="tool" type="fixed"><parent link="l2"/><child link="ball"/>
+    ///     <origin xyz="0.2 0 0"/></joint>
+    /// </robot>"#;
+    /// let urdf = parse_urdf(text, "r.urdf", UrdfOptions::default()).unwrap();
+    /// let dh = urdf.chain(None, "ball").unwrap().to_dh().unwrap();
+    /// // A planar two-link arm: a1 = 300 mm between the parallel axes.
+    /// assert!((dh.params.joints[0].a - 300.0).abs() < 1e-9);
+    /// assert!((dh.params.probe[0] - 200.0).abs() < 1e-9);
+    /// ```
+    pub fn to_dh(&self) -> Result<DhConversion, InputError> {
+        let (axes, tip) = self.axes();
+        let n = axes.len();
+        if n == 0 {
+            return Err(InputError::file_error(
+                "URDF chain",
+                "the chain has no revolute joint",
+            ));
+        }
+        // Frame 0: on axis 1, nearest the root origin; x from the root x axis.
+        let (p1, z0) = axes[0];
+        let o0 = p1 - z0 * p1.coords.dot(&z0);
+        let x0 = perpendicular(Vector3::x(), z0).unwrap_or_else(|| {
+            perpendicular(Vector3::y(), z0).expect("x and y cannot both be parallel to z0")
+        });
+        let base = frame(o0, x0, z0);
+        let (mut o_prev, mut x_prev, mut z_prev) = (o0, x0, z0);
+        let mut joints = Vec::with_capacity(n);
+        for (i, &(point_next, z)) in axes.iter().enumerate().skip(1) {
+            // Axis i (through o_prev along z_prev) to axis i+1.
+            let c = z_prev.cross(&z);
+            let (foot, x) = if c.norm() > PARALLEL {
+                let x = c.normalize();
+                // Feet of the common normal: o_prev + s·z_prev on axis i.
+                let w = point_next - o_prev;
+                let b = z_prev.dot(&z);
+                let denom = 1.0 - b * b;
+                let s = (w.dot(&z_prev) - b * w.dot(&z)) / denom;
+                if s.abs() > FAR_M {
+                    return Err(InputError::file_error(
+                        "URDF chain",
+                        format!(
+                            "the axes of `{}` and `{}` are parallel within {:.1e} rad, so their \
+                             common normal is {:.0} m away: the D-H arm would be exact but \
+                             useless (and lose digits). Round the URDF's near-right angles \
+                             (UrdfOptions::snap_rad, urdf_to_dh --snap-rad) if they are meant \
+                             to be parallel",
+                            self.joints[i - 1],
+                            self.joints[i],
+                            c.norm().asin(),
+                            s.abs()
+                        ),
+                    ));
+                }
+                (o_prev + z_prev * s, x)
+            } else {
+                let x = perpendicular(point_next - o_prev, z_prev).unwrap_or(x_prev);
+                (o_prev, x)
+            };
+            let a = (point_next - foot).dot(&x);
+            let o = foot + x * a;
+            joints.push(DhJoint {
+                a: a * 1000.0,
+                d: (foot - o_prev).dot(&z_prev) * 1000.0,
+                alpha: signed_angle(z_prev, z, x),
+                theta: signed_angle(x_prev, x, z_prev),
+            });
+            debug_assert!(i < n);
+            (o_prev, x_prev, z_prev) = (o, x, z);
+        }
+        // The last joint: a = d = α = θ = 0, the probe in its frame.
+        joints.push(DhJoint::default());
+        let last = frame(o_prev, x_prev, z_prev);
+        let b = last.inverse_transform_point(&tip).coords * 1000.0;
+        Ok(DhConversion {
+            params: DhParams {
+                joints,
+                probe: [b.x, b.y, b.z],
+            },
+            base,
+        })
+    }
+}
+
+/// `v` made perpendicular to the unit `z` and normalised, unless (nearly) zero.
+fn perpendicular(v: Vector3<f64>, z: Vector3<f64>) -> Option<Vector3<f64>> {
+    let p = v - z * v.dot(&z);
+    (p.norm() > 1e-12).then(|| p.normalize())
+}
+
+/// The angle turning unit `from` into unit `to` about unit `about` (both
+/// perpendicular to it).
+fn signed_angle(from: Vector3<f64>, to: Vector3<f64>, about: Vector3<f64>) -> f64 {
+    from.cross(&to).dot(&about).atan2(from.dot(&to))
+}
+
+/// The frame with origin `o`, x axis `x` and z axis `z` (orthonormal).
+fn frame(o: Point3<f64>, x: Vector3<f64>, z: Vector3<f64>) -> Isometry3<f64> {
+    let y = z.cross(&x);
+    let r = Rotation3::from_basis_unchecked(&[x, y, z]);
+    Isometry3::from_parts(
+        Translation3::from(o.coords),
+        UnitQuaternion::from_rotation_matrix(&r),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generic::position;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A random serial chain in URDF: every joint origin random (xyz within
+    /// ±0.3 m, any rpy), random axes, fixed joints between, and a tool ball.
+    fn random_urdf(rng: &mut ChaCha8Rng, joints: usize) -> String {
+        let mut s = String::from("<robot name=\"random\">\n");
+        let mut parent = "base".to_string();
+        let num = |rng: &mut ChaCha8Rng, r: f64| rng.random_range(-r..r);
+        for j in 0..joints {
+            let child = format!("l{j}");
+            let xyz = [num(rng, 0.3), num(rng, 0.3), num(rng, 0.3)];
+            let rpy = [num(rng, 3.2), num(rng, 1.5), num(rng, 3.2)];
+            let axis = [num(rng, 1.0), num(rng, 1.0), num(rng, 1.0)];
+            s += &format!(
+                "<joint name=\"j{j}\" type=\"revolute\"><parent link=\"{parent}\"/>\
+                 <child link=\"{child}\"/><origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>\
+                 <axis xyz=\"{} {} {}\"/><limit lower=\"-3\" upper=\"3\"/></joint>\n",
+                xyz[0], xyz[1], xyz[2], rpy[0], rpy[1], rpy[2], axis[0], axis[1], axis[2]
+            );
+            parent = child;
+            if j % 3 == 1 {
+                let f = format!("f{j}");
+                s += &format!(
+                    "<joint name=\"fix{j}\" type=\"fixed\"><parent link=\"{parent}\"/>\
+                     <child link=\"{f}\"/><origin xyz=\"0.01 0.02 0.05\" rpy=\"0.3 -0.2 1.0\"/>\
+                     </joint>\n"
+                );
+                parent = f;
+            }
+        }
+        s += &format!(
+            "<joint name=\"ball\" type=\"fixed\"><parent link=\"{parent}\"/>\
+             <child link=\"ball_link\"/><origin xyz=\"0.01 -0.02 0.17\"/></joint>\n</robot>\n"
+        );
+        s
+    }
+
+    /// The largest distance, mm, between the URDF tip and the D-H probe
+    /// mapped through the base, over `samples` random readings in ±π.
+    fn worst_mm(chain: &Chain, dh: &DhConversion, rng: &mut ChaCha8Rng, samples: usize) -> f64 {
+        let n = chain.joints.len();
+        let params = dh.params.to_vec();
+        (0..samples)
+            .map(|_| {
+                let q: Vec<f64> = (0..n)
+                    .map(|_| rng.random_range(-std::f64::consts::PI..std::f64::consts::PI))
+                    .collect();
+                let urdf = Vector3::from(chain.position(&q)) * 1000.0;
+                let p = position(&params, &q);
+                let in_root = dh.base * Point3::new(p[0] / 1000.0, p[1] / 1000.0, p[2] / 1000.0);
+                (in_root.coords * 1000.0 - urdf).norm()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn random_chains_agree_to_a_nanometre() {
+        let mut rng = ChaCha8Rng::seed_from_u64(16);
+        for trial in 0..50 {
+            let joints = if trial % 2 == 0 { 6 } else { 7 };
+            let text = random_urdf(&mut rng, joints);
+            let urdf = parse_urdf(&text, "random.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
+            let chain = urdf.chain(None, "ball_link").unwrap();
+            assert_eq!(chain.joints.len(), joints);
+            let dh = chain.to_dh().unwrap();
+            let worst = worst_mm(&chain, &dh, &mut rng, 200);
+            // 1e-9 m = 1e-6 mm.
+            assert!(worst < 1e-6, "trial {trial}: {worst} mm\n{text}");
+        }
+    }
+
+    /// The robots of examples/mukca, with the right angles snapped (as the
+    /// arm files are made); as written, the Kinova's axes 2 and 3 (1.5708,
+    /// -3.1416) meet 38 km away, which is refused.
+    #[test]
+    fn shipped_urdfs_agree_to_a_nanometre() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/mukca/urdf");
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for (file, joints) in [("gen3lite.urdf", 6), ("panda.urdf", 7)] {
+            let text = std::fs::read_to_string(dir.join(file)).unwrap();
+            let urdf = parse_urdf(&text, file, UrdfOptions::default()).unwrap();
+            let chain = urdf.chain(None, "ball_link").unwrap();
+            assert_eq!(chain.joints.len(), joints);
+            let dh = chain.to_dh().unwrap();
+            let worst = worst_mm(&chain, &dh, &mut rng, 1000);
+            assert!(worst < 1e-6, "{file}: {worst} mm");
+            let as_written = parse_urdf(&text, file, UrdfOptions { snap_rad: 0.0 }).unwrap();
+            let dh = as_written.chain(None, "ball_link").unwrap().to_dh();
+            if file == "gen3lite.urdf" {
+                let e = dh.unwrap_err().to_string();
+                assert!(
+                    e.contains("`joint_2` and `joint_3` are parallel within 7.3e-6 rad"),
+                    "{e}"
+                );
+            } else {
+                // The Panda's URDF writes π/2 to full precision: nothing to snap.
+                assert_eq!(dh.unwrap().params, chain.to_dh().unwrap().params);
+            }
+        }
+    }
+
+    /// Consecutive parallel and intersecting axes: the special cases of the
+    /// common normal.
+    #[test]
+    fn parallel_and_intersecting_axes_agree() {
+        let text = r#"<robot name="p">
+          <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/>
+            <origin xyz="0.1 0.2 0.3" rpy="0 0 0.4"/><axis xyz="0 0 1"/></joint>
+          <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+            <origin xyz="0 0 0.2"/><axis xyz="0 0 1"/></joint>
+          <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+            <origin xyz="0.25 0 0" rpy="3.141592653589793 0 0"/><axis xyz="0 0 1"/></joint>
+          <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/>
+            <origin xyz="0 0 0.1" rpy="1.5707963267948966 0 0"/><axis xyz="0 0 1"/></joint>
+          <joint name="j5" type="revolute"><parent link="l4"/><child link="l5"/>
+            <origin xyz="0 0 0" rpy="0 1.5707963267948966 0"/><axis xyz="0 0 -1"/></joint>
+          <joint name="j6" type="continuous"><parent link="l5"/><child link="l6"/>
+            <origin xyz="0.05 0 0.1"/><axis xyz="1 0 0"/></joint>
+          <joint name="tool" type="fixed"><parent link="l6"/><child link="ball"/>
+            <origin xyz="0 0 0.15"/></joint>
+        </robot>"#;
+        let urdf = parse_urdf(text, "p.urdf", UrdfOptions::default()).unwrap();
+        let chain = urdf.chain(Some("b"), "ball").unwrap();
+        let dh = chain.to_dh().unwrap();
+        // j1 ∥ j2 on one line: a1 = 0; j2 ∥ j3 (antiparallel), 250 mm apart.
+        assert!(dh.params.joints[0].a.abs() < 1e-12);
+        assert!((dh.params.joints[1].a.abs() - 250.0).abs() < 1e-9);
+        assert!((dh.params.joints[1].alpha.abs() - std::f64::consts::PI).abs() < 1e-12);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        assert!(worst_mm(&chain, &dh, &mut rng, 500) < 1e-6);
+    }
+
+    #[test]
+    // 1.5708 and 3.1416 are what published URDFs write; that is the point.
+    #[allow(clippy::approx_constant)]
+    fn snapping_rounds_right_angles_only() {
+        let mut notes = Vec::new();
+        let v = snap([1.5708, -3.1416, 0.001], 1e-4, |i, _, to, _| {
+            notes.push((i, to))
+        });
+        assert_eq!(
+            v,
+            [std::f64::consts::FRAC_PI_2, -std::f64::consts::PI, 0.001]
+        );
+        assert_eq!(notes, [(0, "π/2".to_string()), (1, "-π".to_string())]);
+    }
+
+    #[test]
+    fn bad_input_is_located() {
+        let e = parse_urdf(
+            "<robot><joint name=\"a\"/></robot>",
+            "x.urdf",
+            UrdfOptions::default(),
+        )
+        .unwrap_err();
+        assert_eq!(e.to_string(), "x.urdf:1: field `type`: missing on <joint>");
+        let e = parse_urdf(
+            "<robot>\n<joint type=></robot>",
+            "x.urdf",
+            UrdfOptions::default(),
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().starts_with("x.urdf:2: not well-formed XML"),
+            "{e}"
+        );
+        let slider = r#"<robot><joint name="s" type="prismatic"><parent link="a"/>
+            <child link="b"/></joint></robot>"#;
+        let urdf = parse_urdf(slider, "s.urdf", UrdfOptions::default()).unwrap();
+        let e = urdf.chain(None, "b").unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("s.urdf:1: field `type`: joint `s`"),
+            "{e}"
+        );
+        let e = urdf.chain(None, "nowhere").unwrap_err();
+        assert!(e.to_string().contains("no link `nowhere`"), "{e}");
+    }
+}

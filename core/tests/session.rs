@@ -1,0 +1,182 @@
+//! The session from Rust, without the command line: every setting out of
+//! range is refused by the library naming the setting, and the same seed
+//! gives the same report bytes whatever the thread count, on enough points
+//! that the work is really split.
+
+use aacmm_core::calibrate::{CalibrateOptions, CalibrationError, FixSpec, LmOptions, Method};
+use aacmm_core::io::ReferenceLength;
+use aacmm_core::params::DhParams;
+use aacmm_core::session::Problem;
+use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
+use aacmm_core::{Arm, DataSet};
+
+fn nominal() -> Arm {
+    Arm::without_limits("nominal", DhParams::paper_nominal())
+}
+
+fn small_data() -> DataSet {
+    let mut s = CampaignSettings::new(1, ErrorModel::Paper, 5, 6);
+    s.reference_lengths = 2;
+    simulate(&nominal(), &s).unwrap().data_set().unwrap()
+}
+
+/// The field the library names for `change` applied to the defaults.
+fn refused(change: impl Fn(&mut CalibrateOptions)) -> &'static str {
+    let mut o = CalibrateOptions::default();
+    change(&mut o);
+    match Problem::new(nominal(), small_data(), o) {
+        Err(CalibrationError::Option(e)) => {
+            assert!(
+                !e.to_string().contains("--"),
+                "a library error names a flag: {e}"
+            );
+            e.field
+        }
+        Err(e) => panic!("refused for another reason: {e}"),
+        Ok(_) => panic!("accepted"),
+    }
+}
+
+#[test]
+fn every_invalid_option_is_refused_by_its_field() {
+    type Change = Box<dyn Fn(&mut CalibrateOptions)>;
+    let cases: Vec<(&str, Change)> = vec![
+        (
+            "noise.encoder_rad",
+            Box::new(|o| o.noise.encoder_rad = Some(-1e-4)),
+        ),
+        (
+            "noise.probe_mm",
+            Box::new(|o| o.noise.probe_mm = Some(f64::NAN)),
+        ),
+        (
+            "noise.probe_mm",
+            Box::new(|o| {
+                o.noise.encoder_rad = Some(0.0);
+                o.noise.probe_mm = Some(0.0);
+            }),
+        ),
+        (
+            "noise.length_default_mm",
+            Box::new(|o| o.noise.length_default_mm = -0.1),
+        ),
+        (
+            "noise.length_weight",
+            Box::new(|o| o.noise.length_weight = Some(0.0)),
+        ),
+        ("fix", Box::new(|o| o.fix = FixSpec::Columns(vec![0, 27]))),
+        ("fix", Box::new(|o| o.fix = FixSpec::Columns(vec![6, 6]))),
+        ("threads", Box::new(|o| o.lm.threads = 0)),
+        ("lm.max_iterations", Box::new(|o| o.lm.max_iterations = 0)),
+        ("lm.ftol", Box::new(|o| o.lm.ftol = -1.0)),
+        ("lm.gtol", Box::new(|o| o.lm.gtol = f64::INFINITY)),
+        ("anneal.t0", Box::new(|o| o.anneal.t0 = 0.0)),
+        ("anneal.cooling", Box::new(|o| o.anneal.cooling = 1.0)),
+        ("anneal.chain", Box::new(|o| o.anneal.chain = 0)),
+        ("anneal.t_min", Box::new(|o| o.anneal.t_min = -1.0)),
+        ("anneal.target", Box::new(|o| o.anneal.target = f64::NAN)),
+        ("anneal.step_mm", Box::new(|o| o.anneal.step_mm = 0.0)),
+        (
+            "anneal.twist_step_deg",
+            Box::new(|o| o.anneal.twist_step_deg = -0.1),
+        ),
+        (
+            "anneal.zero_step_deg",
+            Box::new(|o| o.anneal.zero_step_deg = f64::NAN),
+        ),
+        (
+            "anneal.max_evaluations",
+            Box::new(|o| o.anneal.max_evaluations = 0),
+        ),
+        ("switch.window", Box::new(|o| o.switch.window = 0)),
+        ("switch.epsilon", Box::new(|o| o.switch.epsilon = -1.0)),
+        ("global.grid_cells", Box::new(|o| o.global.grid_cells = 0)),
+        ("global.max_starts", Box::new(|o| o.global.max_starts = 0)),
+        (
+            "global.confirmations",
+            Box::new(|o| o.global.confirmations = 0),
+        ),
+        (
+            "global.confirmations",
+            Box::new(|o| o.global.confirmations = 1000),
+        ),
+        (
+            "global.start_iterations",
+            Box::new(|o| o.global.start_iterations = 0),
+        ),
+        (
+            "global.noise_floor_k",
+            Box::new(|o| o.global.noise_floor_k = 0.0),
+        ),
+    ];
+    for (field, change) in &cases {
+        assert_eq!(refused(change), *field);
+    }
+    // Folds: 2 up to the groups of points joined by lengths.
+    let problem = Problem::new(nominal(), small_data(), CalibrateOptions::default()).unwrap();
+    for k in [0, 1, 6] {
+        let e = problem.clone().with_cross_validation(k).unwrap_err();
+        assert_eq!(e.field, "cross_validate", "{k}");
+    }
+    assert!(problem.with_cross_validation(2).is_ok());
+    // Data read for another arm.
+    let seven = Arm::without_limits("seven", {
+        let mut p = DhParams::paper_nominal();
+        p.joints.push(p.joints[5]);
+        p
+    });
+    assert!(matches!(
+        Problem::new(seven, small_data(), CalibrateOptions::default()),
+        Err(CalibrationError::Joints { arm: 7, data: 6 })
+    ));
+}
+
+/// 1200 points of 3 touches each, joined by 50 lengths: enough that the
+/// normal equations and the metrics split across threads.
+fn many_points() -> DataSet {
+    let points = 1200;
+    let mut labels = Vec::new();
+    let mut q = Vec::new();
+    for p in 0..points {
+        for t in 0..3 {
+            labels.push(format!("P{p}"));
+            let row: Vec<f64> = (0..6)
+                .map(|j| ((p * 7 + t * 13 + j * 3) as f64 * 0.37).sin() * 1.5)
+                .collect();
+            q.push(row);
+        }
+    }
+    let lengths: Vec<ReferenceLength> = (0..50)
+        .map(|i| ReferenceLength {
+            a: format!("P{}", 2 * i),
+            b: format!("P{}", 2 * i + 1),
+            distance: 100.0 + i as f64,
+            uncertainty: None,
+            line: 0,
+        })
+        .collect();
+    DataSet::from_touches(&labels, &q, &lengths).unwrap()
+}
+
+#[test]
+fn the_same_seed_gives_the_same_report_at_1_2_and_4_threads() {
+    let data = many_points();
+    assert!(data.points().len() >= 1000);
+    let report = |threads: usize| {
+        let options = CalibrateOptions {
+            method: Method::Lm,
+            fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
+            lm: LmOptions::default().threads(threads).max_iterations(8),
+            seed: 5,
+            ..CalibrateOptions::default()
+        };
+        Problem::new(nominal(), data.clone(), options)
+            .unwrap()
+            .run()
+            .unwrap()
+            .to_json()
+    };
+    let one = report(1);
+    assert_eq!(one, report(2), "2 threads");
+    assert_eq!(one, report(4), "4 threads");
+}

@@ -1,0 +1,147 @@
+//! Real recorded data (MUKCa): leave one placement out.
+//!
+//! ```text
+//! cargo run --release --example mukca -- DIR [--method lm|sa|hybrid|global] [--fix auto|NAMES]
+//! cargo run --release --example mukca -- examples/mukca/kinova-1
+//! ```
+//!
+//! `DIR` holds `arm.toml` (the nominal arm), `poses.csv` (readings in rad,
+//! points labelled `PLACEMENT-hK`) and `lengths.csv` (the 50 mm between the
+//! two sockets of a placement); see `examples/mukca/README.md`. For each
+//! placement the arm is calibrated with `aacmm_core::calibrate::calibrate`
+//! (the library's defaults unless `--method`/`--fix` say otherwise) on all
+//! the other placements, and the held-out one is scored with the nominal and
+//! the calibrated arm: consistency (mean distance of a socket's touches to
+//! their centroid, averaged over its sockets) and `|d − 50|` where it has
+//! both sockets. The logic is `aacmm_core::placements`.
+
+use std::io::Write;
+use std::path::Path;
+
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, Method};
+use aacmm_core::dataset::DataSet;
+use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
+use aacmm_core::placements::{PlacementSummary, leave_one_placement_out};
+use anyhow::{Context, bail};
+
+fn main() -> anyhow::Result<()> {
+    let mut dir = None;
+    let mut options = CalibrateOptions::default();
+    let mut fix_text = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--method" => {
+                let m = args.next().context("--method needs a value")?;
+                options.method = Method::parse(&m).with_context(|| {
+                    format!("--method `{m}`: expected lm, sa, hybrid or global")
+                })?;
+            }
+            "--fix" => fix_text = Some(args.next().context("--fix needs a value")?),
+            _ if a.starts_with("--") => bail!("unknown option `{a}`"),
+            _ if dir.is_none() => dir = Some(a),
+            _ => bail!("one data folder only (got `{a}` too)"),
+        }
+    }
+    let dir = dir.context("usage: mukca DIR [--method M] [--fix auto|NAMES]")?;
+    let dir = Path::new(&dir);
+    let (arm, warnings) = read_arm(&dir.join("arm.toml"))?;
+    let (poses, pose_warnings) = read_poses(
+        &dir.join("poses.csv"),
+        AngleUnit::Rad,
+        Some(arm.params.joint_count()),
+    )?;
+    let mut err = std::io::stderr().lock();
+    for w in warnings.iter().chain(&pose_warnings) {
+        writeln!(err, "warning: {w}")?;
+    }
+    if let Some(f) = &fix_text {
+        options.fix = FixSpec::parse(f, arm.params.joint_count())?;
+    }
+    let poses_file = dir.join("poses.csv").display().to_string();
+    let lengths_path = dir.join("lengths.csv");
+    let lengths = read_lengths(&lengths_path)?;
+    let data = DataSet::from_poses(&poses, &poses_file)?
+        .with_lengths(&lengths, &lengths_path.display().to_string())?;
+    let folds = leave_one_placement_out(&arm.params, &data, &options)?;
+    let summary = PlacementSummary::of(&folds);
+
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{}: {} touches, {} sockets, {} lengths; arm `{}`; method {}, fix {}",
+        dir.display(),
+        data.len(),
+        data.points().len(),
+        data.references().len(),
+        arm.name,
+        options.method.name(),
+        fix_text.as_deref().unwrap_or("auto"),
+    )?;
+    writeln!(
+        out,
+        "Leave one placement out: calibrated on the others, scored on the held-out one (mm)"
+    )?;
+    writeln!(
+        out,
+        "{:<22} {:>7} {:>7}  {:>9} {:>9} {:>7}  {:>9} {:>9} {:>7}  fit",
+        "held out",
+        "sockets",
+        "touches",
+        "cons nom",
+        "cons cal",
+        "change",
+        "|d-50| nom",
+        "|d-50| cal",
+        "change"
+    )?;
+    for f in &folds {
+        let (dn, dc, dch) = match (f.nominal.length_max, f.calibrated.length_max) {
+            (Some(n), Some(c)) => (
+                format!("{n:.3}"),
+                format!("{c:.3}"),
+                format!("{:+.0} %", 100.0 * (c - n) / n),
+            ),
+            _ => ("-".into(), "-".into(), "".into()),
+        };
+        writeln!(
+            out,
+            "{:<22} {:>7} {:>7}  {:>9.3} {:>9.3} {:>7}  {:>10} {:>10} {:>7}  {}",
+            f.placement,
+            f.sockets.len(),
+            f.touches,
+            f.nominal.e_mean,
+            f.calibrated.e_mean,
+            format!(
+                "{:+.0} %",
+                100.0 * (f.calibrated.e_mean - f.nominal.e_mean) / f.nominal.e_mean
+            ),
+            dn,
+            dc,
+            dch,
+            if f.successful { "ok" } else { "NOT CONVERGED" }
+        )?;
+    }
+    let (dn, dc, dch) = match (
+        summary.distance_nominal,
+        summary.distance_calibrated,
+        summary.distance_change_percent(),
+    ) {
+        (Some(n), Some(c), Some(p)) => (format!("{n:.3}"), format!("{c:.3}"), format!("{p:+.0} %")),
+        _ => ("-".into(), "-".into(), "".into()),
+    };
+    writeln!(
+        out,
+        "{:<22} {:>7} {:>7}  {:>9.3} {:>9.3} {:>7}  {:>10} {:>10} {:>7}",
+        "mean",
+        "",
+        "",
+        summary.consistency_nominal,
+        summary.consistency_calibrated,
+        format!("{:+.0} %", summary.consistency_change_percent()),
+        dn,
+        dc,
+        dch
+    )?;
+    Ok(())
+}
