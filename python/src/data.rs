@@ -1,11 +1,10 @@
 //! `aacmm.DataSet`: touches grouped by point, with reference lengths — from
 //! files or from arrays.
 
-use std::collections::{HashMap, HashSet};
 use std::path::PathBuf;
 
-use aacmm_core::dataset::{DataSet as CoreDataSet, MIN_TOUCHES};
-use aacmm_core::io::{Poses, ReferenceLength, read_lengths, read_poses, source_name};
+use aacmm_core::dataset::DataSet as CoreDataSet;
+use aacmm_core::io::{ReferenceLength, read_lengths, read_poses, source_name};
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 
@@ -30,112 +29,28 @@ pub struct DataSet {
 /// `(point_a, point_b, distance_mm[, uncertainty_mm])`.
 type LengthTuple = (String, String, f64, Option<f64>);
 
-/// The data set of touches given as arrays: `labels[i]` is the point touched
-/// by pose `i` (row `i` of `q`, `joints` readings in rad, row-major), and
-/// reference lengths between labelled points. Checked as the file readers
-/// check files; messages name the argument and index.
-///
-/// The one place the bindings build a data set from arrays: it goes through
-/// a `Poses` value and `DataSet::from_poses`/`with_lengths` until the
-/// library has a constructor for touches that are not in files.
-pub(crate) fn touches_data_set(
+/// The data set of touches given as arrays (`q`: `joints` readings per
+/// touch, rad, row-major): the library's [`CoreDataSet::from_touches`], whose
+/// messages name `<arrays>`, the 1-based touch or length and the field.
+fn touches_data_set(
     labels: &[String],
     joints: usize,
     q: &[f64],
     lengths: &[LengthTuple],
 ) -> Result<CoreDataSet> {
-    let n = labels.len();
-    if n == 0 {
-        return Err(Error::input("labels: no touches"));
-    }
-    if q.len() != n * joints {
-        return Err(Error::value(format!(
-            "q: {} rows for {n} labels (one row of {joints} readings per touch)",
-            q.len() / joints.max(1)
-        )));
-    }
-    if let Some(i) = q.iter().position(|v| !v.is_finite()) {
-        return Err(Error::input(format!(
-            "q[{}, {}] = {}: readings must be finite numbers",
-            i / joints,
-            i % joints,
-            q[i]
-        )));
-    }
-    if let Some(i) = labels.iter().position(|l| l.trim() != l || l.is_empty()) {
-        return Err(Error::input(format!(
-            "labels[{i}] = {:?}: a label is not empty and has no surrounding whitespace",
-            labels[i]
-        )));
-    }
-    let mut touches: HashMap<&str, (usize, usize)> = HashMap::new();
-    for (i, l) in labels.iter().enumerate() {
-        touches.entry(l.as_str()).or_insert((i, 0)).1 += 1;
-    }
-    let mut few: Vec<(usize, &str, usize)> = touches
+    let rows: Vec<&[f64]> = q.chunks_exact(joints.max(1)).collect();
+    let refs: Vec<ReferenceLength> = lengths
         .iter()
-        .filter(|(_, (_, count))| *count < MIN_TOUCHES)
-        .map(|(&label, &(first, count))| (first, label, count))
-        .collect();
-    few.sort_unstable();
-    if let Some(&(first, label, count)) = few.first() {
-        return Err(Error::input(format!(
-            "labels[{first}]: point `{label}` has {count} touch{}; at least {MIN_TOUCHES} are needed",
-            if count == 1 { "" } else { "es" }
-        )));
-    }
-    let poses = Poses {
-        labels: labels.to_vec(),
-        joints,
-        q: q.chunks_exact(joints).map(<[f64]>::to_vec).collect(),
-        lines: (1..=n).collect(),
-    };
-    let data = CoreDataSet::from_poses(&poses, "labels")?;
-    if lengths.is_empty() {
-        return Ok(data);
-    }
-    let mut pairs = HashSet::new();
-    let mut refs = Vec::with_capacity(lengths.len());
-    for (i, (a, b, distance, uncertainty)) in lengths.iter().enumerate() {
-        let at = |m: String| Error::input(format!("lengths[{i}]: {m}"));
-        for id in [a, b] {
-            if !touches.contains_key(id.as_str()) {
-                return Err(at(format!("unknown point `{id}`: no touch has this label")));
-            }
-        }
-        if a == b {
-            return Err(at(format!(
-                "point_b = point_a = `{a}`: a length needs two points"
-            )));
-        }
-        if !(distance.is_finite() && *distance > 0.0) {
-            return Err(at(format!(
-                "distance = {distance}: must be a positive number (mm)"
-            )));
-        }
-        if let Some(u) = uncertainty
-            && !(u.is_finite() && *u >= 0.0)
-        {
-            return Err(at(format!(
-                "uncertainty = {u}: must be a finite number >= 0 (mm)"
-            )));
-        }
-        let pair = if a < b { (a, b) } else { (b, a) };
-        if !pairs.insert(pair) {
-            return Err(at(format!(
-                "the pair `{}`–`{}` is given twice",
-                pair.0, pair.1
-            )));
-        }
-        refs.push(ReferenceLength {
+        .enumerate()
+        .map(|(i, (a, b, distance, uncertainty))| ReferenceLength {
             a: a.clone(),
             b: b.clone(),
             distance: *distance,
             uncertainty: *uncertainty,
             line: i + 1,
-        });
-    }
-    Ok(data.with_lengths(&refs, "lengths")?)
+        })
+        .collect();
+    Ok(CoreDataSet::from_touches(labels, &rows, &refs)?)
 }
 
 /// A length as a Python tuple, or a clear error.
@@ -172,7 +87,8 @@ impl DataSet {
     /// values, taken as `str`), `q` an array-like `n × joints` of readings in
     /// `angle_unit`, and `lengths` an optional list of `(point_a, point_b,
     /// distance_mm[, uncertainty_mm])`. Checked as the file readers check
-    /// files (`aacmm.InputError` naming the argument and index).
+    /// files (`aacmm.InputError` naming `<arrays>`, the 1-based touch or
+    /// length, and the field).
     #[new]
     #[pyo3(signature = (labels, q, lengths = None, angle_unit = "rad"))]
     fn new(

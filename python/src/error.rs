@@ -5,7 +5,7 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use aacmm_core::calibrate::CalibrationError as CoreCalibrationError;
+use aacmm_core::calibrate::{CalibrationError as CoreCalibrationError, OptionError};
 use aacmm_core::error::InputError as CoreInputError;
 use aacmm_core::kernel::KernelError;
 use aacmm_core::metrics::MetricsError;
@@ -82,11 +82,6 @@ impl Error {
         Error::new(Kind::Value, message)
     }
 
-    /// Bad input data (`aacmm.InputError`).
-    pub(crate) fn input(message: impl Into<String>) -> Error {
-        Error::new(Kind::Input, message)
-    }
-
     /// The same error with `what: ` before its message.
     pub(crate) fn prefixed(mut self, what: &str) -> Error {
         self.message = format!("{what}: {}", self.message);
@@ -127,13 +122,41 @@ impl From<KernelError> for Error {
     }
 }
 
+/// The Python argument of each library setting ([`OptionError::field`])
+/// the bindings expose; the others keep the library's path.
+const ARGUMENTS: [(&str, &str); 7] = [
+    ("noise.encoder_rad", "encoder_deg"),
+    ("noise.probe_mm", "probe_mm"),
+    ("noise.length_default_mm", "length_default_mm"),
+    ("noise.length_weight", "length_weight"),
+    ("fix", "fix"),
+    ("threads", "threads"),
+    ("cross_validate", "cross_validate"),
+];
+
+/// A refused setting as a `ValueError` naming the Python argument. The
+/// encoder σ is refused in the library's radians, so its message gives the
+/// reason only (the caller knows the degrees it passed), as the command line
+/// does.
+impl From<OptionError> for Error {
+    fn from(e: OptionError) -> Error {
+        let message = match ARGUMENTS.iter().find(|(field, _)| *field == e.field) {
+            Some((field, arg)) if field.starts_with("noise.encoder") => {
+                format!("{arg}: {}", e.reason)
+            }
+            Some((_, arg)) => format!("{arg} = {}: {}", e.value, e.reason),
+            None => e.to_string(),
+        };
+        Error::value(message)
+    }
+}
+
 impl From<CoreCalibrationError> for Error {
     fn from(e: CoreCalibrationError) -> Error {
         let kind = match &e {
+            CoreCalibrationError::Option(o) => return o.clone().into(),
             CoreCalibrationError::Kernel(KernelError::Unsupported(_)) => Kind::Unsupported,
-            CoreCalibrationError::UnknownParameter { .. } | CoreCalibrationError::Options(_) => {
-                Kind::Value
-            }
+            CoreCalibrationError::Joints { .. } => Kind::Value,
             _ => Kind::Calibration,
         };
         Error::new(kind, e.to_string())

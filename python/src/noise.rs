@@ -1,16 +1,15 @@
 //! `aacmm.Noise`: what is known of the measurement noise, in the units the
-//! command line's flags use.
+//! command line uses (degrees for encoders, mm otherwise).
 
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::residuals::Noise as CoreNoise;
 use pyo3::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 
-/// What is known of the measurement noise (the command line's
-/// `--encoder-noise`, `--probe-noise`, `--length-uncertainty`,
-/// `--length-weight`). With neither touch noise stated, the touch σ is
-/// estimated from the fit.
+/// What is known of the measurement noise (the command line's noise
+/// options). With neither touch noise stated, the touch σ is estimated from
+/// the fit.
 #[pyclass(frozen, module = "aacmm")]
 #[derive(Clone)]
 pub struct Noise {
@@ -19,51 +18,23 @@ pub struct Noise {
 }
 
 impl Noise {
-    /// The command line's defaults: nothing stated, lengths ± 0.001 mm.
-    pub(crate) fn default_noise() -> CoreNoise {
-        CoreNoise {
-            length_default_mm: DEFAULT_LENGTH_SIGMA_MM,
-            ..CoreNoise::default()
-        }
-    }
-
+    /// The noise in the library's units, checked by the library
+    /// ([`CoreNoise::check`]; a refusal names the Python argument). A
+    /// length weight of 0 means none, as on the command line.
     fn checked(
         encoder_deg: Option<f64>,
         probe_mm: Option<f64>,
         length_default_mm: f64,
         length_weight: Option<f64>,
     ) -> Result<Noise> {
-        for (name, v) in [
-            ("encoder_deg", encoder_deg),
-            ("probe_mm", probe_mm),
-            ("length_default_mm", Some(length_default_mm)),
-            ("length_weight", length_weight),
-        ] {
-            if let Some(v) = v
-                && !(v.is_finite() && v >= 0.0)
-            {
-                return Err(Error::value(format!(
-                    "{name} = {v}: must be a finite number ≥ 0"
-                )));
-            }
-        }
-        if encoder_deg.unwrap_or(0.0) == 0.0
-            && probe_mm.unwrap_or(0.0) == 0.0
-            && (encoder_deg.is_some() || probe_mm.is_some())
-        {
-            return Err(Error::value(
-                "encoder_deg and probe_mm are both 0: a touch needs some uncertainty",
-            ));
-        }
-        Ok(Noise {
-            noise: CoreNoise {
-                encoder_rad: encoder_deg.map(f64::to_radians),
-                probe_mm,
-                length_default_mm,
-                length_weight: length_weight.filter(|&w| w > 0.0),
-            },
-            encoder_deg,
-        })
+        let noise = CoreNoise {
+            encoder_rad: encoder_deg.map(f64::to_radians),
+            probe_mm,
+            length_default_mm,
+            length_weight: length_weight.filter(|&w| w != 0.0),
+        };
+        noise.check()?;
+        Ok(Noise { noise, encoder_deg })
     }
 }
 
@@ -72,8 +43,9 @@ impl Noise {
     /// `encoder_deg`: σ of each encoder reading, degrees; `probe_mm`: σ of
     /// the probe seating per axis, mm; `length_default_mm`: σ of a reference
     /// length that states none, mm; `length_weight`: weight of every
-    /// reference-length residual, 1/mm, overriding the uncertainties.
-    /// Values must be finite and ≥ 0 (`ValueError`).
+    /// reference-length residual, 1/mm, overriding the uncertainties (0:
+    /// none). Values must be finite and ≥ 0, and stated touch noise not 0
+    /// on both counts (`ValueError`, from the library's check).
     #[new]
     #[pyo3(signature = (encoder_deg = None, probe_mm = None, length_default_mm = DEFAULT_LENGTH_SIGMA_MM, length_weight = None))]
     fn new(

@@ -3,7 +3,8 @@
 
 use aacmm_core::identify::identify as core_identify;
 use aacmm_core::metrics::evaluate as core_evaluate;
-use aacmm_core::residuals::Weights;
+use aacmm_core::residuals::Noise as CoreNoise;
+use aacmm_core::calibrate::LmOptions;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -13,11 +14,16 @@ use crate::error::{Error, detached};
 use crate::noise::Noise;
 use crate::to_dict;
 
-/// Worker threads: `threads`, or one per core; 0 is refused.
+/// Worker threads: `threads`, or one per core (`None`); the library's check
+/// refuses 0.
 pub(crate) fn threads(threads: Option<usize>) -> PyResult<usize> {
     match threads {
-        Some(0) => Err(Error::value("threads = 0: at least 1 (or None for one per core)").into()),
-        Some(n) => Ok(n),
+        Some(n) => {
+            let mut lm = LmOptions::default();
+            lm.threads = n;
+            lm.check().map_err(Error::from)?;
+            Ok(n)
+        }
         None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
     }
 }
@@ -51,11 +57,10 @@ pub fn identify<'py>(
     noise: Option<&Noise>,
     threads: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let noise = noise.map_or_else(Noise::default_noise, |n| n.noise);
+    let noise = noise.map_or_else(CoreNoise::default, |n| n.noise);
     let threads = self::threads(threads)?;
     let id = detached(py, || {
-        let weights = Weights::new(&arm.kernel, &data.data, &noise, 0.01)?;
-        core_identify(&arm.arm.params, &data.data, &weights, threads)
+        core_identify(&arm.arm.params, &data.data, &noise, threads)
             .map_err(|e| Error::from(e).prefixed(&arm.source))
     })?;
     to_dict(py, &id)
