@@ -7,7 +7,8 @@ matplotlib is installed. Run from the repository root after
 
 The same calibration as the README's main command (``aacmm calibrate
 --encoder-noise 0.005 --probe-noise 0.01 --cross-validate 3``); OUT_DIR
-(default ``target/python-example``) receives calibration.json, calibrated.toml
+(default ``target/python-example``) receives the command line's files
+(calibrated.toml, calibration.json, timing.json, report.html and its figures)
 and fig6.png.
 """
 
@@ -37,7 +38,7 @@ cal = aacmm.calibrate(nominal, data, noise=noise, cross_validate=3)
 took = time.perf_counter() - start
 s = cal.summary
 print(
-    f"{s['method']}: {s['termination_text']} after {s['iterations']} iterations "
+    f"{s['method']}: {s['stop_text']} after {s['iterations']} iterations "
     f"({took * 1e3:.1f} ms); {s['free_parameters']} free parameters, "
     f"sigma0 = {s['sigma0']:.3f}"
 )
@@ -66,9 +67,8 @@ for fold in s["cross_validation"]:
         f"{f['before']['e_mean']:.4f} -> {f['after']['e_mean']:.4f} mm"
     )
 
-(out / "calibration.json").write_text(cal.to_json() + "\n")
-(out / "calibrated.toml").write_text(cal.arm.to_toml())
-print(f"wrote {out / 'calibration.json'}, {out / 'calibrated.toml'}")
+written = cal.write(out)
+print(f"wrote {len(written)} files into {out} (as aacmm calibrate --out)")
 
 # %% Fig. 6, if matplotlib is there.
 try:

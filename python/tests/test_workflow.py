@@ -41,16 +41,31 @@ def test_identify_equals_the_cli_json(cli, arm, data, tmp_path):
     assert ours == json.loads(out.read_text())["identification"]
 
 
-def test_calibration_equals_the_cli_calibration_json(cli, arm, data, tmp_path):
-    cli(
+def test_calibration_equals_the_cli_files(cli, arm, data, tmp_path):
+    theirs, ours = tmp_path / "cli", tmp_path / "py"
+    printed = cli(
         "calibrate", "--arm", ARM, "--data", POSES, "--lengths", LENGTHS,
         "--encoder-noise", "0.005", "--probe-noise", "0.01", "--cross-validate", "3",
-        "--out", tmp_path,
+        "--out", theirs,
     )
     noise = aacmm.Noise(encoder_deg=0.005, probe_mm=0.01)
     cal = aacmm.calibrate(arm, data, noise=noise, cross_validate=3, threads=1)
-    assert cal.to_json() + "\n" == (tmp_path / "calibration.json").read_text()
-    assert cal.arm.to_toml() == (tmp_path / "calibrated.toml").read_text()
+    assert cal.to_json() == (theirs / "calibration.json").read_text()
+    assert cal.arm.to_toml() == (theirs / "calibrated.toml").read_text()
+    assert printed.startswith(cal.text()) and "Parameters (mm, deg" in cal.text()
+    # write(dir) writes the command line's files, byte for byte, apart from
+    # the wall times in timing.json.
+    written = cal.write(ours)
+    names = sorted(p.name for p in theirs.iterdir())
+    assert sorted(p.name for p in written) == names and "report.html" in names
+    assert all(p.parent == ours for p in written)
+    for name in names:
+        if name == "timing.json":
+            a, b = (json.loads((d / name).read_text()) for d in (ours, theirs))
+            assert [p["name"] for p in a["phases"]] == [p["name"] for p in b["phases"]]
+            assert a["total_ms"] > 0
+        else:
+            assert (ours / name).read_bytes() == (theirs / name).read_bytes(), name
     # The arrays are the report's numbers in mm and rad.
     report = cal.report
     names = aacmm.param_names(6)
@@ -59,13 +74,15 @@ def test_calibration_equals_the_cli_calibration_json(cli, arm, data, tmp_path):
         value = cal.params[i] if e["unit"] == "mm" else np.degrees(cal.params[i])
         assert np.isclose(value, e["calibrated"], rtol=1e-12, atol=1e-12)
         if e["fixed"] is None:
-            assert not np.isnan(cal.sigma[i])
+            sigma = cal.sigma[i] if e["unit"] == "mm" else np.degrees(cal.sigma[i])
+            assert np.isclose(sigma, e["sigma"], rtol=1e-12, atol=0)
         else:
             assert np.isnan(cal.sigma[i]) and cal.fixed[e["name"]] == e["fixed"]
     assert len(cal.free) == 21 == cal.correlation.shape[0] == cal.summary["free_parameters"]
     assert np.allclose(np.diag(cal.correlation), 1.0)
     s = cal.summary
     assert s["successful"] and cal.successful and s["method"] == "global"
+    assert "final LM" in s["stop_text"] and "global" in s["stop"]
     assert s["fitted"]["after"]["e_mean"] < s["fitted"]["before"]["e_mean"] / 10
     assert len(s["cross_validation"]) == 3 and s["held_out"] is None
     # Threads change nothing; arrays give the same parameters as files.
