@@ -27,7 +27,8 @@ class AacmmError(Exception):
 
 class InputError(AacmmError):
     """Invalid input data: a file's content (the message names file, line and
-    field) or arrays (the message names the argument and index)."""
+    field) or arrays (the message names ``<arrays>``, the 1-based touch or
+    length, and the field)."""
 
 class CalibrationError(AacmmError):
     """The calibration (or identification, evaluation, simulation) cannot run
@@ -101,8 +102,8 @@ class DataSet:
     ) -> None:
         """Touches from arrays: ``labels`` (one per touch, taken as str), ``q``
         n × joints readings, ``lengths`` ``(point_a, point_b, distance_mm[,
-        uncertainty_mm])``. Checked as files are (InputError naming the
-        argument and index)."""
+        uncertainty_mm])``. Checked by the library as files are (InputError
+        naming ``<arrays>``, the 1-based touch or length, and the field)."""
     @staticmethod
     def from_files(
         poses: _Path,
@@ -136,9 +137,11 @@ class DataSet:
         """``file:line`` of touch ``i`` (data set order)."""
 
 class Noise:
-    """What is known of the measurement noise (the command line's
-    ``--encoder-noise`` (degrees), ``--probe-noise``, ``--length-uncertainty``,
-    ``--length-weight``)."""
+    """What is known of the measurement noise (the command line's noise
+    options): σ of each encoder reading (degrees), of the probe seating (mm),
+    of a reference length that states none (mm), and a weight of every
+    reference length (1/mm; 0 or None: from the uncertainties). Checked by the
+    library when made: ValueError naming the argument."""
 
     def __init__(
         self,
@@ -231,17 +234,26 @@ class Calibration:
     def correlation(self) -> _Array:
         """Correlation matrix of the free parameters."""
     @property
-    def successful(self) -> bool: ...
+    def successful(self) -> bool:
+        """Whether the solution is usable (converged to a confirmed minimum)."""
     @property
     def summary(self) -> Dict[str, Any]:
-        """Method, termination, iterations, dof, σ0, touch σ, costs, and the
-        before/after figures (fitted, held out, cross-validation folds)."""
+        """Method, why it stopped (``stop``, and ``stop_text`` in words),
+        iterations, dof, σ0, touch σ, costs, and the before/after figures
+        (fitted, held out, cross-validation folds)."""
     @property
     def report(self) -> Dict[str, Any]:
         """Everything calibration.json holds (mm and degrees)."""
     def to_json(self) -> str:
-        """The text of ``aacmm calibrate``'s calibration.json (without the
-        final newline)."""
+        """The text of ``aacmm calibrate``'s calibration.json, final newline
+        included."""
+    def text(self) -> str:
+        """The summary ``aacmm calibrate`` prints."""
+    def write(self, dir: _Path) -> List[pathlib.Path]:
+        """Writes the files of ``aacmm calibrate --out dir`` (created if
+        missing): calibrated.toml, calibration.json, timing.json, report.html
+        and its SVG figures; returns their paths. OSError when one cannot be
+        written."""
 
 def calibrate(
     arm: Arm,
@@ -255,6 +267,8 @@ def calibrate(
     cross_validate: Optional[int] = None,
     validate: Optional[DataSet] = None,
 ) -> Calibration:
-    """Calibrates ``arm`` on ``data`` (``aacmm calibrate`` without its files);
-    the parameters are the command line's bit for bit. ``fix`` defaults to
-    ``"auto"``."""
+    """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
+    calibrate`` runs it; the report is the command line's bit for bit.
+    ``fix`` defaults to ``"auto"``. ValueError for a bad option (naming the
+    argument), CalibrationError when the data cannot determine the free
+    parameters."""

@@ -54,7 +54,7 @@ def main():
             timing = json.load(open(os.path.join(out, "timing.json")))
             cli_fit.append(timing["fit_ms"] / 1e3)
             cli_total.append(timing["total_ms"] / 1e3)
-        same = cal.to_json() + "\n" == open(os.path.join(out, "calibration.json")).read()
+        same = cal.to_json() == open(os.path.join(out, "calibration.json")).read()
     print(f"shipped campaign, {RUNS} runs each (calibration.json identical: {same}):")
     print("                                 Python        CLI    Python/CLI")
     for name, a, b in (("fit", py_fit, cli_fit), ("fit + validation", py_total, cli_total)):

@@ -129,11 +129,13 @@ pub fn calibrate(
         None => "auto".to_string(),
     };
     let fix = FixSpec::parse(&fix, arm.joints()).map_err(Error::from)?;
-    let mut lm = LmOptions::default();
     // None: one per core; 0 is left to the library to refuse.
-    lm.threads = match threads {
-        Some(n) => n,
-        None => self::threads(None)?,
+    let lm = LmOptions {
+        threads: match threads {
+            Some(n) => n,
+            None => self::threads(None)?,
+        },
+        ..LmOptions::default()
     };
     let options = CalibrateOptions {
         fix,
@@ -299,10 +301,7 @@ impl Calibration {
     fn write(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
         detached(py, || {
             std::fs::create_dir_all(&dir).map_err(|e| {
-                Error::new(
-                    Kind::Io,
-                    format!("{}: cannot create: {e}", dir.display()),
-                )
+                Error::new(Kind::Io, format!("{}: cannot create: {e}", dir.display()))
             })?;
             self.report
                 .write(&self.problem, &dir, self.seconds)

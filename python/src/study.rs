@@ -1,10 +1,10 @@
 //! `aacmm.evaluate` and `aacmm.identify`: the figures of an arm on data, and
 //! what the data can determine.
 
+use aacmm_core::calibrate::LmOptions;
 use aacmm_core::identify::identify as core_identify;
 use aacmm_core::metrics::evaluate as core_evaluate;
 use aacmm_core::residuals::Noise as CoreNoise;
-use aacmm_core::calibrate::LmOptions;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -19,8 +19,10 @@ use crate::to_dict;
 pub(crate) fn threads(threads: Option<usize>) -> PyResult<usize> {
     match threads {
         Some(n) => {
-            let mut lm = LmOptions::default();
-            lm.threads = n;
+            let lm = LmOptions {
+                threads: n,
+                ..LmOptions::default()
+            };
             lm.check().map_err(Error::from)?;
             Ok(n)
         }
