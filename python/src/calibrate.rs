@@ -60,13 +60,11 @@ fn problem(
     options: CalibrateOptions,
     cross_validate: Option<usize>,
 ) -> Result<Problem> {
+    // Another joint count: say which data set has it.
     let joints = |what: &'static str| {
-        move |e: aacmm_core::CalibrationError| {
-            let e = Error::from(e);
-            match e.kind {
-                Kind::Value => e.prefixed(what),
-                _ => e,
-            }
+        move |e: aacmm_core::CalibrationError| match e {
+            e @ aacmm_core::CalibrationError::Joints { .. } => Error::from(e).prefixed(what),
+            e => Error::from(e),
         }
     };
     let mut warnings = arm.warnings.clone();

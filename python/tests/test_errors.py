@@ -138,7 +138,7 @@ def test_calibration_options_and_data(arm, data):
         aacmm.calibrate(arm, data, fix="theta9")
     with refused(ValueError, match="cross_validate = 1"):
         aacmm.calibrate(arm, data, cross_validate=1)
-    with refused(ValueError, match="threads = 0"):
+    with refused(ValueError, match="^threads = 0: at least 1$"):
         aacmm.calibrate(arm, data, threads=0)
     with refused(ValueError, match="fix"):
         aacmm.calibrate(arm, data, fix=3)
@@ -152,8 +152,11 @@ def test_calibration_options_and_data(arm, data):
     with refused(ValueError, match="cross_validate = 50"):
         aacmm.calibrate(arm, data, cross_validate=50)
     arm7 = aacmm.Arm.from_params(7, np.r_[np.full(21, 100.0), np.zeros(7), 0, 0, 50])
-    with refused(ValueError, match="data: the arm has 7 joints, the data 6"):
+    with refused(ValueError, match="^data: the arm has 7 joints, the data 6$"):
         aacmm.calibrate(arm7, data)
+    seven = aacmm.DataSet(labels, np.c_[np.radians(q), np.zeros(len(q))])
+    with refused(ValueError, match="^validate: the arm has 6 joints, the data 7$"):
+        aacmm.calibrate(arm, data, validate=seven)
     with refused(ValueError, match="7 joints but the data has 6"):
         aacmm.evaluate(arm7, data)
     with refused(ValueError, match="7 joints but the data has 6"):
