@@ -1,0 +1,274 @@
+"""The aacmm toolkit: forward kinematics, metrics, identifiability, simulation
+and calibration of D-H arms (articulated-arm CMMs).
+
+Lengths in mm; angles in rad unless an argument says otherwise. Arrays are
+numpy float64. Parameters are in the order ``a1..an, d1..dn, alpha1..alphan,
+theta1..thetan, Bx, By, Bz`` (see :func:`param_names`).
+"""
+
+import os
+import pathlib
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+_Path = Union[str, "os.PathLike[str]"]
+_AngleUnit = Literal["rad", "deg"]
+_Readings = npt.ArrayLike
+_Length = Tuple[str, str, float, Optional[float]]
+_Array = npt.NDArray[np.float64]
+
+class AacmmError(Exception):
+    """Base class of the errors aacmm raises (besides OSError for unreadable
+    files and ValueError/TypeError for malformed arguments)."""
+
+class InputError(AacmmError):
+    """Invalid input data: a file's content (the message names file, line and
+    field) or arrays (the message names ``<arrays>``, the 1-based touch or
+    length, and the field)."""
+
+class CalibrationError(AacmmError):
+    """The calibration (or identification, evaluation, simulation) cannot run
+    on this input."""
+
+class UnsupportedError(AacmmError):
+    """An arm with a joint count the toolkit has no kernel for (it has 6 and 7)."""
+
+def param_names(joints: int) -> List[str]:
+    """The names of the ``4·joints + 3`` parameters, in the toolkit's order."""
+
+class Arm:
+    """An arm: its D-H geometry (mm, rad) prepared for the generated kernel of
+    its joint count (6 or 7). Immutable; safe to share between threads."""
+
+    @staticmethod
+    def from_file(path: _Path) -> "Arm":
+        """Reads an arm file (TOML). Errors name the file, line and field
+        (InputError; OSError when it cannot be read); warnings go to
+        ``warnings`` and are issued as UserWarning."""
+    @staticmethod
+    def from_params(joints: int, params: npt.ArrayLike, name: str = "arm") -> "Arm":
+        """An arm from its ``4·joints + 3`` parameters (mm, rad), no joint limits."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def joints(self) -> int: ...
+    @property
+    def source(self) -> str:
+        """The file as named, ``<parameters>``, ``<calibration>`` or ``<simulation>``."""
+    @property
+    def warnings(self) -> List[str]: ...
+    @property
+    def params(self) -> _Array:
+        """The parameters (mm, rad), a new array of ``4·joints + 3``."""
+    @property
+    def param_names(self) -> List[str]: ...
+    @property
+    def limits(self) -> List[Optional[Tuple[float, float]]]:
+        """Per joint, ``(min, max)`` rad, or None."""
+    def positions(self, q: _Readings, angle_unit: _AngleUnit = "rad") -> _Array:
+        """Probe positions (mm): ``q`` n × joints → n × 3 (a 1-D ``q`` of one
+        pose gives shape (3,)). Bit-identical to the Rust API. Runs without
+        the GIL."""
+    def jacobians(
+        self, q: _Readings, angle_unit: _AngleUnit = "rad"
+    ) -> Tuple[_Array, _Array]:
+        """``(p, jac)``: positions n × 3 and parameter Jacobians
+        n × 3 × (4·joints + 3), ``jac[i, k, c] = ∂p_k/∂param_c`` (mm/mm,
+        mm/rad)."""
+    def joint_jacobian(
+        self, q: _Readings, angle_unit: _AngleUnit = "rad"
+    ) -> Tuple[_Array, _Array]:
+        """``(p, jac)``: positions n × 3 and joint Jacobians n × 3 × joints,
+        ``jac[i, k, j] = ∂p_k/∂q_j`` (mm/rad)."""
+    def to_toml(self, length_unit: str = "mm", angle_unit: str = "deg") -> str:
+        """The arm in the arm-file schema."""
+    def to_dict(self) -> Dict[str, float]:
+        """Parameter name → value (mm, rad)."""
+
+class DataSet:
+    """Touches grouped by point (order of first appearance), with reference
+    lengths between points. Immutable."""
+
+    def __init__(
+        self,
+        labels: Sequence[Any],
+        q: _Readings,
+        lengths: Optional[Sequence[Union[Tuple[Any, Any, float], Tuple[Any, Any, float, Optional[float]]]]] = None,
+        angle_unit: _AngleUnit = "rad",
+    ) -> None:
+        """Touches from arrays: ``labels`` (one per touch, taken as str), ``q``
+        n × joints readings, ``lengths`` ``(point_a, point_b, distance_mm[,
+        uncertainty_mm])``. Checked by the library as files are (InputError
+        naming ``<arrays>``, the 1-based touch or length, and the field)."""
+    @staticmethod
+    def from_files(
+        poses: _Path,
+        lengths: Optional[_Path] = None,
+        angle_unit: _AngleUnit = "deg",
+        joints: Optional[int] = None,
+    ) -> "DataSet":
+        """Reads a poses file (CSV ``point,q1,...,qn``, degrees by default) and
+        optionally a reference-lengths file (CSV
+        ``point_a,point_b,distance[,uncertainty]``, mm)."""
+    def __len__(self) -> int: ...
+    @property
+    def joints(self) -> int: ...
+    @property
+    def points(self) -> List[str]: ...
+    @property
+    def labels(self) -> List[str]:
+        """Per touch, in the data set's order (grouped by point)."""
+    @property
+    def q(self) -> _Array:
+        """Readings (rad), n × joints, in the data set's order."""
+    @property
+    def lengths(self) -> List[_Length]: ...
+    @property
+    def poses_file(self) -> str: ...
+    @property
+    def lengths_file(self) -> Optional[str]: ...
+    @property
+    def warnings(self) -> List[str]: ...
+    def source_of(self, i: int) -> str:
+        """``file:line`` of touch ``i`` (data set order)."""
+
+class Noise:
+    """What is known of the measurement noise (the command line's noise
+    options): σ of each encoder reading (degrees), of the probe seating (mm),
+    of a reference length that states none (mm), and a weight of every
+    reference length (1/mm; 0 or None: from the uncertainties). Checked by the
+    library when made: ValueError naming the argument."""
+
+    def __init__(
+        self,
+        encoder_deg: Optional[float] = None,
+        probe_mm: Optional[float] = None,
+        length_default_mm: float = 0.001,
+        length_weight: Optional[float] = None,
+    ) -> None: ...
+    @property
+    def encoder_deg(self) -> Optional[float]: ...
+    @property
+    def probe_mm(self) -> Optional[float]: ...
+    @property
+    def length_default_mm(self) -> float: ...
+    @property
+    def length_weight(self) -> Optional[float]: ...
+    @property
+    def stated(self) -> bool: ...
+
+def evaluate(arm: Arm, data: DataSet) -> Dict[str, Any]:
+    """The figures of ``arm`` on ``data`` (``aacmm evaluate``'s ``evaluation``), mm."""
+
+def identify(
+    arm: Arm, data: DataSet, noise: Optional[Noise] = None, threads: Optional[int] = None
+) -> Dict[str, Any]:
+    """What the data can determine (``aacmm identify``'s ``identification``)."""
+
+class Campaign:
+    """A simulated campaign with a known true arm."""
+
+    @property
+    def nominal(self) -> Arm: ...
+    @property
+    def true_arm(self) -> Arm: ...
+    @property
+    def labels(self) -> List[str]:
+        """Per touch (row of poses.csv), the socket's label."""
+    @property
+    def q(self) -> _Array:
+        """Encoder readings (rad), n × joints, rows of poses.csv."""
+    @property
+    def socket_labels(self) -> List[str]: ...
+    @property
+    def sockets(self) -> _Array:
+        """True socket centres, mm, k × 3."""
+    @property
+    def lengths(self) -> List[_Length]: ...
+    @property
+    def data(self) -> DataSet: ...
+    def write(self, dir: _Path) -> List[pathlib.Path]:
+        """Writes poses.csv, lengths.csv, sockets.csv, true_arm.toml,
+        campaign.toml (the bytes of ``aacmm simulate``)."""
+
+def simulate(
+    arm: Arm,
+    *,
+    poses: int,
+    seed: int,
+    sockets: Optional[int] = None,
+    sockets_file: Optional[_Path] = None,
+    errors: Literal["paper", "random", "assembled"] = "paper",
+    true_arm: Optional[Arm] = None,
+    error_scale: Optional[float] = None,
+    encoder_noise_deg: float = 0.0,
+    probe_noise_mm: float = 0.0,
+    reference_lengths: Optional[int] = None,
+    length_uncertainty_mm: Optional[float] = None,
+) -> Campaign:
+    """Simulates a calibration campaign (``aacmm simulate``)."""
+
+class Calibration:
+    """The result of :func:`calibrate`."""
+
+    @property
+    def arm(self) -> Arm:
+        """The calibrated arm."""
+    @property
+    def params(self) -> _Array:
+        """Calibrated parameters (mm, rad)."""
+    @property
+    def sigma(self) -> _Array:
+        """Standard uncertainties (mm, rad); NaN for fixed parameters."""
+    @property
+    def fixed(self) -> Dict[str, str]:
+        """Fixed parameter → reason."""
+    @property
+    def free(self) -> List[str]:
+        """The free parameters: rows and columns of ``correlation``."""
+    @property
+    def correlation(self) -> _Array:
+        """Correlation matrix of the free parameters."""
+    @property
+    def successful(self) -> bool:
+        """Whether the solution is usable (converged to a confirmed minimum)."""
+    @property
+    def summary(self) -> Dict[str, Any]:
+        """Method, why it stopped (``stop``, and ``stop_text`` in words),
+        iterations, dof, σ0, touch σ, costs, and the before/after figures
+        (fitted, held out, cross-validation folds)."""
+    @property
+    def report(self) -> Dict[str, Any]:
+        """Everything calibration.json holds (mm and degrees)."""
+    def to_json(self) -> str:
+        """The text of ``aacmm calibrate``'s calibration.json, final newline
+        included."""
+    def text(self) -> str:
+        """The summary ``aacmm calibrate`` prints."""
+    def write(self, dir: _Path) -> List[pathlib.Path]:
+        """Writes the files of ``aacmm calibrate --out dir`` (created if
+        missing): calibrated.toml, calibration.json, timing.json, report.html
+        and its SVG figures; returns their paths. OSError when one cannot be
+        written."""
+
+def calibrate(
+    arm: Arm,
+    data: DataSet,
+    *,
+    method: Literal["global", "lm", "sa", "hybrid"] = "global",
+    fix: Union[str, Sequence[str], None] = None,
+    noise: Optional[Noise] = None,
+    seed: int = 0,
+    threads: Optional[int] = None,
+    cross_validate: Optional[int] = None,
+    validate: Optional[DataSet] = None,
+) -> Calibration:
+    """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
+    calibrate`` runs it; the report is the command line's bit for bit.
+    ``fix`` defaults to ``"auto"``. ValueError for a bad option (naming the
+    argument), CalibrationError when the data cannot determine the free
+    parameters."""

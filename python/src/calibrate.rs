@@ -1,0 +1,323 @@
+//! `aacmm.calibrate` and its result, `aacmm.Calibration`: the library's
+//! session (`Problem`, `session::run` → `CalibrationReport`) with Python
+//! arguments in and the report's figures out. Nothing of the session is
+//! rebuilt here, so `to_json()` and `write(dir)` give the command line's
+//! bytes.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use aacmm_core::calibrate::{CalibrateOptions, Context, FixSpec, LmOptions, Method};
+use aacmm_core::io::Arm as CoreArm;
+use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Sources};
+use numpy::ndarray::{Array1, Array2};
+use numpy::{IntoPyArray, PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString};
+
+use crate::arm::Arm;
+use crate::data::DataSet;
+use crate::error::{Error, Kind, Result, detached};
+use crate::noise::Noise;
+use crate::study::threads;
+use crate::{to_dict, to_python};
+
+/// The result of `aacmm.calibrate`: the problem as checked and the
+/// library's report. Immutable.
+#[pyclass(frozen, module = "aacmm")]
+pub struct Calibration {
+    problem: Problem,
+    report: CalibrationReport,
+    /// Wall time of the session, s (for `timing.json`).
+    seconds: f64,
+}
+
+/// The `fix=` argument: `"auto"`, comma-separated names, or a list of names.
+fn fix_text(fix: &Bound<'_, PyAny>) -> PyResult<String> {
+    if let Ok(s) = fix.cast::<PyString>() {
+        return Ok(s.to_string());
+    }
+    let names: Vec<String> = fix
+        .extract()
+        .map_err(|_| Error::value("fix: 'auto', comma-separated names, or a list of names"))?;
+    Ok(names.join(","))
+}
+
+/// The method of a `method=` argument.
+fn method(name: &str) -> Result<Method> {
+    Method::parse(name).ok_or_else(|| {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        Error::value(format!("method = {name:?}: one of {}", names.join(", ")))
+    })
+}
+
+/// The problem, checked by the library (a refused setting names its Python
+/// argument; another joint count names `data` or `validate`).
+fn problem(
+    arm: &Arm,
+    data: &DataSet,
+    validate: Option<&DataSet>,
+    options: CalibrateOptions,
+    cross_validate: Option<usize>,
+) -> Result<Problem> {
+    // Another joint count: say which data set has it.
+    let joints = |what: &'static str| {
+        move |e: aacmm_core::CalibrationError| match e {
+            e @ aacmm_core::CalibrationError::Joints { .. } => Error::from(e).prefixed(what),
+            e => Error::from(e),
+        }
+    };
+    let mut warnings = arm.warnings.clone();
+    warnings.extend(data.warnings.iter().cloned());
+    let mut problem = Problem::new(arm.arm.clone(), data.data.clone(), options)
+        .map_err(joints("data"))?
+        .with_sources(Sources {
+            arm_file: arm.source.clone(),
+            data_file: data.poses_file.clone(),
+            lengths_file: data.lengths_file.clone(),
+            warnings,
+        });
+    if let Some(v) = validate {
+        problem = problem
+            .with_held_out(HeldOutData {
+                data: v.data.clone(),
+                data_file: v.poses_file.clone(),
+                lengths_file: v.lengths_file.clone(),
+            })
+            .map_err(joints("validate"))?;
+    }
+    if let Some(k) = cross_validate {
+        problem = problem.with_cross_validation(k)?;
+    }
+    Ok(problem)
+}
+
+/// Calibrates `arm` (the start, e.g. the nominal arm) on `data`: `aacmm
+/// calibrate`'s session. `method`: `"global"` (converges from encoder zeros
+/// unknown anywhere in ±180°), `"lm"`, `"sa"` or `"hybrid"`; `fix`:
+/// `"auto"` (the identifiability analysis's set), comma-separated names or a
+/// list of names (see `param_names`); `noise`: an `aacmm.Noise` (default:
+/// not stated, the touch σ is estimated from the fit); `seed`: every random
+/// draw; `threads`: workers for the normal equations (default one per core;
+/// the result does not depend on it); `cross_validate`: `k` folds over
+/// points; `validate`: a held-out `DataSet` (same arm). The report is the
+/// command line's bit for bit. Runs without the GIL.
+///
+/// Raises `ValueError` for a bad option (naming the argument),
+/// `aacmm.CalibrationError` when the data cannot determine the free
+/// parameters. A solver that did not converge still gives a result: check
+/// `successful`.
+#[pyfunction]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn calibrate(
+    py: Python<'_>,
+    arm: &Arm,
+    data: &DataSet,
+    method: &str,
+    fix: Option<&Bound<'_, PyAny>>,
+    noise: Option<&Noise>,
+    seed: u64,
+    threads: Option<usize>,
+    cross_validate: Option<usize>,
+    validate: Option<&DataSet>,
+) -> PyResult<Calibration> {
+    let fix = match fix {
+        Some(f) => fix_text(f)?,
+        None => "auto".to_string(),
+    };
+    let fix = FixSpec::parse(&fix, arm.joints()).map_err(Error::from)?;
+    // None: one per core; 0 is left to the library to refuse.
+    let lm = LmOptions {
+        threads: match threads {
+            Some(n) => n,
+            None => self::threads(None)?,
+        },
+        ..LmOptions::default()
+    };
+    let options = CalibrateOptions {
+        fix,
+        noise: noise.map(|n| n.noise).unwrap_or_default(),
+        method: self::method(method)?,
+        lm,
+        seed,
+        // The solvers' settings not exposed here keep the library's
+        // defaults, which are the command line's.
+        ..CalibrateOptions::default()
+    };
+    detached(py, || {
+        let problem = problem(arm, data, validate, options, cross_validate)?;
+        let started = Instant::now();
+        let mut ctx = Context::new(problem.options().lm.threads, seed);
+        let solver = problem.options().method.solver();
+        let report = session::run(&problem, &*solver, &mut ctx)
+            .map_err(|e| Error::from(e).prefixed(&arm.source))?;
+        Ok(Calibration {
+            problem,
+            report,
+            seconds: started.elapsed().as_secs_f64(),
+        })
+    })
+}
+
+#[pymethods]
+impl Calibration {
+    /// The calibrated arm (named `<start>-calibrated`, the start's joint
+    /// limits).
+    #[getter]
+    fn arm(&self) -> PyResult<Arm> {
+        let arm: CoreArm = self.report.calibrated_arm(self.problem.arm());
+        Ok(Arm::new(arm, "<calibration>".to_string(), Vec::new())?)
+    }
+
+    /// The calibrated parameters (mm, rad; zero offsets wrapped to ±π), in
+    /// the order of `param_names`.
+    #[getter]
+    fn params<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        Array1::from(self.report.calibration.params.to_vec()).into_pyarray(py)
+    }
+
+    /// Standard uncertainties (k = 1) of the parameters, mm and rad; NaN for
+    /// a parameter held fixed.
+    #[getter]
+    fn sigma<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let v: Vec<f64> = self
+            .report
+            .calibration
+            .parameters
+            .iter()
+            .map(|e| e.sigma.unwrap_or(f64::NAN))
+            .collect();
+        Array1::from(v).into_pyarray(py)
+    }
+
+    /// The parameters held fixed: name → reason.
+    #[getter]
+    fn fixed<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for e in &self.report.calibration.parameters {
+            if let Some(reason) = &e.fixed {
+                d.set_item(e.id.to_string(), reason)?;
+            }
+        }
+        Ok(d)
+    }
+
+    /// The names of the fitted (free) parameters, in order: the rows and
+    /// columns of `correlation`.
+    #[getter]
+    fn free(&self) -> Vec<String> {
+        let m = &self.report.calibration.correlation_matrix;
+        m.parameters.iter().map(ToString::to_string).collect()
+    }
+
+    /// The correlation matrix of the free parameters (`free` × `free`).
+    #[getter]
+    fn correlation<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let rho = &self.report.calibration.correlation_matrix.rho;
+        let n = rho.len();
+        let flat: Vec<f64> = rho.iter().flatten().copied().collect();
+        let m = Array2::from_shape_vec((n, n), flat)
+            .map_err(|e| Error::new(Kind::Internal, format!("internal: correlation: {e}")))?;
+        Ok(m.into_pyarray(py))
+    }
+
+    /// Whether the solution is usable: the solver converged to a confirmed
+    /// minimum.
+    #[getter]
+    fn successful(&self) -> bool {
+        self.report.is_usable()
+    }
+
+    /// The figures a program acts on: method, why it stopped (`stop`, and
+    /// `stop_text` in words), iterations, free parameters, degrees of
+    /// freedom, σ0, touch σ (mm), costs, and the before/after figures on the
+    /// fitted data (and on the held-out data and per cross-validation fold
+    /// when asked for).
+    #[getter]
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.report.calibration;
+        let v = &self.report.validation;
+        let d = PyDict::new(py);
+        d.set_item("method", c.solver.method.name())?;
+        d.set_item("stop", to_python(py, &c.solver.stop)?)?;
+        d.set_item("stop_text", c.solver.stop.describe())?;
+        d.set_item("successful", c.solver.successful)?;
+        d.set_item("iterations", c.solver.iterations)?;
+        d.set_item("cost_evaluations", c.solver.cost_evaluations)?;
+        d.set_item("jacobian_evaluations", c.solver.jacobian_evaluations)?;
+        d.set_item("initial_cost", c.solver.initial_cost)?;
+        d.set_item("final_cost", c.solver.final_cost)?;
+        d.set_item("free_parameters", c.dof.free_parameters)?;
+        d.set_item("degrees_of_freedom", c.dof.degrees_of_freedom)?;
+        d.set_item("sigma0", c.dof.sigma0)?;
+        d.set_item("touch_sigma_mm", c.dof.touch_sigma_mm)?;
+        d.set_item("touch_sigma_estimated", c.dof.touch_sigma_estimated)?;
+        d.set_item("fitted", to_dict(py, &v.fitted)?)?;
+        d.set_item(
+            "held_out",
+            match &v.held_out {
+                Some(h) => to_dict(py, &h.figures)?.into_any(),
+                None => py.None().into_bound(py),
+            },
+        )?;
+        d.set_item(
+            "cross_validation",
+            match &v.cross_validation {
+                Some(cv) => to_python(py, &cv.folds)?,
+                None => PyList::empty(py).into_any(),
+            },
+        )?;
+        Ok(d)
+    }
+
+    /// Everything `calibration.json` holds, as a dict (lengths in mm,
+    /// angles in degrees, as its `units` says).
+    #[getter]
+    fn report<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.report)
+    }
+
+    /// The text of `calibration.json` (with its final newline) as `aacmm
+    /// calibrate` writes it for the same inputs and options: the same bytes
+    /// when the arm and data were read from the same paths.
+    fn to_json(&self) -> String {
+        self.report.to_json()
+    }
+
+    /// The summary `aacmm calibrate` prints: the solver, the degrees of
+    /// freedom, every parameter with σ (mm, deg), the correlations and the
+    /// validation table.
+    fn text(&self) -> String {
+        self.report.summary()
+    }
+
+    /// Writes the files `aacmm calibrate --out dir` writes (created if
+    /// missing): `calibrated.toml`, `calibration.json`, `timing.json` (this
+    /// call's wall times), `report.html` and its SVG figures. Returns the
+    /// paths written. `OSError` when a file cannot be written.
+    fn write(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
+        detached(py, || {
+            std::fs::create_dir_all(&dir).map_err(|e| {
+                Error::new(Kind::Io, format!("{}: cannot create: {e}", dir.display()))
+            })?;
+            self.report
+                .write(&self.problem, &dir, self.seconds)
+                .map_err(|e| match e {
+                    session::WriteError::Report(e) => Error::from(e),
+                    e => Error::new(Kind::Io, e.to_string()),
+                })
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.report.calibration;
+        format!(
+            "Calibration(method={:?}, successful={}, free_parameters={}, sigma0={:.4})",
+            c.solver.method.name(),
+            c.solver.successful,
+            c.dof.free_parameters,
+            c.dof.sigma0
+        )
+    }
+}

@@ -1,0 +1,205 @@
+//! Errors on their way to Python: the library's typed errors become one
+//! [`Error`] (a kind and the library's message, `Send` so that it can leave
+//! a block run without the GIL), then a Python exception. [`guard`] catches
+//! panics so that none unwinds into the interpreter.
+
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+use aacmm_core::calibrate::{CalibrationError as CoreCalibrationError, OptionError};
+use aacmm_core::error::InputError as CoreInputError;
+use aacmm_core::kernel::KernelError;
+use aacmm_core::metrics::MetricsError;
+use aacmm_core::simulate::SimError;
+use pyo3::PyErr;
+use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+
+pyo3::create_exception!(
+    aacmm,
+    AacmmError,
+    PyException,
+    "Base class of the errors aacmm raises (besides OSError for unreadable files and \
+     ValueError/TypeError for malformed arguments)."
+);
+pyo3::create_exception!(
+    aacmm,
+    InputError,
+    AacmmError,
+    "Invalid input data: a file's content (the message names file, line and field) or \
+     arrays (the message names the argument and index)."
+);
+pyo3::create_exception!(
+    aacmm,
+    CalibrationError,
+    AacmmError,
+    "The calibration (or identification, evaluation, simulation) cannot run on this input: \
+     too few residuals, a fixed set that leaves a direction the data cannot see, a start arm \
+     that gives non-finite positions, impossible settings."
+);
+pyo3::create_exception!(
+    aacmm,
+    UnsupportedError,
+    AacmmError,
+    "An arm with a joint count the toolkit has no kernel for (it has 6 and 7)."
+);
+
+/// What kind of exception an [`Error`] becomes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Kind {
+    /// `aacmm.InputError`.
+    Input,
+    /// `OSError`: a file that cannot be read or written.
+    Io,
+    /// `aacmm.CalibrationError`.
+    Calibration,
+    /// `aacmm.UnsupportedError`.
+    Unsupported,
+    /// `ValueError`: an argument out of range or of the wrong shape.
+    Value,
+    /// `aacmm.AacmmError`: a bug inside aacmm (a caught panic).
+    Internal,
+}
+
+/// An error with the library's message.
+#[derive(Debug)]
+pub(crate) struct Error {
+    pub(crate) kind: Kind,
+    pub(crate) message: String,
+}
+
+/// The result of the bindings' Rust side.
+pub(crate) type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    pub(crate) fn new(kind: Kind, message: impl Into<String>) -> Error {
+        Error {
+            kind,
+            message: message.into(),
+        }
+    }
+
+    /// A bad argument (`ValueError`).
+    pub(crate) fn value(message: impl Into<String>) -> Error {
+        Error::new(Kind::Value, message)
+    }
+
+    /// The same error with `what: ` before its message.
+    pub(crate) fn prefixed(mut self, what: &str) -> Error {
+        self.message = format!("{what}: {}", self.message);
+        self
+    }
+}
+
+impl From<Error> for PyErr {
+    fn from(e: Error) -> PyErr {
+        match e.kind {
+            Kind::Input => InputError::new_err(e.message),
+            Kind::Io => PyOSError::new_err(e.message),
+            Kind::Calibration => CalibrationError::new_err(e.message),
+            Kind::Unsupported => UnsupportedError::new_err(e.message),
+            Kind::Value => PyValueError::new_err(e.message),
+            Kind::Internal => AacmmError::new_err(e.message),
+        }
+    }
+}
+
+impl From<CoreInputError> for Error {
+    fn from(e: CoreInputError) -> Error {
+        let kind = match e {
+            CoreInputError::Io { .. } => Kind::Io,
+            _ => Kind::Input,
+        };
+        Error::new(kind, e.to_string())
+    }
+}
+
+impl From<KernelError> for Error {
+    fn from(e: KernelError) -> Error {
+        let kind = match e {
+            KernelError::Unsupported(_) => Kind::Unsupported,
+            _ => Kind::Value,
+        };
+        Error::new(kind, e.to_string())
+    }
+}
+
+/// The Python argument of each library setting ([`OptionError::field`])
+/// the bindings expose; the others keep the library's path.
+const ARGUMENTS: [(&str, &str); 7] = [
+    ("noise.encoder_rad", "encoder_deg"),
+    ("noise.probe_mm", "probe_mm"),
+    ("noise.length_default_mm", "length_default_mm"),
+    ("noise.length_weight", "length_weight"),
+    ("fix", "fix"),
+    ("threads", "threads"),
+    ("cross_validate", "cross_validate"),
+];
+
+/// A refused setting as a `ValueError` naming the Python argument. The
+/// encoder σ is refused in the library's radians, so its message gives the
+/// reason only (the caller knows the degrees it passed), as the command line
+/// does.
+impl From<OptionError> for Error {
+    fn from(e: OptionError) -> Error {
+        let message = match ARGUMENTS.iter().find(|(field, _)| *field == e.field) {
+            Some((field, arg)) if field.starts_with("noise.encoder") => {
+                format!("{arg}: {}", e.reason)
+            }
+            Some((_, arg)) => format!("{arg} = {}: {}", e.value, e.reason),
+            None => e.to_string(),
+        };
+        Error::value(message)
+    }
+}
+
+impl From<CoreCalibrationError> for Error {
+    fn from(e: CoreCalibrationError) -> Error {
+        let kind = match &e {
+            CoreCalibrationError::Option(o) => return o.clone().into(),
+            CoreCalibrationError::Kernel(KernelError::Unsupported(_)) => Kind::Unsupported,
+            CoreCalibrationError::Joints { .. } => Kind::Value,
+            _ => Kind::Calibration,
+        };
+        Error::new(kind, e.to_string())
+    }
+}
+
+impl From<MetricsError> for Error {
+    fn from(e: MetricsError) -> Error {
+        Error::new(Kind::Calibration, e.to_string())
+    }
+}
+
+impl From<SimError> for Error {
+    fn from(e: SimError) -> Error {
+        match e {
+            SimError::Input(e) => e.into(),
+            e => Error::new(Kind::Calibration, e.to_string()),
+        }
+    }
+}
+
+/// Runs `body`, turning a panic into an [`Kind::Internal`] error: no panic
+/// unwinds into Python (where PyO3 would raise `PanicException`, which is
+/// not an `Exception`).
+pub(crate) fn guard<T>(body: impl FnOnce() -> Result<T>) -> Result<T> {
+    catch_unwind(AssertUnwindSafe(body)).unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic without a message".to_string());
+        Err(Error::new(
+            Kind::Internal,
+            format!("internal error in aacmm (please report it): {what}"),
+        ))
+    })
+}
+
+/// Runs `body` without the GIL (other Python threads run meanwhile), with
+/// panics caught.
+pub(crate) fn detached<T: Send>(
+    py: pyo3::Python<'_>,
+    body: impl FnOnce() -> Result<T> + Send,
+) -> pyo3::PyResult<T> {
+    py.detach(|| guard(body)).map_err(PyErr::from)
+}

@@ -1,0 +1,74 @@
+//! Python bindings of aacmm: the module `aacmm` (PyO3 + numpy), built by
+//! maturin into an abi3 wheel for CPython 3.9 and newer (`pip install
+//! ./python`).
+//!
+//! Arrays go in and out as numpy arrays without per-element Python work;
+//! the GIL is released while the kernel, the metrics, the identification,
+//! the simulator and the calibrator run; every error becomes a Python
+//! exception with the library's message (module `error`), and no panic crosses
+//! into Python. The typed surface is `aacmm.pyi` beside this crate.
+
+mod arm;
+mod calibrate;
+mod data;
+mod error;
+mod noise;
+mod readings;
+mod simulate;
+mod study;
+
+use aacmm_core::io::AngleUnit;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::error::{Error, Result};
+
+/// The unit of `angle_unit=` arguments: `"rad"` or `"deg"`.
+pub(crate) fn angle_unit(s: &str) -> Result<AngleUnit> {
+    s.parse()
+        .map_err(|e: aacmm_core::io::UnknownUnit| Error::value(format!("angle_unit: {e}")))
+}
+
+/// A serialisable value of the library as a Python object (through JSON,
+/// so that Python sees exactly what the command line writes).
+pub(crate) fn to_python<'py>(
+    py: Python<'py>,
+    value: &impl serde::Serialize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let text = serde_json::to_string(value)
+        .map_err(|e| Error::new(error::Kind::Internal, format!("JSON: {e}")))?;
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// A serialisable value as a Python dict.
+pub(crate) fn to_dict<'py>(
+    py: Python<'py>,
+    value: &impl serde::Serialize,
+) -> PyResult<Bound<'py, PyDict>> {
+    Ok(to_python(py, value)?.cast_into::<PyDict>()?)
+}
+
+/// The aacmm toolkit: forward kinematics, metrics, identifiability,
+/// simulation and calibration of D-H arms (articulated-arm CMMs). Lengths in
+/// mm; angles in rad unless an argument says otherwise.
+#[pymodule]
+#[pyo3(name = "aacmm")]
+fn aacmm_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("AacmmError", py.get_type::<error::AacmmError>())?;
+    m.add("InputError", py.get_type::<error::InputError>())?;
+    m.add("CalibrationError", py.get_type::<error::CalibrationError>())?;
+    m.add("UnsupportedError", py.get_type::<error::UnsupportedError>())?;
+    m.add_class::<arm::Arm>()?;
+    m.add_class::<data::DataSet>()?;
+    m.add_class::<simulate::Campaign>()?;
+    m.add_class::<noise::Noise>()?;
+    m.add_class::<calibrate::Calibration>()?;
+    m.add_function(wrap_pyfunction!(arm::param_names, m)?)?;
+    m.add_function(wrap_pyfunction!(study::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(study::identify, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
+    Ok(())
+}

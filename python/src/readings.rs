@@ -1,0 +1,130 @@
+//! Encoder readings handed in from Python: any array-like of numbers,
+//! `n × joints` (or one pose of `joints`), read in chunks.
+//!
+//! A chunk is copied out of the caller's array while the GIL is held, so no
+//! Python thread can change it under us; the work on it (unit conversion,
+//! sin/cos, the kernel) runs without the GIL. Chunks are small enough to stay
+//! in cache, so the copy costs little next to the sin/cos it feeds.
+
+use std::ops::Range;
+
+use aacmm_core::io::AngleUnit;
+use aacmm_core::kernel::PreparedPoses;
+use numpy::ndarray::{Ix2, s};
+use numpy::{AllowTypeChange, PyArrayLikeDyn, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+use crate::error::{Error, Result, detached};
+
+/// Poses per chunk: 16 Ki poses of 6 readings are 768 KiB.
+const CHUNK: usize = 16 * 1024;
+
+/// Readings from Python, checked for shape.
+pub(crate) struct Readings<'py> {
+    array: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
+    joints: usize,
+    rows: usize,
+    single: bool,
+    unit: AngleUnit,
+}
+
+impl<'py> Readings<'py> {
+    /// The readings `q` (named `name` in messages) of a `joints`-joint arm,
+    /// in `unit`.
+    pub(crate) fn new(
+        q: &Bound<'py, PyAny>,
+        name: &str,
+        joints: usize,
+        unit: AngleUnit,
+    ) -> PyResult<Readings<'py>> {
+        let array: PyArrayLikeDyn<'py, f64, AllowTypeChange> = q.extract().map_err(|e| {
+            Error::value(format!(
+                "{name}: expected an array of numbers, n × {joints} (one row per pose) \
+                 ({e})"
+            ))
+        })?;
+        let shape = array.shape().to_vec();
+        let (rows, single) = match shape[..] {
+            [j] if j == joints => (1, true),
+            [n, j] if j == joints => (n, false),
+            _ => {
+                return Err(Error::value(format!(
+                    "{name}: shape {shape:?}; expected (n, {joints}) for the arm's {joints} \
+                     joints, or ({joints},) for one pose"
+                ))
+                .into());
+            }
+        };
+        Ok(Readings {
+            array,
+            joints,
+            rows,
+            single,
+            unit,
+        })
+    }
+
+    /// Number of poses.
+    pub(crate) fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Whether one pose was given as a 1-D array (the results drop the pose
+    /// axis).
+    pub(crate) fn single(&self) -> bool {
+        self.single
+    }
+
+    /// Appends the readings of `rows` to `buf`, row-major, as given.
+    fn copy(&self, rows: Range<usize>, buf: &mut Vec<f64>) {
+        let j = self.joints;
+        // `as_slice` also accepts Fortran order: only C order is row-major.
+        if self.array.is_c_contiguous()
+            && let Ok(all) = self.array.as_slice()
+        {
+            buf.extend_from_slice(&all[rows.start * j..rows.end * j]);
+            return;
+        }
+        let view = self.array.as_array();
+        match view.view().into_dimensionality::<Ix2>() {
+            Ok(m) => buf.extend(m.slice(s![rows, ..]).iter()),
+            Err(_) => buf.extend(view.iter()),
+        }
+    }
+
+    /// Calls `f(rows, q)` for consecutive chunks of poses, `q` the chunk's
+    /// readings in rad (row-major), without the GIL.
+    pub(crate) fn for_chunks(
+        &self,
+        py: Python<'_>,
+        mut f: impl FnMut(Range<usize>, &[f64]) -> Result<()> + Send,
+    ) -> PyResult<()> {
+        let mut buf = Vec::with_capacity(CHUNK.min(self.rows) * self.joints);
+        let unit = self.unit;
+        let mut start = 0;
+        while start < self.rows {
+            let rows = start..(start + CHUNK).min(self.rows);
+            buf.clear();
+            self.copy(rows.clone(), &mut buf);
+            let chunk = &mut buf;
+            detached(py, || {
+                if unit != AngleUnit::Rad {
+                    chunk.iter_mut().for_each(|x| *x = unit.to_internal(*x));
+                }
+                f(rows.clone(), chunk)
+            })?;
+            start = rows.end;
+        }
+        Ok(())
+    }
+}
+
+/// Readings `q` (row-major, `joints` per pose, in rad) prepared for the
+/// kernel (the C API's `prepare`).
+pub(crate) fn prepare(joints: usize, q: &[f64]) -> Result<PreparedPoses> {
+    Ok(match joints {
+        6 => PreparedPoses::new(6, q.as_chunks::<6>().0)?,
+        7 => PreparedPoses::new(7, q.as_chunks::<7>().0)?,
+        _ => PreparedPoses::new(joints, &q.chunks_exact(joints).collect::<Vec<_>>())?,
+    })
+}

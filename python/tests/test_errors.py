@@ -1,0 +1,185 @@
+"""Every error path raises a Python exception with the library's message;
+nothing crashes the interpreter."""
+
+import contextlib
+
+import numpy as np
+import pytest
+
+import aacmm
+from conftest import ARM, LENGTHS, POSES, read_lengths, read_poses
+
+
+def write(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_exception_hierarchy():
+    for e in (aacmm.InputError, aacmm.CalibrationError, aacmm.UnsupportedError):
+        assert issubclass(e, aacmm.AacmmError) and issubclass(e, Exception)
+
+
+def test_arm_files(tmp_path):
+    with pytest.raises(OSError, match="missing.toml"):
+        aacmm.Arm.from_file(tmp_path / "missing.toml")
+    text = (aacmm.Arm.from_file(ARM).to_toml()).replace('length_unit = "mm"', 'length_unit = "furlong"')
+    bad = write(tmp_path, "bad.toml", text)
+    with pytest.raises(aacmm.InputError, match=r"bad\.toml:\d+: .*furlong"):
+        aacmm.Arm.from_file(bad)
+
+
+def test_arm_parameters():
+    with pytest.raises(aacmm.UnsupportedError, match="joints = 5"):
+        aacmm.Arm.from_params(5, np.zeros(23))
+    with pytest.raises(ValueError, match="26 values, expected 27"):
+        aacmm.Arm.from_params(6, np.zeros(26))
+    bad = np.zeros(27)
+    bad[3] = np.nan
+    with pytest.raises(ValueError, match=r"params\[3\] \(a4\) = NaN"):
+        aacmm.Arm.from_params(6, bad)
+    with pytest.raises(ValueError):
+        aacmm.Arm.from_params(6, ["x"] * 27)
+
+
+def test_readings_of_the_wrong_shape_or_unit(arm):
+    with pytest.raises(ValueError, match=r"shape \[4, 7\]"):
+        arm.positions(np.zeros((4, 7)))
+    with pytest.raises(ValueError, match=r"shape \[2, 3, 6\]"):
+        arm.jacobians(np.zeros((2, 3, 6)))
+    with pytest.raises(ValueError, match="expected an array of numbers"):
+        arm.joint_jacobian([["a"] * 6])
+    with pytest.raises(ValueError, match="angle_unit"):
+        arm.positions(np.zeros((1, 6)), angle_unit="grad")
+    with pytest.raises(ValueError, match="length_unit"):
+        arm.to_toml(length_unit="parsec")
+
+
+def test_poses_and_lengths_files(tmp_path):
+    with pytest.raises(OSError, match="nope.csv"):
+        aacmm.DataSet.from_files(tmp_path / "nope.csv")
+    poses = write(tmp_path, "p.csv", "point,q1,q2,q3,q4,q5,q6\nA,1,2,3,4,5,6\nA,1,2,x,4,5,6\n")
+    with pytest.raises(aacmm.InputError, match=r"p\.csv:3: field `q3`"):
+        aacmm.DataSet.from_files(poses)
+    few = write(tmp_path, "few.csv", "point,q1,q2,q3,q4,q5,q6\nA,1,2,3,4,5,6\nA,1,2,3,4,5,7\n")
+    with pytest.raises(aacmm.InputError, match=r"few\.csv:2: field `point`: point `A` has 2 touches"):
+        aacmm.DataSet.from_files(few)
+    with pytest.raises(aacmm.InputError, match="7"):
+        aacmm.DataSet.from_files(POSES, joints=7)
+    lengths = write(tmp_path, "l.csv", "point_a,point_b,distance\nS1,S99,100\n")
+    with pytest.raises(aacmm.InputError, match=r"l\.csv:2: field `point_b`: unknown point `S99`"):
+        aacmm.DataSet.from_files(POSES, lengths)
+
+
+def test_arrays():
+    """Arrays are checked by the library as files are: messages name
+    `<arrays>`, the 1-based touch (row of q) or length, and the field."""
+    labels, q = read_poses()
+    q = np.radians(q)
+    with pytest.raises(aacmm.InputError, match=r"<arrays>:7: field `point`: point `X` has 2 touches"):
+        aacmm.DataSet(labels[:6] + ["X", "X"], q[:8])
+    bad = q.copy()
+    bad[4, 2] = np.inf
+    with pytest.raises(aacmm.InputError, match=r"<arrays>:5: field `q3`: inf: readings must be finite"):
+        aacmm.DataSet(labels, bad)
+    with pytest.raises(aacmm.InputError, match="<arrays>: 100 labels for 99 rows of readings"):
+        aacmm.DataSet(labels, q[:99])
+    with pytest.raises(aacmm.InputError, match="<arrays>: no touches"):
+        aacmm.DataSet([], np.zeros((0, 6)))
+    with pytest.raises(ValueError, match=r"shape"):
+        aacmm.DataSet(labels, q.ravel())
+    cases = [
+        (("S1", "S77", 10.0), r"<arrays>:1: field `point_b`: unknown point `S77`"),
+        (("S1", "S1", 10.0), r"<arrays>:1: field `point_b`: `S1` again: a length needs two points"),
+        (("S1", "S2", -1.0), r"<arrays>:1: field `distance`: -1: must be a positive number"),
+        (("S1", "S2", 5.0, -0.1), r"<arrays>:1: field `uncertainty`: -0.1: must be a finite number"),
+    ]
+    for length, message in cases:
+        with pytest.raises(aacmm.InputError, match=message):
+            aacmm.DataSet(labels, q, [length])
+    with pytest.raises(aacmm.InputError, match=r"<arrays>:2: field `point_b`: the pair S2–S1 is given twice"):
+        aacmm.DataSet(labels, q, [("S1", "S2", 5.0), ("S2", "S1", 5.0)])
+    with pytest.raises(ValueError, match=r"lengths\[0\]: expected"):
+        aacmm.DataSet(labels, q, [("S1", "S2")])
+    with pytest.raises(ValueError, match=r"lengths\[0\]: expected"):
+        aacmm.DataSet(labels, q, [("S1", "S2", "far")])
+
+
+@contextlib.contextmanager
+def refused(exception, match):
+    """pytest.raises, and the message names no command-line flag: the
+    library names settings, the bindings their Python arguments."""
+    with pytest.raises(exception, match=match) as caught:
+        yield caught
+    assert "--" not in str(caught.value), caught.value
+
+
+def test_noise():
+    with refused(ValueError, match="probe_mm = -1"):
+        aacmm.Noise(probe_mm=-1)
+    with refused(ValueError, match="encoder_deg: must be a finite number ≥ 0"):
+        aacmm.Noise(encoder_deg=float("nan"))
+    with refused(ValueError, match="length_default_mm = inf"):
+        aacmm.Noise(length_default_mm=float("inf"))
+    with refused(ValueError, match="length_weight = -2: must be a finite number > 0"):
+        aacmm.Noise(length_weight=-2)
+    with refused(ValueError, match="probe_mm = 0: encoder and probe noise both 0"):
+        aacmm.Noise(encoder_deg=0, probe_mm=0)
+    assert aacmm.Noise(length_weight=0).length_weight is None
+    n = aacmm.Noise(encoder_deg=0.01)
+    assert n.stated and n.encoder_deg == 0.01 and n.probe_mm is None
+
+
+def test_calibration_options_and_data(arm, data):
+    with refused(ValueError, match='method = "newton"'):
+        aacmm.calibrate(arm, data, method="newton")
+    with refused(ValueError, match="fix = theta9: unknown parameter `theta9`"):
+        aacmm.calibrate(arm, data, fix="theta9")
+    with refused(ValueError, match="cross_validate = 1"):
+        aacmm.calibrate(arm, data, cross_validate=1)
+    with refused(ValueError, match="^threads = 0: at least 1$"):
+        aacmm.calibrate(arm, data, threads=0)
+    with refused(ValueError, match="fix"):
+        aacmm.calibrate(arm, data, fix=3)
+    # Nothing fixed: the base rotation is a direction no touch can see.
+    with refused(aacmm.CalibrationError, match="directions the data cannot see"):
+        aacmm.calibrate(arm, data, fix="", method="lm")
+    labels, q = read_poses()
+    small = aacmm.DataSet(labels[:3] + labels[10:13], q[:3] + q[10:13], angle_unit="deg")
+    with refused(aacmm.CalibrationError, match=r"scale \(no reference length\)"):
+        aacmm.calibrate(arm, small, method="lm", fix="theta1,d1,theta6,alpha6,Bx,By")
+    with refused(ValueError, match="cross_validate = 50"):
+        aacmm.calibrate(arm, data, cross_validate=50)
+    arm7 = aacmm.Arm.from_params(7, np.r_[np.full(21, 100.0), np.zeros(7), 0, 0, 50])
+    with refused(ValueError, match="^data: the arm has 7 joints, the data 6$"):
+        aacmm.calibrate(arm7, data)
+    seven = aacmm.DataSet(labels, np.c_[np.radians(q), np.zeros(len(q))])
+    with refused(ValueError, match="^validate: the arm has 6 joints, the data 7$"):
+        aacmm.calibrate(arm, data, validate=seven)
+    with refused(ValueError, match="7 joints but the data has 6"):
+        aacmm.evaluate(arm7, data)
+    with refused(ValueError, match="7 joints but the data has 6"):
+        aacmm.identify(arm7, data)
+    with refused(ValueError, match="threads = 0"):
+        aacmm.identify(arm, data, threads=0)
+
+
+def test_simulation_settings(arm, tmp_path):
+    with pytest.raises(ValueError, match='errors = "wobbly"'):
+        aacmm.simulate(arm, sockets=3, poses=5, seed=1, errors="wobbly")
+    with pytest.raises(ValueError, match="error_scale"):
+        aacmm.simulate(arm, sockets=3, poses=5, seed=1, error_scale=2.0)
+    with pytest.raises(ValueError, match="not both"):
+        aacmm.simulate(arm, sockets=3, sockets_file=POSES, poses=5, seed=1)
+    with pytest.raises(ValueError, match="give sockets"):
+        aacmm.simulate(arm, poses=5, seed=1)
+    with pytest.raises(aacmm.CalibrationError, match="setting `poses_per_socket`"):
+        aacmm.simulate(arm, sockets=3, poses=2, seed=1)
+    with pytest.raises(aacmm.CalibrationError, match="setting `reference_lengths`"):
+        aacmm.simulate(arm, sockets=3, poses=5, seed=1, reference_lengths=9)
+    sockets = write(tmp_path, "s.csv", "point,x,y,z\nA,1,2\n")
+    with pytest.raises(aacmm.InputError, match=r"s\.csv:2"):
+        aacmm.simulate(arm, sockets_file=sockets, poses=5, seed=1)
+    with pytest.raises(TypeError):
+        aacmm.simulate(arm, 3, 5, 1)

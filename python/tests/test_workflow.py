@@ -1,0 +1,189 @@
+"""Data sets, evaluation, identification, simulation and calibration against
+the command line's outputs."""
+
+import json
+import threading
+import time
+
+import numpy as np
+
+import aacmm
+from conftest import ARM, LENGTHS, POSES, read_lengths, read_poses
+
+
+def test_a_data_set_from_files_and_from_arrays_is_the_same(data):
+    labels, q = read_poses()
+    arrays = aacmm.DataSet(labels, q, read_lengths(), angle_unit="deg")
+    assert len(arrays) == len(data) == 100
+    assert arrays.points == data.points and arrays.labels == data.labels
+    assert np.array_equal(arrays.q, data.q)
+    assert arrays.lengths == data.lengths
+    assert data.joints == 6 and data.poses_file == POSES and data.lengths_file == LENGTHS
+    assert arrays.poses_file == "<arrays>"
+    assert data.source_of(0) == f"{POSES}:2"
+    no_lengths = aacmm.DataSet(labels, np.radians(q))
+    assert no_lengths.lengths == [] and no_lengths.lengths_file is None
+
+
+def test_evaluate_equals_the_cli_json(cli, arm, data, tmp_path):
+    out = tmp_path / "evaluation.json"
+    cli("evaluate", "--arm", ARM, "--data", POSES, "--lengths", LENGTHS, "--json", out)
+    assert aacmm.evaluate(arm, data) == json.loads(out.read_text())["evaluation"]
+
+
+def test_identify_equals_the_cli_json(cli, arm, data, tmp_path):
+    out = tmp_path / "identify.json"
+    cli(
+        "identify", "--arm", ARM, "--data", POSES, "--lengths", LENGTHS,
+        "--encoder-noise", "0.005", "--probe-noise", "0.01", "--json", out,
+    )
+    ours = aacmm.identify(arm, data, noise=aacmm.Noise(encoder_deg=0.005, probe_mm=0.01), threads=2)
+    assert ours == json.loads(out.read_text())["identification"]
+
+
+def test_calibration_equals_the_cli_files(cli, arm, data, tmp_path):
+    theirs, ours = tmp_path / "cli", tmp_path / "py"
+    printed = cli(
+        "calibrate", "--arm", ARM, "--data", POSES, "--lengths", LENGTHS,
+        "--encoder-noise", "0.005", "--probe-noise", "0.01", "--cross-validate", "3",
+        "--out", theirs,
+    )
+    noise = aacmm.Noise(encoder_deg=0.005, probe_mm=0.01)
+    cal = aacmm.calibrate(arm, data, noise=noise, cross_validate=3, threads=1)
+    assert cal.to_json() == (theirs / "calibration.json").read_text()
+    assert cal.arm.to_toml() == (theirs / "calibrated.toml").read_text()
+    assert printed.startswith(cal.text()) and "Parameters (mm, deg" in cal.text()
+    # write(dir) writes the command line's files, byte for byte, apart from
+    # the wall times in timing.json.
+    written = cal.write(ours)
+    names = sorted(p.name for p in theirs.iterdir())
+    assert sorted(p.name for p in written) == names and "report.html" in names
+    assert all(p.parent == ours for p in written)
+    for name in names:
+        if name == "timing.json":
+            a, b = (json.loads((d / name).read_text()) for d in (ours, theirs))
+            assert [p["name"] for p in a["phases"]] == [p["name"] for p in b["phases"]]
+            assert a["total_ms"] > 0
+        else:
+            assert (ours / name).read_bytes() == (theirs / name).read_bytes(), name
+    # The arrays are the report's numbers in mm and rad.
+    report = cal.report
+    names = aacmm.param_names(6)
+    for i, e in enumerate(report["calibration"]["parameters"]):
+        assert e["name"] == names[i]
+        value = cal.params[i] if e["unit"] == "mm" else np.degrees(cal.params[i])
+        assert np.isclose(value, e["calibrated"], rtol=1e-12, atol=1e-12)
+        if e["fixed"] is None:
+            sigma = cal.sigma[i] if e["unit"] == "mm" else np.degrees(cal.sigma[i])
+            assert np.isclose(sigma, e["sigma"], rtol=1e-12, atol=0)
+        else:
+            assert np.isnan(cal.sigma[i]) and cal.fixed[e["name"]] == e["fixed"]
+    assert len(cal.free) == 21 == cal.correlation.shape[0] == cal.summary["free_parameters"]
+    assert np.allclose(np.diag(cal.correlation), 1.0)
+    s = cal.summary
+    assert s["successful"] and cal.successful and s["method"] == "global"
+    assert "final LM" in s["stop_text"] and "global" in s["stop"]
+    assert s["fitted"]["after"]["e_mean"] < s["fitted"]["before"]["e_mean"] / 10
+    assert len(s["cross_validation"]) == 3 and s["held_out"] is None
+    # Threads change nothing; arrays give the same parameters as files.
+    labels, q = read_poses()
+    arrays = aacmm.DataSet(labels, q, read_lengths(), angle_unit="deg")
+    again = aacmm.calibrate(arm, arrays, noise=noise, fix=cal.report["fix"], threads=2)
+    assert np.array_equal(again.params, cal.params)
+    assert np.array_equal(again.sigma, cal.sigma, equal_nan=True)
+
+
+def test_held_out_validation_and_fix_lists(arm, data):
+    campaign = aacmm.simulate(arm, sockets=4, poses=6, seed=11)
+    fix = ["theta1", "d1", "theta6", "alpha6", "Bx", "By"]
+    cal = aacmm.calibrate(arm, data, method="lm", fix=fix, validate=campaign.data)
+    assert set(cal.fixed) == set(fix)
+    assert all(r == "fixed by the user" for r in cal.fixed.values())
+    held = cal.report["validation"]["held_out"]
+    assert held["data_file"] == "poses.csv" and held["figures"] == cal.summary["held_out"]
+    assert cal.report["fix"] == ",".join(fix)
+
+
+def test_simulate_writes_the_cli_campaign(cli, arm, tmp_path):
+    campaign = aacmm.simulate(
+        arm, sockets=5, poses=6, seed=4, encoder_noise_deg=0.002, probe_noise_mm=0.003
+    )
+    ours, theirs = tmp_path / "py", tmp_path / "cli"
+    written = campaign.write(ours)
+    cli(
+        "simulate", "--arm", ARM, "--errors", "paper", "--sockets", 5, "--poses", 6,
+        "--seed", 4, "--encoder-noise", 0.002, "--probe-noise", 0.003, "--out", theirs,
+    )
+    names = sorted(p.name for p in theirs.iterdir())
+    assert sorted(str(p).rsplit("/", 1)[-1] for p in written) == names
+    for name in names:
+        assert (ours / name).read_bytes() == (theirs / name).read_bytes(), name
+    assert campaign.q.shape == (30, 6) and campaign.sockets.shape == (5, 3)
+    assert campaign.labels[:6] == ["S1"] * 6 and campaign.socket_labels[0] == "S1"
+    assert len(campaign.lengths) == 3
+    # The true arm puts every touch of a socket near its centre.
+    xyz = campaign.true_arm.positions(campaign.q)
+    centre = campaign.sockets[0]
+    assert np.abs(xyz[:6] - centre).max() < 0.05
+    assert len(campaign.data) == 30 and campaign.nominal.name == arm.name
+
+
+def test_the_gil_is_released_during_calibration(arm, data):
+    gaps, stop, running = [], threading.Event(), threading.Event()
+
+    def watch():
+        last = time.perf_counter()
+        while not stop.is_set():
+            now = time.perf_counter()
+            if running.is_set():
+                gaps.append(now - last)
+            last = now
+
+    t = threading.Thread(target=watch)
+    t.start()
+    try:
+        running.set()
+        start = time.perf_counter()
+        aacmm.calibrate(arm, data, cross_validate=5, threads=1)
+        took = time.perf_counter() - start
+        running.clear()
+    finally:
+        stop.set()
+        t.join()
+    assert took > 0.05, took
+    assert max(gaps) < took / 2, (max(gaps), took)
+
+
+def test_the_example_script_runs(tmp_path):
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    script = REPO / "python" / "examples" / "calibrate_campaign.py"
+    done = subprocess.run(
+        [sys.executable, str(script), str(tmp_path)], cwd=REPO, capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    assert "e mean: 3.6515 mm -> 0.0520 mm" in done.stdout
+    assert (tmp_path / "calibration.json").read_text().startswith('{\n  "arm": "paper-table-1"')
+
+
+def test_the_readme_python_example_prints_what_the_readme_says():
+    import re
+    import subprocess
+    import sys
+
+    from conftest import REPO
+
+    readme = (REPO / "README.md").read_text()
+    m = re.search(
+        r'```sh\npython3 -m venv v && v/bin/pip install \./python\nv/bin/python -c "\n(.*?)"\n```\n\n```text\n(.*?)```',
+        readme,
+        re.S,
+    )
+    assert m, "the README's Python example is not where the test looks"
+    code, printed = m.groups()
+    done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == printed
