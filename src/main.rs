@@ -38,7 +38,16 @@ enum Command {
     #[command(allow_negative_numbers = true)]
     Identify(commands::identify::Args),
     /// Calibrate an arm from touches and reference lengths.
-    #[command(allow_negative_numbers = true)]
+    #[command(
+        allow_negative_numbers = true,
+        after_help = "Exit status: 0 for a usable calibration; 1 for an error, or for a \
+                      calibration that is not usable — the solver did not reach a confirmed \
+                      minimum, the arm is not the nominal arm's geometry (a mirror image, a \
+                      collapsed arm, a unit mistake), or (unless --accept-poor-fit) its χ² is \
+                      far outside the stated noise or it is worse than the nominal on its own \
+                      data; the files are then written for inspection and calibration.json's \
+                      /verdict says why; 2 for a command line that cannot be parsed."
+    )]
     Calibrate(commands::calibrate::Args),
 }
 

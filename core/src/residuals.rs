@@ -803,6 +803,49 @@ pub fn weighted_cost(
     cost(&ArmKernel::new(params)?, data, &weights, &mut xyz)
 }
 
+/// Per touch (data-set order), its standardised squared residual
+/// `rᵀ A r / (1 − h)`: `r` the touch's offset from its point's weighted
+/// centroid, `A` its weight, `h = tr(A (Σ A)⁻¹)/3` its leverage on that
+/// centroid. About `χ²₃` for a touch that fits the noise model.
+pub(crate) fn standardised_residuals(
+    kernel: &ArmKernel,
+    data: &DataSet,
+    weights: &Weights,
+) -> Result<Vec<f64>, KernelError> {
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    let mut out = vec![0.0; data.len()];
+    for point in data.points() {
+        let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
+        for i in point.touches.clone() {
+            let a = &weights.touch[i];
+            let ap = sym_mul(a, &xyz[i]);
+            for k in 0..6 {
+                sum_a[k] += a[k];
+            }
+            for k in 0..3 {
+                sum_ap[k] += ap[k];
+            }
+        }
+        let inv = sym_inv(&sum_a);
+        let c = sym_mul(&inv, &sum_ap);
+        for i in point.touches.clone() {
+            let a = &weights.touch[i];
+            let r: [f64; 3] = std::array::from_fn(|k| xyz[i][k] - c[k]);
+            let ar = sym_mul(a, &r);
+            let q = r[0] * ar[0] + r[1] * ar[1] + r[2] * ar[2];
+            // tr(A·inv) for symmetric A and inv.
+            let tr = a[0] * inv[0]
+                + a[1] * inv[1]
+                + a[2] * inv[2]
+                + 2.0 * (a[3] * inv[3] + a[4] * inv[4] + a[5] * inv[5]);
+            let h = (tr / 3.0).clamp(0.0, 0.999);
+            out[i] = q / (1.0 - h);
+        }
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

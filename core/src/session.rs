@@ -112,6 +112,7 @@ impl Problem {
             });
         }
         options.check(joints)?;
+        check_length_units(&arm.params, &data)?;
         Ok(Problem {
             arm,
             data,
@@ -204,6 +205,49 @@ impl Problem {
         let mut ctx = Context::new(self.options.lm.threads, self.options.seed);
         run(self, &*self.options.method.solver(), &mut ctx)
     }
+}
+
+/// Stated lengths this many times the nominal arm's distances (or their
+/// inverse) are in another unit: a calibration moves the arm by per cent,
+/// not by orders of magnitude — but the nominal arm of a newly assembled
+/// one, its zeros anywhere, can put two sockets several times nearer or
+/// farther than they are, so the bound is two orders of magnitude (metres
+/// for millimetres is three).
+const LENGTH_UNIT_RATIO: f64 = 100.0;
+
+/// Refuses reference lengths whose median ratio to the nominal arm's
+/// distances between the same points is beyond [`LENGTH_UNIT_RATIO`]
+/// (lengths in metres for an arm in mm, say).
+fn check_length_units(params: &DhParams, data: &DataSet) -> Result<(), CalibrationError> {
+    if data.references().is_empty() {
+        return Ok(());
+    }
+    let kernel = crate::kernel::ArmKernel::new(params)?;
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    let centroids: Vec<[f64; 3]> = data
+        .points()
+        .iter()
+        .map(|p| crate::geometry::centroid(&xyz[p.touches.clone()]))
+        .collect();
+    let mut ratios: Vec<f64> = data
+        .references()
+        .iter()
+        .map(|r| r.distance / crate::geometry::distance(&centroids[r.a], &centroids[r.b]))
+        .filter(|v| v.is_finite())
+        .collect();
+    if ratios.is_empty() {
+        return Ok(());
+    }
+    ratios.sort_by(f64::total_cmp);
+    let ratio = ratios[ratios.len() / 2];
+    if !(1.0 / LENGTH_UNIT_RATIO..=LENGTH_UNIT_RATIO).contains(&ratio) {
+        return Err(CalibrationError::LengthUnits {
+            file: data.source().reference(0).file.to_string(),
+            ratio,
+        });
+    }
+    Ok(())
 }
 
 /// Units of the values in a [`CalibrationReport`] meant for people.
@@ -428,6 +472,27 @@ impl CalibrationReport {
         );
         if let Some(chi) = &c.checks.chi_square {
             t += &format!("Fit quality: {}\n", chi.describe());
+        }
+        let o = &c.checks.outliers;
+        if o.is_empty() {
+            t += &format!(
+                "Outliers: none (no touch beyond {:.2} sigma)\n",
+                c.checks.outlier_threshold
+            );
+        } else {
+            let shown: Vec<String> = o
+                .iter()
+                .take(20)
+                .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
+                .collect();
+            t += &format!(
+                "Outliers: {} touch(es) beyond {:.2} sigma — check them (remeasure, or fix the \
+                 label): {}{}\n",
+                o.len(),
+                c.checks.outlier_threshold,
+                shown.join(", "),
+                if o.len() > shown.len() { ", …" } else { "" }
+            );
         }
         t += &if r.verdict.usable {
             "Verdict: usable\n\n".to_string()

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aacmm_core::calibrate::{
-    AnnealOptions, CalibrateOptions, Context, FixSpec, GlobalOptions, LmOptions, SwitchRule,
+    AnnealOptions, CalibrateOptions, CalibrationError, Context, FixSpec, GlobalOptions, LmOptions,
+    SwitchRule,
 };
 use aacmm_core::io::source_name;
 use aacmm_core::report::{CALIBRATION_FILES, HTML_FILE};
@@ -231,9 +232,13 @@ pub fn run(args: Args) -> Result<()> {
         let mut show = |phase: &str, f: f64| bar.show(phase, f);
         let mut ctx = Context::new(args.fit.threads(), args.seed).observed(&mut show);
         let solver = problem.options().method.solver();
-        session::run(&problem, &*solver, &mut ctx)
-            .with_context(|| arm_file.clone())
-            .map_err(|e| super::noise_flags(e, &args.fit))?
+        session::run(&problem, &*solver, &mut ctx).map_err(|e| match e {
+            CalibrationError::Option(_) => flag_error(e),
+            other => super::noise_flags(
+                anyhow::Error::new(other).context(arm_file.clone()),
+                &args.fit,
+            ),
+        })?
     };
     let total = started.elapsed().as_secs_f64();
 

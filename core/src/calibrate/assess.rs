@@ -244,6 +244,20 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
                 .collect()
         })
         .collect();
+    // Suspect touches: residuals in units of their own σ — the stated
+    // noise, or (estimated) the fit's σ̂.
+    let mut t2 =
+        crate::residuals::standardised_residuals(&ArmKernel::new(&params)?, data, &weights)?;
+    if !stated {
+        // σ from the touches themselves, robustly: the median of a χ²₃
+        // variable is 2.366, and a few outliers do not move a median.
+        let mut sorted = t2.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(1.0);
+        let s2 = (median / 2.366).max(f64::MIN_POSITIVE);
+        t2.iter_mut().for_each(|v| *v /= s2);
+    }
+    let (outlier_threshold, outliers) = super::checks::outliers(data, &t2);
     let names: Vec<String> = ids.iter().map(ParamId::to_string).collect();
     let cost_evaluations = extra_costs + phases.iter().map(|p| p.cost_evaluations).sum::<usize>();
     let jacobian_evaluations =
@@ -284,6 +298,8 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         checks: Checks {
             gross_corrections: gross_corrections(&params, start, &free),
             chi_square: stated.then(|| ChiSquare::new(normal.cost(), degrees_of_freedom)),
+            outliers,
+            outlier_threshold,
         },
         params,
     })

@@ -269,3 +269,72 @@ pub(crate) fn erfc(x: f64) -> f64 {
             .exp();
     if x >= 0.0 { r } else { 2.0 - r }
 }
+
+/// A touch whose residual the noise model does not explain.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Outlier {
+    /// Where it was read: `file:line`.
+    pub at: String,
+    /// Its point's label.
+    pub point: String,
+    /// Its standardised residual (`sqrt` of the leverage-corrected
+    /// `rᵀ A r`, in units of its own σ).
+    pub standardised: f64,
+}
+
+/// The family-wise false-alarm rate of the outlier test: a touch is named
+/// when its standardised squared residual exceeds the `χ²₃` quantile at
+/// `1 − OUTLIER_ALPHA / touches` (Bonferroni), so a campaign without
+/// outliers names one with this probability.
+pub const OUTLIER_ALPHA: f64 = 0.01;
+
+/// `P(χ²₃ ≥ x)`.
+fn chi_square_3_upper(x: f64) -> f64 {
+    if x.is_nan() || x <= 0.0 {
+        return 1.0;
+    }
+    erfc((x / 2.0).sqrt()) + (2.0 * x / std::f64::consts::PI).sqrt() * (-x / 2.0).exp()
+}
+
+/// The `χ²₃` value exceeded with probability `p` (bisection).
+///
+/// ```
+/// use aacmm_core::calibrate::checks::chi_square_3_quantile;
+/// assert!((chi_square_3_quantile(0.05) - 7.815).abs() < 1e-2);
+/// ```
+pub fn chi_square_3_quantile(p: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    while chi_square_3_upper(hi) > p && hi < 1e6 {
+        hi *= 2.0;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if chi_square_3_upper(mid) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The touches whose standardised squared residual (`scaled`: already
+/// divided by `σ0²` when the noise was estimated) exceeds the Bonferroni
+/// threshold, largest first.
+pub(crate) fn outliers(data: &crate::dataset::DataSet, scaled: &[f64]) -> (f64, Vec<Outlier>) {
+    let threshold = chi_square_3_quantile(OUTLIER_ALPHA / data.len().max(1) as f64);
+    let mut found: Vec<Outlier> = Vec::new();
+    for point in data.points() {
+        for i in point.touches.clone() {
+            if scaled[i] > threshold {
+                found.push(Outlier {
+                    at: data.source().touch(i).to_string(),
+                    point: point.label.clone(),
+                    standardised: scaled[i].sqrt(),
+                });
+            }
+        }
+    }
+    found.sort_by(|a, b| b.standardised.total_cmp(&a.standardised));
+    (threshold.sqrt(), found)
+}

@@ -83,6 +83,18 @@ pub enum CalibrationError {
         /// The data's joints.
         data: usize,
     },
+    /// The reference lengths are in another unit than the arm.
+    #[error(
+        "{file}: the reference lengths are {ratio:.3e} times the nominal arm's distances between \
+         the same points (median): lengths and arm in different units? (the arm file's lengths \
+         are mm inside the toolkit; the lengths file must be in mm)"
+    )]
+    LengthUnits {
+        /// The lengths file.
+        file: String,
+        /// Median of stated length / nominal distance.
+        ratio: f64,
+    },
     /// The report could not be drawn.
     #[cfg(feature = "report")]
     #[error(transparent)]
@@ -372,6 +384,11 @@ pub struct Checks {
     /// The χ² test of the residuals against the stated noise (`None`
     /// without stated noise: the touch σ was estimated from the fit).
     pub chi_square: Option<checks::ChiSquare>,
+    /// Touches the noise model does not explain (standardised residual
+    /// beyond `outlier_threshold`), largest first.
+    pub outliers: Vec<checks::Outlier>,
+    /// The threshold of the outlier test, in σ of a touch.
+    pub outlier_threshold: f64,
 }
 
 /// What [`calibrate`] returns.
