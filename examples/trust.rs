@@ -15,6 +15,7 @@
 //! calibration: `aacmm calibrate` with the same noise, `--seed 1`.
 
 use aacmm_core::calibrate::{CalibrateOptions, Method};
+use aacmm_core::geometry::rigid_distance;
 use aacmm_core::io::Arm;
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId, ParamKind, wrap};
@@ -22,36 +23,8 @@ use aacmm_core::residuals::Noise;
 use aacmm_core::session::Problem;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
 use anyhow::Result;
-use nalgebra::{Matrix3, Vector3};
 
 const MIRROR_SEEDS: [u64; 8] = [16, 114, 134, 188, 235, 255, 277, 323];
-
-/// The largest distance between `a` and `b` after the best rigid motion of
-/// `a` onto `b` (Kabsch), proper (`reflect` false) or with a reflection.
-fn rigid_distance(a: &[[f64; 3]], b: &[[f64; 3]], reflect: bool) -> f64 {
-    let mean = |p: &[[f64; 3]]| {
-        p.iter()
-            .fold(Vector3::zeros(), |s, x| s + Vector3::from(*x))
-            / p.len() as f64
-    };
-    let (ca, cb) = (mean(a), mean(b));
-    let mut h = Matrix3::zeros();
-    for (x, y) in a.iter().zip(b) {
-        h += (Vector3::from(*x) - ca) * (Vector3::from(*y) - cb).transpose();
-    }
-    let svd = h.svd(true, true);
-    let (u, v_t) = (svd.u.unwrap(), svd.v_t.unwrap());
-    let mut d = Matrix3::identity();
-    let proper = (v_t.transpose() * u.transpose()).determinant() > 0.0;
-    if proper == reflect {
-        d[(2, 2)] = -1.0;
-    }
-    let r = v_t.transpose() * d * u.transpose();
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (r * (Vector3::from(*x) - ca) + cb - Vector3::from(*y)).norm())
-        .fold(0.0, f64::max)
-}
 
 /// Lengths `a` and twists of every joint but the last whose sign differs
 /// from the nominal's (the last link's may turn about the last axis when

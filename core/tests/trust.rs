@@ -10,7 +10,6 @@ use aacmm_core::residuals::Noise;
 use aacmm_core::session::{CalibrationReport, Problem};
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
 use aacmm_core::{Arm, DataSet, read_arm};
-use nalgebra::{Matrix3, Vector3};
 
 fn root(file: &str) -> String {
     format!("{}/../examples/{file}", env!("CARGO_MANIFEST_DIR"))
@@ -65,32 +64,6 @@ fn without_lengths_global_does_not_fold_the_arm() {
     assert!((ea / eb - 1.0).abs() <= 0.10, "{ea} vs {eb}");
 }
 
-/// The largest distance between `a` and `b` after the best proper rigid
-/// motion of `a` onto `b` (Kabsch).
-fn proper_rigid_distance(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    let mean = |p: &[[f64; 3]]| {
-        p.iter()
-            .fold(Vector3::zeros(), |s, x| s + Vector3::from(*x))
-            / p.len() as f64
-    };
-    let (ca, cb) = (mean(a), mean(b));
-    let mut h = Matrix3::zeros();
-    for (x, y) in a.iter().zip(b) {
-        h += (Vector3::from(*x) - ca) * (Vector3::from(*y) - cb).transpose();
-    }
-    let svd = h.svd(true, true);
-    let (u, v_t) = (svd.u.unwrap(), svd.v_t.unwrap());
-    let mut d = Matrix3::identity();
-    if (v_t.transpose() * u.transpose()).determinant() < 0.0 {
-        d[(2, 2)] = -1.0;
-    }
-    let r = v_t.transpose() * d * u.transpose();
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (r * (Vector3::from(*x) - ca) + cb - Vector3::from(*y)).norm())
-        .fold(0.0, f64::max)
-}
-
 #[test]
 fn assembled_arms_that_fell_into_the_mirror_image_now_come_out_proper() {
     // Seeds where `global` used to return the arm's mirror image (issue 15).
@@ -113,9 +86,10 @@ fn assembled_arms_that_fell_into_the_mirror_image_now_come_out_proper() {
                 .positions_of(&campaign.poses.q)
                 .unwrap()
         };
-        let d = proper_rigid_distance(
+        let d = aacmm_core::geometry::rigid_distance(
             &xyz(&report.calibration.params),
             &xyz(&campaign.true_arm.params),
+            false,
         );
         assert!(d < 1.0, "seed {seed}: {d} mm from the true arm");
         // The nominal sign convention: every length and twist but the last
