@@ -87,7 +87,29 @@ fn push_fixed6(out: &mut String, x: f64) {
     if bits >> 63 == 1 {
         out.push('-');
     }
-    _ = write!(out, "{}.{:06}", micro / SCALE, micro % SCALE);
+    // Both parts fit in u64 (the integer part is below 2⁴⁹); digits by
+    // hand, the formatting machinery costs more than the rounding.
+    let (int, frac) = ((micro / SCALE) as u64, (micro % SCALE) as u64);
+    let mut digits = [b'0'; 20];
+    let mut at = digits.len();
+    let mut rest = int;
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (rest % 10) as u8;
+        rest /= 10;
+        if rest == 0 {
+            break;
+        }
+    }
+    let mut fraction = [b'.', 0, 0, 0, 0, 0, 0];
+    let mut rest = frac;
+    for d in fraction[1..].iter_mut().rev() {
+        *d = b'0' + (rest % 10) as u8;
+        rest /= 10;
+    }
+    for part in [&digits[at..], &fraction[..]] {
+        out.push_str(std::str::from_utf8(part).expect("ASCII digits"));
+    }
 }
 
 /// Reads a point file (standard input for `-`); messages name the file as
