@@ -70,7 +70,8 @@ fn main() -> Result<()> {
         };
         let report = Problem::new(Arm::clone(&nominal), data, options)?.run()?;
         let cal = &report.calibration.params;
-        let xyz = |p: &DhParams| ArmKernel::new(p)?.positions_of(&campaign.poses.q);
+        let rows: Vec<&[f64]> = campaign.poses.rows().collect();
+        let xyz = |p: &DhParams| ArmKernel::new(p)?.positions_of(&rows);
         let (c, t) = (xyz(cal)?, xyz(&campaign.true_arm.params)?);
         let proper = rigid_distance(&c, &t, false);
         let mirror = rigid_distance(&c, &t, true);

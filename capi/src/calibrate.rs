@@ -497,12 +497,10 @@ fn array_data(
             if count == 1 { "" } else { "es" }
         )));
     }
-    let poses = Poses {
-        labels: points.iter().map(u32::to_string).collect(),
-        joints,
-        q: q.chunks_exact(joints).map(<[f64]>::to_vec).collect(),
-        lines: (1..=points.len()).collect(),
-    };
+    let mut poses = Poses::with_capacity(joints, points.len());
+    for (i, (id, row)) in points.iter().zip(q.chunks_exact(joints)).enumerate() {
+        poses.push(&id.to_string(), row, i + 1);
+    }
     let data = DataSet::from_poses(&poses, "points")?;
     if lengths.is_empty() {
         return Ok(data);

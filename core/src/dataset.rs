@@ -126,29 +126,30 @@ pub struct DataSet {
 /// Refuses readings in which no point is articulated: every point's touches
 /// lie within [`MIN_ARTICULATION_DEG`] of each other in every joint. Such a
 /// campaign (each socket touched in one pose, perhaps read several times)
-/// has a Jacobian of rounding and noise only. `rows_of` lists each point's
-/// rows; readings are in radians. A data set without readings is exempt.
+/// has a Jacobian of rounding and noise only. `q` holds the readings (rad)
+/// in touch order, `points` each point's touches. A data set without
+/// readings is exempt.
 fn check_articulation(
-    rows_of: &[(&str, Vec<usize>)],
-    poses: &Poses,
+    points: &[Point],
+    q: &[f64],
+    joints: usize,
     file: &str,
 ) -> Result<(), InputError> {
-    if poses.joints == 0 {
+    if joints == 0 {
         return Ok(());
     }
     // The widest range: (range in rad, joint, point label).
     let mut widest = (0.0_f64, 0, "");
-    for (label, rows) in rows_of {
-        for j in 0..poses.joints {
-            let (lo, hi) = rows
-                .iter()
-                .filter_map(|&r| poses.q.get(r).and_then(|q| q.get(j)).copied())
+    for point in points {
+        for j in 0..joints {
+            let (lo, hi) = (point.touches.clone())
+                .map(|i| q[i * joints + j])
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
                     (lo.min(x), hi.max(x))
                 });
             let range = hi - lo;
             if range > widest.0 {
-                widest = (range, j, label);
+                widest = (range, j, &point.label);
             }
         }
     }
@@ -201,62 +202,66 @@ impl DataSet {
         if poses.is_empty() {
             return Err(InputError::file_error(file, "no touches"));
         }
-        let mut index: HashMap<&str, usize> = HashMap::new();
-        let mut rows_of: Vec<(&str, Vec<usize>)> = Vec::new();
-        for (row, label) in poses.labels.iter().enumerate() {
-            let p = *index.entry(label.as_str()).or_insert_with(|| {
-                rows_of.push((label.as_str(), Vec::new()));
-                rows_of.len() - 1
-            });
-            rows_of[p].1.push(row);
+        // The poses' points are in order of first appearance already: a
+        // counting sort by point puts the rows in touch order.
+        let labels = poses.points();
+        let mut count = vec![0usize; labels.len()];
+        let mut first = vec![usize::MAX; labels.len()];
+        for row in 0..poses.len() {
+            let p = poses.point(row);
+            count[p] += 1;
+            first[p] = first[p].min(row);
         }
-        let line_of = |row: usize| poses.lines.get(row).copied().unwrap_or(0);
-        for (label, rows) in &rows_of {
-            if rows.len() < MIN_TOUCHES {
+        for (p, label) in labels.iter().enumerate() {
+            if count[p] < MIN_TOUCHES {
                 return Err(InputError::field(
                     file,
-                    line_of(rows[0]),
+                    poses.line(first[p]),
                     "point",
                     format!(
                         "point `{label}` has {} touch{}; at least {MIN_TOUCHES} are needed",
-                        rows.len(),
-                        if rows.len() == 1 { "" } else { "es" }
+                        count[p],
+                        if count[p] == 1 { "" } else { "es" }
                     ),
                 ));
             }
         }
-        let joints = poses.joints;
-        let order: Vec<usize> = rows_of
-            .iter()
-            .flat_map(|(_, r)| r.iter().copied())
-            .collect();
         let mut start = 0;
-        let points = rows_of
-            .iter()
-            .map(|(label, rows)| {
-                let touches = start..start + rows.len();
+        let points: Vec<Point> = (labels.iter().zip(&count))
+            .map(|(label, &n)| {
+                let touches = start..start + n;
                 start = touches.end;
                 Point {
-                    label: label.to_string(),
+                    label: label.clone(),
                     touches,
                 }
             })
             .collect();
-        let q: Vec<f64> = order
-            .iter()
-            .flat_map(|&r| poses.q[r].iter().copied())
-            .collect();
-        check_articulation(&rows_of, poses, file)?;
-        let poses_prepared = prepare(joints, &q, order.len());
+        // `next[p]`: where point p's next touch goes.
+        let mut next: Vec<usize> = points.iter().map(|p| p.touches.start).collect();
+        drop((count, first));
+        let mut order = vec![0usize; poses.len()];
+        for row in 0..poses.len() {
+            let p = poses.point(row);
+            order[next[p]] = row;
+            next[p] += 1;
+        }
+        let joints = poses.joints();
+        let mut q = Vec::with_capacity(order.len() * joints);
+        for &row in &order {
+            q.extend_from_slice(poses.reading(row));
+        }
+        check_articulation(&points, &q, joints, file)?;
+        let prepared = PreparedPoses::from_flat(joints, order.len(), &q);
         Ok(DataSet {
             joints,
             points,
             q,
-            poses: poses_prepared,
+            poses: prepared,
             references: Vec::new(),
             source: SourceMap {
                 poses_file: file.to_string(),
-                touch_lines: order.iter().map(|&r| line_of(r)).collect(),
+                touch_lines: order.iter().map(|&r| poses.line(r)).collect(),
                 touch_rows: order,
                 ..SourceMap::default()
             },
@@ -325,8 +330,8 @@ impl DataSet {
             ));
         }
         let joints = readings.first().map_or(0, |r| r.as_ref().len());
-        let mut q = Vec::with_capacity(readings.len());
-        for (i, row) in readings.iter().enumerate() {
+        let mut poses = Poses::with_capacity(joints, readings.len());
+        for (i, (label, row)) in labels.iter().zip(readings).enumerate() {
             let row = row.as_ref();
             if row.len() != joints {
                 return Err(InputError::line_error(
@@ -343,7 +348,7 @@ impl DataSet {
                     format!("{}: readings must be finite", row[j]),
                 ));
             }
-            q.push(row.to_vec());
+            poses.push(label.as_ref(), row, i + 1);
         }
         let mut pairs = std::collections::HashSet::new();
         for (i, l) in lengths.iter().enumerate() {
@@ -375,12 +380,6 @@ impl DataSet {
                 );
             }
         }
-        let poses = Poses {
-            labels: labels.iter().map(|l| l.as_ref().to_string()).collect(),
-            joints,
-            q,
-            lines: (1..=labels.len()).collect(),
-        };
         let lengths: Vec<ReferenceLength> = lengths
             .iter()
             .enumerate()
@@ -401,12 +400,10 @@ impl DataSet {
     /// assert_eq!(data.to_touch_order(&[0, 1, 2, 3, 4, 5]), [0, 2, 4, 1, 3, 5]);
     /// ```
     pub fn from_labels<S: AsRef<str>>(labels: &[S], file: &str) -> Result<DataSet, InputError> {
-        let poses = Poses {
-            labels: labels.iter().map(|l| l.as_ref().to_string()).collect(),
-            joints: 0,
-            q: vec![Vec::new(); labels.len()],
-            lines: (2..labels.len() + 2).collect(),
-        };
+        let mut poses = Poses::with_capacity(0, labels.len());
+        for (i, label) in labels.iter().enumerate() {
+            poses.push(label.as_ref(), &[], i + 2);
+        }
         DataSet::from_poses(&poses, file)
     }
 
@@ -530,7 +527,7 @@ impl DataSet {
             .iter()
             .flat_map(|&i| self.reading(i).iter().copied())
             .collect();
-        let poses = prepare(self.joints, &q, touches.len());
+        let poses = PreparedPoses::from_flat(self.joints, touches.len(), &q);
         let mut reference_lines = Vec::new();
         let references = self
             .references
@@ -564,14 +561,6 @@ impl DataSet {
             },
         }
     }
-}
-
-/// Touch-major readings (`len` rows of `joints`) prepared for the kernel.
-fn prepare(joints: usize, q: &[f64], len: usize) -> PreparedPoses {
-    let rows: Vec<&[f64]> = (0..len).map(|i| &q[i * joints..(i + 1) * joints]).collect();
-    // Invariant: each row is a `joints`-long slice of `q` by construction,
-    // and `PreparedPoses::new` fails only on a row of another length.
-    PreparedPoses::new(joints, &rows).expect("every row has `joints` readings")
 }
 
 #[cfg(test)]

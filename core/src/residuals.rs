@@ -266,7 +266,7 @@ impl Weights {
             let mut jq = vec![[0.0; 3]; data.joints()];
             (0..data.len())
                 .map(|i| {
-                    kernel.joint_jacobian(data.reading(i), &mut jq)?;
+                    kernel.joint_jacobian_at(data.poses(), i, &mut jq)?;
                     let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
                     let cov = [
                         p2 + s(0, 0),

@@ -52,7 +52,7 @@ fn zero_noise_recovers_every_identifiable_parameter() {
         ArmKernel::new(&moved).unwrap(),
         ArmKernel::new(&cal.params).unwrap(),
     );
-    for q in &fresh.poses.q {
+    for q in fresh.poses.rows() {
         let (p, r) = (a.position(q).unwrap(), b.position(q).unwrap());
         let d = (0..3).map(|k| (p[k] - r[k]).powi(2)).sum::<f64>().sqrt();
         assert!(d <= 1e-6, "{d}");

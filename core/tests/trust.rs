@@ -44,7 +44,9 @@ fn shipped_arrays() -> (Vec<String>, Vec<Vec<f64>>, Vec<ReferenceLength>) {
     )
     .unwrap();
     let lengths = read_lengths(root("paper-campaign/lengths.csv").as_ref()).unwrap();
-    (poses.labels, poses.q, lengths)
+    let labels = poses.labels().map(str::to_string).collect();
+    let q = poses.rows().map(<[f64]>::to_vec).collect();
+    (labels, q, lengths)
 }
 
 #[test]
@@ -83,7 +85,7 @@ fn assembled_arms_that_fell_into_the_mirror_image_now_come_out_proper() {
         let xyz = |p: &DhParams| {
             ArmKernel::new(p)
                 .unwrap()
-                .positions_of(&campaign.poses.q)
+                .positions_of(&campaign.poses.rows().collect::<Vec<_>>())
                 .unwrap()
         };
         let d = aacmm_core::geometry::rigid_distance(

@@ -193,22 +193,17 @@ fn factor(state: &mut u64) -> f64 {
 pub fn build(case: &Degenerate) -> (Poses, Vec<ReferenceLength>) {
     let base = &bases()[case.base % bases().len()];
     let mut labels: Vec<&str> = Vec::new();
-    for l in &base.poses.labels {
-        if !labels.contains(&l.as_str()) {
+    for l in base.poses.labels() {
+        if !labels.contains(&l) {
             labels.push(l);
         }
     }
     labels.truncate(case.sockets.max(1));
     let mut rng = case.seed;
-    let mut poses = Poses {
-        labels: Vec::new(),
-        joints: base.poses.joints,
-        q: Vec::new(),
-        lines: Vec::new(),
-    };
+    let mut poses = Poses::new(base.poses.joints());
     for (k, label) in labels.iter().enumerate() {
         let rows: Vec<usize> = (0..base.poses.len())
-            .filter(|&r| base.poses.labels[r] == *label)
+            .filter(|&r| base.poses.label(r) == *label)
             .take(case.touches)
             .collect();
         for (i, &r) in rows.iter().enumerate() {
@@ -224,13 +219,14 @@ pub fn build(case: &Degenerate) -> (Poses, Vec<ReferenceLength>) {
             };
             let times = if case.duplicates == 1 { 2 } else { 1 };
             for _ in 0..times {
-                let q = base.poses.q[from]
+                let q: Vec<f64> = base
+                    .poses
+                    .reading(from)
                     .iter()
                     .map(|&x| x * case.scale + case.jitter * factor(&mut rng))
                     .collect();
-                poses.lines.push(poses.labels.len() + 2);
-                poses.labels.push(name.clone());
-                poses.q.push(q);
+                let line = poses.len() + 2;
+                poses.push(&name, &q, line);
             }
         }
     }

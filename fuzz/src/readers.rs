@@ -371,8 +371,10 @@ pub fn check_reader(reader: Reader, bytes: &[u8]) -> Result<String, String> {
         },
         Reader::Poses => match parse_poses(text, file, AngleUnit::Deg, None) {
             Ok((poses, _)) => {
-                finite(poses.q.iter().flatten().copied(), "reading")?;
-                if poses.q.len() != poses.labels.len() || poses.lines.len() != poses.labels.len() {
+                finite(poses.readings().iter().copied(), "reading")?;
+                if poses.readings().len() != poses.len() * poses.joints()
+                    || poses.lines().len() != poses.len()
+                {
                     return Err("rows, labels and lines disagree".into());
                 }
                 Ok("ok".into())

@@ -53,7 +53,7 @@ impl Campaign {
     /// Per touch (row of `poses.csv`), the socket's label.
     #[getter]
     fn labels(&self) -> Vec<String> {
-        self.campaign.poses.labels.clone()
+        self.campaign.poses.labels().map(str::to_string).collect()
     }
 
     /// What the encoders read, rad, `n × joints`, in the rows of
@@ -61,8 +61,7 @@ impl Campaign {
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let p = &self.campaign.poses;
-        let flat: Vec<f64> = p.q.iter().flatten().copied().collect();
-        shaped(py, flat, &[p.q.len(), p.joints])
+        shaped(py, p.readings().to_vec(), &[p.len(), p.joints()])
     }
 
     /// The sockets' labels, in order.

@@ -13,7 +13,7 @@ pub mod simulate;
 use std::path::PathBuf;
 
 use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses, source_name};
-use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf};
+use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, PreparedPoses};
 use aacmm_core::residuals::short;
 use anyhow::{Context, Result, bail};
 
@@ -35,7 +35,7 @@ pub fn limit_warning(arm: &Arm, poses: &Poses, file: &str, unit: AngleUnit) -> O
     let mut count = 0;
     let mut joints: Vec<usize> = Vec::new();
     let mut first = None;
-    for (row, q) in poses.q.iter().enumerate() {
+    for (row, q) in poses.rows().enumerate() {
         for (j, (&x, limit)) in q.iter().zip(&arm.limits).enumerate() {
             let Some([lo, hi]) = *limit else { continue };
             let (bound, sign) = if x < lo - LIMIT_SLACK {
@@ -67,7 +67,7 @@ pub fn limit_warning(arm: &Arm, poses: &Poses, file: &str, unit: AngleUnit) -> O
     };
     Some(Warning {
         file: file.to_string(),
-        line: poses.lines.get(row).copied(),
+        line: Some(poses.line(row)),
         field: Some(format!("q{}", j + 1)),
         message: format!(
             "{count} {readings}{more} outside the arm's joint limits (first: {} {sign} {}); \
@@ -128,13 +128,39 @@ impl ArmAndPoses {
         ArmKernel::new(&arm.params).with_context(|| source_name(&self.arm))
     }
 
-    /// Probe positions of every pose (mm), in row order.
+    /// Probe positions of every pose (mm), in row order, on every core. The
+    /// sin/cos of the readings are prepared a chunk at a time, never for the
+    /// whole file; the bits do not depend on the chunks.
     pub fn positions(&self, arm: &Arm, poses: &Poses) -> Result<Vec<[f64; 3]>> {
-        let xyz = self
-            .kernel(arm)?
-            .positions_of(&poses.q)
-            .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))?;
-        self.check_finite(&xyz, |row| poses.lines.get(row).copied().unwrap_or(0))?;
+        /// Poses per chunk: 4096 poses of 7 joints prepared are 448 KiB.
+        const CHUNK: usize = 4096;
+        let kernel = self.kernel(arm)?;
+        let mut xyz = vec![[0.0; 3]; poses.len()];
+        let chunk = |(c, out): (usize, &mut [[f64; 3]])| {
+            let rows: Vec<&[f64]> = (c * CHUNK..c * CHUNK + out.len())
+                .map(|row| poses.reading(row))
+                .collect();
+            PreparedPoses::new(poses.joints(), &rows)
+                .and_then(|prepared| kernel.positions(&prepared, 0..out.len(), out))
+        };
+        let threads = worker_threads(None);
+        let per_thread = poses.len().div_ceil(CHUNK).div_ceil(threads).max(1) * CHUNK;
+        std::thread::scope(|s| {
+            let parts: Vec<_> = (xyz.chunks_mut(per_thread).enumerate())
+                .map(|(t, part)| {
+                    let first = t * per_thread / CHUNK;
+                    s.spawn(move || {
+                        (part.chunks_mut(CHUNK).enumerate())
+                            .try_for_each(|(c, out)| chunk((first + c, out)))
+                    })
+                })
+                .collect();
+            parts
+                .into_iter()
+                .try_for_each(|p| p.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+        })
+        .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))?;
+        self.check_finite(&xyz, |row| poses.line(row))?;
         Ok(xyz)
     }
 

@@ -34,14 +34,14 @@ pub fn run(args: Args) -> Result<()> {
         Some(path) => {
             let file =
                 File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
-            let mut w = BufWriter::new(file);
-            write_points(&mut w, &poses.labels, &xyz)
+            let mut w = BufWriter::with_capacity(1 << 16, file);
+            write_points(&mut w, poses.labels(), &xyz)
                 .and_then(|_| w.flush())
                 .with_context(|| format!("{}: cannot write", path.display()))?;
         }
         None => {
             let mut out = Stdout::new();
-            out.write_with(|w| write_points(w, &poses.labels, &xyz))?;
+            out.write_with(|w| write_points(w, poses.labels(), &xyz))?;
             out.finish()?;
         }
     }

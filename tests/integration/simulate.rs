@@ -88,12 +88,12 @@ fn paper_like_campaign_is_complete_and_reproducible() {
     // roughly the noise (0.005° at up to ~1 m is ~0.09 mm; seating 0.01 mm).
     let p = ArmKernel::new(&arm.params)
         .unwrap()
-        .positions_of(&poses.q)
+        .positions_of(&poses.rows().collect::<Vec<_>>())
         .unwrap();
     let centre = |l: &str| sockets.iter().find(|s| s.0 == l).unwrap().1;
     let worst = p
         .iter()
-        .zip(&poses.labels)
+        .zip(poses.labels())
         .map(|(p, l)| {
             (0..3)
                 .map(|i| (p[i] - centre(l)[i]).powi(2))
@@ -146,10 +146,10 @@ fn zero_noise_campaign_reproduces_sockets() {
     let sockets = read_points(&dir.join("sockets.csv")).unwrap();
     let p = ArmKernel::new(&arm.params)
         .unwrap()
-        .positions_of(&poses.q)
+        .positions_of(&poses.rows().collect::<Vec<_>>())
         .unwrap();
-    for (p, l) in p.iter().zip(&poses.labels) {
-        let c = sockets.iter().find(|s| &s.0 == l).unwrap().1;
+    for (p, l) in p.iter().zip(poses.labels()) {
+        let c = sockets.iter().find(|s| s.0 == l).unwrap().1;
         let e = (0..3).map(|i| (p[i] - c[i]).powi(2)).sum::<f64>().sqrt();
         assert!(e <= 1e-9, "{l}: {e} mm");
     }

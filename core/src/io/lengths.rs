@@ -17,7 +17,7 @@ use std::collections::{BTreeSet, HashMap};
 use std::io::Write;
 use std::path::Path;
 
-use super::text::{check_header, fmt_f64, parse_f64, quote, read_text, table};
+use super::text::{check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use crate::error::InputError;
 
 /// One reference length between two labelled points.
@@ -63,62 +63,63 @@ pub fn read_lengths(path: &Path) -> Result<Vec<ReferenceLength>, InputError> {
 /// assert_eq!(e.to_string(), "l.csv:2: field `distance`: must be positive, got -1");
 /// ```
 pub fn parse_lengths(text: &str, file: &str) -> Result<Vec<ReferenceLength>, InputError> {
-    let (_, rows) = table(text, file, SHAPE, "one row per length", |header| {
+    let mut pairs: HashMap<(String, String), usize> = HashMap::new();
+    let mut out = Vec::new();
+    let check = |header: &super::text::Record| {
         let ncols = if header.fields.len() >= 4 { 4 } else { 3 };
         check_header(header, file, &COLUMNS[..ncols], SHAPE)
-    })?;
-    let mut pairs: HashMap<(String, String), usize> = HashMap::new();
-    let mut out = Vec::with_capacity(rows.len());
-    for row in rows {
-        let line = row.line;
-        let error =
-            |field: &str, message: String| Err(InputError::field(file, line, field, message));
-        let mut f = row.fields.into_iter();
-        let (a, b) = (f.next().unwrap_or_default(), f.next().unwrap_or_default());
-        let (distance, uncertainty) = (f.next().unwrap_or_default(), f.next());
-        for (field, label) in [("point_a", &a), ("point_b", &b)] {
-            if label.is_empty() {
-                return error(field, "empty point label".into());
-            }
-        }
-        if a == b {
-            return error(
-                "point_b",
-                format!("same point as point_a (`{a}`): a length needs two points"),
-            );
-        }
-        let d = parse_f64(&distance, file, line, "distance")?;
-        if d <= 0.0 {
-            return error("distance", format!("must be positive, got {distance}"));
-        }
-        let u = match uncertainty.filter(|s| !s.is_empty()) {
-            None => None,
-            Some(s) => match parse_f64(&s, file, line, "uncertainty")? {
-                u if u < 0.0 => {
-                    return error("uncertainty", format!("must not be negative, got {s}"));
+    };
+    scan_table(
+        text,
+        file,
+        SHAPE,
+        "one row per length",
+        check,
+        |_, line, f| {
+            let error =
+                |field: &str, message: String| Err(InputError::field(file, line, field, message));
+            let (a, b, distance, uncertainty) = (f[0], f[1], f[2], f.get(3).copied());
+            for (field, label) in [("point_a", a), ("point_b", b)] {
+                if label.is_empty() {
+                    return error(field, "empty point label".into());
                 }
-                u => Some(u),
-            },
-        };
-        let pair = if a < b {
-            (a.clone(), b.clone())
-        } else {
-            (b.clone(), a.clone())
-        };
-        if let Some(first) = pairs.insert(pair, line) {
-            return error(
-                "point_b",
-                format!("the pair `{a}`–`{b}` is already given on line {first}"),
-            );
-        }
-        out.push(ReferenceLength {
-            a,
-            b,
-            distance: d,
-            uncertainty: u,
-            line,
-        });
-    }
+            }
+            if a == b {
+                return error(
+                    "point_b",
+                    format!("same point as point_a (`{a}`): a length needs two points"),
+                );
+            }
+            let d = parse_f64(distance, file, line, "distance")?;
+            if d <= 0.0 {
+                return error("distance", format!("must be positive, got {distance}"));
+            }
+            let u = match uncertainty.filter(|s| !s.is_empty()) {
+                None => None,
+                Some(s) => match parse_f64(s, file, line, "uncertainty")? {
+                    u if u < 0.0 => {
+                        return error("uncertainty", format!("must not be negative, got {s}"));
+                    }
+                    u => Some(u),
+                },
+            };
+            let pair = if a < b { (a, b) } else { (b, a) };
+            if let Some(first) = pairs.insert((pair.0.to_string(), pair.1.to_string()), line) {
+                return error(
+                    "point_b",
+                    format!("the pair `{a}`–`{b}` is already given on line {first}"),
+                );
+            }
+            out.push(ReferenceLength {
+                a: a.to_string(),
+                b: b.to_string(),
+                distance: d,
+                uncertainty: u,
+                line,
+            });
+            Ok(())
+        },
+    )?;
     Ok(out)
 }
 

@@ -13,7 +13,7 @@ use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
-use super::text::{check_header, invalid, parse_f64, quote, read_text, table};
+use super::text::{check_header, invalid, parse_f64, quote, read_text, scan_table};
 use crate::error::InputError;
 
 const COLUMNS: [&str; 4] = ["point", "x", "y", "z"];
@@ -33,19 +33,83 @@ const SHAPE: &str = "point,x,y,z";
 /// ```
 pub fn write_points<S: AsRef<str>>(
     mut w: impl Write,
-    labels: &[S],
+    labels: impl IntoIterator<Item = S, IntoIter: ExactSizeIterator>,
     xyz: &[[f64; 3]],
 ) -> std::io::Result<()> {
+    let labels = labels.into_iter();
     if labels.len() != xyz.len() {
         let message = format!("{} labels for {} points", labels.len(), xyz.len());
         return Err(invalid(message));
     }
     w.write_all(format!("{SHAPE}\n").as_bytes())?;
-    for (label, [x, y, z]) in labels.iter().zip(xyz) {
-        let line = format!("{},{x:.6},{y:.6},{z:.6}\n", quote(label.as_ref())?);
+    let mut line = String::new();
+    for (label, xyz) in labels.zip(xyz) {
+        line.clear();
+        line.push_str(&quote(label.as_ref())?);
+        for &v in xyz {
+            line.push(',');
+            push_fixed6(&mut line, v);
+        }
+        line.push('\n');
         w.write_all(line.as_bytes())?;
     }
     Ok(())
+}
+
+/// Appends `x` with 6 decimals, the bytes of `format!("{x:.6}")`: the
+/// exact binary value rounded half to even, the sign kept (`-0.000000`).
+/// Integer arithmetic where it is exact (|x| < 2⁴⁹), the standard
+/// formatter elsewhere.
+fn push_fixed6(out: &mut String, x: f64) {
+    use std::fmt::Write as _;
+    const SCALE: u128 = 1_000_000;
+    if !x.is_finite() || x.abs() >= (1u64 << 49) as f64 {
+        _ = write!(out, "{x:.6}");
+        return;
+    }
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let fraction = bits & ((1 << 52) - 1);
+    // x = m·2^-shift exactly, shift > 0 below 2⁴⁹.
+    let (m, shift) = match biased {
+        0 => (fraction, 1074),
+        _ => (fraction | (1 << 52), 1075 - biased),
+    };
+    // m·10⁶ < 2⁷³: exact in u128; below 2^-74 the value rounds to 0.
+    let scaled = u128::from(m) * SCALE;
+    let micro = if shift >= 127 {
+        0
+    } else {
+        let (q, r) = (scaled >> shift, scaled & ((1u128 << shift) - 1));
+        let half = 1u128 << (shift - 1);
+        q + u128::from(r > half || (r == half && q & 1 == 1))
+    };
+    if bits >> 63 == 1 {
+        out.push('-');
+    }
+    // Both parts fit in u64 (the integer part is below 2⁴⁹); digits by
+    // hand, the formatting machinery costs more than the rounding.
+    let (int, frac) = ((micro / SCALE) as u64, (micro % SCALE) as u64);
+    let mut digits = [b'0'; 20];
+    let mut at = digits.len();
+    let mut rest = int;
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (rest % 10) as u8;
+        rest /= 10;
+        if rest == 0 {
+            break;
+        }
+    }
+    let mut fraction = [b'.', 0, 0, 0, 0, 0, 0];
+    let mut rest = frac;
+    for d in fraction[1..].iter_mut().rev() {
+        *d = b'0' + (rest % 10) as u8;
+        rest /= 10;
+    }
+    for part in [&digits[at..], &fraction[..]] {
+        out.push_str(std::str::from_utf8(part).expect("ASCII digits"));
+    }
 }
 
 /// Reads a point file (standard input for `-`); messages name the file as
@@ -70,33 +134,36 @@ pub fn read_points(path: &Path) -> Result<Vec<(String, [f64; 3])>, InputError> {
 /// assert!(e.to_string().starts_with("s.csv:3: field `point`: duplicate label `S1`"));
 /// ```
 pub fn parse_points(text: &str, file: &str) -> Result<Vec<(String, [f64; 3])>, InputError> {
-    let (_, rows) = table(text, file, SHAPE, "one row per point", |header| {
-        check_header(header, file, &COLUMNS, SHAPE)
-    })?;
     let mut seen: HashMap<String, usize> = HashMap::new();
-    let mut out = Vec::with_capacity(rows.len());
-    for row in rows {
-        let label = &row.fields[0];
-        if label.is_empty() {
-            return Err(InputError::field(file, row.line, "point", "empty label"));
-        }
-        if let Some(first) = seen.insert(label.clone(), row.line) {
-            return Err(InputError::field(
-                file,
-                row.line,
-                "point",
-                format!("duplicate label `{label}` (first on line {first})"),
-            ));
-        }
-        let mut xyz = [0.0; 3];
-        for (v, (s, col)) in xyz
-            .iter_mut()
-            .zip(row.fields[1..].iter().zip(&COLUMNS[1..]))
-        {
-            *v = parse_f64(s, file, row.line, col)?;
-        }
-        out.push((label.clone(), xyz));
-    }
+    let mut out = Vec::new();
+    let check = |header: &super::text::Record| check_header(header, file, &COLUMNS, SHAPE);
+    scan_table(
+        text,
+        file,
+        SHAPE,
+        "one row per point",
+        check,
+        |_, line, fields| {
+            let label = fields[0];
+            if label.is_empty() {
+                return Err(InputError::field(file, line, "point", "empty label"));
+            }
+            if let Some(first) = seen.insert(label.to_string(), line) {
+                return Err(InputError::field(
+                    file,
+                    line,
+                    "point",
+                    format!("duplicate label `{label}` (first on line {first})"),
+                ));
+            }
+            let mut xyz = [0.0; 3];
+            for (v, (s, col)) in xyz.iter_mut().zip(fields[1..].iter().zip(&COLUMNS[1..])) {
+                *v = parse_f64(s, file, line, col)?;
+            }
+            out.push((label.to_string(), xyz));
+            Ok(())
+        },
+    )?;
     Ok(out)
 }
 
@@ -199,6 +266,44 @@ mod tests {
         let (l2, p2): (Vec<String>, Vec<[f64; 3]>) = back.into_iter().unzip();
         write_points(&mut again, &l2, &p2).unwrap();
         assert_eq!(String::from_utf8(again).unwrap(), text);
+    }
+
+    /// The fixed-point writer gives the standard formatter's bytes: ties
+    /// (multiples of 2⁻⁷), tiny, negative, huge and random values.
+    #[test]
+    fn six_decimals_as_the_standard_formatter() {
+        use rand::{RngExt, SeedableRng};
+        let mut values = vec![
+            0.0,
+            -0.0,
+            1e-300,
+            -1e-300,
+            f64::MIN_POSITIVE / 3.0,
+            -4e-7,
+            5e-7,
+            4.999999999e-7,
+            0.5,
+            (1u64 << 49) as f64,
+            (1u64 << 49) as f64 - 0.5,
+            1e300,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        values.extend((0..4096).map(|k| f64::from(k) / 128.0 - 16.0));
+        values.extend((0..4096).map(|k| f64::from(k) * 1e-6 + 2.5e-7));
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        for _ in 0..200_000 {
+            let v: f64 = rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-10..16));
+            values.push(v);
+            values.push(f64::from_bits(rng.random::<u64>()));
+        }
+        for v in values {
+            let mut s = String::new();
+            push_fixed6(&mut s, v);
+            assert_eq!(s, format!("{v:.6}"), "{v:e}");
+        }
     }
 
     #[test]

@@ -12,39 +12,162 @@
 //! unit the caller states (files do not carry it). The CSV dialect is
 //! described in the [`io`](super) module docs.
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
 use super::Warning;
-use super::text::{Record, check_header, fmt_f64, invalid, parse_f64, quote, read_text, table};
+use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
 use crate::error::InputError;
 
 /// The radians hint is given only for at least this many rows.
 pub const RADIANS_HINT_MIN_ROWS: usize = 20;
 
-/// The touches of a poses file.
+/// The touches of a poses file, stored compactly: each point label once
+/// (rows name their point by index), the readings in one row-major array.
+///
+/// ```
+/// use aacmm_core::io::Poses;
+/// let mut poses = Poses::new(2);
+/// poses.push("S1", &[0.5, 1.0], 2);
+/// poses.push("S2", &[0.0, -1.0], 3);
+/// poses.push("S1", &[0.25, 2.0], 4);
+/// assert_eq!(poses.len(), 3);
+/// assert_eq!(poses.points(), ["S1", "S2"]);
+/// assert_eq!((poses.point(2), poses.label(2)), (0, "S1"));
+/// assert_eq!(poses.reading(1), [0.0, -1.0]);
+/// assert_eq!(poses.line(2), 4);
+/// assert_eq!(poses.labels().collect::<Vec<_>>(), ["S1", "S2", "S1"]);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Poses {
-    /// Per row, the label of the point touched.
-    pub labels: Vec<String>,
     /// Number of joints (angle columns).
-    pub joints: usize,
-    /// Per row, the `joints` encoder readings, rad.
-    pub q: Vec<Vec<f64>>,
+    joints: usize,
+    /// The labels of the points touched, each once, in order of first
+    /// appearance.
+    points: Vec<String>,
+    /// Each label's index in `points`.
+    index: HashMap<String, u32>,
+    /// Per row, the index of its point in `points`.
+    point_of: Vec<u32>,
+    /// Per row, the `joints` encoder readings, rad, row after row.
+    q: Vec<f64>,
     /// Per row, its 1-based line in the source file (for messages).
-    pub lines: Vec<usize>,
+    lines: Vec<usize>,
 }
 
 impl Poses {
+    /// No rows, readings of `joints` joints.
+    pub fn new(joints: usize) -> Poses {
+        Poses::with_capacity(joints, 0)
+    }
+
+    /// No rows, with room for `rows` rows.
+    pub fn with_capacity(joints: usize, rows: usize) -> Poses {
+        Poses {
+            joints,
+            points: Vec::new(),
+            index: HashMap::new(),
+            point_of: Vec::with_capacity(rows),
+            q: Vec::with_capacity(rows * joints),
+            lines: Vec::with_capacity(rows),
+        }
+    }
+
+    /// Adds a row: a touch of the point `label` with readings `q` (rad),
+    /// read from `line` of its file (or numbered by the caller).
+    ///
+    /// # Panics
+    /// If `q` does not hold [`Poses::joints`] readings, or past 2³² distinct
+    /// labels.
+    pub fn push(&mut self, label: &str, q: &[f64], line: usize) {
+        assert_eq!(q.len(), self.joints, "readings of one row");
+        let id = self.intern(label);
+        self.point_of.push(id);
+        self.q.extend_from_slice(q);
+        self.lines.push(line);
+    }
+
+    /// The index of `label` in `points`, added if new. Rows of one point
+    /// usually follow each other: the previous row's point is tried first.
+    #[inline]
+    fn intern(&mut self, label: &str) -> u32 {
+        if let Some(&last) = self.point_of.last()
+            && self.points[last as usize] == label
+        {
+            return last;
+        }
+        if let Some(&id) = self.index.get(label) {
+            return id;
+        }
+        let id = u32::try_from(self.points.len()).expect("fewer than 2^32 points");
+        self.points.push(label.to_string());
+        self.index.insert(label.to_string(), id);
+        id
+    }
+
     /// Number of rows (touches).
     pub fn len(&self) -> usize {
-        self.q.len()
+        self.point_of.len()
     }
 
     /// Whether there are no rows.
     pub fn is_empty(&self) -> bool {
-        self.q.is_empty()
+        self.point_of.is_empty()
+    }
+
+    /// Number of joints (readings per row).
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// The labels of the points touched, each once, in order of first
+    /// appearance.
+    pub fn points(&self) -> &[String] {
+        &self.points
+    }
+
+    /// The index in [`Poses::points`] of the point row `row` touches.
+    pub fn point(&self, row: usize) -> usize {
+        self.point_of[row] as usize
+    }
+
+    /// The label of the point row `row` touches.
+    pub fn label(&self, row: usize) -> &str {
+        &self.points[self.point(row)]
+    }
+
+    /// The label of every row, in row order.
+    pub fn labels(&self) -> impl ExactSizeIterator<Item = &str> + '_ {
+        self.point_of
+            .iter()
+            .map(|&p| self.points[p as usize].as_str())
+    }
+
+    /// The readings (rad) of row `row`.
+    pub fn reading(&self, row: usize) -> &[f64] {
+        &self.q[row * self.joints..(row + 1) * self.joints]
+    }
+
+    /// The readings (rad) of every row, row after row.
+    pub fn readings(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// The readings of every row, in row order.
+    pub fn rows(&self) -> impl ExactSizeIterator<Item = &[f64]> + '_ {
+        (0..self.len()).map(|row| self.reading(row))
+    }
+
+    /// The 1-based line of row `row` in its file.
+    pub fn line(&self, row: usize) -> usize {
+        self.lines[row]
+    }
+
+    /// The line of every row.
+    pub fn lines(&self) -> &[usize] {
+        &self.lines
     }
 }
 
@@ -75,9 +198,9 @@ pub fn read_poses(
 /// use aacmm_core::io::{AngleUnit, parse_poses};
 /// let text = "point,q1,q2\nS1,90,0\nS1,0,-180\n";
 /// let (poses, warnings) = parse_poses(text, "p.csv", AngleUnit::Deg, Some(2)).unwrap();
-/// assert_eq!(poses.labels, ["S1", "S1"]);
-/// assert_eq!(poses.q[0][0], std::f64::consts::FRAC_PI_2);
-/// assert_eq!(poses.lines, [2, 3]);
+/// assert_eq!(poses.labels().collect::<Vec<_>>(), ["S1", "S1"]);
+/// assert_eq!(poses.reading(0)[0], std::f64::consts::FRAC_PI_2);
+/// assert_eq!(poses.lines(), [2, 3]);
 /// assert!(warnings.is_empty());
 ///
 /// let err = parse_poses(text, "p.csv", AngleUnit::Deg, Some(6)).unwrap_err();
@@ -91,38 +214,51 @@ pub fn parse_poses(
 ) -> Result<(Poses, Vec<Warning>), InputError> {
     let shape = "point,q1,...,qn";
     let per_row = "one row per touch";
-    let (header, rows) = table(text, file, shape, per_row, |h| {
-        check_poses_header(h, file, expected_joints)
-    })?;
-    let columns = &header.fields;
-    let mut poses = Poses {
-        labels: Vec::with_capacity(rows.len()),
-        joints: columns.len() - 1,
-        q: Vec::with_capacity(rows.len()),
-        lines: Vec::with_capacity(rows.len()),
-    };
-    for row in rows {
-        let mut fields = row.fields.into_iter();
-        let label = fields.next().unwrap_or_default();
-        if label.is_empty() {
-            return Err(InputError::field(
-                file,
-                row.line,
-                "point",
-                "empty label: each row must name the point touched",
-            ));
-        }
-        let q = fields
-            .zip(&columns[1..])
-            .map(|(s, col)| parse_f64(&s, file, row.line, col))
-            .collect::<Result<Vec<f64>, _>>()?;
-        poses.labels.push(label);
-        poses.q.push(q);
-        poses.lines.push(row.line);
-    }
-
+    // At most one row per line: room for them all, so that the readings
+    // are never copied to grow.
+    let max_rows = 1 + text.bytes().filter(|&b| b == b'\n').count();
+    let mut poses: Option<Poses> = None;
+    let header = scan_table(
+        text,
+        file,
+        shape,
+        per_row,
+        |h| check_poses_header(h, file, expected_joints),
+        |header, line, fields| {
+            let columns = &header.fields;
+            let poses =
+                poses.get_or_insert_with(|| Poses::with_capacity(columns.len() - 1, max_rows));
+            let label = fields[0];
+            if label.is_empty() {
+                return Err(InputError::field(
+                    file,
+                    line,
+                    "point",
+                    "empty label: each row must name the point touched",
+                ));
+            }
+            let start = poses.q.len();
+            for (s, col) in fields[1..].iter().zip(&columns[1..]) {
+                match parse_f64(s, file, line, col) {
+                    Ok(x) => poses.q.push(x),
+                    Err(e) => {
+                        poses.q.truncate(start);
+                        return Err(e);
+                    }
+                }
+            }
+            let id = poses.intern(label);
+            poses.point_of.push(id);
+            poses.lines.push(line);
+            Ok(())
+        },
+    )?;
+    let mut poses = poses.unwrap_or_else(|| Poses::new(header.fields.len() - 1));
+    poses.q.shrink_to_fit();
+    poses.point_of.shrink_to_fit();
+    poses.lines.shrink_to_fit();
     let warnings = unit_warnings(&poses, file, unit);
-    for x in poses.q.iter_mut().flatten() {
+    for x in &mut poses.q {
         *x = unit.to_internal(*x);
     }
     Ok((poses, warnings))
@@ -180,7 +316,7 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
         field,
         message,
     };
-    let all_small = || poses.q.iter().flatten().all(|x| x.abs() < turn);
+    let all_small = || poses.q.iter().all(|x| x.abs() < turn);
     match unit {
         AngleUnit::Deg if poses.len() >= RADIANS_HINT_MIN_ROWS && all_small() => {
             let message = format!(
@@ -191,7 +327,7 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
             vec![warning(None, None, message)]
         }
         AngleUnit::Deg => vec![],
-        AngleUnit::Rad => (poses.q.iter().zip(&poses.lines))
+        AngleUnit::Rad => (poses.rows().zip(&poses.lines))
             .find_map(|(q, &line)| {
                 let j = q.iter().position(|x| x.abs() > turn)?;
                 let message = format!(
@@ -210,18 +346,14 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
 /// deterministic bytes, numbers in the shortest form that reads back to the
 /// same value (bit-exact in rad; in deg see
 /// [`AngleUnit::from_internal_exact`]), labels quoted only where needed.
-/// `lines` is not written. Inconsistent `poses` (row lengths, label count)
-/// or a label with surrounding whitespace (reading trims it) give an
-/// [`std::io::ErrorKind::InvalidInput`] error.
+/// The lines are not written. A label with surrounding whitespace (reading
+/// trims it) gives an [`std::io::ErrorKind::InvalidInput`] error.
 ///
 /// ```
 /// use aacmm_core::io::{AngleUnit, Poses, write_poses};
-/// let poses = Poses {
-///     labels: vec!["S1".into(), "S2".into()],
-///     joints: 2,
-///     q: vec![vec![std::f64::consts::FRAC_PI_2, 0.0], vec![-0.5, 1e-9]],
-///     lines: vec![2, 3],
-/// };
+/// let mut poses = Poses::new(2);
+/// poses.push("S1", &[std::f64::consts::FRAC_PI_2, 0.0], 2);
+/// poses.push("S2", &[-0.5, 1e-9], 3);
 /// let mut out = Vec::new();
 /// write_poses(&mut out, &poses, AngleUnit::Rad).unwrap();
 /// assert_eq!(
@@ -230,28 +362,13 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
 /// );
 /// ```
 pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io::Result<()> {
-    if poses.labels.len() != poses.q.len() {
-        return Err(invalid(format!(
-            "{} labels for {} rows of angles",
-            poses.labels.len(),
-            poses.q.len()
-        )));
-    }
     let mut header = String::from("point");
     for j in 1..=poses.joints {
         header.push_str(&format!(",q{j}"));
     }
     header.push('\n');
     w.write_all(header.as_bytes())?;
-    for (i, (label, q)) in poses.labels.iter().zip(&poses.q).enumerate() {
-        if q.len() != poses.joints {
-            return Err(invalid(format!(
-                "row {} has {} angles, expected {}",
-                i + 1,
-                q.len(),
-                poses.joints
-            )));
-        }
+    for (label, q) in poses.labels().zip(poses.rows()) {
         let mut line = quote(label)?.into_owned();
         for &x in q {
             line.push(',');
@@ -287,12 +404,15 @@ mod tests {
         let (p, w) = parse_poses(text, F, AngleUnit::Deg, Some(2)).unwrap();
         assert!(w.is_empty());
         assert_eq!(p.joints, 2);
-        assert_eq!(p.labels, ["S1", "S 2"]);
-        assert_eq!(p.lines, [4, 5]);
-        assert_eq!(p.q[0], [std::f64::consts::PI, -std::f64::consts::FRAC_PI_2]);
-        assert_eq!(p.q[1], [0.5f64.to_radians(), 1e-3f64.to_radians()]);
+        assert_eq!(p.labels().collect::<Vec<_>>(), ["S1", "S 2"]);
+        assert_eq!(p.lines(), [4, 5]);
+        assert_eq!(
+            p.reading(0),
+            [std::f64::consts::PI, -std::f64::consts::FRAC_PI_2]
+        );
+        assert_eq!(p.reading(1), [0.5f64.to_radians(), 1e-3f64.to_radians()]);
         let (r, _) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
-        assert_eq!(r.q[1], [0.5, 1e-3]);
+        assert_eq!(r.reading(1), [0.5, 1e-3]);
     }
 
     #[test]
@@ -301,9 +421,9 @@ mod tests {
         // was silently dropped as one.
         let text = "# touches\npoint,q1\nS0,1\n#S1,2\n # S2 ,3\n";
         let (p, _) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
-        assert_eq!(p.labels, ["S0", "#S1", "# S2"]);
-        assert_eq!(p.lines, [3, 4, 5]);
-        assert_eq!(p.q[1], [2.0]);
+        assert_eq!(p.labels().collect::<Vec<_>>(), ["S0", "#S1", "# S2"]);
+        assert_eq!(p.lines(), [3, 4, 5]);
+        assert_eq!(p.reading(1), [2.0]);
         // A comment-like line after the header is a row like any other.
         assert_at(
             &err("point,q1,q2\nS,1,2\n# note\n", None),
@@ -522,16 +642,12 @@ mod tests {
     fn random_poses(seed: u64, joints: usize, rows: usize) -> Poses {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let labels = ["S1", "socket 2", "#3", "a,b", "q\"x", "\"q\""];
-        Poses {
-            labels: (0..rows)
-                .map(|i| labels[i % labels.len()].to_string())
-                .collect(),
-            joints,
-            q: (0..rows)
-                .map(|_| (0..joints).map(|_| rng.random_range(-4.0..4.0)).collect())
-                .collect(),
-            lines: (2..rows + 2).collect(),
+        let mut poses = Poses::new(joints);
+        for i in 0..rows {
+            let q: Vec<f64> = (0..joints).map(|_| rng.random_range(-4.0..4.0)).collect();
+            poses.push(labels[i % labels.len()], &q, i + 2);
         }
+        poses
     }
 
     #[test]
@@ -541,9 +657,9 @@ mod tests {
         write_poses(&mut out, &p, AngleUnit::Rad).unwrap();
         let text = String::from_utf8(out).unwrap();
         let (back, _) = parse_poses(&text, F, AngleUnit::Rad, Some(7)).unwrap();
-        assert_eq!(back.labels, p.labels);
-        assert_eq!(back.lines, p.lines);
-        for (a, b) in back.q.iter().flatten().zip(p.q.iter().flatten()) {
+        assert!(back.labels().eq(p.labels()));
+        assert_eq!(back.lines(), p.lines());
+        for (a, b) in back.readings().iter().zip(p.readings()) {
             assert_eq!(a.to_bits(), b.to_bits());
         }
         // Writing again gives identical bytes.
@@ -567,7 +683,7 @@ mod tests {
         let (back, _) =
             parse_poses(std::str::from_utf8(&out).unwrap(), F, AngleUnit::Deg, None).unwrap();
         let (mut exact, mut total) = (0, 0);
-        for (a, b) in back.q.iter().flatten().zip(p.q.iter().flatten()) {
+        for (a, b) in back.readings().iter().zip(p.readings()) {
             assert!((a - b).abs() <= b.abs() * f64::EPSILON, "{a} {b}");
             exact += usize::from(a.to_bits() == b.to_bits());
             total += 1;
@@ -576,18 +692,116 @@ mod tests {
     }
 
     #[test]
-    fn write_rejects_inconsistent_poses() {
+    fn write_rejects_padded_labels() {
         let mut p = random_poses(3, 2, 3);
-        p.q[1].pop();
+        p.push(" pad ", &[0.0, 1.0], 5);
         let e = write_poses(Vec::new(), &p, AngleUnit::Rad).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
-        let mut p = random_poses(3, 2, 3);
-        p.labels.pop();
-        assert!(write_poses(Vec::new(), &p, AngleUnit::Rad).is_err());
-        let mut p = random_poses(3, 2, 3);
-        p.labels[2] = " pad ".into();
-        let e = write_poses(Vec::new(), &p, AngleUnit::Rad).unwrap_err();
-        assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+    }
+
+    /// Labels are stored once; rows refer to them, in order of first
+    /// appearance, whether rows of one point follow each other or not.
+    #[test]
+    fn labels_are_interned() {
+        let text = "point,q1\nB,1\nB,2\nA,3\nB,4\nC,5\nA,6\n";
+        let (p, _) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
+        assert_eq!(p.points(), ["B", "A", "C"]);
+        let ids: Vec<usize> = (0..p.len()).map(|r| p.point(r)).collect();
+        assert_eq!(ids, [0, 0, 1, 0, 2, 1]);
+        assert_eq!(
+            p.labels().collect::<Vec<_>>(),
+            ["B", "B", "A", "B", "C", "A"]
+        );
+    }
+
+    /// Quoted fields (the `csv` crate's path) and plain ones (the byte
+    /// splitter) read the same file the same way.
+    #[test]
+    fn quoted_and_plain_files_agree() {
+        let plain = "# c\npoint,q1,q2\r\nS1, 1.5 ,-2\r\n S2 ,3e-3,4\r\n\n";
+        let quoted = "# c\npoint,q1,q2\r\n\"S1\", 1.5 ,-2\r\n S2 ,3e-3,4\r\n\n";
+        let (a, _) = parse_poses(plain, F, AngleUnit::Deg, None).unwrap();
+        let (b, _) = parse_poses(quoted, F, AngleUnit::Deg, None).unwrap();
+        assert_eq!(a, b);
+        assert_eq!(a.lines(), [3, 4]);
+        for (text, line) in [(plain, 3), (quoted, 3)] {
+            let bad = text.replace("1.5", "1.5.");
+            assert_at(&err(&bad, None), line, Some("q1"), "`1.5.` is not a number");
+        }
+    }
+
+    /// The first error is the one of the stage that checks first (a blank
+    /// line, the header, a row's width, its values), not the first line.
+    #[test]
+    fn errors_in_stage_order() {
+        let width_after_value = "point,q1,q2\nS,x,2\nS,1\n";
+        assert_at(
+            &err(width_after_value, None),
+            3,
+            Some("q2"),
+            "missing: the row has 2",
+        );
+        let blank_after_width = "point,q1,q2\nS,1\nS,1,2\n\nS,1,2\n";
+        assert_at(&err(blank_after_width, None), 4, None, "blank line");
+        let blank_after_header = "point,q\nS,1\n\nS,2\n";
+        assert_at(&err(blank_after_header, None), 3, None, "blank line");
+        let value_then_value = "point,q1\nS,y\nS,x\n";
+        assert_at(
+            &err(value_then_value, None),
+            2,
+            Some("q1"),
+            "`y` is not a number",
+        );
+        let label_before_value = "point,q1,q2\n,x,2\n";
+        assert_at(
+            &err(label_before_value, None),
+            2,
+            Some("point"),
+            "empty label",
+        );
+    }
+
+    /// Numbers the fast path reads and those it leaves to the standard
+    /// parser give the standard parser's bits.
+    #[test]
+    fn numbers_match_the_standard_parser() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        let mut text = String::from("point,q1\n");
+        let mut want = Vec::new();
+        for i in 0..2000 {
+            let x: f64 = rng.random_range(-400.0..400.0) * 10f64.powi(rng.random_range(-12..12));
+            let s = match i % 6 {
+                0 => format!("{x:?}"),
+                1 => format!("{x:e}"),
+                2 => format!("{x:.3}"),
+                3 => format!("+{}", x.abs()),
+                4 => format!("{:.0}.", x.trunc()),
+                _ => format!("{x:E}"),
+            };
+            want.push(s.parse::<f64>().unwrap());
+            text.push_str(&format!("S,{s}\n"));
+        }
+        for s in [
+            ".5",
+            "-.5e+3",
+            "1e-320",
+            "0.0000000000000000000001",
+            "00012",
+            "1E5",
+        ] {
+            want.push(s.parse::<f64>().unwrap());
+            text.push_str(&format!("S,{s}\n"));
+        }
+        let (p, _) = parse_poses(&text, F, AngleUnit::Rad, None).unwrap();
+        for (a, b) in p.readings().iter().zip(&want) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{b}");
+        }
+        for s in [
+            "1e", "e5", ".", "+", "1.2.3", "0x10", "1_0", "--1", "1e+-2", "inf", "+nan",
+        ] {
+            let e = err(&format!("point,q1\nS,{s}\n"), None);
+            assert_eq!(e.line(), Some(2), "{s}: {e}");
+        }
     }
 
     #[test]

@@ -82,50 +82,150 @@ pub(crate) struct Record {
     pub fields: Vec<String>,
 }
 
-/// The header and the data rows of a CSV file, each row as wide as the
-/// header. Errors on an empty file or one without data rows; `shape` and
-/// `rows_are` complete the message (`point,x,y,z`, `one row per point`).
-pub(crate) fn table(
+/// Reads a CSV table row by row: the header goes to `check_header`, each
+/// data row (as wide as the header) to `row`, with the header, its line and
+/// its fields, trimmed. Returns the header. `shape` and `rows_are` complete the message
+/// of an empty file (`point,x,y,z`, `one row per point`).
+///
+/// The error is the one of reading every record first and checking them in
+/// stages, whatever their order in the file: a malformed record (a blank line
+/// before more data, a quote left open) wins over a header error, which wins
+/// over an empty file or one without data rows, over the first row of the
+/// wrong width, over the first error `row` returns (after which `row` is not
+/// called again).
+pub(crate) fn scan_table(
     text: &str,
     file: &str,
     shape: &str,
     rows_are: &str,
     check_header: impl FnOnce(&Record) -> Result<(), InputError>,
-) -> Result<(Record, Vec<Record>), InputError> {
-    let mut recs = records(text, file)?.into_iter();
-    let Some(header) = recs.next() else {
+    mut row: impl FnMut(&Record, usize, &[&str]) -> Result<(), InputError>,
+) -> Result<Record, InputError> {
+    let mut check_header = Some(check_header);
+    let mut header: Option<Record> = None;
+    let (mut header_error, mut width_error, mut row_error) = (None, None, None);
+    let mut rows = 0usize;
+    each_record(text, file, |line, fields| {
+        let Some(h) = &header else {
+            let h = Record {
+                line,
+                fields: fields.iter().map(|f| f.to_string()).collect(),
+            };
+            header_error = check_header.take().and_then(|check| check(&h).err());
+            header = Some(h);
+            return;
+        };
+        rows += 1;
+        if header_error.is_some() || width_error.is_some() {
+            return;
+        }
+        if let Err(e) = check_row_width(line, fields.len(), file, &h.fields) {
+            width_error = Some(e);
+        } else if row_error.is_none() {
+            row_error = row(h, line, fields).err();
+        }
+    })?;
+    let Some(header) = header else {
         return Err(InputError::file_error(
             file,
             format!("empty file; expected the header `{shape}` and {rows_are}"),
         ));
     };
-    check_header(&header)?;
-    let rows: Vec<Record> = recs.collect();
-    if rows.is_empty() {
+    if let Some(e) = header_error {
+        return Err(e);
+    }
+    if rows == 0 {
         return Err(InputError::file_error(
             file,
             format!("no data rows after the header (line {})", header.line),
         ));
     }
-    for row in &rows {
-        check_row_width(row, file, &header.fields)?;
+    match width_error.or(row_error) {
+        Some(e) => Err(e),
+        None => Ok(header),
     }
-    Ok((header, rows))
 }
 
-/// Splits CSV text into records. The `csv` crate tokenizes; this layer keeps
-/// the rules of the dialect (see the `io` module docs) and the lines: each
-/// record's line comes from its byte offset, which the crate gets right where
-/// its line counter is not (after blank lines, with CRLF: rust-csv#208, #395).
-pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError> {
+/// Calls `f` with the line and the trimmed fields of every record of CSV
+/// text, in order; the dialect's errors (see [`records`]) stop it.
+///
+/// Text without a double quote after the comments (every data file this
+/// toolkit writes, and any without quoted labels) is split here, byte by
+/// byte, into fields borrowed from the text: the `csv` crate's records for
+/// such text are its lines, less the blank ones, cut at every comma. Other
+/// text goes through [`records`].
+pub(crate) fn each_record(
+    text: &str,
+    file: &str,
+    mut f: impl FnMut(usize, &[&str]),
+) -> Result<(), InputError> {
+    let original = text;
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let starts: Vec<usize> = std::iter::once(0)
-        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
-        .collect();
-    let line = |at: usize| starts.partition_point(|&s| s <= at);
-    // Comments before the header are not tokenized (a quote in one would
-    // open a field); blank lines there are remembered, as blank lines are
-    // errors before more data.
+    let (body, mut blank) = preamble(text);
+    let bytes = text.as_bytes();
+    if bytes[body..].contains(&b'"') {
+        for r in records(original, file)? {
+            let fields: Vec<&str> = r.fields.iter().map(String::as_str).collect();
+            f(r.line, &fields);
+        }
+        return Ok(());
+    }
+    let (mut pos, mut line) = (body, line_of(text, body));
+    let mut any = false;
+    let mut fields: Vec<&str> = Vec::with_capacity(16);
+    while pos < bytes.len() {
+        // One pass over the line for its commas and its end.
+        fields.clear();
+        let (mut start, mut end) = (pos, pos);
+        while end < bytes.len() && bytes[end] != b'\n' {
+            if bytes[end] == b',' {
+                fields.push(trim(&text[start..end]));
+                start = end + 1;
+            }
+            end += 1;
+        }
+        if fields.is_empty() && is_blank(&text[pos..end]) {
+            blank.get_or_insert(pos);
+        } else {
+            if let Some(blank) = blank {
+                return Err(blank_line(text, file, blank, line, any));
+            }
+            any = true;
+            fields.push(trim(&text[start..end]));
+            f(line, &fields);
+        }
+        pos = end + 1;
+        line += 1;
+    }
+    Ok(())
+}
+
+/// Whether a line is blank (whitespace only).
+#[inline]
+fn is_blank(line: &str) -> bool {
+    match line.as_bytes().first() {
+        None => true,
+        Some(b) if b.is_ascii_graphic() => false,
+        Some(_) => line.trim().is_empty(),
+    }
+}
+
+/// A field without surrounding whitespace (`str::trim`, as the `csv`
+/// crate's `Trim::All`), quick when there is none.
+#[inline]
+fn trim(field: &str) -> &str {
+    match field.as_bytes() {
+        [first, .., last] if first.is_ascii_graphic() && last.is_ascii_graphic() => field,
+        [only] if only.is_ascii_graphic() => field,
+        _ => field.trim(),
+    }
+}
+
+/// Where the first record starts (past the comments and blank lines before
+/// the header, and byte-order marks starting the header), and the first
+/// blank line before it, if any. Comments are not tokenized: a quote in one
+/// would open a field.
+fn preamble(text: &str) -> (usize, Option<usize>) {
     let (mut body, mut blank) = (0, None);
     for l in text.split_inclusive('\n') {
         match l.trim() {
@@ -135,9 +235,47 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
         }
         body += l.len();
     }
-    // The crate drops a byte-order mark starting its input: drop it here, so
-    // that the offsets below point past it.
-    let body = text.len() - text[body..].trim_start_matches('\u{feff}').len();
+    (
+        text.len() - text[body..].trim_start_matches('\u{feff}').len(),
+        blank,
+    )
+}
+
+/// The error for a blank line (at byte `blank`) before the record on
+/// `line`; `after_records` when a record came before it.
+fn blank_line(
+    text: &str,
+    file: &str,
+    blank: usize,
+    line: usize,
+    after_records: bool,
+) -> InputError {
+    let hint = if after_records {
+        ""
+    } else {
+        ", or start it with `#` to make it a comment"
+    };
+    let message = format!(
+        "blank line before more data (line {line}); only trailing blank lines are \
+         allowed: delete it{hint}"
+    );
+    InputError::line_error(file, line_of(text, blank), message)
+}
+
+/// Splits CSV text into records: the reading of text with quotes (see
+/// [`each_record`]). The `csv` crate tokenizes; this layer keeps
+/// the rules of the dialect (see the `io` module docs) and the lines: each
+/// record's line comes from its byte offset, which the crate gets right where
+/// its line counter is not (after blank lines, with CRLF: rust-csv#208, #395).
+pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let starts: Vec<usize> = std::iter::once(0)
+        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+        .collect();
+    let line = |at: usize| starts.partition_point(|&s| s <= at);
+    // Blank lines before the header are remembered, as blank lines are
+    // errors before more data.
+    let (body, mut blank) = preamble(text);
     // A sentinel record after the text: a quote left open swallows it.
     let input = text.as_bytes()[body..].chain(&b"\n\0"[..]);
     let mut reader = ReaderBuilder::new()
@@ -164,17 +302,7 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
             continue;
         }
         if let Some(blank) = blank {
-            let hint = if out.is_empty() {
-                ", or start it with `#` to make it a comment"
-            } else {
-                ""
-            };
-            let message = format!(
-                "blank line before more data (line {}); only trailing blank lines are \
-                 allowed: delete it{hint}",
-                line(start)
-            );
-            return Err(InputError::line_error(file, line(blank), message));
+            return Err(blank_line(text, file, blank, line(start), !out.is_empty()));
         }
         out.push(Record {
             line: line(start),
@@ -248,17 +376,19 @@ pub(crate) fn check_header(
     Ok(())
 }
 
-/// Checks that a data row has as many fields as the header.
+/// Checks that the data row on `line`, of `got` fields, is as wide as the
+/// header.
 pub(crate) fn check_row_width(
-    row: &Record,
+    line: usize,
+    got: usize,
     file: &str,
     columns: &[String],
 ) -> Result<(), InputError> {
-    let (got, want) = (row.fields.len(), columns.len());
+    let want = columns.len();
     if got < want {
         return Err(InputError::field(
             file,
-            row.line,
+            line,
             columns[got].clone(),
             format!("missing: the row has {got} columns, the header {want}"),
         ));
@@ -266,7 +396,7 @@ pub(crate) fn check_row_width(
     if got > want {
         return Err(InputError::line_error(
             file,
-            row.line,
+            line,
             format!(
                 "the row has {got} columns, the header {want} (`{}`)",
                 columns.join(",")
@@ -277,7 +407,22 @@ pub(crate) fn check_row_width(
 }
 
 /// Parses a finite number from a CSV field.
+///
+/// `fast_float2` reads what the standard parser reads as a finite number
+/// (`[+-]digits[.digits][(e|E)[+-]digits]`), correctly rounded as it is, so
+/// the bits are the same; anything else (and a value out of range) goes to
+/// the standard parser for its verdict and the message.
+#[inline]
 pub(crate) fn parse_f64(s: &str, file: &str, line: usize, field: &str) -> Result<f64, InputError> {
+    match fast_float2::parse::<f64, _>(s) {
+        Ok(x) if x.is_finite() => Ok(x),
+        _ => parse_f64_slow(s, file, line, field),
+    }
+}
+
+/// [`parse_f64`] by the standard parser, with the message of each failure.
+#[cold]
+fn parse_f64_slow(s: &str, file: &str, line: usize, field: &str) -> Result<f64, InputError> {
     let problem = match s.parse::<f64>() {
         Ok(x) if x.is_finite() => return Ok(x),
         _ if s.is_empty() => "missing value".to_string(),

@@ -117,6 +117,26 @@ impl KernelOp for OnePose<'_> {
     }
 }
 
+/// One pose of prepared poses: its joint Jacobian from the stored sin/cos.
+struct OnePrepared<'a> {
+    poses: &'a PreparedPoses,
+    i: usize,
+    jac: &'a mut [[f64; 3]],
+}
+
+impl KernelOp for OnePrepared<'_> {
+    type Output = Result<[f64; 3], KernelError>;
+    fn run<const N: usize>(self, k: &PreparedParams<N>) -> Self::Output
+    where
+        Dh: Chain<N>,
+    {
+        check_len(N, self.jac.len())?;
+        let jac: &mut [[f64; 3]; N] = self.jac.try_into().expect("length checked");
+        let (cq, sq) = self.poses.trig::<N>(self.i);
+        Ok(Dh::joint_jacobian(k, &cq, &sq, jac))
+    }
+}
+
 /// A batch operation with the arm's chain known: the [`LaneOp`] that
 /// [`lanes::run`] runs on the widest lanes the CPU has.
 struct OnChain<'k, const N: usize, O> {
@@ -278,6 +298,30 @@ impl ArmKernel {
             q,
             jac: Some((jac, false)),
         })
+    }
+
+    /// [`ArmKernel::joint_jacobian`] of pose `i` of `poses`, from their
+    /// stored sin/cos (the same bits as from the readings: both are the
+    /// sin/cos of the same values).
+    ///
+    /// ```
+    /// use aacmm_core::{kernel::{ArmKernel, PreparedPoses}, params::DhParams};
+    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+    /// let q = [[0.1, 0.2, 0.3, 0.4, 0.5, 0.6], [0.5; 6]];
+    /// let poses = PreparedPoses::new(6, &q).unwrap();
+    /// let (mut a, mut b) = ([[0.0; 3]; 6], [[0.0; 3]; 6]);
+    /// let p = k.joint_jacobian_at(&poses, 1, &mut a).unwrap();
+    /// assert_eq!((p, a), (k.joint_jacobian(&q[1], &mut b).unwrap(), b));
+    /// assert!(k.joint_jacobian_at(&poses, 2, &mut a).is_err());
+    /// ```
+    pub fn joint_jacobian_at(
+        &self,
+        poses: &PreparedPoses,
+        i: usize,
+        jac: &mut [[f64; 3]],
+    ) -> Result<[f64; 3], KernelError> {
+        self.check_poses(poses, &(i..i + 1))?;
+        self.apply(OnePrepared { poses, i, jac })
     }
 
     fn check_poses(&self, poses: &PreparedPoses, range: &Range<usize>) -> Result<(), KernelError> {

@@ -294,6 +294,23 @@ impl PreparedPoses {
         })
     }
 
+    /// Prepares `len` poses of `joints` readings (rad), row after row in
+    /// `q`: [`PreparedPoses::new`] without a slice per row.
+    pub(crate) fn from_flat(joints: usize, len: usize, q: &[f64]) -> Self {
+        assert_eq!(q.len(), joints * len, "readings of {len} poses");
+        let column = |j: usize| (0..len).map(move |i| q[i * joints + j]);
+        PreparedPoses {
+            joints,
+            len,
+            cos: (0..joints)
+                .map(|j| column(j).map(f64::cos).collect())
+                .collect(),
+            sin: (0..joints)
+                .map(|j| column(j).map(f64::sin).collect())
+                .collect(),
+        }
+    }
+
     /// Number of poses.
     pub fn len(&self) -> usize {
         self.len

@@ -33,9 +33,10 @@
 //! let settings = CampaignSettings::new(42, ErrorModel::Paper, 3, 4);
 //! let c = simulate(&nominal, &settings).unwrap();
 //! assert_eq!(c.poses.len(), 12);
-//! assert_eq!(c.poses.labels[4], "S2");
+//! assert_eq!(c.poses.label(4), "S2");
 //! // Zero noise: the true arm reproduces the socket at every pose.
-//! let p = kernel::ArmKernel::new(&c.true_arm.params).unwrap().positions_of(&c.poses.q).unwrap();
+//! let rows: Vec<&[f64]> = c.poses.rows().collect();
+//! let p = kernel::ArmKernel::new(&c.true_arm.params).unwrap().positions_of(&rows).unwrap();
 //! let s2 = c.sockets[1].1;
 //! assert!((0..3).all(|i| (p[4][i] - s2[i]).abs() < 1e-9));
 //! ```
@@ -192,33 +193,22 @@ pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, 
     let k = ArmKernel::new(&true_arm.params)?;
     let mut enc = rng(seed, streams::ENCODERS);
     let sigma = settings.encoder_noise_deg.to_radians();
-    let mut q = Vec::with_capacity(touches.len());
-    for t in &touches {
+    let mut poses = Poses::with_capacity(n, touches.len());
+    let mut q = Vec::with_capacity(n);
+    for (i, t) in touches.iter().enumerate() {
         let p = k.position(&t.q)?;
         let r = (0..3)
             .map(|i| (p[i] - t.point[i]).powi(2))
             .sum::<f64>()
             .sqrt();
         stats.max_residual_mm = stats.max_residual_mm.max(r);
-        q.push(
-            t.q.iter()
-                .zip(&true_arm.limits)
-                .map(|(&x, lim)| {
-                    let read = x + sigma * truth::normal(&mut enc);
-                    exact_in_degrees(if lim.is_some() { read } else { wrap(read) })
-                })
-                .collect(),
-        );
+        q.clear();
+        q.extend(t.q.iter().zip(&true_arm.limits).map(|(&x, lim)| {
+            let read = x + sigma * truth::normal(&mut enc);
+            exact_in_degrees(if lim.is_some() { read } else { wrap(read) })
+        }));
+        poses.push(&sockets[t.socket].0, &q, i + 2);
     }
-    let poses = Poses {
-        labels: touches
-            .iter()
-            .map(|t| sockets[t.socket].0.clone())
-            .collect(),
-        joints: n,
-        lines: (2..touches.len() + 2).collect(),
-        q,
-    };
     let lengths = reference_lengths(
         &sockets,
         settings.reference_lengths,

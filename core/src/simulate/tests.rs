@@ -55,7 +55,7 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 fn max_socket_error(c: &Campaign) -> f64 {
     let p = ArmKernel::new(&c.true_arm.params)
         .unwrap()
-        .positions_of(&c.poses.q)
+        .positions_of(&c.poses.rows().collect::<Vec<_>>())
         .unwrap();
     p.iter()
         .zip(&c.touches)
@@ -73,13 +73,13 @@ fn zero_noise_reproduces_sockets_6_and_7_joints() {
         let s = CampaignSettings::new(11, errors, 6, 8);
         let c = simulate(&nominal, &s).unwrap();
         assert_eq!(c.poses.len(), 48);
-        assert_eq!(c.poses.joints, nominal.params.joint_count());
+        assert_eq!(c.poses.joints(), nominal.params.joint_count());
         let e = max_socket_error(&c);
-        assert!(e <= 1e-9, "{} joints: {e} mm", c.poses.joints);
+        assert!(e <= 1e-9, "{} joints: {e} mm", c.poses.joints());
         assert!(c.stats.max_residual_mm < IK_TOLERANCE_MM);
         // Labels follow the sockets, eight touches each.
-        assert_eq!(c.poses.labels[0], "S1");
-        assert_eq!(c.poses.labels[47], "S6");
+        assert_eq!(c.poses.label(0), "S1");
+        assert_eq!(c.poses.label(47), "S6");
     }
 }
 
@@ -97,7 +97,7 @@ fn touches_of_a_socket_are_distinct_articulations() {
             if ta.socket == tb.socket {
                 assert!(separation(&ta.q, &tb.q) >= min_sep, "touches {a} and {b}");
                 // Noise-free readings are the true ones (to the degree rounding).
-                assert!(separation(&c.poses.q[a], &c.poses.q[b]) >= min_sep - 1e-12);
+                assert!(separation(c.poses.reading(a), c.poses.reading(b)) >= min_sep - 1e-12);
             }
         }
     }
@@ -105,8 +105,7 @@ fn touches_of_a_socket_are_distinct_articulations() {
     for j in 0..6 {
         let (lo, hi) = c
             .poses
-            .q
-            .iter()
+            .rows()
             .map(|q| q[j])
             .fold((f64::MAX, f64::MIN), |(l, h), x| (l.min(x), h.max(x)));
         assert!(hi - lo > 1.0, "joint {} spans only {} rad", j + 1, hi - lo);
@@ -139,7 +138,7 @@ fn joint_limits_are_respected() {
             }
         }
     }
-    for q in &c.poses.q {
+    for q in c.poses.rows() {
         for (j, (&q, l)) in q.iter().zip(&nominal.limits).enumerate() {
             if let Some([lo, hi]) = l {
                 assert!(
@@ -152,7 +151,7 @@ fn joint_limits_are_respected() {
     }
     assert!(max_socket_error(&c) <= 1e-9);
     // Joint 6 reaches past 180° inside its limits: readings are shifted there.
-    assert!(c.poses.q.iter().any(|q| q[5] > std::f64::consts::PI));
+    assert!(c.poses.rows().any(|q| q[5] > std::f64::consts::PI));
 }
 
 #[test]
@@ -337,8 +336,7 @@ fn noise_has_the_stated_size() {
     );
     let d: Vec<f64> = enc
         .poses
-        .q
-        .iter()
+        .rows()
         .zip(&enc.touches)
         .flat_map(|(r, t)| r.iter().zip(&t.q).map(|(a, b)| wrap(a - b).to_degrees()))
         .collect();
@@ -363,7 +361,7 @@ fn noise_has_the_stated_size() {
     // The true arm still reaches each seated point exactly.
     let p = ArmKernel::new(&seat.true_arm.params)
         .unwrap()
-        .positions_of(&seat.poses.q)
+        .positions_of(&seat.poses.rows().collect::<Vec<_>>())
         .unwrap();
     for (p, t) in p.iter().zip(&seat.touches) {
         assert!(dist(*p, t.point) <= 1e-9);
@@ -426,7 +424,7 @@ fn given_sockets_keep_their_labels() {
     s.reference_lengths = 3;
     let c = simulate(&paper(), &s).unwrap();
     assert_eq!(c.sockets[1], ("B".to_string(), [-200.0, 350.0, 250.123457]));
-    assert_eq!(c.poses.labels[5], "B");
+    assert_eq!(c.poses.label(5), "B");
     assert!(max_socket_error(&c) <= 1e-9);
     // An unknown format names the file, line and field.
     std::fs::write(&path, "label,x,y,z\nA,1,2,3\n").unwrap();
@@ -607,7 +605,7 @@ fn true_arm_is_canonical() {
         Some(6),
     )
     .unwrap();
-    assert_eq!(back.q, c.poses.q);
+    assert_eq!(back.readings(), c.poses.readings());
 }
 
 #[test]
