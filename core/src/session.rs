@@ -366,6 +366,14 @@ impl Verdict {
                 notes.push(chi.describe());
             }
         }
+        if let Some(u) = calibration.checks.position_uncertainty.filter(|u| u.weak()) {
+            notes.push(format!(
+                "these data determine the arm to ±{:.4} mm (k = 2, RMS over the campaign's \
+                 poses), enough to add more than 5 % to a touch's own scatter (±{:.4} mm): \
+                 add sockets, poses or reference lengths",
+                u.rms_mm, u.touch_mm
+            ));
+        }
         let (before, after) = (fitted.before.e_mean, fitted.after.e_mean);
         if after.is_nan() || after > before {
             poor.push(format!(
@@ -472,6 +480,9 @@ impl CalibrationReport {
         );
         if let Some(chi) = &c.checks.chi_square {
             t += &format!("Fit quality: {}\n", chi.describe());
+        }
+        if let Some(u) = &c.checks.position_uncertainty {
+            t += &format!("Experiment: {}\n", u.describe());
         }
         let o = &c.checks.outliers;
         if o.is_empty() {

@@ -208,3 +208,30 @@ fn nothing_free_and_overstated_noise_are_refused() {
     assert!(accepted.is_usable());
     assert!(accepted.verdict.notes[0].starts_with("accepted on request"));
 }
+
+#[test]
+fn a_weak_experiment_is_told_what_the_data_determine() {
+    let note = |sockets: usize, poses: usize, lengths: usize| {
+        let mut s = CampaignSettings::new(2, ErrorModel::Paper, sockets, poses);
+        s.encoder_noise_deg = 0.005;
+        s.probe_noise_mm = 0.01;
+        s.reference_lengths = lengths;
+        let data = simulate(&nominal(), &s).unwrap().data_set().unwrap();
+        let report = run(
+            data,
+            CalibrateOptions {
+                noise: stated(),
+                ..CalibrateOptions::default()
+            },
+        );
+        let u = report.calibration.checks.position_uncertainty.unwrap();
+        assert!(u.rms_mm > 0.0 && u.max_mm >= u.rms_mm, "{u:?}");
+        report
+            .verdict
+            .notes
+            .iter()
+            .any(|n| n.starts_with("these data determine the arm to"))
+    };
+    assert!(note(5, 6, 1), "5 sockets x 6 touches, one length");
+    assert!(!note(10, 10, 3), "10 x 10, three lengths");
+}

@@ -258,6 +258,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         t2.iter_mut().for_each(|v| *v /= s2);
     }
     let (outlier_threshold, outliers) = super::checks::outliers(data, &t2);
+    let position_uncertainty = position_uncertainty(&params, data, &free, &cov, touch_sigma)?;
     let names: Vec<String> = ids.iter().map(ParamId::to_string).collect();
     let cost_evaluations = extra_costs + phases.iter().map(|p| p.cost_evaluations).sum::<usize>();
     let jacobian_evaluations =
@@ -300,7 +301,49 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             chi_square: stated.then(|| ChiSquare::new(normal.cost(), degrees_of_freedom)),
             outliers,
             outlier_threshold,
+            position_uncertainty,
         },
         params,
     })
+}
+
+/// The predicted position uncertainty of `params` (k = 2) over the poses of
+/// `data` (an even sample of at most [`super::checks::UNCERTAINTY_POSES`]),
+/// from the free parameters' covariance `cov`.
+fn position_uncertainty(
+    params: &DhParams,
+    data: &DataSet,
+    free: &[usize],
+    cov: &DMatrix<f64>,
+    touch_sigma: f64,
+) -> Result<Option<super::checks::PositionUncertainty>, CalibrationError> {
+    const K: f64 = 2.0;
+    if data.is_empty() || cov.iter().any(|v| !v.is_finite()) {
+        return Ok(None);
+    }
+    let kernel = ArmKernel::new(params)?;
+    let step = data.len().div_ceil(super::checks::UNCERTAINTY_POSES).max(1);
+    let mut jac = vec![[0.0; 3]; params.param_count()];
+    let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
+    for i in (0..data.len()).step_by(step) {
+        kernel.position_jacobian(data.reading(i), &mut jac)?;
+        let mut tr = 0.0;
+        for (a, &ca) in free.iter().enumerate() {
+            for (b, &cb) in free.iter().enumerate() {
+                let jj: f64 = (0..3).map(|k| jac[ca][k] * jac[cb][k]).sum();
+                tr += cov[(a, b)] * jj;
+            }
+        }
+        let u = K * tr.max(0.0).sqrt();
+        sum += u * u;
+        max = max.max(u);
+        n += 1;
+    }
+    Ok(Some(super::checks::PositionUncertainty {
+        k: K,
+        poses: n,
+        rms_mm: (sum / n as f64).sqrt(),
+        max_mm: max,
+        touch_mm: K * 3f64.sqrt() * touch_sigma,
+    }))
 }

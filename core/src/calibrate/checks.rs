@@ -338,3 +338,48 @@ pub(crate) fn outliers(data: &crate::dataset::DataSet, scaled: &[f64]) -> (f64, 
     found.sort_by(|a, b| b.standardised.total_cmp(&a.standardised));
     (threshold.sqrt(), found)
 }
+
+/// How well the data determine the calibrated arm where it was used: the
+/// predicted uncertainty of a probe position, `U = k·sqrt(tr(J C Jᵀ))` with
+/// `C` the free parameters' covariance and `J` the position's parameter
+/// Jacobian, over the campaign's poses.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PositionUncertainty {
+    /// Coverage factor (2).
+    pub k: f64,
+    /// Poses evaluated (every touch, or an even sample of them).
+    pub poses: usize,
+    /// RMS of `U` over the poses, mm.
+    pub rms_mm: f64,
+    /// Largest `U`, mm.
+    pub max_mm: f64,
+    /// A single touch's own scatter at the same coverage,
+    /// `k·sqrt(3)·σ_touch`, mm: what the arm's uncertainty is compared with.
+    pub touch_mm: f64,
+}
+
+impl PositionUncertainty {
+    /// Whether the arm's own uncertainty would add more than 5 % to a
+    /// single measurement's scatter (`sqrt(1 + (U/T)²) > 1.05`, i.e. `U`
+    /// above a third of a touch's `T`): the data, not the noise, limit the
+    /// arm.
+    pub fn weak(&self) -> bool {
+        self.rms_mm > WEAK_FRACTION * self.touch_mm
+    }
+
+    /// In words.
+    pub fn describe(&self) -> String {
+        format!(
+            "predicted position uncertainty of the calibrated arm over the campaign's poses \
+             (k = {}): RMS {:.4} mm, max {:.4} mm (one touch scatters ±{:.4} mm)",
+            self.k, self.rms_mm, self.max_mm, self.touch_mm
+        )
+    }
+}
+
+/// [`PositionUncertainty::weak`]: the arm's uncertainty against a touch's
+/// scatter, `sqrt(1.05² − 1)`.
+pub const WEAK_FRACTION: f64 = 0.32;
+
+/// Most poses [`PositionUncertainty`] evaluates (an even sample beyond).
+pub const UNCERTAINTY_POSES: usize = 2000;

@@ -389,6 +389,9 @@ pub struct Checks {
     pub outliers: Vec<checks::Outlier>,
     /// The threshold of the outlier test, in σ of a touch.
     pub outlier_threshold: f64,
+    /// How well the data determine the arm (`None` when the covariance is
+    /// not finite).
+    pub position_uncertainty: Option<checks::PositionUncertainty>,
 }
 
 /// What [`calibrate`] returns.

@@ -107,6 +107,7 @@ fn push_fixed6(out: &mut String, x: f64) {
         *d = b'0' + (rest % 10) as u8;
         rest /= 10;
     }
+    // Invariant: every byte written above is an ASCII digit or the point.
     for part in [&digits[at..], &fraction[..]] {
         out.push_str(std::str::from_utf8(part).expect("ASCII digits"));
     }

@@ -101,6 +101,7 @@ impl Poses {
         if let Some(&id) = self.index.get(label) {
             return id;
         }
+        // A documented panic (`push`); a file would need 2³² lines to reach it.
         let id = u32::try_from(self.points.len()).expect("fewer than 2^32 points");
         self.points.push(label.to_string());
         self.index.insert(label.to_string(), id);

@@ -131,6 +131,7 @@ impl KernelOp for OnePrepared<'_> {
         Dh: Chain<N>,
     {
         check_len(N, self.jac.len())?;
+        // Invariant: `check_len` above.
         let jac: &mut [[f64; 3]; N] = self.jac.try_into().expect("length checked");
         let (cq, sq) = self.poses.trig::<N>(self.i);
         Ok(Dh::joint_jacobian(k, &cq, &sq, jac))

@@ -297,6 +297,7 @@ impl PreparedPoses {
     /// Prepares `len` poses of `joints` readings (rad), row after row in
     /// `q`: [`PreparedPoses::new`] without a slice per row.
     pub(crate) fn from_flat(joints: usize, len: usize, q: &[f64]) -> Self {
+        // Invariant: the data set passes its own `len` rows of `joints`.
         assert_eq!(q.len(), joints * len, "readings of {len} poses");
         let column = |j: usize| (0..len).map(move |i| q[i * joints + j]);
         PreparedPoses {
