@@ -786,8 +786,13 @@ fn method_lines(s: &crate::calibrate::SolverSummary) -> String {
             "no zero offset is free, so the start arm's LM is the search".to_string()
         } else {
             let n = g.minima.len();
+            let twins = match g.twin_restarts {
+                0 => String::new(),
+                r => format!(", {r} restart(s) from a mirror image's zeros"),
+            };
             format!(
-                "{n} {} (the start arm, {} grid cell(s), {} random start(s)) on the circles of {}",
+                "{n} {} (the start arm, {} grid cell(s), {} random start(s){twins}) on the circles \
+                 of {}",
                 if n == 1 { "minimum" } else { "minima" },
                 g.grid_starts,
                 g.random_starts,

@@ -168,6 +168,9 @@ pub struct GlobalTrace {
     pub grid_starts: usize,
     /// Random starts refined (after the grid).
     pub random_starts: usize,
+    /// Restarts from the nominal geometry with the zeros of a mirror-image
+    /// minimum (after the random starts).
+    pub twin_restarts: usize,
     /// Starts that reached the lowest cost.
     pub best_hits: usize,
     /// The noise-floor cost, when the noise is stated.
@@ -277,13 +280,12 @@ pub(crate) fn global<R: Rng>(
     });
     // A minimum is a candidate only if its geometry is the nominal arm's
     // kind (not its mirror image, not collapsed): the cost cannot tell.
-    let plausible = |fit: &LmResult| {
-        let mut p = fit.params.clone();
-        super::global::normalize_signs(&mut p, start, free);
-        for j in &mut p.joints {
-            j.alpha = crate::params::wrap(j.alpha);
-        }
-        super::checks::gross_corrections(&p, start, free).is_empty()
+    // (`gross_corrections` compares twists modulo 2π.)
+    let judge = |found: &mut Found, m: Minimum| {
+        let mut p = m.fit.params.clone();
+        normalize_signs(&mut p, start, free);
+        let plausible = super::checks::gross_corrections(&p, start, free).is_empty();
+        found.record(m, floor, plausible)
     };
     let mut phases = vec![
         Phase::new("lm from start"),
@@ -309,10 +311,9 @@ pub(crate) fn global<R: Rng>(
     let promising = floor.map(|(_, hi)| 10.0 * hi);
     let first = settle(first, problem, &mut phases[0], promising)?;
     let mut angles = 0;
-    let (mut grid_starts, mut random_starts) = (0, 0);
+    let (mut grid_starts, mut random_starts, mut twin_restarts) = (0, 0, 0);
     let stop = 'search: {
-        let ok = plausible(&first.fit);
-        if found.record(first, floor, ok) {
+        if judge(&mut found, first) {
             break 'search GlobalStop::NoiseFloor;
         }
         if circles.is_empty() {
@@ -347,8 +348,7 @@ pub(crate) fn global<R: Rng>(
             grid_starts += 1;
             progress(tried as f64 / total as f64);
             let m = refine(&x, &mut phases)?;
-            let ok = plausible(&m.fit);
-            if found.record(m, floor, ok) {
+            if judge(&mut found, m) {
                 break 'search GlobalStop::NoiseFloor;
             }
         }
@@ -367,8 +367,7 @@ pub(crate) fn global<R: Rng>(
                 *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             }
             let m = refine(&x, &mut phases)?;
-            let ok = plausible(&m.fit);
-            if found.record(m, floor, ok) {
+            if judge(&mut found, m) {
                 break 'search GlobalStop::NoiseFloor;
             }
             if found.hits >= options.confirmations {
@@ -413,8 +412,8 @@ pub(crate) fn global<R: Rng>(
                 let fit = levenberg_marquardt(&x, data, &here, free, lm)?;
                 phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
                 let m = reweigh(fit, problem, &mut phases[3])?;
-                let ok = plausible(&m.fit);
-                if found.record(m, floor, ok) {
+                twin_restarts += 1;
+                if judge(&mut found, m) {
                     break 'search GlobalStop::NoiseFloor;
                 }
             }
@@ -458,6 +457,7 @@ pub(crate) fn global<R: Rng>(
         minima: found.minima,
         grid_starts,
         random_starts,
+        twin_restarts,
         best_hits: found.hits,
         noise_floor_cost: floor.map(|(_, hi)| hi),
         sign_changes: Vec::new(),
