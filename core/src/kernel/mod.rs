@@ -281,25 +281,18 @@ impl PreparedPoses {
         // Direct calls, not a function pointer: whether LLVM sees through a
         // pointer depends on the crate that instantiates `new` (the C ABI's
         // copy kept an indirect call per reading, a few percent of its batch).
-        let column = |j: usize| rows.iter().map(move |r| r.as_ref()[j]);
-        Ok(PreparedPoses {
-            joints,
-            len: rows.len(),
-            cos: (0..joints)
-                .map(|j| column(j).map(f64::cos).collect())
-                .collect(),
-            sin: (0..joints)
-                .map(|j| column(j).map(f64::sin).collect())
-                .collect(),
-        })
+        Ok(PreparedPoses::from_columns(joints, rows.len(), |j| {
+            rows.iter().map(move |r| r.as_ref()[j])
+        }))
     }
 
-    /// Prepares `len` poses of `joints` readings (rad), row after row in
-    /// `q`: [`PreparedPoses::new`] without a slice per row.
-    pub(crate) fn from_flat(joints: usize, len: usize, q: &[f64]) -> Self {
-        // Invariant: the data set passes its own `len` rows of `joints`.
-        assert_eq!(q.len(), joints * len, "readings of {len} poses");
-        let column = |j: usize| (0..len).map(move |i| q[i * joints + j]);
+    /// sin and cos of every joint's column of readings; generic over the
+    /// column, so each caller gets its own direct-call loop.
+    fn from_columns<I: Iterator<Item = f64>>(
+        joints: usize,
+        len: usize,
+        column: impl Fn(usize) -> I,
+    ) -> Self {
         PreparedPoses {
             joints,
             len,
@@ -310,6 +303,14 @@ impl PreparedPoses {
                 .map(|j| column(j).map(f64::sin).collect())
                 .collect(),
         }
+    }
+
+    /// Prepares `len` poses of `joints` readings (rad), row after row in
+    /// `q`: [`PreparedPoses::new`] without a slice per row.
+    pub(crate) fn from_flat(joints: usize, len: usize, q: &[f64]) -> Self {
+        // Invariant: the data set passes its own `len` rows of `joints`.
+        assert_eq!(q.len(), joints * len, "readings of {len} poses");
+        PreparedPoses::from_columns(joints, len, |j| (0..len).map(move |i| q[i * joints + j]))
     }
 
     /// Number of poses.
