@@ -4,6 +4,9 @@ whose outputs the Python results are checked against."""
 import os
 import pathlib
 import subprocess
+import sys
+import threading
+import time
 
 import pytest
 
@@ -62,3 +65,35 @@ def read_poses(path=POSES):
 def read_lengths(path=LENGTHS):
     lines = (REPO / path).read_text().splitlines()[1:]
     return [(a, b, float(d)) for a, b, d in (line.split(",") for line in lines)]
+
+
+def longest_stall(call):
+    """Runs `call()` while another thread ticks; returns (seconds the call took,
+    longest gap between ticks). A call that holds the GIL stalls the ticker for
+    its whole length; one that releases it leaves gaps of about the switch
+    interval, set short here so the test does not depend on the machine's speed."""
+    gaps, stop, running = [], threading.Event(), threading.Event()
+
+    def tick():
+        last = time.perf_counter()
+        while not stop.is_set():
+            now = time.perf_counter()
+            if running.is_set():
+                gaps.append(now - last)
+            last = now
+
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(0.0005)
+    ticker = threading.Thread(target=tick)
+    ticker.start()
+    try:
+        running.set()
+        start = time.perf_counter()
+        call()
+        took = time.perf_counter() - start
+        running.clear()
+    finally:
+        stop.set()
+        ticker.join()
+        sys.setswitchinterval(interval)
+    return took, max(gaps, default=float("inf"))

@@ -16,9 +16,10 @@ pub fn command(args: &[&str]) -> Command {
     c
 }
 
-/// A fresh, empty folder for one test.
+/// A fresh, empty folder for one test, under cargo's `target/tmp` so runs do
+/// not pile up in the system's temporary directory.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("aacmm-test-{}-{name}", std::process::id()));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("aacmm-test-{name}"));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir
