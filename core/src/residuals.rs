@@ -351,6 +351,21 @@ impl Weights {
         touch.chain(length).fold(0.0, f64::max)
     }
 
+    /// These weights with touch `i`'s matrix `A_i` multiplied by
+    /// `scale[i]` (a robust fit's weight in (0, 1]); the lengths' weights
+    /// unchanged.
+    pub fn scaled_touches(&self, scale: &[f64]) -> Weights {
+        Weights {
+            touch: self
+                .touch
+                .iter()
+                .zip(scale)
+                .map(|(a, &w)| a.map(|v| v * w))
+                .collect(),
+            length: self.length.clone(),
+        }
+    }
+
     /// A typical touch σ, mm: the median over touches of `sqrt(trace(Σ_i)/3)`.
     pub fn typical_touch_sigma(&self) -> f64 {
         let mut s: Vec<f64> = self

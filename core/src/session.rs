@@ -366,6 +366,22 @@ impl Verdict {
                 notes.push(chi.describe());
             }
         }
+        if let Some(r) = &calibration.robust {
+            if let Some(d) = r.describe_scale() {
+                if r.far_outside() {
+                    poor.push(d);
+                } else if r.verdict != Some(crate::calibrate::checks::ChiSquareVerdict::Consistent) {
+                    notes.push(d);
+                }
+            }
+            if !r.converged {
+                notes.push(format!(
+                    "the robust weights still moved by more than {} after {} refits",
+                    crate::calibrate::robust::WEIGHT_TOLERANCE,
+                    r.passes
+                ));
+            }
+        }
         if let Some(u) = calibration.checks.position_uncertainty.filter(|u| u.weak()) {
             notes.push(format!(
                 "these data determine the arm to ±{:.4} mm (k = 2, RMS over the campaign's \
@@ -469,7 +485,12 @@ impl CalibrationReport {
             d.degrees_of_freedom
         );
         t += &format!(
-            "sigma0 = sqrt(cost/dof) = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n",
+            "sigma0 = {} = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n",
+            if c.robust.is_some() {
+                "robust scale (median of the standardised residuals)"
+            } else {
+                "sqrt(cost/dof)"
+            },
             d.sigma0,
             d.touch_sigma_mm,
             if d.touch_sigma_estimated {
@@ -480,6 +501,12 @@ impl CalibrationReport {
         );
         if let Some(chi) = &c.checks.chi_square {
             t += &format!("Fit quality: {}\n", chi.describe());
+        }
+        if let Some(r) = &c.robust {
+            if let Some(d) = r.describe_scale() {
+                t += &format!("Fit quality: {d}\n");
+            }
+            t += &robust_line(r);
         }
         if let Some(u) = &c.checks.position_uncertainty {
             t += &format!("Experiment: {}\n", u.describe());
@@ -825,4 +852,33 @@ fn method_lines(s: &crate::calibrate::SolverSummary) -> String {
         .collect();
     t += &format!("Phases: {}\n", phases.join("; "));
     t
+}
+
+/// The summary's line on a robust fit: its settings and the touches it
+/// downweighted, by `file:line`.
+fn robust_line(r: &crate::calibrate::RobustFit) -> String {
+    use crate::calibrate::robust::DOWNWEIGHTED;
+    let low = r.downweighted();
+    let head = format!(
+        "Robust: {} (k = {}), {} refit(s){}, scale {:.4}",
+        r.loss.name(),
+        r.scale_k,
+        r.passes,
+        if r.converged { "" } else { " (weights not settled)" },
+        r.scale
+    );
+    if low.is_empty() {
+        return format!("{head}; no touch weighed below {DOWNWEIGHTED}\n");
+    }
+    let shown: Vec<String> = low
+        .iter()
+        .take(20)
+        .map(|t| format!("{} (point {}, weight {:.3})", t.at, t.point, t.weight))
+        .collect();
+    format!(
+        "{head}; {} touch(es) weighed below {DOWNWEIGHTED}: {}{}\n",
+        low.len(),
+        shown.join(", "),
+        if low.len() > shown.len() { ", …" } else { "" }
+    )
 }

@@ -53,6 +53,14 @@ impl Counts {
         self.residuals().saturating_sub(self.unknowns()).max(1)
     }
 
+    /// `(3n − 3k) / (3n − 3k − p)`: the share of the touch residuals the
+    /// free parameters take, which the leverage on the centroids does not
+    /// correct ([`super::robust`]).
+    pub(crate) fn scale_dof_factor(self) -> f64 {
+        let rows = self.touch_rows.saturating_sub(self.centre_coordinates);
+        rows as f64 / self.touch_dof() as f64
+    }
+
     /// The touches' own degrees of freedom, for a σ estimated from them.
     fn touch_dof(self) -> usize {
         self.touch_rows
@@ -185,17 +193,56 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     if stated {
         touch_sigma = weights.typical_touch_sigma();
     }
+    // Unit weights still (no stated noise, no lengths): the normal
+    // equations were rescaled by the estimated σ, the weights not.
+    let mut unit_weights = !stated && counts.length_rows == 0;
+    let mut robust = None;
+    if let Some(r) = options.robust {
+        if unit_weights {
+            weights = Weights::new(&ArmKernel::new(&params)?, data, &options.noise, touch_sigma)?;
+            unit_weights = false;
+        }
+        let out = super::robust::irls(
+            r,
+            &params,
+            data,
+            &weights,
+            &free,
+            &lm,
+            counts.scale_dof_factor(),
+            stated,
+        )?;
+        extra_jacobians += out.fit.passes + 1;
+        phases.push(out.phase);
+        history = out.last.history;
+        iterations = out.last.iterations;
+        if stop.lm().is_some() {
+            stop = stop.with_lm(out.last.termination);
+        }
+        params = out.params;
+        normal = out.last.normal;
+        weights = out.weights;
+        if !stated {
+            // The estimated σ held the outliers; the robust scale does not.
+            touch_sigma *= out.fit.scale;
+        }
+        robust = Some((out.fit, out.touch_weights));
+    }
     // The start arm's cost under the final weights: "cost A -> B" compares
     // like with like whatever the method did in between.
     let mut xyz = vec![[0.0; 3]; data.len()];
     let mut initial_cost =
         crate::residuals::cost(&ArmKernel::new(start)?, data, &weights, &mut xyz)?;
     extra_costs += 1;
-    if !stated && counts.length_rows == 0 {
+    if unit_weights {
         initial_cost /= touch_sigma * touch_sigma;
     }
     let degrees_of_freedom = counts.dof();
-    let sigma0 = (normal.cost() / degrees_of_freedom as f64).sqrt();
+    // Robust: the IRLS covariance σ̂²(JᵀWJ)⁻¹ with σ̂ the robust scale.
+    let sigma0 = match &robust {
+        Some((fit, _)) => fit.scale,
+        None => (normal.cost() / degrees_of_freedom as f64).sqrt(),
+    };
     let p = free.len();
     let n = DMatrix::from_row_slice(p, p, &normal.jtj);
     let cov = match n.cholesky() {
@@ -248,6 +295,10 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     // noise, or (estimated) the fit's σ̂.
     let mut t2 =
         crate::residuals::standardised_residuals(&ArmKernel::new(&params)?, data, &weights)?;
+    if let Some((_, w)) = &robust {
+        // In units of the touch's own σ, not of its robust weight.
+        t2.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
+    }
     if !stated {
         // σ from the touches themselves, robustly: the median of a χ²₃
         // variable is 2.366, and a few outliers do not move a median.
@@ -298,12 +349,16 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         identification,
         checks: Checks {
             gross_corrections: gross_corrections(&params, start, &free),
-            chi_square: stated.then(|| ChiSquare::new(normal.cost(), degrees_of_freedom)),
+            // A robust fit's weighted cost has no χ² law: its scale is
+            // tested instead (`robust`).
+            chi_square: (stated && robust.is_none())
+                .then(|| ChiSquare::new(normal.cost(), degrees_of_freedom)),
             outliers,
             outlier_threshold,
             position_uncertainty,
         },
         params,
+        robust: robust.map(|(fit, _)| fit),
     })
 }
 

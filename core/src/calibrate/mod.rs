@@ -44,6 +44,7 @@ pub mod energy;
 pub mod global;
 pub mod lm;
 pub mod options;
+pub mod robust;
 pub mod solver;
 pub mod validate;
 
@@ -53,6 +54,7 @@ pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule}
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub use lm::{LmIteration, LmOptions, LmResult, Termination};
 pub use options::{CalibrateOptions, DEFAULT_LENGTH_SIGMA_MM, FixSpec, OptionError};
+pub use robust::{Loss, Robust, RobustFit};
 pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
@@ -415,6 +417,10 @@ pub struct Calibration {
     pub identification: Option<Identification>,
     /// Plausibility of the arm and of the fit.
     pub checks: Checks,
+    /// The robust fit and every touch's weight (only when one ran:
+    /// [`CalibrateOptions::robust`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust: Option<RobustFit>,
 }
 
 impl Calibration {

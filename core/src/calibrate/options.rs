@@ -15,7 +15,7 @@ use crate::residuals::Noise;
 
 /// A setting out of range: which one (its path in [`CalibrateOptions`],
 /// e.g. `noise.probe_mm`, `anneal.cooling`, `global.max_starts`, `fix`,
-/// `threads`, `cross_validate`) and why.
+/// `robust.scale_k`, `threads`, `cross_validate`) and why.
 ///
 /// ```
 /// use aacmm_core::calibrate::{CalibrateOptions, OptionError};
@@ -178,6 +178,10 @@ pub struct CalibrateOptions {
     /// a mirror-image or collapsed arm).
     #[serde(default)]
     pub accept_poor_fit: bool,
+    /// A robust fit (IRLS with a Huber or Cauchy loss) after the solver;
+    /// `None`, plain least squares (the default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robust: Option<super::robust::Robust>,
 }
 
 impl Default for CalibrateOptions {
@@ -192,6 +196,7 @@ impl Default for CalibrateOptions {
             global: GlobalOptions::default(),
             seed: 0,
             accept_poor_fit: false,
+            robust: None,
         }
     }
 }
@@ -235,6 +240,9 @@ impl CalibrateOptions {
         self.lm.check()?;
         self.anneal.check()?;
         self.switch.check()?;
+        if let Some(r) = &self.robust {
+            r.check()?;
+        }
         self.global.check()
     }
 }

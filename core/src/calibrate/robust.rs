@@ -1,0 +1,442 @@
+//! Robust fitting: iteratively reweighted least squares (IRLS) after any
+//! solver, so that a few bad touches (a mislabelled socket, a probe that
+//! slipped) do not pull the arm.
+//!
+//! Every touch `i` gets a scalar weight `w_i ∈ (0, 1]` that multiplies its
+//! weight matrix `A_i`. One IRLS pass: at the current arm, each touch's
+//! standardised residual `u_i = sqrt(rᵢᵀ A_i rᵢ / (1 − h_i))` (the
+//! leverage-corrected residual of [`crate::calibrate::checks`], in units of
+//! the touch's own σ); the robust scale `σ̂` of those residuals (below); the
+//! weights `w_i = ψ(z_i)/z_i` of the loss at `z_i = u_i/σ̂`; LM refits under
+//! them. Passes repeat until no weight moves by more than
+//! [`WEIGHT_TOLERANCE`] (at most [`MAX_PASSES`] refits). Deterministic: no
+//! random draw, and the normal equations are the same bits on any thread
+//! count.
+//!
+//! - **Scale** `σ̂`: `σ̂² = f · median(u_i²) / 2.366`, the median of the
+//!   squared standardised residuals over the median of `χ²₃` (2.366) — the
+//!   analogue, for a 3-D residual norm, of the MAD of a scalar one (which
+//!   is `χ₁`-based). `f = (3n − 3k) / (3n − 3k − p)` (`n` touches, `k`
+//!   points, `p` free parameters) corrects for the parameters' share of the
+//!   residuals, which the leverage (the centroids' share) does not. A few
+//!   outliers do not move a median; `σ̂ ≈ 1` when the weights (the stated
+//!   noise) are right.
+//! - **Losses**: Huber, `w = min(1, k/z)`; Cauchy, `w = 1/(1 + (z/k)²)`.
+//!   The usual constants 1.345 and 2.385 give 95 % efficiency under
+//!   Gaussian noise for a *scalar* residual; on a 3-D residual norm they
+//!   give 92.6 % and 93.7 %, and the same 95 % needs `k` = 1.62 (Huber)
+//!   and 2.65 (Cauchy): those are the defaults ([`Loss::default_k`]; a
+//!   test checks the efficiency by quadrature).
+//! - **Uncertainty**: the standard IRLS covariance `σ̂² (Jᵀ W J)⁻¹` with
+//!   the weights `W` of the last pass, `σ̂` the robust scale on the plain
+//!   dof (through `f` above). With most weights 1 it is close to the
+//!   plain covariance of the inliers; the downweighted good touches (Huber
+//!   at `k` = 1.62 trims the weight of some 45 % of them a little) make it
+//!   slightly conservative.
+//! - **Fit quality**: the weighted cost has no `χ²` distribution, so the
+//!   `χ²` test is replaced by a test of the robust scale against the stated
+//!   noise: the sample median of `u²` is asymptotically normal about 2.366
+//!   with standard deviation `1/(2 f₃(2.366) √n)` (`f₃` the `χ²₃` density),
+//!   both tails, the same significance levels as the `χ²` test. It does not
+//!   count the outliers against the fit: a robust fit of a campaign with a
+//!   few bad touches is not called a poor fit.
+//!
+//! The global search itself stays plain least squares: it finds the basin;
+//! the robust refits stay in it. With `sa` (annealing alone) the robust
+//! refits are LM all the same (phase `lm, robust …`).
+
+use serde::{Deserialize, Serialize};
+
+use super::checks::{CHI_SQUARE_ALPHA, CHI_SQUARE_REFUSE, ChiSquareVerdict, erfc};
+use super::lm::{LmOptions, LmResult, levenberg_marquardt};
+use super::{CalibrationError, OptionError, Phase};
+use crate::dataset::DataSet;
+use crate::kernel::ArmKernel;
+use crate::params::DhParams;
+use crate::residuals::{Weights, standardised_residuals};
+
+/// IRLS stops when no touch's weight moved by more than this.
+pub const WEIGHT_TOLERANCE: f64 = 1e-3;
+/// Most robust refits.
+pub const MAX_PASSES: usize = 30;
+/// Touches below this weight are listed as downweighted in summaries.
+pub const DOWNWEIGHTED: f64 = 0.5;
+/// The smallest weight a touch gets (so that its matrix stays invertible
+/// in sums; a Cauchy weight of a touch thousands of σ off would underflow).
+pub const MIN_WEIGHT: f64 = 1e-9;
+/// Median of `χ²₃`.
+const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
+
+/// The loss of a robust fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Loss {
+    /// Huber: quadratic up to `k`, linear beyond (`w = min(1, k/z)`).
+    Huber,
+    /// Cauchy: `w = 1/(1 + (z/k)²)`; far outliers weigh almost nothing.
+    Cauchy,
+}
+
+impl Loss {
+    /// Both losses.
+    pub const ALL: [Loss; 2] = [Loss::Huber, Loss::Cauchy];
+
+    /// The name used on the command line and in reports.
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::robust::Loss;
+    /// assert_eq!(Loss::parse("cauchy"), Some(Loss::Cauchy));
+    /// assert_eq!(Loss::Huber.name(), "huber");
+    /// assert_eq!(Loss::parse("bogus"), None);
+    /// ```
+    pub fn name(self) -> &'static str {
+        match self {
+            Loss::Huber => "huber",
+            Loss::Cauchy => "cauchy",
+        }
+    }
+
+    /// The loss of a name.
+    pub fn parse(s: &str) -> Option<Loss> {
+        Loss::ALL.into_iter().find(|l| l.name() == s)
+    }
+
+    /// The default tuning constant: 95 % efficiency under Gaussian noise on
+    /// the 3-D standardised residual norm (1.62 Huber, 2.65 Cauchy; see the
+    /// module documentation).
+    pub fn default_k(self) -> f64 {
+        match self {
+            Loss::Huber => 1.62,
+            Loss::Cauchy => 2.65,
+        }
+    }
+
+    /// The weight `ψ(z)/z` at the scaled residual norm `z ≥ 0`, tuning
+    /// constant `k`, at least [`MIN_WEIGHT`].
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::robust::Loss;
+    /// assert_eq!(Loss::Huber.weight(1.0, 1.62), 1.0);
+    /// assert!((Loss::Huber.weight(3.24, 1.62) - 0.5).abs() < 1e-12);
+    /// assert!((Loss::Cauchy.weight(2.65, 2.65) - 0.5).abs() < 1e-12);
+    /// ```
+    pub fn weight(self, z: f64, k: f64) -> f64 {
+        let w = match self {
+            Loss::Huber => {
+                if z <= k {
+                    1.0
+                } else {
+                    k / z
+                }
+            }
+            Loss::Cauchy => 1.0 / (1.0 + (z / k) * (z / k)),
+        };
+        if w.is_nan() { MIN_WEIGHT } else { w.max(MIN_WEIGHT) }
+    }
+}
+
+/// A robust fit's settings: the loss and its tuning constant `k` (in units
+/// of the robust scale of the standardised 3-D residual norm).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Robust {
+    /// The loss.
+    pub loss: Loss,
+    /// The tuning constant `k` (> 0).
+    pub scale_k: f64,
+}
+
+impl Robust {
+    /// `loss` with its default constant ([`Loss::default_k`]).
+    pub fn new(loss: Loss) -> Robust {
+        Robust {
+            loss,
+            scale_k: loss.default_k(),
+        }
+    }
+
+    /// `Ok` when `scale_k` is finite and positive (refused as
+    /// `robust.scale_k`).
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::robust::{Loss, Robust};
+    /// let e = Robust { loss: Loss::Huber, scale_k: -1.0 }.check().unwrap_err();
+    /// assert_eq!(e.field, "robust.scale_k");
+    /// ```
+    pub fn check(&self) -> Result<(), OptionError> {
+        super::options::check_nonnegative("robust.scale_k", self.scale_k, false)
+    }
+}
+
+/// One touch's weight in a robust fit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TouchWeight {
+    /// Where it was read: `file:line`.
+    pub at: String,
+    /// Its point's label.
+    pub point: String,
+    /// Its weight in (0, 1]: 1 for a touch the noise explains.
+    pub weight: f64,
+}
+
+/// What a robust fit did, in `calibration.json` (only when one ran).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RobustFit {
+    /// The loss.
+    pub loss: Loss,
+    /// Its tuning constant `k`.
+    pub scale_k: f64,
+    /// The robust scale `σ̂` of the standardised residuals at the end (1
+    /// when the weights, i.e. the stated noise, are right): the parameters'
+    /// σ are scaled by it.
+    pub scale: f64,
+    /// Refits (IRLS passes).
+    pub passes: usize,
+    /// Whether the weights settled (no change above [`WEIGHT_TOLERANCE`])
+    /// within [`MAX_PASSES`].
+    pub converged: bool,
+    /// `P(median ≥ observed)` of the squared standardised residuals under
+    /// the stated noise (`None` without stated noise).
+    pub p_upper: Option<f64>,
+    /// `P(median ≤ observed)` (`None` without stated noise).
+    pub p_lower: Option<f64>,
+    /// The verdict of that test (`None` without stated noise).
+    pub verdict: Option<ChiSquareVerdict>,
+    /// Every touch's weight, in the data set's order (grouped by point).
+    pub weights: Vec<TouchWeight>,
+}
+
+impl RobustFit {
+    /// The touches weighed below [`DOWNWEIGHTED`], lowest first.
+    pub fn downweighted(&self) -> Vec<&TouchWeight> {
+        let mut v: Vec<&TouchWeight> = self
+            .weights
+            .iter()
+            .filter(|t| t.weight < DOWNWEIGHTED)
+            .collect();
+        v.sort_by(|a, b| a.weight.total_cmp(&b.weight));
+        v
+    }
+
+    /// Whether the scale test is far outside the stated noise (either
+    /// tail), as [`super::checks::ChiSquare::far_outside`].
+    pub fn far_outside(&self) -> bool {
+        self.p_upper.is_some_and(|p| p < CHI_SQUARE_REFUSE)
+            || self.p_lower.is_some_and(|p| p < CHI_SQUARE_REFUSE)
+    }
+
+    /// The scale test in words (`None` without stated noise).
+    pub fn describe_scale(&self) -> Option<String> {
+        let (v, up, lo) = (self.verdict?, self.p_upper?, self.p_lower?);
+        let head = format!(
+            "robust {} fit, scale {:.3} of the stated noise (median test, P above {:.3}, below \
+             {:.3})",
+            self.loss.name(),
+            self.scale,
+            up,
+            lo
+        );
+        Some(match v {
+            ChiSquareVerdict::Consistent => format!("{head}: consistent with the stated noise"),
+            ChiSquareVerdict::ResidualsTooLarge => format!(
+                "{head}: most residuals larger than the stated noise explains: noise \
+                 understated or a model error"
+            ),
+            ChiSquareVerdict::ResidualsTooSmall => format!(
+                "{head}: residuals smaller than the stated noise explains: the noise is \
+                 overstated, so the uncertainties are too large"
+            ),
+        })
+    }
+}
+
+/// The median of `v` (upper median for an even count); 0 when empty.
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(0.0)
+}
+
+/// The robust fit's result, for [`super::assess`].
+pub(crate) struct Irls {
+    /// The arm at the end.
+    pub params: DhParams,
+    /// The weights of the last refit (base weights × robust weights).
+    pub weights: Weights,
+    /// The robust weights per touch.
+    pub touch_weights: Vec<f64>,
+    /// The last refit.
+    pub last: LmResult,
+    /// All refits' work.
+    pub phase: Phase,
+    /// The report.
+    pub fit: RobustFit,
+}
+
+/// Squared standardised residuals in units of the base weights' σ (the
+/// leverage under the robust weights, which is what the fit used).
+fn base_standardised(
+    params: &DhParams,
+    data: &DataSet,
+    base: &Weights,
+    w: &[f64],
+) -> Result<Vec<f64>, CalibrationError> {
+    let t2 = standardised_residuals(&ArmKernel::new(params)?, data, &base.scaled_touches(w))?;
+    Ok(t2.iter().zip(w).map(|(t, w)| t / w).collect())
+}
+
+/// IRLS from `params` (the solver's minimum under `base`).
+/// `dof_factor` is `f` of the module documentation; `stated`, whether the
+/// base weights come from a stated noise (then the scale is tested).
+pub(crate) fn irls(
+    robust: Robust,
+    params: &DhParams,
+    data: &DataSet,
+    base: &Weights,
+    free: &[usize],
+    lm: &LmOptions,
+    dof_factor: f64,
+    stated: bool,
+) -> Result<Irls, CalibrationError> {
+    let timer = std::time::Instant::now();
+    let n = data.len();
+    let scale_of = |u2: &[f64]| (dof_factor * median(u2) / CHI2_3_MEDIAN).max(f64::MIN_POSITIVE);
+    let weights_of = |u2: &[f64], s2: f64| -> Vec<f64> {
+        u2.iter()
+            .map(|&q| robust.loss.weight((q.max(0.0) / s2).sqrt(), robust.scale_k))
+            .collect()
+    };
+    let mut phase = Phase::new(&format!("lm, robust {}", robust.loss.name()));
+    let mut w = vec![1.0; n];
+    let mut params = params.clone();
+    let mut last: Option<LmResult> = None;
+    let mut passes = 0;
+    let mut converged = false;
+    loop {
+        let u2 = base_standardised(&params, data, base, &w)?;
+        let next = weights_of(&u2, scale_of(&u2));
+        let change = next
+            .iter()
+            .zip(&w)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        if last.is_some() && change <= WEIGHT_TOLERANCE {
+            converged = true;
+            break;
+        }
+        if passes == MAX_PASSES {
+            break;
+        }
+        w = next;
+        let fit = levenberg_marquardt(&params, data, &base.scaled_touches(&w), free, lm)?;
+        phase.add_lm(&fit, 0.0);
+        passes += 1;
+        params = fit.params.clone();
+        last = Some(fit);
+    }
+    phase.seconds = timer.elapsed().as_secs_f64();
+    let last = last.expect("at least one refit ran");
+    // The scale at the end, under the weights the last refit used.
+    let u2 = base_standardised(&params, data, base, &w)?;
+    let median_u2 = median(&u2);
+    let scale = scale_of(&u2).sqrt();
+    let (p_upper, p_lower, verdict) = if stated && n > 0 {
+        // The sample median of χ²₃ (corrected by f) against its
+        // asymptotic normal law.
+        let m = dof_factor * median_u2;
+        let density = CHI2_3_MEDIAN.sqrt() * (-CHI2_3_MEDIAN / 2.0).exp()
+            / (2.0 * std::f64::consts::PI).sqrt();
+        let sd = 1.0 / (2.0 * density * (n as f64).sqrt());
+        let z = (m - CHI2_3_MEDIAN) / sd;
+        let p_upper = 0.5 * erfc(z / std::f64::consts::SQRT_2);
+        let p_lower = 0.5 * erfc(-z / std::f64::consts::SQRT_2);
+        let verdict = if p_upper < CHI_SQUARE_ALPHA {
+            ChiSquareVerdict::ResidualsTooLarge
+        } else if p_lower < CHI_SQUARE_ALPHA {
+            ChiSquareVerdict::ResidualsTooSmall
+        } else {
+            ChiSquareVerdict::Consistent
+        };
+        (Some(p_upper), Some(p_lower), Some(verdict))
+    } else {
+        (None, None, None)
+    };
+    let mut weights = Vec::with_capacity(n);
+    for point in data.points() {
+        for i in point.touches.clone() {
+            weights.push(TouchWeight {
+                at: data.source().touch(i).to_string(),
+                point: point.label.clone(),
+                weight: w[i],
+            });
+        }
+    }
+    Ok(Irls {
+        params,
+        weights: base.scaled_touches(&w),
+        touch_weights: w,
+        last,
+        phase,
+        fit: RobustFit {
+            loss: robust.loss,
+            scale_k: robust.scale_k,
+            scale,
+            passes,
+            converged,
+            p_upper,
+            p_lower,
+            verdict,
+            weights,
+        },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Efficiency of the radial M-estimator of a 3-D location with weight
+    /// `w` under Gaussian noise, by quadrature over the χ₃ density.
+    fn efficiency(loss: Loss, k: f64) -> f64 {
+        let p = 3.0;
+        let f = |r: f64| (2.0 / std::f64::consts::PI).sqrt() * r * r * (-r * r / 2.0).exp();
+        let psi = |r: f64| r * loss.weight(r, k);
+        let h = 1e-4;
+        let dpsi = |r: f64| (psi(r + h) - psi((r - h).max(0.0))) / (r + h - (r - h).max(0.0));
+        let (mut b, mut a) = (0.0, 0.0);
+        let steps = 200_000;
+        let dr = 12.0 / steps as f64;
+        for s in 0..steps {
+            let r = (s as f64 + 0.5) * dr;
+            b += psi(r).powi(2) / p * f(r) * dr;
+            a += ((1.0 - 1.0 / p) * psi(r) / r + dpsi(r) / p) * f(r) * dr;
+        }
+        a * a / b
+    }
+
+    #[test]
+    fn default_constants_give_95_percent_efficiency_in_3d() {
+        for loss in Loss::ALL {
+            let e = efficiency(loss, loss.default_k());
+            assert!((e - 0.95).abs() < 0.002, "{loss:?}: {e}");
+        }
+        // The 1-D constants fall short of it on a 3-D norm.
+        assert!(efficiency(Loss::Huber, 1.345) < 0.93);
+        assert!(efficiency(Loss::Cauchy, 2.385) < 0.94);
+    }
+
+    #[test]
+    fn weights_lie_in_0_1_and_fall_with_the_residual() {
+        for loss in Loss::ALL {
+            let k = loss.default_k();
+            let mut prev = 1.0;
+            for z in [0.0, 0.5, 1.0, 2.0, 5.0, 50.0, 1e300, f64::INFINITY, f64::NAN] {
+                let w = loss.weight(z, k);
+                assert!((MIN_WEIGHT..=1.0).contains(&w), "{loss:?} {z}: {w}");
+                if !z.is_nan() {
+                    assert!(w <= prev);
+                    prev = w;
+                }
+            }
+        }
+    }
+}
