@@ -370,7 +370,8 @@ impl Verdict {
             if let Some(d) = r.describe_scale() {
                 if r.far_outside() {
                     poor.push(d);
-                } else if r.verdict != Some(crate::calibrate::checks::ChiSquareVerdict::Consistent) {
+                } else if r.verdict != Some(crate::calibrate::checks::ChiSquareVerdict::Consistent)
+                {
                     notes.push(d);
                 }
             }
@@ -864,7 +865,11 @@ fn robust_line(r: &crate::calibrate::RobustFit) -> String {
         r.loss.name(),
         r.scale_k,
         r.passes,
-        if r.converged { "" } else { " (weights not settled)" },
+        if r.converged {
+            ""
+        } else {
+            " (weights not settled)"
+        },
         r.scale
     );
     if low.is_empty() {

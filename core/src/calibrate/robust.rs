@@ -59,8 +59,10 @@ use crate::residuals::{Weights, standardised_residuals};
 pub const WEIGHT_TOLERANCE: f64 = 1e-3;
 /// Most robust refits.
 pub const MAX_PASSES: usize = 30;
-/// Touches below this weight are listed as downweighted in summaries.
-pub const DOWNWEIGHTED: f64 = 0.5;
+/// Touches below this weight are listed as downweighted in summaries: a
+/// touch the noise explains falls below it with probability about 1e-4
+/// (Cauchy, `z > √3·k`) or 4e-9 (Huber, `z > 4k`) at the default `k`.
+pub const DOWNWEIGHTED: f64 = 0.25;
 /// The smallest weight a touch gets (so that its matrix stays invertible
 /// in sums; a Cauchy weight of a touch thousands of σ off would underflow).
 pub const MIN_WEIGHT: f64 = 1e-9;
@@ -131,7 +133,11 @@ impl Loss {
             }
             Loss::Cauchy => 1.0 / (1.0 + (z / k) * (z / k)),
         };
-        if w.is_nan() { MIN_WEIGHT } else { w.max(MIN_WEIGHT) }
+        if w.is_nan() {
+            MIN_WEIGHT
+        } else {
+            w.max(MIN_WEIGHT)
+        }
     }
 }
 
@@ -429,7 +435,17 @@ mod tests {
         for loss in Loss::ALL {
             let k = loss.default_k();
             let mut prev = 1.0;
-            for z in [0.0, 0.5, 1.0, 2.0, 5.0, 50.0, 1e300, f64::INFINITY, f64::NAN] {
+            for z in [
+                0.0,
+                0.5,
+                1.0,
+                2.0,
+                5.0,
+                50.0,
+                1e300,
+                f64::INFINITY,
+                f64::NAN,
+            ] {
                 let w = loss.weight(z, k);
                 assert!((MIN_WEIGHT..=1.0).contains(&w), "{loss:?} {z}: {w}");
                 if !z.is_nan() {
