@@ -107,12 +107,13 @@ pub fn read_other(
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 22] = [
+const FLAGS: [(&str, &str); 23] = [
     ("noise.encoder_rad", "--encoder-noise"),
     ("noise.probe_mm", "--probe-noise"),
     ("noise.length_default_mm", "--length-uncertainty"),
     ("noise.length_weight", "--length-weight"),
     ("fix", "--fix"),
+    ("robust.scale_k", "--robust-scale"),
     ("threads", "--threads"),
     ("cross_validate", "--cross-validate"),
     ("anneal.t0", "--sa-t0"),

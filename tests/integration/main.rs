@@ -11,6 +11,7 @@ mod out_paths;
 mod points;
 mod readme;
 mod report;
+mod robust;
 mod session;
 mod sim_messages;
 mod simulate;
