@@ -47,7 +47,10 @@ fn robust_cauchy_writes_the_weights_and_names_the_downweighted_touch() {
     let plain = calibrate(&poses, &dir.join("plain"), &[]);
     assert!(!plain.status.success());
     let json = std::fs::read_to_string(dir.join("plain/calibration.json")).unwrap();
-    assert!(!json.contains("\"robust\""), "a plain fit reports no robust section");
+    assert!(
+        !json.contains("\"robust\""),
+        "a plain fit reports no robust section"
+    );
     let o = calibrate(&poses, &dir.join("robust"), &["--robust", "cauchy"]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
@@ -64,7 +67,10 @@ fn robust_cauchy_writes_the_weights_and_names_the_downweighted_touch() {
         robust_line.contains(&format!("1 touch(es) weighed below 0.25: {at} (point S2")),
         "{robust_line}"
     );
-    assert!(stdout.contains("Fit quality: robust cauchy fit"), "{stdout}");
+    assert!(
+        stdout.contains("Fit quality: robust cauchy fit"),
+        "{stdout}"
+    );
     let json = std::fs::read_to_string(dir.join("robust/calibration.json")).unwrap();
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     let fit = &v["calibration"]["robust"];
