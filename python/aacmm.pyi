@@ -266,9 +266,14 @@ def calibrate(
     threads: Optional[int] = None,
     cross_validate: Optional[int] = None,
     validate: Optional[DataSet] = None,
+    robust: Optional[Literal["huber", "cauchy"]] = None,
+    robust_scale: Optional[float] = None,
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
-    ``fix`` defaults to ``"auto"``. ValueError for a bad option (naming the
+    ``fix`` defaults to ``"auto"``. ``robust`` (``"huber"`` or
+    ``"cauchy"``) refits with per-touch weights (``--robust``; the weights
+    in ``report["calibration"]["robust"]``), ``robust_scale`` its tuning
+    constant. ValueError for a bad option (naming the
     argument), CalibrationError when the data cannot determine the free
     parameters."""

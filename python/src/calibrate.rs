@@ -7,7 +7,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aacmm_core::calibrate::{CalibrateOptions, Context, FixSpec, LmOptions, Method};
+use aacmm_core::calibrate::{
+    CalibrateOptions, Context, FixSpec, LmOptions, Loss, Method, Robust,
+};
 use aacmm_core::io::Arm as CoreArm;
 use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Sources};
 use numpy::ndarray::{Array1, Array2};
@@ -41,6 +43,26 @@ fn fix_text(fix: &Bound<'_, PyAny>) -> PyResult<String> {
         .extract()
         .map_err(|_| Error::value("fix: 'auto', comma-separated names, or a list of names"))?;
     Ok(names.join(","))
+}
+
+/// The robust fit of `robust=` and `robust_scale=` (the library checks
+/// the constant).
+fn robust(loss: Option<&str>, k: Option<f64>) -> Result<Option<Robust>> {
+    match (loss, k) {
+        (None, None) => Ok(None),
+        (None, Some(_)) => Err(Error::value(
+            "robust_scale: needs robust = \"huber\" or \"cauchy\"",
+        )),
+        (Some(name), k) => {
+            let loss = Loss::parse(name).ok_or_else(|| {
+                Error::value(format!("robust = {name:?}: one of huber, cauchy"))
+            })?;
+            Ok(Some(Robust {
+                loss,
+                scale_k: k.unwrap_or(loss.default_k()),
+            }))
+        }
+    }
 }
 
 /// The method of a `method=` argument.
@@ -100,15 +122,17 @@ fn problem(
 /// not stated, the touch σ is estimated from the fit); `seed`: every random
 /// draw; `threads`: workers for the normal equations (default one per core;
 /// the result does not depend on it); `cross_validate`: `k` folds over
-/// points; `validate`: a held-out `DataSet` (same arm). The report is the
-/// command line's bit for bit. Runs without the GIL.
+/// points; `validate`: a held-out `DataSet` (same arm); `robust`:
+/// `"huber"` or `"cauchy"` for a robust refit (IRLS, `--robust`), with
+/// `robust_scale` its tuning constant (default 1.62 / 2.65). The report is
+/// the command line's bit for bit. Runs without the GIL.
 ///
 /// Raises `ValueError` for a bad option (naming the argument),
 /// `aacmm.CalibrationError` when the data cannot determine the free
 /// parameters. A solver that did not converge still gives a result: check
 /// `successful`.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None))]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -121,7 +145,10 @@ pub fn calibrate(
     threads: Option<usize>,
     cross_validate: Option<usize>,
     validate: Option<&DataSet>,
+    robust: Option<&str>,
+    robust_scale: Option<f64>,
 ) -> PyResult<Calibration> {
+    let robust = self::robust(robust, robust_scale)?;
     let fix = match fix {
         Some(f) => fix_text(f)?,
         None => "auto".to_string(),
@@ -141,6 +168,7 @@ pub fn calibrate(
         method: self::method(method)?,
         lm,
         seed,
+        robust,
         // The solvers' settings not exposed here keep the library's
         // defaults, which are the command line's.
         ..CalibrateOptions::default()

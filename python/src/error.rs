@@ -124,7 +124,7 @@ impl From<KernelError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 7] = [
+const ARGUMENTS: [(&str, &str); 8] = [
     ("noise.encoder_rad", "encoder_deg"),
     ("noise.probe_mm", "probe_mm"),
     ("noise.length_default_mm", "length_default_mm"),
@@ -132,6 +132,7 @@ const ARGUMENTS: [(&str, &str); 7] = [
     ("fix", "fix"),
     ("threads", "threads"),
     ("cross_validate", "cross_validate"),
+    ("robust.scale_k", "robust_scale"),
 ];
 
 /// A refused setting as a `ValueError` naming the Python argument. The

@@ -142,6 +142,12 @@ def test_calibration_options_and_data(arm, data):
         aacmm.calibrate(arm, data, threads=0)
     with refused(ValueError, match="fix"):
         aacmm.calibrate(arm, data, fix=3)
+    with refused(ValueError, match='robust = "bogus": one of huber, cauchy'):
+        aacmm.calibrate(arm, data, robust="bogus")
+    with refused(ValueError, match="^robust_scale = -1: must be a finite number > 0$"):
+        aacmm.calibrate(arm, data, robust="huber", robust_scale=-1)
+    with refused(ValueError, match="robust_scale: needs robust"):
+        aacmm.calibrate(arm, data, robust_scale=2)
     # Nothing fixed: the base rotation is a direction no touch can see.
     with refused(aacmm.CalibrationError, match="directions the data cannot see"):
         aacmm.calibrate(arm, data, fix="", method="lm")

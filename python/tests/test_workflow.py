@@ -164,3 +164,19 @@ def test_the_readme_python_example_prints_what_the_readme_says():
     done = subprocess.run([sys.executable, "-c", code], cwd=REPO, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout == printed
+
+
+def test_robust_keyword_downweights_a_displaced_touch(arm):
+    labels, q = read_poses()
+    q = [list(row) for row in q]
+    q[16][1] += 0.2  # about 2 mm at the probe (degrees)
+    data = aacmm.DataSet(labels, q, read_lengths(), angle_unit="deg")
+    noise = aacmm.Noise(encoder_deg=0.005, probe_mm=0.01)
+    plain = aacmm.calibrate(arm, data, noise=noise)
+    assert "robust" not in plain.report["calibration"]
+    cal = aacmm.calibrate(arm, data, noise=noise, robust="cauchy")
+    fit = cal.report["calibration"]["robust"]
+    assert fit["loss"] == "cauchy" and fit["scale_k"] == 2.65
+    low = [w["at"] for w in fit["weights"] if w["weight"] < 0.25]
+    assert low == ["<arrays>:17"]
+    assert cal.report["verdict"]["usable"] and not plain.report["verdict"]["usable"]
