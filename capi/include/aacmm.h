@@ -167,6 +167,12 @@ typedef struct AacmmCalibration AacmmCalibration;
 typedef uint32_t AacmmMethod;
 
 /**
+ * The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
+ * `_CAUCHY` (`--robust`).
+ */
+typedef uint32_t AacmmRobust;
+
+/**
  * Settings of a calibration: the command line's flags. Start from
  * `aacmm_calibrate_options_default` and change what you need; a
  * zero-initialised struct is not the default (it states a reference-length
@@ -222,6 +228,17 @@ typedef struct {
    * The results do not depend on it.
    */
   size_t threads;
+  /**
+   * A robust refit after the solver (IRLS, per-touch weights in the
+   * report's `/calibration/robust`): `AACMM_ROBUST_NONE` (default),
+   * `_HUBER` or `_CAUCHY` (`--robust`).
+   */
+  AacmmRobust robust;
+  /**
+   * Its tuning constant `k`; 0 = the loss's default (1.62 Huber, 2.65
+   * Cauchy). (`--robust-scale`.)
+   */
+  double robust_scale;
 } AacmmCalibrateOptions;
 
 /**
@@ -321,6 +338,21 @@ typedef struct {
  * default).
  */
 #define AACMM_METHOD_GLOBAL 3
+
+/**
+ * Plain least squares (the default).
+ */
+#define AACMM_ROBUST_NONE 0
+
+/**
+ * A robust refit with the Huber loss.
+ */
+#define AACMM_ROBUST_HUBER 1
+
+/**
+ * A robust refit with the Cauchy loss.
+ */
+#define AACMM_ROBUST_CAUCHY 2
 
 /**
  * Angles in degrees (the command line's default).

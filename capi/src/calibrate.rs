@@ -3,7 +3,9 @@
 use std::collections::{HashMap, HashSet};
 use std::ffi::{CStr, c_char};
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, Method, Termination};
+use aacmm_core::calibrate::{
+    CalibrateOptions, FixSpec, LmOptions, Loss, Method, Robust, Termination,
+};
 use aacmm_core::dataset::{DataSet, MIN_TOUCHES};
 use aacmm_core::io::{
     AngleUnit, Arm, Poses, ReferenceLength, read_arm, read_lengths, read_poses, source_name,
@@ -54,6 +56,19 @@ fn method_code(m: Method) -> AacmmMethod {
     }
 }
 
+/// The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
+/// `_CAUCHY` (`--robust`).
+pub type AacmmRobust = u32;
+
+/// Plain least squares (the default).
+pub const AACMM_ROBUST_NONE: AacmmRobust = 0;
+
+/// A robust refit with the Huber loss.
+pub const AACMM_ROBUST_HUBER: AacmmRobust = 1;
+
+/// A robust refit with the Cauchy loss.
+pub const AACMM_ROBUST_CAUCHY: AacmmRobust = 2;
+
 /// The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
 /// `AACMM_ANGLE_RAD`.
 pub type AacmmAngleUnit = u32;
@@ -102,6 +117,13 @@ pub struct AacmmCalibrateOptions {
     /// Worker threads for the normal equations; 0 = one per core (default).
     /// The results do not depend on it.
     pub threads: usize,
+    /// A robust refit after the solver (IRLS, per-touch weights in the
+    /// report's `/calibration/robust`): `AACMM_ROBUST_NONE` (default),
+    /// `_HUBER` or `_CAUCHY` (`--robust`).
+    pub robust: AacmmRobust,
+    /// Its tuning constant `k`; 0 = the loss's default (1.62 Huber, 2.65
+    /// Cauchy). (`--robust-scale`.)
+    pub robust_scale: f64,
 }
 
 /// One reference length between two touched points, for `aacmm_calibrate`.
@@ -208,6 +230,8 @@ pub extern "C" fn aacmm_calibrate_options_default() -> AacmmCalibrateOptions {
         length_uncertainty_mm: DEFAULT_LENGTH_SIGMA_MM,
         length_weight: 0.0,
         threads: 0,
+        robust: AACMM_ROBUST_NONE,
+        robust_scale: 0.0,
     }
 }
 
@@ -239,6 +263,17 @@ unsafe fn settings(
             o.method
         )));
     };
+    let loss = match o.robust {
+        AACMM_ROBUST_NONE => None,
+        AACMM_ROBUST_HUBER => Some(Loss::Huber),
+        AACMM_ROBUST_CAUCHY => Some(Loss::Cauchy),
+        other => {
+            return Err(Error::invalid(format!(
+                "options.robust = {other}: one of AACMM_ROBUST_NONE ({AACMM_ROBUST_NONE}), \
+                 _HUBER ({AACMM_ROBUST_HUBER}), _CAUCHY ({AACMM_ROBUST_CAUCHY})"
+            )));
+        }
+    };
     let fix = if o.fix.is_null() {
         "auto".to_string()
     } else {
@@ -269,6 +304,14 @@ unsafe fn settings(
             length_weight: stated(o.length_weight),
         },
         lm: LmOptions::default().threads(threads),
+        robust: loss.map(|loss| Robust {
+            loss,
+            scale_k: if o.robust_scale == 0.0 {
+                loss.default_k()
+            } else {
+                o.robust_scale
+            },
+        }),
         ..CalibrateOptions::default()
     };
     options.check(joints)?;

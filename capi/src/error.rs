@@ -116,7 +116,7 @@ impl From<CalibrationError> for Error {
 
 /// The C field of each library setting ([`OptionError::field`]); settings
 /// the C API does not expose keep their library path.
-const FIELDS: [(&str, &str); 7] = [
+const FIELDS: [(&str, &str); 8] = [
     ("noise.encoder_rad", "encoder_noise_rad"),
     ("noise.probe_mm", "probe_noise_mm"),
     ("noise.length_default_mm", "length_uncertainty_mm"),
@@ -124,6 +124,7 @@ const FIELDS: [(&str, &str); 7] = [
     ("fix", "fix"),
     ("threads", "threads"),
     ("cross_validate", "cross_validate"),
+    ("robust.scale_k", "robust_scale"),
 ];
 
 impl From<OptionError> for Error {

@@ -239,6 +239,8 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("overlap", 3),
         ("unknown_parameter", 3),
         ("unknown_method", 3),
+        ("unknown_robust", 3),
+        ("robust_scale", 3),
         ("five_joints", 4),
         ("missing_file", 5),
         ("missing_poses", 5),
@@ -252,6 +254,12 @@ fn the_c_program_agrees_with_the_rust_api() {
             out.get(&format!("error {name}"))
         );
     }
+    assert!(
+        out.get("error robust_scale")
+            .contains("options.robust_scale = -1: must be a finite number > 0"),
+        "{}",
+        out.get("error robust_scale")
+    );
     assert!(
         out.get("error missing_file").contains("no/such/arm.toml"),
         "the message names the file"

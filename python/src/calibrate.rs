@@ -7,9 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aacmm_core::calibrate::{
-    CalibrateOptions, Context, FixSpec, LmOptions, Loss, Method, Robust,
-};
+use aacmm_core::calibrate::{CalibrateOptions, Context, FixSpec, LmOptions, Loss, Method, Robust};
 use aacmm_core::io::Arm as CoreArm;
 use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Sources};
 use numpy::ndarray::{Array1, Array2};
@@ -54,9 +52,8 @@ fn robust(loss: Option<&str>, k: Option<f64>) -> Result<Option<Robust>> {
             "robust_scale: needs robust = \"huber\" or \"cauchy\"",
         )),
         (Some(name), k) => {
-            let loss = Loss::parse(name).ok_or_else(|| {
-                Error::value(format!("robust = {name:?}: one of huber, cauchy"))
-            })?;
+            let loss = Loss::parse(name)
+                .ok_or_else(|| Error::value(format!("robust = {name:?}: one of huber, cauchy")))?;
             Ok(Some(Robust {
                 loss,
                 scale_k: k.unwrap_or(loss.default_k()),

@@ -265,6 +265,15 @@ int main(int argc, char **argv) {
     bad.method = 7;
     expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
            AACMM_STATUS_INVALID_ARGUMENT, "unknown_method");
+    bad = aacmm_calibrate_options_default();
+    bad.robust = 9;
+    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
+           AACMM_STATUS_INVALID_ARGUMENT, "unknown_robust");
+    bad = aacmm_calibrate_options_default();
+    bad.robust = AACMM_ROBUST_HUBER;
+    bad.robust_scale = -1;
+    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
+           AACMM_STATUS_INVALID_ARGUMENT, "robust_scale");
     size_t needed = aacmm_last_error_message(NULL, 0);
     char tiny[8];
     if (aacmm_last_error_message(tiny, sizeof tiny) != needed || strlen(tiny) != sizeof tiny - 1) {

@@ -293,6 +293,7 @@ fn base_standardised(
 /// IRLS from `params` (the solver's minimum under `base`).
 /// `dof_factor` is `f` of the module documentation; `stated`, whether the
 /// base weights come from a stated noise (then the scale is tested).
+#[allow(clippy::too_many_arguments)] // the fit's inputs, as LM takes them, and two facts of assess
 pub(crate) fn irls(
     robust: Robust,
     params: &DhParams,
