@@ -214,7 +214,7 @@ fn clean_campaigns_keep_their_weights_and_verdict() {
 fn robust_fits_work_for_every_solver_and_are_deterministic() {
     use aacmm_core::calibrate::Method;
     let c = case(9, &[40], 2.0);
-    for method in [Method::Lm, Method::Hybrid, Method::Global] {
+    for method in [Method::Lm, Method::Sa, Method::Hybrid, Method::Global] {
         let o = CalibrateOptions {
             method,
             ..options(Some(Loss::Cauchy))
@@ -226,6 +226,13 @@ fn robust_fits_work_for_every_solver_and_are_deterministic() {
         let fit = a.calibration.robust.as_ref().unwrap();
         let low: Vec<&str> = fit.downweighted().iter().map(|t| t.at.as_str()).collect();
         assert_eq!(low, ["<arrays>:41"], "{method:?}");
+        // The refits are LM whatever ran before: the stop names it.
+        assert!(
+            a.calibration.solver.stop.lm().is_some(),
+            "{method:?}: {}",
+            a.calibration.solver.stop.describe()
+        );
+        assert!(a.is_usable(), "{method:?}: {:?}", a.verdict);
         let b = Problem::new(nominal(), c.data.clone(), o)
             .unwrap()
             .run()
@@ -250,4 +257,51 @@ fn a_bad_tuning_constant_is_refused_by_its_field() {
             other => panic!("k = {k} accepted: {:?}", other.map(|_| ())),
         }
     }
+}
+
+/// The same bytes at 1, 2 and 4 threads: 300 points (5 chunks), so the normal
+/// equations of every refit split across threads.
+#[test]
+fn a_robust_report_is_the_same_at_1_2_and_4_threads() {
+    use aacmm_core::calibrate::{FixSpec, LmOptions, Method};
+    use aacmm_core::io::ReferenceLength;
+    let (mut labels, mut q) = (Vec::new(), Vec::new());
+    for p in 0..300usize {
+        for t in 0..3usize {
+            labels.push(format!("P{p}"));
+            q.push(
+                (0..6)
+                    .map(|j| ((p * 7 + t * 13 + j * 3) as f64 * 0.37).sin() * 1.5)
+                    .collect::<Vec<f64>>(),
+            );
+        }
+    }
+    let lengths: Vec<ReferenceLength> = (0..50)
+        .map(|i| ReferenceLength {
+            a: format!("P{}", 2 * i),
+            b: format!("P{}", 2 * i + 1),
+            distance: 100.0 + i as f64,
+            uncertainty: None,
+            line: 0,
+        })
+        .collect();
+    let data = DataSet::from_touches(&labels, &q, &lengths).unwrap();
+    let report = |threads: usize| {
+        let options = CalibrateOptions {
+            method: Method::Lm,
+            fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
+            lm: LmOptions::default().threads(threads).max_iterations(8),
+            robust: Some(Robust::new(Loss::Cauchy)),
+            ..CalibrateOptions::default()
+        };
+        Problem::new(nominal(), data.clone(), options)
+            .unwrap()
+            .run()
+            .unwrap()
+            .to_json()
+    };
+    let one = report(1);
+    assert!(one.contains("\"robust\""));
+    assert_eq!(one, report(2), "2 threads");
+    assert_eq!(one, report(4), "4 threads");
 }

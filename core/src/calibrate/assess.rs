@@ -8,7 +8,7 @@ use super::checks::{ChiSquare, gross_corrections};
 use super::lm::{LmIteration, levenberg_marquardt};
 use super::{
     CalibrateOptions, Calibration, CalibrationError, Checks, CorrelationMatrix, Dof, Estimate,
-    Method, Outcome, Phase, SolverSummary,
+    Method, Outcome, Phase, SolverSummary, Stop,
 };
 use crate::dataset::DataSet;
 use crate::identify::{Identification, strong_correlations};
@@ -216,9 +216,14 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         phases.push(out.phase);
         history = out.last.history;
         iterations = out.last.iterations;
-        if stop.lm().is_some() {
-            stop = stop.with_lm(out.last.termination);
-        }
+        // The refits are LM, after `sa` too: say so.
+        stop = match stop {
+            Stop::Anneal(anneal) => Stop::Hybrid {
+                anneal,
+                lm: out.last.termination,
+            },
+            other => other.with_lm(out.last.termination),
+        };
         params = out.params;
         normal = out.last.normal;
         weights = out.weights;

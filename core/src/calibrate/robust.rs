@@ -43,7 +43,8 @@
 //!
 //! The global search itself stays plain least squares: it finds the basin;
 //! the robust refits stay in it. With `sa` (annealing alone) the robust
-//! refits are LM all the same (phase `lm, robust …`).
+//! refits are LM all the same (phase `lm, robust …`), and the stop says
+//! so: annealing, then LM.
 
 use serde::{Deserialize, Serialize};
 
