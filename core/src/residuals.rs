@@ -260,12 +260,37 @@ impl Weights {
         noise: &Noise,
         touch_sigma_mm: f64,
     ) -> Result<Weights, KernelError> {
+        Weights::new_threads(kernel, data, noise, touch_sigma_mm, 1)
+    }
+
+    /// [`Weights::new`] with the touches' weights (a joint Jacobian each) on
+    /// up to `threads` threads, in chunks of fixed size: each touch's weight
+    /// is its own, so the result is the same bits whatever `threads`.
+    pub fn new_threads(
+        kernel: &ArmKernel,
+        data: &DataSet,
+        noise: &Noise,
+        touch_sigma_mm: f64,
+        threads: usize,
+    ) -> Result<Weights, KernelError> {
         let touch = if noise.stated() {
             let e2 = noise.encoder_rad.unwrap_or(0.0).powi(2);
             let p2 = noise.probe_mm.unwrap_or(0.0).powi(2);
-            let mut jq = vec![[0.0; 3]; data.joints()];
-            (0..data.len())
-                .map(|i| {
+            let mut touch = vec![[0.0; 6]; data.len()];
+            let parts = touch
+                .chunks_mut(TOUCHES_PER_CHUNK)
+                .enumerate()
+                .collect::<Vec<_>>();
+            let parts: Vec<std::sync::Mutex<(usize, &mut [Sym3])>> =
+                parts.into_iter().map(std::sync::Mutex::new).collect();
+            let results = parallel_map(&parts, threads, |part| {
+                let mut part = part
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                let (k, out) = &mut *part;
+                let first = *k * TOUCHES_PER_CHUNK;
+                let mut jq = vec![[0.0; 3]; data.joints()];
+                for (i, w) in (first..).zip(out.iter_mut()) {
                     kernel.joint_jacobian_at(data.poses(), i, &mut jq)?;
                     let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
                     let cov = [
@@ -276,9 +301,13 @@ impl Weights {
                         s(0, 2),
                         s(1, 2),
                     ];
-                    Ok(sym_inv(&cov))
-                })
-                .collect::<Result<Vec<Sym3>, KernelError>>()?
+                    *w = sym_inv(&cov);
+                }
+                Ok::<(), KernelError>(())
+            });
+            drop(parts);
+            results.into_iter().collect::<Result<(), KernelError>>()?;
+            touch
         } else {
             let w = 1.0 / (touch_sigma_mm * touch_sigma_mm);
             vec![[w, w, w, 0.0, 0.0, 0.0]; data.len()]
@@ -452,6 +481,10 @@ struct Partial {
     centroids: Vec<[f64; 3]>,
     mean_j: Vec<Vec<[f64; 3]>>,
 }
+
+/// Touches per work item of [`Weights::new_threads`] (about 0.1 ms of work:
+/// enough to pay for handing it out).
+const TOUCHES_PER_CHUNK: usize = 1024;
 
 /// Points per work item: fixed, so the sums are added in the same order
 /// whatever the number of threads (same bytes on any machine).
@@ -947,6 +980,11 @@ mod tests {
             length_weight: None,
         };
         let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        assert!(data.len() > 2 * TOUCHES_PER_CHUNK, "weights in chunks too");
+        for threads in [2, 4] {
+            let w = Weights::new_threads(&kernel, &data, &noise, 1.0, threads).unwrap();
+            assert_eq!(w, weights, "{threads} threads");
+        }
         let free: Vec<usize> = (0..27).collect();
         let bits = |threads: usize| {
             let ne = normal_equations(&kernel, &data, &weights, &free, threads).unwrap();

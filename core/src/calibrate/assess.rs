@@ -145,8 +145,13 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         // probe along directions that depend on the arm, and the lengths'
         // weights on the centroids' directions — both far off when the
         // zeros were.
-        let at_solution =
-            Weights::new(&ArmKernel::new(&params)?, data, &options.noise, touch_sigma)?;
+        let at_solution = Weights::new_threads(
+            &ArmKernel::new(&params)?,
+            data,
+            &options.noise,
+            touch_sigma,
+            threads,
+        )?;
         let timer = std::time::Instant::now();
         // Weights that moved by under REWEIGH_TOLERANCE would move the
         // estimate by a like fraction of its σ and its σ not at all (shipped

@@ -473,7 +473,7 @@ pub fn calibrate_with(
 ) -> Result<Calibration, CalibrationError> {
     options.check(start.joint_count())?;
     let kernel = ArmKernel::new(start)?;
-    let weights = Weights::new(&kernel, data, &options.noise, 1.0)?;
+    let weights = Weights::new_threads(&kernel, data, &options.noise, 1.0, ctx.threads)?;
     // One pass over the data at the start serves the identifiability
     // analysis and, restricted to the free columns, the first step.
     let timer = std::time::Instant::now();

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::{CalibrateOptions, CalibrationError, OptionError, calibrate};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
-use crate::metrics::evaluate;
+use crate::metrics::evaluate_without_pairs;
 use crate::params::DhParams;
 
 /// The figures a calibration is judged by, mm.
@@ -35,7 +35,8 @@ pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, Calibration
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
     k.positions(data.poses(), 0..data.len(), &mut xyz)?;
-    let ev = evaluate(data, &xyz)?;
+    // The figures use no pair of points (eq. 19): not computed.
+    let ev = evaluate_without_pairs(data, &xyz)?;
     Ok(Figures {
         points: ev.points.len(),
         e_mean: ev.single_point_e.mean,

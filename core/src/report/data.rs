@@ -8,7 +8,7 @@ use super::svg::{BLUE, GREY, Marker, Shape, VERMILLION};
 use super::{Arms, MAX_PAIR_MARKERS, Measured, ReportError};
 use crate::dataset::DataSet;
 use crate::geometry::distance;
-use crate::metrics::{Evaluation, evaluate, pair_length_errors};
+use crate::metrics::{DEFAULT_THREADS, Evaluation, add_pairs, evaluate_without_pairs};
 
 /// Which arm gave the positions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,6 +36,8 @@ pub(crate) struct Evaluated<'a> {
     pub xyz: &'a [[f64; 3]],
     /// The metrics.
     pub ev: Evaluation,
+    /// Eq. 19 for the figure, from the same pass as the metrics' summaries.
+    pub pairs: Pairs,
 }
 
 impl Evaluated<'_> {
@@ -106,6 +108,7 @@ pub(crate) fn evaluate_all<'a>(
                     got: xyz.len(),
                 });
             }
+            let (ev, pairs) = evaluate_with_pairs(m.data, xyz)?;
             out.push(Evaluated {
                 set,
                 set_name: set_name.clone(),
@@ -113,7 +116,8 @@ pub(crate) fn evaluate_all<'a>(
                 held_out: m.held_out,
                 stage,
                 xyz,
-                ev: evaluate(m.data, xyz)?,
+                ev,
+                pairs,
             });
         }
     }
@@ -140,32 +144,58 @@ pub(crate) enum Pairs {
 /// Distance bins of [`Pairs::Binned`].
 const PAIR_BINS: usize = 40;
 
-/// Eq. 19 of `e`, streamed: memory does not grow with the pairs.
-pub(crate) fn pairs(e: &Evaluated) -> Pairs {
-    let n = e.ev.points.len();
+/// The metrics of `data` at `xyz` with eq. 19 for the figure, in one pass
+/// over the pairs of points on [`DEFAULT_THREADS`] (the pairs grow as the
+/// square of the points: 1000 points of 1000 touches are 5·10⁸ touch
+/// distances): every pair when there are at most [`MAX_PAIR_MARKERS`],
+/// else the mean `|d|_error` per distance bin. Memory does not grow with
+/// the pairs beyond the markers. The bins' sums are per chunk of rows,
+/// merged in row order: the same bits whatever the threads.
+fn evaluate_with_pairs(
+    data: &DataSet,
+    xyz: &[[f64; 3]],
+) -> Result<(Evaluation, Pairs), ReportError> {
+    let mut ev = evaluate_without_pairs(data, xyz)?;
+    let n = ev.points.len();
     let count = n * n.saturating_sub(1) / 2;
-    let rows = || pair_length_errors(e.data, e.xyz, &e.ev.points);
     if count <= MAX_PAIR_MARKERS {
-        return Pairs::Each(
-            rows()
-                .map(|p| (p.centroid_distance, p.d_error_abs))
-                .collect(),
-        );
+        let each = add_pairs(
+            &mut ev,
+            data,
+            xyz,
+            DEFAULT_THREADS,
+            Vec::new,
+            |v, d, abs| v.push((d, abs)),
+        )?;
+        return Ok((ev, Pairs::Each(each.concat())));
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for (i, a) in e.ev.points.iter().enumerate() {
-        for b in &e.ev.points[i + 1..] {
+    for (i, a) in ev.points.iter().enumerate() {
+        for b in &ev.points[i + 1..] {
             let d = distance(&a.centroid, &b.centroid);
             lo = lo.min(d);
             hi = hi.max(d);
         }
     }
     let width = ((hi - lo) / PAIR_BINS as f64).max(f64::MIN_POSITIVE);
+    let parts = add_pairs(
+        &mut ev,
+        data,
+        xyz,
+        DEFAULT_THREADS,
+        || vec![(0.0f64, 0usize); PAIR_BINS],
+        |sums, d, abs| {
+            let k = (((d - lo) / width) as usize).min(PAIR_BINS - 1);
+            sums[k].0 += abs;
+            sums[k].1 += 1;
+        },
+    )?;
     let mut sums = vec![(0.0f64, 0usize); PAIR_BINS];
-    for p in rows() {
-        let k = (((p.centroid_distance - lo) / width) as usize).min(PAIR_BINS - 1);
-        sums[k].0 += p.d_error_abs;
-        sums[k].1 += 1;
+    for part in &parts {
+        for (s, p) in sums.iter_mut().zip(part) {
+            s.0 += p.0;
+            s.1 += p.1;
+        }
     }
     let bins = sums
         .iter()
@@ -173,7 +203,7 @@ pub(crate) fn pairs(e: &Evaluated) -> Pairs {
         .filter(|(_, (_, c))| *c > 0)
         .map(|(k, (s, c))| (lo + (k as f64 + 0.5) * width, s / *c as f64, *c))
         .collect();
-    Pairs::Binned { bins, count }
+    Ok((ev, Pairs::Binned { bins, count }))
 }
 
 /// `δ_i = |x_i − x̄|` of every touch of `e`, touch order, mm.
@@ -221,6 +251,7 @@ pub(crate) fn sets<'a, 'b>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::metrics::{evaluate, pair_length_errors};
 
     #[test]
     fn median_of_odd_and_even_counts() {
@@ -245,7 +276,20 @@ mod tests {
             })
             .collect();
         let xyz = data.to_touch_order(&rows);
-        let ev = evaluate(&data, &xyz).unwrap();
+        let (ev, pairs) = evaluate_with_pairs(&data, &xyz).unwrap();
+        assert_eq!(ev, evaluate(&data, &xyz).unwrap());
+        let mut expected = vec![(0.0, 0usize); PAIR_BINS];
+        let d: Vec<f64> = pair_length_errors(&data, &xyz, &ev.points)
+            .map(|p| p.centroid_distance)
+            .collect();
+        let lo = d.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = d.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let width = (hi - lo) / PAIR_BINS as f64;
+        for p in pair_length_errors(&data, &xyz, &ev.points) {
+            let k = (((p.centroid_distance - lo) / width) as usize).min(PAIR_BINS - 1);
+            expected[k].0 += p.d_error_abs;
+            expected[k].1 += 1;
+        }
         let e = Evaluated {
             set: 0,
             set_name: "fitted".into(),
@@ -254,10 +298,15 @@ mod tests {
             stage: Stage::After,
             xyz: &xyz,
             ev,
+            pairs,
         };
-        let Pairs::Binned { bins, count } = pairs(&e) else {
+        let Pairs::Binned { bins, count } = e.pairs.clone() else {
             panic!("expected bins")
         };
+        for (b, (s, c)) in bins.iter().zip(expected.iter().filter(|x| x.1 > 0)) {
+            assert_eq!(b.2, *c);
+            assert!((b.1 - s / *c as f64).abs() < 1e-12, "{b:?} vs {s}/{c}");
+        }
         assert_eq!(count, 70 * 69 / 2);
         assert_eq!(bins.iter().map(|b| b.2).sum::<usize>(), count);
         assert!(bins.len() <= PAIR_BINS);

@@ -5,7 +5,7 @@
 //! before and after differ by orders of magnitude.
 
 use super::{frame, header_height, short};
-use crate::report::data::{Evaluated, Pairs, Stage, pairs};
+use crate::report::data::{Evaluated, Pairs, Stage};
 use crate::report::svg::{
     Area, Axis, Class, GREY, Key, Marker, Shape, WIDTH, chart, dashed_across, group, message,
     render,
@@ -25,7 +25,7 @@ pub(crate) fn figure(evaluated: &[Evaluated], arms: &Arms) -> Result<Figure, Rep
         .iter()
         .enumerate()
         .filter(|(_, e)| e.ev.points.len() > 1)
-        .map(|(i, e)| (i, pairs(e)))
+        .map(|(i, e)| (i, e.pairs.clone()))
         .collect();
     let mut entries: Vec<(Key, String)> = Vec::new();
     for (i, p) in &series {
