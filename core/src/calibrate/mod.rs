@@ -44,6 +44,7 @@ pub mod energy;
 pub mod global;
 pub mod lm;
 pub mod options;
+pub mod prior;
 pub mod solver;
 pub mod validate;
 
@@ -53,6 +54,7 @@ pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule}
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub use lm::{LmIteration, LmOptions, LmResult, Termination};
 pub use options::{CalibrateOptions, DEFAULT_LENGTH_SIGMA_MM, FixSpec, OptionError};
+pub use prior::{PriorEstimate, PriorReport, Target, Tolerances};
 pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
@@ -324,6 +326,14 @@ pub struct Dof {
     pub touch_sigma_mm: f64,
     /// Whether the touch σ was estimated from the fit.
     pub touch_sigma_estimated: bool,
+    /// Pseudo-observation rows of a prior (free parameters with a stated
+    /// tolerance), counted in `degrees_of_freedom`; absent without one.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub prior_rows: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// The solver's account of itself.
@@ -415,6 +425,10 @@ pub struct Calibration {
     pub identification: Option<Identification>,
     /// Plausibility of the arm and of the fit.
     pub checks: Checks,
+    /// The prior and the data's share of the information per parameter
+    /// (only when tolerances were stated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<PriorReport>,
 }
 
 impl Calibration {
@@ -467,7 +481,7 @@ pub fn calibrate_with(
 ) -> Result<Calibration, CalibrationError> {
     options.check(start.joint_count())?;
     let kernel = ArmKernel::new(start)?;
-    let weights = Weights::new(&kernel, data, &options.noise, 1.0)?;
+    let mut weights = Weights::new(&kernel, data, &options.noise, 1.0)?;
     // One pass over the data at the start serves the identifiability
     // analysis and, restricted to the free columns, the first step.
     let timer = std::time::Instant::now();
@@ -504,7 +518,14 @@ pub fn calibrate_with(
         )
         .into());
     }
-    let counts = assess::Counts::new(data, free.len());
+    // The fixed set is the data's own (see [`prior`]); the prior then
+    // rides with the weights into every fit.
+    weights.prior = options
+        .prior
+        .as_ref()
+        .and_then(|t| prior::PriorTerm::new(t, start));
+    let prior_rows = weights.prior.as_ref().map_or(0, |p| p.rows(&free));
+    let counts = assess::Counts::new(data, free.len()).with_prior_rows(prior_rows);
     if counts.residuals() <= counts.unknowns() {
         return Err(CalibrationError::TooFewResiduals {
             residuals: counts.residuals(),
@@ -517,7 +538,10 @@ pub fn calibrate_with(
         seconds: timer.elapsed().as_secs_f64(),
         ..Phase::new("identify")
     };
-    let start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
+    let mut start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
+    if let Some(p) = &weights.prior {
+        p.add_to(&mut start_normal, &start.to_vec());
+    }
     let task = Task {
         start,
         data,

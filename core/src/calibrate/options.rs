@@ -178,6 +178,10 @@ pub struct CalibrateOptions {
     /// a mirror-image or collapsed arm).
     #[serde(default)]
     pub accept_poor_fit: bool,
+    /// Stated tolerances of the nominal geometry: a prior
+    /// ([`super::prior`]); `None` (the default) fits the data alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<super::Tolerances>,
 }
 
 impl Default for CalibrateOptions {
@@ -192,6 +196,7 @@ impl Default for CalibrateOptions {
             global: GlobalOptions::default(),
             seed: 0,
             accept_poor_fit: false,
+            prior: None,
         }
     }
 }
@@ -231,6 +236,9 @@ impl CalibrateOptions {
                     format!("column {}{name} is listed twice", w[0]),
                 ));
             }
+        }
+        if let Some(t) = &self.prior {
+            t.check(joints)?;
         }
         self.lm.check()?;
         self.anneal.check()?;

@@ -182,6 +182,9 @@ pub(crate) struct ArmFile {
     angle_unit: AngleUnit,
     joint: Spanned<Vec<Spanned<JointFile>>>,
     probe: ProbeFile,
+    /// Stated tolerances: read by [`super::prior`], never written.
+    #[serde(rename = "prior", default, skip_serializing)]
+    _prior: Option<serde::de::IgnoredAny>,
 }
 
 /// One `[[joint]]` table.
@@ -259,6 +262,7 @@ impl ArmFile {
                 y: len(y),
                 z: len(z),
             },
+            _prior: None,
         }
     }
 
