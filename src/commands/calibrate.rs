@@ -187,7 +187,7 @@ pub fn run(args: Args) -> Result<()> {
         args.force,
     )?;
     let noise = args.fit.noise();
-    let (arm, data, warnings) = args.fit.read_with_warnings()?;
+    let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
     let joints = arm.params.joint_count();
     let fix = FixSpec::parse(&args.fix, joints).map_err(flag_error)?;
     let (anneal, switch, global) = args.solver.options();
@@ -201,6 +201,7 @@ pub fn run(args: Args) -> Result<()> {
         global,
         seed: args.seed,
         accept_poor_fit: args.accept_poor_fit,
+        prior,
     };
     let arm_file = source_name(&args.fit.input.arm);
     let sources = Sources {

@@ -54,7 +54,7 @@ pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule}
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub use lm::{LmIteration, LmOptions, LmResult, Termination};
 pub use options::{CalibrateOptions, DEFAULT_LENGTH_SIGMA_MM, FixSpec, OptionError};
-pub use prior::{PriorEstimate, PriorReport, Target, Tolerances};
+pub use prior::{PriorConditioning, PriorEstimate, PriorReport, Target, Tolerances};
 pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
@@ -498,7 +498,17 @@ pub fn calibrate_with(
             let free: Vec<usize> = (0..start.param_count())
                 .filter(|c| !fixed.contains(c))
                 .collect();
-            let directions = open_directions_from(start, data, full.clone(), &free);
+            // A tolerance determines its parameter: with a prior, only
+            // directions it does not cover are open.
+            let mut seen = full.clone();
+            if let Some(p) = options
+                .prior
+                .as_ref()
+                .and_then(|t| prior::PriorTerm::new(t, start))
+            {
+                p.add_information(&mut seen);
+            }
+            let directions = open_directions_from(start, data, seen, &free);
             if !directions.is_empty() {
                 return Err(CalibrationError::Unidentifiable { directions });
             }

@@ -363,6 +363,17 @@ impl PriorTerm {
             .sum()
     }
 
+    /// Adds the prior's information `1/σ²` alone to `normal`'s matrix (for
+    /// an identifiability check).
+    pub fn add_information(&self, normal: &mut Normal) {
+        let p = normal.free.len();
+        for (a, &c) in normal.free.iter().enumerate() {
+            if let Some(s) = self.sigma(c) {
+                normal.jtj[a * p + a] += 1.0 / (s * s);
+            }
+        }
+    }
+
     /// Adds the pseudo-observations at `x` to `normal` (over its columns).
     pub fn add_to(&self, normal: &mut Normal, x: &[f64]) {
         let p = normal.free.len();
@@ -496,4 +507,104 @@ impl PriorReport {
     pub fn of(&self, name: &str) -> Option<&PriorEstimate> {
         self.parameters.iter().find(|p| p.name == name)
     }
+}
+
+/// What a prior does to the conditioning (`identify` with tolerances): the
+/// rank and condition number of the scaled normal matrix (angles as arcs at
+/// the reach, as [`crate::identify`] scales them) with and without the
+/// prior's `diag(1/σ²)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PriorConditioning {
+    /// The tolerances, in words.
+    pub tolerances: String,
+    /// Parameters with a tolerance.
+    pub parameters_with_tolerance: usize,
+    /// Parameters in all.
+    pub parameters: usize,
+    /// Identifiable combinations from the data alone (after the structural
+    /// rules: [`crate::identify::Identification::rank`]).
+    pub rank_without: usize,
+    /// Determined combinations with the prior, all parameters (singular
+    /// values above `RANK_TOLERANCE × s_max`).
+    pub rank_with: usize,
+    /// Condition number (`s_max / s_min`) over the free parameters of
+    /// `fix = auto`, data alone.
+    pub condition_without: f64,
+    /// The same with the prior.
+    pub condition_with: f64,
+}
+
+/// The rank and conditioning of `data` at `params` with and without the
+/// prior `tolerances`, touches weighed from `noise` (without stated noise,
+/// as a 0.01 mm touch, like [`crate::identify::identify`]: the prior's
+/// weight relative to the data depends on that σ). `identification` is the
+/// data's own analysis (its rank and recommended free set).
+///
+/// # Errors
+///
+/// The kernel's, for an arm it cannot evaluate or noise that overflows.
+pub fn conditioning(
+    params: &DhParams,
+    data: &crate::dataset::DataSet,
+    noise: &crate::residuals::Noise,
+    tolerances: &Tolerances,
+    identification: &crate::identify::Identification,
+    threads: usize,
+) -> Result<PriorConditioning, crate::kernel::KernelError> {
+    use nalgebra::DMatrix;
+    let n = params.joint_count();
+    let weights =
+        crate::residuals::Weights::new(&crate::kernel::ArmKernel::new(params)?, data, noise, 0.01)?;
+    let full = crate::identify::full_normal(params, data, &weights, threads)?;
+    let np = full.free.len();
+    let reach = params.reach();
+    let ids: Vec<ParamId> = ParamId::all(n).collect();
+    let d: Vec<f64> = ids
+        .iter()
+        .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / reach })
+        .collect();
+    let sigma = tolerances.sigmas(n);
+    let scaled = |cols: &[usize], with: bool| {
+        DMatrix::from_fn(cols.len(), cols.len(), |a, b| {
+            let (ca, cb) = (cols[a], cols[b]);
+            let mut v = full.jtj[ca * np + cb];
+            if with && ca == cb {
+                v += sigma[ca].map_or(0.0, |s| 1.0 / (s * s));
+            }
+            v * d[ca] * d[cb]
+        })
+    };
+    let singular = |m: DMatrix<f64>| -> Vec<f64> {
+        if !m.iter().all(|v| v.is_finite()) {
+            return vec![0.0; m.nrows()];
+        }
+        let mut s: Vec<f64> = m
+            .symmetric_eigenvalues()
+            .iter()
+            .map(|e| e.max(0.0).sqrt())
+            .collect();
+        s.sort_by(|a, b| b.total_cmp(a));
+        s
+    };
+    let condition = |s: &[f64]| {
+        let (max, min) = (s.first().copied().unwrap_or(0.0), s.last().copied().unwrap_or(0.0));
+        if min > 0.0 { max / min } else { f64::INFINITY }
+    };
+    let all: Vec<usize> = (0..np).collect();
+    let with_all = singular(scaled(&all, true));
+    let smax = with_all.first().copied().unwrap_or(0.0);
+    let rank_with = with_all
+        .iter()
+        .filter(|&&s| s > crate::identify::RANK_TOLERANCE * smax)
+        .count();
+    let free = identification.free_columns();
+    Ok(PriorConditioning {
+        tolerances: tolerances.describe(n),
+        parameters_with_tolerance: sigma.iter().filter(|s| s.is_some()).count(),
+        parameters: np,
+        rank_without: identification.rank,
+        rank_with,
+        condition_without: condition(&singular(scaled(&free, false))),
+        condition_with: condition(&singular(scaled(&free, true))),
+    })
 }
