@@ -480,8 +480,11 @@ impl CalibrationReport {
         );
         if let Some(p) = &c.prior {
             t += &format!(
-                "Prior: {}; {} pseudo-observation rows (counted in the dof), prior cost {:.3}\n",
-                p.tolerances, p.rows, p.cost
+                "Prior: {}; {} pseudo-observation rows (counted in the dof), prior cost {:.3}{}\n",
+                p.tolerances,
+                p.rows,
+                p.cost,
+                p.conflict().unwrap_or_default()
             );
         }
         if let Some(chi) = &c.checks.chi_square {

@@ -503,6 +503,25 @@ impl PriorReport {
         }
     }
 
+    /// A note when the data contradict the tolerances: the prior's cost
+    /// above `rows + 3·sqrt(2·rows)` (its χ² expectation plus three
+    /// standard deviations), naming the parameter moved farthest.
+    pub fn conflict(&self) -> Option<String> {
+        let rows = self.rows as f64;
+        if self.rows == 0 || self.cost <= rows + 3.0 * (2.0 * rows).sqrt() {
+            return None;
+        }
+        let worst = self
+            .parameters
+            .iter()
+            .max_by(|a, b| a.shift.abs().total_cmp(&b.shift.abs()))?;
+        Some(format!(
+            " — more than the tolerances allow: the data move {} by {:+.1} tolerances (tolerances \
+             too tight for this arm, or a nominal that is off)",
+            worst.name, worst.shift
+        ))
+    }
+
     /// The entry of a parameter, by name.
     pub fn of(&self, name: &str) -> Option<&PriorEstimate> {
         self.parameters.iter().find(|p| p.name == name)
