@@ -498,17 +498,19 @@ pub fn calibrate_with(
             let free: Vec<usize> = (0..start.param_count())
                 .filter(|c| !fixed.contains(c))
                 .collect();
-            // A tolerance determines its parameter: with a prior, only
-            // directions it does not cover are open.
-            let mut seen = full.clone();
-            if let Some(p) = options
+            // A tolerance determines its parameter as a fixed value would
+            // (the prior sees every direction that moves it): only
+            // directions among the free parameters without one are open.
+            let sigmas = options
                 .prior
                 .as_ref()
-                .and_then(|t| prior::PriorTerm::new(t, start))
-            {
-                p.add_information(&mut seen);
-            }
-            let directions = open_directions_from(start, data, seen, &free);
+                .map(|t| t.sigmas(start.joint_count()));
+            let unknown: Vec<usize> = free
+                .iter()
+                .copied()
+                .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
+                .collect();
+            let directions = open_directions_from(start, data, full.clone(), &unknown);
             if !directions.is_empty() {
                 return Err(CalibrationError::Unidentifiable { directions });
             }

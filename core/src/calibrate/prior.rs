@@ -363,17 +363,6 @@ impl PriorTerm {
             .sum()
     }
 
-    /// Adds the prior's information `1/σ²` alone to `normal`'s matrix (for
-    /// an identifiability check).
-    pub fn add_information(&self, normal: &mut Normal) {
-        let p = normal.free.len();
-        for (a, &c) in normal.free.iter().enumerate() {
-            if let Some(s) = self.sigma(c) {
-                normal.jtj[a * p + a] += 1.0 / (s * s);
-            }
-        }
-    }
-
     /// Adds the pseudo-observations at `x` to `normal` (over its columns).
     pub fn add_to(&self, normal: &mut Normal, x: &[f64]) {
         let p = normal.free.len();

@@ -125,7 +125,12 @@ pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputErr
     })?;
     let schema = ArmFile::deserialize(toml::de::Deserializer::from(doc.clone()))
         .map_err(|e| schema_error(text, file, doc.get_ref(), &e))?;
-    schema.to_arm(text, file)
+    let (arm, warnings) = schema.to_arm(text, file)?;
+    if doc.get_ref().contains_key("prior") {
+        // Checked by every reader, used by the fits: a typo is never ignored.
+        super::prior::parse_prior(text, file, arm.params.joint_count())?;
+    }
+    Ok((arm, warnings))
 }
 
 /// Writes an arm in the arm-file schema with the given units: deterministic
