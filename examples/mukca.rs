@@ -16,7 +16,9 @@
 //! both sockets. The logic is `aacmm_core::placements`. The arm file's
 //! `[prior]` table (stated tolerances) is used unless `--prior none`;
 //! `--prior SPEC` (`length=0.5mm,angle=0.1deg,…`) overrides it entry by
-//! entry, as on the command line of `aacmm calibrate`.
+//! entry, as on the command line of `aacmm calibrate`. `--in-sample` adds
+//! a diagnostic: each placement's consistency under the arm calibrated on
+//! every placement, itself included (what this model can reach at best).
 
 use std::io::Write;
 use std::path::Path;
@@ -32,6 +34,7 @@ fn main() -> anyhow::Result<()> {
     let mut options = CalibrateOptions::default();
     let mut fix_text = None;
     let mut prior_text = None;
+    let mut in_sample = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -43,12 +46,15 @@ fn main() -> anyhow::Result<()> {
             }
             "--fix" => fix_text = Some(args.next().context("--fix needs a value")?),
             "--prior" => prior_text = Some(args.next().context("--prior needs a value")?),
+            "--in-sample" => in_sample = true,
             _ if a.starts_with("--") => bail!("unknown option `{a}`"),
             _ if dir.is_none() => dir = Some(a),
             _ => bail!("one data folder only (got `{a}` too)"),
         }
     }
-    let dir = dir.context("usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC]")?;
+    let dir = dir.context(
+        "usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC] [--in-sample]",
+    )?;
     let dir = Path::new(&dir);
     let (arm, file_prior, warnings) = read_arm_with_prior(&dir.join("arm.toml"))?;
     let (poses, pose_warnings) = read_poses(
@@ -157,5 +163,27 @@ fn main() -> anyhow::Result<()> {
         dc,
         dch
     )?;
+    if in_sample {
+        let all = aacmm_core::calibrate::calibrate(&arm.params, &data, &options)?;
+        writeln!(
+            out,
+            "In sample (calibrated on every placement, this one included): consistency (mm)"
+        )?;
+        for f in &folds {
+            let held: Vec<usize> = (0..data.points().len())
+                .filter(|&p| {
+                    aacmm_core::placements::placement_of(&data.points()[p].label) == f.placement
+                })
+                .collect();
+            let e = aacmm_core::calibrate::validate::figures(&all.params, &data.subset(&held))?;
+            writeln!(
+                out,
+                "{:<22} {:>9.3} ({:+.0} % from nominal)",
+                f.placement,
+                e.e_mean,
+                100.0 * (e.e_mean - f.nominal.e_mean) / f.nominal.e_mean
+            )?;
+        }
+    }
     Ok(())
 }
