@@ -80,8 +80,14 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
     if let Some(p) = &prior {
+        let weighed = if assumed {
+            "touches weighed as 0.01 mm, so the prior weighs little here: state \
+             --probe-noise/--encoder-noise for its real weight"
+        } else {
+            "touches weighed from the stated noise"
+        };
         out.print(format_args!(
-            "\nWith the prior ({}; {} of {} parameters; weighed against the touches as above):\n  \
+            "\nWith the prior ({}; {} of {} parameters; {weighed}):\n  \
              rank {} of {} (data alone: {} after the rules)\n  condition number over the free \
              parameters {:.1} (data alone: {:.1})\n",
             p.tolerances,

@@ -46,6 +46,11 @@ fn the_arm_files_prior_is_used_and_none_switches_it_off() {
     assert!(summary.contains("data share"), "{summary}");
     assert_eq!(with["calibration"]["dof"]["prior_rows"], 21);
     assert_eq!(with["calibration"]["prior"]["parameters"].as_array().unwrap().len(), 21);
+    // The HTML parameter table shows tolerance and data share, tied to the JSON.
+    let html = std::fs::read_to_string(dir.join("with/report.html")).unwrap();
+    assert!(html.contains("data share"));
+    assert!(html.contains("prior/parameters/0/data_share\""), "no JSON-tied data share cell");
+    assert!(crate::report::assert_agrees_with_json(&html, &with) > 0);
     // `--prior none`: the calibration of the arm without a prior, exactly.
     let (summary, off) = run("off", &["--prior", "none"]);
     assert!(!summary.contains("Prior:"), "{summary}");
@@ -114,7 +119,10 @@ fn identify_reports_rank_and_condition_with_and_without_the_prior() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = String::from_utf8(o.stdout).unwrap();
     assert!(
-        out.contains("With the prior (length=0.5mm, angle=0.1deg; 27 of 27 parameters"),
+        out.contains(
+            "With the prior (length=0.5mm, angle=0.1deg; 27 of 27 parameters; touches weighed \
+             from the stated noise)"
+        ),
         "{out}"
     );
     assert!(out.contains("rank 27 of 27 (data alone: 21 after the rules)"), "{out}");
