@@ -14,7 +14,11 @@ fn the_arm_files_prior_is_used_and_none_switches_it_off() {
     let dir = temp_dir("prior-file");
     let arm = dir.join("arm.toml");
     let text = std::fs::read_to_string(shipped_arm()).unwrap();
-    std::fs::write(&arm, format!("{text}\n[prior]\nlength_mm = 1\nangle_deg = 0.5\n")).unwrap();
+    std::fs::write(
+        &arm,
+        format!("{text}\n[prior]\nlength_mm = 1\nangle_deg = 0.5\n"),
+    )
+    .unwrap();
     let (poses, lengths) = (shipped("poses.csv"), shipped("lengths.csv"));
     let run = |out: &str, extra: &[&str]| {
         let out = dir.join(out);
@@ -45,11 +49,20 @@ fn the_arm_files_prior_is_used_and_none_switches_it_off() {
     );
     assert!(summary.contains("data share"), "{summary}");
     assert_eq!(with["calibration"]["dof"]["prior_rows"], 21);
-    assert_eq!(with["calibration"]["prior"]["parameters"].as_array().unwrap().len(), 21);
+    assert_eq!(
+        with["calibration"]["prior"]["parameters"]
+            .as_array()
+            .unwrap()
+            .len(),
+        21
+    );
     // The HTML parameter table shows tolerance and data share, tied to the JSON.
     let html = std::fs::read_to_string(dir.join("with/report.html")).unwrap();
     assert!(html.contains("data share"));
-    assert!(html.contains("prior/parameters/0/data_share\""), "no JSON-tied data share cell");
+    assert!(
+        html.contains("prior/parameters/0/data_share\""),
+        "no JSON-tied data share cell"
+    );
     assert!(crate::report::assert_agrees_with_json(&html, &with) > 0);
     // `--prior none`: the calibration of the arm without a prior, exactly.
     let (summary, off) = run("off", &["--prior", "none"]);
@@ -125,5 +138,8 @@ fn identify_reports_rank_and_condition_with_and_without_the_prior() {
         ),
         "{out}"
     );
-    assert!(out.contains("rank 27 of 27 (data alone: 21 after the rules)"), "{out}");
+    assert!(
+        out.contains("rank 27 of 27 (data alone: 21 after the rules)"),
+        "{out}"
+    );
 }

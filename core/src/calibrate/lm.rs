@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
 use super::options::{OptionError, check_nonnegative};
-use crate::dataset::DataSet;
 use super::prior::{cost_at, normal_at};
+use crate::dataset::DataSet;
 use crate::params::DhParams;
 use crate::residuals::{Normal, Weights};
 
@@ -235,8 +235,9 @@ pub(crate) fn levenberg_marquardt_from(
     let p = free.len();
     let mut x = start.to_vec();
     // The prior, if any, rides with the weights ([`super::prior`]).
-    let params_of =
-        |x: &[f64]| -> Result<DhParams, CalibrationError> { DhParams::from_slice(x).ok_or(CalibrationError::Shape) };
+    let params_of = |x: &[f64]| -> Result<DhParams, CalibrationError> {
+        DhParams::from_slice(x).ok_or(CalibrationError::Shape)
+    };
     let mut normal = normal;
     if !normal.cost().is_finite() {
         return Err(CalibrationError::NonFiniteStart);

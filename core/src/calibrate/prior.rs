@@ -136,7 +136,11 @@ fn check_value(target: Target, value: f64, unit: &str) -> Result<f64, String> {
         (false, "deg") => value.to_radians(),
         (false, "rad") => value,
         (true, _) => return Err(format!("{name} is a length: give its tolerance in mm or m")),
-        (false, _) => return Err(format!("{name} is an angle: give its tolerance in deg or rad")),
+        (false, _) => {
+            return Err(format!(
+                "{name} is an angle: give its tolerance in deg or rad"
+            ));
+        }
     };
     if !(internal.is_finite() && internal > 0.0) {
         return Err(format!(
@@ -307,7 +311,9 @@ fn short(v: f64) -> String {
 
 /// Why a target name is refused.
 pub(crate) fn unknown_target(name: &str, n: usize) -> String {
-    let last = ParamId::all(n).last().map_or(String::new(), |p| p.to_string());
+    let last = ParamId::all(n)
+        .last()
+        .map_or(String::new(), |p| p.to_string());
     format!(
         "unknown target `{name}`: use length, angle, a, d, alpha, theta, probe, or a \
          parameter name (a1 … {last})"
@@ -595,7 +601,10 @@ pub fn conditioning(
         s
     };
     let condition = |s: &[f64]| {
-        let (max, min) = (s.first().copied().unwrap_or(0.0), s.last().copied().unwrap_or(0.0));
+        let (max, min) = (
+            s.first().copied().unwrap_or(0.0),
+            s.last().copied().unwrap_or(0.0),
+        );
         if min > 0.0 { max / min } else { f64::INFINITY }
     };
     let all: Vec<usize> = (0..np).collect();

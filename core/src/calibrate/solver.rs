@@ -315,13 +315,8 @@ impl Solver for Anneal {
         } else {
             // No LM: the normal equations at the best point give the
             // covariance.
-            let normal = super::prior::normal_at(
-                &best,
-                task.data,
-                task.weights,
-                task.free,
-                ctx.threads,
-            )?;
+            let normal =
+                super::prior::normal_at(&best, task.data, task.weights, task.free, ctx.threads)?;
             phases[0].jacobian_evaluations = 1;
             Outcome {
                 params: best,

@@ -22,8 +22,8 @@ use toml::de::{DeTable, DeValue};
 use super::Warning;
 use super::arm::{Arm, parse_arm};
 use super::text::{line_of, read_text};
-use crate::calibrate::prior::{Target, unknown_target};
 use crate::calibrate::Tolerances;
+use crate::calibrate::prior::{Target, unknown_target};
 use crate::error::InputError;
 
 /// Reads an arm file and its `[prior]` table (`None` without one).
@@ -92,15 +92,16 @@ pub fn parse_prior(
     for (k, v) in entries {
         let name: &str = k.get_ref();
         let line = line_of(text, k.span().start);
-        let err = |message: String| InputError::field(file, line, name, format!("[prior]: {message}"));
+        let err =
+            |message: String| InputError::field(file, line, name, format!("[prior]: {message}"));
         let (target_name, unit) = name.rsplit_once('_').ok_or_else(|| {
             err(format!(
                 "`{name}` has no unit; write NAME_UNIT, e.g. length_mm, angle_deg or \
                  theta5_deg"
             ))
         })?;
-        let target =
-            Target::parse(target_name, joints).ok_or_else(|| err(unknown_target(target_name, joints)))?;
+        let target = Target::parse(target_name, joints)
+            .ok_or_else(|| err(unknown_target(target_name, joints)))?;
         let value = match v.get_ref() {
             DeValue::Float(f) => f.as_str().replace('_', "").parse::<f64>().ok(),
             DeValue::Integer(i) => i64::from_str_radix(&i.as_str().replace('_', ""), i.radix())
@@ -110,7 +111,9 @@ pub fn parse_prior(
         }
         .ok_or_else(|| {
             let raw = text.get(v.span()).unwrap_or("?");
-            err(format!("`{raw}` is not a number (a tolerance, 1σ, in {unit})"))
+            err(format!(
+                "`{raw}` is not a number (a tolerance, 1σ, in {unit})"
+            ))
         })?;
         tolerances.set(target, value, unit).map_err(err)?;
     }
