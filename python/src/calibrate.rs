@@ -100,7 +100,11 @@ fn problem(
 /// not stated, the touch σ is estimated from the fit); `seed`: every random
 /// draw; `threads`: workers for the normal equations (default one per core;
 /// the result does not depend on it); `cross_validate`: `k` folds over
-/// points; `validate`: a held-out `DataSet` (same arm). The report is the
+/// points; `validate`: a held-out `DataSet` (same arm); `prior`: stated
+/// tolerances of the arm, as the command line's `--prior`
+/// (`"length=0.5mm,angle=0.1deg,theta5=0.05deg"`, entry by entry over the
+/// arm file's `[prior]`; `"none"` ignores the file's; default: the file's,
+/// if any). The report is the
 /// command line's bit for bit. Runs without the GIL.
 ///
 /// Raises `ValueError` for a bad option (naming the argument),
@@ -108,7 +112,7 @@ fn problem(
 /// parameters. A solver that did not converge still gives a result: check
 /// `successful`.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None))]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, prior = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -121,7 +125,14 @@ pub fn calibrate(
     threads: Option<usize>,
     cross_validate: Option<usize>,
     validate: Option<&DataSet>,
+    prior: Option<&str>,
 ) -> PyResult<Calibration> {
+    let prior = match prior {
+        None => arm.prior.clone(),
+        Some(spec) => aacmm_core::calibrate::Tolerances::parse(spec, arm.joints())
+            .map_err(Error::from)?
+            .map(|flag| arm.prior.clone().unwrap_or_default().overridden_by(&flag)),
+    };
     let fix = match fix {
         Some(f) => fix_text(f)?,
         None => "auto".to_string(),
@@ -141,6 +152,7 @@ pub fn calibrate(
         method: self::method(method)?,
         lm,
         seed,
+        prior,
         // The solvers' settings not exposed here keep the library's
         // defaults, which are the command line's.
         ..CalibrateOptions::default()
