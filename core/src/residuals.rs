@@ -868,10 +868,12 @@ mod tests {
         let a = Weights {
             touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
             length: vec![2.0],
+            prior: None,
         };
         let b = Weights {
             touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
             length: vec![2.2],
+            prior: None,
         };
         assert!((b.relative_change(&a) - 0.1).abs() < 1e-12);
         assert_eq!(a.relative_change(&a), 0.0);

@@ -84,10 +84,9 @@ impl FitInput {
         let joints = arm.params.joint_count();
         let prior = match self.prior.as_deref() {
             None => file_prior,
-            Some(spec) => match Tolerances::parse(spec, joints).map_err(flag_error)? {
-                None => None,
-                Some(flag) => Some(file_prior.unwrap_or_default().overridden_by(&flag)),
-            },
+            Some(spec) => Tolerances::parse(spec, joints)
+                .map_err(flag_error)?
+                .map(|flag| file_prior.unwrap_or_default().overridden_by(&flag)),
         };
         let data = data_set(&poses, &self.input.data, self.lengths.as_deref())?;
         Ok((arm, prior, data, warnings))
