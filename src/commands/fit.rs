@@ -36,10 +36,10 @@ pub struct FitInput {
     #[arg(long, value_name = "W")]
     pub length_weight: Option<f64>,
     /// Tolerances of the nominal geometry (1σ prior; a MAP fit): `none`
-    /// (ignore the arm file's [prior]) or comma-separated TARGET=VALUEUNIT,
+    /// (ignore the arm file's prior table) or comma-separated TARGET=VALUEUNIT,
     /// e.g. `length=0.5mm,angle=0.1deg,theta5=0.05deg` (targets length,
     /// angle, a, d, alpha, theta, probe or a parameter; units mm, m, deg,
-    /// rad); overrides the arm file's [prior] entry by entry.
+    /// rad); overrides the arm file's prior table entry by entry.
     #[arg(long, value_name = "none|SPEC")]
     pub prior: Option<String>,
     /// Worker threads (default: every core); results do not depend on it.
