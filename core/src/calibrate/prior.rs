@@ -433,7 +433,8 @@ pub struct PriorEstimate {
     /// The stated tolerance (1σ).
     pub tolerance: f64,
     /// Posterior standard uncertainty from the augmented normal matrix
-    /// (before the σ̂ scaling), in `unit`.
+    /// (before the σ̂ scaling), in `unit`; 0 (and `data_share` 0) when that
+    /// matrix is singular (never NaN).
     pub posterior_sigma: f64,
     /// The data's share of the information: `1 − posterior variance /
     /// prior variance` (1 = the data alone determine it, 0 = the prior
