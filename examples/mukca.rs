@@ -1,7 +1,7 @@
 //! Real recorded data (MUKCa): leave one placement out.
 //!
 //! ```text
-//! cargo run --release --example mukca -- DIR [--method lm|sa|hybrid|global] [--fix auto|NAMES]
+//! cargo run --release --example mukca -- DIR [--method lm|sa|hybrid|global] [--fix auto|NAMES] [--prior none|SPEC]
 //! cargo run --release --example mukca -- examples/mukca/kinova-1
 //! ```
 //!
@@ -13,14 +13,19 @@
 //! the other placements, and the held-out one is scored with the nominal and
 //! the calibrated arm: consistency (mean distance of a socket's touches to
 //! their centroid, averaged over its sockets) and `|d − 50|` where it has
-//! both sockets. The logic is `aacmm_core::placements`.
+//! both sockets. The logic is `aacmm_core::placements`. The arm file's
+//! `[prior]` table (stated tolerances) is used unless `--prior none`;
+//! `--prior SPEC` (`length=0.5mm,angle=0.1deg,…`) overrides it entry by
+//! entry, as on the command line of `aacmm calibrate`. `--in-sample` adds
+//! a diagnostic: each placement's consistency under the arm calibrated on
+//! every placement, itself included (what this model can reach at best).
 
 use std::io::Write;
 use std::path::Path;
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, Method};
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, Method, Tolerances};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
+use aacmm_core::io::{AngleUnit, read_arm_with_prior, read_lengths, read_poses};
 use aacmm_core::placements::{PlacementSummary, leave_one_placement_out};
 use anyhow::{Context, bail};
 
@@ -28,6 +33,8 @@ fn main() -> anyhow::Result<()> {
     let mut dir = None;
     let mut options = CalibrateOptions::default();
     let mut fix_text = None;
+    let mut prior_text = None;
+    let mut in_sample = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -38,14 +45,18 @@ fn main() -> anyhow::Result<()> {
                 })?;
             }
             "--fix" => fix_text = Some(args.next().context("--fix needs a value")?),
+            "--prior" => prior_text = Some(args.next().context("--prior needs a value")?),
+            "--in-sample" => in_sample = true,
             _ if a.starts_with("--") => bail!("unknown option `{a}`"),
             _ if dir.is_none() => dir = Some(a),
             _ => bail!("one data folder only (got `{a}` too)"),
         }
     }
-    let dir = dir.context("usage: mukca DIR [--method M] [--fix auto|NAMES]")?;
+    let dir = dir.context(
+        "usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC] [--in-sample]",
+    )?;
     let dir = Path::new(&dir);
-    let (arm, warnings) = read_arm(&dir.join("arm.toml"))?;
+    let (arm, file_prior, warnings) = read_arm_with_prior(&dir.join("arm.toml"))?;
     let (poses, pose_warnings) = read_poses(
         &dir.join("poses.csv"),
         AngleUnit::Rad,
@@ -55,6 +66,11 @@ fn main() -> anyhow::Result<()> {
     for w in warnings.iter().chain(&pose_warnings) {
         writeln!(err, "warning: {w}")?;
     }
+    options.prior = match prior_text.as_deref() {
+        None => file_prior,
+        Some(spec) => Tolerances::parse(spec, arm.params.joint_count())?
+            .map(|flag| file_prior.unwrap_or_default().overridden_by(&flag)),
+    };
     if let Some(f) = &fix_text {
         options.fix = FixSpec::parse(f, arm.params.joint_count())?;
     }
@@ -69,7 +85,7 @@ fn main() -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
-        "{}: {} touches, {} sockets, {} lengths; arm `{}`; method {}, fix {}",
+        "{}: {} touches, {} sockets, {} lengths; arm `{}`; method {}, fix {}, prior {}",
         dir.display(),
         data.len(),
         data.points().len(),
@@ -77,6 +93,10 @@ fn main() -> anyhow::Result<()> {
         arm.name,
         options.method.name(),
         fix_text.as_deref().unwrap_or("auto"),
+        options
+            .prior
+            .as_ref()
+            .map_or("none".to_string(), |t| t.describe(arm.params.joint_count())),
     )?;
     writeln!(
         out,
@@ -143,5 +163,27 @@ fn main() -> anyhow::Result<()> {
         dc,
         dch
     )?;
+    if in_sample {
+        let all = aacmm_core::calibrate::calibrate(&arm.params, &data, &options)?;
+        writeln!(
+            out,
+            "In sample (calibrated on every placement, this one included): consistency (mm)"
+        )?;
+        for f in &folds {
+            let held: Vec<usize> = (0..data.points().len())
+                .filter(|&p| {
+                    aacmm_core::placements::placement_of(&data.points()[p].label) == f.placement
+                })
+                .collect();
+            let e = aacmm_core::calibrate::validate::figures(&all.params, &data.subset(&held))?;
+            writeln!(
+                out,
+                "{:<22} {:>9.3} ({:+.0} % from nominal)",
+                f.placement,
+                e.e_mean,
+                100.0 * (e.e_mean - f.nominal.e_mean) / f.nominal.e_mean
+            )?;
+        }
+    }
     Ok(())
 }

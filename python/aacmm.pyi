@@ -268,12 +268,15 @@ def calibrate(
     validate: Optional[DataSet] = None,
     robust: Optional[Literal["huber", "cauchy"]] = None,
     robust_scale: Optional[float] = None,
+    prior: Optional[str] = None,
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
     ``fix`` defaults to ``"auto"``. ``robust`` (``"huber"`` or
     ``"cauchy"``) refits with per-touch weights (``--robust``; the weights
     in ``report["calibration"]["robust"]``), ``robust_scale`` its tuning
-    constant. ValueError for a bad option (naming the
+    constant. ``prior`` states tolerances as ``--prior`` does
+    (``"length=0.5mm,angle=0.1deg"``, over the arm file's ``[prior]``;
+    ``"none"`` ignores the file's). ValueError for a bad option (naming the
     argument), CalibrationError when the data cannot determine the free
     parameters."""

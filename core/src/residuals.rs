@@ -249,6 +249,9 @@ pub(crate) struct Weights {
     pub touch: Vec<Sym3>,
     /// Per reference length, `1/σ_L` (1/mm).
     pub length: Vec<f64>,
+    /// The stated tolerances of the geometry, if any
+    /// ([`crate::calibrate::prior`]): added by the fits, not here.
+    pub prior: Option<crate::calibrate::prior::PriorTerm>,
 }
 
 impl Weights {
@@ -352,7 +355,11 @@ impl Weights {
             })
             .collect::<Result<Vec<f64>, KernelError>>()?;
         check_weights(&touch, &length, noise, touch_sigma_mm, data)?;
-        Ok(Weights { touch, length })
+        Ok(Weights {
+            touch,
+            length,
+            prior: None,
+        })
     }
 
     /// The largest relative change from `other` to `self` of any touch's
@@ -392,6 +399,7 @@ impl Weights {
                 .map(|(a, &w)| a.map(|v| v * w))
                 .collect(),
             length: self.length.clone(),
+            prior: self.prior.clone(),
         }
     }
 
@@ -421,6 +429,8 @@ pub(crate) struct Normal {
     pub touch_cost: f64,
     /// `Σ r²` of the length residuals.
     pub length_cost: f64,
+    /// `Σ r²` of the prior's pseudo-observations (0 without a prior).
+    pub prior_cost: f64,
     /// Weighted centroid of every point, mm.
     pub centroids: Vec<[f64; 3]>,
 }
@@ -428,7 +438,7 @@ pub(crate) struct Normal {
 impl Normal {
     /// The whole cost `Σ r²` (a χ² when the weights are right).
     pub fn cost(&self) -> f64 {
-        self.touch_cost + self.length_cost
+        self.touch_cost + self.length_cost + self.prior_cost
     }
 
     /// The normal equations over `cols`, a subset of these columns: every
@@ -450,6 +460,7 @@ impl Normal {
             jtr: at.iter().map(|&a| self.jtr[a]).collect(),
             touch_cost: self.touch_cost,
             length_cost: self.length_cost,
+            prior_cost: self.prior_cost,
             centroids: self.centroids.clone(),
         })
     }
@@ -519,6 +530,7 @@ pub(crate) fn normal_equations(
         jtr: vec![0.0; p],
         touch_cost: 0.0,
         length_cost: 0.0,
+        prior_cost: 0.0,
         centroids: Vec::with_capacity(np),
     };
     let mut mean_j: Vec<Vec<[f64; 3]>> = Vec::with_capacity(if need_mean { np } else { 0 });
@@ -905,10 +917,12 @@ mod tests {
         let a = Weights {
             touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
             length: vec![2.0],
+            prior: None,
         };
         let b = Weights {
             touch: vec![[4.0, 4.0, 4.0, 0.0, 0.0, 0.0]],
             length: vec![2.2],
+            prior: None,
         };
         assert!((b.relative_change(&a) - 0.1).abs() < 1e-12);
         assert_eq!(a.relative_change(&a), 0.0);

@@ -500,6 +500,15 @@ impl CalibrationReport {
                 " (from the stated noise)"
             }
         );
+        if let Some(p) = &c.prior {
+            t += &format!(
+                "Prior: {}; {} pseudo-observation rows (counted in the dof), prior cost {:.3}{}\n",
+                p.tolerances,
+                p.rows,
+                p.cost,
+                p.conflict().unwrap_or_default()
+            );
+        }
         if let Some(chi) = &c.checks.chi_square {
             t += &format!("Fit quality: {}\n", chi.describe());
         }
@@ -554,6 +563,9 @@ impl CalibrationReport {
                 p.sigma.map_or("-".to_string(), |s| format!("{s:.6}")),
                 p.fixed.as_deref().unwrap_or("")
             );
+        }
+        if let Some(p) = &c.prior {
+            t += &prior_table(p);
         }
         if c.correlations.is_empty() {
             t += "No pair of free parameters correlates with |rho| > 0.9.\n";
@@ -886,4 +898,29 @@ fn robust_line(r: &crate::calibrate::RobustFit) -> String {
         shown.join(", "),
         if low.len() > shown.len() { ", …" } else { "" }
     )
+}
+
+/// The summary's prior table: per free parameter with a tolerance, how much
+/// of its information came from the data.
+fn prior_table(p: &crate::calibrate::PriorReport) -> String {
+    let mut t = String::from(
+        "Prior (data share = 1 - posterior variance / prior variance; shift = correction in \
+         tolerances):\n",
+    );
+    t += &format!(
+        "  {:<8} {:<4} {:>10} {:>12} {:>10} {:>8}\n",
+        "name", "unit", "tolerance", "post. sigma", "data share", "shift"
+    );
+    for e in &p.parameters {
+        t += &format!(
+            "  {:<8} {:<4} {:>10.6} {:>12.6} {:>9.1} % {:>+8.2}\n",
+            e.name,
+            e.unit,
+            e.tolerance,
+            e.posterior_sigma,
+            100.0 * e.data_share,
+            e.shift
+        );
+    }
+    t
 }

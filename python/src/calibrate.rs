@@ -121,15 +121,19 @@ fn problem(
 /// the result does not depend on it); `cross_validate`: `k` folds over
 /// points; `validate`: a held-out `DataSet` (same arm); `robust`:
 /// `"huber"` or `"cauchy"` for a robust refit (IRLS, `--robust`), with
-/// `robust_scale` its tuning constant (default 1.62 / 2.65). The report is
-/// the command line's bit for bit. Runs without the GIL.
+/// `robust_scale` its tuning constant (default 1.62 / 2.65); `prior`: stated
+/// tolerances of the arm, as the command line's `--prior`
+/// (`"length=0.5mm,angle=0.1deg,theta5=0.05deg"`, entry by entry over the
+/// arm file's `[prior]`; `"none"` ignores the file's; default: the file's,
+/// if any). The report is the command line's bit for bit. Runs without the
+/// GIL.
 ///
 /// Raises `ValueError` for a bad option (naming the argument),
 /// `aacmm.CalibrationError` when the data cannot determine the free
 /// parameters. A solver that did not converge still gives a result: check
 /// `successful`.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None))]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -144,8 +148,15 @@ pub fn calibrate(
     validate: Option<&DataSet>,
     robust: Option<&str>,
     robust_scale: Option<f64>,
+    prior: Option<&str>,
 ) -> PyResult<Calibration> {
     let robust = self::robust(robust, robust_scale)?;
+    let prior = match prior {
+        None => arm.prior.clone(),
+        Some(spec) => aacmm_core::calibrate::Tolerances::parse(spec, arm.joints())
+            .map_err(Error::from)?
+            .map(|flag| arm.prior.clone().unwrap_or_default().overridden_by(&flag)),
+    };
     let fix = match fix {
         Some(f) => fix_text(f)?,
         None => "auto".to_string(),
@@ -166,6 +177,7 @@ pub fn calibrate(
         lm,
         seed,
         robust,
+        prior,
         // The solvers' settings not exposed here keep the library's
         // defaults, which are the command line's.
         ..CalibrateOptions::default()

@@ -3,6 +3,7 @@ the command line's outputs."""
 
 import json
 import numpy as np
+import pytest
 
 import aacmm
 from conftest import ARM, LENGTHS, POSES, longest_stall, read_lengths, read_poses
@@ -99,6 +100,25 @@ def test_held_out_validation_and_fix_lists(arm, data):
     held = cal.report["validation"]["held_out"]
     assert held["data_file"] == "poses.csv" and held["figures"] == cal.summary["held_out"]
     assert cal.report["fix"] == ",".join(fix)
+
+
+def test_a_prior_is_the_command_lines(cli, arm, data, tmp_path):
+    spec = "length=1mm,angle=0.5deg"
+    theirs = tmp_path / "cli"
+    cli(
+        "calibrate", "--arm", ARM, "--data", POSES, "--lengths", LENGTHS,
+        "--encoder-noise", "0.005", "--probe-noise", "0.01", "--prior", spec,
+        "--out", theirs,
+    )
+    noise = aacmm.Noise(encoder_deg=0.005, probe_mm=0.01)
+    cal = aacmm.calibrate(arm, data, noise=noise, prior=spec, threads=1)
+    assert cal.to_json() == (theirs / "calibration.json").read_text()
+    prior = cal.report["calibration"]["prior"]
+    assert prior["rows"] == 21 == cal.report["calibration"]["dof"]["prior_rows"]
+    assert all(p["data_share"] > 0.99 for p in prior["parameters"])
+    assert "prior" not in aacmm.calibrate(arm, data, noise=noise, prior="none").report["calibration"]
+    with pytest.raises(ValueError, match="prior = theta5=1mm: `theta5=1mm`: theta5 is an angle"):
+        aacmm.calibrate(arm, data, prior="theta5=1mm")
 
 
 def test_simulate_writes_the_cli_campaign(cli, arm, tmp_path):

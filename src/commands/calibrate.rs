@@ -216,7 +216,7 @@ pub fn run(args: Args) -> Result<()> {
         args.force,
     )?;
     let noise = args.fit.noise();
-    let (arm, data, warnings) = args.fit.read_with_warnings()?;
+    let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
     let joints = arm.params.joint_count();
     let fix = FixSpec::parse(&args.fix, joints).map_err(flag_error)?;
     let (anneal, switch, global) = args.solver.options();
@@ -237,6 +237,7 @@ pub fn run(args: Args) -> Result<()> {
                 scale_k: args.robust_scale.unwrap_or(loss.default_k()),
             }
         }),
+        prior,
     };
     let arm_file = source_name(&args.fit.input.arm);
     let sources = Sources {

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
-use aacmm_core::calibrate::{CalibrationError, OptionError};
+use aacmm_core::calibrate::{CalibrationError, OptionError, Tolerances};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::source_name;
 use aacmm_core::io::{AngleUnit, Arm, read_lengths};
@@ -35,6 +35,13 @@ pub struct FitInput {
     /// uncertainties).
     #[arg(long, value_name = "W")]
     pub length_weight: Option<f64>,
+    /// Tolerances of the nominal geometry (1σ prior; a MAP fit): `none`
+    /// (ignore the arm file's prior table) or comma-separated TARGET=VALUEUNIT,
+    /// e.g. `length=0.5mm,angle=0.1deg,theta5=0.05deg` (targets length,
+    /// angle, a, d, alpha, theta, probe or a parameter; units mm, m, deg,
+    /// rad); overrides the arm file's prior table entry by entry.
+    #[arg(long, value_name = "none|SPEC")]
+    pub prior: Option<String>,
     /// Worker threads (default: every core); results do not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
@@ -67,17 +74,22 @@ impl FitInput {
         super::worker_threads(self.threads)
     }
 
-    /// The arm and the data set (touches grouped by point, lengths added).
-    pub fn read(&self) -> Result<(Arm, DataSet)> {
-        self.read_with_warnings().map(|(arm, data, _)| (arm, data))
-    }
-
-    /// [`FitInput::read`], with the warnings printed kept for the report.
-    pub fn read_with_warnings(&self) -> Result<(Arm, DataSet, Vec<String>)> {
-        let (arm, poses, warnings) = self.input.read_with_warnings()?;
+    /// The arm, its prior (the arm file's `[prior]` overridden entry by
+    /// entry by `--prior`; `--prior none`: none), the data set (touches
+    /// grouped by point, lengths added) and the warnings printed, kept for
+    /// the report.
+    pub fn read_with_prior(&self) -> Result<(Arm, Option<Tolerances>, DataSet, Vec<String>)> {
+        let (arm, file_prior, poses, warnings) = self.input.read_with_prior()?;
         self.input.kernel(&arm)?;
+        let joints = arm.params.joint_count();
+        let prior = match self.prior.as_deref() {
+            None => file_prior,
+            Some(spec) => Tolerances::parse(spec, joints)
+                .map_err(flag_error)?
+                .map(|flag| file_prior.unwrap_or_default().overridden_by(&flag)),
+        };
         let data = data_set(&poses, &self.input.data, self.lengths.as_deref())?;
-        Ok((arm, data, warnings))
+        Ok((arm, prior, data, warnings))
     }
 }
 
@@ -107,7 +119,8 @@ pub fn read_other(
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 23] = [
+const FLAGS: [(&str, &str); 24] = [
+    ("prior", "--prior"),
     ("noise.encoder_rad", "--encoder-noise"),
     ("noise.probe_mm", "--probe-noise"),
     ("noise.length_default_mm", "--length-uncertainty"),

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use aacmm_core::calibrate::{PriorConditioning, prior::conditioning};
 use aacmm_core::identify::{Identification, identify};
 use aacmm_core::io::source_name;
 use anyhow::{Context, Result};
@@ -33,6 +34,8 @@ struct Report<'a> {
     reference_lengths: usize,
     noise: String,
     identification: &'a Identification,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    prior: Option<PriorConditioning>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -41,7 +44,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let noise = args.fit.noise();
     noise.check().map_err(super::fit::flag_error)?;
-    let (arm, data) = args.fit.read()?;
+    let (arm, tolerances, data, _) = args.fit.read_with_prior()?;
     args.fit.input.kernel(&arm)?;
     // Without stated noise the singular values are in units of a 0.01 mm touch.
     let assumed = !noise.stated();
@@ -68,6 +71,35 @@ pub fn run(args: Args) -> Result<()> {
         data.references().len()
     ))?;
     out.print(table(&id))?;
+    let prior = match &tolerances {
+        Some(t) => Some(
+            conditioning(&arm.params, &data, &noise, t, &id, args.fit.threads())
+                .with_context(|| source_name(&args.fit.input.arm))
+                .map_err(|e| super::noise_flags(e, &args.fit))?,
+        ),
+        None => None,
+    };
+    if let Some(p) = &prior {
+        let weighed = if assumed {
+            "touches weighed as 0.01 mm, so the prior weighs little here: state \
+             --probe-noise/--encoder-noise for its real weight"
+        } else {
+            "touches weighed from the stated noise"
+        };
+        out.print(format_args!(
+            "\nWith the prior ({}; {} of {} parameters; {weighed}):\n  \
+             rank {} of {} (data alone: {} after the rules)\n  condition number over the free \
+             parameters {:.1} (data alone: {:.1})\n",
+            p.tolerances,
+            p.parameters_with_tolerance,
+            p.parameters,
+            p.rank_with,
+            p.parameters,
+            p.rank_without,
+            p.condition_with,
+            p.condition_without
+        ))?;
+    }
     out.finish()?;
     if let Some(path) = &args.json {
         let report = Report {
@@ -80,6 +112,7 @@ pub fn run(args: Args) -> Result<()> {
             reference_lengths: data.references().len(),
             noise: noise_text,
             identification: &id,
+            prior,
         };
         super::write_json(path, &report)?;
     }

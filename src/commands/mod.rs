@@ -12,7 +12,10 @@ pub mod simulate;
 
 use std::path::PathBuf;
 
-use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses, source_name};
+use aacmm_core::calibrate::Tolerances;
+use aacmm_core::io::{
+    AngleUnit, Arm, Poses, Warning, read_arm_with_prior, read_poses, source_name,
+};
 use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, PreparedPoses};
 use aacmm_core::residuals::short;
 use anyhow::{Context, Result, bail};
@@ -112,7 +115,14 @@ impl ArmAndPoses {
 
     /// [`ArmAndPoses::read`], with the warnings printed kept as text.
     pub fn read_with_warnings(&self) -> Result<(Arm, Poses, Vec<String>)> {
-        let (arm, mut warnings) = read_arm(&self.arm)?;
+        self.read_with_prior()
+            .map(|(arm, _, poses, warnings)| (arm, poses, warnings))
+    }
+
+    /// [`ArmAndPoses::read_with_warnings`], with the arm file's `[prior]`
+    /// table.
+    pub fn read_with_prior(&self) -> Result<(Arm, Option<Tolerances>, Poses, Vec<String>)> {
+        let (arm, prior, mut warnings) = read_arm_with_prior(&self.arm)?;
         let (poses, more) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
         warnings.extend(more);
@@ -120,7 +130,7 @@ impl ArmAndPoses {
         warnings.extend(limit_warning(&arm, &poses, &file, self.angle_unit));
         report(&warnings)?;
         let text = warnings.iter().map(ToString::to_string).collect();
-        Ok((arm, poses, text))
+        Ok((arm, prior, poses, text))
     }
 
     /// The arm prepared for its generated kernel.

@@ -9,6 +9,7 @@ mod evaluate;
 mod mukca;
 mod out_paths;
 mod points;
+mod prior;
 mod readme;
 mod report;
 mod robust;

@@ -44,7 +44,7 @@ fn assert_self_contained(html: &str) {
 /// Every `data-json` cell against the JSON: the same number, shown
 /// rounded from it. Returns how many cells were checked.
 #[track_caller]
-fn assert_agrees_with_json(html: &str, json: &serde_json::Value) -> usize {
+pub(crate) fn assert_agrees_with_json(html: &str, json: &serde_json::Value) -> usize {
     let doc = page(html);
     let mut checked = 0;
     for n in doc.descendants().filter(|n| n.has_attribute("data-json")) {

@@ -14,12 +14,16 @@ use crate::dataset::DataSet;
 use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
-use crate::residuals::{Weights, normal_equations};
+use crate::residuals::Weights;
 
 /// Largest relative change of the weights at the solution, against those of
 /// the fit, that needs no refit: the estimate moves by about this fraction
 /// of its σ.
 pub const REWEIGH_TOLERANCE: f64 = 0.05;
+
+/// With a prior and no stated noise, at most this many refits while the
+/// estimated touch σ settles.
+const MAX_SIGMA_REFITS: usize = 6;
 
 /// Residual rows and unknowns of a fit.
 #[derive(Clone, Copy, Debug)]
@@ -28,6 +32,7 @@ pub(crate) struct Counts {
     length_rows: usize,
     centre_coordinates: usize,
     free: usize,
+    pub(crate) prior_rows: usize,
 }
 
 impl Counts {
@@ -37,11 +42,21 @@ impl Counts {
             length_rows: data.references().len(),
             centre_coordinates: 3 * data.points().len(),
             free,
+            prior_rows: 0,
         }
     }
 
+    /// These counts with `rows` pseudo-observations of a prior.
+    pub(crate) fn with_prior_rows(self, rows: usize) -> Counts {
+        Counts {
+            prior_rows: rows,
+            ..self
+        }
+    }
+
+    /// Residual rows: touches, lengths and the prior's pseudo-observations.
     pub(crate) fn residuals(self) -> usize {
-        self.touch_rows + self.length_rows
+        self.touch_rows + self.length_rows + self.prior_rows
     }
 
     pub(crate) fn unknowns(self) -> usize {
@@ -112,14 +127,9 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     let lm = options.lm.threads(threads);
     let stated = options.noise.stated();
     let normal_at = |params: &DhParams, weights: &Weights| -> Result<_, CalibrationError> {
-        Ok(normal_equations(
-            &ArmKernel::new(params)?,
-            data,
-            weights,
-            &free,
-            threads,
-        )?)
+        super::prior::normal_at(params, data, weights, &free, threads)
     };
+    let has_prior = weights.prior.is_some();
     let mut extra_jacobians = 0;
     let mut extra_costs = 0;
     let sign_changes = super::global::normalize_signs(&mut params, start, &free);
@@ -140,18 +150,19 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             .sqrt()
             .max(1e-9);
     }
-    if stated || counts.length_rows > 0 {
+    if stated || counts.length_rows > 0 || has_prior {
         // Weigh at the solution, not at the start: encoder noise moves the
         // probe along directions that depend on the arm, and the lengths'
         // weights on the centroids' directions — both far off when the
         // zeros were.
-        let at_solution = Weights::new_threads(
+        let mut at_solution = Weights::new_threads(
             &ArmKernel::new(&params)?,
             data,
             &options.noise,
             touch_sigma,
             threads,
         )?;
+        at_solution.prior = weights.prior.clone();
         let timer = std::time::Instant::now();
         // Weights that moved by under REWEIGH_TOLERANCE would move the
         // estimate by a like fraction of its σ and its σ not at all (shipped
@@ -195,12 +206,46 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             h.cost *= w2;
         }
     }
+    if has_prior && !stated {
+        // The prior weighs against the touches, so their σ must be right
+        // before the prior's pull is: estimate it again from the refit
+        // until it settles (the first fit weighed touches as 1 mm).
+        for _ in 0..MAX_SIGMA_REFITS {
+            let next = touch_sigma * (normal.touch_cost / counts.touch_dof() as f64).sqrt();
+            if !(next.is_finite() && next > 0.0)
+                || (next / touch_sigma - 1.0).abs() <= REWEIGH_TOLERANCE
+            {
+                break;
+            }
+            touch_sigma = next.max(1e-9);
+            let timer = std::time::Instant::now();
+            let mut w = Weights::new_threads(
+                &ArmKernel::new(&params)?,
+                data,
+                &options.noise,
+                touch_sigma,
+                threads,
+            )?;
+            w.prior = weights.prior.clone();
+            weights = w;
+            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm)?;
+            let mut phase = Phase::new("lm, touch σ re-estimated (prior)");
+            phase.add_lm(&refit, timer.elapsed().as_secs_f64());
+            phases.push(phase);
+            // The weights changed units again: the history is the refit's.
+            history = refit.history.clone();
+            iterations = refit.iterations;
+            stop = stop.with_lm(refit.termination);
+            params = refit.params;
+            normal = refit.normal;
+        }
+    }
     if stated {
         touch_sigma = weights.typical_touch_sigma();
     }
-    // Unit weights still (no stated noise, no lengths): the normal
+    // Unit weights still (no stated noise, no lengths, no prior): the normal
     // equations were rescaled by the estimated σ, the weights not.
-    let mut unit_weights = !stated && counts.length_rows == 0;
+    let mut unit_weights = !stated && counts.length_rows == 0 && !has_prior;
     let mut robust = None;
     if let Some(r) = options.robust {
         if unit_weights {
@@ -255,10 +300,22 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     };
     let p = free.len();
     let n = DMatrix::from_row_slice(p, p, &normal.jtj);
-    let cov = match n.cholesky() {
-        Some(ch) => ch.inverse() * (sigma0 * sigma0),
+    let inverse = match n.cholesky() {
+        Some(ch) => ch.inverse(),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
+    let prior = match (&options.prior, &weights.prior) {
+        (Some(t), Some(term)) => Some(super::PriorReport::new(
+            t,
+            term,
+            &params.to_vec(),
+            &free,
+            &inverse,
+            start.joint_count(),
+        )),
+        _ => None,
+    };
+    let cov = inverse * (sigma0 * sigma0);
     let ids: Vec<ParamId> = ParamId::all(start.joint_count()).collect();
     for j in &mut params.joints {
         j.theta = wrap(j.theta);
@@ -340,6 +397,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             sigma0,
             touch_sigma_mm: touch_sigma,
             touch_sigma_estimated: !stated,
+            prior_rows: counts.prior_rows,
         },
         solver: SolverSummary {
             method,
@@ -369,6 +427,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         },
         params,
         robust: robust.map(|(fit, _)| fit),
+        prior,
     })
 }
 

@@ -408,7 +408,8 @@ pub(crate) fn global<R: Rng>(
                 // and weights from the start arm's zeros would slow LM down
                 // past any cap.
                 let timer = std::time::Instant::now();
-                let here = Weights::new(&ArmKernel::new(&x)?, data, problem.noise, 1.0)?;
+                let mut here = Weights::new(&ArmKernel::new(&x)?, data, problem.noise, 1.0)?;
+                here.prior = problem.weights.prior.clone();
                 let fit = levenberg_marquardt(&x, data, &here, free, lm)?;
                 phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
                 let m = reweigh(fit, problem, &mut phases[3])?;
@@ -498,10 +499,11 @@ fn settle(
         let cost = match problem.stated_dof {
             Some(_) => {
                 let kernel = ArmKernel::new(&fit.params)?;
-                let weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
+                let mut weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
+                weights.prior = problem.weights.prior.clone();
                 let mut xyz = vec![[0.0; 3]; problem.data.len()];
                 phase.cost_evaluations += 1;
-                cost(&kernel, problem.data, &weights, &mut xyz)?
+                super::prior::cost_at(&fit.params, problem.data, &weights, problem.free, &mut xyz)?
             }
             None => fit.normal.cost(),
         };
@@ -526,7 +528,8 @@ fn reweigh(
     }
     let timer = std::time::Instant::now();
     let kernel = ArmKernel::new(&fit.params)?;
-    let weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
+    let mut weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
+    weights.prior = problem.weights.prior.clone();
     let refit = levenberg_marquardt(
         &fit.params,
         problem.data,

@@ -8,10 +8,10 @@ use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
 use super::options::{OptionError, check_nonnegative};
+use super::prior::{cost_at, normal_at};
 use crate::dataset::DataSet;
-use crate::kernel::ArmKernel;
 use crate::params::DhParams;
-use crate::residuals::{Normal, Weights, cost, normal_equations};
+use crate::residuals::{Normal, Weights};
 
 /// Why the solver stopped, as MINPACK's `info` or Ceres' termination type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -216,13 +216,7 @@ pub(crate) fn levenberg_marquardt(
     free: &[usize],
     options: &LmOptions,
 ) -> Result<LmResult, CalibrationError> {
-    let normal = normal_equations(
-        &ArmKernel::new(start)?,
-        data,
-        weights,
-        free,
-        options.threads,
-    )?;
+    let normal = normal_at(start, data, weights, free, options.threads)?;
     let mut fit = levenberg_marquardt_from(start, normal, data, weights, options)?;
     fit.jacobian_evaluations += 1;
     Ok(fit)
@@ -240,9 +234,9 @@ pub(crate) fn levenberg_marquardt_from(
     let free = &normal.free.clone();
     let p = free.len();
     let mut x = start.to_vec();
-    let kernel_at = |x: &[f64]| -> Result<ArmKernel, CalibrationError> {
-        let params = DhParams::from_slice(x).ok_or(CalibrationError::Shape)?;
-        Ok(ArmKernel::new(&params)?)
+    // The prior, if any, rides with the weights ([`super::prior`]).
+    let params_of = |x: &[f64]| -> Result<DhParams, CalibrationError> {
+        DhParams::from_slice(x).ok_or(CalibrationError::Shape)
     };
     let mut normal = normal;
     if !normal.cost().is_finite() {
@@ -294,7 +288,7 @@ pub(crate) fn levenberg_marquardt_from(
         for (c, &col) in free.iter().enumerate() {
             trial[col] += delta[c];
         }
-        let f_new = cost(&kernel_at(&trial)?, data, weights, &mut xyz)?;
+        let f_new = cost_at(&params_of(&trial)?, data, weights, free, &mut xyz)?;
         cost_evaluations += 1;
         // |r + Jδ|² = f + 2δᵀg + δᵀNδ
         let predicted = -(2.0 * delta.dot(&g) + delta.dot(&(&n * &delta)));
@@ -321,7 +315,7 @@ pub(crate) fn levenberg_marquardt_from(
                 break;
             }
             x = trial;
-            normal = normal_equations(&kernel_at(&x)?, data, weights, free, options.threads)?;
+            normal = normal_at(&params_of(&x)?, data, weights, free, options.threads)?;
             jacobian_evaluations += 1;
             lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
             nu = 2.0;

@@ -44,6 +44,7 @@ pub mod energy;
 pub mod global;
 pub mod lm;
 pub mod options;
+pub mod prior;
 pub mod robust;
 pub mod solver;
 pub mod validate;
@@ -54,6 +55,7 @@ pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule}
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub use lm::{LmIteration, LmOptions, LmResult, Termination};
 pub use options::{CalibrateOptions, DEFAULT_LENGTH_SIGMA_MM, FixSpec, OptionError};
+pub use prior::{PriorConditioning, PriorEstimate, PriorReport, Target, Tolerances};
 pub use robust::{Loss, Robust, RobustFit};
 pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
@@ -326,6 +328,14 @@ pub struct Dof {
     pub touch_sigma_mm: f64,
     /// Whether the touch σ was estimated from the fit.
     pub touch_sigma_estimated: bool,
+    /// Pseudo-observation rows of a prior (free parameters with a stated
+    /// tolerance), counted in `degrees_of_freedom`; absent without one.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub prior_rows: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// The solver's account of itself.
@@ -421,6 +431,10 @@ pub struct Calibration {
     /// [`CalibrateOptions::robust`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustFit>,
+    /// The prior and the data's share of the information per parameter
+    /// (only when tolerances were stated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<PriorReport>,
 }
 
 impl Calibration {
@@ -473,7 +487,7 @@ pub fn calibrate_with(
 ) -> Result<Calibration, CalibrationError> {
     options.check(start.joint_count())?;
     let kernel = ArmKernel::new(start)?;
-    let weights = Weights::new_threads(&kernel, data, &options.noise, 1.0, ctx.threads)?;
+    let mut weights = Weights::new_threads(&kernel, data, &options.noise, 1.0, ctx.threads)?;
     // One pass over the data at the start serves the identifiability
     // analysis and, restricted to the free columns, the first step.
     let timer = std::time::Instant::now();
@@ -490,7 +504,19 @@ pub fn calibrate_with(
             let free: Vec<usize> = (0..start.param_count())
                 .filter(|c| !fixed.contains(c))
                 .collect();
-            let directions = open_directions_from(start, data, full.clone(), &free);
+            // A tolerance determines its parameter as a fixed value would
+            // (the prior sees every direction that moves it): only
+            // directions among the free parameters without one are open.
+            let sigmas = options
+                .prior
+                .as_ref()
+                .map(|t| t.sigmas(start.joint_count()));
+            let unknown: Vec<usize> = free
+                .iter()
+                .copied()
+                .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
+                .collect();
+            let directions = open_directions_from(start, data, full.clone(), &unknown);
             if !directions.is_empty() {
                 return Err(CalibrationError::Unidentifiable { directions });
             }
@@ -510,7 +536,14 @@ pub fn calibrate_with(
         )
         .into());
     }
-    let counts = assess::Counts::new(data, free.len());
+    // The fixed set is the data's own (see [`prior`]); the prior then
+    // rides with the weights into every fit.
+    weights.prior = options
+        .prior
+        .as_ref()
+        .and_then(|t| prior::PriorTerm::new(t, start));
+    let prior_rows = weights.prior.as_ref().map_or(0, |p| p.rows(&free));
+    let counts = assess::Counts::new(data, free.len()).with_prior_rows(prior_rows);
     if counts.residuals() <= counts.unknowns() {
         return Err(CalibrationError::TooFewResiduals {
             residuals: counts.residuals(),
@@ -523,7 +556,10 @@ pub fn calibrate_with(
         seconds: timer.elapsed().as_secs_f64(),
         ..Phase::new("identify")
     };
-    let start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
+    let mut start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
+    if let Some(p) = &weights.prior {
+        p.add_to(&mut start_normal, &start.to_vec());
+    }
     let task = Task {
         start,
         data,

@@ -182,6 +182,10 @@ pub struct CalibrateOptions {
     /// `None`, plain least squares (the default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<super::robust::Robust>,
+    /// Stated tolerances of the nominal geometry: a prior
+    /// ([`super::prior`]); `None` (the default) fits the data alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<super::Tolerances>,
 }
 
 impl Default for CalibrateOptions {
@@ -197,6 +201,7 @@ impl Default for CalibrateOptions {
             seed: 0,
             accept_poor_fit: false,
             robust: None,
+            prior: None,
         }
     }
 }
@@ -236,6 +241,9 @@ impl CalibrateOptions {
                     format!("column {}{name} is listed twice", w[0]),
                 ));
             }
+        }
+        if let Some(t) = &self.prior {
+            t.check(joints)?;
         }
         self.lm.check()?;
         self.anneal.check()?;

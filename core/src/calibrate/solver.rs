@@ -11,10 +11,9 @@ use super::global::{self, GlobalStop, GlobalTrace};
 use super::lm::{self, LmIteration, LmResult, Termination, levenberg_marquardt};
 use super::{CalibrateOptions, CalibrationError, Method, Phase};
 use crate::dataset::DataSet;
-use crate::kernel::ArmKernel;
 use crate::params::DhParams;
 use crate::random::{rng, streams};
-use crate::residuals::{Normal, Weights, normal_equations};
+use crate::residuals::{Normal, Weights};
 
 /// Told `(phase, fraction done)` as a solver runs.
 pub type Observer<'a> = &'a mut dyn FnMut(&str, f64);
@@ -316,13 +315,8 @@ impl Solver for Anneal {
         } else {
             // No LM: the normal equations at the best point give the
             // covariance.
-            let normal = normal_equations(
-                &ArmKernel::new(&best)?,
-                task.data,
-                task.weights,
-                task.free,
-                ctx.threads,
-            )?;
+            let normal =
+                super::prior::normal_at(&best, task.data, task.weights, task.free, ctx.threads)?;
             phases[0].jacobian_evaluations = 1;
             Outcome {
                 params: best,

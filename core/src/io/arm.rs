@@ -125,7 +125,12 @@ pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputErr
     })?;
     let schema = ArmFile::deserialize(toml::de::Deserializer::from(doc.clone()))
         .map_err(|e| schema_error(text, file, doc.get_ref(), &e))?;
-    schema.to_arm(text, file)
+    let (arm, warnings) = schema.to_arm(text, file)?;
+    if doc.get_ref().contains_key("prior") {
+        // Checked by every reader, used by the fits: a typo is never ignored.
+        super::prior::parse_prior(text, file, arm.params.joint_count())?;
+    }
+    Ok((arm, warnings))
 }
 
 /// Writes an arm in the arm-file schema with the given units: deterministic
@@ -182,6 +187,9 @@ pub(crate) struct ArmFile {
     angle_unit: AngleUnit,
     joint: Spanned<Vec<Spanned<JointFile>>>,
     probe: ProbeFile,
+    /// Stated tolerances: read by [`super::prior`], never written.
+    #[serde(rename = "prior", default, skip_serializing)]
+    _prior: Option<serde::de::IgnoredAny>,
 }
 
 /// One `[[joint]]` table.
@@ -259,6 +267,7 @@ impl ArmFile {
                 y: len(y),
                 z: len(z),
             },
+            _prior: None,
         }
     }
 

@@ -37,6 +37,7 @@ pub mod arm;
 pub mod lengths;
 pub mod points;
 pub mod poses;
+pub mod prior;
 pub(crate) mod text;
 pub mod units;
 
@@ -49,6 +50,7 @@ pub use lengths::{
 };
 pub use points::{parse_points, read_points, write_points};
 pub use poses::{Poses, parse_poses, read_poses, write_poses};
+pub use prior::{parse_prior, read_arm_with_prior};
 pub use text::source_name;
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
 

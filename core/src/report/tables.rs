@@ -422,6 +422,10 @@ pub(crate) fn parameters(
             head.push(format!("true error [{unit}]"));
             head.push("(correction − true)/σ".to_string());
         }
+        if cal.prior.is_some() {
+            head.push(format!("tolerance [{unit}]"));
+            head.push("data share".to_string());
+        }
         head.push("fixed because".to_string());
         let rows: Vec<(String, Vec<Cell>)> = cal
             .parameters
@@ -455,6 +459,30 @@ pub(crate) fn parameters(
                         _ => f64::NAN,
                     };
                     cells.push(Cell::num(z, 2));
+                }
+                if let Some(prior) = &cal.prior {
+                    // Tolerance and the data's share of the information
+                    // (1 − posterior/prior variance), for the free ones.
+                    match prior.parameters.iter().position(|e| e.name == p.name) {
+                        Some(k) => {
+                            let e = &prior.parameters[k];
+                            let at = |f: &str| format!("prior/parameters/{k}/{f}");
+                            cells.push(Cell::num(e.tolerance, 6).at(
+                                json,
+                                &at("tolerance"),
+                                e.tolerance,
+                            ));
+                            cells.push(Cell::num(e.data_share, 3).at(
+                                json,
+                                &at("data_share"),
+                                e.data_share,
+                            ));
+                        }
+                        None => {
+                            cells.push(Cell::none());
+                            cells.push(Cell::none());
+                        }
+                    }
                 }
                 cells.push(Cell::markup(format!(
                     "<span class=\"note\">{}</span>",
