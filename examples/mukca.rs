@@ -46,6 +46,12 @@ fn main() -> anyhow::Result<()> {
             }
             "--fix" => fix_text = Some(args.next().context("--fix needs a value")?),
             "--prior" => prior_text = Some(args.next().context("--prior needs a value")?),
+            "--robust" => {
+                let l = args.next().context("--robust needs a value")?;
+                let loss = aacmm_core::calibrate::Loss::parse(&l)
+                    .with_context(|| format!("--robust `{l}`: expected huber or cauchy"))?;
+                options.robust = Some(aacmm_core::calibrate::Robust::new(loss));
+            }
             "--in-sample" => in_sample = true,
             _ if a.starts_with("--") => bail!("unknown option `{a}`"),
             _ if dir.is_none() => dir = Some(a),
@@ -53,7 +59,7 @@ fn main() -> anyhow::Result<()> {
         }
     }
     let dir = dir.context(
-        "usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC] [--in-sample]",
+        "usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC] [--robust huber|cauchy] [--in-sample]",
     )?;
     let dir = Path::new(&dir);
     let (arm, file_prior, warnings) = read_arm_with_prior(&dir.join("arm.toml"))?;
