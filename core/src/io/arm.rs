@@ -309,7 +309,7 @@ impl ArmFile {
         for (i, j) in joints.iter().map(Spanned::get_ref).enumerate() {
             let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
             let [a, d] = [&j.a, &j.d].map(|v| lu.to_internal(*v.get_ref()));
-            arm.params.joints.push(DhJoint { a, d, alpha, theta });
+            arm.params.joints.push(DhJoint::dh(a, d, alpha, theta));
             let limits = match j.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
                 None => None,
                 Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
@@ -1076,6 +1076,7 @@ z = 100.0
                     d: rng.random_range(-400.0..400.0),
                     alpha: rng.random_range(-3.2..3.2),
                     theta: rng.random_range(-0.1..0.1),
+                    ..DhJoint::default()
                 })
                 .collect();
             let limits = (0..n)
