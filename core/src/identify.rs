@@ -212,7 +212,7 @@ pub(crate) fn full_normal(
 
 impl Scaled {
     fn at(params: &DhParams, normal: crate::residuals::Normal) -> Scaled {
-        let ids: Vec<ParamId> = ParamId::all(params.joint_count()).collect();
+        let ids: Vec<ParamId> = params.param_ids().collect();
         let np = ids.len();
         let reach = params.reach();
         let d: Vec<f64> = ids

@@ -202,7 +202,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         Some(ch) => ch.inverse() * (sigma0 * sigma0),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
-    let ids: Vec<ParamId> = ParamId::all(start.joint_count()).collect();
+    let ids: Vec<ParamId> = start.param_ids().collect();
     for j in &mut params.joints {
         j.theta = wrap(j.theta);
         j.alpha = wrap(j.alpha);
@@ -212,7 +212,10 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         .enumerate()
         .map(|(c, &id)| {
             let (nominal, calibrated) = (start.get(id), params.get(id));
-            let correction = if matches!(id.kind, ParamKind::Theta | ParamKind::Alpha) {
+            let correction = if matches!(
+                id.kind,
+                ParamKind::Theta | ParamKind::Alpha | ParamKind::Beta
+            ) {
                 wrap(calibrated - nominal)
             } else {
                 calibrated - nominal

@@ -241,7 +241,7 @@ pub(crate) fn levenberg_marquardt_from(
     let p = free.len();
     let mut x = start.to_vec();
     let kernel_at = |x: &[f64]| -> Result<ArmKernel, CalibrationError> {
-        let params = DhParams::from_slice(x).ok_or(CalibrationError::Shape)?;
+        let params = start.with_values(x).ok_or(CalibrationError::Shape)?;
         Ok(ArmKernel::new(&params)?)
     };
     let mut normal = normal;
@@ -351,7 +351,7 @@ pub(crate) fn levenberg_marquardt_from(
         }
     }
     Ok(LmResult {
-        params: DhParams::from_slice(&x).ok_or(CalibrationError::Shape)?,
+        params: start.with_values(&x).ok_or(CalibrationError::Shape)?,
         termination,
         iterations: history.len(),
         cost_evaluations,
