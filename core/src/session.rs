@@ -374,6 +374,8 @@ impl Verdict {
                 u.rms_mm, u.touch_mm
             ));
         }
+        // Nearly parallel axes in the D-H model: say which joint suits Hayati.
+        notes.extend(crate::hayati::recommendations(&calibration.params));
         let (before, after) = (fitted.before.e_mean, fitted.after.e_mean);
         if after.is_nan() || after > before {
             poor.push(format!(
