@@ -590,7 +590,6 @@ unsafe fn per_parameter<T: Copy>(
 ) -> Result<(), Error> {
     // SAFETY: by the contract.
     let cal = unsafe { result(cal) }?;
-    let joints = cal.calibrated.params.joint_count();
     let count = cal.calibrated.params.param_count();
     if len != count {
         return Err(Error::length(format!(
@@ -599,7 +598,8 @@ unsafe fn per_parameter<T: Copy>(
     }
     // SAFETY: by the contract.
     let out = unsafe { ptr::output(out, len, "out") }?;
-    for (c, id) in ParamId::all(joints).enumerate() {
+    // The arm's own names: a Hayati joint's d-slot holds β.
+    for (c, id) in cal.calibrated.params.param_ids().enumerate() {
         out[c].write(value(cal, c, id));
     }
     Ok(())
