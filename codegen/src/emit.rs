@@ -309,6 +309,9 @@ mod tests {
         let mut outputs = jacobian_outputs(&k);
         outputs.extend(k.beta_jacobian.iter().flatten());
         let jac = k.graph.op_count(&outputs);
+        let pos = k.graph.op_count(&k.position);
+        println!("extended chain, 6 joints: position {pos:?}, position + jacobian {jac:?}");
+        assert!(pos.total() <= 160, "position: {pos:?}");
         assert!(jac.total() <= 620, "position + jacobian: {jac:?}");
         let text = quote!(#file).to_string();
         assert_eq!(text.matches("if hayati [").count(), 6);
