@@ -188,8 +188,7 @@ pub fn run(args: Args) -> Result<()> {
     )?;
     let noise = args.fit.noise();
     let (arm, data, warnings) = args.fit.read_with_warnings()?;
-    let joints = arm.params.joint_count();
-    let fix = FixSpec::parse(&args.fix, joints).map_err(flag_error)?;
+    let fix = FixSpec::parse_for(&args.fix, &arm.params).map_err(flag_error)?;
     let (anneal, switch, global) = args.solver.options();
     let options = CalibrateOptions {
         fix,
