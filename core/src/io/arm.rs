@@ -28,7 +28,7 @@
 //! `name` is optional (default empty). Lengths (`a`, `d`, probe) are in
 //! `length_unit`, angles (`theta`, `alpha`, `hbeta`, `limits`) in `angle_unit`.
 //! `model` is `"dh"` (the default: `d` required, no `hbeta`) or `"hayati"`
-//! (`hbeta` required, no `d`); see [`JointModel`](crate::params::JointModel).
+//! (`hbeta` required, no `d`); see [`JointModel`].
 //! `hbeta`, not `beta`: `beta` is the paper's name of the twist `α`.
 //! Integers are accepted where numbers are expected. Unknown keys are errors
 //! (a typo is never ignored), as are non-finite numbers, a missing key, a
