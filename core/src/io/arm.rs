@@ -366,6 +366,13 @@ impl ArmFile {
     /// express; `text` and `file` locate the messages.
     pub(crate) fn to_arm(&self, text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputError> {
         let joints = self.joint.get_ref();
+        // Per-joint keys first, as serde's missing-key errors came before
+        // the joint count when `d` was required by the schema.
+        let models = joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| j.get_ref().model(j.span(), i, text, file))
+            .collect::<Result<Vec<JointModel>, InputError>>()?;
         if !SUPPORTED_JOINTS.contains(&joints.len()) {
             // Blame the first joint too many, or the last.
             let max = SUPPORTED_JOINTS.iter().max().copied().unwrap_or(0);
@@ -396,9 +403,7 @@ impl ArmFile {
             },
             limits: Vec::with_capacity(joints.len()),
         };
-        for (i, spanned) in joints.iter().enumerate() {
-            let j = spanned.get_ref();
-            let model = j.model(spanned.span(), i, text, file)?;
+        for (i, (j, &model)) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate() {
             let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
             let a = lu.to_internal(*j.a.get_ref());
             arm.params.joints.push(match model {
