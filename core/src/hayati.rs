@@ -261,6 +261,42 @@ mod tests {
         ));
     }
 
+    /// `Rz(π)` passes through a Hayati link as `θ + π, −a, −α, −β` (what
+    /// `normalize_signs` undoes): positions unchanged both ways.
+    #[test]
+    fn a_flipped_hayati_joint_is_the_same_arm_and_is_normalised() {
+        use crate::calibrate::global::normalize_signs;
+        let mut nominal = DhParams::paper_nominal();
+        nominal.joints[1].alpha = 0.0;
+        let mut nominal = nominal.with_hayati(1).unwrap();
+        nominal.joints[1].beta = 0.01;
+        nominal.joints[1].alpha = 0.002; // nearly parallel
+        let mut flipped = nominal.clone();
+        let j = &mut flipped.joints[1];
+        j.theta += PI;
+        (j.a, j.alpha, j.beta) = (-j.a, -j.alpha, -j.beta);
+        flipped.joints[2].theta += PI;
+        let (k0, k1) = (
+            ArmKernel::new(&nominal).unwrap(),
+            ArmKernel::new(&flipped).unwrap(),
+        );
+        let q = [0.1, -0.7, 1.3, 0.4, -2.0, 0.6];
+        let (p0, p1) = (k0.position(&q).unwrap(), k1.position(&q).unwrap());
+        assert!(
+            (0..3).all(|k| (p0[k] - p1[k]).abs() < 1e-9),
+            "{p0:?} {p1:?}"
+        );
+        let all: Vec<usize> = (0..27).collect();
+        let changed = normalize_signs(&mut flipped, &nominal, &all);
+        assert_eq!(changed, ["theta2", "a2", "alpha2", "hbeta2", "theta3"]);
+        assert!((flipped.joints[1].beta - 0.01).abs() < 1e-15);
+        let p2 = ArmKernel::new(&flipped).unwrap().position(&q).unwrap();
+        assert!(
+            (0..3).all(|k| (p0[k] - p2[k]).abs() < 1e-9),
+            "{p0:?} {p2:?}"
+        );
+    }
+
     #[test]
     fn candidates_within_the_threshold_only() {
         let mut arm = DhParams::paper_nominal();

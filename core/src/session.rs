@@ -731,7 +731,7 @@ pub fn run(
         arm_file: s.arm_file.clone(),
         data_file: s.data_file.clone(),
         lengths_file: s.lengths_file.clone(),
-        fix: options.fix.describe(start.joint_count()),
+        fix: options.fix.describe_for(start),
         noise: options.noise,
         seed: ctx.seed,
         units: Units {

@@ -509,7 +509,7 @@ pub fn calibrate_with(
     if free.is_empty() {
         return Err(OptionError::new(
             "fix",
-            options.fix.describe(start.joint_count()),
+            options.fix.describe_for(start),
             "every parameter is fixed: nothing is left to calibrate",
         )
         .into());

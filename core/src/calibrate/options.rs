@@ -193,6 +193,20 @@ impl FixSpec {
                 .join(","),
         }
     }
+
+    /// [`FixSpec::describe`] with `arm`'s names (`hbeta…` for a Hayati
+    /// joint's d-slot).
+    pub fn describe_for(&self, arm: &crate::params::DhParams) -> String {
+        match self {
+            FixSpec::Auto => "auto".to_string(),
+            FixSpec::Columns(c) => c
+                .iter()
+                .filter_map(|&c| arm.param_id(c))
+                .map(|id| id.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+        }
+    }
 }
 
 /// σ of a reference length whose file states none, mm.
