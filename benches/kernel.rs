@@ -1,11 +1,13 @@
 //! Kernel speed: batches of 1000 seeded random poses of the paper's arm with a
 //! perturbed parameter set, grouped by operation. Ids compare the generated
 //! kernel with the generic nalgebra model (position) and with num-dual
-//! autodiff and central differences on the generic model (Jacobian).
+//! autodiff and central differences on the generic model (Jacobian), and
+//! the extended chain (`generated-hayati`: the same arm with joint 2 in the
+//! Hayati parameterisation) with the D-H one.
 
 use aacmm_core::generic;
 use aacmm_core::kernel::{self, ArmKernel, PreparedPoses};
-use aacmm_core::params::DhParams;
+use aacmm_core::params::{DhParams, JointModel};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -27,6 +29,14 @@ fn inputs() -> (DhParams, Vec<[f64; 6]>) {
     (params, q)
 }
 
+/// The same arm with joint 2 Hayati (β = 0.001 rad): what runs the extended chain.
+fn hayati(params: &DhParams) -> ArmKernel {
+    let mut h = params.clone();
+    h.joints[1].model = JointModel::Hayati;
+    h.joints[1].beta = 0.001;
+    ArmKernel::new(&h).expect("6 joints")
+}
+
 fn position(c: &mut Criterion) {
     let (params, q) = inputs();
     let k = ArmKernel::new(&params).expect("6 joints");
@@ -37,6 +47,10 @@ fn position(c: &mut Criterion) {
     g.throughput(Throughput::Elements(POSES as u64));
     g.bench_function(BenchmarkId::from_parameter("generated"), |b| {
         b.iter(|| black_box(&k).positions(black_box(&poses), 0..POSES, &mut out))
+    });
+    let kh = hayati(&params);
+    g.bench_function(BenchmarkId::from_parameter("generated-hayati"), |b| {
+        b.iter(|| black_box(&kh).positions(black_box(&poses), 0..POSES, &mut out))
     });
     g.bench_function(BenchmarkId::from_parameter("generic"), |b| {
         b.iter(|| {
@@ -57,6 +71,10 @@ fn jacobian(c: &mut Criterion) {
     g.throughput(Throughput::Elements(POSES as u64));
     g.bench_function(BenchmarkId::from_parameter("generated"), |b| {
         b.iter(|| black_box(&k).jacobians(black_box(&poses), &mut out))
+    });
+    let kh = hayati(&params);
+    g.bench_function(BenchmarkId::from_parameter("generated-hayati"), |b| {
+        b.iter(|| black_box(&kh).jacobians(black_box(&poses), &mut out))
     });
     g.bench_function(BenchmarkId::from_parameter("num-dual"), |b| {
         b.iter(|| {

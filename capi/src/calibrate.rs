@@ -248,8 +248,9 @@ struct Settings {
 /// or NUL-terminated.
 unsafe fn settings(
     options: *const AacmmCalibrateOptions,
-    joints: usize,
+    arm: &aacmm_core::params::DhParams,
 ) -> Result<Settings, Error> {
+    let joints = arm.joint_count();
     let o = if options.is_null() {
         aacmm_calibrate_options_default()
     } else {
@@ -296,7 +297,7 @@ unsafe fn settings(
     let options = CalibrateOptions {
         method: solver,
         seed: o.seed,
-        fix: FixSpec::parse(&fix, joints)?,
+        fix: FixSpec::parse_for(&fix, arm)?,
         noise: Noise {
             encoder_rad: stated(o.encoder_noise_rad),
             probe_mm: stated(o.probe_noise_mm),
@@ -420,7 +421,7 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
         let (arm, mut warnings) = read_arm(&arm_path)?;
         let (arm_file, data_file) = (source_name(&arm_path), source_name(&poses_path));
         // SAFETY: by the contract.
-        let s = unsafe { settings(options, arm.params.joint_count()) }?;
+        let s = unsafe { settings(options, &arm.params) }?;
         let (poses, poses_warnings) =
             read_poses(&poses_path, unit, Some(arm.params.joint_count()))?;
         warnings.extend(poses_warnings);
@@ -496,7 +497,7 @@ pub unsafe extern "C" fn aacmm_calibrate(
             )
         };
         // SAFETY: by the contract.
-        let s = unsafe { settings(options, joints) }?;
+        let s = unsafe { settings(options, &start.arm.params) }?;
         let data = array_data(joints, q, points, lengths)?;
         let sources = Sources {
             arm_file: start.source.clone(),
@@ -633,7 +634,6 @@ unsafe fn per_parameter<T: Copy>(
 ) -> Result<(), Error> {
     // SAFETY: by the contract.
     let cal = unsafe { result(cal) }?;
-    let joints = cal.calibrated.params.joint_count();
     let count = cal.calibrated.params.param_count();
     if len != count {
         return Err(Error::length(format!(
@@ -642,7 +642,8 @@ unsafe fn per_parameter<T: Copy>(
     }
     // SAFETY: by the contract.
     let out = unsafe { ptr::output(out, len, "out") }?;
-    for (c, id) in ParamId::all(joints).enumerate() {
+    // The arm's own names: a Hayati joint's d-slot holds β.
+    for (c, id) in cal.calibrated.params.param_ids().enumerate() {
         out[c].write(value(cal, c, id));
     }
     Ok(())
@@ -804,6 +805,7 @@ pub unsafe extern "C" fn aacmm_calibration_report(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use aacmm_core::params::DhParams;
 
     fn length(a: u32, b: u32, distance_mm: f64, uncertainty_mm: f64) -> AacmmReferenceLength {
         AacmmReferenceLength {
@@ -866,13 +868,15 @@ mod tests {
     fn options_are_checked_like_flags() {
         let mut o = aacmm_calibrate_options_default();
         // SAFETY: `o` is a live options struct with a NULL `fix`.
-        let s = unsafe { settings(&o, 6) }.unwrap();
+        let s = unsafe { settings(&o, &DhParams::paper_nominal()) }.unwrap();
         assert_eq!(s.options.fix, FixSpec::Auto);
         assert_eq!(s.options.noise.encoder_rad, None);
         assert_eq!(s.options.noise.length_default_mm, DEFAULT_LENGTH_SIGMA_MM);
         o.probe_noise_mm = -1.0;
         // SAFETY: as above.
-        let e = unsafe { settings(&o, 6) }.err().unwrap();
+        let e = unsafe { settings(&o, &DhParams::paper_nominal()) }
+            .err()
+            .unwrap();
         assert_eq!(e.status, AacmmStatus::InvalidArgument);
         assert_eq!(
             e.message,
@@ -882,7 +886,9 @@ mod tests {
         o.threads = 0;
         o.length_uncertainty_mm = f64::NAN;
         // SAFETY: as above.
-        let e = unsafe { settings(&o, 6) }.err().unwrap();
+        let e = unsafe { settings(&o, &DhParams::paper_nominal()) }
+            .err()
+            .unwrap();
         assert!(
             e.message.starts_with("options.length_uncertainty_mm = NaN"),
             "{}",
@@ -891,12 +897,12 @@ mod tests {
         o = aacmm_calibrate_options_default();
         o.fix = c"theta1, d1".as_ptr();
         // SAFETY: `fix` points to a NUL-terminated literal.
-        let s = unsafe { settings(&o, 6) }.unwrap();
+        let s = unsafe { settings(&o, &DhParams::paper_nominal()) }.unwrap();
         assert_eq!(s.options.fix, FixSpec::Columns(vec![18, 6]));
         o.cross_validate = 1;
         // SAFETY: as above.
-        assert!(unsafe { settings(&o, 6) }.is_err());
+        assert!(unsafe { settings(&o, &DhParams::paper_nominal()) }.is_err());
         // SAFETY: NULL options are the defaults.
-        assert!(unsafe { settings(std::ptr::null(), 6) }.is_ok());
+        assert!(unsafe { settings(std::ptr::null(), &DhParams::paper_nominal()) }.is_ok());
     }
 }

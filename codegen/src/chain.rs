@@ -1,7 +1,13 @@
 //! The D-H chain expanded symbolically into the three kernel outputs.
 //!
 //! Link `i`: `A_i = Rz(θ_i + q_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)`, probe `B` in the last
-//! frame. The joint angle's trig comes from the angle-addition formulas
+//! frame. The *extended* chain ([`ChainSpec::hayati`]) appends `Ry(β_i)` to
+//! every link, `A_i = Rz(θ_i + q_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`: with
+//! `β_i = 0` a D-H link, with `d_i = 0` the Hayati link (Hayati & Mirmirani
+//! 1985) for a joint whose axis is nearly parallel to the previous one. One
+//! extended chain serves every subset of Hayati joints: the caller sets β or d
+//! per parameter set, and picks per joint whether the d-slot's column is
+//! `∂p/∂d_i` or `∂p/∂β_i`. The joint angle's trig comes from the angle-addition formulas
 //! `cos(q+θ) = cq·cθ − sq·sθ`, `sin(q+θ) = sq·cθ + cq·sθ`, so the per-pose code
 //! has no trig calls.
 //!
@@ -11,6 +17,9 @@
 //!   frame), then each column in closed form:
 //!   `∂p/∂θ_i = z_{i−1} × (p − o_{i−1})`, `∂p/∂d_i = z_{i−1}`, `∂p/∂a_i = x_i`,
 //!   `∂p/∂α_i = x_i × (p − o_i)`, `∂p/∂B = R_n`; and `∂p/∂q_i = ∂p/∂θ_i`.
+//!   In the extended chain `x_i` in the `a` and `α` columns is the x axis
+//!   before `Ry(β_i)`, and `∂p/∂β_i = y_i × (p − o_i)` (`Ry` turns about `y_i`,
+//!   which it leaves unchanged, through `o_i`, which it does not move).
 //!   Frame 0 is the identity, which the graph folds into the first link.
 
 use crate::graph::{Graph, Id, Input};
@@ -22,6 +31,9 @@ pub struct ChainSpec {
     pub joints: usize,
     /// Whether a probe offset `B` follows the last frame (3 more parameters).
     pub probe: bool,
+    /// The extended chain: every link ends in `Ry(β_i)`, and the d-slot's
+    /// Jacobian column is chosen per joint (`∂p/∂d_i` or `∂p/∂β_i`).
+    pub hayati: bool,
 }
 
 impl ChainSpec {
@@ -47,6 +59,9 @@ pub struct KernelExprs {
     pub param_jacobian: Vec<[Id; 3]>,
     /// `∂p/∂q_i`, one column per joint.
     pub joint_jacobian: Vec<[Id; 3]>,
+    /// `∂p/∂β_i`, one column per joint (extended chain only, else empty):
+    /// what replaces `param_jacobian`'s `d_i` column for a Hayati joint.
+    pub beta_jacobian: Vec<[Id; 3]>,
 }
 
 type V3 = [Id; 3];
@@ -102,9 +117,16 @@ impl Builder {
         (self.g.sub(cc, ss), self.g.add(sc, cs))
     }
 
-    fn link(&mut self, i: usize) -> Link {
+    fn link(&mut self, i: usize, hayati: bool) -> Link {
         let (c, s) = self.joint_trig(i);
+        let beta = hayati.then(|| {
+            (
+                self.g.input(Input::CosBeta(i)),
+                self.g.input(Input::SinBeta(i)),
+            )
+        });
         Link {
+            beta,
             c,
             s,
             ca: self.g.input(Input::CosAlpha(i)),
@@ -125,6 +147,8 @@ impl Builder {
 
 #[derive(Clone, Copy)]
 struct Link {
+    /// cos and sin of `β` (extended chain only).
+    beta: Option<(Id, Id)>,
     c: Id,
     s: Id,
     ca: Id,
@@ -136,6 +160,9 @@ struct Link {
 /// A frame in the base frame: axes and origin.
 #[derive(Clone, Copy)]
 struct Frame {
+    /// The x axis before the link's `Ry(β)` (equal to `x` in a D-H link): the
+    /// direction of `a` and the axis of `α`.
+    xa: V3,
     x: V3,
     y: V3,
     z: V3,
@@ -146,18 +173,31 @@ struct Frame {
 ///
 /// ```
 /// use aacmm_codegen::chain::{expand_chain, ChainSpec};
-/// let k = expand_chain(ChainSpec { joints: 6, probe: true });
+/// let k = expand_chain(ChainSpec { joints: 6, probe: true, hayati: false });
 /// assert_eq!(k.param_jacobian.len(), 27);
 /// assert_eq!(k.joint_jacobian.len(), 6);
 /// ```
 pub fn expand_chain(spec: ChainSpec) -> KernelExprs {
     let mut b = Builder { g: Graph::new() };
-    let links: Vec<Link> = (0..spec.joints).map(|i| b.link(i)).collect();
+    let links: Vec<Link> = (0..spec.joints).map(|i| b.link(i, spec.hayati)).collect();
     let probe = b.probe(spec);
 
-    // Right to left: v ← Rz(θ)·(Rx(α)·v + (a, 0, d)).
+    // Right to left: v ← Rz(θ)·(Rx(α)·Ry(β)·v + (a, 0, d)).
     let mut v = probe;
     for l in links.iter().rev() {
+        if let Some((cb, sb)) = l.beta {
+            let x = {
+                let p = b.g.mul(cb, v[0]);
+                let q = b.g.mul(sb, v[2]);
+                b.g.add(p, q)
+            };
+            let z = {
+                let p = b.g.mul(cb, v[2]);
+                let q = b.g.mul(sb, v[0]);
+                b.g.sub(p, q)
+            };
+            v = [x, v[1], z];
+        }
         let y = {
             let p = b.g.mul(l.ca, v[1]);
             let q = b.g.mul(l.sa, v[2]);
@@ -186,6 +226,7 @@ pub fn expand_chain(spec: ChainSpec) -> KernelExprs {
 
     // Left to right: frames[i] is frame i (frames[0] the base).
     let mut frames = vec![Frame {
+        xa: b.constant([1.0, 0.0, 0.0]),
         x: b.constant([1.0, 0.0, 0.0]),
         y: b.constant([0.0, 1.0, 0.0]),
         z: b.constant([0.0, 0.0, 1.0]),
@@ -201,7 +242,21 @@ pub fn expand_chain(spec: ChainSpec) -> KernelExprs {
         let z = b.combine(l.ca, f.z, nsa, u);
         let step = b.combine(l.d, f.z, l.a, x);
         let o = b.add(f.o, step);
-        frames.push(Frame { x, y, z, o });
+        // Ry(β): x ← cβ·x − sβ·z, z ← sβ·x + cβ·z; y and o unchanged.
+        let (xb, zb) = match l.beta {
+            Some((cb, sb)) => {
+                let nsb = b.g.neg(sb);
+                (b.combine(cb, x, nsb, z), b.combine(sb, x, cb, z))
+            }
+            None => (x, z),
+        };
+        frames.push(Frame {
+            xa: x,
+            x: xb,
+            y,
+            z: zb,
+            o,
+        });
     }
     let last = *frames.last().expect("base frame");
     let rb = {
@@ -221,11 +276,21 @@ pub fn expand_chain(spec: ChainSpec) -> KernelExprs {
     let col_alpha: Vec<V3> = (0..n)
         .map(|i| {
             let r = b.sub(p, frames[i + 1].o);
-            b.cross(frames[i + 1].x, r)
+            b.cross(frames[i + 1].xa, r)
         })
         .collect();
+    let beta_jacobian: Vec<V3> = if spec.hayati {
+        (0..n)
+            .map(|i| {
+                let r = b.sub(p, frames[i + 1].o);
+                b.cross(frames[i + 1].y, r)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut param_jacobian: Vec<V3> = Vec::with_capacity(spec.param_count());
-    param_jacobian.extend((0..n).map(|i| frames[i + 1].x));
+    param_jacobian.extend((0..n).map(|i| frames[i + 1].xa));
     param_jacobian.extend((0..n).map(|i| frames[i].z));
     param_jacobian.extend(col_alpha);
     param_jacobian.extend(col_theta.iter().copied());
@@ -240,6 +305,7 @@ pub fn expand_chain(spec: ChainSpec) -> KernelExprs {
         frame_position: p,
         param_jacobian,
         joint_jacobian: col_theta,
+        beta_jacobian,
     }
 }
 
@@ -254,6 +320,8 @@ mod tests {
         d: Vec<f64>,
         alpha: Vec<f64>,
         theta: Vec<f64>,
+        /// Hayati rotations (zero for a D-H chain).
+        beta: Vec<f64>,
         b: [f64; 3],
         q: Vec<f64>,
     }
@@ -273,9 +341,18 @@ mod tests {
                 d: (0..n).map(|_| next(300.0)).collect(),
                 alpha: (0..n).map(|_| next(3.0)).collect(),
                 theta: (0..n).map(|_| next(3.0)).collect(),
+                beta: vec![0.0; n],
                 b: [next(100.0), next(100.0), next(100.0)],
                 q: (0..n).map(|_| next(3.0)).collect(),
             }
+        }
+
+        /// A sample with every link's β random too (the extended chain).
+        fn sample_extended(n: usize, seed: u64) -> Point {
+            let mut p = Point::sample(n, seed);
+            let other = Point::sample(n, seed ^ 0x5eed);
+            p.beta = other.theta;
+            p
         }
 
         fn leaf(&self, i: Input) -> f64 {
@@ -288,6 +365,8 @@ mod tests {
                 Input::SinAlpha(j) => self.alpha[j].sin(),
                 Input::A(j) => self.a[j],
                 Input::D(j) => self.d[j],
+                Input::CosBeta(j) => self.beta[j].cos(),
+                Input::SinBeta(j) => self.beta[j].sin(),
                 Input::Probe(k) => self.b[k],
             }
         }
@@ -301,19 +380,28 @@ mod tests {
             for j in 0..self.q.len() {
                 let (st, ct) = (self.q[j] + self.theta[j]).sin_cos();
                 let (sa, ca) = self.alpha[j].sin_cos();
+                let (sb, cb) = self.beta[j].sin_cos();
                 let a = [
                     [ct, -ca * st, sa * st, self.a[j] * ct],
                     [st, ca * ct, -sa * ct, self.a[j] * st],
                     [0.0, sa, ca, self.d[j]],
                     [0.0, 0.0, 0.0, 1.0],
                 ];
-                let mut m = [[0.0; 4]; 4];
-                for r in 0..4 {
-                    for c in 0..4 {
-                        m[r][c] = (0..4).map(|k| t[r][k] * a[k][c]).sum();
+                let ry = [
+                    [cb, 0.0, sb, 0.0],
+                    [0.0, 1.0, 0.0, 0.0],
+                    [-sb, 0.0, cb, 0.0],
+                    [0.0, 0.0, 0.0, 1.0],
+                ];
+                for m in [a, ry] {
+                    let mut prod = [[0.0; 4]; 4];
+                    for r in 0..4 {
+                        for c in 0..4 {
+                            prod[r][c] = (0..4).map(|k| t[r][k] * m[k][c]).sum();
+                        }
                     }
+                    t = prod;
                 }
-                t = m;
             }
             let h = [self.b[0], self.b[1], self.b[2], 1.0];
             [0, 1, 2].map(|r| (0..4).map(|k| t[r][k] * h[k]).sum())
@@ -335,6 +423,7 @@ mod tests {
             let k = expand_chain(ChainSpec {
                 joints: n,
                 probe: true,
+                hayati: false,
             });
             for seed in 0..50 {
                 let pt = Point::sample(n, seed);
@@ -351,6 +440,7 @@ mod tests {
         let k = expand_chain(ChainSpec {
             joints: n,
             probe: true,
+            hayati: false,
         });
         for seed in 0..20 {
             let pt = Point::sample(n, seed);
@@ -383,10 +473,55 @@ mod tests {
     }
 
     #[test]
+    fn extended_chain_matches_the_matrix_product_and_differences() {
+        for n in 1..=7 {
+            let k = expand_chain(ChainSpec {
+                joints: n,
+                probe: true,
+                hayati: true,
+            });
+            assert_eq!(k.beta_jacobian.len(), n);
+            for seed in 0..20 {
+                let pt = Point::sample_extended(n, seed);
+                let want = pt.position();
+                assert!(close(pt.eval(&k, &k.position), want, 1e-9), "n={n}");
+                assert!(close(pt.eval(&k, &k.frame_position), want, 1e-9), "n={n}");
+                let v = k.graph.eval(|i| pt.leaf(i));
+                let h = 1e-6;
+                // Every column, β's appended after the probe's.
+                let cols = k.param_jacobian.iter().chain(&k.beta_jacobian);
+                for (col, ids) in cols.enumerate() {
+                    let shifted = |delta: f64| {
+                        let mut p = pt.clone();
+                        let (block, j) = (col / n, col % n);
+                        match block {
+                            0 => p.a[j] += delta,
+                            1 => p.d[j] += delta,
+                            2 => p.alpha[j] += delta,
+                            3 => p.theta[j] += delta,
+                            _ if col < 4 * n + 3 => p.b[col - 4 * n] += delta,
+                            _ => p.beta[col - 4 * n - 3] += delta,
+                        }
+                        p.position()
+                    };
+                    let (plus, minus) = (shifted(h), shifted(-h));
+                    let fd = [0, 1, 2].map(|r| (plus[r] - minus[r]) / (2.0 * h));
+                    let got = ids.map(|id| v[id.index()]);
+                    assert!(
+                        close(got, fd, 1e-5),
+                        "n={n} column {col}: {got:?} vs {fd:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn first_frame_is_folded() {
         let k = expand_chain(ChainSpec {
             joints: 6,
             probe: true,
+            hayati: false,
         });
         // ∂p/∂d1 is the base z axis: constants, no arithmetic.
         let d1 = k.param_jacobian[6];
@@ -403,6 +538,7 @@ mod tests {
         let k = expand_chain(ChainSpec {
             joints: 3,
             probe: false,
+            hayati: false,
         });
         assert_eq!(k.param_jacobian.len(), 12);
         let pt = Point {

@@ -20,6 +20,8 @@ fn operand(g: &Graph, id: Id) -> TokenStream {
                 Input::SinAlpha(j) => ("sa", j),
                 Input::A(j) => ("a", j),
                 Input::D(j) => ("d", j),
+                Input::CosBeta(j) => ("cb", j),
+                Input::SinBeta(j) => ("sb", j),
                 Input::Probe(k) => ("b", k),
             };
             let array = Ident::new(array, Span::call_site());
@@ -76,11 +78,40 @@ fn vec3(g: &Graph, v: &[Id; 3]) -> TokenStream {
 
 /// The `let`s for `cols` and `position`, and the stores `jac[i] = [..];`.
 fn columns(g: &Graph, cols: &[[Id; 3]], position: &[Id; 3]) -> (TokenStream, TokenStream) {
-    let outputs: Vec<Id> = cols.iter().flatten().chain(position).copied().collect();
+    columns_with(g, cols, &[], 0, position)
+}
+
+/// [`columns`] where, for each `j` of `alternatives`, column `offset + j` is
+/// `alternatives[j]` when `hayati[j]` (a per-parameter-set flag, the same in
+/// every SIMD lane) and `cols[offset + j]` otherwise.
+fn columns_with(
+    g: &Graph,
+    cols: &[[Id; 3]],
+    alternatives: &[[Id; 3]],
+    offset: usize,
+    position: &[Id; 3],
+) -> (TokenStream, TokenStream) {
+    let outputs: Vec<Id> = cols
+        .iter()
+        .chain(alternatives)
+        .flatten()
+        .chain(position)
+        .copied()
+        .collect();
     let stores = cols.iter().enumerate().map(|(i, col)| {
-        let i = Literal::usize_unsuffixed(i);
         let v = vec3(g, col);
-        quote!(jac[#i] = #v;)
+        let store = Literal::usize_unsuffixed(i);
+        match i
+            .checked_sub(offset)
+            .and_then(|j| alternatives.get(j).map(|alt| (j, alt)))
+        {
+            Some((j, alt)) => {
+                let alt = vec3(g, alt);
+                let j = Literal::usize_unsuffixed(j);
+                quote!(jac[#store] = if hayati[#j] { #alt } else { #v };)
+            }
+            None => quote!(jac[#store] = #v;),
+        }
     });
     (body(g, &outputs), quote!(#(#stores)*))
 }
@@ -95,10 +126,21 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
     } else {
         quote!()
     };
+    let beta_arg = if k.spec.hayati {
+        quote!(cb: &[S; #n], sb: &[S; #n],)
+    } else {
+        quote!()
+    };
     let args = quote! {
         ct: &[S; #n], st: &[S; #n], ca: &[S; #n], sa: &[S; #n],
-        a: &[S; #n], d: &[S; #n], #probe_arg
+        a: &[S; #n], d: &[S; #n], #beta_arg #probe_arg
         cq: &[S; #n], sq: &[S; #n]
+    };
+    // Only the parameter Jacobian depends on which joints are Hayati.
+    let select_arg = if k.spec.hayati {
+        quote!(hayati: &[bool; #n],)
+    } else {
+        quote!()
     };
     let bounds = quote! {
         S: ::core::marker::Copy
@@ -116,7 +158,13 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
     let position_body = body(g, &k.position);
     let position = vec3(g, &k.position);
 
-    let (jac_body, jac_stores) = columns(g, &k.param_jacobian, &k.frame_position);
+    let (jac_body, jac_stores) = columns_with(
+        g,
+        &k.param_jacobian,
+        &k.beta_jacobian,
+        k.spec.joints,
+        &k.frame_position,
+    );
     let (joint_body, joint_stores) = columns(g, &k.joint_jacobian, &k.frame_position);
     let frame_position = vec3(g, &k.frame_position);
 
@@ -125,11 +173,23 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
     } else {
         "`a1..an, d1..dn, α1..αn, θ1..θn`"
     };
-    let args_doc = "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
+    let args_doc = if k.spec.hayati {
+        "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
+        `ca, sa` (cos, sin of the twists α), `a`, `d` (mm), `cb, sb` (cos, sin of the \
+        Hayati rotations β about the link's y axis; β = 0 for a D-H joint) and the probe \
+        offset `b` (mm); per pose `cq, sq` (cos, sin of the encoder readings)."
+    } else {
+        "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
         `ca, sa` (cos, sin of the twists α), `a`, `d` (mm) and the probe offset `b` (mm); \
-        per pose `cq, sq` (cos, sin of the encoder readings).";
+        per pose `cq, sq` (cos, sin of the encoder readings)."
+    };
+    let select_doc = if k.spec.hayati {
+        " `hayati[i]` puts `∂p/∂β_i` in joint `i`'s d-slot instead of `∂p/∂d_i`."
+    } else {
+        ""
+    };
     let jac_doc = format!(
-        "Probe position and `∂p/∂parameter` into `jac`, one column per parameter in the order {order}. {args_doc}"
+        "Probe position and `∂p/∂parameter` into `jac`, one column per parameter in the order {order}.{select_doc} {args_doc}"
     );
     quote! {
         /// Number of joints of this chain.
@@ -147,7 +207,7 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
 
         #[doc = #jac_doc]
         #attrs
-        pub fn position_jacobian<S>(#args, jac: &mut [[S; 3]; #p]) -> [S; 3] where #bounds {
+        pub fn position_jacobian<S>(#args, #select_arg jac: &mut [[S; 3]; #p]) -> [S; 3] where #bounds {
             #jac_body
             #jac_stores
             #frame_position
@@ -170,10 +230,15 @@ mod tests {
     use crate::chain::{ChainSpec, expand_chain};
 
     fn items(joints: usize) -> (KernelExprs, syn::File) {
-        let k = expand_chain(ChainSpec {
+        items_of(ChainSpec {
             joints,
             probe: true,
-        });
+            hayati: false,
+        })
+    }
+
+    fn items_of(spec: ChainSpec) -> (KernelExprs, syn::File) {
+        let k = expand_chain(spec);
         let file = syn::parse2(kernel_items(&k)).expect("generated code parses as Rust items");
         (k, file)
     }
@@ -231,13 +296,45 @@ mod tests {
         assert!(jac.total() <= 425, "position + jacobian: {jac:?}");
     }
 
+    /// The extended chain costs more than the D-H one (it computes both the
+    /// d and the β column of every joint), but stays straight-line code of
+    /// the same order: a guard against an accidental blow-up.
+    #[test]
+    fn extended_chain_stays_small() {
+        let (k, file) = items_of(ChainSpec {
+            joints: 6,
+            probe: true,
+            hayati: true,
+        });
+        let mut outputs = jacobian_outputs(&k);
+        outputs.extend(k.beta_jacobian.iter().flatten());
+        let jac = k.graph.op_count(&outputs);
+        let pos = k.graph.op_count(&k.position);
+        println!("extended chain, 6 joints: position {pos:?}, position + jacobian {jac:?}");
+        assert!(pos.total() <= 160, "position: {pos:?}");
+        assert!(jac.total() <= 620, "position + jacobian: {jac:?}");
+        let text = quote!(#file).to_string();
+        assert_eq!(text.matches("if hayati [").count(), 6);
+    }
+
     #[test]
     fn no_matrix_products_or_calls_in_the_per_pose_code() {
-        let (_, file) = items(7);
+        for hayati in [false, true] {
+            let (_, file) = items_of(ChainSpec {
+                joints: 7,
+                probe: true,
+                hayati,
+            });
+            calls_free(&file);
+        }
+    }
+
+    fn calls_free(file: &syn::File) {
         for name in ["position", "position_jacobian", "joint_jacobian"] {
             let text = quote!(#file).to_string();
             assert!(!text.contains("sin ("), "{name}");
-            let block = &function(&file, name).block;
+            assert!(!text.contains("cos ("), "{name}");
+            let block = &function(file, name).block;
             let body = quote!(#block).to_string();
             // Only operators, indexing and `S::from` constants: no calls.
             let calls = body.matches('(').count() - body.matches("S :: from (").count();

@@ -40,6 +40,10 @@ pub enum Input {
     A(usize),
     /// Link offset `d_j`.
     D(usize),
+    /// cos of the Hayati rotation `β_j` (extended chain only).
+    CosBeta(usize),
+    /// sin of the Hayati rotation `β_j` (extended chain only).
+    SinBeta(usize),
     /// Probe offset component (0 = x, 1 = y, 2 = z).
     Probe(usize),
 }

@@ -1,4 +1,4 @@
-//! The macro's input: `[#[attrs]] [vis] mod NAME { joints = N[, probe = bool] }`.
+//! The macro's input: `[#[attrs]] [vis] mod NAME { joints = N[, probe = bool][, hayati = bool] }`.
 
 use proc_macro2::TokenStream;
 use quote::quote;
@@ -50,6 +50,7 @@ impl Parse for ChainMacroInput {
         }
         let mut joints: Option<usize> = None;
         let mut probe: Option<bool> = None;
+        let mut hayati: Option<bool> = None;
         for s in settings {
             let key = s.key.to_string();
             let duplicate = || syn::Error::new(s.key.span(), format!("`{key}` is given twice"));
@@ -85,10 +86,22 @@ impl Parse for ChainMacroInput {
                     };
                     probe = Some(lit.value);
                 }
+                "hayati" => {
+                    if hayati.is_some() {
+                        return Err(duplicate());
+                    }
+                    let Lit::Bool(lit) = &s.value else {
+                        return Err(syn::Error::new_spanned(
+                            &s.value,
+                            "`hayati` takes `true` or `false`",
+                        ));
+                    };
+                    hayati = Some(lit.value);
+                }
                 _ => {
                     return Err(syn::Error::new(
                         s.key.span(),
-                        format!("unknown setting `{key}`; expected `joints` or `probe`"),
+                        format!("unknown setting `{key}`; expected `joints`, `probe` or `hayati`"),
                     ));
                 }
             }
@@ -106,6 +119,7 @@ impl Parse for ChainMacroInput {
             spec: ChainSpec {
                 joints,
                 probe: probe.unwrap_or(true),
+                hayati: hayati.unwrap_or(false),
             },
         })
     }
@@ -146,7 +160,8 @@ mod tests {
             input.spec,
             ChainSpec {
                 joints: 7,
-                probe: true
+                probe: true,
+                hayati: false,
             }
         );
     }

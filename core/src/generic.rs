@@ -7,7 +7,7 @@ use nalgebra::{Matrix4, SVector, Vector4};
 use num_dual::{DualNum, DualSVec64, jacobian};
 
 use crate::kernel::KernelError;
-use crate::params::{DhParams, param_count};
+use crate::params::{DhParams, JointModel, param_count};
 
 /// Probe position of an `n`-joint chain: `params` in the fixed order
 /// (`4n + 3` values, mm and rad), `q` the `n` encoder readings (rad).
@@ -26,11 +26,26 @@ use crate::params::{DhParams, param_count};
 /// assert!((p[2] - 995.0).abs() < 1e-9);
 /// ```
 pub fn position<D: DualNum<Primitive = f64> + Copy>(params: &[D], q: &[D]) -> [D; 3] {
+    position_with(params, q, &vec![JointModel::Dh; q.len()])
+}
+
+/// [`position`] of a chain whose joints have `models`: a
+/// [`JointModel::Hayati`] joint's d-slot holds `β` (rad) and its link is
+/// `Rz(θ + q)·Tx(a)·Rx(α)·Ry(β)`.
+///
+/// # Panics
+/// As [`position`], or if `models.len() != q.len()`.
+pub fn position_with<D: DualNum<Primitive = f64> + Copy>(
+    params: &[D],
+    q: &[D],
+    models: &[JointModel],
+) -> [D; 3] {
     let n = q.len();
     assert_eq!(params.len(), param_count(n), "parameter vector length");
+    assert_eq!(models.len(), n, "one model per joint");
     let mut t = Matrix4::<D>::identity();
     for (j, &qj) in q.iter().enumerate() {
-        let (a, d, alpha, theta) = (
+        let (a, slot, alpha, theta) = (
             params[j],
             params[n + j],
             params[2 * n + j],
@@ -40,6 +55,10 @@ pub fn position<D: DualNum<Primitive = f64> + Copy>(params: &[D], q: &[D]) -> [D
         let (sa, ca) = alpha.sin_cos();
         let zero = D::from(0.0);
         let one = D::from(1.0);
+        let d = match models[j] {
+            JointModel::Dh => slot,
+            JointModel::Hayati => zero,
+        };
         #[rustfmt::skip]
         let link = Matrix4::new(
             ct,   -ca * st, sa * st,  a * ct,
@@ -48,6 +67,17 @@ pub fn position<D: DualNum<Primitive = f64> + Copy>(params: &[D], q: &[D]) -> [D
             zero, zero,     zero,     one,
         );
         t *= link;
+        if models[j] == JointModel::Hayati {
+            let (sb, cb) = slot.sin_cos();
+            #[rustfmt::skip]
+            let ry = Matrix4::new(
+                cb,   zero, sb,   zero,
+                zero, one,  zero, zero,
+                -sb,  zero, cb,   zero,
+                zero, zero, zero, one,
+            );
+            t *= ry;
+        }
     }
     let b = &params[4 * n..];
     let p = t * Vector4::new(b[0], b[1], b[2], D::from(1.0));
@@ -86,10 +116,11 @@ pub fn param_jacobian_dual<const P: usize>(
         });
     }
     let x = SVector::<f64, P>::from_iterator(params.to_vec());
+    let models = params.models();
     let (_, jac) = jacobian(
         |x: SVector<DualSVec64<P>, P>| {
             let q: Vec<DualSVec64<P>> = q.iter().map(|&v| DualSVec64::from(v)).collect();
-            let p = position(x.as_slice(), &q);
+            let p = position_with(x.as_slice(), &q, &models);
             nalgebra::Vector3::new(p[0], p[1], p[2])
         },
         &x,
@@ -115,13 +146,14 @@ pub fn param_jacobian_central(
 ) -> Result<Vec<[f64; 3]>, KernelError> {
     check(params, q)?;
     let x = params.to_vec();
+    let models = params.models();
     let mut shifted = x.clone();
     Ok((0..x.len())
         .map(|c| {
             shifted[c] = x[c] + h;
-            let plus = position(&shifted, q);
+            let plus = position_with(&shifted, q, &models);
             shifted[c] = x[c] - h;
-            let minus = position(&shifted, q);
+            let minus = position_with(&shifted, q, &models);
             shifted[c] = x[c];
             [0, 1, 2].map(|r| (plus[r] - minus[r]) / (2.0 * h))
         })
@@ -152,10 +184,11 @@ pub fn joint_jacobian_dual<const N: usize>(
     }
     let x = SVector::<f64, N>::from_column_slice(q);
     let p = params.to_vec();
+    let models = params.models();
     let (_, jac) = jacobian(
         |q: SVector<DualSVec64<N>, N>| {
             let params: Vec<DualSVec64<N>> = p.iter().map(|&v| DualSVec64::from(v)).collect();
-            let r = position(&params, q.as_slice());
+            let r = position_with(&params, q.as_slice(), &models);
             nalgebra::Vector3::new(r[0], r[1], r[2])
         },
         &x,

@@ -176,6 +176,12 @@ pub struct Identification {
     pub free: Vec<FreeParameter>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
     pub correlations: Vec<Correlation>,
+    /// Model changes to consider: the D-H joints with nearly parallel axes
+    /// that the Hayati parameterisation suits
+    /// ([`hayati::recommendations`](crate::hayati::recommendations)).
+    /// Absent from JSON when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub recommendations: Vec<String>,
 }
 
 impl Identification {
@@ -212,7 +218,7 @@ pub(crate) fn full_normal(
 
 impl Scaled {
     fn at(params: &DhParams, normal: crate::residuals::Normal) -> Scaled {
-        let ids: Vec<ParamId> = ParamId::all(params.joint_count()).collect();
+        let ids: Vec<ParamId> = params.param_ids().collect();
         let np = ids.len();
         let reach = params.reach();
         let d: Vec<f64> = ids
@@ -468,6 +474,7 @@ pub(crate) fn identify_from(
         fixed,
         free,
         correlations,
+        recommendations: crate::hayati::recommendations(params),
     }
 }
 

@@ -28,6 +28,7 @@ pub mod error;
 #[cfg(feature = "reference-model")]
 pub mod generic;
 pub mod geometry;
+pub mod hayati;
 pub mod identify;
 pub mod io;
 pub mod kernel;

@@ -7,8 +7,32 @@
 
 use std::fmt;
 
-/// One link of a standard Denavit–Hartenberg chain:
-/// `A = Rz(θ + q) · Tz(d) · Tx(a) · Rx(α)`.
+/// How a joint's link is parameterised.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum JointModel {
+    /// Standard Denavit–Hartenberg: `A = Rz(θ + q)·Tz(d)·Tx(a)·Rx(α)`.
+    #[default]
+    Dh,
+    /// Hayati & Mirmirani (1985): `A = Rz(θ + q)·Tx(a)·Rx(α)·Ry(β)`, for a
+    /// joint whose axis is (nearly) parallel to the previous one, where D-H's
+    /// `d` is ill-determined. `d` is structurally 0 and the d-slot of the
+    /// parameter vector holds `β` ([`ParamKind::Beta`]).
+    Hayati,
+}
+
+impl JointModel {
+    /// The name in arm files: `dh` or `hayati`.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointModel::Dh => "dh",
+            JointModel::Hayati => "hayati",
+        }
+    }
+}
+
+/// One link of the chain: standard Denavit–Hartenberg,
+/// `A = Rz(θ + q) · Tz(d) · Tx(a) · Rx(α)`, or with
+/// [`JointModel::Hayati`] `A = Rz(θ + q) · Tx(a) · Rx(α) · Ry(β)`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DhJoint {
     /// Common-normal length `a`, mm.
@@ -19,6 +43,52 @@ pub struct DhJoint {
     pub alpha: f64,
     /// Encoder zero offset `θ⁰`, rad: the joint angle is `q + θ`.
     pub theta: f64,
+    /// Rotation about the link's y axis `β`, rad (Hayati joints; 0 and
+    /// unused for a D-H joint, whose `d` is used instead).
+    pub beta: f64,
+    /// The link's parameterisation.
+    pub model: JointModel,
+}
+
+impl DhJoint {
+    /// A D-H joint (β = 0).
+    ///
+    /// ```
+    /// use aacmm_core::params::{DhJoint, JointModel};
+    /// let j = DhJoint::dh(10.0, 5.0, 0.0, 0.0);
+    /// assert_eq!((j.d, j.model), (5.0, JointModel::Dh));
+    /// ```
+    pub fn dh(a: f64, d: f64, alpha: f64, theta: f64) -> DhJoint {
+        DhJoint {
+            a,
+            d,
+            alpha,
+            theta,
+            beta: 0.0,
+            model: JointModel::Dh,
+        }
+    }
+
+    /// A Hayati joint (d = 0).
+    pub fn hayati(a: f64, alpha: f64, theta: f64, beta: f64) -> DhJoint {
+        DhJoint {
+            a,
+            d: 0.0,
+            alpha,
+            theta,
+            beta,
+            model: JointModel::Hayati,
+        }
+    }
+
+    /// The joint's d-slot parameter kind: [`ParamKind::D`] or, for a Hayati
+    /// joint, [`ParamKind::Beta`].
+    pub fn slot_kind(&self) -> ParamKind {
+        match self.model {
+            JointModel::Dh => ParamKind::D,
+            JointModel::Hayati => ParamKind::Beta,
+        }
+    }
 }
 
 /// The kind of a geometric parameter.
@@ -34,6 +104,9 @@ pub enum ParamKind {
     Theta,
     /// Probe offset component in the last frame (mm).
     Probe,
+    /// Hayati rotation `β` about the link's y axis (rad): the d-slot of a
+    /// [`JointModel::Hayati`] joint.
+    Beta,
 }
 
 impl ParamKind {
@@ -46,6 +119,11 @@ impl ParamKind {
     /// ```
     pub fn is_length(self) -> bool {
         matches!(self, ParamKind::A | ParamKind::D | ParamKind::Probe)
+    }
+
+    /// Whether the parameter sits in a joint's d-slot (`d` or Hayati `β`).
+    pub fn is_d_slot(self) -> bool {
+        matches!(self, ParamKind::D | ParamKind::Beta)
     }
 }
 
@@ -72,7 +150,7 @@ impl ParamId {
     pub fn column(self, n: usize) -> usize {
         let block = match self.kind {
             ParamKind::A => 0,
-            ParamKind::D => 1,
+            ParamKind::D | ParamKind::Beta => 1,
             ParamKind::Alpha => 2,
             ParamKind::Theta => 3,
             ParamKind::Probe => 4,
@@ -80,7 +158,9 @@ impl ParamId {
         block * n + self.index
     }
 
-    /// The parameter at `column` of an `n`-joint chain, if there is one.
+    /// The parameter at `column` of an `n`-joint D-H chain, if there is one
+    /// (the d-slot is always [`ParamKind::D`] here; an arm with Hayati joints
+    /// names its columns with [`DhParams::param_id`]).
     ///
     /// ```
     /// use aacmm_core::params::{ParamId, ParamKind};
@@ -113,7 +193,9 @@ impl ParamId {
     }
 
     /// The parameter of an `n`-joint chain named `name` (`a1`, `alpha3`,
-    /// `theta6`, `Bz`; `beta…` is accepted for `alpha…`, the paper's name).
+    /// `theta6`, `Bz`, `hbeta2`; `beta…` is accepted for `alpha…`, the
+    /// paper's name). Whether a joint has a `d` or an `hbeta` depends on its
+    /// model: [`DhParams::parse_param`] checks that.
     ///
     /// ```
     /// use aacmm_core::params::{ParamId, ParamKind};
@@ -203,6 +285,7 @@ impl std::str::FromStr for ParamId {
             });
         }
         let kinds = [
+            ("hbeta", ParamKind::Beta),
             ("alpha", ParamKind::Alpha),
             ("beta", ParamKind::Alpha),
             ("theta", ParamKind::Theta),
@@ -232,6 +315,7 @@ impl fmt::Display for ParamId {
             ParamKind::Alpha => write!(f, "alpha{i}"),
             ParamKind::Theta => write!(f, "theta{i}"),
             ParamKind::Probe => write!(f, "B{}", ["x", "y", "z"][self.index]),
+            ParamKind::Beta => write!(f, "hbeta{i}"),
         }
     }
 }
@@ -301,12 +385,7 @@ impl DhParams {
         DhParams {
             joints: rows
                 .iter()
-                .map(|&(alpha, a, d)| DhJoint {
-                    a,
-                    d,
-                    alpha,
-                    theta: 0.0,
-                })
+                .map(|&(alpha, a, d)| DhJoint::dh(a, d, alpha, 0.0))
                 .collect(),
             probe: [0.0, 0.0, 100.0],
         }
@@ -336,6 +415,7 @@ impl DhParams {
             ParamKind::Alpha => self.joints[id.index].alpha,
             ParamKind::Theta => self.joints[id.index].theta,
             ParamKind::Probe => self.probe[id.index],
+            ParamKind::Beta => self.joints[id.index].beta,
         }
     }
 
@@ -347,7 +427,89 @@ impl DhParams {
             ParamKind::Alpha => &mut self.joints[id.index].alpha,
             ParamKind::Theta => &mut self.joints[id.index].theta,
             ParamKind::Probe => &mut self.probe[id.index],
+            ParamKind::Beta => &mut self.joints[id.index].beta,
         }
+    }
+
+    /// The parameter at `column` of this arm: [`ParamId::from_column`] with
+    /// a Hayati joint's d-slot named [`ParamKind::Beta`].
+    ///
+    /// ```
+    /// use aacmm_core::params::{DhParams, JointModel};
+    /// let mut arm = DhParams::paper_nominal();
+    /// arm.joints[2].model = JointModel::Hayati;
+    /// assert_eq!(arm.param_id(8).unwrap().to_string(), "hbeta3");
+    /// assert_eq!(arm.param_id(7).unwrap().to_string(), "d2");
+    /// ```
+    pub fn param_id(&self, column: usize) -> Option<ParamId> {
+        let id = ParamId::from_column(self.joint_count(), column)?;
+        Some(match id.kind {
+            ParamKind::D => ParamId {
+                kind: self.joints[id.index].slot_kind(),
+                index: id.index,
+            },
+            _ => id,
+        })
+    }
+
+    /// This arm's parameters in the fixed order (see [`DhParams::param_id`]).
+    pub fn param_ids(&self) -> impl Iterator<Item = ParamId> + '_ {
+        (0..self.param_count()).filter_map(|c| self.param_id(c))
+    }
+
+    /// Whether `id` is a parameter of this arm: in range, and `d…`/`hbeta…`
+    /// only for a joint of that model.
+    pub fn has_param(&self, id: ParamId) -> bool {
+        let n = self.joint_count();
+        match id.kind {
+            ParamKind::Probe => id.index < 3,
+            ParamKind::D | ParamKind::Beta => {
+                id.index < n && self.joints[id.index].slot_kind() == id.kind
+            }
+            _ => id.index < n,
+        }
+    }
+
+    /// The parameter of this arm named `name` (see [`ParamId::parse`]); a
+    /// `d…` of a Hayati joint or an `hbeta…` of a D-H joint is `None`.
+    pub fn parse_param(&self, name: &str) -> Option<ParamId> {
+        name.parse::<ParamId>()
+            .ok()
+            .filter(|&id| self.has_param(id))
+    }
+
+    /// Whether any joint is [`JointModel::Hayati`].
+    pub fn has_hayati(&self) -> bool {
+        self.joints.iter().any(|j| j.model == JointModel::Hayati)
+    }
+
+    /// The models of the joints, base to probe.
+    pub fn models(&self) -> Vec<JointModel> {
+        self.joints.iter().map(|j| j.model).collect()
+    }
+
+    /// This arm with its parameters set from `v` (the fixed order, as
+    /// [`DhParams::to_vec`] gives): the joints keep their models. `None`
+    /// unless `v` has [`DhParams::param_count`] values.
+    ///
+    /// ```
+    /// use aacmm_core::params::{DhParams, JointModel};
+    /// let mut arm = DhParams::paper_nominal();
+    /// arm.joints[1].model = JointModel::Hayati;
+    /// arm.joints[1].beta = 0.01;
+    /// assert_eq!(arm.with_values(&arm.to_vec()), Some(arm.clone()));
+    /// assert_eq!(arm.to_vec()[7], 0.01); // the d-slot holds β
+    /// ```
+    pub fn with_values(&self, v: &[f64]) -> Option<DhParams> {
+        if v.len() != self.param_count() {
+            return None;
+        }
+        let mut p = self.clone();
+        for (c, &x) in v.iter().enumerate() {
+            let id = self.param_id(c)?;
+            *p.get_mut(id) = x;
+        }
+        Some(p)
     }
 
     /// The arm's reach, a length scale for its parameters: `Σ|a| + Σ|d| +
@@ -358,7 +520,19 @@ impl DhParams {
     /// assert_eq!(arm.reach(), 50.0 + 55.0 + 35.0 * 4.0 + 375.0 + 250.0 + 270.0 + 100.0);
     /// ```
     pub fn reach(&self) -> f64 {
-        let links: f64 = self.joints.iter().map(|j| j.a.abs() + j.d.abs()).sum();
+        // A Hayati joint's d is 0 (its `d` field is unused).
+        let links: f64 = self
+            .joints
+            .iter()
+            .map(|j| {
+                j.a.abs()
+                    + if j.model == JointModel::Dh {
+                        j.d.abs()
+                    } else {
+                        0.0
+                    }
+            })
+            .sum();
         let b = self.probe.iter().map(|v| v * v).sum::<f64>().sqrt();
         (links + b).max(1.0)
     }
@@ -371,13 +545,12 @@ impl DhParams {
     /// assert_eq!(v[6], 375.0); // d1
     /// ```
     pub fn to_vec(&self) -> Vec<f64> {
-        ParamId::all(self.joint_count())
-            .map(|id| self.get(id))
-            .collect()
+        self.param_ids().map(|id| self.get(id)).collect()
     }
 
-    /// The inverse of [`DhParams::to_vec`]; `None` unless `v.len() == 4n + 3`
-    /// for some `n ≥ 1`.
+    /// The inverse of [`DhParams::to_vec`] for a D-H arm (every joint
+    /// [`JointModel::Dh`]; [`DhParams::with_values`] keeps an arm's models);
+    /// `None` unless `v.len() == 4n + 3` for some `n ≥ 1`.
     ///
     /// ```
     /// use aacmm_core::params::DhParams;

@@ -391,6 +391,8 @@ impl Verdict {
                 u.rms_mm, u.touch_mm
             ));
         }
+        // Nearly parallel axes in the D-H model: say which joint suits Hayati.
+        notes.extend(crate::hayati::recommendations(&calibration.params));
         let (before, after) = (fitted.before.e_mean, fitted.after.e_mean);
         if after.is_nan() || after > before {
             poor.push(format!(
@@ -769,7 +771,7 @@ pub fn run(
         arm_file: s.arm_file.clone(),
         data_file: s.data_file.clone(),
         lengths_file: s.lengths_file.clone(),
-        fix: options.fix.describe(start.joint_count()),
+        fix: options.fix.describe_for(start),
         noise: options.noise,
         seed: ctx.seed,
         units: Units {

@@ -567,6 +567,7 @@ impl Chain {
                 d: (foot - o_prev).dot(&z_prev) * 1000.0,
                 alpha: signed_angle(z_prev, z, x),
                 theta: signed_angle(x_prev, x, z_prev),
+                ..DhJoint::default()
             });
             debug_assert!(i < n);
             (o_prev, x_prev, z_prev) = (o, x, z);

@@ -4,8 +4,10 @@
 //! Jacobians against num-dual autodiff and central differences.
 
 use aacmm_core::generic;
-use aacmm_core::kernel::{self, ArmKernel, Chain, Dh, Jacobians, PreparedParams, PreparedPoses};
-use aacmm_core::params::{DhJoint, DhParams};
+use aacmm_core::kernel::{
+    self, ArmKernel, Chain, Dh, Hayati, Jacobians, PreparedParams, PreparedPoses,
+};
+use aacmm_core::params::{DhJoint, DhParams, JointModel};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 
@@ -18,6 +20,7 @@ fn nominal(n: usize) -> DhParams {
             d: 60.0,
             alpha: -PI / 2.0,
             theta: 0.0,
+            ..DhJoint::default()
         });
     }
     arm
@@ -46,6 +49,25 @@ fn arm(n: usize) -> impl Strategy<Value = DhParams> {
             DhParams::from_slice(&v).expect("4n + 3 values")
         });
     prop_oneof![near, far]
+}
+
+/// [`arm`] with a random subset of joints made Hayati, each with a random β
+/// (small, the near-parallel case, or anything).
+fn hayati_arm(n: usize) -> impl Strategy<Value = DhParams> {
+    (
+        arm(n),
+        prop::collection::vec(any::<bool>(), n),
+        prop::collection::vec(prop_oneof![-0.02f64..0.02, -PI..PI], n),
+    )
+        .prop_map(|(mut p, mask, beta)| {
+            for ((j, h), b) in p.joints.iter_mut().zip(mask).zip(beta) {
+                if h {
+                    j.model = JointModel::Hayati;
+                    j.beta = b;
+                }
+            }
+            p
+        })
 }
 
 fn readings(n: usize) -> impl Strategy<Value = Vec<f64>> {
@@ -84,11 +106,13 @@ fn kernel_matches<const N: usize, const P: usize>(
 ) -> Result<(), TestCaseError>
 where
     Dh: Chain<N>,
+    Hayati: Chain<N>,
 {
     let k = PreparedParams::<N>::new(params).unwrap();
     let q: [f64; N] = q.try_into().unwrap();
+    let models = params.models();
 
-    let want = generic::position(&params.to_vec(), &q);
+    let want = generic::position_with(&params.to_vec(), &q, &models);
     let got = kernel::position(&k, &q);
     for r in 0..3 {
         prop_assert!((got[r] - want[r]).abs() <= 1e-9, "{:?} vs {:?}", got, want);
@@ -124,8 +148,8 @@ where
             plus[j] += h;
             minus[j] -= h;
             let (p, m) = (
-                generic::position(&flat, &plus),
-                generic::position(&flat, &minus),
+                generic::position_with(&flat, &plus, &models),
+                generic::position_with(&flat, &minus, &models),
             );
             [0, 1, 2].map(|r| (p[r] - m[r]) / (2.0 * h))
         })
@@ -145,6 +169,114 @@ proptest! {
     #[test]
     fn seven_joint_kernel_matches_oracles(params in arm(7), q in readings(7)) {
         kernel_matches::<7, 31>(&params, &q)?;
+    }
+}
+
+proptest! {
+    // Fewer cases than the D-H chains': the joint subsets are random too, and
+    // the extended chain shares the D-H chain's frames.
+    #![proptest_config(ProptestConfig::with_cases(1000))]
+
+    #[test]
+    fn six_joint_hayati_kernel_matches_oracles(params in hayati_arm(6), q in readings(6)) {
+        kernel_matches::<6, 27>(&params, &q)?;
+    }
+
+    #[test]
+    fn seven_joint_hayati_kernel_matches_oracles(params in hayati_arm(7), q in readings(7)) {
+        kernel_matches::<7, 31>(&params, &q)?;
+    }
+}
+
+/// The extended chain with no Hayati joint is the D-H chain (it is only
+/// picked when a joint is Hayati, but it must agree where both apply).
+#[test]
+fn extended_chain_without_hayati_joints_is_the_dh_chain() {
+    for n in [6, 7] {
+        let params = nominal(n);
+        for i in 0..20 {
+            let q: Vec<f64> = (0..n)
+                .map(|j| ((i * 5 + j) as f64 * 0.77).sin() * 3.0)
+                .collect();
+            let (cq, sq): (Vec<f64>, Vec<f64>) = q.iter().map(|v| (v.cos(), v.sin())).unzip();
+            if n == 6 {
+                let k = PreparedParams::<6>::new(&params).unwrap();
+                let (cq, sq) = (
+                    cq.clone().try_into().unwrap(),
+                    sq.clone().try_into().unwrap(),
+                );
+                let (mut a, mut b) = (vec![[0.0; 3]; 27], vec![[0.0; 3]; 27]);
+                let pd = <Dh as Chain<6>>::position_jacobian(&k, &cq, &sq, &mut a);
+                let ph = <Hayati as Chain<6>>::position_jacobian(&k, &cq, &sq, &mut b);
+                for r in 0..3 {
+                    assert!((pd[r] - ph[r]).abs() < 1e-9);
+                }
+                for (x, y) in a.iter().zip(&b) {
+                    for r in 0..3 {
+                        assert!((x[r] - y[r]).abs() < 1e-9);
+                    }
+                }
+            } else {
+                let k = PreparedParams::<7>::new(&params).unwrap();
+                let (cq, sq) = (
+                    cq.clone().try_into().unwrap(),
+                    sq.clone().try_into().unwrap(),
+                );
+                let pd = <Dh as Chain<7>>::position(&k, &cq, &sq);
+                let ph = <Hayati as Chain<7>>::position(&k, &cq, &sq);
+                for r in 0..3 {
+                    assert!((pd[r] - ph[r]).abs() < 1e-9);
+                }
+            }
+        }
+    }
+}
+
+/// With a Hayati joint the batch paths (SIMD lanes and scalar tail) give the
+/// one-pose results of the extended chain bit for bit.
+#[test]
+fn hayati_batches_equal_single_poses_bit_for_bit() {
+    for n in [6usize, 7] {
+        let mut params = nominal(n);
+        params.joints[2].model = JointModel::Hayati;
+        params.joints[2].beta = 0.003;
+        params.joints[n - 1].model = JointModel::Hayati;
+        params.joints[n - 1].beta = -0.2;
+        let arm = ArmKernel::new(&params).unwrap();
+        let p = params.param_count();
+        for len in [0usize, 3, 4, 5, 9] {
+            let q: Vec<Vec<f64>> = (0..len)
+                .map(|i| {
+                    (0..n)
+                        .map(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 3.0)
+                        .collect()
+                })
+                .collect();
+            let poses = PreparedPoses::new(n, &q).unwrap();
+            let mut pos = vec![[0.0; 3]; len];
+            arm.positions(&poses, 0..len, &mut pos).unwrap();
+            let mut batch = Jacobians::new(len, p);
+            arm.jacobians(&poses, &mut batch).unwrap();
+            let mut seen = 0;
+            arm.for_each_jacobian(&poses, 0..len, |i, pi, cols| {
+                seen += 1;
+                assert_eq!(*pi, batch.position(i));
+                for (c, col) in cols.iter().enumerate() {
+                    assert_eq!(*col, batch.column(i, c));
+                }
+            })
+            .unwrap();
+            assert_eq!(seen, len);
+            for i in 0..len {
+                assert_eq!(pos[i], arm.position(&q[i]).unwrap());
+                let mut one = vec![[0.0; 3]; p];
+                let pi = arm.position_jacobian(&q[i], &mut one).unwrap();
+                assert_eq!(pi, batch.position(i));
+                for (c, col) in one.iter().enumerate() {
+                    assert_eq!(*col, batch.column(i, c), "n={n} pose {i} column {c}");
+                }
+            }
+        }
     }
 }
 

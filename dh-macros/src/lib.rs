@@ -16,9 +16,12 @@
 
 use proc_macro::TokenStream;
 
-/// `dh_chain! { [attrs] [vis] mod NAME { joints = N[, probe = true|false] } }`
+/// `dh_chain! { [attrs] [vis] mod NAME { joints = N[, probe = true|false][, hayati = true|false] } }`
 /// expands to a module with `JOINTS`, `PARAMS` and the generic functions
-/// `position`, `position_jacobian` and `joint_jacobian`.
+/// `position`, `position_jacobian` and `joint_jacobian`. With `hayati = true`
+/// every link ends in `Ry(β)` (inputs `cb`, `sb`), and `position_jacobian`
+/// takes `hayati: &[bool; N]` choosing per joint whether the d-slot's column
+/// is `∂p/∂d` or `∂p/∂β` (see `aacmm_codegen::chain`).
 #[proc_macro]
 pub fn dh_chain(input: TokenStream) -> TokenStream {
     aacmm_codegen::expand(input.into())

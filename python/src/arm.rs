@@ -312,7 +312,8 @@ impl Arm {
 
     /// The parameters as a dict `name → value` (mm, rad).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let pairs: Vec<(String, f64)> = ParamId::all(self.joints())
+        // The arm's own names: a Hayati joint's d-slot is `hbeta…` (rad).
+        let pairs: Vec<(String, f64)> = (self.arm.params.param_ids())
             .map(|id| (id.to_string(), self.arm.params.get(id)))
             .collect();
         let dict = pyo3::types::PyDict::new(py);

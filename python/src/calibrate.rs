@@ -161,7 +161,7 @@ pub fn calibrate(
         Some(f) => fix_text(f)?,
         None => "auto".to_string(),
     };
-    let fix = FixSpec::parse(&fix, arm.joints()).map_err(Error::from)?;
+    let fix = FixSpec::parse_for(&fix, &arm.arm.params).map_err(Error::from)?;
     // None: one per core; 0 is left to the library to refuse.
     let lm = LmOptions {
         threads: match threads {

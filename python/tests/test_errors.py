@@ -189,3 +189,19 @@ def test_simulation_settings(arm, tmp_path):
         aacmm.simulate(arm, sockets_file=sockets, poses=5, seed=1)
     with pytest.raises(TypeError):
         aacmm.simulate(arm, 3, 5, 1)
+
+
+def test_hayati_joint_names(tmp_path, data):
+    """A Hayati joint's d-slot is `hbeta<i>` (rad in Python), and `d<i>` of
+    that joint is refused rather than fixing β silently."""
+    parts = aacmm.Arm.from_file(ARM).to_toml().split("[[joint]]\n")
+    parts[2] = 'model = "hayati"\n' + parts[2].replace("alpha = 90.0", "alpha = 0.0").replace(
+        "d = 0.0", "hbeta = 0.5"
+    )
+    hayati = write(tmp_path, "hayati.toml", "[[joint]]\n".join(parts))
+    arm = aacmm.Arm.from_file(hayati)
+    params = arm.to_dict()
+    assert "hbeta2" in params and "d2" not in params
+    assert params["hbeta2"] == pytest.approx(np.radians(0.5), rel=1e-15)
+    with refused(ValueError, match="joint 2 is a Hayati joint: its d-slot is `hbeta2`"):
+        aacmm.calibrate(arm, data, fix="theta1,d2")

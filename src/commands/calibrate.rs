@@ -217,8 +217,7 @@ pub fn run(args: Args) -> Result<()> {
     )?;
     let noise = args.fit.noise();
     let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
-    let joints = arm.params.joint_count();
-    let fix = FixSpec::parse(&args.fix, joints).map_err(flag_error)?;
+    let fix = FixSpec::parse_for(&args.fix, &arm.params).map_err(flag_error)?;
     let (anneal, switch, global) = args.solver.options();
     let options = CalibrateOptions {
         fix,

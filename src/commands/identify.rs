@@ -135,6 +135,12 @@ fn table(id: &Identification) -> String {
     for chunk in sv.chunks(9) {
         s += &format!("  {}\n", chunk.join("  "));
     }
+    if !id.recommendations.is_empty() {
+        s += "\nModel (nearly parallel axes):\n";
+        for r in &id.recommendations {
+            s += &format!("  {r}\n");
+        }
+    }
     s += "\nStructural rules (hold whatever the noise does to the singular values):\n";
     for r in &id.rules {
         s += &format!("  {}: {}\n", r.name, r.explanation);

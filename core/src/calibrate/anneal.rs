@@ -284,15 +284,14 @@ pub fn anneal_observed<R: Rng>(
     if let Some(rule) = switch {
         rule.check()?;
     }
-    let joints = start.joint_count();
     let ids: Vec<ParamId> = free
         .iter()
-        .map(|&c| ParamId::from_column(joints, c).ok_or(CalibrationError::Shape))
+        .map(|&c| start.param_id(c).ok_or(CalibrationError::Shape))
         .collect::<Result<_, _>>()?;
     let ranges: Vec<f64> = ids
         .iter()
         .map(|id| match id.kind {
-            ParamKind::Alpha => options.twist_step_deg.to_radians(),
+            ParamKind::Alpha | ParamKind::Beta => options.twist_step_deg.to_radians(),
             ParamKind::Theta => options.zero_step_deg.to_radians(),
             _ => options.step_mm,
         })

@@ -311,12 +311,12 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             &params.to_vec(),
             &free,
             &inverse,
-            start.joint_count(),
+            start,
         )),
         _ => None,
     };
     let cov = inverse * (sigma0 * sigma0);
-    let ids: Vec<ParamId> = ParamId::all(start.joint_count()).collect();
+    let ids: Vec<ParamId> = start.param_ids().collect();
     for j in &mut params.joints {
         j.theta = wrap(j.theta);
         j.alpha = wrap(j.alpha);
@@ -326,7 +326,10 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         .enumerate()
         .map(|(c, &id)| {
             let (nominal, calibrated) = (start.get(id), params.get(id));
-            let correction = if matches!(id.kind, ParamKind::Theta | ParamKind::Alpha) {
+            let correction = if matches!(
+                id.kind,
+                ParamKind::Theta | ParamKind::Alpha | ParamKind::Beta
+            ) {
                 wrap(calibrated - nominal)
             } else {
                 calibrated - nominal

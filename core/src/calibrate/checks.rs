@@ -102,16 +102,22 @@ pub fn gross_corrections(
     let in_last_link = |id: ParamId| {
         id.kind == ParamKind::Probe
             || (id.index == last
-                && matches!(id.kind, ParamKind::A | ParamKind::D | ParamKind::Alpha))
+                && matches!(
+                    id.kind,
+                    ParamKind::A | ParamKind::D | ParamKind::Alpha | ParamKind::Beta
+                ))
     };
     let mut gross: Vec<GrossCorrection> = free
         .iter()
-        .filter_map(|&c| ParamId::from_column(n, c))
+        .filter_map(|&c| nominal.param_id(c))
         .filter(|&id| id.kind != ParamKind::Theta && !in_last_link(id))
         .filter_map(|id| {
             let (v0, v) = (nominal.get(id), calibrated.get(id));
             let (moved, tolerance) = match id.kind {
-                ParamKind::Alpha => (wrap(v - v0).abs(), TWIST_TOLERANCE_DEG.to_radians()),
+                // A Hayati β is a twist about the link's y axis.
+                ParamKind::Alpha | ParamKind::Beta => {
+                    (wrap(v - v0).abs(), TWIST_TOLERANCE_DEG.to_radians())
+                }
                 _ => ((v - v0).abs(), length_tolerance(v0)),
             };
             (moved.is_nan() || moved > tolerance).then(|| GrossCorrection {

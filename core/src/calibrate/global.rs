@@ -428,7 +428,7 @@ pub(crate) fn global<R: Rng>(
     phases.retain(|p| p.cost_evaluations + p.jacobian_evaluations > 0);
     let names = |cols: &[usize]| -> Vec<String> {
         cols.iter()
-            .filter_map(|&c| ParamId::from_column(joints, c))
+            .filter_map(|&c| start.param_id(c))
             .map(|id| id.to_string())
             .collect()
     };
@@ -658,11 +658,18 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
             continue;
         }
         // The half turn to absorb: find where, through free parameters only.
+        // A Hayati joint's Ry(β) turns with its twist: Rz(π) carries
+        // through Tx(a)·Rx(α)·Ry(β) as Tx(−a)·Rx(−α)·Ry(−β).
+        let hayati_beta = |j: usize| {
+            (params.joints[j].model == crate::params::JointModel::Hayati)
+                .then(|| id(ParamKind::Beta, j))
+        };
         let mut plan = vec![
             id(ParamKind::Theta, i),
             id(ParamKind::A, i),
             id(ParamKind::Alpha, i),
         ];
+        plan.extend(hayati_beta(i));
         let mut absorbed = false;
         for j in i + 1..n {
             if is_free(id(ParamKind::Theta, j)) {
@@ -671,6 +678,7 @@ pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]
                 break;
             }
             plan.extend([id(ParamKind::A, j), id(ParamKind::Alpha, j)]);
+            plan.extend(hayati_beta(j));
         }
         if !absorbed {
             plan.extend([id(ParamKind::Probe, 0), id(ParamKind::Probe, 1)]);
@@ -713,6 +721,14 @@ fn last_joint_route(
     changed: &mut Vec<String>,
 ) -> bool {
     let n = params.joint_count();
+    // Not derived for Hayati links (their Ry(β) sits between Rx(α) and the
+    // probe): their sign convention is left as the fit found it.
+    if params.joints[i..]
+        .iter()
+        .any(|j| j.model == crate::params::JointModel::Hayati)
+    {
+        return false;
+    }
     let id = |kind, index| ParamId { kind, index };
     let is_free = |p: ParamId| free.contains(&p.column(n));
     let mut negate = vec![id(ParamKind::A, i), id(ParamKind::Alpha, i)];

@@ -236,7 +236,7 @@ pub(crate) fn levenberg_marquardt_from(
     let mut x = start.to_vec();
     // The prior, if any, rides with the weights ([`super::prior`]).
     let params_of = |x: &[f64]| -> Result<DhParams, CalibrationError> {
-        DhParams::from_slice(x).ok_or(CalibrationError::Shape)
+        start.with_values(x).ok_or(CalibrationError::Shape)
     };
     let mut normal = normal;
     if !normal.cost().is_finite() {
@@ -345,7 +345,7 @@ pub(crate) fn levenberg_marquardt_from(
         }
     }
     Ok(LmResult {
-        params: DhParams::from_slice(&x).ok_or(CalibrationError::Shape)?,
+        params: start.with_values(&x).ok_or(CalibrationError::Shape)?,
         termination,
         iterations: history.len(),
         cost_evaluations,

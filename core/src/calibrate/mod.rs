@@ -447,7 +447,17 @@ impl Calibration {
     /// Restores [`Calibration::params`] from the estimates, after reading a
     /// calibration back from JSON.
     pub fn restore_params(&mut self) {
-        if let Some(p) = DhParams::from_slice(&self.calibrated_vector()) {
+        if let Some(mut p) = DhParams::from_slice(&self.calibrated_vector()) {
+            // A Hayati joint's d-slot is named `hbeta…`: from_slice put β in d.
+            for e in &self.parameters {
+                if e.id.kind == crate::params::ParamKind::Beta
+                    && let Some(j) = p.joints.get_mut(e.id.index)
+                {
+                    j.model = crate::params::JointModel::Hayati;
+                    j.beta = j.d;
+                    j.d = 0.0;
+                }
+            }
             self.params = p;
         }
     }
@@ -522,7 +532,7 @@ pub fn calibrate_with(
             }
             let reasons = fixed
                 .iter()
-                .filter_map(|&c| ParamId::from_column(start.joint_count(), c))
+                .filter_map(|&c| start.param_id(c))
                 .map(|id| (id, "fixed by the user".to_string()))
                 .collect();
             (free, None, reasons)
@@ -531,7 +541,7 @@ pub fn calibrate_with(
     if free.is_empty() {
         return Err(OptionError::new(
             "fix",
-            options.fix.describe(start.joint_count()),
+            options.fix.describe_for(start),
             "every parameter is fixed: nothing is left to calibrate",
         )
         .into());

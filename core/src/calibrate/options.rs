@@ -96,10 +96,56 @@ impl FixSpec {
     /// assert!(e.reason.contains("`auto` stands alone"), "{e}");
     /// ```
     pub fn parse(s: &str, joints: usize) -> Result<FixSpec, OptionError> {
+        let names: Vec<String> = ParamId::all(joints).map(|p| p.to_string()).collect();
+        FixSpec::parse_names(s, &names, |t| {
+            ParamId::parse(t, joints).map(|id| id.column(joints))
+        })
+    }
+
+    /// [`FixSpec::parse`] for `arm`: a Hayati joint's d-slot is `hbeta…`
+    /// and has no `d…` (and a D-H joint no `hbeta…`), so a name of the
+    /// other model is refused rather than fixing the slot silently.
+    ///
+    /// ```
+    /// use aacmm_core::{calibrate::FixSpec, params::{DhParams, JointModel}};
+    /// let mut arm = DhParams::paper_nominal();
+    /// arm.joints[1].model = JointModel::Hayati;
+    /// assert_eq!(FixSpec::parse_for("hbeta2", &arm).unwrap(), FixSpec::Columns(vec![7]));
+    /// let e = FixSpec::parse_for("d2", &arm).unwrap_err();
+    /// assert!(e.reason.contains("joint 2 is a Hayati joint: its d-slot is `hbeta2`"), "{e}");
+    /// ```
+    pub fn parse_for(s: &str, arm: &crate::params::DhParams) -> Result<FixSpec, OptionError> {
+        let names: Vec<String> = arm.param_ids().map(|p| p.to_string()).collect();
+        let n = arm.joint_count();
+        let fix = FixSpec::parse_names(s, &names, |t| arm.parse_param(t).map(|id| id.column(n)));
+        // Say why a name of the other model is unknown.
+        if fix.is_err()
+            && let Some((t, id)) = s.split(',').map(str::trim).find_map(|t| {
+                ParamId::parse(t, n)
+                    .filter(|&id| id.kind.is_d_slot() && !arm.has_param(id))
+                    .map(|id| (t, id))
+            })
+        {
+            let j = id.index + 1;
+            let reason = match id.kind {
+                crate::params::ParamKind::D => {
+                    format!("joint {j} is a Hayati joint: its d-slot is `hbeta{j}`, not `{t}`")
+                }
+                _ => format!("joint {j} is a D-H joint: its d-slot is `d{j}`, not `{t}`"),
+            };
+            return Err(OptionError::new("fix", s, reason));
+        }
+        fix
+    }
+
+    fn parse_names(
+        s: &str,
+        names: &[String],
+        column: impl Fn(&str) -> Option<usize>,
+    ) -> Result<FixSpec, OptionError> {
         if s.trim() == "auto" {
             return Ok(FixSpec::Auto);
         }
-        let names: Vec<String> = ParamId::all(joints).map(|p| p.to_string()).collect();
         s.split(',')
             .map(str::trim)
             .filter(|t| !t.is_empty())
@@ -112,19 +158,17 @@ impl FixSpec {
                          parameters to fix",
                     ));
                 }
-                ParamId::parse(t, joints)
-                    .map(|id| id.column(joints))
-                    .ok_or_else(|| {
-                        OptionError::new(
-                            "fix",
-                            s,
-                            format!(
-                                "unknown parameter `{t}`; parameters are {} … {}",
-                                names[0],
-                                names[names.len() - 1]
-                            ),
-                        )
-                    })
+                column(t).ok_or_else(|| {
+                    OptionError::new(
+                        "fix",
+                        s,
+                        format!(
+                            "unknown parameter `{t}`; parameters are {} … {}",
+                            names[0],
+                            names[names.len() - 1]
+                        ),
+                    )
+                })
             })
             .collect::<Result<Vec<usize>, _>>()
             .map(FixSpec::Columns)
@@ -144,6 +188,20 @@ impl FixSpec {
             FixSpec::Columns(c) => c
                 .iter()
                 .filter_map(|&c| ParamId::from_column(joints, c))
+                .map(|id| id.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+        }
+    }
+
+    /// [`FixSpec::describe`] with `arm`'s names (`hbeta…` for a Hayati
+    /// joint's d-slot).
+    pub fn describe_for(&self, arm: &crate::params::DhParams) -> String {
+        match self {
+            FixSpec::Auto => "auto".to_string(),
+            FixSpec::Columns(c) => c
+                .iter()
+                .filter_map(|&c| arm.param_id(c))
                 .map(|id| id.to_string())
                 .collect::<Vec<_>>()
                 .join(","),

@@ -258,20 +258,30 @@ impl Tolerances {
     /// Per column of an `n`-joint arm (the fixed order), the tolerance
     /// (mm or rad) that applies, if any.
     pub fn sigmas(&self, n: usize) -> Vec<Option<f64>> {
+        self.sigmas_of(n, ParamId::all(n))
+    }
+
+    /// Per column of the arm `params`, the tolerance (mm or rad) that
+    /// applies, if any: as [`Tolerances::sigmas`], with a Hayati joint's
+    /// d-slot the angle `hbeta…` (covered by `angle`, not `length` or `d`).
+    pub fn sigmas_for(&self, params: &DhParams) -> Vec<Option<f64>> {
+        self.sigmas_of(params.joint_count(), params.param_ids())
+    }
+
+    fn sigmas_of(&self, n: usize, ids: impl Iterator<Item = ParamId>) -> Vec<Option<f64>> {
         let targets: Vec<(Target, f64)> = self
             .entries
             .iter()
             .filter_map(|(name, s)| Some((Target::parse(name, n)?, *s)))
             .collect();
-        ParamId::all(n)
-            .map(|id| {
-                targets
-                    .iter()
-                    .filter(|(t, _)| t.covers(id))
-                    .max_by_key(|(t, _)| t.rank())
-                    .map(|(_, s)| *s)
-            })
-            .collect()
+        ids.map(|id| {
+            targets
+                .iter()
+                .filter(|(t, _)| t.covers(id))
+                .max_by_key(|(t, _)| t.rank())
+                .map(|(_, s)| *s)
+        })
+        .collect()
     }
 
     /// Checks the entries for an `n`-joint arm (each target exists, each
@@ -332,15 +342,14 @@ impl PriorTerm {
     /// The prior of `tolerances` around the arm `nominal`; `None` when no
     /// tolerance applies to any parameter.
     pub fn new(tolerances: &Tolerances, nominal: &DhParams) -> Option<PriorTerm> {
-        let n = nominal.joint_count();
-        let sigma = tolerances.sigmas(n);
+        let sigma = tolerances.sigmas_for(nominal);
         if sigma.iter().all(Option::is_none) {
             return None;
         }
         Some(PriorTerm {
             nominal: nominal.to_vec(),
             sigma,
-            angle: ParamId::all(n).map(|id| !id.kind.is_length()).collect(),
+            angle: nominal.param_ids().map(|id| !id.kind.is_length()).collect(),
         })
     }
 
@@ -467,14 +476,14 @@ impl PriorReport {
         x: &[f64],
         free: &[usize],
         inverse: &nalgebra::DMatrix<f64>,
-        joints: usize,
+        arm: &DhParams,
     ) -> PriorReport {
         let parameters = free
             .iter()
             .enumerate()
             .filter_map(|(a, &c)| {
                 let s = prior.sigma(c)?;
-                let id = ParamId::from_column(joints, c)?;
+                let id = arm.param_id(c)?;
                 let var = inverse[(a, a)];
                 let finite = var.is_finite() && var >= 0.0;
                 Some(PriorEstimate {
@@ -492,7 +501,7 @@ impl PriorReport {
             })
             .collect();
         PriorReport {
-            tolerances: tolerances.describe(joints),
+            tolerances: tolerances.describe(arm.joint_count()),
             rows: prior.rows(free),
             cost: prior.cost(free, x),
             parameters,
@@ -573,12 +582,12 @@ pub fn conditioning(
     let full = crate::identify::full_normal(params, data, &weights, threads)?;
     let np = full.free.len();
     let reach = params.reach();
-    let ids: Vec<ParamId> = ParamId::all(n).collect();
+    let ids: Vec<ParamId> = params.param_ids().collect();
     let d: Vec<f64> = ids
         .iter()
         .map(|i| if i.kind.is_length() { 1.0 } else { 1.0 / reach })
         .collect();
-    let sigma = tolerances.sigmas(n);
+    let sigma = tolerances.sigmas_for(params);
     let scaled = |cols: &[usize], with: bool| {
         DMatrix::from_fn(cols.len(), cols.len(), |a, b| {
             let (ca, cb) = (cols[a], cols[b]);

@@ -12,6 +12,13 @@
 //! d = 375.0
 //! limits = [-180.0, 180.0]   # optional limits of the encoder reading q
 //!
+//! [[joint]]               # a joint whose axis is (nearly) parallel to the previous
+//! model = "hayati"        # A = Rz(θ+q)·Tx(a)·Rx(α)·Ry(β): no `d`, `hbeta` instead
+//! theta = 0.0
+//! alpha = 0.2
+//! a = 300.0
+//! hbeta = 0.0             # rotation β about the link's y axis, in angle_unit
+//!
 //! [probe]                 # probe centre in the last joint's frame
 //! x = 0.0
 //! y = 0.0
@@ -19,7 +26,10 @@
 //! ```
 //!
 //! `name` is optional (default empty). Lengths (`a`, `d`, probe) are in
-//! `length_unit`, angles (`theta`, `alpha`, `limits`) in `angle_unit`.
+//! `length_unit`, angles (`theta`, `alpha`, `hbeta`, `limits`) in `angle_unit`.
+//! `model` is `"dh"` (the default: `d` required, no `hbeta`) or `"hayati"`
+//! (`hbeta` required, no `d`); see [`JointModel`].
+//! `hbeta`, not `beta`: `beta` is the paper's name of the twist `α`.
 //! Integers are accepted where numbers are expected. Unknown keys are errors
 //! (a typo is never ignored), as are non-finite numbers, a missing key, a
 //! joint count the toolkit has no kernel for (see
@@ -41,7 +51,7 @@ use super::Warning;
 use super::text::{line_of, read_text, suggest};
 use super::units::{AngleUnit, LengthUnit};
 use crate::error::InputError;
-use crate::params::{DhJoint, DhParams, SUPPORTED_JOINTS};
+use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
 
 /// In an arm file in metres, a length above this (m) draws a warning: no
 /// measuring arm is that long, so the lengths are likely millimetres.
@@ -196,13 +206,89 @@ pub(crate) struct ArmFile {
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields, expecting = "a table")]
 struct JointFile {
+    /// `dh` (absent: the default) or `hayati`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    model: Option<Spanned<String>>,
     theta: Spanned<f64>,
     #[serde(alias = "beta")]
     alpha: Spanned<f64>,
     a: Spanned<f64>,
-    d: Spanned<f64>,
+    /// Required for a D-H joint, refused for a Hayati joint (checked in
+    /// [`ArmFile::to_arm`], which locates the message).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    d: Option<Spanned<f64>>,
+    /// Hayati β: required for a Hayati joint, refused for a D-H joint.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    hbeta: Option<Spanned<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     limits: Option<Spanned<Vec<Spanned<f64>>>>,
+}
+
+impl JointFile {
+    /// The joint's model, or a located message (joint `i`, 0-based).
+    fn model(
+        &self,
+        span: Range<usize>,
+        i: usize,
+        text: &str,
+        file: &str,
+    ) -> Result<JointModel, InputError> {
+        let ctx = format!("joint {}: ", i + 1);
+        let at = |span: Range<usize>, field: &str, message: String| {
+            InputError::field(
+                file,
+                line_of(text, span.start),
+                field,
+                format!("{ctx}{message}"),
+            )
+        };
+        let model = match &self.model {
+            None => JointModel::Dh,
+            Some(m) => match m.get_ref().as_str() {
+                "dh" => JointModel::Dh,
+                "hayati" => JointModel::Hayati,
+                other => {
+                    return Err(at(
+                        m.span(),
+                        "model",
+                        format!("unknown model `{other}`; expected \"dh\" or \"hayati\""),
+                    ));
+                }
+            },
+        };
+        match (model, &self.d, &self.hbeta) {
+            (JointModel::Dh, Some(_), None) | (JointModel::Hayati, None, Some(_)) => Ok(model),
+            (JointModel::Dh, None, _) => Err(at(
+                span,
+                "d",
+                "missing; every [[joint]] needs `theta`, `alpha` (or `beta`), `a` and `d` \
+                 (a joint with `model = \"hayati\"` needs `hbeta` instead of `d`)"
+                    .to_string(),
+            )),
+            (JointModel::Dh, Some(_), Some(b)) => Err(at(
+                b.span(),
+                "hbeta",
+                "`hbeta` is the Hayati rotation: it needs `model = \"hayati\"` (and no `d`); \
+                 the paper's β, the twist, is written `alpha` or `beta`"
+                    .to_string(),
+            )),
+            (JointModel::Hayati, Some(d), _) => Err(at(
+                d.span(),
+                "d",
+                "a Hayati joint (model = \"hayati\") has no `d`: its link is \
+                 Rz(θ+q)·Tx(a)·Rx(α)·Ry(β); remove `d` (for axes exactly parallel to the \
+                 previous one, move it to the next joint's `d`) and give `hbeta`"
+                    .to_string(),
+            )),
+            (JointModel::Hayati, None, None) => Err(at(
+                span,
+                "hbeta",
+                "missing; a Hayati joint (model = \"hayati\") needs `hbeta`, the rotation \
+                 about the link's y axis, in angle_unit"
+                    .to_string(),
+            )),
+        }
+    }
 }
 
 /// The `[probe]` table.
@@ -248,11 +334,15 @@ impl ArmFile {
             angle_unit: au,
             joint: new(joints
                 .map(|(i, j)| {
+                    let hayati = j.model == JointModel::Hayati;
                     new(JointFile {
+                        // Absent for D-H joints: their files read as before.
+                        model: hayati.then(|| new(JointModel::Hayati.name().to_string())),
                         theta: new(ang(j.theta)),
                         alpha: new(ang(j.alpha)),
                         a: len(j.a),
-                        d: len(j.d),
+                        d: (!hayati).then(|| len(j.d)),
+                        hbeta: hayati.then(|| new(ang(j.beta))),
                         limits: arm
                             .limits
                             .get(i)
@@ -285,6 +375,13 @@ impl ArmFile {
     /// express; `text` and `file` locate the messages.
     pub(crate) fn to_arm(&self, text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputError> {
         let joints = self.joint.get_ref();
+        // Per-joint keys first, as serde's missing-key errors came before
+        // the joint count when `d` was required by the schema.
+        let models = joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| j.get_ref().model(j.span(), i, text, file))
+            .collect::<Result<Vec<JointModel>, InputError>>()?;
         if !SUPPORTED_JOINTS.contains(&joints.len()) {
             // Blame the first joint too many, or the last.
             let max = SUPPORTED_JOINTS.iter().max().copied().unwrap_or(0);
@@ -315,10 +412,22 @@ impl ArmFile {
             },
             limits: Vec::with_capacity(joints.len()),
         };
-        for (i, j) in joints.iter().map(Spanned::get_ref).enumerate() {
+        for (i, (j, &model)) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate() {
             let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
-            let [a, d] = [&j.a, &j.d].map(|v| lu.to_internal(*v.get_ref()));
-            arm.params.joints.push(DhJoint { a, d, alpha, theta });
+            let a = lu.to_internal(*j.a.get_ref());
+            arm.params.joints.push(match model {
+                JointModel::Dh => {
+                    let d = j.d.as_ref().map_or(0.0, |d| lu.to_internal(*d.get_ref()));
+                    DhJoint::dh(a, d, alpha, theta)
+                }
+                JointModel::Hayati => {
+                    let beta = j
+                        .hbeta
+                        .as_ref()
+                        .map_or(0.0, |b| au.to_internal(*b.get_ref()));
+                    DhJoint::hayati(a, alpha, theta, beta)
+                }
+            });
             let limits = match j.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
                 None => None,
                 Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
@@ -361,13 +470,14 @@ impl ArmFile {
             .enumerate()
         {
             let ctx = format!("joint {}: ", i + 1);
-            for (field, v) in [
-                ("theta", &j.theta),
-                ("alpha", &j.alpha),
-                ("a", &j.a),
-                ("d", &j.d),
-            ] {
+            for (field, v) in [("theta", &j.theta), ("alpha", &j.alpha), ("a", &j.a)] {
                 out.push((ctx.clone(), field, v));
+            }
+            if let Some(d) = &j.d {
+                out.push((ctx.clone(), "d", d));
+            }
+            if let Some(b) = &j.hbeta {
+                out.push((ctx.clone(), "hbeta", b));
             }
             for v in j.limits.iter().flat_map(|l| l.get_ref()) {
                 out.push((ctx.clone(), "limits", v));
@@ -403,7 +513,7 @@ impl ArmFile {
                 (field, v, message)
             });
         let turn = (self.angle_unit == AngleUnit::Rad)
-            .then(|| first(&["theta", "alpha"], std::f64::consts::TAU))
+            .then(|| first(&["theta", "alpha", "hbeta"], std::f64::consts::TAU))
             .flatten()
             .map(|(_, field, v)| {
                 let message = format!(
@@ -1079,12 +1189,21 @@ z = 100.0
     fn write_is_deterministic_and_round_trips_bits() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         for n in SUPPORTED_JOINTS {
+            // Every third joint Hayati: its β round-trips too.
             let joints = (0..n)
-                .map(|_| DhJoint {
-                    a: rng.random_range(-100.0..100.0),
-                    d: rng.random_range(-400.0..400.0),
-                    alpha: rng.random_range(-3.2..3.2),
-                    theta: rng.random_range(-0.1..0.1),
+                .map(|i| {
+                    let j = DhJoint {
+                        a: rng.random_range(-100.0..100.0),
+                        d: rng.random_range(-400.0..400.0),
+                        alpha: rng.random_range(-3.2..3.2),
+                        theta: rng.random_range(-0.1..0.1),
+                        ..DhJoint::default()
+                    };
+                    if i % 3 == 1 {
+                        DhJoint::hayati(j.a, j.alpha, j.theta, rng.random_range(-0.1..0.1))
+                    } else {
+                        j
+                    }
                 })
                 .collect();
             let limits = (0..n)
@@ -1112,6 +1231,7 @@ z = 100.0
                     .collect::<Vec<_>>()
             };
             assert_eq!(bits(&back), bits(&arm));
+            assert_eq!(back.params, arm.params);
             assert_eq!(arm_to_toml(&back, LengthUnit::Mm, AngleUnit::Rad), text);
             // Through deg and m: within 1 ulp.
             let (back, _) =
@@ -1120,6 +1240,84 @@ z = 100.0
                 assert!((x - y).abs() <= y.abs() * f64::EPSILON, "{x} {y}");
             }
         }
+    }
+
+    /// `GOOD` with joint 2 (α = 90°) written as a Hayati joint.
+    fn hayati_text() -> String {
+        edit(
+            "theta = 0.5\nbeta = 90\na = -55.0\nd = 0.0\n",
+            "model = \"hayati\"\ntheta = 0.5\nalpha = 90\na = -55.0\nhbeta = 0.25\n",
+        )
+    }
+
+    #[test]
+    fn hayati_joints_read_and_write_back() {
+        let (arm, _) = parse_arm(&hayati_text(), F).unwrap();
+        let j = arm.params.joints[1];
+        assert_eq!(j.model, JointModel::Hayati);
+        assert_eq!((j.beta, j.d), (0.25f64.to_radians(), 0.0));
+        assert_eq!(arm.params.joints[0].model, JointModel::Dh);
+        let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg);
+        assert!(
+            text.contains(
+                "model = \"hayati\"\ntheta = 0.5\nalpha = 90.0\na = -55.0\nhbeta = 0.25\n"
+            ),
+            "{text}"
+        );
+        assert_eq!(
+            text.matches("model").count(),
+            1,
+            "D-H joints write no model"
+        );
+        assert_eq!(parse_arm(&text, F).unwrap().0, arm);
+        // `model = "dh"` is the default, spelled out.
+        let dh = edit("theta = 0.5\n", "model = \"dh\"\ntheta = 0.5\n");
+        assert_eq!(parse_arm(&dh, F).unwrap().0, parse_arm(GOOD, F).unwrap().0);
+    }
+
+    #[test]
+    fn hayati_mistakes_are_located() {
+        let h = hayati_text();
+        let bad = |from: &str, to: &str| {
+            assert!(h.contains(from), "{from}");
+            err(&h.replacen(from, to, 1))
+        };
+        assert_at(
+            &bad("model = \"hayati\"", "model = \"hayat\""),
+            13,
+            Some("model"),
+            "joint 2: unknown model `hayat`; expected \"dh\" or \"hayati\"",
+        );
+        assert_at(
+            &bad("hbeta = 0.25\n", "hbeta = 0.25\nd = 1.0\n"),
+            18,
+            Some("d"),
+            "joint 2: a Hayati joint (model = \"hayati\") has no `d`",
+        );
+        assert_at(
+            &bad("hbeta = 0.25\n", ""),
+            12,
+            Some("hbeta"),
+            "joint 2: missing; a Hayati joint",
+        );
+        assert_at(
+            &bad("model = \"hayati\"\n", ""),
+            12,
+            Some("d"),
+            "joint 2: missing; every [[joint]] needs",
+        );
+        assert_at(
+            &err(&edit("d = 375.0\n", "d = 375.0\nhbeta = 1.0\n")),
+            10,
+            Some("hbeta"),
+            "joint 1: `hbeta` is the Hayati rotation: it needs `model = \"hayati\"`",
+        );
+        assert_at(
+            &bad("hbeta = 0.25", "hbeta = inf"),
+            17,
+            Some("hbeta"),
+            "joint 2: `inf` is not a finite number",
+        );
     }
 
     #[test]

@@ -6,8 +6,8 @@ use std::ops::Range;
 
 use super::lanes::{self, Batch, LaneOp};
 use super::{
-    Chain, Dh, Jacobians, KernelError, PreparedParams, PreparedPoses, for_each_lane_jacobian,
-    jacobians_impl, positions_impl,
+    Chain, Dh, Hayati, Jacobians, KernelError, PreparedParams, PreparedPoses,
+    for_each_lane_jacobian, jacobians_impl, positions_impl,
 };
 use crate::params::DhParams;
 
@@ -16,10 +16,9 @@ use crate::params::DhParams;
 pub(crate) trait KernelOp {
     /// What the operation returns.
     type Output;
-    /// Runs the operation on the prepared parameters of an `N`-joint arm.
-    fn run<const N: usize>(self, k: &PreparedParams<N>) -> Self::Output
-    where
-        Dh: Chain<N>;
+    /// Runs the operation on the prepared parameters of an `N`-joint arm
+    /// with its chain `C` ([`Dh`], or [`Hayati`] when a joint is Hayati).
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output;
 }
 
 macro_rules! chains {
@@ -52,10 +51,15 @@ macro_rules! chains {
                 Ok(ArmKernel { inner })
             }
 
-            /// Runs `op` on this arm's chain.
+            /// Runs `op` on this arm's chain: the D-H one unless a joint is
+            /// Hayati (the D-H chain stays as fast as it was).
             pub(crate) fn apply<O: KernelOp>(&self, op: O) -> O::Output {
                 match &self.inner {
-                    $(Prepared::$variant(k) => op.run(k),)*
+                    $(Prepared::$variant(k) => if k.has_hayati() {
+                        op.run::<$n, Hayati>(k)
+                    } else {
+                        op.run::<$n, Dh>(k)
+                    },)*
                 }
             }
         }
@@ -76,10 +80,7 @@ pub struct ArmKernel {
 struct Joints;
 impl KernelOp for Joints {
     type Output = usize;
-    fn run<const N: usize>(self, _: &PreparedParams<N>) -> usize
-    where
-        Dh: Chain<N>,
-    {
+    fn run<const N: usize, C: Chain<N>>(self, _: &PreparedParams<N>) -> usize {
         N
     }
 }
@@ -92,26 +93,23 @@ struct OnePose<'a> {
 
 impl KernelOp for OnePose<'_> {
     type Output = Result<[f64; 3], KernelError>;
-    fn run<const N: usize>(self, k: &PreparedParams<N>) -> Self::Output
-    where
-        Dh: Chain<N>,
-    {
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output {
         let q: &[f64; N] = self.q.try_into().map_err(|_| KernelError::JointCount {
             expected: N,
             got: self.q.len(),
         })?;
         let (cq, sq) = (q.map(f64::cos), q.map(f64::sin));
         match self.jac {
-            None => Ok(Dh::position(k, &cq, &sq)),
+            None => Ok(C::position(k, &cq, &sq)),
             Some((jac, true)) => {
-                check_len(<Dh as Chain<N>>::PARAMS, jac.len())?;
-                Ok(Dh::position_jacobian(k, &cq, &sq, jac))
+                check_len(C::PARAMS, jac.len())?;
+                Ok(C::position_jacobian(k, &cq, &sq, jac))
             }
             Some((jac, false)) => {
                 check_len(N, jac.len())?;
                 // Invariant: `check_len` just returned Ok for length N.
                 let jac: &mut [[f64; 3]; N] = jac.try_into().expect("length checked");
-                Ok(Dh::joint_jacobian(k, &cq, &sq, jac))
+                Ok(C::joint_jacobian(k, &cq, &sq, jac))
             }
         }
     }
@@ -126,23 +124,31 @@ struct OnePrepared<'a> {
 
 impl KernelOp for OnePrepared<'_> {
     type Output = Result<[f64; 3], KernelError>;
-    fn run<const N: usize>(self, k: &PreparedParams<N>) -> Self::Output
-    where
-        Dh: Chain<N>,
-    {
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output {
         check_len(N, self.jac.len())?;
         // Invariant: `check_len` above.
         let jac: &mut [[f64; 3]; N] = self.jac.try_into().expect("length checked");
         let (cq, sq) = self.poses.trig::<N>(self.i);
-        Ok(Dh::joint_jacobian(k, &cq, &sq, jac))
+        Ok(C::joint_jacobian(k, &cq, &sq, jac))
     }
 }
 
 /// A batch operation with the arm's chain known: the [`LaneOp`] that
 /// [`lanes::run`] runs on the widest lanes the CPU has.
-struct OnChain<'k, const N: usize, O> {
+struct OnChain<'k, const N: usize, C, O> {
     k: &'k PreparedParams<N>,
     op: O,
+    chain: std::marker::PhantomData<C>,
+}
+
+impl<'k, const N: usize, C, O> OnChain<'k, N, C, O> {
+    fn new(k: &'k PreparedParams<N>, op: O) -> Self {
+        OnChain {
+            k,
+            op,
+            chain: std::marker::PhantomData,
+        }
+    }
 }
 
 struct Positions<'a> {
@@ -153,23 +159,17 @@ struct Positions<'a> {
 
 impl KernelOp for Positions<'_> {
     type Output = ();
-    fn run<const N: usize>(self, k: &PreparedParams<N>)
-    where
-        Dh: Chain<N>,
-    {
-        lanes::run(OnChain { k, op: self })
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
+        lanes::run(OnChain::<N, C, _>::new(k, self))
     }
 }
 
-impl<const N: usize> LaneOp for OnChain<'_, N, Positions<'_>>
-where
-    Dh: Chain<N>,
-{
+impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, Positions<'_>> {
     type Output = ();
     #[inline(always)]
     fn run<L: Batch>(self) {
         let Positions { poses, start, out } = self.op;
-        positions_impl::<N, L>(self.k, poses, start, out)
+        positions_impl::<N, C, L>(self.k, poses, start, out)
     }
 }
 
@@ -180,25 +180,19 @@ struct AllJacobians<'a> {
 
 impl KernelOp for AllJacobians<'_> {
     type Output = Result<(), KernelError>;
-    fn run<const N: usize>(self, k: &PreparedParams<N>) -> Self::Output
-    where
-        Dh: Chain<N>,
-    {
-        check_len(<Dh as Chain<N>>::PARAMS, self.out.params())?;
-        lanes::run(OnChain { k, op: self });
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output {
+        check_len(C::PARAMS, self.out.params())?;
+        lanes::run(OnChain::<N, C, _>::new(k, self));
         Ok(())
     }
 }
 
-impl<const N: usize> LaneOp for OnChain<'_, N, AllJacobians<'_>>
-where
-    Dh: Chain<N>,
-{
+impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, AllJacobians<'_>> {
     type Output = ();
     #[inline(always)]
     fn run<L: Batch>(self) {
         let AllJacobians { poses, out } = self.op;
-        jacobians_impl::<N, L>(self.k, poses, out)
+        jacobians_impl::<N, C, L>(self.k, poses, out)
     }
 }
 
@@ -210,24 +204,19 @@ struct EachJacobian<'a, F> {
 
 impl<F: FnMut(usize, &[f64; 3], &[[f64; 3]])> KernelOp for EachJacobian<'_, F> {
     type Output = ();
-    fn run<const N: usize>(self, k: &PreparedParams<N>)
-    where
-        Dh: Chain<N>,
-    {
-        lanes::run(OnChain { k, op: self })
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
+        lanes::run(OnChain::<N, C, _>::new(k, self))
     }
 }
 
-impl<const N: usize, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneOp
-    for OnChain<'_, N, EachJacobian<'_, F>>
-where
-    Dh: Chain<N>,
+impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneOp
+    for OnChain<'_, N, C, EachJacobian<'_, F>>
 {
     type Output = ();
     #[inline(always)]
     fn run<L: Batch>(self) {
         let EachJacobian { poses, range, f } = self.op;
-        for_each_lane_jacobian::<N, L>(self.k, poses, range, f)
+        for_each_lane_jacobian::<N, C, L>(self.k, poses, range, f)
     }
 }
 

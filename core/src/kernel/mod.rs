@@ -27,7 +27,7 @@ use std::ops::{Add, Mul, Neg, Sub};
 
 use thiserror::Error;
 
-use crate::params::DhParams;
+use crate::params::{DhParams, JointModel};
 use lanes::{Batch, LANES};
 
 aacmm_dh_macros::dh_chain! {
@@ -38,6 +38,16 @@ aacmm_dh_macros::dh_chain! {
 aacmm_dh_macros::dh_chain! {
     /// The 7-joint (7-axis) arm (31 parameters).
     pub mod arm7 { joints = 7, probe = true }
+}
+
+aacmm_dh_macros::dh_chain! {
+    /// The 6-joint arm with any subset of Hayati joints (27 parameters).
+    pub mod arm6h { joints = 6, probe = true, hayati = true }
+}
+
+aacmm_dh_macros::dh_chain! {
+    /// The 7-joint arm with any subset of Hayati joints (31 parameters).
+    pub mod arm7h { joints = 7, probe = true, hayati = true }
 }
 
 /// Wrong shapes handed to the kernel.
@@ -117,7 +127,9 @@ impl<S> Scalar for S where
 }
 
 /// Per-parameter-set inputs of the generated code: lengths (mm) and the
-/// sin/cos of the zero offsets and twists.
+/// sin/cos of the zero offsets and twists; for the extended chain
+/// ([`Hayati`]) also the sin/cos of the Hayati rotations and which joints
+/// are Hayati (the D-H chain ignores those).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Consts<S, const N: usize> {
     /// cos θ⁰.
@@ -130,8 +142,14 @@ pub struct Consts<S, const N: usize> {
     pub sa: [S; N],
     /// a, mm.
     pub a: [S; N],
-    /// d, mm.
+    /// d, mm (0 for a Hayati joint).
     pub d: [S; N],
+    /// cos β (1 for a D-H joint).
+    pub cb: [S; N],
+    /// sin β (0 for a D-H joint).
+    pub sb: [S; N],
+    /// Whether joint `i` is Hayati: its d-slot's Jacobian column is `∂p/∂β`.
+    pub hayati: [bool; N],
     /// Probe offset, mm.
     pub b: [S; 3],
 }
@@ -156,15 +174,27 @@ impl<const N: usize> Consts<f64, N> {
             });
         }
         let j = &params.joints;
+        let hayati: [bool; N] = std::array::from_fn(|i| j[i].model == JointModel::Hayati);
+        // The structural zeros: d of a Hayati joint, β of a D-H joint.
+        let beta: [f64; N] = std::array::from_fn(|i| if hayati[i] { j[i].beta } else { 0.0 });
         Ok(Consts {
             ct: std::array::from_fn(|i| j[i].theta.cos()),
             st: std::array::from_fn(|i| j[i].theta.sin()),
             ca: std::array::from_fn(|i| j[i].alpha.cos()),
             sa: std::array::from_fn(|i| j[i].alpha.sin()),
             a: std::array::from_fn(|i| j[i].a),
-            d: std::array::from_fn(|i| j[i].d),
+            d: std::array::from_fn(|i| if hayati[i] { 0.0 } else { j[i].d }),
+            cb: beta.map(f64::cos),
+            sb: beta.map(f64::sin),
+            hayati,
             b: params.probe,
         })
+    }
+
+    /// Whether some joint is Hayati, so that only the extended chain
+    /// ([`Hayati`]) computes this arm.
+    pub fn has_hayati(&self) -> bool {
+        self.hayati.contains(&true)
     }
 
     /// The same constants in another scalar type (every lane the same).
@@ -177,13 +207,16 @@ impl<const N: usize> Consts<f64, N> {
             sa: s(&self.sa),
             a: s(&self.a),
             d: s(&self.d),
+            cb: s(&self.cb),
+            sb: s(&self.sb),
+            hayati: self.hayati,
             b: self.b.map(S::from),
         }
     }
 }
 
-/// The generated functions of an `N`-joint chain. Implemented by [`Dh`] for
-/// the chains the toolkit generates (6 and 7 joints).
+/// The generated functions of an `N`-joint chain. Implemented by [`Dh`] and
+/// [`Hayati`] for the chains the toolkit generates (6 and 7 joints).
 pub trait Chain<const N: usize> {
     /// Number of geometric parameters, `4N + 3`.
     const PARAMS: usize;
@@ -205,9 +238,17 @@ pub trait Chain<const N: usize> {
     ) -> [S; 3];
 }
 
-/// The generated D-H kernels; see [`Chain`].
+/// The generated D-H kernels; see [`Chain`]. They ignore the β inputs, so
+/// they compute an arm only when no joint is Hayati.
 #[derive(Clone, Copy, Debug)]
 pub struct Dh;
+
+/// The generated extended kernels (`Ry(β)` in every link, the d-slot's
+/// column chosen per joint); see [`Chain`]. Correct for any arm, D-H
+/// included, but dearer: [`ArmKernel`] uses them only for an arm with a
+/// Hayati joint.
+#[derive(Clone, Copy, Debug)]
+pub struct Hayati;
 
 macro_rules! impl_chain {
     ($n:literal, $m:ident) => {
@@ -249,6 +290,53 @@ macro_rules! impl_chain {
 
 impl_chain!(6, arm6);
 impl_chain!(7, arm7);
+
+macro_rules! impl_hayati_chain {
+    ($n:literal, $m:ident) => {
+        impl Chain<$n> for Hayati {
+            const PARAMS: usize = $m::PARAMS;
+
+            #[inline(always)]
+            fn position<S: Scalar>(k: &Consts<S, $n>, cq: &[S; $n], sq: &[S; $n]) -> [S; 3] {
+                $m::position(
+                    &k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.cb, &k.sb, &k.b, cq, sq,
+                )
+            }
+
+            #[inline(always)]
+            fn position_jacobian<S: Scalar>(
+                k: &Consts<S, $n>,
+                cq: &[S; $n],
+                sq: &[S; $n],
+                jac: &mut [[S; 3]],
+            ) -> [S; 3] {
+                // Invariant: as for the D-H chain.
+                let jac: &mut [[S; 3]; $m::PARAMS] = jac
+                    .try_into()
+                    .expect("jacobian buffer holds 4n + 3 columns");
+                $m::position_jacobian(
+                    &k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.cb, &k.sb, &k.b, cq, sq, &k.hayati,
+                    jac,
+                )
+            }
+
+            #[inline(always)]
+            fn joint_jacobian<S: Scalar>(
+                k: &Consts<S, $n>,
+                cq: &[S; $n],
+                sq: &[S; $n],
+                jac: &mut [[S; 3]; $n],
+            ) -> [S; 3] {
+                $m::joint_jacobian(
+                    &k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.cb, &k.sb, &k.b, cq, sq, jac,
+                )
+            }
+        }
+    };
+}
+
+impl_hayati_chain!(6, arm6h);
+impl_hayati_chain!(7, arm7h);
 
 /// Encoder readings of a data set with their sin/cos, computed once and laid
 /// out joint by joint (structure of arrays) so that four poses load as one
@@ -362,8 +450,14 @@ impl PreparedPoses {
 pub fn position<const N: usize>(k: &PreparedParams<N>, q: &[f64; N]) -> [f64; 3]
 where
     Dh: Chain<N>,
+    Hayati: Chain<N>,
 {
-    Dh::position(k, &q.map(f64::cos), &q.map(f64::sin))
+    let (cq, sq) = (q.map(f64::cos), q.map(f64::sin));
+    if k.has_hayati() {
+        Hayati::position(k, &cq, &sq)
+    } else {
+        Dh::position(k, &cq, &sq)
+    }
 }
 
 /// Probe position and `∂p/∂q` of one pose (rad); what inverse kinematics needs.
@@ -380,9 +474,15 @@ pub fn joint_jacobian<const N: usize>(
 ) -> ([f64; 3], [[f64; 3]; N])
 where
     Dh: Chain<N>,
+    Hayati: Chain<N>,
 {
     let mut jac = [[0.0; 3]; N];
-    let p = Dh::joint_jacobian(k, &q.map(f64::cos), &q.map(f64::sin), &mut jac);
+    let (cq, sq) = (q.map(f64::cos), q.map(f64::sin));
+    let p = if k.has_hayati() {
+        Hayati::joint_jacobian(k, &cq, &sq, &mut jac)
+    } else {
+        Dh::joint_jacobian(k, &cq, &sq, &mut jac)
+    };
     (p, jac)
 }
 
@@ -456,43 +556,39 @@ impl Jacobians {
 }
 
 #[inline(always)]
-fn positions_impl<const N: usize, L: Batch>(
+fn positions_impl<const N: usize, C: Chain<N>, L: Batch>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses,
     start: usize,
     out: &mut [[f64; 3]],
-) where
-    Dh: Chain<N>,
-{
+) {
     let kl: Consts<L, N> = k.splat();
     let full = out.len() / LANES * LANES;
     for o in (0..full).step_by(LANES) {
         let (cq, sq) = poses.trig_lanes::<N, L>(start + o);
-        let p = Dh::position(&kl, &cq, &sq);
+        let p = C::position(&kl, &cq, &sq);
         transpose(&[p], &mut out[o..o + LANES]);
     }
     for (o, slot) in out.iter_mut().enumerate().skip(full) {
         let (cq, sq) = poses.trig::<N>(start + o);
-        *slot = Dh::position(k, &cq, &sq);
+        *slot = C::position(k, &cq, &sq);
     }
 }
 
 #[inline(always)]
-fn jacobians_impl<const N: usize, L: Batch>(
+fn jacobians_impl<const N: usize, C: Chain<N>, L: Batch>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses,
     out: &mut Jacobians,
-) where
-    Dh: Chain<N>,
-{
+) {
     let kl: Consts<L, N> = k.splat();
-    let params = <Dh as Chain<N>>::PARAMS;
+    let params = <C as Chain<N>>::PARAMS;
     let len = out.len;
     let mut jl = vec![[L::from(0.0); 3]; params];
     let full = poses.len() / LANES * LANES;
     for i in (0..full).step_by(LANES) {
         let (cq, sq) = poses.trig_lanes::<N, L>(i);
-        let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
+        let p = C::position_jacobian(&kl, &cq, &sq, &mut jl);
         for (r, v) in p.into_iter().enumerate() {
             v.store(&mut out.pos[r * len + i..]);
         }
@@ -505,29 +601,27 @@ fn jacobians_impl<const N: usize, L: Batch>(
     let mut cols = vec![[0.0; 3]; params];
     for i in full..poses.len() {
         let (cq, sq) = poses.trig::<N>(i);
-        let p = Dh::position_jacobian(k, &cq, &sq, &mut cols);
+        let p = C::position_jacobian(k, &cq, &sq, &mut cols);
         out.set(i, p, &cols);
     }
 }
 
 #[inline(always)]
-fn for_each_lane_jacobian<const N: usize, L: Batch>(
+fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses,
     range: std::ops::Range<usize>,
     mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
-) where
-    Dh: Chain<N>,
-{
+) {
     let kl: Consts<L, N> = k.splat();
-    let params = <Dh as Chain<N>>::PARAMS;
+    let params = <C as Chain<N>>::PARAMS;
     let mut jl = vec![[L::from(0.0); 3]; params];
     let mut tile = vec![[0.0; 3]; LANES * params];
     let mut pos = [[0.0; 3]; LANES];
     let full = range.start + range.len() / LANES * LANES;
     for i in (range.start..full).step_by(LANES) {
         let (cq, sq) = poses.trig_lanes::<N, L>(i);
-        let p = Dh::position_jacobian(&kl, &cq, &sq, &mut jl);
+        let p = C::position_jacobian(&kl, &cq, &sq, &mut jl);
         transpose(&[p], &mut pos);
         transpose(&jl, &mut tile);
         for (l, cols) in tile.chunks_exact(params).enumerate() {
@@ -536,7 +630,7 @@ fn for_each_lane_jacobian<const N: usize, L: Batch>(
     }
     for i in full..range.end {
         let (cq, sq) = poses.trig::<N>(i);
-        let p = Dh::position_jacobian(k, &cq, &sq, &mut tile[..params]);
+        let p = C::position_jacobian(k, &cq, &sq, &mut tile[..params]);
         f(i, &p, &tile[..params]);
     }
 }
@@ -565,17 +659,25 @@ mod tests {
     /// results bit for bit, like the AVX path the integration tests see here.
     #[test]
     fn portable_lanes_equal_single_poses() {
-        let k = PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
+        let mut hayati = DhParams::paper_nominal();
+        hayati.joints[1].model = JointModel::Hayati;
+        hayati.joints[1].beta = 0.01;
+        portable_lanes_equal_single_poses_of::<Dh>(&DhParams::paper_nominal());
+        portable_lanes_equal_single_poses_of::<Hayati>(&hayati);
+    }
+
+    fn portable_lanes_equal_single_poses_of<C: Chain<6>>(params: &DhParams) {
+        let k = PreparedParams::<6>::new(params).unwrap();
         let q: Vec<[f64; 6]> = (0..7)
             .map(|i| std::array::from_fn(|j| ((i * 5 + j) as f64 * 0.61).sin() * 3.0))
             .collect();
         let poses = PreparedPoses::new(6, &q).unwrap();
         let mut pos = vec![[0.0; 3]; q.len()];
-        positions_impl::<6, Lanes>(&k, &poses, 0, &mut pos);
+        positions_impl::<6, C, Lanes>(&k, &poses, 0, &mut pos);
         let mut batch = Jacobians::new(q.len(), 27);
-        jacobians_impl::<6, Lanes>(&k, &poses, &mut batch);
+        jacobians_impl::<6, C, Lanes>(&k, &poses, &mut batch);
         let mut seen = 0;
-        for_each_lane_jacobian::<6, Lanes>(&k, &poses, 0..q.len(), |i, p, cols| {
+        for_each_lane_jacobian::<6, C, Lanes>(&k, &poses, 0..q.len(), |i, p, cols| {
             assert_eq!(*p, batch.position(i));
             for (c, col) in cols.iter().enumerate() {
                 assert_eq!(*col, batch.column(i, c));
@@ -587,7 +689,7 @@ mod tests {
             assert_eq!(pos[i], position(&k, qi));
             let (cq, sq) = poses.trig::<6>(i);
             let mut cols = vec![[0.0; 3]; 27];
-            let p = <Dh as Chain<6>>::position_jacobian(&k, &cq, &sq, &mut cols);
+            let p = C::position_jacobian(&k, &cq, &sq, &mut cols);
             assert_eq!(p, batch.position(i));
             for (c, col) in cols.iter().enumerate() {
                 assert_eq!(*col, batch.column(i, c));

@@ -30,6 +30,7 @@ fn seven() -> Arm {
             d,
             alpha,
             theta: 0.0,
+            ..DhJoint::default()
         })
         .collect();
     Arm::without_limits(

@@ -8,7 +8,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use super::{ErrorModel, SimError};
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, parse_arm};
-use crate::params::wrap;
+use crate::params::{JointModel, wrap};
 
 /// The paper's identified errors (method.md §7, Table 2), per joint:
 /// `(Δθ deg, Δβ deg, Δa mm, Δd mm)`; joint 6 has no `Δθ`, `Δβ`.
@@ -71,7 +71,13 @@ pub fn true_arm(nominal: &Arm, model: &ErrorModel, rng: &mut ChaCha8Rng) -> Resu
         } => {
             for j in arm.params.joints.iter_mut() {
                 j.a += sl * normal(rng);
-                j.d += sl * normal(rng);
+                // The d-slot's draw: a length for D-H, a twist for Hayati's
+                // β (one draw either way, so D-H arms keep their streams).
+                let slot = normal(rng);
+                match j.model {
+                    JointModel::Dh => j.d += sl * slot,
+                    JointModel::Hayati => j.beta += deg(st * slot),
+                }
                 j.alpha += deg(st * normal(rng));
                 j.theta = if *zero_uniform {
                     wrap(j.theta + rng.random_range(-PI..PI))

@@ -9,7 +9,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::{frame, header_height};
 use crate::calibrate::{Calibration, EstimateRecord};
 
-use crate::params::{DhParams, ParamId, ParamKind};
+use crate::params::{DhParams, ParamKind};
 use crate::report::svg::{
     Area, Axis, BLUE, Class, DrawResult, GREEN, GREY, Key, Marker, Shape, WIDTH, chart,
     dashed_across, font, group, render,
@@ -30,7 +30,8 @@ pub(crate) fn true_errors(
     truth: Option<&DhParams>,
 ) -> Vec<(String, Option<f64>)> {
     let joints = cal.params.joint_count();
-    ParamId::all(joints)
+    cal.params
+        .param_ids()
         .zip(&cal.parameters)
         .map(|(id, p)| {
             let t = truth.filter(|t| t.joint_count() == joints).map(|t| {
