@@ -135,8 +135,8 @@ impl Arm {
     }
 }
 
-/// The D-H joints (0-based) whose `|α|` is within [`HAYATI_THRESHOLD_DEG`]
-/// of 0 or 180°.
+/// The D-H joints (0-based; not the last, whose twist leads to the probe)
+/// whose `|α|` is within [`HAYATI_THRESHOLD_DEG`] of 0 or 180°.
 ///
 /// ```
 /// let mut arm = aacmm_core::params::DhParams::paper_nominal();
@@ -145,10 +145,14 @@ impl Arm {
 /// ```
 pub fn candidates(params: &DhParams) -> Vec<usize> {
     let threshold = HAYATI_THRESHOLD_DEG.to_radians();
+    // The last twist leads to the probe's frame, not to another axis: no
+    // pair of axes to be parallel (the probe offset carries it).
+    let axes_after = params.joints.len().saturating_sub(1);
     params
         .joints
         .iter()
         .enumerate()
+        .take(axes_after)
         .filter(|(_, j)| j.model == JointModel::Dh)
         .filter(|(_, j)| {
             let a = crate::params::wrap(j.alpha).abs();
@@ -304,7 +308,8 @@ mod tests {
         arm.joints[1].alpha = (180.0 - 0.9f64).to_radians();
         arm.joints[3].alpha = 1.1f64.to_radians();
         arm.joints[4].alpha = -0.5f64.to_radians();
-        assert_eq!(candidates(&arm), [1, 4]);
+        arm.joints[5].alpha = 0.0;
+        assert_eq!(candidates(&arm), [1, 4], "the last twist has no next axis");
         let notes = recommendations(&arm);
         assert!(notes[0].starts_with("joint 2: α = 179.1000° is within 1° of 180°"));
         assert!(notes[1].contains("axes 5 and 6"));
