@@ -35,6 +35,7 @@ fn main() -> anyhow::Result<()> {
     let mut fix_text = None;
     let mut prior_text = None;
     let mut in_sample = false;
+    let mut hayati: Vec<usize> = Vec::new();
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -52,6 +53,15 @@ fn main() -> anyhow::Result<()> {
                     .with_context(|| format!("--robust `{l}`: expected huber or cauchy"))?;
                 options.robust = Some(aacmm_core::calibrate::Robust::new(loss));
             }
+            "--hayati" => {
+                let j = args.next().context("--hayati needs a joint number")?;
+                hayati.push(
+                    j.parse::<usize>()
+                        .ok()
+                        .filter(|&j| j >= 1)
+                        .with_context(|| format!("--hayati `{j}`: a joint number from 1"))?,
+                );
+            }
             "--in-sample" => in_sample = true,
             _ if a.starts_with("--") => bail!("unknown option `{a}`"),
             _ if dir.is_none() => dir = Some(a),
@@ -59,10 +69,15 @@ fn main() -> anyhow::Result<()> {
         }
     }
     let dir = dir.context(
-        "usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC] [--robust huber|cauchy] [--in-sample]",
+        "usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC] [--robust huber|cauchy] [--hayati J]… [--in-sample]",
     )?;
     let dir = Path::new(&dir);
-    let (arm, file_prior, warnings) = read_arm_with_prior(&dir.join("arm.toml"))?;
+    let (mut arm, file_prior, warnings) = read_arm_with_prior(&dir.join("arm.toml"))?;
+    for &j in &hayati {
+        arm = arm
+            .with_hayati(j - 1)
+            .with_context(|| format!("--hayati {j}"))?;
+    }
     let (poses, pose_warnings) = read_poses(
         &dir.join("poses.csv"),
         AngleUnit::Rad,
