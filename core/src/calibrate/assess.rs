@@ -130,6 +130,19 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         super::prior::normal_at(params, data, weights, &free, threads)
     };
     let has_prior = weights.prior.is_some();
+    // The touches' and lengths' weights at an arm; the prior rides along.
+    let prior_term = weights.prior.clone();
+    let weights_at = |params: &DhParams, touch_sigma: f64| -> Result<Weights, CalibrationError> {
+        let mut w = Weights::new_threads(
+            &ArmKernel::new(params)?,
+            data,
+            &options.noise,
+            touch_sigma,
+            threads,
+        )?;
+        w.prior = prior_term.clone();
+        Ok(w)
+    };
     let mut extra_jacobians = 0;
     let mut extra_costs = 0;
     let sign_changes = super::global::normalize_signs(&mut params, start, &free);
@@ -155,14 +168,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         // probe along directions that depend on the arm, and the lengths'
         // weights on the centroids' directions — both far off when the
         // zeros were.
-        let mut at_solution = Weights::new_threads(
-            &ArmKernel::new(&params)?,
-            data,
-            &options.noise,
-            touch_sigma,
-            threads,
-        )?;
-        at_solution.prior = weights.prior.clone();
+        let at_solution = weights_at(&params, touch_sigma)?;
         let timer = std::time::Instant::now();
         // Weights that moved by under REWEIGH_TOLERANCE would move the
         // estimate by a like fraction of its σ and its σ not at all (shipped
@@ -219,15 +225,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             }
             touch_sigma = next.max(1e-9);
             let timer = std::time::Instant::now();
-            let mut w = Weights::new_threads(
-                &ArmKernel::new(&params)?,
-                data,
-                &options.noise,
-                touch_sigma,
-                threads,
-            )?;
-            w.prior = weights.prior.clone();
-            weights = w;
+            weights = weights_at(&params, touch_sigma)?;
             let refit = levenberg_marquardt(&params, data, &weights, &free, &lm)?;
             let mut phase = Phase::new("lm, touch σ re-estimated (prior)");
             phase.add_lm(&refit, timer.elapsed().as_secs_f64());
@@ -249,7 +247,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     let mut robust = None;
     if let Some(r) = options.robust {
         if unit_weights {
-            weights = Weights::new(&ArmKernel::new(&params)?, data, &options.noise, touch_sigma)?;
+            weights = weights_at(&params, touch_sigma)?;
             unit_weights = false;
         }
         let out = super::robust::irls(
