@@ -2,7 +2,7 @@
 //! used and reported, `--prior none` gives today's result, bad tolerances
 //! name the flag or the file's line, `identify` reports the rank it adds.
 
-use crate::util::{aacmm, calibrate_shipped, shipped, shipped_arm, temp_dir};
+use crate::util::{aacmm, calibrate_files, calibrate_shipped, shipped, shipped_arm, temp_dir};
 
 fn json(dir: &std::path::Path) -> serde_json::Value {
     let text = std::fs::read_to_string(dir.join("calibration.json")).unwrap();
@@ -19,26 +19,10 @@ fn the_arm_files_prior_is_used_and_none_switches_it_off() {
         format!("{text}\n[prior]\nlength_mm = 1\nangle_deg = 0.5\n"),
     )
     .unwrap();
-    let (poses, lengths) = (shipped("poses.csv"), shipped("lengths.csv"));
+    let poses = shipped("poses.csv");
     let run = |out: &str, extra: &[&str]| {
         let out = dir.join(out);
-        let mut args = vec![
-            "calibrate",
-            "--arm",
-            arm.to_str().unwrap(),
-            "--data",
-            &poses,
-            "--lengths",
-            &lengths,
-            "--encoder-noise",
-            "0.005",
-            "--probe-noise",
-            "0.01",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        let o = aacmm(&args);
+        let o = calibrate_files(arm.to_str().unwrap(), &poses, &out, extra);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         (String::from_utf8(o.stdout).unwrap(), json(&out))
     };

@@ -2,7 +2,7 @@
 //! by file:line, the weights go to calibration.json, bad flags are refused
 //! by name.
 
-use crate::util::{aacmm, shipped, shipped_arm, temp_dir};
+use crate::util::{aacmm, calibrate_files, shipped, shipped_arm, temp_dir};
 
 /// The shipped campaign with touch 17 (file line 18) turned by 0.2° on
 /// joint 2 (about 2 mm at the probe), written into `dir`.
@@ -19,24 +19,7 @@ fn displaced_poses(dir: &std::path::Path) -> String {
 }
 
 fn calibrate(poses: &str, out: &std::path::Path, extra: &[&str]) -> std::process::Output {
-    let (arm, lengths) = (shipped_arm(), shipped("lengths.csv"));
-    let mut args = vec![
-        "calibrate",
-        "--arm",
-        &arm,
-        "--data",
-        poses,
-        "--lengths",
-        &lengths,
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(extra);
-    aacmm(&args)
+    calibrate_files(&shipped_arm(), poses, out, extra)
 }
 
 #[test]

@@ -45,13 +45,19 @@ pub fn shipped(file: &str) -> String {
 /// `aacmm calibrate` on the shipped campaign with its lengths and noise,
 /// into `out`, with `extra` flags.
 pub fn calibrate_shipped(out: &Path, extra: &[&str]) -> Output {
-    let (arm, poses, lengths) = (shipped_arm(), shipped("poses.csv"), shipped("lengths.csv"));
+    calibrate_files(&shipped_arm(), &shipped("poses.csv"), out, extra)
+}
+
+/// `aacmm calibrate` of `arm` on `poses` with the shipped campaign's
+/// lengths and noise, into `out`, with `extra` flags.
+pub fn calibrate_files(arm: &str, poses: &str, out: &Path, extra: &[&str]) -> Output {
+    let lengths = shipped("lengths.csv");
     let mut args = vec![
         "calibrate",
         "--arm",
-        &arm,
+        arm,
         "--data",
-        &poses,
+        poses,
         "--lengths",
         &lengths,
         "--encoder-noise",
