@@ -2,7 +2,7 @@
 //! by file:line, the weights go to calibration.json, bad flags are refused
 //! by name.
 
-use crate::util::{aacmm, calibrate_files, shipped, shipped_arm, temp_dir};
+use crate::util::{calibrate_files, shipped, shipped_arm, temp_dir};
 
 /// The shipped campaign with touch 17 (file line 18) turned by 0.2° on
 /// joint 2 (about 2 mm at the probe), written into `dir`.

@@ -178,6 +178,20 @@ pub enum ChiSquareVerdict {
     ResidualsTooSmall,
 }
 
+impl ChiSquareVerdict {
+    /// The verdict of a two-tailed test from its tail probabilities, each
+    /// tail at [`CHI_SQUARE_ALPHA`].
+    pub(crate) fn from_tails(p_upper: f64, p_lower: f64) -> ChiSquareVerdict {
+        if p_upper < CHI_SQUARE_ALPHA {
+            ChiSquareVerdict::ResidualsTooLarge
+        } else if p_lower < CHI_SQUARE_ALPHA {
+            ChiSquareVerdict::ResidualsTooSmall
+        } else {
+            ChiSquareVerdict::Consistent
+        }
+    }
+}
+
 /// Significance of the χ² test in each tail.
 pub const CHI_SQUARE_ALPHA: f64 = 0.001;
 
@@ -199,13 +213,7 @@ impl ChiSquare {
     pub fn new(statistic: f64, dof: usize) -> ChiSquare {
         let p_upper = chi_square_upper(statistic, dof);
         let p_lower = 1.0 - p_upper;
-        let verdict = if p_upper < CHI_SQUARE_ALPHA {
-            ChiSquareVerdict::ResidualsTooLarge
-        } else if p_lower < CHI_SQUARE_ALPHA {
-            ChiSquareVerdict::ResidualsTooSmall
-        } else {
-            ChiSquareVerdict::Consistent
-        };
+        let verdict = ChiSquareVerdict::from_tails(p_upper, p_lower);
         ChiSquare {
             statistic,
             dof,

@@ -48,7 +48,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::checks::{CHI_SQUARE_ALPHA, CHI_SQUARE_REFUSE, ChiSquareVerdict, erfc};
+use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict, erfc};
 use super::lm::{LmOptions, LmResult, levenberg_marquardt};
 use super::{CalibrationError, OptionError, Phase};
 use crate::dataset::DataSet;
@@ -357,13 +357,7 @@ pub(crate) fn irls(
         let z = (m - CHI2_3_MEDIAN) / sd;
         let p_upper = 0.5 * erfc(z / std::f64::consts::SQRT_2);
         let p_lower = 0.5 * erfc(-z / std::f64::consts::SQRT_2);
-        let verdict = if p_upper < CHI_SQUARE_ALPHA {
-            ChiSquareVerdict::ResidualsTooLarge
-        } else if p_lower < CHI_SQUARE_ALPHA {
-            ChiSquareVerdict::ResidualsTooSmall
-        } else {
-            ChiSquareVerdict::Consistent
-        };
+        let verdict = ChiSquareVerdict::from_tails(p_upper, p_lower);
         (Some(p_upper), Some(p_lower), Some(verdict))
     } else {
         (None, None, None)
