@@ -48,7 +48,7 @@ use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
 use super::Warning;
-use super::text::{line_of, read_text, suggest};
+use super::text::{line_of, parse_toml, read_text, suggest};
 use super::units::{AngleUnit, LengthUnit};
 use crate::error::InputError;
 use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
@@ -126,13 +126,7 @@ pub fn read_arm(path: &Path) -> Result<(Arm, Vec<Warning>), InputError> {
 /// );
 /// ```
 pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputError> {
-    let doc = DeTable::parse(text).map_err(|e| {
-        let message = format!("TOML syntax: {}", e.message());
-        match e.span() {
-            Some(span) => InputError::line_error(file, line_of(text, span.start), message),
-            None => InputError::file_error(file, message),
-        }
-    })?;
+    let doc = parse_toml(text, file)?;
     let schema = ArmFile::deserialize(toml::de::Deserializer::from(doc.clone()))
         .map_err(|e| schema_error(text, file, doc.get_ref(), &e))?;
     let (arm, warnings) = schema.to_arm(text, file)?;

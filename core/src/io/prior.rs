@@ -17,11 +17,11 @@
 use std::path::Path;
 
 use toml::Spanned;
-use toml::de::{DeTable, DeValue};
+use toml::de::DeValue;
 
 use super::Warning;
 use super::arm::{Arm, parse_arm};
-use super::text::{line_of, read_text};
+use super::text::{line_of, parse_toml, read_text};
 use crate::calibrate::Tolerances;
 use crate::calibrate::prior::{Target, unknown_target};
 use crate::error::InputError;
@@ -64,13 +64,7 @@ pub fn parse_prior(
     file: &str,
     joints: usize,
 ) -> Result<Option<Tolerances>, InputError> {
-    let doc = DeTable::parse(text).map_err(|e| {
-        let message = format!("TOML syntax: {}", e.message());
-        match e.span() {
-            Some(span) => InputError::line_error(file, line_of(text, span.start), message),
-            None => InputError::file_error(file, message),
-        }
-    })?;
+    let doc = parse_toml(text, file)?;
     let root = doc.get_ref();
     let Some((key, value)) = root.get_key_value("prior") else {
         return Ok(None);

@@ -69,6 +69,21 @@ pub(crate) fn line_of(text: &str, offset: usize) -> usize {
         .count()
 }
 
+/// `text` parsed as a TOML document, a syntax error located by line in
+/// `file`.
+pub(crate) fn parse_toml<'a>(
+    text: &'a str,
+    file: &str,
+) -> Result<toml::Spanned<toml::de::DeTable<'a>>, InputError> {
+    toml::de::DeTable::parse(text).map_err(|e| {
+        let message = format!("TOML syntax: {}", e.message());
+        match e.span() {
+            Some(span) => InputError::line_error(file, line_of(text, span.start), message),
+            None => InputError::file_error(file, message),
+        }
+    })
+}
+
 /// The shortest decimal form of `x` that parses back to exactly `x`
 /// (Rust's `{:?}`: `0.1`, `-90.0`, `1e-7`, `1e16`; `NaN`, `inf`, `-inf`).
 pub(crate) fn fmt_f64(x: f64) -> String {
