@@ -48,7 +48,7 @@ enum Command {
                       data; the files are then written for inspection and calibration.json's \
                       /verdict says why; 2 for a command line that cannot be parsed."
     )]
-    Calibrate(commands::calibrate::Args),
+    Calibrate(Box<commands::calibrate::Args>),
 }
 
 fn main() -> ExitCode {
@@ -68,7 +68,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => commands::simulate::run(args),
         Command::Evaluate(args) => commands::evaluate::run(args),
         Command::Identify(args) => commands::identify::run(args),
-        Command::Calibrate(args) => commands::calibrate::run(args),
+        Command::Calibrate(args) => commands::calibrate::run(*args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

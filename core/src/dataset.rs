@@ -72,10 +72,12 @@ impl fmt::Display for Location<'_> {
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SourceMap {
     poses_file: String,
-    /// Per touch (data-set order), its line in the poses file.
-    touch_lines: Vec<usize>,
+    /// Per touch (data-set order), its line in the poses file. `u32`: half
+    /// the memory of `usize` at a million touches; a data set is refused
+    /// past `u32::MAX` rows or lines (see [`DataSet::from_poses`]).
+    touch_lines: Vec<u32>,
     /// Per touch (data-set order), its row in the poses file (0-based).
-    touch_rows: Vec<usize>,
+    touch_rows: Vec<u32>,
     lengths_file: String,
     /// Per reference, its line in the lengths file.
     reference_lines: Vec<usize>,
@@ -86,14 +88,14 @@ impl SourceMap {
     pub fn touch(&self, i: usize) -> Location<'_> {
         Location {
             file: &self.poses_file,
-            line: self.touch_lines.get(i).copied().unwrap_or(0),
+            line: self.touch_lines.get(i).map_or(0, |&l| l as usize),
         }
     }
 
     /// The row of the poses file that touch `i` (data-set order) was read
     /// from, 0-based: how to put results back in file order.
     pub fn touch_row(&self, i: usize) -> usize {
-        self.touch_rows[i]
+        self.touch_rows[i] as usize
     }
 
     /// Where reference `r` came from.
@@ -199,6 +201,24 @@ impl DataSet {
     /// assert!(e.to_string().starts_with("f.csv:2: field `point`: point `A` has 2 touches"));
     /// ```
     pub fn from_poses(poses: &Poses, file: &str) -> Result<DataSet, InputError> {
+        Ok(DataSet::grouped(poses, file)?.prepared())
+    }
+
+    /// As [`DataSet::from_poses`], taking the poses: they are freed before
+    /// the joints' trig is prepared, so a large file's readings are never
+    /// held three times (the reader's, the data set's, its trig).
+    ///
+    /// # Errors
+    /// As [`DataSet::from_poses`].
+    pub fn from_poses_owned(poses: Poses, file: &str) -> Result<DataSet, InputError> {
+        let grouped = DataSet::grouped(&poses, file)?;
+        drop(poses);
+        Ok(grouped.prepared())
+    }
+
+    /// The rows grouped by point, readings copied in touch order; the trig
+    /// not prepared yet (an empty [`PreparedPoses`]).
+    fn grouped(poses: &Poses, file: &str) -> Result<DataSet, InputError> {
         if poses.is_empty() {
             return Err(InputError::file_error(file, "no touches"));
         }
@@ -252,20 +272,45 @@ impl DataSet {
             q.extend_from_slice(poses.reading(row));
         }
         check_articulation(&points, &q, joints, file)?;
-        let prepared = PreparedPoses::from_flat(joints, order.len(), &q);
+        let too_many = |what: &str| {
+            InputError::file_error(
+                file,
+                format!("more than {} {what}: split the campaign", u32::MAX),
+            )
+        };
+        let touch_lines = order
+            .iter()
+            .map(|&r| u32::try_from(poses.line(r)))
+            .collect::<Result<Vec<u32>, _>>()
+            .map_err(|_| too_many("lines"))?;
+        let touch_rows = order
+            .iter()
+            .map(|&r| u32::try_from(r))
+            .collect::<Result<Vec<u32>, _>>()
+            .map_err(|_| too_many("touches"))?;
+        drop(order);
         Ok(DataSet {
             joints,
             points,
             q,
-            poses: prepared,
+            poses: PreparedPoses::from_flat(joints, 0, &[]),
             references: Vec::new(),
             source: SourceMap {
                 poses_file: file.to_string(),
-                touch_lines: order.iter().map(|&r| poses.line(r)).collect(),
-                touch_rows: order,
+                touch_lines,
+                touch_rows,
                 ..SourceMap::default()
             },
         })
+    }
+
+    /// This data set with its joints' trig prepared from its readings.
+    fn prepared(mut self) -> DataSet {
+        // `len()` counts the prepared poses: not yet; the source map has
+        // every touch (also when there are no joints, `from_labels`).
+        let touches = self.source.touch_rows.len();
+        self.poses = PreparedPoses::from_flat(self.joints, touches, &self.q);
+        self
     }
 
     /// A data set read from a poses file (angles in degrees) and an optional
@@ -283,7 +328,7 @@ impl DataSet {
     ) -> Result<DataSet, InputError> {
         let path = poses.as_ref();
         let (p, _) = crate::io::read_poses(path, crate::io::AngleUnit::Deg, Some(joints))?;
-        let data = DataSet::from_poses(&p, &crate::io::source_name(path))?;
+        let data = DataSet::from_poses_owned(p, &crate::io::source_name(path))?;
         match lengths {
             Some(l) => {
                 let l = l.as_ref();
@@ -409,7 +454,11 @@ impl DataSet {
 
     /// Values given per row of the poses file, put in touch order.
     pub fn to_touch_order<T: Copy>(&self, by_row: &[T]) -> Vec<T> {
-        self.source.touch_rows.iter().map(|&r| by_row[r]).collect()
+        self.source
+            .touch_rows
+            .iter()
+            .map(|&r| by_row[r as usize])
+            .collect()
     }
 
     /// Adds reference lengths read from `file`, naming the points by label.

@@ -872,14 +872,18 @@ pub(crate) fn standardised_residuals(
     data: &DataSet,
     weights: &Weights,
 ) -> Result<Vec<f64>, KernelError> {
-    let mut xyz = vec![[0.0; 3]; data.len()];
-    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    // Positions one point at a time: memory stays the output's.
+    let most = data.points().iter().map(|p| p.touches.len()).max();
+    let mut xyz = vec![[0.0; 3]; most.unwrap_or(0)];
     let mut out = vec![0.0; data.len()];
     for point in data.points() {
+        let first = point.touches.start;
+        let xyz = &mut xyz[..point.touches.len()];
+        kernel.positions(data.poses(), point.touches.clone(), xyz)?;
         let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
         for i in point.touches.clone() {
             let a = &weights.touch[i];
-            let ap = sym_mul(a, &xyz[i]);
+            let ap = sym_mul(a, &xyz[i - first]);
             for k in 0..6 {
                 sum_a[k] += a[k];
             }
@@ -891,7 +895,7 @@ pub(crate) fn standardised_residuals(
         let c = sym_mul(&inv, &sum_ap);
         for i in point.touches.clone() {
             let a = &weights.touch[i];
-            let r: [f64; 3] = std::array::from_fn(|k| xyz[i][k] - c[k]);
+            let r: [f64; 3] = std::array::from_fn(|k| xyz[i - first][k] - c[k]);
             let ar = sym_mul(a, &r);
             let q = r[0] * ar[0] + r[1] * ar[1] + r[2] * ar[2];
             // tr(A·inv) for symmetric A and inv.

@@ -86,8 +86,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (arm, poses) = args.input.read()?;
     let kernel = args.input.kernel(&arm)?;
-    let mut data = DataSet::from_poses(&poses, &source_name(&args.input.data))?;
-    drop(poses);
+    let mut data = DataSet::from_poses_owned(poses, &source_name(&args.input.data))?;
     if let Some(path) = &args.lengths {
         data = data.with_lengths(&read_lengths(path)?, &source_name(path))?;
     }

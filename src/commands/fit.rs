@@ -88,18 +88,18 @@ impl FitInput {
                 .map_err(flag_error)?
                 .map(|flag| file_prior.unwrap_or_default().overridden_by(&flag)),
         };
-        let data = data_set(&poses, &self.input.data, self.lengths.as_deref())?;
+        let data = data_set(poses, &self.input.data, self.lengths.as_deref())?;
         Ok((arm, prior, data, warnings))
     }
 }
 
 /// A data set from poses (already read) and an optional lengths file.
 pub fn data_set(
-    poses: &aacmm_core::io::Poses,
+    poses: aacmm_core::io::Poses,
     data: &Path,
     lengths: Option<&Path>,
 ) -> Result<DataSet> {
-    let mut set = DataSet::from_poses(poses, &source_name(data))?;
+    let mut set = DataSet::from_poses_owned(poses, &source_name(data))?;
     if let Some(path) = lengths {
         set = set.with_lengths(&read_lengths(path)?, &source_name(path))?;
     }
@@ -115,7 +115,7 @@ pub fn read_other(
 ) -> Result<DataSet> {
     let (poses, warnings) = aacmm_core::io::read_poses(data, unit, Some(arm.params.joint_count()))?;
     super::report(&warnings)?;
-    data_set(&poses, data, lengths)
+    data_set(poses, data, lengths)
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
