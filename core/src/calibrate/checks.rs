@@ -309,11 +309,16 @@ pub fn chi_square_3_quantile(p: f64) -> f64 {
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if chi_square_3_upper(mid) > p {
-            lo = mid;
+        let (l, h) = if chi_square_3_upper(mid) > p {
+            (mid, hi)
         } else {
-            hi = mid;
+            (lo, mid)
+        };
+        // A fixed point (the bounds adjacent doubles) stays one: stop there.
+        if (l, h) == (lo, hi) {
+            break;
         }
+        (lo, hi) = (l, h);
     }
     0.5 * (lo + hi)
 }
