@@ -69,7 +69,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     writeln!(p, "touches {}", data.len())?;
     writeln!(p, "points {}", data.points().len())?;
     writeln!(p, "lengths {}", data.references().len())?;
-    writeln!(p, "encoder_rad {:e}", options.noise.encoder_rad.unwrap_or(0.0))?;
+    writeln!(
+        p,
+        "encoder_rad {:e}",
+        options.noise.encoder_rad.unwrap_or(0.0)
+    )?;
     writeln!(p, "probe_mm {:e}", options.noise.probe_mm.unwrap_or(0.0))?;
     writeln!(p, "length_default_mm {:e}", options.noise.length_default_mm)?;
     let v = start.to_vec();

@@ -432,3 +432,78 @@ fn position_uncertainty(
         touch_mm: K * 3f64.sqrt() * touch_sigma,
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`position_uncertainty`] one pose at a time, as before the poses went
+    /// four at a time: the reference the lanes must match bit for bit.
+    fn one_at_a_time(
+        params: &DhParams,
+        data: &DataSet,
+        free: &[usize],
+        cov: &DMatrix<f64>,
+    ) -> (usize, f64, f64) {
+        let kernel = ArmKernel::new(params).unwrap();
+        let step = data
+            .len()
+            .div_ceil(super::super::checks::UNCERTAINTY_POSES)
+            .max(1);
+        let mut jac = vec![[0.0; 3]; params.param_count()];
+        let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
+        for i in (0..data.len()).step_by(step) {
+            kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
+            let mut tr = 0.0;
+            for (a, &ca) in free.iter().enumerate() {
+                for (b, &cb) in free.iter().enumerate() {
+                    let jj: f64 = (0..3).map(|k| jac[ca][k] * jac[cb][k]).sum();
+                    tr += cov[(a, b)] * jj;
+                }
+            }
+            let u = 2.0 * f64::max(tr, 0.0).sqrt();
+            sum += u * u;
+            max = max.max(u);
+            n += 1;
+        }
+        (n, (sum / n as f64).sqrt(), max)
+    }
+
+    /// Pose counts that leave 1, 2, 3 and 4 poses in the last group, and one
+    /// sampled (more than UNCERTAINTY_POSES touches): the same bits.
+    #[test]
+    fn position_uncertainty_in_lanes_is_the_same_bits() {
+        let params = DhParams::paper_nominal();
+        let free: Vec<usize> = (2..params.param_count() - 2).collect();
+        let q = free.len();
+        // A symmetric positive-definite covariance with correlations.
+        let cov = DMatrix::from_fn(q, q, |a, b| {
+            let d = a.abs_diff(b) as f64;
+            if a == b {
+                1e-4 * (1.0 + a as f64)
+            } else {
+                1e-5 / (1.0 + d)
+            }
+        });
+        for touches in [3usize, 5, 6, 7, 9, 4003] {
+            // At least 3 touches a point.
+            let points = (touches / 3).min(3);
+            let labels: Vec<String> = (0..touches).map(|i| format!("p{}", i % points)).collect();
+            let readings: Vec<Vec<f64>> = (0..touches)
+                .map(|i| {
+                    (0..6)
+                        .map(|j| ((i * 7 + j * 13) % 31) as f64 * 0.2 - 3.0)
+                        .collect()
+                })
+                .collect();
+            let data = DataSet::from_touches(&labels, &readings, &[]).unwrap();
+            let u = position_uncertainty(&params, &data, &free, &cov, 0.01)
+                .unwrap()
+                .unwrap();
+            let (n, rms, max) = one_at_a_time(&params, &data, &free, &cov);
+            assert_eq!(u.poses, n, "{touches} touches");
+            assert_eq!(u.rms_mm.to_bits(), rms.to_bits(), "{touches} touches");
+            assert_eq!(u.max_mm.to_bits(), max.to_bits(), "{touches} touches");
+        }
+    }
+}
