@@ -453,22 +453,42 @@ fn position_uncertainty(
     }
     let kernel = ArmKernel::new(params)?;
     let step = data.len().div_ceil(super::checks::UNCERTAINTY_POSES).max(1);
+    let q = free.len();
+    // The covariance row-major, and the free columns of LANES poses' position
+    // Jacobians side by side: the poses' sums are independent chains, so they
+    // run together (each in its own order: the same bits as one at a time).
+    const LANES: usize = 4;
+    let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
     let mut jac = vec![[0.0; 3]; params.param_count()];
-    let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
-    for i in (0..data.len()).step_by(step) {
-        kernel.position_jacobian(data.reading(i), &mut jac)?;
-        let mut tr = 0.0;
-        for (a, &ca) in free.iter().enumerate() {
-            for (b, &cb) in free.iter().enumerate() {
-                let jj: f64 = (0..3).map(|k| jac[ca][k] * jac[cb][k]).sum();
-                tr += cov[(a, b)] * jj;
+    let mut jf = vec![[[0.0; LANES]; 3]; q];
+    let poses: Vec<usize> = (0..data.len()).step_by(step).collect();
+    let (mut sum, mut max) = (0.0, 0.0f64);
+    for group in poses.chunks(LANES) {
+        for (l, &i) in group.iter().enumerate() {
+            kernel.position_jacobian(data.reading(i), &mut jac)?;
+            for (a, &ca) in free.iter().enumerate() {
+                for k in 0..3 {
+                    jf[a][k][l] = jac[ca][k];
+                }
             }
         }
-        let u = K * tr.max(0.0).sqrt();
-        sum += u * u;
-        max = max.max(u);
-        n += 1;
+        let mut tr = [0.0; LANES];
+        for a in 0..q {
+            let (ja, row) = (&jf[a], &c[a * q..(a + 1) * q]);
+            for (jb, &cab) in jf.iter().zip(row) {
+                for l in 0..LANES {
+                    let jj = ja[0][l] * jb[0][l] + ja[1][l] * jb[1][l] + ja[2][l] * jb[2][l];
+                    tr[l] += cab * jj;
+                }
+            }
+        }
+        for &t in &tr[..group.len()] {
+            let u = K * t.max(0.0).sqrt();
+            sum += u * u;
+            max = max.max(u);
+        }
     }
+    let n = poses.len();
     Ok(Some(super::checks::PositionUncertainty {
         k: K,
         poses: n,
@@ -476,4 +496,79 @@ fn position_uncertainty(
         max_mm: max,
         touch_mm: K * 3f64.sqrt() * touch_sigma,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`position_uncertainty`] one pose at a time, as before the poses went
+    /// four at a time: the reference the lanes must match bit for bit.
+    fn one_at_a_time(
+        params: &DhParams,
+        data: &DataSet,
+        free: &[usize],
+        cov: &DMatrix<f64>,
+    ) -> (usize, f64, f64) {
+        let kernel = ArmKernel::new(params).unwrap();
+        let step = data
+            .len()
+            .div_ceil(super::super::checks::UNCERTAINTY_POSES)
+            .max(1);
+        let mut jac = vec![[0.0; 3]; params.param_count()];
+        let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
+        for i in (0..data.len()).step_by(step) {
+            kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
+            let mut tr = 0.0;
+            for (a, &ca) in free.iter().enumerate() {
+                for (b, &cb) in free.iter().enumerate() {
+                    let jj: f64 = (0..3).map(|k| jac[ca][k] * jac[cb][k]).sum();
+                    tr += cov[(a, b)] * jj;
+                }
+            }
+            let u = 2.0 * f64::max(tr, 0.0).sqrt();
+            sum += u * u;
+            max = max.max(u);
+            n += 1;
+        }
+        (n, (sum / n as f64).sqrt(), max)
+    }
+
+    /// Pose counts that leave 1, 2, 3 and 4 poses in the last group, and one
+    /// sampled (more than UNCERTAINTY_POSES touches): the same bits.
+    #[test]
+    fn position_uncertainty_in_lanes_is_the_same_bits() {
+        let params = DhParams::paper_nominal();
+        let free: Vec<usize> = (2..params.param_count() - 2).collect();
+        let q = free.len();
+        // A symmetric positive-definite covariance with correlations.
+        let cov = DMatrix::from_fn(q, q, |a, b| {
+            let d = a.abs_diff(b) as f64;
+            if a == b {
+                1e-4 * (1.0 + a as f64)
+            } else {
+                1e-5 / (1.0 + d)
+            }
+        });
+        for touches in [3usize, 5, 6, 7, 9, 4003] {
+            // At least 3 touches a point.
+            let points = (touches / 3).min(3);
+            let labels: Vec<String> = (0..touches).map(|i| format!("p{}", i % points)).collect();
+            let readings: Vec<Vec<f64>> = (0..touches)
+                .map(|i| {
+                    (0..6)
+                        .map(|j| ((i * 7 + j * 13) % 31) as f64 * 0.2 - 3.0)
+                        .collect()
+                })
+                .collect();
+            let data = DataSet::from_touches(&labels, &readings, &[]).unwrap();
+            let u = position_uncertainty(&params, &data, &free, &cov, 0.01)
+                .unwrap()
+                .unwrap();
+            let (n, rms, max) = one_at_a_time(&params, &data, &free, &cov);
+            assert_eq!(u.poses, n, "{touches} touches");
+            assert_eq!(u.rms_mm.to_bits(), rms.to_bits(), "{touches} touches");
+            assert_eq!(u.max_mm.to_bits(), max.to_bits(), "{touches} touches");
+        }
+    }
 }

@@ -323,11 +323,16 @@ pub fn chi_square_3_quantile(p: f64) -> f64 {
     }
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
-        if chi_square_3_upper(mid) > p {
-            lo = mid;
+        let (l, h) = if chi_square_3_upper(mid) > p {
+            (mid, hi)
         } else {
-            hi = mid;
+            (lo, mid)
+        };
+        // A fixed point (the bounds adjacent doubles) stays one: stop there.
+        if (l, h) == (lo, hi) {
+            break;
         }
+        (lo, hi) = (l, h);
     }
     0.5 * (lo + hi)
 }
@@ -397,3 +402,36 @@ pub const WEAK_FRACTION: f64 = 0.32;
 
 /// Most poses [`PositionUncertainty`] evaluates (an even sample beyond).
 pub const UNCERTAINTY_POSES: usize = 2000;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bisection stopped at its fixed point gives the value of all 200
+    /// halvings, bit for bit.
+    #[test]
+    fn quantile_stopping_at_the_fixed_point_is_the_same_bits() {
+        let full = |p: f64| {
+            let (mut lo, mut hi) = (0.0f64, 1.0f64);
+            while chi_square_3_upper(hi) > p && hi < 1e6 {
+                hi *= 2.0;
+            }
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if chi_square_3_upper(mid) > p {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            0.5 * (lo + hi)
+        };
+        for p in [0.5, 0.05, 1e-3, 1e-5, 1e-8, 1e-10, 1e-12, 1e-300, 0.0] {
+            assert_eq!(
+                chi_square_3_quantile(p).to_bits(),
+                full(p).to_bits(),
+                "p = {p}"
+            );
+        }
+    }
+}
