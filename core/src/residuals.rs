@@ -241,8 +241,120 @@ fn sym_inv(a: &Sym3) -> Sym3 {
     c.map(|v| v / det)
 }
 
+/// The centroid covariance `(Σ A_i)⁻¹` of a point from its touches'
+/// weights, summed in touch order.
+fn centroid_cov(touch: &[Sym3]) -> Sym3 {
+    let mut sum = [0.0; 6];
+    for a in touch {
+        for (s, v) in sum.iter_mut().zip(a) {
+            *s += v;
+        }
+    }
+    sym_inv(&sum)
+}
+
+/// Per reference length, `1/σ_L`: the stated weight, or the length's own
+/// uncertainty combined with its two centroids' covariances along it.
+fn length_weights(
+    kernel: &ArmKernel,
+    data: &DataSet,
+    noise: &Noise,
+    centroid_cov: &[Sym3],
+) -> Result<Vec<f64>, KernelError> {
+    data.references()
+        .iter()
+        .map(|r| match noise.length_weight {
+            Some(w) => Ok(w),
+            None => {
+                let (ca, cb) = (
+                    kernel.position(data.reading(data.points()[r.a].touches.start))?,
+                    kernel.position(data.reading(data.points()[r.b].touches.start))?,
+                );
+                let d: [f64; 3] = std::array::from_fn(|k| ca[k] - cb[k]);
+                let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+                    .sqrt()
+                    .max(f64::MIN_POSITIVE);
+                let u = d.map(|v| v / n);
+                let along = |c: &Sym3| {
+                    let cu = sym_mul(c, &u);
+                    u[0] * cu[0] + u[1] * cu[1] + u[2] * cu[2]
+                };
+                let ul = r.uncertainty.unwrap_or(noise.length_default_mm);
+                Ok(1.0 / (ul * ul + along(&centroid_cov[r.a]) + along(&centroid_cov[r.b])).sqrt())
+            }
+        })
+        .collect()
+}
+
+/// One touch's weight at an arm: `A_i = (p²I + e² J_q J_qᵀ)⁻¹` with stated
+/// noise, `I/σ²` without.
+struct TouchWeight<'a> {
+    kernel: &'a ArmKernel,
+    data: &'a DataSet,
+    stated: bool,
+    e2: f64,
+    p2: f64,
+    unit: f64,
+    jq: Vec<[f64; 3]>,
+}
+
+impl<'a> TouchWeight<'a> {
+    fn new(kernel: &'a ArmKernel, data: &'a DataSet, noise: &Noise, touch_sigma_mm: f64) -> Self {
+        TouchWeight {
+            kernel,
+            data,
+            stated: noise.stated(),
+            e2: noise.encoder_rad.unwrap_or(0.0).powi(2),
+            p2: noise.probe_mm.unwrap_or(0.0).powi(2),
+            unit: 1.0 / (touch_sigma_mm * touch_sigma_mm),
+            jq: vec![[0.0; 3]; data.joints()],
+        }
+    }
+
+    fn at(&mut self, i: usize) -> Result<Sym3, KernelError> {
+        if !self.stated {
+            let w = self.unit;
+            return Ok([w, w, w, 0.0, 0.0, 0.0]);
+        }
+        self.kernel
+            .joint_jacobian_at(self.data.poses(), i, &mut self.jq)?;
+        let (e2, p2, jq) = (self.e2, self.p2, &self.jq);
+        let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
+        let cov = [
+            p2 + s(0, 0),
+            p2 + s(1, 1),
+            p2 + s(2, 2),
+            s(0, 1),
+            s(0, 2),
+            s(1, 2),
+        ];
+        Ok(sym_inv(&cov))
+    }
+}
+
+/// `‖a − b‖/‖b‖` in the Frobenius norm (off-diagonal entries count twice).
+/// A touch weight that [`check_weights`] would refuse counts as an infinite
+/// change.
+fn touch_change(a: &Sym3, b: &Sym3) -> f64 {
+    if !a.iter().all(|v| v.is_finite()) || !a[..3].iter().all(|&v| v > 0.0) {
+        return f64::INFINITY;
+    }
+    let norm = |a: &Sym3| {
+        (a[..3].iter().map(|v| v * v).sum::<f64>()
+            + 2.0 * a[3..].iter().map(|v| v * v).sum::<f64>())
+        .sqrt()
+    };
+    let d: Sym3 = std::array::from_fn(|k| a[k] - b[k]);
+    norm(&d) / norm(b)
+}
+
+/// `|a − b|/|b|` for a length weight.
+fn length_change(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
 /// Weights of every residual.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub(crate) struct Weights {
     /// Per touch (data-set order), the inverse covariance `A_i = Σ_i⁻¹` of its
     /// position, 1/mm².
@@ -277,8 +389,6 @@ impl Weights {
         threads: usize,
     ) -> Result<Weights, KernelError> {
         let touch = if noise.stated() {
-            let e2 = noise.encoder_rad.unwrap_or(0.0).powi(2);
-            let p2 = noise.probe_mm.unwrap_or(0.0).powi(2);
             let mut touch = vec![[0.0; 6]; data.len()];
             let parts = touch
                 .chunks_mut(TOUCHES_PER_CHUNK)
@@ -291,20 +401,9 @@ impl Weights {
                     .lock()
                     .unwrap_or_else(std::sync::PoisonError::into_inner);
                 let (k, out) = &mut *part;
-                let first = *k * TOUCHES_PER_CHUNK;
-                let mut jq = vec![[0.0; 3]; data.joints()];
-                for (i, w) in (first..).zip(out.iter_mut()) {
-                    kernel.joint_jacobian_at(data.poses(), i, &mut jq)?;
-                    let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
-                    let cov = [
-                        p2 + s(0, 0),
-                        p2 + s(1, 1),
-                        p2 + s(2, 2),
-                        s(0, 1),
-                        s(0, 2),
-                        s(1, 2),
-                    ];
-                    *w = sym_inv(&cov);
+                let mut touch_weight = TouchWeight::new(kernel, data, noise, touch_sigma_mm);
+                for (i, w) in (*k * TOUCHES_PER_CHUNK..).zip(out.iter_mut()) {
+                    *w = touch_weight.at(i)?;
                 }
                 Ok::<(), KernelError>(())
             });
@@ -315,45 +414,12 @@ impl Weights {
             let w = 1.0 / (touch_sigma_mm * touch_sigma_mm);
             vec![[w, w, w, 0.0, 0.0, 0.0]; data.len()]
         };
-        // Centroid covariances: (Σ A_i)⁻¹ per point.
         let centroid_cov: Vec<Sym3> = data
             .points()
             .iter()
-            .map(|p| {
-                let mut sum = [0.0; 6];
-                for i in p.touches.clone() {
-                    for (s, v) in sum.iter_mut().zip(&touch[i]) {
-                        *s += v;
-                    }
-                }
-                sym_inv(&sum)
-            })
+            .map(|p| centroid_cov(&touch[p.touches.clone()]))
             .collect();
-        let length = data
-            .references()
-            .iter()
-            .map(|r| match noise.length_weight {
-                Some(w) => Ok(w),
-                None => {
-                    let (ca, cb) = (
-                        kernel.position(data.reading(data.points()[r.a].touches.start))?,
-                        kernel.position(data.reading(data.points()[r.b].touches.start))?,
-                    );
-                    let d: [f64; 3] = std::array::from_fn(|k| ca[k] - cb[k]);
-                    let n = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
-                        .sqrt()
-                        .max(f64::MIN_POSITIVE);
-                    let u = d.map(|v| v / n);
-                    let along = |c: &Sym3| {
-                        let cu = sym_mul(c, &u);
-                        u[0] * cu[0] + u[1] * cu[1] + u[2] * cu[2]
-                    };
-                    let ul = r.uncertainty.unwrap_or(noise.length_default_mm);
-                    Ok(1.0
-                        / (ul * ul + along(&centroid_cov[r.a]) + along(&centroid_cov[r.b])).sqrt())
-                }
-            })
-            .collect::<Result<Vec<f64>, KernelError>>()?;
+        let length = length_weights(kernel, data, noise, &centroid_cov)?;
         check_weights(&touch, &length, noise, touch_sigma_mm, data)?;
         Ok(Weights {
             touch,
@@ -365,26 +431,85 @@ impl Weights {
     /// The largest relative change from `other` to `self` of any touch's
     /// weight matrix (Frobenius norm) or any length's weight; infinite when
     /// the shapes differ.
+    #[cfg(test)]
     pub fn relative_change(&self, other: &Weights) -> f64 {
         if self.touch.len() != other.touch.len() || self.length.len() != other.length.len() {
             return f64::INFINITY;
         }
-        // Off-diagonal entries count twice in the Frobenius norm.
-        let norm = |a: &Sym3| {
-            (a[..3].iter().map(|v| v * v).sum::<f64>()
-                + 2.0 * a[3..].iter().map(|v| v * v).sum::<f64>())
-            .sqrt()
-        };
-        let touch = self.touch.iter().zip(&other.touch).map(|(a, b)| {
-            let d: Sym3 = std::array::from_fn(|k| a[k] - b[k]);
-            norm(&d) / norm(b)
-        });
+        let touch = self
+            .touch
+            .iter()
+            .zip(&other.touch)
+            .map(|(a, b)| touch_change(a, b));
         let length = self
             .length
             .iter()
             .zip(&other.length)
-            .map(|(a, b)| (a - b).abs() / b.abs());
+            .map(|(a, b)| length_change(*a, *b));
         touch.chain(length).fold(0.0, f64::max)
+    }
+
+    /// What `Weights::new_threads(kernel, data, noise, touch_sigma_mm,
+    /// threads)?.relative_change(self)` would be, without holding a second
+    /// set of weights (at 10⁶ touches, 48 MB): the new touch weights are made
+    /// a chunk of whole points at a time and compared at once. Infinite
+    /// where the new weights would be refused, so that the caller builds
+    /// them and reports why.
+    pub fn relative_change_to(
+        &self,
+        kernel: &ArmKernel,
+        data: &DataSet,
+        noise: &Noise,
+        touch_sigma_mm: f64,
+        threads: usize,
+    ) -> Result<f64, KernelError> {
+        if self.touch.len() != data.len() || self.length.len() != data.references().len() {
+            return Ok(f64::INFINITY);
+        }
+        // Chunks of whole points, so that each chunk's centroid covariances
+        // are its own.
+        let mut chunks = Vec::new();
+        let mut first = 0;
+        for (k, p) in data.points().iter().enumerate() {
+            if p.touches.end - data.points()[first].touches.start >= TOUCHES_PER_CHUNK
+                || k + 1 == data.points().len()
+            {
+                chunks.push(first..k + 1);
+                first = k + 1;
+            }
+        }
+        let results = parallel_map(&chunks, threads, |points| {
+            let mut touch_weight = TouchWeight::new(kernel, data, noise, touch_sigma_mm);
+            let mut change = 0.0_f64;
+            let mut covs = Vec::with_capacity(points.len());
+            let mut buffer = Vec::new();
+            for p in &data.points()[points.clone()] {
+                buffer.clear();
+                for i in p.touches.clone() {
+                    let a = touch_weight.at(i)?;
+                    change = change.max(touch_change(&a, &self.touch[i]));
+                    buffer.push(a);
+                }
+                covs.push(centroid_cov(&buffer));
+            }
+            Ok::<_, KernelError>((change, covs))
+        });
+        let mut change = 0.0_f64;
+        let mut covs = Vec::with_capacity(data.points().len());
+        for r in results {
+            let (c, v) = r?;
+            change = change.max(c);
+            covs.extend(v);
+        }
+        let length = length_weights(kernel, data, noise, &covs)?;
+        if check_weights(&[], &length, noise, touch_sigma_mm, data).is_err() {
+            return Ok(f64::INFINITY);
+        }
+        Ok(length
+            .iter()
+            .zip(&self.length)
+            .map(|(a, b)| length_change(*a, *b))
+            .fold(change, f64::max))
     }
 
     /// These weights with touch `i`'s matrix `A_i` multiplied by
@@ -960,13 +1085,9 @@ mod tests {
         assert!(direct.restrict(&[2]).is_none());
     }
 
-    /// 1000 points of 3 touches with stated noise and reference lengths:
-    /// 16 chunks of points, so 2 and 4 threads really split the work (one
-    /// thread below 4 chunks). The normal equations, their cost and the
-    /// centroids are the same bits on 1, 2 and 4 threads.
-    #[test]
-    fn normal_equations_are_the_same_bits_on_any_thread_count() {
-        let n = 1000;
+    /// `n` points of 3 touches each, spread in joint space, with 20
+    /// reference lengths between them.
+    fn points_of_three_touches(n: usize) -> DataSet {
         let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
         for p in 0..n {
             for k in 0..3 {
@@ -984,10 +1105,64 @@ mod tests {
         for i in 0..20 {
             lengths.push_str(&format!("P{i},P{},{}\n", n - 1 - i, 500 + i));
         }
-        let data = DataSet::from_poses(&poses, "p.csv")
+        DataSet::from_poses(&poses, "p.csv")
             .unwrap()
             .with_lengths(&parse_lengths(&lengths, "l.csv").unwrap(), "l.csv")
-            .unwrap();
+            .unwrap()
+    }
+
+    /// The weights' change to another arm, streamed a chunk of points at a
+    /// time, is the change built-then-compared, to the bit, on any thread
+    /// count; with and without stated noise.
+    #[test]
+    fn the_streamed_change_of_weights_is_the_built_one() {
+        let data = points_of_three_touches(1000);
+        assert!(data.len() > 2 * TOUCHES_PER_CHUNK);
+        let here = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
+        let mut moved = DhParams::paper_nominal();
+        moved.joints[1].d += 3.0;
+        moved.joints[2].theta += 0.02;
+        let there = ArmKernel::new(&moved).unwrap();
+        let stated = Noise {
+            encoder_rad: Some(1e-4),
+            probe_mm: Some(0.01),
+            length_default_mm: 0.001,
+            length_weight: None,
+        };
+        let unstated = Noise {
+            encoder_rad: None,
+            probe_mm: None,
+            ..stated
+        };
+        for (noise, sigma) in [(&stated, 1.0), (&unstated, 0.7)] {
+            let old = Weights::new(&here, &data, noise, 1.0).unwrap();
+            let built = Weights::new(&there, &data, noise, sigma)
+                .unwrap()
+                .relative_change(&old);
+            assert!(built > 0.0 && built.is_finite());
+            for threads in [1, 2, 4] {
+                let streamed = old
+                    .relative_change_to(&there, &data, noise, sigma, threads)
+                    .unwrap();
+                assert_eq!(streamed.to_bits(), built.to_bits(), "{threads} threads");
+            }
+            let same = old.relative_change_to(&here, &data, noise, 1.0, 2).unwrap();
+            assert_eq!(same, 0.0);
+        }
+        let mut short = Weights::new(&here, &data, &stated, 1.0).unwrap();
+        short.touch.pop();
+        let change = short.relative_change_to(&here, &data, &stated, 1.0, 1);
+        assert_eq!(change.unwrap(), f64::INFINITY);
+    }
+
+    /// 1000 points of 3 touches with stated noise and reference lengths:
+    /// 16 chunks of points, so 2 and 4 threads really split the work (one
+    /// thread below 4 chunks). The normal equations, their cost and the
+    /// centroids are the same bits on 1, 2 and 4 threads.
+    #[test]
+    fn normal_equations_are_the_same_bits_on_any_thread_count() {
+        let n = 1000;
+        let data = points_of_three_touches(n);
         assert_eq!(data.points().len(), n);
         assert!(n > 4 * POINTS_PER_CHUNK, "enough chunks to run in parallel");
         let kernel = ArmKernel::new(&DhParams::paper_nominal()).unwrap();

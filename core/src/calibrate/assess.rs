@@ -130,18 +130,24 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         super::prior::normal_at(params, data, weights, &free, threads)
     };
     let has_prior = weights.prior.is_some();
-    // The touches' and lengths' weights at an arm; the prior rides along.
-    let prior_term = weights.prior.clone();
-    let weights_at = |params: &DhParams, touch_sigma: f64| -> Result<Weights, CalibrationError> {
-        let mut w = Weights::new_threads(
+    // The touches' and lengths' weights at another arm, in place: the old
+    // ones are freed first (one set at a time: 48 MB at 10⁶ touches), the
+    // prior rides along.
+    let reweigh = |weights: &mut Weights,
+                   params: &DhParams,
+                   touch_sigma: f64|
+     -> Result<(), CalibrationError> {
+        let prior = weights.prior.take();
+        *weights = Weights::default();
+        *weights = Weights::new_threads(
             &ArmKernel::new(params)?,
             data,
             &options.noise,
             touch_sigma,
             threads,
         )?;
-        w.prior = prior_term.clone();
-        Ok(w)
+        weights.prior = prior;
+        Ok(())
     };
     let mut extra_jacobians = 0;
     let mut extra_costs = 0;
@@ -168,22 +174,28 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         // probe along directions that depend on the arm, and the lengths'
         // weights on the centroids' directions — both far off when the
         // zeros were.
-        let at_solution = weights_at(&params, touch_sigma)?;
         let timer = std::time::Instant::now();
         // Weights that moved by under REWEIGH_TOLERANCE would move the
         // estimate by a like fraction of its σ and its σ not at all (shipped
         // campaign, lm: weights 3 % off moved no parameter by more than
         // 3.4 % of its σ, and σ by 1e-5 of itself): the fit's weights stand.
-        let settled = stated && at_solution.relative_change(&weights) <= REWEIGH_TOLERANCE;
+        let settled = stated
+            && weights.relative_change_to(
+                &ArmKernel::new(&params)?,
+                data,
+                &options.noise,
+                touch_sigma,
+                threads,
+            )? <= REWEIGH_TOLERANCE;
         if settled {
             // The fit's weights, normal equations and history stand.
         } else if stop.lm().is_none() {
             // No LM ran (annealing alone): none runs now either.
-            weights = at_solution;
+            reweigh(&mut weights, &params, touch_sigma)?;
             normal = normal_at(&params, &weights)?;
             extra_jacobians += 1;
         } else {
-            weights = at_solution;
+            reweigh(&mut weights, &params, touch_sigma)?;
             let refit = levenberg_marquardt(&params, data, &weights, &free, &lm)?;
             let mut phase = Phase::new("lm, weighed at the solution");
             phase.add_lm(&refit, timer.elapsed().as_secs_f64());
@@ -225,7 +237,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             }
             touch_sigma = next.max(1e-9);
             let timer = std::time::Instant::now();
-            weights = weights_at(&params, touch_sigma)?;
+            reweigh(&mut weights, &params, touch_sigma)?;
             let refit = levenberg_marquardt(&params, data, &weights, &free, &lm)?;
             let mut phase = Phase::new("lm, touch σ re-estimated (prior)");
             phase.add_lm(&refit, timer.elapsed().as_secs_f64());
@@ -247,7 +259,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     let mut robust = None;
     if let Some(r) = options.robust {
         if unit_weights {
-            weights = weights_at(&params, touch_sigma)?;
+            reweigh(&mut weights, &params, touch_sigma)?;
             unit_weights = false;
         }
         let out = super::robust::irls(

@@ -219,9 +219,10 @@ pub(crate) fn deltas(e: &Evaluated) -> Vec<f64> {
     out
 }
 
-/// The median of `values` (empty: `None`).
-pub(crate) fn median(values: &[f64]) -> Option<f64> {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+/// The median of the finite `values` (none: `None`). Takes the values so
+/// that 10⁶ touches' δ are sorted where they are, not copied.
+pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
+    v.retain(|x| x.is_finite());
     if v.is_empty() {
         return None;
     }
@@ -255,9 +256,10 @@ mod tests {
 
     #[test]
     fn median_of_odd_and_even_counts() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
-        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), Some(2.5));
-        assert_eq!(median(&[]), None);
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(vec![4.0, f64::NAN, 1.0, 2.0, 3.0]), Some(2.5));
+        assert_eq!(median(vec![]), None);
+        assert_eq!(median(vec![f64::INFINITY]), None);
     }
 
     #[test]

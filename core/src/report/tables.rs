@@ -588,12 +588,13 @@ pub(crate) fn residuals(evaluated: &[Evaluated], arms: &Arms) -> String {
             let d = deltas(e);
             let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len().max(1) as f64).sqrt();
             let max = d.iter().copied().fold(0.0, f64::max);
+            let touches = d.len();
             (
                 row_class(e),
                 vec![
                     Cell::text(&e.name(arms)),
-                    Cell::int(d.len()),
-                    Cell::num(median(&d).unwrap_or(f64::NAN), 4),
+                    Cell::int(touches),
+                    Cell::num(median(d).unwrap_or(f64::NAN), 4),
                     Cell::num(rms, 4),
                     Cell::num(max, 4),
                 ],

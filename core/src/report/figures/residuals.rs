@@ -49,7 +49,7 @@ pub(crate) fn figure(evaluated: &[Evaluated], arms: &Arms) -> Result<Figure, Rep
     let y = Axis::linear(0.0, top as f64, true, "touches per bin");
     let entries: Vec<(Key, String)> = evaluated
         .iter()
-        .zip(&all)
+        .zip(all)
         .map(|(e, d)| {
             (
                 Key::Line(e.color(), 2, e.held_out),
