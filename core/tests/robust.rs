@@ -13,6 +13,8 @@ use aacmm_core::session::{CalibrationReport, Problem};
 use aacmm_core::simulate::{Campaign, CampaignSettings, ErrorModel, simulate};
 use aacmm_core::{Arm, DataSet, read_arm};
 
+mod common;
+
 fn nominal() -> Arm {
     let path = format!(
         "{}/../examples/paper-table-1.toml",
@@ -264,28 +266,7 @@ fn a_bad_tuning_constant_is_refused_by_its_field() {
 #[test]
 fn a_robust_report_is_the_same_at_1_2_and_4_threads() {
     use aacmm_core::calibrate::{FixSpec, LmOptions, Method};
-    use aacmm_core::io::ReferenceLength;
-    let (mut labels, mut q) = (Vec::new(), Vec::new());
-    for p in 0..300usize {
-        for t in 0..3usize {
-            labels.push(format!("P{p}"));
-            q.push(
-                (0..6)
-                    .map(|j| ((p * 7 + t * 13 + j * 3) as f64 * 0.37).sin() * 1.5)
-                    .collect::<Vec<f64>>(),
-            );
-        }
-    }
-    let lengths: Vec<ReferenceLength> = (0..50)
-        .map(|i| ReferenceLength {
-            a: format!("P{}", 2 * i),
-            b: format!("P{}", 2 * i + 1),
-            distance: 100.0 + i as f64,
-            uncertainty: None,
-            line: 0,
-        })
-        .collect();
-    let data = DataSet::from_touches(&labels, &q, &lengths).unwrap();
+    let data = common::many_points(300);
     let report = |threads: usize| {
         let options = CalibrateOptions {
             method: Method::Lm,

@@ -4,11 +4,12 @@
 //! that the work is really split.
 
 use aacmm_core::calibrate::{CalibrateOptions, CalibrationError, FixSpec, LmOptions, Method};
-use aacmm_core::io::ReferenceLength;
 use aacmm_core::params::DhParams;
 use aacmm_core::session::Problem;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
 use aacmm_core::{Arm, DataSet};
+
+mod common;
 
 fn nominal() -> Arm {
     Arm::without_limits("nominal", DhParams::paper_nominal())
@@ -131,36 +132,11 @@ fn every_invalid_option_is_refused_by_its_field() {
     ));
 }
 
-/// 1200 points of 3 touches each, joined by 50 lengths: enough that the
-/// normal equations and the metrics split across threads.
-fn many_points() -> DataSet {
-    let points = 1200;
-    let mut labels = Vec::new();
-    let mut q = Vec::new();
-    for p in 0..points {
-        for t in 0..3 {
-            labels.push(format!("P{p}"));
-            let row: Vec<f64> = (0..6)
-                .map(|j| ((p * 7 + t * 13 + j * 3) as f64 * 0.37).sin() * 1.5)
-                .collect();
-            q.push(row);
-        }
-    }
-    let lengths: Vec<ReferenceLength> = (0..50)
-        .map(|i| ReferenceLength {
-            a: format!("P{}", 2 * i),
-            b: format!("P{}", 2 * i + 1),
-            distance: 100.0 + i as f64,
-            uncertainty: None,
-            line: 0,
-        })
-        .collect();
-    DataSet::from_touches(&labels, &q, &lengths).unwrap()
-}
-
 #[test]
 fn the_same_seed_gives_the_same_report_at_1_2_and_4_threads() {
-    let data = many_points();
+    // 1200 points: enough that the normal equations and the metrics split
+    // across threads.
+    let data = common::many_points(1200);
     assert!(data.points().len() >= 1000);
     let report = |threads: usize| {
         let options = CalibrateOptions {
