@@ -265,21 +265,11 @@ fn a_bad_tuning_constant_is_refused_by_its_field() {
 /// equations of every refit split across threads.
 #[test]
 fn a_robust_report_is_the_same_at_1_2_and_4_threads() {
-    use aacmm_core::calibrate::{FixSpec, LmOptions, Method};
     let data = common::many_points(300);
     let report = |threads: usize| {
-        let options = CalibrateOptions {
-            method: Method::Lm,
-            fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
-            lm: LmOptions::default().threads(threads).max_iterations(8),
-            robust: Some(Robust::new(Loss::Cauchy)),
-            ..CalibrateOptions::default()
-        };
-        Problem::new(nominal(), data.clone(), options)
-            .unwrap()
-            .run()
-            .unwrap()
-            .to_json()
+        common::lm_report_on_threads(&nominal(), &data, threads, |o| {
+            o.robust = Some(Robust::new(Loss::Cauchy))
+        })
     };
     let one = report(1);
     assert!(one.contains("\"robust\""));

@@ -3,7 +3,7 @@
 //! gives the same report bytes whatever the thread count, on enough points
 //! that the work is really split.
 
-use aacmm_core::calibrate::{CalibrateOptions, CalibrationError, FixSpec, LmOptions, Method};
+use aacmm_core::calibrate::{CalibrateOptions, CalibrationError, FixSpec};
 use aacmm_core::params::DhParams;
 use aacmm_core::session::Problem;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
@@ -138,20 +138,8 @@ fn the_same_seed_gives_the_same_report_at_1_2_and_4_threads() {
     // across threads.
     let data = common::many_points(1200);
     assert!(data.points().len() >= 1000);
-    let report = |threads: usize| {
-        let options = CalibrateOptions {
-            method: Method::Lm,
-            fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
-            lm: LmOptions::default().threads(threads).max_iterations(8),
-            seed: 5,
-            ..CalibrateOptions::default()
-        };
-        Problem::new(nominal(), data.clone(), options)
-            .unwrap()
-            .run()
-            .unwrap()
-            .to_json()
-    };
+    let report =
+        |threads: usize| common::lm_report_on_threads(&nominal(), &data, threads, |o| o.seed = 5);
     let one = report(1);
     assert_eq!(one, report(2), "2 threads");
     assert_eq!(one, report(4), "4 threads");

@@ -1,7 +1,9 @@
 //! Data shared by the core's integration tests.
 
-use aacmm_core::DataSet;
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, Method};
 use aacmm_core::io::ReferenceLength;
+use aacmm_core::session::Problem;
+use aacmm_core::{Arm, DataSet};
 
 /// `points` points of 3 touches each, spread over ±1.5 rad in every joint,
 /// the first 100 joined in pairs by 50 lengths: with a few hundred points
@@ -28,4 +30,27 @@ pub fn many_points(points: usize) -> DataSet {
         })
         .collect();
     DataSet::from_touches(&labels, &q, &lengths).unwrap()
+}
+
+/// `calibration.json` of an 8-iteration LM session of `arm` on `data` on
+/// `threads` threads (the paper's usual fixed set), with `tune` applied to
+/// the options: what the "same bytes on any thread count" tests compare.
+pub fn lm_report_on_threads(
+    arm: &Arm,
+    data: &DataSet,
+    threads: usize,
+    tune: impl Fn(&mut CalibrateOptions),
+) -> String {
+    let mut options = CalibrateOptions {
+        method: Method::Lm,
+        fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
+        lm: LmOptions::default().threads(threads).max_iterations(8),
+        ..CalibrateOptions::default()
+    };
+    tune(&mut options);
+    Problem::new(arm.clone(), data.clone(), options)
+        .unwrap()
+        .run()
+        .unwrap()
+        .to_json()
 }
