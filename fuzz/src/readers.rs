@@ -52,6 +52,9 @@ impl Reader {
                 include_str!("../../examples/paper-table-1.toml"),
                 include_str!("../../examples/paper-campaign/true_arm.toml"),
                 ARM_WITH_LIMITS,
+                include_str!("../../examples/mukca/kinova-1/arm.toml"),
+                include_str!("../../examples/mukca/panda-1/arm.toml"),
+                ARM_WITH_HAYATI_AND_PRIOR,
             ],
             Reader::Campaign => &[include_str!("../../examples/paper-campaign/campaign.toml")],
             Reader::Poses => &[
@@ -79,6 +82,19 @@ const ARM_WITH_LIMITS: &str = "name = \"limits\"\nlength_unit = \"mm\"\nangle_un
 [[joint]]\ntheta = 0\nd = 0\na = 0\nalpha = -90\n\
 [[joint]]\ntheta = 0\nd = 100\na = 0\nalpha = 0\n\
 [probe]\nx = 0\ny = 0\nz = 100\n";
+
+/// A Hayati joint (no `d`, `hbeta`) and a `[prior]` table of every form:
+/// per kind, per class, per parameter.
+const ARM_WITH_HAYATI_AND_PRIOR: &str = "name = \"hayati\"\nlength_unit = \"mm\"\n\
+angle_unit = \"deg\"\n\
+[[joint]]\ntheta = 0\nd = 400\na = 50\nalpha = -90\n\
+[[joint]]\nmodel = \"hayati\"\ntheta = -90\nhbeta = 0.25\na = 600\nalpha = 0.2\n\
+[[joint]]\nmodel = \"dh\"\ntheta = 0\nd = 0\na = 50\nalpha = -90\n\
+[[joint]]\ntheta = 0\nd = 550\na = 0\nalpha = 90\n\
+[[joint]]\ntheta = 0\nd = 0\na = 0\nalpha = -90\n\
+[[joint]]\ntheta = 0\nd = 100\na = 0\nalpha = 0\n\
+[probe]\nx = 0\ny = 0\nz = 100\n\
+[prior]\nlength_mm = 1.0\nangle_deg = 0.5\ntheta_deg = 0.2\nd2_mm = 0.3\nhbeta2_deg = 0.1\n";
 
 /// Tokens the mutations insert: numbers at and past the edges of `f64`,
 /// separators, quotes, TOML syntax, units, odd characters.
@@ -145,6 +161,16 @@ pub const TOKENS: &[&str] = &[
     "theta",
     "alpha",
     "limits",
+    "model",
+    "\"hayati\"",
+    "\"dh\"",
+    "hbeta",
+    "hbeta2",
+    "[prior]",
+    "length_mm",
+    "angle_deg",
+    "theta5_deg",
+    "a5_mm",
     "length_unit",
     "angle_unit",
     "true",
