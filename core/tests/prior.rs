@@ -357,3 +357,38 @@ fn with_unstated_noise_the_prior_weighs_against_the_estimated_touch_sigma() {
         );
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(3000))]
+    /// `--prior` strings built from the spec's own pieces and odd ones never
+    /// panic: a parse is `none`, tolerances that pass their own check and
+    /// describe themselves, or an error naming the field `prior`.
+    #[test]
+    fn any_prior_spec_parses_or_is_refused_by_its_field(
+        pieces in proptest::collection::vec(
+            proptest::sample::select(vec![
+                "length", "angle", "theta", "theta5", "theta7", "theta0", "a1", "d6", "alpha2",
+                "hbeta2", "probe", "Bz", "=", "==", ",", " ", "0.5", "-1", "0", "1e308", "1e309",
+                "nan", "inf", "-inf", "1e", "e5", ".5", "mm", "m", "deg", "rad", "um", "é", "°",
+                "none", "\u{0}", "\u{202e}", "99999999999999999999",
+            ]),
+            0..12,
+        ),
+        joints in 1usize..=8,
+    ) {
+        let spec: String = pieces.concat();
+        match Tolerances::parse(&spec, joints) {
+            Ok(None) => proptest::prop_assert_eq!(spec.trim(), "none"),
+            Ok(Some(t)) => {
+                proptest::prop_assert!(!t.is_empty());
+                let _ = t.check(joints);
+                let _ = t.describe(joints);
+                proptest::prop_assert_eq!(t.sigmas(joints).len(), 4 * joints + 3);
+            }
+            Err(e) => {
+                proptest::prop_assert_eq!(e.field, "prior");
+                proptest::prop_assert!(!e.reason.is_empty());
+            }
+        }
+    }
+}
