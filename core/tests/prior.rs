@@ -183,7 +183,7 @@ fn arm_text(prior: &str) -> String {
 #[test]
 fn bad_tolerances_are_refused_where_they_are_written() {
     let base_lines = arm_text("").lines().count();
-    let cases: [(&str, &str, &str); 9] = [
+    let cases: [(&str, &str, &str); 11] = [
         ("length_mm = 0", "length_mm", "must be a finite number > 0"),
         (
             "angle_deg = -0.1",
@@ -197,6 +197,13 @@ fn bad_tolerances_are_refused_where_they_are_written() {
             "must be a finite number > 0",
         ),
         ("theta9_deg = 0.1", "theta9_deg", "unknown target `theta9`"),
+        // Pseudo-observations that overflow, or that constrain nothing.
+        (
+            "a2_mm = 1e-300",
+            "a2_mm",
+            "should be fixed, not given a tolerance",
+        ),
+        ("angle_deg = 1e300", "angle_deg", "that constrains nothing"),
         ("theta5_mm = 0.1", "theta5_mm", "theta5 is an angle"),
         ("length = 0.5", "length", "has no unit"),
         ("Bz_mm = \"0.5\"", "Bz_mm", "is not a number"),
@@ -254,6 +261,8 @@ fn bad_tolerances_are_refused_where_they_are_written() {
         ("length:0.5mm", "expected TARGET=VALUEUNIT"),
         ("", "no tolerance given"),
         ("length=abcmm", "is not a number"),
+        ("length=1e-13mm", "below 1e-12"),
+        ("theta5=1e13rad", "above 1e12"),
     ] {
         let e = Tolerances::parse(spec, 6).unwrap_err();
         assert_eq!(e.field, "prior");

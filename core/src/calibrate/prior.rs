@@ -147,7 +147,30 @@ fn check_value(target: Target, value: f64, unit: &str) -> Result<f64, String> {
             "tolerance of {name} = {value} {unit} is not representable"
         ));
     }
+    if let Some(why) = out_of_range(internal) {
+        return Err(format!("tolerance of {name} = {value} {unit}: {why}"));
+    }
     Ok(internal)
+}
+
+/// The tolerances a prior can carry, mm or rad: a pseudo-observation
+/// `Δ/σ` must stay far from overflow for any correction (σ = 1e-300 made
+/// the cost infinite), and one beyond 1e12 constrains nothing.
+const SIGMA_RANGE: std::ops::RangeInclusive<f64> = 1e-12..=1e12;
+
+/// Why a tolerance `sigma` (mm or rad) is out of [`SIGMA_RANGE`], if it is.
+fn out_of_range(sigma: f64) -> Option<&'static str> {
+    if sigma < *SIGMA_RANGE.start() {
+        Some(
+            "below 1e-12 (mm or rad): a parameter known that well should be fixed, not given a tolerance",
+        )
+    } else if sigma > *SIGMA_RANGE.end() {
+        Some(
+            "above 1e12 (mm or rad): that constrains nothing; leave the parameter out to give it no prior",
+        )
+    } else {
+        None
+    }
 }
 
 /// Stated 1σ tolerances of the nominal geometry (mm, rad inside): per class
@@ -297,6 +320,9 @@ impl Tolerances {
                     format!("{name}={s}"),
                     "a tolerance must be a finite number > 0",
                 ));
+            }
+            if let Some(why) = out_of_range(*s) {
+                return Err(OptionError::new("prior", format!("{name}={s}"), why));
             }
         }
         Ok(())
