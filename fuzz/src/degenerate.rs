@@ -3,13 +3,15 @@
 
 use std::sync::OnceLock;
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, Method, calibrate};
+use aacmm_core::calibrate::prior::Target;
+use aacmm_core::calibrate::robust::{Loss, Robust};
+use aacmm_core::calibrate::{CalibrateOptions, FixSpec, Method, Tolerances, calibrate};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::identify::identify;
 use aacmm_core::io::{
     AngleUnit, Arm, Poses, ReferenceLength, parse_arm, parse_lengths, parse_poses,
 };
-use aacmm_core::params::{DhParams, ParamId, ParamKind};
+use aacmm_core::params::{DhParams, JointModel, ParamId, ParamKind};
 use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, SocketPlan, SocketPoint, simulate};
 use proptest::prelude::*;
@@ -130,6 +132,10 @@ pub struct Degenerate {
     pub fix: u8,
     /// Seed of the pseudo-random factors and the solver.
     pub seed: u64,
+    /// 0 none; 1 a prior (0.5 mm, 0.1°); 2 `--robust huber`; 3 `--robust
+    /// cauchy` with the prior; 4 a prior of 1e-300 mm/rad; 5 of 1e300; 6 the
+    /// nominal's joint 2 in the Hayati model; 7 Hayati with the prior.
+    pub extras: u8,
 }
 
 fn degenerate() -> impl Strategy<Value = Degenerate> {
@@ -153,6 +159,7 @@ fn degenerate() -> impl Strategy<Value = Degenerate> {
             prop::sample::select(vec![Method::Lm, Method::Global, Method::Hybrid, Method::Sa]),
             0..=3u8,
             any::<u64>(),
+            prop::sample::select(vec![0u8, 0, 0, 1, 2, 3, 4, 5, 6, 7]),
         ),
     )
         .prop_map(
@@ -160,7 +167,7 @@ fn degenerate() -> impl Strategy<Value = Degenerate> {
                 (base, sockets, touches, duplicates),
                 (jitter, scale, lengths),
                 noise,
-                (method, fix, seed),
+                (method, fix, seed, extras),
             )| {
                 Degenerate {
                     base,
@@ -174,6 +181,7 @@ fn degenerate() -> impl Strategy<Value = Degenerate> {
                     method,
                     fix,
                     seed,
+                    extras,
                 }
             },
         )
@@ -284,7 +292,24 @@ pub fn check_degenerate(case: &Degenerate) -> Result<String, String> {
             length_default_mm: 0.001,
             length_weight: None,
         };
-        let _ = identify(&base.nominal, &data, &noise, 1);
+        let hayati;
+        let nominal = if case.extras >= 6 {
+            // The exact conversion where joint 2 allows it, else joint 2
+            // simply declared Hayati (β = 0, its d dropped): a poorer start,
+            // still an arm.
+            hayati = base.nominal.with_hayati(1).unwrap_or_else(|_| {
+                let mut p = base.nominal.clone();
+                if let Some(j) = p.joints.get_mut(1) {
+                    j.model = JointModel::Hayati;
+                    (j.d, j.beta) = (0.0, 0.0);
+                }
+                p
+            });
+            &hayati
+        } else {
+            &base.nominal
+        };
+        let _ = identify(nominal, &data, &noise, 1);
         let mut options = CalibrateOptions {
             noise,
             method: case.method,
@@ -314,7 +339,29 @@ pub fn check_degenerate(case: &Degenerate) -> Result<String, String> {
                     .collect(),
             ),
         };
-        match calibrate(&base.nominal, &data, &options) {
+        let prior = |length_mm: f64, angle_rad: f64| {
+            let mut t = Tolerances::new();
+            t.set(Target::Length, length_mm, "mm")
+                .and(t.set(Target::Angle, angle_rad, "rad"))
+                .map(|()| t)
+        };
+        let tolerances = match case.extras {
+            1 | 3 | 7 => Some(prior(0.5, 0.1f64.to_radians())),
+            4 => Some(prior(1e-300, 1e-300)),
+            5 => Some(prior(1e300, 1e300)),
+            _ => None,
+        };
+        match tolerances {
+            Some(Ok(t)) => options.prior = Some(t),
+            Some(Err(e)) => return Ok(format!("prior refused: {}", kind(&e))),
+            None => {}
+        }
+        options.robust = match case.extras {
+            2 => Some(Robust::new(Loss::Huber)),
+            3 => Some(Robust::new(Loss::Cauchy)),
+            _ => None,
+        };
+        match calibrate(nominal, &data, &options) {
             Ok(c) => {
                 if let Some(v) = c.params.to_vec().into_iter().find(|v| !v.is_finite()) {
                     return Err(format!("calibrated a non-finite parameter {v}"));
