@@ -425,15 +425,48 @@ impl PreparedPoses {
         )
     }
 
+    /// The sin/cos of `count` whole batches of poses from `start`, cut
+    /// once per call so that the batch loops load without checks; the
+    /// caller has checked `N` and the range.
+    #[inline(always)]
+    fn batches<const N: usize>(&self, start: usize, count: usize) -> Batches<'_, N> {
+        let end = start + count * LANES;
+        let mut cos: [&[[f64; LANES]]; N] = [&[]; N];
+        let mut sin: [&[[f64; LANES]]; N] = [&[]; N];
+        // Plain loops, not `array::from_fn`: its closure is not always
+        // inlined. `[..count]` makes every column's length the loop bound
+        // itself, so the loads in `Batches::get` need no check.
+        for j in 0..N {
+            cos[j] = &self.cos[j][start..end].as_chunks().0[..count];
+            sin[j] = &self.sin[j][start..end].as_chunks().0[..count];
+        }
+        Batches { count, cos, sin }
+    }
+}
+
+/// Whole batches of [`LANES`] poses of a [`PreparedPoses`], column by
+/// column: what the batch loops index. The runtime-sized storage behind
+/// `PreparedPoses` (a `Vec` of columns) would otherwise cost a joint-count
+/// check, a pointer load and a range check for every load of every batch —
+/// as many scalar instructions as the position kernel has vector ones.
+struct Batches<'a, const N: usize> {
+    /// Number of batches: the length of every column.
+    count: usize,
+    cos: [&'a [[f64; LANES]]; N],
+    sin: [&'a [[f64; LANES]]; N],
+}
+
+impl<const N: usize> Batches<'_, N> {
+    /// cos and sin of batch `b`'s readings, one lane per pose.
     // Plain loops, not `array::from_fn`: its closure is not always inlined,
     // and out of line the AVX loads become calls.
     #[inline(always)]
-    fn trig_lanes<const N: usize, L: Batch>(&self, i: usize) -> ([L; N], [L; N]) {
+    fn get<L: Batch>(&self, b: usize) -> ([L; N], [L; N]) {
         let mut c = [L::from(0.0); N];
         let mut s = [L::from(0.0); N];
         for j in 0..N {
-            c[j] = L::load(&self.cos[j][i..]);
-            s[j] = L::load(&self.sin[j][i..]);
+            c[j] = L::load(&self.cos[j][b]);
+            s[j] = L::load(&self.sin[j][b]);
         }
         (c, s)
     }
@@ -563,16 +596,25 @@ fn positions_impl<const N: usize, C: Chain<N>, L: Batch>(
     out: &mut [[f64; 3]],
 ) {
     let kl: Consts<L, N> = k.splat();
-    let full = out.len() / LANES * LANES;
-    for o in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<N, L>(start + o);
+    let (whole, rest) = out.as_chunks_mut::<LANES>();
+    let batches = poses.batches::<N>(start, whole.len());
+    for (b, dst) in whole.iter_mut().enumerate().take(batches.count) {
+        let (cq, sq) = batches.get::<L>(b);
         let p = C::position(&kl, &cq, &sq);
-        transpose(&[p], &mut out[o..o + LANES]);
+        transpose(&[p], dst);
     }
-    for (o, slot) in out.iter_mut().enumerate().skip(full) {
-        let (cq, sq) = poses.trig::<N>(start + o);
+    let tail = start + batches.count * LANES;
+    for (o, slot) in rest.iter_mut().enumerate() {
+        let (cq, sq) = poses.trig::<N>(tail + o);
         *slot = C::position(k, &cq, &sq);
     }
+}
+
+/// Batch `b`'s four values of a row of `len` values per pose (one
+/// coordinate of the positions or of a Jacobian column).
+#[inline(always)]
+fn lanes_of(row: &mut [f64], b: usize) -> &mut [f64; LANES] {
+    &mut row.as_chunks_mut().0[b]
 }
 
 #[inline(always)]
@@ -585,21 +627,20 @@ fn jacobians_impl<const N: usize, C: Chain<N>, L: Batch>(
     let params = <C as Chain<N>>::PARAMS;
     let len = out.len;
     let mut jl = vec![[L::from(0.0); 3]; params];
-    let full = poses.len() / LANES * LANES;
-    for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<N, L>(i);
+    let batches = poses.batches::<N>(0, poses.len() / LANES);
+    for b in 0..batches.count {
+        let (cq, sq) = batches.get::<L>(b);
         let p = C::position_jacobian(&kl, &cq, &sq, &mut jl);
-        for (r, v) in p.into_iter().enumerate() {
-            v.store(&mut out.pos[r * len + i..]);
+        // Rows of `len` values, one per output: `len ≥ LANES` here.
+        for (row, v) in out.pos.chunks_exact_mut(len).zip(p) {
+            v.store(lanes_of(row, b));
         }
-        for (c, col) in jl.iter().enumerate() {
-            for (r, v) in col.iter().enumerate() {
-                v.store(&mut out.jac[(3 * c + r) * len + i..]);
-            }
+        for (row, v) in out.jac.chunks_exact_mut(len).zip(jl.iter().flatten()) {
+            v.store(lanes_of(row, b));
         }
     }
     let mut cols = vec![[0.0; 3]; params];
-    for i in full..poses.len() {
+    for i in batches.count * LANES..poses.len() {
         let (cq, sq) = poses.trig::<N>(i);
         let p = C::position_jacobian(k, &cq, &sq, &mut cols);
         out.set(i, p, &cols);
@@ -618,17 +659,18 @@ fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     let mut jl = vec![[L::from(0.0); 3]; params];
     let mut tile = vec![[0.0; 3]; LANES * params];
     let mut pos = [[0.0; 3]; LANES];
-    let full = range.start + range.len() / LANES * LANES;
-    for i in (range.start..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<N, L>(i);
+    let batches = poses.batches::<N>(range.start, range.len() / LANES);
+    for b in 0..batches.count {
+        let (cq, sq) = batches.get::<L>(b);
         let p = C::position_jacobian(&kl, &cq, &sq, &mut jl);
         transpose(&[p], &mut pos);
         transpose(&jl, &mut tile);
+        let i = range.start + b * LANES;
         for (l, cols) in tile.chunks_exact(params).enumerate() {
             f(i + l, &pos[l], cols);
         }
     }
-    for i in full..range.end {
+    for i in range.start + batches.count * LANES..range.end {
         let (cq, sq) = poses.trig::<N>(i);
         let p = C::position_jacobian(k, &cq, &sq, &mut tile[..params]);
         f(i, &p, &tile[..params]);
