@@ -82,6 +82,45 @@ impl Neg for Lanes {
     }
 }
 
+/// Two batches computed together: every operation on both halves, so
+/// the generated code carries two independent dependency chains and the
+/// CPU overlaps them (one chain alone waits on its latency: the position
+/// kernel is a serial product of links). Each half does exactly what one
+/// batch does, so the results are the same bits.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Two<L>(pub(crate) L, pub(crate) L);
+
+impl<L: From<f64>> From<f64> for Two<L> {
+    #[inline(always)]
+    fn from(v: f64) -> Two<L> {
+        Two(L::from(v), L::from(v))
+    }
+}
+
+macro_rules! pairwise {
+    ($tr:ident, $f:ident) => {
+        impl<L: $tr<Output = L>> $tr for Two<L> {
+            type Output = Two<L>;
+            #[inline(always)]
+            fn $f(self, o: Two<L>) -> Two<L> {
+                Two(self.0.$f(o.0), self.1.$f(o.1))
+            }
+        }
+    };
+}
+
+pairwise!(Add, add);
+pairwise!(Sub, sub);
+pairwise!(Mul, mul);
+
+impl<L: Neg<Output = L>> Neg for Two<L> {
+    type Output = Two<L>;
+    #[inline(always)]
+    fn neg(self) -> Two<L> {
+        Two(-self.0, -self.1)
+    }
+}
+
 /// A batch loop generic over the lane type: what [`run`] runs on the widest
 /// lanes the CPU supports. Its output cannot depend on the lane type, so no
 /// lane value leaves `run` except through the loop's own results.

@@ -28,7 +28,7 @@ use std::ops::{Add, Mul, Neg, Sub};
 use thiserror::Error;
 
 use crate::params::{DhParams, JointModel};
-use lanes::{Batch, LANES};
+use lanes::{Batch, LANES, Two};
 
 aacmm_dh_macros::dh_chain! {
     /// The 6-joint measuring arm (27 parameters).
@@ -596,10 +596,25 @@ fn positions_impl<const N: usize, C: Chain<N>, L: Batch>(
     out: &mut [[f64; 3]],
 ) {
     let kl: Consts<L, N> = k.splat();
+    let k2: Consts<Two<L>, N> = k.splat();
     let (whole, rest) = out.as_chunks_mut::<LANES>();
     let batches = poses.batches::<N>(start, whole.len());
-    for (b, dst) in whole.iter_mut().enumerate().take(batches.count) {
-        let (cq, sq) = batches.get::<L>(b);
+    // Two batches at a time (see `Two`), then an odd one.
+    let mut pairs = whole.chunks_exact_mut(2);
+    for (b, dst) in (0..batches.count).step_by(2).zip(&mut pairs) {
+        let ((c0, s0), (c1, s1)) = (batches.get::<L>(b), batches.get::<L>(b + 1));
+        let mut cq = [Two(c0[0], c1[0]); N];
+        let mut sq = [Two(s0[0], s1[0]); N];
+        for j in 0..N {
+            cq[j] = Two(c0[j], c1[j]);
+            sq[j] = Two(s0[j], s1[j]);
+        }
+        let [x, y, z] = C::position(&k2, &cq, &sq);
+        transpose(&[[x.0, y.0, z.0]], &mut dst[0]);
+        transpose(&[[x.1, y.1, z.1]], &mut dst[1]);
+    }
+    if let [dst] = pairs.into_remainder() {
+        let (cq, sq) = batches.get::<L>(batches.count - 1);
         let p = C::position(&kl, &cq, &sq);
         transpose(&[p], dst);
     }
@@ -710,12 +725,17 @@ mod tests {
 
     fn portable_lanes_equal_single_poses_of<C: Chain<6>>(params: &DhParams) {
         let k = PreparedParams::<6>::new(params).unwrap();
-        let q: Vec<[f64; 6]> = (0..7)
+        // 15 poses: a pair of batches, an odd batch and a tail of three.
+        let q: Vec<[f64; 6]> = (0..15)
             .map(|i| std::array::from_fn(|j| ((i * 5 + j) as f64 * 0.61).sin() * 3.0))
             .collect();
         let poses = PreparedPoses::new(6, &q).unwrap();
         let mut pos = vec![[0.0; 3]; q.len()];
         positions_impl::<6, C, Lanes>(&k, &poses, 0, &mut pos);
+        // From pose 1: one pair of batches and a tail of two.
+        let mut from_one = vec![[0.0; 3]; 10];
+        positions_impl::<6, C, Lanes>(&k, &poses, 1, &mut from_one);
+        assert_eq!(from_one, pos[1..11]);
         let mut batch = Jacobians::new(q.len(), 27);
         jacobians_impl::<6, C, Lanes>(&k, &poses, &mut batch);
         let mut seen = 0;
