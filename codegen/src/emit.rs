@@ -43,31 +43,37 @@ fn temp(id: Id) -> Ident {
     format_ident!("t{}", id.index())
 }
 
+/// The `let` statement of operation `id` (`None` for an input or constant).
+fn let_of(g: &Graph, id: Id) -> Option<TokenStream> {
+    let value = match g.node(id) {
+        Node::Add(a, b) => {
+            let (a, b) = (operand(g, a), operand(g, b));
+            quote!(#a + #b)
+        }
+        Node::Sub(a, b) => {
+            let (a, b) = (operand(g, a), operand(g, b));
+            quote!(#a - #b)
+        }
+        Node::Mul(a, b) => {
+            let (a, b) = (operand(g, a), operand(g, b));
+            quote!(#a * #b)
+        }
+        Node::Neg(a) => {
+            let a = operand(g, a);
+            quote!(-#a)
+        }
+        Node::Input(_) | Node::Const(_) => return None,
+    };
+    let t = temp(id);
+    Some(quote!(let #t: S = #value;))
+}
+
 /// The `let` statements that compute `outputs`.
 fn body(g: &Graph, outputs: &[Id]) -> TokenStream {
-    let lets = g.reachable(outputs).into_iter().filter_map(|id| {
-        let value = match g.node(id) {
-            Node::Add(a, b) => {
-                let (a, b) = (operand(g, a), operand(g, b));
-                quote!(#a + #b)
-            }
-            Node::Sub(a, b) => {
-                let (a, b) = (operand(g, a), operand(g, b));
-                quote!(#a - #b)
-            }
-            Node::Mul(a, b) => {
-                let (a, b) = (operand(g, a), operand(g, b));
-                quote!(#a * #b)
-            }
-            Node::Neg(a) => {
-                let a = operand(g, a);
-                quote!(-#a)
-            }
-            Node::Input(_) | Node::Const(_) => return None,
-        };
-        let t = temp(id);
-        Some(quote!(let #t: S = #value;))
-    });
+    let lets = g
+        .reachable(outputs)
+        .into_iter()
+        .filter_map(|id| let_of(g, id));
     quote!(#(#lets)*)
 }
 
@@ -76,8 +82,45 @@ fn vec3(g: &Graph, v: &[Id; 3]) -> TokenStream {
     quote!([#x, #y, #z])
 }
 
-/// The `let`s for `cols` and `position`, and the stores `jac[i] = [..];`.
-fn columns(g: &Graph, cols: &[[Id; 3]], position: &[Id; 3]) -> (TokenStream, TokenStream) {
+/// The last operation among `ids` in evaluation order (`None` when all are
+/// inputs or constants, available from the start).
+fn last_operation(g: &Graph, ids: &[Id]) -> Option<Id> {
+    ids.iter()
+        .copied()
+        .filter(|&id| !matches!(g.node(id), Node::Input(_) | Node::Const(_)))
+        .max()
+}
+
+/// The `let`s that compute `outputs`, each of `stores` placed right after
+/// the `let` of the last value it reads (before the first `let` when it
+/// reads only inputs): a column leaves the registers as soon as it is
+/// computed instead of waiting, spilled, for the end of the function.
+/// The operations are those of [`body`] in the same order, so the values
+/// are the same bits.
+fn body_with_stores(
+    g: &Graph,
+    outputs: &[Id],
+    mut stores: Vec<(Option<Id>, TokenStream)>,
+) -> TokenStream {
+    stores.sort_by_key(|(ready, _)| *ready);
+    let mut pending = stores.into_iter().peekable();
+    let mut code = TokenStream::new();
+    while let Some((_, store)) = pending.next_if(|(ready, _)| ready.is_none()) {
+        code.extend(store);
+    }
+    for id in g.reachable(outputs) {
+        code.extend(let_of(g, id));
+        while let Some((_, store)) = pending.next_if(|(ready, _)| *ready == Some(id)) {
+            code.extend(store);
+        }
+    }
+    assert!(pending.next().is_none(), "every store placed");
+    code
+}
+
+/// The `let`s for `cols` and `position`, with the stores `jac[i] = [..];`
+/// among them.
+fn columns(g: &Graph, cols: &[[Id; 3]], position: &[Id; 3]) -> TokenStream {
     columns_with(g, cols, &[], 0, position)
 }
 
@@ -90,7 +133,7 @@ fn columns_with(
     alternatives: &[[Id; 3]],
     offset: usize,
     position: &[Id; 3],
-) -> (TokenStream, TokenStream) {
+) -> TokenStream {
     let outputs: Vec<Id> = cols
         .iter()
         .chain(alternatives)
@@ -106,14 +149,18 @@ fn columns_with(
             .and_then(|j| alternatives.get(j).map(|alt| (j, alt)))
         {
             Some((j, alt)) => {
+                let ready = last_operation(g, &[*col, *alt].concat());
                 let alt = vec3(g, alt);
                 let j = Literal::usize_unsuffixed(j);
-                quote!(jac[#store] = if hayati[#j] { #alt } else { #v };)
+                (
+                    ready,
+                    quote!(jac[#store] = if hayati[#j] { #alt } else { #v };),
+                )
             }
-            None => quote!(jac[#store] = #v;),
+            None => (last_operation(g, col), quote!(jac[#store] = #v;)),
         }
     });
-    (body(g, &outputs), quote!(#(#stores)*))
+    body_with_stores(g, &outputs, stores.collect())
 }
 
 /// The items of a generated kernel module (without the `mod` around them).
@@ -158,14 +205,14 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
     let position_body = body(g, &k.position);
     let position = vec3(g, &k.position);
 
-    let (jac_body, jac_stores) = columns_with(
+    let jac_body = columns_with(
         g,
         &k.param_jacobian,
         &k.beta_jacobian,
         k.spec.joints,
         &k.frame_position,
     );
-    let (joint_body, joint_stores) = columns(g, &k.joint_jacobian, &k.frame_position);
+    let joint_body = columns(g, &k.joint_jacobian, &k.frame_position);
     let frame_position = vec3(g, &k.frame_position);
 
     let order = if k.spec.probe {
@@ -209,7 +256,6 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
         #attrs
         pub fn position_jacobian<S>(#args, #select_arg jac: &mut [[S; 3]; #p]) -> [S; 3] where #bounds {
             #jac_body
-            #jac_stores
             #frame_position
         }
 
@@ -218,7 +264,6 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
         #attrs
         pub fn joint_jacobian<S>(#args, jac: &mut [[S; 3]; #n]) -> [S; 3] where #bounds {
             #joint_body
-            #joint_stores
             #frame_position
         }
     }

@@ -281,13 +281,14 @@ fn hayati_batches_equal_single_poses_bit_for_bit() {
 }
 
 /// The batch paths (SIMD lanes plus a scalar tail) give the one-pose results
-/// bit for bit, for every batch length around the lane width.
+/// bit for bit, for every batch length around the lane width (pairs of
+/// batches, an odd batch, a scalar tail).
 #[test]
 fn batches_equal_single_poses_bit_for_bit() {
     let params = nominal(6);
     let k = PreparedParams::<6>::new(&params).unwrap();
     let arm = ArmKernel::new(&params).unwrap();
-    for len in 0..11 {
+    for len in 0..19 {
         let q: Vec<[f64; 6]> = (0..len)
             .map(|i| std::array::from_fn(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 3.0))
             .collect();

@@ -21,12 +21,13 @@ pub(crate) const LANES: usize = 4;
 
 /// A lane type the batch loops can run the generated code on.
 pub(crate) trait Batch: Scalar {
-    /// Loads the first [`LANES`] values of `v`.
-    fn load(v: &[f64]) -> Self;
+    /// Loads `LANES` values (a fixed-size array, so the batch loops do
+    /// their bounds checks once per call, not once per load).
+    fn load(v: &[f64; LANES]) -> Self;
     /// The lanes as an array.
     fn to_array(self) -> [f64; LANES];
-    /// Stores the lanes into the first [`LANES`] values of `dst`.
-    fn store(self, dst: &mut [f64]);
+    /// Stores the lanes into `dst`.
+    fn store(self, dst: &mut [f64; LANES]);
 }
 
 /// Portable lanes: one value per pose.
@@ -35,10 +36,8 @@ pub(crate) struct Lanes(pub(crate) [f64; LANES]);
 
 impl Batch for Lanes {
     #[inline(always)]
-    fn load(v: &[f64]) -> Lanes {
-        // Invariant: `v[..LANES]` is exactly LANES long (the slice panics
-        // first if `v` were shorter, and batch callers pass whole lanes).
-        Lanes(v[..LANES].try_into().expect("4 values"))
+    fn load(v: &[f64; LANES]) -> Lanes {
+        Lanes(*v)
     }
 
     #[inline(always)]
@@ -47,8 +46,8 @@ impl Batch for Lanes {
     }
 
     #[inline(always)]
-    fn store(self, dst: &mut [f64]) {
-        dst[..LANES].copy_from_slice(&self.0);
+    fn store(self, dst: &mut [f64; LANES]) {
+        *dst = self.0;
     }
 }
 
@@ -80,6 +79,45 @@ impl Neg for Lanes {
     #[inline(always)]
     fn neg(self) -> Lanes {
         Lanes(self.0.map(|v| -v))
+    }
+}
+
+/// Two batches computed together: every operation on both halves, so
+/// the generated code carries two independent dependency chains and the
+/// CPU overlaps them (one chain alone waits on its latency: the position
+/// kernel is a serial product of links). Each half does exactly what one
+/// batch does, so the results are the same bits.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Two<L>(pub(crate) L, pub(crate) L);
+
+impl<L: From<f64>> From<f64> for Two<L> {
+    #[inline(always)]
+    fn from(v: f64) -> Two<L> {
+        Two(L::from(v), L::from(v))
+    }
+}
+
+macro_rules! pairwise {
+    ($tr:ident, $f:ident) => {
+        impl<L: $tr<Output = L>> $tr for Two<L> {
+            type Output = Two<L>;
+            #[inline(always)]
+            fn $f(self, o: Two<L>) -> Two<L> {
+                Two(self.0.$f(o.0), self.1.$f(o.1))
+            }
+        }
+    };
+}
+
+pairwise!(Add, add);
+pairwise!(Sub, sub);
+pairwise!(Mul, mul);
+
+impl<L: Neg<Output = L>> Neg for Two<L> {
+    type Output = Two<L>;
+    #[inline(always)]
+    fn neg(self) -> Two<L> {
+        Two(-self.0, -self.1)
     }
 }
 
@@ -161,9 +199,7 @@ mod avx {
 
     impl Batch for Avx {
         #[inline(always)]
-        fn load(v: &[f64]) -> Avx {
-            // Invariant: `v[..LANES]` is exactly LANES long.
-            let v: &[f64; LANES] = v[..LANES].try_into().expect("4 values");
+        fn load(v: &[f64; LANES]) -> Avx {
             // SAFETY: AVX is present (type invariant); `v` holds 4 values.
             Avx(unsafe { _mm256_loadu_pd(v.as_ptr()) })
         }
@@ -177,9 +213,7 @@ mod avx {
         }
 
         #[inline(always)]
-        fn store(self, dst: &mut [f64]) {
-            // Invariant: `dst[..LANES]` is exactly LANES long.
-            let dst: &mut [f64; LANES] = (&mut dst[..LANES]).try_into().expect("4 values");
+        fn store(self, dst: &mut [f64; LANES]) {
             // SAFETY: AVX is present (type invariant); `dst` holds 4 values.
             unsafe { _mm256_storeu_pd(dst.as_mut_ptr(), self.0) };
         }

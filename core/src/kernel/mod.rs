@@ -28,7 +28,7 @@ use std::ops::{Add, Mul, Neg, Sub};
 use thiserror::Error;
 
 use crate::params::{DhParams, JointModel};
-use lanes::{Batch, LANES};
+use lanes::{Batch, LANES, Two};
 
 aacmm_dh_macros::dh_chain! {
     /// The 6-joint measuring arm (27 parameters).
@@ -425,15 +425,48 @@ impl PreparedPoses {
         )
     }
 
+    /// The sin/cos of `count` whole batches of poses from `start`, cut
+    /// once per call so that the batch loops load without checks; the
+    /// caller has checked `N` and the range.
+    #[inline(always)]
+    fn batches<const N: usize>(&self, start: usize, count: usize) -> Batches<'_, N> {
+        let end = start + count * LANES;
+        let mut cos: [&[[f64; LANES]]; N] = [&[]; N];
+        let mut sin: [&[[f64; LANES]]; N] = [&[]; N];
+        // Plain loops, not `array::from_fn`: its closure is not always
+        // inlined. `[..count]` makes every column's length the loop bound
+        // itself, so the loads in `Batches::get` need no check.
+        for j in 0..N {
+            cos[j] = &self.cos[j][start..end].as_chunks().0[..count];
+            sin[j] = &self.sin[j][start..end].as_chunks().0[..count];
+        }
+        Batches { count, cos, sin }
+    }
+}
+
+/// Whole batches of [`LANES`] poses of a [`PreparedPoses`], column by
+/// column: what the batch loops index. The runtime-sized storage behind
+/// `PreparedPoses` (a `Vec` of columns) would otherwise cost a joint-count
+/// check, a pointer load and a range check for every load of every batch —
+/// as many scalar instructions as the position kernel has vector ones.
+struct Batches<'a, const N: usize> {
+    /// Number of batches: the length of every column.
+    count: usize,
+    cos: [&'a [[f64; LANES]]; N],
+    sin: [&'a [[f64; LANES]]; N],
+}
+
+impl<const N: usize> Batches<'_, N> {
+    /// cos and sin of batch `b`'s readings, one lane per pose.
     // Plain loops, not `array::from_fn`: its closure is not always inlined,
     // and out of line the AVX loads become calls.
     #[inline(always)]
-    fn trig_lanes<const N: usize, L: Batch>(&self, i: usize) -> ([L; N], [L; N]) {
+    fn get<L: Batch>(&self, b: usize) -> ([L; N], [L; N]) {
         let mut c = [L::from(0.0); N];
         let mut s = [L::from(0.0); N];
         for j in 0..N {
-            c[j] = L::load(&self.cos[j][i..]);
-            s[j] = L::load(&self.sin[j][i..]);
+            c[j] = L::load(&self.cos[j][b]);
+            s[j] = L::load(&self.sin[j][b]);
         }
         (c, s)
     }
@@ -563,16 +596,40 @@ fn positions_impl<const N: usize, C: Chain<N>, L: Batch>(
     out: &mut [[f64; 3]],
 ) {
     let kl: Consts<L, N> = k.splat();
-    let full = out.len() / LANES * LANES;
-    for o in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<N, L>(start + o);
-        let p = C::position(&kl, &cq, &sq);
-        transpose(&[p], &mut out[o..o + LANES]);
+    let k2: Consts<Two<L>, N> = k.splat();
+    let (whole, rest) = out.as_chunks_mut::<LANES>();
+    let batches = poses.batches::<N>(start, whole.len());
+    // Two batches at a time (see `Two`), then an odd one.
+    let mut pairs = whole.chunks_exact_mut(2);
+    for (b, dst) in (0..batches.count).step_by(2).zip(&mut pairs) {
+        let ((c0, s0), (c1, s1)) = (batches.get::<L>(b), batches.get::<L>(b + 1));
+        let mut cq = [Two(c0[0], c1[0]); N];
+        let mut sq = [Two(s0[0], s1[0]); N];
+        for j in 0..N {
+            cq[j] = Two(c0[j], c1[j]);
+            sq[j] = Two(s0[j], s1[j]);
+        }
+        let [x, y, z] = C::position(&k2, &cq, &sq);
+        transpose(&[[x.0, y.0, z.0]], &mut dst[0]);
+        transpose(&[[x.1, y.1, z.1]], &mut dst[1]);
     }
-    for (o, slot) in out.iter_mut().enumerate().skip(full) {
-        let (cq, sq) = poses.trig::<N>(start + o);
+    if let [dst] = pairs.into_remainder() {
+        let (cq, sq) = batches.get::<L>(batches.count - 1);
+        let p = C::position(&kl, &cq, &sq);
+        transpose(&[p], dst);
+    }
+    let tail = start + batches.count * LANES;
+    for (o, slot) in rest.iter_mut().enumerate() {
+        let (cq, sq) = poses.trig::<N>(tail + o);
         *slot = C::position(k, &cq, &sq);
     }
+}
+
+/// Batch `b`'s four values of a row of `len` values per pose (one
+/// coordinate of the positions or of a Jacobian column).
+#[inline(always)]
+fn lanes_of(row: &mut [f64], b: usize) -> &mut [f64; LANES] {
+    &mut row.as_chunks_mut().0[b]
 }
 
 #[inline(always)]
@@ -585,21 +642,20 @@ fn jacobians_impl<const N: usize, C: Chain<N>, L: Batch>(
     let params = <C as Chain<N>>::PARAMS;
     let len = out.len;
     let mut jl = vec![[L::from(0.0); 3]; params];
-    let full = poses.len() / LANES * LANES;
-    for i in (0..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<N, L>(i);
+    let batches = poses.batches::<N>(0, poses.len() / LANES);
+    for b in 0..batches.count {
+        let (cq, sq) = batches.get::<L>(b);
         let p = C::position_jacobian(&kl, &cq, &sq, &mut jl);
-        for (r, v) in p.into_iter().enumerate() {
-            v.store(&mut out.pos[r * len + i..]);
+        // Rows of `len` values, one per output: `len ≥ LANES` here.
+        for (row, v) in out.pos.chunks_exact_mut(len).zip(p) {
+            v.store(lanes_of(row, b));
         }
-        for (c, col) in jl.iter().enumerate() {
-            for (r, v) in col.iter().enumerate() {
-                v.store(&mut out.jac[(3 * c + r) * len + i..]);
-            }
+        for (row, v) in out.jac.chunks_exact_mut(len).zip(jl.iter().flatten()) {
+            v.store(lanes_of(row, b));
         }
     }
     let mut cols = vec![[0.0; 3]; params];
-    for i in full..poses.len() {
+    for i in batches.count * LANES..poses.len() {
         let (cq, sq) = poses.trig::<N>(i);
         let p = C::position_jacobian(k, &cq, &sq, &mut cols);
         out.set(i, p, &cols);
@@ -618,17 +674,18 @@ fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     let mut jl = vec![[L::from(0.0); 3]; params];
     let mut tile = vec![[0.0; 3]; LANES * params];
     let mut pos = [[0.0; 3]; LANES];
-    let full = range.start + range.len() / LANES * LANES;
-    for i in (range.start..full).step_by(LANES) {
-        let (cq, sq) = poses.trig_lanes::<N, L>(i);
+    let batches = poses.batches::<N>(range.start, range.len() / LANES);
+    for b in 0..batches.count {
+        let (cq, sq) = batches.get::<L>(b);
         let p = C::position_jacobian(&kl, &cq, &sq, &mut jl);
         transpose(&[p], &mut pos);
         transpose(&jl, &mut tile);
+        let i = range.start + b * LANES;
         for (l, cols) in tile.chunks_exact(params).enumerate() {
             f(i + l, &pos[l], cols);
         }
     }
-    for i in full..range.end {
+    for i in range.start + batches.count * LANES..range.end {
         let (cq, sq) = poses.trig::<N>(i);
         let p = C::position_jacobian(k, &cq, &sq, &mut tile[..params]);
         f(i, &p, &tile[..params]);
@@ -668,12 +725,17 @@ mod tests {
 
     fn portable_lanes_equal_single_poses_of<C: Chain<6>>(params: &DhParams) {
         let k = PreparedParams::<6>::new(params).unwrap();
-        let q: Vec<[f64; 6]> = (0..7)
+        // 15 poses: a pair of batches, an odd batch and a tail of three.
+        let q: Vec<[f64; 6]> = (0..15)
             .map(|i| std::array::from_fn(|j| ((i * 5 + j) as f64 * 0.61).sin() * 3.0))
             .collect();
         let poses = PreparedPoses::new(6, &q).unwrap();
         let mut pos = vec![[0.0; 3]; q.len()];
         positions_impl::<6, C, Lanes>(&k, &poses, 0, &mut pos);
+        // From pose 1: one pair of batches and a tail of two.
+        let mut from_one = vec![[0.0; 3]; 10];
+        positions_impl::<6, C, Lanes>(&k, &poses, 1, &mut from_one);
+        assert_eq!(from_one, pos[1..11]);
         let mut batch = Jacobians::new(q.len(), 27);
         jacobians_impl::<6, C, Lanes>(&k, &poses, &mut batch);
         let mut seen = 0;
