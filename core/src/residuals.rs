@@ -477,11 +477,27 @@ struct PointSums {
     s: Sym3,
     started: bool,
     origin: [f64; 3],
-    /// Scratch, one touch: the free columns of `J` and of `A·J`, one slice
-    /// per coordinate, so the `JᵀAJ` update runs over contiguous memory.
+    /// Row stride of the padded `JᵀAJ` and of the scratch: `p` rounded up to
+    /// a whole number of [`LANES`].
+    stride: usize,
+    /// Scratch, up to [`BLOCK`] touches of one point: the free columns of
+    /// `J` and of `A·J`, one padded row per touch and coordinate, so the
+    /// `JᵀAJ` update runs over whole lanes of contiguous memory.
     j: [Vec<f64>; 3],
     aj: [Vec<f64>; 3],
+    /// Touches held in the scratch, not yet in `JᵀAJ`.
+    pending: usize,
+    /// Scratch: the point's `J̄ = S⁻¹ G`.
+    mean: Vec<[f64; 3]>,
 }
+
+/// Touches whose `JᵀAJ` terms are added in one sweep over the matrix: each
+/// entry is loaded and stored once per block, the terms still added one
+/// touch at a time in touch order (the same bits as touch by touch).
+const BLOCK: usize = 8;
+
+/// Entries of a `JᵀAJ` row updated together (one AVX2 register of f64).
+const LANES: usize = 4;
 
 /// What one chunk of points contributes.
 struct Partial {
@@ -571,6 +587,7 @@ pub(crate) fn normal_equations(
 
 impl PointSums {
     fn new(p: usize) -> PointSums {
+        let stride = p.div_ceil(LANES) * LANES;
         PointSums {
             g: vec![[0.0; 3]; p],
             jap: vec![0.0; p],
@@ -579,8 +596,11 @@ impl PointSums {
             s: [0.0; 6],
             started: false,
             origin: [0.0; 3],
-            j: std::array::from_fn(|_| vec![0.0; p]),
-            aj: std::array::from_fn(|_| vec![0.0; p]),
+            stride,
+            j: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
+            aj: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
+            pending: 0,
+            mean: vec![[0.0; 3]; p],
         }
     }
 
@@ -594,14 +614,14 @@ impl PointSums {
         self.started = false;
     }
 
-    /// Adds one touch: position, weight, free Jacobian columns.
+    /// Adds one touch: position, weight, free Jacobian columns. `jtj` is
+    /// `p` rows of [`PointSums::stride`] (lower triangle meaningful).
     #[inline(always)]
     fn add(&mut self, pos: &[f64; 3], a: &Sym3, jac: &[[f64; 3]], free: &[usize], jtj: &mut [f64]) {
         if !self.started {
             self.origin = *pos;
             self.started = true;
         }
-        let p = free.len();
         let d: [f64; 3] = std::array::from_fn(|k| pos[k] - self.origin[k]);
         let ad = sym_mul(a, &d);
         for (s, v) in self.ap.iter_mut().zip(&ad) {
@@ -611,8 +631,12 @@ impl PointSums {
         for (s, v) in self.s.iter_mut().zip(a) {
             *s += v;
         }
+        let at = self.pending * self.stride;
+        let end = at + free.len();
         let [jx, jy, jz] = &mut self.j;
         let [ax, ay, az] = &mut self.aj;
+        let (jx, jy, jz) = (&mut jx[at..end], &mut jy[at..end], &mut jz[at..end]);
+        let (ax, ay, az) = (&mut ax[at..end], &mut ay[at..end], &mut az[at..end]);
         for (i, &ci) in free.iter().enumerate() {
             let j = jac[ci];
             let wa = sym_mul(a, &j);
@@ -624,38 +648,95 @@ impl PointSums {
             (jx[i], jy[i], jz[i]) = (j[0], j[1], j[2]);
             (ax[i], ay[i], az[i]) = (wa[0], wa[1], wa[2]);
         }
-        // Lower triangle of JᵀAJ: row i gets (AJ)_iᵀ J_b for b ≤ i.
-        for i in 0..p {
-            let (x, y, z) = (ax[i], ay[i], az[i]);
-            let row = &mut jtj[i * p..=i * p + i];
-            for (((r, jbx), jby), jbz) in
-                row.iter_mut().zip(&jx[..=i]).zip(&jy[..=i]).zip(&jz[..=i])
-            {
-                *r += x * jbx + y * jby + z * jbz;
-            }
+        self.pending += 1;
+        if self.pending == BLOCK {
+            self.flush(jtj);
         }
     }
 
-    /// Closes the point: its Schur term into the lower triangle of `jtj`,
-    /// its gradient and cost; resets for the next point.
-    fn finish(&mut self, part: &mut Partial, need_mean: bool) {
+    /// The held touches' terms into the lower triangle of `jtj`: row `i`
+    /// gets `(AJ)_iᵀ J_b` for `b ≤ i`, a lane at a time (the entries past
+    /// the diagonal in a row's last lane are upper-triangle scratch).
+    #[inline(always)]
+    fn flush(&mut self, jtj: &mut [f64]) {
+        let (n, w) = (self.pending, self.stride);
+        if n == 0 {
+            return;
+        }
         let p = self.jap.len();
+        for i in 0..p {
+            let row = &mut jtj[i * w..i * w + w];
+            // Up to four lanes at once: independent sums, so the additions'
+            // latency overlaps (one lane's sum is a chain over the touches).
+            let mut c = 0;
+            while c <= i {
+                c += match (i - c) / LANES + 1 {
+                    1 => self.lanes::<1>(row, i, c, n),
+                    2 => self.lanes::<2>(row, i, c, n),
+                    3 => self.lanes::<3>(row, i, c, n),
+                    _ => self.lanes::<4>(row, i, c, n),
+                };
+            }
+        }
+        self.pending = 0;
+    }
+
+    /// `K` lanes of `row` (row `i` of `JᵀAJ`) from column `c`, the `n` held
+    /// touches added in touch order; returns the columns done.
+    #[inline(always)]
+    fn lanes<const K: usize>(&self, row: &mut [f64], i: usize, c: usize, n: usize) -> usize {
+        let (w, m) = (self.stride, K * LANES);
+        let [jx, jy, jz] = &self.j;
+        let [ax, ay, az] = &self.aj;
+        let out = &mut row[c..c + m];
+        let mut r: [[f64; LANES]; K] =
+            std::array::from_fn(|k| std::array::from_fn(|l| out[k * LANES + l]));
+        for t in 0..n {
+            let o = t * w;
+            let (x, y, z) = (ax[o + i], ay[o + i], az[o + i]);
+            let (bx, by, bz) = (
+                &jx[o + c..o + c + m],
+                &jy[o + c..o + c + m],
+                &jz[o + c..o + c + m],
+            );
+            for k in 0..K {
+                for l in 0..LANES {
+                    let b = k * LANES + l;
+                    r[k][l] += x * bx[b] + y * by[b] + z * bz[b];
+                }
+            }
+        }
+        for k in 0..K {
+            out[k * LANES..(k + 1) * LANES].copy_from_slice(&r[k]);
+        }
+        m
+    }
+
+    /// Closes the point: its Schur term into the lower triangle of `jtj`
+    /// (rows of [`PointSums::stride`]), its gradient and cost; resets for
+    /// the next point.
+    #[inline(always)]
+    fn finish(&mut self, part: &mut Partial, jtj: &mut [f64], need_mean: bool) {
+        self.flush(jtj);
+        let (p, w) = (self.jap.len(), self.stride);
         let cinv = sym_inv(&self.s);
         let c = sym_mul(&cinv, &self.ap);
         // Σ p̃ᵀAp̃ − cᵀ S c, with S c = Σ A p̃
         part.cost += self.pap - (c[0] * self.ap[0] + c[1] * self.ap[1] + c[2] * self.ap[2]);
-        let mean: Vec<[f64; 3]> = self.g.iter().map(|g| sym_mul(&cinv, g)).collect();
+        for (m, g) in self.mean.iter_mut().zip(&self.g) {
+            *m = sym_mul(&cinv, g);
+        }
         for i in 0..p {
             let gi = self.g[i];
             part.jtr[i] += self.jap[i] - (gi[0] * c[0] + gi[1] * c[1] + gi[2] * c[2]);
-            for (b, mb) in mean.iter().enumerate().take(i + 1) {
-                part.jtj[i * p + b] -= gi[0] * mb[0] + gi[1] * mb[1] + gi[2] * mb[2];
+            for (b, mb) in self.mean.iter().enumerate().take(i + 1) {
+                jtj[i * w + b] -= gi[0] * mb[0] + gi[1] * mb[1] + gi[2] * mb[2];
             }
         }
         part.centroids
             .push(std::array::from_fn(|k| c[k] + self.origin[k]));
         if need_mean {
-            part.mean_j.push(mean);
+            part.mean_j.push(self.mean.clone());
         }
         self.reset();
     }
@@ -680,6 +761,9 @@ fn chunk(
     let all = data.points();
     let touches = all[points.start].touches.start..all[points.end - 1].touches.end;
     let mut sums = PointSums::new(p);
+    // The lower triangle, in padded rows (see [`PointSums::flush`]).
+    let w = sums.stride;
+    let mut jtj = vec![0.0; p * w];
     let mut point = points.start;
     let mut finite = true;
     // Inlined into the kernel's loop, so the accumulation is compiled with
@@ -690,17 +774,18 @@ fn chunk(
         #[inline(always)]
         |i, pos, jac| {
             if i == all[point].touches.end {
-                sums.finish(&mut part, need_mean);
+                sums.finish(&mut part, &mut jtj, need_mean);
                 point += 1;
             }
             finite &= pos.iter().all(|v| v.is_finite());
-            sums.add(pos, &weights.touch[i], jac, free, &mut part.jtj);
+            sums.add(pos, &weights.touch[i], jac, free, &mut jtj);
         },
     )?;
-    sums.finish(&mut part, need_mean);
+    sums.finish(&mut part, &mut jtj, need_mean);
     for a in 0..p {
-        for b in 0..a {
-            part.jtj[b * p + a] = part.jtj[a * p + b];
+        for b in 0..=a {
+            part.jtj[a * p + b] = jtj[a * w + b];
+            part.jtj[b * p + a] = jtj[a * w + b];
         }
     }
     if !finite {
