@@ -459,17 +459,28 @@ fn position_uncertainty(
     // run together (each in its own order: the same bits as one at a time).
     const LANES: usize = 4;
     let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
-    let mut jac = vec![[0.0; 3]; params.param_count()];
     let mut jf = vec![[[0.0; LANES]; 3]; q];
     let poses: Vec<usize> = (0..data.len()).step_by(step).collect();
     let (mut sum, mut max) = (0.0, 0.0f64);
     for group in poses.chunks(LANES) {
-        for (l, &i) in group.iter().enumerate() {
-            kernel.position_jacobian(data.reading(i), &mut jac)?;
+        // From the poses' stored sin/cos, a group in one kernel call when
+        // the sample is every pose (the same bits as `position_jacobian` of
+        // the readings, without their trigonometry).
+        let mut fill = |l: usize, jac: &[[f64; 3]]| {
             for (a, &ca) in free.iter().enumerate() {
                 for k in 0..3 {
                     jf[a][k][l] = jac[ca][k];
                 }
+            }
+        };
+        if step == 1 {
+            let first = group[0];
+            kernel.for_each_jacobian(data.poses(), first..first + group.len(), |i, _, jac| {
+                fill(i - first, jac)
+            })?;
+        } else {
+            for (l, &i) in group.iter().enumerate() {
+                kernel.for_each_jacobian(data.poses(), i..i + 1, |_, _, jac| fill(l, jac))?;
             }
         }
         let mut tr = [0.0; LANES];
