@@ -1049,6 +1049,88 @@ mod tests {
     /// 16 chunks of points, so 2 and 4 threads really split the work (one
     /// thread below 4 chunks). The normal equations, their cost and the
     /// centroids are the same bits on 1, 2 and 4 threads.
+    /// The blocked, lane-wise accumulation adds every product in the order
+    /// of the plain loops it replaced (touch by touch, `b ≤ i`, then the
+    /// point's Schur term): the same bits, with points of more touches than
+    /// a block and an odd number of free columns.
+    #[test]
+    fn blocked_normal_equations_are_the_plain_loops_bits() {
+        use crate::simulate::{CampaignSettings, ErrorModel, simulate};
+        let nominal = crate::io::Arm::without_limits("n", DhParams::paper_nominal());
+        let mut settings = CampaignSettings::new(5, ErrorModel::Paper, 7, 2 * BLOCK + 3);
+        // No lengths: the touches' sums alone.
+        settings.reference_lengths = 0;
+        settings.encoder_noise_deg = 0.005;
+        settings.probe_noise_mm = 0.01;
+        let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+        let kernel = ArmKernel::new(&nominal.params).unwrap();
+        let noise = Noise {
+            encoder_rad: Some(0.005f64.to_radians()),
+            probe_mm: Some(0.01),
+            ..Noise::default()
+        };
+        let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        for free in [
+            (0..27).collect::<Vec<usize>>(),
+            vec![2, 3, 5, 8, 13, 21, 26],
+        ] {
+            let p = free.len();
+            let (mut jtj, mut jtr, mut cost) = (vec![0.0; p * p], vec![0.0; p], 0.0);
+            let mut rows = Vec::new();
+            kernel
+                .for_each_jacobian(data.poses(), 0..data.len(), |_, pos, jac| {
+                    rows.push((*pos, jac.to_vec()))
+                })
+                .unwrap();
+            for point in data.points() {
+                let origin = rows[point.touches.start].0;
+                let (mut g, mut jap) = (vec![[0.0; 3]; p], vec![0.0; p]);
+                let (mut ap, mut pap, mut sa) = ([0.0; 3], 0.0, [0.0; 6]);
+                for t in point.touches.clone() {
+                    let (pos, jac) = &rows[t];
+                    let a = &weights.touch[t];
+                    let d: [f64; 3] = std::array::from_fn(|k| pos[k] - origin[k]);
+                    let ad = sym_mul(a, &d);
+                    (0..3).for_each(|k| ap[k] += ad[k]);
+                    pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+                    (0..6).for_each(|k| sa[k] += a[k]);
+                    let wa: Vec<[f64; 3]> = free.iter().map(|&c| sym_mul(a, &jac[c])).collect();
+                    for i in 0..p {
+                        (0..3).for_each(|k| g[i][k] += wa[i][k]);
+                        jap[i] += wa[i][0] * d[0] + wa[i][1] * d[1] + wa[i][2] * d[2];
+                        for b in 0..=i {
+                            let j = jac[free[b]];
+                            jtj[i * p + b] += wa[i][0] * j[0] + wa[i][1] * j[1] + wa[i][2] * j[2];
+                        }
+                    }
+                }
+                let cinv = sym_inv(&sa);
+                let c = sym_mul(&cinv, &ap);
+                cost += pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
+                let mean: Vec<[f64; 3]> = g.iter().map(|gi| sym_mul(&cinv, gi)).collect();
+                for i in 0..p {
+                    let gi = g[i];
+                    jtr[i] += jap[i] - (gi[0] * c[0] + gi[1] * c[1] + gi[2] * c[2]);
+                    for b in 0..=i {
+                        let mb = mean[b];
+                        jtj[i * p + b] -= gi[0] * mb[0] + gi[1] * mb[1] + gi[2] * mb[2];
+                    }
+                }
+            }
+            for a in 0..p {
+                for b in 0..a {
+                    jtj[b * p + a] = jtj[a * p + b];
+                }
+            }
+            // One chunk of points (under POINTS_PER_CHUNK): no partial sums.
+            assert!(data.points().len() <= POINTS_PER_CHUNK);
+            let n = normal_equations(&kernel, &data, &weights, &free, 1).unwrap();
+            assert_eq!(n.jtj, jtj);
+            assert_eq!(n.jtr, jtr);
+            assert_eq!(n.touch_cost, cost);
+        }
+    }
+
     #[test]
     fn normal_equations_are_the_same_bits_on_any_thread_count() {
         let n = 1000;
