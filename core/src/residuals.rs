@@ -699,15 +699,15 @@ impl PointSums {
                 &jy[o + c..o + c + m],
                 &jz[o + c..o + c + m],
             );
-            for k in 0..K {
-                for l in 0..LANES {
+            for (k, rk) in r.iter_mut().enumerate() {
+                for (l, v) in rk.iter_mut().enumerate() {
                     let b = k * LANES + l;
-                    r[k][l] += x * bx[b] + y * by[b] + z * bz[b];
+                    *v += x * bx[b] + y * by[b] + z * bz[b];
                 }
             }
         }
-        for k in 0..K {
-            out[k * LANES..(k + 1) * LANES].copy_from_slice(&r[k]);
+        for (o, rk) in out.chunks_exact_mut(LANES).zip(&r) {
+            o.copy_from_slice(rk);
         }
         m
     }
