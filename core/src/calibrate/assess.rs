@@ -471,19 +471,18 @@ fn position_uncertainty(
     // run together (each in its own order: the same bits as one at a time).
     const LANES: usize = 4;
     let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
-    let mut jac = vec![[0.0; 3]; params.param_count()];
     let mut jf = vec![[[0.0; LANES]; 3]; q];
     let poses: Vec<usize> = (0..data.len()).step_by(step).collect();
     let (mut sum, mut max) = (0.0, 0.0f64);
-    for group in poses.chunks(LANES) {
-        for (l, &i) in group.iter().enumerate() {
-            kernel.position_jacobian(data.reading(i), &mut jac)?;
-            for (a, &ca) in free.iter().enumerate() {
-                for k in 0..3 {
-                    jf[a][k][l] = jac[ca][k];
-                }
+    // Pose `l` of the group from its Jacobian; with the group's last, its
+    // `n` poses' uncertainties into the sums.
+    let mut add = |l: usize, jac: &[[f64; 3]], n: Option<usize>| {
+        for (a, &ca) in free.iter().enumerate() {
+            for k in 0..3 {
+                jf[a][k][l] = jac[ca][k];
             }
         }
+        let Some(n) = n else { return };
         let mut tr = [0.0; LANES];
         for a in 0..q {
             let (ja, row) = (&jf[a], &c[a * q..(a + 1) * q]);
@@ -494,10 +493,25 @@ fn position_uncertainty(
                 }
             }
         }
-        for &t in &tr[..group.len()] {
+        for &t in &tr[..n] {
             let u = K * t.max(0.0).sqrt();
             sum += u * u;
             max = max.max(u);
+        }
+    };
+    // The Jacobians from the poses' stored sin/cos through the lanes kernel
+    // (the same bits as `position_jacobian` of the readings, without their
+    // trigonometry): every pose in one call when every pose is sampled.
+    let last = |l: usize, i: usize| (l + 1 == LANES || i + step >= data.len()).then_some(l + 1);
+    if step == 1 {
+        kernel.for_each_jacobian(data.poses(), 0..data.len(), |i, _, jac| {
+            add(i % LANES, jac, last(i % LANES, i))
+        })?;
+    } else {
+        for (k, &i) in poses.iter().enumerate() {
+            let l = k % LANES;
+            kernel
+                .for_each_jacobian(data.poses(), i..i + 1, |_, _, jac| add(l, jac, last(l, i)))?;
         }
     }
     let n = poses.len();
