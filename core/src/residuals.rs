@@ -1142,14 +1142,19 @@ mod tests {
         assert_eq!(a.relative_change(&a), 0.0);
     }
 
-    /// The free columns' normal equations are the full system's principal
-    /// submatrix, to the bit (what the first LM step reuses).
-    #[test]
-    fn the_free_columns_system_is_the_restriction_of_the_full_one() {
+    /// A simulated campaign (paper errors, `sockets` × `touches`, `lengths`
+    /// reference lengths, 0.005° and 0.01 mm noise) with the nominal arm's
+    /// kernel and its weights from that noise.
+    fn simulated_at_nominal(
+        seed: u64,
+        sockets: usize,
+        touches: usize,
+        lengths: usize,
+    ) -> (DataSet, ArmKernel, Weights) {
         use crate::simulate::{CampaignSettings, ErrorModel, simulate};
         let nominal = crate::io::Arm::without_limits("n", DhParams::paper_nominal());
-        let mut settings = CampaignSettings::new(9, ErrorModel::Paper, 10, 10);
-        settings.reference_lengths = 3;
+        let mut settings = CampaignSettings::new(seed, ErrorModel::Paper, sockets, touches);
+        settings.reference_lengths = lengths;
         settings.encoder_noise_deg = 0.005;
         settings.probe_noise_mm = 0.01;
         let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
@@ -1160,6 +1165,14 @@ mod tests {
             ..Noise::default()
         };
         let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        (data, kernel, weights)
+    }
+
+    /// The free columns' normal equations are the full system's principal
+    /// submatrix, to the bit (what the first LM step reuses).
+    #[test]
+    fn the_free_columns_system_is_the_restriction_of_the_full_one() {
+        let (data, kernel, weights) = simulated_at_nominal(9, 10, 10, 3);
         let all: Vec<usize> = (0..27).collect();
         let full = normal_equations(&kernel, &data, &weights, &all, 1).unwrap();
         let free: Vec<usize> = vec![1, 0, 7, 12, 19, 26];
@@ -1176,21 +1189,8 @@ mod tests {
     /// a block and an odd number of free columns.
     #[test]
     fn blocked_normal_equations_are_the_plain_loops_bits() {
-        use crate::simulate::{CampaignSettings, ErrorModel, simulate};
-        let nominal = crate::io::Arm::without_limits("n", DhParams::paper_nominal());
-        let mut settings = CampaignSettings::new(5, ErrorModel::Paper, 7, 2 * BLOCK + 3);
         // No lengths: the touches' sums alone.
-        settings.reference_lengths = 0;
-        settings.encoder_noise_deg = 0.005;
-        settings.probe_noise_mm = 0.01;
-        let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
-        let kernel = ArmKernel::new(&nominal.params).unwrap();
-        let noise = Noise {
-            encoder_rad: Some(0.005f64.to_radians()),
-            probe_mm: Some(0.01),
-            ..Noise::default()
-        };
-        let weights = Weights::new(&kernel, &data, &noise, 1.0).unwrap();
+        let (data, kernel, weights) = simulated_at_nominal(5, 7, 2 * BLOCK + 3, 0);
         for free in [
             (0..27).collect::<Vec<usize>>(),
             vec![2, 3, 5, 8, 13, 21, 26],
