@@ -250,14 +250,17 @@ pub struct Dh;
 #[derive(Clone, Copy, Debug)]
 pub struct Hayati;
 
+/// `Chain<$n>` for `$model` over the generated module `$m`: `$geo` are the
+/// geometry constants its functions take (in order, before the joints'
+/// cos/sin), `$col` those only its parameter Jacobian takes after them.
 macro_rules! impl_chain {
-    ($n:literal, $m:ident) => {
-        impl Chain<$n> for Dh {
+    ($model:ident, $n:literal, $m:ident, [$($geo:ident),*], [$($col:ident),*]) => {
+        impl Chain<$n> for $model {
             const PARAMS: usize = $m::PARAMS;
 
             #[inline(always)]
             fn position<S: Scalar>(k: &Consts<S, $n>, cq: &[S; $n], sq: &[S; $n]) -> [S; 3] {
-                $m::position(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.b, cq, sq)
+                $m::position($(&k.$geo,)* cq, sq)
             }
 
             #[inline(always)]
@@ -272,7 +275,7 @@ macro_rules! impl_chain {
                 let jac: &mut [[S; 3]; $m::PARAMS] = jac
                     .try_into()
                     .expect("jacobian buffer holds 4n + 3 columns");
-                $m::position_jacobian(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.b, cq, sq, jac)
+                $m::position_jacobian($(&k.$geo,)* cq, sq, $(&k.$col,)* jac)
             }
 
             #[inline(always)]
@@ -282,61 +285,28 @@ macro_rules! impl_chain {
                 sq: &[S; $n],
                 jac: &mut [[S; 3]; $n],
             ) -> [S; 3] {
-                $m::joint_jacobian(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.b, cq, sq, jac)
+                $m::joint_jacobian($(&k.$geo,)* cq, sq, jac)
             }
         }
     };
 }
 
-impl_chain!(6, arm6);
-impl_chain!(7, arm7);
-
-macro_rules! impl_hayati_chain {
-    ($n:literal, $m:ident) => {
-        impl Chain<$n> for Hayati {
-            const PARAMS: usize = $m::PARAMS;
-
-            #[inline(always)]
-            fn position<S: Scalar>(k: &Consts<S, $n>, cq: &[S; $n], sq: &[S; $n]) -> [S; 3] {
-                $m::position(
-                    &k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.cb, &k.sb, &k.b, cq, sq,
-                )
-            }
-
-            #[inline(always)]
-            fn position_jacobian<S: Scalar>(
-                k: &Consts<S, $n>,
-                cq: &[S; $n],
-                sq: &[S; $n],
-                jac: &mut [[S; 3]],
-            ) -> [S; 3] {
-                // Invariant: as for the D-H chain.
-                let jac: &mut [[S; 3]; $m::PARAMS] = jac
-                    .try_into()
-                    .expect("jacobian buffer holds 4n + 3 columns");
-                $m::position_jacobian(
-                    &k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.cb, &k.sb, &k.b, cq, sq, &k.hayati,
-                    jac,
-                )
-            }
-
-            #[inline(always)]
-            fn joint_jacobian<S: Scalar>(
-                k: &Consts<S, $n>,
-                cq: &[S; $n],
-                sq: &[S; $n],
-                jac: &mut [[S; 3]; $n],
-            ) -> [S; 3] {
-                $m::joint_jacobian(
-                    &k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.cb, &k.sb, &k.b, cq, sq, jac,
-                )
-            }
-        }
-    };
-}
-
-impl_hayati_chain!(6, arm6h);
-impl_hayati_chain!(7, arm7h);
+impl_chain!(Dh, 6, arm6, [ct, st, ca, sa, a, d, b], []);
+impl_chain!(Dh, 7, arm7, [ct, st, ca, sa, a, d, b], []);
+impl_chain!(
+    Hayati,
+    6,
+    arm6h,
+    [ct, st, ca, sa, a, d, cb, sb, b],
+    [hayati]
+);
+impl_chain!(
+    Hayati,
+    7,
+    arm7h,
+    [ct, st, ca, sa, a, d, cb, sb, b],
+    [hayati]
+);
 
 /// Encoder readings of a data set with their sin/cos, computed once and laid
 /// out joint by joint (structure of arrays) so that four poses load as one
