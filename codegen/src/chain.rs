@@ -327,6 +327,27 @@ mod tests {
     }
 
     impl Point {
+        /// `∂p/∂x` of column `col` of an `n`-joint chain (a, d, α, θ, the
+        /// probe, then β) by central differences, step 1e-6.
+        fn central_difference(&self, n: usize, col: usize) -> [f64; 3] {
+            let h = 1e-6;
+            let shifted = |delta: f64| {
+                let mut p = self.clone();
+                let (block, j) = (col / n, col % n);
+                match block {
+                    0 => p.a[j] += delta,
+                    1 => p.d[j] += delta,
+                    2 => p.alpha[j] += delta,
+                    3 => p.theta[j] += delta,
+                    _ if col < 4 * n + 3 => p.b[col - 4 * n] += delta,
+                    _ => p.beta[col - 4 * n - 3] += delta,
+                }
+                p.position()
+            };
+            let (plus, minus) = (shifted(h), shifted(-h));
+            [0, 1, 2].map(|r| (plus[r] - minus[r]) / (2.0 * h))
+        }
+
         fn sample(n: usize, seed: u64) -> Point {
             // A small LCG keeps this crate free of dependencies.
             let mut s = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
@@ -446,21 +467,7 @@ mod tests {
             let pt = Point::sample(n, seed);
             let v = k.graph.eval(|i| pt.leaf(i));
             for (col, ids) in k.param_jacobian.iter().enumerate() {
-                let h = 1e-6;
-                let shifted = |delta: f64| {
-                    let mut p = pt.clone();
-                    let (block, j) = (col / n, col % n);
-                    match block {
-                        0 => p.a[j] += delta,
-                        1 => p.d[j] += delta,
-                        2 => p.alpha[j] += delta,
-                        3 => p.theta[j] += delta,
-                        _ => p.b[col - 4 * n] += delta,
-                    }
-                    p.position()
-                };
-                let (plus, minus) = (shifted(h), shifted(-h));
-                let fd = [0, 1, 2].map(|r| (plus[r] - minus[r]) / (2.0 * h));
+                let fd = pt.central_difference(n, col);
                 let got = ids.map(|id| v[id.index()]);
                 assert!(close(got, fd, 1e-5), "column {col}: {got:?} vs {fd:?}");
             }
@@ -487,25 +494,10 @@ mod tests {
                 assert!(close(pt.eval(&k, &k.position), want, 1e-9), "n={n}");
                 assert!(close(pt.eval(&k, &k.frame_position), want, 1e-9), "n={n}");
                 let v = k.graph.eval(|i| pt.leaf(i));
-                let h = 1e-6;
                 // Every column, β's appended after the probe's.
                 let cols = k.param_jacobian.iter().chain(&k.beta_jacobian);
                 for (col, ids) in cols.enumerate() {
-                    let shifted = |delta: f64| {
-                        let mut p = pt.clone();
-                        let (block, j) = (col / n, col % n);
-                        match block {
-                            0 => p.a[j] += delta,
-                            1 => p.d[j] += delta,
-                            2 => p.alpha[j] += delta,
-                            3 => p.theta[j] += delta,
-                            _ if col < 4 * n + 3 => p.b[col - 4 * n] += delta,
-                            _ => p.beta[col - 4 * n - 3] += delta,
-                        }
-                        p.position()
-                    };
-                    let (plus, minus) = (shifted(h), shifted(-h));
-                    let fd = [0, 1, 2].map(|r| (plus[r] - minus[r]) / (2.0 * h));
+                    let fd = pt.central_difference(n, col);
                     let got = ids.map(|id| v[id.index()]);
                     assert!(
                         close(got, fd, 1e-5),
