@@ -92,6 +92,19 @@ fn main() -> anyhow::Result<()> {
         Some(spec) => Tolerances::parse(spec, arm.params.joint_count())?
             .map(|flag| file_prior.unwrap_or_default().overridden_by(&flag)),
     };
+    // A joint made Hayati has no `d` any more: a tolerance stated for it
+    // (the arm file's, written for the D-H arm) holds nothing and goes.
+    if let Some(t) = &mut options.prior {
+        for &j in &hayati {
+            if t.remove(&format!("d{j}")) {
+                writeln!(
+                    err,
+                    "note: prior d{j} dropped: joint {j} is Hayati (its d-slot is hbeta{j}, \
+                     covered by `angle`)"
+                )?;
+            }
+        }
+    }
     if let Some(f) = &fix_text {
         options.fix = FixSpec::parse(f, arm.params.joint_count())?;
     }

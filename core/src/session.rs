@@ -111,7 +111,7 @@ impl Problem {
                 data: data.joints(),
             });
         }
-        options.check(joints)?;
+        options.check_for(&arm.params)?;
         check_length_units(&arm.params, &data)?;
         Ok(Problem {
             arm,

@@ -295,3 +295,59 @@ fn a_prior_treats_hbeta_as_an_angle() {
     assert!((beta.tolerance - 0.1).abs() < 1e-12, "{beta:?}");
     assert!(!prior.parameters.iter().any(|e| e.name == "d2"));
 }
+
+/// A tolerance named for the other model's d-slot (`d2` on a Hayati joint
+/// 2, `hbeta2` on a D-H one) holds nothing: it is refused by its field,
+/// from the options and from the arm file at its line — not ignored while
+/// its direction counts as held (a Hayati last joint with `d6=1mm` used to
+/// run on a singular direction: σ of a6 in the 10⁵ mm).
+#[test]
+fn a_tolerance_of_the_other_models_slot_is_refused() {
+    use aacmm_core::calibrate::{CalibrationError, Tolerances};
+    use aacmm_core::session::Problem;
+    let data = campaign(102, &true_arm(7_002)).data_set().unwrap();
+    for (arm, spec, needle) in [
+        (
+            nominal_hayati(),
+            "d2=1mm",
+            "joint 2 is a Hayati joint: its d-slot is `hbeta2`, not `d2`",
+        ),
+        (
+            nominal_dh(),
+            "hbeta2=0.1deg",
+            "joint 2 is a D-H joint: its d-slot is `d2`, not `hbeta2`",
+        ),
+    ] {
+        let mut o = options(FIXED);
+        o.prior = Tolerances::parse(spec, 6).unwrap();
+        match Problem::new(arm.clone(), data.clone(), o.clone()) {
+            Err(CalibrationError::Option(e)) => {
+                assert_eq!(e.field, "prior");
+                assert!(e.reason.contains(needle), "{e}");
+            }
+            other => panic!("{spec} accepted: {:?}", other.map(|_| ())),
+        }
+        // The library's lower entry point checks it too.
+        assert!(matches!(
+            calibrate(&arm.params, &data, &o),
+            Err(CalibrationError::Option(_))
+        ));
+    }
+    // In the arm file: located at the entry's line.
+    use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml};
+    let text = arm_to_toml(&nominal_hayati(), LengthUnit::Mm, AngleUnit::Deg)
+        + "\n[prior]\nangle_deg = 0.1\nd2_mm = 1.0\n";
+    let e = aacmm_core::io::parse_arm(&text, "arm.toml")
+        .unwrap_err()
+        .to_string();
+    let line = text.lines().position(|l| l.starts_with("d2_mm")).unwrap() + 1;
+    assert!(
+        e.starts_with(&format!(
+            "arm.toml:{line}: field `d2_mm`: [prior]: joint 2 is a Hayati joint"
+        )),
+        "{e}"
+    );
+    // The right name is accepted.
+    let ok = text.replace("d2_mm = 1.0", "hbeta2_deg = 0.1");
+    assert!(aacmm_core::io::parse_arm(&ok, "arm.toml").is_ok());
+}

@@ -88,6 +88,11 @@ impl FitInput {
                 .map_err(flag_error)?
                 .map(|flag| file_prior.unwrap_or_default().overridden_by(&flag)),
         };
+        // The file's entries were checked against the arm where they are
+        // written; this catches the flag's.
+        if let Some(t) = &prior {
+            t.check_for(&arm.params).map_err(flag_error)?;
+        }
         let data = data_set(poses, &self.input.data, self.lengths.as_deref())?;
         Ok((arm, prior, data, warnings))
     }

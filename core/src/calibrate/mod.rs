@@ -487,7 +487,7 @@ pub fn calibrate(
 }
 
 /// [`calibrate`] with a given solver and context (threads, seed, progress
-/// observer). Checks every setting first ([`CalibrateOptions::check`]).
+/// observer). Checks every setting first ([`CalibrateOptions::check_for`]).
 pub fn calibrate_with(
     start: &DhParams,
     data: &DataSet,
@@ -495,7 +495,7 @@ pub fn calibrate_with(
     solver: &dyn Solver,
     ctx: &mut Context,
 ) -> Result<Calibration, CalibrationError> {
-    options.check(start.joint_count())?;
+    options.check_for(start)?;
     let kernel = ArmKernel::new(start)?;
     let mut weights = Weights::new_threads(&kernel, data, &options.noise, 1.0, ctx.threads)?;
     // One pass over the data at the start serves the identifiability
@@ -517,10 +517,7 @@ pub fn calibrate_with(
             // A tolerance determines its parameter as a fixed value would
             // (the prior sees every direction that moves it): only
             // directions among the free parameters without one are open.
-            let sigmas = options
-                .prior
-                .as_ref()
-                .map(|t| t.sigmas(start.joint_count()));
+            let sigmas = options.prior.as_ref().map(|t| t.sigmas_for(start));
             let unknown: Vec<usize> = free
                 .iter()
                 .copied()

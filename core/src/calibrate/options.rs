@@ -311,4 +311,15 @@ impl CalibrateOptions {
         }
         self.global.check()
     }
+
+    /// [`CalibrateOptions::check`] for the arm `arm`, and the prior's
+    /// parameters are the arm's ([`super::Tolerances::check_for`]: a
+    /// Hayati joint has `hbeta…`, not `d…`).
+    pub fn check_for(&self, arm: &crate::params::DhParams) -> Result<(), OptionError> {
+        self.check(arm.joint_count())?;
+        match &self.prior {
+            Some(t) => t.check_for(arm),
+            None => Ok(()),
+        }
+    }
 }

@@ -173,6 +173,24 @@ fn out_of_range(sigma: f64) -> Option<&'static str> {
     }
 }
 
+/// Why `target` (written `name`) is not a parameter of the arm `params`, if
+/// it is not: the d-slot of a Hayati joint is `hbeta…`, of a D-H joint `d…`.
+pub(crate) fn not_in_arm(target: Target, name: &str, params: &DhParams) -> Option<String> {
+    let Target::Param(id) = target else {
+        return None;
+    };
+    if params.has_param(id) {
+        return None;
+    }
+    let j = id.index + 1;
+    Some(match id.kind {
+        ParamKind::D => {
+            format!("joint {j} is a Hayati joint: its d-slot is `hbeta{j}`, not `{name}`")
+        }
+        _ => format!("joint {j} is a D-H joint: its d-slot is `d{j}`, not `{name}`"),
+    })
+}
+
 /// Stated 1σ tolerances of the nominal geometry (mm, rad inside): per class
 /// (`length`, `angle`), per kind (`a`, `d`, `alpha`, `theta`, `probe`) and
 /// per parameter (`theta5`); the most specific applies. Empty = no prior.
@@ -216,6 +234,14 @@ impl Tolerances {
         self.entries.retain(|(n, _)| *n != name);
         self.entries.push((name, sigma));
         Ok(())
+    }
+
+    /// Removes the tolerance of the target named `name` (as written:
+    /// `d2`, `length`); whether there was one.
+    pub fn remove(&mut self, name: &str) -> bool {
+        let before = self.entries.len();
+        self.entries.retain(|(n, _)| n != name);
+        self.entries.len() != before
     }
 
     /// These tolerances, each replaced or extended by `other`'s (the command
@@ -305,6 +331,33 @@ impl Tolerances {
                 .map(|(_, s)| *s)
         })
         .collect()
+    }
+
+    /// [`Tolerances::check`] for the arm `params`, and each parameter named
+    /// exists in it: a Hayati joint's d-slot is `hbeta…` and has no `d…`
+    /// (a D-H joint no `hbeta…`), so a tolerance of the other model would
+    /// hold nothing — and the fit would count its direction as held.
+    ///
+    /// ```
+    /// use aacmm_core::{calibrate::Tolerances, params::{DhParams, JointModel}};
+    /// let mut arm = DhParams::paper_nominal();
+    /// arm.joints[1].model = JointModel::Hayati;
+    /// let t = Tolerances::parse("hbeta2=0.1deg", 6).unwrap().unwrap();
+    /// assert!(t.check_for(&arm).is_ok());
+    /// let e = Tolerances::parse("d2=1mm", 6).unwrap().unwrap().check_for(&arm).unwrap_err();
+    /// assert!(e.reason.contains("joint 2 is a Hayati joint: its d-slot is `hbeta2`"), "{e}");
+    /// let e = t.check_for(&DhParams::paper_nominal()).unwrap_err();
+    /// assert!(e.reason.contains("joint 2 is a D-H joint: its d-slot is `d2`"), "{e}");
+    /// ```
+    pub fn check_for(&self, params: &DhParams) -> Result<(), OptionError> {
+        let n = params.joint_count();
+        self.check(n)?;
+        for (name, _) in &self.entries {
+            if let Some(why) = Target::parse(name, n).and_then(|t| not_in_arm(t, name, params)) {
+                return Err(OptionError::new("prior", name, why));
+            }
+        }
+        Ok(())
     }
 
     /// Checks the entries for an `n`-joint arm (each target exists, each

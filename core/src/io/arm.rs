@@ -132,7 +132,7 @@ pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputErr
     let (arm, warnings) = schema.to_arm(text, file)?;
     if doc.get_ref().contains_key("prior") {
         // Checked by every reader, used by the fits: a typo is never ignored.
-        super::prior::parse_prior(text, file, arm.params.joint_count())?;
+        super::prior::parse_prior_of(text, file, arm.params.joint_count(), Some(&arm.params))?;
     }
     Ok((arm, warnings))
 }

@@ -23,7 +23,7 @@ use super::Warning;
 use super::arm::{Arm, parse_arm};
 use super::text::{line_of, parse_toml, read_text};
 use crate::calibrate::Tolerances;
-use crate::calibrate::prior::{Target, unknown_target};
+use crate::calibrate::prior::{Target, not_in_arm, unknown_target};
 use crate::error::InputError;
 
 /// Reads an arm file and its `[prior]` table (`None` without one).
@@ -36,7 +36,7 @@ pub fn read_arm_with_prior(
 ) -> Result<(Arm, Option<Tolerances>, Vec<Warning>), InputError> {
     let (file, text) = read_text(path)?;
     let (arm, warnings) = parse_arm(&text, &file)?;
-    let prior = parse_prior(&text, &file, arm.params.joint_count())?;
+    let prior = parse_prior_of(&text, &file, arm.params.joint_count(), Some(&arm.params))?;
     Ok((arm, prior, warnings))
 }
 
@@ -63,6 +63,17 @@ pub fn parse_prior(
     text: &str,
     file: &str,
     joints: usize,
+) -> Result<Option<Tolerances>, InputError> {
+    parse_prior_of(text, file, joints, None)
+}
+
+/// [`parse_prior`], and with the arm `arm` each parameter named must be
+/// one of its own (a Hayati joint has `hbeta…`, not `d…`).
+pub(crate) fn parse_prior_of(
+    text: &str,
+    file: &str,
+    joints: usize,
+    arm: Option<&crate::params::DhParams>,
 ) -> Result<Option<Tolerances>, InputError> {
     let doc = parse_toml(text, file)?;
     let root = doc.get_ref();
@@ -96,6 +107,9 @@ pub fn parse_prior(
         })?;
         let target = Target::parse(target_name, joints)
             .ok_or_else(|| err(unknown_target(target_name, joints)))?;
+        if let Some(why) = arm.and_then(|a| not_in_arm(target, target_name, a)) {
+            return Err(err(why));
+        }
         let value = match v.get_ref() {
             DeValue::Float(f) => f.as_str().replace('_', "").parse::<f64>().ok(),
             DeValue::Integer(i) => i64::from_str_radix(&i.as_str().replace('_', ""), i.radix())

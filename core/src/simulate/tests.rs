@@ -678,3 +678,17 @@ fn campaign_arms_are_tables_and_old_files_are_named() {
         "c.toml: field `format`: expected \"aacmm-campaign-2\", found \"aacmm-campaign-1\""
     );
 }
+
+/// The paper's Table 2 errs in `d` on every joint; a Hayati joint has no
+/// `d` (its d-slot is β), so the paper model is refused for such an arm
+/// rather than leaving that error out silently.
+#[test]
+fn paper_errors_are_refused_for_a_hayati_arm() {
+    let mut arm = paper();
+    arm.params.joints[1].model = crate::params::JointModel::Hayati;
+    let s = CampaignSettings::new(1, ErrorModel::Paper, 4, 5);
+    let e = simulate(&arm, &s).unwrap_err().to_string();
+    assert!(e.contains("joint 2 of the nominal arm is Hayati"), "{e}");
+    let random = CampaignSettings::new(1, ErrorModel::random(1.0, false), 4, 5);
+    assert!(simulate(&arm, &random).is_ok());
+}

@@ -52,6 +52,20 @@ pub fn true_arm(nominal: &Arm, model: &ErrorModel, rng: &mut ChaCha8Rng) -> Resu
                      joints"
                 )));
             }
+            // Table 2's d errors have no slot in a Hayati joint (its d-slot
+            // is the angle β): applying them would drop some silently.
+            if let Some(k) = arm
+                .params
+                .joints
+                .iter()
+                .position(|j| j.model == JointModel::Hayati)
+            {
+                return Err(SimError::Model(format!(
+                    "the paper's Table 2 errors are for its D-H arm, and joint {} of the nominal \
+                     arm is Hayati (no d to err); use the random errors or a true arm file",
+                    k + 1
+                )));
+            }
             for (j, &(dt, db, da, dd)) in arm.params.joints.iter_mut().zip(&PAPER_TABLE_2) {
                 j.theta += deg(dt);
                 j.alpha += deg(db);
