@@ -14,7 +14,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::params::{DhParams, ParamId, ParamKind, wrap};
+use crate::params::{DhParams, JointModel, ParamId, ParamKind, wrap};
 
 /// A length may move from nominal by this fraction of its nominal value…
 pub const LENGTH_TOLERANCE: f64 = 0.25;
@@ -54,12 +54,20 @@ impl GrossCorrection {
 /// base frame: its distance from the axis and its height along it — what
 /// the last zero offset cannot change. (`A_n = Rz(θ+q)·Tz(d)·Tx(a)·Rx(α)`
 /// puts the probe at `Rz(θ+q)·(a + Bx, By cos α − Bz sin α, d + By sin α +
-/// Bz cos α)`.)
+/// Bz cos α)`; a Hayati last joint, `Rz(θ+q)·Tx(a)·Rx(α)·Ry(β)`, has no `d`
+/// and turns the probe by `Ry(β)` first.)
 fn last_link(p: &DhParams) -> (f64, f64) {
     let j = p.joints[p.joint_count() - 1];
     let [bx, by, bz] = p.probe;
+    let (bx, bz, d) = match j.model {
+        JointModel::Dh => (bx, bz, j.d),
+        JointModel::Hayati => {
+            let (sb, cb) = j.beta.sin_cos();
+            (bx * cb + bz * sb, -bx * sb + bz * cb, 0.0)
+        }
+    };
     let (s, c) = j.alpha.sin_cos();
-    let (x, y, z) = (j.a + bx, by * c - bz * s, j.d + by * s + bz * c);
+    let (x, y, z) = (j.a + bx, by * c - bz * s, d + by * s + bz * c);
     (x.hypot(y), z)
 }
 
@@ -406,6 +414,36 @@ pub const UNCERTAINTY_POSES: usize = 2000;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A Hayati last joint: its β turns the probe about the link's y axis,
+    /// which the zero offset cannot undo — a 60° β that brings the probe
+    /// 34 mm nearer axis 6 is gross, as halving Bz is; the nominal in Hayati
+    /// form (β = 0) is not.
+    #[test]
+    fn a_hayati_last_joints_beta_moves_the_last_link() {
+        let mut nominal = DhParams::paper_nominal();
+        nominal.joints[5].model = JointModel::Hayati;
+        nominal.joints[5].d = 0.0;
+        let all: Vec<usize> = (0..27).collect();
+        assert!(gross_corrections(&nominal, &nominal, &all).is_empty());
+        let mut turned = nominal.clone();
+        turned.joints[5].beta = 60f64.to_radians();
+        // α6 = 90°: the probe (Bz = 100) lies 100 mm off axis 6, a6 = −35
+        // beside it; Ry(60°) swings it to (86.6, 0, 50) in the last frame.
+        let (r0, _) = last_link(&nominal);
+        let (r, _) = last_link(&turned);
+        assert!((r0 - 35f64.hypot(100.0)).abs() < 1e-9, "{r0}");
+        let x = -35.0 + 100.0 * 60f64.to_radians().sin();
+        assert!((r - x.hypot(50.0)).abs() < 1e-9, "{r}");
+        let names: Vec<String> = gross_corrections(&turned, &nominal, &all)
+            .into_iter()
+            .map(|g| g.name)
+            .collect();
+        assert!(!names.is_empty(), "β6 = 60° passed as plausible");
+        let mut lowered = nominal.clone();
+        lowered.probe[2] = 50.0;
+        assert!(!gross_corrections(&lowered, &nominal, &all).is_empty());
+    }
 
     /// The bisection stopped at its fixed point gives the value of all 200
     /// halvings, bit for bit.
