@@ -94,7 +94,7 @@ angle_unit = \"deg\"\n\
 [[joint]]\ntheta = 0\nd = 0\na = 0\nalpha = -90\n\
 [[joint]]\ntheta = 0\nd = 100\na = 0\nalpha = 0\n\
 [probe]\nx = 0\ny = 0\nz = 100\n\
-[prior]\nlength_mm = 1.0\nangle_deg = 0.5\ntheta_deg = 0.2\nd2_mm = 0.3\nhbeta2_deg = 0.1\n";
+[prior]\nlength_mm = 1.0\nangle_deg = 0.5\ntheta_deg = 0.2\nd3_mm = 0.3\nhbeta2_deg = 0.1\n";
 
 /// Tokens the mutations insert: numbers at and past the edges of `f64`,
 /// separators, quotes, TOML syntax, units, odd characters.
