@@ -520,9 +520,10 @@ pub struct PriorEstimate {
     pub unit: String,
     /// The stated tolerance (1σ).
     pub tolerance: f64,
-    /// Posterior standard uncertainty from the augmented normal matrix
-    /// (before the σ̂ scaling), in `unit`; 0 (and `data_share` 0) when that
-    /// matrix is singular (never NaN).
+    /// Posterior standard uncertainty, `unit`: the parameter's σ of the
+    /// result, from the augmented normal matrix with the data's part scaled
+    /// by σ̂² and the prior's not; 0 (and `data_share` 0) when that matrix
+    /// is singular (never NaN).
     pub posterior_sigma: f64,
     /// The data's share of the information: `1 − posterior variance /
     /// prior variance` (1 = the data alone determine it, 0 = the prior
@@ -547,8 +548,8 @@ pub struct PriorReport {
 }
 
 impl PriorReport {
-    /// The report of `prior` at the result `x`, from the inverse of the
-    /// augmented normal matrix (`inverse`, free columns `free`).
+    /// The report of `prior` at the result `x`, from the covariance of the
+    /// free parameters (`inverse`, free columns `free`).
     pub(crate) fn new(
         tolerances: &Tolerances,
         prior: &PriorTerm,
