@@ -276,3 +276,37 @@ fn a_robust_report_is_the_same_at_1_2_and_4_threads() {
     assert_eq!(one, report(2), "2 threads");
     assert_eq!(one, report(4), "4 threads");
 }
+
+/// Without stated noise, with a prior: the touch σ estimated with the
+/// outliers in weighs the touches too little against the prior, so the
+/// refits run at σ·σ̂ until the robust scale settles — σ̂ ends near 1 and the
+/// touch σ near the campaign's own (one touch in 20 moved 1 mm).
+#[test]
+fn with_a_prior_and_no_stated_noise_the_robust_scale_settles() {
+    use aacmm_core::calibrate::Tolerances;
+    let moved: Vec<usize> = (0..100).step_by(20).collect();
+    let c = case(3, &moved, 1.0);
+    let o = CalibrateOptions {
+        robust: Some(Robust::new(Loss::Huber)),
+        prior: Tolerances::parse("length=1mm,angle=0.5deg", 6).unwrap(),
+        ..CalibrateOptions::default()
+    };
+    let plain = CalibrateOptions {
+        robust: None,
+        ..o.clone()
+    };
+    let fit = |o: &CalibrateOptions| {
+        Problem::new(nominal(), c.data.clone(), o.clone())
+            .unwrap()
+            .run()
+            .unwrap()
+            .calibration
+    };
+    let (robust, plain) = (fit(&o), fit(&plain));
+    let scale = robust.robust.as_ref().unwrap().scale;
+    assert!((scale - 1.0).abs() <= 0.05, "robust scale {scale}");
+    // The campaign's touch scatter (0.01 mm probe, 0.005° encoders) is
+    // ≈ 0.035 mm; the plain fit's estimate holds the 1 mm outliers.
+    let (r, p) = (robust.dof.touch_sigma_mm, plain.dof.touch_sigma_mm);
+    assert!(r < 0.05 && p > 2.0 * r, "robust {r} mm, plain {p} mm");
+}

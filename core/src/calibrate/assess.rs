@@ -262,16 +262,35 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             reweigh(&mut weights, &params, touch_sigma)?;
             unit_weights = false;
         }
-        let out = super::robust::irls(
-            r,
-            &params,
-            data,
-            &weights,
-            &free,
-            &lm,
-            counts.scale_dof_factor(),
-            stated,
-        )?;
+        let irls = |params: &DhParams, weights: &Weights| {
+            super::robust::irls(
+                r,
+                params,
+                data,
+                weights,
+                &free,
+                &lm,
+                counts.scale_dof_factor(),
+                stated,
+            )
+        };
+        let mut out = irls(&params, &weights)?;
+        if has_prior && !stated {
+            // The touch σ was estimated with the outliers in; the prior
+            // weighs against it, so refit at σ·σ̂ until σ̂ settles — else
+            // the prior pulls (σ/σ_robust)² too hard.
+            for _ in 0..MAX_SIGMA_REFITS {
+                let s = out.fit.scale;
+                if !(s.is_finite() && s > 0.0) || (s - 1.0).abs() <= REWEIGH_TOLERANCE {
+                    break;
+                }
+                touch_sigma *= s;
+                extra_jacobians += out.fit.passes + 1;
+                phases.push(out.phase);
+                reweigh(&mut weights, &out.params, touch_sigma)?;
+                out = irls(&out.params, &weights)?;
+            }
+        }
         extra_jacobians += out.fit.passes + 1;
         phases.push(out.phase);
         history = out.last.history;
