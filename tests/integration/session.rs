@@ -1,14 +1,15 @@
 //! The command line is a shell around the library's session: the same
 //! inputs give the same `calibration.json`, byte for byte, as
-//! `aacmm_core::session` run in-process (the C API's test makes the same
-//! comparison from C, so the three front ends agree).
+//! `aacmm_core::session` run in-process and as the `paper_experiment`
+//! example writes it (the C API's test makes the same comparison from C, so
+//! the front ends agree).
 
 use aacmm_core::calibrate::{CalibrateOptions, LmOptions, Method};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::{CalibrationReport, Problem, Sources};
 use aacmm_core::{DataSet, read_arm};
 
-use crate::util::{calibrate_shipped, shipped, shipped_arm, temp_dir};
+use crate::util::{calibrate_shipped, example, shipped, shipped_arm, temp_dir};
 
 /// The shipped campaign as the CLI reads it, with its noise stated.
 fn shipped_problem(method: Method, seed: u64) -> Problem {
@@ -111,4 +112,96 @@ fn the_readmes_rust_example_is_the_crates_doc_test() {
     let (a, b) = (rust_block(section, ""), rust_block(doc, "//! "));
     assert!(a.len() >= 5 && a.len() <= 10, "{a:?}");
     assert_eq!(a, b);
+}
+
+/// The newest modification time of a file under `path`.
+fn newest(path: &std::path::Path) -> std::time::SystemTime {
+    let meta = std::fs::metadata(path).unwrap();
+    if meta.is_dir() {
+        std::fs::read_dir(path)
+            .unwrap()
+            .map(|e| newest(&e.unwrap().path()))
+            .max()
+            .unwrap_or(std::time::UNIX_EPOCH)
+    } else {
+        meta.modified().unwrap()
+    }
+}
+
+/// The example binary `name`, built by `cargo test` beside the test binary
+/// (`target/<profile>/examples/`). `cargo test --test integration` alone
+/// does not build examples: one missing, or older than its source or the
+/// core library's, fails with what to run rather than testing stale code.
+fn example_binary(name: &str) -> std::path::PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    let path = exe
+        .parent()
+        .and_then(|deps| deps.parent())
+        .unwrap()
+        .join("examples")
+        .join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let sources = newest(&root.join("core/src")).max(newest(&example(&format!("{name}.rs"))));
+    let built = std::fs::metadata(&path).and_then(|m| m.modified()).ok();
+    assert!(
+        built.is_some_and(|b| b >= sources),
+        "{} is missing or older than its sources: run `cargo test --workspace` (it builds the \
+         examples), or `cargo build --example {name}` with this profile",
+        path.display()
+    );
+    path
+}
+
+#[test]
+fn the_paper_experiment_writes_what_the_cli_writes() {
+    // The example fits its simulated campaign in-process; the CLI, given
+    // the files it wrote and the same settings, must write the same
+    // calibration.json — the example is a shell around the same session.
+    let dir = temp_dir("paper-experiment");
+    let o = std::process::Command::new(example_binary("paper_experiment"))
+        .arg(&dir)
+        .output()
+        .expect("the paper_experiment example runs (cargo test builds it)");
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    // The example names its inputs relative to the repository and to its
+    // output folder; give the CLI the same names.
+    std::fs::create_dir_all(dir.join("examples")).unwrap();
+    std::fs::copy(shipped_arm(), dir.join("examples/paper-table-1.toml")).unwrap();
+    for (method, seed) in [("hybrid", "0"), ("global", "0")] {
+        let out = format!("cli-{method}");
+        let o = crate::util::command(&[
+            "calibrate",
+            "--arm",
+            "examples/paper-table-1.toml",
+            "--data",
+            "campaign/poses.csv",
+            "--lengths",
+            "campaign/lengths.csv",
+            "--validate",
+            "held-out/poses.csv",
+            "--validate-lengths",
+            "held-out/lengths.csv",
+            "--encoder-noise",
+            "0.012",
+            "--probe-noise",
+            "0.024",
+            "--method",
+            method,
+            "--seed",
+            seed,
+            "--out",
+            &out,
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+        assert!(o.status.success(), "{}", crate::util::stderr(&o));
+        let cli = std::fs::read_to_string(dir.join(&out).join("calibration.json")).unwrap();
+        let example = std::fs::read_to_string(dir.join(method).join("calibration.json")).unwrap();
+        assert!(
+            cli.contains("\"held_out\": {"),
+            "validated on the held-out campaign"
+        );
+        assert_eq!(cli, example, "{method}");
+    }
 }
