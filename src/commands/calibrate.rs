@@ -280,13 +280,12 @@ pub fn run(args: Args) -> Result<()> {
 
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("--out {}: cannot create", args.out.display()))?;
-    let files = report.files(&problem, total).context("--out")?;
+    let written = report.write(&problem, &args.out, total)?;
+    let figures = written.len() - 4;
     let mut wrote = String::new();
-    let figures = files.len() - 4;
-    for (name, text) in &files {
-        let path = args.out.join(name);
-        std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;
-        if [CALIBRATED_FILE, REPORT_FILE, TIMING_FILE].contains(&name.as_str()) {
+    for path in &written {
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        if [CALIBRATED_FILE, REPORT_FILE, TIMING_FILE].contains(&&*name) {
             wrote += &format!("wrote {}\n", path.display());
         } else if name == HTML_FILE {
             wrote += &format!(
