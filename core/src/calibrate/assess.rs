@@ -503,7 +503,7 @@ fn position_uncertainty(
     // The covariance row-major, and the free columns of LANES poses' position
     // Jacobians side by side: the poses' sums are independent chains, so they
     // run together (each in its own order: the same bits as one at a time).
-    const LANES: usize = 4;
+    const LANES: usize = 8;
     let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
     let mut jf = vec![[[0.0; LANES]; 3]; q];
     let poses: Vec<usize> = (0..data.len()).step_by(step).collect();
