@@ -335,7 +335,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     let p = free.len();
     let n = DMatrix::from_row_slice(p, p, &normal.jtj);
     let invert = |m: DMatrix<f64>| match m.cholesky() {
-        Some(ch) => ch.inverse(),
+        Some(ch) => super::inverse::cholesky_inverse(&ch),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
     let cov = match &weights.prior {
@@ -500,18 +500,74 @@ fn position_uncertainty(
     let kernel = ArmKernel::new(params)?;
     let step = data.len().div_ceil(super::checks::UNCERTAINTY_POSES).max(1);
     let q = free.len();
-    // The covariance row-major, and the free columns of LANES poses' position
-    // Jacobians side by side: the poses' sums are independent chains, so they
-    // run together (each in its own order: the same bits as one at a time).
-    const LANES: usize = 8;
     let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
-    let mut jf = vec![[[0.0; LANES]; 3]; q];
     let poses: Vec<usize> = (0..data.len()).step_by(step).collect();
-    let (mut sum, mut max) = (0.0, 0.0f64);
-    // Pose `l` of the group from its Jacobian; with the group's last, its
-    // `n` poses' uncertainties into the sums.
-    let mut add = |l: usize, jac: &[[f64; 3]], n: Option<usize>| {
-        for (a, &ca) in free.iter().enumerate() {
+    let mut sums = UncertaintySums {
+        free,
+        c,
+        jf: vec![[[0.0; LANES]; 3]; q],
+        sum: 0.0,
+        max: 0.0,
+    };
+    // The Jacobians from the poses' stored sin/cos through the lanes kernel
+    // (the same bits as `position_jacobian` of the readings, without their
+    // trigonometry): every pose in one call when every pose is sampled.
+    // The sums are inlined into the kernel's loop, so they are compiled with
+    // its target features (AVX2 where the CPU has it; no FMA, so the same
+    // bits as without).
+    let last = |l: usize, i: usize| (l + 1 == LANES || i + step >= data.len()).then_some(l + 1);
+    if step == 1 {
+        kernel.for_each_jacobian(
+            data.poses(),
+            0..data.len(),
+            #[inline(always)]
+            |i, _, jac| sums.add(i % LANES, jac, last(i % LANES, i)),
+        )?;
+    } else {
+        for (k, &i) in poses.iter().enumerate() {
+            let l = k % LANES;
+            kernel.for_each_jacobian(
+                data.poses(),
+                i..i + 1,
+                #[inline(always)]
+                |_, _, jac| sums.add(l, jac, last(l, i)),
+            )?;
+        }
+    }
+    let (sum, max) = (sums.sum, sums.max);
+    let n = poses.len();
+    Ok(Some(super::checks::PositionUncertainty {
+        k: K,
+        poses: n,
+        rms_mm: (sum / n as f64).sqrt(),
+        max_mm: max,
+        touch_mm: K * 3f64.sqrt() * touch_sigma,
+    }))
+}
+
+/// Poses whose uncertainties [`position_uncertainty`] sums side by side:
+/// independent chains, so they run together (each in its own order: the
+/// same bits as one at a time).
+const LANES: usize = 8;
+
+/// [`position_uncertainty`]'s running sums: the covariance row-major, the
+/// free columns of [`LANES`] poses' position Jacobians side by side.
+struct UncertaintySums<'a> {
+    free: &'a [usize],
+    c: Vec<f64>,
+    jf: Vec<[[f64; LANES]; 3]>,
+    sum: f64,
+    max: f64,
+}
+
+impl UncertaintySums<'_> {
+    /// Pose `l` of the group from its Jacobian; with the group's last, its
+    /// `n` poses' uncertainties (k = 2) into the sums.
+    #[inline(always)]
+    fn add(&mut self, l: usize, jac: &[[f64; 3]], n: Option<usize>) {
+        const K: f64 = 2.0;
+        let (jf, q) = (&mut self.jf, self.free.len());
+        for (a, &ca) in self.free.iter().enumerate() {
             for k in 0..3 {
                 jf[a][k][l] = jac[ca][k];
             }
@@ -519,7 +575,7 @@ fn position_uncertainty(
         let Some(n) = n else { return };
         let mut tr = [0.0; LANES];
         for a in 0..q {
-            let (ja, row) = (&jf[a], &c[a * q..(a + 1) * q]);
+            let (ja, row) = (&jf[a], &self.c[a * q..(a + 1) * q]);
             for (jb, &cab) in jf.iter().zip(row) {
                 for l in 0..LANES {
                     let jj = ja[0][l] * jb[0][l] + ja[1][l] * jb[1][l] + ja[2][l] * jb[2][l];
@@ -529,33 +585,10 @@ fn position_uncertainty(
         }
         for &t in &tr[..n] {
             let u = K * t.max(0.0).sqrt();
-            sum += u * u;
-            max = max.max(u);
-        }
-    };
-    // The Jacobians from the poses' stored sin/cos through the lanes kernel
-    // (the same bits as `position_jacobian` of the readings, without their
-    // trigonometry): every pose in one call when every pose is sampled.
-    let last = |l: usize, i: usize| (l + 1 == LANES || i + step >= data.len()).then_some(l + 1);
-    if step == 1 {
-        kernel.for_each_jacobian(data.poses(), 0..data.len(), |i, _, jac| {
-            add(i % LANES, jac, last(i % LANES, i))
-        })?;
-    } else {
-        for (k, &i) in poses.iter().enumerate() {
-            let l = k % LANES;
-            kernel
-                .for_each_jacobian(data.poses(), i..i + 1, |_, _, jac| add(l, jac, last(l, i)))?;
+            self.sum += u * u;
+            self.max = self.max.max(u);
         }
     }
-    let n = poses.len();
-    Ok(Some(super::checks::PositionUncertainty {
-        k: K,
-        poses: n,
-        rms_mm: (sum / n as f64).sqrt(),
-        max_mm: max,
-        touch_mm: K * 3f64.sqrt() * touch_sigma,
-    }))
 }
 
 #[cfg(test)]

@@ -250,6 +250,15 @@ pub(crate) fn levenberg_marquardt_from(
     let mut nu = 2.0;
     let (mut cost_evaluations, mut jacobian_evaluations) = (0, 0);
     let mut termination = Termination::MaxIterations;
+    // N and g as matrices, made again only when a step is taken (a
+    // rejected step keeps them: near the minimum most steps are).
+    let matrices = |normal: &Normal| {
+        (
+            DMatrix::from_row_slice(p, p, &normal.jtj),
+            DVector::from_column_slice(&normal.jtr),
+        )
+    };
+    let (mut n, mut g) = matrices(&normal);
     for iteration in 1..=options.max_iterations {
         let f = normal.cost();
         if f <= f64::MIN_POSITIVE {
@@ -259,7 +268,6 @@ pub(crate) fn levenberg_marquardt_from(
         for (s, c) in scale.iter_mut().zip(0..p) {
             *s = s.max(normal.jtj[c * p + c]).max(f64::MIN_POSITIVE);
         }
-        let g = DVector::from_column_slice(&normal.jtr);
         let gmax = (0..p)
             .map(|c| g[c].abs() / (normal.jtj[c * p + c].max(f64::MIN_POSITIVE) * f).sqrt())
             .fold(0.0, f64::max);
@@ -267,7 +275,6 @@ pub(crate) fn levenberg_marquardt_from(
             termination = Termination::GradientTolerance;
             break;
         }
-        let n = DMatrix::from_row_slice(p, p, &normal.jtj);
         let mut a = n.clone();
         for c in 0..p {
             a[(c, c)] += lambda * scale[c];
@@ -316,6 +323,7 @@ pub(crate) fn levenberg_marquardt_from(
             }
             x = trial;
             normal = normal_at(&params_of(&x)?, data, weights, free, options.threads)?;
+            (n, g) = matrices(&normal);
             jacobian_evaluations += 1;
             lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
             nu = 2.0;

@@ -42,6 +42,7 @@ pub mod assess;
 pub mod checks;
 pub mod energy;
 pub mod global;
+mod inverse;
 pub mod lm;
 pub mod options;
 pub mod prior;
