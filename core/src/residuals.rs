@@ -295,7 +295,6 @@ struct TouchWeight<'a> {
     e2: f64,
     p2: f64,
     unit: f64,
-    jq: Vec<[f64; 3]>,
 }
 
 impl<'a> TouchWeight<'a> {
@@ -307,29 +306,45 @@ impl<'a> TouchWeight<'a> {
             e2: noise.encoder_rad.unwrap_or(0.0).powi(2),
             p2: noise.probe_mm.unwrap_or(0.0).powi(2),
             unit: 1.0 / (touch_sigma_mm * touch_sigma_mm),
-            jq: vec![[0.0; 3]; data.joints()],
         }
     }
 
-    fn at(&mut self, i: usize) -> Result<Sym3, KernelError> {
+    /// The weights of touches `range`, in order, to `f(i, A_i)`; the joint
+    /// Jacobians a batch of lanes at a time.
+    fn each(
+        &self,
+        range: Range<usize>,
+        mut f: impl FnMut(usize, Sym3) -> Result<(), KernelError>,
+    ) -> Result<(), KernelError> {
         if !self.stated {
             let w = self.unit;
-            return Ok([w, w, w, 0.0, 0.0, 0.0]);
+            return range.map(|i| f(i, [w, w, w, 0.0, 0.0, 0.0])).collect();
         }
+        let (e2, p2) = (self.e2, self.p2);
+        let mut result = Ok(());
         self.kernel
-            .joint_jacobian_at(self.data.poses(), i, &mut self.jq)?;
-        let (e2, p2, jq) = (self.e2, self.p2, &self.jq);
-        let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
-        let cov = [
-            p2 + s(0, 0),
-            p2 + s(1, 1),
-            p2 + s(2, 2),
-            s(0, 1),
-            s(0, 2),
-            s(1, 2),
-        ];
-        Ok(sym_inv(&cov))
+            .for_each_joint_jacobian(self.data.poses(), range, |i, jq| {
+                if result.is_ok() {
+                    result = f(i, touch_weight(jq, e2, p2));
+                }
+            })?;
+        result
     }
+}
+
+/// `(p²I + e² J_q J_qᵀ)⁻¹` of one touch's joint Jacobian.
+#[inline(always)]
+fn touch_weight(jq: &[[f64; 3]], e2: f64, p2: f64) -> Sym3 {
+    let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
+    let cov = [
+        p2 + s(0, 0),
+        p2 + s(1, 1),
+        p2 + s(2, 2),
+        s(0, 1),
+        s(0, 2),
+        s(1, 2),
+    ];
+    sym_inv(&cov)
 }
 
 /// `‖a − b‖/‖b‖` in the Frobenius norm (off-diagonal entries count twice).
@@ -401,11 +416,14 @@ impl Weights {
                     .lock()
                     .unwrap_or_else(std::sync::PoisonError::into_inner);
                 let (k, out) = &mut *part;
-                let mut touch_weight = TouchWeight::new(kernel, data, noise, touch_sigma_mm);
-                for (i, w) in (*k * TOUCHES_PER_CHUNK..).zip(out.iter_mut()) {
-                    *w = touch_weight.at(i)?;
-                }
-                Ok::<(), KernelError>(())
+                let start = *k * TOUCHES_PER_CHUNK;
+                TouchWeight::new(kernel, data, noise, touch_sigma_mm).each(
+                    start..start + out.len(),
+                    |i, w| {
+                        out[i - start] = w;
+                        Ok(())
+                    },
+                )
             });
             drop(parts);
             results.into_iter().collect::<Result<(), KernelError>>()?;
@@ -479,19 +497,21 @@ impl Weights {
             }
         }
         let results = parallel_map(&chunks, threads, |points| {
-            let mut touch_weight = TouchWeight::new(kernel, data, noise, touch_sigma_mm);
+            let all = &data.points()[points.clone()];
             let mut change = 0.0_f64;
             let mut covs = Vec::with_capacity(points.len());
             let mut buffer = Vec::new();
-            for p in &data.points()[points.clone()] {
-                buffer.clear();
-                for i in p.touches.clone() {
-                    let a = touch_weight.at(i)?;
-                    change = change.max(touch_change(&a, &self.touch[i]));
-                    buffer.push(a);
+            let mut point = all.iter().map(|p| p.touches.end).peekable();
+            let touches = all[0].touches.start..all[all.len() - 1].touches.end;
+            TouchWeight::new(kernel, data, noise, touch_sigma_mm).each(touches, |i, a| {
+                change = change.max(touch_change(&a, &self.touch[i]));
+                buffer.push(a);
+                if point.next_if_eq(&(i + 1)).is_some() {
+                    covs.push(centroid_cov(&buffer));
+                    buffer.clear();
                 }
-                covs.push(centroid_cov(&buffer));
-            }
+                Ok(())
+            })?;
             Ok::<_, KernelError>((change, covs))
         });
         let mut change = 0.0_f64;

@@ -220,6 +220,34 @@ impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneO
     }
 }
 
+struct EachJointJacobian<'a, F> {
+    poses: &'a PreparedPoses,
+    range: Range<usize>,
+    f: F,
+}
+
+impl<F: FnMut(usize, &[[f64; 3]])> KernelOp for EachJointJacobian<'_, F> {
+    type Output = ();
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
+        lanes::run(OnChain::<N, C, _>::new(k, self))
+    }
+}
+
+impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[[f64; 3]])> LaneOp
+    for OnChain<'_, N, C, EachJointJacobian<'_, F>>
+{
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let EachJointJacobian {
+            poses,
+            range,
+            mut f,
+        } = self.op;
+        super::for_each_lane_joint_jacobian::<N, C, L>(self.k, poses, range, |i, jq| f(i, jq))
+    }
+}
+
 fn check_len(expected: usize, got: usize) -> Result<(), KernelError> {
     if expected == got {
         Ok(())
@@ -409,6 +437,20 @@ impl ArmKernel {
         Ok(())
     }
 
+    /// [`ArmKernel::joint_jacobian_at`] of every pose of `range`, in order,
+    /// to `f(i, ∂p/∂q)`, a batch of lanes at a time (the same bits as one
+    /// pose at a time).
+    pub(crate) fn for_each_joint_jacobian(
+        &self,
+        poses: &PreparedPoses,
+        range: Range<usize>,
+        f: impl FnMut(usize, &[[f64; 3]]),
+    ) -> Result<(), KernelError> {
+        self.check_poses(poses, &range)?;
+        self.apply(EachJointJacobian { poses, range, f });
+        Ok(())
+    }
+
     /// Probe positions of every row of readings (rad), in row order: the
     /// convenience for callers holding plain rows.
     ///
@@ -431,6 +473,50 @@ impl ArmKernel {
 mod tests {
     use super::*;
     use crate::params::SUPPORTED_JOINTS;
+
+    /// The joint Jacobians in lanes are the one-pose ones bit for bit: 6 and
+    /// 7 joints, D-H and Hayati, every length around the lane width, ranges
+    /// that start mid-batch.
+    #[test]
+    fn joint_jacobians_in_lanes_are_the_same_bits() {
+        for n in [6usize, 7] {
+            for hayati in [false, true] {
+                let mut params = DhParams::paper_nominal();
+                if n == 7 {
+                    params.joints.push(params.joints[5].clone());
+                }
+                if hayati {
+                    params.joints[2].model = crate::params::JointModel::Hayati;
+                    params.joints[2].beta = 0.003;
+                }
+                let k = ArmKernel::new(&params).unwrap();
+                let q: Vec<Vec<f64>> = (0..23)
+                    .map(|i| {
+                        (0..n)
+                            .map(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 3.0)
+                            .collect()
+                    })
+                    .collect();
+                let poses = PreparedPoses::new(n, &q).unwrap();
+                for (start, end) in [(0, 0), (0, 3), (0, 4), (0, 9), (3, 23), (1, 18)] {
+                    let mut seen = start;
+                    k.for_each_joint_jacobian(&poses, start..end, |i, jq| {
+                        assert_eq!(i, seen);
+                        seen += 1;
+                        let mut one = vec![[0.0; 3]; n];
+                        k.joint_jacobian_at(&poses, i, &mut one).unwrap();
+                        assert_eq!(jq, &one[..], "n={n} hayati={hayati} pose {i}");
+                    })
+                    .unwrap();
+                    assert_eq!(seen, end);
+                }
+                assert!(
+                    k.for_each_joint_jacobian(&poses, 20..24, |_, _| {})
+                        .is_err()
+                );
+            }
+        }
+    }
 
     #[test]
     fn chains_are_the_supported_joint_counts() {

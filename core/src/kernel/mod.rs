@@ -662,6 +662,36 @@ fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     }
 }
 
+/// [`for_each_lane_jacobian`] for `∂p/∂q`: each pose's joint Jacobian
+/// (`N` columns) to `f`, in pose order, a batch of lanes at a time.
+#[inline(always)]
+pub(crate) fn for_each_lane_joint_jacobian<const N: usize, C: Chain<N>, L: Batch>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses,
+    range: std::ops::Range<usize>,
+    mut f: impl FnMut(usize, &[[f64; 3]; N]),
+) {
+    let kl: Consts<L, N> = k.splat();
+    let mut jl = [[L::from(0.0); 3]; N];
+    let mut tile = [[[0.0; 3]; N]; LANES];
+    let batches = poses.batches::<N>(range.start, range.len() / LANES);
+    for b in 0..batches.count {
+        let (cq, sq) = batches.get::<L>(b);
+        C::joint_jacobian(&kl, &cq, &sq, &mut jl);
+        transpose(&jl, tile.as_flattened_mut());
+        let i = range.start + b * LANES;
+        for (l, cols) in tile.iter().enumerate() {
+            f(i + l, cols);
+        }
+    }
+    let mut cols = [[0.0; 3]; N];
+    for i in range.start + batches.count * LANES..range.end {
+        let (cq, sq) = poses.trig::<N>(i);
+        C::joint_jacobian(k, &cq, &sq, &mut cols);
+        f(i, &cols);
+    }
+}
+
 /// Lanes (column-major across poses) to one block of columns per pose:
 /// `dst[l·C + c] = cols[c]` of lane `l`, for `C = cols.len()` columns.
 #[inline(always)]
