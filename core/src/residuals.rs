@@ -313,12 +313,12 @@ impl<'a> TouchWeight<'a> {
     /// Jacobians a batch of lanes at a time.
     fn each(
         &self,
-        range: Range<usize>,
+        mut range: Range<usize>,
         mut f: impl FnMut(usize, Sym3) -> Result<(), KernelError>,
     ) -> Result<(), KernelError> {
         if !self.stated {
             let w = self.unit;
-            return range.map(|i| f(i, [w, w, w, 0.0, 0.0, 0.0])).collect();
+            return range.try_for_each(|i| f(i, [w, w, w, 0.0, 0.0, 0.0]));
         }
         let (e2, p2) = (self.e2, self.p2);
         let mut result = Ok(());

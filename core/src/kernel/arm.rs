@@ -483,7 +483,7 @@ mod tests {
             for hayati in [false, true] {
                 let mut params = DhParams::paper_nominal();
                 if n == 7 {
-                    params.joints.push(params.joints[5].clone());
+                    params.joints.push(params.joints[5]);
                 }
                 if hayati {
                     params.joints[2].model = crate::params::JointModel::Hayati;
