@@ -232,6 +232,51 @@ fn extended_chain_without_hayati_joints_is_the_dh_chain() {
     }
 }
 
+/// `len` poses of `n` readings (rad), spread over ±3 rad.
+fn spread_readings(n: usize, len: usize) -> Vec<Vec<f64>> {
+    (0..len)
+        .map(|i| {
+            (0..n)
+                .map(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 3.0)
+                .collect()
+        })
+        .collect()
+}
+
+/// The joint Jacobians in lanes are the one-pose ones bit for bit: 6 and 7
+/// joints, D-H and Hayati, every length around the lane width, ranges that
+/// start mid-batch; a range past the poses is an error.
+#[test]
+fn joint_jacobians_in_lanes_are_the_same_bits() {
+    for n in [6usize, 7] {
+        for hayati in [false, true] {
+            let mut params = nominal(n);
+            if hayati {
+                params.joints[2].model = JointModel::Hayati;
+                params.joints[2].beta = 0.003;
+            }
+            let k = ArmKernel::new(&params).unwrap();
+            let poses = PreparedPoses::new(n, &spread_readings(n, 23)).unwrap();
+            for (start, end) in [(0, 0), (0, 3), (0, 4), (0, 9), (3, 23), (1, 18)] {
+                let mut seen = start;
+                k.for_each_joint_jacobian(&poses, start..end, |i, jq| {
+                    assert_eq!(i, seen);
+                    seen += 1;
+                    let mut one = vec![[0.0; 3]; n];
+                    k.joint_jacobian_at(&poses, i, &mut one).unwrap();
+                    assert_eq!(jq, &one[..], "n={n} hayati={hayati} pose {i}");
+                })
+                .unwrap();
+                assert_eq!(seen, end);
+            }
+            assert!(
+                k.for_each_joint_jacobian(&poses, 20..24, |_, _| {})
+                    .is_err()
+            );
+        }
+    }
+}
+
 /// With a Hayati joint the batch paths (SIMD lanes and scalar tail) give the
 /// one-pose results of the extended chain bit for bit.
 #[test]
@@ -245,13 +290,7 @@ fn hayati_batches_equal_single_poses_bit_for_bit() {
         let arm = ArmKernel::new(&params).unwrap();
         let p = params.param_count();
         for len in [0usize, 3, 4, 5, 9] {
-            let q: Vec<Vec<f64>> = (0..len)
-                .map(|i| {
-                    (0..n)
-                        .map(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 3.0)
-                        .collect()
-                })
-                .collect();
+            let q = spread_readings(n, len);
             let poses = PreparedPoses::new(n, &q).unwrap();
             let mut pos = vec![[0.0; 3]; len];
             arm.positions(&poses, 0..len, &mut pos).unwrap();
