@@ -653,9 +653,7 @@ pub(crate) fn strong_correlations(
 fn plainly_closed(ns: &DMatrix<f64>, free: &[usize], base: [usize; 2]) -> bool {
     let k = ns.nrows();
     let trace = ns.trace();
-    if base.iter().any(|b| free.contains(b))
-        || trace.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-    {
+    if base.iter().any(|b| free.contains(b)) || trace.is_nan() || trace <= 0.0 {
         return false;
     }
     // A base column below the eigen decomposition's own rounding (ε·trace)
@@ -712,21 +710,21 @@ pub(crate) fn open_directions_from(
     if !data.references().is_empty() && plainly_closed(&ns, free, base) {
         return Vec::new();
     }
-    analysed_open_directions(params, data, &ids, &ns, free)
+    analysed_open_directions(params, data, &ids, &ns, free, base)
 }
 
 /// [`open_directions_from`] by the eigen decomposition of the scaled normal
-/// matrix `ns`: every unseen direction, then the open ones among them.
+/// matrix `ns`: every unseen direction, then the open ones among them
+/// (`base`: the columns of theta1 and d1).
 fn analysed_open_directions(
     params: &DhParams,
     data: &DataSet,
     ids: &[ParamId],
     ns: &DMatrix<f64>,
     free: &[usize],
+    base: [usize; 2],
 ) -> Vec<String> {
-    let n = params.joint_count();
     let np = ids.len();
-    let base = [ParamKind::Theta, ParamKind::D].map(|kind| ParamId { kind, index: 0 }.column(n));
     // Unseen directions, in scaled coordinates, with names.
     let mut unseen: Vec<(String, nalgebra::DVector<f64>)> = Vec::new();
     let unit = |c: usize| nalgebra::DVector::from_fn(np, |a, _| if a == c { 1.0 } else { 0.0 });
@@ -957,7 +955,8 @@ mod plainly_closed_tests {
                 }
                 let free: Vec<usize> = (0..27).filter(|c| !fixed.contains(c)).collect();
                 let closed = plainly_closed(&ns, &free, base);
-                let found = analysed_open_directions(&nominal.params, &data, &ids, &ns, &free);
+                let found =
+                    analysed_open_directions(&nominal.params, &data, &ids, &ns, &free, base);
                 if closed {
                     assert!(found.is_empty(), "seed {seed}, fixed {fixed:?}: {found:?}");
                     shortcut += 1;

@@ -493,7 +493,6 @@ fn position_uncertainty(
     cov: &DMatrix<f64>,
     touch_sigma: f64,
 ) -> Result<Option<super::checks::PositionUncertainty>, CalibrationError> {
-    const K: f64 = 2.0;
     if data.is_empty() || cov.iter().any(|v| !v.is_finite()) {
         return Ok(None);
     }
@@ -545,6 +544,9 @@ fn position_uncertainty(
     }))
 }
 
+/// Coverage factor of the predicted position uncertainty.
+const K: f64 = 2.0;
+
 /// Poses whose uncertainties [`position_uncertainty`] sums side by side:
 /// independent chains, so they run together (each in its own order: the
 /// same bits as one at a time).
@@ -562,10 +564,9 @@ struct UncertaintySums<'a> {
 
 impl UncertaintySums<'_> {
     /// Pose `l` of the group from its Jacobian; with the group's last, its
-    /// `n` poses' uncertainties (k = 2) into the sums.
+    /// `n` poses' uncertainties (k = [`K`]) into the sums.
     #[inline(always)]
     fn add(&mut self, l: usize, jac: &[[f64; 3]], n: Option<usize>) {
-        const K: f64 = 2.0;
         let (jf, q) = (&mut self.jf, self.free.len());
         for (a, &ca) in self.free.iter().enumerate() {
             for k in 0..3 {

@@ -665,7 +665,7 @@ fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
 /// [`for_each_lane_jacobian`] for `∂p/∂q`: each pose's joint Jacobian
 /// (`N` columns) to `f`, in pose order, a batch of lanes at a time.
 #[inline(always)]
-pub(crate) fn for_each_lane_joint_jacobian<const N: usize, C: Chain<N>, L: Batch>(
+fn for_each_lane_joint_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses,
     range: std::ops::Range<usize>,
