@@ -15,7 +15,7 @@
 use std::hint::black_box;
 
 use aacmm_core::calibrate::energy::Energy;
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, Method, calibrate};
+use aacmm_core::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::Arm;
 use aacmm_core::kernel::ArmKernel;
@@ -41,18 +41,23 @@ fn campaign(seed: u64, errors: ErrorModel, sockets: usize, touches: usize) -> Da
         .expect("data set")
 }
 
-fn options(method: Method, fix: FixSpec) -> CalibrateOptions {
-    CalibrateOptions {
+/// The model (stated noise, `fix`) and `method` on one thread.
+fn options(method: Method, fix: FixSpec) -> (ModelOptions, SolverSettings) {
+    let model = ModelOptions {
         fix,
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
             probe_mm: Some(0.01),
-            ..CalibrateOptions::default().noise
+            ..Noise::default()
         },
+        ..ModelOptions::default()
+    };
+    let settings = SolverSettings {
         method,
-        lm: LmOptions::default().threads(1),
-        ..CalibrateOptions::default()
-    }
+        threads: 1,
+        ..SolverSettings::default()
+    };
+    (model, settings)
 }
 
 fn lm(c: &mut Criterion) {
@@ -62,7 +67,7 @@ fn lm(c: &mut Criterion) {
         sizes.extend([(1000, 100), (1000, 1000)]);
     }
     let start = nominal().params;
-    let opts = options(Method::Lm, FixSpec::parse(UNOBSERVABLE, 6).expect("names"));
+    let (model, settings) = options(Method::Lm, FixSpec::parse(UNOBSERVABLE, 6).expect("names"));
     let mut g = c.benchmark_group("lm");
     g.sample_size(10);
     for (sockets, touches) in sizes {
@@ -71,7 +76,9 @@ fn lm(c: &mut Criterion) {
         g.throughput(Throughput::Elements((sockets * touches) as u64));
         g.bench_function(BenchmarkId::from_parameter(sockets * touches), |b| {
             let data = data.get_or_init(|| campaign(7, ErrorModel::Paper, sockets, touches));
-            b.iter(|| calibrate(black_box(&start), black_box(data), &opts).expect("fit"))
+            b.iter(|| {
+                calibrate(black_box(&start), black_box(data), &model, &settings).expect("fit")
+            })
         });
     }
     g.finish();
@@ -83,9 +90,10 @@ const ASSEMBLED_SEED: u64 = 4;
 fn global(c: &mut Criterion) {
     let start = nominal().params;
     let data = campaign(ASSEMBLED_SEED, ErrorModel::random(1.0, true), 10, 10);
-    let opts = options(Method::Global, FixSpec::Auto);
-    let lm = calibrate(&start, &data, &options(Method::Lm, FixSpec::Auto)).expect("lm");
-    let global = calibrate(&start, &data, &opts).expect("global");
+    let (model, settings) = options(Method::Global, FixSpec::Auto);
+    let lm = settings.clone().with_method(Method::Lm);
+    let lm = calibrate(&start, &data, &model, &lm).expect("lm");
+    let global = calibrate(&start, &data, &model, &settings).expect("global");
     assert!(
         lm.dof.sigma0 > 10.0 * global.dof.sigma0,
         "the bench campaign should defeat LM from nominal (sigma0 {} vs {})",
@@ -95,7 +103,7 @@ fn global(c: &mut Criterion) {
     let mut g = c.benchmark_group("global");
     g.sample_size(10);
     g.bench_function(BenchmarkId::from_parameter("assembled-100"), |b| {
-        b.iter(|| calibrate(black_box(&start), black_box(&data), &opts).expect("fit"))
+        b.iter(|| calibrate(black_box(&start), black_box(&data), &model, &settings).expect("fit"))
     });
     g.finish();
 }

@@ -20,7 +20,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, Method, calibrate};
+use aacmm_core::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
 use aacmm_core::io::Arm;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;
@@ -46,16 +46,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     s.probe_noise_mm = 0.01;
     let data = simulate(&nominal, &s)?.data_set()?;
     let fix = FixSpec::parse(UNOBSERVABLE, 6)?;
-    let options = CalibrateOptions {
+    let options = ModelOptions {
         fix: fix.clone(),
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
             probe_mm: Some(0.01),
-            ..CalibrateOptions::default().noise
+            ..Noise::default()
         },
+        ..ModelOptions::default()
+    };
+    let settings = SolverSettings {
         method: Method::Lm,
-        lm: LmOptions::default().threads(1),
-        ..CalibrateOptions::default()
+        threads: 1,
+        ..SolverSettings::default()
     };
 
     let start = &nominal.params;
@@ -117,7 +120,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut result = None;
     for _ in 0..repeats.max(1) {
         let t0 = Instant::now();
-        let c = calibrate(start, &data, &options)?;
+        let c = calibrate(start, &data, &options, &settings)?;
         best = best.min(t0.elapsed().as_secs_f64() * 1e3);
         result = Some(c);
     }

@@ -22,7 +22,7 @@
 
 use std::time::Instant;
 
-use aacmm_core::calibrate::{CalibrateOptions, LmOptions, Method, calibrate, validate};
+use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings, calibrate, validate};
 use aacmm_core::io::Arm;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::{Noise, weighted_cost};
@@ -117,7 +117,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let noise = Noise {
         encoder_rad: Some(ENCODER_DEG.to_radians()),
         probe_mm: Some(PROBE_MM),
-        ..CalibrateOptions::default().noise
+        ..Noise::default()
     };
     println!(
         "| case | method | success (held-out e ≤ 1.08 × true) | global minimum (cost ≤ true arm's) | median time | max time | median evaluations (cost + Jacobian) |"
@@ -135,12 +135,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let fresh = simulate(&nominal, &settings(1_000_000 + seed, fresh_arm))?.data_set()?;
             let truth = validate::figures(&campaign.true_arm.params, &fresh)?.e_mean;
             for ((method, range, label), tally) in methods.iter().zip(&mut tallies) {
-                let mut options = CalibrateOptions {
+                let model = ModelOptions {
                     noise,
+                    ..ModelOptions::default()
+                };
+                let mut options = SolverSettings {
                     method: *method,
-                    lm: LmOptions::default().threads(1),
+                    threads: 1,
                     seed,
-                    ..CalibrateOptions::default()
+                    ..SolverSettings::default()
                 };
                 if let Some(r) = range {
                     options.anneal.zero_step_deg = *r;
@@ -152,7 +155,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     options.global.grid_cells = cells;
                 }
                 let started = Instant::now();
-                let result = calibrate(&nominal.params, &data, &options);
+                let result = calibrate(&nominal.params, &data, &model, &options);
                 let ms = started.elapsed().as_secs_f64() * 1e3;
                 tally.runs += 1;
                 tally.ms.push(ms);

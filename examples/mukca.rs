@@ -23,15 +23,17 @@
 use std::io::Write;
 use std::path::Path;
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, Method, Tolerances};
+use aacmm_core::calibrate::{FixSpec, Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{AngleUnit, read_arm_with_prior, read_lengths, read_poses};
+use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
 use aacmm_core::placements::{PlacementSummary, leave_one_placement_out};
+use aacmm_core::tolerances::Tolerances;
 use anyhow::{Context, bail};
 
 fn main() -> anyhow::Result<()> {
     let mut dir = None;
-    let mut options = CalibrateOptions::default();
+    let mut options = ModelOptions::default();
+    let mut settings = SolverSettings::default();
     let mut fix_text = None;
     let mut prior_text = None;
     let mut in_sample = false;
@@ -41,7 +43,7 @@ fn main() -> anyhow::Result<()> {
         match a.as_str() {
             "--method" => {
                 let m = args.next().context("--method needs a value")?;
-                options.method = Method::parse(&m).with_context(|| {
+                settings.method = Method::parse(&m).with_context(|| {
                     format!("--method `{m}`: expected lm, sa, hybrid or global")
                 })?;
             }
@@ -72,7 +74,8 @@ fn main() -> anyhow::Result<()> {
         "usage: mukca DIR [--method M] [--fix auto|NAMES] [--prior none|SPEC] [--robust huber|cauchy] [--hayati J]… [--in-sample]",
     )?;
     let dir = Path::new(&dir);
-    let (mut arm, file_prior, warnings) = read_arm_with_prior(&dir.join("arm.toml"))?;
+    let (mut arm, warnings) = read_arm(&dir.join("arm.toml"))?;
+    let file_prior = arm.prior.take();
     for &j in &hayati {
         arm = arm
             .with_hayati(j - 1)
@@ -113,7 +116,7 @@ fn main() -> anyhow::Result<()> {
     let lengths = read_lengths(&lengths_path)?;
     let data = DataSet::from_poses(&poses, &poses_file)?
         .with_lengths(&lengths, &lengths_path.display().to_string())?;
-    let folds = leave_one_placement_out(&arm.params, &data, &options)?;
+    let folds = leave_one_placement_out(&arm.params, &data, &options, &settings)?;
     let summary = PlacementSummary::of(&folds);
 
     let mut out = std::io::stdout().lock();
@@ -125,7 +128,7 @@ fn main() -> anyhow::Result<()> {
         data.points().len(),
         data.references().len(),
         arm.name,
-        options.method.name(),
+        settings.method.name(),
         fix_text.as_deref().unwrap_or("auto"),
         options
             .prior
@@ -198,7 +201,7 @@ fn main() -> anyhow::Result<()> {
         dch
     )?;
     if in_sample {
-        let all = aacmm_core::calibrate::calibrate(&arm.params, &data, &options)?;
+        let all = aacmm_core::calibrate::calibrate(&arm.params, &data, &options, &settings)?;
         writeln!(
             out,
             "In sample (calibrated on every placement, this one included): consistency (mm)"

@@ -29,7 +29,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use aacmm_core::calibrate::{CalibrateOptions, Calibration, Method};
+use aacmm_core::calibrate::{Calibration, Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::read_arm;
 use aacmm_core::metrics::{Evaluation, Summary, evaluate};
@@ -81,40 +81,35 @@ fn main() -> Result<()> {
     write_campaign(&out.join("campaign"), &campaign, &fit_settings)?;
     write_campaign(&out.join("held-out"), &held_campaign, &held_settings)?;
 
-    let options = CalibrateOptions {
+    let options = ModelOptions {
         noise: Noise {
             encoder_rad: Some(ENCODER_NOISE_DEG.to_radians()),
             probe_mm: Some(PROBE_NOISE_MM),
-            ..CalibrateOptions::default().noise
+            ..Noise::default()
         },
-        seed: SOLVER_SEED,
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     let truth = &campaign.true_arm.params;
     let mut fits: Vec<(Method, Problem, CalibrationReport, f64)> = Vec::new();
     for method in [Method::Hybrid, Method::Global] {
-        let problem = Problem::new(
-            nominal.clone(),
-            data.clone(),
-            CalibrateOptions {
-                method,
-                ..options.clone()
-            },
-        )?
-        .with_held_out(HeldOutData {
-            data: held.clone(),
-            data_file: "held-out/poses.csv".to_string(),
-            lengths_file: Some("held-out/lengths.csv".to_string()),
-        })?
-        .with_sources(Sources {
-            arm_file: "examples/paper-table-1.toml".to_string(),
-            data_file: "campaign/poses.csv".to_string(),
-            lengths_file: Some("campaign/lengths.csv".to_string()),
-            warnings: Vec::new(),
-        })
-        .with_truth(truth.clone());
+        let problem = Problem::new(nominal.clone(), data.clone(), options.clone())?
+            .with_held_out(HeldOutData {
+                data: held.clone(),
+                data_file: "held-out/poses.csv".to_string(),
+                lengths_file: Some("held-out/lengths.csv".to_string()),
+            })?
+            .with_sources(Sources {
+                arm_file: "examples/paper-table-1.toml".to_string(),
+                data_file: "campaign/poses.csv".to_string(),
+                lengths_file: Some("campaign/lengths.csv".to_string()),
+                warnings: Vec::new(),
+            })
+            .with_truth(truth.clone());
         let started = Instant::now();
-        let report = problem.run()?;
+        let settings = SolverSettings::default()
+            .with_method(method)
+            .with_seed(SOLVER_SEED);
+        let report = problem.run(&settings)?;
         fits.push((method, problem, report, started.elapsed().as_secs_f64()));
     }
 

@@ -22,7 +22,7 @@
 //! arm's own — of plain least squares and of `--robust huber` / `cauchy`.
 
 use aacmm_core::calibrate::validate::figures;
-use aacmm_core::calibrate::{CalibrateOptions, Loss, Method, Robust};
+use aacmm_core::calibrate::{Loss, Method, ModelOptions, Robust, SolverSettings};
 use aacmm_core::geometry::rigid_distance;
 use aacmm_core::io::Arm;
 use aacmm_core::kernel::ArmKernel;
@@ -71,13 +71,14 @@ fn main() -> Result<()> {
         s.reference_lengths = 3;
         let campaign = simulate(&nominal, &s)?;
         let data = campaign.data_set()?;
-        let options = CalibrateOptions {
-            method: Method::Global,
+        let options = ModelOptions {
             noise,
-            seed: 1,
-            ..CalibrateOptions::default()
+            ..ModelOptions::default()
         };
-        let report = Problem::new(Arm::clone(&nominal), data, options)?.run()?;
+        let settings = SolverSettings::default()
+            .with_method(Method::Global)
+            .with_seed(1);
+        let report = Problem::new(Arm::clone(&nominal), data, options)?.run(&settings)?;
         let cal = &report.calibration.params;
         let rows: Vec<&[f64]> = campaign.poses.rows().collect();
         let xyz = |p: &DhParams| ArmKernel::new(p)?.positions_of(&rows);
@@ -174,12 +175,13 @@ fn outliers(nominal: &Arm, noise: Noise) -> Result<()> {
             let fresh = simulate(nominal, &settings(10_000 + seed))?.data_set()?;
             let truth = figures(&campaign.true_arm.params, &fresh)?.e_mean;
             for (f, loss) in fits.iter().enumerate() {
-                let options = CalibrateOptions {
+                let options = ModelOptions {
                     noise,
                     robust: loss.map(Robust::new),
-                    ..CalibrateOptions::default()
+                    ..ModelOptions::default()
                 };
-                let report = Problem::new(Arm::clone(nominal), data.clone(), options)?.run()?;
+                let report = Problem::new(Arm::clone(nominal), data.clone(), options)?
+                    .run(&SolverSettings::default())?;
                 let r = figures(&report.calibration.params, &fresh)?.e_mean / truth;
                 ratio[f] += r / 10.0;
                 worst[f] = worst[f].max(r);

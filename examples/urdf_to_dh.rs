@@ -71,6 +71,7 @@ fn main() -> anyhow::Result<()> {
         } else {
             vec![None; chain.joints.len()]
         },
+        prior: None,
     };
     let mut out = std::io::stdout().lock();
     writeln!(

@@ -4,7 +4,7 @@ use std::collections::{HashMap, HashSet};
 use std::ffi::{CStr, c_char};
 
 use aacmm_core::calibrate::{
-    CalibrateOptions, FixSpec, LmOptions, Loss, Method, Robust, Termination,
+    FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings, Termination,
 };
 use aacmm_core::dataset::{DataSet, MIN_TOUCHES};
 use aacmm_core::io::{
@@ -238,7 +238,8 @@ pub extern "C" fn aacmm_calibrate_options_default() -> AacmmCalibrateOptions {
 /// The options in the library's terms (checked by the library when the
 /// problem is made), and the fold count.
 struct Settings {
-    options: CalibrateOptions,
+    options: ModelOptions,
+    solver: SolverSettings,
     cross_validate: usize,
 }
 
@@ -294,9 +295,13 @@ unsafe fn settings(
     // `..default()`: settings the C API does not expose (annealing
     // schedule, start budget) keep the library's defaults, which are the
     // command line's.
-    let options = CalibrateOptions {
+    let settings = SolverSettings {
         method: solver,
         seed: o.seed,
+        threads,
+        ..SolverSettings::default()
+    };
+    let options = ModelOptions {
         fix: FixSpec::parse_for(&fix, arm)?,
         noise: Noise {
             encoder_rad: stated(o.encoder_noise_rad),
@@ -304,7 +309,6 @@ unsafe fn settings(
             length_default_mm: o.length_uncertainty_mm,
             length_weight: stated(o.length_weight),
         },
-        lm: LmOptions::default().threads(threads),
         robust: loss.map(|loss| Robust {
             loss,
             scale_k: if o.robust_scale == 0.0 {
@@ -313,9 +317,10 @@ unsafe fn settings(
                 o.robust_scale
             },
         }),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     options.check(joints)?;
+    settings.check()?;
     if o.cross_validate == 1 {
         return Err(Error::invalid(
             "options.cross_validate = 1: 0 (none) or 2 or more folds",
@@ -323,6 +328,7 @@ unsafe fn settings(
     }
     Ok(Settings {
         options,
+        solver: settings,
         cross_validate: o.cross_validate,
     })
 }
@@ -342,7 +348,7 @@ fn run(
         problem = problem.with_cross_validation(s.cross_validate)?;
     }
     let report = problem
-        .run()
+        .run(&s.solver)
         .map_err(|e| in_file(e, &problem.sources().arm_file))?;
     Ok(AacmmCalibration {
         calibrated: report.calibrated_arm(start),

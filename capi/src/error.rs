@@ -7,8 +7,9 @@ use std::ffi::c_char;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Once;
 
-use aacmm_core::calibrate::{CalibrationError, OptionError};
+use aacmm_core::calibrate::CalibrationError;
 use aacmm_core::error::InputError;
+use aacmm_core::error::OptionError;
 use aacmm_core::kernel::KernelError;
 use aacmm_core::residuals::WORKER_THREAD_NAME;
 

@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, Termination, calibrate};
+use aacmm_core::calibrate::{FixSpec, ModelOptions, SolverSettings, Termination, calibrate};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses, source_name};
 use aacmm_core::kernel::{ArmKernel, Jacobians, PreparedPoses};
@@ -274,9 +274,8 @@ fn the_c_program_agrees_with_the_rust_api() {
         .unwrap()
         .with_lengths(&read_lengths(&at(LENGTHS)).unwrap(), LENGTHS)
         .unwrap();
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     #[allow(clippy::needless_update)] // settings to come keep their defaults
-    let options = CalibrateOptions {
+    let options = ModelOptions {
         fix: FixSpec::parse("auto", 6).unwrap(),
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
@@ -284,10 +283,10 @@ fn the_c_program_agrees_with_the_rust_api() {
             length_default_mm: 0.001,
             length_weight: None,
         },
-        lm: LmOptions::default().threads(threads),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
-    let cal = calibrate(&arm.params, &data, &options).unwrap();
+    let settings = SolverSettings::default();
+    let cal = calibrate(&arm.params, &data, &options, &settings).unwrap();
     assert!(cal.solver.successful);
     assert_bits(
         "files_params",
@@ -341,7 +340,7 @@ fn the_c_program_agrees_with_the_rust_api() {
         })
         .with_cross_validation(3)
         .unwrap();
-    let expected = problem.run().unwrap().to_json();
+    let expected = problem.run(&settings).unwrap().to_json();
     let report = out
         .get("report")
         .replace("\\\\", "\u{0}")

@@ -1,4 +1,5 @@
-//! Errors in user input, located as precisely as the input allows.
+//! Errors in user input, located as precisely as the input allows: in a
+//! file ([`InputError`]) or in a setting ([`OptionError`]).
 //!
 //! Every message names the file; where known, also the 1-based line and the
 //! field (a TOML key or a CSV column). Readers never panic on bad input and
@@ -173,5 +174,74 @@ impl InputError {
             | InputError::File { message, .. } => message.clone(),
             InputError::Io { error, .. } => error.to_string(),
         }
+    }
+}
+
+/// A setting out of range: which one (its path in the settings struct that
+/// holds it — `ModelOptions` or `SolverSettings` of [`crate::calibrate`] —
+/// e.g. `noise.probe_mm`, `anneal.cooling`, `global.max_starts`, `fix`,
+/// `robust.scale_k`, `threads`, `cross_validate`) and why.
+///
+/// ```
+/// use aacmm_core::{calibrate::SolverSettings, error::OptionError};
+/// let mut o = SolverSettings::default();
+/// o.anneal.cooling = 1.5;
+/// let e: OptionError = o.check().unwrap_err();
+/// assert_eq!(e.field, "anneal.cooling");
+/// assert_eq!(e.to_string(), "anneal.cooling = 1.5: must lie strictly between 0 and 1");
+/// ```
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{field} = {value}: {reason}")]
+#[non_exhaustive]
+pub struct OptionError {
+    /// The setting's path in its settings struct (or `cross_validate`).
+    pub field: &'static str,
+    /// The value refused, as text (in the setting's own unit).
+    pub value: String,
+    /// Why it is refused.
+    pub reason: String,
+}
+
+impl OptionError {
+    /// A refusal of `value` for `field`, because of `reason`.
+    pub fn new(
+        field: &'static str,
+        value: impl std::fmt::Display,
+        reason: impl Into<String>,
+    ) -> OptionError {
+        OptionError {
+            field,
+            value: value.to_string(),
+            reason: reason.into(),
+        }
+    }
+}
+
+/// `Ok` when `v` is finite and `> 0` (or `≥ 0` with `zero_ok`).
+pub(crate) fn check_nonnegative(
+    field: &'static str,
+    v: f64,
+    zero_ok: bool,
+) -> Result<(), OptionError> {
+    let ok = v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
+    if ok {
+        Ok(())
+    } else {
+        let bound = if zero_ok { "≥ 0" } else { "> 0" };
+        Err(OptionError::new(
+            field,
+            v,
+            format!("must be a finite number {bound}"),
+        ))
+    }
+}
+
+/// A number for a message: plain when of ordinary size, else in `e`
+/// notation (`1e300`, not three hundred digits).
+pub fn short(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e15).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }

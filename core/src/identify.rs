@@ -904,7 +904,6 @@ mod tests {
 #[cfg(test)]
 mod plainly_closed_tests {
     use super::*;
-    use crate::calibrate::CalibrateOptions;
     use crate::simulate::{CampaignSettings, ErrorModel, simulate};
     use rand::RngExt;
 
@@ -925,7 +924,7 @@ mod plainly_closed_tests {
             settings.reference_lengths = 1;
             let campaign = simulate(&nominal, &settings).unwrap();
             let data = campaign.data_set().unwrap();
-            let noise = CalibrateOptions::default().noise;
+            let noise = crate::calibrate::ModelOptions::default().noise;
             let kernel = crate::kernel::ArmKernel::new(&nominal.params).unwrap();
             let weights = Weights::new_threads(&kernel, &data, &noise, 1.0, 1).unwrap();
             let normal = full_normal(&nominal.params, &data, &weights, 1).unwrap();

@@ -10,11 +10,11 @@
 //!
 //! ```
 //! # std::env::set_current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).unwrap();
-//! use aacmm_core::{CalibrateOptions, DataSet, Problem, read_arm};
+//! use aacmm_core::{DataSet, ModelOptions, Problem, SolverSettings, read_arm};
 //!
 //! let (arm, _) = read_arm("examples/paper-table-1.toml".as_ref())?;
 //! let data = DataSet::from_files("examples/paper-campaign/poses.csv", Some("examples/paper-campaign/lengths.csv"), 6)?;
-//! let report = Problem::new(arm, data, CalibrateOptions::default())?.run()?;
+//! let report = Problem::new(arm, data, ModelOptions::default())?.run(&SolverSettings::default())?;
 //! assert!(report.is_usable());
 //! for p in report.calibration.parameters.iter().filter(|p| p.fixed.is_none()).map(|p| p.user()) {
 //!     println!("{:<7} {:>12.4} ± {:.4} {}", p.name, p.calibrated, p.sigma.unwrap_or(f64::NAN), p.unit);
@@ -41,9 +41,12 @@ pub mod report;
 pub mod residuals;
 pub mod session;
 pub mod simulate;
+pub mod tolerances;
 pub mod urdf;
 
-pub use calibrate::{CalibrateOptions, Calibration, CalibrationError, FixSpec, Method, calibrate};
+pub use calibrate::{
+    Calibration, CalibrationError, FixSpec, Method, ModelOptions, SolverSettings, calibrate,
+};
 pub use dataset::DataSet;
 pub use io::{Arm, read_arm};
 pub use metrics::evaluate;

@@ -17,8 +17,9 @@
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::validate::{Figures, figures};
-use crate::calibrate::{CalibrateOptions, CalibrationError, OptionError, calibrate};
+use crate::calibrate::{CalibrationError, ModelOptions, SolverSettings, calibrate};
 use crate::dataset::DataSet;
+use crate::error::OptionError;
 use crate::params::DhParams;
 
 /// The placement of a point label: up to the last `-`.
@@ -118,7 +119,8 @@ fn percent(before: f64, after: f64) -> f64 {
 pub fn leave_one_placement_out(
     start: &DhParams,
     data: &DataSet,
-    options: &CalibrateOptions,
+    model: &ModelOptions,
+    settings: &SolverSettings,
 ) -> Result<Vec<PlacementFold>, CalibrationError> {
     let mut placements: Vec<(String, Vec<usize>)> = Vec::new();
     for (i, p) in data.points().iter().enumerate() {
@@ -145,7 +147,7 @@ pub fn leave_one_placement_out(
                 .collect();
             let train_data = data.subset(&train);
             let test_data = data.subset(held);
-            let fit = calibrate(start, &train_data, options)?;
+            let fit = calibrate(start, &train_data, model, settings)?;
             Ok(PlacementFold {
                 placement: name.clone(),
                 sockets: held

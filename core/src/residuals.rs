@@ -41,6 +41,7 @@ use std::ops::Range;
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::DataSet;
+use crate::error::{OptionError, check_nonnegative, short};
 use crate::kernel::{ArmKernel, KernelError, NoiseOf};
 
 /// The residual kinds of a calibration: a closed set, matched exhaustively
@@ -100,8 +101,7 @@ impl Noise {
     /// let negative = Noise { probe_mm: Some(-0.01), ..Noise::default() };
     /// assert_eq!(negative.check().unwrap_err().field, "noise.probe_mm");
     /// ```
-    pub fn check(&self) -> Result<(), crate::calibrate::OptionError> {
-        use crate::calibrate::{OptionError, options::check_nonnegative};
+    pub fn check(&self) -> Result<(), OptionError> {
         for (field, v) in [
             ("noise.encoder_rad", self.encoder_rad),
             ("noise.probe_mm", self.probe_mm),
@@ -201,16 +201,6 @@ fn check_weights(
         });
     }
     Ok(())
-}
-
-/// A number for a message: plain when of ordinary size, else in `e`
-/// notation (`1e300`, not three hundred digits).
-pub fn short(v: f64) -> String {
-    if v == 0.0 || (1e-4..1e15).contains(&v.abs()) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
 }
 
 /// A symmetric 3 × 3 matrix: `[xx, yy, zz, xy, xz, yz]`.

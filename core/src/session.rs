@@ -7,12 +7,13 @@
 //! are shells around this module.
 //!
 //! ```
-//! use aacmm_core::{Arm, CalibrateOptions, Problem, params::DhParams, simulate::*};
+//! use aacmm_core::{Arm, ModelOptions, Problem, SolverSettings, params::DhParams, simulate::*};
 //! let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
 //! let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 8, 10);
 //! settings.reference_lengths = 3;
 //! let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
-//! let report = Problem::new(nominal, data, CalibrateOptions::default()).unwrap().run().unwrap();
+//! let problem = Problem::new(nominal, data, ModelOptions::default()).unwrap();
+//! let report = problem.run(&SolverSettings::default()).unwrap();
 //! assert!(report.is_usable());
 //! assert!(report.validation.fitted.after.e_mean < report.validation.fitted.before.e_mean);
 //! ```
@@ -25,9 +26,10 @@ use crate::calibrate::validate::{
     BeforeAfter, Figures, Fold, before_after, check_folds, cross_validate,
 };
 use crate::calibrate::{
-    CalibrateOptions, Calibration, CalibrationError, Context, OptionError, Solver, calibrate_with,
+    Calibration, CalibrationError, Context, ModelOptions, Solver, SolverSettings, calibrate_with,
 };
 use crate::dataset::DataSet;
+use crate::error::OptionError;
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
 use crate::params::DhParams;
 use crate::residuals::Noise;
@@ -71,7 +73,7 @@ pub struct HeldOutData {
 pub struct Problem {
     arm: Arm,
     data: DataSet,
-    options: CalibrateOptions,
+    model: ModelOptions,
     held_out: Option<HeldOutData>,
     cross_validate: Option<usize>,
     sources: Sources,
@@ -87,23 +89,19 @@ impl Problem {
     /// [`CalibrationError::Joints`] when the data have another joint count.
     ///
     /// ```
-    /// use aacmm_core::{Arm, CalibrateOptions, Problem, params::DhParams, simulate::*};
+    /// use aacmm_core::{Arm, ModelOptions, Problem, params::DhParams, simulate::*};
     /// use aacmm_core::calibrate::CalibrationError;
     /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
     /// let data = simulate(&nominal, &CampaignSettings::new(1, ErrorModel::Paper, 4, 6))
     ///     .unwrap().data_set().unwrap();
-    /// let mut options = CalibrateOptions::default();
-    /// options.noise.probe_mm = Some(-1.0);
-    /// match Problem::new(nominal, data, options) {
+    /// let mut model = ModelOptions::default();
+    /// model.noise.probe_mm = Some(-1.0);
+    /// match Problem::new(nominal, data, model) {
     ///     Err(CalibrationError::Option(e)) => assert_eq!(e.field, "noise.probe_mm"),
     ///     _ => panic!("negative noise accepted"),
     /// }
     /// ```
-    pub fn new(
-        arm: Arm,
-        data: DataSet,
-        options: CalibrateOptions,
-    ) -> Result<Problem, CalibrationError> {
+    pub fn new(arm: Arm, data: DataSet, model: ModelOptions) -> Result<Problem, CalibrationError> {
         let joints = arm.params.joint_count();
         if data.joints() != joints {
             return Err(CalibrationError::Joints {
@@ -111,12 +109,12 @@ impl Problem {
                 data: data.joints(),
             });
         }
-        options.check_for(&arm.params)?;
+        model.check_for(&arm.params)?;
         check_length_units(&arm.params, &data)?;
         Ok(Problem {
             arm,
             data,
-            options,
+            model,
             held_out: None,
             cross_validate: None,
             sources: Sources::default(),
@@ -140,7 +138,7 @@ impl Problem {
         Ok(self)
     }
 
-    /// Cross-validates over `k` folds of points (seeded by the options'
+    /// Cross-validates over `k` folds of points (seeded by the solver
     /// seed).
     ///
     /// # Errors
@@ -182,8 +180,8 @@ impl Problem {
     }
 
     /// The settings.
-    pub fn options(&self) -> &CalibrateOptions {
-        &self.options
+    pub fn model(&self) -> &ModelOptions {
+        &self.model
     }
 
     /// The held-out data, if any.
@@ -196,14 +194,18 @@ impl Problem {
         &self.sources
     }
 
-    /// [`run`] with the method, threads and seed of the options.
+    /// [`run`] with the method of `settings`.
     ///
     /// # Errors
     ///
     /// As [`run`].
-    pub fn run(&self) -> Result<CalibrationReport, CalibrationError> {
-        let mut ctx = Context::new(self.options.lm.threads, self.options.seed);
-        run(self, &*self.options.method.solver(), &mut ctx)
+    pub fn run(&self, settings: &SolverSettings) -> Result<CalibrationReport, CalibrationError> {
+        run(
+            self,
+            settings,
+            &*settings.method.solver(),
+            &mut Context::new(),
+        )
     }
 }
 
@@ -446,12 +448,14 @@ impl CalibrationReport {
     }
 
     /// The calibrated arm: named `<start>-calibrated`, with the start arm's
-    /// joint limits.
+    /// joint limits and no tolerances (those were the nominal's; the
+    /// calibration's σ are in the report).
     pub fn calibrated_arm(&self, start: &Arm) -> Arm {
         Arm {
             name: format!("{}-calibrated", start.name),
             params: self.calibration.params.clone(),
             limits: start.limits.clone(),
+            prior: None,
         }
     }
 
@@ -654,12 +658,12 @@ impl CalibrationReport {
     ///
     /// # Errors
     ///
-    /// The report's, when a figure cannot be drawn.
+    /// [`WriteError::Report`], when a figure cannot be drawn.
     pub fn files(
         &self,
         problem: &Problem,
         total_seconds: f64,
-    ) -> Result<Vec<(String, String)>, CalibrationError> {
+    ) -> Result<Vec<(String, String)>, WriteError> {
         let calibrated = self.calibrated_arm(problem.arm());
         let mut files = vec![
             (
@@ -719,13 +723,15 @@ pub enum WriteError {
         source: std::io::Error,
     },
     /// The report could not be drawn.
+    #[cfg(feature = "report")]
     #[error(transparent)]
-    Report(#[from] CalibrationError),
+    Report(#[from] crate::report::ReportError),
 }
 
-/// Calibrates `problem` with `solver`, validates the result on the fitted
-/// and held-out data, and cross-validates when asked (each fold with the
-/// same solver's method).
+/// Calibrates `problem` with `solver` under `settings` (threads, seed, the
+/// solvers' tolerances), validates the result on the fitted and held-out
+/// data, and cross-validates when asked (each fold with the same solver's
+/// method).
 ///
 /// # Errors
 ///
@@ -733,13 +739,14 @@ pub enum WriteError {
 /// free parameters, the kernel refuses the arm).
 pub fn run(
     problem: &Problem,
+    settings: &SolverSettings,
     solver: &dyn Solver,
     ctx: &mut Context,
 ) -> Result<CalibrationReport, CalibrationError> {
     let start = &problem.arm.params;
     let data = &problem.data;
-    let options = &problem.options;
-    let calibration = calibrate_with(start, data, options, solver, ctx)?;
+    let model = &problem.model;
+    let calibration = calibrate_with(start, data, model, settings, solver, ctx)?;
     let fitted = before_after(start, &calibration.params, data)?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
@@ -751,29 +758,24 @@ pub fn run(
     };
     let cross_validation = match problem.cross_validate {
         Some(k) => {
-            let fold_options = CalibrateOptions {
-                method: solver.method(),
-                lm: options.lm.threads(ctx.threads),
-                seed: ctx.seed,
-                ..options.clone()
-            };
+            let fold_settings = settings.clone().with_method(solver.method());
             Some(CrossValidation {
-                folds: cross_validate(start, data, &fold_options, k, ctx.seed)?,
-                seed: ctx.seed,
+                folds: cross_validate(start, data, model, &fold_settings, k)?,
+                seed: settings.seed,
             })
         }
         None => None,
     };
     let s = &problem.sources;
-    let verdict = Verdict::of(&calibration, &fitted, options.accept_poor_fit);
+    let verdict = Verdict::of(&calibration, &fitted, model.accept_poor_fit);
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
         data_file: s.data_file.clone(),
         lengths_file: s.lengths_file.clone(),
-        fix: options.fix.describe_for(start),
-        noise: options.noise,
-        seed: ctx.seed,
+        fix: model.fix.describe_for(start),
+        noise: model.noise,
+        seed: settings.seed,
         units: Units {
             lengths: "mm".to_string(),
             angles: "deg".to_string(),

@@ -1,6 +1,6 @@
 //! Calibration on simulated campaigns with a known true arm.
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, calibrate, validate};
+use aacmm_core::calibrate::{FixSpec, ModelOptions, SolverSettings, calibrate, validate};
 use aacmm_core::identify::identify;
 use aacmm_core::io::Arm;
 use aacmm_core::kernel::ArmKernel;
@@ -26,11 +26,17 @@ const UNOBSERVABLE: &str = "theta1,d1,theta6,alpha6,Bx,By";
 fn zero_noise_recovers_every_identifiable_parameter() {
     let c = campaign(3, 0.0, 0.0);
     let data = c.data_set().unwrap();
-    let options = CalibrateOptions {
+    let options = ModelOptions {
         fix: FixSpec::parse(UNOBSERVABLE, 6).unwrap(),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
-    let cal = calibrate(&c.nominal.params, &data, &options).unwrap();
+    let cal = calibrate(
+        &c.nominal.params,
+        &data,
+        &options,
+        &SolverSettings::default(),
+    )
+    .unwrap();
     assert!(cal.solver.successful, "{:?}", cal.solver.stop);
     let fixed = FixSpec::parse(UNOBSERVABLE, 6).unwrap();
     let FixSpec::Columns(fixed) = fixed else {
@@ -108,7 +114,7 @@ fn identify_finds_rank_20_without_lengths_and_21_with() {
 #[test]
 fn uncertainties_are_honest_over_seeds() {
     let seeds = 50u64;
-    let options = CalibrateOptions {
+    let options = ModelOptions {
         fix: FixSpec::parse(UNOBSERVABLE, 6).unwrap(),
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
@@ -116,7 +122,7 @@ fn uncertainties_are_honest_over_seeds() {
             length_default_mm: 0.001,
             length_weight: None,
         },
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     let (mut inside, mut total, mut sum_z2) = (0usize, 0usize, 0.0);
     // Held-out figures averaged over the seeds: ours and the true arm's.
@@ -124,7 +130,13 @@ fn uncertainties_are_honest_over_seeds() {
     for seed in 0..seeds {
         let c = campaign(100 + seed, 0.005, 0.01);
         let data = c.data_set().unwrap();
-        let cal = calibrate(&c.nominal.params, &data, &options).unwrap();
+        let cal = calibrate(
+            &c.nominal.params,
+            &data,
+            &options,
+            &SolverSettings::default(),
+        )
+        .unwrap();
         assert!(cal.solver.successful);
         for (id, est) in ParamId::all(6).zip(&cal.parameters) {
             let Some(sigma) = est.sigma else { continue };
@@ -167,21 +179,36 @@ fn a_fixed_set_that_leaves_an_unseen_direction_is_refused() {
     let c = campaign(5, 0.005, 0.01);
     let with_lengths = c.data_set().unwrap();
     let bare = aacmm_core::dataset::DataSet::from_poses(&c.poses, "poses.csv").unwrap();
-    let fix = |names: &str| CalibrateOptions {
+    let fix = |names: &str| ModelOptions {
         fix: FixSpec::parse(names, 6).unwrap(),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     // The paper's fixed set is enough with a reference length…
-    assert!(calibrate(&c.nominal.params, &with_lengths, &fix(UNOBSERVABLE)).is_ok());
+    assert!(
+        calibrate(
+            &c.nominal.params,
+            &with_lengths,
+            &fix(UNOBSERVABLE),
+            &SolverSettings::default()
+        )
+        .is_ok()
+    );
     // …but not without one: scale stays open.
-    let e = calibrate(&c.nominal.params, &bare, &fix(UNOBSERVABLE)).unwrap_err();
+    let e = calibrate(
+        &c.nominal.params,
+        &bare,
+        &fix(UNOBSERVABLE),
+        &SolverSettings::default(),
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("scale"), "{e}");
     // Fixing a length more closes it; d1 does not (a slide along the base axis).
     assert!(
         calibrate(
             &c.nominal.params,
             &bare,
-            &fix(&format!("{UNOBSERVABLE},d3"))
+            &fix(&format!("{UNOBSERVABLE},d3")),
+            &SolverSettings::default()
         )
         .is_ok()
     );
@@ -190,6 +217,7 @@ fn a_fixed_set_that_leaves_an_unseen_direction_is_refused() {
         &c.nominal.params,
         &with_lengths,
         &fix("d1,theta6,alpha6,Bx,By"),
+        &SolverSettings::default(),
     )
     .unwrap_err();
     assert!(e.to_string().contains("theta1"), "{e}");
@@ -197,6 +225,7 @@ fn a_fixed_set_that_leaves_an_unseen_direction_is_refused() {
         &c.nominal.params,
         &with_lengths,
         &fix("theta1,d1,theta6,alpha6,By"),
+        &SolverSettings::default(),
     )
     .unwrap_err();
     assert!(e.to_string().contains("redundan"), "{e}");
@@ -253,13 +282,15 @@ fn global_converges_from_unknown_zeros_where_lm_fails() {
     for seed in [4, 5] {
         let (c, fresh) = assembled(seed);
         let data = c.data_set().unwrap();
-        let options = |method| CalibrateOptions {
+        let model = ModelOptions {
             noise: stated_noise(),
-            method,
-            ..CalibrateOptions::default()
+            ..ModelOptions::default()
         };
-        let lm = calibrate(&c.nominal.params, &data, &options(Method::Lm)).unwrap();
-        let global = calibrate(&c.nominal.params, &data, &options(Method::Global)).unwrap();
+        let run = |method| {
+            let settings = SolverSettings::default().with_method(method);
+            calibrate(&c.nominal.params, &data, &model, &settings).unwrap()
+        };
+        let (lm, global) = (run(Method::Lm), run(Method::Global));
         assert!(
             lm.dof.sigma0 > 100.0,
             "seed {seed}: LM σ0 {}",
@@ -299,11 +330,14 @@ fn global_without_stated_noise_stops_on_agreement() {
     use aacmm_core::calibrate::{GlobalStop, Method};
     let (c, fresh) = assembled(1);
     let data = c.data_set().unwrap();
-    let options = CalibrateOptions {
-        method: Method::Global,
-        ..CalibrateOptions::default()
-    };
-    let cal = calibrate(&c.nominal.params, &data, &options).unwrap();
+    let settings = SolverSettings::default().with_method(Method::Global);
+    let cal = calibrate(
+        &c.nominal.params,
+        &data,
+        &ModelOptions::default(),
+        &settings,
+    )
+    .unwrap();
     let trace = cal.solver.global.as_ref().unwrap();
     assert_eq!(trace.stop, GlobalStop::Agreement);
     assert!(trace.best_hits >= 2);
@@ -313,20 +347,24 @@ fn global_without_stated_noise_stops_on_agreement() {
 
 #[test]
 fn same_seed_same_bytes_whatever_the_threads() {
-    use aacmm_core::calibrate::{LmOptions, Method};
+    use aacmm_core::calibrate::Method;
     let (c, _) = assembled(4);
     let data = c.data_set().unwrap();
+    let model = ModelOptions {
+        noise: stated_noise(),
+        ..ModelOptions::default()
+    };
     for method in [Method::Sa, Method::Hybrid, Method::Global] {
         let run = |threads: usize, seed: u64| {
-            let options = CalibrateOptions {
-                noise: stated_noise(),
+            let settings = SolverSettings {
                 method,
-                lm: LmOptions::default().threads(threads),
                 anneal: aacmm_core::calibrate::AnnealOptions::default().chain(10),
+                threads,
                 seed,
-                ..CalibrateOptions::default()
+                ..SolverSettings::default()
             };
-            serde_json::to_string(&calibrate(&c.nominal.params, &data, &options).unwrap()).unwrap()
+            let cal = calibrate(&c.nominal.params, &data, &model, &settings).unwrap();
+            serde_json::to_string(&cal).unwrap()
         };
         let one = run(1, 5);
         assert_eq!(one, run(2, 5), "{method:?}");
@@ -341,12 +379,15 @@ fn the_hybrid_anneals_then_switches_to_lm() {
     use aacmm_core::calibrate::{AnnealStop, Method, Stop};
     let c = campaign(5, 0.005, 0.01);
     let data = c.data_set().unwrap();
-    let options = |method| CalibrateOptions {
+    let model = ModelOptions {
         noise: stated_noise(),
-        method,
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
-    let hybrid = calibrate(&c.nominal.params, &data, &options(Method::Hybrid)).unwrap();
+    let run = |method| {
+        let settings = SolverSettings::default().with_method(method);
+        calibrate(&c.nominal.params, &data, &model, &settings).unwrap()
+    };
+    let hybrid = run(Method::Hybrid);
     let a = hybrid.solver.anneal.as_ref().unwrap();
     assert_eq!(a.stop, AnnealStop::Switched);
     assert!(a.best_energy < a.start_energy);
@@ -366,7 +407,7 @@ fn the_hybrid_anneals_then_switches_to_lm() {
         ["identify", "anneal", "lm"]
     );
     // The paper's annealing alone ends far from the minimum LM finds.
-    let sa = calibrate(&c.nominal.params, &data, &options(Method::Sa)).unwrap();
+    let sa = run(Method::Sa);
     assert_eq!(sa.solver.stop, Stop::Anneal(AnnealStop::Cooled));
     assert_eq!(sa.solver.stop.lm(), None);
     assert_eq!(sa.solver.anneal.as_ref().unwrap().stop, AnnealStop::Cooled);

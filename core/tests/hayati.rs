@@ -3,7 +3,9 @@
 //! calibrated arm measures held-out sockets as well as the true arm; the D-H
 //! model of the same data shows the singularity.
 
-use aacmm_core::calibrate::{CalibrateOptions, Calibration, FixSpec, calibrate, validate};
+use aacmm_core::calibrate::{
+    Calibration, FixSpec, ModelOptions, SolverSettings, calibrate, validate,
+};
 use aacmm_core::identify::identify;
 use aacmm_core::io::Arm;
 use aacmm_core::params::{DhJoint, DhParams, JointModel, ParamKind, wrap};
@@ -87,11 +89,11 @@ fn fixed_columns() -> Vec<usize> {
     }
 }
 
-fn options(fix: &str) -> CalibrateOptions {
-    CalibrateOptions {
+fn options(fix: &str) -> ModelOptions {
+    ModelOptions {
         fix: FixSpec::parse(fix, 6).unwrap(),
         noise: noise(),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     }
 }
 
@@ -136,7 +138,13 @@ fn hayati_is_honest(seeds: u64) {
             assert_eq!(cols, want, "{:?}", id.fixed);
             assert!(id.recommendations.is_empty(), "joint 2 is Hayati already");
         }
-        let cal = calibrate(&c.nominal.params, &data, &options(FIXED)).unwrap();
+        let cal = calibrate(
+            &c.nominal.params,
+            &data,
+            &options(FIXED),
+            &SolverSettings::default(),
+        )
+        .unwrap();
         assert!(cal.solver.successful, "seed {seed}: {:?}", cal.solver.stop);
         assert_eq!(cal.params.joints[1].model, JointModel::Hayati);
         let z = normalised_errors(&cal, &truth.params);
@@ -220,13 +228,25 @@ fn dh_model_shows_the_singularity() {
 
     // D-H with d3 free too (the paper's fixed set): refused, the data
     // cannot see d2 − d3 at exactly parallel axes.
-    let refused = calibrate(&dh.params, &data, &options(FIXED)).unwrap_err();
+    let refused = calibrate(
+        &dh.params,
+        &data,
+        &options(FIXED),
+        &SolverSettings::default(),
+    )
+    .unwrap_err();
     let text = refused.to_string();
     assert!(text.contains("d2 with d3"), "{text}");
     // A nominal twist a little off 0 (nearly parallel, as the true arm
     // is): refused while the d2 − d3 direction is below the rank threshold,
     // then d2 and d3 slide together along the nearly parallel axes with huge σ.
-    let hay = calibrate(&nominal_hayati().params, &data, &options(FIXED)).unwrap();
+    let hay = calibrate(
+        &nominal_hayati().params,
+        &data,
+        &options(FIXED),
+        &SolverSettings::default(),
+    )
+    .unwrap();
     let sigma = |cal: &Calibration, name: &str| {
         cal.parameters
             .iter()
@@ -245,11 +265,23 @@ fn dh_model_shows_the_singularity() {
         p
     };
     // At 0.3° the d2 − d3 direction is still below the rank threshold.
-    let refused = calibrate(&tilted(0.3), &data, &options(FIXED)).unwrap_err();
+    let refused = calibrate(
+        &tilted(0.3),
+        &data,
+        &options(FIXED),
+        &SolverSettings::default(),
+    )
+    .unwrap_err();
     assert!(refused.to_string().contains("a redundancy"), "{refused}");
     // From 3° the fit runs to the true arm's tiny twist and puts the common
     // normal of the nearly parallel axes a hundred metres away.
-    let cal = calibrate(&tilted(3.0), &data, &options(FIXED)).unwrap();
+    let cal = calibrate(
+        &tilted(3.0),
+        &data,
+        &options(FIXED),
+        &SolverSettings::default(),
+    )
+    .unwrap();
     let (s2, s3) = (sigma(&cal, "d2"), sigma(&cal, "d3"));
     let (d2, alpha2) = (
         cal.params.joints[1].d,
@@ -268,7 +300,7 @@ fn dh_model_shows_the_singularity() {
 /// `length=…` and `d=…` do not.
 #[test]
 fn a_prior_treats_hbeta_as_an_angle() {
-    use aacmm_core::calibrate::Tolerances;
+    use aacmm_core::tolerances::Tolerances;
     let arm = nominal_hayati();
     let t = Tolerances::parse("length=0.5mm,angle=0.1deg", 6)
         .unwrap()
@@ -284,7 +316,7 @@ fn a_prior_treats_hbeta_as_an_angle() {
     let data = campaign(101, &truth).data_set().unwrap();
     let mut options = options(FIXED);
     options.prior = Some(t);
-    let cal = calibrate(&arm.params, &data, &options).unwrap();
+    let cal = calibrate(&arm.params, &data, &options, &SolverSettings::default()).unwrap();
     let prior = cal.prior.as_ref().unwrap();
     let beta = prior
         .parameters
@@ -303,8 +335,9 @@ fn a_prior_treats_hbeta_as_an_angle() {
 /// run on a singular direction: σ of a6 in the 10⁵ mm).
 #[test]
 fn a_tolerance_of_the_other_models_slot_is_refused() {
-    use aacmm_core::calibrate::{CalibrationError, Tolerances};
+    use aacmm_core::calibrate::CalibrationError;
     use aacmm_core::session::Problem;
+    use aacmm_core::tolerances::Tolerances;
     let data = campaign(102, &true_arm(7_002)).data_set().unwrap();
     for (arm, spec, needle) in [
         (
@@ -329,7 +362,7 @@ fn a_tolerance_of_the_other_models_slot_is_refused() {
         }
         // The library's lower entry point checks it too.
         assert!(matches!(
-            calibrate(&arm.params, &data, &o),
+            calibrate(&arm.params, &data, &o, &SolverSettings::default()),
             Err(CalibrationError::Option(_))
         ));
     }

@@ -7,13 +7,14 @@ use std::path::PathBuf;
 
 use aacmm_core::calibrate::prior::conditioning;
 use aacmm_core::calibrate::{
-    CalibrateOptions, Calibration, CalibrationError, FixSpec, Tolerances, calibrate,
+    Calibration, CalibrationError, FixSpec, ModelOptions, SolverSettings, calibrate,
 };
 use aacmm_core::dataset::DataSet;
 use aacmm_core::identify::identify;
-use aacmm_core::io::{parse_prior, read_arm, read_arm_with_prior, read_lengths};
+use aacmm_core::io::{parse_prior, read_arm, read_lengths};
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;
+use aacmm_core::tolerances::Tolerances;
 
 fn root(file: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -22,7 +23,7 @@ fn root(file: &str) -> PathBuf {
 }
 
 /// The shipped campaign and arm, and the README's noise.
-fn shipped() -> (DhParams, DataSet, CalibrateOptions) {
+fn shipped() -> (DhParams, DataSet, ModelOptions) {
     let (arm, _) = read_arm(&root("paper-table-1.toml")).unwrap();
     let poses = root("paper-campaign/poses.csv");
     let (p, _) =
@@ -32,19 +33,19 @@ fn shipped() -> (DhParams, DataSet, CalibrateOptions) {
         .unwrap()
         .with_lengths(&lengths, "lengths.csv")
         .unwrap();
-    let options = CalibrateOptions {
+    let options = ModelOptions {
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
             probe_mm: Some(0.01),
             ..Noise::default()
         },
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     (arm.params, data, options)
 }
 
-fn with_prior(options: &CalibrateOptions, spec: &str) -> CalibrateOptions {
-    CalibrateOptions {
+fn with_prior(options: &ModelOptions, spec: &str) -> ModelOptions {
+    ModelOptions {
         prior: Tolerances::parse(spec, 6).unwrap(),
         ..options.clone()
     }
@@ -57,11 +58,12 @@ fn with_prior(options: &CalibrateOptions, spec: &str) -> CalibrateOptions {
 #[test]
 fn a_realistic_prior_does_not_bias_well_determined_parameters() {
     let (start, data, options) = shipped();
-    let plain = calibrate(&start, &data, &options).unwrap();
+    let plain = calibrate(&start, &data, &options, &SolverSettings::default()).unwrap();
     let map = calibrate(
         &start,
         &data,
         &with_prior(&options, "length=1mm,angle=0.5deg"),
+        &SolverSettings::default(),
     )
     .unwrap();
     assert!(plain.solver.successful && map.solver.successful);
@@ -108,6 +110,7 @@ fn only_free_parameters_with_a_tolerance_are_rows() {
         &start,
         &data,
         &with_prior(&options, "theta2=0.5deg,a1=1mm,d1=1mm"),
+        &SolverSettings::default(),
     )
     .unwrap();
     // d1 is fixed (base motion): no row for it.
@@ -131,11 +134,11 @@ fn only_free_parameters_with_a_tolerance_are_rows() {
 fn a_direction_without_data_stays_at_nominal_with_the_prior_sigma() {
     let (start, data, options) = shipped();
     let fix = FixSpec::parse("theta1,theta6,alpha6,Bx,By", 6).unwrap();
-    let free_d1 = CalibrateOptions {
+    let free_d1 = ModelOptions {
         fix,
         ..options.clone()
     };
-    let refused = calibrate(&start, &data, &free_d1).unwrap_err();
+    let refused = calibrate(&start, &data, &free_d1, &SolverSettings::default()).unwrap_err();
     assert!(
         matches!(refused, CalibrationError::Unidentifiable { .. }),
         "{refused}"
@@ -144,6 +147,7 @@ fn a_direction_without_data_stays_at_nominal_with_the_prior_sigma() {
         &start,
         &data,
         &with_prior(&free_d1, "length=0.5mm,angle=0.1deg"),
+        &SolverSettings::default(),
     )
     .unwrap();
     assert!(map.solver.successful, "{:?}", map.solver.stop);
@@ -243,7 +247,8 @@ fn bad_tolerances_are_refused_where_they_are_written() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("arm.toml");
     std::fs::write(&path, &good).unwrap();
-    let (arm, prior, _) = read_arm_with_prior(&path).unwrap();
+    let (arm, _) = read_arm(&path).unwrap();
+    let prior = arm.prior.clone();
     assert_eq!(
         arm.params,
         read_arm(&root("paper-table-1.toml")).unwrap().0.params
@@ -317,12 +322,14 @@ fn with_unstated_noise_the_prior_weighs_against_the_estimated_touch_sigma() {
         s.probe_noise_mm = 0.01;
         let c = simulate(&nominal, &s).unwrap();
         let data = c.data_set().unwrap();
-        let options = CalibrateOptions::default();
-        let plain = calibrate(&nominal.params, &data, &options).unwrap();
+        let options = ModelOptions::default();
+        let plain =
+            calibrate(&nominal.params, &data, &options, &SolverSettings::default()).unwrap();
         let map = calibrate(
             &nominal.params,
             &data,
             &with_prior(&options, "length=2mm,angle=1deg"),
+            &SolverSettings::default(),
         )
         .unwrap();
         assert!(map.solver.successful, "{lengths}: {:?}", map.solver.stop);
@@ -354,6 +361,7 @@ fn with_unstated_noise_the_prior_weighs_against_the_estimated_touch_sigma() {
             &nominal.params,
             &data,
             &with_prior(&options, "length=0.05mm,angle=0.01deg"),
+            &SolverSettings::default(),
         )
         .unwrap();
         let d = &tight.dof;

@@ -5,7 +5,7 @@
 
 use aacmm_core::calibrate::robust::{DOWNWEIGHTED, Loss, Robust};
 use aacmm_core::calibrate::validate::figures;
-use aacmm_core::calibrate::{CalibrateOptions, CalibrationError};
+use aacmm_core::calibrate::{CalibrationError, ModelOptions, SolverSettings};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;
@@ -31,15 +31,15 @@ fn settings(seed: u64) -> CampaignSettings {
     s
 }
 
-fn options(robust: Option<Loss>) -> CalibrateOptions {
-    CalibrateOptions {
+fn options(robust: Option<Loss>) -> ModelOptions {
+    ModelOptions {
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
             probe_mm: Some(0.01),
             ..Noise::default()
         },
         robust: robust.map(Robust::new),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     }
 }
 
@@ -91,7 +91,7 @@ fn case(seed: u64, moved: &[usize], mm: f64) -> Case {
 fn run(data: &DataSet, robust: Option<Loss>) -> CalibrationReport {
     Problem::new(nominal(), data.clone(), options(robust))
         .unwrap()
-        .run()
+        .run(&SolverSettings::default())
         .unwrap()
 }
 
@@ -217,13 +217,11 @@ fn robust_fits_work_for_every_solver_and_are_deterministic() {
     use aacmm_core::calibrate::Method;
     let c = case(9, &[40], 2.0);
     for method in [Method::Lm, Method::Sa, Method::Hybrid, Method::Global] {
-        let o = CalibrateOptions {
-            method,
-            ..options(Some(Loss::Cauchy))
-        };
+        let o = options(Some(Loss::Cauchy));
+        let settings = SolverSettings::default().with_method(method);
         let a = Problem::new(nominal(), c.data.clone(), o.clone())
             .unwrap()
-            .run()
+            .run(&settings)
             .unwrap();
         let fit = a.calibration.robust.as_ref().unwrap();
         let low: Vec<&str> = fit.downweighted().iter().map(|t| t.at.as_str()).collect();
@@ -237,7 +235,7 @@ fn robust_fits_work_for_every_solver_and_are_deterministic() {
         assert!(a.is_usable(), "{method:?}: {:?}", a.verdict);
         let b = Problem::new(nominal(), c.data.clone(), o)
             .unwrap()
-            .run()
+            .run(&settings)
             .unwrap();
         assert_eq!(a.to_json(), b.to_json(), "{method:?}");
     }
@@ -247,7 +245,7 @@ fn robust_fits_work_for_every_solver_and_are_deterministic() {
 fn a_bad_tuning_constant_is_refused_by_its_field() {
     let c = case(1, &[], 0.0);
     for k in [-1.0, 0.0, f64::NAN, f64::INFINITY] {
-        let o = CalibrateOptions {
+        let o = ModelOptions {
             robust: Some(Robust {
                 loss: Loss::Huber,
                 scale_k: k,
@@ -267,7 +265,7 @@ fn a_bad_tuning_constant_is_refused_by_its_field() {
 fn a_robust_report_is_the_same_at_1_2_and_4_threads() {
     let data = common::many_points(300);
     let report = |threads: usize| {
-        common::lm_report_on_threads(&nominal(), &data, threads, |o| {
+        common::lm_report_on_threads(&nominal(), &data, threads, |o, _| {
             o.robust = Some(Robust::new(Loss::Cauchy))
         })
     };
@@ -283,22 +281,22 @@ fn a_robust_report_is_the_same_at_1_2_and_4_threads() {
 /// touch σ near the campaign's own (one touch in 20 moved 1 mm).
 #[test]
 fn with_a_prior_and_no_stated_noise_the_robust_scale_settles() {
-    use aacmm_core::calibrate::Tolerances;
+    use aacmm_core::tolerances::Tolerances;
     let moved: Vec<usize> = (0..100).step_by(20).collect();
     let c = case(3, &moved, 1.0);
-    let o = CalibrateOptions {
+    let o = ModelOptions {
         robust: Some(Robust::new(Loss::Huber)),
         prior: Tolerances::parse("length=1mm,angle=0.5deg", 6).unwrap(),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
-    let plain = CalibrateOptions {
+    let plain = ModelOptions {
         robust: None,
         ..o.clone()
     };
-    let fit = |o: &CalibrateOptions| {
+    let fit = |o: &ModelOptions| {
         Problem::new(nominal(), c.data.clone(), o.clone())
             .unwrap()
-            .run()
+            .run(&SolverSettings::default())
             .unwrap()
             .calibration
     };

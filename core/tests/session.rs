@@ -3,7 +3,7 @@
 //! gives the same report bytes whatever the thread count, on enough points
 //! that the work is really split.
 
-use aacmm_core::calibrate::{CalibrateOptions, CalibrationError, FixSpec};
+use aacmm_core::calibrate::{CalibrationError, FixSpec, ModelOptions, SolverSettings};
 use aacmm_core::params::DhParams;
 use aacmm_core::session::Problem;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
@@ -21,11 +21,9 @@ fn small_data() -> DataSet {
     simulate(&nominal(), &s).unwrap().data_set().unwrap()
 }
 
-/// The field the library names for `change` applied to the defaults.
-fn refused(change: impl Fn(&mut CalibrateOptions)) -> &'static str {
-    let mut o = CalibrateOptions::default();
-    change(&mut o);
-    match Problem::new(nominal(), small_data(), o) {
+/// The field a library refusal names (never a command-line flag).
+fn field_of<T>(result: Result<T, CalibrationError>) -> &'static str {
+    match result {
         Err(CalibrationError::Option(e)) => {
             assert!(
                 !e.to_string().contains("--"),
@@ -38,9 +36,26 @@ fn refused(change: impl Fn(&mut CalibrateOptions)) -> &'static str {
     }
 }
 
+/// The field the library names for `change` applied to the default model:
+/// refused when the problem is made.
+fn refused(change: impl Fn(&mut ModelOptions)) -> &'static str {
+    let mut o = ModelOptions::default();
+    change(&mut o);
+    field_of(Problem::new(nominal(), small_data(), o))
+}
+
+/// The field the library names for `change` applied to the default solver
+/// settings: refused before any work when the problem is run.
+fn refused_setting(change: impl Fn(&mut SolverSettings)) -> &'static str {
+    let mut s = SolverSettings::default();
+    change(&mut s);
+    let problem = Problem::new(nominal(), small_data(), ModelOptions::default()).unwrap();
+    field_of(problem.run(&s))
+}
+
 #[test]
 fn every_invalid_option_is_refused_by_its_field() {
-    type Change = Box<dyn Fn(&mut CalibrateOptions)>;
+    type Change = Box<dyn Fn(&mut ModelOptions)>;
     let cases: Vec<(&str, Change)> = vec![
         (
             "noise.encoder_rad",
@@ -67,7 +82,13 @@ fn every_invalid_option_is_refused_by_its_field() {
         ),
         ("fix", Box::new(|o| o.fix = FixSpec::Columns(vec![0, 27]))),
         ("fix", Box::new(|o| o.fix = FixSpec::Columns(vec![6, 6]))),
-        ("threads", Box::new(|o| o.lm.threads = 0)),
+    ];
+    for (field, change) in &cases {
+        assert_eq!(refused(change), *field);
+    }
+    type Setting = Box<dyn Fn(&mut SolverSettings)>;
+    let settings: Vec<(&str, Setting)> = vec![
+        ("threads", Box::new(|o| o.threads = 0)),
         ("lm.max_iterations", Box::new(|o| o.lm.max_iterations = 0)),
         ("lm.ftol", Box::new(|o| o.lm.ftol = -1.0)),
         ("lm.gtol", Box::new(|o| o.lm.gtol = f64::INFINITY)),
@@ -110,11 +131,11 @@ fn every_invalid_option_is_refused_by_its_field() {
             Box::new(|o| o.global.noise_floor_k = 0.0),
         ),
     ];
-    for (field, change) in &cases {
-        assert_eq!(refused(change), *field);
+    for (field, change) in &settings {
+        assert_eq!(refused_setting(change), *field);
     }
     // Folds: 2 up to the groups of points joined by lengths.
-    let problem = Problem::new(nominal(), small_data(), CalibrateOptions::default()).unwrap();
+    let problem = Problem::new(nominal(), small_data(), ModelOptions::default()).unwrap();
     for k in [0, 1, 6] {
         let e = problem.clone().with_cross_validation(k).unwrap_err();
         assert_eq!(e.field, "cross_validate", "{k}");
@@ -127,7 +148,7 @@ fn every_invalid_option_is_refused_by_its_field() {
         p
     });
     assert!(matches!(
-        Problem::new(seven, small_data(), CalibrateOptions::default()),
+        Problem::new(seven, small_data(), ModelOptions::default()),
         Err(CalibrationError::Joints { arm: 7, data: 6 })
     ));
 }
@@ -138,8 +159,9 @@ fn the_same_seed_gives_the_same_report_at_1_2_and_4_threads() {
     // across threads.
     let data = common::many_points(1200);
     assert!(data.points().len() >= 1000);
-    let report =
-        |threads: usize| common::lm_report_on_threads(&nominal(), &data, threads, |o| o.seed = 5);
+    let report = |threads: usize| {
+        common::lm_report_on_threads(&nominal(), &data, threads, |_, s| s.seed = 5)
+    };
     let one = report(1);
     assert_eq!(one, report(2), "2 threads");
     assert_eq!(one, report(4), "4 threads");

@@ -2,7 +2,7 @@
 //! a collapsed, mirrored or unit-scaled arm as usable, and touches the noise
 //! model does not explain, named by where they were read.
 
-use aacmm_core::calibrate::{CalibrateOptions, CalibrationError, FixSpec};
+use aacmm_core::calibrate::{CalibrationError, FixSpec, ModelOptions, SolverSettings};
 use aacmm_core::io::{AngleUnit, ReferenceLength, read_lengths, read_poses};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::DhParams;
@@ -27,10 +27,14 @@ fn stated() -> Noise {
     }
 }
 
-fn run(data: DataSet, options: CalibrateOptions) -> CalibrationReport {
-    Problem::new(nominal(), data, options)
+fn run(data: DataSet, model: ModelOptions) -> CalibrationReport {
+    run_seeded(data, model, 0)
+}
+
+fn run_seeded(data: DataSet, model: ModelOptions, seed: u64) -> CalibrationReport {
+    Problem::new(nominal(), data, model)
         .unwrap()
-        .run()
+        .run(&SolverSettings::default().with_seed(seed))
         .unwrap()
 }
 
@@ -54,7 +58,7 @@ fn without_lengths_global_does_not_fold_the_arm() {
     let (labels, q, lengths) = shipped_arrays();
     let bare = DataSet::from_touches(&labels, &q, &[]).unwrap();
     let with = DataSet::from_touches(&labels, &q, &lengths).unwrap();
-    let options = CalibrateOptions::default();
+    let options = ModelOptions::default();
     let (a, b) = (run(bare, options.clone()), run(with, options));
     assert!(a.is_usable(), "{:?}", a.verdict);
     assert!(a.calibration.checks.gross_corrections.is_empty());
@@ -75,12 +79,11 @@ fn assembled_arms_that_fell_into_the_mirror_image_now_come_out_proper() {
         s.probe_noise_mm = 0.01;
         s.reference_lengths = 3;
         let campaign = simulate(&nominal(), &s).unwrap();
-        let options = CalibrateOptions {
+        let model = ModelOptions {
             noise: stated(),
-            seed: 1,
-            ..CalibrateOptions::default()
+            ..ModelOptions::default()
         };
-        let report = run(campaign.data_set().unwrap(), options);
+        let report = run_seeded(campaign.data_set().unwrap(), model, 1);
         assert!(report.is_usable(), "seed {seed}: {:?}", report.verdict);
         let xyz = |p: &DhParams| {
             ArmKernel::new(p)
@@ -120,9 +123,9 @@ fn displaced_touches_are_named_by_file_and_line() {
     let (labels, mut q, lengths) = shipped_arrays();
     let clean = run(
         DataSet::from_touches(&labels, &q, &lengths).unwrap(),
-        CalibrateOptions {
+        ModelOptions {
             noise: stated(),
-            ..CalibrateOptions::default()
+            ..ModelOptions::default()
         },
     );
     assert!(
@@ -134,9 +137,9 @@ fn displaced_touches_are_named_by_file_and_line() {
     q[16][1] += 0.2f64.to_radians();
     let report = run(
         DataSet::from_touches(&labels, &q, &lengths).unwrap(),
-        CalibrateOptions {
+        ModelOptions {
             noise: stated(),
-            ..CalibrateOptions::default()
+            ..ModelOptions::default()
         },
     );
     let o = &report.calibration.checks.outliers;
@@ -157,7 +160,7 @@ fn lengths_in_another_unit_are_refused() {
         })
         .collect();
     let data = DataSet::from_touches(&labels, &q, &metres).unwrap();
-    match Problem::new(nominal(), data, CalibrateOptions::default()) {
+    match Problem::new(nominal(), data, ModelOptions::default()) {
         Err(CalibrationError::LengthUnits { ratio, .. }) => assert!(ratio < 0.01, "{ratio}"),
         Err(e) => panic!("another error: {e}"),
         Ok(_) => panic!("lengths in metres accepted"),
@@ -168,25 +171,25 @@ fn lengths_in_another_unit_are_refused() {
 fn nothing_free_and_overstated_noise_are_refused() {
     let (labels, q, lengths) = shipped_arrays();
     let data = DataSet::from_touches(&labels, &q, &lengths).unwrap();
-    let all = CalibrateOptions {
+    let all = ModelOptions {
         fix: FixSpec::Columns((0..27).collect()),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     let e = Problem::new(nominal(), data.clone(), all)
         .unwrap()
-        .run()
+        .run(&SolverSettings::default())
         .unwrap_err();
     assert!(
         matches!(e, CalibrationError::Option(ref o) if o.field == "fix"),
         "{e}"
     );
-    let loud = CalibrateOptions {
+    let loud = ModelOptions {
         noise: Noise {
             encoder_rad: Some(30f64.to_radians()),
             probe_mm: Some(100.0),
             ..Noise::default()
         },
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     let report = run(data.clone(), loud.clone());
     assert!(!report.is_usable());
@@ -200,7 +203,7 @@ fn nothing_free_and_overstated_noise_are_refused() {
     assert!(report.validation.fitted.after.e_mean < 0.06);
     let accepted = run(
         data,
-        CalibrateOptions {
+        ModelOptions {
             accept_poor_fit: true,
             ..loud
         },
@@ -219,9 +222,9 @@ fn a_weak_experiment_is_told_what_the_data_determine() {
         let data = simulate(&nominal(), &s).unwrap().data_set().unwrap();
         let report = run(
             data,
-            CalibrateOptions {
+            ModelOptions {
                 noise: stated(),
-                ..CalibrateOptions::default()
+                ..ModelOptions::default()
             },
         );
         let u = report.calibration.checks.position_uncertainty.unwrap();

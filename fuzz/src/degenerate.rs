@@ -3,9 +3,8 @@
 
 use std::sync::OnceLock;
 
-use aacmm_core::calibrate::prior::Target;
 use aacmm_core::calibrate::robust::{Loss, Robust};
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, Method, Tolerances, calibrate};
+use aacmm_core::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::identify::identify;
 use aacmm_core::io::{
@@ -14,6 +13,8 @@ use aacmm_core::io::{
 use aacmm_core::params::{DhParams, JointModel, ParamId, ParamKind};
 use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, SocketPlan, SocketPoint, simulate};
+use aacmm_core::tolerances::Target;
+use aacmm_core::tolerances::Tolerances;
 use proptest::prelude::*;
 use proptest::test_runner::{TestCaseError, TestError};
 
@@ -310,14 +311,17 @@ pub fn check_degenerate(case: &Degenerate) -> Result<String, String> {
             &base.nominal
         };
         let _ = identify(nominal, &data, &noise, 1);
-        let mut options = CalibrateOptions {
+        let mut options = ModelOptions {
             noise,
+            ..ModelOptions::default()
+        };
+        let mut settings = SolverSettings {
             method: case.method,
             seed: case.seed,
-            ..CalibrateOptions::default()
+            threads: 1,
+            ..SolverSettings::default()
         };
-        options.lm.threads = 1;
-        options.anneal.max_evaluations = options.anneal.max_evaluations.min(3000);
+        settings.anneal.max_evaluations = settings.anneal.max_evaluations.min(3000);
         options.fix = match case.fix {
             0 => FixSpec::Auto,
             1 => FixSpec::Columns(
@@ -361,7 +365,7 @@ pub fn check_degenerate(case: &Degenerate) -> Result<String, String> {
             3 => Some(Robust::new(Loss::Cauchy)),
             _ => None,
         };
-        match calibrate(nominal, &data, &options) {
+        match calibrate(nominal, &data, &options, &settings) {
             Ok(c) => {
                 if let Some(v) = c.params.to_vec().into_iter().find(|v| !v.is_finite()) {
                     return Err(format!("calibrated a non-finite parameter {v}"));

@@ -3,9 +3,7 @@
 
 use std::path::PathBuf;
 
-use aacmm_core::io::{
-    AngleUnit, Arm as CoreArm, LengthUnit, arm_to_toml, read_arm_with_prior, source_name,
-};
+use aacmm_core::io::{AngleUnit, Arm as CoreArm, LengthUnit, arm_to_toml, read_arm, source_name};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId, SUPPORTED_JOINTS, param_count, supported_joints_text};
 use numpy::ndarray::{Array1, ArrayD};
@@ -24,8 +22,6 @@ pub struct Arm {
     /// Where the arm came from: the file as named, or `<parameters>`.
     pub(crate) source: String,
     pub(crate) warnings: Vec<String>,
-    /// The arm file's `[prior]` tolerances, if any.
-    pub(crate) prior: Option<aacmm_core::calibrate::Tolerances>,
 }
 
 impl Arm {
@@ -36,7 +32,6 @@ impl Arm {
             kernel,
             source,
             warnings,
-            prior: None,
         })
     }
 
@@ -77,11 +72,9 @@ impl Arm {
     #[staticmethod]
     fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Arm> {
         let arm = detached(py, || {
-            let (arm, prior, warnings) = read_arm_with_prior(&path)?;
+            let (arm, warnings) = read_arm(&path)?;
             let warnings = warnings.iter().map(ToString::to_string).collect();
-            let mut arm = Arm::new(arm, source_name(&path), warnings)?;
-            arm.prior = prior;
-            Ok(arm)
+            Arm::new(arm, source_name(&path), warnings)
         })?;
         warn_all(py, &arm.warnings)?;
         Ok(arm)

@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aacmm_core::calibrate::{CalibrateOptions, Context, FixSpec, LmOptions, Loss, Method, Robust};
+use aacmm_core::calibrate::{Context, FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings};
 use aacmm_core::io::Arm as CoreArm;
 use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Sources};
 use numpy::ndarray::{Array1, Array2};
@@ -19,7 +19,6 @@ use crate::arm::Arm;
 use crate::data::DataSet;
 use crate::error::{Error, Kind, Result, detached};
 use crate::noise::Noise;
-use crate::study::threads;
 use crate::{to_dict, to_python};
 
 /// The result of `aacmm.calibrate`: the problem as checked and the
@@ -76,7 +75,7 @@ fn problem(
     arm: &Arm,
     data: &DataSet,
     validate: Option<&DataSet>,
-    options: CalibrateOptions,
+    options: ModelOptions,
     cross_validate: Option<usize>,
 ) -> Result<Problem> {
     // Another joint count: say which data set has it.
@@ -152,42 +151,43 @@ pub fn calibrate(
 ) -> PyResult<Calibration> {
     let robust = self::robust(robust, robust_scale)?;
     let prior = match prior {
-        None => arm.prior.clone(),
-        Some(spec) => aacmm_core::calibrate::Tolerances::parse(spec, arm.joints())
+        None => arm.arm.prior.clone(),
+        Some(spec) => aacmm_core::tolerances::Tolerances::parse(spec, arm.joints())
             .map_err(Error::from)?
-            .map(|flag| arm.prior.clone().unwrap_or_default().overridden_by(&flag)),
+            .map(|flag| {
+                arm.arm
+                    .prior
+                    .clone()
+                    .unwrap_or_default()
+                    .overridden_by(&flag)
+            }),
     };
     let fix = match fix {
         Some(f) => fix_text(f)?,
         None => "auto".to_string(),
     };
     let fix = FixSpec::parse_for(&fix, &arm.arm.params).map_err(Error::from)?;
-    // None: one per core; 0 is left to the library to refuse.
-    let lm = LmOptions {
-        threads: match threads {
-            Some(n) => n,
-            None => self::threads(None)?,
-        },
-        ..LmOptions::default()
+    // None: one per core; 0 is left to the library to refuse. The
+    // solvers' settings not exposed here keep the library's defaults, which
+    // are the command line's.
+    let settings = SolverSettings {
+        method: self::method(method)?,
+        seed,
+        threads: threads.unwrap_or_else(aacmm_core::calibrate::available_threads),
+        ..SolverSettings::default()
     };
-    let options = CalibrateOptions {
+    let options = ModelOptions {
         fix,
         noise: noise.map(|n| n.noise).unwrap_or_default(),
-        method: self::method(method)?,
-        lm,
-        seed,
         robust,
         prior,
-        // The solvers' settings not exposed here keep the library's
-        // defaults, which are the command line's.
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     detached(py, || {
         let problem = problem(arm, data, validate, options, cross_validate)?;
         let started = Instant::now();
-        let mut ctx = Context::new(problem.options().lm.threads, seed);
-        let solver = problem.options().method.solver();
-        let report = session::run(&problem, &*solver, &mut ctx)
+        let solver = settings.method.solver();
+        let report = session::run(&problem, &settings, &*solver, &mut Context::new())
             .map_err(|e| Error::from(e).prefixed(&arm.source))?;
         Ok(Calibration {
             problem,

@@ -5,8 +5,9 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use aacmm_core::calibrate::{CalibrationError as CoreCalibrationError, OptionError};
+use aacmm_core::calibrate::CalibrationError as CoreCalibrationError;
 use aacmm_core::error::InputError as CoreInputError;
+use aacmm_core::error::OptionError;
 use aacmm_core::kernel::KernelError;
 use aacmm_core::metrics::MetricsError;
 use aacmm_core::simulate::SimError;
@@ -162,6 +163,12 @@ impl From<CoreCalibrationError> for Error {
             _ => Kind::Calibration,
         };
         Error::new(kind, e.to_string())
+    }
+}
+
+impl From<aacmm_core::report::ReportError> for Error {
+    fn from(e: aacmm_core::report::ReportError) -> Error {
+        Error::new(Kind::Calibration, e.to_string())
     }
 }
 

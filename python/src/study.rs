@@ -1,7 +1,7 @@
 //! `aacmm.evaluate` and `aacmm.identify`: the figures of an arm on data, and
 //! what the data can determine.
 
-use aacmm_core::calibrate::LmOptions;
+use aacmm_core::calibrate::{SolverSettings, available_threads};
 use aacmm_core::identify::identify as core_identify;
 use aacmm_core::metrics::evaluate as core_evaluate;
 use aacmm_core::residuals::Noise as CoreNoise;
@@ -19,14 +19,14 @@ use crate::to_dict;
 pub(crate) fn threads(threads: Option<usize>) -> PyResult<usize> {
     match threads {
         Some(n) => {
-            let lm = LmOptions {
+            let settings = SolverSettings {
                 threads: n,
-                ..LmOptions::default()
+                ..SolverSettings::default()
             };
-            lm.check().map_err(Error::from)?;
+            settings.check().map_err(Error::from)?;
             Ok(n)
         }
-        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+        None => Ok(available_threads()),
     }
 }
 

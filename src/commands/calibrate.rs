@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aacmm_core::calibrate::{
-    AnnealOptions, CalibrateOptions, CalibrationError, Context, FixSpec, GlobalOptions, LmOptions,
-    Loss, Robust, SwitchRule,
+    AnnealOptions, CalibrationError, Context, FixSpec, GlobalOptions, LmOptions, Loss,
+    ModelOptions, Robust, SolverSettings, SwitchRule,
 };
 use aacmm_core::io::source_name;
 use aacmm_core::report::{CALIBRATION_FILES, HTML_FILE};
@@ -219,15 +219,18 @@ pub fn run(args: Args) -> Result<()> {
     let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
     let fix = FixSpec::parse_for(&args.fix, &arm.params).map_err(flag_error)?;
     let (anneal, switch, global) = args.solver.options();
-    let options = CalibrateOptions {
-        fix,
-        noise,
+    let settings = SolverSettings {
         method: args.method.into(),
-        lm: LmOptions::default().threads(args.fit.threads()),
+        lm: LmOptions::default(),
         anneal,
         switch,
         global,
+        threads: args.fit.threads(),
         seed: args.seed,
+    };
+    let model = ModelOptions {
+        fix,
+        noise,
         accept_poor_fit: args.accept_poor_fit,
         robust: args.robust.map(|l| {
             let loss = Loss::from(l);
@@ -245,7 +248,7 @@ pub fn run(args: Args) -> Result<()> {
         lengths_file: args.fit.lengths.as_deref().map(source_name),
         warnings,
     };
-    let mut problem = Problem::new(arm, data, options)
+    let mut problem = Problem::new(arm, data, model)
         .map_err(flag_error)?
         .with_sources(sources);
     if let Some(path) = &args.validate {
@@ -266,9 +269,9 @@ pub fn run(args: Args) -> Result<()> {
     let report = {
         let mut bar = super::progress::Bar::new();
         let mut show = |phase: &str, f: f64| bar.show(phase, f);
-        let mut ctx = Context::new(args.fit.threads(), args.seed).observed(&mut show);
-        let solver = problem.options().method.solver();
-        session::run(&problem, &*solver, &mut ctx).map_err(|e| match e {
+        let mut ctx = Context::new().observed(&mut show);
+        let solver = settings.method.solver();
+        session::run(&problem, &settings, &*solver, &mut ctx).map_err(|e| match e {
             CalibrationError::Option(_) => flag_error(e),
             other => super::noise_flags(
                 anyhow::Error::new(other).context(arm_file.clone()),

@@ -3,12 +3,14 @@
 
 use std::path::{Path, PathBuf};
 
+use aacmm_core::calibrate::CalibrationError;
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
-use aacmm_core::calibrate::{CalibrationError, OptionError, Tolerances};
 use aacmm_core::dataset::DataSet;
+use aacmm_core::error::OptionError;
 use aacmm_core::io::source_name;
 use aacmm_core::io::{AngleUnit, Arm, read_lengths};
 use aacmm_core::residuals::Noise;
+use aacmm_core::tolerances::Tolerances;
 use anyhow::{Result, anyhow};
 
 use super::ArmAndPoses;

@@ -12,12 +12,10 @@ pub mod simulate;
 
 use std::path::PathBuf;
 
-use aacmm_core::calibrate::Tolerances;
-use aacmm_core::io::{
-    AngleUnit, Arm, Poses, Warning, read_arm_with_prior, read_poses, source_name,
-};
+use aacmm_core::error::short;
+use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses, source_name};
 use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, PreparedPoses};
-use aacmm_core::residuals::short;
+use aacmm_core::tolerances::Tolerances;
 use anyhow::{Context, Result, bail};
 
 use crate::output::warn;
@@ -122,7 +120,8 @@ impl ArmAndPoses {
     /// [`ArmAndPoses::read_with_warnings`], with the arm file's `[prior]`
     /// table.
     pub fn read_with_prior(&self) -> Result<(Arm, Option<Tolerances>, Poses, Vec<String>)> {
-        let (arm, prior, mut warnings) = read_arm_with_prior(&self.arm)?;
+        let (arm, mut warnings) = read_arm(&self.arm)?;
+        let prior = arm.prior.clone();
         let (poses, more) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
         warnings.extend(more);

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use aacmm_core::calibrate::{CalibrateOptions, Method};
+use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::generic;
 use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
@@ -149,11 +149,8 @@ fn by_hand(params: &[f64], data: &DataSet, points: &[usize]) -> (f64, Vec<[f64; 
 #[test]
 fn leave_one_placement_out_on_the_kinova() {
     let (arm, data) = load("kinova-2");
-    let options = CalibrateOptions {
-        method: Method::Lm,
-        ..CalibrateOptions::default()
-    };
-    let folds = leave_one_placement_out(&arm.params, &data, &options).unwrap();
+    let lm = SolverSettings::default().with_method(Method::Lm);
+    let folds = leave_one_placement_out(&arm.params, &data, &ModelOptions::default(), &lm).unwrap();
     let names: Vec<&str> = folds.iter().map(|f| f.placement.as_str()).collect();
     assert_eq!(names, ["front_rotated", "left", "right-high", "gen3lite"]);
     let nominal = arm.params.to_vec();
@@ -199,6 +196,7 @@ fn one_placement_is_refused() {
     let (arm, data) = load("kinova-1");
     let front: Vec<usize> = (0..2).collect();
     let one = data.subset(&front);
-    let e = leave_one_placement_out(&arm.params, &one, &CalibrateOptions::default()).unwrap_err();
+    let (model, settings) = (ModelOptions::default(), SolverSettings::default());
+    let e = leave_one_placement_out(&arm.params, &one, &model, &settings).unwrap_err();
     assert!(e.to_string().contains("two placements or more"), "{e}");
 }

@@ -4,7 +4,7 @@
 //! example writes it (the C API's test makes the same comparison from C, so
 //! the front ends agree).
 
-use aacmm_core::calibrate::{CalibrateOptions, LmOptions, Method};
+use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::{CalibrationReport, Problem, Sources};
 use aacmm_core::{DataSet, read_arm};
@@ -12,19 +12,16 @@ use aacmm_core::{DataSet, read_arm};
 use crate::util::{calibrate_shipped, example, shipped, shipped_arm, temp_dir};
 
 /// The shipped campaign as the CLI reads it, with its noise stated.
-fn shipped_problem(method: Method, seed: u64) -> Problem {
+fn shipped_problem() -> Problem {
     let (arm, _) = read_arm(shipped_arm().as_ref()).unwrap();
     let data = DataSet::from_files(shipped("poses.csv"), Some(shipped("lengths.csv")), 6).unwrap();
-    let options = CalibrateOptions {
-        method,
-        seed,
+    let options = ModelOptions {
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
             probe_mm: Some(0.01),
             ..Noise::default()
         },
-        lm: LmOptions::default().threads(1),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
     Problem::new(arm, data, options)
         .unwrap()
@@ -55,10 +52,14 @@ fn the_cli_writes_the_library_sessions_report() {
         );
         assert!(o.status.success(), "{}", crate::util::stderr(&o));
         let written = std::fs::read_to_string(out.join("calibration.json")).unwrap();
-        let problem = shipped_problem(method, seed)
-            .with_cross_validation(3)
-            .unwrap();
-        let expected = problem.run().unwrap();
+        let problem = shipped_problem().with_cross_validation(3).unwrap();
+        let settings = SolverSettings {
+            method,
+            seed,
+            threads: 1,
+            ..SolverSettings::default()
+        };
+        let expected = problem.run(&settings).unwrap();
         assert_eq!(written, expected.to_json(), "{}", method.name());
         // The file reads back as the same report.
         let back = CalibrationReport::from_json(&written).unwrap();

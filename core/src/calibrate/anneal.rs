@@ -21,8 +21,8 @@ use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
 use super::energy::Energy;
-use super::options::{OptionError, check_nonnegative};
 use crate::dataset::DataSet;
+use crate::error::{OptionError, check_nonnegative};
 use crate::kernel::ArmKernel;
 use crate::params::{DhParams, ParamId, ParamKind};
 

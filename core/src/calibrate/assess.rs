@@ -7,8 +7,8 @@ use nalgebra::DMatrix;
 use super::checks::{ChiSquare, gross_corrections};
 use super::lm::{LmIteration, levenberg_marquardt};
 use super::{
-    CalibrateOptions, Calibration, CalibrationError, Checks, CorrelationMatrix, Dof, Estimate,
-    Method, Outcome, Phase, SolverSummary, Stop,
+    Calibration, CalibrationError, Checks, CorrelationMatrix, Dof, Estimate, Method, ModelOptions,
+    Outcome, Phase, SolverSettings, SolverSummary, Stop,
 };
 use crate::dataset::DataSet;
 use crate::identify::{Identification, strong_correlations};
@@ -88,9 +88,9 @@ impl Counts {
 pub(crate) struct Setup<'a> {
     pub start: &'a DhParams,
     pub data: &'a DataSet,
-    pub options: &'a CalibrateOptions,
+    pub model: &'a ModelOptions,
+    pub settings: &'a SolverSettings,
     pub method: Method,
-    pub threads: usize,
     pub free: Vec<usize>,
     pub identification: Option<Identification>,
     pub reasons: Vec<(ParamId, String)>,
@@ -105,9 +105,9 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     let Setup {
         start,
         data,
-        options,
+        model,
+        settings,
         method,
-        threads,
         free,
         identification,
         reasons,
@@ -124,8 +124,8 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         mut global,
         mut normal,
     } = outcome;
-    let lm = options.lm.threads(threads);
-    let stated = options.noise.stated();
+    let (lm, threads) = (settings.lm, settings.threads);
+    let stated = model.noise.stated();
     let normal_at = |params: &DhParams, weights: &Weights| -> Result<_, CalibrationError> {
         super::prior::normal_at(params, data, weights, &free, threads)
     };
@@ -142,7 +142,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         *weights = Weights::new_threads(
             &ArmKernel::new(params)?,
             data,
-            &options.noise,
+            &model.noise,
             touch_sigma,
             threads,
         )?;
@@ -183,7 +183,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             && weights.relative_change_to(
                 &ArmKernel::new(&params)?,
                 data,
-                &options.noise,
+                &model.noise,
                 touch_sigma,
                 threads,
             )? <= REWEIGH_TOLERANCE;
@@ -196,7 +196,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             extra_jacobians += 1;
         } else {
             reweigh(&mut weights, &params, touch_sigma)?;
-            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm)?;
+            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm, threads)?;
             let mut phase = Phase::new("lm, weighed at the solution");
             phase.add_lm(&refit, timer.elapsed().as_secs_f64());
             phases.push(phase);
@@ -238,7 +238,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             touch_sigma = next.max(1e-9);
             let timer = std::time::Instant::now();
             reweigh(&mut weights, &params, touch_sigma)?;
-            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm)?;
+            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm, threads)?;
             let mut phase = Phase::new("lm, touch σ re-estimated (prior)");
             phase.add_lm(&refit, timer.elapsed().as_secs_f64());
             phases.push(phase);
@@ -257,7 +257,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
     // equations were rescaled by the estimated σ, the weights not.
     let mut unit_weights = !stated && counts.length_rows == 0 && !has_prior;
     let mut robust = None;
-    if let Some(r) = options.robust {
+    if let Some(r) = model.robust {
         if unit_weights {
             reweigh(&mut weights, &params, touch_sigma)?;
             unit_weights = false;
@@ -270,6 +270,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
                 weights,
                 &free,
                 &lm,
+                threads,
                 counts.scale_dof_factor(),
                 stated,
             )
@@ -354,7 +355,7 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         }
         _ => invert(n) * (sigma0 * sigma0),
     };
-    let prior = match (&options.prior, &weights.prior) {
+    let prior = match (&model.prior, &weights.prior) {
         (Some(t), Some(term)) => Some(super::PriorReport::new(
             t,
             term,

@@ -35,9 +35,9 @@ use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use super::lm::{LmOptions, LmResult, levenberg_marquardt, levenberg_marquardt_from};
-use super::options::OptionError;
 use super::{CalibrationError, Phase};
 use crate::dataset::DataSet;
+use crate::error::OptionError;
 use crate::kernel::ArmKernel;
 use crate::params::{DhParams, ParamId, ParamKind};
 use crate::residuals::{Noise, Weights, cost};
@@ -117,7 +117,7 @@ impl GlobalOptions {
                 ),
             ));
         }
-        super::options::check_nonnegative("global.noise_floor_k", self.noise_floor_k, false)
+        crate::error::check_nonnegative("global.noise_floor_k", self.noise_floor_k, false)
     }
 }
 
@@ -196,6 +196,8 @@ pub(crate) struct GlobalProblem<'a> {
     pub free: &'a [usize],
     /// LM tolerances.
     pub lm: &'a LmOptions,
+    /// Worker threads of the normal equations.
+    pub threads: usize,
     /// Degrees of freedom; with stated noise, enables the noise floor.
     pub stated_dof: Option<usize>,
     /// The normal equations at the start over `free`, when already computed.
@@ -261,6 +263,7 @@ pub(crate) fn global<R: Rng>(
         weights,
         free,
         lm,
+        threads,
         stated_dof,
         ..
     } = *problem;
@@ -303,8 +306,8 @@ pub(crate) fn global<R: Rng>(
         lm.max_iterations(lm.max_iterations.min(options.start_iterations))
     };
     let first = match problem.start_normal.clone() {
-        Some(normal) => levenberg_marquardt_from(start, normal, data, weights, &start_lm)?,
-        None => levenberg_marquardt(start, data, weights, free, &start_lm)?,
+        Some(normal) => levenberg_marquardt_from(start, normal, data, weights, &start_lm, threads)?,
+        None => levenberg_marquardt(start, data, weights, free, &start_lm, threads)?,
     };
     phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
     // A cut-off start within this cost of the floor is finished.
@@ -328,10 +331,10 @@ pub(crate) fn global<R: Rng>(
         };
         let refine = |x: &DhParams, phases: &mut Vec<Phase>| -> Result<Minimum, CalibrationError> {
             let timer = std::time::Instant::now();
-            let zeros = levenberg_marquardt(x, data, weights, &circles, &zero_lm)?;
+            let zeros = levenberg_marquardt(x, data, weights, &circles, &zero_lm, threads)?;
             phases[2].add_lm(&zeros, timer.elapsed().as_secs_f64());
             let timer = std::time::Instant::now();
-            let fit = levenberg_marquardt(&zeros.params, data, weights, free, &start_lm)?;
+            let fit = levenberg_marquardt(&zeros.params, data, weights, free, &start_lm, threads)?;
             phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
             settle(fit, problem, &mut phases[3], promising)
         };
@@ -410,7 +413,7 @@ pub(crate) fn global<R: Rng>(
                 let timer = std::time::Instant::now();
                 let mut here = Weights::new(&ArmKernel::new(&x)?, data, problem.noise, 1.0)?;
                 here.prior = problem.weights.prior.clone();
-                let fit = levenberg_marquardt(&x, data, &here, free, lm)?;
+                let fit = levenberg_marquardt(&x, data, &here, free, lm, threads)?;
                 phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
                 let m = reweigh(fit, problem, &mut phases[3])?;
                 twin_restarts += 1;
@@ -444,7 +447,7 @@ pub(crate) fn global<R: Rng>(
         // The lowest start was cut off by the per-start cap: finish its
         // descent with the full LM rather than report it unconverged.
         let timer = std::time::Instant::now();
-        let fit = levenberg_marquardt(&best.fit.params, data, weights, free, lm)?;
+        let fit = levenberg_marquardt(&best.fit.params, data, weights, free, lm, threads)?;
         phases.push(Phase::new("lm, best start finished"));
         let last = phases.len() - 1;
         phases[last].add_lm(&fit, timer.elapsed().as_secs_f64());
@@ -488,6 +491,7 @@ fn settle(
             problem.weights,
             problem.free,
             problem.lm,
+            problem.threads,
         )?;
         phase.add_lm(&done, timer.elapsed().as_secs_f64());
         return settle(done, problem, phase, None);
@@ -536,6 +540,7 @@ fn reweigh(
         &weights,
         problem.free,
         problem.lm,
+        problem.threads,
     )?;
     phase.add_lm(&refit, timer.elapsed().as_secs_f64());
     let cost = refit.normal.cost();

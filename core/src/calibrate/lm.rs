@@ -7,9 +7,9 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
-use super::options::{OptionError, check_nonnegative};
 use super::prior::{cost_at, normal_at};
 use crate::dataset::DataSet;
+use crate::error::{OptionError, check_nonnegative};
 use crate::params::DhParams;
 use crate::residuals::{Normal, Weights};
 
@@ -86,14 +86,6 @@ pub struct LmOptions {
     pub xtol: f64,
     /// Largest cosine between a column and the residuals at a minimum.
     pub gtol: f64,
-    /// Worker threads for the normal equations (results do not depend on
-    /// it, so neither does the serialised form: same bytes on any machine).
-    #[serde(skip, default = "one")]
-    pub threads: usize,
-}
-
-fn one() -> usize {
-    1
 }
 
 impl Default for LmOptions {
@@ -103,7 +95,6 @@ impl Default for LmOptions {
             ftol: 1e-12,
             xtol: 1e-12,
             gtol: 1e-12,
-            threads: 1,
         }
     }
 }
@@ -116,8 +107,7 @@ setters!(LmOptions {
 });
 
 impl LmOptions {
-    /// Checks the settings; the error names the setting (`lm.ftol`, …,
-    /// `threads`).
+    /// Checks the settings; the error names the setting (`lm.ftol`, …).
     ///
     /// ```
     /// use aacmm_core::calibrate::LmOptions;
@@ -135,16 +125,7 @@ impl LmOptions {
         ] {
             check_nonnegative(field, v, true)?;
         }
-        if self.threads == 0 {
-            return Err(OptionError::new("threads", 0, "at least 1"));
-        }
         Ok(())
-    }
-
-    /// Sets the worker threads.
-    pub fn threads(mut self, n: usize) -> Self {
-        self.threads = n.max(1);
-        self
     }
 }
 
@@ -205,7 +186,8 @@ impl LmResult {
 }
 
 /// Minimises the weighted cost over the parameters `free` (indices in the
-/// fixed order of [`crate::params`]) from `start`.
+/// fixed order of [`crate::params`]) from `start`, the normal equations on
+/// `threads` threads.
 ///
 /// Never returns NaN: a trial step with a non-finite cost is rejected like
 /// any step that does not lower the cost.
@@ -215,9 +197,10 @@ pub(crate) fn levenberg_marquardt(
     weights: &Weights,
     free: &[usize],
     options: &LmOptions,
+    threads: usize,
 ) -> Result<LmResult, CalibrationError> {
-    let normal = normal_at(start, data, weights, free, options.threads)?;
-    let mut fit = levenberg_marquardt_from(start, normal, data, weights, options)?;
+    let normal = normal_at(start, data, weights, free, threads)?;
+    let mut fit = levenberg_marquardt_from(start, normal, data, weights, options, threads)?;
     fit.jacobian_evaluations += 1;
     Ok(fit)
 }
@@ -230,6 +213,7 @@ pub(crate) fn levenberg_marquardt_from(
     data: &DataSet,
     weights: &Weights,
     options: &LmOptions,
+    threads: usize,
 ) -> Result<LmResult, CalibrationError> {
     let free = &normal.free.clone();
     let p = free.len();
@@ -322,7 +306,7 @@ pub(crate) fn levenberg_marquardt_from(
                 break;
             }
             x = trial;
-            normal = normal_at(&params_of(&x)?, data, weights, free, options.threads)?;
+            normal = normal_at(&params_of(&x)?, data, weights, free, threads)?;
             (n, g) = matrices(&normal);
             jacobian_evaluations += 1;
             lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));

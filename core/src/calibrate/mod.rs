@@ -52,11 +52,14 @@ pub mod validate;
 
 use serde::{Deserialize, Serialize};
 
+use crate::error::OptionError;
 pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub use lm::{LmIteration, LmOptions, LmResult, Termination};
-pub use options::{CalibrateOptions, DEFAULT_LENGTH_SIGMA_MM, FixSpec, OptionError};
-pub use prior::{PriorConditioning, PriorEstimate, PriorReport, Target, Tolerances};
+pub use options::{
+    DEFAULT_LENGTH_SIGMA_MM, FixSpec, ModelOptions, SolverSettings, available_threads,
+};
+pub use prior::{PriorConditioning, PriorEstimate, PriorReport};
 pub use robust::{Loss, Robust, RobustFit};
 pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
@@ -100,10 +103,6 @@ pub enum CalibrationError {
         /// Median of stated length / nominal distance.
         ratio: f64,
     },
-    /// The report could not be drawn.
-    #[cfg(feature = "report")]
-    #[error(transparent)]
-    Report(#[from] crate::report::ReportError),
     /// A parameter vector of the wrong length (a bug, not user input).
     #[error("internal: parameter vector of the wrong length")]
     Shape,
@@ -429,7 +428,7 @@ pub struct Calibration {
     /// Plausibility of the arm and of the fit.
     pub checks: Checks,
     /// The robust fit and every touch's weight (only when one ran:
-    /// [`CalibrateOptions::robust`]).
+    /// [`ModelOptions::robust`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robust: Option<RobustFit>,
     /// The prior and the data's share of the information per parameter
@@ -464,8 +463,8 @@ impl Calibration {
     }
 }
 
-/// Calibrates `start` (the nominal arm) on `data` with `options.method`,
-/// `options.lm.threads` threads and `options.seed`.
+/// Calibrates `start` (the nominal arm) on `data`: the model `model`, solved
+/// as `settings` say (method, threads, seed).
 ///
 /// ```
 /// use aacmm_core::{calibrate::*, io::Arm, params::DhParams, simulate::*};
@@ -474,36 +473,42 @@ impl Calibration {
 /// settings.reference_lengths = 3;
 /// let campaign = simulate(&nominal, &settings).unwrap();
 /// let data = campaign.data_set().unwrap();
-/// let c = calibrate(&nominal.params, &data, &CalibrateOptions::default()).unwrap();
+/// let model = ModelOptions::default();
+/// let c = calibrate(&nominal.params, &data, &model, &SolverSettings::default()).unwrap();
 /// assert!(c.solver.successful);
 /// assert_eq!(c.parameters.iter().filter(|p| p.fixed.is_none()).count(), 21);
 /// ```
 pub fn calibrate(
     start: &DhParams,
     data: &DataSet,
-    options: &CalibrateOptions,
+    model: &ModelOptions,
+    settings: &SolverSettings,
 ) -> Result<Calibration, CalibrationError> {
-    let mut ctx = Context::new(options.lm.threads, options.seed);
-    calibrate_with(start, data, options, &*options.method.solver(), &mut ctx)
+    let solver = settings.method.solver();
+    calibrate_with(start, data, model, settings, &*solver, &mut Context::new())
 }
 
-/// [`calibrate`] with a given solver and context (threads, seed, progress
-/// observer). Checks every setting first ([`CalibrateOptions::check_for`]).
+/// [`calibrate`] with a given solver and context (a progress observer).
+/// Checks every setting first ([`ModelOptions::check_for`],
+/// [`SolverSettings::check`]).
 pub fn calibrate_with(
     start: &DhParams,
     data: &DataSet,
-    options: &CalibrateOptions,
+    model: &ModelOptions,
+    settings: &SolverSettings,
     solver: &dyn Solver,
     ctx: &mut Context,
 ) -> Result<Calibration, CalibrationError> {
-    options.check_for(start)?;
+    model.check_for(start)?;
+    settings.check()?;
+    let threads = settings.threads;
     let kernel = ArmKernel::new(start)?;
-    let mut weights = Weights::new_threads(&kernel, data, &options.noise, 1.0, ctx.threads)?;
+    let mut weights = Weights::new_threads(&kernel, data, &model.noise, 1.0, threads)?;
     // One pass over the data at the start serves the identifiability
     // analysis and, restricted to the free columns, the first step.
     let timer = std::time::Instant::now();
-    let full = crate::identify::full_normal(start, data, &weights, ctx.threads)?;
-    let (free, identification, reasons) = match &options.fix {
+    let full = crate::identify::full_normal(start, data, &weights, threads)?;
+    let (free, identification, reasons) = match &model.fix {
         FixSpec::Auto => {
             let id = identify_from(start, data, full.clone());
             let free = id.free_columns();
@@ -518,7 +523,7 @@ pub fn calibrate_with(
             // A tolerance determines its parameter as a fixed value would
             // (the prior sees every direction that moves it): only
             // directions among the free parameters without one are open.
-            let sigmas = options.prior.as_ref().map(|t| t.sigmas_for(start));
+            let sigmas = model.prior.as_ref().map(|t| t.sigmas_for(start));
             let unknown: Vec<usize> = free
                 .iter()
                 .copied()
@@ -539,14 +544,14 @@ pub fn calibrate_with(
     if free.is_empty() {
         return Err(OptionError::new(
             "fix",
-            options.fix.describe_for(start),
+            model.fix.describe_for(start),
             "every parameter is fixed: nothing is left to calibrate",
         )
         .into());
     }
     // The fixed set is the data's own (see [`prior`]); the prior then
     // rides with the weights into every fit.
-    weights.prior = options
+    weights.prior = model
         .prior
         .as_ref()
         .and_then(|t| prior::PriorTerm::new(t, start));
@@ -572,8 +577,9 @@ pub fn calibrate_with(
         start,
         data,
         free: &free,
-        options,
-        stated_dof: options.noise.stated().then_some(counts.dof()),
+        model,
+        settings,
+        stated_dof: model.noise.stated().then_some(counts.dof()),
         weights: &weights,
         start_normal,
     };
@@ -583,9 +589,9 @@ pub fn calibrate_with(
         assess::Setup {
             start,
             data,
-            options,
+            model,
+            settings,
             method: solver.method(),
-            threads: ctx.threads,
             free,
             identification,
             reasons,

@@ -1,75 +1,20 @@
 //! The settings of a calibration, and the one place that checks them.
 //!
-//! Every setting is checked before any work starts ([`CalibrateOptions::check`],
-//! called by [`crate::session::Problem::new`]); a setting out of range is an
-//! [`OptionError`] naming the setting's path in [`CalibrateOptions`]
-//! (`noise.probe_mm`, `anneal.cooling`, `fix`). Front ends map those paths to
-//! their own spelling: the command line to its flags, the C API to its struct
-//! fields.
+//! Two homes, one for each side: [`ModelOptions`] (what is fitted and how
+//! the result is judged: noise, fixed set, loss, tolerances — the problem
+//! holds them) and [`SolverSettings`] (how it is solved: method, LM,
+//! annealing, global search, threads, seed). Every setting is checked before
+//! any work starts; a setting out of range is an [`OptionError`] naming the
+//! setting's path in its struct (`noise.probe_mm`, `anneal.cooling`, `fix`,
+//! `threads`). Front ends map those paths to their own spelling: the command
+//! line to its flags, the C API to its option names.
 
 use serde::{Deserialize, Serialize};
 
 use super::{AnnealOptions, GlobalOptions, LmOptions, Method, SwitchRule};
+use crate::error::OptionError;
 use crate::params::{ParamId, param_count};
 use crate::residuals::Noise;
-
-/// A setting out of range: which one (its path in [`CalibrateOptions`],
-/// e.g. `noise.probe_mm`, `anneal.cooling`, `global.max_starts`, `fix`,
-/// `robust.scale_k`, `threads`, `cross_validate`) and why.
-///
-/// ```
-/// use aacmm_core::calibrate::{CalibrateOptions, OptionError};
-/// let mut o = CalibrateOptions::default();
-/// o.anneal.cooling = 1.5;
-/// let e: OptionError = o.check(6).unwrap_err();
-/// assert_eq!(e.field, "anneal.cooling");
-/// assert_eq!(e.to_string(), "anneal.cooling = 1.5: must lie strictly between 0 and 1");
-/// ```
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{field} = {value}: {reason}")]
-#[non_exhaustive]
-pub struct OptionError {
-    /// The setting's path in [`CalibrateOptions`] (or `cross_validate`).
-    pub field: &'static str,
-    /// The value refused, as text (in the setting's own unit).
-    pub value: String,
-    /// Why it is refused.
-    pub reason: String,
-}
-
-impl OptionError {
-    /// A refusal of `value` for `field`, because of `reason`.
-    pub fn new(
-        field: &'static str,
-        value: impl std::fmt::Display,
-        reason: impl Into<String>,
-    ) -> OptionError {
-        OptionError {
-            field,
-            value: value.to_string(),
-            reason: reason.into(),
-        }
-    }
-}
-
-/// `Ok` when `v` is finite and `> 0` (or `≥ 0` with `zero_ok`).
-pub(crate) fn check_nonnegative(
-    field: &'static str,
-    v: f64,
-    zero_ok: bool,
-) -> Result<(), OptionError> {
-    let ok = v.is_finite() && (v > 0.0 || (zero_ok && v == 0.0));
-    if ok {
-        Ok(())
-    } else {
-        let bound = if zero_ok { "≥ 0" } else { "> 0" };
-        Err(OptionError::new(
-            field,
-            v,
-            format!("must be a finite number {bound}"),
-        ))
-    }
-}
 
 /// Which parameters stay at their start values.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -212,25 +157,16 @@ impl FixSpec {
 /// σ of a reference length whose file states none, mm.
 pub const DEFAULT_LENGTH_SIGMA_MM: f64 = crate::residuals::DEFAULT_LENGTH_SIGMA_MM;
 
-/// Settings of a calibration.
+/// What a calibration fits and how its result is judged: the model's side
+/// of the settings, which the problem holds (the data's noise, the fixed
+/// set, the loss, the stated tolerances, the verdict's policy). How it is
+/// solved is [`SolverSettings`]'s.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CalibrateOptions {
+pub struct ModelOptions {
     /// The fixed set.
     pub fix: FixSpec,
     /// What is known of the noise.
     pub noise: Noise,
-    /// The solver.
-    pub method: Method,
-    /// LM's tolerances (every method but `sa` ends with LM).
-    pub lm: LmOptions,
-    /// The annealer's settings (`sa`, `hybrid`).
-    pub anneal: AnnealOptions,
-    /// The hybrid's switching rule.
-    pub switch: SwitchRule,
-    /// The global method's settings.
-    pub global: GlobalOptions,
-    /// Seed of every random draw (annealing moves, starts, folds).
-    pub seed: u64,
     /// Call a fit usable even when its χ² is far outside the stated noise or
     /// the calibrated arm is worse than the nominal on its own data (never
     /// a mirror-image or collapsed arm).
@@ -243,20 +179,14 @@ pub struct CalibrateOptions {
     /// Stated tolerances of the nominal geometry: a prior
     /// ([`super::prior`]); `None` (the default) fits the data alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub prior: Option<super::Tolerances>,
+    pub prior: Option<crate::tolerances::Tolerances>,
 }
 
-impl Default for CalibrateOptions {
+impl Default for ModelOptions {
     fn default() -> Self {
-        CalibrateOptions {
+        ModelOptions {
             fix: FixSpec::Auto,
             noise: Noise::default(),
-            method: Method::default(),
-            lm: LmOptions::default(),
-            anneal: AnnealOptions::default(),
-            switch: SwitchRule::default(),
-            global: GlobalOptions::default(),
-            seed: 0,
             accept_poor_fit: false,
             robust: None,
             prior: None,
@@ -264,62 +194,145 @@ impl Default for CalibrateOptions {
     }
 }
 
-impl CalibrateOptions {
+impl ModelOptions {
     /// Checks every setting for an arm of `joints` joints: the first one
     /// out of range is refused by its path.
     ///
     /// ```
-    /// use aacmm_core::calibrate::{CalibrateOptions, FixSpec};
-    /// assert!(CalibrateOptions::default().check(6).is_ok());
-    /// let o = CalibrateOptions { fix: FixSpec::Columns(vec![3, 27]), ..Default::default() };
+    /// use aacmm_core::calibrate::{FixSpec, ModelOptions};
+    /// assert!(ModelOptions::default().check(6).is_ok());
+    /// let o = ModelOptions { fix: FixSpec::Columns(vec![3, 27]), ..Default::default() };
     /// assert_eq!(o.check(6).unwrap_err().field, "fix");
     /// ```
     pub fn check(&self, joints: usize) -> Result<(), OptionError> {
         self.noise.check()?;
         if let FixSpec::Columns(columns) = &self.fix {
-            let count = param_count(joints);
-            if let Some(&c) = columns.iter().find(|&&c| c >= count) {
-                return Err(OptionError::new(
-                    "fix",
-                    c,
-                    format!(
-                        "column {c}: a {joints}-joint arm has parameters 0 to {}",
-                        count - 1
-                    ),
-                ));
-            }
-            let mut sorted = columns.clone();
-            sorted.sort_unstable();
-            if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-                let name =
-                    ParamId::from_column(joints, w[0]).map_or(String::new(), |p| format!(" ({p})"));
-                return Err(OptionError::new(
-                    "fix",
-                    w[0],
-                    format!("column {}{name} is listed twice", w[0]),
-                ));
-            }
+            check_fixed_columns(columns, joints)?;
         }
         if let Some(t) = &self.prior {
             t.check(joints)?;
         }
-        self.lm.check()?;
-        self.anneal.check()?;
-        self.switch.check()?;
-        if let Some(r) = &self.robust {
-            r.check()?;
+        match &self.robust {
+            Some(r) => r.check(),
+            None => Ok(()),
         }
-        self.global.check()
     }
 
-    /// [`CalibrateOptions::check`] for the arm `arm`, and the prior's
-    /// parameters are the arm's ([`super::Tolerances::check_for`]: a
-    /// Hayati joint has `hbeta…`, not `d…`).
+    /// [`ModelOptions::check`] for the arm `arm`, and the prior's
+    /// parameters are the arm's ([`crate::tolerances::Tolerances::check_for`]:
+    /// a Hayati joint has `hbeta…`, not `d…`).
     pub fn check_for(&self, arm: &crate::params::DhParams) -> Result<(), OptionError> {
         self.check(arm.joint_count())?;
         match &self.prior {
             Some(t) => t.check_for(arm),
             None => Ok(()),
         }
+    }
+}
+
+/// Refuses fixed columns out of range for a `joints`-joint arm, or listed
+/// twice.
+fn check_fixed_columns(columns: &[usize], joints: usize) -> Result<(), OptionError> {
+    let count = param_count(joints);
+    if let Some(&c) = columns.iter().find(|&&c| c >= count) {
+        return Err(OptionError::new(
+            "fix",
+            c,
+            format!(
+                "column {c}: a {joints}-joint arm has parameters 0 to {}",
+                count - 1
+            ),
+        ));
+    }
+    let mut sorted = columns.to_vec();
+    sorted.sort_unstable();
+    if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+        let name = ParamId::from_column(joints, w[0]).map_or(String::new(), |p| format!(" ({p})"));
+        return Err(OptionError::new(
+            "fix",
+            w[0],
+            format!("column {}{name} is listed twice", w[0]),
+        ));
+    }
+    Ok(())
+}
+
+/// How a calibration is solved: the method and its settings, the worker
+/// threads and the seed — each in this one place. Results never depend on
+/// the threads; the same seed gives the same bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolverSettings {
+    /// The solver.
+    pub method: Method,
+    /// LM's tolerances (every method but `sa` ends with LM).
+    pub lm: LmOptions,
+    /// The annealer's settings (`sa`, `hybrid`).
+    pub anneal: AnnealOptions,
+    /// The hybrid's switching rule.
+    pub switch: SwitchRule,
+    /// The global method's settings.
+    pub global: GlobalOptions,
+    /// Worker threads (≥ 1); the default is every core the system offers.
+    pub threads: usize,
+    /// Seed of every random draw (annealing moves, starts, folds).
+    pub seed: u64,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            method: Method::default(),
+            lm: LmOptions::default(),
+            anneal: AnnealOptions::default(),
+            switch: SwitchRule::default(),
+            global: GlobalOptions::default(),
+            threads: available_threads(),
+            seed: 0,
+        }
+    }
+}
+
+/// The cores the system offers this process (1 when it cannot tell).
+///
+/// ```
+/// assert!(aacmm_core::calibrate::available_threads() >= 1);
+/// ```
+pub fn available_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+impl SolverSettings {
+    /// Checks every setting: the first one out of range is refused by its
+    /// path (`lm.ftol`, `anneal.cooling`, `global.max_starts`, `threads`, …).
+    ///
+    /// ```
+    /// use aacmm_core::calibrate::SolverSettings;
+    /// assert!(SolverSettings::default().check().is_ok());
+    /// let s = SolverSettings { threads: 0, ..Default::default() };
+    /// assert_eq!(s.check().unwrap_err().field, "threads");
+    /// ```
+    pub fn check(&self) -> Result<(), OptionError> {
+        if self.threads == 0 {
+            return Err(OptionError::new("threads", 0, "at least 1"));
+        }
+        self.lm.check()?;
+        self.anneal.check()?;
+        self.switch.check()?;
+        self.global.check()
+    }
+
+    /// These settings with `method`.
+    pub fn with_method(self, method: Method) -> SolverSettings {
+        SolverSettings { method, ..self }
+    }
+
+    /// These settings on `threads` threads.
+    pub fn with_threads(self, threads: usize) -> SolverSettings {
+        SolverSettings { threads, ..self }
+    }
+
+    /// These settings with `seed`.
+    pub fn with_seed(self, seed: u64) -> SolverSettings {
+        SolverSettings { seed, ..self }
     }
 }

@@ -170,7 +170,7 @@ impl Robust {
     /// assert_eq!(e.field, "robust.scale_k");
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
-        super::options::check_nonnegative("robust.scale_k", self.scale_k, false)
+        crate::error::check_nonnegative("robust.scale_k", self.scale_k, false)
     }
 }
 
@@ -302,6 +302,7 @@ pub(crate) fn irls(
     base: &Weights,
     free: &[usize],
     lm: &LmOptions,
+    threads: usize,
     dof_factor: f64,
     stated: bool,
 ) -> Result<Irls, CalibrationError> {
@@ -335,7 +336,7 @@ pub(crate) fn irls(
             break;
         }
         w = next;
-        let fit = levenberg_marquardt(&params, data, &base.scaled_touches(&w), free, lm)?;
+        let fit = levenberg_marquardt(&params, data, &base.scaled_touches(&w), free, lm, threads)?;
         phase.add_lm(&fit, 0.0);
         passes += 1;
         params = fit.params.clone();

@@ -1,7 +1,7 @@
 //! The solvers behind one trait: each takes the same [`Task`] (start arm,
-//! data, weights, free columns, settings) and a [`Context`] (threads,
-//! seed, progress observer), and returns an [`Outcome`] with its own
-//! [`Stop`] reason. What follows a solve — reweighing at the solution,
+//! data, weights, free columns, the model's and the solver's settings) and
+//! a [`Context`] (a progress observer), and returns an [`Outcome`] with its
+//! own [`Stop`] reason. What follows a solve — reweighing at the solution,
 //! covariance, dof — is [`super::assess`], the same for every solver.
 
 use serde::{Deserialize, Serialize};
@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::anneal::{self, AnnealStop, AnnealTrace};
 use super::global::{self, GlobalStop, GlobalTrace};
 use super::lm::{self, LmIteration, LmResult, Termination, levenberg_marquardt};
-use super::{CalibrateOptions, CalibrationError, Method, Phase};
+use super::{CalibrationError, Method, ModelOptions, Phase, SolverSettings};
 use crate::dataset::DataSet;
 use crate::params::DhParams;
 use crate::random::{rng, streams};
@@ -18,15 +18,11 @@ use crate::residuals::{Normal, Weights};
 /// Told `(phase, fraction done)` as a solver runs.
 pub type Observer<'a> = &'a mut dyn FnMut(&str, f64);
 
-/// How a solver runs: worker threads, the seed of its random stream
-/// ([`crate::random`]), and an observer told the phase running and the
-/// fraction of it done (for a progress bar). Results never depend on the
-/// threads.
+/// What a solver reports to while it runs: an observer told the phase
+/// running and the fraction of it done (for a progress bar). Threads and
+/// seed are settings ([`super::SolverSettings`]), not part of it.
+#[derive(Default)]
 pub struct Context<'a> {
-    /// Worker threads (≥ 1).
-    pub threads: usize,
-    /// Seed of the solver's random stream.
-    pub seed: u64,
     /// Told `(phase, fraction done)`, if any.
     pub observer: Option<Observer<'a>>,
 }
@@ -35,15 +31,11 @@ impl<'a> Context<'a> {
     /// A context with no observer.
     ///
     /// ```
-    /// let ctx = aacmm_core::calibrate::Context::new(2, 7);
-    /// assert_eq!((ctx.threads, ctx.seed), (2, 7));
+    /// let ctx = aacmm_core::calibrate::Context::new();
+    /// assert!(ctx.observer.is_none());
     /// ```
-    pub fn new(threads: usize, seed: u64) -> Context<'a> {
-        Context {
-            threads: threads.max(1),
-            seed,
-            observer: None,
-        }
+    pub fn new() -> Context<'a> {
+        Context { observer: None }
     }
 
     /// This context, telling `observer` the progress.
@@ -69,8 +61,10 @@ pub struct Task<'a> {
     pub data: &'a DataSet,
     /// The free columns (fixed order).
     pub free: &'a [usize],
-    /// The settings (noise, tolerances, the solvers' own settings).
-    pub options: &'a CalibrateOptions,
+    /// The model's settings (noise, tolerances).
+    pub model: &'a ModelOptions,
+    /// The solvers' settings, threads and seed.
+    pub settings: &'a SolverSettings,
     /// Degrees of freedom when the noise is stated (enables noise-floor
     /// tests), else `None`.
     pub stated_dof: Option<usize>,
@@ -247,25 +241,20 @@ impl Method {
     }
 }
 
-/// The task's LM settings with the context's threads.
-fn lm_options(task: &Task, ctx: &Context) -> lm::LmOptions {
-    task.options.lm.threads(ctx.threads)
-}
-
 impl Solver for Lm {
     fn method(&self) -> Method {
         Method::Lm
     }
 
-    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
+    fn solve(&self, task: Task<'_>, _ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
         let timer = std::time::Instant::now();
-        let options = lm_options(&task, ctx);
         let fit = lm::levenberg_marquardt_from(
             task.start,
             task.start_normal,
             task.data,
             task.weights,
-            &options,
+            &task.settings.lm,
+            task.settings.threads,
         )?;
         let mut phase = Phase::new("lm");
         phase.add_lm(&fit, timer.elapsed().as_secs_f64());
@@ -285,14 +274,13 @@ impl Solver for Anneal {
 
     fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
         let timer = std::time::Instant::now();
-        let options = lm_options(&task, ctx);
-        let mut rng = rng(ctx.seed, streams::SOLVER);
+        let mut rng = rng(task.settings.seed, streams::SOLVER);
         let (best, trace) = anneal::anneal_observed(
             task.start,
             task.data,
             task.free,
-            &task.options.anneal,
-            self.hybrid.then_some(&task.options.switch),
+            &task.settings.anneal,
+            self.hybrid.then_some(&task.settings.switch),
             &mut rng,
             &mut |f| ctx.observe("anneal", f),
         )?;
@@ -303,7 +291,14 @@ impl Solver for Anneal {
         }];
         let mut outcome = if self.hybrid {
             let timer = std::time::Instant::now();
-            let fit = levenberg_marquardt(&best, task.data, task.weights, task.free, &options)?;
+            let fit = levenberg_marquardt(
+                &best,
+                task.data,
+                task.weights,
+                task.free,
+                &task.settings.lm,
+                task.settings.threads,
+            )?;
             let mut phase = Phase::new("lm");
             phase.add_lm(&fit, timer.elapsed().as_secs_f64());
             phases.push(phase);
@@ -315,8 +310,13 @@ impl Solver for Anneal {
         } else {
             // No LM: the normal equations at the best point give the
             // covariance.
-            let normal =
-                super::prior::normal_at(&best, task.data, task.weights, task.free, ctx.threads)?;
+            let normal = super::prior::normal_at(
+                &best,
+                task.data,
+                task.weights,
+                task.free,
+                task.settings.threads,
+            )?;
             phases[0].jacobian_evaluations = 1;
             Outcome {
                 params: best,
@@ -340,21 +340,21 @@ impl Solver for Global {
     }
 
     fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
-        let options = lm_options(&task, ctx);
-        let mut rng = rng(ctx.seed, streams::SOLVER);
+        let mut rng = rng(task.settings.seed, streams::SOLVER);
         let problem = global::GlobalProblem {
             data: task.data,
-            noise: &task.options.noise,
+            noise: &task.model.noise,
             weights: task.weights,
             free: task.free,
-            lm: &options,
+            lm: &task.settings.lm,
+            threads: task.settings.threads,
             stated_dof: task.stated_dof,
             start_normal: Some(task.start_normal),
         };
         let (fit, trace, phases) = global::global(
             task.start,
             &problem,
-            &task.options.global,
+            &task.settings.global,
             &mut rng,
             &mut |f| ctx.observe("global", f),
         )?;

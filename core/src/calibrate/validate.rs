@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{CalibrateOptions, CalibrationError, OptionError, calibrate};
+use super::{CalibrationError, ModelOptions, OptionError, SolverSettings, calibrate};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::metrics::evaluate_without_pairs;
@@ -84,14 +84,16 @@ pub struct Fold {
 
 /// `k`-fold cross-validation over points: points joined by a reference
 /// length stay in one fold (so every fold is also scored on lengths where it
-/// has them); groups are dealt to folds in an order shuffled by `seed`.
+/// has them); groups are dealt to folds in an order shuffled by the
+/// settings' seed, and each fold is calibrated with `model` and `settings`.
 pub fn cross_validate(
     start: &DhParams,
     data: &DataSet,
-    options: &CalibrateOptions,
+    model: &ModelOptions,
+    settings: &SolverSettings,
     k: usize,
-    seed: u64,
 ) -> Result<Vec<Fold>, CalibrationError> {
+    let seed = settings.seed;
     check_folds(data, k)?;
     let groups = length_groups(data);
     let mut order: Vec<usize> = (0..groups.len()).collect();
@@ -113,7 +115,7 @@ pub fn cross_validate(
                 .collect();
             let train_data = data.subset(&train);
             let test_data = data.subset(&held);
-            let fit = calibrate(start, &train_data, options)?;
+            let fit = calibrate(start, &train_data, model, settings)?;
             Ok(Fold {
                 held_out: held
                     .iter()

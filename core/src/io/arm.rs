@@ -52,6 +52,7 @@ use super::text::{line_of, parse_toml, read_text, suggest};
 use super::units::{AngleUnit, LengthUnit};
 use crate::error::InputError;
 use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
+use crate::tolerances::Tolerances;
 
 /// In an arm file in metres, a length above this (m) draws a warning: no
 /// measuring arm is that long, so the lengths are likely millimetres.
@@ -67,6 +68,10 @@ pub struct Arm {
     /// Per joint, the optional `[min, max]` of the encoder reading `q`, rad.
     /// Has one entry per joint when read from a file.
     pub limits: Vec<Option<[f64; 2]>>,
+    /// The stated tolerances of the nominal geometry (the arm file's
+    /// `[prior]` table), if any: a fit uses them as a prior unless told
+    /// otherwise.
+    pub prior: Option<Tolerances>,
 }
 
 impl Arm {
@@ -83,6 +88,7 @@ impl Arm {
             name: name.into(),
             params,
             limits: vec![None; n],
+            prior: None,
         }
     }
 }
@@ -129,10 +135,12 @@ pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputErr
     let doc = parse_toml(text, file)?;
     let schema = ArmFile::deserialize(toml::de::Deserializer::from(doc.clone()))
         .map_err(|e| schema_error(text, file, doc.get_ref(), &e))?;
-    let (arm, warnings) = schema.to_arm(text, file)?;
+    let (mut arm, warnings) = schema.to_arm(text, file)?;
     if doc.get_ref().contains_key("prior") {
-        // Checked by every reader, used by the fits: a typo is never ignored.
-        super::prior::parse_prior_of(text, file, arm.params.joint_count(), Some(&arm.params))?;
+        // Read with the arm, so every front end fits with it: a typo is
+        // never ignored, and no reader can leave the tolerances behind.
+        arm.prior =
+            super::prior::parse_prior_of(text, file, arm.params.joint_count(), Some(&arm.params))?;
     }
     Ok((arm, warnings))
 }
@@ -405,6 +413,7 @@ impl ArmFile {
                     .map(|v| lu.to_internal(*v.get_ref())),
             },
             limits: Vec::with_capacity(joints.len()),
+            prior: None,
         };
         for (i, (j, &model)) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate() {
             let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
@@ -1212,6 +1221,7 @@ z = 100.0
                     probe: [rng.random(), rng.random(), 1e-12],
                 },
                 limits,
+                prior: None,
             };
             let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Rad);
             let (back, _) = parse_arm(&text, F).unwrap();

@@ -50,7 +50,7 @@ pub use lengths::{
 };
 pub use points::{parse_points, read_points, write_points};
 pub use poses::{Poses, parse_poses, read_poses, write_poses};
-pub use prior::{parse_prior, read_arm_with_prior};
+pub use prior::parse_prior;
 pub use text::source_name;
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
 

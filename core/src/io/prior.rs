@@ -1,5 +1,5 @@
 //! The optional `[prior]` table of an arm file: stated 1σ tolerances of the
-//! nominal geometry ([`crate::calibrate::prior`]).
+//! nominal geometry ([`crate::tolerances`]).
 //!
 //! ```toml
 //! [prior]              # optional; every key NAME_UNIT, unit mm or m / deg or rad
@@ -11,34 +11,15 @@
 //!
 //! A key without a unit, with the wrong kind of unit, an unknown name, and a
 //! value that is not a finite number > 0 are errors naming the file, line
-//! and key. [`crate::io::read_arm`] accepts the table (and ignores it);
-//! [`read_arm_with_prior`] returns it too.
-
-use std::path::Path;
+//! and key. [`crate::io::read_arm`] reads the table into
+//! [`crate::io::Arm::prior`].
 
 use toml::Spanned;
 use toml::de::DeValue;
 
-use super::Warning;
-use super::arm::{Arm, parse_arm};
-use super::text::{line_of, parse_toml, read_text};
-use crate::calibrate::Tolerances;
-use crate::calibrate::prior::{Target, not_in_arm, unknown_target};
+use super::text::{line_of, parse_toml};
 use crate::error::InputError;
-
-/// Reads an arm file and its `[prior]` table (`None` without one).
-///
-/// # Errors
-///
-/// [`crate::io::read_arm`]'s, and a bad `[prior]` entry (file, line, key).
-pub fn read_arm_with_prior(
-    path: &Path,
-) -> Result<(Arm, Option<Tolerances>, Vec<Warning>), InputError> {
-    let (file, text) = read_text(path)?;
-    let (arm, warnings) = parse_arm(&text, &file)?;
-    let prior = parse_prior_of(&text, &file, arm.params.joint_count(), Some(&arm.params))?;
-    Ok((arm, prior, warnings))
-}
+use crate::tolerances::{Target, Tolerances, not_in_arm, unknown_target};
 
 /// The `[prior]` table of an arm file's text for an arm of `joints` joints
 /// (`None` without one). `file` names the file in messages.

@@ -266,8 +266,8 @@ pub struct EvaluationInput<'a> {
 /// let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 5, 6);
 /// settings.reference_lengths = 2;
 /// let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
-/// let options = CalibrateOptions { method: Method::Lm, ..CalibrateOptions::default() };
-/// let cal = calibrate(&nominal.params, &data, &options).unwrap();
+/// let settings = SolverSettings::default().with_method(Method::Lm);
+/// let cal = calibrate(&nominal.params, &data, &ModelOptions::default(), &settings).unwrap();
 /// let before = positions(&nominal.params, &data).unwrap();
 /// let after = positions(&cal.params, &data).unwrap();
 /// let fitted = validate::before_after(&nominal.params, &cal.params, &data).unwrap();

@@ -8,7 +8,7 @@ use roxmltree::{Document, Node};
 
 use super::*;
 use crate::calibrate::validate::before_after;
-use crate::calibrate::{CalibrateOptions, FixSpec, Method, calibrate};
+use crate::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
 use crate::io::Arm;
 use crate::residuals::Noise;
 use crate::simulate::{CampaignSettings, ErrorModel, simulate};
@@ -45,16 +45,16 @@ fn case() -> &'static Case {
         h.probe_noise_mm = 0.01;
         let held = simulate(&nominal, &h).unwrap();
         let data = fitted.data_set().unwrap();
-        let options = CalibrateOptions {
-            method: Method::Lm,
+        let model = ModelOptions {
             noise: Noise {
                 encoder_rad: Some(0.005f64.to_radians()),
                 probe_mm: Some(0.01),
-                ..CalibrateOptions::default().noise
+                ..Noise::default()
             },
-            ..CalibrateOptions::default()
+            ..ModelOptions::default()
         };
-        let cal = calibrate(&nominal.params, &data, &options).unwrap();
+        let lm = SolverSettings::default().with_method(Method::Lm);
+        let cal = calibrate(&nominal.params, &data, &model, &lm).unwrap();
         Case {
             nominal: nominal.params,
             truth: fitted.true_arm.params,
@@ -407,12 +407,12 @@ fn bad_positions_are_errors_not_panics() {
 #[test]
 fn a_user_fixed_set_reads_as_the_users_choice() {
     let c = case();
-    let options = CalibrateOptions {
-        method: Method::Lm,
+    let model = ModelOptions {
         fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
-    let cal = calibrate(&c.nominal, &c.data, &options).unwrap();
+    let lm = SolverSettings::default().with_method(Method::Lm);
+    let cal = calibrate(&c.nominal, &c.data, &model, &lm).unwrap();
     let r = report_of(c, &cal, false).unwrap();
     let svg = figure(&r, PARAMETERS_SVG);
     assert_eq!(svg.matches("user&apos;s choice").count(), 6, "{svg}");

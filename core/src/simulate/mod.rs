@@ -138,7 +138,7 @@ fn check_probe_noise(nominal: &Arm, sigma_mm: f64) -> Result<(), SimError> {
                 "σ = {} mm is more than {}% of the arm's reach ({reach:.0} mm), at most {max:.1} mm: \
                  the ball would be seated that far from its socket, out of the workspace \
                  (a real seating noise is 0.001–0.05 mm)",
-                crate::residuals::short(sigma_mm),
+                crate::error::short(sigma_mm),
                 MAX_PROBE_NOISE_OF_REACH * 100.0
             ),
         ));

@@ -1,6 +1,6 @@
 //! Data shared by the core's integration tests.
 
-use aacmm_core::calibrate::{CalibrateOptions, FixSpec, LmOptions, Method};
+use aacmm_core::calibrate::{FixSpec, LmOptions, Method, ModelOptions, SolverSettings};
 use aacmm_core::io::ReferenceLength;
 use aacmm_core::session::Problem;
 use aacmm_core::{Arm, DataSet};
@@ -34,23 +34,28 @@ pub fn many_points(points: usize) -> DataSet {
 
 /// `calibration.json` of an 8-iteration LM session of `arm` on `data` on
 /// `threads` threads (the paper's usual fixed set), with `tune` applied to
-/// the options: what the "same bytes on any thread count" tests compare.
+/// the model and the settings: what the "same bytes on any thread count"
+/// tests compare.
 pub fn lm_report_on_threads(
     arm: &Arm,
     data: &DataSet,
     threads: usize,
-    tune: impl Fn(&mut CalibrateOptions),
+    tune: impl Fn(&mut ModelOptions, &mut SolverSettings),
 ) -> String {
-    let mut options = CalibrateOptions {
-        method: Method::Lm,
+    let mut model = ModelOptions {
         fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
-        lm: LmOptions::default().threads(threads).max_iterations(8),
-        ..CalibrateOptions::default()
+        ..ModelOptions::default()
     };
-    tune(&mut options);
-    Problem::new(arm.clone(), data.clone(), options)
+    let mut settings = SolverSettings {
+        method: Method::Lm,
+        lm: LmOptions::default().max_iterations(8),
+        threads,
+        ..SolverSettings::default()
+    };
+    tune(&mut model, &mut settings);
+    Problem::new(arm.clone(), data.clone(), model)
         .unwrap()
-        .run()
+        .run(&settings)
         .unwrap()
         .to_json()
 }
