@@ -320,8 +320,8 @@ fn read(path: &str) -> String {
 // ---------------------------------------------------------------------------
 // The layering of aacmm-core.
 
-/// A `crate::` reference: the first segment after `crate::` (for a group,
-/// `crate::{a::X, b}`, one per item) and its line.
+/// The `crate::` references of blanked source: the first segment after
+/// `crate::` (for a group, `crate::{a::X, b}`, one per item) and its line.
 fn crate_references(s: &[char]) -> Vec<(String, usize)> {
     let mut out = Vec::new();
     let mut from = 0;
