@@ -652,6 +652,22 @@ const TOUCHES_PER_CHUNK: usize = 1024;
 /// whatever the number of threads (same bytes on any machine).
 const POINTS_PER_CHUNK: usize = 64;
 
+/// How many chunks of work the normal equations of `points` points split
+/// into: chunks of a fixed number of points, run on several threads from 4
+/// chunks up (below that, on the calling thread whatever the thread count).
+/// What a test of thread-independence asks, to know that the work really
+/// splits.
+///
+/// ```
+/// use aacmm_core::residuals::point_chunks;
+/// assert_eq!(point_chunks(64), 1);
+/// assert_eq!(point_chunks(65), 2);
+/// assert!(point_chunks(300) >= 4, "300 points: on several threads");
+/// ```
+pub fn point_chunks(points: usize) -> usize {
+    points.div_ceil(POINTS_PER_CHUNK)
+}
+
 /// The normal equations of the weighted residuals at `kernel`, over the
 /// columns `free`. Chunks of points run on up to `threads` threads; the
 /// result does not depend on `threads`.
@@ -663,9 +679,9 @@ pub(crate) fn normal_equations(
     threads: usize,
 ) -> Result<Normal, KernelError> {
     let np = data.points().len();
-    let chunks: Vec<Range<usize>> = (0..np)
-        .step_by(POINTS_PER_CHUNK)
-        .map(|s| s..(s + POINTS_PER_CHUNK).min(np))
+    // Counted by `point_chunks`, so that what it tells the tests holds here.
+    let chunks: Vec<Range<usize>> = (0..point_chunks(np))
+        .map(|c| c * POINTS_PER_CHUNK..((c + 1) * POINTS_PER_CHUNK).min(np))
         .collect();
     let need_mean = !data.references().is_empty();
     let run = |c: &Range<usize>| chunk(kernel, data, weights, free, c.clone(), need_mean);

@@ -327,7 +327,6 @@ pub(crate) fn global<R: Rng>(
             ftol: 1e-8,
             xtol: 1e-8,
             gtol: 1e-8,
-            ..*lm
         };
         let refine = |x: &DhParams, phases: &mut Vec<Phase>| -> Result<Minimum, CalibrationError> {
             let timer = std::time::Instant::now();

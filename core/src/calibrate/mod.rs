@@ -508,39 +508,7 @@ pub fn calibrate_with(
     // analysis and, restricted to the free columns, the first step.
     let timer = std::time::Instant::now();
     let full = crate::identify::full_normal(start, data, &weights, threads)?;
-    let (free, identification, reasons) = match &model.fix {
-        FixSpec::Auto => {
-            let id = identify_from(start, data, full.clone());
-            let free = id.free_columns();
-            let reasons: Vec<(ParamId, String)> =
-                id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
-            (free, Some(id), reasons)
-        }
-        FixSpec::Columns(fixed) => {
-            let free: Vec<usize> = (0..start.param_count())
-                .filter(|c| !fixed.contains(c))
-                .collect();
-            // A tolerance determines its parameter as a fixed value would
-            // (the prior sees every direction that moves it): only
-            // directions among the free parameters without one are open.
-            let sigmas = model.prior.as_ref().map(|t| t.sigmas_for(start));
-            let unknown: Vec<usize> = free
-                .iter()
-                .copied()
-                .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
-                .collect();
-            let directions = open_directions_from(start, data, full.clone(), &unknown);
-            if !directions.is_empty() {
-                return Err(CalibrationError::Unidentifiable { directions });
-            }
-            let reasons = fixed
-                .iter()
-                .filter_map(|&c| start.param_id(c))
-                .map(|id| (id, "fixed by the user".to_string()))
-                .collect();
-            (free, None, reasons)
-        }
-    };
+    let (free, identification, reasons) = fixed_set(start, data, model, &full)?;
     if free.is_empty() {
         return Err(OptionError::new(
             "fix",
@@ -600,4 +568,49 @@ pub fn calibrate_with(
         },
         outcome,
     )
+}
+
+/// The free columns, the identifiability analysis behind them (`fix =
+/// auto`) and why each fixed parameter is fixed; a user's fixed set that
+/// leaves a direction the data (and the tolerances) cannot see is refused.
+#[allow(clippy::type_complexity)] // three plain results, named where used
+fn fixed_set(
+    start: &DhParams,
+    data: &DataSet,
+    model: &ModelOptions,
+    full: &crate::residuals::Normal,
+) -> Result<(Vec<usize>, Option<Identification>, Vec<(ParamId, String)>), CalibrationError> {
+    match &model.fix {
+        FixSpec::Auto => {
+            let id = identify_from(start, data, full.clone());
+            let free = id.free_columns();
+            let reasons: Vec<(ParamId, String)> =
+                id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
+            Ok((free, Some(id), reasons))
+        }
+        FixSpec::Columns(fixed) => {
+            let free: Vec<usize> = (0..start.param_count())
+                .filter(|c| !fixed.contains(c))
+                .collect();
+            // A tolerance determines its parameter as a fixed value would
+            // (the prior sees every direction that moves it): only
+            // directions among the free parameters without one are open.
+            let sigmas = model.prior.as_ref().map(|t| t.sigmas_for(start));
+            let unknown: Vec<usize> = free
+                .iter()
+                .copied()
+                .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
+                .collect();
+            let directions = open_directions_from(start, data, full.clone(), &unknown);
+            if !directions.is_empty() {
+                return Err(CalibrationError::Unidentifiable { directions });
+            }
+            let reasons = fixed
+                .iter()
+                .filter_map(|&c| start.param_id(c))
+                .map(|id| (id, "fixed by the user".to_string()))
+                .collect();
+            Ok((free, None, reasons))
+        }
+    }
 }
