@@ -178,7 +178,7 @@ impl InputError {
 }
 
 /// A setting out of range: which one (its path in the settings struct that
-/// holds it — `ModelOptions` or `SolverSettings` of [`crate::calibrate`] —
+/// holds it — `ModelOptions` or `SolverSettings` of [`crate::calibrate`](mod@crate::calibrate) —
 /// e.g. `noise.probe_mm`, `anneal.cooling`, `global.max_starts`, `fix`,
 /// `robust.scale_k`, `threads`, `cross_validate`) and why.
 ///
