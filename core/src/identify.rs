@@ -259,161 +259,290 @@ pub(crate) fn identify_from(
     data: &DataSet,
     normal: crate::residuals::Normal,
 ) -> Identification {
-    let n = params.joint_count();
-    let Scaled {
-        ids,
-        normal,
-        reach: r,
-        d,
-        ns,
-    } = Scaled::at(params, normal);
-    let np = ids.len();
-    let names: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
+    let mut scaled = Scaled::at(params, normal);
+    let np = scaled.ids.len();
+    let names: Vec<String> = scaled.ids.iter().map(|i| i.to_string()).collect();
     // Overflowing normal equations are analysed as seeing nothing, and say so.
-    let overflow = !ns.iter().all(|v| v.is_finite());
-    let ns = if overflow { DMatrix::zeros(np, np) } else { ns };
-    let singular_values = singular(&ns);
-
-    // Rule 1: base motion.
-    let base = [
-        ParamId {
-            kind: ParamKind::Theta,
-            index: 0,
-        }
-        .column(n),
-        ParamId {
-            kind: ParamKind::D,
-            index: 0,
-        }
-        .column(n),
-    ];
-    let mut rules = vec![Rule {
-        name: "base-motion".into(),
-        explanation: "theta1 and d1 are never identifiable: touches compared with their \
-                      centroids and distances between centroids do not see a rotation about, \
-                      or a slide along, the base axis"
-            .into(),
-    }];
+    let overflow = !scaled.ns.iter().all(|v| v.is_finite());
     if overflow {
-        rules.push(Rule {
-            name: "not-finite".into(),
-            explanation: NOT_FINITE.into(),
-        });
+        scaled.ns = DMatrix::zeros(np, np);
     }
-    let cols: Vec<usize> = (0..np).filter(|c| !base.contains(c)).collect();
-    let k = cols.len();
-    let unprojected = DMatrix::from_fn(k, k, |a, b| ns[(cols[a], cols[b])]);
-    let mut m = unprojected.clone();
-    // Rule 2: scale.
-    let scale_dir = if data.references().is_empty() {
-        let v = nalgebra::DVector::from_fn(k, |a, _| {
-            let id = ids[cols[a]];
-            if id.kind.is_length() {
-                params.get(id)
-            } else {
-                0.0
-            }
-        });
-        // The scale direction up to the exact null directions (which are
-        // unidentifiable anyway): without this, projecting `v` would merely
-        // trade one of them for it.
-        let e0 = eigen(unprojected.clone());
-        let emax = e0.eigenvalues.iter().copied().fold(0.0, f64::max);
-        let mut v = v.normalize();
-        for (i, &e) in e0.eigenvalues.iter().enumerate() {
-            if e.max(0.0).sqrt() <= RANK_TOLERANCE * emax.sqrt() {
-                let u = e0.eigenvectors.column(i);
-                v -= u * u.dot(&v);
-            }
-        }
-        let v = v.normalize();
-        let p = DMatrix::identity(k, k) - &v * v.transpose();
-        m = &p * m * &p;
-        rules.push(Rule {
-            name: "scale".into(),
-            explanation: "no reference length: scaling every length (a, d, B) scales every \
-                          residual, so the data cannot fix the arm's size; give at least one \
-                          reference length"
-                .into(),
-        });
-        Some(v)
-    } else {
-        None
-    };
-    let eig = eigen(m.clone());
-    let mut order: Vec<usize> = (0..k).collect();
-    order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-    let sv: Vec<f64> = order
-        .iter()
-        .map(|&i| eig.eigenvalues[i].max(0.0).sqrt())
-        .collect();
-    let smax = sv.first().copied().unwrap_or(0.0);
-    let threshold = RANK_TOLERANCE * smax;
-    let rank = sv.iter().filter(|&&s| s > threshold).count();
-    let relation = |i: usize, s: f64| {
-        let v = eig.eigenvectors.column(order[i]);
-        let mut terms: Vec<(String, f64)> = (0..k)
-            .filter(|&a| v[a].abs() > 0.05)
-            .map(|a| (names[cols[a]].clone(), v[a]))
-            .collect();
-        terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
-        if let Some(first) = terms.first()
-            && first.1 < 0.0
-        {
-            terms.iter_mut().for_each(|t| t.1 = -t.1);
-        }
-        Relation {
-            singular_value: s,
-            text: relation_text(&terms),
-            terms,
-        }
-    };
-    let weak_relations = (0..rank)
-        .filter(|&i| sv[i] < 1e-3 * smax)
-        .map(|i| relation(i, sv[i]))
-        .collect();
-    let condition_number = if rank > 0 {
-        smax / sv[rank - 1]
-    } else {
-        f64::INFINITY
-    };
+    let singular_values = singular(&scaled.ns);
+    let structure = Structure::of(params, data, &scaled, overflow);
+    let spectrum = Spectrum::of(&structure, &names);
+    let split = FreeSet::pivoted(params.joint_count(), &scaled, &structure, spectrum.rank);
+    let (free, correlations) = predicted(&scaled, overflow, &structure, &spectrum, &split, &names);
+    let r = scaled.reach;
+    Identification {
+        parameters: names,
+        reach_mm: r,
+        scaling: format!(
+            "angle columns divided by the reach R = {r:.1} mm (an angle counts as the arc it \
+             sweeps at R); length columns unscaled"
+        ),
+        singular_values,
+        analysed_singular_values: spectrum.sv,
+        threshold: spectrum.threshold,
+        rank: spectrum.rank,
+        condition_number: spectrum.condition_number,
+        rules: structure.rules,
+        null_relations: split.null_relations,
+        weak_relations: spectrum.weak_relations,
+        fixed: split.fixed,
+        free,
+        correlations,
+        recommendations: crate::hayati::recommendations(params),
+    }
+}
 
-    // Recommended free set: pivoted Cholesky on the analysed matrix.
-    let preferred_fixed: Vec<usize> = PAPER_FIXED
-        .iter()
-        .map(|&(kind, index)| ParamId { kind, index }.column(n))
+/// What the structural rules leave to the numerical analysis: every column
+/// but the base motion's, with the scale direction projected out when no
+/// reference length fixes the size.
+struct Structure {
+    /// The rules that fired, in the order they are reported.
+    rules: Vec<Rule>,
+    /// The columns of theta1 and d1 (rule 1).
+    base: [usize; 2],
+    /// The analysed columns: all but `base`.
+    cols: Vec<usize>,
+    /// The scaled normal matrix on `cols`.
+    unprojected: DMatrix<f64>,
+    /// `unprojected` with the scale direction projected out (rule 2), or
+    /// `unprojected` itself when reference lengths fix the size.
+    analysed: DMatrix<f64>,
+    /// Whether rule 2 fired: one more column is then fixed, for scale.
+    scale: bool,
+}
+
+impl Structure {
+    fn of(params: &DhParams, data: &DataSet, scaled: &Scaled, overflow: bool) -> Structure {
+        let n = params.joint_count();
+        let np = scaled.ids.len();
+        let base =
+            [ParamKind::Theta, ParamKind::D].map(|kind| ParamId { kind, index: 0 }.column(n));
+        let mut rules = vec![Rule {
+            name: "base-motion".into(),
+            explanation: "theta1 and d1 are never identifiable: touches compared with their \
+                          centroids and distances between centroids do not see a rotation about, \
+                          or a slide along, the base axis"
+                .into(),
+        }];
+        if overflow {
+            rules.push(Rule {
+                name: "not-finite".into(),
+                explanation: NOT_FINITE.into(),
+            });
+        }
+        let cols: Vec<usize> = (0..np).filter(|c| !base.contains(c)).collect();
+        let k = cols.len();
+        let unprojected = DMatrix::from_fn(k, k, |a, b| scaled.ns[(cols[a], cols[b])]);
+        let scale = data.references().is_empty();
+        let analysed = if scale {
+            let v = scale_direction(params, &scaled.ids, &cols, &unprojected);
+            let p = DMatrix::identity(k, k) - &v * v.transpose();
+            rules.push(Rule {
+                name: "scale".into(),
+                explanation: "no reference length: scaling every length (a, d, B) scales every \
+                              residual, so the data cannot fix the arm's size; give at least one \
+                              reference length"
+                    .into(),
+            });
+            &p * unprojected.clone() * &p
+        } else {
+            unprojected.clone()
+        };
+        Structure {
+            rules,
+            base,
+            cols,
+            unprojected,
+            analysed,
+            scale,
+        }
+    }
+}
+
+/// Rule 2's direction on the analysed columns `cols`: every length (a, d,
+/// B) in proportion to its value, a unit vector.
+fn scale_direction(
+    params: &DhParams,
+    ids: &[ParamId],
+    cols: &[usize],
+    unprojected: &DMatrix<f64>,
+) -> DVector<f64> {
+    let k = cols.len();
+    let v = DVector::from_fn(k, |a, _| {
+        let id = ids[cols[a]];
+        if id.kind.is_length() {
+            params.get(id)
+        } else {
+            0.0
+        }
+    });
+    // The scale direction up to the exact null directions (which are
+    // unidentifiable anyway): without this, projecting `v` would merely
+    // trade one of them for it.
+    let e0 = eigen(unprojected.clone());
+    let emax = e0.eigenvalues.iter().copied().fold(0.0, f64::max);
+    let mut v = v.normalize();
+    for (i, &e) in e0.eigenvalues.iter().enumerate() {
+        if e.max(0.0).sqrt() <= RANK_TOLERANCE * emax.sqrt() {
+            let u = e0.eigenvectors.column(i);
+            v -= u * u.dot(&v);
+        }
+    }
+    v.normalize()
+}
+
+/// The eigen decomposition of the analysed matrix, read as singular values:
+/// the numerical rank, the condition and the weak directions.
+struct Spectrum {
+    eig: SymmetricEigen<f64, Dyn>,
+    /// Indices of `eig`'s eigenvalues, largest first.
+    order: Vec<usize>,
+    /// Singular values, descending (`order`'s eigenvalues, square-rooted).
+    sv: Vec<f64>,
+    threshold: f64,
+    rank: usize,
+    condition_number: f64,
+    weak_relations: Vec<Relation>,
+}
+
+impl Spectrum {
+    fn of(structure: &Structure, names: &[String]) -> Spectrum {
+        let k = structure.cols.len();
+        let eig = eigen(structure.analysed.clone());
+        let mut order: Vec<usize> = (0..k).collect();
+        order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+        let sv: Vec<f64> = order
+            .iter()
+            .map(|&i| eig.eigenvalues[i].max(0.0).sqrt())
+            .collect();
+        let smax = sv.first().copied().unwrap_or(0.0);
+        let threshold = RANK_TOLERANCE * smax;
+        let rank = sv.iter().filter(|&&s| s > threshold).count();
+        let weak_relations = (0..rank)
+            .filter(|&i| sv[i] < 1e-3 * smax)
+            .map(|i| weak_relation(&eig.eigenvectors, order[i], sv[i], &structure.cols, names))
+            .collect();
+        let condition_number = if rank > 0 {
+            smax / sv[rank - 1]
+        } else {
+            f64::INFINITY
+        };
+        Spectrum {
+            eig,
+            order,
+            sv,
+            threshold,
+            rank,
+            condition_number,
+            weak_relations,
+        }
+    }
+}
+
+/// The weak direction `vectors[:, i]` (over the analysed columns `cols`,
+/// singular value `s`) as a relation: its terms above 0.05, largest first,
+/// signed so that the largest is positive.
+fn weak_relation(
+    vectors: &DMatrix<f64>,
+    i: usize,
+    s: f64,
+    cols: &[usize],
+    names: &[String],
+) -> Relation {
+    let v = vectors.column(i);
+    let mut terms: Vec<(String, f64)> = (0..cols.len())
+        .filter(|&a| v[a].abs() > 0.05)
+        .map(|a| (names[cols[a]].clone(), v[a]))
         .collect();
-    let pivots = pivoted_cholesky(&m, rank, |a| preferred_fixed.contains(&cols[a]));
-    let mut free_cols: Vec<usize> = pivots.iter().map(|&a| cols[a]).collect();
-    free_cols.sort_unstable();
-    // The column fixed for scale: free without the scale rule, fixed with it.
-    let scale_fixed: Vec<usize> = if scale_dir.is_some() {
-        pivoted_cholesky(&unprojected, rank + 1, |a| {
+    terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+    if let Some(first) = terms.first()
+        && first.1 < 0.0
+    {
+        terms.iter_mut().for_each(|t| t.1 = -t.1);
+    }
+    Relation {
+        singular_value: s,
+        text: relation_text(&terms),
+        terms,
+    }
+}
+
+/// The recommended split into free and fixed parameters.
+struct FreeSet {
+    /// The free columns, ascending.
+    free_cols: Vec<usize>,
+    /// Every fixed parameter with its reason, in column order.
+    fixed: Vec<Fixed>,
+    /// The relation behind each parameter fixed as redundant.
+    null_relations: Vec<Relation>,
+}
+
+impl FreeSet {
+    /// The free set from Cholesky with diagonal pivoting on the analysed
+    /// matrix, the first `rank` pivots (ties towards the paper's fixed set).
+    fn pivoted(n: usize, scaled: &Scaled, structure: &Structure, rank: usize) -> FreeSet {
+        let cols = &structure.cols;
+        let preferred_fixed: Vec<usize> = PAPER_FIXED
+            .iter()
+            .map(|&(kind, index)| ParamId { kind, index }.column(n))
+            .collect();
+        let pivots = pivoted_cholesky(&structure.analysed, rank, |a| {
             preferred_fixed.contains(&cols[a])
-        })
-        .into_iter()
-        .map(|a| cols[a])
-        .filter(|c| !free_cols.contains(c))
-        .collect()
-    } else {
-        Vec::new()
-    };
+        });
+        let mut free_cols: Vec<usize> = pivots.iter().map(|&a| cols[a]).collect();
+        free_cols.sort_unstable();
+        // The column fixed for scale: free without the scale rule, fixed with it.
+        let scale_fixed: Vec<usize> = if structure.scale {
+            pivoted_cholesky(&structure.unprojected, rank + 1, |a| {
+                preferred_fixed.contains(&cols[a])
+            })
+            .into_iter()
+            .map(|a| cols[a])
+            .filter(|c| !free_cols.contains(c))
+            .collect()
+        } else {
+            Vec::new()
+        };
+        let (fixed, null_relations) = fixed_reasons(n, scaled, structure, &free_cols, &scale_fixed);
+        FreeSet {
+            free_cols,
+            fixed,
+            null_relations,
+        }
+    }
+}
+
+/// Why each column outside `free_cols` is fixed — base motion, scale
+/// (`scale_fixed`) or redundancy — in column order, with the relation of
+/// each redundant one.
+fn fixed_reasons(
+    n: usize,
+    scaled: &Scaled,
+    structure: &Structure,
+    free_cols: &[usize],
+    scale_fixed: &[usize],
+) -> (Vec<Fixed>, Vec<Relation>) {
+    let Scaled { ids, d, ns, .. } = scaled;
     let mut null_relations = Vec::new();
-    let mut fixed: Vec<Fixed> = base
+    let mut fixed: Vec<Fixed> = structure
+        .base
         .iter()
         .map(|&c| Fixed {
             id: ids[c],
             reason: "base motion: never identifiable".into(),
         })
         .collect();
-    for &c in &cols {
+    for &c in &structure.cols {
         if free_cols.contains(&c) {
             continue;
         }
         let reason = if scale_fixed.contains(&c) {
             "scale: no reference length fixes the arm's size".to_string()
         } else {
-            let relation = dependence(&ns, &ids, &d, c, &free_cols);
+            let relation = dependence(ns, ids, d, c, free_cols);
             let reason = format!("redundant: {}", relation.text);
             null_relations.push(relation);
             reason
@@ -421,8 +550,22 @@ pub(crate) fn identify_from(
         fixed.push(Fixed { id: ids[c], reason });
     }
     fixed.sort_by_key(|f| f.id.column(n));
+    (fixed, null_relations)
+}
 
-    // Predicted σ of the free parameters (weights carry the noise).
+/// The free parameters' predicted σ (the weights carry the noise) and
+/// identifiability, and their strong correlations.
+fn predicted(
+    scaled: &Scaled,
+    overflow: bool,
+    structure: &Structure,
+    spectrum: &Spectrum,
+    split: &FreeSet,
+    names: &[String],
+) -> (Vec<FreeParameter>, Vec<Correlation>) {
+    let Scaled { ids, normal, .. } = scaled;
+    let np = ids.len();
+    let free_cols = &split.free_cols;
     let q = free_cols.len();
     let nf = DMatrix::from_fn(q, q, |a, b| normal.jtj[free_cols[a] * np + free_cols[b]]);
     // A singular (or overflowing) free block leaves σ unbounded.
@@ -431,20 +574,21 @@ pub(crate) fn identify_from(
         .and_then(DMatrix::try_inverse)
         .filter(|c| c.iter().all(|v| v.is_finite()))
         .unwrap_or_else(|| DMatrix::from_element(q, q, f64::INFINITY));
-    let basis: Vec<usize> = order[..rank].to_vec();
+    let basis = &spectrum.order[..spectrum.rank];
     let free = free_cols
         .iter()
         .enumerate()
         .map(|(a, &c)| {
             // Invariant: the free columns are pivots of the analysed matrix,
             // whose columns are `cols`.
-            let row = cols
+            let row = structure
+                .cols
                 .iter()
                 .position(|&x| x == c)
                 .expect("free columns are analysed");
             let ident = basis
                 .iter()
-                .map(|&i| eig.eigenvectors[(row, i)].powi(2))
+                .map(|&i| spectrum.eig.eigenvectors[(row, i)].powi(2))
                 .sum::<f64>()
                 .sqrt();
             FreeParameter {
@@ -455,27 +599,8 @@ pub(crate) fn identify_from(
             }
         })
         .collect();
-    let correlations = strong_correlations(&cov, &free_cols, &names);
-    Identification {
-        parameters: names,
-        reach_mm: r,
-        scaling: format!(
-            "angle columns divided by the reach R = {r:.1} mm (an angle counts as the arc it \
-             sweeps at R); length columns unscaled"
-        ),
-        singular_values,
-        analysed_singular_values: sv,
-        threshold,
-        rank,
-        condition_number,
-        rules,
-        null_relations,
-        weak_relations,
-        fixed,
-        free,
-        correlations,
-        recommendations: crate::hayati::recommendations(params),
-    }
+    let correlations = strong_correlations(&cov, free_cols, names);
+    (free, correlations)
 }
 
 /// Singular values of a matrix whose Gram matrix is `n`, descending.

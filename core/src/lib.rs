@@ -23,6 +23,7 @@
 //! ```
 
 pub mod calibrate;
+mod damping;
 pub mod dataset;
 pub mod error;
 #[cfg(feature = "reference-model")]

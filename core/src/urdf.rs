@@ -141,17 +141,7 @@ pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, 
             format!("not well-formed XML: {e}"),
         )
     })?;
-    let root = doc.root_element();
-    if root.tag_name().name() != "robot" {
-        return Err(InputError::line_error(
-            file,
-            line(&doc, root),
-            format!(
-                "the root element is <{}>; a URDF has <robot>",
-                root.tag_name().name()
-            ),
-        ));
-    }
+    let root = robot_element(&doc, file)?;
     let mut urdf = Urdf {
         file: file.to_string(),
         name: root.attribute("name").unwrap_or_default().to_string(),
@@ -160,63 +150,164 @@ pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, 
     };
     let mut child_of: HashMap<String, usize> = HashMap::new();
     for node in root.children().filter(|n| n.has_tag_name("joint")) {
-        let at = line(&doc, node);
-        let attr = |name: &str| -> Result<String, InputError> {
-            node.attribute(name)
-                .map(str::to_string)
-                .ok_or_else(|| InputError::field(file, at, name, "missing on <joint>"))
+        let element = JointElement {
+            doc: &doc,
+            node,
+            file,
+            at: line(&doc, node),
         };
-        let name = attr("name")?;
-        let type_name = attr("type")?;
+        let joint = element.read(options, &mut urdf.snapped)?;
+        if let Some(&other) = child_of.get(&joint.child) {
+            return Err(InputError::field(
+                file,
+                joint.line,
+                "child",
+                format!(
+                    "link `{}` is already the child of joint `{}` (line {}); a URDF is a tree",
+                    joint.child, urdf.joints[other].name, urdf.joints[other].line
+                ),
+            ));
+        }
+        child_of.insert(joint.child.clone(), urdf.joints.len());
+        urdf.joints.push(joint);
+    }
+    Ok(urdf)
+}
+
+/// The document's root element, which must be `<robot>`.
+fn robot_element<'a, 'input>(
+    doc: &'a roxmltree::Document<'input>,
+    file: &str,
+) -> Result<roxmltree::Node<'a, 'input>, InputError> {
+    let root = doc.root_element();
+    if root.tag_name().name() != "robot" {
+        return Err(InputError::line_error(
+            file,
+            line(doc, root),
+            format!(
+                "the root element is <{}>; a URDF has <robot>",
+                root.tag_name().name()
+            ),
+        ));
+    }
+    Ok(root)
+}
+
+/// A `<joint>` element being read, and where it is, for messages.
+struct JointElement<'a, 'input> {
+    doc: &'a roxmltree::Document<'input>,
+    node: roxmltree::Node<'a, 'input>,
+    file: &'a str,
+    /// The line of `<joint>`.
+    at: usize,
+}
+
+impl<'a, 'input> JointElement<'a, 'input> {
+    /// The joint, its `rpy` snapped by `options` (each rounding noted in
+    /// `snapped`).
+    fn read(
+        &self,
+        options: UrdfOptions,
+        snapped: &mut Vec<String>,
+    ) -> Result<UrdfJoint, InputError> {
+        let name = self.attribute("name")?;
+        let type_name = self.attribute("type")?;
         let kind = match type_name.as_str() {
             "revolute" | "continuous" => JointKind::Revolute,
             "fixed" => JointKind::Fixed,
             _ => JointKind::Other,
         };
-        let link_of = |tag: &str| -> Result<String, InputError> {
-            let el = node
-                .children()
-                .find(|c| c.has_tag_name(tag))
-                .ok_or_else(|| {
-                    InputError::field(file, at, tag, format!("joint `{name}` has no <{tag}>"))
-                })?;
-            el.attribute("link").map(str::to_string).ok_or_else(|| {
-                InputError::field(
-                    file,
-                    line(&doc, el),
-                    "link",
-                    format!("<{tag}> without `link`"),
-                )
-            })
-        };
-        let parent = link_of("parent")?;
-        let child = link_of("child")?;
-        let origin_el = node.children().find(|c| c.has_tag_name("origin"));
+        let parent = self.link(&name, "parent")?;
+        let child = self.link(&name, "child")?;
+        let origin = self.origin(&name, options.snap_rad, snapped)?;
+        let axis = self.axis(&name, kind)?;
+        Ok(UrdfJoint {
+            limits: self.limits(&type_name),
+            name,
+            type_name,
+            kind,
+            parent,
+            child,
+            origin,
+            axis,
+            line: self.at,
+        })
+    }
+
+    fn attribute(&self, attribute: &str) -> Result<String, InputError> {
+        self.node
+            .attribute(attribute)
+            .map(str::to_string)
+            .ok_or_else(|| InputError::field(self.file, self.at, attribute, "missing on <joint>"))
+    }
+
+    fn child(&self, tag: &str) -> Option<roxmltree::Node<'a, 'input>> {
+        self.node.children().find(|c| c.has_tag_name(tag))
+    }
+
+    /// The `link` of the `<parent>` or `<child>` element (`tag`) of the
+    /// joint `name`.
+    fn link(&self, name: &str, tag: &str) -> Result<String, InputError> {
+        let el = self.child(tag).ok_or_else(|| {
+            InputError::field(
+                self.file,
+                self.at,
+                tag,
+                format!("joint `{name}` has no <{tag}>"),
+            )
+        })?;
+        el.attribute("link").map(str::to_string).ok_or_else(|| {
+            InputError::field(
+                self.file,
+                line(self.doc, el),
+                "link",
+                format!("<{tag}> without `link`"),
+            )
+        })
+    }
+
+    /// The child frame in the parent frame, its `rpy` within `snap_rad`
+    /// of a multiple of π/2 set to it (each rounding noted in `snapped`).
+    fn origin(
+        &self,
+        name: &str,
+        snap_rad: f64,
+        snapped: &mut Vec<String>,
+    ) -> Result<Isometry3<f64>, InputError> {
+        let origin_el = self.child("origin");
         let (xyz, rpy) = match origin_el {
             Some(el) => {
-                let l = line(&doc, el);
+                let l = line(self.doc, el);
                 (
-                    triple(el.attribute("xyz"), [0.0; 3], file, l, "xyz")?,
-                    triple(el.attribute("rpy"), [0.0; 3], file, l, "rpy")?,
+                    triple(el.attribute("xyz"), [0.0; 3], self.file, l, "xyz")?,
+                    triple(el.attribute("rpy"), [0.0; 3], self.file, l, "rpy")?,
                 )
             }
             None => ([0.0; 3], [0.0; 3]),
         };
-        let rpy = snap(rpy, options.snap_rad, |i, from, to, by| {
-            urdf.snapped.push(format!(
+        let rpy = snap(rpy, snap_rad, |i, from, to, by| {
+            snapped.push(format!(
                 "line {}: {name} {} {from} → {to} ({by:.1e} rad)",
-                origin_el.map_or(at, |el| line(&doc, el)),
+                origin_el.map_or(self.at, |el| line(self.doc, el)),
                 ["roll", "pitch", "yaw"][i]
             ));
         });
-        // URDF's default axis is x.
-        let axis_el = node.children().find(|c| c.has_tag_name("axis"));
+        Ok(Isometry3::from_parts(
+            Translation3::from(Vector3::from(xyz)),
+            UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]),
+        ))
+    }
+
+    /// The unit axis (URDF's default is x); a turning joint's must not be
+    /// zero.
+    fn axis(&self, name: &str, kind: JointKind) -> Result<Vector3<f64>, InputError> {
+        let axis_el = self.child("axis");
         let axis = match axis_el {
             Some(el) => triple(
                 el.attribute("xyz"),
                 [1.0, 0.0, 0.0],
-                file,
-                line(&doc, el),
+                self.file,
+                line(self.doc, el),
                 "axis",
             )?,
             None => [1.0, 0.0, 0.0],
@@ -224,53 +315,30 @@ pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, 
         let axis = Vector3::from(axis);
         if kind == JointKind::Revolute && axis.norm() == 0.0 {
             return Err(InputError::field(
-                file,
-                axis_el.map_or(at, |el| line(&doc, el)),
+                self.file,
+                axis_el.map_or(self.at, |el| line(self.doc, el)),
                 "axis",
                 format!("joint `{name}` turns about a zero axis"),
             ));
         }
-        let limits = node
-            .children()
-            .find(|c| c.has_tag_name("limit"))
+        Ok(if axis.norm() > 0.0 {
+            axis.normalize()
+        } else {
+            axis
+        })
+    }
+
+    /// `[lower, upper]` of a `revolute` joint, when both are finite and in
+    /// order.
+    fn limits(&self, type_name: &str) -> Option<[f64; 2]> {
+        self.child("limit")
             .filter(|_| type_name == "revolute")
             .and_then(|el| {
                 let lo = el.attribute("lower")?.trim().parse::<f64>().ok()?;
                 let hi = el.attribute("upper")?.trim().parse::<f64>().ok()?;
                 (lo.is_finite() && hi.is_finite() && lo < hi).then_some([lo, hi])
-            });
-        if let Some(&other) = child_of.get(&child) {
-            return Err(InputError::field(
-                file,
-                at,
-                "child",
-                format!(
-                    "link `{child}` is already the child of joint `{}` (line {}); a URDF is a tree",
-                    urdf.joints[other].name, urdf.joints[other].line
-                ),
-            ));
-        }
-        child_of.insert(child.clone(), urdf.joints.len());
-        urdf.joints.push(UrdfJoint {
-            name,
-            type_name,
-            kind,
-            parent,
-            child,
-            origin: Isometry3::from_parts(
-                Translation3::from(Vector3::from(xyz)),
-                UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]),
-            ),
-            axis: if axis.norm() > 0.0 {
-                axis.normalize()
-            } else {
-                axis
-            },
-            limits,
-            line: at,
-        });
+            })
     }
-    Ok(urdf)
 }
 
 fn line(doc: &roxmltree::Document, node: roxmltree::Node) -> usize {

@@ -192,6 +192,18 @@ impl SolverFlags {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    check_paths(&args)?;
+    let problem = with_validation(problem(&args)?, &args)?;
+    let started = Instant::now();
+    let report = solve(&problem, &settings(&args), &args)?;
+    let total = started.elapsed().as_secs_f64();
+    let wrote = write_files(&report, &problem, &args.out, total)?;
+    print_results(&report, wrote, total)
+}
+
+/// --out may not hold an input, nor (without --force) an earlier
+/// calibration.
+fn check_paths(args: &Args) -> Result<()> {
     let mut inputs = args.fit.paths();
     inputs.extend(args.validate.as_deref().map(|p| ("--validate", p)));
     inputs.extend(
@@ -214,12 +226,13 @@ pub fn run(args: Args) -> Result<()> {
         &args.out,
         &[CALIBRATED_FILE, REPORT_FILE],
         args.force,
-    )?;
-    let noise = args.fit.noise();
-    let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
-    let fix = FixSpec::parse_for(&args.fix, &arm.params).map_err(flag_error)?;
+    )
+}
+
+/// The solver's settings the flags give.
+fn settings(args: &Args) -> SolverSettings {
     let (anneal, switch, global) = args.solver.options();
-    let settings = SolverSettings {
+    SolverSettings {
         method: args.method.into(),
         lm: LmOptions::default(),
         anneal,
@@ -227,8 +240,15 @@ pub fn run(args: Args) -> Result<()> {
         global,
         threads: args.fit.threads(),
         seed: args.seed,
-    };
-    let model = ModelOptions {
+    }
+}
+
+/// The arm, its touches and the model the flags give.
+fn problem(args: &Args) -> Result<Problem> {
+    let noise = args.fit.noise();
+    let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
+    let fix = FixSpec::parse_for(&args.fix, &arm.params).map_err(flag_error)?;
+    let options = ModelOptions {
         fix,
         noise,
         accept_poor_fit: args.accept_poor_fit,
@@ -241,16 +261,20 @@ pub fn run(args: Args) -> Result<()> {
         }),
         prior,
     };
-    let arm_file = source_name(&args.fit.input.arm);
     let sources = Sources {
-        arm_file: arm_file.clone(),
+        arm_file: source_name(&args.fit.input.arm),
         data_file: source_name(&args.fit.input.data),
         lengths_file: args.fit.lengths.as_deref().map(source_name),
         warnings,
     };
-    let mut problem = Problem::new(arm, data, model)
+    Ok(Problem::new(arm, data, options)
         .map_err(flag_error)?
-        .with_sources(sources);
+        .with_sources(sources))
+}
+
+/// `problem` with the held-out data and the cross-validation folds asked
+/// for.
+fn with_validation(mut problem: Problem, args: &Args) -> Result<Problem> {
     if let Some(path) = &args.validate {
         let lengths = args.validate_lengths.as_deref();
         let data = read_other(problem.arm(), path, lengths, args.fit.input.angle_unit)?;
@@ -265,25 +289,41 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(k) = args.cross_validate {
         problem = problem.with_cross_validation(k).map_err(flag_error)?;
     }
-    let started = Instant::now();
-    let report = {
-        let mut bar = super::progress::Bar::new();
-        let mut show = |phase: &str, f: f64| bar.show(phase, f);
-        let mut ctx = Context::new().observed(&mut show);
-        let solver = settings.method.solver();
-        session::run(&problem, &settings, &*solver, &mut ctx).map_err(|e| match e {
-            CalibrationError::Option(_) => flag_error(e),
-            other => super::noise_flags(
-                anyhow::Error::new(other).context(arm_file.clone()),
-                &args.fit,
-            ),
-        })?
-    };
-    let total = started.elapsed().as_secs_f64();
+    Ok(problem)
+}
 
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("--out {}: cannot create", args.out.display()))?;
-    let written = report.write(&problem, &args.out, total)?;
+/// The calibration, with a progress bar; an error in terms of the flags
+/// where it can be.
+fn solve(
+    problem: &Problem,
+    settings: &SolverSettings,
+    args: &Args,
+) -> Result<session::CalibrationReport> {
+    let arm_file = &problem.sources().arm_file;
+    let mut bar = super::progress::Bar::new();
+    let mut show = |phase: &str, f: f64| bar.show(phase, f);
+    let mut ctx = Context::new().observed(&mut show);
+    let solver = settings.method.solver();
+    session::run(problem, settings, &*solver, &mut ctx).map_err(|e| match e {
+        CalibrationError::Option(_) => flag_error(e),
+        other => super::noise_flags(
+            anyhow::Error::new(other).context(arm_file.clone()),
+            &args.fit,
+        ),
+    })
+}
+
+/// Writes the calibration and its report into `out`; the lines that say
+/// so.
+fn write_files(
+    report: &session::CalibrationReport,
+    problem: &Problem,
+    out: &std::path::Path,
+    total: f64,
+) -> Result<String> {
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("--out {}: cannot create", out.display()))?;
+    let written = report.write(problem, out, total)?;
     let figures = written.len() - 4;
     let mut wrote = String::new();
     for path in &written {
@@ -297,6 +337,13 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
     }
+    Ok(wrote)
+}
+
+/// The summary and the files written on stdout, the time and the
+/// verdict's notes on stderr; an error when the calibration is not usable
+/// (its files are written all the same, for inspection).
+fn print_results(report: &session::CalibrationReport, wrote: String, total: f64) -> Result<()> {
     let mut out = Stdout::new();
     out.print(report.summary())?;
     out.print(wrote)?;

@@ -104,6 +104,23 @@ enum Errors {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    check_paths(&args)?;
+    let (nominal, warnings) = read_arm(&args.arm)?;
+    report(&warnings)?;
+    let joints = nominal.params.joint_count();
+    let errors = error_model(&args)?;
+    let (sockets, file) = socket_plan(&args)?;
+    let located = |e| flag_error(e, file.as_ref());
+    let settings = campaign_settings(&args, errors, sockets);
+    settings.validate(joints).map_err(located)?;
+
+    let campaign = simulate(&nominal, &settings).map_err(located)?;
+    let written = write_campaign(&args.out, &campaign, &settings)?;
+    describe(&args, &nominal, &settings, &campaign, &written)
+}
+
+/// --out may not hold an input.
+fn check_paths(args: &Args) -> Result<()> {
     let mut inputs: Vec<Input> = vec![("--arm", &args.arm)];
     inputs.extend(args.true_arm.as_deref().map(|p| ("--true", p)));
     inputs.extend(args.sockets_file.as_deref().map(|p| ("--sockets-file", p)));
@@ -114,12 +131,12 @@ pub fn run(args: Args) -> Result<()> {
         TRUE_ARM_FILE,
         CAMPAIGN_FILE,
     ];
-    check_output_dir("--out", &args.out, &outputs, &inputs)?;
+    check_output_dir("--out", &args.out, &outputs, &inputs)
+}
 
-    let (nominal, warnings) = read_arm(&args.arm)?;
-    report(&warnings)?;
-    let joints = nominal.params.joint_count();
-    let errors = match (&args.true_arm, args.errors) {
+/// The true arm: a file (--true) or an error model (--errors).
+fn error_model(args: &Args) -> Result<ErrorModel> {
+    Ok(match (&args.true_arm, args.errors) {
         (Some(path), _) => {
             let (arm, warnings) = read_arm(path)?;
             report(&warnings)?;
@@ -141,8 +158,13 @@ pub fn run(args: Args) -> Result<()> {
             ErrorModel::random(scale, model == Errors::Assembled)
         }
         (None, None) => bail!("give --true TRUE.toml or --errors paper|random|assembled"),
-    };
-    let (sockets, file) = match (&args.sockets_file, args.sockets) {
+    })
+}
+
+/// Where the sockets are: spread (--sockets) or from a file
+/// (--sockets-file, kept for messages).
+fn socket_plan(args: &Args) -> Result<(SocketPlan, Option<SocketsFile>)> {
+    Ok(match (&args.sockets_file, args.sockets) {
         (Some(path), _) => {
             let plan = SocketPlan::from_file(path)?;
             let file = SocketsFile::new(path, &plan);
@@ -151,8 +173,11 @@ pub fn run(args: Args) -> Result<()> {
         }
         (None, Some(count)) => (SocketPlan::Spread { count }, None),
         (None, None) => bail!("give --sockets K or --sockets-file FILE"),
-    };
-    let located = |e| flag_error(e, file.as_ref());
+    })
+}
+
+/// The campaign's settings from the flags (not yet checked).
+fn campaign_settings(args: &Args, errors: ErrorModel, sockets: SocketPlan) -> CampaignSettings {
     let count = sockets.count();
     let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses);
     settings.nominal_file = Some(source_name(&args.arm));
@@ -163,11 +188,19 @@ pub fn run(args: Args) -> Result<()> {
         .reference_lengths
         .unwrap_or_else(|| DEFAULT_REFERENCE_LENGTHS.min(pair_count(count)));
     settings.length_uncertainty_mm = args.length_uncertainty;
-    settings.validate(joints).map_err(located)?;
+    settings
+}
 
-    let campaign = simulate(&nominal, &settings).map_err(located)?;
-    let written = write_campaign(&args.out, &campaign, &settings)?;
-
+/// What was simulated and written, on stderr.
+fn describe(
+    args: &Args,
+    nominal: &aacmm_core::io::Arm,
+    settings: &CampaignSettings,
+    campaign: &aacmm_core::simulate::Campaign,
+    written: &[PathBuf],
+) -> Result<()> {
+    let joints = nominal.params.joint_count();
+    let count = settings.sockets.count();
     let st = &campaign.stats;
     note(format_args!(
         "nominal arm `{}` ({}, {joints} joints)",
@@ -214,7 +247,7 @@ pub fn run(args: Args) -> Result<()> {
              be calibrated)",
         )?;
     }
-    for path in &written {
+    for path in written {
         note(format_args!("wrote {}", path.display()))?;
     }
     Ok(())

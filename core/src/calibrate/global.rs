@@ -240,6 +240,15 @@ impl Found {
         }
         at_floor
     }
+
+    /// The implausible minimum, when it is lower than every plausible one.
+    fn lowest_implausible(&self) -> Option<&Minimum> {
+        let i = self.implausible.as_ref()?;
+        self.best
+            .as_ref()
+            .is_none_or(|b| i.cost < b.cost)
+            .then_some(i)
+    }
 }
 
 /// One start's minimum, weighed at itself.
@@ -258,214 +267,431 @@ pub(crate) fn global<R: Rng>(
     progress: &mut dyn FnMut(f64),
 ) -> Result<(LmResult, GlobalTrace, Vec<Phase>), CalibrationError> {
     options.check()?;
-    let GlobalProblem {
-        data,
-        weights,
-        free,
-        lm,
-        threads,
-        stated_dof,
-        ..
-    } = *problem;
-    let joints = start.joint_count();
-    let circles: Vec<usize> = free
-        .iter()
-        .copied()
-        .filter(|&c| ParamId::from_column(joints, c).is_some_and(|id| id.kind == ParamKind::Theta))
-        .collect();
-    // The band of costs the stated noise explains: χ²/dof within k standard
-    // deviations of 1. Below it the noise is overstated and every basin
-    // looks like the floor, so none is accepted on that ground.
-    let floor = stated_dof.map(|dof| {
-        let dof = dof.max(1) as f64;
-        let k = options.noise_floor_k * (2.0 / dof).sqrt();
-        (dof * (1.0 - k).max(0.0), dof * (1.0 + k))
-    });
-    // A minimum is a candidate only if its geometry is the nominal arm's
-    // kind (not its mirror image, not collapsed): the cost cannot tell.
-    // (`gross_corrections` compares twists modulo 2π.)
-    let judge = |found: &mut Found, m: Minimum| {
-        let mut p = m.fit.params.clone();
-        normalize_signs(&mut p, start, free);
-        let plausible = super::checks::gross_corrections(&p, start, free).is_empty();
-        found.record(m, floor, plausible)
-    };
-    let mut phases = vec![
-        Phase::new("lm from start"),
-        Phase::new("torus grid"),
-        Phase::new("zero-offset lm"),
-        Phase::new("lm"),
-    ];
-    let mut found = Found::default();
-    let timer = std::time::Instant::now();
-    // From a good start LM converges in a handful of iterations; one that
-    // wanders longer is in the wrong basin, and the grid will do better.
-    let start_lm = if circles.is_empty() {
-        *lm
-    } else {
-        lm.max_iterations(lm.max_iterations.min(options.start_iterations))
-    };
-    let first = match problem.start_normal.clone() {
-        Some(normal) => levenberg_marquardt_from(start, normal, data, weights, &start_lm, threads)?,
-        None => levenberg_marquardt(start, data, weights, free, &start_lm, threads)?,
-    };
-    phases[0].add_lm(&first, timer.elapsed().as_secs_f64());
-    // A cut-off start within this cost of the floor is finished.
-    let promising = floor.map(|(_, hi)| 10.0 * hi);
-    let first = settle(first, problem, &mut phases[0], promising)?;
-    let mut angles = 0;
-    let (mut grid_starts, mut random_starts, mut twin_restarts) = (0, 0, 0);
-    let stop = 'search: {
-        if judge(&mut found, first) {
-            break 'search GlobalStop::NoiseFloor;
+    let search = Search::new(start, problem, options);
+    let mut tally = Tally::new();
+    let stop = search.run(&mut tally, rng, progress)?;
+    progress(1.0);
+    search.finish(tally, stop)
+}
+
+/// The phases of [`Tally::phases`], by index.
+const START_PHASE: usize = 0;
+const GRID_PHASE: usize = 1;
+const ZEROS_PHASE: usize = 2;
+const LM_PHASE: usize = 3;
+
+/// What the search has found and spent so far.
+struct Tally {
+    found: Found,
+    /// The work of [`START_PHASE`], [`GRID_PHASE`], [`ZEROS_PHASE`] and
+    /// [`LM_PHASE`].
+    phases: Vec<Phase>,
+    /// Angles per circle of the grid (0 while there is none).
+    grid_angles: usize,
+    grid_starts: usize,
+    random_starts: usize,
+    twin_restarts: usize,
+}
+
+impl Tally {
+    fn new() -> Tally {
+        Tally {
+            found: Found::default(),
+            phases: vec![
+                Phase::new("lm from start"),
+                Phase::new("torus grid"),
+                Phase::new("zero-offset lm"),
+                Phase::new("lm"),
+            ],
+            grid_angles: 0,
+            grid_starts: 0,
+            random_starts: 0,
+            twin_restarts: 0,
         }
-        if circles.is_empty() {
-            break 'search GlobalStop::Agreement;
-        }
+    }
+
+    /// The grid cells and random draws refined so far: the progress made.
+    fn started(&self) -> usize {
+        self.grid_starts + self.random_starts
+    }
+}
+
+/// What one global search holds fixed: the problem, the circles searched,
+/// the noise floor and the LM settings of each start.
+struct Search<'a> {
+    start: &'a DhParams,
+    problem: &'a GlobalProblem<'a>,
+    options: &'a GlobalOptions,
+    /// The free zero offsets (columns): the circles of the torus.
+    circles: Vec<usize>,
+    /// The band of costs the stated noise explains.
+    floor: Option<(f64, f64)>,
+    /// A cut-off start within this cost of the floor is finished.
+    promising: Option<f64>,
+    /// LM from each start: the start arm, a grid cell, a random draw.
+    start_lm: LmOptions,
+    /// LM over the zero offsets alone, from a grid cell or random draw.
+    zero_lm: LmOptions,
+}
+
+impl<'a> Search<'a> {
+    fn new(
+        start: &'a DhParams,
+        problem: &'a GlobalProblem<'a>,
+        options: &'a GlobalOptions,
+    ) -> Search<'a> {
+        let joints = start.joint_count();
+        let lm = problem.lm;
+        let circles: Vec<usize> = problem
+            .free
+            .iter()
+            .copied()
+            .filter(|&c| {
+                ParamId::from_column(joints, c).is_some_and(|id| id.kind == ParamKind::Theta)
+            })
+            .collect();
+        // The band of costs the stated noise explains: χ²/dof within k standard
+        // deviations of 1. Below it the noise is overstated and every basin
+        // looks like the floor, so none is accepted on that ground.
+        let floor = problem.stated_dof.map(|dof| {
+            let dof = dof.max(1) as f64;
+            let k = options.noise_floor_k * (2.0 / dof).sqrt();
+            (dof * (1.0 - k).max(0.0), dof * (1.0 + k))
+        });
+        // From a good start LM converges in a handful of iterations; one that
+        // wanders longer is in the wrong basin, and the grid will do better.
+        let start_lm = if circles.is_empty() {
+            *lm
+        } else {
+            lm.max_iterations(lm.max_iterations.min(options.start_iterations))
+        };
         let zero_lm = LmOptions {
             max_iterations: 50,
             ftol: 1e-8,
             xtol: 1e-8,
             gtol: 1e-8,
         };
-        let refine = |x: &DhParams, phases: &mut Vec<Phase>| -> Result<Minimum, CalibrationError> {
-            let timer = std::time::Instant::now();
-            let zeros = levenberg_marquardt(x, data, weights, &circles, &zero_lm, threads)?;
-            phases[2].add_lm(&zeros, timer.elapsed().as_secs_f64());
-            let timer = std::time::Instant::now();
-            let fit = levenberg_marquardt(&zeros.params, data, weights, free, &start_lm, threads)?;
-            phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
-            settle(fit, problem, &mut phases[3], promising)
-        };
-        // The grid over the torus, and its lowest local minima.
+        Search {
+            start,
+            problem,
+            options,
+            circles,
+            floor,
+            promising: floor.map(|(_, hi)| 10.0 * hi),
+            start_lm,
+            zero_lm,
+        }
+    }
+
+    /// The search, phase by phase, until one of them stops it.
+    fn run<R: Rng>(
+        &self,
+        tally: &mut Tally,
+        rng: &mut R,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<GlobalStop, CalibrationError> {
+        if let Some(stop) = self.start_arm(tally)? {
+            return Ok(stop);
+        }
+        let cells = self.grid(tally)?;
+        let planned = cells.len() + self.options.max_starts;
+        if let Some(stop) = self.grid_candidates(cells, planned, tally, progress)? {
+            return Ok(stop);
+        }
+        if let Some(stop) = self.random_starts(planned, tally, rng, progress)? {
+            return Ok(stop);
+        }
+        Ok(self
+            .twin_restarts(tally)?
+            .unwrap_or(GlobalStop::StartBudget))
+    }
+
+    /// LM from the start arm; it stops the search when it reaches the noise
+    /// floor, or when there is no zero offset to search.
+    fn start_arm(&self, tally: &mut Tally) -> Result<Option<GlobalStop>, CalibrationError> {
+        let GlobalProblem {
+            data,
+            weights,
+            free,
+            ..
+        } = *self.problem;
         let timer = std::time::Instant::now();
-        let (grid_angles, cells) = torus_grid(start, &circles, problem, options)?;
-        angles = grid_angles;
-        phases[1].cost_evaluations += grid_angles.pow(circles.len() as u32);
-        phases[1].seconds += timer.elapsed().as_secs_f64();
-        let total = cells.len() + options.max_starts;
-        let mut tried = 0;
+        let first = match self.problem.start_normal.clone() {
+            Some(normal) => levenberg_marquardt_from(
+                self.start,
+                normal,
+                data,
+                weights,
+                &self.start_lm,
+                self.problem.threads,
+            )?,
+            None => levenberg_marquardt(
+                self.start,
+                data,
+                weights,
+                free,
+                &self.start_lm,
+                self.problem.threads,
+            )?,
+        };
+        let phase = &mut tally.phases[START_PHASE];
+        phase.add_lm(&first, timer.elapsed().as_secs_f64());
+        let first = settle(first, self.problem, phase, self.promising)?;
+        if self.judge(&mut tally.found, first) {
+            return Ok(Some(GlobalStop::NoiseFloor));
+        }
+        Ok(self.circles.is_empty().then_some(GlobalStop::Agreement))
+    }
+
+    /// The grid over the torus: its lowest local minima, lowest first.
+    fn grid(&self, tally: &mut Tally) -> Result<Vec<DhParams>, CalibrationError> {
+        let timer = std::time::Instant::now();
+        let (angles, cells) = torus_grid(self.start, &self.circles, self.problem, self.options)?;
+        tally.grid_angles = angles;
+        let phase = &mut tally.phases[GRID_PHASE];
+        phase.cost_evaluations += angles.pow(self.circles.len() as u32);
+        phase.seconds += timer.elapsed().as_secs_f64();
+        Ok(cells)
+    }
+
+    /// Refines the grid's `cells` in turn (`planned`: the starts there can
+    /// be, for the progress).
+    fn grid_candidates(
+        &self,
+        cells: Vec<DhParams>,
+        planned: usize,
+        tally: &mut Tally,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Option<GlobalStop>, CalibrationError> {
         for x in cells {
-            tried += 1;
-            grid_starts += 1;
-            progress(tried as f64 / total as f64);
-            let m = refine(&x, &mut phases)?;
-            if judge(&mut found, m) {
-                break 'search GlobalStop::NoiseFloor;
+            tally.grid_starts += 1;
+            progress(tally.started() as f64 / planned as f64);
+            let m = self.refine(&x, &mut tally.phases)?;
+            if self.judge(&mut tally.found, m) {
+                return Ok(Some(GlobalStop::NoiseFloor));
             }
         }
-        if floor.is_none() && found.hits >= options.confirmations {
-            break 'search GlobalStop::Agreement;
-        }
-        // Random starts until the lowest cost is confirmed.
-        let mut x = start.clone();
-        for _ in 0..options.max_starts {
-            tried += 1;
-            random_starts += 1;
-            progress(tried as f64 / total as f64);
-            x.clone_from(start);
-            for &c in &circles {
+        Ok(self.agreement(&tally.found))
+    }
+
+    /// Random starts until the lowest cost is confirmed.
+    fn random_starts<R: Rng>(
+        &self,
+        planned: usize,
+        tally: &mut Tally,
+        rng: &mut R,
+        progress: &mut dyn FnMut(f64),
+    ) -> Result<Option<GlobalStop>, CalibrationError> {
+        let joints = self.start.joint_count();
+        let mut x = self.start.clone();
+        for _ in 0..self.options.max_starts {
+            tally.random_starts += 1;
+            progress(tally.started() as f64 / planned as f64);
+            x.clone_from(self.start);
+            for &c in &self.circles {
                 let id = ParamId::from_column(joints, c).ok_or(CalibrationError::Shape)?;
                 *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             }
-            let m = refine(&x, &mut phases)?;
-            if judge(&mut found, m) {
-                break 'search GlobalStop::NoiseFloor;
+            let m = self.refine(&x, &mut tally.phases)?;
+            if self.judge(&mut tally.found, m) {
+                return Ok(Some(GlobalStop::NoiseFloor));
             }
-            if found.hits >= options.confirmations {
-                break 'search GlobalStop::Agreement;
+            if tally.found.hits >= self.options.confirmations {
+                return Ok(Some(GlobalStop::Agreement));
             }
         }
-        // Only implausible minima at the floor (a mirror image of the arm
-        // fits exactly as well): restart from the nominal geometry with
-        // that minimum's zero offsets, as they are and reversed, which
-        // leads into the proper twin's basin.
-        let lowest_implausible = |f: &Found| match (&f.implausible, &f.best) {
-            (Some(i), Some(b)) => i.cost < b.cost,
-            (Some(_), None) => true,
-            _ => false,
+        Ok(None)
+    }
+
+    /// Only implausible minima at the floor (a mirror image of the arm
+    /// fits exactly as well): restart from the nominal geometry with
+    /// that minimum's zero offsets, as they are and reversed, which
+    /// leads into the proper twin's basin.
+    fn twin_restarts(&self, tally: &mut Tally) -> Result<Option<GlobalStop>, CalibrationError> {
+        let Some(m) = tally.found.lowest_implausible() else {
+            return Ok(None);
         };
-        if lowest_implausible(&found)
-            && let Some(m) = &found.implausible
-        {
-            // Its zero offsets in the nominal sign convention (the flips
-            // that keep positions put back), so that they pair with the
-            // nominal lengths and twists.
-            let mut zeros = m.fit.params.clone();
-            normalize_signs(&mut zeros, start, free);
-            let twins: Vec<DhParams> = [1.0, -1.0]
-                .iter()
-                .map(|&sign| {
-                    let mut x = start.clone();
-                    for &c in &circles {
-                        if let Some(id) = ParamId::from_column(joints, c) {
-                            *x.get_mut(id) = crate::params::wrap(sign * zeros.get(id));
-                        }
-                    }
-                    x
-                })
-                .collect();
-            for x in twins {
-                // Weighed at the restart itself: its zeros are the minimum's,
-                // and weights from the start arm's zeros would slow LM down
-                // past any cap.
-                let timer = std::time::Instant::now();
-                let mut here = Weights::new(&ArmKernel::new(&x)?, data, problem.noise, 1.0)?;
-                here.prior = problem.weights.prior.clone();
-                let fit = levenberg_marquardt(&x, data, &here, free, lm, threads)?;
-                phases[3].add_lm(&fit, timer.elapsed().as_secs_f64());
-                let m = reweigh(fit, problem, &mut phases[3])?;
-                twin_restarts += 1;
-                if judge(&mut found, m) {
-                    break 'search GlobalStop::NoiseFloor;
-                }
-            }
-            if floor.is_none() && found.hits >= options.confirmations {
-                break 'search GlobalStop::Agreement;
+        for x in self.twins(m) {
+            let m = self.restart(&x, &mut tally.phases)?;
+            tally.twin_restarts += 1;
+            if self.judge(&mut tally.found, m) {
+                return Ok(Some(GlobalStop::NoiseFloor));
             }
         }
-        GlobalStop::StartBudget
-    };
-    progress(1.0);
-    phases.retain(|p| p.cost_evaluations + p.jacobian_evaluations > 0);
-    let names = |cols: &[usize]| -> Vec<String> {
-        cols.iter()
-            .filter_map(|&c| start.param_id(c))
-            .map(|id| id.to_string())
+        Ok(self.agreement(&tally.found))
+    }
+
+    /// The nominal geometry with the zero offsets of the implausible
+    /// minimum `m`, as they are and reversed.
+    fn twins(&self, m: &Minimum) -> Vec<DhParams> {
+        let joints = self.start.joint_count();
+        // Its zero offsets in the nominal sign convention (the flips
+        // that keep positions put back), so that they pair with the
+        // nominal lengths and twists.
+        let mut zeros = m.fit.params.clone();
+        normalize_signs(&mut zeros, self.start, self.problem.free);
+        [1.0, -1.0]
+            .iter()
+            .map(|&sign| {
+                let mut x = self.start.clone();
+                for &c in &self.circles {
+                    if let Some(id) = ParamId::from_column(joints, c) {
+                        *x.get_mut(id) = crate::params::wrap(sign * zeros.get(id));
+                    }
+                }
+                x
+            })
             .collect()
-    };
-    // The lowest minimum, plausible or not: an implausible one (a mirror
-    // image) is then refused by the checks by name, not hidden behind a
-    // worse plausible start.
-    let mut best = match (found.best, found.implausible) {
-        (Some(b), Some(i)) if i.cost < b.cost && stop == GlobalStop::StartBudget => i,
-        (Some(b), _) => b,
-        (None, i) => i.ok_or(CalibrationError::Shape)?,
-    };
-    if best.fit.termination == super::Termination::MaxIterations {
-        // The lowest start was cut off by the per-start cap: finish its
-        // descent with the full LM rather than report it unconverged.
+    }
+
+    /// The full LM from a twin `x`, weighed at `x` itself: its zeros are the
+    /// minimum's, and weights from the start arm's zeros would slow LM down
+    /// past any cap.
+    fn restart(&self, x: &DhParams, phases: &mut [Phase]) -> Result<Minimum, CalibrationError> {
+        let problem = self.problem;
         let timer = std::time::Instant::now();
-        let fit = levenberg_marquardt(&best.fit.params, data, weights, free, lm, threads)?;
+        let mut here = Weights::new(&ArmKernel::new(x)?, problem.data, problem.noise, 1.0)?;
+        here.prior = problem.weights.prior.clone();
+        let fit = levenberg_marquardt(
+            x,
+            problem.data,
+            &here,
+            problem.free,
+            problem.lm,
+            problem.threads,
+        )?;
+        phases[LM_PHASE].add_lm(&fit, timer.elapsed().as_secs_f64());
+        reweigh(fit, problem, &mut phases[LM_PHASE])
+    }
+
+    /// A grid cell's or random draw's minimum: LM over the zero offsets
+    /// alone, then the full LM.
+    fn refine(&self, x: &DhParams, phases: &mut [Phase]) -> Result<Minimum, CalibrationError> {
+        let GlobalProblem {
+            data,
+            weights,
+            free,
+            ..
+        } = *self.problem;
+        let timer = std::time::Instant::now();
+        let zeros = levenberg_marquardt(
+            x,
+            data,
+            weights,
+            &self.circles,
+            &self.zero_lm,
+            self.problem.threads,
+        )?;
+        phases[ZEROS_PHASE].add_lm(&zeros, timer.elapsed().as_secs_f64());
+        let timer = std::time::Instant::now();
+        let fit = levenberg_marquardt(
+            &zeros.params,
+            data,
+            weights,
+            free,
+            &self.start_lm,
+            self.problem.threads,
+        )?;
+        phases[LM_PHASE].add_lm(&fit, timer.elapsed().as_secs_f64());
+        settle(fit, self.problem, &mut phases[LM_PHASE], self.promising)
+    }
+
+    /// Records `m` in `found`; whether it is at the noise floor. A minimum
+    /// is a candidate only if its geometry is the nominal arm's kind (not
+    /// its mirror image, not collapsed): the cost cannot tell.
+    /// (`gross_corrections` compares twists modulo 2π.)
+    fn judge(&self, found: &mut Found, m: Minimum) -> bool {
+        let mut p = m.fit.params.clone();
+        normalize_signs(&mut p, self.start, self.problem.free);
+        let plausible =
+            super::checks::gross_corrections(&p, self.start, self.problem.free).is_empty();
+        found.record(m, self.floor, plausible)
+    }
+
+    /// Agreement, without stated noise: the lowest cost reached from enough
+    /// starts. (With stated noise only the floor stops the grid and the
+    /// twins early.)
+    fn agreement(&self, found: &Found) -> Option<GlobalStop> {
+        (self.floor.is_none() && found.hits >= self.options.confirmations)
+            .then_some(GlobalStop::Agreement)
+    }
+
+    /// The lowest minimum, finished if the per-start cap cut it off, and
+    /// the account of the search.
+    fn finish(
+        &self,
+        tally: Tally,
+        stop: GlobalStop,
+    ) -> Result<(LmResult, GlobalTrace, Vec<Phase>), CalibrationError> {
+        let Tally {
+            found,
+            mut phases,
+            grid_angles,
+            grid_starts,
+            random_starts,
+            twin_restarts,
+        } = tally;
+        phases.retain(|p| p.cost_evaluations + p.jacobian_evaluations > 0);
+        let Found {
+            best,
+            hits,
+            minima,
+            implausible,
+        } = found;
+        // The lowest minimum, plausible or not: an implausible one (a mirror
+        // image) is then refused by the checks by name, not hidden behind a
+        // worse plausible start.
+        let mut best = match (best, implausible) {
+            (Some(b), Some(i)) if i.cost < b.cost && stop == GlobalStop::StartBudget => i,
+            (Some(b), _) => b,
+            (None, i) => i.ok_or(CalibrationError::Shape)?,
+        };
+        if best.fit.termination == super::Termination::MaxIterations {
+            best = self.finish_cut_off(best, &mut phases)?;
+        }
+        let trace = GlobalTrace {
+            options: *self.options,
+            stop,
+            circles: self
+                .circles
+                .iter()
+                .filter_map(|&c| self.start.param_id(c))
+                .map(|id| id.to_string())
+                .collect(),
+            grid_angles,
+            minima,
+            grid_starts,
+            random_starts,
+            twin_restarts,
+            best_hits: hits,
+            noise_floor_cost: self.floor.map(|(_, hi)| hi),
+            sign_changes: Vec::new(),
+        };
+        Ok((best.fit, trace, phases))
+    }
+
+    /// The lowest start was cut off by the per-start cap: finish its
+    /// descent with the full LM rather than report it unconverged.
+    fn finish_cut_off(
+        &self,
+        best: Minimum,
+        phases: &mut Vec<Phase>,
+    ) -> Result<Minimum, CalibrationError> {
+        let problem = self.problem;
+        let timer = std::time::Instant::now();
+        let fit = levenberg_marquardt(
+            &best.fit.params,
+            problem.data,
+            problem.weights,
+            problem.free,
+            problem.lm,
+            problem.threads,
+        )?;
         phases.push(Phase::new("lm, best start finished"));
         let last = phases.len() - 1;
         phases[last].add_lm(&fit, timer.elapsed().as_secs_f64());
-        best = reweigh(fit, problem, &mut phases[last])?;
+        reweigh(fit, problem, &mut phases[last])
     }
-    let trace = GlobalTrace {
-        options: *options,
-        stop,
-        circles: names(&circles),
-        grid_angles: angles,
-        minima: found.minima,
-        grid_starts,
-        random_starts,
-        twin_restarts,
-        best_hits: found.hits,
-        noise_floor_cost: floor.map(|(_, hi)| hi),
-        sign_changes: Vec::new(),
-    };
-    Ok((best.fit, trace, phases))
 }
 
 /// A start's result: reweighed ([`reweigh`]) when its LM converged; one

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
 use super::prior::{cost_at, normal_at};
+use crate::damping::Damping;
 use crate::dataset::DataSet;
 use crate::error::{OptionError, check_nonnegative};
 use crate::params::DhParams;
@@ -186,8 +187,7 @@ impl LmResult {
 }
 
 /// Minimises the weighted cost over the parameters `free` (indices in the
-/// fixed order of [`crate::params`]) from `start`, the normal equations on
-/// `threads` threads.
+/// fixed order of [`crate::params`]) from `start`.
 ///
 /// Never returns NaN: a trial step with a non-finite cost is rejected like
 /// any step that does not lower the cost.
@@ -215,135 +215,280 @@ pub(crate) fn levenberg_marquardt_from(
     options: &LmOptions,
     threads: usize,
 ) -> Result<LmResult, CalibrationError> {
-    let free = &normal.free.clone();
-    let p = free.len();
-    let mut x = start.to_vec();
-    // The prior, if any, rides with the weights ([`super::prior`]).
-    let params_of = |x: &[f64]| -> Result<DhParams, CalibrationError> {
-        start.with_values(x).ok_or(CalibrationError::Shape)
-    };
-    let mut normal = normal;
     if !normal.cost().is_finite() {
         return Err(CalibrationError::NonFiniteStart);
     }
-    let initial_cost = normal.cost();
-    let mut xyz = vec![[0.0; 3]; data.len()];
-    let mut history = Vec::new();
-    let mut scale = vec![0.0f64; p];
-    let mut lambda = 1e-3;
-    let mut nu = 2.0;
-    let (mut cost_evaluations, mut jacobian_evaluations) = (0, 0);
+    let mut descent = Descent::new(start, normal, data, weights, options, threads);
     let mut termination = Termination::MaxIterations;
-    // N and g as matrices, made again only when a step is taken (a
-    // rejected step keeps them: near the minimum most steps are).
-    let matrices = |normal: &Normal| {
-        (
-            DMatrix::from_row_slice(p, p, &normal.jtj),
-            DVector::from_column_slice(&normal.jtr),
-        )
-    };
-    let (mut n, mut g) = matrices(&normal);
     for iteration in 1..=options.max_iterations {
-        let f = normal.cost();
+        if let Some(stop) = descent.iterate(iteration)? {
+            termination = stop;
+            break;
+        }
+    }
+    descent.finish(termination)
+}
+
+/// One Levenberg–Marquardt descent: where it stands, its normal equations
+/// there, the damping, and its account so far.
+struct Descent<'a> {
+    start: &'a DhParams,
+    // The prior, if any, rides with the weights ([`super::prior`]).
+    data: &'a DataSet,
+    weights: &'a Weights,
+    options: &'a LmOptions,
+    /// Worker threads of the normal equations.
+    threads: usize,
+    free: Vec<usize>,
+    /// Every parameter, in the fixed order.
+    x: Vec<f64>,
+    /// The normal equations at `x`; N and g as matrices, made again only
+    /// when a step is taken (a rejected step keeps them: near the minimum
+    /// most steps are).
+    normal: Normal,
+    n: DMatrix<f64>,
+    g: DVector<f64>,
+    /// Marquardt's diagonal scale: per column, the largest diagonal of N
+    /// seen so far (so mm and rad need no hand-tuned units).
+    scale: Vec<f64>,
+    damping: Damping,
+    /// Positions of the trial cost, reused.
+    xyz: Vec<[f64; 3]>,
+    initial_cost: f64,
+    history: Vec<LmIteration>,
+    cost_evaluations: usize,
+    jacobian_evaluations: usize,
+}
+
+/// A trial step and what it did to the cost.
+struct Trial {
+    /// Every parameter after the step.
+    x: Vec<f64>,
+    f_new: f64,
+    /// The actual and the predicted cost reduction.
+    actual: f64,
+    predicted: f64,
+    /// The gain ratio, actual over predicted (−1 when none is predicted).
+    rho: f64,
+    /// Whether the scaled step is below `xtol` relative to the scaled
+    /// parameters.
+    small_step: bool,
+}
+
+impl Trial {
+    /// Whether the step lowered the cost (never so for a non-finite cost).
+    fn lowers_cost(&self) -> bool {
+        self.rho > 0.0 && self.f_new.is_finite()
+    }
+
+    /// Converged at `f` (the cost before the step) by `ftol` or `xtol`.
+    /// Such a step is not taken: the result stays where its normal
+    /// equations were computed (they give the covariance), and the Jacobian
+    /// pass at the step's end is saved.
+    fn converged(&self, f: f64, options: &LmOptions) -> Option<Termination> {
+        if self.actual <= options.ftol * f && self.predicted <= options.ftol * f {
+            Some(Termination::CostTolerance)
+        } else if self.small_step {
+            Some(Termination::StepTolerance)
+        } else {
+            None
+        }
+    }
+}
+
+impl<'a> Descent<'a> {
+    fn new(
+        start: &'a DhParams,
+        normal: Normal,
+        data: &'a DataSet,
+        weights: &'a Weights,
+        options: &'a LmOptions,
+        threads: usize,
+    ) -> Descent<'a> {
+        let free = normal.free.clone();
+        let p = free.len();
+        let (n, g) = matrices(&normal, p);
+        Descent {
+            start,
+            data,
+            weights,
+            options,
+            threads,
+            x: start.to_vec(),
+            initial_cost: normal.cost(),
+            normal,
+            n,
+            g,
+            scale: vec![0.0f64; p],
+            damping: Damping::nielsen(),
+            xyz: vec![[0.0; 3]; data.len()],
+            history: Vec::new(),
+            cost_evaluations: 0,
+            jacobian_evaluations: 0,
+            free,
+        }
+    }
+
+    /// One iteration — the gradient test, the damped solve, the trial
+    /// step, then acceptance or rejection; why the descent stops, if it
+    /// does.
+    fn iterate(&mut self, iteration: usize) -> Result<Option<Termination>, CalibrationError> {
+        let f = self.normal.cost();
         if f <= f64::MIN_POSITIVE {
-            termination = Termination::ZeroResidual;
-            break;
+            return Ok(Some(Termination::ZeroResidual));
         }
-        for (s, c) in scale.iter_mut().zip(0..p) {
-            *s = s.max(normal.jtj[c * p + c]).max(f64::MIN_POSITIVE);
+        self.widen_scale();
+        let gmax = self.gradient_cosine(f);
+        if gmax <= self.options.gtol {
+            return Ok(Some(Termination::GradientTolerance));
         }
-        let gmax = (0..p)
-            .map(|c| g[c].abs() / (normal.jtj[c * p + c].max(f64::MIN_POSITIVE) * f).sqrt())
-            .fold(0.0, f64::max);
-        if gmax <= options.gtol {
-            termination = Termination::GradientTolerance;
-            break;
-        }
-        let mut a = n.clone();
-        for c in 0..p {
-            a[(c, c)] += lambda * scale[c];
-        }
-        let step = a.cholesky().map(|ch| -ch.solve(&g));
-        let Some(delta) = step.filter(|d| d.iter().all(|v| v.is_finite())) else {
-            lambda *= nu;
-            nu *= 2.0;
-            history.push(LmIteration {
-                iteration,
-                cost: f,
-                lambda,
-                accepted: false,
-            });
-            continue;
+        // A damped system that cannot be solved is damped harder; giving
+        // up is left to the steps that can be tried.
+        let Some(delta) = self.damped_step() else {
+            self.reject(iteration, f);
+            return Ok(None);
         };
-        let mut trial = x.clone();
-        for (c, &col) in free.iter().enumerate() {
-            trial[col] += delta[c];
+        let trial = self.trial(&delta, f)?;
+        if trial.lowers_cost() {
+            if let Some(stop) = trial.converged(f, self.options) {
+                return Ok(Some(stop));
+            }
+            self.accept(iteration, trial)?;
+            return Ok(None);
         }
-        let f_new = cost_at(&params_of(&trial)?, data, weights, free, &mut xyz)?;
-        cost_evaluations += 1;
+        self.reject(iteration, f);
+        Ok((trial.small_step || self.damping.exhausted()).then(|| stalled(gmax)))
+    }
+
+    fn widen_scale(&mut self) {
+        let p = self.free.len();
+        let jtj = &self.normal.jtj;
+        for (s, c) in self.scale.iter_mut().zip(0..p) {
+            *s = s.max(jtj[c * p + c]).max(f64::MIN_POSITIVE);
+        }
+    }
+
+    /// The gradient test: the largest cosine between a column and the
+    /// residuals (cost `f`).
+    fn gradient_cosine(&self, f: f64) -> f64 {
+        let p = self.free.len();
+        (0..p)
+            .map(|c| {
+                self.g[c].abs() / (self.normal.jtj[c * p + c].max(f64::MIN_POSITIVE) * f).sqrt()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// The step `δ` of `(N + λ·diag(scale)) δ = −g`, if it solves to finite
+    /// numbers.
+    fn damped_step(&self) -> Option<DVector<f64>> {
+        let mut a = self.n.clone();
+        for c in 0..self.free.len() {
+            a[(c, c)] += self.damping.value() * self.scale[c];
+        }
+        let step = a.cholesky().map(|ch| -ch.solve(&self.g));
+        step.filter(|d| d.iter().all(|v| v.is_finite()))
+    }
+
+    /// The cost after the step `delta` from cost `f` (positions only), and
+    /// how it compares with the prediction.
+    fn trial(&mut self, delta: &DVector<f64>, f: f64) -> Result<Trial, CalibrationError> {
+        let p = self.free.len();
+        let mut x = self.x.clone();
+        for (c, &col) in self.free.iter().enumerate() {
+            x[col] += delta[c];
+        }
+        let trial = self.params_of(&x)?;
+        let f_new = cost_at(&trial, self.data, self.weights, &self.free, &mut self.xyz)?;
+        self.cost_evaluations += 1;
         // |r + Jδ|² = f + 2δᵀg + δᵀNδ
-        let predicted = -(2.0 * delta.dot(&g) + delta.dot(&(&n * &delta)));
+        let predicted = -(2.0 * delta.dot(&self.g) + delta.dot(&(&self.n * delta)));
         let actual = f - f_new;
         let rho = if predicted > 0.0 {
             actual / predicted
         } else {
             -1.0
         };
-        let scaled =
-            |v: &[f64]| -> f64 { (0..p).map(|c| scale[c] * v[c] * v[c]).sum::<f64>().sqrt() };
-        let xs: Vec<f64> = free.iter().map(|&c| x[c]).collect();
-        let small_step = scaled(delta.as_slice()) <= options.xtol * (scaled(&xs) + options.xtol);
-        if rho > 0.0 && f_new.is_finite() {
-            // A step too small to matter is not taken: the result stays
-            // where its normal equations were computed (they give the
-            // covariance), and the Jacobian pass at the step's end is saved.
-            if actual <= options.ftol * f && predicted <= options.ftol * f {
-                termination = Termination::CostTolerance;
-                break;
-            }
-            if small_step {
-                termination = Termination::StepTolerance;
-                break;
-            }
-            x = trial;
-            normal = normal_at(&params_of(&x)?, data, weights, free, threads)?;
-            (n, g) = matrices(&normal);
-            jacobian_evaluations += 1;
-            lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-            nu = 2.0;
-            history.push(LmIteration {
-                iteration,
-                cost: normal.cost(),
-                lambda,
-                accepted: true,
-            });
-        } else {
-            lambda *= nu;
-            nu *= 2.0;
-            history.push(LmIteration {
-                iteration,
-                cost: f,
-                lambda,
-                accepted: false,
-            });
-            if small_step || lambda > 1e16 {
-                termination = if gmax <= MACHINE_PRECISION_GTOL {
-                    Termination::MachinePrecision
-                } else {
-                    Termination::NoProgress
-                };
-                break;
-            }
-        }
+        let scaled = |v: &[f64]| -> f64 {
+            (0..p)
+                .map(|c| self.scale[c] * v[c] * v[c])
+                .sum::<f64>()
+                .sqrt()
+        };
+        let xs: Vec<f64> = self.free.iter().map(|&c| self.x[c]).collect();
+        let xtol = self.options.xtol;
+        let small_step = scaled(delta.as_slice()) <= xtol * (scaled(&xs) + xtol);
+        Ok(Trial {
+            x,
+            f_new,
+            actual,
+            predicted,
+            rho,
+            small_step,
+        })
     }
-    Ok(LmResult {
-        params: start.with_values(&x).ok_or(CalibrationError::Shape)?,
-        termination,
-        iterations: history.len(),
-        cost_evaluations,
-        jacobian_evaluations,
-        initial_cost,
-        history,
-        normal,
-    })
+
+    /// Takes the step: the normal equations at its end, less damping.
+    fn accept(&mut self, iteration: usize, trial: Trial) -> Result<(), CalibrationError> {
+        self.x = trial.x;
+        let params = self.params_of(&self.x)?;
+        self.normal = normal_at(&params, self.data, self.weights, &self.free, self.threads)?;
+        (self.n, self.g) = matrices(&self.normal, self.free.len());
+        self.jacobian_evaluations += 1;
+        self.damping.accept(trial.rho);
+        self.history.push(LmIteration {
+            iteration,
+            cost: self.normal.cost(),
+            lambda: self.damping.value(),
+            accepted: true,
+        });
+        Ok(())
+    }
+
+    /// Stays at cost `f`, more damped.
+    fn reject(&mut self, iteration: usize, f: f64) {
+        self.damping.reject();
+        self.history.push(LmIteration {
+            iteration,
+            cost: f,
+            lambda: self.damping.value(),
+            accepted: false,
+        });
+    }
+
+    fn params_of(&self, x: &[f64]) -> Result<DhParams, CalibrationError> {
+        self.start.with_values(x).ok_or(CalibrationError::Shape)
+    }
+
+    fn finish(self, termination: Termination) -> Result<LmResult, CalibrationError> {
+        Ok(LmResult {
+            params: self.params_of(&self.x)?,
+            termination,
+            iterations: self.history.len(),
+            cost_evaluations: self.cost_evaluations,
+            jacobian_evaluations: self.jacobian_evaluations,
+            initial_cost: self.initial_cost,
+            history: self.history,
+            normal: self.normal,
+        })
+    }
+}
+
+/// N (`p × p`) and g of `normal` as matrices.
+fn matrices(normal: &Normal, p: usize) -> (DMatrix<f64>, DVector<f64>) {
+    (
+        DMatrix::from_row_slice(p, p, &normal.jtj),
+        DVector::from_column_slice(&normal.jtr),
+    )
+}
+
+/// Why a descent stops when no step lowers the cost: converged to machine
+/// precision if the gradient test (`gmax`) passes at
+/// [`MACHINE_PRECISION_GTOL`], otherwise no progress.
+fn stalled(gmax: f64) -> Termination {
+    if gmax <= MACHINE_PRECISION_GTOL {
+        Termination::MachinePrecision
+    } else {
+        Termination::NoProgress
+    }
 }

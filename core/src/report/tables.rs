@@ -616,29 +616,41 @@ pub(crate) fn residuals(evaluated: &[Evaluated], arms: &Arms) -> String {
 
 /// The solver summary.
 pub(crate) fn solver(cal: &Calibration, json: Option<&str>) -> String {
-    let s = &cal.solver;
-    let d = &cal.dof;
     let sb = json.map(|j| format!("{j}/solver"));
-    let sb = sb.as_deref();
     let db = json.map(|j| format!("{j}/dof"));
-    let db = db.as_deref();
-    let row = |name: &str, c: Cell| (String::new(), vec![Cell::text(name), c]);
-    let mut rows = vec![
-        row("method", Cell::text(s.method.name())),
-        row("stopped", Cell::text(&s.stop.describe())),
-        row(
+    let mut rows = solver_rows(cal, sb.as_deref());
+    rows.extend(dof_rows(cal, db.as_deref()));
+    rows.extend(phase_rows(cal));
+    rows.extend(anneal_rows(cal, sb.as_deref()));
+    rows.extend(global_rows(cal));
+    table("Solver", &["figure", "value"], &rows)
+}
+
+/// A row of the solver table: a figure's name and its value.
+fn figure_row(name: &str, c: Cell) -> (String, Vec<Cell>) {
+    (String::new(), vec![Cell::text(name), c])
+}
+
+/// How the solver stopped and what it evaluated (`sb`: the solver's JSON
+/// Pointer).
+fn solver_rows(cal: &Calibration, sb: Option<&str>) -> Vec<(String, Vec<Cell>)> {
+    let s = &cal.solver;
+    vec![
+        figure_row("method", Cell::text(s.method.name())),
+        figure_row("stopped", Cell::text(&s.stop.describe())),
+        figure_row(
             "converged",
             Cell::text(if s.successful { "yes" } else { "no" }),
         ),
-        row(
+        figure_row(
             "iterations of the final LM",
             Cell::int(s.iterations).at(sb, "iterations", s.iterations as f64),
         ),
-        row(
+        figure_row(
             "cost evaluations (positions only)",
             Cell::int(s.cost_evaluations).at(sb, "cost_evaluations", s.cost_evaluations as f64),
         ),
-        row(
+        figure_row(
             "Jacobian evaluations",
             Cell::int(s.jacobian_evaluations).at(
                 sb,
@@ -646,23 +658,31 @@ pub(crate) fn solver(cal: &Calibration, json: Option<&str>) -> String {
                 s.jacobian_evaluations as f64,
             ),
         ),
-        row(
+        figure_row(
             "cost Σr² of the start arm (final weights)",
             Cell::sci(s.initial_cost, 6).at(sb, "initial_cost", s.initial_cost),
         ),
-        row(
+        figure_row(
             "cost Σr² at the end",
             Cell::sci(s.final_cost, 6).at(sb, "final_cost", s.final_cost),
         ),
-        row(
+    ]
+}
+
+/// The residual rows, the unknowns and the σ behind the weights (`db`:
+/// the dof's JSON Pointer).
+fn dof_rows(cal: &Calibration, db: Option<&str>) -> Vec<(String, Vec<Cell>)> {
+    let d = &cal.dof;
+    vec![
+        figure_row(
             "residual rows: touches (3 each) + lengths",
             Cell::text(&format!("{} + {}", d.touch_rows, d.length_rows)),
         ),
-        row(
+        figure_row(
             "unknowns: free parameters + centre coordinates",
             Cell::text(&format!("{} + {}", d.free_parameters, d.centre_coordinates)),
         ),
-        row(
+        figure_row(
             "degrees of freedom m − p",
             Cell::int(d.degrees_of_freedom).at(
                 db,
@@ -670,63 +690,86 @@ pub(crate) fn solver(cal: &Calibration, json: Option<&str>) -> String {
                 d.degrees_of_freedom as f64,
             ),
         ),
-        row(
+        figure_row(
             "σ̂0 = sqrt(cost / (m − p))",
             Cell::num(d.sigma0, 4).at(db, "sigma0", d.sigma0),
         ),
-        row(
+        figure_row(
             "touch σ behind the weights [mm]",
             Cell::num(d.touch_sigma_mm, 4).at(db, "touch_sigma_mm", d.touch_sigma_mm),
         ),
-    ];
-    for p in &s.phases {
-        rows.push(row(
-            &format!("phase {}", p.name),
-            Cell::text(&format!(
-                "{} cost, {} Jacobian evaluations",
-                p.cost_evaluations, p.jacobian_evaluations
-            )),
-        ));
-    }
-    if let Some(a) = &s.anneal {
-        let ab = sb.map(|b| format!("{b}/anneal"));
-        let ab = ab.as_deref();
-        let o = &a.options;
-        rows.push(row(
+    ]
+}
+
+/// The evaluations of each phase.
+fn phase_rows(cal: &Calibration) -> Vec<(String, Vec<Cell>)> {
+    cal.solver
+        .phases
+        .iter()
+        .map(|p| {
+            figure_row(
+                &format!("phase {}", p.name),
+                Cell::text(&format!(
+                    "{} cost, {} Jacobian evaluations",
+                    p.cost_evaluations, p.jacobian_evaluations
+                )),
+            )
+        })
+        .collect()
+}
+
+/// The annealing's settings and result, if it ran (`sb`: the solver's
+/// JSON Pointer).
+fn anneal_rows(cal: &Calibration, sb: Option<&str>) -> Vec<(String, Vec<Cell>)> {
+    let Some(a) = &cal.solver.anneal else {
+        return Vec::new();
+    };
+    let ab = sb.map(|b| format!("{b}/anneal"));
+    let ab = ab.as_deref();
+    let o = &a.options;
+    vec![
+        figure_row(
             "annealing settings",
             Cell::text(&format!(
                 "T0 {} mm, cooling {}, chain {}, T_min {} mm, target {} mm",
                 o.t0, o.cooling, o.chain, o.t_min, o.target
             )),
-        ));
-        rows.push(row(
+        ),
+        figure_row(
             "annealing energy at the start [mm]",
             Cell::num(a.start_energy, 4).at(ab, "start_energy", a.start_energy),
-        ));
-        rows.push(row(
+        ),
+        figure_row(
             "annealing best energy [mm]",
             Cell::num(a.best_energy, 4).at(ab, "best_energy", a.best_energy),
-        ));
-        rows.push(row(
+        ),
+        figure_row(
             "annealing evaluations",
             Cell::int(a.evaluations).at(ab, "evaluations", a.evaluations as f64),
-        ));
-        rows.push(row("annealing stopped", Cell::text(a.stop.describe())));
-    }
-    if let Some(g) = &s.global {
-        rows.push(row(
+        ),
+        figure_row("annealing stopped", Cell::text(a.stop.describe())),
+    ]
+}
+
+/// The global search's starts and stop, if it ran.
+fn global_rows(cal: &Calibration) -> Vec<(String, Vec<Cell>)> {
+    let Some(g) = &cal.solver.global else {
+        return Vec::new();
+    };
+    let mut rows = vec![
+        figure_row(
             "global: starts, lowest reached",
             Cell::text(&format!("{}, {} times", g.minima.len(), g.best_hits)),
+        ),
+        figure_row("global stopped", Cell::text(g.stop.describe())),
+    ];
+    if !g.sign_changes.is_empty() {
+        rows.push(figure_row(
+            "signs put in the nominal convention",
+            Cell::text(&g.sign_changes.join(", ")),
         ));
-        rows.push(row("global stopped", Cell::text(g.stop.describe())));
-        if !g.sign_changes.is_empty() {
-            rows.push(row(
-                "signs put in the nominal convention",
-                Cell::text(&g.sign_changes.join(", ")),
-            ));
-        }
     }
-    table("Solver", &["figure", "value"], &rows)
+    rows
 }
 
 /// The summary across points of one evaluation.

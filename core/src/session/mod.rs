@@ -462,10 +462,23 @@ impl CalibrationReport {
     /// The summary every front end prints: the solver, the dof, every
     /// parameter with σ, the correlations and the validation table.
     pub fn summary(&self) -> String {
+        let c = &self.calibration;
+        let mut t = self.summary_header();
+        t += &dof_lines(c);
+        t += &fit_quality_lines(c);
+        t += &outliers_line(c);
+        t += &verdict_line(&self.verdict);
+        t += &parameter_table(c);
+        t += &correlations_line(c);
+        t += &validation_table(&self.validation);
+        t
+    }
+
+    /// The summary's head: what was calibrated on what, and how the solver
+    /// went.
+    fn summary_header(&self) -> String {
         let r = self;
-        let c = &r.calibration;
-        let s = &c.solver;
-        let d = &c.dof;
+        let s = &r.calibration.solver;
         let mut t = format!(
             "calibrated `{}` ({}) on {}: {} touches of {} points, {} reference lengths\n\n",
             r.arm, r.arm_file, r.data_file, r.touches, r.points, r.reference_lengths
@@ -482,143 +495,6 @@ impl CalibrationReport {
             s.initial_cost,
             s.final_cost
         );
-        t += &format!(
-            "Residuals: {} touch rows + {} length rows; unknowns: {} parameters + {} centre \
-             coordinates; {} degrees of freedom\n",
-            d.touch_rows,
-            d.length_rows,
-            d.free_parameters,
-            d.centre_coordinates,
-            d.degrees_of_freedom
-        );
-        t += &format!(
-            "sigma0 = {} = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n",
-            if c.robust.is_some() {
-                "robust scale (median of the standardised residuals)"
-            } else {
-                "sqrt(cost/dof)"
-            },
-            d.sigma0,
-            d.touch_sigma_mm,
-            if d.touch_sigma_estimated {
-                " (estimated from the fit)"
-            } else {
-                " (from the stated noise)"
-            }
-        );
-        if let Some(p) = &c.prior {
-            t += &format!(
-                "Prior: {}; {} pseudo-observation rows (counted in the dof), prior cost {:.3}{}\n",
-                p.tolerances,
-                p.rows,
-                p.cost,
-                p.conflict().unwrap_or_default()
-            );
-        }
-        if let Some(chi) = &c.checks.chi_square {
-            t += &format!("Fit quality: {}\n", chi.describe());
-        }
-        if let Some(r) = &c.robust {
-            if let Some(d) = r.describe_scale() {
-                t += &format!("Fit quality: {d}\n");
-            }
-            t += &robust_line(r);
-        }
-        if let Some(u) = &c.checks.position_uncertainty {
-            t += &format!("Experiment: {}\n", u.describe());
-        }
-        let o = &c.checks.outliers;
-        if o.is_empty() {
-            t += &format!(
-                "Outliers: none (no touch beyond {:.2} sigma)\n",
-                c.checks.outlier_threshold
-            );
-        } else {
-            let shown: Vec<String> = o
-                .iter()
-                .take(20)
-                .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
-                .collect();
-            t += &format!(
-                "Outliers: {} touch(es) beyond {:.2} sigma — check them (remeasure, or fix the \
-                 label): {}{}\n",
-                o.len(),
-                c.checks.outlier_threshold,
-                shown.join(", "),
-                if o.len() > shown.len() { ", …" } else { "" }
-            );
-        }
-        t += &if r.verdict.usable {
-            "Verdict: usable\n\n".to_string()
-        } else {
-            format!("Verdict: NOT usable — {}\n\n", r.verdict.reasons.join("; "))
-        };
-        t += "Parameters (mm, deg; sigma = standard uncertainty, k = 1):\n";
-        t += &format!(
-            "  {:<8} {:<4} {:>14} {:>14} {:>12} {:>10}  {}\n",
-            "name", "unit", "nominal", "calibrated", "correction", "sigma", "fixed because"
-        );
-        for p in c.parameters.iter().map(|p| p.user()) {
-            t += &format!(
-                "  {:<8} {:<4} {:>14.6} {:>14.6} {:>12.6} {:>10}  {}\n",
-                p.name,
-                p.unit,
-                p.nominal,
-                p.calibrated,
-                p.correction,
-                p.sigma.map_or("-".to_string(), |s| format!("{s:.6}")),
-                p.fixed.as_deref().unwrap_or("")
-            );
-        }
-        if let Some(p) = &c.prior {
-            t += &prior_table(p);
-        }
-        if c.correlations.is_empty() {
-            t += "No pair of free parameters correlates with |rho| > 0.9.\n";
-        } else {
-            t += "Correlations |rho| > 0.9:";
-            for x in &c.correlations {
-                t += &format!("  {}/{} {:+.3}", x.a, x.b, x.rho);
-            }
-            t += "\n";
-        }
-        t += "\nValidation (mm): e = mean single-point error, 2s and delta_max (SPAT), length RMS/max\n";
-        t += &format!(
-            "  {:<28} {:>8} {:>8} {:>9} {:>10} {:>10}\n",
-            "data", "e", "2s", "delta_max", "len RMS", "len max"
-        );
-        let mut row = |name: &str, f: &Figures| {
-            let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
-            t += &format!(
-                "  {:<28} {:>8.4} {:>8.4} {:>9.4} {:>10} {:>10}\n",
-                name,
-                f.e_mean,
-                f.two_s_mean,
-                f.delta_max,
-                opt(f.length_rms),
-                opt(f.length_max)
-            );
-        };
-        let v = &r.validation;
-        row("fitted, before", &v.fitted.before);
-        row("fitted, after", &v.fitted.after);
-        if let Some(h) = &v.held_out {
-            row("held out, before", &h.figures.before);
-            row("held out, after", &h.figures.after);
-        }
-        if let Some(cv) = &v.cross_validation {
-            for (i, f) in cv.folds.iter().enumerate() {
-                row(
-                    &format!("fold {} ({} pts), before", i + 1, f.held_out.len()),
-                    &f.figures.before,
-                );
-                row(
-                    &format!("fold {} ({} pts), after", i + 1, f.held_out.len()),
-                    &f.figures.after,
-                );
-            }
-        }
-        t += "\n";
         t
     }
 
@@ -792,6 +668,173 @@ pub fn run(
         warnings: s.warnings.clone(),
         verdict,
     })
+}
+
+/// The summary's degrees of freedom and the σ behind the weights.
+fn dof_lines(c: &Calibration) -> String {
+    let d = &c.dof;
+    let mut t = format!(
+        "Residuals: {} touch rows + {} length rows; unknowns: {} parameters + {} centre \
+         coordinates; {} degrees of freedom\n",
+        d.touch_rows, d.length_rows, d.free_parameters, d.centre_coordinates, d.degrees_of_freedom
+    );
+    t += &format!(
+        "sigma0 = {} = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n",
+        if c.robust.is_some() {
+            "robust scale (median of the standardised residuals)"
+        } else {
+            "sqrt(cost/dof)"
+        },
+        d.sigma0,
+        d.touch_sigma_mm,
+        if d.touch_sigma_estimated {
+            " (estimated from the fit)"
+        } else {
+            " (from the stated noise)"
+        }
+    );
+    t
+}
+
+/// The summary's account of the fit against the noise: the prior, the χ²
+/// test, the robust fit and what the experiment can determine.
+fn fit_quality_lines(c: &Calibration) -> String {
+    let mut t = String::new();
+    if let Some(p) = &c.prior {
+        t += &format!(
+            "Prior: {}; {} pseudo-observation rows (counted in the dof), prior cost {:.3}{}\n",
+            p.tolerances,
+            p.rows,
+            p.cost,
+            p.conflict().unwrap_or_default()
+        );
+    }
+    if let Some(chi) = &c.checks.chi_square {
+        t += &format!("Fit quality: {}\n", chi.describe());
+    }
+    if let Some(r) = &c.robust {
+        if let Some(d) = r.describe_scale() {
+            t += &format!("Fit quality: {d}\n");
+        }
+        t += &robust_line(r);
+    }
+    if let Some(u) = &c.checks.position_uncertainty {
+        t += &format!("Experiment: {}\n", u.describe());
+    }
+    t
+}
+
+/// The summary's outliers: the first 20 by `file:line`.
+fn outliers_line(c: &Calibration) -> String {
+    let o = &c.checks.outliers;
+    if o.is_empty() {
+        return format!(
+            "Outliers: none (no touch beyond {:.2} sigma)\n",
+            c.checks.outlier_threshold
+        );
+    }
+    let shown: Vec<String> = o
+        .iter()
+        .take(20)
+        .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
+        .collect();
+    format!(
+        "Outliers: {} touch(es) beyond {:.2} sigma — check them (remeasure, or fix the \
+         label): {}{}\n",
+        o.len(),
+        c.checks.outlier_threshold,
+        shown.join(", "),
+        if o.len() > shown.len() { ", …" } else { "" }
+    )
+}
+
+fn verdict_line(v: &Verdict) -> String {
+    if v.usable {
+        "Verdict: usable\n\n".to_string()
+    } else {
+        format!("Verdict: NOT usable — {}\n\n", v.reasons.join("; "))
+    }
+}
+
+/// The summary's parameter table (user units), and the prior's if any.
+fn parameter_table(c: &Calibration) -> String {
+    let mut t = String::from("Parameters (mm, deg; sigma = standard uncertainty, k = 1):\n");
+    t += &format!(
+        "  {:<8} {:<4} {:>14} {:>14} {:>12} {:>10}  {}\n",
+        "name", "unit", "nominal", "calibrated", "correction", "sigma", "fixed because"
+    );
+    for p in c.parameters.iter().map(|p| p.user()) {
+        t += &format!(
+            "  {:<8} {:<4} {:>14.6} {:>14.6} {:>12.6} {:>10}  {}\n",
+            p.name,
+            p.unit,
+            p.nominal,
+            p.calibrated,
+            p.correction,
+            p.sigma.map_or("-".to_string(), |s| format!("{s:.6}")),
+            p.fixed.as_deref().unwrap_or("")
+        );
+    }
+    if let Some(p) = &c.prior {
+        t += &prior_table(p);
+    }
+    t
+}
+
+fn correlations_line(c: &Calibration) -> String {
+    if c.correlations.is_empty() {
+        return "No pair of free parameters correlates with |rho| > 0.9.\n".to_string();
+    }
+    let mut t = String::from("Correlations |rho| > 0.9:");
+    for x in &c.correlations {
+        t += &format!("  {}/{} {:+.3}", x.a, x.b, x.rho);
+    }
+    t += "\n";
+    t
+}
+
+/// The summary's validation table: before and after, on the fitted data,
+/// the held-out data and each cross-validation fold.
+fn validation_table(v: &Validation) -> String {
+    let mut t = String::from(
+        "\nValidation (mm): e = mean single-point error, 2s and delta_max (SPAT), length RMS/max\n",
+    );
+    t += &format!(
+        "  {:<28} {:>8} {:>8} {:>9} {:>10} {:>10}\n",
+        "data", "e", "2s", "delta_max", "len RMS", "len max"
+    );
+    let mut row = |name: &str, f: &Figures| {
+        let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.4}"));
+        t += &format!(
+            "  {:<28} {:>8.4} {:>8.4} {:>9.4} {:>10} {:>10}\n",
+            name,
+            f.e_mean,
+            f.two_s_mean,
+            f.delta_max,
+            opt(f.length_rms),
+            opt(f.length_max)
+        );
+    };
+    row("fitted, before", &v.fitted.before);
+    row("fitted, after", &v.fitted.after);
+    if let Some(h) = &v.held_out {
+        row("held out, before", &h.figures.before);
+        row("held out, after", &h.figures.after);
+    }
+    if let Some(cv) = &v.cross_validation {
+        for (i, f) in cv.folds.iter().enumerate() {
+            row(
+                &format!("fold {} ({} pts), before", i + 1, f.held_out.len()),
+                &f.figures.before,
+            );
+            row(
+                &format!("fold {} ({} pts), after", i + 1, f.held_out.len()),
+                &f.figures.after,
+            );
+        }
+    }
+    t += "\n";
+    t
 }
 
 /// What the method did, before the final LM's line.

@@ -7,6 +7,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use crate::damping::Damping;
 use crate::kernel::{ArmKernel, KernelError};
 
 /// Residual below which a solution is accepted, mm.
@@ -61,25 +62,29 @@ pub fn solve_point(
     let mut q = start.to_vec();
     let (mut r, mut jac) = eval(&q)?;
     let mut err = r.norm();
-    let mut mu = 1e-3 * jjt(&jac).trace() / 3.0;
+    let mut mu = Damping::fixed_factors(1e-3 * jjt(&jac).trace() / 3.0, 3.0, 4.0);
     let mut iterations = 0;
     while err >= IK_TOLERANCE_MM && iterations < IK_MAX_ITERATIONS {
         iterations += 1;
-        let a = jjt(&jac) + Matrix3::identity() * mu;
-        let Some(y) = a.lu().solve(&r) else {
-            mu = mu * 4.0 + f64::MIN_POSITIVE;
-            continue;
+        let a = jjt(&jac) + Matrix3::identity() * mu.value();
+        let lower = match a.lu().solve(&r) {
+            Some(y) => {
+                let trial: Vec<f64> = (0..q.len())
+                    .map(|j| q[j] + jac[j][0] * y[0] + jac[j][1] * y[1] + jac[j][2] * y[2])
+                    .collect();
+                let (r_new, jac_new) = eval(&trial)?;
+                let err_new = r_new.norm();
+                (err_new < err).then_some((trial, r_new, jac_new, err_new))
+            }
+            None => None,
         };
-        let trial: Vec<f64> = (0..q.len())
-            .map(|j| q[j] + jac[j][0] * y[0] + jac[j][1] * y[1] + jac[j][2] * y[2])
-            .collect();
-        let (r_new, jac_new) = eval(&trial)?;
-        let err_new = r_new.norm();
-        if err_new < err {
-            (q, r, jac, err) = (trial, r_new, jac_new, err_new);
-            mu /= 3.0;
-        } else {
-            mu = mu * 4.0 + f64::MIN_POSITIVE;
+        match lower {
+            Some(better) => {
+                (q, r, jac, err) = better;
+                // The fixed factors do not look at the gain ratio.
+                mu.accept(f64::NAN);
+            }
+            None => mu.reject(),
         }
     }
     Ok(IkSolution {

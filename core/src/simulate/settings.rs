@@ -290,13 +290,22 @@ impl CampaignSettings {
     /// assert!(e.starts_with("setting `reference_lengths`: 7 reference lengths"), "{e}");
     /// ```
     pub fn validate(&self, joints: usize) -> Result<(), SimError> {
-        let bad = |name: &str, msg: String| Err(SimError::setting(name, msg));
         if self.seed > i64::MAX as u64 {
             return bad(
                 "seed",
                 format!("at most {} (TOML integers), got {}", i64::MAX, self.seed),
             );
         }
+        self.validate_counts(joints)?;
+        self.validate_noise()?;
+        self.validate_selection()?;
+        self.validate_errors(joints)?;
+        self.validate_given_sockets()
+    }
+
+    /// The sockets, and the touches per socket (`joints`: what leaves
+    /// articulations free).
+    fn validate_counts(&self, joints: usize) -> Result<(), SimError> {
         let sockets = self.sockets.count();
         if sockets == 0 {
             return bad("sockets", "at least one socket is needed".into());
@@ -332,11 +341,23 @@ impl CampaignSettings {
                 ),
             );
         }
+        Ok(())
+    }
+
+    fn validate_noise(&self) -> Result<(), SimError> {
         non_negative("encoder_noise_deg", self.encoder_noise_deg)?;
         non_negative("probe_noise_mm", self.probe_noise_mm)?;
         if let Some(u) = self.length_uncertainty_mm {
             non_negative("length_uncertainty_mm", u)?;
         }
+        Ok(())
+    }
+
+    /// How lengths and touches are picked: the reference lengths among the
+    /// socket pairs, the separation of a socket's touches, the IK starts
+    /// per touch.
+    fn validate_selection(&self) -> Result<(), SimError> {
+        let sockets = self.sockets.count();
         let pairs = pair_count(sockets);
         if self.reference_lengths > pairs {
             return bad(
@@ -364,34 +385,39 @@ impl CampaignSettings {
                 ),
             );
         }
-        self.validate_errors(joints)?;
-        if let SocketPlan::Given { points, .. } = &self.sockets {
-            let mut seen = HashSet::new();
-            for p in points {
-                if p.label.is_empty() || !seen.insert(p.label.as_str()) {
-                    return bad(
-                        "sockets.points",
-                        format!("socket labels must be non-empty and unique: `{}`", p.label),
-                    );
-                }
-                if ![p.x, p.y, p.z].iter().all(|v| v.is_finite()) {
-                    return bad(
-                        "sockets.points",
-                        format!("socket `{}` has a non-finite coordinate", p.label),
-                    );
-                }
-            }
-            if let Some((i, j)) = self.sockets.same_place() {
-                let (a, b) = (&points[i], &points[j]);
+        Ok(())
+    }
+
+    /// Sockets from a file: labelled uniquely, finite, each at its own place.
+    fn validate_given_sockets(&self) -> Result<(), SimError> {
+        let SocketPlan::Given { points, .. } = &self.sockets else {
+            return Ok(());
+        };
+        let mut seen = HashSet::new();
+        for p in points {
+            if p.label.is_empty() || !seen.insert(p.label.as_str()) {
                 return bad(
                     "sockets.points",
-                    format!(
-                        "sockets `{}` and `{}` are at the same place ({}, {}, {} mm): every \
-                         socket must be a different point",
-                        a.label, b.label, b.x, b.y, b.z
-                    ),
+                    format!("socket labels must be non-empty and unique: `{}`", p.label),
                 );
             }
+            if ![p.x, p.y, p.z].iter().all(|v| v.is_finite()) {
+                return bad(
+                    "sockets.points",
+                    format!("socket `{}` has a non-finite coordinate", p.label),
+                );
+            }
+        }
+        if let Some((i, j)) = self.sockets.same_place() {
+            let (a, b) = (&points[i], &points[j]);
+            return bad(
+                "sockets.points",
+                format!(
+                    "sockets `{}` and `{}` are at the same place ({}, {}, {} mm): every \
+                     socket must be a different point",
+                    a.label, b.label, b.x, b.y, b.z
+                ),
+            );
         }
         Ok(())
     }
@@ -433,6 +459,11 @@ impl CampaignSettings {
 /// ```
 pub fn pair_count(n: usize) -> usize {
     n * n.saturating_sub(1) / 2
+}
+
+/// A setting refused, by name.
+fn bad(name: &str, msg: String) -> Result<(), SimError> {
+    Err(SimError::setting(name, msg))
 }
 
 fn non_negative(name: &str, x: f64) -> Result<(), SimError> {
