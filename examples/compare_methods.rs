@@ -24,8 +24,9 @@ use std::time::Instant;
 
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings, calibrate, validate};
 use aacmm_core::io::Arm;
+use aacmm_core::objective::weighted_cost;
 use aacmm_core::params::DhParams;
-use aacmm_core::residuals::{Noise, weighted_cost};
+use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
 
 /// Campaigns per case when no argument says otherwise.

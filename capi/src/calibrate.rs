@@ -53,6 +53,8 @@ fn method_code(m: Method) -> AacmmMethod {
         Method::Sa => AACMM_METHOD_SA,
         Method::Hybrid => AACMM_METHOD_HYBRID,
         Method::Global => AACMM_METHOD_GLOBAL,
+        // Never: the C API runs the library's own solvers only.
+        Method::External => AacmmMethod::MAX,
     }
 }
 

@@ -11,7 +11,7 @@ use aacmm_core::calibrate::CalibrationError;
 use aacmm_core::error::InputError;
 use aacmm_core::error::OptionError;
 use aacmm_core::kernel::KernelError;
-use aacmm_core::residuals::WORKER_THREAD_NAME;
+use aacmm_core::parallel::WORKER_THREAD_NAME;
 
 use crate::ptr::copy_str;
 

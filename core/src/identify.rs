@@ -33,9 +33,10 @@ use nalgebra::{DMatrix, DVector, Dyn, SVD, SymmetricEigen};
 use serde::{Deserialize, Serialize};
 
 use crate::dataset::DataSet;
-use crate::kernel::{ArmKernel, KernelError};
+
+use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Noise, Weights, normal_equations};
+use crate::residuals::{Layout, Noise, Sees, TermError};
 
 /// Relative singular-value threshold of the numerical rank.
 pub const RANK_TOLERANCE: f64 = 1e-7;
@@ -203,19 +204,6 @@ struct Scaled {
     ns: DMatrix<f64>,
 }
 
-/// The normal equations of every column at `params`: what [`identify`] and
-/// [`open_directions_from`] analyse, and (restricted to the free columns) where
-/// a fit from `params` starts.
-pub(crate) fn full_normal(
-    params: &DhParams,
-    data: &DataSet,
-    weights: &Weights,
-    threads: usize,
-) -> Result<crate::residuals::Normal, KernelError> {
-    let all: Vec<usize> = (0..params.param_count()).collect();
-    normal_equations(&ArmKernel::new(params)?, data, weights, &all, threads)
-}
-
 impl Scaled {
     fn at(params: &DhParams, normal: crate::residuals::Normal) -> Scaled {
         let ids: Vec<ParamId> = params.param_ids().collect();
@@ -238,25 +226,47 @@ impl Scaled {
 
 /// Analyses what `data` can identify at `params`, the touches weighed from
 /// `noise` (without stated noise, as a 0.01 mm touch).
+///
+/// # Errors
+///
+/// The kernel's, and noise that makes weights that are not finite.
 pub fn identify(
     params: &DhParams,
     data: &DataSet,
     noise: &Noise,
     threads: usize,
-) -> Result<Identification, KernelError> {
-    // Without stated noise, σ as for a 0.01 mm touch.
-    let weights = Weights::new(&ArmKernel::new(params)?, data, noise, 0.01)?;
-    Ok(identify_from(
-        params,
-        data,
-        full_normal(params, data, &weights, threads)?,
-    ))
+) -> Result<Identification, TermError> {
+    let objective = data_objective(params, data, noise, threads)?;
+    let all: Vec<usize> = (0..params.param_count()).collect();
+    let normal = objective.normal(&params.to_vec(), &all)?;
+    Ok(identify_from(params, objective.sees(), normal))
 }
 
-/// [`identify`] from the normal equations of every column at `params`.
+/// The data's terms at `params` (no prior), touches without stated noise
+/// weighed as a 0.01 mm touch: what the analysis of the data alone sees.
+pub(crate) fn data_objective<'d>(
+    params: &DhParams,
+    data: &'d DataSet,
+    noise: &Noise,
+    threads: usize,
+) -> Result<Objective<'d>, TermError> {
+    // Without stated noise, σ as for a 0.01 mm touch.
+    Objective::of_data(
+        Layout::new(params.clone()),
+        data,
+        noise,
+        Vec::new(),
+        None,
+        0.01,
+        threads,
+    )
+}
+
+/// [`identify`] from the normal equations of every geometry column at
+/// `params`, of data that see what `sees` says.
 pub(crate) fn identify_from(
     params: &DhParams,
-    data: &DataSet,
+    sees: Sees,
     normal: crate::residuals::Normal,
 ) -> Identification {
     let mut scaled = Scaled::at(params, normal);
@@ -268,7 +278,7 @@ pub(crate) fn identify_from(
         scaled.ns = DMatrix::zeros(np, np);
     }
     let singular_values = singular(&scaled.ns);
-    let structure = Structure::of(params, data, &scaled, overflow);
+    let structure = Structure::of(params, sees, &scaled, overflow);
     let spectrum = Spectrum::of(&structure, &names);
     let split = FreeSet::pivoted(params.joint_count(), &scaled, &structure, spectrum.rank);
     let (free, correlations) = predicted(&scaled, overflow, &structure, &spectrum, &split, &names);
@@ -296,13 +306,13 @@ pub(crate) fn identify_from(
 }
 
 /// What the structural rules leave to the numerical analysis: every column
-/// but the base motion's, with the scale direction projected out when no
-/// reference length fixes the size.
+/// but the base motion's (when the data are relative), with the scale
+/// direction projected out when nothing fixes the size.
 struct Structure {
     /// The rules that fired, in the order they are reported.
     rules: Vec<Rule>,
-    /// The columns of theta1 and d1 (rule 1).
-    base: [usize; 2],
+    /// The columns of theta1 and d1 (rule 1), when no term sees base motion.
+    base: Vec<usize>,
     /// The analysed columns: all but `base`.
     cols: Vec<usize>,
     /// The scaled normal matrix on `cols`.
@@ -315,18 +325,27 @@ struct Structure {
 }
 
 impl Structure {
-    fn of(params: &DhParams, data: &DataSet, scaled: &Scaled, overflow: bool) -> Structure {
-        let n = params.joint_count();
+    fn of(params: &DhParams, sees: Sees, scaled: &Scaled, overflow: bool) -> Structure {
         let np = scaled.ids.len();
-        let base =
-            [ParamKind::Theta, ParamKind::D].map(|kind| ParamId { kind, index: 0 }.column(n));
-        let mut rules = vec![Rule {
-            name: "base-motion".into(),
-            explanation: "theta1 and d1 are never identifiable: touches compared with their \
-                          centroids and distances between centroids do not see a rotation about, \
-                          or a slide along, the base axis"
-                .into(),
-        }];
+        let unseen = unseen_base(params, sees);
+        let base: Vec<usize> = unseen.iter().map(|(c, _)| *c).collect();
+        let mut rules = Vec::new();
+        if unseen.len() == 2 {
+            rules.push(Rule {
+                name: "base-motion".into(),
+                explanation: "theta1 and d1 are never identifiable: touches compared with their \
+                              centroids and distances between centroids do not see a rotation \
+                              about, or a slide along, the base axis"
+                    .into(),
+            });
+        } else {
+            for (_, what) in &unseen {
+                rules.push(Rule {
+                    name: "base-motion".into(),
+                    explanation: format!("no data see a {what}: it is not identifiable"),
+                });
+            }
+        }
         if overflow {
             rules.push(Rule {
                 name: "not-finite".into(),
@@ -336,7 +355,7 @@ impl Structure {
         let cols: Vec<usize> = (0..np).filter(|c| !base.contains(c)).collect();
         let k = cols.len();
         let unprojected = DMatrix::from_fn(k, k, |a, b| scaled.ns[(cols[a], cols[b])]);
-        let scale = data.references().is_empty();
+        let scale = !sees.scale;
         let analysed = if scale {
             let v = scale_direction(params, &scaled.ids, &cols, &unprojected);
             let p = DMatrix::identity(k, k) - &v * v.transpose();
@@ -360,6 +379,34 @@ impl Structure {
             scale,
         }
     }
+}
+
+/// The base motions no term sees — a turn about the base axis (theta1), a
+/// slide along it (d1) — with their columns and in words: rule 1 holds them
+/// fixed. Relative data (touches against their centroids, distances
+/// between centroids) see neither.
+fn unseen_base(params: &DhParams, sees: Sees) -> Vec<(usize, &'static str)> {
+    let n = params.joint_count();
+    let column = |kind| ParamId { kind, index: 0 }.column(n);
+    let mut out = Vec::new();
+    if !sees.base_rotation {
+        out.push((
+            column(ParamKind::Theta),
+            "rotation about the base axis (theta1)",
+        ));
+    }
+    if !sees.base_slide {
+        out.push((column(ParamKind::D), "slide along the base axis (d1)"));
+    }
+    out
+}
+
+/// The columns of [`unseen_base`].
+fn base_columns(params: &DhParams, sees: Sees) -> Vec<usize> {
+    unseen_base(params, sees)
+        .into_iter()
+        .map(|(c, _)| c)
+        .collect()
 }
 
 /// Rule 2's direction on the analysed columns `cols`: every length (a, d,
@@ -775,7 +822,7 @@ pub(crate) fn strong_correlations(
 /// When S's smallest eigenvalue exceeds 100 times that bound (with the
 /// trace for λmax), no such `w` exists and the full analysis would return
 /// nothing; otherwise it runs and names what is open.
-fn plainly_closed(ns: &DMatrix<f64>, free: &[usize], base: [usize; 2]) -> bool {
+fn plainly_closed(ns: &DMatrix<f64>, free: &[usize], base: &[usize]) -> bool {
     let k = ns.nrows();
     let trace = ns.trace();
     if base.iter().any(|b| free.contains(b)) || trace.is_nan() || trace <= 0.0 {
@@ -784,7 +831,8 @@ fn plainly_closed(ns: &DMatrix<f64>, free: &[usize], base: [usize; 2]) -> bool {
     // A base column below the eigen decomposition's own rounding (ε·trace)
     // is one it sees as zero.
     let seen: Vec<usize> = base
-        .into_iter()
+        .iter()
+        .copied()
         .filter(|&b| ns.row(b).norm() > f64::EPSILON * trace)
         .collect();
     let tau2 = 1e-14 * trace;
@@ -822,43 +870,40 @@ fn closed_block(ns: &DMatrix<f64>, free: &[usize], correction: &DMatrix<f64>, bo
 /// one — the fit is then well posed.
 pub(crate) fn open_directions_from(
     params: &DhParams,
-    data: &DataSet,
+    sees: Sees,
     normal: crate::residuals::Normal,
     free: &[usize],
 ) -> Vec<String> {
-    let n = params.joint_count();
     let Scaled { ids, ns, .. } = Scaled::at(params, normal);
     if !ns.iter().all(|v| v.is_finite()) {
         return vec![format!("every direction ({NOT_FINITE})")];
     }
-    let base = [ParamKind::Theta, ParamKind::D].map(|kind| ParamId { kind, index: 0 }.column(n));
-    if !data.references().is_empty() && plainly_closed(&ns, free, base) {
+    let base = base_columns(params, sees);
+    if sees.scale && plainly_closed(&ns, free, &base) {
         return Vec::new();
     }
-    analysed_open_directions(params, data, &ids, &ns, free, base)
+    analysed_open_directions(params, sees, &ids, &ns, free)
 }
 
 /// [`open_directions_from`] by the eigen decomposition of the scaled normal
-/// matrix `ns`: every unseen direction, then the open ones among them
-/// (`base`: the columns of theta1 and d1).
+/// matrix `ns`: every unseen direction (the base motions no term sees,
+/// scale when nothing fixes it, the exact redundancies), then the open ones
+/// among them.
 fn analysed_open_directions(
     params: &DhParams,
-    data: &DataSet,
+    sees: Sees,
     ids: &[ParamId],
     ns: &DMatrix<f64>,
     free: &[usize],
-    base: [usize; 2],
 ) -> Vec<String> {
     let np = ids.len();
     // Unseen directions, in scaled coordinates, with names.
     let mut unseen: Vec<(String, nalgebra::DVector<f64>)> = Vec::new();
     let unit = |c: usize| nalgebra::DVector::from_fn(np, |a, _| if a == c { 1.0 } else { 0.0 });
-    unseen.push((
-        "rotation about the base axis (theta1)".into(),
-        unit(base[0]),
-    ));
-    unseen.push(("slide along the base axis (d1)".into(), unit(base[1])));
-    if data.references().is_empty() {
+    for (c, name) in unseen_base(params, sees) {
+        unseen.push((name.to_string(), unit(c)));
+    }
+    if !sees.scale {
         let v = nalgebra::DVector::from_fn(np, |a, _| {
             if ids[a].kind.is_length() {
                 params.get(ids[a])
@@ -979,7 +1024,6 @@ mod tests {
     #[test]
     fn overflowing_normal_equations_are_named_not_looped_on() {
         use crate::io::{AngleUnit, parse_poses};
-        use crate::kernel::ArmKernel;
         let params = DhParams::paper_nominal();
         let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
         for (p, k) in [("A", 0.0), ("B", 40.0)] {
@@ -997,13 +1041,13 @@ mod tests {
         }
         let (poses, _) = parse_poses(&text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
         let data = DataSet::from_poses(&poses, "p.csv").unwrap();
-        let kernel = ArmKernel::new(&params).unwrap();
-        let weights =
-            Weights::new(&kernel, &data, &crate::residuals::Noise::default(), 0.01).unwrap();
-        let mut normal = full_normal(&params, &data, &weights, 1).unwrap();
+        let objective = data_objective(&params, &data, &Noise::default(), 1).unwrap();
+        let all: Vec<usize> = (0..params.param_count()).collect();
+        let mut normal = objective.normal(&params.to_vec(), &all).unwrap();
         normal.jtj[0] = f64::INFINITY;
         normal.jtj[1] = f64::NAN;
-        let id = identify_from(&params, &data, normal.clone());
+        let sees = objective.sees();
+        let id = identify_from(&params, sees, normal.clone());
         assert!(
             id.rules.iter().any(|r| r.name == "not-finite"),
             "{:?}",
@@ -1011,8 +1055,7 @@ mod tests {
         );
         assert_eq!(id.rank, 0);
         assert!(id.free.iter().all(|f| f.sigma == f64::INFINITY));
-        let all: Vec<usize> = (0..params.param_count()).collect();
-        let open = open_directions_from(&params, &data, normal, &all);
+        let open = open_directions_from(&params, sees, normal, &all);
         assert!(open[0].contains("not finite"), "{open:?}");
     }
 
@@ -1050,9 +1093,12 @@ mod plainly_closed_tests {
             let campaign = simulate(&nominal, &settings).unwrap();
             let data = campaign.data_set().unwrap();
             let noise = crate::calibrate::ModelOptions::default().noise;
-            let kernel = crate::kernel::ArmKernel::new(&nominal.params).unwrap();
-            let weights = Weights::new_threads(&kernel, &data, &noise, 1.0, 1).unwrap();
-            let normal = full_normal(&nominal.params, &data, &weights, 1).unwrap();
+            let layout = Layout::new(nominal.params.clone());
+            let objective =
+                Objective::of_data(layout, &data, &noise, Vec::new(), None, 1.0, 1).unwrap();
+            let all: Vec<usize> = (0..27).collect();
+            let normal = objective.normal(&nominal.params.to_vec(), &all).unwrap();
+            let sees = objective.sees();
             let Scaled { ids, ns, .. } = Scaled::at(&nominal.params, normal);
             let base = [18, 6];
             let mut rng = crate::random::rng(seed, 0);
@@ -1078,9 +1124,8 @@ mod plainly_closed_tests {
                     fixed.push(rng.random_range(0..27));
                 }
                 let free: Vec<usize> = (0..27).filter(|c| !fixed.contains(c)).collect();
-                let closed = plainly_closed(&ns, &free, base);
-                let found =
-                    analysed_open_directions(&nominal.params, &data, &ids, &ns, &free, base);
+                let closed = plainly_closed(&ns, &free, &base);
+                let found = analysed_open_directions(&nominal.params, sees, &ids, &ns, &free);
                 if closed {
                     assert!(found.is_empty(), "seed {seed}, fixed {fixed:?}: {found:?}");
                     shortcut += 1;

@@ -34,6 +34,8 @@ pub mod identify;
 pub mod io;
 pub mod kernel;
 pub mod metrics;
+pub mod objective;
+pub mod parallel;
 pub mod params;
 pub mod placements;
 pub mod random;

@@ -548,6 +548,49 @@ impl DhParams {
         self.param_ids().map(|id| self.get(id)).collect()
     }
 
+    /// An arm from named values: each value goes to the parameter it
+    /// names, and a joint named with an `hbeta…` is a Hayati joint (its `d`
+    /// structurally 0). `None` unless the names are exactly the `4n + 3` of
+    /// an `n`-joint arm, each once.
+    ///
+    /// ```
+    /// use aacmm_core::params::{DhParams, JointModel};
+    /// let mut arm = DhParams::paper_nominal();
+    /// arm.joints[1].model = JointModel::Hayati;
+    /// arm.joints[1].beta = 0.01;
+    /// arm.joints[1].d = 0.0;
+    /// let named = arm.param_ids().map(|id| (id, arm.get(id)));
+    /// assert_eq!(DhParams::from_named(named), Some(arm));
+    /// ```
+    pub fn from_named(values: impl IntoIterator<Item = (ParamId, f64)>) -> Option<DhParams> {
+        let values: Vec<(ParamId, f64)> = values.into_iter().collect();
+        let n = values.len().checked_sub(3)? / 4;
+        if n == 0 || values.len() != param_count(n) {
+            return None;
+        }
+        let mut p = DhParams {
+            joints: vec![DhJoint::default(); n],
+            probe: [0.0; 3],
+        };
+        for (id, _) in &values {
+            if id.kind == ParamKind::Beta {
+                p.joints.get_mut(id.index)?.model = JointModel::Hayati;
+            }
+        }
+        let mut seen = vec![false; values.len()];
+        for &(id, v) in &values {
+            if !p.has_param(id) {
+                return None;
+            }
+            let c = id.column(n);
+            if std::mem::replace(&mut seen[c], true) {
+                return None;
+            }
+            *p.get_mut(id) = v;
+        }
+        Some(p)
+    }
+
     /// The inverse of [`DhParams::to_vec`] for a D-H arm (every joint
     /// [`JointModel::Dh`]; [`DhParams::with_values`] keeps an arm's models);
     /// `None` unless `v.len() == 4n + 3` for some `n ≥ 1`.

@@ -123,6 +123,15 @@ impl From<KernelError> for Error {
     }
 }
 
+impl From<aacmm_core::residuals::TermError> for Error {
+    fn from(e: aacmm_core::residuals::TermError) -> Error {
+        match e {
+            aacmm_core::residuals::TermError::Kernel(k) => k.into(),
+            other => Error::new(Kind::Value, other.to_string()),
+        }
+    }
+}
+
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
 const ARGUMENTS: [(&str, &str); 9] = [

@@ -216,12 +216,20 @@ pub fn write_json(path: &std::path::Path, value: &impl serde::Serialize) -> Resu
 /// Other errors pass through.
 pub fn noise_flags(e: impl Into<anyhow::Error>, fit: &fit::FitInput) -> anyhow::Error {
     let e: anyhow::Error = e.into();
-    let kernel = e.downcast_ref::<KernelError>().or_else(|| {
-        match e.downcast_ref::<aacmm_core::calibrate::CalibrationError>() {
-            Some(aacmm_core::calibrate::CalibrationError::Kernel(k)) => Some(k),
-            _ => None,
-        }
-    });
+    let kernel = e
+        .downcast_ref::<KernelError>()
+        .or_else(
+            || match e.downcast_ref::<aacmm_core::calibrate::CalibrationError>() {
+                Some(aacmm_core::calibrate::CalibrationError::Kernel(k)) => Some(k),
+                _ => None,
+            },
+        )
+        .or_else(
+            || match e.downcast_ref::<aacmm_core::residuals::TermError>() {
+                Some(aacmm_core::residuals::TermError::Kernel(k)) => Some(k),
+                _ => None,
+            },
+        );
     let Some(KernelError::Noise { of, message }) = kernel else {
         return e;
     };

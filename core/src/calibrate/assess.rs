@@ -1,20 +1,27 @@
-//! What follows every solver, once: the sign convention, the weights at the
-//! solution (and a refit when they moved), the touch σ, the covariance,
-//! correlations and degrees of freedom.
+//! What follows every solver, once, in named stages: the sign convention;
+//! the weights at the solution (and a refit when they moved); the unit σ
+//! of terms without stated noise, settled against the prior; the robust
+//! refits; the covariance; the diagnostics (estimates, correlations,
+//! outliers, the predicted position uncertainty, the plausibility checks);
+//! and the assembly of the [`Calibration`].
 
 use nalgebra::DMatrix;
 
+use super::anneal::AnnealTrace;
 use super::checks::{ChiSquare, gross_corrections};
-use super::lm::{LmIteration, levenberg_marquardt};
+use super::global::GlobalTrace;
+use super::lm::{LmIteration, LmResult, levenberg_marquardt};
+use super::robust::RobustFit;
 use super::{
-    Calibration, CalibrationError, Checks, CorrelationMatrix, Dof, Estimate, Method, ModelOptions,
-    Outcome, Phase, SolverSettings, SolverSummary, Stop,
+    AuxiliaryEstimate, Calibration, CalibrationError, Checks, CorrelationMatrix, Dof, Estimate,
+    Method, ModelOptions, Outcome, Phase, SolverSettings, SolverSummary, Stop, TermRows,
 };
 use crate::dataset::DataSet;
 use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
+use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
-use crate::residuals::Weights;
+use crate::residuals::Normal;
 
 /// Largest relative change of the weights at the solution, against those of
 /// the fit, that needs no refit: the estimate moves by about this fraction
@@ -25,68 +32,139 @@ pub const REWEIGH_TOLERANCE: f64 = 0.05;
 /// estimated touch σ settles.
 const MAX_SIGMA_REFITS: usize = 6;
 
-/// Residual rows and unknowns of a fit.
-#[derive(Clone, Copy, Debug)]
+/// One term's share of the residuals and unknowns.
+#[derive(Clone, Debug)]
+struct TermCount {
+    name: String,
+    rows: usize,
+    eliminated: usize,
+    /// Its weights are in units of an estimated σ.
+    unit: bool,
+    /// It has observations a robust loss weighs.
+    observed: bool,
+}
+
+/// Residual rows and unknowns of a fit, per term.
+#[derive(Clone, Debug)]
 pub(crate) struct Counts {
-    touch_rows: usize,
-    length_rows: usize,
-    centre_coordinates: usize,
+    terms: Vec<TermCount>,
     free: usize,
-    pub(crate) prior_rows: usize,
 }
 
 impl Counts {
-    pub(crate) fn new(data: &DataSet, free: usize) -> Counts {
+    /// The counts of `objective`'s terms over the columns `free`.
+    pub(crate) fn of(objective: &Objective<'_>, free: &[usize]) -> Counts {
         Counts {
-            touch_rows: 3 * data.len(),
-            length_rows: data.references().len(),
-            centre_coordinates: 3 * data.points().len(),
-            free,
-            prior_rows: 0,
+            terms: objective
+                .terms()
+                .map(|t| TermCount {
+                    name: t.name().to_string(),
+                    rows: t.rows(free),
+                    eliminated: t.eliminated(),
+                    unit: t.unit_weighted(),
+                    observed: t.observations() > 0,
+                })
+                .collect(),
+            free: free.len(),
         }
     }
 
-    /// These counts with `rows` pseudo-observations of a prior.
-    pub(crate) fn with_prior_rows(self, rows: usize) -> Counts {
-        Counts {
-            prior_rows: rows,
-            ..self
-        }
+    /// Residual rows: every term's (the prior's pseudo-observations too).
+    pub(crate) fn residuals(&self) -> usize {
+        self.terms.iter().map(|t| t.rows).sum()
     }
 
-    /// Residual rows: touches, lengths and the prior's pseudo-observations.
-    pub(crate) fn residuals(self) -> usize {
-        self.touch_rows + self.length_rows + self.prior_rows
+    /// The free columns and every unknown eliminated inside the terms.
+    pub(crate) fn unknowns(&self) -> usize {
+        self.free + self.eliminated()
     }
 
-    pub(crate) fn unknowns(self) -> usize {
-        self.free + self.centre_coordinates
+    fn eliminated(&self) -> usize {
+        self.terms.iter().map(|t| t.eliminated).sum()
     }
 
     /// `m − p` (at least 1 once [`super::calibrate_with`] checked it).
-    pub(crate) fn dof(self) -> usize {
+    pub(crate) fn dof(&self) -> usize {
         self.residuals().saturating_sub(self.unknowns()).max(1)
     }
 
-    /// `(3n − 3k) / (3n − 3k − p)`: the share of the touch residuals the
-    /// free parameters take, which the leverage on the centroids does not
-    /// correct ([`super::robust`]).
-    pub(crate) fn scale_dof_factor(self) -> f64 {
-        let rows = self.touch_rows.saturating_sub(self.centre_coordinates);
-        rows as f64 / self.touch_dof() as f64
+    /// The rows of the term named `name`.
+    fn rows_of(&self, name: &str) -> usize {
+        self.terms
+            .iter()
+            .filter(|t| t.name == name)
+            .map(|t| t.rows)
+            .sum()
     }
 
-    /// The touches' own degrees of freedom, for a σ estimated from them.
-    fn touch_dof(self) -> usize {
-        self.touch_rows
-            .saturating_sub(self.centre_coordinates + self.free)
-            .max(1)
+    /// Rows and eliminated unknowns of the terms `which` accepts.
+    fn sum(&self, which: impl Fn(&TermCount) -> bool) -> (usize, usize) {
+        self.terms
+            .iter()
+            .filter(|t| which(t))
+            .fold((0, 0), |(r, e), t| (r + t.rows, e + t.eliminated))
+    }
+
+    /// The unit-weighted terms' own degrees of freedom, for a σ estimated
+    /// from their residuals.
+    fn unit_dof(&self) -> usize {
+        let (rows, eliminated) = self.sum(|t| t.unit);
+        rows.saturating_sub(eliminated + self.free).max(1)
+    }
+
+    /// `(m_o − e_o) / (m_o − e_o − p)` over the observed terms: the share
+    /// of their residuals the free parameters take, which the leverage (the
+    /// centres' share) does not correct ([`super::robust`]).
+    fn scale_dof_factor(&self) -> f64 {
+        let (rows, eliminated) = self.sum(|t| t.observed);
+        let rows = rows.saturating_sub(eliminated);
+        let dof = rows.saturating_sub(self.free).max(1);
+        rows as f64 / dof as f64
+    }
+
+    /// Whether every term's weights are in units of the estimated σ: the
+    /// normal equations can then be rescaled by it instead of reweighed.
+    fn all_unit(&self) -> bool {
+        self.terms.iter().all(|t| t.unit)
+    }
+
+    /// The counts as reported, with the variance factor `sigma0` and the
+    /// touch σ `unit_sigma` (from the stated noise when `stated`).
+    fn report(&self, sigma0: f64, unit_sigma: f64, stated: bool) -> Dof {
+        Dof {
+            touch_rows: self.rows_of("touches"),
+            length_rows: self.rows_of("lengths"),
+            free_parameters: self.free,
+            centre_coordinates: self.eliminated(),
+            degrees_of_freedom: self.dof(),
+            sigma0,
+            touch_sigma_mm: unit_sigma,
+            touch_sigma_estimated: !stated,
+            prior_rows: self.rows_of("prior"),
+            other_rows: self.other_rows(),
+        }
+    }
+
+    /// The rows of the terms that are neither touches, lengths nor the
+    /// prior, by name.
+    fn other_rows(&self) -> Vec<TermRows> {
+        self.terms
+            .iter()
+            .filter(|t| !["touches", "lengths", "prior"].contains(&t.name.as_str()))
+            .map(|t| TermRows {
+                term: t.name.clone(),
+                rows: t.rows,
+                eliminated: t.eliminated,
+            })
+            .collect()
     }
 }
 
-/// What [`assess`] needs besides the solver's outcome.
+/// What [`assess`] needs besides the objective and the solver's outcome.
 pub(crate) struct Setup<'a> {
     pub start: &'a DhParams,
+    /// Every column at the start.
+    pub x0: &'a [f64],
     pub data: &'a DataSet,
     pub model: &'a ModelOptions,
     pub settings: &'a SolverSettings,
@@ -94,259 +172,324 @@ pub(crate) struct Setup<'a> {
     pub free: Vec<usize>,
     pub identification: Option<Identification>,
     pub reasons: Vec<(ParamId, String)>,
-    /// The weights the solver fitted under (at the start arm).
-    pub weights: Weights,
     pub counts: Counts,
+}
+
+/// The fit as it passes from stage to stage.
+struct Fit<'o> {
+    /// The objective, as weighed now.
+    objective: Objective<'o>,
+    x: Vec<f64>,
+    params: DhParams,
+    normal: Normal,
+    stop: Stop,
+    iterations: usize,
+    history: Vec<LmIteration>,
+    phases: Vec<Phase>,
+    anneal: Option<AnnealTrace>,
+    global: Option<GlobalTrace>,
+    /// Evaluations beyond the phases' own.
+    extra_jacobians: usize,
+    extra_costs: usize,
+    /// The σ of a unit-weighted observation (a touch, mm).
+    unit_sigma: f64,
+    /// Whether the terms still carry unit weights (the normal equations were
+    /// rescaled by the estimated σ, the weights not).
+    unit_weights: bool,
+    /// The robust fit and every observation's weight, when one ran.
+    robust: Option<(RobustFit, Vec<f64>)>,
+}
+
+impl Fit<'_> {
+    /// Takes the refit's point, normal equations and final LM's stop.
+    fn take(&mut self, fit: LmResult) {
+        self.stop = self.stop.with_lm(fit.termination);
+        self.params = fit.params;
+        self.x = fit.x;
+        self.normal = fit.normal;
+    }
+
+    /// The unit-weighted terms' cost in the current normal equations.
+    fn unit_cost(&self) -> f64 {
+        (self.normal.costs.iter().zip(self.objective.terms()))
+            .filter(|(_, t)| t.unit_weighted())
+            .map(|(c, _)| *c)
+            .sum()
+    }
+
+    /// An LM refit from the current point, as the phase `name`.
+    fn refit(&mut self, setup: &Setup<'_>, name: &str) -> Result<LmResult, CalibrationError> {
+        let timer = std::time::Instant::now();
+        let refit = levenberg_marquardt(&self.objective, &self.x, &setup.free, &setup.settings.lm)?;
+        let mut phase = Phase::new(name);
+        phase.add_lm(&refit, timer.elapsed().as_secs_f64());
+        self.phases.push(phase);
+        Ok(refit)
+    }
+
+    /// Weighs the objective at the current point, the unit-weighted terms
+    /// as `unit_sigma`.
+    fn reweigh(&mut self) -> Result<(), CalibrationError> {
+        self.objective.weigh(&self.x, self.unit_sigma)?;
+        Ok(())
+    }
 }
 
 /// Reweighs at the solution, refits when the weights moved, and computes
 /// the covariance, correlations and dof: the same for every solver.
-pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, CalibrationError> {
-    let Setup {
-        start,
-        data,
-        model,
-        settings,
-        method,
-        free,
-        identification,
-        reasons,
-        mut weights,
-        counts,
-    } = setup;
-    let Outcome {
-        mut params,
-        mut stop,
-        mut iterations,
-        mut history,
-        mut phases,
-        anneal,
-        mut global,
-        mut normal,
-    } = outcome;
-    let (lm, threads) = (settings.lm, settings.threads);
-    let stated = model.noise.stated();
-    let normal_at = |params: &DhParams, weights: &Weights| -> Result<_, CalibrationError> {
-        super::prior::normal_at(params, data, weights, &free, threads)
+pub(crate) fn assess(
+    setup: Setup<'_>,
+    objective: Objective<'_>,
+    outcome: Outcome,
+) -> Result<Calibration, CalibrationError> {
+    let mut fit = Fit {
+        objective,
+        x: outcome.x,
+        params: outcome.params,
+        normal: outcome.normal,
+        stop: outcome.stop,
+        iterations: outcome.iterations,
+        history: outcome.history,
+        phases: outcome.phases,
+        anneal: outcome.anneal,
+        global: outcome.global,
+        extra_jacobians: 0,
+        extra_costs: 0,
+        unit_sigma: 1.0,
+        unit_weights: false,
+        robust: None,
     };
-    let has_prior = weights.prior.is_some();
-    // The touches' and lengths' weights at another arm, in place: the old
-    // ones are freed first (one set at a time: 48 MB at 10⁶ touches), the
-    // prior rides along.
-    let reweigh = |weights: &mut Weights,
-                   params: &DhParams,
-                   touch_sigma: f64|
-     -> Result<(), CalibrationError> {
-        let prior = weights.prior.take();
-        *weights = Weights::default();
-        *weights = Weights::new_threads(
-            &ArmKernel::new(params)?,
-            data,
-            &model.noise,
-            touch_sigma,
-            threads,
-        )?;
-        weights.prior = prior;
-        Ok(())
-    };
-    let mut extra_jacobians = 0;
-    let mut extra_costs = 0;
-    let sign_changes = super::global::normalize_signs(&mut params, start, &free);
-    if !sign_changes.is_empty() {
-        // Same positions, other signs: the normal equations change sign
-        // pattern, so recompute them for the covariance.
-        normal = normal_at(&params, &weights)?;
-        extra_jacobians += 1;
+    normalise_signs(&mut fit, &setup)?;
+    reweigh_at_solution(&mut fit, &setup)?;
+    settle_unit_sigma(&mut fit, &setup)?;
+    if setup.model.noise.stated() {
+        fit.unit_sigma = typical_sigma(&fit.objective);
     }
-    if let Some(g) = &mut global {
-        g.sign_changes = sign_changes;
+    // Unit weights still (no stated noise, no other term): the normal
+    // equations were rescaled by the estimated σ, the weights not.
+    fit.unit_weights = !setup.model.noise.stated() && setup.counts.all_unit();
+    robust_refits(&mut fit, &setup)?;
+    let initial_cost = initial_cost(&mut fit, &setup)?;
+    let covariance = covariance(&fit, &setup);
+    assemble(fit, setup, covariance, initial_cost)
+}
+
+/// Puts the arm into the start's sign convention. Same positions, other
+/// signs: the normal equations change sign pattern, so they are computed
+/// again for the covariance.
+fn normalise_signs(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
+    let changes = super::global::normalize_signs(&mut fit.params, setup.start, &setup.free);
+    if !changes.is_empty() {
+        let geometry = fit.params.to_vec();
+        fit.x[..geometry.len()].copy_from_slice(&geometry);
+        fit.normal = fit.objective.normal(&fit.x, &setup.free)?;
+        fit.extra_jacobians += 1;
     }
-    let mut touch_sigma = 1.0;
+    if let Some(g) = &mut fit.global {
+        g.sign_changes = changes;
+    }
+    Ok(())
+}
+
+/// Weighs at the solution, not at the start: encoder noise moves the probe
+/// along directions that depend on the arm, and the lengths' weights on the
+/// centroids' directions — both far off when the zeros were. Without
+/// stated noise the unit σ is first estimated from the unit-weighted
+/// terms' residuals, so that the other terms weigh right against them;
+/// when every term is unit-weighted the normal equations are rescaled
+/// instead.
+fn reweigh_at_solution(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
+    let stated = setup.model.noise.stated();
     if !stated {
-        // Unit weights: the touch residuals are mm. Estimate σ so that the
-        // lengths weigh right against the touches.
-        touch_sigma = (normal.touch_cost / counts.touch_dof() as f64)
+        // Unit weights: the residuals are mm. Estimate σ so that the other
+        // terms weigh right against them.
+        fit.unit_sigma = (fit.unit_cost() / setup.counts.unit_dof() as f64)
             .sqrt()
             .max(1e-9);
     }
-    if stated || counts.length_rows > 0 || has_prior {
-        // Weigh at the solution, not at the start: encoder noise moves the
-        // probe along directions that depend on the arm, and the lengths'
-        // weights on the centroids' directions — both far off when the
-        // zeros were.
-        let timer = std::time::Instant::now();
-        // Weights that moved by under REWEIGH_TOLERANCE would move the
-        // estimate by a like fraction of its σ and its σ not at all (shipped
-        // campaign, lm: weights 3 % off moved no parameter by more than
-        // 3.4 % of its σ, and σ by 1e-5 of itself): the fit's weights stand.
-        let settled = stated
-            && weights.relative_change_to(
-                &ArmKernel::new(&params)?,
-                data,
-                &model.noise,
-                touch_sigma,
-                threads,
-            )? <= REWEIGH_TOLERANCE;
-        if settled {
-            // The fit's weights, normal equations and history stand.
-        } else if stop.lm().is_none() {
-            // No LM ran (annealing alone): none runs now either.
-            reweigh(&mut weights, &params, touch_sigma)?;
-            normal = normal_at(&params, &weights)?;
-            extra_jacobians += 1;
-        } else {
-            reweigh(&mut weights, &params, touch_sigma)?;
-            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm, threads)?;
-            let mut phase = Phase::new("lm, weighed at the solution");
-            phase.add_lm(&refit, timer.elapsed().as_secs_f64());
-            phases.push(phase);
-            // With stated noise the weights keep their units: one history,
-            // the descent then the polish. Otherwise the units changed.
-            let n = if stated { history.len() } else { 0 };
-            if !stated {
-                history.clear();
-                iterations = 0;
+    if !stated && setup.counts.all_unit() {
+        let w2 = 1.0 / (fit.unit_sigma * fit.unit_sigma);
+        fit.normal.jtj.iter_mut().for_each(|v| *v *= w2);
+        let unit: Vec<bool> = fit.objective.terms().map(|t| t.unit_weighted()).collect();
+        for (c, u) in fit.normal.costs.iter_mut().zip(unit) {
+            if u {
+                *c *= w2;
             }
-            history.extend(refit.history.iter().map(|h| LmIteration {
-                iteration: h.iteration + n,
-                ..*h
-            }));
-            iterations += refit.iterations;
-            stop = stop.with_lm(refit.termination);
-            params = refit.params;
-            normal = refit.normal;
         }
-    } else {
-        let w2 = 1.0 / (touch_sigma * touch_sigma);
-        normal.jtj.iter_mut().for_each(|v| *v *= w2);
-        normal.touch_cost *= w2;
-        for h in &mut history {
+        for h in &mut fit.history {
             h.cost *= w2;
         }
+        return Ok(());
     }
-    if has_prior && !stated {
-        // The prior weighs against the touches, so their σ must be right
-        // before the prior's pull is: estimate it again from the refit
-        // until it settles (the first fit weighed touches as 1 mm).
+    let timer = std::time::Instant::now();
+    // Weights that moved by under REWEIGH_TOLERANCE would move the estimate
+    // by a like fraction of its σ and its σ not at all (shipped campaign,
+    // lm: weights 3 % off moved no parameter by more than 3.4 % of its σ,
+    // and σ by 1e-5 of itself): the fit's weights stand.
+    let settled =
+        stated && fit.objective.weight_change(&fit.x, fit.unit_sigma)? <= REWEIGH_TOLERANCE;
+    if settled {
+        // The fit's weights, normal equations and history stand.
+        return Ok(());
+    }
+    fit.reweigh()?;
+    if fit.stop.lm().is_none() {
+        // No LM ran (annealing alone): none runs now either.
+        fit.normal = fit.objective.normal(&fit.x, &setup.free)?;
+        fit.extra_jacobians += 1;
+        return Ok(());
+    }
+    let refit = levenberg_marquardt(&fit.objective, &fit.x, &setup.free, &setup.settings.lm)?;
+    let mut phase = Phase::new("lm, weighed at the solution");
+    phase.add_lm(&refit, timer.elapsed().as_secs_f64());
+    fit.phases.push(phase);
+    // With stated noise the weights keep their units: one history, the
+    // descent then the polish. Otherwise the units changed.
+    let n = if stated { fit.history.len() } else { 0 };
+    if !stated {
+        fit.history.clear();
+        fit.iterations = 0;
+    }
+    fit.history
+        .extend(refit.history.iter().map(|h| LmIteration {
+            iteration: h.iteration + n,
+            ..*h
+        }));
+    fit.iterations += refit.iterations;
+    fit.take(refit);
+    Ok(())
+}
+
+/// With a prior and no stated noise: the prior weighs against the touches,
+/// so their σ must be right before the prior's pull is — estimate it again
+/// from the refit until it settles (the first fit weighed touches as 1 mm).
+fn settle_unit_sigma(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
+    if !fit.objective.has_prior() || setup.model.noise.stated() {
+        return Ok(());
+    }
+    for _ in 0..MAX_SIGMA_REFITS {
+        let next = fit.unit_sigma * (fit.unit_cost() / setup.counts.unit_dof() as f64).sqrt();
+        if !(next.is_finite() && next > 0.0)
+            || (next / fit.unit_sigma - 1.0).abs() <= REWEIGH_TOLERANCE
+        {
+            break;
+        }
+        fit.unit_sigma = next.max(1e-9);
+        fit.reweigh()?;
+        let refit = fit.refit(setup, "lm, touch σ re-estimated (prior)")?;
+        // The weights changed units again: the history is the refit's.
+        fit.history = refit.history.clone();
+        fit.iterations = refit.iterations;
+        fit.take(refit);
+    }
+    Ok(())
+}
+
+/// The σ the stated noise gives a typical observation (the touches'), mm.
+fn typical_sigma(objective: &Objective<'_>) -> f64 {
+    objective
+        .terms()
+        .find_map(|t| t.typical_sigma())
+        .unwrap_or(f64::NAN)
+}
+
+/// The robust refits (IRLS), when asked for: from the fit's minimum, every
+/// observation weighed by the loss; without stated noise and with a prior,
+/// again at σ·σ̂ until the robust scale settles.
+fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
+    let Some(r) = setup.model.robust else {
+        return Ok(());
+    };
+    let stated = setup.model.noise.stated();
+    if fit.unit_weights {
+        fit.reweigh()?;
+        fit.unit_weights = false;
+    }
+    let factor = setup.counts.scale_dof_factor();
+    let lm = &setup.settings.lm;
+    let mut out = super::robust::irls(r, &fit.x, &fit.objective, &setup.free, lm, factor, stated)?;
+    if fit.objective.has_prior() && !stated {
+        // The touch σ was estimated with the outliers in; the prior weighs
+        // against it, so refit at σ·σ̂ until σ̂ settles — else the prior
+        // pulls (σ/σ_robust)² too hard.
         for _ in 0..MAX_SIGMA_REFITS {
-            let next = touch_sigma * (normal.touch_cost / counts.touch_dof() as f64).sqrt();
-            if !(next.is_finite() && next > 0.0)
-                || (next / touch_sigma - 1.0).abs() <= REWEIGH_TOLERANCE
-            {
+            let s = out.fit.scale;
+            if !(s.is_finite() && s > 0.0) || (s - 1.0).abs() <= REWEIGH_TOLERANCE {
                 break;
             }
-            touch_sigma = next.max(1e-9);
-            let timer = std::time::Instant::now();
-            reweigh(&mut weights, &params, touch_sigma)?;
-            let refit = levenberg_marquardt(&params, data, &weights, &free, &lm, threads)?;
-            let mut phase = Phase::new("lm, touch σ re-estimated (prior)");
-            phase.add_lm(&refit, timer.elapsed().as_secs_f64());
-            phases.push(phase);
-            // The weights changed units again: the history is the refit's.
-            history = refit.history.clone();
-            iterations = refit.iterations;
-            stop = stop.with_lm(refit.termination);
-            params = refit.params;
-            normal = refit.normal;
+            fit.unit_sigma *= s;
+            fit.extra_jacobians += out.fit.passes + 1;
+            fit.phases.push(out.phase);
+            fit.objective.weigh(&out.x, fit.unit_sigma)?;
+            out = super::robust::irls(r, &out.x, &fit.objective, &setup.free, lm, factor, stated)?;
         }
     }
-    if stated {
-        touch_sigma = weights.typical_touch_sigma();
-    }
-    // Unit weights still (no stated noise, no lengths, no prior): the normal
-    // equations were rescaled by the estimated σ, the weights not.
-    let mut unit_weights = !stated && counts.length_rows == 0 && !has_prior;
-    let mut robust = None;
-    if let Some(r) = model.robust {
-        if unit_weights {
-            reweigh(&mut weights, &params, touch_sigma)?;
-            unit_weights = false;
-        }
-        let irls = |params: &DhParams, weights: &Weights| {
-            super::robust::irls(
-                r,
-                params,
-                data,
-                weights,
-                &free,
-                &lm,
-                threads,
-                counts.scale_dof_factor(),
-                stated,
-            )
-        };
-        let mut out = irls(&params, &weights)?;
-        if has_prior && !stated {
-            // The touch σ was estimated with the outliers in; the prior
-            // weighs against it, so refit at σ·σ̂ until σ̂ settles — else
-            // the prior pulls (σ/σ_robust)² too hard.
-            for _ in 0..MAX_SIGMA_REFITS {
-                let s = out.fit.scale;
-                if !(s.is_finite() && s > 0.0) || (s - 1.0).abs() <= REWEIGH_TOLERANCE {
-                    break;
-                }
-                touch_sigma *= s;
-                extra_jacobians += out.fit.passes + 1;
-                phases.push(out.phase);
-                reweigh(&mut weights, &out.params, touch_sigma)?;
-                out = irls(&out.params, &weights)?;
-            }
-        }
-        extra_jacobians += out.fit.passes + 1;
-        phases.push(out.phase);
-        history = out.last.history;
-        iterations = out.last.iterations;
-        // The refits are LM, after `sa` too: say so.
-        stop = match stop {
-            Stop::Anneal(anneal) => Stop::Hybrid {
-                anneal,
-                lm: out.last.termination,
-            },
-            other => other.with_lm(out.last.termination),
-        };
-        params = out.params;
-        normal = out.last.normal;
-        weights = out.weights;
-        if !stated {
-            // The estimated σ held the outliers; the robust scale does not.
-            touch_sigma *= out.fit.scale;
-        }
-        robust = Some((out.fit, out.touch_weights));
-    }
-    // The start arm's cost under the final weights: "cost A -> B" compares
-    // like with like whatever the method did in between.
-    // Its position buffer is freed at once: at 10⁶ touches it is 24 MB
-    // beside the later checks' own.
-    let mut initial_cost = crate::residuals::cost(
-        &ArmKernel::new(start)?,
-        data,
-        &weights,
-        &mut vec![[0.0; 3]; data.len()],
-    )?;
-    extra_costs += 1;
-    if unit_weights {
-        initial_cost /= touch_sigma * touch_sigma;
-    }
-    let degrees_of_freedom = counts.dof();
-    // Robust: the IRLS covariance σ̂²(JᵀWJ)⁻¹ with σ̂ the robust scale.
-    let sigma0 = match &robust {
-        Some((fit, _)) => fit.scale,
-        None => (normal.cost() / degrees_of_freedom as f64).sqrt(),
+    fit.extra_jacobians += out.fit.passes + 1;
+    fit.phases.push(out.phase);
+    fit.history = out.last.history;
+    fit.iterations = out.last.iterations;
+    // The refits are LM, after `sa` too: say so.
+    fit.stop = match fit.stop {
+        Stop::Anneal(anneal) => Stop::Hybrid {
+            anneal,
+            lm: out.last.termination,
+        },
+        other => other.with_lm(out.last.termination),
     };
-    let p = free.len();
-    let n = DMatrix::from_row_slice(p, p, &normal.jtj);
+    fit.params = out.last.params;
+    fit.x = out.x;
+    fit.normal = out.last.normal;
+    fit.objective = out.objective;
+    if !stated {
+        // The estimated σ held the outliers; the robust scale does not.
+        fit.unit_sigma *= out.fit.scale;
+    }
+    fit.robust = Some((out.fit, out.touch_weights));
+    Ok(())
+}
+
+/// The start arm's data cost under the final weights: "cost A -> B"
+/// compares like with like whatever the method did in between. Its
+/// position buffer is freed at once: at 10⁶ touches it is 24 MB beside the
+/// later checks' own.
+fn initial_cost(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<f64, CalibrationError> {
+    let mut cost = fit.objective.data_cost(setup.x0, &mut Vec::new())?;
+    fit.extra_costs += 1;
+    if fit.unit_weights {
+        cost /= fit.unit_sigma * fit.unit_sigma;
+    }
+    Ok(cost)
+}
+
+/// The free columns' covariance and the variance factor σ̂.
+struct Covariance {
+    cov: DMatrix<f64>,
+    sigma0: f64,
+    dof: usize,
+}
+
+/// `σ̂² N⁻¹`, or with a prior `(N_data/σ̂² + P)⁻¹`; robust: the IRLS
+/// covariance with σ̂ the robust scale.
+fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
+    let dof = setup.counts.dof();
+    let sigma0 = match &fit.robust {
+        Some((robust, _)) => robust.scale,
+        None => (fit.normal.cost() / dof as f64).sqrt(),
+    };
+    let p = setup.free.len();
+    let n = DMatrix::from_row_slice(p, p, &fit.normal.jtj);
     let invert = |m: DMatrix<f64>| match m.cholesky() {
         Some(ch) => super::inverse::cholesky_inverse(&ch),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
-    let cov = match &weights.prior {
+    let cov = match fit.objective.prior() {
         // The stated tolerances are absolute: σ̂ rescales the data's
         // information, not the prior's — (N_data/σ̂² + P)⁻¹. Scaling the
         // whole σ̂²·N⁻¹ made a parameter the prior holds (data share 5 %)
         // 30 % more certain than its tolerance under a robust scale of 0.68.
         Some(term) if sigma0.is_finite() && sigma0 > 0.0 => {
             let mut m = n / (sigma0 * sigma0);
-            for (a, &c) in free.iter().enumerate() {
+            for (a, &c) in setup.free.iter().enumerate() {
                 if let Some(s) = term.sigma(c) {
                     m[(a, a)] += (1.0 - 1.0 / (sigma0 * sigma0)) / (s * s);
                 }
@@ -355,27 +498,26 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
         }
         _ => invert(n) * (sigma0 * sigma0),
     };
-    let prior = match (&model.prior, &weights.prior) {
-        (Some(t), Some(term)) => Some(super::PriorReport::new(
-            t,
-            term,
-            &params.to_vec(),
-            &free,
-            &cov,
-            start,
-        )),
-        _ => None,
-    };
-    let ids: Vec<ParamId> = start.param_ids().collect();
-    for j in &mut params.joints {
+    Covariance { cov, sigma0, dof }
+}
+
+/// Every geometry parameter's estimate (zero offsets and twists wrapped),
+/// its σ from `cov` when free, and why it is fixed otherwise.
+fn estimates(fit: &mut Fit<'_>, setup: &Setup<'_>, cov: &DMatrix<f64>) -> Vec<Estimate> {
+    let start = setup.start;
+    for j in &mut fit.params.joints {
         j.theta = wrap(j.theta);
         j.alpha = wrap(j.alpha);
     }
-    let parameters = ids
-        .iter()
+    // The point follows: what is evaluated at it from here on is the
+    // reported arm's.
+    let geometry = fit.params.to_vec();
+    fit.x[..geometry.len()].copy_from_slice(&geometry);
+    start
+        .param_ids()
         .enumerate()
-        .map(|(c, &id)| {
-            let (nominal, calibrated) = (start.get(id), params.get(id));
+        .map(|(c, id)| {
+            let (nominal, calibrated) = (start.get(id), fit.params.get(id));
             let correction = if matches!(
                 id.kind,
                 ParamKind::Theta | ParamKind::Alpha | ParamKind::Beta
@@ -384,7 +526,8 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
             } else {
                 calibrated - nominal
             };
-            let sigma = free
+            let sigma = setup
+                .free
                 .iter()
                 .position(|&f| f == c)
                 .map(|a| cov[(a, a)].max(0.0).sqrt());
@@ -394,13 +537,114 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
                 calibrated,
                 correction,
                 sigma: sigma.filter(|s| s.is_finite()),
-                fixed: reasons
+                fixed: setup
+                    .reasons
                     .iter()
                     .find(|(r, _)| *r == id)
                     .map(|(_, why)| why.clone()),
             }
         })
+        .collect()
+}
+
+/// The auxiliary blocks' estimates (all their columns are free).
+fn auxiliary(fit: &Fit<'_>, setup: &Setup<'_>, cov: &DMatrix<f64>) -> Vec<AuxiliaryEstimate> {
+    let layout = fit.objective.layout();
+    (layout.geometry_columns()..layout.len())
+        .filter_map(|c| {
+            let parameter = layout.parameter(c)?;
+            let sigma = setup
+                .free
+                .iter()
+                .position(|&f| f == c)
+                .map(|a| cov[(a, a)].max(0.0).sqrt())
+                .filter(|s| s.is_finite());
+            let u = |v: f64| parameter.unit.to_user(v);
+            Some(AuxiliaryEstimate {
+                name: parameter.name.clone(),
+                unit: parameter.unit.name().to_string(),
+                start: u(setup.x0[c]),
+                calibrated: u(fit.x[c]),
+                sigma: sigma.map(u),
+            })
+        })
+        .collect()
+}
+
+/// The blocks whose values no real instrument could have, in words.
+fn implausible_blocks(fit: &Fit<'_>, setup: &Setup<'_>) -> Vec<String> {
+    let layout = fit.objective.layout();
+    let mut first = layout.geometry_columns();
+    layout
+        .blocks()
+        .filter_map(|b| {
+            let cols = first..first + b.len();
+            first = cols.end;
+            b.implausible(&setup.x0[cols.clone()], &fit.x[cols])
+                .map(|why| format!("{}: {why}", b.name()))
+        })
+        .collect()
+}
+
+/// Every observation's standardised squared residual in units of its own
+/// σ — the stated noise, or (estimated) the fit's, robustly: the median of
+/// a χ²₃ variable is 2.366, and a few outliers do not move a median.
+fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, CalibrationError> {
+    let mut t2 = fit.objective.standardised(&fit.x)?;
+    if let Some((_, w)) = &fit.robust {
+        // In units of the observation's own σ, not of its robust weight.
+        t2.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
+    }
+    if !setup.model.noise.stated() {
+        let mut sorted = t2.clone();
+        sorted.sort_by(f64::total_cmp);
+        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(1.0);
+        let s2 = (median / 2.366).max(f64::MIN_POSITIVE);
+        t2.iter_mut().for_each(|v| *v /= s2);
+    }
+    Ok(t2)
+}
+
+/// The free geometry columns (their positions among `free`) and their
+/// covariance: what moves a probe position.
+fn geometry_covariance(
+    free: &[usize],
+    geometry: usize,
+    cov: &DMatrix<f64>,
+) -> (Vec<usize>, DMatrix<f64>) {
+    let at: Vec<usize> = (0..free.len()).filter(|&a| free[a] < geometry).collect();
+    let cols = at.iter().map(|&a| free[a]).collect();
+    let sub = DMatrix::from_fn(at.len(), at.len(), |a, b| cov[(at[a], at[b])]);
+    (cols, sub)
+}
+
+/// The calibration, from the fit and its covariance.
+fn assemble(
+    mut fit: Fit<'_>,
+    setup: Setup<'_>,
+    covariance: Covariance,
+    initial_cost: f64,
+) -> Result<Calibration, CalibrationError> {
+    let Covariance { cov, sigma0, dof } = covariance;
+    let stated = setup.model.noise.stated();
+    let prior = match (&setup.model.prior, fit.objective.prior()) {
+        (Some(t), Some(term)) => Some(super::PriorReport::new(
+            t,
+            term,
+            &fit.x,
+            &setup.free,
+            &cov,
+            setup.start,
+        )),
+        _ => None,
+    };
+    let parameters = estimates(&mut fit, &setup, &cov);
+    let auxiliary = auxiliary(&fit, &setup, &cov);
+    let layout = fit.objective.layout();
+    let names: Vec<String> = (0..layout.len())
+        .map(|c| layout.parameter(c).map_or(String::new(), |p| p.name))
         .collect();
+    let p = setup.free.len();
     let rho = (0..p)
         .map(|a| {
             (0..p)
@@ -411,75 +655,61 @@ pub(crate) fn assess(setup: Setup, outcome: Outcome) -> Result<Calibration, Cali
                 .collect()
         })
         .collect();
-    // Suspect touches: residuals in units of their own σ — the stated
-    // noise, or (estimated) the fit's σ̂.
-    let mut t2 =
-        crate::residuals::standardised_residuals(&ArmKernel::new(&params)?, data, &weights)?;
-    if let Some((_, w)) = &robust {
-        // In units of the touch's own σ, not of its robust weight.
-        t2.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
-    }
-    if !stated {
-        // σ from the touches themselves, robustly: the median of a χ²₃
-        // variable is 2.366, and a few outliers do not move a median.
-        let mut sorted = t2.clone();
-        sorted.sort_by(f64::total_cmp);
-        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(1.0);
-        let s2 = (median / 2.366).max(f64::MIN_POSITIVE);
-        t2.iter_mut().for_each(|v| *v /= s2);
-    }
-    let (outlier_threshold, outliers) = super::checks::outliers(data, &t2);
-    let position_uncertainty = position_uncertainty(&params, data, &free, &cov, touch_sigma)?;
-    let names: Vec<String> = ids.iter().map(ParamId::to_string).collect();
-    let cost_evaluations = extra_costs + phases.iter().map(|p| p.cost_evaluations).sum::<usize>();
+    let t2 = standardised(&fit, &setup)?;
+    let (outlier_threshold, outliers) = super::checks::outliers(&fit.objective, &t2);
+    let (geometry_free, geometry_cov) =
+        geometry_covariance(&setup.free, layout.geometry_columns(), &cov);
+    let position_uncertainty = position_uncertainty(
+        &fit.params,
+        setup.data,
+        &geometry_free,
+        &geometry_cov,
+        fit.unit_sigma,
+    )?;
+    let phases = &fit.phases;
+    let cost_evaluations =
+        fit.extra_costs + phases.iter().map(|p| p.cost_evaluations).sum::<usize>();
     let jacobian_evaluations =
-        extra_jacobians + phases.iter().map(|p| p.jacobian_evaluations).sum::<usize>();
+        fit.extra_jacobians + phases.iter().map(|p| p.jacobian_evaluations).sum::<usize>();
+    let implausible = implausible_blocks(&fit, &setup);
     Ok(Calibration {
         parameters,
-        correlations: strong_correlations(&cov, &free, &names),
+        auxiliary,
+        correlations: strong_correlations(&cov, &setup.free, &names),
         correlation_matrix: CorrelationMatrix {
-            parameters: free.iter().map(|&c| ids[c]).collect(),
+            parameters: setup.free.iter().map(|&c| names[c].clone()).collect(),
             rho,
         },
-        dof: Dof {
-            touch_rows: counts.touch_rows,
-            length_rows: counts.length_rows,
-            free_parameters: p,
-            centre_coordinates: counts.centre_coordinates,
-            degrees_of_freedom,
-            sigma0,
-            touch_sigma_mm: touch_sigma,
-            touch_sigma_estimated: !stated,
-            prior_rows: counts.prior_rows,
-        },
+        dof: setup.counts.report(sigma0, fit.unit_sigma, stated),
         solver: SolverSummary {
-            method,
-            stop,
-            successful: stop.is_solution_usable(),
-            iterations,
+            method: setup.method,
+            stop: fit.stop,
+            successful: fit.stop.is_solution_usable(),
+            iterations: fit.iterations,
             cost_evaluations,
             jacobian_evaluations,
             initial_cost,
-            final_cost: normal.cost(),
-            history,
-            options: lm,
-            phases,
-            anneal,
-            global,
+            final_cost: fit.normal.cost(),
+            history: fit.history,
+            options: setup.settings.lm,
+            phases: fit.phases,
+            anneal: fit.anneal,
+            global: fit.global,
         },
-        identification,
+        identification: setup.identification,
         checks: Checks {
-            gross_corrections: gross_corrections(&params, start, &free),
+            gross_corrections: gross_corrections(&fit.params, setup.start, &setup.free),
+            implausible_blocks: implausible,
             // A robust fit's weighted cost has no χ² law: its scale is
             // tested instead (`robust`).
-            chi_square: (stated && robust.is_none())
-                .then(|| ChiSquare::new(normal.cost(), degrees_of_freedom)),
+            chi_square: (stated && fit.robust.is_none())
+                .then(|| ChiSquare::new(fit.normal.cost(), dof)),
             outliers,
             outlier_threshold,
             position_uncertainty,
         },
-        params,
-        robust: robust.map(|(fit, _)| fit),
+        params: fit.params,
+        robust: fit.robust.map(|(robust, _)| robust),
         prior,
     })
 }

@@ -345,21 +345,23 @@ pub fn chi_square_3_quantile(p: f64) -> f64 {
     0.5 * (lo + hi)
 }
 
-/// The touches whose standardised squared residual (`scaled`: already
-/// divided by `σ0²` when the noise was estimated) exceeds the Bonferroni
-/// threshold, largest first.
-pub(crate) fn outliers(data: &crate::dataset::DataSet, scaled: &[f64]) -> (f64, Vec<Outlier>) {
-    let threshold = chi_square_3_quantile(OUTLIER_ALPHA / data.len().max(1) as f64);
+/// The observations (touches) whose standardised squared residual
+/// (`scaled`: already divided by `σ0²` when the noise was estimated)
+/// exceeds the Bonferroni threshold, largest first.
+pub(crate) fn outliers(
+    objective: &crate::objective::Objective<'_>,
+    scaled: &[f64],
+) -> (f64, Vec<Outlier>) {
+    let threshold = chi_square_3_quantile(OUTLIER_ALPHA / scaled.len().max(1) as f64);
     let mut found: Vec<Outlier> = Vec::new();
-    for point in data.points() {
-        for i in point.touches.clone() {
-            if scaled[i] > threshold {
-                found.push(Outlier {
-                    at: data.source().touch(i).to_string(),
-                    point: point.label.clone(),
-                    standardised: scaled[i].sqrt(),
-                });
-            }
+    for (i, &s) in scaled.iter().enumerate() {
+        if s > threshold {
+            let origin = objective.origin(i);
+            found.push(Outlier {
+                at: origin.at,
+                point: origin.group,
+                standardised: s.sqrt(),
+            });
         }
     }
     found.sort_by(|a, b| b.standardised.total_cmp(&a.standardised));

@@ -36,11 +36,9 @@ use serde::{Deserialize, Serialize};
 
 use super::lm::{LmOptions, LmResult, levenberg_marquardt, levenberg_marquardt_from};
 use super::{CalibrationError, Phase};
-use crate::dataset::DataSet;
 use crate::error::OptionError;
-use crate::kernel::ArmKernel;
+use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Noise, Weights, cost};
 
 /// Settings of the global method; a builder. Defaults: a torus grid of at
 /// most 1296 cells (6 angles per circle for 4 circles), 8 grid
@@ -185,23 +183,40 @@ fn same_minimum(a: f64, b: f64) -> bool {
 }
 
 /// What [`global`] needs beyond the start.
-pub(crate) struct GlobalProblem<'a> {
-    /// The data.
-    pub data: &'a DataSet,
-    /// The noise, to weigh the touches at each minimum.
-    pub noise: &'a Noise,
-    /// The weights at the start arm.
-    pub weights: &'a Weights,
+pub(crate) struct GlobalProblem<'a, 'o> {
+    /// The objective, weighed at the start arm (each minimum is weighed
+    /// at itself again).
+    pub objective: &'a Objective<'o>,
     /// Free columns.
     pub free: &'a [usize],
     /// LM tolerances.
     pub lm: &'a LmOptions,
-    /// Worker threads of the normal equations.
-    pub threads: usize,
     /// Degrees of freedom; with stated noise, enables the noise floor.
     pub stated_dof: Option<usize>,
     /// The normal equations at the start over `free`, when already computed.
     pub start_normal: Option<crate::residuals::Normal>,
+}
+
+impl GlobalProblem<'_, '_> {
+    /// Every column of the point whose geometry is `arm`, the auxiliary
+    /// blocks at their start values (the search moves zero offsets only).
+    fn point(&self, arm: &DhParams) -> Vec<f64> {
+        let mut x = arm.to_vec();
+        let layout = self.objective.layout();
+        x.extend(&layout.start()[layout.geometry_columns()..]);
+        x
+    }
+
+    /// LM of the objective `objective` from `x` over `free`.
+    fn lm(
+        &self,
+        objective: &Objective<'_>,
+        x: &[f64],
+        free: &[usize],
+        options: &LmOptions,
+    ) -> Result<LmResult, CalibrationError> {
+        levenberg_marquardt(objective, x, free, options)
+    }
 }
 
 /// The minima found so far.
@@ -261,7 +276,7 @@ struct Minimum {
 /// start's sign convention), its account, and the work per phase.
 pub(crate) fn global<R: Rng>(
     start: &DhParams,
-    problem: &GlobalProblem,
+    problem: &GlobalProblem<'_, '_>,
     options: &GlobalOptions,
     rng: &mut R,
     progress: &mut dyn FnMut(f64),
@@ -318,9 +333,9 @@ impl Tally {
 
 /// What one global search holds fixed: the problem, the circles searched,
 /// the noise floor and the LM settings of each start.
-struct Search<'a> {
+struct Search<'a, 'o> {
     start: &'a DhParams,
-    problem: &'a GlobalProblem<'a>,
+    problem: &'a GlobalProblem<'a, 'o>,
     options: &'a GlobalOptions,
     /// The free zero offsets (columns): the circles of the torus.
     circles: Vec<usize>,
@@ -334,12 +349,12 @@ struct Search<'a> {
     zero_lm: LmOptions,
 }
 
-impl<'a> Search<'a> {
+impl<'a, 'o> Search<'a, 'o> {
     fn new(
         start: &'a DhParams,
-        problem: &'a GlobalProblem<'a>,
+        problem: &'a GlobalProblem<'a, 'o>,
         options: &'a GlobalOptions,
-    ) -> Search<'a> {
+    ) -> Search<'a, 'o> {
         let joints = start.joint_count();
         let lm = problem.lm;
         let circles: Vec<usize> = problem
@@ -409,30 +424,12 @@ impl<'a> Search<'a> {
     /// LM from the start arm; it stops the search when it reaches the noise
     /// floor, or when there is no zero offset to search.
     fn start_arm(&self, tally: &mut Tally) -> Result<Option<GlobalStop>, CalibrationError> {
-        let GlobalProblem {
-            data,
-            weights,
-            free,
-            ..
-        } = *self.problem;
+        let problem = self.problem;
+        let (objective, x) = (problem.objective, problem.point(self.start));
         let timer = std::time::Instant::now();
-        let first = match self.problem.start_normal.clone() {
-            Some(normal) => levenberg_marquardt_from(
-                self.start,
-                normal,
-                data,
-                weights,
-                &self.start_lm,
-                self.problem.threads,
-            )?,
-            None => levenberg_marquardt(
-                self.start,
-                data,
-                weights,
-                free,
-                &self.start_lm,
-                self.problem.threads,
-            )?,
+        let first = match problem.start_normal.clone() {
+            Some(normal) => levenberg_marquardt_from(objective, &x, normal, &self.start_lm)?,
+            None => problem.lm(objective, &x, problem.free, &self.start_lm)?,
         };
         let phase = &mut tally.phases[START_PHASE];
         phase.add_lm(&first, timer.elapsed().as_secs_f64());
@@ -550,16 +547,9 @@ impl<'a> Search<'a> {
     fn restart(&self, x: &DhParams, phases: &mut [Phase]) -> Result<Minimum, CalibrationError> {
         let problem = self.problem;
         let timer = std::time::Instant::now();
-        let mut here = Weights::new(&ArmKernel::new(x)?, problem.data, problem.noise, 1.0)?;
-        here.prior = problem.weights.prior.clone();
-        let fit = levenberg_marquardt(
-            x,
-            problem.data,
-            &here,
-            problem.free,
-            problem.lm,
-            problem.threads,
-        )?;
+        let x = problem.point(x);
+        let here = problem.objective.reweighed(&x, 1.0)?;
+        let fit = problem.lm(&here, &x, problem.free, problem.lm)?;
         phases[LM_PHASE].add_lm(&fit, timer.elapsed().as_secs_f64());
         reweigh(fit, problem, &mut phases[LM_PHASE])
     }
@@ -567,31 +557,13 @@ impl<'a> Search<'a> {
     /// A grid cell's or random draw's minimum: LM over the zero offsets
     /// alone, then the full LM.
     fn refine(&self, x: &DhParams, phases: &mut [Phase]) -> Result<Minimum, CalibrationError> {
-        let GlobalProblem {
-            data,
-            weights,
-            free,
-            ..
-        } = *self.problem;
+        let problem = self.problem;
+        let objective = problem.objective;
         let timer = std::time::Instant::now();
-        let zeros = levenberg_marquardt(
-            x,
-            data,
-            weights,
-            &self.circles,
-            &self.zero_lm,
-            self.problem.threads,
-        )?;
+        let zeros = problem.lm(objective, &problem.point(x), &self.circles, &self.zero_lm)?;
         phases[ZEROS_PHASE].add_lm(&zeros, timer.elapsed().as_secs_f64());
         let timer = std::time::Instant::now();
-        let fit = levenberg_marquardt(
-            &zeros.params,
-            data,
-            weights,
-            free,
-            &self.start_lm,
-            self.problem.threads,
-        )?;
+        let fit = problem.lm(objective, &zeros.x, problem.free, &self.start_lm)?;
         phases[LM_PHASE].add_lm(&fit, timer.elapsed().as_secs_f64());
         settle(fit, self.problem, &mut phases[LM_PHASE], self.promising)
     }
@@ -679,14 +651,7 @@ impl<'a> Search<'a> {
     ) -> Result<Minimum, CalibrationError> {
         let problem = self.problem;
         let timer = std::time::Instant::now();
-        let fit = levenberg_marquardt(
-            &best.fit.params,
-            problem.data,
-            problem.weights,
-            problem.free,
-            problem.lm,
-            problem.threads,
-        )?;
+        let fit = problem.lm(problem.objective, &best.fit.x, problem.free, problem.lm)?;
         phases.push(Phase::new("lm, best start finished"));
         let last = phases.len() - 1;
         phases[last].add_lm(&fit, timer.elapsed().as_secs_f64());
@@ -699,7 +664,7 @@ impl<'a> Search<'a> {
 /// recorded where it stopped, its cost under the weights at that point.
 fn settle(
     fit: LmResult,
-    problem: &GlobalProblem,
+    problem: &GlobalProblem<'_, '_>,
     phase: &mut Phase,
     promising: Option<f64>,
 ) -> Result<Minimum, CalibrationError> {
@@ -710,14 +675,7 @@ fn settle(
         // slowly. Finish the descent, so that the geometry judged is the
         // minimum's, not a point on the way to it.
         let timer = std::time::Instant::now();
-        let done = levenberg_marquardt(
-            &fit.params,
-            problem.data,
-            problem.weights,
-            problem.free,
-            problem.lm,
-            problem.threads,
-        )?;
+        let done = problem.lm(problem.objective, &fit.x, problem.free, problem.lm)?;
         phase.add_lm(&done, timer.elapsed().as_secs_f64());
         return settle(done, problem, phase, None);
     }
@@ -727,12 +685,9 @@ fn settle(
         // happen to be kind looks lowest.
         let cost = match problem.stated_dof {
             Some(_) => {
-                let kernel = ArmKernel::new(&fit.params)?;
-                let mut weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
-                weights.prior = problem.weights.prior.clone();
-                let mut xyz = vec![[0.0; 3]; problem.data.len()];
+                let here = problem.objective.reweighed(&fit.x, 1.0)?;
                 phase.cost_evaluations += 1;
-                super::prior::cost_at(&fit.params, problem.data, &weights, problem.free, &mut xyz)?
+                here.cost(&fit.x, problem.free, &mut Vec::new())?
             }
             None => fit.normal.cost(),
         };
@@ -748,7 +703,7 @@ fn settle(
 /// depend on the arm.
 fn reweigh(
     fit: LmResult,
-    problem: &GlobalProblem,
+    problem: &GlobalProblem<'_, '_>,
     phase: &mut Phase,
 ) -> Result<Minimum, CalibrationError> {
     if problem.stated_dof.is_none() {
@@ -756,17 +711,8 @@ fn reweigh(
         return Ok(Minimum { fit, cost });
     }
     let timer = std::time::Instant::now();
-    let kernel = ArmKernel::new(&fit.params)?;
-    let mut weights = Weights::new(&kernel, problem.data, problem.noise, 1.0)?;
-    weights.prior = problem.weights.prior.clone();
-    let refit = levenberg_marquardt(
-        &fit.params,
-        problem.data,
-        &weights,
-        problem.free,
-        problem.lm,
-        problem.threads,
-    )?;
+    let here = problem.objective.reweighed(&fit.x, 1.0)?;
+    let refit = problem.lm(&here, &fit.x, problem.free, problem.lm)?;
     phase.add_lm(&refit, timer.elapsed().as_secs_f64());
     let cost = refit.normal.cost();
     Ok(Minimum { fit: refit, cost })
@@ -778,7 +724,7 @@ fn reweigh(
 fn torus_grid(
     start: &DhParams,
     circles: &[usize],
-    problem: &GlobalProblem,
+    problem: &GlobalProblem<'_, '_>,
     options: &GlobalOptions,
 ) -> Result<(usize, Vec<DhParams>), CalibrationError> {
     let joints = start.joint_count();
@@ -807,17 +753,13 @@ fn torus_grid(
         }
     };
     let mut x = start.clone();
-    let mut xyz = vec![[0.0; 3]; problem.data.len()];
+    let mut xyz = Vec::new();
     let mut costs = Vec::with_capacity(cells);
     for cell in 0..cells {
         place(&mut x, cell);
-        // Never NaN: a non-finite cost is +∞.
-        costs.push(cost(
-            &ArmKernel::new(&x)?,
-            problem.data,
-            problem.weights,
-            &mut xyz,
-        )?);
+        // The data's cost (the prior does not steer the scan); never NaN:
+        // a non-finite cost is +∞.
+        costs.push(problem.objective.data_cost(&problem.point(&x), &mut xyz)?);
     }
     let mut minima: Vec<usize> = (0..cells)
         .filter(|&cell| {

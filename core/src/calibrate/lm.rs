@@ -7,12 +7,11 @@ use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
 use super::CalibrationError;
-use super::prior::{cost_at, normal_at};
 use crate::damping::Damping;
-use crate::dataset::DataSet;
 use crate::error::{OptionError, check_nonnegative};
+use crate::objective::Objective;
 use crate::params::DhParams;
-use crate::residuals::{Normal, Weights};
+use crate::residuals::Normal;
 
 /// Why the solver stopped, as MINPACK's `info` or Ceres' termination type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -148,6 +147,9 @@ pub struct LmIteration {
 pub struct LmResult {
     /// The parameters at the end (fixed ones unchanged).
     pub params: DhParams,
+    /// Every column at the end (the geometry's, then the auxiliary
+    /// blocks').
+    pub x: Vec<f64>,
     /// Why it stopped.
     pub termination: Termination,
     /// Iterations (steps tried).
@@ -186,21 +188,19 @@ impl LmResult {
     }
 }
 
-/// Minimises the weighted cost over the parameters `free` (indices in the
-/// fixed order of [`crate::params`]) from `start`.
+/// Minimises `objective` over the columns `free` from the point `start`
+/// (every column).
 ///
 /// Never returns NaN: a trial step with a non-finite cost is rejected like
 /// any step that does not lower the cost.
 pub(crate) fn levenberg_marquardt(
-    start: &DhParams,
-    data: &DataSet,
-    weights: &Weights,
+    objective: &Objective<'_>,
+    start: &[f64],
     free: &[usize],
     options: &LmOptions,
-    threads: usize,
 ) -> Result<LmResult, CalibrationError> {
-    let normal = normal_at(start, data, weights, free, threads)?;
-    let mut fit = levenberg_marquardt_from(start, normal, data, weights, options, threads)?;
+    let normal = objective.normal(start, free)?;
+    let mut fit = levenberg_marquardt_from(objective, start, normal, options)?;
     fit.jacobian_evaluations += 1;
     Ok(fit)
 }
@@ -208,17 +208,15 @@ pub(crate) fn levenberg_marquardt(
 /// [`levenberg_marquardt`] from the normal equations already computed at
 /// `start` (over the free columns `normal.free`), which it does not count.
 pub(crate) fn levenberg_marquardt_from(
-    start: &DhParams,
+    objective: &Objective<'_>,
+    start: &[f64],
     normal: Normal,
-    data: &DataSet,
-    weights: &Weights,
     options: &LmOptions,
-    threads: usize,
 ) -> Result<LmResult, CalibrationError> {
     if !normal.cost().is_finite() {
         return Err(CalibrationError::NonFiniteStart);
     }
-    let mut descent = Descent::new(start, normal, data, weights, options, threads);
+    let mut descent = Descent::new(objective, start, normal, options);
     let mut termination = Termination::MaxIterations;
     for iteration in 1..=options.max_iterations {
         if let Some(stop) = descent.iterate(iteration)? {
@@ -231,16 +229,11 @@ pub(crate) fn levenberg_marquardt_from(
 
 /// One Levenberg–Marquardt descent: where it stands, its normal equations
 /// there, the damping, and its account so far.
-struct Descent<'a> {
-    start: &'a DhParams,
-    // The prior, if any, rides with the weights ([`super::prior`]).
-    data: &'a DataSet,
-    weights: &'a Weights,
+struct Descent<'a, 'o> {
+    objective: &'a Objective<'o>,
     options: &'a LmOptions,
-    /// Worker threads of the normal equations.
-    threads: usize,
     free: Vec<usize>,
-    /// Every parameter, in the fixed order.
+    /// Every column.
     x: Vec<f64>,
     /// The normal equations at `x`; N and g as matrices, made again only
     /// when a step is taken (a rejected step keeps them: near the minimum
@@ -296,24 +289,19 @@ impl Trial {
     }
 }
 
-impl<'a> Descent<'a> {
+impl<'a, 'o> Descent<'a, 'o> {
     fn new(
-        start: &'a DhParams,
+        objective: &'a Objective<'o>,
+        start: &[f64],
         normal: Normal,
-        data: &'a DataSet,
-        weights: &'a Weights,
         options: &'a LmOptions,
-        threads: usize,
-    ) -> Descent<'a> {
+    ) -> Descent<'a, 'o> {
         let free = normal.free.clone();
         let p = free.len();
         let (n, g) = matrices(&normal, p);
         Descent {
-            start,
-            data,
-            weights,
+            objective,
             options,
-            threads,
             x: start.to_vec(),
             initial_cost: normal.cost(),
             normal,
@@ -321,7 +309,7 @@ impl<'a> Descent<'a> {
             g,
             scale: vec![0.0f64; p],
             damping: Damping::nielsen(),
-            xyz: vec![[0.0; 3]; data.len()],
+            xyz: Vec::new(),
             history: Vec::new(),
             cost_evaluations: 0,
             jacobian_evaluations: 0,
@@ -394,12 +382,8 @@ impl<'a> Descent<'a> {
     /// how it compares with the prediction.
     fn trial(&mut self, delta: &DVector<f64>, f: f64) -> Result<Trial, CalibrationError> {
         let p = self.free.len();
-        let mut x = self.x.clone();
-        for (c, &col) in self.free.iter().enumerate() {
-            x[col] += delta[c];
-        }
-        let trial = self.params_of(&x)?;
-        let f_new = cost_at(&trial, self.data, self.weights, &self.free, &mut self.xyz)?;
+        let x = self.objective.plus(&self.x, &self.free, delta.as_slice());
+        let f_new = self.objective.cost(&x, &self.free, &mut self.xyz)?;
         self.cost_evaluations += 1;
         // |r + Jδ|² = f + 2δᵀg + δᵀNδ
         let predicted = -(2.0 * delta.dot(&self.g) + delta.dot(&(&self.n * delta)));
@@ -431,8 +415,7 @@ impl<'a> Descent<'a> {
     /// Takes the step: the normal equations at its end, less damping.
     fn accept(&mut self, iteration: usize, trial: Trial) -> Result<(), CalibrationError> {
         self.x = trial.x;
-        let params = self.params_of(&self.x)?;
-        self.normal = normal_at(&params, self.data, self.weights, &self.free, self.threads)?;
+        self.normal = self.objective.normal(&self.x, &self.free)?;
         (self.n, self.g) = matrices(&self.normal, self.free.len());
         self.jacobian_evaluations += 1;
         self.damping.accept(trial.rho);
@@ -456,13 +439,10 @@ impl<'a> Descent<'a> {
         });
     }
 
-    fn params_of(&self, x: &[f64]) -> Result<DhParams, CalibrationError> {
-        self.start.with_values(x).ok_or(CalibrationError::Shape)
-    }
-
     fn finish(self, termination: Termination) -> Result<LmResult, CalibrationError> {
         Ok(LmResult {
-            params: self.params_of(&self.x)?,
+            params: (self.objective.layout().arm(&self.x)).ok_or(CalibrationError::Shape)?,
+            x: self.x,
             termination,
             iterations: self.history.len(),
             cost_evaluations: self.cost_evaluations,

@@ -65,10 +65,11 @@ pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
 use crate::identify::{Correlation, Identification, identify_from, open_directions_from};
-use crate::kernel::{ArmKernel, KernelError};
+use crate::kernel::KernelError;
 use crate::metrics::MetricsError;
+use crate::objective::Objective;
 use crate::params::{DhParams, ParamId};
-use crate::residuals::Weights;
+use crate::residuals::{Layout, Normal, Term, TermError};
 
 /// Why a calibration could not run.
 #[derive(Debug, thiserror::Error)]
@@ -80,6 +81,14 @@ pub enum CalibrationError {
     /// The kernel refused the arm or the data.
     #[error(transparent)]
     Kernel(#[from] KernelError),
+    /// A residual term refused its own inputs.
+    #[error("{term}: {message}")]
+    Term {
+        /// The term's name.
+        term: String,
+        /// What is wrong.
+        message: String,
+    },
     /// The metrics refused positions (validation).
     #[error(transparent)]
     Metrics(#[from] MetricsError),
@@ -134,6 +143,15 @@ pub enum CalibrationError {
     },
 }
 
+impl From<TermError> for CalibrationError {
+    fn from(e: TermError) -> Self {
+        match e {
+            TermError::Kernel(k) => CalibrationError::Kernel(k),
+            TermError::Invalid { term, message } => CalibrationError::Term { term, message },
+        }
+    }
+}
+
 /// The solvers of [`calibrate`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -147,6 +165,10 @@ pub enum Method {
     /// Converges from encoder zeros unknown in ±180° ([`global`]).
     #[default]
     Global,
+    /// A solver of another crate, passed to the session as a [`Solver`]
+    /// (the library has none by this name: [`SolverSettings::check`]
+    /// refuses it as the method to run).
+    External,
 }
 
 impl Method {
@@ -167,10 +189,11 @@ impl Method {
             Method::Sa => "sa",
             Method::Hybrid => "hybrid",
             Method::Global => "global",
+            Method::External => "external",
         }
     }
 
-    /// The method of a name.
+    /// The method of a name (one of [`Method::ALL`]).
     pub fn parse(s: &str) -> Option<Method> {
         Method::ALL.into_iter().find(|m| m.name() == s)
     }
@@ -308,8 +331,35 @@ impl TryFrom<EstimateRecord> for Estimate {
     }
 }
 
+/// An auxiliary block's column as estimated, in the unit users see.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AuxiliaryEstimate {
+    /// Its name (`tracker.tx`).
+    pub name: String,
+    /// Its unit (`mm`, `deg`, or the block's own).
+    pub unit: String,
+    /// The start value.
+    pub start: f64,
+    /// The calibrated value.
+    pub calibrated: f64,
+    /// Standard uncertainty (k = 1); `None` when the data do not determine
+    /// it.
+    pub sigma: Option<f64>,
+}
+
+/// A residual term's rows, beyond the touches, lengths and prior.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TermRows {
+    /// The term's name.
+    pub term: String,
+    /// Its residual rows.
+    pub rows: usize,
+    /// Unknowns it eliminates.
+    pub eliminated: usize,
+}
+
 /// Residual and unknown counts, and the a-posteriori variance factor.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Dof {
     /// Touch residual rows (3 per touch).
     pub touch_rows: usize,
@@ -317,7 +367,7 @@ pub struct Dof {
     pub length_rows: usize,
     /// Free parameters.
     pub free_parameters: usize,
-    /// Eliminated centre coordinates (3 per point).
+    /// Eliminated unknowns: the point centres' coordinates (3 per point).
     pub centre_coordinates: usize,
     /// `m − p`.
     pub degrees_of_freedom: usize,
@@ -332,6 +382,10 @@ pub struct Dof {
     /// tolerance), counted in `degrees_of_freedom`; absent without one.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub prior_rows: usize,
+    /// The rows of every other residual term, counted in
+    /// `degrees_of_freedom`; absent without one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub other_rows: Vec<TermRows>,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -380,8 +434,8 @@ impl SolverSummary {
 /// The correlation matrix of the free parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CorrelationMatrix {
-    /// The free parameters, in the fixed order.
-    pub parameters: Vec<ParamId>,
+    /// The free parameters' names, in column order.
+    pub parameters: Vec<String>,
     /// `ρ_ij`, row by row.
     pub rho: Vec<Vec<f64>>,
 }
@@ -393,6 +447,10 @@ pub struct Checks {
     /// of the arm, a collapsed arm, or a unit mistake. Empty when the arm is
     /// plausible.
     pub gross_corrections: Vec<checks::GrossCorrection>,
+    /// Auxiliary blocks whose values no real instrument could have (each
+    /// block's own limits), in words; absent when there is none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub implausible_blocks: Vec<String>,
     /// The χ² test of the residuals against the stated noise (`None`
     /// without stated noise: the touch σ was estimated from the fit).
     pub chi_square: Option<checks::ChiSquare>,
@@ -415,6 +473,10 @@ pub struct Calibration {
     pub params: DhParams,
     /// Per parameter, in the fixed order.
     pub parameters: Vec<Estimate>,
+    /// Per column of the auxiliary blocks (a frame, a scalar), in the
+    /// layout's order; absent when there is none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub auxiliary: Vec<AuxiliaryEstimate>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
     pub correlations: Vec<Correlation>,
     /// Every correlation of the free parameters.
@@ -445,19 +507,11 @@ impl Calibration {
     }
 
     /// Restores [`Calibration::params`] from the estimates, after reading a
-    /// calibration back from JSON.
+    /// calibration back from JSON: each value to the parameter it names (a
+    /// joint with an `hbeta…` is a Hayati joint).
     pub fn restore_params(&mut self) {
-        if let Some(mut p) = DhParams::from_slice(&self.calibrated_vector()) {
-            // A Hayati joint's d-slot is named `hbeta…`: from_slice put β in d.
-            for e in &self.parameters {
-                if e.id.kind == crate::params::ParamKind::Beta
-                    && let Some(j) = p.joints.get_mut(e.id.index)
-                {
-                    j.model = crate::params::JointModel::Hayati;
-                    j.beta = j.d;
-                    j.d = 0.0;
-                }
-            }
+        if let Some(p) = DhParams::from_named(self.parameters.iter().map(|e| (e.id, e.calibrated)))
+        {
             self.params = p;
         }
     }
@@ -485,30 +539,68 @@ pub fn calibrate(
     settings: &SolverSettings,
 ) -> Result<Calibration, CalibrationError> {
     let solver = settings.method.solver();
-    calibrate_with(start, data, model, settings, &*solver, &mut Context::new())
+    let layout = Layout::new(start.clone());
+    let inputs = FitInputs {
+        layout: &layout,
+        data,
+        model,
+        terms: &[],
+    };
+    calibrate_with(inputs, settings, &*solver, &mut Context::new())
 }
 
-/// [`calibrate`] with a given solver and context (a progress observer).
-/// Checks every setting first ([`ModelOptions::check_for`],
+/// A calibration to run: the data and the model, on the columns of
+/// `layout` — the start arm's geometry, then any auxiliary parameter block
+/// a caller adds — with the residual terms a caller adds to the data's own
+/// (touches, reference lengths, the prior).
+#[derive(Clone, Copy)]
+pub struct FitInputs<'p> {
+    /// The columns: the start arm's geometry first.
+    pub layout: &'p Layout,
+    /// The touches and reference lengths.
+    pub data: &'p DataSet,
+    /// The model's settings.
+    pub model: &'p ModelOptions,
+    /// Residual terms beyond the data's.
+    pub terms: &'p [Box<dyn Term>],
+}
+
+/// [`calibrate`] with a given solver and context (a progress observer), on
+/// `inputs` (which may add parameter blocks and residual terms). Checks
+/// every setting first ([`ModelOptions::check_for`],
 /// [`SolverSettings::check`]).
 pub fn calibrate_with(
-    start: &DhParams,
-    data: &DataSet,
-    model: &ModelOptions,
+    inputs: FitInputs<'_>,
     settings: &SolverSettings,
     solver: &dyn Solver,
     ctx: &mut Context,
 ) -> Result<Calibration, CalibrationError> {
+    let FitInputs {
+        layout,
+        data,
+        model,
+        terms,
+    } = inputs;
+    let start = layout.geometry();
     model.check_for(start)?;
     settings.check()?;
-    let threads = settings.threads;
-    let kernel = ArmKernel::new(start)?;
-    let mut weights = Weights::new_threads(&kernel, data, &model.noise, 1.0, threads)?;
+    let extra = terms.iter().map(|t| dyn_clone::clone_box(&**t)).collect();
+    let objective = Objective::of_data(
+        layout.clone(),
+        data,
+        &model.noise,
+        extra,
+        model.prior.as_ref(),
+        1.0,
+        settings.threads,
+    )?;
+    let x0 = objective.start();
     // One pass over the data at the start serves the identifiability
     // analysis and, restricted to the free columns, the first step.
     let timer = std::time::Instant::now();
-    let full = crate::identify::full_normal(start, data, &weights, threads)?;
-    let (free, identification, reasons) = fixed_set(start, data, model, &full)?;
+    let all: Vec<usize> = (0..layout.len()).collect();
+    let full = objective.normal_of(&x0, &all, |t| !t.is_prior())?;
+    let (free, identification, reasons) = fixed_set(start, &objective, model, &full)?;
     if free.is_empty() {
         return Err(OptionError::new(
             "fix",
@@ -517,14 +609,9 @@ pub fn calibrate_with(
         )
         .into());
     }
-    // The fixed set is the data's own (see [`prior`]); the prior then
-    // rides with the weights into every fit.
-    weights.prior = model
-        .prior
-        .as_ref()
-        .and_then(|t| prior::PriorTerm::new(t, start));
-    let prior_rows = weights.prior.as_ref().map_or(0, |p| p.rows(&free));
-    let counts = assess::Counts::new(data, free.len()).with_prior_rows(prior_rows);
+    // The fixed set is the data's own (see [`prior`]); the prior joins
+    // every fit from here on.
+    let counts = assess::Counts::of(&objective, &free);
     if counts.residuals() <= counts.unknowns() {
         return Err(CalibrationError::TooFewResiduals {
             residuals: counts.residuals(),
@@ -538,36 +625,33 @@ pub fn calibrate_with(
         ..Phase::new("identify")
     };
     let mut start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
-    if let Some(p) = &weights.prior {
-        p.add_to(&mut start_normal, &start.to_vec());
-    }
+    objective.add_terms(&mut start_normal, &x0, |t| t.is_prior())?;
     let task = Task {
         start,
+        x: &x0,
         data,
+        objective: &objective,
         free: &free,
         model,
         settings,
         stated_dof: model.noise.stated().then_some(counts.dof()),
-        weights: &weights,
         start_normal,
     };
     let mut outcome = solver.solve(task, ctx)?;
     outcome.phases.insert(0, identify_phase);
-    assess::assess(
-        assess::Setup {
-            start,
-            data,
-            model,
-            settings,
-            method: solver.method(),
-            free,
-            identification,
-            reasons,
-            weights,
-            counts,
-        },
-        outcome,
-    )
+    let setup = assess::Setup {
+        start,
+        x0: &x0,
+        data,
+        model,
+        settings,
+        method: solver.method(),
+        free,
+        identification,
+        reasons,
+        counts,
+    };
+    assess::assess(setup, objective, outcome)
 }
 
 /// The free columns, the identifiability analysis behind them (`fix =
@@ -576,17 +660,24 @@ pub fn calibrate_with(
 #[allow(clippy::type_complexity)] // three plain results, named where used
 fn fixed_set(
     start: &DhParams,
-    data: &DataSet,
+    objective: &Objective<'_>,
     model: &ModelOptions,
-    full: &crate::residuals::Normal,
+    full: &Normal,
 ) -> Result<(Vec<usize>, Option<Identification>, Vec<(ParamId, String)>), CalibrationError> {
-    match &model.fix {
+    let layout = objective.layout();
+    let geometry = layout.geometry_columns();
+    // Every auxiliary column is free: the geometry is analysed with them
+    // fitted too (their elimination, as the centres' is).
+    let aux: Vec<usize> = (geometry..layout.len()).collect();
+    let full = &geometry_normal(full, layout)?;
+    let sees = objective.sees();
+    let (mut free, identification, reasons) = match &model.fix {
         FixSpec::Auto => {
-            let id = identify_from(start, data, full.clone());
+            let id = identify_from(start, sees, full.clone());
             let free = id.free_columns();
             let reasons: Vec<(ParamId, String)> =
                 id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
-            Ok((free, Some(id), reasons))
+            (free, Some(id), reasons)
         }
         FixSpec::Columns(fixed) => {
             let free: Vec<usize> = (0..start.param_count())
@@ -601,7 +692,7 @@ fn fixed_set(
                 .copied()
                 .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
                 .collect();
-            let directions = open_directions_from(start, data, full.clone(), &unknown);
+            let directions = open_directions_from(start, sees, full.clone(), &unknown);
             if !directions.is_empty() {
                 return Err(CalibrationError::Unidentifiable { directions });
             }
@@ -610,7 +701,36 @@ fn fixed_set(
                 .filter_map(|&c| start.param_id(c))
                 .map(|id| (id, "fixed by the user".to_string()))
                 .collect();
-            Ok((free, None, reasons))
+            (free, None, reasons)
         }
+    };
+    free.extend(aux);
+    Ok((free, identification, reasons))
+}
+
+/// The geometry's normal equations with every auxiliary column fitted and
+/// eliminated (`N_gg − N_ga N_aa⁻¹ N_ag`): what the identifiability of the
+/// geometry is judged on. Without auxiliary columns, `full` itself.
+fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, CalibrationError> {
+    let (g, all) = (layout.geometry_columns(), layout.len());
+    if g == all {
+        return Ok(full.clone());
     }
+    let nm = nalgebra::DMatrix::from_row_slice(all, all, &full.jtj);
+    let naa = nm.view((g, g), (all - g, all - g)).into_owned();
+    let nga = nm.view((0, g), (g, all - g)).into_owned();
+    let Some(ch) = naa.cholesky() else {
+        let blocks: Vec<&str> = layout.blocks().map(|b| b.name()).collect();
+        return Err(CalibrationError::Unidentifiable {
+            directions: vec![format!(
+                "the auxiliary blocks ({}): the data do not determine them",
+                blocks.join(", ")
+            )],
+        });
+    };
+    let reduced = nm.view((0, 0), (g, g)) - &nga * ch.solve(&nga.transpose());
+    let geometry: Vec<usize> = (0..g).collect();
+    let mut out = full.restrict(&geometry).ok_or(CalibrationError::Shape)?;
+    out.jtj = reduced.transpose().as_slice().to_vec();
+    Ok(out)
 }

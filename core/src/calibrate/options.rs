@@ -315,6 +315,13 @@ impl SolverSettings {
         if self.threads == 0 {
             return Err(OptionError::new("threads", 0, "at least 1"));
         }
+        if self.method == Method::External {
+            return Err(OptionError::new(
+                "method",
+                self.method.name(),
+                "the library has no solver of that name: pass yours to session::run",
+            ));
+        }
         self.lm.check()?;
         self.anneal.check()?;
         self.switch.check()?;

@@ -33,111 +33,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::params::{DhParams, ParamId, wrap};
-use crate::residuals::Normal;
+use crate::params::{DhParams, ParamId};
+use crate::residuals::{PriorTerm, Term};
 use crate::tolerances::Tolerances;
-
-/// The resolved prior of one fit: nominal values and tolerances per column.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct PriorTerm {
-    nominal: Vec<f64>,
-    sigma: Vec<Option<f64>>,
-    angle: Vec<bool>,
-}
-
-impl PriorTerm {
-    /// The prior of `tolerances` around the arm `nominal`; `None` when no
-    /// tolerance applies to any parameter.
-    pub fn new(tolerances: &Tolerances, nominal: &DhParams) -> Option<PriorTerm> {
-        let sigma = tolerances.sigmas_for(nominal);
-        if sigma.iter().all(Option::is_none) {
-            return None;
-        }
-        Some(PriorTerm {
-            nominal: nominal.to_vec(),
-            sigma,
-            angle: nominal.param_ids().map(|id| !id.kind.is_length()).collect(),
-        })
-    }
-
-    /// The tolerance of column `c`.
-    pub fn sigma(&self, c: usize) -> Option<f64> {
-        self.sigma.get(c).copied().flatten()
-    }
-
-    /// `(p_c − p0_c)/σ_c` at `x` (angles wrapped), if `c` has a tolerance.
-    fn residual(&self, c: usize, x: &[f64]) -> Option<f64> {
-        let s = self.sigma(c)?;
-        let d = x[c] - self.nominal[c];
-        Some(if self.angle[c] { wrap(d) } else { d } / s)
-    }
-
-    /// Pseudo-observation rows among the columns `free`.
-    pub fn rows(&self, free: &[usize]) -> usize {
-        free.iter().filter(|&&c| self.sigma(c).is_some()).count()
-    }
-
-    /// `Σ r_k²` at `x` over the columns `free`.
-    pub fn cost(&self, free: &[usize], x: &[f64]) -> f64 {
-        free.iter()
-            .filter_map(|&c| self.residual(c, x))
-            .map(|r| r * r)
-            .sum()
-    }
-
-    /// Adds the pseudo-observations at `x` to `normal` (over its columns).
-    pub fn add_to(&self, normal: &mut Normal, x: &[f64]) {
-        let p = normal.free.len();
-        let mut cost = 0.0;
-        for (a, &c) in normal.free.iter().enumerate() {
-            if let (Some(r), Some(s)) = (self.residual(c, x), self.sigma(c)) {
-                normal.jtj[a * p + a] += 1.0 / (s * s);
-                normal.jtr[a] += r / s;
-                cost += r * r;
-            }
-        }
-        normal.prior_cost = cost;
-    }
-}
-
-/// The normal equations at `params` under `weights`, with their prior if
-/// any: what every fit uses.
-pub(crate) fn normal_at(
-    params: &DhParams,
-    data: &crate::dataset::DataSet,
-    weights: &crate::residuals::Weights,
-    free: &[usize],
-    threads: usize,
-) -> Result<Normal, super::CalibrationError> {
-    let kernel = crate::kernel::ArmKernel::new(params)?;
-    let mut normal = crate::residuals::normal_equations(&kernel, data, weights, free, threads)?;
-    if let Some(p) = &weights.prior {
-        p.add_to(&mut normal, &params.to_vec());
-    }
-    Ok(normal)
-}
-
-/// The cost at `params` under `weights`, with the prior over `free` if any.
-pub(crate) fn cost_at(
-    params: &DhParams,
-    data: &crate::dataset::DataSet,
-    weights: &crate::residuals::Weights,
-    free: &[usize],
-    xyz: &mut [[f64; 3]],
-) -> Result<f64, super::CalibrationError> {
-    let kernel = crate::kernel::ArmKernel::new(params)?;
-    let data_cost = crate::residuals::cost(&kernel, data, weights, xyz)?;
-    let prior = weights
-        .prior
-        .as_ref()
-        .map_or(0.0, |p| p.cost(free, &params.to_vec()));
-    let total = data_cost + prior;
-    Ok(if total.is_finite() {
-        total
-    } else {
-        f64::INFINITY
-    })
-}
 
 /// One parameter's prior and what the data made of it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -282,12 +180,12 @@ pub fn conditioning(
     tolerances: &Tolerances,
     identification: &crate::identify::Identification,
     threads: usize,
-) -> Result<PriorConditioning, crate::kernel::KernelError> {
+) -> Result<PriorConditioning, crate::residuals::TermError> {
     use nalgebra::DMatrix;
     let n = params.joint_count();
-    let weights =
-        crate::residuals::Weights::new(&crate::kernel::ArmKernel::new(params)?, data, noise, 0.01)?;
-    let full = crate::identify::full_normal(params, data, &weights, threads)?;
+    let all: Vec<usize> = (0..params.param_count()).collect();
+    let full = crate::identify::data_objective(params, data, noise, threads)?
+        .normal(&params.to_vec(), &all)?;
     let np = full.free.len();
     let reach = params.reach();
     let ids: Vec<ParamId> = params.param_ids().collect();

@@ -51,10 +51,7 @@ use serde::{Deserialize, Serialize};
 use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict, erfc};
 use super::lm::{LmOptions, LmResult, levenberg_marquardt};
 use super::{CalibrationError, OptionError, Phase};
-use crate::dataset::DataSet;
-use crate::kernel::ArmKernel;
-use crate::params::DhParams;
-use crate::residuals::{Weights, standardised_residuals};
+use crate::objective::Objective;
 
 /// IRLS stops when no touch's weight moved by more than this.
 pub const WEIGHT_TOLERANCE: f64 = 1e-3;
@@ -264,11 +261,11 @@ fn median(v: &[f64]) -> f64 {
 }
 
 /// The robust fit's result, for [`super::assess`].
-pub(crate) struct Irls {
-    /// The arm at the end.
-    pub params: DhParams,
-    /// The weights of the last refit (base weights × robust weights).
-    pub weights: Weights,
+pub(crate) struct Irls<'a> {
+    /// Every column at the end.
+    pub x: Vec<f64>,
+    /// The objective of the last refit (base weights × robust weights).
+    pub objective: Objective<'a>,
     /// The robust weights per touch.
     pub touch_weights: Vec<f64>,
     /// The last refit.
@@ -282,32 +279,28 @@ pub(crate) struct Irls {
 /// Squared standardised residuals in units of the base weights' σ (the
 /// leverage under the robust weights, which is what the fit used).
 fn base_standardised(
-    params: &DhParams,
-    data: &DataSet,
-    base: &Weights,
+    x: &[f64],
+    base: &Objective<'_>,
     w: &[f64],
 ) -> Result<Vec<f64>, CalibrationError> {
-    let t2 = standardised_residuals(&ArmKernel::new(params)?, data, &base.scaled_touches(w))?;
+    let t2 = base.with_observation_weights(w).standardised(x)?;
     Ok(t2.iter().zip(w).map(|(t, w)| t / w).collect())
 }
 
-/// IRLS from `params` (the solver's minimum under `base`).
+/// IRLS from `x` (the solver's minimum under `base`).
 /// `dof_factor` is `f` of the module documentation; `stated`, whether the
 /// base weights come from a stated noise (then the scale is tested).
-#[allow(clippy::too_many_arguments)] // the fit's inputs, as LM takes them, and two facts of assess
-pub(crate) fn irls(
+pub(crate) fn irls<'a>(
     robust: Robust,
-    params: &DhParams,
-    data: &DataSet,
-    base: &Weights,
+    x: &[f64],
+    base: &Objective<'a>,
     free: &[usize],
     lm: &LmOptions,
-    threads: usize,
     dof_factor: f64,
     stated: bool,
-) -> Result<Irls, CalibrationError> {
+) -> Result<Irls<'a>, CalibrationError> {
     let timer = std::time::Instant::now();
-    let n = data.len();
+    let n = base.observations();
     let scale_of = |u2: &[f64]| (dof_factor * median(u2) / CHI2_3_MEDIAN).max(f64::MIN_POSITIVE);
     let weights_of = |u2: &[f64], s2: f64| -> Vec<f64> {
         u2.iter()
@@ -316,12 +309,12 @@ pub(crate) fn irls(
     };
     let mut phase = Phase::new(&format!("lm, robust {}", robust.loss.name()));
     let mut w = vec![1.0; n];
-    let mut params = params.clone();
+    let mut x = x.to_vec();
     let mut last: Option<LmResult> = None;
     let mut passes = 0;
     let mut converged = false;
     loop {
-        let u2 = base_standardised(&params, data, base, &w)?;
+        let u2 = base_standardised(&x, base, &w)?;
         let next = weights_of(&u2, scale_of(&u2));
         let change = next
             .iter()
@@ -336,16 +329,16 @@ pub(crate) fn irls(
             break;
         }
         w = next;
-        let fit = levenberg_marquardt(&params, data, &base.scaled_touches(&w), free, lm, threads)?;
+        let fit = levenberg_marquardt(&base.with_observation_weights(&w), &x, free, lm)?;
         phase.add_lm(&fit, 0.0);
         passes += 1;
-        params = fit.params.clone();
+        x.clone_from(&fit.x);
         last = Some(fit);
     }
     phase.seconds = timer.elapsed().as_secs_f64();
     let last = last.expect("at least one refit ran");
     // The scale at the end, under the weights the last refit used.
-    let u2 = base_standardised(&params, data, base, &w)?;
+    let u2 = base_standardised(&x, base, &w)?;
     let median_u2 = median(&u2);
     let scale = scale_of(&u2).sqrt();
     let (p_upper, p_lower, verdict) = if stated && n > 0 {
@@ -363,19 +356,19 @@ pub(crate) fn irls(
     } else {
         (None, None, None)
     };
-    let mut weights = Vec::with_capacity(n);
-    for point in data.points() {
-        for i in point.touches.clone() {
-            weights.push(TouchWeight {
-                at: data.source().touch(i).to_string(),
-                point: point.label.clone(),
+    let weights = (0..n)
+        .map(|i| {
+            let origin = base.origin(i);
+            TouchWeight {
+                at: origin.at,
+                point: origin.group,
                 weight: w[i],
-            });
-        }
-    }
+            }
+        })
+        .collect();
     Ok(Irls {
-        params,
-        weights: base.scaled_touches(&w),
+        x,
+        objective: base.with_observation_weights(&w),
         touch_weights: w,
         last,
         phase,

@@ -1,8 +1,14 @@
-//! The solvers behind one trait: each takes the same [`Task`] (start arm,
-//! data, weights, free columns, the model's and the solver's settings) and
-//! a [`Context`] (a progress observer), and returns an [`Outcome`] with its
-//! own [`Stop`] reason. What follows a solve — reweighing at the solution,
-//! covariance, dof — is [`super::assess`], the same for every solver.
+//! The solvers behind one trait: each takes the same [`Task`] (the
+//! objective at the start's weights, the start point, the free columns, the
+//! model's and the solver's settings) and a [`Context`] (a progress
+//! observer), and returns an [`Outcome`] with its own [`Stop`] reason. What
+//! follows a solve — reweighing at the solution, covariance, dof — is
+//! [`super::assess`], the same for every solver.
+//!
+//! The trait is open: a solver of another crate evaluates the task's
+//! [`Objective`] (its cost, its normal equations over the free columns, its
+//! local update `x ⊞ δ`) as the library's solvers do, and returns
+//! [`Outcome::at`] its minimum with [`Stop::External`].
 
 use serde::{Deserialize, Serialize};
 
@@ -11,9 +17,10 @@ use super::global::{self, GlobalStop, GlobalTrace};
 use super::lm::{self, LmIteration, LmResult, Termination, levenberg_marquardt};
 use super::{CalibrationError, Method, ModelOptions, Phase, SolverSettings};
 use crate::dataset::DataSet;
+use crate::objective::Objective;
 use crate::params::DhParams;
 use crate::random::{rng, streams};
-use crate::residuals::{Normal, Weights};
+use crate::residuals::Normal;
 
 /// Told `(phase, fraction done)` as a solver runs.
 pub type Observer<'a> = &'a mut dyn FnMut(&str, f64);
@@ -54,12 +61,17 @@ impl<'a> Context<'a> {
 
 /// What every solver works on. Made by [`super::calibrate_with`] after the
 /// settings and the identifiability were checked.
-pub struct Task<'a> {
+pub struct Task<'a, 'o> {
     /// The start arm.
     pub start: &'a DhParams,
-    /// The touches and lengths.
+    /// The start point: every column (the geometry's, then the auxiliary
+    /// blocks').
+    pub x: &'a [f64],
+    /// The touches and lengths (what the annealer's energy measures).
     pub data: &'a DataSet,
-    /// The free columns (fixed order).
+    /// The least squares, weighed at the start.
+    pub objective: &'a Objective<'o>,
+    /// The free columns.
     pub free: &'a [usize],
     /// The model's settings (noise, tolerances).
     pub model: &'a ModelOptions,
@@ -68,8 +80,8 @@ pub struct Task<'a> {
     /// Degrees of freedom when the noise is stated (enables noise-floor
     /// tests), else `None`.
     pub stated_dof: Option<usize>,
-    pub(crate) weights: &'a Weights,
-    pub(crate) start_normal: Normal,
+    /// The normal equations at the start over `free`.
+    pub start_normal: Normal,
 }
 
 /// Why a solver stopped: its own reason, and the final LM's where one ran.
@@ -94,6 +106,11 @@ pub enum Stop {
         /// Why the best start's LM stopped.
         lm: Termination,
     },
+    /// A solver of another crate ([`Method::External`]).
+    External {
+        /// Whether it reached a minimum it vouches for.
+        converged: bool,
+    },
 }
 
 impl Stop {
@@ -116,6 +133,7 @@ impl Stop {
                 anneal != AnnealStop::EvaluationBudget && lm.was_successful()
             }
             Stop::Global { search, lm } => search.confirmed() && lm.was_successful(),
+            Stop::External { converged } => converged,
         }
     }
 
@@ -123,7 +141,7 @@ impl Stop {
     pub fn lm(self) -> Option<Termination> {
         match self {
             Stop::Lm(t) | Stop::Hybrid { lm: t, .. } | Stop::Global { lm: t, .. } => Some(t),
-            Stop::Anneal(_) => None,
+            Stop::Anneal(_) | Stop::External { .. } => None,
         }
     }
 
@@ -134,6 +152,8 @@ impl Stop {
             Stop::Lm(_) => Stop::Lm(t),
             Stop::Hybrid { anneal, .. } => Stop::Hybrid { anneal, lm: t },
             Stop::Global { search, .. } => Stop::Global { search, lm: t },
+            // A refit after an external solver is the library's LM.
+            Stop::External { .. } => Stop::Lm(t),
             Stop::Anneal(a) => Stop::Anneal(a),
         }
     }
@@ -159,6 +179,8 @@ impl Stop {
             Stop::Global { search, lm } => {
                 format!("{}; final LM: {}", search.describe(), lm.describe())
             }
+            Stop::External { converged: true } => "an external solver: converged".to_string(),
+            Stop::External { converged: false } => "an external solver: not converged".to_string(),
         }
     }
 }
@@ -166,8 +188,10 @@ impl Stop {
 /// What a solver returns.
 #[derive(Clone, Debug)]
 pub struct Outcome {
-    /// The parameters found (fixed ones unchanged).
+    /// The arm found (fixed parameters unchanged).
     pub params: DhParams,
+    /// Every column found (the geometry's, then the auxiliary blocks').
+    pub x: Vec<f64>,
     /// Why it stopped.
     pub stop: Stop,
     /// Iterations of the final LM (0 without one).
@@ -185,9 +209,35 @@ pub struct Outcome {
 }
 
 impl Outcome {
+    /// The outcome of a solver that stopped at `x` (every column) for the
+    /// reason `stop`: its normal equations there are computed here, for the
+    /// covariance.
+    ///
+    /// # Errors
+    ///
+    /// The objective's, at `x`.
+    pub fn at(task: &Task<'_, '_>, x: Vec<f64>, stop: Stop) -> Result<Outcome, CalibrationError> {
+        let normal = task.objective.normal(&x, task.free)?;
+        Ok(Outcome {
+            params: (task.objective.layout().arm(&x)).ok_or(CalibrationError::Shape)?,
+            x,
+            stop,
+            iterations: 0,
+            history: Vec::new(),
+            phases: vec![Phase {
+                jacobian_evaluations: 1,
+                ..Phase::new("external")
+            }],
+            anneal: None,
+            global: None,
+            normal,
+        })
+    }
+
     fn from_lm(fit: LmResult, stop: Stop, phases: Vec<Phase>) -> Outcome {
         Outcome {
             params: fit.params,
+            x: fit.x,
             stop,
             iterations: fit.iterations,
             history: fit.history,
@@ -205,7 +255,12 @@ pub trait Solver {
     fn method(&self) -> Method;
 
     /// Minimises the task's cost over its free columns.
-    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError>;
+    ///
+    /// # Errors
+    ///
+    /// The objective's; a refused setting.
+    fn solve(&self, task: Task<'_, '_>, ctx: &mut Context<'_>)
+    -> Result<Outcome, CalibrationError>;
 }
 
 /// Levenberg–Marquardt from the start arm.
@@ -237,6 +292,9 @@ impl Method {
             Method::Sa => Box::new(Anneal { hybrid: false }),
             Method::Hybrid => Box::new(Anneal { hybrid: true }),
             Method::Global => Box::new(Global),
+            // Refused as the method to run (`SolverSettings::check`); a
+            // session passed an external solver never asks for it.
+            Method::External => Box::new(Lm),
         }
     }
 }
@@ -246,15 +304,17 @@ impl Solver for Lm {
         Method::Lm
     }
 
-    fn solve(&self, task: Task<'_>, _ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
+    fn solve(
+        &self,
+        task: Task<'_, '_>,
+        _ctx: &mut Context<'_>,
+    ) -> Result<Outcome, CalibrationError> {
         let timer = std::time::Instant::now();
         let fit = lm::levenberg_marquardt_from(
-            task.start,
+            task.objective,
+            task.x,
             task.start_normal,
-            task.data,
-            task.weights,
             &task.settings.lm,
-            task.settings.threads,
         )?;
         let mut phase = Phase::new("lm");
         phase.add_lm(&fit, timer.elapsed().as_secs_f64());
@@ -272,13 +332,26 @@ impl Solver for Anneal {
         }
     }
 
-    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
+    fn solve(
+        &self,
+        task: Task<'_, '_>,
+        ctx: &mut Context<'_>,
+    ) -> Result<Outcome, CalibrationError> {
         let timer = std::time::Instant::now();
         let mut rng = rng(task.settings.seed, streams::SOLVER);
+        // The paper's energy is the touches' and lengths': it moves the
+        // geometry only.
+        let geometry = task.objective.layout().geometry_columns();
+        let free: Vec<usize> = task
+            .free
+            .iter()
+            .copied()
+            .filter(|&c| c < geometry)
+            .collect();
         let (best, trace) = anneal::anneal_observed(
             task.start,
             task.data,
-            task.free,
+            &free,
             &task.settings.anneal,
             self.hybrid.then_some(&task.settings.switch),
             &mut rng,
@@ -292,12 +365,10 @@ impl Solver for Anneal {
         let mut outcome = if self.hybrid {
             let timer = std::time::Instant::now();
             let fit = levenberg_marquardt(
-                &best,
-                task.data,
-                task.weights,
+                task.objective,
+                &point(&task, &best),
                 task.free,
                 &task.settings.lm,
-                task.settings.threads,
             )?;
             let mut phase = Phase::new("lm");
             phase.add_lm(&fit, timer.elapsed().as_secs_f64());
@@ -310,16 +381,12 @@ impl Solver for Anneal {
         } else {
             // No LM: the normal equations at the best point give the
             // covariance.
-            let normal = super::prior::normal_at(
-                &best,
-                task.data,
-                task.weights,
-                task.free,
-                task.settings.threads,
-            )?;
+            let x = point(&task, &best);
+            let normal = task.objective.normal(&x, task.free)?;
             phases[0].jacobian_evaluations = 1;
             Outcome {
                 params: best,
+                x,
                 stop: Stop::Anneal(trace.stop),
                 iterations: 0,
                 history: Vec::new(),
@@ -339,15 +406,16 @@ impl Solver for Global {
         Method::Global
     }
 
-    fn solve(&self, task: Task<'_>, ctx: &mut Context<'_>) -> Result<Outcome, CalibrationError> {
+    fn solve(
+        &self,
+        task: Task<'_, '_>,
+        ctx: &mut Context<'_>,
+    ) -> Result<Outcome, CalibrationError> {
         let mut rng = rng(task.settings.seed, streams::SOLVER);
         let problem = global::GlobalProblem {
-            data: task.data,
-            noise: &task.model.noise,
-            weights: task.weights,
+            objective: task.objective,
             free: task.free,
             lm: &task.settings.lm,
-            threads: task.settings.threads,
             stated_dof: task.stated_dof,
             start_normal: Some(task.start_normal),
         };
@@ -366,4 +434,12 @@ impl Solver for Global {
         outcome.global = Some(trace);
         Ok(outcome)
     }
+}
+
+/// The task's start with the geometry `arm` (the auxiliary blocks where
+/// the task starts them).
+fn point(task: &Task<'_, '_>, arm: &DhParams) -> Vec<f64> {
+    let mut x = arm.to_vec();
+    x.extend(&task.x[task.objective.layout().geometry_columns()..]);
+    x
 }

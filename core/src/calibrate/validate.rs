@@ -3,7 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{CalibrationError, ModelOptions, OptionError, SolverSettings, calibrate};
+use super::{
+    CalibrationError, Context, FitInputs, OptionError, Solver, SolverSettings, calibrate_with,
+};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::metrics::evaluate_without_pairs;
@@ -85,14 +87,19 @@ pub struct Fold {
 /// `k`-fold cross-validation over points: points joined by a reference
 /// length stay in one fold (so every fold is also scored on lengths where it
 /// has them); groups are dealt to folds in an order shuffled by the
-/// settings' seed, and each fold is calibrated with `model` and `settings`.
+/// settings' seed, and each fold is calibrated as `inputs` say (their data
+/// are the fold's training points) by `solver`.
+///
+/// # Errors
+///
+/// A fold count the data cannot split into; a fold's calibration's.
 pub fn cross_validate(
-    start: &DhParams,
-    data: &DataSet,
-    model: &ModelOptions,
+    inputs: FitInputs<'_>,
     settings: &SolverSettings,
+    solver: &dyn Solver,
     k: usize,
 ) -> Result<Vec<Fold>, CalibrationError> {
+    let (start, data) = (inputs.layout.geometry(), inputs.data);
     let seed = settings.seed;
     check_folds(data, k)?;
     let groups = length_groups(data);
@@ -115,7 +122,11 @@ pub fn cross_validate(
                 .collect();
             let train_data = data.subset(&train);
             let test_data = data.subset(&held);
-            let fit = calibrate(start, &train_data, model, settings)?;
+            let fold = FitInputs {
+                data: &train_data,
+                ..inputs
+            };
+            let fit = calibrate_with(fold, settings, solver, &mut Context::new())?;
             Ok(Fold {
                 held_out: held
                     .iter()

@@ -526,7 +526,7 @@ fn pair_pass<A: Send>(
         .map(|s| s..(s + ROWS_PER_CHUNK).min(points.len()))
         .collect();
     let threads = if chunks.len() > 2 { threads } else { 1 };
-    let parts = crate::residuals::parallel_map(&chunks, threads, |r| rows(r.clone()));
+    let parts = crate::parallel::parallel_map(&chunks, threads, |r| rows(r.clone()));
     let mut accs = Vec::with_capacity(parts.len());
     let (mut signed, mut abs) = (Running::default(), Running::default());
     for (ps, pa, acc) in parts {

@@ -26,13 +26,14 @@ use crate::calibrate::validate::{
     BeforeAfter, Figures, Fold, before_after, check_folds, cross_validate,
 };
 use crate::calibrate::{
-    Calibration, CalibrationError, Context, ModelOptions, Solver, SolverSettings, calibrate_with,
+    Calibration, CalibrationError, Context, FitInputs, ModelOptions, Solver, SolverSettings,
+    calibrate_with,
 };
 use crate::dataset::DataSet;
 use crate::error::OptionError;
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
 use crate::params::DhParams;
-use crate::residuals::Noise;
+use crate::residuals::{Block, BlockId, Layout, Noise, Term};
 
 /// The calibrated arm, in the arm-file schema.
 pub const CALIBRATED_FILE: &str = "calibrated.toml";
@@ -67,13 +68,19 @@ pub struct HeldOutData {
     pub lengths_file: Option<String>,
 }
 
-/// A calibration problem: the start (nominal) arm, the data, the settings —
-/// all checked when it is made — and what to validate on.
+/// A calibration problem: the start (nominal) arm, the data, the model —
+/// all checked when it is made —, what a caller adds to the least squares
+/// (auxiliary parameter blocks, residual terms of its own), and what to
+/// validate on.
 #[derive(Clone, Debug)]
 pub struct Problem {
     arm: Arm,
     data: DataSet,
     model: ModelOptions,
+    /// The columns: the arm's geometry, then the blocks added.
+    layout: Layout,
+    /// Residual terms beyond the data's.
+    terms: Vec<Box<dyn Term>>,
     held_out: Option<HeldOutData>,
     cross_validate: Option<usize>,
     sources: Sources,
@@ -112,9 +119,11 @@ impl Problem {
         model.check_for(&arm.params)?;
         check_length_units(&arm.params, &data)?;
         Ok(Problem {
+            layout: Layout::new(arm.params.clone()),
             arm,
             data,
             model,
+            terms: Vec::new(),
             held_out: None,
             cross_validate: None,
             sources: Sources::default(),
@@ -149,6 +158,32 @@ impl Problem {
         check_folds(&self.data, k)?;
         self.cross_validate = Some(k);
         Ok(self)
+    }
+
+    /// Adds an auxiliary parameter block (a frame, a scalar) after the
+    /// geometry and the blocks added before; returns where its columns are,
+    /// for the terms that use it. Every column of it is fitted.
+    pub fn add_block(&mut self, block: impl Block + 'static) -> BlockId {
+        self.layout.add(Box::new(block))
+    }
+
+    /// Adds a residual term of the caller's (a new kind of measurement),
+    /// evaluated after the data's touches and lengths and before the
+    /// prior.
+    pub fn with_term(mut self, term: impl Term + 'static) -> Problem {
+        self.terms.push(Box::new(term));
+        self
+    }
+
+    /// What the calibration fits: the layout, the data, the model and the
+    /// added terms.
+    pub fn inputs(&self) -> FitInputs<'_> {
+        FitInputs {
+            layout: &self.layout,
+            data: &self.data,
+            model: &self.model,
+            terms: &self.terms,
+        }
     }
 
     /// Names the inputs in the report.
@@ -622,7 +657,7 @@ pub fn run(
     let start = &problem.arm.params;
     let data = &problem.data;
     let model = &problem.model;
-    let calibration = calibrate_with(start, data, model, settings, solver, ctx)?;
+    let calibration = calibrate_with(problem.inputs(), settings, solver, ctx)?;
     let fitted = before_after(start, &calibration.params, data)?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
@@ -633,13 +668,10 @@ pub fn run(
         None => None,
     };
     let cross_validation = match problem.cross_validate {
-        Some(k) => {
-            let fold_settings = settings.clone().with_method(solver.method());
-            Some(CrossValidation {
-                folds: cross_validate(start, data, model, &fold_settings, k)?,
-                seed: settings.seed,
-            })
-        }
+        Some(k) => Some(CrossValidation {
+            folds: cross_validate(problem.inputs(), settings, solver, k)?,
+            seed: settings.seed,
+        }),
         None => None,
     };
     let s = &problem.sources;

@@ -1,0 +1,442 @@
+//! The objective every fit minimises: the residual terms, at fixed weights,
+//! on the layout's columns — the least squares a solver (the library's or
+//! a third party's) evaluates.
+//!
+//! A point is a vector `x` of every column (the geometry's first, in the
+//! paper's order, then each auxiliary block's: [`Layout`]). The objective
+//! gives the cost at `x` (positions only, what a trial step needs), the
+//! normal equations over the free columns (`JᵀJ`, `Jᵀr`, each term's cost),
+//! and the local update `x ⊞ δ`; it weighs its terms at an arm (the noise
+//! carried through it) and says how far their weights would move. The
+//! terms are evaluated in order — the data's (touches first: the others may
+//! measure between their point centres), then the prior — and their sums
+//! are added in that order, so the same inputs give the same bits on any
+//! thread count.
+
+use crate::dataset::DataSet;
+use crate::kernel::ArmKernel;
+use crate::residuals::{
+    At, Layout, LengthTerm, Noise, Normal, Origin, PriorTerm, Sees, Shared, Term, TermError,
+    TouchTerm,
+};
+use crate::tolerances::Tolerances;
+
+/// The terms of a calibration on the columns of a layout, with the worker
+/// threads their sums may use.
+#[derive(Clone, Debug)]
+pub struct Objective<'a> {
+    layout: Layout,
+    terms: Vec<Box<dyn Term + 'a>>,
+    /// The prior among the terms, for its report.
+    prior: Option<PriorTerm>,
+    threads: usize,
+}
+
+impl<'a> Objective<'a> {
+    /// `terms` on the columns of `layout`, their sums on up to `threads`
+    /// threads (results do not depend on it). The terms are not weighed
+    /// yet: see [`Objective::weigh`].
+    pub fn new(layout: Layout, terms: Vec<Box<dyn Term + 'a>>, threads: usize) -> Objective<'a> {
+        Objective {
+            layout,
+            terms,
+            prior: None,
+            threads: threads.max(1),
+        }
+    }
+
+    /// The data's built-in terms: `data`'s touches, then its reference
+    /// lengths if it has any, under `noise`; then `extra` terms; then the
+    /// prior of `tolerances` and of the layout's blocks, if any applies.
+    /// Weighed at the layout's start, touches as `unit_sigma` mm when no
+    /// touch noise is stated.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's, and noise that makes weights that are not finite.
+    pub fn of_data(
+        layout: Layout,
+        data: &'a DataSet,
+        noise: &Noise,
+        extra: Vec<Box<dyn Term + 'a>>,
+        tolerances: Option<&Tolerances>,
+        unit_sigma: f64,
+        threads: usize,
+    ) -> Result<Objective<'a>, TermError> {
+        let mut terms: Vec<Box<dyn Term + 'a>> = vec![Box::new(TouchTerm::new(data, *noise))];
+        if !data.references().is_empty() {
+            terms.push(Box::new(LengthTerm::new(data, *noise)));
+        }
+        terms.extend(extra);
+        let start = layout.start();
+        let prior = PriorTerm::new(tolerances, &layout, &start);
+        if let Some(prior) = &prior {
+            terms.push(Box::new(prior.clone()));
+        }
+        let mut objective = Objective::new(layout, terms, threads);
+        objective.prior = prior;
+        objective.weigh(&start, unit_sigma)?;
+        Ok(objective)
+    }
+
+    /// The columns.
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// The terms, in the order they are evaluated.
+    pub fn terms(&self) -> impl Iterator<Item = &(dyn Term + 'a)> {
+        self.terms.iter().map(|t| &**t)
+    }
+
+    /// The worker threads.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The index of the first term named `name`.
+    pub fn position(&self, name: &str) -> Option<usize> {
+        self.terms.iter().position(|t| t.name() == name)
+    }
+
+    /// Whether a prior term is present.
+    pub fn has_prior(&self) -> bool {
+        self.terms.iter().any(|t| t.is_prior())
+    }
+
+    /// The prior of the stated tolerances, if any applies.
+    pub fn prior(&self) -> Option<&PriorTerm> {
+        self.prior.as_ref()
+    }
+
+    /// Every column's start value.
+    pub fn start(&self) -> Vec<f64> {
+        self.layout.start()
+    }
+
+    /// `x` moved by `delta` over the columns `free` (each block's local
+    /// update).
+    pub fn plus(&self, x: &[f64], free: &[usize], delta: &[f64]) -> Vec<f64> {
+        self.layout.plus(x, free, delta)
+    }
+
+    /// What the data's terms let the identifiability rules assume.
+    pub fn sees(&self) -> Sees {
+        self.terms
+            .iter()
+            .filter(|t| !t.is_prior())
+            .fold(Sees::default(), |s, t| {
+                let t = t.sees();
+                Sees {
+                    base_rotation: s.base_rotation || t.base_rotation,
+                    base_slide: s.base_slide || t.base_slide,
+                    scale: s.scale || t.scale,
+                }
+            })
+    }
+
+    /// Residual rows of every term over `free`.
+    pub fn rows(&self, free: &[usize]) -> usize {
+        self.terms.iter().map(|t| t.rows(free)).sum()
+    }
+
+    /// Unknowns eliminated inside the terms.
+    pub fn eliminated(&self) -> usize {
+        self.terms.iter().map(|t| t.eliminated()).sum()
+    }
+
+    /// Evaluates `f` with the point `x` prepared: its arm and kernel.
+    fn at<R>(
+        &self,
+        x: &[f64],
+        f: impl FnOnce(&At<'_>) -> Result<R, TermError>,
+    ) -> Result<R, TermError> {
+        let arm = self.layout.arm(x).ok_or_else(|| {
+            TermError::invalid(
+                "objective",
+                "a point of the wrong length (a bug, not input)",
+            )
+        })?;
+        let kernel = ArmKernel::new(&arm)?;
+        f(&At {
+            x,
+            arm: &arm,
+            kernel: &kernel,
+            layout: &self.layout,
+            threads: self.threads,
+        })
+    }
+
+    /// Weighs every term at `x` (the touches as `unit_sigma` mm when their
+    /// noise is not stated), in place.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's, and weights that are not finite numbers.
+    pub fn weigh(&mut self, x: &[f64], unit_sigma: f64) -> Result<(), TermError> {
+        let layout = &self.layout;
+        let threads = self.threads;
+        let arm = layout.arm(x).ok_or_else(|| {
+            TermError::invalid(
+                "objective",
+                "a point of the wrong length (a bug, not input)",
+            )
+        })?;
+        let kernel = ArmKernel::new(&arm)?;
+        let at = At {
+            x,
+            arm: &arm,
+            kernel: &kernel,
+            layout,
+            threads,
+        };
+        let mut shared = Shared::default();
+        for term in &mut self.terms {
+            term.weigh(&at, &mut shared, unit_sigma)?;
+        }
+        Ok(())
+    }
+
+    /// Observations a robust loss may downweight, over every term that has
+    /// them (in term order).
+    pub fn observations(&self) -> usize {
+        self.terms.iter().map(|t| t.observations()).sum()
+    }
+
+    /// The terms that have observations, with the first observation of
+    /// each in [`Objective::observations`]' numbering.
+    fn observing(&self) -> impl Iterator<Item = (usize, &(dyn Term + 'a))> {
+        let mut first = 0;
+        self.terms
+            .iter()
+            .filter(|t| t.observations() > 0)
+            .map(move |t| {
+                let at = first;
+                first += t.observations();
+                (at, &**t)
+            })
+    }
+
+    /// Every observation's standardised squared residual at `x` (each
+    /// about `χ²₃` when it fits the noise model), in
+    /// [`Objective::observations`]' order.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's, and a term whose observations are not of 3 rows (the
+    /// robust loss and the outlier test are calibrated for `χ²₃`).
+    pub fn standardised(&self, x: &[f64]) -> Result<Vec<f64>, TermError> {
+        self.at(x, |at| {
+            let mut out = Vec::with_capacity(self.observations());
+            for (_, term) in self.observing() {
+                let Some(s) = term.standardised(at)? else {
+                    continue;
+                };
+                if s.rows != 3 {
+                    return Err(TermError::invalid(
+                        term.name(),
+                        format!(
+                            "observations of {} rows: the robust loss and the outlier test                              are for 3-D observations",
+                            s.rows
+                        ),
+                    ));
+                }
+                out.extend(s.values);
+            }
+            Ok(out)
+        })
+    }
+
+    /// Where observation `i` came from.
+    pub fn origin(&self, i: usize) -> Origin {
+        self.observing()
+            .take_while(|(first, _)| *first <= i)
+            .last()
+            .map_or_else(
+                || Origin {
+                    at: format!("observation {}", i + 1),
+                    group: String::new(),
+                },
+                |(first, term)| term.origin(i - first),
+            )
+    }
+
+    /// A copy whose observations' weights are multiplied by `w` (the robust
+    /// fit's), the terms with observations taking theirs in order.
+    pub fn with_observation_weights(&self, w: &[f64]) -> Objective<'a> {
+        let mut copy = self.clone();
+        let mut rest = w;
+        for term in &mut copy.terms {
+            let n = term.observations().min(rest.len());
+            if n > 0 {
+                term.weigh_observations(&rest[..n]);
+                rest = &rest[n..];
+            }
+        }
+        copy
+    }
+
+    /// A copy weighed at `x`.
+    ///
+    /// # Errors
+    ///
+    /// As [`Objective::weigh`].
+    pub fn reweighed(&self, x: &[f64], unit_sigma: f64) -> Result<Objective<'a>, TermError> {
+        let mut copy = self.clone();
+        copy.weigh(x, unit_sigma)?;
+        Ok(copy)
+    }
+
+    /// The largest relative change weighing at `x` would make to any term's
+    /// weights, without keeping a second set; `∞` where a term would refuse
+    /// the new weights (so that the caller weighs and reports why).
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub fn weight_change(&self, x: &[f64], unit_sigma: f64) -> Result<f64, TermError> {
+        self.at(x, |at| {
+            let mut shared = Shared::default();
+            let mut change = 0.0_f64;
+            for term in &self.terms {
+                change = change.max(term.weight_change(at, &mut shared, unit_sigma)?);
+            }
+            Ok(change)
+        })
+    }
+
+    /// The normal equations at `x` over the columns `free`, every term.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub fn normal(&self, x: &[f64], free: &[usize]) -> Result<Normal, TermError> {
+        self.normal_of(x, free, |_| true)
+    }
+
+    /// The normal equations at `x` over `free` of the terms `include`
+    /// accepts; the others' costs are 0.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub fn normal_of(
+        &self,
+        x: &[f64],
+        free: &[usize],
+        include: impl Fn(&dyn Term) -> bool,
+    ) -> Result<Normal, TermError> {
+        let mut normal = Normal::new(free);
+        normal.costs = vec![0.0; self.terms.len()];
+        self.add_terms(&mut normal, x, include)?;
+        Ok(normal)
+    }
+
+    /// Adds the terms `include` accepts at `x` to `normal` (over its
+    /// columns), each cost into its place.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub fn add_terms(
+        &self,
+        normal: &mut Normal,
+        x: &[f64],
+        include: impl Fn(&dyn Term) -> bool,
+    ) -> Result<(), TermError> {
+        normal.costs.resize(self.terms.len(), 0.0);
+        self.at(x, |at| {
+            let mut shared = Shared {
+                want_centre_jacobians: self
+                    .terms
+                    .iter()
+                    .any(|t| include(&**t) && t.needs_centre_jacobians()),
+                ..Shared::default()
+            };
+            for (k, term) in self.terms.iter().enumerate() {
+                if include(&**term) {
+                    normal.costs[k] = term.accumulate(at, &mut shared, normal)?;
+                }
+            }
+            Ok(())
+        })
+    }
+
+    /// The cost `Σ r²` at `x` over the columns `free` (a prior's rows are
+    /// the free columns'), positions only; `+∞` when it is not finite, never
+    /// NaN. `scratch` is a buffer kept between calls.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub fn cost(
+        &self,
+        x: &[f64],
+        free: &[usize],
+        scratch: &mut Vec<[f64; 3]>,
+    ) -> Result<f64, TermError> {
+        self.cost_of(x, free, scratch, |_| true)
+    }
+
+    /// The data's cost at `x` (no prior), as [`Objective::cost`].
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub fn data_cost(&self, x: &[f64], scratch: &mut Vec<[f64; 3]>) -> Result<f64, TermError> {
+        self.cost_of(x, &[], scratch, |t| !t.is_prior())
+    }
+
+    fn cost_of(
+        &self,
+        x: &[f64],
+        free: &[usize],
+        scratch: &mut Vec<[f64; 3]>,
+        include: impl Fn(&dyn Term) -> bool,
+    ) -> Result<f64, TermError> {
+        let total = self.at(x, |at| {
+            let mut shared = Shared::default();
+            let mut total = 0.0;
+            for term in self.terms.iter().filter(|t| include(&***t)) {
+                term.add_cost(at, free, &mut shared, scratch, &mut total)?;
+            }
+            Ok(total)
+        })?;
+        Ok(if total.is_finite() {
+            total
+        } else {
+            f64::INFINITY
+        })
+    }
+}
+
+/// The weighted cost `Σ r²` of the arm `params` on `data`, with every
+/// residual weighed from `noise` at the arm `weighed_at` (so that two arms
+/// compare under the same weights). Without stated touch noise a touch
+/// weighs as a 1 mm σ.
+///
+/// ```
+/// use aacmm_core::{DhParams, objective::weighted_cost, residuals::Noise, simulate::*, Arm};
+/// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+/// let c = simulate(&nominal, &CampaignSettings::new(2, ErrorModel::Paper, 4, 6)).unwrap();
+/// let data = c.data_set().unwrap();
+/// let noise = Noise { probe_mm: Some(0.01), ..Noise::default() };
+/// let truth = &c.true_arm.params;
+/// let at_truth = weighted_cost(truth, truth, &data, &noise).unwrap();
+/// let at_nominal = weighted_cost(&nominal.params, truth, &data, &noise).unwrap();
+/// assert!(at_truth < at_nominal);
+/// ```
+///
+/// # Errors
+///
+/// The kernel's, for an arm it cannot evaluate.
+pub fn weighted_cost(
+    params: &crate::params::DhParams,
+    weighed_at: &crate::params::DhParams,
+    data: &DataSet,
+    noise: &Noise,
+) -> Result<f64, TermError> {
+    let layout = Layout::new(weighed_at.clone());
+    let objective = Objective::of_data(layout, data, noise, Vec::new(), None, 1.0, 1)?;
+    objective.data_cost(&params.to_vec(), &mut Vec::new())
+}

@@ -1,0 +1,542 @@
+//! Parameter blocks: the unknowns of a calibration, in columns.
+//!
+//! The arm's geometry comes first, in the paper's fixed order (`a1..an,
+//! d1..dn, α1..αn, θ1..θn, Bx, By, Bz`; a Hayati joint's second slot is
+//! its `β`, named `hbeta…` — [`crate::params::DhParams::param_id`]), then
+//! any auxiliary [`Block`]: a rigid [`Frame`] (an instrument station, an
+//! artefact placement), a [`Scalar`], a [`Vector`] (one value per joint).
+//! Each knows its columns' names and units, its start values, how a step
+//! updates it (its manifold: a frame composes rotations rather than adding
+//! angles), its stated tolerances and what makes a result implausible.
+
+use std::ops::Range;
+
+use crate::params::DhParams;
+
+/// The unit of a column.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Unit {
+    /// mm inside and in reports.
+    Length,
+    /// rad inside, deg in reports.
+    Angle,
+    /// Any other unit, as it is (its name, e.g. `rad/(N·m)`).
+    Other(String),
+}
+
+impl Unit {
+    /// The unit users see: `mm`, `deg`, or the other unit's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Unit::Length => "mm",
+            Unit::Angle => "deg",
+            Unit::Other(name) => name,
+        }
+    }
+
+    /// A value (mm, rad, or as it is) in the unit users see.
+    ///
+    /// ```
+    /// use aacmm_core::residuals::Unit;
+    /// assert_eq!(Unit::Angle.to_user(std::f64::consts::PI), 180.0);
+    /// assert_eq!(Unit::Length.to_user(2.5), 2.5);
+    /// ```
+    pub fn to_user(&self, v: f64) -> f64 {
+        match self {
+            Unit::Angle => v.to_degrees(),
+            _ => v,
+        }
+    }
+
+    /// Whether the column is an angle (the identifiability analysis scales
+    /// it by the arm's reach, as it does the geometry's angles).
+    pub fn is_angle(&self) -> bool {
+        matches!(self, Unit::Angle)
+    }
+}
+
+/// One column of a block: its name and unit.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Parameter {
+    /// Its name in reports (`frame.tracker.tx`).
+    pub name: String,
+    /// Its unit.
+    pub unit: Unit,
+}
+
+/// An auxiliary block of unknowns.
+pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
+    /// The block's name (`tracker`, `plane`).
+    fn name(&self) -> &str;
+
+    /// Its columns, in order.
+    fn parameters(&self) -> Vec<Parameter>;
+
+    /// Its start values (mm, rad, or as its units say).
+    fn start(&self) -> Vec<f64>;
+
+    /// Columns (the local update's dimension, equal to the values').
+    fn len(&self) -> usize {
+        self.parameters().len()
+    }
+
+    /// Whether the block has no column.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// `x ⊞ delta` into `out`: the block's local update. The default adds.
+    fn plus(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
+        for ((o, v), d) in out.iter_mut().zip(x).zip(delta) {
+            *o = v + d;
+        }
+    }
+
+    /// The stated tolerance (1σ) of column `i`, if any: a prior row.
+    fn tolerance(&self, i: usize) -> Option<f64> {
+        let _ = i;
+        None
+    }
+
+    /// Why the values `x` are implausible against the start values (a
+    /// result no real instrument could have), if they are.
+    fn implausible(&self, start: &[f64], x: &[f64]) -> Option<String> {
+        let _ = (start, x);
+        None
+    }
+}
+
+dyn_clone::clone_trait_object!(Block);
+
+/// Which auxiliary block: its place in the layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct BlockId(usize);
+
+/// Where every column is: the geometry's, then each auxiliary block's.
+#[derive(Clone, Debug)]
+pub struct Layout {
+    geometry: DhParams,
+    blocks: Vec<Box<dyn Block>>,
+    /// First column of each block.
+    starts: Vec<usize>,
+}
+
+impl Layout {
+    /// The columns of the arm `geometry` (its joints' models decide the
+    /// names) and no auxiliary block.
+    pub fn new(geometry: DhParams) -> Layout {
+        Layout {
+            geometry,
+            blocks: Vec::new(),
+            starts: Vec::new(),
+        }
+    }
+
+    /// Appends `block`'s columns; returns where they are.
+    pub fn add(&mut self, block: Box<dyn Block>) -> BlockId {
+        self.starts.push(self.len());
+        self.blocks.push(block);
+        BlockId(self.blocks.len() - 1)
+    }
+
+    /// The start arm: the geometry's models and start values.
+    pub fn geometry(&self) -> &DhParams {
+        &self.geometry
+    }
+
+    /// The geometry's columns (`4n + 3`).
+    pub fn geometry_columns(&self) -> usize {
+        self.geometry.param_count()
+    }
+
+    /// Every column.
+    pub fn len(&self) -> usize {
+        self.geometry_columns() + self.blocks.iter().map(|b| b.len()).sum::<usize>()
+    }
+
+    /// Whether there is no column (never: an arm has its geometry).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The auxiliary blocks, in order.
+    pub fn blocks(&self) -> impl Iterator<Item = &dyn Block> {
+        self.blocks.iter().map(|b| &**b)
+    }
+
+    /// The columns of block `id`.
+    pub fn columns(&self, id: BlockId) -> Range<usize> {
+        let start = self.starts[id.0];
+        start..start + self.blocks[id.0].len()
+    }
+
+    /// The block and its index of column `c` beyond the geometry.
+    fn block_of(&self, c: usize) -> Option<(usize, usize)> {
+        let b = self.starts.partition_point(|&s| s <= c).checked_sub(1)?;
+        let i = c - self.starts[b];
+        (i < self.blocks[b].len()).then_some((b, i))
+    }
+
+    /// Every column's start value: the geometry's, then each block's.
+    pub fn start(&self) -> Vec<f64> {
+        let mut x = self.geometry.to_vec();
+        for b in &self.blocks {
+            x.extend(b.start());
+        }
+        x
+    }
+
+    /// The arm of `x`'s geometry columns.
+    pub fn arm(&self, x: &[f64]) -> Option<DhParams> {
+        self.geometry.with_values(x.get(..self.geometry_columns())?)
+    }
+
+    /// Column `c`'s name and unit.
+    pub fn parameter(&self, c: usize) -> Option<Parameter> {
+        if c < self.geometry_columns() {
+            let id = self.geometry.param_id(c)?;
+            let unit = if id.kind.is_length() {
+                Unit::Length
+            } else {
+                Unit::Angle
+            };
+            return Some(Parameter {
+                name: id.to_string(),
+                unit,
+            });
+        }
+        let (b, i) = self.block_of(c)?;
+        self.blocks[b].parameters().into_iter().nth(i)
+    }
+
+    /// `x` moved by `delta` over the columns `free` (`delta[k]` for column
+    /// `free[k]`): the geometry's columns add, each auxiliary block takes
+    /// its own local update (its fixed columns a zero step).
+    pub fn plus(&self, x: &[f64], free: &[usize], delta: &[f64]) -> Vec<f64> {
+        let mut out = x.to_vec();
+        let geometry = self.geometry_columns();
+        let mut aux = false;
+        for (&c, &d) in free.iter().zip(delta) {
+            if c < geometry {
+                out[c] += d;
+            } else {
+                aux = true;
+            }
+        }
+        if !aux {
+            return out;
+        }
+        for (b, block) in self.blocks.iter().enumerate() {
+            let cols = self.starts[b]..self.starts[b] + block.len();
+            let mut step = vec![0.0; block.len()];
+            let mut moved = false;
+            for (&c, &d) in free.iter().zip(delta) {
+                if cols.contains(&c) {
+                    step[c - cols.start] = d;
+                    moved = true;
+                }
+            }
+            if moved {
+                block.plus(&x[cols.clone()], &step, &mut out[cols]);
+            }
+        }
+        out
+    }
+}
+
+/// One unknown number: a plane's offset, a scale, a compliance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scalar {
+    /// Its name.
+    pub name: String,
+    /// Its unit.
+    pub unit: Unit,
+    /// Its start value.
+    pub start: f64,
+    /// Its stated tolerance (1σ), if any.
+    pub tolerance: Option<f64>,
+}
+
+impl Block for Scalar {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn parameters(&self) -> Vec<Parameter> {
+        vec![Parameter {
+            name: self.name.clone(),
+            unit: self.unit.clone(),
+        }]
+    }
+
+    fn start(&self) -> Vec<f64> {
+        vec![self.start]
+    }
+
+    fn tolerance(&self, _i: usize) -> Option<f64> {
+        self.tolerance
+    }
+}
+
+/// Named numbers of one unit: one per joint (encoder harmonics, joint
+/// compliances), or any fixed count.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Vector {
+    /// The block's name.
+    pub name: String,
+    /// Per column, its name.
+    pub names: Vec<String>,
+    /// Their unit.
+    pub unit: Unit,
+    /// Per column, its start value.
+    pub start: Vec<f64>,
+    /// Per column, its stated tolerance, if any.
+    pub tolerances: Vec<Option<f64>>,
+}
+
+impl Block for Vector {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn parameters(&self) -> Vec<Parameter> {
+        self.names
+            .iter()
+            .map(|name| Parameter {
+                name: name.clone(),
+                unit: self.unit.clone(),
+            })
+            .collect()
+    }
+
+    fn start(&self) -> Vec<f64> {
+        self.start.clone()
+    }
+
+    fn tolerance(&self, i: usize) -> Option<f64> {
+        self.tolerances.get(i).copied().flatten()
+    }
+}
+
+/// A rigid transform `p ↦ R p + t` (an instrument's frame in the arm's base
+/// frame, an artefact's placement): values `[rx, ry, rz, tx, ty, tz]`, the
+/// rotation vector (rad) of `R` and the translation (mm). A step `δ` turns
+/// the frame by `exp(δω)` on the left and moves it by `δt`, so the
+/// Jacobian of [`Frame::jacobian`] is with respect to that local step and
+/// no angle of the chart ever wraps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// The frame's name (`tracker`, `placement 2`).
+    pub name: String,
+    /// Start values `[rx, ry, rz, tx, ty, tz]` (rad, mm).
+    pub start: [f64; 6],
+}
+
+/// `R = exp([ω]×)` (Rodrigues), row-major.
+fn rotation(w: [f64; 3]) -> [[f64; 3]; 3] {
+    let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    // sin θ/θ and (1 − cos θ)/θ² by their series near 0.
+    let (a, b) = if th < 1e-6 {
+        (1.0 - th * th / 6.0, 0.5 - th * th / 24.0)
+    } else {
+        (th.sin() / th, (1.0 - th.cos()) / (th * th))
+    };
+    let [x, y, z] = w;
+    [
+        [
+            1.0 - b * (y * y + z * z),
+            -a * z + b * x * y,
+            a * y + b * x * z,
+        ],
+        [
+            a * z + b * x * y,
+            1.0 - b * (x * x + z * z),
+            -a * x + b * y * z,
+        ],
+        [
+            -a * y + b * x * z,
+            a * x + b * y * z,
+            1.0 - b * (x * x + y * y),
+        ],
+    ]
+}
+
+/// The rotation vector of `R` (angle in [0, π]).
+fn rotation_vector(r: [[f64; 3]; 3]) -> [f64; 3] {
+    let trace = r[0][0] + r[1][1] + r[2][2];
+    let c = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0);
+    let th = c.acos();
+    let v = [r[2][1] - r[1][2], r[0][2] - r[2][0], r[1][0] - r[0][1]];
+    if th < 1e-6 {
+        // sin θ ≈ θ: v = 2 sin θ · axis.
+        return v.map(|x| x / 2.0);
+    }
+    if th < std::f64::consts::PI - 1e-6 {
+        let k = th / (2.0 * th.sin());
+        return v.map(|x| x * k);
+    }
+    // θ ≈ π: the axis from the diagonal of R = 2 a aᵀ − I.
+    let d = [r[0][0], r[1][1], r[2][2]];
+    let i = (0..3).max_by(|&a, &b| d[a].total_cmp(&d[b])).unwrap_or(0);
+    let mut a = [0.0; 3];
+    a[i] = ((d[i] + 1.0) / 2.0).max(0.0).sqrt();
+    for j in (0..3).filter(|&j| j != i) {
+        a[j] = (r[i][j] + r[j][i]) / (4.0 * a[i]);
+    }
+    a.map(|x| x * th)
+}
+
+fn mat_mul(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+impl Frame {
+    /// A frame named `name` starting at the identity.
+    pub fn identity(name: impl Into<String>) -> Frame {
+        Frame {
+            name: name.into(),
+            start: [0.0; 6],
+        }
+    }
+
+    /// `R p + t` for the values `x`.
+    ///
+    /// ```
+    /// use aacmm_core::residuals::Frame;
+    /// let quarter = [0.0, 0.0, std::f64::consts::FRAC_PI_2, 10.0, 0.0, 0.0];
+    /// let p = Frame::apply(&quarter, [1.0, 0.0, 0.0]);
+    /// assert!((p[0] - 10.0).abs() < 1e-12 && (p[1] - 1.0).abs() < 1e-12);
+    /// ```
+    pub fn apply(x: &[f64], p: [f64; 3]) -> [f64; 3] {
+        let r = rotation([x[0], x[1], x[2]]);
+        std::array::from_fn(|i| (0..3).map(|k| r[i][k] * p[k]).sum::<f64>() + x[3 + i])
+    }
+
+    /// `∂(R p + t)/∂δ` for the local step `δ = [δω, δt]` at `x`: row `i` is
+    /// the derivative of coordinate `i`, `[−[Rp]× | I]`.
+    pub fn jacobian(x: &[f64], p: [f64; 3]) -> [[f64; 6]; 3] {
+        let r = rotation([x[0], x[1], x[2]]);
+        let q: [f64; 3] = std::array::from_fn(|i| (0..3).map(|k| r[i][k] * p[k]).sum());
+        // δω × q = −[q]× δω.
+        [
+            [0.0, q[2], -q[1], 1.0, 0.0, 0.0],
+            [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
+            [q[1], -q[0], 0.0, 0.0, 0.0, 1.0],
+        ]
+    }
+}
+
+impl Block for Frame {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn parameters(&self) -> Vec<Parameter> {
+        ["rx", "ry", "rz", "tx", "ty", "tz"]
+            .iter()
+            .enumerate()
+            .map(|(i, c)| Parameter {
+                name: format!("{}.{c}", self.name),
+                unit: if i < 3 { Unit::Angle } else { Unit::Length },
+            })
+            .collect()
+    }
+
+    fn start(&self) -> Vec<f64> {
+        self.start.to_vec()
+    }
+
+    /// `R ← exp(δω) R`, `t ← t + δt`.
+    fn plus(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
+        let r = mat_mul(
+            rotation([delta[0], delta[1], delta[2]]),
+            rotation([x[0], x[1], x[2]]),
+        );
+        out[..3].copy_from_slice(&rotation_vector(r));
+        for i in 3..6 {
+            out[i] = x[i] + delta[i];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The frame's Jacobian is the derivative of `apply` along its own
+    /// local update, at frames near the identity and turned by more than a
+    /// right angle.
+    #[test]
+    fn the_frame_jacobian_follows_its_local_update() {
+        let frame = Frame::identity("f");
+        let p = [120.0, -40.0, 300.0];
+        for x in [
+            [0.0; 6],
+            [0.3, -0.2, 0.1, 5.0, -7.0, 2.0],
+            [1.9, 0.4, -1.2, 100.0, 0.0, -50.0],
+        ] {
+            let j = Frame::jacobian(&x, p);
+            for k in 0..6 {
+                let h = 1e-6;
+                let (mut up, mut down) = ([0.0; 6], [0.0; 6]);
+                let (mut d_up, mut d_down) = ([0.0; 6], [0.0; 6]);
+                d_up[k] = h;
+                d_down[k] = -h;
+                frame.plus(&x, &d_up, &mut up);
+                frame.plus(&x, &d_down, &mut down);
+                let (a, b) = (Frame::apply(&up, p), Frame::apply(&down, p));
+                for i in 0..3 {
+                    let numeric = (a[i] - b[i]) / (2.0 * h);
+                    assert!(
+                        (numeric - j[i][k]).abs() < 1e-5 * (1.0 + j[i][k].abs()),
+                        "x {x:?}, column {k}, row {i}: {numeric} vs {}",
+                        j[i][k]
+                    );
+                }
+            }
+        }
+    }
+
+    /// The rotation vector of `exp(ω)` is `ω` for every angle up to π.
+    #[test]
+    fn rotation_vectors_round_trip() {
+        for w in [
+            [0.0, 0.0, 0.0],
+            [1e-9, -2e-9, 0.0],
+            [0.5, -0.3, 0.2],
+            [0.0, 3.0, 0.0],
+            [std::f64::consts::PI - 1e-9, 0.0, 0.0],
+        ] {
+            let back = rotation_vector(rotation(w));
+            for k in 0..3 {
+                assert!((back[k] - w[k]).abs() < 1e-7, "{w:?} -> {back:?}");
+            }
+        }
+    }
+
+    /// Columns are found by block; a step moves the geometry by addition
+    /// and a frame by its own update, fixed columns not at all.
+    #[test]
+    fn the_layout_places_and_moves_blocks() {
+        let mut layout = Layout::new(DhParams::paper_nominal());
+        let s = layout.add(Box::new(Scalar {
+            name: "offset".into(),
+            unit: Unit::Length,
+            start: 3.0,
+            tolerance: None,
+        }));
+        let f = layout.add(Box::new(Frame::identity("tracker")));
+        assert_eq!(layout.columns(s), 27..28);
+        assert_eq!(layout.columns(f), 28..34);
+        assert_eq!(layout.len(), 34);
+        assert_eq!(layout.parameter(30).unwrap().name, "tracker.rz");
+        assert_eq!(layout.parameter(26).unwrap().name, "Bz");
+        let x = layout.start();
+        let moved = layout.plus(&x, &[0, 27, 30, 33], &[1.0, 0.5, 0.1, -2.0]);
+        assert_eq!(moved[0], x[0] + 1.0);
+        assert_eq!(moved[27], 3.5);
+        assert!((moved[30] - 0.1).abs() < 1e-15 && moved[28] == 0.0);
+        assert_eq!(moved[33], -2.0);
+        assert_eq!(moved[1..27], x[1..27]);
+    }
+}

@@ -1,0 +1,333 @@
+//! The built-in terms' sums: the same bits as the plain loops they stand
+//! for, on any thread count; the weights' streamed change is the built one.
+
+use super::sym3::{sym_inv, sym_mul};
+use super::touches::{BLOCK, POINTS_PER_CHUNK, TOUCHES_PER_CHUNK};
+use super::*;
+use crate::dataset::DataSet;
+use crate::io::{AngleUnit, parse_lengths, parse_poses};
+use crate::kernel::ArmKernel;
+use crate::params::DhParams;
+
+/// The touches and (when `data` has them) the lengths of `data` under
+/// `noise`, weighed at `arm` (unit σ `sigma`) on `threads` threads.
+fn weighed<'d>(
+    data: &'d DataSet,
+    noise: &Noise,
+    arm: &DhParams,
+    sigma: f64,
+    threads: usize,
+) -> (TouchTerm<'d>, Option<LengthTerm<'d>>) {
+    let (mut touches, mut lengths) = (
+        TouchTerm::new(data, *noise),
+        (!data.references().is_empty()).then(|| LengthTerm::new(data, *noise)),
+    );
+    at(arm, threads, |at| {
+        let mut shared = Shared::default();
+        touches.weigh(at, &mut shared, sigma)?;
+        if let Some(l) = &mut lengths {
+            l.weigh(at, &mut shared, sigma)?;
+        }
+        Ok(())
+    })
+    .unwrap();
+    (touches, lengths)
+}
+
+/// `f` at the arm `arm`.
+fn at<R>(
+    arm: &DhParams,
+    threads: usize,
+    f: impl FnOnce(&At<'_>) -> Result<R, TermError>,
+) -> Result<R, TermError> {
+    let kernel = ArmKernel::new(arm)?;
+    let layout = Layout::new(arm.clone());
+    let x = arm.to_vec();
+    f(&At {
+        x: &x,
+        arm,
+        kernel: &kernel,
+        layout: &layout,
+        threads,
+    })
+}
+
+/// The normal equations of the touches (and lengths) at `arm` over
+/// `free`, and the centres the touches left.
+fn normal_equations(
+    arm: &DhParams,
+    touches: &TouchTerm<'_>,
+    lengths: Option<&LengthTerm<'_>>,
+    free: &[usize],
+    threads: usize,
+) -> (Normal, Centres) {
+    at(arm, threads, |at| {
+        let mut normal = Normal::new(free);
+        let mut shared = Shared {
+            want_centre_jacobians: lengths.is_some(),
+            ..Shared::default()
+        };
+        let cost = touches.accumulate(at, &mut shared, &mut normal)?;
+        normal.costs.push(cost);
+        if let Some(l) = lengths {
+            let cost = l.accumulate(at, &mut shared, &mut normal)?;
+            normal.costs.push(cost);
+        }
+        Ok((normal, shared.centres.unwrap()))
+    })
+    .unwrap()
+}
+
+/// The largest relative change of the weights weighed at `arm` (`sigma`)
+/// against `touches`' and `lengths'`, on `threads` threads.
+fn change(
+    arm: &DhParams,
+    touches: &TouchTerm<'_>,
+    lengths: Option<&LengthTerm<'_>>,
+    sigma: f64,
+    threads: usize,
+) -> f64 {
+    at(arm, threads, |at| {
+        let mut shared = Shared::default();
+        let mut c = touches.weight_change(at, &mut shared, sigma)?;
+        if let Some(l) = lengths {
+            c = c.max(l.weight_change(at, &mut shared, sigma)?);
+        }
+        Ok(c)
+    })
+    .unwrap()
+}
+
+/// `‖a − b‖/‖b‖` per touch and `|a − b|/|b|` per length, the largest.
+fn built_change(
+    (ta, la): (&TouchTerm<'_>, Option<&LengthTerm<'_>>),
+    (tb, lb): (&TouchTerm<'_>, Option<&LengthTerm<'_>>),
+) -> f64 {
+    let norm = |a: &[f64; 6]| {
+        (a[..3].iter().map(|v| v * v).sum::<f64>()
+            + 2.0 * a[3..].iter().map(|v| v * v).sum::<f64>())
+        .sqrt()
+    };
+    let touch = ta.weights().iter().zip(tb.weights()).map(|(a, b)| {
+        let d: [f64; 6] = std::array::from_fn(|k| a[k] - b[k]);
+        norm(&d) / norm(b)
+    });
+    let length = la
+        .map(|l| l.weights().to_vec())
+        .unwrap_or_default()
+        .into_iter()
+        .zip(lb.map(|l| l.weights().to_vec()).unwrap_or_default())
+        .map(|(a, b)| (a - b).abs() / b.abs());
+    touch.chain(length).fold(0.0, f64::max)
+}
+
+/// A simulated campaign (paper errors, `sockets` × `touches`, `lengths`
+/// reference lengths, 0.005° and 0.01 mm noise), its noise and the nominal
+/// arm.
+fn simulated(seed: u64, sockets: usize, touches: usize, lengths: usize) -> (DataSet, Noise) {
+    use crate::simulate::{CampaignSettings, ErrorModel, simulate};
+    let nominal = crate::io::Arm::without_limits("n", DhParams::paper_nominal());
+    let mut settings = CampaignSettings::new(seed, ErrorModel::Paper, sockets, touches);
+    settings.reference_lengths = lengths;
+    settings.encoder_noise_deg = 0.005;
+    settings.probe_noise_mm = 0.01;
+    let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+    let noise = Noise {
+        encoder_rad: Some(0.005f64.to_radians()),
+        probe_mm: Some(0.01),
+        ..Noise::default()
+    };
+    (data, noise)
+}
+
+/// The free columns' normal equations are the full system's principal
+/// submatrix, to the bit (what the first LM step reuses).
+#[test]
+fn the_free_columns_system_is_the_restriction_of_the_full_one() {
+    let (data, noise) = simulated(9, 10, 10, 3);
+    let arm = DhParams::paper_nominal();
+    let (t, l) = weighed(&data, &noise, &arm, 1.0, 1);
+    let all: Vec<usize> = (0..27).collect();
+    let full = normal_equations(&arm, &t, l.as_ref(), &all, 1).0;
+    let free: Vec<usize> = vec![1, 0, 7, 12, 19, 26];
+    let direct = normal_equations(&arm, &t, l.as_ref(), &free, 1).0;
+    // Same products summed in the same order: equal to the bit.
+    assert_eq!(full.restrict(&free).unwrap(), direct);
+    assert!(full.restrict(&[27]).is_none());
+    assert!(direct.restrict(&[2]).is_none());
+}
+
+/// The blocked, lane-wise accumulation adds every product in the order
+/// of the plain loops it replaced (touch by touch, `b ≤ i`, then the
+/// point's Schur term): the same bits, with points of more touches than
+/// a block and an odd number of free columns.
+#[test]
+fn blocked_normal_equations_are_the_plain_loops_bits() {
+    // No lengths: the touches' sums alone.
+    let (data, noise) = simulated(5, 7, 2 * BLOCK + 3, 0);
+    let arm = DhParams::paper_nominal();
+    let kernel = ArmKernel::new(&arm).unwrap();
+    let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
+    for free in [
+        (0..27).collect::<Vec<usize>>(),
+        vec![2, 3, 5, 8, 13, 21, 26],
+    ] {
+        let p = free.len();
+        let (mut jtj, mut jtr, mut cost) = (vec![0.0; p * p], vec![0.0; p], 0.0);
+        let mut rows = Vec::new();
+        kernel
+            .for_each_jacobian(data.poses(), 0..data.len(), |_, pos, jac| {
+                rows.push((*pos, jac.to_vec()))
+            })
+            .unwrap();
+        for point in data.points() {
+            let origin = rows[point.touches.start].0;
+            let (mut g, mut jap) = (vec![[0.0; 3]; p], vec![0.0; p]);
+            let (mut ap, mut pap, mut sa) = ([0.0; 3], 0.0, [0.0; 6]);
+            for i in point.touches.clone() {
+                let (pos, jac) = &rows[i];
+                let a = &t.weights()[i];
+                let d: [f64; 3] = std::array::from_fn(|k| pos[k] - origin[k]);
+                let ad = sym_mul(a, &d);
+                (0..3).for_each(|k| ap[k] += ad[k]);
+                pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+                (0..6).for_each(|k| sa[k] += a[k]);
+                let wa: Vec<[f64; 3]> = free.iter().map(|&c| sym_mul(a, &jac[c])).collect();
+                for i in 0..p {
+                    (0..3).for_each(|k| g[i][k] += wa[i][k]);
+                    jap[i] += wa[i][0] * d[0] + wa[i][1] * d[1] + wa[i][2] * d[2];
+                    for b in 0..=i {
+                        let j = jac[free[b]];
+                        jtj[i * p + b] += wa[i][0] * j[0] + wa[i][1] * j[1] + wa[i][2] * j[2];
+                    }
+                }
+            }
+            let cinv = sym_inv(&sa);
+            let c = sym_mul(&cinv, &ap);
+            cost += pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
+            let mean: Vec<[f64; 3]> = g.iter().map(|gi| sym_mul(&cinv, gi)).collect();
+            for i in 0..p {
+                let gi = g[i];
+                jtr[i] += jap[i] - (gi[0] * c[0] + gi[1] * c[1] + gi[2] * c[2]);
+                for b in 0..=i {
+                    let mb = mean[b];
+                    jtj[i * p + b] -= gi[0] * mb[0] + gi[1] * mb[1] + gi[2] * mb[2];
+                }
+            }
+        }
+        for a in 0..p {
+            for b in 0..a {
+                jtj[b * p + a] = jtj[a * p + b];
+            }
+        }
+        // One chunk of points (under POINTS_PER_CHUNK): no partial sums.
+        assert!(data.points().len() <= POINTS_PER_CHUNK);
+        let n = normal_equations(&arm, &t, None, &free, 1).0;
+        assert_eq!(n.jtj, jtj);
+        assert_eq!(n.jtr, jtr);
+        assert_eq!(n.costs, [cost]);
+    }
+}
+
+/// `n` points of 3 touches each, spread in joint space, with 20
+/// reference lengths between them.
+fn points_of_three_touches(n: usize) -> DataSet {
+    let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
+    for p in 0..n {
+        for k in 0..3 {
+            let q: Vec<String> = (0..6)
+                .map(|j| {
+                    let base = ((p * 7 + j * 13) as f64 * 0.37).sin() * 120.0;
+                    format!("{}", base + (k * 20 + j) as f64 * 0.5)
+                })
+                .collect();
+            text.push_str(&format!("P{p},{}\n", q.join(",")));
+        }
+    }
+    let (poses, _) = parse_poses(&text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
+    let mut lengths = String::from("point_a,point_b,distance\n");
+    for i in 0..20 {
+        lengths.push_str(&format!("P{i},P{},{}\n", n - 1 - i, 500 + i));
+    }
+    DataSet::from_poses(&poses, "p.csv")
+        .unwrap()
+        .with_lengths(&parse_lengths(&lengths, "l.csv").unwrap(), "l.csv")
+        .unwrap()
+}
+
+/// The weights' change to another arm, streamed a chunk of points at a
+/// time, is the change built-then-compared, to the bit, on any thread
+/// count; with and without stated noise.
+#[test]
+fn the_streamed_change_of_weights_is_the_built_one() {
+    let data = points_of_three_touches(1000);
+    assert!(data.len() > 2 * TOUCHES_PER_CHUNK);
+    let here = DhParams::paper_nominal();
+    let mut there = DhParams::paper_nominal();
+    there.joints[1].d += 3.0;
+    there.joints[2].theta += 0.02;
+    let stated = Noise {
+        encoder_rad: Some(1e-4),
+        probe_mm: Some(0.01),
+        length_default_mm: 0.001,
+        length_weight: None,
+    };
+    let unstated = Noise {
+        encoder_rad: None,
+        probe_mm: None,
+        ..stated
+    };
+    for (noise, sigma) in [(&stated, 1.0), (&unstated, 0.7)] {
+        let (t, l) = weighed(&data, noise, &here, 1.0, 1);
+        let (nt, nl) = weighed(&data, noise, &there, sigma, 1);
+        let built = built_change((&nt, nl.as_ref()), (&t, l.as_ref()));
+        assert!(built > 0.0 && built.is_finite());
+        for threads in [1, 2, 4] {
+            let streamed = change(&there, &t, l.as_ref(), sigma, threads);
+            assert_eq!(streamed.to_bits(), built.to_bits(), "{threads} threads");
+        }
+        assert_eq!(change(&here, &t, l.as_ref(), 1.0, 2), 0.0);
+    }
+    // Weights of another shape than the data's: an infinite change.
+    let (t, l) = weighed(&data, &stated, &here, 1.0, 1);
+    let short = t.without_last_weight();
+    assert_eq!(change(&here, &short, l.as_ref(), 1.0, 1), f64::INFINITY);
+}
+
+/// 1000 points of 3 touches with stated noise and reference lengths:
+/// 16 chunks of points, so 2 and 4 threads really split the work (one
+/// thread below 4 chunks). The normal equations, their cost and the
+/// centroids are the same bits on 1, 2 and 4 threads.
+#[test]
+fn normal_equations_are_the_same_bits_on_any_thread_count() {
+    let n = 1000;
+    let data = points_of_three_touches(n);
+    assert_eq!(data.points().len(), n);
+    assert!(n > 4 * POINTS_PER_CHUNK, "enough chunks to run in parallel");
+    let arm = DhParams::paper_nominal();
+    let noise = Noise {
+        encoder_rad: Some(1e-4),
+        probe_mm: Some(0.01),
+        length_default_mm: 0.001,
+        length_weight: None,
+    };
+    let (t, l) = weighed(&data, &noise, &arm, 1.0, 1);
+    assert!(data.len() > 2 * TOUCHES_PER_CHUNK, "weights in chunks too");
+    for threads in [2, 4] {
+        let (tw, lw) = weighed(&data, &noise, &arm, 1.0, threads);
+        assert_eq!(tw.weights(), t.weights(), "{threads} threads");
+        assert_eq!(lw.unwrap().weights(), l.as_ref().unwrap().weights());
+    }
+    let free: Vec<usize> = (0..27).collect();
+    let bits = |threads: usize| {
+        let (ne, centres) = normal_equations(&arm, &t, l.as_ref(), &free, threads);
+        let mut v: Vec<u64> = ne.jtj.iter().chain(&ne.jtr).map(|x| x.to_bits()).collect();
+        v.extend(ne.costs.iter().chain([&ne.cost()]).map(|c| c.to_bits()));
+        v.extend(centres.points.iter().flatten().map(|x| x.to_bits()));
+        assert!(ne.costs.iter().all(|&c| c > 0.0));
+        v
+    };
+    let one = bits(1);
+    assert_eq!(bits(2), one);
+    assert_eq!(bits(4), one);
+}

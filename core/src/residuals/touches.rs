@@ -1,0 +1,826 @@
+//! Same-point touches: every touch of a point against the point's weighted
+//! centroid, the centres eliminated (see the module docs of
+//! [`crate::residuals`]). The work runs in chunks of whole points on the
+//! kernel's SIMD lanes, in a fixed order, so the sums are the same bits on
+//! any thread count.
+
+use std::ops::Range;
+
+use super::sym3::{Sym3, centroid_cov, sym_inv, sym_mul};
+use super::{At, Centres, Noise, Normal, Origin, Shared, Standardised, Term, TermError};
+use crate::dataset::DataSet;
+use crate::error::short;
+use crate::kernel::{ArmKernel, KernelError, NoiseOf};
+use crate::parallel::parallel_map;
+
+/// Touches per work item of the weights (about 0.1 ms of work: enough to pay
+/// for handing it out).
+pub(super) const TOUCHES_PER_CHUNK: usize = 1024;
+
+/// Points per work item of the normal equations: fixed, so the sums are
+/// added in the same order whatever the number of threads (same bytes on
+/// any machine).
+pub(super) const POINTS_PER_CHUNK: usize = 64;
+
+/// How many chunks of work the normal equations of `points` points split
+/// into: chunks of a fixed number of points, run on several threads from 4
+/// chunks up (below that, on the calling thread whatever the thread count).
+/// What a test of thread-independence asks, to know that the work really
+/// splits.
+///
+/// ```
+/// use aacmm_core::residuals::point_chunks;
+/// assert_eq!(point_chunks(64), 1);
+/// assert_eq!(point_chunks(65), 2);
+/// assert!(point_chunks(300) >= 4, "300 points: on several threads");
+/// ```
+pub fn point_chunks(points: usize) -> usize {
+    points.div_ceil(POINTS_PER_CHUNK)
+}
+
+/// The touches of a data set, each weighed by the inverse of its position's
+/// covariance: stated probe and encoder noise carried through the arm, or
+/// `I/σ²` with `σ` estimated from the fit when no noise is stated.
+#[derive(Clone)]
+pub struct TouchTerm<'d> {
+    data: &'d DataSet,
+    noise: Noise,
+    /// The σ of an unweighted touch (noise not stated), mm.
+    unit_sigma: f64,
+    /// Per touch (data-set order), `A_i = Σ_i⁻¹`, 1/mm²; empty until weighed.
+    weights: Vec<Sym3>,
+}
+
+impl std::fmt::Debug for TouchTerm<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("TouchTerm")
+            .field("touches", &self.data.len())
+            .field("points", &self.data.points().len())
+            .field("noise", &self.noise)
+            .field("unit_sigma", &self.unit_sigma)
+            .field("weighed", &!self.weights.is_empty())
+            .finish()
+    }
+}
+
+impl<'d> TouchTerm<'d> {
+    /// The touches of `data` under `noise` (its touch part), not weighed
+    /// yet ([`Term::weigh`]).
+    pub fn new(data: &'d DataSet, noise: Noise) -> TouchTerm<'d> {
+        TouchTerm {
+            data,
+            noise,
+            unit_sigma: 1.0,
+            weights: Vec::new(),
+        }
+    }
+
+    /// Per touch (data-set order), its weight `A_i`, `[xx, yy, zz, xy,
+    /// xz, yz]`, 1/mm².
+    pub fn weights(&self) -> &[[f64; 6]] {
+        &self.weights
+    }
+
+    /// These weights less the last touch's: weights of another shape.
+    #[cfg(test)]
+    pub(super) fn without_last_weight(mut self) -> Self {
+        self.weights.pop();
+        self
+    }
+
+    /// The weights of touches `range` at `kernel`, in order, to `f(i, A_i)`.
+    fn each_weight(
+        &self,
+        kernel: &ArmKernel,
+        range: Range<usize>,
+        unit_sigma: f64,
+        f: impl FnMut(usize, Sym3) -> Result<(), KernelError>,
+    ) -> Result<(), KernelError> {
+        TouchWeight::new(kernel, self.data, &self.noise, unit_sigma).each(range, f)
+    }
+
+    /// Every touch's weight at `kernel`, the joint Jacobians on up to
+    /// `threads` threads in chunks of fixed size: each touch's weight is its
+    /// own, so the result is the same bits whatever `threads`.
+    fn weights_at(
+        &self,
+        kernel: &ArmKernel,
+        unit_sigma: f64,
+        threads: usize,
+    ) -> Result<Vec<Sym3>, KernelError> {
+        if !self.noise.stated() {
+            let w = 1.0 / (unit_sigma * unit_sigma);
+            return Ok(vec![[w, w, w, 0.0, 0.0, 0.0]; self.data.len()]);
+        }
+        let mut touch = vec![[0.0; 6]; self.data.len()];
+        let parts = touch
+            .chunks_mut(TOUCHES_PER_CHUNK)
+            .enumerate()
+            .collect::<Vec<_>>();
+        let parts: Vec<std::sync::Mutex<(usize, &mut [Sym3])>> =
+            parts.into_iter().map(std::sync::Mutex::new).collect();
+        let results = parallel_map(&parts, threads, |part| {
+            let mut part = part
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            let (k, out) = &mut *part;
+            let start = *k * TOUCHES_PER_CHUNK;
+            self.each_weight(kernel, start..start + out.len(), unit_sigma, |i, w| {
+                out[i - start] = w;
+                Ok(())
+            })
+        });
+        drop(parts);
+        results.into_iter().collect::<Result<(), KernelError>>()?;
+        Ok(touch)
+    }
+
+    /// Refuses weights that are not finite numbers, naming the noise that
+    /// made them: a σ whose square overflows (the weight is 0/0), or one
+    /// that vanishes (the weight is 1/0). Positions are finite here, so the
+    /// noise is the only cause.
+    fn check(&self, weights: &[Sym3], unit_sigma: f64) -> Result<(), KernelError> {
+        let Some(i) = weights.iter().position(refused) else {
+            return Ok(());
+        };
+        let noise = &self.noise;
+        let stated = match (noise.encoder_rad, noise.probe_mm) {
+            (None, None) => format!("an assumed touch σ of {} mm", short(unit_sigma)),
+            (e, p) => [
+                e.map(|e| {
+                    format!(
+                        "encoder noise σ = {}° ({} rad)",
+                        short(e.to_degrees()),
+                        short(e)
+                    )
+                }),
+                p.map(|p| format!("probe noise σ = {} mm", short(p))),
+            ]
+            .into_iter()
+            .flatten()
+            .collect::<Vec<_>>()
+            .join(" and "),
+        };
+        Err(KernelError::Noise {
+            of: NoiseOf::Touches,
+            message: format!(
+                "the touch weights are not finite positive numbers with {stated} (first at {}); \
+                 {OVERFLOW}; state the instrument's noise (typically 0.001–0.1° per encoder and \
+                 0.001–0.1 mm for the probe)",
+                self.data.source().touch(i)
+            ),
+        })
+    }
+
+    /// Per point, the covariance of its centre under `weights`.
+    fn centre_covariances(&self, weights: &[Sym3]) -> Vec<Sym3> {
+        self.data
+            .points()
+            .iter()
+            .map(|p| centroid_cov(&weights[p.touches.clone()]))
+            .collect()
+    }
+
+    /// The largest relative change of any touch's weight at `kernel`, and
+    /// every point's centre covariance under the new weights, made a chunk
+    /// of whole points at a time and compared at once: at 10⁶ touches a
+    /// second set of weights would be 48 MB.
+    fn streamed_change(
+        &self,
+        kernel: &ArmKernel,
+        unit_sigma: f64,
+        threads: usize,
+    ) -> Result<(f64, Vec<Sym3>), KernelError> {
+        let data = self.data;
+        // Chunks of whole points, so that each chunk's centroid covariances
+        // are its own.
+        let mut chunks = Vec::new();
+        let mut first = 0;
+        for (k, p) in data.points().iter().enumerate() {
+            if p.touches.end - data.points()[first].touches.start >= TOUCHES_PER_CHUNK
+                || k + 1 == data.points().len()
+            {
+                chunks.push(first..k + 1);
+                first = k + 1;
+            }
+        }
+        let results = parallel_map(&chunks, threads, |points| {
+            let all = &data.points()[points.clone()];
+            let mut change = 0.0_f64;
+            let mut covs = Vec::with_capacity(points.len());
+            let mut buffer = Vec::new();
+            let mut point = all.iter().map(|p| p.touches.end).peekable();
+            let touches = all[0].touches.start..all[all.len() - 1].touches.end;
+            self.each_weight(kernel, touches, unit_sigma, |i, a| {
+                change = change.max(touch_change(&a, &self.weights[i]));
+                buffer.push(a);
+                if point.next_if_eq(&(i + 1)).is_some() {
+                    covs.push(centroid_cov(&buffer));
+                    buffer.clear();
+                }
+                Ok(())
+            })?;
+            Ok::<_, KernelError>((change, covs))
+        });
+        let mut change = 0.0_f64;
+        let mut covs = Vec::with_capacity(data.points().len());
+        for r in results {
+            let (c, v) = r?;
+            change = change.max(c);
+            covs.extend(v);
+        }
+        Ok((change, covs))
+    }
+
+    /// The point a touch belongs to (its index): the points' touches are
+    /// contiguous and in order.
+    fn point_of(&self, touch: usize) -> usize {
+        self.data
+            .points()
+            .partition_point(|p| p.touches.end <= touch)
+    }
+}
+
+/// Why a σ gives no weight.
+const OVERFLOW: &str = "a σ this large overflows and one this small vanishes in double precision";
+
+/// Whether a weight matrix is refused: it must be finite with a positive
+/// diagonal (an overflowing covariance can also invert to exact zeros).
+fn refused(a: &Sym3) -> bool {
+    !a.iter().all(|v| v.is_finite()) || !a[..3].iter().all(|&v| v > 0.0)
+}
+
+/// One touch's weight at an arm: `A_i = (p²I + e² J_q J_qᵀ)⁻¹` with stated
+/// noise, `I/σ²` without.
+struct TouchWeight<'a> {
+    kernel: &'a ArmKernel,
+    data: &'a DataSet,
+    stated: bool,
+    e2: f64,
+    p2: f64,
+    unit: f64,
+}
+
+impl<'a> TouchWeight<'a> {
+    fn new(kernel: &'a ArmKernel, data: &'a DataSet, noise: &Noise, touch_sigma_mm: f64) -> Self {
+        TouchWeight {
+            kernel,
+            data,
+            stated: noise.stated(),
+            e2: noise.encoder_rad.unwrap_or(0.0).powi(2),
+            p2: noise.probe_mm.unwrap_or(0.0).powi(2),
+            unit: 1.0 / (touch_sigma_mm * touch_sigma_mm),
+        }
+    }
+
+    /// The weights of touches `range`, in order, to `f(i, A_i)`; the joint
+    /// Jacobians a batch of lanes at a time.
+    fn each(
+        &self,
+        mut range: Range<usize>,
+        mut f: impl FnMut(usize, Sym3) -> Result<(), KernelError>,
+    ) -> Result<(), KernelError> {
+        if !self.stated {
+            let w = self.unit;
+            return range.try_for_each(|i| f(i, [w, w, w, 0.0, 0.0, 0.0]));
+        }
+        let (e2, p2) = (self.e2, self.p2);
+        let mut result = Ok(());
+        self.kernel
+            .for_each_joint_jacobian(self.data.poses(), range, |i, jq| {
+                if result.is_ok() {
+                    result = f(i, touch_weight(jq, e2, p2));
+                }
+            })?;
+        result
+    }
+}
+
+/// `(p²I + e² J_q J_qᵀ)⁻¹` of one touch's joint Jacobian.
+#[inline(always)]
+fn touch_weight(jq: &[[f64; 3]], e2: f64, p2: f64) -> Sym3 {
+    let s = |a: usize, b: usize| jq.iter().map(|c| c[a] * c[b]).sum::<f64>() * e2;
+    let cov = [
+        p2 + s(0, 0),
+        p2 + s(1, 1),
+        p2 + s(2, 2),
+        s(0, 1),
+        s(0, 2),
+        s(1, 2),
+    ];
+    sym_inv(&cov)
+}
+
+/// `‖a − b‖/‖b‖` in the Frobenius norm (off-diagonal entries count twice).
+/// A touch weight the term would refuse counts as an infinite change.
+fn touch_change(a: &Sym3, b: &Sym3) -> f64 {
+    if refused(a) {
+        return f64::INFINITY;
+    }
+    let norm = |a: &Sym3| {
+        (a[..3].iter().map(|v| v * v).sum::<f64>()
+            + 2.0 * a[3..].iter().map(|v| v * v).sum::<f64>())
+        .sqrt()
+    };
+    let d: Sym3 = std::array::from_fn(|k| a[k] - b[k]);
+    norm(&d) / norm(b)
+}
+
+impl Term for TouchTerm<'_> {
+    fn name(&self) -> &str {
+        "touches"
+    }
+
+    fn rows(&self, _free: &[usize]) -> usize {
+        3 * self.data.len()
+    }
+
+    fn eliminated(&self) -> usize {
+        3 * self.data.points().len()
+    }
+
+    fn unit_weighted(&self) -> bool {
+        !self.noise.stated()
+    }
+
+    /// The old weights are freed before the new ones are made: one set
+    /// alive at a time (48 MB at 10⁶ touches).
+    fn weigh(
+        &mut self,
+        at: &At<'_>,
+        shared: &mut Shared,
+        unit_sigma: f64,
+    ) -> Result<(), TermError> {
+        self.weights = Vec::new();
+        let weights = self.weights_at(at.kernel, unit_sigma, at.threads)?;
+        self.check(&weights, unit_sigma)?;
+        shared.centre_covariances = Some(self.centre_covariances(&weights));
+        self.weights = weights;
+        self.unit_sigma = unit_sigma;
+        Ok(())
+    }
+
+    fn weight_change(
+        &self,
+        at: &At<'_>,
+        shared: &mut Shared,
+        unit_sigma: f64,
+    ) -> Result<f64, TermError> {
+        if self.weights.len() != self.data.len() {
+            shared.centre_covariances = None;
+            return Ok(f64::INFINITY);
+        }
+        let (change, covs) = self.streamed_change(at.kernel, unit_sigma, at.threads)?;
+        shared.centre_covariances = Some(covs);
+        Ok(change)
+    }
+
+    fn accumulate(
+        &self,
+        at: &At<'_>,
+        shared: &mut Shared,
+        normal: &mut Normal,
+    ) -> Result<f64, TermError> {
+        Ok(accumulate(self, at, shared, normal)?)
+    }
+
+    fn add_cost(
+        &self,
+        at: &At<'_>,
+        _free: &[usize],
+        shared: &mut Shared,
+        scratch: &mut Vec<[f64; 3]>,
+        total: &mut f64,
+    ) -> Result<(), TermError> {
+        let data = self.data;
+        scratch.resize(data.len(), [0.0; 3]);
+        let xyz = &mut scratch[..];
+        at.kernel.positions(data.poses(), 0..data.len(), xyz)?;
+        let mut centroids = Vec::with_capacity(data.points().len());
+        for point in data.points() {
+            let origin = xyz[point.touches.start];
+            let (mut ap, mut pap, mut sum) = ([0.0; 3], 0.0, [0.0; 6]);
+            for i in point.touches.clone() {
+                let a = &self.weights[i];
+                let d: [f64; 3] = std::array::from_fn(|k| xyz[i][k] - origin[k]);
+                let ad = sym_mul(a, &d);
+                for (s, v) in ap.iter_mut().zip(&ad) {
+                    *s += v;
+                }
+                pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+                for (s, v) in sum.iter_mut().zip(a) {
+                    *s += v;
+                }
+            }
+            let c = sym_mul(&sym_inv(&sum), &ap);
+            *total += pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
+            centroids.push(std::array::from_fn(|k| c[k] + origin[k]));
+        }
+        shared.centres = Some(Centres {
+            points: centroids,
+            jacobians: Vec::new(),
+        });
+        Ok(())
+    }
+
+    /// `rᵀ A r / (1 − h)` per touch: `r` the touch's offset from its point's
+    /// weighted centroid, `A` its weight, `h = tr(A (Σ A)⁻¹)/3` its leverage
+    /// on that centroid. Positions one point at a time: memory stays the
+    /// output's.
+    fn standardised(&self, at: &At<'_>) -> Result<Option<Standardised>, TermError> {
+        let data = self.data;
+        let most = data.points().iter().map(|p| p.touches.len()).max();
+        let mut xyz = vec![[0.0; 3]; most.unwrap_or(0)];
+        let mut out = vec![0.0; data.len()];
+        for point in data.points() {
+            let first = point.touches.start;
+            let xyz = &mut xyz[..point.touches.len()];
+            at.kernel
+                .positions(data.poses(), point.touches.clone(), xyz)?;
+            let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
+            for i in point.touches.clone() {
+                let a = &self.weights[i];
+                let ap = sym_mul(a, &xyz[i - first]);
+                for k in 0..6 {
+                    sum_a[k] += a[k];
+                }
+                for k in 0..3 {
+                    sum_ap[k] += ap[k];
+                }
+            }
+            let inv = sym_inv(&sum_a);
+            let c = sym_mul(&inv, &sum_ap);
+            for i in point.touches.clone() {
+                let a = &self.weights[i];
+                let r: [f64; 3] = std::array::from_fn(|k| xyz[i - first][k] - c[k]);
+                let ar = sym_mul(a, &r);
+                let q = r[0] * ar[0] + r[1] * ar[1] + r[2] * ar[2];
+                // tr(A·inv) for symmetric A and inv.
+                let tr = a[0] * inv[0]
+                    + a[1] * inv[1]
+                    + a[2] * inv[2]
+                    + 2.0 * (a[3] * inv[3] + a[4] * inv[4] + a[5] * inv[5]);
+                let h = (tr / 3.0).clamp(0.0, 0.999);
+                out[i] = q / (1.0 - h);
+            }
+        }
+        Ok(Some(Standardised {
+            rows: 3,
+            values: out,
+        }))
+    }
+
+    fn observations(&self) -> usize {
+        self.data.len()
+    }
+
+    fn origin(&self, i: usize) -> Origin {
+        let point = &self.data.points()[self.point_of(i)];
+        Origin {
+            at: self.data.source().touch(i).to_string(),
+            group: point.label.clone(),
+        }
+    }
+
+    /// Touch `i`'s matrix `A_i` multiplied by `w[i]`.
+    fn weigh_observations(&mut self, w: &[f64]) -> bool {
+        for (a, &w) in self.weights.iter_mut().zip(w) {
+            *a = a.map(|v| v * w);
+        }
+        true
+    }
+
+    /// The median over touches of `sqrt(trace(Σ_i)/3)`.
+    fn typical_sigma(&self) -> Option<f64> {
+        let mut s: Vec<f64> = self
+            .weights
+            .iter()
+            .map(|a| (sym_inv(a)[..3].iter().sum::<f64>() / 3.0).sqrt())
+            .collect();
+        s.sort_by(f64::total_cmp);
+        Some(s.get(s.len() / 2).copied().unwrap_or(f64::NAN))
+    }
+}
+
+/// The touches' contribution at `at` over `normal.free()`: chunks of points
+/// on up to `at.threads` threads (the result does not depend on it), added
+/// in chunk order; the centroids (and, when a later term needs them, their
+/// Jacobians) left in `shared`.
+fn accumulate(
+    term: &TouchTerm<'_>,
+    at: &At<'_>,
+    shared: &mut Shared,
+    normal: &mut Normal,
+) -> Result<f64, KernelError> {
+    let data = term.data;
+    let np = data.points().len();
+    // Counted by `point_chunks`, so that what it tells the tests holds here.
+    let chunks: Vec<Range<usize>> = (0..point_chunks(np))
+        .map(|c| c * POINTS_PER_CHUNK..((c + 1) * POINTS_PER_CHUNK).min(np))
+        .collect();
+    let need_mean = shared.want_centre_jacobians;
+    // Touches move with the geometry only: their sums run over the free
+    // geometry columns, placed at those columns' rows of `normal` (the
+    // identity when no auxiliary column is free).
+    let geometry = at.layout.geometry_columns();
+    let (at_free, free): (Vec<usize>, Vec<usize>) = (normal.free.iter().enumerate())
+        .filter(|(_, c)| **c < geometry)
+        .map(|(a, &c)| (a, c))
+        .unzip();
+    let p = normal.free.len();
+    let run = |c: &Range<usize>| chunk(at.kernel, term, &free, c.clone(), need_mean);
+    let partials: Vec<Result<Partial, KernelError>> = if at.threads <= 1 || chunks.len() < 4 {
+        chunks.iter().map(run).collect()
+    } else {
+        parallel_map(&chunks, at.threads, run)
+    };
+    let mut cost = 0.0;
+    let mut centres = Centres {
+        points: Vec::with_capacity(np),
+        jacobians: Vec::with_capacity(if need_mean { np } else { 0 }),
+    };
+    let q = free.len();
+    for part in partials {
+        let part = part?;
+        if q == p {
+            for (o, v) in normal.jtj.iter_mut().zip(&part.jtj) {
+                *o += v;
+            }
+            for (o, v) in normal.jtr.iter_mut().zip(&part.jtr) {
+                *o += v;
+            }
+            centres.jacobians.extend(part.mean_j);
+        } else {
+            for (a, &ra) in at_free.iter().enumerate() {
+                normal.jtr[ra] += part.jtr[a];
+                for (b, &rb) in at_free.iter().enumerate() {
+                    normal.jtj[ra * p + rb] += part.jtj[a * q + b];
+                }
+            }
+            centres.jacobians.extend(part.mean_j.into_iter().map(|m| {
+                let mut full = vec![[0.0; 3]; p];
+                for (&ra, v) in at_free.iter().zip(m) {
+                    full[ra] = v;
+                }
+                full
+            }));
+        }
+        cost += part.cost;
+        centres.points.extend(part.centroids);
+    }
+    shared.centres = Some(centres);
+    Ok(cost)
+}
+
+/// Per-point sums: `G = Σ A J` (3 × p), `Σ Jᵀ A p̃`, `Σ A p̃`, `Σ p̃ᵀA p̃`,
+/// `S = Σ A`, with `p̃` the position relative to the point's first touch (no
+/// cancellation of metre-sized coordinates).
+struct PointSums {
+    g: Vec<[f64; 3]>,
+    jap: Vec<f64>,
+    ap: [f64; 3],
+    pap: f64,
+    s: Sym3,
+    started: bool,
+    origin: [f64; 3],
+    /// Row stride of the padded `JᵀAJ` and of the scratch: `p` rounded up to
+    /// a whole number of [`LANES`].
+    stride: usize,
+    /// Scratch, up to [`BLOCK`] touches of one point: the free columns of
+    /// `J` and of `A·J`, one padded row per touch and coordinate, so the
+    /// `JᵀAJ` update runs over whole lanes of contiguous memory.
+    j: [Vec<f64>; 3],
+    aj: [Vec<f64>; 3],
+    /// Touches held in the scratch, not yet in `JᵀAJ`.
+    pending: usize,
+    /// Scratch: the point's `J̄ = S⁻¹ G`.
+    mean: Vec<[f64; 3]>,
+}
+
+/// Touches whose `JᵀAJ` terms are added in one sweep over the matrix: each
+/// entry is loaded and stored once per block, the terms still added one
+/// touch at a time in touch order (the same bits as touch by touch).
+pub(super) const BLOCK: usize = 8;
+
+/// Entries of a `JᵀAJ` row updated together (one AVX2 register of f64).
+const LANES: usize = 4;
+
+/// What one chunk of points contributes.
+struct Partial {
+    jtj: Vec<f64>,
+    jtr: Vec<f64>,
+    cost: f64,
+    /// Per point of the chunk: centroid, and `J̄` (3 × p) if lengths need it.
+    centroids: Vec<[f64; 3]>,
+    mean_j: Vec<Vec<[f64; 3]>>,
+}
+
+impl PointSums {
+    fn new(p: usize) -> PointSums {
+        let stride = p.div_ceil(LANES) * LANES;
+        PointSums {
+            g: vec![[0.0; 3]; p],
+            jap: vec![0.0; p],
+            ap: [0.0; 3],
+            pap: 0.0,
+            s: [0.0; 6],
+            started: false,
+            origin: [0.0; 3],
+            stride,
+            j: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
+            aj: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
+            pending: 0,
+            mean: vec![[0.0; 3]; p],
+        }
+    }
+
+    /// Ready for the next point, keeping the buffers.
+    fn reset(&mut self) {
+        self.g.fill([0.0; 3]);
+        self.jap.fill(0.0);
+        self.ap = [0.0; 3];
+        self.pap = 0.0;
+        self.s = [0.0; 6];
+        self.started = false;
+    }
+
+    /// Adds one touch: position, weight, free Jacobian columns. `jtj` is
+    /// `p` rows of [`PointSums::stride`] (lower triangle meaningful).
+    #[inline(always)]
+    fn add(&mut self, pos: &[f64; 3], a: &Sym3, jac: &[[f64; 3]], free: &[usize], jtj: &mut [f64]) {
+        if !self.started {
+            self.origin = *pos;
+            self.started = true;
+        }
+        let d: [f64; 3] = std::array::from_fn(|k| pos[k] - self.origin[k]);
+        let ad = sym_mul(a, &d);
+        for (s, v) in self.ap.iter_mut().zip(&ad) {
+            *s += v;
+        }
+        self.pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+        for (s, v) in self.s.iter_mut().zip(a) {
+            *s += v;
+        }
+        let at = self.pending * self.stride;
+        let end = at + free.len();
+        let [jx, jy, jz] = &mut self.j;
+        let [ax, ay, az] = &mut self.aj;
+        let (jx, jy, jz) = (&mut jx[at..end], &mut jy[at..end], &mut jz[at..end]);
+        let (ax, ay, az) = (&mut ax[at..end], &mut ay[at..end], &mut az[at..end]);
+        for (i, &ci) in free.iter().enumerate() {
+            let j = jac[ci];
+            let wa = sym_mul(a, &j);
+            let g = &mut self.g[i];
+            g[0] += wa[0];
+            g[1] += wa[1];
+            g[2] += wa[2];
+            self.jap[i] += wa[0] * d[0] + wa[1] * d[1] + wa[2] * d[2];
+            (jx[i], jy[i], jz[i]) = (j[0], j[1], j[2]);
+            (ax[i], ay[i], az[i]) = (wa[0], wa[1], wa[2]);
+        }
+        self.pending += 1;
+        if self.pending == BLOCK {
+            self.flush(jtj);
+        }
+    }
+
+    /// The held touches' terms into the lower triangle of `jtj`: row `i`
+    /// gets `(AJ)_iᵀ J_b` for `b ≤ i`, a lane at a time (the entries past
+    /// the diagonal in a row's last lane are upper-triangle scratch).
+    #[inline(always)]
+    fn flush(&mut self, jtj: &mut [f64]) {
+        let (n, w) = (self.pending, self.stride);
+        if n == 0 {
+            return;
+        }
+        let p = self.jap.len();
+        for i in 0..p {
+            let row = &mut jtj[i * w..i * w + w];
+            // Up to four lanes at once: independent sums, so the additions'
+            // latency overlaps (one lane's sum is a chain over the touches).
+            let mut c = 0;
+            while c <= i {
+                c += match (i - c) / LANES + 1 {
+                    1 => self.lanes::<1>(row, i, c, n),
+                    2 => self.lanes::<2>(row, i, c, n),
+                    3 => self.lanes::<3>(row, i, c, n),
+                    _ => self.lanes::<4>(row, i, c, n),
+                };
+            }
+        }
+        self.pending = 0;
+    }
+
+    /// `K` lanes of `row` (row `i` of `JᵀAJ`) from column `c`, the `n` held
+    /// touches added in touch order; returns the columns done.
+    #[inline(always)]
+    fn lanes<const K: usize>(&self, row: &mut [f64], i: usize, c: usize, n: usize) -> usize {
+        let (w, m) = (self.stride, K * LANES);
+        let [jx, jy, jz] = &self.j;
+        let [ax, ay, az] = &self.aj;
+        let out = &mut row[c..c + m];
+        let mut r: [[f64; LANES]; K] =
+            std::array::from_fn(|k| std::array::from_fn(|l| out[k * LANES + l]));
+        for t in 0..n {
+            let o = t * w;
+            let (x, y, z) = (ax[o + i], ay[o + i], az[o + i]);
+            let (bx, by, bz) = (
+                &jx[o + c..o + c + m],
+                &jy[o + c..o + c + m],
+                &jz[o + c..o + c + m],
+            );
+            for (k, rk) in r.iter_mut().enumerate() {
+                for (l, v) in rk.iter_mut().enumerate() {
+                    let b = k * LANES + l;
+                    *v += x * bx[b] + y * by[b] + z * bz[b];
+                }
+            }
+        }
+        for (o, rk) in out.chunks_exact_mut(LANES).zip(&r) {
+            o.copy_from_slice(rk);
+        }
+        m
+    }
+
+    /// Closes the point: its Schur term into the lower triangle of `jtj`
+    /// (rows of [`PointSums::stride`]), its gradient and cost; resets for
+    /// the next point.
+    #[inline(always)]
+    fn finish(&mut self, part: &mut Partial, jtj: &mut [f64], need_mean: bool) {
+        self.flush(jtj);
+        let (p, w) = (self.jap.len(), self.stride);
+        let cinv = sym_inv(&self.s);
+        let c = sym_mul(&cinv, &self.ap);
+        // Σ p̃ᵀAp̃ − cᵀ S c, with S c = Σ A p̃
+        part.cost += self.pap - (c[0] * self.ap[0] + c[1] * self.ap[1] + c[2] * self.ap[2]);
+        for (m, g) in self.mean.iter_mut().zip(&self.g) {
+            *m = sym_mul(&cinv, g);
+        }
+        for i in 0..p {
+            let gi = self.g[i];
+            part.jtr[i] += self.jap[i] - (gi[0] * c[0] + gi[1] * c[1] + gi[2] * c[2]);
+            for (b, mb) in self.mean.iter().enumerate().take(i + 1) {
+                jtj[i * w + b] -= gi[0] * mb[0] + gi[1] * mb[1] + gi[2] * mb[2];
+            }
+        }
+        part.centroids
+            .push(std::array::from_fn(|k| c[k] + self.origin[k]));
+        if need_mean {
+            part.mean_j.push(self.mean.clone());
+        }
+        self.reset();
+    }
+}
+
+/// One chunk of points' sums over the geometry columns `free`.
+fn chunk(
+    kernel: &ArmKernel,
+    term: &TouchTerm<'_>,
+    free: &[usize],
+    points: Range<usize>,
+    need_mean: bool,
+) -> Result<Partial, KernelError> {
+    let (data, weights) = (term.data, &term.weights);
+    let p = free.len();
+    let mut part = Partial {
+        jtj: vec![0.0; p * p],
+        jtr: vec![0.0; p],
+        cost: 0.0,
+        centroids: Vec::with_capacity(points.len()),
+        mean_j: Vec::new(),
+    };
+    let all = data.points();
+    let touches = all[points.start].touches.start..all[points.end - 1].touches.end;
+    let mut sums = PointSums::new(p);
+    // The lower triangle, in padded rows (see [`PointSums::flush`]).
+    let w = sums.stride;
+    let mut jtj = vec![0.0; p * w];
+    let mut point = points.start;
+    let mut finite = true;
+    // Inlined into the kernel's loop, so the accumulation is compiled with
+    // the same target features (AVX2 where the CPU has it).
+    kernel.for_each_jacobian(
+        data.poses(),
+        touches,
+        #[inline(always)]
+        |i, pos, jac| {
+            if i == all[point].touches.end {
+                sums.finish(&mut part, &mut jtj, need_mean);
+                point += 1;
+            }
+            finite &= pos.iter().all(|v| v.is_finite());
+            sums.add(pos, &weights[i], jac, free, &mut jtj);
+        },
+    )?;
+    sums.finish(&mut part, &mut jtj, need_mean);
+    for a in 0..p {
+        for b in 0..=a {
+            part.jtj[a * p + b] = jtj[a * w + b];
+            part.jtj[b * p + a] = jtj[a * w + b];
+        }
+    }
+    if !finite {
+        part.cost = f64::INFINITY;
+    }
+    Ok(part)
+}

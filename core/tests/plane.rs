@@ -1,0 +1,303 @@
+//! The least squares is open: a new kind of measurement is one new
+//! residual term, written here, outside the library, against its public
+//! API — the probe touching a known plane (one row per touch: its signed
+//! distance to the plane). A plane parallel to the arm's base axis, added
+//! to a campaign without reference lengths, fixes the scale the touches
+//! alone cannot see; with the plane's offset unknown, an auxiliary
+//! parameter block carries it.
+
+use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
+use aacmm_core::kernel::{ArmKernel, PreparedPoses};
+use aacmm_core::params::DhParams;
+use aacmm_core::residuals::{
+    At, BlockId, Noise, Normal, Scalar, Sees, Shared, Term, TermError, Unit,
+};
+use aacmm_core::session::{CalibrationReport, Problem};
+use aacmm_core::simulate::{Campaign, CampaignSettings, ErrorModel, simulate, solve_point};
+use aacmm_core::{Arm, DataSet};
+
+/// The probe on the plane `n·p = offset` (a unit normal in the arm's base
+/// frame), each touch one row `(n·p(q) − offset)/σ`.
+#[derive(Clone, Debug)]
+struct PlaneTerm {
+    poses: PreparedPoses,
+    normal: [f64; 3],
+    /// Where the plane is: a known offset, mm, or an unknown one in a block.
+    offset: Offset,
+    sigma: f64,
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Offset {
+    Known(f64),
+    Fitted(BlockId),
+}
+
+impl PlaneTerm {
+    /// The offset at `at`, and its column when it is fitted.
+    fn offset(&self, at: &At<'_>) -> (f64, Option<usize>) {
+        match self.offset {
+            Offset::Known(d) => (d, None),
+            Offset::Fitted(id) => (at.block(id)[0], Some(at.layout.columns(id).start)),
+        }
+    }
+
+    fn residual(&self, p: &[f64; 3], offset: f64) -> f64 {
+        let n = self.normal;
+        (n[0] * p[0] + n[1] * p[1] + n[2] * p[2] - offset) / self.sigma
+    }
+}
+
+impl Term for PlaneTerm {
+    fn name(&self) -> &str {
+        "plane"
+    }
+
+    fn rows(&self, _free: &[usize]) -> usize {
+        self.poses.len()
+    }
+
+    /// The plane's normal is in the base frame: a turn about the base axis
+    /// tilts the touches off it unless it is horizontal. A slide along the
+    /// axis moves them off a plane that is not parallel to it — unless the
+    /// offset is unknown (the plane slides along). Scale: an arm scaled
+    /// about a point of its base axis (the slide makes up the rest) keeps
+    /// the touches on a plane through that point, so only a known plane
+    /// parallel to the axis, away from it, fixes the size.
+    fn sees(&self) -> Sees {
+        let n = self.normal;
+        let parallel = n[2].abs() < 1e-9;
+        let known = match self.offset {
+            Offset::Known(d) => Some(d),
+            Offset::Fitted(_) => None,
+        };
+        Sees {
+            base_rotation: !parallel || n[0] != 0.0 || n[1] != 0.0,
+            base_slide: known.is_some() && !parallel,
+            scale: known.is_some_and(|d| parallel && d.abs() > 1e-9),
+        }
+    }
+
+    fn accumulate(
+        &self,
+        at: &At<'_>,
+        _shared: &mut Shared,
+        normal: &mut Normal,
+    ) -> Result<f64, TermError> {
+        let (offset, column) = self.offset(at);
+        let geometry = at.layout.geometry_columns();
+        let free = normal.free().to_vec();
+        let mut rows = Vec::with_capacity(self.poses.len());
+        at.kernel
+            .for_each_jacobian(&self.poses, 0..self.poses.len(), |_, p, jac| {
+                let n = self.normal;
+                let row: Vec<f64> = free
+                    .iter()
+                    .map(|&c| match c {
+                        c if c < geometry => {
+                            (n[0] * jac[c][0] + n[1] * jac[c][1] + n[2] * jac[c][2]) / self.sigma
+                        }
+                        c if Some(c) == column => -1.0 / self.sigma,
+                        _ => 0.0,
+                    })
+                    .collect();
+                rows.push((row, self.residual(p, offset)));
+            })?;
+        let mut cost = 0.0;
+        for (row, r) in rows {
+            normal.add_row(&row, r);
+            cost += r * r;
+        }
+        Ok(cost)
+    }
+
+    fn add_cost(
+        &self,
+        at: &At<'_>,
+        _free: &[usize],
+        _shared: &mut Shared,
+        _scratch: &mut Vec<[f64; 3]>,
+        total: &mut f64,
+    ) -> Result<(), TermError> {
+        let (offset, _) = self.offset(at);
+        let mut xyz = vec![[0.0; 3]; self.poses.len()];
+        at.kernel
+            .positions(&self.poses, 0..self.poses.len(), &mut xyz)?;
+        *total += xyz
+            .iter()
+            .map(|p| self.residual(p, offset).powi(2))
+            .sum::<f64>();
+        Ok(())
+    }
+}
+
+fn nominal() -> Arm {
+    Arm::without_limits("paper", DhParams::paper_nominal())
+}
+
+/// A campaign of the paper's errors with `lengths` reference lengths
+/// (without any, its touches cannot tell the arm's size).
+fn campaign(lengths: usize) -> Campaign {
+    let mut s = CampaignSettings::new(11, ErrorModel::Paper, 10, 10);
+    s.reference_lengths = lengths;
+    s.encoder_noise_deg = 0.005;
+    s.probe_noise_mm = 0.01;
+    simulate(&nominal(), &s).unwrap()
+}
+
+/// Readings that put the TRUE arm's probe on the plane `x = at`, parallel
+/// to the base axis: the sockets' (y, z), each from three start poses.
+fn plane_poses(c: &Campaign, at: f64) -> PreparedPoses {
+    let truth = ArmKernel::new(&c.true_arm.params).unwrap();
+    let mut rows = Vec::new();
+    for (k, (_, s)) in c.sockets.iter().enumerate() {
+        for start in 0..3 {
+            let q0: Vec<f64> = (0..6)
+                .map(|j| ((k * 5 + start * 3 + j) as f64 * 0.9).sin())
+                .collect();
+            let target = [at, s[1] + 20.0 * start as f64, s[2]];
+            let found = solve_point(&truth, target, &q0).unwrap();
+            if found.converged() {
+                rows.push(found.q);
+            }
+        }
+    }
+    assert!(rows.len() >= 20, "{} plane touches", rows.len());
+    PreparedPoses::new(6, &rows).unwrap()
+}
+
+/// A plane `x = const` through the middle of the sockets.
+fn plane_x(c: &Campaign) -> f64 {
+    let xs: Vec<f64> = c.sockets.iter().map(|(_, s)| s[0]).collect();
+    xs.iter().sum::<f64>() / xs.len() as f64
+}
+
+fn stated() -> Noise {
+    Noise {
+        encoder_rad: Some(0.005f64.to_radians()),
+        probe_mm: Some(0.01),
+        ..Noise::default()
+    }
+}
+
+fn run(problem: Problem) -> CalibrationReport {
+    let lm = SolverSettings::default().with_method(Method::Lm);
+    problem.run(&lm).unwrap()
+}
+
+/// How far the calibrated arm puts the campaign's touches from where the
+/// true arm puts them, after the best rigid motion (mm, RMS): what scale
+/// and shape errors leave.
+fn shape_error(c: &Campaign, params: &DhParams) -> f64 {
+    let rows: Vec<&[f64]> = c.poses.rows().collect();
+    let xyz = |p: &DhParams| ArmKernel::new(p).unwrap().positions_of(&rows).unwrap();
+    aacmm_core::geometry::rigid_distance(&xyz(params), &xyz(&c.true_arm.params), false)
+}
+
+#[test]
+fn a_known_plane_fixes_the_scale_the_touches_cannot_see() {
+    let c = campaign(0);
+    let data: DataSet = c.data_set().unwrap();
+    let model = ModelOptions {
+        noise: stated(),
+        ..ModelOptions::default()
+    };
+    let at = plane_x(&c);
+    let plane = PlaneTerm {
+        poses: plane_poses(&c, at),
+        normal: [1.0, 0.0, 0.0],
+        offset: Offset::Known(at),
+        sigma: 0.01,
+    };
+    let rows = plane.poses.len();
+    let bare = run(Problem::new(nominal(), data.clone(), model.clone()).unwrap());
+    let with = run(Problem::new(nominal(), data, model)
+        .unwrap()
+        .with_term(plane));
+    let rules = |r: &CalibrationReport| -> Vec<String> {
+        let id = r.calibration.identification.as_ref().unwrap();
+        id.rules.iter().map(|r| r.name.clone()).collect()
+    };
+    // The touches alone: base motion and scale structurally unseen.
+    assert_eq!(rules(&bare), ["base-motion", "scale"]);
+    // With a known plane parallel to the base axis: scale and the turn
+    // about the axis are seen; the slide along it still is not.
+    assert_eq!(rules(&with), ["base-motion"]);
+    let id = with.calibration.identification.as_ref().unwrap();
+    assert!(id.rules[0].explanation.contains("d1"), "{:?}", id.rules);
+    let fixed: Vec<String> = id.fixed.iter().map(|f| f.id.to_string()).collect();
+    assert!(fixed.contains(&"d1".to_string()) && !fixed.contains(&"theta1".to_string()));
+    assert!(with.is_usable(), "{:?}", with.verdict);
+    let dof = &with.calibration.dof;
+    assert_eq!(dof.other_rows.len(), 1);
+    assert_eq!(
+        (dof.other_rows[0].term.as_str(), dof.other_rows[0].rows),
+        ("plane", rows)
+    );
+    assert_eq!(
+        dof.degrees_of_freedom,
+        dof.touch_rows + rows - dof.centre_coordinates - dof.free_parameters
+    );
+    // The length fixed for scale is now calibrated, and the arm's shape
+    // comes out far closer to the truth.
+    let (b, w) = (
+        shape_error(&c, &bare.calibration.params),
+        shape_error(&c, &with.calibration.params),
+    );
+    assert!(w < 0.05 && w < b / 5.0, "shape error {b:.4} → {w:.4} mm");
+}
+
+#[test]
+fn an_unknown_plane_offset_is_a_block_of_its_own() {
+    // Reference lengths fix the size; the plane, its offset unknown, adds
+    // the turn about the base axis.
+    let c = campaign(3);
+    let data = c.data_set().unwrap();
+    let model = ModelOptions {
+        noise: stated(),
+        ..ModelOptions::default()
+    };
+    let at = plane_x(&c);
+    let mut problem = Problem::new(nominal(), data, model).unwrap();
+    // Started 2 mm off: the fit finds it.
+    let offset = problem.add_block(Scalar {
+        name: "plane.offset".into(),
+        unit: Unit::Length,
+        start: at + 2.0,
+        tolerance: None,
+    });
+    let plane = PlaneTerm {
+        poses: plane_poses(&c, at),
+        normal: [1.0, 0.0, 0.0],
+        offset: Offset::Fitted(offset),
+        sigma: 0.01,
+    };
+    let report = run(problem.with_term(plane));
+    assert!(report.is_usable(), "{:?}", report.verdict);
+    let aux = &report.calibration.auxiliary;
+    assert_eq!(aux.len(), 1);
+    let e = &aux[0];
+    assert_eq!(
+        (e.name.as_str(), e.unit.as_str(), e.start),
+        ("plane.offset", "mm", at + 2.0)
+    );
+    let sigma = e.sigma.unwrap();
+    // The plane is parallel to the base axis, so the slide along the axis
+    // (d1, fixed by the rules) does not move it, and the lengths fix the
+    // size: the offset comes out where the true arm's plane is.
+    let id = report.calibration.identification.as_ref().unwrap();
+    let rules: Vec<&str> = id.rules.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(rules, ["base-motion"]);
+    let d1 = &report.calibration.parameters[6];
+    assert_eq!(d1.id.to_string(), "d1");
+    assert_eq!(d1.fixed.as_deref(), Some("base motion: never identifiable"));
+    assert!(sigma > 0.0 && sigma < 0.1, "σ {sigma}");
+    assert!(
+        (e.calibrated - at).abs() < 4.0 * sigma,
+        "offset {} ± {sigma}, the plane at {at}",
+        e.calibrated
+    );
+    // In the JSON, beside the geometry's estimates.
+    let json = report.to_json();
+    assert!(json.contains("\"auxiliary\"") && json.contains("plane.offset"));
+}
