@@ -106,7 +106,7 @@ const KNOWN_LONG: &[(&str, &str)] = &[
     ("core/src/report/figures/points.rs", "figure"),
     ("core/src/report/tables.rs", "parameters"),
     ("core/src/report/tables.rs", "solver"),
-    ("core/src/session.rs", "summary"),
+    ("core/src/session/mod.rs", "summary"),
     ("core/src/simulate/settings.rs", "validate"),
     ("core/src/urdf.rs", "parse_urdf"),
     ("src/commands/calibrate.rs", "run"),
