@@ -132,7 +132,7 @@ enum AacmmTermination
   AACMM_TERMINATION_MACHINE_PRECISION = 6,
   /**
    * No LM ran: annealing alone (`AACMM_METHOD_SA`); its own stop decides
-   * `successful`.
+   * `converged`.
    */
   AACMM_TERMINATION_NO_LM = 7,
 };
@@ -155,91 +155,21 @@ typedef int32_t AacmmTermination;
 typedef struct AacmmArm AacmmArm;
 
 /**
+ * Settings of a calibration: the command line's flags. Opaque; made with
+ * the defaults of `aacmm calibrate` by `aacmm_calibrate_options_new`,
+ * changed by its setters (`aacmm_calibrate_options_set_method` and the
+ * others of that prefix, one per option), released by
+ * `aacmm_calibrate_options_free`. The calibration functions only read it:
+ * one options object may serve several calibrations, also at once on
+ * several threads, as long as no setter runs on it meanwhile.
+ */
+typedef struct AacmmCalibrateOptions AacmmCalibrateOptions;
+
+/**
  * The result of a calibration. Opaque; released by
  * `aacmm_calibration_free`. Never modified after it is made.
  */
 typedef struct AacmmCalibration AacmmCalibration;
-
-/**
- * A solver, for the `method` option: one of the `AACMM_METHOD_…`
- * constants.
- */
-typedef uint32_t AacmmMethod;
-
-/**
- * The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
- * `_CAUCHY` (`--robust`).
- */
-typedef uint32_t AacmmRobust;
-
-/**
- * Settings of a calibration: the command line's flags. Start from
- * `aacmm_calibrate_options_default` and change what you need; a
- * zero-initialised struct is not the default (it states a reference-length
- * uncertainty of 0).
- */
-typedef struct {
-  /**
-   * The solver: `AACMM_METHOD_GLOBAL` (default), `_LM`, `_SA` or
-   * `_HYBRID`.
-   */
-  AacmmMethod method;
-  /**
-   * Parameters held at their start values: `NULL` or `"auto"` (the
-   * recommended set of the identifiability analysis; default), or
-   * comma-separated names in the order's spelling, e.g.
-   * `"theta1,d1,theta6,alpha6,Bx,By"` (`beta…` is accepted for
-   * `alpha…`): the command line's `--fix`. Read during the call only.
-   */
-  const char *fix;
-  /**
-   * Seed of every random draw: the solvers' moves and starts, the
-   * cross-validation folds. Default 0.
-   */
-  uint64_t seed;
-  /**
-   * `k`-fold cross-validation over points for the report (0 = none, the
-   * default; otherwise 2 or more): `--cross-validate`.
-   */
-  size_t cross_validate;
-  /**
-   * σ of each encoder reading, rad; 0 = not stated (default). With
-   * `probe_noise_mm` these weigh the touches; when both are 0 the touch σ
-   * is estimated from the fit. (`--encoder-noise`, which is in degrees.)
-   */
-  double encoder_noise_rad;
-  /**
-   * σ of the probe seating per axis, mm; 0 = not stated (default).
-   * (`--probe-noise`.)
-   */
-  double probe_noise_mm;
-  /**
-   * σ of a reference length that states none, mm; default 0.001.
-   * (`--length-uncertainty`.)
-   */
-  double length_uncertainty_mm;
-  /**
-   * Weight of every reference-length residual, 1/mm, overriding the
-   * uncertainties; 0 = none (default). (`--length-weight`.)
-   */
-  double length_weight;
-  /**
-   * Worker threads for the normal equations; 0 = one per core (default).
-   * The results do not depend on it.
-   */
-  size_t threads;
-  /**
-   * A robust refit after the solver (IRLS, per-touch weights in the
-   * report's `/calibration/robust`): `AACMM_ROBUST_NONE` (default),
-   * `_HUBER` or `_CAUCHY` (`--robust`).
-   */
-  AacmmRobust robust;
-  /**
-   * Its tuning constant `k`; 0 = the loss's default (1.62 Huber, 2.65
-   * Cauchy). (`--robust-scale`.)
-   */
-  double robust_scale;
-} AacmmCalibrateOptions;
 
 /**
  * The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
@@ -265,10 +195,17 @@ typedef struct {
   double distance_mm;
   /**
    * Standard uncertainty of the distance, mm, >= 0; `NAN` = not stated
-   * (then `length_uncertainty_mm` of the options applies).
+   * (then the options' length uncertainty applies:
+   * `aacmm_calibrate_options_set_length_uncertainty_mm`).
    */
   double uncertainty_mm;
 } AacmmReferenceLength;
+
+/**
+ * A solver, for `aacmm_calibrate_options_set_method`: one of the
+ * `AACMM_METHOD_…` constants.
+ */
+typedef uint32_t AacmmMethod;
 
 /**
  * The figures of a calibration a program acts on; the report has the rest.
@@ -283,11 +220,23 @@ typedef struct {
    */
   AacmmTermination termination;
   /**
-   * Whether the result is usable: the final LM converged and the
-   * method's own stop is not a spent budget (an unconfirmed global
-   * search, an annealing out of evaluations).
+   * Whether the result is usable: the library's verdict, what the
+   * command line's exit status and Python's `Calibration.successful`
+   * say. False when the solver did not converge, when the calibrated
+   * arm is not the nominal arm's geometry (a mirror image, a collapsed
+   * arm, a unit mistake), or when the fit is poor (a χ² far outside the
+   * stated noise, an arm worse than the nominal on its own data) unless
+   * a poor fit was accepted (`aacmm_calibrate_options_set_accept_poor_fit`).
+   * `aacmm_calibration_verdict` says why.
    */
   bool successful;
+  /**
+   * Whether the solver converged: the final LM converged and the
+   * method's own stop is not a spent budget (an unconfirmed global
+   * search, an annealing out of evaluations). A converged fit may still
+   * be refused (`successful` false).
+   */
+  bool converged;
   /**
    * Iterations of the final fit.
    */
@@ -317,6 +266,22 @@ typedef struct {
    */
   double final_cost;
 } AacmmCalibrationSummary;
+
+/**
+ * The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
+ * `_CAUCHY` (`--robust`).
+ */
+typedef uint32_t AacmmRobust;
+
+/**
+ * Angles in degrees (the command line's default).
+ */
+#define AACMM_ANGLE_DEG 0
+
+/**
+ * Angles in radians.
+ */
+#define AACMM_ANGLE_RAD 1
 
 /**
  * Levenberg–Marquardt from the start arm (`--method lm`).
@@ -353,16 +318,6 @@ typedef struct {
  * A robust refit with the Cauchy loss.
  */
 #define AACMM_ROBUST_CAUCHY 2
-
-/**
- * Angles in degrees (the command line's default).
- */
-#define AACMM_ANGLE_DEG 0
-
-/**
- * Angles in radians.
- */
-#define AACMM_ANGLE_RAD 1
 
 #ifdef __cplusplus
 extern "C" {
@@ -546,33 +501,33 @@ AacmmStatus aacmm_joint_jacobian(const AacmmArm *arm,
                                  size_t jac_len);
 
 /**
- * The defaults of every option (those of `aacmm calibrate`).
- */
-AacmmCalibrateOptions aacmm_calibrate_options_default(void);
-
-/**
  * Calibrates the arm of an arm file on a poses file and an optional
  * reference-lengths file: `aacmm calibrate --arm ARM --data POSES
- * [--lengths LENGTHS]` with the flags of `options` (`NULL` = defaults).
- * The parameters are the command line's, bit for bit; held-out validation
- * (`--validate`) is not part of the C API.
+ * [--lengths LENGTHS]` with the flags of `options` (`NULL` = the
+ * defaults). The arm file's `[prior]` table, if any, is used as the
+ * command line uses it (`aacmm_calibrate_options_set_prior` overrides or
+ * drops it). The parameters and the verdict are the command line's, bit
+ * for bit; held-out validation (`--validate`) is not part of the C API.
  *
  * `poses_unit` is the unit of the poses file's angles (`AACMM_ANGLE_DEG`,
  * `AACMM_ANGLE_RAD`); `lengths_path` may be `NULL`. The result goes to a
- * new handle at `*out`; a solver that did not converge still gives a
- * result (check `successful` in `aacmm_calibration_summary`).
+ * new handle at `*out`; a calibration the library does not call usable
+ * (the solver did not converge, a mirror-image arm, a poor fit) still
+ * gives a result: check `successful` in `aacmm_calibration_summary`, and
+ * `aacmm_calibration_verdict` for why.
  *
  * Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_IO` (a file cannot be
  * read), `AACMM_STATUS_INPUT` (a file's content; the message names file,
- * line and field), `AACMM_STATUS_INVALID_ARGUMENT` (an option),
+ * line and field), `AACMM_STATUS_INVALID_ARGUMENT` (an option, e.g. a
+ * fixed parameter or a prior target the arm does not have),
  * `AACMM_STATUS_UNSUPPORTED`, `AACMM_STATUS_CALIBRATION` (the data cannot
  * determine the free parameters). On error `*out` is `NULL`.
  *
  * # Safety
  *
- * The paths are `NULL` or NUL-terminated strings; `options` is `NULL` or
- * points to an options struct (its `fix` `NULL` or NUL-terminated); `out`
- * is `NULL` or points to writable memory for one pointer.
+ * The paths are `NULL` or NUL-terminated strings; `options` is `NULL` or a
+ * live options handle that no setter changes during the call; `out` is
+ * `NULL` or points to writable memory for one pointer.
  */
 AacmmStatus aacmm_calibrate_files(const char *arm_path,
                                   const char *poses_path,
@@ -589,14 +544,18 @@ AacmmStatus aacmm_calibrate_files(const char *arm_path,
  * touched (`points_len = n`; touches with the same id touch the same
  * point, which needs at least 3 touches); `lengths` holds `lengths_len`
  * reference lengths between point ids (may be `NULL` when `lengths_len`
- * is 0). Same solver and options as `aacmm_calibrate_files`; on the same
- * data (point ids in place of labels) it gives the same parameters.
+ * is 0). Same solver and options as `aacmm_calibrate_files`, and the
+ * prior of `start`'s arm file if it was read from one
+ * (`aacmm_arm_from_file`); on the same data (point ids in place of
+ * labels) it gives the same parameters.
  *
  * Errors: as `aacmm_calibrate_files`; `AACMM_STATUS_LENGTH` for `q_len`
- * or `points_len` that do not match; `AACMM_STATUS_INPUT` for a point with
- * fewer than 3 touches, or a length that joins a point to itself, names an
+ * or `points_len` that do not match; `AACMM_STATUS_INPUT` for a
+ * non-finite reading, a point with fewer than 3 touches, touches without
+ * articulation, or a length that joins a point to itself, names an
  * unknown point, repeats a pair, or has a distance <= 0 or a negative
- * uncertainty.
+ * uncertainty: the message names the array and the index
+ * (`points[6]: point 9 has 2 touches; …`, `lengths[0]: …`).
  *
  * # Safety
  *
@@ -661,7 +620,8 @@ AacmmStatus aacmm_calibration_sigmas(const AacmmCalibration *cal, double *sigma,
 AacmmStatus aacmm_calibration_fixed(const AacmmCalibration *cal, bool *fixed, size_t fixed_len);
 
 /**
- * The solver's outcome and the fit's figures into `*summary`.
+ * The verdict, the solver's outcome and the fit's figures into
+ * `*summary`.
  *
  * # Safety
  *
@@ -704,6 +664,48 @@ AacmmStatus aacmm_calibration_report(const AacmmCalibration *cal,
                                      size_t *len);
 
 /**
+ * The library's verdict on the calibration: whether it is usable into
+ * `*usable` (the summary's `successful`), and why not into `buf`: the
+ * reasons, one per line (UTF-8; empty when usable), copied like
+ * `aacmm_last_error_message`; `*len` gets the full length in bytes
+ * without the NUL. The same as the report's `verdict.usable` and
+ * `verdict.reasons`, and what the command line prints as `Verdict: NOT
+ * usable — …` (exiting non-zero).
+ *
+ * Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the copy was truncated
+ * (`buf` may be `NULL` with `buf_len` 0 to ask for the length; `*usable`
+ * is written all the same).
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `usable` is `NULL` or
+ * writable; `buf` is `NULL` or points to `buf_len` writable bytes; `len`
+ * is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_verdict(const AacmmCalibration *cal,
+                                      bool *usable,
+                                      char *buf,
+                                      size_t buf_len,
+                                      size_t *len);
+
+/**
+ * What a metrologist should know although the calibration may be usable
+ * (a χ² outside its range, a poor fit accepted on request, data that
+ * determine the arm weakly, a joint better modelled by Hayati's
+ * parameters): the verdict's notes, one per line (empty when there are
+ * none), copied like `aacmm_calibration_verdict`'s reasons.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `buf` is `NULL` or points to
+ * `buf_len` writable bytes; `len` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_verdict_notes(const AacmmCalibration *cal,
+                                            char *buf,
+                                            size_t buf_len,
+                                            size_t *len);
+
+/**
  * Copies the message of the last failed call on this thread into `buf`.
  *
  * Writes at most `buf_len - 1` bytes of UTF-8 (cut at a character
@@ -720,6 +722,185 @@ AacmmStatus aacmm_calibration_report(const AacmmCalibration *cal,
  * `buf` is `NULL` or points to at least `buf_len` writable bytes.
  */
 size_t aacmm_last_error_message(char *buf, size_t buf_len);
+
+/**
+ * New options with the defaults of `aacmm calibrate`, at `*out` (release
+ * them with `aacmm_calibrate_options_free`). Passing `NULL` options to a
+ * calibration means these defaults too.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`out`).
+ *
+ * # Safety
+ *
+ * `out` is `NULL` or points to writable memory for one pointer.
+ */
+AacmmStatus aacmm_calibrate_options_new(AacmmCalibrateOptions **out);
+
+/**
+ * Releases options. `NULL` is allowed (nothing happens).
+ *
+ * # Safety
+ *
+ * `options` is `NULL` or a live options handle, which must not be used
+ * afterwards.
+ */
+void aacmm_calibrate_options_free(AacmmCalibrateOptions *options);
+
+/**
+ * The solver: `AACMM_METHOD_GLOBAL` (default), `_LM`, `_SA` or `_HYBRID`
+ * (`--method`).
+ *
+ * Errors (for every setter): `AACMM_STATUS_NULL_POINTER` (`options`),
+ * `AACMM_STATUS_INVALID_ARGUMENT` for a value out of range; the message
+ * names the option (`method = 7: …`) and the options keep their earlier
+ * value.
+ *
+ * # Safety
+ *
+ * `options` is `NULL` or a live options handle that no other thread uses
+ * during the call (the same for every setter).
+ */
+AacmmStatus aacmm_calibrate_options_set_method(AacmmCalibrateOptions *options, AacmmMethod method);
+
+/**
+ * Parameters held at their start values (`--fix`): `NULL` or `"auto"`
+ * (the recommended set of the identifiability analysis; default), or
+ * comma-separated names in the order's spelling, e.g.
+ * `"theta1,d1,theta6,alpha6,Bx,By"` (`beta…` is accepted for `alpha…`,
+ * `hbeta…` names a Hayati joint's d-slot). Copied; names that no arm has
+ * are refused here, names the arm at hand lacks when calibrating.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `fix` is `NULL` or a
+ * NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_fix(AacmmCalibrateOptions *options, const char *fix);
+
+/**
+ * Seed of every random draw: the solvers' moves and starts, the
+ * cross-validation folds (`--seed`; default 0).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_seed(AacmmCalibrateOptions *options, uint64_t seed);
+
+/**
+ * `k`-fold cross-validation over points for the report
+ * (`--cross-validate`): 0 = none (the default), otherwise 2 or more (and
+ * at most the number of points, checked when calibrating).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_cross_validate(AacmmCalibrateOptions *options, size_t k);
+
+/**
+ * σ of each encoder reading, rad (`--encoder-noise`, which is in
+ * degrees); 0 = not stated (the default). With the probe noise these
+ * weigh the touches; when neither is stated the touch σ is estimated from
+ * the fit. Finite and ≥ 0.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_encoder_noise_rad(AacmmCalibrateOptions *options,
+                                                          double sigma);
+
+/**
+ * σ of the probe seating per axis, mm (`--probe-noise`); 0 = not stated
+ * (the default). Finite and ≥ 0.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_probe_noise_mm(AacmmCalibrateOptions *options,
+                                                       double sigma);
+
+/**
+ * σ of a reference length that states none, mm (`--length-uncertainty`;
+ * default 0.001). Finite and ≥ 0.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_length_uncertainty_mm(AacmmCalibrateOptions *options,
+                                                              double sigma);
+
+/**
+ * Weight of every reference-length residual, 1/mm, overriding the
+ * uncertainties (`--length-weight`); 0 = none (the default). Finite and
+ * ≥ 0.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_length_weight(AacmmCalibrateOptions *options,
+                                                      double weight);
+
+/**
+ * Worker threads for the normal equations (`--threads`); 0 = one per
+ * core (the default). The results do not depend on it.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_threads(AacmmCalibrateOptions *options, size_t threads);
+
+/**
+ * A robust refit after the solver (IRLS; per-touch weights in the
+ * report's `/calibration/robust`; `--robust`, `--robust-scale`): `loss`
+ * `AACMM_ROBUST_NONE` (the default), `_HUBER` or `_CAUCHY`, and its tuning
+ * constant `scale` (> 0; 0 = the loss's default: 1.62 Huber, 2.65 Cauchy;
+ * ignored with `_NONE`).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_robust(AacmmCalibrateOptions *options,
+                                               AacmmRobust loss,
+                                               double scale);
+
+/**
+ * Stated tolerances of the start arm: a prior, as the command line's
+ * `--prior`. `NULL` (the default): the arm file's `[prior]` table, if
+ * any; `"none"`: no prior, whatever the file says; otherwise
+ * comma-separated `TARGET=VALUEUNIT`, e.g.
+ * `"length=0.5mm,angle=0.1deg,theta5=0.05deg"` (targets `length`,
+ * `angle`, `a`, `d`, `alpha`, `theta`, `probe` or a parameter; units `mm`,
+ * `m`, `deg`, `rad`), each replacing or adding to the file's entry for
+ * its target. Copied; the syntax and values are checked here, the
+ * parameters against the arm when calibrating.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `prior` is `NULL` or a
+ * NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_prior(AacmmCalibrateOptions *options, const char *prior);
+
+/**
+ * Whether a poor fit may be called usable (`--accept-poor-fit`; default
+ * `false`): a χ² far outside the stated noise, or a calibrated arm worse
+ * than the nominal on its own data, then becomes a note of the verdict
+ * instead of a reason to refuse it. A mirror-image or collapsed arm, or a
+ * solver that did not converge, is refused all the same.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_accept_poor_fit(AacmmCalibrateOptions *options,
+                                                        bool accept);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -1,75 +1,17 @@
 //! Calibration from files or arrays, and the result handle.
 
-use std::collections::{HashMap, HashSet};
-use std::ffi::{CStr, c_char};
+use std::ffi::c_char;
 
-use aacmm_core::calibrate::{
-    FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings, Termination,
-};
-use aacmm_core::dataset::{DataSet, MIN_TOUCHES};
-use aacmm_core::io::{
-    AngleUnit, Arm, Poses, ReferenceLength, read_arm, read_lengths, read_poses, source_name,
-};
+use aacmm_core::calibrate::Termination;
+use aacmm_core::dataset::{ArrayLength, DataSet};
+use aacmm_core::io::{AngleUnit, Arm, read_arm, read_lengths, read_poses, source_name};
 use aacmm_core::params::ParamId;
-use aacmm_core::residuals::{DEFAULT_LENGTH_SIGMA_MM, Noise};
 use aacmm_core::session::{CalibrationReport, Problem, Sources};
 
 use crate::arm::{AacmmArm, handle, pose_count, string_out};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
+use crate::options::{self, AacmmCalibrateOptions, AacmmMethod, Settings, method_code};
 use crate::ptr;
-
-/// A solver, for the `method` option: one of the `AACMM_METHOD_…`
-/// constants.
-pub type AacmmMethod = u32;
-
-/// Levenberg–Marquardt from the start arm (`--method lm`).
-pub const AACMM_METHOD_LM: AacmmMethod = 0;
-
-/// The paper's simulated annealing alone (`--method sa`).
-pub const AACMM_METHOD_SA: AacmmMethod = 1;
-
-/// The paper's hybrid, annealing then LM (`--method hybrid`).
-pub const AACMM_METHOD_HYBRID: AacmmMethod = 2;
-
-/// Converges from encoder zeros unknown in ±180° (`--method global`, the
-/// default).
-pub const AACMM_METHOD_GLOBAL: AacmmMethod = 3;
-
-/// The library's method of a C constant.
-fn method(m: AacmmMethod) -> Option<Method> {
-    match m {
-        AACMM_METHOD_LM => Some(Method::Lm),
-        AACMM_METHOD_SA => Some(Method::Sa),
-        AACMM_METHOD_HYBRID => Some(Method::Hybrid),
-        AACMM_METHOD_GLOBAL => Some(Method::Global),
-        _ => None,
-    }
-}
-
-/// The C constant of a library method.
-fn method_code(m: Method) -> AacmmMethod {
-    match m {
-        Method::Lm => AACMM_METHOD_LM,
-        Method::Sa => AACMM_METHOD_SA,
-        Method::Hybrid => AACMM_METHOD_HYBRID,
-        Method::Global => AACMM_METHOD_GLOBAL,
-        // Never: the C API runs the library's own solvers only.
-        Method::External => AacmmMethod::MAX,
-    }
-}
-
-/// The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
-/// `_CAUCHY` (`--robust`).
-pub type AacmmRobust = u32;
-
-/// Plain least squares (the default).
-pub const AACMM_ROBUST_NONE: AacmmRobust = 0;
-
-/// A robust refit with the Huber loss.
-pub const AACMM_ROBUST_HUBER: AacmmRobust = 1;
-
-/// A robust refit with the Cauchy loss.
-pub const AACMM_ROBUST_CAUCHY: AacmmRobust = 2;
 
 /// The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
 /// `AACMM_ANGLE_RAD`.
@@ -80,53 +22,6 @@ pub const AACMM_ANGLE_DEG: AacmmAngleUnit = 0;
 
 /// Angles in radians.
 pub const AACMM_ANGLE_RAD: AacmmAngleUnit = 1;
-
-/// Settings of a calibration: the command line's flags. Start from
-/// `aacmm_calibrate_options_default` and change what you need; a
-/// zero-initialised struct is not the default (it states a reference-length
-/// uncertainty of 0).
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct AacmmCalibrateOptions {
-    /// The solver: `AACMM_METHOD_GLOBAL` (default), `_LM`, `_SA` or
-    /// `_HYBRID`.
-    pub method: AacmmMethod,
-    /// Parameters held at their start values: `NULL` or `"auto"` (the
-    /// recommended set of the identifiability analysis; default), or
-    /// comma-separated names in the order's spelling, e.g.
-    /// `"theta1,d1,theta6,alpha6,Bx,By"` (`beta…` is accepted for
-    /// `alpha…`): the command line's `--fix`. Read during the call only.
-    pub fix: *const c_char,
-    /// Seed of every random draw: the solvers' moves and starts, the
-    /// cross-validation folds. Default 0.
-    pub seed: u64,
-    /// `k`-fold cross-validation over points for the report (0 = none, the
-    /// default; otherwise 2 or more): `--cross-validate`.
-    pub cross_validate: usize,
-    /// σ of each encoder reading, rad; 0 = not stated (default). With
-    /// `probe_noise_mm` these weigh the touches; when both are 0 the touch σ
-    /// is estimated from the fit. (`--encoder-noise`, which is in degrees.)
-    pub encoder_noise_rad: f64,
-    /// σ of the probe seating per axis, mm; 0 = not stated (default).
-    /// (`--probe-noise`.)
-    pub probe_noise_mm: f64,
-    /// σ of a reference length that states none, mm; default 0.001.
-    /// (`--length-uncertainty`.)
-    pub length_uncertainty_mm: f64,
-    /// Weight of every reference-length residual, 1/mm, overriding the
-    /// uncertainties; 0 = none (default). (`--length-weight`.)
-    pub length_weight: f64,
-    /// Worker threads for the normal equations; 0 = one per core (default).
-    /// The results do not depend on it.
-    pub threads: usize,
-    /// A robust refit after the solver (IRLS, per-touch weights in the
-    /// report's `/calibration/robust`): `AACMM_ROBUST_NONE` (default),
-    /// `_HUBER` or `_CAUCHY` (`--robust`).
-    pub robust: AacmmRobust,
-    /// Its tuning constant `k`; 0 = the loss's default (1.62 Huber, 2.65
-    /// Cauchy). (`--robust-scale`.)
-    pub robust_scale: f64,
-}
 
 /// One reference length between two touched points, for `aacmm_calibrate`.
 #[repr(C)]
@@ -139,8 +34,22 @@ pub struct AacmmReferenceLength {
     /// Distance, mm, > 0.
     pub distance_mm: f64,
     /// Standard uncertainty of the distance, mm, >= 0; `NAN` = not stated
-    /// (then `length_uncertainty_mm` of the options applies).
+    /// (then the options' length uncertainty applies:
+    /// `aacmm_calibrate_options_set_length_uncertainty_mm`).
     pub uncertainty_mm: f64,
+}
+
+impl From<&AacmmReferenceLength> for ArrayLength {
+    fn from(l: &AacmmReferenceLength) -> ArrayLength {
+        ArrayLength {
+            point_a: l.point_a,
+            point_b: l.point_b,
+            distance_mm: l.distance_mm,
+            // NAN is C's "not stated"; any other value goes to the
+            // library's check.
+            uncertainty_mm: (!l.uncertainty_mm.is_nan()).then_some(l.uncertainty_mm),
+        }
+    }
 }
 
 /// Why the solver stopped.
@@ -164,7 +73,7 @@ pub enum AacmmTermination {
     /// machine precision.
     MachinePrecision = 6,
     /// No LM ran: annealing alone (`AACMM_METHOD_SA`); its own stop decides
-    /// `successful`.
+    /// `converged`.
     NoLm = 7,
 }
 
@@ -191,10 +100,20 @@ pub struct AacmmCalibrationSummary {
     pub method: AacmmMethod,
     /// Why the final LM stopped.
     pub termination: AacmmTermination,
-    /// Whether the result is usable: the final LM converged and the
-    /// method's own stop is not a spent budget (an unconfirmed global
-    /// search, an annealing out of evaluations).
+    /// Whether the result is usable: the library's verdict, what the
+    /// command line's exit status and Python's `Calibration.successful`
+    /// say. False when the solver did not converge, when the calibrated
+    /// arm is not the nominal arm's geometry (a mirror image, a collapsed
+    /// arm, a unit mistake), or when the fit is poor (a χ² far outside the
+    /// stated noise, an arm worse than the nominal on its own data) unless
+    /// a poor fit was accepted (`aacmm_calibrate_options_set_accept_poor_fit`).
+    /// `aacmm_calibration_verdict` says why.
     pub successful: bool,
+    /// Whether the solver converged: the final LM converged and the
+    /// method's own stop is not a spent budget (an unconfirmed global
+    /// search, an annealing out of evaluations). A converged fit may still
+    /// be refused (`successful` false).
+    pub converged: bool,
     /// Iterations of the final fit.
     pub iterations: usize,
     /// Parameters fitted (the others were held fixed).
@@ -219,122 +138,6 @@ pub struct AacmmCalibration {
     json: String,
 }
 
-/// The defaults of every option (those of `aacmm calibrate`).
-#[unsafe(no_mangle)]
-pub extern "C" fn aacmm_calibrate_options_default() -> AacmmCalibrateOptions {
-    AacmmCalibrateOptions {
-        method: AACMM_METHOD_GLOBAL,
-        fix: std::ptr::null(),
-        seed: 0,
-        cross_validate: 0,
-        encoder_noise_rad: 0.0,
-        probe_noise_mm: 0.0,
-        length_uncertainty_mm: DEFAULT_LENGTH_SIGMA_MM,
-        length_weight: 0.0,
-        threads: 0,
-        robust: AACMM_ROBUST_NONE,
-        robust_scale: 0.0,
-    }
-}
-
-/// The options in the library's terms (checked by the library when the
-/// problem is made), and the fold count.
-struct Settings {
-    options: ModelOptions,
-    solver: SolverSettings,
-    cross_validate: usize,
-}
-
-/// # Safety
-///
-/// `options` is `NULL` or points to an options struct whose `fix` is `NULL`
-/// or NUL-terminated.
-unsafe fn settings(
-    options: *const AacmmCalibrateOptions,
-    arm: &aacmm_core::params::DhParams,
-) -> Result<Settings, Error> {
-    let joints = arm.joint_count();
-    let o = if options.is_null() {
-        aacmm_calibrate_options_default()
-    } else {
-        // SAFETY: by the contract.
-        *unsafe { ptr::object(options, "options") }?
-    };
-    let Some(solver) = method(o.method) else {
-        return Err(Error::invalid(format!(
-            "options.method = {}: one of AACMM_METHOD_LM ({AACMM_METHOD_LM}), _SA \
-             ({AACMM_METHOD_SA}), _HYBRID ({AACMM_METHOD_HYBRID}), _GLOBAL ({AACMM_METHOD_GLOBAL})",
-            o.method
-        )));
-    };
-    let loss = match o.robust {
-        AACMM_ROBUST_NONE => None,
-        AACMM_ROBUST_HUBER => Some(Loss::Huber),
-        AACMM_ROBUST_CAUCHY => Some(Loss::Cauchy),
-        other => {
-            return Err(Error::invalid(format!(
-                "options.robust = {other}: one of AACMM_ROBUST_NONE ({AACMM_ROBUST_NONE}), \
-                 _HUBER ({AACMM_ROBUST_HUBER}), _CAUCHY ({AACMM_ROBUST_CAUCHY})"
-            )));
-        }
-    };
-    let fix = if o.fix.is_null() {
-        "auto".to_string()
-    } else {
-        // SAFETY: non-null, NUL-terminated by the contract.
-        let s = unsafe { CStr::from_ptr(o.fix) };
-        s.to_str()
-            .map_err(|_| Error::invalid("options.fix is not valid UTF-8"))?
-            .to_string()
-    };
-    // 0 = not stated; anything else goes to the library, which refuses
-    // negative and non-finite values by field.
-    let stated = |v: f64| (v != 0.0).then_some(v);
-    let threads = match o.threads {
-        0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        n => n,
-    };
-    // `..default()`: settings the C API does not expose (annealing
-    // schedule, start budget) keep the library's defaults, which are the
-    // command line's.
-    let settings = SolverSettings {
-        method: solver,
-        seed: o.seed,
-        threads,
-        ..SolverSettings::default()
-    };
-    let options = ModelOptions {
-        fix: FixSpec::parse_for(&fix, arm)?,
-        noise: Noise {
-            encoder_rad: stated(o.encoder_noise_rad),
-            probe_mm: stated(o.probe_noise_mm),
-            length_default_mm: o.length_uncertainty_mm,
-            length_weight: stated(o.length_weight),
-        },
-        robust: loss.map(|loss| Robust {
-            loss,
-            scale_k: if o.robust_scale == 0.0 {
-                loss.default_k()
-            } else {
-                o.robust_scale
-            },
-        }),
-        ..ModelOptions::default()
-    };
-    options.check(joints)?;
-    settings.check()?;
-    if o.cross_validate == 1 {
-        return Err(Error::invalid(
-            "options.cross_validate = 1: 0 (none) or 2 or more folds",
-        ));
-    }
-    Ok(Settings {
-        options,
-        solver: settings,
-        cross_validate: o.cross_validate,
-    })
-}
-
 /// Calibrates and builds the result: the library's session (what the
 /// command line runs), without held-out validation.
 fn run(
@@ -343,7 +146,7 @@ fn run(
     s: Settings,
     sources: Sources,
 ) -> Result<AacmmCalibration, Error> {
-    let mut problem = Problem::new(start.clone(), data, s.options)
+    let mut problem = Problem::new(start.clone(), data, s.model)
         .map_err(|e| in_file(e, &sources.arm_file))?
         .with_sources(sources);
     if s.cross_validate != 0 {
@@ -373,26 +176,31 @@ fn in_file(e: aacmm_core::CalibrationError, arm: &str) -> Error {
 
 /// Calibrates the arm of an arm file on a poses file and an optional
 /// reference-lengths file: `aacmm calibrate --arm ARM --data POSES
-/// [--lengths LENGTHS]` with the flags of `options` (`NULL` = defaults).
-/// The parameters are the command line's, bit for bit; held-out validation
-/// (`--validate`) is not part of the C API.
+/// [--lengths LENGTHS]` with the flags of `options` (`NULL` = the
+/// defaults). The arm file's `[prior]` table, if any, is used as the
+/// command line uses it (`aacmm_calibrate_options_set_prior` overrides or
+/// drops it). The parameters and the verdict are the command line's, bit
+/// for bit; held-out validation (`--validate`) is not part of the C API.
 ///
 /// `poses_unit` is the unit of the poses file's angles (`AACMM_ANGLE_DEG`,
 /// `AACMM_ANGLE_RAD`); `lengths_path` may be `NULL`. The result goes to a
-/// new handle at `*out`; a solver that did not converge still gives a
-/// result (check `successful` in `aacmm_calibration_summary`).
+/// new handle at `*out`; a calibration the library does not call usable
+/// (the solver did not converge, a mirror-image arm, a poor fit) still
+/// gives a result: check `successful` in `aacmm_calibration_summary`, and
+/// `aacmm_calibration_verdict` for why.
 ///
 /// Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_IO` (a file cannot be
 /// read), `AACMM_STATUS_INPUT` (a file's content; the message names file,
-/// line and field), `AACMM_STATUS_INVALID_ARGUMENT` (an option),
+/// line and field), `AACMM_STATUS_INVALID_ARGUMENT` (an option, e.g. a
+/// fixed parameter or a prior target the arm does not have),
 /// `AACMM_STATUS_UNSUPPORTED`, `AACMM_STATUS_CALIBRATION` (the data cannot
 /// determine the free parameters). On error `*out` is `NULL`.
 ///
 /// # Safety
 ///
-/// The paths are `NULL` or NUL-terminated strings; `options` is `NULL` or
-/// points to an options struct (its `fix` `NULL` or NUL-terminated); `out`
-/// is `NULL` or points to writable memory for one pointer.
+/// The paths are `NULL` or NUL-terminated strings; `options` is `NULL` or a
+/// live options handle that no setter changes during the call; `out` is
+/// `NULL` or points to writable memory for one pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_calibrate_files(
     arm_path: *const c_char,
@@ -429,7 +237,7 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
         let (arm, mut warnings) = read_arm(&arm_path)?;
         let (arm_file, data_file) = (source_name(&arm_path), source_name(&poses_path));
         // SAFETY: by the contract.
-        let s = unsafe { settings(options, &arm.params) }?;
+        let s = options::settings(&unsafe { options::read(options) }?, &arm)?;
         let (poses, poses_warnings) =
             read_poses(&poses_path, unit, Some(arm.params.joint_count()))?;
         warnings.extend(poses_warnings);
@@ -457,14 +265,18 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
 /// touched (`points_len = n`; touches with the same id touch the same
 /// point, which needs at least 3 touches); `lengths` holds `lengths_len`
 /// reference lengths between point ids (may be `NULL` when `lengths_len`
-/// is 0). Same solver and options as `aacmm_calibrate_files`; on the same
-/// data (point ids in place of labels) it gives the same parameters.
+/// is 0). Same solver and options as `aacmm_calibrate_files`, and the
+/// prior of `start`'s arm file if it was read from one
+/// (`aacmm_arm_from_file`); on the same data (point ids in place of
+/// labels) it gives the same parameters.
 ///
 /// Errors: as `aacmm_calibrate_files`; `AACMM_STATUS_LENGTH` for `q_len`
-/// or `points_len` that do not match; `AACMM_STATUS_INPUT` for a point with
-/// fewer than 3 touches, or a length that joins a point to itself, names an
+/// or `points_len` that do not match; `AACMM_STATUS_INPUT` for a
+/// non-finite reading, a point with fewer than 3 touches, touches without
+/// articulation, or a length that joins a point to itself, names an
 /// unknown point, repeats a pair, or has a distance <= 0 or a negative
-/// uncertainty.
+/// uncertainty: the message names the array and the index
+/// (`points[6]: point 9 has 2 touches; …`, `lengths[0]: …`).
 ///
 /// # Safety
 ///
@@ -505,8 +317,9 @@ pub unsafe extern "C" fn aacmm_calibrate(
             )
         };
         // SAFETY: by the contract.
-        let s = unsafe { settings(options, &start.arm.params) }?;
-        let data = array_data(joints, q, points, lengths)?;
+        let s = options::settings(&unsafe { options::read(options) }?, &start.arm)?;
+        let lengths: Vec<ArrayLength> = lengths.iter().map(ArrayLength::from).collect();
+        let data = DataSet::from_arrays(joints, q, points, &lengths)?;
         let sources = Sources {
             arm_file: start.source.clone(),
             data_file: "<arrays>".to_string(),
@@ -517,89 +330,6 @@ pub unsafe extern "C" fn aacmm_calibrate(
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })
-}
-
-/// The data set of the array interface, checked as the file readers check
-/// files (messages name the array and index).
-fn array_data(
-    joints: usize,
-    q: &[f64],
-    points: &[u32],
-    lengths: &[AacmmReferenceLength],
-) -> Result<DataSet, Error> {
-    let input = |m: String| Error::new(AacmmStatus::Input, m);
-    if points.is_empty() {
-        return Err(input("no touches (q_len = 0)".into()));
-    }
-    if let Some(i) = q.iter().position(|v| !v.is_finite()) {
-        return Err(input(format!("q[{i}] = {}: readings must be finite", q[i])));
-    }
-    let mut touches: HashMap<u32, (usize, usize)> = HashMap::new();
-    for (i, &id) in points.iter().enumerate() {
-        touches.entry(id).or_insert((i, 0)).1 += 1;
-    }
-    let mut few: Vec<(usize, u32, usize)> = (touches.iter())
-        .filter(|(_, (_, count))| *count < MIN_TOUCHES)
-        .map(|(&id, &(first, count))| (first, id, count))
-        .collect();
-    few.sort_unstable();
-    if let Some(&(first, id, count)) = few.first() {
-        return Err(input(format!(
-            "points[{first}]: point {id} has {count} touch{}; at least {MIN_TOUCHES} are needed",
-            if count == 1 { "" } else { "es" }
-        )));
-    }
-    let mut poses = Poses::with_capacity(joints, points.len());
-    for (i, (id, row)) in points.iter().zip(q.chunks_exact(joints)).enumerate() {
-        poses.push(&id.to_string(), row, i + 1);
-    }
-    let data = DataSet::from_poses(&poses, "points")?;
-    if lengths.is_empty() {
-        return Ok(data);
-    }
-    let mut pairs = HashSet::new();
-    let mut refs = Vec::with_capacity(lengths.len());
-    for (i, l) in lengths.iter().enumerate() {
-        let at = |m: String| input(format!("lengths[{i}]: {m}"));
-        for id in [l.point_a, l.point_b] {
-            if !touches.contains_key(&id) {
-                return Err(at(format!("unknown point {id}: no touch has this id")));
-            }
-        }
-        if l.point_a == l.point_b {
-            return Err(at(format!(
-                "point_b = point_a = {}: a length needs two points",
-                l.point_a
-            )));
-        }
-        if !(l.distance_mm.is_finite() && l.distance_mm > 0.0) {
-            return Err(at(format!(
-                "distance_mm = {}: must be a positive number",
-                l.distance_mm
-            )));
-        }
-        let u = l.uncertainty_mm;
-        if !(u.is_nan() || (u.is_finite() && u >= 0.0)) {
-            return Err(at(format!(
-                "uncertainty_mm = {u}: must be >= 0, or NAN for not stated"
-            )));
-        }
-        let pair = (l.point_a.min(l.point_b), l.point_a.max(l.point_b));
-        if !pairs.insert(pair) {
-            return Err(at(format!(
-                "the pair {}–{} is given twice",
-                l.point_a, l.point_b
-            )));
-        }
-        refs.push(ReferenceLength {
-            a: l.point_a.to_string(),
-            b: l.point_b.to_string(),
-            distance: l.distance_mm,
-            uncertainty: (!u.is_nan()).then_some(u),
-            line: i + 1,
-        });
-    }
-    Ok(data.with_lengths(&refs, "lengths")?)
 }
 
 /// The result behind `cal`.
@@ -727,7 +457,8 @@ pub unsafe extern "C" fn aacmm_calibration_fixed(
     })
 }
 
-/// The solver's outcome and the fit's figures into `*summary`.
+/// The verdict, the solver's outcome and the fit's figures into
+/// `*summary`.
 ///
 /// # Safety
 ///
@@ -740,11 +471,13 @@ pub unsafe extern "C" fn aacmm_calibration_summary(
 ) -> AacmmStatus {
     guard(|| {
         // SAFETY: by the contract.
-        let c = &unsafe { result(cal) }?.report.calibration;
+        let report = &unsafe { result(cal) }?.report;
+        let c = &report.calibration;
         let value = AacmmCalibrationSummary {
             method: method_code(c.solver.method),
             termination: c.solver.stop.lm().into(),
-            successful: c.solver.successful,
+            successful: report.verdict.usable,
+            converged: c.solver.successful,
             iterations: c.solver.iterations,
             free_parameters: c.dof.free_parameters,
             degrees_of_freedom: c.dof.degrees_of_freedom,
@@ -810,107 +543,70 @@ pub unsafe extern "C" fn aacmm_calibration_report(
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use aacmm_core::params::DhParams;
+/// `items` one per line, for a C caller to split at `\n`: an item's own
+/// line breaks (none today) become spaces, so that lines and items stay
+/// one to one.
+fn lines(items: &[String]) -> String {
+    let items: Vec<String> = items.iter().map(|s| s.replace('\n', " ")).collect();
+    items.join("\n")
+}
 
-    fn length(a: u32, b: u32, distance_mm: f64, uncertainty_mm: f64) -> AacmmReferenceLength {
-        AacmmReferenceLength {
-            point_a: a,
-            point_b: b,
-            distance_mm,
-            uncertainty_mm,
-        }
-    }
+/// The library's verdict on the calibration: whether it is usable into
+/// `*usable` (the summary's `successful`), and why not into `buf`: the
+/// reasons, one per line (UTF-8; empty when usable), copied like
+/// `aacmm_last_error_message`; `*len` gets the full length in bytes
+/// without the NUL. The same as the report's `verdict.usable` and
+/// `verdict.reasons`, and what the command line prints as `Verdict: NOT
+/// usable — …` (exiting non-zero).
+///
+/// Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the copy was truncated
+/// (`buf` may be `NULL` with `buf_len` 0 to ask for the length; `*usable`
+/// is written all the same).
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `usable` is `NULL` or
+/// writable; `buf` is `NULL` or points to `buf_len` writable bytes; `len`
+/// is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_verdict(
+    cal: *const AacmmCalibration,
+    usable: *mut bool,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let verdict = &unsafe { result(cal) }?.report.verdict;
+        // SAFETY: by the contract.
+        unsafe { ptr::write(usable, verdict.usable, "usable") }?;
+        // SAFETY: by the contract.
+        unsafe { string_out(&lines(&verdict.reasons), buf, buf_len, len) }
+    })
+}
 
-    /// Three points of three touches each, 6 joints.
-    fn touches() -> (Vec<f64>, Vec<u32>) {
-        let points = vec![7, 7, 7, 3, 3, 3, 9, 9, 9];
-        let q = (0..points.len() * 6)
-            .map(|i| (i as f64 * 0.3).sin())
-            .collect();
-        (q, points)
-    }
-
-    fn message(e: Error) -> (AacmmStatus, String) {
-        (e.status, e.message)
-    }
-
-    #[test]
-    fn arrays_are_checked_like_files() {
-        let (q, points) = touches();
-        let ok = array_data(6, &q, &points, &[length(7, 9, 500.0, f64::NAN)]).unwrap();
-        assert_eq!(ok.points()[1].label, "3");
-        assert_eq!((ok.references()[0].a, ok.references()[0].b), (0, 2));
-        assert_eq!(ok.references()[0].uncertainty, None);
-        let cases = [
-            (
-                length(7, 7, 500.0, f64::NAN),
-                "lengths[0]: point_b = point_a = 7",
-            ),
-            (length(7, 4, 500.0, f64::NAN), "lengths[0]: unknown point 4"),
-            (length(7, 3, -1.0, f64::NAN), "lengths[0]: distance_mm = -1"),
-            (length(7, 3, 1.0, -0.1), "lengths[0]: uncertainty_mm = -0.1"),
-        ];
-        for (l, expected) in cases {
-            let (status, m) = message(array_data(6, &q, &points, &[l]).unwrap_err());
-            assert_eq!(status, AacmmStatus::Input);
-            assert!(m.starts_with(expected), "{m}");
-        }
-        let twice = [length(7, 3, 1.0, 0.0), length(3, 7, 1.0, 0.0)];
-        let (_, m) = message(array_data(6, &q, &points, &twice).unwrap_err());
-        assert!(
-            m.starts_with("lengths[1]: the pair 3–7 is given twice"),
-            "{m}"
-        );
-        let (_, m) = message(array_data(6, &q[..48], &points[..8], &[]).unwrap_err());
-        assert!(m.starts_with("points[6]: point 9 has 2 touches"), "{m}");
-        let mut nan = q.clone();
-        nan[4] = f64::NAN;
-        let (_, m) = message(array_data(6, &nan, &points, &[]).unwrap_err());
-        assert!(m.starts_with("q[4] = NaN"), "{m}");
-    }
-
-    #[test]
-    fn options_are_checked_like_flags() {
-        let mut o = aacmm_calibrate_options_default();
-        // SAFETY: `o` is a live options struct with a NULL `fix`.
-        let s = unsafe { settings(&o, &DhParams::paper_nominal()) }.unwrap();
-        assert_eq!(s.options.fix, FixSpec::Auto);
-        assert_eq!(s.options.noise.encoder_rad, None);
-        assert_eq!(s.options.noise.length_default_mm, DEFAULT_LENGTH_SIGMA_MM);
-        o.probe_noise_mm = -1.0;
-        // SAFETY: as above.
-        let e = unsafe { settings(&o, &DhParams::paper_nominal()) }
-            .err()
-            .unwrap();
-        assert_eq!(e.status, AacmmStatus::InvalidArgument);
-        assert_eq!(
-            e.message,
-            "options.probe_noise_mm = -1: must be a finite number ≥ 0"
-        );
-        o.probe_noise_mm = 0.0;
-        o.threads = 0;
-        o.length_uncertainty_mm = f64::NAN;
-        // SAFETY: as above.
-        let e = unsafe { settings(&o, &DhParams::paper_nominal()) }
-            .err()
-            .unwrap();
-        assert!(
-            e.message.starts_with("options.length_uncertainty_mm = NaN"),
-            "{}",
-            e.message
-        );
-        o = aacmm_calibrate_options_default();
-        o.fix = c"theta1, d1".as_ptr();
-        // SAFETY: `fix` points to a NUL-terminated literal.
-        let s = unsafe { settings(&o, &DhParams::paper_nominal()) }.unwrap();
-        assert_eq!(s.options.fix, FixSpec::Columns(vec![18, 6]));
-        o.cross_validate = 1;
-        // SAFETY: as above.
-        assert!(unsafe { settings(&o, &DhParams::paper_nominal()) }.is_err());
-        // SAFETY: NULL options are the defaults.
-        assert!(unsafe { settings(std::ptr::null(), &DhParams::paper_nominal()) }.is_ok());
-    }
+/// What a metrologist should know although the calibration may be usable
+/// (a χ² outside its range, a poor fit accepted on request, data that
+/// determine the arm weakly, a joint better modelled by Hayati's
+/// parameters): the verdict's notes, one per line (empty when there are
+/// none), copied like `aacmm_calibration_verdict`'s reasons.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `buf` is `NULL` or points to
+/// `buf_len` writable bytes; `len` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_verdict_notes(
+    cal: *const AacmmCalibration,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let verdict = &unsafe { result(cal) }?.report.verdict;
+        // SAFETY: by the contract.
+        unsafe { string_out(&lines(&verdict.notes), buf, buf_len, len) }
+    })
 }

@@ -115,27 +115,31 @@ impl From<CalibrationError> for Error {
     }
 }
 
-/// The C field of each library setting ([`OptionError::field`]); settings
-/// the C API does not expose keep their library path.
-const FIELDS: [(&str, &str); 8] = [
+/// The C name of each library setting ([`OptionError::field`]): the
+/// option as its setter names it (`…_set_probe_noise_mm` sets
+/// `probe_noise_mm`); settings the C API does not expose keep their library
+/// path.
+const OPTIONS: [(&str, &str); 9] = [
     ("noise.encoder_rad", "encoder_noise_rad"),
     ("noise.probe_mm", "probe_noise_mm"),
     ("noise.length_default_mm", "length_uncertainty_mm"),
     ("noise.length_weight", "length_weight"),
     ("fix", "fix"),
+    ("prior", "prior"),
     ("threads", "threads"),
     ("cross_validate", "cross_validate"),
-    ("robust.scale_k", "robust_scale"),
+    ("robust.scale_k", "robust scale"),
 ];
 
 impl From<OptionError> for Error {
-    /// `AACMM_STATUS_INVALID_ARGUMENT`, naming the options struct's field.
+    /// `AACMM_STATUS_INVALID_ARGUMENT`, naming the option as its setter
+    /// does (`probe_noise_mm = -1: …`).
     fn from(o: OptionError) -> Error {
-        let field = FIELDS
+        let option = OPTIONS
             .iter()
             .find(|(lib, _)| *lib == o.field)
             .map_or(o.field, |(_, c)| *c);
-        Error::invalid(format!("options.{field} = {}: {}", o.value, o.reason))
+        Error::invalid(format!("{option} = {}: {}", o.value, o.reason))
     }
 }
 

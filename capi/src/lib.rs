@@ -17,7 +17,10 @@
 //!   `AACMM_STATUS_PANIC`, never an unwind into C or an abort of the host;
 //! - handles (`AacmmArm`, `AacmmCalibration`) are opaque, immutable once
 //!   made, usable from several threads at once, and released by their
-//!   `…_free` function.
+//!   `…_free` function; the options of a calibration
+//!   (`AacmmCalibrateOptions`) are an opaque builder too, changed only by
+//!   its setters, so that options can be added without changing a layout
+//!   a compiled caller relies on.
 //!
 //! Only `aacmm_`-prefixed symbols are exported.
 
@@ -31,6 +34,7 @@
 mod arm;
 mod calibrate;
 mod error;
+mod options;
 mod ptr;
 
 use std::ffi::c_char;
@@ -41,14 +45,24 @@ pub use arm::{
     aacmm_positions,
 };
 pub use calibrate::{
-    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_GLOBAL, AACMM_METHOD_HYBRID, AACMM_METHOD_LM,
-    AACMM_METHOD_SA, AacmmAngleUnit, AacmmCalibrateOptions, AacmmCalibration,
-    AacmmCalibrationSummary, AacmmMethod, AacmmReferenceLength, AacmmTermination, aacmm_calibrate,
-    aacmm_calibrate_files, aacmm_calibrate_options_default, aacmm_calibration_arm,
-    aacmm_calibration_fixed, aacmm_calibration_free, aacmm_calibration_params,
-    aacmm_calibration_report, aacmm_calibration_sigmas, aacmm_calibration_summary,
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmAngleUnit, AacmmCalibration, AacmmCalibrationSummary,
+    AacmmReferenceLength, AacmmTermination, aacmm_calibrate, aacmm_calibrate_files,
+    aacmm_calibration_arm, aacmm_calibration_fixed, aacmm_calibration_free,
+    aacmm_calibration_params, aacmm_calibration_report, aacmm_calibration_sigmas,
+    aacmm_calibration_summary, aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
 };
 pub use error::{AacmmStatus, aacmm_last_error_message};
+pub use options::{
+    AACMM_METHOD_GLOBAL, AACMM_METHOD_HYBRID, AACMM_METHOD_LM, AACMM_METHOD_SA,
+    AACMM_ROBUST_CAUCHY, AACMM_ROBUST_HUBER, AACMM_ROBUST_NONE, AacmmCalibrateOptions, AacmmMethod,
+    AacmmRobust, aacmm_calibrate_options_free, aacmm_calibrate_options_new,
+    aacmm_calibrate_options_set_accept_poor_fit, aacmm_calibrate_options_set_cross_validate,
+    aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_fix,
+    aacmm_calibrate_options_set_length_uncertainty_mm, aacmm_calibrate_options_set_length_weight,
+    aacmm_calibrate_options_set_method, aacmm_calibrate_options_set_prior,
+    aacmm_calibrate_options_set_probe_noise_mm, aacmm_calibrate_options_set_robust,
+    aacmm_calibrate_options_set_seed, aacmm_calibrate_options_set_threads,
+};
 
 /// The library's version (`MAJOR.MINOR.PATCH`, the workspace's version), as
 /// a static NUL-terminated string: do not free it.

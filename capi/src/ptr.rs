@@ -125,6 +125,19 @@ pub(crate) unsafe fn object<'a, T>(ptr: *const T, name: &str) -> Result<&'a T, E
     Ok(unsafe { &*ptr })
 }
 
+/// A mutable reference to the value behind a handle (a builder's setter).
+///
+/// # Safety
+///
+/// `ptr` is `NULL` or points to a live `T` that nothing else reads or
+/// writes during `'a`.
+pub(crate) unsafe fn object_mut<'a, T>(ptr: *mut T, name: &str) -> Result<&'a mut T, Error> {
+    check(ptr, 1, name)?;
+    // SAFETY: non-null and aligned (`check`); live and not used elsewhere
+    // by the caller's contract.
+    Ok(unsafe { &mut *ptr })
+}
+
 /// Writes `value` to an out-parameter.
 ///
 /// # Safety

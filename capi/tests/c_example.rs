@@ -129,6 +129,13 @@ impl Output {
     }
 }
 
+/// A line of the program's `print_escaped` back to its text.
+fn unescape(line: &str) -> String {
+    line.replace("\\\\", "\u{0}")
+        .replace("\\n", "\n")
+        .replace('\u{0}', "\\")
+}
+
 /// Bitwise equality with the index of the first difference.
 fn assert_bits(what: &str, c: &[f64], rust: &[f64]) {
     assert_eq!(c.len(), rust.len(), "{what}: lengths");
@@ -230,6 +237,7 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("null_path", 1),
         ("null_calibration", 1),
         ("null_out", 1),
+        ("null_options", 1),
         ("q_len_not_a_multiple", 2),
         ("p_len_short", 2),
         ("jac_len_short", 2),
@@ -241,6 +249,8 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("unknown_method", 3),
         ("unknown_robust", 3),
         ("robust_scale", 3),
+        ("prior_without_unit", 3),
+        ("fix_not_in_arm", 3),
         ("five_joints", 4),
         ("missing_file", 5),
         ("missing_poses", 5),
@@ -256,9 +266,23 @@ fn the_c_program_agrees_with_the_rust_api() {
     }
     assert!(
         out.get("error robust_scale")
-            .contains("options.robust_scale = -1: must be a finite number > 0"),
+            .contains("robust scale = -1: must be a finite number > 0"),
         "{}",
         out.get("error robust_scale")
+    );
+    // A name no arm has is refused when set; one this 6-joint arm lacks
+    // when calibrating, both naming the option.
+    assert!(
+        out.get("error unknown_parameter")
+            .contains("fix = theta1,theta9: unknown parameter `theta9`"),
+        "{}",
+        out.get("error unknown_parameter")
+    );
+    assert!(
+        out.get("error fix_not_in_arm")
+            .contains("fix = theta7: unknown parameter `theta7`"),
+        "{}",
+        out.get("error fix_not_in_arm")
     );
     assert!(
         out.get("error missing_file").contains("no/such/arm.toml"),
@@ -314,10 +338,11 @@ fn the_c_program_agrees_with_the_rust_api() {
     assert_eq!(
         out.get("files_summary"),
         format!(
-            "0 1 {} {} {} 3",
+            "0 1 1 {} {} {} 3",
             cal.solver.iterations, cal.dof.free_parameters, cal.dof.degrees_of_freedom
         ),
-        "termination 0 = cost tolerance, successful, method 3 = global (the default)"
+        "termination 0 = cost tolerance, successful (usable), converged, method 3 = global \
+         (the default)"
     );
     assert_eq!(cal.solver.stop.lm(), Some(Termination::CostTolerance));
     let after = ArmKernel::new(&cal.params).unwrap();
@@ -340,13 +365,16 @@ fn the_c_program_agrees_with_the_rust_api() {
         })
         .with_cross_validation(3)
         .unwrap();
-    let expected = problem.run(&settings).unwrap().to_json();
-    let report = out
-        .get("report")
-        .replace("\\\\", "\u{0}")
-        .replace("\\n", "\n")
-        .replace('\u{0}', "\\");
-    assert_eq!(report, expected);
+    let expected = problem.run(&settings).unwrap();
+    // The verdict: usable, no reason; the notes as the report has them.
+    assert!(expected.verdict.usable);
+    assert_eq!(out.get("verdict"), "usable ");
+    assert_eq!(
+        unescape(out.get("verdict_notes")),
+        expected.verdict.notes.join("\n")
+    );
+    let report = unescape(out.get("report"));
+    assert_eq!(report, expected.to_json());
     let report: serde_json::Value = serde_json::from_str(&report).unwrap();
     assert_eq!(report["calibration"]["solver"]["method"], "global");
     assert_eq!(report["fix"], "auto");
@@ -428,7 +456,17 @@ fn the_header_compiles_as_cpp() {
     let src = Path::new(env!("CARGO_TARGET_TMPDIR")).join("header.cpp");
     std::fs::write(
         &src,
-        "#include \"aacmm.h\"\nint main() { return aacmm_param_count(6) == 27 ? 0 : 1; }\n",
+        // The options builder too: its `bool` and `uint64_t` arguments and
+        // pointer-to-pointer output, as a C++ caller writes them.
+        "#include \"aacmm.h\"\n\
+         int main() {\n\
+         AacmmCalibrateOptions *options = nullptr;\n\
+         if (aacmm_calibrate_options_new(&options) != AACMM_STATUS_OK) return 1;\n\
+         bool ok = aacmm_calibrate_options_set_accept_poor_fit(options, true) == AACMM_STATUS_OK\n\
+         && aacmm_calibrate_options_set_seed(options, UINT64_C(7)) == AACMM_STATUS_OK;\n\
+         aacmm_calibrate_options_free(options);\n\
+         return ok && aacmm_param_count(6) == 27 ? 0 : 1;\n\
+         }\n",
     )
     .unwrap();
     run(Command::new(cxx)
@@ -470,5 +508,8 @@ fn the_readme_example_runs() {
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(lines.len(), 3, "{out}");
     assert!(lines[0].starts_with("pose 0: "), "{out}");
-    assert!(lines[2].starts_with("converged: yes after "), "{out}");
+    assert!(
+        lines[2].starts_with("usable: yes; converged after "),
+        "{out}"
+    );
 }

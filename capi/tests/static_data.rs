@@ -8,10 +8,7 @@
 use std::ffi::{CStr, CString, c_char};
 use std::path::Path;
 
-use aacmm_capi::{
-    AACMM_ANGLE_DEG, AacmmStatus, aacmm_calibrate_files, aacmm_calibrate_options_default,
-    aacmm_last_error_message,
-};
+use aacmm_capi::{AACMM_ANGLE_DEG, AacmmStatus, aacmm_calibrate_files, aacmm_last_error_message};
 
 /// The shipped campaign's first row of each socket, repeated ten times.
 fn static_poses() -> String {
@@ -39,17 +36,16 @@ fn static_data_is_an_input_error() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let arm = CString::new(root.join("examples/paper-table-1.toml").to_str().unwrap()).unwrap();
     let poses_c = CString::new(poses.to_str().unwrap()).unwrap();
-    let options = aacmm_calibrate_options_default();
     let mut out = std::ptr::null_mut();
-    // SAFETY: NUL-terminated paths, a NULL lengths path (none), valid
-    // options and an output slot.
+    // SAFETY: NUL-terminated paths, a NULL lengths path (none), NULL
+    // options (the defaults) and an output slot.
     let status = unsafe {
         aacmm_calibrate_files(
             arm.as_ptr(),
             poses_c.as_ptr(),
             std::ptr::null(),
             AACMM_ANGLE_DEG,
-            &options,
+            std::ptr::null(),
             &mut out,
         )
     };

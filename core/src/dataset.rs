@@ -436,6 +436,53 @@ impl DataSet {
         DataSet::from_poses(&poses, FILE)?.with_lengths(&lengths, FILE)
     }
 
+    /// A data set from flat arrays, as a C caller holds them: `q` the
+    /// readings (rad) of `points.len()` touches, `joints` per touch,
+    /// row-major (`q[i·joints + j]` is joint `j` of touch `i`); `points[i]`
+    /// the id of the point touch `i` touched; `lengths` between point ids.
+    /// Labels are the ids in decimal. Checked as the file readers check
+    /// files, with messages that name the array and its 0-based index
+    /// (`q[5]`, `points[3]`, `lengths[0]`, each [`InputError::file`]);
+    /// afterwards a touch `i` is located at `points:i+1` and a length `r` at
+    /// `lengths:r+1` (reports count from 1, as for a file's lines).
+    ///
+    /// ```
+    /// use aacmm_core::dataset::{ArrayLength, DataSet};
+    /// let points = [7, 7, 7, 3, 3, 3];
+    /// let q: Vec<f64> = (0..12).map(|i| 0.1 * i as f64).collect();
+    /// let l = ArrayLength { point_a: 3, point_b: 7, distance_mm: 500.0, uncertainty_mm: None };
+    /// let data = DataSet::from_arrays(2, &q, &points, &[l]).unwrap();
+    /// assert_eq!(data.points()[1].label, "3");
+    /// assert_eq!((data.references()[0].a, data.references()[0].b), (1, 0));
+    /// let e = DataSet::from_arrays(2, &q[..10], &points[..5], &[]).unwrap_err();
+    /// assert_eq!(e.to_string(), "points[3]: point 3 has 2 touches; at least 3 are needed");
+    /// ```
+    ///
+    /// # Errors
+    ///
+    /// `q` of another length than `joints · points.len()`, no touches,
+    /// non-finite readings, a point with fewer than [`MIN_TOUCHES`]
+    /// touches, readings without articulation, a length that names an
+    /// unknown point, joins a point to itself, repeats a pair, or has a
+    /// distance that is not positive or an uncertainty below 0.
+    pub fn from_arrays(
+        joints: usize,
+        q: &[f64],
+        points: &[u32],
+        lengths: &[ArrayLength],
+    ) -> Result<DataSet, InputError> {
+        let touches = check_touch_arrays(joints, q, points)?;
+        let mut poses = Poses::with_capacity(joints, points.len());
+        for (i, id) in points.iter().enumerate() {
+            poses.push(&id.to_string(), &q[i * joints..(i + 1) * joints], i + 1);
+        }
+        let data = DataSet::from_poses_owned(poses, "points")?;
+        if lengths.is_empty() {
+            return Ok(data);
+        }
+        data.with_lengths(&array_lengths(lengths, &touches)?, "lengths")
+    }
+
     /// A data set of labelled points without readings (`joints() == 0`): for
     /// figures computed from positions measured elsewhere, and for tests.
     ///
@@ -612,6 +659,122 @@ impl DataSet {
     }
 }
 
+/// One reference length of [`DataSet::from_arrays`]: a distance between two
+/// point ids. The field names are the ones its messages use.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArrayLength {
+    /// Id of the first point (as in the `points` array).
+    pub point_a: u32,
+    /// Id of the second point (another than `point_a`).
+    pub point_b: u32,
+    /// The distance, mm, `> 0`.
+    pub distance_mm: f64,
+    /// Its standard uncertainty (k = 1), mm, `≥ 0`; `None` when not stated.
+    pub uncertainty_mm: Option<f64>,
+}
+
+/// The touch arrays of [`DataSet::from_arrays`], checked: per point id, the
+/// index of its first touch and its touch count.
+fn check_touch_arrays(
+    joints: usize,
+    q: &[f64],
+    points: &[u32],
+) -> Result<HashMap<u32, (usize, usize)>, InputError> {
+    if Some(q.len()) != points.len().checked_mul(joints) {
+        return Err(InputError::file_error(
+            "q",
+            format!(
+                "{} readings for {} touches of {joints} joints: expected one row of {joints} \
+                 per point id",
+                q.len(),
+                points.len()
+            ),
+        ));
+    }
+    if points.is_empty() {
+        return Err(InputError::file_error("points", "no touches"));
+    }
+    if let Some(k) = q.iter().position(|v| !v.is_finite()) {
+        return Err(InputError::file_error(
+            format!("q[{k}]"),
+            format!(
+                "{}: readings must be finite (touch {}, joint {})",
+                q[k],
+                k / joints,
+                k % joints + 1
+            ),
+        ));
+    }
+    let mut touches: HashMap<u32, (usize, usize)> = HashMap::new();
+    for (i, &id) in points.iter().enumerate() {
+        touches.entry(id).or_insert((i, 0)).1 += 1;
+    }
+    // The point that comes first in `points`, so that the message does not
+    // depend on the map's order.
+    let few = (touches.iter())
+        .filter(|(_, (_, count))| *count < MIN_TOUCHES)
+        .map(|(&id, &(first, count))| (first, id, count))
+        .min();
+    if let Some((first, id, count)) = few {
+        return Err(InputError::file_error(
+            format!("points[{first}]"),
+            format!(
+                "point {id} has {count} touch{}; at least {MIN_TOUCHES} are needed",
+                if count == 1 { "" } else { "es" }
+            ),
+        ));
+    }
+    Ok(touches)
+}
+
+/// The lengths of [`DataSet::from_arrays`], checked against the point ids
+/// `touched`, as the lengths reader's rows.
+fn array_lengths(
+    lengths: &[ArrayLength],
+    touched: &HashMap<u32, (usize, usize)>,
+) -> Result<Vec<ReferenceLength>, InputError> {
+    let mut pairs = std::collections::HashSet::new();
+    let mut refs = Vec::with_capacity(lengths.len());
+    for (i, l) in lengths.iter().enumerate() {
+        let refuse = |m: String| Err(InputError::file_error(format!("lengths[{i}]"), m));
+        if let Some(id) = [l.point_a, l.point_b]
+            .into_iter()
+            .find(|id| !touched.contains_key(id))
+        {
+            return refuse(format!("unknown point {id}: no touch has this id"));
+        }
+        if l.point_a == l.point_b {
+            return refuse(format!(
+                "point_b = point_a = {}: a length needs two points",
+                l.point_a
+            ));
+        }
+        if !(l.distance_mm.is_finite() && l.distance_mm > 0.0) {
+            return refuse(format!(
+                "distance_mm = {}: must be a positive number",
+                l.distance_mm
+            ));
+        }
+        if let Some(u) = l.uncertainty_mm.filter(|u| !(u.is_finite() && *u >= 0.0)) {
+            return refuse(format!(
+                "uncertainty_mm = {u}: must be a finite number ≥ 0, or not stated"
+            ));
+        }
+        let (a, b) = (l.point_a.min(l.point_b), l.point_a.max(l.point_b));
+        if !pairs.insert((a, b)) {
+            return refuse(format!("the pair {a}–{b} is given twice"));
+        }
+        refs.push(ReferenceLength {
+            a: l.point_a.to_string(),
+            b: l.point_b.to_string(),
+            distance: l.distance_mm,
+            uncertainty: l.uncertainty_mm,
+            line: i + 1,
+        });
+    }
+    Ok(refs)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -643,5 +806,87 @@ mod tests {
         // One articulated point is enough.
         data("point,q1,q2\nA,10,20\nA,10.01,25\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
             .unwrap();
+    }
+
+    fn length(a: u32, b: u32, distance_mm: f64, uncertainty_mm: Option<f64>) -> ArrayLength {
+        ArrayLength {
+            point_a: a,
+            point_b: b,
+            distance_mm,
+            uncertainty_mm,
+        }
+    }
+
+    /// Three points of three touches each, 6 joints.
+    fn touch_arrays() -> (Vec<f64>, Vec<u32>) {
+        let points = vec![7, 7, 7, 3, 3, 3, 9, 9, 9];
+        let q = (0..points.len() * 6)
+            .map(|i| (i as f64 * 0.3).sin())
+            .collect();
+        (q, points)
+    }
+
+    /// Arrays are checked as files are, and every refusal names the array
+    /// and the 0-based index of what it refuses.
+    #[test]
+    fn arrays_are_checked_like_files() {
+        let (q, points) = touch_arrays();
+        let ok = DataSet::from_arrays(6, &q, &points, &[length(7, 9, 500.0, None)]).unwrap();
+        assert_eq!(ok.points()[1].label, "3");
+        assert_eq!(ok.points()[1].touches, 3..6);
+        assert_eq!((ok.references()[0].a, ok.references()[0].b), (0, 2));
+        assert_eq!(ok.references()[0].uncertainty, None);
+        assert_eq!(ok.source().touch(4).to_string(), "points:5");
+        assert_eq!(ok.source().reference(0).to_string(), "lengths:1");
+        let cases = [
+            (
+                length(7, 7, 500.0, None),
+                "lengths[0]: point_b = point_a = 7",
+            ),
+            (length(7, 4, 500.0, None), "lengths[0]: unknown point 4"),
+            (length(7, 3, -1.0, None), "lengths[0]: distance_mm = -1"),
+            (
+                length(7, 3, f64::NAN, None),
+                "lengths[0]: distance_mm = NaN",
+            ),
+            (
+                length(7, 3, 1.0, Some(-0.1)),
+                "lengths[0]: uncertainty_mm = -0.1",
+            ),
+            (
+                length(7, 3, 1.0, Some(f64::INFINITY)),
+                "lengths[0]: uncertainty_mm = inf",
+            ),
+        ];
+        for (l, expected) in cases {
+            let e = DataSet::from_arrays(6, &q, &points, &[l]).unwrap_err();
+            assert!(e.to_string().starts_with(expected), "{e}");
+            assert_eq!(e.file(), "lengths[0]");
+        }
+        let twice = [length(7, 3, 1.0, Some(0.0)), length(3, 7, 1.0, None)];
+        let e = DataSet::from_arrays(6, &q, &points, &twice).unwrap_err();
+        assert_eq!(e.to_string(), "lengths[1]: the pair 3–7 is given twice");
+        let e = DataSet::from_arrays(6, &q[..48], &points[..8], &[]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "points[6]: point 9 has 2 touches; at least 3 are needed"
+        );
+        let mut nan = q.clone();
+        nan[10] = f64::NAN;
+        let e = DataSet::from_arrays(6, &nan, &points, &[]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "q[10]: NaN: readings must be finite (touch 1, joint 5)"
+        );
+        let e = DataSet::from_arrays(6, &q[..53], &points, &[]).unwrap_err();
+        assert!(
+            e.to_string().starts_with("q: 53 readings for 9 touches"),
+            "{e}"
+        );
+        let e = DataSet::from_arrays(6, &[], &[], &[]).unwrap_err();
+        assert_eq!(e.to_string(), "points: no touches");
+        let still = vec![0.5; q.len()];
+        let e = DataSet::from_arrays(6, &still, &points, &[]).unwrap_err();
+        assert!(e.to_string().starts_with("points: no articulation"), "{e}");
     }
 }

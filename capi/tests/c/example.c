@@ -11,8 +11,9 @@
  *
  *   version, arm_params, q, positions, jac_positions, jacobians,
  *   joint_q, joint_p, joint_jac, nominal_positions, error, files_params,
- *   files_sigmas, files_fixed, files_summary, report (newlines and
- *   backslashes escaped as \\n and \\\\), arrays_params,
+ *   files_sigmas, files_fixed, files_summary, verdict (`usable` or
+ *   `refused`, then the reasons), verdict_notes, report (these three with
+ *   newlines and backslashes escaped as \\n and \\\\), arrays_params,
  *   calibrated_positions
  *
  * Its own checks (expected error codes, arrays == files) make it exit with
@@ -67,6 +68,37 @@ static void expect(AacmmStatus got, AacmmStatus want, const char *name) {
         fprintf(stderr, "example: %s gave status %d, expected %d\n", name, (int)got, (int)want);
         failures++;
     }
+}
+
+/* Prints `tag text` on one line: newlines and backslashes escaped (the test
+ * undoes it). */
+static void print_escaped(const char *tag, const char *text) {
+    printf("%s ", tag);
+    for (const char *c = text; *c; c++) {
+        if (*c == '\n') {
+            printf("\\n");
+        } else if (*c == '\\') {
+            printf("\\\\");
+        } else {
+            putchar(*c);
+        }
+    }
+    printf("\n");
+}
+
+/* A string output of the API (report, verdict): asks for the length, then
+ * copies into a buffer of that size. The caller frees it. */
+static char *string_of(AacmmStatus (*get)(const AacmmCalibration *, char *, size_t, size_t *),
+                       const AacmmCalibration *cal, const char *what) {
+    size_t len = 0;
+    AacmmStatus sized = get(cal, NULL, 0, &len);
+    if (sized != AACMM_STATUS_BUFFER_TOO_SMALL) {
+        fprintf(stderr, "example: %s: asking the length gave status %d\n", what, (int)sized);
+        exit(1);
+    }
+    char *text = malloc(len + 1);
+    ok(get(cal, text, len + 1, &len), what);
+    return text;
 }
 
 /* ---- a small reader for the CSV files (what a host program has anyway) ---- */
@@ -257,23 +289,26 @@ int main(int argc, char **argv) {
     AacmmCalibration *cal = NULL;
     expect(aacmm_calibrate_files(arm_path, "no/such/poses.csv", NULL, AACMM_ANGLE_DEG, NULL, &cal),
            AACMM_STATUS_IO, "missing_poses");
-    AacmmCalibrateOptions bad = aacmm_calibrate_options_default();
-    bad.fix = "theta1,theta9";
-    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
-           AACMM_STATUS_INVALID_ARGUMENT, "unknown_parameter");
-    bad = aacmm_calibrate_options_default();
-    bad.method = 7;
-    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
-           AACMM_STATUS_INVALID_ARGUMENT, "unknown_method");
-    bad = aacmm_calibrate_options_default();
-    bad.robust = 9;
-    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
-           AACMM_STATUS_INVALID_ARGUMENT, "unknown_robust");
-    bad = aacmm_calibrate_options_default();
-    bad.robust = AACMM_ROBUST_HUBER;
-    bad.robust_scale = -1;
-    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, &bad, &cal),
+    /* Options: each setter refuses a value out of range and keeps the one
+     * before; names no arm has are refused when set, names this arm lacks
+     * when calibrating. */
+    AacmmCalibrateOptions *bad = NULL;
+    ok(aacmm_calibrate_options_new(&bad), "aacmm_calibrate_options_new");
+    expect(aacmm_calibrate_options_set_seed(NULL, 1), AACMM_STATUS_NULL_POINTER, "null_options");
+    expect(aacmm_calibrate_options_set_fix(bad, "theta1,theta9"), AACMM_STATUS_INVALID_ARGUMENT,
+           "unknown_parameter");
+    expect(aacmm_calibrate_options_set_method(bad, 7), AACMM_STATUS_INVALID_ARGUMENT,
+           "unknown_method");
+    expect(aacmm_calibrate_options_set_robust(bad, 9, 0), AACMM_STATUS_INVALID_ARGUMENT,
+           "unknown_robust");
+    expect(aacmm_calibrate_options_set_robust(bad, AACMM_ROBUST_HUBER, -1),
            AACMM_STATUS_INVALID_ARGUMENT, "robust_scale");
+    expect(aacmm_calibrate_options_set_prior(bad, "length=0.5"), AACMM_STATUS_INVALID_ARGUMENT,
+           "prior_without_unit");
+    ok(aacmm_calibrate_options_set_fix(bad, "theta7"), "aacmm_calibrate_options_set_fix");
+    expect(aacmm_calibrate_files(arm_path, poses_path, NULL, AACMM_ANGLE_DEG, bad, &cal),
+           AACMM_STATUS_INVALID_ARGUMENT, "fix_not_in_arm");
+    aacmm_calibrate_options_free(bad);
     size_t needed = aacmm_last_error_message(NULL, 0);
     char tiny[8];
     if (aacmm_last_error_message(tiny, sizeof tiny) != needed || strlen(tiny) != sizeof tiny - 1) {
@@ -282,11 +317,15 @@ int main(int argc, char **argv) {
 
     /* Calibration from the files, with the README's flags:
      * --encoder-noise 0.005 (deg) --probe-noise 0.01 --cross-validate 3. */
-    AacmmCalibrateOptions options = aacmm_calibrate_options_default();
-    options.encoder_noise_rad = 0.005 * (PI / 180.0);
-    options.probe_noise_mm = 0.01;
-    options.cross_validate = 3;
-    ok(aacmm_calibrate_files(arm_path, poses_path, lengths_path, AACMM_ANGLE_DEG, &options, &cal),
+    AacmmCalibrateOptions *options = NULL;
+    ok(aacmm_calibrate_options_new(&options), "aacmm_calibrate_options_new");
+    ok(aacmm_calibrate_options_set_encoder_noise_rad(options, 0.005 * (PI / 180.0)),
+       "aacmm_calibrate_options_set_encoder_noise_rad");
+    ok(aacmm_calibrate_options_set_probe_noise_mm(options, 0.01),
+       "aacmm_calibrate_options_set_probe_noise_mm");
+    ok(aacmm_calibrate_options_set_cross_validate(options, 3),
+       "aacmm_calibrate_options_set_cross_validate");
+    ok(aacmm_calibrate_files(arm_path, poses_path, lengths_path, AACMM_ANGLE_DEG, options, &cal),
        "aacmm_calibrate_files");
     double calibrated[31], sigma[31];
     bool fixed[31];
@@ -302,27 +341,32 @@ int main(int argc, char **argv) {
         printf(" %d", fixed[c] ? 1 : 0);
     }
     printf("\n");
-    printf("files_summary %d %d %zu %zu %zu %u\n", (int)summary.termination,
-           summary.successful ? 1 : 0, summary.iterations, summary.free_parameters,
-           summary.degrees_of_freedom, (unsigned)summary.method);
+    printf("files_summary %d %d %d %zu %zu %zu %u\n", (int)summary.termination,
+           summary.successful ? 1 : 0, summary.converged ? 1 : 0, summary.iterations,
+           summary.free_parameters, summary.degrees_of_freedom, (unsigned)summary.method);
+
+    /* The verdict: usable (the summary's `successful`) and why not, one
+     * reason per line; and its notes. */
+    bool usable = false;
+    size_t reasons_len = 0;
+    AacmmStatus sized = aacmm_calibration_verdict(cal, &usable, NULL, 0, &reasons_len);
+    char *reasons = malloc(reasons_len + 1);
+    ok(aacmm_calibration_verdict(cal, &usable, reasons, reasons_len + 1, &reasons_len),
+       "aacmm_calibration_verdict");
+    if (sized != AACMM_STATUS_BUFFER_TOO_SMALL || usable != summary.successful) {
+        fail("aacmm_calibration_verdict disagrees with the summary or did not size its text");
+    }
+    print_escaped(usable ? "verdict usable" : "verdict refused", reasons);
+    free(reasons);
+    char *notes = string_of(aacmm_calibration_verdict_notes, cal, "aacmm_calibration_verdict_notes");
+    print_escaped("verdict_notes", notes);
+    free(notes);
+
     size_t report_len = 0;
     expect(aacmm_calibration_report(cal, NULL, 0, &report_len), AACMM_STATUS_BUFFER_TOO_SMALL,
            "report_size");
-    char *report = malloc(report_len + 1);
-    ok(aacmm_calibration_report(cal, report, report_len + 1, &report_len),
-       "aacmm_calibration_report");
-    /* One line: newlines and backslashes escaped (the test undoes it). */
-    printf("report ");
-    for (const char *c = report; *c; c++) {
-        if (*c == '\n') {
-            printf("\\n");
-        } else if (*c == '\\') {
-            printf("\\\\");
-        } else {
-            putchar(*c);
-        }
-    }
-    printf("\n");
+    char *report = string_of(aacmm_calibration_report, cal, "aacmm_calibration_report");
+    print_escaped("report", report);
     free(report);
 
     /* The calibrated arm as a handle. */
@@ -339,10 +383,10 @@ int main(int argc, char **argv) {
     size_t n = read_poses(poses_path, joints, touches, points);
     size_t m = read_lengths(lengths_path, lengths);
     AacmmCalibration *from_arrays = NULL;
-    expect(aacmm_calibrate(arm, touches, n * joints, points, n - 1, lengths, m, &options,
+    expect(aacmm_calibrate(arm, touches, n * joints, points, n - 1, lengths, m, options,
                            &from_arrays),
            AACMM_STATUS_LENGTH, "points_len");
-    ok(aacmm_calibrate(arm, touches, n * joints, points, n, lengths, m, &options, &from_arrays),
+    ok(aacmm_calibrate(arm, touches, n * joints, points, n, lengths, m, options, &from_arrays),
        "aacmm_calibrate");
     double arrays[31];
     ok(aacmm_calibration_params(from_arrays, arrays, n_params), "aacmm_calibration_params");
@@ -353,6 +397,8 @@ int main(int argc, char **argv) {
 
     aacmm_calibration_free(from_arrays);
     aacmm_calibration_free(cal);
+    aacmm_calibrate_options_free(options);
+    aacmm_calibrate_options_free(NULL);
     aacmm_arm_free(made);
     aacmm_arm_free(arm);
     aacmm_arm_free(NULL);

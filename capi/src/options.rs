@@ -1,0 +1,803 @@
+//! The options of a calibration: an opaque builder with one setter per
+//! option, so that an option added later changes no struct a compiled
+//! caller allocated (the ABI stays), and each value is checked where it is
+//! set. [`settings`] turns the options into the library's terms.
+
+use std::ffi::c_char;
+
+use aacmm_core::calibrate::{
+    FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings, available_threads,
+};
+use aacmm_core::error::OptionError;
+use aacmm_core::io::Arm;
+use aacmm_core::params::SUPPORTED_JOINTS;
+use aacmm_core::residuals::Noise;
+use aacmm_core::tolerances::Tolerances;
+
+use crate::error::{AacmmStatus, Error, guard, guard_value};
+use crate::ptr;
+
+/// A solver, for `aacmm_calibrate_options_set_method`: one of the
+/// `AACMM_METHOD_…` constants.
+pub type AacmmMethod = u32;
+
+/// Levenberg–Marquardt from the start arm (`--method lm`).
+pub const AACMM_METHOD_LM: AacmmMethod = 0;
+
+/// The paper's simulated annealing alone (`--method sa`).
+pub const AACMM_METHOD_SA: AacmmMethod = 1;
+
+/// The paper's hybrid, annealing then LM (`--method hybrid`).
+pub const AACMM_METHOD_HYBRID: AacmmMethod = 2;
+
+/// Converges from encoder zeros unknown in ±180° (`--method global`, the
+/// default).
+pub const AACMM_METHOD_GLOBAL: AacmmMethod = 3;
+
+/// The library's method of a C constant.
+fn method(m: AacmmMethod) -> Option<Method> {
+    match m {
+        AACMM_METHOD_LM => Some(Method::Lm),
+        AACMM_METHOD_SA => Some(Method::Sa),
+        AACMM_METHOD_HYBRID => Some(Method::Hybrid),
+        AACMM_METHOD_GLOBAL => Some(Method::Global),
+        _ => None,
+    }
+}
+
+/// The C constant of a library method.
+pub(crate) fn method_code(m: Method) -> AacmmMethod {
+    match m {
+        Method::Lm => AACMM_METHOD_LM,
+        Method::Sa => AACMM_METHOD_SA,
+        Method::Hybrid => AACMM_METHOD_HYBRID,
+        Method::Global => AACMM_METHOD_GLOBAL,
+        // Never: the C API runs the library's own solvers only.
+        Method::External => AacmmMethod::MAX,
+    }
+}
+
+/// The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
+/// `_CAUCHY` (`--robust`).
+pub type AacmmRobust = u32;
+
+/// Plain least squares (the default).
+pub const AACMM_ROBUST_NONE: AacmmRobust = 0;
+
+/// A robust refit with the Huber loss.
+pub const AACMM_ROBUST_HUBER: AacmmRobust = 1;
+
+/// A robust refit with the Cauchy loss.
+pub const AACMM_ROBUST_CAUCHY: AacmmRobust = 2;
+
+/// Settings of a calibration: the command line's flags. Opaque; made with
+/// the defaults of `aacmm calibrate` by `aacmm_calibrate_options_new`,
+/// changed by its setters (`aacmm_calibrate_options_set_method` and the
+/// others of that prefix, one per option), released by
+/// `aacmm_calibrate_options_free`. The calibration functions only read it:
+/// one options object may serve several calibrations, also at once on
+/// several threads, as long as no setter runs on it meanwhile.
+#[derive(Clone, Debug)]
+pub struct AacmmCalibrateOptions {
+    method: Method,
+    /// `--fix` as given; `None`: `auto`.
+    fix: Option<String>,
+    seed: u64,
+    /// 0: none.
+    cross_validate: usize,
+    noise: Noise,
+    /// 0: one per core.
+    threads: usize,
+    robust: Option<Robust>,
+    /// `--prior` as given; `None`: the arm file's `[prior]`.
+    prior: Option<String>,
+    accept_poor_fit: bool,
+}
+
+impl Default for AacmmCalibrateOptions {
+    /// The command line's defaults (the library's, which are the same).
+    fn default() -> Self {
+        let model = ModelOptions::default();
+        AacmmCalibrateOptions {
+            method: SolverSettings::default().method,
+            fix: None,
+            seed: 0,
+            cross_validate: 0,
+            noise: model.noise,
+            threads: 0,
+            robust: None,
+            prior: None,
+            accept_poor_fit: model.accept_poor_fit,
+        }
+    }
+}
+
+/// The options in the library's terms, and the fold count.
+pub(crate) struct Settings {
+    pub(crate) model: ModelOptions,
+    pub(crate) solver: SolverSettings,
+    pub(crate) cross_validate: usize,
+}
+
+/// The library's model options and solver settings of `o` for the start arm
+/// `arm` (whose file's `[prior]`, if any, `o`'s prior overrides entry by
+/// entry, as the command line's `--prior` does). What the user gave as text
+/// (the fixed set, the prior) is checked against the arm here; the rest was
+/// checked when it was set. The one place that builds them, so that the
+/// library's request path can take its place.
+pub(crate) fn settings(o: &AacmmCalibrateOptions, arm: &Arm) -> Result<Settings, Error> {
+    let joints = arm.params.joint_count();
+    let prior = match o.prior.as_deref() {
+        None => arm.prior.clone(),
+        Some(spec) => Tolerances::parse(spec, joints)?
+            .map(|given| arm.prior.clone().unwrap_or_default().overridden_by(&given)),
+    };
+    // `..default()`: settings the C API does not expose (annealing
+    // schedule, start budget) keep the library's defaults, which are the
+    // command line's.
+    let solver = SolverSettings {
+        method: o.method,
+        seed: o.seed,
+        threads: match o.threads {
+            0 => available_threads(),
+            n => n,
+        },
+        ..SolverSettings::default()
+    };
+    let model = ModelOptions {
+        fix: FixSpec::parse_for(o.fix.as_deref().unwrap_or("auto"), &arm.params)?,
+        noise: o.noise,
+        accept_poor_fit: o.accept_poor_fit,
+        robust: o.robust,
+        prior,
+    };
+    model.check_for(&arm.params)?;
+    solver.check()?;
+    Ok(Settings {
+        model,
+        solver,
+        cross_validate: o.cross_validate,
+    })
+}
+
+/// The options behind `options`, or the defaults for `NULL`.
+///
+/// # Safety
+///
+/// `options` is `NULL` or a live options handle that no setter changes
+/// meanwhile.
+pub(crate) unsafe fn read(
+    options: *const AacmmCalibrateOptions,
+) -> Result<AacmmCalibrateOptions, Error> {
+    if options.is_null() {
+        return Ok(AacmmCalibrateOptions::default());
+    }
+    // SAFETY: forwarded contract.
+    Ok(unsafe { ptr::object(options, "options") }?.clone())
+}
+
+/// The text option `name` as given, checked as UTF-8.
+///
+/// # Safety
+///
+/// `s` is `NULL` or a NUL-terminated string.
+unsafe fn text(s: *const c_char, name: &str) -> Result<Option<String>, Error> {
+    if s.is_null() {
+        return Ok(None);
+    }
+    // SAFETY: non-null, so NUL-terminated by the contract.
+    let s = unsafe { ptr::c_str(s, name) }?;
+    let s = s
+        .to_str()
+        .map_err(|_| Error::invalid(format!("{name} is not valid UTF-8")))?;
+    Ok(Some(s.to_string()))
+}
+
+/// Whether `parse` accepts the text for an arm of some joint count the
+/// toolkit has kernels for: what can be checked before the arm is known.
+/// The error is the one for the largest count (its names are a superset).
+fn for_some_arm<T>(parse: impl Fn(usize) -> Result<T, OptionError>) -> Result<(), Error> {
+    let mut counts = SUPPORTED_JOINTS.iter().rev();
+    let largest = parse(*counts.next().expect("a supported joint count"));
+    if largest.is_ok() || counts.any(|&n| parse(n).is_ok()) {
+        return Ok(());
+    }
+    largest.map(|_| ()).map_err(Error::from)
+}
+
+/// New options with the defaults of `aacmm calibrate`, at `*out` (release
+/// them with `aacmm_calibrate_options_free`). Passing `NULL` options to a
+/// calibration means these defaults too.
+///
+/// Errors: `AACMM_STATUS_NULL_POINTER` (`out`).
+///
+/// # Safety
+///
+/// `out` is `NULL` or points to writable memory for one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_new(
+    out: *mut *mut AacmmCalibrateOptions,
+) -> AacmmStatus {
+    guard(|| {
+        let options = Box::into_raw(Box::new(AacmmCalibrateOptions::default()));
+        // SAFETY: by the contract.
+        let written = unsafe { ptr::write(out, options, "out") };
+        if written.is_err() {
+            // SAFETY: made just above and never handed out.
+            drop(unsafe { Box::from_raw(options) });
+        }
+        written
+    })
+}
+
+/// Releases options. `NULL` is allowed (nothing happens).
+///
+/// # Safety
+///
+/// `options` is `NULL` or a live options handle, which must not be used
+/// afterwards.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_free(options: *mut AacmmCalibrateOptions) {
+    guard_value((), || {
+        if !options.is_null() {
+            // SAFETY: a live handle made by `Box::into_raw`, given up by
+            // the caller.
+            drop(unsafe { Box::from_raw(options) });
+        }
+    })
+}
+
+/// The solver: `AACMM_METHOD_GLOBAL` (default), `_LM`, `_SA` or `_HYBRID`
+/// (`--method`).
+///
+/// Errors (for every setter): `AACMM_STATUS_NULL_POINTER` (`options`),
+/// `AACMM_STATUS_INVALID_ARGUMENT` for a value out of range; the message
+/// names the option (`method = 7: …`) and the options keep their earlier
+/// value.
+///
+/// # Safety
+///
+/// `options` is `NULL` or a live options handle that no other thread uses
+/// during the call (the same for every setter).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_method(
+    options: *mut AacmmCalibrateOptions,
+    method: AacmmMethod,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        o.method = self::method(method).ok_or_else(|| {
+            Error::invalid(format!(
+                "method = {method}: one of AACMM_METHOD_LM ({AACMM_METHOD_LM}), _SA \
+                     ({AACMM_METHOD_SA}), _HYBRID ({AACMM_METHOD_HYBRID}), _GLOBAL \
+                     ({AACMM_METHOD_GLOBAL})"
+            ))
+        })?;
+        Ok(())
+    })
+}
+
+/// Parameters held at their start values (`--fix`): `NULL` or `"auto"`
+/// (the recommended set of the identifiability analysis; default), or
+/// comma-separated names in the order's spelling, e.g.
+/// `"theta1,d1,theta6,alpha6,Bx,By"` (`beta…` is accepted for `alpha…`,
+/// `hbeta…` names a Hayati joint's d-slot). Copied; names that no arm has
+/// are refused here, names the arm at hand lacks when calibrating.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `fix` is `NULL` or a
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_fix(
+    options: *mut AacmmCalibrateOptions,
+    fix: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        // SAFETY: by the contract.
+        let fix = unsafe { text(fix, "fix") }?;
+        if let Some(f) = &fix {
+            for_some_arm(|n| FixSpec::parse(f, n))?;
+        }
+        o.fix = fix;
+        Ok(())
+    })
+}
+
+/// Seed of every random draw: the solvers' moves and starts, the
+/// cross-validation folds (`--seed`; default 0).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_seed(
+    options: *mut AacmmCalibrateOptions,
+    seed: u64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        o.seed = seed;
+        Ok(())
+    })
+}
+
+/// `k`-fold cross-validation over points for the report
+/// (`--cross-validate`): 0 = none (the default), otherwise 2 or more (and
+/// at most the number of points, checked when calibrating).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_cross_validate(
+    options: *mut AacmmCalibrateOptions,
+    k: usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        if k == 1 {
+            return Err(Error::invalid(
+                "cross_validate = 1: 0 (none) or 2 or more folds",
+            ));
+        }
+        o.cross_validate = k;
+        Ok(())
+    })
+}
+
+/// Sets one noise figure on a copy of `o`'s and keeps it if the library
+/// accepts it (its refusal names the C option: see `crate::error`).
+fn set_noise(o: &mut AacmmCalibrateOptions, change: impl FnOnce(&mut Noise)) -> Result<(), Error> {
+    let mut noise = o.noise;
+    change(&mut noise);
+    noise.check()?;
+    o.noise = noise;
+    Ok(())
+}
+
+/// σ of each encoder reading, rad (`--encoder-noise`, which is in
+/// degrees); 0 = not stated (the default). With the probe noise these
+/// weigh the touches; when neither is stated the touch σ is estimated from
+/// the fit. Finite and ≥ 0.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_encoder_noise_rad(
+    options: *mut AacmmCalibrateOptions,
+    sigma: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        set_noise(o, |n| n.encoder_rad = stated(sigma))
+    })
+}
+
+/// σ of the probe seating per axis, mm (`--probe-noise`); 0 = not stated
+/// (the default). Finite and ≥ 0.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_probe_noise_mm(
+    options: *mut AacmmCalibrateOptions,
+    sigma: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        set_noise(o, |n| n.probe_mm = stated(sigma))
+    })
+}
+
+/// σ of a reference length that states none, mm (`--length-uncertainty`;
+/// default 0.001). Finite and ≥ 0.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_length_uncertainty_mm(
+    options: *mut AacmmCalibrateOptions,
+    sigma: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        set_noise(o, |n| n.length_default_mm = sigma)
+    })
+}
+
+/// Weight of every reference-length residual, 1/mm, overriding the
+/// uncertainties (`--length-weight`); 0 = none (the default). Finite and
+/// ≥ 0.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_length_weight(
+    options: *mut AacmmCalibrateOptions,
+    weight: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        set_noise(o, |n| n.length_weight = stated(weight))
+    })
+}
+
+/// 0 = not stated; anything else is left to the library's check (which
+/// refuses negative and non-finite values).
+fn stated(v: f64) -> Option<f64> {
+    (v != 0.0).then_some(v)
+}
+
+/// Worker threads for the normal equations (`--threads`); 0 = one per
+/// core (the default). The results do not depend on it.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_threads(
+    options: *mut AacmmCalibrateOptions,
+    threads: usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        o.threads = threads;
+        Ok(())
+    })
+}
+
+/// A robust refit after the solver (IRLS; per-touch weights in the
+/// report's `/calibration/robust`; `--robust`, `--robust-scale`): `loss`
+/// `AACMM_ROBUST_NONE` (the default), `_HUBER` or `_CAUCHY`, and its tuning
+/// constant `scale` (> 0; 0 = the loss's default: 1.62 Huber, 2.65 Cauchy;
+/// ignored with `_NONE`).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_robust(
+    options: *mut AacmmCalibrateOptions,
+    loss: AacmmRobust,
+    scale: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let loss = match loss {
+            AACMM_ROBUST_NONE => None,
+            AACMM_ROBUST_HUBER => Some(Loss::Huber),
+            AACMM_ROBUST_CAUCHY => Some(Loss::Cauchy),
+            other => {
+                return Err(Error::invalid(format!(
+                    "robust = {other}: one of AACMM_ROBUST_NONE ({AACMM_ROBUST_NONE}), \
+                         _HUBER ({AACMM_ROBUST_HUBER}), _CAUCHY ({AACMM_ROBUST_CAUCHY})"
+                )));
+            }
+        };
+        let robust = loss.map(|loss| Robust {
+            loss,
+            scale_k: if scale == 0.0 {
+                loss.default_k()
+            } else {
+                scale
+            },
+        });
+        if let Some(r) = &robust {
+            r.check()?;
+        }
+        o.robust = robust;
+        Ok(())
+    })
+}
+
+/// Stated tolerances of the start arm: a prior, as the command line's
+/// `--prior`. `NULL` (the default): the arm file's `[prior]` table, if
+/// any; `"none"`: no prior, whatever the file says; otherwise
+/// comma-separated `TARGET=VALUEUNIT`, e.g.
+/// `"length=0.5mm,angle=0.1deg,theta5=0.05deg"` (targets `length`,
+/// `angle`, `a`, `d`, `alpha`, `theta`, `probe` or a parameter; units `mm`,
+/// `m`, `deg`, `rad`), each replacing or adding to the file's entry for
+/// its target. Copied; the syntax and values are checked here, the
+/// parameters against the arm when calibrating.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `prior` is `NULL` or a
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_prior(
+    options: *mut AacmmCalibrateOptions,
+    prior: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        // SAFETY: by the contract.
+        let prior = unsafe { text(prior, "prior") }?;
+        if let Some(p) = &prior {
+            for_some_arm(|n| Tolerances::parse(p, n))?;
+        }
+        o.prior = prior;
+        Ok(())
+    })
+}
+
+/// Whether a poor fit may be called usable (`--accept-poor-fit`; default
+/// `false`): a χ² far outside the stated noise, or a calibrated arm worse
+/// than the nominal on its own data, then becomes a note of the verdict
+/// instead of a reason to refuse it. A mirror-image or collapsed arm, or a
+/// solver that did not converge, is refused all the same.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_accept_poor_fit(
+    options: *mut AacmmCalibrateOptions,
+    accept: bool,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        o.accept_poor_fit = accept;
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::aacmm_last_error_message;
+    use aacmm_core::io::read_arm;
+    use aacmm_core::params::DhParams;
+
+    fn new() -> *mut AacmmCalibrateOptions {
+        let mut o = std::ptr::null_mut();
+        // SAFETY: `o` is writable.
+        let status = unsafe { aacmm_calibrate_options_new(&mut o) };
+        assert_eq!(status, AacmmStatus::Ok);
+        assert!(!o.is_null());
+        o
+    }
+
+    fn last_error() -> String {
+        let mut buf = [0 as c_char; 512];
+        // SAFETY: `buf` has 512 writable bytes.
+        unsafe { aacmm_last_error_message(buf.as_mut_ptr(), buf.len()) };
+        // SAFETY: NUL-terminated by the call.
+        let s = unsafe { std::ffi::CStr::from_ptr(buf.as_ptr()) };
+        s.to_string_lossy().into_owned()
+    }
+
+    /// The options behind a live handle.
+    fn get(o: *mut AacmmCalibrateOptions) -> AacmmCalibrateOptions {
+        // SAFETY: a live handle made by `new`.
+        unsafe { read(o) }.unwrap()
+    }
+
+    /// A refusal: `INVALID_ARGUMENT` and a message that starts with
+    /// `expected` (the option as the C API names it, and the value).
+    fn refused(status: AacmmStatus, expected: &str) {
+        assert_eq!(status, AacmmStatus::InvalidArgument, "{expected}");
+        let m = last_error();
+        assert!(m.starts_with(expected), "{m}");
+    }
+
+    fn kinova() -> Arm {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        read_arm(&root.join("examples/mukca/kinova-1/arm.toml"))
+            .unwrap()
+            .0
+    }
+
+    /// Every setter refuses what the library would refuse, naming the
+    /// option as its setter does, and keeps the earlier value; every
+    /// setter refuses `NULL` options.
+    #[test]
+    fn each_setter_checks_its_value() {
+        let o = new();
+        // SAFETY: `o` is live and used by this thread only; the strings
+        // are NUL-terminated literals.
+        unsafe {
+            refused(
+                aacmm_calibrate_options_set_method(o, 7),
+                "method = 7: one of AACMM_METHOD_LM (0)",
+            );
+            refused(
+                aacmm_calibrate_options_set_fix(o, c"theta1,theta9".as_ptr()),
+                "fix = theta1,theta9: unknown parameter `theta9`",
+            );
+            refused(
+                aacmm_calibrate_options_set_fix(o, c"auto,theta1".as_ptr()),
+                "fix = auto,theta1: `auto` stands alone",
+            );
+            let bad_utf8 = [0xffu8, 0];
+            refused(
+                aacmm_calibrate_options_set_fix(o, bad_utf8.as_ptr().cast()),
+                "fix is not valid UTF-8",
+            );
+            refused(
+                aacmm_calibrate_options_set_cross_validate(o, 1),
+                "cross_validate = 1: 0 (none) or 2 or more folds",
+            );
+            refused(
+                aacmm_calibrate_options_set_encoder_noise_rad(o, -1.0),
+                "encoder_noise_rad = -1: must be a finite number ≥ 0",
+            );
+            refused(
+                aacmm_calibrate_options_set_probe_noise_mm(o, f64::NAN),
+                "probe_noise_mm = NaN: must be a finite number ≥ 0",
+            );
+            refused(
+                aacmm_calibrate_options_set_length_uncertainty_mm(o, -0.5),
+                "length_uncertainty_mm = -0.5: must be a finite number ≥ 0",
+            );
+            refused(
+                aacmm_calibrate_options_set_length_weight(o, f64::INFINITY),
+                "length_weight = inf: must be a finite number > 0",
+            );
+            refused(
+                aacmm_calibrate_options_set_robust(o, 9, 0.0),
+                "robust = 9: one of AACMM_ROBUST_NONE (0)",
+            );
+            refused(
+                aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_HUBER, -1.0),
+                "robust scale = -1: must be a finite number > 0",
+            );
+            refused(
+                aacmm_calibrate_options_set_prior(o, c"length=0.5".as_ptr()),
+                "prior = length=0.5: `length=0.5`: no unit",
+            );
+            refused(
+                aacmm_calibrate_options_set_prior(o, c"theta9=1deg".as_ptr()),
+                "prior = theta9=1deg: ",
+            );
+            refused(
+                aacmm_calibrate_options_set_prior(o, c"theta5=0.05mm".as_ptr()),
+                "prior = theta5=0.05mm: `theta5=0.05mm`: theta5 is an angle",
+            );
+        }
+        // Nothing refused was kept: still the defaults.
+        let d = AacmmCalibrateOptions::default();
+        let kept = get(o);
+        assert_eq!(format!("{kept:?}"), format!("{d:?}"));
+        let null = std::ptr::null_mut();
+        // SAFETY: NULL options are refused before any use.
+        let statuses = unsafe {
+            [
+                aacmm_calibrate_options_set_method(null, AACMM_METHOD_LM),
+                aacmm_calibrate_options_set_fix(null, std::ptr::null()),
+                aacmm_calibrate_options_set_seed(null, 1),
+                aacmm_calibrate_options_set_cross_validate(null, 0),
+                aacmm_calibrate_options_set_encoder_noise_rad(null, 0.0),
+                aacmm_calibrate_options_set_probe_noise_mm(null, 0.0),
+                aacmm_calibrate_options_set_length_uncertainty_mm(null, 0.0),
+                aacmm_calibrate_options_set_length_weight(null, 0.0),
+                aacmm_calibrate_options_set_threads(null, 0),
+                aacmm_calibrate_options_set_robust(null, AACMM_ROBUST_NONE, 0.0),
+                aacmm_calibrate_options_set_prior(null, std::ptr::null()),
+                aacmm_calibrate_options_set_accept_poor_fit(null, true),
+                aacmm_calibrate_options_new(std::ptr::null_mut()),
+            ]
+        };
+        assert!(statuses.iter().all(|&s| s == AacmmStatus::NullPointer));
+        // SAFETY: live, not used after.
+        unsafe { aacmm_calibrate_options_free(o) };
+    }
+
+    /// What is set arrives in the library's settings, in its units.
+    #[test]
+    fn set_values_reach_the_library() {
+        let o = new();
+        // SAFETY: `o` is live and used by this thread only; the strings
+        // are NUL-terminated literals.
+        unsafe {
+            for status in [
+                aacmm_calibrate_options_set_method(o, AACMM_METHOD_LM),
+                aacmm_calibrate_options_set_fix(o, c"theta1, d1".as_ptr()),
+                aacmm_calibrate_options_set_seed(o, 9),
+                aacmm_calibrate_options_set_cross_validate(o, 3),
+                aacmm_calibrate_options_set_encoder_noise_rad(o, 1e-4),
+                aacmm_calibrate_options_set_probe_noise_mm(o, 0.01),
+                aacmm_calibrate_options_set_length_uncertainty_mm(o, 0.002),
+                aacmm_calibrate_options_set_length_weight(o, 5.0),
+                aacmm_calibrate_options_set_threads(o, 2),
+                aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_CAUCHY, 0.0),
+                aacmm_calibrate_options_set_accept_poor_fit(o, true),
+            ] {
+                assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+            }
+        }
+        let arm = Arm::without_limits("nominal", DhParams::paper_nominal());
+        let s = settings(&get(o), &arm).unwrap();
+        assert_eq!(s.solver.method, Method::Lm);
+        assert_eq!(
+            (s.solver.seed, s.solver.threads, s.cross_validate),
+            (9, 2, 3)
+        );
+        assert_eq!(s.model.fix, FixSpec::Columns(vec![18, 6]));
+        let n = s.model.noise;
+        assert_eq!(n.encoder_rad, Some(1e-4));
+        assert_eq!(n.probe_mm, Some(0.01));
+        assert_eq!((n.length_default_mm, n.length_weight), (0.002, Some(5.0)));
+        let r = s.model.robust.unwrap();
+        assert_eq!(
+            (r.loss, r.scale_k),
+            (Loss::Cauchy, Loss::Cauchy.default_k())
+        );
+        assert!(s.model.accept_poor_fit);
+        assert_eq!(s.model.prior, None);
+        // 0 = one per core; NULL fix = auto; robust off again.
+        // SAFETY: as above.
+        unsafe {
+            aacmm_calibrate_options_set_threads(o, 0);
+            aacmm_calibrate_options_set_fix(o, std::ptr::null());
+            aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_NONE, 0.0);
+        }
+        let s = settings(&get(o), &arm).unwrap();
+        assert_eq!(s.solver.threads, available_threads());
+        assert_eq!(s.model.fix, FixSpec::Auto);
+        assert_eq!(s.model.robust, None);
+        // A 7-joint name passes the setter but not a 6-joint arm.
+        // SAFETY: as above.
+        unsafe { aacmm_calibrate_options_set_fix(o, c"theta7".as_ptr()) };
+        let e = settings(&get(o), &arm).err().unwrap();
+        assert_eq!(e.status, AacmmStatus::InvalidArgument);
+        assert!(
+            e.message.starts_with("fix = theta7: unknown parameter"),
+            "{}",
+            e.message
+        );
+        // SAFETY: live, not used after.
+        unsafe { aacmm_calibrate_options_free(o) };
+    }
+
+    /// The arm file's `[prior]` is the default; `none` drops it; a
+    /// specification overrides it entry by entry, as `--prior` does.
+    #[test]
+    fn the_arm_files_prior_is_used_unless_overridden() {
+        let arm = kinova();
+        let file = arm
+            .prior
+            .clone()
+            .expect("kinova-1's arm file has a [prior]");
+        let o = new();
+        let s = settings(&get(o), &arm).unwrap();
+        assert_eq!(s.model.prior.as_ref(), Some(&file));
+        // SAFETY: `o` is live and used by this thread only.
+        unsafe { aacmm_calibrate_options_set_prior(o, c"none".as_ptr()) };
+        assert_eq!(settings(&get(o), &arm).unwrap().model.prior, None);
+        // SAFETY: as above.
+        unsafe { aacmm_calibrate_options_set_prior(o, c"length=0.3mm,theta5=0.05deg".as_ptr()) };
+        let given = Tolerances::parse("length=0.3mm,theta5=0.05deg", 6)
+            .unwrap()
+            .unwrap();
+        let s = settings(&get(o), &arm).unwrap();
+        assert_eq!(s.model.prior, Some(file.clone().overridden_by(&given)));
+        let sigmas = s.model.prior.unwrap().sigmas(6);
+        assert_eq!(sigmas[0], Some(0.3), "a1: the given length");
+        assert_eq!(sigmas[5], Some(2.0), "a6: the file's own entry stays");
+        // An arm without a file prior takes the specification alone.
+        let bare = Arm::without_limits("nominal", DhParams::paper_nominal());
+        let s = settings(&get(o), &bare).unwrap();
+        assert_eq!(s.model.prior, Some(given));
+        // SAFETY: live, not used after.
+        unsafe { aacmm_calibrate_options_free(o) };
+    }
+}

@@ -1,0 +1,382 @@
+//! The C API against the command line: on an arm file with a `[prior]`
+//! table (`examples/mukca/kinova-1`, poses in radians) `aacmm_calibrate_files`
+//! gives what `aacmm calibrate` writes — `calibration.json` byte for byte,
+//! the calibrated parameters bit for bit, the verdict — and `successful` is
+//! the library's verdict, not the solver's convergence.
+
+// Calling the C ABI from Rust takes raw pointers, as C does.
+#![allow(unsafe_code)]
+
+use std::ffi::{CStr, CString, c_char};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use aacmm_capi::{
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmCalibrateOptions, AacmmCalibration,
+    AacmmCalibrationSummary, AacmmStatus, aacmm_calibrate_files, aacmm_calibrate_options_free,
+    aacmm_calibrate_options_new, aacmm_calibrate_options_set_accept_poor_fit,
+    aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_prior,
+    aacmm_calibrate_options_set_probe_noise_mm, aacmm_calibration_free, aacmm_calibration_params,
+    aacmm_calibration_report, aacmm_calibration_summary, aacmm_calibration_verdict,
+    aacmm_calibration_verdict_notes, aacmm_last_error_message,
+};
+use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm};
+
+/// The workspace root.
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("capi/ is in the workspace")
+        .to_path_buf()
+}
+
+/// An example file by its path from the root, absolute: the C API and the
+/// command line then name it alike in their reports.
+fn example(path: &str) -> String {
+    root().join(path).display().to_string()
+}
+
+/// The command line of this workspace: `$AACMM_CLI` if set, else built by
+/// cargo now in this test's profile, so that the test never compares with
+/// a binary left by an older tree.
+fn cli() -> PathBuf {
+    if let Some(exe) = std::env::var_os("AACMM_CLI") {
+        return exe.into();
+    }
+    let exe = std::env::current_exe().expect("the test's path");
+    let profile = exe
+        .parent()
+        .and_then(Path::parent)
+        .and_then(Path::file_name)
+        .and_then(|n| n.to_str())
+        .expect("target/PROFILE/deps/TEST")
+        .to_string();
+    let mut cargo = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    cargo
+        .args(["build", "--quiet", "-p", "aacmm", "--bin", "aacmm"])
+        .arg("--message-format=json")
+        .current_dir(root());
+    match profile.as_str() {
+        "debug" => {}
+        "release" => {
+            cargo.arg("--release");
+        }
+        other => {
+            cargo.args(["--profile", other]);
+        }
+    }
+    let out = cargo.output().expect("cargo runs");
+    assert!(
+        out.status.success(),
+        "cargo build --bin aacmm failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .find_map(|m| m["executable"].as_str().map(PathBuf::from))
+        .expect("cargo names the aacmm executable")
+}
+
+fn last_error() -> String {
+    let mut buf = [0 as c_char; 1024];
+    // SAFETY: `buf` has 1024 writable bytes.
+    unsafe { aacmm_last_error_message(buf.as_mut_ptr(), buf.len()) };
+    // SAFETY: NUL-terminated by the call.
+    unsafe { CStr::from_ptr(buf.as_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// New options, changed by `set` (each setter must succeed).
+fn options(set: impl FnOnce(*mut AacmmCalibrateOptions) -> Vec<AacmmStatus>) -> Options {
+    let mut o = std::ptr::null_mut();
+    // SAFETY: `o` is writable.
+    let status = unsafe { aacmm_calibrate_options_new(&mut o) };
+    assert_eq!(status, AacmmStatus::Ok);
+    for status in set(o) {
+        assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+    }
+    Options(o)
+}
+
+/// Options that free themselves.
+struct Options(*mut AacmmCalibrateOptions);
+
+impl Drop for Options {
+    fn drop(&mut self) {
+        // SAFETY: a live handle, not used after.
+        unsafe { aacmm_calibrate_options_free(self.0) };
+    }
+}
+
+/// A calibration result that frees itself.
+struct Calibration(*mut AacmmCalibration);
+
+impl Drop for Calibration {
+    fn drop(&mut self) {
+        // SAFETY: a live handle, not used after.
+        unsafe { aacmm_calibration_free(self.0) };
+    }
+}
+
+impl Calibration {
+    /// `aacmm_calibrate_files` on files named from the root.
+    fn of_files(arm: &str, poses: &str, lengths: Option<&str>, unit: u32, o: &Options) -> Self {
+        let c = |p: &str| CString::new(example(p)).unwrap();
+        let (arm, poses) = (c(arm), c(poses));
+        let lengths = lengths.map(c);
+        let mut out = std::ptr::null_mut();
+        // SAFETY: NUL-terminated paths (lengths NULL when absent), live
+        // options, a writable output slot.
+        let status = unsafe {
+            aacmm_calibrate_files(
+                arm.as_ptr(),
+                poses.as_ptr(),
+                lengths.as_ref().map_or(std::ptr::null(), |l| l.as_ptr()),
+                unit,
+                o.0,
+                &mut out,
+            )
+        };
+        assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+        Calibration(out)
+    }
+
+    fn params(&self) -> Vec<f64> {
+        let mut p = vec![0.0; 27];
+        // SAFETY: a live result of a 6-joint arm; 27 writable doubles.
+        let status = unsafe { aacmm_calibration_params(self.0, p.as_mut_ptr(), p.len()) };
+        assert_eq!(status, AacmmStatus::Ok);
+        p
+    }
+
+    fn summary(&self) -> AacmmCalibrationSummary {
+        let mut s = std::mem::MaybeUninit::uninit();
+        // SAFETY: a live result; room for the struct, written on success.
+        unsafe {
+            assert_eq!(
+                aacmm_calibration_summary(self.0, s.as_mut_ptr()),
+                AacmmStatus::Ok
+            );
+            s.assume_init()
+        }
+    }
+
+    /// A string output: sized first, then copied.
+    fn text(&self, mut get: impl FnMut(*mut c_char, usize, *mut usize) -> AacmmStatus) -> String {
+        let mut len = 0;
+        assert_eq!(
+            get(std::ptr::null_mut(), 0, &mut len),
+            AacmmStatus::BufferTooSmall
+        );
+        let mut buf = vec![0u8; len + 1];
+        assert_eq!(
+            get(buf.as_mut_ptr().cast(), buf.len(), &mut len),
+            AacmmStatus::Ok
+        );
+        assert_eq!(buf[len], 0);
+        String::from_utf8(buf[..len].to_vec()).unwrap()
+    }
+
+    fn report(&self) -> String {
+        // SAFETY: a live result; the buffers are as stated.
+        self.text(|b, n, len| unsafe { aacmm_calibration_report(self.0, b, n, len) })
+    }
+
+    /// `(usable, reasons, notes)`.
+    fn verdict(&self) -> (bool, String, String) {
+        let mut usable = !self.summary().successful;
+        // SAFETY: a live result; the buffers are as stated.
+        let reasons = self
+            .text(|b, n, len| unsafe { aacmm_calibration_verdict(self.0, &mut usable, b, n, len) });
+        // SAFETY: as above.
+        let notes =
+            self.text(|b, n, len| unsafe { aacmm_calibration_verdict_notes(self.0, b, n, len) });
+        (usable, reasons, notes)
+    }
+}
+
+/// Bitwise equality with the index of the first difference.
+fn assert_bits(what: &str, a: &[f64], b: &[f64]) {
+    assert_eq!(a.len(), b.len(), "{what}: lengths");
+    if let Some(i) = (0..a.len()).find(|&i| a[i].to_bits() != b[i].to_bits()) {
+        panic!("{what}[{i}]: {:e} vs {:e}", a[i], b[i]);
+    }
+}
+
+const KINOVA: [&str; 3] = [
+    "examples/mukca/kinova-1/arm.toml",
+    "examples/mukca/kinova-1/poses.csv",
+    "examples/mukca/kinova-1/lengths.csv",
+];
+
+/// Runs `aacmm calibrate` on kinova-1 with `extra` flags; its output
+/// directory.
+fn command_line(name: &str, extra: &[&str]) -> (PathBuf, bool) {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&out);
+    let [arm, poses, lengths] = KINOVA.map(example);
+    let run = Command::new(cli())
+        .args([
+            "calibrate",
+            "--arm",
+            &arm,
+            "--data",
+            &poses,
+            "--lengths",
+            &lengths,
+        ])
+        .args(["--angle-unit", "rad", "--out"])
+        .arg(&out)
+        .args(extra)
+        .output()
+        .expect("aacmm runs");
+    assert!(
+        out.join("calibration.json").is_file(),
+        "aacmm calibrate wrote nothing:\n{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    (out, run.status.success())
+}
+
+/// The arm file's `[prior]` reaches the fit: the C API writes the command
+/// line's report byte for byte and its calibrated parameters bit for bit,
+/// with the same verdict; `prior = "none"` is `--prior none`, and differs.
+#[test]
+fn an_arm_files_prior_gives_the_command_lines_result() {
+    let [arm, poses, lengths] = KINOVA;
+    let defaults = options(|_| Vec::new());
+    let c = Calibration::of_files(arm, poses, Some(lengths), AACMM_ANGLE_RAD, &defaults);
+    let (dir, exit_ok) = command_line("kinova-1-cli", &[]);
+    let json = std::fs::read_to_string(dir.join("calibration.json")).unwrap();
+    let report = c.report();
+    assert_eq!(report, json, "the C API's report is not the command line's");
+    // The command line writes no radians: its calibrated parameters are
+    // those of `calibrated.toml` (mm, and deg converted so that they read
+    // back to the same radians where a decimal can). The C API's
+    // parameters, written the same way, give the same bytes.
+    let params = c.params();
+    let (start, _) = read_arm(&root().join(arm)).unwrap();
+    let from_c = Arm {
+        name: format!("{}-calibrated", start.name),
+        params: start.params.with_values(&params).unwrap(),
+        limits: start.limits.clone(),
+        prior: None,
+    };
+    assert_eq!(
+        arm_to_toml(&from_c, LengthUnit::Mm, AngleUnit::Deg),
+        std::fs::read_to_string(dir.join("calibrated.toml")).unwrap(),
+        "the C API's calibrated parameters are not the command line's"
+    );
+    // And in the report's units (deg by `to_degrees`, another conversion),
+    // parameter by parameter: the numbers of the command line's JSON, as
+    // written (parsed, they could be off by an ulp).
+    let mut rest = &json[json.find("\"parameters\": [").unwrap()..];
+    for (id, &v) in start.params.param_ids().zip(&params) {
+        let key = "\"calibrated\": ";
+        let at = rest.find(key).unwrap() + key.len();
+        let written = &rest[at..at + rest[at..].find([',', '\n']).unwrap()];
+        assert_eq!(
+            serde_json::to_string(&id.to_user(v)).unwrap(),
+            written,
+            "{id}"
+        );
+        rest = &rest[at..];
+    }
+
+    // The verdict, as the report and the exit status have it.
+    let expected: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let v = &expected["verdict"];
+    let strings = |key: &str| -> String {
+        let items: Vec<&str> = v[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s.as_str().unwrap())
+            .collect();
+        items.join("\n")
+    };
+    let (usable, reasons, notes) = c.verdict();
+    assert_eq!(usable, v["usable"].as_bool().unwrap());
+    assert_eq!((usable, c.summary().successful), (exit_ok, exit_ok));
+    assert_eq!(reasons, strings("reasons"));
+    assert_eq!(notes, strings("notes"));
+    assert!(
+        !expected["calibration"]["prior"].is_null(),
+        "the fit had a prior"
+    );
+
+    // Without the prior: the command line's `--prior none`, another fit.
+    let none = options(|o| {
+        // SAFETY: live options; a NUL-terminated literal.
+        vec![unsafe { aacmm_calibrate_options_set_prior(o, c"none".as_ptr()) }]
+    });
+    let bare = Calibration::of_files(arm, poses, Some(lengths), AACMM_ANGLE_RAD, &none);
+    let (dir, _) = command_line("kinova-1-cli-no-prior", &["--prior", "none"]);
+    let json = std::fs::read_to_string(dir.join("calibration.json")).unwrap();
+    assert_eq!(bare.report(), json);
+    assert!(
+        params
+            .iter()
+            .zip(bare.params())
+            .any(|(a, b)| a.to_bits() != b.to_bits()),
+        "the prior changed nothing: is it used at all?"
+    );
+}
+
+/// Far overstated noise on the shipped campaign: the solver converges, the
+/// verdict refuses (`successful` false, `converged` true, the reason given);
+/// accepting a poor fit makes it usable, with a note saying so.
+#[test]
+fn successful_is_the_verdict_not_the_solver() {
+    let loud = |accept: bool| {
+        options(|o| {
+            // SAFETY: live options.
+            unsafe {
+                vec![
+                    aacmm_calibrate_options_set_encoder_noise_rad(o, 30f64.to_radians()),
+                    aacmm_calibrate_options_set_probe_noise_mm(o, 100.0),
+                    aacmm_calibrate_options_set_accept_poor_fit(o, accept),
+                ]
+            }
+        })
+    };
+    let files = [
+        "examples/paper-table-1.toml",
+        "examples/paper-campaign/poses.csv",
+        "examples/paper-campaign/lengths.csv",
+    ];
+    let refused = Calibration::of_files(
+        files[0],
+        files[1],
+        Some(files[2]),
+        AACMM_ANGLE_DEG,
+        &loud(false),
+    );
+    let s = refused.summary();
+    assert!(s.converged, "the solver converged");
+    assert!(!s.successful, "but the verdict refuses the fit");
+    let (usable, reasons, _) = refused.verdict();
+    assert!(!usable);
+    assert!(
+        reasons.lines().next().unwrap().contains("overstated"),
+        "{reasons}"
+    );
+    let report: serde_json::Value = serde_json::from_str(&refused.report()).unwrap();
+    assert_eq!(report["verdict"]["usable"], false);
+
+    let accepted = Calibration::of_files(
+        files[0],
+        files[1],
+        Some(files[2]),
+        AACMM_ANGLE_DEG,
+        &loud(true),
+    );
+    assert!(accepted.summary().successful);
+    let (usable, reasons, notes) = accepted.verdict();
+    assert!(usable);
+    assert_eq!(reasons, "");
+    assert!(notes.starts_with("accepted on request: "), "{notes}");
+    assert_bits("params", &accepted.params(), &refused.params());
+}
