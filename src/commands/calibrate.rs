@@ -6,18 +6,15 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aacmm_core::calibrate::{
-    AnnealOptions, CalibrationError, Context, FixSpec, GlobalOptions, LmOptions, Loss,
-    ModelOptions, Robust, SolverSettings, SwitchRule,
+    AnnealOptions, CalibrationError, Context, GlobalOptions, Loss, SwitchRule,
 };
 use aacmm_core::io::source_name;
 use aacmm_core::report::{CALIBRATION_FILES, HTML_FILE};
-use aacmm_core::session::{
-    self, CALIBRATED_FILE, HeldOutData, Problem, REPORT_FILE, Sources, TIMING_FILE,
-};
+use aacmm_core::session::{self, CALIBRATED_FILE, REPORT_FILE, TIMING_FILE};
 use anyhow::{Context as _, Result, bail};
 use clap::ValueEnum;
 
-use super::fit::{FitInput, flag_error, read_other};
+use super::fit::{FitInput, flag_error};
 use crate::output::{Stdout, note, warn};
 use crate::paths::check_output_dir;
 
@@ -215,56 +212,28 @@ pub fn run(args: Args) -> Result<()> {
         &[CALIBRATED_FILE, REPORT_FILE],
         args.force,
     )?;
-    let noise = args.fit.noise();
-    let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
-    let fix = FixSpec::parse_for(&args.fix, &arm.params).map_err(flag_error)?;
     let (anneal, switch, global) = args.solver.options();
-    let settings = SolverSettings {
-        method: args.method.into(),
-        lm: LmOptions::default(),
-        anneal,
-        switch,
-        global,
-        threads: args.fit.threads(),
-        seed: args.seed,
-    };
-    let model = ModelOptions {
-        fix,
-        noise,
-        accept_poor_fit: args.accept_poor_fit,
-        robust: args.robust.map(|l| {
-            let loss = Loss::from(l);
-            Robust {
-                loss,
-                scale_k: args.robust_scale.unwrap_or(loss.default_k()),
-            }
-        }),
-        prior,
-    };
-    let arm_file = source_name(&args.fit.input.arm);
-    let sources = Sources {
-        arm_file: arm_file.clone(),
-        data_file: source_name(&args.fit.input.data),
-        lengths_file: args.fit.lengths.as_deref().map(source_name),
-        warnings,
-    };
-    let mut problem = Problem::new(arm, data, model)
-        .map_err(flag_error)?
-        .with_sources(sources);
+    let mut request = (args.fit.request()?)
+        .fix(&args.fix)
+        .method(aacmm_core::calibrate::Method::from(args.method).name())
+        .seed(args.seed)
+        .anneal(anneal)
+        .switch(switch)
+        .global(global)
+        .accept_poor_fit(args.accept_poor_fit)
+        .robust(args.robust.map(|l| Loss::from(l).name()), args.robust_scale)
+        .cross_validate(args.cross_validate);
     if let Some(path) = &args.validate {
-        let lengths = args.validate_lengths.as_deref();
-        let data = read_other(problem.arm(), path, lengths, args.fit.input.angle_unit)?;
-        problem = problem
-            .with_held_out(HeldOutData {
-                data,
-                data_file: source_name(path),
-                lengths_file: lengths.map(source_name),
-            })
-            .map_err(flag_error)?;
+        let shown = request.warnings().len();
+        request = request.validate_on_files(path, args.validate_lengths.as_deref())?;
+        request.warnings()[shown..].iter().try_for_each(warn)?;
     }
-    if let Some(k) = args.cross_validate {
-        problem = problem.with_cross_validation(k).map_err(flag_error)?;
-    }
+    let arm_file = source_name(&args.fit.input.arm);
+    let (problem, settings) = request.build().map_err(|e| match e {
+        // The arm's own refusal names its file, as a read error would.
+        CalibrationError::Kernel(_) => anyhow::Error::new(e).context(arm_file.clone()),
+        e => flag_error(e),
+    })?;
     let started = Instant::now();
     let report = {
         let mut bar = super::progress::Bar::new();
