@@ -235,10 +235,15 @@ class Calibration:
         """Correlation matrix of the free parameters."""
     @property
     def successful(self) -> bool:
-        """Whether the solution is usable (converged to a confirmed minimum)."""
+        """Whether the calibration is usable: the verdict
+        (``report["verdict"]["usable"]``, exit 0 of ``aacmm calibrate``) —
+        a confirmed minimum, the nominal's kind of geometry, and (unless
+        ``accept_poor_fit``) a χ² and fitted data that agree."""
     @property
     def summary(self) -> Dict[str, Any]:
-        """Method, why it stopped (``stop``, and ``stop_text`` in words),
+        """``successful`` (the verdict, as the property), method, why it
+        stopped (``stop``, and ``stop_text`` in words), ``converged`` (the
+        solver's own criterion, which a refused calibration may meet),
         iterations, dof, σ0, touch σ, costs, and the before/after figures
         (fitted, held out, cross-validation folds)."""
     @property
@@ -269,6 +274,7 @@ def calibrate(
     robust: Optional[Literal["huber", "cauchy"]] = None,
     robust_scale: Optional[float] = None,
     prior: Optional[str] = None,
+    accept_poor_fit: bool = False,
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
@@ -277,6 +283,9 @@ def calibrate(
     in ``report["calibration"]["robust"]``), ``robust_scale`` its tuning
     constant. ``prior`` states tolerances as ``--prior`` does
     (``"length=0.5mm,angle=0.1deg"``, over the arm file's ``[prior]``;
-    ``"none"`` ignores the file's). ValueError for a bad option (naming the
-    argument), CalibrationError when the data cannot determine the free
-    parameters."""
+    ``"none"`` ignores the file's). ``accept_poor_fit`` calls a poor χ² or a
+    fit worse than nominal usable (never a wrong geometry). Readings outside
+    the arm's joint limits are a UserWarning (and in the report's
+    warnings). ValueError for a bad option (naming the argument),
+    CalibrationError when the data cannot determine the free parameters; a
+    calibration that is not usable is returned: check ``successful``."""

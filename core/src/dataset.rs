@@ -315,8 +315,8 @@ impl DataSet {
 
     /// A data set read from a poses file (angles in degrees) and an optional
     /// lengths file, for an arm of `joints` joints; `-` reads standard
-    /// input. Reader warnings are dropped: read the files with
-    /// [`crate::io::read_poses`] to keep them.
+    /// input. The readers' warnings are dropped: [`DataSet::read`] keeps
+    /// them (and takes the angle unit).
     ///
     /// # Errors
     ///
@@ -326,16 +326,71 @@ impl DataSet {
         lengths: Option<impl AsRef<std::path::Path>>,
         joints: usize,
     ) -> Result<DataSet, InputError> {
-        let path = poses.as_ref();
-        let (p, _) = crate::io::read_poses(path, crate::io::AngleUnit::Deg, Some(joints))?;
-        let data = DataSet::from_poses_owned(p, &crate::io::source_name(path))?;
-        match lengths {
+        let lengths = lengths.as_ref().map(|l| l.as_ref());
+        DataSet::read(poses.as_ref(), lengths, crate::io::AngleUnit::Deg, joints).map(|(d, _)| d)
+    }
+
+    /// A data set read from a poses file (angles in `unit`) and an optional
+    /// lengths file, for an arm of `joints` joints (`-` reads standard
+    /// input), with the readers' warnings, in the order read — for the
+    /// caller to show and to keep in its report.
+    ///
+    /// # Errors
+    ///
+    /// The readers' errors, naming file, line and field.
+    ///
+    /// ```
+    /// # std::env::set_current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).unwrap();
+    /// use aacmm_core::{DataSet, io::AngleUnit};
+    /// let poses = std::path::Path::new("examples/paper-campaign/poses.csv");
+    /// let (data, warnings) = DataSet::read(poses, None, AngleUnit::Deg, 6).unwrap();
+    /// assert_eq!((data.len(), warnings.len()), (100, 0));
+    /// // The same file read as radians: readings that look like degrees.
+    /// let (_, warnings) = DataSet::read(poses, None, AngleUnit::Rad, 6).unwrap();
+    /// assert!(warnings[0].to_string().starts_with("examples/paper-campaign/poses.csv"), "{warnings:?}");
+    /// ```
+    pub fn read(
+        poses: &std::path::Path,
+        lengths: Option<&std::path::Path>,
+        unit: crate::io::AngleUnit,
+        joints: usize,
+    ) -> Result<(DataSet, Vec<crate::io::Warning>), InputError> {
+        let (p, warnings) = crate::io::read_poses(poses, unit, Some(joints))?;
+        let data = DataSet::from_poses_owned(p, &crate::io::source_name(poses))?;
+        let data = match lengths {
             Some(l) => {
-                let l = l.as_ref();
-                data.with_lengths(&crate::io::read_lengths(l)?, &crate::io::source_name(l))
+                data.with_lengths(&crate::io::read_lengths(l)?, &crate::io::source_name(l))?
             }
-            None => Ok(data),
-        }
+            None => data,
+        };
+        Ok((data, warnings))
+    }
+
+    /// One warning for the readings outside the joint `limits` (rad, one
+    /// entry per joint, as an arm file's), if any: the warning
+    /// [`crate::io::limit_warning`] gives for the poses file, whose first
+    /// reading outside is the first in file order (`unit`: the one the
+    /// readings were written in, for the message).
+    ///
+    /// ```
+    /// use aacmm_core::{DataSet, io::{AngleUnit, parse_poses}};
+    /// let text = "point,q1\nA,0.1\nB,0.2\nA,0.3\nB,2.5\nA,0.5\nB,0.6\nA,3.5\n";
+    /// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Rad, None).unwrap();
+    /// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+    /// let w = data.limit_warning(&[Some([-2.0, 2.0])], AngleUnit::Rad).unwrap();
+    /// assert!(w.to_string().starts_with("p.csv:5: field `q1`: 2 readings outside"), "{w}");
+    /// assert!(data.limit_warning(&[None], AngleUnit::Rad).is_none());
+    /// ```
+    pub fn limit_warning(
+        &self,
+        limits: &[Option<[f64; 2]>],
+        unit: crate::io::AngleUnit,
+    ) -> Option<crate::io::Warning> {
+        let touches = (0..self.len()).map(|i| {
+            let at = self.source.touch(i);
+            (self.source.touch_row(i), at.line, self.reading(i))
+        });
+        crate::io::limits::limit_warning_of(limits, touches, self.source.poses_file(), unit)
     }
 
     /// A data set from arrays: a point label per touch, the touch's joint

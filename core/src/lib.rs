@@ -5,16 +5,17 @@
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
 //!
-//! The front door: read an arm and its touches, make a [`Problem`], run it
-//! (the README's Rust example, run from the repository's root):
+//! The front door: a [`Request`] — read an arm and its touches, say what to
+//! fit and how as text and values, run it (the README's Rust example, run
+//! from the repository's root):
 //!
 //! ```
 //! # std::env::set_current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).unwrap();
-//! use aacmm_core::{DataSet, ModelOptions, Problem, SolverSettings, read_arm};
+//! use aacmm_core::{Request, io::AngleUnit};
 //!
-//! let (arm, _) = read_arm("examples/paper-table-1.toml".as_ref())?;
-//! let data = DataSet::from_files("examples/paper-campaign/poses.csv", Some("examples/paper-campaign/lengths.csv"), 6)?;
-//! let report = Problem::new(arm, data, ModelOptions::default())?.run(&SolverSettings::default())?;
+//! let request = Request::read("examples/paper-table-1.toml", "examples/paper-campaign/poses.csv", AngleUnit::Deg)?
+//!     .read_lengths("examples/paper-campaign/lengths.csv")?;
+//! let (_problem, report) = request.fix("auto").method("global").run()?;
 //! assert!(report.is_usable());
 //! for p in report.calibration.parameters.iter().filter(|p| p.fixed.is_none()).map(|p| p.user()) {
 //!     println!("{:<7} {:>12.4} ± {:.4} {}", p.name, p.calibrated, p.sigma.unwrap_or(f64::NAN), p.unit);
@@ -55,5 +56,5 @@ pub use io::{Arm, read_arm};
 pub use metrics::evaluate;
 pub use params::{DhParams, ParamId};
 pub use residuals::Noise;
-pub use session::{CalibrationReport, Problem};
+pub use session::{CalibrationReport, Problem, Request};
 pub use simulate::simulate;

@@ -7,17 +7,17 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aacmm_core::calibrate::{Context, FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings};
+use aacmm_core::calibrate::Context;
 use aacmm_core::io::Arm as CoreArm;
-use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Sources};
+use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Request, Sources};
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
-use crate::arm::Arm;
+use crate::arm::{Arm, warn_all};
 use crate::data::DataSet;
-use crate::error::{Error, Kind, Result, detached};
+use crate::error::{Error, Kind, detached};
 use crate::noise::Noise;
 use crate::{to_dict, to_python};
 
@@ -42,72 +42,57 @@ fn fix_text(fix: &Bound<'_, PyAny>) -> PyResult<String> {
     Ok(names.join(","))
 }
 
-/// The robust fit of `robust=` and `robust_scale=` (the library checks
-/// the constant).
-fn robust(loss: Option<&str>, k: Option<f64>) -> Result<Option<Robust>> {
-    match (loss, k) {
-        (None, None) => Ok(None),
-        (None, Some(_)) => Err(Error::value(
-            "robust_scale: needs robust = \"huber\" or \"cauchy\"",
-        )),
-        (Some(name), k) => {
-            let loss = Loss::parse(name)
-                .ok_or_else(|| Error::value(format!("robust = {name:?}: one of huber, cauchy")))?;
-            Ok(Some(Robust {
-                loss,
-                scale_k: k.unwrap_or(loss.default_k()),
-            }))
-        }
-    }
-}
-
-/// The method of a `method=` argument.
-fn method(name: &str) -> Result<Method> {
-    Method::parse(name).ok_or_else(|| {
-        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-        Error::value(format!("method = {name:?}: one of {}", names.join(", ")))
-    })
-}
-
-/// The problem, checked by the library (a refused setting names its Python
-/// argument; another joint count names `data` or `validate`).
-fn problem(
+/// The library's request for these arguments (the library parses and
+/// checks every one when the request is built).
+fn request(
     arm: &Arm,
     data: &DataSet,
     validate: Option<&DataSet>,
-    options: ModelOptions,
-    cross_validate: Option<usize>,
-) -> Result<Problem> {
-    // Another joint count: say which data set has it.
-    let joints = |what: &'static str| {
-        move |e: aacmm_core::CalibrationError| match e {
-            e @ aacmm_core::CalibrationError::Joints { .. } => Error::from(e).prefixed(what),
-            e => Error::from(e),
-        }
-    };
+    fix: &str,
+    noise: Option<&Noise>,
+    prior: Option<&str>,
+) -> Request {
     let mut warnings = arm.warnings.clone();
     warnings.extend(data.warnings.iter().cloned());
-    let mut problem = Problem::new(arm.arm.clone(), data.data.clone(), options)
-        .map_err(joints("data"))?
-        .with_sources(Sources {
+    let request = Request::new(arm.arm.clone(), data.data.clone())
+        .sources(Sources {
             arm_file: arm.source.clone(),
             data_file: data.poses_file.clone(),
             lengths_file: data.lengths_file.clone(),
             warnings,
-        });
-    if let Some(v) = validate {
-        problem = problem
-            .with_held_out(HeldOutData {
+        })
+        .angle_unit(data.unit)
+        .fix(fix)
+        .noise(noise.map(|n| n.noise).unwrap_or_default())
+        .prior(prior);
+    match validate {
+        Some(v) => request.validate_on(
+            HeldOutData {
                 data: v.data.clone(),
                 data_file: v.poses_file.clone(),
                 lengths_file: v.lengths_file.clone(),
-            })
-            .map_err(joints("validate"))?;
+            },
+            v.warnings.clone(),
+        ),
+        None => request,
     }
-    if let Some(k) = cross_validate {
-        problem = problem.with_cross_validation(k)?;
+}
+
+/// A refusal of the request in Python's words: a setting names its
+/// argument; another joint count names `data` or `validate` (the data set
+/// of the arm's joint count is not the one refused).
+fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error {
+    match e {
+        e @ aacmm_core::CalibrationError::Joints { .. } => {
+            let which = if data.data.joints() == arm.joints() {
+                "validate"
+            } else {
+                "data"
+            };
+            Error::from(e).prefixed(which)
+        }
+        e => Error::from(e),
     }
-    Ok(problem)
 }
 
 /// Calibrates `arm` (the start, e.g. the nominal arm) on `data`: `aacmm
@@ -124,15 +109,17 @@ fn problem(
 /// tolerances of the arm, as the command line's `--prior`
 /// (`"length=0.5mm,angle=0.1deg,theta5=0.05deg"`, entry by entry over the
 /// arm file's `[prior]`; `"none"` ignores the file's; default: the file's,
-/// if any). The report is the command line's bit for bit. Runs without the
-/// GIL.
+/// if any); `accept_poor_fit`: call a poor χ² or a fit worse than nominal
+/// usable (never a wrong geometry). The report is the command line's bit
+/// for bit; readings outside the arm's joint limits are a `UserWarning`
+/// (and in the report's warnings). Runs without the GIL.
 ///
 /// Raises `ValueError` for a bad option (naming the argument),
 /// `aacmm.CalibrationError` when the data cannot determine the free
-/// parameters. A solver that did not converge still gives a result: check
-/// `successful`.
+/// parameters. A calibration that is not usable still gives a result:
+/// check `successful` (the verdict) and `report["verdict"]` for why.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None))]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -148,43 +135,32 @@ pub fn calibrate(
     robust: Option<&str>,
     robust_scale: Option<f64>,
     prior: Option<&str>,
+    accept_poor_fit: bool,
 ) -> PyResult<Calibration> {
-    let robust = self::robust(robust, robust_scale)?;
-    let prior = match prior {
-        None => arm.arm.prior.clone(),
-        Some(spec) => aacmm_core::tolerances::Tolerances::parse(spec, arm.joints())
-            .map_err(Error::from)?
-            .map(|flag| {
-                arm.arm
-                    .prior
-                    .clone()
-                    .unwrap_or_default()
-                    .overridden_by(&flag)
-            }),
-    };
     let fix = match fix {
         Some(f) => fix_text(f)?,
         None => "auto".to_string(),
     };
-    let fix = FixSpec::parse_for(&fix, &arm.arm.params).map_err(Error::from)?;
-    // None: one per core; 0 is left to the library to refuse. The
-    // solvers' settings not exposed here keep the library's defaults, which
-    // are the command line's.
-    let settings = SolverSettings {
-        method: self::method(method)?,
-        seed,
-        threads: threads.unwrap_or_else(aacmm_core::calibrate::available_threads),
-        ..SolverSettings::default()
-    };
-    let options = ModelOptions {
-        fix,
-        noise: noise.map(|n| n.noise).unwrap_or_default(),
-        robust,
-        prior,
-        ..ModelOptions::default()
-    };
+    // The solvers' settings not exposed here keep the library's defaults,
+    // which are the command line's.
+    let request = request(arm, data, validate, &fix, noise, prior)
+        .method(method)
+        .seed(seed)
+        .threads(threads)
+        .cross_validate(cross_validate)
+        .robust(robust, robust_scale)
+        .accept_poor_fit(accept_poor_fit);
+    // The readers' warnings were issued when the files were read; the
+    // request adds those about the arm and the data together.
+    let read: Vec<&String> = (arm.warnings.iter().chain(&data.warnings))
+        .chain(validate.iter().flat_map(|v| &v.warnings))
+        .collect();
+    let added: Vec<String> = (request.warnings().into_iter())
+        .filter(|w| !read.contains(&w))
+        .collect();
+    warn_all(py, &added)?;
     detached(py, || {
-        let problem = problem(arm, data, validate, options, cross_validate)?;
+        let (problem, settings) = request.build().map_err(|e| refusal(e, data, arm))?;
         let started = Instant::now();
         let solver = settings.method.solver();
         let report = session::run(&problem, &settings, &*solver, &mut Context::new())
@@ -259,18 +235,22 @@ impl Calibration {
         Ok(m.into_pyarray(py))
     }
 
-    /// Whether the solution is usable: the solver converged to a confirmed
-    /// minimum.
+    /// Whether the calibration is usable — the verdict (`report["verdict"]`,
+    /// exit 0 of `aacmm calibrate`): the solver reached a confirmed minimum,
+    /// the arm is the nominal's kind of geometry, and (unless a poor fit was
+    /// accepted) the χ² test and the fitted data agree.
     #[getter]
     fn successful(&self) -> bool {
         self.report.is_usable()
     }
 
-    /// The figures a program acts on: method, why it stopped (`stop`, and
-    /// `stop_text` in words), iterations, free parameters, degrees of
-    /// freedom, σ0, touch σ (mm), costs, and the before/after figures on the
-    /// fitted data (and on the held-out data and per cross-validation fold
-    /// when asked for).
+    /// The figures a program acts on: `successful` (the verdict, as the
+    /// property), method, why it stopped (`stop`, and `stop_text` in
+    /// words), whether the solver `converged` (its own criterion, which a
+    /// refused calibration may meet), iterations, free parameters, degrees
+    /// of freedom, σ0, touch σ (mm), costs, and the before/after figures on
+    /// the fitted data (and on the held-out data and per cross-validation
+    /// fold when asked for).
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let c = &self.report.calibration;
@@ -279,7 +259,8 @@ impl Calibration {
         d.set_item("method", c.solver.method.name())?;
         d.set_item("stop", to_python(py, &c.solver.stop)?)?;
         d.set_item("stop_text", c.solver.stop.describe())?;
-        d.set_item("successful", c.solver.successful)?;
+        d.set_item("successful", self.report.is_usable())?;
+        d.set_item("converged", c.solver.successful)?;
         d.set_item("iterations", c.solver.iterations)?;
         d.set_item("cost_evaluations", c.solver.cost_evaluations)?;
         d.set_item("jacobian_evaluations", c.solver.jacobian_evaluations)?;
@@ -352,7 +333,7 @@ impl Calibration {
         format!(
             "Calibration(method={:?}, successful={}, free_parameters={}, sigma0={:.4})",
             c.solver.method.name(),
-            c.solver.successful,
+            self.report.is_usable(),
             c.dof.free_parameters,
             c.dof.sigma0
         )

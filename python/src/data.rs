@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use aacmm_core::dataset::DataSet as CoreDataSet;
-use aacmm_core::io::{ReferenceLength, read_lengths, read_poses, source_name};
+use aacmm_core::io::{AngleUnit, ReferenceLength, read_lengths, read_poses, source_name};
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 
@@ -23,6 +23,8 @@ pub struct DataSet {
     /// The lengths file as named, `<arrays>`, or `None` without lengths.
     pub(crate) lengths_file: Option<String>,
     pub(crate) warnings: Vec<String>,
+    /// The unit the readings were given in (messages show them so).
+    pub(crate) unit: AngleUnit,
 }
 
 /// One reference length handed in from Python:
@@ -125,6 +127,7 @@ impl DataSet {
             poses_file: "<arrays>".to_string(),
             lengths_file: has_lengths.then(|| "<arrays>".to_string()),
             warnings: Vec::new(),
+            unit,
         })
     }
 
@@ -157,6 +160,7 @@ impl DataSet {
                 poses_file,
                 lengths_file,
                 warnings: warnings.iter().map(ToString::to_string).collect(),
+                unit,
             })
         })?;
         warn_all(py, &set.warnings)?;

@@ -134,8 +134,10 @@ impl From<aacmm_core::residuals::TermError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 9] = [
+const ARGUMENTS: [(&str, &str); 11] = [
     ("prior", "prior"),
+    ("method", "method"),
+    ("robust.loss", "robust"),
     ("noise.encoder_rad", "encoder_deg"),
     ("noise.probe_mm", "probe_mm"),
     ("noise.length_default_mm", "length_default_mm"),

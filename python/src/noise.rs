@@ -3,6 +3,7 @@
 
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::residuals::Noise as CoreNoise;
+use aacmm_core::session::user_noise;
 use pyo3::prelude::*;
 
 use crate::error::Result;
@@ -27,12 +28,7 @@ impl Noise {
         length_default_mm: f64,
         length_weight: Option<f64>,
     ) -> Result<Noise> {
-        let noise = CoreNoise {
-            encoder_rad: encoder_deg.map(f64::to_radians),
-            probe_mm,
-            length_default_mm,
-            length_weight: length_weight.filter(|&w| w != 0.0),
-        };
+        let noise = user_noise(encoder_deg, probe_mm, length_default_mm, length_weight);
         noise.check()?;
         Ok(Noise { noise, encoder_deg })
     }

@@ -103,6 +103,8 @@ impl Campaign {
             poses_file: aacmm_core::simulate::POSES_FILE.to_string(),
             lengths_file: has_lengths.then(|| aacmm_core::simulate::LENGTHS_FILE.to_string()),
             warnings: Vec::new(),
+            // As its poses file is written.
+            unit: aacmm_core::io::AngleUnit::Deg,
         })
     }
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import aacmm
-from conftest import ARM, LENGTHS, POSES, longest_stall, read_lengths, read_poses
+from conftest import ARM, LENGTHS, POSES, REPO, longest_stall, read_lengths, read_poses
 
 
 def test_a_data_set_from_files_and_from_arrays_is_the_same(data):
@@ -79,7 +79,7 @@ def test_calibration_equals_the_cli_files(cli, arm, data, tmp_path):
     assert len(cal.free) == 21 == cal.correlation.shape[0] == cal.summary["free_parameters"]
     assert np.allclose(np.diag(cal.correlation), 1.0)
     s = cal.summary
-    assert s["successful"] and cal.successful and s["method"] == "global"
+    assert s["successful"] and s["converged"] and cal.successful and s["method"] == "global"
     assert "final LM" in s["stop_text"] and "global" in s["stop"]
     assert s["fitted"]["after"]["e_mean"] < s["fitted"]["before"]["e_mean"] / 10
     assert len(s["cross_validation"]) == 3 and s["held_out"] is None
@@ -89,6 +89,53 @@ def test_calibration_equals_the_cli_files(cli, arm, data, tmp_path):
     again = aacmm.calibrate(arm, arrays, noise=noise, fix=cal.report["fix"], threads=2)
     assert np.array_equal(again.params, cal.params)
     assert np.array_equal(again.sigma, cal.sigma, equal_nan=True)
+
+
+def test_successful_is_the_verdict_not_the_solvers_convergence(arm, data):
+    """Noise overstated 3000 times: the solver converges (to the right arm),
+    but χ² is far below its range, so the σ cannot be trusted and the
+    verdict refuses the calibration — `successful`, `summary["successful"]`
+    and the report's verdict all say so; the solver's own criterion is
+    `converged`. Accepting a poor fit makes all three usable."""
+    loud = aacmm.Noise(encoder_deg=30, probe_mm=100)
+    for accept in (False, True):
+        cal = aacmm.calibrate(arm, data, noise=loud, accept_poor_fit=accept)
+        s, verdict = cal.summary, cal.report["verdict"]
+        assert cal.successful == s["successful"] == verdict["usable"] == accept, verdict
+        assert s["converged"] and cal.report["calibration"]["solver"]["successful"]
+        assert s["fitted"]["after"]["e_mean"] < 0.06
+        assert repr(cal).startswith(f'Calibration(method="global", successful={str(accept).lower()},')
+        if accept:
+            assert verdict["notes"][0].startswith("accepted on request: ")
+        else:
+            assert "overstated" in verdict["reasons"][0], verdict
+
+
+def test_readings_outside_the_joint_limits_are_warned_and_kept_as_the_cli_does(
+    cli, data, tmp_path
+):
+    """The library's request owns the joint-limit warning: Python issues it
+    and keeps it in the report, and the report is the command line's."""
+    text = (REPO / ARM).read_text().replace("d = 250.0", "d = 250.0\nlimits = [-30, 30]", 1)
+    limited = tmp_path / "limited.toml"
+    limited.write_text(text)
+    arm = aacmm.Arm.from_file(limited)
+    warning = (
+        f"{POSES}:3: field `q3`: 85 readings outside the arm's joint limits "
+        "(first: 146.60792432509484° > 30°); check the arm file, the angle unit and the "
+        "encoder zeros"
+    )
+    noise = aacmm.Noise(encoder_deg=0.005, probe_mm=0.01)
+    with pytest.warns(UserWarning) as caught:
+        cal = aacmm.calibrate(arm, data, noise=noise, threads=1)
+    assert [str(w.message) for w in caught] == [warning]
+    assert cal.report["warnings"] == [warning]
+    theirs = tmp_path / "cli"
+    cli(
+        "calibrate", "--arm", limited, "--data", POSES, "--lengths", LENGTHS,
+        "--encoder-noise", "0.005", "--probe-noise", "0.01", "--out", theirs,
+    )
+    assert cal.to_json() == (theirs / "calibration.json").read_text()
 
 
 def test_held_out_validation_and_fix_lists(arm, data):

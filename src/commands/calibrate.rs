@@ -6,18 +6,15 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aacmm_core::calibrate::{
-    AnnealOptions, CalibrationError, Context, FixSpec, GlobalOptions, LmOptions, Loss,
-    ModelOptions, Robust, SolverSettings, SwitchRule,
+    AnnealOptions, CalibrationError, Context, GlobalOptions, Loss, SolverSettings, SwitchRule,
 };
 use aacmm_core::io::source_name;
 use aacmm_core::report::{CALIBRATION_FILES, HTML_FILE};
-use aacmm_core::session::{
-    self, CALIBRATED_FILE, HeldOutData, Problem, REPORT_FILE, Sources, TIMING_FILE,
-};
+use aacmm_core::session::{self, CALIBRATED_FILE, Problem, REPORT_FILE, TIMING_FILE};
 use anyhow::{Context as _, Result, bail};
 use clap::ValueEnum;
 
-use super::fit::{FitInput, flag_error, read_other};
+use super::fit::{FitInput, flag_error};
 use crate::output::{Stdout, note, warn};
 use crate::paths::check_output_dir;
 
@@ -193,9 +190,9 @@ impl SolverFlags {
 
 pub fn run(args: Args) -> Result<()> {
     check_paths(&args)?;
-    let problem = with_validation(problem(&args)?, &args)?;
+    let (problem, settings) = problem(&args)?;
     let started = Instant::now();
-    let report = solve(&problem, &settings(&args), &args)?;
+    let report = solve(&problem, &settings, &args)?;
     let total = started.elapsed().as_secs_f64();
     let wrote = write_files(&report, &problem, &args.out, total)?;
     print_results(&report, wrote, total)
@@ -229,67 +226,32 @@ fn check_paths(args: &Args) -> Result<()> {
     )
 }
 
-/// The solver's settings the flags give.
-fn settings(args: &Args) -> SolverSettings {
+/// The problem and the solver's settings the flags give, built by the
+/// library's request (which owns every check and warning); the held-out
+/// data's warnings are shown as they are read.
+fn problem(args: &Args) -> Result<(Problem, SolverSettings)> {
     let (anneal, switch, global) = args.solver.options();
-    SolverSettings {
-        method: args.method.into(),
-        lm: LmOptions::default(),
-        anneal,
-        switch,
-        global,
-        threads: args.fit.threads(),
-        seed: args.seed,
-    }
-}
-
-/// The arm, its touches and the model the flags give.
-fn problem(args: &Args) -> Result<Problem> {
-    let noise = args.fit.noise();
-    let (arm, prior, data, warnings) = args.fit.read_with_prior()?;
-    let fix = FixSpec::parse_for(&args.fix, &arm.params).map_err(flag_error)?;
-    let options = ModelOptions {
-        fix,
-        noise,
-        accept_poor_fit: args.accept_poor_fit,
-        robust: args.robust.map(|l| {
-            let loss = Loss::from(l);
-            Robust {
-                loss,
-                scale_k: args.robust_scale.unwrap_or(loss.default_k()),
-            }
-        }),
-        prior,
-    };
-    let sources = Sources {
-        arm_file: source_name(&args.fit.input.arm),
-        data_file: source_name(&args.fit.input.data),
-        lengths_file: args.fit.lengths.as_deref().map(source_name),
-        warnings,
-    };
-    Ok(Problem::new(arm, data, options)
-        .map_err(flag_error)?
-        .with_sources(sources))
-}
-
-/// `problem` with the held-out data and the cross-validation folds asked
-/// for.
-fn with_validation(mut problem: Problem, args: &Args) -> Result<Problem> {
+    let mut request = (args.fit.request()?)
+        .fix(&args.fix)
+        .method(aacmm_core::calibrate::Method::from(args.method).name())
+        .seed(args.seed)
+        .anneal(anneal)
+        .switch(switch)
+        .global(global)
+        .accept_poor_fit(args.accept_poor_fit)
+        .robust(args.robust.map(|l| Loss::from(l).name()), args.robust_scale)
+        .cross_validate(args.cross_validate);
     if let Some(path) = &args.validate {
-        let lengths = args.validate_lengths.as_deref();
-        let data = read_other(problem.arm(), path, lengths, args.fit.input.angle_unit)?;
-        problem = problem
-            .with_held_out(HeldOutData {
-                data,
-                data_file: source_name(path),
-                lengths_file: lengths.map(source_name),
-            })
-            .map_err(flag_error)?;
+        let shown = request.warnings().len();
+        request = request.validate_on_files(path, args.validate_lengths.as_deref())?;
+        request.warnings()[shown..].iter().try_for_each(warn)?;
     }
-    if let Some(k) = args.cross_validate {
-        problem = problem.with_cross_validation(k).map_err(flag_error)?;
-    }
-    Ok(problem)
+    let arm_file = source_name(&args.fit.input.arm);
+    request.build().map_err(|e| match e {
+        // The arm's own refusal names its file, as a read error would.
+        CalibrationError::Kernel(_) => anyhow::Error::new(e).context(arm_file),
+        e => flag_error(e),
+    })
 }
 
 /// The calibration, with a progress bar; an error in terms of the flags

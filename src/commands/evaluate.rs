@@ -6,10 +6,9 @@ use std::path::PathBuf;
 
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::{read_lengths, source_name};
-use aacmm_core::metrics::{Evaluation, PairLengthError, evaluate_threads, pair_length_errors};
-use aacmm_core::report::{EVALUATION_FILES, EvaluationInput, Measured, evaluation_report};
+use aacmm_core::report::EVALUATION_FILES;
+use aacmm_core::session::{EvaluationReport, Sources};
 use anyhow::{Context, Result};
-use serde::{Serialize, Serializer};
 
 use crate::output::Stdout;
 use crate::paths::{check_output_dir, check_output_file};
@@ -40,38 +39,6 @@ pub struct Args {
     threads: Option<u16>,
 }
 
-/// The JSON report: what was evaluated, and the figures.
-#[derive(Serialize)]
-struct Report<'a> {
-    arm: &'a str,
-    arm_file: String,
-    data_file: String,
-    lengths_file: Option<String>,
-    length_unit: &'static str,
-    evaluation: &'a Evaluation,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pair_length: Option<Pairs<'a>>,
-}
-
-/// Eq. 19 rows serialised as they are computed, never collected.
-struct Pairs<'a> {
-    data: &'a DataSet,
-    xyz: &'a [[f64; 3]],
-    evaluation: &'a Evaluation,
-}
-
-impl Pairs<'_> {
-    fn rows(&self) -> impl Iterator<Item = PairLengthError> + '_ {
-        pair_length_errors(self.data, self.xyz, &self.evaluation.points)
-    }
-}
-
-impl Serialize for Pairs<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.collect_seq(self.rows())
-    }
-}
-
 pub fn run(args: Args) -> Result<()> {
     let mut inputs = vec![
         ("--arm", args.input.arm.as_path()),
@@ -94,100 +61,36 @@ pub fn run(args: Args) -> Result<()> {
     kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
     args.input
         .check_finite(&xyz, |i| data.source().touch(i).line)?;
-    let threads = super::worker_threads(args.threads);
-    let evaluation = evaluate_threads(&data, &xyz, threads).with_context(|| {
-        format!(
-            "{}: on {}",
-            args.input.arm.display(),
-            args.input.data.display()
-        )
-    })?;
-    let pairs = Pairs {
-        data: &data,
-        xyz: &xyz,
-        evaluation: &evaluation,
+    let sources = Sources {
+        arm_file: source_name(&args.input.arm),
+        data_file: source_name(&args.input.data),
+        lengths_file: args.lengths.as_deref().map(source_name),
+        warnings: Vec::new(),
     };
+    let threads = super::worker_threads(args.threads);
+    let report = EvaluationReport::new(&arm, &data, &xyz, &sources, threads)
+        .with_context(|| {
+            format!(
+                "{}: on {}",
+                args.input.arm.display(),
+                args.input.data.display()
+            )
+        })?
+        .with_pairs(args.pairs);
 
     // The JSON file is written even if stdout fails (e.g. `| head -1`).
     let printed = (|| {
         let mut out = Stdout::new();
-        out.print(format_args!(
-            "arm `{}` ({}) on {}\n",
-            arm.name,
-            args.input.arm.display(),
-            args.input.data.display()
-        ))?;
-        out.print(evaluation.to_table())?;
-        if args.pairs {
-            out.write_with(|w| {
-                aacmm_core::metrics::write_pair_table(w, pairs.rows(), data.points())
-            })?;
-        }
+        out.write_with(|w| report.write_summary(w))?;
         out.finish()
     })();
     if let Some(path) = &args.json {
-        let report = Report {
-            arm: &arm.name,
-            arm_file: source_name(&args.input.arm),
-            data_file: source_name(&args.input.data),
-            lengths_file: args.lengths.as_deref().map(source_name),
-            length_unit: "mm",
-            evaluation: &evaluation,
-            pair_length: args.pairs.then_some(pairs),
-        };
         super::write_json(path, &report)?;
     }
     if let Some(dir) = &args.report {
-        let input = EvaluationInput {
-            title: format!("Evaluation of arm `{}`", arm.name),
-            inputs: report_inputs(&args, &arm.name, &data),
-            measured: Measured {
-                data: &data,
-                held_out: false,
-                before: None,
-                after: &xyz,
-            },
-            arm: arm.name.clone(),
-            evaluation_json: args.json.as_ref().map(|_| "/evaluation".to_string()),
-        };
-        let page = evaluation_report(&input).context("--report")?;
+        let json = args.json.as_deref().map(source_name);
+        let page = report.html(json.as_deref()).context("--report")?;
         super::report::write("--report", dir, &page)?;
     }
     printed
-}
-
-/// What went in, for the report's heading.
-fn report_inputs(args: &Args, arm: &str, data: &DataSet) -> Vec<(String, String)> {
-    let mut lines = vec![
-        (
-            "arm".to_string(),
-            format!("`{arm}` ({})", source_name(&args.input.arm)),
-        ),
-        (
-            "touches".to_string(),
-            format!(
-                "{}: {} touches of {} points",
-                source_name(&args.input.data),
-                data.len(),
-                data.points().len()
-            ),
-        ),
-        (
-            "reference lengths".to_string(),
-            match &args.lengths {
-                Some(l) => format!("{}: {}", source_name(l), data.references().len()),
-                None => "none (scale is not tested)".to_string(),
-            },
-        ),
-    ];
-    if let Some(json) = &args.json {
-        lines.push((
-            "written beside".to_string(),
-            format!(
-                "{} (every number of the tables that is also there is marked with its place)",
-                source_name(json)
-            ),
-        ));
-    }
-    lines
 }

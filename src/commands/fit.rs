@@ -1,19 +1,18 @@
-//! What `identify` and `calibrate` share: the arm, the touches and reference
-//! lengths as a data set, and the stated noise.
+//! What `identify` and `calibrate` share: the flags of the arm, the touches,
+//! the reference lengths, the noise and the prior, read into the library's
+//! [`Request`], and the flag of each library setting.
 
 use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::CalibrationError;
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
-use aacmm_core::dataset::DataSet;
 use aacmm_core::error::OptionError;
-use aacmm_core::io::source_name;
-use aacmm_core::io::{AngleUnit, Arm, read_lengths};
 use aacmm_core::residuals::Noise;
-use aacmm_core::tolerances::Tolerances;
+use aacmm_core::session::{Request, user_noise};
 use anyhow::{Result, anyhow};
 
 use super::ArmAndPoses;
+use crate::output::warn;
 
 /// The flags of a fit: arm, poses, reference lengths, noise.
 #[derive(clap::Args)]
@@ -63,71 +62,39 @@ impl FitInput {
     /// The noise flags in internal units (the library checks them:
     /// [`Noise::check`], with [`flag_error`] naming the flag).
     pub fn noise(&self) -> Noise {
-        Noise {
-            encoder_rad: self.encoder_noise.map(f64::to_radians),
-            probe_mm: self.probe_noise,
-            length_default_mm: self.length_uncertainty,
-            length_weight: self.length_weight.filter(|&w| w != 0.0),
+        user_noise(
+            self.encoder_noise,
+            self.probe_noise,
+            self.length_uncertainty,
+            self.length_weight,
+        )
+    }
+
+    /// The library's request for these flags: the arm, the touches and
+    /// reference lengths read (the readers' warnings, and the one for
+    /// readings outside the arm's joint limits, printed here and kept by
+    /// the request for the report), the noise, `--prior` and `--threads`.
+    pub fn request(&self) -> Result<Request> {
+        let input = &self.input;
+        let mut request = Request::read(&input.arm, &input.data, input.angle_unit)?;
+        // Shown before the lengths are read, so that a bad lengths file
+        // does not hide them.
+        request.warnings().iter().try_for_each(warn)?;
+        if let Some(path) = &self.lengths {
+            request = request.read_lengths(path)?;
         }
+        Ok(request
+            .noise(self.noise())
+            .prior(self.prior.as_deref())
+            .threads(self.threads.map(usize::from)))
     }
-
-    /// The worker threads: `--threads`, or every core.
-    pub fn threads(&self) -> usize {
-        super::worker_threads(self.threads)
-    }
-
-    /// The arm, its prior (the arm file's `[prior]` overridden entry by
-    /// entry by `--prior`; `--prior none`: none), the data set (touches
-    /// grouped by point, lengths added) and the warnings printed, kept for
-    /// the report.
-    pub fn read_with_prior(&self) -> Result<(Arm, Option<Tolerances>, DataSet, Vec<String>)> {
-        let (arm, file_prior, poses, warnings) = self.input.read_with_prior()?;
-        self.input.kernel(&arm)?;
-        let joints = arm.params.joint_count();
-        let prior = match self.prior.as_deref() {
-            None => file_prior,
-            Some(spec) => Tolerances::parse(spec, joints)
-                .map_err(flag_error)?
-                .map(|flag| file_prior.unwrap_or_default().overridden_by(&flag)),
-        };
-        // The file's entries were checked against the arm where they are
-        // written; this catches the flag's.
-        if let Some(t) = &prior {
-            t.check_for(&arm.params).map_err(flag_error)?;
-        }
-        let data = data_set(poses, &self.input.data, self.lengths.as_deref())?;
-        Ok((arm, prior, data, warnings))
-    }
-}
-
-/// A data set from poses (already read) and an optional lengths file.
-pub fn data_set(
-    poses: aacmm_core::io::Poses,
-    data: &Path,
-    lengths: Option<&Path>,
-) -> Result<DataSet> {
-    let mut set = DataSet::from_poses_owned(poses, &source_name(data))?;
-    if let Some(path) = lengths {
-        set = set.with_lengths(&read_lengths(path)?, &source_name(path))?;
-    }
-    Ok(set)
-}
-
-/// Reads another poses file (held-out data) for `arm`.
-pub fn read_other(
-    arm: &Arm,
-    data: &Path,
-    lengths: Option<&Path>,
-    unit: AngleUnit,
-) -> Result<DataSet> {
-    let (poses, warnings) = aacmm_core::io::read_poses(data, unit, Some(arm.params.joint_count()))?;
-    super::report(&warnings)?;
-    data_set(poses, data, lengths)
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 24] = [
+const FLAGS: [(&str, &str); 26] = [
     ("prior", "--prior"),
+    ("method", "--method"),
+    ("robust.loss", "--robust"),
     ("noise.encoder_rad", "--encoder-noise"),
     ("noise.probe_mm", "--probe-noise"),
     ("noise.length_default_mm", "--length-uncertainty"),

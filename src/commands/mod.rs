@@ -13,9 +13,10 @@ pub mod simulate;
 use std::path::PathBuf;
 
 use aacmm_core::error::short;
-use aacmm_core::io::{AngleUnit, Arm, Poses, Warning, read_arm, read_poses, source_name};
+use aacmm_core::io::{
+    AngleUnit, Arm, Poses, Warning, limit_warning, read_arm, read_poses, source_name,
+};
 use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, PreparedPoses};
-use aacmm_core::tolerances::Tolerances;
 use anyhow::{Context, Result, bail};
 
 use crate::output::warn;
@@ -23,60 +24,6 @@ use crate::output::warn;
 /// Prints warnings to stderr, where they cannot be mistaken for output.
 pub fn report(warnings: &[Warning]) -> Result<()> {
     warnings.iter().try_for_each(warn)
-}
-
-/// Readings this far (rad) beyond a limit are still within it: a limit and a
-/// reading written in different units may differ by rounding.
-const LIMIT_SLACK: f64 = 1e-12;
-
-/// One warning for the readings outside the arm's joint limits, if any: how
-/// many, and where the first one is (`file` is the poses file as named in
-/// messages, `unit` the unit its angles are written in).
-pub fn limit_warning(arm: &Arm, poses: &Poses, file: &str, unit: AngleUnit) -> Option<Warning> {
-    let mut count = 0;
-    let mut joints: Vec<usize> = Vec::new();
-    let mut first = None;
-    for (row, q) in poses.rows().enumerate() {
-        for (j, (&x, limit)) in q.iter().zip(&arm.limits).enumerate() {
-            let Some([lo, hi]) = *limit else { continue };
-            let (bound, sign) = if x < lo - LIMIT_SLACK {
-                (lo, "<")
-            } else if x > hi + LIMIT_SLACK {
-                (hi, ">")
-            } else {
-                continue;
-            };
-            count += 1;
-            if !joints.contains(&j) {
-                joints.push(j);
-            }
-            first.get_or_insert((row, j, x, sign, bound));
-        }
-    }
-    let (row, j, x, sign, bound) = first?;
-    let show = |v: f64| match unit {
-        AngleUnit::Deg => format!("{}°", unit.from_internal_exact(v)),
-        AngleUnit::Rad => format!("{v} rad"),
-    };
-    let readings = if count == 1 { "reading" } else { "readings" };
-    let more = if joints.len() > 1 {
-        joints.sort_unstable();
-        let names: Vec<String> = joints.iter().map(|j| format!("q{}", j + 1)).collect();
-        format!(" in {}", names.join(", "))
-    } else {
-        String::new()
-    };
-    Some(Warning {
-        file: file.to_string(),
-        line: Some(poses.line(row)),
-        field: Some(format!("q{}", j + 1)),
-        message: format!(
-            "{count} {readings}{more} outside the arm's joint limits (first: {} {sign} {}); \
-             check the arm file, the angle unit and the encoder zeros",
-            show(x),
-            show(bound)
-        ),
-    })
 }
 
 /// Worker threads for a `--threads` flag: its value, or every core.
@@ -107,29 +54,14 @@ impl ArmAndPoses {
     /// (stderr) about suspicious poses, readings outside the arm's joint
     /// limits included.
     pub fn read(&self) -> Result<(Arm, Poses)> {
-        self.read_with_warnings()
-            .map(|(arm, poses, _)| (arm, poses))
-    }
-
-    /// [`ArmAndPoses::read`], with the warnings printed kept as text.
-    pub fn read_with_warnings(&self) -> Result<(Arm, Poses, Vec<String>)> {
-        self.read_with_prior()
-            .map(|(arm, _, poses, warnings)| (arm, poses, warnings))
-    }
-
-    /// [`ArmAndPoses::read_with_warnings`], with the arm file's `[prior]`
-    /// table.
-    pub fn read_with_prior(&self) -> Result<(Arm, Option<Tolerances>, Poses, Vec<String>)> {
         let (arm, mut warnings) = read_arm(&self.arm)?;
-        let prior = arm.prior.clone();
         let (poses, more) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
         warnings.extend(more);
         let file = source_name(&self.data);
         warnings.extend(limit_warning(&arm, &poses, &file, self.angle_unit));
         report(&warnings)?;
-        let text = warnings.iter().map(ToString::to_string).collect();
-        Ok((arm, prior, poses, text))
+        Ok((arm, poses))
     }
 
     /// The arm prepared for its generated kernel.

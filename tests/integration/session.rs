@@ -5,8 +5,9 @@
 //! the front ends agree).
 
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
+use aacmm_core::io::AngleUnit;
 use aacmm_core::residuals::Noise;
-use aacmm_core::session::{CalibrationReport, Problem, Sources};
+use aacmm_core::session::{CalibrationReport, Problem, Request, Sources};
 use aacmm_core::{DataSet, read_arm};
 
 use crate::util::{calibrate_shipped, example, shipped, shipped_arm, temp_dir};
@@ -205,5 +206,72 @@ fn the_paper_experiment_writes_what_the_cli_writes() {
             "validated on the held-out campaign"
         );
         assert_eq!(cli, example, "{method}");
+    }
+}
+
+/// `aacmm calibrate` and the library's `Request` given the same intent —
+/// the command line's flags, the request's settings as text — write the
+/// same `calibration.json`: on a real robot's campaign whose arm file has a
+/// `[prior]`, used as it is and overridden entry by entry.
+#[test]
+fn a_request_gives_the_clis_calibration_with_the_arm_files_prior() {
+    let dir = temp_dir("request-prior");
+    let m = example("mukca/kinova-1");
+    let path = |f: &str| m.join(f).display().to_string();
+    let (arm, poses, lengths) = (path("arm.toml"), path("poses.csv"), path("lengths.csv"));
+    for (name, prior) in [("file", None), ("override", Some("theta2=0.1deg,d6=1mm"))] {
+        let out = dir.join(name);
+        let mut args = vec![
+            "calibrate",
+            "--arm",
+            &arm,
+            "--data",
+            &poses,
+            "--lengths",
+            &lengths,
+            "--angle-unit",
+            "rad",
+            "--method",
+            "lm",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(prior.iter().flat_map(|p| ["--prior", p]));
+        let o = crate::util::aacmm(&args);
+        assert!(o.status.success(), "{}", crate::util::stderr(&o));
+        let written = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+        let (problem, report) = Request::read(path("arm.toml"), path("poses.csv"), AngleUnit::Rad)
+            .unwrap()
+            .read_lengths(path("lengths.csv"))
+            .unwrap()
+            .method("lm")
+            .prior(prior)
+            .threads(Some(1))
+            .run()
+            .unwrap();
+        assert_eq!(report.to_json(), written, "{name}");
+        let used = report.calibration.prior.as_ref().expect("a prior is used");
+        assert_eq!(
+            Some(&used.tolerances),
+            problem
+                .model()
+                .prior
+                .as_ref()
+                .map(|t| t.describe(6))
+                .as_ref()
+        );
+        let file = problem
+            .arm()
+            .prior
+            .as_ref()
+            .expect("the arm file's [prior]");
+        match prior {
+            None => assert_eq!(problem.model().prior.as_ref(), Some(file)),
+            Some(_) => assert!(
+                used.tolerances.ends_with("theta2=0.1deg, d6=1mm"),
+                "{}",
+                used.tolerances
+            ),
+        }
     }
 }

@@ -35,6 +35,7 @@
 
 pub mod arm;
 pub mod lengths;
+pub mod limits;
 pub mod points;
 pub mod poses;
 pub mod prior;
@@ -48,6 +49,7 @@ pub use arm::{Arm, arm_to_toml, parse_arm, read_arm, write_arm};
 pub use lengths::{
     ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
 };
+pub use limits::limit_warning;
 pub use points::{parse_points, read_points, write_points};
 pub use poses::{Poses, parse_poses, read_poses, write_poses};
 pub use prior::parse_prior;

@@ -18,6 +18,14 @@
 //! assert!(report.validation.fitted.after.e_mean < report.validation.fitted.before.e_mean);
 //! ```
 
+pub mod evaluation;
+pub mod identification;
+pub mod request;
+
+pub use evaluation::EvaluationReport;
+pub use identification::IdentifyReport;
+pub use request::{Request, user_noise};
+
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};

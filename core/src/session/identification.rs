@@ -1,0 +1,259 @@
+//! What `identify` reports, built once for every front end: which
+//! parameters the data can determine at the stated noise
+//! ([`crate::identify`]), with the prior's rank and conditioning when the arm
+//! has tolerances ([`crate::calibrate::prior::conditioning`]), as the JSON of
+//! `aacmm identify --json` ([`IdentifyReport::to_json`]) and the tables it
+//! prints ([`IdentifyReport::summary`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::Sources;
+use crate::calibrate::prior::conditioning;
+use crate::calibrate::{CalibrationError, PriorConditioning};
+use crate::dataset::DataSet;
+use crate::error::OptionError;
+use crate::identify::{Identification, identify};
+use crate::io::{AngleUnit, Arm};
+use crate::residuals::Noise;
+use crate::tolerances::Tolerances;
+
+/// The identifiability of an arm's parameters from a data set: the schema
+/// of `aacmm identify --json`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct IdentifyReport {
+    /// The arm's name.
+    pub arm: String,
+    /// Its file.
+    pub arm_file: String,
+    /// The poses file.
+    pub data_file: String,
+    /// The lengths file, if any.
+    pub lengths_file: Option<String>,
+    /// Touches.
+    pub touches: usize,
+    /// Points.
+    pub points: usize,
+    /// Reference lengths.
+    pub reference_lengths: usize,
+    /// The noise the touches are weighed with, in words (degrees and mm).
+    pub noise: String,
+    /// The analysis.
+    pub identification: Identification,
+    /// The rank and conditioning with the arm's tolerances, when it has
+    /// any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior: Option<PriorConditioning>,
+}
+
+impl IdentifyReport {
+    /// Analyses `data` at `arm` with touches weighed from `noise` (without
+    /// stated noise, as a 0.01 mm touch) on `threads` threads, and, with
+    /// `prior`, the rank and conditioning it adds; `sources` names the
+    /// inputs.
+    ///
+    /// # Errors
+    ///
+    /// An [`OptionError`] on `noise.…` or `threads`;
+    /// [`CalibrationError::Joints`] when the data have another joint count;
+    /// the kernel's refusal of the arm or of weights that are not finite.
+    pub fn new(
+        arm: &Arm,
+        data: &DataSet,
+        noise: &Noise,
+        prior: Option<&Tolerances>,
+        threads: usize,
+        sources: &Sources,
+    ) -> Result<IdentifyReport, CalibrationError> {
+        noise.check()?;
+        if threads == 0 {
+            return Err(OptionError::new("threads", 0, "at least 1").into());
+        }
+        let joints = arm.params.joint_count();
+        if data.joints() != joints {
+            return Err(CalibrationError::Joints {
+                arm: joints,
+                data: data.joints(),
+            });
+        }
+        let identification = identify(&arm.params, data, noise, threads)?;
+        let prior = match prior {
+            Some(t) => Some(conditioning(
+                &arm.params,
+                data,
+                noise,
+                t,
+                &identification,
+                threads,
+            )?),
+            None => None,
+        };
+        Ok(IdentifyReport {
+            arm: arm.name.clone(),
+            arm_file: sources.arm_file.clone(),
+            data_file: sources.data_file.clone(),
+            lengths_file: sources.lengths_file.clone(),
+            touches: data.len(),
+            points: data.points().len(),
+            reference_lengths: data.references().len(),
+            noise: noise_text(noise),
+            identification,
+            prior,
+        })
+    }
+
+    /// The JSON `aacmm identify --json` writes: pretty, with a final
+    /// newline.
+    pub fn to_json(&self) -> String {
+        let mut s = serde_json::to_string_pretty(self)
+            .expect("the report holds only strings, numbers, arrays and maps");
+        s.push('\n');
+        s
+    }
+
+    /// The text `aacmm identify` prints: the inputs and the noise, the
+    /// singular values, the rules, the rank, the unidentifiable directions,
+    /// the recommended fixed set, the predicted σ, the correlations, and
+    /// the prior's rank and conditioning.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "arm `{}` ({}) on {}: {} touches of {} points, {} reference lengths\nnoise: {}\n\n",
+            self.arm,
+            self.arm_file,
+            self.data_file,
+            self.touches,
+            self.points,
+            self.reference_lengths,
+            self.noise
+        );
+        s += &table(&self.identification);
+        if let Some(p) = &self.prior {
+            // Unstated noise weighs every touch as 0.01 mm: say how little
+            // the prior then counts.
+            let weighed = if self.noise.starts_with(NOT_STATED) {
+                "touches weighed as 0.01 mm, so the prior weighs little here: state \
+                 --probe-noise/--encoder-noise for its real weight"
+            } else {
+                "touches weighed from the stated noise"
+            };
+            s += &format!(
+                "\nWith the prior ({}; {} of {} parameters; {weighed}):\n  \
+                 rank {} of {} (data alone: {} after the rules)\n  condition number over the \
+                 free parameters {:.1} (data alone: {:.1})\n",
+                p.tolerances,
+                p.parameters_with_tolerance,
+                p.parameters,
+                p.rank_with,
+                p.parameters,
+                p.rank_without,
+                p.condition_with,
+                p.condition_without
+            );
+        }
+        s
+    }
+}
+
+/// The start of [`IdentifyReport::noise`] when no touch noise is stated.
+const NOT_STATED: &str = "not stated";
+
+/// The noise in words: degrees as the user stated them (the library holds
+/// radians; [`AngleUnit::from_internal_exact`] gives back the number typed).
+fn noise_text(noise: &Noise) -> String {
+    if !noise.stated() {
+        return format!("{NOT_STATED}: σ as for a 0.01 mm touch");
+    }
+    let encoder = noise
+        .encoder_rad
+        .map_or(0.0, |r| AngleUnit::Deg.from_internal_exact(r));
+    format!(
+        "encoders {encoder}°, probe {} mm",
+        noise.probe_mm.unwrap_or(0.0)
+    )
+}
+
+/// The tables of an identification.
+fn table(id: &Identification) -> String {
+    let mut s = String::new();
+    let sv: Vec<String> = id
+        .singular_values
+        .iter()
+        .map(|v| format!("{v:.3e}"))
+        .collect();
+    s += &format!("Scaling: {}\n", id.scaling);
+    s += &format!(
+        "Singular values of the scaled Jacobian (all {} columns):\n",
+        sv.len()
+    );
+    for chunk in sv.chunks(9) {
+        s += &format!("  {}\n", chunk.join("  "));
+    }
+    if !id.recommendations.is_empty() {
+        s += "\nModel (nearly parallel axes):\n";
+        for r in &id.recommendations {
+            s += &format!("  {r}\n");
+        }
+    }
+    s += "\nStructural rules (hold whatever the noise does to the singular values):\n";
+    for r in &id.rules {
+        s += &format!("  {}: {}\n", r.name, r.explanation);
+    }
+    s += &format!(
+        "\nRank: {} identifiable combinations (threshold {:.2e} = 1e-7 × s_max, after the rules); \
+         condition number of the identifiable part {:.1}\n",
+        id.rank, id.threshold, id.condition_number
+    );
+    s += &directions(id);
+    s += &fixed_and_free(id);
+    if id.correlations.is_empty() {
+        s += "\nNo pair of free parameters correlates with |rho| > 0.9.\n";
+    } else {
+        s += "\nCorrelations |rho| > 0.9:\n";
+        for c in &id.correlations {
+            s += &format!("  {:<8} {:<8} {:+.4}\n", c.a, c.b, c.rho);
+        }
+    }
+    s
+}
+
+/// The unidentifiable and the weak directions.
+fn directions(id: &Identification) -> String {
+    let mut s = String::new();
+    if !id.null_relations.is_empty() {
+        s += "\nUnidentifiable directions (one per redundant parameter; s = singular value of the scaled direction):\n";
+        for r in &id.null_relations {
+            s += &format!("  s = {:.1e}  {}\n", r.singular_value, r.text);
+        }
+    }
+    if !id.weak_relations.is_empty() {
+        s += "\nWeak directions (s < 1e-3 s_max):\n";
+        for r in &id.weak_relations {
+            s += &format!("  s = {:.1e}  {}\n", r.singular_value, r.text);
+        }
+    }
+    s
+}
+
+/// The recommended fixed set with its reasons, and the free parameters'
+/// predicted σ.
+fn fixed_and_free(id: &Identification) -> String {
+    let names: Vec<String> = id.fixed.iter().map(|f| f.id.to_string()).collect();
+    let mut s = format!(
+        "\nRecommended fixed set (--fix auto): {}\n",
+        names.join(",")
+    );
+    let w = names.iter().map(String::len).max().unwrap_or(0);
+    for (f, name) in id.fixed.iter().zip(&names) {
+        s += &format!("  {name:<w$}  {}\n", f.reason);
+    }
+    s += "\nFree parameters at the stated noise:\n  parameter  unit   predicted sigma  identifiability\n";
+    for f in &id.free {
+        s += &format!(
+            "  {:<9}  {:<4}  {:>15.3e}  {:>15.4}\n",
+            f.id.to_string(),
+            f.unit,
+            f.sigma,
+            f.identifiability
+        );
+    }
+    s
+}

@@ -1,0 +1,474 @@
+//! One request path for every front end: what a user asks for — an arm and
+//! its touches, and the settings as text and values (`fix = "auto"`,
+//! `robust = "huber"`, `prior = "length=0.5mm"`, `method = "lm"`, threads,
+//! seed, the solvers' tunables) — turned into the checked [`Problem`] and
+//! [`SolverSettings`] in this one place. The command line, the Python
+//! package and programs only translate their arguments into a [`Request`]
+//! and map the [`OptionError`] fields back to their own spelling.
+//!
+//! A request also owns every warning about its inputs: the readers' (the
+//! arm file's and the poses files'), and one for readings outside the arm
+//! file's joint limits, kept in the report whatever the front end.
+//!
+//! ```
+//! # std::env::set_current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).unwrap();
+//! use aacmm_core::{io::AngleUnit, session::{Request, user_noise}};
+//! let read = || Request::read("examples/paper-table-1.toml", "examples/paper-campaign/poses.csv", AngleUnit::Deg);
+//! let request = read()?
+//!     .read_lengths("examples/paper-campaign/lengths.csv")?
+//!     .noise(user_noise(Some(0.005), Some(0.01), 0.0005, None))
+//!     .method("lm");
+//! assert!(request.warnings().is_empty());
+//! let (_problem, report) = request.run()?;
+//! assert!(report.is_usable());
+//! // A refusal names the library's setting.
+//! let refused = read()?.fix("theta9").build().unwrap_err();
+//! assert!(matches!(refused, aacmm_core::CalibrationError::Option(ref o) if o.field == "fix"));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::path::Path;
+
+use super::identification::IdentifyReport;
+use super::{CalibrationReport, HeldOutData, Problem, Sources};
+use crate::calibrate::{
+    AnnealOptions, CalibrationError, FixSpec, GlobalOptions, LmOptions, Loss, Method, ModelOptions,
+    Robust, SolverSettings, SwitchRule, available_threads,
+};
+use crate::dataset::DataSet;
+use crate::error::{InputError, OptionError};
+use crate::io::{AngleUnit, Arm, read_arm, read_lengths, source_name};
+use crate::kernel::ArmKernel;
+use crate::residuals::Noise;
+use crate::tolerances::Tolerances;
+
+/// A calibration (or identification) as asked for: the inputs, their
+/// names and warnings, and every setting as the user gave it, checked only
+/// when the request is built.
+#[derive(Clone, Debug)]
+pub struct Request {
+    arm: Arm,
+    data: DataSet,
+    sources: Sources,
+    unit: AngleUnit,
+    held_out: Option<(HeldOutData, Vec<String>)>,
+    cross_validate: Option<usize>,
+    fix: String,
+    noise: Noise,
+    robust: Option<String>,
+    robust_scale: Option<f64>,
+    prior: Option<String>,
+    accept_poor_fit: bool,
+    method: String,
+    threads: Option<usize>,
+    seed: u64,
+    lm: LmOptions,
+    anneal: AnnealOptions,
+    switch: SwitchRule,
+    global: GlobalOptions,
+}
+
+/// Touch noise as users state it — encoders in degrees, the probe and the
+/// lengths in mm, a length weight of 0 meaning none — in the library's
+/// units (checked when a request is built, or by [`Noise::check`]).
+///
+/// ```
+/// let n = aacmm_core::session::user_noise(Some(0.005), None, 0.0005, Some(0.0));
+/// assert_eq!(n.encoder_rad, Some(0.005f64.to_radians()));
+/// assert_eq!(n.length_weight, None);
+/// ```
+pub fn user_noise(
+    encoder_deg: Option<f64>,
+    probe_mm: Option<f64>,
+    length_default_mm: f64,
+    length_weight: Option<f64>,
+) -> Noise {
+    Noise {
+        encoder_rad: encoder_deg.map(f64::to_radians),
+        probe_mm,
+        length_default_mm,
+        length_weight: length_weight.filter(|&w| w != 0.0),
+    }
+}
+
+impl Request {
+    /// A request for `arm` on `data`, with the library's defaults: `fix =
+    /// "auto"`, no noise stated, plain least squares, the arm file's prior,
+    /// `global`, every core, seed 0. Name the inputs and give the readers'
+    /// warnings with [`Request::sources`].
+    pub fn new(arm: Arm, data: DataSet) -> Request {
+        let solver = SolverSettings::default();
+        Request {
+            arm,
+            data,
+            sources: Sources::default(),
+            unit: AngleUnit::Rad,
+            held_out: None,
+            cross_validate: None,
+            fix: "auto".to_string(),
+            noise: Noise::default(),
+            robust: None,
+            robust_scale: None,
+            prior: None,
+            accept_poor_fit: false,
+            method: solver.method.name().to_string(),
+            threads: None,
+            seed: solver.seed,
+            lm: solver.lm,
+            anneal: solver.anneal,
+            switch: solver.switch,
+            global: solver.global,
+        }
+    }
+
+    /// Reads the arm file and the poses file (angles in `unit`; `-` reads
+    /// standard input), keeping the readers' warnings in the order read.
+    ///
+    /// # Errors
+    ///
+    /// The readers' errors, naming file, line and field.
+    pub fn read(
+        arm: impl AsRef<Path>,
+        poses: impl AsRef<Path>,
+        unit: AngleUnit,
+    ) -> Result<Request, InputError> {
+        let (arm, poses) = (arm.as_ref(), poses.as_ref());
+        let (read, arm_warnings) = read_arm(arm)?;
+        let joints = read.params.joint_count();
+        let (data, data_warnings) = DataSet::read(poses, None, unit, joints)?;
+        let warnings = (arm_warnings.iter().chain(&data_warnings))
+            .map(ToString::to_string)
+            .collect();
+        let sources = Sources {
+            arm_file: source_name(arm),
+            data_file: source_name(poses),
+            lengths_file: None,
+            warnings,
+        };
+        Ok(Request::new(read, data).sources(sources).angle_unit(unit))
+    }
+
+    /// Adds the reference lengths of a lengths file (`-` reads standard
+    /// input) between the data's points.
+    ///
+    /// # Errors
+    ///
+    /// The reader's errors, naming file, line and field; a length naming
+    /// an unknown point.
+    pub fn read_lengths(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
+        let path = path.as_ref();
+        let name = source_name(path);
+        self.data = self.data.with_lengths(&read_lengths(path)?, &name)?;
+        self.sources.lengths_file = Some(name);
+        Ok(self)
+    }
+
+    /// Names the inputs in the report; `sources.warnings` are the readers'
+    /// warnings of the arm and its data.
+    pub fn sources(mut self, sources: Sources) -> Request {
+        self.sources = sources;
+        self
+    }
+
+    /// The unit the readings were written in (default rad): a warning shows
+    /// a reading as written.
+    pub fn angle_unit(mut self, unit: AngleUnit) -> Request {
+        self.unit = unit;
+        self
+    }
+
+    /// Validates on `held_out` too; `warnings` are its readers'.
+    pub fn validate_on(mut self, held_out: HeldOutData, warnings: Vec<String>) -> Request {
+        self.held_out = Some((held_out, warnings));
+        self
+    }
+
+    /// [`Request::validate_on`] the touches of another poses file (and
+    /// lengths file), read as the request's own data.
+    ///
+    /// # Errors
+    ///
+    /// The readers' errors, naming file, line and field.
+    pub fn validate_on_files(
+        self,
+        poses: impl AsRef<Path>,
+        lengths: Option<&Path>,
+    ) -> Result<Request, InputError> {
+        let poses = poses.as_ref();
+        let joints = self.arm.params.joint_count();
+        let (data, warnings) = DataSet::read(poses, lengths, self.unit, joints)?;
+        let held_out = HeldOutData {
+            data,
+            data_file: source_name(poses),
+            lengths_file: lengths.map(source_name),
+        };
+        let warnings = warnings.iter().map(ToString::to_string).collect();
+        Ok(self.validate_on(held_out, warnings))
+    }
+
+    /// Cross-validates over `k` folds of points (`None`: not).
+    pub fn cross_validate(mut self, k: Option<usize>) -> Request {
+        self.cross_validate = k;
+        self
+    }
+
+    /// The fixed set: `auto` (what the data cannot determine) or
+    /// comma-separated parameter names (`theta1,d1,Bx`).
+    pub fn fix(mut self, fix: &str) -> Request {
+        self.fix = fix.to_string();
+        self
+    }
+
+    /// What is known of the noise (see [`user_noise`]).
+    pub fn noise(mut self, noise: Noise) -> Request {
+        self.noise = noise;
+        self
+    }
+
+    /// A robust refit with the loss `huber` or `cauchy` and its tuning
+    /// constant `k` (`None`: the loss's default); no loss, plain least
+    /// squares.
+    pub fn robust(mut self, loss: Option<&str>, k: Option<f64>) -> Request {
+        self.robust = loss.map(str::to_string);
+        self.robust_scale = k;
+        self
+    }
+
+    /// Tolerances over the arm file's `[prior]`: `None`, the file's as
+    /// they are; `none`, no prior; a spec such as
+    /// `length=0.5mm,theta5=0.05deg` overrides the file's entry by entry.
+    pub fn prior(mut self, spec: Option<&str>) -> Request {
+        self.prior = spec.map(str::to_string);
+        self
+    }
+
+    /// Calls a poor χ² or a fit worse than nominal usable (never a wrong
+    /// geometry).
+    pub fn accept_poor_fit(mut self, accept: bool) -> Request {
+        self.accept_poor_fit = accept;
+        self
+    }
+
+    /// The solver: `global`, `lm`, `sa` or `hybrid`.
+    pub fn method(mut self, name: &str) -> Request {
+        self.method = name.to_string();
+        self
+    }
+
+    /// Worker threads (`None`: every core); results do not depend on them.
+    pub fn threads(mut self, threads: Option<usize>) -> Request {
+        self.threads = threads;
+        self
+    }
+
+    /// Seed of every random draw.
+    pub fn seed(mut self, seed: u64) -> Request {
+        self.seed = seed;
+        self
+    }
+
+    /// Levenberg–Marquardt's tolerances.
+    pub fn lm(mut self, lm: LmOptions) -> Request {
+        self.lm = lm;
+        self
+    }
+
+    /// The annealer's settings (`sa`, `hybrid`).
+    pub fn anneal(mut self, anneal: AnnealOptions) -> Request {
+        self.anneal = anneal;
+        self
+    }
+
+    /// The hybrid's switching rule.
+    pub fn switch(mut self, switch: SwitchRule) -> Request {
+        self.switch = switch;
+        self
+    }
+
+    /// The global method's settings.
+    pub fn global(mut self, global: GlobalOptions) -> Request {
+        self.global = global;
+        self
+    }
+
+    /// The start (nominal) arm.
+    pub fn arm(&self) -> &Arm {
+        &self.arm
+    }
+
+    /// The data to fit.
+    pub fn data(&self) -> &DataSet {
+        &self.data
+    }
+
+    /// Every warning about the inputs, in order: the readers' of the arm
+    /// and its data, readings outside the arm's joint limits, then the same
+    /// for the held-out data.
+    pub fn warnings(&self) -> Vec<String> {
+        let limits = &self.arm.limits;
+        let mut all = self.sources.warnings.clone();
+        all.extend(
+            self.data
+                .limit_warning(limits, self.unit)
+                .map(|w| w.to_string()),
+        );
+        if let Some((held_out, warnings)) = &self.held_out {
+            all.extend(warnings.iter().cloned());
+            let w = held_out.data.limit_warning(limits, self.unit);
+            all.extend(w.map(|w| w.to_string()));
+        }
+        all
+    }
+
+    /// The tolerances the fit uses: the arm file's `[prior]`, overridden
+    /// entry by entry by the request's spec (`none`: no prior).
+    ///
+    /// # Errors
+    ///
+    /// An [`OptionError`] on `prior`: a spec that does not parse, or a
+    /// tolerance of a parameter the arm does not have.
+    pub fn tolerances(&self) -> Result<Option<Tolerances>, OptionError> {
+        let file = self.arm.prior.clone();
+        let prior = match self.prior.as_deref() {
+            None => file,
+            Some(spec) => Tolerances::parse(spec, self.arm.params.joint_count())?
+                .map(|given| file.unwrap_or_default().overridden_by(&given)),
+        };
+        if let Some(t) = &prior {
+            t.check_for(&self.arm.params)?;
+        }
+        Ok(prior)
+    }
+
+    /// The model's settings as asked for.
+    ///
+    /// # Errors
+    ///
+    /// An [`OptionError`] on `prior`, `fix`, `robust.loss` or
+    /// `robust.scale_k` (the rest are checked with the problem).
+    pub fn model(&self) -> Result<ModelOptions, OptionError> {
+        let prior = self.tolerances()?;
+        let fix = FixSpec::parse_for(&self.fix, &self.arm.params)?;
+        let robust = match (self.robust.as_deref(), self.robust_scale) {
+            (None, None) => None,
+            (None, Some(k)) => {
+                return Err(OptionError::new(
+                    "robust.scale_k",
+                    k,
+                    "needs a robust loss (huber or cauchy)",
+                ));
+            }
+            (Some(name), k) => {
+                let loss = Loss::parse(name).ok_or_else(|| {
+                    let names: Vec<&str> = Loss::ALL.iter().map(|l| l.name()).collect();
+                    OptionError::new(
+                        "robust.loss",
+                        format!("{name:?}"),
+                        format!("one of {}", names.join(", ")),
+                    )
+                })?;
+                Some(Robust {
+                    loss,
+                    scale_k: k.unwrap_or(loss.default_k()),
+                })
+            }
+        };
+        Ok(ModelOptions {
+            fix,
+            noise: self.noise,
+            accept_poor_fit: self.accept_poor_fit,
+            robust,
+            prior,
+        })
+    }
+
+    /// The solver's settings as asked for, checked.
+    ///
+    /// # Errors
+    ///
+    /// An [`OptionError`] on `method`, `threads`, `lm.…`, `anneal.…`,
+    /// `switch.…` or `global.…`.
+    pub fn settings(&self) -> Result<SolverSettings, OptionError> {
+        let method = Method::parse(&self.method).ok_or_else(|| {
+            let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+            OptionError::new(
+                "method",
+                format!("{:?}", self.method),
+                format!("one of {}", names.join(", ")),
+            )
+        })?;
+        let settings = SolverSettings {
+            method,
+            lm: self.lm,
+            anneal: self.anneal,
+            switch: self.switch,
+            global: self.global,
+            threads: self.threads.unwrap_or_else(available_threads),
+            seed: self.seed,
+        };
+        settings.check()?;
+        Ok(settings)
+    }
+
+    /// The problem and the run's settings, every setting checked, the
+    /// report's warnings all of [`Request::warnings`].
+    ///
+    /// # Errors
+    ///
+    /// [`CalibrationError::Option`] naming the setting refused;
+    /// [`CalibrationError::Joints`] when a data set has another joint count
+    /// than the arm; the kernel's refusal of the arm; lengths in another
+    /// unit than the arm.
+    pub fn build(self) -> Result<(Problem, SolverSettings), CalibrationError> {
+        ArmKernel::new(&self.arm.params)?;
+        // Refusals come in the order of the settings' homes: the problem's,
+        // then the run's.
+        let settings = self.settings();
+        let model = self.model()?;
+        let sources = Sources {
+            warnings: self.warnings(),
+            ..self.sources
+        };
+        let mut problem = Problem::new(self.arm, self.data, model)?.with_sources(sources);
+        if let Some((held_out, _)) = self.held_out {
+            problem = problem.with_held_out(held_out)?;
+        }
+        if let Some(k) = self.cross_validate {
+            problem = problem.with_cross_validation(k)?;
+        }
+        Ok((problem, settings?))
+    }
+
+    /// Builds the request and runs it: the problem (to write the files)
+    /// and the report.
+    ///
+    /// # Errors
+    ///
+    /// As [`Request::build`], and the calibration's when it cannot run.
+    pub fn run(self) -> Result<(Problem, CalibrationReport), CalibrationError> {
+        let (problem, settings) = self.build()?;
+        let report = problem.run(&settings)?;
+        Ok((problem, report))
+    }
+
+    /// What the data can determine at the request's noise, with the prior
+    /// it asks for, on its threads: `identify`'s report.
+    ///
+    /// # Errors
+    ///
+    /// An [`OptionError`] on `prior`, `noise.…` or `threads`; as
+    /// [`IdentifyReport::new`].
+    pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
+        ArmKernel::new(&self.arm.params)?;
+        let prior = self.tolerances()?;
+        let threads = self.threads.unwrap_or_else(available_threads);
+        IdentifyReport::new(
+            &self.arm,
+            &self.data,
+            &self.noise,
+            prior.as_ref(),
+            threads,
+            &self.sources,
+        )
+    }
+}
