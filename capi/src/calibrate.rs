@@ -4,13 +4,13 @@ use std::ffi::c_char;
 
 use aacmm_core::calibrate::Termination;
 use aacmm_core::dataset::{ArrayLength, DataSet};
-use aacmm_core::io::{AngleUnit, Arm, read_arm, read_lengths, read_poses, source_name};
+use aacmm_core::io::{AngleUnit, Arm};
 use aacmm_core::params::ParamId;
-use aacmm_core::session::{CalibrationReport, Problem, Sources};
+use aacmm_core::session::{CalibrationReport, Request, Sources};
 
 use crate::arm::{AacmmArm, handle, pose_count, string_out};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
-use crate::options::{self, AacmmCalibrateOptions, AacmmMethod, Settings, method_code};
+use crate::options::{self, AacmmCalibrateOptions, AacmmMethod, method_code};
 use crate::ptr;
 
 /// The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
@@ -138,25 +138,13 @@ pub struct AacmmCalibration {
     json: String,
 }
 
-/// Calibrates and builds the result: the library's session (what the
-/// command line runs), without held-out validation.
-fn run(
-    start: &Arm,
-    data: DataSet,
-    s: Settings,
-    sources: Sources,
-) -> Result<AacmmCalibration, Error> {
-    let mut problem = Problem::new(start.clone(), data, s.model)
-        .map_err(|e| in_file(e, &sources.arm_file))?
-        .with_sources(sources);
-    if s.cross_validate != 0 {
-        problem = problem.with_cross_validation(s.cross_validate)?;
-    }
-    let report = problem
-        .run(&s.solver)
-        .map_err(|e| in_file(e, &problem.sources().arm_file))?;
+/// Calibrates and builds the result: the library's request and session
+/// (what the command line runs), without held-out validation.
+fn run(request: Request) -> Result<AacmmCalibration, Error> {
+    let arm_file = request.arm_file().to_string();
+    let (problem, report) = request.run().map_err(|e| in_file(e, &arm_file))?;
     Ok(AacmmCalibration {
-        calibrated: report.calibrated_arm(start),
+        calibrated: report.calibrated_arm(problem.arm()),
         json: report.to_json(),
         report,
     })
@@ -234,25 +222,13 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
                 )));
             }
         };
-        let (arm, mut warnings) = read_arm(&arm_path)?;
-        let (arm_file, data_file) = (source_name(&arm_path), source_name(&poses_path));
         // SAFETY: by the contract.
-        let s = options::settings(&unsafe { options::read(options) }?, &arm)?;
-        let (poses, poses_warnings) =
-            read_poses(&poses_path, unit, Some(arm.params.joint_count()))?;
-        warnings.extend(poses_warnings);
-        let mut data = DataSet::from_poses(&poses, &data_file)?;
-        let lengths_file = lengths_path.as_deref().map(source_name);
-        if let (Some(path), Some(file)) = (&lengths_path, &lengths_file) {
-            data = data.with_lengths(&read_lengths(path)?, file)?;
+        let o = unsafe { options::read(options) }?;
+        let mut request = Request::read(&arm_path, &poses_path, unit)?;
+        if let Some(path) = &lengths_path {
+            request = request.read_lengths(path)?;
         }
-        let sources = Sources {
-            arm_file,
-            data_file,
-            lengths_file,
-            warnings: warnings.iter().map(ToString::to_string).collect(),
-        };
-        let result = run(&arm, data, s, sources)?;
+        let result = run(options::request(&o, request))?;
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })
@@ -317,7 +293,7 @@ pub unsafe extern "C" fn aacmm_calibrate(
             )
         };
         // SAFETY: by the contract.
-        let s = options::settings(&unsafe { options::read(options) }?, &start.arm)?;
+        let o = unsafe { options::read(options) }?;
         let lengths: Vec<ArrayLength> = lengths.iter().map(ArrayLength::from).collect();
         let data = DataSet::from_arrays(joints, q, points, &lengths)?;
         let sources = Sources {
@@ -326,7 +302,8 @@ pub unsafe extern "C" fn aacmm_calibrate(
             lengths_file: (!lengths.is_empty()).then(|| "<arrays>".to_string()),
             warnings: start.warnings.clone(),
         };
-        let result = run(&start.arm, data, s, sources)?;
+        let request = Request::new(start.arm.clone(), data).sources(sources);
+        let result = run(options::request(&o, request))?;
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })

@@ -5,13 +5,11 @@
 
 use std::ffi::c_char;
 
-use aacmm_core::calibrate::{
-    FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings, available_threads,
-};
+use aacmm_core::calibrate::{FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings};
 use aacmm_core::error::OptionError;
-use aacmm_core::io::Arm;
 use aacmm_core::params::SUPPORTED_JOINTS;
 use aacmm_core::residuals::Noise;
+use aacmm_core::session::Request;
 use aacmm_core::tolerances::Tolerances;
 
 use crate::error::{AacmmStatus, Error, guard, guard_value};
@@ -112,52 +110,23 @@ impl Default for AacmmCalibrateOptions {
     }
 }
 
-/// The options in the library's terms, and the fold count.
-pub(crate) struct Settings {
-    pub(crate) model: ModelOptions,
-    pub(crate) solver: SolverSettings,
-    pub(crate) cross_validate: usize,
-}
-
-/// The library's model options and solver settings of `o` for the start arm
-/// `arm` (whose file's `[prior]`, if any, `o`'s prior overrides entry by
-/// entry, as the command line's `--prior` does). What the user gave as text
-/// (the fixed set, the prior) is checked against the arm here; the rest was
-/// checked when it was set. The one place that builds them, so that the
-/// library's request path can take its place.
-pub(crate) fn settings(o: &AacmmCalibrateOptions, arm: &Arm) -> Result<Settings, Error> {
-    let joints = arm.params.joint_count();
-    let prior = match o.prior.as_deref() {
-        None => arm.prior.clone(),
-        Some(spec) => Tolerances::parse(spec, joints)?
-            .map(|given| arm.prior.clone().unwrap_or_default().overridden_by(&given)),
-    };
-    // `..default()`: settings the C API does not expose (annealing
-    // schedule, start budget) keep the library's defaults, which are the
-    // command line's.
-    let solver = SolverSettings {
-        method: o.method,
-        seed: o.seed,
-        threads: match o.threads {
-            0 => available_threads(),
-            n => n,
-        },
-        ..SolverSettings::default()
-    };
-    let model = ModelOptions {
-        fix: FixSpec::parse_for(o.fix.as_deref().unwrap_or("auto"), &arm.params)?,
-        noise: o.noise,
-        accept_poor_fit: o.accept_poor_fit,
-        robust: o.robust,
-        prior,
-    };
-    model.check_for(&arm.params)?;
-    solver.check()?;
-    Ok(Settings {
-        model,
-        solver,
-        cross_validate: o.cross_validate,
-    })
+/// `request` with the options of `o`: the library's request path turns
+/// them into the problem and the run's settings (the prior over the arm
+/// file's `[prior]`, the fixed set and the loss by name, every check and
+/// warning), as it does the command line's flags and Python's arguments.
+pub(crate) fn request(o: &AacmmCalibrateOptions, request: Request) -> Request {
+    let threads = (o.threads != 0).then_some(o.threads);
+    let folds = (o.cross_validate != 0).then_some(o.cross_validate);
+    request
+        .fix(o.fix.as_deref().unwrap_or("auto"))
+        .noise(o.noise)
+        .robust(o.robust.map(|r| r.loss.name()), o.robust.map(|r| r.scale_k))
+        .prior(o.prior.as_deref())
+        .accept_poor_fit(o.accept_poor_fit)
+        .method(o.method.name())
+        .threads(threads)
+        .seed(o.seed)
+        .cross_validate(folds)
 }
 
 /// The options behind `options`, or the defaults for `NULL`.
@@ -564,8 +533,31 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_accept_poor_fit(
 mod tests {
     use super::*;
     use crate::error::aacmm_last_error_message;
-    use aacmm_core::io::read_arm;
+    use aacmm_core::dataset::DataSet;
+    use aacmm_core::io::{Arm, read_arm};
     use aacmm_core::params::DhParams;
+
+    /// What the library's request makes of `o` for `arm`.
+    struct Settings {
+        model: ModelOptions,
+        solver: SolverSettings,
+        cross_validate: usize,
+    }
+
+    /// [`request`]'s model and settings for `o` on `arm` (on three
+    /// articulated touches of one point: the options do not look at them).
+    fn settings(o: &AacmmCalibrateOptions, arm: &Arm) -> Result<Settings, Error> {
+        let n = arm.params.joint_count();
+        let q: Vec<Vec<f64>> = (0..3).map(|i| vec![0.1 * i as f64; n]).collect();
+        let labels = vec!["P".to_string(); 3];
+        let data = DataSet::from_touches(&labels, &q, &[]).unwrap();
+        let r = request(o, Request::new(arm.clone(), data));
+        Ok(Settings {
+            model: r.model()?,
+            solver: r.settings()?,
+            cross_validate: o.cross_validate,
+        })
+    }
 
     fn new() -> *mut AacmmCalibrateOptions {
         let mut o = std::ptr::null_mut();
@@ -751,7 +743,7 @@ mod tests {
             aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_NONE, 0.0);
         }
         let s = settings(&get(o), &arm).unwrap();
-        assert_eq!(s.solver.threads, available_threads());
+        assert_eq!(s.solver.threads, aacmm_core::calibrate::available_threads());
         assert_eq!(s.model.fix, FixSpec::Auto);
         assert_eq!(s.model.robust, None);
         // A 7-joint name passes the setter but not a 6-joint arm.

@@ -301,6 +301,11 @@ impl Request {
         &self.data
     }
 
+    /// The arm file's name as the report gives it (empty when not named).
+    pub fn arm_file(&self) -> &str {
+        &self.sources.arm_file
+    }
+
     /// Every warning about the inputs, in order: the readers' of the arm
     /// and its data, readings outside the arm's joint limits, then the same
     /// for the held-out data.
