@@ -313,23 +313,6 @@ impl DataSet {
         self
     }
 
-    /// A data set read from a poses file (angles in degrees) and an optional
-    /// lengths file, for an arm of `joints` joints; `-` reads standard
-    /// input. The readers' warnings are dropped: [`DataSet::read`] keeps
-    /// them (and takes the angle unit).
-    ///
-    /// # Errors
-    ///
-    /// The readers' errors, naming file, line and field.
-    pub fn from_files(
-        poses: impl AsRef<std::path::Path>,
-        lengths: Option<impl AsRef<std::path::Path>>,
-        joints: usize,
-    ) -> Result<DataSet, InputError> {
-        let lengths = lengths.as_ref().map(|l| l.as_ref());
-        DataSet::read(poses.as_ref(), lengths, crate::io::AngleUnit::Deg, joints).map(|(d, _)| d)
-    }
-
     /// A data set read from a poses file (angles in `unit`) and an optional
     /// lengths file, for an arm of `joints` joints (`-` reads standard
     /// input), with the readers' warnings, in the order read — for the

@@ -7,7 +7,7 @@
 use aacmm_core::calibrate::{
     CalibrationError, Context, Method, ModelOptions, Outcome, Solver, SolverSettings, Stop, Task,
 };
-use aacmm_core::io::read_arm;
+use aacmm_core::io::{AngleUnit, read_arm};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::{Problem, run};
 use aacmm_core::{Arm, DataSet};
@@ -74,12 +74,15 @@ fn root(file: &str) -> String {
 
 fn shipped() -> (Arm, DataSet) {
     let (arm, _) = read_arm(root("paper-table-1.toml").as_ref()).unwrap();
-    let data = DataSet::from_files(
-        root("paper-campaign/poses.csv"),
-        Some(root("paper-campaign/lengths.csv")),
+    let lengths = root("paper-campaign/lengths.csv");
+    let (data, warnings) = DataSet::read(
+        root("paper-campaign/poses.csv").as_ref(),
+        Some(lengths.as_ref()),
+        AngleUnit::Deg,
         6,
     )
     .unwrap();
+    assert!(warnings.is_empty());
     (arm, data)
 }
 

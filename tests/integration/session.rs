@@ -15,7 +15,14 @@ use crate::util::{calibrate_shipped, example, shipped, shipped_arm, temp_dir};
 /// The shipped campaign as the CLI reads it, with its noise stated.
 fn shipped_problem() -> Problem {
     let (arm, _) = read_arm(shipped_arm().as_ref()).unwrap();
-    let data = DataSet::from_files(shipped("poses.csv"), Some(shipped("lengths.csv")), 6).unwrap();
+    let lengths = shipped("lengths.csv");
+    let (data, _) = DataSet::read(
+        shipped("poses.csv").as_ref(),
+        Some(lengths.as_ref()),
+        AngleUnit::Deg,
+        6,
+    )
+    .unwrap();
     let options = ModelOptions {
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
