@@ -265,6 +265,7 @@ fn an_unknown_plane_offset_is_a_block_of_its_own() {
         unit: Unit::Length,
         start: at + 2.0,
         tolerance: None,
+        limit: Some(10.0),
     });
     let plane = PlaneTerm {
         poses: plane_poses(&c, at),
@@ -297,7 +298,49 @@ fn an_unknown_plane_offset_is_a_block_of_its_own() {
         "offset {} ± {sigma}, the plane at {at}",
         e.calibrated
     );
-    // In the JSON, beside the geometry's estimates.
+    // In the summary and in the JSON, beside the geometry's estimates.
+    let summary = report.summary();
+    assert!(summary.contains("Auxiliary blocks") && summary.contains("plane.offset"));
+    assert!(
+        summary.contains("Other residual terms (in the dof): plane"),
+        "{summary}"
+    );
     let json = report.to_json();
     assert!(json.contains("\"auxiliary\"") && json.contains("plane.offset"));
+}
+
+/// A block's own limits judge the result: an offset that had to move by
+/// more than its limit makes the calibration unusable, by name.
+#[test]
+fn a_block_beyond_its_limits_is_refused_by_name() {
+    let c = campaign(3);
+    let data = c.data_set().unwrap();
+    let model = ModelOptions {
+        noise: stated(),
+        ..ModelOptions::default()
+    };
+    let at = plane_x(&c);
+    let mut problem = Problem::new(nominal(), data, model).unwrap();
+    // Started 2 mm off, allowed to move 1 mm.
+    let offset = problem.add_block(Scalar {
+        name: "plane.offset".into(),
+        unit: Unit::Length,
+        start: at + 2.0,
+        tolerance: None,
+        limit: Some(1.0),
+    });
+    let plane = PlaneTerm {
+        poses: plane_poses(&c, at),
+        normal: [1.0, 0.0, 0.0],
+        offset: Offset::Fitted(offset),
+        sigma: 0.01,
+    };
+    let report = run(problem.with_term(plane));
+    assert!(!report.is_usable());
+    let reasons = report.verdict.reasons.join("; ");
+    assert!(
+        reasons.contains("no real instrument could have: plane.offset moved by -1.99"),
+        "{reasons}"
+    );
+    assert_eq!(report.calibration.checks.implausible_blocks.len(), 1);
 }

@@ -581,7 +581,6 @@ fn implausible_blocks(fit: &Fit<'_>, setup: &Setup<'_>) -> Vec<String> {
             let cols = first..first + b.len();
             first = cols.end;
             b.implausible(&setup.x0[cols.clone()], &fit.x[cols])
-                .map(|why| format!("{}: {why}", b.name()))
         })
         .collect()
 }

@@ -99,7 +99,8 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     }
 
     /// Why the values `x` are implausible against the start values (a
-    /// result no real instrument could have), if they are.
+    /// result no real instrument could have), if they are: a sentence that
+    /// names the block or its column.
     fn implausible(&self, start: &[f64], x: &[f64]) -> Option<String> {
         let _ = (start, x);
         None
@@ -255,6 +256,10 @@ pub struct Scalar {
     pub start: f64,
     /// Its stated tolerance (1σ), if any.
     pub tolerance: Option<f64>,
+    /// The largest move from the start a real instrument could make, if
+    /// any: a result beyond it is implausible (a unit mistake, a wrong
+    /// minimum), whatever its residuals.
+    pub limit: Option<f64>,
 }
 
 impl Block for Scalar {
@@ -275,6 +280,21 @@ impl Block for Scalar {
 
     fn tolerance(&self, _i: usize) -> Option<f64> {
         self.tolerance
+    }
+
+    fn implausible(&self, start: &[f64], x: &[f64]) -> Option<String> {
+        let limit = self.limit?;
+        let moved = x[0] - start[0];
+        (moved.abs() > limit).then(|| {
+            let u = |v: f64| self.unit.to_user(v);
+            format!(
+                "{} moved by {:.4} {} (more than ±{})",
+                self.name,
+                u(moved),
+                self.unit.name(),
+                u(limit)
+            )
+        })
     }
 }
 
@@ -524,6 +544,7 @@ mod tests {
             unit: Unit::Length,
             start: 3.0,
             tolerance: None,
+            limit: None,
         }));
         let f = layout.add(Box::new(Frame::identity("tracker")));
         assert_eq!(layout.columns(s), 27..28);

@@ -403,6 +403,13 @@ impl Verdict {
                 what.join("; ")
             ));
         }
+        let blocks = &calibration.checks.implausible_blocks;
+        if !blocks.is_empty() {
+            reasons.push(format!(
+                "an auxiliary block has values no real instrument could have: {}",
+                blocks.join("; ")
+            ));
+        }
         let mut poor = Vec::new();
         if let Some(chi) = &calibration.checks.chi_square {
             if chi.far_outside() {
@@ -733,6 +740,12 @@ fn dof_lines(c: &Calibration) -> String {
             " (from the stated noise)"
         }
     );
+    if !d.other_rows.is_empty() {
+        let terms: Vec<String> = (d.other_rows.iter())
+            .map(|r| format!("{} {} rows ({} eliminated)", r.term, r.rows, r.eliminated))
+            .collect();
+        t += &format!("Other residual terms (in the dof): {}\n", terms.join(", "));
+    }
     t
 }
 
@@ -817,6 +830,23 @@ fn parameter_table(c: &Calibration) -> String {
     }
     if let Some(p) = &c.prior {
         t += &prior_table(p);
+    }
+    if !c.auxiliary.is_empty() {
+        t += "Auxiliary blocks (every column free; sigma k = 1):\n";
+        t += &format!(
+            "  {:<16} {:<4} {:>14} {:>14} {:>10}\n",
+            "name", "unit", "start", "calibrated", "sigma"
+        );
+        for e in &c.auxiliary {
+            t += &format!(
+                "  {:<16} {:<4} {:>14.6} {:>14.6} {:>10}\n",
+                e.name,
+                e.unit,
+                e.start,
+                e.calibrated,
+                e.sigma.map_or("-".to_string(), |s| format!("{s:.6}"))
+            );
+        }
     }
     t
 }
