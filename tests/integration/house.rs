@@ -50,7 +50,7 @@ const RANKS: &[(&str, u8)] = &[
     ("damping", 0),
     // 1: the kernel, and the reference models it is checked against.
     ("kernel", 1),
-    ("generic", 1),
+    ("reference_model", 1),
     ("urdf", 1),
     // 2: files.
     ("io", 2),
