@@ -36,7 +36,6 @@ pub mod metrics;
 pub mod objective;
 pub mod parallel;
 pub mod params;
-pub mod placements;
 pub mod random;
 #[cfg(feature = "reference-model")]
 pub mod reference_model;

@@ -25,7 +25,7 @@ use std::path::Path;
 /// Data flow one way, down this chain: files (`io`) → data set
 /// (`dataset`) → residual terms and measures of an arm (`residuals`,
 /// `objective`, `metrics`, `simulate`) → the solver and what it identifies
-/// (`calibrate`, `identify`, `hayati`, `placements`) → the assessment and
+/// (`calibrate`, `identify`, `hayati`) → the assessment and
 /// its report (`session`, `report`). Nothing reaches back up: a residual
 /// term that needed the solver's types, or a solver that needed the report,
 /// could not be tested, reused or read without what comes after it. The
@@ -66,7 +66,6 @@ const RANKS: &[(&str, u8)] = &[
     ("identify", 5),
     ("calibrate", 5),
     ("hayati", 5),
-    ("placements", 5),
     // 6: the assessment of a calibration, and its report.
     ("session", 6),
     ("report", 6),

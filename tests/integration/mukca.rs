@@ -5,10 +5,12 @@
 
 use std::path::PathBuf;
 
+use aacmm_core::calibrate::validate::placements::{
+    PlacementSummary, leave_one_placement_out, placement_of,
+};
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
-use aacmm_core::placements::{PlacementSummary, leave_one_placement_out, placement_of};
 use aacmm_core::reference_model;
 use aacmm_core::urdf::{UrdfOptions, parse_urdf};
 
