@@ -1,13 +1,13 @@
 //! Kernel speed: batches of 1000 seeded random poses of the paper's arm with a
 //! perturbed parameter set, grouped by operation. Ids compare the generated
-//! kernel with the generic nalgebra model (position) and with num-dual
-//! autodiff and central differences on the generic model (Jacobian), and
-//! the extended chain (`generated-hayati`: the same arm with joint 2 in the
-//! Hayati parameterisation) with the D-H one.
+//! kernel with the reference nalgebra model (id `generic`: position) and with
+//! num-dual autodiff and central differences on the reference model
+//! (Jacobian), and the extended chain (`generated-hayati`: the same arm with
+//! joint 2 in the Hayati parameterisation) with the D-H one.
 
-use aacmm_core::generic;
 use aacmm_core::kernel::{self, ArmKernel, PreparedPoses};
 use aacmm_core::params::{DhParams, JointModel};
+use aacmm_core::reference_model;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -55,7 +55,7 @@ fn position(c: &mut Criterion) {
     g.bench_function(BenchmarkId::from_parameter("generic"), |b| {
         b.iter(|| {
             for (o, q) in out.iter_mut().zip(&q) {
-                *o = generic::position(black_box(&flat), q);
+                *o = reference_model::position(black_box(&flat), q);
             }
         })
     });
@@ -80,7 +80,8 @@ fn jacobian(c: &mut Criterion) {
         b.iter(|| {
             for q in &q {
                 black_box(
-                    generic::param_jacobian_dual::<27>(black_box(&params), q).expect("6 joints"),
+                    reference_model::param_jacobian_dual::<27>(black_box(&params), q)
+                        .expect("6 joints"),
                 );
             }
         })
@@ -89,7 +90,8 @@ fn jacobian(c: &mut Criterion) {
         b.iter(|| {
             for q in &q {
                 black_box(
-                    generic::param_jacobian_central(black_box(&params), q, 1e-6).expect("6 joints"),
+                    reference_model::param_jacobian_central(black_box(&params), q, 1e-6)
+                        .expect("6 joints"),
                 );
             }
         })

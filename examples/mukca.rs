@@ -13,20 +13,23 @@
 //! the other placements, and the held-out one is scored with the nominal and
 //! the calibrated arm: consistency (mean distance of a socket's touches to
 //! their centroid, averaged over its sockets) and `|d − 50|` where it has
-//! both sockets. The logic is `aacmm_core::placements`. The arm file's
-//! `[prior]` table (stated tolerances) is used unless `--prior none`;
-//! `--prior SPEC` (`length=0.5mm,angle=0.1deg,…`) overrides it entry by
-//! entry, as on the command line of `aacmm calibrate`. `--in-sample` adds
-//! a diagnostic: each placement's consistency under the arm calibrated on
-//! every placement, itself included (what this model can reach at best).
+//! both sockets. The logic is `aacmm_core::calibrate::validate::placements`.
+//! The arm file's `[prior]` table (stated tolerances) is used unless
+//! `--prior none`; `--prior SPEC` (`length=0.5mm,angle=0.1deg,…`) overrides
+//! it entry by entry, as on the command line of `aacmm calibrate`.
+//! `--in-sample` adds a diagnostic: each placement's consistency under the
+//! arm calibrated on every placement, itself included (what this model can
+//! reach at best).
 
 use std::io::Write;
 use std::path::Path;
 
+use aacmm_core::calibrate::validate::placements::{
+    PlacementSummary, leave_one_placement_out, placement_of,
+};
 use aacmm_core::calibrate::{FixSpec, Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
-use aacmm_core::placements::{PlacementSummary, leave_one_placement_out};
 use aacmm_core::tolerances::Tolerances;
 use anyhow::{Context, bail};
 
@@ -208,9 +211,7 @@ fn main() -> anyhow::Result<()> {
         )?;
         for f in &folds {
             let held: Vec<usize> = (0..data.points().len())
-                .filter(|&p| {
-                    aacmm_core::placements::placement_of(&data.points()[p].label) == f.placement
-                })
+                .filter(|&p| placement_of(&data.points()[p].label) == f.placement)
                 .collect();
             let e = aacmm_core::calibrate::validate::figures(&all.params, &data.subset(&held))?;
             writeln!(

@@ -897,14 +897,41 @@ fn analysed_open_directions(
     free: &[usize],
 ) -> Vec<String> {
     let np = ids.len();
-    // Unseen directions, in scaled coordinates, with names.
-    let mut unseen: Vec<(String, nalgebra::DVector<f64>)> = Vec::new();
-    let unit = |c: usize| nalgebra::DVector::from_fn(np, |a, _| if a == c { 1.0 } else { 0.0 });
+    let unseen = unseen_directions(params, sees, ids, ns);
+    // A combination of unseen directions with no component on a fixed
+    // parameter moves only free ones: the fixed set leaves it open. Count the
+    // open dimensions; a direction is named when leaving it out closes one.
+    let fixed: Vec<usize> = (0..np).filter(|c| !free.contains(c)).collect();
+    let all_dirs: Vec<&DVector<f64>> = unseen.iter().map(|(_, v)| v).collect();
+    let total = open_dimensions(&all_dirs, np, &fixed);
+    if total == 0 {
+        return Vec::new();
+    }
+    let open = named_open_directions(&unseen, np, &fixed, total);
+    if open.is_empty() {
+        return mixed_redundancies(ids, &all_dirs, &fixed);
+    }
+    open
+}
+
+/// Every direction of the `ids.len()` scaled coordinates of `ns` that the
+/// data do not see, with its name: the base motions no term sees, scale
+/// when no term fixes it, and the exact redundancies (eigenvectors of `ns`
+/// whose singular value is below [`RANK_TOLERANCE`] of the largest).
+fn unseen_directions(
+    params: &DhParams,
+    sees: Sees,
+    ids: &[ParamId],
+    ns: &DMatrix<f64>,
+) -> Vec<(String, DVector<f64>)> {
+    let np = ids.len();
+    let mut unseen: Vec<(String, DVector<f64>)> = Vec::new();
+    let unit = |c: usize| DVector::from_fn(np, |a, _| if a == c { 1.0 } else { 0.0 });
     for (c, name) in unseen_base(params, sees) {
         unseen.push((name.to_string(), unit(c)));
     }
     if !sees.scale {
-        let v = nalgebra::DVector::from_fn(np, |a, _| {
+        let v = DVector::from_fn(np, |a, _| {
             if ids[a].kind.is_length() {
                 params.get(ids[a])
             } else {
@@ -923,81 +950,93 @@ fn analysed_open_directions(
             ));
         }
     }
-    // A combination of unseen directions with no component on a fixed
-    // parameter moves only free ones: the fixed set leaves it open. Count the
-    // open dimensions; a direction is named when leaving it out closes one.
-    let fixed: Vec<usize> = (0..np).filter(|c| !free.contains(c)).collect();
-    let open_dims = |dirs: &[&nalgebra::DVector<f64>]| -> usize {
-        if dirs.is_empty() {
-            return 0;
-        }
-        let basis = DMatrix::from_fn(np, dirs.len(), |a, j| dirs[j][a] / dirs[j].norm());
-        // A basis that does not decompose (a direction of overflowing
-        // length) counts as wholly open: the fit is refused, not trusted.
-        let Some((u, singular_values)) = left_singular(basis) else {
-            return dirs.len();
-        };
-        // An orthonormal basis of the span (singular values come in no
-        // guaranteed order).
-        let span: Vec<usize> = (0..singular_values.len())
-            .filter(|&j| singular_values[j] > 1e-9)
-            .collect();
-        let rank = span.len();
-        let on_fixed = DMatrix::from_fn(fixed.len(), rank, |a, j| u[(fixed[a], span[j])]);
-        let blocked = if fixed.is_empty() {
-            0
-        } else {
-            match left_singular(on_fixed) {
-                Some((_, s)) => s.iter().filter(|&&s| s > 1e-6).count(),
-                None => 0,
-            }
-        };
-        rank - blocked
-    };
-    let all_dirs: Vec<&nalgebra::DVector<f64>> = unseen.iter().map(|(_, v)| v).collect();
-    let total = open_dims(&all_dirs);
-    if total == 0 {
-        return Vec::new();
+    unseen
+}
+
+/// The dimensions of the span of `dirs` (vectors of `np` coordinates) that
+/// no `fixed` coordinate blocks: the span's rank less the rank of its
+/// components on the fixed coordinates.
+fn open_dimensions(dirs: &[&DVector<f64>], np: usize, fixed: &[usize]) -> usize {
+    if dirs.is_empty() {
+        return 0;
     }
+    let basis = DMatrix::from_fn(np, dirs.len(), |a, j| dirs[j][a] / dirs[j].norm());
+    // A basis that does not decompose (a direction of overflowing
+    // length) counts as wholly open: the fit is refused, not trusted.
+    let Some((u, singular_values)) = left_singular(basis) else {
+        return dirs.len();
+    };
+    // An orthonormal basis of the span (singular values come in no
+    // guaranteed order).
+    let span: Vec<usize> = (0..singular_values.len())
+        .filter(|&j| singular_values[j] > 1e-9)
+        .collect();
+    let rank = span.len();
+    let on_fixed = DMatrix::from_fn(fixed.len(), rank, |a, j| u[(fixed[a], span[j])]);
+    let blocked = if fixed.is_empty() {
+        0
+    } else {
+        match left_singular(on_fixed) {
+            Some((_, s)) => s.iter().filter(|&&s| s > 1e-6).count(),
+            None => 0,
+        }
+    };
+    rank - blocked
+}
+
+/// The names of the `unseen` directions whose leaving out closes one of
+/// the `total` open dimensions, each name once, in the order of `unseen`.
+fn named_open_directions(
+    unseen: &[(String, DVector<f64>)],
+    np: usize,
+    fixed: &[usize],
+    total: usize,
+) -> Vec<String> {
     let mut open: Vec<String> = Vec::new();
     for j in 0..unseen.len() {
-        let others: Vec<&nalgebra::DVector<f64>> = (0..unseen.len())
+        let others: Vec<&DVector<f64>> = (0..unseen.len())
             .filter(|&i| i != j)
             .map(|i| &unseen[i].1)
             .collect();
-        if open_dims(&others) < total && !open.contains(&unseen[j].0) {
+        if open_dimensions(&others, np, fixed) < total && !open.contains(&unseen[j].0) {
             open.push(unseen[j].0.clone());
         }
     }
-    if open.is_empty() {
-        // Mixed redundancies: name the free parameters of the open combination.
-        let basis = DMatrix::from_fn(np, all_dirs.len(), |a, j| {
-            all_dirs[j][a] / all_dirs[j].norm()
-        });
-        let Some((u, singular_values)) = left_singular(basis) else {
-            return vec!["a combination of the directions above".into()];
-        };
-        let span: Vec<usize> = (0..singular_values.len())
-            .filter(|&j| singular_values[j] > 1e-9)
-            .collect();
-        let ub = DMatrix::from_fn(np, span.len(), |a, j| u[(a, span[j])]);
-        let on_fixed = DMatrix::from_fn(fixed.len(), span.len(), |a, j| ub[(fixed[a], j)]);
-        let gram = on_fixed.transpose() * on_fixed;
-        let eig = eigen(gram);
-        for (i, &e) in eig.eigenvalues.iter().enumerate() {
-            if e > 1e-12 {
-                continue;
-            }
-            let w = &ub * eig.eigenvectors.column(i);
-            let big = w.amax();
-            let mut names: Vec<(f64, String)> = (0..np)
-                .filter(|&a| w[a].abs() > 0.1 * big)
-                .map(|a| (w[a].abs(), ids[a].to_string()))
-                .collect();
-            names.sort_by(|x, y| y.0.total_cmp(&x.0));
-            let names: Vec<String> = names.into_iter().take(4).map(|(_, n)| n).collect();
-            open.push(format!("a redundancy of {}", names.join(" with ")));
+    open
+}
+
+/// Open dimensions that no single direction of `all_dirs` accounts for
+/// (mixed redundancies): each open combination named by its largest free
+/// parameters, up to four.
+fn mixed_redundancies(ids: &[ParamId], all_dirs: &[&DVector<f64>], fixed: &[usize]) -> Vec<String> {
+    let np = ids.len();
+    let basis = DMatrix::from_fn(np, all_dirs.len(), |a, j| {
+        all_dirs[j][a] / all_dirs[j].norm()
+    });
+    let Some((u, singular_values)) = left_singular(basis) else {
+        return vec!["a combination of the directions above".into()];
+    };
+    let span: Vec<usize> = (0..singular_values.len())
+        .filter(|&j| singular_values[j] > 1e-9)
+        .collect();
+    let ub = DMatrix::from_fn(np, span.len(), |a, j| u[(a, span[j])]);
+    let on_fixed = DMatrix::from_fn(fixed.len(), span.len(), |a, j| ub[(fixed[a], j)]);
+    let gram = on_fixed.transpose() * on_fixed;
+    let eig = eigen(gram);
+    let mut open = Vec::new();
+    for (i, &e) in eig.eigenvalues.iter().enumerate() {
+        if e > 1e-12 {
+            continue;
         }
+        let w = &ub * eig.eigenvectors.column(i);
+        let big = w.amax();
+        let mut names: Vec<(f64, String)> = (0..np)
+            .filter(|&a| w[a].abs() > 0.1 * big)
+            .map(|a| (w[a].abs(), ids[a].to_string()))
+            .collect();
+        names.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let names: Vec<String> = names.into_iter().take(4).map(|(_, n)| n).collect();
+        open.push(format!("a redundancy of {}", names.join(" with ")));
     }
     open
 }

@@ -1,6 +1,6 @@
 //! aacmm-core: the geometric model of D-H measuring arms and everything that
-//! evaluates it — parameters, the generic (autodiff) model, the generated kernel,
-//! data files, metrics, the campaign simulator.
+//! evaluates it — parameters, the reference (autodiff) model, the generated
+//! kernel, data files, metrics, the campaign simulator.
 //!
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
@@ -27,8 +27,6 @@ pub mod calibrate;
 mod damping;
 pub mod dataset;
 pub mod error;
-#[cfg(feature = "reference-model")]
-pub mod generic;
 pub mod geometry;
 pub mod hayati;
 pub mod identify;
@@ -38,8 +36,9 @@ pub mod metrics;
 pub mod objective;
 pub mod parallel;
 pub mod params;
-pub mod placements;
 pub mod random;
+#[cfg(feature = "reference-model")]
+pub mod reference_model;
 #[cfg(feature = "report")]
 pub mod report;
 pub mod residuals;

@@ -493,7 +493,7 @@ impl Urdf {
 /// A URDF chain as a D-H arm.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DhConversion {
-    /// The arm, mm and rad: the generic model's `position` of it at
+    /// The arm, mm and rad: `reference_model::position` of it at
     /// `q` is the tip at `q` in the D-H base frame.
     pub params: DhParams,
     /// The D-H base frame in the URDF root frame (metres): tip in the root
@@ -679,7 +679,7 @@ fn frame(o: Point3<f64>, x: Vector3<f64>, z: Vector3<f64>) -> Isometry3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::generic::position;
+    use crate::reference_model::position;
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

@@ -1,13 +1,13 @@
 //! The generated kernel against its oracles, over random parameter sets near
 //! and far from nominal and random joint angles, for 6 and 7 joints:
-//! position against the generic nalgebra model, parameter and joint
+//! position against the reference nalgebra model, parameter and joint
 //! Jacobians against num-dual autodiff and central differences.
 
-use aacmm_core::generic;
 use aacmm_core::kernel::{
     self, ArmKernel, Chain, Dh, Hayati, Jacobians, PreparedParams, PreparedPoses,
 };
 use aacmm_core::params::{DhJoint, DhParams, JointModel};
+use aacmm_core::reference_model;
 use proptest::prelude::*;
 use std::f64::consts::PI;
 
@@ -112,7 +112,7 @@ where
     let q: [f64; N] = q.try_into().unwrap();
     let models = params.models();
 
-    let want = generic::position_with(&params.to_vec(), &q, &models);
+    let want = reference_model::position_with(&params.to_vec(), &q, &models);
     let got = kernel::position(&k, &q);
     for r in 0..3 {
         prop_assert!((got[r] - want[r]).abs() <= 1e-9, "{:?} vs {:?}", got, want);
@@ -129,16 +129,16 @@ where
         prop_assert!((pos[r] - want[r]).abs() <= 1e-9);
     }
     let jac: Vec<[f64; 3]> = (0..P).map(|c| batch.column(0, c)).collect();
-    let dual = generic::param_jacobian_dual::<P>(params, &q).unwrap();
+    let dual = reference_model::param_jacobian_dual::<P>(params, &q).unwrap();
     check_columns(&jac, &dual, 1e-9)?;
-    let central = generic::param_jacobian_central(params, &q, 1e-5).unwrap();
+    let central = reference_model::param_jacobian_central(params, &q, 1e-5).unwrap();
     check_columns(&jac, &central, 1e-6)?;
 
     let (p, jq) = kernel::joint_jacobian(&k, &q);
     for r in 0..3 {
         prop_assert!((p[r] - want[r]).abs() <= 1e-9);
     }
-    let dual_q = generic::joint_jacobian_dual::<N>(params, &q).unwrap();
+    let dual_q = reference_model::joint_jacobian_dual::<N>(params, &q).unwrap();
     check_columns(&jq, &dual_q, 1e-9)?;
     let flat = params.to_vec();
     let h = 1e-5;
@@ -148,8 +148,8 @@ where
             plus[j] += h;
             minus[j] -= h;
             let (p, m) = (
-                generic::position_with(&flat, &plus, &models),
-                generic::position_with(&flat, &minus, &models),
+                reference_model::position_with(&flat, &plus, &models),
+                reference_model::position_with(&flat, &minus, &models),
             );
             [0, 1, 2].map(|r| (p[r] - m[r]) / (2.0 * h))
         })
@@ -366,8 +366,8 @@ fn shape_errors_are_typed_not_panics() {
     let six = nominal(6);
     assert!(PreparedParams::<7>::new(&six).is_err());
     assert!(PreparedPoses::new(6, &[vec![0.0; 5]]).is_err());
-    assert!(generic::param_jacobian_dual::<31>(&six, &[0.0; 6]).is_err());
-    assert!(generic::param_jacobian_central(&six, &[0.0; 7], 1e-6).is_err());
+    assert!(reference_model::param_jacobian_dual::<31>(&six, &[0.0; 6]).is_err());
+    assert!(reference_model::param_jacobian_central(&six, &[0.0; 7], 1e-6).is_err());
     assert_eq!(
         ArmKernel::new(&DhParams::from_slice(&[0.0; 23]).unwrap()),
         Err(kernel::KernelError::Unsupported(5))

@@ -14,7 +14,7 @@ use aacmm_core::session::{self, CALIBRATED_FILE, Problem, REPORT_FILE, TIMING_FI
 use anyhow::{Context as _, Result, bail};
 use clap::ValueEnum;
 
-use super::fit::{FitInput, flag_error};
+use super::shared_flags::{FitInput, flag_error};
 use crate::output::{Stdout, note, warn};
 use crate::paths::check_output_dir;
 

@@ -8,7 +8,7 @@ use aacmm_core::calibrate::CalibrationError;
 use aacmm_core::io::source_name;
 use anyhow::Result;
 
-use super::fit::{FitInput, flag_error};
+use super::shared_flags::{FitInput, flag_error};
 use crate::output::Stdout;
 use crate::paths::check_output_file;
 

@@ -3,11 +3,11 @@
 
 pub mod calibrate;
 pub mod evaluate;
-pub mod fit;
 pub mod identify;
 pub mod points;
 pub mod progress;
 pub mod report;
+pub mod shared_flags;
 pub mod simulate;
 
 use std::path::PathBuf;
@@ -146,7 +146,7 @@ pub fn write_json(path: &std::path::Path, value: &impl serde::Serialize) -> Resu
 /// [`KernelError::Noise`], alone or inside a calibration error), restated
 /// with the flags that set the noise — the library knows no flag names.
 /// Other errors pass through.
-pub fn noise_flags(e: impl Into<anyhow::Error>, fit: &fit::FitInput) -> anyhow::Error {
+pub fn noise_flags(e: impl Into<anyhow::Error>, fit: &shared_flags::FitInput) -> anyhow::Error {
     let e: anyhow::Error = e.into();
     let kernel = e
         .downcast_ref::<KernelError>()

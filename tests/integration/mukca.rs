@@ -5,11 +5,13 @@
 
 use std::path::PathBuf;
 
+use aacmm_core::calibrate::validate::placements::{
+    PlacementSummary, leave_one_placement_out, placement_of,
+};
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::generic;
 use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
-use aacmm_core::placements::{PlacementSummary, leave_one_placement_out, placement_of};
+use aacmm_core::reference_model;
 use aacmm_core::urdf::{UrdfOptions, parse_urdf};
 
 use crate::util::example;
@@ -123,7 +125,7 @@ fn arm_files_are_the_urdf_conversion() {
 }
 
 /// Mean distance of touches to their centroid, and the centroids, from the
-/// generic (nalgebra) model — independent of the kernel and the metrics.
+/// reference (nalgebra) model — independent of the kernel and the metrics.
 fn by_hand(params: &[f64], data: &DataSet, points: &[usize]) -> (f64, Vec<[f64; 3]>) {
     let mut es = Vec::new();
     let mut centroids = Vec::new();
@@ -131,7 +133,7 @@ fn by_hand(params: &[f64], data: &DataSet, points: &[usize]) -> (f64, Vec<[f64; 
         let xyz: Vec<[f64; 3]> = data.points()[p]
             .touches
             .clone()
-            .map(|i| generic::position(params, data.reading(i)))
+            .map(|i| reference_model::position(params, data.reading(i)))
             .collect();
         let n = xyz.len() as f64;
         let c = [0, 1, 2].map(|k| xyz.iter().map(|x| x[k]).sum::<f64>() / n);

@@ -2,8 +2,8 @@
 //! errors that name file, line and field.
 
 use crate::util::{aacmm, assert_clean_error, example, stdout, temp_dir, write};
-use aacmm_core::generic;
 use aacmm_core::io::read_arm;
+use aacmm_core::reference_model;
 
 const POSES: &str = "point,q1,q2,q3,q4,q5,q6\n\
     S1,0,0,0,0,0,0\n\
@@ -21,7 +21,7 @@ fn parse_rows(text: &str) -> Vec<(String, [f64; 3])> {
 }
 
 #[test]
-fn writes_every_row_in_order_matching_the_generic_model() {
+fn writes_every_row_in_order_matching_the_reference_model() {
     let dir = temp_dir("points-six");
     let data = write(&dir, "poses.csv", POSES);
     let arm = example("paper-table-1.toml");
@@ -39,7 +39,7 @@ fn writes_every_row_in_order_matching_the_generic_model() {
     assert_eq!(rows.len(), 3);
     for ((label, xyz), (q, want_label)) in rows.iter().zip(q_deg.iter().zip(["S1", "S1", "S2"])) {
         assert_eq!(label, want_label);
-        let want = generic::position(&params, &q.map(f64::to_radians));
+        let want = reference_model::position(&params, &q.map(f64::to_radians));
         for k in 0..3 {
             // Output is written to 1e-6 mm.
             assert!((xyz[k] - want[k]).abs() <= 6e-7, "{xyz:?} vs {want:?}");
@@ -97,7 +97,7 @@ fn seven_joint_arm_uses_its_own_kernel() {
         .params
         .to_vec();
     let q = [5.0f64, 10.0, 15.0, 20.0, 25.0, 30.0, 35.0].map(f64::to_radians);
-    let want = generic::position(&params, &q);
+    let want = reference_model::position(&params, &q);
     for (got, want) in rows[0].1.iter().zip(want) {
         assert!((got - want).abs() <= 6e-7);
     }

@@ -34,10 +34,10 @@
 //! marker per pair only up to [`MAX_PAIR_MARKERS`] per series; beyond, as
 //! the mean per distance bin.
 
+mod calibration;
 mod data;
 mod figures;
 mod html;
-mod session;
 mod svg;
 mod tables;
 
@@ -51,8 +51,8 @@ use crate::kernel::{ArmKernel, KernelError};
 use crate::metrics::MetricsError;
 use crate::params::DhParams;
 
+pub use calibration::session_report;
 pub use html::escape;
-pub use session::session_report;
 
 /// The page.
 pub const HTML_FILE: &str = "report.html";

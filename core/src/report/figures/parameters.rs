@@ -11,7 +11,7 @@ use crate::calibrate::{Calibration, EstimateRecord};
 
 use crate::params::{DhParams, ParamKind};
 use crate::report::svg::{
-    Area, Axis, BLUE, Class, DrawResult, GREEN, GREY, Key, Marker, Shape, WIDTH, chart,
+    Area, Axis, BLUE, Chart, Class, DrawResult, GREEN, GREY, Key, Marker, Shape, WIDTH, chart,
     dashed_across, font, group, render,
 };
 use crate::report::{Figure, PARAMETERS_SVG, ReportError};
@@ -121,21 +121,7 @@ fn panel(
 ) -> DrawResult {
     let params: Vec<EstimateRecord> = which.iter().map(|&i| cal.parameters[i].user()).collect();
     let names: Vec<String> = params.iter().map(|p| p.name.clone()).collect();
-    let bar = |p: &EstimateRecord| p.sigma.filter(|s| s.is_finite()).map(|s| 2.0 * s);
-    let mut lo = 0.0f64;
-    let mut hi = 0.0f64;
-    for (k, p) in params.iter().enumerate() {
-        let b = bar(p).unwrap_or(0.0);
-        for v in [p.correction - b, p.correction + b]
-            .into_iter()
-            .chain(truths[which[k]].1)
-        {
-            if v.is_finite() {
-                lo = lo.min(v);
-                hi = hi.max(v);
-            }
-        }
-    }
+    let (lo, hi) = value_range(&params, truths, which);
     // Room above for the reasons of fixed parameters.
     let span = (hi - lo).max(1e-6);
     let x = Axis::categories(&names, 40, "parameter");
@@ -155,51 +141,10 @@ fn panel(
         .filter(|(_, p)| p.fixed.is_some())
         .collect();
     group(area, Class::Series, "free corrections", free.len(), || {
-        for (i, p) in &free {
-            let xi = *i as f64;
-            if let Some(b) = bar(p) {
-                let style = BLUE.stroke_width(2);
-                let (c0, c1) = (p.correction - b, p.correction + b);
-                chart.draw_series([
-                    PathElement::new(vec![(xi, c0), (xi, c1)], style),
-                    PathElement::new(vec![(xi - 0.18, c0), (xi + 0.18, c0)], style),
-                    PathElement::new(vec![(xi - 0.18, c1), (xi + 0.18, c1)], style),
-                ])?;
-            }
-            chart.draw_series(std::iter::once(
-                Marker::new(Shape::Dot, BLUE).at((xi, p.correction)),
-            ))?;
-        }
-        Ok(())
+        free_corrections(&mut chart, &free)
     })?;
     group(area, Class::Series, "fixed parameters", fixed.len(), || {
-        // The reason runs away from the true error, so that they do not
-        // overlap: up from the cross, or down when the truth lies above.
-        let up = font(11.5)
-            .color(&GREY)
-            .transform(FontTransform::Rotate270)
-            .pos(Pos::new(HPos::Left, VPos::Center));
-        let down = font(11.5)
-            .color(&GREY)
-            .transform(FontTransform::Rotate90)
-            .pos(Pos::new(HPos::Left, VPos::Center));
-        for (i, p) in &fixed {
-            let xi = *i as f64;
-            chart.draw_series(std::iter::once(
-                Marker::new(Shape::Cross, GREY).at((xi, p.correction)),
-            ))?;
-            let reason = short_reason(p.fixed.as_deref().unwrap_or(""));
-            let truth_above = truths[which[*i]].1.is_some_and(|t| t > p.correction);
-            let (offset, style) = if truth_above {
-                ((0, 10), down.clone())
-            } else {
-                ((0, -10), up.clone())
-            };
-            chart.draw_series(std::iter::once(
-                EmptyElement::at((xi, p.correction)) + Text::new(reason, offset, style),
-            ))?;
-        }
-        Ok(())
+        fixed_parameters(&mut chart, &fixed, truths, which)
     })?;
     let known: Vec<(usize, f64)> = which
         .iter()
@@ -215,6 +160,93 @@ fn panel(
             )?;
             Ok(())
         })?;
+    }
+    Ok(())
+}
+
+/// The half-length of a parameter's error bar, 2σ, where σ is finite.
+fn bar(p: &EstimateRecord) -> Option<f64> {
+    p.sigma.filter(|s| s.is_finite()).map(|s| 2.0 * s)
+}
+
+/// The range the panel of `params` (the parameters `which`) must show:
+/// zero, every correction with its bar, every known true error.
+fn value_range(
+    params: &[EstimateRecord],
+    truths: &[(String, Option<f64>)],
+    which: &[usize],
+) -> (f64, f64) {
+    let mut lo = 0.0f64;
+    let mut hi = 0.0f64;
+    for (k, p) in params.iter().enumerate() {
+        let b = bar(p).unwrap_or(0.0);
+        for v in [p.correction - b, p.correction + b]
+            .into_iter()
+            .chain(truths[which[k]].1)
+        {
+            if v.is_finite() {
+                lo = lo.min(v);
+                hi = hi.max(v);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+/// The free parameters (with their column): a dot at the correction and
+/// its ± 2σ bar.
+fn free_corrections(chart: &mut Chart, free: &[(usize, &EstimateRecord)]) -> DrawResult {
+    for (i, p) in free {
+        let xi = *i as f64;
+        if let Some(b) = bar(p) {
+            let style = BLUE.stroke_width(2);
+            let (c0, c1) = (p.correction - b, p.correction + b);
+            chart.draw_series([
+                PathElement::new(vec![(xi, c0), (xi, c1)], style),
+                PathElement::new(vec![(xi - 0.18, c0), (xi + 0.18, c0)], style),
+                PathElement::new(vec![(xi - 0.18, c1), (xi + 0.18, c1)], style),
+            ])?;
+        }
+        chart.draw_series(std::iter::once(
+            Marker::new(Shape::Dot, BLUE).at((xi, p.correction)),
+        ))?;
+    }
+    Ok(())
+}
+
+/// The fixed parameters (with their column): a cross at the correction
+/// and the short reason they were fixed.
+fn fixed_parameters(
+    chart: &mut Chart,
+    fixed: &[(usize, &EstimateRecord)],
+    truths: &[(String, Option<f64>)],
+    which: &[usize],
+) -> DrawResult {
+    // The reason runs away from the true error, so that they do not
+    // overlap: up from the cross, or down when the truth lies above.
+    let up = font(11.5)
+        .color(&GREY)
+        .transform(FontTransform::Rotate270)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let down = font(11.5)
+        .color(&GREY)
+        .transform(FontTransform::Rotate90)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    for (i, p) in fixed {
+        let xi = *i as f64;
+        chart.draw_series(std::iter::once(
+            Marker::new(Shape::Cross, GREY).at((xi, p.correction)),
+        ))?;
+        let reason = short_reason(p.fixed.as_deref().unwrap_or(""));
+        let truth_above = truths[which[*i]].1.is_some_and(|t| t > p.correction);
+        let (offset, style) = if truth_above {
+            ((0, 10), down.clone())
+        } else {
+            ((0, -10), up.clone())
+        };
+        chart.draw_series(std::iter::once(
+            EmptyElement::at((xi, p.correction)) + Text::new(reason, offset, style),
+        ))?;
     }
     Ok(())
 }

@@ -1,5 +1,9 @@
 //! Validation: the figures of an arm before and after calibration, on the
-//! data it was fitted to and on data held out from the fit.
+//! data it was fitted to and on data held out from the fit — held-out
+//! points by cross-validation here, held-out placements of a touch tool in
+//! [`placements`].
+
+pub mod placements;
 
 use serde::{Deserialize, Serialize};
 

@@ -16,7 +16,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::calibrate::validate::{Figures, figures};
+use super::{Figures, figures};
 use crate::calibrate::{CalibrationError, ModelOptions, SolverSettings, calibrate};
 use crate::dataset::DataSet;
 use crate::error::OptionError;
@@ -25,7 +25,7 @@ use crate::params::DhParams;
 /// The placement of a point label: up to the last `-`.
 ///
 /// ```
-/// use aacmm_core::placements::placement_of;
+/// use aacmm_core::calibrate::validate::placements::placement_of;
 /// assert_eq!(placement_of("right-high-h1"), "right-high");
 /// assert_eq!(placement_of("S1"), "S1");
 /// ```

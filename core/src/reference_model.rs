@@ -17,11 +17,11 @@ use crate::params::{DhParams, JointModel, param_count};
 /// both from one arm).
 ///
 /// ```
-/// use aacmm_core::{generic, params::DhParams};
+/// use aacmm_core::{params::DhParams, reference_model};
 /// let arm = DhParams::paper_nominal().to_vec();
 /// // All readings zero: the arm stands straight up; x sums the a's and z
 /// // the d's plus the 100 mm probe.
-/// let p = generic::position(&arm, &[0.0; 6]);
+/// let p = reference_model::position(&arm, &[0.0; 6]);
 /// assert!((p[0] + 5.0).abs() < 1e-9 && p[1].abs() < 1e-9);
 /// assert!((p[2] - 995.0).abs() < 1e-9);
 /// ```
@@ -99,9 +99,9 @@ fn check(params: &DhParams, q: &[f64]) -> Result<(), KernelError> {
 /// parameter; `P` must be `4n + 3`.
 ///
 /// ```
-/// use aacmm_core::{generic, params::DhParams};
+/// use aacmm_core::{params::DhParams, reference_model};
 /// let arm = DhParams::paper_nominal();
-/// let jac = generic::param_jacobian_dual::<27>(&arm, &[0.0; 6]).unwrap();
+/// let jac = reference_model::param_jacobian_dual::<27>(&arm, &[0.0; 6]).unwrap();
 /// assert_eq!(jac[6], [0.0, 0.0, 1.0]); // ∂p/∂d1 is the base z axis
 /// ```
 pub fn param_jacobian_dual<const P: usize>(
@@ -134,9 +134,9 @@ pub fn param_jacobian_dual<const P: usize>(
 /// (mm for lengths, rad for angles) — the slow, independent check.
 ///
 /// ```
-/// use aacmm_core::{generic, params::DhParams};
+/// use aacmm_core::{params::DhParams, reference_model};
 /// let arm = DhParams::paper_nominal();
-/// let jac = generic::param_jacobian_central(&arm, &[0.0; 6], 1e-6).unwrap();
+/// let jac = reference_model::param_jacobian_central(&arm, &[0.0; 6], 1e-6).unwrap();
 /// assert!((jac[26][2] - 1.0).abs() < 1e-6); // ∂pz/∂Bz at the folded pose
 /// ```
 pub fn param_jacobian_central(
@@ -164,9 +164,9 @@ pub fn param_jacobian_central(
 /// the joint count.
 ///
 /// ```
-/// use aacmm_core::{generic, params::DhParams};
+/// use aacmm_core::{params::DhParams, reference_model};
 /// let arm = DhParams::paper_nominal();
-/// let jac = generic::joint_jacobian_dual::<6>(&arm, &[0.0; 6]).unwrap();
+/// let jac = reference_model::joint_jacobian_dual::<6>(&arm, &[0.0; 6]).unwrap();
 /// // Joint 1 turns about the base z axis through the origin; the probe sits
 /// // at (−5, 0, 995), so it moves along −y at 5 mm/rad.
 /// assert!((jac[0][1] + 5.0).abs() < 1e-9);
