@@ -646,7 +646,7 @@ fn predicted(
             }
         })
         .collect();
-    let correlations = strong_correlations(&cov, free_cols, names);
+    let correlations = strong_correlations(&cov, free_cols.len(), |a| names[free_cols[a]].clone());
     (free, correlations)
 }
 
@@ -783,21 +783,21 @@ fn relation_text(terms: &[(String, f64)]) -> String {
     s
 }
 
-/// Pairs of free parameters with `|ρ| > 0.9`.
+/// Pairs of the `q` free parameters with `|ρ| > 0.9`, `name(a)` the `a`-th
+/// free parameter's name.
 pub(crate) fn strong_correlations(
     cov: &DMatrix<f64>,
-    free: &[usize],
-    names: &[String],
+    q: usize,
+    name: impl Fn(usize) -> String,
 ) -> Vec<Correlation> {
-    let q = free.len();
     let mut out = Vec::new();
     for a in 0..q {
         for b in a + 1..q {
             let rho = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
             if rho.abs() > 0.9 {
                 out.push(Correlation {
-                    a: names[free[a]].clone(),
-                    b: names[free[b]].clone(),
+                    a: name(a),
+                    b: name(b),
                     rho,
                 });
             }

@@ -640,8 +640,9 @@ fn assemble(
     let parameters = estimates(&mut fit, &setup, &cov);
     let auxiliary = auxiliary(&fit, &setup, &cov);
     let layout = fit.objective.layout();
-    let names: Vec<String> = (0..layout.len())
-        .map(|c| layout.parameter(c).map_or(String::new(), |p| p.name))
+    // The free columns' names (the report names nothing else).
+    let names: Vec<String> = (setup.free.iter())
+        .map(|&c| layout.parameter(c).map_or(String::new(), |p| p.name))
         .collect();
     let p = setup.free.len();
     let rho = (0..p)
@@ -674,9 +675,9 @@ fn assemble(
     Ok(Calibration {
         parameters,
         auxiliary,
-        correlations: strong_correlations(&cov, &setup.free, &names),
+        correlations: strong_correlations(&cov, p, |a| names[a].clone()),
         correlation_matrix: CorrelationMatrix {
-            parameters: setup.free.iter().map(|&c| names[c].clone()).collect(),
+            parameters: names,
             rho,
         },
         dof: setup.counts.report(sigma0, fit.unit_sigma, stated),

@@ -787,7 +787,7 @@ fn chunk(
         jtr: vec![0.0; p],
         cost: 0.0,
         centroids: Vec::with_capacity(points.len()),
-        mean_j: Vec::new(),
+        mean_j: Vec::with_capacity(if need_mean { points.len() } else { 0 }),
     };
     let all = data.points();
     let touches = all[points.start].touches.start..all[points.end - 1].touches.end;
