@@ -247,10 +247,10 @@ fn a_known_plane_fixes_the_scale_the_touches_cannot_see() {
     assert!(w < 0.05 && w < b / 5.0, "shape error {b:.4} → {w:.4} mm");
 }
 
-#[test]
-fn an_unknown_plane_offset_is_a_block_of_its_own() {
-    // Reference lengths fix the size; the plane, its offset unknown, adds
-    // the turn about the base axis.
+/// Seed 3's campaign with a plane beside it whose offset is a block of its
+/// own, started 2 mm from the true plane and allowed to move `limit` mm:
+/// the report, and where the plane is.
+fn offset_fit(limit: f64) -> (CalibrationReport, f64) {
     let c = campaign(3);
     let data = c.data_set().unwrap();
     let model = ModelOptions {
@@ -259,13 +259,12 @@ fn an_unknown_plane_offset_is_a_block_of_its_own() {
     };
     let at = plane_x(&c);
     let mut problem = Problem::new(nominal(), data, model).unwrap();
-    // Started 2 mm off: the fit finds it.
     let offset = problem.add_block(Scalar {
         name: "plane.offset".into(),
         unit: Unit::Length,
         start: at + 2.0,
         tolerance: None,
-        limit: Some(10.0),
+        limit: Some(limit),
     });
     let plane = PlaneTerm {
         poses: plane_poses(&c, at),
@@ -273,7 +272,15 @@ fn an_unknown_plane_offset_is_a_block_of_its_own() {
         offset: Offset::Fitted(offset),
         sigma: 0.01,
     };
-    let report = run(problem.with_term(plane));
+    (run(problem.with_term(plane)), at)
+}
+
+#[test]
+fn an_unknown_plane_offset_is_a_block_of_its_own() {
+    // Reference lengths fix the size; the plane, its offset unknown, adds
+    // the turn about the base axis.
+    // Started 2 mm off, allowed to move 10: the fit finds it.
+    let (report, at) = offset_fit(10.0);
     assert!(report.is_usable(), "{:?}", report.verdict);
     let aux = &report.calibration.auxiliary;
     assert_eq!(aux.len(), 1);
@@ -313,29 +320,8 @@ fn an_unknown_plane_offset_is_a_block_of_its_own() {
 /// more than its limit makes the calibration unusable, by name.
 #[test]
 fn a_block_beyond_its_limits_is_refused_by_name() {
-    let c = campaign(3);
-    let data = c.data_set().unwrap();
-    let model = ModelOptions {
-        noise: stated(),
-        ..ModelOptions::default()
-    };
-    let at = plane_x(&c);
-    let mut problem = Problem::new(nominal(), data, model).unwrap();
     // Started 2 mm off, allowed to move 1 mm.
-    let offset = problem.add_block(Scalar {
-        name: "plane.offset".into(),
-        unit: Unit::Length,
-        start: at + 2.0,
-        tolerance: None,
-        limit: Some(1.0),
-    });
-    let plane = PlaneTerm {
-        poses: plane_poses(&c, at),
-        normal: [1.0, 0.0, 0.0],
-        offset: Offset::Fitted(offset),
-        sigma: 0.01,
-    };
-    let report = run(problem.with_term(plane));
+    let (report, _) = offset_fit(1.0);
     assert!(!report.is_usable());
     let reasons = report.verdict.reasons.join("; ");
     assert!(
