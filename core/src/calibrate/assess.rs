@@ -26,7 +26,7 @@ use crate::residuals::Normal;
 /// Largest relative change of the weights at the solution, against those of
 /// the fit, that needs no refit: the estimate moves by about this fraction
 /// of its σ.
-pub const REWEIGH_TOLERANCE: f64 = 0.05;
+pub(crate) const REWEIGH_TOLERANCE: f64 = 0.05;
 
 /// With a prior and no stated noise, at most this many refits while the
 /// estimated touch σ settles.
