@@ -75,7 +75,11 @@ impl Termination {
     }
 }
 
-/// Tolerances and limits of Levenberg–Marquardt; a builder.
+/// Tolerances and limits of Levenberg–Marquardt; a builder. The library's
+/// LM works on the reduced normal equations ([`crate::residuals`]) with
+/// Marquardt's diagonal scaling (so mm and rad need no hand-tuned units),
+/// Nielsen's damping update, MINPACK-style stopping tests, and a trial step
+/// costing positions only.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LmOptions {
     /// Iteration limit (accepted or rejected steps).
