@@ -36,6 +36,7 @@ pub mod metrics;
 pub mod objective;
 pub mod parallel;
 pub mod params;
+pub mod prelude;
 pub(crate) mod random;
 #[cfg(feature = "reference-model")]
 pub mod reference_model;
