@@ -162,17 +162,17 @@ impl Counts {
 
 /// What [`assess`] needs besides the objective and the solver's outcome.
 pub(crate) struct Setup<'a> {
-    pub start: &'a DhParams,
+    pub(crate) start: &'a DhParams,
     /// Every column at the start.
-    pub x0: &'a [f64],
-    pub data: &'a DataSet,
-    pub model: &'a ModelOptions,
-    pub settings: &'a SolverSettings,
-    pub method: Method,
-    pub free: Vec<usize>,
-    pub identification: Option<Identification>,
-    pub reasons: Vec<(ParamId, String)>,
-    pub counts: Counts,
+    pub(crate) x0: &'a [f64],
+    pub(crate) data: &'a DataSet,
+    pub(crate) model: &'a ModelOptions,
+    pub(crate) settings: &'a SolverSettings,
+    pub(crate) method: Method,
+    pub(crate) free: Vec<usize>,
+    pub(crate) identification: Option<Identification>,
+    pub(crate) reasons: Vec<(ParamId, String)>,
+    pub(crate) counts: Counts,
 }
 
 /// The fit as it passes from stage to stage.

@@ -263,17 +263,17 @@ fn median(v: &[f64]) -> f64 {
 /// The robust fit's result, for [`super::assess`].
 pub(crate) struct Irls<'a> {
     /// Every column at the end.
-    pub x: Vec<f64>,
+    pub(crate) x: Vec<f64>,
     /// The objective of the last refit (base weights × robust weights).
-    pub objective: Objective<'a>,
+    pub(crate) objective: Objective<'a>,
     /// The robust weights per touch.
-    pub touch_weights: Vec<f64>,
+    pub(crate) touch_weights: Vec<f64>,
     /// The last refit.
-    pub last: LmResult,
+    pub(crate) last: LmResult,
     /// All refits' work.
-    pub phase: Phase,
+    pub(crate) phase: Phase,
     /// The report.
-    pub fit: RobustFit,
+    pub(crate) fit: RobustFit,
 }
 
 /// Squared standardised residuals in units of the base weights' σ (the
