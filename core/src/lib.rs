@@ -22,6 +22,10 @@
 //! }
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! A program that does more than this imports the [`prelude`]: reading,
+//! simulating, calibrating and the extension points (a new residual term,
+//! parameter block or solver) in one `use`.
 
 pub mod calibrate;
 mod damping;
