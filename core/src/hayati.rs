@@ -22,7 +22,7 @@ use crate::params::{DhParams, JointModel};
 /// A D-H joint whose `|α|` is within this many degrees of 0 or 180° is
 /// recommended for the Hayati parameterisation: 1°, where D-H's `d` already
 /// moves 57 mm per millimetre of tilt along a 1 m link.
-pub const HAYATI_THRESHOLD_DEG: f64 = 1.0;
+pub(crate) const HAYATI_THRESHOLD_DEG: f64 = 1.0;
 
 /// Why a joint cannot be converted exactly.
 #[derive(Clone, Debug, Error, PartialEq)]
@@ -136,7 +136,7 @@ impl Arm {
 }
 
 /// The D-H joints (0-based; not the last, whose twist leads to the probe)
-/// whose `|α|` is within [`HAYATI_THRESHOLD_DEG`] of 0 or 180°.
+/// whose `|α|` is within 1° of 0 or 180°.
 ///
 /// ```
 /// let mut arm = aacmm_core::params::DhParams::paper_nominal();

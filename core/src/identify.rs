@@ -39,7 +39,7 @@ use crate::params::{DhParams, ParamId, ParamKind};
 use crate::residuals::{Layout, Noise, Sees, TermError};
 
 /// Relative singular-value threshold of the numerical rank.
-pub const RANK_TOLERANCE: f64 = 1e-7;
+pub(crate) const RANK_TOLERANCE: f64 = 1e-7;
 
 /// Iterations allowed to an eigen or singular value decomposition: far more
 /// than a finite matrix of this size needs. (nalgebra's `new` iterates
@@ -158,7 +158,7 @@ pub struct Identification {
     /// Singular values after the structural rules (removed columns and
     /// projected directions), descending.
     pub analysed_singular_values: Vec<f64>,
-    /// Threshold: `RANK_TOLERANCE × s_max`.
+    /// Threshold: `1e-7 × s_max` (the numerical rank's relative tolerance).
     pub threshold: f64,
     /// Identifiable parameter combinations.
     pub rank: usize,

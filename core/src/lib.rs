@@ -22,6 +22,10 @@
 //! }
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+//!
+//! A program that does more than this imports the [`prelude`]: reading,
+//! simulating, calibrating and the extension points (a new residual term,
+//! parameter block or solver) in one `use`.
 
 pub mod calibrate;
 mod damping;
@@ -36,7 +40,8 @@ pub mod metrics;
 pub mod objective;
 pub mod parallel;
 pub mod params;
-pub mod random;
+pub mod prelude;
+pub(crate) mod random;
 #[cfg(feature = "reference-model")]
 pub mod reference_model;
 #[cfg(feature = "report")]

@@ -54,7 +54,7 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's, and noise that makes weights that are not finite.
-    pub fn of_data(
+    pub(crate) fn of_data(
         layout: Layout,
         data: &'a DataSet,
         noise: &Noise,
@@ -105,7 +105,7 @@ impl<'a> Objective<'a> {
     }
 
     /// The prior of the stated tolerances, if any applies.
-    pub fn prior(&self) -> Option<&PriorTerm> {
+    pub(crate) fn prior(&self) -> Option<&PriorTerm> {
         self.prior.as_ref()
     }
 
@@ -263,7 +263,7 @@ impl<'a> Objective<'a> {
 
     /// A copy whose observations' weights are multiplied by `w` (the robust
     /// fit's), the terms with observations taking theirs in order.
-    pub fn with_observation_weights(&self, w: &[f64]) -> Objective<'a> {
+    pub(crate) fn with_observation_weights(&self, w: &[f64]) -> Objective<'a> {
         let mut copy = self.clone();
         let mut rest = w;
         for term in &mut copy.terms {
@@ -281,7 +281,7 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// As [`Objective::weigh`].
-    pub fn reweighed(&self, x: &[f64], unit_sigma: f64) -> Result<Objective<'a>, TermError> {
+    pub(crate) fn reweighed(&self, x: &[f64], unit_sigma: f64) -> Result<Objective<'a>, TermError> {
         let mut copy = self.clone();
         copy.weigh(x, unit_sigma)?;
         Ok(copy)
@@ -294,7 +294,7 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's.
-    pub fn weight_change(&self, x: &[f64], unit_sigma: f64) -> Result<f64, TermError> {
+    pub(crate) fn weight_change(&self, x: &[f64], unit_sigma: f64) -> Result<f64, TermError> {
         self.at(x, |at| {
             let mut shared = Shared::default();
             let mut change = 0.0_f64;
@@ -320,7 +320,7 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's.
-    pub fn normal_of(
+    pub(crate) fn normal_of(
         &self,
         x: &[f64],
         free: &[usize],
@@ -338,7 +338,7 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's.
-    pub fn add_terms(
+    pub(crate) fn add_terms(
         &self,
         normal: &mut Normal,
         x: &[f64],

@@ -8,38 +8,43 @@ use rand_chacha::ChaCha8Rng;
 
 /// The named random streams. The numbers are part of the output format:
 /// changing one changes every file made with that seed.
-pub mod streams {
+pub(crate) mod streams {
     /// The true arm's random errors (simulator).
-    pub const TRUE_ARM: u64 = 1;
+    pub(crate) const TRUE_ARM: u64 = 1;
     /// Socket placement (simulator).
-    pub const SOCKETS: u64 = 2;
+    pub(crate) const SOCKETS: u64 = 2;
     /// Probe seating noise (simulator).
-    pub const SEATING: u64 = 3;
+    pub(crate) const SEATING: u64 = 3;
     /// Inverse-kinematics starts (simulator).
-    pub const IK_STARTS: u64 = 4;
+    pub(crate) const IK_STARTS: u64 = 4;
     /// Encoder noise (simulator).
-    pub const ENCODERS: u64 = 5;
+    pub(crate) const ENCODERS: u64 = 5;
     /// Reference-length pairs and their noise (simulator).
-    pub const LENGTHS: u64 = 6;
+    pub(crate) const LENGTHS: u64 = 6;
     /// The order in which cross-validation deals points to folds.
-    pub const FOLDS: u64 = 7;
+    pub(crate) const FOLDS: u64 = 7;
     /// The solvers: annealing moves, global starts.
-    pub const SOLVER: u64 = 0x50_4c_56;
+    pub(crate) const SOLVER: u64 = 0x50_4c_56;
 }
 
 /// The generator of one purpose's draws (see [`streams`]).
-///
-/// ```
-/// use aacmm_core::random::{rng, streams};
-/// use rand::RngExt;
-/// let a: f64 = rng(3, streams::SOCKETS).random();
-/// let b: f64 = rng(3, streams::SOCKETS).random();
-/// let c: f64 = rng(3, streams::ENCODERS).random();
-/// assert_eq!(a, b);
-/// assert_ne!(a, c);
-/// ```
-pub fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
+pub(crate) fn rng(seed: u64, stream: u64) -> ChaCha8Rng {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
     r.set_stream(stream);
     r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{rng, streams};
+    use rand::RngExt;
+
+    #[test]
+    fn a_stream_repeats_itself_and_differs_from_the_others() {
+        let a: f64 = rng(3, streams::SOCKETS).random();
+        let b: f64 = rng(3, streams::SOCKETS).random();
+        let c: f64 = rng(3, streams::ENCODERS).random();
+        assert_eq!(a, b);
+        assert_ne!(a, c);
+    }
 }

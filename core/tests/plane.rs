@@ -6,15 +6,10 @@
 //! alone cannot see; with the plane's offset unknown, an auxiliary
 //! parameter block carries it.
 
-use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
-use aacmm_core::params::DhParams;
-use aacmm_core::residuals::{
-    At, BlockId, Noise, Normal, Scalar, Sees, Shared, Term, TermError, Unit,
-};
-use aacmm_core::session::{CalibrationReport, Problem};
-use aacmm_core::simulate::{Campaign, CampaignSettings, ErrorModel, simulate, solve_point};
-use aacmm_core::{Arm, DataSet};
+use aacmm_core::prelude::*;
+use aacmm_core::residuals::{Scalar, Unit};
+use aacmm_core::simulate::solve_point;
 
 /// The probe on the plane `n·p = offset` (a unit normal in the arm's base
 /// frame), each touch one row `(n·p(q) − offset)/σ`.

@@ -69,6 +69,10 @@ const RANKS: &[(&str, u8)] = &[
     // 6: the assessment of a calibration, and its report.
     ("session", 6),
     ("report", 6),
+    // The prelude re-exports the front door of every rank, from the data
+    // set to the session, so it sits on top with them; nothing in the
+    // crate uses it (it is for programs), so nothing depends on its rank.
+    ("prelude", 6),
 ];
 
 /// The rules between top-level directories, as (files whose module

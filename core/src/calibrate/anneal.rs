@@ -271,7 +271,7 @@ pub fn anneal<R: Rng>(
 
 /// [`anneal`], reporting the fraction of the cooling schedule done after
 /// each temperature to `progress`.
-pub fn anneal_observed<R: Rng>(
+pub(crate) fn anneal_observed<R: Rng>(
     start: &DhParams,
     data: &DataSet,
     free: &[usize],

@@ -26,7 +26,7 @@ use crate::residuals::Normal;
 /// Largest relative change of the weights at the solution, against those of
 /// the fit, that needs no refit: the estimate moves by about this fraction
 /// of its σ.
-pub const REWEIGH_TOLERANCE: f64 = 0.05;
+pub(crate) const REWEIGH_TOLERANCE: f64 = 0.05;
 
 /// With a prior and no stated noise, at most this many refits while the
 /// estimated touch σ settles.
@@ -162,17 +162,17 @@ impl Counts {
 
 /// What [`assess`] needs besides the objective and the solver's outcome.
 pub(crate) struct Setup<'a> {
-    pub start: &'a DhParams,
+    pub(crate) start: &'a DhParams,
     /// Every column at the start.
-    pub x0: &'a [f64],
-    pub data: &'a DataSet,
-    pub model: &'a ModelOptions,
-    pub settings: &'a SolverSettings,
-    pub method: Method,
-    pub free: Vec<usize>,
-    pub identification: Option<Identification>,
-    pub reasons: Vec<(ParamId, String)>,
-    pub counts: Counts,
+    pub(crate) x0: &'a [f64],
+    pub(crate) data: &'a DataSet,
+    pub(crate) model: &'a ModelOptions,
+    pub(crate) settings: &'a SolverSettings,
+    pub(crate) method: Method,
+    pub(crate) free: Vec<usize>,
+    pub(crate) identification: Option<Identification>,
+    pub(crate) reasons: Vec<(ParamId, String)>,
+    pub(crate) counts: Counts,
 }
 
 /// The fit as it passes from stage to stage.

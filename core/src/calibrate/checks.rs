@@ -17,11 +17,11 @@ use serde::{Deserialize, Serialize};
 use crate::params::{DhParams, JointModel, ParamId, ParamKind, wrap};
 
 /// A length may move from nominal by this fraction of its nominal value…
-pub const LENGTH_TOLERANCE: f64 = 0.25;
+pub(crate) const LENGTH_TOLERANCE: f64 = 0.25;
 /// …or by this fraction of the arm's reach, whichever is larger.
-pub const REACH_TOLERANCE: f64 = 0.02;
+pub(crate) const REACH_TOLERANCE: f64 = 0.02;
 /// A twist may move from nominal by this much, degrees.
-pub const TWIST_TOLERANCE_DEG: f64 = 15.0;
+pub(crate) const TWIST_TOLERANCE_DEG: f64 = 15.0;
 
 /// A free parameter (or a combination of the last link's) that moved
 /// implausibly far from nominal.
@@ -73,9 +73,8 @@ fn last_link(p: &DhParams) -> (f64, f64) {
 
 /// The free parameters of `calibrated` (columns `free`) that moved from
 /// `nominal` by more than a plausible manufacturing or assembly error:
-/// lengths by more than [`LENGTH_TOLERANCE`] of their value or
-/// [`REACH_TOLERANCE`] of the reach, twists by more than
-/// [`TWIST_TOLERANCE_DEG`]. Zero offsets are not checked (an assembled
+/// lengths by more than 25 % of their value or 2 % of the reach, twists by
+/// more than 15°. Zero offsets are not checked (an assembled
 /// arm's may be anywhere), and neither are the last link's parameters one
 /// by one: with the last zero offset unknown, the probe may turn about the
 /// last axis, so its distance from that axis and its height along it are
@@ -172,7 +171,7 @@ pub struct ChiSquare {
     pub verdict: ChiSquareVerdict,
 }
 
-/// The verdict of [`ChiSquare`], at [`CHI_SQUARE_ALPHA`] in each tail.
+/// The verdict of [`ChiSquare`], at a significance of 0.001 in each tail.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ChiSquareVerdict {
@@ -201,11 +200,11 @@ impl ChiSquareVerdict {
 }
 
 /// Significance of the χ² test in each tail.
-pub const CHI_SQUARE_ALPHA: f64 = 0.001;
+pub(crate) const CHI_SQUARE_ALPHA: f64 = 0.001;
 
 /// Far outside: a fit this improbable is not usable without
 /// `accept_poor_fit` (both tails).
-pub const CHI_SQUARE_REFUSE: f64 = 1e-9;
+pub(crate) const CHI_SQUARE_REFUSE: f64 = 1e-9;
 
 impl ChiSquare {
     /// The test of `statistic` on `dof` degrees of freedom.
@@ -308,7 +307,7 @@ pub struct Outlier {
 /// when its standardised squared residual exceeds the `χ²₃` quantile at
 /// `1 − OUTLIER_ALPHA / touches` (Bonferroni), so a campaign without
 /// outliers names one with this probability.
-pub const OUTLIER_ALPHA: f64 = 0.01;
+pub(crate) const OUTLIER_ALPHA: f64 = 0.01;
 
 /// `P(χ²₃ ≥ x)`.
 fn chi_square_3_upper(x: f64) -> f64 {
@@ -319,12 +318,7 @@ fn chi_square_3_upper(x: f64) -> f64 {
 }
 
 /// The `χ²₃` value exceeded with probability `p` (bisection).
-///
-/// ```
-/// use aacmm_core::calibrate::checks::chi_square_3_quantile;
-/// assert!((chi_square_3_quantile(0.05) - 7.815).abs() < 1e-2);
-/// ```
-pub fn chi_square_3_quantile(p: f64) -> f64 {
+pub(crate) fn chi_square_3_quantile(p: f64) -> f64 {
     let (mut lo, mut hi) = (0.0f64, 1.0f64);
     while chi_square_3_upper(hi) > p && hi < 1e6 {
         hi *= 2.0;
@@ -408,14 +402,19 @@ impl PositionUncertainty {
 
 /// [`PositionUncertainty::weak`]: the arm's uncertainty against a touch's
 /// scatter, `sqrt(1.05² − 1)`.
-pub const WEAK_FRACTION: f64 = 0.32;
+pub(crate) const WEAK_FRACTION: f64 = 0.32;
 
 /// Most poses [`PositionUncertainty`] evaluates (an even sample beyond).
-pub const UNCERTAINTY_POSES: usize = 2000;
+pub(crate) const UNCERTAINTY_POSES: usize = 2000;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_chi_square_3_quantile_matches_the_table() {
+        assert!((chi_square_3_quantile(0.05) - 7.815).abs() < 1e-2);
+    }
 
     /// A Hayati last joint: its β turns the probe about the link's y axis,
     /// which the zero offset cannot undo — a 60° β that brings the probe

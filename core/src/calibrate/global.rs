@@ -186,15 +186,15 @@ fn same_minimum(a: f64, b: f64) -> bool {
 pub(crate) struct GlobalProblem<'a, 'o> {
     /// The objective, weighed at the start arm (each minimum is weighed
     /// at itself again).
-    pub objective: &'a Objective<'o>,
+    pub(crate) objective: &'a Objective<'o>,
     /// Free columns.
-    pub free: &'a [usize],
+    pub(crate) free: &'a [usize],
     /// LM tolerances.
-    pub lm: &'a LmOptions,
+    pub(crate) lm: &'a LmOptions,
     /// Degrees of freedom; with stated noise, enables the noise floor.
-    pub stated_dof: Option<usize>,
+    pub(crate) stated_dof: Option<usize>,
     /// The normal equations at the start over `free`, when already computed.
-    pub start_normal: Option<crate::residuals::Normal>,
+    pub(crate) start_normal: Option<crate::residuals::Normal>,
 }
 
 impl GlobalProblem<'_, '_> {

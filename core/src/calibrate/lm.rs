@@ -30,7 +30,7 @@ pub enum Termination {
     /// The iteration budget ran out first.
     MaxIterations,
     /// No step lowered the cost even with huge damping, and the gradient
-    /// test passes at [`MACHINE_PRECISION_GTOL`]: a minimum to machine
+    /// test passes at a tolerance of 1e-6: a minimum to machine
     /// precision.
     MachinePrecision,
     /// No step lowered the cost even with huge damping, yet the gradient is
@@ -41,7 +41,7 @@ pub enum Termination {
 
 /// The gradient test (largest cosine between a column and the residuals)
 /// that a stalled LM must pass to count as converged.
-pub const MACHINE_PRECISION_GTOL: f64 = 1e-6;
+pub(crate) const MACHINE_PRECISION_GTOL: f64 = 1e-6;
 
 impl Termination {
     /// Whether the result is a converged minimum.
@@ -75,7 +75,11 @@ impl Termination {
     }
 }
 
-/// Tolerances and limits of Levenberg–Marquardt; a builder.
+/// Tolerances and limits of Levenberg–Marquardt; a builder. The library's
+/// LM works on the reduced normal equations ([`crate::residuals`]) with
+/// Marquardt's diagonal scaling (so mm and rad need no hand-tuned units),
+/// Nielsen's damping update, MINPACK-style stopping tests, and a trial step
+/// costing positions only.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LmOptions {
     /// Iteration limit (accepted or rejected steps).
@@ -144,48 +148,26 @@ pub struct LmIteration {
 
 /// What a Levenberg–Marquardt fit returns.
 #[derive(Clone, Debug, PartialEq)]
-pub struct LmResult {
+pub(crate) struct LmResult {
     /// The parameters at the end (fixed ones unchanged).
-    pub params: DhParams,
+    pub(crate) params: DhParams,
     /// Every column at the end (the geometry's, then the auxiliary
     /// blocks').
-    pub x: Vec<f64>,
+    pub(crate) x: Vec<f64>,
     /// Why it stopped.
-    pub termination: Termination,
+    pub(crate) termination: Termination,
     /// Iterations (steps tried).
-    pub iterations: usize,
+    pub(crate) iterations: usize,
     /// Cost evaluations (positions only).
-    pub cost_evaluations: usize,
+    pub(crate) cost_evaluations: usize,
     /// Jacobian evaluations (normal equations).
-    pub jacobian_evaluations: usize,
+    pub(crate) jacobian_evaluations: usize,
     /// Cost at the start and per iteration.
-    pub initial_cost: f64,
+    pub(crate) initial_cost: f64,
     /// Per iteration.
-    pub history: Vec<LmIteration>,
+    pub(crate) history: Vec<LmIteration>,
     /// The normal equations at the result.
     pub(crate) normal: Normal,
-}
-
-impl LmResult {
-    /// This fit followed by `refit` (which started where this one ended):
-    /// one history, iterations numbered on, this fit's initial cost and
-    /// both fits' evaluations.
-    pub fn then(self, refit: LmResult) -> LmResult {
-        let mut history = self.history;
-        let n = history.len();
-        history.extend(refit.history.iter().map(|h| LmIteration {
-            iteration: h.iteration + n,
-            ..*h
-        }));
-        LmResult {
-            history,
-            initial_cost: self.initial_cost,
-            iterations: self.iterations + refit.iterations,
-            cost_evaluations: self.cost_evaluations + refit.cost_evaluations,
-            jacobian_evaluations: self.jacobian_evaluations + refit.jacobian_evaluations,
-            ..refit
-        }
-    }
 }
 
 /// Minimises `objective` over the columns `free` from the point `start`

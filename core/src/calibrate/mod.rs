@@ -1,6 +1,6 @@
 //! Calibration: the parameters that make the touches agree.
 //!
-//! [`calibrate`] fits the free parameters by Levenberg–Marquardt ([`lm`]) on
+//! [`calibrate`] fits the free parameters by Levenberg–Marquardt ([`LmOptions`]) on
 //! the weighted residuals of [`crate::residuals`], then reports what a
 //! metrologist signs off on:
 //!
@@ -38,12 +38,12 @@ macro_rules! setters {
 }
 
 pub mod anneal;
-pub mod assess;
+pub(crate) mod assess;
 pub mod checks;
 pub mod energy;
 pub mod global;
 mod inverse;
-pub mod lm;
+pub(crate) mod lm;
 pub mod options;
 pub mod prior;
 pub mod robust;
@@ -55,7 +55,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::OptionError;
 pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
-pub use lm::{LmIteration, LmOptions, LmResult, Termination};
+pub(crate) use lm::LmResult;
+pub use lm::{LmIteration, LmOptions, Termination};
 pub use options::{
     DEFAULT_LENGTH_SIGMA_MM, FixSpec, ModelOptions, SolverSettings, available_threads,
 };

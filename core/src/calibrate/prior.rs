@@ -155,7 +155,7 @@ pub struct PriorConditioning {
     /// rules: [`crate::identify::Identification::rank`]).
     pub rank_without: usize,
     /// Determined combinations with the prior, all parameters (singular
-    /// values above `RANK_TOLERANCE × s_max`).
+    /// values above `1e-7 × s_max`, the identification's threshold).
     pub rank_with: usize,
     /// Condition number (`s_max / s_min`) over the free parameters of
     /// `fix = auto`, data alone.

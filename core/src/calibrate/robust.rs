@@ -9,7 +9,7 @@
 //! the touch's own σ); the robust scale `σ̂` of those residuals (below); the
 //! weights `w_i = ψ(z_i)/z_i` of the loss at `z_i = u_i/σ̂`; LM refits under
 //! them. Passes repeat until no weight moves by more than
-//! [`WEIGHT_TOLERANCE`] (at most [`MAX_PASSES`] refits). Deterministic: no
+//! 0.001 (at most 30 refits). Deterministic: no
 //! random draw, and the normal equations are the same bits on any thread
 //! count.
 //!
@@ -54,16 +54,16 @@ use super::{CalibrationError, OptionError, Phase};
 use crate::objective::Objective;
 
 /// IRLS stops when no touch's weight moved by more than this.
-pub const WEIGHT_TOLERANCE: f64 = 1e-3;
+pub(crate) const WEIGHT_TOLERANCE: f64 = 1e-3;
 /// Most robust refits.
-pub const MAX_PASSES: usize = 30;
+pub(crate) const MAX_PASSES: usize = 30;
 /// Touches below this weight are listed as downweighted in summaries: a
 /// touch the noise explains falls below it with probability about 1e-4
 /// (Cauchy, `z > √3·k`) or 4e-9 (Huber, `z > 4k`) at the default `k`.
 pub const DOWNWEIGHTED: f64 = 0.25;
 /// The smallest weight a touch gets (so that its matrix stays invertible
 /// in sums; a Cauchy weight of a touch thousands of σ off would underflow).
-pub const MIN_WEIGHT: f64 = 1e-9;
+pub(crate) const MIN_WEIGHT: f64 = 1e-9;
 /// Median of `χ²₃`.
 const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
 
@@ -112,7 +112,7 @@ impl Loss {
     }
 
     /// The weight `ψ(z)/z` at the scaled residual norm `z ≥ 0`, tuning
-    /// constant `k`, at least [`MIN_WEIGHT`].
+    /// constant `k`, at least 1e-9.
     ///
     /// ```
     /// use aacmm_core::calibrate::robust::Loss;
@@ -195,8 +195,8 @@ pub struct RobustFit {
     pub scale: f64,
     /// Refits (IRLS passes).
     pub passes: usize,
-    /// Whether the weights settled (no change above [`WEIGHT_TOLERANCE`])
-    /// within [`MAX_PASSES`].
+    /// Whether the weights settled (no change above 0.001) within 30
+    /// passes.
     pub converged: bool,
     /// `P(median ≥ observed)` of the squared standardised residuals under
     /// the stated noise (`None` without stated noise).
@@ -263,17 +263,17 @@ fn median(v: &[f64]) -> f64 {
 /// The robust fit's result, for [`super::assess`].
 pub(crate) struct Irls<'a> {
     /// Every column at the end.
-    pub x: Vec<f64>,
+    pub(crate) x: Vec<f64>,
     /// The objective of the last refit (base weights × robust weights).
-    pub objective: Objective<'a>,
+    pub(crate) objective: Objective<'a>,
     /// The robust weights per touch.
-    pub touch_weights: Vec<f64>,
+    pub(crate) touch_weights: Vec<f64>,
     /// The last refit.
-    pub last: LmResult,
+    pub(crate) last: LmResult,
     /// All refits' work.
-    pub phase: Phase,
+    pub(crate) phase: Phase,
     /// The report.
-    pub fit: RobustFit,
+    pub(crate) fit: RobustFit,
 }
 
 /// Squared standardised residuals in units of the base weights' σ (the

@@ -2,8 +2,8 @@
 //! objective at the start's weights, the start point, the free columns, the
 //! model's and the solver's settings) and a [`Context`] (a progress
 //! observer), and returns an [`Outcome`] with its own [`Stop`] reason. What
-//! follows a solve — reweighing at the solution, covariance, dof — is
-//! [`super::assess`], the same for every solver.
+//! follows a solve — reweighing at the solution, covariance, dof — is the
+//! library's own ([`super::calibrate_with`]), the same for every solver.
 //!
 //! The trait is open: a solver of another crate evaluates the task's
 //! [`Objective`] (its cost, its normal equations over the free columns, its

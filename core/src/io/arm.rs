@@ -56,7 +56,7 @@ use crate::tolerances::Tolerances;
 
 /// In an arm file in metres, a length above this (m) draws a warning: no
 /// measuring arm is that long, so the lengths are likely millimetres.
-pub const PLAUSIBLE_METRES: f64 = 10.0;
+pub(crate) const PLAUSIBLE_METRES: f64 = 10.0;
 
 /// An arm: its name, its geometry (mm, rad) and its optional joint limits.
 #[derive(Clone, Debug, PartialEq)]

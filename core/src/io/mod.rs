@@ -156,7 +156,13 @@ pub(crate) mod testing {
     /// The error names `file`, the line (0 = none) and the field, and its
     /// message contains `needle`.
     #[track_caller]
-    pub fn assert_at(e: &InputError, file: &str, line: usize, field: Option<&str>, needle: &str) {
+    pub(crate) fn assert_at(
+        e: &InputError,
+        file: &str,
+        line: usize,
+        field: Option<&str>,
+        needle: &str,
+    ) {
         let s = e.to_string();
         assert!(s.starts_with(file), "{s}");
         assert_eq!(e.file(), file);

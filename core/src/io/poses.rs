@@ -22,7 +22,7 @@ use super::units::AngleUnit;
 use crate::error::InputError;
 
 /// The radians hint is given only for at least this many rows.
-pub const RADIANS_HINT_MIN_ROWS: usize = 20;
+pub(crate) const RADIANS_HINT_MIN_ROWS: usize = 20;
 
 /// The touches of a poses file, stored compactly: each point label once
 /// (rows name their point by index), the readings in one row-major array.

@@ -93,8 +93,8 @@ pub(crate) fn fmt_f64(x: f64) -> String {
 /// One CSV record and its 1-based line.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Record {
-    pub line: usize,
-    pub fields: Vec<String>,
+    pub(crate) line: usize,
+    pub(crate) fields: Vec<String>,
 }
 
 /// Reads a CSV table row by row: the header goes to `check_header`, each

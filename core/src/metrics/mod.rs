@@ -297,7 +297,7 @@ pub struct Evaluation {
 /// Computes every metric of the module for the probe positions `xyz` of the
 /// data set's touches (in its touch order; see the module documentation for
 /// the formulas). Memory is linear in the touches: pairs are summarised as
-/// they are computed, on up to [`DEFAULT_THREADS`] threads;
+/// they are computed, on up to two threads;
 /// [`evaluate_threads`] takes the count.
 ///
 /// # Errors
@@ -327,7 +327,7 @@ pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsE
 }
 
 /// The threads [`evaluate`] uses for the pairs of points.
-pub const DEFAULT_THREADS: usize = 2;
+pub(crate) const DEFAULT_THREADS: usize = 2;
 
 /// [`evaluate`] with the pairs of points (eq. 19, quadratic in the points:
 /// the only part that costs) on up to `threads` threads; 0 counts as 1. The

@@ -23,21 +23,21 @@ pub(crate) enum Stage {
 #[derive(Clone, Debug)]
 pub(crate) struct Evaluated<'a> {
     /// Index of the data set among the [`Measured`].
-    pub set: usize,
+    pub(crate) set: usize,
     /// Its name (`fitted`, `held out`, `held out 2`, or `measured`).
-    pub set_name: String,
+    pub(crate) set_name: String,
     /// The data set.
-    pub data: &'a DataSet,
+    pub(crate) data: &'a DataSet,
     /// Held out from the fit.
-    pub held_out: bool,
+    pub(crate) held_out: bool,
     /// Which arm.
-    pub stage: Stage,
+    pub(crate) stage: Stage,
     /// Probe positions, touch order, mm.
-    pub xyz: &'a [[f64; 3]],
+    pub(crate) xyz: &'a [[f64; 3]],
     /// The metrics.
-    pub ev: Evaluation,
+    pub(crate) ev: Evaluation,
     /// Eq. 19 for the figure, from the same pass as the metrics' summaries.
-    pub pairs: Pairs,
+    pub(crate) pairs: Pairs,
 }
 
 impl Evaluated<'_> {

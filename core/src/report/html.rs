@@ -10,11 +10,7 @@ use super::{
 };
 
 /// Escapes `&`, `<`, `>`, `"` and `'` for HTML/XML text and attributes.
-///
-/// ```
-/// assert_eq!(aacmm_core::report::escape("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");
-/// ```
-pub fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     let mut out = String::with_capacity(s.len());
     for c in s.chars() {
         match c {
@@ -304,4 +300,15 @@ pub(crate) fn evaluation_page(
     );
     page += &foot(figures);
     page
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn escape_covers_the_five_markup_characters() {
+        assert_eq!(
+            super::escape("a<b & \"c\" 'd'>"),
+            "a&lt;b &amp; &quot;c&quot; &#39;d&#39;&gt;"
+        );
+    }
 }

@@ -31,7 +31,7 @@
 //!
 //! **Size.** Memory and output are linear in the touches: eq. 19's pairs,
 //! which grow as the square of the points, are streamed and drawn one
-//! marker per pair only up to [`MAX_PAIR_MARKERS`] per series; beyond, as
+//! marker per pair only up to 2000 per series; beyond, as
 //! the mean per distance bin.
 
 mod calibration;
@@ -52,7 +52,6 @@ use crate::metrics::MetricsError;
 use crate::params::DhParams;
 
 pub use calibration::session_report;
-pub use html::escape;
 
 /// The page.
 pub const HTML_FILE: &str = "report.html";
@@ -85,7 +84,7 @@ pub const EVALUATION_FILES: [&str; 4] = [HTML_FILE, SINGLE_POINT_SVG, LENGTHS_SV
 
 /// Eq. 19 pairs drawn one marker each, per series; more are drawn as the
 /// mean per distance bin.
-pub const MAX_PAIR_MARKERS: usize = 2000;
+pub(crate) const MAX_PAIR_MARKERS: usize = 2000;
 
 /// Why a report could not be made.
 #[derive(Debug, thiserror::Error)]

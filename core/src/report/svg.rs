@@ -215,11 +215,11 @@ pub(crate) enum Shape {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Marker {
     /// The shape.
-    pub shape: Shape,
+    pub(crate) shape: Shape,
     /// The colour.
-    pub color: RGBColor,
+    pub(crate) color: RGBColor,
     /// Radius, px.
-    pub size: i32,
+    pub(crate) size: i32,
 }
 
 impl Marker {
@@ -366,17 +366,17 @@ pub(crate) fn legend_height(width: u32, entries: &[(Key, String)], px: f64) -> u
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Axis {
     /// Description with unit, e.g. `e [mm]`.
-    pub desc: String,
+    pub(crate) desc: String,
     /// Range in axis coordinates.
-    pub range: Range<f64>,
+    pub(crate) range: Range<f64>,
     /// Labelled ticks (axis coordinates) and their labels.
-    pub ticks: Vec<(f64, String)>,
+    pub(crate) ticks: Vec<(f64, String)>,
     /// Unlabelled grid lines.
-    pub minor: Vec<f64>,
+    pub(crate) minor: Vec<f64>,
     /// Whether values are mapped through log10.
-    pub log: bool,
+    pub(crate) log: bool,
     /// Whether the axis runs from high to low values (coordinates negated).
-    pub flip: bool,
+    pub(crate) flip: bool,
 }
 
 impl Axis {

@@ -13,7 +13,7 @@ use crate::kernel::{ArmKernel, KernelError, NoiseOf};
 /// weight, or each length's own uncertainty combined with its two centres'
 /// covariances along it.
 #[derive(Clone)]
-pub struct LengthTerm<'d> {
+pub(crate) struct LengthTerm<'d> {
     data: &'d DataSet,
     noise: Noise,
     /// Per reference length, `1/σ_L` (1/mm); empty until weighed.
@@ -33,7 +33,7 @@ impl std::fmt::Debug for LengthTerm<'_> {
 impl<'d> LengthTerm<'d> {
     /// The reference lengths of `data` under `noise` (its length part), not
     /// weighed yet.
-    pub fn new(data: &'d DataSet, noise: Noise) -> LengthTerm<'d> {
+    pub(crate) fn new(data: &'d DataSet, noise: Noise) -> LengthTerm<'d> {
         LengthTerm {
             data,
             noise,
@@ -42,7 +42,8 @@ impl<'d> LengthTerm<'d> {
     }
 
     /// Per reference length, its weight `1/σ_L`, 1/mm.
-    pub fn weights(&self) -> &[f64] {
+    #[cfg(test)]
+    pub(crate) fn weights(&self) -> &[f64] {
         &self.weights
     }
 

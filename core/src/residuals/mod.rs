@@ -11,11 +11,11 @@
 //! identifiability rules may assume of it, and (where it has them) its
 //! observations' standardised residuals. The built-in ones:
 //!
-//! - [`TouchTerm`] — same-point touches, the point centres eliminated
+//! - `TouchTerm` — same-point touches, the point centres eliminated
 //!   (variable projection: the normal matrix stays the size of the free
 //!   columns whatever the number of points);
-//! - [`LengthTerm`] — reference lengths between those centres;
-//! - [`PriorTerm`] — stated tolerances as pseudo-observations.
+//! - `LengthTerm` — reference lengths between those centres;
+//! - `PriorTerm` — stated tolerances as pseudo-observations.
 //!
 //! A new kind of measurement is one new implementation of [`Term`] (and
 //! its reader); the fits, the covariance, the degrees of freedom and the
@@ -69,10 +69,11 @@ use crate::kernel::{ArmKernel, KernelError};
 use crate::params::DhParams;
 
 pub use blocks::{Block, BlockId, Frame, Layout, Parameter, Scalar, Unit, Vector};
-pub use lengths::LengthTerm;
-pub use prior::PriorTerm;
+pub(crate) use lengths::LengthTerm;
+pub(crate) use prior::PriorTerm;
 pub(crate) use sym3::Sym3;
-pub use touches::{TouchTerm, point_chunks};
+pub(crate) use touches::TouchTerm;
+pub use touches::point_chunks;
 
 /// σ of a reference length whose file states none, mm.
 pub const DEFAULT_LENGTH_SIGMA_MM: f64 = 0.001;

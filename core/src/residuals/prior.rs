@@ -19,7 +19,7 @@ use crate::tolerances::Tolerances;
 /// (the geometry's from the stated [`Tolerances`], an auxiliary block's
 /// from the block).
 #[derive(Clone, Debug, PartialEq)]
-pub struct PriorTerm {
+pub(crate) struct PriorTerm {
     nominal: Vec<f64>,
     sigma: Vec<Option<f64>>,
     /// Whether a column is an angle on a circle (a geometry angle), whose
@@ -31,7 +31,11 @@ impl PriorTerm {
     /// The prior of `tolerances` (the geometry's) and of the auxiliary
     /// blocks' own tolerances around the start `x` of `layout`; `None` when
     /// no tolerance applies to any column.
-    pub fn new(tolerances: Option<&Tolerances>, layout: &Layout, x: &[f64]) -> Option<PriorTerm> {
+    pub(crate) fn new(
+        tolerances: Option<&Tolerances>,
+        layout: &Layout,
+        x: &[f64],
+    ) -> Option<PriorTerm> {
         let geometry = layout.geometry();
         let mut sigma = match tolerances {
             Some(t) => t.sigmas_for(geometry),
@@ -58,19 +62,19 @@ impl PriorTerm {
     }
 
     /// The tolerance of column `c`.
-    pub fn sigma(&self, c: usize) -> Option<f64> {
+    pub(crate) fn sigma(&self, c: usize) -> Option<f64> {
         self.sigma.get(c).copied().flatten()
     }
 
     /// `(p_c − p0_c)/σ_c` at `x` (angles wrapped), if `c` has a tolerance.
-    pub fn residual(&self, c: usize, x: &[f64]) -> Option<f64> {
+    pub(crate) fn residual(&self, c: usize, x: &[f64]) -> Option<f64> {
         let s = self.sigma(c)?;
         let d = x[c] - self.nominal[c];
         Some(if self.circular[c] { wrap(d) } else { d } / s)
     }
 
     /// `Σ r_k²` at `x` over the columns `free`.
-    pub fn cost(&self, free: &[usize], x: &[f64]) -> f64 {
+    pub(crate) fn cost(&self, free: &[usize], x: &[f64]) -> f64 {
         free.iter()
             .filter_map(|&c| self.residual(c, x))
             .map(|r| r * r)

@@ -42,7 +42,7 @@ pub fn point_chunks(points: usize) -> usize {
 /// covariance: stated probe and encoder noise carried through the arm, or
 /// `I/σ²` with `σ` estimated from the fit when no noise is stated.
 #[derive(Clone)]
-pub struct TouchTerm<'d> {
+pub(crate) struct TouchTerm<'d> {
     data: &'d DataSet,
     noise: Noise,
     /// The σ of an unweighted touch (noise not stated), mm.
@@ -66,7 +66,7 @@ impl std::fmt::Debug for TouchTerm<'_> {
 impl<'d> TouchTerm<'d> {
     /// The touches of `data` under `noise` (its touch part), not weighed
     /// yet ([`Term::weigh`]).
-    pub fn new(data: &'d DataSet, noise: Noise) -> TouchTerm<'d> {
+    pub(crate) fn new(data: &'d DataSet, noise: Noise) -> TouchTerm<'d> {
         TouchTerm {
             data,
             noise,
@@ -77,7 +77,8 @@ impl<'d> TouchTerm<'d> {
 
     /// Per touch (data-set order), its weight `A_i`, `[xx, yy, zz, xy,
     /// xz, yz]`, 1/mm².
-    pub fn weights(&self) -> &[[f64; 6]] {
+    #[cfg(test)]
+    pub(crate) fn weights(&self) -> &[[f64; 6]] {
         &self.weights
     }
 

@@ -18,7 +18,12 @@ use crate::metrics::{
 };
 
 /// The figures of an arm on a data set, with the positions they were
-/// computed from (borrowed: a campaign's touches are not copied).
+/// computed from (borrowed: a campaign's touches are not copied): what
+/// `evaluate` reports, built once for every front end, as the JSON of
+/// `aacmm evaluate --json` ([`EvaluationReport::write_json`]) and the tables
+/// it prints ([`EvaluationReport::write_summary`]). The eq. 19 rows of every
+/// pair of points, which grow as the square of the points, are streamed
+/// into both, never collected.
 #[derive(Clone, Debug)]
 pub struct EvaluationReport<'a> {
     /// The arm's name.

@@ -18,7 +18,11 @@ use crate::residuals::Noise;
 use crate::tolerances::Tolerances;
 
 /// The identifiability of an arm's parameters from a data set: the schema
-/// of `aacmm identify --json`.
+/// of `aacmm identify --json` ([`IdentifyReport::to_json`]) and the tables
+/// it prints ([`IdentifyReport::summary`]), built once for every front end —
+/// which parameters the data can determine at the stated noise
+/// ([`crate::identify`]), with the prior's rank and conditioning when the
+/// arm has tolerances ([`crate::calibrate::prior::conditioning`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IdentifyReport {
     /// The arm's name.

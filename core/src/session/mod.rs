@@ -18,8 +18,8 @@
 //! assert!(report.validation.fitted.after.e_mean < report.validation.fitted.before.e_mean);
 //! ```
 
-pub mod evaluation;
-pub mod identification;
+pub(crate) mod evaluation;
+pub(crate) mod identification;
 pub mod request;
 
 pub use evaluation::EvaluationReport;

@@ -14,7 +14,7 @@ use crate::io::{
 
 /// The `format` key of `campaign.toml` (2: arms are TOML tables, no longer
 /// arm-file text in a string).
-pub const CAMPAIGN_FORMAT: &str = "aacmm-campaign-2";
+pub(crate) const CAMPAIGN_FORMAT: &str = "aacmm-campaign-2";
 
 /// The poses file of a campaign (encoder readings, degrees).
 pub const POSES_FILE: &str = "poses.csv";
@@ -52,16 +52,10 @@ struct Format {
 /// The text of `campaign.toml` for a campaign on `nominal`: a comment, the
 /// format, the settings (seed first) and the nominal arm as a table
 /// (`[nominal]`, `[[nominal.joint]]`, `[nominal.probe]`).
-///
-/// ```
-/// use aacmm_core::{io::Arm, params::DhParams, simulate::*};
-/// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
-/// let text = campaign_to_toml(&nominal, &CampaignSettings::new(5, ErrorModel::Paper, 4, 5)).unwrap();
-/// assert!(text.contains("\n[settings]\nseed = 5\n"));
-/// let (arm, settings) = parse_campaign(&text, "campaign.toml").unwrap();
-/// assert_eq!((arm, settings.seed), (nominal, 5));
-/// ```
-pub fn campaign_to_toml(nominal: &Arm, settings: &CampaignSettings) -> Result<String, SimError> {
+pub(crate) fn campaign_to_toml(
+    nominal: &Arm,
+    settings: &CampaignSettings,
+) -> Result<String, SimError> {
     let file = CampaignFile {
         format: CAMPAIGN_FORMAT.to_string(),
         generator: format!("aacmm-core {}", env!("CARGO_PKG_VERSION")),
@@ -198,11 +192,11 @@ pub(crate) mod arm_table {
 
     use super::*;
 
-    pub fn serialize<S: serde::Serializer>(arm: &Arm, s: S) -> Result<S::Ok, S::Error> {
+    pub(crate) fn serialize<S: serde::Serializer>(arm: &Arm, s: S) -> Result<S::Ok, S::Error> {
         ArmFile::exact(arm).serialize(s)
     }
 
-    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Arm, D::Error> {
+    pub(crate) fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Arm, D::Error> {
         let table = toml::Table::deserialize(d)?;
         let text = toml::to_string(&table).map_err(D::Error::custom)?;
         match parse_arm(&text, "arm") {

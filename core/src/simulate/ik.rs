@@ -11,9 +11,9 @@ use crate::damping::Damping;
 use crate::kernel::{ArmKernel, KernelError};
 
 /// Residual below which a solution is accepted, mm.
-pub const IK_TOLERANCE_MM: f64 = 1e-10;
+pub(crate) const IK_TOLERANCE_MM: f64 = 1e-10;
 /// Iterations allowed per start.
-pub const IK_MAX_ITERATIONS: usize = 200;
+pub(crate) const IK_MAX_ITERATIONS: usize = 200;
 
 /// The outcome of one inverse-kinematics run.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,7 +27,7 @@ pub struct IkSolution {
 }
 
 impl IkSolution {
-    /// Whether the residual is below [`IK_TOLERANCE_MM`].
+    /// Whether the residual is below 1e-10 mm.
     pub fn converged(&self) -> bool {
         self.residual_mm < IK_TOLERANCE_MM
     }
@@ -37,7 +37,7 @@ impl IkSolution {
 /// starting from `start`: Levenberg–Marquardt with the step
 /// `Δq = Jᵀ (J Jᵀ + μI)⁻¹ r`, `μ` divided by 3 after a step that lowers the
 /// residual and multiplied by 4 after one that does not. Stops when the
-/// residual is below [`IK_TOLERANCE_MM`] or after [`IK_MAX_ITERATIONS`].
+/// residual is below 1e-10 mm or after 200 iterations.
 ///
 /// ```
 /// use aacmm_core::{kernel::ArmKernel, params::DhParams, simulate::solve_point};

@@ -7,7 +7,7 @@
 //! 2. **Sockets** ([`place_sockets`]): spread over the true arm's
 //!    comfortable volume (near/middle/far from the base axis, well apart), or
 //!    given.
-//! 3. **Touches** ([`find_touches`]): for each socket, `N` articulations by
+//! 3. **Touches**: for each socket, `N` articulations by
 //!    inverse kinematics on the true arm ([`solve_point`], Levenberg–Marquardt
 //!    on the kernel's joint Jacobian) from random starts, within joint limits,
 //!    each at least [`CampaignSettings::min_pose_separation_deg`] from the
@@ -21,7 +21,7 @@
 //!
 //! **Determinism.** Every draw comes from a ChaCha8 generator seeded with
 //! [`CampaignSettings::seed`], one stream per purpose (true arm, sockets,
-//! seating, IK starts, encoders, lengths — [`streams`]), each used in a fixed
+//! seating, IK starts, encoders, lengths), each used in a fixed
 //! order. The same settings give the same bytes (same build and platform);
 //! and changing one purpose's setting does not change the others' draws, so
 //! e.g. the same seed with more encoder noise gives the same true arm and
@@ -56,10 +56,10 @@ mod tests;
 pub use crate::params::wrap;
 pub use error::SimError;
 pub use files::{
-    CAMPAIGN_FILE, CAMPAIGN_FORMAT, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, TRUE_ARM_FILE,
-    campaign_to_toml, parse_campaign, read_campaign, write_campaign,
+    CAMPAIGN_FILE, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, TRUE_ARM_FILE, parse_campaign,
+    read_campaign, write_campaign,
 };
-pub use ik::{IK_MAX_ITERATIONS, IK_TOLERANCE_MM, IkSolution, solve_point};
+pub use ik::{IkSolution, solve_point};
 pub use lengths::reference_lengths;
 pub use settings::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,
@@ -67,19 +67,18 @@ pub use settings::{
     MAX_POSES_PER_SOCKET, MAX_SOCKETS, MAX_STARTS_PER_POSE, MIN_POSES_PER_SOCKET, SocketPlan,
     SocketPoint, pair_count,
 };
-pub use sockets::{
-    MIN_AXIS_DISTANCE, MIN_SOCKET_SEPARATION, REACH_BAND, SOCKET_CANDIDATES, place_sockets,
-    random_configuration, round_nm, shoulder,
-};
-pub use touches::{Touch, TouchPlan, find_touches, separation, within_limits};
-pub use truth::{PAPER_PROBE_ERROR, PAPER_TABLE_2, true_arm};
+use sockets::round_nm;
+pub use sockets::{place_sockets, shoulder};
+pub use touches::Touch;
+use touches::{TouchPlan, find_touches};
+pub use truth::true_arm;
 
 use crate::dataset::DataSet;
 use crate::error::InputError;
 use crate::io::{AngleUnit, Arm, Poses, ReferenceLength};
 use crate::kernel::ArmKernel;
 
-pub use crate::random::{rng, streams};
+pub(crate) use crate::random::{rng, streams};
 
 /// Counts of the touch search, for summaries.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -124,7 +123,7 @@ pub struct Campaign {
 /// Largest probe seating noise, as a fraction of the arm's reach: beyond it
 /// the seated points scatter out of the workspace, and inverse kinematics
 /// would blame the sockets.
-pub const MAX_PROBE_NOISE_OF_REACH: f64 = 0.01;
+pub(crate) const MAX_PROBE_NOISE_OF_REACH: f64 = 0.01;
 
 /// Refuses a probe seating noise that is no seating noise (see
 /// [`MAX_PROBE_NOISE_OF_REACH`]), naming the setting.

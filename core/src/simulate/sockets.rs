@@ -13,19 +13,19 @@ use crate::kernel::ArmKernel;
 
 /// Random configurations whose probe centres are the candidate positions
 /// (at least this many; more for many sockets).
-pub const SOCKET_CANDIDATES: usize = 4000;
+pub(crate) const SOCKET_CANDIDATES: usize = 4000;
 /// The comfortable volume: distance from the shoulder between these
 /// fractions of the arm's reach.
-pub const REACH_BAND: [f64; 2] = [0.3, 0.8];
+pub(crate) const REACH_BAND: [f64; 2] = [0.3, 0.8];
 /// Sockets are at least this fraction of the reach apart.
-pub const MIN_SOCKET_SEPARATION: f64 = 0.05;
+pub(crate) const MIN_SOCKET_SEPARATION: f64 = 0.05;
 /// Sockets are at least this fraction of the reach from the base axis,
 /// clear of the arm's own base column.
-pub const MIN_AXIS_DISTANCE: f64 = 0.2;
+pub(crate) const MIN_AXIS_DISTANCE: f64 = 0.2;
 
 /// A random configuration: each reading uniform within its joint's limits,
 /// or in `[-π, π)` for a joint without limits.
-pub fn random_configuration(limits: &[Option<[f64; 2]>], rng: &mut ChaCha8Rng) -> Vec<f64> {
+pub(crate) fn random_configuration(limits: &[Option<[f64; 2]>], rng: &mut ChaCha8Rng) -> Vec<f64> {
     limits
         .iter()
         .map(|lim| match lim {
@@ -45,14 +45,14 @@ pub fn shoulder(arm: &Arm) -> [f64; 3] {
 ///
 /// Candidates are the probe centres of random configurations (within the
 /// joint limits), so every one is reachable. Those whose distance from the
-/// [`shoulder`] is within [`REACH_BAND`] of the reach (the largest distance
+/// [`shoulder`] is within 30–80 % of the reach (the largest distance
 /// seen), that lie above the mounting plane (the base frame's `z = 0`, as on
-/// a bench; no other obstacle is modelled) and at least [`MIN_AXIS_DISTANCE`]
-/// of the reach from the base axis are split into three equal strata by distance from the base axis —
+/// a bench; no other obstacle is modelled) and at least 20 % of the reach
+/// from the base axis are split into three equal strata by distance from the base axis —
 /// near, middle, far, as in ASME B89.4.22 — and socket `i` is taken from
 /// stratum `i mod 3`: the first at random, each next the candidate farthest
 /// from the sockets already placed (farthest-point sampling), which must be
-/// at least [`MIN_SOCKET_SEPARATION`] of the reach from all of them
+/// at least 5 % of the reach from all of them
 /// (another stratum is tried before giving up). Centres are rounded to 1 nm
 /// (6 decimals in mm), so that `sockets.csv` holds them exactly.
 pub fn place_sockets(
@@ -119,10 +119,6 @@ fn farthest(nearest: &[f64], keep: impl Fn(usize) -> bool, min_sep: f64) -> Opti
 }
 
 /// `x` rounded to 6 decimals: the value `{:.6}` prints and reads back exactly.
-///
-/// ```
-/// assert_eq!(aacmm_core::simulate::round_nm(1.0 / 3.0), 0.333333);
-/// ```
-pub fn round_nm(x: f64) -> f64 {
+pub(crate) fn round_nm(x: f64) -> f64 {
     format!("{x:.6}").parse().unwrap_or(x)
 }

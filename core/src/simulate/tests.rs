@@ -2,6 +2,10 @@
 
 use std::path::PathBuf;
 
+use super::files::{CAMPAIGN_FORMAT, campaign_to_toml};
+use super::ik::IK_TOLERANCE_MM;
+use super::sockets::round_nm;
+use super::touches::separation;
 use super::*;
 use crate::io::{parse_poses, read_arm, read_lengths, read_points, read_poses};
 use crate::kernel::ArmKernel;
@@ -691,4 +695,19 @@ fn paper_errors_are_refused_for_a_hayati_arm() {
     assert!(e.contains("joint 2 of the nominal arm is Hayati"), "{e}");
     let random = CampaignSettings::new(1, ErrorModel::random(1.0, false), 4, 5);
     assert!(simulate(&arm, &random).is_ok());
+}
+
+/// Formerly the doc examples of these crate-private helpers.
+#[test]
+fn the_helpers_round_wrap_and_write_the_campaign() {
+    assert_eq!(round_nm(1.0 / 3.0), 0.333333);
+    let pi = std::f64::consts::PI;
+    let d = separation(&[pi - 0.1, 0.0], &[-pi + 0.1, 0.05]);
+    assert!((d - 0.2).abs() < 1e-12);
+    let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+    let text =
+        campaign_to_toml(&nominal, &CampaignSettings::new(5, ErrorModel::Paper, 4, 5)).unwrap();
+    assert!(text.contains("\n[settings]\nseed = 5\n"));
+    let (arm, settings) = parse_campaign(&text, "campaign.toml").unwrap();
+    assert_eq!((arm, settings.seed), (nominal, 5));
 }

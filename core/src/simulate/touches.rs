@@ -26,15 +26,15 @@ pub struct Touch {
 
 /// What the touch search needs besides the arm and the sockets.
 #[derive(Clone, Copy, Debug)]
-pub struct TouchPlan {
+pub(crate) struct TouchPlan {
     /// Touches per socket.
-    pub poses: usize,
+    pub(crate) poses: usize,
     /// σ of the probe seating per axis, mm.
-    pub probe_noise_mm: f64,
+    pub(crate) probe_noise_mm: f64,
     /// Minimum pose separation (largest joint difference), rad.
-    pub min_separation: f64,
+    pub(crate) min_separation: f64,
     /// Budget of IK starts per requested touch.
-    pub starts_per_pose: usize,
+    pub(crate) starts_per_pose: usize,
 }
 
 /// The touches of every socket, socket by socket. For each touch the seating
@@ -45,7 +45,7 @@ pub struct TouchPlan {
 /// least `min_separation` in some joint (differences wrapped to ±π). A socket
 /// gets `poses × starts_per_pose` starts in all; then
 /// [`SimError::TooFewPoses`].
-pub fn find_touches(
+pub(crate) fn find_touches(
     arm: &Arm,
     sockets: &[(String, [f64; 3])],
     plan: &TouchPlan,
@@ -108,7 +108,7 @@ pub fn find_touches(
 /// The readings wrapped to `[-π, π)` and, where a joint has limits, shifted
 /// by a whole turn into them if that helps; `None` if some joint stays
 /// outside its limits.
-pub fn within_limits(q: Vec<f64>, limits: &[Option<[f64; 2]>]) -> Option<Vec<f64>> {
+pub(crate) fn within_limits(q: Vec<f64>, limits: &[Option<[f64; 2]>]) -> Option<Vec<f64>> {
     use std::f64::consts::TAU;
     let mut out: Vec<f64> = q.into_iter().map(wrap).collect();
     for (j, x) in out.iter_mut().enumerate() {
@@ -122,14 +122,7 @@ pub fn within_limits(q: Vec<f64>, limits: &[Option<[f64; 2]>]) -> Option<Vec<f64
 }
 
 /// The largest joint difference of two poses, each wrapped to ±π, rad.
-///
-/// ```
-/// use aacmm_core::simulate::separation;
-/// let pi = std::f64::consts::PI;
-/// let d = separation(&[pi - 0.1, 0.0], &[-pi + 0.1, 0.05]);
-/// assert!((d - 0.2).abs() < 1e-12);
-/// ```
-pub fn separation(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn separation(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| wrap(x - y).abs())

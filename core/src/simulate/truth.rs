@@ -12,7 +12,7 @@ use crate::params::{JointModel, wrap};
 
 /// The paper's identified errors (method.md §7, Table 2), per joint:
 /// `(Δθ deg, Δβ deg, Δa mm, Δd mm)`; joint 6 has no `Δθ`, `Δβ`.
-pub const PAPER_TABLE_2: [(f64, f64, f64, f64); 6] = [
+pub(crate) const PAPER_TABLE_2: [(f64, f64, f64, f64); 6] = [
     (0.131, 0.124, 0.061, 0.186),
     (0.446, 0.065, -1.106, -0.416),
     (-0.735, -0.021, 0.121, 0.041),
@@ -22,7 +22,7 @@ pub const PAPER_TABLE_2: [(f64, f64, f64, f64); 6] = [
 ];
 
 /// The paper's probe error `(ΔBx, ΔBy, ΔBz)`, mm.
-pub const PAPER_PROBE_ERROR: [f64; 3] = [0.0, 0.0, 0.094];
+pub(crate) const PAPER_PROBE_ERROR: [f64; 3] = [0.0, 0.0, 0.094];
 
 /// The true arm for `model` on `nominal`, drawing from `rng` (only the random
 /// model draws: per joint `a, d, α, θ`, then `Bx, By, Bz`). The result is

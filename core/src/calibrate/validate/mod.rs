@@ -145,7 +145,7 @@ pub fn cross_validate(
 
 /// Checks a fold count `k` for `data`: 2 to the number of groups of points
 /// joined by reference lengths.
-pub fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
+pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
     let groups = length_groups(data).len();
     if k < 2 || k > groups {
         return Err(OptionError::new(
