@@ -38,7 +38,8 @@ class UnsupportedError(AacmmError):
     """An arm with a joint count the toolkit has no kernel for (it has 6 and 7)."""
 
 def param_names(joints: int) -> List[str]:
-    """The names of the ``4·joints + 3`` parameters, in the toolkit's order."""
+    """The names of the ``4·joints + 3`` parameters, in the toolkit's order.
+    A joint count without a kernel (not 6 or 7) raises :class:`UnsupportedError`."""
 
 class Arm:
     """An arm: its D-H geometry (mm, rad) prepared for the generated kernel of

@@ -166,9 +166,11 @@ impl ParamId {
     /// use aacmm_core::params::{ParamId, ParamKind};
     /// assert_eq!(ParamId::from_column(6, 7).unwrap().to_string(), "d2");
     /// assert!(ParamId::from_column(6, 27).is_none());
+    /// assert!(ParamId::from_column(0, 0).is_none());
     /// ```
     pub fn from_column(n: usize, column: usize) -> Option<ParamId> {
-        let (kind, index) = match column / n {
+        // A chain without joints has no columns (and `column / 0` no value).
+        let (kind, index) = match column.checked_div(n)? {
             0 => (ParamKind::A, column % n),
             1 => (ParamKind::D, column % n),
             2 => (ParamKind::Alpha, column % n),
@@ -350,7 +352,9 @@ pub fn supported_joints_text() -> String {
 /// assert_eq!(aacmm_core::params::param_count(7), 31);
 /// ```
 pub fn param_count(n: usize) -> usize {
-    4 * n + 3
+    // Saturating: no chain has that many joints, and a count from hostile
+    // input must not wrap to a small one.
+    n.saturating_mul(4).saturating_add(3)
 }
 
 /// The geometry of a D-H chain: its joints (base to probe) and the probe

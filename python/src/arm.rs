@@ -57,10 +57,28 @@ pub(crate) fn warn_all(py: Python<'_>, warnings: &[String]) -> PyResult<()> {
 }
 
 /// The names of the `4·joints + 3` parameters in the toolkit's order:
-/// `a1..an, d1..dn, alpha1..alphan, theta1..thetan, Bx, By, Bz`.
+/// `a1..an, d1..dn, alpha1..alphan, theta1..thetan, Bx, By, Bz`; a joint
+/// count without a kernel is `aacmm.UnsupportedError` (0 would divide by
+/// zero, a huge count overflow `4·joints + 3`).
 #[pyfunction]
-pub fn param_names(joints: usize) -> Vec<String> {
-    ParamId::all(joints).map(|p| p.to_string()).collect()
+pub fn param_names(joints: usize) -> PyResult<Vec<String>> {
+    supported(joints)?;
+    Ok(ParamId::all(joints).map(|p| p.to_string()).collect())
+}
+
+/// `joints` is a count the toolkit has a kernel for, or
+/// `aacmm.UnsupportedError` saying which it has.
+fn supported(joints: usize) -> Result<(), Error> {
+    if SUPPORTED_JOINTS.contains(&joints) {
+        return Ok(());
+    }
+    Err(Error::new(
+        Kind::Unsupported,
+        format!(
+            "joints = {joints}: the toolkit has kernels for {}",
+            supported_joints_text()
+        ),
+    ))
 }
 
 #[pymethods]
@@ -91,25 +109,17 @@ impl Arm {
         params: PyArrayLike1<'_, f64, AllowTypeChange>,
         name: &str,
     ) -> PyResult<Arm> {
-        let values = params.as_array().to_vec();
-        if !SUPPORTED_JOINTS.contains(&joints) {
-            return Err(Error::new(
-                Kind::Unsupported,
-                format!(
-                    "joints = {joints}: the toolkit has kernels for {}",
-                    supported_joints_text()
-                ),
-            )
-            .into());
-        }
+        supported(joints)?;
+        // Checked before the copy: a huge array is refused, not copied.
         let expected = param_count(joints);
-        if values.len() != expected {
+        let given = params.as_array().len();
+        if given != expected {
             return Err(Error::value(format!(
-                "params: {} values, expected {expected} (4 · joints + 3)",
-                values.len()
+                "params: {given} values, expected {expected} (4 · joints + 3)"
             ))
             .into());
         }
+        let values = params.as_array().to_vec();
         if let Some((id, v)) = ParamId::all(joints)
             .zip(&values)
             .find(|(_, v)| !v.is_finite())
@@ -164,7 +174,7 @@ impl Arm {
     /// The parameters' names, in order.
     #[getter(param_names)]
     fn names(&self) -> Vec<String> {
-        param_names(self.joints())
+        ParamId::all(self.joints()).map(|p| p.to_string()).collect()
     }
 
     /// Per joint, `(min, max)` in rad, or `None` for a joint without limits.

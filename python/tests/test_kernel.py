@@ -71,6 +71,15 @@ def test_joint_jacobian_is_the_zero_offset_columns(arm):
     assert p1.shape == (3,) and j1.shape == (3, 6) and np.array_equal(j1, jq[0])
 
 
+def test_param_names_refuses_joint_counts_without_a_kernel():
+    # 0 divided by zero (a panic past `except Exception`), 2**62 wrapped
+    # 4·n + 3 to three names, 5 had names but no kernel.
+    for joints in (0, 5, 8, 2**62):
+        with pytest.raises(aacmm.UnsupportedError, match=f"joints = {joints}: .*6- and 7-joint"):
+            aacmm.param_names(joints)
+    assert len(aacmm.param_names(7)) == 31
+
+
 def test_parameters_round_trip(arm):
     names = aacmm.param_names(6)
     assert names[:2] == ["a1", "a2"] and names[-3:] == ["Bx", "By", "Bz"] and len(names) == 27
