@@ -670,11 +670,11 @@ fn fixed_set(
     // Every auxiliary column is free: the geometry is analysed with them
     // fitted too (their elimination, as the centres' is).
     let aux: Vec<usize> = (geometry..layout.len()).collect();
-    let full = &geometry_normal(full, layout)?;
+    let full = geometry_normal(full, layout)?;
     let sees = objective.sees();
     let (mut free, identification, reasons) = match &model.fix {
         FixSpec::Auto => {
-            let id = identify_from(start, sees, full.clone());
+            let id = identify_from(start, sees, full);
             let free = id.free_columns();
             let reasons: Vec<(ParamId, String)> =
                 id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
@@ -693,7 +693,7 @@ fn fixed_set(
                 .copied()
                 .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
                 .collect();
-            let directions = open_directions_from(start, sees, full.clone(), &unknown);
+            let directions = open_directions_from(start, sees, full, &unknown);
             if !directions.is_empty() {
                 return Err(CalibrationError::Unidentifiable { directions });
             }
@@ -711,7 +711,8 @@ fn fixed_set(
 
 /// The geometry's normal equations with every auxiliary column fitted and
 /// eliminated (`N_gg − N_ga N_aa⁻¹ N_ag`): what the identifiability of the
-/// geometry is judged on. Without auxiliary columns, `full` itself.
+/// geometry is judged on (owned: the analysis consumes it). Without
+/// auxiliary columns, a copy of `full`.
 fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, CalibrationError> {
     let (g, all) = (layout.geometry_columns(), layout.len());
     if g == all {

@@ -4,7 +4,7 @@
 //! comes after it.
 
 use super::sym3::{Sym3, sym_mul};
-use super::{At, Noise, Normal, Sees, Shared, Term, TermError};
+use super::{At, Centres, Noise, Normal, Sees, Shared, Term, TermError};
 use crate::dataset::DataSet;
 use crate::error::short;
 use crate::kernel::{ArmKernel, KernelError, NoiseOf};
@@ -112,6 +112,17 @@ impl<'d> LengthTerm<'d> {
     }
 }
 
+/// The touch term's centroids (and their Jacobians), which the lengths
+/// measure between: refused when no touch term has left them.
+fn centres(shared: &Shared) -> Result<&Centres, TermError> {
+    shared.centres.as_ref().ok_or_else(|| {
+        TermError::invalid(
+            "lengths",
+            "evaluated before the touches they measure between",
+        )
+    })
+}
+
 /// The touch term's centre covariances, which the lengths' weights need.
 fn covariances(shared: &Shared) -> Option<&[Sym3]> {
     shared.centre_covariances.as_deref()
@@ -185,12 +196,7 @@ impl Term for LengthTerm<'_> {
         shared: &mut Shared,
         normal: &mut Normal,
     ) -> Result<f64, TermError> {
-        let centres = shared.centres.as_ref().ok_or_else(|| {
-            TermError::invalid(
-                "lengths",
-                "evaluated before the touches they measure between",
-            )
-        })?;
+        let centres = centres(shared)?;
         let p = normal.free.len();
         let mut cost = 0.0;
         for (r, &w) in self.data.references().iter().zip(&self.weights) {
@@ -224,12 +230,7 @@ impl Term for LengthTerm<'_> {
         _scratch: &mut Vec<[f64; 3]>,
         total: &mut f64,
     ) -> Result<(), TermError> {
-        let centres = shared.centres.as_ref().ok_or_else(|| {
-            TermError::invalid(
-                "lengths",
-                "evaluated before the touches they measure between",
-            )
-        })?;
+        let centres = centres(shared)?;
         for (r, &w) in self.data.references().iter().zip(&self.weights) {
             let d = crate::geometry::distance(&centres.points[r.a], &centres.points[r.b]);
             let res = w * (d - r.distance);
