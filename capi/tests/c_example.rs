@@ -306,6 +306,7 @@ fn the_c_program_agrees_with_the_rust_api() {
             probe_mm: Some(0.01),
             length_default_mm: 0.001,
             length_weight: None,
+            ..Noise::default()
         },
         ..ModelOptions::default()
     };

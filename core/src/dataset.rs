@@ -15,7 +15,7 @@ use std::fmt;
 use std::ops::Range;
 
 use crate::error::InputError;
-use crate::io::{Poses, ReferenceLength};
+use crate::io::{Poses, Positions, ReferenceLength};
 use crate::kernel::PreparedPoses;
 
 /// Fewest touches a point needs: the sample spread `2s` divides by `n − 1`,
@@ -123,6 +123,67 @@ pub struct DataSet {
     poses: PreparedPoses,
     references: Vec<Reference>,
     source: SourceMap,
+    /// Reference positions seen by an instrument, if any.
+    positions: Option<PositionData>,
+}
+
+/// Reference positions prepared for the kernel: the rows of a
+/// reference-position file ([`crate::io::positions`]), their readings'
+/// sin/cos, and the file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PositionData {
+    rows: Positions,
+    poses: PreparedPoses,
+    file: String,
+}
+
+impl PositionData {
+    /// The rows, in file order.
+    pub fn rows(&self) -> &Positions {
+        &self.rows
+    }
+
+    /// Their readings with sin/cos, for the kernel.
+    pub fn poses(&self) -> &PreparedPoses {
+        &self.poses
+    }
+
+    /// The file they came from.
+    pub fn file(&self) -> &str {
+        &self.file
+    }
+
+    /// Where row `i` came from.
+    pub fn at(&self, i: usize) -> Location<'_> {
+        Location {
+            file: &self.file,
+            line: self.rows.line(i),
+        }
+    }
+
+    /// Rows.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Whether there is no row (never, once read).
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// The rows `keep`, in that order.
+    pub fn subset(&self, keep: &[usize]) -> PositionData {
+        PositionData::new(self.rows.subset(keep), &self.file)
+    }
+
+    fn new(rows: Positions, file: &str) -> PositionData {
+        let poses = PreparedPoses::from_flat(rows.joints(), rows.len(), rows.readings());
+        PositionData {
+            rows,
+            poses,
+            file: file.to_string(),
+        }
+    }
 }
 
 /// Refuses readings in which no point is articulated: every point's touches
@@ -301,6 +362,7 @@ impl DataSet {
                 touch_rows,
                 ..SourceMap::default()
             },
+            positions: None,
         })
     }
 
@@ -592,6 +654,71 @@ impl DataSet {
         Ok(self)
     }
 
+    /// A data set of reference positions only (no touch): the rows of
+    /// `positions`, read from `file`.
+    ///
+    /// # Errors
+    ///
+    /// A file without rows.
+    pub fn from_positions(positions: Positions, file: &str) -> Result<DataSet, InputError> {
+        if positions.is_empty() {
+            return Err(InputError::file_error(file, "no positions"));
+        }
+        let joints = positions.joints();
+        Ok(DataSet {
+            joints,
+            points: Vec::new(),
+            q: Vec::new(),
+            poses: PreparedPoses::from_flat(joints, 0, &[]),
+            references: Vec::new(),
+            source: SourceMap {
+                poses_file: String::new(),
+                ..SourceMap::default()
+            },
+            positions: Some(PositionData::new(positions, file)),
+        })
+    }
+
+    /// These touches with the reference positions of `positions` (from
+    /// `file`), fitted together.
+    ///
+    /// # Errors
+    ///
+    /// Positions with another joint count than the touches, naming the
+    /// file's header.
+    pub fn with_positions(
+        mut self,
+        positions: Positions,
+        file: &str,
+    ) -> Result<DataSet, InputError> {
+        if positions.joints() != self.joints {
+            return Err(InputError::field(
+                file,
+                1,
+                format!("q{}", positions.joints().min(self.joints) + 1),
+                format!(
+                    "{} joint columns, the poses {}: positions and touches must be of one arm",
+                    positions.joints(),
+                    self.joints
+                ),
+            ));
+        }
+        self.positions = Some(PositionData::new(positions, file));
+        Ok(self)
+    }
+
+    /// The reference positions, if any.
+    pub fn positions(&self) -> Option<&PositionData> {
+        self.positions.as_ref()
+    }
+
+    /// This data set with its positions replaced by `positions` (none: the
+    /// touches alone).
+    pub fn with_position_data(mut self, positions: Option<PositionData>) -> DataSet {
+        self.positions = positions;
+        self
+    }
+
     /// Readings per touch.
     pub fn joints(&self) -> usize {
         self.joints
@@ -693,6 +820,7 @@ impl DataSet {
                 lengths_file: self.source.lengths_file.clone(),
                 reference_lines,
             },
+            positions: self.positions.clone(),
         }
     }
 }

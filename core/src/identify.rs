@@ -36,7 +36,7 @@ use crate::dataset::DataSet;
 
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Layout, Noise, Sees, TermError};
+use crate::residuals::{Noise, Sees, TermError};
 
 /// Relative singular-value threshold of the numerical rank.
 pub(crate) const RANK_TOLERANCE: f64 = 1e-7;
@@ -236,10 +236,29 @@ pub fn identify(
     noise: &Noise,
     threads: usize,
 ) -> Result<Identification, TermError> {
+    let (normal, sees) = data_normal(params, data, noise, threads)?;
+    Ok(identify_from(params, sees, normal))
+}
+
+/// The normal equations of the data alone over every geometry column at
+/// `params`, the auxiliary blocks (the frames of reference positions)
+/// fitted and eliminated, and what the data see.
+///
+/// # Errors
+///
+/// As [`identify`], and auxiliary blocks the data do not determine.
+pub(crate) fn data_normal(
+    params: &DhParams,
+    data: &DataSet,
+    noise: &Noise,
+    threads: usize,
+) -> Result<(crate::residuals::Normal, Sees), TermError> {
     let objective = data_objective(params, data, noise, threads)?;
-    let all: Vec<usize> = (0..params.param_count()).collect();
-    let normal = objective.normal(&params.to_vec(), &all)?;
-    Ok(identify_from(params, objective.sees(), normal))
+    let all: Vec<usize> = (0..objective.layout().len()).collect();
+    let normal = objective.normal(&objective.start(), &all)?;
+    let normal = crate::calibrate::geometry_normal(&normal, objective.layout())
+        .map_err(|e| TermError::invalid("frames", e.to_string()))?;
+    Ok((normal, objective.sees()))
 }
 
 /// The data's terms at `params` (no prior), touches without stated noise
@@ -250,9 +269,10 @@ pub(crate) fn data_objective<'d>(
     noise: &Noise,
     threads: usize,
 ) -> Result<Objective<'d>, TermError> {
-    // Without stated noise, σ as for a 0.01 mm touch.
+    // Without stated noise, σ as for a 0.01 mm touch; reference positions
+    // on their frames, each registered to `params` in closed form.
     Objective::of_data(
-        Layout::new(params.clone()),
+        crate::residuals::positions::layout_for(params, data)?,
         data,
         noise,
         Vec::new(),
@@ -334,8 +354,8 @@ impl Structure {
             rules.push(Rule {
                 name: "base-motion".into(),
                 explanation: "theta1 and d1 are never identifiable: touches compared with their \
-                              centroids and distances between centroids do not see a rotation \
-                              about, or a slide along, the base axis"
+                              centroids, distances between centroids and positions in a fitted \
+                              frame do not see a rotation about, or a slide along, the base axis"
                     .into(),
             });
         } else {
@@ -754,7 +774,10 @@ fn dependence(ns: &DMatrix<f64>, ids: &[ParamId], d: &[f64], c: usize, free: &[u
         })
         .collect();
     let text = if parts.is_empty() {
-        format!("∂p/∂{} moves no touch relative to the others", ids[c])
+        format!(
+            "∂p/∂{} changes no residual once the point centres and frames are fitted",
+            ids[c]
+        )
     } else {
         format!("∂p/∂{} = {}", ids[c], parts.join(" "))
     };
@@ -1132,7 +1155,7 @@ mod plainly_closed_tests {
             let campaign = simulate(&nominal, &settings).unwrap();
             let data = campaign.data_set().unwrap();
             let noise = crate::calibrate::ModelOptions::default().noise;
-            let layout = Layout::new(nominal.params.clone());
+            let layout = crate::residuals::Layout::new(nominal.params.clone());
             let objective =
                 Objective::of_data(layout, &data, &noise, Vec::new(), None, 1.0, 1).unwrap();
             let all: Vec<usize> = (0..27).collect();

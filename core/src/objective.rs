@@ -16,8 +16,8 @@
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::residuals::{
-    At, Layout, LengthTerm, Noise, Normal, Origin, PriorTerm, Sees, Shared, Term, TermError,
-    TouchTerm,
+    At, Layout, LengthTerm, Noise, Normal, Origin, PositionTerm, PriorTerm, Sees, Shared, Term,
+    TermError, TouchTerm,
 };
 use crate::tolerances::Tolerances;
 
@@ -45,8 +45,10 @@ impl<'a> Objective<'a> {
         }
     }
 
-    /// The data's built-in terms: `data`'s touches, then its reference
-    /// lengths if it has any, under `noise`; then `extra` terms; then the
+    /// The data's built-in terms: `data`'s touches and its reference
+    /// lengths if it has any, its reference positions if it has any (on
+    /// the layout's frame blocks: [`crate::residuals::positions::layout_for`]),
+    /// under `noise`; then `extra` terms; then the
     /// prior of `tolerances` and of the layout's blocks, if any applies.
     /// Weighed at the layout's start, touches as `unit_sigma` mm when no
     /// touch noise is stated.
@@ -63,9 +65,15 @@ impl<'a> Objective<'a> {
         unit_sigma: f64,
         threads: usize,
     ) -> Result<Objective<'a>, TermError> {
-        let mut terms: Vec<Box<dyn Term + 'a>> = vec![Box::new(TouchTerm::new(data, *noise))];
+        let mut terms: Vec<Box<dyn Term + 'a>> = Vec::new();
+        if !data.is_empty() {
+            terms.push(Box::new(TouchTerm::new(data, *noise)));
+        }
         if !data.references().is_empty() {
             terms.push(Box::new(LengthTerm::new(data, *noise)));
+        }
+        if let Some(positions) = data.positions() {
+            terms.push(Box::new(PositionTerm::new(positions, &layout, noise)?));
         }
         terms.extend(extra);
         let start = layout.start();
@@ -133,6 +141,18 @@ impl<'a> Objective<'a> {
                     scale: s.scale || t.scale,
                 }
             })
+    }
+
+    /// Whether every term with data states its noise (none is weighed by a
+    /// σ the fit estimates): the χ² test applies, and the covariance is not
+    /// rescaled by σ̂.
+    pub fn stated(&self) -> bool {
+        let data: Vec<_> = self
+            .terms
+            .iter()
+            .filter(|t| !t.is_prior() && t.rows(&[]) > 0)
+            .collect();
+        !data.is_empty() && data.iter().all(|t| !t.unit_weighted())
     }
 
     /// Residual rows of every term over `free`.
@@ -436,7 +456,7 @@ pub fn weighted_cost(
     data: &DataSet,
     noise: &Noise,
 ) -> Result<f64, TermError> {
-    let layout = Layout::new(weighed_at.clone());
+    let layout = crate::residuals::positions::layout_for(weighed_at, data)?;
     let objective = Objective::of_data(layout, data, noise, Vec::new(), None, 1.0, 1)?;
     objective.data_cost(&params.to_vec(), &mut Vec::new())
 }

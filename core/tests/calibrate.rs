@@ -74,6 +74,7 @@ fn identify_finds_rank_20_without_lengths_and_21_with() {
         probe_mm: Some(0.01),
         length_default_mm: 0.001,
         length_weight: None,
+        ..Noise::default()
     };
     let with = identify(&c.nominal.params, &data, &noise, 1).unwrap();
     assert_eq!(with.rank, 21, "{:?}", with.analysed_singular_values);
@@ -121,6 +122,7 @@ fn uncertainties_are_honest_over_seeds() {
             probe_mm: Some(0.01),
             length_default_mm: 0.001,
             length_weight: None,
+            ..Noise::default()
         },
         ..ModelOptions::default()
     };
@@ -237,6 +239,7 @@ fn stated_noise() -> Noise {
         probe_mm: Some(0.01),
         length_default_mm: 0.001,
         length_weight: None,
+        ..Noise::default()
     }
 }
 

@@ -33,6 +33,7 @@ fn noise() -> Noise {
         probe_mm: Some(0.01),
         length_default_mm: 0.001,
         length_weight: None,
+        ..Noise::default()
     }
 }
 

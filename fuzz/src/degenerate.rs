@@ -292,6 +292,7 @@ pub fn check_degenerate(case: &Degenerate) -> Result<String, String> {
             probe_mm: case.noise.1,
             length_default_mm: 0.001,
             length_weight: None,
+            ..Noise::default()
         };
         let hayati;
         let nominal = if case.extras >= 6 {

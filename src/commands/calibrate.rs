@@ -40,6 +40,10 @@ pub struct Args {
     /// Reference lengths of the held-out points.
     #[arg(long, value_name = "L.csv", requires = "validate")]
     validate_lengths: Option<PathBuf>,
+    /// Held-out reference positions to validate on (same CSV format as
+    /// --positions): scored in the fitted frames of the same name.
+    #[arg(long, value_name = "P.csv")]
+    validate_positions: Option<PathBuf>,
     /// K-fold cross-validation over points (points joined by a reference
     /// length stay in one fold).
     #[arg(long, value_name = "K")]
@@ -208,6 +212,11 @@ fn check_paths(args: &Args) -> Result<()> {
             .as_deref()
             .map(|p| ("--validate-lengths", p)),
     );
+    inputs.extend(
+        args.validate_positions
+            .as_deref()
+            .map(|p| ("--validate-positions", p)),
+    );
     check_output_dir(
         "--out",
         &args.out,
@@ -246,7 +255,10 @@ fn problem(args: &Args) -> Result<(Problem, SolverSettings)> {
         request = request.validate_on_files(path, args.validate_lengths.as_deref())?;
         request.warnings()[shown..].iter().try_for_each(warn)?;
     }
-    let arm_file = source_name(&args.fit.input.arm);
+    if let Some(path) = &args.validate_positions {
+        request = request.validate_on_positions(path)?;
+    }
+    let arm_file = source_name(&args.fit.arm);
     request.build().map_err(|e| match e {
         // The arm's own refusal names its file, as a read error would.
         CalibrationError::Kernel(_) => anyhow::Error::new(e).context(arm_file),

@@ -31,7 +31,7 @@ pub fn run(args: Args) -> Result<()> {
     let report = args.fit.request()?.identify().map_err(|e| match e {
         CalibrationError::Option(_) => flag_error(e),
         other => super::noise_flags(
-            anyhow::Error::new(other).context(source_name(&args.fit.input.arm)),
+            anyhow::Error::new(other).context(source_name(&args.fit.arm)),
             &args.fit,
         ),
     })?;

@@ -11,17 +11,38 @@ use aacmm_core::residuals::Noise;
 use aacmm_core::session::{Request, user_noise};
 use anyhow::{Result, anyhow};
 
-use super::ArmAndPoses;
 use crate::output::warn;
+use aacmm_core::io::AngleUnit;
 
-/// The flags of a fit: arm, poses, reference lengths, noise.
+/// The flags of a fit: arm, poses, reference lengths, reference
+/// positions, noise.
 #[derive(clap::Args)]
 pub struct FitInput {
-    #[command(flatten)]
-    pub input: ArmAndPoses,
+    /// Arm file (TOML) with 6 or 7 `[[joint]]` entries.
+    #[arg(long)]
+    pub arm: PathBuf,
+    /// Poses file (CSV `point,q1,...,qn`: touches of points in many poses);
+    /// `-` reads standard input. Optional with --positions.
+    #[arg(long, required_unless_present = "positions")]
+    pub data: Option<PathBuf>,
+    /// Unit of the angles in the poses and positions files.
+    #[arg(long, default_value = "deg", value_parser = super::angle_unit)]
+    pub angle_unit: AngleUnit,
     /// Reference lengths (CSV `point_a,point_b,distance[,uncertainty]`, mm).
-    #[arg(long, value_name = "L.csv")]
+    #[arg(long, value_name = "L.csv", requires = "data")]
     pub lengths: Option<PathBuf>,
+    /// Reference positions an instrument saw (a laser tracker) or an
+    /// artefact's certified centres: CSV `point,q1,...,qn,x,y,z[,frame]
+    /// [,uncertainty]`, mm in the instrument's frame; each frame's pose is
+    /// fitted. With --data too, both are fitted together.
+    #[arg(long, value_name = "P.csv")]
+    pub positions: Option<PathBuf>,
+    /// σ per coordinate of a reference position whose file states none:
+    /// `A` mm, or `A+B/m` (B mm per metre from the instrument: a tracker's
+    /// `0.015+0.006/m`). Without it (and without an `uncertainty` column)
+    /// the σ is estimated from the fit.
+    #[arg(long, value_name = "MM[+MM/m]", value_parser = position_noise)]
+    pub position_noise: Option<(f64, Option<f64>)>,
     /// σ of each encoder reading, degrees (with --probe-noise: the touch
     /// weights; without either, the touch σ is estimated from the fit).
     #[arg(long, value_name = "DEG")]
@@ -51,23 +72,26 @@ pub struct FitInput {
 impl FitInput {
     /// The input files, for output-path checks.
     pub fn paths(&self) -> Vec<(&'static str, &Path)> {
-        let mut v = vec![
-            ("--arm", self.input.arm.as_path()),
-            ("--data", &self.input.data),
-        ];
+        let mut v = vec![("--arm", self.arm.as_path())];
+        v.extend(self.data.as_deref().map(|d| ("--data", d)));
         v.extend(self.lengths.as_deref().map(|l| ("--lengths", l)));
+        v.extend(self.positions.as_deref().map(|l| ("--positions", l)));
         v
     }
 
     /// The noise flags in internal units (the library checks them:
     /// [`Noise::check`], with [`flag_error`] naming the flag).
     pub fn noise(&self) -> Noise {
-        user_noise(
-            self.encoder_noise,
-            self.probe_noise,
-            self.length_uncertainty,
-            self.length_weight,
-        )
+        Noise {
+            position_mm: self.position_noise.map(|(a, _)| a),
+            position_mm_per_m: self.position_noise.and_then(|(_, b)| b),
+            ..user_noise(
+                self.encoder_noise,
+                self.probe_noise,
+                self.length_uncertainty,
+                self.length_weight,
+            )
+        }
     }
 
     /// The library's request for these flags: the arm, the touches and
@@ -75,13 +99,20 @@ impl FitInput {
     /// readings outside the arm's joint limits, printed here and kept by
     /// the request for the report), the noise, `--prior` and `--threads`.
     pub fn request(&self) -> Result<Request> {
-        let input = &self.input;
-        let mut request = Request::read(&input.arm, &input.data, input.angle_unit)?;
+        let unit = self.angle_unit;
+        let mut request = match (&self.data, &self.positions) {
+            (Some(data), _) => Request::read(&self.arm, data, unit)?,
+            (None, Some(positions)) => Request::read_positions_only(&self.arm, positions, unit)?,
+            (None, None) => return Err(anyhow!("give --data, --positions or both")),
+        };
         // Shown before the lengths are read, so that a bad lengths file
         // does not hide them.
         request.warnings().iter().try_for_each(warn)?;
         if let Some(path) = &self.lengths {
             request = request.read_lengths(path)?;
+        }
+        if let (Some(_), Some(path)) = (&self.data, &self.positions) {
+            request = request.read_positions(path)?;
         }
         Ok(request
             .noise(self.noise())
@@ -90,8 +121,28 @@ impl FitInput {
     }
 }
 
+/// `A` or `A+B/m` of --position-noise: mm, and mm per metre.
+fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
+    let number = |t: &str| {
+        t.trim().parse::<f64>().map_err(|_| {
+            format!("`{t}` is not a number: give A or A+B/m, both mm (e.g. 0.015+0.006/m)")
+        })
+    };
+    match s.split_once('+') {
+        None => Ok((number(s)?, None)),
+        Some((a, b)) => {
+            let b = b.trim().strip_suffix("/m").ok_or_else(|| {
+                format!("`{s}`: the distance part is B/m, mm per metre (e.g. 0.015+0.006/m)")
+            })?;
+            Ok((number(a)?, Some(number(b)?)))
+        }
+    }
+}
+
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 26] = [
+const FLAGS: [(&str, &str); 28] = [
+    ("noise.position_mm", "--position-noise"),
+    ("noise.position_mm_per_m", "--position-noise"),
     ("prior", "--prior"),
     ("method", "--method"),
     ("robust.loss", "--robust"),

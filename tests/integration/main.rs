@@ -10,6 +10,7 @@ mod house;
 mod mukca;
 mod out_paths;
 mod points;
+mod positions;
 mod prior;
 mod readme;
 mod report;

@@ -173,6 +173,8 @@ pub(crate) struct Setup<'a> {
     pub(crate) identification: Option<Identification>,
     pub(crate) reasons: Vec<(ParamId, String)>,
     pub(crate) counts: Counts,
+    /// Whether every data term states its noise ([`Objective::stated`]).
+    pub(crate) stated: bool,
 }
 
 /// The fit as it passes from stage to stage.
@@ -262,12 +264,12 @@ pub(crate) fn assess(
     normalise_signs(&mut fit, &setup)?;
     reweigh_at_solution(&mut fit, &setup)?;
     settle_unit_sigma(&mut fit, &setup)?;
-    if setup.model.noise.stated() {
+    if setup.stated {
         fit.unit_sigma = typical_sigma(&fit.objective);
     }
     // Unit weights still (no stated noise, no other term): the normal
     // equations were rescaled by the estimated σ, the weights not.
-    fit.unit_weights = !setup.model.noise.stated() && setup.counts.all_unit();
+    fit.unit_weights = !setup.stated && setup.counts.all_unit();
     robust_refits(&mut fit, &setup)?;
     let initial_cost = initial_cost(&mut fit, &setup)?;
     let covariance = covariance(&fit, &setup);
@@ -299,7 +301,7 @@ fn normalise_signs(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibrati
 /// when every term is unit-weighted the normal equations are rescaled
 /// instead.
 fn reweigh_at_solution(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
-    let stated = setup.model.noise.stated();
+    let stated = setup.stated;
     if !stated {
         // Unit weights: the residuals are mm. Estimate σ so that the other
         // terms weigh right against them.
@@ -364,7 +366,7 @@ fn reweigh_at_solution(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calib
 /// so their σ must be right before the prior's pull is — estimate it again
 /// from the refit until it settles (the first fit weighed touches as 1 mm).
 fn settle_unit_sigma(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
-    if !fit.objective.has_prior() || setup.model.noise.stated() {
+    if !fit.objective.has_prior() || setup.stated {
         return Ok(());
     }
     for _ in 0..MAX_SIGMA_REFITS {
@@ -400,7 +402,7 @@ fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibration
     let Some(r) = setup.model.robust else {
         return Ok(());
     };
-    let stated = setup.model.noise.stated();
+    let stated = setup.stated;
     if fit.unit_weights {
         fit.reweigh()?;
         fit.unit_weights = false;
@@ -594,7 +596,7 @@ fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, Calibratio
         // In units of the observation's own σ, not of its robust weight.
         t2.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
     }
-    if !setup.model.noise.stated() {
+    if !setup.stated {
         let mut sorted = t2.clone();
         sorted.sort_by(f64::total_cmp);
         let median = sorted.get(sorted.len() / 2).copied().unwrap_or(1.0);
@@ -625,7 +627,7 @@ fn assemble(
     initial_cost: f64,
 ) -> Result<Calibration, CalibrationError> {
     let Covariance { cov, sigma0, dof } = covariance;
-    let stated = setup.model.noise.stated();
+    let stated = setup.stated;
     let prior = match (&setup.model.prior, fit.objective.prior()) {
         (Some(t), Some(term)) => Some(super::PriorReport::new(
             t,

@@ -113,6 +113,19 @@ pub enum CalibrationError {
         /// Median of stated length / nominal distance.
         ratio: f64,
     },
+    /// Reference positions the nominal arm cannot be registered to: another
+    /// unit, swapped axes, another arm.
+    #[error("{file}:{line}: field `{field}`: {message}")]
+    Positions {
+        /// The positions file.
+        file: String,
+        /// The first line of the frame concerned.
+        line: usize,
+        /// The field concerned.
+        field: String,
+        /// What is wrong, and what to do.
+        message: String,
+    },
     /// A parameter vector of the wrong length (a bug, not user input).
     #[error("internal: parameter vector of the wrong length")]
     Shape,
@@ -507,6 +520,33 @@ impl Calibration {
         self.parameters.iter().map(|p| p.calibrated).collect()
     }
 
+    /// Each fitted frame's registration `[rx, ry, rz, tx, ty, tz]` (rad, mm)
+    /// by name: the auxiliary columns `NAME.rx … NAME.tz` of the frames of
+    /// reference positions.
+    pub fn frames(&self) -> Vec<validate::FrameValues> {
+        const AXES: [&str; 6] = ["rx", "ry", "rz", "tx", "ty", "tz"];
+        let aux = &self.auxiliary;
+        aux.iter()
+            .enumerate()
+            .filter_map(|(i, e)| {
+                let name = e.name.strip_suffix(".rx")?;
+                let cols = aux.get(i..i + 6)?;
+                let mut x = [0.0; 6];
+                for (k, (c, axis)) in cols.iter().zip(AXES).enumerate() {
+                    if c.name != format!("{name}.{axis}") {
+                        return None;
+                    }
+                    x[k] = if k < 3 {
+                        c.calibrated.to_radians()
+                    } else {
+                        c.calibrated
+                    };
+                }
+                Some((name.to_string(), x))
+            })
+            .collect()
+    }
+
     /// Restores [`Calibration::params`] from the estimates, after reading a
     /// calibration back from JSON: each value to the parameter it names (a
     /// joint with an `hbeta…` is a Hayati joint).
@@ -540,7 +580,7 @@ pub fn calibrate(
     settings: &SolverSettings,
 ) -> Result<Calibration, CalibrationError> {
     let solver = settings.method.solver();
-    let layout = Layout::new(start.clone());
+    let layout = crate::residuals::positions::layout_for(start, data)?;
     let inputs = FitInputs {
         layout: &layout,
         data,
@@ -635,7 +675,7 @@ pub fn calibrate_with(
         free: &free,
         model,
         settings,
-        stated_dof: model.noise.stated().then_some(counts.dof()),
+        stated_dof: objective.stated().then_some(counts.dof()),
         start_normal,
     };
     let mut outcome = solver.solve(task, ctx)?;
@@ -651,6 +691,7 @@ pub fn calibrate_with(
         identification,
         reasons,
         counts,
+        stated: objective.stated(),
     };
     assess::assess(setup, objective, outcome)
 }
@@ -713,14 +754,26 @@ fn fixed_set(
 /// eliminated (`N_gg − N_ga N_aa⁻¹ N_ag`): what the identifiability of the
 /// geometry is judged on (owned: the analysis consumes it). Without
 /// auxiliary columns, a copy of `full`.
-fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, CalibrationError> {
+pub(crate) fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, CalibrationError> {
     let (g, all) = (layout.geometry_columns(), layout.len());
     if g == all {
         return Ok(full.clone());
     }
     let nm = nalgebra::DMatrix::from_row_slice(all, all, &full.jtj);
-    let naa = nm.view((g, g), (all - g, all - g)).into_owned();
-    let nga = nm.view((0, g), (g, all - g)).into_owned();
+    // Equilibrated (unit diagonal): a frame's rotation columns are the
+    // reach times its translation's, and the elimination's precision is
+    // the condition of what it factors.
+    let scale = nalgebra::DVector::from_fn(all - g, |i, _| {
+        let v = nm[(g + i, g + i)];
+        if v > 0.0 && v.is_finite() {
+            1.0 / v.sqrt()
+        } else {
+            1.0
+        }
+    });
+    let d = nalgebra::DMatrix::from_diagonal(&scale);
+    let naa = &d * nm.view((g, g), (all - g, all - g)) * &d;
+    let nga = nm.view((0, g), (g, all - g)) * &d;
     let Some(ch) = naa.cholesky() else {
         let blocks: Vec<&str> = layout.blocks().map(|b| b.name()).collect();
         return Err(CalibrationError::Unidentifiable {

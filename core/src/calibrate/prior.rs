@@ -183,9 +183,7 @@ pub fn conditioning(
 ) -> Result<PriorConditioning, crate::residuals::TermError> {
     use nalgebra::DMatrix;
     let n = params.joint_count();
-    let all: Vec<usize> = (0..params.param_count()).collect();
-    let full = crate::identify::data_objective(params, data, noise, threads)?
-        .normal(&params.to_vec(), &all)?;
+    let (full, _) = crate::identify::data_normal(params, data, noise, threads)?;
     let np = full.free.len();
     let reach = params.reach();
     let ids: Vec<ParamId> = params.param_ids().collect();

@@ -38,6 +38,7 @@ pub mod lengths;
 pub mod limits;
 pub mod points;
 pub mod poses;
+pub mod positions;
 pub mod prior;
 pub(crate) mod text;
 pub mod units;
@@ -52,6 +53,7 @@ pub use lengths::{
 pub use limits::limit_warning;
 pub use points::{parse_points, read_points, write_points};
 pub use poses::{Poses, parse_poses, read_poses, write_poses};
+pub use positions::{DEFAULT_FRAME, Positions, parse_positions, read_positions};
 pub use prior::parse_prior;
 pub use text::source_name;
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
@@ -113,6 +115,7 @@ mod tests {
             "point,q1,q2\nS1,1.5,-2\n\"S,2\",3,4e-3\n",
             "point_a,point_b,distance,uncertainty\nA,B,100,0.1\nB,C,5,\n",
             "point,x,y,z\nA,1,2,3\nB,4,5,6\n",
+            "point,q1,q2,x,y,z,frame,uncertainty\nA,1,2,3,0,0,f,0.1\nB,4,5,0,6,0,f,\nC,0,0,0,0,9,f,1\n",
         ];
         let alphabet: Vec<char> = "\"',#[]={}\n\r .-+e0123456789abqxyzé\t\\".chars().collect();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
@@ -139,6 +142,7 @@ mod tests {
                 parse_poses(&text, f, AngleUnit::Rad, None).err(),
                 parse_lengths(&text, f).err(),
                 parse_points(&text, f).err(),
+                parse_positions(&text, f, AngleUnit::Deg, Some(2)).err(),
             ];
             for e in errors.into_iter().flatten() {
                 assert!(e.to_string().starts_with(f), "{e}");

@@ -79,6 +79,11 @@ pub(crate) fn evaluate_all<'a>(
     let mut held_seen = 0;
     let mut out = Vec::new();
     for (set, m) in measured.iter().enumerate() {
+        if m.data.is_empty() {
+            // Reference positions only: no touch to evaluate (their errors
+            // are in the validation's figures).
+            continue;
+        }
         let set_name = if m.held_out {
             held_seen += 1;
             if held_total > 1 {

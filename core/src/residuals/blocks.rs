@@ -165,6 +165,14 @@ impl Layout {
         self.blocks.iter().map(|b| &**b)
     }
 
+    /// The auxiliary block named `name`, if any.
+    pub fn block_named(&self, name: &str) -> Option<BlockId> {
+        self.blocks
+            .iter()
+            .position(|b| b.name() == name)
+            .map(BlockId)
+    }
+
     /// The columns of block `id`.
     pub fn columns(&self, id: BlockId) -> Range<usize> {
         let start = self.starts[id.0];
@@ -353,7 +361,7 @@ pub struct Frame {
 }
 
 /// `R = exp([ω]×)` (Rodrigues), row-major.
-fn rotation(w: [f64; 3]) -> [[f64; 3]; 3] {
+pub(crate) fn rotation(w: [f64; 3]) -> [[f64; 3]; 3] {
     let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
     // sin θ/θ and (1 − cos θ)/θ² by their series near 0.
     let (a, b) = if th < 1e-6 {
@@ -382,7 +390,7 @@ fn rotation(w: [f64; 3]) -> [[f64; 3]; 3] {
 }
 
 /// The rotation vector of `R` (angle in [0, π]).
-fn rotation_vector(r: [[f64; 3]; 3]) -> [f64; 3] {
+pub(crate) fn rotation_vector(r: [[f64; 3]; 3]) -> [f64; 3] {
     let trace = r[0][0] + r[1][1] + r[2][2];
     let c = ((trace - 1.0) / 2.0).clamp(-1.0, 1.0);
     let th = c.acos();
@@ -443,6 +451,26 @@ impl Frame {
             [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
             [q[1], -q[0], 0.0, 0.0, 0.0, 1.0],
         ]
+    }
+}
+
+impl Frame {
+    /// The local step `δ = [δω, δt]` that takes the frame `a` to `b`
+    /// (`b = a ⊞ δ`): `δω = log(R_b R_aᵀ)`, `δt = t_b − t_a` — the
+    /// coordinates a fitted frame's covariance is in.
+    ///
+    /// ```
+    /// use aacmm_core::residuals::Frame;
+    /// let a = [0.3, -0.2, 1.0, 5.0, 0.0, 0.0];
+    /// let d = Frame::difference(&a, &a);
+    /// assert!(d.iter().all(|v| v.abs() < 1e-12));
+    /// ```
+    pub fn difference(a: &[f64], b: &[f64]) -> [f64; 6] {
+        let ra = rotation([a[0], a[1], a[2]]);
+        let rb = rotation([b[0], b[1], b[2]]);
+        let rat: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| ra[j][i]));
+        let w = rotation_vector(mat_mul(rb, rat));
+        [w[0], w[1], w[2], b[3] - a[3], b[4] - a[4], b[5] - a[5]]
     }
 }
 

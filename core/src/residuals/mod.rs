@@ -56,6 +56,7 @@
 
 pub mod blocks;
 mod lengths;
+pub mod positions;
 mod prior;
 mod sym3;
 #[cfg(test)]
@@ -70,6 +71,7 @@ use crate::params::DhParams;
 
 pub use blocks::{Block, BlockId, Frame, Layout, Parameter, Scalar, Unit, Vector};
 pub(crate) use lengths::LengthTerm;
+pub(crate) use positions::PositionTerm;
 pub(crate) use prior::PriorTerm;
 pub(crate) use sym3::Sym3;
 pub(crate) use touches::TouchTerm;
@@ -91,6 +93,14 @@ pub struct Noise {
     pub length_default_mm: f64,
     /// Overrides every length's weight (1/mm).
     pub length_weight: Option<f64>,
+    /// σ of a reference position per coordinate where its file states none,
+    /// mm: the constant part `A` of an instrument's `A + B·distance`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_mm: Option<f64>,
+    /// The part of that σ that grows with the distance from the
+    /// instrument, `B`, mm per metre (a tracker's 0.006).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_mm_per_m: Option<f64>,
 }
 
 impl Default for Noise {
@@ -100,6 +110,8 @@ impl Default for Noise {
             probe_mm: None,
             length_default_mm: DEFAULT_LENGTH_SIGMA_MM,
             length_weight: None,
+            position_mm: None,
+            position_mm_per_m: None,
         }
     }
 }
@@ -108,6 +120,11 @@ impl Noise {
     /// Whether any touch noise was stated.
     pub fn stated(&self) -> bool {
         self.encoder_rad.is_some() || self.probe_mm.is_some()
+    }
+
+    /// Whether a position noise was stated.
+    pub fn positions_stated(&self) -> bool {
+        self.position_mm.is_some()
     }
 
     /// Checks the values: each finite and `≥ 0` (a length weight `> 0`),
@@ -131,6 +148,19 @@ impl Noise {
             }
         }
         check_nonnegative("noise.length_default_mm", self.length_default_mm, true)?;
+        if let Some(a) = self.position_mm {
+            check_nonnegative("noise.position_mm", a, false)?;
+        }
+        if let Some(b) = self.position_mm_per_m {
+            check_nonnegative("noise.position_mm_per_m", b, true)?;
+            if self.position_mm.is_none() {
+                return Err(OptionError::new(
+                    "noise.position_mm_per_m",
+                    b,
+                    "a distance-dependent position σ needs its constant part too (A+B/m)",
+                ));
+            }
+        }
         if let Some(w) = self.length_weight {
             check_nonnegative("noise.length_weight", w, false)?;
         }

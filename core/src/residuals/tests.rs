@@ -271,6 +271,7 @@ fn the_streamed_change_of_weights_is_the_built_one() {
         probe_mm: Some(0.01),
         length_default_mm: 0.001,
         length_weight: None,
+        ..Noise::default()
     };
     let unstated = Noise {
         encoder_rad: None,
@@ -310,6 +311,7 @@ fn normal_equations_are_the_same_bits_on_any_thread_count() {
         probe_mm: Some(0.01),
         length_default_mm: 0.001,
         length_weight: None,
+        ..Noise::default()
     };
     let (t, l) = weighed(&data, &noise, &arm, 1.0, 1);
     assert!(data.len() > 2 * TOUCHES_PER_CHUNK, "weights in chunks too");

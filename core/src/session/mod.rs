@@ -31,7 +31,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::validate::{
-    BeforeAfter, Figures, Fold, before_after, check_folds, cross_validate,
+    BeforeAfter, Figures, Fold, before_after_in, check_folds, cross_validate, registered_frames,
 };
 use crate::calibrate::{
     Calibration, CalibrationError, Context, FitInputs, ModelOptions, Solver, SolverSettings,
@@ -126,8 +126,10 @@ impl Problem {
         }
         model.check_for(&arm.params)?;
         check_length_units(&arm.params, &data)?;
+        let layout = crate::residuals::positions::layout_for(&arm.params, &data)?;
+        check_positions(&data, &layout)?;
         Ok(Problem {
-            layout: Layout::new(arm.params.clone()),
+            layout,
             arm,
             data,
             model,
@@ -295,6 +297,68 @@ fn check_length_units(params: &DhParams, data: &DataSet) -> Result<(), Calibrati
     Ok(())
 }
 
+/// The ratio of the spreads of an instrument's positions and the nominal
+/// arm's beyond which they are in another unit (metres: 1/1000, inches:
+/// 1/25.4) or of another arm.
+const POSITION_SPREAD_RATIO: f64 = 5.0;
+
+/// The share of its spread by which the nominal arm, best registered, may
+/// miss a frame's positions: more is another arm, readings in another
+/// joint order or unit, or a different tool (a nominal arm misses by per
+/// cent of its reach, not by a fifth).
+const POSITION_MISS_SHARE: f64 = 0.2;
+
+/// Refuses reference positions the nominal arm cannot be registered to,
+/// frame by frame: positions in another unit (their spread against the
+/// arm's), a mirror image (swapped axes: a mirrored registration fits much
+/// better than any rotation), or positions of another arm (the best
+/// registration misses by a large share of their spread).
+fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationError> {
+    let Some(positions) = data.positions() else {
+        return Ok(());
+    };
+    let registrations = crate::residuals::positions::register(layout.geometry(), positions)?;
+    let rows = positions.rows();
+    for (f, (name, reg)) in rows.frames().iter().zip(registrations).enumerate() {
+        let first = (0..rows.len()).find(|&i| rows.frame(i) == f).unwrap_or(0);
+        let refuse = |field: &str, message: String| CalibrationError::Positions {
+            file: positions.file().to_string(),
+            line: rows.line(first),
+            field: field.to_string(),
+            message: format!("frame `{name}`: {message}"),
+        };
+        let ratio = reg.spread_mm / reg.arm_spread_mm;
+        if !(1.0 / POSITION_SPREAD_RATIO..=POSITION_SPREAD_RATIO).contains(&ratio) {
+            return Err(refuse(
+                "x",
+                format!(
+                    "the positions spread {:.4} mm about their centroid, the nominal arm's                      {:.4} mm ({ratio:.3e} times): positions in another unit (they must be                      mm; metres give 1e-3) or of another arm?",
+                    reg.spread_mm, reg.arm_spread_mm
+                ),
+            ));
+        }
+        if reg.mirrored_rms_mm < 0.5 * reg.rms_mm && reg.rms_mm > 0.01 * reg.spread_mm {
+            return Err(refuse(
+                "y",
+                format!(
+                    "a mirror image fits the nominal arm (RMS {:.4} mm) far better than any                      rotation (RMS {:.4} mm): two axes swapped, or one reversed — give x, y, z                      of a right-handed frame",
+                    reg.mirrored_rms_mm, reg.rms_mm
+                ),
+            ));
+        }
+        if reg.rms_mm > POSITION_MISS_SHARE * reg.spread_mm {
+            return Err(refuse(
+                "point",
+                format!(
+                    "the nominal arm, best registered, misses these positions by RMS {:.4} mm                      over a spread of {:.4} mm: positions of another arm, joint readings in                      another order or unit, or another tool?",
+                    reg.rms_mm, reg.spread_mm
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Units of the values in a [`CalibrationReport`] meant for people.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Units {
@@ -361,6 +425,12 @@ pub struct CalibrationReport {
     pub points: usize,
     /// Reference lengths fitted.
     pub reference_lengths: usize,
+    /// The reference-positions file, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub positions_file: Option<String>,
+    /// Reference positions fitted.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub positions: usize,
     /// The calibration.
     pub calibration: Calibration,
     /// Before and after.
@@ -369,6 +439,10 @@ pub struct CalibrationReport {
     pub warnings: Vec<String>,
     /// Whether the calibration may be used, and if not, why.
     pub verdict: Verdict,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// Whether a calibration may be used: exit 0 of the command line.
@@ -445,11 +519,16 @@ impl Verdict {
         }
         // Nearly parallel axes in the D-H model: say which joint suits Hayati.
         notes.extend(crate::hayati::recommendations(&calibration.params));
-        let (before, after) = (fitted.before.e_mean, fitted.after.e_mean);
+        let (before, after) = (fitted.before.headline(), fitted.after.headline());
         if after.is_nan() || after > before {
+            let what = if fitted.after.points == 0 {
+                "mean 3-D position error"
+            } else {
+                "mean e"
+            };
             poor.push(format!(
-                "the calibrated arm is worse than the nominal on its own data (mean e {before:.4} \
-                 → {after:.4} mm): a mislabelled touch or a wrong minimum?"
+                "the calibrated arm is worse than the nominal on its own data ({what} \
+                 {before:.4} → {after:.4} mm): a mislabelled observation or a wrong minimum?"
             ));
         }
         if accept_poor_fit {
@@ -529,10 +608,25 @@ impl CalibrationReport {
     fn summary_header(&self) -> String {
         let r = self;
         let s = &r.calibration.solver;
-        let mut t = format!(
-            "calibrated `{}` ({}) on {}: {} touches of {} points, {} reference lengths\n\n",
-            r.arm, r.arm_file, r.data_file, r.touches, r.points, r.reference_lengths
-        );
+        let mut t = if r.touches == 0 {
+            String::new()
+        } else {
+            format!(
+                "calibrated `{}` ({}) on {}: {} touches of {} points, {} reference lengths\n",
+                r.arm, r.arm_file, r.data_file, r.touches, r.points, r.reference_lengths
+            )
+        };
+        if let Some(file) = &r.positions_file {
+            let frames = r.calibration.frames().len();
+            t += &format!(
+                "calibrated `{}` ({}) on {file}: {} reference positions in {frames} frame{}\n",
+                r.arm,
+                r.arm_file,
+                r.positions,
+                if frames == 1 { "" } else { "s" }
+            );
+        }
+        t += "\n";
         t += &method_lines(s);
         t += &format!(
             "Solver: {} — {} after {} iterations ({} cost and {} Jacobian evaluations); \
@@ -673,12 +767,17 @@ pub fn run(
     let data = &problem.data;
     let model = &problem.model;
     let calibration = calibrate_with(problem.inputs(), settings, solver, ctx)?;
-    let fitted = before_after(start, &calibration.params, data)?;
+    // Each arm's frames: the start's registered to the fitted data, the
+    // calibrated arm's fitted with it; held-out positions seen from the
+    // same stations are scored in those frames.
+    let start_frames = registered_frames(start, data)?;
+    let frames = calibration.frames();
+    let fitted = before_after_in(start, &start_frames, &calibration.params, &frames, data)?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
             data_file: h.data_file.clone(),
             lengths_file: h.lengths_file.clone(),
-            figures: before_after(start, &calibration.params, &h.data)?,
+            figures: before_after_in(start, &start_frames, &calibration.params, &frames, &h.data)?,
         }),
         None => None,
     };
@@ -706,6 +805,8 @@ pub fn run(
         touches: data.len(),
         points: data.points().len(),
         reference_lengths: data.references().len(),
+        positions_file: data.positions().map(|p| p.file().to_string()),
+        positions: data.positions().map_or(0, |p| p.len()),
         calibration,
         validation: Validation {
             fitted,
@@ -720,19 +821,34 @@ pub fn run(
 /// The summary's degrees of freedom and the σ behind the weights.
 fn dof_lines(c: &Calibration) -> String {
     let d = &c.dof;
-    let mut t = format!(
-        "Residuals: {} touch rows + {} length rows; unknowns: {} parameters + {} centre \
-         coordinates; {} degrees of freedom\n",
-        d.touch_rows, d.length_rows, d.free_parameters, d.centre_coordinates, d.degrees_of_freedom
-    );
+    let mut t = if d.touch_rows == 0 && d.length_rows == 0 {
+        format!(
+            "Residuals: {} rows; unknowns: {} parameters (the frames' included); {} degrees of \
+             freedom\n",
+            d.other_rows.iter().map(|r| r.rows).sum::<usize>(),
+            d.free_parameters,
+            d.degrees_of_freedom
+        )
+    } else {
+        format!(
+            "Residuals: {} touch rows + {} length rows; unknowns: {} parameters + {} centre \
+             coordinates; {} degrees of freedom\n",
+            d.touch_rows,
+            d.length_rows,
+            d.free_parameters,
+            d.centre_coordinates,
+            d.degrees_of_freedom
+        )
+    };
     t += &format!(
-        "sigma0 = {} = {:.4} (1 when the weights are right); touch sigma {:.4} mm{}\n",
+        "sigma0 = {} = {:.4} (1 when the weights are right); {} sigma {:.4} mm{}\n",
         if c.robust.is_some() {
             "robust scale (median of the standardised residuals)"
         } else {
             "sqrt(cost/dof)"
         },
         d.sigma0,
+        noun(c),
         d.touch_sigma_mm,
         if d.touch_sigma_estimated {
             " (estimated from the fit)"
@@ -777,12 +893,23 @@ fn fit_quality_lines(c: &Calibration) -> String {
     t
 }
 
+/// What the observations are: touches, reference positions, or both.
+fn noun(c: &Calibration) -> &'static str {
+    let others = c.dof.other_rows.iter().any(|r| r.term == "positions");
+    match (c.dof.touch_rows > 0, others) {
+        (true, true) => "observation",
+        (false, true) => "position",
+        _ => "touch",
+    }
+}
+
 /// The summary's outliers: the first 20 by `file:line`.
 fn outliers_line(c: &Calibration) -> String {
     let o = &c.checks.outliers;
+    let noun = noun(c);
     if o.is_empty() {
         return format!(
-            "Outliers: none (no touch beyond {:.2} sigma)\n",
+            "Outliers: none (no {noun} beyond {:.2} sigma)\n",
             c.checks.outlier_threshold
         );
     }
@@ -792,7 +919,7 @@ fn outliers_line(c: &Calibration) -> String {
         .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
         .collect();
     format!(
-        "Outliers: {} touch(es) beyond {:.2} sigma — check them (remeasure, or fix the \
+        "Outliers: {} {noun}(s) beyond {:.2} sigma — check them (remeasure, or fix the \
          label): {}{}\n",
         o.len(),
         c.checks.outlier_threshold,
@@ -866,6 +993,13 @@ fn correlations_line(c: &Calibration) -> String {
 /// The summary's validation table: before and after, on the fitted data,
 /// the held-out data and each cross-validation fold.
 fn validation_table(v: &Validation) -> String {
+    if v.fitted.before.points == 0
+        && v.held_out
+            .as_ref()
+            .is_none_or(|h| h.figures.before.points == 0)
+    {
+        return position_table(v) + "\n";
+    }
     let mut t = String::from(
         "\nValidation (mm): e = mean single-point error, 2s and delta_max (SPAT), length RMS/max\n",
     );
@@ -903,7 +1037,40 @@ fn validation_table(v: &Validation) -> String {
             );
         }
     }
+    t += &position_table(v);
     t += "\n";
+    t
+}
+
+/// The validation at the reference positions, if any: the 3-D distance
+/// between where each arm (its frames registered) puts the probe and where
+/// the instrument saw it.
+fn position_table(v: &Validation) -> String {
+    let mut rows: Vec<(&str, &Figures)> = vec![
+        ("fitted, before", &v.fitted.before),
+        ("fitted, after", &v.fitted.after),
+    ];
+    if let Some(h) = &v.held_out {
+        rows.push(("held out, before", &h.figures.before));
+        rows.push(("held out, after", &h.figures.after));
+    }
+    let mut t = String::new();
+    for (name, f) in rows {
+        let Some(p) = f.positions else {
+            continue;
+        };
+        if t.is_empty() {
+            t += "\nReference positions (mm): 3-D error |R p + t - y| per pose\n";
+            t += &format!(
+                "  {:<28} {:>8} {:>8} {:>8} {:>8}\n",
+                "data", "poses", "mean", "RMS", "max"
+            );
+        }
+        t += &format!(
+            "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4}\n",
+            name, p.count, p.mean, p.rms, p.max
+        );
+    }
     t
 }
 

@@ -37,7 +37,7 @@ use crate::calibrate::{
 };
 use crate::dataset::DataSet;
 use crate::error::{InputError, OptionError};
-use crate::io::{AngleUnit, Arm, read_arm, read_lengths, source_name};
+use crate::io::{AngleUnit, Arm, read_arm, read_lengths, read_positions, source_name};
 use crate::kernel::ArmKernel;
 use crate::residuals::Noise;
 use crate::tolerances::Tolerances;
@@ -88,6 +88,7 @@ pub fn user_noise(
         probe_mm,
         length_default_mm,
         length_weight: length_weight.filter(|&w| w != 0.0),
+        ..Noise::default()
     }
 }
 
@@ -146,6 +147,76 @@ impl Request {
             warnings,
         };
         Ok(Request::new(read, data).sources(sources).angle_unit(unit))
+    }
+
+    /// Reads the arm file and a reference-positions file (readings in
+    /// `unit`): a calibration against an instrument's positions alone.
+    ///
+    /// # Errors
+    ///
+    /// The readers' errors, naming file, line and field.
+    pub fn read_positions_only(
+        arm: impl AsRef<Path>,
+        positions: impl AsRef<Path>,
+        unit: AngleUnit,
+    ) -> Result<Request, InputError> {
+        let (arm, positions) = (arm.as_ref(), positions.as_ref());
+        let (read, arm_warnings) = read_arm(arm)?;
+        let joints = read.params.joint_count();
+        let name = source_name(positions);
+        let rows = read_positions(positions, unit, Some(joints))?;
+        let data = DataSet::from_positions(rows, &name)?;
+        let sources = Sources {
+            arm_file: source_name(arm),
+            data_file: name,
+            lengths_file: None,
+            warnings: arm_warnings.iter().map(ToString::to_string).collect(),
+        };
+        Ok(Request::new(read, data).sources(sources).angle_unit(unit))
+    }
+
+    /// Adds the reference positions of a positions file (readings in the
+    /// request's angle unit), fitted with the touches.
+    ///
+    /// # Errors
+    ///
+    /// The reader's errors, naming file, line and field.
+    pub fn read_positions(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
+        let path = path.as_ref();
+        let joints = self.arm.params.joint_count();
+        let rows = read_positions(path, self.unit, Some(joints))?;
+        self.data = self.data.with_positions(rows, &source_name(path))?;
+        Ok(self)
+    }
+
+    /// Validates on the reference positions of a positions file too: with
+    /// held-out touches ([`Request::validate_on_files`], called first) as
+    /// part of them, else on their own.
+    ///
+    /// # Errors
+    ///
+    /// The reader's errors, naming file, line and field.
+    pub fn validate_on_positions(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
+        let path = path.as_ref();
+        let name = source_name(path);
+        let joints = self.arm.params.joint_count();
+        let rows = read_positions(path, self.unit, Some(joints))?;
+        let held_out = match self.held_out.take() {
+            Some((mut h, warnings)) => {
+                h.data = h.data.with_positions(rows, &name)?;
+                (h, warnings)
+            }
+            None => (
+                HeldOutData {
+                    data: DataSet::from_positions(rows, &name)?,
+                    data_file: name,
+                    lengths_file: None,
+                },
+                Vec::new(),
+            ),
+        };
+        self.held_out = Some(held_out);
+        Ok(self)
     }
 
     /// Adds the reference lengths of a lengths file (`-` reads standard

@@ -45,6 +45,7 @@ mod error;
 mod files;
 mod ik;
 mod lengths;
+mod positions;
 mod settings;
 mod sockets;
 mod touches;
@@ -61,6 +62,9 @@ pub use files::{
 };
 pub use ik::{IkSolution, solve_point};
 pub use lengths::reference_lengths;
+pub use positions::{
+    PositionCampaign, PositionSettings, simulate_positions, simulate_positions_from,
+};
 pub use settings::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,
     DEFAULT_STARTS_PER_POSE, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG, ErrorModel,

@@ -18,7 +18,7 @@ use crate::params::DhParams;
 /// The figures a calibration is judged by, mm.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Figures {
-    /// Points evaluated.
+    /// Points evaluated (0 without touches: the touch figures are then 0).
     pub points: usize,
     /// Mean over points of the paper's `e` (single-point repeatability).
     pub e_mean: f64,
@@ -34,10 +34,117 @@ pub struct Figures {
     pub length_rms: Option<f64>,
     /// Largest `|error|`; `None` without lengths.
     pub length_max: Option<f64>,
+    /// The 3-D errors at the reference positions; absent without them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub positions: Option<PositionErrors>,
 }
 
-/// The figures of `params` on `data`.
+/// The 3-D distances between where an arm puts the probe, registered to
+/// each frame, and where the instrument saw it, mm.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PositionErrors {
+    /// Positions evaluated.
+    pub count: usize,
+    /// Mean distance.
+    pub mean: f64,
+    /// RMS distance.
+    pub rms: f64,
+    /// Largest distance.
+    pub max: f64,
+}
+
+impl Figures {
+    /// The figure a calibration must not make worse on its own data: the
+    /// mean `e` of the touches, or without touches the mean 3-D error at
+    /// the reference positions.
+    pub fn headline(&self) -> f64 {
+        match (self.points, self.positions) {
+            (0, Some(p)) => p.mean,
+            _ => self.e_mean,
+        }
+    }
+}
+
+/// A frame's registration by name: `[rx, ry, rz, tx, ty, tz]` (rad, mm).
+pub type FrameValues = (String, [f64; 6]);
+
+/// The 3-D errors of `params` at `data`'s positions, each frame registered
+/// as `frames` say, or (a frame not among them) by its closed-form
+/// registration of `params`.
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn position_errors(
+    params: &DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[FrameValues],
+) -> Result<PositionErrors, CalibrationError> {
+    let rows = data.rows();
+    let closed = crate::residuals::positions::register(params, data)?;
+    let x: Vec<[f64; 6]> = (rows.frames().iter().zip(&closed))
+        .map(|(name, reg)| {
+            frames
+                .iter()
+                .find(|(n, _)| n == name)
+                .map_or(reg.x, |(_, v)| *v)
+        })
+        .collect();
+    let k = ArmKernel::new(params)?;
+    let mut p = vec![[0.0; 3]; data.len()];
+    k.positions(data.poses(), 0..data.len(), &mut p)?;
+    let d: Vec<f64> = (0..data.len())
+        .map(|i| {
+            let seen = crate::residuals::Frame::apply(&x[rows.frame(i)], p[i]);
+            crate::geometry::distance(&seen, &rows.position(i))
+        })
+        .collect();
+    let n = d.len().max(1) as f64;
+    Ok(PositionErrors {
+        count: d.len(),
+        mean: d.iter().sum::<f64>() / n,
+        rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
+        max: d.iter().copied().fold(0.0, f64::max),
+    })
+}
+
+/// The figures of `params` on `data`, each frame of its positions at its
+/// closed-form registration of `params`.
+///
+/// # Errors
+///
+/// The kernel's and the metrics'.
 pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, CalibrationError> {
+    figures_in(params, data, &[])
+}
+
+/// [`figures`] with the frames registered as `frames` say (a fit's).
+///
+/// # Errors
+///
+/// As [`figures`].
+pub fn figures_in(
+    params: &DhParams,
+    data: &DataSet,
+    frames: &[FrameValues],
+) -> Result<Figures, CalibrationError> {
+    let positions = data
+        .positions()
+        .map(|p| position_errors(params, p, frames))
+        .transpose()?;
+    if data.is_empty() {
+        return Ok(Figures {
+            points: 0,
+            e_mean: 0.0,
+            e_max: 0.0,
+            two_s_mean: 0.0,
+            delta_max: 0.0,
+            lengths: 0,
+            length_rms: None,
+            length_max: None,
+            positions,
+        });
+    }
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
     k.positions(data.poses(), 0..data.len(), &mut xyz)?;
@@ -52,6 +159,7 @@ pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, Calibration
         lengths: ev.reference.len(),
         length_rms: ev.reference_summary.map(|s| s.rms),
         length_max: ev.reference_summary.map(|s| s.max_abs),
+        positions,
     })
 }
 
@@ -65,15 +173,58 @@ pub struct BeforeAfter {
 }
 
 /// Before and after of `start` → `calibrated` on `data`.
+///
+/// # Errors
+///
+/// As [`figures`].
 pub fn before_after(
     start: &DhParams,
     calibrated: &DhParams,
     data: &DataSet,
 ) -> Result<BeforeAfter, CalibrationError> {
+    before_after_in(start, &[], calibrated, &[], data)
+}
+
+/// [`before_after`], the frames of each arm registered as given (the
+/// start arm's closed form on the fitted data, the fit's own), a frame not
+/// given by its closed form on `data`.
+///
+/// # Errors
+///
+/// As [`figures`].
+pub fn before_after_in(
+    start: &DhParams,
+    start_frames: &[FrameValues],
+    calibrated: &DhParams,
+    frames: &[FrameValues],
+    data: &DataSet,
+) -> Result<BeforeAfter, CalibrationError> {
     Ok(BeforeAfter {
-        before: figures(start, data)?,
-        after: figures(calibrated, data)?,
+        before: figures_in(start, data, start_frames)?,
+        after: figures_in(calibrated, data, frames)?,
     })
+}
+
+/// Each frame of `data`'s positions, registered to `params` in closed
+/// form, by name (none without positions).
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn registered_frames(
+    params: &DhParams,
+    data: &DataSet,
+) -> Result<Vec<FrameValues>, CalibrationError> {
+    let Some(p) = data.positions() else {
+        return Ok(Vec::new());
+    };
+    let regs = crate::residuals::positions::register(params, p)?;
+    Ok(p.rows()
+        .frames()
+        .iter()
+        .cloned()
+        .zip(regs.into_iter().map(|r| r.x))
+        .collect())
 }
 
 /// One cross-validation fold: the points held out, and the figures there of

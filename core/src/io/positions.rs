@@ -1,0 +1,559 @@
+//! Reference-position files: where an instrument (a laser tracker, an
+//! optical CMM) saw the probe or target, or the certified centre of an
+//! artefact's sphere the arm touched — CSV with the header
+//! `point,q1,…,qn,x,y,z` and the optional columns `frame` and
+//! `uncertainty`, in that order.
+//!
+//! ```text
+//! point,q1,q2,q3,q4,q5,q6,x,y,z,frame,uncertainty
+//! P1,10,-45,120,-80,60,0,-430.3,-6.27,-98.6,tracker,0.015
+//! P2,12,-44,118,-78,61,5,-463.7,-3.94,-104.9,tracker,
+//! ```
+//!
+//! `x,y,z` are mm in the instrument's (or the artefact placement's) own
+//! frame; every `frame` gets its own unknown rigid registration, found from
+//! the data. Without a `frame` column every row is in one frame named
+//! [`DEFAULT_FRAME`]. `uncertainty` is a standard uncertainty per
+//! coordinate, mm, `> 0`; an empty cell means "not stated" (the noise model
+//! of the command line applies). Rows with the same `point` label in one
+//! frame are the same physical point (a sphere touched in several poses).
+//! Joint readings are in the unit the caller declares, as in a poses file.
+
+use std::path::Path;
+
+use std::io::Write;
+
+use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
+use super::units::AngleUnit;
+use crate::error::InputError;
+
+/// The frame of a file without a `frame` column.
+pub const DEFAULT_FRAME: &str = "instrument";
+
+/// The fewest positions a frame's registration (six unknowns) can rest on.
+pub const MIN_FRAME_POSITIONS: usize = 3;
+
+/// The rows of a reference-position file, in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Positions {
+    joints: usize,
+    /// Per row, its point label.
+    labels: Vec<String>,
+    /// The frames, in order of first appearance.
+    frames: Vec<String>,
+    /// Per row, its frame (index into `frames`).
+    frame_of: Vec<usize>,
+    /// Readings, rad, row-major.
+    q: Vec<f64>,
+    /// Per row, the position seen, mm.
+    xyz: Vec<[f64; 3]>,
+    /// Per row, its stated standard uncertainty per coordinate, mm.
+    uncertainty: Vec<Option<f64>>,
+    /// Per row, its 1-based line.
+    lines: Vec<usize>,
+}
+
+impl Positions {
+    /// No rows, for `joints` joints.
+    pub fn new(joints: usize) -> Positions {
+        Positions {
+            joints,
+            labels: Vec::new(),
+            frames: Vec::new(),
+            frame_of: Vec::new(),
+            q: Vec::new(),
+            xyz: Vec::new(),
+            uncertainty: Vec::new(),
+            lines: Vec::new(),
+        }
+    }
+
+    /// Appends a row: readings `q` (rad), the position (mm) in frame
+    /// `frame`, its uncertainty (mm) if stated, and its line.
+    ///
+    /// # Panics
+    ///
+    /// When `q` has another joint count than the set's.
+    pub fn push(
+        &mut self,
+        label: &str,
+        frame: &str,
+        q: &[f64],
+        xyz: [f64; 3],
+        uncertainty: Option<f64>,
+        line: usize,
+    ) {
+        assert_eq!(q.len(), self.joints, "one reading per joint");
+        let f = match self.frames.iter().position(|n| n == frame) {
+            Some(f) => f,
+            None => {
+                self.frames.push(frame.to_string());
+                self.frames.len() - 1
+            }
+        };
+        self.labels.push(label.to_string());
+        self.frame_of.push(f);
+        self.q.extend_from_slice(q);
+        self.xyz.push(xyz);
+        self.uncertainty.push(uncertainty);
+        self.lines.push(line);
+    }
+
+    /// Rows.
+    pub fn len(&self) -> usize {
+        self.xyz.len()
+    }
+
+    /// Whether there is no row.
+    pub fn is_empty(&self) -> bool {
+        self.xyz.is_empty()
+    }
+
+    /// Joints per reading.
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// The frames, in order of first appearance.
+    pub fn frames(&self) -> &[String] {
+        &self.frames
+    }
+
+    /// Row `i`'s frame (an index into [`Positions::frames`]).
+    pub fn frame(&self, i: usize) -> usize {
+        self.frame_of[i]
+    }
+
+    /// Row `i`'s point label.
+    pub fn label(&self, i: usize) -> &str {
+        &self.labels[i]
+    }
+
+    /// Row `i`'s readings, rad.
+    pub fn reading(&self, i: usize) -> &[f64] {
+        &self.q[i * self.joints..(i + 1) * self.joints]
+    }
+
+    /// Every reading, rad, row-major.
+    pub fn readings(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// Row `i`'s position, mm.
+    pub fn position(&self, i: usize) -> [f64; 3] {
+        self.xyz[i]
+    }
+
+    /// Row `i`'s stated uncertainty, mm.
+    pub fn uncertainty(&self, i: usize) -> Option<f64> {
+        self.uncertainty[i]
+    }
+
+    /// Row `i`'s line.
+    pub fn line(&self, i: usize) -> usize {
+        self.lines[i]
+    }
+
+    /// The rows `keep`, in that order (frames renumbered in order of first
+    /// appearance among them).
+    pub fn subset(&self, keep: &[usize]) -> Positions {
+        let mut out = Positions::new(self.joints);
+        for &i in keep {
+            out.push(
+                &self.labels[i],
+                &self.frames[self.frame_of[i]],
+                self.reading(i),
+                self.xyz[i],
+                self.uncertainty[i],
+                self.lines[i],
+            );
+        }
+        out
+    }
+}
+
+/// Writes positions in the file format, readings in `unit`: deterministic
+/// bytes, numbers in the shortest form that reads back to the same value.
+/// The `frame` column is written unless every row is in [`DEFAULT_FRAME`],
+/// the `uncertainty` column when any row states one.
+///
+/// ```
+/// use aacmm_core::io::{AngleUnit, Positions, positions::write_positions};
+/// let mut p = Positions::new(1);
+/// p.push("P1", "instrument", &[0.5], [1.0, 2.0, 3.0], None, 0);
+/// let mut out = Vec::new();
+/// write_positions(&mut out, &p, AngleUnit::Rad).unwrap();
+/// assert_eq!(String::from_utf8(out).unwrap(), "point,q1,x,y,z\nP1,0.5,1.0,2.0,3.0\n");
+/// ```
+///
+/// # Errors
+///
+/// The writer's; a label with surrounding whitespace (reading trims it).
+pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std::io::Result<()> {
+    let with_frame = p.frames().iter().any(|f| f != DEFAULT_FRAME);
+    let with_u = p.uncertainty.iter().any(Option::is_some);
+    let mut header = String::from("point");
+    for j in 1..=p.joints {
+        header.push_str(&format!(",q{j}"));
+    }
+    header.push_str(",x,y,z");
+    if with_frame {
+        header.push_str(",frame");
+    }
+    if with_u {
+        header.push_str(",uncertainty");
+    }
+    header.push('\n');
+    w.write_all(header.as_bytes())?;
+    for i in 0..p.len() {
+        let mut line = quote(p.label(i))?.into_owned();
+        for &x in p.reading(i) {
+            line.push(',');
+            line.push_str(&fmt_f64(unit.from_internal_exact(x)));
+        }
+        for v in p.position(i) {
+            line.push(',');
+            line.push_str(&fmt_f64(v));
+        }
+        if with_frame {
+            line.push(',');
+            line.push_str(&quote(&p.frames()[p.frame(i)])?);
+        }
+        if with_u {
+            line.push(',');
+            if let Some(u) = p.uncertainty(i) {
+                line.push_str(&fmt_f64(u));
+            }
+        }
+        line.push('\n');
+        w.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// The columns after the joints: `x,y,z` and which optional ones.
+struct Layout {
+    joints: usize,
+    frame: Option<usize>,
+    uncertainty: Option<usize>,
+}
+
+const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty]";
+
+/// Reads a reference-position file (standard input for `-`), readings in
+/// `unit`; messages name the file as [`super::source_name`] gives it.
+///
+/// # Errors
+///
+/// As [`parse_positions`].
+pub fn read_positions(
+    path: &Path,
+    unit: AngleUnit,
+    expected_joints: Option<usize>,
+) -> Result<Positions, InputError> {
+    let (file, text) = read_text(path)?;
+    parse_positions(&text, &file, unit, expected_joints)
+}
+
+/// Parses the text of a reference-position file; `file` names it in
+/// messages.
+///
+/// ```
+/// use aacmm_core::io::{AngleUnit, parse_positions};
+/// let text = "point,q1,q2,x,y,z\nP,0,90,1,2,3\nQ,10,0,4,5,6\nR,0,45,0,9,1\n";
+/// let p = parse_positions(text, "t.csv", AngleUnit::Deg, Some(2)).unwrap();
+/// assert_eq!((p.len(), p.frames()), (3, &["instrument".to_string()][..]));
+/// assert_eq!(p.reading(0)[1], std::f64::consts::FRAC_PI_2);
+/// assert_eq!((p.position(1), p.line(1)), ([4.0, 5.0, 6.0], 3));
+///
+/// let e = parse_positions("point,q1,q2,x,y,z\nP,0,90,1,NaN,3\n", "t.csv", AngleUnit::Deg, None);
+/// assert!(e.unwrap_err().to_string().starts_with("t.csv:2: field `y`: `NaN` is not a finite number"));
+/// ```
+///
+/// # Errors
+///
+/// A header other than [`SHAPE`]'s (or another joint count than
+/// `expected_joints`), an empty label or frame, a value that is not a finite
+/// number, an uncertainty that is not positive, and a frame with fewer
+/// than [`MIN_FRAME_POSITIONS`] rows or with positions on one line (a
+/// registration needs three points that span a plane): each naming the
+/// line and field.
+pub fn parse_positions(
+    text: &str,
+    file: &str,
+    unit: AngleUnit,
+    expected_joints: Option<usize>,
+) -> Result<Positions, InputError> {
+    let mut layout: Option<Layout> = None;
+    let mut out: Option<Positions> = None;
+    let mut q = Vec::new();
+    scan_table(
+        text,
+        file,
+        SHAPE,
+        "one row per position",
+        |h| header_layout(h, file, expected_joints).map(|_| ()),
+        |h, line, f| {
+            let l = match &layout {
+                Some(l) => l,
+                None => layout.insert(header_layout(h, file, expected_joints)?),
+            };
+            let out = out.get_or_insert_with(|| Positions::new(l.joints));
+            parse_row(l, f, file, line, unit, &mut q, out)
+        },
+    )?;
+    let out = out.unwrap_or_else(|| Positions::new(0));
+    check_frames(&out, file)?;
+    Ok(out)
+}
+
+/// The header's joint count and optional columns, checked.
+fn header_layout(
+    h: &Record,
+    file: &str,
+    expected_joints: Option<usize>,
+) -> Result<Layout, InputError> {
+    let fields = &h.fields;
+    let optional = |name: &str| fields.iter().position(|f| f == name);
+    let (frame, uncertainty) = (optional("frame"), optional("uncertainty"));
+    let extra = usize::from(frame.is_some()) + usize::from(uncertainty.is_some());
+    let joints = fields.len().saturating_sub(4 + extra);
+    let want = expected_joints.unwrap_or(joints);
+    let mut expected: Vec<String> = vec!["point".into()];
+    expected.extend((1..=want).map(|j| format!("q{j}")));
+    expected.extend(["x", "y", "z"].map(String::from));
+    if frame.is_some() {
+        expected.push("frame".into());
+    }
+    if uncertainty.is_some() {
+        expected.push("uncertainty".into());
+    }
+    let names: Vec<&str> = expected.iter().map(String::as_str).collect();
+    let shape = format!(
+        "point,q1,...,q{want},x,y,z{}{}",
+        if frame.is_some() { ",frame" } else { "" },
+        if uncertainty.is_some() {
+            ",uncertainty"
+        } else {
+            ""
+        }
+    );
+    check_header(h, file, &names, &shape)?;
+    if want == 0 {
+        return Err(InputError::field(
+            file,
+            h.line,
+            "q1",
+            format!("missing joint columns in the header; the header must be `{SHAPE}`"),
+        ));
+    }
+    Ok(Layout {
+        joints: want,
+        frame,
+        uncertainty,
+    })
+}
+
+/// One data row into `out`.
+fn parse_row(
+    l: &Layout,
+    f: &[&str],
+    file: &str,
+    line: usize,
+    unit: AngleUnit,
+    q: &mut Vec<f64>,
+    out: &mut Positions,
+) -> Result<(), InputError> {
+    let error = |field: &str, message: &str| Err(InputError::field(file, line, field, message));
+    if f[0].is_empty() {
+        return error(
+            "point",
+            "empty label: each row must name the point or target seen",
+        );
+    }
+    q.clear();
+    for j in 0..l.joints {
+        let v = parse_f64(f[1 + j], file, line, &format!("q{}", j + 1))?;
+        q.push(unit.to_internal(v));
+    }
+    let mut xyz = [0.0; 3];
+    for (k, name) in ["x", "y", "z"].iter().enumerate() {
+        xyz[k] = parse_f64(f[1 + l.joints + k], file, line, name)?;
+    }
+    let frame = match l.frame {
+        Some(c) if f[c].is_empty() => {
+            return error("frame", "empty frame: name the station or placement");
+        }
+        Some(c) => f[c],
+        None => DEFAULT_FRAME,
+    };
+    let uncertainty = match l.uncertainty.map(|c| f[c]).filter(|s| !s.is_empty()) {
+        None => None,
+        Some(s) => match parse_f64(s, file, line, "uncertainty")? {
+            u if u > 0.0 => Some(u),
+            _ => {
+                let message = format!("must be positive (a standard uncertainty, mm), got {s}");
+                return error("uncertainty", &message);
+            }
+        },
+    };
+    out.push(f[0], frame, q, xyz, uncertainty, line);
+    Ok(())
+}
+
+/// Refuses a frame whose rows cannot determine its registration: fewer than
+/// [`MIN_FRAME_POSITIONS`], or all on one line.
+fn check_frames(p: &Positions, file: &str) -> Result<(), InputError> {
+    for (f, name) in p.frames().iter().enumerate() {
+        let rows: Vec<usize> = (0..p.len()).filter(|&i| p.frame(i) == f).collect();
+        let first = p.line(rows[0]);
+        let distinct = distinct_positions(p, &rows);
+        if distinct.len() < MIN_FRAME_POSITIONS {
+            return Err(InputError::field(
+                file,
+                first,
+                "frame",
+                format!(
+                    "frame `{name}` has {} distinct position(s); its registration (3 rotations, \
+                     3 translations) needs at least {MIN_FRAME_POSITIONS} not on one line — \
+                     give each station or placement several rows, or leave the `frame` column \
+                     out if every row is in one frame",
+                    distinct.len()
+                ),
+            ));
+        }
+        let spread = spread_off_line(&distinct);
+        if spread.1 <= 1e-6 * spread.0.max(1.0) {
+            return Err(InputError::field(
+                file,
+                first,
+                "frame",
+                format!(
+                    "the positions of frame `{name}` lie on one line: a rotation about it is \
+                     not determined; measure points off that line"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The distinct positions among `rows` (a sphere touched in several poses
+/// counts once).
+fn distinct_positions(p: &Positions, rows: &[usize]) -> Vec<[f64; 3]> {
+    let mut out: Vec<[f64; 3]> = Vec::new();
+    for &i in rows {
+        let x = p.position(i);
+        if !out.contains(&x) {
+            out.push(x);
+        }
+    }
+    out
+}
+
+/// The largest distance of a point from the first, and the largest
+/// distance of a point from the line through the first and that one, mm.
+fn spread_off_line(points: &[[f64; 3]]) -> (f64, f64) {
+    let o = points[0];
+    let d = |p: &[f64; 3]| std::array::from_fn::<f64, 3, _>(|k| p[k] - o[k]);
+    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let far = points
+        .iter()
+        .map(&d)
+        .max_by(|a, b| norm(*a).total_cmp(&norm(*b)))
+        .unwrap_or([0.0; 3]);
+    let length = norm(far);
+    if length == 0.0 {
+        return (0.0, 0.0);
+    }
+    let u = far.map(|v| v / length);
+    let off = points
+        .iter()
+        .map(|p| {
+            let v = d(p);
+            let along = v[0] * u[0] + v[1] * u[1] + v[2] * u[2];
+            norm(std::array::from_fn(|k| v[k] - along * u[k]))
+        })
+        .fold(0.0, f64::max);
+    (length, off)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::testing::assert_at;
+
+    const F: &str = "positions.csv";
+
+    fn parse(text: &str) -> Result<Positions, InputError> {
+        parse_positions(text, F, AngleUnit::Rad, Some(2))
+    }
+
+    const GOOD: &str = "point,q1,q2,x,y,z,frame,uncertainty\n\
+                        A,0,1,100,0,0,s1,0.01\n\
+                        B,1,0,0,100,0,s1,\n\
+                        C,1,1,0,0,100,s1,0.02\n\
+                        A,0,1,10,0,0,s2,\n\
+                        B,1,0,0,10,0,s2,\n\
+                        C,2,1,0,0,10,s2,\n";
+
+    #[test]
+    fn frames_uncertainties_and_lines_are_read() {
+        let p = parse(GOOD).unwrap();
+        assert_eq!(p.frames(), ["s1", "s2"]);
+        assert_eq!((p.frame(0), p.frame(3)), (0, 1));
+        assert_eq!((p.uncertainty(0), p.uncertainty(1)), (Some(0.01), None));
+        assert_eq!(
+            (p.line(5), p.label(5), p.reading(5)),
+            (7, "C", &[2.0, 1.0][..])
+        );
+        let s = p.subset(&[3, 4, 5]);
+        assert_eq!((s.frames(), s.line(0)), (&["s2".to_string()][..], 5));
+    }
+
+    #[test]
+    fn written_positions_read_back_the_same() {
+        let p = parse(GOOD).unwrap();
+        let mut out = Vec::new();
+        write_positions(&mut out, &p, AngleUnit::Deg).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let back = parse_positions(&text, F, AngleUnit::Deg, Some(2)).unwrap();
+        assert_eq!(back.frames(), p.frames());
+        for i in 0..p.len() {
+            assert_eq!(back.position(i), p.position(i));
+            assert_eq!(back.uncertainty(i), p.uncertainty(i));
+            assert_eq!(back.reading(i), p.reading(i), "row {i}");
+        }
+    }
+
+    #[test]
+    fn bad_rows_name_their_line_and_field() {
+        let e = parse(&GOOD.replace("0,0,100,s1,0.02", "0,0,inf,s1,0.02")).unwrap_err();
+        assert_at(&e, F, 4, Some("z"), "not a finite number");
+        let e = parse(&GOOD.replace("s1,0.02", "s1,0")).unwrap_err();
+        assert_at(&e, F, 4, Some("uncertainty"), "must be positive");
+        let e = parse(&GOOD.replace("0,1,10,0,0,s2,", "0,1,10,0,0,,")).unwrap_err();
+        assert_at(&e, F, 5, Some("frame"), "empty frame");
+        let e = parse("point,q1,x,y,z\nA,1,2,3,4\n").unwrap_err();
+        assert_at(&e, F, 1, Some("x"), "expected `q2`");
+    }
+
+    /// A frame column with one row per frame, and a frame on one line.
+    #[test]
+    fn frames_that_cannot_be_registered_are_refused() {
+        let text = "point,q1,q2,x,y,z,frame\nA,0,1,1,0,0,a\nB,1,0,0,1,0,b\nC,1,1,0,0,1,c\n";
+        let e = parse(text).unwrap_err();
+        assert_at(&e, F, 2, Some("frame"), "frame `a` has 1 distinct position");
+        let line = "point,q1,q2,x,y,z\nA,0,1,0,0,0\nB,1,0,1,1,1\nC,1,1,2,2,2\nD,2,2,5,5,5\n";
+        assert_at(
+            &parse(line).unwrap_err(),
+            F,
+            2,
+            Some("frame"),
+            "lie on one line",
+        );
+        // The same sphere seen three times is one position.
+        let same = "point,q1,q2,x,y,z\nA,0,1,1,2,3\nA,1,0,1,2,3\nA,1,1,1,2,3\n";
+        assert_at(&parse(same).unwrap_err(), F, 2, Some("frame"), "1 distinct");
+    }
+}

@@ -1,0 +1,528 @@
+//! Reference positions: where an instrument saw the probe, in the
+//! instrument's own frame — a laser tracker's station, an artefact's
+//! placement. Row `i` in frame `f`: `r_i = w_i (R_f p(q_i; x) + t_f − y_i)`
+//! (3 rows), with `(R_f, t_f)` the frame's registration (a [`Frame`] block,
+//! fitted with the arm) and `w_i = 1/σ_i`: the row's stated uncertainty, or
+//! the noise model `σ = A + B·|y|` (a tracker's error grows with the
+//! distance from it, and `y` is in its frame, so `|y|` is that distance), or
+//! a σ the fit estimates when nothing is stated. The weights do not depend
+//! on the arm.
+//!
+//! Because `R_f` is a rotation, the geometry's block of the normal
+//! equations is `Σ w² J_pᵀJ_p` whatever the frame; the frame's columns
+//! couple to it through `R_f J_p`. Each frame absorbs a rigid motion of
+//! everything it sees: a turn about, or a slide along, the base axis
+//! (`theta1`, `d1`) moves every position rigidly, so those two become
+//! redundant with the frame — the identifiability analysis finds it from
+//! the normal equations with the frames eliminated.
+
+use nalgebra::{Matrix3, Vector3};
+
+use super::blocks::{Frame, rotation};
+use super::{
+    At, BlockId, Layout, Noise, Normal, Origin, Sees, Shared, Standardised, Term, TermError,
+};
+use crate::dataset::{DataSet, PositionData};
+use crate::kernel::{ArmKernel, KernelError};
+use crate::parallel::parallel_map;
+use crate::params::DhParams;
+
+/// Rows per work item: fixed, so sums are added in the same order whatever
+/// the thread count.
+const ROWS_PER_CHUNK: usize = 256;
+
+/// A frame's best rigid registration of an arm's positions onto the
+/// instrument's, in closed form, and how well it fits.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Registration {
+    /// `[rx, ry, rz, tx, ty, tz]`: `y ≈ R p + t` (rad, mm).
+    pub x: [f64; 6],
+    /// RMS of `|R p + t − y|` over the frame's rows, mm.
+    pub rms_mm: f64,
+    /// The same with a mirror image allowed (`det R = −1`): far below
+    /// [`Registration::rms_mm`] when two axes were swapped.
+    pub mirrored_rms_mm: f64,
+    /// RMS distance of the instrument's positions from their centroid, mm.
+    pub spread_mm: f64,
+    /// The same of the arm's positions.
+    pub arm_spread_mm: f64,
+}
+
+/// The rigid transform `y ≈ R p + t` of least squares (Kabsch/Horn by SVD)
+/// of `p` onto `y`, proper (`det R = +1`) or mirrored.
+fn kabsch(p: &[[f64; 3]], y: &[[f64; 3]], mirrored: bool) -> (Matrix3<f64>, Vector3<f64>, f64) {
+    let n = p.len().max(1) as f64;
+    let v = |a: &[f64; 3]| Vector3::new(a[0], a[1], a[2]);
+    let cp = p.iter().map(v).sum::<Vector3<f64>>() / n;
+    let cy = y.iter().map(v).sum::<Vector3<f64>>() / n;
+    let h: Matrix3<f64> = p
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (v(a) - cp) * (v(b) - cy).transpose())
+        .sum();
+    let svd = h.svd(true, true);
+    let (u, vt) = (
+        svd.u.unwrap_or_else(Matrix3::identity),
+        svd.v_t.unwrap_or_else(Matrix3::identity),
+    );
+    let d = (vt.transpose() * u.transpose()).determinant();
+    let want = if mirrored { -1.0 } else { 1.0 };
+    let s = Matrix3::from_diagonal(&Vector3::new(
+        1.0,
+        1.0,
+        if d * want < 0.0 { -1.0 } else { 1.0 },
+    ));
+    let r = vt.transpose() * s * u.transpose();
+    let t = cy - r * cp;
+    let ss: f64 = p
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (r * v(a) + t - v(b)).norm_squared())
+        .sum();
+    (r, t, (ss / n).sqrt())
+}
+
+/// The rotation vector of `R`.
+fn rotation_vector_of(r: &Matrix3<f64>) -> [f64; 3] {
+    super::blocks::rotation_vector(std::array::from_fn(|i| std::array::from_fn(|j| r[(i, j)])))
+}
+
+fn rms_spread(points: &[[f64; 3]]) -> f64 {
+    let c = crate::geometry::centroid(points);
+    let ss: f64 = points
+        .iter()
+        .map(|p| (0..3).map(|k| (p[k] - c[k]).powi(2)).sum::<f64>())
+        .sum();
+    (ss / points.len().max(1) as f64).sqrt()
+}
+
+/// Each frame's closed-form registration of `params`' positions onto the
+/// data's (in the order of [`crate::io::Positions::frames`]).
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn register(params: &DhParams, data: &PositionData) -> Result<Vec<Registration>, KernelError> {
+    let kernel = ArmKernel::new(params)?;
+    let mut p = vec![[0.0; 3]; data.len()];
+    kernel.positions(data.poses(), 0..data.len(), &mut p)?;
+    let rows = data.rows();
+    Ok((0..rows.frames().len())
+        .map(|f| {
+            let idx: Vec<usize> = (0..rows.len()).filter(|&i| rows.frame(i) == f).collect();
+            let pf: Vec<[f64; 3]> = idx.iter().map(|&i| p[i]).collect();
+            let yf: Vec<[f64; 3]> = idx.iter().map(|&i| rows.position(i)).collect();
+            let (r, t, rms) = kabsch(&pf, &yf, false);
+            let (_, _, mirrored) = kabsch(&pf, &yf, true);
+            let w = rotation_vector_of(&r);
+            Registration {
+                x: [w[0], w[1], w[2], t[0], t[1], t[2]],
+                rms_mm: rms,
+                mirrored_rms_mm: mirrored,
+                spread_mm: rms_spread(&yf),
+                arm_spread_mm: rms_spread(&pf),
+            }
+        })
+        .collect())
+}
+
+/// The columns of `params` and one [`Frame`] per frame of `data`'s
+/// positions, each starting at its closed-form registration of `params`:
+/// the layout every fit of these data uses.
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, KernelError> {
+    let mut layout = Layout::new(params.clone());
+    if let Some(positions) = data.positions() {
+        let names = positions.rows().frames();
+        for (name, reg) in names.iter().zip(register(params, positions)?) {
+            layout.add(Box::new(Frame {
+                name: name.clone(),
+                start: reg.x,
+            }));
+        }
+    }
+    Ok(layout)
+}
+
+/// σ of row `i`: its own, or the noise model's (`A + B·|y|`, `B` per metre).
+fn row_sigma(data: &PositionData, noise: &Noise, i: usize) -> Option<f64> {
+    let rows = data.rows();
+    rows.uncertainty(i).or_else(|| {
+        let a = noise.position_mm?;
+        let y = rows.position(i);
+        let metres = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt() / 1000.0;
+        Some(a + noise.position_mm_per_m.unwrap_or(0.0) * metres)
+    })
+}
+
+/// The reference positions of a data set on its frames' blocks.
+#[derive(Clone)]
+pub(crate) struct PositionTerm<'d> {
+    data: &'d PositionData,
+    /// Per frame, its block.
+    frames: Vec<BlockId>,
+    /// Per row, its stated σ (mm), or `None` for every row (unit weights).
+    sigma: Option<Vec<f64>>,
+    /// Per row, a robust fit's weight (1 without one).
+    robust: Vec<f64>,
+    /// Per row, `w_i` (1/mm); empty until weighed.
+    weights: Vec<f64>,
+    /// Rows per frame (each frame's leverage).
+    per_frame: Vec<usize>,
+}
+
+impl std::fmt::Debug for PositionTerm<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PositionTerm")
+            .field("positions", &self.data.len())
+            .field("frames", &self.frames.len())
+            .field("stated", &self.sigma.is_some())
+            .finish()
+    }
+}
+
+impl<'d> PositionTerm<'d> {
+    /// The positions of `data` on the frame blocks of `layout` (one named as
+    /// each frame), under `noise`.
+    ///
+    /// # Errors
+    ///
+    /// A frame without its block in the layout, and a file in which some
+    /// rows state an uncertainty and others have none to fall back on.
+    pub(crate) fn new(
+        data: &'d PositionData,
+        layout: &Layout,
+        noise: &Noise,
+    ) -> Result<PositionTerm<'d>, TermError> {
+        let rows = data.rows();
+        let frames = rows
+            .frames()
+            .iter()
+            .map(|name| {
+                layout.block_named(name).ok_or_else(|| {
+                    TermError::invalid(
+                        "positions",
+                        format!("frame `{name}` has no block among the columns (a bug, not input)"),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let sigmas: Vec<Option<f64>> = (0..rows.len()).map(|i| row_sigma(data, noise, i)).collect();
+        let sigma = match sigmas.iter().position(Option::is_none) {
+            None => Some(sigmas.into_iter().flatten().collect()),
+            Some(_) if sigmas.iter().all(Option::is_none) => None,
+            Some(i) => {
+                return Err(TermError::invalid(
+                    "positions",
+                    format!(
+                        "{}: field `uncertainty`: empty while other rows state one, and no \
+                         position noise is given for it (--position-noise)",
+                        data.at(i)
+                    ),
+                ));
+            }
+        };
+        let mut per_frame = vec![0; frames.len()];
+        for i in 0..rows.len() {
+            per_frame[rows.frame(i)] += 1;
+        }
+        Ok(PositionTerm {
+            data,
+            frames,
+            sigma,
+            robust: vec![1.0; rows.len()],
+            weights: Vec::new(),
+            per_frame,
+        })
+    }
+
+    /// Per frame, `R` and `t` at `at`.
+    fn frames_at(&self, at: &At<'_>) -> Vec<([[f64; 3]; 3], [f64; 3])> {
+        self.frames
+            .iter()
+            .map(|&id| {
+                let x = at.block(id);
+                (rotation([x[0], x[1], x[2]]), [x[3], x[4], x[5]])
+            })
+            .collect()
+    }
+
+    /// Row `i`'s whitened residual for the arm's position `p`.
+    fn residual(&self, frames: &[([[f64; 3]; 3], [f64; 3])], i: usize, p: &[f64; 3]) -> [f64; 3] {
+        let rows = self.data.rows();
+        let (r, t) = &frames[rows.frame(i)];
+        let y = rows.position(i);
+        let w = self.weights[i];
+        std::array::from_fn(|k| {
+            w * (r[k][0] * p[0] + r[k][1] * p[1] + r[k][2] * p[2] + t[k] - y[k])
+        })
+    }
+}
+
+/// A chunk's share of the normal equations: `JᵀJ` (upper triangle filled),
+/// `Jᵀr`, cost.
+struct Part {
+    jtj: Vec<f64>,
+    jtr: Vec<f64>,
+    cost: f64,
+}
+
+impl Term for PositionTerm<'_> {
+    fn name(&self) -> &str {
+        "positions"
+    }
+
+    fn rows(&self, _free: &[usize]) -> usize {
+        3 * self.data.len()
+    }
+
+    /// Positions fix the scale (they are absolute); a turn about, or a
+    /// slide along, the base axis moves every position of a frame rigidly,
+    /// which the frame's fitted registration absorbs: not seen. (The
+    /// normal equations with the frames eliminated say so too, but only to
+    /// the precision the elimination leaves: the rule is exact.)
+    fn sees(&self) -> Sees {
+        Sees {
+            base_rotation: false,
+            base_slide: false,
+            scale: true,
+        }
+    }
+
+    fn unit_weighted(&self) -> bool {
+        self.sigma.is_none()
+    }
+
+    fn weigh(
+        &mut self,
+        _at: &At<'_>,
+        _shared: &mut Shared,
+        unit_sigma: f64,
+    ) -> Result<(), TermError> {
+        let n = self.data.len();
+        self.weights = (0..n)
+            .map(|i| {
+                let s = self.sigma.as_ref().map_or(unit_sigma, |s| s[i]);
+                self.robust[i].sqrt() / s
+            })
+            .collect();
+        if let Some(i) = self
+            .weights
+            .iter()
+            .position(|w| !(w.is_finite() && *w > 0.0))
+        {
+            return Err(TermError::invalid(
+                "positions",
+                format!(
+                    "{}: the weight of this position is not a finite positive number: give \
+                     its uncertainty in mm (a tracker's is 0.005–0.05 mm)",
+                    self.data.at(i)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn weight_change(
+        &self,
+        _at: &At<'_>,
+        _shared: &mut Shared,
+        unit_sigma: f64,
+    ) -> Result<f64, TermError> {
+        if self.weights.len() != self.data.len() {
+            return Ok(f64::INFINITY);
+        }
+        // Only an estimated σ moves them.
+        Ok(match (&self.sigma, self.weights.first()) {
+            (None, Some(&w)) => ((1.0 / unit_sigma) * self.robust[0].sqrt() / w - 1.0).abs(),
+            _ => 0.0,
+        })
+    }
+
+    fn accumulate(
+        &self,
+        at: &At<'_>,
+        _shared: &mut Shared,
+        normal: &mut Normal,
+    ) -> Result<f64, TermError> {
+        let frames = self.frames_at(at);
+        let free = normal.free.clone();
+        let geometry = at.layout.geometry_columns();
+        // Per free column: the geometry column, or (frame, its column 0..6).
+        let geo: Vec<(usize, usize)> = free
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| **c < geometry)
+            .map(|(a, &c)| (a, c))
+            .collect();
+        let frame_cols: Vec<Vec<(usize, usize)>> = self
+            .frames
+            .iter()
+            .map(|&id| {
+                let cols = at.layout.columns(id);
+                free.iter()
+                    .enumerate()
+                    .filter(|(_, c)| cols.contains(c))
+                    .map(|(a, &c)| (a, c - cols.start))
+                    .collect()
+            })
+            .collect();
+        let n = self.data.len();
+        let chunks: Vec<std::ops::Range<usize>> = (0..n.div_ceil(ROWS_PER_CHUNK))
+            .map(|k| k * ROWS_PER_CHUNK..((k + 1) * ROWS_PER_CHUNK).min(n))
+            .collect();
+        let p = free.len();
+        let parts = parallel_map(&chunks, at.threads, |range| {
+            self.part(at, &frames, range.clone(), p, &geo, &frame_cols)
+        });
+        let mut cost = 0.0;
+        for part in parts {
+            let part = part?;
+            cost += part.cost;
+            for a in 0..p {
+                normal.jtr[a] += part.jtr[a];
+                for b in a..p {
+                    let v = part.jtj[a * p + b];
+                    normal.jtj[a * p + b] += v;
+                    if b != a {
+                        normal.jtj[b * p + a] += v;
+                    }
+                }
+            }
+        }
+        Ok(cost)
+    }
+
+    fn add_cost(
+        &self,
+        at: &At<'_>,
+        _free: &[usize],
+        _shared: &mut Shared,
+        scratch: &mut Vec<[f64; 3]>,
+        total: &mut f64,
+    ) -> Result<(), TermError> {
+        let frames = self.frames_at(at);
+        let n = self.data.len();
+        scratch.resize(n, [0.0; 3]);
+        at.kernel
+            .positions(self.data.poses(), 0..n, &mut scratch[..n])?;
+        for (i, p) in scratch[..n].iter().enumerate() {
+            let r = self.residual(&frames, i, p);
+            *total += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        }
+        Ok(())
+    }
+
+    /// `|r|²/(1 − h)` per row, `h = 2/n_f`: the average leverage of its
+    /// frame's six unknowns over the frame's `3 n_f` rows.
+    fn standardised(&self, at: &At<'_>) -> Result<Option<Standardised>, TermError> {
+        let frames = self.frames_at(at);
+        let n = self.data.len();
+        let mut p = vec![[0.0; 3]; n];
+        at.kernel.positions(self.data.poses(), 0..n, &mut p)?;
+        let rows = self.data.rows();
+        let values = (0..n)
+            .map(|i| {
+                let r = self.residual(&frames, i, &p[i]);
+                let h = (2.0 / self.per_frame[rows.frame(i)] as f64).min(0.999);
+                let w2 = self.robust[i];
+                (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) / w2.max(f64::MIN_POSITIVE) / (1.0 - h)
+            })
+            .collect();
+        Ok(Some(Standardised { rows: 3, values }))
+    }
+
+    fn observations(&self) -> usize {
+        self.data.len()
+    }
+
+    fn origin(&self, i: usize) -> Origin {
+        Origin {
+            at: self.data.at(i).to_string(),
+            group: self.data.rows().label(i).to_string(),
+        }
+    }
+
+    fn weigh_observations(&mut self, w: &[f64]) -> bool {
+        for (r, &v) in self.robust.iter_mut().zip(w) {
+            *r *= v;
+        }
+        for (x, &v) in self.weights.iter_mut().zip(w) {
+            *x *= v.sqrt();
+        }
+        true
+    }
+
+    fn typical_sigma(&self) -> Option<f64> {
+        let mut s = self.sigma.clone()?;
+        s.sort_by(f64::total_cmp);
+        s.get(s.len() / 2).copied()
+    }
+}
+
+impl PositionTerm<'_> {
+    /// Rows `range`'s share of the normal equations over `p` free columns:
+    /// `geo` the free geometry columns, `frame_cols` each frame's free
+    /// columns (index into the free list, column of the frame).
+    fn part(
+        &self,
+        at: &At<'_>,
+        frames: &[([[f64; 3]; 3], [f64; 3])],
+        range: std::ops::Range<usize>,
+        p: usize,
+        geo: &[(usize, usize)],
+        frame_cols: &[Vec<(usize, usize)>],
+    ) -> Result<Part, TermError> {
+        let mut part = Part {
+            jtj: vec![0.0; p * p],
+            jtr: vec![0.0; p],
+            cost: 0.0,
+        };
+        let rows = self.data.rows();
+        let mut d: Vec<(usize, [f64; 3])> = Vec::with_capacity(p);
+        at.kernel
+            .for_each_jacobian(self.data.poses(), range, |i, pos, jac| {
+                let f = rows.frame(i);
+                let (rot, _) = &frames[f];
+                let w = self.weights[i];
+                let r = self.residual(frames, i, pos);
+                part.cost += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+                d.clear();
+                for &(a, c) in geo {
+                    let j = jac[c];
+                    d.push((
+                        a,
+                        std::array::from_fn(|k| {
+                            w * (rot[k][0] * j[0] + rot[k][1] * j[1] + rot[k][2] * j[2])
+                        }),
+                    ));
+                }
+                if !frame_cols[f].is_empty() {
+                    // Frame::jacobian with R already at hand: [−[Rp]× | I].
+                    let q: [f64; 3] = std::array::from_fn(|k| {
+                        rot[k][0] * pos[0] + rot[k][1] * pos[1] + rot[k][2] * pos[2]
+                    });
+                    let jf = [
+                        [0.0, q[2], -q[1], 1.0, 0.0, 0.0],
+                        [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
+                        [q[1], -q[0], 0.0, 0.0, 0.0, 1.0],
+                    ];
+                    for &(a, k) in &frame_cols[f] {
+                        d.push((a, std::array::from_fn(|row| w * jf[row][k])));
+                    }
+                }
+                for (u, &(a, da)) in d.iter().enumerate() {
+                    part.jtr[a] += da[0] * r[0] + da[1] * r[1] + da[2] * r[2];
+                    for &(b, db) in &d[u..] {
+                        let v = da[0] * db[0] + da[1] * db[1] + da[2] * db[2];
+                        let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+                        part.jtj[lo * p + hi] += v;
+                    }
+                }
+            })?;
+        Ok(part)
+    }
+}

@@ -1,0 +1,148 @@
+//! Simulated reference positions: a laser tracker (or several stations)
+//! seeing the true arm's probe in random poses, with a known truth.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::SimError;
+use super::sockets::random_configuration;
+use super::truth::normal;
+use crate::io::{Arm, DEFAULT_FRAME, Positions};
+use crate::kernel::ArmKernel;
+use crate::residuals::{Frame, Noise};
+
+/// What a simulated tracker campaign measures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PositionSettings {
+    /// Poses per frame.
+    pub poses: usize,
+    /// Frames (instrument stations): one is named
+    /// [`crate::io::DEFAULT_FRAME`], several `station1`, `station2`, ….
+    pub frames: usize,
+    /// The noise: `position_mm` (A) and `position_mm_per_m` (B) of
+    /// `σ = A + B·distance` per coordinate.
+    pub noise: Noise,
+    /// Seed of every draw.
+    pub seed: u64,
+}
+
+/// A simulated campaign: the positions and each frame's true registration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PositionCampaign {
+    /// The rows, as a file would hold them (no uncertainty column: the
+    /// noise model states it).
+    pub positions: Positions,
+    /// Per frame, its true `[rx, ry, rz, tx, ty, tz]` (rad, mm).
+    pub frames: Vec<(String, [f64; 6])>,
+}
+
+/// A random frame: any orientation, 2–4 m from the arm (where a tracker
+/// stands).
+fn random_frame(rng: &mut ChaCha8Rng) -> [f64; 6] {
+    let unit = |rng: &mut ChaCha8Rng| {
+        let v = [normal(rng), normal(rng), normal(rng)];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-12);
+        v.map(|x| x / n)
+    };
+    let axis = unit(rng);
+    let angle = rng.random_range(0.0..std::f64::consts::PI * 0.95);
+    let dir = unit(rng);
+    let distance = rng.random_range(2000.0..4000.0);
+    [
+        axis[0] * angle,
+        axis[1] * angle,
+        axis[2] * angle,
+        dir[0] * distance,
+        dir[1] * distance,
+        dir[2] * distance,
+    ]
+}
+
+/// Positions of `truth`'s probe in random poses (uniform within its joint
+/// limits, or ±180°), seen from `settings.frames` random stations with the
+/// noise model's σ per coordinate. Labels `P1`, `P2`, … per frame.
+///
+/// ```
+/// use aacmm_core::{io::Arm, params::DhParams, residuals::Noise, simulate::*};
+/// let arm = Arm::without_limits("t", DhParams::paper_nominal());
+/// let noise = Noise { position_mm: Some(0.015), position_mm_per_m: Some(0.006), ..Noise::default() };
+/// let s = PositionSettings { poses: 50, frames: 2, noise, seed: 3 };
+/// let c = simulate_positions(&arm, &s).unwrap();
+/// assert_eq!((c.positions.len(), c.positions.frames().len()), (100, 2));
+/// ```
+///
+/// # Errors
+///
+/// Settings without a pose, frame or stated noise; the kernel's.
+pub fn simulate_positions(
+    truth: &Arm,
+    settings: &PositionSettings,
+) -> Result<PositionCampaign, SimError> {
+    let a = settings.noise.position_mm.unwrap_or(-1.0);
+    let b = settings.noise.position_mm_per_m.unwrap_or(0.0);
+    if settings.poses < 3 || settings.frames == 0 || !(a >= 0.0 && b >= 0.0) {
+        return Err(SimError::setting(
+            "positions",
+            "at least 3 poses per frame, one frame, and a position noise A ≥ 0 (B ≥ 0)",
+        ));
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let frames: Vec<(String, [f64; 6])> = (0..settings.frames)
+        .map(|f| {
+            let name = if settings.frames == 1 {
+                DEFAULT_FRAME.to_string()
+            } else {
+                format!("station{}", f + 1)
+            };
+            (name, random_frame(&mut rng))
+        })
+        .collect();
+    let positions = seen_from(truth, settings, &frames, &mut rng)?;
+    Ok(PositionCampaign { positions, frames })
+}
+
+/// Positions of `truth`'s probe in `settings.poses` random poses per frame,
+/// seen from the given `frames` (`[rx, ry, rz, tx, ty, tz]`, rad, mm) with
+/// the noise model of `settings` (its frame count is not used): new poses
+/// from stations already placed, for held-out data.
+///
+/// # Errors
+///
+/// As [`simulate_positions`].
+pub fn simulate_positions_from(
+    truth: &Arm,
+    settings: &PositionSettings,
+    frames: &[(String, [f64; 6])],
+) -> Result<Positions, SimError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    seen_from(truth, settings, frames, &mut rng)
+}
+
+fn seen_from(
+    truth: &Arm,
+    settings: &PositionSettings,
+    frames: &[(String, [f64; 6])],
+    rng: &mut ChaCha8Rng,
+) -> Result<Positions, SimError> {
+    let a = settings.noise.position_mm.unwrap_or(-1.0);
+    let b = settings.noise.position_mm_per_m.unwrap_or(0.0);
+    let n = truth.params.joint_count();
+    let mut limits = truth.limits.clone();
+    limits.resize(n, None);
+    let kernel = ArmKernel::new(&truth.params).map_err(|e| SimError::Model(e.to_string()))?;
+    let mut positions = Positions::new(n);
+    for (name, x) in frames {
+        for i in 0..settings.poses {
+            let q = random_configuration(&limits, rng);
+            let p = kernel
+                .position(&q)
+                .map_err(|e| SimError::Model(e.to_string()))?;
+            let y = Frame::apply(x, p);
+            let distance = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt() / 1000.0;
+            let sigma = a + b * distance;
+            let seen = y.map(|v| v + sigma * normal(rng));
+            positions.push(&format!("P{}", i + 1), name, &q, seen, None, 0);
+        }
+    }
+    Ok(positions)
+}
