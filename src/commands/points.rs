@@ -4,8 +4,10 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 
-use aacmm_core::io::write_points;
-use anyhow::{Context, Result};
+use aacmm_core::io::frames::parse_frames;
+use aacmm_core::io::{source_name, write_points};
+use aacmm_core::residuals::Frame;
+use anyhow::{Context, Result, bail};
 
 use crate::output::Stdout;
 use crate::paths::check_output_file;
@@ -18,6 +20,34 @@ pub struct Args {
     /// Output CSV `point,x,y,z` (mm); stdout when absent.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Positions in this frame of the arm file (a calibrated arm's
+    /// `[[frame]]`, fitted to reference positions): what that instrument
+    /// will see, for a verification run. Without it, the arm's base frame.
+    #[arg(long, value_name = "NAME")]
+    frame: Option<String>,
+}
+
+/// The registration of the frame `name` in the arm file `path`.
+fn frame(path: &std::path::Path, name: &str) -> Result<[f64; 6]> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let frames = parse_frames(&text, &source_name(path))?;
+    match frames.iter().find(|f| f.name == name) {
+        Some(f) => Ok(f.values()),
+        None if frames.is_empty() => bail!(
+            "--frame {name}: {} has no `[[frame]]` table (a calibration against reference \
+             positions writes one per frame into calibrated.toml)",
+            path.display()
+        ),
+        None => {
+            let names: Vec<String> = frames.iter().map(|f| format!("`{}`", f.name)).collect();
+            bail!(
+                "--frame {name}: no such frame in {}; it has {}",
+                path.display(),
+                names.join(", ")
+            )
+        }
+    }
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -29,7 +59,11 @@ pub fn run(args: Args) -> Result<()> {
         check_output_file("--out", out, &inputs)?;
     }
     let (arm, poses) = args.input.read()?;
-    let xyz = args.input.positions(&arm, &poses)?;
+    let mut xyz = args.input.positions(&arm, &poses)?;
+    if let Some(name) = &args.frame {
+        let x = frame(&args.input.arm, name)?;
+        xyz.iter_mut().for_each(|p| *p = Frame::apply(&x, *p));
+    }
     match &args.out {
         Some(path) => {
             let file =

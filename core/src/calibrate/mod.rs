@@ -547,6 +547,33 @@ impl Calibration {
             .collect()
     }
 
+    /// Each fitted frame as a calibrated arm file carries it
+    /// ([`crate::io::frames`]): values and σ in deg and mm.
+    pub fn frame_records(&self) -> Vec<crate::io::frames::FrameRecord> {
+        self.frames()
+            .into_iter()
+            .map(|(name, x)| {
+                let sigma = |axis: &str| {
+                    let n = format!("{name}.{axis}");
+                    self.auxiliary
+                        .iter()
+                        .find(|a| a.name == n)
+                        .and_then(|a| a.sigma)
+                };
+                let three = |axes: [&str; 3]| -> Option<[f64; 3]> {
+                    Some([sigma(axes[0])?, sigma(axes[1])?, sigma(axes[2])?])
+                };
+                crate::io::frames::FrameRecord {
+                    name: name.clone(),
+                    rotation_deg: [x[0], x[1], x[2]].map(f64::to_degrees),
+                    translation_mm: [x[3], x[4], x[5]],
+                    rotation_sigma_deg: three(["rx", "ry", "rz"]),
+                    translation_sigma_mm: three(["tx", "ty", "tz"]),
+                }
+            })
+            .collect()
+    }
+
     /// Restores [`Calibration::params`] from the estimates, after reading a
     /// calibration back from JSON: each value to the parameter it names (a
     /// joint with an `hbeta…` is a Hayati joint).

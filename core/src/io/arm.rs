@@ -202,6 +202,10 @@ pub(crate) struct ArmFile {
     /// Stated tolerances: read by [`super::prior`], never written.
     #[serde(rename = "prior", default, skip_serializing)]
     _prior: Option<serde::de::IgnoredAny>,
+    /// A calibration's frame registrations: read by [`super::frames`],
+    /// never written here.
+    #[serde(rename = "frame", default, skip_serializing)]
+    _frame: Option<serde::de::IgnoredAny>,
 }
 
 /// One `[[joint]]` table.
@@ -360,6 +364,7 @@ impl ArmFile {
                 z: len(z),
             },
             _prior: None,
+            _frame: None,
         }
     }
 

@@ -34,6 +34,7 @@
 //! whitespace, which would not read back.
 
 pub mod arm;
+pub mod frames;
 pub mod lengths;
 pub mod limits;
 pub mod points;

@@ -688,7 +688,8 @@ impl CalibrationReport {
         let mut files = vec![
             (
                 CALIBRATED_FILE.to_string(),
-                arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg),
+                arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg)
+                    + &crate::io::frames::frames_to_toml(&self.calibration.frame_records()),
             ),
             (REPORT_FILE.to_string(), self.to_json()),
             (TIMING_FILE.to_string(), self.timing_json(total_seconds)),

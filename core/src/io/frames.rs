@@ -1,0 +1,104 @@
+//! The registrations of an instrument's frames, as a calibrated arm file
+//! carries them: one `[[frame]]` table per frame of the reference
+//! positions it was fitted to.
+//!
+//! ```toml
+//! [[frame]]
+//! name = "instrument"
+//! rotation_deg = [-0.0566, 0.1122, 0.0509]     # rotation vector (axis × angle)
+//! translation_mm = [-0.4099, 0.0943, -0.0031]
+//! rotation_sigma_deg = [0.0015, 0.0017, 0.0050] # k = 1, of the local step
+//! translation_sigma_mm = [0.021, 0.019, 0.013]
+//! ```
+//!
+//! A frame maps the arm's base coordinates into the instrument's,
+//! `y = R p + t`, with `R` the rotation of the rotation vector. The σ are those of the
+//! fit's local step (a small rotation `δω` applied on the left, `δt`); a
+//! column the data did not determine has none.
+
+use serde::{Deserialize, Serialize};
+
+use super::text::line_of;
+use crate::error::InputError;
+
+/// A frame's registration as written in a calibrated arm file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameRecord {
+    /// The frame's name (the positions file's `frame`).
+    pub name: String,
+    /// Rotation vector of `R`, deg.
+    pub rotation_deg: [f64; 3],
+    /// `t`, mm.
+    pub translation_mm: [f64; 3],
+    /// σ of the rotation (k = 1), deg, when the fit determined it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation_sigma_deg: Option<[f64; 3]>,
+    /// σ of the translation (k = 1), mm, when the fit determined it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translation_sigma_mm: Option<[f64; 3]>,
+}
+
+impl FrameRecord {
+    /// `[rx, ry, rz, tx, ty, tz]` (rad, mm), what the library computes with.
+    pub fn values(&self) -> [f64; 6] {
+        let r = self.rotation_deg.map(f64::to_radians);
+        let t = self.translation_mm;
+        [r[0], r[1], r[2], t[0], t[1], t[2]]
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+struct Frames {
+    #[serde(default)]
+    frame: Vec<FrameRecord>,
+}
+
+/// The `[[frame]]` tables of an arm file's text (none: empty); `file`
+/// names it in messages.
+///
+/// ```
+/// use aacmm_core::io::frames::{parse_frames, frames_to_toml};
+/// let text = "[[frame]]\nname = \"t\"\nrotation_deg = [0.0, 0.0, 90.0]\ntranslation_mm = [1.0, 2.0, 3.0]\n";
+/// let f = parse_frames(text, "c.toml").unwrap();
+/// assert_eq!((f[0].name.as_str(), f[0].values()[2]), ("t", std::f64::consts::FRAC_PI_2));
+/// assert_eq!(frames_to_toml(&f), text);
+/// ```
+///
+/// # Errors
+///
+/// TOML that does not parse, a `[[frame]]` table with a field missing,
+/// unknown or not a number, a value that is not finite, and a name given
+/// twice: each naming the file.
+pub fn parse_frames(text: &str, file: &str) -> Result<Vec<FrameRecord>, InputError> {
+    let frames = toml::from_str::<Frames>(text)
+        .map_err(|e| {
+            let line = e.span().map_or(0, |s| line_of(text, s.start));
+            let m = format!("a `[[frame]]` table: {}", e.message());
+            InputError::field(file, line, "frame", m)
+        })?
+        .frame;
+    for (i, f) in frames.iter().enumerate() {
+        let values = f.rotation_deg.iter().chain(&f.translation_mm);
+        if values.clone().any(|v| !v.is_finite()) {
+            let m = format!("frame `{}`: a value that is not a finite number", f.name);
+            return Err(InputError::file_error(file, m));
+        }
+        if frames[..i].iter().any(|g| g.name == f.name) {
+            let m = format!("frame `{}` is given twice", f.name);
+            return Err(InputError::file_error(file, m));
+        }
+    }
+    Ok(frames)
+}
+
+/// The `[[frame]]` tables of `frames`, to append to an arm file.
+pub fn frames_to_toml(frames: &[FrameRecord]) -> String {
+    if frames.is_empty() {
+        return String::new();
+    }
+    let t = Frames {
+        frame: frames.to_vec(),
+    };
+    toml::to_string(&t).expect("strings and finite numbers always serialize to TOML")
+}
