@@ -10,7 +10,12 @@
 //! - `global`: `--method global` on a newly assembled arm (zeros anywhere in
 //!   ±180°) whose LM from nominal fails, 100 touches;
 //! - `energy`: annealing energy evaluations (position kernel + the paper's
-//!   OA) per second, 100 touches.
+//!   OA) per second, 100 touches;
+//! - `positions`: a laser-tracker calibration — the shipped UR5's arm file
+//!   (two Hayati joints), random errors, one tracker frame seeing 1000 or
+//!   12000 poses with 15 µm + 6 µm/m noise (stated): LM from nominal with
+//!   the identifiability analysis (`--fix auto`), frame and covariance,
+//!   `positions/1000` and `positions/12000`.
 
 use std::hint::black_box;
 
@@ -123,5 +128,51 @@ fn energy(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, lm, global, energy);
+fn positions(c: &mut Criterion) {
+    use aacmm_core::simulate::{PositionSettings, simulate_positions, true_arm};
+    use rand::SeedableRng;
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/ur5-tracker/arm.toml");
+    let nominal = aacmm_core::read_arm(std::path::Path::new(path))
+        .expect("the shipped UR5")
+        .0;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let truth = true_arm(&nominal, &ErrorModel::random(1.0, false), &mut rng).expect("truth");
+    let noise = Noise {
+        position_mm: Some(0.015),
+        position_mm_per_m: Some(0.006),
+        ..Noise::default()
+    };
+    let (mut model, settings) = options(Method::Lm, FixSpec::Auto);
+    model.noise = noise;
+    let mut g = c.benchmark_group("positions");
+    g.sample_size(10);
+    for poses in [1000, 12000] {
+        let data = std::sync::OnceLock::new();
+        g.throughput(Throughput::Elements(poses as u64));
+        g.bench_function(BenchmarkId::from_parameter(poses), |b| {
+            let data = data.get_or_init(|| {
+                let s = PositionSettings {
+                    poses,
+                    frames: 1,
+                    noise,
+                    seed: 12,
+                };
+                let rows = simulate_positions(&truth, &s).expect("campaign").positions;
+                DataSet::from_positions(rows, "tracker.csv").expect("data set")
+            });
+            b.iter(|| {
+                calibrate(
+                    black_box(&nominal.params),
+                    black_box(data),
+                    &model,
+                    &settings,
+                )
+                .expect("fit")
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, lm, global, energy, positions);
 criterion_main!(benches);
