@@ -122,7 +122,7 @@ impl FitInput {
 }
 
 /// `A` or `A+B/m` of --position-noise: mm, and mm per metre.
-fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
+pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
     let number = |t: &str| {
         t.trim().parse::<f64>().map_err(|_| {
             format!("`{t}` is not a number: give A or A+B/m, both mm (e.g. 0.015+0.006/m)")

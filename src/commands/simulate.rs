@@ -27,7 +27,7 @@ const DEFAULT_REFERENCE_LENGTHS: usize = 3;
 /// campaign.toml (every setting and the seed) into --out. Same seed, same bytes.
 #[derive(clap::Args)]
 #[command(group(ArgGroup::new("truth").required(true).args(["true_arm", "errors"])))]
-#[command(group(ArgGroup::new("where").required(true).args(["sockets", "sockets_file"])))]
+#[command(group(ArgGroup::new("where").required(true).multiple(true).args(["sockets", "sockets_file", "positions"])))]
 pub struct Args {
     /// Nominal arm file (TOML, 6 or 7 joints); its joint limits, if any, bound
     /// every simulated reading.
@@ -57,7 +57,20 @@ pub struct Args {
     /// Touches per socket (at least 3), each a different articulation (some
     /// joint at least 20° away from every other touch of the socket).
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
-    poses: usize,
+    poses: Option<usize>,
+    /// Also (or instead) a laser-tracker campaign: N random poses (within
+    /// the joint limits) per instrument frame, seen from random stations
+    /// 2–4 m away; writes positions.csv and the true frames into
+    /// true_arm.toml.
+    #[arg(long, value_name = "N")]
+    positions: Option<usize>,
+    /// Instrument stations of --positions, each with its own random pose.
+    #[arg(long, value_name = "F", default_value_t = 1, requires = "positions")]
+    frames: usize,
+    /// Noise of --positions per coordinate: `A` mm or `A+B/m` (a tracker's
+    /// `0.015+0.006/m`, the default).
+    #[arg(long, value_name = "MM[+MM/m]", requires = "positions", value_parser = super::shared_flags::position_noise)]
+    position_noise: Option<(f64, Option<f64>)>,
     /// Seed of every random draw (0 to 2^63 - 1); recorded in campaign.toml.
     #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
     seed: u64,
@@ -109,14 +122,85 @@ pub fn run(args: Args) -> Result<()> {
     report(&warnings)?;
     let joints = nominal.params.joint_count();
     let errors = error_model(&args)?;
+    if args.sockets.is_none() && args.sockets_file.is_none() {
+        return tracker(&args, &nominal, &errors, None);
+    }
     let (sockets, file) = socket_plan(&args)?;
     let located = |e| flag_error(e, file.as_ref());
-    let settings = campaign_settings(&args, errors, sockets);
+    let settings = campaign_settings(&args, errors.clone(), sockets);
     settings.validate(joints).map_err(located)?;
 
     let campaign = simulate(&nominal, &settings).map_err(located)?;
     let written = write_campaign(&args.out, &campaign, &settings)?;
-    describe(&args, &nominal, &settings, &campaign, &written)
+    describe(&args, &nominal, &settings, &campaign, &written)?;
+    if args.positions.is_some() {
+        tracker(&args, &nominal, &errors, Some(&campaign.true_arm))?;
+    }
+    Ok(())
+}
+
+/// The tracker campaign of --positions: of `truth` (the touch campaign's
+/// true arm) or of a true arm drawn from `errors`; positions.csv and
+/// true_arm.toml with the true frames.
+fn tracker(
+    args: &Args,
+    nominal: &aacmm_core::io::Arm,
+    errors: &ErrorModel,
+    truth: Option<&aacmm_core::io::Arm>,
+) -> Result<()> {
+    use aacmm_core::io::frames::frames_to_toml;
+    use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, positions::write_positions};
+    use aacmm_core::simulate::{POSITIONS_FILE, PositionSettings, true_frames};
+    let Some(poses) = args.positions else {
+        bail!("give --sockets K, --sockets-file FILE or --positions N");
+    };
+    let (a, b) = args.position_noise.unwrap_or((0.015, Some(0.006)));
+    let settings = PositionSettings {
+        poses,
+        frames: args.frames,
+        noise: aacmm_core::residuals::Noise {
+            position_mm: Some(a),
+            position_mm_per_m: b,
+            ..Default::default()
+        },
+        seed: args.seed,
+    };
+    let (truth, campaign) = match truth {
+        Some(t) => (
+            t.clone(),
+            aacmm_core::simulate::simulate_positions(t, &settings),
+        ),
+        None => match aacmm_core::simulate::simulate_tracker(nominal, errors, &settings) {
+            Ok((t, c)) => (t, Ok(c)),
+            Err(e) => return Err(flag_error(e, None)),
+        },
+    };
+    let campaign = campaign.map_err(|e| anyhow!("--positions: {e}"))?;
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
+    let path = args.out.join(POSITIONS_FILE);
+    let mut text = Vec::new();
+    write_positions(&mut text, &campaign.positions, AngleUnit::Deg)?;
+    write_file(&path, &text)?;
+    let true_arm = arm_to_toml(&truth, LengthUnit::Mm, AngleUnit::Deg)
+        + &frames_to_toml(&true_frames(&campaign));
+    let arm_path = args.out.join(TRUE_ARM_FILE);
+    write_file(&arm_path, true_arm.as_bytes())?;
+    note(format_args!(
+        "tracker: {poses} poses in each of {} frame(s), noise {a} mm{}; seed {}",
+        args.frames,
+        b.map(|b| format!(" + {b} mm/m")).unwrap_or_default(),
+        args.seed
+    ))?;
+    note(format_args!("wrote {}", path.display()))?;
+    note(format_args!(
+        "wrote {} (with the true frames)",
+        arm_path.display()
+    ))
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    std::fs::write(path, bytes).map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))
 }
 
 /// --out may not hold an input.
@@ -130,6 +214,7 @@ fn check_paths(args: &Args) -> Result<()> {
         SOCKETS_FILE,
         TRUE_ARM_FILE,
         CAMPAIGN_FILE,
+        aacmm_core::simulate::POSITIONS_FILE,
     ];
     check_output_dir("--out", &args.out, &outputs, &inputs)
 }
@@ -179,7 +264,7 @@ fn socket_plan(args: &Args) -> Result<(SocketPlan, Option<SocketsFile>)> {
 /// The campaign's settings from the flags (not yet checked).
 fn campaign_settings(args: &Args, errors: ErrorModel, sockets: SocketPlan) -> CampaignSettings {
     let count = sockets.count();
-    let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses);
+    let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses.unwrap_or(0));
     settings.nominal_file = Some(source_name(&args.arm));
     settings.sockets = sockets;
     settings.encoder_noise_deg = args.encoder_noise;

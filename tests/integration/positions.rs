@@ -327,3 +327,53 @@ fn bad_positions_are_refused_by_file_line_and_field() {
         assert_clean_error(&o, expect);
     }
 }
+
+/// `simulate --positions` writes a tracker campaign with its true frames;
+/// `calibrate --positions` with the simulated noise stated finds it usable
+/// and consistent with that noise (the χ² test), 3 frames.
+#[test]
+fn simulate_positions_then_calibrate() {
+    use crate::util::{aacmm, shipped_arm, stderr, stdout, temp_dir};
+    let dir = temp_dir("simulate-positions");
+    let d = dir.to_str().unwrap();
+    let arm = shipped_arm();
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm,
+        "--errors",
+        "random",
+        "--positions",
+        "150",
+        "--frames",
+        "3",
+        "--seed",
+        "9",
+        "--out",
+        d,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let truth = std::fs::read_to_string(dir.join("true_arm.toml")).unwrap();
+    let frames = aacmm_core::io::frames::parse_frames(&truth, "true_arm.toml").unwrap();
+    assert_eq!(frames.len(), 3);
+    let positions = dir.join("positions.csv");
+    let out = dir.join("out");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--positions",
+        positions.to_str().unwrap(),
+        "--position-noise",
+        "0.015+0.006/m",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("consistent with the stated noise"), "{text}");
+    assert!(
+        text.contains("450 reference positions in 3 frames"),
+        "{text}"
+    );
+}

@@ -36,6 +36,46 @@ pub struct PositionCampaign {
     pub frames: Vec<(String, [f64; 6])>,
 }
 
+/// The file a simulated tracker campaign writes its positions to.
+pub const POSITIONS_FILE: &str = "positions.csv";
+
+/// A true arm drawn from `errors` about `nominal` (seeded by
+/// `settings.seed`) and its tracker campaign (seeded by the next seed):
+/// what `aacmm simulate --positions` writes.
+///
+/// # Errors
+///
+/// As [`super::true_arm`] and [`simulate_positions`].
+pub fn simulate_tracker(
+    nominal: &Arm,
+    errors: &super::ErrorModel,
+    settings: &PositionSettings,
+) -> Result<(Arm, PositionCampaign), SimError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let truth = super::true_arm(nominal, errors, &mut rng)?;
+    let next = PositionSettings {
+        seed: settings.seed.wrapping_add(1),
+        ..settings.clone()
+    };
+    let campaign = simulate_positions(&truth, &next)?;
+    Ok((truth, campaign))
+}
+
+/// The frames of a campaign as an arm file carries them (no σ: the truth).
+pub fn true_frames(campaign: &PositionCampaign) -> Vec<crate::io::frames::FrameRecord> {
+    campaign
+        .frames
+        .iter()
+        .map(|(name, x)| crate::io::frames::FrameRecord {
+            name: name.clone(),
+            rotation_deg: [x[0], x[1], x[2]].map(f64::to_degrees),
+            translation_mm: [x[3], x[4], x[5]],
+            rotation_sigma_deg: None,
+            translation_sigma_mm: None,
+        })
+        .collect()
+}
+
 /// A random frame: any orientation, 2–4 m from the arm (where a tracker
 /// stands).
 fn random_frame(rng: &mut ChaCha8Rng) -> [f64; 6] {
