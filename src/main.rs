@@ -49,6 +49,8 @@ enum Command {
                       /verdict says why; 2 for a command line that cannot be parsed."
     )]
     Calibrate(Box<commands::calibrate::Args>),
+    /// Export an arm (a calibrated one) as URDF or as a D-H table.
+    Export(commands::export::Args),
 }
 
 fn main() -> ExitCode {
@@ -69,6 +71,7 @@ fn main() -> ExitCode {
         Command::Evaluate(args) => commands::evaluate::run(args),
         Command::Identify(args) => commands::identify::run(args),
         Command::Calibrate(args) => commands::calibrate::run(*args),
+        Command::Export(args) => commands::export::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -3,6 +3,7 @@
 
 pub mod calibrate;
 pub mod evaluate;
+pub mod export;
 pub mod identify;
 pub mod points;
 pub mod progress;

@@ -6,6 +6,7 @@ mod calibrate;
 mod campaign;
 mod edges;
 mod evaluate;
+mod export;
 mod house;
 mod mukca;
 mod out_paths;

@@ -33,6 +33,8 @@
 //! rounds every `rpy` component within that distance of a multiple of π/2 to
 //! it and reports each rounding ([`Urdf::snapped`]).
 
+pub mod export;
+
 use std::collections::HashMap;
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};

@@ -1,0 +1,272 @@
+//! A D-H arm (a calibrated one) as URDF joint origins, and as a plain D-H
+//! table.
+//!
+//! Link `i`'s frame is the frame just after joint `i`'s rotation; joint
+//! `i + 1` sits in it at `Rz(θ_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)` (a Hayati joint:
+//! `Rz(θ_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`) and turns about its z axis, so the
+//! URDF's readings are the arm's `q` (the zero offsets are in the origins).
+//! The probe is a `fixed` joint at `B` after the last link's transform.
+//! `xyz` in metres, `rpy` in radians (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`),
+//! every number with the digits that read back to the same `f64`: the
+//! toolkit's own URDF reader ([`super::parse_urdf`]) gives back the same
+//! chain, the tip within 1 nm of the arm's probe for every reading.
+
+use nalgebra::{Rotation3, Vector3};
+
+use super::{JointKind, Urdf};
+use crate::params::{DhJoint, DhParams, JointModel};
+
+/// The names a URDF gives the arm: its robot, links and joints, and joint
+/// limits; from a template URDF, or the defaults (`base_link`, `link1`…,
+/// `joint1`…, `probe`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfNames {
+    /// The robot's name.
+    pub robot: String,
+    /// `n + 1` links: the base, then the one after each joint.
+    pub links: Vec<String>,
+    /// `n` revolute joints.
+    pub joints: Vec<String>,
+    /// Per joint, `[lower, upper]` (rad), where known.
+    pub limits: Vec<Option<[f64; 2]>>,
+}
+
+impl UrdfNames {
+    /// The default names for an arm of `n` joints named `robot`, with
+    /// `limits` (rad; missing entries: none).
+    pub fn defaults(robot: &str, n: usize, limits: &[Option<[f64; 2]>]) -> UrdfNames {
+        UrdfNames {
+            robot: robot.to_string(),
+            links: std::iter::once("base_link".to_string())
+                .chain((1..=n).map(|i| format!("link{i}")))
+                .collect(),
+            joints: (1..=n).map(|i| format!("joint{i}")).collect(),
+            limits: (0..n).map(|i| limits.get(i).copied().flatten()).collect(),
+        }
+    }
+
+    /// The names of a template URDF's revolute joints, in file order (its
+    /// chain root to tip), their links and limits; `None` unless it has
+    /// exactly `n` revolute joints, each the child link's parent of the next.
+    pub fn from_template(template: &Urdf, n: usize) -> Option<UrdfNames> {
+        let revolute: Vec<_> = (template.joints.iter())
+            .filter(|j| j.kind == JointKind::Revolute)
+            .collect();
+        if revolute.len() != n || n == 0 {
+            return None;
+        }
+        let mut links = vec![revolute[0].parent.clone()];
+        links.extend(revolute.iter().map(|j| j.child.clone()));
+        Some(UrdfNames {
+            robot: template.name.clone(),
+            links,
+            joints: revolute.iter().map(|j| j.name.clone()).collect(),
+            limits: revolute.iter().map(|j| j.limits).collect(),
+        })
+    }
+}
+
+/// The rigid transform of link `j` before the next joint turns:
+/// translation (mm) and rotation.
+fn link_transform(j: &DhJoint) -> (Vector3<f64>, Rotation3<f64>) {
+    let (s, c) = j.theta.sin_cos();
+    let rz = Rotation3::from_axis_angle(&Vector3::z_axis(), j.theta);
+    let rx = Rotation3::from_axis_angle(&Vector3::x_axis(), j.alpha);
+    match j.model {
+        JointModel::Hayati => {
+            let ry = Rotation3::from_axis_angle(&Vector3::y_axis(), j.beta);
+            (Vector3::new(j.a * c, j.a * s, 0.0), rz * rx * ry)
+        }
+        _ => (Vector3::new(j.a * c, j.a * s, j.d), rz * rx),
+    }
+}
+
+/// `<origin xyz="…" rpy="…"/>` of a transform (translation in mm).
+fn origin(t: Vector3<f64>, r: Rotation3<f64>) -> String {
+    let (roll, pitch, yaw) = r.euler_angles();
+    let m = t / 1000.0;
+    format!(
+        "<origin xyz=\"{:?} {:?} {:?}\" rpy=\"{:?} {:?} {:?}\"/>",
+        m.x, m.y, m.z, roll, pitch, yaw
+    )
+}
+
+/// The arm `params` as a URDF with `names`: one revolute joint per joint
+/// (axis z, limits where known, `continuous` where not), then a fixed joint
+/// to the probe link `probe`.
+///
+/// ```
+/// use aacmm_core::params::DhParams;
+/// use aacmm_core::urdf::{UrdfOptions, parse_urdf, export::{UrdfNames, to_urdf}};
+/// let arm = DhParams::paper_nominal();
+/// let text = to_urdf(&arm, &UrdfNames::defaults("paper", 6, &[]));
+/// let back = parse_urdf(&text, "out.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
+/// let chain = back.chain(None, "probe").unwrap();
+/// let tip = chain.position(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]);
+/// let k = aacmm_core::kernel::ArmKernel::new(&arm).unwrap();
+/// let p = k.position(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]).unwrap();
+/// assert!((0..3).all(|i| (tip[i] * 1000.0 - p[i]).abs() < 1e-6));
+/// ```
+pub fn to_urdf(params: &DhParams, names: &UrdfNames) -> String {
+    let n = params.joint_count();
+    let mut s = format!(
+        "<?xml version=\"1.0\"?>\n<!-- written by aacmm export: the D-H arm's joint origins; \
+         readings are the arm's q -->\n<robot name=\"{}\">\n",
+        xml_escape(&names.robot)
+    );
+    for link in names
+        .links
+        .iter()
+        .chain(std::iter::once(&"probe".to_string()))
+    {
+        s += &format!("  <link name=\"{}\"/>\n", xml_escape(link));
+    }
+    let mut previous = (Vector3::zeros(), Rotation3::identity());
+    for i in 0..n {
+        let limit = names.limits.get(i).copied().flatten();
+        let kind = if limit.is_some() {
+            "revolute"
+        } else {
+            "continuous"
+        };
+        s += &format!(
+            "  <joint name=\"{}\" type=\"{kind}\">\n    <parent link=\"{}\"/>\n    <child \
+             link=\"{}\"/>\n    {}\n    <axis xyz=\"0 0 1\"/>\n",
+            xml_escape(&names.joints[i]),
+            xml_escape(&names.links[i]),
+            xml_escape(&names.links[i + 1]),
+            origin(previous.0, previous.1)
+        );
+        if let Some([lo, hi]) = limit {
+            s += &format!(
+                "    <limit lower=\"{lo:?}\" upper=\"{hi:?}\" effort=\"0\" velocity=\"0\"/>\n"
+            );
+        }
+        s += "  </joint>\n";
+        previous = link_transform(&params.joints[i]);
+    }
+    let b = Vector3::from(params.probe);
+    let (t, r) = previous;
+    s += &format!(
+        "  <joint name=\"probe\" type=\"fixed\">\n    <parent link=\"{}\"/>\n    <child \
+         link=\"probe\"/>\n    {}\n  </joint>\n</robot>\n",
+        xml_escape(&names.links[n]),
+        origin(t + r * b, r)
+    );
+    s
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The arm as a plain D-H table, CSV: one row per joint (`theta_deg`,
+/// `d_mm`, `a_mm`, `alpha_deg`, and `beta_deg` for a Hayati joint, whose
+/// `d_mm` is empty), then a `probe` row with the probe's `x_mm,y_mm,z_mm`
+/// in the last frame. Standard D-H: `A_i = Rz(θ_i + q_i)·Tz(d_i)·Tx(a_i)·
+/// Rx(α_i)`; Hayati: `Rz(θ_i + q_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`.
+///
+/// ```
+/// let t = aacmm_core::urdf::export::dh_table(&aacmm_core::params::DhParams::paper_nominal());
+/// assert!(t.starts_with("link,model,theta_deg,d_mm,a_mm,alpha_deg,beta_deg,x_mm,y_mm,z_mm\n1,dh,0.0,"));
+/// assert!(t.ends_with("probe,point,,,,,,0.0,0.0,100.0\n"));
+/// ```
+pub fn dh_table(params: &DhParams) -> String {
+    let mut s = String::from("link,model,theta_deg,d_mm,a_mm,alpha_deg,beta_deg,x_mm,y_mm,z_mm\n");
+    for (i, j) in params.joints.iter().enumerate() {
+        let (model, d, beta) = match j.model {
+            JointModel::Hayati => (
+                "hayati",
+                String::new(),
+                format!("{:?}", j.beta.to_degrees()),
+            ),
+            _ => ("dh", format!("{:?}", j.d), String::new()),
+        };
+        s += &format!(
+            "{},{model},{:?},{d},{:?},{:?},{beta},,,\n",
+            i + 1,
+            j.theta.to_degrees(),
+            j.a,
+            j.alpha.to_degrees()
+        );
+    }
+    let b = params.probe;
+    s += &format!("probe,point,,,,,,{:?},{:?},{:?}\n", b[0], b[1], b[2]);
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::ArmKernel;
+    use crate::urdf::{UrdfOptions, parse_urdf};
+
+    /// Exported and read back by the toolkit's own URDF reader, the chain's
+    /// tip is the arm's probe within 1 nm — D-H and Hayati joints, 6 and 7
+    /// joints, zero offsets and twists off their nominal values — and the
+    /// D-H conversion of the read-back chain is the same arm up to its base.
+    #[test]
+    fn exported_urdf_reads_back_within_a_nanometre() {
+        let mut hayati = DhParams::paper_nominal();
+        hayati.joints[1] = DhJoint {
+            a: hayati.joints[1].a,
+            alpha: 0.001,
+            theta: 0.05,
+            beta: 0.003,
+            model: JointModel::Hayati,
+            ..DhJoint::default()
+        };
+        hayati.joints[2].theta = -0.2;
+        let mut seven = DhParams::paper_nominal();
+        seven.joints.push(DhJoint {
+            a: 12.0,
+            d: 40.0,
+            alpha: 0.4,
+            theta: 0.1,
+            ..DhJoint::default()
+        });
+        for (name, arm) in [
+            ("paper", DhParams::paper_nominal()),
+            ("hayati", hayati),
+            ("seven", seven),
+        ] {
+            let n = arm.joint_count();
+            let limits = vec![Some([-3.0, 3.0]); n];
+            let text = to_urdf(&arm, &UrdfNames::defaults(name, n, &limits));
+            let urdf = parse_urdf(&text, "x.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
+            assert!(
+                urdf.joints
+                    .iter()
+                    .all(|j| j.limits == Some([-3.0, 3.0]) || j.name == "probe")
+            );
+            let chain = urdf.chain(None, "probe").unwrap();
+            // The reader's D-H conversion (D-H joints only: a Hayati joint's
+            // skew axes have a common normal far away).
+            let dh = (name != "hayati").then(|| chain.to_dh().unwrap());
+            let k = ArmKernel::new(&arm).unwrap();
+            for i in 0..50 {
+                let q: Vec<f64> = (0..n)
+                    .map(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 2.5)
+                    .collect();
+                let p = k.position(&q).unwrap();
+                let tip = chain.position(&q);
+                for c in 0..3 {
+                    assert!(
+                        (tip[c] * 1000.0 - p[c]).abs() < 1e-6,
+                        "{name} {q:?}: {tip:?} vs {p:?}"
+                    );
+                }
+                if let Some(dh) = &dh {
+                    let other = ArmKernel::new(&dh.params).unwrap().position(&q).unwrap();
+                    let at = dh.base * nalgebra::Point3::from(Vector3::from(other) / 1000.0);
+                    for c in 0..3 {
+                        assert!((at[c] - tip[c]).abs() < 1e-9, "{name}: {at:?} vs {tip:?}");
+                    }
+                }
+            }
+        }
+    }
+}

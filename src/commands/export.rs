@@ -1,0 +1,86 @@
+//! `aacmm export`: a (calibrated) arm for a robot controller or a
+//! simulator — URDF joint origins, or a plain D-H table.
+
+use std::path::PathBuf;
+
+use aacmm_core::io::{read_arm, source_name};
+use aacmm_core::urdf::export::{UrdfNames, dh_table, to_urdf};
+use aacmm_core::urdf::{UrdfOptions, parse_urdf};
+use anyhow::{Context, Result, bail};
+
+use super::report;
+use crate::output::note;
+use crate::paths::check_output_file;
+
+/// Export an arm file as URDF (joint origins; names, links and limits from
+/// a template when given) or as a D-H table (CSV).
+#[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("what").required(true).multiple(true).args(["urdf", "dh_table"])))]
+pub struct Args {
+    /// The arm file (a calibrated.toml).
+    #[arg(long)]
+    arm: PathBuf,
+    /// Write the arm as URDF here: one revolute joint per joint (its
+    /// origin the previous link's D-H or Hayati transform, axis z), then a
+    /// fixed joint to the link `probe`; metres and radians.
+    #[arg(long, value_name = "OUT.urdf")]
+    urdf: Option<PathBuf>,
+    /// A URDF of the robot whose revolute joints (in file order) name the
+    /// joints, links and limits of the export; it must have as many
+    /// revolute joints as the arm.
+    #[arg(long, value_name = "ROBOT.urdf", requires = "urdf")]
+    template: Option<PathBuf>,
+    /// Write the arm as a D-H table here: `link,model,theta_deg,d_mm,a_mm,
+    /// alpha_deg,beta_deg,x_mm,y_mm,z_mm`, one row per joint and a `probe`
+    /// row.
+    #[arg(long, value_name = "OUT.csv")]
+    dh_table: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let inputs = [("--arm", args.arm.as_path())];
+    for (flag, out) in [("--urdf", &args.urdf), ("--dh-table", &args.dh_table)] {
+        if let Some(out) = out {
+            check_output_file(flag, out, &inputs)?;
+        }
+    }
+    let (arm, warnings) = read_arm(&args.arm)?;
+    report(&warnings)?;
+    let n = arm.params.joint_count();
+    if let Some(out) = &args.urdf {
+        let names = match &args.template {
+            Some(path) => template_names(path, n)?,
+            None => UrdfNames::defaults(&arm.name, n, &arm.limits),
+        };
+        write(out, &to_urdf(&arm.params, &names))?;
+    }
+    if let Some(out) = &args.dh_table {
+        write(out, &dh_table(&arm.params))?;
+    }
+    Ok(())
+}
+
+/// The names of a template URDF with `n` revolute joints.
+fn template_names(path: &std::path::Path, n: usize) -> Result<UrdfNames> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("{}: cannot read", path.display()))?;
+    let urdf = parse_urdf(&text, &source_name(path), UrdfOptions::default())?;
+    match UrdfNames::from_template(&urdf, n) {
+        Some(names) => Ok(names),
+        None => {
+            let found = (urdf.joints.iter())
+                .filter(|j| j.kind == aacmm_core::urdf::JointKind::Revolute)
+                .count();
+            bail!(
+                "--template {}: {found} revolute joint(s); the arm has {n} joints — give the \
+                 URDF of the same robot",
+                path.display()
+            )
+        }
+    }
+}
+
+fn write(path: &std::path::Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))?;
+    note(format_args!("wrote {}", path.display()))
+}
