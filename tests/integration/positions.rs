@@ -5,7 +5,7 @@
 use aacmm_core::calibrate::validate::position_errors;
 use aacmm_core::identify::identify;
 use aacmm_core::io::Arm;
-use aacmm_core::params::DhParams;
+use aacmm_core::params::{DhParams, ParamId};
 use aacmm_core::residuals::{Frame, Noise};
 use aacmm_core::simulate::{
     ErrorModel, PositionCampaign, PositionSettings, simulate_positions, simulate_positions_from,
@@ -375,5 +375,90 @@ fn simulate_positions_then_calibrate() {
     assert!(
         text.contains("450 reference positions in 3 frames"),
         "{text}"
+    );
+}
+
+/// One true arm measured three ways — touches with reference lengths, a
+/// tracker, and both in one fit — under one fixed set (the union of what
+/// each kind alone cannot see, so every parameter means the same in the
+/// three fits): the combined fit agrees with each kind alone within that
+/// kind's 3σ, and with the truth.
+#[test]
+fn combined_campaigns_fit_the_arm_each_kind_predicts() {
+    use aacmm_core::FixSpec;
+    use aacmm_core::simulate::{CampaignSettings, simulate};
+    let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
+    let fixed = "theta1,d1,alpha5,theta5,alpha6,theta6,Bx,By,Bz";
+    let noise = Noise {
+        encoder_rad: Some(0.005f64.to_radians()),
+        probe_mm: Some(0.01),
+        ..tracker()
+    };
+    let model = ModelOptions {
+        fix: FixSpec::parse(fixed, 6).unwrap(),
+        noise,
+        ..ModelOptions::default()
+    };
+    let mut z2 = Vec::new();
+    for seed in 0..5 {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut truth = true_arm(&nominal, &ErrorModel::random(1.0, false), &mut rng).unwrap();
+        let ids: Vec<_> = fixed
+            .split(',')
+            .map(|n| ParamId::parse(n, 6).unwrap())
+            .collect();
+        for &id in &ids {
+            *truth.params.get_mut(id) = nominal.params.get(id);
+        }
+        let mut s = CampaignSettings::new(seed, ErrorModel::File { arm: truth.clone() }, 12, 15);
+        s.reference_lengths = 4;
+        s.encoder_noise_deg = 0.005;
+        s.probe_noise_mm = 0.01;
+        let touches = simulate(&nominal, &s).unwrap().data_set().unwrap();
+        let tracker_rows = simulate_positions(&truth, &settings(150, 1, seed + 100))
+            .unwrap()
+            .positions;
+        let positions = DataSet::from_positions(tracker_rows.clone(), "t.csv").unwrap();
+        let both = touches
+            .clone()
+            .with_positions(tracker_rows, "t.csv")
+            .unwrap();
+        let fit = |data: DataSet| {
+            let r = Problem::new(nominal.clone(), data, model.clone())
+                .unwrap()
+                .run(&lm())
+                .unwrap();
+            assert!(r.is_usable(), "seed {seed}: {:?}", r.verdict);
+            r.calibration
+        };
+        let (a, b, c) = (fit(touches), fit(positions), fit(both));
+        for ((ea, eb), ec) in a.parameters.iter().zip(&b.parameters).zip(&c.parameters) {
+            let (Some(sa), Some(sb), Some(sc)) = (ea.sigma, eb.sigma, ec.sigma) else {
+                continue;
+            };
+            let name = ec.id.to_string();
+            assert!(
+                (ec.calibrated - ea.calibrated).abs() <= 3.0 * sa,
+                "seed {seed} {name}: combined {} vs touches {} ± {sa}",
+                ec.calibrated,
+                ea.calibrated
+            );
+            assert!(
+                (ec.calibrated - eb.calibrated).abs() <= 3.0 * sb,
+                "seed {seed} {name}: combined {} vs tracker {} ± {sb}",
+                ec.calibrated,
+                eb.calibrated
+            );
+            assert!(
+                sc <= sa.min(sb) * 1.001,
+                "seed {seed} {name}: σ {sc} vs {sa}, {sb}"
+            );
+            z2.push(((ec.calibrated - truth.params.get(ec.id)) / sc).powi(2));
+        }
+    }
+    let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    assert!(
+        (0.6..=1.5).contains(&rms),
+        "combined normalised error RMS {rms}"
     );
 }
