@@ -8,7 +8,7 @@ theta1..thetan, Bx, By, Bz`` (see :func:`param_names`).
 
 import os
 import pathlib
-from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Literal, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -20,6 +20,27 @@ _AngleUnit = Literal["rad", "deg"]
 _Readings = npt.ArrayLike
 _Length = Tuple[str, str, float, Optional[float]]
 _Array = npt.NDArray[np.float64]
+_Names = Union[str, Sequence[Any]]
+
+class _Positions(TypedDict):
+    """Reference positions as ``DataSet.positions`` gives them: the arguments
+    of :meth:`DataSet.from_positions` (angles in rad)."""
+
+    labels: List[str]
+    frames: List[str]
+    q: _Array
+    xyz: _Array
+    uncertainty: _Array
+
+class _Frame(TypedDict):
+    """A frame fitted with the arm: ``y = R p + t`` maps the arm's base
+    coordinates into the instrument's."""
+
+    rotation_deg: _Array
+    translation_mm: _Array
+    rotation_sigma_deg: Optional[_Array]
+    translation_sigma_mm: Optional[_Array]
+    rotation_matrix: _Array
 
 class AacmmError(Exception):
     """Base class of the errors aacmm raises (besides OSError for unreadable
@@ -92,7 +113,8 @@ class Arm:
 
 class DataSet:
     """Touches grouped by point (order of first appearance), with reference
-    lengths between points. Immutable."""
+    lengths between points, and reference positions an instrument saw (each
+    frame's registration fitted with the arm). Immutable."""
 
     def __init__(
         self,
@@ -107,15 +129,52 @@ class DataSet:
         naming ``<arrays>``, the 1-based touch or length, and the field)."""
     @staticmethod
     def from_files(
-        poses: _Path,
+        poses: Optional[_Path] = None,
         lengths: Optional[_Path] = None,
         angle_unit: _AngleUnit = "deg",
         joints: Optional[int] = None,
+        positions: Optional[_Path] = None,
     ) -> "DataSet":
-        """Reads a poses file (CSV ``point,q1,...,qn``, degrees by default) and
+        """Reads a poses file (CSV ``point,q1,...,qn``, degrees by default),
         optionally a reference-lengths file (CSV
-        ``point_a,point_b,distance[,uncertainty]``, mm)."""
-    def __len__(self) -> int: ...
+        ``point_a,point_b,distance[,uncertainty]``, mm) and a
+        reference-positions file (CSV
+        ``point,q1,...,qn,x,y,z[,frame][,uncertainty]``, mm: the command
+        line's ``--positions``), or the positions file alone
+        (``poses=None``)."""
+    @staticmethod
+    def from_positions(
+        q: _Readings,
+        xyz: npt.ArrayLike,
+        frames: Optional[_Names] = None,
+        uncertainty: Optional[npt.ArrayLike] = None,
+        labels: Optional[Sequence[Any]] = None,
+        angle_unit: _AngleUnit = "rad",
+    ) -> "DataSet":
+        """Reference positions alone, from arrays: ``q`` n × joints readings,
+        ``xyz`` n × 3 where the instrument saw the probe (mm, its frame),
+        ``frames`` per row its frame (a str for every row; default
+        ``"instrument"``), each with its own fitted registration,
+        ``uncertainty`` σ per coordinate (mm; one number or one per row; NaN:
+        not stated), ``labels`` per row its point (default ``P1``, ``P2``,
+        …). ValueError naming the argument and row (0-based) for a wrong
+        shape, a non-finite value, an uncertainty ≤ 0, an empty name, or a
+        frame with fewer than 3 distinct positions or all on one line."""
+    def with_positions(
+        self,
+        q: _Readings,
+        xyz: npt.ArrayLike,
+        frames: Optional[_Names] = None,
+        uncertainty: Optional[npt.ArrayLike] = None,
+        labels: Optional[Sequence[Any]] = None,
+        angle_unit: _AngleUnit = "rad",
+    ) -> "DataSet":
+        """These touches with reference positions from arrays (as
+        :meth:`from_positions`, ``q`` with this data set's joints), fitted
+        together: a new data set. ValueError if this one has positions
+        already."""
+    def __len__(self) -> int:
+        """Number of touches (0 for reference positions alone)."""
     @property
     def joints(self) -> int: ...
     @property
@@ -133,6 +192,13 @@ class DataSet:
     @property
     def lengths_file(self) -> Optional[str]: ...
     @property
+    def positions_file(self) -> Optional[str]:
+        """The positions file as named (``<arrays>``), or None without
+        reference positions."""
+    @property
+    def positions(self) -> Optional[_Positions]:
+        """The reference positions (None without), in the rows' order."""
+    @property
     def warnings(self) -> List[str]: ...
     def source_of(self, i: int) -> str:
         """``file:line`` of touch ``i`` (data set order)."""
@@ -140,9 +206,12 @@ class DataSet:
 class Noise:
     """What is known of the measurement noise (the command line's noise
     options): σ of each encoder reading (degrees), of the probe seating (mm),
-    of a reference length that states none (mm), and a weight of every
-    reference length (1/mm; 0 or None: from the uncertainties). Checked by the
-    library when made: ValueError naming the argument."""
+    of a reference length that states none (mm), a weight of every
+    reference length (1/mm; 0 or None: from the uncertainties), and the σ
+    per coordinate of a reference position that states none, ``position_mm
+    + position_mm_per_m · distance`` (mm, mm per metre from the instrument;
+    a laser tracker's 0.015 and 0.006). Checked by the library when made:
+    ValueError naming the argument."""
 
     def __init__(
         self,
@@ -150,6 +219,8 @@ class Noise:
         probe_mm: Optional[float] = None,
         length_default_mm: float = 0.001,
         length_weight: Optional[float] = None,
+        position_mm: Optional[float] = None,
+        position_mm_per_m: Optional[float] = None,
     ) -> None: ...
     @property
     def encoder_deg(self) -> Optional[float]: ...
@@ -160,10 +231,17 @@ class Noise:
     @property
     def length_weight(self) -> Optional[float]: ...
     @property
-    def stated(self) -> bool: ...
+    def position_mm(self) -> Optional[float]: ...
+    @property
+    def position_mm_per_m(self) -> Optional[float]: ...
+    @property
+    def stated(self) -> bool:
+        """Whether any touch noise is stated."""
 
 def evaluate(arm: Arm, data: DataSet) -> Dict[str, Any]:
-    """The figures of ``arm`` on ``data`` (``aacmm evaluate``'s ``evaluation``), mm."""
+    """The figures of ``arm`` on ``data`` (``aacmm evaluate``'s ``evaluation``), mm:
+    touches and lengths only (reference positions alone: ValueError; their
+    figures are a calibration's ``summary``)."""
 
 def identify(
     arm: Arm, data: DataSet, noise: Optional[Noise] = None, threads: Optional[int] = None
@@ -235,6 +313,12 @@ class Calibration:
     def correlation(self) -> _Array:
         """Correlation matrix of the free parameters."""
     @property
+    def frames(self) -> Dict[str, _Frame]:
+        """Each instrument frame fitted with the arm (empty without reference
+        positions): rotation vector (deg) and translation (mm) of ``y = R p +
+        t``, their σ (k = 1; None where not determined) as calibrated.toml's
+        ``[[frame]]`` tables, and ``R`` (3 × 3)."""
+    @property
     def successful(self) -> bool:
         """Whether the calibration is usable: the verdict
         (``report["verdict"]["usable"]``, exit 0 of ``aacmm calibrate``) —
@@ -246,7 +330,9 @@ class Calibration:
         stopped (``stop``, and ``stop_text`` in words), ``converged`` (the
         solver's own criterion, which a refused calibration may meet),
         iterations, dof, σ0, touch σ, costs, and the before/after figures
-        (fitted, held out, cross-validation folds)."""
+        (fitted, held out, cross-validation folds); with reference positions
+        each figure's ``positions`` holds the 3-D errors (``count``,
+        ``mean``, ``rms``, ``max``, mm)."""
     @property
     def report(self) -> Dict[str, Any]:
         """Everything calibration.json holds (mm and degrees)."""
@@ -284,7 +370,9 @@ def calibrate(
     in ``report["calibration"]["robust"]``), ``robust_scale`` its tuning
     constant. ``prior`` states tolerances as ``--prior`` does
     (``"length=0.5mm,angle=0.1deg"``, over the arm file's ``[prior]``;
-    ``"none"`` ignores the file's). ``accept_poor_fit`` calls a poor χ² or a
+    ``"none"`` ignores the file's). ``validate`` is a held-out data set of
+    touches, reference positions or both (positions in a fitted frame are
+    scored in it). ``accept_poor_fit`` calls a poor χ² or a
     fit worse than nominal usable (never a wrong geometry). Readings outside
     the arm's joint limits are a UserWarning (and in the report's
     warnings). ValueError for a bad option (naming the argument),

@@ -256,7 +256,8 @@ impl<'a> Objective<'a> {
                     return Err(TermError::invalid(
                         term.name(),
                         format!(
-                            "observations of {} rows: the robust loss and the outlier test                              are for 3-D observations",
+                            "observations of {} rows: the robust loss and the outlier test \
+                             are for 3-D observations",
                             s.rows
                         ),
                     ));

@@ -23,6 +23,8 @@ pub(crate) mod streams {
     pub(crate) const LENGTHS: u64 = 6;
     /// The order in which cross-validation deals points to folds.
     pub(crate) const FOLDS: u64 = 7;
+    /// The order in which cross-validation deals reference positions.
+    pub(crate) const POSITION_FOLDS: u64 = 8;
     /// The solvers: annealing moves, global starts.
     pub(crate) const SOLVER: u64 = 0x50_4c_56;
 }

@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use aacmm_core::calibrate::Context;
 use aacmm_core::io::Arm as CoreArm;
+use aacmm_core::residuals::Frame;
 use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Request, Sources};
 use numpy::ndarray::{Array1, Array2};
 use numpy::{IntoPyArray, PyArray1, PyArray2};
@@ -103,7 +104,9 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// not stated, the touch σ is estimated from the fit); `seed`: every random
 /// draw; `threads`: workers for the normal equations (default one per core;
 /// the result does not depend on it); `cross_validate`: `k` folds over
-/// points; `validate`: a held-out `DataSet` (same arm); `robust`:
+/// points; `validate`: a held-out `DataSet` (same arm: touches, reference
+/// positions or both; positions in a fitted frame are scored in it, others
+/// registered in closed form); `robust`:
 /// `"huber"` or `"cauchy"` for a robust refit (IRLS, `--robust`), with
 /// `robust_scale` its tuning constant (default 1.62 / 2.65); `prior`: stated
 /// tolerances of the arm, as the command line's `--prior`
@@ -235,6 +238,44 @@ impl Calibration {
         Ok(m.into_pyarray(py))
     }
 
+    /// Each instrument frame fitted with the arm (none without reference
+    /// positions): name → dict of `rotation_deg` (the rotation vector of
+    /// `R`, axis × angle, deg) and `translation_mm` (`t`), mapping the arm's
+    /// base coordinates into the instrument's, `y = R p + t`; their standard
+    /// uncertainties `rotation_sigma_deg` and `translation_sigma_mm` (k = 1,
+    /// of the fit's local step; `None` where the data did not determine
+    /// them) — the `[[frame]]` tables of `calibrated.toml`; and
+    /// `rotation_matrix`, `R` (3 × 3).
+    #[getter]
+    fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.report.calibration;
+        let three = |v: [f64; 3]| Array1::from(v.to_vec()).into_pyarray(py);
+        let out = PyDict::new(py);
+        for (record, (_, x)) in c.frame_records().into_iter().zip(c.frames()) {
+            // Column k of R is the image of the k-th unit vector, less t.
+            let mut r = Array2::<f64>::zeros((3, 3));
+            for k in 0..3 {
+                let mut e = [0.0; 3];
+                e[k] = 1.0;
+                let y = Frame::apply(&x, e);
+                for i in 0..3 {
+                    r[[i, k]] = y[i] - x[3 + i];
+                }
+            }
+            let d = PyDict::new(py);
+            d.set_item("rotation_deg", three(record.rotation_deg))?;
+            d.set_item("translation_mm", three(record.translation_mm))?;
+            d.set_item("rotation_sigma_deg", record.rotation_sigma_deg.map(three))?;
+            d.set_item(
+                "translation_sigma_mm",
+                record.translation_sigma_mm.map(three),
+            )?;
+            d.set_item("rotation_matrix", r.into_pyarray(py))?;
+            out.set_item(record.name, d)?;
+        }
+        Ok(out)
+    }
+
     /// Whether the calibration is usable — the verdict (`report["verdict"]`,
     /// exit 0 of `aacmm calibrate`): the solver reached a confirmed minimum,
     /// the arm is the nominal's kind of geometry, and (unless a poor fit was
@@ -248,9 +289,11 @@ impl Calibration {
     /// property), method, why it stopped (`stop`, and `stop_text` in
     /// words), whether the solver `converged` (its own criterion, which a
     /// refused calibration may meet), iterations, free parameters, degrees
-    /// of freedom, σ0, touch σ (mm), costs, and the before/after figures on
-    /// the fitted data (and on the held-out data and per cross-validation
-    /// fold when asked for).
+    /// of freedom, σ0, touch σ (mm; of the positions without touches), costs,
+    /// and the before/after figures on the fitted data (and on the held-out
+    /// data and per cross-validation fold when asked for); with reference
+    /// positions, each figure's `positions` holds the 3-D errors `|R p + t −
+    /// y|` (`count`, `mean`, `rms`, `max`, mm).
     #[getter]
     fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let c = &self.report.calibration;

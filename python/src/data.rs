@@ -1,24 +1,30 @@
-//! `aacmm.DataSet`: touches grouped by point, with reference lengths — from
-//! files or from arrays.
+//! `aacmm.DataSet`: touches grouped by point, with reference lengths, and
+//! reference positions an instrument saw — from files or from arrays.
 
 use std::path::PathBuf;
 
 use aacmm_core::dataset::DataSet as CoreDataSet;
-use aacmm_core::io::{AngleUnit, ReferenceLength, read_lengths, read_poses, source_name};
+use aacmm_core::io::{
+    AngleUnit, ReferenceLength, read_lengths, read_poses, read_positions, source_name,
+};
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
-use crate::arm::{shaped, warn_all};
+use crate::arm::{points_array, shaped, warn_all};
 use crate::error::{Error, Result, detached};
+use crate::positions::{ARRAYS, PositionArgs};
 use crate::readings::Readings;
 
 /// Touches grouped by point (in order of first appearance), the encoder
-/// readings prepared for the kernel, and reference lengths between points.
-/// Immutable.
+/// readings prepared for the kernel, reference lengths between points, and
+/// reference positions an instrument saw (each frame's registration fitted
+/// with the arm). Immutable.
 #[pyclass(frozen, module = "aacmm")]
 pub struct DataSet {
     pub(crate) data: CoreDataSet,
-    /// The poses file as named, or `<arrays>`.
+    /// The poses file as named, or `<arrays>`; for positions alone, their
+    /// file (as the command line's report names it).
     pub(crate) poses_file: String,
     /// The lengths file as named, `<arrays>`, or `None` without lengths.
     pub(crate) lengths_file: Option<String>,
@@ -132,21 +138,46 @@ impl DataSet {
     }
 
     /// Reads a poses file (CSV `point,q1,...,qn`, angles in `angle_unit`,
-    /// degrees by default as on the command line) and, optionally, a
+    /// degrees by default as on the command line), optionally a
     /// reference-lengths file (CSV `point_a,point_b,distance[,uncertainty]`,
-    /// mm). `joints` (if given) is the number of angle columns required.
-    /// Errors name file, line and field (`aacmm.InputError`; `OSError` when
-    /// a file cannot be read); warnings go to `warnings` and `UserWarning`.
+    /// mm) and a reference-positions file (CSV
+    /// `point,q1,...,qn,x,y,z[,frame][,uncertainty]`, mm in the
+    /// instrument's frame: `--positions`), or the positions file alone
+    /// (`poses=None`). `joints` (if given) is the number of angle columns
+    /// required. Errors name file, line and field (`aacmm.InputError`;
+    /// `OSError` when a file cannot be read); warnings go to `warnings` and
+    /// `UserWarning`.
     #[staticmethod]
-    #[pyo3(signature = (poses, lengths = None, angle_unit = "deg", joints = None))]
+    #[pyo3(signature = (poses = None, lengths = None, angle_unit = "deg", joints = None, positions = None))]
     fn from_files(
         py: Python<'_>,
-        poses: PathBuf,
+        poses: Option<PathBuf>,
         lengths: Option<PathBuf>,
         angle_unit: &str,
         joints: Option<usize>,
+        positions: Option<PathBuf>,
     ) -> PyResult<DataSet> {
         let unit = crate::angle_unit(angle_unit)?;
+        let Some(poses) = poses else {
+            return match (positions, lengths) {
+                (None, _) => Err(Error::value("give poses, positions or both").into()),
+                (Some(_), Some(_)) => Err(Error::value(
+                    "lengths: reference lengths join touched points: give poses too",
+                )
+                .into()),
+                (Some(path), None) => detached(py, || {
+                    let name = source_name(&path);
+                    let rows = read_positions(&path, unit, joints)?;
+                    Ok(DataSet {
+                        data: CoreDataSet::from_positions(rows, &name)?,
+                        poses_file: name,
+                        lengths_file: None,
+                        warnings: Vec::new(),
+                        unit,
+                    })
+                }),
+            };
+        };
         let set = detached(py, || {
             let (read, warnings) = read_poses(&poses, unit, joints)?;
             let poses_file = source_name(&poses);
@@ -154,6 +185,10 @@ impl DataSet {
             let lengths_file = lengths.as_deref().map(source_name);
             if let (Some(path), Some(name)) = (&lengths, &lengths_file) {
                 data = data.with_lengths(&read_lengths(path)?, name)?;
+            }
+            if let Some(path) = &positions {
+                let rows = read_positions(path, unit, Some(data.joints()))?;
+                data = data.with_positions(rows, &source_name(path))?;
             }
             Ok(DataSet {
                 data,
@@ -167,7 +202,103 @@ impl DataSet {
         Ok(set)
     }
 
-    /// Number of touches.
+    /// A data set of reference positions alone, from arrays: `q` an
+    /// array-like `n × joints` of readings in `angle_unit`; `xyz` `n × 3`,
+    /// where the instrument saw the probe, mm in its own frame; `frames`
+    /// per row the frame (station, placement) it was seen from, each with
+    /// its own unknown registration (a `str` for every row; default every
+    /// row in `"instrument"`); `uncertainty` the standard uncertainty per
+    /// coordinate, mm, one number or one per row (NaN: not stated, the
+    /// noise model applies); `labels` per row its point (default `P1`,
+    /// `P2`, …; rows with one label in one frame are one physical point).
+    /// Checked as the library's reader checks a positions file: a
+    /// `ValueError` naming the argument and row (0-based) for a wrong
+    /// shape, a value that is not finite, an uncertainty not positive, an
+    /// empty name, and a frame with fewer than 3 distinct positions or all
+    /// of them on one line. Reports name the rows `<arrays>:i+1`.
+    #[staticmethod]
+    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad"))]
+    fn from_positions(
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        xyz: &Bound<'_, PyAny>,
+        frames: Option<&Bound<'_, PyAny>>,
+        uncertainty: Option<&Bound<'_, PyAny>>,
+        labels: Option<&Bound<'_, PyAny>>,
+        angle_unit: &str,
+    ) -> PyResult<DataSet> {
+        let unit = crate::angle_unit(angle_unit)?;
+        let args = PositionArgs {
+            q,
+            xyz,
+            frames,
+            uncertainty,
+            labels,
+            unit,
+        };
+        let read = args.read(py, None)?;
+        let data = detached(py, || {
+            read.check_frames()?;
+            Ok(CoreDataSet::from_positions(read.rows, ARRAYS)?)
+        })?;
+        Ok(DataSet {
+            data,
+            poses_file: ARRAYS.to_string(),
+            lengths_file: None,
+            warnings: Vec::new(),
+            unit,
+        })
+    }
+
+    /// These touches (and lengths) with reference positions given as arrays,
+    /// fitted together: the arguments and checks of `from_positions`, `q`
+    /// with the data set's joint count. A new data set; a data set that
+    /// already has positions is refused (give them all at once).
+    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad"))]
+    #[allow(clippy::too_many_arguments)]
+    fn with_positions(
+        &self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        xyz: &Bound<'_, PyAny>,
+        frames: Option<&Bound<'_, PyAny>>,
+        uncertainty: Option<&Bound<'_, PyAny>>,
+        labels: Option<&Bound<'_, PyAny>>,
+        angle_unit: &str,
+    ) -> PyResult<DataSet> {
+        let unit = crate::angle_unit(angle_unit)?;
+        if let Some(p) = self.data.positions() {
+            return Err(Error::value(format!(
+                "this data set already has {} reference positions (from {}): give them all in \
+                 one data set",
+                p.len(),
+                p.file()
+            ))
+            .into());
+        }
+        let args = PositionArgs {
+            q,
+            xyz,
+            frames,
+            uncertainty,
+            labels,
+            unit,
+        };
+        let read = args.read(py, Some(self.data.joints()))?;
+        let data = detached(py, || {
+            read.check_frames()?;
+            Ok(self.data.clone().with_positions(read.rows, ARRAYS)?)
+        })?;
+        Ok(DataSet {
+            data,
+            poses_file: self.poses_file.clone(),
+            lengths_file: self.lengths_file.clone(),
+            warnings: self.warnings.clone(),
+            unit: self.unit,
+        })
+    }
+
+    /// Number of touches (0 for reference positions alone).
     fn __len__(&self) -> usize {
         self.data.len()
     }
@@ -238,6 +369,44 @@ impl DataSet {
         self.lengths_file.as_deref()
     }
 
+    /// The positions file as named (`<arrays>`, or `None` without
+    /// reference positions).
+    #[getter]
+    fn positions_file(&self) -> Option<&str> {
+        self.data.positions().map(|p| p.file())
+    }
+
+    /// The reference positions (`None` without): a dict of `labels` and
+    /// `frames` (per row, `str`), `q` (readings, rad, `n × joints`), `xyz`
+    /// (mm, `n × 3`) and `uncertainty` (mm, `n`, NaN where not stated), in
+    /// the rows' order — the arguments of `from_positions` (angles in rad).
+    #[getter]
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(p) = self.data.positions() else {
+            return Ok(None);
+        };
+        let rows = p.rows();
+        let n = rows.len();
+        let d = PyDict::new(py);
+        let labels: Vec<&str> = (0..n).map(|i| rows.label(i)).collect();
+        let frames: Vec<&str> = (0..n)
+            .map(|i| rows.frames()[rows.frame(i)].as_str())
+            .collect();
+        let xyz: Vec<[f64; 3]> = (0..n).map(|i| rows.position(i)).collect();
+        let u: Vec<f64> = (0..n)
+            .map(|i| rows.uncertainty(i).unwrap_or(f64::NAN))
+            .collect();
+        d.set_item("labels", labels)?;
+        d.set_item("frames", frames)?;
+        d.set_item(
+            "q",
+            shaped(py, rows.readings().to_vec(), &[n, rows.joints()])?,
+        )?;
+        d.set_item("xyz", points_array(py, &xyz)?)?;
+        d.set_item("uncertainty", shaped(py, u, &[n])?)?;
+        Ok(Some(d))
+    }
+
     /// The readers' warnings.
     #[getter]
     fn warnings(&self) -> Vec<String> {
@@ -256,8 +425,17 @@ impl DataSet {
     }
 
     fn __repr__(&self) -> String {
+        let positions = self.data.positions().map_or(String::new(), |p| {
+            let frames = p.rows().frames().len();
+            format!(
+                ", {} reference positions in {frames} frame{}",
+                p.len(),
+                if frames == 1 { "" } else { "s" }
+            )
+        });
         format!(
-            "DataSet({} touches of {} points, {} joints, {} reference lengths, from {:?})",
+            "DataSet({} touches of {} points, {} joints, {} reference lengths{positions}, from \
+             {:?})",
             self.data.len(),
             self.data.points().len(),
             self.data.joints(),

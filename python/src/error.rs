@@ -134,7 +134,7 @@ impl From<aacmm_core::residuals::TermError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 11] = [
+const ARGUMENTS: [(&str, &str); 13] = [
     ("prior", "prior"),
     ("method", "method"),
     ("robust.loss", "robust"),
@@ -142,6 +142,8 @@ const ARGUMENTS: [(&str, &str); 11] = [
     ("noise.probe_mm", "probe_mm"),
     ("noise.length_default_mm", "length_default_mm"),
     ("noise.length_weight", "length_weight"),
+    ("noise.position_mm", "position_mm"),
+    ("noise.position_mm_per_m", "position_mm_per_m"),
     ("fix", "fix"),
     ("threads", "threads"),
     ("cross_validate", "cross_validate"),

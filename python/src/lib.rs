@@ -13,6 +13,7 @@ mod calibrate;
 mod data;
 mod error;
 mod noise;
+mod positions;
 mod readings;
 mod simulate;
 mod study;

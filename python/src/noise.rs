@@ -1,5 +1,6 @@
 //! `aacmm.Noise`: what is known of the measurement noise, in the units the
-//! command line uses (degrees for encoders, mm otherwise).
+//! command line uses (degrees for encoders, mm otherwise; mm per metre for
+//! the distance-dependent part of a reference position's σ).
 
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::residuals::Noise as CoreNoise;
@@ -10,7 +11,8 @@ use crate::error::Result;
 
 /// What is known of the measurement noise (the command line's noise
 /// options). With neither touch noise stated, the touch σ is estimated from
-/// the fit.
+/// the fit; likewise the σ of reference positions that state none, without
+/// a position noise.
 #[pyclass(frozen, module = "aacmm")]
 #[derive(Clone)]
 pub struct Noise {
@@ -27,8 +29,14 @@ impl Noise {
         probe_mm: Option<f64>,
         length_default_mm: f64,
         length_weight: Option<f64>,
+        position_mm: Option<f64>,
+        position_mm_per_m: Option<f64>,
     ) -> Result<Noise> {
-        let noise = user_noise(encoder_deg, probe_mm, length_default_mm, length_weight);
+        let noise = CoreNoise {
+            position_mm,
+            position_mm_per_m,
+            ..user_noise(encoder_deg, probe_mm, length_default_mm, length_weight)
+        };
         noise.check()?;
         Ok(Noise { noise, encoder_deg })
     }
@@ -40,21 +48,30 @@ impl Noise {
     /// the probe seating per axis, mm; `length_default_mm`: σ of a reference
     /// length that states none, mm; `length_weight`: weight of every
     /// reference-length residual, 1/mm, overriding the uncertainties (0:
-    /// none). Values must be finite and ≥ 0, and stated touch noise not 0
-    /// on both counts (`ValueError`, from the library's check).
+    /// none); `position_mm` and `position_mm_per_m`: σ per coordinate of a
+    /// reference position that states no uncertainty, `A + B·distance`
+    /// with `A = position_mm` (mm) and `B = position_mm_per_m` (mm per
+    /// metre from the instrument; a laser tracker's 0.015 and 0.006; `B`
+    /// needs `A`). Values must be finite and ≥ 0 (`position_mm` > 0), and
+    /// stated touch noise not 0 on both counts (`ValueError`, from the
+    /// library's check).
     #[new]
-    #[pyo3(signature = (encoder_deg = None, probe_mm = None, length_default_mm = DEFAULT_LENGTH_SIGMA_MM, length_weight = None))]
+    #[pyo3(signature = (encoder_deg = None, probe_mm = None, length_default_mm = DEFAULT_LENGTH_SIGMA_MM, length_weight = None, position_mm = None, position_mm_per_m = None))]
     fn new(
         encoder_deg: Option<f64>,
         probe_mm: Option<f64>,
         length_default_mm: f64,
         length_weight: Option<f64>,
+        position_mm: Option<f64>,
+        position_mm_per_m: Option<f64>,
     ) -> PyResult<Noise> {
         Ok(Noise::checked(
             encoder_deg,
             probe_mm,
             length_default_mm,
             length_weight,
+            position_mm,
+            position_mm_per_m,
         )?)
     }
 
@@ -83,6 +100,20 @@ impl Noise {
         self.noise.length_weight
     }
 
+    /// σ per coordinate of a reference position that states none, its
+    /// constant part `A`, mm (`None`: not stated).
+    #[getter]
+    fn position_mm(&self) -> Option<f64> {
+        self.noise.position_mm
+    }
+
+    /// The part of that σ that grows with the distance from the
+    /// instrument, `B`, mm per metre (`None`: not stated).
+    #[getter]
+    fn position_mm_per_m(&self) -> Option<f64> {
+        self.noise.position_mm_per_m
+    }
+
     /// Whether any touch noise is stated.
     #[getter]
     fn stated(&self) -> bool {
@@ -92,11 +123,14 @@ impl Noise {
     fn __repr__(&self) -> String {
         let opt = |v: Option<f64>| v.map_or("None".to_string(), |v| v.to_string());
         format!(
-            "Noise(encoder_deg={}, probe_mm={}, length_default_mm={}, length_weight={})",
+            "Noise(encoder_deg={}, probe_mm={}, length_default_mm={}, length_weight={}, \
+             position_mm={}, position_mm_per_m={})",
             opt(self.encoder_deg),
             opt(self.noise.probe_mm),
             self.noise.length_default_mm,
-            opt(self.noise.length_weight)
+            opt(self.noise.length_weight),
+            opt(self.noise.position_mm),
+            opt(self.noise.position_mm_per_m)
         )
     }
 }

@@ -33,9 +33,17 @@ pub(crate) fn threads(threads: Option<usize>) -> PyResult<usize> {
 /// The figures of `arm` on `data` (`aacmm evaluate`'s JSON `evaluation`):
 /// per point `e`, `2s`, `δ_max`; their summaries across points; the length
 /// errors between points (eq. 19) and against the reference lengths. mm.
-/// Runs without the GIL.
+/// Touches only: reference positions alone are refused (`ValueError`;
+/// their figures are a calibration's). Runs without the GIL.
 #[pyfunction]
 pub fn evaluate<'py>(py: Python<'py>, arm: &Arm, data: &DataSet) -> PyResult<Bound<'py, PyDict>> {
+    if data.data.is_empty() {
+        return Err(Error::value(
+            "data: no touches to evaluate (reference positions alone): the figures at the \
+             positions are a calibration's, summary[\"fitted\"][...][\"positions\"]",
+        )
+        .into());
+    }
     let evaluation = detached(py, || {
         let d = &data.data;
         let mut xyz = vec![[0.0; 3]; d.len()];

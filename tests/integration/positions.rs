@@ -462,3 +462,53 @@ fn combined_campaigns_fit_the_arm_each_kind_predicts() {
         "combined normalised error RMS {rms}"
     );
 }
+
+/// Cross-validation deals each frame's positions to the folds: every
+/// position is held out once, each fold scored in the frames it fitted,
+/// and each fold's held-out error is close to the true arm's there.
+#[test]
+fn cross_validation_folds_positions_by_pose() {
+    let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
+    let (truth, c) = campaign(&nominal, 3, 120, 2);
+    let data = DataSet::from_positions(c.positions.clone(), "sim.csv").unwrap();
+    let problem = Problem::new(nominal.clone(), data, model())
+        .unwrap()
+        .with_cross_validation(4)
+        .unwrap();
+    let report = problem.run(&lm()).unwrap();
+    let folds = &report.validation.cross_validation.as_ref().unwrap().folds;
+    assert_eq!(folds.len(), 4);
+    let held: usize = folds.iter().map(|f| f.held_out.len()).sum();
+    assert_eq!(held, 240);
+    for (i, f) in folds.iter().enumerate() {
+        let (before, after) = (
+            f.figures.before.positions.unwrap(),
+            f.figures.after.positions.unwrap(),
+        );
+        assert_eq!(after.count, 60, "fold {i}");
+        assert!(
+            f.successful && after.mean < 0.2 * before.mean,
+            "fold {i}: {before:?} → {after:?}"
+        );
+        // The true arm in the true frames on the same rows: within 10 %.
+        assert!(
+            after.mean < 1.1 * truth_error(&truth, &c),
+            "fold {i}: {after:?}"
+        );
+    }
+    // Three folds of a frame of 4 positions leave 2 to register it in a
+    // fold's training: refused by name.
+    let data = DataSet::from_positions(c.positions.subset(&[0, 1, 2, 3]), "s.csv").unwrap();
+    let e = Problem::new(nominal, data, model())
+        .unwrap()
+        .with_cross_validation(3);
+    assert_eq!(e.unwrap_err().field, "cross_validate");
+}
+
+/// The true arm's mean 3-D error on its own campaign (the noise's share).
+fn truth_error(truth: &Arm, c: &PositionCampaign) -> f64 {
+    let data = DataSet::from_positions(c.positions.clone(), "sim.csv").unwrap();
+    position_errors(&truth.params, data.positions().unwrap(), &c.frames)
+        .unwrap()
+        .mean
+}

@@ -401,81 +401,108 @@ fn parse_row(
     Ok(())
 }
 
-/// Refuses a frame whose rows cannot determine its registration: fewer than
-/// [`MIN_FRAME_POSITIONS`], or all on one line.
+/// Refuses a frame whose rows cannot determine its registration
+/// ([`Positions::unregistrable_frame`]), at the frame's first line.
 fn check_frames(p: &Positions, file: &str) -> Result<(), InputError> {
-    for (f, name) in p.frames().iter().enumerate() {
-        let rows: Vec<usize> = (0..p.len()).filter(|&i| p.frame(i) == f).collect();
-        let first = p.line(rows[0]);
-        let distinct = distinct_positions(p, &rows);
-        if distinct.len() < MIN_FRAME_POSITIONS {
-            return Err(InputError::field(
-                file,
-                first,
-                "frame",
-                format!(
-                    "frame `{name}` has {} distinct position(s); its registration (3 rotations, \
-                     3 translations) needs at least {MIN_FRAME_POSITIONS} not on one line — \
-                     give each station or placement several rows, or leave the `frame` column \
-                     out if every row is in one frame",
-                    distinct.len()
-                ),
-            ));
-        }
-        let spread = spread_off_line(&distinct);
-        if spread.1 <= 1e-6 * spread.0.max(1.0) {
-            return Err(InputError::field(
-                file,
-                first,
-                "frame",
-                format!(
-                    "the positions of frame `{name}` lie on one line: a rotation about it is \
-                     not determined; measure points off that line"
-                ),
-            ));
-        }
+    match p.unregistrable_frame() {
+        Some((row, why)) => Err(InputError::field(file, p.line(row), "frame", why)),
+        None => Ok(()),
     }
-    Ok(())
 }
 
-/// The distinct positions among `rows` (a sphere touched in several poses
-/// counts once).
-fn distinct_positions(p: &Positions, rows: &[usize]) -> Vec<[f64; 3]> {
-    let mut out: Vec<[f64; 3]> = Vec::new();
-    for &i in rows {
-        let x = p.position(i);
-        if !out.contains(&x) {
-            out.push(x);
+impl Positions {
+    /// The first frame whose rows cannot determine its registration (six
+    /// unknowns) — fewer than [`MIN_FRAME_POSITIONS`] distinct positions
+    /// (a sphere touched in several poses counts once), or all on one line
+    /// — with its first row and why; `None` when every frame can be
+    /// registered. Linear in the rows.
+    ///
+    /// ```
+    /// let mut p = aacmm_core::io::Positions::new(1);
+    /// for (i, x) in [0.0, 1.0, 2.0].into_iter().enumerate() {
+    ///     p.push("P", "f", &[i as f64], [x, x, x], None, i + 2);
+    /// }
+    /// assert!(p.unregistrable_frame().unwrap().1.contains("lie on one line"));
+    /// ```
+    pub fn unregistrable_frame(&self) -> Option<(usize, String)> {
+        let mut by_frame: Vec<Vec<usize>> = vec![Vec::new(); self.frames.len()];
+        for i in 0..self.len() {
+            by_frame[self.frame(i)].push(i);
         }
+        for (name, rows) in self.frames.iter().zip(&by_frame) {
+            let first = rows[0];
+            let distinct = self.distinct_up_to(rows, MIN_FRAME_POSITIONS);
+            if distinct < MIN_FRAME_POSITIONS {
+                return Some((
+                    first,
+                    format!(
+                        "frame `{name}` has {distinct} distinct position(s); its registration (3 \
+                         rotations, 3 translations) needs at least {MIN_FRAME_POSITIONS} not on \
+                         one line — give each station or placement several rows, or leave the \
+                         `frame` column out if every row is in one frame"
+                    ),
+                ));
+            }
+            let (length, off) = self.spread_off_line(rows);
+            if off <= 1e-6 * length.max(1.0) {
+                return Some((
+                    first,
+                    format!(
+                        "the positions of frame `{name}` lie on one line: a rotation about it is \
+                         not determined; measure points off that line"
+                    ),
+                ));
+            }
+        }
+        None
     }
-    out
-}
 
-/// The largest distance of a point from the first, and the largest
-/// distance of a point from the line through the first and that one, mm.
-fn spread_off_line(points: &[[f64; 3]]) -> (f64, f64) {
-    let o = points[0];
-    let d = |p: &[f64; 3]| std::array::from_fn::<f64, 3, _>(|k| p[k] - o[k]);
-    let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    let far = points
-        .iter()
-        .map(&d)
-        .max_by(|a, b| norm(*a).total_cmp(&norm(*b)))
-        .unwrap_or([0.0; 3]);
-    let length = norm(far);
-    if length == 0.0 {
-        return (0.0, 0.0);
+    /// How many distinct positions `rows` hold, counting no further than
+    /// `enough`.
+    fn distinct_up_to(&self, rows: &[usize], enough: usize) -> usize {
+        let mut seen: Vec<[f64; 3]> = Vec::with_capacity(enough);
+        for &i in rows {
+            let x = self.position(i);
+            if !seen.contains(&x) {
+                seen.push(x);
+                if seen.len() == enough {
+                    break;
+                }
+            }
+        }
+        seen.len()
     }
-    let u = far.map(|v| v / length);
-    let off = points
-        .iter()
-        .map(|p| {
-            let v = d(p);
-            let along = v[0] * u[0] + v[1] * u[1] + v[2] * u[2];
-            norm(std::array::from_fn(|k| v[k] - along * u[k]))
-        })
-        .fold(0.0, f64::max);
-    (length, off)
+
+    /// The largest distance of a position of `rows` from the first, and
+    /// the largest distance of one from the line through the first and
+    /// that one, mm.
+    fn spread_off_line(&self, rows: &[usize]) -> (f64, f64) {
+        let o = self.position(rows[0]);
+        let d = |i: usize| {
+            let x = self.position(i);
+            [x[0] - o[0], x[1] - o[1], x[2] - o[2]]
+        };
+        let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let far = rows
+            .iter()
+            .map(|&i| d(i))
+            .max_by(|a, b| norm(*a).total_cmp(&norm(*b)))
+            .unwrap_or([0.0; 3]);
+        let length = norm(far);
+        if length == 0.0 {
+            return (0.0, 0.0);
+        }
+        let u = far.map(|v| v / length);
+        let off = rows
+            .iter()
+            .map(|&i| {
+                let v = d(i);
+                let along = v[0] * u[0] + v[1] * u[1] + v[2] * u[2];
+                norm(std::array::from_fn(|k| v[k] - along * u[k]))
+            })
+            .fold(0.0, f64::max);
+        (length, off)
+    }
 }
 
 #[cfg(test)]

@@ -122,6 +122,13 @@ pub enum MetricsError {
         /// How many touches it has.
         touches: usize,
     },
+    /// The data set has no touches (reference positions only): the
+    /// touch metrics have nothing to evaluate.
+    #[error(
+        "no touches: the single-point and length metrics evaluate touches of points; reference \
+         positions are scored by a calibration's validation"
+    )]
+    NoTouches,
     /// A figure overflowed (positions far too large to compare).
     #[error(
         "the figure `{figure}` overflows (not a finite number): the probe positions are too \
@@ -381,6 +388,9 @@ fn evaluate_with(
             got: xyz.len(),
         });
     }
+    if data.points().is_empty() {
+        return Err(MetricsError::NoTouches);
+    }
     for point in data.points() {
         if let Some(i) = point.touches.clone().find(|&i| !is_finite(&xyz[i])) {
             return Err(MetricsError::NonFinite {
@@ -417,8 +427,8 @@ fn evaluate_with(
         .collect();
     let across_points = |figure: fn(&PointStats) -> f64| {
         let values: Vec<f64> = stats.iter().map(figure).collect();
-        // Invariant: a built data set has at least one point (`DataSet`
-        // refuses a file without touches), so `values` is not empty.
+        // Invariant: refused above without a point, so `values` is not
+        // empty.
         Summary::of(&values).expect("a data set has points")
     };
     let ev = Evaluation {

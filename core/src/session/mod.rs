@@ -332,7 +332,9 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
             return Err(refuse(
                 "x",
                 format!(
-                    "the positions spread {:.4} mm about their centroid, the nominal arm's                      {:.4} mm ({ratio:.3e} times): positions in another unit (they must be                      mm; metres give 1e-3) or of another arm?",
+                    "the positions spread {:.4} mm about their centroid, the nominal arm's \
+                     {:.4} mm ({ratio:.3e} times): positions in another unit (they must be \
+                     mm; metres give 1e-3) or of another arm?",
                     reg.spread_mm, reg.arm_spread_mm
                 ),
             ));
@@ -341,7 +343,9 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
             return Err(refuse(
                 "y",
                 format!(
-                    "a mirror image fits the nominal arm (RMS {:.4} mm) far better than any                      rotation (RMS {:.4} mm): two axes swapped, or one reversed — give x, y, z                      of a right-handed frame",
+                    "a mirror image fits the nominal arm (RMS {:.4} mm) far better than any \
+                     rotation (RMS {:.4} mm): two axes swapped, or one reversed — give x, y, z \
+                     of a right-handed frame",
                     reg.mirrored_rms_mm, reg.rms_mm
                 ),
             ));
@@ -350,7 +354,9 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
             return Err(refuse(
                 "point",
                 format!(
-                    "the nominal arm, best registered, misses these positions by RMS {:.4} mm                      over a spread of {:.4} mm: positions of another arm, joint readings in                      another order or unit, or another tool?",
+                    "the nominal arm, best registered, misses these positions by RMS {:.4} mm \
+                     over a spread of {:.4} mm: positions of another arm, joint readings in \
+                     another order or unit, or another tool?",
                     reg.rms_mm, reg.spread_mm
                 ),
             ));
@@ -1047,13 +1053,22 @@ fn validation_table(v: &Validation) -> String {
 /// between where each arm (its frames registered) puts the probe and where
 /// the instrument saw it.
 fn position_table(v: &Validation) -> String {
-    let mut rows: Vec<(&str, &Figures)> = vec![
-        ("fitted, before", &v.fitted.before),
-        ("fitted, after", &v.fitted.after),
+    let mut rows: Vec<(String, &Figures)> = vec![
+        ("fitted, before".into(), &v.fitted.before),
+        ("fitted, after".into(), &v.fitted.after),
     ];
     if let Some(h) = &v.held_out {
-        rows.push(("held out, before", &h.figures.before));
-        rows.push(("held out, after", &h.figures.after));
+        rows.push(("held out, before".into(), &h.figures.before));
+        rows.push(("held out, after".into(), &h.figures.after));
+    }
+    for (i, fold) in v
+        .cross_validation
+        .iter()
+        .flat_map(|cv| &cv.folds)
+        .enumerate()
+    {
+        rows.push((format!("fold {}, before", i + 1), &fold.figures.before));
+        rows.push((format!("fold {}, after", i + 1), &fold.figures.after));
     }
     let mut t = String::new();
     for (name, f) in rows {

@@ -239,11 +239,15 @@ pub struct Fold {
     pub successful: bool,
 }
 
-/// `k`-fold cross-validation over points: points joined by a reference
-/// length stay in one fold (so every fold is also scored on lengths where it
-/// has them); groups are dealt to folds in an order shuffled by the
-/// settings' seed, and each fold is calibrated as `inputs` say (their data
-/// are the fold's training points) by `solver`.
+/// `k`-fold cross-validation over points and reference positions: points
+/// joined by a reference length stay in one fold (so every fold is also
+/// scored on lengths where it has them), and each frame's positions are
+/// dealt to the folds one by one (every fold's training keeps every frame);
+/// groups and positions are dealt in an order shuffled by the settings'
+/// seed, and each fold is calibrated as `inputs` say (their data are the
+/// fold's training points and positions) by `solver`. Held-out positions
+/// are scored in the frames the fold fitted (the start arm in its closed-
+/// form registration on the fold's training positions).
 ///
 /// # Errors
 ///
@@ -255,8 +259,42 @@ pub fn cross_validate(
     k: usize,
 ) -> Result<Vec<Fold>, CalibrationError> {
     let (start, data) = (inputs.layout.geometry(), inputs.data);
-    let seed = settings.seed;
     check_folds(data, k)?;
+    let point_folds = point_folds(data, k, settings.seed);
+    let row_folds = position_folds(data, k, settings.seed);
+    (0..k)
+        .map(|f| {
+            let (train_data, test_data) = fold_data(data, &point_folds[f], &row_folds[f]);
+            let fold = FitInputs {
+                data: &train_data,
+                ..inputs
+            };
+            let fit = calibrate_with(fold, settings, solver, &mut Context::new())?;
+            let start_frames = registered_frames(start, &train_data)?;
+            let mut held_out: Vec<String> = (point_folds[f].iter())
+                .map(|&p| data.points()[p].label.clone())
+                .collect();
+            if let Some(p) = data.positions() {
+                held_out.extend(row_folds[f].iter().map(|&i| p.rows().label(i).to_string()));
+            }
+            Ok(Fold {
+                held_out,
+                figures: before_after_in(
+                    start,
+                    &start_frames,
+                    &fit.params,
+                    &fit.frames(),
+                    &test_data,
+                )?,
+                successful: fit.solver.successful,
+            })
+        })
+        .collect()
+}
+
+/// Per fold, the points it holds out (sorted): groups joined by reference
+/// lengths dealt in a seeded order.
+fn point_folds(data: &DataSet, k: usize, seed: u64) -> Vec<Vec<usize>> {
     let groups = length_groups(data);
     let mut order: Vec<usize> = (0..groups.len()).collect();
     {
@@ -267,38 +305,56 @@ pub fn cross_validate(
     for (i, &g) in order.iter().enumerate() {
         folds[i % k].extend(&groups[g]);
     }
+    folds.iter_mut().for_each(|f| f.sort_unstable());
     folds
-        .iter()
-        .map(|held| {
-            let mut held = held.clone();
-            held.sort_unstable();
-            let train: Vec<usize> = (0..data.points().len())
-                .filter(|p| !held.contains(p))
-                .collect();
-            let train_data = data.subset(&train);
-            let test_data = data.subset(&held);
-            let fold = FitInputs {
-                data: &train_data,
-                ..inputs
-            };
-            let fit = calibrate_with(fold, settings, solver, &mut Context::new())?;
-            Ok(Fold {
-                held_out: held
-                    .iter()
-                    .map(|&p| data.points()[p].label.clone())
-                    .collect(),
-                figures: before_after(start, &fit.params, &test_data)?,
-                successful: fit.solver.successful,
-            })
-        })
-        .collect()
+}
+
+/// Per fold, the position rows it holds out (sorted): each frame's rows in
+/// a seeded order, dealt one by one.
+fn position_folds(data: &DataSet, k: usize, seed: u64) -> Vec<Vec<usize>> {
+    let mut folds: Vec<Vec<usize>> = vec![Vec::new(); k];
+    let Some(p) = data.positions() else {
+        return folds;
+    };
+    let rows = p.rows();
+    let mut rng = crate::random::rng(seed, crate::random::streams::POSITION_FOLDS);
+    for f in 0..rows.frames().len() {
+        let mut of: Vec<usize> = (0..rows.len()).filter(|&i| rows.frame(i) == f).collect();
+        {
+            use rand::seq::SliceRandom;
+            of.shuffle(&mut rng);
+        }
+        for (i, row) in of.into_iter().enumerate() {
+            folds[i % k].push(row);
+        }
+    }
+    folds.iter_mut().for_each(|f| f.sort_unstable());
+    folds
+}
+
+/// A fold's training and test data: without the `points` and position
+/// `rows` held out, and of them only.
+fn fold_data(data: &DataSet, points: &[usize], rows: &[usize]) -> (DataSet, DataSet) {
+    let train: Vec<usize> = (0..data.points().len())
+        .filter(|p| points.binary_search(p).is_err())
+        .collect();
+    let (mut train_data, mut test_data) = (data.subset(&train), data.subset(points));
+    if let Some(p) = data.positions() {
+        let kept: Vec<usize> = (0..p.len())
+            .filter(|i| rows.binary_search(i).is_err())
+            .collect();
+        train_data = train_data.with_position_data(Some(p.subset(&kept)));
+        test_data = test_data.with_position_data((!rows.is_empty()).then(|| p.subset(rows)));
+    }
+    (train_data, test_data)
 }
 
 /// Checks a fold count `k` for `data`: 2 to the number of groups of points
-/// joined by reference lengths.
+/// joined by reference lengths (with touches), and few enough that every
+/// frame of the reference positions keeps three in each fold's training.
 pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
     let groups = length_groups(data).len();
-    if k < 2 || k > groups {
+    if k < 2 || (!data.is_empty() && k > groups) {
         return Err(OptionError::new(
             "cross_validate",
             k,
@@ -307,6 +363,23 @@ pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
                  lengths)"
             ),
         ));
+    }
+    if let Some(p) = data.positions() {
+        let rows = p.rows();
+        for (f, name) in rows.frames().iter().enumerate() {
+            let n = (0..rows.len()).filter(|&i| rows.frame(i) == f).count();
+            if n - n.div_ceil(k) < crate::io::positions::MIN_FRAME_POSITIONS {
+                return Err(OptionError::new(
+                    "cross_validate",
+                    k,
+                    format!(
+                        "frame `{name}` has {n} positions: {k} folds leave its registration \
+                         fewer than {} in a fold's training",
+                        crate::io::positions::MIN_FRAME_POSITIONS
+                    ),
+                ));
+            }
+        }
     }
     Ok(())
 }
