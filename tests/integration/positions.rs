@@ -217,6 +217,16 @@ fn the_ur5_tracker_data_calibrate_below_the_published_error() {
         after.mean
     );
     assert!(before.mean > 5.0 * after.mean, "{before:?} → {after:?}");
+    // The report's figure of the 3-D errors: every series drawn.
+    let svg = std::fs::read_to_string(out.join("position-errors.svg")).unwrap();
+    for series in [
+        "nominal, fitted",
+        "calibrated, fitted",
+        "nominal, held out",
+        "calibrated, held out",
+    ] {
+        assert!(svg.contains(series), "{series} not in the figure");
+    }
     // The frame in calibrated.toml: the held-out poses seen from the
     // tracker, within the fit's largest held-out error.
     let poses = crate::util::write(&out, "poses.csv", &poses_of(&ur5("positions-random.csv")));

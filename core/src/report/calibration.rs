@@ -3,8 +3,8 @@
 //! with that file marked by its JSON Pointer.
 
 use super::{
-    Arms, CalibrationInput, Measured, Report, ReportError, ValidationRow, calibration_report,
-    positions,
+    Arms, CalibrationInput, Measured, PoseErrors, Report, ReportError, ValidationRow,
+    calibration_report, positions,
 };
 use crate::session::{CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE};
 
@@ -83,7 +83,83 @@ pub fn session_report(
         },
         validation,
         truth: problem.truth(),
+        positions: pose_errors(report, problem)?,
     })
+}
+
+/// The 3-D errors at the reference positions of the fitted and held-out
+/// data, before (the start arm, registered to the fitted data in closed
+/// form) and after (the calibrated arm in the fitted frames).
+fn pose_errors(
+    report: &CalibrationReport,
+    problem: &Problem,
+) -> Result<Vec<PoseErrors>, ReportError> {
+    let cal = &report.calibration;
+    let start = &problem.arm().params;
+    let start_frames: Vec<crate::calibrate::validate::FrameValues> =
+        match problem.data().positions() {
+            Some(p) => (p.rows().frames().iter().cloned())
+                .zip(
+                    crate::residuals::positions::register(start, p)?
+                        .into_iter()
+                        .map(|r| r.x),
+                )
+                .collect(),
+            None => Vec::new(),
+        };
+    let frames = cal.frames();
+    let mut sets = vec![("fitted", false, problem.data())];
+    if let Some(h) = problem.held_out() {
+        sets.push(("held out", true, &h.data));
+    }
+    let mut out = Vec::new();
+    for (set, held_out, data) in sets {
+        let Some(p) = data.positions() else {
+            continue;
+        };
+        for (after, params, f) in [(false, start, &start_frames), (true, &cal.params, &frames)] {
+            let (reach_mm, error_mm) = per_pose(params, p, f)?;
+            let arm = if after { "calibrated" } else { "nominal" };
+            out.push(PoseErrors {
+                name: format!("{arm}, {set}"),
+                held_out,
+                after,
+                reach_mm,
+                error_mm,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Per row, the probe's distance from the base axis and its 3-D error,
+/// each frame as `frames` registers it (else its closed form).
+fn per_pose(
+    params: &crate::params::DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[crate::calibrate::validate::FrameValues],
+) -> Result<(Vec<f64>, Vec<f64>), crate::kernel::KernelError> {
+    let closed = crate::residuals::positions::register(params, data)?;
+    let rows = data.rows();
+    let x: Vec<[f64; 6]> = (rows.frames().iter().zip(&closed))
+        .map(|(name, reg)| {
+            frames
+                .iter()
+                .find(|(n, _)| n == name)
+                .map_or(reg.x, |(_, v)| *v)
+        })
+        .collect();
+    let k = crate::kernel::ArmKernel::new(params)?;
+    let mut p = vec![[0.0; 3]; data.len()];
+    k.positions(data.poses(), 0..data.len(), &mut p)?;
+    let reach = p.iter().map(|q| q[0].hypot(q[1])).collect();
+    let error = (0..data.len())
+        .map(|i| {
+            let seen = crate::residuals::Frame::apply(&x[rows.frame(i)], p[i]);
+            crate::geometry::distance(&seen, &rows.position(i))
+        })
+        .collect();
+    Ok((reach, error))
 }
 
 /// What went in, for the page's heading.

@@ -67,6 +67,9 @@ pub const IDENTIFIABILITY_SVG: &str = "identifiability.svg";
 pub const RESIDUALS_SVG: &str = "residuals.svg";
 /// The solver's progress.
 pub const SOLVER_SVG: &str = "solver-progress.svg";
+/// The 3-D errors at reference positions, when the calibration had them
+/// (not among [`CALIBRATION_FILES`], which every calibration writes).
+pub const POSITIONS_SVG: &str = "position-errors.svg";
 
 /// Every file [`calibration_report`] writes, page first.
 pub const CALIBRATION_FILES: [&str; 7] = [
@@ -232,6 +235,25 @@ pub struct CalibrationInput<'a> {
     /// The true arm, when known (simulations): its errors are drawn beside
     /// the corrections.
     pub truth: Option<&'a DhParams>,
+    /// The 3-D errors at the reference positions, per data set and arm
+    /// (none without positions: the figure is then left out).
+    pub positions: Vec<PoseErrors>,
+}
+
+/// The 3-D errors of one arm at one data set's reference positions, each
+/// frame registered (the before arm's closed form, the fit's frames).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseErrors {
+    /// The series' name (`nominal, fitted`).
+    pub name: String,
+    /// Held out from the fit.
+    pub held_out: bool,
+    /// The calibrated arm's (else the start arm's).
+    pub after: bool,
+    /// Per pose, the probe's distance from the base axis, mm.
+    pub reach_mm: Vec<f64>,
+    /// Per pose, `|R p + t − y|`, mm.
+    pub error_mm: Vec<f64>,
 }
 
 /// What [`evaluation_report`] shows.
@@ -279,6 +301,7 @@ pub struct EvaluationInput<'a> {
 ///     arms: Arms { before: "nominal".into(), after: "calibrated".into() },
 ///     validation: vec![ValidationRow { name: "fitted".into(), held_out: false, figures: &fitted, json: None }],
 ///     truth: None,
+///     positions: Vec::new(),
 /// })
 /// .unwrap();
 /// assert_eq!(report.files().count(), CALIBRATION_FILES.len());
@@ -295,6 +318,10 @@ pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportErro
         figures::residuals::figure(&evaluated, &input.arms)?,
         figures::solver::figure(input.calibration)?,
     ];
+    let mut figures = figures;
+    if !input.positions.is_empty() {
+        figures.push(figures::positions::figure(&input.positions)?);
+    }
     let html = html::calibration_page(input, &evaluated, &figures);
     Ok(Report { html, figures })
 }

@@ -5,6 +5,7 @@ pub(crate) mod identifiability;
 pub(crate) mod lengths;
 pub(crate) mod parameters;
 pub(crate) mod points;
+pub(crate) mod positions;
 pub(crate) mod residuals;
 pub(crate) mod solver;
 
