@@ -254,7 +254,8 @@ typedef struct {
    */
   double sigma0;
   /**
-   * The touch σ behind the weights, mm.
+   * The touch σ behind the weights, mm (without touches: the position
+   * σ).
    */
   double touch_sigma_mm;
   /**
@@ -266,6 +267,38 @@ typedef struct {
    */
   double final_cost;
 } AacmmCalibrationSummary;
+
+/**
+ * One fitted frame of reference positions, for `aacmm_calibration_frame`:
+ * the rigid registration `y = R p + t` that maps the arm's base
+ * coordinates `p` into the instrument's `y` (the `[[frame]]` table of the
+ * command line's `calibrated.toml`).
+ */
+typedef struct {
+  /**
+   * The rotation vector of `R` (axis × angle), deg.
+   */
+  double rotation_deg[3];
+  /**
+   * `t`, mm.
+   */
+  double translation_mm[3];
+  /**
+   * Standard uncertainties (k = 1) of the rotation, deg, of the fit's
+   * local step (a small rotation applied on the left); `NAN` where the
+   * data did not determine them.
+   */
+  double rotation_sigma_deg[3];
+  /**
+   * Standard uncertainties (k = 1) of `t`, mm; `NAN` where the data did
+   * not determine them.
+   */
+  double translation_sigma_mm[3];
+  /**
+   * `R`, row-major: `R[i][k]` at `3·i + k`.
+   */
+  double rotation_matrix[9];
+} AacmmFrame;
 
 /**
  * The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
@@ -509,8 +542,15 @@ AacmmStatus aacmm_joint_jacobian(const AacmmArm *arm,
  * drops it). The parameters and the verdict are the command line's, bit
  * for bit; held-out validation (`--validate`) is not part of the C API.
  *
- * `poses_unit` is the unit of the poses file's angles (`AACMM_ANGLE_DEG`,
- * `AACMM_ANGLE_RAD`); `lengths_path` may be `NULL`. The result goes to a
+ * With a positions file in the options
+ * (`aacmm_calibrate_options_set_positions_file`: `--positions`) its
+ * reference positions are fitted with the touches, or alone when
+ * `poses_path` is `NULL`; the fitted frames are then in
+ * `aacmm_calibration_frame`.
+ *
+ * `poses_unit` is the unit of the angles of the poses file and of the
+ * positions file (`AACMM_ANGLE_DEG`, `AACMM_ANGLE_RAD`: `--angle-unit`);
+ * `lengths_path` may be `NULL`. The result goes to a
  * new handle at `*out`; a calibration the library does not call usable
  * (the solver did not converge, a mirror-image arm, a poor fit) still
  * gives a result: check `successful` in `aacmm_calibration_summary`, and
@@ -521,7 +561,9 @@ AacmmStatus aacmm_joint_jacobian(const AacmmArm *arm,
  * line and field), `AACMM_STATUS_INVALID_ARGUMENT` (an option, e.g. a
  * fixed parameter or a prior target the arm does not have),
  * `AACMM_STATUS_UNSUPPORTED`, `AACMM_STATUS_CALIBRATION` (the data cannot
- * determine the free parameters). On error `*out` is `NULL`.
+ * determine the free parameters); `AACMM_STATUS_NULL_POINTER` for a `NULL`
+ * `poses_path` without a positions file, `AACMM_STATUS_INVALID_ARGUMENT`
+ * for positions set as arrays. On error `*out` is `NULL`.
  *
  * # Safety
  *
@@ -549,8 +591,17 @@ AacmmStatus aacmm_calibrate_files(const char *arm_path,
  * (`aacmm_arm_from_file`); on the same data (point ids in place of
  * labels) it gives the same parameters.
  *
+ * With reference positions in the options
+ * (`aacmm_calibrate_options_set_positions`, for an arm of `start`'s joint
+ * count) they are fitted with the touches, or alone when there are no
+ * touches (`q_len`, `points_len` and `lengths_len` 0; `q`, `points` and
+ * `lengths` may then be `NULL`); the fitted frames are then in
+ * `aacmm_calibration_frame`.
+ *
  * Errors: as `aacmm_calibrate_files`; `AACMM_STATUS_LENGTH` for `q_len`
- * or `points_len` that do not match; `AACMM_STATUS_INPUT` for a
+ * or `points_len` that do not match, or positions of another joint count
+ * than `start`'s; `AACMM_STATUS_INVALID_ARGUMENT` for a positions file in
+ * the options (`aacmm_calibrate_files` reads it); `AACMM_STATUS_INPUT` for a
  * non-finite reading, a point with fewer than 3 touches, touches without
  * articulation, or a length that joins a point to itself, names an
  * unknown point, repeats a pair, or has a distance <= 0 or a negative
@@ -706,6 +757,39 @@ AacmmStatus aacmm_calibration_verdict_notes(const AacmmCalibration *cal,
                                             size_t *len);
 
 /**
+ * The number of frames fitted with the arm (one per frame of the
+ * reference positions; 0 without positions) into `*count`.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_frame_count(const AacmmCalibration *cal, size_t *count);
+
+/**
+ * Frame `index` (`0 ≤ index < aacmm_calibration_frame_count`, in order of
+ * first appearance in the positions) into `*frame`, and its name (UTF-8)
+ * into `buf`, copied like `aacmm_last_error_message`; `*len` gets the
+ * name's full length in bytes without the NUL. Returns
+ * `AACMM_STATUS_BUFFER_TOO_SMALL` when the name was truncated (`buf` may
+ * be `NULL` with `buf_len` 0 to ask for the length; `*frame` is written
+ * all the same), `AACMM_STATUS_INVALID_ARGUMENT` for an index out of
+ * range.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `frame` is `NULL` or points to
+ * writable memory for the struct; `buf` is `NULL` or points to `buf_len`
+ * writable bytes; `len` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_frame(const AacmmCalibration *cal,
+                                    size_t index,
+                                    AacmmFrame *frame,
+                                    char *buf,
+                                    size_t buf_len,
+                                    size_t *len);
+
+/**
  * Copies the message of the last failed call on this thread into `buf`.
  *
  * Writes at most `buf_len - 1` bytes of UTF-8 (cut at a character
@@ -846,6 +930,24 @@ AacmmStatus aacmm_calibrate_options_set_length_weight(AacmmCalibrateOptions *opt
                                                       double weight);
 
 /**
+ * σ per coordinate of a reference position whose uncertainty is not
+ * stated (`NAN` in `aacmm_calibrate_options_set_positions`, an empty cell
+ * in a positions file), as an instrument's specification gives it:
+ * `a_mm + b_mm_per_m · distance`, the distance from the instrument in
+ * metres (`--position-noise A+B/m`; a laser tracker's 0.015 mm +
+ * 0.006 mm/m). `a_mm` finite and > 0, or 0 = not stated (the default: the
+ * position σ is then estimated from the fit); `b_mm_per_m` finite and
+ * ≥ 0 (0: σ does not grow with the distance), and 0 when `a_mm` is.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_position_noise_mm(AacmmCalibrateOptions *options,
+                                                          double a_mm,
+                                                          double b_mm_per_m);
+
+/**
  * Worker threads for the normal equations (`--threads`); 0 = one per
  * core (the default). The results do not depend on it.
  *
@@ -901,6 +1003,80 @@ AacmmStatus aacmm_calibrate_options_set_prior(AacmmCalibrateOptions *options, co
  */
 AacmmStatus aacmm_calibrate_options_set_accept_poor_fit(AacmmCalibrateOptions *options,
                                                         bool accept);
+
+/**
+ * Reference positions an instrument saw, fitted with the arm as the
+ * command line's `--positions` file is (copied; they replace positions set
+ * before, also a file). Row `i` of `n = q_len / joints` rows holds the
+ * readings `q[i·joints ..]` (rad, row-major as in `aacmm_positions`) of a
+ * pose, and `xyz[3·i ..]`, where the instrument saw the probe: x, y, z in
+ * mm in the instrument's own frame. Each frame (a station of a tracker,
+ * a placement of an artefact) gets its own unknown rigid registration,
+ * fitted with the arm (`aacmm_calibration_frame`): `frames[i]` is row
+ * `i`'s frame, an index into the `frame_names` (`frames_len` = `n`;
+ * every name used); without `frames` (`frames_len` = 0) every row is in
+ * one frame, named `frame_names[0]` if `frame_names_len` is 1, else
+ * `"instrument"`. `uncertainty[i]` is row `i`'s standard uncertainty per
+ * coordinate, mm, > 0, or `NAN` for not stated, when the options'
+ * position noise applies (`aacmm_calibrate_options_set_position_noise_mm`);
+ * `uncertainty_len` = 0 states none. Each row is its own point, named
+ * `P1`, `P2`, … in file order by the report.
+ *
+ * With positions, `aacmm_calibrate` fits them with its touches, or alone
+ * when it has none (`q_len` = 0 there); `aacmm_calibrate_files` takes a
+ * positions file instead (`aacmm_calibrate_options_set_positions_file`)
+ * and refuses these. Every array length 0 removes the positions (the
+ * default: none).
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or an array or a frame
+ * name that is `NULL`), `AACMM_STATUS_UNSUPPORTED` (`joints` neither 6 nor
+ * 7), `AACMM_STATUS_LENGTH` (a length that does not match `n`),
+ * `AACMM_STATUS_INVALID_ARGUMENT` (a frame name that is not UTF-8),
+ * `AACMM_STATUS_INPUT` — the message names the array and index — for a
+ * reading or position that is not a finite number, an uncertainty that is
+ * neither `NAN` nor > 0, a frame index out of range, a frame name empty,
+ * given twice or unused, and a frame with fewer than 3 distinct positions
+ * or all of them on one line (its registration would not be determined).
+ * On error the options keep their earlier positions.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; each array is `NULL` or points
+ * to its stated length of values (it may be `NULL` when its length is 0);
+ * each of the `frame_names_len` names is `NULL` or a NUL-terminated
+ * string.
+ */
+AacmmStatus aacmm_calibrate_options_set_positions(AacmmCalibrateOptions *options,
+                                                  size_t joints,
+                                                  const double *q,
+                                                  size_t q_len,
+                                                  const double *xyz,
+                                                  size_t xyz_len,
+                                                  const uint32_t *frames,
+                                                  size_t frames_len,
+                                                  const char *const *frame_names,
+                                                  size_t frame_names_len,
+                                                  const double *uncertainty,
+                                                  size_t uncertainty_len);
+
+/**
+ * A reference-positions file (`--positions`: CSV
+ * `point,q1,…,qn,x,y,z[,frame][,uncertainty]`, the readings in the unit
+ * `aacmm_calibrate_files` is given for the poses file), fitted with the
+ * arm; `NULL` removes the positions (the default: none). The path is
+ * copied, the file read when calibrating; it replaces positions set
+ * before, also arrays. With a positions file `aacmm_calibrate_files` may
+ * be given no poses file (`poses_path` `NULL`): a calibration on the
+ * positions alone. `aacmm_calibrate` takes arrays instead
+ * (`aacmm_calibrate_options_set_positions`) and refuses a file.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `path` is `NULL` or a
+ * NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_positions_file(AacmmCalibrateOptions *options,
+                                                       const char *path);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -6,11 +6,13 @@ use aacmm_core::calibrate::Termination;
 use aacmm_core::dataset::{ArrayLength, DataSet};
 use aacmm_core::io::{AngleUnit, Arm};
 use aacmm_core::params::ParamId;
+use aacmm_core::residuals::Frame;
 use aacmm_core::session::{CalibrationReport, Request, Sources};
 
 use crate::arm::{AacmmArm, handle, pose_count, string_out};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
-use crate::options::{self, AacmmCalibrateOptions, AacmmMethod, method_code};
+use crate::options::{self, AacmmCalibrateOptions, AacmmMethod, PositionInput, method_code};
+use crate::positions::ARRAYS;
 use crate::ptr;
 
 /// The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
@@ -122,12 +124,35 @@ pub struct AacmmCalibrationSummary {
     pub degrees_of_freedom: usize,
     /// `sqrt(cost / dof)`: 1 when the weights are right.
     pub sigma0: f64,
-    /// The touch σ behind the weights, mm.
+    /// The touch σ behind the weights, mm (without touches: the position
+    /// σ).
     pub touch_sigma_mm: f64,
     /// Weighted cost at the start of the final fit.
     pub initial_cost: f64,
     /// Weighted cost at the end.
     pub final_cost: f64,
+}
+
+/// One fitted frame of reference positions, for `aacmm_calibration_frame`:
+/// the rigid registration `y = R p + t` that maps the arm's base
+/// coordinates `p` into the instrument's `y` (the `[[frame]]` table of the
+/// command line's `calibrated.toml`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct AacmmFrame {
+    /// The rotation vector of `R` (axis × angle), deg.
+    pub rotation_deg: [f64; 3],
+    /// `t`, mm.
+    pub translation_mm: [f64; 3],
+    /// Standard uncertainties (k = 1) of the rotation, deg, of the fit's
+    /// local step (a small rotation applied on the left); `NAN` where the
+    /// data did not determine them.
+    pub rotation_sigma_deg: [f64; 3],
+    /// Standard uncertainties (k = 1) of `t`, mm; `NAN` where the data did
+    /// not determine them.
+    pub translation_sigma_mm: [f64; 3],
+    /// `R`, row-major: `R[i][k]` at `3·i + k`.
+    pub rotation_matrix: [f64; 9],
 }
 
 /// The result of a calibration. Opaque; released by
@@ -170,8 +195,15 @@ fn in_file(e: aacmm_core::CalibrationError, arm: &str) -> Error {
 /// drops it). The parameters and the verdict are the command line's, bit
 /// for bit; held-out validation (`--validate`) is not part of the C API.
 ///
-/// `poses_unit` is the unit of the poses file's angles (`AACMM_ANGLE_DEG`,
-/// `AACMM_ANGLE_RAD`); `lengths_path` may be `NULL`. The result goes to a
+/// With a positions file in the options
+/// (`aacmm_calibrate_options_set_positions_file`: `--positions`) its
+/// reference positions are fitted with the touches, or alone when
+/// `poses_path` is `NULL`; the fitted frames are then in
+/// `aacmm_calibration_frame`.
+///
+/// `poses_unit` is the unit of the angles of the poses file and of the
+/// positions file (`AACMM_ANGLE_DEG`, `AACMM_ANGLE_RAD`: `--angle-unit`);
+/// `lengths_path` may be `NULL`. The result goes to a
 /// new handle at `*out`; a calibration the library does not call usable
 /// (the solver did not converge, a mirror-image arm, a poor fit) still
 /// gives a result: check `successful` in `aacmm_calibration_summary`, and
@@ -182,7 +214,9 @@ fn in_file(e: aacmm_core::CalibrationError, arm: &str) -> Error {
 /// line and field), `AACMM_STATUS_INVALID_ARGUMENT` (an option, e.g. a
 /// fixed parameter or a prior target the arm does not have),
 /// `AACMM_STATUS_UNSUPPORTED`, `AACMM_STATUS_CALIBRATION` (the data cannot
-/// determine the free parameters). On error `*out` is `NULL`.
+/// determine the free parameters); `AACMM_STATUS_NULL_POINTER` for a `NULL`
+/// `poses_path` without a positions file, `AACMM_STATUS_INVALID_ARGUMENT`
+/// for positions set as arrays. On error `*out` is `NULL`.
 ///
 /// # Safety
 ///
@@ -202,11 +236,11 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
         // SAFETY: by the contract.
         unsafe { ptr::write(out, std::ptr::null_mut(), "out") }?;
         // SAFETY: by the contract.
-        let (arm_path, poses_path) = unsafe {
-            (
-                ptr::path(arm_path, "arm_path")?,
-                ptr::path(poses_path, "poses_path")?,
-            )
+        let arm_path = unsafe { ptr::path(arm_path, "arm_path") }?;
+        let poses_path = match poses_path.is_null() {
+            true => None,
+            // SAFETY: by the contract.
+            false => Some(unsafe { ptr::path(poses_path, "poses_path") }?),
         };
         let lengths_path = match lengths_path.is_null() {
             true => None,
@@ -223,10 +257,36 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
             }
         };
         // SAFETY: by the contract.
-        let o = unsafe { options::read(options) }?;
-        let mut request = Request::read(&arm_path, &poses_path, unit)?;
+        let mut o = unsafe { options::read(options) }?;
+        let positions = match o.take_positions() {
+            None => None,
+            Some(PositionInput::File(path)) => Some(path),
+            Some(PositionInput::Arrays(_)) => {
+                return Err(Error::invalid(
+                    "positions set as arrays (aacmm_calibrate_options_set_positions) go with \
+                     aacmm_calibrate; give aacmm_calibrate_files a positions file \
+                     (aacmm_calibrate_options_set_positions_file)",
+                ));
+            }
+        };
+        // The command line's order: poses (or positions alone), lengths,
+        // positions.
+        let mut request = match (&poses_path, &positions) {
+            (Some(poses), _) => Request::read(&arm_path, poses, unit)?,
+            (None, Some(path)) => Request::read_positions_only(&arm_path, path, unit)?,
+            (None, None) => {
+                return Err(Error::new(
+                    AacmmStatus::NullPointer,
+                    "`poses_path` is NULL: give a poses file, a positions file \
+                     (aacmm_calibrate_options_set_positions_file) or both",
+                ));
+            }
+        };
         if let Some(path) = &lengths_path {
             request = request.read_lengths(path)?;
+        }
+        if let (Some(_), Some(path)) = (&poses_path, &positions) {
+            request = request.read_positions(path)?;
         }
         let result = run(options::request(&o, request))?;
         // SAFETY: checked writable above.
@@ -246,8 +306,17 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
 /// (`aacmm_arm_from_file`); on the same data (point ids in place of
 /// labels) it gives the same parameters.
 ///
+/// With reference positions in the options
+/// (`aacmm_calibrate_options_set_positions`, for an arm of `start`'s joint
+/// count) they are fitted with the touches, or alone when there are no
+/// touches (`q_len`, `points_len` and `lengths_len` 0; `q`, `points` and
+/// `lengths` may then be `NULL`); the fitted frames are then in
+/// `aacmm_calibration_frame`.
+///
 /// Errors: as `aacmm_calibrate_files`; `AACMM_STATUS_LENGTH` for `q_len`
-/// or `points_len` that do not match; `AACMM_STATUS_INPUT` for a
+/// or `points_len` that do not match, or positions of another joint count
+/// than `start`'s; `AACMM_STATUS_INVALID_ARGUMENT` for a positions file in
+/// the options (`aacmm_calibrate_files` reads it); `AACMM_STATUS_INPUT` for a
 /// non-finite reading, a point with fewer than 3 touches, touches without
 /// articulation, or a length that joins a point to itself, names an
 /// unknown point, repeats a pair, or has a distance <= 0 or a negative
@@ -293,13 +362,37 @@ pub unsafe extern "C" fn aacmm_calibrate(
             )
         };
         // SAFETY: by the contract.
-        let o = unsafe { options::read(options) }?;
+        let mut o = unsafe { options::read(options) }?;
+        let positions = match o.take_positions() {
+            None => None,
+            Some(PositionInput::Arrays(rows)) if rows.joints() != joints => {
+                return Err(Error::length(format!(
+                    "the options' positions (aacmm_calibrate_options_set_positions) have {} \
+                     joints per row; the start arm has {joints}",
+                    rows.joints()
+                )));
+            }
+            Some(PositionInput::Arrays(rows)) => Some(rows),
+            Some(PositionInput::File(_)) => {
+                return Err(Error::invalid(
+                    "a positions file (aacmm_calibrate_options_set_positions_file) goes with \
+                     aacmm_calibrate_files; give aacmm_calibrate positions as arrays \
+                     (aacmm_calibrate_options_set_positions)",
+                ));
+            }
+        };
         let lengths: Vec<ArrayLength> = lengths.iter().map(ArrayLength::from).collect();
-        let data = DataSet::from_arrays(joints, q, points, &lengths)?;
+        let data = match positions {
+            Some(rows) if n == 0 && lengths.is_empty() => DataSet::from_positions(rows, ARRAYS)?,
+            Some(rows) => {
+                DataSet::from_arrays(joints, q, points, &lengths)?.with_positions(rows, ARRAYS)?
+            }
+            None => DataSet::from_arrays(joints, q, points, &lengths)?,
+        };
         let sources = Sources {
             arm_file: start.source.clone(),
-            data_file: "<arrays>".to_string(),
-            lengths_file: (!lengths.is_empty()).then(|| "<arrays>".to_string()),
+            data_file: ARRAYS.to_string(),
+            lengths_file: (!lengths.is_empty()).then(|| ARRAYS.to_string()),
             warnings: start.warnings.clone(),
         };
         let request = Request::new(start.arm.clone(), data).sources(sources);
@@ -585,5 +678,89 @@ pub unsafe extern "C" fn aacmm_calibration_verdict_notes(
         let verdict = &unsafe { result(cal) }?.report.verdict;
         // SAFETY: by the contract.
         unsafe { string_out(&lines(&verdict.notes), buf, buf_len, len) }
+    })
+}
+
+/// The number of frames fitted with the arm (one per frame of the
+/// reference positions; 0 without positions) into `*count`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_frame_count(
+    cal: *const AacmmCalibration,
+    count: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let c = unsafe { result(cal) }?;
+        // SAFETY: by the contract.
+        unsafe { ptr::write(count, c.report.calibration.frames().len(), "count") }
+    })
+}
+
+/// Frame `index` (`0 ≤ index < aacmm_calibration_frame_count`, in order of
+/// first appearance in the positions) into `*frame`, and its name (UTF-8)
+/// into `buf`, copied like `aacmm_last_error_message`; `*len` gets the
+/// name's full length in bytes without the NUL. Returns
+/// `AACMM_STATUS_BUFFER_TOO_SMALL` when the name was truncated (`buf` may
+/// be `NULL` with `buf_len` 0 to ask for the length; `*frame` is written
+/// all the same), `AACMM_STATUS_INVALID_ARGUMENT` for an index out of
+/// range.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `frame` is `NULL` or points to
+/// writable memory for the struct; `buf` is `NULL` or points to `buf_len`
+/// writable bytes; `len` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_frame(
+    cal: *const AacmmCalibration,
+    index: usize,
+    frame: *mut AacmmFrame,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let c = &unsafe { result(cal) }?.report.calibration;
+        let values = c.frames();
+        let records = c.frame_records();
+        let (Some((_, x)), Some(record)) = (values.get(index), records.get(index)) else {
+            return Err(Error::invalid(format!(
+                "index = {index}: the calibration has {} frame(s)",
+                values.len()
+            )));
+        };
+        // Column k of R: the image of the k-th unit vector without the
+        // translation, exact (products with 1 and 0).
+        let rotation = [x[0], x[1], x[2], 0.0, 0.0, 0.0];
+        let columns: [[f64; 3]; 3] = std::array::from_fn(|k| {
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            Frame::apply(&rotation, e)
+        });
+        // Each σ on its own (`frame_records` has all three or none): the
+        // frame's columns `NAME.rx … NAME.tz`, in deg and mm.
+        let sigma = |axis: &str| {
+            let column = format!("{}.{axis}", record.name);
+            (c.auxiliary.iter())
+                .find(|a| a.name == column)
+                .and_then(|a| a.sigma)
+                .unwrap_or(f64::NAN)
+        };
+        let value = AacmmFrame {
+            rotation_deg: record.rotation_deg,
+            translation_mm: record.translation_mm,
+            rotation_sigma_deg: ["rx", "ry", "rz"].map(sigma),
+            translation_sigma_mm: ["tx", "ty", "tz"].map(sigma),
+            rotation_matrix: std::array::from_fn(|m| columns[m % 3][m / 3]),
+        };
+        // SAFETY: by the contract.
+        unsafe { ptr::write(frame, value, "frame") }?;
+        // SAFETY: by the contract.
+        unsafe { string_out(&record.name, buf, buf_len, len) }
     })
 }

@@ -35,6 +35,7 @@ mod arm;
 mod calibrate;
 mod error;
 mod options;
+mod positions;
 mod ptr;
 
 use std::ffi::c_char;
@@ -46,10 +47,11 @@ pub use arm::{
 };
 pub use calibrate::{
     AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmAngleUnit, AacmmCalibration, AacmmCalibrationSummary,
-    AacmmReferenceLength, AacmmTermination, aacmm_calibrate, aacmm_calibrate_files,
-    aacmm_calibration_arm, aacmm_calibration_fixed, aacmm_calibration_free,
-    aacmm_calibration_params, aacmm_calibration_report, aacmm_calibration_sigmas,
-    aacmm_calibration_summary, aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
+    AacmmFrame, AacmmReferenceLength, AacmmTermination, aacmm_calibrate, aacmm_calibrate_files,
+    aacmm_calibration_arm, aacmm_calibration_fixed, aacmm_calibration_frame,
+    aacmm_calibration_frame_count, aacmm_calibration_free, aacmm_calibration_params,
+    aacmm_calibration_report, aacmm_calibration_sigmas, aacmm_calibration_summary,
+    aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
 };
 pub use error::{AacmmStatus, aacmm_last_error_message};
 pub use options::{
@@ -59,9 +61,11 @@ pub use options::{
     aacmm_calibrate_options_set_accept_poor_fit, aacmm_calibrate_options_set_cross_validate,
     aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_fix,
     aacmm_calibrate_options_set_length_uncertainty_mm, aacmm_calibrate_options_set_length_weight,
-    aacmm_calibrate_options_set_method, aacmm_calibrate_options_set_prior,
-    aacmm_calibrate_options_set_probe_noise_mm, aacmm_calibrate_options_set_robust,
-    aacmm_calibrate_options_set_seed, aacmm_calibrate_options_set_threads,
+    aacmm_calibrate_options_set_method, aacmm_calibrate_options_set_position_noise_mm,
+    aacmm_calibrate_options_set_positions, aacmm_calibrate_options_set_positions_file,
+    aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
+    aacmm_calibrate_options_set_robust, aacmm_calibrate_options_set_seed,
+    aacmm_calibrate_options_set_threads,
 };
 
 /// The library's version (`MAJOR.MINOR.PATCH`, the workspace's version), as

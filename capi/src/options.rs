@@ -4,15 +4,18 @@
 //! set. [`settings`] turns the options into the library's terms.
 
 use std::ffi::c_char;
+use std::path::PathBuf;
 
 use aacmm_core::calibrate::{FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings};
 use aacmm_core::error::OptionError;
+use aacmm_core::io::Positions;
 use aacmm_core::params::SUPPORTED_JOINTS;
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::Request;
 use aacmm_core::tolerances::Tolerances;
 
 use crate::error::{AacmmStatus, Error, guard, guard_value};
+use crate::positions;
 use crate::ptr;
 
 /// A solver, for `aacmm_calibrate_options_set_method`: one of the
@@ -68,6 +71,17 @@ pub const AACMM_ROBUST_HUBER: AacmmRobust = 1;
 /// A robust refit with the Cauchy loss.
 pub const AACMM_ROBUST_CAUCHY: AacmmRobust = 2;
 
+/// Reference positions to fit with the arm (`--positions`).
+#[derive(Clone, Debug)]
+pub(crate) enum PositionInput {
+    /// Rows copied from arrays (`aacmm_calibrate_options_set_positions`),
+    /// checked.
+    Arrays(Positions),
+    /// A positions file (`aacmm_calibrate_options_set_positions_file`),
+    /// read when calibrating.
+    File(PathBuf),
+}
+
 /// Settings of a calibration: the command line's flags. Opaque; made with
 /// the defaults of `aacmm calibrate` by `aacmm_calibrate_options_new`,
 /// changed by its setters (`aacmm_calibrate_options_set_method` and the
@@ -90,6 +104,16 @@ pub struct AacmmCalibrateOptions {
     /// `--prior` as given; `None`: the arm file's `[prior]`.
     prior: Option<String>,
     accept_poor_fit: bool,
+    /// `--positions`; `None`: no reference positions.
+    positions: Option<PositionInput>,
+}
+
+impl AacmmCalibrateOptions {
+    /// The reference positions, if any were set, taken out of these
+    /// options (a copy [`read`] made: the caller's stay).
+    pub(crate) fn take_positions(&mut self) -> Option<PositionInput> {
+        self.positions.take()
+    }
 }
 
 impl Default for AacmmCalibrateOptions {
@@ -106,6 +130,7 @@ impl Default for AacmmCalibrateOptions {
             robust: None,
             prior: None,
             accept_poor_fit: model.accept_poor_fit,
+            positions: None,
         }
     }
 }
@@ -405,6 +430,34 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_length_weight(
     })
 }
 
+/// σ per coordinate of a reference position whose uncertainty is not
+/// stated (`NAN` in `aacmm_calibrate_options_set_positions`, an empty cell
+/// in a positions file), as an instrument's specification gives it:
+/// `a_mm + b_mm_per_m · distance`, the distance from the instrument in
+/// metres (`--position-noise A+B/m`; a laser tracker's 0.015 mm +
+/// 0.006 mm/m). `a_mm` finite and > 0, or 0 = not stated (the default: the
+/// position σ is then estimated from the fit); `b_mm_per_m` finite and
+/// ≥ 0 (0: σ does not grow with the distance), and 0 when `a_mm` is.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_position_noise_mm(
+    options: *mut AacmmCalibrateOptions,
+    a_mm: f64,
+    b_mm_per_m: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        set_noise(o, |n| {
+            n.position_mm = stated(a_mm);
+            n.position_mm_per_m = stated(b_mm_per_m);
+        })
+    })
+}
+
 /// 0 = not stated; anything else is left to the library's check (which
 /// refuses negative and non-finite values).
 fn stated(v: f64) -> Option<f64> {
@@ -529,6 +582,127 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_accept_poor_fit(
     })
 }
 
+/// Reference positions an instrument saw, fitted with the arm as the
+/// command line's `--positions` file is (copied; they replace positions set
+/// before, also a file). Row `i` of `n = q_len / joints` rows holds the
+/// readings `q[i·joints ..]` (rad, row-major as in `aacmm_positions`) of a
+/// pose, and `xyz[3·i ..]`, where the instrument saw the probe: x, y, z in
+/// mm in the instrument's own frame. Each frame (a station of a tracker,
+/// a placement of an artefact) gets its own unknown rigid registration,
+/// fitted with the arm (`aacmm_calibration_frame`): `frames[i]` is row
+/// `i`'s frame, an index into the `frame_names` (`frames_len` = `n`;
+/// every name used); without `frames` (`frames_len` = 0) every row is in
+/// one frame, named `frame_names[0]` if `frame_names_len` is 1, else
+/// `"instrument"`. `uncertainty[i]` is row `i`'s standard uncertainty per
+/// coordinate, mm, > 0, or `NAN` for not stated, when the options'
+/// position noise applies (`aacmm_calibrate_options_set_position_noise_mm`);
+/// `uncertainty_len` = 0 states none. Each row is its own point, named
+/// `P1`, `P2`, … in file order by the report.
+///
+/// With positions, `aacmm_calibrate` fits them with its touches, or alone
+/// when it has none (`q_len` = 0 there); `aacmm_calibrate_files` takes a
+/// positions file instead (`aacmm_calibrate_options_set_positions_file`)
+/// and refuses these. Every array length 0 removes the positions (the
+/// default: none).
+///
+/// Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or an array or a frame
+/// name that is `NULL`), `AACMM_STATUS_UNSUPPORTED` (`joints` neither 6 nor
+/// 7), `AACMM_STATUS_LENGTH` (a length that does not match `n`),
+/// `AACMM_STATUS_INVALID_ARGUMENT` (a frame name that is not UTF-8),
+/// `AACMM_STATUS_INPUT` — the message names the array and index — for a
+/// reading or position that is not a finite number, an uncertainty that is
+/// neither `NAN` nor > 0, a frame index out of range, a frame name empty,
+/// given twice or unused, and a frame with fewer than 3 distinct positions
+/// or all of them on one line (its registration would not be determined).
+/// On error the options keep their earlier positions.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; each array is `NULL` or points
+/// to its stated length of values (it may be `NULL` when its length is 0);
+/// each of the `frame_names_len` names is `NULL` or a NUL-terminated
+/// string.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_positions(
+    options: *mut AacmmCalibrateOptions,
+    joints: usize,
+    q: *const f64,
+    q_len: usize,
+    xyz: *const f64,
+    xyz_len: usize,
+    frames: *const u32,
+    frames_len: usize,
+    frame_names: *const *const c_char,
+    frame_names_len: usize,
+    uncertainty: *const f64,
+    uncertainty_len: usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let lengths = positions::Lengths {
+            joints,
+            q: q_len,
+            xyz: xyz_len,
+            frames: frames_len,
+            frame_names: frame_names_len,
+            uncertainty: uncertainty_len,
+        };
+        if lengths.none() {
+            o.positions = None;
+            return Ok(());
+        }
+        lengths.rows()?;
+        // SAFETY: by the contract.
+        let (q, xyz, frames, names, uncertainty) = unsafe {
+            (
+                ptr::input(q, q_len, "q")?,
+                ptr::input(xyz, xyz_len, "xyz")?,
+                ptr::input(frames, frames_len, "frames")?,
+                ptr::input(frame_names, frame_names_len, "frame_names")?,
+                ptr::input(uncertainty, uncertainty_len, "uncertainty")?,
+            )
+        };
+        // SAFETY: each name is NULL or NUL-terminated, by the contract.
+        let names = unsafe { positions::frame_names(names) }?;
+        let rows = positions::rows(joints, q, xyz, frames, &names, uncertainty)?;
+        o.positions = Some(PositionInput::Arrays(rows));
+        Ok(())
+    })
+}
+
+/// A reference-positions file (`--positions`: CSV
+/// `point,q1,…,qn,x,y,z[,frame][,uncertainty]`, the readings in the unit
+/// `aacmm_calibrate_files` is given for the poses file), fitted with the
+/// arm; `NULL` removes the positions (the default: none). The path is
+/// copied, the file read when calibrating; it replaces positions set
+/// before, also arrays. With a positions file `aacmm_calibrate_files` may
+/// be given no poses file (`poses_path` `NULL`): a calibration on the
+/// positions alone. `aacmm_calibrate` takes arrays instead
+/// (`aacmm_calibrate_options_set_positions`) and refuses a file.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `path` is `NULL` or a
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_positions_file(
+    options: *mut AacmmCalibrateOptions,
+    path: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        o.positions = match path.is_null() {
+            true => None,
+            // SAFETY: by the contract.
+            false => Some(PositionInput::File(unsafe { ptr::path(path, "path") }?)),
+        };
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -645,6 +819,19 @@ mod tests {
                 "length_weight = inf: must be a finite number > 0",
             );
             refused(
+                aacmm_calibrate_options_set_position_noise_mm(o, -0.015, 0.0),
+                "position_noise a_mm = -0.015: must be a finite number > 0",
+            );
+            refused(
+                aacmm_calibrate_options_set_position_noise_mm(o, 0.015, f64::NAN),
+                "position_noise b_mm_per_m = NaN: must be a finite number ≥ 0",
+            );
+            refused(
+                aacmm_calibrate_options_set_position_noise_mm(o, 0.0, 0.006),
+                "position_noise b_mm_per_m = 0.006: a distance-dependent position σ needs its \
+                 constant part too",
+            );
+            refused(
                 aacmm_calibrate_options_set_robust(o, 9, 0.0),
                 "robust = 9: one of AACMM_ROBUST_NONE (0)",
             );
@@ -685,6 +872,22 @@ mod tests {
                 aacmm_calibrate_options_set_robust(null, AACMM_ROBUST_NONE, 0.0),
                 aacmm_calibrate_options_set_prior(null, std::ptr::null()),
                 aacmm_calibrate_options_set_accept_poor_fit(null, true),
+                aacmm_calibrate_options_set_position_noise_mm(null, 0.0, 0.0),
+                aacmm_calibrate_options_set_positions(
+                    null,
+                    6,
+                    std::ptr::null(),
+                    0,
+                    std::ptr::null(),
+                    0,
+                    std::ptr::null(),
+                    0,
+                    std::ptr::null(),
+                    0,
+                    std::ptr::null(),
+                    0,
+                ),
+                aacmm_calibrate_options_set_positions_file(null, std::ptr::null()),
                 aacmm_calibrate_options_new(std::ptr::null_mut()),
             ]
         };
@@ -712,6 +915,7 @@ mod tests {
                 aacmm_calibrate_options_set_threads(o, 2),
                 aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_CAUCHY, 0.0),
                 aacmm_calibrate_options_set_accept_poor_fit(o, true),
+                aacmm_calibrate_options_set_position_noise_mm(o, 0.015, 0.006),
             ] {
                 assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
             }
@@ -728,6 +932,10 @@ mod tests {
         assert_eq!(n.encoder_rad, Some(1e-4));
         assert_eq!(n.probe_mm, Some(0.01));
         assert_eq!((n.length_default_mm, n.length_weight), (0.002, Some(5.0)));
+        assert_eq!(
+            (n.position_mm, n.position_mm_per_m),
+            (Some(0.015), Some(0.006))
+        );
         let r = s.model.robust.unwrap();
         assert_eq!(
             (r.loss, r.scale_k),
@@ -746,6 +954,16 @@ mod tests {
         assert_eq!(s.solver.threads, aacmm_core::calibrate::available_threads());
         assert_eq!(s.model.fix, FixSpec::Auto);
         assert_eq!(s.model.robust, None);
+        // A position σ without its distance part: 0 = not stated, as `A`
+        // alone on the command line; 0 for both: none.
+        // SAFETY: as above.
+        unsafe { aacmm_calibrate_options_set_position_noise_mm(o, 0.02, 0.0) };
+        let n = settings(&get(o), &arm).unwrap().model.noise;
+        assert_eq!((n.position_mm, n.position_mm_per_m), (Some(0.02), None));
+        // SAFETY: as above.
+        unsafe { aacmm_calibrate_options_set_position_noise_mm(o, 0.0, 0.0) };
+        let n = settings(&get(o), &arm).unwrap().model.noise;
+        assert_eq!((n.position_mm, n.position_mm_per_m), (None, None));
         // A 7-joint name passes the setter but not a 6-joint arm.
         // SAFETY: as above.
         unsafe { aacmm_calibrate_options_set_fix(o, c"theta7".as_ptr()) };

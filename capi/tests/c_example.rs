@@ -3,7 +3,9 @@
 //! this test (static and shared), run on the shipped example campaign, and
 //! checked against the Rust API: positions and Jacobians bit for bit, the
 //! calibration equal to `calibrate()` on the same files and options (what
-//! `aacmm calibrate` runs), the error paths with their documented codes.
+//! `aacmm calibrate` runs), a calibration on a tracker's reference positions
+//! and its frames equal to the library's, the error paths with their
+//! documented codes.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -11,11 +13,11 @@ use std::process::Command;
 
 use aacmm_core::calibrate::{FixSpec, ModelOptions, SolverSettings, Termination, calibrate};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses, source_name};
+use aacmm_core::io::{AngleUnit, Arm, Positions, read_arm, read_lengths, read_poses, source_name};
 use aacmm_core::kernel::{ArmKernel, Jacobians, PreparedPoses};
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;
-use aacmm_core::session::{Problem, Sources};
+use aacmm_core::session::{Problem, Request, Sources};
 
 const ARM: &str = "examples/paper-table-1.toml";
 const POSES: &str = "examples/paper-campaign/poses.csv";
@@ -256,6 +258,13 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("missing_poses", 5),
         ("not_an_arm_file", 6),
         ("report_size", 8),
+        ("position_noise", 3),
+        ("one_row_frame", 6),
+        ("nan_xyz", 6),
+        ("null_xyz", 1),
+        ("positions_file_for_arrays", 3),
+        ("frame_name_size", 8),
+        ("frame_index", 3),
     ] {
         assert_eq!(
             out.error_code(name),
@@ -288,6 +297,26 @@ fn the_c_program_agrees_with_the_rust_api() {
         out.get("error missing_file").contains("no/such/arm.toml"),
         "the message names the file"
     );
+    // The position arrays' refusals name the argument and the row.
+    for (name, message) in [
+        (
+            "one_row_frame",
+            "frames[3]: frame `solo` has 1 distinct position(s)",
+        ),
+        (
+            "nan_xyz",
+            "xyz[4] = NaN (y of row 1): positions must be finite",
+        ),
+        ("null_xyz", "`xyz` is NULL"),
+        (
+            "position_noise",
+            "position_noise a_mm = -1: must be a finite number > 0",
+        ),
+        ("frame_index", "index = 2: the calibration has 2 frame(s)"),
+    ] {
+        let got = out.get(&format!("error {name}"));
+        assert!(got.contains(message), "{name}: {got}");
+    }
 
     // The calibration: what `aacmm calibrate --arm ARM --data POSES
     // --lengths LENGTHS --encoder-noise 0.005 --probe-noise 0.01
@@ -381,6 +410,84 @@ fn the_c_program_agrees_with_the_rust_api() {
     assert_eq!(report["fix"], "auto");
     assert_eq!(report["touches"], 100);
     assert!(report["validation"]["held_out"].is_null());
+
+    tracker_positions(&out);
+}
+
+/// The C program's tracker: positions alone from arrays, fitted as the
+/// library fits the same rows (parameters and frames bit for bit), the
+/// stations found where the program placed them.
+fn tracker_positions(out: &Output) {
+    let q = out.doubles("tracker_q");
+    let xyz = out.doubles("tracker_xyz");
+    let n = q.len() / 6;
+    assert_eq!((n, xyz.len()), (80, 240));
+    let stations = ["left", "right"];
+    let mut rows = Positions::new(6);
+    for i in 0..n {
+        let x = [xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]];
+        let frame = stations[i / 40];
+        rows.push(
+            &format!("P{}", i + 1),
+            frame,
+            &q[6 * i..6 * i + 6],
+            x,
+            None,
+            i + 1,
+        );
+    }
+    let data = DataSet::from_positions(rows, "<arrays>").unwrap();
+    let sources = Sources {
+        arm_file: "<parameters>".to_string(),
+        data_file: "<arrays>".to_string(),
+        lengths_file: None,
+        warnings: Vec::new(),
+    };
+    let noise = Noise {
+        position_mm: Some(0.015),
+        position_mm_per_m: Some(0.006),
+        ..Noise::default()
+    };
+    let arm = Arm::without_limits("arm", DhParams::paper_nominal());
+    let (_, report) = Request::new(arm, data)
+        .sources(sources)
+        .noise(noise)
+        .method("lm")
+        .run()
+        .unwrap();
+    let c = &report.calibration;
+    assert_bits(
+        "tracker_params",
+        &out.doubles("tracker_params"),
+        &c.params.to_vec(),
+    );
+    assert_eq!(out.get("tracker_frames"), "2");
+    let turn = [0.5f64, -1.2];
+    let shift = [[2500.0, -400.0, 300.0], [-300.0, 2800.0, -150.0]];
+    for (f, record) in c.frame_records().iter().enumerate() {
+        assert_eq!(record.name, stations[f]);
+        let got = out.doubles(&format!("frame_{}", record.name));
+        let sigma = |s: Option<[f64; 3]>| s.unwrap_or([f64::NAN; 3]);
+        let expected: Vec<f64> = [
+            record.rotation_deg,
+            record.translation_mm,
+            sigma(record.rotation_sigma_deg),
+            sigma(record.translation_sigma_mm),
+        ]
+        .concat();
+        assert_bits(&record.name, &got[..12], &expected);
+        // Where the program placed the station: a turn about z and a
+        // shift, within what the noise (±0.02 mm) allows.
+        let r = &got[12..];
+        let (cos, sin) = (turn[f].cos(), turn[f].sin());
+        let truth = [cos, -sin, 0.0, sin, cos, 0.0, 0.0, 0.0, 1.0];
+        for (got, want) in r.iter().zip(truth) {
+            assert!((got - want).abs() < 1e-4, "{}: R {r:?}", record.name);
+        }
+        for (t, want) in record.translation_mm.iter().zip(shift[f]) {
+            assert!((t - want).abs() < 0.1, "{}: t {t}", record.name);
+        }
+    }
 }
 
 /// The shared library exports the C API and nothing else.
@@ -458,15 +565,28 @@ fn the_header_compiles_as_cpp() {
     std::fs::write(
         &src,
         // The options builder too: its `bool` and `uint64_t` arguments and
-        // pointer-to-pointer output, as a C++ caller writes them.
+        // pointer-to-pointer output, and the positions' array of names, as
+        // a C++ caller writes them; a frame's struct of arrays.
         "#include \"aacmm.h\"\n\
+         #include <vector>\n\
          int main() {\n\
          AacmmCalibrateOptions *options = nullptr;\n\
          if (aacmm_calibrate_options_new(&options) != AACMM_STATUS_OK) return 1;\n\
          bool ok = aacmm_calibrate_options_set_accept_poor_fit(options, true) == AACMM_STATUS_OK\n\
          && aacmm_calibrate_options_set_seed(options, UINT64_C(7)) == AACMM_STATUS_OK;\n\
+         std::vector<double> q(18), xyz(9), u(3, 0.01);\n\
+         std::vector<uint32_t> frames(3, 0);\n\
+         const char *names[] = {\"tracker\"};\n\
+         ok = ok && aacmm_calibrate_options_set_position_noise_mm(options, 0.015, 0.006)\n\
+         == AACMM_STATUS_OK;\n\
+         AacmmStatus set = aacmm_calibrate_options_set_positions(options, 6, q.data(), q.size(),\n\
+         xyz.data(), xyz.size(), frames.data(), frames.size(), names, 1, u.data(), u.size());\n\
+         AacmmFrame frame{};\n\
+         size_t len = 0;\n\
+         AacmmStatus none = aacmm_calibration_frame(nullptr, 0, &frame, nullptr, 0, &len);\n\
          aacmm_calibrate_options_free(options);\n\
-         return ok && aacmm_param_count(6) == 27 ? 0 : 1;\n\
+         return ok && set == AACMM_STATUS_INPUT && none == AACMM_STATUS_NULL_POINTER\n\
+         && frame.rotation_matrix[0] == 0.0 && aacmm_param_count(6) == 27 ? 0 : 1;\n\
          }\n",
     )
     .unwrap();

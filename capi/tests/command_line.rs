@@ -2,7 +2,8 @@
 //! table (`examples/mukca/kinova-1`, poses in radians) `aacmm_calibrate_files`
 //! gives what `aacmm calibrate` writes — `calibration.json` byte for byte,
 //! the calibrated parameters bit for bit, the verdict — and `successful` is
-//! the library's verdict, not the solver's convergence.
+//! the library's verdict, not the solver's convergence; with a positions
+//! file (`--positions`), alone or with touches, the same report too.
 
 // Calling the C ABI from Rust takes raw pointers, as C does.
 #![allow(unsafe_code)]
@@ -12,15 +13,21 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use aacmm_capi::{
-    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmCalibrateOptions, AacmmCalibration,
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AacmmCalibrateOptions, AacmmCalibration,
     AacmmCalibrationSummary, AacmmStatus, aacmm_calibrate_files, aacmm_calibrate_options_free,
     aacmm_calibrate_options_new, aacmm_calibrate_options_set_accept_poor_fit,
-    aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_prior,
-    aacmm_calibrate_options_set_probe_noise_mm, aacmm_calibration_free, aacmm_calibration_params,
+    aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_method,
+    aacmm_calibrate_options_set_position_noise_mm, aacmm_calibrate_options_set_positions_file,
+    aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
+    aacmm_calibration_frame_count, aacmm_calibration_free, aacmm_calibration_params,
     aacmm_calibration_report, aacmm_calibration_summary, aacmm_calibration_verdict,
     aacmm_calibration_verdict_notes, aacmm_last_error_message,
 };
-use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm};
+use aacmm_core::io::positions::write_positions;
+use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm, write_poses};
+use aacmm_core::simulate::{
+    CampaignSettings, ErrorModel, PositionSettings, simulate, simulate_positions,
+};
 
 /// The workspace root.
 fn root() -> PathBuf {
@@ -123,17 +130,34 @@ impl Drop for Calibration {
 impl Calibration {
     /// `aacmm_calibrate_files` on files named from the root.
     fn of_files(arm: &str, poses: &str, lengths: Option<&str>, unit: u32, o: &Options) -> Self {
-        let c = |p: &str| CString::new(example(p)).unwrap();
-        let (arm, poses) = (c(arm), c(poses));
-        let lengths = lengths.map(c);
+        Calibration::of_paths(
+            &example(arm),
+            Some(&example(poses)),
+            lengths.map(example).as_deref(),
+            unit,
+            o,
+        )
+    }
+
+    /// `aacmm_calibrate_files` on these paths (no poses: `NULL`).
+    fn of_paths(
+        arm: &str,
+        poses: Option<&str>,
+        lengths: Option<&str>,
+        unit: u32,
+        o: &Options,
+    ) -> Self {
+        let c = |p: &str| CString::new(p).unwrap();
+        let (arm, poses, lengths) = (c(arm), poses.map(c), lengths.map(c));
+        let path = |p: &Option<CString>| p.as_ref().map_or(std::ptr::null(), |p| p.as_ptr());
         let mut out = std::ptr::null_mut();
-        // SAFETY: NUL-terminated paths (lengths NULL when absent), live
-        // options, a writable output slot.
+        // SAFETY: NUL-terminated paths (NULL when absent), live options, a
+        // writable output slot.
         let status = unsafe {
             aacmm_calibrate_files(
                 arm.as_ptr(),
-                poses.as_ptr(),
-                lengths.as_ref().map_or(std::ptr::null(), |l| l.as_ptr()),
+                path(&poses),
+                path(&lengths),
                 unit,
                 o.0,
                 &mut out,
@@ -141,6 +165,14 @@ impl Calibration {
         };
         assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
         Calibration(out)
+    }
+
+    fn frame_count(&self) -> usize {
+        let mut n = usize::MAX;
+        // SAFETY: a live result; `n` is writable.
+        let status = unsafe { aacmm_calibration_frame_count(self.0, &mut n) };
+        assert_eq!(status, AacmmStatus::Ok);
+        n
     }
 
     fn params(&self) -> Vec<f64> {
@@ -379,4 +411,132 @@ fn successful_is_the_verdict_not_the_solver() {
     assert_eq!(reasons, "");
     assert!(notes.starts_with("accepted on request: "), "{notes}");
     assert_bits("params", &accepted.params(), &refused.params());
+}
+
+/// A positions file (`--positions`), alone and with touches and lengths:
+/// the C API's report is the command line's, byte for byte, and the frames
+/// are counted. The shipped UR5 tracker rows alone; a simulated campaign's
+/// touches, lengths and tracker positions (written to files) together.
+#[test]
+fn a_positions_file_gives_the_command_lines_result() {
+    let flags = ["--method", "lm", "--position-noise", "0.015+0.006/m"];
+    let tracked = options(|o| {
+        // SAFETY: live options.
+        unsafe {
+            vec![
+                aacmm_calibrate_options_set_method(o, AACMM_METHOD_LM),
+                aacmm_calibrate_options_set_position_noise_mm(o, 0.015, 0.006),
+            ]
+        }
+    });
+    let set_file = |path: &str| {
+        let path = CString::new(path).unwrap();
+        // SAFETY: live options; a NUL-terminated path.
+        let status =
+            unsafe { aacmm_calibrate_options_set_positions_file(tracked.0, path.as_ptr()) };
+        assert_eq!(status, AacmmStatus::Ok);
+    };
+    let cli = |name: &str, args: &[&str]| -> String {
+        let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+        let _ = std::fs::remove_dir_all(&out);
+        let run = Command::new(cli())
+            .arg("calibrate")
+            .args(args)
+            .args(flags)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .expect("aacmm runs");
+        std::fs::read_to_string(out.join("calibration.json")).unwrap_or_else(|_| {
+            panic!(
+                "aacmm calibrate wrote nothing:\n{}",
+                String::from_utf8_lossy(&run.stderr)
+            )
+        })
+    };
+
+    // The UR5's 20 random poses seen by a tracker, alone.
+    let (arm, positions) = (
+        example("examples/ur5-tracker/arm.toml"),
+        example("examples/ur5-tracker/positions-random.csv"),
+    );
+    set_file(&positions);
+    let c = Calibration::of_paths(&arm, None, None, AACMM_ANGLE_DEG, &tracked);
+    let json = cli(
+        "ur5-positions-cli",
+        &["--arm", &arm, "--positions", &positions],
+    );
+    assert_eq!(c.report(), json, "positions alone");
+    assert_eq!(c.frame_count(), 1);
+
+    // Touches, lengths and positions of one simulated arm, in files.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("touches-and-positions");
+    std::fs::create_dir_all(&dir).unwrap();
+    let arm = example("examples/paper-table-1.toml");
+    let (nominal, _) = read_arm(Path::new(&arm)).unwrap();
+    let mut settings = CampaignSettings::new(5, ErrorModel::Paper, 6, 8);
+    settings.encoder_noise_deg = 0.005;
+    settings.probe_noise_mm = 0.01;
+    let campaign = simulate(&nominal, &settings).unwrap();
+    let seen = simulate_positions(
+        &campaign.true_arm,
+        &PositionSettings {
+            poses: 30,
+            frames: 2,
+            noise: aacmm_core::residuals::Noise {
+                position_mm: Some(0.015),
+                position_mm_per_m: Some(0.006),
+                ..Default::default()
+            },
+            seed: 6,
+        },
+    )
+    .unwrap();
+    let file = |name: &str| dir.join(name).display().to_string();
+    let (poses, lengths, positions) = (
+        file("poses.csv"),
+        file("lengths.csv"),
+        file("positions.csv"),
+    );
+    let mut text = Vec::new();
+    write_poses(&mut text, &campaign.poses, AngleUnit::Deg).unwrap();
+    std::fs::write(&poses, &text).unwrap();
+    let mut text = Vec::new();
+    aacmm_core::io::write_lengths(&mut text, &campaign.lengths).unwrap();
+    std::fs::write(&lengths, &text).unwrap();
+    let mut text = Vec::new();
+    write_positions(&mut text, &seen.positions, AngleUnit::Deg).unwrap();
+    std::fs::write(&positions, &text).unwrap();
+    set_file(&positions);
+    // SAFETY: live options.
+    unsafe {
+        aacmm_calibrate_options_set_encoder_noise_rad(tracked.0, 0.005f64.to_radians());
+        aacmm_calibrate_options_set_probe_noise_mm(tracked.0, 0.01);
+    }
+    let c = Calibration::of_paths(
+        &arm,
+        Some(&poses),
+        Some(&lengths),
+        AACMM_ANGLE_DEG,
+        &tracked,
+    );
+    let json = cli(
+        "touches-and-positions-cli",
+        &[
+            "--arm",
+            &arm,
+            "--data",
+            &poses,
+            "--lengths",
+            &lengths,
+            "--positions",
+            &positions,
+            "--encoder-noise",
+            "0.005",
+            "--probe-noise",
+            "0.01",
+        ],
+    );
+    assert_eq!(c.report(), json, "touches, lengths and positions");
+    assert_eq!(c.frame_count(), 2);
 }

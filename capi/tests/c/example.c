@@ -14,7 +14,9 @@
  *   files_sigmas, files_fixed, files_summary, verdict (`usable` or
  *   `refused`, then the reasons), verdict_notes, report (these three with
  *   newlines and backslashes escaped as \\n and \\\\), arrays_params,
- *   calibrated_positions
+ *   calibrated_positions, tracker_q, tracker_xyz, tracker_params,
+ *   tracker_frames (the count), frame_NAME (per fitted frame: rotation,
+ *   translation, their sigmas, the rotation matrix)
  *
  * Its own checks (expected error codes, arrays == files) make it exit with
  * status 1 and a message on stderr when they fail.
@@ -394,6 +396,114 @@ int main(int argc, char **argv) {
     if (memcmp(arrays, calibrated, n_params * sizeof(double)) != 0) {
         fail("arrays and files gave different parameters");
     }
+
+    /* No reference positions, no frame. */
+    size_t frame_count = 1;
+    ok(aacmm_calibration_frame_count(cal, &frame_count), "aacmm_calibration_frame_count");
+    if (frame_count != 0) {
+        fail("a calibration on touches has a frame");
+    }
+
+    /* Reference positions from arrays: a laser tracker at two stations sees
+     * the probe of the nominal arm (`made`) in TRACKED poses each; the
+     * calibration on the positions alone finds where the stations stood. */
+#define TRACKED 40
+    static double tq[2 * TRACKED * 6], txyz[2 * TRACKED * 3];
+    static uint32_t tframes[2 * TRACKED];
+    const char *stations[3] = {"left", "right", "solo"};
+    const double turn[2] = {0.5, -1.2}; /* rad about z */
+    const double shift[2][3] = {{2500, -400, 300}, {-300, 2800, -150}};
+    for (size_t i = 0; i < 2 * TRACKED * 6; i++) {
+        tq[i] = 2.5 * sin(0.91 * (double)i + 0.3);
+    }
+    ok(aacmm_positions(made, tq, 2 * TRACKED * 6, txyz, 2 * TRACKED * 3),
+       "aacmm_positions (tracked)");
+    for (size_t i = 0; i < 2 * TRACKED; i++) {
+        const size_t f = i / TRACKED;
+        const double c = cos(turn[f]), s = sin(turn[f]);
+        double *y = txyz + 3 * i;
+        const double x0 = y[0], x1 = y[1];
+        y[0] = c * x0 - s * x1;
+        y[1] = s * x0 + c * x1;
+        for (size_t k = 0; k < 3; k++) {
+            /* The tracker's noise, deterministic: ±0.02 mm. */
+            y[k] += shift[f][k] + 0.02 * sin(1.7 * (double)(3 * i + k));
+        }
+        tframes[i] = (uint32_t)f;
+    }
+    print_bits("tracker_q", tq, 2 * TRACKED * 6);
+    print_bits("tracker_xyz", txyz, 2 * TRACKED * 3);
+    AacmmCalibrateOptions *tracking = NULL;
+    ok(aacmm_calibrate_options_new(&tracking), "aacmm_calibrate_options_new");
+    ok(aacmm_calibrate_options_set_method(tracking, AACMM_METHOD_LM),
+       "aacmm_calibrate_options_set_method");
+    ok(aacmm_calibrate_options_set_position_noise_mm(tracking, 0.015, 0.006),
+       "aacmm_calibrate_options_set_position_noise_mm");
+    expect(aacmm_calibrate_options_set_position_noise_mm(tracking, -1, 0),
+           AACMM_STATUS_INVALID_ARGUMENT, "position_noise");
+    /* Bad arrays, each refused naming the argument: a frame seen once, a
+     * position that is not a number, a NULL array. */
+    tframes[3] = 2;
+    expect(aacmm_calibrate_options_set_positions(tracking, 6, tq, 2 * TRACKED * 6, txyz,
+                                                 2 * TRACKED * 3, tframes, 2 * TRACKED,
+                                                 stations, 3, NULL, 0),
+           AACMM_STATUS_INPUT, "one_row_frame");
+    tframes[3] = 0;
+    const double seen = txyz[4];
+    txyz[4] = NAN;
+    expect(aacmm_calibrate_options_set_positions(tracking, 6, tq, 2 * TRACKED * 6, txyz,
+                                                 2 * TRACKED * 3, tframes, 2 * TRACKED,
+                                                 stations, 2, NULL, 0),
+           AACMM_STATUS_INPUT, "nan_xyz");
+    txyz[4] = seen;
+    expect(aacmm_calibrate_options_set_positions(tracking, 6, tq, 2 * TRACKED * 6, NULL,
+                                                 2 * TRACKED * 3, tframes, 2 * TRACKED,
+                                                 stations, 2, NULL, 0),
+           AACMM_STATUS_NULL_POINTER, "null_xyz");
+    /* A positions file is for aacmm_calibrate_files. */
+    ok(aacmm_calibrate_options_set_positions_file(tracking, "positions.csv"),
+       "aacmm_calibrate_options_set_positions_file");
+    AacmmCalibration *tracked = NULL;
+    expect(aacmm_calibrate(made, NULL, 0, NULL, 0, NULL, 0, tracking, &tracked),
+           AACMM_STATUS_INVALID_ARGUMENT, "positions_file_for_arrays");
+    /* The positions alone: no touches. */
+    ok(aacmm_calibrate_options_set_positions(tracking, 6, tq, 2 * TRACKED * 6, txyz,
+                                             2 * TRACKED * 3, tframes, 2 * TRACKED, stations, 2,
+                                             NULL, 0),
+       "aacmm_calibrate_options_set_positions");
+    ok(aacmm_calibrate(made, NULL, 0, NULL, 0, NULL, 0, tracking, &tracked),
+       "aacmm_calibrate (positions)");
+    ok(aacmm_calibration_params(tracked, arrays, 27), "aacmm_calibration_params (positions)");
+    print_bits("tracker_params", arrays, 27);
+    ok(aacmm_calibration_frame_count(tracked, &frame_count), "aacmm_calibration_frame_count");
+    printf("tracker_frames %zu\n", frame_count);
+    for (size_t f = 0; f < frame_count; f++) {
+        AacmmFrame frame;
+        char name[32], tag[48];
+        size_t name_len = 0;
+        ok(aacmm_calibration_frame(tracked, f, &frame, name, sizeof name, &name_len),
+           "aacmm_calibration_frame");
+        snprintf(tag, sizeof tag, "frame_%s", name);
+        double values[21];
+        memcpy(values, frame.rotation_deg, sizeof frame.rotation_deg);
+        memcpy(values + 3, frame.translation_mm, sizeof frame.translation_mm);
+        memcpy(values + 6, frame.rotation_sigma_deg, sizeof frame.rotation_sigma_deg);
+        memcpy(values + 9, frame.translation_sigma_mm, sizeof frame.translation_sigma_mm);
+        memcpy(values + 12, frame.rotation_matrix, sizeof frame.rotation_matrix);
+        print_bits(tag, values, 21);
+    }
+    AacmmFrame frame;
+    char small[3];
+    size_t name_len = 0;
+    expect(aacmm_calibration_frame(tracked, 0, &frame, small, sizeof small, &name_len),
+           AACMM_STATUS_BUFFER_TOO_SMALL, "frame_name_size");
+    if (name_len != strlen("left") || strcmp(small, "le") != 0) {
+        fail("aacmm_calibration_frame did not size or truncate the name");
+    }
+    expect(aacmm_calibration_frame(tracked, 2, &frame, NULL, 0, &name_len),
+           AACMM_STATUS_INVALID_ARGUMENT, "frame_index");
+    aacmm_calibration_free(tracked);
+    aacmm_calibrate_options_free(tracking);
 
     aacmm_calibration_free(from_arrays);
     aacmm_calibration_free(cal);

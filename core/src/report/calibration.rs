@@ -139,27 +139,8 @@ fn per_pose(
     data: &crate::dataset::PositionData,
     frames: &[crate::calibrate::validate::FrameValues],
 ) -> Result<(Vec<f64>, Vec<f64>), crate::kernel::KernelError> {
-    let closed = crate::residuals::positions::register(params, data)?;
-    let rows = data.rows();
-    let x: Vec<[f64; 6]> = (rows.frames().iter().zip(&closed))
-        .map(|(name, reg)| {
-            frames
-                .iter()
-                .find(|(n, _)| n == name)
-                .map_or(reg.x, |(_, v)| *v)
-        })
-        .collect();
-    let k = crate::kernel::ArmKernel::new(params)?;
-    let mut p = vec![[0.0; 3]; data.len()];
-    k.positions(data.poses(), 0..data.len(), &mut p)?;
-    let reach = p.iter().map(|q| q[0].hypot(q[1])).collect();
-    let error = (0..data.len())
-        .map(|i| {
-            let seen = crate::residuals::Frame::apply(&x[rows.frame(i)], p[i]);
-            crate::geometry::distance(&seen, &rows.position(i))
-        })
-        .collect();
-    Ok((reach, error))
+    let (p, error) = crate::calibrate::validate::pose_errors(params, data, frames)?;
+    Ok((p.iter().map(|q| q[0].hypot(q[1])).collect(), error))
 }
 
 /// What went in, for the page's heading.

@@ -39,6 +39,9 @@ pub struct IdentifyReport {
     pub points: usize,
     /// Reference lengths.
     pub reference_lengths: usize,
+    /// Reference positions (their frames fitted and eliminated).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub positions: usize,
     /// The noise the touches are weighed with, in words (degrees and mm).
     pub noise: String,
     /// The analysis.
@@ -99,6 +102,7 @@ impl IdentifyReport {
             touches: data.len(),
             points: data.points().len(),
             reference_lengths: data.references().len(),
+            positions: data.positions().map_or(0, |p| p.len()),
             noise: noise_text(noise),
             identification,
             prior,
@@ -119,8 +123,13 @@ impl IdentifyReport {
     /// the recommended fixed set, the predicted σ, the correlations, and
     /// the prior's rank and conditioning.
     pub fn summary(&self) -> String {
+        let positions = match self.positions {
+            0 => String::new(),
+            n => format!(", {n} reference positions (each frame's registration eliminated)"),
+        };
         let mut s = format!(
-            "arm `{}` ({}) on {}: {} touches of {} points, {} reference lengths\nnoise: {}\n\n",
+            "arm `{}` ({}) on {}: {} touches of {} points, {} reference lengths{positions}\nnoise: \
+             {}\n\n",
             self.arm,
             self.arm_file,
             self.data_file,
@@ -157,20 +166,29 @@ impl IdentifyReport {
     }
 }
 
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
 /// The start of [`IdentifyReport::noise`] when no touch noise is stated.
 const NOT_STATED: &str = "not stated";
 
 /// The noise in words: degrees as the user stated them (the library holds
 /// radians; [`AngleUnit::from_internal_exact`] gives back the number typed).
 fn noise_text(noise: &Noise) -> String {
+    let positions = match (noise.position_mm, noise.position_mm_per_m) {
+        (Some(a), Some(b)) => format!("; positions {a} mm + {b} mm/m"),
+        (Some(a), None) => format!("; positions {a} mm"),
+        _ => String::new(),
+    };
     if !noise.stated() {
-        return format!("{NOT_STATED}: σ as for a 0.01 mm touch");
+        return format!("{NOT_STATED}: σ as for a 0.01 mm touch{positions}");
     }
     let encoder = noise
         .encoder_rad
         .map_or(0.0, |r| AngleUnit::Deg.from_internal_exact(r));
     format!(
-        "encoders {encoder}°, probe {} mm",
+        "encoders {encoder}°, probe {} mm{positions}",
         noise.probe_mm.unwrap_or(0.0)
     )
 }

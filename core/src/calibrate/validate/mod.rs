@@ -80,6 +80,28 @@ pub fn position_errors(
     data: &crate::dataset::PositionData,
     frames: &[FrameValues],
 ) -> Result<PositionErrors, CalibrationError> {
+    let (_, d) = pose_errors(params, data, frames)?;
+    let n = d.len().max(1) as f64;
+    Ok(PositionErrors {
+        count: d.len(),
+        mean: d.iter().sum::<f64>() / n,
+        rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
+        max: d.iter().copied().fold(0.0, f64::max),
+    })
+}
+
+/// Per row of `data`, where `params` puts the probe (the arm's base frame,
+/// mm) and its 3-D error `|R p + t − y|` (mm), each frame registered as
+/// `frames` say or by its closed form.
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn pose_errors(
+    params: &DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[FrameValues],
+) -> Result<(Vec<[f64; 3]>, Vec<f64>), crate::kernel::KernelError> {
     let rows = data.rows();
     let closed = crate::residuals::positions::register(params, data)?;
     let x: Vec<[f64; 6]> = (rows.frames().iter().zip(&closed))
@@ -93,19 +115,13 @@ pub fn position_errors(
     let k = ArmKernel::new(params)?;
     let mut p = vec![[0.0; 3]; data.len()];
     k.positions(data.poses(), 0..data.len(), &mut p)?;
-    let d: Vec<f64> = (0..data.len())
+    let d = (0..data.len())
         .map(|i| {
             let seen = crate::residuals::Frame::apply(&x[rows.frame(i)], p[i]);
             crate::geometry::distance(&seen, &rows.position(i))
         })
         .collect();
-    let n = d.len().max(1) as f64;
-    Ok(PositionErrors {
-        count: d.len(),
-        mean: d.iter().sum::<f64>() / n,
-        rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
-        max: d.iter().copied().fold(0.0, f64::max),
-    })
+    Ok((p, d))
 }
 
 /// The figures of `params` on `data`, each frame of its positions at its

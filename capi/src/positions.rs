@@ -1,0 +1,205 @@
+//! Reference positions handed in as arrays
+//! (`aacmm_calibrate_options_set_positions`): checked as the library's
+//! reader checks a positions file, each refusal naming the array and its
+//! index (0-based, as C indexes it).
+
+use std::ffi::c_char;
+
+use aacmm_core::io::{DEFAULT_FRAME, Positions};
+use aacmm_core::params::{SUPPORTED_JOINTS, supported_joints_text};
+
+use crate::error::{AacmmStatus, Error};
+use crate::ptr;
+
+/// The name arrays go by in reports (a row's "line" is its 1-based index).
+pub(crate) const ARRAYS: &str = "<arrays>";
+
+/// The lengths of the position arrays, as given.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Lengths {
+    pub(crate) joints: usize,
+    pub(crate) q: usize,
+    pub(crate) xyz: usize,
+    pub(crate) frames: usize,
+    pub(crate) frame_names: usize,
+    pub(crate) uncertainty: usize,
+}
+
+impl Lengths {
+    /// Whether every array is empty: no positions.
+    pub(crate) fn none(&self) -> bool {
+        [
+            self.q,
+            self.xyz,
+            self.frames,
+            self.frame_names,
+            self.uncertainty,
+        ]
+        .iter()
+        .all(|&n| n == 0)
+    }
+
+    /// The number of rows the lengths agree on, checked: `joints` one the
+    /// toolkit has a kernel for (`AACMM_STATUS_UNSUPPORTED`), every length
+    /// what `q_len / joints` rows imply (`AACMM_STATUS_LENGTH`).
+    pub(crate) fn rows(&self) -> Result<usize, Error> {
+        let joints = self.joints;
+        if !SUPPORTED_JOINTS.contains(&joints) {
+            return Err(Error::new(
+                AacmmStatus::Unsupported,
+                format!(
+                    "joints = {joints}: the toolkit has kernels for {}",
+                    supported_joints_text()
+                ),
+            ));
+        }
+        if !self.q.is_multiple_of(joints) || self.q == 0 {
+            return Err(Error::length(format!(
+                "q_len = {}: a positive multiple of joints = {joints} (one row of readings per \
+                 position)",
+                self.q
+            )));
+        }
+        let n = self.q / joints;
+        let expect = |name: &str, got: usize, allowed: &[usize], what: &str| {
+            if allowed.contains(&got) {
+                Ok(())
+            } else {
+                Err(Error::length(format!(
+                    "{name} = {got}, expected {what} for the {n} rows of q"
+                )))
+            }
+        };
+        expect("xyz_len", self.xyz, &[3 * n], &format!("{}", 3 * n))?;
+        expect("frames_len", self.frames, &[0, n], &format!("0 or {n}"))?;
+        expect(
+            "uncertainty_len",
+            self.uncertainty,
+            &[0, n],
+            &format!("0 or {n}"),
+        )?;
+        if self.frames == 0 && self.frame_names > 1 {
+            return Err(Error::length(format!(
+                "frame_names_len = {}, expected 0 or 1 without frames (every row in one frame)",
+                self.frame_names
+            )));
+        }
+        if self.frames > 0 && self.frame_names == 0 {
+            return Err(Error::length(
+                "frame_names_len = 0: frames index into frame_names, which holds none",
+            ));
+        }
+        Ok(n)
+    }
+}
+
+/// The frame names: each UTF-8 text (`AACMM_STATUS_INVALID_ARGUMENT`
+/// otherwise), not empty and named once (`AACMM_STATUS_INPUT`).
+///
+/// # Safety
+///
+/// Each pointer is `NULL` or points to a NUL-terminated string.
+pub(crate) unsafe fn frame_names(names: &[*const c_char]) -> Result<Vec<String>, Error> {
+    let mut out: Vec<String> = Vec::with_capacity(names.len());
+    for (k, &p) in names.iter().enumerate() {
+        let arg = format!("frame_names[{k}]");
+        // SAFETY: NULL or NUL-terminated, by the contract.
+        let s = unsafe { ptr::c_str(p, &arg) }?;
+        let s = s
+            .to_str()
+            .map_err(|_| Error::invalid(format!("{arg} is not valid UTF-8")))?;
+        if s.trim().is_empty() {
+            return Err(input(format!(
+                "{arg}: empty frame name: name the station or placement"
+            )));
+        }
+        if let Some(j) = out.iter().position(|n| n == s) {
+            return Err(input(format!(
+                "{arg}: `{s}` is frame_names[{j}] too: give each frame once"
+            )));
+        }
+        out.push(s.to_string());
+    }
+    Ok(out)
+}
+
+fn input(message: String) -> Error {
+    Error::new(AacmmStatus::Input, message)
+}
+
+/// The rows of the arrays (lengths checked by [`Lengths::rows`]), checked
+/// as a positions file's: finite readings and positions, uncertainties
+/// positive or `NAN` (not stated), frame indices in range, every frame
+/// name used, and every frame with at least 3 distinct positions not on
+/// one line. Each row is its own point, labelled `P1`, `P2`, … in row
+/// order, its "line" its 1-based index.
+pub(crate) fn rows(
+    joints: usize,
+    q: &[f64],
+    xyz: &[f64],
+    frames: &[u32],
+    names: &[String],
+    uncertainty: &[f64],
+) -> Result<Positions, Error> {
+    let n = q.len() / joints;
+    if let Some(k) = q.iter().position(|v| !v.is_finite()) {
+        return Err(input(format!(
+            "q[{k}] = {}: readings must be finite numbers (row {}, joint {})",
+            q[k],
+            k / joints,
+            k % joints + 1
+        )));
+    }
+    if let Some(k) = xyz.iter().position(|v| !v.is_finite()) {
+        return Err(input(format!(
+            "xyz[{k}] = {} ({} of row {}): positions must be finite numbers (mm)",
+            xyz[k],
+            ["x", "y", "z"][k % 3],
+            k / 3
+        )));
+    }
+    // NAN: not stated; otherwise a finite number > 0.
+    let stated_wrong = |u: f64| !(u.is_nan() || (u.is_finite() && u > 0.0));
+    if let Some((i, &u)) = (uncertainty.iter().enumerate()).find(|&(_, &u)| stated_wrong(u)) {
+        return Err(input(format!(
+            "uncertainty[{i}] = {u}: a standard uncertainty per coordinate (mm) is a finite \
+             number > 0; NAN: not stated"
+        )));
+    }
+    if let Some((i, f)) = frames
+        .iter()
+        .enumerate()
+        .find(|&(_, &f)| f as usize >= names.len())
+    {
+        return Err(input(format!(
+            "frames[{i}] = {f}: an index into frame_names, which holds {}",
+            names.len()
+        )));
+    }
+    if !frames.is_empty()
+        && let Some(k) = (0..names.len()).find(|&k| !frames.contains(&(k as u32)))
+    {
+        return Err(input(format!(
+            "frame_names[{k}] (`{}`): no row of frames names it",
+            names[k]
+        )));
+    }
+    let one = names.first().map_or(DEFAULT_FRAME, String::as_str);
+    let mut out = Positions::new(joints);
+    for i in 0..n {
+        let frame = frames.get(i).map_or(one, |&f| names[f as usize].as_str());
+        let x = [xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]];
+        let u = uncertainty.get(i).copied().filter(|u| !u.is_nan());
+        let reading = &q[i * joints..(i + 1) * joints];
+        out.push(&format!("P{}", i + 1), frame, reading, x, u, i + 1);
+    }
+    if let Some((row, why)) = out.unregistrable_frame() {
+        let arg = if frames.is_empty() {
+            "xyz".to_string()
+        } else {
+            format!("frames[{row}]")
+        };
+        return Err(input(format!("{arg}: {why}")));
+    }
+    Ok(out)
+}
