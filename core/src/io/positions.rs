@@ -272,9 +272,9 @@ pub fn read_positions(
 ///
 /// # Errors
 ///
-/// A header other than [`SHAPE`]'s (or another joint count than
-/// `expected_joints`), an empty label or frame, a value that is not a finite
-/// number, an uncertainty that is not positive, and a frame with fewer
+/// A header other than `point,q1,...,qn,x,y,z[,frame][,uncertainty]` (or
+/// another joint count than `expected_joints`), an empty label or frame, a
+/// value that is not a finite number, an uncertainty that is not positive, and a frame with fewer
 /// than [`MIN_FRAME_POSITIONS`] rows or with positions on one line (a
 /// registration needs three points that span a plane): each naming the
 /// line and field.
