@@ -522,3 +522,27 @@ fn truth_error(truth: &Arm, c: &PositionCampaign) -> f64 {
         .unwrap()
         .mean
 }
+
+/// The paper's annealing minimises the touches' energy: `sa` with reference
+/// positions (it would ignore them and call the nominal arm usable) and
+/// `hybrid` without touches are refused, naming the method.
+#[test]
+fn annealing_is_refused_where_it_cannot_use_the_data() {
+    let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
+    let (_, c) = campaign(&nominal, 4, 60, 1);
+    let data = DataSet::from_positions(c.positions, "sim.csv").unwrap();
+    let problem = Problem::new(nominal, data, model()).unwrap();
+    for method in [aacmm_core::Method::Sa, aacmm_core::Method::Hybrid] {
+        let settings = SolverSettings {
+            method,
+            ..SolverSettings::default()
+        };
+        match problem.run(&settings) {
+            Err(aacmm_core::CalibrationError::Option(e)) => {
+                assert_eq!(e.field, "method");
+                assert!(e.reason.contains("use lm or global"), "{e}");
+            }
+            other => panic!("{method:?} accepted: {:?}", other.map(|r| r.verdict)),
+        }
+    }
+}

@@ -652,6 +652,7 @@ pub fn calibrate_with(
     let start = layout.geometry();
     model.check_for(start)?;
     settings.check()?;
+    check_method_for(solver.method(), data)?;
     let extra = terms.iter().map(|t| dyn_clone::clone_box(&**t)).collect();
     let objective = Objective::of_data(
         layout.clone(),
@@ -721,6 +722,27 @@ pub fn calibrate_with(
         stated: objective.stated(),
     };
     assess::assess(setup, objective, outcome)
+}
+
+/// Refuses a method that cannot use the data: the paper's annealing
+/// minimises the touches' energy (its OA), so `sa` alone would ignore
+/// reference positions, and neither `sa` nor `hybrid` has anything to
+/// anneal without touches.
+fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
+    let why = match method {
+        Method::Sa if data.positions().is_some() => {
+            "anneals the paper's touch energy alone, which reference positions are no part of"
+        }
+        Method::Hybrid if data.is_empty() => {
+            "anneals the paper's touch energy, and these data have no touches"
+        }
+        _ => return Ok(()),
+    };
+    Err(OptionError::new(
+        "method",
+        method.name(),
+        format!("{why}: use lm or global (the default)"),
+    ))
 }
 
 /// The free columns, the identifiability analysis behind them (`fix =

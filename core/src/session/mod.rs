@@ -525,6 +525,16 @@ impl Verdict {
         }
         // Nearly parallel axes in the D-H model: say which joint suits Hayati.
         notes.extend(crate::hayati::recommendations(&calibration.params));
+        if let (Some(b), Some(a)) = (fitted.before.positions, fitted.after.positions)
+            && fitted.after.points > 0
+            && (a.mean.is_nan() || a.mean > b.mean)
+        {
+            poor.push(format!(
+                "the calibrated arm is worse than the nominal at its own reference positions \
+                 (mean 3-D error {:.4} → {:.4} mm): touches and positions disagree?",
+                b.mean, a.mean
+            ));
+        }
         let (before, after) = (fitted.before.headline(), fitted.after.headline());
         if after.is_nan() || after > before {
             let what = if fitted.after.points == 0 {
@@ -892,7 +902,7 @@ fn fit_quality_lines(c: &Calibration) -> String {
         if let Some(d) = r.describe_scale() {
             t += &format!("Fit quality: {d}\n");
         }
-        t += &robust_line(r);
+        t += &robust_line(r, noun(c));
     }
     if let Some(u) = &c.checks.position_uncertainty {
         t += &format!("Experiment: {}\n", u.describe());
@@ -1169,7 +1179,7 @@ fn method_lines(s: &crate::calibrate::SolverSummary) -> String {
 
 /// The summary's line on a robust fit: its settings and the touches it
 /// downweighted, by `file:line`.
-fn robust_line(r: &crate::calibrate::RobustFit) -> String {
+fn robust_line(r: &crate::calibrate::RobustFit, noun: &str) -> String {
     use crate::calibrate::robust::DOWNWEIGHTED;
     let low = r.downweighted();
     let head = format!(
@@ -1185,7 +1195,7 @@ fn robust_line(r: &crate::calibrate::RobustFit) -> String {
         r.scale
     );
     if low.is_empty() {
-        return format!("{head}; no touch weighed below {DOWNWEIGHTED}\n");
+        return format!("{head}; no {noun} weighed below {DOWNWEIGHTED}\n");
     }
     let shown: Vec<String> = low
         .iter()
@@ -1193,7 +1203,7 @@ fn robust_line(r: &crate::calibrate::RobustFit) -> String {
         .map(|t| format!("{} (point {}, weight {:.3})", t.at, t.point, t.weight))
         .collect();
     format!(
-        "{head}; {} touch(es) weighed below {DOWNWEIGHTED}: {}{}\n",
+        "{head}; {} {noun}(s) weighed below {DOWNWEIGHTED}: {}{}\n",
         low.len(),
         shown.join(", "),
         if low.len() > shown.len() { ", …" } else { "" }
