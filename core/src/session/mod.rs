@@ -910,6 +910,14 @@ fn fit_quality_lines(c: &Calibration) -> String {
     t
 }
 
+/// `noun`, counted: `touch(es)`, `position(s)`.
+fn plural(noun: &str) -> String {
+    match noun {
+        "touch" => "touch(es)".to_string(),
+        _ => format!("{noun}(s)"),
+    }
+}
+
 /// What the observations are: touches, reference positions, or both.
 fn noun(c: &Calibration) -> &'static str {
     let others = c.dof.other_rows.iter().any(|r| r.term == "positions");
@@ -936,9 +944,10 @@ fn outliers_line(c: &Calibration) -> String {
         .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
         .collect();
     format!(
-        "Outliers: {} {noun}(s) beyond {:.2} sigma — check them (remeasure, or fix the \
+        "Outliers: {} {} beyond {:.2} sigma — check them (remeasure, or fix the \
          label): {}{}\n",
         o.len(),
+        plural(noun),
         c.checks.outlier_threshold,
         shown.join(", "),
         if o.len() > shown.len() { ", …" } else { "" }
@@ -1203,8 +1212,9 @@ fn robust_line(r: &crate::calibrate::RobustFit, noun: &str) -> String {
         .map(|t| format!("{} (point {}, weight {:.3})", t.at, t.point, t.weight))
         .collect();
     format!(
-        "{head}; {} {noun}(s) weighed below {DOWNWEIGHTED}: {}{}\n",
+        "{head}; {} {} weighed below {DOWNWEIGHTED}: {}{}\n",
         low.len(),
+        plural(noun),
         shown.join(", "),
         if low.len() > shown.len() { ", …" } else { "" }
     )
