@@ -524,25 +524,14 @@ impl Calibration {
     /// by name: the auxiliary columns `NAME.rx … NAME.tz` of the frames of
     /// reference positions.
     pub fn frames(&self) -> Vec<validate::FrameValues> {
-        const AXES: [&str; 6] = ["rx", "ry", "rz", "tx", "ty", "tz"];
-        let aux = &self.auxiliary;
-        aux.iter()
-            .enumerate()
-            .filter_map(|(i, e)| {
-                let name = e.name.strip_suffix(".rx")?;
-                let cols = aux.get(i..i + 6)?;
-                let mut x = [0.0; 6];
-                for (k, (c, axis)) in cols.iter().zip(AXES).enumerate() {
-                    if c.name != format!("{name}.{axis}") {
-                        return None;
-                    }
-                    x[k] = if k < 3 {
-                        c.calibrated.to_radians()
-                    } else {
-                        c.calibrated
-                    };
-                }
-                Some((name.to_string(), x))
+        self.frame_columns()
+            .into_iter()
+            .map(|(name, cols)| {
+                let x = std::array::from_fn(|k| {
+                    let v = cols[k].calibrated;
+                    if k < 3 { v.to_radians() } else { v }
+                });
+                (name.to_string(), x)
             })
             .collect()
     }
@@ -550,26 +539,40 @@ impl Calibration {
     /// Each fitted frame as a calibrated arm file carries it
     /// ([`crate::io::frames`]): values and σ in deg and mm.
     pub fn frame_records(&self) -> Vec<crate::io::frames::FrameRecord> {
-        self.frames()
+        self.frame_columns()
             .into_iter()
-            .map(|(name, x)| {
-                let sigma = |axis: &str| {
-                    let n = format!("{name}.{axis}");
-                    self.auxiliary
-                        .iter()
-                        .find(|a| a.name == n)
-                        .and_then(|a| a.sigma)
-                };
-                let three = |axes: [&str; 3]| -> Option<[f64; 3]> {
-                    Some([sigma(axes[0])?, sigma(axes[1])?, sigma(axes[2])?])
+            .map(|(name, cols)| {
+                let three = |from: usize| std::array::from_fn(|k| cols[from + k].calibrated);
+                let sigmas = |from: usize| -> Option<[f64; 3]> {
+                    Some([
+                        cols[from].sigma?,
+                        cols[from + 1].sigma?,
+                        cols[from + 2].sigma?,
+                    ])
                 };
                 crate::io::frames::FrameRecord {
-                    name: name.clone(),
-                    rotation_deg: [x[0], x[1], x[2]].map(f64::to_degrees),
-                    translation_mm: [x[3], x[4], x[5]],
-                    rotation_sigma_deg: three(["rx", "ry", "rz"]),
-                    translation_sigma_mm: three(["tx", "ty", "tz"]),
+                    name: name.to_string(),
+                    rotation_deg: three(0),
+                    translation_mm: three(3),
+                    rotation_sigma_deg: sigmas(0),
+                    translation_sigma_mm: sigmas(3),
                 }
+            })
+            .collect()
+    }
+
+    /// The frames among the auxiliary columns: each name and its six
+    /// columns `NAME.rx … NAME.tz` (user units: deg, mm).
+    fn frame_columns(&self) -> Vec<(&str, &[AuxiliaryEstimate])> {
+        const AXES: [&str; 6] = ["rx", "ry", "rz", "tx", "ty", "tz"];
+        let aux = &self.auxiliary;
+        (0..aux.len())
+            .filter_map(|i| {
+                let name = aux[i].name.strip_suffix(".rx")?;
+                let cols = aux.get(i..i + 6)?;
+                let named = (cols.iter().zip(AXES))
+                    .all(|(c, axis)| c.name.strip_prefix(name) == Some(&format!(".{axis}")));
+                named.then_some((name, cols))
             })
             .collect()
     }
@@ -681,6 +684,8 @@ pub fn calibrate_with(
     // The fixed set is the data's own (see [`prior`]); the prior joins
     // every fit from here on.
     let counts = assess::Counts::of(&objective, &free);
+    // Whether every data term states its noise (else σ is estimated).
+    let stated = objective.stated();
     if counts.residuals() <= counts.unknowns() {
         return Err(CalibrationError::TooFewResiduals {
             residuals: counts.residuals(),
@@ -703,7 +708,7 @@ pub fn calibrate_with(
         free: &free,
         model,
         settings,
-        stated_dof: objective.stated().then_some(counts.dof()),
+        stated_dof: stated.then_some(counts.dof()),
         start_normal,
     };
     let mut outcome = solver.solve(task, ctx)?;
@@ -719,7 +724,7 @@ pub fn calibrate_with(
         identification,
         reasons,
         counts,
-        stated: objective.stated(),
+        stated,
     };
     assess::assess(setup, objective, outcome)
 }

@@ -96,17 +96,7 @@ fn pose_errors(
 ) -> Result<Vec<PoseErrors>, ReportError> {
     let cal = &report.calibration;
     let start = &problem.arm().params;
-    let start_frames: Vec<crate::calibrate::validate::FrameValues> =
-        match problem.data().positions() {
-            Some(p) => (p.rows().frames().iter().cloned())
-                .zip(
-                    crate::residuals::positions::register(start, p)?
-                        .into_iter()
-                        .map(|r| r.x),
-                )
-                .collect(),
-            None => Vec::new(),
-        };
+    let start_frames = crate::calibrate::validate::registered_frames(start, problem.data())?;
     let frames = cal.frames();
     let mut sets = vec![("fitted", false, problem.data())];
     if let Some(h) = problem.held_out() {

@@ -122,11 +122,6 @@ impl Noise {
         self.encoder_rad.is_some() || self.probe_mm.is_some()
     }
 
-    /// Whether a position noise was stated.
-    pub fn positions_stated(&self) -> bool {
-        self.position_mm.is_some()
-    }
-
     /// Checks the values: each finite and `≥ 0` (a length weight `> 0`),
     /// and stated touch noise not zero on both counts.
     ///

@@ -103,14 +103,16 @@ pub fn pose_errors(
     frames: &[FrameValues],
 ) -> Result<(Vec<[f64; 3]>, Vec<f64>), crate::kernel::KernelError> {
     let rows = data.rows();
-    let closed = crate::residuals::positions::register(params, data)?;
-    let x: Vec<[f64; 6]> = (rows.frames().iter().zip(&closed))
-        .map(|(name, reg)| {
-            frames
-                .iter()
-                .find(|(n, _)| n == name)
-                .map_or(reg.x, |(_, v)| *v)
-        })
+    let given = |name: &String| frames.iter().find(|(n, _)| n == name).map(|(_, v)| *v);
+    // The closed form only where a frame is not given (a fit's frames
+    // usually all are).
+    let closed = if rows.frames().iter().all(|n| given(n).is_some()) {
+        Vec::new()
+    } else {
+        crate::residuals::positions::register(params, data)?
+    };
+    let x: Vec<[f64; 6]> = (rows.frames().iter().enumerate())
+        .map(|(f, name)| given(name).unwrap_or_else(|| closed[f].x))
         .collect();
     let k = ArmKernel::new(params)?;
     let mut p = vec![[0.0; 3]; data.len()];
@@ -230,7 +232,7 @@ pub fn before_after_in(
 pub fn registered_frames(
     params: &DhParams,
     data: &DataSet,
-) -> Result<Vec<FrameValues>, CalibrationError> {
+) -> Result<Vec<FrameValues>, crate::kernel::KernelError> {
     let Some(p) = data.positions() else {
         return Ok(Vec::new());
     };
