@@ -72,6 +72,7 @@ fn main() -> anyhow::Result<()> {
             vec![None; chain.joints.len()]
         },
         prior: None,
+        physics: Default::default(),
     };
     let mut out = std::io::stdout().lock();
     writeln!(

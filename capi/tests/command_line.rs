@@ -295,6 +295,7 @@ fn an_arm_files_prior_gives_the_command_lines_result() {
         params: start.params.with_values(&params).unwrap(),
         limits: start.limits.clone(),
         prior: None,
+        physics: start.physics.clone(),
     };
     assert_eq!(
         arm_to_toml(&from_c, LengthUnit::Mm, AngleUnit::Deg),

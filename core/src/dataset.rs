@@ -14,9 +14,11 @@ use std::collections::HashMap;
 use std::fmt;
 use std::ops::Range;
 
+use crate::corrections::{Beyond, Conditions, Effects, Physics};
 use crate::error::InputError;
 use crate::io::{Poses, Positions, ReferenceLength};
 use crate::kernel::PreparedPoses;
+use crate::params::DhParams;
 
 /// Fewest touches a point needs: the sample spread `2s` divides by `n − 1`,
 /// and fewer than three touches say next to nothing about articulation error.
@@ -125,6 +127,10 @@ pub struct DataSet {
     source: SourceMap,
     /// Reference positions seen by an instrument, if any.
     positions: Option<PositionData>,
+    /// Per touch (touch order), its temperature (°C) and time (s), when
+    /// the poses file recorded them.
+    temperature: Option<Vec<f64>>,
+    time: Option<Vec<f64>>,
 }
 
 /// Reference positions prepared for the kernel: the rows of a
@@ -174,6 +180,14 @@ impl PositionData {
     /// The rows `keep`, in that order.
     pub fn subset(&self, keep: &[usize]) -> PositionData {
         PositionData::new(self.rows.subset(keep), &self.file)
+    }
+
+    /// The temperature and time of every row, when recorded.
+    pub fn conditions(&self) -> Conditions<'_> {
+        Conditions {
+            temperature_c: self.rows.temperatures(),
+            time_s: self.rows.times(),
+        }
     }
 
     fn new(rows: Positions, file: &str) -> PositionData {
@@ -363,6 +377,8 @@ impl DataSet {
                 ..SourceMap::default()
             },
             positions: None,
+            temperature: None,
+            time: None,
         })
     }
 
@@ -676,6 +692,8 @@ impl DataSet {
                 ..SourceMap::default()
             },
             positions: Some(PositionData::new(positions, file)),
+            temperature: None,
+            time: None,
         })
     }
 
@@ -821,7 +839,51 @@ impl DataSet {
                 reference_lines,
             },
             positions: self.positions.clone(),
+            temperature: (self.temperature.as_ref())
+                .map(|t| touches.iter().map(|&i| t[i]).collect()),
+            time: (self.time.as_ref()).map(|t| touches.iter().map(|&i| t[i]).collect()),
         }
+    }
+
+    /// The readings of every touch (rad), touch-major.
+    pub fn readings(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// The temperature and time of every touch, when recorded.
+    pub fn conditions(&self) -> Conditions<'_> {
+        Conditions {
+            temperature_c: self.temperature.as_deref(),
+            time_s: self.time.as_deref(),
+        }
+    }
+
+    /// This data set as the arm `arm` with the corrections of `physics`
+    /// sees it: every pose's readings corrected (and, for an expansion or
+    /// a drift, its position transformed) once, so that whatever evaluates
+    /// the arm on these data — the metrics, a validation, a report — sees
+    /// what the fit saw. Unchanged when `physics` corrects nothing.
+    ///
+    /// # Errors
+    ///
+    /// A correction whose conditions were not recorded.
+    pub fn corrected(&self, arm: &DhParams, physics: &Physics) -> Result<DataSet, String> {
+        if !physics.corrects() {
+            return Ok(self.clone());
+        }
+        let none = Beyond::default();
+        let mut out = self.clone();
+        if !self.is_empty() {
+            out.poses = Effects::new(arm, physics, &none, &self.q, self.conditions())
+                .map_err(|e| format!("{}: {e}", self.source.poses_file))?
+                .poses;
+        }
+        if let Some(p) = &mut out.positions {
+            p.poses = Effects::new(arm, physics, &none, p.rows.readings(), p.conditions())
+                .map_err(|e| format!("{}: {e}", p.file))?
+                .poses;
+        }
+        Ok(out)
     }
 }
 

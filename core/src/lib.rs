@@ -28,6 +28,7 @@
 //! parameter block or solver) in one `use`.
 
 pub mod calibrate;
+pub mod corrections;
 mod damping;
 pub mod dataset;
 pub mod error;

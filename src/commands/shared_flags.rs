@@ -64,6 +64,25 @@ pub struct FitInput {
     /// rad); overrides the arm file's prior table entry by entry.
     #[arg(long, value_name = "none|SPEC")]
     pub prior: Option<String>,
+    /// Joint compliance under gravity for the listed joints (e.g. `2,3,4`):
+    /// each deflects by its compliance (rad per N·m, fitted) times the
+    /// gravity torque of the masses outboard of it, from the arm file's
+    /// `mass_kg` (links and [probe]) and `gravity`.
+    #[arg(long, value_name = "JOINTS")]
+    pub compliance: Option<String>,
+    /// Encoder harmonics `a_k sin(k q) + b_k cos(k q)` added to the listed
+    /// joints' readings, JOINT:ORDERS (e.g. `2:1,5:1-2`; order 1 is the
+    /// disc's eccentricity).
+    #[arg(long, value_name = "J:K[,J:K1-K2]")]
+    pub harmonics: Option<String>,
+    /// Fit a thermal expansion coefficient of the lengths (ppm/K) against
+    /// the `temperature` column (°C) of the data; lengths are at 20 °C.
+    #[arg(long)]
+    pub thermal: bool,
+    /// Fit a linear drift of the arm's base against the instrument (mm/h)
+    /// against the `time` column (s) of the data.
+    #[arg(long)]
+    pub drift: bool,
     /// Worker threads (default: every core); results do not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub threads: Option<u16>,
@@ -116,6 +135,12 @@ impl FitInput {
         }
         Ok(request
             .noise(self.noise())
+            .beyond(
+                self.compliance.as_deref(),
+                self.harmonics.as_deref(),
+                self.thermal,
+                self.drift,
+            )
             .prior(self.prior.as_deref())
             .threads(self.threads.map(usize::from)))
     }
@@ -140,7 +165,11 @@ pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 28] = [
+const FLAGS: [(&str, &str); 32] = [
+    ("compliance", "--compliance"),
+    ("harmonics", "--harmonics"),
+    ("thermal", "--thermal"),
+    ("drift", "--drift"),
     ("noise.position_mm", "--position-noise"),
     ("noise.position_mm_per_m", "--position-noise"),
     ("prior", "--prior"),

@@ -172,6 +172,9 @@ pub(crate) struct Setup<'a> {
     pub(crate) free: Vec<usize>,
     pub(crate) identification: Option<Identification>,
     pub(crate) reasons: Vec<(ParamId, String)>,
+    /// Auxiliary columns held at their start, with why (corrections the
+    /// data cannot separate).
+    pub(crate) held: Vec<(usize, String)>,
     pub(crate) counts: Counts,
     /// Whether every data term states its noise ([`Objective::stated`]).
     pub(crate) stated: bool,
@@ -562,12 +565,16 @@ fn auxiliary(fit: &Fit<'_>, setup: &Setup<'_>, cov: &DMatrix<f64>) -> Vec<Auxili
                 .map(|a| cov[(a, a)].max(0.0).sqrt())
                 .filter(|s| s.is_finite());
             let u = |v: f64| parameter.unit.to_user(v);
+            let fixed = (setup.held.iter())
+                .find(|(h, _)| *h == c)
+                .map(|(_, why)| why.clone());
             Some(AuxiliaryEstimate {
                 name: parameter.name.clone(),
                 unit: parameter.unit.name().to_string(),
                 start: u(setup.x0[c]),
                 calibrated: u(fit.x[c]),
                 sigma: sigma.map(u),
+                fixed,
             })
         })
         .collect()
@@ -674,7 +681,9 @@ fn assemble(
     let jacobian_evaluations =
         fit.extra_jacobians + phases.iter().map(|p| p.jacobian_evaluations).sum::<usize>();
     let implausible = implausible_blocks(&fit, &setup);
+    let physics = (layout.corrections()).map(|(block, cols)| block.physics_at(&fit.x[cols]));
     Ok(Calibration {
+        physics,
         parameters,
         auxiliary,
         correlations: strong_correlations(&cov, p, |a| names[a].clone()),

@@ -359,6 +359,10 @@ pub struct AuxiliaryEstimate {
     /// Standard uncertainty (k = 1); `None` when the data do not determine
     /// it.
     pub sigma: Option<f64>,
+    /// Why it was held at its start value, when it was (a correction
+    /// beyond geometry these data cannot separate).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fixed: Option<String>,
 }
 
 /// A residual term's rows, beyond the touches, lengths and prior.
@@ -511,6 +515,11 @@ pub struct Calibration {
     /// (only when tolerances were stated).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prior: Option<PriorReport>,
+    /// The arm's physics at the fit — masses, and every correction beyond
+    /// geometry, fitted or stated ([`crate::corrections`]) — when the arm
+    /// states any or the fit estimated any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<crate::corrections::Physics>,
 }
 
 impl Calibration {
@@ -673,6 +682,7 @@ pub fn calibrate_with(
     let all: Vec<usize> = (0..layout.len()).collect();
     let full = objective.normal_of(&x0, &all, |t| !t.is_prior())?;
     let (free, identification, reasons) = fixed_set(start, &objective, model, &full)?;
+    let (free, held) = correction_columns(&full, layout, free)?;
     if free.is_empty() {
         return Err(OptionError::new(
             "fix",
@@ -723,6 +733,7 @@ pub fn calibrate_with(
         free,
         identification,
         reasons,
+        held,
         counts,
         stated,
     };
@@ -809,7 +820,20 @@ fn fixed_set(
 /// geometry is judged on (owned: the analysis consumes it). Without
 /// auxiliary columns, a copy of `full`.
 pub(crate) fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, CalibrationError> {
-    let (g, all) = (layout.geometry_columns(), layout.len());
+    // The corrections beyond geometry are judged after the geometry
+    // (`correction_columns`): left out here.
+    let corrections = layout.corrections().map_or(0..0, |(_, c)| c);
+    let keep: Vec<usize> = (0..layout.len())
+        .filter(|c| !corrections.contains(c))
+        .collect();
+    let restricted;
+    let full = if corrections.is_empty() {
+        full
+    } else {
+        restricted = full.restrict(&keep).ok_or(CalibrationError::Shape)?;
+        &restricted
+    };
+    let (g, all) = (layout.geometry_columns(), keep.len());
     if g == all {
         return Ok(full.clone());
     }
@@ -842,4 +866,77 @@ pub(crate) fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, 
     let mut out = full.restrict(&geometry).ok_or(CalibrationError::Shape)?;
     out.jtj = reduced.transpose().as_slice().to_vec();
     Ok(out)
+}
+
+/// A correction column whose information, once the free geometry, the
+/// frames and the corrections accepted before it are fitted, is below this
+/// share of its own is held at its stated value: its effect is (to one part
+/// in 10⁶ of its variance) what the others already do, and fitting it
+/// would only trade it against them.
+pub(crate) const CORRECTION_SEPARATION: f64 = 1e-6;
+
+/// The free columns with the correction columns beyond geometry judged one
+/// at a time, in the block's order, against the `free` geometry, the frames
+/// and the corrections kept before: kept when the data separate it
+/// ([`CORRECTION_SEPARATION`]), else held with why (by column).
+#[allow(clippy::type_complexity)] // the free columns and the held ones
+fn correction_columns(
+    full: &Normal,
+    layout: &Layout,
+    free: Vec<usize>,
+) -> Result<(Vec<usize>, Vec<(usize, String)>), CalibrationError> {
+    let Some((_, corrections)) = layout.corrections() else {
+        return Ok((free, Vec::new()));
+    };
+    let mut base: Vec<usize> = free
+        .iter()
+        .copied()
+        .filter(|c| !corrections.contains(c))
+        .collect();
+    let mut held = Vec::new();
+    let name = |c: usize| layout.parameter(c).map_or(String::new(), |p| p.name);
+    for c in corrections.clone() {
+        let cols: Vec<usize> = base.iter().copied().chain([c]).collect();
+        let n = full.restrict(&cols).ok_or(CalibrationError::Shape)?;
+        let k = cols.len();
+        let m = nalgebra::DMatrix::from_row_slice(k, k, &n.jtj);
+        let diag: Vec<f64> = (0..k).map(|i| m[(i, i)]).collect();
+        // Round-off of a column that is nil (a joint's turn that moves no
+        // probe) is not information: judged against the largest column.
+        let largest = diag.iter().copied().fold(0.0, f64::max);
+        if !(diag[k - 1] > 1e-20 * largest && diag[k - 1].is_finite()) {
+            held.push((c, "moves no residual: these data do not see it".to_string()));
+            continue;
+        }
+        let s = nalgebra::DMatrix::from_fn(k, k, |i, j| {
+            let d = (diag[i] * diag[j]).sqrt();
+            if d > 0.0 { m[(i, j)] / d } else { 0.0 }
+        });
+        let bb = s.view((0, 0), (k - 1, k - 1)).into_owned();
+        let bc = s.view((0, k - 1), (k - 1, 1)).into_owned();
+        let share = match bb.clone().cholesky() {
+            Some(ch) => 1.0 - (bc.transpose() * ch.solve(&bc))[(0, 0)],
+            None => 0.0,
+        };
+        if share >= CORRECTION_SEPARATION {
+            base.push(c);
+            continue;
+        }
+        // The column it is most like, by the cosine of their columns.
+        let like = (0..k - 1)
+            .max_by(|&a, &b| bc[(a, 0)].abs().total_cmp(&bc[(b, 0)].abs()))
+            .map(|a| format!(" (most like {}: cos {:+.4})", name(cols[a]), bc[(a, 0)]))
+            .unwrap_or_default();
+        held.push((
+            c,
+            format!(
+                "not separable from the fitted parameters by these data: {:.1e} of its \
+                 information is its own{like}",
+                share.max(0.0)
+            ),
+        ));
+    }
+    let mut out: Vec<usize> = base;
+    out.sort_unstable();
+    Ok((out, held))
 }

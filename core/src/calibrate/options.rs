@@ -180,6 +180,11 @@ pub struct ModelOptions {
     /// ([`super::prior`]); `None` (the default) fits the data alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prior: Option<crate::tolerances::Tolerances>,
+    /// Models beyond geometry the fit estimates (compliance, encoder
+    /// harmonics, thermal expansion, drift: [`crate::corrections`]); none
+    /// by default.
+    #[serde(default, skip_serializing_if = "crate::corrections::Beyond::is_empty")]
+    pub beyond: crate::corrections::Beyond,
 }
 
 impl Default for ModelOptions {
@@ -190,6 +195,7 @@ impl Default for ModelOptions {
             accept_poor_fit: false,
             robust: None,
             prior: None,
+            beyond: crate::corrections::Beyond::default(),
         }
     }
 }
@@ -212,6 +218,7 @@ impl ModelOptions {
         if let Some(t) = &self.prior {
             t.check(joints)?;
         }
+        self.beyond.check(joints)?;
         match &self.robust {
             Some(r) => r.check(),
             None => Ok(()),

@@ -50,6 +50,7 @@ use toml::de::{DeTable, DeValue};
 use super::Warning;
 use super::text::{line_of, parse_toml, read_text, suggest};
 use super::units::{AngleUnit, LengthUnit};
+use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
 use crate::error::InputError;
 use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
 use crate::tolerances::Tolerances;
@@ -72,6 +73,10 @@ pub struct Arm {
     /// `[prior]` table), if any: a fit uses them as a prior unless told
     /// otherwise.
     pub prior: Option<Tolerances>,
+    /// What the arm states beyond its geometry: masses, gravity and the
+    /// corrections' values ([`crate::corrections`]); empty by default.
+    /// Boxed: most arms have none, and an arm is moved by value often.
+    pub physics: Box<Physics>,
 }
 
 impl Arm {
@@ -89,6 +94,7 @@ impl Arm {
             params,
             limits: vec![None; n],
             prior: None,
+            physics: Box::default(),
         }
     }
 }
@@ -197,6 +203,15 @@ pub(crate) struct ArmFile {
     length_unit: LengthUnit,
     #[serde(serialize_with = "by_name", deserialize_with = "from_name")]
     angle_unit: AngleUnit,
+    /// Gravity's direction in the base frame (default −z).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    gravity: Option<Spanned<Vec<Spanned<f64>>>>,
+    /// Thermal expansion coefficient of the lengths, 1/K.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    cte_per_k: Option<Spanned<f64>>,
+    /// The temperature the lengths are at, °C (default 20).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    reference_temperature_c: Option<Spanned<f64>>,
     joint: Spanned<Vec<Spanned<JointFile>>>,
     probe: ProbeFile,
     /// Stated tolerances: read by [`super::prior`], never written.
@@ -207,6 +222,9 @@ pub(crate) struct ArmFile {
     #[serde(rename = "frame", default, skip_serializing)]
     _frame: Option<serde::de::IgnoredAny>,
 }
+
+/// An array of `[x, y, z]`-like number arrays, each located.
+type Arrays = Spanned<Vec<Spanned<Vec<Spanned<f64>>>>>;
 
 /// One `[[joint]]` table.
 #[derive(Serialize, Deserialize)]
@@ -228,6 +246,18 @@ struct JointFile {
     hbeta: Option<Spanned<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     limits: Option<Spanned<Vec<Spanned<f64>>>>,
+    /// The mass of the link after the joint, kg.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mass_kg: Option<Spanned<f64>>,
+    /// Its centre of mass in the link's D-H frame, mm.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    com_mm: Option<Spanned<Vec<Spanned<f64>>>>,
+    /// The joint's compliance, rad per N·m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    compliance_rad_per_nm: Option<Spanned<f64>>,
+    /// Encoder harmonics `[order, sin, cos]`, amplitudes in angle_unit.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    harmonics: Option<Arrays>,
 }
 
 impl JointFile {
@@ -304,6 +334,12 @@ struct ProbeFile {
     x: Spanned<f64>,
     y: Spanned<f64>,
     z: Spanned<f64>,
+    /// The tool's mass, kg.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mass_kg: Option<Spanned<f64>>,
+    /// Its centre of mass in the last joint's frame, mm (default: the probe).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    com_mm: Option<Spanned<Vec<Spanned<f64>>>>,
 }
 
 /// A unit by its name.
@@ -334,10 +370,29 @@ impl ArmFile {
         let ang = |x: f64| au.from_internal_exact(x);
         let joints = arm.params.joints.iter().enumerate();
         let [x, y, z] = arm.params.probe;
+        let physics = &arm.physics;
+        let triple = |v: [f64; 3]| new(v.map(new).to_vec());
+        let link_mass = |i: usize| physics.link_masses.get(i).copied().flatten();
+        let harmonics = |i: usize| {
+            let of: Vec<_> = (physics.harmonics.iter())
+                .filter(|h| h.joint == i)
+                .map(|h| {
+                    new(vec![
+                        new(f64::from(h.order)),
+                        new(ang(h.sin)),
+                        new(ang(h.cos)),
+                    ])
+                })
+                .collect();
+            (!of.is_empty()).then(|| new(of))
+        };
         ArmFile {
             name: arm.name.clone(),
             length_unit: lu,
             angle_unit: au,
+            gravity: physics.gravity.map(triple),
+            cte_per_k: physics.cte_per_k.map(new),
+            reference_temperature_c: physics.reference_temperature_c.map(new),
             joint: new(joints
                 .map(|(i, j)| {
                     let hayati = j.model == JointModel::Hayati;
@@ -355,6 +410,15 @@ impl ArmFile {
                             .copied()
                             .flatten()
                             .map(|[lo, hi]| new(vec![new(ang(lo)), new(ang(hi))])),
+                        mass_kg: link_mass(i).map(|m| new(m.kg)),
+                        com_mm: link_mass(i).and_then(|m| m.com_mm).map(triple),
+                        compliance_rad_per_nm: physics
+                            .compliance
+                            .get(i)
+                            .copied()
+                            .flatten()
+                            .map(new),
+                        harmonics: harmonics(i),
                     })
                 })
                 .collect()),
@@ -362,6 +426,8 @@ impl ArmFile {
                 x: len(x),
                 y: len(y),
                 z: len(z),
+                mass_kg: physics.probe_mass.map(|m| new(m.kg)),
+                com_mm: physics.probe_mass.and_then(|m| m.com_mm).map(triple),
             },
             _prior: None,
             _frame: None,
@@ -419,6 +485,7 @@ impl ArmFile {
             },
             limits: Vec::with_capacity(joints.len()),
             prior: None,
+            physics: Box::default(),
         };
         for (i, (j, &model)) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate() {
             let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
@@ -464,7 +531,103 @@ impl ArmFile {
             };
             arm.limits.push(limits);
         }
+        arm.physics = Box::new(self.physics(text, file)?);
         Ok((arm, self.unit_warnings(text, file)))
+    }
+
+    /// The masses, gravity and corrections the file states, checked.
+    fn physics(&self, text: &str, file: &str) -> Result<Physics, InputError> {
+        let at = |span: Range<usize>, field: &str, message: String| {
+            InputError::field(file, line_of(text, span.start), field, message)
+        };
+        let triple = |v: &Spanned<Vec<Spanned<f64>>>, field: &str, ctx: &str| match v.get_ref()[..]
+        {
+            [ref x, ref y, ref z] => Ok([x, y, z].map(|c| *c.get_ref())),
+            ref other => Err(at(
+                v.span(),
+                field,
+                format!("{ctx}expected [x, y, z], found {} values", other.len()),
+            )),
+        };
+        let mass = |kg: &Option<Spanned<f64>>,
+                    com: &Option<Spanned<Vec<Spanned<f64>>>>,
+                    ctx: &str|
+         -> Result<Option<Mass>, InputError> {
+            let com_mm = com.as_ref().map(|c| triple(c, "com_mm", ctx)).transpose()?;
+            match kg {
+                None if com_mm.is_some() => Err(at(
+                    com.as_ref().map_or(0..0, Spanned::span),
+                    "com_mm",
+                    format!("{ctx}a centre of mass without `mass_kg`"),
+                )),
+                None => Ok(None),
+                Some(m) if *m.get_ref() < 0.0 => Err(at(
+                    m.span(),
+                    "mass_kg",
+                    format!("{ctx}a mass is not negative, got {}", m.get_ref()),
+                )),
+                Some(m) => Ok(Some(Mass {
+                    kg: *m.get_ref(),
+                    com_mm,
+                })),
+            }
+        };
+        let au = self.angle_unit;
+        let mut physics = Physics::default();
+        for (i, j) in self
+            .joint
+            .get_ref()
+            .iter()
+            .map(Spanned::get_ref)
+            .enumerate()
+        {
+            let ctx = format!("joint {}: ", i + 1);
+            physics.link_masses.push(mass(&j.mass_kg, &j.com_mm, &ctx)?);
+            physics
+                .compliance
+                .push(j.compliance_rad_per_nm.as_ref().map(|c| *c.get_ref()));
+            for h in j.harmonics.iter().flat_map(|h| h.get_ref()) {
+                let order = match h.get_ref()[..] {
+                    [ref k, _, _] => *k.get_ref(),
+                    _ => f64::NAN,
+                };
+                if !(order.fract() == 0.0 && (1.0..=f64::from(MAX_HARMONIC_ORDER)).contains(&order))
+                {
+                    return Err(at(
+                        h.span(),
+                        "harmonics",
+                        format!(
+                            "{ctx}expected [order, sin, cos] with a whole order from 1 to                              {MAX_HARMONIC_ORDER} and amplitudes in {au}"
+                        ),
+                    ));
+                }
+                let v = h.get_ref();
+                physics.harmonics.push(Harmonic {
+                    joint: i,
+                    order: order as u32,
+                    sin: au.to_internal(*v[1].get_ref()),
+                    cos: au.to_internal(*v[2].get_ref()),
+                });
+            }
+        }
+        if physics.link_masses.iter().all(Option::is_none) {
+            physics.link_masses.clear();
+        }
+        if physics.compliance.iter().all(Option::is_none) {
+            physics.compliance.clear();
+        }
+        physics.probe_mass = mass(&self.probe.mass_kg, &self.probe.com_mm, "[probe]: ")?;
+        if let Some(g) = &self.gravity {
+            let v = triple(g, "gravity", "")?;
+            if v.iter().all(|c| *c == 0.0) {
+                return Err(at(g.span(), "gravity", "a direction, not zero".into()));
+            }
+            physics.gravity = Some(v);
+        }
+        physics.cte_per_k = self.cte_per_k.as_ref().map(|c| *c.get_ref());
+        physics.reference_temperature_c =
+            (self.reference_temperature_c.as_ref()).map(|c| *c.get_ref());
+        Ok(physics)
     }
 
     /// Every number of the file, base to probe, with its context and key.
@@ -490,6 +653,33 @@ impl ArmFile {
             for v in j.limits.iter().flat_map(|l| l.get_ref()) {
                 out.push((ctx.clone(), "limits", v));
             }
+            if let Some(m) = &j.mass_kg {
+                out.push((ctx.clone(), "mass_kg", m));
+            }
+            if let Some(c) = &j.compliance_rad_per_nm {
+                out.push((ctx.clone(), "compliance_rad_per_nm", c));
+            }
+            for v in j.com_mm.iter().flat_map(|c| c.get_ref()) {
+                out.push((ctx.clone(), "com_mm", v));
+            }
+            for v in (j.harmonics.iter().flat_map(|h| h.get_ref())).flat_map(|h| h.get_ref()) {
+                out.push((ctx.clone(), "harmonics", v));
+            }
+        }
+        for (field, v) in [
+            ("cte_per_k", &self.cte_per_k),
+            ("reference_temperature_c", &self.reference_temperature_c),
+            ("mass_kg", &self.probe.mass_kg),
+        ] {
+            if let Some(v) = v {
+                out.push((String::new(), field, v));
+            }
+        }
+        for v in self.gravity.iter().flat_map(|g| g.get_ref()) {
+            out.push((String::new(), "gravity", v));
+        }
+        for v in self.probe.com_mm.iter().flat_map(|g| g.get_ref()) {
+            out.push(("[probe]: ".to_string(), "com_mm", v));
         }
         let p = &self.probe;
         for (field, v) in [("x", &p.x), ("y", &p.y), ("z", &p.z)] {
@@ -1227,6 +1417,7 @@ z = 100.0
                 },
                 limits,
                 prior: None,
+                physics: Box::default(),
             };
             let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Rad);
             let (back, _) = parse_arm(&text, F).unwrap();

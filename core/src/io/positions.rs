@@ -1,8 +1,8 @@
 //! Reference-position files: where an instrument (a laser tracker, an
 //! optical CMM) saw the probe or target, or the certified centre of an
 //! artefact's sphere the arm touched — CSV with the header
-//! `point,q1,…,qn,x,y,z` and the optional columns `frame` and
-//! `uncertainty`, in that order.
+//! `point,q1,…,qn,x,y,z` and the optional columns `frame`,
+//! `uncertainty`, `temperature` and `time`, in that order.
 //!
 //! ```text
 //! point,q1,q2,q3,q4,q5,q6,x,y,z,frame,uncertainty
@@ -18,6 +18,10 @@
 //! of the command line applies). Rows with the same `point` label in one
 //! frame are the same physical point (a sphere touched in several poses).
 //! Joint readings are in the unit the caller declares, as in a poses file.
+//! `temperature` (°C, of the arm when the row was taken) and `time` (s,
+//! from any origin) are what a thermal expansion or a drift is fitted
+//! against ([`crate::corrections`]); where a column is present every row
+//! gives it.
 
 use std::path::Path;
 
@@ -51,6 +55,9 @@ pub struct Positions {
     uncertainty: Vec<Option<f64>>,
     /// Per row, its 1-based line.
     lines: Vec<usize>,
+    /// Per row, the temperature (°C) and time (s), when recorded.
+    temperature: Option<Vec<f64>>,
+    time: Option<Vec<f64>>,
 }
 
 impl Positions {
@@ -65,7 +72,36 @@ impl Positions {
             xyz: Vec::new(),
             uncertainty: Vec::new(),
             lines: Vec::new(),
+            temperature: None,
+            time: None,
         }
+    }
+
+    /// Records the last row's temperature (°C) and time (s); a column is
+    /// kept only when every row has it (the reader's rule).
+    pub fn record(&mut self, temperature: Option<f64>, time: Option<f64>) {
+        let n = self.len();
+        for (column, v) in [(&mut self.temperature, temperature), (&mut self.time, time)] {
+            match v {
+                Some(v) if n == 1 => *column = Some(vec![v]),
+                Some(v) => {
+                    if let Some(c) = column.as_mut().filter(|c| c.len() + 1 == n) {
+                        c.push(v);
+                    }
+                }
+                None => *column = None,
+            }
+        }
+    }
+
+    /// Per row, the temperature (°C), when recorded.
+    pub fn temperatures(&self) -> Option<&[f64]> {
+        self.temperature.as_deref()
+    }
+
+    /// Per row, the time (s), when recorded.
+    pub fn times(&self) -> Option<&[f64]> {
+        self.time.as_deref()
     }
 
     /// Appends a row: readings `q` (rad), the position (mm) in frame
@@ -167,6 +203,10 @@ impl Positions {
                 self.uncertainty[i],
                 self.lines[i],
             );
+            out.record(
+                self.temperature.as_ref().map(|t| t[i]),
+                self.time.as_ref().map(|t| t[i]),
+            );
         }
         out
     }
@@ -203,6 +243,13 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
     if with_u {
         header.push_str(",uncertainty");
     }
+    let conditions = [("temperature", p.temperatures()), ("time", p.times())];
+    for (name, column) in conditions {
+        if column.is_some() {
+            header.push(',');
+            header.push_str(name);
+        }
+    }
     header.push('\n');
     w.write_all(header.as_bytes())?;
     for i in 0..p.len() {
@@ -225,6 +272,12 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
                 line.push_str(&fmt_f64(u));
             }
         }
+        for (_, column) in conditions {
+            if let Some(c) = column {
+                line.push(',');
+                line.push_str(&fmt_f64(c[i]));
+            }
+        }
         line.push('\n');
         w.write_all(line.as_bytes())?;
     }
@@ -236,9 +289,11 @@ struct Layout {
     joints: usize,
     frame: Option<usize>,
     uncertainty: Option<usize>,
+    temperature: Option<usize>,
+    time: Option<usize>,
 }
 
-const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty]";
+const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty][,temperature][,time]";
 
 /// Reads a reference-position file (standard input for `-`), readings in
 /// `unit`; messages name the file as [`super::source_name`] gives it.
@@ -316,7 +371,11 @@ fn header_layout(
     let fields = &h.fields;
     let optional = |name: &str| fields.iter().position(|f| f == name);
     let (frame, uncertainty) = (optional("frame"), optional("uncertainty"));
-    let extra = usize::from(frame.is_some()) + usize::from(uncertainty.is_some());
+    let (temperature, time) = (optional("temperature"), optional("time"));
+    let extra = [frame, uncertainty, temperature, time]
+        .iter()
+        .filter(|c| c.is_some())
+        .count();
     let joints = fields.len().saturating_sub(4 + extra);
     let want = expected_joints.unwrap_or(joints);
     let mut expected: Vec<String> = vec!["point".into()];
@@ -325,19 +384,20 @@ fn header_layout(
     if frame.is_some() {
         expected.push("frame".into());
     }
-    if uncertainty.is_some() {
-        expected.push("uncertainty".into());
+    for (column, name) in [
+        (uncertainty, "uncertainty"),
+        (temperature, "temperature"),
+        (time, "time"),
+    ] {
+        if column.is_some() {
+            expected.push(name.into());
+        }
     }
     let names: Vec<&str> = expected.iter().map(String::as_str).collect();
-    let shape = format!(
-        "point,q1,...,q{want},x,y,z{}{}",
-        if frame.is_some() { ",frame" } else { "" },
-        if uncertainty.is_some() {
-            ",uncertainty"
-        } else {
-            ""
-        }
-    );
+    let shape = format!("point,q1,...,q{want},x,y,z{}", {
+        let tail: Vec<&str> = names[1 + want + 3..].to_vec();
+        tail.iter().map(|n| format!(",{n}")).collect::<String>()
+    });
     check_header(h, file, &names, &shape)?;
     if want == 0 {
         return Err(InputError::field(
@@ -351,6 +411,8 @@ fn header_layout(
         joints: want,
         frame,
         uncertainty,
+        temperature,
+        time,
     })
 }
 
@@ -398,6 +460,25 @@ fn parse_row(
         },
     };
     out.push(f[0], frame, q, xyz, uncertainty, line);
+    let condition = |c: Option<usize>, name: &str| match c {
+        None => Ok(None),
+        Some(c) if f[c].is_empty() => Err(InputError::field(
+            file,
+            line,
+            name,
+            "empty: where the column is given, every row gives it",
+        )),
+        Some(c) => parse_f64(f[c], file, line, name).map(Some),
+    };
+    let (t, s) = (
+        condition(l.temperature, "temperature")?,
+        condition(l.time, "time")?,
+    );
+    if let Some(t) = t.filter(|t| !(-100.0..=200.0).contains(t)) {
+        let message = format!("{t} °C: not an arm's temperature (°C expected, −100 to 200)");
+        return error("temperature", &message);
+    }
+    out.record(t, s);
     Ok(())
 }
 

@@ -339,7 +339,21 @@ impl ArmKernel {
         jac: &mut [[f64; 3]],
     ) -> Result<[f64; 3], KernelError> {
         self.check_poses(poses, &(i..i + 1))?;
-        self.apply(OnePrepared { poses, i, jac })
+        let p = self.apply(OnePrepared {
+            poses,
+            i,
+            jac: &mut *jac,
+        })?;
+        match poses.post() {
+            None => Ok(p),
+            Some(post) => {
+                let s = post.scale[i];
+                for c in jac.iter_mut() {
+                    *c = c.map(|v| s * v);
+                }
+                Ok(std::array::from_fn(|r| s * p[r] + post.offset[i][r]))
+            }
+        }
     }
 
     fn check_poses(&self, poses: &PreparedPoses, range: &Range<usize>) -> Result<(), KernelError> {
@@ -382,11 +396,18 @@ impl ArmKernel {
     ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
         check_len(range.len(), out.len())?;
+        let start = range.start;
         self.apply(Positions {
             poses,
-            start: range.start,
-            out,
+            start,
+            out: &mut *out,
         });
+        if let Some(post) = poses.post() {
+            for (k, o) in out.iter_mut().enumerate() {
+                let (s, off) = (post.scale[start + k], post.offset[start + k]);
+                *o = std::array::from_fn(|r| s * o[r] + off[r]);
+            }
+        }
         Ok(())
     }
 
@@ -405,7 +426,14 @@ impl ArmKernel {
     pub fn jacobians(&self, poses: &PreparedPoses, out: &mut Jacobians) -> Result<(), KernelError> {
         self.check_poses(poses, &(0..poses.len()))?;
         check_len(poses.len(), out.len())?;
-        self.apply(AllJacobians { poses, out })
+        self.apply(AllJacobians {
+            poses,
+            out: &mut *out,
+        })?;
+        if let Some(post) = poses.post() {
+            out.apply_post(post);
+        }
+        Ok(())
     }
 
     /// Calls `f(pose, position, jacobian)` for every pose of `range` in order,
@@ -430,10 +458,25 @@ impl ArmKernel {
         &self,
         poses: &PreparedPoses,
         range: Range<usize>,
-        f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+        mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
     ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
-        self.apply(EachJacobian { poses, range, f });
+        match poses.post() {
+            None => self.apply(EachJacobian { poses, range, f }),
+            Some(post) => {
+                // Outside the hot path (a model beyond geometry is on): one
+                // copy of the columns per pose, scaled.
+                let mut scaled = vec![[0.0; 3]; self.param_count()];
+                let g = |i: usize, p: &[f64; 3], jac: &[[f64; 3]]| {
+                    let (s, off) = (post.scale[i], post.offset[i]);
+                    for (o, c) in scaled.iter_mut().zip(jac) {
+                        *o = c.map(|v| s * v);
+                    }
+                    f(i, &std::array::from_fn(|r| s * p[r] + off[r]), &scaled);
+                };
+                self.apply(EachJacobian { poses, range, f: g })
+            }
+        }
         Ok(())
     }
 
@@ -459,10 +502,22 @@ impl ArmKernel {
         &self,
         poses: &PreparedPoses,
         range: Range<usize>,
-        f: impl FnMut(usize, &[[f64; 3]]),
+        mut f: impl FnMut(usize, &[[f64; 3]]),
     ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
-        self.apply(EachJointJacobian { poses, range, f });
+        match poses.post() {
+            None => self.apply(EachJointJacobian { poses, range, f }),
+            Some(post) => {
+                let mut scaled = vec![[0.0; 3]; self.joints()];
+                let g = |i: usize, jq: &[[f64; 3]]| {
+                    for (o, c) in scaled.iter_mut().zip(jq) {
+                        *o = c.map(|v| post.scale[i] * v);
+                    }
+                    f(i, &scaled);
+                };
+                self.apply(EachJointJacobian { poses, range, f: g })
+            }
+        }
         Ok(())
     }
 

@@ -318,6 +318,22 @@ pub struct PreparedPoses {
     /// `cos[j][i]`: cos of joint `j`'s reading at pose `i`.
     cos: Vec<Vec<f64>>,
     sin: Vec<Vec<f64>>,
+    /// What follows the chain at each pose, if anything (a thermal scale,
+    /// a drift): see [`Post`].
+    post: Option<Box<Post>>,
+}
+
+/// A per-pose transform after the chain: the position seen is
+/// `scale_i · p(q_i) + offset_i` — the whole arm grown by a temperature
+/// (every length scales, so the probe's position about the base does), or
+/// its base drifted in time. The kernel applies it to positions and to
+/// every Jacobian column (`offset` does not depend on the arm).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Post {
+    /// Per pose, the scale (1 when none).
+    pub scale: Vec<f64>,
+    /// Per pose, the offset, mm.
+    pub offset: Vec<[f64; 3]>,
 }
 
 impl PreparedPoses {
@@ -360,7 +376,27 @@ impl PreparedPoses {
             sin: (0..joints)
                 .map(|j| column(j).map(f64::sin).collect())
                 .collect(),
+            post: None,
         }
+    }
+
+    /// These poses with `post` applied after the chain.
+    ///
+    /// # Panics
+    ///
+    /// When `post` has another length than the poses (a bug, not input).
+    pub fn with_post(mut self, post: Post) -> Self {
+        assert!(
+            post.scale.len() == self.len && post.offset.len() == self.len,
+            "one scale and offset per pose"
+        );
+        self.post = Some(Box::new(post));
+        self
+    }
+
+    /// The transform after the chain, if any.
+    pub fn post(&self) -> Option<&Post> {
+        self.post.as_deref()
     }
 
     /// Prepares `len` poses of `joints` readings (rad), row after row in
@@ -543,6 +579,23 @@ impl Jacobians {
     pub fn row(&self, c: usize, r: usize) -> &[f64] {
         let start = (3 * c + r) * self.len;
         &self.jac[start..start + self.len]
+    }
+
+    /// `post` applied to every pose's position and columns.
+    pub(crate) fn apply_post(&mut self, post: &Post) {
+        let n = self.len;
+        for i in 0..n {
+            let s = post.scale[i];
+            for r in 0..3 {
+                let v = &mut self.pos[r * n + i];
+                *v = s * *v + post.offset[i][r];
+            }
+            for c in 0..self.params {
+                for r in 0..3 {
+                    self.jac[(3 * c + r) * n + i] *= s;
+                }
+            }
+        }
     }
 
     #[inline(always)]

@@ -6,6 +6,7 @@ use super::{
     Arms, CalibrationInput, Measured, PoseErrors, Report, ReportError, ValidationRow,
     calibration_report, positions,
 };
+use crate::corrections::Physics;
 use crate::session::{CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE};
 
 /// The report (page and figures) of `report`, the session run on `problem`.
@@ -20,15 +21,22 @@ pub fn session_report(
     let cal = &report.calibration;
     let start = &problem.arm().params;
     let data = problem.data();
-    let fitted_before = positions(start, data)?;
-    let fitted_after = positions(&cal.params, data)?;
+    let stated: &Physics = &problem.arm().physics;
+    let fitted = cal.physics.as_ref().unwrap_or(stated);
+    // Each arm sees the touches through its own corrections beyond geometry.
+    let seen = |params, physics, data| -> Result<Vec<[f64; 3]>, ReportError> {
+        let seen = crate::calibrate::validate::seen_by(params, physics, data).map_err(Box::new)?;
+        positions(params, &seen)
+    };
+    let fitted_before = seen(start, stated, data)?;
+    let fitted_after = seen(&cal.params, fitted, data)?;
     let held = problem
         .held_out()
         .map(|h| {
             Ok::<_, ReportError>((
                 &h.data,
-                positions(start, &h.data)?,
-                positions(&cal.params, &h.data)?,
+                seen(start, stated, &h.data)?,
+                seen(&cal.params, fitted, &h.data)?,
             ))
         })
         .transpose()?;
@@ -94,9 +102,15 @@ fn pose_errors(
     report: &CalibrationReport,
     problem: &Problem,
 ) -> Result<Vec<PoseErrors>, ReportError> {
+    use crate::calibrate::validate::{registered_frames, seen_by};
     let cal = &report.calibration;
     let start = &problem.arm().params;
-    let start_frames = crate::calibrate::validate::registered_frames(start, problem.data())?;
+    let stated: &Physics = &problem.arm().physics;
+    let fitted = cal.physics.as_ref().unwrap_or(stated);
+    let start_frames = registered_frames(
+        start,
+        &*seen_by(start, stated, problem.data()).map_err(Box::new)?,
+    )?;
     let frames = cal.frames();
     let mut sets = vec![("fitted", false, problem.data())];
     if let Some(h) = problem.held_out() {
@@ -104,10 +118,18 @@ fn pose_errors(
     }
     let mut out = Vec::new();
     for (set, held_out, data) in sets {
-        let Some(p) = data.positions() else {
+        if data.positions().is_none() {
             continue;
-        };
-        for (after, params, f) in [(false, start, &start_frames), (true, &cal.params, &frames)] {
+        }
+        let arms = [
+            (false, start, stated, &start_frames),
+            (true, &cal.params, fitted, &frames),
+        ];
+        for (after, params, physics, f) in arms {
+            let seen = seen_by(params, physics, data).map_err(Box::new)?;
+            let Some(p) = seen.positions() else {
+                continue;
+            };
             let (reach_mm, error_mm) = per_pose(params, p, f)?;
             let arm = if after { "calibrated" } else { "nominal" };
             out.push(PoseErrors {

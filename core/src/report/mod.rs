@@ -108,6 +108,10 @@ pub enum ReportError {
     /// The kernel refused an arm ([`positions`]).
     #[error("report: {0}")]
     Kernel(#[from] KernelError),
+    /// The data could not be seen through an arm's corrections beyond
+    /// geometry, or another refusal of the calibration's.
+    #[error("report: {0}")]
+    Calibration(#[from] Box<crate::calibrate::CalibrationError>),
     /// Plotters failed to draw a figure.
     #[error("report: figure {file}: {message}")]
     Draw {

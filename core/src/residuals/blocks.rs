@@ -105,6 +105,12 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
         let _ = (start, x);
         None
     }
+
+    /// The block as the corrections beyond geometry, if it is them: the
+    /// terms read every pose through it ([`crate::corrections`]).
+    fn corrections(&self) -> Option<&crate::corrections::CorrectionBlock> {
+        None
+    }
 }
 
 dyn_clone::clone_trait_object!(Block);
@@ -134,7 +140,15 @@ impl Layout {
     }
 
     /// Appends `block`'s columns; returns where they are.
+    ///
+    /// # Panics
+    ///
+    /// A correction block after another block (it must come first).
     pub fn add(&mut self, block: Box<dyn Block>) -> BlockId {
+        assert!(
+            block.corrections().is_none() || self.blocks.is_empty(),
+            "the corrections are the layout's first block"
+        );
         self.starts.push(self.len());
         self.blocks.push(block);
         BlockId(self.blocks.len() - 1)
@@ -158,6 +172,21 @@ impl Layout {
     /// Whether there is no column (never: an arm has its geometry).
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// The corrections beyond geometry and their columns, if the layout
+    /// has them (always its first block: right after the geometry, so that
+    /// a pose's Jacobian over the arm is the chain's columns and then
+    /// theirs).
+    pub fn corrections(&self) -> Option<(&crate::corrections::CorrectionBlock, Range<usize>)> {
+        let block = self.blocks.first()?.corrections()?;
+        Some((block, self.columns(BlockId(0))))
+    }
+
+    /// Columns that move the arm's positions: the geometry's and the
+    /// corrections'.
+    pub fn arm_columns(&self) -> usize {
+        self.geometry_columns() + self.corrections().map_or(0, |(_, c)| c.len())
     }
 
     /// The auxiliary blocks, in order.

@@ -219,6 +219,32 @@ impl At<'_> {
     pub fn block(&self, id: BlockId) -> &[f64] {
         &self.x[self.layout.columns(id)]
     }
+
+    /// The poses of `readings` (rad, pose-major) under `conditions` as the
+    /// chain sees them with the layout's corrections at this point, and
+    /// the corrections' Jacobian factors; `None` when the layout corrects
+    /// nothing (the poses are the readings).
+    ///
+    /// # Errors
+    ///
+    /// A correction whose conditions were not recorded (an expansion
+    /// without temperatures).
+    pub fn effects(
+        &self,
+        readings: &[f64],
+        conditions: crate::corrections::Conditions<'_>,
+    ) -> Result<Option<crate::corrections::Effects>, TermError> {
+        let Some((block, cols)) = self.layout.corrections() else {
+            return Ok(None);
+        };
+        let physics = block.physics_at(&self.x[cols]);
+        if block.fit.is_empty() && !physics.corrects() {
+            return Ok(None);
+        }
+        crate::corrections::Effects::new(self.arm, &physics, &block.fit, readings, conditions)
+            .map(Some)
+            .map_err(|e| TermError::invalid("beyond", e))
+    }
 }
 
 /// The point centres of the same-point touches: the unknowns the touch term

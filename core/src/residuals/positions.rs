@@ -22,6 +22,7 @@ use super::blocks::{Frame, rotation};
 use super::{
     At, BlockId, Layout, Noise, Normal, Origin, Sees, Shared, Standardised, Term, TermError,
 };
+use crate::corrections::{Beyond, CorrectionBlock, Effects, Physics};
 use crate::dataset::{DataSet, PositionData};
 use crate::kernel::{ArmKernel, KernelError};
 use crate::parallel::parallel_map;
@@ -134,7 +135,41 @@ pub fn register(params: &DhParams, data: &PositionData) -> Result<Vec<Registrati
 ///
 /// The kernel's.
 pub fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, KernelError> {
+    layout_with(params, data, &Physics::default(), &Beyond::default())
+}
+
+/// [`layout_for`] of an arm with `physics` whose fit estimates the models
+/// `fit` beyond geometry: their [`CorrectionBlock`] first (when anything is
+/// fitted or stated), the frames registered with the stated corrections
+/// applied.
+///
+/// # Errors
+///
+/// The kernel's. A stated correction whose conditions `data` lack (an
+/// expansion without temperatures) is left out of the frames' start; the
+/// session refuses such data first.
+pub fn layout_with(
+    params: &DhParams,
+    data: &DataSet,
+    physics: &Physics,
+    fit: &Beyond,
+) -> Result<Layout, KernelError> {
     let mut layout = Layout::new(params.clone());
+    if !fit.is_empty() || physics.corrects() || physics.has_masses() {
+        layout.add(Box::new(CorrectionBlock {
+            fit: fit.clone(),
+            physics: physics.clone(),
+            joints: params.joint_count(),
+        }));
+    }
+    let corrected;
+    let data = match data.corrected(params, physics) {
+        Ok(d) => {
+            corrected = d;
+            &corrected
+        }
+        Err(_) => data,
+    };
     if let Some(positions) = data.positions() {
         let names = positions.rows().frames();
         for (name, reg) in names.iter().zip(register(params, positions)?) {
@@ -350,12 +385,14 @@ impl Term for PositionTerm<'_> {
     ) -> Result<f64, TermError> {
         let frames = self.frames_at(at);
         let free = normal.free.clone();
-        let geometry = at.layout.geometry_columns();
-        // Per free column: the geometry column, or (frame, its column 0..6).
+        let arm = at.layout.arm_columns();
+        let effects = at.effects(self.data.rows().readings(), self.data.conditions())?;
+        // Per free column: the arm's column (geometry or correction), or
+        // (frame, its column 0..6).
         let geo: Vec<(usize, usize)> = free
             .iter()
             .enumerate()
-            .filter(|(_, c)| **c < geometry)
+            .filter(|(_, c)| **c < arm)
             .map(|(a, &c)| (a, c))
             .collect();
         let frame_cols: Vec<Vec<(usize, usize)>> = self
@@ -376,7 +413,12 @@ impl Term for PositionTerm<'_> {
             .collect();
         let p = free.len();
         let parts = parallel_map(&chunks, at.threads, |range| {
-            self.part(at, &frames, range.clone(), p, &geo, &frame_cols)
+            let cols = Columns {
+                p,
+                geo: &geo,
+                frame_cols: &frame_cols,
+            };
+            self.part(at, effects.as_ref(), &frames, range.clone(), cols)
         });
         let mut cost = 0.0;
         for part in parts {
@@ -407,8 +449,9 @@ impl Term for PositionTerm<'_> {
         let frames = self.frames_at(at);
         let n = self.data.len();
         scratch.resize(n, [0.0; 3]);
-        at.kernel
-            .positions(self.data.poses(), 0..n, &mut scratch[..n])?;
+        let effects = at.effects(self.data.rows().readings(), self.data.conditions())?;
+        let poses = effects.as_ref().map_or(self.data.poses(), |e| &e.poses);
+        at.kernel.positions(poses, 0..n, &mut scratch[..n])?;
         for (i, p) in scratch[..n].iter().enumerate() {
             let r = self.residual(&frames, i, p);
             *total += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
@@ -422,7 +465,9 @@ impl Term for PositionTerm<'_> {
         let frames = self.frames_at(at);
         let n = self.data.len();
         let mut p = vec![[0.0; 3]; n];
-        at.kernel.positions(self.data.poses(), 0..n, &mut p)?;
+        let effects = at.effects(self.data.rows().readings(), self.data.conditions())?;
+        let poses = effects.as_ref().map_or(self.data.poses(), |e| &e.poses);
+        at.kernel.positions(poses, 0..n, &mut p)?;
         let rows = self.data.rows();
         let values = (0..n)
             .map(|i| {
@@ -463,6 +508,16 @@ impl Term for PositionTerm<'_> {
     }
 }
 
+/// The free columns a chunk of rows adds to: `p` in all, `geo` the arm's
+/// (index into the free list, column), `frame_cols` each frame's (index
+/// into the free list, column of the frame).
+#[derive(Clone, Copy)]
+struct Columns<'a> {
+    p: usize,
+    geo: &'a [(usize, usize)],
+    frame_cols: &'a [Vec<(usize, usize)>],
+}
+
 impl PositionTerm<'_> {
     /// Rows `range`'s share of the normal equations over `p` free columns:
     /// `geo` the free geometry columns, `frame_cols` each frame's free
@@ -470,12 +525,12 @@ impl PositionTerm<'_> {
     fn part(
         &self,
         at: &At<'_>,
+        effects: Option<&Effects>,
         frames: &[([[f64; 3]; 3], [f64; 3])],
         range: std::ops::Range<usize>,
-        p: usize,
-        geo: &[(usize, usize)],
-        frame_cols: &[Vec<(usize, usize)>],
+        cols: Columns<'_>,
     ) -> Result<Part, TermError> {
+        let Columns { p, geo, frame_cols } = cols;
         let mut part = Part {
             jtj: vec![0.0; p * p],
             jtr: vec![0.0; p],
@@ -483,46 +538,54 @@ impl PositionTerm<'_> {
         };
         let rows = self.data.rows();
         let mut d: Vec<(usize, [f64; 3])> = Vec::with_capacity(p);
-        at.kernel
-            .for_each_jacobian(self.data.poses(), range, |i, pos, jac| {
-                let f = rows.frame(i);
-                let (rot, _) = &frames[f];
-                let w = self.weights[i];
-                let r = self.residual(frames, i, pos);
-                part.cost += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-                d.clear();
-                for &(a, c) in geo {
-                    let j = jac[c];
-                    d.push((
-                        a,
-                        std::array::from_fn(|k| {
-                            w * (rot[k][0] * j[0] + rot[k][1] * j[1] + rot[k][2] * j[2])
-                        }),
-                    ));
+        let poses = effects.map_or(self.data.poses(), |e| &e.poses);
+        let mut ext = Vec::new();
+        at.kernel.for_each_jacobian(poses, range, |i, pos, jac| {
+            let jac = match effects {
+                Some(e) => {
+                    e.extend(i, pos, jac, &mut ext);
+                    &ext[..]
                 }
-                if !frame_cols[f].is_empty() {
-                    // Frame::jacobian with R already at hand: [−[Rp]× | I].
-                    let q: [f64; 3] = std::array::from_fn(|k| {
-                        rot[k][0] * pos[0] + rot[k][1] * pos[1] + rot[k][2] * pos[2]
-                    });
-                    let jf = [
-                        [0.0, q[2], -q[1], 1.0, 0.0, 0.0],
-                        [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
-                        [q[1], -q[0], 0.0, 0.0, 0.0, 1.0],
-                    ];
-                    for &(a, k) in &frame_cols[f] {
-                        d.push((a, std::array::from_fn(|row| w * jf[row][k])));
-                    }
+                None => jac,
+            };
+            let f = rows.frame(i);
+            let (rot, _) = &frames[f];
+            let w = self.weights[i];
+            let r = self.residual(frames, i, pos);
+            part.cost += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+            d.clear();
+            for &(a, c) in geo {
+                let j = jac[c];
+                d.push((
+                    a,
+                    std::array::from_fn(|k| {
+                        w * (rot[k][0] * j[0] + rot[k][1] * j[1] + rot[k][2] * j[2])
+                    }),
+                ));
+            }
+            if !frame_cols[f].is_empty() {
+                // Frame::jacobian with R already at hand: [−[Rp]× | I].
+                let q: [f64; 3] = std::array::from_fn(|k| {
+                    rot[k][0] * pos[0] + rot[k][1] * pos[1] + rot[k][2] * pos[2]
+                });
+                let jf = [
+                    [0.0, q[2], -q[1], 1.0, 0.0, 0.0],
+                    [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
+                    [q[1], -q[0], 0.0, 0.0, 0.0, 1.0],
+                ];
+                for &(a, k) in &frame_cols[f] {
+                    d.push((a, std::array::from_fn(|row| w * jf[row][k])));
                 }
-                for (u, &(a, da)) in d.iter().enumerate() {
-                    part.jtr[a] += da[0] * r[0] + da[1] * r[1] + da[2] * r[2];
-                    for &(b, db) in &d[u..] {
-                        let v = da[0] * db[0] + da[1] * db[1] + da[2] * db[2];
-                        let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-                        part.jtj[lo * p + hi] += v;
-                    }
+            }
+            for (u, &(a, da)) in d.iter().enumerate() {
+                part.jtr[a] += da[0] * r[0] + da[1] * r[1] + da[2] * r[2];
+                for &(b, db) in &d[u..] {
+                    let v = da[0] * db[0] + da[1] * db[1] + da[2] * db[2];
+                    let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+                    part.jtj[lo * p + hi] += v;
                 }
-            })?;
+            }
+        })?;
         Ok(part)
     }
 }

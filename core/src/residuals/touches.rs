@@ -8,6 +8,7 @@ use std::ops::Range;
 
 use super::sym3::{Sym3, centroid_cov, sym_inv, sym_mul};
 use super::{At, Centres, Noise, Normal, Origin, Shared, Standardised, Term, TermError};
+use crate::corrections::Effects;
 use crate::dataset::DataSet;
 use crate::error::short;
 use crate::kernel::{ArmKernel, KernelError, NoiseOf};
@@ -382,7 +383,8 @@ impl Term for TouchTerm<'_> {
         shared: &mut Shared,
         normal: &mut Normal,
     ) -> Result<f64, TermError> {
-        Ok(accumulate(self, at, shared, normal)?)
+        let effects = at.effects(self.data.readings(), self.data.conditions())?;
+        Ok(accumulate(self, at, effects.as_ref(), shared, normal)?)
     }
 
     fn add_cost(
@@ -396,7 +398,9 @@ impl Term for TouchTerm<'_> {
         let data = self.data;
         scratch.resize(data.len(), [0.0; 3]);
         let xyz = &mut scratch[..];
-        at.kernel.positions(data.poses(), 0..data.len(), xyz)?;
+        let effects = at.effects(data.readings(), data.conditions())?;
+        let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
+        at.kernel.positions(poses, 0..data.len(), xyz)?;
         let mut centroids = Vec::with_capacity(data.points().len());
         for point in data.points() {
             let origin = xyz[point.touches.start];
@@ -433,11 +437,12 @@ impl Term for TouchTerm<'_> {
         let most = data.points().iter().map(|p| p.touches.len()).max();
         let mut xyz = vec![[0.0; 3]; most.unwrap_or(0)];
         let mut out = vec![0.0; data.len()];
+        let effects = at.effects(data.readings(), data.conditions())?;
+        let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
         for point in data.points() {
             let first = point.touches.start;
             let xyz = &mut xyz[..point.touches.len()];
-            at.kernel
-                .positions(data.poses(), point.touches.clone(), xyz)?;
+            at.kernel.positions(poses, point.touches.clone(), xyz)?;
             let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
             for i in point.touches.clone() {
                 let a = &self.weights[i];
@@ -510,6 +515,7 @@ impl Term for TouchTerm<'_> {
 fn accumulate(
     term: &TouchTerm<'_>,
     at: &At<'_>,
+    effects: Option<&Effects>,
     shared: &mut Shared,
     normal: &mut Normal,
 ) -> Result<f64, KernelError> {
@@ -520,16 +526,16 @@ fn accumulate(
         .map(|c| c * POINTS_PER_CHUNK..((c + 1) * POINTS_PER_CHUNK).min(np))
         .collect();
     let need_mean = shared.want_centre_jacobians;
-    // Touches move with the geometry only: their sums run over the free
-    // geometry columns, placed at those columns' rows of `normal` (the
-    // identity when no auxiliary column is free).
-    let geometry = at.layout.geometry_columns();
+    // Touches move with the arm only: their sums run over the free
+    // geometry and correction columns, placed at those columns' rows of
+    // `normal` (the identity when no other column is free).
+    let arm = at.layout.arm_columns();
     let (at_free, free): (Vec<usize>, Vec<usize>) = (normal.free.iter().enumerate())
-        .filter(|(_, c)| **c < geometry)
+        .filter(|(_, c)| **c < arm)
         .map(|(a, &c)| (a, c))
         .unzip();
     let p = normal.free.len();
-    let run = |c: &Range<usize>| chunk(at.kernel, term, &free, c.clone(), need_mean);
+    let run = |c: &Range<usize>| chunk(at.kernel, term, effects, &free, c.clone(), need_mean);
     let partials: Vec<Result<Partial, KernelError>> = if at.threads <= 1 || chunks.len() < 4 {
         chunks.iter().map(run).collect()
     } else {
@@ -777,6 +783,7 @@ impl PointSums {
 fn chunk(
     kernel: &ArmKernel,
     term: &TouchTerm<'_>,
+    effects: Option<&Effects>,
     free: &[usize],
     points: Range<usize>,
     need_mean: bool,
@@ -798,21 +805,36 @@ fn chunk(
     let mut jtj = vec![0.0; p * w];
     let mut point = points.start;
     let mut finite = true;
-    // Inlined into the kernel's loop, so the accumulation is compiled with
-    // the same target features (AVX2 where the CPU has it).
-    kernel.for_each_jacobian(
-        data.poses(),
-        touches,
-        #[inline(always)]
-        |i, pos, jac| {
+    if let Some(effects) = effects {
+        // A model beyond geometry is on: each touch's columns extended by
+        // the corrections' (off the hot path of a geometric fit).
+        let mut ext = Vec::with_capacity(kernel.param_count() + effects.columns());
+        kernel.for_each_jacobian(&effects.poses, touches, |i, pos, jac| {
             if i == all[point].touches.end {
                 sums.finish(&mut part, &mut jtj, need_mean);
                 point += 1;
             }
             finite &= pos.iter().all(|v| v.is_finite());
-            sums.add(pos, &weights[i], jac, free, &mut jtj);
-        },
-    )?;
+            effects.extend(i, pos, jac, &mut ext);
+            sums.add(pos, &weights[i], &ext, free, &mut jtj);
+        })?;
+    } else {
+        // Inlined into the kernel's loop, so the accumulation is compiled
+        // with the same target features (AVX2 where the CPU has it).
+        kernel.for_each_jacobian(
+            data.poses(),
+            touches,
+            #[inline(always)]
+            |i, pos, jac| {
+                if i == all[point].touches.end {
+                    sums.finish(&mut part, &mut jtj, need_mean);
+                    point += 1;
+                }
+                finite &= pos.iter().all(|v| v.is_finite());
+                sums.add(pos, &weights[i], jac, free, &mut jtj);
+            },
+        )?;
+    }
     sums.finish(&mut part, &mut jtj, need_mean);
     for a in 0..p {
         for b in 0..=a {

@@ -31,12 +31,14 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::validate::{
-    BeforeAfter, Figures, Fold, before_after_in, check_folds, cross_validate, registered_frames,
+    ArmView, BeforeAfter, Figures, Fold, before_after_of, check_folds, cross_validate,
+    registered_frames, seen_by,
 };
 use crate::calibrate::{
     Calibration, CalibrationError, Context, FitInputs, ModelOptions, Solver, SolverSettings,
     calibrate_with,
 };
+use crate::corrections::Physics;
 use crate::dataset::DataSet;
 use crate::error::OptionError;
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
@@ -125,8 +127,14 @@ impl Problem {
             });
         }
         model.check_for(&arm.params)?;
+        model.beyond.check_inputs(&arm.physics, &data)?;
         check_length_units(&arm.params, &data)?;
-        let layout = crate::residuals::positions::layout_for(&arm.params, &data)?;
+        let layout = crate::residuals::positions::layout_with(
+            &arm.params,
+            &data,
+            &arm.physics,
+            &model.beyond,
+        )?;
         check_positions(&data, &layout)?;
         Ok(Problem {
             layout,
@@ -601,6 +609,14 @@ impl CalibrationReport {
             params: self.calibration.params.clone(),
             limits: start.limits.clone(),
             prior: None,
+            // Drift belongs to the session, not to the arm.
+            physics: match &self.calibration.physics {
+                Some(p) => Box::new(Physics {
+                    drift_mm_per_h: None,
+                    ..p.clone()
+                }),
+                None => start.physics.clone(),
+            },
         }
     }
 
@@ -787,14 +803,25 @@ pub fn run(
     // Each arm's frames: the start's registered to the fitted data, the
     // calibrated arm's fitted with it; held-out positions seen from the
     // same stations are scored in those frames.
-    let start_frames = registered_frames(start, data)?;
+    let stated = &problem.arm.physics;
+    let start_frames = registered_frames(start, &*seen_by(start, stated, data)?)?;
     let frames = calibration.frames();
-    let fitted = before_after_in(start, &start_frames, &calibration.params, &frames, data)?;
+    let before = ArmView {
+        params: start,
+        physics: stated,
+        frames: &start_frames,
+    };
+    let after = ArmView {
+        params: &calibration.params,
+        physics: calibration.physics.as_ref().unwrap_or(stated),
+        frames: &frames,
+    };
+    let fitted = before_after_of(before, after, data)?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
             data_file: h.data_file.clone(),
             lengths_file: h.lengths_file.clone(),
-            figures: before_after_in(start, &start_frames, &calibration.params, &frames, &h.data)?,
+            figures: before_after_of(before, after, &h.data)?,
         }),
         None => None,
     };
@@ -985,20 +1012,27 @@ fn parameter_table(c: &Calibration) -> String {
         t += &prior_table(p);
     }
     if !c.auxiliary.is_empty() {
-        t += "Auxiliary blocks (every column free; sigma k = 1):\n";
+        t += if c.auxiliary.iter().any(|e| e.fixed.is_some()) {
+            "Auxiliary blocks (sigma k = 1; a correction the data cannot separate is held):\n"
+        } else {
+            "Auxiliary blocks (every column free; sigma k = 1):\n"
+        };
         t += &format!(
             "  {:<16} {:<4} {:>14} {:>14} {:>10}\n",
             "name", "unit", "start", "calibrated", "sigma"
         );
         for e in &c.auxiliary {
-            t += &format!(
-                "  {:<16} {:<4} {:>14.6} {:>14.6} {:>10}\n",
+            let line = format!(
+                "  {:<16} {:<4} {:>14.6} {:>14.6} {:>10}  {}",
                 e.name,
                 e.unit,
                 e.start,
                 e.calibrated,
-                e.sigma.map_or("-".to_string(), |s| format!("{s:.6}"))
+                e.sigma.map_or("-".to_string(), |s| format!("{s:.6}")),
+                e.fixed.as_deref().unwrap_or("")
             );
+            t += line.trim_end();
+            t += "\n";
         }
     }
     t

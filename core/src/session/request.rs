@@ -35,6 +35,7 @@ use crate::calibrate::{
     AnnealOptions, CalibrationError, FixSpec, GlobalOptions, LmOptions, Loss, Method, ModelOptions,
     Robust, SolverSettings, SwitchRule, available_threads,
 };
+use crate::corrections::Beyond;
 use crate::dataset::DataSet;
 use crate::error::{InputError, OptionError};
 use crate::io::{AngleUnit, Arm, read_arm, read_lengths, read_positions, source_name};
@@ -59,6 +60,7 @@ pub struct Request {
     robust_scale: Option<f64>,
     prior: Option<String>,
     accept_poor_fit: bool,
+    beyond: BeyondRequest,
     method: String,
     threads: Option<usize>,
     seed: u64,
@@ -66,6 +68,15 @@ pub struct Request {
     anneal: AnnealOptions,
     switch: SwitchRule,
     global: GlobalOptions,
+}
+
+/// The models beyond geometry as asked for (parsed with the model).
+#[derive(Clone, Debug, Default)]
+struct BeyondRequest {
+    compliance: Option<String>,
+    harmonics: Option<String>,
+    thermal: bool,
+    drift: bool,
 }
 
 /// Touch noise as users state it — encoders in degrees, the probe and the
@@ -112,6 +123,7 @@ impl Request {
             robust_scale: None,
             prior: None,
             accept_poor_fit: false,
+            beyond: BeyondRequest::default(),
             method: solver.method.name().to_string(),
             threads: None,
             seed: solver.seed,
@@ -296,6 +308,26 @@ impl Request {
         self
     }
 
+    /// Models beyond geometry to fit, as users write them: compliances of
+    /// the joints `compliance` (`"2,3,4"`), the encoder harmonics
+    /// `harmonics` (`"2:1,5:1-2"`), a thermal expansion coefficient, a
+    /// drift ([`crate::corrections`]).
+    pub fn beyond(
+        mut self,
+        compliance: Option<&str>,
+        harmonics: Option<&str>,
+        thermal: bool,
+        drift: bool,
+    ) -> Request {
+        self.beyond = BeyondRequest {
+            compliance: compliance.map(str::to_string),
+            harmonics: harmonics.map(str::to_string),
+            thermal,
+            drift,
+        };
+        self
+    }
+
     /// A robust refit with the loss `huber` or `cauchy` and its tuning
     /// constant `k` (`None`: the loss's default); no loss, plain least
     /// squares.
@@ -449,12 +481,26 @@ impl Request {
                 })
             }
         };
+        let b = &self.beyond;
+        let beyond = Beyond {
+            compliance: match &b.compliance {
+                Some(c) => Beyond::parse_compliance(c)?,
+                None => Vec::new(),
+            },
+            harmonics: match &b.harmonics {
+                Some(h) => Beyond::parse_harmonics(h)?,
+                None => Vec::new(),
+            },
+            thermal: b.thermal,
+            drift: b.drift,
+        };
         Ok(ModelOptions {
             fix,
             noise: self.noise,
             accept_poor_fit: self.accept_poor_fit,
             robust,
             prior,
+            beyond,
         })
     }
 

@@ -63,8 +63,8 @@ pub use files::{
 pub use ik::{IkSolution, solve_point};
 pub use lengths::reference_lengths;
 pub use positions::{
-    POSITIONS_FILE, PositionCampaign, PositionSettings, simulate_positions,
-    simulate_positions_from, simulate_tracker, true_frames,
+    ConditionSettings, POSITIONS_FILE, PositionCampaign, PositionSettings, simulate_positions,
+    simulate_positions_from, simulate_positions_in, simulate_tracker, true_frames,
 };
 pub use settings::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,

@@ -158,10 +158,57 @@ pub fn simulate_positions_from(
     seen_from(truth, settings, frames, &mut rng)
 }
 
+/// What a simulated session records beside each pose: its temperature and
+/// time. Default: neither.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ConditionSettings {
+    /// Temperatures drawn uniformly in `[low, high]`, °C.
+    pub temperature_c: Option<[f64; 2]>,
+    /// Rows taken one after another, evenly over this many hours.
+    pub session_h: Option<f64>,
+}
+
+/// [`simulate_positions_from`] of a session recording `conditions`: the
+/// true arm's corrections beyond geometry (its [`Arm::physics`]: compliance,
+/// harmonics, expansion) act on every row, and the rows carry their
+/// temperature and time columns. `drift` (mm/h) moves the base against
+/// the instrument over the session.
+///
+/// # Errors
+///
+/// As [`simulate_positions`]; an expansion without temperatures, a drift
+/// without a session time.
+pub fn simulate_positions_in(
+    truth: &Arm,
+    settings: &PositionSettings,
+    frames: &[(String, [f64; 6])],
+    conditions: &ConditionSettings,
+    drift: Option<[f64; 3]>,
+) -> Result<Positions, SimError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let mut physics = truth.physics.clone();
+    physics.drift_mm_per_h = drift;
+    draw_rows(truth, &physics, settings, frames, conditions, &mut rng)
+}
+
 fn seen_from(
     truth: &Arm,
     settings: &PositionSettings,
     frames: &[(String, [f64; 6])],
+    rng: &mut ChaCha8Rng,
+) -> Result<Positions, SimError> {
+    let conditions = ConditionSettings::default();
+    draw_rows(truth, &truth.physics, settings, frames, &conditions, rng)
+}
+
+/// Random poses per frame, each seen through the true arm's `physics`
+/// under its drawn conditions, with the noise of `settings`.
+fn draw_rows(
+    truth: &Arm,
+    physics: &crate::corrections::Physics,
+    settings: &PositionSettings,
+    frames: &[(String, [f64; 6])],
+    conditions: &ConditionSettings,
     rng: &mut ChaCha8Rng,
 ) -> Result<Positions, SimError> {
     let a = settings.noise.position_mm.unwrap_or(-1.0);
@@ -169,19 +216,44 @@ fn seen_from(
     let n = truth.params.joint_count();
     let mut limits = truth.limits.clone();
     limits.resize(n, None);
-    let kernel = ArmKernel::new(&truth.params).map_err(|e| SimError::Model(e.to_string()))?;
+    let model = |e: String| SimError::Model(e);
+    let kernel = ArmKernel::new(&truth.params).map_err(|e| model(e.to_string()))?;
+    let rows = frames.len() * settings.poses;
+    let none = crate::corrections::Beyond::default();
     let mut positions = Positions::new(n);
-    for (name, x) in frames {
+    // Row by row — the pose, its conditions, the noise — so that a session
+    // without conditions draws what it always drew.
+    for (f, (name, x)) in frames.iter().enumerate() {
         for i in 0..settings.poses {
+            let r = f * settings.poses + i;
             let q = random_configuration(&limits, rng);
-            let p = kernel
-                .position(&q)
-                .map_err(|e| SimError::Model(e.to_string()))?;
+            let temperature = conditions
+                .temperature_c
+                .map(|[lo, hi]| rng.random_range(lo..=hi));
+            let time = (conditions.session_h)
+                .map(|h| 3600.0 * h * r as f64 / rows.saturating_sub(1).max(1) as f64);
+            let p = if physics.corrects() {
+                let recorded = crate::corrections::Conditions {
+                    temperature_c: temperature.as_ref().map(std::slice::from_ref),
+                    time_s: time.as_ref().map(std::slice::from_ref),
+                };
+                let seen =
+                    crate::corrections::Effects::new(&truth.params, physics, &none, &q, recorded)
+                        .map_err(model)?;
+                let mut p = [[0.0; 3]];
+                kernel
+                    .positions(&seen.poses, 0..1, &mut p)
+                    .map_err(|e| model(e.to_string()))?;
+                p[0]
+            } else {
+                kernel.position(&q).map_err(|e| model(e.to_string()))?
+            };
             let y = Frame::apply(x, p);
             let distance = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt() / 1000.0;
             let sigma = a + b * distance;
-            let seen = y.map(|v| v + sigma * normal(rng));
-            positions.push(&format!("P{}", i + 1), name, &q, seen, None, 0);
+            let noisy = y.map(|v| v + sigma * normal(rng));
+            positions.push(&format!("P{}", i + 1), name, &q, noisy, None, 0);
+            positions.record(temperature, time);
         }
     }
     Ok(positions)

@@ -94,10 +94,17 @@ pub(crate) fn find_touches(
                 }
                 break q;
             };
+            // A true arm with errors beyond geometry reads other angles in
+            // this pose (the separation is judged on the pose itself).
+            let reading = if arm.physics.corrects() {
+                crate::corrections::readings_for(&arm.params, &arm.physics, &q)
+            } else {
+                q.clone()
+            };
             touches.push(Touch {
                 socket: s,
                 point,
-                q: q.clone(),
+                q: reading,
             });
             accepted.push(q);
         }

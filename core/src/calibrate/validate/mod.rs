@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::{
     CalibrationError, Context, FitInputs, OptionError, Solver, SolverSettings, calibrate_with,
 };
+use crate::corrections::Physics;
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::metrics::evaluate_without_pairs;
@@ -223,6 +224,64 @@ pub fn before_after_in(
     })
 }
 
+/// An arm as it sees data: its geometry, its physics (the corrections
+/// beyond geometry it applies, [`crate::corrections`]) and its frames.
+#[derive(Clone, Copy, Debug)]
+pub struct ArmView<'a> {
+    /// The geometry.
+    pub params: &'a DhParams,
+    /// The corrections it applies.
+    pub physics: &'a Physics,
+    /// Its frames (a frame not given: its closed form on the data).
+    pub frames: &'a [FrameValues],
+}
+
+/// `data` as an arm `params` with `physics` sees it: unchanged when the
+/// physics corrects nothing ([`DataSet::corrected`]).
+///
+/// # Errors
+///
+/// A correction whose conditions the data lack.
+pub fn seen_by<'d>(
+    params: &DhParams,
+    physics: &Physics,
+    data: &'d DataSet,
+) -> Result<std::borrow::Cow<'d, DataSet>, CalibrationError> {
+    if !physics.corrects() {
+        return Ok(std::borrow::Cow::Borrowed(data));
+    }
+    data.corrected(params, physics)
+        .map(std::borrow::Cow::Owned)
+        .map_err(|message| CalibrationError::Term {
+            term: "beyond".into(),
+            message,
+        })
+}
+
+/// [`before_after_in`] of two arms each with its physics: each sees the
+/// data through its own corrections.
+///
+/// # Errors
+///
+/// As [`figures`], and [`seen_by`]'s.
+pub fn before_after_of(
+    before: ArmView<'_>,
+    after: ArmView<'_>,
+    data: &DataSet,
+) -> Result<BeforeAfter, CalibrationError> {
+    let of = |arm: ArmView<'_>| -> Result<Figures, CalibrationError> {
+        figures_in(
+            arm.params,
+            &*seen_by(arm.params, arm.physics, data)?,
+            arm.frames,
+        )
+    };
+    Ok(BeforeAfter {
+        before: of(before)?,
+        after: of(after)?,
+    })
+}
+
 /// Each frame of `data`'s positions, registered to `params` in closed
 /// form, by name (none without positions).
 ///
@@ -277,6 +336,8 @@ pub fn cross_validate(
     k: usize,
 ) -> Result<Vec<Fold>, CalibrationError> {
     let (start, data) = (inputs.layout.geometry(), inputs.data);
+    let stated =
+        (inputs.layout.corrections()).map_or_else(Physics::default, |(b, _)| b.physics.clone());
     check_folds(data, k)?;
     let point_folds = point_folds(data, k, settings.seed);
     let row_folds = position_folds(data, k, settings.seed);
@@ -288,7 +349,8 @@ pub fn cross_validate(
                 ..inputs
             };
             let fit = calibrate_with(fold, settings, solver, &mut Context::new())?;
-            let start_frames = registered_frames(start, &train_data)?;
+            let start_frames = registered_frames(start, &*seen_by(start, &stated, &train_data)?)?;
+            let fit_frames = fit.frames();
             let mut held_out: Vec<String> = (point_folds[f].iter())
                 .map(|&p| data.points()[p].label.clone())
                 .collect();
@@ -297,11 +359,17 @@ pub fn cross_validate(
             }
             Ok(Fold {
                 held_out,
-                figures: before_after_in(
-                    start,
-                    &start_frames,
-                    &fit.params,
-                    &fit.frames(),
+                figures: before_after_of(
+                    ArmView {
+                        params: start,
+                        physics: &stated,
+                        frames: &start_frames,
+                    },
+                    ArmView {
+                        params: &fit.params,
+                        physics: fit.physics.as_ref().unwrap_or(&stated),
+                        frames: &fit_frames,
+                    },
                     &test_data,
                 )?,
                 successful: fit.solver.successful,

@@ -1,0 +1,204 @@
+//! A set of poses as the chain sees them under the corrections, and the
+//! corrections' Jacobian columns.
+
+use super::gravity::{gravity_vector, torques};
+use super::{Beyond, Physics};
+use crate::kernel::{Post, PreparedPoses};
+use crate::params::DhParams;
+
+/// What was recorded with each pose beyond its readings.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Conditions<'a> {
+    /// Per pose, the temperature, °C.
+    pub temperature_c: Option<&'a [f64]>,
+    /// Per pose, the time, s (from any origin).
+    pub time_s: Option<&'a [f64]>,
+}
+
+/// A correction column's derivative, per pose a factor times …
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    /// … the chain's column `c` (a joint's zero offset: a reading's change).
+    Joint(usize),
+    /// … the position before the expansion.
+    Expansion,
+    /// … a unit vector along a base axis.
+    Axis(usize),
+}
+
+/// Poses under the corrections: the readings the chain sees (with the
+/// expansion and drift after it, [`Post`]) and, per pose, the factors of
+/// the fitted corrections' Jacobian columns.
+#[derive(Clone, Debug)]
+pub struct Effects {
+    /// The corrected poses.
+    pub poses: PreparedPoses,
+    kinds: Vec<Kind>,
+    /// `factors[i·m + k]`: column `k`'s factor at pose `i`.
+    factors: Vec<f64>,
+}
+
+/// Why the corrections cannot be applied to a set of poses.
+pub type EffectsError = String;
+
+impl Effects {
+    /// The poses of `readings` (rad, pose-major, `arm`'s joints per pose)
+    /// recorded under `conditions`, corrected by `physics` (the effective
+    /// values: stated or at the fit's point), with the Jacobian factors of
+    /// the models `fit` estimates.
+    ///
+    /// # Errors
+    ///
+    /// An expansion without temperatures, a drift without times.
+    pub fn new(
+        arm: &DhParams,
+        physics: &Physics,
+        fit: &Beyond,
+        readings: &[f64],
+        conditions: Conditions<'_>,
+    ) -> Result<Effects, EffectsError> {
+        let n = arm.joints.len();
+        let len = readings.len() / n.max(1);
+        let thermal = fit.thermal || physics.cte_per_k.is_some_and(|c| c != 0.0);
+        let drift = fit.drift || physics.drift_mm_per_h.is_some();
+        let temperature = match (thermal, conditions.temperature_c) {
+            (true, None) => {
+                return Err("thermal expansion needs a `temperature` column (°C)".into());
+            }
+            (_, t) => t,
+        };
+        let time = match (drift, conditions.time_s) {
+            (true, None) => return Err("drift needs a `time` column (s)".into()),
+            (_, t) => t,
+        };
+        let t0 = time.map_or(0.0, |t| t.iter().copied().fold(f64::INFINITY, f64::min));
+        let (cte, reference) = (physics.cte_per_k.unwrap_or(0.0), physics.reference_c());
+        let drift_v = physics.drift_mm_per_h.unwrap_or([0.0; 3]);
+        let torque = !fit.compliance.is_empty()
+            || physics
+                .compliance
+                .iter()
+                .any(|c| c.is_some_and(|v| v != 0.0));
+        let g = gravity_vector(physics);
+        let m = fit.len();
+        let mut kinds = Vec::with_capacity(m);
+        kinds.extend(fit.compliance.iter().map(|&j| Kind::Joint(3 * n + j)));
+        for &(j, _) in &fit.harmonics {
+            kinds.extend([Kind::Joint(3 * n + j); 2]);
+        }
+        if fit.thermal {
+            kinds.push(Kind::Expansion);
+        }
+        if fit.drift {
+            kinds.extend((0..3).map(Kind::Axis));
+        }
+        let mut q = readings.to_vec();
+        let mut factors = vec![0.0; len * m];
+        let mut tau = vec![0.0; n];
+        let mut post = Post {
+            scale: vec![1.0; len],
+            offset: vec![[0.0; 3]; len],
+        };
+        for i in 0..len {
+            let raw = &readings[i * n..(i + 1) * n];
+            let seen = &mut q[i * n..(i + 1) * n];
+            for h in &physics.harmonics {
+                let x = f64::from(h.order) * raw[h.joint];
+                seen[h.joint] += h.sin * x.sin() + h.cos * x.cos();
+            }
+            if torque {
+                torques(arm, physics, &g, raw, &mut tau);
+                for (j, s) in seen.iter_mut().enumerate() {
+                    *s += physics.compliance_of(j) * tau[j];
+                }
+            }
+            let dt_k = temperature.map_or(0.0, |t| t[i] - reference);
+            let dt_h = time.map_or(0.0, |t| (t[i] - t0) / 3600.0);
+            post.scale[i] = 1.0 + cte * dt_k;
+            post.offset[i] = drift_v.map(|v| v * dt_h);
+            let f = &mut factors[i * m..(i + 1) * m];
+            let mut k = 0;
+            for &j in &fit.compliance {
+                f[k] = tau[j] * 1e-6;
+                k += 1;
+            }
+            for &(j, order) in &fit.harmonics {
+                let x = f64::from(order) * raw[j];
+                (f[k], f[k + 1]) = (x.sin(), x.cos());
+                k += 2;
+            }
+            if fit.thermal {
+                f[k] = dt_k * 1e-6 / post.scale[i];
+                k += 1;
+            }
+            if fit.drift {
+                f[k..k + 3].fill(dt_h);
+            }
+        }
+        let mut poses = PreparedPoses::from_flat(n, len, &q);
+        if thermal || drift {
+            poses = poses.with_post(post);
+        }
+        Ok(Effects {
+            poses,
+            kinds,
+            factors,
+        })
+    }
+
+    /// Columns of the fitted corrections.
+    pub fn columns(&self) -> usize {
+        self.kinds.len()
+    }
+
+    /// Pose `i`'s Jacobian into `out`: the chain's columns `jac` (at the
+    /// corrected pose, position `pos`), then the corrections' — the layout's
+    /// order when the correction block is its first.
+    #[inline]
+    pub fn extend(&self, i: usize, pos: &[f64; 3], jac: &[[f64; 3]], out: &mut Vec<[f64; 3]>) {
+        out.clear();
+        out.extend_from_slice(jac);
+        let m = self.kinds.len();
+        let offset = self.poses.post().map_or([0.0; 3], |p| p.offset[i]);
+        for (kind, &f) in self.kinds.iter().zip(&self.factors[i * m..(i + 1) * m]) {
+            out.push(match *kind {
+                Kind::Joint(c) => jac[c].map(|v| f * v),
+                Kind::Expansion => std::array::from_fn(|r| f * (pos[r] - offset[r])),
+                Kind::Axis(a) => std::array::from_fn(|r| if r == a { f } else { 0.0 }),
+            });
+        }
+    }
+}
+
+/// The encoder readings whose corrected joint angles ([`Effects`]:
+/// harmonics and compliance, not the expansion or drift) are `angles`:
+/// what a true arm with these errors reads in the pose `angles`. Fixed
+/// point `q ← angles − c(q)`: the corrections are micro-radians, their
+/// change with `q` smaller still, so a few rounds reach round-off.
+pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
+    let n = arm.joints.len();
+    let g = gravity_vector(physics);
+    let mut q = angles.to_vec();
+    let mut tau = vec![0.0; n];
+    for _ in 0..8 {
+        let mut c = vec![0.0; n];
+        for h in &physics.harmonics {
+            let x = f64::from(h.order) * q[h.joint];
+            c[h.joint] += h.sin * x.sin() + h.cos * x.cos();
+        }
+        if physics
+            .compliance
+            .iter()
+            .any(|c| c.is_some_and(|v| v != 0.0))
+        {
+            torques(arm, physics, &g, &q, &mut tau);
+            for (j, cj) in c.iter_mut().enumerate() {
+                *cj += physics.compliance_of(j) * tau[j];
+            }
+        }
+        for j in 0..n {
+            q[j] = angles[j] - c[j];
+        }
+    }
+    q
+}

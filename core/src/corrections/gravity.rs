@@ -1,0 +1,191 @@
+//! Gravity torques about the joint axes: what loads a compliant joint.
+//!
+//! For a pose, the chain's frames are `T_0 = I` (the base) and `T_j =
+//! T_{j−1}·A_j` (a D-H link `Rz(θ+q)·Tz(d)·Tx(a)·Rx(α)`, a Hayati link
+//! `Rz(θ+q)·Tx(a)·Rx(α)·Ry(β)`); joint `j` turns about the z axis of
+//! `T_{j−1}` through its origin `o_{j−1}`. Link `j` (after joint `j`) has
+//! its centre of mass at `T_j·com` when stated, else halfway between
+//! `o_{j−1}` and `o_j`; the tool's mass sits at the probe unless its `com`
+//! (in the last frame) is stated. The torque of gravity about joint `j`,
+//! from the masses outboard of it, is
+//!
+//! ```text
+//! τ_j = z_{j−1} · Σ_{i ≥ j} (r_i − o_{j−1}) × m_i g
+//!     = z_{j−1} · ((S_j − M_j o_{j−1}) × g),   S_j = Σ m_i r_i, M_j = Σ m_i
+//! ```
+//!
+//! — linear in the joints, from running sums from the tip. Lengths are mm
+//! inside, so the sum is N·mm and is returned in N·m.
+
+use super::{Mass, Physics};
+use crate::params::{DhJoint, DhParams, JointModel};
+
+/// Standard gravity, m/s².
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// A rigid transform: rotation (rows) and translation, mm.
+#[derive(Clone, Copy)]
+struct Pose3 {
+    r: [[f64; 3]; 3],
+    t: [f64; 3],
+}
+
+impl Pose3 {
+    const IDENTITY: Pose3 = Pose3 {
+        r: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        t: [0.0; 3],
+    };
+
+    fn apply(&self, v: &[f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|k| dot(&self.r[k], v) + self.t[k])
+    }
+
+    fn then(&self, b: &Pose3) -> Pose3 {
+        Pose3 {
+            r: std::array::from_fn(|i| {
+                std::array::from_fn(|j| (0..3).map(|k| self.r[i][k] * b.r[k][j]).sum())
+            }),
+            t: self.apply(&b.t),
+        }
+    }
+
+    fn z(&self) -> [f64; 3] {
+        [self.r[0][2], self.r[1][2], self.r[2][2]]
+    }
+}
+
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Link `j`'s transform at joint angle `angle = q + θ`.
+fn link(j: &DhJoint, angle: f64) -> Pose3 {
+    let (st, ct) = angle.sin_cos();
+    let (sa, ca) = j.alpha.sin_cos();
+    let d = match j.model {
+        JointModel::Dh => j.d,
+        JointModel::Hayati => 0.0,
+    };
+    let a = Pose3 {
+        r: [
+            [ct, -ca * st, sa * st],
+            [st, ca * ct, -sa * ct],
+            [0.0, sa, ca],
+        ],
+        t: [j.a * ct, j.a * st, d],
+    };
+    match j.model {
+        JointModel::Dh => a,
+        JointModel::Hayati => {
+            let (sb, cb) = j.beta.sin_cos();
+            a.then(&Pose3 {
+                r: [[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]],
+                t: [0.0; 3],
+            })
+        }
+    }
+}
+
+/// Gravity `g` (m/s², in the base frame) of `physics`: its stated
+/// direction scaled to [`STANDARD_GRAVITY`], else −z.
+pub fn gravity_vector(physics: &Physics) -> [f64; 3] {
+    let dir = physics.gravity.unwrap_or([0.0, 0.0, -1.0]);
+    let norm = dot(&dir, &dir).sqrt();
+    dir.map(|v| STANDARD_GRAVITY * v / norm)
+}
+
+/// Gravity torque about each joint's axis at readings `q` (rad), N·m,
+/// into `out` (one per joint); `g` from [`gravity_vector`].
+pub fn torques(arm: &DhParams, physics: &Physics, g: &[f64; 3], q: &[f64], out: &mut [f64]) {
+    let n = arm.joints.len();
+    // Frames o_0..o_n (origins and the z axes of 0..n−1) and the masses'
+    // centres, base to tip.
+    let mut frames = Vec::with_capacity(n + 1);
+    frames.push(Pose3::IDENTITY);
+    for (j, joint) in arm.joints.iter().enumerate() {
+        let next = frames[j].then(&link(joint, q[j] + joint.theta));
+        frames.push(next);
+    }
+    let centre = |m: &Mass, frame: &Pose3, default: [f64; 3]| match m.com_mm {
+        Some(c) => frame.apply(&c),
+        None => default,
+    };
+    // Running sums from the tip: S = Σ m r (kg·mm), M = Σ m (kg).
+    let (mut s, mut m) = ([0.0; 3], 0.0);
+    if let Some(tool) = &physics.probe_mass {
+        let tip = frames[n].apply(&arm.probe);
+        let r = centre(tool, &frames[n], tip);
+        s = r.map(|v| tool.kg * v);
+        m = tool.kg;
+    }
+    for j in (0..n).rev() {
+        if let Some(Some(link)) = physics.link_masses.get(j) {
+            let (a, b) = (frames[j].t, frames[j + 1].t);
+            let mid = std::array::from_fn(|k| 0.5 * (a[k] + b[k]));
+            let r = centre(link, &frames[j + 1], mid);
+            for k in 0..3 {
+                s[k] += link.kg * r[k];
+            }
+            m += link.kg;
+        }
+        let o = frames[j].t;
+        let arm_of: [f64; 3] = std::array::from_fn(|k| s[k] - m * o[k]);
+        out[j] = dot(&frames[j].z(), &cross(&arm_of, g)) / 1000.0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::corrections::Mass;
+
+    /// A horizontal two-link planar arm (a = 500 mm each, axes along z
+    /// tilted to be horizontal by gravity along −y): 1 kg at each link's
+    /// middle loads joint 1 with 1 kg·250 mm + 1 kg·750 mm.
+    #[test]
+    fn torques_are_lever_arms_times_weights() {
+        let joint = DhJoint::dh(500.0, 0.0, 0.0, 0.0);
+        let mut arm = DhParams::paper_nominal();
+        arm.joints = vec![joint; 6];
+        for j in &mut arm.joints[2..] {
+            j.a = 0.0;
+        }
+        let physics = Physics {
+            link_masses: vec![
+                Some(Mass::at_middle(1.0)),
+                Some(Mass::at_middle(1.0)),
+                None,
+                None,
+                None,
+                None,
+            ],
+            gravity: Some([0.0, -1.0, 0.0]),
+            ..Physics::default()
+        };
+        let g = gravity_vector(&physics);
+        let mut tau = [0.0; 6];
+        torques(&arm, &physics, &g, &[0.0; 6], &mut tau);
+        // Links along +x, gravity along −y: torque about +z is negative.
+        let expect = -STANDARD_GRAVITY * (0.25 + 0.75);
+        assert!((tau[0] - expect).abs() < 1e-12, "{tau:?}");
+        assert!((tau[1] + STANDARD_GRAVITY * 0.25).abs() < 1e-12);
+        assert_eq!(tau[2], 0.0);
+        // Turned a quarter up, the links hang along the gravity: no torque.
+        torques(
+            &arm,
+            &physics,
+            &g,
+            &[-std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0],
+            &mut tau,
+        );
+        assert!(tau[0].abs() < 1e-12 && tau[1].abs() < 1e-12);
+    }
+}

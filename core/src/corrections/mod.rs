@@ -1,0 +1,506 @@
+//! Beyond geometry: joint compliance under gravity, encoder harmonics,
+//! thermal expansion and drift — small physical models a user switches on,
+//! identified with the geometry.
+//!
+//! What an arm states beyond its D-H table is its [`Physics`]: link and
+//! tool masses and the gravity direction (what loads the joints), and the
+//! values of the corrections (a compliance per joint, harmonics per joint
+//! and order, a thermal expansion coefficient). A fit switches models on
+//! with [`Beyond`]; their unknowns are one auxiliary parameter block
+//! ([`CorrectionBlock`], the layout's first after the geometry), and a
+//! correction the arm states but the fit does not estimate is applied at
+//! its stated value.
+//!
+//! Each pose's readings `q` and conditions (temperature `T`, time `t`)
+//! become what the chain sees:
+//!
+//! ```text
+//! q'_j = q_j + Σ_k (s_jk sin(k q_j) + c_jk cos(k q_j)) + κ_j τ_j(q)
+//! p    = (1 + c·(T − T0)) · p_chain(q') + v·(t − t_0)
+//! ```
+//!
+//! with `τ_j` the gravity torque about joint `j` ([`gravity`]), `κ_j` its
+//! compliance, `c` the expansion coefficient (every length scales, so the
+//! position about the base does), `T0` the reference temperature (20 °C,
+//! ISO 1) and `v` the drift of the base against the instrument over the
+//! session (`t_0` its first time). The harmonics are functions of the
+//! encoder's own reading (an eccentric disc errs by where it is read).
+//!
+//! The Jacobian columns: a reading correction moves the probe as the joint
+//! does — `∂p/∂κ_j = τ_j ∂p/∂θ_j` (the joint's zero offset column), `∂p/∂s_jk
+//! = sin(k q_j) ∂p/∂θ_j` — the expansion `∂p/∂c = (T − T0) p_chain`, the
+//! drift `∂p/∂v = (t − t_0) I`. `τ` is computed at the arm being evaluated
+//! and its own dependence on the geometry is left out of the Jacobian
+//! (κτ is a few µrad; its change with a millimetre of geometry is 10⁻³ of
+//! that).
+//!
+//! What the data can separate is the identifiability analysis's business:
+//! a compliance is not identifiable from poses that all load the joint
+//! alike (its column is then its zero offset's); a first harmonic's `cos`
+//! is the zero offset's over a joint that barely turns; an expansion
+//! coefficient from data at one temperature is the scale. Internal units
+//! keep the columns near the geometry's size: µrad/(N·m), ppm/K, mm/h.
+
+mod effects;
+pub mod gravity;
+
+use serde::{Deserialize, Serialize};
+
+pub use effects::{Conditions, Effects, readings_for};
+
+use crate::dataset::DataSet;
+use crate::error::OptionError;
+use crate::residuals::{Block, Parameter, Unit};
+
+/// ISO 1's reference temperature, °C: the calibrated lengths are at it.
+pub const REFERENCE_TEMPERATURE_C: f64 = 20.0;
+
+/// A mass and where it is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Mass {
+    /// kg.
+    pub kg: f64,
+    /// Its centre in its link's D-H frame, mm; `None`: halfway between the
+    /// link's frame origins (the tool: at the probe).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub com_mm: Option<[f64; 3]>,
+}
+
+impl Mass {
+    /// `kg` at the default centre.
+    pub fn at_middle(kg: f64) -> Mass {
+        Mass { kg, com_mm: None }
+    }
+}
+
+/// One encoder harmonic: `sin·sin(k q) + cos·cos(k q)` added to joint
+/// `joint`'s reading.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Harmonic {
+    /// Joint, 0-based.
+    pub joint: usize,
+    /// Order `k ≥ 1` (1: the disc's eccentricity).
+    pub order: u32,
+    /// Its sine amplitude, rad.
+    pub sin: f64,
+    /// Its cosine amplitude, rad.
+    pub cos: f64,
+}
+
+/// What an arm states beyond its geometry: masses and gravity, and the
+/// values of the corrections. Empty by default (a purely geometric arm).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Physics {
+    /// Per joint, the mass of the link after it (empty: none stated).
+    #[serde(default)]
+    pub link_masses: Vec<Option<Mass>>,
+    /// The tool's (probe's, target's) mass.
+    #[serde(default)]
+    pub probe_mass: Option<Mass>,
+    /// Gravity's direction in the base frame; `None`: −z.
+    #[serde(default)]
+    pub gravity: Option<[f64; 3]>,
+    /// Per joint, its compliance, rad/(N·m) (empty: none).
+    #[serde(default)]
+    pub compliance: Vec<Option<f64>>,
+    /// Encoder harmonics, rad.
+    #[serde(default)]
+    pub harmonics: Vec<Harmonic>,
+    /// Thermal expansion coefficient of the lengths, 1/K.
+    #[serde(default)]
+    pub cte_per_k: Option<f64>,
+    /// The temperature the geometry is at, °C (default
+    /// [`REFERENCE_TEMPERATURE_C`]).
+    #[serde(default)]
+    pub reference_temperature_c: Option<f64>,
+    /// Drift of the base against the instrument, mm/h (a fit's result,
+    /// never an arm file's).
+    #[serde(default, skip)]
+    pub drift_mm_per_h: Option<[f64; 3]>,
+}
+
+impl Physics {
+    /// Whether any correction changes a position (masses alone do not).
+    pub fn corrects(&self) -> bool {
+        self.compliance.iter().any(|c| c.is_some_and(|v| v != 0.0))
+            || self.harmonics.iter().any(|h| h.sin != 0.0 || h.cos != 0.0)
+            || self.cte_per_k.is_some_and(|c| c != 0.0)
+            || self.drift_mm_per_h.is_some_and(|v| v != [0.0; 3])
+    }
+
+    /// Whether any mass is stated.
+    pub fn has_masses(&self) -> bool {
+        self.probe_mass.is_some() || self.link_masses.iter().any(Option::is_some)
+    }
+
+    /// Joint `j`'s compliance, rad/(N·m), 0 when none is stated.
+    pub fn compliance_of(&self, j: usize) -> f64 {
+        self.compliance.get(j).copied().flatten().unwrap_or(0.0)
+    }
+
+    /// The reference temperature, °C.
+    pub fn reference_c(&self) -> f64 {
+        self.reference_temperature_c
+            .unwrap_or(REFERENCE_TEMPERATURE_C)
+    }
+
+    /// This physics with the fitted values `values` (a
+    /// [`CorrectionBlock`]'s columns, internal units) of the models `fit`
+    /// in place of the stated ones, for an arm of `joints` joints.
+    pub fn with_fitted(&self, fit: &Beyond, values: &[f64], joints: usize) -> Physics {
+        let mut out = self.clone();
+        let mut v = values.iter().copied();
+        let mut next = || v.next().unwrap_or(0.0);
+        if !fit.compliance.is_empty() {
+            out.compliance.resize(joints, None);
+            for &j in &fit.compliance {
+                out.compliance[j] = Some(next() * 1e-6);
+            }
+        }
+        for &(joint, order) in &fit.harmonics {
+            let (sin, cos) = (next(), next());
+            out.harmonics
+                .retain(|h| (h.joint, h.order) != (joint, order));
+            out.harmonics.push(Harmonic {
+                joint,
+                order,
+                sin,
+                cos,
+            });
+        }
+        out.harmonics.sort_by_key(|h| (h.joint, h.order));
+        if fit.thermal {
+            out.cte_per_k = Some(next() * 1e-6);
+        }
+        if fit.drift {
+            out.drift_mm_per_h = Some([next(), next(), next()]);
+        }
+        out
+    }
+
+    /// The stated values of the models `fit` estimates, as the block's
+    /// start (internal units): what a fit starts from.
+    pub fn start_of(&self, fit: &Beyond) -> Vec<f64> {
+        let mut x = Vec::new();
+        for &j in &fit.compliance {
+            x.push(self.compliance_of(j) * 1e6);
+        }
+        for &(joint, order) in &fit.harmonics {
+            let h = self
+                .harmonics
+                .iter()
+                .find(|h| (h.joint, h.order) == (joint, order));
+            x.push(h.map_or(0.0, |h| h.sin));
+            x.push(h.map_or(0.0, |h| h.cos));
+        }
+        if fit.thermal {
+            x.push(self.cte_per_k.unwrap_or(0.0) * 1e6);
+        }
+        if fit.drift {
+            x.extend(self.drift_mm_per_h.unwrap_or([0.0; 3]));
+        }
+        x
+    }
+}
+
+/// The models a fit estimates beyond the geometry. Empty by default.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Beyond {
+    /// Joints (0-based) with a compliance.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub compliance: Vec<usize>,
+    /// Encoder harmonics: (joint 0-based, order ≥ 1).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub harmonics: Vec<(usize, u32)>,
+    /// A thermal expansion coefficient (needs temperatures).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub thermal: bool,
+    /// A linear drift of the base in time (needs times).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub drift: bool,
+}
+
+/// Harmonic orders above this are refused: an encoder's errors of interest
+/// are the first few; beyond, a term fits the data's noise.
+pub const MAX_HARMONIC_ORDER: u32 = 16;
+
+impl Beyond {
+    /// Whether no model is switched on.
+    pub fn is_empty(&self) -> bool {
+        self.compliance.is_empty() && self.harmonics.is_empty() && !self.thermal && !self.drift
+    }
+
+    /// Columns of the block.
+    pub fn len(&self) -> usize {
+        self.compliance.len()
+            + 2 * self.harmonics.len()
+            + usize::from(self.thermal)
+            + 3 * usize::from(self.drift)
+    }
+
+    /// Parses `2,3,4` (1-based joints) into compliances.
+    ///
+    /// ```
+    /// use aacmm_core::corrections::Beyond;
+    /// assert_eq!(Beyond::parse_compliance("2,3").unwrap(), vec![1, 2]);
+    /// assert!(Beyond::parse_compliance("0").is_err());
+    /// ```
+    ///
+    /// # Errors
+    ///
+    /// A joint that is not a positive integer, or one listed twice.
+    pub fn parse_compliance(text: &str) -> Result<Vec<usize>, OptionError> {
+        let mut out = Vec::new();
+        for part in text.split(',').map(str::trim) {
+            let j = parse_joint(part, "compliance")?;
+            if out.contains(&j) {
+                return Err(OptionError::new("compliance", part, "joint listed twice"));
+            }
+            out.push(j);
+        }
+        out.sort_unstable();
+        Ok(out)
+    }
+
+    /// Parses `2:1,5:1-2` (joint:orders, orders a number or a range) into
+    /// harmonics.
+    ///
+    /// ```
+    /// use aacmm_core::corrections::Beyond;
+    /// assert_eq!(Beyond::parse_harmonics("2:1,5:1-2").unwrap(), vec![(1, 1), (4, 1), (4, 2)]);
+    /// assert_eq!(Beyond::parse_harmonics("2").unwrap_err().field, "harmonics");
+    /// ```
+    ///
+    /// # Errors
+    ///
+    /// A malformed entry, an order outside 1..=[`MAX_HARMONIC_ORDER`], or
+    /// a harmonic listed twice.
+    pub fn parse_harmonics(text: &str) -> Result<Vec<(usize, u32)>, OptionError> {
+        let mut out = Vec::new();
+        for part in text.split(',').map(str::trim) {
+            let Some((joint, orders)) = part.split_once(':') else {
+                return Err(OptionError::new(
+                    "harmonics",
+                    part,
+                    "expected JOINT:ORDERS, e.g. 2:1 or 5:1-2",
+                ));
+            };
+            let j = parse_joint(joint.trim(), "harmonics")?;
+            let (lo, hi) = match orders.split_once('-') {
+                Some((a, b)) => (parse_order(a, part)?, parse_order(b, part)?),
+                None => (parse_order(orders, part)?, parse_order(orders, part)?),
+            };
+            if lo > hi {
+                return Err(OptionError::new("harmonics", part, "empty order range"));
+            }
+            for k in lo..=hi {
+                if out.contains(&(j, k)) {
+                    return Err(OptionError::new("harmonics", part, "listed twice"));
+                }
+                out.push((j, k));
+            }
+        }
+        out.sort_unstable();
+        Ok(out)
+    }
+
+    /// Checks the models against an arm of `joints` joints: every joint in
+    /// range.
+    ///
+    /// # Errors
+    ///
+    /// The first refused setting, by its field.
+    pub fn check(&self, joints: usize) -> Result<(), OptionError> {
+        let last = self
+            .compliance
+            .iter()
+            .chain(self.harmonics.iter().map(|(j, _)| j))
+            .find(|&&j| j >= joints);
+        if let Some(&j) = last {
+            let field = if self.compliance.contains(&j) {
+                "compliance"
+            } else {
+                "harmonics"
+            };
+            return Err(OptionError::new(
+                field,
+                j + 1,
+                format!("joint {}: the arm has {joints} joints", j + 1),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks the models against what the arm and the data provide: a
+    /// compliance needs masses that load the joints, an expansion (fitted
+    /// or stated) temperatures, a drift times — in every file of `data`.
+    ///
+    /// # Errors
+    ///
+    /// The first model its inputs cannot support, by its field, with what
+    /// to add.
+    pub fn check_inputs(&self, physics: &Physics, data: &DataSet) -> Result<(), OptionError> {
+        let mut sets = Vec::new();
+        if !data.is_empty() {
+            sets.push((data.source().poses_file().to_string(), data.conditions()));
+        }
+        if let Some(p) = data.positions() {
+            sets.push((p.file().to_string(), p.conditions()));
+        }
+        let stated_cte = physics.cte_per_k.is_some_and(|c| c != 0.0);
+        for (file, c) in &sets {
+            if (self.thermal || stated_cte) && c.temperature_c.is_none() {
+                let (field, value) = if self.thermal {
+                    ("thermal", "on".to_string())
+                } else {
+                    ("cte_per_k", format!("{}", physics.cte_per_k.unwrap_or(0.0)))
+                };
+                return Err(OptionError::new(
+                    field,
+                    value,
+                    format!(
+                        "thermal expansion needs the temperature of every pose: {file} has                          no `temperature` column (°C)"
+                    ),
+                ));
+            }
+            if self.drift && c.time_s.is_none() {
+                return Err(OptionError::new(
+                    "drift",
+                    "on",
+                    format!(
+                        "a drift needs the time of every pose: {file} has no `time` column (s)"
+                    ),
+                ));
+            }
+        }
+        if !self.compliance.is_empty() && !physics.has_masses() {
+            return Err(OptionError::new(
+                "compliance",
+                self.compliance
+                    .iter()
+                    .map(|j| (j + 1).to_string())
+                    .collect::<Vec<_>>()
+                    .join(","),
+                "no mass loads the joints: state `mass_kg` of the links (in their \
+                 [[joint]] tables) and of the tool ([probe]) in the arm file",
+            ));
+        }
+        Ok(())
+    }
+}
+
+fn parse_joint(text: &str, field: &'static str) -> Result<usize, OptionError> {
+    match text.parse::<usize>() {
+        Ok(j) if j >= 1 => Ok(j - 1),
+        _ => Err(OptionError::new(
+            field,
+            text,
+            "a joint is a number from 1 (the base joint)",
+        )),
+    }
+}
+
+fn parse_order(text: &str, part: &str) -> Result<u32, OptionError> {
+    match text.trim().parse::<u32>() {
+        Ok(k) if (1..=MAX_HARMONIC_ORDER).contains(&k) => Ok(k),
+        _ => Err(OptionError::new(
+            "harmonics",
+            part,
+            format!("an order is a whole number from 1 to {MAX_HARMONIC_ORDER}"),
+        )),
+    }
+}
+
+/// The unknowns of the models a fit switches on, with the arm's physics
+/// (masses, stated values) they act through: the layout's first block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CorrectionBlock {
+    /// What is fitted.
+    pub fit: Beyond,
+    /// The arm's physics: masses, and the stated values of what is not.
+    pub physics: Physics,
+    /// Joints of the arm.
+    pub joints: usize,
+}
+
+/// The name of the correction block in a layout.
+pub const BLOCK_NAME: &str = "beyond";
+
+impl CorrectionBlock {
+    /// The physics at the block's values `x` (internal units).
+    pub fn physics_at(&self, x: &[f64]) -> Physics {
+        self.physics.with_fitted(&self.fit, x, self.joints)
+    }
+}
+
+impl Block for CorrectionBlock {
+    fn name(&self) -> &str {
+        BLOCK_NAME
+    }
+
+    fn parameters(&self) -> Vec<Parameter> {
+        let mut out = Vec::new();
+        let other = |s: &str| Unit::Other(s.to_string());
+        for &j in &self.fit.compliance {
+            out.push(Parameter {
+                name: format!("compliance{}", j + 1),
+                unit: other("µrad/(N·m)"),
+            });
+        }
+        for &(j, k) in &self.fit.harmonics {
+            for part in ["sin", "cos"] {
+                out.push(Parameter {
+                    name: format!("harmonic{}.{part}{k}", j + 1),
+                    unit: Unit::Angle,
+                });
+            }
+        }
+        if self.fit.thermal {
+            out.push(Parameter {
+                name: "thermal.cte".into(),
+                unit: other("ppm/K"),
+            });
+        }
+        if self.fit.drift {
+            for axis in ["x", "y", "z"] {
+                out.push(Parameter {
+                    name: format!("drift.{axis}"),
+                    unit: other("mm/h"),
+                });
+            }
+        }
+        out
+    }
+
+    fn start(&self) -> Vec<f64> {
+        self.physics.start_of(&self.fit)
+    }
+
+    fn corrections(&self) -> Option<&CorrectionBlock> {
+        Some(self)
+    }
+
+    fn implausible(&self, _start: &[f64], x: &[f64]) -> Option<String> {
+        let names = self.parameters();
+        // No real joint gives a tenth of a degree per N·m, no encoder errs
+        // by a degree, no structural material expands by 0.1 % per kelvin.
+        for (p, v) in names.iter().zip(x) {
+            let limit = match &p.unit {
+                Unit::Angle => 1f64.to_radians(),
+                Unit::Other(u) if u.starts_with("µrad") => 1745.0,
+                Unit::Other(u) if u == "ppm/K" => 1000.0,
+                _ => continue,
+            };
+            if v.abs() > limit || !v.is_finite() {
+                return Some(format!(
+                    "{} = {:.4} {}: beyond any real arm ({} at most)",
+                    p.name,
+                    p.unit.to_user(*v),
+                    p.unit.name(),
+                    p.unit.to_user(limit)
+                ));
+            }
+        }
+        None
+    }
+}
