@@ -2,6 +2,7 @@
 //! module per command, and one per concern the commands share.
 
 mod arm_checks;
+mod beyond;
 mod calibrate;
 mod campaign;
 mod edges;

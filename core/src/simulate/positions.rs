@@ -233,18 +233,26 @@ fn draw_rows(
             let time = (conditions.session_h)
                 .map(|h| 3600.0 * h * r as f64 / rows.saturating_sub(1).max(1) as f64);
             let p = if physics.corrects() {
+                // The drift is the session's, from its first row: added
+                // here (one row's own time would be its origin).
+                let still = crate::corrections::Physics {
+                    drift_mm_per_h: None,
+                    ..physics.clone()
+                };
                 let recorded = crate::corrections::Conditions {
                     temperature_c: temperature.as_ref().map(std::slice::from_ref),
-                    time_s: time.as_ref().map(std::slice::from_ref),
+                    time_s: None,
                 };
                 let seen =
-                    crate::corrections::Effects::new(&truth.params, physics, &none, &q, recorded)
+                    crate::corrections::Effects::new(&truth.params, &still, &none, &q, recorded)
                         .map_err(model)?;
                 let mut p = [[0.0; 3]];
                 kernel
                     .positions(&seen.poses, 0..1, &mut p)
                     .map_err(|e| model(e.to_string()))?;
-                p[0]
+                let hours = time.unwrap_or(0.0) / 3600.0;
+                let v = physics.drift_mm_per_h.unwrap_or([0.0; 3]);
+                std::array::from_fn(|k| p[0][k] + v[k] * hours)
             } else {
                 kernel.position(&q).map_err(|e| model(e.to_string()))?
             };
