@@ -880,7 +880,7 @@ pub(crate) const CORRECTION_SEPARATION: f64 = 1e-6;
 /// and the corrections kept before: kept when the data separate it
 /// ([`CORRECTION_SEPARATION`]), else held with why (by column).
 #[allow(clippy::type_complexity)] // the free columns and the held ones
-fn correction_columns(
+pub(crate) fn correction_columns(
     full: &Normal,
     layout: &Layout,
     free: Vec<usize>,

@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 use super::Sources;
 use crate::calibrate::prior::conditioning;
 use crate::calibrate::{CalibrationError, PriorConditioning};
+use crate::corrections::Beyond;
 use crate::dataset::DataSet;
 use crate::error::OptionError;
 use crate::identify::{Identification, identify};
@@ -50,6 +51,29 @@ pub struct IdentifyReport {
     /// any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prior: Option<PriorConditioning>,
+    /// The columns of the models beyond geometry asked for, judged after
+    /// the geometry: kept or held, with the σ the data predict.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub corrections: Vec<CorrectionColumn>,
+}
+
+/// A correction column beyond geometry as the data see it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CorrectionColumn {
+    /// Its name (`compliance2`, `harmonic5.sin1`).
+    pub name: String,
+    /// Its unit.
+    pub unit: String,
+    /// Its predicted σ (k = 1) at the stated noise, with the free geometry,
+    /// the frames and the other kept corrections fitted; `None` when held.
+    pub sigma: Option<f64>,
+    /// The fitted column it correlates with most, and `ρ`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub most_correlated: Option<(String, f64)>,
+    /// Why it is held at its stated value, when the data cannot separate
+    /// it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held: Option<String>,
 }
 
 impl IdentifyReport {
@@ -63,15 +87,19 @@ impl IdentifyReport {
     /// An [`OptionError`] on `noise.…` or `threads`;
     /// [`CalibrationError::Joints`] when the data have another joint count;
     /// the kernel's refusal of the arm or of weights that are not finite.
+    #[allow(clippy::too_many_arguments)] // the inputs of `aacmm identify`, each named
     pub fn new(
         arm: &Arm,
         data: &DataSet,
         noise: &Noise,
         prior: Option<&Tolerances>,
+        beyond: &Beyond,
         threads: usize,
         sources: &Sources,
     ) -> Result<IdentifyReport, CalibrationError> {
         noise.check()?;
+        beyond.check(arm.params.joint_count())?;
+        beyond.check_inputs(&arm.physics, data)?;
         if threads == 0 {
             return Err(OptionError::new("threads", 0, "at least 1").into());
         }
@@ -83,6 +111,11 @@ impl IdentifyReport {
             });
         }
         let identification = identify(&arm.params, data, noise, threads)?;
+        let corrections = if beyond.is_empty() {
+            Vec::new()
+        } else {
+            correction_columns(arm, data, noise, beyond, &identification, threads)?
+        };
         let prior = match prior {
             Some(t) => Some(conditioning(
                 &arm.params,
@@ -106,6 +139,7 @@ impl IdentifyReport {
             noise: noise_text(noise),
             identification,
             prior,
+            corrections,
         })
     }
 
@@ -139,6 +173,7 @@ impl IdentifyReport {
             self.noise
         );
         s += &table(&self.identification);
+        s += &corrections_table(&self.corrections);
         if let Some(p) = &self.prior {
             // Unstated noise weighs every touch as 0.01 mm: say how little
             // the prior then counts.
@@ -164,6 +199,95 @@ impl IdentifyReport {
         }
         s
     }
+}
+
+/// The correction columns of `beyond` at `arm` on `data`: each judged after
+/// the free geometry of `id` and the frames
+/// ([`crate::calibrate::correction_columns`]), the kept ones' σ and
+/// strongest correlation from the normal equations of everything fitted.
+fn correction_columns(
+    arm: &Arm,
+    data: &DataSet,
+    noise: &Noise,
+    beyond: &Beyond,
+    id: &Identification,
+    threads: usize,
+) -> Result<Vec<CorrectionColumn>, CalibrationError> {
+    let layout = crate::residuals::positions::layout_with(&arm.params, data, &arm.physics, beyond)?;
+    let objective = crate::objective::Objective::of_data(
+        layout.clone(),
+        data,
+        noise,
+        Vec::new(),
+        None,
+        0.01,
+        threads,
+    )?;
+    let all: Vec<usize> = (0..layout.len()).collect();
+    let full = (objective.normal(&objective.start(), &all))?;
+    let geometry = layout.geometry_columns();
+    let free: Vec<usize> = (id.free_columns().into_iter())
+        .chain(geometry..layout.len())
+        .collect();
+    let (free, held) = crate::calibrate::correction_columns(&full, &layout, free)?;
+    let n = full.restrict(&free).ok_or(CalibrationError::Shape)?;
+    let k = free.len();
+    let m = nalgebra::DMatrix::from_row_slice(k, k, &n.jtj);
+    let cov = m.cholesky().map(|c| c.inverse());
+    let name = |c: usize| layout.parameter(c).map_or(String::new(), |p| p.name);
+    let cols = layout.corrections().map_or(0..0, |(_, c)| c);
+    Ok(cols
+        .filter_map(|c| {
+            let p = layout.parameter(c)?;
+            let held = held.iter().find(|(h, _)| *h == c).map(|(_, w)| w.clone());
+            let at = free.iter().position(|&f| f == c);
+            let (sigma, most_correlated) = match (&cov, at) {
+                (Some(cov), Some(a)) => {
+                    let s = cov[(a, a)].max(0.0).sqrt();
+                    let rho = |b: usize| cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+                    let best = (0..k)
+                        .filter(|&b| b != a)
+                        .max_by(|&x, &y| rho(x).abs().total_cmp(&rho(y).abs()))
+                        .map(|b| (name(free[b]), rho(b)));
+                    (Some(p.unit.to_user(s)), best)
+                }
+                _ => (None, None),
+            };
+            Some(CorrectionColumn {
+                name: p.name,
+                unit: p.unit.name().to_string(),
+                sigma,
+                most_correlated,
+                held,
+            })
+        })
+        .collect())
+}
+
+/// The corrections' table of `aacmm identify`.
+fn corrections_table(columns: &[CorrectionColumn]) -> String {
+    if columns.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "
+Beyond geometry (judged after the free geometry and the frames; predicted sigma k = 1):\n",
+    );
+    for c in columns {
+        let line = match (&c.held, c.sigma) {
+            (Some(why), _) => format!("  {:<16} held: {why}", c.name),
+            (None, Some(sigma)) => {
+                let rho = (c.most_correlated.as_ref()).map_or(String::new(), |(n, r)| {
+                    format!("  most correlated: {n} {r:+.3}")
+                });
+                format!("  {:<16} sigma {sigma:.4} {}{rho}", c.name, c.unit)
+            }
+            (None, None) => format!("  {:<16} sigma not finite", c.name),
+        };
+        s += &line;
+        s.push('\n');
+    }
+    s
 }
 
 fn is_zero(n: &usize) -> bool {

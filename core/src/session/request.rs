@@ -481,8 +481,21 @@ impl Request {
                 })
             }
         };
+        let beyond = self.beyond_options()?;
+        Ok(ModelOptions {
+            fix,
+            noise: self.noise,
+            accept_poor_fit: self.accept_poor_fit,
+            robust,
+            prior,
+            beyond,
+        })
+    }
+
+    /// The models beyond geometry as asked for, parsed.
+    fn beyond_options(&self) -> Result<Beyond, OptionError> {
         let b = &self.beyond;
-        let beyond = Beyond {
+        Ok(Beyond {
             compliance: match &b.compliance {
                 Some(c) => Beyond::parse_compliance(c)?,
                 None => Vec::new(),
@@ -493,14 +506,6 @@ impl Request {
             },
             thermal: b.thermal,
             drift: b.drift,
-        };
-        Ok(ModelOptions {
-            fix,
-            noise: self.noise,
-            accept_poor_fit: self.accept_poor_fit,
-            robust,
-            prior,
-            beyond,
         })
     }
 
@@ -589,6 +594,7 @@ impl Request {
             &self.data,
             &self.noise,
             prior.as_ref(),
+            &self.beyond_options()?,
             threads,
             &self.sources,
         )
