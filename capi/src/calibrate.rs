@@ -155,6 +155,32 @@ pub struct AacmmFrame {
     pub rotation_matrix: [f64; 9],
 }
 
+/// One column of a calibration's auxiliary blocks, for
+/// `aacmm_calibration_auxiliary`: an unknown fitted with the arm beyond its
+/// parameters — a correction beyond geometry (`--compliance`,
+/// `--harmonics`, `--thermal`, `--drift`) or a coordinate of a frame of
+/// reference positions — as the report's `calibration.auxiliary` has it.
+/// Values are in the column's unit, given by its name: `complianceJ`
+/// µrad/(N·m); `harmonicJ.sinK`, `harmonicJ.cosK` deg; `thermal.cte` ppm/K;
+/// `drift.x`, `.y`, `.z` mm/h; a frame's `NAME.rx`, `.ry`, `.rz` deg and
+/// `NAME.tx`, `.ty`, `.tz` mm.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct AacmmAuxiliary {
+    /// The value the fit started from (for a correction, the arm file's
+    /// stated value, else 0).
+    pub start: f64,
+    /// The calibrated value.
+    pub calibrated: f64,
+    /// Standard uncertainty (k = 1); `NAN` where the data did not
+    /// determine it (and for a column held at its start).
+    pub sigma: f64,
+    /// Whether the column was held at its start value: a correction these
+    /// data cannot separate (why: the report's
+    /// `calibration.auxiliary[index].fixed`).
+    pub fixed: bool,
+}
+
 /// The result of a calibration. Opaque; released by
 /// `aacmm_calibration_free`. Never modified after it is made.
 pub struct AacmmCalibration {
@@ -762,5 +788,73 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
         unsafe { ptr::write(frame, value, "frame") }?;
         // SAFETY: by the contract.
         unsafe { string_out(&record.name, buf, buf_len, len) }
+    })
+}
+
+/// The number of auxiliary columns fitted with the arm (0 without
+/// corrections beyond geometry and without reference positions) into
+/// `*count`: the corrections' columns first, then six per frame.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_auxiliary_count(
+    cal: *const AacmmCalibration,
+    count: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let c = unsafe { result(cal) }?;
+        // SAFETY: by the contract.
+        unsafe { ptr::write(count, c.report.calibration.auxiliary.len(), "count") }
+    })
+}
+
+/// Auxiliary column `index` (`0 ≤ index < aacmm_calibration_auxiliary_count`,
+/// the order of the report's `calibration.auxiliary`) into `*column`, and
+/// its name (UTF-8: `compliance2`, `harmonic5.sin1`, `thermal.cte`,
+/// `drift.x`, `tracker.rx`, …) into `buf`, copied like
+/// `aacmm_last_error_message`; `*len` gets the name's full length in bytes
+/// without the NUL. Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the name
+/// was truncated (`buf` may be `NULL` with `buf_len` 0 to ask for the
+/// length; `*column` is written all the same),
+/// `AACMM_STATUS_INVALID_ARGUMENT` for an index out of range. The physics
+/// at the fit (masses, and every correction fitted or stated, in SI units)
+/// is the report's `calibration.physics`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `column` is `NULL` or points
+/// to writable memory for the struct; `buf` is `NULL` or points to
+/// `buf_len` writable bytes; `len` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_auxiliary(
+    cal: *const AacmmCalibration,
+    index: usize,
+    column: *mut AacmmAuxiliary,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let auxiliary = &unsafe { result(cal) }?.report.calibration.auxiliary;
+        let Some(a) = auxiliary.get(index) else {
+            return Err(Error::invalid(format!(
+                "index = {index}: the calibration has {} auxiliary column(s)",
+                auxiliary.len()
+            )));
+        };
+        let value = AacmmAuxiliary {
+            start: a.start,
+            calibrated: a.calibrated,
+            sigma: a.sigma.unwrap_or(f64::NAN),
+            fixed: a.fixed.is_some(),
+        };
+        // SAFETY: by the contract.
+        unsafe { ptr::write(column, value, "column") }?;
+        // SAFETY: by the contract.
+        unsafe { string_out(&a.name, buf, buf_len, len) }
     })
 }

@@ -119,7 +119,7 @@ impl From<CalibrationError> for Error {
 /// option as its setter names it (`…_set_probe_noise_mm` sets
 /// `probe_noise_mm`); settings the C API does not expose keep their library
 /// path.
-const OPTIONS: [(&str, &str); 11] = [
+const OPTIONS: [(&str, &str); 15] = [
     ("noise.encoder_rad", "encoder_noise_rad"),
     ("noise.probe_mm", "probe_noise_mm"),
     ("noise.length_default_mm", "length_uncertainty_mm"),
@@ -131,6 +131,10 @@ const OPTIONS: [(&str, &str); 11] = [
     ("threads", "threads"),
     ("cross_validate", "cross_validate"),
     ("robust.scale_k", "robust scale"),
+    ("compliance", "compliance"),
+    ("harmonics", "harmonics"),
+    ("thermal", "thermal"),
+    ("drift", "drift"),
 ];
 
 impl From<OptionError> for Error {

@@ -7,9 +7,10 @@ use std::ffi::c_char;
 use std::path::PathBuf;
 
 use aacmm_core::calibrate::{FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings};
+use aacmm_core::corrections::Beyond;
 use aacmm_core::error::OptionError;
 use aacmm_core::io::Positions;
-use aacmm_core::params::SUPPORTED_JOINTS;
+use aacmm_core::params::{SUPPORTED_JOINTS, supported_joints_text};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::Request;
 use aacmm_core::tolerances::Tolerances;
@@ -104,6 +105,14 @@ pub struct AacmmCalibrateOptions {
     /// `--prior` as given; `None`: the arm file's `[prior]`.
     prior: Option<String>,
     accept_poor_fit: bool,
+    /// `--compliance` as given; `None`: none.
+    compliance: Option<String>,
+    /// `--harmonics` as given; `None`: none.
+    harmonics: Option<String>,
+    /// `--thermal`.
+    thermal: bool,
+    /// `--drift`.
+    drift: bool,
     /// `--positions`; `None`: no reference positions.
     positions: Option<PositionInput>,
 }
@@ -130,6 +139,10 @@ impl Default for AacmmCalibrateOptions {
             robust: None,
             prior: None,
             accept_poor_fit: model.accept_poor_fit,
+            compliance: None,
+            harmonics: None,
+            thermal: model.beyond.thermal,
+            drift: model.beyond.drift,
             positions: None,
         }
     }
@@ -148,6 +161,12 @@ pub(crate) fn request(o: &AacmmCalibrateOptions, request: Request) -> Request {
         .robust(o.robust.map(|r| r.loss.name()), o.robust.map(|r| r.scale_k))
         .prior(o.prior.as_deref())
         .accept_poor_fit(o.accept_poor_fit)
+        .beyond(
+            o.compliance.as_deref(),
+            o.harmonics.as_deref(),
+            o.thermal,
+            o.drift,
+        )
         .method(o.method.name())
         .threads(threads)
         .seed(o.seed)
@@ -197,6 +216,22 @@ fn for_some_arm<T>(parse: impl Fn(usize) -> Result<T, OptionError>) -> Result<()
         return Ok(());
     }
     largest.map(|_| ()).map_err(Error::from)
+}
+
+/// Refuses a joint (0-based, of a model beyond geometry set as `field`)
+/// that no arm the toolkit has kernels for has: what can be checked before
+/// the arm is known (the arm at hand's count is checked when calibrating).
+fn on_some_arm(field: &str, joints: impl IntoIterator<Item = usize>) -> Result<(), Error> {
+    let most = SUPPORTED_JOINTS.iter().copied().max().unwrap_or(0);
+    match joints.into_iter().find(|&j| j >= most) {
+        Some(j) => Err(Error::invalid(format!(
+            "{field} = {}: joint {}: the toolkit has kernels for arms of {} joints",
+            j + 1,
+            j + 1,
+            supported_joints_text()
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// New options with the defaults of `aacmm calibrate`, at `*out` (release
@@ -582,6 +617,121 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_accept_poor_fit(
     })
 }
 
+/// Joint compliance under gravity, fitted for the listed joints
+/// (`--compliance`): comma-separated joints numbered from 1, e.g. `"2,3"`;
+/// each joint deflects by its compliance times the gravity torque of the
+/// masses outboard of it, from the arm file's `mass_kg` (links and
+/// `[probe]`) and `gravity`. `NULL` (the default): none. Copied; the
+/// syntax and joints no arm has are refused here (`compliance = 0: a joint
+/// is a number from 1 …`), a joint the arm at hand lacks, or an arm file
+/// without masses, when calibrating. The fitted compliances are the
+/// auxiliary columns `compliance2`, … (µrad/(N·m);
+/// `aacmm_calibration_auxiliary`), and in the report's
+/// `calibration.physics`.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `joints` is `NULL` or a
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_compliance(
+    options: *mut AacmmCalibrateOptions,
+    joints: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        // SAFETY: by the contract.
+        let joints = unsafe { text(joints, "compliance") }?;
+        if let Some(j) = &joints {
+            on_some_arm("compliance", Beyond::parse_compliance(j)?)?;
+        }
+        o.compliance = joints;
+        Ok(())
+    })
+}
+
+/// Encoder harmonics `s·sin(k q) + c·cos(k q)` added to the listed joints'
+/// readings, fitted (`--harmonics`): comma-separated `JOINT:ORDERS`, joints
+/// numbered from 1, orders a number or a range from 1 to 16, e.g.
+/// `"2:1,5:1-2"` (order 1 is the disc's eccentricity). `NULL` (the
+/// default): none. Copied; the syntax and joints no arm has are refused
+/// here (`harmonics = 2:: an order is a whole number …`), a joint the arm
+/// at hand lacks when calibrating. The fitted amplitudes are the auxiliary
+/// columns `harmonic2.sin1`, `harmonic2.cos1`, … (deg;
+/// `aacmm_calibration_auxiliary`).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `spec` is `NULL` or a
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_harmonics(
+    options: *mut AacmmCalibrateOptions,
+    spec: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        // SAFETY: by the contract.
+        let spec = unsafe { text(spec, "harmonics") }?;
+        if let Some(s) = &spec {
+            let harmonics = Beyond::parse_harmonics(s)?;
+            on_some_arm("harmonics", harmonics.iter().map(|&(j, _)| j))?;
+        }
+        o.harmonics = spec;
+        Ok(())
+    })
+}
+
+/// Whether a thermal expansion coefficient of the lengths is fitted
+/// (`--thermal`; default `false`) against the temperature (°C) of every
+/// pose: the `temperature` column of the poses and positions files of
+/// `aacmm_calibrate_files` (the calibrated lengths are at 20 °C; arrays
+/// carry no temperatures). Data without temperatures are refused when
+/// calibrating (`thermal = on: … needs the temperature of every pose …`). The fitted coefficient is the auxiliary column `thermal.cte`
+/// (ppm/K; `aacmm_calibration_auxiliary`).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_thermal(
+    options: *mut AacmmCalibrateOptions,
+    thermal: bool,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        o.thermal = thermal;
+        Ok(())
+    })
+}
+
+/// Whether a linear drift of the arm's base against the instrument is
+/// fitted (`--drift`; default `false`) against the time (s) of every pose:
+/// the `time` column of the poses and positions files of
+/// `aacmm_calibrate_files` (arrays carry no times). Data without times are
+/// refused when calibrating (`drift = on: … needs the time of every
+/// pose …`). The fitted drift is the auxiliary columns `drift.x`,
+/// `drift.y`, `drift.z` (mm/h; `aacmm_calibration_auxiliary`).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_drift(
+    options: *mut AacmmCalibrateOptions,
+    drift: bool,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        o.drift = drift;
+        Ok(())
+    })
+}
+
 /// Reference positions an instrument saw, fitted with the arm as the
 /// command line's `--positions` file is (copied; they replace positions set
 /// before, also a file). Row `i` of `n = q_len / joints` rows holds the
@@ -851,6 +1001,30 @@ mod tests {
                 aacmm_calibrate_options_set_prior(o, c"theta5=0.05mm".as_ptr()),
                 "prior = theta5=0.05mm: `theta5=0.05mm`: theta5 is an angle",
             );
+            refused(
+                aacmm_calibrate_options_set_compliance(o, c"0".as_ptr()),
+                "compliance = 0: a joint is a number from 1",
+            );
+            refused(
+                aacmm_calibrate_options_set_compliance(o, c"2,3,2".as_ptr()),
+                "compliance = 2: joint listed twice",
+            );
+            refused(
+                aacmm_calibrate_options_set_compliance(o, c"2,8".as_ptr()),
+                "compliance = 8: joint 8: the toolkit has kernels for arms of 6",
+            );
+            refused(
+                aacmm_calibrate_options_set_harmonics(o, c"2:".as_ptr()),
+                "harmonics = 2:: an order is a whole number from 1 to 16",
+            );
+            refused(
+                aacmm_calibrate_options_set_harmonics(o, c"2".as_ptr()),
+                "harmonics = 2: expected JOINT:ORDERS",
+            );
+            refused(
+                aacmm_calibrate_options_set_harmonics(o, c"9:1".as_ptr()),
+                "harmonics = 9: joint 9: the toolkit has kernels for arms of 6",
+            );
         }
         // Nothing refused was kept: still the defaults.
         let d = AacmmCalibrateOptions::default();
@@ -872,6 +1046,10 @@ mod tests {
                 aacmm_calibrate_options_set_robust(null, AACMM_ROBUST_NONE, 0.0),
                 aacmm_calibrate_options_set_prior(null, std::ptr::null()),
                 aacmm_calibrate_options_set_accept_poor_fit(null, true),
+                aacmm_calibrate_options_set_compliance(null, std::ptr::null()),
+                aacmm_calibrate_options_set_harmonics(null, std::ptr::null()),
+                aacmm_calibrate_options_set_thermal(null, true),
+                aacmm_calibrate_options_set_drift(null, true),
                 aacmm_calibrate_options_set_position_noise_mm(null, 0.0, 0.0),
                 aacmm_calibrate_options_set_positions(
                     null,
@@ -916,6 +1094,10 @@ mod tests {
                 aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_CAUCHY, 0.0),
                 aacmm_calibrate_options_set_accept_poor_fit(o, true),
                 aacmm_calibrate_options_set_position_noise_mm(o, 0.015, 0.006),
+                aacmm_calibrate_options_set_compliance(o, c"3, 2".as_ptr()),
+                aacmm_calibrate_options_set_harmonics(o, c"2:1,5:1-2".as_ptr()),
+                aacmm_calibrate_options_set_thermal(o, true),
+                aacmm_calibrate_options_set_drift(o, true),
             ] {
                 assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
             }
@@ -943,17 +1125,32 @@ mod tests {
         );
         assert!(s.model.accept_poor_fit);
         assert_eq!(s.model.prior, None);
+        // 1-based joints in the text, 0-based in the model, sorted.
+        assert_eq!(
+            s.model.beyond,
+            Beyond {
+                compliance: vec![1, 2],
+                harmonics: vec![(1, 1), (4, 1), (4, 2)],
+                thermal: true,
+                drift: true,
+            }
+        );
         // 0 = one per core; NULL fix = auto; robust off again.
         // SAFETY: as above.
         unsafe {
             aacmm_calibrate_options_set_threads(o, 0);
             aacmm_calibrate_options_set_fix(o, std::ptr::null());
             aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_NONE, 0.0);
+            aacmm_calibrate_options_set_compliance(o, std::ptr::null());
+            aacmm_calibrate_options_set_harmonics(o, std::ptr::null());
+            aacmm_calibrate_options_set_thermal(o, false);
+            aacmm_calibrate_options_set_drift(o, false);
         }
         let s = settings(&get(o), &arm).unwrap();
         assert_eq!(s.solver.threads, aacmm_core::calibrate::available_threads());
         assert_eq!(s.model.fix, FixSpec::Auto);
         assert_eq!(s.model.robust, None);
+        assert!(s.model.beyond.is_empty(), "NULL and false: no model");
         // A position σ without its distance part: 0 = not stated, as `A`
         // alone on the command line; 0 for both: none.
         // SAFETY: as above.
@@ -974,6 +1171,17 @@ mod tests {
             "{}",
             e.message
         );
+        // So does a compliance of joint 7, refused by the model's check
+        // for the arm at hand.
+        // SAFETY: as above.
+        unsafe {
+            aacmm_calibrate_options_set_fix(o, std::ptr::null());
+            aacmm_calibrate_options_set_compliance(o, c"2,7".as_ptr());
+        }
+        let model = settings(&get(o), &arm).unwrap().model;
+        let e = Error::from(model.check(6).unwrap_err());
+        assert_eq!(e.status, AacmmStatus::InvalidArgument);
+        assert_eq!(e.message, "compliance = 7: joint 7: the arm has 6 joints");
         // SAFETY: live, not used after.
         unsafe { aacmm_calibrate_options_free(o) };
     }

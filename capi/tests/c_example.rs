@@ -265,6 +265,10 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("positions_file_for_arrays", 3),
         ("frame_name_size", 8),
         ("frame_index", 3),
+        ("auxiliary_index", 3),
+        ("compliance_zero", 3),
+        ("harmonics_no_order", 3),
+        ("compliance_without_masses", 3),
     ] {
         assert_eq!(
             out.error_code(name),
@@ -313,6 +317,22 @@ fn the_c_program_agrees_with_the_rust_api() {
             "position_noise a_mm = -1: must be a finite number > 0",
         ),
         ("frame_index", "index = 2: the calibration has 2 frame(s)"),
+        (
+            "auxiliary_index",
+            "index = 12: the calibration has 12 auxiliary column(s)",
+        ),
+        (
+            "compliance_zero",
+            "compliance = 0: a joint is a number from 1",
+        ),
+        (
+            "harmonics_no_order",
+            "harmonics = 2:: an order is a whole number from 1 to 16",
+        ),
+        (
+            "compliance_without_masses",
+            "compliance = 2,3: no mass loads the joints",
+        ),
     ] {
         let got = out.get(&format!("error {name}"));
         assert!(got.contains(message), "{name}: {got}");
@@ -488,6 +508,20 @@ fn tracker_positions(out: &Output) {
             assert!((t - want).abs() < 0.1, "{}: t {t}", record.name);
         }
     }
+    // The auxiliary columns: the two frames' six each, the library's
+    // values bit for bit, none held.
+    assert_eq!(out.get("tracker_auxiliary"), "12");
+    assert_eq!(c.auxiliary.len(), 12);
+    for a in &c.auxiliary {
+        let expected = [
+            a.start,
+            a.calibrated,
+            a.sigma.unwrap_or(f64::NAN),
+            f64::from(u8::from(a.fixed.is_some())),
+        ];
+        assert_bits(&a.name, &out.doubles(&format!("aux_{}", a.name)), &expected);
+        assert!(a.fixed.is_none() && a.sigma.is_some(), "{}", a.name);
+    }
 }
 
 /// The shared library exports the C API and nothing else.
@@ -566,14 +600,19 @@ fn the_header_compiles_as_cpp() {
         &src,
         // The options builder too: its `bool` and `uint64_t` arguments and
         // pointer-to-pointer output, and the positions' array of names, as
-        // a C++ caller writes them; a frame's struct of arrays.
+        // a C++ caller writes them; a frame's struct of arrays; an
+        // auxiliary column's struct.
         "#include \"aacmm.h\"\n\
          #include <vector>\n\
          int main() {\n\
          AacmmCalibrateOptions *options = nullptr;\n\
          if (aacmm_calibrate_options_new(&options) != AACMM_STATUS_OK) return 1;\n\
          bool ok = aacmm_calibrate_options_set_accept_poor_fit(options, true) == AACMM_STATUS_OK\n\
-         && aacmm_calibrate_options_set_seed(options, UINT64_C(7)) == AACMM_STATUS_OK;\n\
+         && aacmm_calibrate_options_set_seed(options, UINT64_C(7)) == AACMM_STATUS_OK\n\
+         && aacmm_calibrate_options_set_compliance(options, \"2,3\") == AACMM_STATUS_OK\n\
+         && aacmm_calibrate_options_set_harmonics(options, nullptr) == AACMM_STATUS_OK\n\
+         && aacmm_calibrate_options_set_thermal(options, false) == AACMM_STATUS_OK\n\
+         && aacmm_calibrate_options_set_drift(options, false) == AACMM_STATUS_OK;\n\
          std::vector<double> q(18), xyz(9), u(3, 0.01);\n\
          std::vector<uint32_t> frames(3, 0);\n\
          const char *names[] = {\"tracker\"};\n\
@@ -584,8 +623,12 @@ fn the_header_compiles_as_cpp() {
          AacmmFrame frame{};\n\
          size_t len = 0;\n\
          AacmmStatus none = aacmm_calibration_frame(nullptr, 0, &frame, nullptr, 0, &len);\n\
+         AacmmAuxiliary column{};\n\
+         AacmmStatus no_column = aacmm_calibration_auxiliary(nullptr, 0, &column, nullptr, 0,\n\
+         &len);\n\
          aacmm_calibrate_options_free(options);\n\
          return ok && set == AACMM_STATUS_INPUT && none == AACMM_STATUS_NULL_POINTER\n\
+         && no_column == AACMM_STATUS_NULL_POINTER && !column.fixed\n\
          && frame.rotation_matrix[0] == 0.0 && aacmm_param_count(6) == 27 ? 0 : 1;\n\
          }\n",
     )

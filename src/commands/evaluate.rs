@@ -58,7 +58,12 @@ pub fn run(args: Args) -> Result<()> {
         data = data.with_lengths(&read_lengths(path)?, &source_name(path))?;
     }
     let mut xyz = vec![[0.0; 3]; data.len()];
-    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    args.input.check_conditions(&arm)?;
+    let rows: Vec<&[f64]> = (0..data.len()).map(|i| data.reading(i)).collect();
+    match args.input.corrected(&arm, &rows)? {
+        Some(poses) => kernel.positions(&poses, 0..data.len(), &mut xyz)?,
+        None => kernel.positions(data.poses(), 0..data.len(), &mut xyz)?,
+    }
     args.input
         .check_finite(&xyz, |i| data.source().touch(i).line)?;
     let sources = Sources {

@@ -48,6 +48,10 @@ pub struct ArmAndPoses {
     /// Unit of the angles in the poses file.
     #[arg(long, default_value = "deg", value_parser = angle_unit)]
     pub angle_unit: AngleUnit,
+    /// The arm's temperature, °C, when its file states a thermal expansion
+    /// (`cte_per_k`): its lengths are scaled from the reference temperature.
+    #[arg(long, value_name = "CELSIUS")]
+    pub temperature: Option<f64>,
 }
 
 impl ArmAndPoses {
@@ -65,6 +69,44 @@ impl ArmAndPoses {
         Ok((arm, poses))
     }
 
+    /// Refuses an arm whose stated thermal expansion has no temperature to
+    /// act at.
+    pub fn check_conditions(&self, arm: &Arm) -> Result<()> {
+        if arm.physics.cte_per_k.is_some_and(|c| c != 0.0) && self.temperature.is_none() {
+            bail!(
+                "{}: the arm states a thermal expansion (cte_per_k): give --temperature, the \
+                 arm's temperature in °C",
+                source_name(&self.arm)
+            );
+        }
+        Ok(())
+    }
+
+    /// `rows` as the arm's chain sees them through the corrections its file
+    /// states (compliance, encoder harmonics, expansion at --temperature);
+    /// `None` when it states none.
+    pub fn corrected(&self, arm: &Arm, rows: &[&[f64]]) -> Result<Option<PreparedPoses>> {
+        use aacmm_core::corrections::{Beyond, Conditions, Effects};
+        if !arm.physics.corrects() {
+            return Ok(None);
+        }
+        let flat: Vec<f64> = rows.iter().flat_map(|r| r.iter().copied()).collect();
+        let temperatures = self.temperature.map(|t| vec![t; rows.len()]);
+        let conditions = Conditions {
+            temperature_c: temperatures.as_deref(),
+            time_s: None,
+        };
+        let effects = Effects::new(
+            &arm.params,
+            &arm.physics,
+            &Beyond::default(),
+            &flat,
+            conditions,
+        )
+        .map_err(|e| anyhow::anyhow!("{}: {e}", source_name(&self.arm)))?;
+        Ok(Some(effects.poses))
+    }
+
     /// The arm prepared for its generated kernel.
     pub fn kernel(&self, arm: &Arm) -> Result<ArmKernel> {
         ArmKernel::new(&arm.params).with_context(|| source_name(&self.arm))
@@ -78,12 +120,16 @@ impl ArmAndPoses {
         const CHUNK: usize = 4096;
         let kernel = self.kernel(arm)?;
         let mut xyz = vec![[0.0; 3]; poses.len()];
-        let chunk = |(c, out): (usize, &mut [[f64; 3]])| {
+        self.check_conditions(arm)?;
+        let chunk = |(c, out): (usize, &mut [[f64; 3]])| -> Result<()> {
             let rows: Vec<&[f64]> = (c * CHUNK..c * CHUNK + out.len())
                 .map(|row| poses.reading(row))
                 .collect();
-            PreparedPoses::new(poses.joints(), &rows)
-                .and_then(|prepared| kernel.positions(&prepared, 0..out.len(), out))
+            let prepared = match self.corrected(arm, &rows)? {
+                Some(p) => p,
+                None => PreparedPoses::new(poses.joints(), &rows)?,
+            };
+            Ok(kernel.positions(&prepared, 0..out.len(), out)?)
         };
         let threads = worker_threads(None);
         let per_thread = poses.len().div_ceil(CHUNK).div_ceil(threads).max(1) * CHUNK;

@@ -16,7 +16,9 @@
  *   newlines and backslashes escaped as \\n and \\\\), arrays_params,
  *   calibrated_positions, tracker_q, tracker_xyz, tracker_params,
  *   tracker_frames (the count), frame_NAME (per fitted frame: rotation,
- *   translation, their sigmas, the rotation matrix)
+ *   translation, their sigmas, the rotation matrix), tracker_auxiliary (the
+ *   count of auxiliary columns), aux_NAME (per column: start, calibrated,
+ *   sigma, and 1 or 0 for held or fitted)
  *
  * Its own checks (expected error codes, arrays == files) make it exit with
  * status 1 and a message on stderr when they fail.
@@ -502,6 +504,40 @@ int main(int argc, char **argv) {
     }
     expect(aacmm_calibration_frame(tracked, 2, &frame, NULL, 0, &name_len),
            AACMM_STATUS_INVALID_ARGUMENT, "frame_index");
+    /* The same frames as auxiliary columns, the general accessor (which
+     * also gives the corrections beyond geometry, when fitted). */
+    size_t aux_count = 0;
+    ok(aacmm_calibration_auxiliary_count(tracked, &aux_count),
+       "aacmm_calibration_auxiliary_count");
+    printf("tracker_auxiliary %zu\n", aux_count);
+    for (size_t k = 0; k < aux_count; k++) {
+        AacmmAuxiliary column;
+        char name[32], tag[48];
+        ok(aacmm_calibration_auxiliary(tracked, k, &column, name, sizeof name, &name_len),
+           "aacmm_calibration_auxiliary");
+        snprintf(tag, sizeof tag, "aux_%s", name);
+        const double values[4] = {column.start, column.calibrated, column.sigma,
+                                  column.fixed ? 1.0 : 0.0};
+        print_bits(tag, values, 4);
+    }
+    AacmmAuxiliary column;
+    expect(aacmm_calibration_auxiliary(tracked, aux_count, &column, NULL, 0, &name_len),
+           AACMM_STATUS_INVALID_ARGUMENT, "auxiliary_index");
+    /* Models beyond geometry: a spec is checked when set (the options keep
+     * their earlier value); a compliance needs masses, which an arm made
+     * from parameters does not state. */
+    expect(aacmm_calibrate_options_set_compliance(tracking, "0"),
+           AACMM_STATUS_INVALID_ARGUMENT, "compliance_zero");
+    expect(aacmm_calibrate_options_set_harmonics(tracking, "2:"),
+           AACMM_STATUS_INVALID_ARGUMENT, "harmonics_no_order");
+    ok(aacmm_calibrate_options_set_compliance(tracking, "2,3"),
+       "aacmm_calibrate_options_set_compliance");
+    AacmmCalibration *loaded = NULL;
+    expect(aacmm_calibrate(made, NULL, 0, NULL, 0, NULL, 0, tracking, &loaded),
+           AACMM_STATUS_INVALID_ARGUMENT, "compliance_without_masses");
+    if (loaded != NULL) {
+        fail("a refused calibration gave a result");
+    }
     aacmm_calibration_free(tracked);
     aacmm_calibrate_options_free(tracking);
 
