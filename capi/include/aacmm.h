@@ -301,6 +301,40 @@ typedef struct {
 } AacmmFrame;
 
 /**
+ * One column of a calibration's auxiliary blocks, for
+ * `aacmm_calibration_auxiliary`: an unknown fitted with the arm beyond its
+ * parameters — a correction beyond geometry (`--compliance`,
+ * `--harmonics`, `--thermal`, `--drift`) or a coordinate of a frame of
+ * reference positions — as the report's `calibration.auxiliary` has it.
+ * Values are in the column's unit, given by its name: `complianceJ`
+ * µrad/(N·m); `harmonicJ.sinK`, `harmonicJ.cosK` deg; `thermal.cte` ppm/K;
+ * `drift.x`, `.y`, `.z` mm/h; a frame's `NAME.rx`, `.ry`, `.rz` deg and
+ * `NAME.tx`, `.ty`, `.tz` mm.
+ */
+typedef struct {
+  /**
+   * The value the fit started from (for a correction, the arm file's
+   * stated value, else 0).
+   */
+  double start;
+  /**
+   * The calibrated value.
+   */
+  double calibrated;
+  /**
+   * Standard uncertainty (k = 1); `NAN` where the data did not
+   * determine it (and for a column held at its start).
+   */
+  double sigma;
+  /**
+   * Whether the column was held at its start value: a correction these
+   * data cannot separate (why: the report's
+   * `calibration.auxiliary[index].fixed`).
+   */
+  bool fixed;
+} AacmmAuxiliary;
+
+/**
  * The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
  * `_CAUCHY` (`--robust`).
  */
@@ -790,6 +824,43 @@ AacmmStatus aacmm_calibration_frame(const AacmmCalibration *cal,
                                     size_t *len);
 
 /**
+ * The number of auxiliary columns fitted with the arm (0 without
+ * corrections beyond geometry and without reference positions) into
+ * `*count`: the corrections' columns first, then six per frame.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_auxiliary_count(const AacmmCalibration *cal, size_t *count);
+
+/**
+ * Auxiliary column `index` (`0 ≤ index < aacmm_calibration_auxiliary_count`,
+ * the order of the report's `calibration.auxiliary`) into `*column`, and
+ * its name (UTF-8: `compliance2`, `harmonic5.sin1`, `thermal.cte`,
+ * `drift.x`, `tracker.rx`, …) into `buf`, copied like
+ * `aacmm_last_error_message`; `*len` gets the name's full length in bytes
+ * without the NUL. Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the name
+ * was truncated (`buf` may be `NULL` with `buf_len` 0 to ask for the
+ * length; `*column` is written all the same),
+ * `AACMM_STATUS_INVALID_ARGUMENT` for an index out of range. The physics
+ * at the fit (masses, and every correction fitted or stated: rad/(N·m),
+ * rad, 1/K, mm/h) is the report's `calibration.physics`.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `column` is `NULL` or points
+ * to writable memory for the struct; `buf` is `NULL` or points to
+ * `buf_len` writable bytes; `len` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_auxiliary(const AacmmCalibration *cal,
+                                        size_t index,
+                                        AacmmAuxiliary *column,
+                                        char *buf,
+                                        size_t buf_len,
+                                        size_t *len);
+
+/**
  * Copies the message of the last failed call on this thread into `buf`.
  *
  * Writes at most `buf_len - 1` bytes of UTF-8 (cut at a character
@@ -1003,6 +1074,76 @@ AacmmStatus aacmm_calibrate_options_set_prior(AacmmCalibrateOptions *options, co
  */
 AacmmStatus aacmm_calibrate_options_set_accept_poor_fit(AacmmCalibrateOptions *options,
                                                         bool accept);
+
+/**
+ * Joint compliance under gravity, fitted for the listed joints
+ * (`--compliance`): comma-separated joints numbered from 1, e.g. `"2,3"`;
+ * each joint deflects by its compliance times the gravity torque of the
+ * masses outboard of it, from the arm file's `mass_kg` (links and
+ * `[probe]`) and `gravity`. `NULL` (the default): none. Copied; the
+ * syntax and joints no arm has are refused here (`compliance = 0: a joint
+ * is a number from 1 …`), a joint the arm at hand lacks, or an arm file
+ * without masses, when calibrating. The fitted compliances are the
+ * auxiliary columns `compliance2`, … (µrad/(N·m);
+ * `aacmm_calibration_auxiliary`), and in the report's
+ * `calibration.physics`.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `joints` is `NULL` or a
+ * NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_compliance(AacmmCalibrateOptions *options,
+                                                   const char *joints);
+
+/**
+ * Encoder harmonics `s·sin(k q) + c·cos(k q)` added to the listed joints'
+ * readings, fitted (`--harmonics`): comma-separated `JOINT:ORDERS`, joints
+ * numbered from 1, orders a number or a range from 1 to 16, e.g.
+ * `"2:1,5:1-2"` (order 1 is the disc's eccentricity). `NULL` (the
+ * default): none. Copied; the syntax and joints no arm has are refused
+ * here (`harmonics = 2:: an order is a whole number …`), a joint the arm
+ * at hand lacks when calibrating. The fitted amplitudes are the auxiliary
+ * columns `harmonic2.sin1`, `harmonic2.cos1`, … (deg;
+ * `aacmm_calibration_auxiliary`).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `spec` is `NULL` or a
+ * NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_harmonics(AacmmCalibrateOptions *options, const char *spec);
+
+/**
+ * Whether a thermal expansion coefficient of the lengths is fitted
+ * (`--thermal`; default `false`) against the temperature (°C) of every
+ * pose: the `temperature` column of the poses and positions files of
+ * `aacmm_calibrate_files` (the calibrated lengths are at 20 °C; arrays
+ * carry no temperatures). Data without temperatures are refused when
+ * calibrating (`thermal = on: … needs the temperature of every pose …`). The fitted coefficient is the auxiliary column `thermal.cte`
+ * (ppm/K; `aacmm_calibration_auxiliary`).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_thermal(AacmmCalibrateOptions *options,
+                                                bool thermal);
+
+/**
+ * Whether a linear drift of the arm's base against the instrument is
+ * fitted (`--drift`; default `false`) against the time (s) of every pose:
+ * the `time` column of the poses and positions files of
+ * `aacmm_calibrate_files` (arrays carry no times). Data without times are
+ * refused when calibrating (`drift = on: … needs the time of every
+ * pose …`). The fitted drift is the auxiliary columns `drift.x`,
+ * `drift.y`, `drift.z` (mm/h; `aacmm_calibration_auxiliary`).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_drift(AacmmCalibrateOptions *options, bool drift);
 
 /**
  * Reference positions an instrument saw, fitted with the arm as the

@@ -820,8 +820,8 @@ pub unsafe extern "C" fn aacmm_calibration_auxiliary_count(
 /// was truncated (`buf` may be `NULL` with `buf_len` 0 to ask for the
 /// length; `*column` is written all the same),
 /// `AACMM_STATUS_INVALID_ARGUMENT` for an index out of range. The physics
-/// at the fit (masses, and every correction fitted or stated, in SI units)
-/// is the report's `calibration.physics`.
+/// at the fit (masses, and every correction fitted or stated: rad/(N·m),
+/// rad, 1/K, mm/h) is the report's `calibration.physics`.
 ///
 /// # Safety
 ///

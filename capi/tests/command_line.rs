@@ -3,7 +3,9 @@
 //! gives what `aacmm calibrate` writes — `calibration.json` byte for byte,
 //! the calibrated parameters bit for bit, the verdict — and `successful` is
 //! the library's verdict, not the solver's convergence; with a positions
-//! file (`--positions`), alone or with touches, the same report too.
+//! file (`--positions`), alone or with touches, the same report too; with
+//! a model beyond geometry (`--compliance`) too, its columns through
+//! `aacmm_calibration_auxiliary`.
 
 // Calling the C ABI from Rust takes raw pointers, as C does.
 #![allow(unsafe_code)]
@@ -13,15 +15,17 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use aacmm_capi::{
-    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AacmmCalibrateOptions, AacmmCalibration,
-    AacmmCalibrationSummary, AacmmStatus, aacmm_calibrate_files, aacmm_calibrate_options_free,
-    aacmm_calibrate_options_new, aacmm_calibrate_options_set_accept_poor_fit,
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AacmmAuxiliary, AacmmCalibrateOptions,
+    AacmmCalibration, AacmmCalibrationSummary, AacmmStatus, aacmm_calibrate_files,
+    aacmm_calibrate_options_free, aacmm_calibrate_options_new,
+    aacmm_calibrate_options_set_accept_poor_fit, aacmm_calibrate_options_set_compliance,
     aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_method,
     aacmm_calibrate_options_set_position_noise_mm, aacmm_calibrate_options_set_positions_file,
     aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
-    aacmm_calibration_frame_count, aacmm_calibration_free, aacmm_calibration_params,
-    aacmm_calibration_report, aacmm_calibration_summary, aacmm_calibration_verdict,
-    aacmm_calibration_verdict_notes, aacmm_last_error_message,
+    aacmm_calibrate_options_set_thermal, aacmm_calibration_auxiliary,
+    aacmm_calibration_auxiliary_count, aacmm_calibration_frame_count, aacmm_calibration_free,
+    aacmm_calibration_params, aacmm_calibration_report, aacmm_calibration_summary,
+    aacmm_calibration_verdict, aacmm_calibration_verdict_notes, aacmm_last_error_message,
 };
 use aacmm_core::io::positions::write_positions;
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm, write_poses};
@@ -147,6 +151,18 @@ impl Calibration {
         unit: u32,
         o: &Options,
     ) -> Self {
+        let c = Calibration::try_paths(arm, poses, lengths, unit, o);
+        c.unwrap_or_else(|status| panic!("{status:?}: {}", last_error()))
+    }
+
+    /// `aacmm_calibrate_files` on these paths, or its refusal.
+    fn try_paths(
+        arm: &str,
+        poses: Option<&str>,
+        lengths: Option<&str>,
+        unit: u32,
+        o: &Options,
+    ) -> Result<Self, AacmmStatus> {
         let c = |p: &str| CString::new(p).unwrap();
         let (arm, poses, lengths) = (c(arm), poses.map(c), lengths.map(c));
         let path = |p: &Option<CString>| p.as_ref().map_or(std::ptr::null(), |p| p.as_ptr());
@@ -163,8 +179,33 @@ impl Calibration {
                 &mut out,
             )
         };
-        assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
-        Calibration(out)
+        match status {
+            AacmmStatus::Ok => Ok(Calibration(out)),
+            s => {
+                assert!(out.is_null(), "a refused calibration gave a result");
+                Err(s)
+            }
+        }
+    }
+
+    /// Every auxiliary column: name and values.
+    fn auxiliary(&self) -> Vec<(String, AacmmAuxiliary)> {
+        let mut count = usize::MAX;
+        // SAFETY: a live result; `count` is writable.
+        let status = unsafe { aacmm_calibration_auxiliary_count(self.0, &mut count) };
+        assert_eq!(status, AacmmStatus::Ok);
+        (0..count)
+            .map(|i| {
+                let mut column = std::mem::MaybeUninit::uninit();
+                // SAFETY: a live result; room for the struct; the name's
+                // buffers as stated.
+                let name = self.text(|b, n, len| unsafe {
+                    aacmm_calibration_auxiliary(self.0, i, column.as_mut_ptr(), b, n, len)
+                });
+                // SAFETY: written by the calls above (with the name).
+                (name, unsafe { column.assume_init() })
+            })
+            .collect()
     }
 
     fn frame_count(&self) -> usize {
@@ -540,4 +581,170 @@ fn a_positions_file_gives_the_command_lines_result() {
     );
     assert_eq!(c.report(), json, "touches, lengths and positions");
     assert_eq!(c.frame_count(), 2);
+}
+
+/// `aacmm calibrate` with `args`, written to a fresh directory `name`: its
+/// `calibration.json`.
+fn command_line_report(name: &str, args: &[&str]) -> String {
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&out);
+    let run = Command::new(cli())
+        .arg("calibrate")
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .expect("aacmm runs");
+    std::fs::read_to_string(out.join("calibration.json")).unwrap_or_else(|_| {
+        panic!(
+            "aacmm calibrate wrote nothing:\n{}",
+            String::from_utf8_lossy(&run.stderr)
+        )
+    })
+}
+
+/// The number `key` of the auxiliary column `name` as `json` writes it.
+fn written<'a>(json: &'a str, name: &str, key: &str) -> &'a str {
+    let column = &json[json
+        .find(&format!("\"name\": \"{name}\""))
+        .unwrap_or_else(|| panic!("no column {name}"))..];
+    let key = format!("\"{key}\": ");
+    let at = column.find(&key).unwrap() + key.len();
+    &column[at..at + column[at..].find([',', '\n']).unwrap()]
+}
+
+/// Joint compliance (`--compliance 2,3`, the arm file's masses loading the
+/// joints) on the shipped UR5 tracker grid: the C API writes the command
+/// line's report byte for byte; the compliances are the first auxiliary
+/// columns, fitted, the values the report writes, in its physics too.
+#[test]
+fn a_compliance_gives_the_command_lines_result() {
+    let (arm, positions) = (
+        example("examples/ur5-tracker/arm.toml"),
+        example("examples/ur5-tracker/positions-grid.csv"),
+    );
+    let path = CString::new(positions.as_str()).unwrap();
+    let o = options(|o| {
+        // SAFETY: live options; NUL-terminated strings.
+        unsafe {
+            vec![
+                aacmm_calibrate_options_set_method(o, AACMM_METHOD_LM),
+                aacmm_calibrate_options_set_positions_file(o, path.as_ptr()),
+                aacmm_calibrate_options_set_compliance(o, c"2,3".as_ptr()),
+            ]
+        }
+    });
+    let c = Calibration::of_paths(&arm, None, None, AACMM_ANGLE_DEG, &o);
+    let json = command_line_report(
+        "ur5-compliance-cli",
+        &[
+            "--arm",
+            &arm,
+            "--positions",
+            &positions,
+            "--compliance",
+            "2,3",
+            "--method",
+            "lm",
+        ],
+    );
+    assert_eq!(
+        c.report(),
+        json,
+        "the C API's report is not the command line's"
+    );
+
+    let columns = c.auxiliary();
+    let names: Vec<&str> = columns.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "compliance2",
+            "compliance3",
+            "instrument.rx",
+            "instrument.ry",
+            "instrument.rz",
+            "instrument.tx",
+            "instrument.ty",
+            "instrument.tz"
+        ]
+    );
+    let report: serde_json::Value = serde_json::from_str(&json).unwrap();
+    for (k, (name, a)) in columns.iter().enumerate() {
+        for (key, v) in [("start", a.start), ("calibrated", a.calibrated)] {
+            assert_eq!(
+                serde_json::to_string(&v).unwrap(),
+                written(&json, name, key),
+                "{name}.{key}"
+            );
+        }
+        assert_eq!(
+            serde_json::to_string(&a.sigma).unwrap(),
+            written(&json, name, "sigma"),
+            "{name}.sigma"
+        );
+        assert!(!a.fixed, "{name}: held");
+        assert_eq!(report["calibration"]["auxiliary"][k]["name"], *name);
+    }
+    // The data see both compliances (each many σ from 0), and the report's
+    // physics holds them in rad/(N·m).
+    let physics = &report["calibration"]["physics"]["compliance"];
+    for (j, (name, a)) in columns[..2].iter().enumerate() {
+        assert!(a.calibrated.abs() > 5.0 * a.sigma, "{name}: {a:?}");
+        let si = physics[j + 1].as_f64().unwrap();
+        assert!(
+            (si - a.calibrated * 1e-6).abs() <= 1e-12 * si.abs(),
+            "{name}: {si} rad/(N·m) vs {} µrad/(N·m)",
+            a.calibrated
+        );
+    }
+}
+
+/// What the arm or the data cannot support is refused when calibrating,
+/// naming the setting: a compliance without masses (the paper's arm file
+/// states none), a thermal expansion without temperatures (the UR5 grid has
+/// no `temperature` column).
+#[test]
+fn beyond_geometry_without_its_inputs_is_refused() {
+    let compliant = options(|o| {
+        // SAFETY: live options; a NUL-terminated literal.
+        vec![unsafe { aacmm_calibrate_options_set_compliance(o, c"2,3".as_ptr()) }]
+    });
+    let refused = Calibration::try_paths(
+        &example("examples/paper-table-1.toml"),
+        Some(&example("examples/paper-campaign/poses.csv")),
+        None,
+        AACMM_ANGLE_DEG,
+        &compliant,
+    );
+    assert_eq!(refused.err(), Some(AacmmStatus::InvalidArgument));
+    let m = last_error();
+    assert!(
+        m.starts_with("compliance = 2,3: no mass loads the joints"),
+        "{m}"
+    );
+
+    let positions = CString::new(example("examples/ur5-tracker/positions-grid.csv")).unwrap();
+    let thermal = options(|o| {
+        // SAFETY: live options; a NUL-terminated path.
+        unsafe {
+            vec![
+                aacmm_calibrate_options_set_positions_file(o, positions.as_ptr()),
+                aacmm_calibrate_options_set_thermal(o, true),
+            ]
+        }
+    });
+    let refused = Calibration::try_paths(
+        &example("examples/ur5-tracker/arm.toml"),
+        None,
+        None,
+        AACMM_ANGLE_DEG,
+        &thermal,
+    );
+    assert_eq!(refused.err(), Some(AacmmStatus::InvalidArgument));
+    let m = last_error();
+    assert!(
+        m.starts_with("thermal = on: thermal expansion needs the temperature of every pose"),
+        "{m}"
+    );
 }

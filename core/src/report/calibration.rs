@@ -92,7 +92,97 @@ pub fn session_report(
         validation,
         truth: problem.truth(),
         positions: pose_errors(report, problem)?,
+        beyond: beyond_effects(report, problem)?,
     })
+}
+
+/// Per model beyond geometry the fit switched on, how far its fitted
+/// correction alone moves the calibrated arm's probe at every fitted pose
+/// (touches and reference positions), against the reach.
+fn beyond_effects(
+    report: &CalibrationReport,
+    problem: &Problem,
+) -> Result<Vec<PoseErrors>, ReportError> {
+    use crate::corrections::{Beyond, Conditions, Effects};
+    let fit = &problem.inputs().model.beyond;
+    let (Some(fitted), false) = (&report.calibration.physics, fit.is_empty()) else {
+        return Ok(Vec::new());
+    };
+    let bare = Physics {
+        compliance: Vec::new(),
+        harmonics: Vec::new(),
+        cte_per_k: None,
+        drift_mm_per_h: None,
+        ..fitted.clone()
+    };
+    let mut models: Vec<(&str, Physics)> = Vec::new();
+    if !fit.compliance.is_empty() {
+        let only = Physics {
+            compliance: fitted.compliance.clone(),
+            ..bare.clone()
+        };
+        models.push(("joint compliance", only));
+    }
+    if !fit.harmonics.is_empty() {
+        let only = Physics {
+            harmonics: fitted.harmonics.clone(),
+            ..bare.clone()
+        };
+        models.push(("encoder harmonics", only));
+    }
+    if fit.thermal {
+        let only = Physics {
+            cte_per_k: fitted.cte_per_k,
+            ..bare.clone()
+        };
+        models.push(("thermal expansion", only));
+    }
+    if fit.drift {
+        let only = Physics {
+            drift_mm_per_h: fitted.drift_mm_per_h,
+            ..bare.clone()
+        };
+        models.push(("drift", only));
+    }
+    let params = &report.calibration.params;
+    let kernel = crate::kernel::ArmKernel::new(params)?;
+    let data = problem.data();
+    let mut sets: Vec<(&[f64], Conditions<'_>, &crate::kernel::PreparedPoses)> = Vec::new();
+    if !data.is_empty() {
+        sets.push((data.readings(), data.conditions(), data.poses()));
+    }
+    if let Some(p) = data.positions() {
+        sets.push((p.rows().readings(), p.conditions(), p.poses()));
+    }
+    let mut out = Vec::new();
+    for (name, physics) in models {
+        let (mut reach_mm, mut error_mm) = (Vec::new(), Vec::new());
+        for (readings, conditions, plain) in &sets {
+            let n = plain.len();
+            let seen = Effects::new(params, &physics, &Beyond::default(), readings, *conditions)
+                .map_err(|message| {
+                    Box::new(crate::calibrate::CalibrationError::Term {
+                        term: "beyond".into(),
+                        message,
+                    })
+                })?;
+            let (mut a, mut b) = (vec![[0.0; 3]; n], vec![[0.0; 3]; n]);
+            kernel.positions(plain, 0..n, &mut a)?;
+            kernel.positions(&seen.poses, 0..n, &mut b)?;
+            for (p, q) in a.iter().zip(&b) {
+                reach_mm.push(p[0].hypot(p[1]));
+                error_mm.push(crate::geometry::distance(p, q));
+            }
+        }
+        out.push(PoseErrors {
+            name: name.to_string(),
+            held_out: false,
+            after: true,
+            reach_mm,
+            error_mm,
+        });
+    }
+    Ok(out)
 }
 
 /// The 3-D errors at the reference positions of the fitted and held-out

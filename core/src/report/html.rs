@@ -5,8 +5,8 @@
 use super::data::Evaluated;
 use super::tables;
 use super::{
-    CalibrationInput, EvaluationInput, Figure, IDENTIFIABILITY_SVG, LENGTHS_SVG, PARAMETERS_SVG,
-    RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG,
+    BEYOND_SVG, CalibrationInput, EvaluationInput, Figure, IDENTIFIABILITY_SVG, LENGTHS_SVG,
+    PARAMETERS_SVG, RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG,
 };
 
 /// Escapes `&`, `<`, `>`, `"` and `'` for HTML/XML text and attributes.
@@ -170,6 +170,11 @@ pub(crate) fn calibration_page(
         ("residuals", "5 Residuals"),
         ("solver", "6 Solver"),
     ];
+    let beyond = find(figures, BEYOND_SVG);
+    let mut nav = nav.to_vec();
+    if beyond.is_some() {
+        nav.push(("beyond", "7 Beyond geometry"));
+    }
     let mut page = head(&input.title, &input.inputs, &nav);
     page += &format!(
         "<section id=\"summary\">\n<h2>Summary</h2>\n{}{}</section>\n",
@@ -245,6 +250,22 @@ pub(crate) fn calibration_page(
         &tables::solver(cal, json),
         "",
     );
+    if beyond.is_some() {
+        page += &section(
+            "beyond",
+            "7. Beyond geometry",
+            "Models the fit estimated with the geometry: each column's value with its σ, or why \
+             the data could not separate it (it is then held at its stated value).",
+            beyond,
+            "Per fitted pose, how far each model's fitted correction alone moves the calibrated \
+             arm's probe: the error it explains. Part of it a geometric parameter can mimic \
+             (a compliance partly acts as a zero offset: see the correlations), so this bounds \
+             from above what a geometric fit would have left in the residuals or spread over \
+             the parameters.",
+            "",
+            &tables::beyond(cal, json),
+        );
+    }
     page += &foot(figures);
     page
 }
@@ -265,6 +286,11 @@ pub(crate) fn evaluation_page(
         before: String::new(),
         after: input.arm.clone(),
     };
+    let beyond = find(figures, BEYOND_SVG);
+    let mut nav = nav.to_vec();
+    if beyond.is_some() {
+        nav.push(("beyond", "7 Beyond geometry"));
+    }
     let mut page = head(&input.title, &input.inputs, &nav);
     let e = &evaluated[0];
     page += &section(

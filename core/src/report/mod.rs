@@ -70,6 +70,9 @@ pub const SOLVER_SVG: &str = "solver-progress.svg";
 /// The 3-D errors at reference positions, when the calibration had them
 /// (not among [`CALIBRATION_FILES`], which every calibration writes).
 pub const POSITIONS_SVG: &str = "position-errors.svg";
+/// How far each fitted model beyond geometry moves the probe, when the
+/// calibration fitted any (not among [`CALIBRATION_FILES`]).
+pub const BEYOND_SVG: &str = "beyond-geometry.svg";
 
 /// Every file [`calibration_report`] writes, page first.
 pub const CALIBRATION_FILES: [&str; 7] = [
@@ -242,6 +245,10 @@ pub struct CalibrationInput<'a> {
     /// The 3-D errors at the reference positions, per data set and arm
     /// (none without positions: the figure is then left out).
     pub positions: Vec<PoseErrors>,
+    /// Per model beyond geometry the fit switched on, how far it moves the
+    /// probe at each fitted pose (`error_mm`), against the reach (none:
+    /// the section is left out).
+    pub beyond: Vec<PoseErrors>,
 }
 
 /// The 3-D errors of one arm at one data set's reference positions, each
@@ -306,6 +313,7 @@ pub struct EvaluationInput<'a> {
 ///     validation: vec![ValidationRow { name: "fitted".into(), held_out: false, figures: &fitted, json: None }],
 ///     truth: None,
 ///     positions: Vec::new(),
+///     beyond: Vec::new(),
 /// })
 /// .unwrap();
 /// assert_eq!(report.files().count(), CALIBRATION_FILES.len());
@@ -325,6 +333,9 @@ pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportErro
     let mut figures = figures;
     if !input.positions.is_empty() {
         figures.push(figures::positions::figure(&input.positions)?);
+    }
+    if !input.beyond.is_empty() {
+        figures.push(figures::beyond::figure(&input.beyond)?);
     }
     let html = html::calibration_page(input, &evaluated, &figures);
     Ok(Report { html, figures })

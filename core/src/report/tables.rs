@@ -398,6 +398,45 @@ pub(crate) fn parameters_intro(cal: &Calibration) -> String {
     )
 }
 
+/// The correction columns beyond geometry, one table per model: start,
+/// calibrated, σ, and why a column was held; empty without any.
+pub(crate) fn beyond(cal: &Calibration, json: Option<&str>) -> String {
+    let models = [
+        ("compliance", "Joint compliance under gravity"),
+        ("harmonic", "Encoder harmonics a·sin(kq) + b·cos(kq)"),
+        ("thermal", "Thermal expansion of the lengths (from 20 °C)"),
+        ("drift", "Drift of the base against the instrument"),
+    ];
+    let mut out = String::new();
+    for (prefix, caption) in models {
+        let rows: Vec<(String, Vec<Cell>)> = (cal.auxiliary.iter().enumerate())
+            .filter(|(_, a)| a.name.starts_with(prefix))
+            .map(|(i, a)| {
+                let cells = vec![
+                    Cell::text(&a.name),
+                    Cell::text(&a.unit),
+                    Cell::num(a.start, 6),
+                    Cell::num(a.calibrated, 6).at(
+                        json,
+                        &format!("auxiliary/{i}/calibrated"),
+                        a.calibrated,
+                    ),
+                    a.sigma.map_or_else(Cell::none, |s| {
+                        Cell::num(s, 6).at(json, &format!("auxiliary/{i}/sigma"), s)
+                    }),
+                    Cell::text(a.fixed.as_deref().unwrap_or("")),
+                ];
+                (String::new(), cells)
+            })
+            .collect();
+        if !rows.is_empty() {
+            let head = ["column", "unit", "start", "calibrated", "σ", "held because"];
+            out += &table(caption, &head, &rows);
+        }
+    }
+    out
+}
+
 /// The parameter tables: lengths (mm) and angles (deg).
 pub(crate) fn parameters(
     cal: &Calibration,

@@ -113,6 +113,7 @@ fn report_of(c: &Case, cal: &Calibration, held: bool) -> Result<Report, ReportEr
         validation,
         truth: Some(&c.truth),
         positions: Vec::new(),
+        beyond: Vec::new(),
     })
 }
 

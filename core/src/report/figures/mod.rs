@@ -1,6 +1,7 @@
 //! The figures, one file per kind, and the frame they share: a title line,
 //! a legend strip, the panels.
 
+pub(crate) mod beyond;
 pub(crate) mod identifiability;
 pub(crate) mod lengths;
 pub(crate) mod parameters;
