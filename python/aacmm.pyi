@@ -42,6 +42,16 @@ class _Frame(TypedDict):
     translation_sigma_mm: Optional[_Array]
     rotation_matrix: _Array
 
+class _Auxiliary(TypedDict):
+    """An auxiliary column fitted with the arm (a correction beyond geometry,
+    a frame's coordinate), in its ``unit``."""
+
+    unit: str
+    start: float
+    calibrated: float
+    sigma: Optional[float]
+    fixed: Optional[str]
+
 class AacmmError(Exception):
     """Base class of the errors aacmm raises (besides OSError for unreadable
     files and ValueError/TypeError for malformed arguments)."""
@@ -319,6 +329,23 @@ class Calibration:
         t``, their σ (k = 1; None where not determined) as calibrated.toml's
         ``[[frame]]`` tables, and ``R`` (3 × 3)."""
     @property
+    def auxiliary(self) -> Dict[str, _Auxiliary]:
+        """Each auxiliary column, in the report's order: the corrections
+        beyond geometry (``compliance2`` µrad/(N·m), ``harmonic2.sin1`` and
+        ``harmonic2.cos1`` deg, ``thermal.cte`` ppm/K, ``drift.x`` … mm/h),
+        then each frame's ``NAME.rx`` … ``NAME.tz`` (deg, mm): name →
+        ``unit``, ``start``, ``calibrated``, ``sigma`` (k = 1; None where
+        not determined) and ``fixed`` (why it was held — a correction these
+        data cannot separate — or None)."""
+    @property
+    def physics(self) -> Optional[Dict[str, Any]]:
+        """The arm's physics at the fit (None when the arm states none and
+        none was fitted): ``link_masses``, ``probe_mass``, ``gravity``, and
+        the corrections fitted or as stated — ``compliance`` per joint
+        (rad/(N·m)), ``harmonics`` (rad), ``cte_per_k`` (1/K),
+        ``reference_temperature_c`` — as ``report["calibration"]["physics"]``;
+        ``drift_mm_per_h`` when a drift was fitted."""
+    @property
     def successful(self) -> bool:
         """Whether the calibration is usable: the verdict
         (``report["verdict"]["usable"]``, exit 0 of ``aacmm calibrate``) —
@@ -362,6 +389,10 @@ def calibrate(
     robust_scale: Optional[float] = None,
     prior: Optional[str] = None,
     accept_poor_fit: bool = False,
+    compliance: Optional[str] = None,
+    harmonics: Optional[str] = None,
+    thermal: bool = False,
+    drift: bool = False,
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
@@ -373,7 +404,14 @@ def calibrate(
     ``"none"`` ignores the file's). ``validate`` is a held-out data set of
     touches, reference positions or both (positions in a fitted frame are
     scored in it). ``accept_poor_fit`` calls a poor χ² or a
-    fit worse than nominal usable (never a wrong geometry). Readings outside
+    fit worse than nominal usable (never a wrong geometry). Models beyond
+    geometry, fitted with the arm as the command line's flags:
+    ``compliance`` (``"2,3"``, joints from 1, loaded by the arm file's
+    masses: ``--compliance``), ``harmonics`` (``"2:1,5:1-2"``,
+    ``JOINT:ORDERS``: ``--harmonics``), ``thermal`` (against the data's
+    ``temperature`` column: ``--thermal``), ``drift`` (against its ``time``
+    column: ``--drift``); their values in :attr:`Calibration.auxiliary` and
+    :attr:`Calibration.physics`. Readings outside
     the arm's joint limits are a UserWarning (and in the report's
     warnings). ValueError for a bad option (naming the argument),
     CalibrationError when the data cannot determine the free parameters; a

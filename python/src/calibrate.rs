@@ -113,7 +113,15 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// (`"length=0.5mm,angle=0.1deg,theta5=0.05deg"`, entry by entry over the
 /// arm file's `[prior]`; `"none"` ignores the file's; default: the file's,
 /// if any); `accept_poor_fit`: call a poor χ² or a fit worse than nominal
-/// usable (never a wrong geometry). The report is the command line's bit
+/// usable (never a wrong geometry). Models beyond geometry, fitted with
+/// it, as the command line's flags: `compliance`, joints (from 1) whose
+/// compliance under the gravity torque of the arm file's masses is fitted
+/// (`"2,3"`, `--compliance`); `harmonics`, encoder harmonics
+/// `JOINT:ORDERS` (`"2:1,5:1-2"`, `--harmonics`); `thermal`, a thermal
+/// expansion coefficient against the data's `temperature` column
+/// (`--thermal`); `drift`, a linear drift of the base against the
+/// instrument over the data's `time` column (`--drift`). Their values are
+/// in `auxiliary` and `physics`. The report is the command line's bit
 /// for bit; readings outside the arm's joint limits are a `UserWarning`
 /// (and in the report's warnings). Runs without the GIL.
 ///
@@ -122,7 +130,7 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// parameters. A calibration that is not usable still gives a result:
 /// check `successful` (the verdict) and `report["verdict"]` for why.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false))]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -139,6 +147,10 @@ pub fn calibrate(
     robust_scale: Option<f64>,
     prior: Option<&str>,
     accept_poor_fit: bool,
+    compliance: Option<&str>,
+    harmonics: Option<&str>,
+    thermal: bool,
+    drift: bool,
 ) -> PyResult<Calibration> {
     let fix = match fix {
         Some(f) => fix_text(f)?,
@@ -152,7 +164,8 @@ pub fn calibrate(
         .threads(threads)
         .cross_validate(cross_validate)
         .robust(robust, robust_scale)
-        .accept_poor_fit(accept_poor_fit);
+        .accept_poor_fit(accept_poor_fit)
+        .beyond(compliance, harmonics, thermal, drift);
     // The readers' warnings were issued when the files were read; the
     // request adds those about the arm and the data together.
     let read: Vec<&String> = (arm.warnings.iter().chain(&data.warnings))
@@ -274,6 +287,49 @@ impl Calibration {
             out.set_item(record.name, d)?;
         }
         Ok(out)
+    }
+
+    /// Each auxiliary column fitted with the arm, in the report's order
+    /// (`report["calibration"]["auxiliary"]`): the corrections beyond
+    /// geometry (`compliance2` µrad/(N·m), `harmonic2.sin1` and
+    /// `harmonic2.cos1` deg, `thermal.cte` ppm/K, `drift.x` … mm/h), then
+    /// each frame's `NAME.rx` … `NAME.tz` (deg, mm): name → dict of `unit`,
+    /// `start`, `calibrated`, `sigma` (k = 1; `None` where the data did not
+    /// determine it) and `fixed` (why the column was held at its start —
+    /// a correction these data cannot separate — or `None`).
+    #[getter]
+    fn auxiliary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for a in &self.report.calibration.auxiliary {
+            let d = PyDict::new(py);
+            d.set_item("unit", &a.unit)?;
+            d.set_item("start", a.start)?;
+            d.set_item("calibrated", a.calibrated)?;
+            d.set_item("sigma", a.sigma)?;
+            d.set_item("fixed", &a.fixed)?;
+            out.set_item(&a.name, d)?;
+        }
+        Ok(out)
+    }
+
+    /// The arm's physics at the fit (`None` when the arm states none and
+    /// none was fitted): `link_masses` and `probe_mass` (`kg`, `com_mm`),
+    /// `gravity`, and the corrections, fitted or as the arm file states
+    /// them — `compliance` per joint (rad/(N·m), `None` for none),
+    /// `harmonics` (`joint` 0-based, `order`, `sin`, `cos` rad),
+    /// `cte_per_k` (1/K), `reference_temperature_c` (°C) — as
+    /// `report["calibration"]["physics"]`, and `drift_mm_per_h` (x, y, z)
+    /// when a drift was fitted.
+    #[getter]
+    fn physics<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(physics) = &self.report.calibration.physics else {
+            return Ok(None);
+        };
+        let d = to_dict(py, physics)?;
+        if let Some(v) = physics.drift_mm_per_h {
+            d.set_item("drift_mm_per_h", v.to_vec())?;
+        }
+        Ok(Some(d))
     }
 
     /// Whether the calibration is usable — the verdict (`report["verdict"]`,

@@ -134,7 +134,7 @@ impl From<aacmm_core::residuals::TermError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 13] = [
+const ARGUMENTS: [(&str, &str); 17] = [
     ("prior", "prior"),
     ("method", "method"),
     ("robust.loss", "robust"),
@@ -148,6 +148,10 @@ const ARGUMENTS: [(&str, &str); 13] = [
     ("threads", "threads"),
     ("cross_validate", "cross_validate"),
     ("robust.scale_k", "robust_scale"),
+    ("compliance", "compliance"),
+    ("harmonics", "harmonics"),
+    ("thermal", "thermal"),
+    ("drift", "drift"),
 ];
 
 /// A refused setting as a `ValueError` naming the Python argument. The
