@@ -71,6 +71,19 @@ pub struct Args {
     /// `0.015+0.006/m`, the default).
     #[arg(long, value_name = "MM[+MM/m]", requires = "positions", value_parser = super::shared_flags::position_noise)]
     position_noise: Option<(f64, Option<f64>)>,
+    /// Temperatures of --positions, drawn uniformly in LOW:HIGH °C, written
+    /// as a `temperature` column: a true arm stating `cte_per_k` grows with
+    /// them (from 20 °C).
+    #[arg(long, value_name = "LOW:HIGH", requires = "positions", value_parser = temperature_range)]
+    temperature: Option<[f64; 2]>,
+    /// Rows of --positions taken evenly over this many hours, written as a
+    /// `time` column (s).
+    #[arg(long, value_name = "H", requires = "positions")]
+    session_hours: Option<f64>,
+    /// A drift of the true arm's base against the instrument over the
+    /// session, `X,Y,Z` mm/h (needs --session-hours).
+    #[arg(long, value_name = "X,Y,Z", requires = "session_hours", value_parser = drift_vector)]
+    drift: Option<[f64; 3]>,
     /// Seed of every random draw (0 to 2^63 - 1); recorded in campaign.toml.
     #[arg(long, value_name = "S", allow_negative_numbers = true, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
     seed: u64,
@@ -165,11 +178,22 @@ fn tracker(
         },
         seed: args.seed,
     };
+    let conditions = aacmm_core::simulate::ConditionSettings {
+        temperature_c: args.temperature,
+        session_h: args.session_hours,
+    };
+    let session = |t: &aacmm_core::io::Arm| {
+        aacmm_core::simulate::simulate_session(t, &settings, &conditions, args.drift)
+    };
     let (truth, campaign) = match truth {
-        Some(t) => (
-            t.clone(),
-            aacmm_core::simulate::simulate_positions(t, &settings),
-        ),
+        Some(t) => (t.clone(), session(t)),
+        None if conditions != Default::default() => {
+            use aacmm_core::simulate::simulate_tracker_session;
+            match simulate_tracker_session(nominal, errors, &settings, &conditions, args.drift) {
+                Ok((t, c)) => (t, Ok(c)),
+                Err(e) => return Err(flag_error(e, None)),
+            }
+        }
         None => match aacmm_core::simulate::simulate_tracker(nominal, errors, &settings) {
             Ok((t, c)) => (t, Ok(c)),
             Err(e) => return Err(flag_error(e, None)),
@@ -450,3 +474,32 @@ fn flag_error(e: SimError, file: Option<&SocketsFile>) -> anyhow::Error {
 const _: () = assert!(DEFAULT_LENGTH_SIGMA_MM == 0.4);
 const _: () = assert!(DEFAULT_TWIST_SIGMA_DEG == 0.07);
 const _: () = assert!(DEFAULT_ZERO_SIGMA_DEG == 0.45);
+
+/// `LOW:HIGH` of --temperature, °C.
+fn temperature_range(s: &str) -> Result<[f64; 2], String> {
+    let (lo, hi) = s
+        .split_once(':')
+        .ok_or_else(|| format!("`{s}`: give LOW:HIGH in °C, e.g. 15:30"))?;
+    let number = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| (-100.0..=200.0).contains(v))
+            .ok_or_else(|| format!("`{t}` is not a temperature in °C (−100 to 200)"))
+    };
+    let (lo, hi) = (number(lo)?, number(hi)?);
+    if lo > hi {
+        return Err(format!("`{s}`: LOW above HIGH"));
+    }
+    Ok([lo, hi])
+}
+
+/// `X,Y,Z` of --drift, mm/h.
+fn drift_vector(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| format!("`{s}`: give X,Y,Z in mm/h, e.g. 0.1,0,-0.05"))?;
+    <[f64; 3]>::try_from(v).map_err(|_| format!("`{s}`: three numbers X,Y,Z in mm/h"))
+}

@@ -446,3 +446,97 @@ fn the_ur5_tracker_data_with_each_model() {
         "points {mean} vs the fit's {compliance}"
     );
 }
+
+/// `aacmm simulate` with a true arm file stating compliances and an
+/// expansion, temperatures, a session time and a drift; `aacmm calibrate`
+/// with every model on recovers each within 4σ, and the true arm file the
+/// simulator writes carries the errors.
+#[test]
+fn simulate_writes_a_session_that_calibrate_recovers() {
+    use crate::util::{aacmm, stderr, stdout, temp_dir};
+    let dir = temp_dir("beyond-sim");
+    let nominal = crate::util::example("ur5-tracker").join("arm.toml");
+    let text = std::fs::read_to_string(&nominal).unwrap();
+    let true_text = text
+        .replacen(
+            "angle_unit = \"deg\"\n",
+            "angle_unit = \"deg\"\ncte_per_k = 23e-6\n",
+            1,
+        )
+        .replace(
+            "mass_kg = 8.393",
+            "mass_kg = 8.393\ncompliance_rad_per_nm = 12e-6",
+        )
+        .replace(
+            "mass_kg = 2.275",
+            "mass_kg = 2.275\ncompliance_rad_per_nm = 18e-6",
+        );
+    let truth = crate::util::write(&dir, "true.toml", &true_text);
+    let out = dir.join("sim");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        nominal.to_str().unwrap(),
+        "--true",
+        &truth,
+        "--positions",
+        "300",
+        "--temperature",
+        "15:30",
+        "--session-hours",
+        "4",
+        "--drift",
+        "0.08,-0.05,0.1",
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = std::fs::read_to_string(out.join("true_arm.toml")).unwrap();
+    assert!(written.contains("cte_per_k") && written.contains("compliance_rad_per_nm"));
+    let positions = std::fs::read_to_string(out.join("positions.csv")).unwrap();
+    assert!(positions.starts_with("point,q1,q2,q3,q4,q5,q6,x,y,z,temperature,time\n"));
+    let cal = dir.join("cal");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        nominal.to_str().unwrap(),
+        "--positions",
+        out.join("positions.csv").to_str().unwrap(),
+        "--position-noise",
+        "0.015+0.006/m",
+        "--compliance",
+        "2,3",
+        "--thermal",
+        "--drift",
+        "--method",
+        "lm",
+        "--out",
+        cal.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("Verdict: usable"));
+    let json = std::fs::read_to_string(cal.join("calibration.json")).unwrap();
+    let r = aacmm_core::CalibrationReport::from_json(&json).unwrap();
+    let truths = [
+        ("compliance2", 12.0),
+        ("compliance3", 18.0),
+        ("thermal.cte", 23.0),
+        ("drift.x", 0.08),
+        ("drift.y", -0.05),
+        ("drift.z", 0.1),
+    ];
+    for (name, truth) in truths {
+        let a = (r.calibration.auxiliary.iter())
+            .find(|a| a.name == name)
+            .unwrap();
+        let z = (a.calibrated - truth) / a.sigma.unwrap();
+        assert!(
+            z.abs() < 4.0,
+            "{name}: {} ± {:?} vs {truth}",
+            a.calibrated,
+            a.sigma
+        );
+    }
+}

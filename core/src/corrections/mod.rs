@@ -115,7 +115,7 @@ pub struct Physics {
     pub reference_temperature_c: Option<f64>,
     /// Drift of the base against the instrument, mm/h (a fit's result,
     /// never an arm file's).
-    #[serde(default, skip)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drift_mm_per_h: Option<[f64; 3]>,
 }
 
@@ -359,7 +359,8 @@ impl Beyond {
                     field,
                     value,
                     format!(
-                        "thermal expansion needs the temperature of every pose: {file} has                          no `temperature` column (°C)"
+                        "thermal expansion needs the temperature of every pose: {file} has \
+                         no `temperature` column (°C)"
                     ),
                 ));
             }

@@ -61,6 +61,30 @@ pub fn simulate_tracker(
     Ok((truth, campaign))
 }
 
+/// [`simulate_tracker`] of a session recording `conditions`, the base
+/// drifting by `drift` (mm/h): the true arm drawn as there, its campaign
+/// as [`simulate_session`] makes it.
+///
+/// # Errors
+///
+/// As [`simulate_tracker`] and [`simulate_session`].
+pub fn simulate_tracker_session(
+    nominal: &Arm,
+    errors: &super::ErrorModel,
+    settings: &PositionSettings,
+    conditions: &ConditionSettings,
+    drift: Option<[f64; 3]>,
+) -> Result<(Arm, PositionCampaign), SimError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let truth = super::true_arm(nominal, errors, &mut rng)?;
+    let next = PositionSettings {
+        seed: settings.seed.wrapping_add(1),
+        ..settings.clone()
+    };
+    let campaign = simulate_session(&truth, &next, conditions, drift)?;
+    Ok((truth, campaign))
+}
+
 /// The frames of a campaign as an arm file carries them (no σ: the truth).
 pub fn true_frames(campaign: &PositionCampaign) -> Vec<crate::io::frames::FrameRecord> {
     campaign
@@ -139,6 +163,36 @@ pub fn simulate_positions(
         .collect();
     let positions = seen_from(truth, settings, &frames, &mut rng)?;
     Ok(PositionCampaign { positions, frames })
+}
+
+/// [`simulate_positions`] of a session recording `conditions`, the base
+/// drifting by `drift` (mm/h): the stations drawn as there, the rows as in
+/// [`simulate_positions_in`].
+///
+/// # Errors
+///
+/// As [`simulate_positions_in`].
+pub fn simulate_session(
+    truth: &Arm,
+    settings: &PositionSettings,
+    conditions: &ConditionSettings,
+    drift: Option<[f64; 3]>,
+) -> Result<PositionCampaign, SimError> {
+    let stations = simulate_positions(
+        &Arm {
+            physics: Box::default(),
+            ..truth.clone()
+        },
+        &PositionSettings {
+            poses: 3,
+            ..settings.clone()
+        },
+    )?;
+    let positions = simulate_positions_in(truth, settings, &stations.frames, conditions, drift)?;
+    Ok(PositionCampaign {
+        positions,
+        frames: stations.frames,
+    })
 }
 
 /// Positions of `truth`'s probe in `settings.poses` random poses per frame,

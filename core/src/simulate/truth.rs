@@ -113,6 +113,11 @@ pub fn true_arm(nominal: &Arm, model: &ErrorModel, rng: &mut ChaCha8Rng) -> Resu
                 )));
             }
             arm.params = given.params.clone();
+            // Its errors beyond geometry (compliance, harmonics, an
+            // expansion) are the true arm's too.
+            if given.physics.corrects() || given.physics.has_masses() {
+                arm.physics = given.physics.clone();
+            }
             for (lim, own) in arm.limits.iter_mut().zip(&given.limits) {
                 if own.is_some() {
                     *lim = *own;
