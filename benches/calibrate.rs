@@ -15,7 +15,13 @@
 //!   (two Hayati joints), random errors, one tracker frame seeing 1000 or
 //!   12000 poses with 15 µm + 6 µm/m noise (stated): LM from nominal with
 //!   the identifiability analysis (`--fix auto`), frame and covariance,
-//!   `positions/1000` and `positions/12000`.
+//!   `positions/1000` and `positions/12000`;
+//! - `beyond`: the models beyond geometry switched on, each against the
+//!   same problem without it — `lm-100` (the `lm/100` campaign and fit with
+//!   link masses stated, nothing switched on), `compliance-100`
+//!   (`--compliance 2,3`), `harmonics-100` (`--harmonics 2:1,3:1`); and the
+//!   UR5 tracker's 1000 poses with temperatures and times, `positions-1000`
+//!   without and `thermal-drift-1000` with `--thermal --drift`.
 
 use std::hint::black_box;
 
@@ -174,5 +180,140 @@ fn positions(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, lm, global, energy, positions);
+/// The paper's arm with link masses (a portable arm's: a few kg in all) and
+/// a 0.3 kg probe.
+fn with_masses() -> Arm {
+    use aacmm_core::corrections::{Mass, Physics};
+    let mut arm = nominal();
+    arm.physics = Box::new(Physics {
+        link_masses: [0.8, 1.2, 0.9, 0.6, 0.4, 0.2]
+            .map(|kg| Some(Mass::at_middle(kg)))
+            .to_vec(),
+        probe_mass: Some(Mass::at_middle(0.3)),
+        ..Physics::default()
+    });
+    arm
+}
+
+/// `calibrate` of `arm` (its physics) with the models `beyond` on.
+fn fit_beyond(
+    arm: &Arm,
+    data: &DataSet,
+    model: &ModelOptions,
+    settings: &SolverSettings,
+) -> aacmm_core::Calibration {
+    use aacmm_core::calibrate::{Context, FitInputs, calibrate_with};
+    let layout = aacmm_core::residuals::positions::layout_with(
+        &arm.params,
+        data,
+        &arm.physics,
+        &model.beyond,
+    )
+    .expect("layout");
+    let inputs = FitInputs {
+        layout: &layout,
+        data,
+        model,
+        terms: &[],
+    };
+    calibrate_with(
+        inputs,
+        settings,
+        &*settings.method.solver(),
+        &mut Context::new(),
+    )
+    .expect("fit")
+}
+
+fn beyond(c: &mut Criterion) {
+    use aacmm_core::corrections::Beyond;
+    let arm = with_masses();
+    let (model, settings) = options(Method::Lm, FixSpec::parse(UNOBSERVABLE, 6).expect("names"));
+    let mut g = c.benchmark_group("beyond");
+    g.sample_size(10);
+    let data = std::sync::OnceLock::new();
+    let cases = [
+        ("lm-100", Beyond::default()),
+        (
+            "compliance-100",
+            Beyond {
+                compliance: vec![1, 2],
+                ..Beyond::default()
+            },
+        ),
+        (
+            "harmonics-100",
+            Beyond {
+                harmonics: vec![(1, 1), (2, 1)],
+                ..Beyond::default()
+            },
+        ),
+    ];
+    for (name, beyond) in cases {
+        let model = ModelOptions {
+            beyond,
+            ..model.clone()
+        };
+        g.bench_function(BenchmarkId::from_parameter(name), |b| {
+            let data = data.get_or_init(|| campaign(7, ErrorModel::Paper, 10, 10));
+            b.iter(|| fit_beyond(&arm, black_box(data), &model, &settings))
+        });
+    }
+    beyond_positions(&mut g);
+    g.finish();
+}
+
+/// The UR5 tracker's 1000 poses at 15–30 °C over 4 h, without and with
+/// `--thermal --drift`.
+fn beyond_positions(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>) {
+    use aacmm_core::corrections::Beyond;
+    use aacmm_core::simulate::{ConditionSettings, PositionSettings, simulate_session, true_arm};
+    use rand::SeedableRng;
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/ur5-tracker/arm.toml");
+    let nominal = aacmm_core::read_arm(std::path::Path::new(path))
+        .expect("the shipped UR5")
+        .0;
+    let noise = Noise {
+        position_mm: Some(0.015),
+        position_mm_per_m: Some(0.006),
+        ..Noise::default()
+    };
+    let (mut model, settings) = options(Method::Lm, FixSpec::Auto);
+    model.noise = noise;
+    let data = std::sync::OnceLock::new();
+    for (name, thermal) in [("positions-1000", false), ("thermal-drift-1000", true)] {
+        let model = ModelOptions {
+            beyond: Beyond {
+                thermal,
+                drift: thermal,
+                ..Beyond::default()
+            },
+            ..model.clone()
+        };
+        g.bench_function(BenchmarkId::from_parameter(name), |b| {
+            let data = data.get_or_init(|| {
+                let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+                let truth =
+                    true_arm(&nominal, &ErrorModel::random(1.0, false), &mut rng).expect("truth");
+                let s = PositionSettings {
+                    poses: 1000,
+                    frames: 1,
+                    noise,
+                    seed: 12,
+                };
+                let conditions = ConditionSettings {
+                    temperature_c: Some([15.0, 30.0]),
+                    session_h: Some(4.0),
+                };
+                let rows = simulate_session(&truth, &s, &conditions, None)
+                    .expect("campaign")
+                    .positions;
+                DataSet::from_positions(rows, "tracker.csv").expect("data set")
+            });
+            b.iter(|| fit_beyond(&nominal, black_box(data), &model, &settings))
+        });
+    }
+}
+
+criterion_group!(benches, lm, global, energy, positions, beyond);
 criterion_main!(benches);

@@ -874,12 +874,12 @@ impl DataSet {
         let none = Beyond::default();
         let mut out = self.clone();
         if !self.is_empty() {
-            out.poses = Effects::new(arm, physics, &none, &self.q, self.conditions())
+            out.poses = Effects::new(arm, physics, &none, &self.poses, self.conditions())
                 .map_err(|e| format!("{}: {e}", self.source.poses_file))?
                 .poses;
         }
         if let Some(p) = &mut out.positions {
-            p.poses = Effects::new(arm, physics, &none, p.rows.readings(), p.conditions())
+            p.poses = Effects::new(arm, physics, &none, &p.poses, p.conditions())
                 .map_err(|e| format!("{}: {e}", p.file))?
                 .poses;
         }

@@ -90,7 +90,7 @@ impl ArmAndPoses {
         if !arm.physics.corrects() {
             return Ok(None);
         }
-        let flat: Vec<f64> = rows.iter().flat_map(|r| r.iter().copied()).collect();
+        let raw = PreparedPoses::new(arm.params.joint_count(), rows)?;
         let temperatures = self.temperature.map(|t| vec![t; rows.len()]);
         let conditions = Conditions {
             temperature_c: temperatures.as_deref(),
@@ -100,7 +100,7 @@ impl ArmAndPoses {
             &arm.params,
             &arm.physics,
             &Beyond::default(),
-            &flat,
+            &raw,
             conditions,
         )
         .map_err(|e| anyhow::anyhow!("{}: {e}", source_name(&self.arm)))?;

@@ -1,7 +1,7 @@
 //! A set of poses as the chain sees them under the corrections, and the
 //! corrections' Jacobian columns.
 
-use super::gravity::{gravity_vector, torques};
+use super::gravity::{Loads, torques};
 use super::{Beyond, Physics};
 use crate::kernel::{Post, PreparedPoses};
 use crate::params::DhParams;
@@ -42,10 +42,13 @@ pub struct Effects {
 pub type EffectsError = String;
 
 impl Effects {
-    /// The poses of `readings` (rad, pose-major, `arm`'s joints per pose)
-    /// recorded under `conditions`, corrected by `physics` (the effective
-    /// values: stated or at the fit's point), with the Jacobian factors of
-    /// the models `fit` estimates.
+    /// The poses `raw` (the readings' own cos and sin) recorded under
+    /// `conditions`, corrected by `physics` (the effective values: stated
+    /// or at the fit's point), with the Jacobian factors of the models
+    /// `fit` estimates. No transcendental call per pose: the harmonics
+    /// `sin(kq)`, `cos(kq)` by the angle-sum recurrence from the reading's
+    /// own, the corrected angles through the angle sum with the small
+    /// correction.
     ///
     /// # Errors
     ///
@@ -54,11 +57,11 @@ impl Effects {
         arm: &DhParams,
         physics: &Physics,
         fit: &Beyond,
-        readings: &[f64],
+        raw: &PreparedPoses,
         conditions: Conditions<'_>,
     ) -> Result<Effects, EffectsError> {
         let n = arm.joints.len();
-        let len = readings.len() / n.max(1);
+        let len = raw.len();
         let thermal = fit.thermal || physics.cte_per_k.is_some_and(|c| c != 0.0);
         let drift = fit.drift || physics.drift_mm_per_h.is_some();
         let temperature = match (thermal, conditions.temperature_c) {
@@ -74,12 +77,9 @@ impl Effects {
         let t0 = time.map_or(0.0, |t| t.iter().copied().fold(f64::INFINITY, f64::min));
         let (cte, reference) = (physics.cte_per_k.unwrap_or(0.0), physics.reference_c());
         let drift_v = physics.drift_mm_per_h.unwrap_or([0.0; 3]);
-        let torque = !fit.compliance.is_empty()
-            || physics
-                .compliance
-                .iter()
-                .any(|c| c.is_some_and(|v| v != 0.0));
-        let g = gravity_vector(physics);
+        let compliance: Vec<f64> = (0..n).map(|j| physics.compliance_of(j)).collect();
+        let loads = (!fit.compliance.is_empty() || compliance.iter().any(|&c| c != 0.0))
+            .then(|| Loads::new(arm, physics));
         let m = fit.len();
         let mut kinds = Vec::with_capacity(m);
         kinds.extend(fit.compliance.iter().map(|&j| Kind::Joint(3 * n + j)));
@@ -92,39 +92,72 @@ impl Effects {
         if fit.drift {
             kinds.extend((0..3).map(Kind::Axis));
         }
-        let mut q = readings.to_vec();
+        let trig: Vec<(&[f64], &[f64])> = (0..n).map(|j| raw.column_trig(j)).collect();
+        // Each joint's reading correction, joint by joint over the poses.
+        let mut delta: Vec<Vec<f64>> = vec![Vec::new(); n];
+        for h in &physics.harmonics {
+            let (c, s) = trig[h.joint];
+            let d = &mut delta[h.joint];
+            d.resize(len, 0.0);
+            for i in 0..len {
+                let (ck, sk) = multiple(c[i], s[i], h.order);
+                d[i] += h.sin * sk + h.cos * ck;
+            }
+        }
+        let mut tau = vec![0.0; if loads.is_some() { len * n } else { 0 }];
+        if let Some(loads) = &loads {
+            for (i, t) in tau.chunks_exact_mut(n).enumerate() {
+                loads.torques(|j| trig[j].0[i], |j| trig[j].1[i], t);
+            }
+            for (j, d) in delta.iter_mut().enumerate() {
+                if compliance[j] != 0.0 {
+                    d.resize(len, 0.0);
+                    for i in 0..len {
+                        d[i] += compliance[j] * tau[i * n + j];
+                    }
+                }
+            }
+        }
+        // The corrected angles' cos and sin through the angle sum; a joint
+        // without correction keeps its own.
+        let (mut cos, mut sin) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for (j, d) in delta.iter().enumerate() {
+            let (c, s) = trig[j];
+            if d.is_empty() {
+                cos.push(c.to_vec());
+                sin.push(s.to_vec());
+                continue;
+            }
+            let (mut cj, mut sj) = (vec![0.0; len], vec![0.0; len]);
+            for i in 0..len {
+                let (cd, sd) = small_sin_cos(d[i]);
+                cj[i] = c[i] * cd - s[i] * sd;
+                sj[i] = s[i] * cd + c[i] * sd;
+            }
+            cos.push(cj);
+            sin.push(sj);
+        }
         let mut factors = vec![0.0; len * m];
-        let mut tau = vec![0.0; n];
         let mut post = Post {
             scale: vec![1.0; len],
             offset: vec![[0.0; 3]; len],
         };
         for i in 0..len {
-            let raw = &readings[i * n..(i + 1) * n];
-            let seen = &mut q[i * n..(i + 1) * n];
-            for h in &physics.harmonics {
-                let x = f64::from(h.order) * raw[h.joint];
-                seen[h.joint] += h.sin * x.sin() + h.cos * x.cos();
-            }
-            if torque {
-                torques(arm, physics, &g, raw, &mut tau);
-                for (j, s) in seen.iter_mut().enumerate() {
-                    *s += physics.compliance_of(j) * tau[j];
-                }
-            }
             let dt_k = temperature.map_or(0.0, |t| t[i] - reference);
             let dt_h = time.map_or(0.0, |t| (t[i] - t0) / 3600.0);
             post.scale[i] = 1.0 + cte * dt_k;
             post.offset[i] = drift_v.map(|v| v * dt_h);
+            if m == 0 {
+                continue;
+            }
             let f = &mut factors[i * m..(i + 1) * m];
             let mut k = 0;
             for &j in &fit.compliance {
-                f[k] = tau[j] * 1e-6;
+                f[k] = tau[i * n + j] * 1e-6;
                 k += 1;
             }
             for &(j, order) in &fit.harmonics {
-                let x = f64::from(order) * raw[j];
-                (f[k], f[k + 1]) = (x.sin(), x.cos());
+                (f[k + 1], f[k]) = multiple(trig[j].0[i], trig[j].1[i], order);
                 k += 2;
             }
             if fit.thermal {
@@ -135,7 +168,7 @@ impl Effects {
                 f[k..k + 3].fill(dt_h);
             }
         }
-        let mut poses = PreparedPoses::from_flat(n, len, &q);
+        let mut poses = PreparedPoses::from_trig(n, len, cos, sin);
         if thermal || drift {
             poses = poses.with_post(post);
         }
@@ -154,7 +187,7 @@ impl Effects {
     /// Pose `i`'s Jacobian into `out`: the chain's columns `jac` (at the
     /// corrected pose, position `pos`), then the corrections' — the layout's
     /// order when the correction block is its first.
-    #[inline]
+    #[inline(always)]
     pub fn extend(&self, i: usize, pos: &[f64; 3], jac: &[[f64; 3]], out: &mut Vec<[f64; 3]>) {
         out.clear();
         out.extend_from_slice(jac);
@@ -177,7 +210,6 @@ impl Effects {
 /// change with `q` smaller still, so a few rounds reach round-off.
 pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
     let n = arm.joints.len();
-    let g = gravity_vector(physics);
     let mut q = angles.to_vec();
     let mut tau = vec![0.0; n];
     for _ in 0..8 {
@@ -191,7 +223,7 @@ pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f6
             .iter()
             .any(|c| c.is_some_and(|v| v != 0.0))
         {
-            torques(arm, physics, &g, &q, &mut tau);
+            torques(arm, physics, &q, &mut tau);
             for (j, cj) in c.iter_mut().enumerate() {
                 *cj += physics.compliance_of(j) * tau[j];
             }
@@ -201,4 +233,28 @@ pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f6
         }
     }
     q
+}
+
+/// `(cos kq, sin kq)` from `cos q`, `sin q` by the angle-sum recurrence.
+#[inline]
+fn multiple(c: f64, s: f64, k: u32) -> (f64, f64) {
+    let (mut ck, mut sk) = (c, s);
+    for _ in 1..k {
+        (ck, sk) = (ck * c - sk * s, sk * c + ck * s);
+    }
+    (ck, sk)
+}
+
+/// `(cos d, sin d)` of a correction `d`: its Taylor series while `|d| <
+/// 0.01` rad (the next term below 10⁻²³), else the library's.
+#[inline]
+fn small_sin_cos(d: f64) -> (f64, f64) {
+    if d.abs() >= 0.01 {
+        let (s, c) = d.sin_cos();
+        return (c, s);
+    }
+    let d2 = d * d;
+    let c = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0)));
+    let s = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)));
+    (c, s)
 }

@@ -66,31 +66,66 @@ fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// Link `j`'s transform at joint angle `angle = q + θ`.
-fn link(j: &DhJoint, angle: f64) -> Pose3 {
-    let (st, ct) = angle.sin_cos();
-    let (sa, ca) = j.alpha.sin_cos();
-    let d = match j.model {
-        JointModel::Dh => j.d,
-        JointModel::Hayati => 0.0,
-    };
-    let a = Pose3 {
-        r: [
-            [ct, -ca * st, sa * st],
-            [st, ca * ct, -sa * ct],
-            [0.0, sa, ca],
-        ],
-        t: [j.a * ct, j.a * st, d],
-    };
-    match j.model {
-        JointModel::Dh => a,
-        JointModel::Hayati => {
-            let (sb, cb) = j.beta.sin_cos();
-            a.then(&Pose3 {
-                r: [[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]],
-                t: [0.0; 3],
-            })
+/// A link's constants: everything but its joint's reading.
+#[derive(Clone, Copy, Debug)]
+struct Link {
+    /// cos and sin of the zero offset θ.
+    ct: f64,
+    st: f64,
+    ca: f64,
+    sa: f64,
+    /// cos and sin of a Hayati joint's β (1, 0 for a D-H joint).
+    cb: f64,
+    sb: f64,
+    a: f64,
+    d: f64,
+    hayati: bool,
+}
+
+impl Link {
+    fn new(j: &DhJoint) -> Link {
+        let (st, ct) = j.theta.sin_cos();
+        let (sa, ca) = j.alpha.sin_cos();
+        let hayati = j.model == JointModel::Hayati;
+        let (sb, cb) = if hayati { j.beta.sin_cos() } else { (0.0, 1.0) };
+        Link {
+            ct,
+            st,
+            ca,
+            sa,
+            cb,
+            sb,
+            a: j.a,
+            d: if hayati { 0.0 } else { j.d },
+            hayati,
         }
+    }
+
+    /// The link's transform at a reading with cos `cq` and sin `sq`: the
+    /// joint angle `q + θ` through the angle sum, no transcendental call.
+    fn at(&self, cq: f64, sq: f64) -> Pose3 {
+        let ct = cq * self.ct - sq * self.st;
+        let st = sq * self.ct + cq * self.st;
+        let (ca, sa) = (self.ca, self.sa);
+        let a = Pose3 {
+            r: [
+                [ct, -ca * st, sa * st],
+                [st, ca * ct, -sa * ct],
+                [0.0, sa, ca],
+            ],
+            t: [self.a * ct, self.a * st, self.d],
+        };
+        if !self.hayati {
+            return a;
+        }
+        a.then(&Pose3 {
+            r: [
+                [self.cb, 0.0, self.sb],
+                [0.0, 1.0, 0.0],
+                [-self.sb, 0.0, self.cb],
+            ],
+            t: [0.0; 3],
+        })
     }
 }
 
@@ -102,44 +137,80 @@ pub fn gravity_vector(physics: &Physics) -> [f64; 3] {
     dir.map(|v| STANDARD_GRAVITY * v / norm)
 }
 
-/// Gravity torque about each joint's axis at readings `q` (rad), N·m,
-/// into `out` (one per joint); `g` from [`gravity_vector`].
-pub fn torques(arm: &DhParams, physics: &Physics, g: &[f64; 3], q: &[f64], out: &mut [f64]) {
-    let n = arm.joints.len();
-    // Frames o_0..o_n (origins and the z axes of 0..n−1) and the masses'
-    // centres, base to tip.
-    let mut frames = Vec::with_capacity(n + 1);
-    frames.push(Pose3::IDENTITY);
-    for (j, joint) in arm.joints.iter().enumerate() {
-        let next = frames[j].then(&link(joint, q[j] + joint.theta));
-        frames.push(next);
-    }
-    let centre = |m: &Mass, frame: &Pose3, default: [f64; 3]| match m.com_mm {
-        Some(c) => frame.apply(&c),
-        None => default,
-    };
-    // Running sums from the tip: S = Σ m r (kg·mm), M = Σ m (kg).
-    let (mut s, mut m) = ([0.0; 3], 0.0);
-    if let Some(tool) = &physics.probe_mass {
-        let tip = frames[n].apply(&arm.probe);
-        let r = centre(tool, &frames[n], tip);
-        s = r.map(|v| tool.kg * v);
-        m = tool.kg;
-    }
-    for j in (0..n).rev() {
-        if let Some(Some(link)) = physics.link_masses.get(j) {
-            let (a, b) = (frames[j].t, frames[j + 1].t);
-            let mid = std::array::from_fn(|k| 0.5 * (a[k] + b[k]));
-            let r = centre(link, &frames[j + 1], mid);
-            for k in 0..3 {
-                s[k] += link.kg * r[k];
-            }
-            m += link.kg;
+/// An arm's chain and masses, prepared once for the gravity torques of
+/// many poses.
+#[derive(Clone, Debug)]
+pub struct Loads {
+    links: Vec<Link>,
+    probe: [f64; 3],
+    masses: Vec<Option<Mass>>,
+    tool: Option<Mass>,
+    g: [f64; 3],
+}
+
+impl Loads {
+    /// The loads of `physics`' masses on the chain of `arm`.
+    pub fn new(arm: &DhParams, physics: &Physics) -> Loads {
+        Loads {
+            links: arm.joints.iter().map(Link::new).collect(),
+            probe: arm.probe,
+            masses: physics.link_masses.clone(),
+            tool: physics.probe_mass,
+            g: gravity_vector(physics),
         }
-        let o = frames[j].t;
-        let arm_of: [f64; 3] = std::array::from_fn(|k| s[k] - m * o[k]);
-        out[j] = dot(&frames[j].z(), &cross(&arm_of, g)) / 1000.0;
     }
+
+    /// Gravity torque about each joint's axis (N·m) into `out`, at the
+    /// pose whose readings have cos `cq(j)` and sin `sq(j)`.
+    pub fn torques(&self, cq: impl Fn(usize) -> f64, sq: impl Fn(usize) -> f64, out: &mut [f64]) {
+        let n = self.links.len();
+        // Frames o_0..o_n (origins and the z axes of 0..n−1) and the
+        // masses' centres, base to tip.
+        let mut fixed = [Pose3::IDENTITY; 9];
+        let mut long = Vec::new();
+        let frames: &mut [Pose3] = if n < fixed.len() {
+            &mut fixed[..=n]
+        } else {
+            long.resize(n + 1, Pose3::IDENTITY);
+            &mut long
+        };
+        for (j, link) in self.links.iter().enumerate() {
+            frames[j + 1] = frames[j].then(&link.at(cq(j), sq(j)));
+        }
+        let centre = |m: &Mass, frame: &Pose3, default: [f64; 3]| match m.com_mm {
+            Some(c) => frame.apply(&c),
+            None => default,
+        };
+        // Running sums from the tip: S = Σ m r (kg·mm), M = Σ m (kg).
+        let (mut s, mut m) = ([0.0; 3], 0.0);
+        if let Some(tool) = &self.tool {
+            let tip = frames[n].apply(&self.probe);
+            let r = centre(tool, &frames[n], tip);
+            s = r.map(|v| tool.kg * v);
+            m = tool.kg;
+        }
+        for j in (0..n).rev() {
+            if let Some(Some(link)) = self.masses.get(j) {
+                let (a, b) = (frames[j].t, frames[j + 1].t);
+                let mid = std::array::from_fn(|k| 0.5 * (a[k] + b[k]));
+                let r = centre(link, &frames[j + 1], mid);
+                for k in 0..3 {
+                    s[k] += link.kg * r[k];
+                }
+                m += link.kg;
+            }
+            let o = frames[j].t;
+            let arm_of: [f64; 3] = std::array::from_fn(|k| s[k] - m * o[k]);
+            out[j] = dot(&frames[j].z(), &cross(&arm_of, &self.g)) / 1000.0;
+        }
+    }
+}
+
+/// Gravity torque about each joint's axis at readings `q` (rad), N·m,
+/// into `out` (one per joint): [`Loads::torques`] of one pose.
+pub fn torques(arm: &DhParams, physics: &Physics, q: &[f64], out: &mut [f64]) {
+    let loads = Loads::new(arm, physics);
+    loads.torques(|j| q[j].cos(), |j| q[j].sin(), out);
 }
 
 #[cfg(test)]
@@ -170,9 +241,8 @@ mod tests {
             gravity: Some([0.0, -1.0, 0.0]),
             ..Physics::default()
         };
-        let g = gravity_vector(&physics);
         let mut tau = [0.0; 6];
-        torques(&arm, &physics, &g, &[0.0; 6], &mut tau);
+        torques(&arm, &physics, &[0.0; 6], &mut tau);
         // Links along +x, gravity along −y: torque about +z is negative.
         let expect = -STANDARD_GRAVITY * (0.25 + 0.75);
         assert!((tau[0] - expect).abs() < 1e-12, "{tau:?}");
@@ -182,7 +252,6 @@ mod tests {
         torques(
             &arm,
             &physics,
-            &g,
             &[-std::f64::consts::FRAC_PI_2, 0.0, 0.0, 0.0, 0.0, 0.0],
             &mut tau,
         );

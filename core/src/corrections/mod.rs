@@ -477,6 +477,11 @@ impl Block for CorrectionBlock {
         self.physics.start_of(&self.fit)
     }
 
+    /// Without naming every column (the layout asks often).
+    fn len(&self) -> usize {
+        self.fit.len()
+    }
+
     fn corrections(&self) -> Option<&CorrectionBlock> {
         Some(self)
     }

@@ -380,6 +380,30 @@ impl PreparedPoses {
         }
     }
 
+    /// Poses from the cos and sin of their readings, joint by joint
+    /// (`cos[j][i]`): readings corrected by small angles through the angle
+    /// sums, without a transcendental call per reading.
+    pub(crate) fn from_trig(
+        joints: usize,
+        len: usize,
+        cos: Vec<Vec<f64>>,
+        sin: Vec<Vec<f64>>,
+    ) -> Self {
+        debug_assert!(cos.len() == joints && sin.len() == joints);
+        PreparedPoses {
+            joints,
+            len,
+            cos,
+            sin,
+            post: None,
+        }
+    }
+
+    /// The cos and sin of joint `j`'s readings, pose by pose.
+    pub(crate) fn column_trig(&self, j: usize) -> (&[f64], &[f64]) {
+        (&self.cos[j], &self.sin[j])
+    }
+
     /// These poses with `post` applied after the chain.
     ///
     /// # Panics

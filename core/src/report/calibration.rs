@@ -147,19 +147,19 @@ fn beyond_effects(
     let params = &report.calibration.params;
     let kernel = crate::kernel::ArmKernel::new(params)?;
     let data = problem.data();
-    let mut sets: Vec<(&[f64], Conditions<'_>, &crate::kernel::PreparedPoses)> = Vec::new();
+    let mut sets: Vec<(Conditions<'_>, &crate::kernel::PreparedPoses)> = Vec::new();
     if !data.is_empty() {
-        sets.push((data.readings(), data.conditions(), data.poses()));
+        sets.push((data.conditions(), data.poses()));
     }
     if let Some(p) = data.positions() {
-        sets.push((p.rows().readings(), p.conditions(), p.poses()));
+        sets.push((p.conditions(), p.poses()));
     }
     let mut out = Vec::new();
     for (name, physics) in models {
         let (mut reach_mm, mut error_mm) = (Vec::new(), Vec::new());
-        for (readings, conditions, plain) in &sets {
+        for (conditions, plain) in &sets {
             let n = plain.len();
-            let seen = Effects::new(params, &physics, &Beyond::default(), readings, *conditions)
+            let seen = Effects::new(params, &physics, &Beyond::default(), plain, *conditions)
                 .map_err(|message| {
                     Box::new(crate::calibrate::CalibrationError::Term {
                         term: "beyond".into(),

@@ -220,8 +220,8 @@ impl At<'_> {
         &self.x[self.layout.columns(id)]
     }
 
-    /// The poses of `readings` (rad, pose-major) under `conditions` as the
-    /// chain sees them with the layout's corrections at this point, and
+    /// The poses `raw` (a data set's prepared readings) under `conditions`
+    /// as the chain sees them with the layout's corrections at this point, and
     /// the corrections' Jacobian factors; `None` when the layout corrects
     /// nothing (the poses are the readings).
     ///
@@ -231,7 +231,7 @@ impl At<'_> {
     /// without temperatures).
     pub fn effects(
         &self,
-        readings: &[f64],
+        raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
     ) -> Result<Option<crate::corrections::Effects>, TermError> {
         let Some((block, cols)) = self.layout.corrections() else {
@@ -241,7 +241,30 @@ impl At<'_> {
         if block.fit.is_empty() && !physics.corrects() {
             return Ok(None);
         }
-        crate::corrections::Effects::new(self.arm, &physics, &block.fit, readings, conditions)
+        crate::corrections::Effects::new(self.arm, &physics, &block.fit, raw, conditions)
+            .map(Some)
+            .map_err(|e| TermError::invalid("beyond", e))
+    }
+
+    /// [`At::effects`] without the Jacobian factors: what a cost needs.
+    ///
+    /// # Errors
+    ///
+    /// As [`At::effects`].
+    pub fn corrected_poses(
+        &self,
+        raw: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+    ) -> Result<Option<crate::corrections::Effects>, TermError> {
+        let Some((block, cols)) = self.layout.corrections() else {
+            return Ok(None);
+        };
+        let physics = block.physics_at(&self.x[cols]);
+        if !physics.corrects() {
+            return Ok(None);
+        }
+        let none = crate::corrections::Beyond::default();
+        crate::corrections::Effects::new(self.arm, &physics, &none, raw, conditions)
             .map(Some)
             .map_err(|e| TermError::invalid("beyond", e))
     }

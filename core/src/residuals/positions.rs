@@ -386,7 +386,7 @@ impl Term for PositionTerm<'_> {
         let frames = self.frames_at(at);
         let free = normal.free.clone();
         let arm = at.layout.arm_columns();
-        let effects = at.effects(self.data.rows().readings(), self.data.conditions())?;
+        let effects = at.effects(self.data.poses(), self.data.conditions())?;
         // Per free column: the arm's column (geometry or correction), or
         // (frame, its column 0..6).
         let geo: Vec<(usize, usize)> = free
@@ -449,7 +449,7 @@ impl Term for PositionTerm<'_> {
         let frames = self.frames_at(at);
         let n = self.data.len();
         scratch.resize(n, [0.0; 3]);
-        let effects = at.effects(self.data.rows().readings(), self.data.conditions())?;
+        let effects = at.corrected_poses(self.data.poses(), self.data.conditions())?;
         let poses = effects.as_ref().map_or(self.data.poses(), |e| &e.poses);
         at.kernel.positions(poses, 0..n, &mut scratch[..n])?;
         for (i, p) in scratch[..n].iter().enumerate() {
@@ -465,7 +465,7 @@ impl Term for PositionTerm<'_> {
         let frames = self.frames_at(at);
         let n = self.data.len();
         let mut p = vec![[0.0; 3]; n];
-        let effects = at.effects(self.data.rows().readings(), self.data.conditions())?;
+        let effects = at.corrected_poses(self.data.poses(), self.data.conditions())?;
         let poses = effects.as_ref().map_or(self.data.poses(), |e| &e.poses);
         at.kernel.positions(poses, 0..n, &mut p)?;
         let rows = self.data.rows();

@@ -383,7 +383,7 @@ impl Term for TouchTerm<'_> {
         shared: &mut Shared,
         normal: &mut Normal,
     ) -> Result<f64, TermError> {
-        let effects = at.effects(self.data.readings(), self.data.conditions())?;
+        let effects = at.effects(self.data.poses(), self.data.conditions())?;
         Ok(accumulate(self, at, effects.as_ref(), shared, normal)?)
     }
 
@@ -398,7 +398,7 @@ impl Term for TouchTerm<'_> {
         let data = self.data;
         scratch.resize(data.len(), [0.0; 3]);
         let xyz = &mut scratch[..];
-        let effects = at.effects(data.readings(), data.conditions())?;
+        let effects = at.corrected_poses(data.poses(), data.conditions())?;
         let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
         at.kernel.positions(poses, 0..data.len(), xyz)?;
         let mut centroids = Vec::with_capacity(data.points().len());
@@ -437,7 +437,7 @@ impl Term for TouchTerm<'_> {
         let most = data.points().iter().map(|p| p.touches.len()).max();
         let mut xyz = vec![[0.0; 3]; most.unwrap_or(0)];
         let mut out = vec![0.0; data.len()];
-        let effects = at.effects(data.readings(), data.conditions())?;
+        let effects = at.corrected_poses(data.poses(), data.conditions())?;
         let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
         for point in data.points() {
             let first = point.touches.start;
@@ -809,15 +809,20 @@ fn chunk(
         // A model beyond geometry is on: each touch's columns extended by
         // the corrections' (off the hot path of a geometric fit).
         let mut ext = Vec::with_capacity(kernel.param_count() + effects.columns());
-        kernel.for_each_jacobian(&effects.poses, touches, |i, pos, jac| {
-            if i == all[point].touches.end {
-                sums.finish(&mut part, &mut jtj, need_mean);
-                point += 1;
-            }
-            finite &= pos.iter().all(|v| v.is_finite());
-            effects.extend(i, pos, jac, &mut ext);
-            sums.add(pos, &weights[i], &ext, free, &mut jtj);
-        })?;
+        kernel.for_each_jacobian(
+            &effects.poses,
+            touches,
+            #[inline(always)]
+            |i, pos, jac| {
+                if i == all[point].touches.end {
+                    sums.finish(&mut part, &mut jtj, need_mean);
+                    point += 1;
+                }
+                finite &= pos.iter().all(|v| v.is_finite());
+                effects.extend(i, pos, jac, &mut ext);
+                sums.add(pos, &weights[i], &ext, free, &mut jtj);
+            },
+        )?;
     } else {
         // Inlined into the kernel's loop, so the accumulation is compiled
         // with the same target features (AVX2 where the CPU has it).

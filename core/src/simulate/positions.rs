@@ -8,7 +8,7 @@ use super::SimError;
 use super::sockets::random_configuration;
 use super::truth::normal;
 use crate::io::{Arm, DEFAULT_FRAME, Positions};
-use crate::kernel::ArmKernel;
+use crate::kernel::{ArmKernel, PreparedPoses};
 use crate::residuals::{Frame, Noise};
 
 /// What a simulated tracker campaign measures.
@@ -297,9 +297,14 @@ fn draw_rows(
                     temperature_c: temperature.as_ref().map(std::slice::from_ref),
                     time_s: None,
                 };
-                let seen =
-                    crate::corrections::Effects::new(&truth.params, &still, &none, &q, recorded)
-                        .map_err(model)?;
+                let seen = crate::corrections::Effects::new(
+                    &truth.params,
+                    &still,
+                    &none,
+                    &PreparedPoses::from_flat(n, 1, &q),
+                    recorded,
+                )
+                .map_err(model)?;
                 let mut p = [[0.0; 3]];
                 kernel
                     .positions(&seen.poses, 0..1, &mut p)
