@@ -540,3 +540,59 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
         );
     }
 }
+
+/// What the data cannot separate is held with why, the rest fitted: a
+/// harmonic of a joint that does not turn (its columns are the zero
+/// offset's), an expansion at one temperature (the scale), the compliance
+/// of the vertical base joint (never loaded) — each beside a column of the
+/// same model that the data do separate.
+#[test]
+fn what_the_data_cannot_separate_is_held() {
+    let nominal = ur5();
+    let truth = true_geometry(&nominal, 3);
+    let frame = vec![("instrument".to_string(), FRAME)];
+    let held = |cal: &Calibration, name: &str| {
+        (cal.auxiliary.iter())
+            .find(|a| a.name == name)
+            .unwrap_or_else(|| panic!("{name} not among the columns"))
+            .fixed
+            .clone()
+    };
+    // Joint 4 held at one reading.
+    let mut still = truth.clone();
+    still.limits[3] = Some([0.4, 0.4 + 1e-12]);
+    let rows = simulate_positions_in(&still, &settings(200, 5), &frame, &CONDITIONS, None).unwrap();
+    let harmonics = Beyond {
+        harmonics: vec![(2, 1), (3, 1)],
+        ..Beyond::default()
+    };
+    let cal = fit(&nominal, &rows, &harmonics);
+    for column in ["harmonic4.sin1", "harmonic4.cos1"] {
+        let why = held(&cal, column).unwrap_or_else(|| panic!("{column} fitted"));
+        assert!(why.contains("not separable"), "{column}: {why}");
+    }
+    assert_eq!(held(&cal, "harmonic3.sin1"), None);
+    // One temperature: the expansion is the scale.
+    let one = ConditionSettings {
+        temperature_c: Some([25.0, 25.0]),
+        session_h: Some(4.0),
+    };
+    let rows = simulate_positions_in(&truth, &settings(200, 6), &frame, &one, None).unwrap();
+    let thermal = Beyond {
+        thermal: true,
+        drift: true,
+        ..Beyond::default()
+    };
+    let cal = fit(&nominal, &rows, &thermal);
+    assert!(held(&cal, "thermal.cte").is_some_and(|w| w.contains("not separable")));
+    assert_eq!(held(&cal, "drift.x"), None);
+    // The base joint turns about gravity: no load.
+    let rows = positions(&truth, None, 200, 7);
+    let compliance = Beyond {
+        compliance: vec![0, 1],
+        ..Beyond::default()
+    };
+    let cal = fit(&nominal, &rows, &compliance);
+    assert!(held(&cal, "compliance1").is_some_and(|w| w.contains("moves no residual")));
+    assert_eq!(held(&cal, "compliance2"), None);
+}
