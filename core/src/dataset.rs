@@ -363,6 +363,11 @@ impl DataSet {
             .map(|&r| u32::try_from(r))
             .collect::<Result<Vec<u32>, _>>()
             .map_err(|_| too_many("touches"))?;
+        let in_touch_order = |c: Option<&[f64]>| c.map(|c| order.iter().map(|&r| c[r]).collect());
+        let (temperature, time) = (
+            in_touch_order(poses.temperatures()),
+            in_touch_order(poses.times()),
+        );
         drop(order);
         Ok(DataSet {
             joints,
@@ -377,8 +382,8 @@ impl DataSet {
                 ..SourceMap::default()
             },
             positions: None,
-            temperature: None,
-            time: None,
+            temperature,
+            time,
         })
     }
 

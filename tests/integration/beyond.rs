@@ -596,3 +596,94 @@ fn what_the_data_cannot_separate_is_held() {
     assert!(held(&cal, "compliance1").is_some_and(|w| w.contains("moves no residual")));
     assert_eq!(held(&cal, "compliance2"), None);
 }
+
+/// Touches with `temperature` and `time` columns: a poses file carries them
+/// (read, kept in touch order), `--thermal --drift` fit them, and on a
+/// campaign without either error both come out consistent with zero.
+#[test]
+fn touches_carry_temperature_and_time() {
+    use crate::util::{aacmm, stderr, stdout, temp_dir};
+    let dir = temp_dir("beyond-touches");
+    let arm = crate::util::example("paper-table-1.toml");
+    let sim = dir.join("sim");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--errors",
+        "paper",
+        "--sockets",
+        "8",
+        "--poses",
+        "12",
+        "--seed",
+        "5",
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(sim.join("poses.csv")).unwrap();
+    let mut out = String::new();
+    for (i, line) in text.lines().enumerate() {
+        if i == 0 {
+            out += &format!("{line},temperature,time\n");
+        } else {
+            // A warm-up over the session, 30 s per touch.
+            let t = 30.0 * i as f64;
+            out += &format!("{line},{},{t}\n", 18.0 + 8.0 * (t / 3000.0).sin().abs());
+        }
+    }
+    let poses = crate::util::write(&dir, "poses.csv", &out);
+    let cal = dir.join("cal");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--data",
+        &poses,
+        "--lengths",
+        sim.join("lengths.csv").to_str().unwrap(),
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--thermal",
+        "--drift",
+        "--method",
+        "lm",
+        "--out",
+        cal.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("Verdict: usable"), "{}", stdout(&o));
+    let json = std::fs::read_to_string(cal.join("calibration.json")).unwrap();
+    let r = aacmm_core::CalibrationReport::from_json(&json).unwrap();
+    for name in ["thermal.cte", "drift.x", "drift.y", "drift.z"] {
+        let a = (r.calibration.auxiliary.iter())
+            .find(|a| a.name == name)
+            .unwrap();
+        let z = a.calibrated / a.sigma.unwrap();
+        assert!(z.abs() < 4.0, "{name}: {} ± {:?}", a.calibrated, a.sigma);
+    }
+    // Without the columns, the models are refused by their flags.
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--data",
+        sim.join("poses.csv").to_str().unwrap(),
+        "--thermal",
+        "--out",
+        dir.join("no").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("--thermal on: thermal expansion needs the temperature"),
+        "{}",
+        stderr(&o)
+    );
+}

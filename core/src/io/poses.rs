@@ -55,6 +55,10 @@ pub struct Poses {
     q: Vec<f64>,
     /// Per row, its 1-based line in the source file (for messages).
     lines: Vec<usize>,
+    /// Per row, the temperature (°C) and time (s), when the file has the
+    /// columns ([`crate::corrections`]).
+    temperature: Option<Vec<f64>>,
+    time: Option<Vec<f64>>,
 }
 
 impl Poses {
@@ -72,7 +76,28 @@ impl Poses {
             point_of: Vec::with_capacity(rows),
             q: Vec::with_capacity(rows * joints),
             lines: Vec::with_capacity(rows),
+            temperature: None,
+            time: None,
         }
+    }
+
+    /// The column of a condition (`temperature` or `time`).
+    fn condition_mut(&mut self, name: &str) -> &mut Option<Vec<f64>> {
+        if name == "temperature" {
+            &mut self.temperature
+        } else {
+            &mut self.time
+        }
+    }
+
+    /// Per row, the temperature (°C), when recorded.
+    pub fn temperatures(&self) -> Option<&[f64]> {
+        self.temperature.as_deref()
+    }
+
+    /// Per row, the time (s), when recorded.
+    pub fn times(&self) -> Option<&[f64]> {
+        self.time.as_deref()
     }
 
     /// Adds a row: a touch of the point `label` with readings `q` (rad),
@@ -213,7 +238,7 @@ pub fn parse_poses(
     unit: AngleUnit,
     expected_joints: Option<usize>,
 ) -> Result<(Poses, Vec<Warning>), InputError> {
-    let shape = "point,q1,...,qn";
+    let shape = "point,q1,...,qn[,temperature][,time]";
     let per_row = "one row per touch";
     // At most one row per line: room for them all, so that the readings
     // are never copied to grow.
@@ -227,8 +252,15 @@ pub fn parse_poses(
         |h| check_poses_header(h, file, expected_joints),
         |header, line, fields| {
             let columns = &header.fields;
-            let poses =
-                poses.get_or_insert_with(|| Poses::with_capacity(columns.len() - 1, max_rows));
+            let extra = condition_columns(columns);
+            let joints = columns.len() - 1 - extra.len();
+            let poses = poses.get_or_insert_with(|| {
+                let mut p = Poses::with_capacity(joints, max_rows);
+                for c in &extra {
+                    *p.condition_mut(c) = Some(Vec::with_capacity(max_rows));
+                }
+                p
+            });
             let label = fields[0];
             if label.is_empty() {
                 return Err(InputError::field(
@@ -239,7 +271,7 @@ pub fn parse_poses(
                 ));
             }
             let start = poses.q.len();
-            for (s, col) in fields[1..].iter().zip(&columns[1..]) {
+            for (s, col) in fields[1..=joints].iter().zip(&columns[1..=joints]) {
                 match parse_f64(s, file, line, col) {
                     Ok(x) => poses.q.push(x),
                     Err(e) => {
@@ -248,13 +280,35 @@ pub fn parse_poses(
                     }
                 }
             }
+            let mut values = [0.0; 2];
+            for (k, c) in extra.iter().enumerate() {
+                let v = fields[1 + joints + k];
+                values[k] = match parse_f64(v, file, line, c) {
+                    Ok(t) if *c == "temperature" && !(-100.0..=200.0).contains(&t) => {
+                        poses.q.truncate(start);
+                        let message = format!("{t} °C: not an arm's temperature (°C, −100 to 200)");
+                        return Err(InputError::field(file, line, *c, message));
+                    }
+                    Ok(t) => t,
+                    Err(e) => {
+                        poses.q.truncate(start);
+                        return Err(e);
+                    }
+                };
+            }
+            for (k, c) in extra.iter().enumerate() {
+                if let Some(column) = poses.condition_mut(c) {
+                    column.push(values[k]);
+                }
+            }
             let id = poses.intern(label);
             poses.point_of.push(id);
             poses.lines.push(line);
             Ok(())
         },
     )?;
-    let mut poses = poses.unwrap_or_else(|| Poses::new(header.fields.len() - 1));
+    let extra = condition_columns(&header.fields).len();
+    let mut poses = poses.unwrap_or_else(|| Poses::new(header.fields.len() - 1 - extra));
     poses.q.shrink_to_fit();
     poses.point_of.shrink_to_fit();
     poses.lines.shrink_to_fit();
@@ -265,22 +319,40 @@ pub fn parse_poses(
     Ok((poses, warnings))
 }
 
-/// Checks the header `point,q1,...,qn`, and `n` against `expected_joints`.
+/// The optional columns after the joints' a header ends with, in order:
+/// `temperature` (°C) then `time` (s).
+fn condition_columns(fields: &[String]) -> Vec<&'static str> {
+    let mut out = Vec::new();
+    let mut rest = fields;
+    for name in ["time", "temperature"] {
+        if rest.len() > 1 && rest.last().is_some_and(|f| f == name) {
+            out.insert(0, name);
+            rest = &rest[..rest.len() - 1];
+        }
+    }
+    out
+}
+
+/// Checks the header `point,q1,...,qn[,temperature][,time]`, and `n`
+/// against `expected_joints`.
 fn check_poses_header(
     header: &Record,
     file: &str,
     expected_joints: Option<usize>,
 ) -> Result<(), InputError> {
-    let n = header.fields.len() - 1;
+    let extra = condition_columns(&header.fields);
+    let n = header.fields.len() - 1 - extra.len();
+    let tail: String = extra.iter().map(|c| format!(",{c}")).collect();
     let shape = |n: usize| match n {
-        0 => "point,q1,...,qn".to_string(),
-        n => format!("point,q1,...,q{n}"),
+        0 => format!("point,q1,...,qn{tail}"),
+        n => format!("point,q1,...,q{n}{tail}"),
     };
     let want = shape(expected_joints.unwrap_or(n));
     let names: Vec<String> = (1..=n).map(|j| format!("q{j}")).collect();
     let expected: Vec<&str> = ["point"]
         .into_iter()
         .chain(names.iter().map(String::as_str))
+        .chain(extra.iter().copied())
         .collect();
     check_header(header, file, &expected, &want)?;
     let error =
@@ -367,13 +439,27 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
     for j in 1..=poses.joints {
         header.push_str(&format!(",q{j}"));
     }
+    let conditions = [
+        ("temperature", poses.temperatures()),
+        ("time", poses.times()),
+    ];
+    for (name, column) in conditions {
+        if column.is_some() {
+            header.push(',');
+            header.push_str(name);
+        }
+    }
     header.push('\n');
     w.write_all(header.as_bytes())?;
-    for (label, q) in poses.labels().zip(poses.rows()) {
+    for (row, (label, q)) in poses.labels().zip(poses.rows()).enumerate() {
         let mut line = quote(label)?.into_owned();
         for &x in q {
             line.push(',');
             line.push_str(&fmt_f64(unit.from_internal_exact(x)));
+        }
+        for column in conditions.iter().filter_map(|(_, c)| *c) {
+            line.push(',');
+            line.push_str(&fmt_f64(column[row]));
         }
         line.push('\n');
         w.write_all(line.as_bytes())?;
@@ -387,6 +473,35 @@ mod tests {
     use rand::{RngExt, SeedableRng};
 
     const F: &str = "touches.csv";
+
+    /// `temperature` and `time` after the joints: read per row, written
+    /// back, a bad value refused by line and field, a column out of order
+    /// refused by the header.
+    #[test]
+    fn conditions_are_read_written_and_checked() {
+        let text = "point,q1,q2,temperature,time\nA,1,2,20.5,0\nA,3,4,21,60\n";
+        let (p, _) = parse_poses(text, F, AngleUnit::Rad, Some(2)).unwrap();
+        assert_eq!(p.joints(), 2);
+        assert_eq!(p.temperatures(), Some(&[20.5, 21.0][..]));
+        assert_eq!(p.times(), Some(&[0.0, 60.0][..]));
+        let mut out = Vec::new();
+        write_poses(&mut out, &p, AngleUnit::Rad).unwrap();
+        let written = String::from_utf8(out).unwrap();
+        assert!(written.starts_with("point,q1,q2,temperature,time\n"), "{written}");
+        assert_eq!(parse_poses(&written, F, AngleUnit::Rad, Some(2)).unwrap().0, p);
+        let hot = text.replace("21,60", "2100,60");
+        let e = parse_poses(&hot, F, AngleUnit::Rad, Some(2)).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("touches.csv:3: field `temperature`"),
+            "{e}"
+        );
+        let only_time = "point,q1,q2,time\nA,1,2,5\n";
+        let (p, _) = parse_poses(only_time, F, AngleUnit::Rad, Some(2)).unwrap();
+        assert_eq!((p.temperatures(), p.times()), (None, Some(&[5.0][..])));
+        let swapped = "point,q1,q2,time,temperature\nA,1,2,5,20\n";
+        assert!(parse_poses(swapped, F, AngleUnit::Rad, Some(2)).is_err());
+    }
 
     fn err(text: &str, expected: Option<usize>) -> InputError {
         parse_poses(text, F, AngleUnit::Deg, expected).unwrap_err()
