@@ -613,8 +613,8 @@ fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, Calibratio
     Ok(t2)
 }
 
-/// The free geometry columns (their positions among `free`) and their
-/// covariance: what moves a probe position.
+/// The free columns below `arm` — the geometry's and the corrections'
+/// beyond it — and their covariance: what moves a probe position.
 fn geometry_covariance(
     free: &[usize],
     geometry: usize,
@@ -666,11 +666,32 @@ fn assemble(
         .collect();
     let t2 = standardised(&fit, &setup)?;
     let (outlier_threshold, outliers) = super::checks::outliers(&fit.objective, &t2);
+    // The columns that move a probe: the geometry's and the corrections'
+    // (whose Jacobian columns follow the chain's, at the fitted values).
     let (geometry_free, geometry_cov) =
-        geometry_covariance(&setup.free, layout.geometry_columns(), &cov);
+        geometry_covariance(&setup.free, layout.arm_columns(), &cov);
+    let effects = match layout.corrections() {
+        Some((block, cols)) if !setup.data.is_empty() => {
+            let physics = block.physics_at(&fit.x[cols]);
+            let conditions = setup.data.conditions();
+            let e = crate::corrections::Effects::new(
+                &fit.params,
+                &physics,
+                &block.fit,
+                setup.data.poses(),
+                conditions,
+            );
+            Some(e.map_err(|message| CalibrationError::Term {
+                term: "beyond".into(),
+                message,
+            })?)
+        }
+        _ => None,
+    };
     let position_uncertainty = position_uncertainty(
         &fit.params,
         setup.data,
+        effects.as_ref(),
         &geometry_free,
         &geometry_cov,
         fit.unit_sigma,
@@ -731,6 +752,7 @@ fn assemble(
 fn position_uncertainty(
     params: &DhParams,
     data: &DataSet,
+    effects: Option<&crate::corrections::Effects>,
     free: &[usize],
     cov: &DMatrix<f64>,
     touch_sigma: f64,
@@ -757,7 +779,18 @@ fn position_uncertainty(
     // its target features (AVX2 where the CPU has it; no FMA, so the same
     // bits as without).
     let last = |l: usize, i: usize| (l + 1 == LANES || i + step >= data.len()).then_some(l + 1);
-    if step == 1 {
+    if let Some(e) = effects {
+        // With corrections beyond geometry: the poses as the chain saw
+        // them, each Jacobian extended by the corrections' columns.
+        let mut ext = Vec::new();
+        for (k, &i) in poses.iter().enumerate() {
+            let l = k % LANES;
+            kernel.for_each_jacobian(&e.poses, i..i + 1, |i, pos, jac| {
+                e.extend(i, pos, jac, &mut ext);
+                sums.add(l, &ext, last(l, i));
+            })?;
+        }
+    } else if step == 1 {
         kernel.for_each_jacobian(
             data.poses(),
             0..data.len(),
@@ -898,7 +931,7 @@ mod tests {
                 })
                 .collect();
             let data = DataSet::from_touches(&labels, &readings, &[]).unwrap();
-            let u = position_uncertainty(&params, &data, &free, &cov, 0.01)
+            let u = position_uncertainty(&params, &data, None, &free, &cov, 0.01)
                 .unwrap()
                 .unwrap();
             let (n, rms, max) = one_at_a_time(&params, &data, &free, &cov);
