@@ -855,6 +855,20 @@ impl DataSet {
         &self.q
     }
 
+    /// Each set of poses — the touches, the reference positions — by its
+    /// file's name, with its conditions: what a model beyond geometry is
+    /// checked against ([`crate::corrections::Beyond::check_inputs`]).
+    pub fn condition_sets(&self) -> Vec<(String, Conditions<'_>)> {
+        let mut sets = Vec::new();
+        if !self.is_empty() {
+            sets.push((self.source.poses_file.clone(), self.conditions()));
+        }
+        if let Some(p) = &self.positions {
+            sets.push((p.file.clone(), p.conditions()));
+        }
+        sets
+    }
+
     /// The temperature and time of every touch, when recorded.
     pub fn conditions(&self) -> Conditions<'_> {
         Conditions {

@@ -52,6 +52,10 @@ const RANKS: &[(&str, u8)] = &[
     ("kernel", 1),
     ("reference_model", 1),
     ("urdf", 1),
+    // What an arm is beyond its chain (masses, compliance, encoder
+    // harmonics, expansion) and the poses it makes of readings: the
+    // kernel's input, used by the files, the data set and the terms.
+    ("corrections", 1),
     // 2: files.
     ("io", 2),
     // 3: the typed data set made of them.

@@ -613,6 +613,33 @@ fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, Calibratio
     Ok(t2)
 }
 
+/// The touches as the fitted arm's chain sees them with its corrections
+/// beyond geometry, and those corrections' Jacobian factors; `None`
+/// without corrections or touches.
+fn touch_effects(
+    fit: &Fit<'_>,
+    setup: &Setup<'_>,
+) -> Result<Option<crate::corrections::Effects>, CalibrationError> {
+    let layout = fit.objective.layout();
+    let (Some((block, cols)), false) = (layout.corrections(), setup.data.is_empty()) else {
+        return Ok(None);
+    };
+    let physics = block.physics_at(&fit.x[cols]);
+    let data = setup.data;
+    crate::corrections::Effects::new(
+        &fit.params,
+        &physics,
+        &block.fit,
+        data.poses(),
+        data.conditions(),
+    )
+    .map(Some)
+    .map_err(|message| CalibrationError::Term {
+        term: "beyond".into(),
+        message,
+    })
+}
+
 /// The free columns below `arm` — the geometry's and the corrections'
 /// beyond it — and their covariance: what moves a probe position.
 fn geometry_covariance(
@@ -670,24 +697,7 @@ fn assemble(
     // (whose Jacobian columns follow the chain's, at the fitted values).
     let (geometry_free, geometry_cov) =
         geometry_covariance(&setup.free, layout.arm_columns(), &cov);
-    let effects = match layout.corrections() {
-        Some((block, cols)) if !setup.data.is_empty() => {
-            let physics = block.physics_at(&fit.x[cols]);
-            let conditions = setup.data.conditions();
-            let e = crate::corrections::Effects::new(
-                &fit.params,
-                &physics,
-                &block.fit,
-                setup.data.poses(),
-                conditions,
-            );
-            Some(e.map_err(|message| CalibrationError::Term {
-                term: "beyond".into(),
-                message,
-            })?)
-        }
-        _ => None,
-    };
+    let effects = touch_effects(&fit, &setup)?;
     let position_uncertainty = position_uncertainty(
         &fit.params,
         setup.data,

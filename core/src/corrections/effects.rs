@@ -41,6 +41,46 @@ pub struct Effects {
 /// Why the corrections cannot be applied to a set of poses.
 pub type EffectsError = String;
 
+/// A pose set's conditions as the corrections need them: per pose the
+/// temperature from the reference (K) and the time from the first (h).
+struct Elapsed {
+    kelvin: Vec<f64>,
+    hours: Vec<f64>,
+}
+
+impl Elapsed {
+    /// Refuses an expansion (fitted or stated) without temperatures and a
+    /// drift without times.
+    fn of(
+        physics: &Physics,
+        fit: &Beyond,
+        len: usize,
+        c: Conditions<'_>,
+    ) -> Result<Elapsed, EffectsError> {
+        let thermal = fit.thermal || physics.cte_per_k.is_some_and(|c| c != 0.0);
+        let drift = fit.drift || physics.drift_mm_per_h.is_some();
+        if thermal && c.temperature_c.is_none() {
+            return Err("thermal expansion needs a `temperature` column (°C)".into());
+        }
+        if drift && c.time_s.is_none() {
+            return Err("drift needs a `time` column (s)".into());
+        }
+        let reference = physics.reference_c();
+        let kelvin = match c.temperature_c {
+            Some(t) if thermal => t.iter().map(|t| t - reference).collect(),
+            _ => vec![0.0; len],
+        };
+        let hours = match c.time_s {
+            Some(t) if drift => {
+                let t0 = t.iter().copied().fold(f64::INFINITY, f64::min);
+                t.iter().map(|t| (t - t0) / 3600.0).collect()
+            }
+            _ => vec![0.0; len],
+        };
+        Ok(Elapsed { kelvin, hours })
+    }
+}
+
 impl Effects {
     /// The poses `raw` (the readings' own cos and sin) recorded under
     /// `conditions`, corrected by `physics` (the effective values: stated
@@ -60,121 +100,36 @@ impl Effects {
         raw: &PreparedPoses,
         conditions: Conditions<'_>,
     ) -> Result<Effects, EffectsError> {
-        let n = arm.joints.len();
-        let len = raw.len();
-        let thermal = fit.thermal || physics.cte_per_k.is_some_and(|c| c != 0.0);
-        let drift = fit.drift || physics.drift_mm_per_h.is_some();
-        let temperature = match (thermal, conditions.temperature_c) {
-            (true, None) => {
-                return Err("thermal expansion needs a `temperature` column (°C)".into());
-            }
-            (_, t) => t,
-        };
-        let time = match (drift, conditions.time_s) {
-            (true, None) => return Err("drift needs a `time` column (s)".into()),
-            (_, t) => t,
-        };
-        let t0 = time.map_or(0.0, |t| t.iter().copied().fold(f64::INFINITY, f64::min));
-        let (cte, reference) = (physics.cte_per_k.unwrap_or(0.0), physics.reference_c());
-        let drift_v = physics.drift_mm_per_h.unwrap_or([0.0; 3]);
-        let compliance: Vec<f64> = (0..n).map(|j| physics.compliance_of(j)).collect();
-        let loads = (!fit.compliance.is_empty() || compliance.iter().any(|&c| c != 0.0))
-            .then(|| Loads::new(arm, physics));
-        let m = fit.len();
-        let mut kinds = Vec::with_capacity(m);
-        kinds.extend(fit.compliance.iter().map(|&j| Kind::Joint(3 * n + j)));
-        for &(j, _) in &fit.harmonics {
-            kinds.extend([Kind::Joint(3 * n + j); 2]);
-        }
-        if fit.thermal {
-            kinds.push(Kind::Expansion);
-        }
-        if fit.drift {
-            kinds.extend((0..3).map(Kind::Axis));
-        }
+        let (n, len) = (arm.joints.len(), raw.len());
+        let elapsed = Elapsed::of(physics, fit, len, conditions)?;
         let trig: Vec<(&[f64], &[f64])> = (0..n).map(|j| raw.column_trig(j)).collect();
-        // Each joint's reading correction, joint by joint over the poses.
-        let mut delta: Vec<Vec<f64>> = vec![Vec::new(); n];
-        for h in &physics.harmonics {
-            let (c, s) = trig[h.joint];
-            let d = &mut delta[h.joint];
-            d.resize(len, 0.0);
-            for i in 0..len {
-                let (ck, sk) = multiple(c[i], s[i], h.order);
-                d[i] += h.sin * sk + h.cos * ck;
-            }
-        }
+        let loads = (!fit.compliance.is_empty() || physics.compliance.iter().any(|c| c.is_some()))
+            .then(|| Loads::new(arm, physics));
+        // Per pose and joint (pose-major), the gravity torque.
         let mut tau = vec![0.0; if loads.is_some() { len * n } else { 0 }];
         if let Some(loads) = &loads {
             for (i, t) in tau.chunks_exact_mut(n).enumerate() {
                 loads.torques(|j| trig[j].0[i], |j| trig[j].1[i], t);
             }
-            for (j, d) in delta.iter_mut().enumerate() {
-                if compliance[j] != 0.0 {
-                    d.resize(len, 0.0);
-                    for i in 0..len {
-                        d[i] += compliance[j] * tau[i * n + j];
-                    }
-                }
-            }
         }
-        // The corrected angles' cos and sin through the angle sum; a joint
-        // without correction keeps its own.
-        let (mut cos, mut sin) = (Vec::with_capacity(n), Vec::with_capacity(n));
-        for (j, d) in delta.iter().enumerate() {
-            let (c, s) = trig[j];
-            if d.is_empty() {
-                cos.push(c.to_vec());
-                sin.push(s.to_vec());
-                continue;
-            }
-            let (mut cj, mut sj) = (vec![0.0; len], vec![0.0; len]);
-            for i in 0..len {
-                let (cd, sd) = small_sin_cos(d[i]);
-                cj[i] = c[i] * cd - s[i] * sd;
-                sj[i] = s[i] * cd + c[i] * sd;
-            }
-            cos.push(cj);
-            sin.push(sj);
-        }
-        let mut factors = vec![0.0; len * m];
-        let mut post = Post {
-            scale: vec![1.0; len],
-            offset: vec![[0.0; 3]; len],
-        };
-        for i in 0..len {
-            let dt_k = temperature.map_or(0.0, |t| t[i] - reference);
-            let dt_h = time.map_or(0.0, |t| (t[i] - t0) / 3600.0);
-            post.scale[i] = 1.0 + cte * dt_k;
-            post.offset[i] = drift_v.map(|v| v * dt_h);
-            if m == 0 {
-                continue;
-            }
-            let f = &mut factors[i * m..(i + 1) * m];
-            let mut k = 0;
-            for &j in &fit.compliance {
-                f[k] = tau[i * n + j] * 1e-6;
-                k += 1;
-            }
-            for &(j, order) in &fit.harmonics {
-                (f[k + 1], f[k]) = multiple(trig[j].0[i], trig[j].1[i], order);
-                k += 2;
-            }
-            if fit.thermal {
-                f[k] = dt_k * 1e-6 / post.scale[i];
-                k += 1;
-            }
-            if fit.drift {
-                f[k..k + 3].fill(dt_h);
-            }
-        }
+        let delta = reading_corrections(physics, &trig, &tau, len);
+        let (cos, sin) = corrected_trig(&trig, &delta, len);
         let mut poses = PreparedPoses::from_trig(n, len, cos, sin);
-        if thermal || drift {
+        let (cte, drift) = (
+            physics.cte_per_k.unwrap_or(0.0),
+            physics.drift_mm_per_h.unwrap_or([0.0; 3]),
+        );
+        let post = Post {
+            scale: elapsed.kelvin.iter().map(|k| 1.0 + cte * k).collect(),
+            offset: elapsed.hours.iter().map(|h| drift.map(|v| v * h)).collect(),
+        };
+        let factors = factors(fit, &trig, &tau, &elapsed, &post.scale, n);
+        if fit.thermal || fit.drift || cte != 0.0 || physics.drift_mm_per_h.is_some() {
             poses = poses.with_post(post);
         }
         Ok(Effects {
             poses,
-            kinds,
+            kinds: kinds(fit, n),
             factors,
         })
     }
@@ -257,4 +212,118 @@ fn small_sin_cos(d: f64) -> (f64, f64) {
     let c = 1.0 - d2 / 2.0 * (1.0 - d2 / 12.0 * (1.0 - d2 / 30.0 * (1.0 - d2 / 56.0)));
     let s = d * (1.0 - d2 / 6.0 * (1.0 - d2 / 20.0 * (1.0 - d2 / 42.0)));
     (c, s)
+}
+
+/// Per joint, its reading correction at every pose (empty for a joint
+/// without one): the harmonics of its reading and compliance × torque.
+fn reading_corrections(
+    physics: &Physics,
+    trig: &[(&[f64], &[f64])],
+    tau: &[f64],
+    len: usize,
+) -> Vec<Vec<f64>> {
+    let n = trig.len();
+    let mut delta: Vec<Vec<f64>> = vec![Vec::new(); n];
+    for h in &physics.harmonics {
+        let (c, s) = trig[h.joint];
+        let d = &mut delta[h.joint];
+        d.resize(len, 0.0);
+        for i in 0..len {
+            let (ck, sk) = multiple(c[i], s[i], h.order);
+            d[i] += h.sin * sk + h.cos * ck;
+        }
+    }
+    if !tau.is_empty() {
+        for (j, d) in delta.iter_mut().enumerate() {
+            let kappa = physics.compliance_of(j);
+            if kappa != 0.0 {
+                d.resize(len, 0.0);
+                for i in 0..len {
+                    d[i] += kappa * tau[i * n + j];
+                }
+            }
+        }
+    }
+    delta
+}
+
+/// The corrected angles' cos and sin, joint by joint, through the angle sum;
+/// a joint without a correction keeps its own.
+#[allow(clippy::type_complexity)] // cos and sin columns, as PreparedPoses holds them
+fn corrected_trig(
+    trig: &[(&[f64], &[f64])],
+    delta: &[Vec<f64>],
+    len: usize,
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let (mut cos, mut sin) = (
+        Vec::with_capacity(trig.len()),
+        Vec::with_capacity(trig.len()),
+    );
+    for (&(c, s), d) in trig.iter().zip(delta) {
+        if d.is_empty() {
+            cos.push(c.to_vec());
+            sin.push(s.to_vec());
+            continue;
+        }
+        let (mut cj, mut sj) = (vec![0.0; len], vec![0.0; len]);
+        for i in 0..len {
+            let (cd, sd) = small_sin_cos(d[i]);
+            cj[i] = c[i] * cd - s[i] * sd;
+            sj[i] = s[i] * cd + c[i] * sd;
+        }
+        cos.push(cj);
+        sin.push(sj);
+    }
+    (cos, sin)
+}
+
+/// The fitted columns' kinds, in the block's order.
+fn kinds(fit: &Beyond, n: usize) -> Vec<Kind> {
+    let mut kinds = Vec::with_capacity(fit.len());
+    kinds.extend(fit.compliance.iter().map(|&j| Kind::Joint(3 * n + j)));
+    for &(j, _) in &fit.harmonics {
+        kinds.extend([Kind::Joint(3 * n + j); 2]);
+    }
+    if fit.thermal {
+        kinds.push(Kind::Expansion);
+    }
+    if fit.drift {
+        kinds.extend((0..3).map(Kind::Axis));
+    }
+    kinds
+}
+
+/// Per pose (pose-major), the factor of each fitted column ([`kinds`]).
+fn factors(
+    fit: &Beyond,
+    trig: &[(&[f64], &[f64])],
+    tau: &[f64],
+    elapsed: &Elapsed,
+    scale: &[f64],
+    n: usize,
+) -> Vec<f64> {
+    let (m, len) = (fit.len(), scale.len());
+    let mut factors = vec![0.0; len * m];
+    if m == 0 {
+        return factors;
+    }
+    for (i, f) in factors.chunks_exact_mut(m).enumerate() {
+        let mut k = 0;
+        for &j in &fit.compliance {
+            f[k] = tau[i * n + j] * 1e-6;
+            k += 1;
+        }
+        for &(j, order) in &fit.harmonics {
+            (f[k + 1], f[k]) = multiple(trig[j].0[i], trig[j].1[i], order);
+            k += 2;
+        }
+        if fit.thermal {
+            f[k] = elapsed.kelvin[i] * 1e-6 / scale[i];
+            k += 1;
+        }
+        if fit.drift {
+            f[k..k + 3].fill(elapsed.hours[i]);
+        }
+    }
+    factors
 }

@@ -7,7 +7,8 @@
 //! values of the corrections (a compliance per joint, harmonics per joint
 //! and order, a thermal expansion coefficient). A fit switches models on
 //! with [`Beyond`]; their unknowns are one auxiliary parameter block
-//! ([`CorrectionBlock`], the layout's first after the geometry), and a
+//! ([`crate::residuals::CorrectionBlock`], the layout's first after the
+//! geometry), and a
 //! correction the arm states but the fit does not estimate is applied at
 //! its stated value.
 //!
@@ -48,9 +49,7 @@ use serde::{Deserialize, Serialize};
 
 pub use effects::{Conditions, Effects, readings_for};
 
-use crate::dataset::DataSet;
 use crate::error::OptionError;
-use crate::residuals::{Block, Parameter, Unit};
 
 /// ISO 1's reference temperature, °C: the calibrated lengths are at it.
 pub const REFERENCE_TEMPERATURE_C: f64 = 20.0;
@@ -333,22 +332,21 @@ impl Beyond {
 
     /// Checks the models against what the arm and the data provide: a
     /// compliance needs masses that load the joints, an expansion (fitted
-    /// or stated) temperatures, a drift times — in every file of `data`.
+    /// or stated) temperatures, a drift times — in every set of poses
+    /// `sets` (each its file's name and conditions:
+    /// [`crate::dataset::DataSet::condition_sets`]).
     ///
     /// # Errors
     ///
     /// The first model its inputs cannot support, by its field, with what
     /// to add.
-    pub fn check_inputs(&self, physics: &Physics, data: &DataSet) -> Result<(), OptionError> {
-        let mut sets = Vec::new();
-        if !data.is_empty() {
-            sets.push((data.source().poses_file().to_string(), data.conditions()));
-        }
-        if let Some(p) = data.positions() {
-            sets.push((p.file().to_string(), p.conditions()));
-        }
+    pub fn check_inputs(
+        &self,
+        physics: &Physics,
+        sets: &[(String, Conditions<'_>)],
+    ) -> Result<(), OptionError> {
         let stated_cte = physics.cte_per_k.is_some_and(|c| c != 0.0);
-        for (file, c) in &sets {
+        for (file, c) in sets {
             if (self.thermal || stated_cte) && c.temperature_c.is_none() {
                 let (field, value) = if self.thermal {
                     ("thermal", "on".to_string())
@@ -409,104 +407,5 @@ fn parse_order(text: &str, part: &str) -> Result<u32, OptionError> {
             part,
             format!("an order is a whole number from 1 to {MAX_HARMONIC_ORDER}"),
         )),
-    }
-}
-
-/// The unknowns of the models a fit switches on, with the arm's physics
-/// (masses, stated values) they act through: the layout's first block.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CorrectionBlock {
-    /// What is fitted.
-    pub fit: Beyond,
-    /// The arm's physics: masses, and the stated values of what is not.
-    pub physics: Physics,
-    /// Joints of the arm.
-    pub joints: usize,
-}
-
-/// The name of the correction block in a layout.
-pub const BLOCK_NAME: &str = "beyond";
-
-impl CorrectionBlock {
-    /// The physics at the block's values `x` (internal units).
-    pub fn physics_at(&self, x: &[f64]) -> Physics {
-        self.physics.with_fitted(&self.fit, x, self.joints)
-    }
-}
-
-impl Block for CorrectionBlock {
-    fn name(&self) -> &str {
-        BLOCK_NAME
-    }
-
-    fn parameters(&self) -> Vec<Parameter> {
-        let mut out = Vec::new();
-        let other = |s: &str| Unit::Other(s.to_string());
-        for &j in &self.fit.compliance {
-            out.push(Parameter {
-                name: format!("compliance{}", j + 1),
-                unit: other("µrad/(N·m)"),
-            });
-        }
-        for &(j, k) in &self.fit.harmonics {
-            for part in ["sin", "cos"] {
-                out.push(Parameter {
-                    name: format!("harmonic{}.{part}{k}", j + 1),
-                    unit: Unit::Angle,
-                });
-            }
-        }
-        if self.fit.thermal {
-            out.push(Parameter {
-                name: "thermal.cte".into(),
-                unit: other("ppm/K"),
-            });
-        }
-        if self.fit.drift {
-            for axis in ["x", "y", "z"] {
-                out.push(Parameter {
-                    name: format!("drift.{axis}"),
-                    unit: other("mm/h"),
-                });
-            }
-        }
-        out
-    }
-
-    fn start(&self) -> Vec<f64> {
-        self.physics.start_of(&self.fit)
-    }
-
-    /// Without naming every column (the layout asks often).
-    fn len(&self) -> usize {
-        self.fit.len()
-    }
-
-    fn corrections(&self) -> Option<&CorrectionBlock> {
-        Some(self)
-    }
-
-    fn implausible(&self, _start: &[f64], x: &[f64]) -> Option<String> {
-        let names = self.parameters();
-        // No real joint gives a tenth of a degree per N·m, no encoder errs
-        // by a degree, no structural material expands by 0.1 % per kelvin.
-        for (p, v) in names.iter().zip(x) {
-            let limit = match &p.unit {
-                Unit::Angle => 1f64.to_radians(),
-                Unit::Other(u) if u.starts_with("µrad") => 1745.0,
-                Unit::Other(u) if u == "ppm/K" => 1000.0,
-                _ => continue,
-            };
-            if v.abs() > limit || !v.is_finite() {
-                return Some(format!(
-                    "{} = {:.4} {}: beyond any real arm ({} at most)",
-                    p.name,
-                    p.unit.to_user(*v),
-                    p.unit.name(),
-                    p.unit.to_user(limit)
-                ));
-            }
-        }
-        None
     }
 }

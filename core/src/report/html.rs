@@ -8,6 +8,7 @@ use super::{
     BEYOND_SVG, CalibrationInput, EvaluationInput, Figure, IDENTIFIABILITY_SVG, LENGTHS_SVG,
     PARAMETERS_SVG, RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG,
 };
+use crate::calibrate::Calibration;
 
 /// Escapes `&`, `<`, `>`, `"` and `'` for HTML/XML text and attributes.
 pub(crate) fn escape(s: &str) -> String {
@@ -251,23 +252,28 @@ pub(crate) fn calibration_page(
         "",
     );
     if beyond.is_some() {
-        page += &section(
-            "beyond",
-            "7. Beyond geometry",
-            "Models the fit estimated with the geometry: each column's value with its σ, or why \
-             the data could not separate it (it is then held at its stated value).",
-            beyond,
-            "Per fitted pose, how far each model's fitted correction alone moves the calibrated \
-             arm's probe: the error it explains. Part of it a geometric parameter can mimic \
-             (a compliance partly acts as a zero offset: see the correlations), so this bounds \
-             from above what a geometric fit would have left in the residuals or spread over \
-             the parameters.",
-            "",
-            &tables::beyond(cal, json),
-        );
+        page += &beyond_section(cal, json, beyond);
     }
     page += &foot(figures);
     page
+}
+
+/// Section 7: the models beyond geometry, their table and figure.
+fn beyond_section(cal: &Calibration, json: Option<&str>, figure: Option<&Figure>) -> String {
+    section(
+        "beyond",
+        "7. Beyond geometry",
+        "Models the fit estimated with the geometry: each column's value with its σ, or why \
+         the data could not separate it (it is then held at its stated value).",
+        figure,
+        "Per fitted pose, how far each model's fitted correction alone moves the calibrated \
+         arm's probe: the error it explains. Part of it a geometric parameter can mimic (a \
+         compliance partly acts as a zero offset: see the correlations), so this bounds from \
+         above what a geometric fit would have left in the residuals or spread over the \
+         parameters.",
+        "",
+        &tables::beyond(cal, json),
+    )
 }
 
 /// The evaluation report page.

@@ -108,7 +108,7 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
 
     /// The block as the corrections beyond geometry, if it is them: the
     /// terms read every pose through it ([`crate::corrections`]).
-    fn corrections(&self) -> Option<&crate::corrections::CorrectionBlock> {
+    fn corrections(&self) -> Option<&super::CorrectionBlock> {
         None
     }
 }
@@ -178,7 +178,7 @@ impl Layout {
     /// has them (always its first block: right after the geometry, so that
     /// a pose's Jacobian over the arm is the chain's columns and then
     /// theirs).
-    pub fn corrections(&self) -> Option<(&crate::corrections::CorrectionBlock, Range<usize>)> {
+    pub fn corrections(&self) -> Option<(&super::CorrectionBlock, Range<usize>)> {
         let block = self.blocks.first()?.corrections()?;
         Some((block, self.columns(BlockId(0))))
     }

@@ -54,6 +54,7 @@
 //! after it. Degrees of freedom: `m − p` with `m` the rows of every term and
 //! `p` the free columns plus every term's eliminated unknowns.
 
+mod beyond;
 pub mod blocks;
 mod lengths;
 pub mod positions;
@@ -69,6 +70,7 @@ use crate::error::{OptionError, check_nonnegative};
 use crate::kernel::{ArmKernel, KernelError};
 use crate::params::DhParams;
 
+pub use beyond::{BLOCK_NAME, CorrectionBlock};
 pub use blocks::{Block, BlockId, Frame, Layout, Parameter, Scalar, Unit, Vector};
 pub(crate) use lengths::LengthTerm;
 pub(crate) use positions::PositionTerm;

@@ -18,11 +18,12 @@
 
 use nalgebra::{Matrix3, Vector3};
 
+use super::CorrectionBlock;
 use super::blocks::{Frame, rotation};
 use super::{
     At, BlockId, Layout, Noise, Normal, Origin, Sees, Shared, Standardised, Term, TermError,
 };
-use crate::corrections::{Beyond, CorrectionBlock, Effects, Physics};
+use crate::corrections::{Beyond, Effects, Physics};
 use crate::dataset::{DataSet, PositionData};
 use crate::kernel::{ArmKernel, KernelError};
 use crate::parallel::parallel_map;

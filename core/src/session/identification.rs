@@ -99,7 +99,7 @@ impl IdentifyReport {
     ) -> Result<IdentifyReport, CalibrationError> {
         noise.check()?;
         beyond.check(arm.params.joint_count())?;
-        beyond.check_inputs(&arm.physics, data)?;
+        beyond.check_inputs(&arm.physics, &data.condition_sets())?;
         if threads == 0 {
             return Err(OptionError::new("threads", 0, "at least 1").into());
         }

@@ -127,7 +127,9 @@ impl Problem {
             });
         }
         model.check_for(&arm.params)?;
-        model.beyond.check_inputs(&arm.physics, &data)?;
+        model
+            .beyond
+            .check_inputs(&arm.physics, &data.condition_sets())?;
         check_length_units(&arm.params, &data)?;
         let layout = crate::residuals::positions::layout_with(
             &arm.params,

@@ -1,0 +1,104 @@
+//! The corrections beyond geometry as a parameter block
+//! ([`crate::corrections`]): the layout's first after the geometry.
+
+use super::{Block, Parameter, Unit};
+use crate::corrections::{Beyond, Physics};
+
+/// The unknowns of the models a fit switches on, with the arm's physics
+/// (masses, stated values) they act through: the layout's first block.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CorrectionBlock {
+    /// What is fitted.
+    pub fit: Beyond,
+    /// The arm's physics: masses, and the stated values of what is not.
+    pub physics: Physics,
+    /// Joints of the arm.
+    pub joints: usize,
+}
+
+/// The name of the correction block in a layout.
+pub const BLOCK_NAME: &str = "beyond";
+
+impl CorrectionBlock {
+    /// The physics at the block's values `x` (internal units).
+    pub fn physics_at(&self, x: &[f64]) -> Physics {
+        self.physics.with_fitted(&self.fit, x, self.joints)
+    }
+}
+
+impl Block for CorrectionBlock {
+    fn name(&self) -> &str {
+        BLOCK_NAME
+    }
+
+    fn parameters(&self) -> Vec<Parameter> {
+        let mut out = Vec::new();
+        let other = |s: &str| Unit::Other(s.to_string());
+        for &j in &self.fit.compliance {
+            out.push(Parameter {
+                name: format!("compliance{}", j + 1),
+                unit: other("µrad/(N·m)"),
+            });
+        }
+        for &(j, k) in &self.fit.harmonics {
+            for part in ["sin", "cos"] {
+                out.push(Parameter {
+                    name: format!("harmonic{}.{part}{k}", j + 1),
+                    unit: Unit::Angle,
+                });
+            }
+        }
+        if self.fit.thermal {
+            out.push(Parameter {
+                name: "thermal.cte".into(),
+                unit: other("ppm/K"),
+            });
+        }
+        if self.fit.drift {
+            for axis in ["x", "y", "z"] {
+                out.push(Parameter {
+                    name: format!("drift.{axis}"),
+                    unit: other("mm/h"),
+                });
+            }
+        }
+        out
+    }
+
+    fn start(&self) -> Vec<f64> {
+        self.physics.start_of(&self.fit)
+    }
+
+    /// Without naming every column (the layout asks often).
+    fn len(&self) -> usize {
+        self.fit.len()
+    }
+
+    fn corrections(&self) -> Option<&CorrectionBlock> {
+        Some(self)
+    }
+
+    fn implausible(&self, _start: &[f64], x: &[f64]) -> Option<String> {
+        let names = self.parameters();
+        // No real joint gives a tenth of a degree per N·m, no encoder errs
+        // by a degree, no structural material expands by 0.1 % per kelvin.
+        for (p, v) in names.iter().zip(x) {
+            let limit = match &p.unit {
+                Unit::Angle => 1f64.to_radians(),
+                Unit::Other(u) if u.starts_with("µrad") => 1745.0,
+                Unit::Other(u) if u == "ppm/K" => 1000.0,
+                _ => continue,
+            };
+            if v.abs() > limit || !v.is_finite() {
+                return Some(format!(
+                    "{} = {:.4} {}: beyond any real arm ({} at most)",
+                    p.name,
+                    p.unit.to_user(*v),
+                    p.unit.name(),
+                    p.unit.to_user(limit)
+                ));
+            }
+        }
+        None
+    }
+}
