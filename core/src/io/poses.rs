@@ -487,8 +487,14 @@ mod tests {
         let mut out = Vec::new();
         write_poses(&mut out, &p, AngleUnit::Rad).unwrap();
         let written = String::from_utf8(out).unwrap();
-        assert!(written.starts_with("point,q1,q2,temperature,time\n"), "{written}");
-        assert_eq!(parse_poses(&written, F, AngleUnit::Rad, Some(2)).unwrap().0, p);
+        assert!(
+            written.starts_with("point,q1,q2,temperature,time\n"),
+            "{written}"
+        );
+        assert_eq!(
+            parse_poses(&written, F, AngleUnit::Rad, Some(2)).unwrap().0,
+            p
+        );
         let hot = text.replace("21,60", "2100,60");
         let e = parse_poses(&hot, F, AngleUnit::Rad, Some(2)).unwrap_err();
         assert!(
