@@ -67,7 +67,7 @@ pub struct FitInput {
     /// Joint compliance under gravity for the listed joints (e.g. `2,3,4`):
     /// each deflects by its compliance (rad per N·m, fitted) times the
     /// gravity torque of the masses outboard of it, from the arm file's
-    /// `mass_kg` (links and [probe]) and `gravity`.
+    /// `mass_kg` (links and `[probe]`) and `gravity`.
     #[arg(long, value_name = "JOINTS")]
     pub compliance: Option<String>,
     /// Encoder harmonics `a_k sin(k q) + b_k cos(k q)` added to the listed

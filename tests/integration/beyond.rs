@@ -269,7 +269,7 @@ fn each_model_recovers_its_error_in_a_simulated_arm() {
         let (mut z2, mut on, mut off) = (Vec::new(), Vec::new(), Vec::new());
         for seed in 0..SEEDS {
             let mut truth = true_geometry(&nominal, seed);
-            truth.physics = Box::new((case.physics)(&nominal.physics));
+            *truth.physics = (case.physics)(&nominal.physics);
             let rows = positions(&truth, case.drift, 200, seed + 2000);
             let held = positions(&truth, case.drift, 40, seed + 7000);
             let true_physics = Physics {

@@ -144,8 +144,9 @@ impl Physics {
     }
 
     /// This physics with the fitted values `values` (a
-    /// [`CorrectionBlock`]'s columns, internal units) of the models `fit`
-    /// in place of the stated ones, for an arm of `joints` joints.
+    /// [`crate::residuals::CorrectionBlock`]'s columns, internal units) of
+    /// the models `fit` in place of the stated ones, for an arm of `joints`
+    /// joints.
     pub fn with_fitted(&self, fit: &Beyond, values: &[f64], joints: usize) -> Physics {
         let mut out = self.clone();
         let mut v = values.iter().copied();
