@@ -16,12 +16,22 @@
 //! file does not need: touches' spreads and distances do not depend on it.
 //! Values are rounded to 1e-9 mm and 1e-9 degrees, so that 90° is written
 //! `90.0` rather than `89.99999999999999`.
-//! The conversion itself is `aacmm_core::urdf` (tested there to 1e-9 m).
+//! Masses (`<inertial>` of the URDF's links): each joint's `mass_kg` is the
+//! link after it (its child link and the links fixed to it), `com_mm` their
+//! centre of mass in that link's D-H frame; after the last joint, its child
+//! link is that joint's and the rest (gripper, fingers, ball) is the
+//! probe's `mass_kg`, its centre in the last frame. The header lists which
+//! links went where; the links before the first joint load no joint and are
+//! left out. Gravity is the URDF root's −z (`gravity` is written only when
+//! the D-H base's −z is not that). Masses are rounded to 1e-12 kg.
+//! The conversion itself is `aacmm_core::urdf` (tested there to 1e-9 m, the
+//! centres of mass to 1e-6 mm at any pose).
 
 use std::io::Write;
 
+use aacmm_core::corrections::{Mass, Physics};
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
-use aacmm_core::urdf::{UrdfOptions, parse_urdf};
+use aacmm_core::urdf::{Carrier, Chain, DhMass, UrdfOptions, parse_urdf};
 use anyhow::{Context, bail};
 
 fn main() -> anyhow::Result<()> {
@@ -63,6 +73,22 @@ fn main() -> anyhow::Result<()> {
         (j.alpha, j.theta) = (tidy_rad(j.alpha), tidy_rad(j.theta));
     }
     params.probe = params.probe.map(tidy_mm);
+    // The masses as the arm file states them, rounded.
+    let mass = |m: &DhMass| Mass {
+        kg: (m.kg * 1e12).round() / 1e12,
+        com_mm: Some(m.com_mm.map(tidy_mm)),
+    };
+    let physics = Physics {
+        link_masses: dh
+            .masses
+            .links
+            .iter()
+            .map(|l| l.as_ref().map(mass))
+            .collect(),
+        probe_mass: dh.masses.tool.as_ref().map(mass),
+        gravity: (dh.masses.gravity).map(|g| g.map(|v| (v * 1e12).round() / 1e12 + 0.0)),
+        ..Physics::default()
+    };
     let arm = Arm {
         name: name.unwrap_or_else(|| urdf.name.clone()),
         params,
@@ -72,7 +98,7 @@ fn main() -> anyhow::Result<()> {
             vec![None; chain.joints.len()]
         },
         prior: None,
-        physics: Default::default(),
+        physics: physics.into(),
     };
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -127,8 +153,48 @@ fn main() -> anyhow::Result<()> {
         out,
         "# Values rounded to 1e-9 mm and 1e-9 deg (the probe moves by < 1e-7 mm)."
     )?;
+    for line in mass_notes(&chain) {
+        writeln!(out, "# {line}")?;
+    }
     write!(out, "{}", arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg))?;
     Ok(())
+}
+
+/// Where the URDF's masses went: one line per joint's link, the probe, the
+/// base side, and each link behind a moving joint off the chain.
+fn mass_notes(chain: &Chain) -> Vec<String> {
+    if chain.masses.is_empty() {
+        return vec!["No link of the chain has a mass (<inertial>).".into()];
+    }
+    let list = |carrier: Carrier| -> Option<String> {
+        let of: Vec<String> = (chain.masses.iter())
+            .filter(|m| m.carrier == carrier)
+            .map(|m| format!("{} {} kg", m.link, m.kg))
+            .collect();
+        (!of.is_empty()).then(|| of.join(", "))
+    };
+    let mut out = vec![
+        "Masses from the URDF's <inertial> (mass_kg; com_mm in the link's D-H frame):".to_string(),
+    ];
+    for (j, name) in chain.joints.iter().enumerate() {
+        if let Some(l) = list(Carrier::Link(j)) {
+            out.push(format!("  after q{} ({name}): {l}", j + 1));
+        }
+    }
+    if let Some(l) = list(Carrier::Tool) {
+        out.push(format!("  probe (after the last joint): {l}"));
+    }
+    if let Some(l) = list(Carrier::Base) {
+        out.push(format!("  before q1, loading no joint (left out): {l}"));
+    }
+    for m in chain.masses.iter().filter(|m| !m.moving.is_empty()) {
+        out.push(format!(
+            "  {} is behind {} off the chain, taken at zero",
+            m.link,
+            m.moving.join(", ")
+        ));
+    }
+    out
 }
 
 /// Rounds to 1e-9 mm: `279.99999999999994` (the rounding of the geometry)

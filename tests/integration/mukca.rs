@@ -98,7 +98,8 @@ fn shipped_data_is_complete() {
 }
 
 /// The shipped arm files are the conversion of the shipped URDFs (so that
-/// neither drifts from the other).
+/// neither drifts from the other): geometry, and the links' and the tool's
+/// masses with their centres of mass.
 #[test]
 fn arm_files_are_the_urdf_conversion() {
     for (urdf, arms) in [
@@ -118,6 +119,22 @@ fn arm_files_are_the_urdf_conversion() {
                 assert!(
                     (x - y).abs() < 1e-8,
                     "{arm} parameter {i}: file {x}, URDF {y}"
+                );
+            }
+            // Masses and centres as the files round them (1e-12 kg, 1e-9 mm);
+            // gravity the base's −z (not stated).
+            let (p, m) = (&file.physics, &dh.masses);
+            assert_eq!(p.gravity, m.gravity, "{arm}");
+            assert_eq!(p.link_masses.len(), m.links.len(), "{arm}");
+            let stated = p.link_masses.iter().chain([&p.probe_mass]);
+            let converted = m.links.iter().chain([&m.tool]);
+            for (i, (x, y)) in stated.zip(converted).enumerate() {
+                let (x, y) = (x.unwrap(), y.unwrap());
+                let c = x.com_mm.unwrap();
+                assert!(
+                    (x.kg - y.kg).abs() < 1e-12
+                        && (0..3).all(|k| (c[k] - y.com_mm[k]).abs() < 1e-8),
+                    "{arm} mass {i}: file {x:?}, URDF {y:?}"
                 );
             }
         }

@@ -32,6 +32,20 @@
 //! refuses a common normal more than 100 m away. [`UrdfOptions::snap_rad`]
 //! rounds every `rpy` component within that distance of a multiple of π/2 to
 //! it and reports each rounding ([`Urdf::snapped`]).
+//!
+//! Masses: each `<link>`'s `<inertial>` (`<mass value>`, kg, and the centre
+//! of mass at its `<origin xyz>`, m, in the link frame) is carried by the
+//! chain part it moves with ([`Chain::masses`], [`Carrier`]): the link after
+//! joint `j` is the child link of joint `j` with every link fixed to it (off
+//! the chain too: a flange, a finger on a `fixed` joint); after the last
+//! joint, its child link is the last link's and the rest is the tool's (the
+//! probe's). [`Chain::to_dh`] sums each part's masses and puts their centre
+//! in that link's D-H frame ([`DhConversion::masses`]: what an arm file's
+//! `mass_kg` and `com_mm` state, `crate::corrections::Physics`; this module
+//! sits below it and does not use it). Links before the
+//! first joint load no joint and are left out; a link behind a joint off the
+//! chain that moves (a gripper's prismatic finger) is taken at that joint's
+//! zero. Gravity is the URDF root's −z (ROS's convention, REP 103).
 
 pub mod export;
 
@@ -94,7 +108,27 @@ pub struct UrdfJoint {
     pub line: usize,
 }
 
-/// A parsed URDF: its joints, in file order.
+/// A link's `<inertial>`: its mass and where its centre is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Inertial {
+    /// `<mass value>`, kg (finite, ≥ 0).
+    pub kg: f64,
+    /// The centre of mass in the link frame (`<origin xyz>`), metres.
+    pub com: Vector3<f64>,
+}
+
+/// One `<link>` element of a URDF file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UrdfLink {
+    /// The link's name.
+    pub name: String,
+    /// Its mass, when it has an `<inertial>`.
+    pub inertial: Option<Inertial>,
+    /// 1-based line of the `<link>` element.
+    pub line: usize,
+}
+
+/// A parsed URDF: its joints and links, in file order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Urdf {
     /// The file name used in messages.
@@ -103,18 +137,21 @@ pub struct Urdf {
     pub name: String,
     /// Every joint.
     pub joints: Vec<UrdfJoint>,
+    /// Every `<link>` element (a link named only by joints has none).
+    pub links: Vec<UrdfLink>,
     /// One note per `rpy` component [`UrdfOptions::snap_rad`] rounded:
     /// `line 12: joint_3 roll -3.1416 → -π (7.3e-6 rad)`.
     pub snapped: Vec<String>,
 }
 
-/// Parses the joints of a URDF; `file` names it in messages.
+/// Parses the joints and links of a URDF; `file` names it in messages.
 ///
 /// # Errors
 /// Malformed XML (at its line); a root element other than `<robot>`; a joint
 /// without a name, type, parent or child; an `xyz`, `rpy` or `axis` that is
 /// not three finite numbers; a zero axis; a link that is the child of two
-/// joints.
+/// joints; a `<link>` without a name or defined twice; an `<inertial>`
+/// without `<mass>`, or whose `value` is not a finite number ≥ 0.
 ///
 /// ```
 /// use aacmm_core::urdf::{parse_urdf, UrdfOptions};
@@ -148,8 +185,24 @@ pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, 
         file: file.to_string(),
         name: root.attribute("name").unwrap_or_default().to_string(),
         joints: Vec::new(),
+        links: Vec::new(),
         snapped: Vec::new(),
     };
+    for node in root.children().filter(|n| n.has_tag_name("link")) {
+        let link = read_link(&doc, node, file)?;
+        if let Some(other) = urdf.links.iter().find(|l| l.name == link.name) {
+            return Err(InputError::field(
+                file,
+                link.line,
+                "name",
+                format!(
+                    "link `{}` is already defined (line {}); a URDF names each link once",
+                    link.name, other.line
+                ),
+            ));
+        }
+        urdf.links.push(link);
+    }
     let mut child_of: HashMap<String, usize> = HashMap::new();
     for node in root.children().filter(|n| n.has_tag_name("joint")) {
         let element = JointElement {
@@ -193,6 +246,77 @@ fn robot_element<'a, 'input>(
         ));
     }
     Ok(root)
+}
+
+/// A `<link>` element: its name and its `<inertial>`'s mass and centre
+/// (the inertia tensor is not needed and not read).
+fn read_link(
+    doc: &roxmltree::Document,
+    node: roxmltree::Node,
+    file: &str,
+) -> Result<UrdfLink, InputError> {
+    let at = line(doc, node);
+    let name = node
+        .attribute("name")
+        .map(str::to_string)
+        .ok_or_else(|| InputError::field(file, at, "name", "missing on <link>"))?;
+    let Some(el) = node.children().find(|c| c.has_tag_name("inertial")) else {
+        return Ok(UrdfLink {
+            name,
+            inertial: None,
+            line: at,
+        });
+    };
+    let inertial_at = line(doc, el);
+    let com = match el.children().find(|c| c.has_tag_name("origin")) {
+        Some(o) => {
+            let l = line(doc, o);
+            // The rpy turns the inertia tensor only; read to refuse a
+            // malformed one.
+            triple(o.attribute("rpy"), [0.0; 3], file, l, "rpy")?;
+            triple(o.attribute("xyz"), [0.0; 3], file, l, "xyz")?
+        }
+        None => [0.0; 3],
+    };
+    let mass = el
+        .children()
+        .find(|c| c.has_tag_name("mass"))
+        .ok_or_else(|| {
+            InputError::field(
+                file,
+                inertial_at,
+                "mass",
+                format!("link `{name}`: <inertial> without <mass>"),
+            )
+        })?;
+    let mass_at = line(doc, mass);
+    let text = mass.attribute("value").ok_or_else(|| {
+        InputError::field(
+            file,
+            mass_at,
+            "mass",
+            format!("link `{name}`: <mass> without `value`"),
+        )
+    })?;
+    let kg = match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => v,
+        _ => {
+            return Err(InputError::field(
+                file,
+                mass_at,
+                "mass",
+                format!("link `{name}`: `{text}` is not a mass (a finite number of kg, ≥ 0)"),
+            ));
+        }
+    };
+    Ok(UrdfLink {
+        name,
+        inertial: Some(Inertial {
+            kg,
+            com: Vector3::from(com),
+        }),
+        line: at,
+    })
 }
 
 /// A `<joint>` element being read, and where it is, for messages.
@@ -417,6 +541,38 @@ pub struct Chain {
     /// Their `[lower, upper]` limits, rad, where the URDF states them.
     pub limits: Vec<Option<[f64; 2]>>,
     steps: Vec<Step>,
+    /// The masses of the links that move with the chain (or sit on its
+    /// root side), in the file's order of `<link>` elements.
+    pub masses: Vec<ChainMass>,
+}
+
+/// The part of a chain a link moves with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Carrier {
+    /// The root side, before the first joint: it loads no joint.
+    Base,
+    /// The link after joint `j` (0-based): that joint's child link and
+    /// every link fixed to it (for the last joint, its child link only).
+    Link(usize),
+    /// The tool: what is fixed after the last joint, but for that joint's
+    /// child link.
+    Tool,
+}
+
+/// A link's mass as a chain carries it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainMass {
+    /// The link.
+    pub link: String,
+    /// What it moves with.
+    pub carrier: Carrier,
+    /// Its mass, kg.
+    pub kg: f64,
+    /// Its centre of mass in the root frame with every reading zero, m.
+    pub com: Point3<f64>,
+    /// The joints off the chain between it and the chain that are not
+    /// `fixed` (each taken at its zero), nearest the link first.
+    pub moving: Vec<String>,
 }
 
 impl Urdf {
@@ -443,6 +599,18 @@ impl Urdf {
         let mut link = tip;
         while Some(link) != root {
             match by_child.get(link) {
+                Some(j) if path.len() == self.joints.len() => {
+                    return Err(InputError::field(
+                        &self.file,
+                        j.line,
+                        "parent",
+                        format!(
+                            "going up from `{tip}` never ends: joint `{}` is on a loop of \
+                             joints; a URDF is a tree",
+                            j.name
+                        ),
+                    ));
+                }
                 Some(j) => {
                     path.push(j);
                     link = &j.parent;
@@ -464,6 +632,7 @@ impl Urdf {
             joints: Vec::new(),
             limits: Vec::new(),
             steps: Vec::new(),
+            masses: self.masses_along(&path),
         };
         for j in path {
             match j.kind {
@@ -492,6 +661,81 @@ impl Urdf {
     }
 }
 
+impl Urdf {
+    /// The links with a mass that move with the chain `path` (joints, root
+    /// to tip), each with its carrier and its centre at `q = 0`.
+    fn masses_along(&self, path: &[&UrdfJoint]) -> Vec<ChainMass> {
+        let Some(first) = path.first() else {
+            return Vec::new();
+        };
+        let turning = path
+            .iter()
+            .filter(|j| j.kind == JointKind::Revolute)
+            .count();
+        // Each link of the chain: its carrier and its frame at q = 0.
+        let mut on_chain: HashMap<&str, (Carrier, Isometry3<f64>)> = HashMap::new();
+        let (mut carrier, mut t, mut turned) = (Carrier::Base, Isometry3::identity(), 0);
+        on_chain.insert(first.parent.as_str(), (carrier, t));
+        for j in path {
+            t *= j.origin;
+            if j.kind == JointKind::Revolute {
+                carrier = Carrier::Link(turned);
+                turned += 1;
+            } else if turned == turning && turned > 0 {
+                carrier = Carrier::Tool;
+            }
+            on_chain.insert(j.child.as_str(), (carrier, t));
+        }
+        let by_child: HashMap<&str, &UrdfJoint> =
+            self.joints.iter().map(|j| (j.child.as_str(), j)).collect();
+        let mut out = Vec::new();
+        for link in &self.links {
+            let Some(inertial) = link.inertial else {
+                continue;
+            };
+            // Up from the link to the chain; a link that never reaches it
+            // (above the root, another tree) does not move with it.
+            let mut up: Vec<&UrdfJoint> = Vec::new();
+            let mut at = link.name.as_str();
+            let attached = loop {
+                if let Some(&found) = on_chain.get(at) {
+                    break Some(found);
+                }
+                match by_child.get(at) {
+                    Some(j) if up.len() < self.joints.len() => {
+                        up.push(j);
+                        at = &j.parent;
+                    }
+                    // No parent, or a loop of joints (which `chain` refuses
+                    // on the way to the tip; off it, the link is left out).
+                    _ => break None,
+                }
+            };
+            let Some((mut carrier, mut t)) = attached else {
+                continue;
+            };
+            if !up.is_empty() && turning > 0 && carrier == Carrier::Link(turning - 1) {
+                carrier = Carrier::Tool;
+            }
+            for j in up.iter().rev() {
+                t *= j.origin;
+            }
+            out.push(ChainMass {
+                link: link.name.clone(),
+                carrier,
+                kg: inertial.kg,
+                com: t * Point3::from(inertial.com),
+                moving: up
+                    .iter()
+                    .filter(|j| j.kind != JointKind::Fixed)
+                    .map(|j| j.name.clone())
+                    .collect(),
+            });
+        }
+        out
+    }
+}
+
 /// A URDF chain as a D-H arm.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DhConversion {
@@ -501,6 +745,41 @@ pub struct DhConversion {
     /// The D-H base frame in the URDF root frame (metres): tip in the root
     /// frame = `base · (D-H probe position / 1000)`.
     pub base: Isometry3<f64>,
+    /// The chain's masses as an arm file states them (see the module
+    /// docs). Empty when no link after the first joint has a mass.
+    pub masses: DhMasses,
+}
+
+/// A mass and its centre in a D-H frame: an arm file's `mass_kg` and
+/// `com_mm`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DhMass {
+    /// kg.
+    pub kg: f64,
+    /// The centre of mass in the link's D-H frame, mm.
+    pub com_mm: [f64; 3],
+}
+
+/// A chain's masses as its D-H arm carries them: what an arm file states
+/// in its `[[joint]]` tables, `[probe]` and `gravity`
+/// (`crate::corrections::Physics`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DhMasses {
+    /// Per joint, the link after it (its centre in that joint's frame
+    /// `T_j`, which turns with it); empty when the chain carries no mass.
+    pub links: Vec<Option<DhMass>>,
+    /// The tool's, its centre in the last frame.
+    pub tool: Option<DhMass>,
+    /// Gravity's direction in the D-H base — the URDF root's −z — when that
+    /// is not the base's −z and a mass is stated.
+    pub gravity: Option<[f64; 3]>,
+}
+
+impl DhMasses {
+    /// Whether no mass is stated.
+    pub fn is_empty(&self) -> bool {
+        self.tool.is_none() && self.links.iter().all(Option::is_none)
+    }
 }
 
 /// Farther than this (m) from the previous frame, a common normal means two
@@ -646,14 +925,79 @@ impl Chain {
         joints.push(DhJoint::default());
         let last = frame(o_prev, x_prev, z_prev);
         let b = last.inverse_transform_point(&tip).coords * 1000.0;
+        let params = DhParams {
+            joints,
+            probe: [b.x, b.y, b.z],
+        };
         Ok(DhConversion {
-            params: DhParams {
-                joints,
-                probe: [b.x, b.y, b.z],
-            },
+            masses: masses_in_dh(&self.masses, &params, &base),
+            params,
             base,
         })
     }
+}
+
+/// The masses `masses` summed per carrier, each centre in its D-H frame
+/// (`params` at `q = 0`, its base at `base` in the root frame); gravity the
+/// root's −z.
+fn masses_in_dh(masses: &[ChainMass], params: &DhParams, base: &Isometry3<f64>) -> DhMasses {
+    let n = params.joints.len();
+    // Σ m and Σ m·r (root frame, m) per link after joint k (k < n) and the
+    // tool (n).
+    let mut sums = vec![(0.0, Vector3::zeros()); n + 1];
+    for m in masses {
+        let slot = match m.carrier {
+            Carrier::Base => continue,
+            Carrier::Link(k) => k,
+            Carrier::Tool => n,
+        };
+        sums[slot].0 += m.kg;
+        sums[slot].1 += m.com.coords * m.kg;
+    }
+    // The D-H frames at q = 0 in the root frame: base·A_1…A_j.
+    let mut frames = vec![*base];
+    for j in &params.joints {
+        let last = frames[frames.len() - 1];
+        frames.push(last * dh_link(j));
+    }
+    let mass = |slot: usize, frame: &Isometry3<f64>| {
+        let (kg, moment): (f64, Vector3<f64>) = sums[slot];
+        (kg > 0.0).then(|| {
+            let c = frame
+                .inverse_transform_point(&Point3::from(moment / kg))
+                .coords
+                * 1000.0;
+            DhMass {
+                kg,
+                com_mm: [c.x, c.y, c.z],
+            }
+        })
+    };
+    let out = DhMasses {
+        links: (0..n).map(|k| mass(k, &frames[k + 1])).collect(),
+        tool: mass(n, &frames[n]),
+        gravity: None,
+    };
+    if out.is_empty() {
+        return DhMasses::default();
+    }
+    let down = base.rotation.inverse() * -Vector3::z();
+    DhMasses {
+        gravity: ((down + Vector3::z()).norm() > 1e-12).then(|| [down.x, down.y, down.z]),
+        ..out
+    }
+}
+
+/// A D-H link at `q = 0`, metres: `Rz(θ)·Tz(d)·Tx(a)·Rx(α)`.
+fn dh_link(j: &DhJoint) -> Isometry3<f64> {
+    let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), j.theta);
+    let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), j.alpha);
+    Isometry3::from_parts(Translation3::identity(), rz)
+        * Isometry3::from_parts(
+            Translation3::new(j.a / 1000.0, 0.0, j.d / 1000.0),
+            UnitQuaternion::identity(),
+        )
+        * Isometry3::from_parts(Translation3::identity(), rx)
 }
 
 /// `v` made perpendicular to the unit `z` and normalised, unless (nearly) zero.
@@ -860,5 +1204,390 @@ mod tests {
         );
         let e = urdf.chain(None, "nowhere").unwrap_err();
         assert!(e.to_string().contains("no link `nowhere`"), "{e}");
+    }
+
+    /// A random chain whose links have masses: a base mass before the
+    /// first joint (on a mounting link above it), each joint's child link,
+    /// links fixed to them beside the chain and on it, a link behind a
+    /// prismatic joint beside the chain, the tool's links after the last
+    /// joint (beside the chain and beyond the tip), a zero mass and a link
+    /// without one. Returns the URDF and each massive link's carrier, in
+    /// file order.
+    fn random_massive_urdf(
+        rng: &mut ChaCha8Rng,
+        joints: usize,
+    ) -> (String, Vec<(String, Carrier)>) {
+        /// Adds a link of random mass and centre carried by `carrier`.
+        fn massive(
+            out: &mut (String, Vec<(String, Carrier)>),
+            rng: &mut ChaCha8Rng,
+            name: &str,
+            carrier: Carrier,
+        ) {
+            let kg = rng.random_range(0.05..3.0);
+            let c: [f64; 3] = std::array::from_fn(|_| rng.random_range(-0.2..0.2));
+            out.0 += &format!(
+                "<link name=\"{name}\"><inertial><origin xyz=\"{} {} {}\" rpy=\"0.3 -0.1 2\"/>\
+                 <mass value=\"{kg}\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" \
+                 iyz=\"0\" izz=\"1\"/></inertial></link>\n",
+                c[0], c[1], c[2]
+            );
+            out.1.push((name.to_string(), carrier));
+        }
+        /// Adds a joint of kind `kind` at a random origin, about a random
+        /// axis.
+        fn joint(out: &mut String, rng: &mut ChaCha8Rng, [name, kind, parent, child]: [&str; 4]) {
+            let xyz: [f64; 3] = std::array::from_fn(|_| rng.random_range(-0.3..0.3));
+            let rpy = [
+                rng.random_range(-3.2..3.2),
+                rng.random_range(-1.5..1.5),
+                rng.random_range(-3.2..3.2),
+            ];
+            let axis: [f64; 3] = std::array::from_fn(|_| rng.random_range(-1.0..1.0));
+            *out += &format!(
+                "<joint name=\"{name}\" type=\"{kind}\"><parent link=\"{parent}\"/>\
+                 <child link=\"{child}\"/><origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>\
+                 <axis xyz=\"{} {} {}\"/></joint>\n",
+                xyz[0], xyz[1], xyz[2], rpy[0], rpy[1], rpy[2], axis[0], axis[1], axis[2]
+            );
+        }
+        let mut out = ("<link name=\"world\"/>\n".to_string(), Vec::new());
+        let mut js = String::new();
+        joint(&mut js, rng, ["mount", "fixed", "world", "base"]);
+        massive(&mut out, rng, "base", Carrier::Base);
+        let mut parent = "base".to_string();
+        for j in 0..joints {
+            let last = j + 1 == joints;
+            let child = format!("l{j}");
+            joint(
+                &mut js,
+                rng,
+                [&format!("j{j}"), "revolute", &parent, &child],
+            );
+            massive(&mut out, rng, &child, Carrier::Link(j));
+            let beside = if last {
+                Carrier::Tool
+            } else {
+                Carrier::Link(j)
+            };
+            if j % 2 == 0 || last {
+                let side = format!("side{j}");
+                joint(
+                    &mut js,
+                    rng,
+                    [&format!("fix_side{j}"), "fixed", &child, &side],
+                );
+                massive(&mut out, rng, &side, beside);
+            }
+            if j == 1 {
+                joint(&mut js, rng, ["slide", "prismatic", &child, "slider"]);
+                massive(&mut out, rng, "slider", beside);
+            }
+            parent = child;
+            if j % 3 == 1 && !last {
+                let f = format!("f{j}");
+                joint(&mut js, rng, [&format!("fix{j}"), "fixed", &parent, &f]);
+                massive(&mut out, rng, &f, Carrier::Link(j));
+                parent = f;
+            }
+        }
+        joint(&mut js, rng, ["ball", "fixed", &parent, "ball_link"]);
+        massive(&mut out, rng, "ball_link", Carrier::Tool);
+        joint(
+            &mut js,
+            rng,
+            ["beyond_joint", "fixed", "ball_link", "beyond"],
+        );
+        massive(&mut out, rng, "beyond", Carrier::Tool);
+        out.0 += "<link name=\"nothing\"><inertial><mass value=\"0\"/></inertial></link>\n";
+        joint(&mut js, rng, ["nothing_joint", "fixed", "l0", "nothing"]);
+        out.1.push(("nothing".into(), Carrier::Link(0)));
+        (
+            format!("<robot name=\"massive\">\n{}{js}</robot>\n", out.0),
+            out.1,
+        )
+    }
+
+    /// Each link's pose in the root frame at readings `q` of the chain's
+    /// joints (by name), every other joint at its zero: the URDF tree walked
+    /// directly, independently of [`Chain`].
+    fn link_pose(urdf: &Urdf, chain: &Chain, q: &[f64], link: &str) -> Isometry3<f64> {
+        match urdf.joints.iter().find(|j| j.child == link) {
+            None => Isometry3::identity(),
+            Some(j) => {
+                let turn = (chain.joints.iter().position(|n| *n == j.name)).map_or(0.0, |i| q[i]);
+                link_pose(urdf, chain, q, &j.parent)
+                    * j.origin
+                    * Isometry3::from_parts(
+                        Translation3::identity(),
+                        UnitQuaternion::from_scaled_axis(j.axis * turn),
+                    )
+            }
+        }
+    }
+
+    /// The centre of mass of the links carried by `carrier` in the root
+    /// frame at `q` through the URDF, m, and their mass.
+    fn urdf_com(urdf: &Urdf, chain: &Chain, q: &[f64], carrier: Carrier) -> (f64, Vector3<f64>) {
+        let (mut kg, mut moment) = (0.0, Vector3::zeros());
+        for m in chain.masses.iter().filter(|m| m.carrier == carrier) {
+            let link = urdf.links.iter().find(|l| l.name == m.link).unwrap();
+            let inertial = link.inertial.unwrap();
+            let r = link_pose(urdf, chain, q, &link.name) * Point3::from(inertial.com);
+            kg += inertial.kg;
+            moment += r.coords * inertial.kg;
+        }
+        (kg, moment / kg)
+    }
+
+    /// The mass `m` of the link after joint `k` (the tool: `k = n`) in the
+    /// root frame at `q` through the D-H arm (its frame `k + 1`, the tool's
+    /// the last), m: the arm cut after that frame with `com_mm` as its probe.
+    fn dh_com(dh: &DhConversion, q: &[f64], k: usize, m: &DhMass) -> Vector3<f64> {
+        let n = dh.params.joints.len();
+        let frames = (k + 1).min(n);
+        let mut arm = dh.params.clone();
+        arm.joints.truncate(frames);
+        arm.probe = m.com_mm;
+        let p = position(&arm.to_vec(), &q[..frames]);
+        (dh.base * Point3::new(p[0] / 1000.0, p[1] / 1000.0, p[2] / 1000.0)).coords
+    }
+
+    /// The largest distance, mm, between each carried centre of mass
+    /// through the URDF and through the D-H arm, over `samples` random
+    /// readings in ±π; and the masses must be the same.
+    fn worst_com_mm(
+        urdf: &Urdf,
+        chain: &Chain,
+        dh: &DhConversion,
+        rng: &mut ChaCha8Rng,
+        samples: usize,
+    ) -> f64 {
+        let n = chain.joints.len();
+        let mut worst: f64 = 0.0;
+        for _ in 0..samples {
+            let q: Vec<f64> = (0..n)
+                .map(|_| rng.random_range(-std::f64::consts::PI..std::f64::consts::PI))
+                .collect();
+            let stated = (dh.masses.links.iter().enumerate())
+                .filter_map(|(k, m)| Some((Carrier::Link(k), k, (*m)?)))
+                .chain(dh.masses.tool.map(|m| (Carrier::Tool, n, m)));
+            for (carrier, k, m) in stated {
+                let (kg, urdf_com) = urdf_com(urdf, chain, &q, carrier);
+                assert!((kg - m.kg).abs() < 1e-12, "{carrier:?}: {kg} vs {}", m.kg);
+                worst = worst.max((dh_com(dh, &q, k, &m) - urdf_com).norm() * 1000.0);
+            }
+        }
+        worst
+    }
+
+    /// The masses as the corrections' [`crate::corrections::Physics`] (what
+    /// an arm file with them reads as).
+    fn physics_of(m: &DhMasses) -> crate::corrections::Physics {
+        let mass = |d: &DhMass| crate::corrections::Mass {
+            kg: d.kg,
+            com_mm: Some(d.com_mm),
+        };
+        crate::corrections::Physics {
+            link_masses: m.links.iter().map(|l| l.as_ref().map(mass)).collect(),
+            probe_mass: m.tool.as_ref().map(mass),
+            gravity: m.gravity,
+            ..Default::default()
+        }
+    }
+
+    /// Gravity (the root's −z) about each joint axis, N·m, from the URDF
+    /// directly: the masses outboard of the joint, about a point on its
+    /// axis.
+    fn urdf_torques(urdf: &Urdf, chain: &Chain, q: &[f64]) -> Vec<f64> {
+        let g = Vector3::new(0.0, 0.0, -crate::corrections::gravity::STANDARD_GRAVITY);
+        (0..chain.joints.len())
+            .map(|j| {
+                let joint = urdf
+                    .joints
+                    .iter()
+                    .find(|u| u.name == chain.joints[j])
+                    .unwrap();
+                let at = link_pose(urdf, chain, q, &joint.parent) * joint.origin;
+                let (axis, point) = (at.rotation * joint.axis, at.translation.vector);
+                let outboard = chain.masses.iter().filter(|m| match m.carrier {
+                    Carrier::Link(k) => k >= j,
+                    Carrier::Tool => true,
+                    Carrier::Base => false,
+                });
+                outboard
+                    .map(|m| {
+                        let inertial = urdf
+                            .links
+                            .iter()
+                            .find(|l| l.name == m.link)
+                            .unwrap()
+                            .inertial
+                            .unwrap();
+                        let r = link_pose(urdf, chain, q, &m.link) * Point3::from(inertial.com);
+                        axis.dot(&(r.coords - point).cross(&(g * inertial.kg)))
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// Masses carried to the D-H frames: every link where it belongs, each
+    /// carried centre of mass where the URDF puts it at any reading (within
+    /// 1e-6 mm), and the gravity torques the toolkit computes from the
+    /// converted arm those of the URDF (gravity its root's −z, stated in
+    /// the D-H base, which the random first axis turns).
+    #[test]
+    fn random_chains_carry_their_masses() {
+        let mut rng = ChaCha8Rng::seed_from_u64(29);
+        for trial in 0..30 {
+            let joints = if trial % 2 == 0 { 6 } else { 7 };
+            let (text, expect) = random_massive_urdf(&mut rng, joints);
+            let urdf = parse_urdf(&text, "massive.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
+            let chain = urdf.chain(None, "ball_link").unwrap();
+            let carried: Vec<(String, Carrier)> = chain
+                .masses
+                .iter()
+                .map(|m| (m.link.clone(), m.carrier))
+                .collect();
+            assert_eq!(carried, expect, "trial {trial}");
+            let moving: Vec<&ChainMass> = chain
+                .masses
+                .iter()
+                .filter(|m| !m.moving.is_empty())
+                .collect();
+            assert_eq!(moving.len(), 1);
+            assert_eq!(
+                (moving[0].link.as_str(), moving[0].moving.as_slice()),
+                ("slider", &["slide".to_string()][..])
+            );
+            let dh = chain.to_dh().unwrap();
+            assert_eq!(dh.masses.links.len(), joints);
+            assert!(dh.masses.links.iter().all(Option::is_some));
+            assert!(dh.masses.tool.is_some());
+            let worst = worst_com_mm(&urdf, &chain, &dh, &mut rng, 50);
+            assert!(worst < 1e-6, "trial {trial}: {worst} mm\n{text}");
+            assert!(dh.masses.gravity.is_some(), "the base is turned");
+            let physics = physics_of(&dh.masses);
+            for _ in 0..20 {
+                let q: Vec<f64> = (0..joints).map(|_| rng.random_range(-3.0..3.0)).collect();
+                let mut tau = vec![0.0; joints];
+                crate::corrections::gravity::torques(&dh.params, &physics, &q, &mut tau);
+                let want = urdf_torques(&urdf, &chain, &q);
+                for (j, (a, b)) in tau.iter().zip(&want).enumerate() {
+                    assert!(
+                        (a - b).abs() < 1e-9 * (1.0 + b.abs()),
+                        "trial {trial} joint {j}: {a} vs {b}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The shipped URDFs' masses: the link after each joint, the gripper
+    /// (and fingers) as the probe's, the base left out, gravity the base's
+    /// −z; their centres where the URDF puts them at any reading.
+    #[test]
+    fn shipped_urdfs_carry_their_masses() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/mukca/urdf");
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        // Link after joint 2, the tool's mass, the base's.
+        for (file, after_2, tool, base) in [
+            (
+                "gen3lite.urdf",
+                1.17756164,
+                0.1395 + 2.0 * (0.018385 + 0.010748),
+                1.14608471,
+            ),
+            ("panda.urdf", 0.646926, 0.73 + 2.0 * 0.015, 0.629769),
+        ] {
+            let text = std::fs::read_to_string(dir.join(file)).unwrap();
+            let urdf = parse_urdf(&text, file, UrdfOptions::default()).unwrap();
+            let chain = urdf.chain(None, "ball_link").unwrap();
+            let dh = chain.to_dh().unwrap();
+            let p = &dh.masses;
+            assert!((p.links[1].unwrap().kg - after_2).abs() < 1e-12, "{file}");
+            assert!((p.tool.unwrap().kg - tool).abs() < 1e-12, "{file}");
+            let left_out: Vec<f64> = (chain.masses.iter())
+                .filter(|m| m.carrier == Carrier::Base)
+                .map(|m| m.kg)
+                .collect();
+            assert_eq!(left_out, [base], "{file}");
+            assert_eq!(p.gravity, None, "{file}: the D-H base is the URDF root");
+            let worst = worst_com_mm(&urdf, &chain, &dh, &mut rng, 500);
+            assert!(worst < 1e-6, "{file}: {worst} mm");
+        }
+    }
+
+    #[test]
+    fn bad_masses_are_located() {
+        let parse = |links: &str| {
+            let text = format!("<robot>\n{links}\n</robot>");
+            parse_urdf(&text, "m.urdf", UrdfOptions::default())
+        };
+        let cases = [
+            ("<link/>", "m.urdf:2: field `name`: missing on <link>"),
+            (
+                "<link name=\"a\">\n<inertial><origin xyz=\"0 0 0\"/></inertial></link>",
+                "m.urdf:3: field `mass`: link `a`: <inertial> without <mass>",
+            ),
+            (
+                "<link name=\"a\"><inertial>\n<mass/></inertial></link>",
+                "m.urdf:3: field `mass`: link `a`: <mass> without `value`",
+            ),
+            (
+                "<link name=\"a\"><inertial><mass value=\"-1\"/></inertial></link>",
+                "m.urdf:2: field `mass`: link `a`: `-1` is not a mass (a finite number of kg, ≥ 0)",
+            ),
+            (
+                "<link name=\"a\"><inertial><mass value=\"heavy\"/></inertial></link>",
+                "m.urdf:2: field `mass`: link `a`: `heavy` is not a mass (a finite number of kg, ≥ 0)",
+            ),
+            (
+                "<link name=\"a\"><inertial><mass value=\"inf\"/></inertial></link>",
+                "m.urdf:2: field `mass`: link `a`: `inf` is not a mass (a finite number of kg, ≥ 0)",
+            ),
+            (
+                "<link name=\"a\"><inertial>\n<origin xyz=\"0 0\"/><mass value=\"1\"/></inertial></link>",
+                "m.urdf:3: field `xyz`: `0 0` is not three finite numbers",
+            ),
+            (
+                "<link name=\"a\"><inertial>\n<origin rpy=\"0 x 0\"/><mass value=\"1\"/></inertial></link>",
+                "m.urdf:3: field `rpy`: `0 x 0` is not three finite numbers",
+            ),
+            (
+                "<link name=\"a\"/>\n<link name=\"a\"/>",
+                "m.urdf:3: field `name`: link `a` is already defined (line 2); a URDF names each \
+                 link once",
+            ),
+        ];
+        for (links, message) in cases {
+            let e = parse(links).unwrap_err();
+            assert_eq!(e.to_string(), message);
+            assert!(matches!(e, InputError::Field { .. }), "{e:?}");
+        }
+        // A link without <inertial> has no mass; a mass of 0 is a mass.
+        let urdf = parse(
+            "<link name=\"a\"/><link name=\"b\"><inertial><mass value=\"0\"/></inertial></link>",
+        )
+        .unwrap();
+        assert_eq!(urdf.links[0].inertial, None);
+        assert_eq!(urdf.links[1].inertial.map(|i| i.kg), Some(0.0));
+        // Joints in a loop are refused, not followed forever.
+        let text = r#"<robot>
+            <joint name="j1" type="revolute"><parent link="a"/><child link="b"/></joint>
+            <joint name="j2" type="revolute"><parent link="b"/><child link="a"/></joint>
+            </robot>"#;
+        let urdf = parse_urdf(text, "loop.urdf", UrdfOptions::default()).unwrap();
+        let e = urdf.chain(None, "b").unwrap_err();
+        assert!(e.to_string().contains("is on a loop of joints"), "{e}");
+        // A chain without masses converts to an arm without any.
+        let text = r#"<robot><link name="base"><inertial><mass value="2"/></inertial></link>
+            <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+            <axis xyz="0 0 1"/></joint></robot>"#;
+        let urdf = parse_urdf(text, "base.urdf", UrdfOptions::default()).unwrap();
+        let chain = urdf.chain(None, "l1").unwrap();
+        assert_eq!(chain.masses.len(), 1);
+        assert_eq!(chain.to_dh().unwrap().masses, DhMasses::default());
     }
 }
