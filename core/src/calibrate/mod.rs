@@ -598,7 +598,9 @@ impl Calibration {
 }
 
 /// Calibrates `start` (the nominal arm) on `data`: the model `model`, solved
-/// as `settings` say (method, threads, seed).
+/// as `settings` say (method, threads, seed). The geometry alone states no
+/// masses: with [`ModelOptions::beyond`] a compliance is refused (a
+/// [`crate::session::Problem`] of an arm file with masses fits one).
 ///
 /// ```
 /// use aacmm_core::{calibrate::*, io::Arm, params::DhParams, simulate::*};
@@ -619,7 +621,13 @@ pub fn calibrate(
     settings: &SolverSettings,
 ) -> Result<Calibration, CalibrationError> {
     let solver = settings.method.solver();
-    let layout = crate::residuals::positions::layout_for(start, data)?;
+    // A bare geometry states no masses: the models beyond it that need none
+    // (harmonics, expansion, drift) are fitted, a compliance refused.
+    let physics = crate::corrections::Physics::default();
+    model
+        .beyond
+        .check_inputs(&physics, &data.condition_sets())?;
+    let layout = crate::residuals::positions::layout_with(start, data, &physics, &model.beyond)?;
     let inputs = FitInputs {
         layout: &layout,
         data,
