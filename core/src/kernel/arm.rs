@@ -463,21 +463,32 @@ impl ArmKernel {
         self.check_poses(poses, &range)?;
         match poses.post() {
             None => self.apply(EachJacobian { poses, range, f }),
-            Some(post) => {
-                // Outside the hot path (a model beyond geometry is on): one
-                // copy of the columns per pose, scaled.
-                let mut scaled = vec![[0.0; 3]; self.param_count()];
-                let g = |i: usize, p: &[f64; 3], jac: &[[f64; 3]]| {
-                    let (s, off) = (post.scale[i], post.offset[i]);
-                    for (o, c) in scaled.iter_mut().zip(jac) {
-                        *o = c.map(|v| s * v);
-                    }
-                    f(i, &std::array::from_fn(|r| s * p[r] + off[r]), &scaled);
-                };
-                self.apply(EachJacobian { poses, range, f: g })
-            }
+            Some(post) => self.each_jacobian_after(poses, post, range, f),
         }
         Ok(())
+    }
+
+    /// [`ArmKernel::for_each_jacobian`] of poses with a transform after the
+    /// chain (a model beyond geometry is on): one copy of the columns per
+    /// pose, scaled. Out of line, so that the plain path compiles as before.
+    #[cold]
+    #[inline(never)]
+    fn each_jacobian_after(
+        &self,
+        poses: &PreparedPoses,
+        post: &crate::kernel::Post,
+        range: Range<usize>,
+        mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+    ) {
+        let mut scaled = vec![[0.0; 3]; self.param_count()];
+        let g = |i: usize, p: &[f64; 3], jac: &[[f64; 3]]| {
+            let (s, off) = (post.scale[i], post.offset[i]);
+            for (o, c) in scaled.iter_mut().zip(jac) {
+                *o = c.map(|v| s * v);
+            }
+            f(i, &std::array::from_fn(|r| s * p[r] + off[r]), &scaled);
+        };
+        self.apply(EachJacobian { poses, range, f: g })
     }
 
     /// Calls `f(pose, ∂p/∂q)` for every pose of `range` in order, with the

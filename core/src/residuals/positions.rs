@@ -163,13 +163,15 @@ pub fn layout_with(
             joints: params.joint_count(),
         }));
     }
+    // The frames' start through the stated corrections (a copy of the data
+    // only when there are any).
     let corrected;
-    let data = match data.corrected(params, physics) {
-        Ok(d) => {
+    let data = match physics.corrects().then(|| data.corrected(params, physics)) {
+        Some(Ok(d)) => {
             corrected = d;
             &corrected
         }
-        Err(_) => data,
+        _ => data,
     };
     if let Some(positions) = data.positions() {
         let names = positions.rows().frames();
