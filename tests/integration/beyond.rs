@@ -700,13 +700,13 @@ fn touches_recover_a_compliance() {
     use aacmm_core::corrections::Mass;
     use aacmm_core::simulate::{CampaignSettings, simulate};
     let mut nominal = Arm::without_limits("paper", aacmm_core::DhParams::paper_nominal());
-    nominal.physics = Box::new(Physics {
+    *nominal.physics = Physics {
         link_masses: [0.8, 1.2, 0.9, 0.6, 0.4, 0.2]
             .map(|kg| Some(Mass::at_middle(kg)))
             .to_vec(),
         probe_mass: Some(Mass::at_middle(0.3)),
         ..Physics::default()
-    });
+    };
     let mut truth = nominal.clone();
     truth.physics.compliance = vec![None, Some(40e-6), Some(60e-6), None, None, None];
     let noise = Noise {

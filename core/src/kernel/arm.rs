@@ -458,7 +458,7 @@ impl ArmKernel {
         &self,
         poses: &PreparedPoses,
         range: Range<usize>,
-        mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+        f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
     ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
         match poses.post() {

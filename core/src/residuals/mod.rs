@@ -223,9 +223,9 @@ impl At<'_> {
     }
 
     /// The poses `raw` (a data set's prepared readings) under `conditions`
-    /// as the chain sees them with the layout's corrections at this point, and
-    /// the corrections' Jacobian factors; `None` when the layout corrects
-    /// nothing (the poses are the readings).
+    /// as the chain sees them with the layout's corrections at this point,
+    /// and the corrections' Jacobian factors; `None` when the layout
+    /// corrects nothing (the poses are the readings).
     ///
     /// # Errors
     ///
@@ -236,16 +236,7 @@ impl At<'_> {
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
     ) -> Result<Option<crate::corrections::Effects>, TermError> {
-        let Some((block, cols)) = self.layout.corrections() else {
-            return Ok(None);
-        };
-        let physics = block.physics_at(&self.x[cols]);
-        if block.fit.is_empty() && !physics.corrects() {
-            return Ok(None);
-        }
-        crate::corrections::Effects::new(self.arm, &physics, &block.fit, raw, conditions)
-            .map(Some)
-            .map_err(|e| TermError::invalid("beyond", e))
+        self.corrected(raw, conditions, true)
     }
 
     /// [`At::effects`] without the Jacobian factors: what a cost needs.
@@ -258,15 +249,27 @@ impl At<'_> {
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
     ) -> Result<Option<crate::corrections::Effects>, TermError> {
+        self.corrected(raw, conditions, false)
+    }
+
+    /// [`At::effects`], with the factors of the fitted columns when
+    /// `columns`.
+    fn corrected(
+        &self,
+        raw: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        columns: bool,
+    ) -> Result<Option<crate::corrections::Effects>, TermError> {
         let Some((block, cols)) = self.layout.corrections() else {
             return Ok(None);
         };
         let physics = block.physics_at(&self.x[cols]);
-        if !physics.corrects() {
+        let none = crate::corrections::Beyond::default();
+        let fit = if columns { &block.fit } else { &none };
+        if fit.is_empty() && !physics.corrects() {
             return Ok(None);
         }
-        let none = crate::corrections::Beyond::default();
-        crate::corrections::Effects::new(self.arm, &physics, &none, raw, conditions)
+        crate::corrections::Effects::new(self.arm, &physics, fit, raw, conditions)
             .map(Some)
             .map_err(|e| TermError::invalid("beyond", e))
     }

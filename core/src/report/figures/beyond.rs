@@ -4,7 +4,7 @@
 
 use plotters::prelude::*;
 
-use super::{frame, header_height, short};
+use super::{frame, header_height, series_label};
 use crate::report::svg::{
     Axis, BLUE, Class, GREEN, Key, Marker, PURPLE, Shape, VERMILLION, WIDTH, chart, group, render,
 };
@@ -28,19 +28,7 @@ pub(crate) fn figure(series: &[PoseErrors]) -> Result<Figure, ReportError> {
         ..Marker::new(Shape::Dot, COLORS[i % COLORS.len()])
     };
     let entries: Vec<(Key, String)> = (series.iter().enumerate())
-        .map(|(i, s)| {
-            let n = s.error_mm.len().max(1) as f64;
-            (
-                Key::Marker(marker(i)),
-                format!(
-                    "{}: {} poses, mean {} mm, max {} mm",
-                    s.name,
-                    s.error_mm.len(),
-                    short(s.error_mm.iter().sum::<f64>() / n),
-                    short(s.error_mm.iter().copied().fold(0.0, f64::max))
-                ),
-            )
-        })
+        .map(|(i, s)| (Key::Marker(marker(i)), series_label(s)))
         .collect();
     let height = header_height(&entries) + 420;
     let svg = render(BEYOND_SVG, TITLE, (WIDTH, height), |root| {

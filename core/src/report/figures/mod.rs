@@ -67,6 +67,19 @@ pub(crate) fn short(v: f64) -> String {
     }
 }
 
+/// A series' legend: its name, its poses, and the mean and largest of its
+/// per-pose errors (mm).
+pub(crate) fn series_label(s: &crate::report::PoseErrors) -> String {
+    let n = s.error_mm.len().max(1) as f64;
+    format!(
+        "{}: {} poses, mean {} mm, max {} mm",
+        s.name,
+        s.error_mm.len(),
+        short(s.error_mm.iter().sum::<f64>() / n),
+        short(s.error_mm.iter().copied().fold(0.0, f64::max))
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::short;

@@ -5,7 +5,7 @@
 
 use plotters::prelude::*;
 
-use super::{frame, header_height, short};
+use super::{frame, header_height, series_label};
 use crate::report::svg::{
     Axis, BLUE, Class, GREY, Key, Marker, Shape, VERMILLION, WIDTH, chart, group, render,
 };
@@ -49,19 +49,7 @@ pub(crate) fn figure(series: &[PoseErrors]) -> Result<Figure, ReportError> {
         });
     let entries: Vec<(Key, String)> = series
         .iter()
-        .map(|s| {
-            let n = s.error_mm.len().max(1) as f64;
-            (
-                Key::Marker(marker(s)),
-                format!(
-                    "{}: {} poses, mean {} mm, max {} mm",
-                    s.name,
-                    s.error_mm.len(),
-                    short(s.error_mm.iter().sum::<f64>() / n),
-                    short(s.error_mm.iter().copied().fold(0.0, f64::max))
-                ),
-            )
-        })
+        .map(|s| (Key::Marker(marker(s)), series_label(s)))
         .collect();
     let height = header_height(&entries) + 420;
     let svg = render(POSITIONS_SVG, TITLE, (WIDTH, height), |root| {
