@@ -625,6 +625,9 @@ fn touch_effects(
         return Ok(None);
     };
     let physics = block.physics_at(&fit.x[cols]);
+    if block.fit.is_empty() && !physics.corrects() {
+        return Ok(None);
+    }
     let data = setup.data;
     crate::corrections::Effects::new(
         &fit.params,
@@ -793,12 +796,19 @@ fn position_uncertainty(
         // With corrections beyond geometry: the poses as the chain saw
         // them, each Jacobian extended by the corrections' columns.
         let mut ext = Vec::new();
-        for (k, &i) in poses.iter().enumerate() {
-            let l = k % LANES;
-            kernel.for_each_jacobian(&e.poses, i..i + 1, |i, pos, jac| {
+        if step == 1 {
+            kernel.for_each_jacobian(&e.poses, 0..data.len(), |i, pos, jac| {
                 e.extend(i, pos, jac, &mut ext);
-                sums.add(l, &ext, last(l, i));
+                sums.add(i % LANES, &ext, last(i % LANES, i));
             })?;
+        } else {
+            for (k, &i) in poses.iter().enumerate() {
+                let l = k % LANES;
+                kernel.for_each_jacobian(&e.poses, i..i + 1, |i, pos, jac| {
+                    e.extend(i, pos, jac, &mut ext);
+                    sums.add(l, &ext, last(l, i));
+                })?;
+            }
         }
     } else if step == 1 {
         kernel.for_each_jacobian(

@@ -156,7 +156,9 @@ pub fn layout_with(
     fit: &Beyond,
 ) -> Result<Layout, KernelError> {
     let mut layout = Layout::new(params.clone());
-    if !fit.is_empty() || physics.corrects() || physics.has_masses() {
+    // Masses alone change no position: no block (and no cost) without a
+    // model fitted or a correction stated.
+    if !fit.is_empty() || physics.corrects() {
         layout.add(Box::new(CorrectionBlock {
             fit: fit.clone(),
             physics: physics.clone(),
