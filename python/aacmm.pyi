@@ -339,8 +339,8 @@ class Calibration:
         data cannot separate — or None)."""
     @property
     def physics(self) -> Optional[Dict[str, Any]]:
-        """The arm's physics at the fit (None when the arm states none and
-        none was fitted): ``link_masses``, ``probe_mass``, ``gravity``, and
+        """The arm's physics at the fit (None when no correction is stated or
+        fitted — masses alone correct nothing): ``link_masses``, ``probe_mass``, ``gravity``, and
         the corrections fitted or as stated — ``compliance`` per joint
         (rad/(N·m)), ``harmonics`` (rad), ``cte_per_k`` (1/K),
         ``reference_temperature_c`` — as ``report["calibration"]["physics"]``;

@@ -312,8 +312,8 @@ impl Calibration {
         Ok(out)
     }
 
-    /// The arm's physics at the fit (`None` when the arm states none and
-    /// none was fitted): `link_masses` and `probe_mass` (`kg`, `com_mm`),
+    /// The arm's physics at the fit (`None` when no correction is stated
+    /// or fitted — masses alone correct nothing): `link_masses` and `probe_mass` (`kg`, `com_mm`),
     /// `gravity`, and the corrections, fitted or as the arm file states
     /// them — `compliance` per joint (rad/(N·m), `None` for none),
     /// `harmonics` (`joint` 0-based, `order`, `sin`, `cos` rad),

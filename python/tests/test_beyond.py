@@ -52,11 +52,11 @@ def test_compliance_gives_the_command_lines_report(cli, ur5, grid, tmp_path):
         assert physics["compliance"][j - 1] == pytest.approx(c["calibrated"] * 1e-6, rel=1e-12)
     assert "drift_mm_per_h" not in physics
 
-    # Without the option: no correction column, the stated (no) compliance.
+    # Without the option: no correction column, and no physics at the fit
+    # (masses alone correct nothing).
     geometric = aacmm.calibrate(ur5, grid, method="lm")
     assert list(geometric.auxiliary) == list(aux)[2:]
-    assert geometric.physics["compliance"] == []
-    assert geometric.physics["probe_mass"] == {"kg": 0.2}
+    assert geometric.physics is None
 
 
 def test_a_held_correction_says_why(ur5, grid):

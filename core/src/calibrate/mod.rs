@@ -517,7 +517,8 @@ pub struct Calibration {
     pub prior: Option<PriorReport>,
     /// The arm's physics at the fit — masses, and every correction beyond
     /// geometry, fitted or stated ([`crate::corrections`]) — when the arm
-    /// states any or the fit estimated any.
+    /// states a correction or the fit estimated one (masses alone correct
+    /// nothing: then `None`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub physics: Option<crate::corrections::Physics>,
 }
