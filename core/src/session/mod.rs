@@ -1019,13 +1019,17 @@ fn parameter_table(c: &Calibration) -> String {
         } else {
             "Auxiliary blocks (every column free; sigma k = 1):\n"
         };
+        // The unit column as wide as its widest unit (`µrad/(N·m)`).
+        let w = (c.auxiliary.iter())
+            .map(|e| e.unit.chars().count())
+            .fold(4, usize::max);
         t += &format!(
-            "  {:<16} {:<4} {:>14} {:>14} {:>10}\n",
+            "  {:<16} {:<w$} {:>14} {:>14} {:>10}\n",
             "name", "unit", "start", "calibrated", "sigma"
         );
         for e in &c.auxiliary {
             let line = format!(
-                "  {:<16} {:<4} {:>14.6} {:>14.6} {:>10}  {}",
+                "  {:<16} {:<w$} {:>14.6} {:>14.6} {:>10}  {}",
                 e.name,
                 e.unit,
                 e.start,
