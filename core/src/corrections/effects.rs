@@ -1,7 +1,7 @@
 //! A set of poses as the chain sees them under the corrections, and the
 //! corrections' Jacobian columns.
 
-use super::gravity::{Loads, torques};
+use super::gravity::Loads;
 use super::{Beyond, Physics};
 use crate::kernel::{Post, PreparedPoses};
 use crate::params::DhParams;
@@ -165,26 +165,25 @@ impl Effects {
 /// change with `q` smaller still, so a few rounds reach round-off.
 pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
     let n = arm.joints.len();
+    let loads = physics
+        .compliance
+        .iter()
+        .any(|c| c.is_some_and(|v| v != 0.0))
+        .then(|| Loads::new(arm, physics));
     let mut q = angles.to_vec();
-    let mut tau = vec![0.0; n];
+    let mut tau = vec![0.0; if loads.is_some() { n } else { 0 }];
     for _ in 0..8 {
-        let mut c = vec![0.0; n];
-        for h in &physics.harmonics {
-            let x = f64::from(h.order) * q[h.joint];
-            c[h.joint] += h.sin * x.sin() + h.cos * x.cos();
+        let (cos, sin): (Vec<f64>, Vec<f64>) = q.iter().map(|v| (v.cos(), v.sin())).unzip();
+        let trig: Vec<(&[f64], &[f64])> = (0..n)
+            .map(|j| (std::slice::from_ref(&cos[j]), std::slice::from_ref(&sin[j])))
+            .collect();
+        if let Some(loads) = &loads {
+            loads.torques(|j| cos[j], |j| sin[j], &mut tau);
         }
-        if physics
-            .compliance
-            .iter()
-            .any(|c| c.is_some_and(|v| v != 0.0))
-        {
-            torques(arm, physics, &q, &mut tau);
-            for (j, cj) in c.iter_mut().enumerate() {
-                *cj += physics.compliance_of(j) * tau[j];
-            }
-        }
+        // The same corrections the fit applies, of this one pose.
+        let delta = reading_corrections(physics, &trig, &tau, 1);
         for j in 0..n {
-            q[j] = angles[j] - c[j];
+            q[j] = angles[j] - delta[j].first().copied().unwrap_or(0.0);
         }
     }
     q

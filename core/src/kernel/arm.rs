@@ -351,7 +351,7 @@ impl ArmKernel {
                 for c in jac.iter_mut() {
                     *c = c.map(|v| s * v);
                 }
-                Ok(std::array::from_fn(|r| s * p[r] + post.offset[i][r]))
+                Ok(post.at(i, &p))
             }
         }
     }
@@ -404,8 +404,7 @@ impl ArmKernel {
         });
         if let Some(post) = poses.post() {
             for (k, o) in out.iter_mut().enumerate() {
-                let (s, off) = (post.scale[start + k], post.offset[start + k]);
-                *o = std::array::from_fn(|r| s * o[r] + off[r]);
+                *o = post.at(start + k, o);
             }
         }
         Ok(())
@@ -482,11 +481,10 @@ impl ArmKernel {
     ) {
         let mut scaled = vec![[0.0; 3]; self.param_count()];
         let g = |i: usize, p: &[f64; 3], jac: &[[f64; 3]]| {
-            let (s, off) = (post.scale[i], post.offset[i]);
             for (o, c) in scaled.iter_mut().zip(jac) {
-                *o = c.map(|v| s * v);
+                *o = c.map(|v| post.scale[i] * v);
             }
-            f(i, &std::array::from_fn(|r| s * p[r] + off[r]), &scaled);
+            f(i, &post.at(i, p), &scaled);
         };
         self.apply(EachJacobian { poses, range, f: g })
     }

@@ -336,6 +336,15 @@ pub struct Post {
     pub offset: Vec<[f64; 3]>,
 }
 
+impl Post {
+    /// Pose `i`'s position `p` of the chain as seen: `scale_i·p + offset_i`.
+    #[inline]
+    pub fn at(&self, i: usize, p: &[f64; 3]) -> [f64; 3] {
+        let (s, off) = (self.scale[i], self.offset[i]);
+        std::array::from_fn(|r| s * p[r] + off[r])
+    }
+}
+
 impl PreparedPoses {
     /// Prepares readings (rad), one row of `joints` readings per pose.
     ///
@@ -610,9 +619,9 @@ impl Jacobians {
         let n = self.len;
         for i in 0..n {
             let s = post.scale[i];
-            for r in 0..3 {
-                let v = &mut self.pos[r * n + i];
-                *v = s * *v + post.offset[i][r];
+            let p = post.at(i, &self.position(i));
+            for (r, v) in p.into_iter().enumerate() {
+                self.pos[r * n + i] = v;
             }
             for c in 0..self.params {
                 for r in 0..3 {

@@ -274,6 +274,12 @@ fn draw_rows(
     let kernel = ArmKernel::new(&truth.params).map_err(|e| model(e.to_string()))?;
     let rows = frames.len() * settings.poses;
     let none = crate::corrections::Beyond::default();
+    // The drift is the session's, from its first row: added per row below
+    // (one row's own time would be its origin).
+    let still = crate::corrections::Physics {
+        drift_mm_per_h: None,
+        ..physics.clone()
+    };
     let mut positions = Positions::new(n);
     // Row by row — the pose, its conditions, the noise — so that a session
     // without conditions draws what it always drew.
@@ -287,12 +293,6 @@ fn draw_rows(
             let time = (conditions.session_h)
                 .map(|h| 3600.0 * h * r as f64 / rows.saturating_sub(1).max(1) as f64);
             let p = if physics.corrects() {
-                // The drift is the session's, from its first row: added
-                // here (one row's own time would be its origin).
-                let still = crate::corrections::Physics {
-                    drift_mm_per_h: None,
-                    ..physics.clone()
-                };
                 let recorded = crate::corrections::Conditions {
                     temperature_c: temperature.as_ref().map(std::slice::from_ref),
                     time_s: None,
