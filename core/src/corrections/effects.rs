@@ -2,7 +2,7 @@
 //! corrections' Jacobian columns.
 
 use super::gravity::Loads;
-use super::{Beyond, Physics};
+use super::{Beyond, Column, Physics};
 use crate::kernel::{Post, PreparedPoses};
 use crate::params::DhParams;
 
@@ -278,18 +278,13 @@ fn corrected_trig(
 
 /// The fitted columns' kinds, in the block's order.
 fn kinds(fit: &Beyond, n: usize) -> Vec<Kind> {
-    let mut kinds = Vec::with_capacity(fit.len());
-    kinds.extend(fit.compliance.iter().map(|&j| Kind::Joint(3 * n + j)));
-    for &(j, _) in &fit.harmonics {
-        kinds.extend([Kind::Joint(3 * n + j); 2]);
-    }
-    if fit.thermal {
-        kinds.push(Kind::Expansion);
-    }
-    if fit.drift {
-        kinds.extend((0..3).map(Kind::Axis));
-    }
-    kinds
+    (fit.columns().into_iter())
+        .map(|column| match column {
+            Column::Compliance(j) | Column::Sin(j, _) | Column::Cos(j, _) => Kind::Joint(3 * n + j),
+            Column::Expansion => Kind::Expansion,
+            Column::Drift(a) => Kind::Axis(a),
+        })
+        .collect()
 }
 
 /// Per pose (pose-major), the factor of each fitted column ([`kinds`]).
@@ -301,27 +296,21 @@ fn factors(
     scale: &[f64],
     n: usize,
 ) -> Vec<f64> {
-    let (m, len) = (fit.len(), scale.len());
+    let columns = fit.columns();
+    let (m, len) = (columns.len(), scale.len());
     let mut factors = vec![0.0; len * m];
     if m == 0 {
         return factors;
     }
     for (i, f) in factors.chunks_exact_mut(m).enumerate() {
-        let mut k = 0;
-        for &j in &fit.compliance {
-            f[k] = tau[i * n + j] * 1e-6;
-            k += 1;
-        }
-        for &(j, order) in &fit.harmonics {
-            (f[k + 1], f[k]) = multiple(trig[j].0[i], trig[j].1[i], order);
-            k += 2;
-        }
-        if fit.thermal {
-            f[k] = elapsed.kelvin[i] * 1e-6 / scale[i];
-            k += 1;
-        }
-        if fit.drift {
-            f[k..k + 3].fill(elapsed.hours[i]);
+        for (fk, column) in f.iter_mut().zip(&columns) {
+            *fk = match *column {
+                Column::Compliance(j) => tau[i * n + j] * 1e-6,
+                Column::Sin(j, k) => multiple(trig[j].0[i], trig[j].1[i], k).1,
+                Column::Cos(j, k) => multiple(trig[j].0[i], trig[j].1[i], k).0,
+                Column::Expansion => elapsed.kelvin[i] * 1e-6 / scale[i],
+                Column::Drift(_) => elapsed.hours[i],
+            };
         }
     }
     factors

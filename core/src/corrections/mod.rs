@@ -149,57 +149,53 @@ impl Physics {
     /// joints.
     pub fn with_fitted(&self, fit: &Beyond, values: &[f64], joints: usize) -> Physics {
         let mut out = self.clone();
-        let mut v = values.iter().copied();
-        let mut next = || v.next().unwrap_or(0.0);
         if !fit.compliance.is_empty() {
             out.compliance.resize(joints, None);
-            for &j in &fit.compliance {
-                out.compliance[j] = Some(next() * 1e-6);
+        }
+        for (column, &v) in fit.columns().iter().zip(values) {
+            match *column {
+                Column::Compliance(j) => out.compliance[j] = Some(v * 1e-6),
+                Column::Sin(j, k) => out.harmonic_mut(j, k).sin = v,
+                Column::Cos(j, k) => out.harmonic_mut(j, k).cos = v,
+                Column::Expansion => out.cte_per_k = Some(v * 1e-6),
+                Column::Drift(a) => out.drift_mm_per_h.get_or_insert([0.0; 3])[a] = v,
             }
         }
-        for &(joint, order) in &fit.harmonics {
-            let (sin, cos) = (next(), next());
-            out.harmonics
-                .retain(|h| (h.joint, h.order) != (joint, order));
-            out.harmonics.push(Harmonic {
-                joint,
-                order,
-                sin,
-                cos,
-            });
-        }
         out.harmonics.sort_by_key(|h| (h.joint, h.order));
-        if fit.thermal {
-            out.cte_per_k = Some(next() * 1e-6);
-        }
-        if fit.drift {
-            out.drift_mm_per_h = Some([next(), next(), next()]);
-        }
         out
+    }
+
+    /// Joint `joint`'s harmonic of order `order`, added at zero if absent.
+    fn harmonic_mut(&mut self, joint: usize, order: u32) -> &mut Harmonic {
+        let at = match (self.harmonics.iter()).position(|h| (h.joint, h.order) == (joint, order)) {
+            Some(at) => at,
+            None => {
+                self.harmonics.push(Harmonic {
+                    joint,
+                    order,
+                    sin: 0.0,
+                    cos: 0.0,
+                });
+                self.harmonics.len() - 1
+            }
+        };
+        &mut self.harmonics[at]
     }
 
     /// The stated values of the models `fit` estimates, as the block's
     /// start (internal units): what a fit starts from.
     pub fn start_of(&self, fit: &Beyond) -> Vec<f64> {
-        let mut x = Vec::new();
-        for &j in &fit.compliance {
-            x.push(self.compliance_of(j) * 1e6);
-        }
-        for &(joint, order) in &fit.harmonics {
-            let h = self
-                .harmonics
-                .iter()
-                .find(|h| (h.joint, h.order) == (joint, order));
-            x.push(h.map_or(0.0, |h| h.sin));
-            x.push(h.map_or(0.0, |h| h.cos));
-        }
-        if fit.thermal {
-            x.push(self.cte_per_k.unwrap_or(0.0) * 1e6);
-        }
-        if fit.drift {
-            x.extend(self.drift_mm_per_h.unwrap_or([0.0; 3]));
-        }
-        x
+        let harmonic =
+            |j: usize, k: u32| (self.harmonics.iter()).find(|h| (h.joint, h.order) == (j, k));
+        (fit.columns().into_iter())
+            .map(|column| match column {
+                Column::Compliance(j) => self.compliance_of(j) * 1e6,
+                Column::Sin(j, k) => harmonic(j, k).map_or(0.0, |h| h.sin),
+                Column::Cos(j, k) => harmonic(j, k).map_or(0.0, |h| h.cos),
+                Column::Expansion => self.cte_per_k.unwrap_or(0.0) * 1e6,
+                Column::Drift(a) => self.drift_mm_per_h.map_or(0.0, |d| d[a]),
+            })
+            .collect()
     }
 }
 
@@ -220,6 +216,22 @@ pub struct Beyond {
     pub drift: bool,
 }
 
+/// One column of the models a fit switches on: what the block's names,
+/// start, fitted values and Jacobian all follow ([`Beyond::columns`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Column {
+    /// Joint `j`'s compliance (µrad/(N·m)).
+    Compliance(usize),
+    /// The sine amplitude of joint `j`'s harmonic of order `k` (rad).
+    Sin(usize, u32),
+    /// Its cosine amplitude (rad).
+    Cos(usize, u32),
+    /// The expansion coefficient (ppm/K).
+    Expansion,
+    /// The drift along base axis `a` (mm/h).
+    Drift(usize),
+}
+
 /// Harmonic orders above this are refused: an encoder's errors of interest
 /// are the first few; beyond, a term fits the data's noise.
 pub const MAX_HARMONIC_ORDER: u32 = 16;
@@ -228,6 +240,26 @@ impl Beyond {
     /// Whether no model is switched on.
     pub fn is_empty(&self) -> bool {
         self.compliance.is_empty() && self.harmonics.is_empty() && !self.thermal && !self.drift
+    }
+
+    /// The block's columns, in order: the compliances, each harmonic's sine
+    /// and cosine, the expansion, the drift's three axes.
+    pub fn columns(&self) -> Vec<Column> {
+        let mut out: Vec<Column> = self
+            .compliance
+            .iter()
+            .map(|&j| Column::Compliance(j))
+            .collect();
+        for &(j, k) in &self.harmonics {
+            out.extend([Column::Sin(j, k), Column::Cos(j, k)]);
+        }
+        if self.thermal {
+            out.push(Column::Expansion);
+        }
+        if self.drift {
+            out.extend((0..3).map(Column::Drift));
+        }
+        out
     }
 
     /// Columns of the block.

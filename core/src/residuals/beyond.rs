@@ -2,7 +2,7 @@
 //! ([`crate::corrections`]): the layout's first after the geometry.
 
 use super::{Block, Parameter, Unit};
-use crate::corrections::{Beyond, Physics};
+use crate::corrections::{Beyond, Column, Physics};
 
 /// The unknowns of the models a fit switches on, with the arm's physics
 /// (masses, stated values) they act through: the layout's first block.
@@ -32,37 +32,19 @@ impl Block for CorrectionBlock {
     }
 
     fn parameters(&self) -> Vec<Parameter> {
-        let mut out = Vec::new();
         let other = |s: &str| Unit::Other(s.to_string());
-        for &j in &self.fit.compliance {
-            out.push(Parameter {
-                name: format!("compliance{}", j + 1),
-                unit: other("µrad/(N·m)"),
-            });
-        }
-        for &(j, k) in &self.fit.harmonics {
-            for part in ["sin", "cos"] {
-                out.push(Parameter {
-                    name: format!("harmonic{}.{part}{k}", j + 1),
-                    unit: Unit::Angle,
-                });
-            }
-        }
-        if self.fit.thermal {
-            out.push(Parameter {
-                name: "thermal.cte".into(),
-                unit: other("ppm/K"),
-            });
-        }
-        if self.fit.drift {
-            for axis in ["x", "y", "z"] {
-                out.push(Parameter {
-                    name: format!("drift.{axis}"),
-                    unit: other("mm/h"),
-                });
-            }
-        }
-        out
+        (self.fit.columns().into_iter())
+            .map(|column| {
+                let (name, unit) = match column {
+                    Column::Compliance(j) => (format!("compliance{}", j + 1), other("µrad/(N·m)")),
+                    Column::Sin(j, k) => (format!("harmonic{}.sin{k}", j + 1), Unit::Angle),
+                    Column::Cos(j, k) => (format!("harmonic{}.cos{k}", j + 1), Unit::Angle),
+                    Column::Expansion => ("thermal.cte".to_string(), other("ppm/K")),
+                    Column::Drift(a) => (format!("drift.{}", ["x", "y", "z"][a]), other("mm/h")),
+                };
+                Parameter { name, unit }
+            })
+            .collect()
     }
 
     fn start(&self) -> Vec<f64> {
