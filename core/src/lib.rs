@@ -41,6 +41,7 @@ pub mod metrics;
 pub mod objective;
 pub mod parallel;
 pub mod params;
+pub mod plan;
 pub mod prelude;
 pub(crate) mod random;
 #[cfg(feature = "reference-model")]

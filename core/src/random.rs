@@ -25,6 +25,11 @@ pub(crate) mod streams {
     pub(crate) const FOLDS: u64 = 7;
     /// The order in which cross-validation deals reference positions.
     pub(crate) const POSITION_FOLDS: u64 = 8;
+    /// An experiment plan's random subsets (its baseline) and sampled
+    /// workspace poses.
+    pub(crate) const PLAN: u64 = 9;
+    /// The workspace sample of an uncertainty map.
+    pub(crate) const WORKSPACE: u64 = 10;
     /// The solvers: annealing moves, global starts.
     pub(crate) const SOLVER: u64 = 0x50_4c_56;
 }

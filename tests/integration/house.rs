@@ -70,6 +70,7 @@ const RANKS: &[(&str, u8)] = &[
     ("identify", 5),
     ("calibrate", 5),
     ("hayati", 5),
+    ("plan", 5),
     // 6: the assessment of a calibration, and its report.
     ("session", 6),
     ("report", 6),

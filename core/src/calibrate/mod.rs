@@ -524,6 +524,34 @@ pub struct Calibration {
 }
 
 impl Calibration {
+    /// The free geometry's columns (of the `4n + 3`) and their covariance
+    /// (mm, rad): the parameters' σ with the correlation matrix. `None`
+    /// without a free parameter, or with one whose σ is not finite.
+    pub fn geometry_covariance(&self) -> Option<(Vec<usize>, nalgebra::DMatrix<f64>)> {
+        let n = self.params.joint_count();
+        let free: Vec<&Estimate> = self
+            .parameters
+            .iter()
+            .filter(|e| e.fixed.is_none())
+            .collect();
+        let names = &self.correlation_matrix.parameters;
+        let at: Vec<usize> = free
+            .iter()
+            .map(|e| names.iter().position(|m| *m == e.id.to_string()))
+            .collect::<Option<_>>()?;
+        let sigma: Vec<f64> = free.iter().map(|e| e.sigma).collect::<Option<_>>()?;
+        if free.is_empty() || sigma.iter().any(|s| !s.is_finite()) {
+            return None;
+        }
+        let rho = &self.correlation_matrix.rho;
+        let q = free.len();
+        let cov = nalgebra::DMatrix::from_fn(q, q, |a, b| {
+            let r = if a == b { 1.0 } else { rho[at[a]][at[b]] };
+            sigma[a] * sigma[b] * r
+        });
+        Some((free.iter().map(|e| e.id.column(n)).collect(), cov))
+    }
+
     /// The calibrated parameters as a vector in the fixed order (mm, rad):
     /// what [`DhParams::from_slice`] takes.
     pub fn calibrated_vector(&self) -> Vec<f64> {

@@ -20,7 +20,10 @@
 
 pub(crate) mod evaluation;
 pub(crate) mod identification;
+mod map;
 pub mod request;
+
+pub use map::MAP_POSES;
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
@@ -455,6 +458,10 @@ pub struct CalibrationReport {
     pub warnings: Vec<String>,
     /// Whether the calibration may be used, and if not, why.
     pub verdict: Verdict,
+    /// The predicted position uncertainty over a sampled workspace
+    /// ([`crate::plan::map`]); absent when the covariance is not finite.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncertainty_map: Option<crate::plan::UncertaintyMap>,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -629,6 +636,9 @@ impl CalibrationReport {
         let mut t = self.summary_header();
         t += &dof_lines(c);
         t += &fit_quality_lines(c);
+        if let Some(m) = &self.uncertainty_map {
+            t += &format!("Uncertainty map: {}\n", m.describe());
+        }
         t += &outliers_line(c);
         t += &verdict_line(&self.verdict);
         t += &parameter_table(c);
@@ -836,6 +846,7 @@ pub fn run(
     };
     let s = &problem.sources;
     let verdict = Verdict::of(&calibration, &fitted, model.accept_poor_fit);
+    let uncertainty_map = map::workspace_map(&problem.arm, data, &calibration, settings.seed);
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
@@ -861,6 +872,7 @@ pub fn run(
         },
         warnings: s.warnings.clone(),
         verdict,
+        uncertainty_map,
     })
 }
 

@@ -1,0 +1,828 @@
+//! Experiment design: which poses to measure, and how well a calibration
+//! will know the arm where it is used.
+//!
+//! A plan picks `K` rows of a pool of candidate poses (touches of sockets,
+//! or positions an instrument will see) greedily, each step taking the
+//! candidate that most lowers the **mean predicted variance of a probe
+//! position over the workspace** (I-optimality, `tr(W C)`: `C` the free
+//! geometry's covariance given the rows, `W` the mean `JᵀJ` of the poses
+//! where the arm will be used — the candidates themselves unless a
+//! workspace is given). D-optimality (`ln det M`) rewards the extreme poses
+//! that stretch the information ellipsoid, and those are where the errors
+//! no geometric model explains (compliance, bending, heat) are largest: it
+//! gains at a few poses and loses at many. The default criterion hedges
+//! that: each candidate's rows count as noisier by `1 + τ² h_i/h̄`, `h_i`
+//! its leverage within the whole pool and `τ` the unexplained error at a
+//! pose of average leverage in units of the noise (1 by default; from a
+//! previous calibration's `σ̂₀` when given) — a pose the model can barely
+//! reach from the others is worth less than its leverage promises.
+//!
+//! The rows are those of [`crate::residuals`]: positions through the
+//! instrument's frame (fitted with the arm, so its six columns are in the
+//! design), touches with each socket's centre eliminated (a socket's first
+//! touch tells nothing; each later one its difference from the mean of
+//! those before). The free columns are [`crate::identify`]'s for the whole
+//! pool, or a given calibration's.
+
+pub mod coverage;
+mod greedy;
+pub mod map;
+mod rows;
+
+use nalgebra::DMatrix;
+use rand::seq::SliceRandom;
+use serde::{Deserialize, Serialize};
+
+pub use map::{MapPoint, Region, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map};
+
+use crate::dataset::DataSet;
+use crate::io::{DEFAULT_FRAME, Poses, Positions};
+use crate::kernel::{ArmKernel, PreparedPoses};
+use crate::params::DhParams;
+use crate::residuals::Noise;
+use greedy::{Gain, Greedy};
+use rows::{Blocks, jacobians, mean_gram, scaled, unit_scale};
+
+/// What the campaign will measure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Measure {
+    /// Positions an instrument sees (laser tracker, artefact), in its frame.
+    Positions,
+    /// Touches of sockets; the candidates' labels are the sockets.
+    Touches,
+}
+
+/// What a plan optimises.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Criterion {
+    /// The mean predicted position variance over the workspace, each pose
+    /// discounted by its leverage (see the module): the default.
+    Robust,
+    /// The same without the discount (plain I-optimality).
+    Prediction,
+    /// Greedy D-optimality, for comparison.
+    Determinant,
+}
+
+/// Touches a plan gives each socket it uses at least.
+pub const MIN_TOUCHES_PER_SOCKET: usize = 3;
+
+/// Workspace poses the criterion and the reported spreads use at most (an
+/// even sample of a larger workspace).
+pub const WORKSPACE_POSES: usize = 500;
+
+/// The weak prior `ε I` (scaled columns, unit noise) that makes the first
+/// steps' covariance finite.
+const EPSILON: f64 = 1e-6;
+
+/// How a plan is made.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanSettings {
+    /// Rows to choose.
+    pub count: usize,
+    /// Touches or positions.
+    pub measure: Measure,
+    /// What is optimised.
+    pub criterion: Criterion,
+    /// `τ`: the unexplained error at a pose of average leverage, in units
+    /// of the noise (used by [`Criterion::Robust`]).
+    pub hedge: f64,
+    /// Noise of one row per coordinate, mm: scales every predicted
+    /// uncertainty (not the choice).
+    pub sigma_mm: f64,
+    /// Random subsets of the same size the plan is compared with.
+    pub random_sets: usize,
+    /// The greedy continues to this many rows to show where more stops
+    /// paying (at least `count`).
+    pub curve_to: usize,
+    /// Seed of the random subsets.
+    pub seed: u64,
+}
+
+impl PlanSettings {
+    /// `count` rows of `measure`, robust criterion, τ = 1, σ = 0.01 mm,
+    /// 10 random sets, the curve to twice the count, seed 1.
+    pub fn new(count: usize, measure: Measure) -> PlanSettings {
+        PlanSettings {
+            count,
+            measure,
+            criterion: Criterion::Robust,
+            hedge: 1.0,
+            sigma_mm: 0.01,
+            random_sets: 10,
+            curve_to: 2 * count,
+            seed: 1,
+        }
+    }
+}
+
+/// A previous calibration the plan adds to: what it knows already.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Given {
+    /// Its free geometry columns.
+    pub free: Vec<usize>,
+    /// Their covariance, mm and rad.
+    pub cov: DMatrix<f64>,
+    /// σ of one new row per coordinate (its own estimate), mm.
+    pub sigma_mm: f64,
+    /// Its `σ̂₀` (residuals against the stated noise), when noise was stated.
+    pub sigma0: Option<f64>,
+    /// Whether it fitted an instrument frame: new positions are taken in
+    /// that frame, as known.
+    pub frame_known: bool,
+}
+
+/// Why a plan cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PlanError {
+    /// Settings or candidates that make no plan.
+    #[error("{0}")]
+    Invalid(String),
+    /// The kernel's.
+    #[error(transparent)]
+    Kernel(#[from] crate::kernel::KernelError),
+    /// The identifiability analysis of the pool.
+    #[error("identifiability of the candidates: {0}")]
+    Identify(String),
+}
+
+/// The predicted uncertainty of a design over the workspace: the 95 %
+/// radius ([`coverage::radius`]) pose by pose.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Spread {
+    /// RMS over the workspace, mm.
+    pub rms_mm: f64,
+    /// Median, mm.
+    pub median_mm: f64,
+    /// Largest, mm.
+    pub max_mm: f64,
+}
+
+/// One chosen row, in the order chosen.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Step {
+    /// Row of the pool (0-based).
+    pub row: usize,
+    /// Its label.
+    pub label: String,
+    /// The criterion after it, as the RMS 95 % radius of an isotropic
+    /// error of the same variance, mm (what the greedy minimises).
+    pub criterion_mm: f64,
+}
+
+/// The predicted uncertainty after the first `rows` choices.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurvePoint {
+    /// Rows chosen.
+    pub rows: usize,
+    /// The workspace's RMS 95 % radius, mm; `None` while the rows do not
+    /// yet determine every free parameter.
+    pub rms_mm: Option<f64>,
+}
+
+/// How far a joint turns over the chosen rows against the pool.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct JointSpan {
+    /// Joint, from 1.
+    pub joint: usize,
+    /// Range of the chosen readings, degrees.
+    pub chosen_deg: f64,
+    /// Range of the pool's, degrees.
+    pub pool_deg: f64,
+}
+
+/// The random subsets a plan is compared with.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RandomBaseline {
+    /// Subsets drawn.
+    pub sets: usize,
+    /// Those whose rows determine every free parameter.
+    pub determined: usize,
+    /// The median subset's spread (undetermined ones count as worst).
+    pub median: Option<Spread>,
+}
+
+/// A plan.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// What is measured.
+    pub measure: Measure,
+    /// What was optimised.
+    pub criterion: Criterion,
+    /// Candidates in the pool.
+    pub candidates: usize,
+    /// Rows chosen (the first `count` of [`Plan::steps`]).
+    pub count: usize,
+    /// The rows chosen, then those the curve continued with.
+    pub steps: Vec<Step>,
+    /// The parameters the design is for (free geometry, then the frame's).
+    pub parameters: Vec<String>,
+    /// Noise of a row per coordinate, mm.
+    pub sigma_mm: f64,
+    /// `τ` of the robust criterion (0 for the others).
+    pub hedge: f64,
+    /// Whether a previous calibration's knowledge was the start.
+    pub given: bool,
+    /// The workspace the spreads are over, in words, and its poses.
+    pub workspace: String,
+    /// Poses of the workspace used.
+    pub workspace_poses: usize,
+    /// The predicted uncertainty with the chosen rows.
+    pub planned: Option<Spread>,
+    /// With every candidate.
+    pub all: Option<Spread>,
+    /// With random subsets of the same size.
+    pub random: RandomBaseline,
+    /// The predicted uncertainty as rows are added.
+    pub curve: Vec<CurvePoint>,
+    /// Touches per socket chosen (touches only).
+    pub sockets: Vec<(String, usize)>,
+    /// How far each joint turns over the chosen rows.
+    pub joints: Vec<JointSpan>,
+    /// What the user should know.
+    pub warnings: Vec<String>,
+}
+
+impl Plan {
+    /// The chosen rows of the pool, in the order chosen.
+    pub fn chosen(&self) -> Vec<usize> {
+        self.steps[..self.count].iter().map(|s| s.row).collect()
+    }
+}
+
+/// The design problem: the candidates' scaled rows, the workspace, groups.
+struct Design {
+    blocks: Blocks,
+    scale: Vec<f64>,
+    workspace: Blocks,
+    w: Vec<f64>,
+    group: Vec<usize>,
+    sockets: Vec<String>,
+    touches: bool,
+    geometry: usize,
+    sigma: f64,
+}
+
+/// Chooses `settings.count` rows of `pool` for `params`; `workspace` is
+/// where the arm will be used (the pool when `None`), `given` a previous
+/// calibration to add to.
+///
+/// # Errors
+///
+/// A pool of another joint count, fewer candidates than the count, a pool
+/// that determines nothing, the kernel's.
+pub fn plan(
+    params: &DhParams,
+    pool: &Poses,
+    workspace: Option<&Poses>,
+    given: Option<&Given>,
+    settings: &PlanSettings,
+) -> Result<Plan, PlanError> {
+    check(params, pool, workspace, settings)?;
+    let (free, frame) = columns(params, pool, given, settings)?;
+    let design = design(params, pool, workspace, &free, frame, given, settings)?;
+    let hedge = match settings.criterion {
+        Criterion::Robust => given.and_then(|g| g.sigma0).map_or(settings.hedge, |s0| {
+            (s0 * s0 - 1.0).max(0.0).sqrt().max(settings.hedge)
+        }),
+        _ => 0.0,
+    };
+    let weight = hedge_weights(&design, hedge);
+    let prior = given.map(|g| prior_information(g, &design));
+    let gain = match settings.criterion {
+        Criterion::Determinant => Gain::Determinant,
+        _ => Gain::Prediction,
+    };
+    let mut greedy = Greedy::new(
+        &design.blocks,
+        &design.w,
+        &weight,
+        &design.group,
+        design.touches,
+        prior.as_ref(),
+        EPSILON,
+        gain,
+    )
+    .ok_or_else(|| PlanError::Invalid("the candidates' information is not finite".into()))?;
+    let to = settings.curve_to.clamp(settings.count, pool.len());
+    let order = choose(&mut greedy, &design, settings.count, to);
+    let steps = order
+        .iter()
+        .map(|&(row, criterion)| Step {
+            row,
+            label: pool.label(row).to_string(),
+            criterion_mm: coverage::K_ISOTROPIC * design.sigma * (criterion.max(0.0) / 3.0).sqrt(),
+        })
+        .collect::<Vec<_>>();
+    let rows: Vec<usize> = steps.iter().map(|s| s.row).collect();
+    let chosen = &rows[..settings.count];
+    let report = Evaluation {
+        design: &design,
+        prior: prior.as_ref(),
+    };
+    let planned = report.spread(chosen);
+    let all = report.spread(&(0..pool.len()).collect::<Vec<_>>());
+    let random = report.random(pool.len(), settings);
+    let curve = checkpoints(settings.count, to)
+        .into_iter()
+        .map(|k| CurvePoint {
+            rows: k,
+            rms_mm: report.spread(&rows[..k]).map(|s| s.rms_mm),
+        })
+        .collect();
+    let joints = joint_spans(pool, chosen);
+    let sockets = socket_counts(&design, chosen);
+    let warnings = warnings(&joints, planned.is_none(), settings);
+    let mut parameters: Vec<String> = free
+        .iter()
+        .map(|&c| {
+            params
+                .param_ids()
+                .nth(c)
+                .map_or(String::new(), |i| i.to_string())
+        })
+        .collect();
+    if frame {
+        parameters.extend(["rx", "ry", "rz", "tx", "ty", "tz"].map(|n| format!("frame {n}")));
+    }
+    Ok(Plan {
+        measure: settings.measure,
+        criterion: settings.criterion,
+        candidates: pool.len(),
+        count: settings.count,
+        steps,
+        parameters,
+        sigma_mm: design.sigma,
+        hedge,
+        given: given.is_some(),
+        workspace: if workspace.is_some() {
+            "the given workspace"
+        } else {
+            "the candidates"
+        }
+        .to_string(),
+        workspace_poses: design.workspace.len(),
+        planned,
+        all,
+        random,
+        curve,
+        sockets,
+        joints,
+        warnings,
+    })
+}
+
+fn check(
+    params: &DhParams,
+    pool: &Poses,
+    workspace: Option<&Poses>,
+    settings: &PlanSettings,
+) -> Result<(), PlanError> {
+    let n = params.joint_count();
+    if pool.joints() != n || workspace.is_some_and(|w| w.joints() != n) {
+        return Err(PlanError::Invalid(format!(
+            "the arm has {n} joints, the candidates {} readings per row",
+            pool.joints()
+        )));
+    }
+    if settings.count == 0 || settings.count > pool.len() {
+        return Err(PlanError::Invalid(format!(
+            "--count {}: choose between 1 and the {} candidates",
+            settings.count,
+            pool.len()
+        )));
+    }
+    let sigma_ok = settings.sigma_mm > 0.0 && settings.sigma_mm.is_finite();
+    if !(sigma_ok && settings.hedge >= 0.0 && settings.hedge.is_finite()) {
+        return Err(PlanError::Invalid(
+            "the noise must be positive and finite, the hedge τ ≥ 0".into(),
+        ));
+    }
+    if settings.measure == Measure::Touches && settings.count < MIN_TOUCHES_PER_SOCKET {
+        return Err(PlanError::Invalid(format!(
+            "--count {}: touches need at least {MIN_TOUCHES_PER_SOCKET} touches of a socket",
+            settings.count
+        )));
+    }
+    Ok(())
+}
+
+/// The free geometry columns (the given calibration's, or what the whole
+/// pool determines), and whether a frame is estimated.
+fn columns(
+    params: &DhParams,
+    pool: &Poses,
+    given: Option<&Given>,
+    settings: &PlanSettings,
+) -> Result<(Vec<usize>, bool), PlanError> {
+    let positions = settings.measure == Measure::Positions;
+    if let Some(g) = given {
+        return Ok((g.free.clone(), positions && !g.frame_known));
+    }
+    let data = pool_data(params, pool, positions)?;
+    let noise = Noise {
+        position_mm: Some(settings.sigma_mm),
+        ..Noise::default()
+    };
+    let id = crate::identify::identify(params, &data, &noise, 1)
+        .map_err(|e| PlanError::Identify(e.to_string()))?;
+    let free = id.free_columns();
+    if free.is_empty() {
+        return Err(PlanError::Invalid(
+            "the candidates determine no parameter of the arm".into(),
+        ));
+    }
+    Ok((free, positions))
+}
+
+/// The pool as a data set the identifiability analysis reads: touches as
+/// they are, positions where the nominal arm puts them.
+fn pool_data(params: &DhParams, pool: &Poses, positions: bool) -> Result<DataSet, PlanError> {
+    let bad = |e: crate::error::InputError| PlanError::Invalid(e.to_string());
+    if !positions {
+        return DataSet::from_poses(pool, "<candidates>").map_err(bad);
+    }
+    let kernel = ArmKernel::new(params)?;
+    let mut rows = Positions::new(pool.joints());
+    for i in 0..pool.len() {
+        let q = pool.reading(i);
+        rows.push(
+            pool.label(i),
+            DEFAULT_FRAME,
+            q,
+            kernel.position(q)?,
+            None,
+            pool.line(i),
+        );
+    }
+    DataSet::from_positions(rows, "<candidates>").map_err(bad)
+}
+
+/// The poses of `poses` as the kernel takes them.
+fn prepared(poses: &Poses) -> PreparedPoses {
+    PreparedPoses::from_flat(poses.joints(), poses.len(), poses.readings())
+}
+
+/// The scaled rows of the pool and the workspace.
+#[allow(clippy::too_many_arguments)]
+fn design(
+    params: &DhParams,
+    pool: &Poses,
+    workspace: Option<&Poses>,
+    free: &[usize],
+    frame: bool,
+    given: Option<&Given>,
+    settings: &PlanSettings,
+) -> Result<Design, PlanError> {
+    let (raw, _) = jacobians(params, &prepared(pool), free, frame)?;
+    let scale = unit_scale(&raw);
+    let blocks = scaled(raw, &scale);
+    let ws = workspace.unwrap_or(pool);
+    let step = ws.len().div_ceil(WORKSPACE_POSES).max(1);
+    let mut sample = Poses::new(ws.joints());
+    for i in (0..ws.len()).step_by(step) {
+        sample.push(ws.label(i), ws.reading(i), ws.line(i));
+    }
+    let (mut wraw, _) = jacobians(params, &prepared(&sample), free, frame)?;
+    // Where the arm is used, only the geometry moves the probe: the frame
+    // is the instrument's, not the arm's.
+    let g = free.len();
+    for row in wraw.j.chunks_exact_mut(wraw.p) {
+        row[g..].iter_mut().for_each(|v| *v = 0.0);
+    }
+    let workspace = scaled(wraw, &scale);
+    let w = mean_gram(&workspace);
+    let mut sockets: Vec<String> = Vec::new();
+    let group = (0..pool.len())
+        .map(|i| {
+            let l = pool.label(i);
+            sockets.iter().position(|s| s == l).unwrap_or_else(|| {
+                sockets.push(l.to_string());
+                sockets.len() - 1
+            })
+        })
+        .collect();
+    Ok(Design {
+        blocks,
+        scale,
+        workspace,
+        w,
+        group,
+        sockets,
+        touches: settings.measure == Measure::Touches,
+        geometry: g,
+        sigma: given.map_or(settings.sigma_mm, |g| g.sigma_mm),
+    })
+}
+
+/// Each candidate's weight `1/(1 + τ² h_i/h̄)`, `h_i` its leverage within
+/// the whole pool (its rows' `tr(d M⁻¹ dᵀ)`, touches about their socket's
+/// mean).
+fn hedge_weights(design: &Design, tau: f64) -> Vec<f64> {
+    let n = design.blocks.len();
+    if tau == 0.0 {
+        return vec![1.0; n];
+    }
+    let rows = deviations(design, &(0..n).collect::<Vec<_>>());
+    let p = design.blocks.p;
+    let m = gram(&rows, p) + DMatrix::identity(p, p) * EPSILON;
+    let Some(c) = m.cholesky().map(|c| c.inverse()) else {
+        return vec![1.0; n];
+    };
+    let h: Vec<f64> = rows
+        .iter()
+        .map(|(_, d)| {
+            let s = map::sandwich(d, &c, p);
+            s[0][0] + s[1][1] + s[2][2]
+        })
+        .collect();
+    let mean = h.iter().sum::<f64>() / n.max(1) as f64;
+    h.iter()
+        .map(|&v| 1.0 / (1.0 + tau * tau * v / mean.max(f64::MIN_POSITIVE)))
+        .collect()
+}
+
+/// The rows of `chosen` as the fit sees them: positions as they are,
+/// touches less their socket's mean over `chosen`.
+fn deviations(design: &Design, chosen: &[usize]) -> Vec<(usize, Vec<f64>)> {
+    let p = design.blocks.p;
+    let mut rows: Vec<(usize, Vec<f64>)> = chosen
+        .iter()
+        .map(|&i| (i, design.blocks.at(i).to_vec()))
+        .collect();
+    if design.touches {
+        for s in 0..design.sockets.len() {
+            let idx: Vec<usize> = (0..rows.len())
+                .filter(|&r| design.group[rows[r].0] == s)
+                .collect();
+            let mut mean = vec![0.0; 3 * p];
+            for &r in &idx {
+                for (m, v) in mean.iter_mut().zip(&rows[r].1) {
+                    *m += v / idx.len() as f64;
+                }
+            }
+            for &r in &idx {
+                for (v, m) in rows[r].1.iter_mut().zip(&mean) {
+                    *v -= m;
+                }
+            }
+        }
+    }
+    rows
+}
+
+/// `Σ dᵀ d` of 3 × p blocks.
+fn gram(rows: &[(usize, Vec<f64>)], p: usize) -> DMatrix<f64> {
+    let mut m = DMatrix::zeros(p, p);
+    for (_, d) in rows {
+        for k in 0..3 {
+            let r = &d[k * p..(k + 1) * p];
+            for a in 0..p {
+                if r[a] == 0.0 {
+                    continue;
+                }
+                for b in 0..p {
+                    m[(a, b)] += r[a] * r[b];
+                }
+            }
+        }
+    }
+    m
+}
+
+/// A given calibration's information in the plan's scaled columns (unit
+/// noise): `σ² S C⁻¹ S`, its frame (if estimated) unknown.
+fn prior_information(given: &Given, design: &Design) -> DMatrix<f64> {
+    let p = design.blocks.p;
+    let mut m = DMatrix::zeros(p, p);
+    if let Some(info) = given.cov.clone().try_inverse() {
+        let (s, g) = (&design.scale, design.geometry.min(info.nrows()));
+        for a in 0..g {
+            for b in 0..g {
+                m[(a, b)] = info[(a, b)] * given.sigma_mm.powi(2) * s[a] * s[b];
+            }
+        }
+    }
+    m
+}
+
+/// The greedy's choices up to `to` rows, with the criterion after each;
+/// touches open their sockets (most candidates first) with
+/// [`MIN_TOUCHES_PER_SOCKET`] seeds each, as many sockets as the count
+/// allows, and open the next when the open ones run out of candidates.
+fn choose(greedy: &mut Greedy, design: &Design, count: usize, to: usize) -> Vec<(usize, f64)> {
+    let sockets = design.sockets.len();
+    let mut order = Vec::with_capacity(to);
+    let mut open = vec![!design.touches; sockets];
+    let mut queue: Vec<usize> = Vec::new();
+    if design.touches {
+        let size = |s: usize| design.group.iter().filter(|&&g| g == s).count();
+        queue = (0..sockets).filter(|&s| size(s) >= 2).collect();
+        queue.sort_by_key(|&s| std::cmp::Reverse(size(s)));
+        queue.reverse();
+        let first = (count / MIN_TOUCHES_PER_SOCKET).clamp(1, sockets);
+        for _ in 0..first {
+            if let Some(s) = queue.pop() {
+                open[s] = true;
+                seed(greedy, design, s, &mut order);
+            }
+        }
+    }
+    while order.len() < to {
+        if let Some((k, _)) = greedy.best(|k| open[design.group[k]]) {
+            greedy.add(k);
+            order.push((k, greedy.criterion));
+        } else if let Some(s) = queue.pop() {
+            open[s] = true;
+            seed(greedy, design, s, &mut order);
+        } else {
+            break;
+        }
+    }
+    order.truncate(to);
+    order
+}
+
+/// A socket's first touches: the candidate farthest (in its rows) from the
+/// socket's mean, the one farthest from that, then the best third.
+fn seed(greedy: &mut Greedy, design: &Design, s: usize, order: &mut Vec<(usize, f64)>) {
+    let members: Vec<usize> = (0..design.group.len())
+        .filter(|&i| design.group[i] == s && !greedy.is_taken(i))
+        .collect();
+    let p3 = 3 * design.blocks.p;
+    let mut mean = vec![0.0; p3];
+    for &i in &members {
+        for (m, v) in mean.iter_mut().zip(design.blocks.at(i)) {
+            *m += v / members.len() as f64;
+        }
+    }
+    let Some(a) = farthest(greedy, design, &members, &mean) else {
+        return;
+    };
+    greedy.add(a);
+    order.push((a, greedy.criterion));
+    let from = design.blocks.at(a).to_vec();
+    let Some(b) = farthest(greedy, design, &members, &from) else {
+        return;
+    };
+    greedy.add(b);
+    order.push((b, greedy.criterion));
+    while greedy.members(s).len() < MIN_TOUCHES_PER_SOCKET {
+        let Some((c, _)) = greedy.best(|k| design.group[k] == s) else {
+            return;
+        };
+        greedy.add(c);
+        order.push((c, greedy.criterion));
+    }
+}
+
+/// The untaken candidate of `members` whose rows are farthest from `from`.
+fn farthest(greedy: &Greedy, design: &Design, members: &[usize], from: &[f64]) -> Option<usize> {
+    let mut best: Option<(usize, f64)> = None;
+    for &i in members.iter().filter(|&&i| !greedy.is_taken(i)) {
+        let d: f64 = (design.blocks.at(i).iter().zip(from))
+            .map(|(a, b)| (a - b).powi(2))
+            .sum();
+        if best.is_none_or(|(_, b)| d > b) {
+            best = Some((i, d));
+        }
+    }
+    best.map(|(i, _)| i)
+}
+
+/// Predicted spreads of designs over the workspace.
+struct Evaluation<'a> {
+    design: &'a Design,
+    prior: Option<&'a DMatrix<f64>>,
+}
+
+impl Evaluation<'_> {
+    /// The spread with the rows `rows` (and the prior); `None` when they
+    /// do not determine every column.
+    fn spread(&self, rows: &[usize]) -> Option<Spread> {
+        let d = self.design;
+        let p = d.blocks.p;
+        let mut m = gram(&deviations(d, rows), p);
+        if let Some(prior) = self.prior {
+            m += prior;
+        }
+        // Determined: every pivot well above rounding of the largest.
+        let top = m.diagonal().max();
+        let chol = m.cholesky()?;
+        let l = chol.l_dirty();
+        let determined = top > 0.0 && (0..p).all(|a| l[(a, a)].powi(2) > 1e-12 * top);
+        if !determined {
+            return None;
+        }
+        let c = chol.inverse();
+        let s2 = d.sigma * d.sigma;
+        let mut radii: Vec<f64> = (0..d.workspace.len())
+            .map(|i| {
+                let s = map::sandwich(d.workspace.at(i), &c, p).map(|r| r.map(|v| v * s2));
+                coverage::radius(coverage::eigenvalues(s))
+            })
+            .collect();
+        let n = radii.len().max(1) as f64;
+        let rms = (radii.iter().map(|r| r * r).sum::<f64>() / n).sqrt();
+        radii.sort_by(f64::total_cmp);
+        Some(Spread {
+            rms_mm: rms,
+            median_mm: radii.get(radii.len() / 2).copied().unwrap_or(0.0),
+            max_mm: radii.last().copied().unwrap_or(0.0),
+        })
+    }
+
+    /// Random subsets of `settings.count` of `n` candidates.
+    fn random(&self, n: usize, settings: &PlanSettings) -> RandomBaseline {
+        let mut rng = crate::random::rng(settings.seed, crate::random::streams::PLAN);
+        let mut all: Vec<usize> = (0..n).collect();
+        let mut spreads: Vec<Option<Spread>> = (0..settings.random_sets)
+            .map(|_| {
+                all.shuffle(&mut rng);
+                let mut pick = all[..settings.count].to_vec();
+                pick.sort_unstable();
+                self.spread(&pick)
+            })
+            .collect();
+        let determined = spreads.iter().filter(|s| s.is_some()).count();
+        let key = |s: &Option<Spread>| s.map_or(f64::INFINITY, |s| s.rms_mm);
+        spreads.sort_by(|a, b| key(a).total_cmp(&key(b)));
+        RandomBaseline {
+            sets: settings.random_sets,
+            determined,
+            median: spreads.get(spreads.len() / 2).copied().flatten(),
+        }
+    }
+}
+
+/// Row counts the curve is evaluated at: eighths of `to`, and `count`.
+fn checkpoints(count: usize, to: usize) -> Vec<usize> {
+    let mut k: Vec<usize> = (1..=8).map(|i| (to * i).div_ceil(8)).collect();
+    k.push(count);
+    k.retain(|&v| v >= 1 && v <= to);
+    k.sort_unstable();
+    k.dedup();
+    k
+}
+
+/// Each joint's range over the chosen rows and the pool, degrees.
+fn joint_spans(pool: &Poses, chosen: &[usize]) -> Vec<JointSpan> {
+    let range = |rows: &mut dyn Iterator<Item = usize>, j: usize| {
+        let (lo, hi) = rows.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
+            let v = pool.reading(i)[j];
+            (lo.min(v), hi.max(v))
+        });
+        (hi - lo).max(0.0).to_degrees()
+    };
+    (0..pool.joints())
+        .map(|j| JointSpan {
+            joint: j + 1,
+            chosen_deg: range(&mut chosen.iter().copied(), j),
+            pool_deg: range(&mut (0..pool.len()), j),
+        })
+        .collect()
+}
+
+/// Touches chosen per socket (touches only).
+fn socket_counts(design: &Design, chosen: &[usize]) -> Vec<(String, usize)> {
+    if !design.touches {
+        return Vec::new();
+    }
+    design
+        .sockets
+        .iter()
+        .enumerate()
+        .map(|(s, label)| {
+            (
+                label.clone(),
+                chosen.iter().filter(|&&i| design.group[i] == s).count(),
+            )
+        })
+        .filter(|(_, n)| *n > 0)
+        .collect()
+}
+
+/// A joint turned less than this fraction of the pool's range is named.
+const NARROW_JOINT: f64 = 0.25;
+
+fn warnings(joints: &[JointSpan], undetermined: bool, settings: &PlanSettings) -> Vec<String> {
+    let mut w = Vec::new();
+    if undetermined {
+        w.push(format!(
+            "the {} chosen rows do not determine every free parameter: choose more",
+            settings.count
+        ));
+    }
+    for j in joints {
+        if j.pool_deg > 0.0 && j.chosen_deg < NARROW_JOINT * j.pool_deg {
+            w.push(format!(
+                "joint {} turns {:.1}° over the chosen rows, of the candidates' {:.1}°: its \
+                 errors are seen near those readings only",
+                j.joint, j.chosen_deg, j.pool_deg
+            ));
+        }
+    }
+    w
+}

@@ -1,0 +1,60 @@
+//! A calibration's uncertainty map over its workspace, and what a next
+//! plan starts from.
+
+use crate::calibrate::Calibration;
+use crate::dataset::DataSet;
+use crate::io::Arm;
+use crate::plan::{Given, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map};
+
+use super::CalibrationReport;
+
+/// Poses an uncertainty map samples.
+pub const MAP_POSES: usize = 2000;
+
+/// The predicted position uncertainty of `calibration` over [`MAP_POSES`]
+/// poses drawn uniformly within the arm's joint limits — or, for a joint
+/// without, within the range the campaign turned it through — seeded by
+/// `seed`. `None` when the free geometry's covariance is not finite.
+pub(crate) fn workspace_map(
+    arm: &Arm,
+    data: &DataSet,
+    calibration: &Calibration,
+    seed: u64,
+) -> Option<UncertaintyMap> {
+    let (free, cov) = calibration.geometry_covariance()?;
+    let n = arm.params.joint_count();
+    let mut readings: Vec<&[f64]> = (0..data.len()).map(|i| data.reading(i)).collect();
+    if let Some(p) = data.positions() {
+        readings.extend((0..p.len()).map(|i| p.rows().reading(i)));
+    }
+    let seen = reading_ranges(&readings, n);
+    let mut limits = arm.limits.clone();
+    limits.resize(n, None);
+    let stated = limits.iter().filter(|l| l.is_some()).count();
+    let ranges: Vec<Option<[f64; 2]>> = limits.iter().zip(&seen).map(|(l, s)| l.or(*s)).collect();
+    let workspace = match stated {
+        0 => "the joint ranges the campaign turned through".to_string(),
+        s if s == n => "the joint limits".to_string(),
+        _ => "the joint limits (the campaign's ranges where none is stated)".to_string(),
+    };
+    let poses = sample_poses(&ranges, MAP_POSES, seed);
+    uncertainty_map(&calibration.params, &poses, &free, &cov, &workspace).ok()
+}
+
+impl CalibrationReport {
+    /// What a plan of the next measurements starts from: this
+    /// calibration's free geometry and covariance, its σ per row and
+    /// `σ̂₀`. `None` when its covariance is not finite.
+    pub fn plan_given(&self) -> Option<Given> {
+        let c = &self.calibration;
+        let (free, cov) = c.geometry_covariance()?;
+        let stated = !c.dof.touch_sigma_estimated;
+        Some(Given {
+            free,
+            cov,
+            sigma_mm: c.dof.touch_sigma_mm,
+            sigma0: stated.then_some(c.dof.sigma0),
+            frame_known: !c.frames().is_empty(),
+        })
+    }
+}
