@@ -51,6 +51,15 @@ enum Command {
     Calibrate(Box<commands::calibrate::Args>),
     /// Export an arm (a calibrated one) as URDF or as a D-H table.
     Export(commands::export::Args),
+    /// Experiment design: which poses to measure for the best calibration.
+    #[command(
+        allow_negative_numbers = true,
+        after_help = "Exit status: 0 for a plan whose chosen rows determine every free \
+                      parameter; 1 for an error, or for a plan whose chosen rows do not (its \
+                      files are written all the same, and the message says how many rows do); \
+                      2 for a command line that cannot be parsed."
+    )]
+    Plan(commands::plan::Args),
 }
 
 fn main() -> ExitCode {
@@ -72,6 +81,7 @@ fn main() -> ExitCode {
         Command::Identify(args) => commands::identify::run(args),
         Command::Calibrate(args) => commands::calibrate::run(*args),
         Command::Export(args) => commands::export::run(args),
+        Command::Plan(args) => commands::plan::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
