@@ -21,7 +21,11 @@
 //!   link masses stated, nothing switched on), `compliance-100`
 //!   (`--compliance 2,3`), `harmonics-100` (`--harmonics 2:1,3:1`); and the
 //!   UR5 tracker's 1000 poses with temperatures and times, `positions-1000`
-//!   without and `thermal-drift-1000` with `--thermal --drift`.
+//!   without and `thermal-drift-1000` with `--thermal --drift`;
+//! - `plan`: experiment design — 100 of 2000 candidate poses of the UR5
+//!   for a tracker (`positions-100-of-2000`, the robust criterion with its
+//!   exchanges, no random baseline or curve beyond the count), and 60 of
+//!   1000 touches of 10 sockets of the paper's arm (`touches-60-of-1000`).
 
 use std::hint::black_box;
 
@@ -315,5 +319,55 @@ fn beyond_positions(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement
     }
 }
 
-criterion_group!(benches, lm, global, energy, positions, beyond);
+fn plan(c: &mut Criterion) {
+    use aacmm_core::io::Poses;
+    use aacmm_core::plan::{Measure, PlanSettings, plan};
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/ur5-tracker/arm.toml");
+    let ur5 = aacmm_core::read_arm(std::path::Path::new(path))
+        .expect("the shipped UR5")
+        .0;
+    let mut g = c.benchmark_group("plan");
+    g.sample_size(10);
+    let pool = positions_pool(&ur5, 2000);
+    let mut s = PlanSettings::new(100, Measure::Positions);
+    s.random_sets = 0;
+    s.curve_to = 100;
+    g.bench_function(BenchmarkId::from_parameter("positions-100-of-2000"), |b| {
+        b.iter(|| plan(&ur5.params, black_box(&pool), None, None, &s).expect("plan"))
+    });
+    let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
+    let touches: Poses = simulate(
+        &nominal,
+        &CampaignSettings::new(5, ErrorModel::Paper, 10, 100),
+    )
+    .expect("campaign")
+    .poses;
+    let mut s = PlanSettings::new(60, Measure::Touches);
+    s.random_sets = 0;
+    s.curve_to = 60;
+    g.bench_function(BenchmarkId::from_parameter("touches-60-of-1000"), |b| {
+        b.iter(|| plan(&nominal.params, black_box(&touches), None, None, &s).expect("plan"))
+    });
+    g.finish();
+}
+
+/// `n` random poses of `arm` within its limits, as a poses file holds them.
+fn positions_pool(arm: &Arm, n: usize) -> aacmm_core::io::Poses {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let joints = arm.params.joint_count();
+    let mut pool = aacmm_core::io::Poses::new(joints);
+    for i in 0..n {
+        let q: Vec<f64> = (0..joints)
+            .map(|j| match arm.limits.get(j).copied().flatten() {
+                Some([lo, hi]) => rng.random_range(lo..=hi),
+                None => rng.random_range(-3.0..3.0),
+            })
+            .collect();
+        pool.push(&format!("P{}", i + 1), &q, i + 2);
+    }
+    pool
+}
+
+criterion_group!(benches, lm, global, energy, positions, beyond, plan);
 criterion_main!(benches);

@@ -11,6 +11,7 @@ mod export;
 mod house;
 mod mukca;
 mod out_paths;
+mod plan;
 mod plan_cli;
 mod points;
 mod positions;

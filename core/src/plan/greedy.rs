@@ -54,6 +54,8 @@ pub(crate) struct Greedy<'a> {
     gain: Gain,
     /// `tr(W C)` now.
     pub(crate) criterion: f64,
+    /// `ln det M` now, less its start's.
+    log_det: f64,
 }
 
 /// The rows a candidate would add, and their `C`- and `CW`-images.
@@ -115,7 +117,16 @@ impl<'a> Greedy<'a> {
             taken: vec![false; n],
             gain,
             criterion,
+            log_det: 0.0,
         })
+    }
+
+    /// What the gain lowers: `tr(W C)`, or `−ln det M`.
+    pub(crate) fn value(&self) -> f64 {
+        match self.gain {
+            Gain::Prediction => self.criterion,
+            Gain::Determinant => -self.log_det,
+        }
     }
 
     /// Whether candidate `i` is chosen.
@@ -131,6 +142,13 @@ impl<'a> Greedy<'a> {
     /// The rows candidate `k` would add now (`None`: nothing — a socket's
     /// first touch, or a weight of zero).
     fn direction(&self, k: usize) -> Option<Direction> {
+        self.rows_of(k, false)
+    }
+
+    /// The rows candidate `k` adds (`removing`: the rows a chosen `k`
+    /// takes away — a touch about its socket's mean with it, weighed
+    /// `n/(n−1)`).
+    fn rows_of(&self, k: usize, removing: bool) -> Option<Direction> {
         let p = self.p;
         let r = 3 * k * p..3 * (k + 1) * p;
         let mut f = self.weight[k].sqrt();
@@ -142,7 +160,11 @@ impl<'a> Greedy<'a> {
         if self.touches {
             let g = self.group[k];
             let n = self.members[g].len() as f64;
-            f *= (n / (n + 1.0)).sqrt();
+            f *= if removing {
+                (n / (n - 1.0).max(0.0)).sqrt()
+            } else {
+                (n / (n + 1.0)).sqrt()
+            };
             let [jm, um, ym] = &self.means[g];
             for (v, m) in d.iter_mut().zip(jm) {
                 *v -= m;
@@ -154,7 +176,7 @@ impl<'a> Greedy<'a> {
                 *v -= m;
             }
         }
-        if f <= 0.0 {
+        if !(f > 0.0 && f.is_finite()) {
             return None;
         }
         for v in d.iter_mut().chain(ud.iter_mut()).chain(yd.iter_mut()) {
@@ -204,7 +226,8 @@ impl<'a> Greedy<'a> {
         if let Some(dir) = self.direction(k) {
             let t = plus_identity(product(&dir.ud, &dir.d, p));
             if let Some(ti) = inverse3(&t) {
-                self.update(&dir, &ti);
+                self.update(&dir, &ti, 1.0);
+                self.log_det += det3(&t).max(1e-300).ln();
             }
         }
         self.taken[k] = true;
@@ -213,10 +236,32 @@ impl<'a> Greedy<'a> {
         self.refresh_means();
     }
 
-    /// `C`, `U`, `Y` and the criterion after rows `dir` (`ti = T⁻¹`).
-    fn update(&mut self, dir: &Direction, ti: &[[f64; 3]; 3]) {
+    /// Takes a chosen candidate `k` back out: `M − dᵀd`, so
+    /// `C ← C + B (I − d B)⁻¹ Bᵀ`.
+    pub(crate) fn remove(&mut self, k: usize) {
         let p = self.p;
-        // C −= (d C)ᵀ T⁻¹ (d C).
+        if let Some(dir) = self.rows_of(k, true) {
+            let s = product(&dir.ud, &dir.d, p);
+            let t: [[f64; 3]; 3] = std::array::from_fn(|i| {
+                std::array::from_fn(|j| f64::from(u8::from(i == j)) - s[i][j])
+            });
+            if let Some(ti) = inverse3(&t) {
+                self.update(&dir, &ti, -1.0);
+                self.log_det += det3(&t).max(1e-300).ln();
+            }
+        }
+        self.taken[k] = false;
+        let g = self.group[k];
+        self.members[g].retain(|&m| m != k);
+        self.refresh_means();
+    }
+
+    /// `C`, `U`, `Y` and the criterion after rows `dir` added (`sign` 1)
+    /// or taken away (−1), `ti = (I ± d C dᵀ)⁻¹`.
+    fn update(&mut self, dir: &Direction, ti: &[[f64; 3]; 3], sign: f64) {
+        let p = self.p;
+        // C ∓= (d C)ᵀ T⁻¹ (d C).
+        let ti = &ti.map(|r| r.map(|v| sign * v));
         let tud = apply3(ti, &dir.ud, p);
         for a in 0..p {
             for b in 0..p {
@@ -349,7 +394,8 @@ fn inverse3(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
 mod tests {
     use super::*;
 
-    /// The rank-3 updates agree with the criterion recomputed from scratch.
+    /// The rank-3 updates and downdates agree with the criterion recomputed
+    /// from scratch.
     #[test]
     fn the_updates_match_a_fresh_inverse() {
         let (p, n) = (5, 12);
@@ -382,6 +428,10 @@ mod tests {
                 g.add(k);
                 assert!((before - gain - g.criterion).abs() < 1e-9 * before.abs().max(1.0));
             }
+            // Taking rows back out is the same as never adding them.
+            g.remove(2);
+            g.remove(3);
+            let picks = [0, 1, 5, 4, 7];
             // From scratch: M = ε I + Σ (centred per socket) JᵀJ.
             let mut m = DMatrix::<f64>::identity(p, p) * 1e-3;
             for s in 0..2 {

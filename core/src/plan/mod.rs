@@ -167,9 +167,11 @@ pub struct Step {
     pub row: usize,
     /// Its label.
     pub label: String,
-    /// The criterion after it, as the RMS 95 % radius of an isotropic
-    /// error of the same variance, mm (what the greedy minimises).
-    pub criterion_mm: f64,
+    /// The mean predicted variance over the workspace with the rows up to
+    /// this one (plain, without the hedge), as the 95 % radius of an
+    /// isotropic error of that variance, mm; `None` while the rows do not
+    /// determine every free parameter.
+    pub criterion_mm: Option<f64>,
 }
 
 /// The predicted uncertainty after the first `rows` choices.
@@ -233,6 +235,10 @@ pub struct Plan {
     pub planned: Option<Spread>,
     /// With every candidate.
     pub all: Option<Spread>,
+    /// With the given calibration alone, before any new row (`None`
+    /// without one).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<Spread>,
     /// With random subsets of the same size.
     pub random: RandomBaseline,
     /// The predicted uncertainty as rows are added.
@@ -307,23 +313,22 @@ pub fn plan(
     )
     .ok_or_else(|| PlanError::Invalid("the candidates' information is not finite".into()))?;
     let to = settings.curve_to.clamp(settings.count, pool.len());
-    let order = choose(&mut greedy, &design, settings.count, to);
-    let steps = order
-        .iter()
-        .map(|&(row, criterion)| Step {
-            row,
-            label: pool.label(row).to_string(),
-            criterion_mm: coverage::K_ISOTROPIC * design.sigma * (criterion.max(0.0) / 3.0).sqrt(),
-        })
-        .collect::<Vec<_>>();
-    let rows: Vec<usize> = steps.iter().map(|s| s.row).collect();
+    let rows = choose(&mut greedy, &design, settings.count, to);
     let chosen = &rows[..settings.count];
     let report = Evaluation {
         design: &design,
         prior: prior.as_ref(),
     };
+    let steps = (0..rows.len())
+        .map(|k| Step {
+            row: rows[k],
+            label: pool.label(rows[k]).to_string(),
+            criterion_mm: report.criterion(&rows[..=k]),
+        })
+        .collect::<Vec<_>>();
     let planned = report.spread(chosen);
     let all = report.spread(&(0..pool.len()).collect::<Vec<_>>());
+    let start = given.and_then(|_| report.spread(&[]));
     let random = report.random(pool.len(), settings);
     let curve = checkpoints(settings.count, to)
         .into_iter()
@@ -366,6 +371,7 @@ pub fn plan(
         workspace_poses: design.workspace.len(),
         planned,
         all,
+        start,
         random,
         curve,
         sockets,
@@ -389,7 +395,7 @@ fn check(
     }
     if settings.count == 0 || settings.count > pool.len() {
         return Err(PlanError::Invalid(format!(
-            "--count {}: choose between 1 and the {} candidates",
+            "count {}: choose between 1 and the {} candidates",
             settings.count,
             pool.len()
         )));
@@ -402,7 +408,7 @@ fn check(
     }
     if settings.measure == Measure::Touches && settings.count < MIN_TOUCHES_PER_SOCKET {
         return Err(PlanError::Invalid(format!(
-            "--count {}: touches need at least {MIN_TOUCHES_PER_SOCKET} touches of a socket",
+            "count {}: touches need at least {MIN_TOUCHES_PER_SOCKET} touches of a socket",
             settings.count
         )));
     }
@@ -608,11 +614,11 @@ fn prior_information(given: &Given, design: &Design) -> DMatrix<f64> {
     m
 }
 
-/// The greedy's choices up to `to` rows, with the criterion after each;
+/// The greedy's choices up to `to` rows (the first `count` exchanged);
 /// touches open their sockets (most candidates first) with
 /// [`MIN_TOUCHES_PER_SOCKET`] seeds each, as many sockets as the count
 /// allows, and open the next when the open ones run out of candidates.
-fn choose(greedy: &mut Greedy, design: &Design, count: usize, to: usize) -> Vec<(usize, f64)> {
+fn choose(greedy: &mut Greedy, design: &Design, count: usize, to: usize) -> Vec<usize> {
     let sockets = design.sockets.len();
     let mut order = Vec::with_capacity(to);
     let mut open = vec![!design.touches; sockets];
@@ -630,19 +636,65 @@ fn choose(greedy: &mut Greedy, design: &Design, count: usize, to: usize) -> Vec<
             }
         }
     }
-    while order.len() < to {
-        if let Some((k, _)) = greedy.best(|k| open[design.group[k]]) {
-            greedy.add(k);
-            order.push((k, greedy.criterion));
-        } else if let Some(s) = queue.pop() {
-            open[s] = true;
-            seed(greedy, design, s, &mut order);
-        } else {
+    let mut grow =
+        |greedy: &mut Greedy, order: &mut Vec<(usize, f64)>, open: &mut Vec<bool>, to: usize| {
+            while order.len() < to {
+                if let Some((k, _)) = greedy.best(|k| open[design.group[k]]) {
+                    greedy.add(k);
+                    order.push((k, greedy.criterion));
+                } else if let Some(s) = queue.pop() {
+                    open[s] = true;
+                    seed(greedy, design, s, order);
+                } else {
+                    break;
+                }
+            }
+        };
+    grow(greedy, &mut order, &mut open, count);
+    order.truncate(count);
+    exchange(greedy, design, &mut order, &open);
+    grow(greedy, &mut order, &mut open, to);
+    order.truncate(to);
+    order.into_iter().map(|o| o.0).collect()
+}
+
+/// Passes of [`exchange`] at most.
+const EXCHANGE_PASSES: usize = 3;
+
+/// Fedorov's exchange on the chosen rows: each in turn is taken out and
+/// the best candidate put in its place (itself, when none is better), until
+/// a pass changes nothing. The greedy's first choices are made against the
+/// weak prior alone, before the rows determine the arm; the exchange
+/// revisits them once they do.
+fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], open: &[bool]) {
+    for _ in 0..EXCHANGE_PASSES {
+        let mut changed = false;
+        for slot in order.iter_mut() {
+            let k = slot.0;
+            if design.touches && greedy.members(design.group[k]).len() <= MIN_TOUCHES_PER_SOCKET {
+                continue;
+            }
+            let before = greedy.value();
+            greedy.remove(k);
+            let best = greedy.best(|i| open[design.group[i]]).map(|b| b.0);
+            match best {
+                Some(b) if b != k => {
+                    greedy.add(b);
+                    if greedy.value() < before - 1e-9 * before.abs() {
+                        slot.0 = b;
+                        changed = true;
+                    } else {
+                        greedy.remove(b);
+                        greedy.add(k);
+                    }
+                }
+                _ => greedy.add(k),
+            }
+        }
+        if !changed {
             break;
         }
     }
-    order.truncate(to);
-    order
 }
 
 /// A socket's first touches: the candidate farthest (in its rows) from the
@@ -699,9 +751,9 @@ struct Evaluation<'a> {
 }
 
 impl Evaluation<'_> {
-    /// The spread with the rows `rows` (and the prior); `None` when they
-    /// do not determine every column.
-    fn spread(&self, rows: &[usize]) -> Option<Spread> {
+    /// The covariance (scaled columns, unit noise) with the rows `rows`
+    /// and the prior; `None` when they do not determine every column.
+    fn covariance(&self, rows: &[usize]) -> Option<DMatrix<f64>> {
         let d = self.design;
         let p = d.blocks.p;
         let mut m = gram(&deviations(d, rows), p);
@@ -713,10 +765,25 @@ impl Evaluation<'_> {
         let chol = m.cholesky()?;
         let l = chol.l_dirty();
         let determined = top > 0.0 && (0..p).all(|a| l[(a, a)].powi(2) > 1e-12 * top);
-        if !determined {
-            return None;
-        }
-        let c = chol.inverse();
+        determined.then(|| chol.inverse())
+    }
+
+    /// `tr(W C)` with the rows `rows`, as an isotropic 95 % radius (mm).
+    fn criterion(&self, rows: &[usize]) -> Option<f64> {
+        let c = self.covariance(rows)?;
+        let p = self.design.blocks.p;
+        let tr: f64 = (0..p * p)
+            .map(|i| self.design.w[i] * c[(i / p, i % p)])
+            .sum();
+        Some(coverage::K_ISOTROPIC * self.design.sigma * (tr.max(0.0) / 3.0).sqrt())
+    }
+
+    /// The spread with the rows `rows` (and the prior); `None` when they
+    /// do not determine every column.
+    fn spread(&self, rows: &[usize]) -> Option<Spread> {
+        let d = self.design;
+        let p = d.blocks.p;
+        let c = self.covariance(rows)?;
         let s2 = d.sigma * d.sigma;
         let mut radii: Vec<f64> = (0..d.workspace.len())
             .map(|i| {

@@ -9,7 +9,7 @@ use crate::plan::{Given, UncertaintyMap, reading_ranges, sample_poses, uncertain
 use super::CalibrationReport;
 
 /// Poses an uncertainty map samples.
-pub const MAP_POSES: usize = 2000;
+pub const MAP_POSES: usize = 1000;
 
 /// The predicted position uncertainty of `calibration` over [`MAP_POSES`]
 /// poses drawn uniformly within the arm's joint limits — or, for a joint
