@@ -194,8 +194,9 @@ pub fn run(args: Args) -> Result<()> {
         &settings,
     )
     .map_err(|e| match e {
-        // These name their flag (--count) already.
-        PlanError::Invalid(m) if m.starts_with("--") => anyhow!(m),
+        // The count's bounds: the library names the setting, the command
+        // line its flag.
+        PlanError::Invalid(m) if m.starts_with("count ") => anyhow!("--{m}"),
         e => anyhow!("{}: {e}", pool.name),
     })?;
     if plan.all.is_none() {
@@ -600,8 +601,14 @@ fn spreads(plan: &Plan) -> String {
          for an isotropic error):\n  {:<30} {:>9} {:>9}\n",
         "", "RMS", "max"
     );
-    t += &row(&format!("the {} chosen", plan.count), plan.planned);
-    t += &row(&format!("all {} candidates", plan.candidates), plan.all);
+    if plan.given {
+        t += &row("the calibration alone", plan.start);
+        t += &row(&format!("with the {} chosen", plan.count), plan.planned);
+        t += &row(&format!("with all {} candidates", plan.candidates), plan.all);
+    } else {
+        t += &row(&format!("the {} chosen", plan.count), plan.planned);
+        t += &row(&format!("all {} candidates", plan.candidates), plan.all);
+    }
     t += &row(
         &format!("{} at random (median of {})", plan.count, r.sets),
         r.median,
