@@ -93,6 +93,8 @@ pub fn session_report(
         truth: problem.truth(),
         positions: pose_errors(report, problem)?,
         beyond: beyond_effects(report, problem)?,
+        uncertainty_map: report.uncertainty_map.as_ref(),
+        uncertainty_map_json: Some("/uncertainty_map".to_string()),
     })
 }
 

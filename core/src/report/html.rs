@@ -6,9 +6,10 @@ use super::data::Evaluated;
 use super::tables;
 use super::{
     BEYOND_SVG, CalibrationInput, EvaluationInput, Figure, IDENTIFIABILITY_SVG, LENGTHS_SVG,
-    PARAMETERS_SVG, RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG,
+    PARAMETERS_SVG, RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG, UNCERTAINTY_MAP_SVG,
 };
 use crate::calibrate::Calibration;
+use crate::plan::UncertaintyMap;
 
 /// Escapes `&`, `<`, `>`, `"` and `'` for HTML/XML text and attributes.
 pub(crate) fn escape(s: &str) -> String {
@@ -162,20 +163,11 @@ pub(crate) fn calibration_page(
 ) -> String {
     let cal = input.calibration;
     let json = input.calibration_json.as_deref();
-    let nav = [
-        ("summary", "Summary"),
-        ("single-point", "1 Single point"),
-        ("lengths", "2 Lengths"),
-        ("parameters", "3 Parameters"),
-        ("identifiability", "4 Identifiability"),
-        ("residuals", "5 Residuals"),
-        ("solver", "6 Solver"),
-    ];
     let beyond = find(figures, BEYOND_SVG);
-    let mut nav = nav.to_vec();
-    if beyond.is_some() {
-        nav.push(("beyond", "7 Beyond geometry"));
-    }
+    let nav = calibration_nav(beyond.is_some(), input.uncertainty_map.is_some());
+    // The map's section comes last, numbered after whichever came before.
+    let map = (input.uncertainty_map).map(|m| (m, nav.len() - 1));
+    let nav: Vec<(&str, &str)> = nav.iter().map(|(i, n)| (*i, n.as_str())).collect();
     let mut page = head(&input.title, &input.inputs, &nav);
     page += &format!(
         "<section id=\"summary\">\n<h2>Summary</h2>\n{}{}</section>\n",
@@ -254,8 +246,35 @@ pub(crate) fn calibration_page(
     if beyond.is_some() {
         page += &beyond_section(cal, json, beyond);
     }
+    if let Some((m, number)) = map {
+        let json = input.uncertainty_map_json.as_deref();
+        page += &map_section(m, json, find(figures, UNCERTAINTY_MAP_SVG), number);
+    }
     page += &foot(figures);
     page
+}
+
+/// The calibration page's links: the summary, the six sections every
+/// calibration has, then those of what it has besides, numbered on.
+fn calibration_nav(beyond: bool, map: bool) -> Vec<(&'static str, String)> {
+    let mut nav: Vec<(&str, String)> = [
+        ("summary", "Summary"),
+        ("single-point", "1 Single point"),
+        ("lengths", "2 Lengths"),
+        ("parameters", "3 Parameters"),
+        ("identifiability", "4 Identifiability"),
+        ("residuals", "5 Residuals"),
+        ("solver", "6 Solver"),
+    ]
+    .map(|(id, name)| (id, name.to_string()))
+    .to_vec();
+    if beyond {
+        nav.push(("beyond", "7 Beyond geometry".to_string()));
+    }
+    if map {
+        nav.push(("uncertainty-map", format!("{} Uncertainty map", nav.len())));
+    }
+    nav
 }
 
 /// Section 7: the models beyond geometry, their table and figure.
@@ -273,6 +292,52 @@ fn beyond_section(cal: &Calibration, json: Option<&str>, figure: Option<&Figure>
          parameters.",
         "",
         &tables::beyond(cal, json),
+    )
+}
+
+/// The uncertainty map's section, numbered `number`: what the radius is
+/// in one plain sentence, the figure and the table per band.
+fn map_section(
+    map: &UncertaintyMap,
+    json: Option<&str>,
+    figure: Option<&Figure>,
+    number: usize,
+) -> String {
+    let percent = 100.0 * map.coverage;
+    // Stated because a 3-D error needs 2.80 σ, and readers expect the 2 σ
+    // of one coordinate.
+    let intro = format!(
+        "The radius that holds the calibrated probe position's error with {percent:.0} % \
+         probability ({k:.2} σ for an isotropic 3-D error, not 2 σ), over {n} poses sampled \
+         within {w}: RMS {rms:.4} mm, median {median:.4} mm, largest {max:.4} mm. It comes \
+         from the covariance of the fitted geometry alone (J C Jᵀ at each pose): the error \
+         of the calibrated model's prediction there; a single touch adds its own probe \
+         noise on top.",
+        k = map.k_isotropic,
+        n = map.poses,
+        w = escape(&map.workspace),
+        rms = map.rms_mm,
+        median = map.median_mm,
+        max = map.max_mm,
+    );
+    section(
+        "uncertainty-map",
+        &format!("{number}. Predicted position uncertainty over the workspace"),
+        &intro,
+        figure,
+        &format!(
+            "Each dot is one sampled pose ({shown}): its {percent:.0} % radius against the \
+             probe's distance from the shoulder — the base axis at the first joint's height — \
+             coloured by the probe's height above the shoulder. The line is the RMS of the \
+             radius per band of that distance, as in the table.",
+            shown = if map.points.len() == map.poses {
+                format!("all {}", map.poses)
+            } else {
+                format!("{} of the {}, evenly spread", map.points.len(), map.poses)
+            }
+        ),
+        &tables::uncertainty_map(map, json),
+        "",
     )
 }
 

@@ -16,6 +16,7 @@
 //! | singular values and threshold; correlation heat map | [`IDENTIFIABILITY_SVG`] | ✓ | |
 //! | histogram of the per-touch residual lengths `δ = \|x − x̄\|` | [`RESIDUALS_SVG`] | ✓ | ✓ |
 //! | LM cost per iteration; annealing energy against temperature | [`SOLVER_SVG`] | ✓ | |
+//! | predicted 95 % radius of the position error per sampled pose against the distance from the shoulder, RMS per band | [`UNCERTAINTY_MAP_SVG`] | ✓ (with a map) | |
 //!
 //! Before calibration is drawn grey, after in colour (blue for fitted
 //! points, vermillion for held-out ones); fitted points are dots, held-out
@@ -50,6 +51,7 @@ use crate::dataset::DataSet;
 use crate::kernel::{ArmKernel, KernelError};
 use crate::metrics::MetricsError;
 use crate::params::DhParams;
+use crate::plan::UncertaintyMap;
 
 pub use calibration::session_report;
 
@@ -73,6 +75,10 @@ pub const POSITIONS_SVG: &str = "position-errors.svg";
 /// How far each fitted model beyond geometry moves the probe, when the
 /// calibration fitted any (not among [`CALIBRATION_FILES`]).
 pub const BEYOND_SVG: &str = "beyond-geometry.svg";
+/// The predicted position uncertainty over the sampled workspace, when the
+/// calibration has an uncertainty map (not among [`CALIBRATION_FILES`]:
+/// a calibration whose covariance is not finite has none).
+pub const UNCERTAINTY_MAP_SVG: &str = "uncertainty-map.svg";
 
 /// Every file [`calibration_report`] writes, page first.
 pub const CALIBRATION_FILES: [&str; 7] = [
@@ -249,6 +255,12 @@ pub struct CalibrationInput<'a> {
     /// probe at each fitted pose (`error_mm`), against the reach (none:
     /// the section is left out).
     pub beyond: Vec<PoseErrors>,
+    /// The predicted position uncertainty over a sampled workspace (none:
+    /// the section and its figure are left out).
+    pub uncertainty_map: Option<&'a UncertaintyMap>,
+    /// JSON Pointer of the map in the JSON written beside the report (e.g.
+    /// `/uncertainty_map`), if any.
+    pub uncertainty_map_json: Option<String>,
 }
 
 /// The 3-D errors of one arm at one data set's reference positions, each
@@ -284,7 +296,8 @@ pub struct EvaluationInput<'a> {
 }
 
 /// The report of a calibration: the page and six figures
-/// ([`CALIBRATION_FILES`]).
+/// ([`CALIBRATION_FILES`]), and those of what the input has besides
+/// (reference positions, models beyond geometry, an uncertainty map).
 ///
 /// # Errors
 ///
@@ -314,6 +327,8 @@ pub struct EvaluationInput<'a> {
 ///     truth: None,
 ///     positions: Vec::new(),
 ///     beyond: Vec::new(),
+///     uncertainty_map: None,
+///     uncertainty_map_json: None,
 /// })
 /// .unwrap();
 /// assert_eq!(report.files().count(), CALIBRATION_FILES.len());
@@ -336,6 +351,9 @@ pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportErro
     }
     if !input.beyond.is_empty() {
         figures.push(figures::beyond::figure(&input.beyond)?);
+    }
+    if let Some(map) = input.uncertainty_map {
+        figures.push(figures::map::figure(map)?);
     }
     let html = html::calibration_page(input, &evaluated, &figures);
     Ok(Report { html, figures })

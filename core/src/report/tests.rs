@@ -68,6 +68,16 @@ fn case() -> &'static Case {
 /// The calibration report of `cal` on the case's data (with held-out data
 /// when `held`).
 fn report_of(c: &Case, cal: &Calibration, held: bool) -> Result<Report, ReportError> {
+    report_with(c, cal, held, None)
+}
+
+/// [`report_of`] with an uncertainty map.
+fn report_with(
+    c: &Case,
+    cal: &Calibration,
+    held: bool,
+    map: Option<&crate::plan::UncertaintyMap>,
+) -> Result<Report, ReportError> {
     let fb = positions(&c.nominal, &c.data)?;
     let fa = positions(&cal.params, &c.data)?;
     let hb = positions(&c.nominal, &c.held)?;
@@ -114,6 +124,8 @@ fn report_of(c: &Case, cal: &Calibration, held: bool) -> Result<Report, ReportEr
         truth: Some(&c.truth),
         positions: Vec::new(),
         beyond: Vec::new(),
+        uncertainty_map: map,
+        uncertainty_map_json: map.map(|_| "/uncertainty_map".into()),
     })
 }
 
@@ -451,4 +463,83 @@ fn one_point_without_lengths_says_what_cannot_be_drawn() {
     for f in &r.figures {
         Document::parse(&f.svg).unwrap();
     }
+}
+
+#[test]
+fn the_uncertainty_map_has_its_figure_section_and_table() {
+    use crate::plan::{sample_poses, uncertainty_map};
+    let c = case();
+    let (free, cov) = c.cal.geometry_covariance().unwrap();
+    let poses = sample_poses(&[None; 6], 400, 7);
+    let map = uncertainty_map(&c.cal.params, &poses, &free, &cov, "the test's full turns").unwrap();
+    let r = report_with(c, &c.cal, false, Some(&map)).unwrap();
+    let files: Vec<&str> = r.files().map(|(f, _)| f).collect();
+    assert_eq!(files[..CALIBRATION_FILES.len()], CALIBRATION_FILES);
+    assert_eq!(files[CALIBRATION_FILES.len()..], [UNCERTAINTY_MAP_SVG]);
+
+    // A marker per point, in the bands of height; a step per band of reach.
+    let doc = Document::parse(figure(&r, UNCERTAINTY_MAP_SVG)).unwrap();
+    let s = groups(&doc, "series");
+    assert!(!s.is_empty() && s.len() <= 3, "{}", s.len());
+    assert!(
+        s.iter()
+            .all(|g| g.0.starts_with("height above the shoulder"))
+    );
+    let total: (usize, usize) = s
+        .iter()
+        .fold((0, 0), |(a, b), g| (a + g.1, b + markers(g.2)));
+    assert_eq!(total, (map.points.len(), map.points.len()));
+    let bands = map.regions.iter().filter(|b| b.poses > 0).count();
+    let guides = groups(&doc, "guide");
+    assert_eq!(guides.len(), 1);
+    assert_eq!((guides[0].0.as_str(), guides[0].1), ("RMS per band", bands));
+
+    // The section, numbered after the six, in the navigation; the sentence
+    // with the map's own numbers; every number of the table in full.
+    let html = &r.html;
+    assert!(html.contains("<a href=\"#uncertainty-map\">7 Uncertainty map</a>"));
+    assert!(html.contains("<h2>7. Predicted position uncertainty over the workspace</h2>"));
+    assert!(
+        html.contains(
+            "holds the calibrated probe position's error with 95 % probability (2.80 σ for \
+             an isotropic 3-D error, not 2 σ), over 400 poses sampled within the test&#39;s \
+             full turns"
+        ),
+        "{html}"
+    );
+    let page = Document::parse_with_options(
+        html,
+        roxmltree::ParsingOptions {
+            allow_dtd: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let cell = |pointer: &str| -> f64 {
+        let n = page
+            .descendants()
+            .find(|n| n.attribute("data-json") == Some(pointer))
+            .unwrap_or_else(|| panic!("{pointer}"));
+        n.attribute("data-value").unwrap().parse().unwrap()
+    };
+    for (i, b) in map.regions.iter().enumerate() {
+        let at = |f: &str| format!("/uncertainty_map/regions/{i}/{f}");
+        assert_eq!(cell(&at("reach_from_mm")), b.reach_from_mm);
+        assert_eq!(cell(&at("reach_to_mm")), b.reach_to_mm);
+        assert_eq!(cell(&at("poses")), b.poses as f64);
+        assert_eq!(cell(&at("rms_mm")), b.rms_mm);
+        assert_eq!(cell(&at("max_mm")), b.max_mm);
+    }
+    assert_eq!(cell("/uncertainty_map/median_mm"), map.median_mm);
+    assert_eq!(cell("/uncertainty_map/poses"), 400.0);
+
+    // Without a map: neither section nor figure.
+    let without = report_of(c, &c.cal, false).unwrap();
+    assert!(!without.html.contains("uncertainty-map"));
+    assert!(
+        without
+            .figures
+            .iter()
+            .all(|f| f.file != UNCERTAINTY_MAP_SVG)
+    );
 }

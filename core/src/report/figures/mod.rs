@@ -4,6 +4,7 @@
 pub(crate) mod beyond;
 pub(crate) mod identifiability;
 pub(crate) mod lengths;
+pub(crate) mod map;
 pub(crate) mod parameters;
 pub(crate) mod points;
 pub(crate) mod positions;
