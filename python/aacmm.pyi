@@ -52,6 +52,38 @@ class _Auxiliary(TypedDict):
     sigma: Optional[float]
     fixed: Optional[str]
 
+class _Region(TypedDict):
+    """One band of distance from the shoulder of an uncertainty map."""
+
+    reach_from_mm: float
+    reach_to_mm: float
+    poses: int
+    rms_mm: float
+    max_mm: float
+
+class _MapPoints(TypedDict):
+    """An uncertainty map's even sample of its poses, one entry per pose."""
+
+    reach_mm: _Array
+    height_mm: _Array
+    radius_mm: _Array
+
+class _UncertaintyMap(TypedDict):
+    """The predicted position uncertainty over a sampled workspace: the
+    radius that holds the calibrated probe position's error with
+    ``coverage`` (95 %) probability, ``k_isotropic`` (2.80) σ for an
+    isotropic 3-D error."""
+
+    coverage: float
+    k_isotropic: float
+    workspace: str
+    poses: int
+    rms_mm: float
+    median_mm: float
+    max_mm: float
+    regions: List[_Region]
+    points: _MapPoints
+
 class AacmmError(Exception):
     """Base class of the errors aacmm raises (besides OSError for unreadable
     files and ValueError/TypeError for malformed arguments)."""
@@ -345,6 +377,16 @@ class Calibration:
         (rad/(N·m)), ``harmonics`` (rad), ``cte_per_k`` (1/K),
         ``reference_temperature_c`` — as ``report["calibration"]["physics"]``;
         ``drift_mm_per_h`` when a drift was fitted."""
+    @property
+    def uncertainty_map(self) -> Optional[_UncertaintyMap]:
+        """The predicted position uncertainty over a sampled workspace, as
+        ``report["uncertainty_map"]`` (None when the covariance is not
+        finite): ``coverage``, ``k_isotropic`` (2.80: the 95 % radius of an
+        isotropic 3-D error in σ, not 2), ``workspace``, ``poses``,
+        ``rms_mm``, ``median_mm``, ``max_mm`` of the 95 % radius,
+        ``regions`` per band of distance from the shoulder, and ``points``
+        (the figure's sample) as arrays ``reach_mm``, ``height_mm``,
+        ``radius_mm``."""
     @property
     def successful(self) -> bool:
         """Whether the calibration is usable: the verdict

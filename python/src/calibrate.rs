@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use aacmm_core::calibrate::Context;
 use aacmm_core::io::Arm as CoreArm;
+use aacmm_core::plan::MapPoint;
 use aacmm_core::residuals::Frame;
 use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Request, Sources};
 use numpy::ndarray::{Array1, Array2};
@@ -329,6 +330,39 @@ impl Calibration {
         if let Some(v) = physics.drift_mm_per_h {
             d.set_item("drift_mm_per_h", v.to_vec())?;
         }
+        Ok(Some(d))
+    }
+
+    /// The predicted position uncertainty over a sampled workspace, as
+    /// `report["uncertainty_map"]` (`None` when the calibration's
+    /// covariance is not finite): `coverage` (0.95), `k_isotropic` (2.80:
+    /// the 95 % radius of an isotropic 3-D error in σ, not 2), `workspace`
+    /// (where the poses come from, in words), `poses`, `rms_mm`,
+    /// `median_mm` and `max_mm` of the 95 % radius, `regions` (per band of
+    /// distance from the shoulder: `reach_from_mm`, `reach_to_mm`, `poses`,
+    /// `rms_mm`, `max_mm`), and `points`, the figure's even sample of the
+    /// poses as numpy arrays `reach_mm`, `height_mm`, `radius_mm`.
+    #[getter]
+    fn uncertainty_map<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(m) = &self.report.uncertainty_map else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("coverage", m.coverage)?;
+        d.set_item("k_isotropic", m.k_isotropic)?;
+        d.set_item("workspace", &m.workspace)?;
+        d.set_item("poses", m.poses)?;
+        d.set_item("rms_mm", m.rms_mm)?;
+        d.set_item("median_mm", m.median_mm)?;
+        d.set_item("max_mm", m.max_mm)?;
+        d.set_item("regions", to_python(py, &m.regions)?)?;
+        // Columns rather than a list of dicts: what a plot takes.
+        let column = |f: fn(&MapPoint) -> f64| Array1::from_iter(m.points.iter().map(f));
+        let points = PyDict::new(py);
+        points.set_item("reach_mm", column(|p| p.reach_mm).into_pyarray(py))?;
+        points.set_item("height_mm", column(|p| p.height_mm).into_pyarray(py))?;
+        points.set_item("radius_mm", column(|p| p.radius_mm).into_pyarray(py))?;
+        d.set_item("points", points)?;
         Ok(Some(d))
     }
 
