@@ -79,6 +79,11 @@ enum AacmmStatus
    */
   AACMM_STATUS_BUFFER_TOO_SMALL = 8,
   /**
+   * The result has no such thing: an uncertainty map of a calibration
+   * whose covariance is not finite.
+   */
+  AACMM_STATUS_NOT_AVAILABLE = 9,
+  /**
    * An internal error (a bug in aacmm) was caught; the host process is
    * unaffected and the message says what happened.
    */
@@ -333,6 +338,76 @@ typedef struct {
    */
   bool fixed;
 } AacmmAuxiliary;
+
+/**
+ * A calibration's uncertainty map, for
+ * `aacmm_calibration_uncertainty_map`: the radius that holds the
+ * calibrated probe position's error with `coverage` (95 %) probability,
+ * from the covariance of the fitted geometry, over `poses` poses drawn
+ * within the arm's joint limits (or the ranges the campaign turned the
+ * joints through); the report's `uncertainty_map`, whose `workspace` says
+ * which, and whose `points` hold the poses of its figure.
+ */
+typedef struct {
+  /**
+   * Probability each radius covers (0.95).
+   */
+  double coverage;
+  /**
+   * The radius of an isotropic 3-D error in units of its per-coordinate
+   * σ (2.80: a 3-D error needs more than the 2 σ of one coordinate).
+   */
+  double k_isotropic;
+  /**
+   * Poses sampled.
+   */
+  size_t poses;
+  /**
+   * RMS of the radius over the poses, mm.
+   */
+  double rms_mm;
+  /**
+   * Median of the radius, mm.
+   */
+  double median_mm;
+  /**
+   * Largest radius, mm.
+   */
+  double max_mm;
+  /**
+   * Bands of distance from the shoulder the poses are summarised in
+   * (`aacmm_calibration_uncertainty_region`).
+   */
+  size_t regions;
+} AacmmUncertaintyMap;
+
+/**
+ * One band of distance from the shoulder (the base axis at the first
+ * joint's height) of an uncertainty map, for
+ * `aacmm_calibration_uncertainty_region`.
+ */
+typedef struct {
+  /**
+   * Distance of the probe from the shoulder, from (mm).
+   */
+  double reach_from_mm;
+  /**
+   * … to (mm).
+   */
+  double reach_to_mm;
+  /**
+   * Poses in the band.
+   */
+  size_t poses;
+  /**
+   * RMS of the 95 % radius, mm (0 for an empty band).
+   */
+  double rms_mm;
+  /**
+   * Largest radius, mm.
+   */
+  double max_mm;
+} AacmmUncertaintyRegion;
 
 /**
  * The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
@@ -877,6 +952,45 @@ AacmmStatus aacmm_calibration_auxiliary(const AacmmCalibration *cal,
  * `buf` is `NULL` or points to at least `buf_len` writable bytes.
  */
 size_t aacmm_last_error_message(char *buf, size_t buf_len);
+
+/**
+ * The calibration's uncertainty map into `*out`. Returns
+ * `AACMM_STATUS_NOT_AVAILABLE` (and leaves `*out` as it was) when the
+ * calibration has none: its covariance is not finite.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `out` is `NULL` or points to
+ * writable memory for the struct.
+ */
+AacmmStatus aacmm_calibration_uncertainty_map(const AacmmCalibration *cal,
+                                              AacmmUncertaintyMap *out);
+
+/**
+ * The number of bands of the calibration's uncertainty map into `*count`
+ * (0 when it has no map).
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_uncertainty_region_count(const AacmmCalibration *cal, size_t *count);
+
+/**
+ * Band `index` of the calibration's uncertainty map (`0 ≤ index <
+ * aacmm_calibration_uncertainty_region_count`, nearest the shoulder first)
+ * into `*out`. Returns `AACMM_STATUS_NOT_AVAILABLE` when the calibration
+ * has no map, `AACMM_STATUS_INVALID_ARGUMENT` for an index out of range
+ * (`*out` is then left as it was).
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `out` is `NULL` or points to
+ * writable memory for the struct.
+ */
+AacmmStatus aacmm_calibration_uncertainty_region(const AacmmCalibration *cal,
+                                                 size_t index,
+                                                 AacmmUncertaintyRegion *out);
 
 /**
  * New options with the defaults of `aacmm calibrate`, at `*out` (release

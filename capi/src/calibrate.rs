@@ -184,7 +184,7 @@ pub struct AacmmAuxiliary {
 /// The result of a calibration. Opaque; released by
 /// `aacmm_calibration_free`. Never modified after it is made.
 pub struct AacmmCalibration {
-    report: CalibrationReport,
+    pub(crate) report: CalibrationReport,
     calibrated: Arm,
     json: String,
 }
@@ -433,7 +433,9 @@ pub unsafe extern "C" fn aacmm_calibrate(
 /// # Safety
 ///
 /// `cal` is `NULL` or a live result handle.
-unsafe fn result<'a>(cal: *const AacmmCalibration) -> Result<&'a AacmmCalibration, Error> {
+pub(crate) unsafe fn result<'a>(
+    cal: *const AacmmCalibration,
+) -> Result<&'a AacmmCalibration, Error> {
     // SAFETY: forwarded contract.
     unsafe { ptr::object(cal, "cal") }
 }

@@ -48,6 +48,9 @@ pub enum AacmmStatus {
     /// A string did not fit the caller's buffer: a truncated, NUL-terminated
     /// copy was written and the full length reported.
     BufferTooSmall = 8,
+    /// The result has no such thing: an uncertainty map of a calibration
+    /// whose covariance is not finite.
+    NotAvailable = 9,
     /// An internal error (a bug in aacmm) was caught; the host process is
     /// unaffected and the message says what happened.
     Panic = 99,

@@ -34,6 +34,7 @@
 mod arm;
 mod calibrate;
 mod error;
+mod map;
 mod options;
 mod positions;
 mod ptr;
@@ -55,6 +56,10 @@ pub use calibrate::{
     aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
 };
 pub use error::{AacmmStatus, aacmm_last_error_message};
+pub use map::{
+    AacmmUncertaintyMap, AacmmUncertaintyRegion, aacmm_calibration_uncertainty_map,
+    aacmm_calibration_uncertainty_region, aacmm_calibration_uncertainty_region_count,
+};
 pub use options::{
     AACMM_METHOD_GLOBAL, AACMM_METHOD_HYBRID, AACMM_METHOD_LM, AACMM_METHOD_SA,
     AACMM_ROBUST_CAUCHY, AACMM_ROBUST_HUBER, AACMM_ROBUST_NONE, AacmmCalibrateOptions, AacmmMethod,

@@ -17,7 +17,7 @@ use aacmm_core::io::{AngleUnit, Arm, Positions, read_arm, read_lengths, read_pos
 use aacmm_core::kernel::{ArmKernel, Jacobians, PreparedPoses};
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;
-use aacmm_core::session::{Problem, Request, Sources};
+use aacmm_core::session::{CalibrationReport, Problem, Request, Sources};
 
 const ARM: &str = "examples/paper-table-1.toml";
 const POSES: &str = "examples/paper-campaign/poses.csv";
@@ -269,6 +269,9 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("compliance_zero", 3),
         ("harmonics_no_order", 3),
         ("compliance_without_masses", 3),
+        ("map_region_index", 3),
+        ("map_null_out", 1),
+        ("map_null_calibration", 1),
     ] {
         assert_eq!(
             out.error_code(name),
@@ -333,6 +336,11 @@ fn the_c_program_agrees_with_the_rust_api() {
             "compliance_without_masses",
             "compliance = 2,3: no mass loads the joints",
         ),
+        (
+            "map_region_index",
+            "index = 5: the uncertainty map has 5 region(s)",
+        ),
+        ("map_null_out", "`out` is NULL"),
     ] {
         let got = out.get(&format!("error {name}"));
         assert!(got.contains(message), "{name}: {got}");
@@ -430,8 +438,64 @@ fn the_c_program_agrees_with_the_rust_api() {
     assert_eq!(report["fix"], "auto");
     assert_eq!(report["touches"], 100);
     assert!(report["validation"]["held_out"].is_null());
+    uncertainty_map(&out, &expected, &report);
 
     tracker_positions(&out);
+}
+
+/// The C program's uncertainty map: the session's, bit for bit, and the
+/// numbers of the report's `/uncertainty_map`.
+fn uncertainty_map(out: &Output, expected: &CalibrationReport, report: &serde_json::Value) {
+    let m = expected
+        .uncertainty_map
+        .as_ref()
+        .expect("a finite covariance has a map");
+    assert_bits(
+        "map",
+        &out.doubles("map"),
+        &[m.coverage, m.k_isotropic, m.rms_mm, m.median_mm, m.max_mm],
+    );
+    assert_eq!(
+        out.get("map_counts"),
+        format!("{} {}", m.poses, m.regions.len())
+    );
+    assert_eq!(m.regions.len(), 5);
+    let json = &report["uncertainty_map"];
+    // The JSON's numbers, as its reader parses them (to the last bit or
+    // one ulp off, by its float parser).
+    let near = |got: f64, pointer: &str| {
+        let want = json.pointer(pointer).and_then(serde_json::Value::as_f64);
+        let want = want.unwrap_or_else(|| panic!("{pointer}: not a number"));
+        assert!(
+            (got - want).abs() <= 1e-15 * want.abs(),
+            "{pointer}: C {got} vs JSON {want}"
+        );
+    };
+    let map = out.doubles("map");
+    for (k, field) in ["coverage", "k_isotropic", "rms_mm", "median_mm", "max_mm"]
+        .iter()
+        .enumerate()
+    {
+        near(map[k], &format!("/{field}"));
+    }
+    assert_eq!(json["poses"].as_u64(), Some(m.poses as u64));
+    for (i, r) in m.regions.iter().enumerate() {
+        let got = out.doubles(&format!("map_region_{i}"));
+        let expected = [
+            r.reach_from_mm,
+            r.reach_to_mm,
+            r.poses as f64,
+            r.rms_mm,
+            r.max_mm,
+        ];
+        assert_bits(&format!("map_region_{i}"), &got, &expected);
+        for (k, field) in ["reach_from_mm", "reach_to_mm", "poses", "rms_mm", "max_mm"]
+            .iter()
+            .enumerate()
+        {
+            near(got[k], &format!("/regions/{i}/{field}"));
+        }
+    }
 }
 
 /// The C program's tracker: positions alone from arrays, fitted as the

@@ -18,7 +18,10 @@
  *   tracker_frames (the count), frame_NAME (per fitted frame: rotation,
  *   translation, their sigmas, the rotation matrix), tracker_auxiliary (the
  *   count of auxiliary columns), aux_NAME (per column: start, calibrated,
- *   sigma, and 1 or 0 for held or fitted)
+ *   sigma, and 1 or 0 for held or fitted), map (the calibration's
+ *   uncertainty map: coverage, k_isotropic, rms, median, max), map_counts
+ *   (its poses and bands), map_region_K (per band: reach from, to, poses,
+ *   rms, max)
  *
  * Its own checks (expected error codes, arrays == files) make it exit with
  * status 1 and a message on stderr when they fail.
@@ -372,6 +375,43 @@ int main(int argc, char **argv) {
     char *report = string_of(aacmm_calibration_report, cal, "aacmm_calibration_report");
     print_escaped("report", report);
     free(report);
+
+    /* The uncertainty map: the report's `uncertainty_map`, its summary and
+     * each band of distance from the shoulder. */
+    AacmmUncertaintyMap map;
+    ok(aacmm_calibration_uncertainty_map(cal, &map), "aacmm_calibration_uncertainty_map");
+    const double map_values[5] = {map.coverage, map.k_isotropic, map.rms_mm, map.median_mm,
+                                  map.max_mm};
+    print_bits("map", map_values, 5);
+    printf("map_counts %zu %zu\n", map.poses, map.regions);
+    size_t region_count = 0;
+    ok(aacmm_calibration_uncertainty_region_count(cal, &region_count),
+       "aacmm_calibration_uncertainty_region_count");
+    if (region_count != map.regions) {
+        fail("the region count disagrees with the map's");
+    }
+    size_t region_poses = 0;
+    for (size_t r = 0; r < region_count; r++) {
+        AacmmUncertaintyRegion region;
+        char tag[32];
+        ok(aacmm_calibration_uncertainty_region(cal, r, &region),
+           "aacmm_calibration_uncertainty_region");
+        snprintf(tag, sizeof tag, "map_region_%zu", r);
+        const double values[5] = {region.reach_from_mm, region.reach_to_mm, (double)region.poses,
+                                  region.rms_mm, region.max_mm};
+        print_bits(tag, values, 5);
+        region_poses += region.poses;
+    }
+    if (region_poses != map.poses) {
+        fail("the bands do not hold every pose of the map");
+    }
+    AacmmUncertaintyRegion region;
+    expect(aacmm_calibration_uncertainty_region(cal, region_count, &region),
+           AACMM_STATUS_INVALID_ARGUMENT, "map_region_index");
+    expect(aacmm_calibration_uncertainty_map(cal, NULL), AACMM_STATUS_NULL_POINTER,
+           "map_null_out");
+    expect(aacmm_calibration_uncertainty_region(NULL, 0, &region), AACMM_STATUS_NULL_POINTER,
+           "map_null_calibration");
 
     /* The calibrated arm as a handle. */
     AacmmArm *after = NULL;
