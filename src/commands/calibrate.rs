@@ -9,7 +9,9 @@ use aacmm_core::calibrate::{
     AnnealOptions, CalibrationError, Context, GlobalOptions, Loss, SolverSettings, SwitchRule,
 };
 use aacmm_core::io::source_name;
-use aacmm_core::report::{BEYOND_SVG, CALIBRATION_FILES, HTML_FILE, POSITIONS_SVG};
+use aacmm_core::report::{
+    BEYOND_SVG, CALIBRATION_FILES, HTML_FILE, POSITIONS_SVG, UNCERTAINTY_MAP_SVG,
+};
 use aacmm_core::session::{self, CALIBRATED_FILE, Problem, REPORT_FILE, TIMING_FILE};
 use anyhow::{Context as _, Result, bail};
 use clap::ValueEnum;
@@ -227,6 +229,7 @@ fn check_paths(args: &Args) -> Result<()> {
                 TIMING_FILE,
                 POSITIONS_SVG,
                 BEYOND_SVG,
+                UNCERTAINTY_MAP_SVG,
             ][..],
             &CALIBRATION_FILES,
         ]

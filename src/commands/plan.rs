@@ -98,14 +98,15 @@ pub struct Args {
     #[arg(long, value_name = "POSES.csv")]
     workspace: Option<PathBuf>,
     /// What is optimised: the mean predicted position variance over the
-    /// workspace with each candidate discounted by its leverage (robust),
-    /// without the discount (i), or the determinant of the information (d,
-    /// for comparison).
+    /// workspace, one row from each of K strata of look-alike candidates
+    /// (robust), over all candidates freely (i), or the determinant of the
+    /// information (d, for comparison).
     #[arg(long, value_enum, default_value = "robust")]
     criterion: CriterionFlag,
-    /// τ of the robust criterion: the error no model explains at a pose of
-    /// average leverage, in units of the noise (with --given at least the
-    /// calibration's sqrt(σ̂₀² − 1)) [default: 1].
+    /// τ of the robust criterion: each candidate's rows count as noisier by
+    /// 1 + τ²·(its leverage / the mean), τ the error no model explains at a
+    /// pose of average leverage in units of the noise (with --given at least
+    /// the calibration's sqrt(σ̂₀² − 1)) [default: 0].
     #[arg(long, value_name = "TAU")]
     hedge: Option<f64>,
     /// σ of one measured row per coordinate, mm: scales every predicted
@@ -548,10 +549,16 @@ fn header(plan: &Plan, pool: &Pool, args: &Args, start: Option<&Start>) -> Strin
         None => format!("the candidates ({} poses used)", plan.workspace_poses),
     };
     let criterion = match plan.criterion {
+        Criterion::Robust if plan.hedge > 0.0 => format!(
+            "the mean predicted variance of a probe position over the workspace, one row from \
+             each of {} strata of look-alike candidates, each discounted by its leverage \
+             (robust, τ = {:.2})",
+            plan.strata, plan.hedge
+        ),
         Criterion::Robust => format!(
-            "the mean predicted variance of a probe position over the workspace, each \
-             candidate discounted by its leverage (robust, τ = {:.2})",
-            plan.hedge
+            "the mean predicted variance of a probe position over the workspace, one row from \
+             each of {} strata of look-alike candidates (robust)",
+            plan.strata
         ),
         Criterion::Prediction => {
             "the mean predicted variance of a probe position over the workspace (I-optimal)"
@@ -604,7 +611,10 @@ fn spreads(plan: &Plan) -> String {
     if plan.given {
         t += &row("the calibration alone", plan.start);
         t += &row(&format!("with the {} chosen", plan.count), plan.planned);
-        t += &row(&format!("with all {} candidates", plan.candidates), plan.all);
+        t += &row(
+            &format!("with all {} candidates", plan.candidates),
+            plan.all,
+        );
     } else {
         t += &row(&format!("the {} chosen", plan.count), plan.planned);
         t += &row(&format!("all {} candidates", plan.candidates), plan.all);
