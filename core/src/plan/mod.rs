@@ -303,12 +303,7 @@ pub fn plan(
     check(params, pool, workspace, settings)?;
     let (free, frame) = columns(params, pool, given, settings)?;
     let design = design(params, pool, workspace, &free, frame, given, settings)?;
-    let hedge = match settings.criterion {
-        Criterion::Robust => given.and_then(|g| g.sigma0).map_or(settings.hedge, |s0| {
-            (s0 * s0 - 1.0).max(0.0).sqrt().max(settings.hedge)
-        }),
-        _ => 0.0,
-    };
+    let hedge = hedge_of(given, settings);
     let weight = hedge_weights(&design, hedge);
     let prior = given.map(|g| prior_information(g, &design));
     let gain = match settings.criterion {
@@ -354,25 +349,13 @@ pub fn plan(
     let joints = joint_spans(pool, chosen);
     let sockets = socket_counts(&design, chosen);
     let warnings = warnings(&joints, planned.is_none(), settings);
-    let mut parameters: Vec<String> = free
-        .iter()
-        .map(|&c| {
-            params
-                .param_ids()
-                .nth(c)
-                .map_or(String::new(), |i| i.to_string())
-        })
-        .collect();
-    if frame {
-        parameters.extend(["rx", "ry", "rz", "tx", "ty", "tz"].map(|n| format!("frame {n}")));
-    }
     Ok(Plan {
         measure: settings.measure,
         criterion: settings.criterion,
         candidates: pool.len(),
         count: settings.count,
         steps,
-        parameters,
+        parameters: parameter_names(params, &free, frame),
         sigma_mm: design.sigma,
         hedge,
         strata: design.stratum.iter().max().map_or(0, |m| m + 1),
@@ -393,6 +376,27 @@ pub fn plan(
         joints,
         warnings,
     })
+}
+
+/// `τ` of the hedge: the setting's, or a given calibration's
+/// `sqrt(σ̂₀² − 1)` when larger; 0 for the criteria without the hedge.
+fn hedge_of(given: Option<&Given>, settings: &PlanSettings) -> f64 {
+    match settings.criterion {
+        Criterion::Robust => given.and_then(|g| g.sigma0).map_or(settings.hedge, |s0| {
+            (s0 * s0 - 1.0).max(0.0).sqrt().max(settings.hedge)
+        }),
+        _ => 0.0,
+    }
+}
+
+/// The design's columns by name: the free geometry's, then the frame's.
+fn parameter_names(params: &DhParams, free: &[usize], frame: bool) -> Vec<String> {
+    let ids: Vec<String> = params.param_ids().map(|i| i.to_string()).collect();
+    let mut names: Vec<String> = free.iter().map(|&c| ids[c].clone()).collect();
+    if frame {
+        names.extend(["rx", "ry", "rz", "tx", "ty", "tz"].map(|n| format!("frame {n}")));
+    }
+    names
 }
 
 fn check(
