@@ -727,13 +727,20 @@ fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], op
         let mut changed = false;
         for slot in order.iter_mut() {
             let k = slot.0;
-            if design.touches && greedy.members(design.group[k]).len() <= MIN_TOUCHES_PER_SOCKET {
-                continue;
-            }
+            // A socket at its fewest touches swaps within itself (its seeds
+            // were chosen by distance, not by the criterion); other rows
+            // within their stratum, when there are strata.
+            let g = design.group[k];
+            let least = design.touches && greedy.members(g).len() <= MIN_TOUCHES_PER_SOCKET;
             let before = greedy.value();
             greedy.remove(k);
-            // Within the row's own stratum, when there are strata.
-            let same = |i: usize| !stratified || design.stratum[i] == design.stratum[k];
+            let same = |i: usize| {
+                if least {
+                    design.group[i] == g
+                } else {
+                    !stratified || design.stratum[i] == design.stratum[k]
+                }
+            };
             let best = greedy
                 .best(|i| open[design.group[i]] && same(i))
                 .map(|b| b.0);
