@@ -81,6 +81,7 @@ fn template_names(path: &std::path::Path, n: usize) -> Result<UrdfNames> {
 }
 
 fn write(path: &std::path::Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).with_context(|| format!("{}: cannot write", path.display()))?;
+    aacmm_core::io::write_atomic(path, text)
+        .with_context(|| format!("{}: cannot write", path.display()))?;
     note(format_args!("wrote {}", path.display()))
 }

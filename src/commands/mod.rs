@@ -179,15 +179,11 @@ pub fn angle_unit(s: &str) -> Result<AngleUnit, String> {
 
 /// Writes `value` as pretty JSON (and a final newline) to `path`.
 pub fn write_json(path: &std::path::Path, value: &impl serde::Serialize) -> Result<()> {
-    use std::io::Write;
-    let file = std::fs::File::create(path)
-        .with_context(|| format!("{}: cannot create", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
-    serde_json::to_writer_pretty(&mut w, value)
-        .map_err(std::io::Error::from)
-        .and_then(|()| w.write_all(b"\n"))
-        .and_then(|()| w.flush())
-        .with_context(|| format!("{}: cannot write", path.display()))
+    aacmm_core::io::write_atomic_with(path, |w| {
+        serde_json::to_writer_pretty(&mut *w, value).map_err(std::io::Error::from)?;
+        w.write_all(b"\n")
+    })
+    .with_context(|| format!("{}: cannot write", path.display()))
 }
 
 /// A library error about weights that are not finite (a

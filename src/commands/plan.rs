@@ -8,7 +8,6 @@
 //! a poses file in the order chosen, so that a sampled pool's poses can be
 //! measured.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use aacmm_core::error::short;
@@ -494,11 +493,7 @@ fn write_chosen(path: &Path, plan: &Plan, pool: &Poses, unit: AngleUnit) -> Resu
     for (rank, row) in plan.chosen().into_iter().enumerate() {
         chosen.push(pool.label(row), pool.reading(row), rank + 2);
     }
-    let file = std::fs::File::create(path)
-        .with_context(|| format!("{}: cannot create", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
-    write_poses(&mut w, &chosen, unit)
-        .and_then(|()| w.flush())
+    aacmm_core::io::write_atomic_with(path, |w| write_poses(w, &chosen, unit))
         .with_context(|| format!("{}: cannot write", path.display()))
 }
 

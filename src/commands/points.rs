@@ -1,7 +1,5 @@
 //! `aacmm points`: what a measuring arm's software does with every touch.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 
 use aacmm_core::io::frames::parse_frames;
@@ -66,12 +64,10 @@ pub fn run(args: Args) -> Result<()> {
     }
     match &args.out {
         Some(path) => {
-            let file =
-                File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
-            let mut w = BufWriter::with_capacity(1 << 16, file);
-            write_points(&mut w, poses.labels(), &xyz)
-                .and_then(|_| w.flush())
-                .with_context(|| format!("{}: cannot write", path.display()))?;
+            aacmm_core::io::write_atomic_with(path, |w| {
+                write_points(w, poses.labels(), &xyz).map(|_| ())
+            })
+            .with_context(|| format!("{}: cannot write", path.display()))?;
         }
         None => {
             let mut out = Stdout::new();

@@ -13,7 +13,8 @@ pub fn write(flag: &str, dir: &Path, report: &Report) -> Result<PathBuf> {
         .with_context(|| format!("{flag} {}: cannot create", dir.display()))?;
     for (name, text) in report.files() {
         let path = dir.join(name);
-        std::fs::write(&path, text).with_context(|| format!("{}: cannot write", path.display()))?;
+        aacmm_core::io::write_atomic(&path, text)
+            .with_context(|| format!("{}: cannot write", path.display()))?;
     }
     Ok(dir.join(HTML_FILE))
 }

@@ -224,7 +224,8 @@ fn tracker(
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
-    std::fs::write(path, bytes).map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))
+    aacmm_core::io::write_atomic(path, bytes)
+        .map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))
 }
 
 /// --out may not hold an input.

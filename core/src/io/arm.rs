@@ -188,7 +188,7 @@ pub fn write_arm(
     length_unit: LengthUnit,
     angle_unit: AngleUnit,
 ) -> Result<(), InputError> {
-    std::fs::write(path, arm_to_toml(arm, length_unit, angle_unit))
+    super::write_atomic(path, arm_to_toml(arm, length_unit, angle_unit))
         .map_err(|e| InputError::io(path.display().to_string(), e))
 }
 

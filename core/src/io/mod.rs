@@ -34,6 +34,7 @@
 //! whitespace, which would not read back.
 
 pub mod arm;
+pub mod atomic;
 pub mod frames;
 pub mod lengths;
 pub mod limits;
@@ -48,6 +49,7 @@ use std::fmt;
 
 pub use crate::error::InputError;
 pub use arm::{Arm, arm_to_toml, parse_arm, read_arm, write_arm};
+pub use atomic::{write_atomic, write_atomic_with};
 pub use lengths::{
     ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
 };

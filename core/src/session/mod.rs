@@ -765,7 +765,7 @@ impl CalibrationReport {
         let mut written = Vec::with_capacity(files.len());
         for (name, text) in files {
             let path = dir.join(name);
-            std::fs::write(&path, text).map_err(|source| WriteError::Io {
+            crate::io::write_atomic(&path, text).map_err(|source| WriteError::Io {
                 path: path.display().to_string(),
                 source,
             })?;

@@ -177,7 +177,7 @@ pub fn write_campaign(
     files.push((dir.join(CAMPAIGN_FILE), toml.into_bytes()));
 
     for (path, bytes) in &files {
-        std::fs::write(path, bytes).map_err(|e| io(path, e))?;
+        crate::io::write_atomic(path, bytes).map_err(|e| io(path, e))?;
     }
     Ok(files.into_iter().map(|(p, _)| p).collect())
 }
