@@ -312,9 +312,11 @@ class Campaign:
     def lengths(self) -> List[_Length]: ...
     @property
     def data(self) -> DataSet: ...
-    def write(self, dir: _Path) -> List[pathlib.Path]:
+    def write(self, dir: _Path, *, force: bool = False) -> List[pathlib.Path]:
         """Writes poses.csv, lengths.csv, sockets.csv, true_arm.toml,
-        campaign.toml (the bytes of ``aacmm simulate``)."""
+        campaign.toml (the bytes of ``aacmm simulate``), each whole or not at
+        all. OSError when ``dir`` holds an earlier campaign and not
+        ``force``; ValueError for an empty path."""
 
 def simulate(
     arm: Arm,
@@ -410,11 +412,12 @@ class Calibration:
         included."""
     def text(self) -> str:
         """The summary ``aacmm calibrate`` prints."""
-    def write(self, dir: _Path) -> List[pathlib.Path]:
+    def write(self, dir: _Path, *, force: bool = False) -> List[pathlib.Path]:
         """Writes the files of ``aacmm calibrate --out dir`` (created if
         missing): calibrated.toml, calibration.json, timing.json, report.html
-        and its SVG figures; returns their paths. OSError when one cannot be
-        written."""
+        and its SVG figures, each whole or not at all; returns their paths.
+        OSError when one cannot be written, or when ``dir`` holds an earlier
+        calibration and not ``force``; ValueError for an empty path."""
 
 def calibrate(
     arm: Arm,

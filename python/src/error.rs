@@ -60,6 +60,28 @@ pub(crate) enum Kind {
     Internal,
 }
 
+/// Refuses an output directory `dir` that is empty (the current directory
+/// by accident) or that holds one of `earlier` (an earlier result) unless
+/// `force`, as the command line refuses without `--force`.
+pub(crate) fn check_out_dir(dir: &std::path::Path, earlier: &[&str], force: bool) -> Result<()> {
+    if dir.as_os_str().is_empty() {
+        return Err(Error::new(
+            Kind::Value,
+            "dir: empty; give a directory (\".\" for the current one)",
+        ));
+    }
+    if !force && let Some(name) = earlier.iter().find(|n| dir.join(n).exists()) {
+        return Err(Error::new(
+            Kind::Io,
+            format!(
+                "{}: holds an earlier result ({name}); write(..., force=True) overwrites it",
+                dir.display()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// An error with the library's message.
 #[derive(Debug)]
 pub(crate) struct Error {

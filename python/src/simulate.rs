@@ -112,8 +112,17 @@ impl Campaign {
     /// `poses.csv` (degrees), `lengths.csv`, `sockets.csv`, `true_arm.toml`,
     /// `campaign.toml` — the bytes `aacmm simulate` writes for the same
     /// settings. Returns the paths written.
-    fn write(&self, py: Python<'_>, dir: PathBuf) -> PyResult<Vec<PathBuf>> {
+    ///
+    /// `OSError` when `dir` holds an earlier campaign and `force` is not set;
+    /// `ValueError` for an empty path.
+    #[pyo3(signature = (dir, *, force = false))]
+    fn write(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<Vec<PathBuf>> {
         detached(py, || {
+            let earlier = [
+                aacmm_core::simulate::POSES_FILE,
+                aacmm_core::simulate::CAMPAIGN_FILE,
+            ];
+            crate::error::check_out_dir(&dir, &earlier, force)?;
             Ok(write_campaign(&dir, &self.campaign, &self.settings)?)
         })
     }

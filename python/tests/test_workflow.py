@@ -54,6 +54,12 @@ def test_calibration_equals_the_cli_files(cli, arm, data, tmp_path):
     # write(dir) writes the command line's files, byte for byte, apart from
     # the wall times in timing.json.
     written = cal.write(ours)
+    # As the command line without --force: an earlier result is kept.
+    with pytest.raises(OSError, match=r"earlier result \(calibrated.toml\).*force=True"):
+        cal.write(ours)
+    assert cal.write(ours, force=True) == written
+    with pytest.raises(ValueError, match="empty"):
+        cal.write("")
     names = sorted(p.name for p in theirs.iterdir())
     assert sorted(p.name for p in written) == names and "report.html" in names
     assert all(p.parent == ours for p in written)
@@ -174,6 +180,11 @@ def test_simulate_writes_the_cli_campaign(cli, arm, tmp_path):
     )
     ours, theirs = tmp_path / "py", tmp_path / "cli"
     written = campaign.write(ours)
+    with pytest.raises(OSError, match=r"earlier result \(poses.csv\).*force=True"):
+        campaign.write(ours)
+    assert campaign.write(ours, force=True) == written
+    with pytest.raises(ValueError, match="empty"):
+        campaign.write("")
     cli(
         "simulate", "--arm", ARM, "--errors", "paper", "--sockets", 5, "--poses", 6,
         "--seed", 4, "--encoder-noise", 0.002, "--probe-noise", 0.003, "--out", theirs,
