@@ -26,7 +26,7 @@ use std::path::Path;
 
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{Arm, DEFAULT_FRAME, Poses, Positions, read_arm};
+use aacmm_core::io::{Arm, Poses, Positions, read_arm};
 use aacmm_core::plan::{Criterion, Measure, PlanSettings, plan};
 use aacmm_core::residuals::Noise;
 use aacmm_core::residuals::positions::register;
@@ -182,18 +182,7 @@ fn world(case: &Case, seed: u64) -> Result<World> {
 fn subset(world: &World, rows: &[usize]) -> Result<DataSet> {
     let n = world.pool.joints();
     if let Some(p) = &world.positions {
-        let mut out = Positions::new(n);
-        for &i in rows {
-            out.push(
-                p.label(i),
-                DEFAULT_FRAME,
-                p.reading(i),
-                p.position(i),
-                None,
-                i + 2,
-            );
-        }
-        return Ok(DataSet::from_positions(out, "pool")?);
+        return Ok(DataSet::from_positions(p.subset(rows), "pool")?);
     }
     let count = |l: &str| rows.iter().filter(|&&i| world.pool.label(i) == l).count();
     let mut poses = Poses::new(n);
@@ -264,18 +253,7 @@ fn ur5() -> Result<()> {
     }
     // Both scores: the 20 random poses, and the grid poses not chosen.
     let score = |rows: &[usize]| -> Option<[f64; 2]> {
-        let mut out = Positions::new(6);
-        for &i in rows {
-            out.push(
-                grid.label(i),
-                DEFAULT_FRAME,
-                grid.reading(i),
-                grid.position(i),
-                None,
-                i + 2,
-            );
-        }
-        let data = DataSet::from_positions(out, "grid").ok()?;
+        let data = DataSet::from_positions(grid.subset(rows), "grid").ok()?;
         let settings = SolverSettings {
             method: Method::Lm,
             ..SolverSettings::default()

@@ -40,22 +40,6 @@ fn lm() -> SolverSettings {
     }
 }
 
-/// The rows `rows` of a campaign's positions.
-fn rows_of(p: &Positions, rows: &[usize]) -> Positions {
-    let mut out = Positions::new(p.joints());
-    for &i in rows {
-        out.push(
-            p.label(i),
-            DEFAULT_FRAME,
-            p.reading(i),
-            p.position(i),
-            None,
-            i + 2,
-        );
-    }
-    out
-}
-
 /// 200 campaigns of one 40-pose design (the same poses, new noise each
 /// time) calibrated with the stated noise: at 60 workspace poses the
 /// spread of the calibrated probe positions about their mean is what the
@@ -207,7 +191,7 @@ fn a_plan_beats_random_poses_and_d_optimality() {
                 poses.push(p.label(i), p.reading(i), i + 2);
             }
             let score = |rows: &[usize]| {
-                let data = DataSet::from_positions(rows_of(p, rows), "pool").unwrap();
+                let data = DataSet::from_positions(p.subset(rows), "pool").unwrap();
                 let report = Problem::new(nominal.clone(), data, ModelOptions::default())
                     .unwrap()
                     .run(&lm())

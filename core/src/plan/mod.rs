@@ -328,24 +328,31 @@ pub fn plan(
         design: &design,
         prior: prior.as_ref(),
     };
-    let steps = (0..rows.len())
-        .map(|k| Step {
-            row: rows[k],
-            label: pool.label(rows[k]).to_string(),
-            criterion_mm: report.criterion(&rows[..=k]),
-        })
-        .collect::<Vec<_>>();
-    let planned = report.spread(chosen);
+    // Each prefix's covariance once: its criterion for the ranking, and at
+    // the curve's checkpoints (the count among them) its spread.
+    let marks = checkpoints(settings.count, to);
+    let (mut steps, mut curve, mut planned) = (Vec::new(), Vec::new(), None);
+    for k in 1..=rows.len() {
+        let c = report.covariance(&rows[..k]);
+        steps.push(Step {
+            row: rows[k - 1],
+            label: pool.label(rows[k - 1]).to_string(),
+            criterion_mm: c.as_ref().map(|c| report.criterion_of(c)),
+        });
+        if marks.contains(&k) {
+            let spread = c.as_ref().map(|c| report.spread_of(c));
+            curve.push(CurvePoint {
+                rows: k,
+                rms_mm: spread.map(|s| s.rms_mm),
+            });
+            if k == settings.count {
+                planned = spread;
+            }
+        }
+    }
     let all = report.spread(&(0..pool.len()).collect::<Vec<_>>());
     let start = given.and_then(|_| report.spread(&[]));
     let random = report.random(pool.len(), settings);
-    let curve = checkpoints(settings.count, to)
-        .into_iter()
-        .map(|k| CurvePoint {
-            rows: k,
-            rms_mm: report.spread(&rows[..k]).map(|s| s.rms_mm),
-        })
-        .collect();
     let joints = joint_spans(pool, chosen);
     let sockets = socket_counts(&design, chosen);
     let warnings = warnings(&joints, planned.is_none(), settings);
@@ -835,37 +842,40 @@ impl Evaluation<'_> {
         determined.then(|| chol.inverse())
     }
 
-    /// `tr(W C)` with the rows `rows`, as an isotropic 95 % radius (mm).
-    fn criterion(&self, rows: &[usize]) -> Option<f64> {
-        let c = self.covariance(rows)?;
+    /// `tr(W C)` of the covariance `c`, as an isotropic 95 % radius (mm).
+    fn criterion_of(&self, c: &DMatrix<f64>) -> f64 {
         let p = self.design.blocks.p;
         let tr: f64 = (0..p * p)
             .map(|i| self.design.w[i] * c[(i / p, i % p)])
             .sum();
-        Some(coverage::K_ISOTROPIC * self.design.sigma * (tr.max(0.0) / 3.0).sqrt())
+        coverage::K_ISOTROPIC * self.design.sigma * (tr.max(0.0) / 3.0).sqrt()
     }
 
     /// The spread with the rows `rows` (and the prior); `None` when they
     /// do not determine every column.
     fn spread(&self, rows: &[usize]) -> Option<Spread> {
+        self.covariance(rows).map(|c| self.spread_of(&c))
+    }
+
+    /// The spread of the covariance `c` (scaled columns, unit noise).
+    fn spread_of(&self, c: &DMatrix<f64>) -> Spread {
         let d = self.design;
         let p = d.blocks.p;
-        let c = self.covariance(rows)?;
         let s2 = d.sigma * d.sigma;
         let mut radii: Vec<f64> = (0..d.workspace.len())
             .map(|i| {
-                let s = map::sandwich(d.workspace.at(i), &c, p).map(|r| r.map(|v| v * s2));
+                let s = map::sandwich(d.workspace.at(i), c, p).map(|r| r.map(|v| v * s2));
                 coverage::radius(coverage::eigenvalues(s))
             })
             .collect();
         let n = radii.len().max(1) as f64;
         let rms = (radii.iter().map(|r| r * r).sum::<f64>() / n).sqrt();
         radii.sort_by(f64::total_cmp);
-        Some(Spread {
+        Spread {
             rms_mm: rms,
             median_mm: radii.get(radii.len() / 2).copied().unwrap_or(0.0),
             max_mm: radii.last().copied().unwrap_or(0.0),
-        })
+        }
     }
 
     /// Random subsets of `settings.count` of `n` candidates.

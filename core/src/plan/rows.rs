@@ -6,6 +6,7 @@
 
 use crate::kernel::{ArmKernel, KernelError, PreparedPoses};
 use crate::params::DhParams;
+use crate::residuals::Frame;
 
 /// Row-major Jacobians of many poses: pose `i`, coordinate `k`, column `c`
 /// at `[(3 i + k) p + c]`.
@@ -47,15 +48,9 @@ pub(crate) fn jacobians(
                 row[a] = jac[c][k];
             }
             if frame {
-                // ∂(R(ω) p + t)/∂(ω, t) at ω = 0: −[p]× and I.
-                let f = &mut row[free.len()..];
-                let cross = [
-                    [0.0, pos[2], -pos[1]],
-                    [-pos[2], 0.0, pos[0]],
-                    [pos[1], -pos[0], 0.0],
-                ];
-                f[..3].copy_from_slice(&cross[k]);
-                f[3 + k] = 1.0;
+                // The frame's columns at the identity: the information does
+                // not depend on where the instrument stands.
+                row[free.len()..].copy_from_slice(&Frame::jacobian(&[0.0; 6], *pos)[k]);
             }
         }
     })?;
