@@ -179,7 +179,7 @@ fn main() -> anyhow::Result<()> {
             dn,
             dc,
             dch,
-            if f.successful { "ok" } else { "NOT CONVERGED" }
+            fit_column(f)
         )?;
     }
     let (dn, dc, dch) = match (
@@ -224,4 +224,22 @@ fn main() -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The fold's fit as the command line would judge its solver and its
+/// plausibility: `ok`, `NOT CONVERGED`, or the parameters that moved past
+/// the plausibility check.
+fn fit_column(f: &aacmm_core::calibrate::validate::placements::PlacementFold) -> String {
+    let mut what = Vec::new();
+    if !f.successful {
+        what.push("NOT CONVERGED".to_string());
+    }
+    if !f.implausible.is_empty() {
+        what.push(format!("implausible: {}", f.implausible.join(", ")));
+    }
+    if what.is_empty() {
+        "ok".to_string()
+    } else {
+        what.join("; ")
+    }
 }

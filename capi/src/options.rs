@@ -1210,7 +1210,11 @@ mod tests {
         assert_eq!(s.model.prior, Some(file.clone().overridden_by(&given)));
         let sigmas = s.model.prior.unwrap().sigmas(6);
         assert_eq!(sigmas[0], Some(0.3), "a1: the given length");
-        assert_eq!(sigmas[5], Some(2.0), "a6: the file's own entry stays");
+        assert_eq!(
+            sigmas[26],
+            Some(2.0),
+            "Bz: the file's own probe entry stays"
+        );
         // An arm without a file prior takes the specification alone.
         let bare = Arm::without_limits("nominal", DhParams::paper_nominal());
         let s = settings(&get(o), &bare).unwrap();

@@ -36,7 +36,7 @@ use crate::dataset::DataSet;
 
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind};
-use crate::residuals::{Noise, Sees, TermError};
+use crate::residuals::{Hold, Noise, Sees, TermError, WEAK_RATIO};
 
 /// Relative singular-value threshold of the numerical rank.
 pub(crate) const RANK_TOLERANCE: f64 = 1e-7;
@@ -489,7 +489,7 @@ impl Spectrum {
         let threshold = RANK_TOLERANCE * smax;
         let rank = sv.iter().filter(|&&s| s > threshold).count();
         let weak_relations = (0..rank)
-            .filter(|&i| sv[i] < 1e-3 * smax)
+            .filter(|&i| sv[i] < WEAK_RATIO * smax)
             .map(|i| weak_relation(&eig.eigenvectors, order[i], sv[i], &structure.cols, names))
             .collect();
         let condition_number = if rank > 0 {
@@ -535,6 +535,55 @@ fn weak_relation(
         text: relation_text(&terms),
         terms,
     }
+}
+
+/// The weak directions among the columns `cols` of `normal` (the data
+/// alone, at `params`): eigenvectors of the scaled normal matrix on `cols`
+/// whose singular value is below [`WEAK_RATIO`] × `s_max` — what
+/// [`crate::residuals::HoldTerm`] holds at nominal. Each is signed so that
+/// its largest term is positive.
+pub(crate) fn weak_holds(
+    params: &DhParams,
+    normal: crate::residuals::Normal,
+    cols: &[usize],
+    s_max: f64,
+) -> Vec<Hold> {
+    let scaled = Scaled::at(params, normal);
+    let k = cols.len();
+    if k == 0 || s_max.is_nan() || s_max <= 0.0 || !scaled.ns.iter().all(|v| v.is_finite()) {
+        return Vec::new();
+    }
+    let names: Vec<String> = scaled.ids.iter().map(|i| i.to_string()).collect();
+    let m = DMatrix::from_fn(k, k, |a, b| scaled.ns[(cols[a], cols[b])]);
+    let eig = eigen(m);
+    let mut weak: Vec<(usize, f64)> = (0..k)
+        .map(|i| (i, eig.eigenvalues[i].max(0.0).sqrt()))
+        .filter(|&(_, s)| s < WEAK_RATIO * s_max)
+        .collect();
+    weak.sort_by(|a, b| a.1.total_cmp(&b.1));
+    weak.into_iter()
+        .map(|(i, s)| {
+            let relation = weak_relation(&eig.eigenvectors, i, s, cols, &names);
+            let column = eig.eigenvectors.column(i);
+            // The sign of the relation's terms: the largest positive.
+            let largest = (0..k)
+                .max_by(|&a, &b| column[a].abs().total_cmp(&column[b].abs()))
+                .unwrap_or(0);
+            let sign = if column[largest] < 0.0 { -1.0 } else { 1.0 };
+            Hold {
+                cols: cols.to_vec(),
+                v: (0..k).map(|a| sign * column[a]).collect(),
+                d: cols.iter().map(|&c| scaled.d[c]).collect(),
+                circular: cols
+                    .iter()
+                    .map(|&c| !scaled.ids[c].kind.is_length())
+                    .collect(),
+                ratio: s / s_max,
+                text: relation.text,
+                terms: relation.terms,
+            }
+        })
+        .collect()
 }
 
 /// The recommended split into free and fixed parameters.

@@ -107,9 +107,25 @@ impl<'a> Objective<'a> {
         self.terms.iter().position(|t| t.name() == name)
     }
 
-    /// Whether a prior term is present.
+    /// Whether stated tolerances (or an auxiliary block's) apply: a prior
+    /// that weighs against the data. (Held weak directions are not one:
+    /// they are stiff, whatever the data's weights.)
     pub fn has_prior(&self) -> bool {
-        self.terms.iter().any(|t| t.is_prior())
+        self.prior.is_some()
+    }
+
+    /// Replaces the prior of the stated tolerances by `prior` (the same
+    /// columns, other tolerances).
+    pub(crate) fn set_prior(&mut self, prior: PriorTerm) {
+        if let Some(t) = self.terms.iter_mut().find(|t| t.name() == "prior") {
+            *t = Box::new(prior.clone());
+        }
+        self.prior = Some(prior);
+    }
+
+    /// Adds `term` after the others (a fit's held directions).
+    pub(crate) fn push_term(&mut self, term: Box<dyn Term + 'a>) {
+        self.terms.push(term);
     }
 
     /// The prior of the stated tolerances, if any applies.

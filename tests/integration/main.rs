@@ -17,6 +17,7 @@ mod points;
 mod positions;
 mod prior;
 mod readme;
+mod real_robots;
 mod report;
 mod robust;
 mod session;

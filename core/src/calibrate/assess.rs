@@ -178,6 +178,10 @@ pub(crate) struct Setup<'a> {
     pub(crate) counts: Counts,
     /// Whether every data term states its noise ([`Objective::stated`]).
     pub(crate) stated: bool,
+    /// Tolerances carried onto free partners of redundant parameters.
+    pub(crate) carried: Vec<super::prior::CarriedTolerance>,
+    /// The weak directions held at nominal, if any.
+    pub(crate) holds: Option<crate::residuals::HoldTerm>,
 }
 
 /// The fit as it passes from stage to stage.
@@ -673,6 +677,7 @@ fn assemble(
             &setup.free,
             &cov,
             setup.start,
+            setup.carried.clone(),
         )),
         _ => None,
     };
@@ -707,7 +712,7 @@ fn assemble(
         effects.as_ref(),
         &geometry_free,
         &geometry_cov,
-        fit.unit_sigma,
+        touch_sigma_found(fit.unit_sigma, stated, sigma0),
     )?;
     let phases = &fit.phases;
     let cost_evaluations =
@@ -753,10 +758,61 @@ fn assemble(
             outlier_threshold,
             position_uncertainty,
         },
+        held: held_directions(setup.holds.as_ref(), &fit.normal, sigma0),
         params: fit.params,
         robust: fit.robust.map(|(robust, _)| robust),
         prior,
     })
+}
+
+/// A touch's σ as the fit found it: with stated noise, the stated σ times
+/// σ̂ (the covariance carries σ̂² too, so a misstated noise makes the data
+/// look neither too weak nor too strong against a touch's scatter).
+fn touch_sigma_found(unit_sigma: f64, stated: bool, sigma0: f64) -> f64 {
+    if stated && sigma0.is_finite() && sigma0 > 0.0 {
+        unit_sigma * sigma0
+    } else {
+        unit_sigma
+    }
+}
+
+/// The held directions as reported, each with the σ the data alone give it
+/// at the fit: `σ̂ / sqrt(wᵀ N w − K)`, `w` its scaled unit vector in the
+/// columns' units, `N` the normal matrix at the solution (which carries the
+/// hold's own `K` along `w`, and no tolerance: held columns have none).
+fn held_directions(
+    holds: Option<&crate::residuals::HoldTerm>,
+    normal: &Normal,
+    sigma0: f64,
+) -> Vec<crate::residuals::HeldDirection> {
+    let Some(term) = holds else {
+        return Vec::new();
+    };
+    let p = normal.free.len();
+    term.holds()
+        .iter()
+        .map(|h| {
+            let w: Vec<(usize, f64)> = (0..h.cols.len())
+                .filter_map(|i| {
+                    let a = normal.free.iter().position(|&f| f == h.cols[i])?;
+                    Some((a, h.v[i] * h.d[i]))
+                })
+                .collect();
+            let nww: f64 = (w.iter())
+                .flat_map(|&(a, wa)| w.iter().map(move |&(b, wb)| (a, b, wa * wb)))
+                .map(|(a, b, ww)| normal.jtj[a * p + b] * ww)
+                .sum();
+            let info = nww - term.stiffness();
+            crate::residuals::HeldDirection {
+                relation: h.text.clone(),
+                terms: h.terms.clone(),
+                ratio: h.ratio,
+                sigma_mm: (info > 0.0)
+                    .then(|| sigma0 / info.sqrt())
+                    .filter(|s| s.is_finite()),
+            }
+        })
+        .collect()
 }
 
 /// The predicted position uncertainty of `params` (k = 2) over the poses of

@@ -252,8 +252,8 @@ impl ChiSquare {
             ),
             ChiSquareVerdict::ResidualsTooSmall => format!(
                 "χ² = {:.1} on {} dof (sigma0 {s0:.3}): residuals smaller than the stated noise \
-                 explains (P = {:.1e}): the noise is overstated, so the uncertainties are too \
-                 large and the fit cannot be judged",
+                 explains (P = {:.1e}): the noise is overstated (the uncertainties printed are \
+                 rescaled by sigma0², so they are the fit's own), or the fit follows the noise",
                 self.statistic, self.dof, self.p_lower
             ),
         }

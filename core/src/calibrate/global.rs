@@ -171,6 +171,11 @@ pub struct GlobalTrace {
     pub twin_restarts: usize,
     /// Starts that reached the lowest cost.
     pub best_hits: usize,
+    /// Of `best_hits`, those whose minimum agreed with the lowest at the
+    /// fit's noise level only (cost within `cost/dof`, arm within its
+    /// joint uncertainty), not to LM's convergence.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub noise_level_hits: usize,
     /// The noise-floor cost, when the noise is stated.
     pub noise_floor_cost: Option<f64>,
     /// Parameters whose sign was changed to the nominal convention.
@@ -180,6 +185,40 @@ pub struct GlobalTrace {
 /// Two costs from one minimum (equal within LM's convergence).
 fn same_minimum(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-6 * a.abs().max(b.abs()) + 1e-12
+}
+
+/// Whether two minima agree at the fit's noise level: their costs differ
+/// by less than one unit of its variance `s² = cost / dof` (a Δχ² of 1,
+/// what one σ along one direction costs), and the arms are within their
+/// joint uncertainty of each other — `δᵀ N δ / s²` (`N` the normal matrix
+/// at the lower, `δ` their difference, signs in one convention, angles
+/// wrapped) below `p + 3 sqrt(2p)`, the χ²_p mean plus three standard
+/// deviations. On real data, where the model never fits exactly, LM from
+/// different starts stops at costs that differ in the fourth digit; the
+/// data cannot tell such minima apart, so they confirm each other.
+fn agree_at_noise(
+    (lower, other): (f64, f64),
+    n: &crate::residuals::Normal,
+    dof: usize,
+    delta: &[f64],
+) -> bool {
+    let s2 = lower / dof.max(1) as f64;
+    if !(s2 > 0.0 && s2.is_finite()) || (other - lower).abs() > s2 {
+        return false;
+    }
+    let p = n.free.len();
+    if delta.len() != p {
+        return false;
+    }
+    let quad: f64 = (0..p)
+        .map(|a| {
+            (0..p)
+                .map(|b| delta[a] * n.jtj[a * p + b] * delta[b])
+                .sum::<f64>()
+        })
+        .sum();
+    let bound = p as f64 + 3.0 * (2.0 * p as f64).sqrt();
+    quad.is_finite() && quad / s2 <= bound
 }
 
 /// What [`global`] needs beyond the start.
@@ -193,6 +232,9 @@ pub(crate) struct GlobalProblem<'a, 'o> {
     pub(crate) lm: &'a LmOptions,
     /// Degrees of freedom; with stated noise, enables the noise floor.
     pub(crate) stated_dof: Option<usize>,
+    /// Degrees of freedom, stated noise or not: minima are told apart in
+    /// units of the fit's own noise, `cost / dof`.
+    pub(crate) dof: usize,
     /// The normal equations at the start over `free`, when already computed.
     pub(crate) start_normal: Option<crate::residuals::Normal>,
 }
@@ -224,6 +266,9 @@ impl GlobalProblem<'_, '_> {
 struct Found {
     best: Option<Minimum>,
     hits: usize,
+    /// Of `hits`, those that agreed with the best at the noise level only
+    /// ([`agree_at_noise`]), not to LM's convergence.
+    noise_hits: usize,
     minima: Vec<f64>,
     /// The lowest minimum whose geometry is implausible (a mirror image, a
     /// collapsed arm): never accepted, returned only when no plausible
@@ -236,7 +281,13 @@ impl Found {
     /// the band of costs the stated noise explains). A minimum whose
     /// geometry is implausible is recorded but neither accepted nor
     /// counted.
-    fn record(&mut self, m: Minimum, floor: Option<(f64, f64)>, plausible: bool) -> bool {
+    fn record(
+        &mut self,
+        m: Minimum,
+        floor: Option<(f64, f64)>,
+        plausible: bool,
+        agree: impl Fn(&Minimum, &Minimum) -> bool,
+    ) -> bool {
         self.minima.push(m.cost);
         if !plausible {
             if self.implausible.as_ref().is_none_or(|b| m.cost < b.cost) {
@@ -247,10 +298,18 @@ impl Found {
         let at_floor = floor.is_some_and(|(lo, hi)| (lo..=hi).contains(&m.cost));
         match &self.best {
             Some(b) if same_minimum(m.cost, b.cost) => self.hits += 1,
+            Some(b) if agree(&m, b) => {
+                self.hits += 1;
+                self.noise_hits += 1;
+                if m.cost < b.cost {
+                    self.best = Some(m);
+                }
+            }
             Some(b) if m.cost > b.cost => {}
             _ => {
                 self.best = Some(m);
                 self.hits = 1;
+                self.noise_hits = 0;
             }
         }
         at_floor
@@ -573,11 +632,50 @@ impl<'a, 'o> Search<'a, 'o> {
     /// its mirror image, not collapsed): the cost cannot tell.
     /// (`gross_corrections` compares twists modulo 2π.)
     fn judge(&self, found: &mut Found, m: Minimum) -> bool {
+        let plausible = (super::checks::gross_corrections(
+            &self.in_start_signs(&m),
+            self.start,
+            self.problem.free,
+        ))
+        .is_empty();
+        let agree = |a: &Minimum, b: &Minimum| {
+            let (lower, other) = if a.cost <= b.cost { (a, b) } else { (b, a) };
+            let delta = self.difference(lower, other);
+            let costs = (lower.cost, other.cost);
+            agree_at_noise(costs, &lower.fit.normal, self.problem.dof, &delta)
+        };
+        found.record(m, self.floor, plausible, agree)
+    }
+
+    /// A minimum's geometry in the start's sign convention.
+    fn in_start_signs(&self, m: &Minimum) -> DhParams {
         let mut p = m.fit.params.clone();
         normalize_signs(&mut p, self.start, self.problem.free);
-        let plausible =
-            super::checks::gross_corrections(&p, self.start, self.problem.free).is_empty();
-        found.record(m, self.floor, plausible)
+        p
+    }
+
+    /// `other − lower` over the free columns, both geometries in the
+    /// start's sign convention, angles wrapped.
+    fn difference(&self, lower: &Minimum, other: &Minimum) -> Vec<f64> {
+        let point = |m: &Minimum| {
+            let mut x = m.fit.x.clone();
+            let g = self.in_start_signs(m).to_vec();
+            x[..g.len()].copy_from_slice(&g);
+            x
+        };
+        let (a, b) = (point(lower), point(other));
+        let geometry = self.start.param_count();
+        (self.problem.free.iter())
+            .map(|&c| {
+                let d = b[c] - a[c];
+                let angle = c < geometry
+                    && self
+                        .start
+                        .param_id(c)
+                        .is_some_and(|id| !id.kind.is_length());
+                if angle { crate::params::wrap(d) } else { d }
+            })
+            .collect()
     }
 
     /// Agreement, without stated noise: the lowest cost reached from enough
@@ -607,6 +705,7 @@ impl<'a, 'o> Search<'a, 'o> {
         let Found {
             best,
             hits,
+            noise_hits,
             minima,
             implausible,
         } = found;
@@ -636,6 +735,7 @@ impl<'a, 'o> Search<'a, 'o> {
             random_starts,
             twin_restarts,
             best_hits: hits,
+            noise_level_hits: noise_hits,
             noise_floor_cost: self.floor.map(|(_, hi)| hi),
             sign_changes: Vec::new(),
         };
@@ -939,4 +1039,40 @@ fn last_joint_route(
         }
     }
     true
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+#[cfg(test)]
+mod tests {
+    /// Minima agree at the noise level when their costs differ by less than
+    /// `cost/dof` and the arms by less than their joint uncertainty; not
+    /// when either is farther.
+    #[test]
+    fn minima_agree_at_the_noise_level_only_within_it() {
+        use super::agree_at_noise;
+        let mut n = crate::residuals::Normal::new(&[0, 1]);
+        // Information 4 and 1 per unit (σ 0.5 and 1 at unit variance).
+        n.jtj = vec![4.0, 0.0, 0.0, 1.0];
+        // cost 100 on 100 dof: s² = 1; the bound for p = 2 is 2 + 3·2 = 8.
+        assert!(agree_at_noise((100.0, 100.9), &n, 100, &[0.5, 1.0]));
+        assert!(
+            !agree_at_noise((100.0, 101.1), &n, 100, &[0.5, 1.0]),
+            "cost"
+        );
+        assert!(
+            !agree_at_noise((100.0, 100.5), &n, 100, &[1.5, 0.0]),
+            "arm: 9 > 8"
+        );
+        assert!(
+            agree_at_noise((100.0, 100.5), &n, 100, &[1.4, 0.0]),
+            "7.84 ≤ 8"
+        );
+        assert!(
+            !agree_at_noise((0.0, 0.0), &n, 100, &[0.0, 0.0]),
+            "no noise level"
+        );
+    }
 }

@@ -60,7 +60,7 @@ pub use lm::{LmIteration, LmOptions, Termination};
 pub use options::{
     DEFAULT_LENGTH_SIGMA_MM, FixSpec, ModelOptions, SolverSettings, available_threads,
 };
-pub use prior::{PriorConditioning, PriorEstimate, PriorReport};
+pub use prior::{CarriedTolerance, PriorConditioning, PriorEstimate, PriorReport};
 pub use robust::{Loss, Robust, RobustFit};
 pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
@@ -515,6 +515,10 @@ pub struct Calibration {
     /// (only when tolerances were stated).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prior: Option<PriorReport>,
+    /// Weak directions of the free geometry that no tolerance covers, held
+    /// at nominal ([`crate::residuals::HoldTerm`]); absent when none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held: Vec<crate::residuals::HeldDirection>,
     /// The arm's physics at the fit — masses, and every correction beyond
     /// geometry, fitted or stated ([`crate::corrections`]) — when the arm
     /// states a correction or the fit estimated one (masses alone correct
@@ -703,7 +707,7 @@ pub fn calibrate_with(
     settings.check()?;
     check_method_for(solver.method(), data)?;
     let extra = terms.iter().map(|t| dyn_clone::clone_box(&**t)).collect();
-    let objective = Objective::of_data(
+    let mut objective = Objective::of_data(
         layout.clone(),
         data,
         &model.noise,
@@ -718,8 +722,15 @@ pub fn calibrate_with(
     let timer = std::time::Instant::now();
     let all: Vec<usize> = (0..layout.len()).collect();
     let full = objective.normal_of(&x0, &all, |t| !t.is_prior())?;
-    let (free, identification, reasons) = fixed_set(start, &objective, model, &full)?;
+    let FixedSet {
+        free,
+        identification,
+        reasons,
+        holds,
+    } = fixed_set(start, &objective, model, &full)?;
     let (free, held) = correction_columns(&full, layout, free)?;
+    let (carried, holds) =
+        complete_prior(&mut objective, identification.as_ref(), holds, start, &x0);
     if free.is_empty() {
         return Err(OptionError::new(
             "fix",
@@ -756,6 +767,7 @@ pub fn calibrate_with(
         model,
         settings,
         stated_dof: stated.then_some(counts.dof()),
+        dof: counts.dof(),
         start_normal,
     };
     let mut outcome = solver.solve(task, ctx)?;
@@ -773,6 +785,8 @@ pub fn calibrate_with(
         held,
         counts,
         stated,
+        carried,
+        holds,
     };
     assess::assess(setup, objective, outcome)
 }
@@ -799,15 +813,15 @@ fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
 }
 
 /// The free columns, the identifiability analysis behind them (`fix =
-/// auto`) and why each fixed parameter is fixed; a user's fixed set that
-/// leaves a direction the data (and the tolerances) cannot see is refused.
-#[allow(clippy::type_complexity)] // three plain results, named where used
+/// auto`), why each fixed parameter is fixed and the weak directions to
+/// hold; a user's fixed set that leaves a direction the data (and the
+/// tolerances) cannot see is refused.
 fn fixed_set(
     start: &DhParams,
     objective: &Objective<'_>,
     model: &ModelOptions,
     full: &Normal,
-) -> Result<(Vec<usize>, Option<Identification>, Vec<(ParamId, String)>), CalibrationError> {
+) -> Result<FixedSet, CalibrationError> {
     let layout = objective.layout();
     let geometry = layout.geometry_columns();
     // Every auxiliary column is free: the geometry is analysed with them
@@ -815,12 +829,14 @@ fn fixed_set(
     let aux: Vec<usize> = (geometry..layout.len()).collect();
     let full = geometry_normal(full, layout)?;
     let sees = objective.sees();
+    let mut holds = Vec::new();
     let (mut free, identification, reasons) = match &model.fix {
         FixSpec::Auto => {
-            let id = identify_from(start, sees, full);
+            let id = identify_from(start, sees, full.clone());
             let free = id.free_columns();
             let reasons: Vec<(ParamId, String)> =
                 id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
+            holds = weak_untoleranced(start, full, &free, model, &id);
             (free, Some(id), reasons)
         }
         FixSpec::Columns(fixed) => {
@@ -849,7 +865,69 @@ fn fixed_set(
         }
     };
     free.extend(aux);
-    Ok((free, identification, reasons))
+    Ok(FixedSet {
+        free,
+        identification,
+        reasons,
+        holds,
+    })
+}
+
+/// What the automatic fixed set adds to the prior: the tolerances of the
+/// redundant fixed parameters carried onto their free partners, and the
+/// weak directions `holds` held at `x0` (as a term of the objective).
+fn complete_prior(
+    objective: &mut Objective<'_>,
+    identification: Option<&Identification>,
+    holds: Vec<crate::residuals::Hold>,
+    start: &DhParams,
+    x0: &[f64],
+) -> (
+    Vec<prior::CarriedTolerance>,
+    Option<crate::residuals::HoldTerm>,
+) {
+    let Some(id) = identification else {
+        return (Vec::new(), None);
+    };
+    let carried = prior::carry_redundant(objective, id, start);
+    let s_max = id.analysed_singular_values.first().copied().unwrap_or(0.0);
+    let holds = (!holds.is_empty()).then(|| crate::residuals::HoldTerm::new(holds, x0, s_max));
+    if let Some(h) = &holds {
+        objective.push_term(Box::new(h.clone()));
+    }
+    (carried, holds)
+}
+
+/// The free columns, the identifiability analysis behind them (`fix =
+/// auto`), why each fixed parameter is fixed, and the weak directions held
+/// at nominal.
+struct FixedSet {
+    free: Vec<usize>,
+    identification: Option<Identification>,
+    reasons: Vec<(ParamId, String)>,
+    holds: Vec<crate::residuals::Hold>,
+}
+
+/// The weak directions among the free parameters that no tolerance covers
+/// (a parameter with a tolerance is determined by it, as in the user's
+/// fixed set): with them free, noise and model error would move the arm
+/// along them by tens of millimetres, so they are held at nominal
+/// ([`crate::residuals::HoldTerm`]).
+fn weak_untoleranced(
+    start: &DhParams,
+    full: Normal,
+    free: &[usize],
+    model: &ModelOptions,
+    id: &Identification,
+) -> Vec<crate::residuals::Hold> {
+    let sigmas = model.prior.as_ref().map(|t| t.sigmas_for(start));
+    let open: Vec<usize> = free
+        .iter()
+        .copied()
+        .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
+        .collect();
+    let s_max = id.analysed_singular_values.first().copied().unwrap_or(0.0);
+    crate::identify::weak_holds(start, full, &open, s_max)
 }
 
 /// The geometry's normal equations with every auxiliary column fitted and

@@ -60,6 +60,82 @@ pub struct PriorEstimate {
     pub shift: f64,
 }
 
+/// A stated tolerance of a parameter `fix = auto` holds as redundant,
+/// carried onto a free partner: the data see only their sum, so the sum's
+/// tolerance is the partner's own and the carried one in quadrature.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CarriedTolerance {
+    /// The fixed, redundant parameter (`theta5`).
+    pub from: String,
+    /// The free partner that carries it (`a5`).
+    pub to: String,
+    /// The partner's unit (`mm`, `deg`).
+    pub unit: String,
+    /// The redundant parameter's tolerance as it moves the partner:
+    /// `|k| σ_from`, `k` the relation's coefficient, in `unit`.
+    pub carried: f64,
+    /// The partner's tolerance after carrying, in `unit`.
+    pub tolerance: f64,
+}
+
+impl CarriedTolerance {
+    /// In words: `a5 carries theta5: ±0.9599 mm, now ±1.0824 mm`.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} carries {}: ±{:.4} {u}, now ±{:.4} {u}",
+            self.to,
+            self.from,
+            self.carried,
+            self.tolerance,
+            u = self.unit
+        )
+    }
+}
+
+/// Carries the tolerance of every parameter the identification fixed as
+/// redundant onto the free partners of its relation (`∂p/∂from = Σ k
+/// ∂p/∂to`: moving `from` by δ moves the probe as moving each `to` by
+/// `k δ`), in quadrature; a partner without a tolerance of its own stays
+/// without one. Replaces the objective's prior; what was carried, in the
+/// order of the relations.
+pub(crate) fn carry_redundant(
+    objective: &mut crate::objective::Objective<'_>,
+    identification: &crate::identify::Identification,
+    arm: &DhParams,
+) -> Vec<CarriedTolerance> {
+    let Some(mut prior) = objective.prior().cloned() else {
+        return Vec::new();
+    };
+    let column = |name: &str| arm.param_ids().position(|id| id.to_string() == name);
+    let mut carried = Vec::new();
+    for relation in &identification.null_relations {
+        let Some(((from, _), partners)) = relation.terms.split_first() else {
+            continue;
+        };
+        let Some(sigma) = column(from).and_then(|c| prior.sigma(c)) else {
+            continue;
+        };
+        for (to, k) in partners {
+            let Some(c) = column(to) else { continue };
+            let extra = k.abs() * sigma;
+            if let Some(now) = prior.carry(c, extra) {
+                let Some(id) = arm.param_id(c) else { continue };
+                carried.push(CarriedTolerance {
+                    from: from.clone(),
+                    to: to.clone(),
+                    unit: id.unit().to_string(),
+                    carried: id.to_user(extra),
+                    tolerance: id.to_user(now),
+                });
+            }
+        }
+    }
+    if !carried.is_empty() {
+        objective.set_prior(prior);
+    }
+    carried
+}
+
 /// The prior of a calibration, as reported.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PriorReport {
@@ -71,6 +147,10 @@ pub struct PriorReport {
     pub cost: f64,
     /// Per free parameter with a tolerance, in the fixed order.
     pub parameters: Vec<PriorEstimate>,
+    /// Tolerances of redundant fixed parameters carried onto their free
+    /// partners (absent when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub carried: Vec<CarriedTolerance>,
 }
 
 impl PriorReport {
@@ -83,6 +163,7 @@ impl PriorReport {
         free: &[usize],
         inverse: &nalgebra::DMatrix<f64>,
         arm: &DhParams,
+        carried: Vec<CarriedTolerance>,
     ) -> PriorReport {
         let parameters = free
             .iter()
@@ -111,6 +192,7 @@ impl PriorReport {
             rows: prior.rows(free),
             cost: prior.cost(free, x),
             parameters,
+            carried,
         }
     }
 

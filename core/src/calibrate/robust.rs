@@ -247,7 +247,7 @@ impl RobustFit {
             ),
             ChiSquareVerdict::ResidualsTooSmall => format!(
                 "{head}: residuals smaller than the stated noise explains: the noise is \
-                 overstated, so the uncertainties are too large"
+                 overstated (the uncertainties printed are rescaled by the robust scale)"
             ),
         })
     }

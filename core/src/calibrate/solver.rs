@@ -80,6 +80,9 @@ pub struct Task<'a, 'o> {
     /// Degrees of freedom when the noise is stated (enables noise-floor
     /// tests), else `None`.
     pub stated_dof: Option<usize>,
+    /// Degrees of freedom of the fit, stated noise or not (what the fit's
+    /// own noise level, `cost / dof`, is measured in).
+    pub dof: usize,
     /// The normal equations at the start over `free`.
     pub start_normal: Normal,
 }
@@ -417,6 +420,7 @@ impl Solver for Global {
             free: task.free,
             lm: &task.settings.lm,
             stated_dof: task.stated_dof,
+            dof: task.dof,
             start_normal: Some(task.start_normal),
         };
         let (fit, trace, phases) = global::global(

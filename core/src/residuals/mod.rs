@@ -16,6 +16,7 @@
 //!   columns whatever the number of points);
 //! - `LengthTerm` — reference lengths between those centres;
 //! - `PriorTerm` — stated tolerances as pseudo-observations.
+//! - `HoldTerm` — weak directions no tolerance covers, held at nominal.
 //!
 //! A new kind of measurement is one new implementation of [`Term`] (and
 //! its reader); the fits, the covariance, the degrees of freedom and the
@@ -56,6 +57,7 @@
 
 mod beyond;
 pub mod blocks;
+mod hold;
 mod lengths;
 pub mod positions;
 mod prior;
@@ -72,6 +74,8 @@ use crate::params::DhParams;
 
 pub use beyond::{BLOCK_NAME, CorrectionBlock};
 pub use blocks::{Block, BlockId, Frame, Layout, Parameter, Scalar, Unit, Vector};
+pub use hold::{HeldDirection, WEAK_RATIO};
+pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
 pub(crate) use positions::PositionTerm;
 pub(crate) use prior::PriorTerm;

@@ -61,6 +61,16 @@ impl PriorTerm {
         })
     }
 
+    /// Carries `extra` (1σ, the column's units) onto column `c`'s
+    /// tolerance, in quadrature; a column without a tolerance stays
+    /// without one (nothing bounds it, whatever its partner's tolerance).
+    /// The new tolerance, if any.
+    pub(crate) fn carry(&mut self, c: usize, extra: f64) -> Option<f64> {
+        let s = self.sigma.get_mut(c)?.as_mut()?;
+        *s = s.hypot(extra);
+        Some(*s)
+    }
+
     /// The tolerance of column `c`.
     pub(crate) fn sigma(&self, c: usize) -> Option<f64> {
         self.sigma.get(c).copied().flatten()

@@ -482,7 +482,12 @@ pub struct Verdict {
 
 impl Verdict {
     /// The verdict on `calibration` and its validation on the fitted data.
-    fn of(calibration: &Calibration, fitted: &BeforeAfter, accept_poor_fit: bool) -> Verdict {
+    fn of(
+        calibration: &Calibration,
+        fitted: &BeforeAfter,
+        noise: &Noise,
+        accept_poor_fit: bool,
+    ) -> Verdict {
         let (mut reasons, mut notes) = (Vec::new(), Vec::new());
         let solver = &calibration.solver;
         if !solver.is_solution_usable() {
@@ -491,15 +496,7 @@ impl Verdict {
                 solver.stop.describe()
             ));
         }
-        let gross = &calibration.checks.gross_corrections;
-        if !gross.is_empty() {
-            let what: Vec<String> = gross.iter().map(|g| g.describe()).collect();
-            reasons.push(format!(
-                "the calibrated arm is not the nominal arm's geometry — a mirror image, a \
-                 collapsed arm or a unit mistake: {}",
-                what.join("; ")
-            ));
-        }
+        reasons.extend(gross_reasons(calibration));
         let blocks = &calibration.checks.implausible_blocks;
         if !blocks.is_empty() {
             reasons.push(format!(
@@ -510,7 +507,7 @@ impl Verdict {
         let mut poor = Vec::new();
         if let Some(chi) = &calibration.checks.chi_square {
             if chi.far_outside() {
-                poor.push(chi.describe());
+                poor.push(format!("{}; {}", chi.describe(), noise_remedy(noise, chi)));
             } else if chi.verdict != crate::calibrate::checks::ChiSquareVerdict::Consistent {
                 notes.push(chi.describe());
             }
@@ -540,6 +537,7 @@ impl Verdict {
                 u.rms_mm, u.touch_mm
             ));
         }
+        notes.extend(scale_note(calibration));
         // Nearly parallel axes in the D-H model: say which joint suits Hayati.
         notes.extend(crate::hayati::recommendations(&calibration.params));
         if let (Some(b), Some(a)) = (fitted.before.positions, fitted.after.positions)
@@ -578,6 +576,107 @@ impl Verdict {
             notes,
         }
     }
+}
+
+/// Why free parameters moved implausibly far. One whose σ is a third of
+/// the move accepted or more was not determined by the data (a weak
+/// direction the user left free, or that a tolerance did not cover): said
+/// so, with the remedy. The rest are what the check exists for — a mirror
+/// image, a collapsed arm or a unit mistake.
+fn gross_reasons(c: &Calibration) -> Vec<String> {
+    let (mut weak, mut gross) = (Vec::new(), Vec::new());
+    for g in &c.checks.gross_corrections {
+        let e = c.parameters.iter().find(|e| e.id.to_string() == g.name);
+        let sigma = e.and_then(|e| e.sigma.map(|s| e.id.to_user(s)));
+        match sigma {
+            Some(s) if s >= g.tolerance / 3.0 => {
+                weak.push(format!("{} (σ {s:.4} {})", g.describe(), g.unit));
+            }
+            _ => gross.push(g.describe()),
+        }
+    }
+    let mut reasons = Vec::new();
+    if !gross.is_empty() {
+        reasons.push(format!(
+            "the calibrated arm is not the nominal arm's geometry — a mirror image, a collapsed \
+             arm or a unit mistake: {}",
+            gross.join("; ")
+        ));
+    }
+    if !weak.is_empty() {
+        reasons.push(format!(
+            "the data barely determine parameters that moved implausibly far, so they followed \
+             noise and model error: {} — state tolerances for them (`[prior]` in the arm file, \
+             or --prior) or fix them (--fix), or add poses that turn the joints involved",
+            weak.join("; ")
+        ));
+    }
+    reasons
+}
+
+/// Without a reference length the size of the arm is the nominal's: what
+/// that leaves out of every uncertainty, per 0.1 mm the parameter held for
+/// scale is off (the data cannot say by how much it is), and the remedy.
+fn scale_note(c: &Calibration) -> Option<String> {
+    let e = (c.parameters.iter())
+        .find(|e| e.fixed.as_deref().is_some_and(|r| r.starts_with("scale:")))?;
+    let value = e.nominal.abs();
+    if value.is_nan() || value <= 0.0 {
+        return None;
+    }
+    let reach = c.params.reach();
+    let relative = 0.1 / value;
+    Some(format!(
+        "positions are determined only up to scale: no reference length fixes the arm's size, so \
+         {} is held at its nominal {:.3} mm and every length follows it; each 0.1 mm it is off \
+         scales the arm by {relative:.1e}, {:.3} mm at the reach ({reach:.0} mm), an error no \
+         uncertainty here includes. Add a reference length (--lengths) to fix the scale",
+        e.id,
+        value,
+        relative * reach
+    ))
+}
+
+/// The ways out of a χ² far outside the stated noise: the factor σ̂₀ by
+/// which the noise would be misstated, the noise that factor gives (stated
+/// so, this fit is consistent, with the uncertainties it printed, which
+/// already carry σ̂₀), leaving it unstated (σ estimated) or accepting the
+/// fit; and, for residuals too large, the other causes.
+fn noise_remedy(noise: &Noise, chi: &crate::calibrate::checks::ChiSquare) -> String {
+    let s0 = (chi.statistic / chi.dof.max(1) as f64).sqrt();
+    let mut flags = Vec::new();
+    if let Some(e) = noise.encoder_rad {
+        flags.push(format!("--encoder-noise {:.4}", (e * s0).to_degrees()));
+    }
+    if let Some(p) = noise.probe_mm {
+        flags.push(format!("--probe-noise {:.4}", p * s0));
+    }
+    if let Some(a) = noise.position_mm {
+        let b = noise.position_mm_per_m.unwrap_or(0.0);
+        flags.push(if b > 0.0 {
+            format!("--position-noise {:.4}+{:.4}/m", a * s0, b * s0)
+        } else {
+            format!("--position-noise {:.4}", a * s0)
+        });
+    }
+    let (how, other) = if s0 > 1.0 {
+        (
+            format!("{s0:.2} times larger"),
+            " If the noise is right, look for outliers (--robust names them) or a model error.",
+        )
+    } else {
+        (format!("{:.2} times smaller", 1.0 / s0), "")
+    };
+    let stated = if flags.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", flags.join(" "))
+    };
+    format!(
+        "if the noise is misstated, the residuals say it is {how}: state that{stated}, and this \
+         fit is consistent with the uncertainties printed; or leave the noise unstated (σ is then \
+         estimated from the fit); or accept the fit as it is with --accept-poor-fit.{other}"
+    )
 }
 
 impl CalibrationReport {
@@ -845,7 +944,7 @@ pub fn run(
         None => None,
     };
     let s = &problem.sources;
-    let verdict = Verdict::of(&calibration, &fitted, model.accept_poor_fit);
+    let verdict = Verdict::of(&calibration, &fitted, &model.noise, model.accept_poor_fit);
     let uncertainty_map = map::workspace_map(&problem.arm, data, &calibration, settings.seed);
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
@@ -935,6 +1034,14 @@ fn fit_quality_lines(c: &Calibration) -> String {
             p.cost,
             p.conflict().unwrap_or_default()
         );
+        if !p.carried.is_empty() {
+            let what: Vec<String> = p.carried.iter().map(|c| c.describe()).collect();
+            t += &format!(
+                "Tolerances carried onto the free partners of redundant fixed parameters (the data \
+                 see only their sums; in quadrature): {}\n",
+                what.join("; ")
+            );
+        }
     }
     if let Some(chi) = &c.checks.chi_square {
         t += &format!("Fit quality: {}\n", chi.describe());
@@ -947,6 +1054,9 @@ fn fit_quality_lines(c: &Calibration) -> String {
     }
     if let Some(u) = &c.checks.position_uncertainty {
         t += &format!("Experiment: {}\n", u.describe());
+    }
+    if let Some(s) = scale_note(c) {
+        t += &format!("Scale: {s}\n");
     }
     t
 }
@@ -1065,6 +1175,25 @@ fn correlations_line(c: &Calibration) -> String {
         t += &format!("  {}/{} {:+.3}", x.a, x.b, x.rho);
     }
     t += "\n";
+    t += &held_lines(c);
+    t
+}
+
+/// The weak directions held at nominal, one line each, with the remedy.
+fn held_lines(c: &Calibration) -> String {
+    if c.held.is_empty() {
+        return String::new();
+    }
+    let mut t = format!(
+        "Held at nominal: {} direction(s) the data determine more than {:.0} times worse than the \
+         best one (fitted, they would follow noise and model error; state tolerances for their \
+         parameters — `[prior]` or --prior — to fit them):\n",
+        c.held.len(),
+        1.0 / crate::residuals::WEAK_RATIO
+    );
+    for h in &c.held {
+        t += &format!("  {}\n", h.describe());
+    }
     t
 }
 
@@ -1211,8 +1340,15 @@ fn method_lines(s: &crate::calibrate::SolverSummary) -> String {
             )
         };
         t += &format!(
-            "Global: {searched}; lowest cost reached {} time(s); stopped: {}{}\n",
+            "Global: {searched}; lowest cost reached {} time(s){}; stopped: {}{}\n",
             g.best_hits,
+            match g.noise_level_hits {
+                0 => String::new(),
+                k => format!(
+                    " ({k} of them at the noise level: a cost within cost/dof of the lowest and \
+                     an arm within its uncertainty)"
+                ),
+            },
             g.stop.describe(),
             if g.sign_changes.is_empty() {
                 String::new()

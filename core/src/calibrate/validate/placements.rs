@@ -52,6 +52,11 @@ pub struct PlacementFold {
     pub calibrated: Figures,
     /// Whether that calibration converged.
     pub successful: bool,
+    /// Parameters that calibration moved past the plausibility check
+    /// ([`crate::calibrate::checks::gross_corrections`]): what would make
+    /// the command line refuse it. Empty for a plausible arm.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub implausible: Vec<String>,
 }
 
 /// Means over the folds, and the relative change.
@@ -160,6 +165,9 @@ pub fn leave_one_placement_out(
                 nominal: figures(start, &test_data)?,
                 calibrated: figures(&fit.params, &test_data)?,
                 successful: fit.solver.successful,
+                implausible: (fit.checks.gross_corrections.iter())
+                    .map(|g| g.name.clone())
+                    .collect(),
             })
         })
         .collect()
