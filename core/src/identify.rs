@@ -570,13 +570,20 @@ pub(crate) fn weak_holds(
                 .max_by(|&a, &b| column[a].abs().total_cmp(&column[b].abs()))
                 .unwrap_or(0);
             let sign = if column[largest] < 0.0 { -1.0 } else { 1.0 };
+            // Only its terms (above 0.05), renormalised: a held direction
+            // that reached every column would see a sign twin of another
+            // joint (θ_i + π, a_i and α_i negated: the same arm) as a move
+            // of 180°, and the search would find the twin a different,
+            // unconfirmed minimum. Holding the terms alone still takes the
+            // weak freedom away; the small rest stays the data's.
+            let keep: Vec<usize> = (0..k).filter(|&a| column[a].abs() > 0.05).collect();
+            let norm = keep.iter().map(|&a| column[a].powi(2)).sum::<f64>().sqrt();
             Hold {
-                cols: cols.to_vec(),
-                v: (0..k).map(|a| sign * column[a]).collect(),
-                d: cols.iter().map(|&c| scaled.d[c]).collect(),
-                circular: cols
-                    .iter()
-                    .map(|&c| !scaled.ids[c].kind.is_length())
+                cols: keep.iter().map(|&a| cols[a]).collect(),
+                v: keep.iter().map(|&a| sign * column[a] / norm).collect(),
+                d: keep.iter().map(|&a| scaled.d[cols[a]]).collect(),
+                circular: (keep.iter())
+                    .map(|&a| !scaled.ids[cols[a]].kind.is_length())
                     .collect(),
                 ratio: s / s_max,
                 text: relation.text,

@@ -77,6 +77,40 @@ fn an_off_axis_ball_is_held_not_refused_as_a_mirror_image() {
     // The ball on the axis: exact redundancy, fixed, nothing weak to hold.
     let c = calibrate(&arm.params, &data, &model, &settings).unwrap();
     assert!(c.held.is_empty(), "{:?}", c.held);
+    // The command line: usable, the held directions in the summary and the
+    // report.
+    let dir = example("mukca").join("kinova-1");
+    let text = std::fs::read_to_string(dir.join("arm.toml")).unwrap();
+    let off = text.replace("x = 0.0\ny = 0.0\nz = 275.0", "x = 0.3\ny = 0.5\nz = 275.0");
+    assert_ne!(off, text);
+    let out = temp_dir("off-axis");
+    let arm_file = crate::util::write(&out, "arm.toml", &off);
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm_file,
+        "--data",
+        dir.join("poses.csv").to_str().unwrap(),
+        "--lengths",
+        dir.join("lengths.csv").to_str().unwrap(),
+        "--angle-unit",
+        "rad",
+        "--prior",
+        "none",
+        "--out",
+        out.join("fit").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("Held at nominal: 2 direction(s)"),
+        "{}",
+        stdout(&o)
+    );
+    let html = std::fs::read_to_string(out.join("fit").join("report.html")).unwrap();
+    assert!(
+        html.contains("Held at nominal"),
+        "the report names the held directions"
+    );
 }
 
 /// The shipped arm files state only what a maker knows; the tolerance of

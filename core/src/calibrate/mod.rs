@@ -516,7 +516,7 @@ pub struct Calibration {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prior: Option<PriorReport>,
     /// Weak directions of the free geometry that no tolerance covers, held
-    /// at nominal ([`crate::residuals::HoldTerm`]); absent when none.
+    /// at nominal (docs/calibration.md, "Weak directions held at nominal"); absent when none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub held: Vec<crate::residuals::HeldDirection>,
     /// The arm's physics at the fit — masses, and every correction beyond

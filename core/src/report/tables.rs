@@ -510,7 +510,26 @@ pub(crate) fn parameters(
         out += &table(caption, &head, &rows);
     }
     out += &correlations_note(cal);
+    out += &held_note(cal);
     out
+}
+
+/// The weak directions held at nominal (none: nothing), with the σ the
+/// data alone would give each and the remedy.
+fn held_note(cal: &Calibration) -> String {
+    if cal.held.is_empty() {
+        return String::new();
+    }
+    let list: Vec<String> = cal.held.iter().map(|h| escape(&h.describe())).collect();
+    format!(
+        "<p class=\"note\">Held at nominal (<code>/calibration/held</code>): {} direction(s) of \
+         the free parameters that the data determine more than {:.0} times worse than the best \
+         one; fitted, they would follow noise and model error. State tolerances for their \
+         parameters to fit them: {}.</p>\n",
+        cal.held.len(),
+        1.0 / crate::residuals::WEAK_RATIO,
+        list.join("; ")
+    )
 }
 
 /// The header of a parameter table in `unit`: the true-error columns when

@@ -491,8 +491,15 @@ impl Verdict {
         let (mut reasons, mut notes) = (Vec::new(), Vec::new());
         let solver = &calibration.solver;
         if !solver.is_solution_usable() {
+            let remedy = match solver.stop {
+                crate::calibrate::Stop::Global { search, .. } if !search.confirmed() => {
+                    ": give it more starts (--global-starts N), or state tolerances (`[prior]`, \
+                     --prior) for the parameters that differ between its minima"
+                }
+                _ => "",
+            };
             reasons.push(format!(
-                "the solver did not reach a confirmed minimum ({})",
+                "the solver did not reach a confirmed minimum ({}){remedy}",
                 solver.stop.describe()
             ));
         }
