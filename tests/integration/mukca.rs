@@ -16,7 +16,8 @@ use aacmm_core::urdf::{UrdfOptions, parse_urdf};
 
 use crate::util::example;
 
-fn load(name: &str) -> (aacmm_core::io::Arm, DataSet) {
+/// A shipped MUKCa folder: its arm file and its touches with lengths.
+pub(crate) fn load(name: &str) -> (aacmm_core::io::Arm, DataSet) {
     let dir = example("mukca").join(name);
     let (arm, _) = read_arm(&dir.join("arm.toml")).unwrap();
     let (poses, _) = read_poses(

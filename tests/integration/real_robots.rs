@@ -6,21 +6,13 @@
 use aacmm_core::calibrate::validate::placements::leave_one_placement_out;
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings, calibrate};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
+use aacmm_core::io::read_arm;
 use aacmm_core::tolerances::Tolerances;
 
 use crate::util::{aacmm, example, shipped, shipped_arm, stderr, stdout, temp_dir};
 
 fn kinova_1() -> (aacmm_core::io::Arm, DataSet) {
-    let dir = example("mukca").join("kinova-1");
-    let (arm, _) = read_arm(&dir.join("arm.toml")).unwrap();
-    let (poses, _) = read_poses(&dir.join("poses.csv"), AngleUnit::Rad, Some(6)).unwrap();
-    let lengths = read_lengths(&dir.join("lengths.csv")).unwrap();
-    let data = DataSet::from_poses(&poses, "poses.csv")
-        .unwrap()
-        .with_lengths(&lengths, "lengths.csv")
-        .unwrap();
-    (arm, data)
+    crate::mukca::load("kinova-1")
 }
 
 /// A ball 0.6 mm off the last axis (as another conversion of the robot's
