@@ -51,6 +51,7 @@ pub mod report;
 pub mod residuals;
 pub mod session;
 pub mod simulate;
+pub mod stats;
 pub mod tolerances;
 pub mod urdf;
 

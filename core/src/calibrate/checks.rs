@@ -218,8 +218,17 @@ impl ChiSquare {
     /// assert!((t.p_upper - 0.5).abs() < 0.02 && (t.p_lower - 0.5).abs() < 0.02);
     /// ```
     pub fn new(statistic: f64, dof: usize) -> ChiSquare {
-        let p_upper = chi_square_upper(statistic, dof);
-        let p_lower = 1.0 - p_upper;
+        // Each tail exact (the regularised incomplete gamma function), so
+        // that both can be compared with 1e-9.
+        // A statistic that is not a number cannot agree with any noise.
+        let (p_upper, p_lower) = if statistic.is_nan() {
+            (0.0, 1.0)
+        } else {
+            (
+                crate::stats::chi_square_upper(statistic, dof),
+                crate::stats::chi_square_lower(statistic, dof),
+            )
+        };
         let verdict = ChiSquareVerdict::from_tails(p_upper, p_lower);
         ChiSquare {
             statistic,
@@ -258,18 +267,6 @@ impl ChiSquare {
             ),
         }
     }
-}
-
-/// `P(χ²_k ≥ x)` by the Wilson–Hilferty cube-root normal approximation
-/// (accurate to a few per cent of the tail for `k ≥ 10`, better beyond).
-fn chi_square_upper(x: f64, k: usize) -> f64 {
-    let k = k.max(1) as f64;
-    if x.is_nan() || x <= 0.0 {
-        return 1.0;
-    }
-    let v = 2.0 / (9.0 * k);
-    let z = ((x / k).cbrt() - (1.0 - v)) / v.sqrt();
-    0.5 * erfc(z / std::f64::consts::SQRT_2)
 }
 
 /// The complementary error function (W. J. Cody's rational approximations
