@@ -512,30 +512,7 @@ impl Verdict {
             ));
         }
         let mut poor = Vec::new();
-        if let Some(chi) = &calibration.checks.chi_square {
-            if chi.far_outside() {
-                poor.push(format!("{}; {}", chi.describe(), noise_remedy(noise, chi)));
-            } else if chi.verdict != crate::calibrate::checks::ChiSquareVerdict::Consistent {
-                notes.push(chi.describe());
-            }
-        }
-        if let Some(r) = &calibration.robust {
-            if let Some(d) = r.describe_scale() {
-                if r.far_outside() {
-                    poor.push(d);
-                } else if r.verdict != Some(crate::calibrate::checks::ChiSquareVerdict::Consistent)
-                {
-                    notes.push(d);
-                }
-            }
-            if !r.converged {
-                notes.push(format!(
-                    "the robust weights still moved by more than {} after {} refits",
-                    crate::calibrate::robust::WEIGHT_TOLERANCE,
-                    r.passes
-                ));
-            }
-        }
+        noise_checks(calibration, noise, &mut poor, &mut notes);
         if let Some(u) = calibration.checks.position_uncertainty.filter(|u| u.weak()) {
             notes.push(format!(
                 "these data determine the arm to ±{:.4} mm (k = 2, RMS over the campaign's \
@@ -585,6 +562,48 @@ impl Verdict {
     }
 }
 
+/// The fit against the noise: the χ² test (with the ways out of a misstated
+/// noise when the fit is otherwise sound) and the robust scale's test, as
+/// refusals (`poor`, unless a poor fit is accepted) or notes.
+fn noise_checks(
+    calibration: &Calibration,
+    noise: &Noise,
+    poor: &mut Vec<String>,
+    notes: &mut Vec<String>,
+) {
+    if let Some(chi) = &calibration.checks.chi_square {
+        if chi.far_outside() {
+            // A misstated noise is the cause only of a fit otherwise
+            // sound: not of a wrong minimum or a wrong geometry.
+            let sound = calibration.solver.is_solution_usable()
+                && calibration.checks.gross_corrections.is_empty();
+            poor.push(if sound {
+                format!("{}; {}", chi.describe(), noise_remedy(noise, chi))
+            } else {
+                chi.describe()
+            });
+        } else if chi.verdict != crate::calibrate::checks::ChiSquareVerdict::Consistent {
+            notes.push(chi.describe());
+        }
+    }
+    if let Some(r) = &calibration.robust {
+        if let Some(d) = r.describe_scale() {
+            if r.far_outside() {
+                poor.push(d);
+            } else if r.verdict != Some(crate::calibrate::checks::ChiSquareVerdict::Consistent) {
+                notes.push(d);
+            }
+        }
+        if !r.converged {
+            notes.push(format!(
+                "the robust weights still moved by more than {} after {} refits",
+                crate::calibrate::robust::WEIGHT_TOLERANCE,
+                r.passes
+            ));
+        }
+    }
+}
+
 /// Why free parameters moved implausibly far. One whose σ is a third of
 /// the move accepted or more was not determined by the data (a weak
 /// direction the user left free, or that a tolerance did not cover): said
@@ -592,11 +611,14 @@ impl Verdict {
 /// image, a collapsed arm or a unit mistake.
 fn gross_reasons(c: &Calibration) -> Vec<String> {
     let (mut weak, mut gross) = (Vec::new(), Vec::new());
+    // The σ carry σ̂²: when the fit is far outside the stated noise (a wrong
+    // minimum), they are inflated by it and tell nothing.
+    let meaningful = (c.checks.chi_square.as_ref()).is_none_or(|chi| !chi.far_outside());
     for g in &c.checks.gross_corrections {
         let e = c.parameters.iter().find(|e| e.id.to_string() == g.name);
         let sigma = e.and_then(|e| e.sigma.map(|s| e.id.to_user(s)));
         match sigma {
-            Some(s) if s >= g.tolerance / 3.0 => {
+            Some(s) if meaningful && s >= g.tolerance / 3.0 => {
                 weak.push(format!("{} (σ {s:.4} {})", g.describe(), g.unit));
             }
             _ => gross.push(g.describe()),
