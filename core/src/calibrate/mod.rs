@@ -843,15 +843,7 @@ fn fixed_set(
             let free: Vec<usize> = (0..start.param_count())
                 .filter(|c| !fixed.contains(c))
                 .collect();
-            // A tolerance determines its parameter as a fixed value would
-            // (the prior sees every direction that moves it): only
-            // directions among the free parameters without one are open.
-            let sigmas = model.prior.as_ref().map(|t| t.sigmas_for(start));
-            let unknown: Vec<usize> = free
-                .iter()
-                .copied()
-                .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
-                .collect();
+            let unknown = untoleranced(start, model, &free);
             let directions = open_directions_from(start, sees, full, &unknown);
             if !directions.is_empty() {
                 return Err(CalibrationError::Unidentifiable { directions });
@@ -920,14 +912,19 @@ fn weak_untoleranced(
     model: &ModelOptions,
     id: &Identification,
 ) -> Vec<crate::residuals::Hold> {
+    let s_max = id.analysed_singular_values.first().copied().unwrap_or(0.0);
+    crate::identify::weak_holds(start, full, &untoleranced(start, model, free), s_max)
+}
+
+/// The columns of `free` without a stated tolerance. A tolerance
+/// determines its parameter as a fixed value would (the prior sees every
+/// direction that moves it): only directions among these are open.
+fn untoleranced(start: &DhParams, model: &ModelOptions, free: &[usize]) -> Vec<usize> {
     let sigmas = model.prior.as_ref().map(|t| t.sigmas_for(start));
-    let open: Vec<usize> = free
-        .iter()
+    free.iter()
         .copied()
         .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
-        .collect();
-    let s_max = id.analysed_singular_values.first().copied().unwrap_or(0.0);
-    crate::identify::weak_holds(start, full, &open, s_max)
+        .collect()
 }
 
 /// The geometry's normal equations with every auxiliary column fitted and
