@@ -109,10 +109,13 @@ class Arm:
     its joint count (6 or 7). Immutable; safe to share between threads."""
 
     @staticmethod
-    def from_file(path: _Path) -> "Arm":
+    def from_file(path: _Path, accept_rejected: bool = False) -> "Arm":
         """Reads an arm file (TOML). Errors name the file, line and field
         (InputError; OSError when it cannot be read); warnings go to
-        ``warnings`` and are issued as UserWarning."""
+        ``warnings`` and are issued as UserWarning. A file whose
+        ``[verdict]`` says NOT usable (a refused calibration's
+        ``calibrated.toml``) is refused unless ``accept_rejected=True``: it
+        is then read with a warning."""
     @staticmethod
     def from_params(joints: int, params: npt.ArrayLike, name: str = "arm") -> "Arm":
         """An arm from its ``4·joints + 3`` parameters (mm, rad), no joint limits."""

@@ -484,6 +484,11 @@ size_t aacmm_param_count(size_t joints);
  * metres) are kept with the handle: see `aacmm_arm_warnings`. The path
  * `-` reads standard input, as the command line does.
  *
+ * A file whose `[verdict]` says NOT usable (the `calibrated.toml` of a
+ * refused calibration) is refused with `AACMM_STATUS_INPUT`, the message
+ * naming the reasons: see `aacmm_arm_from_file_accepting_rejected` to read
+ * it anyway.
+ *
  * Errors: `AACMM_STATUS_NULL_POINTER` (`path` or `out`), `AACMM_STATUS_IO`
  * (cannot read the file), `AACMM_STATUS_INPUT` (invalid content; the
  * message names line and field), `AACMM_STATUS_UNSUPPORTED`. On error
@@ -495,6 +500,18 @@ size_t aacmm_param_count(size_t joints);
  * writable memory for one pointer.
  */
 AacmmStatus aacmm_arm_from_file(const char *path, AacmmArm **out);
+
+/**
+ * `aacmm_arm_from_file`, except that a file whose `[verdict]` says NOT
+ * usable is read, with a warning naming the reasons
+ * (`aacmm_arm_warnings`): for inspecting a refused calibration's arm,
+ * never for measuring with it.
+ *
+ * # Safety
+ *
+ * As `aacmm_arm_from_file`.
+ */
+AacmmStatus aacmm_arm_from_file_accepting_rejected(const char *path, AacmmArm **out);
 
 /**
  * Makes an arm from its parameters into a new handle at `*out`.

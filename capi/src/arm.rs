@@ -3,7 +3,7 @@
 
 use std::ffi::c_char;
 
-use aacmm_core::io::{Arm, read_arm, source_name};
+use aacmm_core::io::{Arm, Rejected, read_arm_with, source_name};
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::params::{DhParams, ParamId, param_count};
 
@@ -109,6 +109,11 @@ pub extern "C" fn aacmm_param_count(joints: usize) -> usize {
 /// metres) are kept with the handle: see `aacmm_arm_warnings`. The path
 /// `-` reads standard input, as the command line does.
 ///
+/// A file whose `[verdict]` says NOT usable (the `calibrated.toml` of a
+/// refused calibration) is refused with `AACMM_STATUS_INPUT`, the message
+/// naming the reasons: see `aacmm_arm_from_file_accepting_rejected` to read
+/// it anyway.
+///
 /// Errors: `AACMM_STATUS_NULL_POINTER` (`path` or `out`), `AACMM_STATUS_IO`
 /// (cannot read the file), `AACMM_STATUS_INPUT` (invalid content; the
 /// message names line and field), `AACMM_STATUS_UNSUPPORTED`. On error
@@ -123,12 +128,43 @@ pub unsafe extern "C" fn aacmm_arm_from_file(
     path: *const c_char,
     out: *mut *mut AacmmArm,
 ) -> AacmmStatus {
+    // SAFETY: the same contract.
+    unsafe { from_file(path, out, Rejected::Refuse) }
+}
+
+/// `aacmm_arm_from_file`, except that a file whose `[verdict]` says NOT
+/// usable is read, with a warning naming the reasons
+/// (`aacmm_arm_warnings`): for inspecting a refused calibration's arm,
+/// never for measuring with it.
+///
+/// # Safety
+///
+/// As `aacmm_arm_from_file`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_arm_from_file_accepting_rejected(
+    path: *const c_char,
+    out: *mut *mut AacmmArm,
+) -> AacmmStatus {
+    // SAFETY: the same contract.
+    unsafe { from_file(path, out, Rejected::Warn) }
+}
+
+/// Both readers of arm files.
+///
+/// # Safety
+///
+/// As `aacmm_arm_from_file`.
+unsafe fn from_file(
+    path: *const c_char,
+    out: *mut *mut AacmmArm,
+    rejected: Rejected,
+) -> AacmmStatus {
     guard(|| {
         // SAFETY: `out` is NULL or writable, by the contract.
         unsafe { ptr::write(out, std::ptr::null_mut(), "out") }?;
         // SAFETY: `path` is NULL or NUL-terminated, by the contract.
         let path = unsafe { ptr::path(path, "path") }?;
-        let (arm, warnings) = read_arm(&path)?;
+        let (arm, warnings) = read_arm_with(&path, rejected)?;
         let source = source_name(&path);
         let warnings = warnings.iter().map(ToString::to_string).collect();
         let handle = AacmmArm::new(arm, source, warnings)?;

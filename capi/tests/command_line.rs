@@ -16,7 +16,8 @@ use std::process::Command;
 
 use aacmm_capi::{
     AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AacmmAuxiliary, AacmmCalibrateOptions,
-    AacmmCalibration, AacmmCalibrationSummary, AacmmStatus, aacmm_calibrate_files,
+    AacmmCalibration, AacmmCalibrationSummary, AacmmStatus, aacmm_arm_free, aacmm_arm_from_file,
+    aacmm_arm_from_file_accepting_rejected, aacmm_arm_warnings, aacmm_calibrate_files,
     aacmm_calibrate_options_free, aacmm_calibrate_options_new,
     aacmm_calibrate_options_set_accept_poor_fit, aacmm_calibrate_options_set_compliance,
     aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_method,
@@ -747,4 +748,85 @@ fn beyond_geometry_without_its_inputs_is_refused() {
         m.starts_with("thermal = on: thermal expansion needs the temperature of every pose"),
         "{m}"
     );
+}
+
+/// A refused calibration through the C API: one mislabelled touch gives
+/// `successful` false and the reasons; its `calibrated.toml` (written by
+/// the command line) is refused by `aacmm_arm_from_file`, naming the
+/// verdict, and read with a warning by
+/// `aacmm_arm_from_file_accepting_rejected`.
+#[test]
+fn a_refused_calibration_says_so_and_its_arm_file_is_refused_unless_asked() {
+    let dir = std::env::temp_dir().join(format!("aacmm-capi-verdict-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let shipped = std::fs::read_to_string(example("examples/paper-campaign/poses.csv")).unwrap();
+    let mut lines: Vec<String> = shipped.lines().map(str::to_string).collect();
+    assert!(lines[17].starts_with("S2,"));
+    lines[17] = lines[17].replacen("S2,", "S1,", 1);
+    let poses = dir.join("poses.csv");
+    std::fs::write(&poses, lines.join("\n") + "\n").unwrap();
+    let (arm, lengths) = (
+        example("examples/paper-table-1.toml"),
+        example("examples/paper-campaign/lengths.csv"),
+    );
+    let poses = poses.display().to_string();
+    let c = Calibration::of_paths(
+        &arm,
+        Some(&poses),
+        Some(&lengths),
+        AACMM_ANGLE_DEG,
+        &options(|_| vec![]),
+    );
+    let (usable, reasons, _) = c.verdict();
+    assert!(!usable && !c.summary().successful);
+    assert!(reasons.contains("worse than the nominal"), "{reasons}");
+
+    let out = dir.join("out");
+    let done = Command::new(cli())
+        .args([
+            "calibrate",
+            "--arm",
+            &arm,
+            "--data",
+            &poses,
+            "--lengths",
+            &lengths,
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!done.status.success());
+    let file = CString::new(out.join("calibrated.toml").display().to_string()).unwrap();
+    let mut handle = std::ptr::null_mut();
+    // SAFETY: a NUL-terminated path and a writable slot.
+    let status = unsafe { aacmm_arm_from_file(file.as_ptr(), &mut handle) };
+    assert_eq!(status, AacmmStatus::Input);
+    assert!(handle.is_null());
+    let message = last_error();
+    assert!(
+        message.contains("field `verdict`") && message.contains("NOT usable"),
+        "{message}"
+    );
+    assert!(
+        message.contains("aacmm_arm_from_file_accepting_rejected"),
+        "{message}"
+    );
+    // SAFETY: as above.
+    let status = unsafe { aacmm_arm_from_file_accepting_rejected(file.as_ptr(), &mut handle) };
+    assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+    let mut buf = vec![0 as c_char; 4096];
+    let mut len = 0;
+    // SAFETY: a live handle, a buffer of the length given.
+    let status = unsafe { aacmm_arm_warnings(handle, buf.as_mut_ptr(), buf.len(), &mut len) };
+    assert_eq!(status, AacmmStatus::Ok);
+    // SAFETY: NUL-terminated by the call.
+    let warnings = unsafe { CStr::from_ptr(buf.as_ptr()) }
+        .to_string_lossy()
+        .into_owned();
+    assert!(warnings.contains("NOT usable"), "{warnings}");
+    // SAFETY: a live handle, not used after.
+    unsafe { aacmm_arm_free(handle) };
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,7 +3,9 @@
 
 use std::path::PathBuf;
 
-use aacmm_core::io::{AngleUnit, Arm as CoreArm, LengthUnit, arm_to_toml, read_arm, source_name};
+use aacmm_core::io::{
+    AngleUnit, Arm as CoreArm, LengthUnit, Rejected, arm_to_toml, read_arm_with, source_name,
+};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId, SUPPORTED_JOINTS, param_count, supported_joints_text};
 use numpy::ndarray::{Array1, ArrayD};
@@ -87,10 +89,20 @@ impl Arm {
     /// file declares). Errors name the file, line and field
     /// (`aacmm.InputError`; `OSError` when it cannot be read). Legal but
     /// suspicious content is kept in `warnings` and issued as `UserWarning`.
+    /// A file whose `[verdict]` says NOT usable (a refused calibration's
+    /// `calibrated.toml`) is refused (`aacmm.InputError` naming the
+    /// reasons) unless `accept_rejected=True`: it is then read with a
+    /// warning.
     #[staticmethod]
-    fn from_file(py: Python<'_>, path: PathBuf) -> PyResult<Arm> {
+    #[pyo3(signature = (path, accept_rejected = false))]
+    fn from_file(py: Python<'_>, path: PathBuf, accept_rejected: bool) -> PyResult<Arm> {
+        let rejected = if accept_rejected {
+            Rejected::Warn
+        } else {
+            Rejected::Refuse
+        };
         let arm = detached(py, || {
-            let (arm, warnings) = read_arm(&path)?;
+            let (arm, warnings) = read_arm_with(&path, rejected)?;
             let warnings = warnings.iter().map(ToString::to_string).collect();
             Arm::new(arm, source_name(&path), warnings)
         })?;

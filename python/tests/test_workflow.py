@@ -258,3 +258,29 @@ def test_robust_keyword_downweights_a_displaced_touch(arm):
     low = [w["at"] for w in fit["weights"] if w["weight"] < 0.25]
     assert low == ["<arrays>:17"]
     assert cal.report["verdict"]["usable"] and not plain.report["verdict"]["usable"]
+
+
+def test_a_refused_calibration_says_so_and_its_arm_file_is_refused_unless_asked(arm, tmp_path):
+    """One mislabelled touch (file line 18, a touch of S2, labelled S1):
+    `successful`, the report's verdict and the summary text say NOT usable
+    and why; the calibrated.toml it writes is marked, and Arm.from_file
+    refuses it (InputError naming the verdict) unless accept_rejected=True,
+    which reads it with a warning."""
+    labels, q = read_poses()
+    labels = list(labels)
+    assert labels[16] == "S2"
+    labels[16] = "S1"
+    data = aacmm.DataSet(labels, q, read_lengths(), angle_unit="deg")
+    noise = aacmm.Noise(encoder_deg=0.005, probe_mm=0.01)
+    cal = aacmm.calibrate(arm, data, noise=noise, threads=1)
+    verdict = cal.report["verdict"]
+    assert not cal.successful and not verdict["usable"] and verdict["reasons"]
+    assert "Verdict: NOT usable — " in cal.text()
+    cal.write(tmp_path)
+    written = tmp_path / "calibrated.toml"
+    assert written.read_text().startswith("# NOT USABLE")
+    with pytest.raises(aacmm.InputError, match=r"field `verdict`: this arm file .* NOT usable"):
+        aacmm.Arm.from_file(written)
+    with pytest.warns(UserWarning, match="NOT usable"):
+        again = aacmm.Arm.from_file(written, accept_rejected=True)
+    assert "NOT usable" in again.warnings[0]

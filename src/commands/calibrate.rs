@@ -323,8 +323,8 @@ fn write_files(
     Ok(wrote)
 }
 
-/// The summary and the files written on stdout, the time and the
-/// verdict's notes on stderr; an error when the calibration is not usable
+/// The summary (with the verdict and its notes) and the files written on
+/// stdout, the time on stderr; an error when the calibration is not usable
 /// (its files are written all the same, for inspection).
 fn print_results(report: &session::CalibrationReport, wrote: String, total: f64) -> Result<()> {
     let mut out = Stdout::new();
@@ -342,13 +342,12 @@ fn print_results(report: &session::CalibrationReport, wrote: String, total: f64)
         times.join(", "),
         total * 1e3
     ))?;
-    for n in &report.verdict.notes {
-        warn(format_args!("{n}"))?;
-    }
+    // The verdict's notes are in the summary, under the verdict.
     if !report.is_usable() {
         bail!(
             "the calibration is not usable; the files were written for inspection, marked so \
-             in calibration.json (/verdict):\n  {}",
+             in calibration.json (/verdict), calibrated.toml ([verdict]: aacmm refuses to read \
+             it unless asked) and report.html:\n  {}",
             report.verdict.reasons.join("\n  ")
         );
     }

@@ -16,7 +16,7 @@ use std::path::PathBuf;
 
 use aacmm_core::error::short;
 use aacmm_core::io::{
-    AngleUnit, Arm, Poses, Warning, limit_warning, read_arm, read_poses, source_name,
+    AngleUnit, Arm, Poses, Rejected, Warning, limit_warning, read_arm_with, read_poses, source_name,
 };
 use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, PreparedPoses};
 use anyhow::{Context, Result, bail};
@@ -53,6 +53,11 @@ pub struct ArmAndPoses {
     /// (`cte_per_k`): its lengths are scaled from the reference temperature.
     #[arg(long, value_name = "CELSIUS")]
     pub temperature: Option<f64>,
+    /// Read an arm file whose `[verdict]` says NOT usable (a refused
+    /// calibration's calibrated.toml), with a warning, instead of refusing
+    /// it.
+    #[arg(long)]
+    pub accept_rejected: bool,
 }
 
 impl ArmAndPoses {
@@ -60,7 +65,12 @@ impl ArmAndPoses {
     /// (stderr) about suspicious poses, readings outside the arm's joint
     /// limits included.
     pub fn read(&self) -> Result<(Arm, Poses)> {
-        let (arm, mut warnings) = read_arm(&self.arm)?;
+        let rejected = if self.accept_rejected {
+            Rejected::Warn
+        } else {
+            Rejected::Refuse
+        };
+        let (arm, mut warnings) = read_arm_with(&self.arm, rejected)?;
         let (poses, more) =
             read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
         warnings.extend(more);

@@ -25,3 +25,4 @@ mod sim_messages;
 mod simulate;
 mod streams;
 mod util;
+mod verdict;

@@ -1,53 +1,9 @@
-//! The README shows what the programs do: its `evaluate` block is real
-//! output, and `compare_methods` without arguments prints its table's rows.
-
-use crate::util::{aacmm, stdout};
+//! The README shows what the programs do: every block of `$ ` commands is
+//! real output, and `compare_methods` without arguments prints its table's
+//! rows.
 
 fn readme() -> String {
     std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap()
-}
-
-/// The fenced block that starts with `$ <command>`: the command, and its
-/// lines.
-fn block(readme: &str, command_start: &str) -> (String, Vec<String>) {
-    let at = readme
-        .find(command_start)
-        .expect("the README shows the command");
-    let end = at + readme[at..].find("\n```").expect("the block ends");
-    let mut lines = readme[at..end].lines().map(str::to_string);
-    let command = lines.next().unwrap();
-    (command, lines.collect())
-}
-
-/// Every line of the README's `evaluate` block, `...` cuts aside, is a line
-/// of the real output, in order (its "Across pairs" heading was not).
-#[test]
-fn evaluate_block_is_real_output() {
-    let text = readme();
-    let (command, lines) = block(&text, "$ aacmm evaluate ");
-    let args: Vec<&str> = command.split_whitespace().skip(2).collect();
-    let root = env!("CARGO_MANIFEST_DIR");
-    let args: Vec<String> = args
-        .iter()
-        .map(|a| {
-            if a.starts_with("examples/") {
-                format!("{root}/{a}")
-            } else {
-                a.to_string()
-            }
-        })
-        .collect();
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
-    let o = aacmm(&args);
-    assert!(o.status.success());
-    let real = stdout(&o).replace(&format!("{root}/"), "");
-    let mut rest = real.lines();
-    for line in lines.iter().filter(|l| l.trim() != "...") {
-        assert!(
-            rest.any(|r| r == line),
-            "README line not in the output (in order): {line:?}\n{real}"
-        );
-    }
 }
 
 /// `cargo run --release --example compare_methods`, as the README gives it
@@ -73,4 +29,238 @@ fn compare_methods_defaults_are_the_readme_table() {
         line.split('"').nth(1).unwrap().split(',').count()
     };
     assert_eq!(rows, list("DEFAULT_CASES") * list("DEFAULT_METHODS"));
+}
+
+/// A README's fenced block of `$ ` commands and what they print.
+struct OutputBlock {
+    /// `file:line` of the block's first command.
+    at: String,
+    /// Each command (continuation lines joined) and its output lines with
+    /// their 0-based line numbers in the file.
+    commands: Vec<(String, Vec<(usize, String)>)>,
+}
+
+/// Every fenced block whose first line is a `$ ` command.
+fn output_blocks(file: &str, text: &str) -> Vec<OutputBlock> {
+    let (mut blocks, mut lines) = (Vec::new(), text.lines().enumerate());
+    while let Some((_, line)) = lines.next() {
+        if !line.starts_with("```") {
+            continue;
+        }
+        let mut block = OutputBlock {
+            at: String::new(),
+            commands: Vec::new(),
+        };
+        for (n, line) in lines.by_ref() {
+            if line.starts_with("```") {
+                break;
+            }
+            if let Some(command) = line.strip_prefix("$ ") {
+                if block.commands.is_empty() {
+                    block.at = format!("{file}:{}", n + 1);
+                }
+                block.commands.push((command.to_string(), Vec::new()));
+            } else if let Some((command, output)) = block.commands.last_mut() {
+                if command.ends_with('\\') && output.is_empty() {
+                    command.pop();
+                    command.push_str(line.trim_start());
+                } else {
+                    output.push((n, line.to_string()));
+                }
+            }
+        }
+        if !block.commands.is_empty() {
+            blocks.push(block);
+        }
+    }
+    blocks
+}
+
+/// A line with each duration (`2.3 ms`, `0.5 ms`) as `<t> ms` and, when it
+/// has one, its spaces collapsed (a wider time shifts a table's columns):
+/// wall times differ run to run, every other figure must not.
+fn without_times(line: &str) -> String {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let mut timed = false;
+    let mut out: Vec<String> = Vec::with_capacity(words.len());
+    for (i, w) in words.iter().enumerate() {
+        let unit = words
+            .get(i + 1)
+            .map(|u| u.trim_end_matches([',', ')', ';']));
+        let number = w.trim_start_matches('(').parse::<f64>().is_ok();
+        if number && unit == Some("ms") {
+            timed = true;
+            out.push("<t>".to_string());
+        } else {
+            out.push((*w).to_string());
+        }
+    }
+    if timed {
+        out.join(" ")
+    } else {
+        line.to_string()
+    }
+}
+
+/// Runs one README command as a user would, from a scratch folder that sees
+/// the repository's `examples/` (and writes `/tmp/…` inside itself): the
+/// command line on the path; `cargo run --release --example NAME` as the
+/// example this test profile built. Returns stdout and stderr, with the
+/// scratch folder's path put back as the README writes it.
+fn run_readme_command(command: &str, scratch: &std::path::Path) -> (String, String) {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let tmp = format!("{}/tmp/", scratch.display());
+    let bin = std::path::Path::new(env!("CARGO_BIN_EXE_aacmm"))
+        .parent()
+        .unwrap();
+    let mut shell = command.replace("/tmp/", &tmp);
+    if let Some(rest) = shell.strip_prefix("cargo run --release --example ") {
+        let (name, args) = rest.split_once(' ').unwrap_or((rest, ""));
+        let args = args.trim_start().strip_prefix("--").unwrap_or(args);
+        let exe = bin.join("examples").join(name);
+        shell = format!("{} {args}", exe.display());
+    }
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(&shell)
+        .current_dir(scratch)
+        .env(
+            "PATH",
+            format!(
+                "{}:{}",
+                bin.display(),
+                std::env::var("PATH").unwrap_or_default()
+            ),
+        )
+        .output()
+        .expect("sh runs");
+    let back = |s: &[u8]| {
+        String::from_utf8_lossy(s)
+            .replace(&tmp, "/tmp/")
+            .replace(&format!("{root}/"), "")
+    };
+    (back(&o.stdout), back(&o.stderr))
+}
+
+/// A README line the command does not print: where, what, and the printed
+/// line most like it (the longest common start), if any.
+struct Drift {
+    file: String,
+    line: usize,
+    readme: String,
+    printed: Option<String>,
+}
+
+/// Matches a command's README lines against what it printed, in order on
+/// each stream; the lines that drifted.
+fn drifts(file: &str, expected: &[(usize, String)], out: &str, err: &str) -> Vec<Drift> {
+    let streams = [out.lines().collect::<Vec<_>>(), err.lines().collect()];
+    let mut at = [0usize; 2];
+    let mut found = Vec::new();
+    for (n, line) in expected {
+        if matches!(line.trim(), "..." | "…") {
+            continue;
+        }
+        let line = without_times(line);
+        let exact = (0..2).find_map(|s| {
+            (streams[s][at[s]..].iter())
+                .position(|r| without_times(r) == line)
+                .map(|p| (s, p))
+        });
+        if let Some((s, p)) = exact {
+            at[s] += p + 1;
+            continue;
+        }
+        let common = |r: &str| {
+            r.chars()
+                .zip(line.chars())
+                .take_while(|(a, b)| a == b)
+                .count()
+        };
+        let near = (0..2)
+            .flat_map(|s| (at[s]..streams[s].len()).map(move |p| (s, p)))
+            .max_by_key(|&(s, p)| common(streams[s][p]))
+            .filter(|&(s, p)| common(streams[s][p]) >= 12);
+        if let Some((s, p)) = near {
+            at[s] = p + 1;
+        }
+        found.push(Drift {
+            file: file.to_string(),
+            line: *n,
+            readme: line.clone(),
+            printed: near.map(|(s, p)| streams[s][p].to_string()),
+        });
+    }
+    found
+}
+
+/// Every README output block — `$ ` commands with what they print, in
+/// README.md and the examples' READMEs — is real output: each printed line
+/// (`...` and `…` mark cuts) is a line the command prints, in order on its
+/// stream, wall times aside. CI runs this, so a block that drifts fails;
+/// `AACMM_BLESS=1` rewrites each drifted line with the printed line most
+/// like it (review the diff).
+#[test]
+fn every_readme_output_block_is_real_output() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let (mut checked, mut all) = (0, Vec::new());
+    for file in ["README.md", "examples/ur5-tracker/README.md"] {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        for (i, block) in output_blocks(file, &text).into_iter().enumerate() {
+            let name = format!("readme-{}-{i}", file.replace('/', "-"));
+            let scratch = crate::util::temp_dir(&name);
+            std::os::unix::fs::symlink(root.join("examples"), scratch.join("examples")).unwrap();
+            std::fs::create_dir_all(scratch.join("tmp")).unwrap();
+            std::fs::create_dir_all(scratch.join("target")).unwrap();
+            for (command, expected) in &block.commands {
+                let (out, err) = run_readme_command(command, &scratch);
+                let found = drifts(file, expected, &out, &err);
+                if !found.is_empty() && std::env::var_os("AACMM_BLESS").is_none() {
+                    eprintln!(
+                        "{}: `{command}`\n--- stdout\n{out}\n--- stderr\n{err}",
+                        block.at
+                    );
+                }
+                all.extend(found);
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 10, "only {checked} README commands found");
+    if std::env::var_os("AACMM_BLESS").is_some() {
+        bless(root, &all);
+        return;
+    }
+    let listed: Vec<String> = (all.iter())
+        .map(|d| {
+            format!(
+                "{}:{}: README {:?}\n    printed {:?}",
+                d.file,
+                d.line + 1,
+                d.readme,
+                d.printed.as_deref().unwrap_or("(nothing like it)")
+            )
+        })
+        .collect();
+    assert!(
+        all.is_empty(),
+        "README output blocks drifted (AACMM_BLESS=1 rewrites them):\n{}",
+        listed.join("\n")
+    );
+}
+
+/// Rewrites each drifted line that has a printed line like it.
+fn bless(root: &std::path::Path, drifts: &[Drift]) {
+    let mut files: Vec<&str> = drifts.iter().map(|d| d.file.as_str()).collect();
+    files.dedup();
+    for file in files {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        for d in drifts.iter().filter(|d| d.file == file) {
+            if let Some(p) = &d.printed {
+                lines[d.line] = p.clone();
+            }
+        }
+        std::fs::write(root.join(file), lines.join("\n") + "\n").unwrap();
+    }
 }

@@ -49,6 +49,16 @@ pub(crate) fn assert_agrees_with_json(html: &str, json: &serde_json::Value) -> u
     let mut checked = 0;
     for n in doc.descendants().filter(|n| n.has_attribute("data-json")) {
         let pointer = n.attribute("data-json").unwrap();
+        // A yes/no (the verdict) is said as `true`/`false`.
+        if let Some(b) = json.pointer(pointer).and_then(serde_json::Value::as_bool) {
+            assert_eq!(
+                n.attribute("data-value"),
+                Some(b.to_string().as_str()),
+                "{pointer}"
+            );
+            checked += 1;
+            continue;
+        }
         let in_json = json
             .pointer(pointer)
             .and_then(serde_json::Value::as_f64)

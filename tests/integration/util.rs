@@ -123,3 +123,14 @@ pub fn assert_clean_error(o: &Output, expect: &[&str]) {
         assert!(err.contains(e), "stderr lacks `{e}`: {err}");
     }
 }
+
+/// The shipped campaign with one touch mislabelled: touch 17 (file line
+/// 18, a touch of S2) labelled S1 — the gross error a refused calibration
+/// is tested with. Written into `dir`; returns the path.
+pub fn mislabelled_poses(dir: &Path) -> String {
+    let text = std::fs::read_to_string(shipped("poses.csv")).expect("shipped poses");
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    assert!(lines[17].starts_with("S2,"), "{}", lines[17]);
+    lines[17] = lines[17].replacen("S2,", "S1,", 1);
+    write(dir, "poses.csv", &(lines.join("\n") + "\n"))
+}

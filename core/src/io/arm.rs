@@ -50,6 +50,7 @@ use toml::de::{DeTable, DeValue};
 use super::Warning;
 use super::text::{line_of, parse_toml, read_text, suggest};
 use super::units::{AngleUnit, LengthUnit};
+use super::verdict::Rejected;
 use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
 use crate::error::InputError;
 use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
@@ -109,8 +110,15 @@ impl Arm {
 /// # Ok::<(), aacmm_core::error::InputError>(())
 /// ```
 pub fn read_arm(path: &Path) -> Result<(Arm, Vec<Warning>), InputError> {
+    read_arm_with(path, Rejected::Refuse)
+}
+
+/// [`read_arm`], with a file whose `[verdict]` says NOT usable (a refused
+/// calibration's `calibrated.toml`) refused or read with a warning
+/// ([`super::verdict`]).
+pub fn read_arm_with(path: &Path, rejected: Rejected) -> Result<(Arm, Vec<Warning>), InputError> {
     let (file, text) = read_text(path)?;
-    parse_arm(&text, &file)
+    parse_arm_with(&text, &file, rejected)
 }
 
 /// Parses the text of an arm file; `file` is the name used in messages.
@@ -138,10 +146,24 @@ pub fn read_arm(path: &Path) -> Result<(Arm, Vec<Warning>), InputError> {
 /// );
 /// ```
 pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputError> {
+    parse_arm_with(text, file, Rejected::Refuse)
+}
+
+/// [`parse_arm`], with a file whose `[verdict]` says NOT usable refused or
+/// read with a warning ([`super::verdict`]).
+pub fn parse_arm_with(
+    text: &str,
+    file: &str,
+    rejected: Rejected,
+) -> Result<(Arm, Vec<Warning>), InputError> {
     let doc = parse_toml(text, file)?;
+    // First: a refused calibration's file is refused for that, whatever
+    // else it holds.
+    let verdict = super::verdict::check(doc.get_ref(), text, file, rejected)?;
     let schema = ArmFile::deserialize(toml::de::Deserializer::from(doc.clone()))
         .map_err(|e| schema_error(text, file, doc.get_ref(), &e))?;
-    let (mut arm, warnings) = schema.to_arm(text, file)?;
+    let (mut arm, mut warnings) = schema.to_arm(text, file)?;
+    warnings.extend(verdict);
     if doc.get_ref().contains_key("prior") {
         // Read with the arm, so every front end fits with it: a typo is
         // never ignored, and no reader can leave the tolerances behind.
@@ -221,6 +243,10 @@ pub(crate) struct ArmFile {
     /// never written here.
     #[serde(rename = "frame", default, skip_serializing)]
     _frame: Option<serde::de::IgnoredAny>,
+    /// A calibration's verdict: read by [`super::verdict`], never written
+    /// here.
+    #[serde(rename = "verdict", default, skip_serializing)]
+    _verdict: Option<serde::de::IgnoredAny>,
 }
 
 /// An array of `[x, y, z]`-like number arrays, each located.
@@ -431,6 +457,7 @@ impl ArmFile {
             },
             _prior: None,
             _frame: None,
+            _verdict: None,
         }
     }
 

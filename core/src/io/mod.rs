@@ -44,11 +44,12 @@ pub mod positions;
 pub mod prior;
 pub(crate) mod text;
 pub mod units;
+pub mod verdict;
 
 use std::fmt;
 
 pub use crate::error::InputError;
-pub use arm::{Arm, arm_to_toml, parse_arm, read_arm, write_arm};
+pub use arm::{Arm, arm_to_toml, parse_arm, parse_arm_with, read_arm, read_arm_with, write_arm};
 pub use atomic::{write_atomic, write_atomic_with};
 pub use lengths::{
     ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
@@ -60,6 +61,7 @@ pub use positions::{DEFAULT_FRAME, Positions, parse_positions, read_positions};
 pub use prior::parse_prior;
 pub use text::source_name;
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
+pub use verdict::{ArmVerdict, Rejected};
 
 /// Legal but suspicious input, located like an [`InputError`]. Readers
 /// return warnings; the caller prints them.

@@ -166,12 +166,13 @@ pub(crate) fn calibration_page(
     let beyond = find(figures, BEYOND_SVG);
     let nav = calibration_nav(beyond.is_some(), input.uncertainty_map.is_some());
     // The map's section comes last, numbered after whichever came before.
-    let map = (input.uncertainty_map).map(|m| (m, nav.len() - 1));
+    let map = (input.uncertainty_map).map(|m| (m, nav.len() - 2));
     let nav: Vec<(&str, &str)> = nav.iter().map(|(i, n)| (*i, n.as_str())).collect();
     let mut page = head(&input.title, &input.inputs, &nav);
+    page += &super::verdict::section(input);
     page += &format!(
         "<section id=\"summary\">\n<h2>Summary</h2>\n{}{}</section>\n",
-        tables::verdict(cal, evaluated, &input.arms),
+        tables::verdict(cal, evaluated, &input.arms, &input.validation),
         tables::glance(evaluated, &input.arms)
     );
     page += &section(
@@ -254,10 +255,11 @@ pub(crate) fn calibration_page(
     page
 }
 
-/// The calibration page's links: the summary, the six sections every
+/// The calibration page's links: the verdict, the summary, the six sections every
 /// calibration has, then those of what it has besides, numbered on.
 fn calibration_nav(beyond: bool, map: bool) -> Vec<(&'static str, String)> {
     let mut nav: Vec<(&str, String)> = [
+        ("verdict", "Verdict"),
         ("summary", "Summary"),
         ("single-point", "1 Single point"),
         ("lengths", "2 Lengths"),
@@ -272,7 +274,12 @@ fn calibration_nav(beyond: bool, map: bool) -> Vec<(&'static str, String)> {
         nav.push(("beyond", "7 Beyond geometry".to_string()));
     }
     if map {
-        nav.push(("uncertainty-map", format!("{} Uncertainty map", nav.len())));
+        // Numbered after the sections before it (verdict and summary have
+        // no number).
+        nav.push((
+            "uncertainty-map",
+            format!("{} Uncertainty map", nav.len() - 1),
+        ));
     }
     nav
 }

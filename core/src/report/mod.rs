@@ -41,6 +41,7 @@ mod figures;
 mod html;
 mod svg;
 mod tables;
+mod verdict;
 
 #[cfg(test)]
 mod tests;
@@ -261,6 +262,10 @@ pub struct CalibrationInput<'a> {
     /// JSON Pointer of the map in the JSON written beside the report (e.g.
     /// `/uncertainty_map`), if any.
     pub uncertainty_map_json: Option<String>,
+    /// Whether the calibration may be used, and why not: the page opens
+    /// with it. `None` for a calibration drawn outside a session, which
+    /// the page then says has no verdict.
+    pub verdict: Option<&'a crate::session::Verdict>,
 }
 
 /// The 3-D errors of one arm at one data set's reference positions, each
@@ -329,6 +334,7 @@ pub struct EvaluationInput<'a> {
 ///     beyond: Vec::new(),
 ///     uncertainty_map: None,
 ///     uncertainty_map_json: None,
+///     verdict: None,
 /// })
 /// .unwrap();
 /// assert_eq!(report.files().count(), CALIBRATION_FILES.len());

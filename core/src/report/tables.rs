@@ -136,7 +136,12 @@ fn row_class(e: &Evaluated) -> String {
 }
 
 /// A few sentences on the result.
-pub(crate) fn verdict(cal: &Calibration, evaluated: &[Evaluated], arms: &Arms) -> String {
+pub(crate) fn verdict(
+    cal: &Calibration,
+    evaluated: &[Evaluated],
+    arms: &Arms,
+    validation: &[ValidationRow],
+) -> String {
     let s = &cal.solver;
     let d = &cal.dof;
     let mut p = String::from("<p>");
@@ -196,7 +201,8 @@ pub(crate) fn verdict(cal: &Calibration, evaluated: &[Evaluated], arms: &Arms) -
             p += ".";
         }
     }
-    if !evaluated.iter().any(|e| e.held_out) {
+    // Cross-validation folds are held-out data too (section 1's table).
+    if !evaluated.iter().any(|e| e.held_out) && !validation.iter().any(|r| r.held_out) {
         p += " No held-out data were given (--validate): the figures after calibration are on \
               the data the fit used.";
     }

@@ -554,12 +554,51 @@ impl Verdict {
         } else {
             reasons.extend(poor);
         }
+        // A few gross outliers explain every other symptom: said first.
+        if !reasons.is_empty()
+            && let Some(cause) = outlier_cause(calibration)
+        {
+            reasons.insert(0, cause);
+        }
         Verdict {
             usable: reasons.is_empty(),
             reasons,
             notes,
         }
     }
+}
+
+/// Most outliers, as a share of the observations, that can be the cause
+/// of a refusal rather than a symptom of it (a wrong minimum or a wrong
+/// model puts most observations beyond the threshold).
+const FEW_OUTLIERS: f64 = 0.05;
+
+/// A refused fit with a few outliers: they are the likely cause (a
+/// mislabelled or displaced touch pulls the whole fit), named by
+/// `file:line`, with the remedy.
+fn outlier_cause(c: &Calibration) -> Option<String> {
+    let o = &c.checks.outliers;
+    let positions: usize = (c.dof.other_rows.iter())
+        .filter(|r| r.term == "positions")
+        .map(|r| r.rows / 3)
+        .sum();
+    let observations = (c.dof.touch_rows / 3 + positions).max(1);
+    if o.is_empty() || o.len() as f64 > (FEW_OUTLIERS * observations as f64).max(1.0) {
+        return None;
+    }
+    let named: Vec<String> = (o.iter().take(5))
+        .map(|x| format!("{} (point {}, {:.1} σ)", x.at, x.point, x.standardised))
+        .collect();
+    Some(format!(
+        "{} outlying observation{} pull{} the fit: {}{} — a mislabelled or displaced touch? Check \
+         {}: fix the label or remove the row, or calibrate with --robust, which weighs them down",
+        o.len(),
+        if o.len() == 1 { "" } else { "s" },
+        if o.len() == 1 { "s" } else { "" },
+        named.join(", "),
+        if o.len() > named.len() { ", …" } else { "" },
+        if o.len() == 1 { "it" } else { "them" }
+    ))
 }
 
 /// The fit against the noise: the χ² test (with the ways out of a misstated
@@ -856,13 +895,8 @@ impl CalibrationReport {
         problem: &Problem,
         total_seconds: f64,
     ) -> Result<Vec<(String, String)>, WriteError> {
-        let calibrated = self.calibrated_arm(problem.arm());
         let mut files = vec![
-            (
-                CALIBRATED_FILE.to_string(),
-                arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg)
-                    + &crate::io::frames::frames_to_toml(&self.calibration.frame_records()),
-            ),
+            (CALIBRATED_FILE.to_string(), self.calibrated_toml(problem)),
             (REPORT_FILE.to_string(), self.to_json()),
             (TIMING_FILE.to_string(), self.timing_json(total_seconds)),
         ];
@@ -875,6 +909,30 @@ impl CalibrationReport {
             );
         }
         Ok(files)
+    }
+
+    /// `calibrated.toml`: the calibrated arm, its frames, and the verdict
+    /// (`[verdict]`; a refused calibration's file also opens with a comment
+    /// saying so), which every reader of arm files checks
+    /// ([`crate::io::verdict`]).
+    pub fn calibrated_toml(&self, problem: &Problem) -> String {
+        let calibrated = self.calibrated_arm(problem.arm());
+        let verdict = crate::io::ArmVerdict {
+            usable: self.verdict.usable,
+            reasons: self.verdict.reasons.clone(),
+            notes: self.verdict.notes.clone(),
+        };
+        let header = if verdict.usable {
+            ""
+        } else {
+            crate::io::verdict::rejected_header()
+        };
+        format!(
+            "{header}{}{}{}",
+            arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg),
+            crate::io::frames::frames_to_toml(&self.calibration.frame_records()),
+            crate::io::verdict::verdict_to_toml(&verdict)
+        )
     }
 
     /// Writes [`CalibrationReport::files`] into `dir` (which must exist);
@@ -1134,12 +1192,19 @@ fn outliers_line(c: &Calibration) -> String {
     )
 }
 
+/// The verdict, and the notes that come with it (the same as the JSON's
+/// `/verdict`): a χ² outside its range that is not a refusal is said here,
+/// not only in the file.
 fn verdict_line(v: &Verdict) -> String {
-    if v.usable {
-        "Verdict: usable\n\n".to_string()
+    let mut t = if v.usable {
+        "Verdict: usable\n".to_string()
     } else {
-        format!("Verdict: NOT usable — {}\n\n", v.reasons.join("; "))
+        format!("Verdict: NOT usable — {}\n", v.reasons.join("; "))
+    };
+    for n in &v.notes {
+        t += &format!("  note: {n}\n");
     }
+    t + "\n"
 }
 
 /// The summary's parameter table (user units), and the prior's if any.

@@ -1,0 +1,147 @@
+//! The report's first section: whether the calibration may be used, and
+//! why not — the same verdict as the command line's exit code, the summary
+//! and `calibration.json`'s `/verdict`, so that someone sent only the page
+//! cannot mistake a refused calibration for a good one. With it, what the
+//! verdict rests on: the χ² test (or the robust scale's), the outliers by
+//! `file:line`, and the held-out figures (held-out data, cross-validation)
+//! when they ran.
+
+use super::html::escape;
+use super::{CalibrationInput, ValidationRow};
+use crate::calibrate::Calibration;
+
+/// Outliers listed by `file:line` (the rest are counted).
+const LISTED_OUTLIERS: usize = 20;
+
+/// The verdict section.
+pub(crate) fn section(input: &CalibrationInput) -> String {
+    let cal = input.calibration;
+    let mut s = String::from("<section id=\"verdict\">\n<h2>Verdict</h2>\n");
+    s += &headline(input.verdict);
+    s += "<ul>\n";
+    s += &format!("<li>{}</li>\n", fit_quality(cal));
+    s += &format!("<li>{}</li>\n", outliers(cal));
+    for line in held_out(&input.validation) {
+        s += &format!("<li>{line}</li>\n");
+    }
+    s += "</ul>\n</section>\n";
+    s
+}
+
+/// Usable or NOT usable, with the reasons and the notes.
+fn headline(verdict: Option<&crate::session::Verdict>) -> String {
+    let Some(v) = verdict else {
+        return "<p><span class=\"bad\">No verdict</span>: this report was drawn from a \
+                calibration alone, outside a session; whether it may be used (solver, \
+                geometry, χ² test, validation) was not decided here.</p>\n"
+            .to_string();
+    };
+    let mut s = if v.usable {
+        "<p data-json=\"/verdict/usable\" data-value=\"true\"><span class=\"good\">Verdict: \
+         usable.</span> The solver reached a confirmed minimum, the calibrated arm is the \
+         nominal arm's kind of geometry, and the checks below agree.</p>\n"
+            .to_string()
+    } else {
+        let mut s = "<p data-json=\"/verdict/usable\" data-value=\"false\"><span class=\"bad\">\
+                     Verdict: NOT usable.</span> Do not use this calibration (the command exited \
+                     1, and calibrated.toml is marked so); why:</p>\n<ul>\n"
+            .to_string();
+        for r in &v.reasons {
+            s += &format!("<li class=\"bad\">{}</li>\n", escape(r));
+        }
+        s + "</ul>\n"
+    };
+    if !v.notes.is_empty() {
+        s += "<p>Notes:</p>\n<ul>\n";
+        for n in &v.notes {
+            s += &format!("<li>{}</li>\n", escape(n));
+        }
+        s += "</ul>\n";
+    }
+    s
+}
+
+/// The χ² test, or the robust scale's test, or why there is none.
+fn fit_quality(cal: &Calibration) -> String {
+    if let Some(d) = cal.robust.as_ref().and_then(|r| r.describe_scale()) {
+        return format!(
+            "Fit quality (robust scale against the stated noise): {}",
+            escape(&d)
+        );
+    }
+    match &cal.checks.chi_square {
+        Some(chi) => format!(
+            "χ² test against the stated noise (each tail at 0.001; refused beyond 10⁻⁹): {}",
+            escape(&chi.describe())
+        ),
+        None => "χ² test: none — the noise was not stated, so σ was estimated from the fit's \
+                 own residuals and cannot be tested against them (state the noise to test it)."
+            .to_string(),
+    }
+}
+
+/// The outliers by `file:line`, the first [`LISTED_OUTLIERS`].
+fn outliers(cal: &Calibration) -> String {
+    let o = &cal.checks.outliers;
+    let beyond = cal.checks.outlier_threshold;
+    if o.is_empty() {
+        return format!("Outliers: none (no observation beyond {beyond:.2} σ).");
+    }
+    let listed: Vec<String> = (o.iter().take(LISTED_OUTLIERS))
+        .map(|x| {
+            format!(
+                "<code>{}</code> (point {}, {:.1} σ)",
+                escape(&x.at),
+                escape(&x.point),
+                x.standardised
+            )
+        })
+        .collect();
+    format!(
+        "<span class=\"bad\">Outliers</span>: {} beyond {beyond:.2} σ — check them (remeasure, or \
+         fix the label): {}{}.",
+        o.len(),
+        listed.join(", "),
+        if o.len() > LISTED_OUTLIERS {
+            format!(
+                " and {} more (calibration.json lists them all)",
+                o.len() - LISTED_OUTLIERS
+            )
+        } else {
+            String::new()
+        }
+    )
+}
+
+/// One line per data set held out from the fit: its headline figure before
+/// and after, or that none was held out.
+fn held_out(rows: &[ValidationRow]) -> Vec<String> {
+    let held: Vec<&ValidationRow> = rows.iter().filter(|r| r.held_out).collect();
+    if held.is_empty() {
+        return vec![
+            "Held-out data: none (neither --validate nor --cross-validate): every figure after \
+             calibration is on the data the fit used."
+                .to_string(),
+        ];
+    }
+    held.iter()
+        .map(|r| {
+            let (b, a) = (r.figures.before.headline(), r.figures.after.headline());
+            let what = if r.figures.after.points == 0 {
+                "mean 3-D position error"
+            } else {
+                "mean e"
+            };
+            let class = if a.is_finite() && a <= b {
+                "good"
+            } else {
+                "bad"
+            };
+            format!(
+                "Held out, {}: {what} {b:.4} → <span class=\"{class}\">{a:.4}</span> mm \
+                 (nominal → calibrated).",
+                escape(&r.name)
+            )
+        })
+        .collect()
+}
