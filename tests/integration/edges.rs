@@ -244,3 +244,87 @@ fn earlier_calibration_is_kept_without_force() {
         "{help}"
     );
 }
+
+/// The shipped campaign written in radians (angles as typed in rad).
+fn shipped_in_radians() -> String {
+    use aacmm_core::io::{AngleUnit, read_poses, write_poses};
+    let (poses, _) = read_poses(
+        std::path::Path::new(&shipped("poses.csv")),
+        AngleUnit::Deg,
+        None,
+    )
+    .unwrap();
+    let mut rad = Vec::new();
+    write_poses(&mut rad, &poses, AngleUnit::Rad).unwrap();
+    String::from_utf8(rad).unwrap()
+}
+
+/// Poses in radians read as degrees (the default unit): the reader's
+/// warning was right, then the error blamed the lengths file ("1.747e2
+/// times the nominal arm's distances"); the error now names the angle unit
+/// and the flag.
+#[test]
+fn radians_read_as_degrees_blame_the_angle_unit() {
+    let dir = temp_dir("edges-radians");
+    let data = write(&dir, "rad.csv", &shipped_in_radians());
+    let (arm, lengths) = (shipped_arm(), shipped("lengths.csv"));
+    let out = dir.join("out").display().to_string();
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &data,
+        "--lengths",
+        &lengths,
+        "--out",
+        &out,
+    ]);
+    assert_clean_error(
+        &o,
+        &[
+            "look like radians; pass --angle-unit rad",
+            &format!("error: {data}: every joint reading"),
+            "look like radians read as degrees",
+            "`--angle-unit rad`",
+            "the lengths file is not the cause",
+        ],
+    );
+    assert!(!stderr(&o).contains("different units"), "{}", stderr(&o));
+    // Read as radians, the same files calibrate: the lengths were right.
+    let o = crate::util::calibrate_files(&arm, &data, &dir.join("rad"), &["--angle-unit", "rad"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Where the lengths pass (kinova-1's, in rad, read as degrees) the fit
+    // fails later: its verdict leads with the angle unit, not with the
+    // solver's minimum.
+    let kinova = |f: &str| {
+        crate::util::example("mukca/kinova-1")
+            .join(f)
+            .display()
+            .to_string()
+    };
+    let out = dir.join("kinova").display().to_string();
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &kinova("arm.toml"),
+        "--data",
+        &kinova("poses.csv"),
+        "--lengths",
+        &kinova("lengths.csv"),
+        "--out",
+        &out,
+    ]);
+    let text = crate::util::stdout(&o);
+    let verdict = text
+        .lines()
+        .find(|l| l.starts_with("Verdict:"))
+        .expect("a verdict");
+    assert!(
+        verdict.starts_with("Verdict: NOT usable — every joint reading of")
+            && verdict.contains("look like radians read as degrees")
+            && verdict.contains("`--angle-unit rad`"),
+        "{verdict}"
+    );
+    assert!(!o.status.success());
+}
