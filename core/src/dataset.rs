@@ -114,6 +114,123 @@ impl SourceMap {
     }
 }
 
+/// Rows of a poses file that repeat, reading for reading (and temperature),
+/// the previous row of the same point — a logger that wrote a line twice,
+/// or a touch recorded again without the arm moving. Such a row is no
+/// independent touch: it adds no scatter, so counted it would lower `e`
+/// and understate the noise; the data set counts it once and says so.
+/// Only the previous row of the same point is compared (linear time,
+/// memory per point), which catches every run of repeats however long.
+struct Repeats {
+    /// The rows counted once, ascending.
+    rows: Vec<usize>,
+    /// Per repeated row (same order), the row it repeats.
+    of: Vec<usize>,
+}
+
+impl Repeats {
+    fn of(poses: &Poses) -> Repeats {
+        let mut last = vec![usize::MAX; poses.points().len()];
+        let (mut rows, mut of) = (Vec::new(), Vec::new());
+        if poses.joints() == 0 {
+            // Labels without readings (`from_labels`): nothing repeats.
+            return Repeats { rows, of };
+        }
+        let temperature = poses.temperatures();
+        for row in 0..poses.len() {
+            let p = poses.point(row);
+            let prev = last[p];
+            let same = prev != usize::MAX
+                && poses.reading(row) == poses.reading(prev)
+                && temperature.is_none_or(|t| t[row] == t[prev]);
+            if same {
+                rows.push(row);
+                of.push(prev);
+            } else {
+                last[p] = row;
+            }
+        }
+        Repeats { rows, of }
+    }
+
+    /// How many rows of point `p` were counted once (`poses` as read).
+    fn of_point_in(&self, poses: &Poses, p: usize) -> usize {
+        self.rows.iter().filter(|&&r| poses.point(r) == p).count()
+    }
+
+    /// One warning per point with repeats, at its first repeated line, in
+    /// the order of the points' first repeat.
+    fn warnings(&self, poses: &Poses, file: &str) -> Vec<crate::io::Warning> {
+        let mut by_point: Vec<(usize, Vec<usize>, usize)> = Vec::new();
+        for (&row, &of) in self.rows.iter().zip(&self.of) {
+            let p = poses.point(row);
+            match by_point.iter_mut().find(|(q, ..)| *q == p) {
+                Some((_, lines, _)) => lines.push(poses.line(row)),
+                None => by_point.push((p, vec![poses.line(row)], poses.line(of))),
+            }
+        }
+        by_point
+            .into_iter()
+            .map(|(p, lines, first_of)| {
+                let n = lines.len();
+                crate::io::Warning {
+                    file: file.to_string(),
+                    line: Some(lines[0]),
+                    field: Some("point".to_string()),
+                    message: format!(
+                        "point `{}`: {n} row{s} repeat{v} the readings of the point's row before \
+                         {them} exactly (line{s} {}; the first repeats line {first_of}) — a logger \
+                         that wrote a line twice?; each counted once: {n} row{s} not used, as \
+                         repeated rows are no independent touches and would understate the \
+                         scatter",
+                        poses.points()[p],
+                        line_ranges(&lines),
+                        s = plural(n),
+                        v = if n == 1 { "s" } else { "" },
+                        them = if n == 1 { "it" } else { "them" },
+                    ),
+                }
+            })
+            .collect()
+    }
+}
+
+/// `""` for one, `"s"` for more.
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
+/// Ascending line numbers as ranges (`12–20, 31`), the first
+/// [`MAX_LISTED_RANGES`] ranges and how many lines more.
+fn line_ranges(lines: &[usize]) -> String {
+    let mut ranges: Vec<(usize, usize)> = Vec::new();
+    for &l in lines {
+        match ranges.last_mut() {
+            Some((_, end)) if *end + 1 == l => *end = l,
+            _ => ranges.push((l, l)),
+        }
+    }
+    let shown: Vec<String> = ranges
+        .iter()
+        .take(MAX_LISTED_RANGES)
+        .map(|&(a, b)| {
+            if a == b {
+                a.to_string()
+            } else {
+                format!("{a}–{b}")
+            }
+        })
+        .collect();
+    let rest: usize = ranges[shown.len()..].iter().map(|(a, b)| b - a + 1).sum();
+    match rest {
+        0 => shown.join(", "),
+        n => format!("{} and {n} more", shown.join(", ")),
+    }
+}
+
+/// Line ranges a repeat warning lists before counting the rest.
+const MAX_LISTED_RANGES: usize = 8;
+
 /// Touches grouped by point, prepared for the kernel, with reference lengths
 /// and the source of every value.
 #[derive(Clone, Debug, PartialEq)]
@@ -131,6 +248,9 @@ pub struct DataSet {
     /// the poses file recorded them.
     temperature: Option<Vec<f64>>,
     time: Option<Vec<f64>>,
+    /// One warning per point some of whose rows repeated the row before
+    /// them and were counted once ([`DataSet::repeat_warnings`]).
+    repeats: Vec<crate::io::Warning>,
 }
 
 /// Reference positions prepared for the kernel: the rows of a
@@ -297,30 +417,43 @@ impl DataSet {
         if poses.is_empty() {
             return Err(InputError::file_error(file, "no touches"));
         }
+        // Rows that repeat the readings of their point's row before them
+        // are counted once (see `Repeats`), in the counts and the order.
+        let repeats = Repeats::of(poses);
+        let is_repeat = |row: usize| repeats.rows.binary_search(&row).is_ok();
         // The poses' points are in order of first appearance already: a
         // counting sort by point puts the rows in touch order.
         let labels = poses.points();
         let mut count = vec![0usize; labels.len()];
         let mut first = vec![usize::MAX; labels.len()];
-        for row in 0..poses.len() {
+        for row in (0..poses.len()).filter(|&r| !is_repeat(r)) {
             let p = poses.point(row);
             count[p] += 1;
             first[p] = first[p].min(row);
         }
         for (p, label) in labels.iter().enumerate() {
             if count[p] < MIN_TOUCHES {
+                let repeated = repeats.of_point_in(poses, p);
+                let also = match repeated {
+                    0 => String::new(),
+                    n => format!(
+                        " ({n} more row{} repeat its readings and count once)",
+                        plural(n)
+                    ),
+                };
                 return Err(InputError::field(
                     file,
                     poses.line(first[p]),
                     "point",
                     format!(
-                        "point `{label}` has {} touch{}; at least {MIN_TOUCHES} are needed",
+                        "point `{label}` has {} touch{}{also}; at least {MIN_TOUCHES} are needed",
                         count[p],
                         if count[p] == 1 { "" } else { "es" }
                     ),
                 ));
             }
         }
+        let warnings = repeats.warnings(poses, file);
         let mut start = 0;
         let points: Vec<Point> = (labels.iter().zip(&count))
             .map(|(label, &n)| {
@@ -335,8 +468,8 @@ impl DataSet {
         // `next[p]`: where point p's next touch goes.
         let mut next: Vec<usize> = points.iter().map(|p| p.touches.start).collect();
         drop((count, first));
-        let mut order = vec![0usize; poses.len()];
-        for row in 0..poses.len() {
+        let mut order = vec![0usize; poses.len() - repeats.rows.len()];
+        for row in (0..poses.len()).filter(|&r| !is_repeat(r)) {
             let p = poses.point(row);
             order[next[p]] = row;
             next[p] += 1;
@@ -384,6 +517,7 @@ impl DataSet {
             positions: None,
             temperature,
             time,
+            repeats: warnings,
         })
     }
 
@@ -423,6 +557,8 @@ impl DataSet {
     ) -> Result<(DataSet, Vec<crate::io::Warning>), InputError> {
         let (p, warnings) = crate::io::read_poses(poses, unit, Some(joints))?;
         let data = DataSet::from_poses_owned(p, &crate::io::source_name(poses))?;
+        let mut warnings = warnings;
+        warnings.extend_from_slice(data.repeat_warnings());
         let data = match lengths {
             Some(l) => {
                 data.with_lengths(&crate::io::read_lengths(l)?, &crate::io::source_name(l))?
@@ -699,6 +835,7 @@ impl DataSet {
             positions: Some(PositionData::new(positions, file)),
             temperature: None,
             time: None,
+            repeats: Vec::new(),
         })
     }
 
@@ -765,6 +902,26 @@ impl DataSet {
     /// The readings of touch `i` (rad).
     pub fn reading(&self, i: usize) -> &[f64] {
         &self.q[i * self.joints..(i + 1) * self.joints]
+    }
+
+    /// The warnings of rows counted once because they repeated the readings
+    /// of their point's row before them, one per point, naming file, lines
+    /// and label: a front end shows them with the reader's warnings (which
+    /// [`DataSet::read`] does). Empty for data not built from a poses file.
+    ///
+    /// ```
+    /// use aacmm_core::{DataSet, io::{AngleUnit, parse_poses}};
+    /// let text = "point,q1\nA,1\nA,2\nA,2\nA,2\nA,3\n";
+    /// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Rad, None).unwrap();
+    /// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+    /// assert_eq!(data.len(), 3); // lines 4 and 5 repeat line 3
+    /// let w = data.repeat_warnings()[0].to_string();
+    /// assert!(w.starts_with("p.csv:4: field `point`: point `A`: 2 rows repeat"), "{w}");
+    /// assert!(w.contains("(lines 4–5; the first repeats line 3)"), "{w}");
+    /// assert!(w.contains("each counted once: 2 rows not used"), "{w}");
+    /// ```
+    pub fn repeat_warnings(&self) -> &[crate::io::Warning] {
+        &self.repeats
     }
 
     /// The readings with their sin/cos, for the kernel.
@@ -847,6 +1004,7 @@ impl DataSet {
             temperature: (self.temperature.as_ref())
                 .map(|t| touches.iter().map(|&i| t[i]).collect()),
             time: (self.time.as_ref()).map(|t| touches.iter().map(|&i| t[i]).collect()),
+            repeats: self.repeats.clone(),
         }
     }
 

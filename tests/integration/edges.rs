@@ -42,8 +42,14 @@ fn static_data_is_an_error_not_a_panic() {
     let dir = temp_dir("edges-static");
     for jitter in [false, true] {
         let data = write(&dir, "static.csv", &static_campaign(jitter));
+        // Without jitter every socket's rows repeat one row: counted once,
+        // a socket has one touch, and the error says why.
+        let why = match jitter {
+            false => "has 1 touch (9 more rows repeat its readings and count once)",
+            true => "no articulation",
+        };
         let o = aacmm(&["identify", "--arm", &shipped_arm(), "--data", &data]);
-        assert_clean_error(&o, &[&data, "no articulation"]);
+        assert_clean_error(&o, &[&data, why]);
         let out = dir.join("out").display().to_string();
         let o = aacmm(&[
             "calibrate",
@@ -54,7 +60,7 @@ fn static_data_is_an_error_not_a_panic() {
             "--out",
             &out,
         ]);
-        assert_clean_error(&o, &[&data, "no articulation"]);
+        assert_clean_error(&o, &[&data, why]);
     }
 }
 
@@ -327,4 +333,52 @@ fn radians_read_as_degrees_blame_the_angle_unit() {
         "{verdict}"
     );
     assert!(!o.status.success());
+}
+
+/// A socket's row repeated (a logger that wrote a line again) is counted
+/// once, with a warning naming the lines and the point: the figures are
+/// those of the file without the repeats (counted, the repeats lowered e).
+#[test]
+fn repeated_rows_of_a_point_are_counted_once_and_said() {
+    let dir = temp_dir("edges-repeats");
+    let text = std::fs::read_to_string(shipped("poses.csv")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    // Line 2 is S1's first row: lines 3-5 repeat it.
+    let mut repeated = vec![lines[0], lines[1], lines[1], lines[1], lines[1]];
+    repeated.extend(&lines[2..]);
+    let data = write(&dir, "repeated.csv", &(repeated.join("\n") + "\n"));
+    let arm = shipped_arm();
+    let evaluate = |data: &str| aacmm(&["evaluate", "--arm", &arm, "--data", data]);
+    let o = evaluate(&data);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let warning = stderr(&o);
+    assert!(
+        warning.contains(&format!(
+            "{data}:3: field `point`: point `S1`: 3 rows repeat"
+        )),
+        "{warning}"
+    );
+    assert!(
+        warning.contains("(lines 3–5; the first repeats line 2)"),
+        "{warning}"
+    );
+    assert!(
+        warning.contains("each counted once: 3 rows not used"),
+        "{warning}"
+    );
+    let figures = |o: &std::process::Output| {
+        let text = crate::util::stdout(o);
+        text.lines().skip(1).collect::<Vec<_>>().join("\n")
+    };
+    let original = evaluate(&shipped("poses.csv"));
+    assert!(stderr(&original).is_empty(), "{}", stderr(&original));
+    assert_eq!(figures(&o), figures(&original));
+    // A fit says it too (the request's warnings, which `calibrate` shares).
+    let o = aacmm(&["identify", "--arm", &arm, "--data", &data]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("point `S1`: 3 rows repeat"),
+        "{}",
+        stderr(&o)
+    );
 }
