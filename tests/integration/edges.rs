@@ -382,3 +382,32 @@ fn repeated_rows_of_a_point_are_counted_once_and_said() {
         stderr(&o)
     );
 }
+
+/// `--help` lists the units `--angle-unit` takes, and what it applies to,
+/// for every command that has it (it showed only its default).
+#[test]
+fn angle_unit_help_lists_its_values() {
+    for command in ["calibrate", "identify", "evaluate", "points", "plan"] {
+        let o = aacmm(&[command, "--help"]);
+        let help = crate::util::stdout(&o);
+        let at = help.find("--angle-unit <ANGLE_UNIT>").expect(command);
+        let section = &help[at..];
+        let section = &section[..section[2..]
+            .find("\n      --")
+            .map_or(section.len(), |e| e + 2)];
+        for want in [
+            "joint readings",
+            "Possible values:",
+            "- deg: degrees",
+            "- rad: radians",
+            "[default: deg]",
+        ] {
+            assert!(
+                section.contains(want),
+                "{command}: `{want}` not in {section}"
+            );
+        }
+    }
+    let short = crate::util::stdout(&aacmm(&["calibrate", "-h"]));
+    assert!(short.contains("[possible values: deg, rad]"), "{short}");
+}
