@@ -326,27 +326,29 @@ impl PositionData {
 /// has a Jacobian of rounding and noise only. `q` holds the readings (rad)
 /// in touch order, `points` each point's touches. A data set without
 /// readings is exempt.
-fn check_articulation(
-    points: &[Point],
-    q: &[f64],
-    joints: usize,
-    file: &str,
-) -> Result<(), InputError> {
+fn check_articulation(poses: &Poses, file: &str) -> Result<(), InputError> {
+    let joints = poses.joints();
     if joints == 0 {
         return Ok(());
     }
+    // Per point and joint the lowest and highest reading, in one pass over
+    // the rows (repeated rows change no range).
+    let labels = poses.points();
+    let mut bounds = vec![(f64::INFINITY, f64::NEG_INFINITY); labels.len() * joints];
+    for (row, q) in poses.rows().enumerate() {
+        let b = &mut bounds[poses.point(row) * joints..][..joints];
+        for (b, &x) in b.iter_mut().zip(q) {
+            *b = (b.0.min(x), b.1.max(x));
+        }
+    }
     // The widest range: (range in rad, joint, point label).
     let mut widest = (0.0_f64, 0, "");
-    for point in points {
+    for (p, label) in labels.iter().enumerate() {
         for j in 0..joints {
-            let (lo, hi) = (point.touches.clone())
-                .map(|i| q[i * joints + j])
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-                    (lo.min(x), hi.max(x))
-                });
+            let (lo, hi) = bounds[p * joints + j];
             let range = hi - lo;
             if range > widest.0 {
-                widest = (range, j, &point.label);
+                widest = (range, j, label.as_str());
             }
         }
     }
@@ -417,6 +419,9 @@ impl DataSet {
         if poses.is_empty() {
             return Err(InputError::file_error(file, "no touches"));
         }
+        // A campaign without articulation is refused as such before its
+        // repeated rows are counted once (a static campaign is all repeats).
+        check_articulation(poses, file)?;
         // Rows that repeat the readings of their point's row before them
         // are counted once (see `Repeats`), in the counts and the order.
         let repeats = Repeats::of(poses);
@@ -479,7 +484,6 @@ impl DataSet {
         for &row in &order {
             q.extend_from_slice(poses.reading(row));
         }
-        check_articulation(&points, &q, joints, file)?;
         let too_many = |what: &str| {
             InputError::file_error(
                 file,
@@ -1208,8 +1212,9 @@ mod tests {
         let e = data("point,q1,q2\nA,10,20\nA,10.01,20\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
             .unwrap_err();
         assert!(e.to_string().contains("0.0200° (q2 at point `A`)"), "{e}");
-        // One articulated point is enough.
-        data("point,q1,q2\nA,10,20\nA,10.01,25\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
+        // One articulated point is enough (B's rows differ, or they would
+        // count once).
+        data("point,q1,q2\nA,10,20\nA,10.01,25\nA,9.99,20.02\nB,30,40\nB,30,40.01\nB,30,40\n")
             .unwrap();
     }
 
