@@ -339,4 +339,69 @@ mod tests {
         assert!(bins.len() <= PAIR_BINS);
         assert_eq!(deltas(&e).len(), 210);
     }
+
+    /// Above the metrics' budget the figure's pairs are a seeded sample,
+    /// stated on the figure, whose mean estimates the all-pairs mean
+    /// without bias (within 5 σ of the sample mean's spread).
+    #[test]
+    fn pairs_above_the_budget_are_a_stated_unbiased_sample() {
+        // 2000 points of 10 touches: 2·10⁷ touch distances, twice the budget.
+        let labels: Vec<String> = (0..20_000).map(|r| format!("p{}", r % 2000)).collect();
+        let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+        let rows: Vec<[f64; 3]> = (0..20_000)
+            .map(|r| {
+                let (p, k) = ((r % 2000) as f64, (r / 2000) as f64);
+                [(p * 0.37).sin() * 400.0 + k * 0.03, p, (p * k).cos()]
+            })
+            .collect();
+        let xyz = data.to_touch_order(&rows);
+        let (ev, pairs) = evaluate_with_pairs(&data, &xyz, 5).unwrap();
+        let sample = ev.pair_sample.expect("sampled");
+        assert_eq!((sample.pairs, sample.seed), (2000 * 1999 / 2, 5));
+        // Kept with probability 1/2: 999 500 ± 707 (σ).
+        assert!(sample.sampled.abs_diff(999_500) < 5 * 707, "{sample:?}");
+        let Pairs::Binned { count, .. } = &pairs else {
+            panic!("expected bins")
+        };
+        assert_eq!(*count as u64, sample.sampled);
+        let mut full = evaluate_without_pairs(&data, &xyz).unwrap();
+        add_pairs(
+            &mut full,
+            &data,
+            &xyz,
+            (2, &PairSet::All),
+            || (),
+            |_, _, _| {},
+        )
+        .unwrap();
+        let (s, f) = (
+            ev.pair_length_abs_summary.unwrap(),
+            full.pair_length_abs_summary.unwrap(),
+        );
+        let n = sample.sampled as f64;
+        let spread = f.std * ((1.0 - n / sample.pairs as f64) / n).sqrt();
+        assert!(
+            (s.mean - f.mean).abs() < 5.0 * spread,
+            "{} vs {}",
+            s.mean,
+            f.mean
+        );
+        let e = Evaluated {
+            set: 0,
+            set_name: "measured".into(),
+            data: &data,
+            held_out: false,
+            stage: Stage::After,
+            xyz: &xyz,
+            ev,
+            pairs,
+        };
+        let arms = Arms {
+            before: String::new(),
+            after: "arm".into(),
+        };
+        let figure = crate::report::figures::lengths::figure(&[e], &arms).unwrap();
+        let said = format!("{} of 1999000 pairs, sampled (seed 5)", sample.sampled);
+        assert!(figure.svg.contains(&said), "{said} not on the figure");
+    }
 }
