@@ -153,6 +153,46 @@ impl Repeats {
         Repeats { rows, of }
     }
 
+    /// Whether `row` is counted once (a repeat).
+    fn contains(&self, row: usize) -> bool {
+        self.rows.binary_search(&row).is_ok()
+    }
+
+    /// Per point its touches, repeats counted once; a point with fewer
+    /// than [`MIN_TOUCHES`] refused at its first line, saying how many of
+    /// its rows repeated.
+    fn touch_counts(&self, poses: &Poses, file: &str) -> Result<Vec<usize>, InputError> {
+        let labels = poses.points();
+        let mut count = vec![0usize; labels.len()];
+        let mut first = vec![usize::MAX; labels.len()];
+        for row in (0..poses.len()).filter(|&r| !self.contains(r)) {
+            let p = poses.point(row);
+            count[p] += 1;
+            first[p] = first[p].min(row);
+        }
+        let Some(p) = (0..labels.len()).find(|&p| count[p] < MIN_TOUCHES) else {
+            return Ok(count);
+        };
+        let also = match self.of_point_in(poses, p) {
+            0 => String::new(),
+            n => format!(
+                " ({n} more row{} repeat its readings and count once)",
+                plural(n)
+            ),
+        };
+        Err(InputError::field(
+            file,
+            poses.line(first[p]),
+            "point",
+            format!(
+                "point `{}` has {} touch{}{also}; at least {MIN_TOUCHES} are needed",
+                labels[p],
+                count[p],
+                if count[p] == 1 { "" } else { "es" }
+            ),
+        ))
+    }
+
     /// How many rows of point `p` were counted once (`poses` as read).
     fn of_point_in(&self, poses: &Poses, p: usize) -> usize {
         self.rows.iter().filter(|&&r| poses.point(r) == p).count()
@@ -425,39 +465,11 @@ impl DataSet {
         // Rows that repeat the readings of their point's row before them
         // are counted once (see `Repeats`), in the counts and the order.
         let repeats = Repeats::of(poses);
-        let is_repeat = |row: usize| repeats.rows.binary_search(&row).is_ok();
+        let is_repeat = |row: usize| repeats.contains(row);
         // The poses' points are in order of first appearance already: a
         // counting sort by point puts the rows in touch order.
         let labels = poses.points();
-        let mut count = vec![0usize; labels.len()];
-        let mut first = vec![usize::MAX; labels.len()];
-        for row in (0..poses.len()).filter(|&r| !is_repeat(r)) {
-            let p = poses.point(row);
-            count[p] += 1;
-            first[p] = first[p].min(row);
-        }
-        for (p, label) in labels.iter().enumerate() {
-            if count[p] < MIN_TOUCHES {
-                let repeated = repeats.of_point_in(poses, p);
-                let also = match repeated {
-                    0 => String::new(),
-                    n => format!(
-                        " ({n} more row{} repeat its readings and count once)",
-                        plural(n)
-                    ),
-                };
-                return Err(InputError::field(
-                    file,
-                    poses.line(first[p]),
-                    "point",
-                    format!(
-                        "point `{label}` has {} touch{}{also}; at least {MIN_TOUCHES} are needed",
-                        count[p],
-                        if count[p] == 1 { "" } else { "es" }
-                    ),
-                ));
-            }
-        }
+        let count = repeats.touch_counts(poses, file)?;
         let warnings = repeats.warnings(poses, file);
         let mut start = 0;
         let points: Vec<Point> = (labels.iter().zip(&count))
@@ -472,7 +484,7 @@ impl DataSet {
             .collect();
         // `next[p]`: where point p's next touch goes.
         let mut next: Vec<usize> = points.iter().map(|p| p.touches.start).collect();
-        drop((count, first));
+        drop(count);
         let mut order = vec![0usize; poses.len() - repeats.rows.len()];
         for row in (0..poses.len()).filter(|&r| !is_repeat(r)) {
             let p = poses.point(row);

@@ -106,7 +106,8 @@ pub(crate) fn pair_set(points: &[Point], seed: u64) -> PairSet {
         // The pairs skipped before the next kept one: Geometric(p).
         let u: f64 = rng.random();
         let gap = ((-u).ln_1p() / ln_miss).floor();
-        if !(gap < (total - k) as f64) {
+        // `gap` is finite or +∞ (u near 1), never NaN: 0 < p < 1.
+        if gap >= (total - k) as f64 {
             break;
         }
         k += gap as u64;
