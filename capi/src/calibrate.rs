@@ -419,7 +419,11 @@ pub unsafe extern "C" fn aacmm_calibrate(
             arm_file: start.source.clone(),
             data_file: ARRAYS.to_string(),
             lengths_file: (!lengths.is_empty()).then(|| ARRAYS.to_string()),
-            warnings: start.warnings.clone(),
+            // The arm's warnings, and the rows counted once (a point's
+            // repeated row), which the report keeps.
+            warnings: (start.warnings.iter().cloned())
+                .chain(data.repeat_warnings().iter().map(ToString::to_string))
+                .collect(),
         };
         let request = Request::new(start.arm.clone(), data).sources(sources);
         let result = run(options::request(&o, request))?;

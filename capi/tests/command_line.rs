@@ -830,3 +830,37 @@ fn a_refused_calibration_says_so_and_its_arm_file_is_refused_unless_asked() {
     unsafe { aacmm_arm_free(handle) };
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Poses in radians read as degrees (the paper campaign written in rad,
+/// given with `AACMM_ANGLE_DEG`): the refusal names the angle unit and its
+/// C setting, not the lengths file — through the C API the reader's
+/// warning is not shown, so the error alone must say it.
+#[test]
+fn radians_read_as_degrees_name_the_angle_unit() {
+    let (poses, _) = aacmm_core::io::read_poses(
+        Path::new(&example("examples/paper-campaign/poses.csv")),
+        AngleUnit::Deg,
+        None,
+    )
+    .unwrap();
+    let mut text = Vec::new();
+    write_poses(&mut text, &poses, AngleUnit::Rad).unwrap();
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("capi-radians");
+    std::fs::create_dir_all(&dir).unwrap();
+    let rad = dir.join("rad.csv");
+    std::fs::write(&rad, text).unwrap();
+    let defaults = options(|_| Vec::new());
+    let refused = Calibration::try_paths(
+        &example("examples/paper-table-1.toml"),
+        Some(rad.to_str().unwrap()),
+        Some(&example("examples/paper-campaign/lengths.csv")),
+        AACMM_ANGLE_DEG,
+        &defaults,
+    );
+    assert_eq!(refused.err(), Some(AacmmStatus::Calibration));
+    let m = last_error();
+    assert!(m.contains("look like radians read as degrees"), "{m}");
+    assert!(m.contains("AACMM_ANGLE_RAD"), "{m}");
+    assert!(m.contains("the lengths file is not the cause"), "{m}");
+    assert!(!m.contains("different units"), "{m}");
+}

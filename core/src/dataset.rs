@@ -114,6 +114,163 @@ impl SourceMap {
     }
 }
 
+/// Rows of a poses file that repeat, reading for reading (and temperature),
+/// the previous row of the same point — a logger that wrote a line twice,
+/// or a touch recorded again without the arm moving. Such a row is no
+/// independent touch: it adds no scatter, so counted it would lower `e`
+/// and understate the noise; the data set counts it once and says so.
+/// Only the previous row of the same point is compared (linear time,
+/// memory per point), which catches every run of repeats however long.
+struct Repeats {
+    /// The rows counted once, ascending.
+    rows: Vec<usize>,
+    /// Per repeated row (same order), the row it repeats.
+    of: Vec<usize>,
+}
+
+impl Repeats {
+    fn of(poses: &Poses) -> Repeats {
+        let mut last = vec![usize::MAX; poses.points().len()];
+        let (mut rows, mut of) = (Vec::new(), Vec::new());
+        if poses.joints() == 0 {
+            // Labels without readings (`from_labels`): nothing repeats.
+            return Repeats { rows, of };
+        }
+        let temperature = poses.temperatures();
+        for row in 0..poses.len() {
+            let p = poses.point(row);
+            let prev = last[p];
+            let same = prev != usize::MAX
+                && poses.reading(row) == poses.reading(prev)
+                && temperature.is_none_or(|t| t[row] == t[prev]);
+            if same {
+                rows.push(row);
+                of.push(prev);
+            } else {
+                last[p] = row;
+            }
+        }
+        Repeats { rows, of }
+    }
+
+    /// Whether `row` is counted once (a repeat).
+    fn contains(&self, row: usize) -> bool {
+        self.rows.binary_search(&row).is_ok()
+    }
+
+    /// Per point its touches, repeats counted once; a point with fewer
+    /// than [`MIN_TOUCHES`] refused at its first line, saying how many of
+    /// its rows repeated.
+    fn touch_counts(&self, poses: &Poses, file: &str) -> Result<Vec<usize>, InputError> {
+        let labels = poses.points();
+        let mut count = vec![0usize; labels.len()];
+        let mut first = vec![usize::MAX; labels.len()];
+        for row in (0..poses.len()).filter(|&r| !self.contains(r)) {
+            let p = poses.point(row);
+            count[p] += 1;
+            first[p] = first[p].min(row);
+        }
+        let Some(p) = (0..labels.len()).find(|&p| count[p] < MIN_TOUCHES) else {
+            return Ok(count);
+        };
+        let also = match self.of_point_in(poses, p) {
+            0 => String::new(),
+            n => format!(
+                " ({n} more row{} repeat its readings and count once)",
+                plural(n)
+            ),
+        };
+        Err(InputError::field(
+            file,
+            poses.line(first[p]),
+            "point",
+            format!(
+                "point `{}` has {} touch{}{also}; at least {MIN_TOUCHES} are needed",
+                labels[p],
+                count[p],
+                if count[p] == 1 { "" } else { "es" }
+            ),
+        ))
+    }
+
+    /// How many rows of point `p` were counted once (`poses` as read).
+    fn of_point_in(&self, poses: &Poses, p: usize) -> usize {
+        self.rows.iter().filter(|&&r| poses.point(r) == p).count()
+    }
+
+    /// One warning per point with repeats, at its first repeated line, in
+    /// the order of the points' first repeat.
+    fn warnings(&self, poses: &Poses, file: &str) -> Vec<crate::io::Warning> {
+        let mut by_point: Vec<(usize, Vec<usize>, usize)> = Vec::new();
+        for (&row, &of) in self.rows.iter().zip(&self.of) {
+            let p = poses.point(row);
+            match by_point.iter_mut().find(|(q, ..)| *q == p) {
+                Some((_, lines, _)) => lines.push(poses.line(row)),
+                None => by_point.push((p, vec![poses.line(row)], poses.line(of))),
+            }
+        }
+        by_point
+            .into_iter()
+            .map(|(p, lines, first_of)| {
+                let n = lines.len();
+                crate::io::Warning {
+                    file: file.to_string(),
+                    line: Some(lines[0]),
+                    field: Some("point".to_string()),
+                    message: format!(
+                        "point `{}`: {n} row{s} repeat{v} the readings of the point's row before \
+                         {them} exactly (line{s} {}; the first repeats line {first_of}) — a logger \
+                         that wrote a line twice?; each counted once: {n} row{s} not used, as \
+                         repeated rows are no independent touches and would understate the \
+                         scatter",
+                        poses.points()[p],
+                        line_ranges(&lines),
+                        s = plural(n),
+                        v = if n == 1 { "s" } else { "" },
+                        them = if n == 1 { "it" } else { "them" },
+                    ),
+                }
+            })
+            .collect()
+    }
+}
+
+/// `""` for one, `"s"` for more.
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
+/// Ascending line numbers as ranges (`12–20, 31`), the first
+/// [`MAX_LISTED_RANGES`] ranges and how many lines more.
+fn line_ranges(lines: &[usize]) -> String {
+    let mut ranges: Vec<(usize, usize)> = Vec::new();
+    for &l in lines {
+        match ranges.last_mut() {
+            Some((_, end)) if *end + 1 == l => *end = l,
+            _ => ranges.push((l, l)),
+        }
+    }
+    let shown: Vec<String> = ranges
+        .iter()
+        .take(MAX_LISTED_RANGES)
+        .map(|&(a, b)| {
+            if a == b {
+                a.to_string()
+            } else {
+                format!("{a}–{b}")
+            }
+        })
+        .collect();
+    let rest: usize = ranges[shown.len()..].iter().map(|(a, b)| b - a + 1).sum();
+    match rest {
+        0 => shown.join(", "),
+        n => format!("{} and {n} more", shown.join(", ")),
+    }
+}
+
+/// Line ranges a repeat warning lists before counting the rest.
+const MAX_LISTED_RANGES: usize = 8;
+
 /// Touches grouped by point, prepared for the kernel, with reference lengths
 /// and the source of every value.
 #[derive(Clone, Debug, PartialEq)]
@@ -131,6 +288,9 @@ pub struct DataSet {
     /// the poses file recorded them.
     temperature: Option<Vec<f64>>,
     time: Option<Vec<f64>>,
+    /// One warning per point some of whose rows repeated the row before
+    /// them and were counted once ([`DataSet::repeat_warnings`]).
+    repeats: Vec<crate::io::Warning>,
 }
 
 /// Reference positions prepared for the kernel: the rows of a
@@ -206,27 +366,29 @@ impl PositionData {
 /// has a Jacobian of rounding and noise only. `q` holds the readings (rad)
 /// in touch order, `points` each point's touches. A data set without
 /// readings is exempt.
-fn check_articulation(
-    points: &[Point],
-    q: &[f64],
-    joints: usize,
-    file: &str,
-) -> Result<(), InputError> {
+fn check_articulation(poses: &Poses, file: &str) -> Result<(), InputError> {
+    let joints = poses.joints();
     if joints == 0 {
         return Ok(());
     }
+    // Per point and joint the lowest and highest reading, in one pass over
+    // the rows (repeated rows change no range).
+    let labels = poses.points();
+    let mut bounds = vec![(f64::INFINITY, f64::NEG_INFINITY); labels.len() * joints];
+    for (row, q) in poses.rows().enumerate() {
+        let b = &mut bounds[poses.point(row) * joints..][..joints];
+        for (b, &x) in b.iter_mut().zip(q) {
+            *b = (b.0.min(x), b.1.max(x));
+        }
+    }
     // The widest range: (range in rad, joint, point label).
     let mut widest = (0.0_f64, 0, "");
-    for point in points {
+    for (p, label) in labels.iter().enumerate() {
         for j in 0..joints {
-            let (lo, hi) = (point.touches.clone())
-                .map(|i| q[i * joints + j])
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-                    (lo.min(x), hi.max(x))
-                });
+            let (lo, hi) = bounds[p * joints + j];
             let range = hi - lo;
             if range > widest.0 {
-                widest = (range, j, &point.label);
+                widest = (range, j, label.as_str());
             }
         }
     }
@@ -297,30 +459,18 @@ impl DataSet {
         if poses.is_empty() {
             return Err(InputError::file_error(file, "no touches"));
         }
+        // A campaign without articulation is refused as such before its
+        // repeated rows are counted once (a static campaign is all repeats).
+        check_articulation(poses, file)?;
+        // Rows that repeat the readings of their point's row before them
+        // are counted once (see `Repeats`), in the counts and the order.
+        let repeats = Repeats::of(poses);
+        let is_repeat = |row: usize| repeats.contains(row);
         // The poses' points are in order of first appearance already: a
         // counting sort by point puts the rows in touch order.
         let labels = poses.points();
-        let mut count = vec![0usize; labels.len()];
-        let mut first = vec![usize::MAX; labels.len()];
-        for row in 0..poses.len() {
-            let p = poses.point(row);
-            count[p] += 1;
-            first[p] = first[p].min(row);
-        }
-        for (p, label) in labels.iter().enumerate() {
-            if count[p] < MIN_TOUCHES {
-                return Err(InputError::field(
-                    file,
-                    poses.line(first[p]),
-                    "point",
-                    format!(
-                        "point `{label}` has {} touch{}; at least {MIN_TOUCHES} are needed",
-                        count[p],
-                        if count[p] == 1 { "" } else { "es" }
-                    ),
-                ));
-            }
-        }
+        let count = repeats.touch_counts(poses, file)?;
+        let warnings = repeats.warnings(poses, file);
         let mut start = 0;
         let points: Vec<Point> = (labels.iter().zip(&count))
             .map(|(label, &n)| {
@@ -334,9 +484,9 @@ impl DataSet {
             .collect();
         // `next[p]`: where point p's next touch goes.
         let mut next: Vec<usize> = points.iter().map(|p| p.touches.start).collect();
-        drop((count, first));
-        let mut order = vec![0usize; poses.len()];
-        for row in 0..poses.len() {
+        drop(count);
+        let mut order = vec![0usize; poses.len() - repeats.rows.len()];
+        for row in (0..poses.len()).filter(|&r| !is_repeat(r)) {
             let p = poses.point(row);
             order[next[p]] = row;
             next[p] += 1;
@@ -346,7 +496,6 @@ impl DataSet {
         for &row in &order {
             q.extend_from_slice(poses.reading(row));
         }
-        check_articulation(&points, &q, joints, file)?;
         let too_many = |what: &str| {
             InputError::file_error(
                 file,
@@ -384,6 +533,7 @@ impl DataSet {
             positions: None,
             temperature,
             time,
+            repeats: warnings,
         })
     }
 
@@ -423,6 +573,8 @@ impl DataSet {
     ) -> Result<(DataSet, Vec<crate::io::Warning>), InputError> {
         let (p, warnings) = crate::io::read_poses(poses, unit, Some(joints))?;
         let data = DataSet::from_poses_owned(p, &crate::io::source_name(poses))?;
+        let mut warnings = warnings;
+        warnings.extend_from_slice(data.repeat_warnings());
         let data = match lengths {
             Some(l) => {
                 data.with_lengths(&crate::io::read_lengths(l)?, &crate::io::source_name(l))?
@@ -699,6 +851,7 @@ impl DataSet {
             positions: Some(PositionData::new(positions, file)),
             temperature: None,
             time: None,
+            repeats: Vec::new(),
         })
     }
 
@@ -765,6 +918,26 @@ impl DataSet {
     /// The readings of touch `i` (rad).
     pub fn reading(&self, i: usize) -> &[f64] {
         &self.q[i * self.joints..(i + 1) * self.joints]
+    }
+
+    /// The warnings of rows counted once because they repeated the readings
+    /// of their point's row before them, one per point, naming file, lines
+    /// and label: a front end shows them with the reader's warnings (which
+    /// [`DataSet::read`] does). Empty for data not built from a poses file.
+    ///
+    /// ```
+    /// use aacmm_core::{DataSet, io::{AngleUnit, parse_poses}};
+    /// let text = "point,q1\nA,1\nA,2\nA,2\nA,2\nA,3\n";
+    /// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Rad, None).unwrap();
+    /// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+    /// assert_eq!(data.len(), 3); // lines 4 and 5 repeat line 3
+    /// let w = data.repeat_warnings()[0].to_string();
+    /// assert!(w.starts_with("p.csv:4: field `point`: point `A`: 2 rows repeat"), "{w}");
+    /// assert!(w.contains("(lines 4–5; the first repeats line 3)"), "{w}");
+    /// assert!(w.contains("each counted once: 2 rows not used"), "{w}");
+    /// ```
+    pub fn repeat_warnings(&self) -> &[crate::io::Warning] {
+        &self.repeats
     }
 
     /// The readings with their sin/cos, for the kernel.
@@ -847,6 +1020,7 @@ impl DataSet {
             temperature: (self.temperature.as_ref())
                 .map(|t| touches.iter().map(|&i| t[i]).collect()),
             time: (self.time.as_ref()).map(|t| touches.iter().map(|&i| t[i]).collect()),
+            repeats: self.repeats.clone(),
         }
     }
 
@@ -1050,8 +1224,9 @@ mod tests {
         let e = data("point,q1,q2\nA,10,20\nA,10.01,20\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
             .unwrap_err();
         assert!(e.to_string().contains("0.0200° (q2 at point `A`)"), "{e}");
-        // One articulated point is enough.
-        data("point,q1,q2\nA,10,20\nA,10.01,25\nA,9.99,20.02\nB,30,40\nB,30,40\nB,30,40\n")
+        // One articulated point is enough (B's rows differ, or they would
+        // count once).
+        data("point,q1,q2\nA,10,20\nA,10.01,25\nA,9.99,20.02\nB,30,40\nB,30,40.01\nB,30,40\n")
             .unwrap();
     }
 

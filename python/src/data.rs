@@ -128,11 +128,19 @@ impl DataSet {
         };
         let has_lengths = !lengths.is_empty();
         let data = detached(py, || touches_data_set(&labels, joints, &flat, &lengths))?;
+        // Rows counted once (a repeated row of a point) are said, as a
+        // file's would be.
+        let warnings: Vec<String> = data
+            .repeat_warnings()
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        warn_all(py, &warnings)?;
         Ok(DataSet {
             data,
             poses_file: "<arrays>".to_string(),
             lengths_file: has_lengths.then(|| "<arrays>".to_string()),
-            warnings: Vec::new(),
+            warnings,
             unit,
         })
     }
@@ -182,6 +190,8 @@ impl DataSet {
             let (read, warnings) = read_poses(&poses, unit, joints)?;
             let poses_file = source_name(&poses);
             let mut data = CoreDataSet::from_poses(&read, &poses_file)?;
+            let mut warnings = warnings;
+            warnings.extend_from_slice(data.repeat_warnings());
             let lengths_file = lengths.as_deref().map(source_name);
             if let (Some(path), Some(name)) = (&lengths, &lengths_file) {
                 data = data.with_lengths(&read_lengths(path)?, name)?;

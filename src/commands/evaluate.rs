@@ -54,6 +54,8 @@ pub fn run(args: Args) -> Result<()> {
     let (arm, poses) = args.input.read()?;
     let kernel = args.input.kernel(&arm)?;
     let mut data = DataSet::from_poses_owned(poses, &source_name(&args.input.data))?;
+    // Rows counted once are said, with their lines, before any figure.
+    super::report(data.repeat_warnings())?;
     if let Some(path) = &args.lengths {
         data = data.with_lengths(&read_lengths(path)?, &source_name(path))?;
     }

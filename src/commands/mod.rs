@@ -46,8 +46,9 @@ pub struct ArmAndPoses {
     /// Poses file (CSV `point,q1,...,qn`); `-` reads standard input.
     #[arg(long)]
     pub data: PathBuf,
-    /// Unit of the angles in the poses file.
-    #[arg(long, default_value = "deg", value_parser = angle_unit)]
+    /// Unit of the joint readings (q1..qn) in the poses file; the arm
+    /// file states its own (`angle_unit`).
+    #[arg(long, default_value = "deg", value_parser = angle_unit())]
     pub angle_unit: AngleUnit,
     /// The arm's temperature, °C, when its file states a thermal expansion
     /// (`cte_per_k`): its lengths are scaled from the reference temperature.
@@ -181,10 +182,17 @@ impl ArmAndPoses {
     }
 }
 
-/// Parses `--angle-unit` values with the library's own unit names.
-pub fn angle_unit(s: &str) -> Result<AngleUnit, String> {
-    s.parse()
-        .map_err(|e: aacmm_core::io::UnknownUnit| e.to_string())
+/// Parses `--angle-unit` values with the library's own unit names, listed
+/// as the flag's possible values so that `--help` shows them (a plain
+/// function parser shows only the default).
+pub fn angle_unit() -> impl clap::builder::TypedValueParser<Value = AngleUnit> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let help = |u: AngleUnit| match u {
+        AngleUnit::Deg => "degrees",
+        AngleUnit::Rad => "radians",
+    };
+    let values = AngleUnit::ALL.map(|u| PossibleValue::new(u.name()).help(help(u)));
+    PossibleValuesParser::new(values).try_map(|s| s.parse::<AngleUnit>())
 }
 
 /// Writes `value` as pretty JSON (and a final newline) to `path`.

@@ -84,8 +84,10 @@ pub struct Args {
     /// (its frame fitted with the arm) or touches of sockets.
     #[arg(long, value_enum)]
     measure: MeasureFlag,
-    /// Unit of the angles of the poses files read and written.
-    #[arg(long, default_value = "deg", value_parser = super::angle_unit)]
+    /// Unit of the joint readings (q1..qn) of the poses files read
+    /// (--candidates, --workspace) and written (--out); the arm file states
+    /// its own (`angle_unit`).
+    #[arg(long, default_value = "deg", value_parser = super::angle_unit())]
     angle_unit: AngleUnit,
     /// A calibration's output directory (calibration.json): plan the next
     /// measurements at the calibrated arm, starting from what it knows

@@ -25,8 +25,11 @@ pub struct FitInput {
     /// `-` reads standard input. Optional with --positions.
     #[arg(long, required_unless_present = "positions")]
     pub data: Option<PathBuf>,
-    /// Unit of the angles in the poses and positions files.
-    #[arg(long, default_value = "deg", value_parser = super::angle_unit)]
+    /// Unit of the joint readings (q1..qn) in the poses and positions
+    /// files (and calibrate's held-out --validate files); the arm file
+    /// states its own (`angle_unit`), and --encoder-noise is in degrees
+    /// whatever this is.
+    #[arg(long, default_value = "deg", value_parser = super::angle_unit())]
     pub angle_unit: AngleUnit,
     /// Reference lengths (CSV `point_a,point_b,distance[,uncertainty]`, mm).
     #[arg(long, value_name = "L.csv", requires = "data")]

@@ -609,8 +609,8 @@ fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, Calibratio
     }
     if !setup.stated {
         let mut sorted = t2.clone();
-        sorted.sort_by(f64::total_cmp);
-        let median = sorted.get(sorted.len() / 2).copied().unwrap_or(1.0);
+        let m = sorted.len() / 2;
+        let median = crate::stats::kth_smallest(&mut sorted, m).unwrap_or(1.0);
         let s2 = (median / 2.366).max(f64::MIN_POSITIVE);
         t2.iter_mut().for_each(|v| *v /= s2);
     }

@@ -72,6 +72,29 @@ use crate::objective::Objective;
 use crate::params::{DhParams, ParamId};
 use crate::residuals::{Layout, Normal, Term, TermError};
 
+/// What to do about readings in radians read as degrees, in each front
+/// end's words (the library serves all three).
+pub(crate) const ANGLE_UNITS_REMEDY: &str = "read the poses as radians (command line \
+     `--angle-unit rad`, Python `angle_unit=\"rad\"`, C `AACMM_ANGLE_RAD`)";
+
+/// The remedy of [`CalibrationError::AngleUnits`], in each front end's
+/// words (the library serves all three), and whether reading the angles as
+/// radians makes the lengths agree with the nominal arm.
+fn angle_units_remedy(ratio_as_rad: f64, lengths_agree: bool) -> String {
+    let remedy = ANGLE_UNITS_REMEDY;
+    if lengths_agree {
+        format!(
+            "{remedy}: read so, the lengths are {ratio_as_rad:.4} times the nominal arm's \
+             distances (the lengths file is not the cause)"
+        )
+    } else {
+        format!(
+            "{remedy}; read so, the lengths are still {ratio_as_rad:.3e} times the nominal arm's \
+             distances: check the lengths file's unit (mm) too"
+        )
+    }
+}
+
 /// Why a calibration could not run.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -112,6 +135,26 @@ pub enum CalibrationError {
         file: String,
         /// Median of stated length / nominal distance.
         ratio: f64,
+    },
+    /// The reference lengths disagree with the nominal arm because the
+    /// joint readings look like radians read as degrees (every one within
+    /// ±2π "degrees"): the angle unit is the cause, not the lengths file.
+    #[error(
+        "{file}: every joint reading, read as degrees, is within ±6.28° — these angles look like \
+         radians read as degrees, so the reference lengths come out {ratio:.3e} times the nominal \
+         arm's distances; {}",
+        angle_units_remedy(*ratio_as_rad, *lengths_agree)
+    )]
+    AngleUnits {
+        /// The poses file.
+        file: String,
+        /// Median of stated length / nominal distance, as read.
+        ratio: f64,
+        /// The same with the readings taken as radians.
+        ratio_as_rad: f64,
+        /// Whether `ratio_as_rad` is within the bound the lengths are
+        /// checked against.
+        lengths_agree: bool,
     },
     /// Reference positions the nominal arm cannot be registered to: another
     /// unit, swapped axes, another arm.

@@ -256,8 +256,8 @@ impl RobustFit {
 /// The median of `v` (upper median for an even count); 0 when empty.
 fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
-    s.sort_by(f64::total_cmp);
-    s.get(s.len() / 2).copied().unwrap_or(0.0)
+    let m = s.len() / 2;
+    crate::stats::kth_smallest(&mut s, m).unwrap_or(0.0)
 }
 
 /// The robust fit's result, for [`super::assess`].

@@ -380,6 +380,17 @@ fn check_poses_header(
     }
 }
 
+/// Whether `rows` rows of readings `q`, in degrees once multiplied by
+/// `to_deg`, look like radians read as degrees: at least
+/// [`RADIANS_HINT_MIN_ROWS`] rows, every |q| below 2π degrees — no arm is
+/// moved through a campaign within ±6.3° on every joint. The reader's
+/// warning and the calibration's refusal ask the same question, so that
+/// the refusal names the cause the warning named.
+pub(crate) fn look_like_radians(q: &[f64], rows: usize, to_deg: f64) -> bool {
+    let turn = std::f64::consts::TAU;
+    rows >= RADIANS_HINT_MIN_ROWS && q.iter().all(|x| (x * to_deg).abs() < turn)
+}
+
 /// Hints when the angles look like the other unit (`q` still in `unit`).
 fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
     let turn = std::f64::consts::TAU;
@@ -389,9 +400,8 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
         field,
         message,
     };
-    let all_small = || poses.q.iter().all(|x| x.abs() < turn);
     match unit {
-        AngleUnit::Deg if poses.len() >= RADIANS_HINT_MIN_ROWS && all_small() => {
+        AngleUnit::Deg if look_like_radians(&poses.q, poses.len(), 1.0) => {
             let message = format!(
                 "angles declared in degrees, but every |q| in all {} rows is below 2π (6.28°): \
                  these angles look like radians; pass --angle-unit rad if so",

@@ -79,12 +79,15 @@
 //! ```
 
 mod length;
+mod pairs;
 mod point;
 pub(crate) mod table;
 
 pub use length::{
     PairLengthError, ReferenceError, ReferenceSummary, pair_length_error, pair_length_errors,
 };
+pub use pairs::{DEFAULT_PAIR_SEED, PAIR_TOUCH_BUDGET, PairSample};
+pub(crate) use pairs::{PairSet, pair_set};
 pub use point::{PointStats, point_stats};
 pub use table::write_pair_table;
 
@@ -290,11 +293,16 @@ pub struct Evaluation {
     pub single_point_delta_max: Summary,
     /// `2s` across points (SPAT, unverified which figure vendors quote).
     pub single_point_two_s: Summary,
-    /// `d_error` (eq. 19) across all pairs of points (Fig. 7); `None` with a
-    /// single point.
+    /// `d_error` (eq. 19) across all pairs of points (Fig. 7), or across
+    /// [`Evaluation::pair_sample`]; `None` with a single point.
     pub pair_length_summary: Option<Summary>,
     /// `d_error_abs` across pairs; `None` with a single point.
     pub pair_length_abs_summary: Option<Summary>,
+    /// The pairs the two summaries are over when not all of them: a seeded
+    /// sample above [`PAIR_TOUCH_BUDGET`] touch distances (`None`: every
+    /// pair, or none computed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pair_sample: Option<PairSample>,
     /// Error against every reference length of the data set.
     pub reference: Vec<ReferenceError>,
     /// Summary of the reference errors; `None` when none were given.
@@ -305,7 +313,9 @@ pub struct Evaluation {
 /// data set's touches (in its touch order; see the module documentation for
 /// the formulas). Memory is linear in the touches: pairs are summarised as
 /// they are computed, on up to two threads;
-/// [`evaluate_threads`] takes the count.
+/// [`evaluate_threads`] takes the count. Above [`PAIR_TOUCH_BUDGET`] touch
+/// distances the pairs are a sample (seed [`DEFAULT_PAIR_SEED`];
+/// [`evaluate_seeded`] takes one), stated in [`Evaluation::pair_sample`].
 ///
 /// # Errors
 ///
@@ -360,7 +370,36 @@ pub fn evaluate_threads(
     xyz: &[[f64; 3]],
     threads: usize,
 ) -> Result<Evaluation, MetricsError> {
-    evaluate_with(data, xyz, Some(threads))
+    evaluate_with(data, xyz, Some((threads, DEFAULT_PAIR_SEED)))
+}
+
+/// [`evaluate_threads`] with the pairs, when sampled, drawn with `seed`
+/// (a session's, so that its outputs agree).
+///
+/// # Errors
+///
+/// As [`evaluate`].
+///
+/// ```
+/// use aacmm_core::{dataset::DataSet, metrics::evaluate_seeded};
+/// // 1500 points of 10 touches: 1.1·10⁷ touch distances, above the budget.
+/// let labels: Vec<String> = (0..15_000).map(|i| format!("s{}", i % 1500)).collect();
+/// let xyz: Vec<[f64; 3]> = (0..15_000).map(|i| [(i as f64).sin() * 500.0, i as f64, 0.0]).collect();
+/// let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+/// let xyz = data.to_touch_order(&xyz);
+/// let ev = evaluate_seeded(&data, &xyz, 2, 7).unwrap();
+/// let sample = ev.pair_sample.unwrap();
+/// assert_eq!((sample.pairs, sample.seed), (1500 * 1499 / 2, 7));
+/// assert_eq!(ev.pair_length_summary.unwrap().count as u64, sample.sampled);
+/// assert!(sample.sampled < sample.pairs);
+/// ```
+pub fn evaluate_seeded(
+    data: &DataSet,
+    xyz: &[[f64; 3]],
+    threads: usize,
+    seed: u64,
+) -> Result<Evaluation, MetricsError> {
+    evaluate_with(data, xyz, Some((threads, seed)))
 }
 
 /// [`evaluate`] without the pairs of points (their summaries `None`): the
@@ -375,12 +414,12 @@ pub(crate) fn evaluate_without_pairs(
     evaluate_with(data, xyz, None)
 }
 
-/// [`evaluate_threads`], with the pairs on `pairs` threads or, `None`, not
-/// computed.
+/// [`evaluate_threads`], with the pairs on `pairs.0` threads (sampled with
+/// seed `pairs.1` above the budget) or, `None`, not computed.
 fn evaluate_with(
     data: &DataSet,
     xyz: &[[f64; 3]],
-    pairs: Option<usize>,
+    pairs: Option<(usize, u64)>,
 ) -> Result<Evaluation, MetricsError> {
     if xyz.len() != data.len() {
         return Err(MetricsError::LengthMismatch {
@@ -404,12 +443,13 @@ fn evaluate_with(
         .iter()
         .map(|p| point_stats(&p.label, &xyz[p.touches.clone()]))
         .collect::<Result<Vec<_>, _>>()?;
-    let (signed, abs) = match pairs {
-        Some(threads) => {
-            let (signed, abs) = pair_summaries(data, xyz, &stats, threads);
-            (signed.summary(), abs.summary())
+    let (signed, abs, pair_sample) = match pairs {
+        Some((threads, seed)) => {
+            let set = pairs::pair_set(data.points(), seed);
+            let (signed, abs) = pair_summaries(data, xyz, &stats, threads, &set);
+            (signed.summary(), abs.summary(), set.sample())
         }
-        None => (None, None),
+        None => (None, None, None),
     };
     let reference: Vec<ReferenceError> = data
         .references()
@@ -437,6 +477,7 @@ fn evaluate_with(
         single_point_two_s: across_points(|p| p.two_s),
         pair_length_summary: signed,
         pair_length_abs_summary: abs,
+        pair_sample,
         reference_summary: ReferenceSummary::of(
             &reference.iter().map(|r| r.error).collect::<Vec<_>>(),
         ),
@@ -483,18 +524,19 @@ impl Evaluation {
     }
 }
 
-/// Eq. 19 summarised over all pairs `i < j`, in constant memory. Rows `i`
-/// are split into chunks of fixed size that run on up to `threads` threads
-/// (one below three chunks: too little work to pay for a thread); the
-/// chunks' summaries are merged in row order, so the result does not depend
-/// on the threads.
+/// Eq. 19 summarised over the pairs `i < j` of `set`, in constant memory
+/// beyond the set. Rows `i` (or the sampled pairs) are split into chunks of
+/// fixed size that run on up to `threads` threads (one below three chunks:
+/// too little work to pay for a thread); the chunks' summaries are merged
+/// in row order, so the result does not depend on the threads.
 fn pair_summaries(
     data: &DataSet,
     xyz: &[[f64; 3]],
     stats: &[PointStats],
     threads: usize,
+    set: &pairs::PairSet,
 ) -> (Running, Running) {
-    let (signed, abs, _) = pair_pass(data, xyz, stats, threads, || (), |_, _, _| {});
+    let (signed, abs, _) = pair_pass(data, xyz, stats, threads, set, || (), |_, _, _| {});
     (signed, abs)
 }
 
@@ -507,36 +549,52 @@ fn pair_pass<A: Send>(
     xyz: &[[f64; 3]],
     stats: &[PointStats],
     threads: usize,
+    set: &pairs::PairSet,
     init: impl Fn() -> A + Sync,
     visit: impl Fn(&mut A, f64, f64) + Sync,
 ) -> (Running, Running, Vec<A>) {
     const ROWS_PER_CHUNK: usize = 64;
+    // Sampled pairs: about as many distances per chunk as 64 rows of a
+    // campaign at the budget's edge.
+    const PAIRS_PER_CHUNK: usize = 1024;
     let points = data.points();
-    let rows = |range: std::ops::Range<usize>| {
+    let chunk = |pairs: &mut dyn Iterator<Item = (usize, usize)>| {
         let (mut signed, mut abs) = (Shifted::default(), Shifted::default());
         let mut acc = init();
-        for i in range {
-            let ta = &xyz[points[i].touches.clone()];
-            for j in i + 1..points.len() {
-                let (_, centroid_distance, d, d_abs) = length::eq19(
-                    ta,
-                    &xyz[points[j].touches.clone()],
-                    &stats[i].centroid,
-                    &stats[j].centroid,
-                );
-                signed.push(d);
-                abs.push(d_abs);
-                visit(&mut acc, centroid_distance, d_abs);
-            }
+        for (i, j) in pairs {
+            let (_, centroid_distance, d, d_abs) = length::eq19(
+                &xyz[points[i].touches.clone()],
+                &xyz[points[j].touches.clone()],
+                &stats[i].centroid,
+                &stats[j].centroid,
+            );
+            signed.push(d);
+            abs.push(d_abs);
+            visit(&mut acc, centroid_distance, d_abs);
         }
         (signed.running(), abs.running(), acc)
     };
-    let chunks: Vec<std::ops::Range<usize>> = (0..points.len())
-        .step_by(ROWS_PER_CHUNK)
-        .map(|s| s..(s + ROWS_PER_CHUNK).min(points.len()))
-        .collect();
-    let threads = if chunks.len() > 2 { threads } else { 1 };
-    let parts = crate::parallel::parallel_map(&chunks, threads, |r| rows(r.clone()));
+    let all_rows = |r: &std::ops::Range<usize>| {
+        let n = points.len();
+        chunk(&mut r.clone().flat_map(|i| (i + 1..n).map(move |j| (i, j))))
+    };
+    let parts = match set {
+        pairs::PairSet::All => {
+            let chunks: Vec<std::ops::Range<usize>> = (0..points.len())
+                .step_by(ROWS_PER_CHUNK)
+                .map(|s| s..(s + ROWS_PER_CHUNK).min(points.len()))
+                .collect();
+            let threads = if chunks.len() > 2 { threads } else { 1 };
+            crate::parallel::parallel_map(&chunks, threads, all_rows)
+        }
+        pairs::PairSet::Sampled { pairs, .. } => {
+            let chunks: Vec<&[(u32, u32)]> = pairs.chunks(PAIRS_PER_CHUNK).collect();
+            let threads = if chunks.len() > 2 { threads } else { 1 };
+            crate::parallel::parallel_map(&chunks, threads, |c| {
+                chunk(&mut c.iter().map(|&(i, j)| (i as usize, j as usize)))
+            })
+        }
+    };
     let mut accs = Vec::with_capacity(parts.len());
     let (mut signed, mut abs) = (Running::default(), Running::default());
     for (ps, pa, acc) in parts {
@@ -561,13 +619,14 @@ pub(crate) fn add_pairs<A: Send>(
     ev: &mut Evaluation,
     data: &DataSet,
     xyz: &[[f64; 3]],
-    threads: usize,
+    (threads, set): (usize, &PairSet),
     init: impl Fn() -> A + Sync,
     visit: impl Fn(&mut A, f64, f64) + Sync,
 ) -> Result<Vec<A>, MetricsError> {
-    let (signed, abs, accs) = pair_pass(data, xyz, &ev.points, threads, init, visit);
+    let (signed, abs, accs) = pair_pass(data, xyz, &ev.points, threads, set, init, visit);
     ev.pair_length_summary = signed.summary();
     ev.pair_length_abs_summary = abs.summary();
+    ev.pair_sample = set.sample();
     ev.check_finite()?;
     Ok(accs)
 }
@@ -649,9 +708,14 @@ pub(crate) mod tests {
         assert_eq!(part.pair_length_summary, None);
         assert_eq!(part.pair_length_abs_summary, None);
         assert_ne!(full.pair_length_summary, None);
-        let rows = add_pairs(&mut part, &data, &xyz, 2, Vec::new, |v, d, a| {
-            v.push((d, a))
-        })
+        let rows = add_pairs(
+            &mut part,
+            &data,
+            &xyz,
+            (2, &PairSet::All),
+            Vec::new,
+            |v, d, a| v.push((d, a)),
+        )
         .unwrap();
         assert_eq!(part, full);
         let each: Vec<(f64, f64)> = pair_length_errors(&data, &xyz, &full.points)

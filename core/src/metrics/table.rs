@@ -179,8 +179,12 @@ impl Evaluation {
         ]
         .into_iter()
         .filter_map(|(name, s)| s.as_ref().map(|s| summary_row(name, s)));
+        let across = match &self.pair_sample {
+            None => "all pairs of points".to_string(),
+            Some(s) => format!("a sample of the pairs of points ({})", s.describe()),
+        };
         render(
-            &format!("{title}, across all pairs of points (std = population)"),
+            &format!("{title}, across {across} (std = population)"),
             &SUMMARY_HEADER,
             1,
             summary,

@@ -96,6 +96,7 @@ pub fn session_report(
         uncertainty_map: report.uncertainty_map.as_ref(),
         uncertainty_map_json: Some("/uncertainty_map".to_string()),
         verdict: Some(&report.verdict),
+        seed: report.seed,
     })
 }
 

@@ -8,7 +8,9 @@ use super::svg::{BLUE, GREY, Marker, Shape, VERMILLION};
 use super::{Arms, MAX_PAIR_MARKERS, Measured, ReportError};
 use crate::dataset::DataSet;
 use crate::geometry::distance;
-use crate::metrics::{DEFAULT_THREADS, Evaluation, add_pairs, evaluate_without_pairs};
+use crate::metrics::{
+    DEFAULT_THREADS, Evaluation, PairSet, add_pairs, evaluate_without_pairs, pair_set,
+};
 
 /// Which arm gave the positions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -71,9 +73,11 @@ impl Evaluated<'_> {
 }
 
 /// Evaluates every data set with every arm: for each data set, before (if
-/// given) then after.
+/// given) then after; pairs of points sampled (above the metrics' budget)
+/// with `seed`, the same pairs for both arms.
 pub(crate) fn evaluate_all<'a>(
     measured: &[Measured<'a>],
+    seed: u64,
 ) -> Result<Vec<Evaluated<'a>>, ReportError> {
     let held_total = measured.iter().filter(|m| m.held_out).count();
     let mut held_seen = 0;
@@ -113,7 +117,7 @@ pub(crate) fn evaluate_all<'a>(
                     got: xyz.len(),
                 });
             }
-            let (ev, pairs) = evaluate_with_pairs(m.data, xyz)?;
+            let (ev, pairs) = evaluate_with_pairs(m.data, xyz, seed)?;
             out.push(Evaluated {
                 set,
                 set_name: set_name.clone(),
@@ -152,34 +156,43 @@ const PAIR_BINS: usize = 40;
 /// The metrics of `data` at `xyz` with eq. 19 for the figure, in one pass
 /// over the pairs of points on [`DEFAULT_THREADS`] (the pairs grow as the
 /// square of the points: 1000 points of 1000 touches are 5·10⁸ touch
-/// distances): every pair when there are at most [`MAX_PAIR_MARKERS`],
-/// else the mean `|d|_error` per distance bin. Memory does not grow with
-/// the pairs beyond the markers. The bins' sums are per chunk of rows,
-/// merged in row order: the same bits whatever the threads.
+/// distances, so above the metrics' budget they are a sample drawn with
+/// `seed`, which the figure states): every pair computed when there are
+/// at most [`MAX_PAIR_MARKERS`], else the mean `|d|_error` per distance
+/// bin. Memory does not grow with the pairs beyond the markers. The bins'
+/// sums are per chunk of rows, merged in row order: the same bits whatever
+/// the threads.
 fn evaluate_with_pairs(
     data: &DataSet,
     xyz: &[[f64; 3]],
+    seed: u64,
 ) -> Result<(Evaluation, Pairs), ReportError> {
     let mut ev = evaluate_without_pairs(data, xyz)?;
+    let set = pair_set(data.points(), seed);
     let n = ev.points.len();
-    let count = n * n.saturating_sub(1) / 2;
+    let count = match &set {
+        PairSet::All => n * n.saturating_sub(1) / 2,
+        PairSet::Sampled { pairs, .. } => pairs.len(),
+    };
+    let threads = (DEFAULT_THREADS, &set);
     if count <= MAX_PAIR_MARKERS {
-        let each = add_pairs(
-            &mut ev,
-            data,
-            xyz,
-            DEFAULT_THREADS,
-            Vec::new,
-            |v, d, abs| v.push((d, abs)),
-        )?;
+        let each = add_pairs(&mut ev, data, xyz, threads, Vec::new, |v, d, abs| {
+            v.push((d, abs))
+        })?;
         return Ok((ev, Pairs::Each(each.concat())));
     }
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for (i, a) in ev.points.iter().enumerate() {
-        for b in &ev.points[i + 1..] {
-            let d = distance(&a.centroid, &b.centroid);
-            lo = lo.min(d);
-            hi = hi.max(d);
+    let mut extend = |i: usize, j: usize| {
+        let d = distance(&ev.points[i].centroid, &ev.points[j].centroid);
+        lo = lo.min(d);
+        hi = hi.max(d);
+    };
+    // The distance range of the pairs summarised: a sample's own, so that
+    // this costs no more than the sample.
+    match &set {
+        PairSet::All => (0..n).for_each(|i| (i + 1..n).for_each(|j| extend(i, j))),
+        PairSet::Sampled { pairs, .. } => {
+            (pairs.iter()).for_each(|&(i, j)| extend(i as usize, j as usize));
         }
     }
     let width = ((hi - lo) / PAIR_BINS as f64).max(f64::MIN_POSITIVE);
@@ -187,7 +200,7 @@ fn evaluate_with_pairs(
         &mut ev,
         data,
         xyz,
-        DEFAULT_THREADS,
+        threads,
         || vec![(0.0f64, 0usize); PAIR_BINS],
         |sums, d, abs| {
             let k = (((d - lo) / width) as usize).min(PAIR_BINS - 1);
@@ -214,29 +227,36 @@ fn evaluate_with_pairs(
 /// `δ_i = |x_i − x̄|` of every touch of `e`, touch order, mm.
 pub(crate) fn deltas(e: &Evaluated) -> Vec<f64> {
     let mut out = Vec::with_capacity(e.xyz.len());
-    for (point, stats) in e.data.points().iter().zip(&e.ev.points) {
-        out.extend(
-            e.xyz[point.touches.clone()]
-                .iter()
-                .map(|x| distance(x, &stats.centroid)),
-        );
-    }
+    for_each_delta(e, |d| out.push(d));
     out
 }
 
+/// Hands [`deltas`] to `f` one by one, touch order: for figures that need
+/// no list (10⁶ touches' δ are 8 MB per series).
+pub(crate) fn for_each_delta(e: &Evaluated, mut f: impl FnMut(f64)) {
+    for (point, stats) in e.data.points().iter().zip(&e.ev.points) {
+        (e.xyz[point.touches.clone()].iter()).for_each(|x| f(distance(x, &stats.centroid)));
+    }
+}
+
 /// The median of the finite `values` (none: `None`). Takes the values so
-/// that 10⁶ touches' δ are sorted where they are, not copied.
+/// that 10⁶ touches' δ are selected where they are, not copied; selection,
+/// not a sort: the same two middle values in linear time.
 pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
     let m = v.len() / 2;
+    let upper = crate::stats::kth_smallest(&mut v, m)?;
     Some(if v.len() % 2 == 1 {
-        v[m]
+        upper
     } else {
-        (v[m - 1] + v[m]) / 2.0
+        // After the selection the lower half is `v[..m]`: its largest is
+        // the lower middle value.
+        let lower = v[..m]
+            .iter()
+            .copied()
+            .max_by(f64::total_cmp)
+            .unwrap_or(upper);
+        (lower + upper) / 2.0
     })
 }
 
@@ -283,7 +303,7 @@ mod tests {
             })
             .collect();
         let xyz = data.to_touch_order(&rows);
-        let (ev, pairs) = evaluate_with_pairs(&data, &xyz).unwrap();
+        let (ev, pairs) = evaluate_with_pairs(&data, &xyz, 0).unwrap();
         assert_eq!(ev, evaluate(&data, &xyz).unwrap());
         let mut expected = vec![(0.0, 0usize); PAIR_BINS];
         let d: Vec<f64> = pair_length_errors(&data, &xyz, &ev.points)
@@ -318,5 +338,70 @@ mod tests {
         assert_eq!(bins.iter().map(|b| b.2).sum::<usize>(), count);
         assert!(bins.len() <= PAIR_BINS);
         assert_eq!(deltas(&e).len(), 210);
+    }
+
+    /// Above the metrics' budget the figure's pairs are a seeded sample,
+    /// stated on the figure, whose mean estimates the all-pairs mean
+    /// without bias (within 5 σ of the sample mean's spread).
+    #[test]
+    fn pairs_above_the_budget_are_a_stated_unbiased_sample() {
+        // 2000 points of 10 touches: 2·10⁷ touch distances, twice the budget.
+        let labels: Vec<String> = (0..20_000).map(|r| format!("p{}", r % 2000)).collect();
+        let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+        let rows: Vec<[f64; 3]> = (0..20_000)
+            .map(|r| {
+                let (p, k) = ((r % 2000) as f64, (r / 2000) as f64);
+                [(p * 0.37).sin() * 400.0 + k * 0.03, p, (p * k).cos()]
+            })
+            .collect();
+        let xyz = data.to_touch_order(&rows);
+        let (ev, pairs) = evaluate_with_pairs(&data, &xyz, 5).unwrap();
+        let sample = ev.pair_sample.expect("sampled");
+        assert_eq!((sample.pairs, sample.seed), (2000 * 1999 / 2, 5));
+        // Kept with probability 1/2: 999 500 ± 707 (σ).
+        assert!(sample.sampled.abs_diff(999_500) < 5 * 707, "{sample:?}");
+        let Pairs::Binned { count, .. } = &pairs else {
+            panic!("expected bins")
+        };
+        assert_eq!(*count as u64, sample.sampled);
+        let mut full = evaluate_without_pairs(&data, &xyz).unwrap();
+        add_pairs(
+            &mut full,
+            &data,
+            &xyz,
+            (2, &PairSet::All),
+            || (),
+            |_, _, _| {},
+        )
+        .unwrap();
+        let (s, f) = (
+            ev.pair_length_abs_summary.unwrap(),
+            full.pair_length_abs_summary.unwrap(),
+        );
+        let n = sample.sampled as f64;
+        let spread = f.std * ((1.0 - n / sample.pairs as f64) / n).sqrt();
+        assert!(
+            (s.mean - f.mean).abs() < 5.0 * spread,
+            "{} vs {}",
+            s.mean,
+            f.mean
+        );
+        let e = Evaluated {
+            set: 0,
+            set_name: "measured".into(),
+            data: &data,
+            held_out: false,
+            stage: Stage::After,
+            xyz: &xyz,
+            ev,
+            pairs,
+        };
+        let arms = Arms {
+            before: String::new(),
+            after: "arm".into(),
+        };
+        let figure = crate::report::figures::lengths::figure(&[e], &arms).unwrap();
+        let said = format!("{} of 1999000 pairs, sampled (seed 5)", sample.sampled);
+        assert!(figure.svg.contains(&said), "{said} not on the figure");
     }
 }

@@ -266,6 +266,10 @@ pub struct CalibrationInput<'a> {
     /// with it. `None` for a calibration drawn outside a session, which
     /// the page then says has no verdict.
     pub verdict: Option<&'a crate::session::Verdict>,
+    /// The session's seed: draws the pairs of points the length figure
+    /// samples when all of them would cost too much (the metrics'
+    /// budget), so that the same seed gives the same page.
+    pub seed: u64,
 }
 
 /// The 3-D errors of one arm at one data set's reference positions, each
@@ -335,6 +339,7 @@ pub struct EvaluationInput<'a> {
 ///     uncertainty_map: None,
 ///     uncertainty_map_json: None,
 ///     verdict: None,
+///     seed: 0,
 /// })
 /// .unwrap();
 /// assert_eq!(report.files().count(), CALIBRATION_FILES.len());
@@ -342,7 +347,7 @@ pub struct EvaluationInput<'a> {
 /// assert!(!report.html.contains("<script"));
 /// ```
 pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportError> {
-    let evaluated = data::evaluate_all(&input.measured)?;
+    let evaluated = data::evaluate_all(&input.measured, input.seed)?;
     let figures = vec![
         figures::points::figure(&evaluated, &input.arms)?,
         figures::lengths::figure(&evaluated, &input.arms)?,
@@ -393,7 +398,8 @@ pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportErro
 /// ```
 pub fn evaluation_report(input: &EvaluationInput) -> Result<Report, ReportError> {
     let measured = [input.measured];
-    let evaluated = data::evaluate_all(&measured)?;
+    // The pairs `aacmm evaluate`'s figures are over too.
+    let evaluated = data::evaluate_all(&measured, crate::metrics::DEFAULT_PAIR_SEED)?;
     let arms = Arms {
         before: String::new(),
         after: input.arm.clone(),

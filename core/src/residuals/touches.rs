@@ -503,8 +503,8 @@ impl Term for TouchTerm<'_> {
             .iter()
             .map(|a| (sym_inv(a)[..3].iter().sum::<f64>() / 3.0).sqrt())
             .collect();
-        s.sort_by(f64::total_cmp);
-        Some(s.get(s.len() / 2).copied().unwrap_or(f64::NAN))
+        let m = s.len() / 2;
+        Some(crate::stats::kth_smallest(&mut s, m).unwrap_or(f64::NAN))
     }
 }
 

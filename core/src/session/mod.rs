@@ -277,14 +277,52 @@ const LENGTH_UNIT_RATIO: f64 = 100.0;
 
 /// Refuses reference lengths whose median ratio to the nominal arm's
 /// distances between the same points is beyond [`LENGTH_UNIT_RATIO`]
-/// (lengths in metres for an arm in mm, say).
+/// (lengths in metres for an arm in mm, say). When the readings look like
+/// radians read as degrees (the reader's warning), that is the cause the
+/// refusal names ([`CalibrationError::AngleUnits`]), not the lengths file:
+/// every joint within ±6.3° puts the sockets almost on top of each other.
 fn check_length_units(params: &DhParams, data: &DataSet) -> Result<(), CalibrationError> {
-    if data.references().is_empty() {
+    let Some(ratio) = median_length_ratio(params, data, data.poses())? else {
         return Ok(());
+    };
+    let in_range = |r: f64| (1.0 / LENGTH_UNIT_RATIO..=LENGTH_UNIT_RATIO).contains(&r);
+    if in_range(ratio) {
+        return Ok(());
+    }
+    let to_deg = 1f64.to_degrees();
+    if crate::io::poses::look_like_radians(data.readings(), data.len(), to_deg) {
+        // The numbers as typed, taken as radians: what `--angle-unit rad`
+        // would have read.
+        let typed: Vec<f64> = data.readings().iter().map(|x| x * to_deg).collect();
+        let as_rad = crate::kernel::PreparedPoses::from_flat(data.joints(), data.len(), &typed);
+        let ratio_as_rad = median_length_ratio(params, data, &as_rad)?.unwrap_or(f64::NAN);
+        return Err(CalibrationError::AngleUnits {
+            file: data.source().poses_file().to_string(),
+            ratio,
+            ratio_as_rad,
+            lengths_agree: in_range(ratio_as_rad),
+        });
+    }
+    Err(CalibrationError::LengthUnits {
+        file: data.source().reference(0).file.to_string(),
+        ratio,
+    })
+}
+
+/// The median over the reference lengths of stated length / the nominal
+/// arm's distance between the centroids of the same points, with the
+/// touches at `poses`; `None` without a finite ratio (no lengths).
+fn median_length_ratio(
+    params: &DhParams,
+    data: &DataSet,
+    poses: &crate::kernel::PreparedPoses,
+) -> Result<Option<f64>, CalibrationError> {
+    if data.references().is_empty() {
+        return Ok(None);
     }
     let kernel = crate::kernel::ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
-    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    kernel.positions(poses, 0..data.len(), &mut xyz)?;
     let centroids: Vec<[f64; 3]> = data
         .points()
         .iter()
@@ -297,17 +335,10 @@ fn check_length_units(params: &DhParams, data: &DataSet) -> Result<(), Calibrati
         .filter(|v| v.is_finite())
         .collect();
     if ratios.is_empty() {
-        return Ok(());
+        return Ok(None);
     }
     ratios.sort_by(f64::total_cmp);
-    let ratio = ratios[ratios.len() / 2];
-    if !(1.0 / LENGTH_UNIT_RATIO..=LENGTH_UNIT_RATIO).contains(&ratio) {
-        return Err(CalibrationError::LengthUnits {
-            file: data.source().reference(0).file.to_string(),
-            ratio,
-        });
-    }
-    Ok(())
+    Ok(Some(ratios[ratios.len() / 2]))
 }
 
 /// The ratio of the spreads of an instrument's positions and the nominal
@@ -1031,7 +1062,22 @@ pub fn run(
         None => None,
     };
     let s = &problem.sources;
-    let verdict = Verdict::of(&calibration, &fitted, &model.noise, model.accept_poor_fit);
+    let mut verdict = Verdict::of(&calibration, &fitted, &model.noise, model.accept_poor_fit);
+    if !verdict.usable
+        && crate::io::poses::look_like_radians(data.readings(), data.len(), 1f64.to_degrees())
+    {
+        // The reader warned; the reasons that follow (no confirmed minimum,
+        // χ²) are its consequences, so the cause leads.
+        verdict.reasons.insert(
+            0,
+            format!(
+                "every joint reading of {}, read as degrees, is within ±6.28°: these angles look \
+                 like radians read as degrees, and the reasons after this one follow from it — {}",
+                data.source().poses_file(),
+                crate::calibrate::ANGLE_UNITS_REMEDY
+            ),
+        );
+    }
     let uncertainty_map = map::workspace_map(&problem.arm, data, &calibration, settings.seed);
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
@@ -1525,4 +1571,79 @@ fn prior_table(p: &crate::calibrate::PriorReport) -> String {
         );
     }
     t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::{AngleUnit, parse_poses, read_lengths, write_poses};
+
+    /// The shipped campaign (degrees), its lengths, and the nominal arm.
+    fn shipped() -> (crate::io::Poses, Vec<crate::io::ReferenceLength>, Arm) {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+        let (poses, _) =
+            crate::io::read_poses(&root.join("paper-campaign/poses.csv"), AngleUnit::Deg, None)
+                .unwrap();
+        let lengths = read_lengths(&root.join("paper-campaign/lengths.csv")).unwrap();
+        let arm = Arm::without_limits("nominal", DhParams::paper_nominal());
+        (poses, lengths, arm)
+    }
+
+    /// Radians read as degrees: the library's refusal names the angle unit
+    /// (every front end's setting) and finds the lengths right once the
+    /// readings are taken as radians; the lengths-unit refusal stays for
+    /// lengths that are wrong.
+    #[test]
+    fn radians_read_as_degrees_are_refused_for_the_angle_unit() {
+        let (poses, lengths, arm) = shipped();
+        let mut text = Vec::new();
+        write_poses(&mut text, &poses, AngleUnit::Rad).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        let (as_deg, warnings) = parse_poses(&text, "rad.csv", AngleUnit::Deg, None).unwrap();
+        assert!(
+            warnings[0].message.contains("look like radians"),
+            "{warnings:?}"
+        );
+        let data = DataSet::from_poses(&as_deg, "rad.csv")
+            .unwrap()
+            .with_lengths(&lengths, "l.csv")
+            .unwrap();
+        let e = Problem::new(arm.clone(), data, ModelOptions::default()).unwrap_err();
+        match &e {
+            CalibrationError::AngleUnits {
+                file,
+                ratio,
+                ratio_as_rad,
+                lengths_agree,
+            } => {
+                assert_eq!(file, "rad.csv");
+                assert!(*ratio > LENGTH_UNIT_RATIO, "{ratio}");
+                // The nominal arm is within a few mm of the true one.
+                assert!((ratio_as_rad - 1.0).abs() < 0.01, "{ratio_as_rad}");
+                assert!(lengths_agree);
+            }
+            other => panic!("not the angle unit: {other}"),
+        }
+        let m = e.to_string();
+        for want in [
+            "`--angle-unit rad`",
+            "angle_unit=\"rad\"",
+            "AACMM_ANGLE_RAD",
+        ] {
+            assert!(m.contains(want), "{want}: {m}");
+        }
+        // Lengths in metres with readings in degrees: still the lengths.
+        let metres: Vec<_> = (lengths.iter().cloned())
+            .map(|mut l| {
+                l.distance /= 1000.0;
+                l
+            })
+            .collect();
+        let data = DataSet::from_poses(&poses, "p.csv")
+            .unwrap()
+            .with_lengths(&metres, "m.csv")
+            .unwrap();
+        let e = Problem::new(arm, data, ModelOptions::default()).unwrap_err();
+        assert!(matches!(e, CalibrationError::LengthUnits { .. }), "{e}");
+    }
 }

@@ -32,8 +32,15 @@ pub(crate) fn figure(evaluated: &[Evaluated], arms: &Arms) -> Result<Figure, Rep
         let e = &evaluated[*i];
         let mean = e.ev.pair_length_abs_summary.map_or(f64::NAN, |s| s.mean);
         let mut label = format!("{}: mean |d| {} mm", e.name(arms), short(mean));
-        if let Pairs::Binned { count, .. } = p {
-            label += &format!(" ({count} pairs, mean per distance bin)");
+        match (e.ev.pair_sample, p) {
+            (Some(s), Pairs::Binned { .. }) => {
+                label += &format!(" ({}; mean per distance bin)", s.describe());
+            }
+            (Some(s), Pairs::Each(_)) => label += &format!(" ({})", s.describe()),
+            (None, Pairs::Binned { count, .. }) => {
+                label += &format!(" ({count} pairs, mean per distance bin)");
+            }
+            (None, Pairs::Each(_)) => {}
         }
         entries.push((Key::Marker(e.marker()), label));
     }
