@@ -21,6 +21,7 @@ use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
+use crate::plan::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 use crate::residuals::Normal;
 
 /// Largest relative change of the weights at the solution, against those of
@@ -815,8 +816,8 @@ fn held_directions(
         .collect()
 }
 
-/// The predicted position uncertainty of `params` (k = 2) over the poses of
-/// `data` (an even sample of at most [`super::checks::UNCERTAINTY_POSES`]),
+/// The predicted position uncertainty of `params` (the 95 % radius of each
+/// pose's 3-D error) over the poses of `data` (an even sample of at most [`super::checks::UNCERTAINTY_POSES`]),
 /// from the free parameters' covariance `cov`.
 fn position_uncertainty(
     params: &DhParams,
@@ -887,16 +888,13 @@ fn position_uncertainty(
     let (sum, max) = (sums.sum, sums.max);
     let n = poses.len();
     Ok(Some(super::checks::PositionUncertainty {
-        k: K,
+        coverage: COVERAGE,
         poses: n,
         rms_mm: (sum / n as f64).sqrt(),
         max_mm: max,
-        touch_mm: K * 3f64.sqrt() * touch_sigma,
+        touch_mm: K_ISOTROPIC * touch_sigma,
     }))
 }
-
-/// Coverage factor of the predicted position uncertainty.
-const K: f64 = 2.0;
 
 /// Poses whose uncertainties [`position_uncertainty`] sums side by side:
 /// independent chains, so they run together (each in its own order: the
@@ -915,7 +913,7 @@ struct UncertaintySums<'a> {
 
 impl UncertaintySums<'_> {
     /// Pose `l` of the group from its Jacobian; with the group's last, its
-    /// `n` poses' uncertainties (k = [`K`]) into the sums.
+    /// `n` poses' 95 % radii ([`radius`]) into the sums.
     #[inline(always)]
     fn add(&mut self, l: usize, jac: &[[f64; 3]], n: Option<usize>) {
         let (jf, q) = (&mut self.jf, self.free.len());
@@ -925,18 +923,24 @@ impl UncertaintySums<'_> {
             }
         }
         let Some(n) = n else { return };
-        let mut tr = [0.0; LANES];
+        // The position's covariance J C Jᵀ, its six distinct entries (xx,
+        // yy, zz, xy, xz, yz) per lane: its eigenvalues, not only its trace,
+        // give the radius that covers 95 % of a 3-D error.
+        const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+        let mut m = [[0.0; LANES]; 6];
         for a in 0..q {
             let (ja, row) = (&jf[a], &self.c[a * q..(a + 1) * q]);
             for (jb, &cab) in jf.iter().zip(row) {
-                for l in 0..LANES {
-                    let jj = ja[0][l] * jb[0][l] + ja[1][l] * jb[1][l] + ja[2][l] * jb[2][l];
-                    tr[l] += cab * jj;
+                for (e, &(r, s)) in PAIRS.iter().enumerate() {
+                    for l in 0..LANES {
+                        m[e][l] += cab * ja[r][l] * jb[s][l];
+                    }
                 }
             }
         }
-        for &t in &tr[..n] {
-            let u = K * t.max(0.0).sqrt();
+        for l in 0..n {
+            let [xx, yy, zz, xy, xz, yz] = m.map(|e| e[l]);
+            let u = radius(eigenvalues([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]));
             self.sum += u * u;
             self.max = self.max.max(u);
         }
@@ -964,14 +968,19 @@ mod tests {
         let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
         for i in (0..data.len()).step_by(step) {
             kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
-            let mut tr = 0.0;
+            let mut m = [[0.0; 3]; 3];
             for (a, &ca) in free.iter().enumerate() {
                 for (b, &cb) in free.iter().enumerate() {
-                    let jj: f64 = (0..3).map(|k| jac[ca][k] * jac[cb][k]).sum();
-                    tr += cov[(a, b)] * jj;
+                    for (r, mr) in m.iter_mut().enumerate() {
+                        for (s, v) in mr.iter_mut().enumerate() {
+                            *v += cov[(a, b)] * jac[ca][r] * jac[cb][s];
+                        }
+                    }
                 }
             }
-            let u = 2.0 * f64::max(tr, 0.0).sqrt();
+            // Symmetric as the lanes' (which sum the upper triangle only).
+            (m[1][0], m[2][0], m[2][1]) = (m[0][1], m[0][2], m[1][2]);
+            let u = radius(eigenvalues(m));
             sum += u * u;
             max = max.max(u);
             n += 1;

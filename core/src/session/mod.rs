@@ -515,10 +515,13 @@ impl Verdict {
         noise_checks(calibration, noise, &mut poor, &mut notes);
         if let Some(u) = calibration.checks.position_uncertainty.filter(|u| u.weak()) {
             notes.push(format!(
-                "these data determine the arm to ±{:.4} mm (k = 2, RMS over the campaign's \
-                 poses), enough to add more than 5 % to a touch's own scatter (±{:.4} mm): \
-                 add sockets, poses or reference lengths",
-                u.rms_mm, u.touch_mm
+                "these data determine the arm to ±{:.4} mm (RMS over the campaign's poses of \
+                 the {:.0} % radius in 3-D), enough to add more than 5 % to a touch's own \
+                 scatter (±{:.4} mm at the same coverage): add sockets, poses or reference \
+                 lengths",
+                u.rms_mm,
+                100.0 * u.coverage,
+                u.touch_mm
             ));
         }
         notes.extend(scale_note(calibration));
