@@ -300,6 +300,21 @@ pub struct Outlier {
     pub standardised: f64,
 }
 
+/// How a plain fit's outlier list was screened: after a gross error (a
+/// touch labelled with the wrong point) the plain fit is pulled, and the
+/// touches beyond the threshold are many — often all of them. A robust
+/// refit from the plain minimum ([`super::robust`], Cauchy, used for
+/// nothing else) weighs the culprits down and not the touches they pulled:
+/// the list keeps to the named touches it weighs below
+/// [`super::robust::DOWNWEIGHTED`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OutlierScreen {
+    /// The robust refit's loss.
+    pub loss: super::robust::Loss,
+    /// Touches beyond the threshold in the plain fit, before the screen.
+    pub flagged: usize,
+}
+
 /// The family-wise false-alarm rate of the outlier test: a touch is named
 /// when its standardised squared residual exceeds the `χ²₃` quantile at
 /// `1 − OUTLIER_ALPHA / touches` (Bonferroni), so a campaign without

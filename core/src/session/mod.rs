@@ -1111,27 +1111,43 @@ fn noun(c: &Calibration) -> &'static str {
     }
 }
 
-/// The summary's outliers: the first 20 by `file:line`.
+/// The summary's outliers: the first 20 by `file:line`; after a screen by
+/// a robust refit, how many the plain fit had beyond the threshold.
 fn outliers_line(c: &Calibration) -> String {
     let o = &c.checks.outliers;
     let noun = noun(c);
+    let threshold = c.checks.outlier_threshold;
+    let screen = c.checks.outlier_screen.map(|s| {
+        format!(
+            "{} {} beyond {threshold:.2} sigma in this fit, pulled by the gross ones; a robust \
+             {} refit weighs {} of them below {}",
+            s.flagged,
+            plural(noun),
+            s.loss.name(),
+            o.len(),
+            crate::calibrate::robust::DOWNWEIGHTED
+        )
+    });
     if o.is_empty() {
-        return format!(
-            "Outliers: none (no {noun} beyond {:.2} sigma)\n",
-            c.checks.outlier_threshold
-        );
+        return match screen {
+            Some(s) => format!(
+                "Outliers: none singled out ({s}: the residuals are large overall, not a few \
+                 touches)\n"
+            ),
+            None => format!("Outliers: none (no {noun} beyond {threshold:.2} sigma)\n"),
+        };
     }
     let shown: Vec<String> = o
         .iter()
         .take(20)
         .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
         .collect();
+    let screened = screen.map_or(String::new(), |s| format!(" ({s})"));
     format!(
-        "Outliers: {} {} beyond {:.2} sigma — check them (remeasure, or fix the \
-         label): {}{}\n",
+        "Outliers: {} {} beyond {threshold:.2} sigma{screened} — check them (remeasure, or \
+         fix the label): {}{}\n",
         o.len(),
         plural(noun),
-        c.checks.outlier_threshold,
         shown.join(", "),
         if o.len() > shown.len() { ", …" } else { "" }
     )
