@@ -67,6 +67,50 @@ impl std::fmt::Debug for TouchTerm<'_> {
 }
 
 impl<'d> TouchTerm<'d> {
+    /// [`Term::standardised`] of the points `points` (their touches' values
+    /// in order), with `(cols, m)` the free arm columns and their block of
+    /// `N⁻¹` (empty: the centres' leverage only).
+    fn standardised_points(
+        &self,
+        at: &At<'_>,
+        effects: Option<&Effects>,
+        (cols, m): (&[usize], &[f64]),
+        points: &Range<usize>,
+    ) -> Result<Vec<f64>, KernelError> {
+        let (data, q) = (self.data, cols.len());
+        let all = &data.points()[points.clone()];
+        let most = all.iter().map(|p| p.touches.len()).max().unwrap_or(0);
+        let mut scratch = PointScratch::new(most, q);
+        let poses = effects.map_or(data.poses(), |e| &e.poses);
+        let mut out = Vec::with_capacity(all.iter().map(|p| p.touches.len()).sum());
+        let mut ext = Vec::new();
+        for point in all {
+            let first = point.touches.start;
+            if q == 0 {
+                let xyz = &mut scratch.xyz[..point.touches.len()];
+                at.kernel.positions(poses, point.touches.clone(), xyz)?;
+            } else {
+                let (xyz, jac) = (&mut scratch.xyz, &mut scratch.jac);
+                at.kernel
+                    .for_each_jacobian(poses, point.touches.clone(), |i, pos, j| {
+                        let j = match effects {
+                            Some(e) => {
+                                e.extend(i, pos, j, &mut ext);
+                                &ext[..]
+                            }
+                            None => j,
+                        };
+                        xyz[i - first] = *pos;
+                        for (a, &c) in cols.iter().enumerate() {
+                            jac[(i - first) * q + a] = j[c];
+                        }
+                    })?;
+            }
+            out.extend_from_slice(scratch.point(&self.weights[point.touches.clone()], m));
+        }
+        Ok(out)
+    }
+
     /// The touches of `data` under `noise` (its touch part), not weighed
     /// yet ([`Term::weigh`]).
     pub(crate) fn new(data: &'d DataSet, noise: Noise) -> TouchTerm<'d> {
@@ -446,45 +490,27 @@ impl Term for TouchTerm<'_> {
         leverage: Option<&ParameterLeverage>,
     ) -> Result<Option<Standardised>, TermError> {
         let data = self.data;
-        let most = data.points().iter().map(|p| p.touches.len()).max();
         let (cols, m) = leverage.map_or((Vec::new(), Vec::new()), |l| {
             l.restricted(at.layout.arm_columns())
         });
-        let q = cols.len();
-        let mut scratch = PointScratch::new(most.unwrap_or(0), q);
-        let mut out = vec![0.0; data.len()];
         let effects = at.corrected_poses(data.poses(), data.conditions())?;
-        let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
-        let mut ext = Vec::new();
-        for point in data.points() {
-            let first = point.touches.start;
-            if q == 0 {
-                let xyz = &mut scratch.xyz[..point.touches.len()];
-                at.kernel.positions(poses, point.touches.clone(), xyz)?;
-            } else {
-                let (xyz, jac) = (&mut scratch.xyz, &mut scratch.jac);
-                at.kernel
-                    .for_each_jacobian(poses, point.touches.clone(), |i, pos, j| {
-                        let j = match &effects {
-                            Some(e) => {
-                                e.extend(i, pos, j, &mut ext);
-                                &ext[..]
-                            }
-                            None => j,
-                        };
-                        xyz[i - first] = *pos;
-                        for (a, &c) in cols.iter().enumerate() {
-                            jac[(i - first) * q + a] = j[c];
-                        }
-                    })?;
-            }
-            let values = scratch.point(&self.weights[point.touches.clone()], &m);
-            out[point.touches.clone()].copy_from_slice(values);
+        let np = data.points().len();
+        // Chunks of points, on up to `at.threads` threads: each point's
+        // values depend on that point alone, so the same bits on any count.
+        let chunks: Vec<Range<usize>> = (0..point_chunks(np))
+            .map(|c| c * POINTS_PER_CHUNK..((c + 1) * POINTS_PER_CHUNK).min(np))
+            .collect();
+        let run = |c: &Range<usize>| self.standardised_points(at, effects.as_ref(), (&cols, &m), c);
+        let parts: Vec<Result<Vec<f64>, KernelError>> = if at.threads <= 1 || chunks.len() < 4 {
+            chunks.iter().map(run).collect()
+        } else {
+            parallel_map(&chunks, at.threads, run)
+        };
+        let mut values = Vec::with_capacity(data.len());
+        for part in parts {
+            values.extend(part?);
         }
-        Ok(Some(Standardised {
-            rows: 3,
-            values: out,
-        }))
+        Ok(Some(Standardised { rows: 3, values }))
     }
 
     fn observations(&self) -> usize {
