@@ -42,7 +42,7 @@ pub(crate) mod assess;
 pub mod checks;
 pub mod energy;
 pub mod global;
-pub(crate) mod inverse;
+mod inverse;
 pub(crate) mod lm;
 pub mod options;
 pub mod prior;

@@ -439,7 +439,7 @@ impl ParameterLeverage {
     pub fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
         let p = normal.free.len();
         let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj) / scale;
-        let inv = crate::calibrate::inverse::cholesky_inverse(&n.cholesky()?);
+        let inv = n.cholesky()?.inverse();
         let n_inv: Vec<f64> = (0..p * p).map(|i| inv[(i / p, i % p)]).collect();
         n_inv
             .iter()

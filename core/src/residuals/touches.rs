@@ -493,7 +493,13 @@ impl Term for TouchTerm<'_> {
         let (cols, m) = leverage.map_or((Vec::new(), Vec::new()), |l| {
             l.restricted(at.layout.arm_columns())
         });
-        let effects = at.corrected_poses(data.poses(), data.conditions())?;
+        // The corrections' Jacobian factors too when the leverage needs
+        // their columns (as the normal equations have them).
+        let effects = if cols.is_empty() {
+            at.corrected_poses(data.poses(), data.conditions())?
+        } else {
+            at.effects(data.poses(), data.conditions())?
+        };
         let np = data.points().len();
         // Chunks of points, on up to `at.threads` threads: each point's
         // values depend on that point alone, so the same bits on any count.
