@@ -1112,27 +1112,24 @@ fn noun(c: &Calibration) -> &'static str {
 }
 
 /// The summary's outliers: the first 20 by `file:line`; after a screen by
-/// a robust refit, how many the plain fit had beyond the threshold.
+/// a robust refit, that the list keeps to the touches it weighs down, and
+/// how many the plain fit had beyond the threshold.
 fn outliers_line(c: &Calibration) -> String {
     let o = &c.checks.outliers;
     let noun = noun(c);
     let threshold = c.checks.outlier_threshold;
-    let screen = c.checks.outlier_screen.map(|s| {
-        format!(
-            "{} {} beyond {threshold:.2} sigma in this fit, pulled by the gross ones; a robust \
-             {} refit weighs {} of them below {}",
-            s.flagged,
-            plural(noun),
-            s.loss.name(),
-            o.len(),
-            crate::calibrate::robust::DOWNWEIGHTED
-        )
-    });
+    let screen = c.checks.outlier_screen;
+    let below = crate::calibrate::robust::DOWNWEIGHTED;
     if o.is_empty() {
         return match screen {
             Some(s) => format!(
-                "Outliers: none singled out ({s}: the residuals are large overall, not a few \
-                 touches)\n"
+                "Outliers: none singled out: {} {} beyond {threshold:.2} sigma, none of which a \
+                 robust {} refit weighs below {below} — the residuals are large overall, not a \
+                 few {}\n",
+                s.flagged,
+                plural(noun),
+                s.loss.name(),
+                plural(noun)
             ),
             None => format!("Outliers: none (no {noun} beyond {threshold:.2} sigma)\n"),
         };
@@ -1142,7 +1139,14 @@ fn outliers_line(c: &Calibration) -> String {
         .take(20)
         .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
         .collect();
-    let screened = screen.map_or(String::new(), |s| format!(" ({s})"));
+    let screened = screen.map_or(String::new(), |s| {
+        format!(
+            " that a robust {} refit weighs below {below} (of {} beyond it in this fit, pulled \
+             by them)",
+            s.loss.name(),
+            s.flagged
+        )
+    });
     format!(
         "Outliers: {} {} beyond {threshold:.2} sigma{screened} — check them (remeasure, or \
          fix the label): {}{}\n",
