@@ -431,7 +431,9 @@ fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibration
                 break;
             }
             fit.unit_sigma *= s;
-            fit.extra_jacobians += out.fit.passes + 3;
+            // Its standardised residuals and sandwich (below), and the base
+            // weights' normal equations for the next.
+            fit.extra_jacobians += out.fit.passes + 4;
             fit.phases.push(out.phase);
             fit.objective.weigh(&out.x, fit.unit_sigma)?;
             // The base weights' normal equations at the robust point.
@@ -440,9 +442,10 @@ fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibration
             out = super::robust::irls(r, &out.x, base, &setup.free, lm, (stated, ratio))?;
         }
     }
-    // Each pass's standardised residuals, the last's, and the sandwich's
-    // normal equations.
-    fit.extra_jacobians += out.fit.passes + 2;
+    // The standardised residuals (with the full leverage's Jacobians)
+    // before each refit, after the last twice, and the sandwich's normal
+    // equations.
+    fit.extra_jacobians += out.fit.passes + 3;
     fit.phases.push(out.phase);
     fit.history = out.last.history;
     fit.iterations = out.last.iterations;
@@ -717,6 +720,8 @@ fn assemble(
     let p = setup.free.len();
     let rho = correlations(&cov);
     let t2 = standardised(&fit, &setup)?;
+    // Its full leverage evaluates the touches' Jacobians.
+    fit.extra_jacobians += 1;
     let (outlier_threshold, outliers) = super::checks::outliers(&fit.objective, &t2);
     let (outliers, outlier_screen, screen_phase) = screen_outliers(&fit, &setup, outliers)?;
     // The columns that move a probe: the geometry's and the corrections'
@@ -832,8 +837,8 @@ fn screen_outliers(
     let out = super::robust::irls(robust, &fit.x, base, &setup.free, lm, (false, ratio))?;
     let mut phase = out.phase;
     phase.name = format!("{} (outlier screen, not the fit)", phase.name);
-    // Each pass's standardised residuals, the last's, the sandwich's.
-    phase.jacobian_evaluations += out.fit.passes + 2;
+    // As in `robust_refits`: the standardised residuals and the sandwich.
+    phase.jacobian_evaluations += out.fit.passes + 3;
     let down: std::collections::HashSet<&str> = (out.fit.downweighted().into_iter())
         .map(|t| t.at.as_str())
         .collect();
