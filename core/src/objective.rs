@@ -255,17 +255,24 @@ impl<'a> Objective<'a> {
 
     /// Every observation's standardised squared residual at `x` (each
     /// about `χ²₃` when it fits the noise model), in
-    /// [`Objective::observations`]' order.
+    /// [`Objective::observations`]' order; with `leverage` (the inverse of
+    /// the normal matrix at these weights), corrected for the free
+    /// parameters' share of each observation's leverage as well as for its
+    /// eliminated unknowns' (a touch's point).
     ///
     /// # Errors
     ///
     /// The kernel's, and a term whose observations are not of 3 rows (the
     /// robust loss and the outlier test are calibrated for `χ²₃`).
-    pub fn standardised(&self, x: &[f64]) -> Result<Vec<f64>, TermError> {
+    pub fn standardised(
+        &self,
+        x: &[f64],
+        leverage: Option<&crate::residuals::ParameterLeverage>,
+    ) -> Result<Vec<f64>, TermError> {
         self.at(x, |at| {
             let mut out = Vec::with_capacity(self.observations());
             for (_, term) in self.observing() {
-                let Some(s) = term.standardised(at)? else {
+                let Some(s) = term.standardised(at, leverage)? else {
                     continue;
                 };
                 if s.rows != 3 {

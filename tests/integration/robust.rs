@@ -94,3 +94,32 @@ fn bad_robust_flags_are_refused_by_name() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--robust <LOSS>"), "{err}");
 }
+
+/// One touch labelled with another socket pulls the plain fit so far that
+/// every touch lies beyond the outlier threshold; the summary lists the
+/// one a robust refit weighs down, and says how many the plain fit had.
+#[test]
+fn a_mislabelled_touch_is_the_one_outlier_listed() {
+    let dir = temp_dir("robust-mislabelled");
+    let text = std::fs::read_to_string(shipped("poses.csv")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    assert!(lines[17].starts_with("S2,"), "{}", lines[17]);
+    lines[17] = lines[17].replacen("S2,", "S7,", 1);
+    let poses = dir.join("poses.csv");
+    std::fs::write(&poses, lines.join("\n") + "\n").unwrap();
+    let poses = poses.display().to_string();
+    let o = calibrate(&poses, &dir.join("plain"), &[]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let line = (stdout.lines())
+        .find(|l| l.starts_with("Outliers:"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(
+        line.starts_with("Outliers: 1 touch(es) beyond")
+            && line.contains("that a robust cauchy refit weighs below 0.25 (of 100 beyond it"),
+        "{line}"
+    );
+    assert!(
+        line.contains(&format!(": {poses}:18 (point S7, ")),
+        "{line}"
+    );
+}

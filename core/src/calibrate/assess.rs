@@ -8,7 +8,7 @@
 use nalgebra::DMatrix;
 
 use super::anneal::AnnealTrace;
-use super::checks::{ChiSquare, gross_corrections};
+use super::checks::{ChiSquare, Outlier, OutlierScreen, gross_corrections};
 use super::global::GlobalTrace;
 use super::lm::{LmIteration, LmResult, levenberg_marquardt};
 use super::robust::RobustFit;
@@ -21,6 +21,7 @@ use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
+use crate::plan::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 use crate::residuals::Normal;
 
 /// Largest relative change of the weights at the solution, against those of
@@ -112,14 +113,12 @@ impl Counts {
         rows.saturating_sub(eliminated + self.free).max(1)
     }
 
-    /// `(m_o − e_o) / (m_o − e_o − p)` over the observed terms: the share
-    /// of their residuals the free parameters take, which the leverage (the
-    /// centres' share) does not correct ([`super::robust`]).
-    fn scale_dof_factor(&self) -> f64 {
+    /// `(e_o + p) / m_o` over the observed terms (rows `m_o`, eliminated
+    /// unknowns `e_o`): the unknowns per residual row, Huber's `p/n` of
+    /// the robust covariance's small-sample factor ([`super::robust`]).
+    fn unknowns_per_row(&self) -> f64 {
         let (rows, eliminated) = self.sum(|t| t.observed);
-        let rows = rows.saturating_sub(eliminated);
-        let dof = rows.saturating_sub(self.free).max(1);
-        rows as f64 / dof as f64
+        ((eliminated + self.free) as f64 / rows.max(1) as f64).min(1.0)
     }
 
     /// Whether every term's weights are in units of the estimated σ: the
@@ -207,6 +206,9 @@ struct Fit<'o> {
     unit_weights: bool,
     /// The robust fit and every observation's weight, when one ran.
     robust: Option<(RobustFit, Vec<f64>)>,
+    /// A robust fit's normal equations under the curvature weights (the
+    /// sandwich's `J̃ᵀ B J̃`, [`super::robust`]).
+    curvature: Option<Normal>,
 }
 
 impl Fit<'_> {
@@ -267,6 +269,7 @@ pub(crate) fn assess(
         unit_sigma: 1.0,
         unit_weights: false,
         robust: None,
+        curvature: None,
     };
     normalise_signs(&mut fit, &setup)?;
     reweigh_at_solution(&mut fit, &setup)?;
@@ -414,9 +417,10 @@ fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibration
         fit.reweigh()?;
         fit.unit_weights = false;
     }
-    let factor = setup.counts.scale_dof_factor();
     let lm = &setup.settings.lm;
-    let mut out = super::robust::irls(r, &fit.x, &fit.objective, &setup.free, lm, factor, stated)?;
+    let base = (&fit.objective, &fit.normal);
+    let ratio = setup.counts.unknowns_per_row();
+    let mut out = super::robust::irls(r, &fit.x, base, &setup.free, lm, (stated, ratio))?;
     if fit.objective.has_prior() && !stated {
         // The touch σ was estimated with the outliers in; the prior weighs
         // against it, so refit at σ·σ̂ until σ̂ settles — else the prior
@@ -427,13 +431,21 @@ fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibration
                 break;
             }
             fit.unit_sigma *= s;
-            fit.extra_jacobians += out.fit.passes + 1;
+            // Its standardised residuals and sandwich (below), and the base
+            // weights' normal equations for the next.
+            fit.extra_jacobians += out.fit.passes + 4;
             fit.phases.push(out.phase);
             fit.objective.weigh(&out.x, fit.unit_sigma)?;
-            out = super::robust::irls(r, &out.x, &fit.objective, &setup.free, lm, factor, stated)?;
+            // The base weights' normal equations at the robust point.
+            let normal = fit.objective.normal(&out.x, &setup.free)?;
+            let base = (&fit.objective, &normal);
+            out = super::robust::irls(r, &out.x, base, &setup.free, lm, (stated, ratio))?;
         }
     }
-    fit.extra_jacobians += out.fit.passes + 1;
+    // The standardised residuals (with the full leverage's Jacobians)
+    // before each refit, after the last twice, and the sandwich's normal
+    // equations.
+    fit.extra_jacobians += out.fit.passes + 3;
     fit.phases.push(out.phase);
     fit.history = out.last.history;
     fit.iterations = out.last.iterations;
@@ -454,6 +466,7 @@ fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibration
         fit.unit_sigma *= out.fit.scale;
     }
     fit.robust = Some((out.fit, out.touch_weights));
+    fit.curvature = Some(out.curvature);
     Ok(())
 }
 
@@ -477,16 +490,24 @@ struct Covariance {
     dof: usize,
 }
 
-/// `σ̂² N⁻¹`, or with a prior `(N_data/σ̂² + P)⁻¹`; robust: the IRLS
-/// covariance with σ̂ the robust scale.
+/// `σ̂² N⁻¹`, or with a prior `(N_data/σ̂² + P)⁻¹`; robust: the sandwich
+/// `σ̂² κ K² (J̃ᵀ B J̃)⁻¹` ([`super::robust`]), σ̂ the robust scale — in the
+/// same forms, with `J̃ᵀ B J̃` for `N` and `σ̂² κ K²` for `σ̂²`.
 fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
     let dof = setup.counts.dof();
-    let sigma0 = match &fit.robust {
-        Some((robust, _)) => robust.scale,
-        None => (fit.normal.cost() / dof as f64).sqrt(),
+    let (sigma0, variance, normal) = match (&fit.robust, &fit.curvature) {
+        (Some((robust, _)), Some(curvature)) => (
+            robust.scale,
+            robust.scale * robust.scale * robust.sandwich,
+            curvature,
+        ),
+        _ => {
+            let s = (fit.normal.cost() / dof as f64).sqrt();
+            (s, s * s, &fit.normal)
+        }
     };
     let p = setup.free.len();
-    let n = DMatrix::from_row_slice(p, p, &fit.normal.jtj);
+    let n = DMatrix::from_row_slice(p, p, &normal.jtj);
     let invert = |m: DMatrix<f64>| match m.cholesky() {
         Some(ch) => super::inverse::cholesky_inverse(&ch),
         None => DMatrix::from_element(p, p, f64::INFINITY),
@@ -496,16 +517,16 @@ fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
         // information, not the prior's — (N_data/σ̂² + P)⁻¹. Scaling the
         // whole σ̂²·N⁻¹ made a parameter the prior holds (data share 5 %)
         // 30 % more certain than its tolerance under a robust scale of 0.68.
-        Some(term) if sigma0.is_finite() && sigma0 > 0.0 => {
-            let mut m = n / (sigma0 * sigma0);
+        Some(term) if variance.is_finite() && variance > 0.0 => {
+            let mut m = n / variance;
             for (a, &c) in setup.free.iter().enumerate() {
                 if let Some(s) = term.sigma(c) {
-                    m[(a, a)] += (1.0 - 1.0 / (sigma0 * sigma0)) / (s * s);
+                    m[(a, a)] += (1.0 - 1.0 / variance) / (s * s);
                 }
             }
             invert(m)
         }
-        _ => invert(n) * (sigma0 * sigma0),
+        _ => invert(n) * variance,
     };
     Covariance { cov, sigma0, dof }
 }
@@ -602,7 +623,15 @@ fn implausible_blocks(fit: &Fit<'_>, setup: &Setup<'_>) -> Vec<String> {
 /// σ — the stated noise, or (estimated) the fit's, robustly: the median of
 /// a χ²₃ variable is 2.366, and a few outliers do not move a median.
 fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, CalibrationError> {
-    let mut t2 = fit.objective.standardised(&fit.x)?;
+    // The full leverage: the normal matrix of the weights the objective has
+    // now (rescaled by 1/σ² without them when the weights are still unit).
+    let scale = if fit.unit_weights {
+        1.0 / (fit.unit_sigma * fit.unit_sigma)
+    } else {
+        1.0
+    };
+    let leverage = crate::residuals::ParameterLeverage::of(&fit.normal, scale);
+    let mut t2 = fit.objective.standardised(&fit.x, leverage.as_ref())?;
     if let Some((_, w)) = &fit.robust {
         // In units of the observation's own σ, not of its robust weight.
         t2.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
@@ -689,18 +718,12 @@ fn assemble(
         .map(|&c| layout.parameter(c).map_or(String::new(), |p| p.name))
         .collect();
     let p = setup.free.len();
-    let rho = (0..p)
-        .map(|a| {
-            (0..p)
-                .map(|b| {
-                    let r = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
-                    if r.is_finite() { r } else { 0.0 }
-                })
-                .collect()
-        })
-        .collect();
+    let rho = correlations(&cov);
     let t2 = standardised(&fit, &setup)?;
+    // Its full leverage evaluates the touches' Jacobians.
+    fit.extra_jacobians += 1;
     let (outlier_threshold, outliers) = super::checks::outliers(&fit.objective, &t2);
+    let (outliers, outlier_screen, screen_phase) = screen_outliers(&fit, &setup, outliers)?;
     // The columns that move a probe: the geometry's and the corrections'
     // (whose Jacobian columns follow the chain's, at the fitted values).
     let (geometry_free, geometry_cov) =
@@ -714,13 +737,14 @@ fn assemble(
         &geometry_cov,
         touch_sigma_found(fit.unit_sigma, stated, sigma0),
     )?;
+    let implausible = implausible_blocks(&fit, &setup);
+    let physics = (layout.corrections()).map(|(block, cols)| block.physics_at(&fit.x[cols]));
+    fit.phases.extend(screen_phase);
     let phases = &fit.phases;
     let cost_evaluations =
         fit.extra_costs + phases.iter().map(|p| p.cost_evaluations).sum::<usize>();
     let jacobian_evaluations =
         fit.extra_jacobians + phases.iter().map(|p| p.jacobian_evaluations).sum::<usize>();
-    let implausible = implausible_blocks(&fit, &setup);
-    let physics = (layout.corrections()).map(|(block, cols)| block.physics_at(&fit.x[cols]));
     Ok(Calibration {
         physics,
         parameters,
@@ -756,6 +780,7 @@ fn assemble(
                 .then(|| ChiSquare::new(fit.normal.cost(), dof)),
             outliers,
             outlier_threshold,
+            outlier_screen,
             position_uncertainty,
         },
         held: held_directions(setup.holds.as_ref(), &fit.normal, sigma0),
@@ -763,6 +788,65 @@ fn assemble(
         robust: fit.robust.map(|(robust, _)| robust),
         prior,
     })
+}
+
+/// The correlation matrix of `cov` (0 where it is not a number).
+fn correlations(cov: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    let p = cov.nrows();
+    (0..p)
+        .map(|a| {
+            (0..p)
+                .map(|b| {
+                    let r = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+                    if r.is_finite() { r } else { 0.0 }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The outliers as listed, the screen that kept them (if one ran) and its
+/// work.
+type Screened = (Vec<Outlier>, Option<OutlierScreen>, Option<Phase>);
+
+/// A plain fit's outliers screened by a robust (Cauchy) refit from its
+/// minimum when it names more than one touch
+/// ([`super::checks::OutlierScreen`]): the named touches the refit weighs
+/// below [`super::robust::DOWNWEIGHTED`], in the same order. The refit
+/// changes nothing else; its work is a phase of its own. A robust fit's
+/// list, or one of at most one touch, stands.
+fn screen_outliers(
+    fit: &Fit<'_>,
+    setup: &Setup<'_>,
+    outliers: Vec<Outlier>,
+) -> Result<Screened, CalibrationError> {
+    if fit.robust.is_some() || outliers.len() <= 1 {
+        return Ok((outliers, None, None));
+    }
+    let loss = super::robust::Loss::Cauchy;
+    // Weights and normal equations in the same units (unit weights were
+    // rescaled in the normal equations only).
+    let mut base = fit.objective.clone();
+    if fit.unit_weights {
+        base.weigh(&fit.x, fit.unit_sigma)?;
+    }
+    let robust = super::robust::Robust::new(loss);
+    let lm = &setup.settings.lm;
+    let ratio = setup.counts.unknowns_per_row();
+    let base = (&base, &fit.normal);
+    let out = super::robust::irls(robust, &fit.x, base, &setup.free, lm, (false, ratio))?;
+    let mut phase = out.phase;
+    phase.name = format!("{} (outlier screen, not the fit)", phase.name);
+    // As in `robust_refits`: the standardised residuals and the sandwich.
+    phase.jacobian_evaluations += out.fit.passes + 3;
+    let down: std::collections::HashSet<&str> = (out.fit.downweighted().into_iter())
+        .map(|t| t.at.as_str())
+        .collect();
+    let flagged = outliers.len();
+    let kept = (outliers.into_iter())
+        .filter(|o| down.contains(o.at.as_str()))
+        .collect();
+    Ok((kept, Some(OutlierScreen { loss, flagged }), Some(phase)))
 }
 
 /// A touch's σ as the fit found it: with stated noise, the stated σ times
@@ -815,8 +899,8 @@ fn held_directions(
         .collect()
 }
 
-/// The predicted position uncertainty of `params` (k = 2) over the poses of
-/// `data` (an even sample of at most [`super::checks::UNCERTAINTY_POSES`]),
+/// The predicted position uncertainty of `params` (the 95 % radius of each
+/// pose's 3-D error) over the poses of `data` (an even sample of at most [`super::checks::UNCERTAINTY_POSES`]),
 /// from the free parameters' covariance `cov`.
 fn position_uncertainty(
     params: &DhParams,
@@ -887,16 +971,13 @@ fn position_uncertainty(
     let (sum, max) = (sums.sum, sums.max);
     let n = poses.len();
     Ok(Some(super::checks::PositionUncertainty {
-        k: K,
+        coverage: COVERAGE,
         poses: n,
         rms_mm: (sum / n as f64).sqrt(),
         max_mm: max,
-        touch_mm: K * 3f64.sqrt() * touch_sigma,
+        touch_mm: K_ISOTROPIC * touch_sigma,
     }))
 }
-
-/// Coverage factor of the predicted position uncertainty.
-const K: f64 = 2.0;
 
 /// Poses whose uncertainties [`position_uncertainty`] sums side by side:
 /// independent chains, so they run together (each in its own order: the
@@ -915,7 +996,7 @@ struct UncertaintySums<'a> {
 
 impl UncertaintySums<'_> {
     /// Pose `l` of the group from its Jacobian; with the group's last, its
-    /// `n` poses' uncertainties (k = [`K`]) into the sums.
+    /// `n` poses' 95 % radii ([`radius`]) into the sums.
     #[inline(always)]
     fn add(&mut self, l: usize, jac: &[[f64; 3]], n: Option<usize>) {
         let (jf, q) = (&mut self.jf, self.free.len());
@@ -925,18 +1006,24 @@ impl UncertaintySums<'_> {
             }
         }
         let Some(n) = n else { return };
-        let mut tr = [0.0; LANES];
+        // The position's covariance J C Jᵀ, its six distinct entries (xx,
+        // yy, zz, xy, xz, yz) per lane: its eigenvalues, not only its trace,
+        // give the radius that covers 95 % of a 3-D error.
+        const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+        let mut m = [[0.0; LANES]; 6];
         for a in 0..q {
             let (ja, row) = (&jf[a], &self.c[a * q..(a + 1) * q]);
             for (jb, &cab) in jf.iter().zip(row) {
-                for l in 0..LANES {
-                    let jj = ja[0][l] * jb[0][l] + ja[1][l] * jb[1][l] + ja[2][l] * jb[2][l];
-                    tr[l] += cab * jj;
+                for (e, &(r, s)) in PAIRS.iter().enumerate() {
+                    for l in 0..LANES {
+                        m[e][l] += cab * ja[r][l] * jb[s][l];
+                    }
                 }
             }
         }
-        for &t in &tr[..n] {
-            let u = K * t.max(0.0).sqrt();
+        for l in 0..n {
+            let [xx, yy, zz, xy, xz, yz] = m.map(|e| e[l]);
+            let u = radius(eigenvalues([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]));
             self.sum += u * u;
             self.max = self.max.max(u);
         }
@@ -964,14 +1051,19 @@ mod tests {
         let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
         for i in (0..data.len()).step_by(step) {
             kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
-            let mut tr = 0.0;
+            let mut m = [[0.0; 3]; 3];
             for (a, &ca) in free.iter().enumerate() {
                 for (b, &cb) in free.iter().enumerate() {
-                    let jj: f64 = (0..3).map(|k| jac[ca][k] * jac[cb][k]).sum();
-                    tr += cov[(a, b)] * jj;
+                    for (r, mr) in m.iter_mut().enumerate() {
+                        for (s, v) in mr.iter_mut().enumerate() {
+                            *v += cov[(a, b)] * jac[ca][r] * jac[cb][s];
+                        }
+                    }
                 }
             }
-            let u = 2.0 * f64::max(tr, 0.0).sqrt();
+            // Symmetric as the lanes' (which sum the upper triangle only).
+            (m[1][0], m[2][0], m[2][1]) = (m[0][1], m[0][2], m[1][2]);
+            let u = radius(eigenvalues(m));
             sum += u * u;
             max = max.max(u);
             n += 1;

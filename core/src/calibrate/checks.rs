@@ -300,6 +300,21 @@ pub struct Outlier {
     pub standardised: f64,
 }
 
+/// How a plain fit's outlier list was screened: after a gross error (a
+/// touch labelled with the wrong point) the plain fit is pulled, and the
+/// touches beyond the threshold are many — often all of them. A robust
+/// refit from the plain minimum ([`super::robust`], Cauchy, used for
+/// nothing else) weighs the culprits down and not the touches they pulled:
+/// the list keeps to the named touches it weighs below
+/// [`super::robust::DOWNWEIGHTED`].
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OutlierScreen {
+    /// The robust refit's loss.
+    pub loss: super::robust::Loss,
+    /// Touches beyond the threshold in the plain fit, before the screen.
+    pub flagged: usize,
+}
+
 /// The family-wise false-alarm rate of the outlier test: a touch is named
 /// when its standardised squared residual exceeds the `χ²₃` quantile at
 /// `1 − OUTLIER_ALPHA / touches` (Bonferroni), so a campaign without
@@ -360,29 +375,36 @@ pub(crate) fn outliers(
 }
 
 /// How well the data determine the calibrated arm where it was used: the
-/// predicted uncertainty of a probe position, `U = k·sqrt(tr(J C Jᵀ))` with
-/// `C` the free parameters' covariance and `J` the position's parameter
-/// Jacobian, over the campaign's poses.
+/// predicted uncertainty of a probe position over the campaign's poses, as
+/// the radius `U` that holds the position's 3-D error with 95 % probability
+/// ([`crate::plan::coverage::radius`] of the eigenvalues of `J C Jᵀ`, `C`
+/// the free parameters' covariance, `J` the position's parameter
+/// Jacobian) — the uncertainty map's radius. The `2·sqrt(tr(J C Jᵀ))`
+/// reported before was labelled `k = 2` but had no stated coverage: it is
+/// `3.46 σ` (99.3 %) for an isotropic error and `2 σ` (95.4 %) for one
+/// along a single direction, where the 95 % radii are `2.80 σ` and
+/// `1.96 σ`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PositionUncertainty {
-    /// Coverage factor (2).
-    pub k: f64,
+    /// Probability each radius covers (0.95).
+    pub coverage: f64,
     /// Poses evaluated (every touch, or an even sample of them).
     pub poses: usize,
     /// RMS of `U` over the poses, mm.
     pub rms_mm: f64,
     /// Largest `U`, mm.
     pub max_mm: f64,
-    /// A single touch's own scatter at the same coverage,
-    /// `k·sqrt(3)·σ_touch`, mm: what the arm's uncertainty is compared with.
+    /// A single touch's own scatter at the same coverage: the 95 % radius
+    /// of an isotropic 3-D error of the touch's σ per coordinate,
+    /// `2.7955·σ_touch`, mm: what the arm's uncertainty is compared with.
     pub touch_mm: f64,
 }
 
 impl PositionUncertainty {
     /// Whether the arm's own uncertainty would add more than 5 % to a
     /// single measurement's scatter (`sqrt(1 + (U/T)²) > 1.05`, i.e. `U`
-    /// above a third of a touch's `T`): the data, not the noise, limit the
-    /// arm.
+    /// above a third of a touch's `T`, both 95 % radii): the data, not the
+    /// noise, limit the arm.
     pub fn weak(&self) -> bool {
         self.rms_mm > WEAK_FRACTION * self.touch_mm
     }
@@ -391,8 +413,12 @@ impl PositionUncertainty {
     pub fn describe(&self) -> String {
         format!(
             "predicted position uncertainty of the calibrated arm over the campaign's poses \
-             (k = {}): RMS {:.4} mm, max {:.4} mm (one touch scatters ±{:.4} mm)",
-            self.k, self.rms_mm, self.max_mm, self.touch_mm
+             ({:.0} % radius in 3-D): RMS {:.4} mm, max {:.4} mm (one touch scatters ±{:.4} \
+             mm)",
+            100.0 * self.coverage,
+            self.rms_mm,
+            self.max_mm,
+            self.touch_mm
         )
     }
 }

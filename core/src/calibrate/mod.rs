@@ -520,6 +520,11 @@ pub struct Checks {
     pub outliers: Vec<checks::Outlier>,
     /// The threshold of the outlier test, in σ of a touch.
     pub outlier_threshold: f64,
+    /// When a plain fit named more than one touch, the robust refit that
+    /// screened the list (`outliers` then keeps to the touches it weighs
+    /// down); `None` otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outlier_screen: Option<checks::OutlierScreen>,
     /// How well the data determine the arm (`None` when the covariance is
     /// not finite).
     pub position_uncertainty: Option<checks::PositionUncertainty>,

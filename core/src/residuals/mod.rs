@@ -417,6 +417,51 @@ impl Normal {
     }
 }
 
+/// The free parameters' share of an observation's leverage: `N⁻¹`, the
+/// inverse of the normal matrix the fit solved (at the observations'
+/// current weights), over its free columns. An observation's hat-matrix
+/// block is then its eliminated unknowns' part plus `A^½ J̃ N⁻¹ J̃ᵀ A^½`,
+/// `J̃` its rows' Jacobian over the free columns with the eliminated
+/// unknowns profiled out ([`Term::standardised`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParameterLeverage {
+    /// The normal matrix's free columns, in order.
+    pub(crate) free: Vec<usize>,
+    /// `N⁻¹`, row-major `p × p`.
+    pub(crate) n_inv: Vec<f64>,
+}
+
+impl ParameterLeverage {
+    /// From `normal`, its matrix divided by `scale` (the factor the normal
+    /// equations were rescaled by without the weights: 1 when they agree);
+    /// `None` when it is not positive definite (then only the eliminated
+    /// unknowns' leverage is corrected).
+    pub fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
+        let p = normal.free.len();
+        let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj) / scale;
+        let inv = n.cholesky()?.inverse();
+        let n_inv: Vec<f64> = (0..p * p).map(|i| inv[(i / p, i % p)]).collect();
+        n_inv
+            .iter()
+            .all(|v| v.is_finite())
+            .then(|| ParameterLeverage {
+                free: normal.free.clone(),
+                n_inv,
+            })
+    }
+
+    /// The free columns below `below` (those a term's rows depend on, e.g.
+    /// the arm's) and the block of `N⁻¹` over them, row-major.
+    pub(crate) fn restricted(&self, below: usize) -> (Vec<usize>, Vec<f64>) {
+        let p = self.free.len();
+        let at: Vec<usize> = (0..p).filter(|&a| self.free[a] < below).collect();
+        let block = (at.iter())
+            .flat_map(|&a| at.iter().map(move |&b| self.n_inv[a * p + b]))
+            .collect();
+        (at.iter().map(|&a| self.free[a]).collect(), block)
+    }
+}
+
 /// Standardised squared residuals of a term's observations: each about
 /// `χ²_k` (`k` = [`Standardised::rows`]) when it fits the noise model.
 #[derive(Clone, Debug, PartialEq)]
@@ -552,13 +597,18 @@ pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
 
     /// Its observations' standardised squared residuals at `at`, if it has
     /// observations a robust loss may downweight and the outlier test may
-    /// name.
+    /// name; with `leverage`, the free parameters' share of each
+    /// observation's leverage corrected too (a term may ignore it).
     ///
     /// # Errors
     ///
     /// The kernel's.
-    fn standardised(&self, at: &At<'_>) -> Result<Option<Standardised>, TermError> {
-        let _ = at;
+    fn standardised(
+        &self,
+        at: &At<'_>,
+        leverage: Option<&ParameterLeverage>,
+    ) -> Result<Option<Standardised>, TermError> {
+        let _ = (at, leverage);
         Ok(None)
     }
 

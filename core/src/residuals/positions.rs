@@ -466,7 +466,11 @@ impl Term for PositionTerm<'_> {
 
     /// `|r|²/(1 − h)` per row, `h = 2/n_f`: the average leverage of its
     /// frame's six unknowns over the frame's `3 n_f` rows.
-    fn standardised(&self, at: &At<'_>) -> Result<Option<Standardised>, TermError> {
+    fn standardised(
+        &self,
+        at: &At<'_>,
+        _leverage: Option<&super::ParameterLeverage>,
+    ) -> Result<Option<Standardised>, TermError> {
         let frames = self.frames_at(at);
         let n = self.data.len();
         let mut p = vec![[0.0; 3]; n];

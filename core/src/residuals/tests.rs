@@ -333,3 +333,72 @@ fn normal_equations_are_the_same_bits_on_any_thread_count() {
     assert_eq!(bits(2), one);
     assert_eq!(bits(4), one);
 }
+
+/// A touch's full leverage is its block of the hat matrix of the whole
+/// problem — the free columns and every point's centre carried as unknowns
+/// — against a dense computation: `h_i = tr(A_i X_i (Xᵀ A X)⁻¹ X_iᵀ)/3`,
+/// `X_i = [J_i, −E_k]`. The values agree with `rᵀ A r/(1 − h)` to 1e-9, and
+/// summed over the touches `3h` is `3·points + p`.
+#[test]
+fn the_full_leverage_is_the_hat_matrix_block() {
+    use nalgebra::{DMatrix, Matrix3};
+    let (data, noise) = simulated(4, 4, 6, 0);
+    let arm = DhParams::paper_nominal();
+    let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
+    let free: Vec<usize> = vec![1, 3, 7, 12, 16, 19, 23];
+    let normal = normal_equations(&arm, &t, None, &free, 1).0;
+    let leverage = ParameterLeverage::of(&normal, 1.0).unwrap();
+    let got = at(&arm, 1, |at| t.standardised(at, Some(&leverage)))
+        .unwrap()
+        .unwrap()
+        .values;
+    // Dense: columns `free`, then 3 per point.
+    let (q, k, n) = (free.len(), data.points().len(), data.len());
+    let kernel = ArmKernel::new(&arm).unwrap();
+    let a = |i: usize| {
+        let w = t.weights()[i];
+        Matrix3::new(w[0], w[3], w[4], w[3], w[1], w[5], w[4], w[5], w[2])
+    };
+    let mut x = vec![DMatrix::<f64>::zeros(3, q + 3 * k); n];
+    let mut pos = vec![[0.0; 3]; n];
+    let mut jac = vec![[0.0; 3]; arm.param_count()];
+    for (p, point) in data.points().iter().enumerate() {
+        for i in point.touches.clone() {
+            kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
+            pos[i] = kernel.position(data.reading(i)).unwrap();
+            for r in 0..3 {
+                for (c, &f) in free.iter().enumerate() {
+                    x[i][(r, c)] = jac[f][r];
+                }
+                x[i][(r, q + 3 * p + r)] = -1.0;
+            }
+        }
+    }
+    let mut info = DMatrix::<f64>::zeros(q + 3 * k, q + 3 * k);
+    for (i, xi) in x.iter().enumerate() {
+        let ai = DMatrix::from_fn(3, 3, |r, c| a(i)[(r, c)]);
+        info += xi.transpose() * &ai * xi;
+    }
+    let inv = info.try_inverse().unwrap();
+    let mut total = 0.0;
+    for point in data.points() {
+        let s: Matrix3<f64> = point.touches.clone().map(a).sum();
+        let sp: nalgebra::Vector3<f64> = (point.touches.clone())
+            .map(|i| a(i) * nalgebra::Vector3::from(pos[i]))
+            .sum();
+        let c = s.try_inverse().unwrap() * sp;
+        for i in point.touches.clone() {
+            let ai = DMatrix::from_fn(3, 3, |r, cc| a(i)[(r, cc)]);
+            let h = (&ai * &x[i] * &inv * x[i].transpose()).trace() / 3.0;
+            total += 3.0 * h;
+            let r = nalgebra::Vector3::from(pos[i]) - c;
+            let want = (r.transpose() * a(i) * r)[(0, 0)] / (1.0 - h);
+            assert!(
+                (got[i] - want).abs() <= 1e-9 * want,
+                "touch {i}: {} vs {want}",
+                got[i]
+            );
+        }
+    }
+    assert!((total - (3 * k + q) as f64).abs() < 1e-9, "{total}");
+}

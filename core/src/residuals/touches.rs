@@ -7,7 +7,9 @@
 use std::ops::Range;
 
 use super::sym3::{Sym3, centroid_cov, sym_inv, sym_mul};
-use super::{At, Centres, Noise, Normal, Origin, Shared, Standardised, Term, TermError};
+use super::{
+    At, Centres, Noise, Normal, Origin, ParameterLeverage, Shared, Standardised, Term, TermError,
+};
 use crate::corrections::Effects;
 use crate::dataset::DataSet;
 use crate::error::short;
@@ -65,6 +67,50 @@ impl std::fmt::Debug for TouchTerm<'_> {
 }
 
 impl<'d> TouchTerm<'d> {
+    /// [`Term::standardised`] of the points `points` (their touches' values
+    /// in order), with `(cols, m)` the free arm columns and their block of
+    /// `N⁻¹` (empty: the centres' leverage only).
+    fn standardised_points(
+        &self,
+        at: &At<'_>,
+        effects: Option<&Effects>,
+        (cols, m): (&[usize], &[f64]),
+        points: &Range<usize>,
+    ) -> Result<Vec<f64>, KernelError> {
+        let (data, q) = (self.data, cols.len());
+        let all = &data.points()[points.clone()];
+        let most = all.iter().map(|p| p.touches.len()).max().unwrap_or(0);
+        let mut scratch = PointScratch::new(most, q);
+        let poses = effects.map_or(data.poses(), |e| &e.poses);
+        let mut out = Vec::with_capacity(all.iter().map(|p| p.touches.len()).sum());
+        let mut ext = Vec::new();
+        for point in all {
+            let first = point.touches.start;
+            if q == 0 {
+                let xyz = &mut scratch.xyz[..point.touches.len()];
+                at.kernel.positions(poses, point.touches.clone(), xyz)?;
+            } else {
+                let (xyz, jac) = (&mut scratch.xyz, &mut scratch.jac);
+                at.kernel
+                    .for_each_jacobian(poses, point.touches.clone(), |i, pos, j| {
+                        let j = match effects {
+                            Some(e) => {
+                                e.extend(i, pos, j, &mut ext);
+                                &ext[..]
+                            }
+                            None => j,
+                        };
+                        xyz[i - first] = *pos;
+                        for (a, &c) in cols.iter().enumerate() {
+                            jac[(i - first) * q + a] = j[c];
+                        }
+                    })?;
+            }
+            out.extend_from_slice(scratch.point(&self.weights[point.touches.clone()], m));
+        }
+        Ok(out)
+    }
+
     /// The touches of `data` under `noise` (its touch part), not weighed
     /// yet ([`Term::weigh`]).
     pub(crate) fn new(data: &'d DataSet, noise: Noise) -> TouchTerm<'d> {
@@ -429,51 +475,48 @@ impl Term for TouchTerm<'_> {
     }
 
     /// `rᵀ A r / (1 − h)` per touch: `r` the touch's offset from its point's
-    /// weighted centroid, `A` its weight, `h = tr(A (Σ A)⁻¹)/3` its leverage
-    /// on that centroid. Positions one point at a time: memory stays the
-    /// output's.
-    fn standardised(&self, at: &At<'_>) -> Result<Option<Standardised>, TermError> {
+    /// weighted centroid, `A` its weight, `h` its leverage — the trace over 3
+    /// of its hat-matrix block: `tr(A (Σ A)⁻¹)`, the centroid's share, plus
+    /// with `leverage` `tr(A J̃ N⁻¹ J̃ᵀ)`, the free parameters' (`J̃ = J −
+    /// (Σ A)⁻¹ Σ A J` its Jacobian with the centroid profiled out, as the
+    /// normal equations have it). Summed over touches the two are `3k` and
+    /// `p`: the residuals' missing degrees of freedom, so each corrected
+    /// residual is about `χ²₃` without a global dof factor, and a touch of
+    /// high leverage is not flagged for it. One point at a time: memory
+    /// stays the output's and a point's Jacobians; linear in the touches.
+    fn standardised(
+        &self,
+        at: &At<'_>,
+        leverage: Option<&ParameterLeverage>,
+    ) -> Result<Option<Standardised>, TermError> {
         let data = self.data;
-        let most = data.points().iter().map(|p| p.touches.len()).max();
-        let mut xyz = vec![[0.0; 3]; most.unwrap_or(0)];
-        let mut out = vec![0.0; data.len()];
-        let effects = at.corrected_poses(data.poses(), data.conditions())?;
-        let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
-        for point in data.points() {
-            let first = point.touches.start;
-            let xyz = &mut xyz[..point.touches.len()];
-            at.kernel.positions(poses, point.touches.clone(), xyz)?;
-            let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
-            for i in point.touches.clone() {
-                let a = &self.weights[i];
-                let ap = sym_mul(a, &xyz[i - first]);
-                for k in 0..6 {
-                    sum_a[k] += a[k];
-                }
-                for k in 0..3 {
-                    sum_ap[k] += ap[k];
-                }
-            }
-            let inv = sym_inv(&sum_a);
-            let c = sym_mul(&inv, &sum_ap);
-            for i in point.touches.clone() {
-                let a = &self.weights[i];
-                let r: [f64; 3] = std::array::from_fn(|k| xyz[i - first][k] - c[k]);
-                let ar = sym_mul(a, &r);
-                let q = r[0] * ar[0] + r[1] * ar[1] + r[2] * ar[2];
-                // tr(A·inv) for symmetric A and inv.
-                let tr = a[0] * inv[0]
-                    + a[1] * inv[1]
-                    + a[2] * inv[2]
-                    + 2.0 * (a[3] * inv[3] + a[4] * inv[4] + a[5] * inv[5]);
-                let h = (tr / 3.0).clamp(0.0, 0.999);
-                out[i] = q / (1.0 - h);
-            }
+        let (cols, m) = leverage.map_or((Vec::new(), Vec::new()), |l| {
+            l.restricted(at.layout.arm_columns())
+        });
+        // The corrections' Jacobian factors too when the leverage needs
+        // their columns (as the normal equations have them).
+        let effects = if cols.is_empty() {
+            at.corrected_poses(data.poses(), data.conditions())?
+        } else {
+            at.effects(data.poses(), data.conditions())?
+        };
+        let np = data.points().len();
+        // Chunks of points, on up to `at.threads` threads: each point's
+        // values depend on that point alone, so the same bits on any count.
+        let chunks: Vec<Range<usize>> = (0..point_chunks(np))
+            .map(|c| c * POINTS_PER_CHUNK..((c + 1) * POINTS_PER_CHUNK).min(np))
+            .collect();
+        let run = |c: &Range<usize>| self.standardised_points(at, effects.as_ref(), (&cols, &m), c);
+        let parts: Vec<Result<Vec<f64>, KernelError>> = if at.threads <= 1 || chunks.len() < 4 {
+            chunks.iter().map(run).collect()
+        } else {
+            parallel_map(&chunks, at.threads, run)
+        };
+        let mut values = Vec::with_capacity(data.len());
+        for part in parts {
+            values.extend(part?);
         }
-        Ok(Some(Standardised {
-            rows: 3,
-            values: out,
-        }))
+        Ok(Some(Standardised { rows: 3, values }))
     }
 
     fn observations(&self) -> usize {
@@ -505,6 +548,89 @@ impl Term for TouchTerm<'_> {
             .collect();
         let m = s.len() / 2;
         Some(crate::stats::kth_smallest(&mut s, m).unwrap_or(f64::NAN))
+    }
+}
+
+/// [`TouchTerm::standardised`]'s buffers for one point: positions, the
+/// free columns of the touches' Jacobians (`q` per touch), `J̄`, the values.
+struct PointScratch {
+    xyz: Vec<[f64; 3]>,
+    jac: Vec<[f64; 3]>,
+    mean: Vec<[f64; 3]>,
+    aj: Vec<[f64; 3]>,
+    out: Vec<f64>,
+}
+
+impl PointScratch {
+    fn new(touches: usize, q: usize) -> PointScratch {
+        PointScratch {
+            xyz: vec![[0.0; 3]; touches],
+            jac: vec![[0.0; 3]; touches * q],
+            mean: vec![[0.0; 3]; q],
+            aj: vec![[0.0; 3]; q],
+            out: vec![0.0; touches],
+        }
+    }
+
+    /// The point's standardised residuals from its touches' positions (and
+    /// Jacobians, when `m`, the `q × q` block of `N⁻¹`, is not empty) under
+    /// their weights `a`.
+    fn point(&mut self, a: &[Sym3], m: &[f64]) -> &[f64] {
+        let (n, q) = (a.len(), self.mean.len());
+        let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
+        self.mean.fill([0.0; 3]);
+        for (t, a) in a.iter().enumerate() {
+            let ap = sym_mul(a, &self.xyz[t]);
+            for k in 0..6 {
+                sum_a[k] += a[k];
+            }
+            for k in 0..3 {
+                sum_ap[k] += ap[k];
+            }
+            for (g, j) in self.mean.iter_mut().zip(&self.jac[t * q..(t + 1) * q]) {
+                let aj = sym_mul(a, j);
+                (0..3).for_each(|k| g[k] += aj[k]);
+            }
+        }
+        let inv = sym_inv(&sum_a);
+        let c = sym_mul(&inv, &sum_ap);
+        for g in &mut self.mean {
+            *g = sym_mul(&inv, g);
+        }
+        for (t, a) in a.iter().enumerate() {
+            let r: [f64; 3] = std::array::from_fn(|k| self.xyz[t][k] - c[k]);
+            let ar = sym_mul(a, &r);
+            let quad = r[0] * ar[0] + r[1] * ar[1] + r[2] * ar[2];
+            // tr(A·inv) for symmetric A and inv: the centroid's share.
+            let mut tr = a[0] * inv[0]
+                + a[1] * inv[1]
+                + a[2] * inv[2]
+                + 2.0 * (a[3] * inv[3] + a[4] * inv[4] + a[5] * inv[5]);
+            if q > 0 {
+                tr += self.parameter_share(a, t, m);
+            }
+            let h = (tr / 3.0).clamp(0.0, 0.999);
+            self.out[t] = quad / (1.0 - h);
+        }
+        &self.out[..n]
+    }
+
+    /// `tr(A J̃ M J̃ᵀ)` of touch `t`, `J̃ = J − J̄`: `3q²` operations.
+    fn parameter_share(&mut self, a: &Sym3, t: usize, m: &[f64]) -> f64 {
+        let q = self.mean.len();
+        let j = &self.jac[t * q..(t + 1) * q];
+        for ((aj, j), mean) in self.aj.iter_mut().zip(j).zip(&self.mean) {
+            *aj = sym_mul(a, &std::array::from_fn(|k| j[k] - mean[k]));
+        }
+        let mut share = 0.0;
+        for (row, (j, mean)) in m.chunks_exact(q).zip(j.iter().zip(&self.mean)) {
+            let mut y = [0.0; 3];
+            for (&mab, aj) in row.iter().zip(&self.aj) {
+                (0..3).for_each(|k| y[k] += mab * aj[k]);
+            }
+            share += (0..3).map(|k| (j[k] - mean[k]) * y[k]).sum::<f64>();
+        }
+        share
     }
 }
 

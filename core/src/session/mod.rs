@@ -546,10 +546,13 @@ impl Verdict {
         noise_checks(calibration, noise, &mut poor, &mut notes);
         if let Some(u) = calibration.checks.position_uncertainty.filter(|u| u.weak()) {
             notes.push(format!(
-                "these data determine the arm to ±{:.4} mm (k = 2, RMS over the campaign's \
-                 poses), enough to add more than 5 % to a touch's own scatter (±{:.4} mm): \
-                 add sockets, poses or reference lengths",
-                u.rms_mm, u.touch_mm
+                "these data determine the arm to ±{:.4} mm (RMS over the campaign's poses of \
+                 the {:.0} % radius in 3-D), enough to add more than 5 % to a touch's own \
+                 scatter (±{:.4} mm at the same coverage): add sockets, poses or reference \
+                 lengths",
+                u.rms_mm,
+                100.0 * u.coverage,
+                u.touch_mm
             ));
         }
         notes.extend(scale_note(calibration));
@@ -1212,27 +1215,47 @@ fn noun(c: &Calibration) -> &'static str {
     }
 }
 
-/// The summary's outliers: the first 20 by `file:line`.
+/// The summary's outliers: the first 20 by `file:line`; after a screen by
+/// a robust refit, that the list keeps to the touches it weighs down, and
+/// how many the plain fit had beyond the threshold.
 fn outliers_line(c: &Calibration) -> String {
     let o = &c.checks.outliers;
     let noun = noun(c);
+    let threshold = c.checks.outlier_threshold;
+    let screen = c.checks.outlier_screen;
+    let below = crate::calibrate::robust::DOWNWEIGHTED;
     if o.is_empty() {
-        return format!(
-            "Outliers: none (no {noun} beyond {:.2} sigma)\n",
-            c.checks.outlier_threshold
-        );
+        return match screen {
+            Some(s) => format!(
+                "Outliers: none singled out: {} {} beyond {threshold:.2} sigma, none of which a \
+                 robust {} refit weighs below {below} — the residuals are large overall, not a \
+                 few {}\n",
+                s.flagged,
+                plural(noun),
+                s.loss.name(),
+                plural(noun)
+            ),
+            None => format!("Outliers: none (no {noun} beyond {threshold:.2} sigma)\n"),
+        };
     }
     let shown: Vec<String> = o
         .iter()
         .take(20)
         .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
         .collect();
+    let screened = screen.map_or(String::new(), |s| {
+        format!(
+            " that a robust {} refit weighs below {below} (of {} beyond it in this fit, pulled \
+             by them)",
+            s.loss.name(),
+            s.flagged
+        )
+    });
     format!(
-        "Outliers: {} {} beyond {:.2} sigma — check them (remeasure, or fix the \
-         label): {}{}\n",
+        "Outliers: {} {} beyond {threshold:.2} sigma{screened} — check them (remeasure, or \
+         fix the label): {}{}\n",
         o.len(),
         plural(noun),
-        c.checks.outlier_threshold,
         shown.join(", "),
         if o.len() > shown.len() { ", …" } else { "" }
     )
