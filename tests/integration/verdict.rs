@@ -34,7 +34,12 @@ fn a_refused_calibration_says_so_in_every_output() {
         .map(|r| r.as_str().unwrap())
         .collect();
     assert_eq!(json["verdict"]["usable"], false);
-    assert!(!reasons.is_empty());
+    // The cause first: the mislabelled touch, by file:line, and the remedy.
+    assert!(
+        reasons[0].contains(&format!("{poses}:18 (point S1,"))
+            && reasons[0].contains("mislabelled or displaced touch? Check"),
+        "{reasons:?}"
+    );
 
     // The page opens with the verdict, before any figure, with every reason.
     let page = std::fs::read_to_string(out.join("report.html")).unwrap();

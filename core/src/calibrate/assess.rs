@@ -846,7 +846,12 @@ fn screen_outliers(
     let kept = (outliers.into_iter())
         .filter(|o| down.contains(o.at.as_str()))
         .collect();
-    Ok((kept, Some(OutlierScreen { loss, flagged }), Some(phase)))
+    let screen = OutlierScreen {
+        loss,
+        flagged,
+        scale: out.fit.scale,
+    };
+    Ok((kept, Some(screen), Some(phase)))
 }
 
 /// A touch's σ as the fit found it: with stated noise, the stated σ times

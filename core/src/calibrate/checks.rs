@@ -313,6 +313,20 @@ pub struct OutlierScreen {
     pub loss: super::robust::Loss,
     /// Touches beyond the threshold in the plain fit, before the screen.
     pub flagged: usize,
+    /// The robust refit's scale `σ̂` (in the units of the plain fit's
+    /// `sigma0`): far below `sigma0` when the touches it weighs down are
+    /// what made the plain fit's residuals large; about `sigma0` when
+    /// every residual is large (a wrong minimum, a wrong model).
+    pub scale: f64,
+}
+
+impl OutlierScreen {
+    /// Whether the touches the screen weighs down explain the plain fit's
+    /// misfit: without them the residuals' scale is less than half the
+    /// plain fit's `sigma0`.
+    pub fn explains(&self, sigma0: f64) -> bool {
+        self.scale.is_finite() && self.scale < sigma0 / 2.0
+    }
 }
 
 /// The family-wise false-alarm rate of the outlier test: a touch is named

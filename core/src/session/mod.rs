@@ -605,13 +605,20 @@ impl Verdict {
 /// Most outliers, as a share of the observations, that can be the cause
 /// of a refusal rather than a symptom of it (a wrong minimum or a wrong
 /// model puts most observations beyond the threshold).
-const FEW_OUTLIERS: f64 = 0.05;
+const FEW_OUTLIERS: f64 = 0.1;
 
 /// A refused fit with a few outliers: they are the likely cause (a
 /// mislabelled or displaced touch pulls the whole fit), named by
 /// `file:line`, with the remedy.
 fn outlier_cause(c: &Calibration) -> Option<String> {
     let o = &c.checks.outliers;
+    // Named as the cause only when, weighed down, they leave the rest of
+    // the residuals small: not after a wrong minimum, whose residuals are
+    // all large and whose screen singles out one touch all the same.
+    let screen = c.checks.outlier_screen;
+    if screen.is_some_and(|s| !s.explains(c.dof.sigma0)) {
+        return None;
+    }
     let positions: usize = (c.dof.other_rows.iter())
         .filter(|r| r.term == "positions")
         .map(|r| r.rows / 3)
@@ -1244,9 +1251,19 @@ fn outliers_line(c: &Calibration) -> String {
         .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
         .collect();
     let screened = screen.map_or(String::new(), |s| {
+        // What the screen says of the rest: pulled by the named touches,
+        // or (far outside the stated noise all the same) a wrong minimum
+        // or model; else nothing.
+        let far = (c.checks.chi_square.as_ref()).is_some_and(|chi| chi.far_outside());
+        let why = if s.explains(c.dof.sigma0) {
+            ", pulled by them"
+        } else if far {
+            ", and the rest stay large without them: a wrong minimum or model"
+        } else {
+            ""
+        };
         format!(
-            " that a robust {} refit weighs below {below} (of {} beyond it in this fit, pulled \
-             by them)",
+            " that a robust {} refit weighs below {below} (of {} beyond it in this fit{why})",
             s.loss.name(),
             s.flagged
         )
