@@ -62,7 +62,9 @@ def test_poses_and_lengths_files(tmp_path):
     poses = write(tmp_path, "p.csv", "point,q1,q2,q3,q4,q5,q6\nA,1,2,3,4,5,6\nA,1,2,x,4,5,6\n")
     with pytest.raises(aacmm.InputError, match=r"p\.csv:3: field `q3`"):
         aacmm.DataSet.from_files(poses)
-    few = write(tmp_path, "few.csv", "point,q1,q2,q3,q4,q5,q6\nA,1,2,3,4,5,6\nA,1,2,3,4,5,7\n")
+    # Articulated (q6 turns 34°), so the count is what is wrong: a static
+    # campaign is refused as such first.
+    few = write(tmp_path, "few.csv", "point,q1,q2,q3,q4,q5,q6\nA,1,2,3,4,5,6\nA,1,2,3,4,5,40\n")
     with pytest.raises(aacmm.InputError, match=r"few\.csv:2: field `point`: point `A` has 2 touches"):
         aacmm.DataSet.from_files(few)
     with pytest.raises(aacmm.InputError, match="7"):
