@@ -17,7 +17,7 @@ use aacmm_core::tolerances::Tolerances;
 
 use crate::error::{AacmmStatus, Error, guard, guard_value};
 use crate::positions;
-use crate::ptr;
+use crate::ptr::{self, Args};
 
 /// A solver, for `aacmm_calibrate_options_set_method`: one of the
 /// `AACMM_METHOD_…` constants.
@@ -789,6 +789,13 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_positions(
     uncertainty_len: usize,
 ) -> AacmmStatus {
     guard(|| {
+        (Args::new().out("options", options))
+            .input("q", q, q_len)?
+            .input("xyz", xyz, xyz_len)?
+            .input("frames", frames, frames_len)?
+            .input("frame_names", frame_names, frame_names_len)?
+            .input("uncertainty", uncertainty, uncertainty_len)?
+            .disjoint()?;
         // SAFETY: by the contract.
         let o = unsafe { ptr::object_mut(options, "options") }?;
         let lengths = positions::Lengths {
