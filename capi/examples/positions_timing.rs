@@ -10,9 +10,13 @@
 //! Both sides are the same program, one in C and one in Rust (this
 //! example re-run as `positions_timing --rust N REPS`): a fresh process that
 //! fills the same buffers in the same order and times the same calls on its
-//! main thread, so that the allocator sees the same history (each call
-//! allocates the poses' sin/cos, 96 MB for 10⁶ poses, and page-faults it in:
-//! a different heap history alone moves the timing by several percent).
+//! main thread, so that the allocator sees the same history (the Rust side
+//! allocates the poses' sin/cos, 96 MB for 10⁶ poses, and page-faults it in
+//! on each call: a different heap history alone moves the timing by several
+//! percent). The C API prepares the poses 4096 at a time instead (memory
+//! that does not grow with the batch, issue 29), which also keeps them in
+//! cache: since then it is the faster side (C/Rust 0.70 on the 2-core
+//! machine, from 1.02 before).
 //! Prints, per side, the median and the fastest wall-clock call and the
 //! processor time per call (user + system: on a loaded machine the steadiest
 //! figure), and the C/Rust ratios. A timing, not a test: CI does not run it.

@@ -26,7 +26,9 @@
 /**
  * What a call returns: `AACMM_STATUS_OK` (0), or why it failed. On failure
  * `aacmm_last_error_message` describes the error, and output handles are
- * set to `NULL`.
+ * set to `NULL` — unless the arguments themselves were refused (an output
+ * that overlaps another argument, a length past what memory can hold):
+ * then nothing is written.
  */
 enum AacmmStatus
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L
@@ -44,13 +46,15 @@ enum AacmmStatus
   AACMM_STATUS_NULL_POINTER = 1,
   /**
    * A buffer length does not match what the arm and the other arguments
-   * imply (e.g. `p_len != 3 · q_len / joints`).
+   * imply (e.g. `p_len != 3 · q_len / joints`), or is larger than memory
+   * can hold (what it implies included).
    */
   AACMM_STATUS_LENGTH = 2,
   /**
    * An argument's value is out of range: a non-finite parameter, an
    * unknown method, an unknown parameter name, a negative noise, a
-   * misaligned or overlapping buffer, a path that is not valid text.
+   * misaligned buffer, an output that shares memory with an input or
+   * another output, a path that is not valid text.
    */
   AACMM_STATUS_INVALID_ARGUMENT = 3,
   /**
@@ -83,6 +87,13 @@ enum AacmmStatus
    * whose covariance is not finite.
    */
   AACMM_STATUS_NOT_AVAILABLE = 9,
+  /**
+   * Memory for a result or a temporary sized by the input could not be
+   * allocated (e.g. under a memory limit): nothing was computed, the
+   * host process is unaffected, and the message says how much was asked
+   * for.
+   */
+  AACMM_STATUS_OUT_OF_MEMORY = 10,
   /**
    * An internal error (a bug in aacmm) was caught; the host process is
    * unaffected and the message says what happened.
@@ -595,7 +606,9 @@ AacmmStatus aacmm_arm_warnings(const AacmmArm *arm, char *buf, size_t buf_len, s
  *
  * Errors: `AACMM_STATUS_NULL_POINTER` (`arm`, or a buffer whose length is
  * not 0), `AACMM_STATUS_LENGTH` (`q_len` not a multiple of the joint count,
- * `p_len != 3 · n`), `AACMM_STATUS_INVALID_ARGUMENT` (`p` overlaps `q`).
+ * `p_len != 3 · n`, or `q_len` past what memory can hold),
+ * `AACMM_STATUS_INVALID_ARGUMENT` (`p` overlaps `q` or the handle). Memory
+ * does not grow with `n`: poses are prepared a few thousand at a time.
  *
  * # Safety
  *
@@ -732,7 +745,11 @@ AacmmStatus aacmm_calibrate_files(const char *arm_path,
  * articulation, or a length that joins a point to itself, names an
  * unknown point, repeats a pair, or has a distance <= 0 or a negative
  * uncertainty: the message names the array and the index
- * (`points[6]: point 9 has 2 touches; …`, `lengths[0]: …`).
+ * (`points[6]: point 9 has 2 touches; …`, `lengths[0]: …`);
+ * `AACMM_STATUS_LENGTH` also for lengths too large to calibrate in memory,
+ * and `AACMM_STATUS_OUT_OF_MEMORY` when the memory the calibration needs
+ * (about 256 bytes per touch) cannot be allocated, checked before any
+ * work.
  *
  * # Safety
  *

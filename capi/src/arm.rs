@@ -8,7 +8,7 @@ use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::params::{DhParams, ParamId, param_count};
 
 use crate::error::{AacmmStatus, Error, guard, guard_value};
-use crate::ptr::{self, disjoint, span};
+use crate::ptr::{self, Args};
 
 /// An arm: its geometry prepared for the generated kernel of its joint
 /// count. Opaque; made by `aacmm_arm_from_file`, `aacmm_arm_from_params`
@@ -160,6 +160,10 @@ unsafe fn from_file(
     rejected: Rejected,
 ) -> AacmmStatus {
     guard(|| {
+        // SAFETY: `path` is NULL or NUL-terminated, by the contract.
+        unsafe { Args::new().c_str("path", path) }
+            .out("out", out)
+            .disjoint()?;
         // SAFETY: `out` is NULL or writable, by the contract.
         unsafe { ptr::write(out, std::ptr::null_mut(), "out") }?;
         // SAFETY: `path` is NULL or NUL-terminated, by the contract.
@@ -200,6 +204,9 @@ pub unsafe extern "C" fn aacmm_arm_from_params(
     out: *mut *mut AacmmArm,
 ) -> AacmmStatus {
     guard(|| {
+        (Args::new().input("params", params, params_len)?)
+            .out("out", out)
+            .disjoint()?;
         // SAFETY: `out` is NULL or writable, by the contract.
         unsafe { ptr::write(out, std::ptr::null_mut(), "out") }?;
         // SAFETY: `params` holds `params_len` doubles, by the contract.
@@ -256,6 +263,10 @@ pub unsafe extern "C" fn aacmm_arm_free(arm: *mut AacmmArm) {
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_arm_joints(arm: *const AacmmArm, joints: *mut usize) -> AacmmStatus {
     guard(|| {
+        Args::new()
+            .object("arm", arm)
+            .out("joints", joints)
+            .disjoint()?;
         // SAFETY: by the contract.
         let arm = unsafe { handle(arm) }?;
         // SAFETY: by the contract.
@@ -278,6 +289,9 @@ pub unsafe extern "C" fn aacmm_arm_params(
     params_len: usize,
 ) -> AacmmStatus {
     guard(|| {
+        (Args::new().object("arm", arm))
+            .output("params", params, params_len)?
+            .disjoint()?;
         // SAFETY: by the contract.
         let arm = unsafe { handle(arm) }?;
         let values = arm.arm.params.to_vec();
@@ -307,11 +321,25 @@ pub unsafe extern "C" fn aacmm_arm_warnings(
     len: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        string_args(Args::new().object("arm", arm), buf, buf_len, len)?;
         // SAFETY: by the contract.
         let arm = unsafe { handle(arm) }?;
         // SAFETY: by the contract.
         unsafe { string_out(&arm.warnings.join("\n"), buf, buf_len, len) }
     })
+}
+
+/// Checks the arguments of a string accessor: `args` (its inputs and other
+/// outputs) with `buf` and `len`, which must share memory with none of them.
+pub(crate) fn string_args(
+    args: Args,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> Result<(), Error> {
+    (args.output("buf", buf, buf_len)?)
+        .out("len", len)
+        .disjoint()
 }
 
 /// Copies `s` out for a string accessor: `*len` = its length, the status
@@ -346,6 +374,12 @@ pub(crate) unsafe fn string_out(
     }
 }
 
+/// Poses prepared at once (their sin and cos, 96 kB for 6 joints) by the
+/// batch functions: memory that does not grow with the batch, so a large
+/// one cannot exhaust it (a failed allocation aborts the host), and the
+/// prepared poses stay in cache.
+const BATCH: usize = 4096;
+
 /// Probe positions of `n = q_len / joints` poses.
 ///
 /// `q` holds the encoder readings, rad, row-major `n × joints`
@@ -357,7 +391,9 @@ pub(crate) unsafe fn string_out(
 ///
 /// Errors: `AACMM_STATUS_NULL_POINTER` (`arm`, or a buffer whose length is
 /// not 0), `AACMM_STATUS_LENGTH` (`q_len` not a multiple of the joint count,
-/// `p_len != 3 · n`), `AACMM_STATUS_INVALID_ARGUMENT` (`p` overlaps `q`).
+/// `p_len != 3 · n`, or `q_len` past what memory can hold),
+/// `AACMM_STATUS_INVALID_ARGUMENT` (`p` overlaps `q` or the handle). Memory
+/// does not grow with `n`: poses are prepared a few thousand at a time.
 ///
 /// # Safety
 ///
@@ -372,27 +408,33 @@ pub unsafe extern "C" fn aacmm_positions(
     p_len: usize,
 ) -> AacmmStatus {
     guard(|| {
+        (Args::new().object("arm", arm))
+            .input("q", q, q_len)?
+            .output("p", p, p_len)?
+            .disjoint()?;
         // SAFETY: by the contract.
         let arm = unsafe { handle(arm) }?;
         let joints = arm.joints();
         let n = pose_count(q_len, joints)?;
         expect_len("p_len", p_len, 3 * n, "3 per pose")?;
-        disjoint(&[span("q", q, q_len), span("p", p, p_len)])?;
         // SAFETY: by the contract; `p` does not overlap `q` (checked).
         let (q, p) = unsafe { (ptr::input(q, q_len, "q")?, ptr::output(p, p_len, "p")?) };
-        let poses = prepare(joints, q)?;
         // The kernel writes through `&mut [[f64; 3]]`, which must not refer
         // to the caller's possibly uninitialised memory: each chunk goes to
         // the stack first and is copied out (one write of `p`, no zeroing
-        // pass). Chunks start at multiples of 4 poses, so the SIMD batches are
+        // pass). Poses are prepared a batch at a time (see `BATCH`). Chunks
+        // and batches start at multiples of 4 poses, so the SIMD batches are
         // the same as in one call.
         const CHUNK: usize = 256;
         let mut chunk = [[0.0; 3]; CHUNK];
-        for (start, dst) in (0..n).step_by(CHUNK).zip(p.chunks_mut(3 * CHUNK)) {
-            let m = dst.len() / 3;
-            arm.kernel
-                .positions(&poses, start..start + m, &mut chunk[..m])?;
-            ptr::write_all(dst, chunk[..m].as_flattened());
+        for (q, p) in q.chunks(BATCH * joints).zip(p.chunks_mut(3 * BATCH)) {
+            let poses = prepare(joints, q)?;
+            for (start, dst) in (0..).step_by(CHUNK).zip(p.chunks_mut(3 * CHUNK)) {
+                let m = dst.len() / 3;
+                arm.kernel
+                    .positions(&poses, start..start + m, &mut chunk[..m])?;
+                ptr::write_all(dst, chunk[..m].as_flattened());
+            }
         }
         Ok(())
     })
@@ -428,6 +470,11 @@ pub unsafe extern "C" fn aacmm_jacobians(
     jac_len: usize,
 ) -> AacmmStatus {
     guard(|| {
+        (Args::new().object("arm", arm))
+            .input("q", q, q_len)?
+            .output("p", p, p_len)?
+            .output("jac", jac, jac_len)?
+            .disjoint()?;
         // SAFETY: by the contract.
         let arm = unsafe { handle(arm) }?;
         let joints = arm.joints();
@@ -444,11 +491,6 @@ pub unsafe extern "C" fn aacmm_jacobians(
             expected,
             "3 · (4 · joints + 3) per pose",
         )?;
-        disjoint(&[
-            span("q", q, q_len),
-            span("p", p, p_len),
-            span("jac", jac, jac_len),
-        ])?;
         // SAFETY: by the contract; the buffers do not overlap (checked).
         let (q, p, jac) = unsafe {
             (
@@ -457,16 +499,23 @@ pub unsafe extern "C" fn aacmm_jacobians(
                 ptr::output(jac, jac_len, "jac")?,
             )
         };
-        let poses = prepare(joints, q)?;
-        arm.kernel.for_each_jacobian(&poses, 0..n, |i, pos, cols| {
-            ptr::write_all(&mut p[3 * i..3 * i + 3], pos);
-            let block = &mut jac[per_pose * i..per_pose * (i + 1)];
-            for (c, col) in cols.iter().enumerate() {
-                for (k, &v) in col.iter().enumerate() {
-                    block[k * params + c].write(v);
+        // A batch of poses prepared at a time (see `BATCH`).
+        let batches = (q.chunks(BATCH * joints))
+            .zip(p.chunks_mut(3 * BATCH))
+            .zip(jac.chunks_mut(per_pose * BATCH));
+        for ((q, p), jac) in batches {
+            let poses = prepare(joints, q)?;
+            let m = poses.len();
+            arm.kernel.for_each_jacobian(&poses, 0..m, |i, pos, cols| {
+                ptr::write_all(&mut p[3 * i..3 * i + 3], pos);
+                let block = &mut jac[per_pose * i..per_pose * (i + 1)];
+                for (c, col) in cols.iter().enumerate() {
+                    for (k, &v) in col.iter().enumerate() {
+                        block[k * params + c].write(v);
+                    }
                 }
-            }
-        })?;
+            })?;
+        }
         Ok(())
     })
 }
@@ -494,17 +543,17 @@ pub unsafe extern "C" fn aacmm_joint_jacobian(
     jac_len: usize,
 ) -> AacmmStatus {
     guard(|| {
+        (Args::new().object("arm", arm))
+            .input("q", q, q_len)?
+            .output("p", p, p_len)?
+            .output("jac", jac, jac_len)?
+            .disjoint()?;
         // SAFETY: by the contract.
         let arm = unsafe { handle(arm) }?;
         let joints = arm.joints();
         expect_len("q_len", q_len, joints, "one reading per joint")?;
         expect_len("p_len", p_len, 3, "x, y, z")?;
         expect_len("jac_len", jac_len, 3 * joints, "3 · joints")?;
-        disjoint(&[
-            span("q", q, q_len),
-            span("p", p, p_len),
-            span("jac", jac, jac_len),
-        ])?;
         // SAFETY: by the contract; the buffers do not overlap (checked).
         let (q, p, jac) = unsafe {
             (
@@ -570,13 +619,14 @@ mod tests {
         }
     }
 
-    /// Positions go out through stack chunks of 256 poses: 601 poses (two
-    /// full chunks and a tail that is not a multiple of the 4 lanes) into an
+    /// Positions go out through stack chunks of 256 poses, prepared in
+    /// batches of `BATCH`: two full batches and 601 poses (two full chunks
+    /// and a tail that is not a multiple of the 4 lanes) into an
     /// uninitialised buffer give the Rust API's bits, in order.
     #[test]
     fn chunked_positions_fill_an_uninitialised_buffer() {
         let arm = nominal();
-        let n = 601;
+        let n = 2 * BATCH + 601;
         let q: Vec<f64> = (0..6 * n).map(|i| (i as f64 * 0.37).sin() * 3.0).collect();
         let mut p: Vec<f64> = Vec::with_capacity(3 * n);
         // SAFETY: live handle; `q` holds `6n` doubles; `p` has room for
@@ -594,6 +644,47 @@ mod tests {
             .positions_of(&rows)
             .unwrap();
         assert_eq!(p, expected.as_flattened());
+        // SAFETY: live handle, not used after.
+        unsafe { aacmm_arm_free(arm) };
+    }
+
+    /// Jacobians of poses prepared in batches of `BATCH` are those of one
+    /// preparation of them all, bit for bit.
+    #[test]
+    fn batched_jacobians_are_those_of_one_batch() {
+        let arm = nominal();
+        let n = BATCH + 5;
+        let q: Vec<f64> = (0..6 * n).map(|i| (i as f64 * 0.29).cos() * 2.0).collect();
+        let (mut p, mut jac) = (vec![0.0; 3 * n], vec![0.0; 81 * n]);
+        // SAFETY: live handle; buffers of the stated lengths.
+        let status = unsafe {
+            aacmm_jacobians(
+                arm,
+                q.as_ptr(),
+                6 * n,
+                p.as_mut_ptr(),
+                3 * n,
+                jac.as_mut_ptr(),
+                81 * n,
+            )
+        };
+        assert_eq!(status, AacmmStatus::Ok);
+        // SAFETY: live handle, freed below and not used after.
+        let kernel = &unsafe { handle(arm) }.unwrap().kernel;
+        let poses = prepare(6, &q).unwrap();
+        let mut seen = 0;
+        kernel
+            .for_each_jacobian(&poses, 0..n, |i, pos, cols| {
+                assert_eq!(p[3 * i..3 * i + 3], pos[..], "pose {i}");
+                for (c, col) in cols.iter().enumerate() {
+                    for (k, &v) in col.iter().enumerate() {
+                        assert_eq!(jac[81 * i + 27 * k + c].to_bits(), v.to_bits());
+                    }
+                }
+                seen += 1;
+            })
+            .unwrap();
+        assert_eq!(seen, n);
         // SAFETY: live handle, not used after.
         unsafe { aacmm_arm_free(arm) };
     }

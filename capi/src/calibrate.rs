@@ -9,11 +9,11 @@ use aacmm_core::params::ParamId;
 use aacmm_core::residuals::Frame;
 use aacmm_core::session::{CalibrationReport, Request, Sources};
 
-use crate::arm::{AacmmArm, handle, pose_count, string_out};
+use crate::arm::{AacmmArm, handle, pose_count, string_args, string_out};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
 use crate::options::{self, AacmmCalibrateOptions, AacmmMethod, PositionInput, method_code};
 use crate::positions::ARRAYS;
-use crate::ptr;
+use crate::ptr::{self, Args};
 
 /// The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
 /// `AACMM_ANGLE_RAD`.
@@ -259,6 +259,15 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
     out: *mut *mut AacmmCalibration,
 ) -> AacmmStatus {
     guard(|| {
+        // SAFETY: the paths are NULL or NUL-terminated, by the contract.
+        let args = unsafe {
+            (Args::new().c_str("arm_path", arm_path))
+                .c_str("poses_path", poses_path)
+                .c_str("lengths_path", lengths_path)
+        };
+        (args.object("options", options))
+            .out("out", out)
+            .disjoint()?;
         // SAFETY: by the contract.
         unsafe { ptr::write(out, std::ptr::null_mut(), "out") }?;
         // SAFETY: by the contract.
@@ -347,7 +356,11 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
 /// articulation, or a length that joins a point to itself, names an
 /// unknown point, repeats a pair, or has a distance <= 0 or a negative
 /// uncertainty: the message names the array and the index
-/// (`points[6]: point 9 has 2 touches; …`, `lengths[0]: …`).
+/// (`points[6]: point 9 has 2 touches; …`, `lengths[0]: …`);
+/// `AACMM_STATUS_LENGTH` also for lengths too large to calibrate in memory,
+/// and `AACMM_STATUS_OUT_OF_MEMORY` when the memory the calibration needs
+/// (about 256 bytes per touch) cannot be allocated, checked before any
+/// work.
 ///
 /// # Safety
 ///
@@ -368,6 +381,16 @@ pub unsafe extern "C" fn aacmm_calibrate(
     out: *mut *mut AacmmCalibration,
 ) -> AacmmStatus {
     guard(|| {
+        // What the lengths imply first: a length error, not an overlap of
+        // a span no memory holds.
+        let bytes = calibration_bytes(points_len, lengths_len)?;
+        (Args::new().object("start", start))
+            .input("q", q, q_len)?
+            .input("points", points, points_len)?
+            .input("lengths", lengths, lengths_len)?
+            .object("options", options)
+            .out("out", out)
+            .disjoint()?;
         // SAFETY: by the contract.
         unsafe { ptr::write(out, std::ptr::null_mut(), "out") }?;
         // SAFETY: by the contract.
@@ -379,6 +402,7 @@ pub unsafe extern "C" fn aacmm_calibrate(
                 "points_len = {points_len}, expected {n} (one point id per touch)"
             )));
         }
+        ptr::room_for("aacmm_calibrate", bytes)?;
         // SAFETY: by the contract.
         let (q, points, lengths) = unsafe {
             (
@@ -407,7 +431,9 @@ pub unsafe extern "C" fn aacmm_calibrate(
                 ));
             }
         };
-        let lengths: Vec<ArrayLength> = lengths.iter().map(ArrayLength::from).collect();
+        let mut converted = ptr::try_vec("lengths_len", lengths.len())?;
+        converted.extend(lengths.iter().map(ArrayLength::from));
+        let lengths = converted;
         let data = match positions {
             Some(rows) if n == 0 && lengths.is_empty() => DataSet::from_positions(rows, ARRAYS)?,
             Some(rows) => {
@@ -430,6 +456,24 @@ pub unsafe extern "C" fn aacmm_calibrate(
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })
+}
+
+/// About what a calibration of `touches` touches and `lengths` reference
+/// lengths allocates inside the library (the data set, the Jacobian
+/// blocks, the report), where a failed allocation would abort the host: a
+/// bound of the measured peak (229 bytes per touch at 10⁶ touches), checked
+/// up front by `aacmm_calibrate`. A size past the address space is
+/// `AACMM_STATUS_LENGTH`, naming the argument.
+fn calibration_bytes(touches: usize, lengths: usize) -> Result<usize, Error> {
+    const PER_TOUCH: usize = 256;
+    const PER_LENGTH: usize = 128;
+    let too_many = |name: &str, n: usize| {
+        Error::length(format!("{name} = {n}: too many to calibrate in memory"))
+    };
+    let t = (touches.checked_mul(PER_TOUCH)).ok_or_else(|| too_many("points_len", touches))?;
+    let l = (lengths.checked_mul(PER_LENGTH)).ok_or_else(|| too_many("lengths_len", lengths))?;
+    t.checked_add(l)
+        .ok_or_else(|| too_many("lengths_len", lengths))
 }
 
 /// The result behind `cal`.
@@ -472,6 +516,9 @@ unsafe fn per_parameter<T: Copy>(
     len: usize,
     value: impl Fn(&AacmmCalibration, usize, ParamId) -> T,
 ) -> Result<(), Error> {
+    (Args::new().object("cal", cal))
+        .output("out", out, len)?
+        .disjoint()?;
     // SAFETY: by the contract.
     let cal = unsafe { result(cal) }?;
     let count = cal.calibrated.params.param_count();
@@ -572,6 +619,10 @@ pub unsafe extern "C" fn aacmm_calibration_summary(
     summary: *mut AacmmCalibrationSummary,
 ) -> AacmmStatus {
     guard(|| {
+        Args::new()
+            .object("cal", cal)
+            .out("summary", summary)
+            .disjoint()?;
         // SAFETY: by the contract.
         let report = &unsafe { result(cal) }?.report;
         let c = &report.calibration;
@@ -606,6 +657,7 @@ pub unsafe extern "C" fn aacmm_calibration_arm(
     out: *mut *mut AacmmArm,
 ) -> AacmmStatus {
     guard(|| {
+        Args::new().object("cal", cal).out("out", out).disjoint()?;
         // SAFETY: by the contract.
         unsafe { ptr::write(out, std::ptr::null_mut(), "out") }?;
         // SAFETY: by the contract.
@@ -638,6 +690,7 @@ pub unsafe extern "C" fn aacmm_calibration_report(
     len: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
         // SAFETY: by the contract.
         let c = unsafe { result(cal) }?;
         // SAFETY: by the contract.
@@ -679,6 +732,8 @@ pub unsafe extern "C" fn aacmm_calibration_verdict(
     len: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        let args = Args::new().object("cal", cal).out("usable", usable);
+        string_args(args, buf, buf_len, len)?;
         // SAFETY: by the contract.
         let verdict = &unsafe { result(cal) }?.report.verdict;
         // SAFETY: by the contract.
@@ -706,6 +761,7 @@ pub unsafe extern "C" fn aacmm_calibration_verdict_notes(
     len: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
         // SAFETY: by the contract.
         let verdict = &unsafe { result(cal) }?.report.verdict;
         // SAFETY: by the contract.
@@ -725,6 +781,10 @@ pub unsafe extern "C" fn aacmm_calibration_frame_count(
     count: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        Args::new()
+            .object("cal", cal)
+            .out("count", count)
+            .disjoint()?;
         // SAFETY: by the contract.
         let c = unsafe { result(cal) }?;
         // SAFETY: by the contract.
@@ -756,6 +816,8 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
     len: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        let args = Args::new().object("cal", cal).out("frame", frame);
+        string_args(args, buf, buf_len, len)?;
         // SAFETY: by the contract.
         let c = &unsafe { result(cal) }?.report.calibration;
         let values = c.frames();
@@ -810,6 +872,10 @@ pub unsafe extern "C" fn aacmm_calibration_auxiliary_count(
     count: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        Args::new()
+            .object("cal", cal)
+            .out("count", count)
+            .disjoint()?;
         // SAFETY: by the contract.
         let c = unsafe { result(cal) }?;
         // SAFETY: by the contract.
@@ -844,6 +910,8 @@ pub unsafe extern "C" fn aacmm_calibration_auxiliary(
     len: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        let args = Args::new().object("cal", cal).out("column", column);
+        string_args(args, buf, buf_len, len)?;
         // SAFETY: by the contract.
         let auxiliary = &unsafe { result(cal) }?.report.calibration.auxiliary;
         let Some(a) = auxiliary.get(index) else {

@@ -17,7 +17,9 @@ use crate::ptr::copy_str;
 
 /// What a call returns: `AACMM_STATUS_OK` (0), or why it failed. On failure
 /// `aacmm_last_error_message` describes the error, and output handles are
-/// set to `NULL`.
+/// set to `NULL` — unless the arguments themselves were refused (an output
+/// that overlaps another argument, a length past what memory can hold):
+/// then nothing is written.
 #[repr(i32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AacmmStatus {
@@ -27,11 +29,13 @@ pub enum AacmmStatus {
     /// while its length is not 0).
     NullPointer = 1,
     /// A buffer length does not match what the arm and the other arguments
-    /// imply (e.g. `p_len != 3 · q_len / joints`).
+    /// imply (e.g. `p_len != 3 · q_len / joints`), or is larger than memory
+    /// can hold (what it implies included).
     Length = 2,
     /// An argument's value is out of range: a non-finite parameter, an
     /// unknown method, an unknown parameter name, a negative noise, a
-    /// misaligned or overlapping buffer, a path that is not valid text.
+    /// misaligned buffer, an output that shares memory with an input or
+    /// another output, a path that is not valid text.
     InvalidArgument = 3,
     /// The arm has a joint count the toolkit generates no kernel for
     /// (it has kernels for 6- and 7-joint arms).
@@ -51,6 +55,11 @@ pub enum AacmmStatus {
     /// The result has no such thing: an uncertainty map of a calibration
     /// whose covariance is not finite.
     NotAvailable = 9,
+    /// Memory for a result or a temporary sized by the input could not be
+    /// allocated (e.g. under a memory limit): nothing was computed, the
+    /// host process is unaffected, and the message says how much was asked
+    /// for.
+    OutOfMemory = 10,
     /// An internal error (a bug in aacmm) was caught; the host process is
     /// unaffected and the message says what happened.
     Panic = 99,
@@ -81,6 +90,10 @@ impl Error {
 
     pub(crate) fn invalid(message: impl Into<String>) -> Error {
         Error::new(AacmmStatus::InvalidArgument, message)
+    }
+
+    pub(crate) fn out_of_memory(message: impl Into<String>) -> Error {
+        Error::new(AacmmStatus::OutOfMemory, message)
     }
 }
 

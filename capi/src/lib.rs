@@ -13,6 +13,15 @@
 //!   the last failure on the calling thread is copied out by
 //!   [`aacmm_last_error_message`]; `NULL` pointers, wrong lengths, misaligned
 //!   or overlapping buffers give codes, never a crash;
+//! - every output (a buffer, a length, a struct, a handle's slot) is
+//!   checked against every input (arrays, strings, handles) and every other
+//!   output before anything is written: one that shares memory with
+//!   another argument gives `AACMM_STATUS_INVALID_ARGUMENT` and nothing is
+//!   written, not even the `NULL` an output handle gets on other errors;
+//!   the lengths are checked before, so that one past what memory can hold
+//!   gives `AACMM_STATUS_LENGTH`;
+//! - memory for work sized by the input is asked for before the work, and a
+//!   refusal gives `AACMM_STATUS_OUT_OF_MEMORY`, never an abort of the host;
 //! - every entry point catches panics: a bug inside gives
 //!   `AACMM_STATUS_PANIC`, never an unwind into C or an abort of the host;
 //! - handles (`AacmmArm`, `AacmmCalibration`) are opaque, immutable once

@@ -5,7 +5,7 @@ use aacmm_core::plan::UncertaintyMap;
 
 use crate::calibrate::{AacmmCalibration, result};
 use crate::error::{AacmmStatus, Error, guard};
-use crate::ptr;
+use crate::ptr::{self, Args};
 
 /// A calibration's uncertainty map, for
 /// `aacmm_calibration_uncertainty_map`: the radius that holds the
@@ -78,6 +78,7 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_map(
     out: *mut AacmmUncertaintyMap,
 ) -> AacmmStatus {
     guard(|| {
+        Args::new().object("cal", cal).out("out", out).disjoint()?;
         // SAFETY: by the contract.
         let m = map_of(unsafe { result(cal) }?)?;
         let value = AacmmUncertaintyMap {
@@ -106,6 +107,10 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_region_count(
     count: *mut usize,
 ) -> AacmmStatus {
     guard(|| {
+        Args::new()
+            .object("cal", cal)
+            .out("count", count)
+            .disjoint()?;
         // SAFETY: by the contract.
         let c = unsafe { result(cal) }?;
         let n = c
@@ -135,6 +140,7 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_region(
     out: *mut AacmmUncertaintyRegion,
 ) -> AacmmStatus {
     guard(|| {
+        Args::new().object("cal", cal).out("out", out).disjoint()?;
         // SAFETY: by the contract.
         let m = map_of(unsafe { result(cal) }?)?;
         let Some(r) = m.regions.get(index) else {

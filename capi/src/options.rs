@@ -17,7 +17,7 @@ use aacmm_core::tolerances::Tolerances;
 
 use crate::error::{AacmmStatus, Error, guard, guard_value};
 use crate::positions;
-use crate::ptr;
+use crate::ptr::{self, Args};
 
 /// A solver, for `aacmm_calibrate_options_set_method`: one of the
 /// `AACMM_METHOD_…` constants.
@@ -189,6 +189,27 @@ pub(crate) unsafe fn read(
     Ok(unsafe { ptr::object(options, "options") }?.clone())
 }
 
+/// The builder behind `options`, for a setter given the string `s`
+/// (named `name`): refused (`AACMM_STATUS_INVALID_ARGUMENT`) when the
+/// string lies in the builder's memory, which the setter writes.
+///
+/// # Safety
+///
+/// `options` is `NULL` or a live options handle that nothing else uses
+/// meanwhile; `s` is `NULL` or a NUL-terminated string.
+unsafe fn builder_with_text<'a>(
+    options: *mut AacmmCalibrateOptions,
+    s: *const c_char,
+    name: &str,
+) -> Result<&'a mut AacmmCalibrateOptions, Error> {
+    // SAFETY: `s` is NULL or NUL-terminated, by the contract.
+    unsafe { Args::new().c_str(name, s) }
+        .out("options", options)
+        .disjoint()?;
+    // SAFETY: by the contract.
+    unsafe { ptr::object_mut(options, "options") }
+}
+
 /// The text option `name` as given, checked as UTF-8.
 ///
 /// # Safety
@@ -325,7 +346,7 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_fix(
 ) -> AacmmStatus {
     guard(|| {
         // SAFETY: by the contract.
-        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let o = unsafe { builder_with_text(options, fix, "fix") }?;
         // SAFETY: by the contract.
         let fix = unsafe { text(fix, "fix") }?;
         if let Some(f) = &fix {
@@ -584,7 +605,7 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_prior(
 ) -> AacmmStatus {
     guard(|| {
         // SAFETY: by the contract.
-        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let o = unsafe { builder_with_text(options, prior, "prior") }?;
         // SAFETY: by the contract.
         let prior = unsafe { text(prior, "prior") }?;
         if let Some(p) = &prior {
@@ -640,7 +661,7 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_compliance(
 ) -> AacmmStatus {
     guard(|| {
         // SAFETY: by the contract.
-        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let o = unsafe { builder_with_text(options, joints, "compliance") }?;
         // SAFETY: by the contract.
         let joints = unsafe { text(joints, "compliance") }?;
         if let Some(j) = &joints {
@@ -672,7 +693,7 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_harmonics(
 ) -> AacmmStatus {
     guard(|| {
         // SAFETY: by the contract.
-        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let o = unsafe { builder_with_text(options, spec, "harmonics") }?;
         // SAFETY: by the contract.
         let spec = unsafe { text(spec, "harmonics") }?;
         if let Some(s) = &spec {
@@ -789,6 +810,13 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_positions(
     uncertainty_len: usize,
 ) -> AacmmStatus {
     guard(|| {
+        (Args::new().out("options", options))
+            .input("q", q, q_len)?
+            .input("xyz", xyz, xyz_len)?
+            .input("frames", frames, frames_len)?
+            .input("frame_names", frame_names, frame_names_len)?
+            .input("uncertainty", uncertainty, uncertainty_len)?
+            .disjoint()?;
         // SAFETY: by the contract.
         let o = unsafe { ptr::object_mut(options, "options") }?;
         let lengths = positions::Lengths {
@@ -843,7 +871,7 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_positions_file(
 ) -> AacmmStatus {
     guard(|| {
         // SAFETY: by the contract.
-        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let o = unsafe { builder_with_text(options, path, "path") }?;
         o.positions = match path.is_null() {
             true => None,
             // SAFETY: by the contract.
@@ -943,6 +971,27 @@ mod tests {
                 aacmm_calibrate_options_set_fix(o, c"auto,theta1".as_ptr()),
                 "fix = auto,theta1: `auto` stands alone",
             );
+            // A string inside the builder, which the setter writes.
+            refused(
+                aacmm_calibrate_options_set_fix(o, o.cast()),
+                "`fix` and `options` overlap",
+            );
+            let q = o.cast_const().cast::<f64>();
+            let status = aacmm_calibrate_options_set_positions(
+                o,
+                6,
+                q,
+                18,
+                q,
+                9,
+                std::ptr::null(),
+                0,
+                std::ptr::null(),
+                0,
+                std::ptr::null(),
+                0,
+            );
+            assert_eq!(status, AacmmStatus::InvalidArgument);
             let bad_utf8 = [0xffu8, 0];
             refused(
                 aacmm_calibrate_options_set_fix(o, bad_utf8.as_ptr().cast()),

@@ -100,7 +100,7 @@ impl Lengths {
 ///
 /// Each pointer is `NULL` or points to a NUL-terminated string.
 pub(crate) unsafe fn frame_names(names: &[*const c_char]) -> Result<Vec<String>, Error> {
-    let mut out: Vec<String> = Vec::with_capacity(names.len());
+    let mut out: Vec<String> = ptr::try_vec("frame_names_len", names.len())?;
     for (k, &p) in names.iter().enumerate() {
         let arg = format!("frame_names[{k}]");
         // SAFETY: NULL or NUL-terminated, by the contract.

@@ -89,28 +89,171 @@ pub(crate) fn write_all<T: Copy>(dst: &mut [MaybeUninit<T>], src: &[T]) {
     }
 }
 
-/// Refuses buffers that share memory: an output that overlaps an input (or
-/// another output) would alias a Rust reference.
-pub(crate) fn disjoint(buffers: &[(&str, usize, usize)]) -> Result<(), Error> {
-    for (i, &(a, start_a, bytes_a)) in buffers.iter().enumerate() {
-        for &(b, start_b, bytes_b) in &buffers[i + 1..] {
-            let overlap = bytes_a > 0
-                && bytes_b > 0
-                && start_a < start_b.saturating_add(bytes_b)
-                && start_b < start_a.saturating_add(bytes_a);
-            if overlap {
-                return Err(Error::invalid(format!(
-                    "`{a}` and `{b}` overlap; pass separate buffers"
-                )));
-            }
-        }
+/// The bytes `len` elements of `T` take, checked: a size past `isize::MAX`
+/// (what no allocation can have) is `AACMM_STATUS_LENGTH`, naming `name`.
+pub(crate) fn bytes<T>(name: &str, len: usize) -> Result<usize, Error> {
+    len.checked_mul(size_of::<T>())
+        .filter(|&bytes| bytes <= isize::MAX as usize)
+        .ok_or_else(|| {
+            Error::length(format!(
+                "`{name}`: length {len} is too large ({} bytes each)",
+                size_of::<T>()
+            ))
+        })
+}
+
+/// An empty vector with room for `len` elements, for a copy or a result
+/// sized by the input: a size past what memory can hold is
+/// `AACMM_STATUS_LENGTH`, a failed allocation `AACMM_STATUS_OUT_OF_MEMORY`
+/// (Rust's default would abort the host), each naming `what`, the length
+/// argument.
+pub(crate) fn try_vec<T>(what: &str, len: usize) -> Result<Vec<T>, Error> {
+    let bytes = len
+        .checked_mul(size_of::<T>())
+        .filter(|&bytes| bytes <= isize::MAX as usize)
+        .ok_or_else(|| {
+            Error::length(format!(
+                "{what} = {len}: too large to hold in memory ({} bytes each)",
+                size_of::<T>()
+            ))
+        })?;
+    let mut v = Vec::new();
+    v.try_reserve_exact(len).map_err(|_| {
+        Error::out_of_memory(format!("{what} = {len}: cannot allocate {bytes} bytes"))
+    })?;
+    Ok(v)
+}
+
+/// Checks, before any work, that `bytes` (what a computation sized by
+/// `what` will allocate inside the library, where a failure would abort)
+/// can be allocated now, and releases them: `AACMM_STATUS_OUT_OF_MEMORY`
+/// when they cannot (e.g. under a memory limit). A check, not a promise:
+/// memory may run out later all the same.
+pub(crate) fn room_for(what: &str, bytes: usize) -> Result<(), Error> {
+    if bytes > isize::MAX as usize {
+        return Err(Error::length(format!(
+            "{what}: the work needs {bytes} bytes, more than memory can hold"
+        )));
+    }
+    let mut probe: Vec<u8> = Vec::new();
+    if probe.try_reserve_exact(bytes).is_err() {
+        return Err(Error::out_of_memory(format!(
+            "{what}: cannot allocate the {bytes} bytes the work needs"
+        )));
     }
     Ok(())
 }
 
-/// `(name, address, bytes)` of `len` elements at `ptr`, for [`disjoint`].
-pub(crate) fn span<T>(name: &str, ptr: *const T, len: usize) -> (&str, usize, usize) {
-    (name, ptr as usize, len.saturating_mul(size_of::<T>()))
+/// The memory one argument takes, for [`Args`].
+#[derive(Clone, Copy, Debug, Default)]
+struct Region<'n> {
+    name: &'n str,
+    start: usize,
+    bytes: usize,
+    written: bool,
+}
+
+/// The memory an entry point reads and writes, declared before anything is
+/// written — the `NULL` put in an output handle's slot included — so that
+/// an output which shares memory with an input, or with another output,
+/// is refused (`AACMM_STATUS_INVALID_ARGUMENT`) rather than read after it
+/// was written (a silently wrong result) or aliased by a Rust reference.
+/// Each length is checked first (`AACMM_STATUS_LENGTH` for one past what
+/// memory can hold), so that a span never saturates into a false overlap.
+/// `NULL` and empty arguments take no memory here; `NULL` is refused later,
+/// where the argument is used. Inputs may share memory with each other
+/// (they are only read).
+#[derive(Debug, Default)]
+pub(crate) struct Args<'n> {
+    regions: [Region<'n>; Args::MAX],
+    len: usize,
+}
+
+impl<'n> Args<'n> {
+    /// The most arguments an entry point has.
+    const MAX: usize = 8;
+
+    pub(crate) fn new() -> Args<'n> {
+        Args::default()
+    }
+
+    fn add(mut self, name: &'n str, start: usize, bytes: usize, written: bool) -> Self {
+        debug_assert!(self.len < Args::MAX, "more than {} arguments", Args::MAX);
+        if let Some(slot) = self.regions.get_mut(self.len) {
+            *slot = Region {
+                name,
+                start,
+                bytes,
+                written,
+            };
+            self.len += 1;
+        }
+        self
+    }
+
+    /// `len` elements of `T` read at `ptr`.
+    pub(crate) fn input<T>(self, name: &'n str, ptr: *const T, len: usize) -> Result<Self, Error> {
+        let bytes = bytes::<T>(name, len)?;
+        Ok(self.add(name, ptr as usize, bytes, false))
+    }
+
+    /// `len` elements of `T` written at `ptr`.
+    pub(crate) fn output<T>(self, name: &'n str, ptr: *mut T, len: usize) -> Result<Self, Error> {
+        let bytes = bytes::<T>(name, len)?;
+        Ok(self.add(name, ptr as usize, bytes, true))
+    }
+
+    /// One `T` read at `ptr` (a handle, an options builder).
+    pub(crate) fn object<T>(self, name: &'n str, ptr: *const T) -> Self {
+        self.add(name, ptr as usize, size_of::<T>(), false)
+    }
+
+    /// One `T` written at `ptr` (an out-parameter, a handle's slot).
+    pub(crate) fn out<T>(self, name: &'n str, ptr: *mut T) -> Self {
+        self.add(name, ptr as usize, size_of::<T>(), true)
+    }
+
+    /// A NUL-terminated string read at `ptr`, its NUL included.
+    ///
+    /// # Safety
+    ///
+    /// `ptr` is `NULL` or points to a NUL-terminated string.
+    pub(crate) unsafe fn c_str(self, name: &'n str, ptr: *const c_char) -> Self {
+        let bytes = match ptr.is_null() {
+            true => 0,
+            // SAFETY: non-null and NUL-terminated, by the contract.
+            false => unsafe { CStr::from_ptr(ptr) }.count_bytes() + 1,
+        };
+        self.add(name, ptr as usize, bytes, false)
+    }
+
+    /// Refuses an output that shares a byte with any other argument, and
+    /// an argument whose bytes run past the end of the address space.
+    pub(crate) fn disjoint(self) -> Result<(), Error> {
+        let regions = &self.regions[..self.len];
+        let end = |r: &Region| r.start.checked_add(r.bytes);
+        let used = |r: &&Region| r.start != 0 && r.bytes > 0;
+        for r in regions.iter().filter(used) {
+            if end(r).is_none() {
+                return Err(Error::length(format!(
+                    "`{}`: {} bytes from its address run past the end of memory",
+                    r.name, r.bytes
+                )));
+            }
+        }
+        for (i, a) in regions.iter().enumerate().filter(|(_, r)| used(r)) {
+            for b in regions[i + 1..].iter().filter(used) {
+                let meet = a.start < b.start + b.bytes && b.start < a.start + a.bytes;
+                if meet && (a.written || b.written) {
+                    return Err(Error::invalid(format!(
+                        "`{}` and `{}` overlap; pass separate buffers",
+                        a.name, b.name
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A reference to the value behind a handle or struct pointer.
@@ -243,11 +386,54 @@ mod tests {
         assert!(unsafe { output::<f64>(std::ptr::null_mut(), 1, "p") }.is_err());
     }
 
+    fn at<T>(address: usize) -> *mut T {
+        std::ptr::without_provenance_mut(address)
+    }
+
     #[test]
     fn overlaps_are_found() {
-        assert!(disjoint(&[("a", 100, 16), ("b", 116, 8)]).is_ok());
-        assert!(disjoint(&[("a", 100, 16), ("b", 108, 8)]).is_err());
-        assert!(disjoint(&[("a", 100, 0), ("b", 100, 8)]).is_ok());
+        let check = |a: usize, a_len: usize, b: usize, b_len: usize| {
+            Args::new()
+                .input("a", at::<u64>(a), a_len)?
+                .output("b", at::<u64>(b), b_len)?
+                .disjoint()
+        };
+        assert!(check(128, 2, 144, 1).is_ok());
+        let err = check(128, 2, 136, 1).unwrap_err();
+        assert_eq!(err.status, crate::error::AacmmStatus::InvalidArgument);
+        assert_eq!(err.message, "`a` and `b` overlap; pass separate buffers");
+        assert!(check(128, 0, 128, 1).is_ok(), "empty");
+        assert!(check(0, 4, 0, 4).is_ok(), "NULL: refused where used");
+        // Two inputs may share memory; an output may not share an
+        // output's.
+        let inputs = Args::new().input("a", at::<u64>(128), 2).unwrap();
+        assert!(
+            inputs
+                .input("b", at::<u64>(128), 2)
+                .unwrap()
+                .disjoint()
+                .is_ok()
+        );
+        let outputs = Args::new().out("a", at::<u64>(128));
+        assert!(outputs.out("b", at::<u32>(132)).disjoint().is_err());
+    }
+
+    /// A length past what memory holds is a length error, before (and
+    /// never mistaken for) an overlap.
+    #[test]
+    fn sizes_are_checked_before_overlap() {
+        let err = Args::new()
+            .input("q", at::<f64>(64), usize::MAX - 3)
+            .unwrap_err();
+        assert_eq!(err.status, crate::error::AacmmStatus::Length);
+        assert!(err.message.starts_with("`q`: length"), "{}", err.message);
+        let near_the_end = usize::MAX - 15;
+        let err = Args::new()
+            .input("q", at::<u8>(near_the_end), 64)
+            .and_then(|a| a.output("p", at::<u8>(64), 8))
+            .and_then(Args::disjoint)
+            .unwrap_err();
+        assert_eq!(err.status, crate::error::AacmmStatus::Length);
     }
 
     #[test]

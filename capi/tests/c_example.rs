@@ -247,6 +247,8 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("params_len", 2),
         ("points_len", 2),
         ("overlap", 3),
+        ("out_in_params", 3),
+        ("huge_q_len", 2),
         ("unknown_parameter", 3),
         ("unknown_method", 3),
         ("unknown_robust", 3),

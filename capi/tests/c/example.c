@@ -289,6 +289,16 @@ int main(int argc, char **argv) {
     expect(aacmm_arm_from_params(6, nominal, 26, &none), AACMM_STATUS_LENGTH, "params_len");
     expect(aacmm_arm_from_params(5, nominal, 23, &none), AACMM_STATUS_UNSUPPORTED, "five_joints");
     expect(aacmm_positions(arm, q, 6, q, 3), AACMM_STATUS_INVALID_ARGUMENT, "overlap");
+    /* An output inside an input: refused before anything is written. */
+    double aliased[27];
+    memcpy(aliased, nominal, sizeof aliased);
+    expect(aacmm_arm_from_params(6, aliased, 27, (AacmmArm **)&aliased[0]),
+           AACMM_STATUS_INVALID_ARGUMENT, "out_in_params");
+    if (memcmp(aliased, nominal, sizeof aliased) != 0) {
+        fail("an output slot inside params was written");
+    }
+    expect(aacmm_positions(arm, q, SIZE_MAX - 3, p, (SIZE_MAX - 3) / 2), AACMM_STATUS_LENGTH,
+           "huge_q_len");
     expect(aacmm_calibration_params(NULL, params, n_params), AACMM_STATUS_NULL_POINTER,
            "null_calibration");
     expect(aacmm_calibrate_files(arm_path, "no/such/poses.csv", NULL, AACMM_ANGLE_DEG, NULL, NULL),
