@@ -187,6 +187,26 @@ pub struct Tolerances {
     entries: Vec<(String, f64)>,
 }
 
+/// Where the unit of `value` (`0.5mm`, `nanmm`, `1e-3 m`) starts: before a
+/// known unit at its end, else at its first letter other than an exponent's
+/// (`inf` and `nan` are numbers, so `nanmm` is `nan` in `mm`).
+///
+/// ```text
+/// nanmm → nan | mm,  0.5mm → 0.5 | mm,  1e-3m → 1e-3 | m,  2furlong → 2 | furlong
+/// ```
+fn unit_start(value: &str) -> usize {
+    if let Some(unit) = ["mm", "deg", "rad", "m"]
+        .iter()
+        .find(|u| value.ends_with(*u))
+    {
+        return value.len() - unit.len();
+    }
+    value
+        .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
+        .or_else(|| value.find(|c: char| c.is_ascii_alphabetic()))
+        .unwrap_or(value.len())
+}
+
 impl Tolerances {
     /// No tolerances.
     pub fn new() -> Tolerances {
@@ -246,13 +266,7 @@ impl Tolerances {
             })?;
             let (name, value) = (name.trim(), value.trim());
             let target = Target::parse(name, n).ok_or_else(|| refuse(unknown_target(name, n)))?;
-            let split = value
-                .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
-                .or_else(|| {
-                    // `inf`, `nan` and a trailing unit all start with a letter.
-                    value.find(|c: char| c.is_ascii_alphabetic())
-                })
-                .unwrap_or(value.len());
+            let split = unit_start(value);
             let (number, unit) = value.split_at(split);
             let number: f64 = number.trim().parse().map_err(|_| {
                 refuse(format!(
@@ -376,4 +390,26 @@ pub(crate) fn unknown_target(name: &str, n: usize) -> String {
         "unknown target `{name}`: use length, angle, a, d, alpha, theta, probe, or a \
          parameter name (a1 … {last})"
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A number spelled in letters (`nan`, `inf`) is the number, and the
+    /// message shows it rather than an empty token.
+    #[test]
+    fn a_value_spelled_in_letters_is_shown() {
+        let e = Tolerances::parse("length=nanmm", 6).unwrap_err();
+        assert!(e.reason.starts_with("`length=nanmm`: "), "{e}");
+        assert!(!e.reason.contains("``"), "{e}");
+        let e = Tolerances::parse("angle=infdeg", 6).unwrap_err();
+        assert!(!e.reason.contains("``"), "{e}");
+        let t = Tolerances::parse("length=1e-3m,angle=0.1deg", 6)
+            .unwrap()
+            .unwrap();
+        assert_eq!(t.describe(6), "length=1mm, angle=0.1deg");
+        let e = Tolerances::parse("length=2furlong", 6).unwrap_err();
+        assert!(e.reason.contains("furlong"), "{e}");
+    }
 }

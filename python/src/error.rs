@@ -156,7 +156,8 @@ impl From<aacmm_core::residuals::TermError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 17] = [
+const ARGUMENTS: [(&str, &str); 18] = [
+    ("seed", "seed"),
     ("prior", "prior"),
     ("method", "method"),
     ("robust.loss", "robust"),
@@ -198,6 +199,9 @@ impl From<CoreCalibrationError> for Error {
         let kind = match &e {
             CoreCalibrationError::Option(o) => return o.clone().into(),
             CoreCalibrationError::Kernel(KernelError::Unsupported(_)) => Kind::Unsupported,
+            // Noise whose weights overflow or vanish: a bad argument, as in
+            // `identify` (one rule per setting).
+            CoreCalibrationError::Kernel(KernelError::Noise { .. }) => Kind::Value,
             CoreCalibrationError::Joints { .. } => Kind::Value,
             _ => Kind::Calibration,
         };
@@ -217,10 +221,28 @@ impl From<MetricsError> for Error {
     }
 }
 
+/// The Python argument of each simulation setting ([`SimError::Setting`]'s
+/// key in `campaign.toml`) `simulate` exposes; the others keep their key.
+const SIM_ARGUMENTS: [(&str, &str); 2] = [
+    ("poses_per_socket", "poses"),
+    ("sockets.points", "sockets_file"),
+];
+
+/// A refused simulation setting is a `ValueError` naming the Python
+/// argument, as a refused calibration setting is; a campaign the arm cannot
+/// perform is an `aacmm.CalibrationError`.
 impl From<SimError> for Error {
     fn from(e: SimError) -> Error {
         match e {
             SimError::Input(e) => e.into(),
+            SimError::Setting { name, message } => {
+                let arg = SIM_ARGUMENTS
+                    .iter()
+                    .find(|(key, _)| *key == name)
+                    .map_or(name.as_str(), |(_, arg)| arg);
+                Error::value(format!("{arg}: {message}"))
+            }
+            SimError::Kernel(k) => k.into(),
             e => Error::new(Kind::Calibration, e.to_string()),
         }
     }

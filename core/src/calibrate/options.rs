@@ -39,6 +39,8 @@ impl FixSpec {
     /// assert!(e.reason.contains("unknown parameter `theta9`"));
     /// let e = FixSpec::parse("auto,theta1", 6).unwrap_err();
     /// assert!(e.reason.contains("`auto` stands alone"), "{e}");
+    /// let e = FixSpec::parse("a1, theta1,a1", 6).unwrap_err();
+    /// assert_eq!(e.to_string(), "fix = a1, theta1,a1: `a1` is listed twice");
     /// ```
     pub fn parse(s: &str, joints: usize) -> Result<FixSpec, OptionError> {
         let names: Vec<String> = ParamId::all(joints).map(|p| p.to_string()).collect();
@@ -109,14 +111,31 @@ impl FixSpec {
                         s,
                         format!(
                             "unknown parameter `{t}`; parameters are {} … {}",
-                            names[0],
-                            names[names.len() - 1]
+                            names.first().map_or("", String::as_str),
+                            names.last().map_or("", String::as_str)
                         ),
                     )
                 })
             })
             .collect::<Result<Vec<usize>, _>>()
-            .map(FixSpec::Columns)
+            .and_then(|columns| {
+                // Named as given: `a1` listed twice, not column 0.
+                match columns
+                    .iter()
+                    .enumerate()
+                    .find(|(i, c)| columns[..*i].contains(c))
+                {
+                    Some((_, &c)) => Err(OptionError::new(
+                        "fix",
+                        s,
+                        format!(
+                            "`{}` is listed twice",
+                            names.get(c).map_or("?", String::as_str)
+                        ),
+                    )),
+                    None => Ok(FixSpec::Columns(columns)),
+                }
+            })
     }
 }
 
@@ -299,6 +318,22 @@ impl Default for SolverSettings {
     }
 }
 
+/// Largest seed, in calibration and simulation alike: seeds are written to
+/// TOML files (`campaign.toml`), whose integers stop at `i64::MAX`.
+///
+/// ```
+/// use aacmm_core::calibrate::{MAX_SEED, SolverSettings};
+/// let s = SolverSettings { seed: MAX_SEED + 1, ..Default::default() };
+/// assert_eq!(s.check().unwrap_err().field, "seed");
+/// assert!(SolverSettings { seed: MAX_SEED, ..Default::default() }.check().is_ok());
+/// ```
+pub const MAX_SEED: u64 = i64::MAX as u64;
+
+/// Why `seed` (above [`MAX_SEED`]) is refused.
+pub fn seed_bound(seed: u64) -> String {
+    format!("at most {MAX_SEED} (seeds are written as TOML integers), got {seed}")
+}
+
 /// The cores the system offers this process (1 when it cannot tell).
 ///
 /// ```
@@ -321,6 +356,9 @@ impl SolverSettings {
     pub fn check(&self) -> Result<(), OptionError> {
         if self.threads == 0 {
             return Err(OptionError::new("threads", 0, "at least 1"));
+        }
+        if self.seed > MAX_SEED {
+            return Err(OptionError::new("seed", self.seed, seed_bound(self.seed)));
         }
         if self.method == Method::External {
             return Err(OptionError::new(
