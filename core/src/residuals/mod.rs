@@ -179,7 +179,8 @@ impl Noise {
                 "noise.encoder_rad",
                 crate::error::short(v),
                 format!(
-                    "σ = {}° is more than {}°: beyond half a turn an angle's σ means nothing                      (a real encoder's is 0.001–0.01°)",
+                    "σ = {}° is more than {}°: beyond half a turn an angle's σ means nothing \
+                     (a real encoder's is 0.001–0.01°)",
                     crate::error::short(v.to_degrees()),
                     MAX_ENCODER_SIGMA_DEG
                 ),
