@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{OptionError, short};
+use crate::error::{OptionError, quoted, short};
 use crate::params::{DhParams, ParamId, ParamKind};
 
 /// The kinds' names as targets (not a `match`, so that a new kind
@@ -260,8 +260,9 @@ impl Tolerances {
         for item in s.split(',').map(str::trim).filter(|i| !i.is_empty()) {
             let (name, value) = item.split_once('=').ok_or_else(|| {
                 refuse(format!(
-                    "`{item}`: expected TARGET=VALUEUNIT, e.g. length=0.5mm or theta5=0.05deg \
-                     (or `none`)"
+                    "{}: expected TARGET=VALUEUNIT, e.g. length=0.5mm or theta5=0.05deg \
+                     (or `none`)",
+                    quoted(item)
                 ))
             })?;
             let (name, value) = (name.trim(), value.trim());
@@ -270,18 +271,20 @@ impl Tolerances {
             let (number, unit) = value.split_at(split);
             let number: f64 = number.trim().parse().map_err(|_| {
                 refuse(format!(
-                    "`{item}`: `{}` is not a number followed by a unit (mm, m, deg, rad)",
-                    number.trim()
+                    "{}: {} is not a number followed by a unit (mm, m, deg, rad)",
+                    quoted(item),
+                    quoted(number.trim())
                 ))
             })?;
             if unit.trim().is_empty() {
                 return Err(refuse(format!(
-                    "`{item}`: no unit; write it after the number ({} for {name})",
+                    "{}: no unit; write it after the number ({} for {name})",
+                    quoted(item),
                     if target.is_length() { "mm" } else { "deg" }
                 )));
             }
             t.set(target, number, unit.trim())
-                .map_err(|why| refuse(format!("`{item}`: {why}")))?;
+                .map_err(|why| refuse(format!("{}: {why}", quoted(item))))?;
         }
         if t.is_empty() {
             return Err(refuse(
@@ -387,8 +390,9 @@ pub(crate) fn unknown_target(name: &str, n: usize) -> String {
         .last()
         .map_or(String::new(), |p| p.to_string());
     format!(
-        "unknown target `{name}`: use length, angle, a, d, alpha, theta, probe, or a \
-         parameter name (a1 … {last})"
+        "unknown target {}: use length, angle, a, d, alpha, theta, probe, or a \
+         parameter name (a1 … {last})",
+        quoted(name)
     )
 }
 

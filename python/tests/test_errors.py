@@ -231,7 +231,7 @@ def test_one_rule_per_setting(arm, data):
         with pytest.raises(OverflowError):
             call()
     # Encoder noise: one cap (180°) in Noise and in simulate.
-    with refused(ValueError, match=r"^encoder_deg: σ = 1e308° is more than 180°"):
+    with refused(ValueError, match=r"^encoder_deg: σ = 1e308° is more than 180°: beyond half a turn an angle.s σ means nothing \(a real"):
         aacmm.Noise(encoder_deg=1e308)
     with refused(ValueError, match=r"^encoder_noise_deg: σ = 1e308° is more than 180°"):
         aacmm.simulate(arm, sockets=3, poses=5, seed=1, encoder_noise_deg=1e308)
@@ -297,3 +297,36 @@ def test_hostile_counts_give_ordinary_exceptions(arm, data):
     # The empty arrays of a valid shape are valid: empty results.
     assert arm.positions(np.zeros((0, 6))).shape == (0, 3)
     assert arm.jacobians(np.zeros((0, 6)))[1].shape == (0, 3, 27)
+
+
+def test_messages_are_bounded(tmp_path, arm, data):
+    """A user's text echoed in a message (a label, a token, a value) is cut
+    to 80 characters with its length said, and its control characters are
+    escaped: a 5 MB label does not make a 5 MB message."""
+    huge = "L" * 5_000_000
+    labels, q = read_poses()
+    with pytest.raises(aacmm.InputError) as caught:
+        aacmm.DataSet(labels[:3] + [huge], q[:4], angle_unit="deg")
+    message = str(caught.value)
+    assert len(message) < 400 and "(5000000 characters)" in message, message[:500]
+    poses = write(tmp_path, "p.csv", "point,q1,q2,q3,q4,q5,q6\n" + "A,1,2,3,4,5,6\n" * 5 + f"A,1,2,{huge},4,5,6\n")
+    with pytest.raises(aacmm.InputError, match=r":7: field `q3`: `L+…` \(5000000 characters\) is not a number$") as caught:
+        aacmm.DataSet.from_files(poses)
+    assert len(str(caught.value)) < 400
+    for kwargs, arg in (({"fix": "x" * 1_000_000}, "fix"), ({"prior": "y" * 1_000_000}, "prior")):
+        with refused(ValueError, match=rf"^{arg} = \w+… \(1000000 characters\): ") as caught:
+            aacmm.calibrate(arm, data, **kwargs)
+        assert len(str(caught.value)) < 600, str(caught.value)[:700]
+    with refused(ValueError, match=r"unknown parameter `a1\\r\\n\\0`") as caught:
+        aacmm.calibrate(arm, data, fix="a1\r\n\0")
+    assert "\r" not in str(caught.value) and "\0" not in str(caught.value)
+
+
+def test_cr_only_line_endings_are_named(tmp_path):
+    """A file whose lines end with CR alone is said to be one, rather than
+    read as one line whose fields run into each other."""
+    text = "point,q1,q2,q3,q4,q5,q6\r" + "A,1,2,3,4,5,6\r" * 5
+    poses = write(tmp_path, "mac.csv", "")
+    poses.write_bytes(text.encode())
+    with pytest.raises(aacmm.InputError, match=r"mac\.csv:1: .*carriage return alone"):
+        aacmm.DataSet.from_files(poses)

@@ -110,7 +110,8 @@ impl FixSpec {
                         "fix",
                         s,
                         format!(
-                            "unknown parameter `{t}`; parameters are {} … {}",
+                            "unknown parameter {}; parameters are {} … {}",
+                            crate::error::quoted(t),
                             names.first().map_or("", String::as_str),
                             names.last().map_or("", String::as_str)
                         ),
