@@ -330,3 +330,19 @@ pub(crate) fn bounded(message: String) -> String {
         None => message,
     }
 }
+
+/// Largest seed, in calibration and simulation alike: seeds are written to
+/// TOML files (`campaign.toml`), whose integers stop at `i64::MAX`.
+///
+/// ```
+/// use aacmm_core::{calibrate::SolverSettings, error::MAX_SEED};
+/// let s = SolverSettings { seed: MAX_SEED + 1, ..Default::default() };
+/// assert_eq!(s.check().unwrap_err().field, "seed");
+/// assert!(SolverSettings { seed: MAX_SEED, ..Default::default() }.check().is_ok());
+/// ```
+pub const MAX_SEED: u64 = i64::MAX as u64;
+
+/// Why `seed` (above [`MAX_SEED`]) is refused.
+pub fn seed_bound(seed: u64) -> String {
+    format!("at most {MAX_SEED} (seeds are written as TOML integers), got {seed}")
+}

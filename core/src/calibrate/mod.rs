@@ -58,8 +58,7 @@ pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub(crate) use lm::LmResult;
 pub use lm::{LmIteration, LmOptions, Termination};
 pub use options::{
-    DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_SEED, ModelOptions, SolverSettings, available_threads,
-    seed_bound,
+    DEFAULT_LENGTH_SIGMA_MM, FixSpec, ModelOptions, SolverSettings, available_threads,
 };
 pub use prior::{CarriedTolerance, PriorConditioning, PriorEstimate, PriorReport};
 pub use robust::{Loss, Robust, RobustFit};

@@ -12,7 +12,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{AnnealOptions, GlobalOptions, LmOptions, Method, SwitchRule};
-use crate::error::OptionError;
+use crate::error::{MAX_SEED, OptionError, seed_bound};
 use crate::params::{ParamId, param_count};
 use crate::residuals::Noise;
 
@@ -317,22 +317,6 @@ impl Default for SolverSettings {
             seed: 0,
         }
     }
-}
-
-/// Largest seed, in calibration and simulation alike: seeds are written to
-/// TOML files (`campaign.toml`), whose integers stop at `i64::MAX`.
-///
-/// ```
-/// use aacmm_core::calibrate::{MAX_SEED, SolverSettings};
-/// let s = SolverSettings { seed: MAX_SEED + 1, ..Default::default() };
-/// assert_eq!(s.check().unwrap_err().field, "seed");
-/// assert!(SolverSettings { seed: MAX_SEED, ..Default::default() }.check().is_ok());
-/// ```
-pub const MAX_SEED: u64 = i64::MAX as u64;
-
-/// Why `seed` (above [`MAX_SEED`]) is refused.
-pub fn seed_bound(seed: u64) -> String {
-    format!("at most {MAX_SEED} (seeds are written as TOML integers), got {seed}")
 }
 
 /// The cores the system offers this process (1 when it cannot tell).

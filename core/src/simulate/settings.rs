@@ -290,8 +290,8 @@ impl CampaignSettings {
     /// assert!(e.starts_with("setting `reference_lengths`: 7 reference lengths"), "{e}");
     /// ```
     pub fn validate(&self, joints: usize) -> Result<(), SimError> {
-        if self.seed > crate::calibrate::MAX_SEED {
-            return bad("seed", crate::calibrate::seed_bound(self.seed));
+        if self.seed > crate::error::MAX_SEED {
+            return bad("seed", crate::error::seed_bound(self.seed));
         }
         self.validate_counts(joints)?;
         self.validate_noise()?;
