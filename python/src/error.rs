@@ -12,7 +12,7 @@ use aacmm_core::kernel::KernelError;
 use aacmm_core::metrics::MetricsError;
 use aacmm_core::simulate::SimError;
 use pyo3::PyErr;
-use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::exceptions::{PyException, PyMemoryError, PyOSError, PyValueError};
 
 pyo3::create_exception!(
     aacmm,
@@ -58,6 +58,9 @@ pub(crate) enum Kind {
     Value,
     /// `aacmm.AacmmError`: a bug inside aacmm (a caught panic).
     Internal,
+    /// `MemoryError`: an output or a copy sized by the input that cannot be
+    /// allocated (refused before any work, as numpy refuses).
+    Memory,
 }
 
 /// Refuses an output directory `dir` that is empty (the current directory
@@ -80,6 +83,33 @@ pub(crate) fn check_out_dir(dir: &std::path::Path, earlier: &[&str], force: bool
         ));
     }
     Ok(())
+}
+
+/// The product of `dims` (an array's element count), or a `MemoryError`
+/// naming `what` when it overflows.
+pub(crate) fn elements(dims: &[usize], what: &str) -> Result<usize> {
+    dims.iter()
+        .try_fold(1usize, |n, &d| n.checked_mul(d))
+        .filter(|n| n.checked_mul(size_of::<f64>()).is_some())
+        .ok_or_else(|| {
+            Error::new(
+                Kind::Memory,
+                format!("{what}: an array of shape {dims:?} cannot be allocated"),
+            )
+        })
+}
+
+/// An empty buffer with room for `count` values, or a `MemoryError` naming
+/// `what`: a hostile size is refused, not an abort of the process.
+pub(crate) fn buffer<T>(count: usize, what: &str) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(count).map_err(|e| {
+        Error::new(
+            Kind::Memory,
+            format!("{what}: {count} values cannot be allocated ({e})"),
+        )
+    })?;
+    Ok(v)
 }
 
 /// An error with the library's message.
@@ -121,6 +151,7 @@ impl From<Error> for PyErr {
             Kind::Unsupported => UnsupportedError::new_err(e.message),
             Kind::Value => PyValueError::new_err(e.message),
             Kind::Internal => AacmmError::new_err(e.message),
+            Kind::Memory => PyMemoryError::new_err(e.message),
         }
     }
 }

@@ -330,3 +330,44 @@ def test_cr_only_line_endings_are_named(tmp_path):
     poses.write_bytes(text.encode())
     with pytest.raises(aacmm.InputError, match=r"mac\.csv:1: .*carriage return alone"):
         aacmm.DataSet.from_files(poses)
+
+
+HOSTILE_SIZES = r"""
+import resource, sys
+import numpy as np
+import aacmm
+resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+arm = aacmm.Arm.from_file(sys.argv[1])
+many = np.broadcast_to(np.zeros(6), (3 * 10**8, 6))
+calls = {
+    "positions": lambda: arm.positions(many),
+    "jacobians": lambda: arm.jacobians(many),
+    "joint_jacobian": lambda: arm.joint_jacobian(many),
+    "DataSet": lambda: aacmm.DataSet(["A"], np.broadcast_to(np.zeros(1000), (10**7, 1000))),
+    "from_positions": lambda: aacmm.DataSet.from_positions(many, np.zeros((1, 3))),
+}
+for name, call in calls.items():
+    try:
+        call()
+        print(name, "accepted")
+    except MemoryError as e:
+        print(name, "MemoryError", str(e)[:200])
+"""
+
+
+def test_outputs_too_large_are_memory_errors(tmp_path):
+    """An output or copy sized by the input that cannot be allocated is a
+    MemoryError before any work, as numpy's own, not an abort of the process
+    (run in a subprocess under a 2 GiB address-space limit)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", HOSTILE_SIZES, ARM], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+    lines = done.stdout.splitlines()
+    assert [line.split()[:2] for line in lines] == [
+        [name, "MemoryError"]
+        for name in ("positions", "jacobians", "joint_jacobian", "DataSet", "from_positions")
+    ], done.stdout
