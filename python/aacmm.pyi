@@ -139,7 +139,9 @@ class Arm:
     def positions(self, q: _Readings, angle_unit: _AngleUnit = "rad") -> _Array:
         """Probe positions (mm): ``q`` n × joints → n × 3 (a 1-D ``q`` of one
         pose gives shape (3,)). Bit-identical to the Rust API. Runs without
-        the GIL."""
+        the GIL. An output too large to allocate is a MemoryError before any
+        work (as for :meth:`jacobians`, :meth:`joint_jacobian` and the copy
+        of ``q`` a :class:`DataSet` keeps)."""
     def jacobians(
         self, q: _Readings, angle_unit: _AngleUnit = "rad"
     ) -> Tuple[_Array, _Array]:
