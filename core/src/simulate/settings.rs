@@ -469,7 +469,7 @@ impl CampaignSettings {
 /// assert_eq!(aacmm_core::simulate::pair_count(7), 21);
 /// ```
 pub fn pair_count(n: usize) -> usize {
-    let (even, odd) = if n % 2 == 0 {
+    let (even, odd) = if n.is_multiple_of(2) {
         (n, n.saturating_sub(1))
     } else {
         (n - 1, n)
