@@ -139,7 +139,9 @@ class Arm:
     def positions(self, q: _Readings, angle_unit: _AngleUnit = "rad") -> _Array:
         """Probe positions (mm): ``q`` n × joints → n × 3 (a 1-D ``q`` of one
         pose gives shape (3,)). Bit-identical to the Rust API. Runs without
-        the GIL."""
+        the GIL. An output too large to allocate is a MemoryError before any
+        work (as for :meth:`jacobians`, :meth:`joint_jacobian` and the copy
+        of ``q`` a :class:`DataSet` keeps)."""
     def jacobians(
         self, q: _Readings, angle_unit: _AngleUnit = "rad"
     ) -> Tuple[_Array, _Array]:
@@ -256,7 +258,9 @@ class Noise:
     per coordinate of a reference position that states none, ``position_mm
     + position_mm_per_m · distance`` (mm, mm per metre from the instrument;
     a laser tracker's 0.015 and 0.006). Checked by the library when made:
-    ValueError naming the argument."""
+    ValueError naming the argument (``encoder_deg`` at most 180). Noise so
+    large or small that its weights overflow or vanish on the data is a
+    ValueError in :func:`identify` and :func:`calibrate` alike."""
 
     def __init__(
         self,
@@ -336,7 +340,13 @@ def simulate(
     reference_lengths: Optional[int] = None,
     length_uncertainty_mm: Optional[float] = None,
 ) -> Campaign:
-    """Simulates a calibration campaign (``aacmm simulate``)."""
+    """Simulates a calibration campaign (``aacmm simulate``). A setting out
+    of range is a ValueError naming the argument (``poses``, ``seed``,
+    ``encoder_noise_deg``, …), as in :func:`calibrate`; a campaign the arm
+    cannot perform (sockets out of reach) is a CalibrationError. ``seed``
+    is at most 2**63 − 1 (written to ``campaign.toml``), as in
+    :func:`calibrate`; ``encoder_noise_deg`` at most 180, as
+    ``Noise(encoder_deg=...)``."""
 
 class Calibration:
     """The result of :func:`calibrate`."""
@@ -461,6 +471,7 @@ def calibrate(
     column: ``--drift``); their values in :attr:`Calibration.auxiliary` and
     :attr:`Calibration.physics`. Readings outside
     the arm's joint limits are a UserWarning (and in the report's
-    warnings). ValueError for a bad option (naming the argument),
+    warnings). ``seed`` is at most 2**63 − 1, as in :func:`simulate`.
+    ValueError for a bad option (naming the argument),
     CalibrationError when the data cannot determine the free parameters; a
     calibration that is not usable is returned: check ``successful``."""

@@ -185,8 +185,8 @@ impl Repeats {
             poses.line(first[p]),
             "point",
             format!(
-                "point `{}` has {} touch{}{also}; at least {MIN_TOUCHES} are needed",
-                labels[p],
+                "point {} has {} touch{}{also}; at least {MIN_TOUCHES} are needed",
+                crate::error::quoted(&labels[p]),
                 count[p],
                 if count[p] == 1 { "" } else { "es" }
             ),
@@ -218,12 +218,12 @@ impl Repeats {
                     line: Some(lines[0]),
                     field: Some("point".to_string()),
                     message: format!(
-                        "point `{}`: {n} row{s} repeat{v} the readings of the point's row before \
+                        "point {}: {n} row{s} repeat{v} the readings of the point's row before \
                          {them} exactly (line{s} {}; the first repeats line {first_of}) — a logger \
                          that wrote a line twice?; each counted once: {n} row{s} not used, as \
                          repeated rows are no independent touches and would understate the \
                          scatter",
-                        poses.points()[p],
+                        crate::error::quoted(&poses.points()[p]),
                         line_ranges(&lines),
                         s = plural(n),
                         v = if n == 1 { "s" } else { "" },
@@ -398,9 +398,10 @@ fn check_articulation(poses: &Poses, file: &str) -> Result<(), InputError> {
     let (range, j, label) = widest;
     let at = if range > 0.0 {
         format!(
-            "the widest range of a joint at one point is {:.4}° (q{} at point `{label}`)",
+            "the widest range of a joint at one point is {:.4}° (q{} at point {})",
             range.to_degrees(),
-            j + 1
+            j + 1,
+            crate::error::quoted(label)
         )
     } else {
         "every point's touches have identical readings".to_string()
@@ -694,7 +695,10 @@ impl DataSet {
             if l.a == l.b {
                 return bad(
                     "point_b",
-                    format!("`{}` again: a length needs two points", l.a),
+                    format!(
+                        "{} again: a length needs two points",
+                        crate::error::quoted(&l.a)
+                    ),
                 );
             }
         }

@@ -86,10 +86,10 @@ impl InputError {
         message: impl Into<String>,
     ) -> InputError {
         InputError::Field {
-            file: file.into(),
+            file: file_shown(file.into()),
             line,
-            field: field.into(),
-            message: message.into(),
+            field: shown(&field.into()),
+            message: bounded(message.into()),
         }
     }
 
@@ -100,24 +100,24 @@ impl InputError {
         message: impl Into<String>,
     ) -> InputError {
         InputError::Line {
-            file: file.into(),
+            file: file_shown(file.into()),
             line,
-            message: message.into(),
+            message: bounded(message.into()),
         }
     }
 
     /// A [`InputError::File`] error.
     pub fn file_error(file: impl Into<String>, message: impl Into<String>) -> InputError {
         InputError::File {
-            file: file.into(),
-            message: message.into(),
+            file: file_shown(file.into()),
+            message: bounded(message.into()),
         }
     }
 
     /// An [`InputError::Io`] error.
     pub fn io(file: impl Into<String>, source: std::io::Error) -> InputError {
         InputError::Io {
-            file: file.into(),
+            file: file_shown(file.into()),
             error: source,
         }
     }
@@ -211,8 +211,8 @@ impl OptionError {
     ) -> OptionError {
         OptionError {
             field,
-            value: value.to_string(),
-            reason: reason.into(),
+            value: shown(&value.to_string()),
+            reason: bounded(reason.into()),
         }
     }
 }
@@ -244,4 +244,105 @@ pub fn short(v: f64) -> String {
     } else {
         format!("{v:e}")
     }
+}
+
+/// Most characters of a user's text (a label, a token, a field, a value)
+/// that a message echoes; longer text is cut, its length said.
+pub const MAX_SHOWN: usize = 80;
+
+/// Most characters of a whole message: a safety net for user text echoed
+/// without [`shown`] (a message of the library's own words is far shorter).
+pub const MAX_MESSAGE: usize = 4000;
+
+/// User text as a message shows it: control characters escaped (`\r`,
+/// `\n`, `\0`, `\u{1b}`), cut after [`MAX_SHOWN`] characters with its full
+/// length said, so that a hostile input cannot make a huge or garbled
+/// message.
+///
+/// ```
+/// use aacmm_core::error::shown;
+/// assert_eq!(shown("S1"), "S1");
+/// assert_eq!(shown("q6\rS1\n\0"), "q6\\rS1\\n\\0");
+/// let long = "x".repeat(50_000_000);
+/// assert_eq!(shown(&long), format!("{}… (50000000 characters)", "x".repeat(80)));
+/// ```
+pub fn shown(s: &str) -> String {
+    match cut(s, MAX_SHOWN) {
+        (text, Some(n)) => format!("{text}… ({n} characters)"),
+        (text, None) => text,
+    }
+}
+
+/// [`shown`] between backticks, as messages quote a user's token: the
+/// length of a cut one after the closing backtick.
+///
+/// ```
+/// use aacmm_core::error::quoted;
+/// assert_eq!(quoted("S99"), "`S99`");
+/// assert_eq!(quoted("a\tb"), "`a\\tb`");
+/// assert_eq!(quoted(&"é".repeat(100)), format!("`{}…` (100 characters)", "é".repeat(80)));
+/// ```
+pub fn quoted(s: &str) -> String {
+    match cut(s, MAX_SHOWN) {
+        (text, Some(n)) => format!("`{text}…` ({n} characters)"),
+        (text, None) => format!("`{text}`"),
+    }
+}
+
+/// The first `max` characters of `s` with control characters escaped, and
+/// the count of all of them when `s` is longer.
+fn cut(s: &str, max: usize) -> (String, Option<usize>) {
+    let mut out = String::new();
+    for (i, c) in s.chars().enumerate() {
+        if i == max {
+            return (out, Some(s.chars().count()));
+        }
+        match c {
+            '\0' => out.push_str("\\0"),
+            c if c.is_control() => out.extend(c.escape_default()),
+            c => out.push(c),
+        }
+    }
+    (out, None)
+}
+
+/// A file's name as messages show it: as [`shown`], with room for the
+/// longest path a system accepts.
+fn file_shown(file: String) -> String {
+    if file.len() <= MAX_MESSAGE && !file.contains(char::is_control) {
+        return file;
+    }
+    match cut(&file, MAX_MESSAGE) {
+        (text, Some(n)) => format!("{text}… ({n} characters)"),
+        (text, None) => text,
+    }
+}
+
+/// A whole message, cut after [`MAX_MESSAGE`] characters (its length said):
+/// the bound on what any message of the library can hold.
+pub(crate) fn bounded(message: String) -> String {
+    match message.char_indices().nth(MAX_MESSAGE) {
+        Some((at, _)) => format!(
+            "{}… ({} characters)",
+            &message[..at],
+            message.chars().count()
+        ),
+        None => message,
+    }
+}
+
+/// Largest seed, in calibration and simulation alike: seeds are written to
+/// TOML files (`campaign.toml`), whose integers stop at `i64::MAX`.
+///
+/// ```
+/// use aacmm_core::{calibrate::SolverSettings, error::MAX_SEED};
+/// let s = SolverSettings { seed: MAX_SEED + 1, ..Default::default() };
+/// assert_eq!(s.check().unwrap_err().field, "seed");
+/// assert!(SolverSettings { seed: MAX_SEED, ..Default::default() }.check().is_ok());
+/// ```
+pub const MAX_SEED: u64 = i64::MAX as u64;
+
+/// Why `seed` (above [`MAX_SEED`]) is refused.
+pub fn seed_bound(seed: u64) -> String {
+    format!("at most {MAX_SEED} (seeds are written as TOML integers), got {seed}")
 }

@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{OptionError, short};
+use crate::error::{OptionError, quoted, short};
 use crate::params::{DhParams, ParamId, ParamKind};
 
 /// The kinds' names as targets (not a `match`, so that a new kind
@@ -187,6 +187,26 @@ pub struct Tolerances {
     entries: Vec<(String, f64)>,
 }
 
+/// Where the unit of `value` (`0.5mm`, `nanmm`, `1e-3 m`) starts: before a
+/// known unit at its end, else at its first letter other than an exponent's
+/// (`inf` and `nan` are numbers, so `nanmm` is `nan` in `mm`).
+///
+/// ```text
+/// nanmm → nan | mm,  0.5mm → 0.5 | mm,  1e-3m → 1e-3 | m,  2furlong → 2 | furlong
+/// ```
+fn unit_start(value: &str) -> usize {
+    if let Some(unit) = ["mm", "deg", "rad", "m"]
+        .iter()
+        .find(|u| value.ends_with(*u))
+    {
+        return value.len() - unit.len();
+    }
+    value
+        .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
+        .or_else(|| value.find(|c: char| c.is_ascii_alphabetic()))
+        .unwrap_or(value.len())
+}
+
 impl Tolerances {
     /// No tolerances.
     pub fn new() -> Tolerances {
@@ -240,34 +260,31 @@ impl Tolerances {
         for item in s.split(',').map(str::trim).filter(|i| !i.is_empty()) {
             let (name, value) = item.split_once('=').ok_or_else(|| {
                 refuse(format!(
-                    "`{item}`: expected TARGET=VALUEUNIT, e.g. length=0.5mm or theta5=0.05deg \
-                     (or `none`)"
+                    "{}: expected TARGET=VALUEUNIT, e.g. length=0.5mm or theta5=0.05deg \
+                     (or `none`)",
+                    quoted(item)
                 ))
             })?;
             let (name, value) = (name.trim(), value.trim());
             let target = Target::parse(name, n).ok_or_else(|| refuse(unknown_target(name, n)))?;
-            let split = value
-                .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
-                .or_else(|| {
-                    // `inf`, `nan` and a trailing unit all start with a letter.
-                    value.find(|c: char| c.is_ascii_alphabetic())
-                })
-                .unwrap_or(value.len());
+            let split = unit_start(value);
             let (number, unit) = value.split_at(split);
             let number: f64 = number.trim().parse().map_err(|_| {
                 refuse(format!(
-                    "`{item}`: `{}` is not a number followed by a unit (mm, m, deg, rad)",
-                    number.trim()
+                    "{}: {} is not a number followed by a unit (mm, m, deg, rad)",
+                    quoted(item),
+                    quoted(number.trim())
                 ))
             })?;
             if unit.trim().is_empty() {
                 return Err(refuse(format!(
-                    "`{item}`: no unit; write it after the number ({} for {name})",
+                    "{}: no unit; write it after the number ({} for {name})",
+                    quoted(item),
                     if target.is_length() { "mm" } else { "deg" }
                 )));
             }
             t.set(target, number, unit.trim())
-                .map_err(|why| refuse(format!("`{item}`: {why}")))?;
+                .map_err(|why| refuse(format!("{}: {why}", quoted(item))))?;
         }
         if t.is_empty() {
             return Err(refuse(
@@ -373,7 +390,30 @@ pub(crate) fn unknown_target(name: &str, n: usize) -> String {
         .last()
         .map_or(String::new(), |p| p.to_string());
     format!(
-        "unknown target `{name}`: use length, angle, a, d, alpha, theta, probe, or a \
-         parameter name (a1 … {last})"
+        "unknown target {}: use length, angle, a, d, alpha, theta, probe, or a \
+         parameter name (a1 … {last})",
+        quoted(name)
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A number spelled in letters (`nan`, `inf`) is the number, and the
+    /// message shows it rather than an empty token.
+    #[test]
+    fn a_value_spelled_in_letters_is_shown() {
+        let e = Tolerances::parse("length=nanmm", 6).unwrap_err();
+        assert!(e.reason.starts_with("`length=nanmm`: "), "{e}");
+        assert!(!e.reason.contains("``"), "{e}");
+        let e = Tolerances::parse("angle=infdeg", 6).unwrap_err();
+        assert!(!e.reason.contains("``"), "{e}");
+        let t = Tolerances::parse("length=1e-3m,angle=0.1deg", 6)
+            .unwrap()
+            .unwrap();
+        assert_eq!(t.describe(6), "length=1mm, angle=0.1deg");
+        let e = Tolerances::parse("length=2furlong", 6).unwrap_err();
+        assert!(e.reason.contains("furlong"), "{e}");
+    }
 }

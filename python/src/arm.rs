@@ -9,7 +9,7 @@ use aacmm_core::io::{
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId, SUPPORTED_JOINTS, param_count, supported_joints_text};
 use numpy::ndarray::{Array1, ArrayD};
-use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArrayDyn, PyArrayLike1};
+use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArrayDyn, PyArrayLike1, PyArrayMethods};
 use pyo3::prelude::*;
 
 use crate::error::{Error, Kind, Result, detached};
@@ -213,10 +213,10 @@ impl Arm {
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let unit = crate::angle_unit(angle_unit)?;
         let r = Readings::new(q, "q", self.joints(), unit)?;
-        let n = r.rows();
-        let mut out = vec![0.0; 3 * n];
+        let out = zeros(py, &r.shape(&[3]), "positions")?;
         {
-            let xyz = out.as_chunks_mut::<3>().0;
+            let mut out = out.readwrite();
+            let xyz = out.as_slice_mut().map_err(internal)?.as_chunks_mut::<3>().0;
             r.for_chunks(py, |rows, q| {
                 let poses = prepare(self.joints(), q)?;
                 self.kernel
@@ -224,8 +224,7 @@ impl Arm {
                 Ok(())
             })?;
         }
-        let shape: Vec<usize> = if r.single() { vec![3] } else { vec![n, 3] };
-        shaped(py, out, &shape)
+        Ok(out)
     }
 
     /// Probe positions and parameter Jacobians of poses `q` (as in
@@ -243,35 +242,34 @@ impl Arm {
     ) -> PyResult<PositionsAndJacobians<'py>> {
         let unit = crate::angle_unit(angle_unit)?;
         let r = Readings::new(q, "q", self.joints(), unit)?;
-        let n = r.rows();
         let params = param_count(self.joints());
         let per_pose = 3 * params;
-        let total = per_pose
-            .checked_mul(n)
-            .ok_or_else(|| Error::value(format!("q: {n} poses are too many")))?;
-        let mut p = vec![0.0; 3 * n];
-        let mut jac = vec![0.0; total];
-        r.for_chunks(py, |rows, q| {
-            let poses = prepare(self.joints(), q)?;
-            let p = &mut p[3 * rows.start..3 * rows.end];
-            let jac = &mut jac[per_pose * rows.start..per_pose * rows.end];
-            self.kernel
-                .for_each_jacobian(&poses, 0..rows.len(), |i, pos, cols| {
-                    p[3 * i..3 * i + 3].copy_from_slice(pos);
-                    let block = &mut jac[per_pose * i..per_pose * (i + 1)];
-                    for (c, col) in cols.iter().enumerate() {
-                        for (k, &v) in col.iter().enumerate() {
-                            block[k * params + c] = v;
+        let (p_out, jac_out) = (
+            zeros(py, &r.shape(&[3]), "positions")?,
+            zeros(py, &r.shape(&[3, params]), "jacobians")?,
+        );
+        {
+            let (mut p_rw, mut jac_rw) = (p_out.readwrite(), jac_out.readwrite());
+            let p = p_rw.as_slice_mut().map_err(internal)?;
+            let jac = jac_rw.as_slice_mut().map_err(internal)?;
+            r.for_chunks(py, |rows, q| {
+                let poses = prepare(self.joints(), q)?;
+                let p = &mut p[3 * rows.start..3 * rows.end];
+                let jac = &mut jac[per_pose * rows.start..per_pose * rows.end];
+                self.kernel
+                    .for_each_jacobian(&poses, 0..rows.len(), |i, pos, cols| {
+                        p[3 * i..3 * i + 3].copy_from_slice(pos);
+                        let block = &mut jac[per_pose * i..per_pose * (i + 1)];
+                        for (c, col) in cols.iter().enumerate() {
+                            for (k, &v) in col.iter().enumerate() {
+                                block[k * params + c] = v;
+                            }
                         }
-                    }
-                })?;
-            Ok(())
-        })?;
-        Ok(if r.single() {
-            (shaped(py, p, &[3])?, shaped(py, jac, &[3, params])?)
-        } else {
-            (shaped(py, p, &[n, 3])?, shaped(py, jac, &[n, 3, params])?)
-        })
+                    })?;
+                Ok(())
+            })?;
+        }
+        Ok((p_out, jac_out))
     }
 
     /// Probe positions and joint Jacobians `∂p/∂q` of poses `q` (as in
@@ -289,28 +287,30 @@ impl Arm {
         let unit = crate::angle_unit(angle_unit)?;
         let joints = self.joints();
         let r = Readings::new(q, "q", joints, unit)?;
-        let n = r.rows();
-        let mut p = vec![0.0; 3 * n];
-        let mut jac = vec![0.0; 3 * joints * n];
-        r.for_chunks(py, |rows, q| {
-            let mut cols = vec![[0.0; 3]; joints];
-            for (i, reading) in rows.zip(q.chunks_exact(joints)) {
-                let pos = self.kernel.joint_jacobian(reading, &mut cols)?;
-                p[3 * i..3 * i + 3].copy_from_slice(&pos);
-                let block = &mut jac[3 * joints * i..3 * joints * (i + 1)];
-                for (j, col) in cols.iter().enumerate() {
-                    for (k, &v) in col.iter().enumerate() {
-                        block[k * joints + j] = v;
+        let (p_out, jac_out) = (
+            zeros(py, &r.shape(&[3]), "positions")?,
+            zeros(py, &r.shape(&[3, joints]), "joint_jacobian")?,
+        );
+        {
+            let (mut p_rw, mut jac_rw) = (p_out.readwrite(), jac_out.readwrite());
+            let p = p_rw.as_slice_mut().map_err(internal)?;
+            let jac = jac_rw.as_slice_mut().map_err(internal)?;
+            r.for_chunks(py, |rows, q| {
+                let mut cols = vec![[0.0; 3]; joints];
+                for (i, reading) in rows.zip(q.chunks_exact(joints)) {
+                    let pos = self.kernel.joint_jacobian(reading, &mut cols)?;
+                    p[3 * i..3 * i + 3].copy_from_slice(&pos);
+                    let block = &mut jac[3 * joints * i..3 * joints * (i + 1)];
+                    for (j, col) in cols.iter().enumerate() {
+                        for (k, &v) in col.iter().enumerate() {
+                            block[k * joints + j] = v;
+                        }
                     }
                 }
-            }
-            Ok(())
-        })?;
-        Ok(if r.single() {
-            (shaped(py, p, &[3])?, shaped(py, jac, &[3, joints])?)
-        } else {
-            (shaped(py, p, &[n, 3])?, shaped(py, jac, &[n, 3, joints])?)
-        })
+                Ok(())
+            })?;
+        }
+        Ok((p_out, jac_out))
     }
 
     /// The arm in the arm-file schema (TOML), in `length_unit` (`"mm"`,
@@ -350,6 +350,37 @@ impl Arm {
 
 /// Positions and Jacobians, as numpy arrays.
 type PositionsAndJacobians<'py> = (Bound<'py, PyArrayDyn<f64>>, Bound<'py, PyArrayDyn<f64>>);
+
+/// A new numpy array of zeros of `shape` (numpy's `zeros`: pages are
+/// given as they are written), its size checked first: a `MemoryError`
+/// naming `what` when it cannot be had, before any work.
+pub(crate) fn zeros<'py>(
+    py: Python<'py>,
+    shape: &[usize],
+    what: &str,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    crate::error::elements(shape, what)?;
+    let array = py
+        .import("numpy")?
+        .call_method1("zeros", (shape.to_vec(),))
+        .map_err(|e| {
+            if e.is_instance_of::<pyo3::exceptions::PyMemoryError>(py) {
+                Error::new(
+                    Kind::Memory,
+                    format!("{what}: an array of shape {shape:?} cannot be allocated ({e})"),
+                )
+                .into()
+            } else {
+                e
+            }
+        })?;
+    Ok(array.cast_into::<PyArrayDyn<f64>>()?)
+}
+
+/// A numpy array that is not the contiguous one just made: a bug.
+fn internal(e: impl std::fmt::Display) -> PyErr {
+    Error::new(Kind::Internal, format!("internal: output array: {e}")).into()
+}
 
 /// An owned buffer as a numpy array of `shape` (no copy).
 pub(crate) fn shaped<'py>(

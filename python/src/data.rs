@@ -113,7 +113,8 @@ impl DataSet {
             .collect::<PyResult<_>>()?;
         let joints = columns(q)?;
         let readings = Readings::new(q, "q", joints, unit)?;
-        let mut flat = Vec::with_capacity(readings.rows() * joints);
+        let count = crate::error::elements(&[readings.rows(), joints], "q")?;
+        let mut flat = crate::error::buffer(count, "q")?;
         readings.for_chunks(py, |_, chunk| {
             flat.extend_from_slice(chunk);
             Ok(())

@@ -12,7 +12,7 @@ use aacmm_core::kernel::KernelError;
 use aacmm_core::metrics::MetricsError;
 use aacmm_core::simulate::SimError;
 use pyo3::PyErr;
-use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::exceptions::{PyException, PyMemoryError, PyOSError, PyValueError};
 
 pyo3::create_exception!(
     aacmm,
@@ -58,6 +58,9 @@ pub(crate) enum Kind {
     Value,
     /// `aacmm.AacmmError`: a bug inside aacmm (a caught panic).
     Internal,
+    /// `MemoryError`: an output or a copy sized by the input that cannot be
+    /// allocated (refused before any work, as numpy refuses).
+    Memory,
 }
 
 /// Refuses an output directory `dir` that is empty (the current directory
@@ -80,6 +83,33 @@ pub(crate) fn check_out_dir(dir: &std::path::Path, earlier: &[&str], force: bool
         ));
     }
     Ok(())
+}
+
+/// The product of `dims` (an array's element count), or a `MemoryError`
+/// naming `what` when it overflows.
+pub(crate) fn elements(dims: &[usize], what: &str) -> Result<usize> {
+    dims.iter()
+        .try_fold(1usize, |n, &d| n.checked_mul(d))
+        .filter(|n| n.checked_mul(size_of::<f64>()).is_some())
+        .ok_or_else(|| {
+            Error::new(
+                Kind::Memory,
+                format!("{what}: an array of shape {dims:?} cannot be allocated"),
+            )
+        })
+}
+
+/// An empty buffer with room for `count` values, or a `MemoryError` naming
+/// `what`: a hostile size is refused, not an abort of the process.
+pub(crate) fn buffer<T>(count: usize, what: &str) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(count).map_err(|e| {
+        Error::new(
+            Kind::Memory,
+            format!("{what}: {count} values cannot be allocated ({e})"),
+        )
+    })?;
+    Ok(v)
 }
 
 /// An error with the library's message.
@@ -121,6 +151,7 @@ impl From<Error> for PyErr {
             Kind::Unsupported => UnsupportedError::new_err(e.message),
             Kind::Value => PyValueError::new_err(e.message),
             Kind::Internal => AacmmError::new_err(e.message),
+            Kind::Memory => PyMemoryError::new_err(e.message),
         }
     }
 }
@@ -156,7 +187,8 @@ impl From<aacmm_core::residuals::TermError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 17] = [
+const ARGUMENTS: [(&str, &str); 18] = [
+    ("seed", "seed"),
     ("prior", "prior"),
     ("method", "method"),
     ("robust.loss", "robust"),
@@ -198,6 +230,9 @@ impl From<CoreCalibrationError> for Error {
         let kind = match &e {
             CoreCalibrationError::Option(o) => return o.clone().into(),
             CoreCalibrationError::Kernel(KernelError::Unsupported(_)) => Kind::Unsupported,
+            // Noise whose weights overflow or vanish: a bad argument, as in
+            // `identify` (one rule per setting).
+            CoreCalibrationError::Kernel(KernelError::Noise { .. }) => Kind::Value,
             CoreCalibrationError::Joints { .. } => Kind::Value,
             _ => Kind::Calibration,
         };
@@ -217,10 +252,28 @@ impl From<MetricsError> for Error {
     }
 }
 
+/// The Python argument of each simulation setting ([`SimError::Setting`]'s
+/// key in `campaign.toml`) `simulate` exposes; the others keep their key.
+const SIM_ARGUMENTS: [(&str, &str); 2] = [
+    ("poses_per_socket", "poses"),
+    ("sockets.points", "sockets_file"),
+];
+
+/// A refused simulation setting is a `ValueError` naming the Python
+/// argument, as a refused calibration setting is; a campaign the arm cannot
+/// perform is an `aacmm.CalibrationError`.
 impl From<SimError> for Error {
     fn from(e: SimError) -> Error {
         match e {
             SimError::Input(e) => e.into(),
+            SimError::Setting { name, message } => {
+                let arg = SIM_ARGUMENTS
+                    .iter()
+                    .find(|(key, _)| *key == name)
+                    .map_or(name.as_str(), |(_, arg)| arg);
+                Error::value(format!("{arg}: {message}"))
+            }
+            SimError::Kernel(k) => k.into(),
             e => Error::new(Kind::Calibration, e.to_string()),
         }
     }

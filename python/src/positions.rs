@@ -57,7 +57,7 @@ impl PositionArgs<'_, '_> {
         if n == 0 {
             return Err(Error::value("q: no rows: no positions").into());
         }
-        let mut q = Vec::with_capacity(n * j);
+        let mut q = crate::error::buffer(crate::error::elements(&[n, j], "q")?, "q")?;
         readings.for_chunks(py, |_, chunk| {
             q.extend_from_slice(chunk);
             Ok(())
@@ -171,7 +171,6 @@ fn uncertainties(u: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<Option<f64>>> {
         ))
     })?;
     let shape = array.shape().to_vec();
-    let values: Vec<f64> = array.as_array().iter().copied().collect();
     let per_row = match shape[..] {
         [] => false,
         [m] if m == n => true,
@@ -183,6 +182,9 @@ fn uncertainties(u: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<Option<f64>>> {
             .into());
         }
     };
+    // Copied once its shape is known: a huge array of the wrong shape is
+    // refused, not copied.
+    let values: Vec<f64> = array.as_array().iter().copied().collect();
     let checked = |k: usize, v: f64| -> Result<Option<f64>> {
         match v {
             v if v.is_nan() => Ok(None),

@@ -69,10 +69,14 @@ impl<'py> Readings<'py> {
         self.rows
     }
 
-    /// Whether one pose was given as a 1-D array (the results drop the pose
-    /// axis).
-    pub(crate) fn single(&self) -> bool {
-        self.single
+    /// The shape of a result with `per_pose` per pose: `(n, *per_pose)`,
+    /// or `per_pose` for one pose given as a 1-D array.
+    pub(crate) fn shape(&self, per_pose: &[usize]) -> Vec<usize> {
+        let pose_axis = (!self.single).then_some(self.rows);
+        pose_axis
+            .into_iter()
+            .chain(per_pose.iter().copied())
+            .collect()
     }
 
     /// Appends the readings of `rows` to `buf`, row-major, as given.

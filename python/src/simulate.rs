@@ -176,8 +176,10 @@ fn error_model(errors: &str, true_arm: Option<&Arm>, scale: Option<f64>) -> Resu
 /// `sockets_file`, CSV `point,x,y,z` mm) `poses` times each; encoder noise
 /// σ `encoder_noise_deg` (degrees), probe seating σ `probe_noise_mm`;
 /// `reference_lengths` distances between sockets (default 3) with standard
-/// uncertainty `length_uncertainty_mm`. Setting errors name the setting
-/// (`aacmm.CalibrationError`). Runs without the GIL.
+/// uncertainty `length_uncertainty_mm`. A setting out of range is a
+/// `ValueError` naming the argument, as in `calibrate` (the same bounds:
+/// `seed` at most 2⁶³ − 1, an encoder σ at most 180°); a campaign the arm
+/// cannot perform is `aacmm.CalibrationError`. Runs without the GIL.
 #[pyfunction]
 #[pyo3(signature = (arm, *, poses, seed, sockets = None, sockets_file = None, errors = "paper", true_arm = None, error_scale = None, encoder_noise_deg = 0.0, probe_noise_mm = 0.0, reference_lengths = None, length_uncertainty_mm = None))]
 #[allow(clippy::too_many_arguments)]

@@ -182,9 +182,9 @@ def test_simulation_settings(arm, tmp_path):
         aacmm.simulate(arm, sockets=3, sockets_file=POSES, poses=5, seed=1)
     with pytest.raises(ValueError, match="give sockets"):
         aacmm.simulate(arm, poses=5, seed=1)
-    with pytest.raises(aacmm.CalibrationError, match="setting `poses_per_socket`"):
+    with pytest.raises(ValueError, match="^poses: "):
         aacmm.simulate(arm, sockets=3, poses=2, seed=1)
-    with pytest.raises(aacmm.CalibrationError, match="setting `reference_lengths`"):
+    with pytest.raises(ValueError, match="^reference_lengths: "):
         aacmm.simulate(arm, sockets=3, poses=5, seed=1, reference_lengths=9)
     sockets = write(tmp_path, "s.csv", "point,x,y,z\nA,1,2\n")
     with pytest.raises(aacmm.InputError, match=r"s\.csv:2"):
@@ -207,3 +207,169 @@ def test_hayati_joint_names(tmp_path, data):
     assert params["hbeta2"] == pytest.approx(np.radians(0.5), rel=1e-15)
     with refused(ValueError, match="joint 2 is a Hayati joint: its d-slot is `hbeta2`"):
         aacmm.calibrate(arm, data, fix="theta1,d2")
+
+
+def test_one_rule_per_setting(arm, data):
+    """The same setting gives the same exception class and bounds in
+    identify, calibrate and simulate, and the message names the argument
+    the caller gave."""
+    # simulate: a setting out of range is a ValueError naming the argument.
+    with refused(ValueError, match=r"^poses: at least 3 touches per socket .*got 2$"):
+        aacmm.simulate(arm, sockets=3, poses=2, seed=1)
+    with refused(ValueError, match="^sockets: at least one socket"):
+        aacmm.simulate(arm, sockets=0, poses=5, seed=1)
+    with refused(ValueError, match="^error_scale"):
+        aacmm.simulate(arm, sockets=3, poses=5, seed=1, errors="random", error_scale=-1)
+    # Seeds: one bound (TOML integers) in calibrate and simulate alike.
+    top = 2**63 - 1
+    with refused(ValueError, match=rf"^seed = {2**64 - 1}: at most {top}"):
+        aacmm.calibrate(arm, data, seed=2**64 - 1)
+    with refused(ValueError, match=rf"^seed: at most {top} .*got {2**63}$"):
+        aacmm.simulate(arm, sockets=3, poses=5, seed=2**63)
+    for call in (
+        lambda: aacmm.calibrate(arm, data, seed=-1),
+        lambda: aacmm.simulate(arm, sockets=3, poses=5, seed=-1),
+    ):
+        with pytest.raises(OverflowError):
+            call()
+    # Encoder noise: one cap (180°) in Noise and in simulate.
+    with refused(ValueError, match=r"^encoder_deg: σ = 1e308° is more than 180°: beyond half a turn an angle.s σ means nothing \(a real"):
+        aacmm.Noise(encoder_deg=1e308)
+    with refused(ValueError, match=r"^encoder_noise_deg: σ = 1e308° is more than 180°"):
+        aacmm.simulate(arm, sockets=3, poses=5, seed=1, encoder_noise_deg=1e308)
+    # Noise whose weights vanish: ValueError in identify and calibrate alike.
+    huge = aacmm.Noise(probe_mm=1e300)
+    with refused(ValueError, match="not finite") as by_identify:
+        aacmm.identify(arm, data, noise=huge)
+    with refused(ValueError, match="not finite") as by_calibrate:
+        aacmm.calibrate(arm, data, noise=huge, method="lm")
+    assert str(by_identify.value).split(": ", 1)[1] == str(by_calibrate.value).split(": ", 1)[1]
+    # Messages show what was given.
+    with refused(ValueError, match=r"^encoder_deg: encoder and probe noise both 0"):
+        aacmm.Noise(encoder_deg=0)
+    with refused(ValueError, match=r"^fix = a1,a1: `a1` is listed twice$"):
+        aacmm.calibrate(arm, data, fix="a1,a1")
+    with refused(ValueError, match=r"^fix = theta1,d1,theta1: `theta1` is listed twice$"):
+        aacmm.calibrate(arm, data, fix=["theta1", "d1", "theta1"])
+    with refused(ValueError, match=r"^prior = length=nanmm: `length=nanmm`: "):
+        aacmm.calibrate(arm, data, prior="length=nanmm")
+
+
+def test_hostile_counts_give_ordinary_exceptions(arm, data):
+    """Every entry point that takes a count, called with 0, a huge or a
+    negative one, raises an ordinary exception (no PanicException, which is
+    not an Exception, and no wrong result)."""
+    hostile = [
+        lambda: aacmm.param_names(0),
+        lambda: aacmm.param_names(5),
+        lambda: aacmm.param_names(2**62),
+        lambda: aacmm.param_names(2**64),
+        lambda: aacmm.param_names(-1),
+        lambda: aacmm.Arm.from_params(0, np.zeros(3)),
+        lambda: aacmm.Arm.from_params(2**62, np.zeros(3)),
+        lambda: aacmm.Arm.from_params(-6, np.zeros(27)),
+        lambda: aacmm.Arm.from_params(6, np.zeros(0)),
+        lambda: aacmm.DataSet.from_files(POSES, joints=0),
+        lambda: aacmm.DataSet.from_files(POSES, joints=2**62),
+        lambda: data.source_of(len(data)),
+        lambda: data.source_of(2**64 - 1),
+        lambda: data.source_of(-1),
+        lambda: arm.positions(np.zeros((3, 0))),
+        lambda: arm.jacobians(np.zeros(0)),
+        lambda: arm.joint_jacobian(np.zeros((0, 7))),
+        lambda: aacmm.DataSet(["A"], np.zeros((1, 0))),
+        lambda: aacmm.DataSet([], np.zeros((0, 2**20))),
+        lambda: aacmm.identify(arm, data, threads=0),
+        lambda: aacmm.calibrate(arm, data, threads=0),
+        lambda: aacmm.calibrate(arm, data, cross_validate=0),
+        lambda: aacmm.calibrate(arm, data, cross_validate=2**62),
+        lambda: aacmm.simulate(arm, sockets=2**62, poses=5, seed=1),
+        lambda: aacmm.simulate(arm, sockets=3, poses=2**62, seed=1),
+        lambda: aacmm.simulate(arm, sockets=3, poses=0, seed=1),
+        lambda: aacmm.simulate(arm, sockets=3, poses=5, seed=1, reference_lengths=2**62),
+        lambda: aacmm.simulate(arm, sockets=3, poses=-5, seed=1),
+    ]
+    for i, call in enumerate(hostile):
+        try:
+            call()
+        except (ValueError, TypeError, OverflowError, IndexError, aacmm.AacmmError) as e:
+            assert "internal error" not in str(e), (i, e)
+        else:
+            pytest.fail(f"hostile call {i} was accepted")
+    # The empty arrays of a valid shape are valid: empty results.
+    assert arm.positions(np.zeros((0, 6))).shape == (0, 3)
+    assert arm.jacobians(np.zeros((0, 6)))[1].shape == (0, 3, 27)
+
+
+def test_messages_are_bounded(tmp_path, arm, data):
+    """A user's text echoed in a message (a label, a token, a value) is cut
+    to 80 characters with its length said, and its control characters are
+    escaped: a 5 MB label does not make a 5 MB message."""
+    huge = "L" * 5_000_000
+    labels, q = read_poses()
+    with pytest.raises(aacmm.InputError) as caught:
+        aacmm.DataSet(labels[:3] + [huge], q[:4], angle_unit="deg")
+    message = str(caught.value)
+    assert len(message) < 400 and "(5000000 characters)" in message, message[:500]
+    poses = write(tmp_path, "p.csv", "point,q1,q2,q3,q4,q5,q6\n" + "A,1,2,3,4,5,6\n" * 5 + f"A,1,2,{huge},4,5,6\n")
+    with pytest.raises(aacmm.InputError, match=r":7: field `q3`: `L+…` \(5000000 characters\) is not a number$") as caught:
+        aacmm.DataSet.from_files(poses)
+    assert len(str(caught.value)) < 400
+    for kwargs, arg in (({"fix": "x" * 1_000_000}, "fix"), ({"prior": "y" * 1_000_000}, "prior")):
+        with refused(ValueError, match=rf"^{arg} = \w+… \(1000000 characters\): ") as caught:
+            aacmm.calibrate(arm, data, **kwargs)
+        assert len(str(caught.value)) < 600, str(caught.value)[:700]
+    with refused(ValueError, match=r"unknown parameter `a1\\r\\n\\0`") as caught:
+        aacmm.calibrate(arm, data, fix="a1\r\n\0")
+    assert "\r" not in str(caught.value) and "\0" not in str(caught.value)
+
+
+def test_cr_only_line_endings_are_named(tmp_path):
+    """A file whose lines end with CR alone is said to be one, rather than
+    read as one line whose fields run into each other."""
+    text = "point,q1,q2,q3,q4,q5,q6\r" + "A,1,2,3,4,5,6\r" * 5
+    poses = write(tmp_path, "mac.csv", "")
+    poses.write_bytes(text.encode())
+    with pytest.raises(aacmm.InputError, match=r"mac\.csv:1: .*carriage return alone"):
+        aacmm.DataSet.from_files(poses)
+
+
+HOSTILE_SIZES = r"""
+import resource, sys
+import numpy as np
+import aacmm
+resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30))
+arm = aacmm.Arm.from_file(sys.argv[1])
+many = np.broadcast_to(np.zeros(6), (3 * 10**8, 6))
+calls = {
+    "positions": lambda: arm.positions(many),
+    "jacobians": lambda: arm.jacobians(many),
+    "joint_jacobian": lambda: arm.joint_jacobian(many),
+    "DataSet": lambda: aacmm.DataSet(["A"], np.broadcast_to(np.zeros(1000), (10**7, 1000))),
+    "from_positions": lambda: aacmm.DataSet.from_positions(many, np.zeros((1, 3))),
+}
+for name, call in calls.items():
+    try:
+        call()
+        print(name, "accepted")
+    except MemoryError as e:
+        print(name, "MemoryError", str(e)[:200])
+"""
+
+
+def test_outputs_too_large_are_memory_errors(tmp_path):
+    """An output or copy sized by the input that cannot be allocated is a
+    MemoryError before any work, as numpy's own, not an abort of the process
+    (run in a subprocess under a 2 GiB address-space limit)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", HOSTILE_SIZES, ARM], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+    lines = done.stdout.splitlines()
+    assert [line.split()[:2] for line in lines] == [
+        [name, "MemoryError"]
+        for name in ("positions", "jacobians", "joint_jacobian", "DataSet", "from_positions")
+    ], done.stdout

@@ -219,8 +219,15 @@ fn option_error(o: &OptionError) -> anyhow::Error {
         // degrees.
         Some((_, flag)) if o.field == "noise.encoder_rad" => match o.value.parse::<f64>() {
             Ok(rad) if rad.is_finite() => {
-                let deg = (rad.to_degrees() * 1e12).round() / 1e12;
-                anyhow!("{flag} {deg}: {}", o.reason)
+                // Rounded back to what was typed where that is ordinary;
+                // `1e300`, not 301 digits, otherwise.
+                let deg = rad.to_degrees();
+                let deg = if (1e-4..1e3).contains(&deg.abs()) {
+                    (deg * 1e12).round() / 1e12
+                } else {
+                    deg
+                };
+                anyhow!("{flag} {}: {}", aacmm_core::error::short(deg), o.reason)
             }
             _ => anyhow!("{flag} {}: {}", o.value, o.reason),
         },

@@ -290,7 +290,7 @@ fn bad_solver_settings_are_clean_errors() {
             "--encoder-noise=nan",
             "--encoder-noise NaN: must be a finite number ≥ 0",
         ),
-        ("--fix=d1,d1", "--fix 6: column 6 (d1) is listed twice"),
+        ("--fix=d1,d1", "--fix d1,d1: `d1` is listed twice"),
         ("--method=ceres", "invalid value 'ceres' for '--method"),
     ] {
         let mut args = base.to_vec();

@@ -12,7 +12,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{AnnealOptions, GlobalOptions, LmOptions, Method, SwitchRule};
-use crate::error::OptionError;
+use crate::error::{MAX_SEED, OptionError, seed_bound};
 use crate::params::{ParamId, param_count};
 use crate::residuals::Noise;
 
@@ -39,6 +39,8 @@ impl FixSpec {
     /// assert!(e.reason.contains("unknown parameter `theta9`"));
     /// let e = FixSpec::parse("auto,theta1", 6).unwrap_err();
     /// assert!(e.reason.contains("`auto` stands alone"), "{e}");
+    /// let e = FixSpec::parse("a1, theta1,a1", 6).unwrap_err();
+    /// assert_eq!(e.to_string(), "fix = a1, theta1,a1: `a1` is listed twice");
     /// ```
     pub fn parse(s: &str, joints: usize) -> Result<FixSpec, OptionError> {
         let names: Vec<String> = ParamId::all(joints).map(|p| p.to_string()).collect();
@@ -108,15 +110,33 @@ impl FixSpec {
                         "fix",
                         s,
                         format!(
-                            "unknown parameter `{t}`; parameters are {} … {}",
-                            names[0],
-                            names[names.len() - 1]
+                            "unknown parameter {}; parameters are {} … {}",
+                            crate::error::quoted(t),
+                            names.first().map_or("", String::as_str),
+                            names.last().map_or("", String::as_str)
                         ),
                     )
                 })
             })
             .collect::<Result<Vec<usize>, _>>()
-            .map(FixSpec::Columns)
+            .and_then(|columns| {
+                // Named as given: `a1` listed twice, not column 0.
+                match columns
+                    .iter()
+                    .enumerate()
+                    .find(|(i, c)| columns[..*i].contains(c))
+                {
+                    Some((_, &c)) => Err(OptionError::new(
+                        "fix",
+                        s,
+                        format!(
+                            "`{}` is listed twice",
+                            names.get(c).map_or("?", String::as_str)
+                        ),
+                    )),
+                    None => Ok(FixSpec::Columns(columns)),
+                }
+            })
     }
 }
 
@@ -321,6 +341,9 @@ impl SolverSettings {
     pub fn check(&self) -> Result<(), OptionError> {
         if self.threads == 0 {
             return Err(OptionError::new("threads", 0, "at least 1"));
+        }
+        if self.seed > MAX_SEED {
+            return Err(OptionError::new("seed", self.seed, seed_bound(self.seed)));
         }
         if self.method == Method::External {
             return Err(OptionError::new(

@@ -52,7 +52,7 @@ use super::text::{line_of, parse_toml, read_text, suggest};
 use super::units::{AngleUnit, LengthUnit};
 use super::verdict::Rejected;
 use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
-use crate::error::InputError;
+use crate::error::{InputError, quoted};
 use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
 use crate::tolerances::Tolerances;
 
@@ -313,7 +313,10 @@ impl JointFile {
                     return Err(at(
                         m.span(),
                         "model",
-                        format!("unknown model `{other}`; expected \"dh\" or \"hayati\""),
+                        format!(
+                            "unknown model {}; expected \"dh\" or \"hayati\"",
+                            quoted(other)
+                        ),
                     ));
                 }
             },
@@ -498,7 +501,7 @@ impl ArmFile {
         if let Some((ctx, field, v)) = numbers.iter().find(|(_, _, v)| !v.get_ref().is_finite()) {
             let line = line_of(text, v.span().start);
             let raw = text.get(v.span()).unwrap_or("?");
-            let message = format!("{ctx}`{raw}` is not a finite number");
+            let message = format!("{ctx}{} is not a finite number", quoted(raw));
             return Err(InputError::field(file, line, *field, message));
         }
 
@@ -872,9 +875,9 @@ fn schema_error(text: &str, file: &str, root: &DeTable<'_>, e: &toml::de::Error)
     };
     let raw = text.get(span.clone()).unwrap_or("?");
     let problem = if message == "floating-point number overflowed" {
-        format!("`{raw}` is not a finite number")
+        format!("{} is not a finite number", quoted(raw))
     } else if message.starts_with("invalid type: integer") && message.contains(" as ") {
-        format!("integer `{raw}` out of range; write it as a float")
+        format!("integer {} out of range; write it as a float", quoted(raw))
     } else if let Some((found, expected)) =
         (message.strip_prefix("invalid type: ")).and_then(|m| m.rsplit_once(", expected "))
     {

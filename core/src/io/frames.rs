@@ -19,7 +19,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::text::line_of;
-use crate::error::InputError;
+use crate::error::{InputError, quoted};
 
 /// A frame's registration as written in a calibrated arm file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -81,11 +81,14 @@ pub fn parse_frames(text: &str, file: &str) -> Result<Vec<FrameRecord>, InputErr
     for (i, f) in frames.iter().enumerate() {
         let values = f.rotation_deg.iter().chain(&f.translation_mm);
         if values.clone().any(|v| !v.is_finite()) {
-            let m = format!("frame `{}`: a value that is not a finite number", f.name);
+            let m = format!(
+                "frame {}: a value that is not a finite number",
+                quoted(&f.name)
+            );
             return Err(InputError::file_error(file, m));
         }
         if frames[..i].iter().any(|g| g.name == f.name) {
-            let m = format!("frame `{}` is given twice", f.name);
+            let m = format!("frame {} is given twice", quoted(&f.name));
             return Err(InputError::file_error(file, m));
         }
     }

@@ -18,7 +18,7 @@ use std::io::Write;
 use std::path::Path;
 
 use super::text::{check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
-use crate::error::InputError;
+use crate::error::{InputError, quoted, shown};
 
 /// One reference length between two labelled points.
 #[derive(Clone, Debug, PartialEq)]
@@ -87,18 +87,27 @@ pub fn parse_lengths(text: &str, file: &str) -> Result<Vec<ReferenceLength>, Inp
             if a == b {
                 return error(
                     "point_b",
-                    format!("same point as point_a (`{a}`): a length needs two points"),
+                    format!(
+                        "same point as point_a ({}): a length needs two points",
+                        quoted(a)
+                    ),
                 );
             }
             let d = parse_f64(distance, file, line, "distance")?;
             if d <= 0.0 {
-                return error("distance", format!("must be positive, got {distance}"));
+                return error(
+                    "distance",
+                    format!("must be positive, got {}", shown(distance)),
+                );
             }
             let u = match uncertainty.filter(|s| !s.is_empty()) {
                 None => None,
                 Some(s) => match parse_f64(s, file, line, "uncertainty")? {
                     u if u < 0.0 => {
-                        return error("uncertainty", format!("must not be negative, got {s}"));
+                        return error(
+                            "uncertainty",
+                            format!("must not be negative, got {}", shown(s)),
+                        );
                     }
                     u => Some(u),
                 },
@@ -107,7 +116,11 @@ pub fn parse_lengths(text: &str, file: &str) -> Result<Vec<ReferenceLength>, Inp
             if let Some(first) = pairs.insert((pair.0.to_string(), pair.1.to_string()), line) {
                 return error(
                     "point_b",
-                    format!("the pair `{a}`–`{b}` is already given on line {first}"),
+                    format!(
+                        "the pair {}–{} is already given on line {first}",
+                        quoted(a),
+                        quoted(b)
+                    ),
                 );
             }
             out.push(ReferenceLength {
@@ -146,13 +159,13 @@ pub fn check_lengths_against<S: AsRef<str>>(
     let Some((line, field, label)) = unknown else {
         return Ok(());
     };
-    let shown: Vec<String> = set.iter().take(10).map(|n| format!("`{n}`")).collect();
+    let shown: Vec<String> = set.iter().take(10).map(|n| quoted(n)).collect();
     let known_text = match set.len() {
         0 => "there are no known points".to_string(),
         n if n > 10 => format!("known points: {} and {} more", shown.join(", "), n - 10),
         _ => format!("known points: {}", shown.join(", ")),
     };
-    let message = format!("unknown point `{label}`; {known_text}");
+    let message = format!("unknown point {}; {known_text}", quoted(label));
     Err(InputError::field(file, line, field, message))
 }
 

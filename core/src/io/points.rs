@@ -14,7 +14,7 @@ use std::io::Write;
 use std::path::Path;
 
 use super::text::{check_header, invalid, parse_f64, quote, read_text, scan_table};
-use crate::error::InputError;
+use crate::error::{InputError, quoted};
 
 const COLUMNS: [&str; 4] = ["point", "x", "y", "z"];
 const SHAPE: &str = "point,x,y,z";
@@ -154,7 +154,7 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<(String, [f64; 3])>, I
                     file,
                     line,
                     "point",
-                    format!("duplicate label `{label}` (first on line {first})"),
+                    format!("duplicate label {} (first on line {first})", quoted(label)),
                 ));
             }
             let mut xyz = [0.0; 3];

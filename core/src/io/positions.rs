@@ -517,10 +517,11 @@ impl Positions {
                 return Some((
                     first,
                     format!(
-                        "frame `{name}` has {distinct} distinct position(s); its registration (3 \
+                        "frame {} has {distinct} distinct position(s); its registration (3 \
                          rotations, 3 translations) needs at least {MIN_FRAME_POSITIONS} not on \
                          one line — give each station or placement several rows, or leave the \
-                         `frame` column out if every row is in one frame"
+                         `frame` column out if every row is in one frame",
+                        crate::error::quoted(name)
                     ),
                 ));
             }
@@ -529,8 +530,9 @@ impl Positions {
                 return Some((
                     first,
                     format!(
-                        "the positions of frame `{name}` lie on one line: a rotation about it is \
-                         not determined; measure points off that line"
+                        "the positions of frame {} lie on one line: a rotation about it is \
+                         not determined; measure points off that line",
+                        crate::error::quoted(name)
                     ),
                 ));
             }

@@ -18,7 +18,7 @@ use toml::Spanned;
 use toml::de::DeValue;
 
 use super::text::{line_of, parse_toml};
-use crate::error::InputError;
+use crate::error::{InputError, quoted};
 use crate::tolerances::{Target, Tolerances, not_in_arm, unknown_target};
 
 /// The `[prior]` table of an arm file's text for an arm of `joints` joints
@@ -82,8 +82,9 @@ pub(crate) fn parse_prior_of(
             |message: String| InputError::field(file, line, name, format!("[prior]: {message}"));
         let (target_name, unit) = name.rsplit_once('_').ok_or_else(|| {
             err(format!(
-                "`{name}` has no unit; write NAME_UNIT, e.g. length_mm, angle_deg or \
-                 theta5_deg"
+                "{} has no unit; write NAME_UNIT, e.g. length_mm, angle_deg or \
+                 theta5_deg",
+                quoted(name)
             ))
         })?;
         let target = Target::parse(target_name, joints)
@@ -101,7 +102,8 @@ pub(crate) fn parse_prior_of(
         .ok_or_else(|| {
             let raw = text.get(v.span()).unwrap_or("?");
             err(format!(
-                "`{raw}` is not a number (a tolerance, 1σ, in {unit})"
+                "{} is not a number (a tolerance, 1σ, in {unit})",
+                quoted(raw)
             ))
         })?;
         tolerances.set(target, value, unit).map_err(err)?;

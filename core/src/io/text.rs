@@ -9,7 +9,7 @@ use std::path::Path;
 
 use csv::{ReaderBuilder, StringRecord, Terminator, Trim};
 
-use crate::error::InputError;
+use crate::error::{InputError, quoted};
 
 /// The name readers give `path` in messages: `<stdin>` for `-`, else the
 /// path as it displays.
@@ -177,6 +177,9 @@ pub(crate) fn each_record(
     let original = text;
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let (body, mut blank) = preamble(text);
+    // The first line, and the header's (past comments).
+    cr_only(text, 0, file)?;
+    cr_only(text, body, file)?;
     let bytes = text.as_bytes();
     if bytes[body..].contains(&b'"') {
         for r in records(original, file)? {
@@ -213,6 +216,23 @@ pub(crate) fn each_record(
         line += 1;
     }
     Ok(())
+}
+
+/// Refuses text whose line starting at byte `body` holds a carriage
+/// return before its end: lines ended by CR alone (classic Mac OS), which
+/// would read as one long line whose fields run into each other.
+fn cr_only(text: &str, body: usize, file: &str) -> Result<(), InputError> {
+    let rest = &text.as_bytes()[body..];
+    let line = &rest[..rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len())];
+    match line.iter().position(|&b| b == b'\r') {
+        Some(at) if at + 1 < line.len() => Err(InputError::line_error(
+            file,
+            line_of(text, body),
+            "the file's lines end with a carriage return alone (CR, classic Mac OS line \
+             endings), so it reads as one line; save it with LF or CRLF line endings",
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// Whether a line is blank (whitespace only).
@@ -334,7 +354,10 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
 /// which reading trims, quoted or not.
 pub(crate) fn quote(label: &str) -> std::io::Result<Cow<'_, str>> {
     if label.trim() != label {
-        let message = format!("label {label:?}: surrounding whitespace does not read back");
+        let message = format!(
+            "label {}: surrounding whitespace does not read back",
+            quoted(label)
+        );
         return Err(invalid(message));
     }
     Ok(
@@ -413,8 +436,8 @@ pub(crate) fn check_row_width(
             file,
             line,
             format!(
-                "the row has {got} columns, the header {want} (`{}`)",
-                columns.join(",")
+                "the row has {got} columns, the header {want} ({})",
+                quoted(&columns.join(","))
             ),
         ));
     }
@@ -442,10 +465,10 @@ fn parse_f64_slow(s: &str, file: &str, line: usize, field: &str) -> Result<f64, 
         Ok(x) if x.is_finite() => return Ok(x),
         _ if s.is_empty() => "missing value".to_string(),
         Ok(x) if x.is_nan() || s.to_ascii_lowercase().contains("inf") => {
-            format!("`{s}` is not a finite number")
+            format!("{} is not a finite number", quoted(s))
         }
-        Ok(_) => format!("`{s}` is out of range of finite numbers"),
-        Err(_) => format!("`{s}` is not a number"),
+        Ok(_) => format!("{} is out of range of finite numbers", quoted(s)),
+        Err(_) => format!("{} is not a number", quoted(s)),
     };
     Err(InputError::field(file, line, field, problem))
 }
@@ -538,6 +561,62 @@ mod tests {
             let e = quote(s).unwrap_err();
             assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput, "{s:?}");
         }
+    }
+
+    #[test]
+    fn cr_only_line_endings_are_named() {
+        for text in [
+            "h1,h2\r1,2\r3,4\r",
+            "# c\rh1,h2\r1,2\r",
+            "# c\nh1,h2\r1,\"2\"\r",
+        ] {
+            let mut seen = 0;
+            let e = each_record(text, "f.csv", |_, _| seen += 1).unwrap_err();
+            assert!(e.to_string().contains("carriage return alone"), "{e}");
+            assert_eq!(seen, 0);
+        }
+        // CRLF, and a CR ending the last line, are line ends as before.
+        let mut rows = Vec::new();
+        each_record("h1,h2\r\n1,2\r\n3,4\r", "f.csv", |l, f| {
+            rows.push((l, f.len()))
+        })
+        .unwrap();
+        assert_eq!(rows, [(1, 2), (2, 2), (3, 2)]);
+    }
+
+    /// A field echoed in a message is bounded and its control characters
+    /// escaped: a huge or garbled token cannot make a huge or garbled
+    /// message.
+    #[test]
+    fn echoed_fields_are_bounded_and_escaped() {
+        let huge = "9".repeat(1000) + "x";
+        let e = parse_f64(&huge, "f.csv", 2, "q1").unwrap_err().to_string();
+        assert!(e.len() < 300, "{e}");
+        assert!(e.contains("…` (1001 characters) is not a number"), "{e}");
+        let e = parse_f64("1\r\n\0", "f.csv", 2, "q1")
+            .unwrap_err()
+            .to_string();
+        assert!(e.ends_with("`1\\r\\n\\0` is not a number"), "{e}");
+        let label = "L".repeat(50_000);
+        let text = format!("point,x\n{label},1\n{label},1\n");
+        let e = scan_table(
+            &text,
+            "f.csv",
+            "point,x",
+            "rows",
+            |_| Ok(()),
+            |_, line, f| {
+                Err(InputError::field(
+                    "f.csv",
+                    line,
+                    "point",
+                    format!("duplicate label {}", quoted(f[0])),
+                ))
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.len() < 200 && e.contains("(50000 characters)"), "{e}");
     }
 
     #[test]

@@ -34,7 +34,8 @@ pub enum LengthUnit {
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "unknown {quantity} unit `{given}`; accepted: {}",
+    "unknown {quantity} unit {}; accepted: {}",
+    crate::error::quoted(given),
     accepted_list(accepted)
 )]
 pub struct UnknownUnit {

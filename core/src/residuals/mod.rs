@@ -109,6 +109,13 @@ pub struct Noise {
     pub position_mm_per_m: Option<f64>,
 }
 
+/// Largest σ of an encoder reading, degrees (in identification,
+/// calibration and simulation alike): beyond half a turn the σ of an angle
+/// means nothing, and the weights it gives vanish.
+pub const MAX_ENCODER_SIGMA_DEG: f64 = 180.0;
+/// [`MAX_ENCODER_SIGMA_DEG`] in rad.
+pub const MAX_ENCODER_SIGMA_RAD: f64 = std::f64::consts::PI;
+
 impl Default for Noise {
     fn default() -> Self {
         Noise {
@@ -165,10 +172,30 @@ impl Noise {
         if let Some(w) = self.length_weight {
             check_nonnegative("noise.length_weight", w, false)?;
         }
+        if let Some(v) = self.encoder_rad
+            && v > MAX_ENCODER_SIGMA_RAD
+        {
+            return Err(OptionError::new(
+                "noise.encoder_rad",
+                crate::error::short(v),
+                format!(
+                    "σ = {}° is more than {}°: beyond half a turn an angle's σ means nothing \
+                     (a real encoder's is 0.001–0.01°)",
+                    crate::error::short(v.to_degrees()),
+                    MAX_ENCODER_SIGMA_DEG
+                ),
+            ));
+        }
         let zero = |v: Option<f64>| v.unwrap_or(0.0) == 0.0;
         if self.stated() && zero(self.encoder_rad) && zero(self.probe_mm) {
+            // Named by the setting given (the probe's when both were).
+            let field = if self.probe_mm.is_some() {
+                "noise.probe_mm"
+            } else {
+                "noise.encoder_rad"
+            };
             return Err(OptionError::new(
-                "noise.probe_mm",
+                field,
                 0,
                 "encoder and probe noise both 0: a touch needs some uncertainty",
             ));

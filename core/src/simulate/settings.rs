@@ -290,11 +290,8 @@ impl CampaignSettings {
     /// assert!(e.starts_with("setting `reference_lengths`: 7 reference lengths"), "{e}");
     /// ```
     pub fn validate(&self, joints: usize) -> Result<(), SimError> {
-        if self.seed > i64::MAX as u64 {
-            return bad(
-                "seed",
-                format!("at most {} (TOML integers), got {}", i64::MAX, self.seed),
-            );
+        if self.seed > crate::error::MAX_SEED {
+            return bad("seed", crate::error::seed_bound(self.seed));
         }
         self.validate_counts(joints)?;
         self.validate_noise()?;
@@ -346,6 +343,17 @@ impl CampaignSettings {
 
     fn validate_noise(&self) -> Result<(), SimError> {
         non_negative("encoder_noise_deg", self.encoder_noise_deg)?;
+        let max = crate::residuals::MAX_ENCODER_SIGMA_DEG;
+        if self.encoder_noise_deg > max {
+            return bad(
+                "encoder_noise_deg",
+                format!(
+                    "σ = {}° is more than {max}°: beyond half a turn an angle's σ means nothing \
+                     (a real encoder's is 0.001–0.01°)",
+                    crate::error::short(self.encoder_noise_deg)
+                ),
+            );
+        }
         non_negative("probe_noise_mm", self.probe_noise_mm)?;
         if let Some(u) = self.length_uncertainty_mm {
             non_negative("length_uncertainty_mm", u)?;
@@ -456,9 +464,17 @@ impl CampaignSettings {
 /// ```
 /// assert_eq!(aacmm_core::simulate::pair_count(10), 45);
 /// assert_eq!(aacmm_core::simulate::pair_count(1), 0);
+/// // Saturates rather than overflow: a count this large is refused later.
+/// assert_eq!(aacmm_core::simulate::pair_count(1 << 62), usize::MAX);
+/// assert_eq!(aacmm_core::simulate::pair_count(7), 21);
 /// ```
 pub fn pair_count(n: usize) -> usize {
-    n * n.saturating_sub(1) / 2
+    let (even, odd) = if n.is_multiple_of(2) {
+        (n, n.saturating_sub(1))
+    } else {
+        (n - 1, n)
+    };
+    (even / 2).saturating_mul(odd)
 }
 
 /// A setting refused, by name.
