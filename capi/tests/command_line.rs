@@ -10,6 +10,9 @@
 // Calling the C ABI from Rust takes raw pointers, as C does.
 #![allow(unsafe_code)]
 
+mod common;
+use common::last_error;
+
 use std::ffi::{CStr, CString, c_char};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -26,7 +29,7 @@ use aacmm_capi::{
     aacmm_calibrate_options_set_thermal, aacmm_calibration_auxiliary,
     aacmm_calibration_auxiliary_count, aacmm_calibration_frame_count, aacmm_calibration_free,
     aacmm_calibration_params, aacmm_calibration_report, aacmm_calibration_summary,
-    aacmm_calibration_verdict, aacmm_calibration_verdict_notes, aacmm_last_error_message,
+    aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
 };
 use aacmm_core::io::positions::write_positions;
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm, write_poses};
@@ -88,16 +91,6 @@ fn cli() -> PathBuf {
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
         .find_map(|m| m["executable"].as_str().map(PathBuf::from))
         .expect("cargo names the aacmm executable")
-}
-
-fn last_error() -> String {
-    let mut buf = [0 as c_char; 1024];
-    // SAFETY: `buf` has 1024 writable bytes.
-    unsafe { aacmm_last_error_message(buf.as_mut_ptr(), buf.len()) };
-    // SAFETY: NUL-terminated by the call.
-    unsafe { CStr::from_ptr(buf.as_ptr()) }
-        .to_string_lossy()
-        .into_owned()
 }
 
 /// New options, changed by `set` (each setter must succeed).

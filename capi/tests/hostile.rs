@@ -8,26 +8,19 @@
 // Calling the C ABI from Rust takes raw pointers, as C does.
 #![allow(unsafe_code)]
 
-use std::ffi::{CStr, CString, c_char};
+mod common;
+use common::last_error;
+
+use std::ffi::{CString, c_char};
 use std::process::Command;
 
 use aacmm_capi::{
     AACMM_ANGLE_DEG, AacmmArm, AacmmCalibration, AacmmReferenceLength, AacmmStatus, aacmm_arm_free,
     aacmm_arm_from_params, aacmm_arm_params, aacmm_calibrate, aacmm_calibrate_files,
     aacmm_calibration_arm, aacmm_calibration_free, aacmm_calibration_report,
-    aacmm_calibration_verdict, aacmm_jacobians, aacmm_last_error_message, aacmm_positions,
+    aacmm_calibration_verdict, aacmm_jacobians, aacmm_positions,
 };
 use aacmm_core::params::DhParams;
-
-fn last_error() -> String {
-    let mut buf = [0 as c_char; 1024];
-    // SAFETY: `buf` has 1024 writable bytes.
-    unsafe { aacmm_last_error_message(buf.as_mut_ptr(), buf.len()) };
-    // SAFETY: NUL-terminated by the call.
-    unsafe { CStr::from_ptr(buf.as_ptr()) }
-        .to_string_lossy()
-        .into_owned()
-}
 
 /// A failure with `status` whose message contains `expected`.
 fn refused(status: AacmmStatus, want: AacmmStatus, expected: &str) {

@@ -6,6 +6,9 @@
 // Calling the C ABI from Rust takes raw pointers, as C does.
 #![allow(unsafe_code)]
 
+mod common;
+use common::last_error;
+
 use std::ffi::{CStr, CString, c_char};
 use std::mem::MaybeUninit;
 
@@ -17,7 +20,7 @@ use aacmm_capi::{
     aacmm_calibrate_options_set_position_noise_mm, aacmm_calibrate_options_set_positions,
     aacmm_calibrate_options_set_positions_file, aacmm_calibrate_options_set_probe_noise_mm,
     aacmm_calibration_frame, aacmm_calibration_frame_count, aacmm_calibration_free,
-    aacmm_calibration_report, aacmm_calibration_summary, aacmm_last_error_message,
+    aacmm_calibration_report, aacmm_calibration_summary,
 };
 use aacmm_core::dataset::DataSet;
 use aacmm_core::identify::identify;
@@ -29,16 +32,6 @@ use aacmm_core::simulate::{
     CampaignSettings, ErrorModel, PositionCampaign, PositionSettings, simulate, simulate_positions,
     simulate_tracker,
 };
-
-fn last_error() -> String {
-    let mut buf = [0 as c_char; 1024];
-    // SAFETY: `buf` has 1024 writable bytes.
-    unsafe { aacmm_last_error_message(buf.as_mut_ptr(), buf.len()) };
-    // SAFETY: NUL-terminated by the call.
-    unsafe { CStr::from_ptr(buf.as_ptr()) }
-        .to_string_lossy()
-        .into_owned()
-}
 
 /// A failure with `status` whose message starts with `expected`.
 fn refused(status: AacmmStatus, want: AacmmStatus, expected: &str) {
