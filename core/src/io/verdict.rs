@@ -24,16 +24,19 @@ use super::Warning;
 use super::text::line_of;
 use crate::error::InputError;
 
-/// A calibration's verdict as its arm file records it.
+/// Whether a calibration may be used (exit 0 of the command line), as the
+/// session decides it ([`crate::session::Verdict`] is this type) and its
+/// arm file records it.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArmVerdict {
-    /// Whether the calibration that wrote the file may be used.
+    /// Usable.
     pub usable: bool,
     /// Why not (empty when usable).
     #[serde(default)]
     pub reasons: Vec<String>,
-    /// What a metrologist should know although it is usable.
+    /// What a metrologist should know although the result is usable (a χ²
+    /// verdict outside its range, a poor fit accepted on request).
     #[serde(default)]
     pub notes: Vec<String>,
 }

@@ -127,11 +127,7 @@ fn held_out(rows: &[ValidationRow]) -> Vec<String> {
     held.iter()
         .map(|r| {
             let (b, a) = (r.figures.before.headline(), r.figures.after.headline());
-            let what = if r.figures.after.points == 0 {
-                "mean 3-D position error"
-            } else {
-                "mean e"
-            };
+            let what = r.figures.after.headline_name();
             let class = if a.is_finite() && a <= b {
                 "good"
             } else {

@@ -499,17 +499,10 @@ fn is_zero(n: &usize) -> bool {
     *n == 0
 }
 
-/// Whether a calibration may be used: exit 0 of the command line.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Verdict {
-    /// Usable.
-    pub usable: bool,
-    /// Why not (empty when usable).
-    pub reasons: Vec<String>,
-    /// What a metrologist should know although the result is usable (a χ²
-    /// verdict outside its range, a poor fit accepted on request).
-    pub notes: Vec<String>,
-}
+/// Whether a calibration may be used: exit 0 of the command line. The
+/// same type as the `[verdict]` table of `calibrated.toml`
+/// ([`crate::io::verdict`]), so the file records what the session decided.
+pub use crate::io::ArmVerdict as Verdict;
 
 impl Verdict {
     /// The verdict on `calibration` and its validation on the fitted data.
@@ -570,11 +563,7 @@ impl Verdict {
         }
         let (before, after) = (fitted.before.headline(), fitted.after.headline());
         if after.is_nan() || after > before {
-            let what = if fitted.after.points == 0 {
-                "mean 3-D position error"
-            } else {
-                "mean e"
-            };
+            let what = fitted.after.headline_name();
             poor.push(format!(
                 "the calibrated arm is worse than the nominal on its own data ({what} \
                  {before:.4} → {after:.4} mm): a mislabelled observation or a wrong minimum?"
@@ -958,11 +947,7 @@ impl CalibrationReport {
     /// ([`crate::io::verdict`]).
     pub fn calibrated_toml(&self, problem: &Problem) -> String {
         let calibrated = self.calibrated_arm(problem.arm());
-        let verdict = crate::io::ArmVerdict {
-            usable: self.verdict.usable,
-            reasons: self.verdict.reasons.clone(),
-            notes: self.verdict.notes.clone(),
-        };
+        let verdict = &self.verdict;
         let header = if verdict.usable {
             ""
         } else {
@@ -972,7 +957,7 @@ impl CalibrationReport {
             "{header}{}{}{}",
             arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg),
             crate::io::frames::frames_to_toml(&self.calibration.frame_records()),
-            crate::io::verdict::verdict_to_toml(&verdict)
+            crate::io::verdict::verdict_to_toml(verdict)
         )
     }
 

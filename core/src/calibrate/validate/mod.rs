@@ -64,6 +64,14 @@ impl Figures {
             _ => self.e_mean,
         }
     }
+
+    /// What [`Figures::headline`] is, in words.
+    pub fn headline_name(&self) -> &'static str {
+        match (self.points, self.positions) {
+            (0, Some(_)) => "mean 3-D position error",
+            _ => "mean e",
+        }
+    }
 }
 
 /// A frame's registration by name: `[rx, ry, rz, tx, ty, tz]` (rad, mm).
