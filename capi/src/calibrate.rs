@@ -422,7 +422,7 @@ pub unsafe extern "C" fn aacmm_calibrate(
                     rows.joints()
                 )));
             }
-            Some(PositionInput::Arrays(rows)) => Some(rows),
+            Some(PositionInput::Arrays(rows)) => Some(*rows),
             Some(PositionInput::File(_)) => {
                 return Err(Error::invalid(
                     "a positions file (aacmm_calibrate_options_set_positions_file) goes with \
@@ -460,13 +460,16 @@ pub unsafe extern "C" fn aacmm_calibrate(
 
 /// About what a calibration of `touches` touches and `lengths` reference
 /// lengths allocates inside the library (the data set, the Jacobian
-/// blocks, the report), where a failed allocation would abort the host: a
-/// bound of the measured peak (229 bytes per touch at 10⁶ touches), checked
-/// up front by `aacmm_calibrate`. A size past the address space is
+/// blocks, the report), where a failed allocation would abort the host:
+/// the library's bound of the measured peak
+/// ([`aacmm_core::memory::CALIBRATION_BYTES_PER_TOUCH`]), checked up front
+/// by `aacmm_calibrate` before the arrays are copied (the session checks
+/// again once the data set is built). A size past the address space is
 /// `AACMM_STATUS_LENGTH`, naming the argument.
 fn calibration_bytes(touches: usize, lengths: usize) -> Result<usize, Error> {
-    const PER_TOUCH: usize = 256;
-    const PER_LENGTH: usize = 128;
+    use aacmm_core::memory::{
+        CALIBRATION_BYTES_PER_LENGTH as PER_LENGTH, CALIBRATION_BYTES_PER_TOUCH as PER_TOUCH,
+    };
     let too_many = |name: &str, n: usize| {
         Error::length(format!("{name} = {n}: too many to calibrate in memory"))
     };

@@ -101,6 +101,7 @@ impl From<InputError> for Error {
     fn from(e: InputError) -> Error {
         let status = match e {
             InputError::Io { .. } => AacmmStatus::Io,
+            InputError::Memory { .. } => AacmmStatus::OutOfMemory,
             _ => AacmmStatus::Input,
         };
         Error::new(status, e.to_string())
@@ -125,6 +126,7 @@ impl From<CalibrationError> for Error {
             CalibrationError::Kernel(KernelError::Noise { .. }) => AacmmStatus::InvalidArgument,
             CalibrationError::Kernel(_) => AacmmStatus::Length,
             CalibrationError::Option(o) => return Error::from(o.clone()),
+            CalibrationError::Memory(_) => AacmmStatus::OutOfMemory,
             _ => AacmmStatus::Calibration,
         };
         Error::new(status, e.to_string())

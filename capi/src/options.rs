@@ -77,7 +77,7 @@ pub const AACMM_ROBUST_CAUCHY: AacmmRobust = 2;
 pub(crate) enum PositionInput {
     /// Rows copied from arrays (`aacmm_calibrate_options_set_positions`),
     /// checked.
-    Arrays(Positions),
+    Arrays(Box<Positions>),
     /// A positions file (`aacmm_calibrate_options_set_positions_file`),
     /// read when calibrating.
     File(PathBuf),
@@ -845,7 +845,7 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_positions(
         // SAFETY: each name is NULL or NUL-terminated, by the contract.
         let names = unsafe { positions::frame_names(names) }?;
         let rows = positions::rows(joints, q, xyz, frames, &names, uncertainty)?;
-        o.positions = Some(PositionInput::Arrays(rows));
+        o.positions = Some(PositionInput::Arrays(Box::new(rows)));
         Ok(())
     })
 }

@@ -335,7 +335,9 @@ fn limit_address_space(headroom: usize) -> bool {
 /// Under an address space 64 MiB above its inputs: 10⁶ positions (whose
 /// sin/cos alone took 96 MB before, an abort) succeed; a calibration of
 /// 10⁶ touches (hundreds of MB inside the library) is refused with
-/// `AACMM_STATUS_OUT_OF_MEMORY`. In the child process only.
+/// `AACMM_STATUS_OUT_OF_MEMORY`, from arrays and from a 14 MB file; a
+/// 256 MiB file of one line is refused for its line. In the child process
+/// only.
 #[test]
 fn memory_limit_child() {
     if std::env::var_os(CHILD).is_none() {
@@ -346,6 +348,7 @@ fn memory_limit_child() {
     let mut p = vec![0.0f64; 3 * n];
     let points: Vec<u32> = (0..n as u32).map(|i| i / 4).collect();
     let arm = nominal();
+    let files = hostile_files(n);
     if !limit_address_space(64 << 20) {
         println!("child skipped: no prlimit");
         return;
@@ -376,7 +379,59 @@ fn memory_limit_child() {
         )
     };
     println!("calibrate {status:?} {}", last_error());
+    for (name, poses) in [("big", &files.big), ("endless", &files.endless)] {
+        let mut out = std::ptr::null_mut();
+        // SAFETY: NUL-terminated paths, default options, a writable out.
+        let status = unsafe {
+            aacmm_calibrate_files(
+                files.arm.as_ptr(),
+                poses.as_ptr(),
+                std::ptr::null(),
+                AACMM_ANGLE_DEG,
+                std::ptr::null(),
+                &mut out,
+            )
+        };
+        println!("files {name} {status:?} {}", last_error());
+    }
+    _ = std::fs::remove_dir_all(&files.dir);
     println!("child done");
+}
+
+/// The arm file and two poses files for [`memory_limit_child`], as C
+/// paths: `big`, `n` valid touches (14 bytes a row: the readings take 4×
+/// the file), and `endless`, a 256 MiB file of one line after its header
+/// (sparse: no disk is used).
+struct HostileFiles {
+    dir: std::path::PathBuf,
+    arm: CString,
+    big: CString,
+    endless: CString,
+}
+
+fn hostile_files(n: usize) -> HostileFiles {
+    let dir = std::env::temp_dir().join(format!("aacmm-capi-hostile-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let big = dir.join("big.csv");
+    let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
+    text.push_str(&"A,1,2,3,4,5,6\nA,2,3,4,5,6,7\n".repeat(n / 2));
+    std::fs::write(&big, text).unwrap();
+    let endless = dir.join("endless.csv");
+    std::fs::write(&endless, "point,q1,q2,q3,q4,q5,q6\nA,1").unwrap();
+    (std::fs::OpenOptions::new()
+        .write(true)
+        .open(&endless)
+        .unwrap())
+    .set_len(256 << 20)
+    .unwrap();
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let c = |p: &std::path::Path| CString::new(p.to_str().unwrap()).unwrap();
+    HostileFiles {
+        dir: dir.clone(),
+        arm: CString::new(format!("{root}/examples/paper-table-1.toml")).unwrap(),
+        big: c(&big),
+        endless: c(&endless),
+    }
 }
 
 #[test]
@@ -411,6 +466,18 @@ fn memory_limits_give_a_status() {
     assert!(stdout.contains("positions Ok true"), "{stdout}");
     assert!(
         stdout.contains("calibrate OutOfMemory aacmm_calibrate: cannot allocate"),
+        "{stdout}"
+    );
+    // A file whose readings need more than the limit: the reader's
+    // reservation fails, a status; a file of one endless line: refused
+    // for it after 1 MiB, though it is four times the limit.
+    assert!(
+        stdout.contains("files big OutOfMemory ") && stdout.contains("big.csv: out of memory"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("files endless Input ")
+            && stdout.contains("endless.csv:2: line longer than 1 MiB"),
         "{stdout}"
     );
 }

@@ -186,7 +186,7 @@ impl Repeats {
             "point",
             format!(
                 "point {} has {} touch{}{also}; at least {MIN_TOUCHES} are needed",
-                crate::error::quoted(&labels[p]),
+                crate::error::quoted(poses.point_label(p)),
                 count[p],
                 if count[p] == 1 { "" } else { "es" }
             ),
@@ -223,7 +223,7 @@ impl Repeats {
                          that wrote a line twice?; each counted once: {n} row{s} not used, as \
                          repeated rows are no independent touches and would understate the \
                          scatter",
-                        crate::error::quoted(&poses.points()[p]),
+                        crate::error::quoted(poses.point_label(p)),
                         line_ranges(&lines),
                         s = plural(n),
                         v = if n == 1 { "s" } else { "" },
@@ -360,6 +360,26 @@ impl PositionData {
     }
 }
 
+/// The rows of `poses` grouped by point, in row order within a point:
+/// point `p`'s are `order[start[p]..start[p + 1]]`.
+fn rows_by_point(poses: &Poses) -> (Vec<usize>, Vec<usize>) {
+    let mut start = vec![0usize; poses.points().len() + 1];
+    for row in 0..poses.len() {
+        start[poses.point(row) + 1] += 1;
+    }
+    for p in 1..start.len() {
+        start[p] += start[p - 1];
+    }
+    let mut next = start.clone();
+    let mut order = vec![0usize; poses.len()];
+    for row in 0..poses.len() {
+        let p = poses.point(row);
+        order[next[p]] = row;
+        next[p] += 1;
+    }
+    (start, order)
+}
+
 /// Refuses readings in which no point is articulated: every point's touches
 /// lie within [`MIN_ARTICULATION_DEG`] of each other in every joint. Such a
 /// campaign (each socket touched in one pose, perhaps read several times)
@@ -371,24 +391,25 @@ fn check_articulation(poses: &Poses, file: &str) -> Result<(), InputError> {
     if joints == 0 {
         return Ok(());
     }
-    // Per point and joint the lowest and highest reading, in one pass over
-    // the rows (repeated rows change no range).
-    let labels = poses.points();
-    let mut bounds = vec![(f64::INFINITY, f64::NEG_INFINITY); labels.len() * joints];
-    for (row, q) in poses.rows().enumerate() {
-        let b = &mut bounds[poses.point(row) * joints..][..joints];
-        for (b, &x) in b.iter_mut().zip(q) {
-            *b = (b.0.min(x), b.1.max(x));
-        }
-    }
-    // The widest range: (range in rad, joint, point label).
+    // The widest range of a joint at one point: (range in rad, joint,
+    // point label), points and joints in order. Each point's rows are
+    // visited together (a counting sort), so what this holds grows with the
+    // rows (8 bytes each), not with points × joints — a file of as many
+    // labels as rows would have taken 16 bytes a joint per row.
     let mut widest = (0.0_f64, 0, "");
-    for (p, label) in labels.iter().enumerate() {
-        for j in 0..joints {
-            let (lo, hi) = bounds[p * joints + j];
+    let (start, order) = rows_by_point(poses);
+    let mut bounds = vec![(f64::INFINITY, f64::NEG_INFINITY); joints];
+    for (p, label) in poses.points().enumerate() {
+        bounds.fill((f64::INFINITY, f64::NEG_INFINITY));
+        for &row in &order[start[p]..start[p + 1]] {
+            for (b, &x) in bounds.iter_mut().zip(poses.reading(row)) {
+                *b = (b.0.min(x), b.1.max(x));
+            }
+        }
+        for (j, &(lo, hi)) in bounds.iter().enumerate() {
             let range = hi - lo;
             if range > widest.0 {
-                widest = (range, j, label.as_str());
+                widest = (range, j, label);
             }
         }
     }
@@ -460,6 +481,7 @@ impl DataSet {
         if poses.is_empty() {
             return Err(InputError::file_error(file, "no touches"));
         }
+        room_for_touches(poses, file)?;
         // A campaign without articulation is refused as such before its
         // repeated rows are counted once (a static campaign is all repeats).
         check_articulation(poses, file)?;
@@ -473,12 +495,12 @@ impl DataSet {
         let count = repeats.touch_counts(poses, file)?;
         let warnings = repeats.warnings(poses, file);
         let mut start = 0;
-        let points: Vec<Point> = (labels.iter().zip(&count))
+        let points: Vec<Point> = (labels.zip(&count))
             .map(|(label, &n)| {
                 let touches = start..start + n;
                 start = touches.end;
                 Point {
-                    label: label.clone(),
+                    label: label.to_string(),
                     touches,
                 }
             })
@@ -539,6 +561,7 @@ impl DataSet {
     }
 
     /// This data set with its joints' trig prepared from its readings.
+    /// [`DataSet::grouped`] checked there is room for it.
     fn prepared(mut self) -> DataSet {
         // `len()` counts the prepared poses: not yet; the source map has
         // every touch (also when there are no joints, `from_labels`).
@@ -1198,6 +1221,22 @@ fn array_lengths(
         });
     }
     Ok(refs)
+}
+
+/// Checks, before the data set is built, that what it holds per touch can
+/// be allocated: the readings in touch order (8 bytes a joint), their sin
+/// and cos (16), the touch order while sorting (8), the source lines and
+/// rows (8) and the conditions (8 each): an [`InputError::Memory`] naming
+/// `file`, rather than an abort, for a file larger than the process can
+/// hold as a data set.
+fn room_for_touches(poses: &Poses, file: &str) -> Result<(), InputError> {
+    let conditions =
+        usize::from(poses.temperatures().is_some()) + usize::from(poses.times().is_some());
+    let per_touch = 24 * poses.joints() + 16 + 8 * conditions;
+    let what = format!("a data set of {} touches", poses.len());
+    crate::memory::bytes_for(&what, poses.len(), per_touch)
+        .and_then(|bytes| crate::memory::room_for(&what, bytes))
+        .map_err(|e| InputError::memory(file, e))
 }
 
 #[cfg(test)]

@@ -61,6 +61,15 @@ pub enum InputError {
         /// The underlying error.
         error: std::io::Error,
     },
+    /// The file (or what it asks for) needs more memory than the process
+    /// can allocate: refused before the work, not an abort of the process.
+    #[error("{file}: {error}")]
+    Memory {
+        /// File name as given by the caller.
+        file: String,
+        /// What the memory was for, and how much.
+        error: crate::memory::OutOfMemory,
+    },
 }
 
 /// `file:line: field `f`: message`, leaving out the unknown parts.
@@ -122,6 +131,14 @@ impl InputError {
         }
     }
 
+    /// An [`InputError::Memory`] error.
+    pub fn memory(file: impl Into<String>, error: crate::memory::OutOfMemory) -> InputError {
+        InputError::Memory {
+            file: file_shown(file.into()),
+            error,
+        }
+    }
+
     /// The file concerned.
     ///
     /// ```
@@ -133,7 +150,8 @@ impl InputError {
             InputError::Field { file, .. }
             | InputError::Line { file, .. }
             | InputError::File { file, .. }
-            | InputError::Io { file, .. } => file,
+            | InputError::Io { file, .. }
+            | InputError::Memory { file, .. } => file,
         }
     }
 
@@ -173,6 +191,7 @@ impl InputError {
             | InputError::Line { message, .. }
             | InputError::File { message, .. } => message.clone(),
             InputError::Io { error, .. } => error.to_string(),
+            InputError::Memory { error, .. } => error.to_string(),
         }
     }
 }

@@ -37,6 +37,7 @@ pub mod hayati;
 pub mod identify;
 pub mod io;
 pub mod kernel;
+pub mod memory;
 pub mod metrics;
 pub mod objective;
 pub mod parallel;

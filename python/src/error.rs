@@ -160,6 +160,7 @@ impl From<CoreInputError> for Error {
     fn from(e: CoreInputError) -> Error {
         let kind = match e {
             CoreInputError::Io { .. } => Kind::Io,
+            CoreInputError::Memory { .. } => Kind::Memory,
             _ => Kind::Input,
         };
         Error::new(kind, e.to_string())
@@ -234,6 +235,7 @@ impl From<CoreCalibrationError> for Error {
             // `identify` (one rule per setting).
             CoreCalibrationError::Kernel(KernelError::Noise { .. }) => Kind::Value,
             CoreCalibrationError::Joints { .. } => Kind::Value,
+            CoreCalibrationError::Memory(_) => Kind::Memory,
             _ => Kind::Calibration,
         };
         Error::new(kind, e.to_string())

@@ -2,6 +2,7 @@
 nothing crashes the interpreter."""
 
 import contextlib
+import os
 
 import numpy as np
 import pytest
@@ -373,3 +374,65 @@ def test_outputs_too_large_are_memory_errors(tmp_path):
         [name, "MemoryError"]
         for name in ("positions", "jacobians", "joint_jacobian", "DataSet", "from_positions")
     ], done.stdout
+
+
+HOSTILE_FILES = r"""
+import resource, sys
+import aacmm
+arm_path, endless, big, many = sys.argv[1:5]
+def virtual_size():
+    with open("/proc/self/status") as f:
+        line = next(l for l in f if l.startswith("VmSize:"))
+    return int(line.split()[1]) * 1024
+arm = aacmm.Arm.from_file(arm_path)
+limit = virtual_size() + (192 << 20)
+resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+calls = {
+    "endless": lambda: aacmm.DataSet.from_files(endless),
+    "big": lambda: aacmm.DataSet.from_files(big),
+    "calibrate": lambda: aacmm.calibrate(arm, aacmm.DataSet.from_files(many), method="lm"),
+}
+for name, call in calls.items():
+    try:
+        call()
+        print(name, "accepted")
+    except (MemoryError, aacmm.InputError) as e:
+        print(name, type(e).__name__, str(e)[:300])
+"""
+
+
+def touches(path, rows):
+    """A poses file of `rows` valid touches of one point, 14 bytes a row:
+    its readings take four times the file once read."""
+    path.write_text("point,q1,q2,q3,q4,q5,q6\n" + "A,1,2,3,4,5,6\nA,2,3,4,5,6,7\n" * (rows // 2))
+    return path
+
+
+def test_files_too_large_are_errors_not_aborts(tmp_path):
+    """Under an address space 192 MiB above what the process uses: a 1 GiB
+    file of one line is refused for its line (read 1 MiB at most); a file
+    whose readings need more than the limit is a MemoryError from the
+    reader; a data set that fits but whose calibration would not is a
+    MemoryError before the work — the process survives each (issue 29)."""
+    import subprocess
+    import sys
+
+    endless = tmp_path / "endless.csv"
+    endless.write_text("point,q1,q2,q3,q4,q5,q6\nA,1")
+    with open(endless, "r+b") as f:
+        f.truncate(1 << 30)  # sparse: no disk used
+    big = touches(tmp_path / "big.csv", 8_000_000)
+    many = touches(tmp_path / "many.csv", 600_000)
+    done = subprocess.run(
+        [sys.executable, "-c", HOSTILE_FILES, ARM, str(endless), str(big), str(many)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "MALLOC_ARENA_MAX": "1"},
+    )
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+    out = done.stdout
+    assert "endless InputError" in out and "endless.csv:2: line longer than 1 MiB" in out, out
+    assert "big MemoryError" in out and "big.csv: out of memory: the rows' readings" in out, out
+    assert "calibrate MemoryError" in out, out
+    assert "out of memory: calibrating 600000 observations and 0 lengths needs" in out, out

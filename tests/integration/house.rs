@@ -31,7 +31,8 @@ use std::path::Path;
 /// could not be tested, reused or read without what comes after it. The
 /// kernel (the generated D-H chains, and the autodiff and URDF models it is
 /// checked against) and the ground floor (errors, options, parameters,
-/// geometry, random numbers, tolerances, threads, damping, statistics) are libraries
+/// geometry, random numbers, tolerances, threads, damping, statistics,
+/// memory) are libraries
 /// that everything from the files to the solver uses, so they sit beneath
 /// the chain and use nothing of it.
 ///
@@ -49,6 +50,7 @@ const RANKS: &[(&str, u8)] = &[
     ("parallel", 0),
     ("damping", 0),
     ("stats", 0),
+    ("memory", 0),
     // 1: the kernel, and the reference models it is checked against.
     ("kernel", 1),
     ("reference_model", 1),

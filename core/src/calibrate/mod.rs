@@ -169,6 +169,10 @@ pub enum CalibrationError {
         /// What is wrong, and what to do.
         message: String,
     },
+    /// The calibration needs more memory than the process can allocate,
+    /// found before any work (see [`crate::memory`]).
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OutOfMemory),
     /// A parameter vector of the wrong length (a bug, not user input).
     #[error("internal: parameter vector of the wrong length")]
     Shape,

@@ -48,7 +48,7 @@ use toml::Spanned;
 use toml::de::{DeTable, DeValue};
 
 use super::Warning;
-use super::text::{line_of, parse_toml, read_text, suggest};
+use super::text::{line_of, parse_toml, read_settings, suggest};
 use super::units::{AngleUnit, LengthUnit};
 use super::verdict::Rejected;
 use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
@@ -117,7 +117,7 @@ pub fn read_arm(path: &Path) -> Result<(Arm, Vec<Warning>), InputError> {
 /// calibration's `calibrated.toml`) refused or read with a warning
 /// ([`super::verdict`]).
 pub fn read_arm_with(path: &Path, rejected: Rejected) -> Result<(Arm, Vec<Warning>), InputError> {
-    let (file, text) = read_text(path)?;
+    let (file, text) = read_settings(path)?;
     parse_arm_with(&text, &file, rejected)
 }
 

@@ -123,6 +123,8 @@ pub fn parse_lengths(text: &str, file: &str) -> Result<Vec<ReferenceLength>, Inp
                     ),
                 );
             }
+            let memory = |e| InputError::memory(file, e);
+            crate::memory::try_grow(&mut out, "the lengths' rows", 1).map_err(memory)?;
             out.push(ReferenceLength {
                 a: a.to_string(),
                 b: b.to_string(),

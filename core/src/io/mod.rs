@@ -36,6 +36,7 @@
 pub mod arm;
 pub mod atomic;
 pub mod frames;
+mod labels;
 pub mod lengths;
 pub mod limits;
 pub mod points;

@@ -161,6 +161,8 @@ pub fn parse_points(text: &str, file: &str) -> Result<Vec<(String, [f64; 3])>, I
             for (v, (s, col)) in xyz.iter_mut().zip(fields[1..].iter().zip(&COLUMNS[1..])) {
                 *v = parse_f64(s, file, line, col)?;
             }
+            let memory = |e| InputError::memory(file, e);
+            crate::memory::try_grow(&mut out, "the points' rows", 1).map_err(memory)?;
             out.push((label.to_string(), xyz));
             Ok(())
         },

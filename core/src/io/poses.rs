@@ -12,14 +12,15 @@
 //! unit the caller states (files do not carry it). The CSV dialect is
 //! described in the [`io`](super) module docs.
 
-use std::collections::HashMap;
 use std::io::Write;
 use std::path::Path;
 
 use super::Warning;
+use super::labels::Labels;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
 use crate::error::InputError;
+use crate::memory::{OutOfMemory, try_vec};
 
 /// The radians hint is given only for at least this many rows.
 pub(crate) const RADIANS_HINT_MIN_ROWS: usize = 20;
@@ -34,7 +35,7 @@ pub(crate) const RADIANS_HINT_MIN_ROWS: usize = 20;
 /// poses.push("S2", &[0.0, -1.0], 3);
 /// poses.push("S1", &[0.25, 2.0], 4);
 /// assert_eq!(poses.len(), 3);
-/// assert_eq!(poses.points(), ["S1", "S2"]);
+/// assert_eq!(poses.points().collect::<Vec<_>>(), ["S1", "S2"]);
 /// assert_eq!((poses.point(2), poses.label(2)), (0, "S1"));
 /// assert_eq!(poses.reading(1), [0.0, -1.0]);
 /// assert_eq!(poses.line(2), 4);
@@ -46,9 +47,7 @@ pub struct Poses {
     joints: usize,
     /// The labels of the points touched, each once, in order of first
     /// appearance.
-    points: Vec<String>,
-    /// Each label's index in `points`.
-    index: HashMap<String, u32>,
+    points: Labels,
     /// Per row, the index of its point in `points`.
     point_of: Vec<u32>,
     /// Per row, the `joints` encoder readings, rad, row after row.
@@ -68,17 +67,29 @@ impl Poses {
     }
 
     /// No rows, with room for `rows` rows.
+    ///
+    /// # Panics
+    /// If the room cannot be allocated (see [`Poses::try_with_capacity`]).
     pub fn with_capacity(joints: usize, rows: usize) -> Poses {
-        Poses {
+        match Poses::try_with_capacity(joints, rows) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    /// No rows, with room for `rows` rows, or an [`OutOfMemory`] when
+    /// that cannot be allocated.
+    pub fn try_with_capacity(joints: usize, rows: usize) -> Result<Poses, OutOfMemory> {
+        let what = "the rows' readings";
+        Ok(Poses {
             joints,
-            points: Vec::new(),
-            index: HashMap::new(),
-            point_of: Vec::with_capacity(rows),
-            q: Vec::with_capacity(rows * joints),
-            lines: Vec::with_capacity(rows),
+            points: Labels::default(),
+            point_of: try_vec(what, rows)?,
+            q: try_vec(what, rows.saturating_mul(joints))?,
+            lines: try_vec(what, rows)?,
             temperature: None,
             time: None,
-        }
+        })
     }
 
     /// The column of a condition (`temperature` or `time`).
@@ -108,7 +119,10 @@ impl Poses {
     /// labels.
     pub fn push(&mut self, label: &str, q: &[f64], line: usize) {
         assert_eq!(q.len(), self.joints, "readings of one row");
-        let id = self.intern(label);
+        let id = match self.intern(label) {
+            Ok(id) => id,
+            Err(e) => panic!("{e}"),
+        };
         self.point_of.push(id);
         self.q.extend_from_slice(q);
         self.lines.push(line);
@@ -117,20 +131,13 @@ impl Poses {
     /// The index of `label` in `points`, added if new. Rows of one point
     /// usually follow each other: the previous row's point is tried first.
     #[inline]
-    fn intern(&mut self, label: &str) -> u32 {
+    fn intern(&mut self, label: &str) -> Result<u32, OutOfMemory> {
         if let Some(&last) = self.point_of.last()
-            && self.points[last as usize] == label
+            && self.points.get(last as usize) == label
         {
-            return last;
+            return Ok(last);
         }
-        if let Some(&id) = self.index.get(label) {
-            return id;
-        }
-        // A documented panic (`push`); a file would need 2³² lines to reach it.
-        let id = u32::try_from(self.points.len()).expect("fewer than 2^32 points");
-        self.points.push(label.to_string());
-        self.index.insert(label.to_string(), id);
-        id
+        self.points.intern(label, "the point labels")
     }
 
     /// Number of rows (touches).
@@ -150,8 +157,13 @@ impl Poses {
 
     /// The labels of the points touched, each once, in order of first
     /// appearance.
-    pub fn points(&self) -> &[String] {
-        &self.points
+    pub fn points(&self) -> impl ExactSizeIterator<Item = &str> + '_ {
+        self.points.iter()
+    }
+
+    /// The label of point `p` (an index into [`Poses::points`]).
+    pub fn point_label(&self, p: usize) -> &str {
+        self.points.get(p)
     }
 
     /// The index in [`Poses::points`] of the point row `row` touches.
@@ -161,14 +173,12 @@ impl Poses {
 
     /// The label of the point row `row` touches.
     pub fn label(&self, row: usize) -> &str {
-        &self.points[self.point(row)]
+        self.points.get(self.point(row))
     }
 
     /// The label of every row, in row order.
     pub fn labels(&self) -> impl ExactSizeIterator<Item = &str> + '_ {
-        self.point_of
-            .iter()
-            .map(|&p| self.points[p as usize].as_str())
+        self.point_of.iter().map(|&p| self.points.get(p as usize))
     }
 
     /// The readings (rad) of row `row`.
@@ -240,9 +250,11 @@ pub fn parse_poses(
 ) -> Result<(Poses, Vec<Warning>), InputError> {
     let shape = "point,q1,...,qn[,temperature][,time]";
     let per_row = "one row per touch";
-    // At most one row per line: room for them all, so that the readings
-    // are never copied to grow.
-    let max_rows = 1 + text.bytes().filter(|&b| b == b'\n').count();
+    // At most one row per line, and per 2 bytes a field (a digit or a
+    // label, and its comma or line end): room for them all, so that the
+    // readings are never copied to grow; the unused room is given back.
+    let lines = 1 + text.bytes().filter(|&b| b == b'\n').count();
+    let max_rows = |fields: usize| lines.min(1 + text.len() / (2 * fields).max(1));
     let mut poses: Option<Poses> = None;
     let header = scan_table(
         text,
@@ -254,13 +266,10 @@ pub fn parse_poses(
             let columns = &header.fields;
             let extra = condition_columns(columns);
             let joints = columns.len() - 1 - extra.len();
-            let poses = poses.get_or_insert_with(|| {
-                let mut p = Poses::with_capacity(joints, max_rows);
-                for c in &extra {
-                    *p.condition_mut(c) = Some(Vec::with_capacity(max_rows));
-                }
-                p
-            });
+            let poses = match poses {
+                Some(ref mut p) => p,
+                None => poses.insert(room(file, joints, max_rows(columns.len()), &extra)?),
+            };
             let label = fields[0];
             if label.is_empty() {
                 return Err(InputError::field(
@@ -301,7 +310,9 @@ pub fn parse_poses(
                     column.push(values[k]);
                 }
             }
-            let id = poses.intern(label);
+            let id = poses
+                .intern(label)
+                .map_err(|e| InputError::memory(file, e))?;
             poses.point_of.push(id);
             poses.lines.push(line);
             Ok(())
@@ -317,6 +328,17 @@ pub fn parse_poses(
         *x = unit.to_internal(*x);
     }
     Ok((poses, warnings))
+}
+
+/// Empty poses of `joints` joints with room for `rows` rows and the
+/// condition columns `extra`, or an [`InputError::Memory`] for `file`.
+fn room(file: &str, joints: usize, rows: usize, extra: &[&str]) -> Result<Poses, InputError> {
+    let memory = |e| InputError::memory(file, e);
+    let mut p = Poses::try_with_capacity(joints, rows).map_err(memory)?;
+    for c in extra {
+        *p.condition_mut(c) = Some(try_vec(c, rows).map_err(memory)?);
+    }
+    Ok(p)
 }
 
 /// The optional columns after the joints' a header ends with, in order:
@@ -837,7 +859,7 @@ mod tests {
     fn labels_are_interned() {
         let text = "point,q1\nB,1\nB,2\nA,3\nB,4\nC,5\nA,6\n";
         let (p, _) = parse_poses(text, F, AngleUnit::Rad, None).unwrap();
-        assert_eq!(p.points(), ["B", "A", "C"]);
+        assert_eq!(p.points().collect::<Vec<_>>(), ["B", "A", "C"]);
         let ids: Vec<usize> = (0..p.len()).map(|r| p.point(r)).collect();
         assert_eq!(ids, [0, 0, 1, 0, 2, 1]);
         assert_eq!(

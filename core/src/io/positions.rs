@@ -27,9 +27,13 @@ use std::path::Path;
 
 use std::io::Write;
 
+use std::collections::HashMap;
+
+use super::labels::Labels;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
 use crate::error::InputError;
+use crate::memory::{OutOfMemory, try_grow};
 
 /// The frame of a file without a `frame` column.
 pub const DEFAULT_FRAME: &str = "instrument";
@@ -37,14 +41,22 @@ pub const DEFAULT_FRAME: &str = "instrument";
 /// The fewest positions a frame's registration (six unknowns) can rest on.
 pub const MIN_FRAME_POSITIONS: usize = 3;
 
+/// One row for [`Positions::try_push`]: label, frame, readings (rad),
+/// position (mm), its uncertainty (mm) and line.
+type Row<'a> = (&'a str, &'a str, &'a [f64], [f64; 3], Option<f64>, usize);
+
 /// The rows of a reference-position file, in file order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Positions {
     joints: usize,
-    /// Per row, its point label.
-    labels: Vec<String>,
+    /// The point labels, each once.
+    labels: Labels,
+    /// Per row, its point label (an index into `labels`).
+    label_of: Vec<u32>,
     /// The frames, in order of first appearance.
     frames: Vec<String>,
+    /// Each frame's index in `frames` (a file may hold many stations).
+    frame_index: HashMap<String, usize>,
     /// Per row, its frame (index into `frames`).
     frame_of: Vec<usize>,
     /// Readings, rad, row-major.
@@ -65,8 +77,10 @@ impl Positions {
     pub fn new(joints: usize) -> Positions {
         Positions {
             joints,
-            labels: Vec::new(),
+            labels: Labels::default(),
+            label_of: Vec::new(),
             frames: Vec::new(),
+            frame_index: HashMap::new(),
             frame_of: Vec::new(),
             q: Vec::new(),
             xyz: Vec::new(),
@@ -109,7 +123,8 @@ impl Positions {
     ///
     /// # Panics
     ///
-    /// When `q` has another joint count than the set's.
+    /// When `q` has another joint count than the set's, or memory for the
+    /// row cannot be had (as `Vec::push`; the readers return an error).
     pub fn push(
         &mut self,
         label: &str,
@@ -119,20 +134,58 @@ impl Positions {
         uncertainty: Option<f64>,
         line: usize,
     ) {
+        let row = (label, frame, q, xyz, uncertainty, line);
+        if let Err(e) = self.try_push(row) {
+            panic!("{e}");
+        }
+    }
+
+    /// [`Positions::push`], or an [`OutOfMemory`] (and nothing added) when
+    /// the row's room cannot be had.
+    fn try_push(&mut self, row: Row<'_>) -> Result<(), OutOfMemory> {
+        let (label, frame, q, xyz, uncertainty, line) = row;
         assert_eq!(q.len(), self.joints, "one reading per joint");
-        let f = match self.frames.iter().position(|n| n == frame) {
-            Some(f) => f,
-            None => {
-                self.frames.push(frame.to_string());
-                self.frames.len() - 1
-            }
+        self.room_for_row()?;
+        let label = self.labels.intern(label, "the positions' labels")?;
+        // Rows of one frame usually follow each other: the last row's first.
+        let f = match self.frame_of.last() {
+            Some(&last) if self.frames[last] == frame => last,
+            _ => match self.frame_index.get(frame) {
+                Some(&f) => f,
+                None => {
+                    self.frames.push(frame.to_string());
+                    (self.frame_index).insert(frame.to_string(), self.frames.len() - 1);
+                    self.frames.len() - 1
+                }
+            },
         };
-        self.labels.push(label.to_string());
+        self.label_of.push(label);
         self.frame_of.push(f);
         self.q.extend_from_slice(q);
         self.xyz.push(xyz);
         self.uncertainty.push(uncertainty);
         self.lines.push(line);
+        Ok(())
+    }
+
+    /// Room for one more row ([`Positions::push`] then grows nothing
+    /// large), or an [`OutOfMemory`]: a reader's growth that cannot be had
+    /// is an error, not an abort.
+    fn room_for_row(&mut self) -> Result<(), OutOfMemory> {
+        let what = "the positions' rows";
+        try_grow(&mut self.label_of, what, 1)?;
+        try_grow(&mut self.frame_of, what, 1)?;
+        try_grow(&mut self.q, what, self.joints)?;
+        try_grow(&mut self.xyz, what, 1)?;
+        try_grow(&mut self.uncertainty, what, 1)?;
+        try_grow(&mut self.lines, what, 1)?;
+        for c in [&mut self.temperature, &mut self.time]
+            .into_iter()
+            .flatten()
+        {
+            try_grow(c, what, 1)?;
+        }
+        Ok(())
     }
 
     /// Rows.
@@ -162,7 +215,7 @@ impl Positions {
 
     /// Row `i`'s point label.
     pub fn label(&self, i: usize) -> &str {
-        &self.labels[i]
+        self.labels.get(self.label_of[i] as usize)
     }
 
     /// Row `i`'s readings, rad.
@@ -196,7 +249,7 @@ impl Positions {
         let mut out = Positions::new(self.joints);
         for &i in keep {
             out.push(
-                &self.labels[i],
+                self.label(i),
                 &self.frames[self.frame_of[i]],
                 self.reading(i),
                 self.xyz[i],
@@ -459,7 +512,8 @@ fn parse_row(
             }
         },
     };
-    out.push(f[0], frame, q, xyz, uncertainty, line);
+    let row = (f[0], frame, &q[..], xyz, uncertainty, line);
+    out.try_push(row).map_err(|e| InputError::memory(file, e))?;
     let condition = |c: Option<usize>, name: &str| match c {
         None => Ok(None),
         Some(c) if f[c].is_empty() => Err(InputError::field(

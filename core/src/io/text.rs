@@ -27,27 +27,113 @@ pub fn source_name(path: &Path) -> String {
     }
 }
 
+/// The longest line a reader accepts: far beyond any header or row of the
+/// toolkit's files (a 7-joint row is about 100 bytes), short enough that a
+/// hostile file of one endless line is refused after 1 MiB rather than held
+/// whole, copied into a header and echoed.
+pub(crate) const MAX_LINE: usize = 1 << 20;
+
+/// The largest settings file (an arm, a campaign) read: thousands of times
+/// what one holds (a few kilobytes), so that a hostile or mistaken file is
+/// refused before its whole text and its parse are held.
+pub(crate) const MAX_SETTINGS: usize = 16 << 20;
+
+/// [`read_text`] for a settings file (TOML): one larger than
+/// [`MAX_SETTINGS`] is refused, by its size before it is read, or as
+/// soon as that much was read from standard input.
+pub(crate) fn read_settings(path: &Path) -> Result<(String, String), InputError> {
+    read_at_most(path, MAX_SETTINGS)
+}
+
+/// What [`read_from`] reads at a time.
+const CHUNK: usize = 1 << 16;
+
 /// Reads a whole file as UTF-8, or standard input for the path `-` (the Unix
 /// convention); returns the name to use in messages ([`source_name`]) and
 /// the text.
+///
+/// Memory: the file's size, reserved up front (fallibly: a file larger than
+/// the process can hold is an [`InputError::Memory`], not an abort), and a
+/// line longer than [`MAX_LINE`] is refused as soon as it is read.
 pub(crate) fn read_text(path: &Path) -> Result<(String, String), InputError> {
+    read_at_most(path, usize::MAX)
+}
+
+/// [`read_text`], refusing a file of more than `max` bytes.
+fn read_at_most(path: &Path, max: usize) -> Result<(String, String), InputError> {
     let file = source_name(path);
     if path.as_os_str() == "-" {
-        read_from(file, std::io::stdin().lock())
+        read_from(file, std::io::stdin().lock(), 0, max)
     } else {
-        match std::fs::File::open(path) {
-            Ok(f) => read_from(file, f),
-            Err(e) => Err(InputError::io(file, e)),
+        let f = std::fs::File::open(path).map_err(|e| InputError::io(&file, e))?;
+        // The size is a hint (a file may grow or be a device): reading
+        // still goes to the end.
+        let size = f.metadata().map_or(0, |m| m.len());
+        let size = usize::try_from(size).unwrap_or(usize::MAX);
+        if size > max {
+            return Err(too_large(&file, max));
         }
+        read_from(file, f, size, max)
     }
 }
 
-/// Reads everything from `r` as UTF-8 text named `file`; invalid UTF-8 is
-/// reported with its line.
-fn read_from(file: String, mut r: impl Read) -> Result<(String, String), InputError> {
-    let mut bytes = Vec::new();
-    if let Err(e) = r.read_to_end(&mut bytes) {
-        return Err(InputError::io(file, e));
+/// The error for a file of more than `max` bytes (a settings file).
+fn too_large(file: &str, max: usize) -> InputError {
+    let message = format!(
+        "larger than {} MiB: not a settings file of this toolkit (an arm or campaign file \
+         holds a few kilobytes); check that this is the intended file",
+        max >> 20
+    );
+    InputError::file_error(file, message)
+}
+
+/// Reads everything from `r` as UTF-8 text named `file`, with room for
+/// `size` bytes reserved first; invalid UTF-8 is reported with its line,
+/// and so is a line longer than [`MAX_LINE`]; more than `max` bytes are
+/// refused as soon as they are read.
+fn read_from(
+    file: String,
+    mut r: impl Read,
+    size: usize,
+    max: usize,
+) -> Result<(String, String), InputError> {
+    let mut bytes: Vec<u8> = Vec::new();
+    // The whole file's room at once when it can be had (no copies while
+    // growing); else room as it is read, so that a file too large to hold
+    // is still refused for its first overlong line, if it has one, and
+    // otherwise for its size once that much was read.
+    _ = bytes.try_reserve_exact(size.saturating_add(1));
+    // Bytes since the last line feed, before the chunk being read.
+    let mut run = 0usize;
+    loop {
+        let start = bytes.len();
+        if bytes.capacity() == start {
+            crate::memory::try_grow(&mut bytes, "reading the file", CHUNK)
+                .map_err(|e| InputError::memory(&file, e))?;
+        }
+        // Into the room there is (the end of a file reserved whole is
+        // found without growing), a chunk at most.
+        let room = (bytes.capacity() - start).min(CHUNK);
+        let n = match (&mut r).take(room as u64).read_to_end(&mut bytes) {
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(InputError::io(file, e)),
+        };
+        if n == 0 {
+            break;
+        }
+        if bytes.len() > max {
+            return Err(too_large(&file, max));
+        }
+        let chunk = &bytes[start..];
+        run = match (
+            chunk.iter().position(|&b| b == b'\n'),
+            chunk.iter().rposition(|&b| b == b'\n'),
+        ) {
+            (Some(first), Some(last)) if run + first <= MAX_LINE => n - 1 - last,
+            (None, _) if run + n <= MAX_LINE => run + n,
+            _ => return Err(too_long(&file, &bytes[..start], chunk)),
+        };
     }
     match String::from_utf8(bytes) {
         Ok(text) => Ok((file, text)),
@@ -58,6 +144,23 @@ fn read_from(file: String, mut r: impl Read) -> Result<(String, String), InputEr
             Err(InputError::line_error(file, line, message))
         }
     }
+}
+
+/// The error for a line longer than [`MAX_LINE`] that started in `before`
+/// (the bytes read before `chunk`, where it grew too long): said to be
+/// lines ended by a carriage return alone when it holds one, as
+/// [`cr_only`] says of a shorter file.
+fn too_long(file: &str, before: &[u8], chunk: &[u8]) -> InputError {
+    let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+    if chunk.contains(&b'\r') {
+        return InputError::line_error(file, line, CR_ONLY);
+    }
+    let message = format!(
+        "line longer than {} MiB: not a table or settings file of this toolkit (each \
+         line is a header, a row or a setting); check that this is the intended file",
+        MAX_LINE >> 20
+    );
+    InputError::line_error(file, line, message)
 }
 
 /// The 1-based line of a byte offset (offsets past the end give the last line).
@@ -182,11 +285,7 @@ pub(crate) fn each_record(
     cr_only(text, body, file)?;
     let bytes = text.as_bytes();
     if bytes[body..].contains(&b'"') {
-        for r in records(original, file)? {
-            let fields: Vec<&str> = r.fields.iter().map(String::as_str).collect();
-            f(r.line, &fields);
-        }
-        return Ok(());
+        return each_quoted(original, file, f);
     }
     let (mut pos, mut line) = (body, line_of(text, body));
     let mut any = false;
@@ -218,6 +317,11 @@ pub(crate) fn each_record(
     Ok(())
 }
 
+/// The message for lines ended by a carriage return alone.
+const CR_ONLY: &str = "the file's lines end with a carriage return alone (CR, classic Mac OS \
+                       line endings), so it reads as one line; save it with LF or CRLF line \
+                       endings";
+
 /// Refuses text whose line starting at byte `body` holds a carriage
 /// return before its end: lines ended by CR alone (classic Mac OS), which
 /// would read as one long line whose fields run into each other.
@@ -225,12 +329,9 @@ fn cr_only(text: &str, body: usize, file: &str) -> Result<(), InputError> {
     let rest = &text.as_bytes()[body..];
     let line = &rest[..rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len())];
     match line.iter().position(|&b| b == b'\r') {
-        Some(at) if at + 1 < line.len() => Err(InputError::line_error(
-            file,
-            line_of(text, body),
-            "the file's lines end with a carriage return alone (CR, classic Mac OS line \
-             endings), so it reads as one line; save it with LF or CRLF line endings",
-        )),
+        Some(at) if at + 1 < line.len() => {
+            Err(InputError::line_error(file, line_of(text, body), CR_ONLY))
+        }
         _ => Ok(()),
     }
 }
@@ -297,17 +398,44 @@ fn blank_line(
     InputError::line_error(file, line_of(text, blank), message)
 }
 
+/// Every record of `text` (see [`each_quoted`]), collected.
+#[cfg(test)]
+pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError> {
+    let mut out = Vec::new();
+    each_quoted(text, file, |line, fields| {
+        out.push(Record {
+            line,
+            fields: fields.iter().map(|f| f.to_string()).collect(),
+        })
+    })?;
+    Ok(out)
+}
+
 /// Splits CSV text into records: the reading of text with quotes (see
 /// [`each_record`]). The `csv` crate tokenizes; this layer keeps
 /// the rules of the dialect (see the `io` module docs) and the lines: each
 /// record's line comes from its byte offset, which the crate gets right where
 /// its line counter is not (after blank lines, with CRLF: rust-csv#208, #395).
-pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError> {
+///
+/// Calls `f` with the line and the fields of each record, one record held
+/// at a time (a quoted field that spans lines makes its record as long as
+/// it is); lines are counted as the records advance, not indexed.
+fn each_quoted(
+    text: &str,
+    file: &str,
+    mut f: impl FnMut(usize, &[&str]),
+) -> Result<(), InputError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let starts: Vec<usize> = std::iter::once(0)
-        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
-        .collect();
-    let line = |at: usize| starts.partition_point(|&s| s <= at);
+    // Lines counted as the records advance: `line` is that of byte `counted`.
+    let (mut counted, mut line) = (0usize, 1usize);
+    let mut line_of_start = |start: usize| {
+        line += text.as_bytes()[counted..start]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        counted = start;
+        line
+    };
     // Blank lines before the header are remembered, as blank lines are
     // errors before more data.
     let (body, mut blank) = preamble(text);
@@ -319,14 +447,16 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
         .trim(Trim::All)
         .terminator(Terminator::Any(b'\n'))
         .from_reader(input);
-    let (mut out, mut rec) = (Vec::new(), StringRecord::new());
+    let mut rec = StringRecord::new();
+    // The last record's line and width, for an unterminated quote.
+    let mut last: Option<(usize, usize)> = None;
     let unreadable = |e: csv::Error| InputError::file_error(file, e.to_string());
     while reader.read_record(&mut rec).map_err(unreadable)? {
         // The crate's offset is before the empty lines it skipped.
         let at = (body + rec.position().map_or(0, |p| p.byte() as usize)).min(text.len());
         let start = text.len() - text[at..].trim_start_matches('\n').len();
         if start == text.len() {
-            return Ok(out);
+            return Ok(());
         }
         if start > at {
             blank.get_or_insert(at);
@@ -336,15 +466,15 @@ pub(crate) fn records(text: &str, file: &str) -> Result<Vec<Record>, InputError>
             blank.get_or_insert(start);
             continue;
         }
+        let line = line_of_start(start);
         if let Some(blank) = blank {
-            return Err(blank_line(text, file, blank, line(start), !out.is_empty()));
+            return Err(blank_line(text, file, blank, line, last.is_some()));
         }
-        out.push(Record {
-            line: line(start),
-            fields: rec.iter().map(String::from).collect(),
-        });
+        let fields: Vec<&str> = rec.iter().collect();
+        f(line, &fields);
+        last = Some((line, fields.len()));
     }
-    let (line, column) = out.last().map_or((1, 1), |r| (r.line, r.fields.len()));
+    let (line, column) = last.unwrap_or((1, 1));
     let message = format!("unterminated quote in column {column}");
     Err(InputError::line_error(file, line, message))
 }
@@ -707,13 +837,92 @@ mod tests {
     fn stdin_is_named_and_read_like_a_file() {
         assert_eq!(source_name(Path::new("-")), "<stdin>");
         assert_eq!(source_name(Path::new("./-")), "./-");
-        let (name, text) = read_from(source_name(Path::new("-")), &b"point,q1\n"[..]).unwrap();
+        let (name, text) = read_from(
+            source_name(Path::new("-")),
+            &b"point,q1\n"[..],
+            0,
+            usize::MAX,
+        )
+        .unwrap();
         assert_eq!((name.as_str(), text.as_str()), ("<stdin>", "point,q1\n"));
-        let e = read_from("<stdin>".into(), &b"a\n\xff"[..]).unwrap_err();
+        let e = read_from("<stdin>".into(), &b"a\n\xff"[..], 0, usize::MAX).unwrap_err();
         assert!(
             e.to_string().starts_with("<stdin>:2: not valid UTF-8"),
             "{e}"
         );
+    }
+
+    /// A reader that counts what was taken from it.
+    struct Counted<R> {
+        inner: R,
+        taken: usize,
+    }
+
+    impl<R: Read> Read for Counted<R> {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let n = self.inner.read(buf)?;
+            self.taken += n;
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn an_endless_line_is_refused_as_soon_as_it_is_too_long() {
+        // 1 GiB of `0` without a line feed: refused after about 1 MiB read.
+        let mut endless = Counted {
+            inner: std::io::repeat(b'0').take(1 << 30),
+            taken: 0,
+        };
+        let e = read_from("big.csv".into(), &mut endless, 0, usize::MAX).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("big.csv:1: line longer than 1 MiB"),
+            "{e}"
+        );
+        assert!(endless.taken <= MAX_LINE + CHUNK, "{}", endless.taken);
+        // The long line's own number, after short ones.
+        let mut text = b"point,q1\nA,1\n".to_vec();
+        text.extend(std::iter::repeat_n(b'1', MAX_LINE + 1));
+        let e = read_from("f.csv".into(), &text[..], 0, usize::MAX).unwrap_err();
+        assert_eq!(e.line(), Some(3), "{e}");
+        // Exactly the longest line allowed, ended or not, anywhere in a chunk.
+        for pad in [0, 5, CHUNK - 1] {
+            let mut ok = vec![b'\n'; pad];
+            ok.extend(std::iter::repeat_n(b'x', MAX_LINE));
+            ok.push(b'\n');
+            ok.extend(std::iter::repeat_n(b'y', MAX_LINE));
+            assert!(
+                read_from("f".into(), &ok[..], ok.len(), usize::MAX).is_ok(),
+                "pad {pad}"
+            );
+            ok.pop();
+            ok.extend(b"yy\n");
+            let e = read_from("f".into(), &ok[..], 0, usize::MAX).unwrap_err();
+            assert_eq!(e.line(), Some(pad + 2), "pad {pad}: {e}");
+        }
+        // A settings file past its bound is refused once that much was read.
+        let mut lines = Counted {
+            inner: std::io::repeat(b'\n').take(1 << 30),
+            taken: 0,
+        };
+        let e = read_from("arm.toml".into(), &mut lines, 0, MAX_SETTINGS).unwrap_err();
+        assert!(
+            e.to_string().starts_with("arm.toml: larger than 16 MiB"),
+            "{e}"
+        );
+        assert!(lines.taken <= MAX_SETTINGS + CHUNK, "{}", lines.taken);
+        // Lines ended by CR alone, however long, are named as such.
+        let mac = b"point,q1\rA,1\r".repeat(MAX_LINE / 8);
+        let e = read_from("mac.csv".into(), &mac[..], 0, usize::MAX).unwrap_err();
+        assert!(e.to_string().contains("carriage return alone"), "{e}");
+    }
+
+    #[test]
+    fn quoted_records_are_counted_by_line_as_they_come() {
+        let t = "# c\n\"a\",b\n1,\"x\ny\"\n\n";
+        let r = records(t, "f").unwrap();
+        assert_eq!(r.iter().map(|r| r.line).collect::<Vec<_>>(), [2, 3]);
+        assert_eq!(r[1].fields, ["1", "x\ny"]);
     }
 
     #[test]

@@ -267,6 +267,25 @@ impl Problem {
     }
 }
 
+/// Checks, before any work, that the memory a calibration of `problem`'s
+/// data holds at its peak can be had: its solver, statistics and report
+/// allocate as they go, where a failure would abort the host process (see
+/// [`crate::memory`]). Held-out data count with the fitted.
+fn room_to_calibrate(problem: &Problem) -> Result<(), CalibrationError> {
+    let observations = |d: &DataSet| {
+        let positions = d.positions().map_or(0, |p| p.len());
+        (d.len().saturating_add(positions), d.references().len())
+    };
+    let (mut touches, mut lengths) = observations(&problem.data);
+    if let Some(h) = &problem.held_out {
+        let (t, l) = observations(&h.data);
+        (touches, lengths) = (touches.saturating_add(t), lengths.saturating_add(l));
+    }
+    let bytes = crate::memory::calibration_bytes(touches, lengths);
+    let what = format!("calibrating {touches} observations and {lengths} lengths");
+    Ok(crate::memory::room_for(&what, bytes)?)
+}
+
 /// Stated lengths this many times the nominal arm's distances (or their
 /// inverse) are in another unit: a calibration moves the arm by per cent,
 /// not by orders of magnitude — but the nominal arm of a newly assembled
@@ -1023,6 +1042,7 @@ pub fn run(
     let start = &problem.arm.params;
     let data = &problem.data;
     let model = &problem.model;
+    room_to_calibrate(problem)?;
     let calibration = calibrate_with(problem.inputs(), settings, solver, ctx)?;
     // Each arm's frames: the start's registered to the fitted data, the
     // calibrated arm's fitted with it; held-out positions seen from the

@@ -116,7 +116,7 @@ pub fn parse_campaign(text: &str, file: &str) -> Result<(Arm, CampaignSettings),
 /// # Ok::<(), aacmm_core::simulate::SimError>(())
 /// ```
 pub fn read_campaign(path: &Path) -> Result<(Arm, CampaignSettings), SimError> {
-    let (file, text) = crate::io::text::read_text(path)?;
+    let (file, text) = crate::io::text::read_settings(path)?;
     parse_campaign(&text, &file)
 }
 
