@@ -436,3 +436,39 @@ def test_files_too_large_are_errors_not_aborts(tmp_path):
     assert "big MemoryError" in out and "big.csv: out of memory: the rows' readings" in out, out
     assert "calibrate MemoryError" in out, out
     assert "out of memory: calibrating 600000 observations and 0 lengths needs" in out, out
+
+
+HELD = r"""
+import resource, sys
+import aacmm
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+try:
+    aacmm.DataSet.from_files(sys.argv[1])
+    print("accepted")
+except aacmm.InputError as e:
+    print("refused", str(e)[:300])
+print("held", (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) * 1024)
+"""
+
+
+def test_a_file_of_a_new_label_per_row_is_held_within_six_times_its_size(tmp_path):
+    """A poses file of one-digit readings and a new label on every row
+    (10⁶ rows, 21 MB) is refused for its touch counts while the process's
+    peak grows by at most 6× the file: the text, the rows (60 bytes each
+    from 21), each label once. It was 14.7× before the labels were stored
+    once and the articulation check kept a range per point and joint."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "labels.csv"
+    rows = "".join(f"a{i:07d},1,2,3,4,5,6\n" for i in range(10**6))
+    path.write_text("point,q1,q2,q3,q4,q5,q6\n" + rows)
+    size = path.stat().st_size
+    done = subprocess.run(
+        [sys.executable, "-c", HELD, str(path)], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("refused") and "point `a0000000` has 1 touch" in lines[0], lines
+    held = int(lines[1].split()[1])
+    assert held <= 6 * size, (held, size, held / size)
