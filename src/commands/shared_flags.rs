@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::CalibrationError;
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
-use aacmm_core::error::OptionError;
+use aacmm_core::error::{OptionError, quoted};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::{Request, user_noise};
 use anyhow::{Result, anyhow};
@@ -153,14 +153,20 @@ impl FitInput {
 pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
     let number = |t: &str| {
         t.trim().parse::<f64>().map_err(|_| {
-            format!("`{t}` is not a number: give A or A+B/m, both mm (e.g. 0.015+0.006/m)")
+            format!(
+                "{} is not a number: give A or A+B/m, both mm (e.g. 0.015+0.006/m)",
+                quoted(t)
+            )
         })
     };
     match s.split_once('+') {
         None => Ok((number(s)?, None)),
         Some((a, b)) => {
             let b = b.trim().strip_suffix("/m").ok_or_else(|| {
-                format!("`{s}`: the distance part is B/m, mm per metre (e.g. 0.015+0.006/m)")
+                format!(
+                    "{}: the distance part is B/m, mm per metre (e.g. 0.015+0.006/m)",
+                    quoted(s)
+                )
             })?;
             Ok((number(a)?, Some(number(b)?)))
         }

@@ -370,9 +370,9 @@ impl TryFrom<EstimateRecord> for Estimate {
         let id: ParamId = r.name.parse()?;
         if r.unit != id.unit() {
             return Err(format!(
-                "{}: unit `{}`, expected `{}`",
+                "{}: unit {}, expected `{}`",
                 r.name,
-                r.unit,
+                crate::error::quoted(&r.unit),
                 id.unit()
             ));
         }

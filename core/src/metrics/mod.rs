@@ -109,7 +109,10 @@ pub enum MetricsError {
         got: usize,
     },
     /// A coordinate is NaN or infinite.
-    #[error("{at}: point `{label}`: computed position is not a finite number")]
+    #[error(
+        "{at}: point {}: computed position is not a finite number",
+        crate::error::quoted(label)
+    )]
     NonFinite {
         /// Label of the offending touch.
         label: String,
@@ -118,7 +121,10 @@ pub enum MetricsError {
         at: String,
     },
     /// A point has fewer than [`MIN_TOUCHES`] touches.
-    #[error("point `{label}` has {touches} touch(es); at least {MIN_TOUCHES} are needed")]
+    #[error(
+        "point {} has {touches} touch(es); at least {MIN_TOUCHES} are needed",
+        crate::error::quoted(label)
+    )]
     TooFewTouches {
         /// The point's label.
         label: String,
