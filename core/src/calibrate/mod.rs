@@ -58,7 +58,8 @@ pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub(crate) use lm::LmResult;
 pub use lm::{LmIteration, LmOptions, Termination};
 pub use options::{
-    DEFAULT_LENGTH_SIGMA_MM, FixSpec, ModelOptions, SolverSettings, available_threads,
+    DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads,
+    check_threads,
 };
 pub use prior::{CarriedTolerance, PriorConditioning, PriorEstimate, PriorReport};
 pub use robust::{Loss, Robust, RobustFit};
