@@ -471,7 +471,8 @@ def calibrate(
     column: ``--drift``); their values in :attr:`Calibration.auxiliary` and
     :attr:`Calibration.physics`. Readings outside
     the arm's joint limits are a UserWarning (and in the report's
-    warnings). ``seed`` is at most 2**63 − 1, as in :func:`simulate`.
+    warnings). ``seed`` is at most 2**63 − 1, as in :func:`simulate`;
+    ``threads`` 1 to 1024, as in :func:`identify` (and ``--threads``).
     ValueError for a bad option (naming the argument),
     CalibrationError when the data cannot determine the free parameters; a
     calibration that is not usable is returned: check ``successful``."""

@@ -1168,7 +1168,8 @@ AacmmStatus aacmm_calibrate_options_set_position_noise_mm(AacmmCalibrateOptions 
 
 /**
  * Worker threads for the normal equations (`--threads`); 0 = one per
- * core (the default). The results do not depend on it.
+ * core (the default), otherwise at most 1024 (`AACMM_STATUS_INVALID_ARGUMENT`
+ * above, the options unchanged). The results do not depend on it.
  *
  * # Safety
  *

@@ -6,7 +6,9 @@
 use std::ffi::c_char;
 use std::path::PathBuf;
 
-use aacmm_core::calibrate::{FixSpec, Loss, Method, ModelOptions, Robust, SolverSettings};
+use aacmm_core::calibrate::{
+    FixSpec, Loss, MAX_THREADS, Method, ModelOptions, Robust, SolverSettings, check_threads,
+};
 use aacmm_core::corrections::Beyond;
 use aacmm_core::error::OptionError;
 use aacmm_core::io::Positions;
@@ -520,8 +522,12 @@ fn stated(v: f64) -> Option<f64> {
     (v != 0.0).then_some(v)
 }
 
+// The bound the setter's documentation (and so the header) states.
+const _: () = assert!(MAX_THREADS == 1024);
+
 /// Worker threads for the normal equations (`--threads`); 0 = one per
-/// core (the default). The results do not depend on it.
+/// core (the default), otherwise at most 1024 (`AACMM_STATUS_INVALID_ARGUMENT`
+/// above, the options unchanged). The results do not depend on it.
 ///
 /// # Safety
 ///
@@ -534,6 +540,9 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_threads(
     guard(|| {
         // SAFETY: by the contract.
         let o = unsafe { ptr::object_mut(options, "options") }?;
+        if threads != 0 {
+            check_threads(threads)?;
+        }
         o.threads = threads;
         Ok(())
     })
@@ -1074,6 +1083,20 @@ mod tests {
                 aacmm_calibrate_options_set_harmonics(o, c"9:1".as_ptr()),
                 "harmonics = 9: joint 9: the toolkit has kernels for arms of 6",
             );
+            // A hostile worker count is refused, not attempted (the bound
+            // of Python's `threads` and the command line's `--threads`).
+            refused(
+                aacmm_calibrate_options_set_threads(o, 1025),
+                "threads = 1025: at most 1024 worker threads",
+            );
+            refused(
+                aacmm_calibrate_options_set_threads(o, 1 << 62),
+                "threads = 4611686018427387904: at most 1024 worker threads",
+            );
+            refused(
+                aacmm_calibrate_options_set_threads(o, usize::MAX),
+                "threads = 18446744073709551615: at most 1024",
+            );
         }
         // Nothing refused was kept: still the defaults.
         let d = AacmmCalibrateOptions::default();
@@ -1197,6 +1220,13 @@ mod tests {
         }
         let s = settings(&get(o), &arm).unwrap();
         assert_eq!(s.solver.threads, aacmm_core::calibrate::available_threads());
+        // The bound itself is a worker count.
+        // SAFETY: as above.
+        let status = unsafe { aacmm_calibrate_options_set_threads(o, MAX_THREADS) };
+        assert_eq!(status, AacmmStatus::Ok);
+        assert_eq!(settings(&get(o), &arm).unwrap().solver.threads, MAX_THREADS);
+        // SAFETY: as above.
+        unsafe { aacmm_calibrate_options_set_threads(o, 0) };
         assert_eq!(s.model.fix, FixSpec::Auto);
         assert_eq!(s.model.robust, None);
         assert!(s.model.beyond.is_empty(), "NULL and false: no model");

@@ -5,6 +5,7 @@
 
 use std::ffi::c_char;
 
+use aacmm_core::error::quoted;
 use aacmm_core::io::{DEFAULT_FRAME, Positions};
 use aacmm_core::params::{SUPPORTED_JOINTS, supported_joints_text};
 
@@ -115,7 +116,8 @@ pub(crate) unsafe fn frame_names(names: &[*const c_char]) -> Result<Vec<String>,
         }
         if let Some(j) = out.iter().position(|n| n == s) {
             return Err(input(format!(
-                "{arg}: `{s}` is frame_names[{j}] too: give each frame once"
+                "{arg}: {} is frame_names[{j}] too: give each frame once",
+                quoted(s)
             )));
         }
         out.push(s.to_string());
@@ -180,8 +182,8 @@ pub(crate) fn rows(
         && let Some(k) = (0..names.len()).find(|&k| !frames.contains(&(k as u32)))
     {
         return Err(input(format!(
-            "frame_names[{k}] (`{}`): no row of frames names it",
-            names[k]
+            "frame_names[{k}] ({}): no row of frames names it",
+            quoted(&names[k])
         )));
     }
     let one = names.first().map_or(DEFAULT_FRAME, String::as_str);

@@ -496,6 +496,33 @@ fn a_tracker_campaign_from_arrays_recovers_its_frames() {
         AacmmStatus::Input,
         "frame_names[1]: `station1` is frame_names[0] too",
     );
+    // A hostile name is echoed bounded: escaped, cut to 80 characters.
+    let hostile = CString::new(format!("s\r\n{}", "x".repeat(9_997))).unwrap();
+    bad(
+        &|a| a.names.push(hostile.clone()),
+        AacmmStatus::Input,
+        "frame_names[2] (`s\\r\\nxxx",
+    );
+    let m = last_error();
+    assert!(m.len() < 600 && !m.contains(char::is_control), "{m:.700}");
+    assert!(
+        m.ends_with("(10000 characters)): no row of frames names it"),
+        "{m}"
+    );
+    bad(
+        &|a| {
+            a.names[0] = hostile.clone();
+            a.names[1] = hostile.clone();
+        },
+        AacmmStatus::Input,
+        "frame_names[1]: `s\\r\\nxxx",
+    );
+    let m = last_error();
+    assert!(m.len() < 600 && !m.contains(char::is_control), "{m:.700}");
+    assert!(
+        m.contains("(10000 characters) is frame_names[0] too"),
+        "{m}"
+    );
     bad(
         &|a| a.names[1] = CString::new(vec![0xff]).unwrap(),
         AacmmStatus::InvalidArgument,

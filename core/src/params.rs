@@ -304,7 +304,10 @@ impl std::str::FromStr for ParamId {
                 return Ok(ParamId { kind, index: i - 1 });
             }
         }
-        Err(format!("`{name}` is not a parameter name"))
+        Err(format!(
+            "{} is not a parameter name",
+            crate::error::quoted(name)
+        ))
     }
 }
 

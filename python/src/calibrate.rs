@@ -103,8 +103,8 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// `"auto"` (the identifiability analysis's set), comma-separated names or a
 /// list of names (see `param_names`); `noise`: an `aacmm.Noise` (default:
 /// not stated, the touch σ is estimated from the fit); `seed`: every random
-/// draw; `threads`: workers for the normal equations (default one per core;
-/// the result does not depend on it); `cross_validate`: `k` folds over
+/// draw; `threads`: workers for the normal equations, 1 to 1024 (default one
+/// per core; the result does not depend on it); `cross_validate`: `k` folds over
 /// points; `validate`: a held-out `DataSet` (same arm: touches, reference
 /// positions or both; positions in a fitted frame are scored in it, others
 /// registered in closed form); `robust`:

@@ -163,7 +163,8 @@ fn error_model(errors: &str, true_arm: Option<&Arm>, scale: Option<f64>) -> Resu
             Ok(ErrorModel::random(scale, errors == "assembled"))
         }
         other => Err(Error::value(format!(
-            "errors = {other:?}: one of 'paper', 'random', 'assembled' (or give true_arm)"
+            "errors = \"{}\": one of 'paper', 'random', 'assembled' (or give true_arm)",
+            aacmm_core::error::shown(other)
         ))),
     }
 }

@@ -472,3 +472,39 @@ def test_a_file_of_a_new_label_per_row_is_held_within_six_times_its_size(tmp_pat
     assert lines[0].startswith("refused") and "point `a0000000` has 1 touch" in lines[0], lines
     held = int(lines[1].split()[1])
     assert held <= 6 * size, (held, size, held / size)
+
+
+def test_simulation_messages_are_bounded(arm, tmp_path):
+    """A socket label or an argument echoed by simulate is cut to 80
+    characters with its length said and its control characters escaped:
+    a CR/LF/NUL label or a 10 000-character one gives a short message."""
+    at = "143.413053,63.660416,861.184613"
+    for label in ("S\r\n\0", "S" + "x" * 9_999):
+        sockets = tmp_path / "sockets.csv"
+        sockets.write_text(f'point,x,y,z\nA,{at}\n"{label}",{at}\n', newline="")
+        with refused(ValueError, match=r"^sockets_file: sockets `A` and `S") as caught:
+            aacmm.simulate(arm, sockets_file=sockets, poses=3, seed=1)
+        messages = [str(caught.value)]
+        with refused(ValueError, match=r'^errors = "S') as caught:
+            aacmm.simulate(arm, sockets=3, poses=3, seed=1, errors=label)
+        messages.append(str(caught.value))
+        for m in messages:
+            assert len(m) < 600 and not any(c in m for c in "\r\n\0"), m[:700]
+            assert len(label) < 10_000 or "(10000 characters)" in m, m
+
+
+@pytest.mark.parametrize("call", ["calibrate", "identify"])
+def test_hostile_thread_counts(arm, data, call):
+    """threads: 1 to 1024 in every front end (the command line's --threads
+    and C's setter too); a hostile count is a ValueError naming threads,
+    never an attempt to start that many workers, and a count beyond a
+    machine integer is pyo3's OverflowError, not a panic."""
+    run = getattr(aacmm, call)
+    for n in (1025, 2**62, 2**64 - 1):
+        with refused(ValueError, match=rf"^threads = {n}: at most 1024 worker threads"):
+            run(arm, data, threads=n)
+    with refused(ValueError, match="^threads = 0: at least 1$"):
+        run(arm, data, threads=0)
+    for n in (2**64, 2**200, -1):
+        with pytest.raises(OverflowError):
+            run(arm, data, threads=n)

@@ -33,10 +33,10 @@ pub struct Args {
     /// errors, length errors, residuals.
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
-    /// Worker threads for the pairs of points (default: every core);
+    /// Worker threads for the pairs of points, 1 to 1024 (default: every core);
     /// results do not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
-    threads: Option<u16>,
+    #[arg(long, value_name = "N", value_parser = super::shared_flags::threads_flag)]
+    threads: Option<usize>,
 }
 
 pub fn run(args: Args) -> Result<()> {

@@ -28,12 +28,10 @@ pub fn report(warnings: &[Warning]) -> Result<()> {
     warnings.iter().try_for_each(warn)
 }
 
-/// Worker threads for a `--threads` flag: its value, or every core.
-pub fn worker_threads(flag: Option<u16>) -> usize {
-    flag.map_or_else(
-        || std::thread::available_parallelism().map_or(1, |n| n.get()),
-        usize::from,
-    )
+/// Worker threads for a `--threads` flag (checked by
+/// [`shared_flags::threads_flag`]): its value, or every core.
+pub fn worker_threads(flag: Option<usize>) -> usize {
+    flag.unwrap_or_else(aacmm_core::calibrate::available_threads)
 }
 
 /// The arm and the poses it is applied to: the flags `points` and

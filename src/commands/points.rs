@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use aacmm_core::error::{quoted, shown};
 use aacmm_core::io::frames::parse_frames;
 use aacmm_core::io::{source_name, write_points};
 use aacmm_core::residuals::Frame;
@@ -33,14 +34,21 @@ fn frame(path: &std::path::Path, name: &str) -> Result<[f64; 6]> {
     match frames.iter().find(|f| f.name == name) {
         Some(f) => Ok(f.values()),
         None if frames.is_empty() => bail!(
-            "--frame {name}: {} has no `[[frame]]` table (a calibration against reference \
+            "--frame {}: {} has no `[[frame]]` table (a calibration against reference \
              positions writes one per frame into calibrated.toml)",
+            shown(name),
             path.display()
         ),
         None => {
-            let names: Vec<String> = frames.iter().map(|f| format!("`{}`", f.name)).collect();
+            // At most ten names, each bounded: a hostile file cannot make
+            // the message long.
+            let mut names: Vec<String> = frames.iter().take(10).map(|f| quoted(&f.name)).collect();
+            if frames.len() > 10 {
+                names.push(format!("and {} more", frames.len() - 10));
+            }
             bail!(
-                "--frame {name}: no such frame in {}; it has {}",
+                "--frame {}: no such frame in {}; it has {}",
+                shown(name),
                 path.display(),
                 names.join(", ")
             )

@@ -4,9 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::calibrate::CalibrationError;
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
-use aacmm_core::error::OptionError;
+use aacmm_core::calibrate::{CalibrationError, MAX_THREADS, check_threads};
+use aacmm_core::error::{OptionError, quoted};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::{Request, user_noise};
 use anyhow::{Result, anyhow};
@@ -86,9 +86,10 @@ pub struct FitInput {
     /// against the `time` column (s) of the data.
     #[arg(long)]
     pub drift: bool,
-    /// Worker threads (default: every core); results do not depend on it.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
-    pub threads: Option<u16>,
+    /// Worker threads, 1 to 1024 (default: every core); results do not
+    /// depend on it.
+    #[arg(long, value_name = "N", value_parser = threads_flag)]
+    pub threads: Option<usize>,
 }
 
 impl FitInput {
@@ -145,22 +146,50 @@ impl FitInput {
                 self.drift,
             )
             .prior(self.prior.as_deref())
-            .threads(self.threads.map(usize::from)))
+            .threads(self.threads))
     }
 }
+
+/// `N` of `--threads`: the library's bound ([`MAX_THREADS`]) in its words,
+/// as Python's `threads` and C's setter refuse it; a number too large for
+/// any integer type is above that bound too, not "not a number".
+pub fn threads_flag(s: &str) -> Result<usize, String> {
+    use std::num::IntErrorKind;
+    let n = match s.trim().parse::<usize>() {
+        Ok(n) => n,
+        Err(e) if *e.kind() == IntErrorKind::PosOverflow => usize::MAX,
+        Err(_) => {
+            return Err(format!(
+                "{} is not a whole number of threads (1 to {MAX_THREADS})",
+                quoted(s)
+            ));
+        }
+    };
+    check_threads(n).map_err(|e| e.reason)?;
+    Ok(n)
+}
+
+// The bound quoted in the help text is the library's.
+const _: () = assert!(MAX_THREADS == 1024);
 
 /// `A` or `A+B/m` of --position-noise: mm, and mm per metre.
 pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
     let number = |t: &str| {
         t.trim().parse::<f64>().map_err(|_| {
-            format!("`{t}` is not a number: give A or A+B/m, both mm (e.g. 0.015+0.006/m)")
+            format!(
+                "{} is not a number: give A or A+B/m, both mm (e.g. 0.015+0.006/m)",
+                quoted(t)
+            )
         })
     };
     match s.split_once('+') {
         None => Ok((number(s)?, None)),
         Some((a, b)) => {
             let b = b.trim().strip_suffix("/m").ok_or_else(|| {
-                format!("`{s}`: the distance part is B/m, mm per metre (e.g. 0.015+0.006/m)")
+                format!(
+                    "{}: the distance part is B/m, mm per metre (e.g. 0.015+0.006/m)",
+                    quoted(s)
+                )
             })?;
             Ok((number(a)?, Some(number(b)?)))
         }

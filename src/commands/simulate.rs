@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use aacmm_core::error::quoted;
 use aacmm_core::io::{read_arm, source_name};
 
 use super::report;
@@ -313,8 +314,8 @@ fn describe(
     let count = settings.sockets.count();
     let st = &campaign.stats;
     note(format_args!(
-        "nominal arm `{}` ({}, {joints} joints)",
-        nominal.name,
+        "nominal arm {} ({}, {joints} joints)",
+        quoted(&nominal.name),
         args.arm.display()
     ))?;
     note(format_args!(
@@ -418,11 +419,11 @@ impl SocketsFile {
             None => "earlier".to_string(),
         };
         bail!(
-            "{}: field `point`: socket `{}` is at the same place as socket `{}` ({first}): \
+            "{}: field `point`: socket {} is at the same place as socket {} ({first}): \
              ({}, {}, {}) mm; every socket must be a different point",
             self.at(j),
-            b.label,
-            a.label,
+            quoted(&b.label),
+            quoted(&a.label),
             b.x,
             b.y,
             b.z
@@ -480,17 +481,17 @@ const _: () = assert!(DEFAULT_ZERO_SIGMA_DEG == 0.45);
 fn temperature_range(s: &str) -> Result<[f64; 2], String> {
     let (lo, hi) = s
         .split_once(':')
-        .ok_or_else(|| format!("`{s}`: give LOW:HIGH in °C, e.g. 15:30"))?;
+        .ok_or_else(|| format!("{}: give LOW:HIGH in °C, e.g. 15:30", quoted(s)))?;
     let number = |t: &str| {
         t.trim()
             .parse::<f64>()
             .ok()
             .filter(|v| (-100.0..=200.0).contains(v))
-            .ok_or_else(|| format!("`{t}` is not a temperature in °C (−100 to 200)"))
+            .ok_or_else(|| format!("{} is not a temperature in °C (−100 to 200)", quoted(t)))
     };
     let (lo, hi) = (number(lo)?, number(hi)?);
     if lo > hi {
-        return Err(format!("`{s}`: LOW above HIGH"));
+        return Err(format!("{}: LOW above HIGH", quoted(s)));
     }
     Ok([lo, hi])
 }
@@ -501,6 +502,6 @@ fn drift_vector(s: &str) -> Result<[f64; 3], String> {
         .split(',')
         .map(|t| t.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
         .collect::<Option<_>>()
-        .ok_or_else(|| format!("`{s}`: give X,Y,Z in mm/h, e.g. 0.1,0,-0.05"))?;
-    <[f64; 3]>::try_from(v).map_err(|_| format!("`{s}`: three numbers X,Y,Z in mm/h"))
+        .ok_or_else(|| format!("{}: give X,Y,Z in mm/h, e.g. 0.1,0,-0.05", quoted(s)))?;
+    <[f64; 3]>::try_from(v).map_err(|_| format!("{}: three numbers X,Y,Z in mm/h", quoted(s)))
 }

@@ -367,3 +367,25 @@ fn same_seed_same_files_whatever_the_thread_count() {
     let o = calibrate_shipped(&dir.join("zero"), &["--threads", "0"]);
     assert_clean_error(&o, &["--threads"]);
 }
+
+/// A hostile `--threads` is refused by name with the library's bound (the
+/// one Python's `threads` and C's setter have), never attempted: 2^62 and a
+/// number beyond any integer type alike, in every command that has it.
+#[test]
+fn hostile_thread_counts_are_refused_by_name() {
+    let dir = temp_dir("calibrate-hostile-threads");
+    let bound = "'--threads <N>': at most 1024 worker threads";
+    for n in ["1025", "4611686018427387904", "18446744073709551616"] {
+        let o = calibrate_shipped(&dir.join(n), &["--threads", n]);
+        assert_clean_error(&o, &[bound]);
+        assert!(!dir.join(n).join("calibration.json").exists());
+        for command in ["identify", "evaluate"] {
+            let (arm, poses) = (arm(), campaign("poses.csv"));
+            #[rustfmt::skip]
+            let o = aacmm(&[command, "--arm", &arm, "--data", &poses, "--threads", n]);
+            assert_clean_error(&o, &[bound]);
+        }
+    }
+    let o = calibrate_shipped(&dir.join("word"), &["--threads", "many"]);
+    assert_clean_error(&o, &["`many` is not a whole number of threads (1 to 1024)"]);
+}

@@ -108,3 +108,27 @@ fn an_unreachable_socket_names_the_file_and_line() {
     );
     assert_clean_error(&o, &[&format!("{sockets}:3: socket `Far`: found 0 of 3")]);
 }
+
+/// A 10 000-character socket label is echoed cut to 80 characters with its
+/// length said, in the command line's own check (two sockets at one place)
+/// and in the simulator's (a socket out of reach).
+#[test]
+fn a_hostile_socket_label_gives_a_bounded_message() {
+    let dir = temp_dir("sim-hostile-label");
+    let label = "L".repeat(10_000);
+    for (name, rows) in [
+        ("twins.csv", format!("A,{REACHABLE}\n{label},{REACHABLE}\n")),
+        ("far.csv", format!("A,{REACHABLE}\n{label},5000,0,0\n")),
+    ] {
+        let sockets = write(&dir, name, &format!("point,x,y,z\n{rows}"));
+        let o = simulate(
+            &["--sockets-file", &sockets, "--poses", "3"],
+            &dir.join("out"),
+            Duration::from_secs(60),
+        );
+        assert_clean_error(&o, &["(10000 characters)"]);
+        let err = stderr(&o);
+        let own = err.len() - sockets.len();
+        assert!(own < 600, "{own} characters besides the path: {err:.700}");
+    }
+}

@@ -58,7 +58,8 @@ pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub(crate) use lm::LmResult;
 pub use lm::{LmIteration, LmOptions, Termination};
 pub use options::{
-    DEFAULT_LENGTH_SIGMA_MM, FixSpec, ModelOptions, SolverSettings, available_threads,
+    DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads,
+    check_threads,
 };
 pub use prior::{CarriedTolerance, PriorConditioning, PriorEstimate, PriorReport};
 pub use robust::{Loss, Robust, RobustFit};
@@ -374,9 +375,9 @@ impl TryFrom<EstimateRecord> for Estimate {
         let id: ParamId = r.name.parse()?;
         if r.unit != id.unit() {
             return Err(format!(
-                "{}: unit `{}`, expected `{}`",
+                "{}: unit {}, expected `{}`",
                 r.name,
-                r.unit,
+                crate::error::quoted(&r.unit),
                 id.unit()
             ));
         }

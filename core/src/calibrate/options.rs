@@ -319,13 +319,47 @@ impl Default for SolverSettings {
     }
 }
 
-/// The cores the system offers this process (1 when it cannot tell).
+/// The cores the system offers this process (1 when it cannot tell), at
+/// most [`MAX_THREADS`].
 ///
 /// ```
-/// assert!(aacmm_core::calibrate::available_threads() >= 1);
+/// use aacmm_core::calibrate::{MAX_THREADS, available_threads};
+/// assert!((1..=MAX_THREADS).contains(&available_threads()));
 /// ```
 pub fn available_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    std::thread::available_parallelism().map_or(1, |n| n.get().min(MAX_THREADS))
+}
+
+/// Most worker threads a caller may ask for (`threads`, `--threads`), in
+/// every front end: more than the cores of any machine the library runs
+/// on, and few enough that starting them cannot exhaust a process's
+/// threads or address space (a hostile `threads = 2^62` is refused, not
+/// attempted).
+pub const MAX_THREADS: usize = 1024;
+
+/// Refuses a worker count outside `1..=`[`MAX_THREADS`], naming `threads`
+/// (front ends name their own spelling of it).
+///
+/// ```
+/// use aacmm_core::calibrate::{MAX_THREADS, check_threads};
+/// assert!(check_threads(1).is_ok() && check_threads(MAX_THREADS).is_ok());
+/// assert_eq!(check_threads(0).unwrap_err().to_string(), "threads = 0: at least 1");
+/// assert_eq!(
+///     check_threads(1 << 62).unwrap_err().to_string(),
+///     "threads = 4611686018427387904: at most 1024 worker threads (more than the cores \
+///      give no speed)"
+/// );
+/// ```
+pub fn check_threads(threads: usize) -> Result<(), OptionError> {
+    match threads {
+        0 => Err(OptionError::new("threads", 0, "at least 1")),
+        n if n > MAX_THREADS => Err(OptionError::new(
+            "threads",
+            n,
+            format!("at most {MAX_THREADS} worker threads (more than the cores give no speed)"),
+        )),
+        _ => Ok(()),
+    }
 }
 
 impl SolverSettings {
@@ -339,9 +373,7 @@ impl SolverSettings {
     /// assert_eq!(s.check().unwrap_err().field, "threads");
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
-        if self.threads == 0 {
-            return Err(OptionError::new("threads", 0, "at least 1"));
-        }
+        check_threads(self.threads)?;
         if self.seed > MAX_SEED {
             return Err(OptionError::new("seed", self.seed, seed_bound(self.seed)));
         }

@@ -52,7 +52,7 @@ use super::text::{line_of, parse_toml, read_settings, suggest};
 use super::units::{AngleUnit, LengthUnit};
 use super::verdict::Rejected;
 use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
-use crate::error::{InputError, quoted};
+use crate::error::{InputError, quoted, shown};
 use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
 use crate::tolerances::Tolerances;
 
@@ -887,7 +887,7 @@ fn schema_error(text: &str, file: &str, root: &DeTable<'_>, e: &toml::de::Error)
         let found = value.map_or(found, |v| v.get_ref().type_str());
         // Limits are in the file's angle unit, if it names one.
         let angle_unit = match root.get("angle_unit").map(Spanned::get_ref) {
-            Some(DeValue::String(unit)) => format!(" in {unit}"),
+            Some(DeValue::String(unit)) => format!(" in {}", shown(unit)),
             _ => String::new(),
         };
         invalid_type(&key, found, expected, &angle_unit)

@@ -507,7 +507,10 @@ fn parse_row(
         Some(s) => match parse_f64(s, file, line, "uncertainty")? {
             u if u > 0.0 => Some(u),
             _ => {
-                let message = format!("must be positive (a standard uncertainty, mm), got {s}");
+                let message = format!(
+                    "must be positive (a standard uncertainty, mm), got {}",
+                    crate::error::shown(s)
+                );
                 return error("uncertainty", &message);
             }
         },

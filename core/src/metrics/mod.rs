@@ -109,7 +109,10 @@ pub enum MetricsError {
         got: usize,
     },
     /// A coordinate is NaN or infinite.
-    #[error("{at}: point `{label}`: computed position is not a finite number")]
+    #[error(
+        "{at}: point {}: computed position is not a finite number",
+        crate::error::quoted(label)
+    )]
     NonFinite {
         /// Label of the offending touch.
         label: String,
@@ -118,7 +121,10 @@ pub enum MetricsError {
         at: String,
     },
     /// A point has fewer than [`MIN_TOUCHES`] touches.
-    #[error("point `{label}` has {touches} touch(es); at least {MIN_TOUCHES} are needed")]
+    #[error(
+        "point {} has {touches} touch(es); at least {MIN_TOUCHES} are needed",
+        crate::error::quoted(label)
+    )]
     TooFewTouches {
         /// The point's label.
         label: String,
@@ -656,6 +662,36 @@ fn check_touches(label: &str, touches: &[[f64; 3]]) -> Result<(), MetricsError> 
 pub(crate) mod tests {
     use super::*;
     use crate::io::ReferenceLength;
+
+    /// A point label echoed in an error is bounded and escaped (issue 29):
+    /// CR/LF/NUL, or 10 000 characters, make a short single-line message;
+    /// so does a parameter name that is not one.
+    #[test]
+    fn hostile_labels_give_bounded_messages() {
+        for label in ["p\r\n\0".to_string(), "p".repeat(10_000)] {
+            let errors = [
+                MetricsError::TooFewTouches {
+                    label: label.clone(),
+                    touches: 1,
+                }
+                .to_string(),
+                MetricsError::NonFinite {
+                    label: label.clone(),
+                    at: "p.csv:2".into(),
+                }
+                .to_string(),
+                label.parse::<crate::params::ParamId>().unwrap_err(),
+            ];
+            for m in errors {
+                assert!(m.chars().count() < 600, "{m:.700}");
+                assert!(!m.contains(char::is_control), "{m:?}");
+                assert!(
+                    label.len() < 10_000 || m.contains("(10000 characters)"),
+                    "{m}"
+                );
+            }
+        }
+    }
 
     /// `evaluate` on points given in row order with labels and references
     /// `(a, b, L)`.

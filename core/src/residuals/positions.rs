@@ -245,7 +245,10 @@ impl<'d> PositionTerm<'d> {
                 layout.block_named(name).ok_or_else(|| {
                     TermError::invalid(
                         "positions",
-                        format!("frame `{name}` has no block among the columns (a bug, not input)"),
+                        format!(
+                            "frame {} has no block among the columns (a bug, not input)",
+                            crate::error::quoted(name)
+                        ),
                     )
                 })
             })

@@ -12,7 +12,6 @@ use crate::calibrate::prior::conditioning;
 use crate::calibrate::{CalibrationError, PriorConditioning};
 use crate::corrections::Beyond;
 use crate::dataset::DataSet;
-use crate::error::OptionError;
 use crate::identify::{Identification, identify};
 use crate::io::{AngleUnit, Arm};
 use crate::residuals::Noise;
@@ -100,9 +99,7 @@ impl IdentifyReport {
         noise.check()?;
         beyond.check(arm.params.joint_count())?;
         beyond.check_inputs(&arm.physics, &data.condition_sets())?;
-        if threads == 0 {
-            return Err(OptionError::new("threads", 0, "at least 1").into());
-        }
+        crate::calibrate::check_threads(threads)?;
         let joints = arm.params.joint_count();
         if data.joints() != joints {
             return Err(CalibrationError::Joints {

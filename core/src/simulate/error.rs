@@ -1,7 +1,7 @@
 //! What can go wrong in a simulation: bad settings, a campaign the true arm
 //! cannot perform, files that cannot be read or written.
 
-use crate::error::InputError;
+use crate::error::{InputError, quoted};
 use crate::kernel::KernelError;
 
 /// An error of the campaign simulator. Settings errors name the setting (its
@@ -46,10 +46,11 @@ pub enum SimError {
     },
     /// One socket could not be touched in enough distinct articulations.
     #[error(
-        "socket `{socket}`: found {found} of {wanted} distinct poses (at least \
+        "socket {}: found {found} of {wanted} distinct poses (at least \
          {min_separation_deg}° apart in some joint, within joint limits) in {attempts} \
          inverse-kinematics starts; the socket may be out of reach or too close to the edge \
-         of the workspace"
+         of the workspace",
+        quoted(socket)
     )]
     TooFewPoses {
         /// The socket's label.
@@ -69,11 +70,12 @@ pub enum SimError {
 }
 
 impl SimError {
-    /// A [`SimError::Setting`] error.
+    /// A [`SimError::Setting`] error (its message bounded as every message
+    /// of the library is: [`crate::error::MAX_MESSAGE`]).
     pub fn setting(name: impl Into<String>, message: impl Into<String>) -> SimError {
         SimError::Setting {
             name: name.into(),
-            message: message.into(),
+            message: crate::error::bounded(message.into()),
         }
     }
 }

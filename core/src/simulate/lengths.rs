@@ -6,6 +6,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::SimError;
 use super::truth::normal;
+use crate::error::quoted;
 use crate::geometry::distance;
 use crate::io::ReferenceLength;
 
@@ -65,9 +66,10 @@ pub fn reference_lengths(
                 return Err(SimError::setting(
                     "sockets.points",
                     format!(
-                        "sockets `{}` and `{}` are at the same place: no reference length \
+                        "sockets {} and {} are at the same place: no reference length \
                          between them",
-                        sockets[i].0, sockets[j].0
+                        quoted(&sockets[i].0),
+                        quoted(&sockets[j].0)
                     ),
                 ));
             }

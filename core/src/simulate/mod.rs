@@ -263,8 +263,8 @@ fn check_limits(arm: &Arm) -> Result<(), SimError> {
             && !(lo.is_finite() && hi.is_finite() && lo < hi)
         {
             return Err(SimError::Model(format!(
-                "arm `{}`, joint {}: limits [{lo}, {hi}] rad must be finite with min < max",
-                arm.name,
+                "arm {}, joint {}: limits [{lo}, {hi}] rad must be finite with min < max",
+                crate::error::quoted(&arm.name),
                 j + 1
             )));
         }

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::SimError;
 use super::sockets::round_nm;
+use crate::error::quoted;
 use crate::io::{Arm, read_points};
 
 /// Default standard deviation of the random length errors (`a`, `d`, probe),
@@ -118,7 +119,7 @@ impl ErrorModel {
                     "random errors (lengths σ {length_sigma_mm} mm, twists σ {twist_sigma_deg}°, {zero})"
                 )
             }
-            ErrorModel::File { arm } => format!("given true arm `{}`", arm.name),
+            ErrorModel::File { arm } => format!("given true arm {}", quoted(&arm.name)),
         }
     }
 }
@@ -406,13 +407,16 @@ impl CampaignSettings {
             if p.label.is_empty() || !seen.insert(p.label.as_str()) {
                 return bad(
                     "sockets.points",
-                    format!("socket labels must be non-empty and unique: `{}`", p.label),
+                    format!(
+                        "socket labels must be non-empty and unique: {}",
+                        quoted(&p.label)
+                    ),
                 );
             }
             if ![p.x, p.y, p.z].iter().all(|v| v.is_finite()) {
                 return bad(
                     "sockets.points",
-                    format!("socket `{}` has a non-finite coordinate", p.label),
+                    format!("socket {} has a non-finite coordinate", quoted(&p.label)),
                 );
             }
         }
@@ -421,9 +425,13 @@ impl CampaignSettings {
             return bad(
                 "sockets.points",
                 format!(
-                    "sockets `{}` and `{}` are at the same place ({}, {}, {} mm): every \
+                    "sockets {} and {} are at the same place ({}, {}, {} mm): every \
                      socket must be a different point",
-                    a.label, b.label, b.x, b.y, b.z
+                    quoted(&a.label),
+                    quoted(&b.label),
+                    b.x,
+                    b.y,
+                    b.z
                 ),
             );
         }
@@ -449,8 +457,8 @@ impl CampaignSettings {
             }
             ErrorModel::File { arm } if arm.params.joint_count() != joints => {
                 Err(SimError::Model(format!(
-                    "the true arm `{}` has {} joints, the nominal arm {joints}",
-                    arm.name,
+                    "the true arm {} has {} joints, the nominal arm {joints}",
+                    quoted(&arm.name),
                     arm.params.joint_count()
                 )))
             }

@@ -711,3 +711,67 @@ fn the_helpers_round_wrap_and_write_the_campaign() {
     let (arm, settings) = parse_campaign(&text, "campaign.toml").unwrap();
     assert_eq!((arm, settings.seed), (nominal, 5));
 }
+
+/// A message that echoes a hostile label, arm name or socket: bounded (the
+/// label cut to 80 characters, its length said) and free of raw control
+/// characters.
+fn assert_bounded(message: &str, long: bool) {
+    assert!(
+        message.chars().count() < 600,
+        "{} characters: {message:.700}",
+        message.len()
+    );
+    assert!(!message.contains(char::is_control), "{message:?}");
+    assert!(!long || message.contains("(10000 characters)"), "{message}");
+}
+
+#[test]
+fn hostile_labels_give_bounded_messages() {
+    let n = paper();
+    let hostile = ["S\r\n\0".to_string(), format!("S{}", "x".repeat(9_999))];
+    for label in &hostile {
+        let long = label.len() == 10_000;
+        let err = |f: &dyn Fn(&mut CampaignSettings)| {
+            let mut s = CampaignSettings::new(1, ErrorModel::Paper, 4, 5);
+            s.reference_lengths = 0;
+            f(&mut s);
+            simulate(&n, &s).unwrap_err().to_string()
+        };
+        let p = |label: &str, x: f64| SocketPoint {
+            label: label.into(),
+            x,
+            y: 100.0,
+            z: 400.0,
+        };
+        let given = |points| SocketPlan::Given { file: None, points };
+        // Twice, at one place, not finite, out of reach.
+        let twice = err(&|s| s.sockets = given(vec![p(label, 300.0), p(label, 200.0)]));
+        assert!(
+            twice.starts_with("setting `sockets.points`: socket labels must be"),
+            "{twice}"
+        );
+        let same = err(&|s| s.sockets = given(vec![p(label, 300.0), p("B", 300.0)]));
+        assert!(same.contains("are at the same place"), "{same}");
+        let nan = err(&|s| s.sockets = given(vec![p(label, f64::NAN)]));
+        assert!(nan.contains("has a non-finite coordinate"), "{nan}");
+        let far = err(&|s| {
+            s.sockets = given(vec![p(label, 5000.0)]);
+            s.starts_per_pose = 1;
+        });
+        assert!(far.starts_with("socket `S"), "{far}");
+        // A true arm or a nominal arm named so.
+        let mut other = seven();
+        other.name = label.clone();
+        let joints = err(&|s| s.errors = ErrorModel::File { arm: other.clone() });
+        assert!(joints.contains("has 7 joints"), "{joints}");
+        let mut limits = paper();
+        limits.name = label.clone();
+        limits.limits[1] = Some([1.0, -1.0]);
+        let e = simulate(&limits, &CampaignSettings::new(1, ErrorModel::Paper, 2, 3));
+        let bad = e.unwrap_err().to_string();
+        assert!(bad.contains("joint 2: limits"), "{bad}");
+        for message in [twice, same, nan, far, joints, bad] {
+            assert_bounded(&message, long);
+        }
+    }
+}

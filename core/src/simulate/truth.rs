@@ -107,8 +107,8 @@ pub fn true_arm(nominal: &Arm, model: &ErrorModel, rng: &mut ChaCha8Rng) -> Resu
         ErrorModel::File { arm: given } => {
             if given.params.joint_count() != n {
                 return Err(SimError::Model(format!(
-                    "the true arm `{}` has {} joints, the nominal arm {n}",
-                    given.name,
+                    "the true arm {} has {} joints, the nominal arm {n}",
+                    crate::error::quoted(&given.name),
                     given.params.joint_count()
                 )));
             }

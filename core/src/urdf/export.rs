@@ -156,11 +156,27 @@ pub fn to_urdf(params: &DhParams, names: &UrdfNames) -> String {
     s
 }
 
+/// `s` as an XML attribute value: markup escaped, tab and line breaks as
+/// character references (read back as written, not normalised to spaces),
+/// and the characters XML 1.0 cannot hold at all (the other C0 controls,
+/// U+FFFE, U+FFFF) as U+FFFD, so that a name from an arm file never makes a
+/// file that no URDF reader accepts.
 fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\t' => out.push_str("&#9;"),
+            '\n' => out.push_str("&#10;"),
+            '\r' => out.push_str("&#13;"),
+            '\u{0}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}' => out.push('\u{fffd}'),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// The arm as a plain D-H table, CSV: one row per joint (`theta_deg`,
@@ -268,5 +284,20 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A hostile name from an arm file (markup, line breaks, NUL) makes a
+    /// well-formed URDF: markup and line breaks read back as written, a
+    /// character XML cannot hold reads back as U+FFFD.
+    #[test]
+    fn hostile_names_export_as_well_formed_xml() {
+        let arm = DhParams::paper_nominal();
+        let mut names = UrdfNames::defaults("a\r\nb<&\"\0>\t", 6, &[]);
+        names.joints[0] = "j\u{1b}1".to_string();
+        let text = to_urdf(&arm, &names);
+        let urdf = parse_urdf(&text, "x.urdf", UrdfOptions::default()).unwrap();
+        assert_eq!(urdf.name, "a\r\nb<&\"\u{fffd}>\t");
+        assert_eq!(urdf.joints[0].name, "j\u{fffd}1");
+        assert!(urdf.chain(None, "probe").is_ok());
     }
 }

@@ -53,7 +53,7 @@ use std::collections::HashMap;
 
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
-use crate::error::InputError;
+use crate::error::{InputError, quoted, shown};
 use crate::params::{DhJoint, DhParams};
 
 /// How [`parse_urdf`] reads angles.
@@ -177,7 +177,8 @@ pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, 
         InputError::line_error(
             file,
             e.pos().row as usize,
-            format!("not well-formed XML: {e}"),
+            // The parser's message quotes names from the file: bounded.
+            format!("not well-formed XML: {}", shown(&e.to_string())),
         )
     })?;
     let root = robot_element(&doc, file)?;
@@ -196,8 +197,9 @@ pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, 
                 link.line,
                 "name",
                 format!(
-                    "link `{}` is already defined (line {}); a URDF names each link once",
-                    link.name, other.line
+                    "link {} is already defined (line {}); a URDF names each link once",
+                    quoted(&link.name),
+                    other.line
                 ),
             ));
         }
@@ -218,8 +220,10 @@ pub fn parse_urdf(text: &str, file: &str, options: UrdfOptions) -> Result<Urdf, 
                 joint.line,
                 "child",
                 format!(
-                    "link `{}` is already the child of joint `{}` (line {}); a URDF is a tree",
-                    joint.child, urdf.joints[other].name, urdf.joints[other].line
+                    "link {} is already the child of joint {} (line {}); a URDF is a tree",
+                    quoted(&joint.child),
+                    quoted(&urdf.joints[other].name),
+                    urdf.joints[other].line
                 ),
             ));
         }
@@ -241,7 +245,7 @@ fn robot_element<'a, 'input>(
             line(doc, root),
             format!(
                 "the root element is <{}>; a URDF has <robot>",
-                root.tag_name().name()
+                shown(root.tag_name().name())
             ),
         ));
     }
@@ -286,7 +290,7 @@ fn read_link(
                 file,
                 inertial_at,
                 "mass",
-                format!("link `{name}`: <inertial> without <mass>"),
+                format!("link {}: <inertial> without <mass>", quoted(&name)),
             )
         })?;
     let mass_at = line(doc, mass);
@@ -295,7 +299,7 @@ fn read_link(
             file,
             mass_at,
             "mass",
-            format!("link `{name}`: <mass> without `value`"),
+            format!("link {}: <mass> without `value`", quoted(&name)),
         )
     })?;
     let kg = match text.trim().parse::<f64>() {
@@ -305,7 +309,11 @@ fn read_link(
                 file,
                 mass_at,
                 "mass",
-                format!("link `{name}`: `{text}` is not a mass (a finite number of kg, ≥ 0)"),
+                format!(
+                    "link {}: {} is not a mass (a finite number of kg, ≥ 0)",
+                    quoted(&name),
+                    quoted(text)
+                ),
             ));
         }
     };
@@ -379,7 +387,7 @@ impl<'a, 'input> JointElement<'a, 'input> {
                 self.file,
                 self.at,
                 tag,
-                format!("joint `{name}` has no <{tag}>"),
+                format!("joint {} has no <{tag}>", quoted(name)),
             )
         })?;
         el.attribute("link").map(str::to_string).ok_or_else(|| {
@@ -413,8 +421,9 @@ impl<'a, 'input> JointElement<'a, 'input> {
         };
         let rpy = snap(rpy, snap_rad, |i, from, to, by| {
             snapped.push(format!(
-                "line {}: {name} {} {from} → {to} ({by:.1e} rad)",
+                "line {}: {} {} {from} → {to} ({by:.1e} rad)",
                 origin_el.map_or(self.at, |el| line(self.doc, el)),
+                shown(name),
                 ["roll", "pitch", "yaw"][i]
             ));
         });
@@ -444,7 +453,7 @@ impl<'a, 'input> JointElement<'a, 'input> {
                 self.file,
                 axis_el.map_or(self.at, |el| line(self.doc, el)),
                 "axis",
-                format!("joint `{name}` turns about a zero axis"),
+                format!("joint {} turns about a zero axis", quoted(name)),
             ));
         }
         Ok(if axis.norm() > 0.0 {
@@ -492,7 +501,7 @@ fn triple(
             file,
             line,
             field,
-            format!("`{text}` is not three finite numbers"),
+            format!("{} is not three finite numbers", quoted(text)),
         )),
     }
 }
@@ -592,7 +601,10 @@ impl Urdf {
         if !known {
             return Err(InputError::file_error(
                 &self.file,
-                format!("no link `{tip}` is joined to the robot (the tip must be a link's name)"),
+                format!(
+                    "no link {} is joined to the robot (the tip must be a link's name)",
+                    quoted(tip)
+                ),
             ));
         }
         let mut path: Vec<&UrdfJoint> = Vec::new();
@@ -605,9 +617,10 @@ impl Urdf {
                         j.line,
                         "parent",
                         format!(
-                            "going up from `{tip}` never ends: joint `{}` is on a loop of \
+                            "going up from {} never ends: joint {} is on a loop of \
                              joints; a URDF is a tree",
-                            j.name
+                            quoted(tip),
+                            quoted(&j.name)
                         ),
                     ));
                 }
@@ -620,8 +633,10 @@ impl Urdf {
                     return Err(InputError::file_error(
                         &self.file,
                         format!(
-                            "link `{}` is not above `{tip}`: going up from it ends at `{link}`",
-                            root.unwrap_or_default()
+                            "link {} is not above {}: going up from it ends at {}",
+                            quoted(root.unwrap_or_default()),
+                            quoted(tip),
+                            quoted(link)
                         ),
                     ));
                 }
@@ -649,9 +664,11 @@ impl Urdf {
                         j.line,
                         "type",
                         format!(
-                            "joint `{}` on the way to `{tip}` is `{}`; a D-H arm has revolute \
+                            "joint {} on the way to {} is {}; a D-H arm has revolute \
                              and fixed joints only",
-                            j.name, j.type_name
+                            quoted(&j.name),
+                            quoted(tip),
+                            quoted(&j.type_name)
                         ),
                     ));
                 }
@@ -892,13 +909,13 @@ impl Chain {
                     return Err(InputError::file_error(
                         "URDF chain",
                         format!(
-                            "the axes of `{}` and `{}` are parallel within {:.1e} rad, so their \
+                            "the axes of {} and {} are parallel within {:.1e} rad, so their \
                              common normal is {:.0} m away: the D-H arm would be exact but \
                              useless (and lose digits). Round the URDF's near-right angles \
                              (UrdfOptions::snap_rad, urdf_to_dh --snap-rad) if they are meant \
                              to be parallel",
-                            self.joints[i - 1],
-                            self.joints[i],
+                            quoted(&self.joints[i - 1]),
+                            quoted(&self.joints[i]),
                             c.norm().asin(),
                             s.abs()
                         ),
@@ -1589,5 +1606,70 @@ mod tests {
         let chain = urdf.chain(None, "l1").unwrap();
         assert_eq!(chain.masses.len(), 1);
         assert_eq!(chain.to_dh().unwrap().masses, DhMasses::default());
+    }
+
+    /// Names, values and tips echoed in a message are bounded (cut to 80
+    /// characters, their length said) and their control characters escaped,
+    /// however long or garbled the file or the tip asked for.
+    #[test]
+    fn hostile_names_give_bounded_messages() {
+        let long = "n".repeat(10_000);
+        // A name with line breaks (as XML character references, the only
+        // way an attribute keeps them) and a very long one.
+        for name in ["a&#13;&#10;b", long.as_str()] {
+            let link =
+                |extra: &str| format!("<robot>\n<link name=\"{name}\">{extra}</link>\n</robot>");
+            let joint = |kind: &str, body: &str| {
+                format!("<robot>\n<joint name=\"{name}\" type=\"{kind}\">{body}</joint>\n</robot>")
+            };
+            let parts = "<parent link=\"base\"/><child link=\"tip\"/>";
+            let texts = [
+                format!("<robot>\n<link name=\"{name}\"/><link name=\"{name}\"/>\n</robot>"),
+                link("<inertial><mass value=\"x\"/></inertial>"),
+                link(&format!("<inertial><mass value=\"{name}\"/></inertial>")),
+                link("<inertial/>"),
+                link(&format!(
+                    "<inertial><origin xyz=\"{name}\"/><mass value=\"1\"/></inertial>"
+                )),
+                joint("revolute", ""),
+                joint("revolute", &format!("{parts}<axis xyz=\"0 0 0\"/>")),
+                format!("<{}/>", name.replace("&#13;&#10;", "_")),
+                format!(
+                    "<robot><{0}></{0}x></robot>",
+                    name.replace("&#13;&#10;", "_")
+                ),
+            ];
+            let mut messages: Vec<String> = texts
+                .iter()
+                .map(|t| {
+                    parse_urdf(t, "h.urdf", UrdfOptions::default())
+                        .unwrap_err()
+                        .to_string()
+                })
+                .collect();
+            let urdf = parse_urdf(
+                &joint(&format!("prismatic{name}"), parts),
+                "h.urdf",
+                UrdfOptions::default(),
+            )
+            .unwrap();
+            messages.push(urdf.chain(None, "tip").unwrap_err().to_string());
+            messages.push(urdf.chain(None, "t\r\n\0").unwrap_err().to_string());
+            messages.push(urdf.chain(Some(&long), "tip").unwrap_err().to_string());
+            for m in &messages {
+                assert!(m.chars().count() < 600, "{} characters: {m:.700}", m.len());
+                assert!(!m.contains(char::is_control), "{m:?}");
+            }
+            if name == long {
+                let cut = messages.iter().filter(|m| m.contains("(10000 characters)"));
+                assert!(cut.count() >= 8, "{messages:#?}");
+            } else {
+                assert!(
+                    messages[0].contains("link `a\\r\\nb` is already defined"),
+                    "{}",
+                    messages[0]
+                );
+            }
+        }
     }
 }

@@ -467,8 +467,9 @@ pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
                     "cross_validate",
                     k,
                     format!(
-                        "frame `{name}` has {n} positions: {k} folds leave its registration \
+                        "frame {} has {n} positions: {k} folds leave its registration \
                          fewer than {} in a fold's training",
+                        crate::error::quoted(name),
                         crate::io::positions::MIN_FRAME_POSITIONS
                     ),
                 ));
