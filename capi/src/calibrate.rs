@@ -383,7 +383,8 @@ pub unsafe extern "C" fn aacmm_calibrate(
     guard(|| {
         // What the lengths imply first: a length error, not an overlap of
         // a span no memory holds.
-        let bytes = calibration_bytes(points_len, lengths_len)?;
+        // For 7 joints, the most a kernel has, before the arm is read.
+        let bytes = calibration_bytes(points_len, lengths_len, 7)?;
         (Args::new().object("start", start))
             .input("q", q, q_len)?
             .input("points", points, points_len)?
@@ -458,25 +459,28 @@ pub unsafe extern "C" fn aacmm_calibrate(
     })
 }
 
-/// About what a calibration of `touches` touches and `lengths` reference
-/// lengths allocates inside the library (the data set, the Jacobian
-/// blocks, the report), where a failed allocation would abort the host:
-/// the library's bound of the measured peak
-/// ([`aacmm_core::memory::CALIBRATION_BYTES_PER_TOUCH`]), checked up front
-/// by `aacmm_calibrate` before the arrays are copied (the session checks
-/// again once the data set is built). A size past the address space is
+/// About what a calibration of `touches` touches of a `joints`-joint arm
+/// and `lengths` reference lengths allocates inside the library (the data
+/// set, the Jacobian blocks, the report), where a failed allocation would
+/// abort the host: the library's bound of the measured peak
+/// ([`aacmm_core::memory::calibration_bytes`]), checked up front by
+/// `aacmm_calibrate` before the arrays are copied (the library checks again
+/// once the data set is built). A size past the address space is
 /// `AACMM_STATUS_LENGTH`, naming the argument.
-fn calibration_bytes(touches: usize, lengths: usize) -> Result<usize, Error> {
-    use aacmm_core::memory::{
-        CALIBRATION_BYTES_PER_LENGTH as PER_LENGTH, CALIBRATION_BYTES_PER_TOUCH as PER_TOUCH,
-    };
+fn calibration_bytes(touches: usize, lengths: usize, joints: usize) -> Result<usize, Error> {
     let too_many = |name: &str, n: usize| {
         Error::length(format!("{name} = {n}: too many to calibrate in memory"))
     };
-    let t = (touches.checked_mul(PER_TOUCH)).ok_or_else(|| too_many("points_len", touches))?;
-    let l = (lengths.checked_mul(PER_LENGTH)).ok_or_else(|| too_many("lengths_len", lengths))?;
-    t.checked_add(l)
-        .ok_or_else(|| too_many("lengths_len", lengths))
+    match aacmm_core::memory::calibration_bytes(touches, lengths, joints) {
+        b if b <= isize::MAX as usize => Ok(b),
+        _ if lengths
+            .checked_mul(aacmm_core::memory::WORK_BYTES_PER_LENGTH)
+            .is_none() =>
+        {
+            Err(too_many("lengths_len", lengths))
+        }
+        _ => Err(too_many("points_len", touches)),
+    }
 }
 
 /// The result behind `cal`.

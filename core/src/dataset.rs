@@ -1228,16 +1228,14 @@ fn array_lengths(
     Ok(refs)
 }
 
-/// Checks, before the data set is built, that what it holds per touch can
-/// be allocated: the readings in touch order (8 bytes a joint), their sin
-/// and cos (16), the touch order while sorting (8), the source lines and
-/// rows (8) and the conditions (8 each): an [`InputError::Memory`] naming
-/// `file`, rather than an abort, for a file larger than the process can
-/// hold as a data set.
+/// Checks, before the data set is built, that what it holds per touch
+/// ([`crate::memory::data_set_bytes_per_touch`]) can be allocated: an
+/// [`InputError::Memory`] naming `file`, rather than an abort, for a file
+/// larger than the process can hold as a data set.
 fn room_for_touches(poses: &Poses, file: &str) -> Result<(), InputError> {
     let conditions =
         usize::from(poses.temperatures().is_some()) + usize::from(poses.times().is_some());
-    let per_touch = 24 * poses.joints() + 16 + 8 * conditions;
+    let per_touch = crate::memory::data_set_bytes_per_touch(poses.joints(), conditions);
     let what = format!("a data set of {} touches", poses.len());
     crate::memory::bytes_for(&what, poses.len(), per_touch)
         .and_then(|bytes| crate::memory::room_for(&what, bytes))

@@ -6,22 +6,38 @@
 //! would simply die. Every buffer whose size follows from the input is
 //! therefore either reserved with `try_reserve` ([`try_vec`]) or, where it
 //! is made deep inside the solver or the report, covered by a probe
-//! ([`room_for`]) of what the whole computation holds at its peak,
-//! measured and rounded up ([`CALIBRATION_BYTES_PER_TOUCH`]).
+//! ([`room_for`]) of what the computation holds at its peak, measured and
+//! rounded up ([`data_set_bytes_per_touch`], [`WORK_BYTES_PER_TOUCH`]).
 //!
 //! A probe is a check, not a promise: memory another process takes between
 //! the check and the work can still run out. Under an address-space limit
 //! (`ulimit -v`, `RLIMIT_AS`, the usual container case) the check is
 //! exact enough to be deterministic: tested in the Python and C suites.
 
-/// What a calibration holds at its peak per touch (the data set's readings
-/// and their sin/cos, the Jacobian blocks, the leverage, the report's
-/// positions): 229 bytes measured at 10⁶ touches of a 6-joint arm
-/// (`calibrate --method lm`, 228.7 MB peak), rounded up.
-pub const CALIBRATION_BYTES_PER_TOUCH: usize = 256;
+/// What a calibration, an identification or an evaluation allocates per
+/// touch (or reference position) beyond the data set it works on (the
+/// Jacobian blocks, the leverage, the report's positions and figures):
+/// measured at 10⁶ touches of a 6-joint arm, `/usr/bin/time` peak less the
+/// data set's [`data_set_bytes_per_touch`] — 122 bytes (`calibrate`, the
+/// global method), 77 (`--method lm`), 50 (`identify`), 18 (`evaluate`) —
+/// and rounded up for a 7-joint arm's wider Jacobian rows.
+pub const WORK_BYTES_PER_TOUCH: usize = 160;
 
-/// What a calibration holds per reference length, rounded up.
-pub const CALIBRATION_BYTES_PER_LENGTH: usize = 128;
+/// The same per reference length, rounded up.
+pub const WORK_BYTES_PER_LENGTH: usize = 128;
+
+/// What a data set holds per touch of `joints` joints with `conditions`
+/// condition columns (temperature, time): the readings in touch order (8
+/// bytes a joint), their sin and cos (16), the touch order while sorting
+/// (8), the source lines and rows (8), 8 bytes per condition.
+///
+/// ```
+/// use aacmm_core::memory::data_set_bytes_per_touch;
+/// assert_eq!(data_set_bytes_per_touch(6, 0), 160);
+/// ```
+pub const fn data_set_bytes_per_touch(joints: usize, conditions: usize) -> usize {
+    24 * joints + 16 + 8 * conditions
+}
 
 /// Memory that could not be had: what for, and how many bytes.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
@@ -102,12 +118,35 @@ pub fn room_for(what: &str, bytes: usize) -> Result<(), OutOfMemory> {
     Ok(())
 }
 
-/// What a calibration of `touches` touches and `lengths` reference lengths
-/// holds at its peak ([`CALIBRATION_BYTES_PER_TOUCH`],
-/// [`CALIBRATION_BYTES_PER_LENGTH`]), saturated at `usize::MAX`.
-pub fn calibration_bytes(touches: usize, lengths: usize) -> usize {
-    (touches.saturating_mul(CALIBRATION_BYTES_PER_TOUCH))
-        .saturating_add(lengths.saturating_mul(CALIBRATION_BYTES_PER_LENGTH))
+/// What the work on a data set of `touches` touches (or positions) and
+/// `lengths` reference lengths allocates beyond the data set
+/// ([`WORK_BYTES_PER_TOUCH`], [`WORK_BYTES_PER_LENGTH`]), saturated at
+/// `usize::MAX`.
+pub fn work_bytes(touches: usize, lengths: usize) -> usize {
+    (touches.saturating_mul(WORK_BYTES_PER_TOUCH))
+        .saturating_add(lengths.saturating_mul(WORK_BYTES_PER_LENGTH))
+}
+
+/// [`room_for`] the work `what` on `touches` touches (or positions) and
+/// `lengths` reference lengths ([`work_bytes`]); the message counts them.
+///
+/// ```
+/// use aacmm_core::memory::room_for_work;
+/// assert!(room_for_work("identifying from", 100, 2).is_ok());
+/// let e = room_for_work("identifying from", usize::MAX / 2, 0).unwrap_err();
+/// assert!(e.to_string().starts_with("out of memory: identifying from 9223372036854775807 observations"));
+/// ```
+pub fn room_for_work(what: &str, touches: usize, lengths: usize) -> Result<(), OutOfMemory> {
+    let what = format!("{what} {touches} observations and {lengths} lengths");
+    room_for(&what, work_bytes(touches, lengths))
+}
+
+/// What a calibration of `touches` touches of a `joints`-joint arm and
+/// `lengths` reference lengths holds at its peak, its data set included: for
+/// a caller that checks before it builds the data set (the C API's arrays).
+pub fn calibration_bytes(touches: usize, lengths: usize, joints: usize) -> usize {
+    let data = touches.saturating_mul(data_set_bytes_per_touch(joints, 0));
+    data.saturating_add(work_bytes(touches, lengths))
 }
 
 #[cfg(test)]
@@ -130,7 +169,8 @@ mod tests {
 
     #[test]
     fn calibration_bytes_saturates() {
-        assert_eq!(calibration_bytes(10, 2), 10 * 256 + 2 * 128);
-        assert_eq!(calibration_bytes(usize::MAX, 1), usize::MAX);
+        assert_eq!(work_bytes(10, 2), 10 * 160 + 2 * 128);
+        assert_eq!(calibration_bytes(10, 2, 6), 10 * 320 + 2 * 128);
+        assert_eq!(calibration_bytes(usize::MAX, 1, 6), usize::MAX);
     }
 }

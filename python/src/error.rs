@@ -248,9 +248,19 @@ impl From<aacmm_core::report::ReportError> for Error {
     }
 }
 
+impl From<aacmm_core::memory::OutOfMemory> for Error {
+    fn from(e: aacmm_core::memory::OutOfMemory) -> Error {
+        Error::new(Kind::Memory, e.to_string())
+    }
+}
+
 impl From<MetricsError> for Error {
     fn from(e: MetricsError) -> Error {
-        Error::new(Kind::Calibration, e.to_string())
+        let kind = match e {
+            MetricsError::Memory(_) => Kind::Memory,
+            _ => Kind::Calibration,
+        };
+        Error::new(kind, e.to_string())
     }
 }
 

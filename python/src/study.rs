@@ -69,6 +69,10 @@ pub fn identify<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let noise = noise.map_or_else(CoreNoise::default, |n| n.noise);
     let threads = self::threads(threads)?;
+    let d = &data.data;
+    let observations = d.len() + d.positions().map_or(0, |p| p.len());
+    aacmm_core::memory::room_for_work("identifying from", observations, d.references().len())
+        .map_err(Error::from)?;
     let id = detached(py, || {
         core_identify(&arm.arm.params, &data.data, &noise, threads)
             .map_err(|e| Error::from(e).prefixed(&arm.source))

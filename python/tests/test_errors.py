@@ -385,12 +385,14 @@ def virtual_size():
         line = next(l for l in f if l.startswith("VmSize:"))
     return int(line.split()[1]) * 1024
 arm = aacmm.Arm.from_file(arm_path)
-limit = virtual_size() + (192 << 20)
+limit = virtual_size() + (256 << 20)
 resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
 calls = {
     "endless": lambda: aacmm.DataSet.from_files(endless),
     "big": lambda: aacmm.DataSet.from_files(big),
     "calibrate": lambda: aacmm.calibrate(arm, aacmm.DataSet.from_files(many), method="lm"),
+    "identify": lambda: aacmm.identify(arm, aacmm.DataSet.from_files(many)),
+    "evaluate": lambda: aacmm.evaluate(arm, aacmm.DataSet.from_files(many)),
 }
 for name, call in calls.items():
     try:
@@ -409,11 +411,12 @@ def touches(path, rows):
 
 
 def test_files_too_large_are_errors_not_aborts(tmp_path):
-    """Under an address space 192 MiB above what the process uses: a 1 GiB
+    """Under an address space 256 MiB above what the process uses: a 1 GiB
     file of one line is refused for its line (read 1 MiB at most); a file
     whose readings need more than the limit is a MemoryError from the
-    reader; a data set that fits but whose calibration would not is a
-    MemoryError before the work — the process survives each (issue 29)."""
+    reader; a data set that fits but whose calibration, identification or
+    evaluation would not is a MemoryError before the work — the process
+    survives each (issue 29)."""
     import subprocess
     import sys
 
@@ -422,7 +425,7 @@ def test_files_too_large_are_errors_not_aborts(tmp_path):
     with open(endless, "r+b") as f:
         f.truncate(1 << 30)  # sparse: no disk used
     big = touches(tmp_path / "big.csv", 8_000_000)
-    many = touches(tmp_path / "many.csv", 600_000)
+    many = touches(tmp_path / "many.csv", 1_000_000)
     done = subprocess.run(
         [sys.executable, "-c", HOSTILE_FILES, ARM, str(endless), str(big), str(many)],
         capture_output=True,
@@ -435,7 +438,9 @@ def test_files_too_large_are_errors_not_aborts(tmp_path):
     assert "endless InputError" in out and "endless.csv:2: line longer than 1 MiB" in out, out
     assert "big MemoryError" in out and "big.csv: out of memory: the rows' readings" in out, out
     assert "calibrate MemoryError" in out, out
-    assert "out of memory: calibrating 600000 observations and 0 lengths needs" in out, out
+    assert "out of memory: calibrating 1000000 observations and 0 lengths needs" in out, out
+    assert "identify MemoryError" in out and "identifying from 1000000 observations" in out, out
+    assert "evaluate MemoryError" in out and "evaluating 1000000 touches" in out, out
 
 
 HELD = r"""

@@ -100,6 +100,10 @@ use serde::{Deserialize, Serialize};
 /// offending value came from.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum MetricsError {
+    /// The evaluation needs more memory than the process can allocate,
+    /// found before any work (see [`crate::memory`]).
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OutOfMemory),
     /// The positions do not match the data set, one per touch.
     #[error("{got} positions for {expected} touches")]
     LengthMismatch {
@@ -376,6 +380,8 @@ pub fn evaluate_threads(
     xyz: &[[f64; 3]],
     threads: usize,
 ) -> Result<Evaluation, MetricsError> {
+    let bytes = crate::memory::work_bytes(data.len(), data.references().len());
+    crate::memory::room_for(&format!("evaluating {} touches", data.len()), bytes)?;
     evaluate_with(data, xyz, Some((threads, DEFAULT_PAIR_SEED)))
 }
 

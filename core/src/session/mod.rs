@@ -268,22 +268,28 @@ impl Problem {
 }
 
 /// Checks, before any work, that the memory a calibration of `problem`'s
-/// data holds at its peak can be had: its solver, statistics and report
-/// allocate as they go, where a failure would abort the host process (see
-/// [`crate::memory`]). Held-out data count with the fitted.
+/// data allocates beyond its data set can be had: its solver, statistics
+/// and report allocate as they go, where a failure would abort the host
+/// process (see [`crate::memory`]). Held-out data count with the fitted.
 fn room_to_calibrate(problem: &Problem) -> Result<(), CalibrationError> {
-    let observations = |d: &DataSet| {
+    let mut data = vec![&problem.data];
+    data.extend(problem.held_out.as_ref().map(|h| &h.data));
+    Ok(room_for_work("calibrating", &data)?)
+}
+
+/// [`crate::memory::room_for_work`] (`what`) on the data sets `data`: their
+/// touches, positions and lengths.
+pub(crate) fn room_for_work(
+    what: &str,
+    data: &[&DataSet],
+) -> Result<(), crate::memory::OutOfMemory> {
+    let (mut touches, mut lengths) = (0usize, 0usize);
+    for d in data {
         let positions = d.positions().map_or(0, |p| p.len());
-        (d.len().saturating_add(positions), d.references().len())
-    };
-    let (mut touches, mut lengths) = observations(&problem.data);
-    if let Some(h) = &problem.held_out {
-        let (t, l) = observations(&h.data);
-        (touches, lengths) = (touches.saturating_add(t), lengths.saturating_add(l));
+        touches = touches.saturating_add(d.len()).saturating_add(positions);
+        lengths = lengths.saturating_add(d.references().len());
     }
-    let bytes = crate::memory::calibration_bytes(touches, lengths);
-    let what = format!("calibrating {touches} observations and {lengths} lengths");
-    Ok(crate::memory::room_for(&what, bytes)?)
+    crate::memory::room_for_work(what, touches, lengths)
 }
 
 /// Stated lengths this many times the nominal arm's distances (or their

@@ -587,6 +587,7 @@ impl Request {
     /// [`IdentifyReport::new`].
     pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
+        super::room_for_work("identifying from", &[&self.data])?;
         let prior = self.tolerances()?;
         let threads = self.threads.unwrap_or_else(available_threads);
         IdentifyReport::new(
