@@ -498,10 +498,8 @@ fn last_error_len() -> usize {
 fn options() -> *mut AacmmCalibrateOptions {
     let mut o = std::ptr::null_mut();
     // SAFETY: a writable out.
-    assert_eq!(
-        unsafe { aacmm_calibrate_options_new(&mut o) },
-        AacmmStatus::Ok
-    );
+    let status = unsafe { aacmm_calibrate_options_new(&mut o) };
+    assert_eq!(status, AacmmStatus::Ok);
     o
 }
 
