@@ -115,7 +115,8 @@ class Arm:
         ``warnings`` and are issued as UserWarning. A file whose
         ``[verdict]`` says NOT usable (a refused calibration's
         ``calibrated.toml``) is refused unless ``accept_rejected=True``: it
-        is then read with a warning."""
+        is then read with a warning. A path ``-`` is a file of that name
+        (not standard input, as on the command line)."""
     @staticmethod
     def from_params(joints: int, params: npt.ArrayLike, name: str = "arm") -> "Arm":
         """An arm from its ``4·joints + 3`` parameters (mm, rad), no joint limits."""
@@ -188,7 +189,8 @@ class DataSet:
         reference-positions file (CSV
         ``point,q1,...,qn,x,y,z[,frame][,uncertainty]``, mm: the command
         line's ``--positions``), or the positions file alone
-        (``poses=None``)."""
+        (``poses=None``). A path ``-`` is a file of that name (not standard
+        input, as on the command line)."""
     @staticmethod
     def from_positions(
         q: _Readings,

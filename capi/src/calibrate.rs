@@ -512,30 +512,33 @@ pub unsafe extern "C" fn aacmm_calibration_free(cal: *mut AacmmCalibration) {
     })
 }
 
-/// Copies one value per parameter into `out` (`len = 4·joints + 3`).
+/// Copies one value per parameter into `out`, the caller's array `name`
+/// whose length `len_name` must be `4·joints + 3` (messages name both as
+/// the caller wrote them).
 ///
 /// # Safety
 ///
 /// As the accessors below.
 unsafe fn per_parameter<T: Copy>(
     cal: *const AacmmCalibration,
+    (name, len_name): (&str, &str),
     out: *mut T,
     len: usize,
     value: impl Fn(&AacmmCalibration, usize, ParamId) -> T,
 ) -> Result<(), Error> {
     (Args::new().object("cal", cal))
-        .output("out", out, len)?
+        .output(name, out, len)?
         .disjoint()?;
     // SAFETY: by the contract.
     let cal = unsafe { result(cal) }?;
     let count = cal.calibrated.params.param_count();
     if len != count {
         return Err(Error::length(format!(
-            "len = {len}, expected {count} (4 · joints + 3)"
+            "{len_name} = {len}, expected {count} (4 · joints + 3)"
         )));
     }
     // SAFETY: by the contract.
-    let out = unsafe { ptr::output(out, len, "out") }?;
+    let out = unsafe { ptr::output(out, len, name) }?;
     // The arm's own names: a Hayati joint's d-slot holds β.
     for (c, id) in cal.calibrated.params.param_ids().enumerate() {
         out[c].write(value(cal, c, id));
@@ -560,9 +563,13 @@ pub unsafe extern "C" fn aacmm_calibration_params(
     guard(|| {
         // SAFETY: forwarded contract.
         unsafe {
-            per_parameter(cal, params, params_len, |c, _, id| {
-                c.calibrated.params.get(id)
-            })
+            per_parameter(
+                cal,
+                ("params", "params_len"),
+                params,
+                params_len,
+                |c, _, id| c.calibrated.params.get(id),
+            )
         }
     })
 }
@@ -583,7 +590,7 @@ pub unsafe extern "C" fn aacmm_calibration_sigmas(
     guard(|| {
         // SAFETY: forwarded contract.
         unsafe {
-            per_parameter(cal, sigma, sigma_len, |c, i, _| {
+            per_parameter(cal, ("sigma", "sigma_len"), sigma, sigma_len, |c, i, _| {
                 c.report.calibration.parameters[i].sigma.unwrap_or(f64::NAN)
             })
         }
@@ -606,7 +613,7 @@ pub unsafe extern "C" fn aacmm_calibration_fixed(
     guard(|| {
         // SAFETY: forwarded contract.
         unsafe {
-            per_parameter(cal, fixed, fixed_len, |c, i, _| {
+            per_parameter(cal, ("fixed", "fixed_len"), fixed, fixed_len, |c, i, _| {
                 c.report.calibration.parameters[i].fixed.is_some()
             })
         }

@@ -164,8 +164,9 @@ pub(crate) fn rows(
     let stated_wrong = |u: f64| !(u.is_nan() || (u.is_finite() && u > 0.0));
     if let Some((i, &u)) = (uncertainty.iter().enumerate()).find(|&(_, &u)| stated_wrong(u)) {
         return Err(input(format!(
-            "uncertainty[{i}] = {u}: a standard uncertainty per coordinate (mm) is a finite \
-             number > 0; NAN: not stated"
+            "uncertainty[{i}] = {}: a standard uncertainty per coordinate (mm) is a finite \
+             number > 0; NAN: not stated",
+            aacmm_core::error::short(u)
         )));
     }
     if let Some((i, f)) = frames

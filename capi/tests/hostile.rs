@@ -15,10 +15,16 @@ use std::ffi::{CString, c_char};
 use std::process::Command;
 
 use aacmm_capi::{
-    AACMM_ANGLE_DEG, AacmmArm, AacmmCalibration, AacmmReferenceLength, AacmmStatus, aacmm_arm_free,
-    aacmm_arm_from_params, aacmm_arm_params, aacmm_calibrate, aacmm_calibrate_files,
-    aacmm_calibration_arm, aacmm_calibration_free, aacmm_calibration_report,
-    aacmm_calibration_verdict, aacmm_jacobians, aacmm_positions,
+    AACMM_ANGLE_DEG, AacmmArm, AacmmCalibrateOptions, AacmmCalibration, AacmmReferenceLength,
+    AacmmStatus, aacmm_arm_free, aacmm_arm_from_params, aacmm_arm_params, aacmm_calibrate,
+    aacmm_calibrate_files, aacmm_calibrate_options_free, aacmm_calibrate_options_new,
+    aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_fix,
+    aacmm_calibrate_options_set_length_weight, aacmm_calibrate_options_set_positions,
+    aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
+    aacmm_calibrate_options_set_seed, aacmm_calibration_arm, aacmm_calibration_fixed,
+    aacmm_calibration_free, aacmm_calibration_params, aacmm_calibration_report,
+    aacmm_calibration_sigmas, aacmm_calibration_verdict, aacmm_jacobians, aacmm_last_error_message,
+    aacmm_positions,
 };
 use aacmm_core::params::DhParams;
 
@@ -480,4 +486,229 @@ fn memory_limits_give_a_status() {
             && stdout.contains("endless.csv:2: line longer than 1 MiB"),
         "{stdout}"
     );
+}
+
+/// The full length of the last error message, bytes (the copy's return
+/// value with no buffer).
+fn last_error_len() -> usize {
+    // SAFETY: no buffer: only the length is returned.
+    unsafe { aacmm_last_error_message(std::ptr::null_mut(), 0) }
+}
+
+fn options() -> *mut AacmmCalibrateOptions {
+    let mut o = std::ptr::null_mut();
+    // SAFETY: a writable out.
+    let status = unsafe { aacmm_calibrate_options_new(&mut o) };
+    assert_eq!(status, AacmmStatus::Ok);
+    o
+}
+
+/// The accessors that copy one value per parameter named their length
+/// `len` (issue 29, item 7): each names its own argument, as
+/// `aacmm_arm_params` does, and writes nothing into a short array.
+#[test]
+fn parameter_accessors_name_their_own_length() {
+    let arm = nominal();
+    let cal = calibration();
+    let mut d = [0.5f64; 26];
+    let mut b = [true; 26];
+    // SAFETY: live handles; 26 writable values, one short of 27.
+    unsafe {
+        let status = aacmm_arm_params(arm, d.as_mut_ptr(), 26);
+        refused(status, AacmmStatus::Length, "params_len = 26");
+        let status = aacmm_calibration_params(cal, d.as_mut_ptr(), 26);
+        refused(status, AacmmStatus::Length, "params_len = 26, expected 27");
+        let status = aacmm_calibration_sigmas(cal, d.as_mut_ptr(), 26);
+        refused(status, AacmmStatus::Length, "sigma_len = 26, expected 27");
+        let status = aacmm_calibration_fixed(cal, b.as_mut_ptr(), 26);
+        refused(status, AacmmStatus::Length, "fixed_len = 26, expected 27");
+        // An output inside the handle is named by its own name too.
+        let status = aacmm_calibration_sigmas(cal, cal.cast(), 27);
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            "`cal` and `sigma` overlap",
+        );
+    }
+    assert_eq!((d, b), ([0.5; 26], [true; 26]), "nothing written");
+    // SAFETY: the handles, not used after.
+    unsafe {
+        aacmm_calibration_free(cal);
+        aacmm_arm_free(arm);
+    }
+}
+
+/// A 50 MB text handed to the C API (issue 29, item 3: the message was
+/// 50 MB): a refusal echoes at most 80 characters of it and says its
+/// length — an option string, a label in a poses file (a line of 50 MB
+/// is refused for its length; one of 900 kB is read and its label cut).
+#[test]
+fn fifty_megabyte_texts_give_short_messages() {
+    let huge = CString::new("L".repeat(50_000_000)).unwrap();
+    let o = options();
+    // SAFETY: live options and a NUL-terminated string.
+    unsafe {
+        let status = aacmm_calibrate_options_set_fix(o, huge.as_ptr());
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            "… (50000000 characters): unknown parameter `LLL",
+        );
+        assert!(last_error_len() < 600, "{}", last_error_len());
+        let status = aacmm_calibrate_options_set_prior(o, huge.as_ptr());
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            "(50000000 characters)",
+        );
+        assert!(last_error_len() < 600, "{}", last_error_len());
+        aacmm_calibrate_options_free(o);
+    }
+    let dir = std::env::temp_dir().join(format!("aacmm-capi-labels-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let arm = CString::new(format!("{root}/examples/paper-table-1.toml")).unwrap();
+    for (name, label, expected) in [
+        (
+            "fifty.csv",
+            50_000_000,
+            "fifty.csv:2: line longer than 1 MiB",
+        ),
+        ("nine.csv", 900_000, "(900000 characters) has 2 touches"),
+    ] {
+        let path = dir.join(name);
+        // Two touches that articulate (q6 turns 34°): too few is the fault.
+        let l = "L".repeat(label);
+        let text = format!("point,q1,q2,q3,q4,q5,q6\n{l},1,2,3,4,5,6\n{l},1,2,3,4,5,40\n");
+        std::fs::write(&path, text).unwrap();
+        let poses = CString::new(path.to_str().unwrap()).unwrap();
+        let mut out = std::ptr::null_mut();
+        // SAFETY: NUL-terminated paths, default options, a writable out.
+        let status = unsafe {
+            aacmm_calibrate_files(
+                arm.as_ptr(),
+                poses.as_ptr(),
+                std::ptr::null(),
+                AACMM_ANGLE_DEG,
+                std::ptr::null(),
+                &mut out,
+            )
+        };
+        refused(status, AacmmStatus::Input, expected);
+        assert!(last_error_len() < 600, "{name}: {}", last_error_len());
+        assert!(out.is_null());
+    }
+    _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A value of 1e308 was printed as a 309-digit integer (issue 29, item
+/// 7): refusals show it as `1e308`; and the same setting has the same
+/// bound as in Python and the command line (encoder σ at most 180°, seed
+/// at most 2⁶³ − 1, checked when calibrating).
+#[test]
+fn huge_values_are_shown_short_and_bounded_as_elsewhere() {
+    let o = options();
+    let arm = nominal();
+    // SAFETY: live options; the setters refuse and keep the options.
+    unsafe {
+        let status = aacmm_calibrate_options_set_probe_noise_mm(o, -1e308);
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            "probe_noise_mm = -1e308: must be a finite number ≥ 0",
+        );
+        let status = aacmm_calibrate_options_set_length_weight(o, -1e308);
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            "length_weight = -1e308: must be a finite number > 0",
+        );
+        let status = aacmm_calibrate_options_set_prior(o, c"length=-1e308mm".as_ptr());
+        refused(status, AacmmStatus::InvalidArgument, "(got -1e308 mm)");
+        let status = aacmm_calibrate_options_set_prior(o, c"length=1e308mm".as_ptr());
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            "tolerance of length = 1e308 mm: above 1e12",
+        );
+        let q = [0.0f64, 0.1, 0.2, 0.3, 0.4, 0.5].repeat(3);
+        let xyz = [0.0, 0.0, 0.0, 100.0, 0.0, 0.0, 0.0, 100.0, 0.0];
+        let u = [-1e308, 0.01, 0.01];
+        let status = aacmm_calibrate_options_set_positions(
+            o,
+            6,
+            q.as_ptr(),
+            q.len(),
+            xyz.as_ptr(),
+            9,
+            std::ptr::null(),
+            0,
+            std::ptr::null(),
+            0,
+            u.as_ptr(),
+            3,
+        );
+        refused(status, AacmmStatus::Input, "uncertainty[0] = -1e308: ");
+        let status = aacmm_calibrate_options_set_encoder_noise_rad(o, 1e308);
+        refused(status, AacmmStatus::InvalidArgument, "is more than 180°");
+        assert!(!last_error().contains("0000000000"), "{}", last_error());
+        let points: Vec<u32> = (0..9).map(|i| i / 3).collect();
+        let q: Vec<f64> = (0..54).map(|i| (i as f64 * 0.7).sin()).collect();
+        let mut out = std::ptr::null_mut();
+        for (distance_mm, uncertainty_mm, expected) in [
+            (
+                -1e308,
+                f64::NAN,
+                "distance_mm = -1e308: must be a positive number",
+            ),
+            (
+                100.0,
+                -1e308,
+                "uncertainty_mm = -1e308: must be a finite number ≥ 0",
+            ),
+        ] {
+            let lengths = [AacmmReferenceLength {
+                point_a: 0,
+                point_b: 1,
+                distance_mm,
+                uncertainty_mm,
+            }];
+            let status = aacmm_calibrate(
+                arm,
+                q.as_ptr(),
+                54,
+                points.as_ptr(),
+                9,
+                lengths.as_ptr(),
+                1,
+                std::ptr::null(),
+                &mut out,
+            );
+            refused(status, AacmmStatus::Input, expected);
+        }
+        // The seed bound of Python's calibrate and simulate.
+        assert_eq!(
+            aacmm_calibrate_options_set_seed(o, u64::MAX),
+            AacmmStatus::Ok
+        );
+        let status = aacmm_calibrate(
+            arm,
+            q.as_ptr(),
+            54,
+            points.as_ptr(),
+            9,
+            std::ptr::null(),
+            0,
+            o,
+            &mut out,
+        );
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            "seed = 18446744073709551615: at most 9223372036854775807",
+        );
+        assert!(out.is_null());
+        aacmm_calibrate_options_free(o);
+        aacmm_arm_free(arm);
+    }
 }

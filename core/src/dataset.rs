@@ -714,11 +714,17 @@ impl DataSet {
             if !(l.distance.is_finite() && l.distance > 0.0) {
                 return bad(
                     "distance",
-                    format!("{}: must be a positive number", l.distance),
+                    format!(
+                        "{}: must be a positive number",
+                        crate::error::short(l.distance)
+                    ),
                 );
             }
             if let Some(u) = l.uncertainty.filter(|u| !(u.is_finite() && *u >= 0.0)) {
-                return bad("uncertainty", format!("{u}: must be a finite number ≥ 0"));
+                return bad(
+                    "uncertainty",
+                    format!("{}: must be a finite number ≥ 0", crate::error::short(u)),
+                );
             }
             if l.a == l.b {
                 return bad(
@@ -1205,12 +1211,13 @@ fn array_lengths(
         if !(l.distance_mm.is_finite() && l.distance_mm > 0.0) {
             return refuse(format!(
                 "distance_mm = {}: must be a positive number",
-                l.distance_mm
+                crate::error::short(l.distance_mm)
             ));
         }
         if let Some(u) = l.uncertainty_mm.filter(|u| !(u.is_finite() && *u >= 0.0)) {
             return refuse(format!(
-                "uncertainty_mm = {u}: must be a finite number ≥ 0, or not stated"
+                "uncertainty_mm = {}: must be a finite number ≥ 0, or not stated",
+                crate::error::short(u)
             ));
         }
         let (a, b) = (l.point_a.min(l.point_b), l.point_a.max(l.point_b));

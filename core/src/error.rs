@@ -249,7 +249,7 @@ pub(crate) fn check_nonnegative(
         let bound = if zero_ok { "≥ 0" } else { "> 0" };
         Err(OptionError::new(
             field,
-            v,
+            short(v),
             format!("must be a finite number {bound}"),
         ))
     }

@@ -99,8 +99,9 @@ fn check_value(target: Target, value: f64, unit: &str) -> Result<f64, String> {
     let name = target.name();
     if !value.is_finite() || value <= 0.0 {
         return Err(format!(
-            "tolerance of {name} must be a finite number > 0 (got {value} {unit}); leave a \
-             parameter out to give it no prior"
+            "tolerance of {name} must be a finite number > 0 (got {} {unit}); leave a \
+             parameter out to give it no prior",
+            short(value)
         ));
     }
     let internal = match (target.is_length(), unit) {
@@ -117,11 +118,15 @@ fn check_value(target: Target, value: f64, unit: &str) -> Result<f64, String> {
     };
     if !(internal.is_finite() && internal > 0.0) {
         return Err(format!(
-            "tolerance of {name} = {value} {unit} is not representable"
+            "tolerance of {name} = {} {unit} is not representable",
+            short(value)
         ));
     }
     if let Some(why) = out_of_range(internal) {
-        return Err(format!("tolerance of {name} = {value} {unit}: {why}"));
+        return Err(format!(
+            "tolerance of {name} = {} {unit}: {why}",
+            short(value)
+        ));
     }
     Ok(internal)
 }

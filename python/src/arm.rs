@@ -92,10 +92,12 @@ impl Arm {
     /// A file whose `[verdict]` says NOT usable (a refused calibration's
     /// `calibrated.toml`) is refused (`aacmm.InputError` naming the
     /// reasons) unless `accept_rejected=True`: it is then read with a
-    /// warning.
+    /// warning. A path `-` is a file of that name (not standard input, as
+    /// on the command line).
     #[staticmethod]
     #[pyo3(signature = (path, accept_rejected = false))]
     fn from_file(py: Python<'_>, path: PathBuf, accept_rejected: bool) -> PyResult<Arm> {
+        let path = crate::file_path(path);
         let rejected = if accept_rejected {
             Rejected::Warn
         } else {

@@ -155,7 +155,8 @@ impl DataSet {
     /// (`poses=None`). `joints` (if given) is the number of angle columns
     /// required. Errors name file, line and field (`aacmm.InputError`;
     /// `OSError` when a file cannot be read); warnings go to `warnings` and
-    /// `UserWarning`.
+    /// `UserWarning`. A path `-` is a file of that name (not standard input,
+    /// as on the command line).
     #[staticmethod]
     #[pyo3(signature = (poses = None, lengths = None, angle_unit = "deg", joints = None, positions = None))]
     fn from_files(
@@ -167,6 +168,11 @@ impl DataSet {
         positions: Option<PathBuf>,
     ) -> PyResult<DataSet> {
         let unit = crate::angle_unit(angle_unit)?;
+        let (poses, lengths, positions) = (
+            poses.map(crate::file_path),
+            lengths.map(crate::file_path),
+            positions.map(crate::file_path),
+        );
         let Some(poses) = poses else {
             return match (positions, lengths) {
                 (None, _) => Err(Error::value("give poses, positions or both").into()),

@@ -30,6 +30,19 @@ pub(crate) fn angle_unit(s: &str) -> Result<AngleUnit> {
         .map_err(|e: aacmm_core::io::UnknownUnit| Error::value(format!("angle_unit: {e}")))
 }
 
+/// A path a Python caller gave: always a file. The library's readers take
+/// `-` for standard input (the command line's and C's convention), which
+/// in Python blocked forever on an open pipe and made a file named `-`
+/// unreachable but as `./-`; Python's own `open("-")` opens a file of that
+/// name, and so does every `aacmm` function (issue 29).
+pub(crate) fn file_path(path: std::path::PathBuf) -> std::path::PathBuf {
+    if path.as_os_str() == "-" {
+        std::path::PathBuf::from("./-")
+    } else {
+        path
+    }
+}
+
 /// A serialisable value of the library as a Python object (through JSON,
 /// so that Python sees exactly what the command line writes).
 pub(crate) fn to_python<'py>(

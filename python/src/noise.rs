@@ -121,9 +121,10 @@ impl Noise {
     }
 
     fn __repr__(&self) -> String {
-        let opt = |v: Option<f64>| v.map_or("None".to_string(), |v| v.to_string());
+        // Debug: `1e308` as Python writes it, not 309 digits.
+        let opt = |v: Option<f64>| v.map_or("None".to_string(), |v| format!("{v:?}"));
         format!(
-            "Noise(encoder_deg={}, probe_mm={}, length_default_mm={}, length_weight={}, \
+            "Noise(encoder_deg={}, probe_mm={}, length_default_mm={:?}, length_weight={}, \
              position_mm={}, position_mm_per_m={})",
             opt(self.encoder_deg),
             opt(self.noise.probe_mm),

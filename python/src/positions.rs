@@ -196,8 +196,9 @@ fn uncertainties(u: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<Option<f64>>> {
                     String::new()
                 };
                 Err(Error::value(format!(
-                    "uncertainty{at} = {v}: must be positive (a standard uncertainty per \
-                     coordinate, mm), or NaN for not stated"
+                    "uncertainty{at} = {}: must be positive (a standard uncertainty per \
+                     coordinate, mm), or NaN for not stated",
+                    aacmm_core::error::short(v)
                 )))
             }
         }

@@ -157,7 +157,8 @@ fn error_model(errors: &str, true_arm: Option<&Arm>, scale: Option<f64>) -> Resu
             let scale = scale.unwrap_or(1.0);
             if !(scale.is_finite() && scale >= 0.0) {
                 return Err(Error::value(format!(
-                    "error_scale: must be finite and not negative, got {scale}"
+                    "error_scale: must be finite and not negative, got {}",
+                    aacmm_core::error::short(scale)
                 )));
             }
             Ok(ErrorModel::random(scale, errors == "assembled"))
@@ -200,6 +201,7 @@ pub fn simulate(
     length_uncertainty_mm: Option<f64>,
 ) -> PyResult<Campaign> {
     let errors = error_model(errors, true_arm, error_scale)?;
+    let sockets_file = sockets_file.map(crate::file_path);
     detached(py, || {
         let plan = match (sockets, &sockets_file) {
             (Some(_), Some(_)) => {

@@ -312,8 +312,15 @@ def test_messages_are_bounded(tmp_path, arm, data):
         aacmm.DataSet(labels[:3] + [huge], q[:4], angle_unit="deg")
     message = str(caught.value)
     assert len(message) < 400 and "(5000000 characters)" in message, message[:500]
+    # A field the reader takes (its lines stop at 1 MiB) is cut; a line
+    # beyond that is refused for its length, unquoted.
+    field = "L" * 900_000
+    poses = write(tmp_path, "p.csv", "point,q1,q2,q3,q4,q5,q6\n" + "A,1,2,3,4,5,6\n" * 5 + f"A,1,2,{field},4,5,6\n")
+    with pytest.raises(aacmm.InputError, match=r":7: field `q3`: `L+…` \(900000 characters\) is not a number$") as caught:
+        aacmm.DataSet.from_files(poses)
+    assert len(str(caught.value)) < 400
     poses = write(tmp_path, "p.csv", "point,q1,q2,q3,q4,q5,q6\n" + "A,1,2,3,4,5,6\n" * 5 + f"A,1,2,{huge},4,5,6\n")
-    with pytest.raises(aacmm.InputError, match=r":7: field `q3`: `L+…` \(5000000 characters\) is not a number$") as caught:
+    with pytest.raises(aacmm.InputError, match=r"p\.csv:7: line longer than 1 MiB") as caught:
         aacmm.DataSet.from_files(poses)
     assert len(str(caught.value)) < 400
     for kwargs, arg in (({"fix": "x" * 1_000_000}, "fix"), ({"prior": "y" * 1_000_000}, "prior")):

@@ -496,7 +496,10 @@ fn non_negative(name: &str, x: f64) -> Result<(), SimError> {
     } else {
         Err(SimError::setting(
             name,
-            format!("must be finite and not negative, got {x}"),
+            format!(
+                "must be finite and not negative, got {}",
+                crate::error::short(x)
+            ),
         ))
     }
 }
