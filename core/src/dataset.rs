@@ -708,7 +708,11 @@ impl DataSet {
             if !pairs.insert(pair) {
                 return bad(
                     "point_b",
-                    format!("the pair {}–{} is given twice", l.a, l.b),
+                    format!(
+                        "the pair {}–{} is given twice",
+                        crate::error::shown(&l.a),
+                        crate::error::shown(&l.b)
+                    ),
                 );
             }
             if !(l.distance.is_finite() && l.distance > 0.0) {

@@ -155,11 +155,8 @@ fn error_model(errors: &str, true_arm: Option<&Arm>, scale: Option<f64>) -> Resu
         },
         "random" | "assembled" => {
             let scale = scale.unwrap_or(1.0);
-            if !(scale.is_finite() && scale >= 0.0) {
-                return Err(Error::value(format!(
-                    "error_scale: must be finite and not negative, got {}",
-                    aacmm_core::error::short(scale)
-                )));
+            if let Err(why) = ErrorModel::check_scale(scale) {
+                return Err(Error::value(format!("error_scale: {why}")));
             }
             Ok(ErrorModel::random(scale, errors == "assembled"))
         }

@@ -110,6 +110,11 @@ def test_huge_values_are_shown_short(arm, data):
             "error_scale: must be finite and not negative, got -1e308",
         ),
         (
+            lambda: aacmm.simulate(arm, **sim, errors="random", error_scale=1e308),
+            ValueError,
+            "error_scale: at most 1000 (a length σ of 400 mm; beyond, no arm), got 1e308",
+        ),
+        (
             lambda: aacmm.DataSet.from_positions(np.zeros((3, 6)), np.eye(3), uncertainty=-1e308),
             ValueError,
             "uncertainty = -1e308: must be positive",

@@ -263,11 +263,8 @@ fn error_model(args: &Args) -> Result<ErrorModel> {
         }
         (None, Some(model)) => {
             let scale = args.error_scale.unwrap_or(1.0);
-            if !(scale.is_finite() && scale >= 0.0) {
-                bail!(
-                    "--error-scale: must be finite and not negative, got {}",
-                    aacmm_core::error::short(scale)
-                );
+            if let Err(why) = ErrorModel::check_scale(scale) {
+                bail!("--error-scale: {why}");
             }
             ErrorModel::random(scale, model == Errors::Assembled)
         }

@@ -209,6 +209,22 @@ fn bad_input_is_a_clear_error() {
     );
     let e = fail(&[
         "--errors",
+        "random",
+        "--error-scale",
+        "1e308",
+        "--sockets",
+        "3",
+        "--poses",
+        "5",
+        "--seed",
+        "1",
+    ]);
+    assert!(
+        e.contains("--error-scale: at most 1000 (a length σ of 400 mm; beyond, no arm), got 1e308"),
+        "{e}"
+    );
+    let e = fail(&[
+        "--errors",
         "paper",
         "--true",
         "x.toml",

@@ -15,6 +15,9 @@ use crate::io::{Arm, read_points};
 /// Default standard deviation of the random length errors (`a`, `d`, probe),
 /// mm: the RMS of the paper's Table 2 length errors (0.40 mm).
 pub const DEFAULT_LENGTH_SIGMA_MM: f64 = 0.4;
+
+/// The largest scale of the random errors' σ ([`ErrorModel::check_scale`]).
+pub const MAX_ERROR_SCALE: f64 = 1000.0;
 /// Default standard deviation of the random twist errors, degrees: the RMS of
 /// the paper's Table 2 `Δβ` (0.07°).
 pub const DEFAULT_TWIST_SIGMA_DEG: f64 = 0.07;
@@ -84,6 +87,33 @@ pub enum ErrorModel {
 }
 
 impl ErrorModel {
+    /// Why `scale` cannot scale the random errors' σ, if it cannot: it
+    /// must be finite, not negative and at most [`MAX_ERROR_SCALE`] (beyond,
+    /// a length σ of metres and a zero's of turns make no arm).
+    ///
+    /// ```
+    /// use aacmm_core::simulate::ErrorModel;
+    /// assert!(ErrorModel::check_scale(3.0).is_ok());
+    /// assert_eq!(
+    ///     ErrorModel::check_scale(1e308).unwrap_err(),
+    ///     "at most 1000 (a length σ of 400 mm; beyond, no arm), got 1e308"
+    /// );
+    /// assert!(ErrorModel::check_scale(-1.0).unwrap_err().starts_with("must be finite"));
+    /// ```
+    pub fn check_scale(scale: f64) -> Result<(), String> {
+        let shown = crate::error::short(scale);
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(format!("must be finite and not negative, got {shown}"));
+        }
+        if scale > MAX_ERROR_SCALE {
+            return Err(format!(
+                "at most {MAX_ERROR_SCALE} (a length σ of {} mm; beyond, no arm), got {shown}",
+                DEFAULT_LENGTH_SIGMA_MM * MAX_ERROR_SCALE
+            ));
+        }
+        Ok(())
+    }
+
     /// Random errors with the default σ ([`DEFAULT_LENGTH_SIGMA_MM`],
     /// [`DEFAULT_TWIST_SIGMA_DEG`], [`DEFAULT_ZERO_SIGMA_DEG`]) times `scale`;
     /// `zero_uniform` for a newly assembled arm.
