@@ -46,7 +46,7 @@ pub(crate) fn read_settings(path: &Path) -> Result<(String, String), InputError>
 }
 
 /// What [`read_from`] reads at a time.
-const CHUNK: usize = 1 << 16;
+const CHUNK: usize = 1 << 20;
 
 /// Reads a whole file as UTF-8, or standard input for the path `-` (the Unix
 /// convention); returns the name to use in messages ([`source_name`]) and
