@@ -83,7 +83,7 @@ impl IdentifyReport {
     ///
     /// # Errors
     ///
-    /// An [`OptionError`] on `noise.…` or `threads`;
+    /// An [`OptionError`](crate::error::OptionError) on `noise.…` or `threads`;
     /// [`CalibrationError::Joints`] when the data have another joint count;
     /// the kernel's refusal of the arm or of weights that are not finite.
     #[allow(clippy::too_many_arguments)] // the inputs of `aacmm identify`, each named

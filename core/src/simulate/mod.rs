@@ -70,8 +70,8 @@ pub use positions::{
 pub use settings::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,
     DEFAULT_STARTS_PER_POSE, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG, ErrorModel,
-    MAX_POSES_PER_SOCKET, MAX_SOCKETS, MAX_STARTS_PER_POSE, MIN_POSES_PER_SOCKET, SocketPlan,
-    SocketPoint, pair_count,
+    MAX_ERROR_SCALE, MAX_POSES_PER_SOCKET, MAX_SOCKETS, MAX_STARTS_PER_POSE, MIN_POSES_PER_SOCKET,
+    SocketPlan, SocketPoint, pair_count,
 };
 use sockets::round_nm;
 pub use sockets::{place_sockets, shoulder};
