@@ -194,7 +194,8 @@ pub(crate) fn rows(
         let x = [xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]];
         let u = uncertainty.get(i).copied().filter(|u| !u.is_nan());
         let reading = &q[i * joints..(i + 1) * joints];
-        out.push(&format!("P{}", i + 1), frame, reading, x, u, i + 1);
+        (out.try_push(&format!("P{}", i + 1), frame, reading, x, u, i + 1))
+            .map_err(|e| Error::out_of_memory(e.to_string()))?;
     }
     if let Some((row, why)) = out.unregistrable_frame() {
         let arg = if frames.is_empty() {

@@ -398,8 +398,8 @@ fn check_articulation(poses: &Poses, file: &str) -> Result<(), InputError> {
     // labels as rows would have taken 16 bytes a joint per row.
     let mut widest = (0.0_f64, 0, "");
     let (start, order) = rows_by_point(poses);
-    // Points touched too few times to range over anything are refused for
-    // that, by the touch count, when no point has the touches it needs.
+    // When no point has the touches it needs, the touch count refuses the
+    // file for that (the clearer cause), not this check.
     if start.windows(2).all(|w| w[1] - w[0] < MIN_TOUCHES) {
         return Ok(());
     }
@@ -677,7 +677,8 @@ impl DataSet {
             ));
         }
         let joints = readings.first().map_or(0, |r| r.as_ref().len());
-        let mut poses = Poses::with_capacity(joints, readings.len());
+        let memory = |e| InputError::memory(FILE, e);
+        let mut poses = Poses::try_with_capacity(joints, readings.len()).map_err(memory)?;
         for (i, (label, row)) in labels.iter().zip(readings).enumerate() {
             let row = row.as_ref();
             if row.len() != joints {
@@ -695,7 +696,7 @@ impl DataSet {
                     format!("{}: readings must be finite", row[j]),
                 ));
             }
-            poses.push(label.as_ref(), row, i + 1);
+            poses.try_push(label.as_ref(), row, i + 1).map_err(memory)?;
         }
         let mut pairs = std::collections::HashSet::new();
         for (i, l) in lengths.iter().enumerate() {
@@ -787,9 +788,13 @@ impl DataSet {
         lengths: &[ArrayLength],
     ) -> Result<DataSet, InputError> {
         let touches = check_touch_arrays(joints, q, points)?;
-        let mut poses = Poses::with_capacity(joints, points.len());
+        let memory = |e| InputError::memory("points", e);
+        let mut poses = Poses::try_with_capacity(joints, points.len()).map_err(memory)?;
         for (i, id) in points.iter().enumerate() {
-            poses.push(&id.to_string(), &q[i * joints..(i + 1) * joints], i + 1);
+            let row = &q[i * joints..(i + 1) * joints];
+            poses
+                .try_push(&id.to_string(), row, i + 1)
+                .map_err(memory)?;
         }
         let data = DataSet::from_poses_owned(poses, "points")?;
         if lengths.is_empty() {
@@ -807,9 +812,10 @@ impl DataSet {
     /// assert_eq!(data.to_touch_order(&[0, 1, 2, 3, 4, 5]), [0, 2, 4, 1, 3, 5]);
     /// ```
     pub fn from_labels<S: AsRef<str>>(labels: &[S], file: &str) -> Result<DataSet, InputError> {
-        let mut poses = Poses::with_capacity(0, labels.len());
+        let memory = |e| InputError::memory(file, e);
+        let mut poses = Poses::try_with_capacity(0, labels.len()).map_err(memory)?;
         for (i, label) in labels.iter().enumerate() {
-            poses.push(label.as_ref(), &[], i + 2);
+            poses.try_push(label.as_ref(), &[], i + 2).map_err(memory)?;
         }
         DataSet::from_poses(&poses, file)
     }

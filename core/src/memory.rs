@@ -26,6 +26,15 @@ pub const WORK_BYTES_PER_TOUCH: usize = 160;
 /// The same per reference length, rounded up.
 pub const WORK_BYTES_PER_LENGTH: usize = 128;
 
+/// What an identification allocates per touch beyond its data set: 50
+/// measured (as [`WORK_BYTES_PER_TOUCH`]), rounded up.
+pub const IDENTIFY_BYTES_PER_TOUCH: usize = 96;
+
+/// What an evaluation allocates per touch beyond its data set, the
+/// positions the caller computes first (24 bytes) included: 18 measured
+/// besides them, rounded up.
+pub const EVALUATE_BYTES_PER_TOUCH: usize = 64;
+
 /// What a data set holds per touch of `joints` joints with `conditions`
 /// condition columns (temperature, time): the readings in touch order (8
 /// bytes a joint), their sin and cos (16), the touch order while sorting
@@ -128,17 +137,28 @@ pub fn work_bytes(touches: usize, lengths: usize) -> usize {
 }
 
 /// [`room_for`] the work `what` on `touches` touches (or positions) and
-/// `lengths` reference lengths ([`work_bytes`]); the message counts them.
+/// `lengths` reference lengths, `per_touch` bytes a touch (e.g.
+/// [`WORK_BYTES_PER_TOUCH`]) and [`WORK_BYTES_PER_LENGTH`] a length, and
+/// `extra` bytes besides; the message counts them.
 ///
 /// ```
-/// use aacmm_core::memory::room_for_work;
-/// assert!(room_for_work("identifying from", 100, 2).is_ok());
-/// let e = room_for_work("identifying from", usize::MAX / 2, 0).unwrap_err();
+/// use aacmm_core::memory::{WORK_BYTES_PER_TOUCH, room_for_work};
+/// assert!(room_for_work("identifying from", 100, 2, WORK_BYTES_PER_TOUCH, 0).is_ok());
+/// let e = room_for_work("identifying from", usize::MAX / 2, 0, 96, 0).unwrap_err();
 /// assert!(e.to_string().starts_with("out of memory: identifying from 9223372036854775807 observations"));
 /// ```
-pub fn room_for_work(what: &str, touches: usize, lengths: usize) -> Result<(), OutOfMemory> {
+pub fn room_for_work(
+    what: &str,
+    touches: usize,
+    lengths: usize,
+    per_touch: usize,
+    extra: usize,
+) -> Result<(), OutOfMemory> {
     let what = format!("{what} {touches} observations and {lengths} lengths");
-    room_for(&what, work_bytes(touches, lengths))
+    let bytes = (touches.saturating_mul(per_touch))
+        .saturating_add(lengths.saturating_mul(WORK_BYTES_PER_LENGTH))
+        .saturating_add(extra);
+    room_for(&what, bytes)
 }
 
 /// What a calibration of `touches` touches of a `joints`-joint arm and

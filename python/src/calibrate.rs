@@ -46,16 +46,28 @@ fn fix_text(fix: &Bound<'_, PyAny>) -> PyResult<String> {
 
 /// Checks, before the data sets are copied into the request (the library
 /// owns its data; Python keeps its own), room for the copies and the work
-/// beyond them ([`aacmm_core::memory::calibration_bytes`]): a `MemoryError`
-/// rather than an abort under a memory limit.
-fn room_to_calibrate(data: &DataSet, validate: Option<&DataSet>) -> Result<(), Error> {
+/// beyond them ([`aacmm_core::memory::calibration_bytes`]), and the folds'
+/// copy when cross-validating: a `MemoryError` rather than an abort under a
+/// memory limit.
+fn room_to_calibrate(
+    data: &DataSet,
+    validate: Option<&DataSet>,
+    cross_validate: Option<usize>,
+) -> Result<(), Error> {
     let (mut touches, mut lengths) = (0usize, 0usize);
     for d in std::iter::once(data).chain(validate).map(|d| &d.data) {
         let positions = d.positions().map_or(0, |p| p.len());
         touches = touches.saturating_add(d.len()).saturating_add(positions);
         lengths = lengths.saturating_add(d.references().len());
     }
-    let bytes = aacmm_core::memory::calibration_bytes(touches, lengths, data.data.joints());
+    let joints = data.data.joints();
+    // Cross-validation copies the data set once more, into its folds.
+    let folds = cross_validate.map_or(0, |_| {
+        let copy = aacmm_core::memory::data_set_bytes_per_touch(joints, 2);
+        data.data.len().saturating_mul(copy)
+    });
+    let bytes =
+        aacmm_core::memory::calibration_bytes(touches, lengths, joints).saturating_add(folds);
     let what = format!("calibrating {touches} observations and {lengths} lengths");
     Ok(aacmm_core::memory::room_for(&what, bytes)?)
 }
@@ -175,7 +187,7 @@ pub fn calibrate(
     };
     // The solvers' settings not exposed here keep the library's defaults,
     // which are the command line's.
-    room_to_calibrate(data, validate)?;
+    room_to_calibrate(data, validate, cross_validate)?;
     let request = request(arm, data, validate, &fix, noise, prior)
         .method(method)
         .seed(seed)

@@ -44,6 +44,7 @@ pub fn evaluate<'py>(py: Python<'py>, arm: &Arm, data: &DataSet) -> PyResult<Bou
         )
         .into());
     }
+    aacmm_core::metrics::room_to_evaluate(&data.data).map_err(Error::from)?;
     let evaluation = detached(py, || {
         let d = &data.data;
         let mut xyz = vec![[0.0; 3]; d.len()];
@@ -71,7 +72,9 @@ pub fn identify<'py>(
     let threads = self::threads(threads)?;
     let d = &data.data;
     let observations = d.len() + d.positions().map_or(0, |p| p.len());
-    aacmm_core::memory::room_for_work("identifying from", observations, d.references().len())
+    let per_touch = aacmm_core::memory::IDENTIFY_BYTES_PER_TOUCH;
+    let lengths = d.references().len();
+    aacmm_core::memory::room_for_work("identifying from", observations, lengths, per_touch, 0)
         .map_err(Error::from)?;
     let id = detached(py, || {
         core_identify(&arm.arm.params, &data.data, &noise, threads)

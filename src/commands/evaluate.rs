@@ -59,6 +59,8 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.lengths {
         data = data.with_lengths(&read_lengths(path)?, &source_name(path))?;
     }
+    // The positions and the rows below are the evaluation's: room first.
+    aacmm_core::metrics::room_to_evaluate(&data)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
     args.input.check_conditions(&arm)?;
     let rows: Vec<&[f64]> = (0..data.len()).map(|i| data.reading(i)).collect();

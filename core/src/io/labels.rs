@@ -68,7 +68,8 @@ impl Labels {
         let rehash = |&id: &u32| hasher.hash_one(self::label(text, ends, id));
         table
             .try_reserve(1, rehash)
-            .map_err(|_| OutOfMemory::new(what, table.capacity().saturating_mul(8)))?;
+            // A u32 and a control byte a slot, the table doubled.
+            .map_err(|_| OutOfMemory::new(what, (table.len() + 1).saturating_mul(2 * 5)))?;
         text.try_reserve(label.len())
             .map_err(|_| OutOfMemory::new(what, text.len().saturating_add(label.len())))?;
         try_grow(ends, what, 1)?;

@@ -20,7 +20,7 @@ use super::labels::Labels;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
 use crate::error::InputError;
-use crate::memory::{OutOfMemory, try_vec};
+use crate::memory::{OutOfMemory, try_grow, try_vec};
 
 /// The radians hint is given only for at least this many rows.
 pub(crate) const RADIANS_HINT_MIN_ROWS: usize = 20;
@@ -115,17 +115,31 @@ impl Poses {
     /// read from `line` of its file (or numbered by the caller).
     ///
     /// # Panics
-    /// If `q` does not hold [`Poses::joints`] readings, or past 2³² distinct
-    /// labels.
+    /// If `q` does not hold [`Poses::joints`] readings, past 2³² distinct
+    /// labels, or when the row's memory cannot be had (as `Vec::push`;
+    /// [`Poses::try_push`] returns an error instead).
     pub fn push(&mut self, label: &str, q: &[f64], line: usize) {
+        if let Err(e) = self.try_push(label, q, line) {
+            panic!("{e}");
+        }
+    }
+
+    /// [`Poses::push`], or an [`OutOfMemory`] (and nothing added) when the
+    /// row's memory cannot be had or past 2³² distinct labels.
+    ///
+    /// # Panics
+    /// If `q` does not hold [`Poses::joints`] readings.
+    pub fn try_push(&mut self, label: &str, q: &[f64], line: usize) -> Result<(), OutOfMemory> {
         assert_eq!(q.len(), self.joints, "readings of one row");
-        let id = match self.intern(label) {
-            Ok(id) => id,
-            Err(e) => panic!("{e}"),
-        };
+        let what = "the rows' readings";
+        try_grow(&mut self.point_of, what, 1)?;
+        try_grow(&mut self.q, what, q.len())?;
+        try_grow(&mut self.lines, what, 1)?;
+        let id = self.intern(label)?;
         self.point_of.push(id);
         self.q.extend_from_slice(q);
         self.lines.push(line);
+        Ok(())
     }
 
     /// The index of `label` in `points`, added if new. Rows of one point

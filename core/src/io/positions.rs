@@ -41,10 +41,6 @@ pub const DEFAULT_FRAME: &str = "instrument";
 /// The fewest positions a frame's registration (six unknowns) can rest on.
 pub const MIN_FRAME_POSITIONS: usize = 3;
 
-/// One row for [`Positions::try_push`]: label, frame, readings (rad),
-/// position (mm), its uncertainty (mm) and line.
-type Row<'a> = (&'a str, &'a str, &'a [f64], [f64; 3], Option<f64>, usize);
-
 /// The rows of a reference-position file, in file order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Positions {
@@ -134,16 +130,27 @@ impl Positions {
         uncertainty: Option<f64>,
         line: usize,
     ) {
-        let row = (label, frame, q, xyz, uncertainty, line);
-        if let Err(e) = self.try_push(row) {
+        if let Err(e) = self.try_push(label, frame, q, xyz, uncertainty, line) {
             panic!("{e}");
         }
     }
 
     /// [`Positions::push`], or an [`OutOfMemory`] (and nothing added) when
     /// the row's room cannot be had.
-    fn try_push(&mut self, row: Row<'_>) -> Result<(), OutOfMemory> {
-        let (label, frame, q, xyz, uncertainty, line) = row;
+    ///
+    /// # Panics
+    ///
+    /// When `q` has another joint count than the set's.
+    #[allow(clippy::too_many_arguments)]
+    pub fn try_push(
+        &mut self,
+        label: &str,
+        frame: &str,
+        q: &[f64],
+        xyz: [f64; 3],
+        uncertainty: Option<f64>,
+        line: usize,
+    ) -> Result<(), OutOfMemory> {
         assert_eq!(q.len(), self.joints, "one reading per joint");
         self.room_for_row()?;
         let label = self.labels.intern(label, "the positions' labels")?;
@@ -515,8 +522,8 @@ fn parse_row(
             }
         },
     };
-    let row = (f[0], frame, &q[..], xyz, uncertainty, line);
-    out.try_push(row).map_err(|e| InputError::memory(file, e))?;
+    (out.try_push(f[0], frame, q, xyz, uncertainty, line))
+        .map_err(|e| InputError::memory(file, e))?;
     let condition = |c: Option<usize>, name: &str| match c {
         None => Ok(None),
         Some(c) if f[c].is_empty() => Err(InputError::field(

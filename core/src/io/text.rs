@@ -45,8 +45,11 @@ pub(crate) fn read_settings(path: &Path) -> Result<(String, String), InputError>
     read_at_most(path, MAX_SETTINGS)
 }
 
-/// What [`read_from`] reads at a time.
+/// What [`read_from`] reads at a time. At most [`MAX_LINE`]: a line inside
+/// one chunk is then never too long, and only lines across chunks are
+/// checked.
 const CHUNK: usize = 1 << 20;
+const _: () = assert!(CHUNK <= MAX_LINE);
 
 /// Reads a whole file as UTF-8, or standard input for the path `-` (the Unix
 /// convention); returns the name to use in messages ([`source_name`]) and
@@ -114,14 +117,13 @@ fn read_from(
         // Into the room there is (the end of a file reserved whole is
         // found without growing), a chunk at most.
         let room = (bytes.capacity() - start).min(CHUNK);
-        let n = match (&mut r).take(room as u64).read_to_end(&mut bytes) {
-            Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(InputError::io(file, e)),
-        };
-        if n == 0 {
-            break;
-        }
+        // `read_to_end` retries an interrupted read itself; fewer bytes
+        // than asked for means the end (a terminal's Ctrl-D is not asked
+        // for twice).
+        let n = (&mut r)
+            .take(room as u64)
+            .read_to_end(&mut bytes)
+            .map_err(|e| InputError::io(&file, e))?;
         if bytes.len() > max {
             return Err(too_large(&file, max));
         }
@@ -134,6 +136,14 @@ fn read_from(
             (None, _) if run + n <= MAX_LINE => run + n,
             _ => return Err(too_long(&file, &bytes[..start], chunk)),
         };
+        if n < room {
+            break;
+        }
+    }
+    // Room grown by doubling (standard input, a file that grew) is given
+    // back rather than held beside the rows the text becomes.
+    if bytes.capacity() > bytes.len().saturating_add(CHUNK) {
+        bytes.shrink_to_fit();
     }
     match String::from_utf8(bytes) {
         Ok(text) => Ok((file, text)),
@@ -152,7 +162,17 @@ fn read_from(
 /// [`cr_only`] says of a shorter file.
 fn too_long(file: &str, before: &[u8], chunk: &[u8]) -> InputError {
     let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-    if chunk.contains(&b'\r') {
+    // The overlong line's part of the chunk; a carriage return before its
+    // end (not the CR of a CRLF) ends lines alone.
+    let part = &chunk[..chunk
+        .iter()
+        .position(|&b| b == b'\n')
+        .unwrap_or(chunk.len())];
+    if part
+        .iter()
+        .enumerate()
+        .any(|(i, &b)| b == b'\r' && i + 1 < part.len())
+    {
         return InputError::line_error(file, line, CR_ONLY);
     }
     let message = format!(
@@ -915,6 +935,41 @@ mod tests {
         let mac = b"point,q1\rA,1\r".repeat(MAX_LINE / 8);
         let e = read_from("mac.csv".into(), &mac[..], 0, usize::MAX).unwrap_err();
         assert!(e.to_string().contains("carriage return alone"), "{e}");
+        // A CRLF file's overlong line is said to be one.
+        let mut crlf = b"point,q1\r\nA,1\r\n".to_vec();
+        crlf.extend(std::iter::repeat_n(b'1', MAX_LINE + 10));
+        crlf.extend(b"\r\nA,2\r\n");
+        let e = read_from("w.csv".into(), &crlf[..], 0, usize::MAX).unwrap_err();
+        assert!(
+            e.to_string().starts_with("w.csv:3: line longer than 1 MiB"),
+            "{e}"
+        );
+    }
+
+    /// Yields its parts one read at a time: an empty part is an end of
+    /// file, as a terminal's Ctrl-D.
+    struct Parts(Vec<&'static [u8]>);
+
+    impl Read for Parts {
+        fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+            let Some(part) = self.0.first_mut() else {
+                return Ok(0);
+            };
+            let n = part.len().min(buf.len());
+            buf[..n].copy_from_slice(&part[..n]);
+            *part = &part[n..];
+            if n == 0 || part.is_empty() {
+                self.0.remove(0);
+            }
+            Ok(n)
+        }
+    }
+
+    #[test]
+    fn the_first_end_of_file_ends_the_text() {
+        let (_, text) =
+            read_from("-".into(), Parts(vec![b"a\n", b"", b"b\n"]), 0, usize::MAX).unwrap();
+        assert_eq!(text, "a\n");
     }
 
     #[test]

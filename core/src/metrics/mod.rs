@@ -353,6 +353,20 @@ pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsE
     evaluate_threads(data, xyz, DEFAULT_THREADS)
 }
 
+/// Checks, before any work, that an evaluation of `data` can have the
+/// memory it needs beyond the data set, the positions its caller computes
+/// first included ([`crate::memory::EVALUATE_BYTES_PER_TOUCH`]): callers
+/// check before they compute them, [`evaluate_threads`] again.
+///
+/// # Errors
+///
+/// [`crate::memory::OutOfMemory`] when the memory cannot be had.
+pub fn room_to_evaluate(data: &DataSet) -> Result<(), crate::memory::OutOfMemory> {
+    let per_touch = crate::memory::EVALUATE_BYTES_PER_TOUCH;
+    let lengths = data.references().len();
+    crate::memory::room_for_work("evaluating", data.len(), lengths, per_touch, 0)
+}
+
 /// The threads [`evaluate`] uses for the pairs of points.
 pub(crate) const DEFAULT_THREADS: usize = 2;
 
@@ -380,8 +394,7 @@ pub fn evaluate_threads(
     xyz: &[[f64; 3]],
     threads: usize,
 ) -> Result<Evaluation, MetricsError> {
-    let bytes = crate::memory::work_bytes(data.len(), data.references().len());
-    crate::memory::room_for(&format!("evaluating {} touches", data.len()), bytes)?;
+    room_to_evaluate(data)?;
     evaluate_with(data, xyz, Some((threads, DEFAULT_PAIR_SEED)))
 }
 

@@ -270,26 +270,41 @@ impl Problem {
 /// Checks, before any work, that the memory a calibration of `problem`'s
 /// data allocates beyond its data set can be had: its solver, statistics
 /// and report allocate as they go, where a failure would abort the host
-/// process (see [`crate::memory`]). Held-out data count with the fitted.
+/// process (see [`crate::memory`]). Held-out data count with the fitted;
+/// cross-validation copies the data set into its folds, one at a time.
 fn room_to_calibrate(problem: &Problem) -> Result<(), CalibrationError> {
     let mut data = vec![&problem.data];
     data.extend(problem.held_out.as_ref().map(|h| &h.data));
-    Ok(room_for_work("calibrating", &data)?)
+    let (touches, lengths) = observations(&data);
+    let folds = match problem.cross_validate {
+        Some(_) => problem
+            .data
+            .len()
+            .saturating_mul(crate::memory::data_set_bytes_per_touch(
+                problem.data.joints(),
+                2,
+            )),
+        None => 0,
+    };
+    let per_touch = crate::memory::WORK_BYTES_PER_TOUCH;
+    Ok(crate::memory::room_for_work(
+        "calibrating",
+        touches,
+        lengths,
+        per_touch,
+        folds,
+    )?)
 }
 
-/// [`crate::memory::room_for_work`] (`what`) on the data sets `data`: their
-/// touches, positions and lengths.
-pub(crate) fn room_for_work(
-    what: &str,
-    data: &[&DataSet],
-) -> Result<(), crate::memory::OutOfMemory> {
+/// The touches and positions, and the reference lengths, of `data`.
+pub(crate) fn observations(data: &[&DataSet]) -> (usize, usize) {
     let (mut touches, mut lengths) = (0usize, 0usize);
     for d in data {
         let positions = d.positions().map_or(0, |p| p.len());
         touches = touches.saturating_add(d.len()).saturating_add(positions);
         lengths = lengths.saturating_add(d.references().len());
     }
-    crate::memory::room_for_work(what, touches, lengths)
+    (touches, lengths)
 }
 
 /// Stated lengths this many times the nominal arm's distances (or their
