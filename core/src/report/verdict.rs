@@ -9,6 +9,7 @@
 use super::html::escape;
 use super::{CalibrationInput, ValidationRow};
 use crate::calibrate::Calibration;
+use crate::calibrate::checks::{CHI_SQUARE_ALPHA, CHI_SQUARE_REFUSE};
 
 /// Outliers listed by `file:line` (the rest are counted).
 const LISTED_OUTLIERS: usize = 20;
@@ -71,7 +72,9 @@ fn fit_quality(cal: &Calibration) -> String {
     }
     match &cal.checks.chi_square {
         Some(chi) => format!(
-            "χ² test against the stated noise (each tail at 0.001; refused beyond 10⁻⁹): {}",
+            "χ² test against the stated noise (each tail at {CHI_SQUARE_ALPHA}; refused beyond \
+             {}): {}",
+            power_of_ten(CHI_SQUARE_REFUSE),
             escape(&chi.describe())
         ),
         None => "χ² test: none — the noise was not stated, so σ was estimated from the fit's \
@@ -140,4 +143,31 @@ fn held_out(rows: &[ValidationRow]) -> Vec<String> {
             )
         })
         .collect()
+}
+
+/// A power of ten as 10 and a superscript exponent: 1e-9 → `10⁻⁹`.
+fn power_of_ten(x: f64) -> String {
+    let exponent = x.log10().round() as i32;
+    let superscript = |c: char| match c {
+        '-' => '⁻',
+        d => ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'][d as usize - '0' as usize],
+    };
+    format!(
+        "10{}",
+        exponent
+            .to_string()
+            .chars()
+            .map(superscript)
+            .collect::<String>()
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn powers_of_ten_are_written_with_superscripts() {
+        assert_eq!(super::power_of_ten(1e-9), "10⁻⁹");
+        assert_eq!(super::power_of_ten(1e-10), "10⁻¹⁰");
+        assert_eq!(super::power_of_ten(1e3), "10³");
+    }
 }
