@@ -117,11 +117,8 @@ pub(crate) fn try_vec<T>(what: &str, len: usize) -> Result<Vec<T>, Error> {
                 size_of::<T>()
             ))
         })?;
-    let mut v = Vec::new();
-    v.try_reserve_exact(len).map_err(|_| {
-        Error::out_of_memory(format!("{what} = {len}: cannot allocate {bytes} bytes"))
-    })?;
-    Ok(v)
+    aacmm_core::memory::try_vec(what, len)
+        .map_err(|_| Error::out_of_memory(format!("{what} = {len}: cannot allocate {bytes} bytes")))
 }
 
 /// Checks, before any work, that `bytes` (what a computation sized by
@@ -135,13 +132,11 @@ pub(crate) fn room_for(what: &str, bytes: usize) -> Result<(), Error> {
             "{what}: the work needs {bytes} bytes, more than memory can hold"
         )));
     }
-    let mut probe: Vec<u8> = Vec::new();
-    if probe.try_reserve_exact(bytes).is_err() {
-        return Err(Error::out_of_memory(format!(
+    aacmm_core::memory::room_for(what, bytes).map_err(|_| {
+        Error::out_of_memory(format!(
             "{what}: cannot allocate the {bytes} bytes the work needs"
-        )));
-    }
-    Ok(())
+        ))
+    })
 }
 
 /// The memory one argument takes, for [`Args`].

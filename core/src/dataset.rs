@@ -943,6 +943,12 @@ impl DataSet {
         self
     }
 
+    /// Touches and reference positions: the observations a fit weighs
+    /// (lengths aside).
+    pub fn observation_count(&self) -> usize {
+        self.len() + self.positions().map_or(0, |p| p.len())
+    }
+
     /// Readings per touch.
     pub fn joints(&self) -> usize {
         self.joints

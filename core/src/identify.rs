@@ -224,6 +224,19 @@ impl Scaled {
     }
 }
 
+/// Checks, before any work, that an identification of `data` can have the
+/// memory it needs beyond the data set
+/// ([`crate::memory::IDENTIFY_BYTES_PER_TOUCH`]).
+///
+/// # Errors
+///
+/// [`crate::memory::OutOfMemory`] when the memory cannot be had.
+pub fn room_to_identify(data: &DataSet) -> Result<(), crate::memory::OutOfMemory> {
+    let per_touch = crate::memory::IDENTIFY_BYTES_PER_TOUCH;
+    let (observations, lengths) = (data.observation_count(), data.references().len());
+    crate::memory::room_for_work("identifying from", observations, lengths, per_touch, 0)
+}
+
 /// Analyses what `data` can identify at `params`, the touches weighed from
 /// `noise` (without stated noise, as a 0.01 mm touch).
 ///

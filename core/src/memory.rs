@@ -128,11 +128,11 @@ pub fn room_for(what: &str, bytes: usize) -> Result<(), OutOfMemory> {
 }
 
 /// What the work on a data set of `touches` touches (or positions) and
-/// `lengths` reference lengths allocates beyond the data set
-/// ([`WORK_BYTES_PER_TOUCH`], [`WORK_BYTES_PER_LENGTH`]), saturated at
-/// `usize::MAX`.
-pub fn work_bytes(touches: usize, lengths: usize) -> usize {
-    (touches.saturating_mul(WORK_BYTES_PER_TOUCH))
+/// `lengths` reference lengths allocates beyond the data set: `per_touch`
+/// bytes a touch (e.g. [`WORK_BYTES_PER_TOUCH`]) and
+/// [`WORK_BYTES_PER_LENGTH`] a length, saturated at `usize::MAX`.
+pub fn work_bytes(touches: usize, lengths: usize, per_touch: usize) -> usize {
+    (touches.saturating_mul(per_touch))
         .saturating_add(lengths.saturating_mul(WORK_BYTES_PER_LENGTH))
 }
 
@@ -155,10 +155,10 @@ pub fn room_for_work(
     extra: usize,
 ) -> Result<(), OutOfMemory> {
     let what = format!("{what} {touches} observations and {lengths} lengths");
-    let bytes = (touches.saturating_mul(per_touch))
-        .saturating_add(lengths.saturating_mul(WORK_BYTES_PER_LENGTH))
-        .saturating_add(extra);
-    room_for(&what, bytes)
+    room_for(
+        &what,
+        work_bytes(touches, lengths, per_touch).saturating_add(extra),
+    )
 }
 
 /// What a calibration of `touches` touches of a `joints`-joint arm and
@@ -166,7 +166,7 @@ pub fn room_for_work(
 /// a caller that checks before it builds the data set (the C API's arrays).
 pub fn calibration_bytes(touches: usize, lengths: usize, joints: usize) -> usize {
     let data = touches.saturating_mul(data_set_bytes_per_touch(joints, 0));
-    data.saturating_add(work_bytes(touches, lengths))
+    data.saturating_add(work_bytes(touches, lengths, WORK_BYTES_PER_TOUCH))
 }
 
 #[cfg(test)]
@@ -189,7 +189,7 @@ mod tests {
 
     #[test]
     fn calibration_bytes_saturates() {
-        assert_eq!(work_bytes(10, 2), 10 * 160 + 2 * 128);
+        assert_eq!(work_bytes(10, 2, WORK_BYTES_PER_TOUCH), 10 * 160 + 2 * 128);
         assert_eq!(calibration_bytes(10, 2, 6), 10 * 320 + 2 * 128);
         assert_eq!(calibration_bytes(usize::MAX, 1, 6), usize::MAX);
     }

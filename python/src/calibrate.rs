@@ -45,31 +45,20 @@ fn fix_text(fix: &Bound<'_, PyAny>) -> PyResult<String> {
 }
 
 /// Checks, before the data sets are copied into the request (the library
-/// owns its data; Python keeps its own), room for the copies and the work
-/// beyond them ([`aacmm_core::memory::calibration_bytes`]), and the folds'
-/// copy when cross-validating: a `MemoryError` rather than an abort under a
-/// memory limit.
+/// owns its data; Python keeps its own), room for the copies, the work
+/// beyond them and the folds' copy when cross-validating
+/// ([`aacmm_core::session::room_to_calibrate`]): a `MemoryError` rather than
+/// an abort under a memory limit.
 fn room_to_calibrate(
     data: &DataSet,
     validate: Option<&DataSet>,
     cross_validate: Option<usize>,
 ) -> Result<(), Error> {
-    let (mut touches, mut lengths) = (0usize, 0usize);
-    for d in std::iter::once(data).chain(validate).map(|d| &d.data) {
-        let positions = d.positions().map_or(0, |p| p.len());
-        touches = touches.saturating_add(d.len()).saturating_add(positions);
-        lengths = lengths.saturating_add(d.references().len());
-    }
-    let joints = data.data.joints();
-    // Cross-validation copies the data set once more, into its folds.
-    let folds = cross_validate.map_or(0, |_| {
-        let copy = aacmm_core::memory::data_set_bytes_per_touch(joints, 2);
-        data.data.len().saturating_mul(copy)
-    });
-    let bytes =
-        aacmm_core::memory::calibration_bytes(touches, lengths, joints).saturating_add(folds);
-    let what = format!("calibrating {touches} observations and {lengths} lengths");
-    Ok(aacmm_core::memory::room_for(&what, bytes)?)
+    let held_out = validate.map(|v| &v.data);
+    let folds = cross_validate.is_some();
+    Ok(aacmm_core::session::room_to_calibrate(
+        &data.data, held_out, folds, true,
+    )?)
 }
 
 /// The library's request for these arguments (the library parses and

@@ -70,12 +70,7 @@ pub fn identify<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let noise = noise.map_or_else(CoreNoise::default, |n| n.noise);
     let threads = self::threads(threads)?;
-    let d = &data.data;
-    let observations = d.len() + d.positions().map_or(0, |p| p.len());
-    let per_touch = aacmm_core::memory::IDENTIFY_BYTES_PER_TOUCH;
-    let lengths = d.references().len();
-    aacmm_core::memory::room_for_work("identifying from", observations, lengths, per_touch, 0)
-        .map_err(Error::from)?;
+    aacmm_core::identify::room_to_identify(&data.data).map_err(Error::from)?;
     let id = detached(py, || {
         core_identify(&arm.arm.params, &data.data, &noise, threads)
             .map_err(|e| Error::from(e).prefixed(&arm.source))

@@ -141,7 +141,6 @@ impl Positions {
     /// # Panics
     ///
     /// When `q` has another joint count than the set's.
-    #[allow(clippy::too_many_arguments)]
     pub fn try_push(
         &mut self,
         label: &str,

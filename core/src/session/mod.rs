@@ -267,41 +267,47 @@ impl Problem {
     }
 }
 
-/// Checks, before any work, that the memory a calibration of `problem`'s
-/// data allocates beyond its data set can be had: its solver, statistics
-/// and report allocate as they go, where a failure would abort the host
-/// process (see [`crate::memory`]). Held-out data count with the fitted;
-/// cross-validation copies the data set into its folds, one at a time.
-fn room_to_calibrate(problem: &Problem) -> Result<(), CalibrationError> {
-    let mut data = vec![&problem.data];
-    data.extend(problem.held_out.as_ref().map(|h| &h.data));
-    let (touches, lengths) = observations(&data);
-    let folds = match problem.cross_validate {
-        Some(_) => problem
-            .data
-            .len()
-            .saturating_mul(crate::memory::data_set_bytes_per_touch(
-                problem.data.joints(),
-                2,
-            )),
-        None => 0,
+/// Checks, before any work, that the memory a calibration of `data` (with
+/// `held_out` data; cross-validated when `folds`) allocates beyond its data
+/// sets can be had: its solver, statistics and report allocate as they go,
+/// where a failure would abort the host process (see [`crate::memory`]).
+/// Cross-validation copies the data set into its folds, one at a time; a
+/// caller that copies the data sets into its request first (`copied`:
+/// Python, which keeps its own) counts those copies too.
+///
+/// # Errors
+///
+/// [`crate::memory::OutOfMemory`] when the memory cannot be had.
+pub fn room_to_calibrate(
+    data: &DataSet,
+    held_out: Option<&DataSet>,
+    folds: bool,
+    copied: bool,
+) -> Result<(), crate::memory::OutOfMemory> {
+    use crate::memory::data_set_bytes_per_touch as data_set_bytes;
+    let all: Vec<&DataSet> = std::iter::once(data).chain(held_out).collect();
+    let (touches, lengths) = observations(&all);
+    let joints = data.joints();
+    let folds = if folds {
+        data.len().saturating_mul(data_set_bytes(joints, 2))
+    } else {
+        0
+    };
+    let copies = if copied {
+        touches.saturating_mul(data_set_bytes(joints, 0))
+    } else {
+        0
     };
     let per_touch = crate::memory::WORK_BYTES_PER_TOUCH;
-    Ok(crate::memory::room_for_work(
-        "calibrating",
-        touches,
-        lengths,
-        per_touch,
-        folds,
-    )?)
+    let extra = folds.saturating_add(copies);
+    crate::memory::room_for_work("calibrating", touches, lengths, per_touch, extra)
 }
 
 /// The touches and positions, and the reference lengths, of `data`.
 pub(crate) fn observations(data: &[&DataSet]) -> (usize, usize) {
     let (mut touches, mut lengths) = (0usize, 0usize);
     for d in data {
-        let positions = d.positions().map_or(0, |p| p.len());
-        touches = touches.saturating_add(d.len()).saturating_add(positions);
+        touches = touches.saturating_add(d.observation_count());
         lengths = lengths.saturating_add(d.references().len());
     }
     (touches, lengths)
@@ -1063,7 +1069,8 @@ pub fn run(
     let start = &problem.arm.params;
     let data = &problem.data;
     let model = &problem.model;
-    room_to_calibrate(problem)?;
+    let held_out = problem.held_out.as_ref().map(|h| &h.data);
+    room_to_calibrate(data, held_out, problem.cross_validate.is_some(), false)?;
     let calibration = calibrate_with(problem.inputs(), settings, solver, ctx)?;
     // Each arm's frames: the start's registered to the fitted data, the
     // calibrated arm's fitted with it; held-out positions seen from the

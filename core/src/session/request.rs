@@ -587,9 +587,7 @@ impl Request {
     /// [`IdentifyReport::new`].
     pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
-        let (touches, lengths) = super::observations(&[&self.data]);
-        let per_touch = crate::memory::IDENTIFY_BYTES_PER_TOUCH;
-        crate::memory::room_for_work("identifying from", touches, lengths, per_touch, 0)?;
+        crate::identify::room_to_identify(&self.data)?;
         let prior = self.tolerances()?;
         let threads = self.threads.unwrap_or_else(available_threads);
         IdentifyReport::new(
