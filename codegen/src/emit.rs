@@ -14,6 +14,9 @@ fn operand(g: &Graph, id: Id) -> TokenStream {
             let (array, index) = match input {
                 Input::CosQ(j) => ("cq", j),
                 Input::SinQ(j) => ("sq", j),
+                // A prismatic joint's reading travels where a revolute
+                // joint's cos does; its `sq` slot is not read.
+                Input::Q(j) => ("cq", j),
                 Input::CosTheta(j) => ("ct", j),
                 Input::SinTheta(j) => ("st", j),
                 Input::CosAlpha(j) => ("ca", j),
@@ -77,9 +80,30 @@ fn body(g: &Graph, outputs: &[Id]) -> TokenStream {
     quote!(#(#lets)*)
 }
 
+/// An array literal of the values `v`.
+fn vector(g: &Graph, v: &[Id]) -> TokenStream {
+    let items = v.iter().map(|&id| operand(g, id));
+    quote!([#(#items),*])
+}
+
 fn vec3(g: &Graph, v: &[Id; 3]) -> TokenStream {
-    let [x, y, z] = v.map(|id| operand(g, id));
-    quote!([#x, #y, #z])
+    vector(g, v)
+}
+
+/// The top three rows of the tool's homogeneous transform, `[R | p]`.
+fn transform(g: &Graph, rotation: &[[Id; 3]; 3], p: &[Id; 3]) -> TokenStream {
+    let rows = (0..3).map(|r| vector(g, &[rotation[r][0], rotation[r][1], rotation[r][2], p[r]]));
+    quote!([#(#rows),*])
+}
+
+/// The ids of the tool's transform.
+fn transform_ids(k: &KernelExprs) -> Vec<Id> {
+    k.rotation
+        .iter()
+        .flatten()
+        .chain(&k.frame_position)
+        .copied()
+        .collect()
 }
 
 /// The last operation among `ids` in evaluation order (`None` when all are
@@ -118,31 +142,31 @@ fn body_with_stores(
     code
 }
 
-/// The `let`s for `cols` and `position`, with the stores `jac[i] = [..];`
+/// The `let`s for `cols` and `returned`, with the stores `jac[i] = [..];`
 /// among them.
-fn columns(g: &Graph, cols: &[[Id; 3]], position: &[Id; 3]) -> TokenStream {
-    columns_with(g, cols, &[], 0, position)
+fn columns<const R: usize>(g: &Graph, cols: &[[Id; R]], returned: &[Id]) -> TokenStream {
+    columns_with(g, cols, &[], 0, returned)
 }
 
 /// [`columns`] where, for each `j` of `alternatives`, column `offset + j` is
 /// `alternatives[j]` when `hayati[j]` (a per-parameter-set flag, the same in
 /// every SIMD lane) and `cols[offset + j]` otherwise.
-fn columns_with(
+fn columns_with<const R: usize>(
     g: &Graph,
-    cols: &[[Id; 3]],
-    alternatives: &[[Id; 3]],
+    cols: &[[Id; R]],
+    alternatives: &[[Id; R]],
     offset: usize,
-    position: &[Id; 3],
+    returned: &[Id],
 ) -> TokenStream {
     let outputs: Vec<Id> = cols
         .iter()
         .chain(alternatives)
         .flatten()
-        .chain(position)
+        .chain(returned)
         .copied()
         .collect();
     let stores = cols.iter().enumerate().map(|(i, col)| {
-        let v = vec3(g, col);
+        let v = vector(g, col);
         let store = Literal::usize_unsuffixed(i);
         match i
             .checked_sub(offset)
@@ -150,7 +174,7 @@ fn columns_with(
         {
             Some((j, alt)) => {
                 let ready = last_operation(g, &[*col, *alt].concat());
-                let alt = vec3(g, alt);
+                let alt = vector(g, alt);
                 let j = Literal::usize_unsuffixed(j);
                 (
                     ready,
@@ -163,48 +187,141 @@ fn columns_with(
     body_with_stores(g, &outputs, stores.collect())
 }
 
+/// What every generated function shares: its arguments, bounds and
+/// attributes, and the documentation of the arguments.
+struct Signature {
+    args: TokenStream,
+    select_arg: TokenStream,
+    bounds: TokenStream,
+    attrs: TokenStream,
+    args_doc: String,
+    select_doc: &'static str,
+    order: &'static str,
+}
+
+impl Signature {
+    fn of(k: &KernelExprs) -> Signature {
+        let n = Literal::usize_unsuffixed(k.spec.joints);
+        let probe_arg = if k.spec.probe {
+            quote!(b: &[S; 3],)
+        } else {
+            quote!()
+        };
+        let beta_arg = if k.spec.hayati {
+            quote!(cb: &[S; #n], sb: &[S; #n],)
+        } else {
+            quote!()
+        };
+        let per_pose = if k.spec.prismatic == 0 {
+            "per pose `cq, sq` (cos, sin of the encoder readings)."
+        } else {
+            "per pose `cq, sq`: for a revolute joint the cos and sin of its reading, for a \
+             prismatic joint its reading itself (mm, added to `d`) in `cq` (its `sq` is not read)."
+        };
+        let args_doc = if k.spec.hayati {
+            format!(
+                "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
+                `ca, sa` (cos, sin of the twists α), `a`, `d` (mm), `cb, sb` (cos, sin of the \
+                Hayati rotations β about the link's y axis; β = 0 for a D-H joint) and the probe \
+                offset `b` (mm); {per_pose}"
+            )
+        } else {
+            format!(
+                "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
+                `ca, sa` (cos, sin of the twists α), `a`, `d` (mm) and the probe offset `b` (mm); \
+                {per_pose}"
+            )
+        };
+        Signature {
+            args: quote! {
+                ct: &[S; #n], st: &[S; #n], ca: &[S; #n], sa: &[S; #n],
+                a: &[S; #n], d: &[S; #n], #beta_arg #probe_arg
+                cq: &[S; #n], sq: &[S; #n]
+            },
+            // Only the parameter Jacobians depend on which joints are Hayati.
+            select_arg: if k.spec.hayati {
+                quote!(hayati: &[bool; #n],)
+            } else {
+                quote!()
+            },
+            bounds: quote! {
+                S: ::core::marker::Copy
+                    + ::core::ops::Add<Output = S>
+                    + ::core::ops::Sub<Output = S>
+                    + ::core::ops::Mul<Output = S>
+                    + ::core::ops::Neg<Output = S>
+                    + ::core::convert::From<f64>
+            },
+            attrs: quote! {
+                #[inline(always)]
+                #[allow(clippy::all, clippy::pedantic, clippy::too_many_arguments, unused_variables)]
+            },
+            args_doc,
+            select_doc: if k.spec.hayati {
+                " `hayati[i]` puts joint `i`'s β column in its d-slot instead of its d column."
+            } else {
+                ""
+            },
+            order: if k.spec.probe {
+                "`a1..an, d1..dn, α1..αn, θ1..θn, Bx, By, Bz`"
+            } else {
+                "`a1..an, d1..dn, α1..αn, θ1..θn`"
+            },
+        }
+    }
+}
+
 /// The items of a generated kernel module (without the `mod` around them).
 pub fn kernel_items(k: &KernelExprs) -> TokenStream {
-    let g = &k.graph;
+    let consts = constants(k);
+    let position = position_items(k);
+    let pose = pose_items(k);
+    quote! {
+        #consts
+        #position
+        #pose
+    }
+}
+
+/// `JOINTS`, `PARAMS`, `SHAPE`, `PRISMATIC` and `EXTENDED`.
+fn constants(k: &KernelExprs) -> TokenStream {
     let n = Literal::usize_unsuffixed(k.spec.joints);
     let p = Literal::usize_unsuffixed(k.spec.param_count());
-    let probe_arg = if k.spec.probe {
-        quote!(b: &[S; 3],)
-    } else {
-        quote!()
-    };
-    let beta_arg = if k.spec.hayati {
-        quote!(cb: &[S; #n], sb: &[S; #n],)
-    } else {
-        quote!()
-    };
-    let args = quote! {
-        ct: &[S; #n], st: &[S; #n], ca: &[S; #n], sa: &[S; #n],
-        a: &[S; #n], d: &[S; #n], #beta_arg #probe_arg
-        cq: &[S; #n], sq: &[S; #n]
-    };
-    // Only the parameter Jacobian depends on which joints are Hayati.
-    let select_arg = if k.spec.hayati {
-        quote!(hayati: &[bool; #n],)
-    } else {
-        quote!()
-    };
-    let bounds = quote! {
-        S: ::core::marker::Copy
-            + ::core::ops::Add<Output = S>
-            + ::core::ops::Sub<Output = S>
-            + ::core::ops::Mul<Output = S>
-            + ::core::ops::Neg<Output = S>
-            + ::core::convert::From<f64>
-    };
-    let attrs = quote! {
-        #[inline(always)]
-        #[allow(clippy::all, clippy::pedantic, clippy::too_many_arguments, unused_variables)]
-    };
+    let shape = k.spec.shape();
+    let prismatic = Literal::u16_unsuffixed(k.spec.prismatic);
+    let extended = k.spec.hayati;
+    quote! {
+        /// Number of joints of this chain.
+        pub const JOINTS: usize = #n;
+        /// Number of geometric parameters of this chain.
+        pub const PARAMS: usize = #p;
+        /// The chain's shape, base first: `R` revolute, `P` prismatic.
+        pub const SHAPE: &str = #shape;
+        /// The prismatic joints: bit `i` for joint `i`.
+        pub const PRISMATIC: u16 = #prismatic;
+        /// Whether every link ends in `Ry(β)` (the extended chain, which
+        /// computes Hayati joints too).
+        pub const EXTENDED: bool = #extended;
+    }
+}
 
+/// `position`, `position_jacobian` and `joint_jacobian`: the probe's
+/// position and its 3-row Jacobians.
+fn position_items(k: &KernelExprs) -> TokenStream {
+    let g = &k.graph;
+    let Signature {
+        args,
+        select_arg,
+        bounds,
+        attrs,
+        args_doc,
+        select_doc,
+        order,
+    } = Signature::of(k);
+    let n = Literal::usize_unsuffixed(k.spec.joints);
+    let p = Literal::usize_unsuffixed(k.spec.param_count());
     let position_body = body(g, &k.position);
     let position = vec3(g, &k.position);
-
     let jac_body = columns_with(
         g,
         &k.param_jacobian,
@@ -214,36 +331,10 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
     );
     let joint_body = columns(g, &k.joint_jacobian, &k.frame_position);
     let frame_position = vec3(g, &k.frame_position);
-
-    let order = if k.spec.probe {
-        "`a1..an, d1..dn, α1..αn, θ1..θn, Bx, By, Bz`"
-    } else {
-        "`a1..an, d1..dn, α1..αn, θ1..θn`"
-    };
-    let args_doc = if k.spec.hayati {
-        "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
-        `ca, sa` (cos, sin of the twists α), `a`, `d` (mm), `cb, sb` (cos, sin of the \
-        Hayati rotations β about the link's y axis; β = 0 for a D-H joint) and the probe \
-        offset `b` (mm); per pose `cq, sq` (cos, sin of the encoder readings)."
-    } else {
-        "Arguments: per parameter set `ct, st` (cos, sin of the zero offsets θ), \
-        `ca, sa` (cos, sin of the twists α), `a`, `d` (mm) and the probe offset `b` (mm); \
-        per pose `cq, sq` (cos, sin of the encoder readings)."
-    };
-    let select_doc = if k.spec.hayati {
-        " `hayati[i]` puts `∂p/∂β_i` in joint `i`'s d-slot instead of `∂p/∂d_i`."
-    } else {
-        ""
-    };
     let jac_doc = format!(
         "Probe position and `∂p/∂parameter` into `jac`, one column per parameter in the order {order}.{select_doc} {args_doc}"
     );
     quote! {
-        /// Number of joints of this chain.
-        pub const JOINTS: usize = #n;
-        /// Number of geometric parameters of this chain.
-        pub const PARAMS: usize = #p;
-
         #[doc = "Probe position (mm) by the right-to-left product."]
         #[doc = #args_doc]
         #attrs
@@ -259,12 +350,146 @@ pub fn kernel_items(k: &KernelExprs) -> TokenStream {
             #frame_position
         }
 
-        #[doc = "Probe position and `∂p/∂q_i` (mm/rad) into `jac`, one column per joint."]
+        #[doc = "Probe position and `∂p/∂q_i` (mm/rad for a revolute joint, mm/mm for a prismatic one) into `jac`, one column per joint."]
         #[doc = #args_doc]
         #attrs
         pub fn joint_jacobian<S>(#args, jac: &mut [[S; 3]; #n]) -> [S; 3] where #bounds {
             #joint_body
             #frame_position
+        }
+    }
+}
+
+/// `pose`, `pose_jacobian` and `joint_pose_jacobian`: the tool frame and
+/// its 6-row Jacobians.
+fn pose_items(k: &KernelExprs) -> TokenStream {
+    let g = &k.graph;
+    let Signature {
+        args,
+        select_arg,
+        bounds,
+        attrs,
+        args_doc,
+        select_doc,
+        order,
+    } = Signature::of(k);
+    let n = Literal::usize_unsuffixed(k.spec.joints);
+    let p = Literal::usize_unsuffixed(k.spec.param_count());
+    let ids = transform_ids(k);
+    let pose_body = body(g, &ids);
+    let pose = transform(g, &k.rotation, &k.frame_position);
+    let jac_body = columns_with(
+        g,
+        &k.pose_jacobian,
+        &k.beta_pose_jacobian,
+        k.spec.joints,
+        &ids,
+    );
+    let joint_body = columns(g, &k.joint_pose_jacobian, &ids);
+    let returns = "Returns the top three rows of the tool's homogeneous transform, `[R | p]`: \
+        `R` the last frame's axes as columns, `p` the probe (mm).";
+    let six = "Each column is 6 rows: the position's derivative (3), then the small rotation \
+        `ω` with `δR = [ω]× R` in the base frame (3).";
+    let jac_doc = format!(
+        "The tool pose and its Jacobian into `jac`, one column per parameter in the order {order}. {six}{select_doc} {returns} {args_doc}"
+    );
+    let joint_doc = format!(
+        "The tool pose and `∂/∂q_i` into `jac`, one column per joint: `[z × (p − o); z]` for a revolute joint, `[z; 0]` for a prismatic one. {six} {returns} {args_doc}"
+    );
+    quote! {
+        #[doc = "The tool pose by the frames."]
+        #[doc = #returns]
+        #[doc = #args_doc]
+        #attrs
+        pub fn pose<S>(#args) -> [[S; 4]; 3] where #bounds {
+            #pose_body
+            #pose
+        }
+
+        #[doc = #jac_doc]
+        #attrs
+        pub fn pose_jacobian<S>(#args, #select_arg jac: &mut [[S; 6]; #p]) -> [[S; 4]; 3] where #bounds {
+            #jac_body
+            #pose
+        }
+
+        #[doc = #joint_doc]
+        #attrs
+        pub fn joint_pose_jacobian<S>(#args, jac: &mut [[S; 6]; #n]) -> [[S; 4]; 3] where #bounds {
+            #joint_body
+            #pose
+        }
+    }
+}
+
+/// A marker type `Kernel` implementing `#core::kernel::Chain<N>` over the
+/// module's functions: what a library built on them (aacmm-core, at the
+/// path `core`) accepts as a chain.
+pub fn chain_impl(k: &KernelExprs, core: &TokenStream) -> TokenStream {
+    let n = Literal::usize_unsuffixed(k.spec.joints);
+    let (geo, select) = if k.spec.hayati {
+        (
+            quote!(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.cb, &k.sb, &k.b,),
+            quote!(&k.hayati,),
+        )
+    } else {
+        (
+            quote!(&k.ct, &k.st, &k.ca, &k.sa, &k.a, &k.d, &k.b,),
+            quote!(),
+        )
+    };
+    let consts = quote!(#core::kernel::Consts<S, #n>);
+    let scalar = quote!(S: #core::kernel::Scalar);
+    let sized = |rows: usize, what: &str| {
+        let rows = Literal::usize_unsuffixed(rows);
+        let message = format!("the Jacobian buffer holds {what} columns");
+        quote! {
+            // Invariant: every caller sizes `jac` from the chain's
+            // PARAMS (the public entry points check the length first).
+            let jac: &mut [[S; #rows]; PARAMS] = jac.try_into().expect(#message);
+        }
+    };
+    let (three, six) = (sized(3, "4n + 3"), sized(6, "4n + 3"));
+    quote! {
+        /// This chain as a type: what `ArmKernel::with_chain` takes.
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        pub struct Kernel;
+
+        impl #core::kernel::Chain<#n> for Kernel {
+            const PRISMATIC: ::core::option::Option<u16> = ::core::option::Option::Some(PRISMATIC);
+            const EXTENDED: bool = EXTENDED;
+
+            #[inline(always)]
+            fn position<#scalar>(k: &#consts, cq: &[S; #n], sq: &[S; #n]) -> [S; 3] {
+                position(#geo cq, sq)
+            }
+
+            #[inline(always)]
+            fn position_jacobian<#scalar>(k: &#consts, cq: &[S; #n], sq: &[S; #n], jac: &mut [[S; 3]]) -> [S; 3] {
+                #three
+                position_jacobian(#geo cq, sq, #select jac)
+            }
+
+            #[inline(always)]
+            fn joint_jacobian<#scalar>(k: &#consts, cq: &[S; #n], sq: &[S; #n], jac: &mut [[S; 3]; #n]) -> [S; 3] {
+                joint_jacobian(#geo cq, sq, jac)
+            }
+
+            #[inline(always)]
+            fn pose<#scalar>(k: &#consts, cq: &[S; #n], sq: &[S; #n]) -> [[S; 4]; 3] {
+                pose(#geo cq, sq)
+            }
+
+            #[inline(always)]
+            fn pose_jacobian<#scalar>(k: &#consts, cq: &[S; #n], sq: &[S; #n], jac: &mut [[S; 6]]) -> [[S; 4]; 3] {
+                #six
+                pose_jacobian(#geo cq, sq, #select jac)
+            }
+
+            #[inline(always)]
+            fn joint_pose_jacobian<#scalar>(k: &#consts, cq: &[S; #n], sq: &[S; #n], jac: &mut [[S; 6]; #n]) -> [[S; 4]; 3] {
+                joint_pose_jacobian(#geo cq, sq, jac)
+            }
         }
     }
 }
@@ -275,11 +500,7 @@ mod tests {
     use crate::chain::{ChainSpec, expand_chain};
 
     fn items(joints: usize) -> (KernelExprs, syn::File) {
-        items_of(ChainSpec {
-            joints,
-            probe: true,
-            hayati: false,
-        })
+        items_of(ChainSpec::revolute(joints))
     }
 
     fn items_of(spec: ChainSpec) -> (KernelExprs, syn::File) {
@@ -325,6 +546,17 @@ mod tests {
             lets("position_jacobian"),
             k.graph.op_count(&jacobian_outputs(&k)).total()
         );
+        let mut pose = pose_jacobian_outputs(&k);
+        assert_eq!(lets("pose_jacobian"), k.graph.op_count(&pose).total());
+        pose.truncate(12);
+        assert_eq!(lets("pose"), k.graph.op_count(&pose).total());
+    }
+
+    /// Everything `pose_jacobian` computes, the transform first.
+    fn pose_jacobian_outputs(k: &KernelExprs) -> Vec<Id> {
+        let mut out = transform_ids(k);
+        out.extend(k.pose_jacobian.iter().flatten());
+        out
     }
 
     /// The straight-line code stays small: a regression guard on the folding
@@ -339,6 +571,24 @@ mod tests {
         assert!(pos.total() <= 120, "position: {pos:?}");
         // Frames, then two cross products per joint: 422 today.
         assert!(jac.total() <= 425, "position + jacobian: {jac:?}");
+        // The pose's columns add no product: its rotation rows are axes
+        // the frames computed already.
+        let pose = k.graph.op_count(&pose_jacobian_outputs(&k));
+        assert_eq!(pose, jac, "pose + jacobian");
+    }
+
+    /// A prismatic joint costs less than a revolute one: no angle sum.
+    #[test]
+    fn a_prismatic_joint_is_cheaper() {
+        let (r, _) = items_of(ChainSpec::revolute(8));
+        let (p, _) = items_of(ChainSpec::of_shape("PRRRRRRR").unwrap());
+        for k in [&r, &p] {
+            assert_eq!(k.pose_jacobian.len(), 35);
+        }
+        let count = |k: &KernelExprs| k.graph.op_count(&pose_jacobian_outputs(k)).total();
+        assert!(count(&p) < count(&r), "{} vs {}", count(&p), count(&r));
+        let pos = |k: &KernelExprs| k.graph.op_count(&k.position).total();
+        assert!(pos(&p) < pos(&r));
     }
 
     /// The extended chain costs more than the D-H one (it computes both the
@@ -347,9 +597,8 @@ mod tests {
     #[test]
     fn extended_chain_stays_small() {
         let (k, file) = items_of(ChainSpec {
-            joints: 6,
-            probe: true,
             hayati: true,
+            ..ChainSpec::revolute(6)
         });
         let mut outputs = jacobian_outputs(&k);
         outputs.extend(k.beta_jacobian.iter().flatten());
@@ -359,23 +608,61 @@ mod tests {
         assert!(pos.total() <= 160, "position: {pos:?}");
         assert!(jac.total() <= 620, "position + jacobian: {jac:?}");
         let text = quote!(#file).to_string();
-        assert_eq!(text.matches("if hayati [").count(), 6);
+        // The d-slot's choice in both parameter Jacobians.
+        assert_eq!(text.matches("if hayati [").count(), 12);
     }
 
     #[test]
     fn no_matrix_products_or_calls_in_the_per_pose_code() {
+        for shape in ["RRRRRRR", "PRRRRRRR", "RRPR"] {
+            for hayati in [false, true] {
+                let (_, file) = items_of(ChainSpec {
+                    hayati,
+                    ..ChainSpec::of_shape(shape).unwrap()
+                });
+                calls_free(&file);
+            }
+        }
+    }
+
+    /// The marker type's impl parses and forwards to every function.
+    #[test]
+    fn the_chain_impl_forwards_to_the_functions() {
         for hayati in [false, true] {
-            let (_, file) = items_of(ChainSpec {
-                joints: 7,
-                probe: true,
+            let k = expand_chain(ChainSpec {
                 hayati,
+                ..ChainSpec::of_shape("RRPR").unwrap()
             });
-            calls_free(&file);
+            let items = chain_impl(&k, &quote!(::aacmm_core));
+            let file: syn::File = syn::parse2(items).expect("the impl parses");
+            let text = quote!(#file).to_string();
+            assert!(text.contains("impl :: aacmm_core :: kernel :: Chain < 4 > for Kernel"));
+            for f in [
+                "position",
+                "position_jacobian",
+                "joint_jacobian",
+                "pose",
+                "pose_jacobian",
+                "joint_pose_jacobian",
+            ] {
+                // The trait's fn and the call of the module's.
+                assert_eq!(text.matches(&format!("fn {f} <")).count(), 1, "{f}");
+                assert_eq!(text.matches(&format!(" {f} (")).count(), 1, "{f}");
+            }
+            assert_eq!(text.contains("& k . hayati"), hayati);
         }
     }
 
     fn calls_free(file: &syn::File) {
-        for name in ["position", "position_jacobian", "joint_jacobian"] {
+        let names = [
+            "position",
+            "position_jacobian",
+            "joint_jacobian",
+            "pose",
+            "pose_jacobian",
+            "joint_pose_jacobian",
+        ];
+        for name in names {
             let text = quote!(#file).to_string();
             assert!(!text.contains("sin ("), "{name}");
             assert!(!text.contains("cos ("), "{name}");

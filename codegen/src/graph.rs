@@ -20,14 +20,17 @@ impl Id {
     }
 }
 
-/// A leaf: what the generated function receives. Joint trig comes once per
-/// pose, parameter trig once per parameter set.
+/// A leaf: what the generated function receives. Joint trig (or a prismatic
+/// joint's reading) comes once per pose, parameter trig once per parameter
+/// set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Input {
-    /// cos of encoder reading `q_j`.
+    /// cos of revolute joint `j`'s reading `q_j`.
     CosQ(usize),
-    /// sin of encoder reading `q_j`.
+    /// sin of revolute joint `j`'s reading `q_j`.
     SinQ(usize),
+    /// Prismatic joint `j`'s reading `q_j` itself (mm).
+    Q(usize),
     /// cos of zero offset `θ_j`.
     CosTheta(usize),
     /// sin of zero offset `θ_j`.

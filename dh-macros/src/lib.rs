@@ -16,12 +16,20 @@
 
 use proc_macro::TokenStream;
 
-/// `dh_chain! { [attrs] [vis] mod NAME { joints = N[, probe = true|false][, hayati = true|false] } }`
-/// expands to a module with `JOINTS`, `PARAMS` and the generic functions
-/// `position`, `position_jacobian` and `joint_jacobian`. With `hayati = true`
-/// every link ends in `Ry(β)` (inputs `cb`, `sb`), and `position_jacobian`
-/// takes `hayati: &[bool; N]` choosing per joint whether the d-slot's column
-/// is `∂p/∂d` or `∂p/∂β` (see `aacmm_codegen::chain`).
+/// `dh_chain! { [attrs] [vis] mod NAME { joints = N | "SHAPE"[, probe = true|false][, hayati = true|false][, core = PATH] } }`
+/// expands to a module with `JOINTS`, `PARAMS`, `SHAPE`, `PRISMATIC`,
+/// `EXTENDED` and the generic functions `position`, `position_jacobian`,
+/// `joint_jacobian` (the probe's position, 3-row Jacobians), `pose`,
+/// `pose_jacobian` and `joint_pose_jacobian` (the tool frame, 6-row
+/// Jacobians). `joints = 6` is six revolute joints; `joints = "PRRRRRR"`
+/// names each joint, base first, `R` revolute or `P` prismatic (its
+/// reading, mm, goes in `cq` and adds to `d`). With `hayati = true` every
+/// link ends in `Ry(β)` (inputs `cb`, `sb`), and the parameter Jacobians
+/// take `hayati: &[bool; N]` choosing per joint whether the d-slot's column
+/// is `∂/∂d` or `∂/∂β` (see `aacmm_codegen::chain`). With `core = PATH`
+/// (the path of aacmm-core) the module also holds a marker type `Kernel`
+/// implementing `PATH::kernel::Chain<N>`; aacmm-core's `dh_kernel!` passes
+/// it for you.
 #[proc_macro]
 pub fn dh_chain(input: TokenStream) -> TokenStream {
     aacmm_codegen::expand(input.into())
