@@ -102,7 +102,7 @@ pub extern "C" fn aacmm_param_count(joints: usize) -> usize {
     })
 }
 
-/// Reads an arm file (TOML, the schema `aacmm` reads: 6 or 7 `[[joint]]`
+/// Reads an arm file (TOML, the schema `aacmm` reads: 1 to 12 `[[joint]]`
 /// entries, the units the file declares) into a new handle at `*out`.
 ///
 /// Warnings about suspicious but legal content (e.g. lengths that look like
@@ -188,7 +188,7 @@ unsafe fn from_file(
 /// `Rz(theta + q) · Tz(d) · Tx(a) · Rx(alpha)`.
 ///
 /// Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_UNSUPPORTED` (a joint
-/// count without a kernel: the toolkit has 6 and 7), `AACMM_STATUS_LENGTH`
+/// count without a kernel: the toolkit computes 1 to 12), `AACMM_STATUS_LENGTH`
 /// (`params_len != 4·joints + 3`), `AACMM_STATUS_INVALID_ARGUMENT` (a
 /// parameter that is not a finite number). On error `*out` is `NULL`.
 ///
@@ -212,11 +212,11 @@ pub unsafe extern "C" fn aacmm_arm_from_params(
         // SAFETY: `params` holds `params_len` doubles, by the contract.
         let values = unsafe { ptr::input(params, params_len, "params") }?;
         let expected = aacmm_param_count(joints);
-        if !aacmm_core::params::SUPPORTED_JOINTS.contains(&joints) {
+        if !aacmm_core::params::supports_joints(joints) {
             return Err(Error::new(
                 AacmmStatus::Unsupported,
                 format!(
-                    "joints = {joints}: the toolkit has kernels for {}",
+                    "joints = {joints}: the toolkit computes {}",
                     aacmm_core::params::supported_joints_text()
                 ),
             ));

@@ -37,8 +37,8 @@ pub enum AacmmStatus {
     /// misaligned buffer, an output that shares memory with an input or
     /// another output, a path that is not valid text.
     InvalidArgument = 3,
-    /// The arm has a joint count the toolkit generates no kernel for
-    /// (it has kernels for 6- and 7-joint arms).
+    /// The arm has a joint count the toolkit has no kernel for (it
+    /// computes chains of 1 to 12 joints).
     Unsupported = 4,
     /// A file could not be read (missing, unreadable).
     Io = 5,

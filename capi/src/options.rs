@@ -12,7 +12,7 @@ use aacmm_core::calibrate::{
 use aacmm_core::corrections::Beyond;
 use aacmm_core::error::OptionError;
 use aacmm_core::io::Positions;
-use aacmm_core::params::{SUPPORTED_JOINTS, supported_joints_text};
+use aacmm_core::params::{MAX_JOINTS, supported_joints_text};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::Request;
 use aacmm_core::tolerances::Tolerances;
@@ -233,9 +233,8 @@ unsafe fn text(s: *const c_char, name: &str) -> Result<Option<String>, Error> {
 /// toolkit has kernels for: what can be checked before the arm is known.
 /// The error is the one for the largest count (its names are a superset).
 fn for_some_arm<T>(parse: impl Fn(usize) -> Result<T, OptionError>) -> Result<(), Error> {
-    let mut counts = SUPPORTED_JOINTS.iter().rev();
-    let largest = parse(*counts.next().expect("a supported joint count"));
-    if largest.is_ok() || counts.any(|&n| parse(n).is_ok()) {
+    let largest = parse(MAX_JOINTS);
+    if largest.is_ok() || (1..MAX_JOINTS).rev().any(|n| parse(n).is_ok()) {
         return Ok(());
     }
     largest.map(|_| ()).map_err(Error::from)
@@ -245,10 +244,9 @@ fn for_some_arm<T>(parse: impl Fn(usize) -> Result<T, OptionError>) -> Result<()
 /// that no arm the toolkit has kernels for has: what can be checked before
 /// the arm is known (the arm at hand's count is checked when calibrating).
 fn on_some_arm(field: &str, joints: impl IntoIterator<Item = usize>) -> Result<(), Error> {
-    let most = SUPPORTED_JOINTS.iter().copied().max().unwrap_or(0);
-    match joints.into_iter().find(|&j| j >= most) {
+    match joints.into_iter().find(|&j| j >= MAX_JOINTS) {
         Some(j) => Err(Error::invalid(format!(
-            "{field} = {}: joint {}: the toolkit has kernels for arms of {} joints",
+            "{field} = {}: joint {}: the toolkit computes {}",
             j + 1,
             j + 1,
             supported_joints_text()
@@ -786,8 +784,8 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_drift(
 /// default: none).
 ///
 /// Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or an array or a frame
-/// name that is `NULL`), `AACMM_STATUS_UNSUPPORTED` (`joints` neither 6 nor
-/// 7), `AACMM_STATUS_LENGTH` (a length that does not match `n`),
+/// name that is `NULL`), `AACMM_STATUS_UNSUPPORTED` (`joints` not 1
+/// to 12), `AACMM_STATUS_LENGTH` (a length that does not match `n`),
 /// `AACMM_STATUS_INVALID_ARGUMENT` (a frame name that is not UTF-8),
 /// `AACMM_STATUS_INPUT` — the message names the array and index — for a
 /// reading or position that is not a finite number, an uncertainty that is
@@ -1068,8 +1066,8 @@ mod tests {
                 "compliance = 2: joint listed twice",
             );
             refused(
-                aacmm_calibrate_options_set_compliance(o, c"2,8".as_ptr()),
-                "compliance = 8: joint 8: the toolkit has kernels for arms of 6",
+                aacmm_calibrate_options_set_compliance(o, c"2,13".as_ptr()),
+                "compliance = 13: joint 13: the toolkit computes chains of 1 to 12 joints",
             );
             refused(
                 aacmm_calibrate_options_set_harmonics(o, c"2:".as_ptr()),
@@ -1080,8 +1078,8 @@ mod tests {
                 "harmonics = 2: expected JOINT:ORDERS",
             );
             refused(
-                aacmm_calibrate_options_set_harmonics(o, c"9:1".as_ptr()),
-                "harmonics = 9: joint 9: the toolkit has kernels for arms of 6",
+                aacmm_calibrate_options_set_harmonics(o, c"13:1".as_ptr()),
+                "harmonics = 13: joint 13: the toolkit computes chains of 1 to 12 joints",
             );
             // A hostile worker count is refused, not attempted (the bound
             // of Python's `threads` and the command line's `--threads`).

@@ -7,7 +7,7 @@ use std::ffi::c_char;
 
 use aacmm_core::error::quoted;
 use aacmm_core::io::{DEFAULT_FRAME, Positions};
-use aacmm_core::params::{SUPPORTED_JOINTS, supported_joints_text};
+use aacmm_core::params::{supported_joints_text, supports_joints};
 
 use crate::error::{AacmmStatus, Error};
 use crate::ptr;
@@ -45,11 +45,11 @@ impl Lengths {
     /// what `q_len / joints` rows imply (`AACMM_STATUS_LENGTH`).
     pub(crate) fn rows(&self) -> Result<usize, Error> {
         let joints = self.joints;
-        if !SUPPORTED_JOINTS.contains(&joints) {
+        if !supports_joints(joints) {
             return Err(Error::new(
                 AacmmStatus::Unsupported,
                 format!(
-                    "joints = {joints}: the toolkit has kernels for {}",
+                    "joints = {joints}: the toolkit computes {}",
                     supported_joints_text()
                 ),
             ));

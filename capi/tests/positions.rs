@@ -547,9 +547,9 @@ fn a_tracker_campaign_from_arrays_recovers_its_frames() {
         "uncertainty_len = 3, expected 0 or 240",
     );
     bad(
-        &|a| a.joints = 5,
+        &|a| a.joints = 13,
         AacmmStatus::Unsupported,
-        "joints = 5: the toolkit has kernels for",
+        "joints = 13: the toolkit computes chains of 1 to 12 joints",
     );
     bad(
         &|a| {

@@ -339,7 +339,11 @@ impl PositionData {
 
     /// The rows `keep`, in that order.
     pub fn subset(&self, keep: &[usize]) -> PositionData {
-        PositionData::new(self.rows.subset(keep), &self.file)
+        PositionData::new(
+            self.rows.subset(keep),
+            &self.file,
+            self.poses.prismatic_mask(),
+        )
     }
 
     /// The temperature and time of every row, when recorded.
@@ -350,8 +354,11 @@ impl PositionData {
         }
     }
 
-    fn new(rows: Positions, file: &str) -> PositionData {
-        let poses = PreparedPoses::from_flat(rows.joints(), rows.len(), rows.readings());
+    /// The rows of `file` prepared for a chain whose joints of the bits
+    /// `prismatic` slide.
+    fn new(rows: Positions, file: &str, prismatic: u16) -> PositionData {
+        let poses =
+            PreparedPoses::from_flat_with(rows.joints(), prismatic, rows.len(), rows.readings());
         PositionData {
             rows,
             poses,
@@ -896,7 +903,7 @@ impl DataSet {
                 poses_file: String::new(),
                 ..SourceMap::default()
             },
-            positions: Some(PositionData::new(positions, file)),
+            positions: Some(PositionData::new(positions, file, 0)),
             temperature: None,
             time: None,
             repeats: Vec::new(),
@@ -927,8 +934,63 @@ impl DataSet {
                 ),
             ));
         }
-        self.positions = Some(PositionData::new(positions, file));
+        self.positions = Some(PositionData::new(
+            positions,
+            file,
+            self.poses.prismatic_mask(),
+        ));
         Ok(self)
+    }
+
+    /// This data set as readings of a chain of `shape`: its prismatic
+    /// joints' readings (mm) used as they are, not through their sin/cos.
+    /// The readers read every column as an angle of a revolute joint; a
+    /// caller holding the arm gives its shape here (touches and reference
+    /// positions alike). Nothing is prepared again when the shape's
+    /// joints are all revolute, as the readers assume.
+    ///
+    /// # Errors
+    ///
+    /// A shape of another joint count than the readings', naming the poses
+    /// file.
+    ///
+    /// ```
+    /// use aacmm_core::{DataSet, io::{AngleUnit, parse_poses}, params::ChainShape};
+    /// let text = "point,q1,q2\nA,100,0.1\nA,200,0.2\nA,300,0.3\n";
+    /// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Rad, None).unwrap();
+    /// let slide: ChainShape = "PR".parse().unwrap();
+    /// let data = DataSet::from_poses(&poses, "p.csv").unwrap().for_shape(slide).unwrap();
+    /// assert_eq!(data.shape(), Some(slide));
+    /// let e = DataSet::from_poses(&poses, "p.csv").unwrap().for_shape("PRR".parse().unwrap());
+    /// assert!(e.unwrap_err().to_string().starts_with("p.csv: the arm's chain PRR has 3 joints"));
+    /// ```
+    pub fn for_shape(mut self, shape: crate::params::ChainShape) -> Result<DataSet, InputError> {
+        if shape.joints() != self.joints {
+            return Err(InputError::file_error(
+                &self.source.poses_file,
+                format!(
+                    "the arm's chain {shape} has {} joints, the readings {}",
+                    shape.joints(),
+                    self.joints
+                ),
+            ));
+        }
+        let mask = shape.prismatic_mask();
+        if mask != self.poses.prismatic_mask() {
+            let len = self.poses.len();
+            self.poses = PreparedPoses::from_flat_with(self.joints, mask, len, &self.q);
+            if let Some(p) = self.positions.take() {
+                self.positions = Some(PositionData::new(p.rows, &p.file, mask));
+            }
+        }
+        Ok(self)
+    }
+
+    /// The shape of chain the readings were prepared for (all revolute
+    /// unless [`DataSet::for_shape`] said otherwise); `None` without
+    /// readings.
+    pub fn shape(&self) -> Option<crate::params::ChainShape> {
+        self.poses.shape()
     }
 
     /// The reference positions, if any.
@@ -1038,7 +1100,12 @@ impl DataSet {
             .iter()
             .flat_map(|&i| self.reading(i).iter().copied())
             .collect();
-        let poses = PreparedPoses::from_flat(self.joints, touches.len(), &q);
+        let poses = PreparedPoses::from_flat_with(
+            self.joints,
+            self.poses.prismatic_mask(),
+            touches.len(),
+            &q,
+        );
         let mut reference_lines = Vec::new();
         let references = self
             .references

@@ -1,4 +1,5 @@
-//! Geometric parameters of a D-H chain with a probe offset.
+//! Geometric parameters of a D-H chain with a probe offset, and the chain's
+//! shape: how many joints, which of them revolute and which prismatic.
 //!
 //! Inside the toolkit lengths are millimetres and angles radians; units are
 //! converted only where a user touches them (files, flags, reports).
@@ -6,6 +7,200 @@
 //! `a1..an, d1..dn, α1..αn, θ1..θn, Bx, By, Bz`.
 
 use std::fmt;
+
+use thiserror::Error;
+
+/// What a joint's reading moves.
+///
+/// A revolute joint turns about the previous z axis: its reading `q` (rad)
+/// adds to `θ`. A prismatic joint slides along it: its reading (mm) adds to
+/// `d`, and its constant parameters are `θ`, `a`, `α` and `d`'s offset (the
+/// reading's zero). The parameter vector and its names are the same for
+/// both; only what `q` means differs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum JointKind {
+    /// Turns: `A = Rz(θ + q)·Tz(d)·…`.
+    #[default]
+    Revolute,
+    /// Slides: `A = Rz(θ)·Tz(d + q)·…`.
+    Prismatic,
+}
+
+impl JointKind {
+    /// The name in files: `revolute` or `prismatic`.
+    pub fn name(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "revolute",
+            JointKind::Prismatic => "prismatic",
+        }
+    }
+
+    /// The letter in a [`ChainShape`]: `R` or `P`.
+    pub fn letter(self) -> char {
+        match self {
+            JointKind::Revolute => 'R',
+            JointKind::Prismatic => 'P',
+        }
+    }
+}
+
+/// Most joints a chain may have. Every chain of 1 to `MAX_JOINTS` joints,
+/// any of them prismatic, has a kernel: a generated one for the common
+/// shapes ([`crate::kernel::SHIPPED_SHAPES`]), a closed-form per-joint one
+/// for the rest.
+pub const MAX_JOINTS: usize = 12;
+
+/// A chain's shape: its joint count (1 to [`MAX_JOINTS`]) and which joints
+/// are prismatic. Written as one letter per joint, base first: `R`
+/// revolute, `P` prismatic (`"PRRRRRR"`: a robot of six revolute joints on
+/// a linear track; `"RRPR"`: a SCARA).
+///
+/// ```
+/// use aacmm_core::params::{ChainShape, DhParams, JointKind};
+/// let scara: ChainShape = "RRPR".parse().unwrap();
+/// assert_eq!((scara.joints(), scara.kind(2)), (4, JointKind::Prismatic));
+/// assert_eq!(scara.to_string(), "RRPR");
+/// assert_eq!(DhParams::paper_nominal().shape().unwrap().to_string(), "RRRRRR");
+/// assert!("RRXR".parse::<ChainShape>().is_err());
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ChainShape {
+    joints: u8,
+    /// Bit `i`: joint `i` is prismatic.
+    prismatic: u16,
+}
+
+/// A shape that is not one: no joints, too many, or a letter other than
+/// `R` and `P`.
+#[derive(Clone, Debug, Error, PartialEq, Eq)]
+pub enum ShapeError {
+    /// A chain has 1 to [`MAX_JOINTS`] joints.
+    #[error("a chain has 1 to {MAX_JOINTS} joints, not {0}")]
+    Joints(usize),
+    /// A letter other than `R` and `P`.
+    #[error(
+        "{} at joint {joint}: a shape has one letter per joint, R (revolute) or P (prismatic)",
+        crate::error::quoted(&letter.to_string())
+    )]
+    Letter {
+        /// The letter.
+        letter: char,
+        /// Its joint, 1-based.
+        joint: usize,
+    },
+    /// Prismatic bits past the joint count.
+    #[error("prismatic joints {mask:#b} past the chain's {joints} joints")]
+    Mask {
+        /// The bits given.
+        mask: u16,
+        /// The joint count.
+        joints: usize,
+    },
+}
+
+impl ChainShape {
+    /// `joints` revolute joints.
+    ///
+    /// ```
+    /// use aacmm_core::params::ChainShape;
+    /// assert_eq!(ChainShape::revolute(7).unwrap().to_string(), "RRRRRRR");
+    /// assert!(ChainShape::revolute(13).is_err());
+    /// ```
+    pub fn revolute(joints: usize) -> Result<ChainShape, ShapeError> {
+        ChainShape::from_mask(joints, 0)
+    }
+
+    /// A shape from its joint count and its prismatic joints (bit `i` for
+    /// joint `i`).
+    pub fn from_mask(joints: usize, prismatic: u16) -> Result<ChainShape, ShapeError> {
+        if !(1..=MAX_JOINTS).contains(&joints) {
+            return Err(ShapeError::Joints(joints));
+        }
+        if prismatic >> joints != 0 {
+            return Err(ShapeError::Mask {
+                mask: prismatic,
+                joints,
+            });
+        }
+        Ok(ChainShape {
+            joints: joints as u8,
+            prismatic,
+        })
+    }
+
+    /// The shape of joints of `kinds`, base first.
+    pub fn new(kinds: impl IntoIterator<Item = JointKind>) -> Result<ChainShape, ShapeError> {
+        let mut joints = 0;
+        let mut prismatic = 0u16;
+        for (i, kind) in kinds.into_iter().enumerate() {
+            if i < MAX_JOINTS && kind == JointKind::Prismatic {
+                prismatic |= 1 << i;
+            }
+            joints = i + 1;
+        }
+        ChainShape::from_mask(joints, prismatic)
+    }
+
+    /// Number of joints.
+    pub fn joints(self) -> usize {
+        self.joints as usize
+    }
+
+    /// The prismatic joints: bit `i` for joint `i`.
+    pub fn prismatic_mask(self) -> u16 {
+        self.prismatic
+    }
+
+    /// Whether joint `i` (0-based) is prismatic.
+    pub fn is_prismatic(self, i: usize) -> bool {
+        i < MAX_JOINTS && self.prismatic & (1 << i) != 0
+    }
+
+    /// Whether every joint is revolute.
+    pub fn is_revolute(self) -> bool {
+        self.prismatic == 0
+    }
+
+    /// Joint `i`'s kind.
+    pub fn kind(self, i: usize) -> JointKind {
+        if self.is_prismatic(i) {
+            JointKind::Prismatic
+        } else {
+            JointKind::Revolute
+        }
+    }
+
+    /// The joints' kinds, base first.
+    pub fn kinds(self) -> impl Iterator<Item = JointKind> {
+        (0..self.joints()).map(move |i| self.kind(i))
+    }
+}
+
+impl fmt::Display for ChainShape {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.kinds().try_for_each(|k| write!(f, "{}", k.letter()))
+    }
+}
+
+impl std::str::FromStr for ChainShape {
+    type Err = ShapeError;
+
+    fn from_str(text: &str) -> Result<ChainShape, ShapeError> {
+        let kinds = text
+            .chars()
+            .enumerate()
+            .map(|(i, c)| match c {
+                'R' => Ok(JointKind::Revolute),
+                'P' => Ok(JointKind::Prismatic),
+                letter => Err(ShapeError::Letter {
+                    letter,
+                    joint: i + 1,
+                }),
+            })
+            .collect::<Result<Vec<JointKind>, ShapeError>>()?;
+        ChainShape::new(kinds)
+    }
+}
 
 /// How a joint's link is parameterised.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -17,6 +212,13 @@ pub enum JointModel {
     /// joint whose axis is (nearly) parallel to the previous one, where D-H's
     /// `d` is ill-determined. `d` is structurally 0 and the d-slot of the
     /// parameter vector holds `β` ([`ParamKind::Beta`]).
+    ///
+    /// A prismatic joint may be Hayati too: `A = Rz(θ)·Tz(q)·Tx(a)·Rx(α)·Ry(β)`.
+    /// Its link's next axis is nearly parallel to the slide, so where along
+    /// the slide the common normal sits — `d`'s offset, the reading's zero —
+    /// is as ill-determined as a revolute joint's `d`; it is structurally 0,
+    /// and the next link's `d` (or, at the end of the chain, the probe's z)
+    /// carries it, exactly as for a revolute Hayati joint.
     Hayati,
 }
 
@@ -32,7 +234,9 @@ impl JointModel {
 
 /// One link of the chain: standard Denavit–Hartenberg,
 /// `A = Rz(θ + q) · Tz(d) · Tx(a) · Rx(α)`, or with
-/// [`JointModel::Hayati`] `A = Rz(θ + q) · Tx(a) · Rx(α) · Ry(β)`.
+/// [`JointModel::Hayati`] `A = Rz(θ + q) · Tx(a) · Rx(α) · Ry(β)`; for a
+/// [`JointKind::Prismatic`] joint the reading `q` (mm) moves to `d`:
+/// `Rz(θ) · Tz(d + q) · …` (Hayati: `Rz(θ) · Tz(q) · …`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DhJoint {
     /// Common-normal length `a`, mm.
@@ -48,6 +252,8 @@ pub struct DhJoint {
     pub beta: f64,
     /// The link's parameterisation.
     pub model: JointModel,
+    /// Whether the joint turns or slides.
+    pub kind: JointKind,
 }
 
 impl DhJoint {
@@ -66,10 +272,11 @@ impl DhJoint {
             theta,
             beta: 0.0,
             model: JointModel::Dh,
+            kind: JointKind::Revolute,
         }
     }
 
-    /// A Hayati joint (d = 0).
+    /// A revolute Hayati joint (d = 0).
     pub fn hayati(a: f64, alpha: f64, theta: f64, beta: f64) -> DhJoint {
         DhJoint {
             a,
@@ -78,7 +285,19 @@ impl DhJoint {
             theta,
             beta,
             model: JointModel::Hayati,
+            kind: JointKind::Revolute,
         }
+    }
+
+    /// This joint with another kind (revolute or prismatic).
+    ///
+    /// ```
+    /// use aacmm_core::params::{DhJoint, JointKind};
+    /// let slide = DhJoint::dh(0.0, 100.0, 0.0, 0.0).with_kind(JointKind::Prismatic);
+    /// assert_eq!((slide.d, slide.kind), (100.0, JointKind::Prismatic));
+    /// ```
+    pub fn with_kind(self, kind: JointKind) -> DhJoint {
+        DhJoint { kind, ..self }
     }
 
     /// The joint's d-slot parameter kind: [`ParamKind::D`] or, for a Hayati
@@ -325,27 +544,26 @@ impl fmt::Display for ParamId {
     }
 }
 
-/// The joint counts the toolkit generates a kernel for. File readers, the
-/// kernel and codegen's instantiations agree on this one list: an arm with
-/// another count is rejected where it is read, naming its file.
+/// Whether the toolkit computes a chain of `n` joints: 1 to [`MAX_JOINTS`].
+/// File readers, the kernel and the front ends share this one rule; an arm
+/// with another count is rejected where it is read, naming its file.
 ///
 /// ```
-/// assert!(aacmm_core::params::SUPPORTED_JOINTS.contains(&6));
+/// use aacmm_core::params::supports_joints;
+/// assert!(supports_joints(6) && supports_joints(1) && supports_joints(12));
+/// assert!(!supports_joints(0) && !supports_joints(13));
 /// ```
-pub const SUPPORTED_JOINTS: [usize; 2] = [6, 7];
+pub fn supports_joints(n: usize) -> bool {
+    (1..=MAX_JOINTS).contains(&n)
+}
 
-/// The supported joint counts in words, for messages: `6- and 7-joint arms`.
+/// The supported joint counts in words, for messages.
 ///
 /// ```
-/// assert_eq!(aacmm_core::params::supported_joints_text(), "6- and 7-joint arms");
+/// assert_eq!(aacmm_core::params::supported_joints_text(), "chains of 1 to 12 joints");
 /// ```
 pub fn supported_joints_text() -> String {
-    let names: Vec<String> = SUPPORTED_JOINTS.iter().map(|n| format!("{n}-")).collect();
-    match names.split_last() {
-        Some((last, [])) => format!("{last}joint arms"),
-        Some((last, rest)) => format!("{} and {last}joint arms", rest.join(", ")),
-        None => "no arms".to_string(),
-    }
+    format!("chains of 1 to {MAX_JOINTS} joints")
 }
 
 /// Number of geometric parameters of an `n`-joint chain with a probe offset.
@@ -406,6 +624,17 @@ impl DhParams {
     /// Number of parameters, `4n + 3`.
     pub fn param_count(&self) -> usize {
         param_count(self.joints.len())
+    }
+
+    /// The chain's shape; an error for no joints or more than
+    /// [`MAX_JOINTS`].
+    pub fn shape(&self) -> Result<ChainShape, ShapeError> {
+        ChainShape::new(self.joints.iter().map(|j| j.kind))
+    }
+
+    /// Whether any joint is prismatic.
+    pub fn has_prismatic(&self) -> bool {
+        self.joints.iter().any(|j| j.kind == JointKind::Prismatic)
     }
 
     /// The value of one parameter (mm or rad).
@@ -496,7 +725,7 @@ impl DhParams {
     }
 
     /// This arm with its parameters set from `v` (the fixed order, as
-    /// [`DhParams::to_vec`] gives): the joints keep their models. `None`
+    /// [`DhParams::to_vec`] gives): the joints keep their models and kinds. `None`
     /// unless `v` has [`DhParams::param_count`] values.
     ///
     /// ```

@@ -7,7 +7,7 @@ use nalgebra::{Matrix4, SVector, Vector4};
 use num_dual::{DualNum, DualSVec64, jacobian};
 
 use crate::kernel::KernelError;
-use crate::params::{DhParams, JointModel, param_count};
+use crate::params::{DhParams, JointKind, JointModel, param_count};
 
 /// Probe position of an `n`-joint chain: `params` in the fixed order
 /// (`4n + 3` values, mm and rad), `q` the `n` encoder readings (rad).
@@ -40,9 +40,39 @@ pub fn position_with<D: DualNum<Primitive = f64> + Copy>(
     q: &[D],
     models: &[JointModel],
 ) -> [D; 3] {
+    let t = tool_with(params, q, models, &vec![JointKind::Revolute; q.len()]);
+    [t[(0, 3)], t[(1, 3)], t[(2, 3)]]
+}
+
+/// The tool's homogeneous transform (the last frame turned, its origin
+/// moved to the probe) of a chain whose joints have `models` and `kinds`:
+/// a [`JointKind::Prismatic`] joint's reading (mm) adds to `d` and its
+/// angle is `θ` alone.
+///
+/// # Panics
+/// As [`position_with`], or if `kinds.len() != q.len()`.
+///
+/// ```
+/// use aacmm_core::{params::{DhParams, JointKind, JointModel}, reference_model};
+/// let arm = DhParams::paper_nominal().to_vec();
+/// let mut kinds = vec![JointKind::Revolute; 6];
+/// kinds[0] = JointKind::Prismatic;
+/// // Joint 1 slides 100 mm along the base z axis (and turns by θ1 = 0).
+/// let t = reference_model::tool_with(&arm, &[100.0, 0.0, 0.0, 0.0, 0.0, 0.0], &[JointModel::Dh; 6], &kinds);
+/// assert!((t[(2, 3)] - 1095.0).abs() < 1e-9);
+/// ```
+pub fn tool_with<D: DualNum<Primitive = f64> + Copy>(
+    params: &[D],
+    q: &[D],
+    models: &[JointModel],
+    kinds: &[JointKind],
+) -> Matrix4<D> {
     let n = q.len();
     assert_eq!(params.len(), param_count(n), "parameter vector length");
     assert_eq!(models.len(), n, "one model per joint");
+    assert_eq!(kinds.len(), n, "one kind per joint");
+    let zero = D::from(0.0);
+    let one = D::from(1.0);
     let mut t = Matrix4::<D>::identity();
     for (j, &qj) in q.iter().enumerate() {
         let (a, slot, alpha, theta) = (
@@ -51,14 +81,16 @@ pub fn position_with<D: DualNum<Primitive = f64> + Copy>(
             params[2 * n + j],
             params[3 * n + j],
         );
-        let (st, ct) = (qj + theta).sin_cos();
-        let (sa, ca) = alpha.sin_cos();
-        let zero = D::from(0.0);
-        let one = D::from(1.0);
         let d = match models[j] {
             JointModel::Dh => slot,
             JointModel::Hayati => zero,
         };
+        let (angle, d) = match kinds[j] {
+            JointKind::Revolute => (qj + theta, d),
+            JointKind::Prismatic => (theta, d + qj),
+        };
+        let (st, ct) = angle.sin_cos();
+        let (sa, ca) = alpha.sin_cos();
         #[rustfmt::skip]
         let link = Matrix4::new(
             ct,   -ca * st, sa * st,  a * ct,
@@ -80,8 +112,37 @@ pub fn position_with<D: DualNum<Primitive = f64> + Copy>(
         }
     }
     let b = &params[4 * n..];
-    let p = t * Vector4::new(b[0], b[1], b[2], D::from(1.0));
-    [p[0], p[1], p[2]]
+    let p = t * Vector4::new(b[0], b[1], b[2], one);
+    for r in 0..3 {
+        t[(r, 3)] = p[r];
+    }
+    t
+}
+
+/// The tool transform of `params` (its joints' models and kinds) at `q`.
+fn tool_of<D: DualNum<Primitive = f64> + Copy>(params: &DhParams, x: &[D], q: &[D]) -> Matrix4<D> {
+    let kinds: Vec<JointKind> = params.joints.iter().map(|j| j.kind).collect();
+    tool_with(x, q, &params.models(), &kinds)
+}
+
+/// The 12 numbers of `[R | p]`, row-major.
+fn top_rows<D: DualNum<Primitive = f64> + Copy>(t: &Matrix4<D>) -> nalgebra::SVector<D, 12> {
+    nalgebra::SVector::<D, 12>::from_fn(|k, _| t[(k / 4, k % 4)])
+}
+
+/// A 6-row column from the derivative `dt` of `[R | p]` (row-major, as
+/// [`top_rows`]) and `R`: the position's derivative, then `ω` with
+/// `dR = [ω]× R`, the axial vector of `dR·Rᵀ`.
+fn six_row(dt: impl Fn(usize, usize) -> f64, r: impl Fn(usize, usize) -> f64) -> [f64; 6] {
+    let w = |i: usize, j: usize| (0..3).map(|k| dt(i, k) * r(j, k)).sum::<f64>();
+    [
+        dt(0, 3),
+        dt(1, 3),
+        dt(2, 3),
+        (w(2, 1) - w(1, 2)) / 2.0,
+        (w(0, 2) - w(2, 0)) / 2.0,
+        (w(1, 0) - w(0, 1)) / 2.0,
+    ]
 }
 
 fn check(params: &DhParams, q: &[f64]) -> Result<(), KernelError> {
@@ -115,18 +176,43 @@ pub fn param_jacobian_dual<const P: usize>(
             got: P,
         });
     }
+    Ok(param_pose_jacobian_dual::<P>(params, q)?
+        .iter()
+        .map(|c| [c[0], c[1], c[2]])
+        .collect())
+}
+
+/// The tool pose's 6-row parameter Jacobian (position rows, then the small
+/// rotation `ω` with `δR = [ω]× R`) by forward-mode autodiff; `P` must be
+/// `4n + 3`.
+///
+/// ```
+/// use aacmm_core::{params::DhParams, reference_model};
+/// let arm = DhParams::paper_nominal();
+/// let jac = reference_model::param_pose_jacobian_dual::<27>(&arm, &[0.0; 6]).unwrap();
+/// assert_eq!(jac[18][3..], [0.0, 0.0, 1.0]); // θ1 turns the tool about the base z axis
+/// ```
+pub fn param_pose_jacobian_dual<const P: usize>(
+    params: &DhParams,
+    q: &[f64],
+) -> Result<Vec<[f64; 6]>, KernelError> {
+    check(params, q)?;
+    if params.param_count() != P {
+        return Err(KernelError::ParamCount {
+            expected: params.param_count(),
+            got: P,
+        });
+    }
     let x = SVector::<f64, P>::from_iterator(params.to_vec());
-    let models = params.models();
-    let (_, jac) = jacobian(
+    let (value, jac) = jacobian(
         |x: SVector<DualSVec64<P>, P>| {
             let q: Vec<DualSVec64<P>> = q.iter().map(|&v| DualSVec64::from(v)).collect();
-            let p = position_with(x.as_slice(), &q, &models);
-            nalgebra::Vector3::new(p[0], p[1], p[2])
+            top_rows(&tool_of(params, x.as_slice(), &q))
         },
         &x,
     );
     Ok((0..P)
-        .map(|c| [jac[(0, c)], jac[(1, c)], jac[(2, c)]])
+        .map(|c| six_row(|i, j| jac[(4 * i + j, c)], |i, j| value[4 * i + j]))
         .collect())
 }
 
@@ -145,17 +231,60 @@ pub fn param_jacobian_central(
     h: f64,
 ) -> Result<Vec<[f64; 3]>, KernelError> {
     check(params, q)?;
+    Ok(param_pose_jacobian_central(params, q, h)?
+        .iter()
+        .map(|c| [c[0], c[1], c[2]])
+        .collect())
+}
+
+/// The tool pose's 6-row parameter Jacobian by central differences of
+/// [`tool_with`] with step `h`.
+pub fn param_pose_jacobian_central(
+    params: &DhParams,
+    q: &[f64],
+    h: f64,
+) -> Result<Vec<[f64; 6]>, KernelError> {
+    check(params, q)?;
     let x = params.to_vec();
-    let models = params.models();
+    let at = tool_of(params, &x, q);
     let mut shifted = x.clone();
     Ok((0..x.len())
         .map(|c| {
             shifted[c] = x[c] + h;
-            let plus = position_with(&shifted, q, &models);
+            let plus = tool_of(params, &shifted, q);
             shifted[c] = x[c] - h;
-            let minus = position_with(&shifted, q, &models);
+            let minus = tool_of(params, &shifted, q);
             shifted[c] = x[c];
-            [0, 1, 2].map(|r| (plus[r] - minus[r]) / (2.0 * h))
+            six_row(
+                |i, j| (plus[(i, j)] - minus[(i, j)]) / (2.0 * h),
+                |i, j| at[(i, j)],
+            )
+        })
+        .collect())
+}
+
+/// The tool pose's 6-row joint Jacobian by central differences with step
+/// `h` (rad, or mm for a prismatic joint).
+pub fn joint_pose_jacobian_central(
+    params: &DhParams,
+    q: &[f64],
+    h: f64,
+) -> Result<Vec<[f64; 6]>, KernelError> {
+    check(params, q)?;
+    let x = params.to_vec();
+    let at = tool_of(params, &x, q);
+    let mut shifted = q.to_vec();
+    Ok((0..q.len())
+        .map(|j| {
+            shifted[j] = q[j] + h;
+            let plus = tool_of(params, &x, &shifted);
+            shifted[j] = q[j] - h;
+            let minus = tool_of(params, &x, &shifted);
+            shifted[j] = q[j];
+            six_row(
+                |r, c| (plus[(r, c)] - minus[(r, c)]) / (2.0 * h),
+                |r, c| at[(r, c)],
+            )
         })
         .collect())
 }
@@ -182,18 +311,35 @@ pub fn joint_jacobian_dual<const N: usize>(
             got: N,
         });
     }
+    Ok(joint_pose_jacobian_dual::<N>(params, q)?
+        .iter()
+        .map(|c| [c[0], c[1], c[2]])
+        .collect())
+}
+
+/// The tool pose's 6-row joint Jacobian by forward-mode autodiff; `N` must
+/// be the joint count.
+pub fn joint_pose_jacobian_dual<const N: usize>(
+    params: &DhParams,
+    q: &[f64],
+) -> Result<Vec<[f64; 6]>, KernelError> {
+    check(params, q)?;
+    if N != q.len() {
+        return Err(KernelError::JointCount {
+            expected: q.len(),
+            got: N,
+        });
+    }
     let x = SVector::<f64, N>::from_column_slice(q);
     let p = params.to_vec();
-    let models = params.models();
-    let (_, jac) = jacobian(
+    let (value, jac) = jacobian(
         |q: SVector<DualSVec64<N>, N>| {
-            let params: Vec<DualSVec64<N>> = p.iter().map(|&v| DualSVec64::from(v)).collect();
-            let r = position_with(&params, q.as_slice(), &models);
-            nalgebra::Vector3::new(r[0], r[1], r[2])
+            let x: Vec<DualSVec64<N>> = p.iter().map(|&v| DualSVec64::from(v)).collect();
+            top_rows(&tool_of(params, &x, q.as_slice()))
         },
         &x,
     );
     Ok((0..N)
-        .map(|c| [jac[(0, c)], jac[(1, c)], jac[(2, c)]])
+        .map(|c| six_row(|i, j| jac[(4 * i + j, c)], |i, j| value[4 * i + j]))
         .collect())
 }

@@ -7,7 +7,7 @@ use aacmm_core::io::{
     AngleUnit, Arm as CoreArm, LengthUnit, Rejected, arm_to_toml, read_arm_with, source_name,
 };
 use aacmm_core::kernel::ArmKernel;
-use aacmm_core::params::{DhParams, ParamId, SUPPORTED_JOINTS, param_count, supported_joints_text};
+use aacmm_core::params::{DhParams, ParamId, param_count, supported_joints_text, supports_joints};
 use numpy::ndarray::{Array1, ArrayD};
 use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArrayDyn, PyArrayLike1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -16,7 +16,7 @@ use crate::error::{Error, Kind, Result, detached};
 use crate::readings::{Readings, prepare};
 
 /// An arm: its D-H geometry (mm, rad) prepared for the generated kernel of
-/// its joint count (6 or 7). Immutable; safe to share between threads.
+/// its joint count (1 to 12). Immutable; safe to share between threads.
 #[pyclass(frozen, module = "aacmm")]
 pub struct Arm {
     pub(crate) arm: CoreArm,
@@ -71,13 +71,13 @@ pub fn param_names(joints: usize) -> PyResult<Vec<String>> {
 /// `joints` is a count the toolkit has a kernel for, or
 /// `aacmm.UnsupportedError` saying which it has.
 fn supported(joints: usize) -> Result<(), Error> {
-    if SUPPORTED_JOINTS.contains(&joints) {
+    if supports_joints(joints) {
         return Ok(());
     }
     Err(Error::new(
         Kind::Unsupported,
         format!(
-            "joints = {joints}: the toolkit has kernels for {}",
+            "joints = {joints}: the toolkit computes {}",
             supported_joints_text()
         ),
     ))
@@ -85,7 +85,7 @@ fn supported(joints: usize) -> Result<(), Error> {
 
 #[pymethods]
 impl Arm {
-    /// Reads an arm file (TOML: 6 or 7 `[[joint]]` entries, in the units the
+    /// Reads an arm file (TOML: 1 to 12 `[[joint]]` entries, in the units the
     /// file declares). Errors name the file, line and field
     /// (`aacmm.InputError`; `OSError` when it cannot be read). Legal but
     /// suspicious content is kept in `warnings` and issued as `UserWarning`.
@@ -159,7 +159,7 @@ impl Arm {
         &self.arm.name
     }
 
-    /// Number of joints (6 or 7).
+    /// Number of joints (1 to 12).
     #[getter(joints)]
     fn joints_py(&self) -> usize {
         self.joints()

@@ -32,8 +32,8 @@ def test_arm_files(tmp_path):
 
 
 def test_arm_parameters():
-    with pytest.raises(aacmm.UnsupportedError, match="joints = 5"):
-        aacmm.Arm.from_params(5, np.zeros(23))
+    with pytest.raises(aacmm.UnsupportedError, match="joints = 13"):
+        aacmm.Arm.from_params(13, np.zeros(55))
     with pytest.raises(ValueError, match="26 values, expected 27"):
         aacmm.Arm.from_params(6, np.zeros(26))
     bad = np.zeros(27)

@@ -38,7 +38,7 @@ pub fn worker_threads(flag: Option<usize>) -> usize {
 /// `evaluate` share.
 #[derive(clap::Args)]
 pub struct ArmAndPoses {
-    /// Arm file (TOML) with 6 or 7 `[[joint]]` entries.
+    /// Arm file (TOML) with 1 to 12 `[[joint]]` entries.
     #[arg(long)]
     pub arm: PathBuf,
     /// Poses file (CSV `point,q1,...,qn`); `-` reads standard input.

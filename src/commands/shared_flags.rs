@@ -18,7 +18,7 @@ use aacmm_core::io::AngleUnit;
 /// positions, noise.
 #[derive(clap::Args)]
 pub struct FitInput {
-    /// Arm file (TOML) with 6 or 7 `[[joint]]` entries.
+    /// Arm file (TOML) with 1 to 12 `[[joint]]` entries.
     #[arg(long)]
     pub arm: PathBuf,
     /// Poses file (CSV `point,q1,...,qn`: touches of points in many poses);

@@ -287,7 +287,7 @@ int main(int argc, char **argv) {
     expect(aacmm_joint_jacobian(arm, q, joints + 1, jp, 3, jq, 3 * joints), AACMM_STATUS_LENGTH,
            "joint_q_len");
     expect(aacmm_arm_from_params(6, nominal, 26, &none), AACMM_STATUS_LENGTH, "params_len");
-    expect(aacmm_arm_from_params(5, nominal, 23, &none), AACMM_STATUS_UNSUPPORTED, "five_joints");
+    expect(aacmm_arm_from_params(0, nominal, 3, &none), AACMM_STATUS_UNSUPPORTED, "no_joints");
     expect(aacmm_positions(arm, q, 6, q, 3), AACMM_STATUS_INVALID_ARGUMENT, "overlap");
     /* An output inside an input: refused before anything is written. */
     double aliased[27];

@@ -4,7 +4,7 @@
 use super::gravity::Loads;
 use super::{Beyond, Column, Physics};
 use crate::kernel::{Post, PreparedPoses};
-use crate::params::DhParams;
+use crate::params::{DhParams, JointKind};
 
 /// What was recorded with each pose beyond its readings.
 #[derive(Clone, Copy, Debug, Default)]
@@ -90,9 +90,15 @@ impl Effects {
     /// own, the corrected angles through the angle sum with the small
     /// correction.
     ///
+    /// A prismatic joint's readings (mm) pass through unchanged: its
+    /// encoder harmonics and compliance are refused (both models are of a
+    /// revolute joint's angle), the expansion and drift act after the
+    /// chain as for any joint.
+    ///
     /// # Errors
     ///
-    /// An expansion without temperatures, a drift without times.
+    /// An expansion without temperatures, a drift without times; encoder
+    /// harmonics or a compliance of a prismatic joint.
     pub fn new(
         arm: &DhParams,
         physics: &Physics,
@@ -101,6 +107,7 @@ impl Effects {
         conditions: Conditions<'_>,
     ) -> Result<Effects, EffectsError> {
         let (n, len) = (arm.joints.len(), raw.len());
+        check_prismatic(arm, physics, fit)?;
         let elapsed = Elapsed::of(physics, fit, len, conditions)?;
         let trig: Vec<(&[f64], &[f64])> = (0..n).map(|j| raw.column_trig(j)).collect();
         let loads = (!fit.compliance.is_empty() || physics.compliance.iter().any(|c| c.is_some()))
@@ -108,13 +115,15 @@ impl Effects {
         // Per pose and joint (pose-major), the gravity torque.
         let mut tau = vec![0.0; if loads.is_some() { len * n } else { 0 }];
         if let Some(loads) = &loads {
+            // A prismatic joint's column holds its readings and no sin.
+            let sin = |j: usize, i: usize| trig[j].1.get(i).copied().unwrap_or(0.0);
             for (i, t) in tau.chunks_exact_mut(n).enumerate() {
-                loads.torques(|j| trig[j].0[i], |j| trig[j].1[i], t);
+                loads.torques(|j| trig[j].0[i], |j| sin(j, i), t);
             }
         }
         let delta = reading_corrections(physics, &trig, &tau, len);
         let (cos, sin) = corrected_trig(&trig, &delta, len);
-        let mut poses = PreparedPoses::from_trig(n, len, cos, sin);
+        let mut poses = PreparedPoses::from_trig(n, raw.prismatic_mask(), len, cos, sin);
         let (cte, drift) = (
             physics.cte_per_k.unwrap_or(0.0),
             physics.drift_mm_per_h.unwrap_or([0.0; 3]),
@@ -158,11 +167,45 @@ impl Effects {
     }
 }
 
+/// Refuses the reading corrections of a prismatic joint: encoder
+/// harmonics and compliance are models of a revolute joint's angle (a
+/// slide's reading is a length, and its load a force along it).
+fn check_prismatic(arm: &DhParams, physics: &Physics, fit: &Beyond) -> Result<(), EffectsError> {
+    let slides = |j: usize| {
+        arm.joints
+            .get(j)
+            .is_some_and(|x| x.kind == JointKind::Prismatic)
+    };
+    let harmonic = (physics.harmonics.iter().map(|h| h.joint))
+        .chain(fit.harmonics.iter().map(|h| h.0))
+        .find(|&j| slides(j));
+    if let Some(j) = harmonic {
+        return Err(format!(
+            "joint {} is prismatic: encoder harmonics are a model of a revolute joint's angle",
+            j + 1
+        ));
+    }
+    let compliant = (0..arm.joints.len())
+        .filter(|&j| physics.compliance_of(j) != 0.0)
+        .chain(fit.compliance.iter().copied())
+        .find(|&j| slides(j));
+    if let Some(j) = compliant {
+        return Err(format!(
+            "joint {} is prismatic: the compliance model turns a revolute joint under its gravity \
+             torque",
+            j + 1
+        ));
+    }
+    Ok(())
+}
+
 /// The encoder readings whose corrected joint angles ([`Effects`]:
 /// harmonics and compliance, not the expansion or drift) are `angles`:
 /// what a true arm with these errors reads in the pose `angles`. Fixed
 /// point `q ← angles − c(q)`: the corrections are micro-radians, their
-/// change with `q` smaller still, so a few rounds reach round-off.
+/// change with `q` smaller still, so a few rounds reach round-off. A
+/// prismatic joint's reading (mm) is its own: nothing corrects it (see
+/// [`Effects::new`]).
 pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
     let n = arm.joints.len();
     let loads = physics
@@ -172,8 +215,17 @@ pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f6
         .then(|| Loads::new(arm, physics));
     let mut q = angles.to_vec();
     let mut tau = vec![0.0; if loads.is_some() { n } else { 0 }];
+    let slides = |j: usize| arm.joints[j].kind == JointKind::Prismatic;
     for _ in 0..8 {
-        let (cos, sin): (Vec<f64>, Vec<f64>) = q.iter().map(|v| (v.cos(), v.sin())).unzip();
+        let (cos, sin): (Vec<f64>, Vec<f64>) = (q.iter().enumerate())
+            .map(|(j, v)| {
+                if slides(j) {
+                    (*v, 0.0)
+                } else {
+                    (v.cos(), v.sin())
+                }
+            })
+            .unzip();
         let trig: Vec<(&[f64], &[f64])> = (0..n)
             .map(|j| (std::slice::from_ref(&cos[j]), std::slice::from_ref(&sin[j])))
             .collect();
@@ -182,7 +234,7 @@ pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f6
         }
         // The same corrections the fit applies, of this one pose.
         let delta = reading_corrections(physics, &trig, &tau, 1);
-        for j in 0..n {
+        for j in (0..n).filter(|&j| !slides(j)) {
             q[j] = angles[j] - delta[j].first().copied().unwrap_or(0.0);
         }
     }

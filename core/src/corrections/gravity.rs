@@ -18,7 +18,7 @@
 //! inside, so the sum is N·mm and is returned in N·m.
 
 use super::{Mass, Physics};
-use crate::params::{DhJoint, DhParams, JointModel};
+use crate::params::{DhJoint, DhParams, JointKind, JointModel};
 
 /// Standard gravity, m/s².
 pub const STANDARD_GRAVITY: f64 = 9.80665;
@@ -80,6 +80,8 @@ struct Link {
     a: f64,
     d: f64,
     hayati: bool,
+    /// A slide: its reading adds to `d`, its angle is θ alone.
+    prismatic: bool,
 }
 
 impl Link {
@@ -98,14 +100,24 @@ impl Link {
             a: j.a,
             d: if hayati { 0.0 } else { j.d },
             hayati,
+            prismatic: j.kind == JointKind::Prismatic,
         }
     }
 
     /// The link's transform at a reading with cos `cq` and sin `sq`: the
     /// joint angle `q + θ` through the angle sum, no transcendental call.
+    /// A prismatic joint's reading (mm) comes as `cq` (`sq` unused): its
+    /// angle is θ, its offset `d + q`.
     fn at(&self, cq: f64, sq: f64) -> Pose3 {
-        let ct = cq * self.ct - sq * self.st;
-        let st = sq * self.ct + cq * self.st;
+        let (ct, st, d) = if self.prismatic {
+            (self.ct, self.st, self.d + cq)
+        } else {
+            (
+                cq * self.ct - sq * self.st,
+                sq * self.ct + cq * self.st,
+                self.d,
+            )
+        };
         let (ca, sa) = (self.ca, self.sa);
         let a = Pose3 {
             r: [
@@ -113,7 +125,7 @@ impl Link {
                 [st, ca * ct, -sa * ct],
                 [0.0, sa, ca],
             ],
-            t: [self.a * ct, self.a * st, self.d],
+            t: [self.a * ct, self.a * st, d],
         };
         if !self.hayati {
             return a;
@@ -161,7 +173,10 @@ impl Loads {
     }
 
     /// Gravity torque about each joint's axis (N·m) into `out`, at the
-    /// pose whose readings have cos `cq(j)` and sin `sq(j)`.
+    /// pose whose readings have cos `cq(j)` and sin `sq(j)` (a prismatic
+    /// joint's reading, mm, as `cq(j)`). A prismatic joint's entry is the
+    /// torque about its axis line, which its slide does not carry: the
+    /// compliance model refuses prismatic joints.
     pub fn torques(&self, cq: impl Fn(usize) -> f64, sq: impl Fn(usize) -> f64, out: &mut [f64]) {
         let n = self.links.len();
         // Frames o_0..o_n (origins and the z axes of 0..n−1) and the
@@ -206,11 +221,15 @@ impl Loads {
     }
 }
 
-/// Gravity torque about each joint's axis at readings `q` (rad), N·m,
-/// into `out` (one per joint): [`Loads::torques`] of one pose.
+/// Gravity torque about each joint's axis at readings `q` (rad; mm for a
+/// prismatic joint), N·m, into `out` (one per joint): [`Loads::torques`]
+/// of one pose.
 pub fn torques(arm: &DhParams, physics: &Physics, q: &[f64], out: &mut [f64]) {
     let loads = Loads::new(arm, physics);
-    loads.torques(|j| q[j].cos(), |j| q[j].sin(), out);
+    let slides = |j: usize| arm.joints[j].kind == JointKind::Prismatic;
+    let cq = |j: usize| if slides(j) { q[j] } else { q[j].cos() };
+    let sq = |j: usize| if slides(j) { 0.0 } else { q[j].sin() };
+    loads.torques(cq, sq, out);
 }
 
 #[cfg(test)]

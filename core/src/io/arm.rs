@@ -5,7 +5,7 @@
 //! length_unit = "mm"      # "mm" or "m"; required, never guessed
 //! angle_unit = "deg"      # "deg" or "rad"; required, never guessed
 //!
-//! [[joint]]               # one per joint, base to probe (6 or 7 joints)
+//! [[joint]]               # one per joint, base to probe (1 to 12 joints)
 //! theta = 0.0             # encoder zero offset θ⁰
 //! alpha = -90.0           # link twist (the paper's β; `beta` is accepted instead)
 //! a = 50.0
@@ -32,8 +32,8 @@
 //! `hbeta`, not `beta`: `beta` is the paper's name of the twist `α`.
 //! Integers are accepted where numbers are expected. Unknown keys are errors
 //! (a typo is never ignored), as are non-finite numbers, a missing key, a
-//! joint count the toolkit has no kernel for (see
-//! [`SUPPORTED_JOINTS`]), and limits with
+//! joint count the toolkit has no kernel for (none, or more than
+//! [`MAX_JOINTS`]), and limits with
 //! `min >= max`. A unit that looks wrong (lengths over 10 m in metres, angles
 //! over a full turn in radians) gives a [`Warning`].
 //!
@@ -53,7 +53,7 @@ use super::units::{AngleUnit, LengthUnit};
 use super::verdict::Rejected;
 use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
 use crate::error::{InputError, quoted, shown};
-use crate::params::{DhJoint, DhParams, JointModel, SUPPORTED_JOINTS};
+use crate::params::{DhJoint, DhParams, JointModel, MAX_JOINTS, supports_joints};
 use crate::tolerances::Tolerances;
 
 /// In an arm file in metres, a length above this (m) draws a warning: no
@@ -139,10 +139,11 @@ pub fn read_arm_with(path: &Path, rejected: Rejected) -> Result<(Arm, Vec<Warnin
 ///
 /// let err = aacmm_core::io::parse_arm(&text.replacen("alpha", "alpah", 1), "arm.toml");
 /// assert!(err.unwrap_err().to_string().starts_with("arm.toml:5: field `alpah`: unknown key"));
-/// let five = text.replacen(joint, "", 1);
+/// let thirteen = text.replace("[probe]", &format!("{}[probe]", joint.repeat(7)));
 /// assert_eq!(
-///     aacmm_core::io::parse_arm(&five, "arm.toml").unwrap_err().to_string(),
-///     "arm.toml:27: field `joint`: 5 joints; the toolkit has kernels for 6- and 7-joint arms"
+///     aacmm_core::io::parse_arm(&thirteen, "arm.toml").unwrap_err().to_string(),
+///     "arm.toml:63: field `joint`: 13 joints; at most 12 are supported (the toolkit \
+///      computes chains of 1 to 12 joints)"
 /// );
 /// ```
 pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputError> {
@@ -485,10 +486,9 @@ impl ArmFile {
             .enumerate()
             .map(|(i, j)| j.get_ref().model(j.span(), i, text, file))
             .collect::<Result<Vec<JointModel>, InputError>>()?;
-        if !SUPPORTED_JOINTS.contains(&joints.len()) {
+        if !supports_joints(joints.len()) {
             // Blame the first joint too many, or the last.
-            let max = SUPPORTED_JOINTS.iter().max().copied().unwrap_or(0);
-            let blamed = joints.get(max).or(joints.last());
+            let blamed = joints.get(MAX_JOINTS).or(joints.last());
             let line = line_of(text, blamed.map_or(self.joint.span(), |j| j.span()).start);
             return Err(InputError::field(
                 file,
@@ -768,15 +768,10 @@ fn unsupported(n: usize) -> String {
     if n == 0 {
         return "no joints: add one [[joint]] table per joint, base to probe".into();
     }
-    let max = SUPPORTED_JOINTS.iter().max().copied().unwrap_or(0);
-    let kinds = SUPPORTED_JOINTS.map(|n| n.to_string()).join("- and ");
-    if n > max {
-        format!(
-            "{n} joints; at most {max} are supported (the toolkit has kernels for {kinds}-joint arms)"
-        )
-    } else {
-        format!("{n} joints; the toolkit has kernels for {kinds}-joint arms")
-    }
+    format!(
+        "{n} joints; at most {MAX_JOINTS} are supported (the toolkit computes {})",
+        crate::params::supported_joints_text()
+    )
 }
 
 /// The tables of an arm file.
@@ -1313,53 +1308,34 @@ z = 100.0
             "joint 1: expected a table, found an integer",
         );
         let joint = "[[joint]]\ntheta = 0\nalpha = 0\na = 0\nd = 1\n";
-        let seven = format!("{no_joints}{}", joint.repeat(7));
-        assert_eq!(parse_arm(&seven, F).unwrap().0.params.joint_count(), 7);
-        let eight = format!("{seven}{joint}");
-        // The eighth [[joint]] header is on line 6 + 7 * 5 + 1.
+        let twelve = format!("{no_joints}{}", joint.repeat(12));
+        assert_eq!(parse_arm(&twelve, F).unwrap().0.params.joint_count(), 12);
+        let thirteen = format!("{twelve}{joint}");
+        // The thirteenth [[joint]] header is on line 6 + 12 * 5 + 1.
         assert_at(
-            &err(&eight),
-            42,
+            &err(&thirteen),
+            67,
             Some("joint"),
-            "8 joints; at most 7 are supported",
+            "13 joints; at most 12 are supported",
         );
     }
 
     #[test]
-    fn unsupported_joint_counts_are_rejected() {
-        // Five joints: one error naming the file, the last [[joint]] and the
-        // kernels there are (it used to parse, and fail later on the poses header).
+    fn every_joint_count_of_a_chain_is_read() {
+        // Five joints and one: chains the kernel computes (they used to be
+        // refused, with 6 and 7 the only counts).
         let five = edit(
             "\n[[joint]]\ntheta = 0.0\nalpha = 90.0\na = -35.0\nd = 0.0\n\n[probe]",
             "\n[probe]",
         );
-        let e = err(&five);
-        assert_at(
-            &e,
-            30,
-            Some("joint"),
-            "5 joints; the toolkit has kernels for 6- and 7-joint arms",
-        );
-        assert_eq!(
-            e.to_string(),
-            "my-arm.toml:30: field `joint`: 5 joints; the toolkit has kernels for 6- and \
-             7-joint arms"
-        );
+        assert_eq!(parse_arm(&five, F).unwrap().0.params.joint_count(), 5);
         let one = "length_unit = \"mm\"\nangle_unit = \"deg\"\n[[joint]]\ntheta = 0\nalpha = 0\n\
                    a = 0\nd = 1\n[probe]\nx = 0\ny = 0\nz = 0\n";
-        assert_at(
-            &err(one),
-            3,
-            Some("joint"),
-            "1 joints; the toolkit has kernels",
-        );
-        // The message follows the list of supported counts.
+        assert_eq!(parse_arm(one, F).unwrap().0.params.joint_count(), 1);
         assert_eq!(
-            SUPPORTED_JOINTS,
-            [6, 7],
-            "update the messages asserted here"
+            unsupported(13),
+            "13 joints; at most 12 are supported (the toolkit computes chains of 1 to 12 joints)"
         );
-        assert!(unsupported(5).ends_with("kernels for 6- and 7-joint arms"));
     }
 
     #[test]
@@ -1416,7 +1392,7 @@ z = 100.0
     #[test]
     fn write_is_deterministic_and_round_trips_bits() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
-        for n in SUPPORTED_JOINTS {
+        for n in [1, 5, 6, 7, 12] {
             // Every third joint Hayati: its β round-trips too.
             let joints = (0..n)
                 .map(|i| {

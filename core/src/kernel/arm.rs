@@ -1,136 +1,383 @@
-//! [`ArmKernel`]: the one runtime-sized entry to the generated chains. Its
-//! `chains!` list is the only place that maps a joint count to a chain; every
-//! operation is a [`KernelOp`] run on the chain the arm has.
+//! [`ArmKernel`]: the one runtime-sized entry to the kernels. Its `chains!`
+//! list is the only place that says which shapes have a generated kernel;
+//! every other shape of 1 to 12 joints runs on [`Generic`]. Every
+//! operation is an [`Op`] run on the chain the arm has, so each chain's
+//! code is instantiated once per operation, whatever calls it.
 
+use std::any::Any;
+use std::fmt;
+use std::marker::PhantomData;
 use std::ops::Range;
 
-use super::lanes::{self, Batch, LaneOp};
-use super::{
-    Chain, Dh, Hayati, Jacobians, KernelError, PreparedParams, PreparedPoses,
-    for_each_lane_jacobian, jacobians_impl, positions_impl,
+use super::batch::{
+    JacobianVisitor, Jacobians, PoseJacobianVisitor, for_each_lane_jacobian,
+    for_each_lane_joint_jacobian, for_each_lane_pose_jacobian, jacobians_impl, poses_impl,
+    positions_impl,
 };
+use super::lanes::{self, Batch, LaneOp};
+use super::{Chain, ChainShape, Generic, KernelError, Pose, PreparedParams, PreparedPoses};
 use crate::params::DhParams;
 
-/// An operation on a generated chain of any supported joint count: what
-/// [`ArmKernel::apply`] runs with the arm's `N`.
-pub(crate) trait KernelOp {
-    /// What the operation returns.
-    type Output;
-    /// Runs the operation on the prepared parameters of an `N`-joint arm
-    /// with its chain `C` ([`Dh`], or [`Hayati`] when a joint is Hayati).
-    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output;
+/// A function of one pose's readings (`q`, rad or mm per joint) and its
+/// outputs, or a batch over prepared poses: everything [`ArmKernel`] does,
+/// as one value. Callbacks are `dyn`: a chain's batch loops are compiled
+/// once, not once per caller's closure.
+pub(crate) enum Op<'a> {
+    Position {
+        q: &'a [f64],
+        out: &'a mut [f64; 3],
+    },
+    PositionJacobian {
+        q: &'a [f64],
+        jac: &'a mut [[f64; 3]],
+        out: &'a mut [f64; 3],
+    },
+    JointJacobian {
+        q: &'a [f64],
+        jac: &'a mut [[f64; 3]],
+        out: &'a mut [f64; 3],
+    },
+    JointJacobianAt {
+        poses: &'a PreparedPoses,
+        i: usize,
+        jac: &'a mut [[f64; 3]],
+        out: &'a mut [f64; 3],
+    },
+    Pose {
+        q: &'a [f64],
+        out: &'a mut Pose,
+    },
+    PoseJacobian {
+        q: &'a [f64],
+        jac: &'a mut [[f64; 6]],
+        out: &'a mut Pose,
+    },
+    JointPoseJacobian {
+        q: &'a [f64],
+        jac: &'a mut [[f64; 6]],
+        out: &'a mut Pose,
+    },
+    Batch(BatchOp<'a>),
 }
 
+/// The operations over prepared poses, each run in SIMD lanes.
+pub(crate) enum BatchOp<'a> {
+    Positions {
+        poses: &'a PreparedPoses,
+        start: usize,
+        out: &'a mut [[f64; 3]],
+    },
+    Poses {
+        poses: &'a PreparedPoses,
+        start: usize,
+        out: &'a mut [Pose],
+    },
+    Jacobians {
+        poses: &'a PreparedPoses,
+        out: &'a mut Jacobians,
+    },
+    EachJacobian {
+        poses: &'a PreparedPoses,
+        range: Range<usize>,
+        f: &'a mut JacobianVisitor<'a>,
+    },
+    EachJointJacobian {
+        poses: &'a PreparedPoses,
+        range: Range<usize>,
+        f: &'a mut dyn FnMut(usize, &[[f64; 3]]),
+    },
+    EachPoseJacobian {
+        poses: &'a PreparedPoses,
+        range: Range<usize>,
+        f: &'a mut PoseJacobianVisitor<'a>,
+    },
+}
+
+/// `q` as the `N` readings of the arm.
+fn readings<const N: usize>(q: &[f64]) -> Result<&[f64; N], KernelError> {
+    q.try_into().map_err(|_| KernelError::JointCount {
+        expected: N,
+        got: q.len(),
+    })
+}
+
+/// `jac` as `N` columns, or the length error.
+fn sized<const N: usize, const R: usize>(
+    jac: &mut [[f64; R]],
+) -> Result<&mut [[f64; R]; N], KernelError> {
+    let got = jac.len();
+    jac.try_into()
+        .map_err(|_| KernelError::OutputLength { expected: N, got })
+}
+
+fn check_len(expected: usize, got: usize) -> Result<(), KernelError> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(KernelError::OutputLength { expected, got })
+    }
+}
+
+impl Op<'_> {
+    /// Runs the operation on the prepared parameters of an `N`-joint arm
+    /// with its chain `C`.
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Result<(), KernelError> {
+        match self {
+            Op::Position { q, out } => {
+                let (cq, sq) = k.joint_inputs(readings::<N>(q)?);
+                *out = C::position(k, &cq, &sq);
+            }
+            Op::PositionJacobian { q, jac, out } => {
+                let (cq, sq) = k.joint_inputs(readings::<N>(q)?);
+                check_len(C::PARAMS, jac.len())?;
+                *out = C::position_jacobian(k, &cq, &sq, jac);
+            }
+            Op::JointJacobian { q, jac, out } => {
+                let (cq, sq) = k.joint_inputs(readings::<N>(q)?);
+                *out = C::joint_jacobian(k, &cq, &sq, sized::<N, 3>(jac)?);
+            }
+            Op::JointJacobianAt { poses, i, jac, out } => {
+                let jac = sized::<N, 3>(jac)?;
+                let (cq, sq) = poses.trig::<N>(i);
+                *out = C::joint_jacobian(k, &cq, &sq, jac);
+            }
+            Op::Pose { q, out } => {
+                let (cq, sq) = k.joint_inputs(readings::<N>(q)?);
+                *out = Pose::from_transform(C::pose(k, &cq, &sq));
+            }
+            Op::PoseJacobian { q, jac, out } => {
+                let (cq, sq) = k.joint_inputs(readings::<N>(q)?);
+                check_len(C::PARAMS, jac.len())?;
+                *out = Pose::from_transform(C::pose_jacobian(k, &cq, &sq, jac));
+            }
+            Op::JointPoseJacobian { q, jac, out } => {
+                let (cq, sq) = k.joint_inputs(readings::<N>(q)?);
+                let t = C::joint_pose_jacobian(k, &cq, &sq, sized::<N, 6>(jac)?);
+                *out = Pose::from_transform(t);
+            }
+            Op::Batch(op) => op.run::<N, C>(k)?,
+        }
+        Ok(())
+    }
+}
+
+impl BatchOp<'_> {
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Result<(), KernelError> {
+        match self {
+            BatchOp::Positions { poses, start, out } => {
+                lanes::run(OnChain::<N, C, _>::new(k, Positions { poses, start, out }));
+            }
+            BatchOp::Poses { poses, start, out } => {
+                lanes::run(OnChain::<N, C, _>::new(k, Poses { poses, start, out }));
+            }
+            BatchOp::Jacobians { poses, out } => {
+                check_len(C::PARAMS, out.params())?;
+                lanes::run(OnChain::<N, C, _>::new(k, AllJacobians { poses, out }));
+            }
+            BatchOp::EachJacobian { poses, range, f } => {
+                lanes::run(OnChain::<N, C, _>::new(k, EachJacobian { poses, range, f }));
+            }
+            BatchOp::EachJointJacobian { poses, range, f } => {
+                lanes::run(OnChain::<N, C, _>::new(
+                    k,
+                    EachJointJacobian { poses, range, f },
+                ));
+            }
+            BatchOp::EachPoseJacobian { poses, range, f } => {
+                lanes::run(OnChain::<N, C, _>::new(
+                    k,
+                    EachPoseJacobian { poses, range, f },
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which kind of kernel computes an arm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelKind {
+    /// A generated kernel the library ships ([`SHIPPED_SHAPES`]).
+    Generated,
+    /// The closed-form per-joint kernel of any shape ([`Generic`]).
+    Generic,
+    /// A chain handed over with [`ArmKernel::with_chain`].
+    User,
+}
+
+/// The shapes with generated kernels, their modules in [`shipped`]
+/// (`…h`: the extended chain, for arms with Hayati joints), and the
+/// arm's prepared parameters by joint count. Every count of 1 to
+/// [`MAX_JOINTS`](crate::params::MAX_JOINTS) has a variant; a shape
+/// without a generated kernel runs on [`Generic`].
 macro_rules! chains {
-    ($($n:literal => $variant:ident),*) => {
-        #[derive(Clone, Debug, PartialEq)]
-        enum Prepared {
-            $($variant(PreparedParams<$n>)),*
+    ($($n:literal => $variant:ident [$($dh:ident, $ext:ident: $shape:literal, $what:literal);*]),* $(,)?) => {
+        /// The generated kernels of the shipped shapes ([`SHIPPED_SHAPES`]):
+        /// for each a D-H chain and an extended one (`…h`), which also
+        /// computes Hayati joints.
+        pub mod shipped {
+            $($(
+                aacmm_dh_macros::dh_chain! {
+                    #[doc = concat!("The generated kernel of ", $what, " (`", $shape, "`), D-H joints.")]
+                    pub mod $dh { joints = $shape, core = crate }
+                }
+                aacmm_dh_macros::dh_chain! {
+                    #[doc = concat!("The generated kernel of ", $what, " (`", $shape, "`) with any subset of Hayati joints.")]
+                    pub mod $ext { joints = $shape, hayati = true, core = crate }
+                }
+            )*)*
         }
 
-        /// The joint counts `chains!` instantiates, for the test that they
-        /// agree with [`SUPPORTED_JOINTS`](crate::params::SUPPORTED_JOINTS).
-        #[cfg(test)]
-        const CHAINS: &[usize] = &[$($n),*];
+        /// The shapes the library ships generated kernels for, base first
+        /// (`R` revolute, `P` prismatic): every other shape runs on
+        /// [`Generic`].
+        pub const SHIPPED_SHAPES: &[&str] = &[$($($shape,)*)*];
 
-        impl ArmKernel {
-            /// Prepares `params` for the generated chain of its joint count.
-            ///
-            /// ```
-            /// use aacmm_core::{kernel::{ArmKernel, KernelError}, params::DhParams};
-            /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-            /// assert_eq!((k.joints(), k.param_count()), (6, 27));
-            /// let five = DhParams::from_slice(&[0.0; 23]).unwrap();
-            /// assert_eq!(ArmKernel::new(&five), Err(KernelError::Unsupported(5)));
-            /// ```
-            pub fn new(params: &DhParams) -> Result<ArmKernel, KernelError> {
-                let inner = match params.joint_count() {
+        #[derive(Clone, Debug, PartialEq)]
+        enum Prepared {
+            $($variant(PreparedParams<$n>),)*
+            User(UserChain),
+        }
+
+        impl Prepared {
+            fn new(params: &DhParams) -> Result<Prepared, KernelError> {
+                Ok(match params.joint_count() {
                     $($n => Prepared::$variant(PreparedParams::<$n>::new(params)?),)*
                     n => return Err(KernelError::Unsupported(n)),
-                };
-                Ok(ArmKernel { inner })
+                })
             }
 
-            /// Runs `op` on this arm's chain: the D-H one unless a joint is
-            /// Hayati (the D-H chain stays as fast as it was).
-            pub(crate) fn apply<O: KernelOp>(&self, op: O) -> O::Output {
-                match &self.inner {
-                    $(Prepared::$variant(k) => if k.has_hayati() {
-                        op.run::<$n, Hayati>(k)
-                    } else {
-                        op.run::<$n, Dh>(k)
-                    },)*
+            fn joints(&self) -> usize {
+                match self {
+                    $(Prepared::$variant(_) => $n,)*
+                    Prepared::User(u) => u.0.joints(),
+                }
+            }
+
+            fn kind(&self) -> KernelKind {
+                match self {
+                    $(Prepared::$variant(k) => {
+                        let mask = k.prismatic_mask();
+                        if [$(shipped::$dh::PRISMATIC),*].contains(&mask) {
+                            KernelKind::Generated
+                        } else {
+                            KernelKind::Generic
+                        }
+                    })*
+                    Prepared::User(_) => KernelKind::User,
+                }
+            }
+
+            /// Runs `op` on this arm's chain: its shape's generated one if
+            /// the library ships it (D-H unless a joint is Hayati: the
+            /// D-H chain is the faster), else the generic one.
+            fn run(&self, op: Op<'_>) -> Result<(), KernelError> {
+                match self {
+                    $(Prepared::$variant(k) => {
+                        $(
+                            if k.prismatic_mask() == shipped::$dh::PRISMATIC {
+                                return if k.has_hayati() {
+                                    op.run::<$n, shipped::$ext::Kernel>(k)
+                                } else {
+                                    op.run::<$n, shipped::$dh::Kernel>(k)
+                                };
+                            }
+                        )*
+                        op.run::<$n, Generic>(k)
+                    })*
+                    Prepared::User(u) => u.0.run(op),
                 }
             }
         }
     };
 }
 
-chains!(6 => Six, 7 => Seven);
-
-/// An arm's geometry prepared for the generated kernel of its joint count:
-/// the type every runtime caller (simulator, metrics, solvers, C ABI) uses.
-/// Preparing costs a few sin/cos and allocates nothing, so solvers make one
-/// per parameter set.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ArmKernel {
-    inner: Prepared,
+chains! {
+    1 => One [],
+    2 => Two [],
+    3 => Three [],
+    4 => Four [scara, scarah: "RRPR", "a SCARA"],
+    5 => Five [arm5, arm5h: "RRRRR", "a 5-axis arm"],
+    6 => Six [arm6, arm6h: "RRRRRR", "the 6-joint arm (27 parameters)"],
+    7 => Seven [
+        arm7, arm7h: "RRRRRRR", "the 7-joint arm (31 parameters)";
+        track6, track6h: "PRRRRRR", "a 6-joint robot on a linear track"
+    ],
+    8 => Eight [track7, track7h: "PRRRRRRR", "a 7-joint arm on a lift or track"],
+    9 => Nine [],
+    10 => Ten [],
+    11 => Eleven [],
+    12 => Twelve [],
 }
 
-struct Joints;
-impl KernelOp for Joints {
-    type Output = usize;
-    fn run<const N: usize, C: Chain<N>>(self, _: &PreparedParams<N>) -> usize {
-        N
+/// A chain handed over by a user ([`ArmKernel::with_chain`]): its
+/// prepared parameters behind a trait object, every operation one dynamic
+/// call.
+#[derive(Clone, Debug)]
+struct UserChain(Box<dyn DynChain>);
+
+impl PartialEq for UserChain {
+    fn eq(&self, other: &UserChain) -> bool {
+        self.0.same(&*other.0)
     }
 }
 
-/// One pose: position, and optionally a Jacobian (parameter or joint).
-struct OnePose<'a> {
-    q: &'a [f64],
-    jac: Option<(&'a mut [[f64; 3]], bool)>,
+trait DynChain: fmt::Debug + Send + Sync + dyn_clone::DynClone + Any {
+    fn joints(&self) -> usize;
+    fn run(&self, op: Op<'_>) -> Result<(), KernelError>;
+    /// The same chain type with the same constants.
+    fn same(&self, other: &dyn DynChain) -> bool;
 }
 
-impl KernelOp for OnePose<'_> {
-    type Output = Result<[f64; 3], KernelError>;
-    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output {
-        let q: &[f64; N] = self.q.try_into().map_err(|_| KernelError::JointCount {
-            expected: N,
-            got: self.q.len(),
-        })?;
-        let (cq, sq) = (q.map(f64::cos), q.map(f64::sin));
-        match self.jac {
-            None => Ok(C::position(k, &cq, &sq)),
-            Some((jac, true)) => {
-                check_len(C::PARAMS, jac.len())?;
-                Ok(C::position_jacobian(k, &cq, &sq, jac))
-            }
-            Some((jac, false)) => {
-                check_len(N, jac.len())?;
-                // Invariant: `check_len` just returned Ok for length N.
-                let jac: &mut [[f64; 3]; N] = jac.try_into().expect("length checked");
-                Ok(C::joint_jacobian(k, &cq, &sq, jac))
-            }
+dyn_clone::clone_trait_object!(DynChain);
+
+/// An `N`-joint arm prepared for the user's chain `C`.
+struct OnUser<const N: usize, C> {
+    k: PreparedParams<N>,
+    chain: PhantomData<fn() -> C>,
+}
+
+impl<const N: usize, C> Clone for OnUser<N, C> {
+    fn clone(&self) -> Self {
+        OnUser {
+            k: self.k,
+            chain: PhantomData,
         }
     }
 }
 
-/// One pose of prepared poses: its joint Jacobian from the stored sin/cos.
-struct OnePrepared<'a> {
-    poses: &'a PreparedPoses,
-    i: usize,
-    jac: &'a mut [[f64; 3]],
+impl<const N: usize, C> fmt::Debug for OnUser<N, C> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("OnUser")
+            .field("chain", &std::any::type_name::<C>())
+            .field("k", &self.k)
+            .finish()
+    }
 }
 
-impl KernelOp for OnePrepared<'_> {
-    type Output = Result<[f64; 3], KernelError>;
-    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output {
-        check_len(N, self.jac.len())?;
-        // Invariant: `check_len` above.
-        let jac: &mut [[f64; 3]; N] = self.jac.try_into().expect("length checked");
-        let (cq, sq) = self.poses.trig::<N>(self.i);
-        Ok(C::joint_jacobian(k, &cq, &sq, jac))
+impl<const N: usize, C: Chain<N> + 'static> DynChain for OnUser<N, C> {
+    fn joints(&self) -> usize {
+        N
     }
+
+    fn run(&self, op: Op<'_>) -> Result<(), KernelError> {
+        op.run::<N, C>(&self.k)
+    }
+
+    fn same(&self, other: &dyn DynChain) -> bool {
+        let other: &dyn Any = other;
+        other.downcast_ref::<Self>().is_some_and(|o| o.k == self.k)
+    }
+}
+
+/// An arm's geometry prepared for its kernel: the type every runtime
+/// caller (simulator, metrics, solvers, C ABI) uses. Preparing costs a few
+/// sin/cos and allocates nothing (a user's chain excepted), so solvers
+/// make one per parameter set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmKernel {
+    inner: Prepared,
+    shape: ChainShape,
 }
 
 /// A batch operation with the arm's chain known: the [`LaneOp`] that
@@ -138,7 +385,7 @@ impl KernelOp for OnePrepared<'_> {
 struct OnChain<'k, const N: usize, C, O> {
     k: &'k PreparedParams<N>,
     op: O,
-    chain: std::marker::PhantomData<C>,
+    chain: PhantomData<C>,
 }
 
 impl<'k, const N: usize, C, O> OnChain<'k, N, C, O> {
@@ -146,7 +393,7 @@ impl<'k, const N: usize, C, O> OnChain<'k, N, C, O> {
         OnChain {
             k,
             op,
-            chain: std::marker::PhantomData,
+            chain: PhantomData,
         }
     }
 }
@@ -155,13 +402,6 @@ struct Positions<'a> {
     poses: &'a PreparedPoses,
     start: usize,
     out: &'a mut [[f64; 3]],
-}
-
-impl KernelOp for Positions<'_> {
-    type Output = ();
-    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
-        lanes::run(OnChain::<N, C, _>::new(k, self))
-    }
 }
 
 impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, Positions<'_>> {
@@ -173,18 +413,24 @@ impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, Positions<'_>> {
     }
 }
 
+struct Poses<'a> {
+    poses: &'a PreparedPoses,
+    start: usize,
+    out: &'a mut [Pose],
+}
+
+impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, Poses<'_>> {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let Poses { poses, start, out } = self.op;
+        poses_impl::<N, C, L>(self.k, poses, start, out)
+    }
+}
+
 struct AllJacobians<'a> {
     poses: &'a PreparedPoses,
     out: &'a mut Jacobians,
-}
-
-impl KernelOp for AllJacobians<'_> {
-    type Output = Result<(), KernelError>;
-    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) -> Self::Output {
-        check_len(C::PARAMS, self.out.params())?;
-        lanes::run(OnChain::<N, C, _>::new(k, self));
-        Ok(())
-    }
 }
 
 impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, AllJacobians<'_>> {
@@ -196,22 +442,13 @@ impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, AllJacobians<'_>>
     }
 }
 
-struct EachJacobian<'a, F> {
+struct EachJacobian<'a> {
     poses: &'a PreparedPoses,
     range: Range<usize>,
-    f: F,
+    f: &'a mut JacobianVisitor<'a>,
 }
 
-impl<F: FnMut(usize, &[f64; 3], &[[f64; 3]])> KernelOp for EachJacobian<'_, F> {
-    type Output = ();
-    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
-        lanes::run(OnChain::<N, C, _>::new(k, self))
-    }
-}
-
-impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneOp
-    for OnChain<'_, N, C, EachJacobian<'_, F>>
-{
+impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, EachJacobian<'_>> {
     type Output = ();
     #[inline(always)]
     fn run<L: Batch>(self) {
@@ -220,367 +457,34 @@ impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneO
     }
 }
 
-struct EachJointJacobian<'a, F> {
+struct EachJointJacobian<'a> {
     poses: &'a PreparedPoses,
     range: Range<usize>,
-    f: F,
+    f: &'a mut dyn FnMut(usize, &[[f64; 3]]),
 }
 
-impl<F: FnMut(usize, &[[f64; 3]])> KernelOp for EachJointJacobian<'_, F> {
-    type Output = ();
-    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
-        lanes::run(OnChain::<N, C, _>::new(k, self))
-    }
-}
-
-impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[[f64; 3]])> LaneOp
-    for OnChain<'_, N, C, EachJointJacobian<'_, F>>
-{
+impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, EachJointJacobian<'_>> {
     type Output = ();
     #[inline(always)]
     fn run<L: Batch>(self) {
-        let EachJointJacobian {
-            poses,
-            range,
-            mut f,
-        } = self.op;
-        super::for_each_lane_joint_jacobian::<N, C, L>(self.k, poses, range, |i, jq| f(i, jq))
+        let EachJointJacobian { poses, range, f } = self.op;
+        for_each_lane_joint_jacobian::<N, C, L>(self.k, poses, range, f)
     }
 }
 
-fn check_len(expected: usize, got: usize) -> Result<(), KernelError> {
-    if expected == got {
-        Ok(())
-    } else {
-        Err(KernelError::OutputLength { expected, got })
+struct EachPoseJacobian<'a> {
+    poses: &'a PreparedPoses,
+    range: Range<usize>,
+    f: &'a mut PoseJacobianVisitor<'a>,
+}
+
+impl<const N: usize, C: Chain<N>> LaneOp for OnChain<'_, N, C, EachPoseJacobian<'_>> {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let EachPoseJacobian { poses, range, f } = self.op;
+        for_each_lane_pose_jacobian::<N, C, L>(self.k, poses, range, f)
     }
 }
 
-impl ArmKernel {
-    /// Number of joints.
-    pub fn joints(&self) -> usize {
-        self.apply(Joints)
-    }
-
-    /// Number of geometric parameters, `4n + 3`.
-    pub fn param_count(&self) -> usize {
-        crate::params::param_count(self.joints())
-    }
-
-    /// Probe position of one pose with readings `q` (rad), mm.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::ArmKernel, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let p = k.position(&[0.0; 6]).unwrap();
-    /// assert!((p[2] - 995.0).abs() < 1e-9);
-    /// assert!(k.position(&[0.0; 7]).is_err());
-    /// ```
-    pub fn position(&self, q: &[f64]) -> Result<[f64; 3], KernelError> {
-        self.apply(OnePose { q, jac: None })
-    }
-
-    /// Probe position and `∂p/∂parameter` (the `4n + 3` columns in the fixed
-    /// order of [`crate::params`]) of one pose, into `jac`.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::ArmKernel, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let mut jac = [[0.0; 3]; 27];
-    /// k.position_jacobian(&[0.2; 6], &mut jac).unwrap();
-    /// assert_eq!(jac[6], [0.0, 0.0, 1.0]); // ∂p/∂d1
-    /// ```
-    pub fn position_jacobian(
-        &self,
-        q: &[f64],
-        jac: &mut [[f64; 3]],
-    ) -> Result<[f64; 3], KernelError> {
-        self.apply(OnePose {
-            q,
-            jac: Some((jac, true)),
-        })
-    }
-
-    /// Probe position and `∂p/∂q_j` of one pose into `jac` (one column per
-    /// joint): what inverse kinematics needs.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::ArmKernel, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let mut jq = [[0.0; 3]; 6];
-    /// k.joint_jacobian(&[0.0; 6], &mut jq).unwrap();
-    /// assert!((jq[0][1] + 5.0).abs() < 1e-9); // joint 1 moves the probe along −y
-    /// ```
-    pub fn joint_jacobian(&self, q: &[f64], jac: &mut [[f64; 3]]) -> Result<[f64; 3], KernelError> {
-        self.apply(OnePose {
-            q,
-            jac: Some((jac, false)),
-        })
-    }
-
-    /// [`ArmKernel::joint_jacobian`] of pose `i` of `poses`, from their
-    /// stored sin/cos (the same bits as from the readings: both are the
-    /// sin/cos of the same values).
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::{ArmKernel, PreparedPoses}, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let q = [[0.1, 0.2, 0.3, 0.4, 0.5, 0.6], [0.5; 6]];
-    /// let poses = PreparedPoses::new(6, &q).unwrap();
-    /// let (mut a, mut b) = ([[0.0; 3]; 6], [[0.0; 3]; 6]);
-    /// let p = k.joint_jacobian_at(&poses, 1, &mut a).unwrap();
-    /// assert_eq!((p, a), (k.joint_jacobian(&q[1], &mut b).unwrap(), b));
-    /// assert!(k.joint_jacobian_at(&poses, 2, &mut a).is_err());
-    /// ```
-    pub fn joint_jacobian_at(
-        &self,
-        poses: &PreparedPoses,
-        i: usize,
-        jac: &mut [[f64; 3]],
-    ) -> Result<[f64; 3], KernelError> {
-        self.check_poses(poses, &(i..i + 1))?;
-        let p = self.apply(OnePrepared {
-            poses,
-            i,
-            jac: &mut *jac,
-        })?;
-        match poses.post() {
-            None => Ok(p),
-            Some(post) => {
-                let s = post.scale[i];
-                for c in jac.iter_mut() {
-                    *c = c.map(|v| s * v);
-                }
-                Ok(post.at(i, &p))
-            }
-        }
-    }
-
-    fn check_poses(&self, poses: &PreparedPoses, range: &Range<usize>) -> Result<(), KernelError> {
-        if poses.joints() != self.joints() {
-            return Err(KernelError::JointCount {
-                expected: self.joints(),
-                got: poses.joints(),
-            });
-        }
-        if range.start > range.end || range.end > poses.len() {
-            return Err(KernelError::Range {
-                start: range.start,
-                end: range.end,
-                len: poses.len(),
-            });
-        }
-        Ok(())
-    }
-
-    /// Probe positions of poses `range`, in order, into `out` (one per pose).
-    /// Solvers split a data set into ranges to work on them in parallel.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::{ArmKernel, PreparedPoses}, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let q: Vec<[f64; 6]> = (0..9).map(|i| [0.1 * i as f64; 6]).collect();
-    /// let poses = PreparedPoses::new(6, &q).unwrap();
-    /// let mut out = vec![[0.0; 3]; 9];
-    /// k.positions(&poses, 0..9, &mut out).unwrap();
-    /// assert_eq!(out[7], k.position(&q[7]).unwrap()); // bit-identical to one pose
-    /// let mut tail = vec![[0.0; 3]; 3];
-    /// k.positions(&poses, 6..9, &mut tail).unwrap();
-    /// assert_eq!(tail[1], out[7]);
-    /// ```
-    pub fn positions(
-        &self,
-        poses: &PreparedPoses,
-        range: Range<usize>,
-        out: &mut [[f64; 3]],
-    ) -> Result<(), KernelError> {
-        self.check_poses(poses, &range)?;
-        check_len(range.len(), out.len())?;
-        let start = range.start;
-        self.apply(Positions {
-            poses,
-            start,
-            out: &mut *out,
-        });
-        if let Some(post) = poses.post() {
-            for (k, o) in out.iter_mut().enumerate() {
-                *o = post.at(start + k, o);
-            }
-        }
-        Ok(())
-    }
-
-    /// Positions and parameter Jacobians of every pose into `out`, made with
-    /// [`Jacobians::new`]`(poses.len(), self.param_count())`.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::{ArmKernel, Jacobians, PreparedPoses}, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let poses = PreparedPoses::new(6, &[[0.2; 6]; 6]).unwrap();
-    /// let mut out = Jacobians::new(6, 27);
-    /// k.jacobians(&poses, &mut out).unwrap();
-    /// assert_eq!(out.column(5, 6), [0.0, 0.0, 1.0]); // ∂p/∂d1 of the last pose
-    /// assert_eq!(out.row(6, 2), &[1.0; 6]);
-    /// ```
-    pub fn jacobians(&self, poses: &PreparedPoses, out: &mut Jacobians) -> Result<(), KernelError> {
-        self.check_poses(poses, &(0..poses.len()))?;
-        check_len(poses.len(), out.len())?;
-        self.apply(AllJacobians {
-            poses,
-            out: &mut *out,
-        })?;
-        if let Some(post) = poses.post() {
-            out.apply_post(post);
-        }
-        Ok(())
-    }
-
-    /// Calls `f(pose, position, jacobian)` for every pose of `range` in order,
-    /// with the `3 × (4n+3)` parameter Jacobian as columns — the form a
-    /// least-squares solver uses to accumulate `JᵀJ` and `Jᵀr` without
-    /// materialising `J`, one range per worker.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::{ArmKernel, PreparedPoses}, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let poses = PreparedPoses::new(6, &[[0.0; 6]; 5]).unwrap();
-    /// let mut seen = Vec::new();
-    /// k.for_each_jacobian(&poses, 1..5, |i, p, jac| {
-    ///     assert_eq!(jac.len(), 27);
-    ///     assert_eq!(jac[6], [0.0, 0.0, 1.0]); // ∂p/∂d1
-    ///     assert!((p[2] - 995.0).abs() < 1e-9);
-    ///     seen.push(i);
-    /// }).unwrap();
-    /// assert_eq!(seen, [1, 2, 3, 4]);
-    /// ```
-    pub fn for_each_jacobian(
-        &self,
-        poses: &PreparedPoses,
-        range: Range<usize>,
-        f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
-    ) -> Result<(), KernelError> {
-        self.check_poses(poses, &range)?;
-        match poses.post() {
-            None => self.apply(EachJacobian { poses, range, f }),
-            Some(post) => self.each_jacobian_after(poses, post, range, f),
-        }
-        Ok(())
-    }
-
-    /// [`ArmKernel::for_each_jacobian`] of poses with a transform after the
-    /// chain (a model beyond geometry is on): one copy of the columns per
-    /// pose, scaled. Out of line, so that the plain path compiles as before.
-    #[cold]
-    #[inline(never)]
-    fn each_jacobian_after(
-        &self,
-        poses: &PreparedPoses,
-        post: &crate::kernel::Post,
-        range: Range<usize>,
-        mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
-    ) {
-        let mut scaled = vec![[0.0; 3]; self.param_count()];
-        let g = |i: usize, p: &[f64; 3], jac: &[[f64; 3]]| {
-            for (o, c) in scaled.iter_mut().zip(jac) {
-                *o = c.map(|v| post.scale[i] * v);
-            }
-            f(i, &post.at(i, p), &scaled);
-        };
-        self.apply(EachJacobian { poses, range, f: g })
-    }
-
-    /// Calls `f(pose, ∂p/∂q)` for every pose of `range` in order, with the
-    /// `3 × n` joint Jacobian (mm/rad) as columns: what carries encoder
-    /// noise into a touch's covariance. A batch of SIMD lanes at a time, the
-    /// same bits as [`ArmKernel::joint_jacobian_at`] one pose at a time.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::{ArmKernel, PreparedPoses}, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let poses = PreparedPoses::new(6, &[[0.0; 6]; 5]).unwrap();
-    /// let mut seen = Vec::new();
-    /// k.for_each_joint_jacobian(&poses, 0..5, |i, jq| {
-    ///     assert_eq!(jq.len(), 6);
-    ///     // Joint 1 turns the probe, 5 mm off the base axis, about z.
-    ///     assert!((jq[0][0] - 0.0).abs() < 1e-12 && (jq[0][1] + 5.0).abs() < 1e-9);
-    ///     seen.push(i);
-    /// }).unwrap();
-    /// assert_eq!(seen, [0, 1, 2, 3, 4]);
-    /// ```
-    pub fn for_each_joint_jacobian(
-        &self,
-        poses: &PreparedPoses,
-        range: Range<usize>,
-        mut f: impl FnMut(usize, &[[f64; 3]]),
-    ) -> Result<(), KernelError> {
-        self.check_poses(poses, &range)?;
-        match poses.post() {
-            None => self.apply(EachJointJacobian { poses, range, f }),
-            Some(post) => {
-                let mut scaled = vec![[0.0; 3]; self.joints()];
-                let g = |i: usize, jq: &[[f64; 3]]| {
-                    for (o, c) in scaled.iter_mut().zip(jq) {
-                        *o = c.map(|v| post.scale[i] * v);
-                    }
-                    f(i, &scaled);
-                };
-                self.apply(EachJointJacobian { poses, range, f: g })
-            }
-        }
-        Ok(())
-    }
-
-    /// Probe positions of every row of readings (rad), in row order: the
-    /// convenience for callers holding plain rows.
-    ///
-    /// ```
-    /// use aacmm_core::{kernel::ArmKernel, params::DhParams};
-    /// let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-    /// let p = k.positions_of(&[vec![0.0; 6]]).unwrap();
-    /// assert!((p[0][2] - 995.0).abs() < 1e-9);
-    /// assert!(k.positions_of(&[vec![0.0; 7]]).is_err());
-    /// ```
-    pub fn positions_of<R: AsRef<[f64]>>(&self, rows: &[R]) -> Result<Vec<[f64; 3]>, KernelError> {
-        let poses = PreparedPoses::new(self.joints(), rows)?;
-        let mut out = vec![[0.0; 3]; poses.len()];
-        self.positions(&poses, 0..poses.len(), &mut out)?;
-        Ok(out)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::params::SUPPORTED_JOINTS;
-
-    #[test]
-    fn chains_are_the_supported_joint_counts() {
-        assert_eq!(CHAINS, SUPPORTED_JOINTS);
-        for n in 0..=9 {
-            let params = DhParams::from_slice(&vec![0.1; 4 * n + 3]);
-            let made = params.map(|p| ArmKernel::new(&p));
-            match made {
-                Some(Ok(k)) => {
-                    assert!(SUPPORTED_JOINTS.contains(&n));
-                    assert_eq!(k.joints(), n);
-                }
-                _ => assert!(!SUPPORTED_JOINTS.contains(&n), "{n}"),
-            }
-        }
-    }
-
-    #[test]
-    fn shapes_are_checked() {
-        let k = ArmKernel::new(&DhParams::paper_nominal()).unwrap();
-        let poses = PreparedPoses::new(6, &[[0.0; 6]; 3]).unwrap();
-        let mut out = vec![[0.0; 3]; 2];
-        assert!(k.positions(&poses, 0..3, &mut out).is_err());
-        assert!(k.positions(&poses, 2..4, &mut out).is_err());
-        assert!(k.positions(&poses, 1..3, &mut out).is_ok());
-        let seven = PreparedPoses::new(7, &[[0.0; 7]; 2]).unwrap();
-        assert!(k.positions(&seven, 0..2, &mut out).is_err());
-        assert!(k.jacobians(&poses, &mut Jacobians::new(3, 31)).is_err());
-        assert!(k.joint_jacobian(&[0.0; 6], &mut [[0.0; 3]; 7]).is_err());
-        assert!(k.position_jacobian(&[0.0; 6], &mut [[0.0; 3]; 26]).is_err());
-    }
-}
+mod api;

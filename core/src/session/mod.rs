@@ -338,9 +338,20 @@ fn check_length_units(params: &DhParams, data: &DataSet) -> Result<(), Calibrati
     let to_deg = 1f64.to_degrees();
     if crate::io::poses::look_like_radians(data.readings(), data.len(), to_deg) {
         // The numbers as typed, taken as radians: what `--angle-unit rad`
-        // would have read.
-        let typed: Vec<f64> = data.readings().iter().map(|x| x * to_deg).collect();
-        let as_rad = crate::kernel::PreparedPoses::from_flat(data.joints(), data.len(), &typed);
+        // would have read (a prismatic joint's reading, mm, as it is).
+        let mask = data.poses().prismatic_mask();
+        let slides = |j: usize| j < 16 && mask & (1 << j) != 0;
+        let typed: Vec<f64> = (data.readings().iter().enumerate())
+            .map(|(i, x)| {
+                if slides(i % data.joints()) {
+                    *x
+                } else {
+                    x * to_deg
+                }
+            })
+            .collect();
+        let as_rad =
+            crate::kernel::PreparedPoses::from_flat_with(data.joints(), mask, data.len(), &typed);
         let ratio_as_rad = median_length_ratio(params, data, &as_rad)?.unwrap_or(f64::NAN);
         return Err(CalibrationError::AngleUnits {
             file: data.source().poses_file().to_string(),

@@ -301,7 +301,7 @@ fn draw_rows(
                     &truth.params,
                     &still,
                     &none,
-                    &PreparedPoses::from_flat(n, 1, &q),
+                    &PreparedPoses::from_flat_with(n, kernel.shape().prismatic_mask(), 1, &q),
                     recorded,
                 )
                 .map_err(model)?;

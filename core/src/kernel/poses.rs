@@ -1,0 +1,295 @@
+//! A data set's joint readings prepared for the kernel: the sin/cos of the
+//! revolute joints' readings (computed once per data set), the prismatic
+//! joints' readings themselves, and what follows the chain ([`Post`]).
+
+use super::KernelError;
+use super::lanes::{Batch, LANES};
+use crate::params::{ChainShape, MAX_JOINTS};
+
+/// Encoder readings of a data set with their sin/cos, computed once and laid
+/// out joint by joint (structure of arrays) so that four poses load as one
+/// SIMD vector.
+///
+/// A prismatic joint's column holds its readings (mm) where a revolute
+/// joint's holds their cos, and no sin: a data set of revolute joints takes
+/// as much memory as it always did, one of prismatic joints less.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PreparedPoses {
+    joints: usize,
+    /// Bit `j`: joint `j` is prismatic (its `cos` column holds the
+    /// readings, its `sin` column is empty).
+    prismatic: u16,
+    len: usize,
+    /// `cos[j][i]`: cos of joint `j`'s reading at pose `i` (the reading of
+    /// a prismatic joint).
+    cos: Vec<Vec<f64>>,
+    sin: Vec<Vec<f64>>,
+    /// What follows the chain at each pose, if anything (a thermal scale,
+    /// a drift): see [`Post`].
+    post: Option<Box<Post>>,
+}
+
+/// A per-pose transform after the chain: the position seen is
+/// `scale_i · p(q_i) + offset_i` — the whole arm grown by a temperature
+/// (every length scales, so the probe's position about the base does), or
+/// its base drifted in time. The kernel applies it to positions and to
+/// every Jacobian column (`offset` does not depend on the arm); a tool's
+/// orientation, and the rotation rows of a pose Jacobian, it leaves alone
+/// (neither scaling nor translation turns anything).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Post {
+    /// Per pose, the scale (1 when none).
+    pub scale: Vec<f64>,
+    /// Per pose, the offset, mm.
+    pub offset: Vec<[f64; 3]>,
+}
+
+impl Post {
+    /// Pose `i`'s position `p` of the chain as seen: `scale_i·p + offset_i`.
+    #[inline]
+    pub fn at(&self, i: usize, p: &[f64; 3]) -> [f64; 3] {
+        let (s, off) = (self.scale[i], self.offset[i]);
+        std::array::from_fn(|r| s * p[r] + off[r])
+    }
+}
+
+impl PreparedPoses {
+    /// Prepares readings (rad) of revolute joints, one row of `joints`
+    /// readings per pose. (A chain with prismatic joints prepares its
+    /// readings with [`PreparedPoses::for_shape`].)
+    ///
+    /// ```
+    /// use aacmm_core::kernel::PreparedPoses;
+    /// let poses = PreparedPoses::new(6, &[[0.0; 6], [0.5; 6]]).unwrap();
+    /// assert_eq!((poses.len(), poses.joints()), (2, 6));
+    /// assert!(PreparedPoses::new(6, &[vec![0.0; 7]]).is_err());
+    /// ```
+    pub fn new<R: AsRef<[f64]>>(joints: usize, rows: &[R]) -> Result<Self, KernelError> {
+        PreparedPoses::with_mask(joints, 0, rows)
+    }
+
+    /// Prepares readings of a chain of `shape`, one row per pose: radians
+    /// for a revolute joint, mm for a prismatic one.
+    ///
+    /// ```
+    /// use aacmm_core::{kernel::PreparedPoses, params::ChainShape};
+    /// let shape: ChainShape = "PRR".parse().unwrap();
+    /// let poses = PreparedPoses::for_shape(shape, &[[250.0, 0.1, 0.2]]).unwrap();
+    /// assert_eq!(poses.shape(), Some(shape));
+    /// assert!(PreparedPoses::for_shape(shape, &[[0.0; 4]]).is_err());
+    /// ```
+    pub fn for_shape<R: AsRef<[f64]>>(shape: ChainShape, rows: &[R]) -> Result<Self, KernelError> {
+        PreparedPoses::with_mask(shape.joints(), shape.prismatic_mask(), rows)
+    }
+
+    fn with_mask<R: AsRef<[f64]>>(
+        joints: usize,
+        prismatic: u16,
+        rows: &[R],
+    ) -> Result<Self, KernelError> {
+        if let Some(r) = rows.iter().find(|r| r.as_ref().len() != joints) {
+            return Err(KernelError::JointCount {
+                expected: joints,
+                got: r.as_ref().len(),
+            });
+        }
+        // Direct calls, not a function pointer: whether LLVM sees through a
+        // pointer depends on the crate that instantiates `new` (the C ABI's
+        // copy kept an indirect call per reading, a few percent of its batch).
+        Ok(PreparedPoses::from_columns(
+            joints,
+            prismatic,
+            rows.len(),
+            |j| rows.iter().map(move |r| r.as_ref()[j]),
+        ))
+    }
+
+    /// sin and cos of every revolute joint's column of readings, the
+    /// readings of every prismatic one; generic over the column, so each
+    /// caller gets its own direct-call loop.
+    fn from_columns<I: Iterator<Item = f64>>(
+        joints: usize,
+        prismatic: u16,
+        len: usize,
+        column: impl Fn(usize) -> I,
+    ) -> Self {
+        let slides = |j: usize| j < MAX_JOINTS && prismatic & (1 << j) != 0;
+        PreparedPoses {
+            joints,
+            prismatic,
+            len,
+            cos: (0..joints)
+                .map(|j| {
+                    if slides(j) {
+                        column(j).collect()
+                    } else {
+                        column(j).map(f64::cos).collect()
+                    }
+                })
+                .collect(),
+            sin: (0..joints)
+                .map(|j| {
+                    if slides(j) {
+                        Vec::new()
+                    } else {
+                        column(j).map(f64::sin).collect()
+                    }
+                })
+                .collect(),
+            post: None,
+        }
+    }
+
+    /// Poses from the cos and sin of their readings, joint by joint
+    /// (`cos[j][i]`; a prismatic joint's readings in `cos[j]`, `sin[j]`
+    /// empty): readings corrected by small angles through the angle sums,
+    /// without a transcendental call per reading.
+    pub(crate) fn from_trig(
+        joints: usize,
+        prismatic: u16,
+        len: usize,
+        cos: Vec<Vec<f64>>,
+        sin: Vec<Vec<f64>>,
+    ) -> Self {
+        debug_assert!(cos.len() == joints && sin.len() == joints);
+        PreparedPoses {
+            joints,
+            prismatic,
+            len,
+            cos,
+            sin,
+            post: None,
+        }
+    }
+
+    /// The cos and sin of joint `j`'s readings, pose by pose; for a
+    /// prismatic joint its readings (mm) and an empty slice.
+    pub(crate) fn column_trig(&self, j: usize) -> (&[f64], &[f64]) {
+        (&self.cos[j], &self.sin[j])
+    }
+
+    /// These poses with `post` applied after the chain.
+    ///
+    /// # Panics
+    ///
+    /// When `post` has another length than the poses (a bug, not input).
+    pub fn with_post(mut self, post: Post) -> Self {
+        assert!(
+            post.scale.len() == self.len && post.offset.len() == self.len,
+            "one scale and offset per pose"
+        );
+        self.post = Some(Box::new(post));
+        self
+    }
+
+    /// The transform after the chain, if any.
+    pub fn post(&self) -> Option<&Post> {
+        self.post.as_deref()
+    }
+
+    /// Prepares `len` poses of `joints` revolute readings (rad), row after
+    /// row in `q`: [`PreparedPoses::new`] without a slice per row.
+    pub(crate) fn from_flat(joints: usize, len: usize, q: &[f64]) -> Self {
+        PreparedPoses::from_flat_with(joints, 0, len, q)
+    }
+
+    /// [`PreparedPoses::from_flat`] of a chain whose joints of the bits
+    /// `prismatic` slide (their readings in mm).
+    pub(crate) fn from_flat_with(joints: usize, prismatic: u16, len: usize, q: &[f64]) -> Self {
+        // Invariant: the data set passes its own `len` rows of `joints`.
+        assert_eq!(q.len(), joints * len, "readings of {len} poses");
+        PreparedPoses::from_columns(joints, prismatic, len, |j| {
+            (0..len).map(move |i| q[i * joints + j])
+        })
+    }
+
+    /// Number of poses.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no poses.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Readings per pose.
+    pub fn joints(&self) -> usize {
+        self.joints
+    }
+
+    /// The prismatic joints: bit `j` for joint `j` (0 for revolute data).
+    pub fn prismatic_mask(&self) -> u16 {
+        self.prismatic
+    }
+
+    /// The shape of chain these poses are readings of; `None` for a joint
+    /// count no chain has (no readings at all, or more than
+    /// [`MAX_JOINTS`]).
+    pub fn shape(&self) -> Option<ChainShape> {
+        ChainShape::from_mask(self.joints, self.prismatic).ok()
+    }
+
+    /// cos and sin of pose `i`'s readings (a prismatic joint's reading and
+    /// 0); the caller has checked `N`.
+    #[inline(always)]
+    pub(crate) fn trig<const N: usize>(&self, i: usize) -> ([f64; N], [f64; N]) {
+        (
+            std::array::from_fn(|j| self.cos[j][i]),
+            std::array::from_fn(|j| self.sin[j].get(i).copied().unwrap_or(0.0)),
+        )
+    }
+
+    /// The sin/cos of `count` whole batches of poses from `start`, cut
+    /// once per call so that the batch loops load without checks; the
+    /// caller has checked `N` and the range.
+    #[inline(always)]
+    pub(crate) fn batches<const N: usize>(&self, start: usize, count: usize) -> Batches<'_, N> {
+        let end = start + count * LANES;
+        let mut cos: [&[[f64; LANES]]; N] = [&[]; N];
+        let mut sin: [&[[f64; LANES]]; N] = [&[]; N];
+        // Plain loops, not `array::from_fn`: its closure is not always
+        // inlined. `[..count]` makes every column's length the loop bound
+        // itself, so the loads in `Batches::get` need no check.
+        for j in 0..N {
+            cos[j] = &self.cos[j][start..end].as_chunks().0[..count];
+            // A prismatic joint has no sin column: its reading stands in
+            // (the kernels do not read a prismatic joint's sin).
+            let sin_j = if self.sin[j].is_empty() {
+                &self.cos[j]
+            } else {
+                &self.sin[j]
+            };
+            sin[j] = &sin_j[start..end].as_chunks().0[..count];
+        }
+        Batches { count, cos, sin }
+    }
+}
+
+/// Whole batches of [`LANES`] poses of a [`PreparedPoses`], column by
+/// column: what the batch loops index. The runtime-sized storage behind
+/// `PreparedPoses` (a `Vec` of columns) would otherwise cost a joint-count
+/// check, a pointer load and a range check for every load of every batch —
+/// as many scalar instructions as the position kernel has vector ones.
+pub(crate) struct Batches<'a, const N: usize> {
+    /// Number of batches: the length of every column.
+    pub(crate) count: usize,
+    cos: [&'a [[f64; LANES]]; N],
+    sin: [&'a [[f64; LANES]]; N],
+}
+
+impl<const N: usize> Batches<'_, N> {
+    /// cos and sin of batch `b`'s readings, one lane per pose.
+    // Plain loops, not `array::from_fn`: its closure is not always inlined,
+    // and out of line the AVX loads become calls.
+    #[inline(always)]
+    pub(crate) fn get<L: Batch>(&self, b: usize) -> ([L; N], [L; N]) {
+        let mut c = [L::from(0.0); N];
+        let mut s = [L::from(0.0); N];
+        for j in 0..N {
+            c[j] = L::load(&self.cos[j][b]);
+            s[j] = L::load(&self.sin[j][b]);
+        }
+        (c, s)
+    }
+}
