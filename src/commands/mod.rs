@@ -18,7 +18,7 @@ use aacmm_core::error::short;
 use aacmm_core::io::{
     AngleUnit, Arm, Poses, Rejected, Warning, limit_warning, read_arm_with, read_poses, source_name,
 };
-use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, PreparedPoses};
+use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, Pose, PreparedPoses};
 use anyhow::{Context, Result, bail};
 
 use crate::output::warn;
@@ -100,7 +100,7 @@ impl ArmAndPoses {
         if !arm.physics.corrects() {
             return Ok(None);
         }
-        let raw = PreparedPoses::new(arm.params.joint_count(), rows)?;
+        let raw = PreparedPoses::for_shape(arm.params.shape()?, rows)?;
         let temperatures = self.temperature.map(|t| vec![t; rows.len()]);
         let conditions = Conditions {
             temperature_c: temperatures.as_deref(),
@@ -126,20 +126,46 @@ impl ArmAndPoses {
     /// sin/cos of the readings are prepared a chunk at a time, never for the
     /// whole file; the bits do not depend on the chunks.
     pub fn positions(&self, arm: &Arm, poses: &Poses) -> Result<Vec<[f64; 3]>> {
+        let xyz = self.per_pose(arm, poses, |k, p, out| k.positions(p, 0..out.len(), out))?;
+        self.check_finite(&xyz, |row| poses.line(row))?;
+        Ok(xyz)
+    }
+
+    /// The tool's pose (probe position and the tool frame's orientation)
+    /// of every pose, in row order: [`ArmAndPoses::positions`] with the
+    /// orientation.
+    pub fn tool_poses(&self, arm: &Arm, poses: &Poses) -> Result<Vec<Pose>> {
+        let tools = self.per_pose(arm, poses, |k, p, out| k.poses(p, 0..out.len(), out))?;
+        let finite = |t: &Pose| t.rotation.iter().flatten().all(|v| v.is_finite());
+        let xyz: Vec<[f64; 3]> = (tools.iter())
+            .map(|t| if finite(t) { t.position } else { [f64::NAN; 3] })
+            .collect();
+        self.check_finite(&xyz, |row| poses.line(row))?;
+        Ok(tools)
+    }
+
+    /// `compute`'s output for every pose, in row order, on every core, the
+    /// readings prepared (and corrected) a chunk at a time.
+    fn per_pose<T: Copy + Default + Send>(
+        &self,
+        arm: &Arm,
+        poses: &Poses,
+        compute: impl Fn(&ArmKernel, &PreparedPoses, &mut [T]) -> Result<(), KernelError> + Sync,
+    ) -> Result<Vec<T>> {
         /// Poses per chunk: 4096 poses of 7 joints prepared are 448 KiB.
         const CHUNK: usize = 4096;
         let kernel = self.kernel(arm)?;
-        let mut xyz = vec![[0.0; 3]; poses.len()];
+        let mut xyz = vec![T::default(); poses.len()];
         self.check_conditions(arm)?;
-        let chunk = |(c, out): (usize, &mut [[f64; 3]])| -> Result<()> {
+        let chunk = |(c, out): (usize, &mut [T])| -> Result<()> {
             let rows: Vec<&[f64]> = (c * CHUNK..c * CHUNK + out.len())
                 .map(|row| poses.reading(row))
                 .collect();
             let prepared = match self.corrected(arm, &rows)? {
                 Some(p) => p,
-                None => PreparedPoses::new(poses.joints(), &rows)?,
+                None => PreparedPoses::for_shape(kernel.shape(), &rows)?,
             };
-            Ok(kernel.positions(&prepared, 0..out.len(), out)?)
+            Ok(compute(&kernel, &prepared, out)?)
         };
         let threads = worker_threads(None);
         let per_thread = poses.len().div_ceil(CHUNK).div_ceil(threads).max(1) * CHUNK;
@@ -158,7 +184,6 @@ impl ArmAndPoses {
                 .try_for_each(|p| p.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
         })
         .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))?;
-        self.check_finite(&xyz, |row| poses.line(row))?;
         Ok(xyz)
     }
 

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use aacmm_core::error::{quoted, shown};
 use aacmm_core::io::frames::parse_frames;
-use aacmm_core::io::{source_name, write_points};
+use aacmm_core::io::{source_name, write_points, write_tool_poses};
 use aacmm_core::residuals::Frame;
 use anyhow::{Context, Result, bail};
 
@@ -19,6 +19,11 @@ pub struct Args {
     /// Output CSV `point,x,y,z` (mm); stdout when absent.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write the tool's orientation too: `point,x,y,z,qw,qx,qy,qz`, the
+    /// last link's frame as a unit quaternion (w ≥ 0, 9 decimals) in the
+    /// base frame (or the `--frame`).
+    #[arg(long)]
+    pose: bool,
     /// Positions in this frame of the arm file (a calibrated arm's
     /// `[[frame]]`, fitted to reference positions): what that instrument
     /// will see, for a verification run. Without it, the arm's base frame.
@@ -65,21 +70,37 @@ pub fn run(args: Args) -> Result<()> {
         check_output_file("--out", out, &inputs)?;
     }
     let (arm, poses) = args.input.read()?;
+    let frame = match &args.frame {
+        Some(name) => Some(frame(&args.input.arm, name)?),
+        None => None,
+    };
+    if args.pose {
+        let mut tools = args.input.tool_poses(&arm, &poses)?;
+        if let Some(x) = frame {
+            tools.iter_mut().for_each(|t| *t = Frame::apply_pose(&x, t));
+        }
+        return write(&args.out, |w| write_tool_poses(w, poses.labels(), &tools));
+    }
     let mut xyz = args.input.positions(&arm, &poses)?;
-    if let Some(name) = &args.frame {
-        let x = frame(&args.input.arm, name)?;
+    if let Some(x) = frame {
         xyz.iter_mut().for_each(|p| *p = Frame::apply(&x, *p));
     }
-    match &args.out {
+    write(&args.out, |w| write_points(w, poses.labels(), &xyz))
+}
+
+/// `write` into the file `out`, atomically, or to stdout.
+fn write(
+    out: &Option<PathBuf>,
+    write: impl Fn(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> Result<()> {
+    match out {
         Some(path) => {
-            aacmm_core::io::write_atomic_with(path, |w| {
-                write_points(w, poses.labels(), &xyz).map(|_| ())
-            })
-            .with_context(|| format!("{}: cannot write", path.display()))?;
+            aacmm_core::io::write_atomic_with(path, |w| write(w))
+                .with_context(|| format!("{}: cannot write", path.display()))?;
         }
         None => {
             let mut out = Stdout::new();
-            out.write_with(|w| write_points(w, poses.labels(), &xyz))?;
+            out.write_with(|w| write(w))?;
             out.finish()?;
         }
     }

@@ -107,6 +107,133 @@ fn seven_joint_arm_uses_its_own_kernel() {
     assert_clean_error(&o, &["six.csv:1"]);
 }
 
+/// The tool frame of `arm` (D-H rows of its file, rad and mm) at readings
+/// `q` (rad) and its probe `b`: the textbook product of 4×4 link matrices,
+/// written here independently of the library.
+fn tool_frame(arm: &aacmm_core::params::DhParams, q: &[f64]) -> [[f64; 4]; 4] {
+    let mut t = [[0.0; 4]; 4];
+    for (i, row) in t.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let product = |x: [[f64; 4]; 4], y: [[f64; 4]; 4]| -> [[f64; 4]; 4] {
+        std::array::from_fn(|r| std::array::from_fn(|c| (0..4).map(|k| x[r][k] * y[k][c]).sum()))
+    };
+    for (j, qj) in arm.joints.iter().zip(q) {
+        let (s, c) = (j.theta + qj).sin_cos();
+        let (sa, ca) = j.alpha.sin_cos();
+        t = product(
+            t,
+            [
+                [c, -ca * s, sa * s, j.a * c],
+                [s, ca * c, -sa * c, j.a * s],
+                [0.0, sa, ca, j.d],
+                [0.0, 0.0, 0.0, 1.0],
+            ],
+        );
+    }
+    let b = arm.probe;
+    product(
+        t,
+        [
+            [1.0, 0.0, 0.0, b[0]],
+            [0.0, 1.0, 0.0, b[1]],
+            [0.0, 0.0, 1.0, b[2]],
+            [0.0, 0.0, 0.0, 1.0],
+        ],
+    )
+}
+
+/// `--pose` adds the tool's orientation as a unit quaternion: the rotation
+/// it stands for is the tool frame of an independent forward kinematics,
+/// `w ≥ 0`, and the positions are `points`' own bytes.
+#[test]
+fn pose_writes_the_tool_orientation() {
+    let dir = temp_dir("points-pose");
+    let data = write(&dir, "poses.csv", POSES);
+    let arm = example("paper-table-1.toml");
+    let args = ["points", "--arm", arm.to_str().unwrap(), "--data", &data];
+    let plain = aacmm(&args);
+    let o = aacmm(&[&args[..], &["--pose"]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = stdout(&o);
+    assert!(text.starts_with("point,x,y,z,qw,qx,qy,qz\n"), "{text}");
+    let params = read_arm(&arm).unwrap().0.params;
+    let q_deg: [[f64; 6]; 3] = [
+        [0.0; 6],
+        [10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
+        [-170.0, 95.5, -30.0, 12.0, -80.0, 179.0],
+    ];
+    let plain_rows: Vec<&str> = std::str::from_utf8(&plain.stdout)
+        .unwrap()
+        .lines()
+        .collect();
+    for (i, line) in text.lines().skip(1).enumerate() {
+        let f: Vec<&str> = line.split(',').collect();
+        assert_eq!(f.len(), 8, "{line}");
+        assert_eq!(
+            f[..4].join(","),
+            plain_rows[i + 1],
+            "the positions are points' own"
+        );
+        assert!(
+            f[4..]
+                .iter()
+                .all(|v| v.split('.').nth(1).unwrap().len() == 9)
+        );
+        let [w, x, y, z] = [4, 5, 6, 7].map(|k| f[k].parse::<f64>().unwrap());
+        assert!(w >= 0.0);
+        assert!(((w * w + x * x + y * y + z * z) - 1.0).abs() < 1e-8);
+        // The rotation of the quaternion against the frame's axes.
+        let r = [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - w * z),
+                2.0 * (x * z + w * y),
+            ],
+            [
+                2.0 * (x * y + w * z),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - w * x),
+            ],
+            [
+                2.0 * (x * z - w * y),
+                2.0 * (y * z + w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ];
+        let t = tool_frame(&params, &q_deg[i].map(f64::to_radians));
+        for (row, want) in r.iter().zip(&t) {
+            for c in 0..3 {
+                assert!((row[c] - want[c]).abs() < 5e-9, "{r:?} vs {t:?}");
+            }
+        }
+        for k in 0..3 {
+            let p: f64 = f[1 + k].parse().unwrap();
+            assert!((p - t[k][3]).abs() <= 6e-7);
+        }
+    }
+    // In a frame of the arm file: turned and moved as a rigid body.
+    let calibrated = std::fs::read_to_string(&arm).unwrap()
+        + "\n[[frame]]\nname = \"tracker\"\nrotation_deg = [0.0, 0.0, 90.0]\ntranslation_mm = [10.0, 0.0, 0.0]\n";
+    let framed = write(&dir, "framed.toml", &calibrated);
+    let o = aacmm(&[
+        "points", "--arm", &framed, "--data", &data, "--pose", "--frame", "tracker",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let first: Vec<f64> = (stdout(&o).lines().nth(1).unwrap().split(',').skip(1))
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let base: Vec<f64> = (text.lines().nth(1).unwrap().split(',').skip(1))
+        .map(|v| v.parse().unwrap())
+        .collect();
+    // A quarter turn about z: (x, y) → (−y, x), then 10 mm along x.
+    assert!((first[0] - (10.0 - base[1])).abs() < 2e-6 && (first[1] - base[0]).abs() < 2e-6);
+    // q' = q_z(90°)·q: w' = (w − z)/√2 for a tool of (w, 0, 0, z).
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let (w, z) = (base[3], base[6]);
+    assert!((first[3] - h * (w - z)).abs() < 1e-8 || (first[3] + h * (w - z)).abs() < 1e-8);
+}
+
 #[test]
 fn bad_files_name_file_line_and_field() {
     let dir = temp_dir("points-bad");

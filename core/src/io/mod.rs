@@ -56,7 +56,7 @@ pub use lengths::{
     ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
 };
 pub use limits::limit_warning;
-pub use points::{parse_points, read_points, write_points};
+pub use points::{parse_points, read_points, write_points, write_tool_poses};
 pub use poses::{Poses, parse_poses, read_poses, write_poses};
 pub use positions::{DEFAULT_FRAME, Positions, parse_positions, read_positions};
 pub use prior::parse_prior;

@@ -5,8 +5,9 @@
 //! S1,512.000000,-103.250000,88.125000
 //! ```
 //!
-//! Written by `aacmm points` (computed probe centres) and read for socket
-//! positions. Labels are unique within a file. The CSV dialect is described
+//! Written by `aacmm points` (computed probe centres; with `--pose` also
+//! the tool's orientation, `point,x,y,z,qw,qx,qy,qz`: [`write_tool_poses`]) and
+//! read for socket positions. Labels are unique within a file. The CSV dialect is described
 //! in the [`io`](super) module docs.
 
 use std::collections::HashMap;
@@ -15,6 +16,7 @@ use std::path::Path;
 
 use super::text::{check_header, invalid, parse_f64, quote, read_text, scan_table};
 use crate::error::{InputError, quoted};
+use crate::kernel::Pose;
 
 const COLUMNS: [&str; 4] = ["point", "x", "y", "z"];
 const SHAPE: &str = "point,x,y,z";
@@ -49,6 +51,55 @@ pub fn write_points<S: AsRef<str>>(
         for &v in xyz {
             line.push(',');
             push_fixed6(&mut line, v);
+        }
+        line.push('\n');
+        w.write_all(line.as_bytes())?;
+    }
+    Ok(())
+}
+
+/// Writes labelled tool poses: `point,x,y,z,qw,qx,qy,qz`, the probe's
+/// position (mm, 6 decimals as [`write_points`]) and the tool frame's
+/// orientation as a unit quaternion (9 decimals: 10⁻⁹ of a unit
+/// quaternion is 2·10⁻⁹ rad, 0.4 mas, far below any arm's repeatability),
+/// `w ≥ 0` ([`Pose::quaternion`]'s sign convention). Errors as
+/// [`write_points`].
+///
+/// ```
+/// use aacmm_core::kernel::Pose;
+/// let half_turn = Pose {
+///     rotation: [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]],
+///     position: [1.0, 2.0, 3.0],
+/// };
+/// let mut out = Vec::new();
+/// aacmm_core::io::write_tool_poses(&mut out, &["S1"], &[half_turn]).unwrap();
+/// assert_eq!(
+///     String::from_utf8(out).unwrap(),
+///     "point,x,y,z,qw,qx,qy,qz\nS1,1.000000,2.000000,3.000000,0.000000000,0.000000000,0.000000000,1.000000000\n"
+/// );
+/// ```
+pub fn write_tool_poses<S: AsRef<str>>(
+    mut w: impl Write,
+    labels: impl IntoIterator<Item = S, IntoIter: ExactSizeIterator>,
+    poses: &[Pose],
+) -> std::io::Result<()> {
+    use std::fmt::Write as _;
+    let labels = labels.into_iter();
+    if labels.len() != poses.len() {
+        let message = format!("{} labels for {} poses", labels.len(), poses.len());
+        return Err(invalid(message));
+    }
+    w.write_all(format!("{SHAPE},qw,qx,qy,qz\n").as_bytes())?;
+    let mut line = String::new();
+    for (label, pose) in labels.zip(poses) {
+        line.clear();
+        line.push_str(&quote(label.as_ref())?);
+        for &v in &pose.position {
+            line.push(',');
+            push_fixed6(&mut line, v);
+        }
+        for v in pose.quaternion() {
+            _ = write!(line, ",{v:.9}");
         }
         line.push('\n');
         w.write_all(line.as_bytes())?;

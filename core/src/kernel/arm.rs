@@ -21,7 +21,8 @@ use crate::params::DhParams;
 /// A function of one pose's readings (`q`, rad or mm per joint) and its
 /// outputs, or a batch over prepared poses: everything [`ArmKernel`] does,
 /// as one value. Callbacks are `dyn`: a chain's batch loops are compiled
-/// once, not once per caller's closure.
+/// once, not once per caller's closure (the measuring arms' excepted, see
+/// `Prepared::run_inlined`).
 pub(crate) enum Op<'a> {
     Position {
         q: &'a [f64],
@@ -211,7 +212,14 @@ pub enum KernelKind {
 /// [`MAX_JOINTS`](crate::params::MAX_JOINTS) has a variant; a shape
 /// without a generated kernel runs on [`Generic`].
 macro_rules! chains {
-    ($($n:literal => $variant:ident [$($dh:ident, $ext:ident: $shape:literal, $what:literal);*]),* $(,)?) => {
+    (
+        shapes: {
+            $($n:literal => $variant:ident [$($dh:ident, $ext:ident: $shape:literal, $what:literal);*]),* $(,)?
+        },
+        inlined: {
+            $($hn:literal => $hvariant:ident [$hdh:ident, $hext:ident]),* $(,)?
+        } $(,)?
+    ) => {
         /// The generated kernels of the shipped shapes ([`SHIPPED_SHAPES`]):
         /// for each a D-H chain and an extended one (`…h`), which also
         /// computes Hayati joints.
@@ -288,26 +296,110 @@ macro_rules! chains {
                     Prepared::User(u) => u.0.run(op),
                 }
             }
+
+            /// Runs `op` with its callback inlined into the batch loop if
+            /// the arm's chain is one of the measuring arms' (6R, 7R): the
+            /// callback then compiles inside the lane function, with its
+            /// AVX2 (a solver's accumulation of `JᵀJ` is vectorised there).
+            /// Every other chain gets `op` back, to run it through [`Op`]
+            /// with a `dyn` callback: compiled once per chain, not once per
+            /// chain and caller.
+            fn run_inlined<O: InlinedOp>(&self, op: O) -> Result<(), O> {
+                match self {
+                    $(Prepared::$hvariant(k) if k.prismatic_mask() == shipped::$hdh::PRISMATIC => {
+                        if k.has_hayati() {
+                            op.run::<$hn, shipped::$hext::Kernel>(k)
+                        } else {
+                            op.run::<$hn, shipped::$hdh::Kernel>(k)
+                        }
+                        Ok(())
+                    })*
+                    _ => Err(op),
+                }
+            }
         }
     };
 }
 
+/// A batch loop whose callback is the caller's own closure type, for
+/// [`Prepared::run_inlined`].
+pub(crate) trait InlinedOp {
+    /// Runs the loop on chain `C` of `N` joints.
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>);
+}
+
+/// [`BatchOp::EachJacobian`] with the caller's closure.
+pub(crate) struct EachJacobianInlined<'a, F> {
+    pub(crate) poses: &'a PreparedPoses,
+    pub(crate) range: Range<usize>,
+    pub(crate) f: F,
+}
+
+impl<F: FnMut(usize, &[f64; 3], &[[f64; 3]])> InlinedOp for EachJacobianInlined<'_, F> {
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
+        lanes::run(OnChain::<N, C, _>::new(k, self))
+    }
+}
+
+impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneOp
+    for OnChain<'_, N, C, EachJacobianInlined<'_, F>>
+{
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let EachJacobianInlined { poses, range, f } = self.op;
+        for_each_lane_jacobian::<N, C, L>(self.k, poses, range, f)
+    }
+}
+
+/// [`BatchOp::EachJointJacobian`] with the caller's closure.
+pub(crate) struct EachJointJacobianInlined<'a, F> {
+    pub(crate) poses: &'a PreparedPoses,
+    pub(crate) range: Range<usize>,
+    pub(crate) f: F,
+}
+
+impl<F: FnMut(usize, &[[f64; 3]])> InlinedOp for EachJointJacobianInlined<'_, F> {
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
+        lanes::run(OnChain::<N, C, _>::new(k, self))
+    }
+}
+
+impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[[f64; 3]])> LaneOp
+    for OnChain<'_, N, C, EachJointJacobianInlined<'_, F>>
+{
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let EachJointJacobianInlined { poses, range, f } = self.op;
+        for_each_lane_joint_jacobian::<N, C, L>(self.k, poses, range, f)
+    }
+}
+
 chains! {
-    1 => One [],
-    2 => Two [],
-    3 => Three [],
-    4 => Four [scara, scarah: "RRPR", "a SCARA"],
-    5 => Five [arm5, arm5h: "RRRRR", "a 5-axis arm"],
-    6 => Six [arm6, arm6h: "RRRRRR", "the 6-joint arm (27 parameters)"],
-    7 => Seven [
-        arm7, arm7h: "RRRRRRR", "the 7-joint arm (31 parameters)";
-        track6, track6h: "PRRRRRR", "a 6-joint robot on a linear track"
-    ],
-    8 => Eight [track7, track7h: "PRRRRRRR", "a 7-joint arm on a lift or track"],
-    9 => Nine [],
-    10 => Ten [],
-    11 => Eleven [],
-    12 => Twelve [],
+    shapes: {
+        1 => One [],
+        2 => Two [],
+        3 => Three [],
+        4 => Four [scara, scarah: "RRPR", "a SCARA"],
+        5 => Five [arm5, arm5h: "RRRRR", "a 5-axis arm"],
+        6 => Six [arm6, arm6h: "RRRRRR", "the 6-joint arm (27 parameters)"],
+        7 => Seven [
+            arm7, arm7h: "RRRRRRR", "the 7-joint arm (31 parameters)";
+            track6, track6h: "PRRRRRR", "a 6-joint robot on a linear track"
+        ],
+        8 => Eight [track7, track7h: "PRRRRRRR", "a 7-joint arm on a lift or track"],
+        9 => Nine [],
+        10 => Ten [],
+        11 => Eleven [],
+        12 => Twelve [],
+    },
+    // The measuring arms: a solver's per-pose callbacks are inlined into
+    // their batch loops (see `Prepared::run_inlined`).
+    inlined: {
+        6 => Six [arm6, arm6h],
+        7 => Seven [arm7, arm7h],
+    },
 }
 
 /// A chain handed over by a user ([`ArmKernel::with_chain`]): its

@@ -207,7 +207,7 @@ pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     k: &PreparedParams<N>,
     poses: &PreparedPoses,
     range: std::ops::Range<usize>,
-    f: &mut JacobianVisitor<'_>,
+    mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
 ) {
     let kl: Consts<L, N> = k.splat();
     let params = <C as Chain<N>>::PARAMS;
@@ -239,7 +239,7 @@ pub(crate) fn for_each_lane_joint_jacobian<const N: usize, C: Chain<N>, L: Batch
     k: &PreparedParams<N>,
     poses: &PreparedPoses,
     range: std::ops::Range<usize>,
-    f: &mut dyn FnMut(usize, &[[f64; 3]]),
+    mut f: impl FnMut(usize, &[[f64; 3]]),
 ) {
     let kl: Consts<L, N> = k.splat();
     let mut jl = [[L::from(0.0); 3]; N];

@@ -593,7 +593,7 @@ mod tests {
         let mut batch = Jacobians::new(q.len(), C::PARAMS);
         jacobians_impl::<N, C, Lanes>(&k, &poses, &mut batch);
         let mut seen = 0;
-        for_each_lane_jacobian::<N, C, Lanes>(&k, &poses, 0..q.len(), &mut |i, p, cols| {
+        for_each_lane_jacobian::<N, C, Lanes>(&k, &poses, 0..q.len(), |i, p: &[f64; 3], cols| {
             assert_eq!(*p, batch.position(i));
             for (c, col) in cols.iter().enumerate() {
                 assert_eq!(*col, batch.column(i, c));

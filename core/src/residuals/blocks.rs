@@ -469,6 +469,24 @@ impl Frame {
         std::array::from_fn(|i| (0..3).map(|k| r[i][k] * p[k]).sum::<f64>() + x[3 + i])
     }
 
+    /// A tool pose seen in the frame of values `x`: its orientation turned
+    /// by `R`, its position `R p + t`.
+    ///
+    /// ```
+    /// use aacmm_core::{kernel::Pose, residuals::Frame};
+    /// let quarter = [0.0, 0.0, std::f64::consts::FRAC_PI_2, 10.0, 0.0, 0.0];
+    /// let tool = Pose { rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], position: [1.0, 0.0, 0.0] };
+    /// let seen = Frame::apply_pose(&quarter, &tool);
+    /// assert!((seen.rotation[1][0] - 1.0).abs() < 1e-12); // its x axis along the frame's y
+    /// assert_eq!(seen.position, Frame::apply(&quarter, tool.position));
+    /// ```
+    pub fn apply_pose(x: &[f64], pose: &crate::kernel::Pose) -> crate::kernel::Pose {
+        crate::kernel::Pose {
+            rotation: mat_mul(rotation([x[0], x[1], x[2]]), pose.rotation),
+            position: Frame::apply(x, pose.position),
+        }
+    }
+
     /// `∂(R p + t)/∂δ` for the local step `δ = [δω, δt]` at `x`: row `i` is
     /// the derivative of coordinate `i`, `[−[Rp]× | I]`.
     pub fn jacobian(x: &[f64], p: [f64; 3]) -> [[f64; 6]; 3] {

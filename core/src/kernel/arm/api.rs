@@ -3,7 +3,10 @@
 
 use std::ops::Range;
 
-use super::{ArmKernel, BatchOp, DynChain, KernelKind, OnUser, Op, Prepared, UserChain, check_len};
+use super::{
+    ArmKernel, BatchOp, DynChain, EachJacobianInlined, EachJointJacobianInlined, KernelKind,
+    OnUser, Op, Prepared, UserChain, check_len,
+};
 use crate::kernel::batch::JacobianVisitor;
 use crate::kernel::{
     Chain, ChainShape, Jacobians, KernelError, Pose, Post, PreparedParams, PreparedPoses, computes,
@@ -411,11 +414,21 @@ impl ArmKernel {
     ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
         match poses.post() {
-            None => self.run(Op::Batch(BatchOp::EachJacobian {
-                poses,
-                range,
-                f: &mut f,
-            })),
+            None => {
+                let op = EachJacobianInlined { poses, range, f };
+                match self.inner.run_inlined(op) {
+                    Ok(()) => Ok(()),
+                    Err(EachJacobianInlined {
+                        poses,
+                        range,
+                        mut f,
+                    }) => self.run(Op::Batch(BatchOp::EachJacobian {
+                        poses,
+                        range,
+                        f: &mut f,
+                    })),
+                }
+            }
             Some(post) => self.each_jacobian_after(poses, post, range, &mut f),
         }
     }
@@ -473,11 +486,21 @@ impl ArmKernel {
     ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
         match poses.post() {
-            None => self.run(Op::Batch(BatchOp::EachJointJacobian {
-                poses,
-                range,
-                f: &mut f,
-            })),
+            None => {
+                let op = EachJointJacobianInlined { poses, range, f };
+                match self.inner.run_inlined(op) {
+                    Ok(()) => Ok(()),
+                    Err(EachJointJacobianInlined {
+                        poses,
+                        range,
+                        mut f,
+                    }) => self.run(Op::Batch(BatchOp::EachJointJacobian {
+                        poses,
+                        range,
+                        f: &mut f,
+                    })),
+                }
+            }
             Some(post) => {
                 let mut scaled = vec![[0.0; 3]; self.joints()];
                 let mut g = |i: usize, jq: &[[f64; 3]]| {
