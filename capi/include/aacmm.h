@@ -11,7 +11,7 @@
  * (AACMM_STATUS_OK = 0) and leaves a message for aacmm_last_error_message.
  * Parameters are in the fixed order
  *   a1..an, d1..dn, alpha1..alphan, theta1..thetan, Bx, By, Bz
- * (4n + 3 values for n joints; kernels exist for 6- and 7-joint arms).
+ * (4n + 3 values for n joints; chains of 1 to 12 joints).
  */
 
 #ifndef AACMM_H
@@ -58,8 +58,8 @@ enum AacmmStatus
    */
   AACMM_STATUS_INVALID_ARGUMENT = 3,
   /**
-   * The arm has a joint count the toolkit generates no kernel for
-   * (it has kernels for 6- and 7-joint arms).
+   * The arm has a joint count the toolkit has no kernel for (it
+   * computes chains of 1 to 12 joints).
    */
   AACMM_STATUS_UNSUPPORTED = 4,
   /**
@@ -488,7 +488,7 @@ const char *aacmm_version(void);
 size_t aacmm_param_count(size_t joints);
 
 /**
- * Reads an arm file (TOML, the schema `aacmm` reads: 6 or 7 `[[joint]]`
+ * Reads an arm file (TOML, the schema `aacmm` reads: 1 to 12 `[[joint]]`
  * entries, the units the file declares) into a new handle at `*out`.
  *
  * Warnings about suspicious but legal content (e.g. lengths that look like
@@ -536,7 +536,7 @@ AacmmStatus aacmm_arm_from_file_accepting_rejected(const char *path, AacmmArm **
  * `Rz(theta + q) · Tz(d) · Tx(a) · Rx(alpha)`.
  *
  * Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_UNSUPPORTED` (a joint
- * count without a kernel: the toolkit has 6 and 7), `AACMM_STATUS_LENGTH`
+ * count without a kernel: the toolkit computes 1 to 12), `AACMM_STATUS_LENGTH`
  * (`params_len != 4·joints + 3`), `AACMM_STATUS_INVALID_ARGUMENT` (a
  * parameter that is not a finite number). On error `*out` is `NULL`.
  *
@@ -1319,8 +1319,8 @@ AacmmStatus aacmm_calibrate_options_set_drift(AacmmCalibrateOptions *options, bo
  * default: none).
  *
  * Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or an array or a frame
- * name that is `NULL`), `AACMM_STATUS_UNSUPPORTED` (`joints` neither 6 nor
- * 7), `AACMM_STATUS_LENGTH` (a length that does not match `n`),
+ * name that is `NULL`), `AACMM_STATUS_UNSUPPORTED` (`joints` not 1
+ * to 12), `AACMM_STATUS_LENGTH` (a length that does not match `n`),
  * `AACMM_STATUS_INVALID_ARGUMENT` (a frame name that is not UTF-8),
  * `AACMM_STATUS_INPUT` — the message names the array and index — for a
  * reading or position that is not a finite number, an uncertainty that is

@@ -52,7 +52,7 @@ fn scara_pose_matches_the_matrix_product() {
         (4, 19, "RRPR", 0b0100)
     );
     let theta = [0.1, -0.2, 0.05, 0.3];
-    let alpha = [0.0, 3.14, 0.0, 0.01];
+    let alpha = [0.0, 3.1, 0.0, 0.01];
     let a = [350.0, 300.0, 0.0, 0.0];
     let d = [400.0, 0.0, -20.0, 50.0];
     let b = [1.0, -2.0, 30.0];

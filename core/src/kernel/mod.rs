@@ -461,8 +461,8 @@ pub fn joint_jacobian<C: Chain<N>, const N: usize>(
 }
 
 /// Generates the kernel of a chain of any shape in the caller's crate, as
-/// a module whose marker type `Kernel` implements [`kernel::Chain`]
-/// (crate::kernel::Chain) and so can be handed to
+/// a module whose marker type `Kernel` implements
+/// [`kernel::Chain`](crate::kernel::Chain) and so can be handed to
 /// [`ArmKernel::with_chain`](crate::kernel::ArmKernel::with_chain): the
 /// same closed-form code the library's shipped shapes have. The settings
 /// are `dh_chain!`'s: `joints = "RPRRR"` (or `joints = N`, all revolute),
