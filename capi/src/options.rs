@@ -971,8 +971,8 @@ mod tests {
                 "method = 7: one of AACMM_METHOD_LM (0)",
             );
             refused(
-                aacmm_calibrate_options_set_fix(o, c"theta1,theta9".as_ptr()),
-                "fix = theta1,theta9: unknown parameter `theta9`",
+                aacmm_calibrate_options_set_fix(o, c"theta1,theta13".as_ptr()),
+                "fix = theta1,theta13: unknown parameter `theta13`",
             );
             refused(
                 aacmm_calibrate_options_set_fix(o, c"auto,theta1".as_ptr()),
@@ -1050,8 +1050,8 @@ mod tests {
                 "prior = length=0.5: `length=0.5`: no unit",
             );
             refused(
-                aacmm_calibrate_options_set_prior(o, c"theta9=1deg".as_ptr()),
-                "prior = theta9=1deg: ",
+                aacmm_calibrate_options_set_prior(o, c"theta13=1deg".as_ptr()),
+                "prior = theta13=1deg: ",
             );
             refused(
                 aacmm_calibrate_options_set_prior(o, c"theta5=0.05mm".as_ptr()),

@@ -292,7 +292,7 @@ fn the_c_program_agrees_with_the_rust_api() {
     // when calibrating, both naming the option.
     assert!(
         out.get("error unknown_parameter")
-            .contains("fix = theta1,theta9: unknown parameter `theta9`"),
+            .contains("fix = theta1,theta13: unknown parameter `theta13`"),
         "{}",
         out.get("error unknown_parameter")
     );

@@ -312,7 +312,7 @@ int main(int argc, char **argv) {
     AacmmCalibrateOptions *bad = NULL;
     ok(aacmm_calibrate_options_new(&bad), "aacmm_calibrate_options_new");
     expect(aacmm_calibrate_options_set_seed(NULL, 1), AACMM_STATUS_NULL_POINTER, "null_options");
-    expect(aacmm_calibrate_options_set_fix(bad, "theta1,theta9"), AACMM_STATUS_INVALID_ARGUMENT,
+    expect(aacmm_calibrate_options_set_fix(bad, "theta1,theta13"), AACMM_STATUS_INVALID_ARGUMENT,
            "unknown_parameter");
     expect(aacmm_calibrate_options_set_method(bad, 7), AACMM_STATUS_INVALID_ARGUMENT,
            "unknown_method");

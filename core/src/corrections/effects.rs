@@ -367,3 +367,105 @@ fn factors(
     }
     factors
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::corrections::Harmonic;
+    use crate::kernel::ArmKernel;
+    use crate::params::ChainShape;
+
+    /// A 6-joint arm whose second joint slides.
+    fn sliding() -> DhParams {
+        let mut arm = DhParams::paper_nominal();
+        arm.joints[1] = arm.joints[1].with_kind(JointKind::Prismatic);
+        arm
+    }
+
+    fn poses(arm: &DhParams) -> PreparedPoses {
+        let q = [
+            [0.1, 150.0, 0.3, -0.2, 0.5, 1.0],
+            [0.4, -80.0, 0.1, 0.2, -0.5, 2.0],
+        ];
+        PreparedPoses::for_shape(arm.shape().unwrap(), &q).unwrap()
+    }
+
+    /// An expansion scales what the chain makes of a prismatic joint's
+    /// readings, which pass through unchanged (no angle sum touches them).
+    #[test]
+    fn a_slides_readings_pass_through_the_corrections() {
+        let arm = sliding();
+        let raw = poses(&arm);
+        let physics = Physics {
+            cte_per_k: Some(10e-6),
+            ..Physics::default()
+        };
+        let t = [30.0, 30.0];
+        let conditions = Conditions {
+            temperature_c: Some(&t),
+            time_s: None,
+        };
+        let e = Effects::new(&arm, &physics, &Beyond::default(), &raw, conditions).unwrap();
+        assert_eq!(e.poses.shape(), Some(arm.shape().unwrap()));
+        assert_eq!(e.poses.column_trig(1), raw.column_trig(1));
+        let k = ArmKernel::new(&arm).unwrap();
+        let (mut seen, mut plain) = ([[0.0; 3]; 2], [[0.0; 3]; 2]);
+        k.positions(&e.poses, 0..2, &mut seen).unwrap();
+        k.positions(&raw, 0..2, &mut plain).unwrap();
+        let scale = 1.0 + 10e-6 * (30.0 - physics.reference_c());
+        for (s, p) in seen.iter().zip(&plain) {
+            for r in 0..3 {
+                assert!((s[r] - scale * p[r]).abs() < 1e-9);
+            }
+        }
+    }
+
+    /// Encoder harmonics and a compliance are models of an angle: refused
+    /// on a prismatic joint, with the joint named; allowed on the others.
+    #[test]
+    fn a_slides_angle_models_are_refused() {
+        let arm = sliding();
+        let raw = poses(&arm);
+        let none = Conditions::default();
+        let harmonic = |joint| Physics {
+            harmonics: vec![Harmonic {
+                joint,
+                order: 1,
+                sin: 1e-5,
+                cos: 0.0,
+            }],
+            ..Physics::default()
+        };
+        let e = Effects::new(&arm, &harmonic(1), &Beyond::default(), &raw, none).unwrap_err();
+        assert_eq!(
+            e,
+            "joint 2 is prismatic: encoder harmonics are a model of a revolute joint's angle"
+        );
+        assert!(Effects::new(&arm, &harmonic(2), &Beyond::default(), &raw, none).is_ok());
+        let fit = Beyond {
+            compliance: vec![1],
+            ..Beyond::default()
+        };
+        let e = Effects::new(&arm, &Physics::default(), &fit, &raw, none).unwrap_err();
+        assert!(
+            e.starts_with("joint 2 is prismatic: the compliance model"),
+            "{e}"
+        );
+        let fit = Beyond {
+            harmonics: vec![(1, 2)],
+            ..Beyond::default()
+        };
+        assert!(Effects::new(&arm, &Physics::default(), &fit, &raw, none).is_err());
+        // The revolute joints of a mixed chain keep their compliance.
+        let fit = Beyond {
+            compliance: vec![2],
+            ..Beyond::default()
+        };
+        let physics = Physics {
+            link_masses: vec![Some(crate::corrections::Mass::at_middle(1.0)); 6],
+            ..Physics::default()
+        };
+        let e = Effects::new(&arm, &physics, &fit, &raw, none).unwrap();
+        assert_eq!(e.poses.shape(), "RPRRRR".parse::<ChainShape>().ok());
+    }
+}

@@ -276,4 +276,45 @@ mod tests {
         );
         assert!(tau[0].abs() < 1e-12 && tau[1].abs() < 1e-12);
     }
+
+    /// A prismatic joint's reading moves its link along the previous z
+    /// axis: the loads of a slide at `s` are those of the same link made
+    /// revolute with `d + s` at a zero reading.
+    #[test]
+    fn a_slide_moves_its_link() {
+        let mut arm = DhParams::paper_nominal();
+        arm.joints[1] = arm.joints[1].with_kind(JointKind::Prismatic);
+        let physics = Physics {
+            link_masses: vec![Some(Mass::at_middle(2.0)); 6],
+            probe_mass: Some(Mass::at_middle(0.5)),
+            // Across the first joint's axis, so that it carries a load.
+            gravity: Some([0.0, -1.0, 0.0]),
+            ..Physics::default()
+        };
+        let q = [0.3, 120.0, -0.4, 0.5, 1.1, -0.2];
+        let mut tau = [0.0; 6];
+        torques(&arm, &physics, &q, &mut tau);
+        let mut turned = arm.clone();
+        turned.joints[1].kind = JointKind::Revolute;
+        turned.joints[1].d += 120.0;
+        let mut want = [0.0; 6];
+        torques(
+            &turned,
+            &physics,
+            &[0.3, 0.0, -0.4, 0.5, 1.1, -0.2],
+            &mut want,
+        );
+        for (t, w) in tau.iter().zip(&want) {
+            assert!((t - w).abs() < 1e-9, "{tau:?} vs {want:?}");
+        }
+        // The slide changes the first joint's load (its lever arm).
+        let mut other = [0.0; 6];
+        torques(
+            &arm,
+            &physics,
+            &[0.3, 320.0, -0.4, 0.5, 1.1, -0.2],
+            &mut other,
+        );
+        assert!((other[0] - tau[0]).abs() > 1e-3, "{tau:?} vs {other:?}");
+    }
 }
