@@ -255,7 +255,7 @@ fn the_c_program_agrees_with_the_rust_api() {
         ("robust_scale", 3),
         ("prior_without_unit", 3),
         ("fix_not_in_arm", 3),
-        ("five_joints", 4),
+        ("no_joints", 4),
         ("missing_file", 5),
         ("missing_poses", 5),
         ("not_an_arm_file", 6),

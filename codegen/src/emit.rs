@@ -305,87 +305,108 @@ fn constants(k: &KernelExprs) -> TokenStream {
     }
 }
 
-/// `position`, `position_jacobian` and `joint_jacobian`: the probe's
-/// position and its 3-row Jacobians.
-fn position_items(k: &KernelExprs) -> TokenStream {
+/// One output's three functions — its value, its parameter Jacobian, its
+/// joint Jacobian — with `R`-row columns: the probe's position (3), the
+/// tool's pose (6).
+struct Family<'a, const R: usize> {
+    names: [&'static str; 3],
+    /// Each function's documentation, a `#[doc]` per entry.
+    docs: [Vec<String>; 3],
+    /// What the value function computes and returns.
+    value: (&'a [Id], TokenStream),
+    /// What the Jacobian functions return besides their columns.
+    returned: (&'a [Id], TokenStream),
+    /// The return type.
+    ret: TokenStream,
+    params: &'a [[Id; R]],
+    betas: &'a [[Id; R]],
+    joints: &'a [[Id; R]],
+}
+
+/// The three functions of `f`.
+fn family<const R: usize>(k: &KernelExprs, sig: &Signature, f: Family<'_, R>) -> TokenStream {
     let g = &k.graph;
     let Signature {
         args,
         select_arg,
         bounds,
         attrs,
-        args_doc,
-        select_doc,
-        order,
-    } = Signature::of(k);
+        ..
+    } = sig;
     let n = Literal::usize_unsuffixed(k.spec.joints);
     let p = Literal::usize_unsuffixed(k.spec.param_count());
-    let position_body = body(g, &k.position);
-    let position = vec3(g, &k.position);
-    let jac_body = columns_with(
-        g,
-        &k.param_jacobian,
-        &k.beta_jacobian,
-        k.spec.joints,
-        &k.frame_position,
-    );
-    let joint_body = columns(g, &k.joint_jacobian, &k.frame_position);
-    let frame_position = vec3(g, &k.frame_position);
+    let rows = Literal::usize_unsuffixed(R);
+    let [value_name, jac_name, joint_name] = f.names.map(|s| Ident::new(s, Span::call_site()));
+    let [value_doc, jac_doc, joint_doc] = &f.docs;
+    let (value_ids, value) = f.value;
+    let value_body = body(g, value_ids);
+    let (returned_ids, returned) = f.returned;
+    let jac_body = columns_with(g, f.params, f.betas, k.spec.joints, returned_ids);
+    let joint_body = columns(g, f.joints, returned_ids);
+    let ret = f.ret;
+    quote! {
+        #(#[doc = #value_doc])*
+        #attrs
+        pub fn #value_name<S>(#args) -> #ret where #bounds {
+            #value_body
+            #value
+        }
+
+        #(#[doc = #jac_doc])*
+        #attrs
+        pub fn #jac_name<S>(#args, #select_arg jac: &mut [[S; #rows]; #p]) -> #ret where #bounds {
+            #jac_body
+            #returned
+        }
+
+        #(#[doc = #joint_doc])*
+        #attrs
+        pub fn #joint_name<S>(#args, jac: &mut [[S; #rows]; #n]) -> #ret where #bounds {
+            #joint_body
+            #returned
+        }
+    }
+}
+
+/// `position`, `position_jacobian` and `joint_jacobian`: the probe's
+/// position and its 3-row Jacobians.
+fn position_items(k: &KernelExprs) -> TokenStream {
+    let g = &k.graph;
+    let sig = Signature::of(k);
+    let (order, select_doc, args_doc) = (sig.order, sig.select_doc, sig.args_doc.clone());
     let jac_doc = format!(
         "Probe position and `∂p/∂parameter` into `jac`, one column per parameter in the order {order}.{select_doc} {args_doc}"
     );
-    quote! {
-        #[doc = "Probe position (mm) by the right-to-left product."]
-        #[doc = #args_doc]
-        #attrs
-        pub fn position<S>(#args) -> [S; 3] where #bounds {
-            #position_body
-            #position
-        }
-
-        #[doc = #jac_doc]
-        #attrs
-        pub fn position_jacobian<S>(#args, #select_arg jac: &mut [[S; 3]; #p]) -> [S; 3] where #bounds {
-            #jac_body
-            #frame_position
-        }
-
-        #[doc = "Probe position and `∂p/∂q_i` (mm/rad for a revolute joint, mm/mm for a prismatic one) into `jac`, one column per joint."]
-        #[doc = #args_doc]
-        #attrs
-        pub fn joint_jacobian<S>(#args, jac: &mut [[S; 3]; #n]) -> [S; 3] where #bounds {
-            #joint_body
-            #frame_position
-        }
-    }
+    let joint_doc = "Probe position and `∂p/∂q_i` (mm/rad for a revolute joint, mm/mm for a \
+        prismatic one) into `jac`, one column per joint.";
+    let f = Family {
+        names: ["position", "position_jacobian", "joint_jacobian"],
+        docs: [
+            vec![
+                "Probe position (mm) by the right-to-left product.".into(),
+                args_doc.clone(),
+            ],
+            vec![jac_doc],
+            vec![joint_doc.into(), args_doc],
+        ],
+        value: (&k.position, vec3(g, &k.position)),
+        returned: (&k.frame_position, vec3(g, &k.frame_position)),
+        ret: quote!([S; 3]),
+        params: &k.param_jacobian,
+        betas: &k.beta_jacobian,
+        joints: &k.joint_jacobian,
+    };
+    family(k, &sig, f)
 }
 
 /// `pose`, `pose_jacobian` and `joint_pose_jacobian`: the tool frame and
 /// its 6-row Jacobians.
 fn pose_items(k: &KernelExprs) -> TokenStream {
     let g = &k.graph;
-    let Signature {
-        args,
-        select_arg,
-        bounds,
-        attrs,
-        args_doc,
-        select_doc,
-        order,
-    } = Signature::of(k);
-    let n = Literal::usize_unsuffixed(k.spec.joints);
-    let p = Literal::usize_unsuffixed(k.spec.param_count());
+    let sig = Signature::of(k);
+    let (order, select_doc, args_doc) = (sig.order, sig.select_doc, sig.args_doc.clone());
     let ids = transform_ids(k);
-    let pose_body = body(g, &ids);
     let pose = transform(g, &k.rotation, &k.frame_position);
-    let jac_body = columns_with(
-        g,
-        &k.pose_jacobian,
-        &k.beta_pose_jacobian,
-        k.spec.joints,
-        &ids,
-    );
-    let joint_body = columns(g, &k.joint_pose_jacobian, &ids);
     let returns = "Returns the top three rows of the tool's homogeneous transform, `[R | p]`: \
         `R` the last frame's axes as columns, `p` the probe (mm).";
     let six = "Each column is 6 rows: the position's derivative (3), then the small rotation \
@@ -396,30 +417,25 @@ fn pose_items(k: &KernelExprs) -> TokenStream {
     let joint_doc = format!(
         "The tool pose and `∂/∂q_i` into `jac`, one column per joint: `[z × (p − o); z]` for a revolute joint, `[z; 0]` for a prismatic one. {six} {returns} {args_doc}"
     );
-    quote! {
-        #[doc = "The tool pose by the frames."]
-        #[doc = #returns]
-        #[doc = #args_doc]
-        #attrs
-        pub fn pose<S>(#args) -> [[S; 4]; 3] where #bounds {
-            #pose_body
-            #pose
-        }
-
-        #[doc = #jac_doc]
-        #attrs
-        pub fn pose_jacobian<S>(#args, #select_arg jac: &mut [[S; 6]; #p]) -> [[S; 4]; 3] where #bounds {
-            #jac_body
-            #pose
-        }
-
-        #[doc = #joint_doc]
-        #attrs
-        pub fn joint_pose_jacobian<S>(#args, jac: &mut [[S; 6]; #n]) -> [[S; 4]; 3] where #bounds {
-            #joint_body
-            #pose
-        }
-    }
+    let f = Family {
+        names: ["pose", "pose_jacobian", "joint_pose_jacobian"],
+        docs: [
+            vec![
+                "The tool pose by the frames.".into(),
+                returns.into(),
+                args_doc,
+            ],
+            vec![jac_doc],
+            vec![joint_doc],
+        ],
+        value: (&ids, pose.clone()),
+        returned: (&ids, pose),
+        ret: quote!([[S; 4]; 3]),
+        params: &k.pose_jacobian,
+        betas: &k.beta_pose_jacobian,
+        joints: &k.joint_pose_jacobian,
+    };
+    family(k, &sig, f)
 }
 
 /// A marker type `Kernel` implementing `#core::kernel::Chain<N>` over the

@@ -169,17 +169,12 @@ pub fn param_jacobian_dual<const P: usize>(
     params: &DhParams,
     q: &[f64],
 ) -> Result<Vec<[f64; 3]>, KernelError> {
-    check(params, q)?;
-    if params.param_count() != P {
-        return Err(KernelError::ParamCount {
-            expected: params.param_count(),
-            got: P,
-        });
-    }
-    Ok(param_pose_jacobian_dual::<P>(params, q)?
-        .iter()
-        .map(|c| [c[0], c[1], c[2]])
-        .collect())
+    param_pose_jacobian_dual::<P>(params, q).map(position_rows)
+}
+
+/// The position rows of 6-row columns.
+fn position_rows(cols: Vec<[f64; 6]>) -> Vec<[f64; 3]> {
+    cols.iter().map(|c| [c[0], c[1], c[2]]).collect()
 }
 
 /// The tool pose's 6-row parameter Jacobian (position rows, then the small
@@ -230,11 +225,7 @@ pub fn param_jacobian_central(
     q: &[f64],
     h: f64,
 ) -> Result<Vec<[f64; 3]>, KernelError> {
-    check(params, q)?;
-    Ok(param_pose_jacobian_central(params, q, h)?
-        .iter()
-        .map(|c| [c[0], c[1], c[2]])
-        .collect())
+    param_pose_jacobian_central(params, q, h).map(position_rows)
 }
 
 /// The tool pose's 6-row parameter Jacobian by central differences of
@@ -245,22 +236,9 @@ pub fn param_pose_jacobian_central(
     h: f64,
 ) -> Result<Vec<[f64; 6]>, KernelError> {
     check(params, q)?;
-    let x = params.to_vec();
-    let at = tool_of(params, &x, q);
-    let mut shifted = x.clone();
-    Ok((0..x.len())
-        .map(|c| {
-            shifted[c] = x[c] + h;
-            let plus = tool_of(params, &shifted, q);
-            shifted[c] = x[c] - h;
-            let minus = tool_of(params, &shifted, q);
-            shifted[c] = x[c];
-            six_row(
-                |i, j| (plus[(i, j)] - minus[(i, j)]) / (2.0 * h),
-                |i, j| at[(i, j)],
-            )
-        })
-        .collect())
+    Ok(central_columns(&params.to_vec(), h, |x| {
+        tool_of(params, x, q)
+    }))
 }
 
 /// The tool pose's 6-row joint Jacobian by central differences with step
@@ -272,21 +250,27 @@ pub fn joint_pose_jacobian_central(
 ) -> Result<Vec<[f64; 6]>, KernelError> {
     check(params, q)?;
     let x = params.to_vec();
-    let at = tool_of(params, &x, q);
-    let mut shifted = q.to_vec();
-    Ok((0..q.len())
-        .map(|j| {
-            shifted[j] = q[j] + h;
-            let plus = tool_of(params, &x, &shifted);
-            shifted[j] = q[j] - h;
-            let minus = tool_of(params, &x, &shifted);
-            shifted[j] = q[j];
+    Ok(central_columns(q, h, |q| tool_of(params, &x, q)))
+}
+
+/// The 6-row columns of the tool transform `tool` by central differences
+/// in each value of `at`, step `h`.
+fn central_columns(at: &[f64], h: f64, tool: impl Fn(&[f64]) -> Matrix4<f64>) -> Vec<[f64; 6]> {
+    let here = tool(at);
+    let mut shifted = at.to_vec();
+    (0..at.len())
+        .map(|c| {
+            shifted[c] = at[c] + h;
+            let plus = tool(&shifted);
+            shifted[c] = at[c] - h;
+            let minus = tool(&shifted);
+            shifted[c] = at[c];
             six_row(
-                |r, c| (plus[(r, c)] - minus[(r, c)]) / (2.0 * h),
-                |r, c| at[(r, c)],
+                |i, j| (plus[(i, j)] - minus[(i, j)]) / (2.0 * h),
+                |i, j| here[(i, j)],
             )
         })
-        .collect())
+        .collect()
 }
 
 /// `∂p/∂q_i` by forward-mode autodiff, one column per joint; `N` must be
@@ -304,17 +288,7 @@ pub fn joint_jacobian_dual<const N: usize>(
     params: &DhParams,
     q: &[f64],
 ) -> Result<Vec<[f64; 3]>, KernelError> {
-    check(params, q)?;
-    if N != q.len() {
-        return Err(KernelError::JointCount {
-            expected: q.len(),
-            got: N,
-        });
-    }
-    Ok(joint_pose_jacobian_dual::<N>(params, q)?
-        .iter()
-        .map(|c| [c[0], c[1], c[2]])
-        .collect())
+    joint_pose_jacobian_dual::<N>(params, q).map(position_rows)
 }
 
 /// The tool pose's 6-row joint Jacobian by forward-mode autodiff; `N` must

@@ -142,7 +142,7 @@ pub fn read_arm_with(path: &Path, rejected: Rejected) -> Result<(Arm, Vec<Warnin
 /// let thirteen = text.replace("[probe]", &format!("{}[probe]", joint.repeat(7)));
 /// assert_eq!(
 ///     aacmm_core::io::parse_arm(&thirteen, "arm.toml").unwrap_err().to_string(),
-///     "arm.toml:63: field `joint`: 13 joints; at most 12 are supported (the toolkit \
+///     "arm.toml:75: field `joint`: 13 joints; at most 12 are supported (the toolkit \
 ///      computes chains of 1 to 12 joints)"
 /// );
 /// ```

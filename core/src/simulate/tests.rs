@@ -551,14 +551,17 @@ fn impossible_settings_are_errors() {
         err(&far)
     );
     // Unsupported joint counts and bad limits.
-    let mut short = paper();
-    short.params.joints.pop();
-    short.limits.pop();
+    let mut long = paper();
+    for _ in 0..7 {
+        long.params.joints.push(long.params.joints[5]);
+        long.limits.push(None);
+    }
     let e = simulate(
-        &short,
+        &long,
         &CampaignSettings::new(1, ErrorModel::random(1.0, false), 2, 3),
     );
-    assert!(e.unwrap_err().to_string().contains("5 joints"));
+    let e = e.unwrap_err().to_string();
+    assert!(e.contains("13 joints"), "{e}");
     let mut bad = paper();
     bad.limits[1] = Some([1.0, -1.0]);
     let e = simulate(&bad, &CampaignSettings::new(1, ErrorModel::Paper, 2, 3)).unwrap_err();

@@ -313,17 +313,32 @@ impl ArmKernel {
         range: Range<usize>,
         out: &mut [[f64; 3]],
     ) -> Result<(), KernelError> {
+        self.one_per_pose(
+            poses,
+            range,
+            out,
+            |poses, start, out| BatchOp::Positions { poses, start, out },
+            |p, post, i| post.at(i, p),
+        )
+    }
+
+    /// A batch `op` over poses `range` with one output each into `out`,
+    /// then `after` each through the poses' transform after the chain.
+    fn one_per_pose<T>(
+        &self,
+        poses: &PreparedPoses,
+        range: Range<usize>,
+        out: &mut [T],
+        op: impl for<'b> FnOnce(&'b PreparedPoses, usize, &'b mut [T]) -> BatchOp<'b>,
+        after: impl Fn(&T, &Post, usize) -> T,
+    ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
         check_len(range.len(), out.len())?;
         let start = range.start;
-        self.run(Op::Batch(BatchOp::Positions {
-            poses,
-            start,
-            out: &mut *out,
-        }))?;
+        self.run(Op::Batch(op(poses, start, &mut *out)))?;
         if let Some(post) = poses.post() {
             for (k, o) in out.iter_mut().enumerate() {
-                *o = post.at(start + k, o);
+                *o = after(o, post, start + k);
             }
         }
         Ok(())
@@ -347,20 +362,13 @@ impl ArmKernel {
         range: Range<usize>,
         out: &mut [Pose],
     ) -> Result<(), KernelError> {
-        self.check_poses(poses, &range)?;
-        check_len(range.len(), out.len())?;
-        let start = range.start;
-        self.run(Op::Batch(BatchOp::Poses {
+        self.one_per_pose(
             poses,
-            start,
-            out: &mut *out,
-        }))?;
-        if let Some(post) = poses.post() {
-            for (k, o) in out.iter_mut().enumerate() {
-                *o = o.after(post, start + k);
-            }
-        }
-        Ok(())
+            range,
+            out,
+            |poses, start, out| BatchOp::Poses { poses, start, out },
+            |t, post, i| t.after(post, i),
+        )
     }
 
     /// Positions and parameter Jacobians of every pose into `out`, made with
