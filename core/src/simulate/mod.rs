@@ -100,7 +100,8 @@ pub struct SimStats {
     /// Converged solutions too close to an earlier touch of the socket.
     pub too_close: usize,
     /// Largest distance between the true arm's probe centre at a touch's
-    /// true readings and the point touched, mm.
+    /// true readings (through the true arm's corrections: harmonics,
+    /// compliance) and the point touched, mm.
     pub max_residual_mm: f64,
 }
 
@@ -200,8 +201,19 @@ pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, 
     let sigma = settings.encoder_noise_deg.to_radians();
     let mut poses = Poses::with_capacity(n, touches.len());
     let mut q = Vec::with_capacity(n);
+    let corrects = true_arm.physics.corrects();
     for (i, t) in touches.iter().enumerate() {
-        let p = k.position(&t.q)?;
+        // What was simulated: the readings through the true arm's own
+        // corrections (harmonics, compliance), as the chain sees them.
+        let p = if corrects {
+            k.position(&crate::corrections::angles_for(
+                &true_arm.params,
+                &true_arm.physics,
+                &t.q,
+            ))?
+        } else {
+            k.position(&t.q)?
+        };
         let r = (0..3)
             .map(|i| (p[i] - t.point[i]).powi(2))
             .sum::<f64>()
