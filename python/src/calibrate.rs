@@ -465,13 +465,13 @@ impl Calibration {
     /// missing): `calibrated.toml`, `calibration.json`, `timing.json` (this
     /// call's wall times), `report.html` and its SVG figures. Returns the
     /// paths written. `OSError` when a file cannot be written (each file is
-    /// written whole or not at all), or when `dir` holds an earlier
-    /// calibration and `force` is not set; `ValueError` for an empty path.
+    /// written whole or not at all), or when `dir` holds results of an
+    /// earlier run (a calibration's, a campaign's, a report's) and `force`
+    /// is not set; `ValueError` for an empty path.
     #[pyo3(signature = (dir, *, force = false))]
     fn write(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<Vec<PathBuf>> {
         detached(py, || {
-            let earlier = [session::CALIBRATED_FILE, session::REPORT_FILE];
-            crate::error::check_out_dir(&dir, &earlier, force)?;
+            crate::error::check_out_dir(&dir, force)?;
             std::fs::create_dir_all(&dir).map_err(|e| {
                 Error::new(Kind::Io, format!("{}: cannot create: {e}", dir.display()))
             })?;

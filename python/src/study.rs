@@ -47,6 +47,8 @@ pub fn evaluate<'py>(py: Python<'py>, arm: &Arm, data: &DataSet) -> PyResult<Bou
     aacmm_core::metrics::room_to_evaluate(&data.data).map_err(Error::from)?;
     let evaluation = detached(py, || {
         let d = &data.data;
+        // Lengths in another unit than the arm: refused, as calibrate does.
+        aacmm_core::session::check_units(&arm.arm.params, d, &arm.source)?;
         let mut xyz = vec![[0.0; 3]; d.len()];
         arm.kernel.positions(d.poses(), 0..d.len(), &mut xyz)?;
         core_evaluate(d, &xyz).map_err(|e| Error::from(e).prefixed(&arm.source))
@@ -72,6 +74,7 @@ pub fn identify<'py>(
     let threads = self::threads(threads)?;
     aacmm_core::identify::room_to_identify(&data.data).map_err(Error::from)?;
     let id = detached(py, || {
+        aacmm_core::session::check_units(&arm.arm.params, &data.data, &arm.source)?;
         core_identify(&arm.arm.params, &data.data, &noise, threads)
             .map_err(|e| Error::from(e).prefixed(&arm.source))
     })?;

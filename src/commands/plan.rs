@@ -21,7 +21,7 @@ use aacmm_core::plan::{
 use aacmm_core::session::{CalibrationReport, REPORT_FILE};
 use aacmm_core::simulate::{
     CampaignSettings, ErrorModel, MIN_POSES_PER_SOCKET, PositionSettings, SimError, SocketPlan,
-    simulate, simulate_positions,
+    simulate_observed, simulate_positions,
 };
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
@@ -29,6 +29,9 @@ use clap::{ArgGroup, ValueEnum};
 use super::report;
 use crate::output::{Stdout, warn};
 use crate::paths::{Input, check_output_file};
+
+// The default quoted in --workspace-poses' help is the library's.
+const _: () = assert!(aacmm_core::plan::WORKSPACE_POSES == 500);
 
 /// Rows chosen with --given when --count is not given.
 const DEFAULT_NEXT: usize = 10;
@@ -98,6 +101,11 @@ pub struct Args {
     /// uncertainty is averaged over these poses [default: the candidates].
     #[arg(long, value_name = "POSES.csv")]
     workspace: Option<PathBuf>,
+    /// Workspace poses the criterion averages over at most: an even sample
+    /// of a larger workspace (each pose adds to every step's work)
+    /// [default: 500].
+    #[arg(long, value_name = "N")]
+    workspace_poses: Option<usize>,
     /// What is optimised: the mean predicted position variance over the
     /// workspace, one row from each of K strata of look-alike candidates
     /// (robust), over all candidates freely (i), or the determinant of the
@@ -125,7 +133,9 @@ pub struct Args {
     /// Also write the whole plan as JSON.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
-    /// Overwrite an existing --out or --json file.
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
     #[arg(long)]
     force: bool,
 }
@@ -188,14 +198,17 @@ pub fn run(args: Args) -> Result<()> {
         Some(path) => Some(read_candidates("--workspace", path, &args, &arm)?),
         None => None,
     };
+    let mut bar = super::progress::Bar::new();
+    bar.busy("plan: choosing rows");
     let plan = plan(
         params,
         &pool.poses,
         workspace.as_ref(),
         start.as_ref().map(|s| &s.given),
         &settings,
-    )
-    .map_err(|e| match e {
+    );
+    drop(bar);
+    let plan = plan.map_err(|e| match e {
         // The count's bounds: the library names the setting, the command
         // line its flag.
         PlanError::Invalid(m) if m.starts_with("count ") => anyhow!("--{m}"),
@@ -255,13 +268,7 @@ fn check_paths(args: &Args) -> Result<()> {
     let outputs = [("--out", &args.out), ("--json", &args.json)];
     for (flag, path) in outputs {
         let Some(path) = path else { continue };
-        check_output_file(flag, path, &inputs)?;
-        if !args.force && path.exists() {
-            bail!(
-                "{flag} {}: already exists; give --force to overwrite it, or another name",
-                path.display()
-            );
-        }
+        check_output_file(flag, path, &inputs, args.force)?;
     }
     if let (Some(out), Some(json)) = (&args.out, &args.json)
         && out == json
@@ -424,7 +431,10 @@ fn sample_touches(args: &Args, arm: &Arm, n: usize) -> Result<Pool> {
     settings.sockets = sockets;
     settings.reference_lengths = 0;
     settings.encoder_noise_deg = SAMPLE_ENCODER_NOISE_DEG;
-    let campaign = simulate(arm, &settings).map_err(|e| sample_error(e, args, n))?;
+    let mut bar = super::progress::Bar::new();
+    let campaign = simulate_observed(arm, &settings, &mut |f| bar.show("sampling", f))
+        .map_err(|e| sample_error(e, args, n))?;
+    drop(bar);
     let placed = match &args.sockets {
         Some(path) => format!("from {}", source_name(path)),
         None => "spread over the reachable volume".to_string(),
@@ -486,7 +496,26 @@ fn settings(args: &Args, given: bool) -> Result<PlanSettings> {
     }
     s.sigma_mm = args.noise;
     s.seed = args.seed;
+    if let Some(n) = args.workspace_poses {
+        if n == 0 {
+            bail!("--workspace-poses 0: at least 1");
+        }
+        s.workspace_limit = n;
+    }
     Ok(s)
+}
+
+/// How much of the workspace the criterion used: all of it, or an even
+/// sample, with why and how to use more.
+fn workspace_used(plan: &Plan) -> String {
+    if plan.workspace_poses >= plan.workspace_total {
+        return format!(" ({} poses)", plan.workspace_poses);
+    }
+    format!(
+        ", an even sample of {} of its {} poses (each workspace pose adds to every step's \
+         work; --workspace-poses N uses up to N)",
+        plan.workspace_poses, plan.workspace_total
+    )
 }
 
 /// The chosen rows of `pool` in the order chosen, as a poses file.
@@ -541,10 +570,14 @@ fn header(plan: &Plan, pool: &Pool, args: &Args, start: Option<&Start>) -> Strin
             c.dof.sigma0
         );
     }
-    let workspace = match &args.workspace {
-        Some(p) => format!("{} ({} poses used)", source_name(p), plan.workspace_poses),
-        None => format!("the candidates ({} poses used)", plan.workspace_poses),
-    };
+    let workspace = format!(
+        "{}{}",
+        match &args.workspace {
+            Some(p) => source_name(p),
+            None => "the candidates".to_string(),
+        },
+        workspace_used(plan)
+    );
     let criterion = match plan.criterion {
         Criterion::Robust if plan.hedge > 0.0 => format!(
             "the mean predicted variance of a probe position over the workspace, one row from \

@@ -8,6 +8,7 @@ mod campaign;
 mod edges;
 mod evaluate;
 mod export;
+mod first_cause;
 mod house;
 mod mukca;
 mod out_paths;

@@ -184,3 +184,45 @@ fn the_largest_residual_is_the_simulated_arms_with_its_harmonics() {
     let written = std::fs::read_to_string(out.join("true_arm.toml")).unwrap();
     assert!(written.contains("harmonics"), "{written}");
 }
+
+/// Issue 43, case 7: progress is drawn only on a terminal. A pipe (as
+/// here) gets the summary lines and nothing else: no bar, no carriage
+/// return, no escape sequence, in `simulate` and in `plan` (which samples
+/// its candidates by the simulator, then chooses).
+#[test]
+fn no_progress_is_drawn_when_stderr_is_not_a_terminal() {
+    let dir = temp_dir("sim-no-progress");
+    let o = simulate(
+        &["--sockets", "4", "--poses", "5"],
+        &dir.join("campaign"),
+        Duration::from_secs(60),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let arm = example("paper-table-1.toml");
+    let plan = command(&[
+        "plan",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--sample",
+        "40",
+        "--count",
+        "10",
+        "--measure",
+        "touches",
+    ])
+    .output()
+    .unwrap();
+    assert!(plan.status.success(), "{}", stderr(&plan));
+    for (what, err) in [("simulate", stderr(&o)), ("plan", stderr(&plan))] {
+        assert!(
+            !err.contains(['\r', '\u{1b}']) && !err.contains("] ") && !err.contains('%'),
+            "{what} drew progress into a pipe:\n{err:?}"
+        );
+    }
+    let err = stderr(&o);
+    let lines: Vec<&str> = err.lines().collect();
+    assert!(
+        lines[0].starts_with("nominal arm ") && lines.len() == 9,
+        "{lines:#?}"
+    );
+}

@@ -244,26 +244,49 @@ impl ChiSquare {
         self.p_upper < CHI_SQUARE_REFUSE || self.p_lower < CHI_SQUARE_REFUSE
     }
 
-    /// In words.
+    /// In words. A tail below [`CHI_SQUARE_ALPHA`] but not below
+    /// [`CHI_SQUARE_REFUSE`] is a note, and its sentence says so — with
+    /// what it suggests — so that it cannot read as a refusal beside
+    /// "Verdict: usable".
     pub fn describe(&self) -> String {
         let s0 = (self.statistic / self.dof.max(1) as f64).sqrt();
+        let head = format!(
+            "χ² = {:.1} on {} dof (sigma0 {s0:.3})",
+            self.statistic, self.dof
+        );
+        let note = |p: f64| {
+            format!(
+                "(P = {p:.1e}: below {CHI_SQUARE_ALPHA} but above the refusal level \
+                 {CHI_SQUARE_REFUSE:e}, so a note, not a refusal: the fit is usable)"
+            )
+        };
         match self.verdict {
             ChiSquareVerdict::Consistent => format!(
-                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): consistent with the stated noise \
-                 (P above {:.3}, below {:.3})",
-                self.statistic, self.dof, self.p_upper, self.p_lower
+                "{head}: consistent with the stated noise (P above {:.3}, below {:.3})",
+                self.p_upper, self.p_lower
+            ),
+            ChiSquareVerdict::ResidualsTooLarge if self.far_outside() => format!(
+                "{head}: residuals larger than the stated noise explains (P = {:.1e}): noise \
+                 understated, outliers, a model error or a wrong minimum",
+                self.p_upper
             ),
             ChiSquareVerdict::ResidualsTooLarge => format!(
-                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): residuals larger than the stated noise \
-                 explains (P = {:.1e}): noise understated, outliers, a model error or a wrong \
-                 minimum",
-                self.statistic, self.dof, self.p_upper
+                "{head}: residuals larger than the stated noise explains {}; it suggests a noise \
+                 {s0:.2} times the stated, a few poor touches (see Outliers) or a small model \
+                 error (tolerances too tight, an effect beyond geometry)",
+                note(self.p_upper)
+            ),
+            ChiSquareVerdict::ResidualsTooSmall if self.far_outside() => format!(
+                "{head}: residuals smaller than the stated noise explains (P = {:.1e}): the noise \
+                 is overstated (the uncertainties printed are rescaled by sigma0², so they are the \
+                 fit's own), or the fit follows the noise",
+                self.p_lower
             ),
             ChiSquareVerdict::ResidualsTooSmall => format!(
-                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): residuals smaller than the stated noise \
-                 explains (P = {:.1e}): the noise is overstated (the uncertainties printed are \
-                 rescaled by sigma0², so they are the fit's own), or the fit follows the noise",
-                self.statistic, self.dof, self.p_lower
+                "{head}: residuals smaller than the stated noise explains {}; it suggests a noise \
+                 {s0:.2} times the stated (the uncertainties printed are rescaled by sigma0², so \
+                 they are the fit's own)",
+                note(self.p_lower)
             ),
         }
     }

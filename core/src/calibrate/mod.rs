@@ -138,6 +138,27 @@ pub enum CalibrationError {
         ratio: f64,
     },
     /// The reference lengths disagree with the nominal arm because the
+    /// arm's own file is in another unit than it declares: its reach is
+    /// no arm's (under 10 mm or over 10 m), so the arm, not the lengths
+    /// file, is the cause.
+    #[error(
+        "{}: the arm file's lengths, in the unit its `length_unit` declares, make the arm {} \
+         long (its reach), and the reference lengths are {ratio:.3e} times its distances \
+         between the same points (median): the arm file's numbers are in another unit than it \
+         declares (millimetres declared as metres make an arm 1000 times too long) — set \
+         `length_unit` to the unit its numbers are in; the lengths file (mm) is not the cause",
+        if file.is_empty() { "the arm" } else { file },
+        crate::error::length_words(*reach_mm)
+    )]
+    ArmUnits {
+        /// The arm file (empty when the caller did not name it).
+        file: String,
+        /// The arm's reach as its file declares it, mm.
+        reach_mm: f64,
+        /// Median of stated length / nominal distance.
+        ratio: f64,
+    },
+    /// The reference lengths disagree with the nominal arm because the
     /// joint readings look like radians read as degrees (every one within
     /// ±2π "degrees"): the angle unit is the cause, not the lengths file.
     #[error(

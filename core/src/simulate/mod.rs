@@ -163,6 +163,21 @@ fn check_probe_noise(nominal: &Arm, sigma_mm: f64) -> Result<(), SimError> {
 /// assert_eq!(e.to_string(), "setting `sockets`: at least one socket is needed");
 /// ```
 pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, SimError> {
+    simulate_observed(nominal, settings, &mut |_| {})
+}
+
+/// [`simulate`], telling `progress` the fraction of the sockets whose
+/// touches were found, as it goes (a large campaign takes seconds: for a
+/// progress bar). The campaign is the same bytes.
+///
+/// # Errors
+///
+/// As [`simulate`].
+pub fn simulate_observed(
+    nominal: &Arm,
+    settings: &CampaignSettings,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Campaign, SimError> {
     let n = nominal.params.joint_count();
     check_limits(nominal)?;
     settings.validate(n)?;
@@ -194,6 +209,7 @@ pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, 
         &mut rng(seed, streams::SEATING),
         &mut rng(seed, streams::IK_STARTS),
         &mut stats,
+        progress,
     )?;
 
     let k = ArmKernel::new(&true_arm.params)?;
