@@ -202,11 +202,12 @@ fn run(request: Request) -> Result<AacmmCalibration, Error> {
 }
 
 /// A calibration error, named after the arm file unless it is a refused
-/// option (which names its field).
+/// option (which names its field) or names the input at fault itself (a
+/// unit mistake: the lengths, poses or arm file first).
 fn in_file(e: aacmm_core::CalibrationError, arm: &str) -> Error {
-    let option = matches!(e, aacmm_core::CalibrationError::Option(_));
+    let named = matches!(e, aacmm_core::CalibrationError::Option(_)) || e.names_its_input();
     let e = Error::from(e);
-    if option {
+    if named {
         e
     } else {
         Error::new(e.status, format!("{arm}: {}", e.message))

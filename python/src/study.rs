@@ -47,10 +47,10 @@ pub fn evaluate<'py>(py: Python<'py>, arm: &Arm, data: &DataSet) -> PyResult<Bou
     aacmm_core::metrics::room_to_evaluate(&data.data).map_err(Error::from)?;
     let evaluation = detached(py, || {
         let d = &data.data;
-        // Lengths in another unit than the arm: refused, as calibrate does.
-        aacmm_core::session::check_units(&arm.arm.params, d, &arm.source)?;
         let mut xyz = vec![[0.0; 3]; d.len()];
         arm.kernel.positions(d.poses(), 0..d.len(), &mut xyz)?;
+        // Lengths in another unit than the arm: refused, as calibrate does.
+        aacmm_core::session::check_units(&arm.arm.params, d, &arm.source)?;
         core_evaluate(d, &xyz).map_err(|e| Error::from(e).prefixed(&arm.source))
     })?;
     to_dict(py, &evaluation)
@@ -74,7 +74,11 @@ pub fn identify<'py>(
     let threads = self::threads(threads)?;
     aacmm_core::identify::room_to_identify(&data.data).map_err(Error::from)?;
     let id = detached(py, || {
-        aacmm_core::session::check_units(&arm.arm.params, &data.data, &arm.source)?;
+        // Lengths in another unit than the arm: refused, as calibrate
+        // does (a joint count that differs is identify's to refuse).
+        if data.data.joints() == arm.arm.params.joint_count() {
+            aacmm_core::session::check_units(&arm.arm.params, &data.data, &arm.source)?;
+        }
         core_identify(&arm.arm.params, &data.data, &noise, threads)
             .map_err(|e| Error::from(e).prefixed(&arm.source))
     })?;

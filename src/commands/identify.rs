@@ -36,9 +36,7 @@ pub fn run(args: Args) -> Result<()> {
     let report = args.fit.request()?.identify().map_err(|e| match e {
         CalibrationError::Option(_) => flag_error(e),
         // Each names the input at fault itself.
-        CalibrationError::LengthUnits { .. }
-        | CalibrationError::AngleUnits { .. }
-        | CalibrationError::ArmUnits { .. } => anyhow::Error::new(e),
+        e if e.names_its_input() => anyhow::Error::new(e),
         other => super::noise_flags(
             anyhow::Error::new(other).context(source_name(&args.fit.arm)),
             &args.fit,

@@ -226,6 +226,20 @@ pub enum CalibrationError {
     },
 }
 
+impl CalibrationError {
+    /// Whether the message starts with the input at fault (the lengths
+    /// file, the poses file, the arm file of a unit mistake): a front end
+    /// that names the arm file before other errors adds nothing to it.
+    pub fn names_its_input(&self) -> bool {
+        matches!(
+            self,
+            CalibrationError::LengthUnits { .. }
+                | CalibrationError::AngleUnits { .. }
+                | CalibrationError::ArmUnits { .. }
+        )
+    }
+}
+
 impl From<TermError> for CalibrationError {
     fn from(e: TermError) -> Self {
         match e {
