@@ -3,6 +3,7 @@
 
 mod arm_checks;
 mod beyond;
+mod builds;
 mod calibrate;
 mod campaign;
 mod edges;

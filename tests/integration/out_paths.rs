@@ -155,35 +155,11 @@ fn unwritable_outputs_fail_before_any_output() {
 fn no_command_writes_over_earlier_results_without_force() {
     let dir = temp_dir("paths-one-rule");
     let data = write(&dir, "touches.csv", POSES);
-    let shipped = |f: &str| example("paper-campaign").join(f).display().to_string();
-    let (arm, poses, lengths) = (arm(), shipped("poses.csv"), shipped("lengths.csv"));
-    // A calibration's directory, made once.
-    let cal = dir.join("cal");
-    let c = |extra: &[&str]| {
-        let mut a = vec![
-            "calibrate",
-            "--arm",
-            &arm,
-            "--data",
-            &poses,
-            "--lengths",
-            &lengths,
-            "--encoder-noise",
-            "0.005",
-            "--probe-noise",
-            "0.01",
-            "--method",
-            "lm",
-            "--out",
-            cal.to_str().unwrap(),
-        ];
-        a.extend(extra);
-        aacmm(&a)
-    };
-    assert!(c(&[]).status.success());
-    // A campaign written into it: refused, the directory as it was; with
-    // --force, written beside the calibration, which stays.
-    let sim = |extra: &[&str]| {
+    let (arm, poses) = (arm(), crate::util::shipped("poses.csv"));
+    let calibrate =
+        |out: &Path| crate::util::calibrate_files(&arm, &poses, out, &["--method", "lm"]);
+    let simulate = |out: &Path, extra: &[&str]| {
+        let out = out.to_str().unwrap();
         let mut a = vec![
             "simulate",
             "--arm",
@@ -192,19 +168,18 @@ fn no_command_writes_over_earlier_results_without_force() {
             "paper",
             "--sockets",
             "3",
-            "--poses",
-            "4",
-            "--seed",
-            "1",
-            "--out",
-            cal.to_str().unwrap(),
         ];
+        a.extend(["--poses", "4", "--seed", "1", "--out", out]);
         a.extend(extra);
         aacmm(&a)
     };
-    let o = sim(&[]);
+    // A calibration's directory, made once.
+    let cal = dir.join("cal");
+    assert!(calibrate(&cal).status.success());
+    // A campaign written into it: refused, the directory as it was; with
+    // --force, written beside the calibration, which stays.
     assert_clean_error(
-        &o,
+        &simulate(&cal, &[]),
         &[
             "--out",
             "already holds earlier results (calibrated.toml, calibration.json",
@@ -212,39 +187,12 @@ fn no_command_writes_over_earlier_results_without_force() {
         ],
     );
     assert!(!cal.join("poses.csv").exists());
-    assert!(sim(&["--force"]).status.success());
+    assert!(simulate(&cal, &["--force"]).status.success());
     assert!(cal.join("poses.csv").exists() && cal.join("calibrated.toml").exists());
     // A calibration into a campaign's directory: refused the same way.
     let campaign = dir.join("campaign");
-    let o = aacmm(&[
-        "simulate",
-        "--arm",
-        &arm,
-        "--errors",
-        "paper",
-        "--sockets",
-        "3",
-        "--poses",
-        "4",
-        "--seed",
-        "1",
-        "--out",
-        campaign.to_str().unwrap(),
-    ]);
-    assert!(o.status.success());
-    let o = aacmm(&[
-        "calibrate",
-        "--arm",
-        &arm,
-        "--data",
-        &poses,
-        "--lengths",
-        &lengths,
-        "--method",
-        "lm",
-        "--out",
-        campaign.to_str().unwrap(),
-    ]);
+    assert!(simulate(&campaign, &[]).status.success());
+    let o = calibrate(&campaign);
     assert_clean_error(&o, &["--out", "already holds earlier results (poses.csv"]);
     assert!(!campaign.join("calibrated.toml").exists());
     // Every output file that exists: refused without --force, kept as it

@@ -10,7 +10,12 @@
 //!    deviations of `χ²/dof` above 1, with the touches weighed at the fit
 //!    (the weights carry the encoder noise through the arm's joint Jacobian,
 //!    so they depend on the zeros) — cannot be beaten by more than noise:
-//!    accepted at once, so a good start costs one LM.
+//!    accepted at once, so a good start costs one LM. With a robust loss,
+//!    a start that misses the floor is judged by its robust refit too (IRLS
+//!    from its minimum, as the final fit runs it): at the floor by the
+//!    robust scale's test, and plausible, it is accepted
+//!    ([`GlobalStop::RobustFloor`]) — a few gross touches, not a wrong
+//!    basin, kept its plain cost off the floor.
 //! 2. **A grid over the torus.** Each unknown is an angle, so the free zero
 //!    offsets live on a torus, which a coarse grid covers completely: `K`
 //!    angles per circle (6 for the 4 free zeros of a 6-joint arm: 1296

@@ -65,8 +65,11 @@
 //!   count the outliers against the fit: a robust fit of a campaign with a
 //!   few bad touches is not called a poor fit.
 //!
-//! The global search itself stays plain least squares: it finds the basin;
-//! the robust refits stay in it. With `sa` (annealing alone) the robust
+//! The global search compares its starts by plain least squares, but with
+//! stated noise judges a start whose plain cost misses the noise floor by
+//! its robust refit ([`super::global`]): a gross touch would otherwise keep
+//! every start off the floor and lead the search to a wrong minimum that
+//! the refits after it keep. With `sa` (annealing alone) the robust
 //! refits are LM all the same (phase `lm, robust …`), and the stop says
 //! so: annealing, then LM.
 
