@@ -244,8 +244,8 @@ impl ChiSquare {
         self.p_upper < CHI_SQUARE_REFUSE || self.p_lower < CHI_SQUARE_REFUSE
     }
 
-    /// In words. A tail below [`CHI_SQUARE_ALPHA`] but not below
-    /// [`CHI_SQUARE_REFUSE`] is a note, and its sentence says so — with
+    /// In words. A tail below 0.001 but not below 10⁻⁹ (the refusal
+    /// level, [`ChiSquare::far_outside`]) is a note, and its sentence says so — with
     /// what it suggests — so that it cannot read as a refusal beside
     /// "Verdict: usable".
     pub fn describe(&self) -> String {

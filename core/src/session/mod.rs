@@ -331,7 +331,7 @@ const PLAUSIBLE_REACH_MM: std::ops::RangeInclusive<f64> =
     10.0..=crate::io::arm::PLAUSIBLE_METRES * 1000.0;
 
 /// Refuses reference lengths whose median ratio to the nominal arm's
-/// distances between the same points is beyond [`LENGTH_UNIT_RATIO`]
+/// distances between the same points is beyond 100 or below 1/100
 /// (lengths in metres for an arm in mm, say), naming the input at fault:
 /// the poses file when the readings look like radians read as degrees
 /// (the reader's warning; every joint within ±6.3° puts the sockets almost
@@ -728,21 +728,25 @@ fn global_remedy(c: &Calibration) -> String {
 const DISAGREE_SIGMA0: f64 = 100.0;
 
 /// The data and the arm disagree — the first cause of a refusal, when the
-/// global search (which tries every basin of the zero offsets) ends with
-/// no minimum of the nominal arm's kind of geometry, or with residuals
-/// hundreds of times the stated noise ([`DISAGREE_SIGMA0`]), and neither a
-/// few outliers nor weakly determined parameters explain it: the joint
-/// columns in another order, another arm's file, or another unit.
+/// global search (which tries every basin of the zero offsets) ends on an
+/// arm not of the nominal's kind (gross corrections the data determine)
+/// having found no minimum of that kind, or leaving residuals hundreds of
+/// times the stated noise ([`DISAGREE_SIGMA0`]), and a few outliers do not
+/// explain it: the joint columns in another order, another arm's file, or
+/// another unit.
 fn disagreement(c: &Calibration) -> Option<String> {
     let trace = c.solver.global.as_ref()?;
     if !matches!(c.solver.stop, crate::calibrate::Stop::Global { .. }) {
         return None;
     }
-    let (gross, _) = classify_gross(c);
-    let no_kind = trace.best_hits == 0 && !gross.is_empty();
+    // An arm of the nominal's kind at the end (only its fit poor) is a
+    // misstated noise or a model error: said by the χ² test.
+    if classify_gross(c).0.is_empty() {
+        return None;
+    }
+    let no_kind = trace.best_hits == 0;
     let s0 = c.dof.sigma0;
-    let stated = c.checks.chi_square.is_some();
-    let far = stated && s0 >= DISAGREE_SIGMA0;
+    let far = c.checks.chi_square.is_some() && s0 >= DISAGREE_SIGMA0;
     if !(no_kind || far) {
         return None;
     }
@@ -880,10 +884,16 @@ fn gross_reasons(c: &Calibration) -> Vec<String> {
         ));
     }
     if !weak.is_empty() {
+        // With a prior in use, what it lacks: no option in use recommended.
+        let tolerances = if c.prior.is_some() {
+            "give them tolerances (or tighter ones) in the prior"
+        } else {
+            "state tolerances for them (`[prior]` in the arm file, or --prior)"
+        };
         reasons.push(format!(
             "the data barely determine parameters that moved implausibly far, so they followed \
-             noise and model error: {} — state tolerances for them (`[prior]` in the arm file, \
-             or --prior) or fix them (--fix), or add poses that turn the joints involved",
+             noise and model error: {} — {tolerances} or fix them (--fix), or add poses that \
+             turn the joints involved",
             weak.join("; ")
         ));
     }
