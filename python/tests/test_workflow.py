@@ -235,7 +235,7 @@ def test_the_readme_python_example_prints_what_the_readme_says():
 
     readme = (REPO / "README.md").read_text()
     m = re.search(
-        r'```sh\npython3 -m venv v && v/bin/pip install \./python\nv/bin/python -c "\n(.*?)"\n```\n\n```text\n(.*?)```',
+        r'```sh\npython3 -m venv v && v/bin/pip install -v \./python[^\n]*\nv/bin/python -c "\n(.*?)"\n```\n\n```text\n(.*?)```',
         readme,
         re.S,
     )
