@@ -780,7 +780,7 @@ pub fn calibrate_with(
         identification,
         reasons,
         holds,
-    } = fixed_set(start, &objective, model, &full)?;
+    } = fixed_set(start, &objective, model, &full, data)?;
     let (free, held) = correction_columns(&full, layout, free)?;
     let (carried, holds) =
         complete_prior(&mut objective, identification.as_ref(), holds, start, &x0);
@@ -874,6 +874,7 @@ fn fixed_set(
     objective: &Objective<'_>,
     model: &ModelOptions,
     full: &Normal,
+    data: &DataSet,
 ) -> Result<FixedSet, CalibrationError> {
     let layout = objective.layout();
     let geometry = layout.geometry_columns();
@@ -885,7 +886,7 @@ fn fixed_set(
     let mut holds = Vec::new();
     let (mut free, identification, reasons) = match &model.fix {
         FixSpec::Auto => {
-            let id = identify_from(start, sees, full.clone());
+            let id = identify_from(start, sees, full.clone(), data);
             let free = id.free_columns();
             let reasons: Vec<(ParamId, String)> =
                 id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
