@@ -297,6 +297,7 @@ pub(crate) fn data_objective<'d>(
 
 /// [`identify`] from the normal equations of every geometry column at
 /// `params`, of `data` that see what `sees` says.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 pub(crate) fn identify_from(
     params: &DhParams,
     sees: Sees,
@@ -1088,6 +1089,7 @@ fn closed_block(ns: &DMatrix<f64>, free: &[usize], correction: &DMatrix<f64>, bo
 /// scale (without reference lengths) and the exact redundancies, from the
 /// normal equations of every column. Empty when the fixed set blocks every
 /// one — the fit is then well posed.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 pub(crate) fn open_directions_from(
     params: &DhParams,
     sees: Sees,
@@ -1332,7 +1334,10 @@ mod exact_data_tests {
         settings.reference_lengths = lengths;
         settings.encoder_noise_deg = encoder_noise_deg;
         let campaign = simulate(&nominal, &settings).unwrap();
-        (campaign.true_arm.params.clone(), campaign.data_set().unwrap())
+        (
+            campaign.true_arm.params.clone(),
+            campaign.data_set().unwrap(),
+        )
     }
 
     fn reasons(id: &Identification) -> Vec<(String, String)> {
@@ -1368,7 +1373,11 @@ mod exact_data_tests {
             "{:?}",
             a.free
         );
-        assert!(a.correlations.iter().all(|c| c.rho.abs() < 0.999), "{:?}", a.correlations);
+        assert!(
+            a.correlations.iter().all(|c| c.rho.abs() < 0.999),
+            "{:?}",
+            a.correlations
+        );
         assert!((a.condition_number / b.condition_number - 1.0).abs() < 0.01);
     }
 

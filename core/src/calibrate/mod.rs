@@ -869,6 +869,7 @@ fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
 /// auto`), why each fixed parameter is fixed and the weak directions to
 /// hold; a user's fixed set that leaves a direction the data (and the
 /// tolerances) cannot see is refused.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn fixed_set(
     start: &DhParams,
     objective: &Objective<'_>,
@@ -922,6 +923,7 @@ fn fixed_set(
 /// What the automatic fixed set adds to the prior: the tolerances of the
 /// redundant fixed parameters carried onto their free partners, and the
 /// weak directions `holds` held at `x0` (as a term of the objective).
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn complete_prior(
     objective: &mut Objective<'_>,
     identification: Option<&Identification>,

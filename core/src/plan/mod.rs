@@ -276,7 +276,10 @@ impl Plan {
     /// The fewest rows of the curve that determine every free parameter
     /// (`None` when none of its points does).
     pub fn rows_needed(&self) -> Option<usize> {
-        self.curve.iter().find(|c| c.rms_mm.is_some()).map(|c| c.rows)
+        self.curve
+            .iter()
+            .find(|c| c.rms_mm.is_some())
+            .map(|c| c.rows)
     }
 
     /// Why no subset of the candidates can make a plan, when even all of

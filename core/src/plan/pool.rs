@@ -198,6 +198,9 @@ mod tests {
         assert!(matches!(e, SampleError::Nothing), "{e}");
         let pool = sample_positions(&arm, 7, 1, "arm.toml").unwrap();
         assert_eq!(pool.poses.len(), 7);
-        assert_eq!(pool.origin, "drawn uniformly within ±180° on every joint (seed 1)");
+        assert_eq!(
+            pool.origin,
+            "drawn uniformly within ±180° on every joint (seed 1)"
+        );
     }
 }
