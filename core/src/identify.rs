@@ -18,6 +18,11 @@
 //!    parameter by `s` scales every residual by `s`: the cost is least at an
 //!    arm shrunk to nothing. Noise lifts that singular value above zero, so a
 //!    threshold misses it; the direction `(a, d, 0, 0, B)` is projected out.
+//!    Exact data (touches that meet at their points) leave it at zero among
+//!    the redundancies of rule 3: it is told from them by the probe
+//!    positions' own Jacobians (a redundancy moves no probe, scale every
+//!    one), so the classification does not depend on the residuals being
+//!    non-zero.
 //! 3. **Redundant last link** — `a6` and `Bx`, `d6` and `By` move the probe
 //!    identically, and `theta6`, `alpha6` and `B` parameterise the probe
 //!    direction twice. These are exact, so the threshold finds them; the

@@ -56,6 +56,8 @@ pub(crate) struct Greedy<'a> {
     pub(crate) criterion: f64,
     /// `ln det M` now, less its start's.
     log_det: f64,
+    /// [`Greedy::gain_of`]'s buffer: a candidate's `d`, `d C`, `d C W`.
+    rows: std::cell::RefCell<Vec<f64>>,
 }
 
 /// The rows a candidate would add, and their `C`- and `CW`-images.
@@ -118,6 +120,7 @@ impl<'a> Greedy<'a> {
             gain,
             criterion,
             log_det: 0.0,
+            rows: std::cell::RefCell::new(vec![0.0; 9 * p]),
         })
     }
 
@@ -186,13 +189,12 @@ impl<'a> Greedy<'a> {
     }
 
     /// What adding candidate `k` gains now: the rows of [`Greedy::direction`]
-    /// read in place (the same operations, so the same bits, without
-    /// copying three blocks per candidate and step).
+    /// made in a buffer kept between calls (the same operations, so the
+    /// same bits, without three allocations per candidate and step).
     pub(crate) fn gain_of(&self, k: usize) -> f64 {
         let p = self.p;
         let r = 3 * k * p..3 * (k + 1) * p;
         let mut f = self.weight[k].sqrt();
-        let (j, u, y) = (&self.j.j[r.clone()], &self.u[r.clone()], &self.y[r]);
         let means = if self.touches {
             let g = self.group[k];
             let n = self.members[g].len() as f64;
@@ -204,18 +206,32 @@ impl<'a> Greedy<'a> {
         if !(f > 0.0 && f.is_finite()) {
             return 0.0;
         }
-        let at = |src: &[f64], which: usize, i: usize| match means {
-            Some(m) => (src[i] - m[which][i]) * f,
-            None => src[i] * f,
-        };
-        let (d, ud, yd) = (|i| at(j, 0, i), |i| at(u, 1, i), |i| at(y, 2, i));
-        let s = product_of(ud, d, p);
-        let a = plus_identity(s);
+        let mut rows = self.rows.borrow_mut();
+        rows.resize(9 * p, 0.0);
+        let (d, rest) = rows.split_at_mut(3 * p);
+        let (ud, yd) = rest.split_at_mut(3 * p);
+        let sources = [(&self.j.j[r.clone()], d), (&self.u[r.clone()], ud), (&self.y[r], yd)];
+        for (which, (src, out)) in sources.into_iter().enumerate() {
+            match means {
+                Some(m) => {
+                    for ((o, v), m) in out.iter_mut().zip(src).zip(&m[which]) {
+                        *o = (v - m) * f;
+                    }
+                }
+                None => {
+                    for (o, v) in out.iter_mut().zip(src) {
+                        *o = v * f;
+                    }
+                }
+            }
+        }
+        let (d, ud, yd) = (&rows[..3 * p], &rows[3 * p..6 * p], &rows[6 * p..]);
+        let a = plus_identity(product(ud, d, p));
         match self.gain {
             Gain::Determinant => det3(&a).max(1e-300).ln(),
             Gain::Prediction => {
                 let Some(ai) = inverse3(&a) else { return 0.0 };
-                let b = product_of(yd, ud, p);
+                let b = product(yd, ud, p);
                 (0..3)
                     .map(|i| (0..3).map(|l| ai[i][l] * b[l][i]).sum::<f64>())
                     .sum()
@@ -337,24 +353,20 @@ fn mat_row(row: &[f64], m: &[f64], p: usize, out: &mut [f64]) {
     }
 }
 
-/// `A Bᵀ` of two 3 × p blocks.
-fn product(a: &[f64], b: &[f64], p: usize) -> [[f64; 3]; 3] {
-    product_of(|i| a[i], |i| b[i], p)
-}
-
-/// [`product`] of two 3 × p blocks given entry by entry: nine sums, each
-/// over the `p` entries in order from −0.0 (as `Iterator::sum`, so the
-/// same bits), run side by side so that they vectorise.
+/// `A Bᵀ` of two 3 × p blocks: nine sums, each over the `p` entries in
+/// order from −0.0 (as `Iterator::sum`, so the same bits), run side by side
+/// so that they vectorise.
 #[inline(always)]
-fn product_of(a: impl Fn(usize) -> f64, b: impl Fn(usize) -> f64, p: usize) -> [[f64; 3]; 3] {
+fn product(a: &[f64], b: &[f64], p: usize) -> [[f64; 3]; 3] {
+    let (a0, a1, a2) = (&a[..p], &a[p..2 * p], &a[2 * p..3 * p]);
+    let (b0, b1, b2) = (&b[..p], &b[p..2 * p], &b[2 * p..3 * p]);
     let mut s = [[-0.0f64; 3]; 3];
-    for i in 0..p {
-        let x = [a(i), a(p + i), a(2 * p + i)];
-        let y = [b(i), b(p + i), b(2 * p + i)];
-        for (sk, &xk) in s.iter_mut().zip(&x) {
-            for (v, &yl) in sk.iter_mut().zip(&y) {
-                *v += xk * yl;
-            }
+    let rows = a0.iter().zip(a1).zip(a2).zip(b0.iter().zip(b1).zip(b2));
+    for (((&x0, &x1), &x2), ((&y0, &y1), &y2)) in rows {
+        for (sk, xk) in s.iter_mut().zip([x0, x1, x2]) {
+            sk[0] += xk * y0;
+            sk[1] += xk * y1;
+            sk[2] += xk * y2;
         }
     }
     s
