@@ -283,7 +283,8 @@ fn fixed4(v: f64) -> String {
             q
         }
     };
-    let sign = if negative { "-" } else { "" };
+    // Below 2⁴⁷·10⁴ < 2⁶⁴: u64 prints faster than u128.
+    let (n, sign) = (n as u64, if negative { "-" } else { "" });
     format!("{sign}{}.{:04}", n / 10_000, n % 10_000)
 }
 
@@ -306,22 +307,25 @@ fn render(
                 .unwrap_or(0)
         })
         .collect();
+    use std::fmt::Write as _;
     let mut out = format!("{title}\n");
+    // One line's cells written into one buffer (no string per cell).
+    let mut text = String::new();
     for line in &lines {
-        let cells: Vec<String> = line
-            .iter()
-            .zip(&widths)
-            .enumerate()
-            .map(|(c, (cell, &w))| {
-                if c < left {
-                    format!("{cell:<w$}")
-                } else {
-                    format!("{cell:>w$}")
-                }
-            })
-            .collect();
+        text.clear();
+        for (c, (cell, &w)) in line.iter().zip(&widths).enumerate() {
+            if c > 0 {
+                text.push_str("  ");
+            }
+            // Writing into a String cannot fail.
+            let _ = if c < left {
+                write!(text, "{cell:<w$}")
+            } else {
+                write!(text, "{cell:>w$}")
+            };
+        }
         out.push_str("  ");
-        out.push_str(cells.join("  ").trim_end());
+        out.push_str(text.trim_end());
         out.push('\n');
     }
     out
@@ -340,8 +344,23 @@ mod tests {
         // in 5 at the fifth decimal), subnormals, zeros and the specials.
         let mut rng = crate::random::rng(4, 0);
         let mut values: Vec<f64> = vec![
-            0.0, -0.0, 0.03125, -0.03125, 0.09375, 2.5e-5, 5e-5, 1.5e-4, 1e-300, -5e-324,
-            f64::NAN, f64::INFINITY, -f64::INFINITY, 1.4e14, -3e15, 1.23456, 2.00005,
+            0.0,
+            -0.0,
+            0.03125,
+            -0.03125,
+            0.09375,
+            2.5e-5,
+            5e-5,
+            1.5e-4,
+            1e-300,
+            -5e-324,
+            f64::NAN,
+            f64::INFINITY,
+            -f64::INFINITY,
+            1.4e14,
+            -3e15,
+            1.23456,
+            2.00005,
         ];
         values.extend((0..4096).map(|k| f64::from(k) / 32.0 - 64.0));
         for _ in 0..200_000 {

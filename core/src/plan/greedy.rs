@@ -210,7 +210,11 @@ impl<'a> Greedy<'a> {
         rows.resize(9 * p, 0.0);
         let (d, rest) = rows.split_at_mut(3 * p);
         let (ud, yd) = rest.split_at_mut(3 * p);
-        let sources = [(&self.j.j[r.clone()], d), (&self.u[r.clone()], ud), (&self.y[r], yd)];
+        let sources = [
+            (&self.j.j[r.clone()], d),
+            (&self.u[r.clone()], ud),
+            (&self.y[r], yd),
+        ];
         for (which, (src, out)) in sources.into_iter().enumerate() {
             match means {
                 Some(m) => {
