@@ -815,7 +815,7 @@ pub fn calibrate_with(
         identification,
         reasons,
         holds,
-    } = fixed_set(start, &objective, model, &full)?;
+    } = fixed_set(start, &objective, model, &full, data)?;
     let (free, held) = correction_columns(&full, layout, free)?;
     let (carried, holds) =
         complete_prior(&mut objective, identification.as_ref(), holds, start, &x0);
@@ -904,11 +904,13 @@ fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
 /// auto`), why each fixed parameter is fixed and the weak directions to
 /// hold; a user's fixed set that leaves a direction the data (and the
 /// tolerances) cannot see is refused.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn fixed_set(
     start: &DhParams,
     objective: &Objective<'_>,
     model: &ModelOptions,
     full: &Normal,
+    data: &DataSet,
 ) -> Result<FixedSet, CalibrationError> {
     let layout = objective.layout();
     let geometry = layout.geometry_columns();
@@ -920,7 +922,7 @@ fn fixed_set(
     let mut holds = Vec::new();
     let (mut free, identification, reasons) = match &model.fix {
         FixSpec::Auto => {
-            let id = identify_from(start, sees, full.clone());
+            let id = identify_from(start, sees, full.clone(), data);
             let free = id.free_columns();
             let reasons: Vec<(ParamId, String)> =
                 id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
@@ -956,6 +958,7 @@ fn fixed_set(
 /// What the automatic fixed set adds to the prior: the tolerances of the
 /// redundant fixed parameters carried onto their free partners, and the
 /// weak directions `holds` held at `x0` (as a term of the objective).
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn complete_prior(
     objective: &mut Objective<'_>,
     identification: Option<&Identification>,

@@ -34,14 +34,20 @@
 pub mod coverage;
 mod greedy;
 pub mod map;
+pub mod pool;
 mod rows;
 mod strata;
+pub mod summary;
 
 use nalgebra::DMatrix;
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 
 pub use map::{MapPoint, Region, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map};
+pub use pool::{
+    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_touches, sample_touches_observed,
+};
+pub use summary::{GivenNote, KNEE, Knee, SummaryContext, knee, summary};
 
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};
@@ -278,6 +284,35 @@ impl Plan {
     /// The chosen rows of the pool, in the order chosen.
     pub fn chosen(&self) -> Vec<usize> {
         self.steps[..self.count].iter().map(|s| s.row).collect()
+    }
+
+    /// The fewest rows of the curve that determine every free parameter
+    /// (`None` when none of its points does).
+    pub fn rows_needed(&self) -> Option<usize> {
+        self.curve
+            .iter()
+            .find(|c| c.rms_mm.is_some())
+            .map(|c| c.rows)
+    }
+
+    /// Why no subset of the candidates can make a plan, when even all of
+    /// them do not determine every free parameter; `None` when they do.
+    pub fn pool_undetermined(&self) -> Option<String> {
+        if self.all.is_some() {
+            return None;
+        }
+        Some(format!(
+            "even all {} candidates do not determine the {} parameters ({}): no subset can; \
+             add candidates that turn the joints further{}",
+            self.candidates,
+            self.parameters.len(),
+            self.parameters.join(", "),
+            if self.measure == Measure::Touches {
+                ", or touches of more sockets"
+            } else {
+                ""
+            }
+        ))
     }
 }
 
