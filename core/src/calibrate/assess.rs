@@ -21,7 +21,7 @@ use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
-use crate::plan::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
+use crate::stats::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 use crate::residuals::Normal;
 
 /// Largest relative change of the weights at the solution, against those of

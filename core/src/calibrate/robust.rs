@@ -72,7 +72,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict, erfc};
+use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict};
 use super::lm::{LmOptions, LmResult, levenberg_marquardt};
 use super::{CalibrationError, OptionError, Phase};
 use crate::objective::Objective;
@@ -423,8 +423,8 @@ pub(crate) fn irls<'a>(
             / (2.0 * std::f64::consts::PI).sqrt();
         let sd = 1.0 / (2.0 * density * (n as f64).sqrt());
         let z = (m - CHI2_3_MEDIAN) / sd;
-        let p_upper = 0.5 * erfc(z / std::f64::consts::SQRT_2);
-        let p_lower = 0.5 * erfc(-z / std::f64::consts::SQRT_2);
+        let p_upper = crate::stats::normal_upper(z);
+        let p_lower = crate::stats::normal_upper(-z);
         let verdict = ChiSquareVerdict::from_tails(p_upper, p_lower);
         (Some(p_upper), Some(p_lower), Some(verdict))
     } else {
