@@ -61,6 +61,7 @@ mod hold;
 mod lengths;
 pub mod positions;
 mod prior;
+mod schur;
 mod sym3;
 #[cfg(test)]
 mod tests;
@@ -75,6 +76,7 @@ use crate::params::DhParams;
 pub use beyond::{BLOCK_NAME, CorrectionBlock};
 pub use blocks::{Block, BlockId, Frame, Layout, Parameter, Scalar, Unit, Vector};
 pub use hold::{HeldDirection, WEAK_RATIO};
+pub use schur::Elimination;
 pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
 pub(crate) use positions::PositionTerm;
