@@ -89,9 +89,10 @@ enum AacmmStatus
   AACMM_STATUS_NOT_AVAILABLE = 9,
   /**
    * Memory for a result or a temporary sized by the input could not be
-   * allocated (e.g. under a memory limit): nothing was computed, the
-   * host process is unaffected, and the message says how much was asked
-   * for.
+   * allocated (under an address-space limit, or more than the machine
+   * has: see the README's "Limits and memory"; a cgroup memory limit is not
+   * seen, and ends the process later): nothing was computed, the host
+   * process is unaffected, and the message says how much was asked for.
    */
   AACMM_STATUS_OUT_OF_MEMORY = 10,
   /**
