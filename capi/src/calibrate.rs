@@ -842,14 +842,7 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
                 values.len()
             )));
         };
-        // Column k of R: the image of the k-th unit vector without the
-        // translation, exact (products with 1 and 0).
-        let rotation = [x[0], x[1], x[2], 0.0, 0.0, 0.0];
-        let columns: [[f64; 3]; 3] = std::array::from_fn(|k| {
-            let mut e = [0.0; 3];
-            e[k] = 1.0;
-            Frame::apply(&rotation, e)
-        });
+        let rotation = Frame::rotation(x);
         // Each σ on its own (`frame_records` has all three or none): the
         // frame's columns `NAME.rx … NAME.tz`, in deg and mm.
         let sigma = |axis: &str| {
@@ -864,7 +857,7 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
             translation_mm: record.translation_mm,
             rotation_sigma_deg: ["rx", "ry", "rz"].map(sigma),
             translation_sigma_mm: ["tx", "ty", "tz"].map(sigma),
-            rotation_matrix: std::array::from_fn(|m| columns[m % 3][m / 3]),
+            rotation_matrix: std::array::from_fn(|m| rotation[(m / 3, m % 3)]),
         };
         // SAFETY: by the contract.
         unsafe { ptr::write(frame, value, "frame") }?;

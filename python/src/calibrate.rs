@@ -284,16 +284,8 @@ impl Calibration {
         let three = |v: [f64; 3]| Array1::from(v.to_vec()).into_pyarray(py);
         let out = PyDict::new(py);
         for (record, (_, x)) in c.frame_records().into_iter().zip(c.frames()) {
-            // Column k of R is the image of the k-th unit vector, less t.
-            let mut r = Array2::<f64>::zeros((3, 3));
-            for k in 0..3 {
-                let mut e = [0.0; 3];
-                e[k] = 1.0;
-                let y = Frame::apply(&x, e);
-                for i in 0..3 {
-                    r[[i, k]] = y[i] - x[3 + i];
-                }
-            }
+            let rotation = Frame::rotation(&x);
+            let r = Array2::from_shape_fn((3, 3), |(i, k)| rotation[(i, k)]);
             let d = PyDict::new(py);
             d.set_item("rotation_deg", three(record.rotation_deg))?;
             d.set_item("translation_mm", three(record.translation_mm))?;
