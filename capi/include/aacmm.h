@@ -301,11 +301,12 @@ typedef struct {
    */
   double translation_mm[3];
   /**
-   * Standard uncertainties (k = 1) of the rotation, deg, of the fit's
-   * local step (a small rotation applied on the left); `NAN` where the
-   * data did not determine them.
+   * Standard uncertainties (k = 1), deg, of small rotations about the
+   * instrument's x, y and z axes (the fit's step `R ← exp(δω) R`; not
+   * of `rotation_deg`'s components); `NAN` where the data did not
+   * determine them.
    */
-  double rotation_sigma_deg[3];
+  double small_rotation_sigma_deg[3];
   /**
    * Standard uncertainties (k = 1) of `t`, mm; `NAN` where the data did
    * not determine them.
@@ -340,7 +341,10 @@ typedef struct {
   double calibrated;
   /**
    * Standard uncertainty (k = 1); `NAN` where the data did not
-   * determine it (and for a column held at its start).
+   * determine it (and for a column held at its start). For a frame's
+   * rotation columns (`NAME.rx`, `.ry`, `.rz`: its rotation vector) the
+   * σ of a small rotation about the frame's x, y, z axis (the report's
+   * `calibration.auxiliary[index].sigma_of`).
    */
   double sigma;
   /**

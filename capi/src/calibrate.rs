@@ -144,10 +144,11 @@ pub struct AacmmFrame {
     pub rotation_deg: [f64; 3],
     /// `t`, mm.
     pub translation_mm: [f64; 3],
-    /// Standard uncertainties (k = 1) of the rotation, deg, of the fit's
-    /// local step (a small rotation applied on the left); `NAN` where the
-    /// data did not determine them.
-    pub rotation_sigma_deg: [f64; 3],
+    /// Standard uncertainties (k = 1), deg, of small rotations about the
+    /// instrument's x, y and z axes (the fit's step `R ← exp(δω) R`; not
+    /// of `rotation_deg`'s components); `NAN` where the data did not
+    /// determine them.
+    pub small_rotation_sigma_deg: [f64; 3],
     /// Standard uncertainties (k = 1) of `t`, mm; `NAN` where the data did
     /// not determine them.
     pub translation_sigma_mm: [f64; 3],
@@ -173,7 +174,10 @@ pub struct AacmmAuxiliary {
     /// The calibrated value.
     pub calibrated: f64,
     /// Standard uncertainty (k = 1); `NAN` where the data did not
-    /// determine it (and for a column held at its start).
+    /// determine it (and for a column held at its start). For a frame's
+    /// rotation columns (`NAME.rx`, `.ry`, `.rz`: its rotation vector) the
+    /// σ of a small rotation about the frame's x, y, z axis (the report's
+    /// `calibration.auxiliary[index].sigma_of`).
     pub sigma: f64,
     /// Whether the column was held at its start value: a correction these
     /// data cannot separate (why: the report's
@@ -855,7 +859,7 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
         let value = AacmmFrame {
             rotation_deg: record.rotation_deg,
             translation_mm: record.translation_mm,
-            rotation_sigma_deg: ["rx", "ry", "rz"].map(sigma),
+            small_rotation_sigma_deg: ["rx", "ry", "rz"].map(sigma),
             translation_sigma_mm: ["tx", "ty", "tz"].map(sigma),
             rotation_matrix: std::array::from_fn(|m| rotation[(m / 3, m % 3)]),
         };

@@ -273,10 +273,12 @@ impl Calibration {
     /// Each instrument frame fitted with the arm (none without reference
     /// positions): name → dict of `rotation_deg` (the rotation vector of
     /// `R`, axis × angle, deg) and `translation_mm` (`t`), mapping the arm's
-    /// base coordinates into the instrument's, `y = R p + t`; their standard
-    /// uncertainties `rotation_sigma_deg` and `translation_sigma_mm` (k = 1,
-    /// of the fit's local step; `None` where the data did not determine
-    /// them) — the `[[frame]]` tables of `calibrated.toml`; and
+    /// base coordinates into the instrument's, `y = R p + t`; standard
+    /// uncertainties (k = 1; `None` where the data did not determine them)
+    /// `small_rotation_sigma_deg`, of small rotations about the
+    /// instrument's x, y and z axes (the fit's step `R ← exp(δω) R`, not
+    /// the rotation vector's components), and `translation_sigma_mm` —
+    /// the `[[frame]]` tables of `calibrated.toml`; and
     /// `rotation_matrix`, `R` (3 × 3).
     #[getter]
     fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -289,7 +291,10 @@ impl Calibration {
             let d = PyDict::new(py);
             d.set_item("rotation_deg", three(record.rotation_deg))?;
             d.set_item("translation_mm", three(record.translation_mm))?;
-            d.set_item("rotation_sigma_deg", record.rotation_sigma_deg.map(three))?;
+            d.set_item(
+                "small_rotation_sigma_deg",
+                record.small_rotation_sigma_deg.map(three),
+            )?;
             d.set_item(
                 "translation_sigma_mm",
                 record.translation_sigma_mm.map(three),
@@ -306,8 +311,10 @@ impl Calibration {
     /// `harmonic2.cos1` deg, `thermal.cte` ppm/K, `drift.x` … mm/h), then
     /// each frame's `NAME.rx` … `NAME.tz` (deg, mm): name → dict of `unit`,
     /// `start`, `calibrated`, `sigma` (k = 1; `None` where the data did not
-    /// determine it) and `fixed` (why the column was held at its start —
-    /// a correction these data cannot separate — or `None`).
+    /// determine it), `sigma_of` (what `sigma` is of when not of the value:
+    /// for a frame's `rx`, `ry`, `rz`, a small rotation about its x, y, z
+    /// axis; else `None`) and `fixed` (why the column was held at its
+    /// start — a correction these data cannot separate — or `None`).
     #[getter]
     fn auxiliary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let out = PyDict::new(py);
@@ -317,6 +324,7 @@ impl Calibration {
             d.set_item("start", a.start)?;
             d.set_item("calibrated", a.calibrated)?;
             d.set_item("sigma", a.sigma)?;
+            d.set_item("sigma_of", &a.sigma_of)?;
             d.set_item("fixed", &a.fixed)?;
             out.set_item(&a.name, d)?;
         }

@@ -405,8 +405,15 @@ pub struct AuxiliaryEstimate {
     /// The calibrated value.
     pub calibrated: f64,
     /// Standard uncertainty (k = 1); `None` when the data do not determine
-    /// it.
+    /// it. Of the value itself unless [`AuxiliaryEstimate::sigma_of`] says
+    /// otherwise.
     pub sigma: Option<f64>,
+    /// What `sigma` is the uncertainty of when not of the value: a frame's
+    /// rotation columns hold its rotation vector, their σ is of a small
+    /// rotation about the frame's named axis (`a small rotation about
+    /// tracker's x axis`), the step the fit takes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_of: Option<String>,
     /// Why it was held at its start value, when it was (a correction
     /// beyond geometry these data cannot separate).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -649,7 +656,7 @@ impl Calibration {
                     name: name.to_string(),
                     rotation_deg: three(0),
                     translation_mm: three(3),
-                    rotation_sigma_deg: sigmas(0),
+                    small_rotation_sigma_deg: sigmas(0),
                     translation_sigma_mm: sigmas(3),
                 }
             })

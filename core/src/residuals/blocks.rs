@@ -113,6 +113,16 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     fn corrections(&self) -> Option<&super::CorrectionBlock> {
         None
     }
+
+    /// What column `i`'s standard uncertainty is of, when not of its value:
+    /// the fit's covariance is that of the local update ([`Block::plus`]),
+    /// which the default update (adding) makes the values'. A frame's
+    /// rotation columns are a rotation vector and their update a small
+    /// rotation about the frame's axes ([`Frame`]).
+    fn sigma_of(&self, i: usize) -> Option<String> {
+        let _ = i;
+        None
+    }
 }
 
 dyn_clone::clone_trait_object!(Block);
@@ -247,6 +257,16 @@ impl Layout {
         }
         let (b, i) = self.block_of(c)?;
         self.blocks[b].parameters().into_iter().nth(i)
+    }
+
+    /// What column `c`'s standard uncertainty is of, when not of its value
+    /// ([`Block::sigma_of`]).
+    pub fn sigma_of(&self, c: usize) -> Option<String> {
+        if c < self.geometry_columns() {
+            return None;
+        }
+        let (b, i) = self.block_of(c)?;
+        self.blocks[b].sigma_of(i)
     }
 
     /// `x` moved by `delta` over the columns `free` (`delta[k]` for column
@@ -538,6 +558,18 @@ impl Block for Frame {
 
     fn start(&self) -> Vec<f64> {
         self.start.to_vec()
+    }
+
+    /// The rotation's columns hold the rotation vector, but the fit steps
+    /// (and its covariance is of) a small rotation `δω` about the frame's
+    /// own axes, `R ← exp(δω) R`: not the same thing as a change of the
+    /// vector's components (the two agree only at the identity).
+    fn sigma_of(&self, i: usize) -> Option<String> {
+        let axis = ["x", "y", "z"].get(i)?;
+        Some(format!(
+            "a small rotation about {}'s {axis} axis",
+            self.name
+        ))
     }
 
     /// `R ← exp(δω) R`, `t ← t + δt`.
