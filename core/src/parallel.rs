@@ -101,7 +101,10 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(
     {
         resume_unwind(payload);
     }
-    in_item_order(items.len(), done.into_inner().unwrap_or_else(PoisonError::into_inner))
+    in_item_order(
+        items.len(),
+        done.into_inner().unwrap_or_else(PoisonError::into_inner),
+    )
 }
 
 /// The results `(item, result)` in item order.
@@ -198,6 +201,9 @@ mod tests {
         .unwrap_err();
         assert_eq!(caught.downcast_ref::<&str>(), Some(&"item forty"));
         let names = names.into_inner().unwrap();
-        assert!(names.contains(&Some(WORKER_THREAD_NAME.to_string())), "{names:?}");
+        assert!(
+            names.contains(&Some(WORKER_THREAD_NAME.to_string())),
+            "{names:?}"
+        );
     }
 }

@@ -254,14 +254,23 @@ mod tests {
         for alpha in [0.5, 0.05, 1e-3, 1e-9, 1e-100, 1e-300] {
             let x = chi_square_upper_quantile(alpha, 2);
             let exact = -2.0 * alpha.ln();
-            assert!((x - exact).abs() <= 1e-12 * exact, "{alpha}: {x} vs {exact}");
+            assert!(
+                (x - exact).abs() <= 1e-12 * exact,
+                "{alpha}: {x} vs {exact}"
+            );
             for k in [1, 3, 10, 1000] {
                 let x = chi_square_upper_quantile(alpha, k);
                 let back = chi_square_upper(x, k);
-                assert!((back / alpha - 1.0).abs() < 1e-9, "{k} dof, {alpha}: {back}");
+                assert!(
+                    (back / alpha - 1.0).abs() < 1e-9,
+                    "{k} dof, {alpha}: {back}"
+                );
             }
         }
-        let (upper, lower) = (chi_square_upper_quantile(0.05, 3), chi_square_quantile(0.95, 3.0));
+        let (upper, lower) = (
+            chi_square_upper_quantile(0.05, 3),
+            chi_square_quantile(0.95, 3.0),
+        );
         assert!((upper - lower).abs() < 1e-11 * lower, "{upper} vs {lower}");
         // The χ²₃ table: 7.8147 at 5 %, 16.266 at 0.1 %.
         assert!((upper - 7.814_728).abs() < 1e-6);
@@ -285,7 +294,10 @@ mod tests {
             (-8.0, 0.999_999_999_999_999_4),
         ] {
             let got = normal_upper(z);
-            assert!((got - want).abs() <= 1e-14 * want, "{z}: {got:e} vs {want:e}");
+            assert!(
+                (got - want).abs() <= 1e-14 * want,
+                "{z}: {got:e} vs {want:e}"
+            );
         }
         assert!(normal_upper(f64::NAN).is_nan());
         assert_eq!(normal_upper(f64::INFINITY), 0.0);

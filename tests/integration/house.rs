@@ -469,15 +469,21 @@ impl std::fmt::Display for Violation {
     }
 }
 
-/// The references of `files` against the ranks, and the problems that stop
-/// the check (a module without a rank, a reference it cannot place).
-fn violations(files: &[CoreFile]) -> (Vec<Violation>, Vec<String>) {
+/// The top-level modules of `files`, and the items the crate root
+/// re-exports with the module each comes from.
+fn modules_and_reexports(files: &[CoreFile]) -> (BTreeSet<&str>, BTreeMap<String, String>) {
     let lib = files
         .iter()
         .find(|f| f.path == "core/src/lib.rs")
         .expect("core/src/lib.rs");
-    let reexports = root_reexports(&lib.src);
-    let modules: BTreeSet<&str> = files.iter().filter_map(|f| module_of(&f.path)).collect();
+    let modules = files.iter().filter_map(|f| module_of(&f.path)).collect();
+    (modules, root_reexports(&lib.src))
+}
+
+/// The references of `files` against the ranks, and the problems that stop
+/// the check (a module without a rank, a reference it cannot place).
+fn violations(files: &[CoreFile]) -> (Vec<Violation>, Vec<String>) {
+    let (modules, reexports) = modules_and_reexports(files);
     let mut problems: Vec<String> = modules
         .iter()
         .filter(|m| rank(m).is_none())
@@ -573,12 +579,7 @@ fn core_modules_reference_only_their_rank_or_below() {
 /// the first `file:line` of each reference; the crate root, the façade
 /// over every module, is none of them.
 fn module_graph(files: &[CoreFile]) -> BTreeMap<String, BTreeMap<String, String>> {
-    let lib = files
-        .iter()
-        .find(|f| f.path == "core/src/lib.rs")
-        .expect("core/src/lib.rs");
-    let reexports = root_reexports(&lib.src);
-    let modules: BTreeSet<&str> = files.iter().filter_map(|f| module_of(&f.path)).collect();
+    let (modules, reexports) = modules_and_reexports(files);
     let mut graph: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
     for f in files {
         let Some(module) = module_of(&f.path) else {
@@ -678,7 +679,11 @@ fn core_modules_reference_each_other_in_no_cycle() {
     assert!(
         new.is_empty() && gone.is_empty(),
         "\n{}\n",
-        new.iter().chain(&gone).cloned().collect::<Vec<_>>().join("\n")
+        new.iter()
+            .chain(&gone)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n")
     );
 }
 
@@ -687,8 +692,14 @@ fn core_modules_reference_each_other_in_no_cycle() {
 #[test]
 fn the_cycle_check_sees_cycles_of_any_length() {
     let graph: BTreeMap<String, BTreeMap<String, String>> = [
-        ("calibrate", &[("identify", "c.rs:1"), ("plan", "c.rs:2")][..]),
-        ("identify", &[("calibrate", "i.rs:3"), ("residuals", "i.rs:4")]),
+        (
+            "calibrate",
+            &[("identify", "c.rs:1"), ("plan", "c.rs:2")][..],
+        ),
+        (
+            "identify",
+            &[("calibrate", "i.rs:3"), ("residuals", "i.rs:4")],
+        ),
         ("plan", &[("identify", "p.rs:5")]),
         ("report", &[("session", "r.rs:6")]),
         ("session", &[("report", "s.rs:7"), ("residuals", "s.rs:8")]),
@@ -706,7 +717,10 @@ fn the_cycle_check_sees_cycles_of_any_length() {
         .collect();
     assert_eq!(
         names,
-        [vec!["calibrate", "identify", "plan"], vec!["report", "session"]]
+        [
+            vec!["calibrate", "identify", "plan"],
+            vec!["report", "session"]
+        ]
     );
     assert_eq!(
         describe_cycle(&graph, &found[1]),

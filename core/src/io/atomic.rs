@@ -160,7 +160,10 @@ mod tests {
                 });
             }
         });
-        let left: Vec<_> = std::fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name()).collect();
+        let left: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
         assert_eq!(left, [std::ffi::OsString::from("calibration.json")]);
     }
 

@@ -551,10 +551,7 @@ impl PositionTerm<'_> {
             d.clear();
             for &(a, c) in geo {
                 let j = jac[c];
-                d.push((
-                    a,
-                    (rot * Vector3::from(j) * w).into(),
-                ));
+                d.push((a, (rot * Vector3::from(j) * w).into()));
             }
             if !frame_cols[f].is_empty() {
                 // Frame::jacobian with R already at hand: [−[Rp]× | I].

@@ -263,7 +263,11 @@ fn the_streamed_change_of_weights_is_the_built_one() {
     // 9000 touches: 8 chunks of 1024 and more, on 2 threads.
     let data = points_of_three_touches(3000);
     let chunks = data.len() / TOUCHES_PER_CHUNK;
-    assert_eq!(crate::parallel::threads_for(chunks, 2), 2, "{chunks} chunks");
+    assert_eq!(
+        crate::parallel::threads_for(chunks, 2),
+        2,
+        "{chunks} chunks"
+    );
     let here = DhParams::paper_nominal();
     let mut there = DhParams::paper_nominal();
     there.joints[1].d += 3.0;
@@ -308,7 +312,11 @@ fn normal_equations_are_the_same_bits_on_any_thread_count() {
     let n = 3000;
     let data = points_of_three_touches(n);
     assert_eq!(data.points().len(), n);
-    assert_eq!(threads_for(n.div_ceil(POINTS_PER_CHUNK), 4), 4, "points split");
+    assert_eq!(
+        threads_for(n.div_ceil(POINTS_PER_CHUNK), 4),
+        4,
+        "points split"
+    );
     let arm = DhParams::paper_nominal();
     let noise = Noise {
         encoder_rad: Some(1e-4),
