@@ -124,18 +124,22 @@ fn in_item_order<R>(len: usize, done: Vec<(usize, R)>) -> Vec<R> {
 
 /// The process's pool, started on first use with a worker per core beyond
 /// the caller's own (at least one); `None` when the system refuses its
-/// threads (every call then runs on its caller).
+/// threads (every call then runs on its caller), and in a child forked
+/// after the pool started (Python's `multiprocessing` on Linux): a fork
+/// copies the pool but not its threads, so work handed to it would wait
+/// forever.
 fn pool() -> Option<&'static rayon::ThreadPool> {
-    static POOL: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
-    POOL.get_or_init(|| {
+    static POOL: OnceLock<(u32, Option<rayon::ThreadPool>)> = OnceLock::new();
+    let (started_in, pool) = POOL.get_or_init(|| {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        rayon::ThreadPoolBuilder::new()
+        let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(cores.saturating_sub(1).max(1))
             .thread_name(|_| WORKER_THREAD_NAME.to_string())
             .build()
-            .ok()
-    })
-    .as_ref()
+            .ok();
+        (std::process::id(), pool)
+    });
+    pool.as_ref().filter(|_| *started_in == std::process::id())
 }
 
 #[cfg(test)]
