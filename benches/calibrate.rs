@@ -30,6 +30,12 @@
 //!   (`--compliance 2,3`), `harmonics-100` (`--harmonics 2:1,3:1`); and the
 //!   UR5 tracker's 1000 poses with temperatures and times, `positions-1000`
 //!   without and `thermal-drift-1000` with `--thermal --drift`;
+//! - `threads`: the UR5 tracker example as the README runs it (its 1000
+//!   measured positions, `global`, `--fix auto`, noise estimated) on one
+//!   thread and on the default threads, `idle` and `loaded` (two busy
+//!   processes, `sh -c 'while :; do :; done'`, started for the bench and
+//!   ended after it): the default threads may cost no more than one
+//!   thread's time (1.1×), loaded or not;
 //! - `plan`: experiment design — 100 of 2000 candidate poses of the UR5
 //!   for a tracker (`positions-100-of-2000`, the robust criterion with its
 //!   exchanges, no random baseline or curve beyond the count), and 60 of
@@ -480,5 +486,71 @@ fn positions_pool(arm: &Arm, n: usize) -> aacmm_core::io::Poses {
     pool
 }
 
-criterion_group!(benches, lm, global, energy, positions, beyond, plan);
+/// Busy processes that load the machine while they live (killed and
+/// reaped on drop, a failed bench included).
+struct Load(Vec<std::process::Child>);
+
+impl Load {
+    fn start(processes: usize) -> Load {
+        Load(
+            (0..processes)
+                .map(|_| {
+                    std::process::Command::new("sh")
+                        .args(["-c", "while :; do :; done"])
+                        .spawn()
+                        .expect("a busy process")
+                })
+                .collect(),
+        )
+    }
+}
+
+impl Drop for Load {
+    fn drop(&mut self) {
+        for child in &mut self.0 {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+fn threads(c: &mut Criterion) {
+    use aacmm_core::io::{AngleUnit, read_positions};
+    let file = |f: &str| format!("{}/examples/ur5-tracker/{f}", env!("CARGO_MANIFEST_DIR"));
+    let arm = aacmm_core::read_arm(std::path::Path::new(&file("arm.toml")))
+        .expect("the shipped UR5")
+        .0;
+    let rows = read_positions(
+        std::path::Path::new(&file("positions-grid.csv")),
+        AngleUnit::Deg,
+        Some(6),
+    )
+    .expect("the shipped positions");
+    let data = DataSet::from_positions(rows, "positions-grid.csv").expect("data set");
+    let model = ModelOptions::default();
+    let default = SolverSettings::default();
+    let one = SolverSettings {
+        threads: 1,
+        ..SolverSettings::default()
+    };
+    let mut g = c.benchmark_group("threads");
+    g.sample_size(10);
+    for (name, busy) in [("idle", 0), ("loaded", 2)] {
+        let _load = Load::start(busy);
+        for (count, settings) in [("1", &one), ("default", &default)] {
+            let id = format!("ur5-tracker/{name}/{count}");
+            g.bench_function(BenchmarkId::from_parameter(id), |b| {
+                b.iter(|| {
+                    calibrate(black_box(&arm.params), black_box(&data), &model, settings)
+                        .expect("fit")
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches, lm, global, energy, positions, beyond, threads, plan
+);
 criterion_main!(benches);

@@ -38,7 +38,8 @@ class _Frame(TypedDict):
 
     rotation_deg: _Array
     translation_mm: _Array
-    rotation_sigma_deg: Optional[_Array]
+    small_rotation_sigma_deg: Optional[_Array]
+    """σ (k = 1) of small rotations about the instrument's x, y, z axes, deg."""
     translation_sigma_mm: Optional[_Array]
     rotation_matrix: _Array
 
@@ -50,6 +51,7 @@ class _Auxiliary(TypedDict):
     start: float
     calibrated: float
     sigma: Optional[float]
+    sigma_of: Optional[str]
     fixed: Optional[str]
 
 class _Region(TypedDict):

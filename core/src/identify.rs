@@ -274,7 +274,7 @@ pub(crate) fn data_normal(
     let objective = data_objective(params, data, noise, threads)?;
     let all: Vec<usize> = (0..objective.layout().len()).collect();
     let normal = objective.normal(&objective.start(), &all)?;
-    let normal = crate::calibrate::geometry_normal(&normal, objective.layout())
+    let normal = (normal.geometry_only(objective.layout()))
         .map_err(|e| TermError::invalid("frames", e.to_string()))?;
     Ok((normal, objective.sees()))
 }

@@ -21,8 +21,8 @@ use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
-use crate::plan::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 use crate::residuals::Normal;
+use crate::stats::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 
 /// Largest relative change of the weights at the solution, against those of
 /// the fit, that needs no refit: the estimate moves by about this fraction
@@ -606,6 +606,7 @@ fn auxiliary(fit: &Fit<'_>, setup: &Setup<'_>, cov: &DMatrix<f64>) -> Vec<Auxili
                 start: u(setup.x0[c]),
                 calibrated: u(fit.x[c]),
                 sigma: sigma.map(u),
+                sigma_of: layout.sigma_of(c),
                 fixed,
             })
         })

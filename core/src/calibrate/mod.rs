@@ -71,7 +71,7 @@ use crate::kernel::KernelError;
 use crate::metrics::MetricsError;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId};
-use crate::residuals::{Layout, Normal, Term, TermError};
+use crate::residuals::{Elimination, Layout, Normal, Term, TermError};
 
 /// What to do about readings in radians read as degrees, in each front
 /// end's words (the library serves all three).
@@ -440,8 +440,15 @@ pub struct AuxiliaryEstimate {
     /// The calibrated value.
     pub calibrated: f64,
     /// Standard uncertainty (k = 1); `None` when the data do not determine
-    /// it.
+    /// it. Of the value itself unless [`AuxiliaryEstimate::sigma_of`] says
+    /// otherwise.
     pub sigma: Option<f64>,
+    /// What `sigma` is the uncertainty of when not of the value: a frame's
+    /// rotation columns hold its rotation vector, their σ is of a small
+    /// rotation about the frame's named axis (`a small rotation about
+    /// tracker's x axis`), the step the fit takes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_of: Option<String>,
     /// Why it was held at its start value, when it was (a correction
     /// beyond geometry these data cannot separate).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -684,7 +691,7 @@ impl Calibration {
                     name: name.to_string(),
                     rotation_deg: three(0),
                     translation_mm: three(3),
-                    rotation_sigma_deg: sigmas(0),
+                    small_rotation_sigma_deg: sigmas(0),
                     translation_sigma_mm: sigmas(3),
                 }
             })
@@ -917,7 +924,12 @@ fn fixed_set(
     // Every auxiliary column is free: the geometry is analysed with them
     // fitted too (their elimination, as the centres' is).
     let aux: Vec<usize> = (geometry..layout.len()).collect();
-    let full = geometry_normal(full, layout)?;
+    let full = full.geometry_only(layout).map_err(|e| match e {
+        Elimination::Shape => CalibrationError::Shape,
+        Elimination::Undetermined(_) => CalibrationError::Unidentifiable {
+            directions: vec![e.to_string()],
+        },
+    })?;
     let sees = objective.sees();
     let mut holds = Vec::new();
     let (mut free, identification, reasons) = match &model.fix {
@@ -1016,59 +1028,6 @@ fn untoleranced(start: &DhParams, model: &ModelOptions, free: &[usize]) -> Vec<u
         .copied()
         .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
         .collect()
-}
-
-/// The geometry's normal equations with every auxiliary column fitted and
-/// eliminated (`N_gg − N_ga N_aa⁻¹ N_ag`): what the identifiability of the
-/// geometry is judged on (owned: the analysis consumes it). Without
-/// auxiliary columns, a copy of `full`.
-pub(crate) fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, CalibrationError> {
-    // The corrections beyond geometry are judged after the geometry
-    // (`correction_columns`): left out here.
-    let corrections = layout.corrections().map_or(0..0, |(_, c)| c);
-    let keep: Vec<usize> = (0..layout.len())
-        .filter(|c| !corrections.contains(c))
-        .collect();
-    let restricted;
-    let full = if corrections.is_empty() {
-        full
-    } else {
-        restricted = full.restrict(&keep).ok_or(CalibrationError::Shape)?;
-        &restricted
-    };
-    let (g, all) = (layout.geometry_columns(), keep.len());
-    if g == all {
-        return Ok(full.clone());
-    }
-    let nm = nalgebra::DMatrix::from_row_slice(all, all, &full.jtj);
-    // Equilibrated (unit diagonal): a frame's rotation columns are the
-    // reach times its translation's, and the elimination's precision is
-    // the condition of what it factors.
-    let scale = nalgebra::DVector::from_fn(all - g, |i, _| {
-        let v = nm[(g + i, g + i)];
-        if v > 0.0 && v.is_finite() {
-            1.0 / v.sqrt()
-        } else {
-            1.0
-        }
-    });
-    let d = nalgebra::DMatrix::from_diagonal(&scale);
-    let naa = &d * nm.view((g, g), (all - g, all - g)) * &d;
-    let nga = nm.view((0, g), (g, all - g)) * &d;
-    let Some(ch) = naa.cholesky() else {
-        let blocks: Vec<&str> = layout.blocks().map(|b| b.name()).collect();
-        return Err(CalibrationError::Unidentifiable {
-            directions: vec![format!(
-                "the auxiliary blocks ({}): the data do not determine them",
-                blocks.join(", ")
-            )],
-        });
-    };
-    let reduced = nm.view((0, 0), (g, g)) - &nga * ch.solve(&nga.transpose());
-    let geometry: Vec<usize> = (0..g).collect();
-    let mut out = full.restrict(&geometry).ok_or(CalibrationError::Shape)?;
-    out.jtj = reduced.transpose().as_slice().to_vec();
-    Ok(out)
 }
 
 /// A correction column whose information, once the free geometry, the

@@ -75,7 +75,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict, erfc};
+use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict};
 use super::lm::{LmOptions, LmResult, levenberg_marquardt};
 use super::{CalibrationError, OptionError, Phase};
 use crate::objective::Objective;
@@ -434,8 +434,8 @@ pub(crate) fn irls<'a>(
     let (p_upper, p_lower, verdict) = if stated && n > 0 {
         // The sample median of χ²₃ against its asymptotic normal law.
         let z = (median_u2 - CHI2_3_MEDIAN) / median_sd(n);
-        let p_upper = 0.5 * erfc(z / std::f64::consts::SQRT_2);
-        let p_lower = 0.5 * erfc(-z / std::f64::consts::SQRT_2);
+        let p_upper = crate::stats::normal_upper(z);
+        let p_lower = crate::stats::normal_upper(-z);
         let verdict = ChiSquareVerdict::from_tails(p_upper, p_lower);
         (Some(p_upper), Some(p_lower), Some(verdict))
     } else {

@@ -26,16 +26,19 @@ pub(super) const TOUCHES_PER_CHUNK: usize = 1024;
 pub(super) const POINTS_PER_CHUNK: usize = 64;
 
 /// How many chunks of work the normal equations of `points` points split
-/// into: chunks of a fixed number of points, run on several threads from 4
-/// chunks up (below that, on the calling thread whatever the thread count).
-/// What a test of thread-independence asks, to know that the work really
-/// splits.
+/// into: chunks of a fixed number of points, shared between threads from
+/// [`MIN_ITEMS_PER_THREAD`](crate::parallel::MIN_ITEMS_PER_THREAD) chunks
+/// a thread up ([`threads_for`](crate::parallel::threads_for); below that,
+/// on the calling thread whatever the thread count). What a test of
+/// thread-independence asks, to know that the work really splits.
 ///
 /// ```
+/// use aacmm_core::parallel::threads_for;
 /// use aacmm_core::residuals::point_chunks;
 /// assert_eq!(point_chunks(64), 1);
 /// assert_eq!(point_chunks(65), 2);
-/// assert!(point_chunks(300) >= 4, "300 points: on several threads");
+/// assert_eq!(threads_for(point_chunks(300), 2), 1, "300 points: one thread");
+/// assert_eq!(threads_for(point_chunks(500), 2), 2, "500 points: two");
 /// ```
 pub fn point_chunks(points: usize) -> usize {
     points.div_ceil(POINTS_PER_CHUNK)
@@ -533,11 +536,7 @@ impl Term for TouchTerm<'_> {
             slot.copy_from_slice(&part);
             Ok::<(), KernelError>(())
         };
-        let done: Vec<Result<(), KernelError>> = if at.threads <= 1 || slots.len() < 4 {
-            slots.iter().map(run).collect()
-        } else {
-            parallel_map(&slots, at.threads, run)
-        };
+        let done = parallel_map(&slots, at.threads, run);
         done.into_iter().collect::<Result<(), KernelError>>()?;
         drop(slots);
         Ok(Some(Standardised { rows: 3, values }))
@@ -726,11 +725,7 @@ fn accumulate(
         .unzip();
     let p = normal.free.len();
     let run = |c: &Range<usize>| chunk(at.kernel, term, effects, &free, c.clone(), need_mean);
-    let partials: Vec<Result<Partial, KernelError>> = if at.threads <= 1 || chunks.len() < 4 {
-        chunks.iter().map(run).collect()
-    } else {
-        parallel_map(&chunks, at.threads, run)
-    };
+    let partials = parallel_map(&chunks, at.threads, run);
     let mut cost = 0.0;
     let mut centres = Centres {
         points: Vec::with_capacity(np),

@@ -1526,14 +1526,20 @@ fn parameter_table(c: &Calibration) -> String {
             "name", "unit", "start", "calibrated", "sigma"
         );
         for e in &c.auxiliary {
+            // Why a column was held, or what its σ is of when not its
+            // value (a frame's rotation: a small rotation about an axis).
+            let note = match (&e.fixed, &e.sigma_of) {
+                (Some(why), _) => why.clone(),
+                (None, Some(of)) if e.sigma.is_some() => format!("sigma of {of}"),
+                _ => String::new(),
+            };
             let line = format!(
-                "  {:<16} {:<w$} {:>14.6} {:>14.6} {:>10}  {}",
+                "  {:<16} {:<w$} {:>14.6} {:>14.6} {:>10}  {note}",
                 e.name,
                 e.unit,
                 e.start,
                 e.calibrated,
                 e.sigma.map_or("-".to_string(), |s| format!("{s:.6}")),
-                e.fixed.as_deref().unwrap_or("")
             );
             t += line.trim_end();
             t += "\n";
