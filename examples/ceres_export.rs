@@ -1,4 +1,4 @@
-//! Writes the `lm` bench's campaign (benches/calibrate.rs: the paper's arm
+//! Writes the `calibrate-lm` bench's campaign (benches/calibrate.rs: the paper's arm
 //! and errors, seed 7, 3 reference lengths, 0.005° encoder and 0.01 mm probe
 //! noise, the fixed set of method.md §8.1) as plain text for the Ceres
 //! comparison program (benches/compare/), then calibrates it with aacmm

@@ -38,7 +38,8 @@ class _Frame(TypedDict):
 
     rotation_deg: _Array
     translation_mm: _Array
-    rotation_sigma_deg: Optional[_Array]
+    small_rotation_sigma_deg: Optional[_Array]
+    """σ (k = 1) of small rotations about the instrument's x, y, z axes, deg."""
     translation_sigma_mm: Optional[_Array]
     rotation_matrix: _Array
 
@@ -50,6 +51,7 @@ class _Auxiliary(TypedDict):
     start: float
     calibrated: float
     sigma: Optional[float]
+    sigma_of: Optional[str]
     fixed: Optional[str]
 
 class _Region(TypedDict):
@@ -324,8 +326,9 @@ class Campaign:
     def write(self, dir: _Path, *, force: bool = False) -> List[pathlib.Path]:
         """Writes poses.csv, lengths.csv, sockets.csv, true_arm.toml,
         campaign.toml (the bytes of ``aacmm simulate``), each whole or not at
-        all. OSError when ``dir`` holds an earlier campaign and not
-        ``force``; ValueError for an empty path."""
+        all. OSError when ``dir`` holds results of an earlier run (a
+        campaign's, a calibration's, a report's) and not ``force``;
+        ValueError for an empty path."""
 
 def simulate(
     arm: Arm,
@@ -431,8 +434,9 @@ class Calibration:
         """Writes the files of ``aacmm calibrate --out dir`` (created if
         missing): calibrated.toml, calibration.json, timing.json, report.html
         and its SVG figures, each whole or not at all; returns their paths.
-        OSError when one cannot be written, or when ``dir`` holds an earlier
-        calibration and not ``force``; ValueError for an empty path."""
+        OSError when one cannot be written, or when ``dir`` holds results of
+        an earlier run (a calibration's, a campaign's, a report's) and not
+        ``force``; ValueError for an empty path."""
 
 def calibrate(
     arm: Arm,

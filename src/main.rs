@@ -37,7 +37,7 @@ enum Command {
     /// Identifiability: which parameters the data can determine, and which to fix.
     #[command(allow_negative_numbers = true)]
     Identify(commands::identify::Args),
-    /// Calibrate an arm from touches and reference lengths.
+    /// Calibrate an arm from touches, reference lengths and/or reference positions.
     #[command(
         allow_negative_numbers = true,
         after_help = "Exit status: 0 for a usable calibration; 1 for an error, or for a \

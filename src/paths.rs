@@ -1,5 +1,12 @@
 //! Output paths, checked before any work is done: a command that can only
 //! fail at the end — or that would overwrite its own input — says so at once.
+//!
+//! One rule for every command that writes (README, "Writing"): an output
+//! is never overwritten silently. An output file that exists, or an output
+//! directory that holds results of any aacmm command
+//! ([`aacmm_core::session::result_files`]), is refused unless `--force`;
+//! `--force` overwrites the command's own files and deletes nothing.
+//! Devices (`/dev/stdout`) are always written.
 
 use std::fs;
 use std::path::Path;
@@ -10,8 +17,9 @@ use anyhow::{Result, bail};
 pub type Input<'a> = (&'a str, &'a Path);
 
 /// `path`, given with `flag`, can be written as a file: it is not a
-/// directory, its directory exists, and it is none of the `inputs`.
-pub fn check_output_file(flag: &str, path: &Path, inputs: &[Input]) -> Result<()> {
+/// directory, its directory exists, it is none of the `inputs`, and
+/// (unless `force`) it is not a file that exists already.
+pub fn check_output_file(flag: &str, path: &Path, inputs: &[Input], force: bool) -> Result<()> {
     let shown = path.display();
     if path.as_os_str().is_empty() {
         bail!("{flag}: the output path is empty");
@@ -31,14 +39,27 @@ pub fn check_output_file(flag: &str, path: &Path, inputs: &[Input]) -> Result<()
             parent.display()
         ),
     }
-    not_an_input(flag, path, inputs)
+    not_an_input(flag, path, inputs)?;
+    let existing = fs::metadata(path).is_ok_and(|m| m.is_file());
+    if existing && !force {
+        bail!("{flag} {shown}: already exists; give --force to overwrite it, or another name");
+    }
+    Ok(())
 }
 
 /// `dir`, given with `flag`, can take the files `names`: it is a directory or
 /// does not exist yet in a directory that does (it will be created, as
 /// `mkdir` would: a missing parent is more likely a typo than a wish), none
-/// of the files is a directory, and none is one of the `inputs`.
-pub fn check_output_dir(flag: &str, dir: &Path, names: &[&str], inputs: &[Input]) -> Result<()> {
+/// of the files is a directory, none is one of the `inputs`, and (unless
+/// `force`) it holds no earlier results of any aacmm command — its own, to
+/// be overwritten, or another's, to be mixed in with.
+pub fn check_output_dir(
+    flag: &str,
+    dir: &Path,
+    names: &[&str],
+    inputs: &[Input],
+    force: bool,
+) -> Result<()> {
     let shown = dir.display();
     if dir.as_os_str().is_empty() {
         bail!("{flag}: the output directory is empty");
@@ -69,27 +90,19 @@ pub fn check_output_dir(flag: &str, dir: &Path, names: &[&str], inputs: &[Input]
         }
         not_an_input(flag, &path, inputs)?;
     }
-    Ok(())
-}
-
-/// Refuses to write over earlier results in `dir` (given with `flag`): any
-/// of the files `markers` already there means a previous run's results,
-/// which a metrologist keeps unless told otherwise (`--force`).
-pub fn keep_earlier_results(flag: &str, dir: &Path, markers: &[&str], force: bool) -> Result<()> {
-    if force {
-        return Ok(());
-    }
-    let found: Vec<&str> = markers
-        .iter()
-        .copied()
-        .filter(|name| dir.join(name).exists())
-        .collect();
-    if !found.is_empty() {
+    let found = aacmm_core::session::earlier_results(dir);
+    if !force && !found.is_empty() {
+        let shown: Vec<&str> = found.iter().take(4).copied().collect();
         bail!(
-            "{flag} {}: already holds earlier results ({}); give --force to overwrite them, \
-             or another directory",
+            "{flag} {}: already holds earlier results ({}{}); give --force to write over \
+             them, or another directory",
             dir.display(),
-            found.join(", ")
+            shown.join(", "),
+            if found.len() > shown.len() {
+                ", …"
+            } else {
+                ""
+            }
         );
     }
     Ok(())

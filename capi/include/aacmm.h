@@ -89,9 +89,10 @@ enum AacmmStatus
   AACMM_STATUS_NOT_AVAILABLE = 9,
   /**
    * Memory for a result or a temporary sized by the input could not be
-   * allocated (e.g. under a memory limit): nothing was computed, the
-   * host process is unaffected, and the message says how much was asked
-   * for.
+   * allocated (under an address-space limit, or more than the machine
+   * has: see the README's "Limits and memory"; a cgroup memory limit is not
+   * seen, and ends the process later): nothing was computed, the host
+   * process is unaffected, and the message says how much was asked for.
    */
   AACMM_STATUS_OUT_OF_MEMORY = 10,
   /**
@@ -300,11 +301,12 @@ typedef struct {
    */
   double translation_mm[3];
   /**
-   * Standard uncertainties (k = 1) of the rotation, deg, of the fit's
-   * local step (a small rotation applied on the left); `NAN` where the
-   * data did not determine them.
+   * Standard uncertainties (k = 1), deg, of small rotations about the
+   * instrument's x, y and z axes (the fit's step `R ← exp(δω) R`; not
+   * of `rotation_deg`'s components); `NAN` where the data did not
+   * determine them.
    */
-  double rotation_sigma_deg[3];
+  double small_rotation_sigma_deg[3];
   /**
    * Standard uncertainties (k = 1) of `t`, mm; `NAN` where the data did
    * not determine them.
@@ -339,7 +341,10 @@ typedef struct {
   double calibrated;
   /**
    * Standard uncertainty (k = 1); `NAN` where the data did not
-   * determine it (and for a column held at its start).
+   * determine it (and for a column held at its start). For a frame's
+   * rotation columns (`NAME.rx`, `.ry`, `.rz`: its rotation vector) the
+   * σ of a small rotation about the frame's x, y, z axis (the report's
+   * `calibration.auxiliary[index].sigma_of`).
    */
   double sigma;
   /**

@@ -144,10 +144,11 @@ pub struct AacmmFrame {
     pub rotation_deg: [f64; 3],
     /// `t`, mm.
     pub translation_mm: [f64; 3],
-    /// Standard uncertainties (k = 1) of the rotation, deg, of the fit's
-    /// local step (a small rotation applied on the left); `NAN` where the
-    /// data did not determine them.
-    pub rotation_sigma_deg: [f64; 3],
+    /// Standard uncertainties (k = 1), deg, of small rotations about the
+    /// instrument's x, y and z axes (the fit's step `R ← exp(δω) R`; not
+    /// of `rotation_deg`'s components); `NAN` where the data did not
+    /// determine them.
+    pub small_rotation_sigma_deg: [f64; 3],
     /// Standard uncertainties (k = 1) of `t`, mm; `NAN` where the data did
     /// not determine them.
     pub translation_sigma_mm: [f64; 3],
@@ -173,7 +174,10 @@ pub struct AacmmAuxiliary {
     /// The calibrated value.
     pub calibrated: f64,
     /// Standard uncertainty (k = 1); `NAN` where the data did not
-    /// determine it (and for a column held at its start).
+    /// determine it (and for a column held at its start). For a frame's
+    /// rotation columns (`NAME.rx`, `.ry`, `.rz`: its rotation vector) the
+    /// σ of a small rotation about the frame's x, y, z axis (the report's
+    /// `calibration.auxiliary[index].sigma_of`).
     pub sigma: f64,
     /// Whether the column was held at its start value: a correction these
     /// data cannot separate (why: the report's
@@ -202,11 +206,12 @@ fn run(request: Request) -> Result<AacmmCalibration, Error> {
 }
 
 /// A calibration error, named after the arm file unless it is a refused
-/// option (which names its field).
+/// option (which names its field) or names the input at fault itself (a
+/// unit mistake: the lengths, poses or arm file first).
 fn in_file(e: aacmm_core::CalibrationError, arm: &str) -> Error {
-    let option = matches!(e, aacmm_core::CalibrationError::Option(_));
+    let named = matches!(e, aacmm_core::CalibrationError::Option(_)) || e.names_its_input();
     let e = Error::from(e);
-    if option {
+    if named {
         e
     } else {
         Error::new(e.status, format!("{arm}: {}", e.message))
@@ -842,14 +847,7 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
                 values.len()
             )));
         };
-        // Column k of R: the image of the k-th unit vector without the
-        // translation, exact (products with 1 and 0).
-        let rotation = [x[0], x[1], x[2], 0.0, 0.0, 0.0];
-        let columns: [[f64; 3]; 3] = std::array::from_fn(|k| {
-            let mut e = [0.0; 3];
-            e[k] = 1.0;
-            Frame::apply(&rotation, e)
-        });
+        let rotation = Frame::rotation(x);
         // Each σ on its own (`frame_records` has all three or none): the
         // frame's columns `NAME.rx … NAME.tz`, in deg and mm.
         let sigma = |axis: &str| {
@@ -862,9 +860,9 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
         let value = AacmmFrame {
             rotation_deg: record.rotation_deg,
             translation_mm: record.translation_mm,
-            rotation_sigma_deg: ["rx", "ry", "rz"].map(sigma),
+            small_rotation_sigma_deg: ["rx", "ry", "rz"].map(sigma),
             translation_sigma_mm: ["tx", "ty", "tz"].map(sigma),
-            rotation_matrix: std::array::from_fn(|m| columns[m % 3][m / 3]),
+            rotation_matrix: std::array::from_fn(|m| rotation[(m / 3, m % 3)]),
         };
         // SAFETY: by the contract.
         unsafe { ptr::write(frame, value, "frame") }?;

@@ -56,9 +56,10 @@ pub enum AacmmStatus {
     /// whose covariance is not finite.
     NotAvailable = 9,
     /// Memory for a result or a temporary sized by the input could not be
-    /// allocated (e.g. under a memory limit): nothing was computed, the
-    /// host process is unaffected, and the message says how much was asked
-    /// for.
+    /// allocated (under an address-space limit, or more than the machine
+    /// has: see the README's "Limits and memory"; a cgroup memory limit is not
+    /// seen, and ends the process later): nothing was computed, the host
+    /// process is unaffected, and the message says how much was asked for.
     OutOfMemory = 10,
     /// An internal error (a bug in aacmm) was caught; the host process is
     /// unaffected and the message says what happened.

@@ -124,8 +124,9 @@ pub(crate) fn try_vec<T>(what: &str, len: usize) -> Result<Vec<T>, Error> {
 /// Checks, before any work, that `bytes` (what a computation sized by
 /// `what` will allocate inside the library, where a failure would abort)
 /// can be allocated now, and releases them: `AACMM_STATUS_OUT_OF_MEMORY`
-/// when they cannot (e.g. under a memory limit). A check, not a promise:
-/// memory may run out later all the same.
+/// when they cannot (what that sees, and the cgroup limit it does not:
+/// [`aacmm_core::memory`]). A check, not a promise: memory may run out
+/// later all the same.
 pub(crate) fn room_for(what: &str, bytes: usize) -> Result<(), Error> {
     if bytes > isize::MAX as usize {
         return Err(Error::length(format!(

@@ -557,7 +557,7 @@ fn tracker_positions(out: &Output) {
         let expected: Vec<f64> = [
             record.rotation_deg,
             record.translation_mm,
-            sigma(record.rotation_sigma_deg),
+            sigma(record.small_rotation_sigma_deg),
             sigma(record.translation_sigma_mm),
         ]
         .concat();

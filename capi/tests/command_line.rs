@@ -18,18 +18,18 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use aacmm_capi::{
-    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AacmmAuxiliary, AacmmCalibrateOptions,
-    AacmmCalibration, AacmmCalibrationSummary, AacmmStatus, aacmm_arm_free, aacmm_arm_from_file,
-    aacmm_arm_from_file_accepting_rejected, aacmm_arm_warnings, aacmm_calibrate_files,
-    aacmm_calibrate_options_free, aacmm_calibrate_options_new,
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AACMM_ROBUST_HUBER, AacmmAuxiliary,
+    AacmmCalibrateOptions, AacmmCalibration, AacmmCalibrationSummary, AacmmStatus, aacmm_arm_free,
+    aacmm_arm_from_file, aacmm_arm_from_file_accepting_rejected, aacmm_arm_warnings,
+    aacmm_calibrate_files, aacmm_calibrate_options_free, aacmm_calibrate_options_new,
     aacmm_calibrate_options_set_accept_poor_fit, aacmm_calibrate_options_set_compliance,
     aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_method,
     aacmm_calibrate_options_set_position_noise_mm, aacmm_calibrate_options_set_positions_file,
     aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
-    aacmm_calibrate_options_set_thermal, aacmm_calibration_auxiliary,
-    aacmm_calibration_auxiliary_count, aacmm_calibration_frame_count, aacmm_calibration_free,
-    aacmm_calibration_params, aacmm_calibration_report, aacmm_calibration_summary,
-    aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
+    aacmm_calibrate_options_set_robust, aacmm_calibrate_options_set_thermal,
+    aacmm_calibration_auxiliary, aacmm_calibration_auxiliary_count, aacmm_calibration_frame_count,
+    aacmm_calibration_free, aacmm_calibration_params, aacmm_calibration_report,
+    aacmm_calibration_summary, aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
 };
 use aacmm_core::io::positions::write_positions;
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm, write_poses};
@@ -767,17 +767,11 @@ fn a_refused_calibration_says_so_and_its_arm_file_is_refused_unless_asked() {
     let dir = std::env::temp_dir().join(format!("aacmm-capi-verdict-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let shipped = std::fs::read_to_string(example("examples/paper-campaign/poses.csv")).unwrap();
-    let mut lines: Vec<String> = shipped.lines().map(str::to_string).collect();
-    assert!(lines[17].starts_with("S2,"));
-    lines[17] = lines[17].replacen("S2,", "S1,", 1);
-    let poses = dir.join("poses.csv");
-    std::fs::write(&poses, lines.join("\n") + "\n").unwrap();
+    let poses = mislabelled(&dir);
     let (arm, lengths) = (
         example("examples/paper-table-1.toml"),
         example("examples/paper-campaign/lengths.csv"),
     );
-    let poses = poses.display().to_string();
     let c = Calibration::of_paths(
         &arm,
         Some(&poses),
@@ -856,4 +850,130 @@ fn radians_read_as_degrees_name_the_angle_unit() {
     assert!(m.contains("AACMM_ANGLE_RAD"), "{m}");
     assert!(m.contains("the lengths file is not the cause"), "{m}");
     assert!(!m.contains("different units"), "{m}");
+}
+
+/// The shipped campaign with touch 17 (file line 18, a touch of S2)
+/// labelled S1, written into `dir`; its path.
+fn mislabelled(dir: &Path) -> String {
+    let shipped = std::fs::read_to_string(example("examples/paper-campaign/poses.csv")).unwrap();
+    let mut lines: Vec<String> = shipped.lines().map(str::to_string).collect();
+    assert!(lines[17].starts_with("S2,"));
+    lines[17] = lines[17].replacen("S2,", "S1,", 1);
+    let poses = dir.join("poses.csv");
+    std::fs::write(&poses, lines.join("\n") + "\n").unwrap();
+    poses.display().to_string()
+}
+
+/// Issue 43 through the C API. Case 1: the Kinova's touches with the
+/// paper's arm — the first reason is that the data and the arm disagree,
+/// not the solver's start budget. Case 2: one mislabelled touch with a
+/// robust loss under the default (global) method is usable, as with LM.
+#[test]
+fn the_first_reason_is_the_true_cause() {
+    let defaults = options(|_| Vec::new());
+    let kinova = Calibration::of_files(
+        "examples/paper-table-1.toml",
+        "examples/mukca/kinova-1/poses.csv",
+        None,
+        AACMM_ANGLE_RAD,
+        &defaults,
+    );
+    let (usable, reasons, _) = kinova.verdict();
+    assert!(!usable && !kinova.summary().successful);
+    assert!(
+        reasons.starts_with("the data and the arm disagree: none of the "),
+        "{reasons}"
+    );
+    assert!(!reasons.contains("more starts"), "{reasons}");
+
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("capi-first-cause");
+    std::fs::create_dir_all(&dir).unwrap();
+    let poses = mislabelled(&dir);
+    let robust = options(|o| {
+        // SAFETY: a live options handle.
+        unsafe {
+            vec![
+                aacmm_calibrate_options_set_encoder_noise_rad(o, 0.005f64.to_radians()),
+                aacmm_calibrate_options_set_probe_noise_mm(o, 0.01),
+                aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_HUBER, 0.0),
+            ]
+        }
+    });
+    let c = Calibration::of_paths(
+        &example("examples/paper-table-1.toml"),
+        Some(&poses),
+        Some(&example("examples/paper-campaign/lengths.csv")),
+        AACMM_ANGLE_DEG,
+        &robust,
+    );
+    let (usable, reasons, _) = c.verdict();
+    assert!(usable && c.summary().successful, "{reasons}");
+    let report: serde_json::Value = serde_json::from_str(&c.report()).unwrap();
+    assert_eq!(
+        report["calibration"]["solver"]["stop"]["global"]["search"],
+        "robust_floor"
+    );
+}
+
+/// Issue 43, cases 3 and 4, through the C API: lengths in metres name the
+/// lengths file; an arm file in the wrong unit (its millimetres declared
+/// as metres) names the arm file — each first in the message.
+#[test]
+fn a_unit_mistake_names_the_file_at_fault() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("capi-units");
+    std::fs::create_dir_all(&dir).unwrap();
+    let arm = example("examples/paper-table-1.toml");
+    let text = std::fs::read_to_string(&arm).unwrap();
+    let arm_m = dir.join("arm-m.toml");
+    std::fs::write(
+        &arm_m,
+        text.replace("length_unit = \"mm\"", "length_unit = \"m\""),
+    )
+    .unwrap();
+    let lengths = std::fs::read_to_string(example("examples/paper-campaign/lengths.csv")).unwrap();
+    let metres: Vec<String> = (lengths.lines().enumerate())
+        .map(|(i, l)| {
+            let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+            if i > 0 {
+                f[2] = format!("{}", f[2].parse::<f64>().unwrap() / 1000.0);
+            }
+            f.join(",")
+        })
+        .collect();
+    let lengths_m = dir.join("lengths-m.csv");
+    std::fs::write(&lengths_m, metres.join("\n") + "\n").unwrap();
+    let (poses, shipped_lengths) = (
+        example("examples/paper-campaign/poses.csv"),
+        example("examples/paper-campaign/lengths.csv"),
+    );
+    let defaults = options(|_| Vec::new());
+    let cases = [
+        (
+            arm_m.display().to_string(),
+            shipped_lengths,
+            "the arm file's lengths",
+        ),
+        (
+            arm,
+            lengths_m.display().to_string(),
+            "the reference lengths are 1.000e-3",
+        ),
+    ];
+    for (arm, lengths, cause) in cases {
+        let refused = Calibration::try_paths(
+            &arm,
+            Some(&poses),
+            Some(&lengths),
+            AACMM_ANGLE_DEG,
+            &defaults,
+        );
+        assert_eq!(refused.err(), Some(AacmmStatus::Calibration));
+        let m = last_error();
+        let at_fault = if cause.starts_with("the arm") {
+            &arm
+        } else {
+            &lengths
+        };
+        assert!(m.starts_with(&format!("{at_fault}: {cause}")), "{m}");
+    }
 }

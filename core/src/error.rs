@@ -255,6 +255,16 @@ pub(crate) fn check_nonnegative(
     }
 }
 
+/// A length in words: metres from 10 m on (an arm's reach in a unit
+/// mistake reads better so), else millimetres.
+pub(crate) fn length_words(mm: f64) -> String {
+    if mm.abs() >= 10_000.0 {
+        format!("{:.1} m", mm / 1000.0)
+    } else {
+        format!("{mm:.1} mm")
+    }
+}
+
 /// A number for a message: plain when of ordinary size, else in `e`
 /// notation (`1e300`, not three hundred digits).
 pub fn short(v: f64) -> String {

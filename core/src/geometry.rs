@@ -1,5 +1,7 @@
-//! Points in mm: distances, centroids, and how far two point sets are apart
-//! after the best rigid motion.
+//! Points in mm: distances, centroids, the best rigid motion of one point
+//! set onto another and how far they are apart after it.
+
+use nalgebra::{Matrix3, Vector3};
 
 /// Euclidean distance between two points.
 ///
@@ -41,29 +43,68 @@ pub fn centroid(points: &[[f64; 3]]) -> [f64; 3] {
 /// assert!(rigid_distance(&a, &mirrored, true) < 1e-12);
 /// ```
 pub fn rigid_distance(a: &[[f64; 3]], b: &[[f64; 3]], reflect: bool) -> f64 {
-    use nalgebra::{Matrix3, Vector3};
+    let Some(m) = best_rigid_motion(a, b, reflect) else {
+        return f64::INFINITY;
+    };
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (m.rotation * (Vector3::from(*x) - m.from) + m.to - Vector3::from(*y)).norm())
+        .fold(0.0, f64::max)
+}
+
+/// The best rigid motion of one point set onto another
+/// ([`best_rigid_motion`]): `y ≈ rotation (x − from) + to`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RigidMotion {
+    /// The rotation (`det = −1`, a mirror, when one was asked for).
+    pub rotation: Matrix3<f64>,
+    /// The centroid of the points moved.
+    pub from: Vector3<f64>,
+    /// The centroid of the points they are moved onto.
+    pub to: Vector3<f64>,
+}
+
+impl RigidMotion {
+    /// The translation `t` of `y ≈ R x + t`.
+    pub fn translation(&self) -> Vector3<f64> {
+        self.to - self.rotation * self.from
+    }
+}
+
+/// The rigid motion of `a` onto `b` (pairwise) of least squares (Kabsch,
+/// Horn: the SVD of their cross-covariance): a proper rotation, or with
+/// `mirrored` one with `det = −1`. `None` when the SVD fails.
+///
+/// ```
+/// use aacmm_core::geometry::best_rigid_motion;
+/// let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]];
+/// let b: Vec<[f64; 3]> = a.iter().map(|p| [-p[1] + 1.0, p[0], p[2] - 2.0]).collect();
+/// let m = best_rigid_motion(&a, &b, false).unwrap();
+/// assert!((m.rotation.determinant() - 1.0).abs() < 1e-12);
+/// assert!((m.translation() - nalgebra::Vector3::new(1.0, 0.0, -2.0)).norm() < 1e-12);
+/// ```
+pub fn best_rigid_motion(a: &[[f64; 3]], b: &[[f64; 3]], mirrored: bool) -> Option<RigidMotion> {
     let mean = |p: &[[f64; 3]]| {
         p.iter()
             .fold(Vector3::zeros(), |s, x| s + Vector3::from(*x))
             / p.len().max(1) as f64
     };
-    let (ca, cb) = (mean(a), mean(b));
+    let (from, to) = (mean(a), mean(b));
     let mut h = Matrix3::zeros();
     for (x, y) in a.iter().zip(b) {
-        h += (Vector3::from(*x) - ca) * (Vector3::from(*y) - cb).transpose();
+        h += (Vector3::from(*x) - from) * (Vector3::from(*y) - to).transpose();
     }
     let svd = h.svd(true, true);
-    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
-        return f64::INFINITY;
-    };
+    let (u, v_t) = (svd.u?, svd.v_t?);
+    // The sign of the smallest singular direction makes it proper or not.
     let mut d = Matrix3::identity();
     let proper = (v_t.transpose() * u.transpose()).determinant() > 0.0;
-    if proper == reflect {
+    if proper == mirrored {
         d[(2, 2)] = -1.0;
     }
-    let r = v_t.transpose() * d * u.transpose();
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (r * (Vector3::from(*x) - ca) + cb - Vector3::from(*y)).norm())
-        .fold(0.0, f64::max)
+    Some(RigidMotion {
+        rotation: v_t.transpose() * d * u.transpose(),
+        from,
+        to,
+    })
 }

@@ -18,6 +18,11 @@
 //!    parameter by `s` scales every residual by `s`: the cost is least at an
 //!    arm shrunk to nothing. Noise lifts that singular value above zero, so a
 //!    threshold misses it; the direction `(a, d, 0, 0, B)` is projected out.
+//!    Exact data (touches that meet at their points) leave it at zero among
+//!    the redundancies of rule 3: it is told from them by the probe
+//!    positions' own Jacobians (a redundancy moves no probe, scale every
+//!    one), so the classification does not depend on the residuals being
+//!    non-zero.
 //! 3. **Redundant last link** — `a6` and `Bx`, `d6` and `By` move the probe
 //!    identically, and `theta6`, `alpha6` and `B` parameterise the probe
 //!    direction twice. These are exact, so the threshold finds them; the
@@ -250,7 +255,7 @@ pub fn identify(
     threads: usize,
 ) -> Result<Identification, TermError> {
     let (normal, sees) = data_normal(params, data, noise, threads)?;
-    Ok(identify_from(params, sees, normal))
+    Ok(identify_from(params, sees, normal, data))
 }
 
 /// The normal equations of the data alone over every geometry column at
@@ -269,7 +274,7 @@ pub(crate) fn data_normal(
     let objective = data_objective(params, data, noise, threads)?;
     let all: Vec<usize> = (0..objective.layout().len()).collect();
     let normal = objective.normal(&objective.start(), &all)?;
-    let normal = crate::calibrate::geometry_normal(&normal, objective.layout())
+    let normal = (normal.geometry_only(objective.layout()))
         .map_err(|e| TermError::invalid("frames", e.to_string()))?;
     Ok((normal, objective.sees()))
 }
@@ -296,11 +301,13 @@ pub(crate) fn data_objective<'d>(
 }
 
 /// [`identify`] from the normal equations of every geometry column at
-/// `params`, of data that see what `sees` says.
+/// `params`, of `data` that see what `sees` says.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 pub(crate) fn identify_from(
     params: &DhParams,
     sees: Sees,
     normal: crate::residuals::Normal,
+    data: &DataSet,
 ) -> Identification {
     let mut scaled = Scaled::at(params, normal);
     let np = scaled.ids.len();
@@ -311,7 +318,7 @@ pub(crate) fn identify_from(
         scaled.ns = DMatrix::zeros(np, np);
     }
     let singular_values = singular(&scaled.ns);
-    let structure = Structure::of(params, sees, &scaled, overflow);
+    let structure = Structure::of(params, sees, &scaled, overflow, data);
     let spectrum = Spectrum::of(&structure, &names);
     let split = FreeSet::pivoted(params.joint_count(), &scaled, &structure, spectrum.rank);
     let (free, correlations) = predicted(&scaled, overflow, &structure, &spectrum, &split, &names);
@@ -355,10 +362,20 @@ struct Structure {
     analysed: DMatrix<f64>,
     /// Whether rule 2 fired: one more column is then fixed, for scale.
     scale: bool,
+    /// Rule 2's direction on `cols` when the data are exact (it is then a
+    /// null direction of `unprojected`, like the redundancies): the fixed
+    /// column it names is found from it, not from the residuals' share.
+    exact_scale: Option<DVector<f64>>,
 }
 
 impl Structure {
-    fn of(params: &DhParams, sees: Sees, scaled: &Scaled, overflow: bool) -> Structure {
+    fn of(
+        params: &DhParams,
+        sees: Sees,
+        scaled: &Scaled,
+        overflow: bool,
+        data: &DataSet,
+    ) -> Structure {
         let np = scaled.ids.len();
         let unseen = unseen_base(params, sees);
         let base: Vec<usize> = unseen.iter().map(|(c, _)| *c).collect();
@@ -389,8 +406,12 @@ impl Structure {
         let k = cols.len();
         let unprojected = DMatrix::from_fn(k, k, |a, b| scaled.ns[(cols[a], cols[b])]);
         let scale = !sees.scale;
+        let mut exact_scale = None;
         let analysed = if scale {
-            let v = scale_direction(params, &scaled.ids, &cols, &unprojected);
+            let (v, exact) = scale_direction(params, scaled, &cols, &unprojected, data);
+            if exact {
+                exact_scale = Some(v.clone());
+            }
             let p = DMatrix::identity(k, k) - &v * v.transpose();
             rules.push(Rule {
                 name: "scale".into(),
@@ -410,6 +431,7 @@ impl Structure {
             unprojected,
             analysed,
             scale,
+            exact_scale,
         }
     }
 }
@@ -443,35 +465,119 @@ fn base_columns(params: &DhParams, sees: Sees) -> Vec<usize> {
 }
 
 /// Rule 2's direction on the analysed columns `cols`: every length (a, d,
-/// B) in proportion to its value, a unit vector.
+/// B) in proportion to its value, a unit vector; and whether the data are
+/// exact.
+///
+/// Scaling every length scales every residual, so the scale direction's
+/// singular value is the residuals' size: noise lifts it off zero, exact
+/// data (touches that meet at a point) leave it at zero among the exact
+/// redundancies. Either way it is taken out by the rule, not counted as a
+/// redundancy: with noise it is projected out up to the null directions;
+/// with exact data it lies among them, and is told from the redundancies
+/// by the probe positions themselves ([`kinematic_null`]): a redundancy
+/// moves no probe, scale moves every one.
 fn scale_direction(
     params: &DhParams,
-    ids: &[ParamId],
+    scaled: &Scaled,
     cols: &[usize],
     unprojected: &DMatrix<f64>,
-) -> DVector<f64> {
+    data: &DataSet,
+) -> (DVector<f64>, bool) {
     let k = cols.len();
     let v = DVector::from_fn(k, |a, _| {
-        let id = ids[cols[a]];
+        let id = scaled.ids[cols[a]];
         if id.kind.is_length() {
             params.get(id)
         } else {
             0.0
         }
-    });
+    })
+    .normalize();
     // The scale direction up to the exact null directions (which are
     // unidentifiable anyway): without this, projecting `v` would merely
     // trade one of them for it.
-    let e0 = eigen(unprojected.clone());
-    let emax = e0.eigenvalues.iter().copied().fold(0.0, f64::max);
-    let mut v = v.normalize();
-    for (i, &e) in e0.eigenvalues.iter().enumerate() {
-        if e.max(0.0).sqrt() <= RANK_TOLERANCE * emax.sqrt() {
-            let u = e0.eigenvectors.column(i);
-            v -= u * u.dot(&v);
+    let rest = without(&v, &null_directions(unprojected));
+    if rest.norm() > EXACT_SCALE {
+        return (rest.normalize(), false);
+    }
+    // Exact data: `v` is itself a null direction. Up to the redundancies
+    // alone (which move no probe), it is still the one the rule takes out.
+    let kinematic = kinematic_null(params, scaled, cols, data);
+    let rest = without(&v, &kinematic);
+    let v = if rest.norm() > EXACT_SCALE {
+        rest.normalize()
+    } else {
+        v
+    };
+    (v, true)
+}
+
+/// A scale direction whose part outside the null directions is below this
+/// (it is a unit vector) lies among them: the data are exact.
+const EXACT_SCALE: f64 = 1e-3;
+
+/// The unit eigenvectors of the symmetric `m` whose singular value is at
+/// most [`RANK_TOLERANCE`] of the largest.
+fn null_directions(m: &DMatrix<f64>) -> Vec<DVector<f64>> {
+    let e = eigen(m.clone());
+    let emax = e.eigenvalues.iter().copied().fold(0.0, f64::max);
+    (0..e.eigenvalues.len())
+        .filter(|&i| e.eigenvalues[i].max(0.0).sqrt() <= RANK_TOLERANCE * emax.sqrt())
+        .map(|i| e.eigenvectors.column(i).into_owned())
+        .collect()
+}
+
+/// `v` less its components along the orthonormal `dirs`.
+fn without(v: &DVector<f64>, dirs: &[DVector<f64>]) -> DVector<f64> {
+    let mut v = v.clone();
+    for u in dirs {
+        v -= u * u.dot(&v);
+    }
+    v
+}
+
+/// Poses of the data [`kinematic_null`] samples at most (evenly): a
+/// redundancy moves no probe at any pose, so a sample finds it.
+const KINEMATIC_POSES: usize = 1000;
+
+/// The null directions, on `cols` (scaled), of the probe positions' own
+/// Jacobians (not the residuals') over the touches of `data`: the
+/// parameter combinations that move no probe at any pose — the kinematic
+/// redundancies, which exact data cannot tell from scale by the residuals.
+/// Empty without touches.
+fn kinematic_null(
+    params: &DhParams,
+    scaled: &Scaled,
+    cols: &[usize],
+    data: &DataSet,
+) -> Vec<DVector<f64>> {
+    let np = scaled.ids.len();
+    let Ok(kernel) = crate::kernel::ArmKernel::new(params) else {
+        return Vec::new();
+    };
+    let mut gram = DMatrix::<f64>::zeros(np, np);
+    let step = data.len().div_ceil(KINEMATIC_POSES).max(1);
+    for i in (0..data.len()).step_by(step) {
+        let seen = kernel.for_each_jacobian(data.poses(), i..i + 1, |_, _, jac| {
+            if jac.len() != np {
+                return;
+            }
+            for a in 0..np {
+                for b in 0..np {
+                    let dot: f64 = (0..3).map(|r| jac[a][r] * jac[b][r]).sum();
+                    gram[(a, b)] += dot * scaled.d[a] * scaled.d[b];
+                }
+            }
+        });
+        if seen.is_err() {
+            return Vec::new();
         }
     }
-    v.normalize()
+    if data.is_empty() {
+        return Vec::new();
+    }
+    let k = cols.len();
+    null_directions(&DMatrix::from_fn(k, k, |a, b| gram[(cols[a], cols[b])]))
 }
 
 /// The eigen decomposition of the analysed matrix, read as singular values:
@@ -630,17 +736,22 @@ impl FreeSet {
         });
         let mut free_cols: Vec<usize> = pivots.iter().map(|&a| cols[a]).collect();
         free_cols.sort_unstable();
-        // The column fixed for scale: free without the scale rule, fixed with it.
-        let scale_fixed: Vec<usize> = if structure.scale {
-            pivoted_cholesky(&structure.unprojected, rank + 1, |a| {
+        // The column fixed for scale: free without the scale rule, fixed
+        // with it (with exact data, whose residuals give scale no weight:
+        // the one whose dependence carries most of it).
+        let scale_fixed: Vec<usize> = match &structure.exact_scale {
+            _ if !structure.scale => Vec::new(),
+            Some(v) => exact_scale_column(structure, v, &pivots)
+                .map(|a| cols[a])
+                .into_iter()
+                .collect(),
+            None => pivoted_cholesky(&structure.unprojected, rank + 1, |a| {
                 preferred_fixed.contains(&cols[a])
             })
             .into_iter()
             .map(|a| cols[a])
             .filter(|c| !free_cols.contains(c))
-            .collect()
-        } else {
-            Vec::new()
+            .collect(),
         };
         let (fixed, null_relations) = fixed_reasons(n, scaled, structure, &free_cols, &scale_fixed);
         FreeSet {
@@ -649,6 +760,29 @@ impl FreeSet {
             null_relations,
         }
     }
+}
+
+/// With exact data, the analysed column (of `structure.cols`, none of the
+/// `pivots`) fixed for scale: the one whose dependence on the pivots
+/// (`e_c − Σ k_a e_a`, regressed on the unprojected matrix, which sees
+/// neither scale nor the redundancies) has the largest component along
+/// the scale direction `v` — the column whose noise-lifted Schur
+/// complement would be largest, as the pivoting finds it when noise lifts
+/// scale (the residuals' share along `v`). `None` when no column's does.
+fn exact_scale_column(structure: &Structure, v: &DVector<f64>, pivots: &[usize]) -> Option<usize> {
+    let m = &structure.unprojected;
+    let q = pivots.len();
+    let nf = DMatrix::from_fn(q, q, |a, b| m[(pivots[a], pivots[b])]);
+    let ch = nf.cholesky()?;
+    let mut best: Option<(usize, f64)> = None;
+    for c in (0..m.nrows()).filter(|c| !pivots.contains(c)) {
+        let coef = ch.solve(&DVector::from_fn(q, |a, _| m[(pivots[a], c)]));
+        let along = v[c] - (0..q).map(|a| coef[a] * v[pivots[a]]).sum::<f64>();
+        if along.abs() > 1e-6 && best.is_none_or(|(_, b)| along.abs() > b) {
+            best = Some((c, along.abs()));
+        }
+    }
+    best.map(|(c, _)| c)
 }
 
 /// Why each column outside `free_cols` is fixed — base motion, scale
@@ -960,6 +1094,7 @@ fn closed_block(ns: &DMatrix<f64>, free: &[usize], correction: &DMatrix<f64>, bo
 /// scale (without reference lengths) and the exact redundancies, from the
 /// normal equations of every column. Empty when the fixed set blocks every
 /// one — the fit is then well posed.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 pub(crate) fn open_directions_from(
     params: &DhParams,
     sees: Sees,
@@ -1032,15 +1167,8 @@ fn unseen_directions(
         });
         unseen.push(("scale (no reference length)".into(), v));
     }
-    let eig = eigen(ns.clone());
-    let smax = eig.eigenvalues.iter().copied().fold(0.0, f64::max).sqrt();
-    for (i, &e) in eig.eigenvalues.iter().enumerate() {
-        if e.max(0.0).sqrt() <= RANK_TOLERANCE * smax {
-            unseen.push((
-                "a redundancy of the parameters".into(),
-                eig.eigenvectors.column(i).into_owned(),
-            ));
-        }
+    for u in null_directions(ns) {
+        unseen.push(("a redundancy of the parameters".into(), u));
     }
     unseen
 }
@@ -1178,7 +1306,7 @@ mod tests {
         normal.jtj[0] = f64::INFINITY;
         normal.jtj[1] = f64::NAN;
         let sees = objective.sees();
-        let id = identify_from(&params, sees, normal.clone());
+        let id = identify_from(&params, sees, normal.clone(), &data);
         assert!(
             id.rules.iter().any(|r| r.name == "not-finite"),
             "{:?}",
@@ -1197,6 +1325,87 @@ mod tests {
         assert_eq!(pivoted_cholesky(&m, 3, |_| false), vec![1]);
         let m = DMatrix::from_element(2, 2, f64::NAN);
         assert_eq!(pivoted_cholesky(&m, 2, |_| false), Vec::<usize>::new());
+    }
+}
+
+#[cfg(test)]
+mod exact_data_tests {
+    use super::*;
+    use crate::simulate::{CampaignSettings, ErrorModel, simulate};
+
+    fn campaign(encoder_noise_deg: f64, lengths: usize) -> (DhParams, DataSet) {
+        let nominal = crate::io::Arm::without_limits("t", DhParams::paper_nominal());
+        let mut settings = CampaignSettings::new(2, ErrorModel::Paper, 6, 10);
+        settings.reference_lengths = lengths;
+        settings.encoder_noise_deg = encoder_noise_deg;
+        let campaign = simulate(&nominal, &settings).unwrap();
+        (
+            campaign.true_arm.params.clone(),
+            campaign.data_set().unwrap(),
+        )
+    }
+
+    fn reasons(id: &Identification) -> Vec<(String, String)> {
+        (id.fixed.iter())
+            .map(|f| {
+                let kind = f.reason.split(':').next().unwrap_or("").to_string();
+                (f.id.to_string(), kind)
+            })
+            .collect()
+    }
+
+    /// Touches that meet exactly (at the true arm, no noise) leave the
+    /// scale direction at zero among the redundancies: the analysis still
+    /// fixes one length for scale, the same set as with a little noise,
+    /// and predicts a finite σ for every free parameter. (It once took
+    /// scale for a redundancy: two angles "fixed for scale", every length
+    /// free, σ 0 and correlations of ±1.)
+    #[test]
+    fn exact_touches_are_classified_as_noisy_ones() {
+        let (truth, exact) = campaign(0.0, 0);
+        let (_, noisy) = campaign(1e-4, 0);
+        let noise = Noise::default();
+        let a = identify(&truth, &exact, &noise, 1).unwrap();
+        let b = identify(&truth, &noisy, &noise, 1).unwrap();
+        assert_eq!(reasons(&a), reasons(&b));
+        let scale: Vec<_> = (reasons(&a).into_iter())
+            .filter(|(_, why)| why == "scale")
+            .collect();
+        assert_eq!(scale.len(), 1, "{:?}", a.fixed);
+        assert_eq!(a.rank, b.rank);
+        assert!(
+            (a.free.iter()).all(|f| f.sigma.is_finite() && f.sigma > 0.0),
+            "{:?}",
+            a.free
+        );
+        assert!(
+            a.correlations.iter().all(|c| c.rho.abs() < 0.999),
+            "{:?}",
+            a.correlations
+        );
+        assert!((a.condition_number / b.condition_number - 1.0).abs() < 0.01);
+    }
+
+    /// A user's fixed set that leaves scale open is refused on exact data
+    /// as with noise, naming the same directions; with a reference length
+    /// the same set is closed.
+    #[test]
+    fn exact_touches_leave_the_same_directions_open() {
+        let all: Vec<usize> = (0..27).collect();
+        // The paper's fixed set, which fixes no length.
+        let free: Vec<usize> = (0..27)
+            .filter(|c| ![18, 6, 23, 17, 24, 25].contains(c))
+            .collect();
+        let open = |noise: f64, lengths: usize| {
+            let (truth, data) = campaign(noise, lengths);
+            let objective = data_objective(&truth, &data, &Noise::default(), 1).unwrap();
+            let normal = objective.normal(&truth.to_vec(), &all).unwrap();
+            open_directions_from(&truth, objective.sees(), normal, &free)
+        };
+        let exact = open(0.0, 0);
+        assert!(!exact.is_empty());
+        assert_eq!(exact, open(1e-4, 0));
+        assert_eq!(open(0.0, 1), Vec::<String>::new());
     }
 }
 

@@ -2,17 +2,37 @@
 //! or simply too large input is an error, not an abort of the host process.
 //!
 //! Rust's default response to a failed allocation is to abort the process:
-//! a host program (Python, a C program) in a container with a memory limit
-//! would simply die. Every buffer whose size follows from the input is
-//! therefore either reserved with `try_reserve` ([`try_vec`]) or, where it
-//! is made deep inside the solver or the report, covered by a probe
-//! ([`room_for`]) of what the computation holds at its peak, measured and
-//! rounded up ([`data_set_bytes_per_touch`], [`WORK_BYTES_PER_TOUCH`]).
+//! a host program (Python, a C program) would simply die. Two means keep
+//! that from happening, and they protect against different things:
 //!
-//! A probe is a check, not a promise: memory another process takes between
-//! the check and the work can still run out. Under an address-space limit
-//! (`ulimit -v`, `RLIMIT_AS`, the usual container case) the check is
-//! exact enough to be deterministic: tested in the Python and C suites.
+//! - **Fallible reservations** ([`try_vec`], [`try_grow`]): every buffer
+//!   whose size follows from the input (a file's text, its rows, the data
+//!   set's arrays, the C API's copies) is reserved with `try_reserve`, and
+//!   the input limits (a line of at most 1 MiB, an arm or campaign file of
+//!   at most 16 MiB, [`bytes_for`]'s overflow check) bound what one input
+//!   can ask for. A size that overflows or exceeds `isize::MAX` is refused
+//!   everywhere, deterministically.
+//! - **Probes** ([`room_for`], [`room_for_work`]): work whose buffers are
+//!   made deep inside the solver or the report asks, before it starts, for
+//!   what it holds at its peak (measured and rounded up:
+//!   [`data_set_bytes_per_touch`], [`WORK_BYTES_PER_TOUCH`]) and gives it
+//!   back at once. A probe is refused — and the work with it, with a
+//!   message — exactly when the system refuses the address space:
+//!   under an address-space limit (`ulimit -v`, `RLIMIT_AS`: exact enough
+//!   to be deterministic, tested in the Python and C suites); under Linux's
+//!   default heuristic overcommit (`vm.overcommit_memory = 0`), a request
+//!   larger than the machine's memory and swap (on a 24 GiB machine
+//!   without swap, 30 GiB is refused and 20 GiB granted); and under strict
+//!   accounting (`= 2`), beyond the commit limit.
+//!
+//! Neither protects against a **cgroup memory limit** (a container's
+//! `--memory`, systemd's `MemoryMax`, a Kubernetes limit): it limits the
+//! memory a process touches, not the address space it reserves, so the
+//! probe and the reservations succeed, and when the work's pages take the
+//! group past its limit the kernel's OOM killer ends the process
+//! (`SIGKILL`, no message). Nor against memory other processes take
+//! between the check and the work. Under such a limit, size the input to
+//! it: [`calibration_bytes`] says what a calibration holds at its peak.
 
 /// What a calibration, an identification or an evaluation allocates per
 /// touch (or reference position) beyond the data set it works on (the

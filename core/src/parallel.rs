@@ -2,36 +2,69 @@
 //! items are handed out one at a time, and every result is put back in
 //! item order, so a sum over them is added in the same order on any
 //! machine.
+//!
+//! The threads are a pool started once per process (rayon's, its threads
+//! named [`WORKER_THREAD_NAME`]) and kept: starting operating-system
+//! threads on every call cost more than a small problem's whole work, and
+//! on a loaded machine each start waited for the scheduler (a UR5 tracker
+//! fit took 350–430 ms on the default threads against 79 ms on one). A
+//! problem too small to share ([`threads_for`]) runs on the calling thread
+//! alone, and the calling thread always takes items itself: work never
+//! waits for a worker to be scheduled when the caller could do it.
+
+use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Mutex, OnceLock, PoisonError};
 
 /// The name of the worker threads the library starts: a host that silences
 /// the panic messages of library code (the C API does) recognises them by it.
 pub const WORKER_THREAD_NAME: &str = "aacmm-worker";
 
-/// `f` over `items` on `threads` scoped threads, results in item order; on
-/// the calling thread when one thread (or one item) is all there is.
+/// The fewest items each thread must have before a call is shared: callers
+/// cut their work into chunks of a fixed size (256 reference positions,
+/// 64 points, 1024 touches), each some tens to hundreds of microseconds,
+/// and a thread's share must outweigh handing it over — on a loaded
+/// machine, waiting for a worker to be scheduled. The UR5 tracker's 1000
+/// positions are 4 chunks: one thread.
+pub const MIN_ITEMS_PER_THREAD: usize = 4;
+
+/// The threads a call of `items` work items asked to run on `threads`
+/// uses: at most one per [`MIN_ITEMS_PER_THREAD`] items, at least one. What
+/// a test of thread-independence asks, to know that the work really splits
+/// (with [`crate::residuals::point_chunks`]).
 ///
-/// A panic in `f` reaches the caller with its own payload (not the scope's
-/// "a scoped thread panicked"), so the caller's `catch_unwind` sees what
-/// went wrong. A worker the system refuses to start is replaced by the
-/// calling thread.
+/// ```
+/// use aacmm_core::parallel::threads_for;
+/// assert_eq!(threads_for(4, 8), 1); // the UR5 tracker's 1000 positions
+/// assert_eq!(threads_for(8, 2), 2);
+/// ```
+pub fn threads_for(items: usize, threads: usize) -> usize {
+    threads.min(items / MIN_ITEMS_PER_THREAD).max(1)
+}
+
+/// `f` over `items` on up to `threads` threads (the caller and the pool's
+/// workers; fewer for few items, [`threads_for`]), results in item order.
+///
+/// A panic in `f` reaches the caller with its own payload, so the caller's
+/// `catch_unwind` sees what went wrong. Without a pool (the system refused
+/// its threads) the calling thread does all the work.
 pub(crate) fn parallel_map<T: Sync, R: Send>(
     items: &[T],
     threads: usize,
     f: impl Fn(&T) -> R + Sync,
 ) -> Vec<R> {
-    use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
-    use std::sync::{Mutex, PoisonError};
-    if threads <= 1 || items.len() <= 1 {
+    let threads = threads_for(items.len(), threads);
+    let Some(pool) = (threads > 1).then(pool).flatten() else {
         return items.iter().map(f).collect();
-    }
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let done = Mutex::new(Vec::new());
+    };
+    let next = AtomicUsize::new(0);
+    let done = Mutex::new(Vec::with_capacity(items.len()));
     let panicked = Mutex::new(None);
     let work = || {
         let run = catch_unwind(AssertUnwindSafe(|| {
             let mut mine = Vec::new();
             loop {
-                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let i = next.fetch_add(1, Ordering::Relaxed);
                 if i >= items.len() {
                     break;
                 }
@@ -54,17 +87,13 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(
             }
         }
     };
-    std::thread::scope(|s| {
-        let mut all_started = true;
-        for _ in 0..threads.min(items.len()) {
-            let started = std::thread::Builder::new()
-                .name(WORKER_THREAD_NAME.into())
-                .spawn_scoped(s, work);
-            all_started &= started.is_ok();
+    // The caller works too: the helpers take what it has not yet taken, and
+    // one that starts after the items are gone returns at once.
+    pool.in_place_scope(|s| {
+        for _ in 1..threads {
+            s.spawn(|_| work());
         }
-        if !all_started {
-            work();
-        }
+        work();
     });
     if let Some(payload) = panicked
         .into_inner()
@@ -72,15 +101,113 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(
     {
         resume_unwind(payload);
     }
-    let mut slots: Vec<Option<R>> = (0..items.len()).map(|_| None).collect();
-    for (i, r) in done.into_inner().unwrap_or_else(PoisonError::into_inner) {
+    in_item_order(
+        items.len(),
+        done.into_inner().unwrap_or_else(PoisonError::into_inner),
+    )
+}
+
+/// The results `(item, result)` in item order.
+fn in_item_order<R>(len: usize, done: Vec<(usize, R)>) -> Vec<R> {
+    let mut slots: Vec<Option<R>> = (0..len).map(|_| None).collect();
+    for (i, r) in done {
         slots[i] = Some(r);
     }
-    // Every index below `items.len()` was taken by exactly one loop, which
-    // either finished it (its result is in `done`) or panicked (resumed
-    // above); a refused worker's share is run by the caller.
+    // Every index below `len` was taken by exactly one loop, which either
+    // finished it (its result is in `done`) or panicked (resumed before
+    // this).
     slots
         .into_iter()
         .map(|r| r.expect("every item ran"))
         .collect()
+}
+
+/// The process's pool, started on first use with a worker per core beyond
+/// the caller's own (at least one); `None` when the system refuses its
+/// threads (every call then runs on its caller), and in a child forked
+/// after the pool started (Python's `multiprocessing` on Linux): a fork
+/// copies the pool but not its threads, so work handed to it would wait
+/// forever.
+fn pool() -> Option<&'static rayon::ThreadPool> {
+    static POOL: OnceLock<(u32, Option<rayon::ThreadPool>)> = OnceLock::new();
+    let (started_in, pool) = POOL.get_or_init(|| {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(cores.saturating_sub(1).max(1))
+            .thread_name(|_| WORKER_THREAD_NAME.to_string())
+            .build()
+            .ok();
+        (std::process::id(), pool)
+    });
+    pool.as_ref().filter(|_| *started_in == std::process::id())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::collections::{BTreeSet, HashSet};
+    use std::thread::ThreadId;
+
+    #[test]
+    fn few_items_run_on_one_thread_many_on_those_asked_for() {
+        assert_eq!(threads_for(0, 4), 1);
+        assert_eq!(threads_for(4, 8), 1);
+        assert_eq!(threads_for(7, 2), 1);
+        assert_eq!(threads_for(8, 2), 2);
+        assert_eq!(threads_for(16, 4), 4);
+        assert_eq!(threads_for(1000, 3), 3);
+        assert_eq!(threads_for(1000, 0), 1);
+    }
+
+    /// Which threads ran each item, and the results in item order.
+    fn traced(items: usize, threads: usize, each: std::time::Duration) -> HashSet<ThreadId> {
+        let v: Vec<usize> = (0..items).collect();
+        let out = parallel_map(&v, threads, |&i| {
+            std::thread::sleep(each);
+            (i * i, std::thread::current().id())
+        });
+        let squares: Vec<usize> = out.iter().map(|r| r.0).collect();
+        assert_eq!(squares, v.iter().map(|i| i * i).collect::<Vec<_>>());
+        out.into_iter().map(|r| r.1).collect()
+    }
+
+    #[test]
+    fn a_small_problem_runs_on_the_calling_thread() {
+        let me = std::thread::current().id();
+        let ran = traced(MIN_ITEMS_PER_THREAD, 8, std::time::Duration::ZERO);
+        assert_eq!(ran, HashSet::from([me]));
+    }
+
+    /// 64 items of a millisecond each on 2 threads: the pool's worker takes
+    /// some of them while the caller works (it has 64 ms to be scheduled).
+    #[test]
+    fn a_large_problem_is_shared_with_the_pool() {
+        let ran = traced(64, 2, std::time::Duration::from_millis(1));
+        assert_eq!(ran.len(), 2, "{ran:?}");
+    }
+
+    /// The pool's threads carry the name the C API's panic hook looks for,
+    /// and a panic in one reaches the caller with its own payload.
+    #[test]
+    fn a_workers_panic_reaches_the_caller_with_its_payload() {
+        let v: Vec<usize> = (0..64).collect();
+        let names = Mutex::new(BTreeSet::new());
+        let caught = catch_unwind(AssertUnwindSafe(|| {
+            parallel_map(&v, 2, |&i| {
+                std::thread::sleep(std::time::Duration::from_millis(1));
+                let name = std::thread::current().name().map(str::to_string);
+                names.lock().unwrap().insert(name);
+                if i == 40 {
+                    panic!("item forty");
+                }
+            })
+        }))
+        .unwrap_err();
+        assert_eq!(caught.downcast_ref::<&str>(), Some(&"item forty"));
+        let names = names.into_inner().unwrap();
+        assert!(
+            names.contains(&Some(WORKER_THREAD_NAME.to_string())),
+            "{names:?}"
+        );
+    }
 }

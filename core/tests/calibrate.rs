@@ -349,7 +349,7 @@ fn global_without_stated_noise_stops_on_agreement() {
 }
 
 /// A campaign of many points: 86 sockets spread by the simulator, each
-/// seated at three places 5 mm apart — 258 points of 4 touches (placing 258
+/// seated at six places 5 mm apart — 516 points of 4 touches (placing 516
 /// sockets apart would take seconds in a debug build).
 fn many_points() -> aacmm_core::simulate::Campaign {
     use aacmm_core::simulate::{SocketPlan, SocketPoint, place_sockets};
@@ -359,7 +359,15 @@ fn many_points() -> aacmm_core::simulate::Campaign {
     let points = spread
         .iter()
         .flat_map(|(label, c)| {
-            [("a", 0.0, 0.0), ("b", 5.0, 0.0), ("c", 0.0, 5.0)].map(|(k, dx, dy)| SocketPoint {
+            [
+                ("a", 0.0, 0.0),
+                ("b", 5.0, 0.0),
+                ("c", 0.0, 5.0),
+                ("d", 5.0, 5.0),
+                ("e", 10.0, 0.0),
+                ("f", 0.0, 10.0),
+            ]
+            .map(|(k, dx, dy)| SocketPoint {
                 label: format!("{label}{k}"),
                 x: c[0] + dx,
                 y: c[1] + dy,
@@ -381,13 +389,15 @@ fn many_points() -> aacmm_core::simulate::Campaign {
 #[test]
 fn same_seed_same_bytes_whatever_the_threads() {
     use aacmm_core::calibrate::Method;
+    use aacmm_core::parallel::threads_for;
     use aacmm_core::residuals::point_chunks;
     let c = many_points();
     let data = c.data_set().unwrap();
     let n = data.points().len();
-    assert!(
-        point_chunks(n) >= 4,
-        "{n} points make {} chunk(s) of work: on one thread below 4",
+    assert_eq!(
+        threads_for(point_chunks(n), 2),
+        2,
+        "{n} points make {} chunk(s) of work: on one thread",
         point_chunks(n)
     );
     let model = ModelOptions {

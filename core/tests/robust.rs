@@ -259,11 +259,14 @@ fn a_bad_tuning_constant_is_refused_by_its_field() {
     }
 }
 
-/// The same bytes at 1, 2 and 4 threads: 300 points (5 chunks), so the normal
-/// equations of every refit split across threads.
+/// The same bytes at 1, 2 and 4 threads: 512 points (8 chunks), so the normal
+/// equations of every refit split across 2 threads.
 #[test]
 fn a_robust_report_is_the_same_at_1_2_and_4_threads() {
-    let data = common::many_points(300);
+    use aacmm_core::parallel::threads_for;
+    use aacmm_core::residuals::point_chunks;
+    let data = common::many_points(512);
+    assert_eq!(threads_for(point_chunks(data.points().len()), 2), 2);
     let report = |threads: usize| {
         common::lm_report_on_threads(&nominal(), &data, threads, |o, _| {
             o.robust = Some(Robust::new(Loss::Cauchy))

@@ -32,7 +32,8 @@ print(f"\n{cal}\nsuccessful: {cal.successful}; position σ {s['touch_sigma_mm']:
 for name, frame in cal.frames.items():
     print(f"\nframe {name!r}:")
     print("  rotation vector, deg:", np.array2string(frame["rotation_deg"], precision=5))
-    print("              σ, deg:", np.array2string(frame["rotation_sigma_deg"], precision=5))
+    print("  σ of small rotations about its x, y, z axes, deg:",
+          np.array2string(frame["small_rotation_sigma_deg"], precision=5))
     print("  translation, mm:    ", np.array2string(frame["translation_mm"], precision=4))
     print("              σ, mm:  ", np.array2string(frame["translation_sigma_mm"], precision=4))
 

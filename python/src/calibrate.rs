@@ -273,10 +273,12 @@ impl Calibration {
     /// Each instrument frame fitted with the arm (none without reference
     /// positions): name → dict of `rotation_deg` (the rotation vector of
     /// `R`, axis × angle, deg) and `translation_mm` (`t`), mapping the arm's
-    /// base coordinates into the instrument's, `y = R p + t`; their standard
-    /// uncertainties `rotation_sigma_deg` and `translation_sigma_mm` (k = 1,
-    /// of the fit's local step; `None` where the data did not determine
-    /// them) — the `[[frame]]` tables of `calibrated.toml`; and
+    /// base coordinates into the instrument's, `y = R p + t`; standard
+    /// uncertainties (k = 1; `None` where the data did not determine them)
+    /// `small_rotation_sigma_deg`, of small rotations about the
+    /// instrument's x, y and z axes (the fit's step `R ← exp(δω) R`, not
+    /// the rotation vector's components), and `translation_sigma_mm` —
+    /// the `[[frame]]` tables of `calibrated.toml`; and
     /// `rotation_matrix`, `R` (3 × 3).
     #[getter]
     fn frames<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -284,20 +286,15 @@ impl Calibration {
         let three = |v: [f64; 3]| Array1::from(v.to_vec()).into_pyarray(py);
         let out = PyDict::new(py);
         for (record, (_, x)) in c.frame_records().into_iter().zip(c.frames()) {
-            // Column k of R is the image of the k-th unit vector, less t.
-            let mut r = Array2::<f64>::zeros((3, 3));
-            for k in 0..3 {
-                let mut e = [0.0; 3];
-                e[k] = 1.0;
-                let y = Frame::apply(&x, e);
-                for i in 0..3 {
-                    r[[i, k]] = y[i] - x[3 + i];
-                }
-            }
+            let rotation = Frame::rotation(&x);
+            let r = Array2::from_shape_fn((3, 3), |(i, k)| rotation[(i, k)]);
             let d = PyDict::new(py);
             d.set_item("rotation_deg", three(record.rotation_deg))?;
             d.set_item("translation_mm", three(record.translation_mm))?;
-            d.set_item("rotation_sigma_deg", record.rotation_sigma_deg.map(three))?;
+            d.set_item(
+                "small_rotation_sigma_deg",
+                record.small_rotation_sigma_deg.map(three),
+            )?;
             d.set_item(
                 "translation_sigma_mm",
                 record.translation_sigma_mm.map(three),
@@ -314,8 +311,10 @@ impl Calibration {
     /// `harmonic2.cos1` deg, `thermal.cte` ppm/K, `drift.x` … mm/h), then
     /// each frame's `NAME.rx` … `NAME.tz` (deg, mm): name → dict of `unit`,
     /// `start`, `calibrated`, `sigma` (k = 1; `None` where the data did not
-    /// determine it) and `fixed` (why the column was held at its start —
-    /// a correction these data cannot separate — or `None`).
+    /// determine it), `sigma_of` (what `sigma` is of when not of the value:
+    /// for a frame's `rx`, `ry`, `rz`, a small rotation about its x, y, z
+    /// axis; else `None`) and `fixed` (why the column was held at its
+    /// start — a correction these data cannot separate — or `None`).
     #[getter]
     fn auxiliary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let out = PyDict::new(py);
@@ -325,6 +324,7 @@ impl Calibration {
             d.set_item("start", a.start)?;
             d.set_item("calibrated", a.calibrated)?;
             d.set_item("sigma", a.sigma)?;
+            d.set_item("sigma_of", &a.sigma_of)?;
             d.set_item("fixed", &a.fixed)?;
             out.set_item(&a.name, d)?;
         }
@@ -465,13 +465,13 @@ impl Calibration {
     /// missing): `calibrated.toml`, `calibration.json`, `timing.json` (this
     /// call's wall times), `report.html` and its SVG figures. Returns the
     /// paths written. `OSError` when a file cannot be written (each file is
-    /// written whole or not at all), or when `dir` holds an earlier
-    /// calibration and `force` is not set; `ValueError` for an empty path.
+    /// written whole or not at all), or when `dir` holds results of an
+    /// earlier run (a calibration's, a campaign's, a report's) and `force`
+    /// is not set; `ValueError` for an empty path.
     #[pyo3(signature = (dir, *, force = false))]
     fn write(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<Vec<PathBuf>> {
         detached(py, || {
-            let earlier = [session::CALIBRATED_FILE, session::REPORT_FILE];
-            crate::error::check_out_dir(&dir, &earlier, force)?;
+            crate::error::check_out_dir(&dir, force)?;
             std::fs::create_dir_all(&dir).map_err(|e| {
                 Error::new(Kind::Io, format!("{}: cannot create: {e}", dir.display()))
             })?;

@@ -64,20 +64,23 @@ pub(crate) enum Kind {
 }
 
 /// Refuses an output directory `dir` that is empty (the current directory
-/// by accident) or that holds one of `earlier` (an earlier result) unless
-/// `force`, as the command line refuses without `--force`.
-pub(crate) fn check_out_dir(dir: &std::path::Path, earlier: &[&str], force: bool) -> Result<()> {
+/// by accident) or that holds results of any aacmm command (the library's
+/// rule, [`aacmm_core::session::earlier_results`]: a calibration's, a
+/// campaign's, a report's) unless `force`, as the command line refuses
+/// without `--force`.
+pub(crate) fn check_out_dir(dir: &std::path::Path, force: bool) -> Result<()> {
     if dir.as_os_str().is_empty() {
         return Err(Error::new(
             Kind::Value,
             "dir: empty; give a directory (\".\" for the current one)",
         ));
     }
-    if !force && let Some(name) = earlier.iter().find(|n| dir.join(n).exists()) {
+    let found = aacmm_core::session::earlier_results(dir);
+    if !force && let Some(name) = found.first() {
         return Err(Error::new(
             Kind::Io,
             format!(
-                "{}: holds an earlier result ({name}); write(..., force=True) overwrites it",
+                "{}: holds an earlier result ({name}); write(..., force=True) writes over it",
                 dir.display()
             ),
         ));

@@ -113,16 +113,13 @@ impl Campaign {
     /// `campaign.toml` — the bytes `aacmm simulate` writes for the same
     /// settings. Returns the paths written.
     ///
-    /// `OSError` when `dir` holds an earlier campaign and `force` is not set;
+    /// `OSError` when `dir` holds results of an earlier run (a campaign's, a
+    /// calibration's, a report's) and `force` is not set;
     /// `ValueError` for an empty path.
     #[pyo3(signature = (dir, *, force = false))]
     fn write(&self, py: Python<'_>, dir: PathBuf, force: bool) -> PyResult<Vec<PathBuf>> {
         detached(py, || {
-            let earlier = [
-                aacmm_core::simulate::POSES_FILE,
-                aacmm_core::simulate::CAMPAIGN_FILE,
-            ];
-            crate::error::check_out_dir(&dir, &earlier, force)?;
+            crate::error::check_out_dir(&dir, force)?;
             Ok(write_campaign(&dir, &self.campaign, &self.settings)?)
         })
     }

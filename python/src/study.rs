@@ -49,6 +49,8 @@ pub fn evaluate<'py>(py: Python<'py>, arm: &Arm, data: &DataSet) -> PyResult<Bou
         let d = &data.data;
         let mut xyz = vec![[0.0; 3]; d.len()];
         arm.kernel.positions(d.poses(), 0..d.len(), &mut xyz)?;
+        // Lengths in another unit than the arm: refused, as calibrate does.
+        aacmm_core::session::check_units(&arm.arm.params, d, &arm.source)?;
         core_evaluate(d, &xyz).map_err(|e| Error::from(e).prefixed(&arm.source))
     })?;
     to_dict(py, &evaluation)
@@ -72,6 +74,11 @@ pub fn identify<'py>(
     let threads = self::threads(threads)?;
     aacmm_core::identify::room_to_identify(&data.data).map_err(Error::from)?;
     let id = detached(py, || {
+        // Lengths in another unit than the arm: refused, as calibrate
+        // does (a joint count that differs is identify's to refuse).
+        if data.data.joints() == arm.arm.params.joint_count() {
+            aacmm_core::session::check_units(&arm.arm.params, &data.data, &arm.source)?;
+        }
         core_identify(&arm.arm.params, &data.data, &noise, threads)
             .map_err(|e| Error::from(e).prefixed(&arm.source))
     })?;

@@ -39,7 +39,7 @@ def test_compliance_gives_the_command_lines_report(cli, ur5, grid, tmp_path):
     assert list(aux)[:3] == ["compliance2", "compliance3", "instrument.rx"]
     assert len(aux) == 2 + 6
     assert [dict(name=k, **v) for k, v in aux.items()] == [
-        {k: column.get(k) for k in ("name", "unit", "start", "calibrated", "sigma", "fixed")}
+        {k: column.get(k) for k in ("name", "unit", "start", "calibrated", "sigma", "sigma_of", "fixed")}
         for column in cal.report["calibration"]["auxiliary"]
     ]
     physics = cal.physics

@@ -100,7 +100,7 @@ def test_a_tracker_campaign_finds_the_true_arm_and_frame(nominal):
     assert np.abs(frame["translation_mm"] - t).max() < 0.05
     assert np.allclose(frame["rotation_matrix"], rotation(w), atol=1e-5)
     assert np.allclose(frame["rotation_matrix"] @ frame["rotation_matrix"].T, np.eye(3), atol=1e-12)
-    for key in ("rotation_sigma_deg", "translation_sigma_mm"):
+    for key in ("small_rotation_sigma_deg", "translation_sigma_mm"):
         assert frame[key].shape == (3,) and (0 < frame[key]).all() and (frame[key] < 0.01).all()
     # The frames' columns in the report (deg, mm).
     auxiliary = {e["name"]: e for e in cal.report["calibration"]["auxiliary"]}
@@ -187,7 +187,7 @@ def test_positions_files_calibrate_as_the_cli_does(cli, nominal, tmp_path):
     table = (out / "calibrated.toml").read_text().split("[[frame]]\n")[1]
     values = dict(line.split(" = ", 1) for line in table.splitlines() if " = " in line)
     assert values["name"] == '"instrument"'
-    for key in ("rotation_deg", "translation_mm", "rotation_sigma_deg", "translation_sigma_mm"):
+    for key in ("rotation_deg", "translation_mm", "small_rotation_sigma_deg", "translation_sigma_mm"):
         written = [float(v) for v in values[key].strip("[]").split(",")]
         assert np.array_equal(written, frame[key]), key
     arrays = aacmm.calibrate(nominal, aacmm.DataSet.from_positions(q, xyz), noise=noise)

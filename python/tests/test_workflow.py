@@ -235,7 +235,7 @@ def test_the_readme_python_example_prints_what_the_readme_says():
 
     readme = (REPO / "README.md").read_text()
     m = re.search(
-        r'```sh\npython3 -m venv v && v/bin/pip install \./python\nv/bin/python -c "\n(.*?)"\n```\n\n```text\n(.*?)```',
+        r'```sh\npython3 -m venv v && v/bin/pip install -v \./python[^\n]*\nv/bin/python -c "\n(.*?)"\n```\n\n```text\n(.*?)```',
         readme,
         re.S,
     )
@@ -286,3 +286,33 @@ def test_a_refused_calibration_says_so_and_its_arm_file_is_refused_unless_asked(
     with pytest.warns(UserWarning, match="NOT usable"):
         again = aacmm.Arm.from_file(written, accept_rejected=True)
     assert "NOT usable" in again.warnings[0]
+
+
+def _calibrate_in_child(arm, data, noise, queue):
+    cal = aacmm.calibrate(arm, data, method="lm", noise=noise, threads=2)
+    queue.put(cal.params.tolist())
+
+
+def test_a_child_forked_after_the_worker_threads_started_calibrates(arm):
+    """The library's worker threads start once per process. A child forked
+    after they did (multiprocessing's default on Linux) inherits the pool
+    but not its threads: its calibration runs on its own thread, with the
+    parent's result, instead of waiting for workers that do not exist."""
+    import multiprocessing
+
+    # 520 points: 9 chunks of the normal equations, so 2 threads share them.
+    campaign = aacmm.simulate(arm, sockets=520, poses=4, seed=5, encoder_noise_deg=0.005, probe_noise_mm=0.01)
+    noise = aacmm.Noise(encoder_deg=0.005, probe_mm=0.01)
+    parent = aacmm.calibrate(arm, campaign.data, method="lm", noise=noise, threads=2)
+    context = multiprocessing.get_context("fork")
+    queue = context.Queue()
+    child = context.Process(target=_calibrate_in_child, args=(arm, campaign.data, noise, queue))
+    child.start()
+    try:
+        params = queue.get(timeout=120)
+    finally:
+        child.join(timeout=10)
+        if child.is_alive():
+            child.kill()
+    assert child.exitcode == 0
+    assert params == parent.params.tolist()

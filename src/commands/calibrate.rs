@@ -20,7 +20,7 @@ use super::shared_flags::{FitInput, flag_error};
 use crate::output::{Stdout, note, warn};
 use crate::paths::check_output_dir;
 
-/// Calibrate an arm from touches (and reference lengths).
+/// Calibrate an arm from touches, reference lengths and/or reference positions.
 #[derive(clap::Args)]
 pub struct Args {
     #[command(flatten)]
@@ -74,8 +74,9 @@ pub struct Args {
     /// the report (report.html and one SVG per figure).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Overwrite an earlier calibration in --out (without it, a directory
-    /// that holds calibrated.toml or calibration.json is refused).
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
     #[arg(long)]
     force: bool,
 }
@@ -204,8 +205,7 @@ pub fn run(args: Args) -> Result<()> {
     print_results(&report, wrote, total)
 }
 
-/// --out may not hold an input, nor (without --force) an earlier
-/// calibration.
+/// --out may not hold an input, nor (without --force) earlier results.
 fn check_paths(args: &Args) -> Result<()> {
     let mut inputs = args.fit.paths();
     inputs.extend(args.validate.as_deref().map(|p| ("--validate", p)));
@@ -235,11 +235,6 @@ fn check_paths(args: &Args) -> Result<()> {
         ]
         .concat(),
         &inputs,
-    )?;
-    crate::paths::keep_earlier_results(
-        "--out",
-        &args.out,
-        &[CALIBRATED_FILE, REPORT_FILE],
         args.force,
     )
 }
@@ -344,10 +339,11 @@ fn print_results(report: &session::CalibrationReport, wrote: String, total: f64)
     ))?;
     // The verdict's notes are in the summary, under the verdict.
     if !report.is_usable() {
+        // The first line names the first cause; the files' marks last.
         bail!(
-            "the calibration is not usable; the files were written for inspection, marked so \
-             in calibration.json (/verdict), calibrated.toml ([verdict]: aacmm refuses to read \
-             it unless asked) and report.html:\n  {}",
+            "the calibration is not usable: {}\n  (the files were written for inspection, \
+             marked so in calibration.json (/verdict), calibrated.toml ([verdict]: aacmm \
+             refuses to read it unless asked) and report.html)",
             report.verdict.reasons.join("\n  ")
         );
     }

@@ -37,6 +37,11 @@ pub struct Args {
     /// results do not depend on it.
     #[arg(long, value_name = "N", value_parser = super::shared_flags::threads_flag)]
     threads: Option<usize>,
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
+    #[arg(long)]
+    force: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -46,10 +51,10 @@ pub fn run(args: Args) -> Result<()> {
     ];
     inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
     if let Some(json) = &args.json {
-        check_output_file("--json", json, &inputs)?;
+        check_output_file("--json", json, &inputs, args.force)?;
     }
     if let Some(dir) = &args.report {
-        check_output_dir("--report", dir, &EVALUATION_FILES, &inputs)?;
+        check_output_dir("--report", dir, &EVALUATION_FILES, &inputs, args.force)?;
     }
     let (arm, poses) = args.input.read()?;
     let kernel = args.input.kernel(&arm)?;
@@ -58,6 +63,9 @@ pub fn run(args: Args) -> Result<()> {
     super::report(data.repeat_warnings())?;
     if let Some(path) = &args.lengths {
         data = data.with_lengths(&read_lengths(path)?, &source_name(path))?;
+        // As calibrate and identify check them: lengths in another unit
+        // than the arm are refused, naming the input at fault.
+        aacmm_core::session::check_units(&arm.params, &data, &source_name(&args.input.arm))?;
     }
     // The positions and the rows below are the evaluation's: room first.
     aacmm_core::metrics::room_to_evaluate(&data)?;

@@ -35,13 +35,18 @@ pub struct Args {
     /// row.
     #[arg(long, value_name = "OUT.csv")]
     dh_table: Option<PathBuf>,
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
+    #[arg(long)]
+    force: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let inputs = [("--arm", args.arm.as_path())];
     for (flag, out) in [("--urdf", &args.urdf), ("--dh-table", &args.dh_table)] {
         if let Some(out) = out {
-            check_output_file(flag, out, &inputs)?;
+            check_output_file(flag, out, &inputs, args.force)?;
         }
     }
     let (arm, warnings) = read_arm(&args.arm)?;

@@ -20,16 +20,23 @@ pub struct Args {
     /// Also write everything as JSON.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
+    #[arg(long)]
+    force: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
     if let Some(json) = &args.json {
-        check_output_file("--json", json, &args.fit.paths())?;
+        check_output_file("--json", json, &args.fit.paths(), args.force)?;
     }
     // Bad noise flags are refused before any file is read.
     args.fit.noise().check().map_err(flag_error)?;
     let report = args.fit.request()?.identify().map_err(|e| match e {
         CalibrationError::Option(_) => flag_error(e),
+        // Each names the input at fault itself.
+        e if e.names_its_input() => anyhow::Error::new(e),
         other => super::noise_flags(
             anyhow::Error::new(other).context(source_name(&args.fit.arm)),
             &args.fit,

@@ -10,19 +10,13 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::error::short;
-use aacmm_core::io::{
-    AngleUnit, Arm, Poses, limit_warning, read_arm, read_poses, source_name, write_poses,
-};
+use aacmm_core::io::{AngleUnit, Arm, Poses, limit_warning, read_arm, read_poses, source_name};
 use aacmm_core::plan::{
-    Criterion, CurvePoint, Given, Measure, Plan, PlanError, PlanSettings, Spread,
-    coverage::K_ISOTROPIC, plan,
+    Criterion, DEFAULT_SOCKETS, Given, GivenNote, Measure, Plan, PlanError, PlanSettings, Pool,
+    SampleError, SummaryContext, plan, sample_positions, sample_touches_observed, summary,
 };
 use aacmm_core::session::{CalibrationReport, REPORT_FILE};
-use aacmm_core::simulate::{
-    CampaignSettings, ErrorModel, MIN_POSES_PER_SOCKET, PositionSettings, SimError, SocketPlan,
-    simulate, simulate_positions,
-};
+use aacmm_core::simulate::{SimError, SocketPlan};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
 
@@ -30,20 +24,11 @@ use super::report;
 use crate::output::{Stdout, warn};
 use crate::paths::{Input, check_output_file};
 
+// The default quoted in --workspace-poses' help is the library's.
+const _: () = assert!(aacmm_core::plan::WORKSPACE_POSES == 500);
+
 /// Rows chosen with --given when --count is not given.
 const DEFAULT_NEXT: usize = 10;
-
-/// Sockets of a sampled touch pool when neither --sockets nor
-/// --socket-count is given.
-const DEFAULT_SOCKETS: usize = 5;
-
-/// σ of the encoder noise of sampled touches, degrees (0.36″, 1.7 µm at a
-/// metre): see [`sample_touches`].
-const SAMPLE_ENCODER_NOISE_DEG: f64 = 1e-4;
-
-/// More rows stop paying where doubling them lowers the RMS radius by less
-/// than this fraction.
-const KNEE: f64 = 0.10;
 
 /// Choose which poses to measure (experiment design): K rows of a pool of
 /// candidates that make the calibration predict the probe's position best
@@ -98,6 +83,11 @@ pub struct Args {
     /// uncertainty is averaged over these poses [default: the candidates].
     #[arg(long, value_name = "POSES.csv")]
     workspace: Option<PathBuf>,
+    /// Workspace poses the criterion averages over at most: an even sample
+    /// of a larger workspace (each pose adds to every step's work)
+    /// [default: 500].
+    #[arg(long, value_name = "N")]
+    workspace_poses: Option<usize>,
     /// What is optimised: the mean predicted position variance over the
     /// workspace, one row from each of K strata of look-alike candidates
     /// (robust), over all candidates freely (i), or the determinant of the
@@ -125,7 +115,9 @@ pub struct Args {
     /// Also write the whole plan as JSON.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
-    /// Overwrite an existing --out or --json file.
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
     #[arg(long)]
     force: bool,
 }
@@ -152,22 +144,18 @@ enum CriterionFlag {
     Determinant,
 }
 
-/// The candidates, and where they come from.
-struct Pool {
-    poses: Poses,
-    /// In words, for the summary.
-    origin: String,
-    /// For messages: the file, or the flag that drew them.
+/// The candidates, and the name messages give them: the file, or the flag
+/// that drew them.
+struct Candidates {
+    pool: Pool,
     name: String,
-    /// Whether the rows are lines of a file (the ranking names them).
-    from_file: bool,
 }
 
 /// A calibration the plan adds to.
 struct Start {
     report: CalibrationReport,
     given: Given,
-    dir: PathBuf,
+    note: GivenNote,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -183,42 +171,39 @@ pub fn run(args: Args) -> Result<()> {
         .map_or(&arm.params, |s| &s.report.calibration.params);
     // Bad settings are refused before a pool is drawn.
     let settings = settings(&args, start.is_some())?;
-    let pool = candidates(&args, &arm)?;
+    let candidates = candidates(&args, &arm)?;
     let workspace = match &args.workspace {
         Some(path) => Some(read_candidates("--workspace", path, &args, &arm)?),
         None => None,
     };
+    let mut bar = super::progress::Bar::new();
+    bar.busy("plan: choosing rows");
     let plan = plan(
         params,
-        &pool.poses,
+        &candidates.pool.poses,
         workspace.as_ref(),
         start.as_ref().map(|s| &s.given),
         &settings,
-    )
-    .map_err(|e| match e {
+    );
+    drop(bar);
+    let plan = plan.map_err(|e| match e {
         // The count's bounds: the library names the setting, the command
         // line its flag.
         PlanError::Invalid(m) if m.starts_with("count ") => anyhow!("--{m}"),
-        e => anyhow!("{}: {e}", pool.name),
+        e => anyhow!("{}: {e}", candidates.name),
     })?;
-    if plan.all.is_none() {
-        bail!(
-            "{}: even all {} candidates do not determine the {} parameters ({}): no subset \
-             can; add candidates that turn the joints further{}",
-            pool.name,
-            plan.candidates,
-            plan.parameters.len(),
-            plan.parameters.join(", "),
-            if plan.measure == Measure::Touches {
-                ", or touches of more sockets"
-            } else {
-                ""
-            }
-        );
+    if let Some(why) = plan.pool_undetermined() {
+        bail!("{}: {why}", candidates.name);
     }
-    let mut text = summary(&plan, &pool, &args, start.as_ref());
+    let workspace_file = args.workspace.as_deref().map(source_name);
+    let context = SummaryContext {
+        pool: &candidates.pool,
+        workspace: workspace_file.as_deref(),
+        given: start.as_ref().map(|s| &s.note),
+    };
+    let mut text = summary(&plan, context);
     if let Some(path) = &args.out {
-        write_chosen(path, &plan, &pool.poses, args.angle_unit)?;
+        write_chosen(path, &plan, &candidates.pool.poses, args.angle_unit)?;
         text += &format!("wrote {}\n", path.display());
     }
     if let Some(path) = &args.json {
@@ -230,13 +215,11 @@ pub fn run(args: Args) -> Result<()> {
     out.finish()?;
     plan.warnings.iter().try_for_each(warn)?;
     if plan.planned.is_none() {
-        let enough = plan.curve.iter().find(|c| c.rms_mm.is_some());
         bail!(
             "no usable plan: the {} chosen rows do not determine every parameter{}",
             plan.count,
-            enough.map_or(String::new(), |c| format!(
-                "; {} rows do: give --count {} or more",
-                c.rows, c.rows
+            plan.rows_needed().map_or(String::new(), |rows| format!(
+                "; {rows} rows do: give --count {rows} or more"
             ))
         );
     }
@@ -255,13 +238,7 @@ fn check_paths(args: &Args) -> Result<()> {
     let outputs = [("--out", &args.out), ("--json", &args.json)];
     for (flag, path) in outputs {
         let Some(path) = path else { continue };
-        check_output_file(flag, path, &inputs)?;
-        if !args.force && path.exists() {
-            bail!(
-                "{flag} {}: already exists; give --force to overwrite it, or another name",
-                path.display()
-            );
-        }
+        check_output_file(flag, path, &inputs, args.force)?;
     }
     if let (Some(out), Some(json)) = (&args.out, &args.json)
         && out == json
@@ -312,30 +289,51 @@ fn read_given(dir: &Path, arm: &Arm, arm_file: &Path) -> Result<Start> {
             report.verdict.reasons.join("; ")
         ))?;
     }
+    let note = GivenNote {
+        dir: dir.display().to_string(),
+        sigma0: report.calibration.dof.sigma0,
+    };
     Ok(Start {
         report,
         given,
-        dir: dir.to_path_buf(),
+        note,
     })
 }
 
 /// The pool: read (--candidates) or drawn (--sample).
-fn candidates(args: &Args, arm: &Arm) -> Result<Pool> {
+fn candidates(args: &Args, arm: &Arm) -> Result<Candidates> {
     if let Some(path) = &args.candidates {
-        return Ok(Pool {
-            poses: read_candidates("--candidates", path, args, arm)?,
-            origin: format!("from {}", source_name(path)),
+        let poses = read_candidates("--candidates", path, args, arm)?;
+        return Ok(Candidates {
+            pool: Pool::from_file(poses, &source_name(path)),
             name: format!("--candidates {}", source_name(path)),
-            from_file: true,
         });
     }
     let Some(n) = args.sample else {
         bail!("give --candidates POOL.csv or --sample N");
     };
-    match args.measure {
-        MeasureFlag::Positions => sample_positions(arm, n, args.seed, &args.arm),
-        MeasureFlag::Touches => sample_touches(args, arm, n),
-    }
+    let pool = match args.measure {
+        MeasureFlag::Positions => sample_positions(arm, n, args.seed, &source_name(&args.arm))
+            .map_err(|e| anyhow!("--sample {n}: {e}"))?,
+        MeasureFlag::Touches => {
+            let sockets = match &args.sockets {
+                Some(path) => SocketPlan::from_file(path)?,
+                None => SocketPlan::Spread {
+                    count: args.socket_count.unwrap_or(DEFAULT_SOCKETS),
+                },
+            };
+            let mut bar = super::progress::Bar::new();
+            let pool = sample_touches_observed(arm, sockets, n, args.seed, &mut |f| {
+                bar.show("sampling", f)
+            });
+            drop(bar);
+            pool.map_err(|e| sample_error(e, args, n))?
+        }
+    };
+    Ok(Candidates {
+        pool,
+        name: format!("--sample {n}"),
+    })
 }
 
 /// A poses file of the arm's joint count, its warnings (readings outside
@@ -352,107 +350,23 @@ fn read_candidates(flag: &str, path: &Path, args: &Args, arm: &Arm) -> Result<Po
     Ok(poses)
 }
 
-/// `n` poses uniformly within the arm's joint limits (±180° where none),
-/// labelled `P1…Pn`: the poses `aacmm simulate --positions` draws.
-fn sample_positions(arm: &Arm, n: usize, seed: u64, file: &Path) -> Result<Pool> {
-    if n == 0 {
-        bail!("--sample 0: draw at least one candidate");
-    }
-    let settings = PositionSettings {
-        poses: n,
-        frames: 1,
-        // The instrument's readings are not used: only the poses.
-        noise: aacmm_core::residuals::Noise {
-            position_mm: Some(0.0),
-            ..Default::default()
-        },
-        seed,
-    };
-    let drawn = simulate_positions(arm, &settings).map_err(|e| anyhow!("--sample {n}: {e}"))?;
-    let rows = drawn.positions;
-    let mut poses = Poses::with_capacity(rows.joints(), rows.len());
-    for i in 0..rows.len() {
-        poses.push(rows.label(i), rows.reading(i), i + 2);
-    }
-    let limits = arm.limits.iter().filter(|l| l.is_some()).count();
-    let within = match limits {
-        0 => "±180° on every joint".to_string(),
-        l if l == rows.joints() => format!("the joint limits of {}", source_name(file)),
-        _ => format!(
-            "the joint limits of {} (±180° where none)",
-            source_name(file)
-        ),
-    };
-    Ok(Pool {
-        poses,
-        origin: format!("drawn uniformly within {within} (seed {seed})"),
-        name: format!("--sample {n}"),
-        from_file: false,
-    })
-}
-
-/// About `n` touches of sockets spread as `aacmm simulate` spreads them
-/// (or read from --sockets), each found by inverse kinematics on the arm
-/// itself: the simulator with no error and no noise.
-fn sample_touches(args: &Args, arm: &Arm, n: usize) -> Result<Pool> {
-    let sockets = match &args.sockets {
-        Some(path) => SocketPlan::from_file(path)?,
-        None => SocketPlan::Spread {
-            count: args.socket_count.unwrap_or(DEFAULT_SOCKETS),
-        },
-    };
-    let count = sockets.count();
-    if count == 0 {
-        bail!("--socket-count 0: at least one socket");
-    }
-    let per = n.div_ceil(count);
-    if per < MIN_POSES_PER_SOCKET {
-        bail!(
-            "--sample {n}: {count} sockets need at least {} touches ({MIN_POSES_PER_SOCKET} \
-             per socket)",
-            MIN_POSES_PER_SOCKET * count
-        );
-    }
-    // The true arm is the arm itself: no error, no lengths, and an encoder
-    // noise far below any encoder's resolution. Touches that fit the arm
-    // exactly (zero residuals) make the identifiability analysis the plan
-    // starts from leave the arm's scale free (its scale direction is then
-    // an exact null direction, which it sets aside as redundant), and no
-    // plan is determined; this noise keeps the residuals off zero.
-    let errors = ErrorModel::File { arm: arm.clone() };
-    let mut settings = CampaignSettings::new(args.seed, errors, count, per);
-    settings.sockets = sockets;
-    settings.reference_lengths = 0;
-    settings.encoder_noise_deg = SAMPLE_ENCODER_NOISE_DEG;
-    let campaign = simulate(arm, &settings).map_err(|e| sample_error(e, args, n))?;
-    let placed = match &args.sockets {
-        Some(path) => format!("from {}", source_name(path)),
-        None => "spread over the reachable volume".to_string(),
-    };
-    Ok(Pool {
-        origin: format!(
-            "{count} sockets {placed}, {per} touches each found on the arm by inverse \
-             kinematics (seed {})",
-            args.seed
-        ),
-        poses: campaign.poses,
-        name: format!("--sample {n}"),
-        from_file: false,
-    })
-}
-
-/// The simulator's refusal in terms of the flags.
-fn sample_error(e: SimError, args: &Args, n: usize) -> anyhow::Error {
+/// The library's refusal to draw touches, in terms of the flags.
+fn sample_error(e: SampleError, args: &Args, n: usize) -> anyhow::Error {
     let flag = match &e {
-        SimError::Setting { name, .. } if name == "sockets" => "--socket-count".to_string(),
-        SimError::Setting { name, .. } if name == "sockets.points" => match &args.sockets {
-            Some(p) => format!("--sockets {}", p.display()),
-            None => "--sockets".to_string(),
-        },
+        SampleError::NoSocket => "--socket-count 0".to_string(),
+        SampleError::Simulate(SimError::Setting { name, .. }) if name == "sockets" => {
+            "--socket-count".to_string()
+        }
+        SampleError::Simulate(SimError::Setting { name, .. }) if name == "sockets.points" => {
+            match &args.sockets {
+                Some(p) => format!("--sockets {}", p.display()),
+                None => "--sockets".to_string(),
+            }
+        }
         _ => format!("--sample {n}"),
     };
     match e {
-        SimError::Setting { message, .. } => anyhow!("{flag}: {message}"),
+        SampleError::Simulate(SimError::Setting { message, .. }) => anyhow!("{flag}: {message}"),
         other => anyhow!("{flag}: {other}"),
     }
 }
@@ -486,6 +400,12 @@ fn settings(args: &Args, given: bool) -> Result<PlanSettings> {
     }
     s.sigma_mm = args.noise;
     s.seed = args.seed;
+    if let Some(n) = args.workspace_poses {
+        if n == 0 {
+            bail!("--workspace-poses 0: at least 1");
+        }
+        s.workspace_limit = n;
+    }
     Ok(s)
 }
 
@@ -495,306 +415,6 @@ fn write_chosen(path: &Path, plan: &Plan, pool: &Poses, unit: AngleUnit) -> Resu
     for (rank, row) in plan.chosen().into_iter().enumerate() {
         chosen.push(pool.label(row), pool.reading(row), rank + 2);
     }
-    aacmm_core::io::write_atomic_with(path, |w| write_poses(w, &chosen, unit))
+    aacmm_core::io::write_atomic_with(path, |w| aacmm_core::io::write_poses(w, &chosen, unit))
         .with_context(|| format!("{}: cannot write", path.display()))
-}
-
-/// What the user reads: what was optimised, the predicted radius with the
-/// chosen rows against all and against random ones, the curve, the ranking,
-/// the sockets and the joint spans.
-fn summary(plan: &Plan, pool: &Pool, args: &Args, start: Option<&Start>) -> String {
-    let mut t = header(plan, pool, args, start);
-    t += &spreads(plan);
-    t += &curve(plan);
-    t += &ranking(plan, pool, start.is_some());
-    if !plan.sockets.is_empty() {
-        let s: Vec<String> = (plan.sockets.iter())
-            .map(|(label, n)| format!("{label} {n}"))
-            .collect();
-        t += &format!("Touches per socket: {}\n", s.join(", "));
-    }
-    let spans: Vec<String> = (plan.joints.iter())
-        .map(|j| format!("q{} {:.0}/{:.0}", j.joint, j.chosen_deg, j.pool_deg))
-        .collect();
-    t += &format!(
-        "Joint spans, chosen/candidates (deg): {}\n",
-        spans.join(", ")
-    );
-    t
-}
-
-/// The plan's first lines: the pool, what was optimised, the noise.
-fn header(plan: &Plan, pool: &Pool, args: &Args, start: Option<&Start>) -> String {
-    let what = match plan.measure {
-        Measure::Positions => "positions",
-        Measure::Touches => "touches",
-    };
-    let mut t = format!(
-        "Plan: {} of {} candidate {what}, {}\n",
-        plan.count, plan.candidates, pool.origin
-    );
-    if let Some(s) = start {
-        let c = &s.report.calibration;
-        t += &format!(
-            "Adding to the calibration in {} (its covariance the start; σ̂₀ {:.2})\n",
-            s.dir.display(),
-            c.dof.sigma0
-        );
-    }
-    let workspace = match &args.workspace {
-        Some(p) => format!("{} ({} poses used)", source_name(p), plan.workspace_poses),
-        None => format!("the candidates ({} poses used)", plan.workspace_poses),
-    };
-    let criterion = match plan.criterion {
-        Criterion::Robust if plan.hedge > 0.0 => format!(
-            "the mean predicted variance of a probe position over the workspace, one row from \
-             each of {} strata of look-alike candidates, each discounted by its leverage \
-             (robust, τ = {:.2})",
-            plan.strata, plan.hedge
-        ),
-        Criterion::Robust => format!(
-            "the mean predicted variance of a probe position over the workspace, one row from \
-             each of {} strata of look-alike candidates (robust)",
-            plan.strata
-        ),
-        Criterion::Prediction => {
-            "the mean predicted variance of a probe position over the workspace (I-optimal)"
-                .to_string()
-        }
-        Criterion::Determinant => {
-            "the determinant of the information (D-optimal, for comparison)".to_string()
-        }
-    };
-    let frame = plan
-        .parameters
-        .iter()
-        .filter(|p| p.starts_with("frame "))
-        .count();
-    let geometry = plan.parameters.len() - frame;
-    let frame = if frame > 0 {
-        format!(" and the instrument frame's {frame}")
-    } else {
-        String::new()
-    };
-    t += &format!(
-        "Optimised: {criterion}\n  workspace: {workspace}; parameters: {geometry} of the \
-         geometry{frame}; noise σ {} mm per coordinate of a row{}\n",
-        match start {
-            Some(_) => format!("{:.4}", plan.sigma_mm),
-            None => short(plan.sigma_mm),
-        },
-        if start.is_some() {
-            " (the calibration's)"
-        } else {
-            ""
-        }
-    );
-    t
-}
-
-/// The predicted radius with the chosen rows, all candidates, and random
-/// subsets of the same size.
-fn spreads(plan: &Plan) -> String {
-    let row = |name: &str, s: Option<Spread>| match s {
-        Some(s) => format!("  {name:<30} {:>9.4} {:>9.4}\n", s.rms_mm, s.max_mm),
-        None => format!("  {name:<30}  not determined\n"),
-    };
-    let r = &plan.random;
-    let mut t = format!(
-        "Predicted 95 % radius of a probe position over the workspace (mm; {K_ISOTROPIC:.2} σ \
-         for an isotropic error):\n  {:<30} {:>9} {:>9}\n",
-        "", "RMS", "max"
-    );
-    if plan.given {
-        t += &row("the calibration alone", plan.start);
-        t += &row(&format!("with the {} chosen", plan.count), plan.planned);
-        t += &row(
-            &format!("with all {} candidates", plan.candidates),
-            plan.all,
-        );
-    } else {
-        t += &row(&format!("the {} chosen", plan.count), plan.planned);
-        t += &row(&format!("all {} candidates", plan.candidates), plan.all);
-    }
-    t += &row(
-        &format!("{} at random (median of {})", plan.count, r.sets),
-        r.median,
-    );
-    if r.determined < r.sets {
-        t += &format!(
-            "  ({} of the {} random subsets determine every parameter)\n",
-            r.determined, r.sets
-        );
-    }
-    t
-}
-
-/// Where more rows stop paying, read off the curve.
-#[derive(Debug, PartialEq)]
-enum Knee {
-    /// Doubling from `rows` lowers the RMS by `gain` (< [`KNEE`]).
-    At { rows: usize, gain: f64 },
-    /// Every doubling the curve shows still gains [`KNEE`] or more; the
-    /// last from `rows`, by `gain`.
-    Beyond { rows: usize, gain: f64 },
-    /// The curve shows no doubling of determined rows.
-    Unknown,
-}
-
-/// The first determined point of the curve from which doubling the rows
-/// lowers the RMS radius by less than [`KNEE`] (the RMS at twice the rows
-/// interpolated between the curve's points).
-fn knee(curve: &[CurvePoint]) -> Knee {
-    let points: Vec<(usize, f64)> = curve
-        .iter()
-        .filter_map(|c| c.rms_mm.map(|r| (c.rows, r)))
-        .collect();
-    let at = |rows: usize| -> Option<f64> {
-        let i = points.iter().position(|&(k, _)| k >= rows)?;
-        let (k1, r1) = points[i];
-        if k1 == rows || i == 0 {
-            return (k1 == rows).then_some(r1);
-        }
-        let (k0, r0) = points[i - 1];
-        Some(r0 + (r1 - r0) * (rows - k0) as f64 / (k1 - k0) as f64)
-    };
-    let mut last = Knee::Unknown;
-    for &(k, r) in &points {
-        let Some(r2) = at(2 * k) else { break };
-        let gain = 1.0 - r2 / r;
-        if gain < KNEE {
-            return Knee::At { rows: k, gain };
-        }
-        last = Knee::Beyond { rows: k, gain };
-    }
-    last
-}
-
-/// The curve, rows → RMS radius, with the chosen count and the knee marked.
-fn curve(plan: &Plan) -> String {
-    let to = plan.curve.last().map_or(plan.count, |c| c.rows);
-    let knee = knee(&plan.curve);
-    let mut t = format!("RMS radius as rows are added (the greedy continued to {to}):\n");
-    for c in &plan.curve {
-        let value = c
-            .rms_mm
-            .map_or("not determined".to_string(), |r| format!("{r:.4} mm"));
-        let mut marks = Vec::new();
-        if c.rows == plan.count {
-            marks.push("chosen");
-        }
-        if matches!(knee, Knee::At { rows, .. } if rows == c.rows) {
-            marks.push("more stops paying");
-        }
-        let marks = if marks.is_empty() {
-            String::new()
-        } else {
-            format!("  ← {}", marks.join(", "))
-        };
-        t += &format!("  {:>6}  {value}{marks}\n", c.rows);
-    }
-    t += &match knee {
-        Knee::At { rows, gain } => format!(
-            "  From {rows} rows, twice as many lower the RMS radius by {:.0} % only (< {:.0} %).\n",
-            100.0 * gain,
-            100.0 * KNEE
-        ),
-        Knee::Beyond { rows, gain } => format!(
-            "  Twice {rows} rows still lower the RMS radius by {:.0} %: more rows still pay.\n",
-            100.0 * gain
-        ),
-        Knee::Unknown => String::new(),
-    };
-    t
-}
-
-/// A step's criterion, `None` while the rows do not determine every
-/// parameter. Generic over what [`aacmm_core::plan::Step::criterion_mm`]
-/// holds, a value or an option: the library's plan is being reworked.
-fn criterion_of(c: impl Into<Option<f64>>) -> Option<f64> {
-    c.into()
-}
-
-/// The chosen rows in the order chosen: row of the pool (from 1), label,
-/// line of the candidates file, and the criterion after each.
-fn ranking(plan: &Plan, pool: &Pool, next: bool) -> String {
-    let mut t = if next {
-        format!("Measure these {} next, in this order", plan.count)
-    } else {
-        "Chosen, in order".to_string()
-    };
-    t += " (after each, the mean predicted variance over the workspace as an RMS radius, mm; \
-          — until every parameter is determined):\n";
-    let width = (plan.steps.iter().map(|s| s.label.len()))
-        .max()
-        .unwrap_or(0)
-        .max(5);
-    let line = |l: &str| {
-        if pool.from_file {
-            format!("  {l:>5}")
-        } else {
-            String::new()
-        }
-    };
-    t += &format!(
-        "  {:>4}  {:>5}  {:<width$}{}  criterion\n",
-        "#",
-        "row",
-        "label",
-        line("line")
-    );
-    for (rank, step) in plan.steps[..plan.count].iter().enumerate() {
-        let criterion =
-            criterion_of(step.criterion_mm).map_or("—".to_string(), |c| format!("{c:.4}"));
-        t += &format!(
-            "  {:>4}  {:>5}  {:<width$}{}  {criterion}\n",
-            rank + 1,
-            step.row + 1,
-            step.label,
-            line(&pool.poses.line(step.row).to_string())
-        );
-    }
-    t
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn curve(points: &[(usize, Option<f64>)]) -> Vec<CurvePoint> {
-        points
-            .iter()
-            .map(|&(rows, rms_mm)| CurvePoint { rows, rms_mm })
-            .collect()
-    }
-
-    #[test]
-    fn the_knee_is_the_first_doubling_that_gains_under_ten_percent() {
-        let c = curve(&[
-            (5, None),
-            (10, Some(1.0)),
-            (15, Some(0.7)),
-            (20, Some(0.6)),
-            (30, Some(0.57)),
-            (40, Some(0.55)),
-        ]);
-        // 10 → 20: 40 %; 15 → 30: 18.6 %; 20 → 40: 8.3 %.
-        match knee(&c) {
-            Knee::At { rows, gain } => {
-                assert_eq!(rows, 20);
-                assert!((gain - (1.0 - 0.55 / 0.6)).abs() < 1e-12);
-            }
-            other => panic!("{other:?}"),
-        }
-        // Interpolated: 10 → 20 between 15 and 30.
-        let c = curve(&[(10, Some(1.0)), (15, Some(0.8)), (30, Some(0.5))]);
-        match knee(&c) {
-            Knee::Beyond { rows, gain } => {
-                assert_eq!(rows, 15);
-                assert!((gain - 0.375).abs() < 1e-12);
-            }
-            other => panic!("{other:?}"),
-        }
-        assert_eq!(knee(&curve(&[(5, None), (10, Some(1.0))])), Knee::Unknown);
-    }
 }

@@ -29,6 +29,11 @@ pub struct Args {
     /// will see, for a verification run. Without it, the arm's base frame.
     #[arg(long, value_name = "NAME")]
     frame: Option<String>,
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
+    #[arg(long)]
+    force: bool,
 }
 
 /// The registration of the frame `name` in the arm file `path`.
@@ -67,7 +72,7 @@ pub fn run(args: Args) -> Result<()> {
             ("--arm", args.input.arm.as_path()),
             ("--data", &args.input.data),
         ];
-        check_output_file("--out", out, &inputs)?;
+        check_output_file("--out", out, &inputs, args.force)?;
     }
     let (arm, poses) = args.input.read()?;
     let frame = match &args.frame {

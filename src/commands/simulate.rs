@@ -11,7 +11,7 @@ use super::report;
 use aacmm_core::simulate::{
     CAMPAIGN_FILE, CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG,
     DEFAULT_ZERO_SIGMA_DEG, ErrorModel, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, SimError,
-    SocketPlan, TRUE_ARM_FILE, pair_count, simulate, write_campaign,
+    SocketPlan, TRUE_ARM_FILE, pair_count, simulate_observed, write_campaign,
 };
 use anyhow::{Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
@@ -113,9 +113,14 @@ pub struct Args {
     /// distances get Gaussian noise of this size and lengths.csv states it.
     #[arg(long, value_name = "MM", allow_negative_numbers = true)]
     length_uncertainty: Option<f64>,
-    /// Output directory (created if missing; the campaign's files in it are replaced).
+    /// Output directory (created if missing).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this command's
+    /// files are overwritten; nothing is deleted).
+    #[arg(long)]
+    force: bool,
 }
 
 /// The error models of `--errors`.
@@ -144,7 +149,11 @@ pub fn run(args: Args) -> Result<()> {
     let settings = campaign_settings(&args, errors.clone(), sockets);
     settings.validate(joints).map_err(located)?;
 
-    let campaign = simulate(&nominal, &settings).map_err(located)?;
+    // Progress on a terminal: a thousand sockets take half a minute.
+    let mut bar = super::progress::Bar::new();
+    let campaign = simulate_observed(&nominal, &settings, &mut |f| bar.show("simulate", f));
+    drop(bar);
+    let campaign = campaign.map_err(located)?;
     let written = write_campaign(&args.out, &campaign, &settings)?;
     describe(&args, &nominal, &settings, &campaign, &written)?;
     if args.positions.is_some() {
@@ -229,7 +238,7 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
         .map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))
 }
 
-/// --out may not hold an input.
+/// --out may not hold an input, nor (without --force) earlier results.
 fn check_paths(args: &Args) -> Result<()> {
     let mut inputs: Vec<Input> = vec![("--arm", &args.arm)];
     inputs.extend(args.true_arm.as_deref().map(|p| ("--true", p)));
@@ -242,7 +251,7 @@ fn check_paths(args: &Args) -> Result<()> {
         CAMPAIGN_FILE,
         aacmm_core::simulate::POSITIONS_FILE,
     ];
-    check_output_dir("--out", &args.out, &outputs, &inputs)
+    check_output_dir("--out", &args.out, &outputs, &inputs, args.force)
 }
 
 /// The true arm: a file (--true) or an error model (--errors).

@@ -299,8 +299,8 @@ fn bad_solver_settings_are_clean_errors() {
     }
 }
 
-/// A campaign of 270 sockets, 4 touches each, simulated into `dir`: the
-/// shipped campaign's 10 sockets, each with its 3 × 3 × 3 neighbours 10 mm
+/// A campaign of 540 sockets, 4 touches each, simulated into `dir`: the
+/// shipped campaign's 10 sockets, each with its 3 × 3 × 6 neighbours 10 mm
 /// apart (none lower than the socket: two are near the table). Returns the
 /// poses and lengths files.
 fn many_points(dir: &std::path::Path) -> (String, String) {
@@ -309,7 +309,7 @@ fn many_points(dir: &std::path::Path) -> (String, String) {
     for line in shipped.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
         let c: Vec<f64> = f[1..].iter().map(|v| v.parse().unwrap()).collect();
-        for (k, (dx, dy, dz)) in (0..27).map(|k| (k % 3, k / 3 % 3, k / 9)).enumerate() {
+        for (k, (dx, dy, dz)) in (0..54).map(|k| (k % 3, k / 3 % 3, k / 9)).enumerate() {
             let at = |v: f64, d: usize, low: f64| v + 10.0 * (d as f64 - low);
             let (x, y, z) = (at(c[0], dx, 1.0), at(c[1], dy, 1.0), at(c[2], dz, 0.0));
             sockets.push_str(&format!("{}-{k},{x},{y},{z}\n", f[0]));
@@ -335,14 +335,16 @@ fn many_points(dir: &std::path::Path) -> (String, String) {
 #[test]
 fn same_seed_same_files_whatever_the_thread_count() {
     use aacmm_core::io::{AngleUnit, read_poses};
+    use aacmm_core::parallel::threads_for;
     use aacmm_core::residuals::point_chunks;
     let dir = temp_dir("calibrate-threads");
     let (poses, lengths) = many_points(&dir);
     let (read, _) = read_poses(poses.as_ref(), AngleUnit::Deg, Some(6)).unwrap();
     let n = read.points().len();
-    assert!(
-        point_chunks(n) >= 4,
-        "{n} points make {} chunk(s) of work: on one thread below 4",
+    assert_eq!(
+        threads_for(point_chunks(n), 2),
+        2,
+        "{n} points make {} chunk(s) of work: on one thread",
         point_chunks(n)
     );
     let run = |threads: &str| {

@@ -247,7 +247,7 @@ fn earlier_calibration_is_kept_without_force() {
         &o,
         &[
             "--out",
-            "earlier results (calibrated.toml, calibration.json)",
+            "earlier results (calibrated.toml, calibration.json,",
             "--force",
         ],
     );
@@ -261,7 +261,7 @@ fn earlier_calibration_is_kept_without_force() {
     assert_eq!(std::fs::read_to_string(&calibrated).unwrap(), first);
     let help = crate::util::stdout(&aacmm(&["calibrate", "--help"]));
     assert!(
-        help.contains("--force") && help.contains("Overwrite an earlier calibration"),
+        help.contains("--force") && help.contains("Write over earlier results"),
         "{help}"
     );
 }

@@ -76,6 +76,7 @@ fn the_panda_exports_with_its_urdfs_names_and_reads_back() {
         urdf_out.to_str().unwrap(),
         "--template",
         template.to_str().unwrap(),
+        "--force",
     ]);
     assert_clean_error(
         &o,

@@ -3,11 +3,13 @@
 
 mod arm_checks;
 mod beyond;
+mod builds;
 mod calibrate;
 mod campaign;
 mod edges;
 mod evaluate;
 mod export;
+mod first_cause;
 mod house;
 mod mukca;
 mod out_paths;

@@ -145,3 +145,159 @@ fn unwritable_outputs_fail_before_any_output() {
     assert_clean_error(&o, &["--out", "not a directory"]);
     assert_eq!(std::fs::read_to_string(&data).unwrap(), POSES);
 }
+
+/// Issue 43, case 6: one rule for every command that writes. An output
+/// file that exists, or an output directory holding results of any aacmm
+/// command, is refused before any work unless `--force`, which writes its
+/// own files and deletes nothing. Before, `export` overwrote silently and
+/// `simulate --out` mixed a campaign into a calibration's directory.
+#[test]
+fn no_command_writes_over_earlier_results_without_force() {
+    let dir = temp_dir("paths-one-rule");
+    let data = write(&dir, "touches.csv", POSES);
+    let (arm, poses) = (arm(), crate::util::shipped("poses.csv"));
+    let calibrate =
+        |out: &Path| crate::util::calibrate_files(&arm, &poses, out, &["--method", "lm"]);
+    let simulate = |out: &Path, extra: &[&str]| {
+        let out = out.to_str().unwrap();
+        let mut a = vec![
+            "simulate",
+            "--arm",
+            &arm,
+            "--errors",
+            "paper",
+            "--sockets",
+            "3",
+        ];
+        a.extend(["--poses", "4", "--seed", "1", "--out", out]);
+        a.extend(extra);
+        aacmm(&a)
+    };
+    // A calibration's directory, made once.
+    let cal = dir.join("cal");
+    assert!(calibrate(&cal).status.success());
+    // A campaign written into it: refused, the directory as it was; with
+    // --force, written beside the calibration, which stays.
+    assert_clean_error(
+        &simulate(&cal, &[]),
+        &[
+            "--out",
+            "already holds earlier results (calibrated.toml, calibration.json",
+            "--force",
+        ],
+    );
+    assert!(!cal.join("poses.csv").exists());
+    assert!(simulate(&cal, &["--force"]).status.success());
+    assert!(cal.join("poses.csv").exists() && cal.join("calibrated.toml").exists());
+    // A calibration into a campaign's directory: refused the same way.
+    let campaign = dir.join("campaign");
+    assert!(simulate(&campaign, &[]).status.success());
+    let o = calibrate(&campaign);
+    assert_clean_error(&o, &["--out", "already holds earlier results (poses.csv"]);
+    assert!(!campaign.join("calibrated.toml").exists());
+    // Every output file that exists: refused without --force, kept as it
+    // was; written with it.
+    let calibrated = cal.join("calibrated.toml").display().to_string();
+    let file = |name: &str| {
+        let path = dir.join(name).display().to_string();
+        std::fs::write(&path, "mine\n").unwrap();
+        path
+    };
+    let (points, urdf, table, ev, id, pl) = (
+        file("points.csv"),
+        file("arm.urdf"),
+        file("dh.csv"),
+        file("evaluate.json"),
+        file("identify.json"),
+        file("plan.json"),
+    );
+    let runs: Vec<(&str, Vec<&str>)> = vec![
+        (
+            "--out",
+            vec!["points", "--arm", &arm, "--data", &data, "--out", &points],
+        ),
+        (
+            "--urdf",
+            vec!["export", "--arm", &calibrated, "--urdf", &urdf],
+        ),
+        (
+            "--dh-table",
+            vec!["export", "--arm", &calibrated, "--dh-table", &table],
+        ),
+        (
+            "--json",
+            vec!["evaluate", "--arm", &arm, "--data", &data, "--json", &ev],
+        ),
+        (
+            "--json",
+            vec!["identify", "--arm", &arm, "--data", &poses, "--json", &id],
+        ),
+        (
+            "--json",
+            vec![
+                "plan",
+                "--arm",
+                &arm,
+                "--sample",
+                "40",
+                "--count",
+                "10",
+                "--measure",
+                "positions",
+                "--json",
+                &pl,
+            ],
+        ),
+    ];
+    for (flag, args) in &runs {
+        let o = aacmm(args);
+        assert_clean_error(&o, &[flag, "already exists; give --force to overwrite it"]);
+        let out = args.last().unwrap();
+        assert_eq!(std::fs::read_to_string(out).unwrap(), "mine\n", "{args:?}");
+        let forced = aacmm(&[&args[..], &["--force"]].concat());
+        assert!(
+            forced.status.success(),
+            "{args:?}: {}",
+            crate::util::stderr(&forced)
+        );
+        assert_ne!(std::fs::read_to_string(out).unwrap(), "mine\n", "{args:?}");
+    }
+    // A report directory that holds a report: refused; other files only: fine.
+    let report = dir.join("report");
+    let ev = |extra: &[&str]| {
+        let mut a = vec![
+            "evaluate",
+            "--arm",
+            &arm,
+            "--data",
+            &data,
+            "--report",
+            report.to_str().unwrap(),
+        ];
+        a.extend(extra);
+        aacmm(&a)
+    };
+    std::fs::create_dir_all(&report).unwrap();
+    std::fs::write(report.join("notes.txt"), "mine").unwrap();
+    assert!(ev(&[]).status.success());
+    assert_clean_error(
+        &ev(&[]),
+        &["--report", "already holds earlier results (report.html"],
+    );
+    assert!(ev(&["--force"]).status.success());
+    assert_eq!(
+        std::fs::read_to_string(report.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    // A device is always written.
+    let o = aacmm(&[
+        "points",
+        "--arm",
+        &arm,
+        "--data",
+        &data,
+        "--out",
+        "/dev/stdout",
+    ]);
+    assert!(o.status.success() && stdout(&o).starts_with("point,x,y,z\n"));
+}

@@ -283,3 +283,35 @@ fn the_readme_block_is_real_output() {
     let real = stdout(&o).replace(&out.display().to_string(), "/tmp/chosen.csv");
     assert_eq!(shown.trim_end(), real.trim_end());
 }
+
+/// Issue 43, case 9: a workspace larger than the criterion uses is sampled,
+/// and the summary says so — how many of how many, why, and the flag that
+/// changes it — instead of a bare "(500 poses used)"; all of a small one is
+/// said to be used.
+#[test]
+fn a_sampled_workspace_is_said_with_why_and_how_to_change_it() {
+    let base = ["--sample", "200", "--count", "20", "--measure", "positions"];
+    let text = plan_ok(&[&base[..], &["--workspace-poses", "50"]].concat());
+    assert!(
+        text.contains(
+            "workspace: the candidates, an even sample of 50 of its 200 poses (each workspace \
+             pose adds to every step's work; --workspace-poses N uses up to N)"
+        ),
+        "{text}"
+    );
+    let all = plan_ok(&base);
+    assert!(
+        all.contains("workspace: the candidates (200 poses);"),
+        "{all}"
+    );
+    let arm = shipped_arm();
+    let o = aacmm(
+        &[
+            &["plan", "--arm", &arm][..],
+            &base,
+            &["--workspace-poses", "0"],
+        ]
+        .concat(),
+    );
+    assert_clean_error(&o, &["--workspace-poses 0: at least 1"]);
+}

@@ -227,10 +227,31 @@ fn the_ur5_tracker_data_calibrate_below_the_published_error() {
     ] {
         assert!(svg.contains(series), "{series} not in the figure");
     }
+    // The rotation's σ under the name of what it is: small rotations about
+    // the frame's axes (the fit's step), not the rotation vector's
+    // components beside which the summary prints it.
+    let calibrated = out.join("calibrated.toml");
+    let toml = std::fs::read_to_string(&calibrated).unwrap();
+    assert!(toml.contains("\nsmall_rotation_sigma_deg = ["), "{toml}");
+    assert!(!toml.contains("\nrotation_sigma_deg"), "{toml}");
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        let column = &r.calibration.auxiliary[k];
+        let of = format!("a small rotation about instrument's {axis} axis");
+        assert_eq!(column.sigma_of.as_deref(), Some(of.as_str()), "{column:?}");
+        let line = (stdout(&o).lines())
+            .find(|l| l.trim_start().starts_with(&column.name))
+            .unwrap_or_else(|| panic!("{} in the summary", column.name))
+            .to_string();
+        assert!(line.ends_with(&format!("sigma of {of}")), "{line}");
+    }
+    assert!(
+        r.calibration.auxiliary[3..]
+            .iter()
+            .all(|c| c.sigma_of.is_none())
+    );
     // The frame in calibrated.toml: the held-out poses seen from the
     // tracker, within the fit's largest held-out error.
     let poses = crate::util::write(&out, "poses.csv", &poses_of(&ur5("positions-random.csv")));
-    let calibrated = out.join("calibrated.toml");
     let o = aacmm(&[
         "points",
         "--arm",

@@ -132,3 +132,97 @@ fn a_hostile_socket_label_gives_a_bounded_message() {
         assert!(own < 600, "{own} characters besides the path: {err:.700}");
     }
 }
+
+/// Issue 43, case 5: a true arm with encoder harmonics puts its touches
+/// exactly on their sockets, and the summary's "largest residual" is that
+/// of what was simulated — the readings through the true arm's
+/// corrections — not of the chain without them (1.2e-1 mm before).
+#[test]
+fn the_largest_residual_is_the_simulated_arms_with_its_harmonics() {
+    let dir = temp_dir("sim-harmonics-residual");
+    let nominal = std::fs::read_to_string(example("paper-table-1.toml")).unwrap();
+    // Joint 2 and joint 5 with a first and a second harmonic of 0.01°.
+    let mut joints = nominal.split("[[joint]]\n");
+    let mut text = joints.next().unwrap().to_string();
+    for (j, joint) in joints.enumerate() {
+        text += "[[joint]]\n";
+        if j == 1 || j == 4 {
+            text += "harmonics = [[1, 0.01, -0.005], [2, 0.0, 0.008]]\n";
+        }
+        text += joint;
+    }
+    let truth = write(&dir, "true.toml", &text);
+    let arm = example("paper-table-1.toml");
+    let out = dir.join("campaign");
+    let o = command(&[
+        "simulate",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--true",
+        &truth,
+        "--sockets",
+        "3",
+        "--poses",
+        "5",
+        "--seed",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .output()
+    .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let largest = err
+        .split("largest residual ")
+        .nth(1)
+        .and_then(|r| r.split(" mm").next())
+        .and_then(|r| r.parse::<f64>().ok())
+        .unwrap_or_else(|| panic!("no largest residual in:\n{err}"));
+    assert!(largest < 1e-9, "largest residual {largest:e} mm:\n{err}");
+    // The true arm's harmonics are in its file and move the readings.
+    let written = std::fs::read_to_string(out.join("true_arm.toml")).unwrap();
+    assert!(written.contains("harmonics"), "{written}");
+}
+
+/// Issue 43, case 7: progress is drawn only on a terminal. A pipe (as
+/// here) gets the summary lines and nothing else: no bar, no carriage
+/// return, no escape sequence, in `simulate` and in `plan` (which samples
+/// its candidates by the simulator, then chooses).
+#[test]
+fn no_progress_is_drawn_when_stderr_is_not_a_terminal() {
+    let dir = temp_dir("sim-no-progress");
+    let o = simulate(
+        &["--sockets", "4", "--poses", "5"],
+        &dir.join("campaign"),
+        Duration::from_secs(60),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let arm = example("paper-table-1.toml");
+    let plan = command(&[
+        "plan",
+        "--arm",
+        arm.to_str().unwrap(),
+        "--sample",
+        "40",
+        "--count",
+        "10",
+        "--measure",
+        "touches",
+    ])
+    .output()
+    .unwrap();
+    assert!(plan.status.success(), "{}", stderr(&plan));
+    for (what, err) in [("simulate", stderr(&o)), ("plan", stderr(&plan))] {
+        assert!(
+            !err.contains(['\r', '\u{1b}']) && !err.contains("] ") && !err.contains('%'),
+            "{what} drew progress into a pipe:\n{err:?}"
+        );
+    }
+    let err = stderr(&o);
+    let lines: Vec<&str> = err.lines().collect();
+    assert!(
+        lines[0].starts_with("nominal arm ") && lines.len() == 9,
+        "{lines:#?}"
+    );
+}

@@ -539,7 +539,8 @@ int main(int argc, char **argv) {
         double values[21];
         memcpy(values, frame.rotation_deg, sizeof frame.rotation_deg);
         memcpy(values + 3, frame.translation_mm, sizeof frame.translation_mm);
-        memcpy(values + 6, frame.rotation_sigma_deg, sizeof frame.rotation_sigma_deg);
+        memcpy(values + 6, frame.small_rotation_sigma_deg,
+               sizeof frame.small_rotation_sigma_deg);
         memcpy(values + 9, frame.translation_sigma_mm, sizeof frame.translation_sigma_mm);
         memcpy(values + 12, frame.rotation_matrix, sizeof frame.rotation_matrix);
         print_bits(tag, values, 21);

@@ -21,8 +21,8 @@ use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
-use crate::plan::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 use crate::residuals::Normal;
+use crate::stats::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 
 /// Largest relative change of the weights at the solution, against those of
 /// the fit, that needs no refit: the estimate moves by about this fraction
@@ -289,6 +289,7 @@ pub(crate) fn assess(
 /// Puts the arm into the start's sign convention. Same positions, other
 /// signs: the normal equations change sign pattern, so they are computed
 /// again for the covariance.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn normalise_signs(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
     let changes = super::global::normalize_signs(&mut fit.params, setup.start, &setup.free);
     if !changes.is_empty() {
@@ -310,6 +311,7 @@ fn normalise_signs(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibrati
 /// terms' residuals, so that the other terms weigh right against them;
 /// when every term is unit-weighted the normal equations are rescaled
 /// instead.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn reweigh_at_solution(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
     let stated = setup.stated;
     if !stated {
@@ -375,6 +377,7 @@ fn reweigh_at_solution(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calib
 /// With a prior and no stated noise: the prior weighs against the touches,
 /// so their σ must be right before the prior's pull is — estimate it again
 /// from the refit until it settles (the first fit weighed touches as 1 mm).
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn settle_unit_sigma(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
     if !fit.objective.has_prior() || setup.stated {
         return Ok(());
@@ -408,6 +411,7 @@ fn typical_sigma(objective: &Objective<'_>) -> f64 {
 /// The robust refits (IRLS), when asked for: from the fit's minimum, every
 /// observation weighed by the loss; without stated noise and with a prior,
 /// again at σ·σ̂ until the robust scale settles.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), CalibrationError> {
     let Some(r) = setup.model.robust else {
         return Ok(());
@@ -474,6 +478,7 @@ fn robust_refits(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<(), Calibration
 /// compares like with like whatever the method did in between. Its
 /// position buffer is freed at once: at 10⁶ touches it is 24 MB beside the
 /// later checks' own.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn initial_cost(fit: &mut Fit<'_>, setup: &Setup<'_>) -> Result<f64, CalibrationError> {
     let mut cost = fit.objective.data_cost(setup.x0, &mut Vec::new())?;
     fit.extra_costs += 1;
@@ -493,6 +498,7 @@ struct Covariance {
 /// `σ̂² N⁻¹`, or with a prior `(N_data/σ̂² + P)⁻¹`; robust: the sandwich
 /// `σ̂² κ K² (J̃ᵀ B J̃)⁻¹` ([`super::robust`]), σ̂ the robust scale — in the
 /// same forms, with `J̃ᵀ B J̃` for `N` and `σ̂² κ K²` for `σ̂²`.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
     let dof = setup.counts.dof();
     let (sigma0, variance, normal) = match (&fit.robust, &fit.curvature) {
@@ -533,6 +539,7 @@ fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
 
 /// Every geometry parameter's estimate (zero offsets and twists wrapped),
 /// its σ from `cov` when free, and why it is fixed otherwise.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn estimates(fit: &mut Fit<'_>, setup: &Setup<'_>, cov: &DMatrix<f64>) -> Vec<Estimate> {
     let start = setup.start;
     for j in &mut fit.params.joints {
@@ -599,6 +606,7 @@ fn auxiliary(fit: &Fit<'_>, setup: &Setup<'_>, cov: &DMatrix<f64>) -> Vec<Auxili
                 start: u(setup.x0[c]),
                 calibrated: u(fit.x[c]),
                 sigma: sigma.map(u),
+                sigma_of: layout.sigma_of(c),
                 fixed,
             })
         })
@@ -622,6 +630,7 @@ fn implausible_blocks(fit: &Fit<'_>, setup: &Setup<'_>) -> Vec<String> {
 /// Every observation's standardised squared residual in units of its own
 /// σ — the stated noise, or (estimated) the fit's, robustly: the median of
 /// a χ²₃ variable is 2.366, and a few outliers do not move a median.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, CalibrationError> {
     // The full leverage: the normal matrix of the weights the objective has
     // now (rescaled by 1/σ² without them when the weights are still unit).
@@ -815,6 +824,7 @@ type Screened = (Vec<Outlier>, Option<OutlierScreen>, Option<Phase>);
 /// below [`super::robust::DOWNWEIGHTED`], in the same order. The refit
 /// changes nothing else; its work is a phase of its own. A robust fit's
 /// list, or one of at most one touch, stands.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn screen_outliers(
     fit: &Fit<'_>,
     setup: &Setup<'_>,
@@ -869,6 +879,7 @@ fn touch_sigma_found(unit_sigma: f64, stated: bool, sigma0: f64) -> f64 {
 /// at the fit: `σ̂ / sqrt(wᵀ N w − K)`, `w` its scaled unit vector in the
 /// columns' units, `N` the normal matrix at the solution (which carries the
 /// hold's own `K` along `w`, and no tolerance: held columns have none).
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn held_directions(
     holds: Option<&crate::residuals::HoldTerm>,
     normal: &Normal,
@@ -907,6 +918,7 @@ fn held_directions(
 /// The predicted position uncertainty of `params` (the 95 % radius of each
 /// pose's 3-D error) over the poses of `data` (an even sample of at most [`super::checks::UNCERTAINTY_POSES`]),
 /// from the free parameters' covariance `cov`.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn position_uncertainty(
     params: &DhParams,
     data: &DataSet,

@@ -244,48 +244,52 @@ impl ChiSquare {
         self.p_upper < CHI_SQUARE_REFUSE || self.p_lower < CHI_SQUARE_REFUSE
     }
 
-    /// In words.
+    /// In words. A tail below 0.001 but not below 10⁻⁹ (the refusal
+    /// level, [`ChiSquare::far_outside`]) is a note, and its sentence says so — with
+    /// what it suggests — so that it cannot read as a refusal beside
+    /// "Verdict: usable".
     pub fn describe(&self) -> String {
         let s0 = (self.statistic / self.dof.max(1) as f64).sqrt();
+        let head = format!(
+            "χ² = {:.1} on {} dof (sigma0 {s0:.3})",
+            self.statistic, self.dof
+        );
+        let note = |p: f64| {
+            format!(
+                "(P = {p:.1e}: below {CHI_SQUARE_ALPHA} but above the refusal level \
+                 {CHI_SQUARE_REFUSE:e}, so a note, not a refusal: the fit is usable)"
+            )
+        };
         match self.verdict {
             ChiSquareVerdict::Consistent => format!(
-                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): consistent with the stated noise \
-                 (P above {:.3}, below {:.3})",
-                self.statistic, self.dof, self.p_upper, self.p_lower
+                "{head}: consistent with the stated noise (P above {:.3}, below {:.3})",
+                self.p_upper, self.p_lower
+            ),
+            ChiSquareVerdict::ResidualsTooLarge if self.far_outside() => format!(
+                "{head}: residuals larger than the stated noise explains (P = {:.1e}): noise \
+                 understated, outliers, a model error or a wrong minimum",
+                self.p_upper
             ),
             ChiSquareVerdict::ResidualsTooLarge => format!(
-                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): residuals larger than the stated noise \
-                 explains (P = {:.1e}): noise understated, outliers, a model error or a wrong \
-                 minimum",
-                self.statistic, self.dof, self.p_upper
+                "{head}: residuals larger than the stated noise explains {}; it suggests a noise \
+                 {s0:.2} times the stated, a few poor touches (see Outliers) or a small model \
+                 error (tolerances too tight, an effect beyond geometry)",
+                note(self.p_upper)
+            ),
+            ChiSquareVerdict::ResidualsTooSmall if self.far_outside() => format!(
+                "{head}: residuals smaller than the stated noise explains (P = {:.1e}): the noise \
+                 is overstated (the uncertainties printed are rescaled by sigma0², so they are the \
+                 fit's own), or the fit follows the noise",
+                self.p_lower
             ),
             ChiSquareVerdict::ResidualsTooSmall => format!(
-                "χ² = {:.1} on {} dof (sigma0 {s0:.3}): residuals smaller than the stated noise \
-                 explains (P = {:.1e}): the noise is overstated (the uncertainties printed are \
-                 rescaled by sigma0², so they are the fit's own), or the fit follows the noise",
-                self.statistic, self.dof, self.p_lower
+                "{head}: residuals smaller than the stated noise explains {}; it suggests a noise \
+                 {s0:.2} times the stated (the uncertainties printed are rescaled by sigma0², so \
+                 they are the fit's own)",
+                note(self.p_lower)
             ),
         }
     }
-}
-
-/// The complementary error function (W. J. Cody's rational approximations
-/// via the Numerical Recipes `erfcc` form; relative error < 1.2e-7).
-pub(crate) fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    if x >= 0.0 { r } else { 2.0 - r }
 }
 
 /// A touch whose residual the noise model does not explain.
@@ -335,36 +339,6 @@ impl OutlierScreen {
 /// outliers names one with this probability.
 pub(crate) const OUTLIER_ALPHA: f64 = 0.01;
 
-/// `P(χ²₃ ≥ x)`.
-fn chi_square_3_upper(x: f64) -> f64 {
-    if x.is_nan() || x <= 0.0 {
-        return 1.0;
-    }
-    erfc((x / 2.0).sqrt()) + (2.0 * x / std::f64::consts::PI).sqrt() * (-x / 2.0).exp()
-}
-
-/// The `χ²₃` value exceeded with probability `p` (bisection).
-pub(crate) fn chi_square_3_quantile(p: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, 1.0f64);
-    while chi_square_3_upper(hi) > p && hi < 1e6 {
-        hi *= 2.0;
-    }
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        let (l, h) = if chi_square_3_upper(mid) > p {
-            (mid, hi)
-        } else {
-            (lo, mid)
-        };
-        // A fixed point (the bounds adjacent doubles) stays one: stop there.
-        if (l, h) == (lo, hi) {
-            break;
-        }
-        (lo, hi) = (l, h);
-    }
-    0.5 * (lo + hi)
-}
-
 /// The observations (touches) whose standardised squared residual
 /// (`scaled`: already divided by `σ0²` when the noise was estimated)
 /// exceeds the Bonferroni threshold, largest first.
@@ -372,7 +346,8 @@ pub(crate) fn outliers(
     objective: &crate::objective::Objective<'_>,
     scaled: &[f64],
 ) -> (f64, Vec<Outlier>) {
-    let threshold = chi_square_3_quantile(OUTLIER_ALPHA / scaled.len().max(1) as f64);
+    let alpha = OUTLIER_ALPHA / scaled.len().max(1) as f64;
+    let threshold = crate::stats::chi_square_upper_quantile(alpha, 3);
     let mut found: Vec<Outlier> = Vec::new();
     for (i, &s) in scaled.iter().enumerate() {
         if s > threshold {
@@ -391,7 +366,7 @@ pub(crate) fn outliers(
 /// How well the data determine the calibrated arm where it was used: the
 /// predicted uncertainty of a probe position over the campaign's poses, as
 /// the radius `U` that holds the position's 3-D error with 95 % probability
-/// ([`crate::plan::coverage::radius`] of the eigenvalues of `J C Jᵀ`, `C`
+/// ([`crate::stats::coverage::radius`] of the eigenvalues of `J C Jᵀ`, `C`
 /// the free parameters' covariance, `J` the position's parameter
 /// Jacobian) — the uncertainty map's radius. The `2·sqrt(tr(J C Jᵀ))`
 /// reported before was labelled `k = 2` but had no stated coverage: it is
@@ -448,11 +423,6 @@ pub(crate) const UNCERTAINTY_POSES: usize = 2000;
 mod tests {
     use super::*;
 
-    #[test]
-    fn the_chi_square_3_quantile_matches_the_table() {
-        assert!((chi_square_3_quantile(0.05) - 7.815).abs() < 1e-2);
-    }
-
     /// A Hayati last joint: its β turns the probe about the link's y axis,
     /// which the zero offset cannot undo — a 60° β that brings the probe
     /// 34 mm nearer axis 6 is gross, as halving Bz is; the nominal in Hayati
@@ -481,33 +451,5 @@ mod tests {
         let mut lowered = nominal.clone();
         lowered.probe[2] = 50.0;
         assert!(!gross_corrections(&lowered, &nominal, &all).is_empty());
-    }
-
-    /// The bisection stopped at its fixed point gives the value of all 200
-    /// halvings, bit for bit.
-    #[test]
-    fn quantile_stopping_at_the_fixed_point_is_the_same_bits() {
-        let full = |p: f64| {
-            let (mut lo, mut hi) = (0.0f64, 1.0f64);
-            while chi_square_3_upper(hi) > p && hi < 1e6 {
-                hi *= 2.0;
-            }
-            for _ in 0..200 {
-                let mid = 0.5 * (lo + hi);
-                if chi_square_3_upper(mid) > p {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            0.5 * (lo + hi)
-        };
-        for p in [0.5, 0.05, 1e-3, 1e-5, 1e-8, 1e-10, 1e-12, 1e-300, 0.0] {
-            assert_eq!(
-                chi_square_3_quantile(p).to_bits(),
-                full(p).to_bits(),
-                "p = {p}"
-            );
-        }
     }
 }

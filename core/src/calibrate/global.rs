@@ -10,7 +10,12 @@
 //!    deviations of `χ²/dof` above 1, with the touches weighed at the fit
 //!    (the weights carry the encoder noise through the arm's joint Jacobian,
 //!    so they depend on the zeros) — cannot be beaten by more than noise:
-//!    accepted at once, so a good start costs one LM.
+//!    accepted at once, so a good start costs one LM. With a robust loss,
+//!    a start that misses the floor is judged by its robust refit too (IRLS
+//!    from its minimum, as the final fit runs it): at the floor by the
+//!    robust scale's test, and plausible, it is accepted
+//!    ([`GlobalStop::RobustFloor`]) — a few gross touches, not a wrong
+//!    basin, kept its plain cost off the floor.
 //! 2. **A grid over the torus.** Each unknown is an angle, so the free zero
 //!    offsets live on a torus, which a coarse grid covers completely: `K`
 //!    angles per circle (6 for the 4 free zeros of a 6-joint arm: 1296
@@ -125,6 +130,9 @@ impl GlobalOptions {
 pub enum GlobalStop {
     /// A fit at the stated noise floor.
     NoiseFloor,
+    /// With a robust loss: a start's robust refit at the stated noise
+    /// floor (a few gross touches kept its plain cost off it).
+    RobustFloor,
     /// The lowest cost was reached from enough starts.
     Agreement,
     /// The start budget ran out before either.
@@ -136,6 +144,9 @@ impl GlobalStop {
     pub fn describe(self) -> &'static str {
         match self {
             GlobalStop::NoiseFloor => "fit at the stated noise floor",
+            GlobalStop::RobustFloor => {
+                "fit at the stated noise floor once the robust loss weighs the outliers down"
+            }
             GlobalStop::Agreement => "lowest cost reached from independent starts",
             GlobalStop::StartBudget => "start budget spent without confirmation",
         }
@@ -237,6 +248,10 @@ pub(crate) struct GlobalProblem<'a, 'o> {
     pub(crate) dof: usize,
     /// The normal equations at the start over `free`, when already computed.
     pub(crate) start_normal: Option<crate::residuals::Normal>,
+    /// The robust loss the fit ends with, if any: with stated noise, a
+    /// start whose plain minimum misses the noise floor is judged by its
+    /// robust refit too ([`Search::robust_floor`]), as the final fit will be.
+    pub(crate) robust: Option<super::robust::Robust>,
 }
 
 impl GlobalProblem<'_, '_> {
@@ -493,8 +508,8 @@ impl<'a, 'o> Search<'a, 'o> {
         let phase = &mut tally.phases[START_PHASE];
         phase.add_lm(&first, timer.elapsed().as_secs_f64());
         let first = settle(first, self.problem, phase, self.promising)?;
-        if self.judge(&mut tally.found, first) {
-            return Ok(Some(GlobalStop::NoiseFloor));
+        if let Some(stop) = self.judge_start(tally, first)? {
+            return Ok(Some(stop));
         }
         Ok(self.circles.is_empty().then_some(GlobalStop::Agreement))
     }
@@ -523,8 +538,8 @@ impl<'a, 'o> Search<'a, 'o> {
             tally.grid_starts += 1;
             progress(tally.started() as f64 / planned as f64);
             let m = self.refine(&x, &mut tally.phases)?;
-            if self.judge(&mut tally.found, m) {
-                return Ok(Some(GlobalStop::NoiseFloor));
+            if let Some(stop) = self.judge_start(tally, m)? {
+                return Ok(Some(stop));
             }
         }
         Ok(self.agreement(&tally.found))
@@ -549,8 +564,8 @@ impl<'a, 'o> Search<'a, 'o> {
                 *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             }
             let m = self.refine(&x, &mut tally.phases)?;
-            if self.judge(&mut tally.found, m) {
-                return Ok(Some(GlobalStop::NoiseFloor));
+            if let Some(stop) = self.judge_start(tally, m)? {
+                return Ok(Some(stop));
             }
             if tally.found.hits >= self.options.confirmations {
                 return Ok(Some(GlobalStop::Agreement));
@@ -570,8 +585,8 @@ impl<'a, 'o> Search<'a, 'o> {
         for x in self.twins(m) {
             let m = self.restart(&x, &mut tally.phases)?;
             tally.twin_restarts += 1;
-            if self.judge(&mut tally.found, m) {
-                return Ok(Some(GlobalStop::NoiseFloor));
+            if let Some(stop) = self.judge_start(tally, m)? {
+                return Ok(Some(stop));
             }
         }
         Ok(self.agreement(&tally.found))
@@ -625,6 +640,88 @@ impl<'a, 'o> Search<'a, 'o> {
         let fit = problem.lm(objective, &zeros.x, problem.free, &self.start_lm)?;
         phases[LM_PHASE].add_lm(&fit, timer.elapsed().as_secs_f64());
         settle(fit, self.problem, &mut phases[LM_PHASE], self.promising)
+    }
+
+    /// Records a start's minimum `m`; the stop when it is at the noise
+    /// floor, or (with a robust loss) when its robust refit is — then the
+    /// refit is the answer.
+    fn judge_start(
+        &self,
+        tally: &mut Tally,
+        m: Minimum,
+    ) -> Result<Option<GlobalStop>, CalibrationError> {
+        let robust = self.robust_floor(&m, &mut tally.phases)?;
+        if self.judge(&mut tally.found, m) {
+            return Ok(Some(GlobalStop::NoiseFloor));
+        }
+        Ok(robust.map(|r| {
+            let found = &mut tally.found;
+            (found.best, found.hits, found.noise_hits) = (Some(r), 1, 0);
+            GlobalStop::RobustFloor
+        }))
+    }
+
+    /// With a robust loss and stated noise, the robust refit (IRLS, as the
+    /// final fit runs it) of a minimum `m` that misses the plain noise
+    /// floor, when its scale is within the floor's `k` standard deviations
+    /// of the stated noise and its geometry is plausible. A gross touch (a
+    /// mislabelled socket) keeps every start's plain cost far off the
+    /// floor and pulls its geometry, so the plain search alone would end on
+    /// whichever minimum accommodates that touch best — a wrong one — and
+    /// the robust refit after it would stay there; judged robustly, the
+    /// right basin is found at once. `None` otherwise.
+    fn robust_floor(
+        &self,
+        m: &Minimum,
+        phases: &mut Vec<Phase>,
+    ) -> Result<Option<Minimum>, CalibrationError> {
+        let problem = self.problem;
+        let (Some(robust), Some((lo, hi))) = (problem.robust, self.floor) else {
+            return Ok(None);
+        };
+        if (lo..=hi).contains(&m.cost) || !m.cost.is_finite() {
+            return Ok(None);
+        }
+        let timer = std::time::Instant::now();
+        let base = problem.objective.reweighed(&m.fit.x, 1.0)?;
+        let normal = base.normal(&m.fit.x, problem.free)?;
+        let out = super::robust::irls(
+            robust,
+            &m.fit.x,
+            (&base, &normal),
+            problem.free,
+            problem.lm,
+            (true, 0.0),
+        )?;
+        // The refits' LM work, plus the normal equations here and the
+        // standardised residuals before each refit and after the last.
+        let name = format!("{} (judging a start)", out.phase.name);
+        let at = match phases.iter().position(|p| p.name == name) {
+            Some(at) => at,
+            None => {
+                phases.push(Phase::new(&name));
+                phases.len() - 1
+            }
+        };
+        let phase = &mut phases[at];
+        phase.cost_evaluations += out.phase.cost_evaluations;
+        phase.jacobian_evaluations += out.phase.jacobian_evaluations + out.fit.passes + 2;
+        phase.seconds += timer.elapsed().as_secs_f64();
+        if !out.fit.within_floor(self.options.noise_floor_k) {
+            return Ok(None);
+        }
+        let fit = out.last;
+        let candidate = Minimum {
+            cost: fit.normal.cost(),
+            fit,
+        };
+        let plausible = (super::checks::gross_corrections(
+            &self.in_start_signs(&candidate),
+            self.start,
+            problem.free,
+        ))
+        .is_empty();
+        Ok(plausible.then_some(candidate))
     }
 
     /// Records `m` in `found`; whether it is at the noise floor. A minimum
@@ -717,7 +814,11 @@ impl<'a, 'o> Search<'a, 'o> {
             (Some(b), _) => b,
             (None, i) => i.ok_or(CalibrationError::Shape)?,
         };
-        if best.fit.termination == super::Termination::MaxIterations {
+        // (A robust refit's last LM is under its weights: finishing it
+        // plainly would undo it.)
+        if best.fit.termination == super::Termination::MaxIterations
+            && stop != GlobalStop::RobustFloor
+        {
             best = self.finish_cut_off(best, &mut phases)?;
         }
         let trace = GlobalTrace {

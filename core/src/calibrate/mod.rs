@@ -71,7 +71,7 @@ use crate::kernel::KernelError;
 use crate::metrics::MetricsError;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId};
-use crate::residuals::{Layout, Normal, Term, TermError};
+use crate::residuals::{Elimination, Layout, Normal, Term, TermError};
 
 /// What to do about readings in radians read as degrees, in each front
 /// end's words (the library serves all three).
@@ -134,6 +134,27 @@ pub enum CalibrationError {
     LengthUnits {
         /// The lengths file.
         file: String,
+        /// Median of stated length / nominal distance.
+        ratio: f64,
+    },
+    /// The reference lengths disagree with the nominal arm because the
+    /// arm's own file is in another unit than it declares: its reach is
+    /// no arm's (under 10 mm or over 10 m), so the arm, not the lengths
+    /// file, is the cause.
+    #[error(
+        "{}: the arm file's lengths, in the unit its `length_unit` declares, make the arm {} \
+         long (its reach), and the reference lengths are {ratio:.3e} times its distances \
+         between the same points (median): the arm file's numbers are in another unit than it \
+         declares (millimetres declared as metres make an arm 1000 times too long) — set \
+         `length_unit` to the unit its numbers are in; the lengths file (mm) is not the cause",
+        if file.is_empty() { "the arm" } else { file },
+        crate::error::length_words(*reach_mm)
+    )]
+    ArmUnits {
+        /// The arm file (empty when the caller did not name it).
+        file: String,
+        /// The arm's reach as its file declares it, mm.
+        reach_mm: f64,
         /// Median of stated length / nominal distance.
         ratio: f64,
     },
@@ -203,6 +224,20 @@ pub enum CalibrationError {
         /// The open directions, in words.
         directions: Vec<String>,
     },
+}
+
+impl CalibrationError {
+    /// Whether the message starts with the input at fault (the lengths
+    /// file, the poses file, the arm file of a unit mistake): a front end
+    /// that names the arm file before other errors adds nothing to it.
+    pub fn names_its_input(&self) -> bool {
+        matches!(
+            self,
+            CalibrationError::LengthUnits { .. }
+                | CalibrationError::AngleUnits { .. }
+                | CalibrationError::ArmUnits { .. }
+        )
+    }
 }
 
 impl From<TermError> for CalibrationError {
@@ -405,8 +440,15 @@ pub struct AuxiliaryEstimate {
     /// The calibrated value.
     pub calibrated: f64,
     /// Standard uncertainty (k = 1); `None` when the data do not determine
-    /// it.
+    /// it. Of the value itself unless [`AuxiliaryEstimate::sigma_of`] says
+    /// otherwise.
     pub sigma: Option<f64>,
+    /// What `sigma` is the uncertainty of when not of the value: a frame's
+    /// rotation columns hold its rotation vector, their σ is of a small
+    /// rotation about the frame's named axis (`a small rotation about
+    /// tracker's x axis`), the step the fit takes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sigma_of: Option<String>,
     /// Why it was held at its start value, when it was (a correction
     /// beyond geometry these data cannot separate).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -649,7 +691,7 @@ impl Calibration {
                     name: name.to_string(),
                     rotation_deg: three(0),
                     translation_mm: three(3),
-                    rotation_sigma_deg: sigmas(0),
+                    small_rotation_sigma_deg: sigmas(0),
                     translation_sigma_mm: sigmas(3),
                 }
             })
@@ -780,7 +822,7 @@ pub fn calibrate_with(
         identification,
         reasons,
         holds,
-    } = fixed_set(start, &objective, model, &full)?;
+    } = fixed_set(start, &objective, model, &full, data)?;
     let (free, held) = correction_columns(&full, layout, free)?;
     let (carried, holds) =
         complete_prior(&mut objective, identification.as_ref(), holds, start, &x0);
@@ -869,23 +911,30 @@ fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
 /// auto`), why each fixed parameter is fixed and the weak directions to
 /// hold; a user's fixed set that leaves a direction the data (and the
 /// tolerances) cannot see is refused.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn fixed_set(
     start: &DhParams,
     objective: &Objective<'_>,
     model: &ModelOptions,
     full: &Normal,
+    data: &DataSet,
 ) -> Result<FixedSet, CalibrationError> {
     let layout = objective.layout();
     let geometry = layout.geometry_columns();
     // Every auxiliary column is free: the geometry is analysed with them
     // fitted too (their elimination, as the centres' is).
     let aux: Vec<usize> = (geometry..layout.len()).collect();
-    let full = geometry_normal(full, layout)?;
+    let full = full.geometry_only(layout).map_err(|e| match e {
+        Elimination::Shape => CalibrationError::Shape,
+        Elimination::Undetermined(_) => CalibrationError::Unidentifiable {
+            directions: vec![e.to_string()],
+        },
+    })?;
     let sees = objective.sees();
     let mut holds = Vec::new();
     let (mut free, identification, reasons) = match &model.fix {
         FixSpec::Auto => {
-            let id = identify_from(start, sees, full.clone());
+            let id = identify_from(start, sees, full.clone(), data);
             let free = id.free_columns();
             let reasons: Vec<(ParamId, String)> =
                 id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
@@ -921,6 +970,7 @@ fn fixed_set(
 /// What the automatic fixed set adds to the prior: the tolerances of the
 /// redundant fixed parameters carried onto their free partners, and the
 /// weak directions `holds` held at `x0` (as a term of the objective).
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 fn complete_prior(
     objective: &mut Objective<'_>,
     identification: Option<&Identification>,
@@ -978,59 +1028,6 @@ fn untoleranced(start: &DhParams, model: &ModelOptions, free: &[usize]) -> Vec<u
         .copied()
         .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
         .collect()
-}
-
-/// The geometry's normal equations with every auxiliary column fitted and
-/// eliminated (`N_gg − N_ga N_aa⁻¹ N_ag`): what the identifiability of the
-/// geometry is judged on (owned: the analysis consumes it). Without
-/// auxiliary columns, a copy of `full`.
-pub(crate) fn geometry_normal(full: &Normal, layout: &Layout) -> Result<Normal, CalibrationError> {
-    // The corrections beyond geometry are judged after the geometry
-    // (`correction_columns`): left out here.
-    let corrections = layout.corrections().map_or(0..0, |(_, c)| c);
-    let keep: Vec<usize> = (0..layout.len())
-        .filter(|c| !corrections.contains(c))
-        .collect();
-    let restricted;
-    let full = if corrections.is_empty() {
-        full
-    } else {
-        restricted = full.restrict(&keep).ok_or(CalibrationError::Shape)?;
-        &restricted
-    };
-    let (g, all) = (layout.geometry_columns(), keep.len());
-    if g == all {
-        return Ok(full.clone());
-    }
-    let nm = nalgebra::DMatrix::from_row_slice(all, all, &full.jtj);
-    // Equilibrated (unit diagonal): a frame's rotation columns are the
-    // reach times its translation's, and the elimination's precision is
-    // the condition of what it factors.
-    let scale = nalgebra::DVector::from_fn(all - g, |i, _| {
-        let v = nm[(g + i, g + i)];
-        if v > 0.0 && v.is_finite() {
-            1.0 / v.sqrt()
-        } else {
-            1.0
-        }
-    });
-    let d = nalgebra::DMatrix::from_diagonal(&scale);
-    let naa = &d * nm.view((g, g), (all - g, all - g)) * &d;
-    let nga = nm.view((0, g), (g, all - g)) * &d;
-    let Some(ch) = naa.cholesky() else {
-        let blocks: Vec<&str> = layout.blocks().map(|b| b.name()).collect();
-        return Err(CalibrationError::Unidentifiable {
-            directions: vec![format!(
-                "the auxiliary blocks ({}): the data do not determine them",
-                blocks.join(", ")
-            )],
-        });
-    };
-    let reduced = nm.view((0, 0), (g, g)) - &nga * ch.solve(&nga.transpose());
-    let geometry: Vec<usize> = (0..g).collect();
-    let mut out = full.restrict(&geometry).ok_or(CalibrationError::Shape)?;
-    out.jtj = reduced.transpose().as_slice().to_vec();
-    Ok(out)
 }
 
 /// A correction column whose information, once the free geometry, the

@@ -65,14 +65,17 @@
 //!   count the outliers against the fit: a robust fit of a campaign with a
 //!   few bad touches is not called a poor fit.
 //!
-//! The global search itself stays plain least squares: it finds the basin;
-//! the robust refits stay in it. With `sa` (annealing alone) the robust
+//! The global search compares its starts by plain least squares, but with
+//! stated noise judges a start whose plain cost misses the noise floor by
+//! its robust refit ([`super::global`]): a gross touch would otherwise keep
+//! every start off the floor and lead the search to a wrong minimum that
+//! the refits after it keep. With `sa` (annealing alone) the robust
 //! refits are LM all the same (phase `lm, robust …`), and the stop says
 //! so: annealing, then LM.
 
 use serde::{Deserialize, Serialize};
 
-use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict, erfc};
+use super::checks::{CHI_SQUARE_REFUSE, ChiSquareVerdict};
 use super::lm::{LmOptions, LmResult, levenberg_marquardt};
 use super::{CalibrationError, OptionError, Phase};
 use crate::objective::Objective;
@@ -301,14 +304,26 @@ impl RobustFit {
             up,
             lo
         );
+        // Below the note level but not the refusal level: said to be a
+        // note in the same sentence (the verdict stays usable).
+        let note = if self.far_outside() {
+            String::new()
+        } else {
+            format!(
+                " — a note, not a refusal (a tail below {} but above the refusal level {:e}: \
+                 the fit is usable)",
+                super::checks::CHI_SQUARE_ALPHA,
+                CHI_SQUARE_REFUSE
+            )
+        };
         Some(match v {
             ChiSquareVerdict::Consistent => format!("{head}: consistent with the stated noise"),
             ChiSquareVerdict::ResidualsTooLarge => format!(
-                "{head}: most residuals larger than the stated noise explains: noise \
+                "{head}: most residuals larger than the stated noise explains{note}: noise \
                  understated or a model error"
             ),
             ChiSquareVerdict::ResidualsTooSmall => format!(
-                "{head}: residuals smaller than the stated noise explains: the noise is \
+                "{head}: residuals smaller than the stated noise explains{note}: the noise is \
                  overstated (the uncertainties printed are rescaled by the robust scale)"
             ),
         })
@@ -418,13 +433,9 @@ pub(crate) fn irls<'a>(
     let (sandwich, curvature) = sandwich(robust, (&u2, scale, ratio), (&x, base, free))?;
     let (p_upper, p_lower, verdict) = if stated && n > 0 {
         // The sample median of χ²₃ against its asymptotic normal law.
-        let m = median_u2;
-        let density = CHI2_3_MEDIAN.sqrt() * (-CHI2_3_MEDIAN / 2.0).exp()
-            / (2.0 * std::f64::consts::PI).sqrt();
-        let sd = 1.0 / (2.0 * density * (n as f64).sqrt());
-        let z = (m - CHI2_3_MEDIAN) / sd;
-        let p_upper = 0.5 * erfc(z / std::f64::consts::SQRT_2);
-        let p_lower = 0.5 * erfc(-z / std::f64::consts::SQRT_2);
+        let z = (median_u2 - CHI2_3_MEDIAN) / median_sd(n);
+        let p_upper = crate::stats::normal_upper(z);
+        let p_lower = crate::stats::normal_upper(-z);
         let verdict = ChiSquareVerdict::from_tails(p_upper, p_lower);
         (Some(p_upper), Some(p_lower), Some(verdict))
     } else {
@@ -460,6 +471,26 @@ pub(crate) fn irls<'a>(
         },
         curvature,
     })
+}
+
+/// The standard deviation of the sample median of `n` draws of `χ²₃`
+/// (asymptotically normal about [`CHI2_3_MEDIAN`]): `1/(2 f₃(m) √n)`.
+fn median_sd(n: usize) -> f64 {
+    let density =
+        CHI2_3_MEDIAN.sqrt() * (-CHI2_3_MEDIAN / 2.0).exp() / (2.0 * std::f64::consts::PI).sqrt();
+    1.0 / (2.0 * density * (n as f64).sqrt())
+}
+
+impl RobustFit {
+    /// Whether the robust scale is within `k` standard deviations of the
+    /// stated noise's (the median test's `z`): the robust counterpart of
+    /// the global method's noise floor for χ² (`k` of its standard
+    /// deviations).
+    pub(crate) fn within_floor(&self, k: f64) -> bool {
+        let n = self.weights.len();
+        let z = (self.scale * self.scale * CHI2_3_MEDIAN - CHI2_3_MEDIAN) / median_sd(n);
+        n > 0 && z.abs() <= k
+    }
 }
 
 /// The sandwich's factor `κ K²` and the normal equations under the

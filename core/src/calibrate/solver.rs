@@ -422,6 +422,7 @@ impl Solver for Global {
             stated_dof: task.stated_dof,
             dof: task.dof,
             start_normal: Some(task.start_normal),
+            robust: task.model.robust,
         };
         let (fit, trace, phases) = global::global(
             task.start,

@@ -207,38 +207,77 @@ fn check_prismatic(arm: &DhParams, physics: &Physics, fit: &Beyond) -> Result<()
 /// prismatic joint's reading (mm) is its own: nothing corrects it (see
 /// [`Effects::new`]).
 pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
-    let n = arm.joints.len();
-    let loads = physics
-        .compliance
-        .iter()
-        .any(|c| c.is_some_and(|v| v != 0.0))
-        .then(|| Loads::new(arm, physics));
+    let loads = loads_of(arm, physics);
     let mut q = angles.to_vec();
-    let mut tau = vec![0.0; if loads.is_some() { n } else { 0 }];
-    let slides = |j: usize| arm.joints[j].kind == JointKind::Prismatic;
     for _ in 0..8 {
-        let (cos, sin): (Vec<f64>, Vec<f64>) = (q.iter().enumerate())
-            .map(|(j, v)| {
-                if slides(j) {
-                    (*v, 0.0)
-                } else {
-                    (v.cos(), v.sin())
-                }
-            })
-            .unzip();
-        let trig: Vec<(&[f64], &[f64])> = (0..n)
-            .map(|j| (std::slice::from_ref(&cos[j]), std::slice::from_ref(&sin[j])))
-            .collect();
-        if let Some(loads) = &loads {
-            loads.torques(|j| cos[j], |j| sin[j], &mut tau);
-        }
-        // The same corrections the fit applies, of this one pose.
-        let delta = reading_corrections(physics, &trig, &tau, 1);
-        for j in (0..n).filter(|&j| !slides(j)) {
-            q[j] = angles[j] - delta[j].first().copied().unwrap_or(0.0);
+        let delta = pose_corrections(arm, physics, loads.as_ref(), &q);
+        for (j, d) in delta.iter().enumerate() {
+            q[j] = angles[j] - d;
         }
     }
     q
+}
+
+/// The joint angles the chain sees at the encoder readings `readings`
+/// (harmonics and compliance, as [`Effects`] corrects a pose): the inverse
+/// of [`readings_for`], to round-off.
+///
+/// ```
+/// use aacmm_core::corrections::{Harmonic, Physics, angles_for, readings_for};
+/// use aacmm_core::params::DhParams;
+/// let arm = DhParams::paper_nominal();
+/// let mut physics = Physics::default();
+/// physics.harmonics.push(Harmonic { joint: 1, order: 1, sin: 2e-4, cos: -1e-4 });
+/// let pose = [0.1, -0.4, 0.7, 0.2, -0.3, 0.5];
+/// let q = readings_for(&arm, &physics, &pose);
+/// assert!((q[1] - pose[1]).abs() > 1e-5, "the harmonic moves joint 2's reading");
+/// let back = angles_for(&arm, &physics, &q);
+/// assert!(back.iter().zip(&pose).all(|(a, b)| (a - b).abs() < 1e-15));
+/// ```
+pub fn angles_for(arm: &DhParams, physics: &Physics, readings: &[f64]) -> Vec<f64> {
+    let delta = pose_corrections(arm, physics, loads_of(arm, physics).as_ref(), readings);
+    readings.iter().zip(&delta).map(|(q, d)| q + d).collect()
+}
+
+/// The gravity loads, when some joint states a compliance.
+fn loads_of(arm: &DhParams, physics: &Physics) -> Option<Loads> {
+    physics
+        .compliance
+        .iter()
+        .any(|c| c.is_some_and(|v| v != 0.0))
+        .then(|| Loads::new(arm, physics))
+}
+
+/// Per joint, the reading correction of the one pose `q` (the same
+/// corrections the fit applies, [`reading_corrections`]). A prismatic
+/// joint's column holds its reading (mm) in place of the cosine, as the
+/// kernel's prepared poses do, and its correction is zero (nothing
+/// corrects a slide's reading, see [`Effects::new`]).
+fn pose_corrections(
+    arm: &DhParams,
+    physics: &Physics,
+    loads: Option<&Loads>,
+    q: &[f64],
+) -> Vec<f64> {
+    let n = q.len();
+    let slides = |j: usize| arm.joints.get(j).is_some_and(|x| x.kind == JointKind::Prismatic);
+    let (cos, sin): (Vec<f64>, Vec<f64>) = (q.iter().enumerate())
+        .map(|(j, v)| if slides(j) { (*v, 0.0) } else { (v.cos(), v.sin()) })
+        .unzip();
+    let trig: Vec<(&[f64], &[f64])> = (0..n)
+        .map(|j| (std::slice::from_ref(&cos[j]), std::slice::from_ref(&sin[j])))
+        .collect();
+    let mut tau = vec![0.0; if loads.is_some() { n } else { 0 }];
+    if let Some(loads) = loads {
+        loads.torques(|j| cos[j], |j| sin[j], &mut tau);
+    }
+    let delta = reading_corrections(physics, &trig, &tau, 1);
+    (0..n)
+        .map(|j| match delta.get(j).and_then(|d| d.first()) {
+            Some(d) if !slides(j) => *d,
+            _ => 0.0,
+        })
+        .collect()
 }
 
 /// `(cos kq, sin kq)` from `cos q`, `sin q` by the angle-sum recurrence.

@@ -47,7 +47,7 @@ pub mod gravity;
 
 use serde::{Deserialize, Serialize};
 
-pub use effects::{Conditions, Effects, readings_for};
+pub use effects::{Conditions, Effects, angles_for, readings_for};
 
 use crate::error::OptionError;
 

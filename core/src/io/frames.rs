@@ -7,14 +7,18 @@
 //! name = "instrument"
 //! rotation_deg = [-0.0566, 0.1122, 0.0509]     # rotation vector (axis × angle)
 //! translation_mm = [-0.4099, 0.0943, -0.0031]
-//! rotation_sigma_deg = [0.0015, 0.0017, 0.0050] # k = 1, of the local step
+//! small_rotation_sigma_deg = [0.0015, 0.0017, 0.0050] # about its x, y, z axes
 //! translation_sigma_mm = [0.021, 0.019, 0.013]
 //! ```
 //!
 //! A frame maps the arm's base coordinates into the instrument's,
-//! `y = R p + t`, with `R` the rotation of the rotation vector. The σ are those of the
-//! fit's local step (a small rotation `δω` applied on the left, `δt`); a
-//! column the data did not determine has none.
+//! `y = R p + t`, with `R` the rotation of the rotation vector. The σ (k = 1)
+//! are those of the fit's step: of small rotations `δω` about the
+//! instrument's x, y and z axes (`R ← exp(δω) R`) — not of the rotation
+//! vector's components, which they equal only at the identity — and of
+//! the translation. A frame the data did not determine has none. A file
+//! written before the σ had their name (`rotation_sigma_deg`) reads the
+//! same.
 
 use serde::{Deserialize, Serialize};
 
@@ -31,9 +35,14 @@ pub struct FrameRecord {
     pub rotation_deg: [f64; 3],
     /// `t`, mm.
     pub translation_mm: [f64; 3],
-    /// σ of the rotation (k = 1), deg, when the fit determined it.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rotation_sigma_deg: Option<[f64; 3]>,
+    /// σ (k = 1) of small rotations about the instrument's x, y and z axes,
+    /// deg, when the fit determined them (see the module).
+    #[serde(
+        default,
+        alias = "rotation_sigma_deg",
+        skip_serializing_if = "Option::is_none"
+    )]
+    pub small_rotation_sigma_deg: Option<[f64; 3]>,
     /// σ of the translation (k = 1), mm, when the fit determined it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub translation_sigma_mm: Option<[f64; 3]>,
@@ -104,4 +113,34 @@ pub fn frames_to_toml(frames: &[FrameRecord]) -> String {
         frame: frames.to_vec(),
     };
     toml::to_string(&t).expect("strings and finite numbers always serialize to TOML")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The σ of a frame's rotation are written under the name of what they
+    /// are (small rotations about its axes); a file written before, with
+    /// `rotation_sigma_deg`, reads the same.
+    #[test]
+    fn the_rotations_sigma_is_named_and_the_old_name_still_reads() {
+        let record = FrameRecord {
+            name: "tracker".into(),
+            rotation_deg: [1.0, 2.0, 3.0],
+            translation_mm: [4.0, 5.0, 6.0],
+            small_rotation_sigma_deg: Some([0.5, 0.25, 0.125]),
+            translation_sigma_mm: Some([0.1, 0.2, 0.3]),
+        };
+        let text = frames_to_toml(std::slice::from_ref(&record));
+        assert!(
+            text.contains("small_rotation_sigma_deg = [0.5, 0.25, 0.125]\n"),
+            "{text}"
+        );
+        assert_eq!(
+            parse_frames(&text, "c.toml").unwrap(),
+            std::slice::from_ref(&record)
+        );
+        let old = text.replace("small_rotation_sigma_deg", "rotation_sigma_deg");
+        assert_eq!(parse_frames(&old, "c.toml").unwrap(), [record]);
+    }
 }

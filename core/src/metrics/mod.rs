@@ -609,12 +609,10 @@ fn pair_pass<A: Send>(
                 .step_by(ROWS_PER_CHUNK)
                 .map(|s| s..(s + ROWS_PER_CHUNK).min(points.len()))
                 .collect();
-            let threads = if chunks.len() > 2 { threads } else { 1 };
             crate::parallel::parallel_map(&chunks, threads, all_rows)
         }
         pairs::PairSet::Sampled { pairs, .. } => {
             let chunks: Vec<&[(u32, u32)]> = pairs.chunks(PAIRS_PER_CHUNK).collect();
-            let threads = if chunks.len() > 2 { threads } else { 1 };
             crate::parallel::parallel_map(&chunks, threads, |c| {
                 chunk(&mut c.iter().map(|&(i, j)| (i as usize, j as usize)))
             })

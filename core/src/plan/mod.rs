@@ -31,17 +31,25 @@
 //! those before). The free columns are [`crate::identify`]'s for the whole
 //! pool, or a given calibration's.
 
-pub mod coverage;
+// The 95 % radii live with the statistics, where the calibration's
+// assessment finds them too; here under the name plans have used.
+pub use crate::stats::coverage;
 mod greedy;
 pub mod map;
+pub mod pool;
 mod rows;
 mod strata;
+pub mod summary;
 
 use nalgebra::DMatrix;
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 
 pub use map::{MapPoint, Region, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map};
+pub use pool::{
+    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_touches, sample_touches_observed,
+};
+pub use summary::{GivenNote, KNEE, Knee, SummaryContext, knee, summary};
 
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};
@@ -108,11 +116,16 @@ pub struct PlanSettings {
     pub curve_to: usize,
     /// Seed of the random subsets.
     pub seed: u64,
+    /// Workspace poses the criterion and the reported spreads use at most
+    /// (an even sample of a larger workspace): each costs a Jacobian and
+    /// its share of every step's work.
+    pub workspace_limit: usize,
 }
 
 impl PlanSettings {
     /// `count` rows of `measure`, robust criterion, τ = 0, σ = 0.01 mm,
-    /// 10 random sets, the curve to twice the count, seed 1.
+    /// 10 random sets, the curve to twice the count, seed 1, at most
+    /// [`WORKSPACE_POSES`] workspace poses.
     pub fn new(count: usize, measure: Measure) -> PlanSettings {
         PlanSettings {
             count,
@@ -123,6 +136,7 @@ impl PlanSettings {
             random_sets: 10,
             curve_to: 2 * count,
             seed: 1,
+            workspace_limit: WORKSPACE_POSES,
         }
     }
 }
@@ -243,6 +257,11 @@ pub struct Plan {
     pub workspace: String,
     /// Poses of the workspace used.
     pub workspace_poses: usize,
+    /// Poses of the workspace given (or candidates): more than
+    /// [`Plan::workspace_poses`] when an even sample of them was used
+    /// ([`PlanSettings::workspace_limit`]).
+    #[serde(default)]
+    pub workspace_total: usize,
     /// The predicted uncertainty with the chosen rows.
     pub planned: Option<Spread>,
     /// With every candidate.
@@ -267,6 +286,35 @@ impl Plan {
     /// The chosen rows of the pool, in the order chosen.
     pub fn chosen(&self) -> Vec<usize> {
         self.steps[..self.count].iter().map(|s| s.row).collect()
+    }
+
+    /// The fewest rows of the curve that determine every free parameter
+    /// (`None` when none of its points does).
+    pub fn rows_needed(&self) -> Option<usize> {
+        self.curve
+            .iter()
+            .find(|c| c.rms_mm.is_some())
+            .map(|c| c.rows)
+    }
+
+    /// Why no subset of the candidates can make a plan, when even all of
+    /// them do not determine every free parameter; `None` when they do.
+    pub fn pool_undetermined(&self) -> Option<String> {
+        if self.all.is_some() {
+            return None;
+        }
+        Some(format!(
+            "even all {} candidates do not determine the {} parameters ({}): no subset can; \
+             add candidates that turn the joints further{}",
+            self.candidates,
+            self.parameters.len(),
+            self.parameters.join(", "),
+            if self.measure == Measure::Touches {
+                ", or touches of more sockets"
+            } else {
+                ""
+            }
+        ))
     }
 }
 
@@ -374,6 +422,7 @@ pub fn plan(
         }
         .to_string(),
         workspace_poses: design.workspace.len(),
+        workspace_total: workspace.unwrap_or(pool).len(),
         planned,
         all,
         start,
@@ -430,6 +479,11 @@ fn check(
     if !(sigma_ok && settings.hedge >= 0.0 && settings.hedge.is_finite()) {
         return Err(PlanError::Invalid(
             "the noise must be positive and finite, the hedge τ ≥ 0".into(),
+        ));
+    }
+    if settings.workspace_limit == 0 {
+        return Err(PlanError::Invalid(
+            "workspace limit 0: the criterion needs at least one workspace pose".into(),
         ));
     }
     if settings.measure == Measure::Touches && settings.count < MIN_TOUCHES_PER_SOCKET {
@@ -512,7 +566,7 @@ fn design(
     let scale = unit_scale(&raw);
     let blocks = scaled(raw, &scale);
     let ws = workspace.unwrap_or(pool);
-    let step = ws.len().div_ceil(WORKSPACE_POSES).max(1);
+    let step = ws.len().div_ceil(settings.workspace_limit).max(1);
     let mut sample = Poses::new(ws.joints());
     for i in (0..ws.len()).step_by(step) {
         sample.push(ws.label(i), ws.reading(i), ws.line(i));

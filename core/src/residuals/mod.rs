@@ -61,6 +61,7 @@ mod hold;
 mod lengths;
 pub mod positions;
 mod prior;
+mod schur;
 mod sym3;
 #[cfg(test)]
 mod tests;
@@ -79,6 +80,7 @@ pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
 pub(crate) use positions::PositionTerm;
 pub(crate) use prior::PriorTerm;
+pub use schur::Elimination;
 pub(crate) use sym3::Sym3;
 pub(crate) use touches::TouchTerm;
 pub use touches::point_chunks;

@@ -16,10 +16,10 @@
 //! redundant with the frame — the identifiability analysis finds it from
 //! the normal equations with the frames eliminated.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use super::CorrectionBlock;
-use super::blocks::{Frame, rotation};
+use super::blocks::Frame;
 use super::{
     At, BlockId, Layout, Noise, Normal, Origin, Sees, Shared, Standardised, Term, TermError,
 };
@@ -50,32 +50,16 @@ pub struct Registration {
     pub arm_spread_mm: f64,
 }
 
-/// The rigid transform `y ≈ R p + t` of least squares (Kabsch/Horn by SVD)
-/// of `p` onto `y`, proper (`det R = +1`) or mirrored.
+/// The rigid transform `y ≈ R p + t` of least squares
+/// ([`crate::geometry::best_rigid_motion`]) of `p` onto `y`, proper
+/// (`det R = +1`) or mirrored, and the RMS of its residuals.
 fn kabsch(p: &[[f64; 3]], y: &[[f64; 3]], mirrored: bool) -> (Matrix3<f64>, Vector3<f64>, f64) {
     let n = p.len().max(1) as f64;
     let v = |a: &[f64; 3]| Vector3::new(a[0], a[1], a[2]);
-    let cp = p.iter().map(v).sum::<Vector3<f64>>() / n;
-    let cy = y.iter().map(v).sum::<Vector3<f64>>() / n;
-    let h: Matrix3<f64> = p
-        .iter()
-        .zip(y)
-        .map(|(a, b)| (v(a) - cp) * (v(b) - cy).transpose())
-        .sum();
-    let svd = h.svd(true, true);
-    let (u, vt) = (
-        svd.u.unwrap_or_else(Matrix3::identity),
-        svd.v_t.unwrap_or_else(Matrix3::identity),
-    );
-    let d = (vt.transpose() * u.transpose()).determinant();
-    let want = if mirrored { -1.0 } else { 1.0 };
-    let s = Matrix3::from_diagonal(&Vector3::new(
-        1.0,
-        1.0,
-        if d * want < 0.0 { -1.0 } else { 1.0 },
-    ));
-    let r = vt.transpose() * s * u.transpose();
-    let t = cy - r * cp;
+    let (r, t) = crate::geometry::best_rigid_motion(p, y, mirrored)
+        .map_or((Matrix3::identity(), Vector3::zeros()), |m| {
+            (m.rotation, m.translation())
+        });
     let ss: f64 = p
         .iter()
         .zip(y)
@@ -84,9 +68,9 @@ fn kabsch(p: &[[f64; 3]], y: &[[f64; 3]], mirrored: bool) -> (Matrix3<f64>, Vect
     (r, t, (ss / n).sqrt())
 }
 
-/// The rotation vector of `R`.
+/// The rotation vector of `R`, a proper rotation.
 fn rotation_vector_of(r: &Matrix3<f64>) -> [f64; 3] {
-    super::blocks::rotation_vector(std::array::from_fn(|i| std::array::from_fn(|j| r[(i, j)])))
+    super::blocks::rotation_vector(&Rotation3::from_matrix_unchecked(*r))
 }
 
 fn rms_spread(points: &[[f64; 3]]) -> f64 {
@@ -283,25 +267,24 @@ impl<'d> PositionTerm<'d> {
     }
 
     /// Per frame, `R` and `t` at `at`.
-    fn frames_at(&self, at: &At<'_>) -> Vec<([[f64; 3]; 3], [f64; 3])> {
+    fn frames_at(&self, at: &At<'_>) -> Vec<(Rotation3<f64>, [f64; 3])> {
         self.frames
             .iter()
             .map(|&id| {
                 let x = at.block(id);
-                (rotation([x[0], x[1], x[2]]), [x[3], x[4], x[5]])
+                (Frame::rotation(x), [x[3], x[4], x[5]])
             })
             .collect()
     }
 
     /// Row `i`'s whitened residual for the arm's position `p`.
-    fn residual(&self, frames: &[([[f64; 3]; 3], [f64; 3])], i: usize, p: &[f64; 3]) -> [f64; 3] {
+    fn residual(&self, frames: &[(Rotation3<f64>, [f64; 3])], i: usize, p: &[f64; 3]) -> [f64; 3] {
         let rows = self.data.rows();
         let (r, t) = &frames[rows.frame(i)];
         let y = rows.position(i);
         let w = self.weights[i];
-        std::array::from_fn(|k| {
-            w * (r[k][0] * p[0] + r[k][1] * p[1] + r[k][2] * p[2] + t[k] - y[k])
-        })
+        let q = r * Vector3::from(*p);
+        std::array::from_fn(|k| w * (q[k] + t[k] - y[k]))
     }
 }
 
@@ -538,7 +521,7 @@ impl PositionTerm<'_> {
         &self,
         at: &At<'_>,
         effects: Option<&Effects>,
-        frames: &[([[f64; 3]; 3], [f64; 3])],
+        frames: &[(Rotation3<f64>, [f64; 3])],
         range: std::ops::Range<usize>,
         cols: Columns<'_>,
     ) -> Result<Part, TermError> {
@@ -568,18 +551,11 @@ impl PositionTerm<'_> {
             d.clear();
             for &(a, c) in geo {
                 let j = jac[c];
-                d.push((
-                    a,
-                    std::array::from_fn(|k| {
-                        w * (rot[k][0] * j[0] + rot[k][1] * j[1] + rot[k][2] * j[2])
-                    }),
-                ));
+                d.push((a, (rot * Vector3::from(j) * w).into()));
             }
             if !frame_cols[f].is_empty() {
                 // Frame::jacobian with R already at hand: [−[Rp]× | I].
-                let q: [f64; 3] = std::array::from_fn(|k| {
-                    rot[k][0] * pos[0] + rot[k][1] * pos[1] + rot[k][2] * pos[2]
-                });
+                let q = rot * Vector3::from(*pos);
                 let jf = [
                     [0.0, q[2], -q[1], 1.0, 0.0, 0.0],
                     [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
@@ -599,5 +575,32 @@ impl PositionTerm<'_> {
             }
         })?;
         Ok(part)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ROWS_PER_CHUNK;
+    use crate::parallel::threads_for;
+
+    /// The UR5 tracker example's 1000 positions are a small problem: 4
+    /// chunks, which run on the calling thread whatever the thread count,
+    /// so that on a loaded machine the default threads cost no more than
+    /// one (the `threads` bench measures it).
+    #[test]
+    fn the_ur5_trackers_positions_run_on_the_calling_thread() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../examples/ur5-tracker/positions-grid.csv"
+        );
+        let text = std::fs::read_to_string(path).unwrap();
+        let rows = text.lines().skip(1).filter(|l| !l.trim().is_empty());
+        let chunks = rows.count().div_ceil(ROWS_PER_CHUNK);
+        assert_eq!(chunks, 4);
+        for threads in [1, 2, 8, 1024] {
+            assert_eq!(threads_for(chunks, threads), 1, "{threads} threads");
+        }
+        // Twice the poses are shared.
+        assert_eq!(threads_for(2 * chunks, 2), 2);
     }
 }

@@ -260,8 +260,14 @@ fn points_of_three_touches(n: usize) -> DataSet {
 /// count; with and without stated noise.
 #[test]
 fn the_streamed_change_of_weights_is_the_built_one() {
-    let data = points_of_three_touches(1000);
-    assert!(data.len() > 2 * TOUCHES_PER_CHUNK);
+    // 9000 touches: 8 chunks of 1024 and more, on 2 threads.
+    let data = points_of_three_touches(3000);
+    let chunks = data.len() / TOUCHES_PER_CHUNK;
+    assert_eq!(
+        crate::parallel::threads_for(chunks, 2),
+        2,
+        "{chunks} chunks"
+    );
     let here = DhParams::paper_nominal();
     let mut there = DhParams::paper_nominal();
     there.joints[1].d += 3.0;
@@ -295,16 +301,22 @@ fn the_streamed_change_of_weights_is_the_built_one() {
     assert_eq!(change(&here, &short, l.as_ref(), 1.0, 1), f64::INFINITY);
 }
 
-/// 1000 points of 3 touches with stated noise and reference lengths:
-/// 16 chunks of points, so 2 and 4 threads really split the work (one
-/// thread below 4 chunks). The normal equations, their cost and the
+/// 3000 points of 3 touches with stated noise and reference lengths:
+/// 47 chunks of points and 8 of touches' weights, so 2 and 4 threads
+/// really split the work ([`crate::parallel::threads_for`]: one thread
+/// below 8 chunks for two). The normal equations, their cost and the
 /// centroids are the same bits on 1, 2 and 4 threads.
 #[test]
 fn normal_equations_are_the_same_bits_on_any_thread_count() {
-    let n = 1000;
+    use crate::parallel::threads_for;
+    let n = 3000;
     let data = points_of_three_touches(n);
     assert_eq!(data.points().len(), n);
-    assert!(n > 4 * POINTS_PER_CHUNK, "enough chunks to run in parallel");
+    assert_eq!(
+        threads_for(n.div_ceil(POINTS_PER_CHUNK), 4),
+        4,
+        "points split"
+    );
     let arm = DhParams::paper_nominal();
     let noise = Noise {
         encoder_rad: Some(1e-4),
@@ -314,7 +326,8 @@ fn normal_equations_are_the_same_bits_on_any_thread_count() {
         ..Noise::default()
     };
     let (t, l) = weighed(&data, &noise, &arm, 1.0, 1);
-    assert!(data.len() > 2 * TOUCHES_PER_CHUNK, "weights in chunks too");
+    let weight_chunks = data.len() / TOUCHES_PER_CHUNK;
+    assert_eq!(threads_for(weight_chunks, 2), 2, "weights split too");
     for threads in [2, 4] {
         let (tw, lw) = weighed(&data, &noise, &arm, 1.0, threads);
         assert_eq!(tw.weights(), t.weights(), "{threads} threads");

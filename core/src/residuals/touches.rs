@@ -26,16 +26,19 @@ pub(super) const TOUCHES_PER_CHUNK: usize = 1024;
 pub(super) const POINTS_PER_CHUNK: usize = 64;
 
 /// How many chunks of work the normal equations of `points` points split
-/// into: chunks of a fixed number of points, run on several threads from 4
-/// chunks up (below that, on the calling thread whatever the thread count).
-/// What a test of thread-independence asks, to know that the work really
-/// splits.
+/// into: chunks of a fixed number of points, shared between threads from
+/// [`MIN_ITEMS_PER_THREAD`](crate::parallel::MIN_ITEMS_PER_THREAD) chunks
+/// a thread up ([`threads_for`](crate::parallel::threads_for); below that,
+/// on the calling thread whatever the thread count). What a test of
+/// thread-independence asks, to know that the work really splits.
 ///
 /// ```
+/// use aacmm_core::parallel::threads_for;
 /// use aacmm_core::residuals::point_chunks;
 /// assert_eq!(point_chunks(64), 1);
 /// assert_eq!(point_chunks(65), 2);
-/// assert!(point_chunks(300) >= 4, "300 points: on several threads");
+/// assert_eq!(threads_for(point_chunks(300), 2), 1, "300 points: one thread");
+/// assert_eq!(threads_for(point_chunks(500), 2), 2, "500 points: two");
 /// ```
 pub fn point_chunks(points: usize) -> usize {
     points.div_ceil(POINTS_PER_CHUNK)
@@ -78,6 +81,10 @@ impl<'d> TouchTerm<'d> {
         points: &Range<usize>,
     ) -> Result<Vec<f64>, KernelError> {
         let (data, q) = (self.data, cols.len());
+        // `M` transposed, once: [`PointScratch::parameter_share`] reads its
+        // rows side by side.
+        let mt: Vec<f64> = (0..q * q).map(|i| m[(i % q) * q + i / q]).collect();
+        let m = &mt[..];
         let all = &data.points()[points.clone()];
         let most = all.iter().map(|p| p.touches.len()).max().unwrap_or(0);
         let mut scratch = PointScratch::new(most, q);
@@ -529,11 +536,7 @@ impl Term for TouchTerm<'_> {
             slot.copy_from_slice(&part);
             Ok::<(), KernelError>(())
         };
-        let done: Vec<Result<(), KernelError>> = if at.threads <= 1 || slots.len() < 4 {
-            slots.iter().map(run).collect()
-        } else {
-            parallel_map(&slots, at.threads, run)
-        };
+        let done = parallel_map(&slots, at.threads, run);
         done.into_iter().collect::<Result<(), KernelError>>()?;
         drop(slots);
         Ok(Some(Standardised { rows: 3, values }))
@@ -593,9 +596,9 @@ impl PointScratch {
     }
 
     /// The point's standardised residuals from its touches' positions (and
-    /// Jacobians, when `m`, the `q × q` block of `N⁻¹`, is not empty) under
-    /// their weights `a`.
-    fn point(&mut self, a: &[Sym3], m: &[f64]) -> &[f64] {
+    /// Jacobians, when `mt`, the `q × q` block of `N⁻¹` transposed, is not
+    /// empty) under their weights `a`.
+    fn point(&mut self, a: &[Sym3], mt: &[f64]) -> &[f64] {
         let (n, q) = (a.len(), self.mean.len());
         let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
         self.mean.fill([0.0; 3]);
@@ -627,7 +630,7 @@ impl PointScratch {
                 + a[2] * inv[2]
                 + 2.0 * (a[3] * inv[3] + a[4] * inv[4] + a[5] * inv[5]);
             if q > 0 {
-                tr += self.parameter_share(a, t, m);
+                tr += self.parameter_share(a, t, mt);
             }
             let h = (tr / 3.0).clamp(0.0, 0.999);
             self.out[t] = quad / (1.0 - h);
@@ -636,22 +639,62 @@ impl PointScratch {
     }
 
     /// `tr(A J̃ M J̃ᵀ)` of touch `t`, `J̃ = J − J̄`: `3q²` operations.
-    fn parameter_share(&mut self, a: &Sym3, t: usize, m: &[f64]) -> f64 {
+    /// `mt` is `M` transposed (its column `a` is row `a` of `M`, so that
+    /// [`ROWS`] rows run side by side over contiguous memory): each row's
+    /// sums keep their order, and the rows' terms are added in row order,
+    /// so the same bits as one row at a time — without its three dependent
+    /// chains of `q` additions per row, which left the arithmetic units
+    /// idle on their latency.
+    fn parameter_share(&mut self, a: &Sym3, t: usize, mt: &[f64]) -> f64 {
         let q = self.mean.len();
         let j = &self.jac[t * q..(t + 1) * q];
         for ((aj, j), mean) in self.aj.iter_mut().zip(j).zip(&self.mean) {
             *aj = sym_mul(a, &std::array::from_fn(|k| j[k] - mean[k]));
         }
         let mut share = 0.0;
-        for (row, (j, mean)) in m.chunks_exact(q).zip(j.iter().zip(&self.mean)) {
-            let mut y = [0.0; 3];
-            for (&mab, aj) in row.iter().zip(&self.aj) {
-                (0..3).for_each(|k| y[k] += mab * aj[k]);
+        let mut first = 0;
+        while first < q {
+            let y = if q - first >= ROWS {
+                rows_times::<ROWS>(mt, q, first, &self.aj)
+            } else {
+                let mut y = [[0.0; 3]; ROWS];
+                for (r, yr) in y.iter_mut().enumerate().take(q - first) {
+                    *yr = rows_times::<1>(mt, q, first + r, &self.aj)[0];
+                }
+                y
+            };
+            for (r, yr) in y.iter().enumerate().take((q - first).min(ROWS)) {
+                let (ja, mean) = (j[first + r], self.mean[first + r]);
+                share += (0..3).map(|k| (ja[k] - mean[k]) * yr[k]).sum::<f64>();
             }
-            share += (0..3).map(|k| (j[k] - mean[k]) * y[k]).sum::<f64>();
+            first += ROWS;
         }
         share
     }
+}
+
+/// Rows of `M` a touch's parameter share runs side by side.
+const ROWS: usize = 4;
+
+/// `y_r = Σ_b M[first + r][b] · aj[b]` for the `R` rows from `first`, each
+/// sum over `b` in order; `mt` is `M` (`q × q`) transposed.
+#[inline(always)]
+fn rows_times<const R: usize>(
+    mt: &[f64],
+    q: usize,
+    first: usize,
+    aj: &[[f64; 3]],
+) -> [[f64; 3]; ROWS] {
+    let mut y = [[0.0; 3]; ROWS];
+    for (b, ajb) in aj.iter().enumerate() {
+        let m = &mt[b * q + first..b * q + first + R];
+        for (yr, &mab) in y.iter_mut().zip(m) {
+            for k in 0..3 {
+                yr[k] += mab * ajb[k];
+            }
+        }
+    }
+    y
 }
 
 /// The touches' contribution at `at` over `normal.free()`: chunks of points
@@ -682,11 +725,7 @@ fn accumulate(
         .unzip();
     let p = normal.free.len();
     let run = |c: &Range<usize>| chunk(at.kernel, term, effects, &free, c.clone(), need_mean);
-    let partials: Vec<Result<Partial, KernelError>> = if at.threads <= 1 || chunks.len() < 4 {
-        chunks.iter().map(run).collect()
-    } else {
-        parallel_map(&chunks, at.threads, run)
-    };
+    let partials = parallel_map(&chunks, at.threads, run);
     let mut cost = 0.0;
     let mut centres = Centres {
         points: Vec::with_capacity(np),
@@ -997,4 +1036,51 @@ fn chunk(
         part.cost = f64::INFINITY;
     }
     Ok(part)
+}
+
+#[cfg(test)]
+mod share_tests {
+    use super::*;
+
+    /// The parameter share with rows side by side is the same bits as one
+    /// row at a time (three chains of sums per row, rows in order).
+    #[test]
+    fn the_parameter_share_is_the_same_bits_as_row_by_row() {
+        let mut rng = crate::random::rng(9, 0);
+        let mut draw = || rand::RngExt::random_range(&mut rng, -1.0..1.0);
+        for q in [1, 3, 4, 5, 21, 27] {
+            let mut s = PointScratch::new(2, q);
+            let jac: Vec<[f64; 3]> = (0..2 * q).map(|_| [draw(), draw(), draw()]).collect();
+            s.jac.copy_from_slice(&jac);
+            s.mean = (0..q).map(|_| [draw(), draw(), draw()]).collect();
+            let m: Vec<f64> = (0..q * q).map(|_| draw()).collect();
+            let a: Sym3 = [
+                2.0 + draw(),
+                2.0 + draw(),
+                2.0 + draw(),
+                draw(),
+                draw(),
+                draw(),
+            ];
+            // One row at a time, as before.
+            let j = &jac[q..2 * q];
+            let aj: Vec<[f64; 3]> = (j.iter().zip(&s.mean))
+                .map(|(j, mean)| sym_mul(&a, &std::array::from_fn(|k| j[k] - mean[k])))
+                .collect();
+            let mut want = 0.0;
+            for (row, (j, mean)) in m.chunks_exact(q).zip(j.iter().zip(&s.mean)) {
+                let mut y = [0.0; 3];
+                for (&mab, aj) in row.iter().zip(&aj) {
+                    (0..3).for_each(|k| y[k] += mab * aj[k]);
+                }
+                want += (0..3).map(|k| (j[k] - mean[k]) * y[k]).sum::<f64>();
+            }
+            let mt: Vec<f64> = (0..q * q).map(|i| m[(i % q) * q + i / q]).collect();
+            assert_eq!(
+                s.parameter_share(&a, 1, &mt).to_bits(),
+                want.to_bits(),
+                "q {q}"
+            );
+        }
+    }
 }

@@ -21,9 +21,11 @@
 pub(crate) mod evaluation;
 pub(crate) mod identification;
 mod map;
+mod outputs;
 pub mod request;
 
 pub use map::MAP_POSES;
+pub use outputs::{earlier_results, result_files};
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
@@ -133,7 +135,8 @@ impl Problem {
         model
             .beyond
             .check_inputs(&arm.physics, &data.condition_sets())?;
-        check_length_units(&arm.params, &data)?;
+        // The arm's file is named by the request, which knows it.
+        check_units(&arm.params, &data, "")?;
         let layout = crate::residuals::positions::layout_with(
             &arm.params,
             &data,
@@ -321,13 +324,53 @@ pub(crate) fn observations(data: &[&DataSet]) -> (usize, usize) {
 /// for millimetres is three).
 const LENGTH_UNIT_RATIO: f64 = 100.0;
 
+/// The reaches, mm, of arms that exist: a nominal arm outside them is in
+/// another unit than its file declares (the arm reader warns from
+/// `PLAUSIBLE_METRES` in metres on).
+const PLAUSIBLE_REACH_MM: std::ops::RangeInclusive<f64> =
+    10.0..=crate::io::arm::PLAUSIBLE_METRES * 1000.0;
+
 /// Refuses reference lengths whose median ratio to the nominal arm's
-/// distances between the same points is beyond [`LENGTH_UNIT_RATIO`]
-/// (lengths in metres for an arm in mm, say). When the readings look like
-/// radians read as degrees (the reader's warning), that is the cause the
-/// refusal names ([`CalibrationError::AngleUnits`]), not the lengths file:
-/// every joint within ±6.3° puts the sockets almost on top of each other.
-fn check_length_units(params: &DhParams, data: &DataSet) -> Result<(), CalibrationError> {
+/// distances between the same points is beyond 100 or below 1/100
+/// (lengths in metres for an arm in mm, say), naming the input at fault:
+/// the poses file when the readings look like radians read as degrees
+/// (the reader's warning; every joint within ±6.3° puts the sockets almost
+/// on top of each other, [`CalibrationError::AngleUnits`]); the arm file
+/// (`arm_file`) when its reach is no arm's — its numbers in another unit
+/// than it declares ([`CalibrationError::ArmUnits`]); else the lengths
+/// file ([`CalibrationError::LengthUnits`]). Every command that reads a
+/// lengths file makes this check, in every front end: calibrate and
+/// identify (the [`Request`]), evaluate (the command line and Python call
+/// it before evaluating).
+///
+/// # Errors
+///
+/// As above; a kernel that refuses the arm.
+///
+/// ```
+/// use aacmm_core::{calibrate::CalibrationError, io::Arm, params::DhParams, simulate::*};
+/// use aacmm_core::session::check_units;
+/// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
+/// let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 4, 6);
+/// settings.reference_lengths = 3;
+/// let campaign = simulate(&nominal, &settings).unwrap();
+/// let data = campaign.data_set().unwrap();
+/// assert!(check_units(&nominal.params, &data, "arm.toml").is_ok());
+/// // The arm's millimetres declared as metres: the arm is 1240 m long.
+/// let mut metres = nominal.params.clone();
+/// for j in &mut metres.joints {
+///     (j.a, j.d) = (1000.0 * j.a, 1000.0 * j.d);
+/// }
+/// metres.probe = metres.probe.map(|v| 1000.0 * v);
+/// let e = check_units(&metres, &data, "arm.toml").unwrap_err();
+/// assert!(matches!(e, CalibrationError::ArmUnits { .. }), "{e}");
+/// assert!(e.to_string().starts_with("arm.toml: "), "{e}");
+/// ```
+pub fn check_units(
+    params: &DhParams,
+    data: &DataSet,
+    arm_file: &str,
+) -> Result<(), CalibrationError> {
     let Some(ratio) = median_length_ratio(params, data, data.poses())? else {
         return Ok(());
     };
@@ -358,6 +401,14 @@ fn check_length_units(params: &DhParams, data: &DataSet) -> Result<(), Calibrati
             ratio,
             ratio_as_rad,
             lengths_agree: in_range(ratio_as_rad),
+        });
+    }
+    let reach = params.reach();
+    if !PLAUSIBLE_REACH_MM.contains(&reach) {
+        return Err(CalibrationError::ArmUnits {
+            file: arm_file.to_string(),
+            reach_mm: reach,
+            ratio,
         });
     }
     Err(CalibrationError::LengthUnits {
@@ -571,18 +622,26 @@ impl Verdict {
     ) -> Verdict {
         let (mut reasons, mut notes) = (Vec::new(), Vec::new());
         let solver = &calibration.solver;
+        // The data and the arm disagree: no search can help, so the
+        // solver's own failure is said last, without its remedy.
+        let disagree = disagreement(calibration);
+        let mut unconfirmed = None;
         if !solver.is_solution_usable() {
             let remedy = match solver.stop {
-                crate::calibrate::Stop::Global { search, .. } if !search.confirmed() => {
-                    ": give it more starts (--global-starts N), or state tolerances (`[prior]`, \
-                     --prior) for the parameters that differ between its minima"
+                crate::calibrate::Stop::Global { search, .. }
+                    if !search.confirmed() && disagree.is_none() =>
+                {
+                    global_remedy(calibration)
                 }
-                _ => "",
+                _ => String::new(),
             };
-            reasons.push(format!(
+            unconfirmed = Some(format!(
                 "the solver did not reach a confirmed minimum ({}){remedy}",
                 solver.stop.describe()
             ));
+        }
+        if disagree.is_none() {
+            reasons.extend(unconfirmed.take());
         }
         reasons.extend(gross_reasons(calibration));
         let blocks = &calibration.checks.implausible_blocks;
@@ -634,11 +693,16 @@ impl Verdict {
         } else {
             reasons.extend(poor);
         }
-        // A few gross outliers explain every other symptom: said first.
-        if !reasons.is_empty()
-            && let Some(cause) = outlier_cause(calibration)
-        {
-            reasons.insert(0, cause);
+        // A few gross outliers explain every other symptom: said first;
+        // else data that no arm of this kind fits (another arm's file,
+        // columns in another order, another unit).
+        reasons.extend(unconfirmed);
+        if !reasons.is_empty() {
+            if let Some(cause) = outlier_cause(calibration) {
+                reasons.insert(0, cause);
+            } else if let Some(cause) = disagree {
+                reasons.insert(0, cause);
+            }
         }
         Verdict {
             usable: reasons.is_empty(),
@@ -653,11 +717,91 @@ impl Verdict {
 /// model puts most observations beyond the threshold).
 const FEW_OUTLIERS: f64 = 0.1;
 
+/// The way out of a global search that spent its starts without
+/// confirming a minimum: more starts than it had, or tolerances for the
+/// parameters its minima differ in — tighter ones when a prior is already
+/// in use (no remedy names an option already in use as it is).
+fn global_remedy(c: &Calibration) -> String {
+    let starts = (c.solver.global.as_ref()).map_or(0, |g| g.options.max_starts);
+    let tolerances = if c.prior.is_some() {
+        "tighter tolerances for the parameters that differ between its minima (the prior in \
+         use lets them wander)"
+    } else {
+        "state tolerances (`[prior]`, --prior) for the parameters that differ between its minima"
+    };
+    format!(": give it more starts than its {starts} (--global-starts N), or {tolerances}")
+}
+
+/// The σ̂₀ from which the best minimum of a global search says the data
+/// and the arm disagree: residuals hundreds of times the stated noise are
+/// no noise misstatement, and a search that tried the whole torus of the
+/// zero offsets is no wrong start.
+const DISAGREE_SIGMA0: f64 = 100.0;
+
+/// The data and the arm disagree — the first cause of a refusal, when the
+/// global search (which tries every basin of the zero offsets) ends on an
+/// arm not of the nominal's kind (gross corrections the data determine)
+/// having found no minimum of that kind, or leaving residuals hundreds of
+/// times the stated noise ([`DISAGREE_SIGMA0`]), and a few outliers do not
+/// explain it: the joint columns in another order, another arm's file, or
+/// another unit.
+fn disagreement(c: &Calibration) -> Option<String> {
+    let trace = c.solver.global.as_ref()?;
+    if !matches!(c.solver.stop, crate::calibrate::Stop::Global { .. }) {
+        return None;
+    }
+    // An arm of the nominal's kind at the end (only its fit poor) is a
+    // misstated noise or a model error: said by the χ² test.
+    if classify_gross(c).0.is_empty() {
+        return None;
+    }
+    let no_kind = trace.best_hits == 0;
+    let s0 = c.dof.sigma0;
+    let far = c.checks.chi_square.is_some() && s0 >= DISAGREE_SIGMA0;
+    if !(no_kind || far) {
+        return None;
+    }
+    let mut evidence = Vec::new();
+    if no_kind {
+        evidence.push(format!(
+            "none of the {} minima the global search found, from starts all over the zero \
+             offsets' circles, is an arm of the nominal's kind (each a mirror image, folded or \
+             rescaled)",
+            trace.minima.len()
+        ));
+    }
+    if far {
+        evidence.push(format!(
+            "even the best minimum leaves residuals {s0:.0} times the stated noise (a touch \
+             scatters {:.3} mm where the noise says {:.4} mm)",
+            s0 * c.dof.touch_sigma_mm,
+            c.dof.touch_sigma_mm
+        ));
+    }
+    Some(format!(
+        "the data and the arm disagree: {} — check that the poses file's columns q1..q{} are \
+         this arm's joints in its order, that the touches are of this arm (not another \
+         robot's), and that readings and lengths are in the units stated (the readings' angle \
+         unit; lengths in mm)",
+        evidence.join("; "),
+        c.params.joint_count()
+    ))
+}
+
 /// A refused fit with a few outliers: they are the likely cause (a
 /// mislabelled or displaced touch pulls the whole fit), named by
-/// `file:line`, with the remedy.
+/// `file:line`, with the remedy. After a robust fit, the touches it
+/// weighed down pull nothing — they are reported (the summary's robust
+/// and outlier lines), not blamed — and `--robust` is not recommended:
+/// it is in use.
 fn outlier_cause(c: &Calibration) -> Option<String> {
-    let o = &c.checks.outliers;
+    let weighed_out: Vec<&str> = (c.robust.iter())
+        .flat_map(|r| r.downweighted())
+        .map(|w| w.at.as_str())
+        .collect();
+    let o: Vec<&crate::calibrate::checks::Outlier> = (c.checks.outliers.iter())
+        .filter(|x| !weighed_out.contains(&x.at.as_str()))
+        .collect();
     // Named as the cause only when, weighed down, they leave the rest of
     // the residuals small: not after a wrong minimum, whose residuals are
     // all large and whose screen singles out one touch all the same.
@@ -676,9 +820,14 @@ fn outlier_cause(c: &Calibration) -> Option<String> {
     let named: Vec<String> = (o.iter().take(5))
         .map(|x| format!("{} (point {}, {:.1} σ)", x.at, x.point, x.standardised))
         .collect();
+    let robust = if c.robust.is_some() {
+        ""
+    } else {
+        ", or calibrate with --robust, which weighs them down"
+    };
     Some(format!(
         "{} outlying observation{} pull{} the fit: {}{} — a mislabelled or displaced touch? Check \
-         {}: fix the label or remove the row, or calibrate with --robust, which weighs them down",
+         {}: fix the label or remove the row{robust}",
         o.len(),
         if o.len() == 1 { "" } else { "s" },
         if o.len() == 1 { "s" } else { "" },
@@ -736,6 +885,36 @@ fn noise_checks(
 /// so, with the remedy. The rest are what the check exists for — a mirror
 /// image, a collapsed arm or a unit mistake.
 fn gross_reasons(c: &Calibration) -> Vec<String> {
+    let (gross, weak) = classify_gross(c);
+    let mut reasons = Vec::new();
+    if !gross.is_empty() {
+        reasons.push(format!(
+            "the calibrated arm is not the nominal arm's geometry — a mirror image, a collapsed \
+             arm or a unit mistake: {}",
+            gross.join("; ")
+        ));
+    }
+    if !weak.is_empty() {
+        // With a prior in use, what it lacks: no option in use recommended.
+        let tolerances = if c.prior.is_some() {
+            "give them tolerances (or tighter ones) in the prior"
+        } else {
+            "state tolerances for them (`[prior]` in the arm file, or --prior)"
+        };
+        reasons.push(format!(
+            "the data barely determine parameters that moved implausibly far, so they followed \
+             noise and model error: {} — {tolerances} or fix them (--fix), or add poses that \
+             turn the joints involved",
+            weak.join("; ")
+        ));
+    }
+    reasons
+}
+
+/// The implausible moves of [`gross_reasons`], described: those the data
+/// determine (gross: a mirror image, a collapse, a unit mistake), and
+/// those they barely do (weak).
+fn classify_gross(c: &Calibration) -> (Vec<String>, Vec<String>) {
     let (mut weak, mut gross) = (Vec::new(), Vec::new());
     // The σ carry σ̂²: when the fit is far outside the stated noise (a wrong
     // minimum), they are inflated by it and tell nothing.
@@ -750,23 +929,7 @@ fn gross_reasons(c: &Calibration) -> Vec<String> {
             _ => gross.push(g.describe()),
         }
     }
-    let mut reasons = Vec::new();
-    if !gross.is_empty() {
-        reasons.push(format!(
-            "the calibrated arm is not the nominal arm's geometry — a mirror image, a collapsed \
-             arm or a unit mistake: {}",
-            gross.join("; ")
-        ));
-    }
-    if !weak.is_empty() {
-        reasons.push(format!(
-            "the data barely determine parameters that moved implausibly far, so they followed \
-             noise and model error: {} — state tolerances for them (`[prior]` in the arm file, \
-             or --prior) or fix them (--fix), or add poses that turn the joints involved",
-            weak.join("; ")
-        ));
-    }
-    reasons
+    (gross, weak)
 }
 
 /// Without a reference length the size of the arm is the nominal's: what
@@ -1374,14 +1537,20 @@ fn parameter_table(c: &Calibration) -> String {
             "name", "unit", "start", "calibrated", "sigma"
         );
         for e in &c.auxiliary {
+            // Why a column was held, or what its σ is of when not its
+            // value (a frame's rotation: a small rotation about an axis).
+            let note = match (&e.fixed, &e.sigma_of) {
+                (Some(why), _) => why.clone(),
+                (None, Some(of)) if e.sigma.is_some() => format!("sigma of {of}"),
+                _ => String::new(),
+            };
             let line = format!(
-                "  {:<16} {:<w$} {:>14.6} {:>14.6} {:>10}  {}",
+                "  {:<16} {:<w$} {:>14.6} {:>14.6} {:>10}  {note}",
                 e.name,
                 e.unit,
                 e.start,
                 e.calibrated,
                 e.sigma.map_or("-".to_string(), |s| format!("{s:.6}")),
-                e.fixed.as_deref().unwrap_or("")
             );
             t += line.trim_end();
             t += "\n";

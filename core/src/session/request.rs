@@ -556,7 +556,20 @@ impl Request {
             warnings: self.warnings(),
             ..self.sources
         };
-        let mut problem = Problem::new(self.arm, self.data, model)?.with_sources(sources);
+        let arm_file = sources.arm_file.clone();
+        let mut problem = Problem::new(self.arm, self.data, model)
+            .map_err(|e| match e {
+                // The arm file at fault, by the name the request knows.
+                CalibrationError::ArmUnits {
+                    reach_mm, ratio, ..
+                } => CalibrationError::ArmUnits {
+                    file: arm_file,
+                    reach_mm,
+                    ratio,
+                },
+                e => e,
+            })?
+            .with_sources(sources);
         if let Some((held_out, _)) = self.held_out {
             problem = problem.with_held_out(held_out)?;
         }
@@ -583,10 +596,12 @@ impl Request {
     ///
     /// # Errors
     ///
-    /// An [`OptionError`] on `prior`, `noise.…` or `threads`; as
+    /// An [`OptionError`] on `prior`, `noise.…` or `threads`; reference
+    /// lengths in another unit than the arm ([`super::check_units`]); as
     /// [`IdentifyReport::new`].
     pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
+        super::check_units(&self.arm.params, &self.data, &self.sources.arm_file)?;
         crate::identify::room_to_identify(&self.data)?;
         let prior = self.tolerances()?;
         let threads = self.threads.unwrap_or_else(available_threads);

@@ -100,7 +100,8 @@ pub struct SimStats {
     /// Converged solutions too close to an earlier touch of the socket.
     pub too_close: usize,
     /// Largest distance between the true arm's probe centre at a touch's
-    /// true readings and the point touched, mm.
+    /// true readings (through the true arm's corrections: harmonics,
+    /// compliance) and the point touched, mm.
     pub max_residual_mm: f64,
 }
 
@@ -162,6 +163,21 @@ fn check_probe_noise(nominal: &Arm, sigma_mm: f64) -> Result<(), SimError> {
 /// assert_eq!(e.to_string(), "setting `sockets`: at least one socket is needed");
 /// ```
 pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, SimError> {
+    simulate_observed(nominal, settings, &mut |_| {})
+}
+
+/// [`simulate`], telling `progress` the fraction of the sockets whose
+/// touches were found, as it goes (a large campaign takes seconds: for a
+/// progress bar). The campaign is the same bytes.
+///
+/// # Errors
+///
+/// As [`simulate`].
+pub fn simulate_observed(
+    nominal: &Arm,
+    settings: &CampaignSettings,
+    progress: &mut dyn FnMut(f64),
+) -> Result<Campaign, SimError> {
     let n = nominal.params.joint_count();
     check_limits(nominal)?;
     settings.validate(n)?;
@@ -193,6 +209,7 @@ pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, 
         &mut rng(seed, streams::SEATING),
         &mut rng(seed, streams::IK_STARTS),
         &mut stats,
+        progress,
     )?;
 
     let k = ArmKernel::new(&true_arm.params)?;
@@ -200,8 +217,19 @@ pub fn simulate(nominal: &Arm, settings: &CampaignSettings) -> Result<Campaign, 
     let sigma = settings.encoder_noise_deg.to_radians();
     let mut poses = Poses::with_capacity(n, touches.len());
     let mut q = Vec::with_capacity(n);
+    let corrects = true_arm.physics.corrects();
     for (i, t) in touches.iter().enumerate() {
-        let p = k.position(&t.q)?;
+        // What was simulated: the readings through the true arm's own
+        // corrections (harmonics, compliance), as the chain sees them.
+        let p = if corrects {
+            k.position(&crate::corrections::angles_for(
+                &true_arm.params,
+                &true_arm.physics,
+                &t.q,
+            ))?
+        } else {
+            k.position(&t.q)?
+        };
         let r = (0..3)
             .map(|i| (p[i] - t.point[i]).powi(2))
             .sum::<f64>()

@@ -94,7 +94,7 @@ pub fn true_frames(campaign: &PositionCampaign) -> Vec<crate::io::frames::FrameR
             name: name.clone(),
             rotation_deg: [x[0], x[1], x[2]].map(f64::to_degrees),
             translation_mm: [x[3], x[4], x[5]],
-            rotation_sigma_deg: None,
+            small_rotation_sigma_deg: None,
             translation_sigma_mm: None,
         })
         .collect()

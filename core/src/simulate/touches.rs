@@ -44,7 +44,8 @@ pub(crate) struct TouchPlan {
 /// joint limits and differs from every earlier touch of the socket by at
 /// least `min_separation` in some joint (differences wrapped to ±π). A socket
 /// gets `poses × starts_per_pose` starts in all; then
-/// [`SimError::TooFewPoses`].
+/// [`SimError::TooFewPoses`]. `progress` is told the fraction of the
+/// sockets done after each.
 pub(crate) fn find_touches(
     arm: &Arm,
     sockets: &[(String, [f64; 3])],
@@ -52,6 +53,7 @@ pub(crate) fn find_touches(
     seat_rng: &mut ChaCha8Rng,
     start_rng: &mut ChaCha8Rng,
     stats: &mut SimStats,
+    progress: &mut dyn FnMut(f64),
 ) -> Result<Vec<Touch>, SimError> {
     let k = ArmKernel::new(&arm.params)?;
     let budget = plan.poses * plan.starts_per_pose;
@@ -108,6 +110,7 @@ pub(crate) fn find_touches(
             });
             accepted.push(q);
         }
+        progress((s + 1) as f64 / sockets.len() as f64);
     }
     Ok(touches)
 }

@@ -82,7 +82,7 @@ pub fn eigenvalues(m: [[f64; 3]; 3]) -> [f64; 3] {
     [e1, 3.0 * q - e1 - e3, e3]
 }
 
-pub use crate::stats::{chi_square_quantile, gamma_p};
+use super::chi_square_quantile;
 
 #[cfg(test)]
 mod tests {
