@@ -260,9 +260,19 @@ fn pose_corrections(
     q: &[f64],
 ) -> Vec<f64> {
     let n = q.len();
-    let slides = |j: usize| arm.joints.get(j).is_some_and(|x| x.kind == JointKind::Prismatic);
+    let slides = |j: usize| {
+        arm.joints
+            .get(j)
+            .is_some_and(|x| x.kind == JointKind::Prismatic)
+    };
     let (cos, sin): (Vec<f64>, Vec<f64>) = (q.iter().enumerate())
-        .map(|(j, v)| if slides(j) { (*v, 0.0) } else { (v.cos(), v.sin()) })
+        .map(|(j, v)| {
+            if slides(j) {
+                (*v, 0.0)
+            } else {
+                (v.cos(), v.sin())
+            }
+        })
         .unzip();
     let trig: Vec<(&[f64], &[f64])> = (0..n)
         .map(|j| (std::slice::from_ref(&cos[j]), std::slice::from_ref(&sin[j])))

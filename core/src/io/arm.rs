@@ -12,6 +12,14 @@
 //! d = 375.0
 //! limits = [-180.0, 180.0]   # optional limits of the encoder reading q
 //!
+//! [[joint]]               # a slide: the reading is a length added to d
+//! type = "prismatic"      # "revolute" (the default) or "prismatic"
+//! theta = 0.0
+//! alpha = 90.0
+//! a = 0.0
+//! d = 0.0                 # the offset of d at reading 0
+//! limits = [0.0, 800.0]   # a slide's limits are lengths, in length_unit
+//!
 //! [[joint]]               # a joint whose axis is (nearly) parallel to the previous
 //! model = "hayati"        # A = Rz(θ+q)·Tx(a)·Rx(α)·Ry(β): no `d`, `hbeta` instead
 //! theta = 0.0
@@ -27,6 +35,9 @@
 //!
 //! `name` is optional (default empty). Lengths (`a`, `d`, probe) are in
 //! `length_unit`, angles (`theta`, `alpha`, `hbeta`, `limits`) in `angle_unit`.
+//! `type` is `"revolute"` (the default: the reading is an angle added to θ)
+//! or `"prismatic"` (the reading is a length added to `d`, in `length_unit`,
+//! as are its `limits`); see [`JointKind`].
 //! `model` is `"dh"` (the default: `d` required, no `hbeta`) or `"hayati"`
 //! (`hbeta` required, no `d`); see [`JointModel`].
 //! `hbeta`, not `beta`: `beta` is the paper's name of the twist `α`.
@@ -53,7 +64,7 @@ use super::units::{AngleUnit, LengthUnit};
 use super::verdict::Rejected;
 use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
 use crate::error::{InputError, quoted, shown};
-use crate::params::{DhJoint, DhParams, JointModel, MAX_JOINTS, supports_joints};
+use crate::params::{DhJoint, DhParams, JointKind, JointModel, MAX_JOINTS, supports_joints};
 use crate::tolerances::Tolerances;
 
 /// In an arm file in metres, a length above this (m) draws a warning: no
@@ -257,6 +268,9 @@ type Arrays = Spanned<Vec<Spanned<Vec<Spanned<f64>>>>>;
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields, expecting = "a table")]
 struct JointFile {
+    /// `revolute` (absent: the default) or `prismatic`.
+    #[serde(default, rename = "type", skip_serializing_if = "Option::is_none")]
+    kind: Option<Spanned<String>>,
     /// `dh` (absent: the default) or `hayati`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     model: Option<Spanned<String>>,
@@ -288,6 +302,30 @@ struct JointFile {
 }
 
 impl JointFile {
+    /// The joint's type (`revolute` when absent), or a located message
+    /// (joint `i`, 0-based).
+    fn kind(&self, i: usize, text: &str, file: &str) -> Result<JointKind, InputError> {
+        let Some(k) = &self.kind else {
+            return Ok(JointKind::Revolute);
+        };
+        match k.get_ref().as_str() {
+            "revolute" => Ok(JointKind::Revolute),
+            "prismatic" => Ok(JointKind::Prismatic),
+            other => Err(InputError::field(
+                file,
+                line_of(text, k.span().start),
+                "type",
+                format!(
+                    "joint {}: unknown type {}; expected \"revolute\" (turns: the reading is an \
+                     angle added to θ) or \"prismatic\" (slides: the reading is a length added \
+                     to d)",
+                    i + 1,
+                    quoted(other)
+                ),
+            )),
+        }
+    }
+
     /// The joint's model, or a located message (joint `i`, 0-based).
     fn model(
         &self,
@@ -426,7 +464,17 @@ impl ArmFile {
             joint: new(joints
                 .map(|(i, j)| {
                     let hayati = j.model == JointModel::Hayati;
+                    let slides = j.kind == JointKind::Prismatic;
+                    let limit = |x: f64| {
+                        if slides {
+                            lu.from_internal_exact(x)
+                        } else {
+                            ang(x)
+                        }
+                    };
                     new(JointFile {
+                        // Absent for revolute joints: their files read as before.
+                        kind: slides.then(|| new(JointKind::Prismatic.name().to_string())),
                         // Absent for D-H joints: their files read as before.
                         model: hayati.then(|| new(JointModel::Hayati.name().to_string())),
                         theta: new(ang(j.theta)),
@@ -439,7 +487,7 @@ impl ArmFile {
                             .get(i)
                             .copied()
                             .flatten()
-                            .map(|[lo, hi]| new(vec![new(ang(lo)), new(ang(hi))])),
+                            .map(|[lo, hi]| new(vec![new(limit(lo)), new(limit(hi))])),
                         mass_kg: link_mass(i).map(|m| new(m.kg)),
                         com_mm: link_mass(i).and_then(|m| m.com_mm).map(triple),
                         compliance_rad_per_nm: physics
@@ -484,8 +532,11 @@ impl ArmFile {
         let models = joints
             .iter()
             .enumerate()
-            .map(|(i, j)| j.get_ref().model(j.span(), i, text, file))
-            .collect::<Result<Vec<JointModel>, InputError>>()?;
+            .map(|(i, j)| {
+                let model = j.get_ref().model(j.span(), i, text, file)?;
+                Ok((model, j.get_ref().kind(i, text, file)?))
+            })
+            .collect::<Result<Vec<(JointModel, JointKind)>, InputError>>()?;
         if !supports_joints(joints.len()) {
             // Blame the first joint too many, or the last.
             let blamed = joints.get(MAX_JOINTS).or(joints.last());
@@ -517,26 +568,35 @@ impl ArmFile {
             prior: None,
             physics: Box::default(),
         };
-        for (i, (j, &model)) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate() {
+        for (i, (j, &(model, kind))) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate()
+        {
             let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
             let a = lu.to_internal(*j.a.get_ref());
-            arm.params.joints.push(match model {
-                JointModel::Dh => {
-                    let d = j.d.as_ref().map_or(0.0, |d| lu.to_internal(*d.get_ref()));
-                    DhJoint::dh(a, d, alpha, theta)
+            arm.params.joints.push(
+                match model {
+                    JointModel::Dh => {
+                        let d = j.d.as_ref().map_or(0.0, |d| lu.to_internal(*d.get_ref()));
+                        DhJoint::dh(a, d, alpha, theta)
+                    }
+                    JointModel::Hayati => {
+                        let beta = j
+                            .hbeta
+                            .as_ref()
+                            .map_or(0.0, |b| au.to_internal(*b.get_ref()));
+                        DhJoint::hayati(a, alpha, theta, beta)
+                    }
                 }
-                JointModel::Hayati => {
-                    let beta = j
-                        .hbeta
-                        .as_ref()
-                        .map_or(0.0, |b| au.to_internal(*b.get_ref()));
-                    DhJoint::hayati(a, alpha, theta, beta)
-                }
-            });
+                .with_kind(kind),
+            );
+            // A slide's limits are lengths, a turn's angles.
+            let limit = |x: f64| match kind {
+                JointKind::Revolute => au.to_internal(x),
+                JointKind::Prismatic => lu.to_internal(x),
+            };
             let limits = match j.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
                 None => None,
                 Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
-                    Some([lo, hi].map(|x| au.to_internal(*x.get_ref())))
+                    Some([lo, hi].map(|x| limit(*x.get_ref())))
                 }
                 Some((l, values)) => {
                     let message = match values {
@@ -546,7 +606,11 @@ impl ArmFile {
                             hi.get_ref()
                         ),
                         _ => format!(
-                            "expected `[min, max]` in {au}, found {} values",
+                            "expected `[min, max]` in {}, found {} values",
+                            match kind {
+                                JointKind::Revolute => au.to_string(),
+                                JointKind::Prismatic => lu.to_string(),
+                            },
                             values.len()
                         ),
                     };
@@ -1403,8 +1467,14 @@ z = 100.0
                         theta: rng.random_range(-0.1..0.1),
                         ..DhJoint::default()
                     };
-                    if i % 3 == 1 {
+                    let j = if i % 3 == 1 {
                         DhJoint::hayati(j.a, j.alpha, j.theta, rng.random_range(-0.1..0.1))
+                    } else {
+                        j
+                    };
+                    // Every fourth joint slides (some of them Hayati too).
+                    if i % 4 == 1 {
+                        j.with_kind(JointKind::Prismatic)
                     } else {
                         j
                     }
@@ -1412,7 +1482,10 @@ z = 100.0
                 .collect();
             let limits = (0..n)
                 .map(|i| {
-                    (i % 2 == 0).then(|| [rng.random_range(-3.0..-1.0), rng.random_range(1.0..3.0)])
+                    (i % 2 == 0 || i % 4 == 1).then(|| {
+                        let scale = if i % 4 == 1 { 300.0 } else { 1.0 };
+                        [-3.0, 1.0].map(|x| scale * rng.random_range(x..x + 2.0))
+                    })
                 })
                 .collect();
             let arm = Arm {
@@ -1445,7 +1518,50 @@ z = 100.0
             for (x, y) in back.params.to_vec().iter().zip(arm.params.to_vec()) {
                 assert!((x - y).abs() <= y.abs() * f64::EPSILON, "{x} {y}");
             }
+            let kinds = |a: &Arm| a.params.joints.iter().map(|j| j.kind).collect::<Vec<_>>();
+            assert_eq!(kinds(&back), kinds(&arm));
+            // A slide's limits go through metres, a turn's through degrees.
+            for (x, y) in back
+                .limits
+                .iter()
+                .flatten()
+                .zip(arm.limits.iter().flatten())
+            {
+                for (x, y) in x.iter().zip(y) {
+                    assert!((x - y).abs() <= 2.0 * y.abs() * f64::EPSILON, "{x} {y}");
+                }
+            }
         }
+    }
+
+    #[test]
+    fn a_prismatic_joint_reads_its_limits_as_lengths() {
+        let text = edit(
+            "theta = 0.5\nbeta = 90\na = -55.0\nd = 0.0\n",
+            "type = \"prismatic\"\ntheta = 0.5\nbeta = 90\na = -55.0\nd = 0.0\n\
+             limits = [-200, 650]\n",
+        );
+        let (arm, _) = parse_arm(&text, F).unwrap();
+        let j = &arm.params.joints;
+        assert_eq!(j[1].kind, JointKind::Prismatic);
+        assert!(
+            j.iter()
+                .enumerate()
+                .all(|(i, j)| i == 1 || j.kind == JointKind::Revolute)
+        );
+        assert_eq!(arm.limits[1], Some([-200.0, 650.0]));
+        let written = arm_to_toml(&arm, LengthUnit::M, AngleUnit::Deg);
+        assert!(written.contains("type = \"prismatic\""), "{written}");
+        assert!(written.contains("limits = [-0.2, 0.65]"), "{written}");
+        // Revolute joints are written as before: no `type` key.
+        assert_eq!(written.matches("type =").count(), 1, "{written}");
+        let bad = text.replace("\"prismatic\"", "\"sliding\"");
+        assert_at(
+            &err(&bad),
+            13,
+            Some("type"),
+            "joint 2: unknown type `sliding`; expected \"revolute\"",
+        );
     }
 
     /// `GOOD` with joint 2 (α = 90°) written as a Hayati joint.
