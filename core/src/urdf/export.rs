@@ -1,10 +1,12 @@
 //! A D-H arm (a calibrated one) as URDF joint origins, and as a plain D-H
 //! table.
 //!
-//! Link `i`'s frame is the frame just after joint `i`'s rotation; joint
-//! `i + 1` sits in it at `Rz(θ_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)` (a Hayati joint:
-//! `Rz(θ_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`) and turns about its z axis, so the
-//! URDF's readings are the arm's `q` (the zero offsets are in the origins).
+//! Link `i`'s frame is the frame just after joint `i`'s rotation (or
+//! slide); joint `i + 1` sits in it at `Rz(θ_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)` (a
+//! Hayati joint: `Rz(θ_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`) and turns about (a
+//! `prismatic` one: slides along) its z axis, so the URDF's readings are the
+//! arm's `q` — a slide's in metres, the arm's in mm — (the zero offsets are
+//! in the origins: `Tz(q)` commutes with `Rz(θ)·Tz(d)`).
 //! The probe is a `fixed` joint at `B` after the last link's transform.
 //! `xyz` in metres, `rpy` in radians (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`),
 //! every number with the digits that read back to the same `f64`: the
@@ -25,15 +27,17 @@ pub struct UrdfNames {
     pub robot: String,
     /// `n + 1` links: the base, then the one after each joint.
     pub links: Vec<String>,
-    /// `n` revolute joints.
+    /// `n` movable joints.
     pub joints: Vec<String>,
-    /// Per joint, `[lower, upper]` (rad), where known.
+    /// Per joint, `[lower, upper]` in the arm's units (rad, mm for a
+    /// prismatic joint), where known.
     pub limits: Vec<Option<[f64; 2]>>,
 }
 
 impl UrdfNames {
     /// The default names for an arm of `n` joints named `robot`, with
-    /// `limits` (rad; missing entries: none).
+    /// `limits` (the arm's units: rad, mm for a prismatic joint; missing
+    /// entries: none).
     pub fn defaults(robot: &str, n: usize, limits: &[Option<[f64; 2]>]) -> UrdfNames {
         UrdfNames {
             robot: robot.to_string(),
@@ -45,25 +49,52 @@ impl UrdfNames {
         }
     }
 
-    /// The names of a template URDF's revolute joints, in file order (its
-    /// chain root to tip), their links and limits; `None` unless it has
-    /// exactly `n` revolute joints, each the child link's parent of the next.
-    pub fn from_template(template: &Urdf, n: usize) -> Option<UrdfNames> {
-        let revolute: Vec<_> = (template.joints.iter())
-            .filter(|j| j.kind == JointKind::Revolute)
-            .collect();
-        if revolute.len() != n || n == 0 {
+    /// The names of the chain of a template URDF whose movable (revolute,
+    /// continuous and prismatic) joints are, root to tip, of the kinds
+    /// `kinds`: its joints, their links and limits (a slide's metres as
+    /// mm). The chains tried are those from the top of the tree to each leaf
+    /// link, in file order (a gripper's finger slides are another chain
+    /// than the arm's); `None` when none fits.
+    pub fn from_template(template: &Urdf, kinds: &[crate::params::JointKind]) -> Option<UrdfNames> {
+        let movable = (template_chains(template).into_iter())
+            .map(|(_, path)| path)
+            .find(|path| {
+                path.iter()
+                    .map(|j| j.kind.movable())
+                    .eq(kinds.iter().map(|k| Some(*k)))
+            })?;
+        if kinds.is_empty() {
             return None;
         }
-        let mut links = vec![revolute[0].parent.clone()];
-        links.extend(revolute.iter().map(|j| j.child.clone()));
+        let mut links = vec![movable[0].parent.clone()];
+        links.extend(movable.iter().map(|j| j.child.clone()));
         Some(UrdfNames {
             robot: template.name.clone(),
             links,
-            joints: revolute.iter().map(|j| j.name.clone()).collect(),
-            limits: revolute.iter().map(|j| j.limits).collect(),
+            joints: movable.iter().map(|j| j.name.clone()).collect(),
+            limits: (movable.iter())
+                .map(|j| match j.kind {
+                    JointKind::Prismatic => j.limits.map(|l| l.map(|v| v * 1000.0)),
+                    _ => j.limits,
+                })
+                .collect(),
         })
     }
+}
+
+/// Each leaf link of `template` (in file order) and the movable joints from
+/// the top of its tree down to it (a loop of joints: left out).
+pub fn template_chains(template: &Urdf) -> Vec<(String, Vec<&super::UrdfJoint>)> {
+    let parents: std::collections::HashSet<&str> =
+        template.joints.iter().map(|j| j.parent.as_str()).collect();
+    (template.joints.iter())
+        .filter(|j| !parents.contains(j.child.as_str()))
+        .filter_map(|leaf| {
+            let path = template.path_up(None, &leaf.child).ok()?;
+            let movable = path.into_iter().filter(|j| j.kind.movable().is_some());
+            Some((leaf.child.clone(), movable.collect()))
+        })
+        .collect()
 }
 
 /// The rigid transform of link `j` before the next joint turns:
@@ -91,9 +122,10 @@ fn origin(t: Vector3<f64>, r: Rotation3<f64>) -> String {
     )
 }
 
-/// The arm `params` as a URDF with `names`: one revolute joint per joint
-/// (axis z, limits where known, `continuous` where not), then a fixed joint
-/// to the probe link `probe`.
+/// The arm `params` as a URDF with `names`: one joint per joint (axis z; a
+/// revolute one `revolute` with its limits where known, `continuous` where
+/// not; a prismatic one `prismatic`, its limits in metres where known and
+/// no `<limit>` where not), then a fixed joint to the probe link `probe`.
 ///
 /// ```
 /// use aacmm_core::params::DhParams;
@@ -124,10 +156,11 @@ pub fn to_urdf(params: &DhParams, names: &UrdfNames) -> String {
     let mut previous = (Vector3::zeros(), Rotation3::identity());
     for i in 0..n {
         let limit = names.limits.get(i).copied().flatten();
-        let kind = if limit.is_some() {
-            "revolute"
-        } else {
-            "continuous"
+        let slides = params.joints[i].kind == crate::params::JointKind::Prismatic;
+        let (kind, limit) = match (slides, limit) {
+            (true, limit) => ("prismatic", limit.map(|l| l.map(|v| v / 1000.0))),
+            (false, Some(limit)) => ("revolute", Some(limit)),
+            (false, None) => ("continuous", None),
         };
         s += &format!(
             "  <joint name=\"{}\" type=\"{kind}\">\n    <parent link=\"{}\"/>\n    <child \

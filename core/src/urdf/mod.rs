@@ -535,10 +535,7 @@ impl<'a, 'input> JointElement<'a, 'input> {
                 self.file,
                 at,
                 "upper",
-                format!(
-                    "joint {}: upper {hi} is below lower {lo}",
-                    quoted(name)
-                ),
+                format!("joint {}: upper {hi} is below lower {lo}", quoted(name)),
             )),
             (Some(lo), Some(hi)) if lo < hi => Ok(Some([lo, hi])),
             _ => Ok(None),
@@ -670,7 +667,9 @@ pub struct ChainMass {
 impl Urdf {
     /// Whether a joint names `link` as its parent or child.
     fn joins(&self, link: &str) -> bool {
-        self.joints.iter().any(|j| j.child == link || j.parent == link)
+        self.joints
+            .iter()
+            .any(|j| j.child == link || j.parent == link)
     }
 
     /// The chain from `root` (or, without one, the link that is no joint's
@@ -711,7 +710,11 @@ impl Urdf {
             chain.steps.push(Step::Rigid(j.origin));
             let Some(kind) = j.kind.movable() else {
                 if j.kind == JointKind::Fixed {
-                    chain.folded.last_mut().expect("one entry").push(j.name.clone());
+                    chain
+                        .folded
+                        .last_mut()
+                        .expect("one entry")
+                        .push(j.name.clone());
                     continue;
                 }
                 return Err(InputError::field(
@@ -982,9 +985,9 @@ impl Chain {
 
     /// This chain with a tool point `offset` (m, in the tip link's frame)
     /// after its tip: the tip moves there, its frame's orientation stays.
-    pub fn with_tool(mut self, offset: Vector3<f64>) -> Chain {
+    pub fn with_tool(mut self, offset: [f64; 3]) -> Chain {
         self.steps.push(Step::Rigid(Isometry3::from_parts(
-            Translation3::from(offset),
+            Translation3::from(Vector3::from(offset)),
             UnitQuaternion::identity(),
         )));
         self
@@ -1061,7 +1064,10 @@ impl Chain {
         // The last joint: a = d = α = θ = 0, the probe in its frame.
         joints.push(DhJoint::default().with_kind(self.kinds[n - 1]));
         let last = frame(prev.o, prev.x, prev.z);
-        let b = last.inverse_transform_point(&Point3::from(tip.translation.vector)).coords * 1000.0;
+        let b = last
+            .inverse_transform_point(&Point3::from(tip.translation.vector))
+            .coords
+            * 1000.0;
         let params = DhParams {
             joints,
             probe: [b.x, b.y, b.z],
@@ -1114,7 +1120,14 @@ impl Chain {
             theta: signed_angle(prev.x, x, prev.z),
             ..DhJoint::default()
         };
-        Ok((joint, Frame { o: foot + x * a, x, z }))
+        Ok((
+            joint,
+            Frame {
+                o: foot + x * a,
+                x,
+                z,
+            },
+        ))
     }
 }
 
@@ -1394,7 +1407,10 @@ mod tests {
             let worst = worst_mm(&chain, &dh, &mut rng, 50);
             assert!(worst < 1e-6, "trial {trial}: {worst} mm\n{text}");
         }
-        assert!(hayati > 20 && prismatic > 100, "{hayati} Hayati, {prismatic} prismatic");
+        assert!(
+            hayati > 20 && prismatic > 100,
+            "{hayati} Hayati, {prismatic} prismatic"
+        );
     }
 
     /// The robots of examples/mukca, with the right angles snapped (as the
