@@ -26,6 +26,22 @@ fn import(args: &[&str], out: &Path) -> Arm {
     read_arm(out).unwrap().0
 }
 
+/// `aacmm import` of the shipped mobile manipulator from `base_footprint`
+/// to `ball_link`, with `extra` flags; the arm it wrote to `out`.
+fn import_lift(extra: &[&str], out: &Path) -> Arm {
+    let urdf = example(LIFT);
+    let mut args = vec![
+        "--urdf",
+        urdf.to_str().unwrap(),
+        "--base",
+        "base_footprint",
+        "--tip",
+        "ball_link",
+    ];
+    args.extend_from_slice(extra);
+    import(&args, out)
+}
+
 /// Random readings in the URDF's units (rad; m for a slide) and the arm's
 /// (rad; mm).
 fn readings(kinds: &[JointKind], rng: &mut ChaCha8Rng) -> (Vec<f64>, Vec<f64>) {
@@ -64,19 +80,7 @@ fn the_imported_arm_is_the_urdfs_kinematics_in_position_and_orientation() {
     let dir = temp_dir("import-pose");
     let urdf_path = example(LIFT);
     let tool = [4.0, -3.0, -25.0];
-    let arm = import(
-        &[
-            "--urdf",
-            urdf_path.to_str().unwrap(),
-            "--base",
-            "base_footprint",
-            "--tip",
-            "ball_link",
-            "--tool",
-            "4,-3,-25",
-        ],
-        &dir.join("lift.toml"),
-    );
+    let arm = import_lift(&["--tool", "4,-3,-25"], &dir.join("lift.toml"));
     let kinds: Vec<JointKind> = arm.params.joints.iter().map(|j| j.kind).collect();
     assert_eq!(kinds[0], JointKind::Prismatic);
     assert!(kinds[1..].iter().all(|k| *k == JointKind::Revolute));
@@ -119,18 +123,7 @@ fn the_imported_arm_is_the_urdfs_kinematics_in_position_and_orientation() {
 #[test]
 fn import_export_import_agrees_within_a_nanometre() {
     let dir = temp_dir("import-round-trip");
-    let urdf_path = example(LIFT);
-    let first = import(
-        &[
-            "--urdf",
-            urdf_path.to_str().unwrap(),
-            "--base",
-            "base_footprint",
-            "--tip",
-            "ball_link",
-        ],
-        &dir.join("first.toml"),
-    );
+    let first = import_lift(&[], &dir.join("first.toml"));
     let exported = dir.join("exported.urdf");
     let o = aacmm(&[
         "export",
