@@ -77,7 +77,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(offset) = tool {
         chain = chain.with_tool(offset.map(|v| v / 1000.0));
     }
-    let dh = chain.to_dh().map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
+    let dh = chain.to_dh()?;
     let arm = arm_of(&urdf, &chain, &dh, &args);
     let joints = joint_lines(&chain, &dh);
     let mut out = header(&file, &args, &urdf, &chain, &dh, &joints);

@@ -288,6 +288,9 @@ fn bad_input_is_refused_with_its_place() {
     assert!(!Path::new(out).exists(), "nothing written on an error");
     // An output that exists is kept unless --force.
     std::fs::write(out, "keep").unwrap();
-    assert_clean_error(&run(lift, "base_footprint", "ball_link", &[]), &["--out"]);
+    assert_clean_error(
+        &run(lift, "base_footprint", "ball_link", &[]),
+        &["--out", "already exists; give --force to overwrite it"],
+    );
     assert_eq!(std::fs::read_to_string(out).unwrap(), "keep");
 }

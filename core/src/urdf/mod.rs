@@ -67,7 +67,7 @@ use std::collections::HashMap;
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::error::{InputError, quoted, shown};
-use crate::params::{DhJoint, DhParams, JointModel};
+use crate::params::{DhJoint, DhParams, JointModel, MAX_JOINTS};
 
 /// How [`parse_urdf`] reads angles.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -630,6 +630,8 @@ pub struct Chain {
     /// the tool).
     pub folded: Vec<Vec<String>>,
     steps: Vec<Step>,
+    /// The URDF file's name, for messages.
+    file: String,
     /// The masses of the links that move with the chain (or sit on its
     /// root side), in the file's order of `<link>` elements.
     pub masses: Vec<ChainMass>,
@@ -704,6 +706,7 @@ impl Urdf {
             limits: Vec::new(),
             folded: vec![Vec::new()],
             steps: Vec::new(),
+            file: self.file.clone(),
             masses: self.masses_along(&path),
         };
         for j in path {
@@ -1014,7 +1017,8 @@ impl Chain {
     /// The D-H arm of this chain (see the module docs for the conventions).
     ///
     /// # Errors
-    /// A chain without movable joints; two consecutive axes whose common
+    /// A chain without movable joints or with more than
+    /// [`MAX_JOINTS`](crate::params::MAX_JOINTS); two consecutive axes whose common
     /// normal is more than [`HAYATI_BEYOND_M`] away while they are not
     /// nearly parallel (a robot kilometres wide).
     ///
@@ -1037,10 +1041,13 @@ impl Chain {
     pub fn to_dh(&self) -> Result<DhConversion, InputError> {
         let (axes, tip) = self.axes();
         let n = axes.len();
-        if n == 0 {
+        if n == 0 || n > MAX_JOINTS {
             return Err(InputError::file_error(
-                "URDF chain",
-                "the chain has no movable (revolute, continuous or prismatic) joint",
+                &self.file,
+                format!(
+                    "the chain has {n} movable (revolute, continuous or prismatic) joints; \
+                     an arm has 1 to {MAX_JOINTS}"
+                ),
             ));
         }
         // Frame 0: on axis 1, nearest the root origin; x from the root x axis.
@@ -1095,8 +1102,10 @@ impl Chain {
                 if b.abs() > 0.5 {
                     return Ok(hayati_link(prev, next));
                 }
-                return Err(InputError::file_error(
-                    "URDF chain",
+                return Err(InputError::field(
+                    &self.file,
+                    self.lines[i],
+                    "origin",
                     format!(
                         "the axes of {} and {} have their common normal {:.0} m away, and \
                          are {:.0}° apart: no arm is that large",
@@ -1589,6 +1598,26 @@ mod tests {
             let e = parse_urdf(&text, "z.urdf", UrdfOptions::default()).unwrap_err();
             assert_eq!(e.to_string(), message);
         }
+        // Thirteen movable joints, or none, are no arm.
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        let long = random_urdf(&mut rng, 13, true);
+        let urdf = parse_urdf(&long, "long.urdf", UrdfOptions::default()).unwrap();
+        let e = urdf.chain(None, "ball_link").unwrap().to_dh().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "long.urdf: the chain has 13 movable (revolute, continuous or prismatic) joints; \
+             an arm has 1 to 12"
+        );
+        let e = urdf
+            .chain(Some("l12"), "ball_link")
+            .unwrap()
+            .to_dh()
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("long.urdf: the chain has 0 movable"),
+            "{e}"
+        );
         // Limits are kept in the URDF's units: a slide's in metres.
         let text = joint("prismatic", "<limit lower=\"-0.1\" upper=\"0.5\"/>");
         let urdf = parse_urdf(&text, "z.urdf", UrdfOptions::default()).unwrap();
