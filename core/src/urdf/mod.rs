@@ -1018,7 +1018,7 @@ impl Chain {
     ///
     /// # Errors
     /// A chain without movable joints or with more than
-    /// [`MAX_JOINTS`](crate::params::MAX_JOINTS); two consecutive axes whose common
+    /// [`MAX_JOINTS`]; two consecutive axes whose common
     /// normal is more than [`HAYATI_BEYOND_M`] away while they are not
     /// nearly parallel (a robot kilometres wide).
     ///
