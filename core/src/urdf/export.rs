@@ -251,12 +251,14 @@ pub fn dh_table(params: &DhParams) -> String {
 mod tests {
     use super::*;
     use crate::kernel::ArmKernel;
+    use crate::params::JointKind as ArmKind;
     use crate::urdf::{UrdfOptions, parse_urdf};
 
     /// Exported and read back by the toolkit's own URDF reader, the chain's
-    /// tip is the arm's probe within 1 nm — D-H and Hayati joints, 6 and 7
-    /// joints, zero offsets and twists off their nominal values — and the
-    /// D-H conversion of the read-back chain is the same arm up to its base.
+    /// tip is the arm's probe within 1 nm — D-H and Hayati joints, 6, 7 and
+    /// 7 joints with two slides (one Hayati), zero offsets and twists off
+    /// their nominal values; a slide's limits in metres — and the D-H
+    /// conversion of the read-back chain is the same arm up to its base.
     #[test]
     fn exported_urdf_reads_back_within_a_nanometre() {
         let mut hayati = DhParams::paper_nominal();
@@ -277,43 +279,70 @@ mod tests {
             theta: 0.1,
             ..DhJoint::default()
         });
+        // A track (a slide before the arm) and a Hayati slide.
+        let mut track = DhParams::paper_nominal();
+        track.joints.insert(
+            0,
+            DhJoint::dh(150.0, 30.0, 1.2, 0.3).with_kind(ArmKind::Prismatic),
+        );
+        track.joints[3] =
+            DhJoint::hayati(track.joints[3].a, 0.002, 0.1, -0.004).with_kind(ArmKind::Prismatic);
         for (name, arm) in [
             ("paper", DhParams::paper_nominal()),
             ("hayati", hayati),
             ("seven", seven),
+            ("track", track),
         ] {
             let n = arm.joint_count();
+            let kinds: Vec<ArmKind> = arm.joints.iter().map(|j| j.kind).collect();
             let limits = vec![Some([-3.0, 3.0]); n];
             let text = to_urdf(&arm, &UrdfNames::defaults(name, n, &limits));
             let urdf = parse_urdf(&text, "x.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
-            assert!(
-                urdf.joints
-                    .iter()
-                    .all(|j| j.limits == Some([-3.0, 3.0]) || j.name == "probe")
-            );
+            for j in urdf.joints.iter().filter(|j| j.name != "probe") {
+                let slides = j.kind == JointKind::Prismatic;
+                let m = if slides { 1e-3 } else { 1.0 };
+                assert_eq!(j.limits, Some([-3.0 * m, 3.0 * m]), "{name}");
+            }
             let chain = urdf.chain(None, "probe").unwrap();
-            // The reader's D-H conversion (D-H joints only: a Hayati joint's
-            // skew axes have a common normal far away).
-            let dh = (name != "hayati").then(|| chain.to_dh().unwrap());
+            assert_eq!(chain.kinds, kinds);
+            // The reader's own conversion of the exported chain.
+            let dh = chain.to_dh().unwrap();
             let k = ArmKernel::new(&arm).unwrap();
             for i in 0..50 {
                 let q: Vec<f64> = (0..n)
                     .map(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 2.5)
                     .collect();
+                // A slide's reading: mm for the arm, m for the URDF.
+                let q: Vec<f64> = (q.iter().zip(&kinds))
+                    .map(|(v, k)| {
+                        if *k == ArmKind::Prismatic {
+                            v * 100.0
+                        } else {
+                            *v
+                        }
+                    })
+                    .collect();
+                let q_urdf: Vec<f64> = (q.iter().zip(&kinds))
+                    .map(|(v, k)| {
+                        if *k == ArmKind::Prismatic {
+                            v / 1000.0
+                        } else {
+                            *v
+                        }
+                    })
+                    .collect();
                 let p = k.position(&q).unwrap();
-                let tip = chain.position(&q);
+                let tip = chain.position(&q_urdf);
                 for c in 0..3 {
                     assert!(
                         (tip[c] * 1000.0 - p[c]).abs() < 1e-6,
                         "{name} {q:?}: {tip:?} vs {p:?}"
                     );
                 }
-                if let Some(dh) = &dh {
-                    let other = ArmKernel::new(&dh.params).unwrap().position(&q).unwrap();
-                    let at = dh.base * nalgebra::Point3::from(Vector3::from(other) / 1000.0);
-                    for c in 0..3 {
-                        assert!((at[c] - tip[c]).abs() < 1e-9, "{name}: {at:?} vs {tip:?}");
-                    }
+                let other = ArmKernel::new(&dh.params).unwrap().position(&q).unwrap();
+                let at = dh.base * nalgebra::Point3::from(Vector3::from(other) / 1000.0);
+                for c in 0..3 {
+                    assert!((at[c] - tip[c]).abs() < 1e-9, "{name}: {at:?} vs {tip:?}");
                 }
             }
         }
