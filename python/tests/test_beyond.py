@@ -77,6 +77,8 @@ def test_a_held_correction_says_why(ur5, grid):
         ({"harmonics": "2:"}, "harmonics = 2:: an order is a whole number from 1 to 16"),
         ({"harmonics": "2"}, "harmonics = 2: expected JOINT:ORDERS"),
         ({"harmonics": "2:3-1"}, "harmonics = 2:3-1: empty order range"),
+        ({"backlash": "2,2"}, "backlash = 2: joint listed twice"),
+        ({"backlash": "7"}, "backlash = 7: joint 7: the arm has 6 joints"),
         ({"thermal": True}, "thermal = on: thermal expansion needs the temperature of every pose"),
         ({"drift": True}, "drift = on: a drift needs the time of every pose"),
     ],
@@ -85,6 +87,15 @@ def test_a_bad_spec_or_missing_input_names_the_argument(ur5, grid, kwargs, messa
     with pytest.raises(ValueError) as e:
         aacmm.calibrate(ur5, grid, method="lm", **kwargs)
     assert str(e.value).startswith(message), str(e.value)
+
+
+def test_a_backlash_is_fitted_and_named(ur5, grid):
+    """The shoulder's play is a column of its own, in degrees, with its σ,
+    and the fitted physics carries it."""
+    cal = aacmm.calibrate(ur5, grid, method="lm", backlash="2")
+    b = cal.auxiliary["backlash2"]
+    assert b["unit"] == "deg" and b["fixed"] is None and b["sigma"] > 0
+    assert cal.physics["backlash"][1] is not None
 
 
 def test_a_compliance_needs_masses():

@@ -68,6 +68,19 @@ fn cases() -> Vec<Case> {
             },
         },
         Case {
+            // 0.02° of half-play on the shoulder and the elbow.
+            name: "backlash",
+            physics: |p| Physics {
+                backlash: vec![None, Some(PLAY), Some(PLAY), None, None, None],
+                ..p.clone()
+            },
+            drift: None,
+            fit: Beyond {
+                backlash: vec![1, 2],
+                ..Beyond::default()
+            },
+        },
+        Case {
             name: "thermal",
             physics: |p| Physics {
                 cte_per_k: Some(23e-6), // aluminium, as a UR5's links
@@ -90,6 +103,9 @@ fn cases() -> Vec<Case> {
         },
     ]
 }
+
+/// The simulated reducers' half-play, rad (0.02°).
+const PLAY: f64 = 0.02 * std::f64::consts::PI / 180.0;
 
 fn harmonic(joint: usize, order: u32, sin: f64, cos: f64) -> Harmonic {
     Harmonic {
@@ -219,6 +235,12 @@ fn normalised_errors(
                 [(f.0, t.0, "harmonic"), (f.1, t.1, "harmonic")]
             })
             .collect(),
+        "backlash" => (case.fit.backlash.iter())
+            .map(|&j| {
+                let deg = |p: &Physics| p.backlash_of(j).to_degrees();
+                (deg(fitted), deg(truth_physics), "backlash")
+            })
+            .collect(),
         "thermal" => vec![(
             fitted.cte_per_k.unwrap() * 1e6,
             truth_physics.cte_per_k.unwrap() * 1e6,
@@ -233,7 +255,7 @@ fn normalised_errors(
     };
     let columns: Vec<_> = (cal.auxiliary.iter())
         .filter(|a| {
-            ["compliance", "harmonic", "thermal", "drift"]
+            ["compliance", "harmonic", "backlash", "thermal", "drift"]
                 .iter()
                 .any(|p| a.name.starts_with(p))
         })
