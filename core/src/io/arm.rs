@@ -733,7 +733,9 @@ impl ArmFile {
 
     /// Each joint's `backlash` (angle_unit; length_unit for a slide) into
     /// `physics`, after its masses: a play needs a mass to press one of its
-    /// flanks ([`crate::corrections`]), and is never negative.
+    /// flanks ([`crate::corrections`]). A negative value (not physical: the
+    /// link against its load) is read as written, since a calibrated arm
+    /// file carries what its fit found.
     fn read_backlash(
         &self,
         physics: &mut Physics,
@@ -745,21 +747,24 @@ impl ArmFile {
                 physics.backlash.push(None);
                 continue;
             };
-            let why = if *b.get_ref() < 0.0 {
-                "a backlash (half the play) is not negative"
-            } else if !physics.has_masses() {
-                "a backlash needs masses: their gravity torque decides which flank the joint \
-                 rests on; state `mass_kg` of the links and of the tool ([probe])"
+            if !physics.has_masses() {
+                return Err(at(
+                    b.span(),
+                    "backlash",
+                    format!(
+                        "joint {}: a backlash needs masses: their gravity torque decides which \
+                         flank the joint rests on; state `mass_kg` of the links and of the tool \
+                         ([probe])",
+                        i + 1
+                    ),
+                ));
+            }
+            let slides = j.kind.as_ref().is_some_and(|k| k.get_ref() == "prismatic");
+            physics.backlash.push(Some(if slides {
+                self.length_unit.to_internal(*b.get_ref())
             } else {
-                physics
-                    .backlash
-                    .push(Some(match j.kind.as_ref().map(|k| k.get_ref().as_str()) {
-                        Some("prismatic") => self.length_unit.to_internal(*b.get_ref()),
-                        _ => self.angle_unit.to_internal(*b.get_ref()),
-                    }));
-                continue;
-            };
-            return Err(at(b.span(), "backlash", format!("joint {}: {why}", i + 1)));
+                self.angle_unit.to_internal(*b.get_ref())
+            }));
         }
         if physics.backlash.iter().all(Option::is_none) {
             physics.backlash.clear();
@@ -1611,8 +1616,8 @@ z = 100.0
     }
 
     /// A joint's `backlash` is in angle_unit (a slide's in length_unit),
-    /// kept on writing; it needs a mass to press a flank and is never
-    /// negative, each refusal at its line.
+    /// kept on writing; it needs a mass to press a flank (refused at its
+    /// line without); a fit's negative value reads back.
     #[test]
     fn a_backlash_reads_writes_and_needs_masses() {
         let joint2 = "theta = 0.5\nbeta = 90\na = -55.0\nd = 0.0\n";
@@ -1638,12 +1643,8 @@ z = 100.0
             "joint 2: a backlash needs masses",
         );
         let negative = text.replacen("backlash = 0.02", "backlash = -0.02", 1);
-        assert_at(
-            &err(&negative),
-            17,
-            Some("backlash"),
-            "joint 2: a backlash (half the play) is not negative",
-        );
+        let arm = parse_arm(&negative, F).unwrap().0;
+        assert!((arm.physics.backlash_of(1) + 0.02f64.to_radians()).abs() < 1e-18);
     }
 
     /// `GOOD` with joint 2 (α = 90°) written as a Hayati joint.
