@@ -6,6 +6,7 @@
 //! ```text
 //! cargo run --release --example mukca_beyond                     # the three folders
 //! cargo run --release --example mukca_beyond -- examples/mukca/kinova-1 [--folds]
+//! cargo run --release --example mukca_beyond -- --model geometry --model backlash
 //! ```
 //!
 //! The procedure is `examples/mukca.rs`'s (the README's "Real data
@@ -29,7 +30,10 @@
 //! joint: `1:1,…,n:1`), `harmonics 1-2` (orders 1 and 2 on every joint),
 //! `compliance 2,3` (Kinova) or `2,4` (Panda) — the joints gravity loads
 //! most —, `compliance all` (every joint), and `harmonics 1` with each
-//! compliance. A correction the training data cannot separate from the
+//! compliance; `backlash 2,3` (`2,4`) and `backlash all`, a half-play per
+//! joint on the gear flank its gravity torque presses (the arm files' link
+//! masses). `--model PREFIX` (repeatable) runs only the models whose label
+//! starts with it. A correction the training data cannot separate from the
 //! geometry is held at zero by the fit (counted as `held`). A fold is
 //! refused when its calibration fails (the error) or when the command
 //! line's verdict refuses it (not converged, a gross geometry, or a
@@ -89,9 +93,12 @@ fn percent(before: f64, after: f64) -> f64 {
 fn main() -> anyhow::Result<()> {
     let mut dirs = Vec::new();
     let mut folds_detail = false;
-    for a in std::env::args().skip(1) {
+    let mut only: Vec<String> = Vec::new();
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
         match a.as_str() {
             "--folds" => folds_detail = true,
+            "--model" => only.push(args.next().context("--model needs a label prefix")?),
             _ if a.starts_with("--") => bail!("unknown option `{a}`"),
             _ => dirs.push(a),
         }
@@ -124,7 +131,9 @@ fn main() -> anyhow::Result<()> {
             let settings = SolverSettings::default();
             check_geometry_is_the_library(&arm, &data, &model, &settings)
                 .with_context(|| format!("{dir}, prior {prior_name}"))?;
-            for (label, beyond) in models(n) {
+            let chosen = (models(n).into_iter())
+                .filter(|(label, _)| only.is_empty() || only.iter().any(|p| label.starts_with(p)));
+            for (label, beyond) in chosen {
                 let model = ModelOptions {
                     beyond,
                     ..model.clone()
@@ -188,6 +197,20 @@ fn models(n: usize) -> Vec<(String, Beyond)> {
             with(&loaded, &h1),
         ),
         ("harmonics 1 + compliance all".into(), with(&all, &h1)),
+        (
+            format!("backlash {loaded_name}"),
+            Beyond {
+                backlash: loaded.clone(),
+                ..Beyond::default()
+            },
+        ),
+        (
+            "backlash all".into(),
+            Beyond {
+                backlash: all.clone(),
+                ..Beyond::default()
+            },
+        ),
     ]
 }
 

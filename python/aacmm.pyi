@@ -394,7 +394,8 @@ class Calibration:
         """The arm's physics at the fit (None when no correction is stated or
         fitted — masses alone correct nothing): ``link_masses``, ``probe_mass``, ``gravity``, and
         the corrections fitted or as stated — ``compliance`` per joint
-        (rad/(N·m)), ``harmonics`` (rad), ``cte_per_k`` (1/K),
+        (rad/(N·m)), ``harmonics`` (rad), ``backlash`` per joint (rad, mm
+        for a slide; absent when none), ``cte_per_k`` (1/K),
         ``reference_temperature_c`` — as ``report["calibration"]["physics"]``;
         ``drift_mm_per_h`` when a drift was fitted."""
     @property
@@ -457,6 +458,7 @@ def calibrate(
     harmonics: Optional[str] = None,
     thermal: bool = False,
     drift: bool = False,
+    backlash: Optional[str] = None,
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
@@ -472,7 +474,9 @@ def calibrate(
     geometry, fitted with the arm as the command line's flags:
     ``compliance`` (``"2,3"``, joints from 1, loaded by the arm file's
     masses: ``--compliance``), ``harmonics`` (``"2:1,5:1-2"``,
-    ``JOINT:ORDERS``: ``--harmonics``), ``thermal`` (against the data's
+    ``JOINT:ORDERS``: ``--harmonics``), ``backlash`` (``"2,3"``, joints from
+    1, the half-play on the flank the arm file's masses press:
+    ``--backlash``), ``thermal`` (against the data's
     ``temperature`` column: ``--thermal``), ``drift`` (against its ``time``
     column: ``--drift``); their values in :attr:`Calibration.auxiliary` and
     :attr:`Calibration.physics`. Readings outside

@@ -1269,6 +1269,29 @@ AacmmStatus aacmm_calibrate_options_set_compliance(AacmmCalibrateOptions *option
 AacmmStatus aacmm_calibrate_options_set_harmonics(AacmmCalibrateOptions *options, const char *spec);
 
 /**
+ * Backlash, fitted for the listed joints (`--backlash`): comma-separated
+ * joints numbered from 1, e.g. `"2,3"`; each joint reads off by a
+ * half-play `b` on the gear flank that the gravity torque of the arm
+ * file's masses (`mass_kg` of the links and `[probe]`, `gravity`)
+ * presses: `q + b·sgn τ`. `NULL` (the default): none. Copied; the syntax
+ * and joints no arm has are refused here (`backlash = 0: a joint is a
+ * number from 1 …`), a joint the arm at hand lacks, or an arm file
+ * without masses, when calibrating. A joint whose torque keeps one sign
+ * over every pose cannot tell its play from its zero offset: its column
+ * is held, with why. The fitted plays are the auxiliary columns
+ * `backlash2`, … (deg, mm for a prismatic joint;
+ * `aacmm_calibration_auxiliary`), and in the report's
+ * `calibration.physics`.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `joints` is `NULL` or a
+ * NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_backlash(AacmmCalibrateOptions *options,
+                                                 const char *joints);
+
+/**
  * Whether a thermal expansion coefficient of the lengths is fitted
  * (`--thermal`; default `false`) against the temperature (°C) of every
  * pose: the `temperature` column of the poses and positions files of

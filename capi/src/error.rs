@@ -138,7 +138,7 @@ impl From<CalibrationError> for Error {
 /// option as its setter names it (`…_set_probe_noise_mm` sets
 /// `probe_noise_mm`); settings the C API does not expose keep their library
 /// path.
-const OPTIONS: [(&str, &str); 15] = [
+const OPTIONS: [(&str, &str); 16] = [
     ("noise.encoder_rad", "encoder_noise_rad"),
     ("noise.probe_mm", "probe_noise_mm"),
     ("noise.length_default_mm", "length_uncertainty_mm"),
@@ -152,6 +152,7 @@ const OPTIONS: [(&str, &str); 15] = [
     ("robust.scale_k", "robust scale"),
     ("compliance", "compliance"),
     ("harmonics", "harmonics"),
+    ("backlash", "backlash"),
     ("thermal", "thermal"),
     ("drift", "drift"),
 ];

@@ -111,6 +111,8 @@ pub struct AacmmCalibrateOptions {
     compliance: Option<String>,
     /// `--harmonics` as given; `None`: none.
     harmonics: Option<String>,
+    /// `--backlash` as given; `None`: none.
+    backlash: Option<String>,
     /// `--thermal`.
     thermal: bool,
     /// `--drift`.
@@ -143,6 +145,7 @@ impl Default for AacmmCalibrateOptions {
             accept_poor_fit: model.accept_poor_fit,
             compliance: None,
             harmonics: None,
+            backlash: None,
             thermal: model.beyond.thermal,
             drift: model.beyond.drift,
             positions: None,
@@ -169,6 +172,7 @@ pub(crate) fn request(o: &AacmmCalibrateOptions, request: Request) -> Request {
             o.thermal,
             o.drift,
         )
+        .backlash(o.backlash.as_deref())
         .method(o.method.name())
         .threads(threads)
         .seed(o.seed)
@@ -712,6 +716,42 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_harmonics(
     })
 }
 
+/// Backlash, fitted for the listed joints (`--backlash`): comma-separated
+/// joints numbered from 1, e.g. `"2,3"`; each joint reads off by a
+/// half-play `b` on the gear flank that the gravity torque of the arm
+/// file's masses (`mass_kg` of the links and `[probe]`, `gravity`)
+/// presses: `q + b·sgn τ`. `NULL` (the default): none. Copied; the syntax
+/// and joints no arm has are refused here (`backlash = 0: a joint is a
+/// number from 1 …`), a joint the arm at hand lacks, or an arm file
+/// without masses, when calibrating. A joint whose torque keeps one sign
+/// over every pose cannot tell its play from its zero offset: its column
+/// is held, with why. The fitted plays are the auxiliary columns
+/// `backlash2`, … (deg, mm for a prismatic joint;
+/// `aacmm_calibration_auxiliary`), and in the report's
+/// `calibration.physics`.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `joints` is `NULL` or a
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_backlash(
+    options: *mut AacmmCalibrateOptions,
+    joints: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { builder_with_text(options, joints, "backlash") }?;
+        // SAFETY: by the contract.
+        let joints = unsafe { text(joints, "backlash") }?;
+        if let Some(j) = &joints {
+            on_some_arm("backlash", Beyond::parse_backlash(j)?)?;
+        }
+        o.backlash = joints;
+        Ok(())
+    })
+}
+
 /// Whether a thermal expansion coefficient of the lengths is fitted
 /// (`--thermal`; default `false`) against the temperature (°C) of every
 /// pose: the `temperature` column of the poses and positions files of
@@ -1081,6 +1121,10 @@ mod tests {
                 aacmm_calibrate_options_set_harmonics(o, c"13:1".as_ptr()),
                 "harmonics = 13: joint 13: the toolkit computes chains of 1 to 12 joints",
             );
+            refused(
+                aacmm_calibrate_options_set_backlash(o, c"2,2".as_ptr()),
+                "backlash = 2: joint listed twice",
+            );
             // A hostile worker count is refused, not attempted (the bound
             // of Python's `threads` and the command line's `--threads`).
             refused(
@@ -1166,6 +1210,7 @@ mod tests {
                 aacmm_calibrate_options_set_position_noise_mm(o, 0.015, 0.006),
                 aacmm_calibrate_options_set_compliance(o, c"3, 2".as_ptr()),
                 aacmm_calibrate_options_set_harmonics(o, c"2:1,5:1-2".as_ptr()),
+                aacmm_calibrate_options_set_backlash(o, c"3,2".as_ptr()),
                 aacmm_calibrate_options_set_thermal(o, true),
                 aacmm_calibrate_options_set_drift(o, true),
             ] {
@@ -1201,6 +1246,7 @@ mod tests {
             Beyond {
                 compliance: vec![1, 2],
                 harmonics: vec![(1, 1), (4, 1), (4, 2)],
+                backlash: vec![1, 2],
                 thermal: true,
                 drift: true,
             }
@@ -1213,6 +1259,7 @@ mod tests {
             aacmm_calibrate_options_set_robust(o, AACMM_ROBUST_NONE, 0.0);
             aacmm_calibrate_options_set_compliance(o, std::ptr::null());
             aacmm_calibrate_options_set_harmonics(o, std::ptr::null());
+            aacmm_calibrate_options_set_backlash(o, std::ptr::null());
             aacmm_calibrate_options_set_thermal(o, false);
             aacmm_calibrate_options_set_drift(o, false);
         }

@@ -135,7 +135,9 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// it, as the command line's flags: `compliance`, joints (from 1) whose
 /// compliance under the gravity torque of the arm file's masses is fitted
 /// (`"2,3"`, `--compliance`); `harmonics`, encoder harmonics
-/// `JOINT:ORDERS` (`"2:1,5:1-2"`, `--harmonics`); `thermal`, a thermal
+/// `JOINT:ORDERS` (`"2:1,5:1-2"`, `--harmonics`); `backlash`, joints
+/// (from 1) whose half-play on the gear flank the gravity torque presses
+/// is fitted (`"2,3"`, `--backlash`; deg, mm for a slide); `thermal`, a thermal
 /// expansion coefficient against the data's `temperature` column
 /// (`--thermal`); `drift`, a linear drift of the base against the
 /// instrument over the data's `time` column (`--drift`). Their values are
@@ -148,7 +150,7 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// parameters. A calibration that is not usable still gives a result:
 /// check `successful` (the verdict) and `report["verdict"]` for why.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false))]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -169,6 +171,7 @@ pub fn calibrate(
     harmonics: Option<&str>,
     thermal: bool,
     drift: bool,
+    backlash: Option<&str>,
 ) -> PyResult<Calibration> {
     let fix = match fix {
         Some(f) => fix_text(f)?,
@@ -184,7 +187,8 @@ pub fn calibrate(
         .cross_validate(cross_validate)
         .robust(robust, robust_scale)
         .accept_poor_fit(accept_poor_fit)
-        .beyond(compliance, harmonics, thermal, drift);
+        .beyond(compliance, harmonics, thermal, drift)
+        .backlash(backlash);
     // The readers' warnings were issued when the files were read; the
     // request adds those about the arm and the data together.
     let read: Vec<&String> = (arm.warnings.iter().chain(&data.warnings))
@@ -336,6 +340,7 @@ impl Calibration {
     /// `gravity`, and the corrections, fitted or as the arm file states
     /// them — `compliance` per joint (rad/(N·m), `None` for none),
     /// `harmonics` (`joint` 0-based, `order`, `sin`, `cos` rad),
+    /// `backlash` per joint (rad, mm for a slide; absent when none),
     /// `cte_per_k` (1/K), `reference_temperature_c` (°C) — as
     /// `report["calibration"]["physics"]`, and `drift_mm_per_h` (x, y, z)
     /// when a drift was fitted.

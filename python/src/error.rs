@@ -191,7 +191,7 @@ impl From<aacmm_core::residuals::TermError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 18] = [
+const ARGUMENTS: [(&str, &str); 19] = [
     ("seed", "seed"),
     ("prior", "prior"),
     ("method", "method"),
@@ -208,6 +208,7 @@ const ARGUMENTS: [(&str, &str); 18] = [
     ("robust.scale_k", "robust_scale"),
     ("compliance", "compliance"),
     ("harmonics", "harmonics"),
+    ("backlash", "backlash"),
     ("thermal", "thermal"),
     ("drift", "drift"),
 ];

@@ -1,5 +1,5 @@
-"""Models beyond geometry (joint compliance, encoder harmonics, thermal
-expansion, drift) through ``calibrate``'s keyword arguments: the command
+"""Models beyond geometry (joint compliance, encoder harmonics, backlash,
+thermal expansion, drift) through ``calibrate``'s keyword arguments: the command
 line's report for the same flags, the fitted values in ``auxiliary`` and
 ``physics``, and every spec or input the library refuses named by its
 argument."""
@@ -77,6 +77,8 @@ def test_a_held_correction_says_why(ur5, grid):
         ({"harmonics": "2:"}, "harmonics = 2:: an order is a whole number from 1 to 16"),
         ({"harmonics": "2"}, "harmonics = 2: expected JOINT:ORDERS"),
         ({"harmonics": "2:3-1"}, "harmonics = 2:3-1: empty order range"),
+        ({"backlash": "2,2"}, "backlash = 2: joint listed twice"),
+        ({"backlash": "7"}, "backlash = 7: joint 7: the arm has 6 joints"),
         ({"thermal": True}, "thermal = on: thermal expansion needs the temperature of every pose"),
         ({"drift": True}, "drift = on: a drift needs the time of every pose"),
     ],
@@ -85,6 +87,25 @@ def test_a_bad_spec_or_missing_input_names_the_argument(ur5, grid, kwargs, messa
     with pytest.raises(ValueError) as e:
         aacmm.calibrate(ur5, grid, method="lm", **kwargs)
     assert str(e.value).startswith(message), str(e.value)
+
+
+def test_a_backlash_is_fitted_or_held_and_named(cli, ur5, grid, tmp_path):
+    """``backlash="2,3"`` is ``--backlash 2,3``: calibration.json byte for
+    byte. The grid leans the UR5 one way only: the shoulder's torque keeps
+    its sign, so its play is its zero offset, held with why; the elbow's is
+    a column of its own, in degrees, with its σ, and the physics has it."""
+    out = tmp_path / "cli"
+    cli(
+        "calibrate", "--arm", UR5, "--positions", GRID, "--backlash", "2,3",
+        "--method", "lm", "--out", out,
+    )
+    cal = aacmm.calibrate(ur5, grid, method="lm", backlash="2,3")
+    assert cal.to_json() == (out / "calibration.json").read_text()
+    held = cal.auxiliary["backlash2"]
+    assert held["sigma"] is None and "not separable" in held["fixed"]
+    b = cal.auxiliary["backlash3"]
+    assert b["unit"] == "deg" and b["fixed"] is None and b["sigma"] > 0
+    assert cal.physics["backlash"][2] is not None
 
 
 def test_a_compliance_needs_masses():

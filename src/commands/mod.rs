@@ -94,7 +94,8 @@ impl ArmAndPoses {
     }
 
     /// `rows` as the arm's chain sees them through the corrections its file
-    /// states (compliance, encoder harmonics, expansion at --temperature);
+    /// states (compliance, encoder harmonics, backlash, expansion at
+    /// --temperature);
     /// `None` when it states none.
     pub fn corrected(&self, arm: &Arm, rows: &[&[f64]]) -> Result<Option<PreparedPoses>> {
         use aacmm_core::corrections::{Beyond, Conditions, Effects};

@@ -78,6 +78,13 @@ pub struct FitInput {
     /// disc's eccentricity).
     #[arg(long, value_name = "J:K[,J:K1-K2]")]
     pub harmonics: Option<String>,
+    /// Backlash of the listed joints (e.g. `2,3`): each reads off by a
+    /// half-play (deg; mm for a prismatic joint; fitted) on the gear flank
+    /// the gravity torque of the arm file's masses presses. A joint whose
+    /// torque never changes sign over the poses cannot tell it from its
+    /// zero offset: it is held.
+    #[arg(long, value_name = "JOINTS")]
+    pub backlash: Option<String>,
     /// Fit a thermal expansion coefficient of the lengths (ppm/K) against
     /// the `temperature` column (°C) of the data; lengths are at 20 °C.
     #[arg(long)]
@@ -145,6 +152,7 @@ impl FitInput {
                 self.thermal,
                 self.drift,
             )
+            .backlash(self.backlash.as_deref())
             .prior(self.prior.as_deref())
             .threads(self.threads))
     }
@@ -197,9 +205,10 @@ pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 32] = [
+const FLAGS: [(&str, &str); 33] = [
     ("compliance", "--compliance"),
     ("harmonics", "--harmonics"),
+    ("backlash", "--backlash"),
     ("thermal", "--thermal"),
     ("drift", "--drift"),
     ("noise.position_mm", "--position-noise"),

@@ -68,6 +68,19 @@ fn cases() -> Vec<Case> {
             },
         },
         Case {
+            // 0.02° of half-play on the shoulder and the elbow.
+            name: "backlash",
+            physics: |p| Physics {
+                backlash: vec![None, Some(PLAY), Some(PLAY), None, None, None],
+                ..p.clone()
+            },
+            drift: None,
+            fit: Beyond {
+                backlash: vec![1, 2],
+                ..Beyond::default()
+            },
+        },
+        Case {
             name: "thermal",
             physics: |p| Physics {
                 cte_per_k: Some(23e-6), // aluminium, as a UR5's links
@@ -90,6 +103,9 @@ fn cases() -> Vec<Case> {
         },
     ]
 }
+
+/// The simulated reducers' half-play, rad (0.02°).
+const PLAY: f64 = 0.02 * std::f64::consts::PI / 180.0;
 
 fn harmonic(joint: usize, order: u32, sin: f64, cos: f64) -> Harmonic {
     Harmonic {
@@ -219,6 +235,12 @@ fn normalised_errors(
                 [(f.0, t.0, "harmonic"), (f.1, t.1, "harmonic")]
             })
             .collect(),
+        "backlash" => (case.fit.backlash.iter())
+            .map(|&j| {
+                let deg = |p: &Physics| p.backlash_of(j).to_degrees();
+                (deg(fitted), deg(truth_physics), "backlash")
+            })
+            .collect(),
         "thermal" => vec![(
             fitted.cte_per_k.unwrap() * 1e6,
             truth_physics.cte_per_k.unwrap() * 1e6,
@@ -233,7 +255,7 @@ fn normalised_errors(
     };
     let columns: Vec<_> = (cal.auxiliary.iter())
         .filter(|a| {
-            ["compliance", "harmonic", "thermal", "drift"]
+            ["compliance", "harmonic", "backlash", "thermal", "drift"]
                 .iter()
                 .any(|p| a.name.starts_with(p))
         })
@@ -267,6 +289,9 @@ fn each_model_recovers_its_error_in_a_simulated_arm() {
     let nominal = ur5();
     for case in cases() {
         let (mut z2, mut on, mut off) = (Vec::new(), Vec::new(), Vec::new());
+        // The model's own estimates, (estimate − truth)/σ: the last of each
+        // seed's normalised errors.
+        let mut model_z2 = Vec::new();
         for seed in 0..SEEDS {
             let mut truth = true_geometry(&nominal, seed);
             *truth.physics = (case.physics)(&nominal.physics);
@@ -280,7 +305,9 @@ fn each_model_recovers_its_error_in_a_simulated_arm() {
             let ideal = held_out_error(&truth.params, &true_physics, &frames, &held);
             let with = fit(&nominal, &rows, &case.fit);
             let without = fit_with(&nominal, &rows, &Beyond::default(), false);
-            z2.extend(normalised_errors(&with, &truth, &true_physics, &case));
+            let seed_z2 = normalised_errors(&with, &truth, &true_physics, &case);
+            model_z2.extend_from_slice(&seed_z2[seed_z2.len() - case.fit.len()..]);
+            z2.extend(seed_z2);
             for (cal, out) in [(&with, &mut on), (&without, &mut off)] {
                 let physics = cal.physics.clone().unwrap_or_default();
                 out.push(held_out_error(&cal.params, &physics, &cal.frames(), &held) / ideal);
@@ -289,12 +316,22 @@ fn each_model_recovers_its_error_in_a_simulated_arm() {
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
         let rms = (mean(&z2)).sqrt();
         let (on, off) = (mean(&on), mean(&off));
+        let beyond_3 = model_z2.iter().filter(|z2| **z2 > 9.0).count();
         eprintln!(
             "{}: normalised RMS {rms:.3} over {} estimates; held out {on:.4} (model on) and \
-             {off:.4} (geometry alone) times the true arm's error",
+             {off:.4} (geometry alone) times the true arm's error; the model's {} estimates: \
+             normalised RMS {:.3}, largest |z| {:.2}, {beyond_3} beyond 3σ",
             case.name,
-            z2.len()
+            z2.len(),
+            model_z2.len(),
+            mean(&model_z2).sqrt(),
+            model_z2.iter().fold(0.0f64, |a, b| a.max(*b)).sqrt(),
         );
+        // The play of each seed recovered within 3σ: of 100 estimates,
+        // normal errors put 0.27 on average beyond it (3 or more: 0.3 %).
+        if case.name == "backlash" {
+            assert!(beyond_3 <= 2, "backlash: {beyond_3} estimates beyond 3σ");
+        }
         assert!(
             (0.7..=1.4).contains(&rms),
             "{}: normalised RMS {rms}",
@@ -408,6 +445,25 @@ fn the_ur5_tracker_data_with_each_model() {
             .is_some_and(|w| w.contains("moves no residual"))
     }));
     assert!(comp.calibration.auxiliary.iter().all(|a| a.fixed.is_none()));
+    // The grid leans the arm one way only: the shoulder's torque keeps its
+    // sign, so its play is its zero offset, held; the elbow's is fitted,
+    // and the held-out error does not grow.
+    let (_, play, backlash) = run("backlash", &["--backlash", "2,3"]);
+    let column = |name: &str| {
+        (play.calibration.auxiliary.iter())
+            .find(|a| a.name == name)
+            .unwrap()
+            .fixed
+            .clone()
+    };
+    let why = column("backlash2").expect("the shoulder's play held");
+    assert!(
+        why.contains("not separable") && why.contains("theta2"),
+        "{why}"
+    );
+    assert_eq!(column("backlash3"), None);
+    eprintln!("UR5 held out with --backlash 2,3: {backlash:.4} mm");
+    assert!(backlash <= geometry, "{backlash} vs {geometry}");
     // Through the calibrated arm file, seen from the fitted tracker frame.
     let poses: String = std::fs::read_to_string(ur5("positions-random.csv"))
         .unwrap()
@@ -447,8 +503,8 @@ fn the_ur5_tracker_data_with_each_model() {
     );
 }
 
-/// `aacmm simulate` with a true arm file stating compliances and an
-/// expansion, temperatures, a session time and a drift; `aacmm calibrate`
+/// `aacmm simulate` with a true arm file stating compliances, a wrist's
+/// play and an expansion, temperatures, a session time and a drift; `aacmm calibrate`
 /// with every model on recovers each within 4σ, and the true arm file the
 /// simulator writes carries the errors.
 #[test]
@@ -470,7 +526,8 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
         .replace(
             "mass_kg = 2.275",
             "mass_kg = 2.275\ncompliance_rad_per_nm = 18e-6",
-        );
+        )
+        .replacen("mass_kg = 1.219", "mass_kg = 1.219\nbacklash = 0.02", 1);
     let truth = crate::util::write(&dir, "true.toml", &true_text);
     let out = dir.join("sim");
     let o = aacmm(&[
@@ -495,6 +552,7 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
     assert!(o.status.success(), "{}", stderr(&o));
     let written = std::fs::read_to_string(out.join("true_arm.toml")).unwrap();
     assert!(written.contains("cte_per_k") && written.contains("compliance_rad_per_nm"));
+    assert!(written.contains("backlash = "), "{written}");
     let positions = std::fs::read_to_string(out.join("positions.csv")).unwrap();
     assert!(positions.starts_with("point,q1,q2,q3,q4,q5,q6,x,y,z,temperature,time\n"));
     let cal = dir.join("cal");
@@ -508,6 +566,8 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
         "0.015+0.006/m",
         "--compliance",
         "2,3",
+        "--backlash",
+        "4",
         "--thermal",
         "--drift",
         "--method",
@@ -522,6 +582,7 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
     let truths = [
         ("compliance2", 12.0),
         ("compliance3", 18.0),
+        ("backlash4", 0.02),
         ("thermal.cte", 23.0),
         ("drift.x", 0.08),
         ("drift.y", -0.05),
@@ -544,7 +605,7 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
 /// What the data cannot separate is held with why, the rest fitted: a
 /// harmonic of a joint that does not turn (its columns are the zero
 /// offset's), an expansion at one temperature (the scale), the compliance
-/// of the vertical base joint (never loaded) — each beside a column of the
+/// and the backlash of the vertical base joint (never loaded) — each beside a column of the
 /// same model that the data do separate.
 #[test]
 fn what_the_data_cannot_separate_is_held() {
@@ -595,6 +656,15 @@ fn what_the_data_cannot_separate_is_held() {
     let cal = fit(&nominal, &rows, &compliance);
     assert!(held(&cal, "compliance1").is_some_and(|w| w.contains("moves no residual")));
     assert_eq!(held(&cal, "compliance2"), None);
+    // Nor a flank to rest on: its play is unseen; the shoulder's, loaded
+    // both ways over these poses, is fitted.
+    let backlash = Beyond {
+        backlash: vec![0, 1],
+        ..Beyond::default()
+    };
+    let cal = fit(&nominal, &rows, &backlash);
+    assert!(held(&cal, "backlash1").is_some_and(|w| w.contains("moves no residual")));
+    assert_eq!(held(&cal, "backlash2"), None);
 }
 
 /// Touches with `temperature` and `time` columns: a poses file carries them

@@ -90,15 +90,17 @@ impl Effects {
     /// own, the corrected angles through the angle sum with the small
     /// correction.
     ///
-    /// A prismatic joint's readings (mm) pass through unchanged: its
-    /// encoder harmonics and compliance are refused (both models are of a
-    /// revolute joint's angle), the expansion and drift act after the
-    /// chain as for any joint.
+    /// A prismatic joint's readings (mm) pass through unchanged but for
+    /// its backlash (mm, along the gravity force on the slide): its encoder
+    /// harmonics and compliance are refused (both models are of a revolute
+    /// joint's angle), the expansion and drift act after the chain as for
+    /// any joint.
     ///
     /// # Errors
     ///
     /// An expansion without temperatures, a drift without times; encoder
-    /// harmonics or a compliance of a prismatic joint.
+    /// harmonics or a compliance of a prismatic joint, a fitted backlash of
+    /// a Hayati slide (no geometry column moves it).
     pub fn new(
         arm: &DhParams,
         physics: &Physics,
@@ -110,7 +112,7 @@ impl Effects {
         check_prismatic(arm, physics, fit)?;
         let elapsed = Elapsed::of(physics, fit, len, conditions)?;
         let trig: Vec<(&[f64], &[f64])> = (0..n).map(|j| raw.column_trig(j)).collect();
-        let loads = (!fit.compliance.is_empty() || physics.compliance.iter().any(|c| c.is_some()))
+        let loads = (physics.needs_loads(fit) || physics.compliance.iter().any(|c| c.is_some()))
             .then(|| Loads::new(arm, physics));
         // Per pose and joint (pose-major), the gravity torque.
         let mut tau = vec![0.0; if loads.is_some() { len * n } else { 0 }];
@@ -122,7 +124,7 @@ impl Effects {
             }
         }
         let delta = reading_corrections(physics, &trig, &tau, len);
-        let (cos, sin) = corrected_trig(&trig, &delta, len);
+        let (cos, sin) = corrected_trig(&trig, &delta, len, raw.prismatic_mask());
         let mut poses = PreparedPoses::from_trig(n, raw.prismatic_mask(), len, cos, sin);
         let (cte, drift) = (
             physics.cte_per_k.unwrap_or(0.0),
@@ -138,7 +140,7 @@ impl Effects {
         }
         Ok(Effects {
             poses,
-            kinds: kinds(fit, n),
+            kinds: kinds(fit, arm),
             factors,
         })
     }
@@ -182,6 +184,18 @@ fn check_prismatic(arm: &DhParams, physics: &Physics, fit: &Beyond) -> Result<()
     if let Some(j) = harmonic {
         return Err(format!(
             "joint {} is prismatic: encoder harmonics are a model of a revolute joint's angle",
+            j + 1
+        ));
+    }
+    let hayati_slide = fit
+        .backlash
+        .iter()
+        .copied()
+        .find(|&j| slides(j) && arm.joints[j].model == crate::params::JointModel::Hayati);
+    if let Some(j) = hayati_slide {
+        return Err(format!(
+            "joint {} is a Hayati slide: its reading moves no geometry parameter, so its backlash \
+             has no column to fit (state it in the arm file instead)",
             j + 1
         ));
     }
@@ -239,13 +253,9 @@ pub fn angles_for(arm: &DhParams, physics: &Physics, readings: &[f64]) -> Vec<f6
     readings.iter().zip(&delta).map(|(q, d)| q + d).collect()
 }
 
-/// The gravity loads, when some joint states a compliance.
+/// The gravity loads, when some joint states a compliance or a backlash.
 fn loads_of(arm: &DhParams, physics: &Physics) -> Option<Loads> {
-    physics
-        .compliance
-        .iter()
-        .any(|c| c.is_some_and(|v| v != 0.0))
-        .then(|| Loads::new(arm, physics))
+    (physics.needs_loads(&Beyond::default())).then(|| Loads::new(arm, physics))
 }
 
 /// Per joint, the reading correction of the one pose `q` (the same
@@ -282,9 +292,11 @@ fn pose_corrections(
         loads.torques(|j| cos[j], |j| sin[j], &mut tau);
     }
     let delta = reading_corrections(physics, &trig, &tau, 1);
+    // A slide's correction is its backlash alone (its other models are
+    // refused), a length added to its reading.
     (0..n)
         .map(|j| match delta.get(j).and_then(|d| d.first()) {
-            Some(d) if !slides(j) => *d,
+            Some(d) if !slides(j) || physics.backlash_of(j) != 0.0 => *d,
             _ => 0.0,
         })
         .collect()
@@ -315,7 +327,8 @@ fn small_sin_cos(d: f64) -> (f64, f64) {
 }
 
 /// Per joint, its reading correction at every pose (empty for a joint
-/// without one): the harmonics of its reading and compliance × torque.
+/// without one): the harmonics of its reading, compliance × torque and the
+/// backlash on the flank the torque presses ([`flank`]).
 fn reading_corrections(
     physics: &Physics,
     trig: &[(&[f64], &[f64])],
@@ -342,26 +355,54 @@ fn reading_corrections(
                     d[i] += kappa * tau[i * n + j];
                 }
             }
+            let b = physics.backlash_of(j);
+            if b != 0.0 {
+                d.resize(len, 0.0);
+                for i in 0..len {
+                    d[i] += b * flank(tau[i * n + j]);
+                }
+            }
         }
     }
     delta
 }
 
+/// Which gear flank a joint under the gravity torque (or force) `tau`
+/// rests on: `+1` along the torque, `−1` against, `0` for none (a joint
+/// that gravity does not load floats within its play: no correction).
+#[inline]
+fn flank(tau: f64) -> f64 {
+    if tau > 0.0 {
+        1.0
+    } else if tau < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
 /// The corrected angles' cos and sin, joint by joint, through the angle sum;
-/// a joint without a correction keeps its own.
+/// a joint without a correction keeps its own, a slide (bit `j` of
+/// `prismatic`) adds its correction (mm) to its reading.
 #[allow(clippy::type_complexity)] // cos and sin columns, as PreparedPoses holds them
 fn corrected_trig(
     trig: &[(&[f64], &[f64])],
     delta: &[Vec<f64>],
     len: usize,
+    prismatic: u16,
 ) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
     let (mut cos, mut sin) = (
         Vec::with_capacity(trig.len()),
         Vec::with_capacity(trig.len()),
     );
-    for (&(c, s), d) in trig.iter().zip(delta) {
+    for (j, (&(c, s), d)) in trig.iter().zip(delta).enumerate() {
         if d.is_empty() {
             cos.push(c.to_vec());
+            sin.push(s.to_vec());
+            continue;
+        }
+        if prismatic & (1 << j) != 0 {
+            cos.push(c.iter().zip(d).map(|(q, d)| q + d).collect());
             sin.push(s.to_vec());
             continue;
         }
@@ -377,11 +418,24 @@ fn corrected_trig(
     (cos, sin)
 }
 
-/// The fitted columns' kinds, in the block's order.
-fn kinds(fit: &Beyond, n: usize) -> Vec<Kind> {
+/// The fitted columns' kinds, in the block's order: a reading correction
+/// moves the probe as the joint's zero offset θ does (a slide's backlash as
+/// its offset `d`).
+fn kinds(fit: &Beyond, arm: &DhParams) -> Vec<Kind> {
+    let n = arm.joints.len();
     (fit.columns().into_iter())
         .map(|column| match column {
-            Column::Compliance(j) | Column::Sin(j, _) | Column::Cos(j, _) => Kind::Joint(3 * n + j),
+            Column::Backlash(j)
+                if arm
+                    .joints
+                    .get(j)
+                    .is_some_and(|x| x.kind == JointKind::Prismatic) =>
+            {
+                Kind::Joint(n + j)
+            }
+            Column::Compliance(j) | Column::Sin(j, _) | Column::Cos(j, _) | Column::Backlash(j) => {
+                Kind::Joint(3 * n + j)
+            }
             Column::Expansion => Kind::Expansion,
             Column::Drift(a) => Kind::Axis(a),
         })
@@ -407,6 +461,7 @@ fn factors(
         for (fk, column) in f.iter_mut().zip(&columns) {
             *fk = match *column {
                 Column::Compliance(j) => tau[i * n + j] * 1e-6,
+                Column::Backlash(j) => flank(tau[i * n + j]),
                 Column::Sin(j, k) => multiple(trig[j].0[i], trig[j].1[i], k).1,
                 Column::Cos(j, k) => multiple(trig[j].0[i], trig[j].1[i], k).0,
                 Column::Expansion => elapsed.kelvin[i] * 1e-6 / scale[i],
@@ -467,6 +522,70 @@ mod tests {
                 assert!((s[r] - scale * p[r]).abs() < 1e-9);
             }
         }
+    }
+
+    /// A play of `b` on two joints: each reading is off by `b` along its
+    /// gravity torque (`sgn τ`), a vertical axis (no torque) by nothing; a
+    /// slide by `b` mm along the gravity force on it. The fitted column is
+    /// the zero offset's (the slide's `d`'s) times `sgn τ`, and the
+    /// simulator's inverse gives back the readings.
+    #[test]
+    fn a_backlash_follows_the_gravity_torque() {
+        use crate::corrections::{Mass, gravity};
+        let mut arm = sliding();
+        // Turn the base axis across gravity, so that the slide carries some.
+        let masses = Physics {
+            link_masses: vec![Some(Mass::at_middle(2.0)); 6],
+            probe_mass: Some(Mass::at_middle(0.5)),
+            gravity: Some([0.3, -1.0, -0.2]),
+            ..Physics::default()
+        };
+        let play = 0.02f64.to_radians();
+        let physics = Physics {
+            backlash: vec![None, Some(0.05), Some(play), None, None, None],
+            ..masses.clone()
+        };
+        let raw = poses(&arm);
+        let fit = Beyond {
+            backlash: vec![1, 2],
+            ..Beyond::default()
+        };
+        let e = Effects::new(&arm, &physics, &fit, &raw, Conditions::default()).unwrap();
+        let q = [
+            [0.1, 150.0, 0.3, -0.2, 0.5, 1.0],
+            [0.4, -80.0, 0.1, 0.2, -0.5, 2.0],
+        ];
+        for (i, q) in q.iter().enumerate() {
+            let mut tau = [0.0; 6];
+            gravity::torques(&arm, &physics, q, &mut tau);
+            assert!(tau[1].abs() > 0.1 && tau[2].abs() > 0.1, "{tau:?}");
+            let (c, s) = e.poses.column_trig(1);
+            assert!((c[i] - (q[1] + 0.05 * tau[1].signum())).abs() < 1e-12);
+            assert_eq!(s, raw.column_trig(1).1);
+            let (c, s) = e.poses.column_trig(2);
+            let turned = q[2] + play * tau[2].signum();
+            assert!((c[i] - turned.cos()).abs() < 1e-15 && (s[i] - turned.sin()).abs() < 1e-15);
+            assert_eq!(e.poses.column_trig(3), raw.column_trig(3));
+            // The columns: the slide's d (column n + 1), joint 3's θ (3n + 2).
+            let jac: Vec<[f64; 3]> = (0..27).map(|c| [c as f64, 0.0, 0.0]).collect();
+            let mut out = Vec::new();
+            e.extend(i, &[0.0; 3], &jac, &mut out);
+            assert_eq!(out[27][0], 7.0 * tau[1].signum());
+            assert_eq!(out[28][0], 20.0 * tau[2].signum());
+            // What a true arm with this play reads in the pose the chain sees.
+            let seen = angles_for(&arm, &physics, q);
+            let back = readings_for(&arm, &physics, &seen);
+            assert!(back.iter().zip(q).all(|(a, b)| (a - b).abs() < 1e-12));
+        }
+        // A vertical base axis carries no torque: its play moves nothing.
+        arm = DhParams::paper_nominal();
+        let base = Physics {
+            backlash: vec![Some(play)],
+            gravity: None,
+            ..masses
+        };
+        let pose = [0.3, -0.4, 0.7, 0.2, -0.3, 0.5];
+        assert_eq!(angles_for(&arm, &base, &pose), pose.to_vec());
     }
 
     /// Encoder harmonics and a compliance are models of an angle: refused

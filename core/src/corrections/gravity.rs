@@ -175,8 +175,8 @@ impl Loads {
     /// Gravity torque about each joint's axis (N·m) into `out`, at the
     /// pose whose readings have cos `cq(j)` and sin `sq(j)` (a prismatic
     /// joint's reading, mm, as `cq(j)`). A prismatic joint's entry is the
-    /// torque about its axis line, which its slide does not carry: the
-    /// compliance model refuses prismatic joints.
+    /// gravity force along its axis, N (what presses a slide's flank: its
+    /// backlash follows it; the compliance model refuses slides).
     pub fn torques(&self, cq: impl Fn(usize) -> f64, sq: impl Fn(usize) -> f64, out: &mut [f64]) {
         let n = self.links.len();
         // Frames o_0..o_n (origins and the z axes of 0..n−1) and the
@@ -214,15 +214,21 @@ impl Loads {
                 }
                 m += link.kg;
             }
-            let o = frames[j].t;
-            let arm_of: [f64; 3] = std::array::from_fn(|k| s[k] - m * o[k]);
-            out[j] = dot(&frames[j].z(), &cross(&arm_of, &self.g)) / 1000.0;
+            let z = frames[j].z();
+            out[j] = if self.links[j].prismatic {
+                // A slide carries the force along its axis, not a torque.
+                m * dot(&z, &self.g)
+            } else {
+                let o = frames[j].t;
+                let arm_of: [f64; 3] = std::array::from_fn(|k| s[k] - m * o[k]);
+                dot(&z, &cross(&arm_of, &self.g)) / 1000.0
+            };
         }
     }
 }
 
 /// Gravity torque about each joint's axis at readings `q` (rad; mm for a
-/// prismatic joint), N·m, into `out` (one per joint): [`Loads::torques`]
+/// prismatic joint), N·m (a slide's: the force along it, N), into `out` (one per joint): [`Loads::torques`]
 /// of one pose.
 pub fn torques(arm: &DhParams, physics: &Physics, q: &[f64], out: &mut [f64]) {
     let loads = Loads::new(arm, physics);
@@ -304,8 +310,9 @@ mod tests {
             &[0.3, 0.0, -0.4, 0.5, 1.1, -0.2],
             &mut want,
         );
-        for (t, w) in tau.iter().zip(&want) {
-            assert!((t - w).abs() < 1e-9, "{tau:?} vs {want:?}");
+        for (j, (t, w)) in tau.iter().zip(&want).enumerate() {
+            // The slide's own entry is a force, not the torque.
+            assert!(j == 1 || (t - w).abs() < 1e-9, "{tau:?} vs {want:?}");
         }
         // The slide changes the first joint's load (its lever arm).
         let mut other = [0.0; 6];
@@ -316,5 +323,17 @@ mod tests {
             &mut other,
         );
         assert!((other[0] - tau[0]).abs() > 1e-3, "{tau:?} vs {other:?}");
+        // The slide carries the weight outboard of it along its axis (the
+        // axis of joint 2 turns with joint 1, about z, across the gravity
+        // along −y): its entry does not change with the slide's reading.
+        let weight = 10.5 * STANDARD_GRAVITY;
+        assert!((other[1] - tau[1]).abs() < 1e-9 && tau[1].abs() <= weight + 1e-9);
+        let mut z = [0.0; 6];
+        let mut straight = physics.clone();
+        straight.gravity = Some([0.0, 0.0, -1.0]);
+        torques(&arm, &straight, &q, &mut z);
+        // Joint 1's axis is z: the slide's axis (α1 = −90°) lies in the
+        // horizontal plane, no weight along it.
+        assert!(z[1].abs() < 1e-9 * weight, "{z:?}");
     }
 }

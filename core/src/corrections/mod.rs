@@ -1,5 +1,5 @@
 //! Beyond geometry: joint compliance under gravity, encoder harmonics,
-//! thermal expansion and drift — small physical models a user switches on,
+//! backlash, thermal expansion and drift — small physical models a user switches on,
 //! identified with the geometry.
 //!
 //! What an arm states beyond its D-H table is its [`Physics`]: link and
@@ -16,7 +16,7 @@
 //! become what the chain sees:
 //!
 //! ```text
-//! q'_j = q_j + Σ_k (s_jk sin(k q_j) + c_jk cos(k q_j)) + κ_j τ_j(q)
+//! q'_j = q_j + Σ_k (s_jk sin(k q_j) + c_jk cos(k q_j)) + κ_j τ_j(q) + b_j sgn τ_j(q)
 //! p    = (1 + c·(T − T0)) · p_chain(q') + v·(t − t_0)
 //! ```
 //!
@@ -27,9 +27,17 @@
 //! session (`t_0` its first time). The harmonics are functions of the
 //! encoder's own reading (an eccentric disc errs by where it is read).
 //!
+//! Backlash: a reducer's play lets the link sit anywhere within `±b_j` of
+//! where its motor's encoder says; at rest under gravity the load presses
+//! one gear flank, so the link sits `b_j` further along the gravity torque
+//! `τ_j` (for a prismatic joint, `τ_j` is the gravity force along the
+//! slide, N, and `b_j` is in mm). A joint whose torque is exactly zero (a
+//! vertical axis) floats: its correction is zero, as is its column.
+//!
 //! The Jacobian columns: a reading correction moves the probe as the joint
 //! does — `∂p/∂κ_j = τ_j ∂p/∂θ_j` (the joint's zero offset column), `∂p/∂s_jk
-//! = sin(k q_j) ∂p/∂θ_j` — the expansion `∂p/∂c = (T − T0) p_chain`, the
+//! = sin(k q_j) ∂p/∂θ_j`, `∂p/∂b_j = sgn τ_j ∂p/∂θ_j` (`∂p/∂d_j` for a
+//! slide) — the expansion `∂p/∂c = (T − T0) p_chain`, the
 //! drift `∂p/∂v = (t − t_0) I`. `τ` is computed at the arm being evaluated
 //! and its own dependence on the geometry is left out of the Jacobian
 //! (κτ is a few µrad; its change with a millimetre of geometry is 10⁻³ of
@@ -39,7 +47,10 @@
 //! a compliance is not identifiable from poses that all load the joint
 //! alike (its column is then its zero offset's); a first harmonic's `cos`
 //! is the zero offset's over a joint that barely turns; an expansion
-//! coefficient from data at one temperature is the scale. Internal units
+//! coefficient from data at one temperature is the scale; a backlash of a
+//! joint whose torque keeps one sign over every pose is the zero offset
+//! (its column is `±∂p/∂θ_j`: only poses that load both flanks separate
+//! it), and is held as not separable. Internal units
 //! keep the columns near the geometry's size: µrad/(N·m), ppm/K, mm/h.
 
 mod effects;
@@ -105,6 +116,10 @@ pub struct Physics {
     /// Encoder harmonics, rad.
     #[serde(default)]
     pub harmonics: Vec<Harmonic>,
+    /// Per joint, its backlash (half the reducer's play): rad, mm for a
+    /// prismatic joint (empty: none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub backlash: Vec<Option<f64>>,
     /// Thermal expansion coefficient of the lengths, 1/K.
     #[serde(default)]
     pub cte_per_k: Option<f64>,
@@ -123,6 +138,7 @@ impl Physics {
     pub fn corrects(&self) -> bool {
         self.compliance.iter().any(|c| c.is_some_and(|v| v != 0.0))
             || self.harmonics.iter().any(|h| h.sin != 0.0 || h.cos != 0.0)
+            || self.backlash.iter().any(|b| b.is_some_and(|v| v != 0.0))
             || self.cte_per_k.is_some_and(|c| c != 0.0)
             || self.drift_mm_per_h.is_some_and(|v| v != [0.0; 3])
     }
@@ -135,6 +151,20 @@ impl Physics {
     /// Joint `j`'s compliance, rad/(N·m), 0 when none is stated.
     pub fn compliance_of(&self, j: usize) -> f64 {
         self.compliance.get(j).copied().flatten().unwrap_or(0.0)
+    }
+
+    /// Joint `j`'s backlash (rad, mm for a slide), 0 when none is stated.
+    pub fn backlash_of(&self, j: usize) -> f64 {
+        self.backlash.get(j).copied().flatten().unwrap_or(0.0)
+    }
+
+    /// Whether a reading correction needs the gravity loads: a compliance
+    /// or a backlash, stated or fitted.
+    pub(crate) fn needs_loads(&self, fit: &Beyond) -> bool {
+        !fit.compliance.is_empty()
+            || !fit.backlash.is_empty()
+            || self.compliance.iter().any(|c| c.is_some_and(|v| v != 0.0))
+            || self.backlash.iter().any(|b| b.is_some_and(|v| v != 0.0))
     }
 
     /// The reference temperature, °C.
@@ -152,9 +182,13 @@ impl Physics {
         if !fit.compliance.is_empty() {
             out.compliance.resize(joints, None);
         }
+        if !fit.backlash.is_empty() {
+            out.backlash.resize(joints, None);
+        }
         for (column, &v) in fit.columns().iter().zip(values) {
             match *column {
                 Column::Compliance(j) => out.compliance[j] = Some(v * 1e-6),
+                Column::Backlash(j) => out.backlash[j] = Some(v),
                 Column::Sin(j, k) => out.harmonic_mut(j, k).sin = v,
                 Column::Cos(j, k) => out.harmonic_mut(j, k).cos = v,
                 Column::Expansion => out.cte_per_k = Some(v * 1e-6),
@@ -190,6 +224,7 @@ impl Physics {
         (fit.columns().into_iter())
             .map(|column| match column {
                 Column::Compliance(j) => self.compliance_of(j) * 1e6,
+                Column::Backlash(j) => self.backlash_of(j),
                 Column::Sin(j, k) => harmonic(j, k).map_or(0.0, |h| h.sin),
                 Column::Cos(j, k) => harmonic(j, k).map_or(0.0, |h| h.cos),
                 Column::Expansion => self.cte_per_k.unwrap_or(0.0) * 1e6,
@@ -208,6 +243,9 @@ pub struct Beyond {
     /// Encoder harmonics: (joint 0-based, order ≥ 1).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub harmonics: Vec<(usize, u32)>,
+    /// Joints (0-based) with a backlash.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub backlash: Vec<usize>,
     /// A thermal expansion coefficient (needs temperatures).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub thermal: bool,
@@ -226,6 +264,8 @@ pub enum Column {
     Sin(usize, u32),
     /// Its cosine amplitude (rad).
     Cos(usize, u32),
+    /// Joint `j`'s backlash (rad; mm for a slide).
+    Backlash(usize),
     /// The expansion coefficient (ppm/K).
     Expansion,
     /// The drift along base axis `a` (mm/h).
@@ -239,11 +279,15 @@ pub const MAX_HARMONIC_ORDER: u32 = 16;
 impl Beyond {
     /// Whether no model is switched on.
     pub fn is_empty(&self) -> bool {
-        self.compliance.is_empty() && self.harmonics.is_empty() && !self.thermal && !self.drift
+        self.compliance.is_empty()
+            && self.harmonics.is_empty()
+            && self.backlash.is_empty()
+            && !self.thermal
+            && !self.drift
     }
 
     /// The block's columns, in order: the compliances, each harmonic's sine
-    /// and cosine, the expansion, the drift's three axes.
+    /// and cosine, the backlashes, the expansion, the drift's three axes.
     pub fn columns(&self) -> Vec<Column> {
         let mut out: Vec<Column> = self
             .compliance
@@ -253,6 +297,7 @@ impl Beyond {
         for &(j, k) in &self.harmonics {
             out.extend([Column::Sin(j, k), Column::Cos(j, k)]);
         }
+        out.extend(self.backlash.iter().map(|&j| Column::Backlash(j)));
         if self.thermal {
             out.push(Column::Expansion);
         }
@@ -266,6 +311,7 @@ impl Beyond {
     pub fn len(&self) -> usize {
         self.compliance.len()
             + 2 * self.harmonics.len()
+            + self.backlash.len()
             + usize::from(self.thermal)
             + 3 * usize::from(self.drift)
     }
@@ -282,16 +328,22 @@ impl Beyond {
     ///
     /// A joint that is not a positive integer, or one listed twice.
     pub fn parse_compliance(text: &str) -> Result<Vec<usize>, OptionError> {
-        let mut out = Vec::new();
-        for part in text.split(',').map(str::trim) {
-            let j = parse_joint(part, "compliance")?;
-            if out.contains(&j) {
-                return Err(OptionError::new("compliance", part, "joint listed twice"));
-            }
-            out.push(j);
-        }
-        out.sort_unstable();
-        Ok(out)
+        parse_joints(text, "compliance")
+    }
+
+    /// Parses `2,3` (1-based joints) into backlashes.
+    ///
+    /// ```
+    /// use aacmm_core::corrections::Beyond;
+    /// assert_eq!(Beyond::parse_backlash("3, 2").unwrap(), vec![1, 2]);
+    /// assert_eq!(Beyond::parse_backlash("2,2").unwrap_err().field, "backlash");
+    /// ```
+    ///
+    /// # Errors
+    ///
+    /// A joint that is not a positive integer, or one listed twice.
+    pub fn parse_backlash(text: &str) -> Result<Vec<usize>, OptionError> {
+        parse_joints(text, "backlash")
     }
 
     /// Parses `2:1,5:1-2` (joint:orders, orders a number or a range) into
@@ -347,12 +399,15 @@ impl Beyond {
             .compliance
             .iter()
             .chain(self.harmonics.iter().map(|(j, _)| j))
+            .chain(&self.backlash)
             .find(|&&j| j >= joints);
         if let Some(&j) = last {
             let field = if self.compliance.contains(&j) {
                 "compliance"
-            } else {
+            } else if self.harmonics.iter().any(|h| h.0 == j) {
                 "harmonics"
+            } else {
+                "backlash"
             };
             return Err(OptionError::new(
                 field,
@@ -405,20 +460,59 @@ impl Beyond {
                 ));
             }
         }
-        if !self.compliance.is_empty() && !physics.has_masses() {
-            return Err(OptionError::new(
-                "compliance",
-                self.compliance
-                    .iter()
-                    .map(|j| (j + 1).to_string())
-                    .collect::<Vec<_>>()
-                    .join(","),
-                "no mass loads the joints: state `mass_kg` of the links (in their \
-                 [[joint]] tables) and of the tool ([probe]) in the arm file",
-            ));
+        if !physics.has_masses() {
+            let stated = physics.backlash.iter().any(|b| b.is_some_and(|v| v != 0.0));
+            let refused = [
+                ("compliance", joints_text(&self.compliance), ""),
+                (
+                    "backlash",
+                    joints_text(&self.backlash),
+                    ", and their torque decides which flank a backlash takes",
+                ),
+                (
+                    "backlash",
+                    if stated {
+                        "stated".into()
+                    } else {
+                        String::new()
+                    },
+                    ", and their torque decides which flank a backlash takes",
+                ),
+            ];
+            if let Some((field, value, why)) = refused.into_iter().find(|r| !r.1.is_empty()) {
+                return Err(OptionError::new(
+                    field,
+                    value,
+                    format!(
+                        "no mass loads the joints{why}: state `mass_kg` of the links (in their \
+                         [[joint]] tables) and of the tool ([probe]) in the arm file"
+                    ),
+                ));
+            }
         }
         Ok(())
     }
+}
+
+/// `1,2,3`: 0-based joints as users number them.
+fn joints_text(joints: &[usize]) -> String {
+    (joints.iter().map(|j| (j + 1).to_string()))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// Comma-separated 1-based joints, each once, into sorted 0-based ones.
+fn parse_joints(text: &str, field: &'static str) -> Result<Vec<usize>, OptionError> {
+    let mut out = Vec::new();
+    for part in text.split(',').map(str::trim) {
+        let j = parse_joint(part, field)?;
+        if out.contains(&j) {
+            return Err(OptionError::new(field, part, "joint listed twice"));
+        }
+        out.push(j);
+    }
+    out.sort_unstable();
+    Ok(out)
 }
 
 fn parse_joint(text: &str, field: &'static str) -> Result<usize, OptionError> {

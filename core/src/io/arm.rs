@@ -299,6 +299,10 @@ struct JointFile {
     /// Encoder harmonics `[order, sin, cos]`, amplitudes in angle_unit.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     harmonics: Option<Arrays>,
+    /// The joint's backlash (half-play), angle_unit (length_unit for a
+    /// prismatic joint).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    backlash: Option<Spanned<f64>>,
 }
 
 impl JointFile {
@@ -566,6 +570,8 @@ impl ArmFile {
                             .flatten()
                             .map(new),
                         harmonics: harmonics(i),
+                        backlash: (physics.backlash.get(i).copied().flatten())
+                            .map(|b| new(limit(b))),
                     })
                 })
                 .collect()),
@@ -729,6 +735,7 @@ impl ArmFile {
             physics.compliance.clear();
         }
         physics.probe_mass = mass(&self.probe.mass_kg, &self.probe.com_mm, "[probe]: ")?;
+        self.read_backlash(&mut physics, &at)?;
         if let Some(g) = &self.gravity {
             let v = triple(g, "gravity", "")?;
             if v.iter().all(|c| *c == 0.0) {
@@ -740,6 +747,47 @@ impl ArmFile {
         physics.reference_temperature_c =
             (self.reference_temperature_c.as_ref()).map(|c| *c.get_ref());
         Ok(physics)
+    }
+
+    /// Each joint's `backlash` (angle_unit; length_unit for a slide) into
+    /// `physics`, after its masses: a play needs a mass to press one of its
+    /// flanks ([`crate::corrections`]). A negative value (not physical: the
+    /// link against its load) is read as written, since a calibrated arm
+    /// file carries what its fit found.
+    fn read_backlash(
+        &self,
+        physics: &mut Physics,
+        at: &impl Fn(Range<usize>, &'static str, String) -> InputError,
+    ) -> Result<(), InputError> {
+        let joints = self.joint.get_ref().iter().map(Spanned::get_ref);
+        for (i, j) in joints.enumerate() {
+            let Some(b) = &j.backlash else {
+                physics.backlash.push(None);
+                continue;
+            };
+            if !physics.has_masses() {
+                return Err(at(
+                    b.span(),
+                    "backlash",
+                    format!(
+                        "joint {}: a backlash needs masses: their gravity torque decides which \
+                         flank the joint rests on; state `mass_kg` of the links and of the tool \
+                         ([probe])",
+                        i + 1
+                    ),
+                ));
+            }
+            let slides = j.kind.as_ref().is_some_and(|k| k.get_ref() == "prismatic");
+            physics.backlash.push(Some(if slides {
+                self.length_unit.to_internal(*b.get_ref())
+            } else {
+                self.angle_unit.to_internal(*b.get_ref())
+            }));
+        }
+        if physics.backlash.iter().all(Option::is_none) {
+            physics.backlash.clear();
+        }
+        Ok(())
     }
 
     /// Every number of the file, base to probe, with its context and key.
@@ -770,6 +818,9 @@ impl ArmFile {
             }
             if let Some(c) = &j.compliance_rad_per_nm {
                 out.push((ctx.clone(), "compliance_rad_per_nm", c));
+            }
+            if let Some(b) = &j.backlash {
+                out.push((ctx.clone(), "backlash", b));
             }
             for v in j.com_mm.iter().flat_map(|c| c.get_ref()) {
                 out.push((ctx.clone(), "com_mm", v));
@@ -1580,6 +1631,38 @@ z = 100.0
             Some("type"),
             "joint 2: unknown type `sliding`; expected \"revolute\"",
         );
+    }
+
+    /// A joint's `backlash` is in angle_unit (a slide's in length_unit),
+    /// kept on writing; it needs a mass to press a flank (refused at its
+    /// line without); a fit's negative value reads back.
+    #[test]
+    fn a_backlash_reads_writes_and_needs_masses() {
+        let joint2 = "theta = 0.5\nbeta = 90\na = -55.0\nd = 0.0\n";
+        let text = edit(joint2, &format!("{joint2}backlash = 0.02\nmass_kg = 3.0\n"));
+        let (arm, _) = parse_arm(&text, F).unwrap();
+        assert_eq!(arm.physics.backlash.len(), 6);
+        assert!((arm.physics.backlash_of(1) - 0.02f64.to_radians()).abs() < 1e-18);
+        assert_eq!(arm.physics.backlash_of(0), 0.0);
+        let written = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg);
+        assert!(written.contains("backlash = 0.02"), "{written}");
+        let back = parse_arm(&written, F).unwrap().0;
+        assert_eq!(back.physics.backlash, arm.physics.backlash);
+        // A slide's play is a length.
+        let slide = text.replacen("theta = 0.5", "type = \"prismatic\"\ntheta = 0.5", 1);
+        let (arm, _) =
+            parse_arm(&slide.replacen("backlash = 0.02", "backlash = 0.05", 1), F).unwrap();
+        assert_eq!(arm.physics.backlash_of(1), 0.05);
+        let no_mass = edit(joint2, &format!("{joint2}backlash = 0.02\n"));
+        assert_at(
+            &err(&no_mass),
+            17,
+            Some("backlash"),
+            "joint 2: a backlash needs masses",
+        );
+        let negative = text.replacen("backlash = 0.02", "backlash = -0.02", 1);
+        let arm = parse_arm(&negative, F).unwrap().0;
+        assert!((arm.physics.backlash_of(1) + 0.02f64.to_radians()).abs() < 1e-18);
     }
 
     /// `GOOD` with joint 2 (α = 90°) written as a Hayati joint.

@@ -115,6 +115,7 @@ fn beyond_effects(
     let bare = Physics {
         compliance: Vec::new(),
         harmonics: Vec::new(),
+        backlash: Vec::new(),
         cte_per_k: None,
         drift_mm_per_h: None,
         ..fitted.clone()
@@ -133,6 +134,13 @@ fn beyond_effects(
             ..bare.clone()
         };
         models.push(("encoder harmonics", only));
+    }
+    if !fit.backlash.is_empty() {
+        let only = Physics {
+            backlash: fitted.backlash.clone(),
+            ..bare.clone()
+        };
+        models.push(("backlash", only));
     }
     if fit.thermal {
         let only = Physics {

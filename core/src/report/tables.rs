@@ -431,6 +431,10 @@ pub(crate) fn beyond(cal: &Calibration, json: Option<&str>) -> String {
     let models = [
         ("compliance", "Joint compliance under gravity"),
         ("harmonic", "Encoder harmonics a·sin(kq) + b·cos(kq)"),
+        (
+            "backlash",
+            "Backlash: half-play b on the flank the gravity torque presses, q + b·sgn τ",
+        ),
         ("thermal", "Thermal expansion of the lengths (from 20 °C)"),
         ("drift", "Drift of the base against the instrument"),
     ];

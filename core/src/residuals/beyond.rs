@@ -14,7 +14,16 @@ pub struct CorrectionBlock {
     pub physics: Physics,
     /// Joints of the arm.
     pub joints: usize,
+    /// Its prismatic joints (bit `j`: joint `j` slides): their backlash is
+    /// a length.
+    pub prismatic: u16,
 }
+
+/// The largest plausible backlash of a revolute joint: 0.5°, rad.
+pub const MAX_BACKLASH_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+
+/// The largest plausible backlash of a slide, mm.
+pub const MAX_SLIDE_BACKLASH_MM: f64 = 0.5;
 
 /// The name of the correction block in a layout.
 pub const BLOCK_NAME: &str = "beyond";
@@ -39,6 +48,10 @@ impl Block for CorrectionBlock {
                     Column::Compliance(j) => (format!("compliance{}", j + 1), other("µrad/(N·m)")),
                     Column::Sin(j, k) => (format!("harmonic{}.sin{k}", j + 1), Unit::Angle),
                     Column::Cos(j, k) => (format!("harmonic{}.cos{k}", j + 1), Unit::Angle),
+                    Column::Backlash(j) if self.prismatic & (1 << j) != 0 => {
+                        (format!("backlash{}", j + 1), Unit::Length)
+                    }
+                    Column::Backlash(j) => (format!("backlash{}", j + 1), Unit::Angle),
                     Column::Expansion => ("thermal.cte".to_string(), other("ppm/K")),
                     Column::Drift(a) => (format!("drift.{}", ["x", "y", "z"][a]), other("mm/h")),
                 };
@@ -63,9 +76,13 @@ impl Block for CorrectionBlock {
     fn implausible(&self, _start: &[f64], x: &[f64]) -> Option<String> {
         let names = self.parameters();
         // No real joint gives a tenth of a degree per N·m, no encoder errs
-        // by a degree, no structural material expands by 0.1 % per kelvin.
+        // by a degree, no structural material expands by 0.1 % per kelvin,
+        // no reducer a calibration is worth has half a degree (a slide half
+        // a millimetre) of play each way.
         for (p, v) in names.iter().zip(x) {
             let limit = match &p.unit {
+                Unit::Length if p.name.starts_with("backlash") => MAX_SLIDE_BACKLASH_MM,
+                Unit::Angle if p.name.starts_with("backlash") => MAX_BACKLASH_RAD,
                 Unit::Angle => 1f64.to_radians(),
                 Unit::Other(u) if u.starts_with("µrad") => 1745.0,
                 Unit::Other(u) if u == "ppm/K" => 1000.0,

@@ -147,6 +147,7 @@ pub fn layout_with(
             fit: fit.clone(),
             physics: physics.clone(),
             joints: params.joint_count(),
+            prismatic: params.shape().map_or(0, |s| s.prismatic_mask()),
         }));
     }
     // The frames' start through the stated corrections (a copy of the data

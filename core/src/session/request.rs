@@ -75,6 +75,7 @@ pub struct Request {
 struct BeyondRequest {
     compliance: Option<String>,
     harmonics: Option<String>,
+    backlash: Option<String>,
     thermal: bool,
     drift: bool,
 }
@@ -322,9 +323,18 @@ impl Request {
         self.beyond = BeyondRequest {
             compliance: compliance.map(str::to_string),
             harmonics: harmonics.map(str::to_string),
+            backlash: self.beyond.backlash.take(),
             thermal,
             drift,
         };
+        self
+    }
+
+    /// Backlashes to fit, as users write them: the joints `joints`
+    /// (`"2,3"`, `--backlash`), each a half-play on the gear flank its
+    /// gravity torque presses ([`crate::corrections`]); `None`: none.
+    pub fn backlash(mut self, joints: Option<&str>) -> Request {
+        self.beyond.backlash = joints.map(str::to_string);
         self
     }
 
@@ -502,6 +512,10 @@ impl Request {
             },
             harmonics: match &b.harmonics {
                 Some(h) => Beyond::parse_harmonics(h)?,
+                None => Vec::new(),
+            },
+            backlash: match &b.backlash {
+                Some(j) => Beyond::parse_backlash(j)?,
                 None => Vec::new(),
             },
             thermal: b.thermal,
