@@ -96,7 +96,11 @@ const PAPER_FIXED: [(ParamKind, usize); 6] = [
 /// for 6 and 7 joints; for any other chain its last joint stands in for
 /// joint 6 (the link whose parameters the probe repeats).
 fn preferred_fixed(n: usize) -> Vec<usize> {
-    let last = if n == 6 || n == 7 { 5 } else { n.saturating_sub(1) };
+    let last = if n == 6 || n == 7 {
+        5
+    } else {
+        n.saturating_sub(1)
+    };
     PAPER_FIXED
         .iter()
         .map(|&(kind, index)| {
@@ -468,7 +472,10 @@ fn unseen_base(params: &DhParams, sees: Sees) -> Vec<(usize, &'static str)> {
         ));
     }
     // A Hayati joint 1 has no d1 (its d-slot is β1): nothing to fix.
-    let dh_first = params.joints.first().is_some_and(|j| j.model == JointModel::Dh);
+    let dh_first = params
+        .joints
+        .first()
+        .is_some_and(|j| j.model == JointModel::Dh);
     if !sees.base_slide && dh_first {
         out.push((column(ParamKind::D), "slide along the base axis (d1)"));
     }

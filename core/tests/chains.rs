@@ -12,7 +12,7 @@ use std::f64::consts::PI;
 
 use aacmm_core::calibrate::validate::position_errors;
 use aacmm_core::identify::chain::{Evidence, Seen, kinematic_rank, theory};
-use aacmm_core::identify::identify;
+use aacmm_core::identify::{Identification, identify};
 use aacmm_core::io::{Positions, ReferenceLength};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{ChainShape, DhJoint, DhParams, JointKind, JointModel};
@@ -227,7 +227,7 @@ fn touches_see_what_the_theory_says() {
         let shape: ChainShape = text.parse().unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(200 + seed as u64);
         let arm = random_arm(shape, &mut rng);
-        let (labels, readings, centres) = touches(&arm, 8, 6, &mut rng);
+        let (labels, readings, centres) = touches(&arm, (8, 6), 0.0, &mut rng);
         let lengths: Vec<ReferenceLength> = (1..3)
             .map(|b| ReferenceLength {
                 a: "S0".into(),
@@ -240,18 +240,23 @@ fn touches_see_what_the_theory_says() {
         let noise = Noise::default();
         // A slide moves when its reading differs between touches of a
         // socket (a SCARA's quill cannot: it alone sets the height).
-        let moves = (0..shape.joints()).filter(|&j| shape.is_prismatic(j)).any(|j| {
-            (labels.iter().zip(&readings)).any(|(l, q)| {
-                let first = labels.iter().position(|m| m == l).unwrap();
-                (q[j] - readings[first][j]).abs() > 1e-6
-            })
-        });
-        assert_eq!(moves, *text != "RRPR" && shape.prismatic_mask() != 0, "{name}");
+        let moves = (0..shape.joints())
+            .filter(|&j| shape.is_prismatic(j))
+            .any(|j| {
+                (labels.iter().zip(&readings)).any(|(l, q)| {
+                    let first = labels.iter().position(|m| m == l).unwrap();
+                    (q[j] - readings[first][j]).abs() > 1e-6
+                })
+            });
+        assert_eq!(
+            moves,
+            *text != "RRPR" && shape.prismatic_mask() != 0,
+            "{name}"
+        );
         let touches_alone = Evidence::Touches { slides_move: moves };
-        for (with_lengths, evidence) in [
-            (true, Evidence::TouchesAndLengths),
-            (false, touches_alone),
-        ] {
+        for (with_lengths, evidence) in
+            [(true, Evidence::TouchesAndLengths), (false, touches_alone)]
+        {
             let given = if with_lengths { &lengths[..] } else { &[] };
             let data = (DataSet::from_touches(&labels, &readings, given).unwrap())
                 .for_shape(shape)
@@ -260,11 +265,7 @@ fn touches_see_what_the_theory_says() {
             let expected = theory(shape, evidence).arm;
             assert_eq!(id.rank, expected, "{name} {text}, {evidence:?}");
             let scale = id.rules.iter().any(|r| r.name == "scale");
-            assert_eq!(
-                scale,
-                !with_lengths && !moves,
-                "{name}, {evidence:?}"
-            );
+            assert_eq!(scale, !with_lengths && !moves, "{name}, {evidence:?}");
         }
     }
 }
@@ -274,34 +275,60 @@ fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// `sockets` sockets touched `per` times each by `arm` in different
-/// readings (damped least squares from random starts): their labels,
-/// readings and the sockets' positions.
+/// readings within the limits (damped least squares from random starts),
+/// each touch `probe_mm` (1σ per coordinate) off its socket's centre:
+/// their labels, readings and the sockets' centres.
 #[allow(clippy::type_complexity)]
 fn touches(
     arm: &DhParams,
-    sockets: usize,
-    per: usize,
+    (sockets, per): (usize, usize),
+    probe_mm: f64,
     rng: &mut ChaCha8Rng,
 ) -> (Vec<String>, Vec<Vec<f64>>, Vec<[f64; 3]>) {
     let shape = arm.shape().unwrap();
     let kernel = ArmKernel::new(arm).unwrap();
     let (mut labels, mut rows, mut centres) = (Vec::new(), Vec::new(), Vec::new());
     for s in 0..sockets {
-        let first = random_readings(shape, rng);
-        let target = kernel.position(&first).unwrap();
-        centres.push(target);
-        labels.push(format!("S{s}"));
-        rows.push(first);
-        let mut found = 1;
-        while found < per {
-            if let Some(q) = reach(&kernel, target, random_readings(shape, rng)) {
+        let centre = kernel.position(&random_readings(shape, rng)).unwrap();
+        centres.push(centre);
+        let mut found = 0;
+        for _ in 0..10_000 {
+            let target: [f64; 3] = std::array::from_fn(|i| centre[i] + probe_mm * gauss(rng));
+            let start = random_readings(shape, rng);
+            let q = reach(&kernel, target, start).map(|q| wrapped(shape, q));
+            if let Some(q) = q.filter(|q| within_limits(shape, q)) {
                 labels.push(format!("S{s}"));
                 rows.push(q);
                 found += 1;
+                if found == per {
+                    break;
+                }
             }
         }
+        assert_eq!(
+            found, per,
+            "socket {s} of {shape}: too few touches within the limits"
+        );
     }
     (labels, rows, centres)
+}
+
+/// Readings with every revolute joint's wrapped to ±180°.
+fn wrapped(shape: ChainShape, q: Vec<f64>) -> Vec<f64> {
+    (q.into_iter().enumerate())
+        .map(|(j, v)| match shape.kind(j) {
+            JointKind::Revolute => aacmm_core::simulate::wrap(v),
+            JointKind::Prismatic => v,
+        })
+        .collect()
+}
+
+/// Whether (wrapped) readings are within the limits of [`random_readings`].
+fn within_limits(shape: ChainShape, q: &[f64]) -> bool {
+    q.iter().enumerate().all(|(j, &v)| match shape.kind(j) {
+        JointKind::Revolute => v.abs() <= REVOLUTE_LIMIT,
+        JointKind::Prismatic => (SLIDE_RANGE[0]..=SLIDE_RANGE[1]).contains(&v),
+    })
 }
 
 /// Readings that put `kernel`'s probe at `target` (within 1 nm), by
@@ -338,30 +365,132 @@ struct Outcome {
     rank: (usize, usize),
 }
 
-/// A campaign of `shape` and `seed`: a random nominal arm; the true arm
-/// off it by random errors in the parameters the campaign identifies (the
-/// fixed ones stay nominal, so that every free parameter has a true value
-/// to compare with); 150 positions seen from a random tracker station
-/// with 0.02 mm of noise; a fit from the nominal; 60 held-out positions
-/// from the same station, drawn apart from the fit's.
-fn campaign(shape: ChainShape, seed: u64) -> Outcome {
+/// A tracker campaign of `shape` and `seed`: a random nominal arm; the
+/// true arm off it ([`perturbed`]); 150 positions seen from a random
+/// tracker station with 0.02 mm of noise; a fit from the nominal; 60
+/// held-out positions from the same station, drawn apart from the fit's.
+fn tracker_campaign(shape: ChainShape, seed: u64) -> Outcome {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let nominal = random_arm(shape, &mut rng);
     let frame = random_frame(&mut rng);
     let first = data_of(tracker_positions(&nominal, &frame, 150, &mut rng), shape);
     let id = identify(&nominal, &first, &tracker_noise(), 1).unwrap();
+    let truth = perturbed(&nominal, &id, &mut rng);
+    let data = data_of(tracker_positions(&truth, &frame, 150, &mut rng), shape);
+    let cal = fit(&nominal, &data, tracker_noise(), &id, seed);
+    let held = data_of(tracker_positions(&truth, &frame, 60, &mut rng), shape);
+    let held = held.positions().unwrap();
+    let true_frame = vec![("instrument".to_string(), frame)];
+    let after = position_errors(&cal.params, held, &cal.frames()).unwrap();
+    let ideal = position_errors(&truth, held, &true_frame).unwrap();
+    Outcome {
+        z2: normalised_errors(&cal, &truth, Some(&frame)),
+        ratio: after.mean / ideal.mean,
+        rank: (id.rank, theory(shape, Evidence::Positions).arm),
+    }
+}
+
+/// A touch campaign of `shape` and `seed`: a random nominal arm; the true
+/// arm off it ([`perturbed`]); sockets ([`touch_data`]) touched 10 times
+/// each within the limits, 0.01 mm of probe noise, 4 reference lengths; a
+/// fit from the nominal; held out: as many fresh sockets, the mean single-point error (a
+/// touch's distance from its socket's centroid) of the calibrated arm
+/// against the true arm's.
+fn touch_campaign(shape: ChainShape, seed: u64) -> Outcome {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let nominal = random_arm(shape, &mut rng);
+    let first = touch_data(&nominal, &mut rng);
+    let id = identify(&nominal, &first, &probe_noise(), 1).unwrap();
+    let truth = perturbed(&nominal, &id, &mut rng);
+    let data = touch_data(&truth, &mut rng);
+    let cal = fit(&nominal, &data, probe_noise(), &id, seed);
+    let held = touch_data(&truth, &mut rng);
+    Outcome {
+        z2: normalised_errors(&cal, &truth, None),
+        ratio: single_point(&cal.params, &held) / single_point(&truth, &held),
+        rank: (id.rank, theory(shape, Evidence::TouchesAndLengths).arm),
+    }
+}
+
+/// The probe's noise of the touch campaigns, mm.
+const PROBE_MM: f64 = 0.01;
+
+fn probe_noise() -> Noise {
+    Noise {
+        probe_mm: Some(PROBE_MM),
+        ..Noise::default()
+    }
+}
+
+/// Sockets touched 10 times by `arm`, with the distances between four
+/// pairs of their centres as reference lengths. The sockets grow with the
+/// parameters: a fit of `p` parameters on `m` residual degrees of freedom
+/// predicts new touches about `p/2m` worse than the true arm does, so the
+/// campaign has `m ≥ 20p` (a socket of 10 touches gives 27), for half the
+/// 5 % the issue allows, and at least 12 sockets.
+fn touch_data(arm: &DhParams, rng: &mut ChaCha8Rng) -> DataSet {
+    let p = theory(arm.shape().unwrap(), Evidence::TouchesAndLengths).arm;
+    let sockets = (20 * p).div_ceil(27).max(12);
+    let (labels, readings, centres) = touches(arm, (sockets, 10), PROBE_MM, rng);
+    let lengths: Vec<ReferenceLength> = (0..4)
+        .map(|k| ReferenceLength {
+            a: format!("S{}", 2 * k),
+            b: format!("S{}", 2 * k + 1),
+            distance: distance(centres[2 * k], centres[2 * k + 1]),
+            uncertainty: None,
+            line: k + 2,
+        })
+        .collect();
+    (DataSet::from_touches(&labels, &readings, &lengths).unwrap())
+        .for_shape(arm.shape().unwrap())
+        .unwrap()
+}
+
+/// The mean distance of every touch of `data` from its point's centroid,
+/// computed with `arm`.
+fn single_point(arm: &DhParams, data: &DataSet) -> f64 {
+    let kernel = ArmKernel::new(arm).unwrap();
+    let mut sum = 0.0;
+    for point in data.points() {
+        let p: Vec<[f64; 3]> = (point.touches.clone())
+            .map(|i| kernel.position(data.reading(i)).unwrap())
+            .collect();
+        let c: [f64; 3] =
+            std::array::from_fn(|k| p.iter().map(|v| v[k]).sum::<f64>() / p.len() as f64);
+        sum += p.iter().map(|v| distance(*v, c)).sum::<f64>();
+    }
+    sum / data.len() as f64
+}
+
+/// The true arm: `nominal` off by random errors (0.3 mm, 0.02°, 1σ) in
+/// the parameters `id` leaves free; the fixed ones stay nominal, so that
+/// every free parameter has a true value to be compared with.
+fn perturbed(nominal: &DhParams, id: &Identification, rng: &mut ChaCha8Rng) -> DhParams {
     let mut truth = nominal.clone();
     for f in &id.free {
-        let step = if f.id.kind.is_length() { 0.3 } else { 0.02_f64.to_radians() };
-        *truth.get_mut(f.id) += step * gauss(&mut rng);
+        let step = if f.id.kind.is_length() {
+            0.3
+        } else {
+            0.02_f64.to_radians()
+        };
+        *truth.get_mut(f.id) += step * gauss(rng);
     }
-    let data = data_of(tracker_positions(&truth, &frame, 150, &mut rng), shape);
-    // The fit fixes what the first analysis fixed: the truth's fixed
-    // parameters are nominal, its free ones all free (the pivoting's choice
-    // among equals could differ on other data).
-    let n = shape.joints();
+    truth
+}
+
+/// A fit of `data` from `nominal` with LM, fixing what `id` fixed (the
+/// truth's fixed parameters are nominal, its free ones all free; the
+/// pivoting's choice among equals could differ on other data).
+fn fit(
+    nominal: &DhParams,
+    data: &DataSet,
+    noise: Noise,
+    id: &Identification,
+    seed: u64,
+) -> Calibration {
+    let n = nominal.joint_count();
     let model = ModelOptions {
-        noise: tracker_noise(),
+        noise,
         fix: FixSpec::Columns(id.fixed.iter().map(|f| f.id.column(n)).collect()),
         ..ModelOptions::default()
     };
@@ -369,23 +498,19 @@ fn campaign(shape: ChainShape, seed: u64) -> Outcome {
         method: Method::Lm,
         ..SolverSettings::default()
     };
-    let cal = calibrate(&nominal, &data, &model, &settings).unwrap();
-    assert!(cal.solver.successful, "{shape} seed {seed}: {:?}", cal.solver);
-    let held = data_of(tracker_positions(&truth, &frame, 60, &mut rng), shape);
-    let held = held.positions().unwrap();
-    let true_frame = vec![("instrument".to_string(), frame)];
-    let after = position_errors(&cal.params, held, &cal.frames()).unwrap();
-    let ideal = position_errors(&truth, held, &true_frame).unwrap();
-    Outcome {
-        z2: normalised_errors(&cal, &truth, &frame),
-        ratio: after.mean / ideal.mean,
-        rank: (id.rank, theory(shape, Evidence::Positions).arm),
-    }
+    let cal = calibrate(nominal, data, &model, &settings).unwrap();
+    let shape = nominal.shape().unwrap();
+    assert!(
+        cal.solver.successful,
+        "{shape} seed {seed}: {:?}",
+        cal.solver
+    );
+    cal
 }
 
-/// `((estimate − truth)/σ)²` of every free parameter and of the frame's
-/// six columns (its rotation as the local step `log(R_true R̂ᵀ)`).
-fn normalised_errors(cal: &Calibration, truth: &DhParams, frame: &[f64; 6]) -> Vec<f64> {
+/// `((estimate − truth)/σ)²` of every free parameter and, with a frame,
+/// of its six columns (its rotation as the local step `log(R_true R̂ᵀ)`).
+fn normalised_errors(cal: &Calibration, truth: &DhParams, frame: Option<&[f64; 6]>) -> Vec<f64> {
     let mut out: Vec<f64> = (cal.parameters.iter())
         .filter(|e| e.fixed.is_none())
         .map(|e| {
@@ -393,71 +518,82 @@ fn normalised_errors(cal: &Calibration, truth: &DhParams, frame: &[f64; 6]) -> V
             if !e.id.kind.is_length() {
                 d = aacmm_core::simulate::wrap(d);
             }
-            if std::env::var("CHAINS_DEBUG").is_ok() {
-                eprintln!("{} {d} {:?} {:?}", e.id, e.sigma, e.fixed);
-            }
             (d / e.sigma.unwrap()).powi(2)
         })
         .collect();
+    let Some(frame) = frame else {
+        return out;
+    };
     let (_, fitted) = &cal.frames()[0];
     let d = Frame::difference(fitted, frame);
     for (k, aux) in cal.auxiliary.iter().take(6).enumerate() {
         let sigma = aux.sigma.unwrap();
         let sigma = if k < 3 { sigma.to_radians() } else { sigma };
-        if std::env::var("CHAINS_DEBUG").is_ok() {
-            eprintln!("{} {} {sigma}", aux.name, d[k]);
-        }
         out.push((d[k] / sigma).powi(2));
     }
     out
 }
 
-/// Runs `seeds` campaigns of every shape and checks the issue's figures:
-/// the normalised error RMS within 0.8–1.25, the held-out error within 5 %
-/// of the true arm's (mean over the seeds), identify's rank the theory's
-/// on every seed. Prints a line per shape for the README's table.
-fn campaigns(seeds: std::ops::Range<u64>) {
+/// Runs `seeds` campaigns of every shape, of tracker positions and of
+/// touches with lengths: identify's rank the theory's on every seed and,
+/// when the run is the `claim` (50 seeds), the issue's figures — the
+/// normalised error RMS within 0.8–1.25, the held-out error within 5 % of
+/// the true arm's (mean over the seeds); a run of a few seeds checks the
+/// RMS against its own sampling spread and every seed's held-out error
+/// within 15 %. Prints a line per shape and evidence for the README's table.
+fn campaigns(seeds: std::ops::Range<u64>, claim: bool) {
+    type Run = fn(ChainShape, u64) -> Outcome;
+    let kinds: [(&str, Run); 2] = [
+        ("tracker positions", tracker_campaign),
+        ("touches + lengths", touch_campaign),
+    ];
     for (name, text) in SHAPES {
         let shape: ChainShape = text.parse().unwrap();
-        let (mut z2, mut ratios) = (Vec::new(), Vec::new());
-        for seed in seeds.clone() {
-            let o = campaign(shape, seed);
-            assert_eq!(o.rank.0, o.rank.1, "{name} seed {seed}: rank");
-            z2.extend(o.z2);
-            ratios.push(o.ratio);
+        for (evidence, run) in kinds {
+            let (mut z2, mut ratios) = (Vec::new(), Vec::new());
+            for seed in seeds.clone() {
+                let o = run(shape, seed);
+                assert_eq!(o.rank.0, o.rank.1, "{name}, {evidence}, seed {seed}: rank");
+                z2.extend(o.z2);
+                ratios.push(o.ratio);
+            }
+            let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+            let ratio = ratios.iter().sum::<f64>() / ratios.len() as f64;
+            let worst = ratios.iter().copied().fold(0.0, f64::max);
+            eprintln!(
+                "{name} ({text}), {evidence}, {} seeds: normalised RMS {rms:.3} over {} \
+                 estimates; held-out error {ratio:.4} × the true arm's (worst seed {worst:.4}); \
+                 rank = theory on every seed",
+                ratios.len(),
+                z2.len()
+            );
+            if claim {
+                let rms_ok = (0.8..=1.25).contains(&rms);
+                assert!(rms_ok, "{name}, {evidence}: normalised RMS {rms}");
+                assert!(ratio <= 1.05, "{name}, {evidence}: held-out ratio {ratio}");
+            } else {
+                // A few seeds: the mean square of k normalised errors has a
+                // standard deviation of √(2/k); 4 of them either way.
+                let band = 4.0 * (2.0 / z2.len() as f64).sqrt();
+                let ms = rms * rms;
+                assert!((ms - 1.0).abs() <= band, "{name}, {evidence}: RMS {rms}");
+                assert!(worst <= 1.15, "{name}, {evidence}: held-out ratio {worst}");
+            }
         }
-        let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
-        let ratio = ratios.iter().sum::<f64>() / ratios.len() as f64;
-        let worst = ratios.iter().copied().fold(0.0, f64::max);
-        eprintln!(
-            "{name} ({text}), {} seeds: normalised RMS {rms:.3} over {} estimates; held-out \
-             error {ratio:.4} × the true arm's (worst seed {worst:.4}); rank = theory on every seed",
-            ratios.len(),
-            z2.len()
-        );
-        assert!((0.8..=1.25).contains(&rms), "{name}: normalised RMS {rms}");
-        assert!(ratio <= 1.05, "{name}: held-out ratio {ratio}");
     }
 }
 
 /// Two seeds of every shape, always on (the figures' spread over two seeds
 /// is wide; the 50-seed run below is the claim).
 #[test]
-fn tracker_campaigns_recover_the_true_arm() {
-    campaigns(0..2);
+fn campaigns_recover_the_true_arm() {
+    campaigns(0..2, false);
 }
 
-/// The issue's 50 seeds of every shape (release mode, about a minute).
+/// The issue's 50 seeds of every shape and both kinds of evidence (a few
+/// minutes in a debug build).
 #[test]
 #[ignore]
-fn tracker_campaigns_recover_the_true_arm_over_50_seeds() {
-    campaigns(0..50);
-}
-
-#[test]
-fn hayati_scara_is_what_the_generator_builds() {
-    // The SCARA's joints are Hayati (parallel axes need it).
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let arm = random_arm("RRPR".parse().unwrap(), &mut rng);
-    assert!(arm.joints.iter().all(|j| j.model == JointModel::Hayati));
+fn campaigns_recover_the_true_arm_over_50_seeds() {
+    campaigns(0..50, true);
 }

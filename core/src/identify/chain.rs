@@ -208,7 +208,7 @@ pub fn kinematic_rank<R: AsRef<[f64]>>(
             }
             for (c, v) in aux_row(&tool.rotation, p, r).iter().take(aux).enumerate() {
                 // The frame's and the tool's rotations are angles too.
-                let angle = c < 3 || c >= 6;
+                let angle = !(3..6).contains(&c);
                 j[(row, arm + c)] = w * v / if angle { reach } else { 1.0 };
             }
         }
@@ -241,11 +241,7 @@ fn aux_row(rot: &[[f64; 3]; 3], p: [f64; 3], r: usize) -> [f64; 9] {
     let mut out = [0.0; 9];
     if r < 3 {
         // δω × p = −[p]× δω.
-        let cross = [
-            [0.0, p[2], -p[1]],
-            [-p[2], 0.0, p[0]],
-            [p[1], -p[0], 0.0],
-        ];
+        let cross = [[0.0, p[2], -p[1]], [-p[2], 0.0, p[0]], [p[1], -p[0], 0.0]];
         out[..3].copy_from_slice(&cross[r]);
         out[3 + r] = 1.0;
     } else {
