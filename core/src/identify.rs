@@ -28,6 +28,12 @@
 //!    direction twice. These are exact, so the threshold finds them; the
 //!    relations are reported.
 //!
+//! For chains with prismatic joints, rule 1 adds `a1` of a prismatic joint
+//! 1 (its frame never turns), a Hayati joint 1 has no `d1`, and touches in
+//! which a slide moves fix the size (rule 2 does not fire); [`chain`] gives
+//! the theory's counts (`4R + 2P + 6`, `4R + 2P + 3`) and the numerical rank
+//! of positions or full poses in an unknown frame.
+//!
 //! The numerical rank counts singular values above `rank_tolerance × s_max`
 //! after rule 1's columns are removed and rule 2's direction projected out.
 //! The recommended fixed set comes from Cholesky with diagonal pivoting on

@@ -1,12 +1,13 @@
 //! Any chain of revolute and prismatic joints (issue 39): the numerical
-//! rank of positions, full poses and touches equals the theory's (`4R + 2P
-//! + 3`, `4R + 2P + 6`; docs/calibration.md, "Any chain"), and simulated
-//! tracker campaigns recover the true arm of a track + 6R robot, a lift +
-//! 7R mobile manipulator, a SCARA, a 5R arm and a 9-joint chain.
+//! rank of positions, full poses and touches equals the theory's (`4R +
+//! 2P + 3` and `4R + 2P + 6`; docs/calibration.md, "Any chain"), and
+//! simulated tracker and touch campaigns recover the true arm of a track +
+//! 6R robot, a lift + 7R mobile manipulator, a SCARA, a 5R arm and a
+//! 9-joint chain.
 //!
 //! The always-on tests run a few seeds; the 50-seed campaigns are
-//! `#[ignore]`d and run in release mode (README, "Any chain"):
-//! `cargo test --release -p aacmm-core --test chains -- --ignored --nocapture`.
+//! `#[ignore]`d (README, "Any chain"):
+//! `cargo test -p aacmm-core --test chains -- --ignored --nocapture`.
 
 use std::f64::consts::PI;
 
