@@ -101,28 +101,20 @@ fn random_readings(shape: ChainShape, rng: &mut ChaCha8Rng) -> Vec<f64> {
         .collect()
 }
 
-/// A random instrument frame: any orientation, 2–4 m away.
+/// A random instrument frame: a rotation vector of normal components (σ 1
+/// rad: any orientation), a station up to 3 m off along each axis.
 fn random_frame(rng: &mut ChaCha8Rng) -> [f64; 6] {
-    let mut unit = || {
-        let v = [gauss(rng), gauss(rng), gauss(rng)];
-        let n = (v.iter().map(|x| x * x).sum::<f64>()).sqrt();
-        v.map(|x| x / n)
-    };
-    let (axis, dir) = (unit(), unit());
-    let angle = rng.random_range(0.0..0.95 * PI);
-    let distance = rng.random_range(2000.0..4000.0);
-    [
-        axis[0] * angle,
-        axis[1] * angle,
-        axis[2] * angle,
-        dir[0] * distance,
-        dir[1] * distance,
-        dir[2] * distance,
-    ]
+    std::array::from_fn(|k| {
+        if k < 3 {
+            gauss(rng)
+        } else {
+            uniform(rng, -3000.0, 3000.0)
+        }
+    })
 }
 
 /// `poses` positions of `truth`'s probe at random readings, seen through
-/// `frame` with `SIGMA_MM` of noise per coordinate (none when `exact`).
+/// `frame` with `SIGMA_MM` of noise per coordinate.
 fn tracker_positions(
     truth: &DhParams,
     frame: &[f64; 6],
@@ -367,17 +359,18 @@ struct Outcome {
 }
 
 /// A tracker campaign of `shape` and `seed`: a random nominal arm; the
-/// true arm off it ([`perturbed`]); 150 positions seen from a random
-/// tracker station with 0.02 mm of noise; a fit from the nominal; 60
+/// true arm off it ([`perturbed`]); positions ([`tracker_poses`]) seen
+/// from a random tracker station with 0.02 mm of noise; a fit from the nominal; 60
 /// held-out positions from the same station, drawn apart from the fit's.
 fn tracker_campaign(shape: ChainShape, seed: u64) -> Outcome {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let nominal = random_arm(shape, &mut rng);
     let frame = random_frame(&mut rng);
-    let first = data_of(tracker_positions(&nominal, &frame, 150, &mut rng), shape);
+    let poses = tracker_poses(shape);
+    let first = data_of(tracker_positions(&nominal, &frame, poses, &mut rng), shape);
     let id = identify(&nominal, &first, &tracker_noise(), 1).unwrap();
     let truth = perturbed(&nominal, &id, &mut rng);
-    let data = data_of(tracker_positions(&truth, &frame, 150, &mut rng), shape);
+    let data = data_of(tracker_positions(&truth, &frame, poses, &mut rng), shape);
     let cal = fit(&nominal, &data, tracker_noise(), &id, seed);
     let held = data_of(tracker_positions(&truth, &frame, 60, &mut rng), shape);
     let held = held.positions().unwrap();
@@ -411,6 +404,16 @@ fn touch_campaign(shape: ChainShape, seed: u64) -> Outcome {
         ratio: single_point(&cal.params, &held) / single_point(&truth, &held),
         rank: (id.rank, theory(shape, Evidence::TouchesAndLengths).arm),
     }
+}
+
+/// Poses of a tracker campaign: a fit of `p` parameters on `m` residual
+/// degrees of freedom predicts new positions about `p/2m` worse than the
+/// true arm does, so the campaign has `m ≥ 20p` (3 per pose; `p` the
+/// arm's identifiable combinations and the frame's 6), for half the 5 %
+/// the issue allows, and at least 150 poses.
+fn tracker_poses(shape: ChainShape) -> usize {
+    let p = theory(shape, Evidence::Positions).arm + 6;
+    (20 * p).div_ceil(3).max(150)
 }
 
 /// The probe's noise of the touch campaigns, mm.
