@@ -49,6 +49,9 @@ enum Command {
                       /verdict says why; 2 for a command line that cannot be parsed."
     )]
     Calibrate(Box<commands::calibrate::Args>),
+    /// Import a robot's URDF: the chain from a base link to a tip link as an arm file.
+    #[command(allow_negative_numbers = true)]
+    Import(commands::import::Args),
     /// Export an arm (a calibrated one) as URDF or as a D-H table.
     Export(commands::export::Args),
     /// Experiment design: which poses to measure for the best calibration.
@@ -80,6 +83,7 @@ fn main() -> ExitCode {
         Command::Evaluate(args) => commands::evaluate::run(args),
         Command::Identify(args) => commands::identify::run(args),
         Command::Calibrate(args) => commands::calibrate::run(*args),
+        Command::Import(args) => commands::import::run(args),
         Command::Export(args) => commands::export::run(args),
         Command::Plan(args) => commands::plan::run(args),
     };

@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 
 use aacmm_core::io::{read_arm, source_name};
-use aacmm_core::urdf::export::{UrdfNames, dh_table, to_urdf};
+use aacmm_core::params::{DhParams, JointKind};
+use aacmm_core::urdf::export::{UrdfNames, dh_table, template_chains, to_urdf};
 use aacmm_core::urdf::{UrdfOptions, parse_urdf};
 use anyhow::{Context, Result, bail};
 
@@ -20,14 +21,14 @@ pub struct Args {
     /// The arm file (a calibrated.toml).
     #[arg(long)]
     arm: PathBuf,
-    /// Write the arm as URDF here: one revolute joint per joint (its
-    /// origin the previous link's D-H or Hayati transform, axis z), then a
-    /// fixed joint to the link `probe`; metres and radians.
+    /// Write the arm as URDF here: one joint per joint, revolute or
+    /// prismatic (its origin the previous link's D-H or Hayati transform,
+    /// axis z), then a fixed joint to the link `probe`; metres and radians.
     #[arg(long, value_name = "OUT.urdf")]
     urdf: Option<PathBuf>,
-    /// A URDF of the robot whose revolute joints (in file order) name the
-    /// joints, links and limits of the export; it must have as many
-    /// revolute joints as the arm.
+    /// A URDF of the robot whose movable joints (in file order) name the
+    /// joints, links and limits of the export; its revolute, continuous and
+    /// prismatic joints must be the arm's joints, kind for kind.
     #[arg(long, value_name = "ROBOT.urdf", requires = "urdf")]
     template: Option<PathBuf>,
     /// Write the arm as a D-H table here: `link,model,theta_deg,d_mm,a_mm,
@@ -54,7 +55,7 @@ pub fn run(args: Args) -> Result<()> {
     let n = arm.params.joint_count();
     if let Some(out) = &args.urdf {
         let names = match &args.template {
-            Some(path) => template_names(path, n)?,
+            Some(path) => template_names(path, &arm.params)?,
             None => UrdfNames::defaults(&arm.name, n, &arm.limits),
         };
         write(out, &to_urdf(&arm.params, &names))?;
@@ -65,21 +66,38 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The names of a template URDF with `n` revolute joints.
-fn template_names(path: &std::path::Path, n: usize) -> Result<UrdfNames> {
+/// The names of a template URDF whose movable joints are the arm's.
+fn template_names(path: &std::path::Path, params: &DhParams) -> Result<UrdfNames> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{}: cannot read", path.display()))?;
     let urdf = parse_urdf(&text, &source_name(path), UrdfOptions::default())?;
-    match UrdfNames::from_template(&urdf, n) {
+    let kinds: Vec<JointKind> = params.joints.iter().map(|j| j.kind).collect();
+    match UrdfNames::from_template(&urdf, &kinds) {
         Some(names) => Ok(names),
         None => {
-            let found = (urdf.joints.iter())
-                .filter(|j| j.kind == aacmm_core::urdf::JointKind::Revolute)
-                .count();
+            let chains: Vec<String> = (template_chains(&urdf).iter())
+                .map(|(leaf, path)| {
+                    let shape: String = (path.iter())
+                        .filter_map(|j| j.kind.movable())
+                        .map(JointKind::letter)
+                        .collect();
+                    format!(
+                        "{} to `{leaf}`",
+                        if shape.is_empty() { "-" } else { &shape }
+                    )
+                })
+                .collect();
+            let arm: String = kinds.iter().map(|k| k.letter()).collect();
             bail!(
-                "--template {}: {found} revolute joint(s); the arm has {n} joints — give the \
-                 URDF of the same robot",
-                path.display()
+                "--template {}: no chain of it has the arm's joints ({arm}: {} joints; R \
+                 revolute, P prismatic); its chains: {} — give the URDF of the same robot",
+                path.display(),
+                kinds.len(),
+                if chains.is_empty() {
+                    "none".to_string()
+                } else {
+                    chains.join(", ")
+                }
             )
         }
     }

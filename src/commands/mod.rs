@@ -5,6 +5,7 @@ pub mod calibrate;
 pub mod evaluate;
 pub mod export;
 pub mod identify;
+pub mod import;
 pub mod plan;
 pub mod points;
 pub mod progress;

@@ -80,6 +80,11 @@ fn the_panda_exports_with_its_urdfs_names_and_reads_back() {
     ]);
     assert_clean_error(
         &o,
-        &["--template", "7 revolute joint(s); the arm has 6 joints"],
+        &[
+            "--template",
+            "no chain of it has the arm's joints (RRRRRR: 6 joints",
+            "RRRRRRR to `ball_link`",
+            "RRRRRRRP to `panda_leftfinger`",
+        ],
     );
 }

@@ -11,6 +11,7 @@ mod evaluate;
 mod export;
 mod first_cause;
 mod house;
+mod import;
 mod mukca;
 mod out_paths;
 mod plan;

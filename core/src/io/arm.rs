@@ -326,6 +326,75 @@ impl JointFile {
         }
     }
 
+    /// The joint at its reading (mm, rad) from the file's values.
+    fn joint(&self, model: JointModel, kind: JointKind, lu: LengthUnit, au: AngleUnit) -> DhJoint {
+        let [theta, alpha] = [&self.theta, &self.alpha].map(|v| au.to_internal(*v.get_ref()));
+        let a = lu.to_internal(*self.a.get_ref());
+        let joint = match model {
+            JointModel::Dh => {
+                let d = self
+                    .d
+                    .as_ref()
+                    .map_or(0.0, |d| lu.to_internal(*d.get_ref()));
+                DhJoint::dh(a, d, alpha, theta)
+            }
+            JointModel::Hayati => {
+                let beta = (self.hbeta.as_ref()).map_or(0.0, |b| au.to_internal(*b.get_ref()));
+                DhJoint::hayati(a, alpha, theta, beta)
+            }
+        };
+        joint.with_kind(kind)
+    }
+
+    /// The joint's limits (mm for a slide, rad for a turn), checked
+    /// (joint `i`, 0-based).
+    fn limits(
+        &self,
+        i: usize,
+        kind: JointKind,
+        (lu, au): (LengthUnit, AngleUnit),
+        text: &str,
+        file: &str,
+    ) -> Result<Option<[f64; 2]>, InputError> {
+        // A slide's limits are lengths, a turn's angles.
+        let limit = |x: f64| match kind {
+            JointKind::Revolute => au.to_internal(x),
+            JointKind::Prismatic => lu.to_internal(x),
+        };
+        Ok(
+            match self.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
+                None => None,
+                Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
+                    Some([lo, hi].map(|x| limit(*x.get_ref())))
+                }
+                Some((l, values)) => {
+                    let message = match values {
+                        [lo, hi] => format!(
+                            "min {} must be less than max {}",
+                            lo.get_ref(),
+                            hi.get_ref()
+                        ),
+                        _ => format!(
+                            "expected `[min, max]` in {}, found {} values",
+                            match kind {
+                                JointKind::Revolute => au.to_string(),
+                                JointKind::Prismatic => lu.to_string(),
+                            },
+                            values.len()
+                        ),
+                    };
+                    let line = line_of(text, l.span().start);
+                    return Err(InputError::field(
+                        file,
+                        line,
+                        "limits",
+                        format!("joint {}: {message}", i + 1),
+                    ));
+                }
+            },
+        )
+    }
+
     /// The joint's model, or a located message (joint `i`, 0-based).
     fn model(
         &self,
@@ -570,59 +639,8 @@ impl ArmFile {
         };
         for (i, (j, &(model, kind))) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate()
         {
-            let [theta, alpha] = [&j.theta, &j.alpha].map(|v| au.to_internal(*v.get_ref()));
-            let a = lu.to_internal(*j.a.get_ref());
-            arm.params.joints.push(
-                match model {
-                    JointModel::Dh => {
-                        let d = j.d.as_ref().map_or(0.0, |d| lu.to_internal(*d.get_ref()));
-                        DhJoint::dh(a, d, alpha, theta)
-                    }
-                    JointModel::Hayati => {
-                        let beta = j
-                            .hbeta
-                            .as_ref()
-                            .map_or(0.0, |b| au.to_internal(*b.get_ref()));
-                        DhJoint::hayati(a, alpha, theta, beta)
-                    }
-                }
-                .with_kind(kind),
-            );
-            // A slide's limits are lengths, a turn's angles.
-            let limit = |x: f64| match kind {
-                JointKind::Revolute => au.to_internal(x),
-                JointKind::Prismatic => lu.to_internal(x),
-            };
-            let limits = match j.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
-                None => None,
-                Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
-                    Some([lo, hi].map(|x| limit(*x.get_ref())))
-                }
-                Some((l, values)) => {
-                    let message = match values {
-                        [lo, hi] => format!(
-                            "min {} must be less than max {}",
-                            lo.get_ref(),
-                            hi.get_ref()
-                        ),
-                        _ => format!(
-                            "expected `[min, max]` in {}, found {} values",
-                            match kind {
-                                JointKind::Revolute => au.to_string(),
-                                JointKind::Prismatic => lu.to_string(),
-                            },
-                            values.len()
-                        ),
-                    };
-                    let line = line_of(text, l.span().start);
-                    return Err(InputError::field(
-                        file,
-                        line,
-                        "limits",
-                        format!("joint {}: {message}", i + 1),
-                    ));
-                }
-            };
+            arm.params.joints.push(j.joint(model, kind, lu, au));
+            let limits = j.limits(i, kind, (lu, au), text, file)?;
             arm.limits.push(limits);
         }
         arm.physics = Box::new(self.physics(text, file)?);

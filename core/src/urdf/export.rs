@@ -1,10 +1,12 @@
 //! A D-H arm (a calibrated one) as URDF joint origins, and as a plain D-H
 //! table.
 //!
-//! Link `i`'s frame is the frame just after joint `i`'s rotation; joint
-//! `i + 1` sits in it at `Rz(θ_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)` (a Hayati joint:
-//! `Rz(θ_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`) and turns about its z axis, so the
-//! URDF's readings are the arm's `q` (the zero offsets are in the origins).
+//! Link `i`'s frame is the frame just after joint `i`'s rotation (or
+//! slide); joint `i + 1` sits in it at `Rz(θ_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)` (a
+//! Hayati joint: `Rz(θ_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`) and turns about (a
+//! `prismatic` one: slides along) its z axis, so the URDF's readings are the
+//! arm's `q` — a slide's in metres, the arm's in mm — (the zero offsets are
+//! in the origins: `Tz(q)` commutes with `Rz(θ)·Tz(d)`).
 //! The probe is a `fixed` joint at `B` after the last link's transform.
 //! `xyz` in metres, `rpy` in radians (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`),
 //! every number with the digits that read back to the same `f64`: the
@@ -25,15 +27,17 @@ pub struct UrdfNames {
     pub robot: String,
     /// `n + 1` links: the base, then the one after each joint.
     pub links: Vec<String>,
-    /// `n` revolute joints.
+    /// `n` movable joints.
     pub joints: Vec<String>,
-    /// Per joint, `[lower, upper]` (rad), where known.
+    /// Per joint, `[lower, upper]` in the arm's units (rad, mm for a
+    /// prismatic joint), where known.
     pub limits: Vec<Option<[f64; 2]>>,
 }
 
 impl UrdfNames {
     /// The default names for an arm of `n` joints named `robot`, with
-    /// `limits` (rad; missing entries: none).
+    /// `limits` (the arm's units: rad, mm for a prismatic joint; missing
+    /// entries: none).
     pub fn defaults(robot: &str, n: usize, limits: &[Option<[f64; 2]>]) -> UrdfNames {
         UrdfNames {
             robot: robot.to_string(),
@@ -45,25 +49,52 @@ impl UrdfNames {
         }
     }
 
-    /// The names of a template URDF's revolute joints, in file order (its
-    /// chain root to tip), their links and limits; `None` unless it has
-    /// exactly `n` revolute joints, each the child link's parent of the next.
-    pub fn from_template(template: &Urdf, n: usize) -> Option<UrdfNames> {
-        let revolute: Vec<_> = (template.joints.iter())
-            .filter(|j| j.kind == JointKind::Revolute)
-            .collect();
-        if revolute.len() != n || n == 0 {
+    /// The names of the chain of a template URDF whose movable (revolute,
+    /// continuous and prismatic) joints are, root to tip, of the kinds
+    /// `kinds`: its joints, their links and limits (a slide's metres as
+    /// mm). The chains tried are those from the top of the tree to each leaf
+    /// link, in file order (a gripper's finger slides are another chain
+    /// than the arm's); `None` when none fits.
+    pub fn from_template(template: &Urdf, kinds: &[crate::params::JointKind]) -> Option<UrdfNames> {
+        let movable = (template_chains(template).into_iter())
+            .map(|(_, path)| path)
+            .find(|path| {
+                path.iter()
+                    .map(|j| j.kind.movable())
+                    .eq(kinds.iter().map(|k| Some(*k)))
+            })?;
+        if kinds.is_empty() {
             return None;
         }
-        let mut links = vec![revolute[0].parent.clone()];
-        links.extend(revolute.iter().map(|j| j.child.clone()));
+        let mut links = vec![movable[0].parent.clone()];
+        links.extend(movable.iter().map(|j| j.child.clone()));
         Some(UrdfNames {
             robot: template.name.clone(),
             links,
-            joints: revolute.iter().map(|j| j.name.clone()).collect(),
-            limits: revolute.iter().map(|j| j.limits).collect(),
+            joints: movable.iter().map(|j| j.name.clone()).collect(),
+            limits: (movable.iter())
+                .map(|j| match j.kind {
+                    JointKind::Prismatic => j.limits.map(|l| l.map(|v| v * 1000.0)),
+                    _ => j.limits,
+                })
+                .collect(),
         })
     }
+}
+
+/// Each leaf link of `template` (in file order) and the movable joints from
+/// the top of its tree down to it (a loop of joints: left out).
+pub fn template_chains(template: &Urdf) -> Vec<(String, Vec<&super::UrdfJoint>)> {
+    let parents: std::collections::HashSet<&str> =
+        template.joints.iter().map(|j| j.parent.as_str()).collect();
+    (template.joints.iter())
+        .filter(|j| !parents.contains(j.child.as_str()))
+        .filter_map(|leaf| {
+            let path = template.path_up(None, &leaf.child).ok()?;
+            let movable = path.into_iter().filter(|j| j.kind.movable().is_some());
+            Some((leaf.child.clone(), movable.collect()))
+        })
+        .collect()
 }
 
 /// The rigid transform of link `j` before the next joint turns:
@@ -91,9 +122,10 @@ fn origin(t: Vector3<f64>, r: Rotation3<f64>) -> String {
     )
 }
 
-/// The arm `params` as a URDF with `names`: one revolute joint per joint
-/// (axis z, limits where known, `continuous` where not), then a fixed joint
-/// to the probe link `probe`.
+/// The arm `params` as a URDF with `names`: one joint per joint (axis z; a
+/// revolute one `revolute` with its limits where known, `continuous` where
+/// not; a prismatic one `prismatic`, its limits in metres where known and
+/// no `<limit>` where not), then a fixed joint to the probe link `probe`.
 ///
 /// ```
 /// use aacmm_core::params::DhParams;
@@ -124,10 +156,11 @@ pub fn to_urdf(params: &DhParams, names: &UrdfNames) -> String {
     let mut previous = (Vector3::zeros(), Rotation3::identity());
     for i in 0..n {
         let limit = names.limits.get(i).copied().flatten();
-        let kind = if limit.is_some() {
-            "revolute"
-        } else {
-            "continuous"
+        let slides = params.joints[i].kind == crate::params::JointKind::Prismatic;
+        let (kind, limit) = match (slides, limit) {
+            (true, limit) => ("prismatic", limit.map(|l| l.map(|v| v / 1000.0))),
+            (false, Some(limit)) => ("revolute", Some(limit)),
+            (false, None) => ("continuous", None),
         };
         s += &format!(
             "  <joint name=\"{}\" type=\"{kind}\">\n    <parent link=\"{}\"/>\n    <child \
@@ -218,12 +251,14 @@ pub fn dh_table(params: &DhParams) -> String {
 mod tests {
     use super::*;
     use crate::kernel::ArmKernel;
+    use crate::params::JointKind as ArmKind;
     use crate::urdf::{UrdfOptions, parse_urdf};
 
     /// Exported and read back by the toolkit's own URDF reader, the chain's
-    /// tip is the arm's probe within 1 nm — D-H and Hayati joints, 6 and 7
-    /// joints, zero offsets and twists off their nominal values — and the
-    /// D-H conversion of the read-back chain is the same arm up to its base.
+    /// tip is the arm's probe within 1 nm — D-H and Hayati joints, 6, 7 and
+    /// 7 joints with two slides (one Hayati), zero offsets and twists off
+    /// their nominal values; a slide's limits in metres — and the D-H
+    /// conversion of the read-back chain is the same arm up to its base.
     #[test]
     fn exported_urdf_reads_back_within_a_nanometre() {
         let mut hayati = DhParams::paper_nominal();
@@ -244,43 +279,70 @@ mod tests {
             theta: 0.1,
             ..DhJoint::default()
         });
+        // A track (a slide before the arm) and a Hayati slide.
+        let mut track = DhParams::paper_nominal();
+        track.joints.insert(
+            0,
+            DhJoint::dh(150.0, 30.0, 1.2, 0.3).with_kind(ArmKind::Prismatic),
+        );
+        track.joints[3] =
+            DhJoint::hayati(track.joints[3].a, 0.002, 0.1, -0.004).with_kind(ArmKind::Prismatic);
         for (name, arm) in [
             ("paper", DhParams::paper_nominal()),
             ("hayati", hayati),
             ("seven", seven),
+            ("track", track),
         ] {
             let n = arm.joint_count();
+            let kinds: Vec<ArmKind> = arm.joints.iter().map(|j| j.kind).collect();
             let limits = vec![Some([-3.0, 3.0]); n];
             let text = to_urdf(&arm, &UrdfNames::defaults(name, n, &limits));
             let urdf = parse_urdf(&text, "x.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
-            assert!(
-                urdf.joints
-                    .iter()
-                    .all(|j| j.limits == Some([-3.0, 3.0]) || j.name == "probe")
-            );
+            for j in urdf.joints.iter().filter(|j| j.name != "probe") {
+                let slides = j.kind == JointKind::Prismatic;
+                let m = if slides { 1e-3 } else { 1.0 };
+                assert_eq!(j.limits, Some([-3.0 * m, 3.0 * m]), "{name}");
+            }
             let chain = urdf.chain(None, "probe").unwrap();
-            // The reader's D-H conversion (D-H joints only: a Hayati joint's
-            // skew axes have a common normal far away).
-            let dh = (name != "hayati").then(|| chain.to_dh().unwrap());
+            assert_eq!(chain.kinds, kinds);
+            // The reader's own conversion of the exported chain.
+            let dh = chain.to_dh().unwrap();
             let k = ArmKernel::new(&arm).unwrap();
             for i in 0..50 {
                 let q: Vec<f64> = (0..n)
                     .map(|j| ((i * 7 + j * 3) as f64 * 0.37).sin() * 2.5)
                     .collect();
+                // A slide's reading: mm for the arm, m for the URDF.
+                let q: Vec<f64> = (q.iter().zip(&kinds))
+                    .map(|(v, k)| {
+                        if *k == ArmKind::Prismatic {
+                            v * 100.0
+                        } else {
+                            *v
+                        }
+                    })
+                    .collect();
+                let q_urdf: Vec<f64> = (q.iter().zip(&kinds))
+                    .map(|(v, k)| {
+                        if *k == ArmKind::Prismatic {
+                            v / 1000.0
+                        } else {
+                            *v
+                        }
+                    })
+                    .collect();
                 let p = k.position(&q).unwrap();
-                let tip = chain.position(&q);
+                let tip = chain.position(&q_urdf);
                 for c in 0..3 {
                     assert!(
                         (tip[c] * 1000.0 - p[c]).abs() < 1e-6,
                         "{name} {q:?}: {tip:?} vs {p:?}"
                     );
                 }
-                if let Some(dh) = &dh {
-                    let other = ArmKernel::new(&dh.params).unwrap().position(&q).unwrap();
-                    let at = dh.base * nalgebra::Point3::from(Vector3::from(other) / 1000.0);
-                    for c in 0..3 {
-                        assert!((at[c] - tip[c]).abs() < 1e-9, "{name}: {at:?} vs {tip:?}");
-                    }
+                let other = ArmKernel::new(&dh.params).unwrap().position(&q).unwrap();
+                let at = dh.base * nalgebra::Point3::from(Vector3::from(other) / 1000.0);
+                for c in 0..3 {
+                    assert!((at[c] - tip[c]).abs() < 1e-9, "{name}: {at:?} vs {tip:?}");
                 }
             }
         }

@@ -4,16 +4,22 @@
 //! joints, each joint placed in its parent link's frame by an `origin`
 //! (`xyz` in metres, `rpy` in radians, `R = Rz(yaw)·Ry(pitch)·Rx(roll)`) and
 //! turning about its `axis`. This module reads the subset that describes a
-//! serial arm — `revolute` and `continuous` joints, `fixed` joints (flanges,
-//! tools, the probe ball), their origins, axes and limits — follows the chain
-//! from a root link to a tip link (the probe centre), and converts it to the
-//! toolkit's standard D-H arm (`A_i = Rz(θ_i + q_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)`,
-//! probe `B` in the last frame; see [`crate::params`]).
+//! serial chain — `revolute`, `continuous` (a revolute joint without
+//! limits) and `prismatic` joints, `fixed` joints (flanges, tools, the probe
+//! ball, folded into their neighbours), their origins, axes and limits —
+//! follows the chain from a root link to a tip link (the probe centre), and
+//! converts it to the toolkit's standard D-H arm (`A_i = Rz(θ_i + q_i)·
+//! Tz(d_i)·Tx(a_i)·Rx(α_i)`; a prismatic joint's reading, mm, adds to `d_i`;
+//! probe `B` in the last frame; see [`crate::params`]). A URDF reading is in
+//! radians or metres, the arm's in radians or millimetres: a prismatic
+//! joint's `q` is its URDF reading × 1000, its limits likewise.
 //!
 //! The conversion is exact: with the same joint readings `q`, the D-H arm's
 //! probe and the URDF's tip agree up to one fixed rigid motion, the
 //! [`DhConversion::base`] (the D-H base frame must have its z axis on the
-//! first joint axis; the URDF root frame need not). Calibration figures —
+//! first joint axis; the URDF root frame need not); the arm's tool frame
+//! (its last D-H frame) and the tip link's frame differ by one fixed
+//! rotation, [`DhConversion::tool`]. Calibration figures —
 //! the spread of a socket's touches, distances between sockets — do not
 //! depend on that rigid motion, so the arm file needs only the D-H part.
 //!
@@ -22,16 +28,23 @@
 //! root origin and its x axis along the root x axis made perpendicular to the
 //! first axis; where two consecutive axes are parallel, the common normal is
 //! taken through the previous frame's origin (`d = 0`, the textbook choice);
-//! the last joint has `a = d = α = θ = 0`, so the probe vector is the tip in
-//! the frame of the last axis at `q_n = 0`.
+//! where they are nearly parallel, so that their common normal is more than
+//! [`HAYATI_BEYOND_M`] away and D-H would need a `d` of that size (unbounded
+//! as the axes become parallel), the joint gets the Hayati convention
+//! (`Rz(θ + q)·Tx(a)·Rx(α)·Ry(β)`, [`crate::params::JointModel::Hayati`]):
+//! its next frame's origin is where the next axis crosses the plane normal
+//! to this one through the previous origin; a prismatic joint's axis is the
+//! line through its URDF joint origin (any parallel line would do: only its
+//! direction moves the tool); the last joint has `a = d = α = θ = 0`, so the
+//! probe vector is the tip in the frame of the last axis at `q_n = 0`.
 //!
 //! Published URDFs often round right angles (`1.5708` for π/2, `3.1416` for
 //! π). Taken literally, two axes meant to be parallel become skew by 10⁻⁵ rad
-//! and meet kilometres away, and the D-H arm would get a `d` of that size,
-//! useless as a start for a calibration and short of digits: [`Chain::to_dh`]
-//! refuses a common normal more than 100 m away. [`UrdfOptions::snap_rad`]
-//! rounds every `rpy` component within that distance of a multiple of π/2 to
-//! it and reports each rounding ([`Urdf::snapped`]).
+//! and meet kilometres away: the conversion stays exact (a Hayati joint with
+//! `β` of 10⁻⁵ rad), but the arm is not the one its maker meant.
+//! [`UrdfOptions::snap_rad`] rounds every `rpy` component within that
+//! distance of a multiple of π/2 to it and reports each rounding
+//! ([`Urdf::snapped`]).
 //!
 //! Masses: each `<link>`'s `<inertial>` (`<mass value>`, kg, and the centre
 //! of mass at its `<origin xyz>`, m, in the link frame) is carried by the
@@ -54,7 +67,7 @@ use std::collections::HashMap;
 use nalgebra::{Isometry3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::error::{InputError, quoted, shown};
-use crate::params::{DhJoint, DhParams};
+use crate::params::{DhJoint, DhParams, JointModel, MAX_JOINTS};
 
 /// How [`parse_urdf`] reads angles.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,11 +91,24 @@ impl Default for UrdfOptions {
 pub enum JointKind {
     /// Turns about its axis (`revolute` or `continuous`).
     Revolute,
+    /// Slides along its axis (`prismatic`).
+    Prismatic,
     /// Rigid (`fixed`).
     Fixed,
-    /// Anything else (`prismatic`, `floating`, `planar`): readable, but not
-    /// part of a chain this toolkit models.
+    /// Anything else (`floating`, `planar`): readable, but not part of a
+    /// chain this toolkit models.
     Other,
+}
+
+impl JointKind {
+    /// The arm's kind of a movable joint; `None` for a fixed or other one.
+    pub fn movable(self) -> Option<crate::params::JointKind> {
+        match self {
+            JointKind::Revolute => Some(crate::params::JointKind::Revolute),
+            JointKind::Prismatic => Some(crate::params::JointKind::Prismatic),
+            JointKind::Fixed | JointKind::Other => None,
+        }
+    }
 }
 
 /// One joint of a URDF file.
@@ -102,7 +128,8 @@ pub struct UrdfJoint {
     pub origin: Isometry3<f64>,
     /// Unit axis in the child frame.
     pub axis: Vector3<f64>,
-    /// `[lower, upper]` of a `revolute` joint, rad.
+    /// `[lower, upper]` of a `revolute` (rad) or `prismatic` (m) joint,
+    /// when its `<limit>` states them and `lower < upper`.
     pub limits: Option<[f64; 2]>,
     /// 1-based line of the `<joint>` element.
     pub line: usize,
@@ -348,6 +375,7 @@ impl<'a, 'input> JointElement<'a, 'input> {
         let type_name = self.attribute("type")?;
         let kind = match type_name.as_str() {
             "revolute" | "continuous" => JointKind::Revolute,
+            "prismatic" => JointKind::Prismatic,
             "fixed" => JointKind::Fixed,
             _ => JointKind::Other,
         };
@@ -356,7 +384,7 @@ impl<'a, 'input> JointElement<'a, 'input> {
         let origin = self.origin(&name, options.snap_rad, snapped)?;
         let axis = self.axis(&name, kind)?;
         Ok(UrdfJoint {
-            limits: self.limits(&type_name),
+            limits: self.limits(&name, &type_name)?,
             name,
             type_name,
             kind,
@@ -433,7 +461,7 @@ impl<'a, 'input> JointElement<'a, 'input> {
         ))
     }
 
-    /// The unit axis (URDF's default is x); a turning joint's must not be
+    /// The unit axis (URDF's default is x); a movable joint's must not be
     /// zero.
     fn axis(&self, name: &str, kind: JointKind) -> Result<Vector3<f64>, InputError> {
         let axis_el = self.child("axis");
@@ -448,12 +476,16 @@ impl<'a, 'input> JointElement<'a, 'input> {
             None => [1.0, 0.0, 0.0],
         };
         let axis = Vector3::from(axis);
-        if kind == JointKind::Revolute && axis.norm() == 0.0 {
+        if kind.movable().is_some() && axis.norm() == 0.0 {
+            let moves = match kind {
+                JointKind::Prismatic => "slides along",
+                _ => "turns about",
+            };
             return Err(InputError::field(
                 self.file,
                 axis_el.map_or(self.at, |el| line(self.doc, el)),
                 "axis",
-                format!("joint {} turns about a zero axis", quoted(name)),
+                format!("joint {} {moves} a zero axis", quoted(name)),
             ));
         }
         Ok(if axis.norm() > 0.0 {
@@ -463,16 +495,51 @@ impl<'a, 'input> JointElement<'a, 'input> {
         })
     }
 
-    /// `[lower, upper]` of a `revolute` joint, when both are finite and in
-    /// order.
-    fn limits(&self, type_name: &str) -> Option<[f64; 2]> {
-        self.child("limit")
-            .filter(|_| type_name == "revolute")
-            .and_then(|el| {
-                let lo = el.attribute("lower")?.trim().parse::<f64>().ok()?;
-                let hi = el.attribute("upper")?.trim().parse::<f64>().ok()?;
-                (lo.is_finite() && hi.is_finite() && lo < hi).then_some([lo, hi])
-            })
+    /// `[lower, upper]` of a `revolute` or `prismatic` joint, when both are
+    /// stated and `lower < upper` (URDF's default for either is 0, so a
+    /// `<limit>` without them, or with both 0, states no range).
+    ///
+    /// # Errors
+    /// A stated `lower` or `upper` that is not a finite number, or a
+    /// `lower` above `upper`.
+    fn limits(&self, name: &str, type_name: &str) -> Result<Option<[f64; 2]>, InputError> {
+        let Some(el) = self.child("limit") else {
+            return Ok(None);
+        };
+        let at = line(self.doc, el);
+        let bound = |field: &str| -> Result<Option<f64>, InputError> {
+            let Some(text) = el.attribute(field) else {
+                return Ok(None);
+            };
+            match text.trim().parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(Some(v)),
+                _ => Err(InputError::field(
+                    self.file,
+                    at,
+                    field,
+                    format!(
+                        "joint {}: {} is not a limit (a finite number, {})",
+                        quoted(name),
+                        quoted(text),
+                        if type_name == "prismatic" { "m" } else { "rad" }
+                    ),
+                )),
+            }
+        };
+        let (lo, hi) = (bound("lower")?, bound("upper")?);
+        if !matches!(type_name, "revolute" | "prismatic") {
+            return Ok(None);
+        }
+        match (lo, hi) {
+            (Some(lo), Some(hi)) if lo > hi => Err(InputError::field(
+                self.file,
+                at,
+                "upper",
+                format!("joint {}: upper {hi} is below lower {lo}", quoted(name)),
+            )),
+            (Some(lo), Some(hi)) if lo < hi => Ok(Some([lo, hi])),
+            _ => Ok(None),
+        }
     }
 }
 
@@ -540,16 +607,31 @@ enum Step {
     Rigid(Isometry3<f64>),
     /// A rotation by the next reading about this unit axis.
     Turn(Vector3<f64>),
+    /// A translation by the next reading (m) along this unit axis.
+    Slide(Vector3<f64>),
 }
 
 /// The serial chain from a root link to a tip link.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Chain {
-    /// The revolute joints, root to tip: the columns `q1..qn` of a poses file.
+    /// The movable joints, root to tip: the columns `q1..qn` of a poses file.
     pub joints: Vec<String>,
-    /// Their `[lower, upper]` limits, rad, where the URDF states them.
+    /// Whether each turns or slides.
+    pub kinds: Vec<crate::params::JointKind>,
+    /// Each one's `type` as written (`revolute`, `continuous`, `prismatic`).
+    pub types: Vec<String>,
+    /// Each one's line in the file.
+    pub lines: Vec<usize>,
+    /// Their `[lower, upper]` limits, rad or m, where the URDF states them.
     pub limits: Vec<Option<[f64; 2]>>,
+    /// The `fixed` joints folded into the arm: entry `k < n` those just
+    /// before movable joint `k` (entry 0: into the base, the others: into
+    /// the link of joint `k − 1`), entry `n` those after the last one (into
+    /// the tool).
+    pub folded: Vec<Vec<String>>,
     steps: Vec<Step>,
+    /// The URDF file's name, for messages.
+    file: String,
     /// The masses of the links that move with the chain (or sit on its
     /// root side), in the file's order of `<link>` elements.
     pub masses: Vec<ChainMass>,
@@ -585,28 +667,90 @@ pub struct ChainMass {
 }
 
 impl Urdf {
+    /// Whether a joint names `link` as its parent or child.
+    fn joins(&self, link: &str) -> bool {
+        self.joints
+            .iter()
+            .any(|j| j.child == link || j.parent == link)
+    }
+
     /// The chain from `root` (or, without one, the link that is no joint's
     /// child above `tip`) down to `tip`.
     ///
     /// # Errors
-    /// An unknown tip link; a root not above the tip; a joint on the way that
-    /// is neither revolute nor fixed (named, with its line).
+    /// An unknown tip or root link; a root not above the tip (both named,
+    /// and where going up from the tip ends); a joint on the way that is
+    /// neither revolute, continuous, prismatic nor fixed (named, with its
+    /// line).
     pub fn chain(&self, root: Option<&str>, tip: &str) -> Result<Chain, InputError> {
+        for (link, what) in [(Some(tip), "tip"), (root, "base")] {
+            match link {
+                Some(link) if !self.joins(link) => {
+                    return Err(InputError::file_error(
+                        &self.file,
+                        format!(
+                            "no link {} is joined to the robot (the {what} must be a link's name)",
+                            quoted(link)
+                        ),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        let path = self.path_up(root, tip)?;
+        let mut chain = Chain {
+            joints: Vec::new(),
+            kinds: Vec::new(),
+            types: Vec::new(),
+            lines: Vec::new(),
+            limits: Vec::new(),
+            folded: vec![Vec::new()],
+            steps: Vec::new(),
+            file: self.file.clone(),
+            masses: self.masses_along(&path),
+        };
+        for j in path {
+            chain.steps.push(Step::Rigid(j.origin));
+            let Some(kind) = j.kind.movable() else {
+                if j.kind == JointKind::Fixed {
+                    chain
+                        .folded
+                        .last_mut()
+                        .expect("one entry")
+                        .push(j.name.clone());
+                    continue;
+                }
+                return Err(InputError::field(
+                    &self.file,
+                    j.line,
+                    "type",
+                    format!(
+                        "joint {} on the way to {} is {}; a serial chain has revolute, \
+                         continuous, prismatic and fixed joints only",
+                        quoted(&j.name),
+                        quoted(tip),
+                        quoted(&j.type_name)
+                    ),
+                ));
+            };
+            chain.steps.push(match kind {
+                crate::params::JointKind::Revolute => Step::Turn(j.axis),
+                crate::params::JointKind::Prismatic => Step::Slide(j.axis),
+            });
+            chain.joints.push(j.name.clone());
+            chain.kinds.push(kind);
+            chain.types.push(j.type_name.clone());
+            chain.lines.push(j.line);
+            chain.limits.push(j.limits);
+            chain.folded.push(Vec::new());
+        }
+        Ok(chain)
+    }
+
+    /// The joints from `root` (or the top) down to `tip`, root first.
+    fn path_up(&self, root: Option<&str>, tip: &str) -> Result<Vec<&UrdfJoint>, InputError> {
         let by_child: HashMap<&str, &UrdfJoint> =
             self.joints.iter().map(|j| (j.child.as_str(), j)).collect();
-        let known = self
-            .joints
-            .iter()
-            .any(|j| j.child == tip || j.parent == tip);
-        if !known {
-            return Err(InputError::file_error(
-                &self.file,
-                format!(
-                    "no link {} is joined to the robot (the tip must be a link's name)",
-                    quoted(tip)
-                ),
-            ));
-        }
         let mut path: Vec<&UrdfJoint> = Vec::new();
         let mut link = tip;
         while Some(link) != root {
@@ -629,52 +773,36 @@ impl Urdf {
                     link = &j.parent;
                 }
                 None if root.is_none() => break,
-                None => {
-                    return Err(InputError::file_error(
-                        &self.file,
-                        format!(
-                            "link {} is not above {}: going up from it ends at {}",
-                            quoted(root.unwrap_or_default()),
-                            quoted(tip),
-                            quoted(link)
-                        ),
-                    ));
-                }
+                None => return Err(self.not_connected(root.unwrap_or_default(), tip, &path)),
             }
         }
         path.reverse();
-        let mut chain = Chain {
-            joints: Vec::new(),
-            limits: Vec::new(),
-            steps: Vec::new(),
-            masses: self.masses_along(&path),
-        };
-        for j in path {
-            match j.kind {
-                JointKind::Revolute => {
-                    chain.steps.push(Step::Rigid(j.origin));
-                    chain.steps.push(Step::Turn(j.axis));
-                    chain.joints.push(j.name.clone());
-                    chain.limits.push(j.limits);
-                }
-                JointKind::Fixed => chain.steps.push(Step::Rigid(j.origin)),
-                JointKind::Other => {
-                    return Err(InputError::field(
-                        &self.file,
-                        j.line,
-                        "type",
-                        format!(
-                            "joint {} on the way to {} is {}; a D-H arm has revolute \
-                             and fixed joints only",
-                            quoted(&j.name),
-                            quoted(tip),
-                            quoted(&j.type_name)
-                        ),
-                    ));
-                }
-            }
+        Ok(path)
+    }
+
+    /// The error of a `root` that is not above `tip`, after going up from
+    /// the tip through `path` (tip first) to the top.
+    fn not_connected(&self, root: &str, tip: &str, path: &[&UrdfJoint]) -> InputError {
+        let top = path.last().map_or(tip, |j| j.parent.as_str());
+        let through: Vec<String> = path.iter().map(|j| quoted(&j.name)).collect();
+        let message = format!(
+            "the chain does not connect base link {} to tip link {}: going up from {} \
+             {}ends at {}, the top of its tree, without meeting {}",
+            quoted(root),
+            quoted(tip),
+            quoted(tip),
+            if through.is_empty() {
+                String::new()
+            } else {
+                format!("through joints {} ", shown(&through.join(", ")))
+            },
+            quoted(top),
+            quoted(root)
+        );
+        match path.last() {
+            Some(j) => InputError::field(&self.file, j.line, "parent", message),
+            None => InputError::file_error(&self.file, message),
         }
-        Ok(chain)
     }
 }
 
@@ -685,17 +813,14 @@ impl Urdf {
         let Some(first) = path.first() else {
             return Vec::new();
         };
-        let turning = path
-            .iter()
-            .filter(|j| j.kind == JointKind::Revolute)
-            .count();
+        let turning = path.iter().filter(|j| j.kind.movable().is_some()).count();
         // Each link of the chain: its carrier and its frame at q = 0.
         let mut on_chain: HashMap<&str, (Carrier, Isometry3<f64>)> = HashMap::new();
         let (mut carrier, mut t, mut turned) = (Carrier::Base, Isometry3::identity(), 0);
         on_chain.insert(first.parent.as_str(), (carrier, t));
         for j in path {
             t *= j.origin;
-            if j.kind == JointKind::Revolute {
+            if j.kind.movable().is_some() {
                 carrier = Carrier::Link(turned);
                 turned += 1;
             } else if turned == turning && turned > 0 {
@@ -756,12 +881,16 @@ impl Urdf {
 /// A URDF chain as a D-H arm.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DhConversion {
-    /// The arm, mm and rad: `reference_model::position` of it at
-    /// `q` is the tip at `q` in the D-H base frame.
+    /// The arm, mm and rad (its prismatic joints' readings in mm): its
+    /// probe at `q` is the tip at `q` in the D-H base frame.
     pub params: DhParams,
     /// The D-H base frame in the URDF root frame (metres): tip in the root
     /// frame = `base · (D-H probe position / 1000)`.
     pub base: Isometry3<f64>,
+    /// The tip link's frame in the arm's tool frame (its last D-H frame):
+    /// the tip link's orientation in the root frame at `q` is `base ·
+    /// R_tool(q) · tool`.
+    pub tool: UnitQuaternion<f64>,
     /// The chain's masses as an arm file states them (see the module
     /// docs). Empty when no link after the first joint has a mass.
     pub masses: DhMasses,
@@ -800,8 +929,9 @@ impl DhMasses {
 }
 
 /// Farther than this (m) from the previous frame, a common normal means two
-/// axes meant to be parallel: no arm is that large.
-const FAR_M: f64 = 100.0;
+/// axes meant to be parallel — no arm is that large — and D-H would need a
+/// `d` of that size: the joint gets the Hayati convention instead.
+pub const HAYATI_BEYOND_M: f64 = 10.0;
 
 /// A joint axis: a point on it and its unit direction.
 type Axis = (Point3<f64>, Vector3<f64>);
@@ -809,8 +939,17 @@ type Axis = (Point3<f64>, Vector3<f64>);
 /// Below this, `|z_a × z_b|` counts two unit axes as parallel.
 const PARALLEL: f64 = 1e-9;
 
+/// A D-H frame being built, in the root frame: its origin, x and z axes.
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    o: Point3<f64>,
+    x: Vector3<f64>,
+    z: Vector3<f64>,
+}
+
 impl Chain {
-    /// The tip in the root frame at readings `q` (rad), metres.
+    /// The tip in the root frame at readings `q` (rad, or m for a prismatic
+    /// joint: the URDF's units), metres.
     ///
     /// # Panics
     /// If `q` has not one reading per joint (a programming error).
@@ -820,7 +959,13 @@ impl Chain {
         [p.x, p.y, p.z]
     }
 
-    fn transform(&self, q: &[f64]) -> Isometry3<f64> {
+    /// The tip link's frame in the root frame at readings `q` (rad, or m
+    /// for a prismatic joint), metres: the URDF's own forward kinematics,
+    /// one joint origin and one joint motion after the other.
+    ///
+    /// # Panics
+    /// If `q` has not one reading per joint (a programming error).
+    pub fn transform(&self, q: &[f64]) -> Isometry3<f64> {
         assert_eq!(q.len(), self.joints.len(), "one reading per joint");
         let mut t = Isometry3::identity();
         let mut next = q.iter();
@@ -832,34 +977,50 @@ impl Chain {
                     let r = UnitQuaternion::from_scaled_axis(axis * angle);
                     t *= Isometry3::from_parts(Translation3::identity(), r);
                 }
+                Step::Slide(axis) => {
+                    let by = *next.next().expect("checked length");
+                    t *= Translation3::from(axis * by);
+                }
             }
         }
         t
     }
 
+    /// This chain with a tool point `offset` (m, in the tip link's frame)
+    /// after its tip: the tip moves there, its frame's orientation stays.
+    pub fn with_tool(mut self, offset: [f64; 3]) -> Chain {
+        self.steps.push(Step::Rigid(Isometry3::from_parts(
+            Translation3::from(Vector3::from(offset)),
+            UnitQuaternion::identity(),
+        )));
+        self
+    }
+
     /// The joint axes at `q = 0` in the root frame: a point on each and its
-    /// unit direction; and the tip.
-    fn axes(&self) -> (Vec<Axis>, Point3<f64>) {
+    /// unit direction (a prismatic joint's: its joint origin); and the tip
+    /// link's frame.
+    fn axes(&self) -> (Vec<Axis>, Isometry3<f64>) {
         let mut t = Isometry3::identity();
         let mut axes = Vec::new();
         for s in &self.steps {
             match s {
                 Step::Rigid(o) => t *= o,
-                Step::Turn(axis) => axes.push((
+                Step::Turn(axis) | Step::Slide(axis) => axes.push((
                     Point3::from(t.translation.vector),
                     (t.rotation * axis).normalize(),
                 )),
             }
         }
-        (axes, Point3::from(t.translation.vector))
+        (axes, t)
     }
 
     /// The D-H arm of this chain (see the module docs for the conventions).
     ///
     /// # Errors
-    /// A chain without revolute joints; two consecutive axes so nearly
-    /// parallel (but not within 10⁻⁹ rad) that their common normal is more
-    /// than 100 m away.
+    /// A chain without movable joints or with more than
+    /// [`MAX_JOINTS`]; two consecutive axes whose common
+    /// normal is more than [`HAYATI_BEYOND_M`] away while they are not
+    /// nearly parallel (a robot kilometres wide).
     ///
     /// ```
     /// use aacmm_core::urdf::{parse_urdf, UrdfOptions};
@@ -880,10 +1041,13 @@ impl Chain {
     pub fn to_dh(&self) -> Result<DhConversion, InputError> {
         let (axes, tip) = self.axes();
         let n = axes.len();
-        if n == 0 {
+        if n == 0 || n > MAX_JOINTS {
             return Err(InputError::file_error(
-                "URDF chain",
-                "the chain has no revolute joint",
+                &self.file,
+                format!(
+                    "the chain has {n} movable (revolute, continuous or prismatic) joints; \
+                     an arm has 1 to {MAX_JOINTS}"
+                ),
             ));
         }
         // Frame 0: on axis 1, nearest the root origin; x from the root x axis.
@@ -893,65 +1057,116 @@ impl Chain {
             perpendicular(Vector3::y(), z0).expect("x and y cannot both be parallel to z0")
         });
         let base = frame(o0, x0, z0);
-        let (mut o_prev, mut x_prev, mut z_prev) = (o0, x0, z0);
+        let mut prev = Frame {
+            o: o0,
+            x: x0,
+            z: z0,
+        };
         let mut joints = Vec::with_capacity(n);
-        for (i, &(point_next, z)) in axes.iter().enumerate().skip(1) {
-            // Axis i (through o_prev along z_prev) to axis i+1.
-            let c = z_prev.cross(&z);
-            let (foot, x) = if c.norm() > PARALLEL {
-                let x = c.normalize();
-                // Feet of the common normal: o_prev + s·z_prev on axis i.
-                let w = point_next - o_prev;
-                let b = z_prev.dot(&z);
-                let denom = 1.0 - b * b;
-                let s = (w.dot(&z_prev) - b * w.dot(&z)) / denom;
-                if s.abs() > FAR_M {
-                    return Err(InputError::file_error(
-                        "URDF chain",
-                        format!(
-                            "the axes of {} and {} are parallel within {:.1e} rad, so their \
-                             common normal is {:.0} m away: the D-H arm would be exact but \
-                             useless (and lose digits). Round the URDF's near-right angles \
-                             (UrdfOptions::snap_rad, urdf_to_dh --snap-rad) if they are meant \
-                             to be parallel",
-                            quoted(&self.joints[i - 1]),
-                            quoted(&self.joints[i]),
-                            c.norm().asin(),
-                            s.abs()
-                        ),
-                    ));
-                }
-                (o_prev + z_prev * s, x)
-            } else {
-                let x = perpendicular(point_next - o_prev, z_prev).unwrap_or(x_prev);
-                (o_prev, x)
-            };
-            let a = (point_next - foot).dot(&x);
-            let o = foot + x * a;
-            joints.push(DhJoint {
-                a: a * 1000.0,
-                d: (foot - o_prev).dot(&z_prev) * 1000.0,
-                alpha: signed_angle(z_prev, z, x),
-                theta: signed_angle(x_prev, x, z_prev),
-                ..DhJoint::default()
-            });
-            debug_assert!(i < n);
-            (o_prev, x_prev, z_prev) = (o, x, z);
+        for (i, &next) in axes.iter().enumerate().skip(1) {
+            let (joint, to) = self.link(i, prev, next)?;
+            joints.push(joint.with_kind(self.kinds[i - 1]));
+            prev = to;
         }
         // The last joint: a = d = α = θ = 0, the probe in its frame.
-        joints.push(DhJoint::default());
-        let last = frame(o_prev, x_prev, z_prev);
-        let b = last.inverse_transform_point(&tip).coords * 1000.0;
+        joints.push(DhJoint::default().with_kind(self.kinds[n - 1]));
+        let last = frame(prev.o, prev.x, prev.z);
+        let b = last
+            .inverse_transform_point(&Point3::from(tip.translation.vector))
+            .coords
+            * 1000.0;
         let params = DhParams {
             joints,
             probe: [b.x, b.y, b.z],
         };
         Ok(DhConversion {
             masses: masses_in_dh(&self.masses, &params, &base),
+            tool: last.rotation.inverse() * tip.rotation,
             params,
             base,
         })
     }
+
+    /// The link from axis `i` (through `prev`'s origin along its z) to
+    /// axis `i + 1`, `next`: its joint (D-H, or Hayati where the common
+    /// normal is farther than [`HAYATI_BEYOND_M`]) and the next frame.
+    fn link(&self, i: usize, prev: Frame, next: Axis) -> Result<(DhJoint, Frame), InputError> {
+        let (point_next, z) = next;
+        let c = prev.z.cross(&z);
+        let (foot, x) = if c.norm() > PARALLEL {
+            // Feet of the common normal: prev.o + s·prev.z on axis i.
+            let w = point_next - prev.o;
+            let b = prev.z.dot(&z);
+            let s = (w.dot(&prev.z) - b * w.dot(&z)) / (1.0 - b * b);
+            if s.abs() > HAYATI_BEYOND_M {
+                if b.abs() > 0.5 {
+                    return Ok(hayati_link(prev, next));
+                }
+                return Err(InputError::field(
+                    &self.file,
+                    self.lines[i],
+                    "origin",
+                    format!(
+                        "the axes of {} and {} have their common normal {:.0} m away, and \
+                         are {:.0}° apart: no arm is that large",
+                        quoted(&self.joints[i - 1]),
+                        quoted(&self.joints[i]),
+                        s.abs(),
+                        b.acos().to_degrees()
+                    ),
+                ));
+            }
+            (prev.o + prev.z * s, c.normalize())
+        } else {
+            let x = perpendicular(point_next - prev.o, prev.z).unwrap_or(prev.x);
+            (prev.o, x)
+        };
+        let a = (point_next - foot).dot(&x);
+        let joint = DhJoint {
+            a: a * 1000.0,
+            d: (foot - prev.o).dot(&prev.z) * 1000.0,
+            alpha: signed_angle(prev.z, z, x),
+            theta: signed_angle(prev.x, x, prev.z),
+            ..DhJoint::default()
+        };
+        Ok((
+            joint,
+            Frame {
+                o: foot + x * a,
+                x,
+                z,
+            },
+        ))
+    }
+}
+
+/// The Hayati link from `prev` to the nearly parallel axis `next`
+/// (`Rz(θ)·Tx(a)·Rx(α)·Ry(β)`): the next origin where that axis crosses the
+/// plane normal to `prev.z` through `prev.o`, `x` towards it.
+fn hayati_link(prev: Frame, next: Axis) -> (DhJoint, Frame) {
+    let (point_next, z) = next;
+    let along = (point_next - prev.o).dot(&prev.z) / z.dot(&prev.z);
+    let o = point_next - z * along;
+    let x = perpendicular(o - prev.o, prev.z).unwrap_or(prev.x);
+    let a = (o - prev.o).dot(&x);
+    // The next z in the frame turned by θ: (x, y, z) components.
+    let y = prev.z.cross(&x);
+    let (zx, zy, zz) = (z.dot(&x), z.dot(&y), z.dot(&prev.z));
+    let beta = zx.clamp(-1.0, 1.0).asin();
+    let alpha = (-zy).atan2(zz);
+    let joint = DhJoint::hayati(a * 1000.0, alpha, signed_angle(prev.x, x, prev.z), beta);
+    // Ry(β) turns x to cos β·x − sin β·z; Rx(α) then turns the frame's y, z.
+    let (sa, ca) = alpha.sin_cos();
+    let (sb, cb) = beta.sin_cos();
+    let x_next = x * cb + y * (sb * sa) - prev.z * (sb * ca);
+    (
+        joint,
+        Frame {
+            o,
+            x: x_next.normalize(),
+            z,
+        },
+    )
 }
 
 /// The masses `masses` summed per carrier, each centre in its D-H frame
@@ -1005,16 +1220,24 @@ fn masses_in_dh(masses: &[ChainMass], params: &DhParams, base: &Isometry3<f64>) 
     }
 }
 
-/// A D-H link at `q = 0`, metres: `Rz(θ)·Tz(d)·Tx(a)·Rx(α)`.
+/// A link at `q = 0`, metres: `Rz(θ)·Tz(d)·Tx(a)·Rx(α)`, or a Hayati
+/// one's `Rz(θ)·Tx(a)·Rx(α)·Ry(β)`.
 fn dh_link(j: &DhJoint) -> Isometry3<f64> {
     let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), j.theta);
     let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), j.alpha);
+    let (d, ry) = match j.model {
+        JointModel::Hayati => (
+            0.0,
+            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), j.beta),
+        ),
+        JointModel::Dh => (j.d, UnitQuaternion::identity()),
+    };
     Isometry3::from_parts(Translation3::identity(), rz)
         * Isometry3::from_parts(
-            Translation3::new(j.a / 1000.0, 0.0, j.d / 1000.0),
+            Translation3::new(j.a / 1000.0, 0.0, d / 1000.0),
             UnitQuaternion::identity(),
         )
-        * Isometry3::from_parts(Translation3::identity(), rx)
+        * Isometry3::from_parts(Translation3::identity(), rx * ry)
 }
 
 /// `v` made perpendicular to the unit `z` and normalised, unless (nearly) zero.
@@ -1048,17 +1271,36 @@ mod tests {
 
     /// A random serial chain in URDF: every joint origin random (xyz within
     /// ±0.3 m, any rpy), random axes, fixed joints between, and a tool ball.
-    fn random_urdf(rng: &mut ChaCha8Rng, joints: usize) -> String {
+    /// With `mixed`, joints are also `continuous` or `prismatic`, and some
+    /// follow the previous axis exactly (rpy 0, the same axis) or nearly
+    /// (a 0.002 rad pitch: a Hayati joint).
+    fn random_urdf(rng: &mut ChaCha8Rng, joints: usize, mixed: bool) -> String {
         let mut s = String::from("<robot name=\"random\">\n");
         let mut parent = "base".to_string();
         let num = |rng: &mut ChaCha8Rng, r: f64| rng.random_range(-r..r);
+        let mut axis = [0.0, 0.0, 1.0];
         for j in 0..joints {
             let child = format!("l{j}");
             let xyz = [num(rng, 0.3), num(rng, 0.3), num(rng, 0.3)];
-            let rpy = [num(rng, 3.2), num(rng, 1.5), num(rng, 3.2)];
-            let axis = [num(rng, 1.0), num(rng, 1.0), num(rng, 1.0)];
+            let mut rpy = [num(rng, 3.2), num(rng, 1.5), num(rng, 3.2)];
+            let follow = if mixed && j > 0 && parent.starts_with('l') {
+                rng.random_range(0..3)
+            } else {
+                0
+            };
+            match follow {
+                // Parallel to the previous axis (the same frame), or nearly.
+                1 => rpy = [0.0; 3],
+                2 => rpy = [0.0, 0.002, 0.0],
+                _ => axis = [num(rng, 1.0), num(rng, 1.0), num(rng, 1.0)],
+            }
+            let kind = match (mixed, rng.random_range(0..4)) {
+                (true, 0) => "prismatic",
+                (true, 1) => "continuous",
+                _ => "revolute",
+            };
             s += &format!(
-                "<joint name=\"j{j}\" type=\"revolute\"><parent link=\"{parent}\"/>\
+                "<joint name=\"j{j}\" type=\"{kind}\"><parent link=\"{parent}\"/>\
                  <child link=\"{child}\"/><origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>\
                  <axis xyz=\"{} {} {}\"/><limit lower=\"-3\" upper=\"3\"/></joint>\n",
                 xyz[0], xyz[1], xyz[2], rpy[0], rpy[1], rpy[2], axis[0], axis[1], axis[2]
@@ -1076,25 +1318,60 @@ mod tests {
         }
         s += &format!(
             "<joint name=\"ball\" type=\"fixed\"><parent link=\"{parent}\"/>\
-             <child link=\"ball_link\"/><origin xyz=\"0.01 -0.02 0.17\"/></joint>\n</robot>\n"
+             <child link=\"ball_link\"/><origin xyz=\"0.01 -0.02 0.17\" rpy=\"0.1 0.2 0.3\"/>\
+             </joint>\n</robot>\n"
         );
         s
     }
 
+    /// Random readings of `chain` in the URDF's units: ±π rad, ±0.5 m.
+    fn random_q(chain: &Chain, rng: &mut ChaCha8Rng) -> Vec<f64> {
+        (chain.kinds.iter())
+            .map(|k| match k {
+                crate::params::JointKind::Revolute => {
+                    rng.random_range(-std::f64::consts::PI..std::f64::consts::PI)
+                }
+                crate::params::JointKind::Prismatic => rng.random_range(-0.5..0.5),
+            })
+            .collect()
+    }
+
     /// The largest distance, mm, between the URDF tip and the D-H probe
-    /// mapped through the base, over `samples` random readings in ±π.
-    fn worst_mm(chain: &Chain, dh: &DhConversion, rng: &mut ChaCha8Rng, samples: usize) -> f64 {
-        let n = chain.joints.len();
-        let params = dh.params.to_vec();
+    /// mapped through the base, over `samples` random readings; the tool
+    /// frame's orientation, mapped through the base and the tool rotation,
+    /// must be the tip link's (within 1e-12 rad) at each.
+    pub(crate) fn worst_mm(
+        chain: &Chain,
+        dh: &DhConversion,
+        rng: &mut ChaCha8Rng,
+        samples: usize,
+    ) -> f64 {
+        let kernel = crate::kernel::ArmKernel::new(&dh.params).unwrap();
         (0..samples)
             .map(|_| {
-                let q: Vec<f64> = (0..n)
-                    .map(|_| rng.random_range(-std::f64::consts::PI..std::f64::consts::PI))
+                let q = random_q(chain, rng);
+                let urdf = chain.transform(&q);
+                // The arm reads a slide in mm.
+                let q_arm: Vec<f64> = (q.iter().zip(&chain.kinds))
+                    .map(|(v, k)| match k {
+                        crate::params::JointKind::Revolute => *v,
+                        crate::params::JointKind::Prismatic => v * 1000.0,
+                    })
                     .collect();
-                let urdf = Vector3::from(chain.position(&q)) * 1000.0;
-                let p = position(&params, &q);
+                let pose = kernel.pose(&q_arm).unwrap();
+                let p = pose.position;
                 let in_root = dh.base * Point3::new(p[0] / 1000.0, p[1] / 1000.0, p[2] / 1000.0);
-                (in_root.coords * 1000.0 - urdf).norm()
+                let r = Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_fn(|i, j| {
+                    pose.rotation[i][j]
+                }));
+                let tool = dh.base.rotation * UnitQuaternion::from_rotation_matrix(&r) * dh.tool;
+                // The matrices' difference: about the angle between them,
+                // without acos's loss of digits near 0.
+                let turn = (tool.to_rotation_matrix().matrix()
+                    - urdf.rotation.to_rotation_matrix().matrix())
+                .norm();
+                assert!(turn < 1e-12, "orientation off by {turn} rad at {q:?}");
+                (in_root.coords - urdf.translation.vector).norm() * 1000.0
             })
             .fold(0.0, f64::max)
     }
@@ -1104,7 +1381,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(16);
         for trial in 0..50 {
             let joints = if trial % 2 == 0 { 6 } else { 7 };
-            let text = random_urdf(&mut rng, joints);
+            let text = random_urdf(&mut rng, joints, false);
             let urdf = parse_urdf(&text, "random.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
             let chain = urdf.chain(None, "ball_link").unwrap();
             assert_eq!(chain.joints.len(), joints);
@@ -1115,9 +1392,39 @@ mod tests {
         }
     }
 
+    /// Any chain of 1 to 12 joints — revolute, continuous and prismatic,
+    /// fixed joints between, consecutive axes parallel and nearly parallel
+    /// — converts exactly: the tip within 1 nm and the tool frame's
+    /// orientation the tip link's at random readings; nearly parallel axes
+    /// make Hayati joints, slides prismatic ones.
+    #[test]
+    fn any_chain_agrees_in_position_and_orientation() {
+        let mut rng = ChaCha8Rng::seed_from_u64(39);
+        let (mut hayati, mut prismatic) = (0, 0);
+        for trial in 0..120 {
+            let joints = 1 + trial % 12;
+            let text = random_urdf(&mut rng, joints, true);
+            let urdf = parse_urdf(&text, "random.urdf", UrdfOptions { snap_rad: 0.0 }).unwrap();
+            let chain = urdf.chain(Some("base"), "ball_link").unwrap();
+            assert_eq!(chain.joints.len(), joints);
+            let dh = chain.to_dh().unwrap();
+            for (j, kind) in dh.params.joints.iter().zip(&chain.kinds) {
+                assert_eq!(j.kind, *kind);
+                hayati += usize::from(j.model == JointModel::Hayati);
+                prismatic += usize::from(*kind == crate::params::JointKind::Prismatic);
+            }
+            let worst = worst_mm(&chain, &dh, &mut rng, 50);
+            assert!(worst < 1e-6, "trial {trial}: {worst} mm\n{text}");
+        }
+        assert!(
+            hayati > 20 && prismatic > 100,
+            "{hayati} Hayati, {prismatic} prismatic"
+        );
+    }
+
     /// The robots of examples/mukca, with the right angles snapped (as the
     /// arm files are made); as written, the Kinova's axes 2 and 3 (1.5708,
-    /// -3.1416) meet 38 km away, which is refused.
+    /// -3.1416) meet 38 km away: joint 2 becomes a Hayati joint, exact too.
     #[test]
     fn shipped_urdfs_agree_to_a_nanometre() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/mukca/urdf");
@@ -1131,13 +1438,17 @@ mod tests {
             let worst = worst_mm(&chain, &dh, &mut rng, 1000);
             assert!(worst < 1e-6, "{file}: {worst} mm");
             let as_written = parse_urdf(&text, file, UrdfOptions { snap_rad: 0.0 }).unwrap();
-            let dh = as_written.chain(None, "ball_link").unwrap().to_dh();
+            let written = as_written.chain(None, "ball_link").unwrap();
+            let dh = written.to_dh();
             if file == "gen3lite.urdf" {
-                let e = dh.unwrap_err().to_string();
-                assert!(
-                    e.contains("`joint_2` and `joint_3` are parallel within 7.3e-6 rad"),
-                    "{e}"
-                );
+                let dh = dh.unwrap();
+                let models: Vec<JointModel> = dh.params.joints.iter().map(|j| j.model).collect();
+                let mut want = vec![JointModel::Dh; 6];
+                want[1] = JointModel::Hayati;
+                assert_eq!(models, want);
+                assert!((dh.params.joints[1].beta.abs() - 7.3e-6).abs() < 1e-7);
+                let worst = worst_mm(&written, &dh, &mut rng, 1000);
+                assert!(worst < 1e-6, "{file} as written: {worst} mm");
             } else {
                 // The Panda's URDF writes π/2 to full precision: nothing to snap.
                 assert_eq!(dh.unwrap().params, chain.to_dh().unwrap().params);
@@ -1210,17 +1521,107 @@ mod tests {
             e.to_string().starts_with("x.urdf:2: not well-formed XML"),
             "{e}"
         );
+        for kind in ["floating", "planar"] {
+            let text = format!(
+                "<robot>\n<joint name=\"j\" type=\"revolute\"><parent link=\"a\"/>\
+                 <child link=\"b\"/></joint>\n<joint name=\"s\" type=\"{kind}\">\
+                 <parent link=\"b\"/><child link=\"c\"/></joint></robot>"
+            );
+            let urdf = parse_urdf(&text, "s.urdf", UrdfOptions::default()).unwrap();
+            let e = urdf.chain(None, "c").unwrap_err();
+            assert_eq!(
+                e.to_string(),
+                format!(
+                    "s.urdf:3: field `type`: joint `s` on the way to `c` is `{kind}`; a serial \
+                     chain has revolute, continuous, prismatic and fixed joints only"
+                )
+            );
+            // Beside the chain, it is no matter.
+            assert!(urdf.chain(None, "b").is_ok());
+        }
         let slider = r#"<robot><joint name="s" type="prismatic"><parent link="a"/>
             <child link="b"/></joint></robot>"#;
         let urdf = parse_urdf(slider, "s.urdf", UrdfOptions::default()).unwrap();
-        let e = urdf.chain(None, "b").unwrap_err();
-        assert!(
-            e.to_string()
-                .starts_with("s.urdf:1: field `type`: joint `s`"),
-            "{e}"
-        );
+        let chain = urdf.chain(None, "b").unwrap();
+        assert_eq!(chain.kinds, [crate::params::JointKind::Prismatic]);
         let e = urdf.chain(None, "nowhere").unwrap_err();
         assert!(e.to_string().contains("no link `nowhere`"), "{e}");
+        let e = urdf.chain(Some("nowhere"), "b").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "s.urdf: no link `nowhere` is joined to the robot (the base must be a link's name)"
+        );
+    }
+
+    /// A base that is not above the tip, a slide along a zero axis, limits
+    /// that are not numbers or not in order: each named, at its line.
+    #[test]
+    fn bad_chains_and_limits_are_located() {
+        let text = r#"<robot>
+          <joint name="j1" type="revolute"><parent link="a"/><child link="b"/></joint>
+          <joint name="j2" type="prismatic"><parent link="b"/><child link="c"/></joint>
+          <joint name="side" type="revolute"><parent link="a"/><child link="d"/></joint>
+        </robot>"#;
+        let urdf = parse_urdf(text, "t.urdf", UrdfOptions::default()).unwrap();
+        let e = urdf.chain(Some("d"), "c").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.urdf:2: field `parent`: the chain does not connect base link `d` to tip link \
+             `c`: going up from `c` through joints `j2`, `j1` ends at `a`, the top of its tree, \
+             without meeting `d`"
+        );
+        let joint = |kind: &str, body: &str| {
+            format!(
+                "<robot>\n<joint name=\"s\" type=\"{kind}\"><parent link=\"a\"/>\
+                 <child link=\"b\"/>\n{body}</joint></robot>"
+            )
+        };
+        let cases = [
+            (
+                joint("prismatic", "<axis xyz=\"0 0 0\"/>"),
+                "z.urdf:3: field `axis`: joint `s` slides along a zero axis",
+            ),
+            (
+                joint("prismatic", "<limit lower=\"-0.1\" upper=\"1,5\"/>"),
+                "z.urdf:3: field `upper`: joint `s`: `1,5` is not a limit (a finite number, m)",
+            ),
+            (
+                joint("revolute", "<limit lower=\"nan\" upper=\"1\"/>"),
+                "z.urdf:3: field `lower`: joint `s`: `nan` is not a limit (a finite number, rad)",
+            ),
+            (
+                joint("revolute", "<limit lower=\"1\" upper=\"-1\"/>"),
+                "z.urdf:3: field `upper`: joint `s`: upper -1 is below lower 1",
+            ),
+        ];
+        for (text, message) in cases {
+            let e = parse_urdf(&text, "z.urdf", UrdfOptions::default()).unwrap_err();
+            assert_eq!(e.to_string(), message);
+        }
+        // Thirteen movable joints, or none, are no arm.
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        let long = random_urdf(&mut rng, 13, true);
+        let urdf = parse_urdf(&long, "long.urdf", UrdfOptions::default()).unwrap();
+        let e = urdf.chain(None, "ball_link").unwrap().to_dh().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "long.urdf: the chain has 13 movable (revolute, continuous or prismatic) joints; \
+             an arm has 1 to 12"
+        );
+        let e = urdf
+            .chain(Some("l12"), "ball_link")
+            .unwrap()
+            .to_dh()
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("long.urdf: the chain has 0 movable"),
+            "{e}"
+        );
+        // Limits are kept in the URDF's units: a slide's in metres.
+        let text = joint("prismatic", "<limit lower=\"-0.1\" upper=\"0.5\"/>");
+        let urdf = parse_urdf(&text, "z.urdf", UrdfOptions::default()).unwrap();
+        assert_eq!(urdf.chain(None, "b").unwrap().limits, [Some([-0.1, 0.5])]);
     }
 
     /// A random chain whose links have masses: a base mass before the
