@@ -28,11 +28,19 @@
 //!    direction twice. These are exact, so the threshold finds them; the
 //!    relations are reported.
 //!
+//! For chains with prismatic joints, rule 1 adds `a1` of a prismatic joint
+//! 1 (its frame never turns), a Hayati joint 1 has no `d1`, and touches in
+//! which a slide moves fix the size (rule 2 does not fire); [`chain`] gives
+//! the theory's counts (`4R + 2P + 6`, `4R + 2P + 3`) and the numerical rank
+//! of positions or full poses in an unknown frame.
+//!
 //! The numerical rank counts singular values above `rank_tolerance × s_max`
 //! after rule 1's columns are removed and rule 2's direction projected out.
 //! The recommended fixed set comes from Cholesky with diagonal pivoting on
 //! the scaled matrix (equivalent to QR with column pivoting on the scaled
 //! `J`), ties broken towards the paper's choice (θ1, d1, θ6, α6, Bx, By).
+
+pub mod chain;
 
 use nalgebra::{DMatrix, DVector, Dyn, SVD, SymmetricEigen};
 use serde::{Deserialize, Serialize};
@@ -40,7 +48,7 @@ use serde::{Deserialize, Serialize};
 use crate::dataset::DataSet;
 
 use crate::objective::Objective;
-use crate::params::{DhParams, ParamId, ParamKind};
+use crate::params::{DhParams, JointModel, ParamId, ParamKind};
 use crate::residuals::{Hold, Noise, Sees, TermError, WEAK_RATIO};
 
 /// Relative singular-value threshold of the numerical rank.
@@ -89,6 +97,28 @@ const PAPER_FIXED: [(ParamKind, usize); 6] = [
     (ParamKind::Probe, 0),
     (ParamKind::Probe, 1),
 ];
+
+/// The columns preferred as fixed when the pivoting ties: the paper's set
+/// for 6 and 7 joints; for any other chain its last joint stands in for
+/// joint 6 (the link whose parameters the probe repeats).
+fn preferred_fixed(n: usize) -> Vec<usize> {
+    let last = if n == 6 || n == 7 {
+        5
+    } else {
+        n.saturating_sub(1)
+    };
+    PAPER_FIXED
+        .iter()
+        .map(|&(kind, index)| {
+            let index = if kind == ParamKind::Probe || index == 0 {
+                index
+            } else {
+                last
+            };
+            ParamId { kind, index }.column(n)
+        })
+        .collect()
+}
 
 /// A structural rule that fired.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -380,13 +410,10 @@ impl Structure {
         let unseen = unseen_base(params, sees);
         let base: Vec<usize> = unseen.iter().map(|(c, _)| *c).collect();
         let mut rules = Vec::new();
-        if unseen.len() == 2 {
+        if !sees.base_rotation && !sees.base_slide {
             rules.push(Rule {
                 name: "base-motion".into(),
-                explanation: "theta1 and d1 are never identifiable: touches compared with their \
-                              centroids, distances between centroids and positions in a fitted \
-                              frame do not see a rotation about, or a slide along, the base axis"
-                    .into(),
+                explanation: base_motion_text(params, &base),
             });
         } else {
             for (_, what) in &unseen {
@@ -450,10 +477,72 @@ fn unseen_base(params: &DhParams, sees: Sees) -> Vec<(usize, &'static str)> {
             "rotation about the base axis (theta1)",
         ));
     }
-    if !sees.base_slide {
+    // A Hayati joint 1 has no d1 (its d-slot is β1): nothing to fix.
+    let dh_first = params
+        .joints
+        .first()
+        .is_some_and(|j| j.model == JointModel::Dh);
+    if !sees.base_slide && dh_first {
         out.push((column(ParamKind::D), "slide along the base axis (d1)"));
     }
+    if !sees.base_slide {
+        // A prismatic joint 1 does not turn its frame: a1 is a constant
+        // shift of every probe along x1, as rigid a motion as d1's.
+        if first_slides(params) {
+            out.push((column(ParamKind::A), "slide across the base axis (a1)"));
+        }
+    }
     out
+}
+
+/// Rule 1 in words, for relative data: the base columns `base` (θ1, and
+/// d1 of a D-H joint 1, a1 of a prismatic one) are never identifiable.
+fn base_motion_text(params: &DhParams, base: &[usize]) -> String {
+    let names: Vec<String> = (base.iter())
+        .filter_map(|&c| params.param_id(c))
+        .map(|id| id.to_string())
+        .collect();
+    let seen_by = "touches compared with their centroids, distances between centroids and \
+                   positions in a fitted frame do not see";
+    match names.as_slice() {
+        [t, d] if *t == "theta1" && *d == "d1" => format!(
+            "theta1 and d1 are never identifiable: {seen_by} a rotation about, or a slide \
+             along, the base axis"
+        ),
+        _ if first_slides(params) => format!(
+            "{} are never identifiable: {seen_by} a rotation about the base axis or a slide \
+             of the whole arm, and as joint 1 is prismatic its frame never turns, so a1 \
+             slides every probe alike",
+            words(&names)
+        ),
+        _ => format!(
+            "{} never identifiable: {seen_by} a rotation about the base axis (joint 1 is \
+             Hayati: it has no d1)",
+            if names.len() == 1 {
+                format!("{} is", names[0])
+            } else {
+                format!("{} are", words(&names))
+            }
+        ),
+    }
+}
+
+/// `a`, `a and b`, `a, b and c`.
+fn words(names: &[String]) -> String {
+    match names {
+        [] => String::new(),
+        [one] => one.clone(),
+        [rest @ .., last] => format!("{} and {last}", rest.join(", ")),
+    }
+}
+
+/// Whether joint 1 is prismatic (its frame keeps its orientation while it
+/// moves, so every constant offset of that frame moves all probes alike).
+fn first_slides(params: &DhParams) -> bool {
+    params
+        .joints
+        .first()
+        .is_some_and(|j| j.kind == crate::params::JointKind::Prismatic)
 }
 
 /// The columns of [`unseen_base`].
@@ -727,10 +816,7 @@ impl FreeSet {
     /// matrix, the first `rank` pivots (ties towards the paper's fixed set).
     fn pivoted(n: usize, scaled: &Scaled, structure: &Structure, rank: usize) -> FreeSet {
         let cols = &structure.cols;
-        let preferred_fixed: Vec<usize> = PAPER_FIXED
-            .iter()
-            .map(|&(kind, index)| ParamId { kind, index }.column(n))
-            .collect();
+        let preferred_fixed = preferred_fixed(n);
         let pivots = pivoted_cholesky(&structure.analysed, rank, |a| {
             preferred_fixed.contains(&cols[a])
         });

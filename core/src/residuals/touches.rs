@@ -8,7 +8,8 @@ use std::ops::Range;
 
 use super::sym3::{Sym3, centroid_cov, sym_inv, sym_mul};
 use super::{
-    At, Centres, Noise, Normal, Origin, ParameterLeverage, Shared, Standardised, Term, TermError,
+    At, Centres, Noise, Normal, Origin, ParameterLeverage, Sees, Shared, Standardised, Term,
+    TermError,
 };
 use crate::corrections::Effects;
 use crate::dataset::DataSet;
@@ -396,6 +397,17 @@ impl Term for TouchTerm<'_> {
 
     fn unit_weighted(&self) -> bool {
         !self.noise.stated()
+    }
+
+    /// Touches are relative (compared with their point's centroid): they
+    /// see neither base motion. They fix the arm's size when a prismatic
+    /// joint moves among the touches of a point: its reading is a length
+    /// (mm), which scaling the arm's lengths does not scale.
+    fn sees(&self) -> Sees {
+        Sees {
+            scale: slide_moves(self.data),
+            ..Sees::default()
+        }
     }
 
     /// The old weights are freed before the new ones are made: one set
@@ -1036,6 +1048,26 @@ fn chunk(
         part.cost = f64::INFINITY;
     }
     Ok(part)
+}
+
+/// Whether some prismatic joint's reading differs between two touches of
+/// one point (beyond rounding): the touches then see the arm's size.
+fn slide_moves(data: &DataSet) -> bool {
+    let mask = data.poses().prismatic_mask();
+    if mask == 0 {
+        return false;
+    }
+    let slides: Vec<usize> = (0..data.joints()).filter(|j| mask >> j & 1 == 1).collect();
+    data.points().iter().any(|point| {
+        slides.iter().any(|&j| {
+            let (lo, hi) = (point.touches.clone())
+                .map(|i| data.reading(i)[j])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                    (lo.min(q), hi.max(q))
+                });
+            hi - lo > 1e-9 * hi.abs().max(lo.abs()).max(1.0)
+        })
+    })
 }
 
 #[cfg(test)]
