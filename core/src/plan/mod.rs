@@ -54,7 +54,7 @@ pub use summary::{GivenNote, KNEE, Knee, SummaryContext, knee, summary};
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};
 use crate::kernel::{ArmKernel, PreparedPoses};
-use crate::params::DhParams;
+use crate::params::{ChainShape, DhParams};
 use crate::residuals::Noise;
 use greedy::{Gain, Greedy};
 use rows::{Blocks, jacobians, mean_gram, scaled, unit_scale};
@@ -532,6 +532,9 @@ fn pool_data(params: &DhParams, pool: &Poses, positions: bool) -> Result<DataSet
     }
     let kernel = ArmKernel::new(params)?;
     let mut rows = Positions::new(pool.joints());
+    if let Ok(shape) = ChainShape::from_mask(pool.joints(), pool.prismatic_mask()) {
+        rows = rows.with_shape(shape);
+    }
     for i in 0..pool.len() {
         let q = pool.reading(i);
         rows.push(
@@ -548,7 +551,8 @@ fn pool_data(params: &DhParams, pool: &Poses, positions: bool) -> Result<DataSet
 
 /// The poses of `poses` as the kernel takes them.
 fn prepared(poses: &Poses) -> PreparedPoses {
-    PreparedPoses::from_flat(poses.joints(), poses.len(), poses.readings())
+    let prismatic = poses.prismatic_mask();
+    PreparedPoses::from_flat_with(poses.joints(), prismatic, poses.len(), poses.readings())
 }
 
 /// The scaled rows of the pool and the workspace.
@@ -567,7 +571,7 @@ fn design(
     let blocks = scaled(raw, &scale);
     let ws = workspace.unwrap_or(pool);
     let step = ws.len().div_ceil(settings.workspace_limit).max(1);
-    let mut sample = Poses::new(ws.joints());
+    let mut sample = ws.empty_like(0);
     for i in (0..ws.len()).step_by(step) {
         sample.push(ws.label(i), ws.reading(i), ws.line(i));
     }
