@@ -100,15 +100,15 @@ class CalibrationError(AacmmError):
     on this input."""
 
 class UnsupportedError(AacmmError):
-    """An arm with a joint count the toolkit has no kernel for (it has 6 and 7)."""
+    """An arm with a joint count the toolkit has no kernel for (it computes 1 to 12)."""
 
 def param_names(joints: int) -> List[str]:
     """The names of the ``4·joints + 3`` parameters, in the toolkit's order.
-    A joint count without a kernel (not 6 or 7) raises :class:`UnsupportedError`."""
+    A joint count without a kernel (not 1 to 12) raises :class:`UnsupportedError`."""
 
 class Arm:
     """An arm: its D-H geometry (mm, rad) prepared for the generated kernel of
-    its joint count (6 or 7). Immutable; safe to share between threads."""
+    its chain (1 to 12 joints, revolute or prismatic: ``joint_types``). Immutable; safe to share between threads."""
 
     @staticmethod
     def from_file(path: _Path, accept_rejected: bool = False) -> "Arm":

@@ -405,8 +405,13 @@ fn describe(
         st.too_close,
         st.max_residual_mm
     ))?;
+    // A slide's scale has its own, fixed noise (said only where there is one).
+    let slides = match nominal.params.has_prismatic() {
+        true => format!(", slides {} mm", aacmm_core::simulate::SLIDE_NOISE_MM),
+        false => String::new(),
+    };
     note(format_args!(
-        "noise: encoders {}°, probe seating {} mm; {} reference lengths{}; seed {}",
+        "noise: encoders {}°{slides}, probe seating {} mm; {} reference lengths{}; seed {}",
         settings.encoder_noise_deg,
         settings.probe_noise_mm,
         campaign.lengths.len(),

@@ -1,9 +1,11 @@
 //! Inverse kinematics for a point: damped least squares (Levenberg–Marquardt)
 //! on the kernel's analytic `3 × N` joint Jacobian.
 //!
-//! A measuring arm is redundant for a point (six or seven joints, three
+//! An arm of more than three joints is redundant for a point (three
 //! constraints), so the solution reached depends on the start: random starts
-//! give genuinely different articulations of the same point.
+//! give genuinely different articulations of the same point. A prismatic
+//! joint's variable (mm) is scaled to a metre for the step, so that one
+//! damping suits slides and turns.
 
 use nalgebra::{Matrix3, Vector3};
 

@@ -154,7 +154,8 @@ fn check_probe_noise(nominal: &Arm, sigma_mm: f64) -> Result<(), SimError> {
     Ok(())
 }
 
-/// Simulates a campaign of `settings` on `nominal` (6 or 7 joints). Errors,
+/// Simulates a campaign of `settings` on `nominal` (any chain of 1 to 12
+/// joints; a prismatic joint needs its stroke, `limits`). Errors,
 /// never panics, on bad settings or an impossible campaign.
 ///
 /// ```
