@@ -261,7 +261,7 @@ fn read_given(dir: &Path, arm: &Arm, arm_file: &Path) -> Result<Start> {
             dir.display()
         )
     })?;
-    let report = CalibrationReport::from_json(&text)
+    let mut report = CalibrationReport::from_json(&text)
         .map_err(|e| anyhow!("{}: not a calibration report: {e}", path.display()))?;
     let (theirs, ours) = (
         report.calibration.params.joint_count(),
@@ -273,6 +273,11 @@ fn read_given(dir: &Path, arm: &Arm, arm_file: &Path) -> Result<Start> {
             dir.display(),
             source_name(arm_file)
         );
+    }
+    // The report names parameters, not the joints' kinds: those of the
+    // arm file, of the same chain.
+    for (theirs, ours) in (report.calibration.params.joints.iter_mut()).zip(&arm.params.joints) {
+        theirs.kind = ours.kind;
     }
     let given = report.plan_given().ok_or_else(|| {
         anyhow!(
