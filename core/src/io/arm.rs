@@ -302,6 +302,53 @@ struct JointFile {
 }
 
 impl JointFile {
+    /// The joint's `limits` (joint `i`, 0-based, of `kind`) in the toolkit's
+    /// units: a slide's are lengths (`lu`), a turn's angles (`au`).
+    fn limits_of(
+        &self,
+        i: usize,
+        kind: JointKind,
+        (lu, au): (LengthUnit, AngleUnit),
+        (text, file): (&str, &str),
+    ) -> Result<Option<[f64; 2]>, InputError> {
+        let limit = |x: f64| match kind {
+            JointKind::Revolute => au.to_internal(x),
+            JointKind::Prismatic => lu.to_internal(x),
+        };
+        Ok(
+            match self.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
+                None => None,
+                Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
+                    Some([lo, hi].map(|x| limit(*x.get_ref())))
+                }
+                Some((l, values)) => {
+                    let message = match values {
+                        [lo, hi] => format!(
+                            "min {} must be less than max {}",
+                            lo.get_ref(),
+                            hi.get_ref()
+                        ),
+                        _ => format!(
+                            "expected `[min, max]` in {}, found {} values",
+                            match kind {
+                                JointKind::Revolute => au.to_string(),
+                                JointKind::Prismatic => lu.to_string(),
+                            },
+                            values.len()
+                        ),
+                    };
+                    let line = line_of(text, l.span().start);
+                    return Err(InputError::field(
+                        file,
+                        line,
+                        "limits",
+                        format!("joint {}: {message}", i + 1),
+                    ));
+                }
+            },
+        )
+    }
+
     /// The joint's type (`revolute` when absent), or a located message
     /// (joint `i`, 0-based).
     fn kind(&self, i: usize, text: &str, file: &str) -> Result<JointKind, InputError> {
@@ -588,41 +635,7 @@ impl ArmFile {
                 }
                 .with_kind(kind),
             );
-            // A slide's limits are lengths, a turn's angles.
-            let limit = |x: f64| match kind {
-                JointKind::Revolute => au.to_internal(x),
-                JointKind::Prismatic => lu.to_internal(x),
-            };
-            let limits = match j.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
-                None => None,
-                Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
-                    Some([lo, hi].map(|x| limit(*x.get_ref())))
-                }
-                Some((l, values)) => {
-                    let message = match values {
-                        [lo, hi] => format!(
-                            "min {} must be less than max {}",
-                            lo.get_ref(),
-                            hi.get_ref()
-                        ),
-                        _ => format!(
-                            "expected `[min, max]` in {}, found {} values",
-                            match kind {
-                                JointKind::Revolute => au.to_string(),
-                                JointKind::Prismatic => lu.to_string(),
-                            },
-                            values.len()
-                        ),
-                    };
-                    let line = line_of(text, l.span().start);
-                    return Err(InputError::field(
-                        file,
-                        line,
-                        "limits",
-                        format!("joint {}: {message}", i + 1),
-                    ));
-                }
-            };
+            let limits = j.limits_of(i, kind, (lu, au), (text, file))?;
             arm.limits.push(limits);
         }
         arm.physics = Box::new(self.physics(text, file)?);

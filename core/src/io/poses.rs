@@ -332,21 +332,8 @@ pub fn parse_poses(
                 ));
             }
             let start = poses.q.len();
-            for (j, (s, col)) in fields[1..=joints]
-                .iter()
-                .zip(&columns[1..=joints])
-                .enumerate()
-            {
-                let x = parse_f64(s, file, line, col)
-                    .and_then(|x| columns_of.check_stroke(j, x, file, line).map(|_| x));
-                match x {
-                    Ok(x) => poses.q.push(x),
-                    Err(e) => {
-                        poses.q.truncate(start);
-                        return Err(e);
-                    }
-                }
-            }
+            let row = (&fields[1..=joints], &columns[1..=joints]);
+            read_readings(row, &columns_of, (file, line), &mut poses.q)?;
             let mut values = [0.0; 2];
             for (k, c) in extra.iter().enumerate() {
                 let v = fields[1 + joints + k];
@@ -388,6 +375,30 @@ pub fn parse_poses(
         *x = columns_of.to_internal(i % joints, *x, unit);
     }
     Ok((poses, warnings))
+}
+
+/// Appends a row's readings `fields` (columns named `names`) as written to
+/// `q`, each checked against a prismatic joint's stroke; on an error `q`
+/// is as it was.
+fn read_readings(
+    (fields, names): (&[&str], &[String]),
+    columns: &JointColumns,
+    (file, line): (&str, usize),
+    q: &mut Vec<f64>,
+) -> Result<(), InputError> {
+    let start = q.len();
+    for (j, (s, name)) in fields.iter().zip(names).enumerate() {
+        let x = parse_f64(s, file, line, name)
+            .and_then(|x| columns.check_stroke(j, x, file, line).map(|_| x));
+        match x {
+            Ok(x) => q.push(x),
+            Err(e) => {
+                q.truncate(start);
+                return Err(e);
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Empty poses of `joints` joints with room for `rows` rows and the
