@@ -100,15 +100,15 @@ class CalibrationError(AacmmError):
     on this input."""
 
 class UnsupportedError(AacmmError):
-    """An arm with a joint count the toolkit has no kernel for (it has 6 and 7)."""
+    """An arm with a joint count the toolkit has no kernel for (it computes 1 to 12)."""
 
 def param_names(joints: int) -> List[str]:
     """The names of the ``4·joints + 3`` parameters, in the toolkit's order.
-    A joint count without a kernel (not 6 or 7) raises :class:`UnsupportedError`."""
+    A joint count without a kernel (not 1 to 12) raises :class:`UnsupportedError`."""
 
 class Arm:
     """An arm: its D-H geometry (mm, rad) prepared for the generated kernel of
-    its joint count (6 or 7). Immutable; safe to share between threads."""
+    its chain (1 to 12 joints, revolute or prismatic: ``joint_types``). Immutable; safe to share between threads."""
 
     @staticmethod
     def from_file(path: _Path, accept_rejected: bool = False) -> "Arm":
@@ -120,12 +120,20 @@ class Arm:
         is then read with a warning. A path ``-`` is a file of that name
         (not standard input, as on the command line)."""
     @staticmethod
-    def from_params(joints: int, params: npt.ArrayLike, name: str = "arm") -> "Arm":
-        """An arm from its ``4·joints + 3`` parameters (mm, rad), no joint limits."""
+    def from_params(
+        joints: int, params: npt.ArrayLike, name: str = "arm", joint_types: Optional[str] = None
+    ) -> "Arm":
+        """An arm from its ``4·joints + 3`` parameters (mm, rad), no joint limits.
+        ``joint_types`` (default all revolute): one letter per joint from the
+        base, ``R`` revolute, ``P`` prismatic (its reading, mm, adds to ``d``)."""
     @property
     def name(self) -> str: ...
     @property
     def joints(self) -> int: ...
+    @property
+    def joint_types(self) -> str:
+        """Each joint's kind from the base: ``R`` revolute, ``P`` prismatic
+        (its readings are mm whatever the angle unit), e.g. ``"PRRRRRR"``."""
     @property
     def source(self) -> str:
         """The file as named, ``<parameters>``, ``<calibration>`` or ``<simulation>``."""
@@ -172,9 +180,11 @@ class DataSet:
         q: _Readings,
         lengths: Optional[Sequence[Union[Tuple[Any, Any, float], Tuple[Any, Any, float, Optional[float]]]]] = None,
         angle_unit: _AngleUnit = "rad",
+        joint_types: Optional[str] = None,
     ) -> None:
         """Touches from arrays: ``labels`` (one per touch, taken as str), ``q``
-        n × joints readings, ``lengths`` ``(point_a, point_b, distance_mm[,
+        n × joints readings (a prismatic joint's of ``joint_types``, e.g.
+        ``"PRRRRRR"``, in mm whatever ``angle_unit`` says), ``lengths`` ``(point_a, point_b, distance_mm[,
         uncertainty_mm])``. Checked by the library as files are (InputError
         naming ``<arrays>``, the 1-based touch or length, and the field)."""
     @staticmethod
@@ -184,8 +194,11 @@ class DataSet:
         angle_unit: _AngleUnit = "deg",
         joints: Optional[int] = None,
         positions: Optional[_Path] = None,
+        joint_types: Optional[str] = None,
     ) -> "DataSet":
-        """Reads a poses file (CSV ``point,q1,...,qn``, degrees by default),
+        """Reads a poses file (CSV ``point,q1,...,qn``, degrees by default; the
+        columns of the prismatic joints of ``joint_types``, e.g. ``"PRRRRRR"``,
+        mm whatever ``angle_unit`` says),
         optionally a reference-lengths file (CSV
         ``point_a,point_b,distance[,uncertainty]``, mm) and a
         reference-positions file (CSV

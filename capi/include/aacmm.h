@@ -166,8 +166,9 @@ typedef int32_t AacmmTermination;
  * count. Opaque; made by `aacmm_arm_from_file`, `aacmm_arm_from_params`
  * or `aacmm_calibration_arm`, released by `aacmm_arm_free`.
  *
- * A handle is never modified after it is made: several threads may use
- * the same handle at once.
+ * A handle is never modified after it is made (but by
+ * `aacmm_arm_set_joint_types`, called before it is shared): several
+ * threads may use the same handle at once.
  */
 typedef struct AacmmArm AacmmArm;
 
@@ -554,6 +555,27 @@ AacmmStatus aacmm_arm_from_params(size_t joints,
                                   const double *params,
                                   size_t params_len,
                                   AacmmArm **out);
+
+/**
+ * Sets the kind of each joint of `arm`: `types` is a NUL-terminated
+ * string of one letter per joint from the base, `R` revolute, `P`
+ * prismatic (`"PRRRRRR"`: a robot on a linear track). A prismatic joint's
+ * reading is a length in mm (whatever angle unit a call states) that adds
+ * to its `d`; its `theta`, `a`, `alpha` stay constant. An arm made by
+ * `aacmm_arm_from_params` is all revolute until this is called; one read
+ * from a file has the kinds its `type` keys state. Call it before the
+ * handle is shared between threads.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_INVALID_ARGUMENT` (a
+ * letter other than `R`/`P`, or another count than the arm's joints, not
+ * UTF-8); on error the arm is unchanged.
+ *
+ * # Safety
+ *
+ * `arm` is `NULL` or a live handle no other thread uses during the call;
+ * `types` is `NULL` or a NUL-terminated string.
+ */
+AacmmStatus aacmm_arm_set_joint_types(AacmmArm *arm, const char *types);
 
 /**
  * Releases an arm handle. `NULL` is allowed (nothing happens).

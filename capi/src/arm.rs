@@ -5,7 +5,7 @@ use std::ffi::c_char;
 
 use aacmm_core::io::{Arm, Rejected, read_arm_with, source_name};
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
-use aacmm_core::params::{DhParams, ParamId, param_count};
+use aacmm_core::params::{ChainShape, DhParams, ParamId, param_count};
 
 use crate::error::{AacmmStatus, Error, guard, guard_value};
 use crate::ptr::{self, Args};
@@ -14,8 +14,9 @@ use crate::ptr::{self, Args};
 /// count. Opaque; made by `aacmm_arm_from_file`, `aacmm_arm_from_params`
 /// or `aacmm_calibration_arm`, released by `aacmm_arm_free`.
 ///
-/// A handle is never modified after it is made: several threads may use
-/// the same handle at once.
+/// A handle is never modified after it is made (but by
+/// `aacmm_arm_set_joint_types`, called before it is shared): several
+/// threads may use the same handle at once.
 pub struct AacmmArm {
     pub(crate) arm: Arm,
     pub(crate) kernel: ArmKernel,
@@ -62,12 +63,13 @@ pub(crate) unsafe fn handle<'a>(arm: *const AacmmArm) -> Result<&'a AacmmArm, Er
     unsafe { ptr::object(arm, "arm") }
 }
 
-/// Readings `q` (row-major, `joints` per pose) prepared for the kernel.
-pub(crate) fn prepare(joints: usize, q: &[f64]) -> Result<PreparedPoses, Error> {
-    Ok(match joints {
-        6 => PreparedPoses::new(6, q.as_chunks::<6>().0)?,
-        7 => PreparedPoses::new(7, q.as_chunks::<7>().0)?,
-        _ => PreparedPoses::new(joints, &q.chunks_exact(joints).collect::<Vec<_>>())?,
+/// Readings `q` (row-major, one row per pose: rad, mm for a prismatic
+/// joint) prepared for the kernel of a chain of `shape`.
+pub(crate) fn prepare(shape: ChainShape, q: &[f64]) -> Result<PreparedPoses, Error> {
+    Ok(match shape.joints() {
+        6 => PreparedPoses::for_shape(shape, q.as_chunks::<6>().0)?,
+        7 => PreparedPoses::for_shape(shape, q.as_chunks::<7>().0)?,
+        joints => PreparedPoses::for_shape(shape, &q.chunks_exact(joints).collect::<Vec<_>>())?,
     })
 }
 
@@ -236,6 +238,57 @@ pub unsafe extern "C" fn aacmm_arm_from_params(
         let handle = AacmmArm::new(arm, "<parameters>".to_string(), Vec::new())?;
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, handle.into_raw(), "out") }
+    })
+}
+
+/// Sets the kind of each joint of `arm`: `types` is a NUL-terminated
+/// string of one letter per joint from the base, `R` revolute, `P`
+/// prismatic (`"PRRRRRR"`: a robot on a linear track). A prismatic joint's
+/// reading is a length in mm (whatever angle unit a call states) that adds
+/// to its `d`; its `theta`, `a`, `alpha` stay constant. An arm made by
+/// `aacmm_arm_from_params` is all revolute until this is called; one read
+/// from a file has the kinds its `type` keys state. Call it before the
+/// handle is shared between threads.
+///
+/// Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_INVALID_ARGUMENT` (a
+/// letter other than `R`/`P`, or another count than the arm's joints, not
+/// UTF-8); on error the arm is unchanged.
+///
+/// # Safety
+///
+/// `arm` is `NULL` or a live handle no other thread uses during the call;
+/// `types` is `NULL` or a NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_arm_set_joint_types(
+    arm: *mut AacmmArm,
+    types: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let text = unsafe { ptr::c_str(types, "types") }?;
+        // SAFETY: by the contract.
+        let handle = unsafe { ptr::object_mut(arm, "arm") }?;
+        let text = text
+            .to_str()
+            .map_err(|_| Error::invalid("types: not UTF-8".to_string()))?;
+        let shape: ChainShape = text
+            .parse()
+            .map_err(|e| Error::invalid(format!("types = {text:?}: {e}")))?;
+        if shape.joints() != handle.joints() {
+            return Err(Error::invalid(format!(
+                "types = {text:?} names {} joints, the arm has {}",
+                shape.joints(),
+                handle.joints()
+            )));
+        }
+        let mut params = handle.arm.params.clone();
+        for (j, joint) in params.joints.iter_mut().enumerate() {
+            joint.kind = shape.kind(j);
+        }
+        let kernel = ArmKernel::new(&params).map_err(Error::from)?;
+        handle.arm.params = params;
+        handle.kernel = kernel;
+        Ok(())
     })
 }
 
@@ -428,7 +481,7 @@ pub unsafe extern "C" fn aacmm_positions(
         const CHUNK: usize = 256;
         let mut chunk = [[0.0; 3]; CHUNK];
         for (q, p) in q.chunks(BATCH * joints).zip(p.chunks_mut(3 * BATCH)) {
-            let poses = prepare(joints, q)?;
+            let poses = prepare(arm.kernel.shape(), q)?;
             for (start, dst) in (0..).step_by(CHUNK).zip(p.chunks_mut(3 * CHUNK)) {
                 let m = dst.len() / 3;
                 arm.kernel
@@ -504,7 +557,7 @@ pub unsafe extern "C" fn aacmm_jacobians(
             .zip(p.chunks_mut(3 * BATCH))
             .zip(jac.chunks_mut(per_pose * BATCH));
         for ((q, p), jac) in batches {
-            let poses = prepare(joints, q)?;
+            let poses = prepare(arm.kernel.shape(), q)?;
             let m = poses.len();
             arm.kernel.for_each_jacobian(&poses, 0..m, |i, pos, cols| {
                 ptr::write_all(&mut p[3 * i..3 * i + 3], pos);
@@ -671,7 +724,7 @@ mod tests {
         assert_eq!(status, AacmmStatus::Ok);
         // SAFETY: live handle, freed below and not used after.
         let kernel = &unsafe { handle(arm) }.unwrap().kernel;
-        let poses = prepare(6, &q).unwrap();
+        let poses = prepare(ChainShape::revolute(6).unwrap(), &q).unwrap();
         let mut seen = 0;
         kernel
             .for_each_jacobian(&poses, 0..n, |i, pos, cols| {

@@ -52,8 +52,8 @@ use std::ffi::c_char;
 
 pub use arm::{
     AacmmArm, aacmm_arm_free, aacmm_arm_from_file, aacmm_arm_from_file_accepting_rejected,
-    aacmm_arm_from_params, aacmm_arm_joints, aacmm_arm_params, aacmm_arm_warnings, aacmm_jacobians,
-    aacmm_joint_jacobian, aacmm_param_count, aacmm_positions,
+    aacmm_arm_from_params, aacmm_arm_joints, aacmm_arm_params, aacmm_arm_set_joint_types,
+    aacmm_arm_warnings, aacmm_jacobians, aacmm_joint_jacobian, aacmm_param_count, aacmm_positions,
 };
 pub use calibrate::{
     AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmAngleUnit, AacmmAuxiliary, AacmmCalibration,

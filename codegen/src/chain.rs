@@ -101,7 +101,7 @@ impl ChainSpec {
     }
 }
 
-/// Most joints a chain may have; serial arms have 6 or 7, and the expression
+/// Most joints a chain may have; most serial arms have 6 or 7, and the expression
 /// size grows with the square of the count.
 pub const MAX_JOINTS: usize = 12;
 

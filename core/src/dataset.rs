@@ -557,7 +557,8 @@ impl DataSet {
             joints,
             points,
             q,
-            poses: PreparedPoses::from_flat(joints, 0, &[]),
+            // Empty, but of the poses' shape, which `prepared` keeps.
+            poses: PreparedPoses::from_flat_with(joints, poses.prismatic_mask(), 0, &[]),
             references: Vec::new(),
             source: SourceMap {
                 poses_file: file.to_string(),
@@ -578,13 +579,15 @@ impl DataSet {
         // `len()` counts the prepared poses: not yet; the source map has
         // every touch (also when there are no joints, `from_labels`).
         let touches = self.source.touch_rows.len();
-        self.poses = PreparedPoses::from_flat(self.joints, touches, &self.q);
+        let mask = self.poses.prismatic_mask();
+        self.poses = PreparedPoses::from_flat_with(self.joints, mask, touches, &self.q);
         self
     }
 
     /// A data set read from a poses file (angles in `unit`) and an optional
-    /// lengths file, for an arm of `joints` joints (`-` reads standard
-    /// input), with the readers' warnings, in the order read — for the
+    /// lengths file, for an arm of `joints` joints (a count, a shape or the
+    /// arm itself, [`crate::io::JointColumns`]: which columns are lengths;
+    /// `-` reads standard input), with the readers' warnings, in the order read — for the
     /// caller to show and to keep in its report.
     ///
     /// # Errors
@@ -605,9 +608,9 @@ impl DataSet {
         poses: &std::path::Path,
         lengths: Option<&std::path::Path>,
         unit: crate::io::AngleUnit,
-        joints: usize,
+        joints: impl Into<crate::io::JointColumns>,
     ) -> Result<(DataSet, Vec<crate::io::Warning>), InputError> {
-        let (p, warnings) = crate::io::read_poses(poses, unit, Some(joints))?;
+        let (p, warnings) = crate::io::read_poses(poses, unit, joints)?;
         let data = DataSet::from_poses_owned(p, &crate::io::source_name(poses))?;
         let mut warnings = warnings;
         warnings.extend_from_slice(data.repeat_warnings());
@@ -644,7 +647,9 @@ impl DataSet {
             let at = self.source.touch(i);
             (self.source.touch_row(i), at.line, self.reading(i))
         });
-        crate::io::limits::limit_warning_of(limits, touches, self.source.poses_file(), unit)
+        let prismatic = self.poses.prismatic_mask();
+        let file = self.source.poses_file();
+        crate::io::limits::limit_warning_of((limits, prismatic), touches, file, unit)
     }
 
     /// A data set from arrays: a point label per touch, the touch's joint
@@ -893,17 +898,18 @@ impl DataSet {
             return Err(InputError::file_error(file, "no positions"));
         }
         let joints = positions.joints();
+        let prismatic = positions.prismatic_mask();
         Ok(DataSet {
             joints,
             points: Vec::new(),
             q: Vec::new(),
-            poses: PreparedPoses::from_flat(joints, 0, &[]),
+            poses: PreparedPoses::from_flat_with(joints, prismatic, 0, &[]),
             references: Vec::new(),
             source: SourceMap {
                 poses_file: String::new(),
                 ..SourceMap::default()
             },
-            positions: Some(PositionData::new(positions, file, 0)),
+            positions: Some(PositionData::new(positions, file, prismatic)),
             temperature: None,
             time: None,
             repeats: Vec::new(),

@@ -32,6 +32,8 @@ pub(crate) mod streams {
     pub(crate) const WORKSPACE: u64 = 10;
     /// The pairs of points eq. 19 is summarised over, above its budget.
     pub(crate) const PAIRS: u64 = 11;
+    /// The random nominal arm of a chain shape (`simulate --chain`).
+    pub(crate) const CHAIN: u64 = 12;
     /// The solvers: annealing moves, global starts.
     pub(crate) const SOLVER: u64 = 0x50_4c_56;
 }

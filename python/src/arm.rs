@@ -40,6 +40,11 @@ impl Arm {
     pub(crate) fn joints(&self) -> usize {
         self.kernel.joints()
     }
+
+    /// The prismatic joints, bit `j` for joint `j`.
+    pub(crate) fn prismatic(&self) -> u16 {
+        self.kernel.shape().prismatic_mask()
+    }
 }
 
 /// Issues each of `warnings` as a Python `UserWarning`.
@@ -115,13 +120,17 @@ impl Arm {
     /// An arm from its `4·joints + 3` parameters in the toolkit's order
     /// (see `param_names`), lengths in mm and angles in rad. Each link is
     /// `Rz(theta + q)·Tz(d)·Tx(a)·Rx(alpha)`; `B` is the probe centre in the
-    /// last link's frame. No joint limits.
+    /// last link's frame. No joint limits. `joint_types` (default all
+    /// revolute) names each joint's kind, one letter per joint from the
+    /// base: `R` revolute, `P` prismatic (`"PRRRRRR"`: a robot on a track),
+    /// whose reading (mm) adds to `d` instead of `theta`.
     #[staticmethod]
-    #[pyo3(signature = (joints, params, name = "arm"))]
+    #[pyo3(signature = (joints, params, name = "arm", joint_types = None))]
     fn from_params(
         joints: usize,
         params: PyArrayLike1<'_, f64, AllowTypeChange>,
         name: &str,
+        joint_types: Option<&str>,
     ) -> PyResult<Arm> {
         supported(joints)?;
         // Checked before the copy: a huge array is refused, not copied.
@@ -144,8 +153,13 @@ impl Arm {
             ))
             .into());
         }
-        let dh = DhParams::from_slice(&values)
+        let mut dh = DhParams::from_slice(&values)
             .ok_or_else(|| Error::value("params: not a parameter vector"))?;
+        if let Some(shape) = crate::readings::joint_types(joint_types, joints)? {
+            for (j, joint) in dh.joints.iter_mut().enumerate() {
+                joint.kind = shape.kind(j);
+            }
+        }
         Ok(Arm::new(
             CoreArm::without_limits(name, dh),
             "<parameters>".to_string(),
@@ -163,6 +177,14 @@ impl Arm {
     #[getter(joints)]
     fn joints_py(&self) -> usize {
         self.joints()
+    }
+
+    /// Each joint's kind, one letter per joint from the base: `R`
+    /// revolute, `P` prismatic (whose readings are mm, whatever the angle
+    /// unit), e.g. `"PRRRRRR"`.
+    #[getter]
+    fn joint_types(&self) -> String {
+        self.kernel.shape().to_string()
     }
 
     /// Where the arm came from: its file as named, `<parameters>`,
@@ -214,13 +236,13 @@ impl Arm {
         angle_unit: &str,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let unit = crate::angle_unit(angle_unit)?;
-        let r = Readings::new(q, "q", self.joints(), unit)?;
+        let r = Readings::new(q, "q", self.joints(), unit)?.with_prismatic(self.prismatic());
         let out = zeros(py, &r.shape(&[3]), "positions")?;
         {
             let mut out = out.readwrite();
             let xyz = out.as_slice_mut().map_err(internal)?.as_chunks_mut::<3>().0;
             r.for_chunks(py, |rows, q| {
-                let poses = prepare(self.joints(), q)?;
+                let poses = prepare(self.kernel.shape(), q)?;
                 self.kernel
                     .positions(&poses, 0..rows.len(), &mut xyz[rows])?;
                 Ok(())
@@ -243,7 +265,7 @@ impl Arm {
         angle_unit: &str,
     ) -> PyResult<PositionsAndJacobians<'py>> {
         let unit = crate::angle_unit(angle_unit)?;
-        let r = Readings::new(q, "q", self.joints(), unit)?;
+        let r = Readings::new(q, "q", self.joints(), unit)?.with_prismatic(self.prismatic());
         let params = param_count(self.joints());
         let per_pose = 3 * params;
         let (p_out, jac_out) = (
@@ -255,7 +277,7 @@ impl Arm {
             let p = p_rw.as_slice_mut().map_err(internal)?;
             let jac = jac_rw.as_slice_mut().map_err(internal)?;
             r.for_chunks(py, |rows, q| {
-                let poses = prepare(self.joints(), q)?;
+                let poses = prepare(self.kernel.shape(), q)?;
                 let p = &mut p[3 * rows.start..3 * rows.end];
                 let jac = &mut jac[per_pose * rows.start..per_pose * rows.end];
                 self.kernel
@@ -288,7 +310,7 @@ impl Arm {
     ) -> PyResult<PositionsAndJacobians<'py>> {
         let unit = crate::angle_unit(angle_unit)?;
         let joints = self.joints();
-        let r = Readings::new(q, "q", joints, unit)?;
+        let r = Readings::new(q, "q", joints, unit)?.with_prismatic(self.prismatic());
         let (p_out, jac_out) = (
             zeros(py, &r.shape(&[3]), "positions")?,
             zeros(py, &r.shape(&[3, joints]), "joint_jacobian")?,

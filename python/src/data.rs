@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use aacmm_core::dataset::DataSet as CoreDataSet;
 use aacmm_core::io::{
-    AngleUnit, ReferenceLength, read_lengths, read_poses, read_positions, source_name,
+    AngleUnit, JointColumns, ReferenceLength, read_lengths, read_poses, read_positions, source_name,
 };
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
@@ -98,13 +98,14 @@ impl DataSet {
     /// files (`aacmm.InputError` naming `<arrays>`, the 1-based touch or
     /// length, and the field).
     #[new]
-    #[pyo3(signature = (labels, q, lengths = None, angle_unit = "rad"))]
+    #[pyo3(signature = (labels, q, lengths = None, angle_unit = "rad", joint_types = None))]
     fn new(
         py: Python<'_>,
         labels: &Bound<'_, PyAny>,
         q: &Bound<'_, PyAny>,
         lengths: Option<&Bound<'_, PyAny>>,
         angle_unit: &str,
+        joint_types: Option<&str>,
     ) -> PyResult<DataSet> {
         let unit = crate::angle_unit(angle_unit)?;
         let labels: Vec<String> = labels
@@ -112,7 +113,9 @@ impl DataSet {
             .map(|l| Ok(l?.str()?.to_string()))
             .collect::<PyResult<_>>()?;
         let joints = columns(q)?;
-        let readings = Readings::new(q, "q", joints, unit)?;
+        let shape = crate::readings::joint_types(joint_types, joints)?;
+        let prismatic = shape.map_or(0, |s| s.prismatic_mask());
+        let readings = Readings::new(q, "q", joints, unit)?.with_prismatic(prismatic);
         let count = crate::error::elements(&[readings.rows(), joints], "q")?;
         let mut flat = crate::error::buffer(count, "q")?;
         readings.for_chunks(py, |_, chunk| {
@@ -129,6 +132,10 @@ impl DataSet {
         };
         let has_lengths = !lengths.is_empty();
         let data = detached(py, || touches_data_set(&labels, joints, &flat, &lengths))?;
+        let data = match shape {
+            Some(shape) => data.for_shape(shape).map_err(Error::from)?,
+            None => data,
+        };
         // Rows counted once (a repeated row of a point) are said, as a
         // file's would be.
         let warnings: Vec<String> = data
@@ -153,12 +160,14 @@ impl DataSet {
     /// `point,q1,...,qn,x,y,z[,frame][,uncertainty]`, mm in the
     /// instrument's frame: `--positions`), or the positions file alone
     /// (`poses=None`). `joints` (if given) is the number of angle columns
-    /// required. Errors name file, line and field (`aacmm.InputError`;
+    /// required; `joint_types` (`"PRRRRRR"`, one letter per joint: R
+    /// revolute, P prismatic) says which columns are lengths (mm, whatever
+    /// `angle_unit` says) and implies `joints`. Errors name file, line and field (`aacmm.InputError`;
     /// `OSError` when a file cannot be read); warnings go to `warnings` and
     /// `UserWarning`. A path `-` is a file of that name (not standard input,
     /// as on the command line).
     #[staticmethod]
-    #[pyo3(signature = (poses = None, lengths = None, angle_unit = "deg", joints = None, positions = None))]
+    #[pyo3(signature = (poses = None, lengths = None, angle_unit = "deg", joints = None, positions = None, joint_types = None))]
     fn from_files(
         py: Python<'_>,
         poses: Option<PathBuf>,
@@ -166,8 +175,19 @@ impl DataSet {
         angle_unit: &str,
         joints: Option<usize>,
         positions: Option<PathBuf>,
+        joint_types: Option<&str>,
     ) -> PyResult<DataSet> {
         let unit = crate::angle_unit(angle_unit)?;
+        let joints: JointColumns = match joint_types {
+            Some(text) => {
+                let count = joints.unwrap_or(text.chars().count());
+                match crate::readings::joint_types(Some(text), count)? {
+                    Some(shape) => shape.into(),
+                    None => joints.into(),
+                }
+            }
+            None => joints.into(),
+        };
         let (poses, lengths, positions) = (
             poses.map(crate::file_path),
             lengths.map(crate::file_path),
@@ -182,7 +202,7 @@ impl DataSet {
                 .into()),
                 (Some(path), None) => detached(py, || {
                     let name = source_name(&path);
-                    let rows = read_positions(&path, unit, joints)?;
+                    let rows = read_positions(&path, unit, joints.clone())?;
                     Ok(DataSet {
                         data: CoreDataSet::from_positions(rows, &name)?,
                         poses_file: name,
@@ -194,7 +214,7 @@ impl DataSet {
             };
         };
         let set = detached(py, || {
-            let (read, warnings) = read_poses(&poses, unit, joints)?;
+            let (read, warnings) = read_poses(&poses, unit, joints.clone())?;
             let poses_file = source_name(&poses);
             let mut data = CoreDataSet::from_poses(&read, &poses_file)?;
             let mut warnings = warnings;
@@ -204,7 +224,7 @@ impl DataSet {
                 data = data.with_lengths(&read_lengths(path)?, name)?;
             }
             if let Some(path) = &positions {
-                let rows = read_positions(path, unit, Some(data.joints()))?;
+                let rows = read_positions(path, unit, joints.clone())?;
                 data = data.with_positions(rows, &source_name(path))?;
             }
             Ok(DataSet {

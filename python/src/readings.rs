@@ -10,6 +10,7 @@ use std::ops::Range;
 
 use aacmm_core::io::AngleUnit;
 use aacmm_core::kernel::PreparedPoses;
+use aacmm_core::params::ChainShape;
 use numpy::ndarray::{Ix2, s};
 use numpy::{AllowTypeChange, PyArrayLikeDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -26,6 +27,9 @@ pub(crate) struct Readings<'py> {
     rows: usize,
     single: bool,
     unit: AngleUnit,
+    /// The prismatic joints (bit `j` for joint `j`): their readings are mm
+    /// whatever `unit` says.
+    prismatic: u16,
 }
 
 impl<'py> Readings<'py> {
@@ -61,7 +65,15 @@ impl<'py> Readings<'py> {
             rows,
             single,
             unit,
+            prismatic: 0,
         })
+    }
+
+    /// These readings as those of a chain whose joints of the bits
+    /// `prismatic` slide: their columns are mm, not converted from `unit`.
+    pub(crate) fn with_prismatic(mut self, prismatic: u16) -> Readings<'py> {
+        self.prismatic = prismatic;
+        self
     }
 
     /// Number of poses.
@@ -104,7 +116,8 @@ impl<'py> Readings<'py> {
         mut f: impl FnMut(Range<usize>, &[f64]) -> Result<()> + Send,
     ) -> PyResult<()> {
         let mut buf = Vec::with_capacity(CHUNK.min(self.rows) * self.joints);
-        let unit = self.unit;
+        let (unit, prismatic, joints) = (self.unit, self.prismatic, self.joints.max(1));
+        let slides = |j: usize| j < 16 && prismatic & (1 << j) != 0;
         let mut start = 0;
         while start < self.rows {
             let rows = start..(start + CHUNK).min(self.rows);
@@ -113,7 +126,11 @@ impl<'py> Readings<'py> {
             let chunk = &mut buf;
             detached(py, || {
                 if unit != AngleUnit::Rad {
-                    chunk.iter_mut().for_each(|x| *x = unit.to_internal(*x));
+                    for (i, x) in chunk.iter_mut().enumerate() {
+                        if !slides(i % joints) {
+                            *x = unit.to_internal(*x);
+                        }
+                    }
                 }
                 f(rows.clone(), chunk)
             })?;
@@ -123,12 +140,32 @@ impl<'py> Readings<'py> {
     }
 }
 
-/// Readings `q` (row-major, `joints` per pose, in rad) prepared for the
-/// kernel (the C API's `prepare`).
-pub(crate) fn prepare(joints: usize, q: &[f64]) -> Result<PreparedPoses> {
-    Ok(match joints {
-        6 => PreparedPoses::new(6, q.as_chunks::<6>().0)?,
-        7 => PreparedPoses::new(7, q.as_chunks::<7>().0)?,
-        _ => PreparedPoses::new(joints, &q.chunks_exact(joints).collect::<Vec<_>>())?,
+/// Readings `q` (row-major, one row per pose, in rad; mm for a prismatic
+/// joint) prepared for the kernel of a chain of `shape` (the C API's
+/// `prepare`).
+pub(crate) fn prepare(shape: ChainShape, q: &[f64]) -> Result<PreparedPoses> {
+    Ok(match shape.joints() {
+        6 => PreparedPoses::for_shape(shape, q.as_chunks::<6>().0)?,
+        7 => PreparedPoses::for_shape(shape, q.as_chunks::<7>().0)?,
+        joints => PreparedPoses::for_shape(shape, &q.chunks_exact(joints).collect::<Vec<_>>())?,
     })
+}
+
+/// The chain shape a `joint_types` argument names (`"PRRRRRR"`: one letter
+/// per joint, R revolute, P prismatic), checked against `joints`; `None`
+/// when not given.
+pub(crate) fn joint_types(text: Option<&str>, joints: usize) -> Result<Option<ChainShape>> {
+    let Some(text) = text else {
+        return Ok(None);
+    };
+    let shape: ChainShape = text
+        .parse()
+        .map_err(|e| Error::value(format!("joint_types: {e}")))?;
+    if shape.joints() != joints {
+        return Err(Error::value(format!(
+            "joint_types: {text} names {} joints, the readings have {joints}",
+            shape.joints()
+        )));
+    }
+    Ok(Some(shape))
 }

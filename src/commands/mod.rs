@@ -71,8 +71,7 @@ impl ArmAndPoses {
             Rejected::Refuse
         };
         let (arm, mut warnings) = read_arm_with(&self.arm, rejected)?;
-        let (poses, more) =
-            read_poses(&self.data, self.angle_unit, Some(arm.params.joint_count()))?;
+        let (poses, more) = read_poses(&self.data, self.angle_unit, &arm)?;
         warnings.extend(more);
         let file = source_name(&self.data);
         warnings.extend(limit_warning(&arm, &poses, &file, self.angle_unit));

@@ -261,7 +261,7 @@ fn read_given(dir: &Path, arm: &Arm, arm_file: &Path) -> Result<Start> {
             dir.display()
         )
     })?;
-    let report = CalibrationReport::from_json(&text)
+    let mut report = CalibrationReport::from_json(&text)
         .map_err(|e| anyhow!("{}: not a calibration report: {e}", path.display()))?;
     let (theirs, ours) = (
         report.calibration.params.joint_count(),
@@ -273,6 +273,11 @@ fn read_given(dir: &Path, arm: &Arm, arm_file: &Path) -> Result<Start> {
             dir.display(),
             source_name(arm_file)
         );
+    }
+    // The report names parameters, not the joints' kinds: those of the
+    // arm file, of the same chain.
+    for (theirs, ours) in (report.calibration.params.joints.iter_mut()).zip(&arm.params.joints) {
+        theirs.kind = ours.kind;
     }
     let given = report.plan_given().ok_or_else(|| {
         anyhow!(
@@ -339,8 +344,7 @@ fn candidates(args: &Args, arm: &Arm) -> Result<Candidates> {
 /// A poses file of the arm's joint count, its warnings (readings outside
 /// the joint limits included) printed.
 fn read_candidates(flag: &str, path: &Path, args: &Args, arm: &Arm) -> Result<Poses> {
-    let n = arm.params.joint_count();
-    let (poses, mut warnings) = read_poses(path, args.angle_unit, Some(n))?;
+    let (poses, mut warnings) = read_poses(path, args.angle_unit, arm)?;
     let file = source_name(path);
     if poses.is_empty() {
         bail!("{flag} {file}: no poses");
@@ -411,7 +415,8 @@ fn settings(args: &Args, given: bool) -> Result<PlanSettings> {
 
 /// The chosen rows of `pool` in the order chosen, as a poses file.
 fn write_chosen(path: &Path, plan: &Plan, pool: &Poses, unit: AngleUnit) -> Result<()> {
-    let mut chosen = Poses::with_capacity(pool.joints(), plan.count);
+    // The pool's prismatic joints are written as read: mm.
+    let mut chosen = pool.empty_like(plan.count);
     for (rank, row) in plan.chosen().into_iter().enumerate() {
         chosen.push(pool.label(row), pool.reading(row), rank + 2);
     }

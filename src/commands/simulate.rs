@@ -5,14 +5,18 @@
 use std::path::{Path, PathBuf};
 
 use aacmm_core::error::quoted;
-use aacmm_core::io::{read_arm, source_name};
+use aacmm_core::io::{Arm, read_arm, source_name};
+use aacmm_core::params::ChainShape;
 
 use super::report;
 use aacmm_core::simulate::{
     CAMPAIGN_FILE, CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG,
     DEFAULT_ZERO_SIGMA_DEG, ErrorModel, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, SimError,
-    SocketPlan, TRUE_ARM_FILE, pair_count, simulate_observed, write_campaign,
+    SocketPlan, TRUE_ARM_FILE, pair_count, random_arm, simulate_observed, write_campaign,
 };
+
+/// The nominal arm `--chain` draws, written into --out.
+const NOMINAL_FILE: &str = "nominal.toml";
 use anyhow::{Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
 
@@ -27,13 +31,22 @@ const DEFAULT_REFERENCE_LENGTHS: usize = 3;
 /// lengths.csv (mm), sockets.csv (true centres, mm), true_arm.toml and
 /// campaign.toml (every setting and the seed) into --out. Same seed, same bytes.
 #[derive(clap::Args)]
+#[command(group(ArgGroup::new("nominal").required(true).args(["arm", "chain"])))]
 #[command(group(ArgGroup::new("truth").required(true).args(["true_arm", "errors"])))]
 #[command(group(ArgGroup::new("where").required(true).multiple(true).args(["sockets", "sockets_file", "positions"])))]
 pub struct Args {
-    /// Nominal arm file (TOML, 6 or 7 joints); its joint limits, if any, bound
-    /// every simulated reading.
+    /// Nominal arm file (TOML, 1 to 12 joints, revolute or prismatic); its
+    /// joint limits, if any, bound every simulated reading (a prismatic
+    /// joint needs its stroke).
     #[arg(long, value_name = "NOMINAL.toml")]
-    arm: PathBuf,
+    arm: Option<PathBuf>,
+    /// Instead of --arm, a random nominal arm of this chain: one letter per
+    /// joint from the base, R revolute, P prismatic (`PRRRRRR`: a robot on
+    /// a track; 1 to 12 joints), drawn from --seed and written to
+    /// nominal.toml in --out (twists ±90°, a robot's reach, strokes of
+    /// 400–1200 mm).
+    #[arg(long, value_name = "JOINTS", value_parser = chain_shape)]
+    chain: Option<ChainShape>,
     /// True arm file (same joint count as the nominal); exclusive with --errors.
     #[arg(long = "true", value_name = "TRUE.toml")]
     true_arm: Option<PathBuf>,
@@ -137,8 +150,7 @@ enum Errors {
 
 pub fn run(args: Args) -> Result<()> {
     check_paths(&args)?;
-    let (nominal, warnings) = read_arm(&args.arm)?;
-    report(&warnings)?;
+    let nominal = nominal_arm(&args)?;
     let joints = nominal.params.joint_count();
     let errors = error_model(&args)?;
     if args.sockets.is_none() && args.sockets_file.is_none() {
@@ -233,6 +245,44 @@ fn tracker(
     ))
 }
 
+/// `--chain`'s value: a chain shape such as `PRRRRRR`.
+fn chain_shape(text: &str) -> Result<ChainShape, String> {
+    text.parse::<ChainShape>().map_err(|e| e.to_string())
+}
+
+/// The nominal arm: --arm's file, or --chain's random arm, written to
+/// nominal.toml in --out so that the campaign can be calibrated against it.
+fn nominal_arm(args: &Args) -> Result<Arm> {
+    use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml};
+    match (&args.arm, args.chain) {
+        (Some(path), _) => {
+            let (nominal, warnings) = read_arm(path)?;
+            report(&warnings)?;
+            Ok(nominal)
+        }
+        (None, Some(shape)) => {
+            let nominal = random_arm(shape, args.seed);
+            std::fs::create_dir_all(&args.out)
+                .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
+            let text = arm_to_toml(&nominal, LengthUnit::Mm, AngleUnit::Deg);
+            let path = args.out.join(NOMINAL_FILE);
+            write_file(&path, text.as_bytes())?;
+            note(format_args!("wrote {} (--chain {shape})", path.display()))?;
+            Ok(nominal)
+        }
+        (None, None) => bail!("give --arm NOMINAL.toml or --chain JOINTS"),
+    }
+}
+
+/// The nominal arm's name in messages and campaign.toml: --arm's file, or
+/// the nominal.toml --chain writes.
+fn nominal_name(args: &Args) -> String {
+    match &args.arm {
+        Some(path) => source_name(path),
+        None => args.out.join(NOMINAL_FILE).display().to_string(),
+    }
+}
+
 fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     aacmm_core::io::write_atomic(path, bytes)
         .map_err(|e| anyhow!("{}: cannot write: {e}", path.display()))
@@ -240,7 +290,7 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
 
 /// --out may not hold an input, nor (without --force) earlier results.
 fn check_paths(args: &Args) -> Result<()> {
-    let mut inputs: Vec<Input> = vec![("--arm", &args.arm)];
+    let mut inputs: Vec<Input> = args.arm.iter().map(|p| ("--arm", p.as_path())).collect();
     inputs.extend(args.true_arm.as_deref().map(|p| ("--true", p)));
     inputs.extend(args.sockets_file.as_deref().map(|p| ("--sockets-file", p)));
     let outputs = [
@@ -250,6 +300,11 @@ fn check_paths(args: &Args) -> Result<()> {
         TRUE_ARM_FILE,
         CAMPAIGN_FILE,
         aacmm_core::simulate::POSITIONS_FILE,
+        if args.chain.is_some() {
+            NOMINAL_FILE
+        } else {
+            CAMPAIGN_FILE
+        },
     ];
     check_output_dir("--out", &args.out, &outputs, &inputs, args.force)
 }
@@ -300,7 +355,7 @@ fn socket_plan(args: &Args) -> Result<(SocketPlan, Option<SocketsFile>)> {
 fn campaign_settings(args: &Args, errors: ErrorModel, sockets: SocketPlan) -> CampaignSettings {
     let count = sockets.count();
     let mut settings = CampaignSettings::new(args.seed, errors, count, args.poses.unwrap_or(0));
-    settings.nominal_file = Some(source_name(&args.arm));
+    settings.nominal_file = Some(nominal_name(args));
     settings.sockets = sockets;
     settings.encoder_noise_deg = args.encoder_noise;
     settings.probe_noise_mm = args.probe_noise;
@@ -325,7 +380,7 @@ fn describe(
     note(format_args!(
         "nominal arm {} ({}, {joints} joints)",
         quoted(&nominal.name),
-        args.arm.display()
+        nominal_name(args)
     ))?;
     note(format_args!(
         "true arm: {}",
@@ -350,8 +405,13 @@ fn describe(
         st.too_close,
         st.max_residual_mm
     ))?;
+    // A slide's scale has its own, fixed noise (said only where there is one).
+    let slides = match nominal.params.has_prismatic() {
+        true => format!(", slides {} mm", aacmm_core::simulate::SLIDE_NOISE_MM),
+        false => String::new(),
+    };
     note(format_args!(
-        "noise: encoders {}°, probe seating {} mm; {} reference lengths{}; seed {}",
+        "noise: encoders {}°{slides}, probe seating {} mm; {} reference lengths{}; seed {}",
         settings.encoder_noise_deg,
         settings.probe_noise_mm,
         campaign.lengths.len(),

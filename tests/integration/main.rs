@@ -6,6 +6,7 @@ mod beyond;
 mod builds;
 mod calibrate;
 mod campaign;
+mod chains;
 mod edges;
 mod evaluate;
 mod export;

@@ -34,15 +34,17 @@ pub fn limit_warning(arm: &Arm, poses: &Poses, file: &str, unit: AngleUnit) -> O
         .rows()
         .enumerate()
         .map(|(row, q)| (row, poses.line(row), q));
-    limit_warning_of(&arm.limits, rows, file, unit)
+    let prismatic = arm.params.shape().map_or(0, |s| s.prismatic_mask());
+    limit_warning_of((&arm.limits, prismatic), rows, file, unit)
 }
 
 /// [`limit_warning`] over readings given as `(row, line, readings)` in any
 /// order (a data set holds its touches grouped by point): the first reading
 /// named is the one of the lowest row, so the message is the same whatever
-/// the order.
+/// the order. A prismatic joint's (a bit of `prismatic`) reading and
+/// limits are shown in mm.
 pub(crate) fn limit_warning_of<'a>(
-    limits: &[Option<[f64; 2]>],
+    (limits, prismatic): (&[Option<[f64; 2]>], u16),
     rows: impl Iterator<Item = (usize, usize, &'a [f64])>,
     file: &str,
     unit: AngleUnit,
@@ -72,6 +74,7 @@ pub(crate) fn limit_warning_of<'a>(
     }
     let (_, j, line, x, sign, bound) = first?;
     let show = |v: f64| match unit {
+        _ if j < 16 && prismatic & (1 << j) != 0 => format!("{v} mm"),
         AngleUnit::Deg => format!("{}°", unit.from_internal_exact(v)),
         AngleUnit::Rad => format!("{v} rad"),
     };

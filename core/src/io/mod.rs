@@ -35,6 +35,7 @@
 
 pub mod arm;
 pub mod atomic;
+pub mod columns;
 pub mod frames;
 mod labels;
 pub mod lengths;
@@ -52,6 +53,7 @@ use std::fmt;
 pub use crate::error::InputError;
 pub use arm::{Arm, arm_to_toml, parse_arm, parse_arm_with, read_arm, read_arm_with, write_arm};
 pub use atomic::{write_atomic, write_atomic_with};
+pub use columns::JointColumns;
 pub use lengths::{
     ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
 };

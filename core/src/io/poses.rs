@@ -16,6 +16,7 @@ use std::io::Write;
 use std::path::Path;
 
 use super::Warning;
+use super::columns::JointColumns;
 use super::labels::Labels;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
@@ -43,8 +44,11 @@ pub(crate) const RADIANS_HINT_MIN_ROWS: usize = 20;
 /// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct Poses {
-    /// Number of joints (angle columns).
+    /// Number of joints (reading columns).
     joints: usize,
+    /// The prismatic joints (bit `j` for joint `j`): their readings are
+    /// mm, written as they are whatever the angle unit.
+    prismatic: u16,
     /// The labels of the points touched, each once, in order of first
     /// appearance.
     points: Labels,
@@ -83,6 +87,7 @@ impl Poses {
         let what = "the rows' readings";
         Ok(Poses {
             joints,
+            prismatic: 0,
             points: Labels::default(),
             point_of: try_vec(what, rows)?,
             q: try_vec(what, rows.saturating_mul(joints))?,
@@ -169,6 +174,36 @@ impl Poses {
         self.joints
     }
 
+    /// The prismatic joints, bit `j` for joint `j` (none unless read for
+    /// such an arm or set by [`Poses::with_shape`]): their readings are mm.
+    pub fn prismatic_mask(&self) -> u16 {
+        self.prismatic
+    }
+
+    /// No rows, of the joints (and prismatic joints) of `self`, with room
+    /// for `rows` rows.
+    ///
+    /// # Panics
+    /// As [`Poses::with_capacity`].
+    pub fn empty_like(&self, rows: usize) -> Poses {
+        Poses {
+            prismatic: self.prismatic,
+            ..Poses::with_capacity(self.joints, rows)
+        }
+    }
+
+    /// These poses as readings of a chain of `shape` (of their joint
+    /// count): its prismatic joints' readings are mm, and
+    /// [`write_poses`] writes them as they are.
+    ///
+    /// # Panics
+    /// If `shape` has another joint count than the poses.
+    pub fn with_shape(mut self, shape: crate::params::ChainShape) -> Poses {
+        assert_eq!(shape.joints(), self.joints, "joints of the shape");
+        self.prismatic = shape.prismatic_mask();
+        self
+    }
+
     /// The labels of the points touched, each once, in order of first
     /// appearance.
     pub fn points(&self) -> impl ExactSizeIterator<Item = &str> + '_ {
@@ -221,9 +256,10 @@ impl Poses {
     }
 }
 
-/// Reads a poses file (standard input for `-`) with angles in `unit`; if
-/// `expected_joints` is given, the file must have that many angle columns.
-/// Returns the poses and any warnings (for the caller to print).
+/// Reads a poses file (standard input for `-`) with angles in `unit`;
+/// `joints` says how many columns the file must have and which are
+/// lengths ([`JointColumns`]: a count, a shape or the arm). Returns the
+/// poses and any warnings (for the caller to print).
 ///
 /// ```no_run
 /// use aacmm_core::io::{AngleUnit, read_poses};
@@ -236,10 +272,10 @@ impl Poses {
 pub fn read_poses(
     path: &Path,
     unit: AngleUnit,
-    expected_joints: Option<usize>,
+    joints: impl Into<JointColumns>,
 ) -> Result<(Poses, Vec<Warning>), InputError> {
     let (file, text) = read_text(path)?;
-    parse_poses(&text, &file, unit, expected_joints)
+    parse_poses(&text, &file, unit, joints)
 }
 
 /// Parses the text of a poses file; `file` is the name used in messages.
@@ -260,8 +296,10 @@ pub fn parse_poses(
     text: &str,
     file: &str,
     unit: AngleUnit,
-    expected_joints: Option<usize>,
+    joints: impl Into<JointColumns>,
 ) -> Result<(Poses, Vec<Warning>), InputError> {
+    let columns_of = joints.into();
+    let expected_joints = columns_of.expected();
     let shape = "point,q1,...,qn[,temperature][,time]";
     let per_row = "one row per touch";
     // At most one row per line, and per 2 bytes a field (a digit or a
@@ -294,15 +332,8 @@ pub fn parse_poses(
                 ));
             }
             let start = poses.q.len();
-            for (s, col) in fields[1..=joints].iter().zip(&columns[1..=joints]) {
-                match parse_f64(s, file, line, col) {
-                    Ok(x) => poses.q.push(x),
-                    Err(e) => {
-                        poses.q.truncate(start);
-                        return Err(e);
-                    }
-                }
-            }
+            let row = (&fields[1..=joints], &columns[1..=joints]);
+            read_readings(row, &columns_of, (file, line), &mut poses.q)?;
             let mut values = [0.0; 2];
             for (k, c) in extra.iter().enumerate() {
                 let v = fields[1 + joints + k];
@@ -337,11 +368,37 @@ pub fn parse_poses(
     poses.q.shrink_to_fit();
     poses.point_of.shrink_to_fit();
     poses.lines.shrink_to_fit();
+    poses.prismatic = columns_of.prismatic_mask();
     let warnings = unit_warnings(&poses, file, unit);
-    for x in &mut poses.q {
-        *x = unit.to_internal(*x);
+    let joints = poses.joints.max(1);
+    for (i, x) in poses.q.iter_mut().enumerate() {
+        *x = columns_of.to_internal(i % joints, *x, unit);
     }
     Ok((poses, warnings))
+}
+
+/// Appends a row's readings `fields` (columns named `names`) as written to
+/// `q`, each checked against a prismatic joint's stroke; on an error `q`
+/// is as it was.
+fn read_readings(
+    (fields, names): (&[&str], &[String]),
+    columns: &JointColumns,
+    (file, line): (&str, usize),
+    q: &mut Vec<f64>,
+) -> Result<(), InputError> {
+    let start = q.len();
+    for (j, (s, name)) in fields.iter().zip(names).enumerate() {
+        let x = parse_f64(s, file, line, name)
+            .and_then(|x| columns.check_stroke(j, x, file, line).map(|_| x));
+        match x {
+            Ok(x) => q.push(x),
+            Err(e) => {
+                q.truncate(start);
+                return Err(e);
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Empty poses of `joints` joints with room for `rows` rows and the
@@ -416,15 +473,29 @@ fn check_poses_header(
     }
 }
 
-/// Whether `rows` rows of readings `q`, in degrees once multiplied by
-/// `to_deg`, look like radians read as degrees: at least
-/// [`RADIANS_HINT_MIN_ROWS`] rows, every |q| below 2π degrees — no arm is
-/// moved through a campaign within ±6.3° on every joint. The reader's
-/// warning and the calibration's refusal ask the same question, so that
-/// the refusal names the cause the warning named.
-pub(crate) fn look_like_radians(q: &[f64], rows: usize, to_deg: f64) -> bool {
+/// Whether `rows` rows of readings `q` of `joints` joints, in degrees
+/// once multiplied by `to_deg`, look like radians read as degrees: at
+/// least [`RADIANS_HINT_MIN_ROWS`] rows, every |q| of a revolute joint
+/// (not in the bits of `prismatic`, whose readings are mm) below 2π
+/// degrees — no arm is moved through a campaign within ±6.3° on every
+/// joint. The reader's warning and the calibration's refusal ask the same
+/// question, so that the refusal names the cause the warning named.
+pub(crate) fn look_like_radians(
+    q: &[f64],
+    rows: usize,
+    (joints, prismatic): (usize, u16),
+    to_deg: f64,
+) -> bool {
     let turn = std::f64::consts::TAU;
-    rows >= RADIANS_HINT_MIN_ROWS && q.iter().all(|x| (x * to_deg).abs() < turn)
+    let revolute = |i: &usize| {
+        let j = i % joints.max(1);
+        j >= 16 || prismatic & (1 << j) == 0
+    };
+    rows >= RADIANS_HINT_MIN_ROWS
+        && prismatic.count_ones() < joints as u32
+        && (q.iter().enumerate())
+            .filter(|(i, _)| revolute(i))
+            .all(|(_, x)| (x * to_deg).abs() < turn)
 }
 
 /// Hints when the angles look like the other unit (`q` still in `unit`).
@@ -437,7 +508,9 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
         message,
     };
     match unit {
-        AngleUnit::Deg if look_like_radians(&poses.q, poses.len(), 1.0) => {
+        AngleUnit::Deg
+            if look_like_radians(&poses.q, poses.len(), (poses.joints, poses.prismatic), 1.0) =>
+        {
             let message = format!(
                 "angles declared in degrees, but every |q| in all {} rows is below 2π (6.28°): \
                  these angles look like radians; pass --angle-unit rad if so",
@@ -448,7 +521,8 @@ fn unit_warnings(poses: &Poses, file: &str, unit: AngleUnit) -> Vec<Warning> {
         AngleUnit::Deg => vec![],
         AngleUnit::Rad => (poses.rows().zip(&poses.lines))
             .find_map(|(q, &line)| {
-                let j = q.iter().position(|x| x.abs() > turn)?;
+                let slide = |j: usize| j < 16 && poses.prismatic & (1 << j) != 0;
+                let j = (q.iter().enumerate()).position(|(j, x)| !slide(j) && x.abs() > turn)?;
                 let message = format!(
                     "angles declared in radians, but |{}| is more than a full turn (2π): these \
                      angles look like degrees; pass --angle-unit deg if so",
@@ -499,9 +573,10 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
     w.write_all(header.as_bytes())?;
     for (row, (label, q)) in poses.labels().zip(poses.rows()).enumerate() {
         let mut line = quote(label)?.into_owned();
-        for &x in q {
+        for (j, &x) in q.iter().enumerate() {
             line.push(',');
-            line.push_str(&fmt_f64(unit.from_internal_exact(x)));
+            let written = JointColumns::to_written(poses.prismatic, j, x, unit);
+            line.push_str(&fmt_f64(written));
         }
         for column in conditions.iter().filter_map(|(_, c)| *c) {
             line.push(',');

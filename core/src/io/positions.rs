@@ -29,6 +29,7 @@ use std::io::Write;
 
 use std::collections::HashMap;
 
+use super::columns::JointColumns;
 use super::labels::Labels;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
@@ -45,6 +46,8 @@ pub const MIN_FRAME_POSITIONS: usize = 3;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Positions {
     joints: usize,
+    /// The prismatic joints (bit `j` for joint `j`): readings in mm.
+    prismatic: u16,
     /// The point labels, each once.
     labels: Labels,
     /// Per row, its point label (an index into `labels`).
@@ -73,6 +76,7 @@ impl Positions {
     pub fn new(joints: usize) -> Positions {
         Positions {
             joints,
+            prismatic: 0,
             labels: Labels::default(),
             label_of: Vec::new(),
             frames: Vec::new(),
@@ -209,6 +213,23 @@ impl Positions {
         self.joints
     }
 
+    /// The prismatic joints, bit `j` for joint `j` (none unless read for
+    /// such an arm or set by [`Positions::with_shape`]): readings in mm.
+    pub fn prismatic_mask(&self) -> u16 {
+        self.prismatic
+    }
+
+    /// These rows as readings of a chain of `shape` (of their joint
+    /// count): its prismatic joints' readings are mm, written as they are.
+    ///
+    /// # Panics
+    /// If `shape` has another joint count than the rows.
+    pub fn with_shape(mut self, shape: crate::params::ChainShape) -> Positions {
+        assert_eq!(shape.joints(), self.joints, "joints of the shape");
+        self.prismatic = shape.prismatic_mask();
+        self
+    }
+
     /// The frames, in order of first appearance.
     pub fn frames(&self) -> &[String] {
         &self.frames
@@ -253,6 +274,7 @@ impl Positions {
     /// appearance among them).
     pub fn subset(&self, keep: &[usize]) -> Positions {
         let mut out = Positions::new(self.joints);
+        out.prismatic = self.prismatic;
         for &i in keep {
             out.push(
                 self.label(i),
@@ -313,9 +335,10 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
     w.write_all(header.as_bytes())?;
     for i in 0..p.len() {
         let mut line = quote(p.label(i))?.into_owned();
-        for &x in p.reading(i) {
+        for (j, &x) in p.reading(i).iter().enumerate() {
             line.push(',');
-            line.push_str(&fmt_f64(unit.from_internal_exact(x)));
+            let written = JointColumns::to_written(p.prismatic, j, x, unit);
+            line.push_str(&fmt_f64(written));
         }
         for v in p.position(i) {
             line.push(',');
@@ -355,7 +378,8 @@ struct Layout {
 const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty][,temperature][,time]";
 
 /// Reads a reference-position file (standard input for `-`), readings in
-/// `unit`; messages name the file as [`super::source_name`] gives it.
+/// `unit` (a prismatic joint's in mm, [`JointColumns`]); messages name the
+/// file as [`super::source_name`] gives it.
 ///
 /// # Errors
 ///
@@ -363,10 +387,10 @@ const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty][,temperature][,
 pub fn read_positions(
     path: &Path,
     unit: AngleUnit,
-    expected_joints: Option<usize>,
+    joints: impl Into<JointColumns>,
 ) -> Result<Positions, InputError> {
     let (file, text) = read_text(path)?;
-    parse_positions(&text, &file, unit, expected_joints)
+    parse_positions(&text, &file, unit, joints)
 }
 
 /// Parses the text of a reference-position file; `file` names it in
@@ -396,8 +420,10 @@ pub fn parse_positions(
     text: &str,
     file: &str,
     unit: AngleUnit,
-    expected_joints: Option<usize>,
+    joints: impl Into<JointColumns>,
 ) -> Result<Positions, InputError> {
+    let columns = joints.into();
+    let expected_joints = columns.expected();
     let mut layout: Option<Layout> = None;
     let mut out: Option<Positions> = None;
     let mut q = Vec::new();
@@ -412,8 +438,11 @@ pub fn parse_positions(
                 Some(l) => l,
                 None => layout.insert(header_layout(h, file, expected_joints)?),
             };
-            let out = out.get_or_insert_with(|| Positions::new(l.joints));
-            parse_row(l, f, file, line, unit, &mut q, out)
+            let out = out.get_or_insert_with(|| Positions {
+                prismatic: columns.prismatic_mask(),
+                ..Positions::new(l.joints)
+            });
+            parse_row(l, f, (file, line), (unit, &columns), &mut q, out)
         },
     )?;
     let out = out.unwrap_or_else(|| Positions::new(0));
@@ -479,9 +508,8 @@ fn header_layout(
 fn parse_row(
     l: &Layout,
     f: &[&str],
-    file: &str,
-    line: usize,
-    unit: AngleUnit,
+    (file, line): (&str, usize),
+    (unit, columns): (AngleUnit, &JointColumns),
     q: &mut Vec<f64>,
     out: &mut Positions,
 ) -> Result<(), InputError> {
@@ -495,7 +523,8 @@ fn parse_row(
     q.clear();
     for j in 0..l.joints {
         let v = parse_f64(f[1 + j], file, line, &format!("q{}", j + 1))?;
-        q.push(unit.to_internal(v));
+        columns.check_stroke(j, v, file, line)?;
+        q.push(columns.to_internal(j, v, unit));
     }
     let mut xyz = [0.0; 3];
     for (k, name) in ["x", "y", "z"].iter().enumerate() {

@@ -187,14 +187,9 @@ impl PreparedPoses {
         self.post.as_deref()
     }
 
-    /// Prepares `len` poses of `joints` revolute readings (rad), row after
-    /// row in `q`: [`PreparedPoses::new`] without a slice per row.
-    pub(crate) fn from_flat(joints: usize, len: usize, q: &[f64]) -> Self {
-        PreparedPoses::from_flat_with(joints, 0, len, q)
-    }
-
-    /// [`PreparedPoses::from_flat`] of a chain whose joints of the bits
-    /// `prismatic` slide (their readings in mm).
+    /// Prepares `len` poses of `joints` readings, row after row in `q`
+    /// ([`PreparedPoses::new`] without a slice per row), of a chain whose
+    /// joints of the bits `prismatic` slide (their readings in mm).
     pub(crate) fn from_flat_with(joints: usize, prismatic: u16, len: usize, q: &[f64]) -> Self {
         // Invariant: the data set passes its own `len` rows of `joints`.
         assert_eq!(q.len(), joints * len, "readings of {len} poses");

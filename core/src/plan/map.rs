@@ -76,22 +76,30 @@ pub struct MapPoint {
     pub radius_mm: f64,
 }
 
-/// `n` poses drawn uniformly within each joint's range (`None`: a full
-/// turn), seeded.
-pub fn sample_poses(ranges: &[Option<[f64; 2]>], n: usize, seed: u64) -> PreparedPoses {
+/// `n` poses of a chain of `prismatic` joints (bit `j` for joint `j`)
+/// drawn uniformly within each joint's range (`None`: a full turn; a
+/// prismatic joint without a range stays at 0 mm, its stroke unknown),
+/// seeded.
+pub fn sample_poses(
+    ranges: &[Option<[f64; 2]>],
+    prismatic: u16,
+    n: usize,
+    seed: u64,
+) -> PreparedPoses {
     let mut rng = crate::random::rng(seed, crate::random::streams::WORKSPACE);
     let joints = ranges.len();
     let mut q = Vec::with_capacity(n * joints);
     for _ in 0..n {
-        for r in ranges {
+        for (j, r) in ranges.iter().enumerate() {
             q.push(match r {
                 Some([lo, hi]) if hi > lo => rng.random_range(*lo..=*hi),
                 Some([lo, _]) => *lo,
+                None if j < 16 && prismatic & (1 << j) != 0 => 0.0,
                 None => rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
             });
         }
     }
-    PreparedPoses::from_flat(joints, n, &q)
+    PreparedPoses::from_flat_with(joints, prismatic, n, &q)
 }
 
 /// Each joint's range of readings over `poses` (rad).

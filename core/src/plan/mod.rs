@@ -54,7 +54,7 @@ pub use summary::{GivenNote, KNEE, Knee, SummaryContext, knee, summary};
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};
 use crate::kernel::{ArmKernel, PreparedPoses};
-use crate::params::DhParams;
+use crate::params::{ChainShape, DhParams};
 use crate::residuals::Noise;
 use greedy::{Gain, Greedy};
 use rows::{Blocks, jacobians, mean_gram, scaled, unit_scale};
@@ -212,10 +212,13 @@ pub struct CurvePoint {
 pub struct JointSpan {
     /// Joint, from 1.
     pub joint: usize,
-    /// Range of the chosen readings, degrees.
+    /// Range of the chosen readings, degrees (mm for a prismatic joint).
     pub chosen_deg: f64,
-    /// Range of the pool's, degrees.
+    /// Range of the pool's, degrees (mm for a prismatic joint).
     pub pool_deg: f64,
+    /// Whether the joint is prismatic: its spans are mm.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub prismatic: bool,
 }
 
 /// The random subsets a plan is compared with.
@@ -532,6 +535,9 @@ fn pool_data(params: &DhParams, pool: &Poses, positions: bool) -> Result<DataSet
     }
     let kernel = ArmKernel::new(params)?;
     let mut rows = Positions::new(pool.joints());
+    if let Ok(shape) = ChainShape::from_mask(pool.joints(), pool.prismatic_mask()) {
+        rows = rows.with_shape(shape);
+    }
     for i in 0..pool.len() {
         let q = pool.reading(i);
         rows.push(
@@ -548,7 +554,8 @@ fn pool_data(params: &DhParams, pool: &Poses, positions: bool) -> Result<DataSet
 
 /// The poses of `poses` as the kernel takes them.
 fn prepared(poses: &Poses) -> PreparedPoses {
-    PreparedPoses::from_flat(poses.joints(), poses.len(), poses.readings())
+    let prismatic = poses.prismatic_mask();
+    PreparedPoses::from_flat_with(poses.joints(), prismatic, poses.len(), poses.readings())
 }
 
 /// The scaled rows of the pool and the workspace.
@@ -567,7 +574,7 @@ fn design(
     let blocks = scaled(raw, &scale);
     let ws = workspace.unwrap_or(pool);
     let step = ws.len().div_ceil(settings.workspace_limit).max(1);
-    let mut sample = Poses::new(ws.joints());
+    let mut sample = ws.empty_like(0);
     for i in (0..ws.len()).step_by(step) {
         sample.push(ws.label(i), ws.reading(i), ws.line(i));
     }
@@ -965,20 +972,24 @@ fn checkpoints(count: usize, to: usize) -> Vec<usize> {
     k
 }
 
-/// Each joint's range over the chosen rows and the pool, degrees.
+/// Each joint's range over the chosen rows and the pool, degrees (mm for
+/// a prismatic joint).
 fn joint_spans(pool: &Poses, chosen: &[usize]) -> Vec<JointSpan> {
+    let slides = |j: usize| j < 16 && pool.prismatic_mask() & (1 << j) != 0;
     let range = |rows: &mut dyn Iterator<Item = usize>, j: usize| {
         let (lo, hi) = rows.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), i| {
             let v = pool.reading(i)[j];
             (lo.min(v), hi.max(v))
         });
-        (hi - lo).max(0.0).to_degrees()
+        let span = (hi - lo).max(0.0);
+        if slides(j) { span } else { span.to_degrees() }
     };
     (0..pool.joints())
         .map(|j| JointSpan {
             joint: j + 1,
             chosen_deg: range(&mut chosen.iter().copied(), j),
             pool_deg: range(&mut (0..pool.len()), j),
+            prismatic: slides(j),
         })
         .collect()
 }
@@ -1015,9 +1026,14 @@ fn warnings(joints: &[JointSpan], undetermined: bool, settings: &PlanSettings) -
     }
     for j in joints {
         if j.pool_deg > 0.0 && j.chosen_deg < NARROW_JOINT * j.pool_deg {
+            let (moves, unit) = if j.prismatic {
+                ("slides", " mm")
+            } else {
+                ("turns", "°")
+            };
             w.push(format!(
-                "joint {} turns {:.1}° over the chosen rows, of the candidates' {:.1}°: its \
-                 errors are seen near those readings only",
+                "joint {} {moves} {:.1}{unit} over the chosen rows, of the candidates' \
+                 {:.1}{unit}: its errors are seen near those readings only",
                 j.joint, j.chosen_deg, j.pool_deg
             ));
         }

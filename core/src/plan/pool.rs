@@ -94,6 +94,9 @@ pub fn sample_positions(
     };
     let rows = simulate_positions(arm, &settings)?.positions;
     let mut poses = Poses::with_capacity(rows.joints(), rows.len());
+    if let Ok(shape) = arm.params.shape() {
+        poses = poses.with_shape(shape);
+    }
     for i in 0..rows.len() {
         poses.push(rows.label(i), rows.reading(i), i + 2);
     }

@@ -100,7 +100,10 @@ pub fn summary(plan: &Plan, context: SummaryContext<'_>) -> String {
         t += &format!("Touches per socket: {}\n", s.join(", "));
     }
     let spans: Vec<String> = (plan.joints.iter())
-        .map(|j| format!("q{} {:.0}/{:.0}", j.joint, j.chosen_deg, j.pool_deg))
+        .map(|j| {
+            let mm = if j.prismatic { " mm" } else { "" };
+            format!("q{} {:.0}/{:.0}{mm}", j.joint, j.chosen_deg, j.pool_deg)
+        })
         .collect();
     t += &format!(
         "Joint spans, chosen/candidates (deg): {}\n",

@@ -472,7 +472,7 @@ fn the_uncertainty_map_has_its_figure_section_and_table() {
     use crate::plan::{sample_poses, uncertainty_map};
     let c = case();
     let (free, cov) = c.cal.geometry_covariance().unwrap();
-    let poses = sample_poses(&[None; 6], 400, 7);
+    let poses = sample_poses(&[None; 6], 0, 400, 7);
     let map = uncertainty_map(&c.cal.params, &poses, &free, &cov, "the test's full turns").unwrap();
     let r = report_with(c, &c.cal, false, Some(&map)).unwrap();
     let files: Vec<&str> = r.files().map(|(f, _)| f).collect();

@@ -37,7 +37,8 @@ pub(crate) fn workspace_map(
         s if s == n => "the joint limits".to_string(),
         _ => "the joint limits (the campaign's ranges where none is stated)".to_string(),
     };
-    let poses = sample_poses(&ranges, MAP_POSES, seed);
+    let prismatic = arm.params.shape().map_or(0, |s| s.prismatic_mask());
+    let poses = sample_poses(&ranges, prismatic, MAP_POSES, seed);
     uncertainty_map(&calibration.params, &poses, &free, &cov, &workspace).ok()
 }
 

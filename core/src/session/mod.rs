@@ -131,6 +131,7 @@ impl Problem {
                 data: data.joints(),
             });
         }
+        let data = of_arm_shape(&arm, data)?;
         model.check_for(&arm.params)?;
         model
             .beyond
@@ -169,6 +170,10 @@ impl Problem {
                 data: held_out.data.joints(),
             });
         }
+        let held_out = HeldOutData {
+            data: of_arm_shape(&self.arm, held_out.data)?,
+            ..held_out
+        };
         self.held_out = Some(held_out);
         Ok(self)
     }
@@ -330,6 +335,20 @@ const LENGTH_UNIT_RATIO: f64 = 100.0;
 const PLAUSIBLE_REACH_MM: std::ops::RangeInclusive<f64> =
     10.0..=crate::io::arm::PLAUSIBLE_METRES * 1000.0;
 
+/// `data` (of the arm's joint count) prepared for the arm's chain: a
+/// prismatic joint's readings (mm) are used as lengths however the data
+/// were made (a reader given only a joint count, arrays).
+fn of_arm_shape(arm: &Arm, data: DataSet) -> Result<DataSet, CalibrationError> {
+    let Ok(shape) = arm.params.shape() else {
+        return Ok(data);
+    };
+    let joints = (shape.joints(), data.joints());
+    data.for_shape(shape).map_err(|_| CalibrationError::Joints {
+        arm: joints.0,
+        data: joints.1,
+    })
+}
+
 /// Refuses reference lengths whose median ratio to the nominal arm's
 /// distances between the same points is beyond 100 or below 1/100
 /// (lengths in metres for an arm in mm, say), naming the input at fault:
@@ -379,7 +398,8 @@ pub fn check_units(
         return Ok(());
     }
     let to_deg = 1f64.to_degrees();
-    if crate::io::poses::look_like_radians(data.readings(), data.len(), to_deg) {
+    let shape = (data.joints(), data.poses().prismatic_mask());
+    if crate::io::poses::look_like_radians(data.readings(), data.len(), shape, to_deg) {
         // The numbers as typed, taken as radians: what `--angle-unit rad`
         // would have read (a prismatic joint's reading, mm, as it is).
         let mask = data.poses().prismatic_mask();
@@ -1281,7 +1301,12 @@ pub fn run(
     let s = &problem.sources;
     let mut verdict = Verdict::of(&calibration, &fitted, &model.noise, model.accept_poor_fit);
     if !verdict.usable
-        && crate::io::poses::look_like_radians(data.readings(), data.len(), 1f64.to_degrees())
+        && crate::io::poses::look_like_radians(
+            data.readings(),
+            data.len(),
+            (data.joints(), data.poses().prismatic_mask()),
+            1f64.to_degrees(),
+        )
     {
         // The reader warned; the reasons that follow (no confirmed minimum,
         // χ²) are its consequences, so the cause leads.

@@ -148,8 +148,7 @@ impl Request {
     ) -> Result<Request, InputError> {
         let (arm, poses) = (arm.as_ref(), poses.as_ref());
         let (read, arm_warnings) = read_arm(arm)?;
-        let joints = read.params.joint_count();
-        let (data, data_warnings) = DataSet::read(poses, None, unit, joints)?;
+        let (data, data_warnings) = DataSet::read(poses, None, unit, &read)?;
         let warnings = (arm_warnings.iter().chain(&data_warnings))
             .map(ToString::to_string)
             .collect();
@@ -175,9 +174,8 @@ impl Request {
     ) -> Result<Request, InputError> {
         let (arm, positions) = (arm.as_ref(), positions.as_ref());
         let (read, arm_warnings) = read_arm(arm)?;
-        let joints = read.params.joint_count();
         let name = source_name(positions);
-        let rows = read_positions(positions, unit, Some(joints))?;
+        let rows = read_positions(positions, unit, &read)?;
         let data = DataSet::from_positions(rows, &name)?;
         let sources = Sources {
             arm_file: source_name(arm),
@@ -196,8 +194,7 @@ impl Request {
     /// The reader's errors, naming file, line and field.
     pub fn read_positions(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
         let path = path.as_ref();
-        let joints = self.arm.params.joint_count();
-        let rows = read_positions(path, self.unit, Some(joints))?;
+        let rows = read_positions(path, self.unit, &self.arm)?;
         self.data = self.data.with_positions(rows, &source_name(path))?;
         Ok(self)
     }
@@ -212,8 +209,7 @@ impl Request {
     pub fn validate_on_positions(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
         let path = path.as_ref();
         let name = source_name(path);
-        let joints = self.arm.params.joint_count();
-        let rows = read_positions(path, self.unit, Some(joints))?;
+        let rows = read_positions(path, self.unit, &self.arm)?;
         let held_out = match self.held_out.take() {
             Some((mut h, warnings)) => {
                 h.data = h.data.with_positions(rows, &name)?;
@@ -279,8 +275,7 @@ impl Request {
         lengths: Option<&Path>,
     ) -> Result<Request, InputError> {
         let poses = poses.as_ref();
-        let joints = self.arm.params.joint_count();
-        let (data, warnings) = DataSet::read(poses, lengths, self.unit, joints)?;
+        let (data, warnings) = DataSet::read(poses, lengths, self.unit, &self.arm)?;
         let held_out = HeldOutData {
             data,
             data_file: source_name(poses),

@@ -1,9 +1,11 @@
 //! Inverse kinematics for a point: damped least squares (Levenberg–Marquardt)
 //! on the kernel's analytic `3 × N` joint Jacobian.
 //!
-//! A measuring arm is redundant for a point (six or seven joints, three
+//! An arm of more than three joints is redundant for a point (three
 //! constraints), so the solution reached depends on the start: random starts
-//! give genuinely different articulations of the same point.
+//! give genuinely different articulations of the same point. A prismatic
+//! joint's variable (mm) is scaled to a metre for the step, so that one
+//! damping suits slides and turns.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -12,6 +14,9 @@ use crate::kernel::{ArmKernel, KernelError};
 
 /// Residual below which a solution is accepted, mm.
 pub(crate) const IK_TOLERANCE_MM: f64 = 1e-10;
+/// The length (mm) a prismatic joint's variable is counted in by the
+/// solver: a metre, as a radian of a metre-long link.
+const SLIDE_SCALE_MM: f64 = 1000.0;
 /// Iterations allowed per start.
 pub(crate) const IK_MAX_ITERATIONS: usize = 200;
 
@@ -53,9 +58,25 @@ pub fn solve_point(
     target: [f64; 3],
     start: &[f64],
 ) -> Result<IkSolution, KernelError> {
+    // A prismatic joint moves in mm, a revolute one in rad: its variable
+    // is taken in metres (its column times 1000 mm), so that one damping
+    // suits both (1 m of slide moves the probe as much as 1 rad of a 1 m
+    // link). A revolute column is multiplied by 1: exact.
+    let scale: Vec<f64> = (0..start.len())
+        .map(|j| {
+            if k.shape().is_prismatic(j) {
+                SLIDE_SCALE_MM
+            } else {
+                1.0
+            }
+        })
+        .collect();
     let eval = |q: &[f64]| {
         let mut jac = vec![[0.0; 3]; q.len()];
         let p = k.joint_jacobian(q, &mut jac)?;
+        for (col, c) in jac.iter_mut().zip(&scale) {
+            *col = col.map(|v| v * c);
+        }
         let r = Vector3::new(target[0] - p[0], target[1] - p[1], target[2] - p[2]);
         Ok::<_, KernelError>((r, jac))
     };
@@ -70,7 +91,15 @@ pub fn solve_point(
         let lower = match a.lu().solve(&r) {
             Some(y) => {
                 let trial: Vec<f64> = (0..q.len())
-                    .map(|j| q[j] + jac[j][0] * y[0] + jac[j][1] * y[1] + jac[j][2] * y[2])
+                    .map(|j| {
+                        let c = &jac[j];
+                        if scale[j] == 1.0 {
+                            // The revolute step as it always was, to the bit.
+                            q[j] + c[0] * y[0] + c[1] * y[1] + c[2] * y[2]
+                        } else {
+                            q[j] + (c[0] * y[0] + c[1] * y[1] + c[2] * y[2]) * scale[j]
+                        }
+                    })
                     .collect();
                 let (r_new, jac_new) = eval(&trial)?;
                 let err_new = r_new.norm();

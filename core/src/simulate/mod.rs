@@ -41,6 +41,7 @@
 //! assert!((0..3).all(|i| (p[4][i] - s2[i]).abs() < 1e-9));
 //! ```
 
+mod chain;
 mod error;
 mod files;
 mod ik;
@@ -55,6 +56,7 @@ mod truth;
 mod tests;
 
 pub use crate::params::wrap;
+pub use chain::random_arm;
 pub use error::SimError;
 pub use files::{
     CAMPAIGN_FILE, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, TRUE_ARM_FILE, parse_campaign,
@@ -152,7 +154,8 @@ fn check_probe_noise(nominal: &Arm, sigma_mm: f64) -> Result<(), SimError> {
     Ok(())
 }
 
-/// Simulates a campaign of `settings` on `nominal` (6 or 7 joints). Errors,
+/// Simulates a campaign of `settings` on `nominal` (any chain of 1 to 12
+/// joints; a prismatic joint needs its stroke, `limits`). Errors,
 /// never panics, on bad settings or an impossible campaign.
 ///
 /// ```
@@ -215,7 +218,8 @@ pub fn simulate_observed(
     let k = ArmKernel::new(&true_arm.params)?;
     let mut enc = rng(seed, streams::ENCODERS);
     let sigma = settings.encoder_noise_deg.to_radians();
-    let mut poses = Poses::with_capacity(n, touches.len());
+    let shape = k.shape();
+    let mut poses = Poses::with_capacity(n, touches.len()).with_shape(shape);
     let mut q = Vec::with_capacity(n);
     let corrects = true_arm.physics.corrects();
     for (i, t) in touches.iter().enumerate() {
@@ -236,10 +240,16 @@ pub fn simulate_observed(
             .sqrt();
         stats.max_residual_mm = stats.max_residual_mm.max(r);
         q.clear();
-        q.extend(t.q.iter().zip(&true_arm.limits).map(|(&x, lim)| {
-            let read = x + sigma * truth::normal(&mut enc);
-            exact_in_degrees(if lim.is_some() { read } else { wrap(read) })
-        }));
+        q.extend(
+            (t.q.iter().zip(&true_arm.limits).enumerate()).map(|(j, (&x, lim))| {
+                if shape.is_prismatic(j) {
+                    // A slide's scale: mm, written as they are.
+                    return x + SLIDE_NOISE_MM * truth::normal(&mut enc);
+                }
+                let read = x + sigma * truth::normal(&mut enc);
+                exact_in_degrees(if lim.is_some() { read } else { wrap(read) })
+            }),
+        );
         poses.push(&sockets[t.socket].0, &q, i + 2);
     }
     let lengths = reference_lengths(
@@ -284,18 +294,45 @@ fn exact_in_degrees(x: f64) -> f64 {
     AngleUnit::Deg.to_internal(AngleUnit::Deg.from_internal_exact(x))
 }
 
-/// Joint limits must be finite with `min < max`.
+/// σ of a prismatic joint's reading (its linear scale), mm: a glass or
+/// magnetic scale's noise; the simulator's only noise on a slide.
+pub const SLIDE_NOISE_MM: f64 = 1e-3;
+
+/// Joint limits must be finite with `min < max`; a prismatic joint must
+/// have them ([`check_strokes`]).
 fn check_limits(arm: &Arm) -> Result<(), SimError> {
+    check_strokes(arm)?;
     for (j, lim) in arm.limits.iter().enumerate() {
         if let Some([lo, hi]) = lim
             && !(lo.is_finite() && hi.is_finite() && lo < hi)
         {
             return Err(SimError::Model(format!(
-                "arm {}, joint {}: limits [{lo}, {hi}] rad must be finite with min < max",
+                "arm {}, joint {}: limits [{lo}, {hi}] (rad; mm for a prismatic joint) must be \
+                 finite with min < max",
                 crate::error::quoted(&arm.name),
                 j + 1
             )));
         }
     }
     Ok(())
+}
+
+/// A prismatic joint must have limits: its stroke, where the simulator
+/// draws its positions.
+pub(crate) fn check_strokes(arm: &Arm) -> Result<(), SimError> {
+    // A chain of no shape (too many joints) is the kernel's to refuse.
+    let Ok(shape) = arm.params.shape() else {
+        return Ok(());
+    };
+    let missing = (0..shape.joints())
+        .find(|&j| shape.is_prismatic(j) && !matches!(arm.limits.get(j), Some(Some(_))));
+    match missing {
+        Some(j) => Err(SimError::Model(format!(
+            "arm {}, joint {}: a prismatic joint needs its stroke (`limits`, in the arm file's \
+             length unit) for the simulator to draw its positions",
+            crate::error::quoted(&arm.name),
+            j + 1
+        ))),
+        None => Ok(()),
+    }
 }

@@ -268,6 +268,7 @@ fn draw_rows(
     let a = settings.noise.position_mm.unwrap_or(-1.0);
     let b = settings.noise.position_mm_per_m.unwrap_or(0.0);
     let n = truth.params.joint_count();
+    super::check_strokes(truth)?;
     let mut limits = truth.limits.clone();
     limits.resize(n, None);
     let model = |e: String| SimError::Model(e);
@@ -280,7 +281,7 @@ fn draw_rows(
         drift_mm_per_h: None,
         ..physics.clone()
     };
-    let mut positions = Positions::new(n);
+    let mut positions = Positions::new(n).with_shape(kernel.shape());
     // Row by row — the pose, its conditions, the noise — so that a session
     // without conditions draws what it always drew.
     for (f, (name, x)) in frames.iter().enumerate() {

@@ -56,6 +56,8 @@ pub(crate) fn find_touches(
     progress: &mut dyn FnMut(f64),
 ) -> Result<Vec<Touch>, SimError> {
     let k = ArmKernel::new(&arm.params)?;
+    let prismatic = k.shape().prismatic_mask();
+    let scales = separation_scales(arm, prismatic);
     let budget = plan.poses * plan.starts_per_pose;
     let mut touches = Vec::with_capacity(sockets.len() * plan.poses);
     for (s, (label, centre)) in sockets.iter().enumerate() {
@@ -83,13 +85,13 @@ pub(crate) fn find_touches(
                     stats.not_converged += 1;
                     continue;
                 }
-                let Some(q) = within_limits(sol.q, &arm.limits) else {
+                let Some(q) = within_limits(sol.q, &arm.limits, prismatic) else {
                     stats.outside_limits += 1;
                     continue;
                 };
                 if accepted
                     .iter()
-                    .any(|a| separation(a, &q) < plan.min_separation)
+                    .any(|a| separation_scaled(a, &q, &scales) < plan.min_separation)
                 {
                     stats.too_close += 1;
                     continue;
@@ -117,24 +119,58 @@ pub(crate) fn find_touches(
 
 /// The readings wrapped to `[-π, π)` and, where a joint has limits, shifted
 /// by a whole turn into them if that helps; `None` if some joint stays
-/// outside its limits.
-pub(crate) fn within_limits(q: Vec<f64>, limits: &[Option<[f64; 2]>]) -> Option<Vec<f64>> {
+/// outside its limits. A prismatic joint's reading (a bit of `prismatic`,
+/// mm) is not wrapped: it must lie within its stroke.
+pub(crate) fn within_limits(
+    q: Vec<f64>,
+    limits: &[Option<[f64; 2]>],
+    prismatic: u16,
+) -> Option<Vec<f64>> {
     use std::f64::consts::TAU;
-    let mut out: Vec<f64> = q.into_iter().map(wrap).collect();
+    let slides = |j: usize| j < 16 && prismatic & (1 << j) != 0;
+    let mut out: Vec<f64> = (q.into_iter().enumerate())
+        .map(|(j, x)| if slides(j) { x } else { wrap(x) })
+        .collect();
     for (j, x) in out.iter_mut().enumerate() {
         if let Some([lo, hi]) = limits.get(j).copied().flatten() {
-            *x = [*x, *x + TAU, *x - TAU]
-                .into_iter()
-                .find(|v| (lo..=hi).contains(v))?;
+            let turns: &[f64] = if slides(j) { &[0.0] } else { &[0.0, TAU, -TAU] };
+            *x = (turns.iter().map(|t| *x + t)).find(|v| (lo..=hi).contains(v))?;
         }
     }
     Some(out)
 }
 
-/// The largest joint difference of two poses, each wrapped to ±π, rad.
+/// The largest joint difference of two poses of revolute joints, each
+/// wrapped to ±π, rad.
+#[cfg(test)]
 pub(crate) fn separation(a: &[f64], b: &[f64]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| wrap(x - y).abs())
+    separation_scaled(a, b, &vec![0.0; a.len()])
+}
+
+/// Per joint, what a prismatic joint's difference (mm) is multiplied by to
+/// count as an angle in [`separation_scaled`]: its whole stroke counts as
+/// a full turn (the simulator requires a stroke; 1 m a radian without).
+/// 0 for a revolute joint.
+pub(crate) fn separation_scales(arm: &Arm, prismatic: u16) -> Vec<f64> {
+    (0..arm.params.joint_count())
+        .map(|j| match arm.limits.get(j).copied().flatten() {
+            _ if j >= 16 || prismatic & (1 << j) == 0 => 0.0,
+            Some([lo, hi]) if hi > lo => std::f64::consts::TAU / (hi - lo),
+            _ => 1e-3,
+        })
+        .collect()
+}
+
+/// The largest joint difference of two poses: a revolute joint's wrapped
+/// to ±π (rad), a prismatic one's (`scales[j] > 0`) times its scale.
+pub(crate) fn separation_scaled(a: &[f64], b: &[f64], scales: &[f64]) -> f64 {
+    (a.iter().zip(b).zip(scales))
+        .map(|((x, y), &s)| {
+            if s > 0.0 {
+                (x - y).abs() * s
+            } else {
+                wrap(x - y).abs()
+            }
+        })
         .fold(0.0, f64::max)
 }
