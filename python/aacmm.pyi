@@ -214,8 +214,11 @@ class DataSet:
         uncertainty: Optional[npt.ArrayLike] = None,
         labels: Optional[Sequence[Any]] = None,
         angle_unit: _AngleUnit = "rad",
+        joint_types: Optional[str] = None,
     ) -> "DataSet":
-        """Reference positions alone, from arrays: ``q`` n × joints readings,
+        """Reference positions alone, from arrays: ``q`` n × joints readings
+        (``joint_types`` ``"PRRRRRR"``: a slide's column in mm whatever
+        ``angle_unit`` says),
         ``xyz`` n × 3 where the instrument saw the probe (mm, its frame),
         ``frames`` per row its frame (a str for every row; default
         ``"instrument"``), each with its own fitted registration,
@@ -234,7 +237,8 @@ class DataSet:
         angle_unit: _AngleUnit = "rad",
     ) -> "DataSet":
         """These touches with reference positions from arrays (as
-        :meth:`from_positions`, ``q`` with this data set's joints), fitted
+        :meth:`from_positions`, ``q`` with this data set's joints, a slide's
+        column in mm as this data set's joint types say), fitted
         together: a new data set. ValueError if this one has positions
         already."""
     def __len__(self) -> int:

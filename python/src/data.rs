@@ -254,7 +254,8 @@ impl DataSet {
     /// empty name, and a frame with fewer than 3 distinct positions or all
     /// of them on one line. Reports name the rows `<arrays>:i+1`.
     #[staticmethod]
-    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad"))]
+    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad", joint_types = None))]
+    #[allow(clippy::too_many_arguments)]
     fn from_positions(
         py: Python<'_>,
         q: &Bound<'_, PyAny>,
@@ -263,8 +264,14 @@ impl DataSet {
         uncertainty: Option<&Bound<'_, PyAny>>,
         labels: Option<&Bound<'_, PyAny>>,
         angle_unit: &str,
+        joint_types: Option<&str>,
     ) -> PyResult<DataSet> {
         let unit = crate::angle_unit(angle_unit)?;
+        // Only with types given: `read` names a wrong shape of `q` itself.
+        let shape = match joint_types {
+            Some(_) => crate::readings::joint_types(joint_types, columns(q)?)?,
+            None => None,
+        };
         let args = PositionArgs {
             q,
             xyz,
@@ -272,11 +279,16 @@ impl DataSet {
             uncertainty,
             labels,
             unit,
+            prismatic: shape.map_or(0, |s| s.prismatic_mask()),
         };
         let read = args.read(py, None)?;
         let data = detached(py, || {
             read.check_frames()?;
-            Ok(CoreDataSet::from_positions(read.rows, ARRAYS)?)
+            let data = CoreDataSet::from_positions(read.rows, ARRAYS)?;
+            Ok(match shape {
+                Some(shape) => data.for_shape(shape)?,
+                None => data,
+            })
         })?;
         Ok(DataSet {
             data,
@@ -320,6 +332,8 @@ impl DataSet {
             uncertainty,
             labels,
             unit,
+            // The readings of the data set's own chain: its slides in mm.
+            prismatic: self.data.shape().map_or(0, |s| s.prismatic_mask()),
         };
         let read = args.read(py, Some(self.data.joints()))?;
         let data = detached(py, || {

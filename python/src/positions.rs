@@ -32,6 +32,9 @@ pub(crate) struct PositionArgs<'a, 'py> {
     pub(crate) uncertainty: Option<&'a Bound<'py, PyAny>>,
     pub(crate) labels: Option<&'a Bound<'py, PyAny>>,
     pub(crate) unit: AngleUnit,
+    /// Which columns of `q` are slides (bit j: joint j+1): read in mm,
+    /// whatever `unit` says.
+    pub(crate) prismatic: u16,
 }
 
 impl PositionArgs<'_, '_> {
@@ -52,7 +55,7 @@ impl PositionArgs<'_, '_> {
                 .into());
             }
         };
-        let readings = Readings::new(self.q, "q", j, self.unit)?;
+        let readings = Readings::new(self.q, "q", j, self.unit)?.with_prismatic(self.prismatic);
         let n = readings.rows();
         if n == 0 {
             return Err(Error::value("q: no rows: no positions").into());

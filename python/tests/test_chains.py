@@ -60,3 +60,20 @@ def test_data_sets_keep_a_slide_in_mm():
     data = aacmm.DataSet(labels, q, angle_unit="deg", joint_types="PRRRRRR")
     assert np.array_equal(data.q[:, 0], q[:, 0])
     assert np.allclose(data.q[:, 1:], np.radians(q[:, 1:]))
+
+
+def test_positions_from_arrays_keep_a_slide_in_mm():
+    arm = aacmm.Arm.from_file(TRACK)
+    q = track_readings()[:20]
+    xyz = arm.positions(q, angle_unit="deg")
+    data = aacmm.DataSet.from_positions(q, xyz, angle_unit="deg", joint_types="PRRRRRR")
+    seen = data.positions["q"]
+    assert np.array_equal(seen[:, 0], q[:, 0])
+    assert np.allclose(seen[:, 1:], np.radians(q[:, 1:]), rtol=0, atol=1e-15)
+    # Added to touches of the track, the touches' types hold.
+    labels = ["A"] * 6 + ["B"] * 6
+    touches = aacmm.DataSet(labels, q[:12], angle_unit="deg", joint_types="PRRRRRR")
+    both = touches.with_positions(q, xyz, angle_unit="deg")
+    assert np.array_equal(both.positions["q"][:, 0], q[:, 0])
+    with pytest.raises(ValueError, match="joint_types"):
+        aacmm.DataSet.from_positions(q, xyz, joint_types="PRR")

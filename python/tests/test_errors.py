@@ -262,7 +262,7 @@ def test_hostile_counts_give_ordinary_exceptions(arm, data):
     not an Exception, and no wrong result)."""
     hostile = [
         lambda: aacmm.param_names(0),
-        lambda: aacmm.param_names(5),
+        lambda: aacmm.param_names(13),
         lambda: aacmm.param_names(2**62),
         lambda: aacmm.param_names(2**64),
         lambda: aacmm.param_names(-1),

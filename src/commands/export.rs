@@ -32,8 +32,8 @@ pub struct Args {
     #[arg(long, value_name = "ROBOT.urdf", requires = "urdf")]
     template: Option<PathBuf>,
     /// Write the arm as a D-H table here: `link,model,theta_deg,d_mm,a_mm,
-    /// alpha_deg,beta_deg,x_mm,y_mm,z_mm`, one row per joint and a `probe`
-    /// row.
+    /// alpha_deg,beta_deg,x_mm,y_mm,z_mm,type`, one row per joint (`type`:
+    /// revolute or prismatic) and a `probe` row.
     #[arg(long, value_name = "OUT.csv")]
     dh_table: Option<PathBuf>,
     /// Write over earlier results: an output file that exists, or an

@@ -215,16 +215,27 @@ fn xml_escape(s: &str) -> String {
 /// The arm as a plain D-H table, CSV: one row per joint (`theta_deg`,
 /// `d_mm`, `a_mm`, `alpha_deg`, and `beta_deg` for a Hayati joint, whose
 /// `d_mm` is empty), then a `probe` row with the probe's `x_mm,y_mm,z_mm`
-/// in the last frame. Standard D-H: `A_i = Rz(θ_i + q_i)·Tz(d_i)·Tx(a_i)·
-/// Rx(α_i)`; Hayati: `Rz(θ_i + q_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`.
+/// in the last frame; the last column, `type`, says whether the joint turns
+/// (`revolute`: the reading is added to θ) or slides (`prismatic`: the
+/// reading, mm, is added to `d`, or stands where `d` would for a Hayati
+/// joint). Standard D-H: `A_i = Rz(θ_i + q_i)·Tz(d_i)·Tx(a_i)·Rx(α_i)`;
+/// Hayati: `Rz(θ_i + q_i)·Tx(a_i)·Rx(α_i)·Ry(β_i)`; a slide's `q_i` moves
+/// from `Rz` into `Tz`.
 ///
 /// ```
-/// let t = aacmm_core::urdf::export::dh_table(&aacmm_core::params::DhParams::paper_nominal());
-/// assert!(t.starts_with("link,model,theta_deg,d_mm,a_mm,alpha_deg,beta_deg,x_mm,y_mm,z_mm\n1,dh,0.0,"));
-/// assert!(t.ends_with("probe,point,,,,,,0.0,0.0,100.0\n"));
+/// use aacmm_core::params::{DhParams, JointKind};
+/// use aacmm_core::urdf::export::dh_table;
+/// let t = dh_table(&DhParams::paper_nominal());
+/// assert!(t.starts_with("link,model,theta_deg,d_mm,a_mm,alpha_deg,beta_deg,x_mm,y_mm,z_mm,type\n1,dh,0.0,"));
+/// assert!(t.lines().nth(1).unwrap().ends_with(",revolute"));
+/// assert!(t.ends_with("probe,point,,,,,,0.0,0.0,100.0,\n"));
+/// let mut track = DhParams::paper_nominal();
+/// track.joints[0] = track.joints[0].with_kind(JointKind::Prismatic);
+/// assert!(dh_table(&track).lines().nth(1).unwrap().ends_with(",prismatic"));
 /// ```
 pub fn dh_table(params: &DhParams) -> String {
-    let mut s = String::from("link,model,theta_deg,d_mm,a_mm,alpha_deg,beta_deg,x_mm,y_mm,z_mm\n");
+    let mut s =
+        String::from("link,model,theta_deg,d_mm,a_mm,alpha_deg,beta_deg,x_mm,y_mm,z_mm,type\n");
     for (i, j) in params.joints.iter().enumerate() {
         let (model, d, beta) = match j.model {
             JointModel::Hayati => (
@@ -235,15 +246,16 @@ pub fn dh_table(params: &DhParams) -> String {
             _ => ("dh", format!("{:?}", j.d), String::new()),
         };
         s += &format!(
-            "{},{model},{:?},{d},{:?},{:?},{beta},,,\n",
+            "{},{model},{:?},{d},{:?},{:?},{beta},,,,{}\n",
             i + 1,
             j.theta.to_degrees(),
             j.a,
-            j.alpha.to_degrees()
+            j.alpha.to_degrees(),
+            j.kind.name()
         );
     }
     let b = params.probe;
-    s += &format!("probe,point,,,,,,{:?},{:?},{:?}\n", b[0], b[1], b[2]);
+    s += &format!("probe,point,,,,,,{:?},{:?},{:?},\n", b[0], b[1], b[2]);
     s
 }
 
