@@ -169,15 +169,16 @@ impl Effects {
     }
 }
 
+/// Whether joint `j` (0-based) of `arm` slides.
+fn slides(arm: &DhParams, j: usize) -> bool {
+    (arm.joints.get(j)).is_some_and(|x| x.kind == JointKind::Prismatic)
+}
+
 /// Refuses the reading corrections of a prismatic joint: encoder
 /// harmonics and compliance are models of a revolute joint's angle (a
 /// slide's reading is a length, and its load a force along it).
 fn check_prismatic(arm: &DhParams, physics: &Physics, fit: &Beyond) -> Result<(), EffectsError> {
-    let slides = |j: usize| {
-        arm.joints
-            .get(j)
-            .is_some_and(|x| x.kind == JointKind::Prismatic)
-    };
+    let slides = |j: usize| slides(arm, j);
     let harmonic = (physics.harmonics.iter().map(|h| h.joint))
         .chain(fit.harmonics.iter().map(|h| h.0))
         .find(|&j| slides(j));
@@ -270,11 +271,7 @@ fn pose_corrections(
     q: &[f64],
 ) -> Vec<f64> {
     let n = q.len();
-    let slides = |j: usize| {
-        arm.joints
-            .get(j)
-            .is_some_and(|x| x.kind == JointKind::Prismatic)
-    };
+    let slides = |j: usize| slides(arm, j);
     let (cos, sin): (Vec<f64>, Vec<f64>) = (q.iter().enumerate())
         .map(|(j, v)| {
             if slides(j) {
