@@ -53,7 +53,11 @@ fn example(path: &str) -> String {
 
 /// The command line of this workspace: `$AACMM_CLI` if set, else built by
 /// cargo now in this test's profile, so that the test never compares with
-/// a binary left by an older tree.
+/// a binary left by an older tree. Built as `cargo test --workspace` builds
+/// it (a no-op inside that command): `cargo build -p aacmm` would resolve
+/// the dependencies without this crate's cbindgen, whose syn cargo shares
+/// with the proc-macros', and so build the core and the CLI a second time
+/// (2–5 minutes on two cores).
 fn cli() -> PathBuf {
     if let Some(exe) = std::env::var_os("AACMM_CLI") {
         return exe.into();
@@ -68,7 +72,7 @@ fn cli() -> PathBuf {
         .to_string();
     let mut cargo = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
     cargo
-        .args(["build", "--quiet", "-p", "aacmm", "--bin", "aacmm"])
+        .args(["test", "--quiet", "--workspace", "--no-run"])
         .arg("--message-format=json")
         .current_dir(root());
     match profile.as_str() {
@@ -83,12 +87,14 @@ fn cli() -> PathBuf {
     let out = cargo.output().expect("cargo runs");
     assert!(
         out.status.success(),
-        "cargo build --bin aacmm failed:\n{}",
+        "cargo test --workspace --no-run failed:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8_lossy(&out.stdout)
         .lines()
         .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .filter(|m| m["target"]["name"] == "aacmm" && m["target"]["kind"][0] == "bin")
+        .filter(|m| m["profile"]["test"] == false)
         .find_map(|m| m["executable"].as_str().map(PathBuf::from))
         .expect("cargo names the aacmm executable")
 }
