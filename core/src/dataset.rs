@@ -114,7 +114,8 @@ impl SourceMap {
     }
 }
 
-/// Rows of a poses file that repeat, reading for reading (and temperature),
+/// Rows of a poses file that repeat, reading for reading (and temperature
+/// and direction of approach),
 /// the previous row of the same point — a logger that wrote a line twice,
 /// or a touch recorded again without the arm moving. Such a row is no
 /// independent touch: it adds no scatter, so counted it would lower `e`
@@ -137,12 +138,16 @@ impl Repeats {
             return Repeats { rows, of };
         }
         let temperature = poses.temperatures();
+        let approach = poses.approaches();
+        let n = poses.joints();
+        let directions = |a: &[i8], row: usize| a[row * n..(row + 1) * n].to_vec();
         for row in 0..poses.len() {
             let p = poses.point(row);
             let prev = last[p];
             let same = prev != usize::MAX
                 && poses.reading(row) == poses.reading(prev)
-                && temperature.is_none_or(|t| t[row] == t[prev]);
+                && temperature.is_none_or(|t| t[row] == t[prev])
+                && approach.is_none_or(|a| directions(a, row) == directions(a, prev));
             if same {
                 rows.push(row);
                 of.push(prev);
@@ -288,6 +293,9 @@ pub struct DataSet {
     /// the poses file recorded them.
     temperature: Option<Vec<f64>>,
     time: Option<Vec<f64>>,
+    /// Per touch and joint (touch order, touch-major), the direction of
+    /// approach, when the poses file recorded it ([`crate::io::approach`]).
+    approach: Option<Vec<i8>>,
     /// One warning per point some of whose rows repeated the row before
     /// them and were counted once ([`DataSet::repeat_warnings`]).
     repeats: Vec<crate::io::Warning>,
@@ -351,6 +359,7 @@ impl PositionData {
         Conditions {
             temperature_c: self.rows.temperatures(),
             time_s: self.rows.times(),
+            approach: self.rows.approaches(),
         }
     }
 
@@ -552,6 +561,12 @@ impl DataSet {
             in_touch_order(poses.temperatures()),
             in_touch_order(poses.times()),
         );
+        let approach = (poses.approaches()).map(|a| {
+            (order.iter())
+                .flat_map(|&r| &a[r * joints..(r + 1) * joints])
+                .copied()
+                .collect()
+        });
         drop(order);
         Ok(DataSet {
             joints,
@@ -569,6 +584,7 @@ impl DataSet {
             positions: None,
             temperature,
             time,
+            approach,
             repeats: warnings,
         })
     }
@@ -912,6 +928,7 @@ impl DataSet {
             positions: Some(PositionData::new(positions, file, prismatic)),
             temperature: None,
             time: None,
+            approach: None,
             repeats: Vec::new(),
         })
     }
@@ -1147,6 +1164,13 @@ impl DataSet {
             temperature: (self.temperature.as_ref())
                 .map(|t| touches.iter().map(|&i| t[i]).collect()),
             time: (self.time.as_ref()).map(|t| touches.iter().map(|&i| t[i]).collect()),
+            approach: (self.approach.as_ref()).map(|a| {
+                let n = self.joints;
+                (touches.iter())
+                    .flat_map(|&i| &a[i * n..(i + 1) * n])
+                    .copied()
+                    .collect()
+            }),
             repeats: self.repeats.clone(),
         }
     }
@@ -1175,6 +1199,7 @@ impl DataSet {
         Conditions {
             temperature_c: self.temperature.as_deref(),
             time_s: self.time.as_deref(),
+            approach: self.approach.as_deref(),
         }
     }
 
@@ -1342,6 +1367,16 @@ fn room_for_touches(poses: &Poses, file: &str) -> Result<(), InputError> {
 mod tests {
     use super::*;
     use crate::io::{AngleUnit, parse_poses};
+
+    /// The same readings approached from another side are two touches
+    /// (the play puts the link elsewhere); from the same side, a repeat.
+    #[test]
+    fn a_row_approached_otherwise_is_no_repeat() {
+        let t = "point,q1,approach\nA,1,+\nA,1,-\nA,1,-\n";
+        let (p, _) = parse_poses(t, "p.csv", AngleUnit::Deg, Some(1)).unwrap();
+        let r = Repeats::of(&p);
+        assert_eq!((r.rows, r.of), (vec![2], vec![1]));
+    }
 
     fn data(text: &str) -> Result<DataSet, InputError> {
         let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, None).unwrap();
