@@ -97,7 +97,7 @@ fn a_slides_readings_stay_mm_in_arrays_and_in_degree_files() {
     let settings = PositionSettings {
         poses: 150,
         frames: 1,
-        noise: noise.clone(),
+        noise,
         seed: 21,
     };
     let (_, campaign) =

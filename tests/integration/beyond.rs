@@ -2,6 +2,8 @@
 //! and drift in a simulated true arm (a known truth), recovered when the
 //! model is switched on, harmless when it is on for data without them.
 
+use std::path::PathBuf;
+
 use aacmm_core::calibrate::validate::position_errors;
 use aacmm_core::corrections::{Beyond, Harmonic, Physics};
 use aacmm_core::dataset::DataSet;
@@ -529,28 +531,15 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
             "mass_kg = 2.275\ncompliance_rad_per_nm = 18e-6",
         )
         .replacen("mass_kg = 1.219", "mass_kg = 1.219\nbacklash = 0.02", 1);
-    let truth = crate::util::write(&dir, "true.toml", &true_text);
-    let out = dir.join("sim");
-    let o = aacmm(&[
-        "simulate",
-        "--arm",
-        nominal.to_str().unwrap(),
-        "--true",
-        &truth,
-        "--positions",
-        "300",
+    let session = [
         "--temperature",
         "15:30",
         "--session-hours",
         "4",
         "--drift",
         "0.08,-0.05,0.1",
-        "--seed",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    ];
+    let out = simulate_ur5(&dir, &true_text, &session, "3");
     let written = std::fs::read_to_string(out.join("true_arm.toml")).unwrap();
     assert!(written.contains("cte_per_k") && written.contains("compliance_rad_per_nm"));
     assert!(written.contains("backlash = "), "{written}");
@@ -601,6 +590,30 @@ fn simulate_writes_a_session_that_calibrate_recovers() {
             a.sigma
         );
     }
+}
+
+/// `aacmm simulate` of 300 tracker positions (seed `seed`, the flags
+/// `extra`) of the true arm file `true_text` about the shipped UR5, into
+/// `dir/sim`.
+fn simulate_ur5(dir: &std::path::Path, true_text: &str, extra: &[&str], seed: &str) -> PathBuf {
+    use crate::util::{aacmm, stderr};
+    let nominal = crate::util::example("ur5-tracker").join("arm.toml");
+    let truth = crate::util::write(dir, "true.toml", true_text);
+    let out = dir.join("sim");
+    let mut args = vec![
+        "simulate",
+        "--arm",
+        nominal.to_str().unwrap(),
+        "--true",
+        &truth,
+        "--positions",
+        "300",
+    ];
+    args.extend(extra);
+    args.extend(["--seed", seed, "--out", out.to_str().unwrap()]);
+    let o = aacmm(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    out
 }
 
 /// What the data cannot separate is held with why, the rest fitted: a
@@ -764,23 +777,7 @@ fn simulate_writes_the_approach_that_calibrate_reads() {
     let text = std::fs::read_to_string(&nominal).unwrap();
     let true_text = text.replacen("mass_kg = ", "backlash = 0.02\nmass_kg = ", 1);
     assert_ne!(true_text, text);
-    let truth = crate::util::write(&dir, "true.toml", &true_text);
-    let out = dir.join("sim");
-    let o = aacmm(&[
-        "simulate",
-        "--arm",
-        nominal.to_str().unwrap(),
-        "--true",
-        &truth,
-        "--positions",
-        "300",
-        "--approach",
-        "--seed",
-        "4",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = simulate_ur5(&dir, &true_text, &["--approach"], "4");
     let positions = std::fs::read_to_string(out.join("positions.csv")).unwrap();
     assert!(
         positions.starts_with("point,q1,q2,q3,q4,q5,q6,x,y,z,approach\n"),
