@@ -425,6 +425,7 @@ fn beyond_positions(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement
                 let conditions = ConditionSettings {
                     temperature_c: Some([15.0, 30.0]),
                     session_h: Some(4.0),
+                    approach: false,
                 };
                 let rows = simulate_session(&truth, &s, &conditions, None)
                     .expect("campaign")

@@ -624,7 +624,8 @@ AacmmStatus aacmm_arm_warnings(const AacmmArm *arm, char *buf, size_t buf_len, s
 /**
  * Probe positions of `n = q_len / joints` poses.
  *
- * `q` holds the encoder readings, rad, row-major `n × joints`
+ * `q` holds the encoder readings, rad (a prismatic joint's, mm:
+ * `aacmm_arm_set_joint_types`), row-major `n × joints`
  * (`q[i·joints + j]` is joint `j` of pose `i`); `p` receives the probe
  * positions, mm, row-major `n × 3` (`p[3·i + k]`, `k` = x, y, z), in pose
  * order. The results are bit-identical to the Rust API's
@@ -716,7 +717,8 @@ AacmmStatus aacmm_joint_jacobian(const AacmmArm *arm,
  *
  * `poses_unit` is the unit of the angles of the poses file and of the
  * positions file (`AACMM_ANGLE_DEG`, `AACMM_ANGLE_RAD`: `--angle-unit`);
- * `lengths_path` may be `NULL`. The result goes to a
+ * a prismatic joint's column is mm whatever it says (the arm file's
+ * `type`); `lengths_path` may be `NULL`. The result goes to a
  * new handle at `*out`; a calibration the library does not call usable
  * (the solver did not converge, a mirror-image arm, a poor fit) still
  * gives a result: check `successful` in `aacmm_calibration_summary`, and
@@ -747,7 +749,8 @@ AacmmStatus aacmm_calibrate_files(const char *arm_path,
 /**
  * Calibrates `start` on touches and reference lengths given as arrays.
  *
- * `q` holds the readings (rad) of `n = q_len / joints` touches, row-major
+ * `q` holds the readings (rad; a prismatic joint's mm, whatever unit the
+ * files of `aacmm_calibrate_files` are in) of `n = q_len / joints` touches, row-major
  * as in `aacmm_positions`; `points[i]` is the id of the point touch `i`
  * touched (`points_len = n`; touches with the same id touch the same
  * point, which needs at least 3 touches); `lengths` holds `lengths_len`
@@ -1348,7 +1351,8 @@ AacmmStatus aacmm_calibrate_options_set_drift(AacmmCalibrateOptions *options, bo
  * Reference positions an instrument saw, fitted with the arm as the
  * command line's `--positions` file is (copied; they replace positions set
  * before, also a file). Row `i` of `n = q_len / joints` rows holds the
- * readings `q[i·joints ..]` (rad, row-major as in `aacmm_positions`) of a
+ * readings `q[i·joints ..]` (rad, a prismatic joint's mm: row-major as in
+ * `aacmm_positions`) of a
  * pose, and `xyz[3·i ..]`, where the instrument saw the probe: x, y, z in
  * mm in the instrument's own frame. Each frame (a station of a tracker,
  * a placement of an artefact) gets its own unknown rigid registration,

@@ -435,7 +435,8 @@ const BATCH: usize = 4096;
 
 /// Probe positions of `n = q_len / joints` poses.
 ///
-/// `q` holds the encoder readings, rad, row-major `n × joints`
+/// `q` holds the encoder readings, rad (a prismatic joint's, mm:
+/// `aacmm_arm_set_joint_types`), row-major `n × joints`
 /// (`q[i·joints + j]` is joint `j` of pose `i`); `p` receives the probe
 /// positions, mm, row-major `n × 3` (`p[3·i + k]`, `k` = x, y, z), in pose
 /// order. The results are bit-identical to the Rust API's

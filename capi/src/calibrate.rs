@@ -234,7 +234,8 @@ fn in_file(e: aacmm_core::CalibrationError, arm: &str) -> Error {
 ///
 /// `poses_unit` is the unit of the angles of the poses file and of the
 /// positions file (`AACMM_ANGLE_DEG`, `AACMM_ANGLE_RAD`: `--angle-unit`);
-/// `lengths_path` may be `NULL`. The result goes to a
+/// a prismatic joint's column is mm whatever it says (the arm file's
+/// `type`); `lengths_path` may be `NULL`. The result goes to a
 /// new handle at `*out`; a calibration the library does not call usable
 /// (the solver did not converge, a mirror-image arm, a poor fit) still
 /// gives a result: check `successful` in `aacmm_calibration_summary`, and
@@ -336,7 +337,8 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
 
 /// Calibrates `start` on touches and reference lengths given as arrays.
 ///
-/// `q` holds the readings (rad) of `n = q_len / joints` touches, row-major
+/// `q` holds the readings (rad; a prismatic joint's mm, whatever unit the
+/// files of `aacmm_calibrate_files` are in) of `n = q_len / joints` touches, row-major
 /// as in `aacmm_positions`; `points[i]` is the id of the point touch `i`
 /// touched (`points_len = n`; touches with the same id touch the same
 /// point, which needs at least 3 touches); `lengths` holds `lengths_len`

@@ -803,7 +803,8 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_drift(
 /// Reference positions an instrument saw, fitted with the arm as the
 /// command line's `--positions` file is (copied; they replace positions set
 /// before, also a file). Row `i` of `n = q_len / joints` rows holds the
-/// readings `q[i·joints ..]` (rad, row-major as in `aacmm_positions`) of a
+/// readings `q[i·joints ..]` (rad, a prismatic joint's mm: row-major as in
+/// `aacmm_positions`) of a
 /// pose, and `xyz[3·i ..]`, where the instrument saw the probe: x, y, z in
 /// mm in the instrument's own frame. Each frame (a station of a tracker,
 /// a placement of an artefact) gets its own unknown rigid registration,

@@ -30,6 +30,15 @@ pub const MIN_TOUCHES: usize = 3;
 /// and cannot say anything about its geometry.
 pub const MIN_ARTICULATION_DEG: f64 = 1.0;
 
+/// Least range of a prismatic joint's readings (mm) that counts as
+/// articulation, the slide's counterpart of [`MIN_ARTICULATION_DEG`]: a 1°
+/// turn moves the probe about 10 mm at an arm's typical lever of 0.57 m
+/// (1° × 573 mm = 10 mm), so a slide must move the probe as far; that is
+/// 10⁴ times a linear scale's noise (1 µm, as the simulator's), where 1° is
+/// 200 times an angle encoder's (0.005°). Compared with the degrees
+/// threshold, a slide's range in mm would count 0.02 mm as a degree.
+pub const MIN_SLIDE_ARTICULATION_MM: f64 = 10.0;
+
 /// One physical point (cone socket) and its touches.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
@@ -114,7 +123,8 @@ impl SourceMap {
     }
 }
 
-/// Rows of a poses file that repeat, reading for reading (and temperature),
+/// Rows of a poses file that repeat, reading for reading (and temperature
+/// and direction of approach),
 /// the previous row of the same point — a logger that wrote a line twice,
 /// or a touch recorded again without the arm moving. Such a row is no
 /// independent touch: it adds no scatter, so counted it would lower `e`
@@ -137,12 +147,16 @@ impl Repeats {
             return Repeats { rows, of };
         }
         let temperature = poses.temperatures();
+        let approach = poses.approaches();
+        let n = poses.joints();
+        let directions = |a: &[i8], row: usize| a[row * n..(row + 1) * n].to_vec();
         for row in 0..poses.len() {
             let p = poses.point(row);
             let prev = last[p];
             let same = prev != usize::MAX
                 && poses.reading(row) == poses.reading(prev)
-                && temperature.is_none_or(|t| t[row] == t[prev]);
+                && temperature.is_none_or(|t| t[row] == t[prev])
+                && approach.is_none_or(|a| directions(a, row) == directions(a, prev));
             if same {
                 rows.push(row);
                 of.push(prev);
@@ -288,6 +302,9 @@ pub struct DataSet {
     /// the poses file recorded them.
     temperature: Option<Vec<f64>>,
     time: Option<Vec<f64>>,
+    /// Per touch and joint (touch order, touch-major), the direction of
+    /// approach, when the poses file recorded it ([`crate::io::approach`]).
+    approach: Option<Vec<i8>>,
     /// One warning per point some of whose rows repeated the row before
     /// them and were counted once ([`DataSet::repeat_warnings`]).
     repeats: Vec<crate::io::Warning>,
@@ -351,6 +368,7 @@ impl PositionData {
         Conditions {
             temperature_c: self.rows.temperatures(),
             time_s: self.rows.times(),
+            approach: self.rows.approaches(),
         }
     }
 
@@ -388,7 +406,8 @@ fn rows_by_point(poses: &Poses) -> (Vec<usize>, Vec<usize>) {
 }
 
 /// Refuses readings in which no point is articulated: every point's touches
-/// lie within [`MIN_ARTICULATION_DEG`] of each other in every joint. Such a
+/// lie within [`MIN_ARTICULATION_DEG`] of each other in every revolute
+/// joint, [`MIN_SLIDE_ARTICULATION_MM`] in every prismatic one. Such a
 /// campaign (each socket touched in one pose, perhaps read several times)
 /// has a Jacobian of rounding and noise only. `q` holds the readings (rad)
 /// in touch order, `points` each point's touches. A data set without
@@ -398,12 +417,21 @@ fn check_articulation(poses: &Poses, file: &str) -> Result<(), InputError> {
     if joints == 0 {
         return Ok(());
     }
-    // The widest range of a joint at one point: (range in rad, joint,
-    // point label), points and joints in order. Each point's rows are
+    // The widest range of a joint at one point, as a fraction of its
+    // threshold: (fraction, range in rad or mm, joint, point label),
+    // points and joints in order. Each point's rows are
     // visited together (a counting sort), so what this holds grows with the
     // rows (8 bytes each), not with points × joints — a file of as many
     // labels as rows would have taken 16 bytes a joint per row.
-    let mut widest = (0.0_f64, 0, "");
+    let slides = |j: usize| j < 16 && poses.prismatic_mask() & (1 << j) != 0;
+    let fraction = |j: usize, range: f64| {
+        if slides(j) {
+            range / MIN_SLIDE_ARTICULATION_MM
+        } else {
+            range.to_degrees() / MIN_ARTICULATION_DEG
+        }
+    };
+    let mut widest = (0.0_f64, 0.0_f64, 0, "");
     let (start, order) = rows_by_point(poses);
     // When no point has the touches it needs, the touch count refuses the
     // file for that (the clearer cause), not this check.
@@ -420,31 +448,41 @@ fn check_articulation(poses: &Poses, file: &str) -> Result<(), InputError> {
         }
         for (j, &(lo, hi)) in bounds.iter().enumerate() {
             let range = hi - lo;
-            if range > widest.0 {
-                widest = (range, j, label);
+            let f = fraction(j, range);
+            if f > widest.0 {
+                widest = (f, range, j, label);
             }
         }
     }
-    if widest.0.to_degrees() >= MIN_ARTICULATION_DEG {
+    if widest.0 >= 1.0 {
         return Ok(());
     }
-    let (range, j, label) = widest;
+    let (_, range, j, label) = widest;
+    let (value, unit) = match slides(j) {
+        true => (range, " mm"),
+        false => (range.to_degrees(), "°"),
+    };
     let at = if range > 0.0 {
         format!(
-            "the widest range of a joint at one point is {:.4}° (q{} at point {})",
-            range.to_degrees(),
+            "the widest range of a joint at one point is {value:.4}{unit} (q{} at point {})",
             j + 1,
             crate::error::quoted(label)
         )
     } else {
         "every point's touches have identical readings".to_string()
     };
+    // A slide's threshold is said only where there is a slide: a revolute
+    // arm's message is what it always was.
+    let slide = match poses.prismatic_mask() {
+        0 => String::new(),
+        _ => format!(", {MIN_SLIDE_ARTICULATION_MM} mm of a slide"),
+    };
     Err(InputError::file_error(
         file,
         format!(
             "no articulation: {at}; each point must be touched in many different poses \
-             (joint ranges of at least {MIN_ARTICULATION_DEG}°, in practice tens of degrees) \
-             for the touches to say anything about the arm"
+             (joint ranges of at least {MIN_ARTICULATION_DEG}°{slide}, in practice tens of \
+             degrees) for the touches to say anything about the arm"
         ),
     ))
 }
@@ -552,6 +590,12 @@ impl DataSet {
             in_touch_order(poses.temperatures()),
             in_touch_order(poses.times()),
         );
+        let approach = (poses.approaches()).map(|a| {
+            (order.iter())
+                .flat_map(|&r| &a[r * joints..(r + 1) * joints])
+                .copied()
+                .collect()
+        });
         drop(order);
         Ok(DataSet {
             joints,
@@ -569,6 +613,7 @@ impl DataSet {
             positions: None,
             temperature,
             time,
+            approach,
             repeats: warnings,
         })
     }
@@ -912,6 +957,7 @@ impl DataSet {
             positions: Some(PositionData::new(positions, file, prismatic)),
             temperature: None,
             time: None,
+            approach: None,
             repeats: Vec::new(),
         })
     }
@@ -1147,6 +1193,13 @@ impl DataSet {
             temperature: (self.temperature.as_ref())
                 .map(|t| touches.iter().map(|&i| t[i]).collect()),
             time: (self.time.as_ref()).map(|t| touches.iter().map(|&i| t[i]).collect()),
+            approach: (self.approach.as_ref()).map(|a| {
+                let n = self.joints;
+                (touches.iter())
+                    .flat_map(|&i| &a[i * n..(i + 1) * n])
+                    .copied()
+                    .collect()
+            }),
             repeats: self.repeats.clone(),
         }
     }
@@ -1175,6 +1228,7 @@ impl DataSet {
         Conditions {
             temperature_c: self.temperature.as_deref(),
             time_s: self.time.as_deref(),
+            approach: self.approach.as_deref(),
         }
     }
 
@@ -1342,6 +1396,50 @@ fn room_for_touches(poses: &Poses, file: &str) -> Result<(), InputError> {
 mod tests {
     use super::*;
     use crate::io::{AngleUnit, parse_poses};
+
+    /// A slide's range is judged in mm against its own threshold: half a
+    /// millimetre of carriage (28.6 "degrees" if taken for radians) with
+    /// the revolute joints still is no articulation, and says so in mm;
+    /// 20 mm is.
+    #[test]
+    fn a_slide_articulates_by_its_own_threshold_in_mm() {
+        let shape: crate::params::ChainShape = "PRR".parse().unwrap();
+        let rows = |stroke: f64| {
+            let mut t = String::from("point,q1,q2,q3\n");
+            for (k, p) in ["A", "A", "A", "B", "B", "B"].iter().enumerate() {
+                let x = 100.0 + stroke * (k % 3) as f64 / 2.0;
+                t += &format!("{p},{x},10,{}\n", 20.0 + 0.01 * (k % 3) as f64);
+            }
+            parse_poses(&t, "p.csv", AngleUnit::Deg, shape).unwrap().0
+        };
+        let e = DataSet::from_poses(&rows(0.5), "p.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with(
+                "p.csv: no articulation: the widest range of a joint at one point is 0.5000 mm \
+                 (q1 at point `A`)"
+            ),
+            "{e}"
+        );
+        assert!(e.contains("at least 1°, 10 mm of a slide,"), "{e}");
+        assert!(DataSet::from_poses(&rows(20.0), "p.csv").is_ok());
+        // A revolute joint's 0.02° still counts as degrees.
+        let e = DataSet::from_poses(&rows(0.0), "p.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is 0.0200° (q3 at point `A`)"), "{e}");
+    }
+
+    /// The same readings approached from another side are two touches
+    /// (the play puts the link elsewhere); from the same side, a repeat.
+    #[test]
+    fn a_row_approached_otherwise_is_no_repeat() {
+        let t = "point,q1,approach\nA,1,+\nA,1,-\nA,1,-\n";
+        let (p, _) = parse_poses(t, "p.csv", AngleUnit::Deg, Some(1)).unwrap();
+        let r = Repeats::of(&p);
+        assert_eq!((r.rows, r.of), (vec![2], vec![1]));
+    }
 
     fn data(text: &str) -> Result<DataSet, InputError> {
         let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, None).unwrap();

@@ -42,6 +42,36 @@ impl JointKind {
             JointKind::Prismatic => 'P',
         }
     }
+
+    /// The unit of the joint's reading in files and reports: `deg` for a
+    /// revolute joint, `mm` for a prismatic one (whatever the angle unit).
+    pub fn reading_unit(self) -> &'static str {
+        match self {
+            JointKind::Revolute => "deg",
+            JointKind::Prismatic => "mm",
+        }
+    }
+}
+
+/// As in files: `"revolute"` or `"prismatic"`.
+impl serde::Serialize for JointKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for JointKind {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<JointKind, D::Error> {
+        let name = String::deserialize(d)?;
+        [JointKind::Revolute, JointKind::Prismatic]
+            .into_iter()
+            .find(|k| k.name() == name)
+            .ok_or_else(|| {
+                serde::de::Error::custom(format!(
+                    "joint type `{name}`: `revolute` or `prismatic` expected"
+                ))
+            })
+    }
 }
 
 /// Most joints a chain may have. Every chain of 1 to `MAX_JOINTS` joints,

@@ -72,7 +72,10 @@ pub fn run(args: Args) -> Result<()> {
     let mut xyz = vec![[0.0; 3]; data.len()];
     args.input.check_conditions(&arm)?;
     let rows: Vec<&[f64]> = (0..data.len()).map(|i| data.reading(i)).collect();
-    match args.input.corrected(&arm, &rows)? {
+    match args
+        .input
+        .corrected(&arm, &rows, data.conditions().approach)?
+    {
         Some(poses) => kernel.positions(&poses, 0..data.len(), &mut xyz)?,
         None => kernel.positions(data.poses(), 0..data.len(), &mut xyz)?,
     }

@@ -94,9 +94,15 @@ impl ArmAndPoses {
 
     /// `rows` as the arm's chain sees them through the corrections its file
     /// states (compliance, encoder harmonics, backlash, expansion at
-    /// --temperature);
+    /// --temperature, a backlash on the flank of the rows' directions of
+    /// `approach` where known, per row and joint);
     /// `None` when it states none.
-    pub fn corrected(&self, arm: &Arm, rows: &[&[f64]]) -> Result<Option<PreparedPoses>> {
+    pub fn corrected(
+        &self,
+        arm: &Arm,
+        rows: &[&[f64]],
+        approach: Option<&[i8]>,
+    ) -> Result<Option<PreparedPoses>> {
         use aacmm_core::corrections::{Beyond, Conditions, Effects};
         if !arm.physics.corrects() {
             return Ok(None);
@@ -106,6 +112,7 @@ impl ArmAndPoses {
         let conditions = Conditions {
             temperature_c: temperatures.as_deref(),
             time_s: None,
+            approach,
         };
         let effects = Effects::new(
             &arm.params,
@@ -162,7 +169,10 @@ impl ArmAndPoses {
             let rows: Vec<&[f64]> = (c * CHUNK..c * CHUNK + out.len())
                 .map(|row| poses.reading(row))
                 .collect();
-            let prepared = match self.corrected(arm, &rows)? {
+            let n = poses.joints();
+            let approach =
+                (poses.approaches()).map(|a| &a[c * CHUNK * n..(c * CHUNK + out.len()) * n]);
+            let prepared = match self.corrected(arm, &rows, approach)? {
                 Some(p) => p,
                 None => PreparedPoses::for_shape(kernel.shape(), &rows)?,
             };

@@ -80,9 +80,10 @@ pub struct FitInput {
     pub harmonics: Option<String>,
     /// Backlash of the listed joints (e.g. `2,3`): each reads off by a
     /// half-play (deg; mm for a prismatic joint; fitted) on the gear flank
-    /// the gravity torque of the arm file's masses presses. A joint whose
-    /// torque never changes sign over the poses cannot tell it from its
-    /// zero offset: it is held.
+    /// the gravity torque of the arm file's masses presses, or the one an
+    /// `approach` column of the data names (`+-0…`, one sign per joint). A
+    /// joint whose flank never changes over the poses cannot tell it from
+    /// its zero offset: it is held.
     #[arg(long, value_name = "JOINTS")]
     pub backlash: Option<String>,
     /// Fit a thermal expansion coefficient of the lengths (ppm/K) against

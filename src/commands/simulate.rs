@@ -94,6 +94,12 @@ pub struct Args {
     /// `time` column (s).
     #[arg(long, value_name = "H", requires = "positions")]
     session_hours: Option<f64>,
+    /// Each joint approaches each pose of --positions from a random side,
+    /// written as an `approach` column (`+-+…`, one sign per joint): the
+    /// true arm's backlash rests on that flank rather than the one gravity
+    /// presses.
+    #[arg(long, requires = "positions")]
+    approach: bool,
     /// A drift of the true arm's base against the instrument over the
     /// session, `X,Y,Z` mm/h (needs --session-hours).
     #[arg(long, value_name = "X,Y,Z", requires = "session_hours", value_parser = drift_vector)]
@@ -203,6 +209,7 @@ fn tracker(
     let conditions = aacmm_core::simulate::ConditionSettings {
         temperature_c: args.temperature,
         session_h: args.session_hours,
+        approach: args.approach,
     };
     let session = |t: &aacmm_core::io::Arm| {
         aacmm_core::simulate::simulate_session(t, &settings, &conditions, args.drift)

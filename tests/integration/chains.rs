@@ -60,7 +60,43 @@ fn calibrate(dir: &Path, arm: &Path) -> Value {
         &s(&out),
     ]);
     let text = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+    check_joint_types(&text, arm);
     serde_json::from_str(&text).unwrap()
+}
+
+/// `calibration.json` names each joint's type when the chain has a slide
+/// (and not for a revolute one: its JSON is what it was), the chain read
+/// back from it is the arm's, and the summary lists the joints with their
+/// reading units (a slide's mm).
+fn check_joint_types(json: &str, arm: &Path) {
+    let (arm, _) = read_arm(arm).unwrap();
+    let shape = arm.params.shape().unwrap();
+    let value: Value = serde_json::from_str(json).unwrap();
+    let types = &value["calibration"]["joint_types"];
+    let r = aacmm_core::CalibrationReport::from_json(json).unwrap();
+    assert_eq!(r.calibration.params.shape().unwrap(), shape);
+    if shape.prismatic_mask() == 0 {
+        assert_eq!(*types, Value::Null);
+        assert!(!r.summary().contains("Joints:"));
+        return;
+    }
+    let written: String = (types.as_array().unwrap().iter())
+        .map(|t| match t.as_str().unwrap() {
+            "revolute" => 'R',
+            "prismatic" => 'P',
+            other => panic!("joint type {other}"),
+        })
+        .collect();
+    assert_eq!(written, shape.to_string());
+    let summary = r.summary();
+    let line = summary.lines().find(|l| l.starts_with("Joints: ")).unwrap();
+    for (j, letter) in written.chars().enumerate() {
+        let want = match letter {
+            'P' => format!("{} prismatic (reading mm)", j + 1),
+            _ => format!("{} revolute (reading deg)", j + 1),
+        };
+        assert!(line.contains(&want), "{line}");
+    }
 }
 
 /// A campaign of a random nominal arm of `shape`, simulated and calibrated

@@ -756,6 +756,7 @@ fn assemble(
         fit.extra_jacobians + phases.iter().map(|p| p.jacobian_evaluations).sum::<usize>();
     Ok(Calibration {
         physics,
+        joint_types: fit.params.joints.iter().map(|j| j.kind).collect(),
         parameters,
         auxiliary,
         correlations: strong_correlations(&cov, p, |a| names[a].clone()),

@@ -70,7 +70,7 @@ use crate::identify::{Correlation, Identification, identify_from, open_direction
 use crate::kernel::KernelError;
 use crate::metrics::MetricsError;
 use crate::objective::Objective;
-use crate::params::{DhParams, ParamId};
+use crate::params::{DhParams, JointKind, ParamId};
 use crate::residuals::{Elimination, Layout, Normal, Term, TermError};
 
 /// What to do about readings in radians read as degrees, in each front
@@ -586,6 +586,13 @@ pub struct Calibration {
     pub params: DhParams,
     /// Per parameter, in the fixed order.
     pub parameters: Vec<Estimate>,
+    /// Per joint, base first, its type (`revolute`, `prismatic`: whether a
+    /// reading turns θ, deg, or slides d, mm). Written when the chain has
+    /// a slide; absent, every joint turns (an arm file's default), so that
+    /// a revolute arm's JSON is what it always was and the chain read back
+    /// ([`Calibration::restore_params`]) is the one fitted.
+    #[serde(default, skip_serializing_if = "all_revolute")]
+    pub joint_types: Vec<JointKind>,
     /// Per column of the auxiliary blocks (a frame, a scalar), in the
     /// layout's order; absent when there is none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -718,11 +725,20 @@ impl Calibration {
     /// calibration back from JSON: each value to the parameter it names (a
     /// joint with an `hbeta…` is a Hayati joint).
     pub fn restore_params(&mut self) {
-        if let Some(p) = DhParams::from_named(self.parameters.iter().map(|e| (e.id, e.calibrated)))
+        if let Some(mut p) =
+            DhParams::from_named(self.parameters.iter().map(|e| (e.id, e.calibrated)))
         {
+            for (joint, &kind) in p.joints.iter_mut().zip(&self.joint_types) {
+                *joint = joint.with_kind(kind);
+            }
             self.params = p;
         }
     }
+}
+
+/// Whether every joint of `kinds` turns (nothing to write).
+fn all_revolute(kinds: &[JointKind]) -> bool {
+    kinds.iter().all(|&k| k == JointKind::Revolute)
 }
 
 /// Calibrates `start` (the nominal arm) on `data`: the model `model`, solved

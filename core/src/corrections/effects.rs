@@ -13,6 +13,11 @@ pub struct Conditions<'a> {
     pub temperature_c: Option<&'a [f64]>,
     /// Per pose, the time, s (from any origin).
     pub time_s: Option<&'a [f64]>,
+    /// Per pose and joint (pose-major), the direction the joint approached
+    /// its reading from: `+1`, `−1`, `0` not known
+    /// ([`crate::io::approach`]). A known direction decides the flank a
+    /// backlash rests on in place of the gravity torque's sign.
+    pub approach: Option<&'a [i8]>,
 }
 
 /// A correction column's derivative, per pose a factor times …
@@ -123,7 +128,12 @@ impl Effects {
                 loads.torques(|j| trig[j].0[i], |j| sin(j, i), t);
             }
         }
-        let delta = reading_corrections(physics, &trig, &tau, len);
+        let flanks = Flanks {
+            tau: &tau,
+            approach: conditions.approach,
+            joints: n,
+        };
+        let delta = reading_corrections(physics, &trig, &flanks, len);
         let (cos, sin) = corrected_trig(&trig, &delta, len, raw.prismatic_mask());
         let mut poses = PreparedPoses::from_trig(n, raw.prismatic_mask(), len, cos, sin);
         let (cte, drift) = (
@@ -134,7 +144,7 @@ impl Effects {
             scale: elapsed.kelvin.iter().map(|k| 1.0 + cte * k).collect(),
             offset: elapsed.hours.iter().map(|h| drift.map(|v| v * h)).collect(),
         };
-        let factors = factors(fit, &trig, &tau, &elapsed, &post.scale, n);
+        let factors = factors(fit, &trig, &flanks, &elapsed, &post.scale);
         if fit.thermal || fit.drift || cte != 0.0 || physics.drift_mm_per_h.is_some() {
             poses = poses.with_post(post);
         }
@@ -288,7 +298,12 @@ fn pose_corrections(
     if let Some(loads) = loads {
         loads.torques(|j| cos[j], |j| sin[j], &mut tau);
     }
-    let delta = reading_corrections(physics, &trig, &tau, 1);
+    let flanks = Flanks {
+        tau: &tau,
+        approach: None,
+        joints: n,
+    };
+    let delta = reading_corrections(physics, &trig, &flanks, 1);
     // A slide's correction is its backlash alone (its other models are
     // refused), a length added to its reading.
     (0..n)
@@ -325,13 +340,15 @@ fn small_sin_cos(d: f64) -> (f64, f64) {
 
 /// Per joint, its reading correction at every pose (empty for a joint
 /// without one): the harmonics of its reading, compliance × torque and the
-/// backlash on the flank the torque presses ([`flank`]).
+/// backlash on the flank the approach or the torque decides
+/// ([`Flanks::side`]).
 fn reading_corrections(
     physics: &Physics,
     trig: &[(&[f64], &[f64])],
-    tau: &[f64],
+    flanks: &Flanks<'_>,
     len: usize,
 ) -> Vec<Vec<f64>> {
+    let tau = flanks.tau;
     let n = trig.len();
     let mut delta: Vec<Vec<f64>> = vec![Vec::new(); n];
     for h in &physics.harmonics {
@@ -343,10 +360,10 @@ fn reading_corrections(
             d[i] += h.sin * sk + h.cos * ck;
         }
     }
-    if !tau.is_empty() {
+    if !tau.is_empty() || flanks.approach.is_some() {
         for (j, d) in delta.iter_mut().enumerate() {
             let kappa = physics.compliance_of(j);
-            if kappa != 0.0 {
+            if kappa != 0.0 && !tau.is_empty() {
                 d.resize(len, 0.0);
                 for i in 0..len {
                     d[i] += kappa * tau[i * n + j];
@@ -355,13 +372,35 @@ fn reading_corrections(
             let b = physics.backlash_of(j);
             if b != 0.0 {
                 d.resize(len, 0.0);
-                for i in 0..len {
-                    d[i] += b * flank(tau[i * n + j]);
+                for (i, d) in d.iter_mut().enumerate() {
+                    *d += b * flanks.side(i, j);
                 }
             }
         }
     }
     delta
+}
+
+/// What decides the flank each joint rests on at each pose: the direction
+/// it approached the reading from where known, else its gravity torque.
+struct Flanks<'a> {
+    /// Per pose and joint (pose-major), the gravity torque (empty: none).
+    tau: &'a [f64],
+    /// Per pose and joint (pose-major), the direction of approach.
+    approach: Option<&'a [i8]>,
+    joints: usize,
+}
+
+impl Flanks<'_> {
+    /// The flank of joint `j` at pose `i`: `+1`, `−1` or `0` (floating).
+    #[inline]
+    fn side(&self, i: usize, j: usize) -> f64 {
+        let k = i * self.joints + j;
+        match self.approach.map_or(0, |a| a[k]) {
+            0 => flank(self.tau.get(k).copied().unwrap_or(0.0)),
+            s => f64::from(s.signum()),
+        }
+    }
 }
 
 /// Which gear flank a joint under the gravity torque (or force) `tau`
@@ -443,11 +482,11 @@ fn kinds(fit: &Beyond, arm: &DhParams) -> Vec<Kind> {
 fn factors(
     fit: &Beyond,
     trig: &[(&[f64], &[f64])],
-    tau: &[f64],
+    flanks: &Flanks<'_>,
     elapsed: &Elapsed,
     scale: &[f64],
-    n: usize,
 ) -> Vec<f64> {
+    let (tau, n) = (flanks.tau, flanks.joints);
     let columns = fit.columns();
     let (m, len) = (columns.len(), scale.len());
     let mut factors = vec![0.0; len * m];
@@ -458,7 +497,7 @@ fn factors(
         for (fk, column) in f.iter_mut().zip(&columns) {
             *fk = match *column {
                 Column::Compliance(j) => tau[i * n + j] * 1e-6,
-                Column::Backlash(j) => flank(tau[i * n + j]),
+                Column::Backlash(j) => flanks.side(i, j),
                 Column::Sin(j, k) => multiple(trig[j].0[i], trig[j].1[i], k).1,
                 Column::Cos(j, k) => multiple(trig[j].0[i], trig[j].1[i], k).0,
                 Column::Expansion => elapsed.kelvin[i] * 1e-6 / scale[i],
@@ -504,7 +543,7 @@ mod tests {
         let t = [30.0, 30.0];
         let conditions = Conditions {
             temperature_c: Some(&t),
-            time_s: None,
+            ..Conditions::default()
         };
         let e = Effects::new(&arm, &physics, &Beyond::default(), &raw, conditions).unwrap();
         assert_eq!(e.poses.shape(), Some(arm.shape().unwrap()));
@@ -583,6 +622,70 @@ mod tests {
         };
         let pose = [0.3, -0.4, 0.7, 0.2, -0.3, 0.5];
         assert_eq!(angles_for(&arm, &base, &pose), pose.to_vec());
+    }
+
+    /// A known direction of approach decides the flank in place of the
+    /// torque's sign — also for a joint gravity does not load (the vertical
+    /// base axis) — and a `0` falls back to the torque: the correction and
+    /// the fitted column follow it.
+    #[test]
+    fn a_known_approach_decides_the_flank() {
+        use crate::corrections::{Mass, gravity};
+        let arm = DhParams::paper_nominal();
+        let play = 0.02f64.to_radians();
+        let physics = Physics {
+            link_masses: vec![Some(Mass::at_middle(2.0)); 6],
+            backlash: vec![Some(play), Some(play), None, None, None, None],
+            ..Physics::default()
+        };
+        let q = [
+            [0.1, 0.7, 0.3, -0.2, 0.5, 1.0],
+            [0.4, 0.9, 0.1, 0.2, -0.5, 2.0],
+        ];
+        let raw = PreparedPoses::for_shape(arm.shape().unwrap(), &q).unwrap();
+        // Pose 0: joint 1 approached from below, joint 2 from above; pose
+        // 1: joint 1 from above, joint 2 not known.
+        let approach = [1, -1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 0];
+        let conditions = Conditions {
+            approach: Some(&approach),
+            ..Conditions::default()
+        };
+        let fit = Beyond {
+            backlash: vec![0, 1],
+            ..Beyond::default()
+        };
+        let e = Effects::new(&arm, &physics, &fit, &raw, conditions).unwrap();
+        let plain = Effects::new(&arm, &physics, &fit, &raw, Conditions::default()).unwrap();
+        for (i, q) in q.iter().enumerate() {
+            let mut tau = [0.0; 6];
+            gravity::torques(&arm, &physics, q, &mut tau);
+            assert_eq!(tau[0], 0.0, "the vertical base axis is not loaded");
+            assert!(tau[1].abs() > 1.0, "{tau:?}");
+            let gravity_side = tau[1].signum();
+            let (want0, want1) = if i == 0 {
+                (1.0, -1.0)
+            } else {
+                (-1.0, gravity_side)
+            };
+            let turned = |e: &Effects, j: usize| {
+                let (c, s) = e.poses.column_trig(j);
+                (c[i], s[i])
+            };
+            for (j, want) in [(0, want0), (1, want1)] {
+                let t = q[j] + play * want;
+                let (c, s) = turned(&e, j);
+                assert!((c - t.cos()).abs() < 1e-15 && (s - t.sin()).abs() < 1e-15);
+            }
+            // Without the column the base floats and the shoulder rests
+            // on the gravity side.
+            assert_eq!(turned(&plain, 0), (q[0].cos(), q[0].sin()));
+            let t = q[1] + play * gravity_side;
+            assert!((turned(&plain, 1).0 - t.cos()).abs() < 1e-15);
+            let jac: Vec<[f64; 3]> = (0..27).map(|c| [c as f64, 0.0, 0.0]).collect();
+            let mut out = Vec::new();
+            e.extend(i, &[0.0; 3], &jac, &mut out);
+            assert_eq!((out[27][0], out[28][0]), (18.0 * want0, 19.0 * want1));
+        }
     }
 
     /// Encoder harmonics and a compliance are models of an angle: refused

@@ -32,7 +32,10 @@
 //! one gear flank, so the link sits `b_j` further along the gravity torque
 //! `τ_j` (for a prismatic joint, `τ_j` is the gravity force along the
 //! slide, N, and `b_j` is in mm). A joint whose torque is exactly zero (a
-//! vertical axis) floats: its correction is zero, as is its column.
+//! vertical axis) floats: its correction is zero, as is its column. Where
+//! a readings file records the direction each joint approached the pose
+//! from ([`crate::io::approach`], [`Conditions::approach`]), a known
+//! direction `s_j = ±1` replaces `sgn τ_j`: `q_j + b_j s_j`.
 //!
 //! The Jacobian columns: a reading correction moves the probe as the joint
 //! does — `∂p/∂κ_j = τ_j ∂p/∂θ_j` (the joint's zero offset column), `∂p/∂s_jk

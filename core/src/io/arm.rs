@@ -361,15 +361,12 @@ impl JointFile {
         file: &str,
     ) -> Result<Option<[f64; 2]>, InputError> {
         // A slide's limits are lengths, a turn's angles.
-        let limit = |x: f64| match kind {
-            JointKind::Revolute => au.to_internal(x),
-            JointKind::Prismatic => lu.to_internal(x),
-        };
+        let unit = JointUnit { kind, lu, au };
         Ok(
             match self.limits.as_ref().map(|l| (l, l.get_ref().as_slice())) {
                 None => None,
                 Some((_, [lo, hi])) if lo.get_ref() < hi.get_ref() => {
-                    Some([lo, hi].map(|x| limit(*x.get_ref())))
+                    Some([lo, hi].map(|x| unit.to_internal(*x.get_ref())))
                 }
                 Some((l, values)) => {
                     let message = match values {
@@ -380,10 +377,7 @@ impl JointFile {
                         ),
                         _ => format!(
                             "expected `[min, max]` in {}, found {} values",
-                            match kind {
-                                JointKind::Revolute => au.to_string(),
-                                JointKind::Prismatic => lu.to_string(),
-                            },
+                            unit.name(),
                             values.len()
                         ),
                     };
@@ -504,6 +498,42 @@ fn new<T>(value: T) -> Spanned<T> {
     Spanned::new(0..0, value)
 }
 
+/// A joint's own quantity in a file — its limits, its backlash: a length
+/// (length_unit) for a slide, an angle (angle_unit) for a turn. The one
+/// place that switches on the kind for a unit.
+#[derive(Clone, Copy, Debug)]
+struct JointUnit {
+    kind: JointKind,
+    lu: LengthUnit,
+    au: AngleUnit,
+}
+
+impl JointUnit {
+    /// The file's value `x` in mm or rad.
+    fn to_internal(self, x: f64) -> f64 {
+        match self.kind {
+            JointKind::Revolute => self.au.to_internal(x),
+            JointKind::Prismatic => self.lu.to_internal(x),
+        }
+    }
+
+    /// The value to write for `x` (mm or rad), reading back exactly.
+    fn written(self, x: f64) -> f64 {
+        match self.kind {
+            JointKind::Revolute => self.au.from_internal_exact(x),
+            JointKind::Prismatic => self.lu.from_internal_exact(x),
+        }
+    }
+
+    /// The unit's name in messages.
+    fn name(self) -> String {
+        match self.kind {
+            JointKind::Revolute => self.au.to_string(),
+            JointKind::Prismatic => self.lu.to_string(),
+        }
+    }
+}
+
 impl ArmFile {
     /// `arm` in the given units, to write.
     pub(crate) fn new(arm: &Arm, lu: LengthUnit, au: AngleUnit) -> ArmFile {
@@ -538,13 +568,12 @@ impl ArmFile {
                 .map(|(i, j)| {
                     let hayati = j.model == JointModel::Hayati;
                     let slides = j.kind == JointKind::Prismatic;
-                    let limit = |x: f64| {
-                        if slides {
-                            lu.from_internal_exact(x)
-                        } else {
-                            ang(x)
-                        }
+                    let unit = JointUnit {
+                        kind: j.kind,
+                        lu,
+                        au,
                     };
+                    let limit = |x: f64| unit.written(x);
                     new(JointFile {
                         // Absent for revolute joints: their files read as before.
                         kind: slides.then(|| new(JointKind::Prismatic.name().to_string())),
@@ -778,11 +807,16 @@ impl ArmFile {
                 ));
             }
             let slides = j.kind.as_ref().is_some_and(|k| k.get_ref() == "prismatic");
-            physics.backlash.push(Some(if slides {
-                self.length_unit.to_internal(*b.get_ref())
-            } else {
-                self.angle_unit.to_internal(*b.get_ref())
-            }));
+            let unit = JointUnit {
+                kind: if slides {
+                    JointKind::Prismatic
+                } else {
+                    JointKind::Revolute
+                },
+                lu: self.length_unit,
+                au: self.angle_unit,
+            };
+            physics.backlash.push(Some(unit.to_internal(*b.get_ref())));
         }
         if physics.backlash.iter().all(Option::is_none) {
             physics.backlash.clear();
@@ -1663,6 +1697,17 @@ z = 100.0
         let negative = text.replacen("backlash = 0.02", "backlash = -0.02", 1);
         let arm = parse_arm(&negative, F).unwrap().0;
         assert!((arm.physics.backlash_of(1) + 0.02f64.to_radians()).abs() < 1e-18);
+        // A slide's limits and play in metres, written back in metres and
+        // radians: lengths both ways, never angles.
+        let limited = slide.replacen("d = 0.0\n", "d = 0.0\nlimits = [0.0, 1500.0]\n", 1);
+        let (arm, _) = parse_arm(&limited, F).unwrap();
+        assert_eq!(arm.limits[1], Some([0.0, 1500.0]));
+        let metres = arm_to_toml(&arm, LengthUnit::M, AngleUnit::Rad);
+        assert!(metres.contains("limits = [0.0, 1.5]"), "{metres}");
+        assert!(metres.contains("backlash = 0.00002"), "{metres}");
+        let back = parse_arm(&metres, F).unwrap().0;
+        assert_eq!(back.limits[1], arm.limits[1]);
+        assert_eq!(back.physics.backlash_of(1), 0.02);
     }
 
     /// `GOOD` with joint 2 (α = 90°) written as a Hayati joint.

@@ -4,6 +4,7 @@
 //! |---|---|---|
 //! | arm (geometry, units, joint limits) | TOML | [`arm`] |
 //! | poses (one touch per row) | CSV `point,q1,...,qn` | [`poses`] |
+//! | direction of approach (a column of poses and positions) | `+-0` per joint | [`approach`] |
 //! | reference lengths | CSV `point_a,point_b,distance[,uncertainty]` | [`lengths`] |
 //! | points (e.g. socket positions) | CSV `point,x,y,z` | [`points`] |
 //!
@@ -33,6 +34,7 @@
 //! [`points`], fixed 6 decimals); they refuse labels with surrounding
 //! whitespace, which would not read back.
 
+pub mod approach;
 pub mod arm;
 pub mod atomic;
 pub mod columns;

@@ -9,13 +9,16 @@
 //!
 //! `point` labels the physical point (socket) touched; rows with the same
 //! label touch the same point. The angles are the encoder readings `q` in the
-//! unit the caller states (files do not carry it). The CSV dialect is
-//! described in the [`io`](super) module docs.
+//! unit the caller states (files do not carry it). Optional columns
+//! after the joints: `temperature` (°C), `time` (s), then `approach` (the
+//! direction each joint approached the touch from, [`super::approach`]).
+//! The CSV dialect is described in the [`io`](super) module docs.
 
 use std::io::Write;
 use std::path::Path;
 
 use super::Warning;
+use super::approach::{APPROACH, approach_cell};
 use super::columns::JointColumns;
 use super::labels::Labels;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
@@ -62,6 +65,10 @@ pub struct Poses {
     /// columns ([`crate::corrections`]).
     temperature: Option<Vec<f64>>,
     time: Option<Vec<f64>>,
+    /// Per row, the direction each joint approached its reading from
+    /// (`+1`, `−1`, `0` not known), row after row, when the file has the
+    /// column ([`super::approach`]).
+    approach: Option<Vec<i8>>,
 }
 
 impl Poses {
@@ -94,6 +101,7 @@ impl Poses {
             lines: try_vec(what, rows)?,
             temperature: None,
             time: None,
+            approach: None,
         })
     }
 
@@ -114,6 +122,25 @@ impl Poses {
     /// Per row, the time (s), when recorded.
     pub fn times(&self) -> Option<&[f64]> {
         self.time.as_deref()
+    }
+
+    /// Per row and joint (row after row), the direction of approach (`+1`,
+    /// `−1`, `0` not known), when recorded ([`super::approach`]).
+    pub fn approaches(&self) -> Option<&[i8]> {
+        self.approach.as_deref()
+    }
+
+    /// These poses with the directions of approach `approach` (per row and
+    /// joint, row after row: `+1`, `−1`, `0` not known), or without any.
+    ///
+    /// # Panics
+    /// If `approach` does not hold one direction per row and joint.
+    pub fn with_approach(mut self, approach: Option<Vec<i8>>) -> Poses {
+        if let Some(a) = &approach {
+            assert_eq!(a.len(), self.q.len(), "one direction per reading");
+        }
+        self.approach = approach;
+        self
     }
 
     /// Adds a row: a touch of the point `label` with readings `q` (rad),
@@ -144,6 +171,10 @@ impl Poses {
         self.point_of.push(id);
         self.q.extend_from_slice(q);
         self.lines.push(line);
+        if let Some(a) = &mut self.approach {
+            // A row pushed without directions: not known.
+            a.extend(std::iter::repeat_n(0, q.len()));
+        }
         Ok(())
     }
 
@@ -300,7 +331,7 @@ pub fn parse_poses(
 ) -> Result<(Poses, Vec<Warning>), InputError> {
     let columns_of = joints.into();
     let expected_joints = columns_of.expected();
-    let shape = "point,q1,...,qn[,temperature][,time]";
+    let shape = "point,q1,...,qn[,temperature][,time][,approach]";
     let per_row = "one row per touch";
     // At most one row per line, and per 2 bytes a field (a digit or a
     // label, and its comma or line end): room for them all, so that the
@@ -315,12 +346,15 @@ pub fn parse_poses(
         per_row,
         |h| check_poses_header(h, file, expected_joints),
         |header, line, fields| {
-            let columns = &header.fields;
+            let (columns, approach) = split_approach(&header.fields);
             let extra = condition_columns(columns);
             let joints = columns.len() - 1 - extra.len();
             let poses = match poses {
                 Some(ref mut p) => p,
-                None => poses.insert(room(file, joints, max_rows(columns.len()), &extra)?),
+                None => {
+                    let rows = max_rows(header.fields.len());
+                    poses.insert(room(file, (joints, rows), &extra, approach)?)
+                }
             };
             let label = fields[0];
             if label.is_empty() {
@@ -350,6 +384,13 @@ pub fn parse_poses(
                     }
                 };
             }
+            if let Some(signs) = &mut poses.approach {
+                let cell = fields[columns.len()];
+                if let Err(e) = super::approach::parse_approach(cell, joints, (file, line), signs) {
+                    poses.q.truncate(start);
+                    return Err(e);
+                }
+            }
             for (k, c) in extra.iter().enumerate() {
                 if let Some(column) = poses.condition_mut(c) {
                     column.push(values[k]);
@@ -363,8 +404,12 @@ pub fn parse_poses(
             Ok(())
         },
     )?;
-    let extra = condition_columns(&header.fields).len();
-    let mut poses = poses.unwrap_or_else(|| Poses::new(header.fields.len() - 1 - extra));
+    let (columns, approach) = split_approach(&header.fields);
+    let extra = condition_columns(columns).len();
+    let mut poses = poses.unwrap_or_else(|| Poses {
+        approach: approach.then(Vec::new),
+        ..Poses::new(columns.len() - 1 - extra)
+    });
     poses.q.shrink_to_fit();
     poses.point_of.shrink_to_fit();
     poses.lines.shrink_to_fit();
@@ -401,15 +446,34 @@ fn read_readings(
     Ok(())
 }
 
-/// Empty poses of `joints` joints with room for `rows` rows and the
-/// condition columns `extra`, or an [`InputError::Memory`] for `file`.
-fn room(file: &str, joints: usize, rows: usize, extra: &[&str]) -> Result<Poses, InputError> {
+/// Empty poses of `joints` joints with room for `rows` rows, the
+/// condition columns `extra` and, if `approach`, the directions of
+/// approach, or an [`InputError::Memory`] for `file`.
+fn room(
+    file: &str,
+    (joints, rows): (usize, usize),
+    extra: &[&str],
+    approach: bool,
+) -> Result<Poses, InputError> {
     let memory = |e| InputError::memory(file, e);
     let mut p = Poses::try_with_capacity(joints, rows).map_err(memory)?;
     for c in extra {
         *p.condition_mut(c) = Some(try_vec(c, rows).map_err(memory)?);
     }
+    if approach {
+        let directions = try_vec(APPROACH, rows.saturating_mul(joints)).map_err(memory)?;
+        p.approach = Some(directions);
+    }
     Ok(p)
+}
+
+/// The header's fields before a last `approach` column, and whether it has
+/// one (after the conditions: [`super::approach`]).
+fn split_approach(fields: &[String]) -> (&[String], bool) {
+    match fields.split_last() {
+        Some((last, rest)) if last == APPROACH && !rest.is_empty() => (rest, true),
+        _ => (fields, false),
+    }
 }
 
 /// The optional columns after the joints' a header ends with, in order:
@@ -426,15 +490,19 @@ fn condition_columns(fields: &[String]) -> Vec<&'static str> {
     out
 }
 
-/// Checks the header `point,q1,...,qn[,temperature][,time]`, and `n`
-/// against `expected_joints`.
+/// Checks the header `point,q1,...,qn[,temperature][,time][,approach]`,
+/// and `n` against `expected_joints`.
 fn check_poses_header(
     header: &Record,
     file: &str,
     expected_joints: Option<usize>,
 ) -> Result<(), InputError> {
-    let extra = condition_columns(&header.fields);
-    let n = header.fields.len() - 1 - extra.len();
+    let (fields, approach) = split_approach(&header.fields);
+    let mut extra = condition_columns(fields);
+    let n = fields.len() - 1 - extra.len();
+    if approach {
+        extra.push(APPROACH);
+    }
     let tail: String = extra.iter().map(|c| format!(",{c}")).collect();
     let shape = |n: usize| match n {
         0 => format!("point,q1,...,qn{tail}"),
@@ -569,6 +637,10 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
             header.push_str(name);
         }
     }
+    if poses.approach.is_some() {
+        header.push(',');
+        header.push_str(APPROACH);
+    }
     header.push('\n');
     w.write_all(header.as_bytes())?;
     for (row, (label, q)) in poses.labels().zip(poses.rows()).enumerate() {
@@ -582,6 +654,12 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
             line.push(',');
             line.push_str(&fmt_f64(column[row]));
         }
+        if let Some(a) = &poses.approach {
+            line.push(',');
+            line.push_str(&approach_cell(
+                &a[row * poses.joints..(row + 1) * poses.joints],
+            ));
+        }
         line.push('\n');
         w.write_all(line.as_bytes())?;
     }
@@ -594,6 +672,50 @@ mod tests {
     use rand::{RngExt, SeedableRng};
 
     const F: &str = "touches.csv";
+
+    /// `approach` after the conditions: one sign per joint read per row
+    /// (`0`, `.` and an empty cell not known), written back as read; a
+    /// cell of the wrong length or character refused by line and field.
+    #[test]
+    fn the_approach_column_is_read_written_and_checked() {
+        let text =
+            "point,q1,q2,q3,temperature,approach\nA,1,2,3,20,+-.\nA,1,2,3,20,\nB,4,5,6,21,0-+\n";
+        let (p, _) = parse_poses(text, F, AngleUnit::Deg, Some(3)).unwrap();
+        assert_eq!(p.approaches(), Some(&[1, -1, 0, 0, 0, 0, 0, -1, 1][..]));
+        assert_eq!(p.temperatures(), Some(&[20.0, 20.0, 21.0][..]));
+        let mut out = Vec::new();
+        write_poses(&mut out, &p, AngleUnit::Deg).unwrap();
+        let written = String::from_utf8(out).unwrap();
+        assert!(written.starts_with("point,q1,q2,q3,temperature,approach\n"));
+        assert!(
+            written.ends_with(",+-0\n") || written.contains(",+-0\n"),
+            "{written}"
+        );
+        let (back, _) = parse_poses(&written, F, AngleUnit::Deg, Some(3)).unwrap();
+        assert_eq!(back.approaches(), p.approaches());
+        let refused = |cell: &str| {
+            let t = format!("point,q1,q2,q3,approach\nA,1,2,3,+++\nA,1,2,3,{cell}\n");
+            parse_poses(&t, F, AngleUnit::Deg, Some(3))
+                .unwrap_err()
+                .to_string()
+        };
+        let e = refused("+-");
+        assert!(
+            e.starts_with(
+                "touches.csv:3: field `approach`: `+-` has 2 directions but the arm \
+                 has 3 joints"
+            ),
+            "{e}"
+        );
+        let e = refused("+x-");
+        assert!(
+            e.starts_with("touches.csv:3: field `approach`: `+x-`: joint 2's direction `x`"),
+            "{e}"
+        );
+        // Before the conditions it is an unexpected column.
+        let t = "point,q1,approach,time\nA,1,+,0\n";
+        assert!(parse_poses(t, F, AngleUnit::Deg, Some(1)).is_err());
+    }
 
     /// `temperature` and `time` after the joints: read per row, written
     /// back, a bad value refused by line and field, a column out of order

@@ -2,7 +2,8 @@
 //! optical CMM) saw the probe or target, or the certified centre of an
 //! artefact's sphere the arm touched — CSV with the header
 //! `point,q1,…,qn,x,y,z` and the optional columns `frame`,
-//! `uncertainty`, `temperature` and `time`, in that order.
+//! `uncertainty`, `temperature`, `time` and `approach`
+//! ([`super::approach`]), in that order.
 //!
 //! ```text
 //! point,q1,q2,q3,q4,q5,q6,x,y,z,frame,uncertainty
@@ -29,6 +30,7 @@ use std::io::Write;
 
 use std::collections::HashMap;
 
+use super::approach::{APPROACH, approach_cell};
 use super::columns::JointColumns;
 use super::labels::Labels;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
@@ -69,6 +71,9 @@ pub struct Positions {
     /// Per row, the temperature (°C) and time (s), when recorded.
     temperature: Option<Vec<f64>>,
     time: Option<Vec<f64>>,
+    /// Per row and joint (row after row), the direction of approach (`+1`,
+    /// `−1`, `0` not known), when recorded ([`super::approach`]).
+    approach: Option<Vec<i8>>,
 }
 
 impl Positions {
@@ -88,6 +93,7 @@ impl Positions {
             lines: Vec::new(),
             temperature: None,
             time: None,
+            approach: None,
         }
     }
 
@@ -106,6 +112,47 @@ impl Positions {
                 None => *column = None,
             }
         }
+    }
+
+    /// Records the last row's directions of approach (one per joint: `+1`,
+    /// `−1`, `0` not known); kept only when every row has them, as
+    /// [`Positions::record`].
+    ///
+    /// # Panics
+    /// If `signs` has another joint count than the rows.
+    pub fn record_approach(&mut self, signs: Option<&[i8]>) {
+        let n = self.len();
+        match signs {
+            Some(s) if n == 1 => self.approach = Some(s.to_vec()),
+            Some(s) => {
+                assert_eq!(s.len(), self.joints, "one direction per joint");
+                if let Some(a) =
+                    (self.approach.as_mut()).filter(|a| a.len() + s.len() == n * s.len())
+                {
+                    a.extend_from_slice(s);
+                }
+            }
+            None => self.approach = None,
+        }
+    }
+
+    /// These rows with the directions of approach `approach` (per row and
+    /// joint, row after row: `+1`, `−1`, `0` not known), or without any.
+    ///
+    /// # Panics
+    /// If `approach` does not hold one direction per row and joint.
+    pub fn with_approach(mut self, approach: Option<Vec<i8>>) -> Positions {
+        if let Some(a) = &approach {
+            assert_eq!(a.len(), self.q.len(), "one direction per reading");
+        }
+        self.approach = approach;
+        self
+    }
+
+    /// Per row and joint (row after row), the direction of approach, when
+    /// recorded ([`super::approach`]).
+    pub fn approaches(&self) -> Option<&[i8]> {
+        self.approach.as_deref()
     }
 
     /// Per row, the temperature (°C), when recorded.
@@ -288,6 +335,8 @@ impl Positions {
                 self.temperature.as_ref().map(|t| t[i]),
                 self.time.as_ref().map(|t| t[i]),
             );
+            let n = self.joints;
+            out.record_approach(self.approach.as_ref().map(|a| &a[i * n..(i + 1) * n]));
         }
         out
     }
@@ -331,6 +380,10 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
             header.push_str(name);
         }
     }
+    if p.approach.is_some() {
+        header.push(',');
+        header.push_str(APPROACH);
+    }
     header.push('\n');
     w.write_all(header.as_bytes())?;
     for i in 0..p.len() {
@@ -360,6 +413,10 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
                 line.push_str(&fmt_f64(c[i]));
             }
         }
+        if let Some(a) = &p.approach {
+            line.push(',');
+            line.push_str(&approach_cell(&a[i * p.joints..(i + 1) * p.joints]));
+        }
         line.push('\n');
         w.write_all(line.as_bytes())?;
     }
@@ -373,9 +430,10 @@ struct Layout {
     uncertainty: Option<usize>,
     temperature: Option<usize>,
     time: Option<usize>,
+    approach: Option<usize>,
 }
 
-const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty][,temperature][,time]";
+const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty][,temperature][,time][,approach]";
 
 /// Reads a reference-position file (standard input for `-`), readings in
 /// `unit` (a prismatic joint's in mm, [`JointColumns`]); messages name the
@@ -460,7 +518,8 @@ fn header_layout(
     let optional = |name: &str| fields.iter().position(|f| f == name);
     let (frame, uncertainty) = (optional("frame"), optional("uncertainty"));
     let (temperature, time) = (optional("temperature"), optional("time"));
-    let extra = [frame, uncertainty, temperature, time]
+    let approach = optional(APPROACH);
+    let extra = [frame, uncertainty, temperature, time, approach]
         .iter()
         .filter(|c| c.is_some())
         .count();
@@ -476,6 +535,7 @@ fn header_layout(
         (uncertainty, "uncertainty"),
         (temperature, "temperature"),
         (time, "time"),
+        (approach, APPROACH),
     ] {
         if column.is_some() {
             expected.push(name.into());
@@ -501,6 +561,7 @@ fn header_layout(
         uncertainty,
         temperature,
         time,
+        approach,
     })
 }
 
@@ -570,7 +631,12 @@ fn parse_row(
         let message = format!("{t} °C: not an arm's temperature (°C expected, −100 to 200)");
         return error("temperature", &message);
     }
+    let mut signs = Vec::with_capacity(l.joints);
+    if let Some(c) = l.approach {
+        super::approach::parse_approach(f[c], l.joints, (file, line), &mut signs)?;
+    }
     out.record(t, s);
+    out.record_approach(l.approach.map(|_| &signs[..]));
     Ok(())
 }
 
@@ -698,6 +764,32 @@ mod tests {
                         A,0,1,10,0,0,s2,\n\
                         B,1,0,0,10,0,s2,\n\
                         C,2,1,0,0,10,s2,\n";
+
+    /// `approach` last: read per row, kept by a subset, written back; a
+    /// bad cell refused by line and field.
+    #[test]
+    fn the_approach_column_is_read_and_written() {
+        let text = "point,q1,q2,x,y,z,time,approach\n\
+                    A,0,1,100,0,0,0,+-\n\
+                    B,1,0,0,100,0,1,-0\n\
+                    C,1,1,0,0,100,2,\n";
+        let p = parse(text).unwrap();
+        assert_eq!(p.approaches(), Some(&[1, -1, -1, 0, 0, 0][..]));
+        assert_eq!(p.subset(&[2, 0]).approaches(), Some(&[0, 0, 1, -1][..]));
+        let mut out = Vec::new();
+        write_positions(&mut out, &p, AngleUnit::Rad).unwrap();
+        let written = String::from_utf8(out).unwrap();
+        assert!(written.starts_with("point,q1,q2,x,y,z,time,approach\nA,0.0,1.0,"));
+        assert_eq!(parse(&written).unwrap(), p);
+        let e = parse(&text.replace("-0", "-+-")).unwrap_err();
+        assert_at(
+            &e,
+            F,
+            3,
+            Some("approach"),
+            "`-+-` has 3 directions but the arm has 2",
+        );
+    }
 
     #[test]
     fn frames_uncertainties_and_lines_are_read() {

@@ -1078,6 +1078,7 @@ impl CalibrationReport {
         }
         t += &outliers_line(c);
         t += &verdict_line(&self.verdict);
+        t += &joints_line(c);
         t += &parameter_table(c);
         t += &correlations_line(c);
         t += &validation_table(&self.validation);
@@ -1526,6 +1527,23 @@ fn verdict_line(v: &Verdict) -> String {
 }
 
 /// The summary's parameter table (user units), and the prior's if any.
+/// The chain's joints with their types and reading units, when some joint
+/// slides (a revolute arm's summary is what it always was).
+///
+/// ```text
+/// Joints: 1 prismatic (reading mm), 2 revolute (reading deg), …
+/// ```
+fn joints_line(c: &Calibration) -> String {
+    use crate::params::JointKind;
+    if !c.joint_types.contains(&JointKind::Prismatic) {
+        return String::new();
+    }
+    let joints: Vec<String> = (c.joint_types.iter().enumerate())
+        .map(|(j, k)| format!("{} {} (reading {})", j + 1, k.name(), k.reading_unit()))
+        .collect();
+    format!("Joints: {}\n", joints.join(", "))
+}
+
 fn parameter_table(c: &Calibration) -> String {
     let mut t = String::from("Parameters (mm, deg; sigma = standard uncertainty, k = 1):\n");
     t += &format!(

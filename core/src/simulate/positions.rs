@@ -212,14 +212,18 @@ pub fn simulate_positions_from(
     seen_from(truth, settings, frames, &mut rng)
 }
 
-/// What a simulated session records beside each pose: its temperature and
-/// time. Default: neither.
+/// What a simulated session records beside each pose: its temperature,
+/// time and the direction each joint approached it from. Default: none.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ConditionSettings {
     /// Temperatures drawn uniformly in `[low, high]`, °C.
     pub temperature_c: Option<[f64; 2]>,
     /// Rows taken one after another, evenly over this many hours.
     pub session_h: Option<f64>,
+    /// Each joint approaches each pose from a random side (`+` or `-`,
+    /// even odds), written as the `approach` column: a true arm's
+    /// backlash rests on that flank, whatever the gravity torque.
+    pub approach: bool,
 }
 
 /// [`simulate_positions_from`] of a session recording `conditions`: the
@@ -293,10 +297,16 @@ fn draw_rows(
                 .map(|[lo, hi]| rng.random_range(lo..=hi));
             let time = (conditions.session_h)
                 .map(|h| 3600.0 * h * r as f64 / rows.saturating_sub(1).max(1) as f64);
+            let approach: Option<Vec<i8>> = (conditions.approach).then(|| {
+                (0..n)
+                    .map(|_| if rng.random_bool(0.5) { 1 } else { -1 })
+                    .collect()
+            });
             let p = if physics.corrects() {
                 let recorded = crate::corrections::Conditions {
                     temperature_c: temperature.as_ref().map(std::slice::from_ref),
                     time_s: None,
+                    approach: approach.as_deref(),
                 };
                 let seen = crate::corrections::Effects::new(
                     &truth.params,
@@ -322,6 +332,7 @@ fn draw_rows(
             let noisy = y.map(|v| v + sigma * normal(rng));
             positions.push(&format!("P{}", i + 1), name, &q, noisy, None, 0);
             positions.record(temperature, time);
+            positions.record_approach(approach.as_deref());
         }
     }
     Ok(positions)
