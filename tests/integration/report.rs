@@ -250,3 +250,154 @@ fn report_paths_are_checked_before_any_work() {
     ]);
     assert_clean_error(&o, &["--out", "report.html is a directory"]);
 }
+
+/// A tracker campaign of two stations, a quarter of its rows held out:
+/// (fitted file, held-out file) in `dir`.
+fn tracker_campaign(dir: &Path) -> (String, String) {
+    let sim = dir.join("sim");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm(),
+        "--errors",
+        "random",
+        "--positions",
+        "120",
+        "--frames",
+        "2",
+        "--seed",
+        "4",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = read(&sim.join("positions.csv"));
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string() + "\n";
+    let (mut fitted, mut held) = (header.clone(), header);
+    for (i, l) in lines.enumerate() {
+        let to = if i % 4 == 3 { &mut held } else { &mut fitted };
+        *to += l;
+        to.push('\n');
+    }
+    (
+        crate::util::write(dir, "fitted.csv", &fitted),
+        crate::util::write(dir, "held.csv", &held),
+    )
+}
+
+/// The report of a calibration from tracker positions alone leads with the
+/// 3-D errors before and after (table per data set and per frame, and the
+/// figure on the page), states the position noise that was used, and has
+/// no touch section, figure or JSON field: a section per kind of evidence
+/// present.
+#[test]
+fn the_tracker_report_leads_with_the_3d_errors_and_has_no_touch_section() {
+    let dir = temp_dir("report-tracker");
+    let (fitted, held) = tracker_campaign(&dir);
+    let out = dir.join("out");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm(),
+        "--positions",
+        &fitted,
+        "--validate-positions",
+        &held,
+        "--position-noise",
+        "0.015+0.006/m",
+        "--method",
+        "lm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = read(&out.join(HTML_FILE));
+    assert_self_contained(&html);
+    let json: serde_json::Value =
+        serde_json::from_str(&read(&out.join("calibration.json"))).unwrap();
+    // Every number shared with the JSON is the same (the 3-D errors' too).
+    assert!(assert_agrees_with_json(&html, &json) > 0);
+    for pointer in [
+        "/validation/fitted/after/positions/p95",
+        "/validation/held_out/figures/before/positions/rms",
+    ] {
+        assert!(
+            html.contains(&format!("data-json=\"{pointer}\"")),
+            "{pointer} not on the page"
+        );
+    }
+    // No touch: no touch section, figure or field, and no "0 touches".
+    for absent in [
+        "id=\"single-point\"",
+        "id=\"lengths\"",
+        "id=\"residuals\"",
+        "0 touches",
+        "At a glance",
+        "touch σ",
+        "noise</th><td>not stated",
+    ] {
+        assert!(
+            !html.contains(absent),
+            "`{absent}` on the page of positions alone"
+        );
+    }
+    for file in [
+        "single-point-errors.svg",
+        "length-errors.svg",
+        "residuals.svg",
+    ] {
+        assert!(!out.join(file).exists(), "{file} written without touches");
+    }
+    for set in [
+        "/validation/fitted/before",
+        "/validation/held_out/figures/after",
+    ] {
+        let figures = json.pointer(set).unwrap().as_object().unwrap();
+        let keys: Vec<&String> = figures.keys().collect();
+        assert_eq!(keys, ["positions"], "{set}");
+    }
+    // The first numbered section is the 3-D errors, with its figure and a
+    // row per frame of each data set.
+    let first = html
+        .find("<section id=\"positions\"")
+        .expect("a section of the 3-D errors");
+    for later in [
+        "id=\"parameters\"",
+        "id=\"identifiability\"",
+        "id=\"solver\"",
+    ] {
+        assert!(
+            html.find(later).unwrap() > first,
+            "{later} before the 3-D errors"
+        );
+    }
+    assert!(
+        html.contains("<h2>1. 3-D errors at the reference positions"),
+        "not numbered first"
+    );
+    let section = &html[first..first + html[first..].find("</section>").unwrap()];
+    let figure = read(&out.join("position-errors.svg"));
+    assert!(
+        section.contains(
+            figure
+                .trim_start_matches("<?xml version=\"1.0\" encoding=\"UTF-8\"?>")
+                .trim()
+        )
+    );
+    for frame in ["<td>station1</td>", "<td>station2</td>"] {
+        // Fitted and held out, each before and after.
+        assert_eq!(section.matches(frame).count(), 4, "{frame}");
+    }
+    // The noise used, as stated.
+    assert!(
+        html.contains("σ = 0.015 mm + 0.006 mm per metre from the instrument"),
+        "the stated position noise is not on the page"
+    );
+    // The text summary's table has the 95th percentile.
+    let text = crate::util::stdout(&o);
+    assert!(
+        text.contains("poses     mean      RMS      p95      max"),
+        "{text}"
+    );
+}

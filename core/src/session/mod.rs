@@ -1084,6 +1084,55 @@ impl CalibrationReport {
         t
     }
 
+    /// The reference positions' noise, `None` without them: the σ stated
+    /// (`--position-noise`, or each row's own), or that it was estimated,
+    /// with the σ the fit used; and an encoder noise stated without
+    /// touches, which weighs nothing.
+    pub fn position_noise(&self) -> Option<String> {
+        let r = self;
+        r.positions_file.as_ref()?;
+        let n = r.noise;
+        let d = &r.calibration.dof;
+        let mut s = match (n.position_mm, n.position_mm_per_m) {
+            (Some(a), Some(b)) if b > 0.0 => format!(
+                "stated: σ = {a} mm + {b} mm per metre from the instrument, per coordinate (where \
+                 a row states no uncertainty of its own)"
+            ),
+            (Some(a), _) => format!(
+                "stated: σ = {a} mm per coordinate (where a row states no uncertainty of its own)"
+            ),
+            // Alone, positions are weighed as stated only by their own column.
+            (None, _) if r.touches == 0 && !d.touch_sigma_estimated => {
+                "stated: each row's own uncertainty (the file's `uncertainty` column)".to_string()
+            }
+            (None, _) if r.touches == 0 => "not stated: σ is estimated from the fit".to_string(),
+            (None, _) => "no --position-noise: each row's own uncertainty where the file states \
+                          one, else a σ estimated from the fit"
+                .to_string(),
+        };
+        let noun = if r.touches > 0 {
+            "observation"
+        } else {
+            "position"
+        };
+        s += &format!(
+            "; the fit's {noun} σ {:.4} mm ({})",
+            d.touch_sigma_mm,
+            if d.touch_sigma_estimated {
+                "estimated from the fit"
+            } else {
+                "from the stated noise"
+            }
+        );
+        if let (Some(e), 0) = (n.encoder_rad, r.touches) {
+            s += &format!(
+                "; encoders {} deg stated, weighing no row: a position's σ is the instrument's",
+                e.to_degrees()
+            );
+        }
+        Some(s)
+    }
+
     /// The summary's head: what was calibrated on what, and how the solver
     /// went.
     fn summary_header(&self) -> String {
@@ -1106,6 +1155,9 @@ impl CalibrationReport {
                 r.positions,
                 if frames == 1 { "" } else { "s" }
             );
+        }
+        if let Some(noise) = r.position_noise() {
+            t += &format!("Position noise: {noise}\n");
         }
         t += "\n";
         t += &method_lines(s);
@@ -1696,13 +1748,13 @@ fn position_table(v: &Validation) -> String {
         if t.is_empty() {
             t += "\nReference positions (mm): 3-D error |R p + t - y| per pose\n";
             t += &format!(
-                "  {:<28} {:>8} {:>8} {:>8} {:>8}\n",
-                "data", "poses", "mean", "RMS", "max"
+                "  {:<28} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
+                "data", "poses", "mean", "RMS", "p95", "max"
             );
         }
         t += &format!(
-            "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4}\n",
-            name, p.count, p.mean, p.rms, p.max
+            "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
+            name, p.count, p.mean, p.rms, p.p95, p.max
         );
     }
     t
