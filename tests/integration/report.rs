@@ -401,3 +401,74 @@ fn the_tracker_report_leads_with_the_3d_errors_and_has_no_touch_section() {
         "{text}"
     );
 }
+
+/// Held-out positions in a frame the fit does not have: refused by file,
+/// line and field with the fitted frames' names (registered on themselves
+/// they would score optimistically); with --register-held-out they are,
+/// and the summary, calibration.json and the page each say so.
+#[test]
+fn held_out_positions_in_an_unfitted_frame_are_refused_unless_asked_and_then_said() {
+    let dir = temp_dir("report-held-frame");
+    let (fitted, same) = tracker_campaign(&dir);
+    let text = read(Path::new(&same)).replace(",station2\n", ",station3\n");
+    let renamed = crate::util::write(&dir, "held3.csv", &text);
+    let line = 1 + text.lines().position(|l| l.ends_with(",station3")).unwrap();
+    let run = |held: &str, out: &str, extra: &[&str]| {
+        let out = dir.join(out);
+        let mut args = vec![
+            "calibrate",
+            "--arm",
+            &*arm(),
+            "--positions",
+            &fitted,
+            "--validate-positions",
+            held,
+            "--method",
+            "lm",
+            "--out",
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+        args.push(out.display().to_string());
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        (aacmm(&args), out)
+    };
+    let (o, out) = run(&renamed, "refused", &[]);
+    assert_clean_error(
+        &o,
+        &[
+            &format!("held3.csv:{line}: field `frame`"),
+            "`station3` was not fitted",
+            "the fitted frames are `station1`, `station2`",
+            "--register-held-out",
+        ],
+    );
+    assert!(!out.join("calibration.json").exists());
+    let (o, out) = run(&renamed, "asked", &["--register-held-out"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        crate::util::stdout(&o).contains(
+            "held out: frame `station3` not fitted, registered on its own positions as asked"
+        ),
+        "{}",
+        crate::util::stdout(&o)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&read(&out.join("calibration.json"))).unwrap();
+    assert_eq!(
+        json.pointer("/validation/held_out/registered_on_itself"),
+        Some(&serde_json::json!(["station3"]))
+    );
+    let html = read(&out.join(HTML_FILE));
+    assert!(
+        html.contains("frame `station3` not fitted, registered on its own positions (--register-held-out): optimistic"),
+        "the page does not say the held-out frame was registered on itself"
+    );
+    // Held-out frames that were fitted are scored in them, without a word.
+    let (o, out) = run(&same, "fitted-frames", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!crate::util::stdout(&o).contains("registered on its own"));
+    assert!(!read(&out.join("calibration.json")).contains("registered_on_itself"));
+}

@@ -63,7 +63,7 @@ pub fn session_report(
     }];
     if let Some(h) = &v.held_out {
         validation.push(ValidationRow {
-            name: format!("held out ({})", h.data_file),
+            name: format!("held out ({}{})", h.data_file, registered_note(h)),
             held_out: true,
             figures: &h.figures,
             json: Some("/validation/held_out/figures".to_string()),
@@ -353,4 +353,22 @@ fn touch_noise(n: &crate::residuals::Noise) -> String {
             n.length_default_mm
         ),
     }
+}
+
+/// For held-out positions in frames the fit does not have, registered on
+/// themselves because the user asked: `; frame `X` registered on its own
+/// positions (--register-held-out): optimistic` (empty otherwise).
+pub(crate) fn registered_note(h: &crate::session::HeldOut) -> String {
+    let frames = &h.registered_on_itself;
+    if frames.is_empty() {
+        return String::new();
+    }
+    let names: Vec<String> = frames.iter().map(|f| format!("`{f}`")).collect();
+    format!(
+        "; frame{} {} not fitted, registered on {} own positions (--register-held-out): \
+         optimistic",
+        if frames.len() == 1 { "" } else { "s" },
+        names.join(", "),
+        if frames.len() == 1 { "its" } else { "their" }
+    )
 }

@@ -367,7 +367,8 @@ fn positions_section(input: &CalibrationInput, figure: Option<&Figure>, number: 
          into the instrument's frame by R, t) and where the instrument saw it (y). The nominal \
          arm's frames are registered to it in closed form on the fitted positions, the \
          calibrated arm's were fitted with it; a held-out frame is registered as the fitted \
-         frame of its name.",
+         frame of its name — or, only where the user asked (--register-held-out) and then said \
+         in its rows, on its own positions, which flatters the figures.",
         figure,
         "Left: the 3-D error of each pose against the probe's distance from the base axis. \
          Right: their distribution. Grey: the nominal arm; colour: the calibrated arm (blue on \

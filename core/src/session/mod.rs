@@ -100,6 +100,9 @@ pub struct Problem {
     cross_validate: Option<usize>,
     sources: Sources,
     truth: Option<DhParams>,
+    /// Held-out positions in a frame the fit does not have may be
+    /// registered on themselves ([`Problem::registering_held_out_frames`]).
+    register_held_out: bool,
 }
 
 impl Problem {
@@ -155,14 +158,20 @@ impl Problem {
             cross_validate: None,
             sources: Sources::default(),
             truth: None,
+            register_held_out: false,
         })
     }
 
-    /// Validates on `held_out` too.
+    /// Validates on `held_out` too. Its reference positions are scored in
+    /// the fitted frames of their names; a frame the fit does not have is
+    /// refused, unless [`Problem::registering_held_out_frames`] was called
+    /// first.
     ///
     /// # Errors
     ///
-    /// [`CalibrationError::Joints`] when it has another joint count.
+    /// [`CalibrationError::Joints`] when it has another joint count;
+    /// [`CalibrationError::Positions`] naming the first line of a held-out
+    /// frame the fit does not have, and the fitted frames.
     pub fn with_held_out(mut self, held_out: HeldOutData) -> Result<Problem, CalibrationError> {
         if held_out.data.joints() != self.data.joints() {
             return Err(CalibrationError::Joints {
@@ -174,8 +183,22 @@ impl Problem {
             data: of_arm_shape(&self.arm, held_out.data)?,
             ..held_out
         };
+        if !self.register_held_out {
+            check_held_out_frames(&self.data, &held_out.data)?;
+        }
         self.held_out = Some(held_out);
         Ok(self)
+    }
+
+    /// Lets held-out reference positions in a frame the fit does not have
+    /// be registered on themselves (their own closed-form fit): their
+    /// figures are then optimistic — the registration absorbs part of the
+    /// arm's error —, and every output says which frames were so
+    /// registered ([`HeldOut::registered_on_itself`]). Call it before
+    /// [`Problem::with_held_out`].
+    pub fn registering_held_out_frames(mut self) -> Problem {
+        self.register_held_out = true;
+        self
     }
 
     /// Cross-validates over `k` folds of points (seeded by the solver
@@ -555,6 +578,66 @@ pub struct HeldOut {
     pub lengths_file: Option<String>,
     /// Before and after there.
     pub figures: BeforeAfter,
+    /// Its frames the fit does not have, each registered on its own
+    /// positions (closed form, for each arm) because the user asked
+    /// (`--register-held-out`): their figures are optimistic.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub registered_on_itself: Vec<String>,
+}
+
+/// The frames of `data`'s reference positions (none without them).
+fn frame_names(data: &DataSet) -> &[String] {
+    data.positions().map_or(&[], |p| p.rows().frames())
+}
+
+/// The frames of held-out positions that `fitted` has none of, in order.
+fn unfitted_frames<'a>(fitted: &DataSet, held: &'a DataSet) -> Vec<&'a String> {
+    let have = frame_names(fitted);
+    (frame_names(held).iter())
+        .filter(|f| !have.contains(f))
+        .collect()
+}
+
+/// Held-out positions are scored in the fitted frames of their names: a
+/// frame the fit does not have would be registered on its own positions,
+/// which absorbs part of the arm's error (an optimistic score), so it is
+/// refused by its first line, with the fitted frames.
+fn check_held_out_frames(fitted: &DataSet, held: &DataSet) -> Result<(), CalibrationError> {
+    let Some(p) = held.positions() else {
+        return Ok(());
+    };
+    let Some(frame) = unfitted_frames(fitted, held).into_iter().next() else {
+        return Ok(());
+    };
+    let rows = p.rows();
+    let first = (0..rows.len())
+        .find(|&i| &rows.frames()[rows.frame(i)] == frame)
+        .expect("a frame has a row");
+    let have = frame_names(fitted);
+    let fitted = if have.is_empty() {
+        "the fit has no reference positions, so no frame".to_string()
+    } else {
+        format!(
+            "the fitted frame{} {}",
+            if have.len() == 1 { " is" } else { "s are" },
+            have.iter()
+                .map(|f| format!("`{f}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    Err(CalibrationError::Positions {
+        file: p.file().to_string(),
+        line: rows.line(first),
+        field: "frame".to_string(),
+        message: format!(
+            "held-out frame `{frame}` was not fitted ({fitted}): its positions could only be \
+             registered on themselves, which hides part of the arm's error. Name the fitted \
+             frame they were measured in, fit this frame too (in --positions), or let it be \
+             registered on its own positions with --register-held-out (then every output says \
+             so)"
+        ),
+    })
 }
 
 /// Cross-validation over points.
@@ -1340,6 +1423,9 @@ pub fn run(
             data_file: h.data_file.clone(),
             lengths_file: h.lengths_file.clone(),
             figures: before_after_of(before, after, &h.data)?,
+            registered_on_itself: (unfitted_frames(&problem.data, &h.data).into_iter())
+                .cloned()
+                .collect(),
         }),
         None => None,
     };
@@ -1755,6 +1841,21 @@ fn position_table(v: &Validation) -> String {
         t += &format!(
             "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
             name, p.count, p.mean, p.rms, p.p95, p.max
+        );
+    }
+    if let Some(h) = v
+        .held_out
+        .as_ref()
+        .filter(|h| !h.registered_on_itself.is_empty())
+    {
+        t += &format!(
+            "  held out: {} not fitted, registered on its own positions as asked \
+             (--register-held-out): these held-out figures are optimistic\n",
+            h.registered_on_itself
+                .iter()
+                .map(|f| format!("frame `{f}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     t
