@@ -567,3 +567,56 @@ fn annealing_is_refused_where_it_cannot_use_the_data() {
         }
     }
 }
+
+/// Readings in radians in a positions file read as degrees: the refusal
+/// names the angle unit (as the touch readers' does), not the positions'
+/// unit, and says that read as radians the nominal arm fits them — which
+/// `--angle-unit rad` then confirms.
+#[test]
+fn radians_read_as_degrees_in_a_positions_file_blame_the_angle_unit() {
+    use crate::util::{aacmm, assert_clean_error, stderr, temp_dir, write};
+    let dir = temp_dir("positions-radians");
+    let text = std::fs::read_to_string(ur5("positions-grid.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut rad = lines.next().unwrap().to_string() + "\n";
+    for l in lines.take(200) {
+        let f: Vec<String> = (l.split(',').enumerate())
+            .map(|(k, v)| match k {
+                1..=6 => format!("{:?}", v.parse::<f64>().unwrap().to_radians()),
+                _ => v.to_string(),
+            })
+            .collect();
+        rad += &(f.join(",") + "\n");
+    }
+    let file = write(&dir, "rad.csv", &rad);
+    let run = |extra: &[&str]| {
+        let out = dir.join(format!("out{}", extra.len()));
+        let mut args = vec![
+            "calibrate",
+            "--arm",
+            &*ur5("arm.toml").leak(),
+            "--positions",
+            &file,
+            "--method",
+            "lm",
+            "--out",
+        ];
+        let out = out.display().to_string();
+        args.push(&out);
+        args.extend(extra);
+        aacmm(&args)
+    };
+    let o = run(&[]);
+    assert_clean_error(
+        &o,
+        &[
+            "rad.csv:2: field `q1`",
+            "look like radians read as degrees, not positions in another unit",
+            "--angle-unit rad",
+            "read so, the nominal arm fits these positions",
+        ],
+    );
+    assert!(!stderr(&o).contains("they must be mm"), "{}", stderr(&o));
+    let o = run(&["--angle-unit", "rad"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -507,12 +507,69 @@ const POSITION_MISS_SHARE: f64 = 0.2;
 /// frame by frame: positions in another unit (their spread against the
 /// arm's), a mirror image (swapped axes: a mirrored registration fits much
 /// better than any rotation), or positions of another arm (the best
-/// registration misses by a large share of their spread).
+/// registration misses by a large share of their spread). When every
+/// reading, read as degrees, is within ±2π — radians read as degrees, as
+/// the touch readers ask ([`crate::io::poses::look_like_radians`]) — the
+/// refusal names the angle unit instead, and whether the numbers read as
+/// radians fit.
 fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationError> {
     let Some(positions) = data.positions() else {
         return Ok(());
     };
-    let registrations = crate::residuals::positions::register(layout.geometry(), positions)?;
+    let Some(refusal) = position_refusal(positions, layout.geometry())? else {
+        return Ok(());
+    };
+    let rows = positions.rows();
+    let to_deg = 1f64.to_degrees();
+    let shape = (rows.joints(), rows.prismatic_mask());
+    if !crate::io::poses::look_like_radians(rows.readings(), rows.len(), shape, to_deg) {
+        return Err(refusal);
+    }
+    let as_rad =
+        DataSet::from_positions(rows.revolute_scaled(to_deg), positions.file()).map_err(|e| {
+            CalibrationError::Term {
+                term: "positions".into(),
+                message: e.to_string(),
+            }
+        })?;
+    let fits = match as_rad.positions() {
+        Some(p) => position_refusal(p, layout.geometry())?.is_none(),
+        None => false,
+    };
+    // What reading them as degrees did, in numbers rather than the
+    // refusal's guesses (another unit, another arm).
+    let reg = &crate::residuals::positions::register(layout.geometry(), positions)?[0];
+    Err(CalibrationError::Positions {
+        file: positions.file().to_string(),
+        line: rows.line(0),
+        field: "q1".to_string(),
+        message: format!(
+            "every joint reading, read as degrees, is within ±6.28° in all {} rows: these angles \
+             look like radians read as degrees, not positions in another unit — read so, the \
+             nominal arm's probe spreads {:.4} mm about its centroid where the instrument saw \
+             {:.4} mm; {}{}",
+            rows.len(),
+            reg.arm_spread_mm,
+            reg.spread_mm,
+            crate::calibrate::ANGLE_UNITS_REMEDY,
+            if fits {
+                ": read so, the nominal arm fits these positions"
+            } else {
+                "; read so, the nominal arm still does not fit them: check the readings' order \
+                 and the positions' unit (mm) too"
+            }
+        ),
+    })
+}
+
+/// The first frame of `positions` that the nominal arm `params` cannot be
+/// registered to, as the refusal ([`check_positions`]); `None` when every
+/// frame can.
+fn position_refusal(
+    positions: &crate::dataset::PositionData,
+    params: &DhParams,
+) -> Result<Option<CalibrationError>, CalibrationError> {
+    let registrations = crate::residuals::positions::register(params, positions)?;
     let rows = positions.rows();
     for (f, (name, reg)) in rows.frames().iter().zip(registrations).enumerate() {
         let first = (0..rows.len()).find(|&i| rows.frame(i) == f).unwrap_or(0);
@@ -524,7 +581,7 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
         };
         let ratio = reg.spread_mm / reg.arm_spread_mm;
         if !(1.0 / POSITION_SPREAD_RATIO..=POSITION_SPREAD_RATIO).contains(&ratio) {
-            return Err(refuse(
+            return Ok(Some(refuse(
                 "x",
                 format!(
                     "the positions spread {:.4} mm about their centroid, the nominal arm's \
@@ -532,10 +589,10 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
                      mm; metres give 1e-3) or of another arm?",
                     reg.spread_mm, reg.arm_spread_mm
                 ),
-            ));
+            )));
         }
         if reg.mirrored_rms_mm < 0.5 * reg.rms_mm && reg.rms_mm > 0.01 * reg.spread_mm {
-            return Err(refuse(
+            return Ok(Some(refuse(
                 "y",
                 format!(
                     "a mirror image fits the nominal arm (RMS {:.4} mm) far better than any \
@@ -543,10 +600,10 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
                      of a right-handed frame",
                     reg.mirrored_rms_mm, reg.rms_mm
                 ),
-            ));
+            )));
         }
         if reg.rms_mm > POSITION_MISS_SHARE * reg.spread_mm {
-            return Err(refuse(
+            return Ok(Some(refuse(
                 "point",
                 format!(
                     "the nominal arm, best registered, misses these positions by RMS {:.4} mm \
@@ -554,10 +611,10 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
                      another order or unit, or another tool?",
                     reg.rms_mm, reg.spread_mm
                 ),
-            ));
+            )));
         }
     }
-    Ok(())
+    Ok(None)
 }
 
 /// Units of the values in a [`CalibrationReport`] meant for people.
