@@ -25,7 +25,7 @@ struct Cli {
 /// works as `--x=-0.5` does (no option of aacmm is a digit).
 #[derive(Subcommand)]
 enum Command {
-    /// Forward kinematics: the probe position of every pose (CSV point,x,y,z in mm).
+    /// Forward kinematics: the probe position of every pose of a poses or positions file (CSV point,x,y,z in mm).
     #[command(allow_negative_numbers = true)]
     Points(commands::points::Args),
     /// Simulate a calibration campaign with a known true arm.

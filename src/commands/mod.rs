@@ -17,7 +17,8 @@ use std::path::PathBuf;
 
 use aacmm_core::error::short;
 use aacmm_core::io::{
-    AngleUnit, Arm, Poses, Rejected, Warning, limit_warning, read_arm_with, read_poses, source_name,
+    AngleUnit, Arm, Poses, Rejected, Warning, limit_warning, read_arm_with, read_poses,
+    read_poses_or_positions, source_name,
 };
 use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, Pose, PreparedPoses};
 use anyhow::{Context, Result, bail};
@@ -65,13 +66,38 @@ impl ArmAndPoses {
     /// (stderr) about suspicious poses, readings outside the arm's joint
     /// limits included.
     pub fn read(&self) -> Result<(Arm, Poses)> {
+        self.read_with(|path, unit, arm| {
+            let (poses, warnings) = read_poses(path, unit, arm)?;
+            Ok((poses, warnings))
+        })
+    }
+
+    /// [`ArmAndPoses::read`] of a poses file or of a reference-positions
+    /// file, whose readings are taken (`points`: the positions and frames
+    /// are not needed to say where the arm puts its probe).
+    pub fn read_readings(&self) -> Result<(Arm, Poses)> {
+        self.read_with(|path, unit, arm| {
+            let (poses, warnings, _) = read_poses_or_positions(path, unit, arm)?;
+            Ok((poses, warnings))
+        })
+    }
+
+    /// The arm, and the poses `read` reads for it, with the warnings.
+    fn read_with(
+        &self,
+        read: impl Fn(
+            &std::path::Path,
+            AngleUnit,
+            &Arm,
+        ) -> Result<(Poses, Vec<Warning>), aacmm_core::error::InputError>,
+    ) -> Result<(Arm, Poses)> {
         let rejected = if self.accept_rejected {
             Rejected::Warn
         } else {
             Rejected::Refuse
         };
         let (arm, mut warnings) = read_arm_with(&self.arm, rejected)?;
-        let (poses, more) = read_poses(&self.data, self.angle_unit, &arm)?;
+        let (poses, more) = read(&self.data, self.angle_unit, &arm)?;
         warnings.extend(more);
         let file = source_name(&self.data);
         warnings.extend(limit_warning(&arm, &poses, &file, self.angle_unit));

@@ -620,3 +620,51 @@ fn radians_read_as_degrees_in_a_positions_file_blame_the_angle_unit() {
     let o = run(&["--angle-unit", "rad"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// `points` and `plan --candidates` take a positions file's readings: the
+/// same output, byte for byte, as from a poses file of the same readings;
+/// their help says so.
+#[test]
+fn points_and_plan_take_the_readings_of_a_positions_file() {
+    use crate::util::{aacmm, stderr, stdout, temp_dir, write};
+    let dir = temp_dir("positions-readings");
+    let positions = ur5("positions-random.csv");
+    let poses = write(&dir, "poses.csv", &poses_of(&positions));
+    let arm = ur5("arm.toml");
+    let same = |args: &dyn Fn(&str) -> Vec<String>| {
+        let run = |file: &str| {
+            let a = args(file);
+            let o = aacmm(&a.iter().map(String::as_str).collect::<Vec<_>>());
+            assert!(o.status.success(), "{a:?}: {}", stderr(&o));
+            stdout(&o)
+        };
+        let (from_positions, from_poses) = (run(&positions), run(&poses));
+        assert!(!from_poses.is_empty());
+        assert_eq!(from_positions, from_poses.replace(&poses, &positions));
+    };
+    same(&|data| {
+        ["points", "--arm", &arm, "--data", data]
+            .map(String::from)
+            .to_vec()
+    });
+    same(&|data| {
+        let flags = [
+            "plan",
+            "--arm",
+            &arm,
+            "--measure",
+            "positions",
+            "--count",
+            "12",
+        ];
+        let mut a: Vec<String> = flags.map(String::from).to_vec();
+        a.extend(["--candidates", data, "--workspace", data].map(String::from));
+        a
+    });
+    for (command, flag) in [("points", "--data"), ("plan", "--candidates")] {
+        let help = stdout(&aacmm(&[command, "--help"]));
+        let at = help.find(&format!("      {flag} <")).unwrap();
+        let text = &help[at..at + help[at..].find("\n\n").unwrap()];
+        assert!(text.contains("positions file"), "{command} {flag}: {text}");
+    }
+}
