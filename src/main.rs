@@ -31,7 +31,7 @@ enum Command {
     /// Simulate a calibration campaign with a known true arm.
     #[command(allow_negative_numbers = true)]
     Simulate(commands::simulate::Args),
-    /// Evaluate an arm on measured poses: single-point and length metrics.
+    /// Evaluate an arm on measured poses (single-point and length metrics) or at reference positions (3-D errors).
     #[command(allow_negative_numbers = true)]
     Evaluate(commands::evaluate::Args),
     /// Identifiability: which parameters the data can determine, and which to fix.

@@ -76,7 +76,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
         let inputs = [
             ("--arm", args.input.arm.as_path()),
-            ("--data", &args.input.data),
+            ("--data", args.input.data()?),
         ];
         check_output_file("--out", out, &inputs, args.force)?;
     }

@@ -269,6 +269,38 @@ fn the_ur5_tracker_data_calibrate_below_the_published_error() {
         let d = ((p[0] - y[0]).powi(2) + (p[1] - y[1]).powi(2) + (p[2] - y[2]).powi(2)).sqrt();
         assert!(d <= after.max + 1e-3, "{p:?} vs {y:?}: {d} mm");
     }
+    // `evaluate --positions`: the calibrated arm in its own fitted frame
+    // gives the calibration's held-out figures; the nominal arm, which has
+    // no frame, is registered on the positions themselves, and said so.
+    let evaluate = |arm: &str| {
+        let o = aacmm(&[
+            "evaluate",
+            "--arm",
+            arm,
+            "--positions",
+            &ur5("positions-random.csv"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let text = evaluate(calibrated.to_str().unwrap());
+    assert!(
+        text.contains("frame `instrument`: registered as the arm file states it"),
+        "{text}"
+    );
+    let row = format!(
+        "  instrument                 20 {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
+        after.mean, after.rms, after.p95, after.max
+    );
+    assert!(text.contains(&row), "{text}\nlacks\n{row}");
+    let text = evaluate(&ur5("arm.toml"));
+    assert!(
+        text.contains("registered to this arm in closed form on these positions")
+            && text.contains("optimistic"),
+        "{text}"
+    );
+    let help = stdout(&aacmm(&["evaluate", "--help"]));
+    assert!(help.contains("--positions <P.csv>"), "{help}");
 }
 
 /// The `point,q1..q6` columns of a positions file, as a poses file.

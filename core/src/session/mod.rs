@@ -22,6 +22,7 @@ pub(crate) mod evaluation;
 pub(crate) mod identification;
 mod map;
 mod outputs;
+mod position_evaluation;
 pub mod request;
 
 pub use map::MAP_POSES;
@@ -29,6 +30,7 @@ pub use outputs::{earlier_results, result_files};
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
+pub use position_evaluation::{FrameEvaluation, PositionEvaluation};
 pub use request::{Request, user_noise};
 
 use std::path::Path;
