@@ -206,35 +206,7 @@ pub(crate) fn calibration_page(
     if present.touches {
         page += &touch_sections(input, evaluated, figures);
     }
-    let truths = super::figures::parameters::true_errors(cal, input.truth);
-    page += &section(
-        "parameters",
-        &format!(
-            "{}. Parameters: corrections with ± 2σ",
-            number("parameters")
-        ),
-        &tables::parameters_intro(cal),
-        find(figures, PARAMETERS_SVG),
-        "Correction = calibrated − nominal. Bars: ± 2σ (k = 2) from the covariance \
-         σ̂0² (JᵀJ)⁻¹; a bar shorter than its dot is smaller than the dot's radius on this \
-         scale (the table gives every σ). Crosses: parameters held at nominal, with the reason; \
-         the data cannot determine them, so their errors are absorbed by the others.",
-        "",
-        &tables::parameters(cal, json, &truths),
-    );
-    page += &section(
-        "identifiability",
-        &format!("{}. Identifiability", number("identifiability")),
-        "",
-        find(figures, IDENTIFIABILITY_SVG),
-        "Left: singular values of the weighted Jacobian with angle columns scaled by the reach \
-         (an angle counts as the arc it sweeps there); below the threshold a direction is not \
-         determined by the data and a parameter along it is fixed. Right: the correlation \
-         coefficients ρ of the free parameters from the covariance; |ρ| > 0.9 is written in the \
-         cell.",
-        &tables::identification(cal, json),
-        "",
-    );
+    page += &geometry_sections(input, figures, &number);
     if present.touches {
         page += &section(
             "residuals",
@@ -272,6 +244,45 @@ pub(crate) fn calibration_page(
     }
     page += &foot(figures);
     page
+}
+
+/// The sections every calibration has on its geometry: the parameters'
+/// corrections and the identifiability, numbered as `number` says.
+fn geometry_sections(
+    input: &CalibrationInput,
+    figures: &[Figure],
+    number: &dyn Fn(&str) -> usize,
+) -> String {
+    let cal = input.calibration;
+    let json = input.calibration_json.as_deref();
+    let truths = super::figures::parameters::true_errors(cal, input.truth);
+    section(
+        "parameters",
+        &format!(
+            "{}. Parameters: corrections with ± 2σ",
+            number("parameters")
+        ),
+        &tables::parameters_intro(cal),
+        find(figures, PARAMETERS_SVG),
+        "Correction = calibrated − nominal. Bars: ± 2σ (k = 2) from the covariance \
+         σ̂0² (JᵀJ)⁻¹; a bar shorter than its dot is smaller than the dot's radius on this \
+         scale (the table gives every σ). Crosses: parameters held at nominal, with the reason; \
+         the data cannot determine them, so their errors are absorbed by the others.",
+        "",
+        &tables::parameters(cal, json, &truths),
+    ) + &section(
+        "identifiability",
+        &format!("{}. Identifiability", number("identifiability")),
+        "",
+        find(figures, IDENTIFIABILITY_SVG),
+        "Left: singular values of the weighted Jacobian with angle columns scaled by the reach \
+         (an angle counts as the arc it sweeps there); below the threshold a direction is not \
+         determined by the data and a parameter along it is fixed. Right: the correlation \
+         coefficients ρ of the free parameters from the covariance; |ρ| > 0.9 is written in the \
+         cell.",
+        &tables::identification(cal, json),
+        "",
+    )
 }
 
 /// The kinds of evidence and results a calibration page has sections for.
