@@ -158,6 +158,22 @@ pub fn percentile_95(d: &[f64]) -> f64 {
 }
 
 impl Figures {
+    /// The figures of data without touches: the touch figures 0 (and
+    /// left out of the JSON when there are `positions`).
+    pub fn without_touches(positions: Option<PositionErrors>) -> Figures {
+        Figures {
+            points: 0,
+            e_mean: 0.0,
+            e_max: 0.0,
+            two_s_mean: 0.0,
+            delta_max: 0.0,
+            lengths: 0,
+            length_rms: None,
+            length_max: None,
+            positions,
+        }
+    }
+
     /// The figure a calibration must not make worse on its own data: the
     /// mean `e` of the touches, or without touches the mean 3-D error at
     /// the reference positions.
@@ -257,17 +273,7 @@ pub fn figures_in(
         .map(|p| position_errors(params, p, frames))
         .transpose()?;
     if data.is_empty() {
-        return Ok(Figures {
-            points: 0,
-            e_mean: 0.0,
-            e_max: 0.0,
-            two_s_mean: 0.0,
-            delta_max: 0.0,
-            lengths: 0,
-            length_rms: None,
-            length_max: None,
-            positions,
-        });
+        return Ok(Figures::without_touches(positions));
     }
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
@@ -642,17 +648,7 @@ mod tests {
     fn figures_of_positions_alone_have_no_touch_field() {
         let positions = PositionErrors::of(&[1.0, 2.0, 4.0]);
         assert_eq!(positions.p95, 4.0);
-        let f = Figures {
-            points: 0,
-            e_mean: 0.0,
-            e_max: 0.0,
-            two_s_mean: 0.0,
-            delta_max: 0.0,
-            lengths: 0,
-            length_rms: None,
-            length_max: None,
-            positions: Some(positions),
-        };
+        let f = Figures::without_touches(Some(positions));
         let json = serde_json::to_value(f).unwrap();
         let keys: Vec<&String> = json.as_object().unwrap().keys().collect();
         assert_eq!(keys, ["positions"]);
