@@ -476,6 +476,7 @@ def calibrate(
     thermal: bool = False,
     drift: bool = False,
     backlash: Optional[str] = None,
+    register_held_out: bool = False,
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
@@ -486,7 +487,11 @@ def calibrate(
     (``"length=0.5mm,angle=0.1deg"``, over the arm file's ``[prior]``;
     ``"none"`` ignores the file's). ``validate`` is a held-out data set of
     touches, reference positions or both (positions in a fitted frame are
-    scored in it). ``accept_poor_fit`` calls a poor χ² or a
+    scored in it; a frame the fit does not have is a CalibrationError naming
+    the fitted frames, unless ``register_held_out``, which registers it on
+    its own positions — optimistic — and says so in
+    ``report["validation"]["held_out"]["registered_on_itself"]``, as
+    ``--register-held-out``). ``accept_poor_fit`` calls a poor χ² or a
     fit worse than nominal usable (never a wrong geometry). Models beyond
     geometry, fitted with the arm as the command line's flags:
     ``compliance`` (``"2,3"``, joints from 1, loaded by the arm file's

@@ -25,13 +25,13 @@ struct Cli {
 /// works as `--x=-0.5` does (no option of aacmm is a digit).
 #[derive(Subcommand)]
 enum Command {
-    /// Forward kinematics: the probe position of every pose (CSV point,x,y,z in mm).
+    /// Forward kinematics: the probe position of every pose of a poses or positions file (CSV point,x,y,z in mm).
     #[command(allow_negative_numbers = true)]
     Points(commands::points::Args),
     /// Simulate a calibration campaign with a known true arm.
     #[command(allow_negative_numbers = true)]
     Simulate(commands::simulate::Args),
-    /// Evaluate an arm on measured poses: single-point and length metrics.
+    /// Evaluate an arm on measured poses (single-point and length metrics) or at reference positions (3-D errors).
     #[command(allow_negative_numbers = true)]
     Evaluate(commands::evaluate::Args),
     /// Identifiability: which parameters the data can determine, and which to fix.

@@ -150,7 +150,7 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// parameters. A calibration that is not usable still gives a result:
 /// check `successful` (the verdict) and `report["verdict"]` for why.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None))]
+#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None, register_held_out = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -172,6 +172,7 @@ pub fn calibrate(
     thermal: bool,
     drift: bool,
     backlash: Option<&str>,
+    register_held_out: bool,
 ) -> PyResult<Calibration> {
     let fix = match fix {
         Some(f) => fix_text(f)?,
@@ -188,7 +189,8 @@ pub fn calibrate(
         .robust(robust, robust_scale)
         .accept_poor_fit(accept_poor_fit)
         .beyond(compliance, harmonics, thermal, drift)
-        .backlash(backlash);
+        .backlash(backlash)
+        .register_held_out(register_held_out);
     // The readers' warnings were issued when the files were read; the
     // request adds those about the arm and the data together.
     let read: Vec<&String> = (arm.warnings.iter().chain(&data.warnings))

@@ -352,3 +352,24 @@ def test_positions_alone_cannot_be_evaluated_or_cross_validated(nominal, good):
     with pytest.raises(ValueError, match="^data: the arm has 6 joints, the data 7$"):
         aacmm.calibrate(nominal, seven)
 
+
+
+def test_held_out_positions_in_an_unfitted_frame(nominal):
+    """Held-out positions in a frame the fit does not have are refused with
+    the fitted frames' names; ``register_held_out`` registers them on
+    themselves, and the report says so (as ``--register-held-out``)."""
+    rng = np.random.default_rng(12)
+    truth = true_arm(nominal, rng)
+    w, t = random_frame(rng)
+    q, xyz = seen(truth, w, t, 150, rng, 0.01)
+    q2, xyz2 = seen(truth, w, t, 40, rng, 0.01)
+    data = aacmm.DataSet.from_positions(q, xyz)
+    elsewhere = aacmm.DataSet.from_positions(q2, xyz2, frames=["station"] * 40)
+    noise = aacmm.Noise(position_mm=0.01)
+    with pytest.raises(Exception, match="held-out frame `station` was not fitted .*`instrument`"):
+        aacmm.calibrate(nominal, data, noise=noise, validate=elsewhere)
+    cal = aacmm.calibrate(nominal, data, noise=noise, validate=elsewhere, register_held_out=True)
+    assert cal.report["validation"]["held_out"]["registered_on_itself"] == ["station"]
+    same = aacmm.DataSet.from_positions(q2, xyz2)
+    cal = aacmm.calibrate(nominal, data, noise=noise, validate=same)
+    assert "registered_on_itself" not in cal.report["validation"]["held_out"]

@@ -43,9 +43,15 @@ pub struct Args {
     #[arg(long, value_name = "L.csv", requires = "validate")]
     validate_lengths: Option<PathBuf>,
     /// Held-out reference positions to validate on (same CSV format as
-    /// --positions): scored in the fitted frames of the same name.
+    /// --positions): scored in the fitted frames of the same name; a frame the
+    /// fit does not have is refused (see --register-held-out).
     #[arg(long, value_name = "P.csv")]
     validate_positions: Option<PathBuf>,
+    /// Score held-out positions in a frame the fit does not have by
+    /// registering that frame on its own positions (refused without this
+    /// flag: such figures are optimistic, and every output then says so).
+    #[arg(long, requires = "validate_positions")]
+    register_held_out: bool,
     /// K-fold cross-validation over points (points joined by a reference
     /// length stay in one fold).
     #[arg(long, value_name = "K")]
@@ -253,7 +259,8 @@ fn problem(args: &Args) -> Result<(Problem, SolverSettings)> {
         .global(global)
         .accept_poor_fit(args.accept_poor_fit)
         .robust(args.robust.map(|l| Loss::from(l).name()), args.robust_scale)
-        .cross_validate(args.cross_validate);
+        .cross_validate(args.cross_validate)
+        .register_held_out(args.register_held_out);
     if let Some(path) = &args.validate {
         let shown = request.warnings().len();
         request = request.validate_on_files(path, args.validate_lengths.as_deref())?;

@@ -2,25 +2,41 @@
 //! measured poses — the paper's and the standards' (see `aacmm_core::metrics`
 //! for every formula).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
+use aacmm_core::calibrate::validate::FrameValues;
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{read_lengths, source_name};
+use aacmm_core::io::frames::parse_frames;
+use aacmm_core::io::{Arm, read_lengths, read_positions, source_name};
 use aacmm_core::report::EVALUATION_FILES;
-use aacmm_core::session::{EvaluationReport, Sources};
-use anyhow::{Context, Result};
+use aacmm_core::session::{EvaluationReport, PositionEvaluation, Sources};
+use anyhow::{Context, Result, bail};
 
 use crate::output::Stdout;
 use crate::paths::{check_output_dir, check_output_file};
 
-/// Evaluate an arm on measured poses.
+/// Evaluate an arm on measured poses, or at reference positions.
 #[derive(clap::Args)]
+#[command(mut_arg("data", |a| a
+    .required(false)
+    .required_unless_present("positions")
+    .help("Poses file (CSV `point,q1,...,qn`: touches of points); `-` reads standard input. \
+           Optional with --positions")))]
 pub struct Args {
     #[command(flatten)]
     input: super::ArmAndPoses,
     /// Reference lengths (CSV `point_a,point_b,distance[,uncertainty]`, mm).
-    #[arg(long)]
+    #[arg(long, requires = "data")]
     lengths: Option<PathBuf>,
+    /// Reference positions an instrument saw (a laser tracker): CSV
+    /// `point,q1,...,qn,x,y,z[,frame][,uncertainty]`, as calibrate
+    /// --positions reads. Prints the arm's 3-D errors there (mean, RMS,
+    /// 95th percentile, max per frame), each frame registered as the arm
+    /// file's `[[frame]]` of its name (a calibrated arm's), else to this
+    /// arm in closed form on these positions (optimistic) — and says which.
+    /// Printed only: --json and --report are of the touches (--data).
+    #[arg(long, value_name = "P.csv")]
+    positions: Option<PathBuf>,
     /// Also write every figure as JSON (lengths in mm).
     #[arg(long)]
     json: Option<PathBuf>,
@@ -45,11 +61,25 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let mut inputs = vec![
-        ("--arm", args.input.arm.as_path()),
-        ("--data", &args.input.data),
-    ];
+    let mut inputs = vec![("--arm", args.input.arm.as_path())];
+    inputs.extend(args.input.data.as_deref().map(|d| ("--data", d)));
     inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
+    inputs.extend(args.positions.as_deref().map(|p| ("--positions", p)));
+    if args.input.data.is_none() {
+        for (given, flag) in [
+            (args.json.is_some(), "--json"),
+            (args.report.is_some(), "--report"),
+            (args.pairs, "--pairs"),
+        ] {
+            if given {
+                bail!(
+                    "{flag}: written for the touches of --data; the errors at --positions are \
+                     printed"
+                );
+            }
+        }
+        return print_positions(&args, &args.input.read_arm()?);
+    }
     if let Some(json) = &args.json {
         check_output_file("--json", json, &inputs, args.force)?;
     }
@@ -58,7 +88,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (arm, poses) = args.input.read()?;
     let kernel = args.input.kernel(&arm)?;
-    let mut data = DataSet::from_poses_owned(poses, &source_name(&args.input.data))?;
+    let data_path = args.input.data()?;
+    let mut data = DataSet::from_poses_owned(poses, &source_name(data_path))?;
     // Rows counted once are said, with their lines, before any figure.
     super::report(data.repeat_warnings())?;
     if let Some(path) = &args.lengths {
@@ -83,19 +114,13 @@ pub fn run(args: Args) -> Result<()> {
         .check_finite(&xyz, |i| data.source().touch(i).line)?;
     let sources = Sources {
         arm_file: source_name(&args.input.arm),
-        data_file: source_name(&args.input.data),
+        data_file: source_name(data_path),
         lengths_file: args.lengths.as_deref().map(source_name),
         warnings: Vec::new(),
     };
     let threads = super::worker_threads(args.threads);
     let report = EvaluationReport::new(&arm, &data, &xyz, &sources, threads)
-        .with_context(|| {
-            format!(
-                "{}: on {}",
-                args.input.arm.display(),
-                args.input.data.display()
-            )
-        })?
+        .with_context(|| format!("{}: on {}", args.input.arm.display(), data_path.display()))?
         .with_pairs(args.pairs);
 
     // The JSON file is written even if stdout fails (e.g. `| head -1`).
@@ -112,5 +137,37 @@ pub fn run(args: Args) -> Result<()> {
         let page = report.html(json.as_deref()).context("--report")?;
         super::report::write("--report", dir, &page)?;
     }
-    printed
+    printed?;
+    print_positions(&args, &arm)
+}
+
+/// The arm's 3-D errors at --positions, if given, printed.
+fn print_positions(args: &Args, arm: &Arm) -> Result<()> {
+    let Some(path) = &args.positions else {
+        return Ok(());
+    };
+    let file = source_name(path);
+    let rows = read_positions(path, args.input.angle_unit, arm)?;
+    let data = DataSet::from_positions(rows, &file)?;
+    let stated: Vec<FrameValues> = stated_frames(&args.input.arm)?;
+    let evaluation = PositionEvaluation::new(arm, &data, &stated)
+        .with_context(|| format!("{}: on {file}", args.input.arm.display()))?;
+    let mut out = Stdout::new();
+    out.write_with(|w| w.write_all(evaluation.summary().as_bytes()))?;
+    out.finish()
+}
+
+/// The frames the arm file states (`[[frame]]`, a calibrated arm's), by
+/// name; none for an arm read from standard input.
+fn stated_frames(arm: &Path) -> Result<Vec<FrameValues>> {
+    if arm.as_os_str() == "-" {
+        return Ok(Vec::new());
+    }
+    let text =
+        std::fs::read_to_string(arm).with_context(|| format!("{}: cannot read", arm.display()))?;
+    let frames = parse_frames(&text, &source_name(arm))?;
+    Ok(frames
+        .iter()
+        .map(|f| (f.name.clone(), f.values()))
+        .collect())
 }

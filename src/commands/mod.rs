@@ -17,7 +17,8 @@ use std::path::PathBuf;
 
 use aacmm_core::error::short;
 use aacmm_core::io::{
-    AngleUnit, Arm, Poses, Rejected, Warning, limit_warning, read_arm_with, read_poses, source_name,
+    AngleUnit, Arm, Poses, Rejected, Warning, limit_warning, read_arm_with, read_poses,
+    read_poses_or_positions, source_name,
 };
 use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, Pose, PreparedPoses};
 use anyhow::{Context, Result, bail};
@@ -43,8 +44,8 @@ pub struct ArmAndPoses {
     #[arg(long)]
     pub arm: PathBuf,
     /// Poses file (CSV `point,q1,...,qn`); `-` reads standard input.
-    #[arg(long)]
-    pub data: PathBuf,
+    #[arg(long, required = true)]
+    pub data: Option<PathBuf>,
     /// Unit of the joint readings (q1..qn) in the poses file; the arm
     /// file states its own (`angle_unit`).
     #[arg(long, default_value = "deg", value_parser = angle_unit())]
@@ -60,20 +61,74 @@ pub struct ArmAndPoses {
     pub accept_rejected: bool,
 }
 
+/// The poses file as messages name it.
+fn shown_data(data: &Option<PathBuf>) -> String {
+    data.as_deref()
+        .map_or("--data".to_string(), |d| d.display().to_string())
+}
+
 impl ArmAndPoses {
+    /// The poses file (`--data`; optional only where a command says so,
+    /// as `evaluate --positions`).
+    pub fn data(&self) -> Result<&std::path::Path> {
+        match &self.data {
+            Some(path) => Ok(path),
+            None => bail!("give --data: a poses file"),
+        }
+    }
+
     /// Reads both files; the poses must have the arm's joint count. Warns
     /// (stderr) about suspicious poses, readings outside the arm's joint
     /// limits included.
     pub fn read(&self) -> Result<(Arm, Poses)> {
+        self.read_with(|path, unit, arm| {
+            let (poses, warnings) = read_poses(path, unit, arm)?;
+            Ok((poses, warnings))
+        })
+    }
+
+    /// [`ArmAndPoses::read`] of a poses file or of a reference-positions
+    /// file, whose readings are taken (`points`: the positions and frames
+    /// are not needed to say where the arm puts its probe).
+    pub fn read_readings(&self) -> Result<(Arm, Poses)> {
+        self.read_with(|path, unit, arm| {
+            let (poses, warnings, _) = read_poses_or_positions(path, unit, arm)?;
+            Ok((poses, warnings))
+        })
+    }
+
+    /// The arm alone (`evaluate --positions` without poses), its warnings
+    /// printed.
+    pub fn read_arm(&self) -> Result<Arm> {
+        let (arm, warnings) = self.arm_and_warnings()?;
+        report(&warnings)?;
+        Ok(arm)
+    }
+
+    /// The arm file read (a rejected calibration's refused unless
+    /// --accept-rejected), with its warnings.
+    fn arm_and_warnings(&self) -> Result<(Arm, Vec<Warning>)> {
         let rejected = if self.accept_rejected {
             Rejected::Warn
         } else {
             Rejected::Refuse
         };
-        let (arm, mut warnings) = read_arm_with(&self.arm, rejected)?;
-        let (poses, more) = read_poses(&self.data, self.angle_unit, &arm)?;
+        Ok(read_arm_with(&self.arm, rejected)?)
+    }
+
+    /// The arm, and the poses `read` reads for it, with the warnings.
+    fn read_with(
+        &self,
+        read: impl Fn(
+            &std::path::Path,
+            AngleUnit,
+            &Arm,
+        ) -> Result<(Poses, Vec<Warning>), aacmm_core::error::InputError>,
+    ) -> Result<(Arm, Poses)> {
+        let (arm, mut warnings) = self.arm_and_warnings()?;
+        let (poses, more) = read(self.data()?, self.angle_unit, &arm)?;
         warnings.extend(more);
-        let file = source_name(&self.data);
+        let file = source_name(self.data()?);
         warnings.extend(limit_warning(&arm, &poses, &file, self.angle_unit));
         report(&warnings)?;
         Ok((arm, poses))
@@ -194,7 +249,7 @@ impl ArmAndPoses {
                 .into_iter()
                 .try_for_each(|p| p.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
         })
-        .with_context(|| format!("{}: {}", self.arm.display(), self.data.display()))?;
+        .with_context(|| format!("{}: {}", self.arm.display(), shown_data(&self.data)))?;
         Ok(xyz)
     }
 
@@ -208,7 +263,7 @@ impl ArmAndPoses {
                  ({:?} mm) for the pose at {}:{}; check the arm's lengths and units",
                 self.arm.display(),
                 xyz[i],
-                self.data.display(),
+                shown_data(&self.data),
                 line(i)
             );
         }

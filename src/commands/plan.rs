@@ -10,7 +10,9 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::io::{AngleUnit, Arm, Poses, limit_warning, read_arm, read_poses, source_name};
+use aacmm_core::io::{
+    AngleUnit, Arm, Poses, limit_warning, read_arm, read_poses_or_positions, source_name,
+};
 use aacmm_core::plan::{
     Criterion, DEFAULT_SOCKETS, Given, GivenNote, Measure, Plan, PlanError, PlanSettings, Pool,
     SampleError, SummaryContext, plan, sample_positions, sample_touches_observed, summary,
@@ -40,8 +42,10 @@ pub struct Args {
     /// --sample (±180° for a joint without).
     #[arg(long, value_name = "ARM.toml")]
     arm: PathBuf,
-    /// Candidate poses (CSV `point,q1,...,qn`); for touches the `point`
-    /// labels are the sockets. `-` reads standard input.
+    /// Candidate poses (CSV `point,q1,...,qn`), or a reference-positions
+    /// file (`point,q1,...,qn,x,y,z[,frame][,uncertainty]`) whose readings
+    /// are taken, its positions ignored; for touches the `point` labels are
+    /// the sockets. `-` reads standard input.
     #[arg(long, value_name = "POOL.csv")]
     candidates: Option<PathBuf>,
     /// Draw N candidates instead: positions uniformly within the joint
@@ -79,8 +83,9 @@ pub struct Args {
     /// (its covariance, its σ per row and σ̂₀).
     #[arg(long, value_name = "DIR", conflicts_with = "noise")]
     given: Option<PathBuf>,
-    /// Where the arm will be used (a poses file): the predicted
-    /// uncertainty is averaged over these poses [default: the candidates].
+    /// Where the arm will be used (a poses file, or a positions file's
+    /// readings): the predicted uncertainty is averaged over these poses
+    /// [default: the candidates].
     #[arg(long, value_name = "POSES.csv")]
     workspace: Option<PathBuf>,
     /// Workspace poses the criterion averages over at most: an even sample
@@ -341,10 +346,11 @@ fn candidates(args: &Args, arm: &Arm) -> Result<Candidates> {
     })
 }
 
-/// A poses file of the arm's joint count, its warnings (readings outside
-/// the joint limits included) printed.
+/// A poses file of the arm's joint count, or the readings of a positions
+/// file, its warnings (readings outside the joint limits included)
+/// printed.
 fn read_candidates(flag: &str, path: &Path, args: &Args, arm: &Arm) -> Result<Poses> {
-    let (poses, mut warnings) = read_poses(path, args.angle_unit, arm)?;
+    let (poses, mut warnings, _) = read_poses_or_positions(path, args.angle_unit, arm)?;
     let file = source_name(path);
     if poses.is_empty() {
         bail!("{flag} {file}: no poses");

@@ -11,8 +11,14 @@ use anyhow::{Context, Result, bail};
 use crate::output::Stdout;
 use crate::paths::check_output_file;
 
-/// Forward kinematics for every row of a poses file.
+/// Forward kinematics for every row of a poses file, or of a positions file
+/// (its readings; `--data` takes either).
 #[derive(clap::Args)]
+#[command(mut_arg("data", |a| a.help(
+    "Poses file (CSV `point,q1,...,qn`), or a reference-positions file (CSV \
+     `point,q1,...,qn,x,y,z[,frame][,uncertainty]`, as calibrate --positions reads) whose \
+     readings are taken, its positions ignored; `-` reads standard input"
+)))]
 pub struct Args {
     #[command(flatten)]
     input: super::ArmAndPoses,
@@ -70,11 +76,11 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
         let inputs = [
             ("--arm", args.input.arm.as_path()),
-            ("--data", &args.input.data),
+            ("--data", args.input.data()?),
         ];
         check_output_file("--out", out, &inputs, args.force)?;
     }
-    let (arm, poses) = args.input.read()?;
+    let (arm, poses) = args.input.read_readings()?;
     let frame = match &args.frame {
         Some(name) => Some(frame(&args.input.arm, name)?),
         None => None,

@@ -282,6 +282,38 @@ fn the_ur5_tracker_data_calibrate_below_the_published_error() {
         let d = ((p[0] - y[0]).powi(2) + (p[1] - y[1]).powi(2) + (p[2] - y[2]).powi(2)).sqrt();
         assert!(d <= after.max + 1e-3, "{p:?} vs {y:?}: {d} mm");
     }
+    // `evaluate --positions`: the calibrated arm in its own fitted frame
+    // gives the calibration's held-out figures; the nominal arm, which has
+    // no frame, is registered on the positions themselves, and said so.
+    let evaluate = |arm: &str| {
+        let o = aacmm(&[
+            "evaluate",
+            "--arm",
+            arm,
+            "--positions",
+            &ur5("positions-random.csv"),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let text = evaluate(calibrated.to_str().unwrap());
+    assert!(
+        text.contains("frame `instrument`: registered as the arm file states it"),
+        "{text}"
+    );
+    let row = format!(
+        "  instrument                 20 {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
+        after.mean, after.rms, after.p95, after.max
+    );
+    assert!(text.contains(&row), "{text}\nlacks\n{row}");
+    let text = evaluate(&ur5("arm.toml"));
+    assert!(
+        text.contains("registered to this arm in closed form on these positions")
+            && text.contains("optimistic"),
+        "{text}"
+    );
+    let help = stdout(&aacmm(&["evaluate", "--help"]));
+    assert!(help.contains("--positions <P.csv>"), "{help}");
 }
 
 /// The `point,q1..q6` columns of a positions file, as a poses file.
@@ -578,5 +610,106 @@ fn annealing_is_refused_where_it_cannot_use_the_data() {
             }
             other => panic!("{method:?} accepted: {:?}", other.map(|r| r.verdict)),
         }
+    }
+}
+
+/// Readings in radians in a positions file read as degrees: the refusal
+/// names the angle unit (as the touch readers' does), not the positions'
+/// unit, and says that read as radians the nominal arm fits them — which
+/// `--angle-unit rad` then confirms.
+#[test]
+fn radians_read_as_degrees_in_a_positions_file_blame_the_angle_unit() {
+    use crate::util::{aacmm, assert_clean_error, stderr, temp_dir, write};
+    let dir = temp_dir("positions-radians");
+    let text = std::fs::read_to_string(ur5("positions-grid.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut rad = lines.next().unwrap().to_string() + "\n";
+    for l in lines.take(200) {
+        let f: Vec<String> = (l.split(',').enumerate())
+            .map(|(k, v)| match k {
+                1..=6 => format!("{:?}", v.parse::<f64>().unwrap().to_radians()),
+                _ => v.to_string(),
+            })
+            .collect();
+        rad += &(f.join(",") + "\n");
+    }
+    let file = write(&dir, "rad.csv", &rad);
+    let run = |extra: &[&str]| {
+        let out = dir.join(format!("out{}", extra.len()));
+        let mut args = vec![
+            "calibrate",
+            "--arm",
+            &*ur5("arm.toml").leak(),
+            "--positions",
+            &file,
+            "--method",
+            "lm",
+            "--out",
+        ];
+        let out = out.display().to_string();
+        args.push(&out);
+        args.extend(extra);
+        aacmm(&args)
+    };
+    let o = run(&[]);
+    assert_clean_error(
+        &o,
+        &[
+            "rad.csv:2: field `q1`",
+            "look like radians read as degrees, not positions in another unit",
+            "--angle-unit rad",
+            "read so, the nominal arm fits these positions",
+        ],
+    );
+    assert!(!stderr(&o).contains("they must be mm"), "{}", stderr(&o));
+    let o = run(&["--angle-unit", "rad"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `points` and `plan --candidates` take a positions file's readings: the
+/// same output, byte for byte, as from a poses file of the same readings;
+/// their help says so.
+#[test]
+fn points_and_plan_take_the_readings_of_a_positions_file() {
+    use crate::util::{aacmm, stderr, stdout, temp_dir, write};
+    let dir = temp_dir("positions-readings");
+    let positions = ur5("positions-random.csv");
+    let poses = write(&dir, "poses.csv", &poses_of(&positions));
+    let arm = ur5("arm.toml");
+    let same = |args: &dyn Fn(&str) -> Vec<String>| {
+        let run = |file: &str| {
+            let a = args(file);
+            let o = aacmm(&a.iter().map(String::as_str).collect::<Vec<_>>());
+            assert!(o.status.success(), "{a:?}: {}", stderr(&o));
+            stdout(&o)
+        };
+        let (from_positions, from_poses) = (run(&positions), run(&poses));
+        assert!(!from_poses.is_empty());
+        assert_eq!(from_positions, from_poses.replace(&poses, &positions));
+    };
+    same(&|data| {
+        ["points", "--arm", &arm, "--data", data]
+            .map(String::from)
+            .to_vec()
+    });
+    same(&|data| {
+        let flags = [
+            "plan",
+            "--arm",
+            &arm,
+            "--measure",
+            "positions",
+            "--count",
+            "12",
+        ];
+        let mut a: Vec<String> = flags.map(String::from).to_vec();
+        a.extend(["--candidates", data, "--workspace", data].map(String::from));
+        a
+    });
+    for (command, flag) in [("points", "--data"), ("plan", "--candidates")] {
+        let help = stdout(&aacmm(&[command, "--help"]));
+        let at = help.find(&format!("      {flag} <")).unwrap();
+        let text = &help[at..at + help[at..].find("\n\n").unwrap()];
+        assert!(text.contains("positions file"), "{command} {flag}: {text}");
     }
 }

@@ -250,3 +250,225 @@ fn report_paths_are_checked_before_any_work() {
     ]);
     assert_clean_error(&o, &["--out", "report.html is a directory"]);
 }
+
+/// A tracker campaign of two stations, a quarter of its rows held out:
+/// (fitted file, held-out file) in `dir`.
+fn tracker_campaign(dir: &Path) -> (String, String) {
+    let sim = dir.join("sim");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm(),
+        "--errors",
+        "random",
+        "--positions",
+        "120",
+        "--frames",
+        "2",
+        "--seed",
+        "4",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = read(&sim.join("positions.csv"));
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string() + "\n";
+    let (mut fitted, mut held) = (header.clone(), header);
+    for (i, l) in lines.enumerate() {
+        let to = if i % 4 == 3 { &mut held } else { &mut fitted };
+        *to += l;
+        to.push('\n');
+    }
+    (
+        crate::util::write(dir, "fitted.csv", &fitted),
+        crate::util::write(dir, "held.csv", &held),
+    )
+}
+
+/// The report of a calibration from tracker positions alone leads with the
+/// 3-D errors before and after (table per data set and per frame, and the
+/// figure on the page), states the position noise that was used, and has
+/// no touch section, figure or JSON field: a section per kind of evidence
+/// present.
+#[test]
+fn the_tracker_report_leads_with_the_3d_errors_and_has_no_touch_section() {
+    let dir = temp_dir("report-tracker");
+    let (fitted, held) = tracker_campaign(&dir);
+    let out = dir.join("out");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm(),
+        "--positions",
+        &fitted,
+        "--validate-positions",
+        &held,
+        "--position-noise",
+        "0.015+0.006/m",
+        "--method",
+        "lm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = read(&out.join(HTML_FILE));
+    assert_self_contained(&html);
+    let json: serde_json::Value =
+        serde_json::from_str(&read(&out.join("calibration.json"))).unwrap();
+    // Every number shared with the JSON is the same (the 3-D errors' too).
+    assert!(assert_agrees_with_json(&html, &json) > 0);
+    for pointer in [
+        "/validation/fitted/after/positions/p95",
+        "/validation/held_out/figures/before/positions/rms",
+    ] {
+        assert!(
+            html.contains(&format!("data-json=\"{pointer}\"")),
+            "{pointer} not on the page"
+        );
+    }
+    // No touch: no touch section, figure or field, and no "0 touches".
+    for absent in [
+        "id=\"single-point\"",
+        "id=\"lengths\"",
+        "id=\"residuals\"",
+        "0 touches",
+        "At a glance",
+        "touch σ",
+        "noise</th><td>not stated",
+    ] {
+        assert!(
+            !html.contains(absent),
+            "`{absent}` on the page of positions alone"
+        );
+    }
+    for file in [
+        "single-point-errors.svg",
+        "length-errors.svg",
+        "residuals.svg",
+    ] {
+        assert!(!out.join(file).exists(), "{file} written without touches");
+    }
+    for set in [
+        "/validation/fitted/before",
+        "/validation/held_out/figures/after",
+    ] {
+        let figures = json.pointer(set).unwrap().as_object().unwrap();
+        let keys: Vec<&String> = figures.keys().collect();
+        assert_eq!(keys, ["positions"], "{set}");
+    }
+    // The first numbered section is the 3-D errors, with its figure and a
+    // row per frame of each data set.
+    let first = html
+        .find("<section id=\"positions\"")
+        .expect("a section of the 3-D errors");
+    for later in [
+        "id=\"parameters\"",
+        "id=\"identifiability\"",
+        "id=\"solver\"",
+    ] {
+        assert!(
+            html.find(later).unwrap() > first,
+            "{later} before the 3-D errors"
+        );
+    }
+    assert!(
+        html.contains("<h2>1. 3-D errors at the reference positions"),
+        "not numbered first"
+    );
+    let section = &html[first..first + html[first..].find("</section>").unwrap()];
+    let figure = read(&out.join("position-errors.svg"));
+    assert!(
+        section.contains(
+            figure
+                .trim_start_matches("<?xml version=\"1.0\" encoding=\"UTF-8\"?>")
+                .trim()
+        )
+    );
+    for frame in ["<td>station1</td>", "<td>station2</td>"] {
+        // Fitted and held out, each before and after.
+        assert_eq!(section.matches(frame).count(), 4, "{frame}");
+    }
+    // The noise used, as stated.
+    assert!(
+        html.contains("σ = 0.015 mm + 0.006 mm per metre from the instrument"),
+        "the stated position noise is not on the page"
+    );
+    // The text summary's table has the 95th percentile.
+    let text = crate::util::stdout(&o);
+    assert!(
+        text.contains("poses     mean      RMS      p95      max"),
+        "{text}"
+    );
+}
+
+/// Held-out positions in a frame the fit does not have: refused by file,
+/// line and field with the fitted frames' names (registered on themselves
+/// they would score optimistically); with --register-held-out they are,
+/// and the summary, calibration.json and the page each say so.
+#[test]
+fn held_out_positions_in_an_unfitted_frame_are_refused_unless_asked_and_then_said() {
+    let dir = temp_dir("report-held-frame");
+    let (fitted, same) = tracker_campaign(&dir);
+    let text = read(Path::new(&same)).replace(",station2\n", ",station3\n");
+    let renamed = crate::util::write(&dir, "held3.csv", &text);
+    let line = 1 + text.lines().position(|l| l.ends_with(",station3")).unwrap();
+    let run = |held: &str, out: &str, extra: &[&str]| {
+        let out = dir.join(out);
+        let mut args = vec![
+            "calibrate",
+            "--arm",
+            &*arm(),
+            "--positions",
+            &fitted,
+            "--validate-positions",
+            held,
+            "--method",
+            "lm",
+            "--out",
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>();
+        args.push(out.display().to_string());
+        args.extend(extra.iter().map(|s| s.to_string()));
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        (aacmm(&args), out)
+    };
+    let (o, out) = run(&renamed, "refused", &[]);
+    assert_clean_error(
+        &o,
+        &[
+            &format!("held3.csv:{line}: field `frame`"),
+            "`station3` was not fitted",
+            "the fitted frames are `station1`, `station2`",
+            "--register-held-out",
+        ],
+    );
+    assert!(!out.join("calibration.json").exists());
+    let (o, out) = run(&renamed, "asked", &["--register-held-out"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        crate::util::stdout(&o).contains(
+            "held out: frame `station3` not fitted, registered on its own positions as asked"
+        ),
+        "{}",
+        crate::util::stdout(&o)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&read(&out.join("calibration.json"))).unwrap();
+    assert_eq!(
+        json.pointer("/validation/held_out/registered_on_itself"),
+        Some(&serde_json::json!(["station3"]))
+    );
+    let html = read(&out.join(HTML_FILE));
+    assert!(
+        html.contains("frame `station3` not fitted, registered on its own positions (--register-held-out): optimistic"),
+        "the page does not say the held-out frame was registered on itself"
+    );
+    // Held-out frames that were fitted are scored in them, without a word.
+    let (o, out) = run(&same, "fitted-frames", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!crate::util::stdout(&o).contains("registered on its own"));
+    assert!(!read(&out.join("calibration.json")).contains("registered_on_itself"));
+}

@@ -61,7 +61,10 @@ pub use lengths::{
 };
 pub use limits::limit_warning;
 pub use points::{parse_points, read_points, write_points, write_tool_poses};
-pub use poses::{Poses, parse_poses, read_poses, write_poses};
+pub use poses::{
+    Poses, PosesOrPositions, parse_poses, parse_poses_or_positions, read_poses,
+    read_poses_or_positions, write_poses,
+};
 pub use positions::{DEFAULT_FRAME, Positions, parse_positions, read_positions};
 pub use prior::parse_prior;
 pub use text::source_name;

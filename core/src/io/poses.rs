@@ -211,6 +211,40 @@ impl Poses {
         self.prismatic
     }
 
+    /// The readings of reference positions, a touch per row of its point
+    /// label, with its line (the positions themselves, the frames and the
+    /// conditions left out).
+    ///
+    /// # Errors
+    ///
+    /// When the rows' memory cannot be had.
+    pub fn from_positions(p: &super::Positions) -> Result<Poses, OutOfMemory> {
+        let mut out = Poses {
+            prismatic: p.prismatic_mask(),
+            ..Poses::try_with_capacity(p.joints(), p.len())?
+        };
+        for i in 0..p.len() {
+            out.try_push(p.label(i), p.reading(i), p.line(i))?;
+        }
+        Ok(out)
+    }
+
+    /// These readings as typed in `unit` (a revolute joint's in degrees
+    /// for [`AngleUnit::Deg`]): what the readers' unit warnings look at.
+    fn as_typed(&self, unit: AngleUnit) -> Poses {
+        let mut typed = self.clone();
+        if unit == AngleUnit::Deg {
+            let joints = self.joints.max(1);
+            let slides = |j: usize| j < 16 && self.prismatic & (1 << j) != 0;
+            for (i, q) in typed.q.iter_mut().enumerate() {
+                if !slides(i % joints) {
+                    *q = q.to_degrees();
+                }
+            }
+        }
+        typed
+    }
+
     /// No rows, of the joints (and prismatic joints) of `self`, with room
     /// for `rows` rows.
     ///
@@ -307,6 +341,72 @@ pub fn read_poses(
 ) -> Result<(Poses, Vec<Warning>), InputError> {
     let (file, text) = read_text(path)?;
     parse_poses(&text, &file, unit, joints)
+}
+
+/// What a file of joint readings held: the readings as [`Poses`] (a touch
+/// per row, of the row's `point`), and, for a reference-positions file, its
+/// rows whole (positions, frames; [`super::parse_positions`]).
+pub type PosesOrPositions = (Poses, Vec<Warning>, Option<super::Positions>);
+
+/// Reads a poses file or a reference-positions file (standard input for
+/// `-`): [`parse_poses_or_positions`].
+///
+/// # Errors
+///
+/// As [`parse_poses_or_positions`].
+pub fn read_poses_or_positions(
+    path: &Path,
+    unit: AngleUnit,
+    joints: impl Into<JointColumns>,
+) -> Result<PosesOrPositions, InputError> {
+    let (file, text) = read_text(path)?;
+    parse_poses_or_positions(&text, &file, unit, joints)
+}
+
+/// Parses a poses file, or a reference-positions file (a header with an
+/// `x` column: `point,q1,...,qn,x,y,z[,frame][,uncertainty]`) whose
+/// readings are taken as poses — for the commands that need only the
+/// readings (`points`, `plan --candidates`) or score the positions
+/// themselves (`evaluate --positions`). A positions file is checked whole
+/// ([`super::parse_positions`]), and its readings warned about as a poses
+/// file's.
+///
+/// ```
+/// use aacmm_core::io::{AngleUnit, parse_poses_or_positions};
+/// let text = "point,q1,q2,x,y,z\nP,0,90,1,2,3\nQ,10,0,4,5,6\nR,0,45,0,9,1\n";
+/// let (poses, warnings, positions) = parse_poses_or_positions(text, "t.csv", AngleUnit::Deg, Some(2)).unwrap();
+/// assert_eq!(poses.labels().collect::<Vec<_>>(), ["P", "Q", "R"]);
+/// assert_eq!((poses.reading(0)[1], poses.line(2)), (std::f64::consts::FRAC_PI_2, 4));
+/// assert!(warnings.is_empty() && positions.unwrap().len() == 3);
+/// let (poses, _, positions) = parse_poses_or_positions("point,q1\nS,1\n", "p.csv", AngleUnit::Deg, None).unwrap();
+/// assert!(poses.len() == 1 && positions.is_none());
+/// ```
+///
+/// # Errors
+///
+/// As [`parse_poses`] or [`super::parse_positions`], naming file, line
+/// and field.
+pub fn parse_poses_or_positions(
+    text: &str,
+    file: &str,
+    unit: AngleUnit,
+    joints: impl Into<JointColumns>,
+) -> Result<PosesOrPositions, InputError> {
+    if !has_position_columns(text) {
+        let (poses, warnings) = parse_poses(text, file, unit, joints)?;
+        return Ok((poses, warnings, None));
+    }
+    let positions = super::parse_positions(text, file, unit, joints)?;
+    let poses = Poses::from_positions(&positions).map_err(|e| InputError::memory(file, e))?;
+    let warnings = unit_warnings(&poses.as_typed(unit), file, unit);
+    Ok((poses, warnings, Some(positions)))
+}
+
+/// Whether the header (the first line that is not blank) names an `x`
+/// column: a reference-positions file's.
+fn has_position_columns(text: &str) -> bool {
+    (text.lines().find(|l| !l.trim().is_empty()))
+        .is_some_and(|h| h.split(',').any(|f| f.trim().trim_matches('"') == "x"))
 }
 
 /// Parses the text of a poses file; `file` is the name used in messages.

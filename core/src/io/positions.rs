@@ -317,6 +317,22 @@ impl Positions {
         self.lines[i]
     }
 
+    /// These rows with every revolute joint's reading multiplied by `k`
+    /// (a prismatic joint's, mm, as it is): with `k = 180/π`, the numbers
+    /// as typed taken as radians — what `--angle-unit rad` would have read
+    /// from a file read in degrees.
+    pub(crate) fn revolute_scaled(&self, k: f64) -> Positions {
+        let mut out = self.clone();
+        let joints = self.joints.max(1);
+        let slides = |j: usize| j < 16 && self.prismatic & (1 << j) != 0;
+        for (i, q) in out.q.iter_mut().enumerate() {
+            if !slides(i % joints) {
+                *q *= k;
+            }
+        }
+        out
+    }
+
     /// The rows `keep`, in that order (frames renumbered in order of first
     /// appearance among them).
     pub fn subset(&self, keep: &[usize]) -> Positions {

@@ -63,7 +63,7 @@ pub fn session_report(
     }];
     if let Some(h) = &v.held_out {
         validation.push(ValidationRow {
-            name: format!("held out ({})", h.data_file),
+            name: format!("held out ({}{})", h.data_file, registered_note(h)),
             held_out: true,
             figures: &h.figures,
             json: Some("/validation/held_out/figures".to_string()),
@@ -192,6 +192,8 @@ fn beyond_effects(
             after: true,
             reach_mm,
             error_mm,
+            frame: Vec::new(),
+            frame_names: Vec::new(),
         });
     }
     Ok(out)
@@ -234,12 +236,15 @@ fn pose_errors(
             };
             let (reach_mm, error_mm) = per_pose(params, p, f)?;
             let arm = if after { "calibrated" } else { "nominal" };
+            let rows = p.rows();
             out.push(PoseErrors {
                 name: format!("{arm}, {set}"),
                 held_out,
                 after,
                 reach_mm,
                 error_mm,
+                frame: (0..p.len()).map(|i| rows.frame(i)).collect(),
+                frame_names: rows.frames().to_vec(),
             });
         }
     }
@@ -257,39 +262,45 @@ fn per_pose(
     Ok((p.iter().map(|q| q[0].hypot(q[1])).collect(), error))
 }
 
-/// What went in, for the page's heading.
+/// What went in, for the page's heading: a line per kind of evidence
+/// present, and the noise each was weighed with.
 fn inputs(r: &CalibrationReport) -> Vec<(String, String)> {
     let n = r.noise;
-    let noise = match (n.encoder_rad, n.probe_mm) {
-        (None, None) => "not stated: the touch σ is estimated from the fit".to_string(),
-        (e, p) => format!(
-            "encoders {} deg, probe seating {} mm per axis; reference lengths {} mm unless the \
-             file states one",
-            e.map_or("0".to_string(), |v| format!("{}", v.to_degrees())),
-            p.map_or("0".to_string(), |v| format!("{v}")),
-            n.length_default_mm
-        ),
-    };
-    let mut lines = vec![
-        (
-            "nominal arm".to_string(),
-            format!("`{}` ({})", r.arm, r.arm_file),
-        ),
-        (
+    let mut lines = vec![(
+        "nominal arm".to_string(),
+        format!("`{}` ({})", r.arm, r.arm_file),
+    )];
+    if r.touches > 0 {
+        lines.push((
             "touches".to_string(),
             format!(
                 "{}: {} touches of {} points",
                 r.data_file, r.touches, r.points
             ),
-        ),
-        (
+        ));
+        lines.push((
             "reference lengths".to_string(),
             match &r.lengths_file {
                 Some(f) => format!("{f}: {}", r.reference_lengths),
                 None => "none (scale is not tested)".to_string(),
             },
-        ),
-    ];
+        ));
+    }
+    if let Some(file) = &r.positions_file {
+        let frames: Vec<String> = (r.calibration.frames().into_iter())
+            .map(|(name, _)| name)
+            .collect();
+        lines.push((
+            "reference positions".to_string(),
+            format!(
+                "{file}: {} positions in {} frame{} ({})",
+                r.positions,
+                frames.len(),
+                if frames.len() == 1 { "" } else { "s" },
+                frames.join(", ")
+            ),
+        ));
+    }
     if let Some(h) = &r.validation.held_out {
         lines.push((
             "held out".to_string(),
@@ -299,7 +310,12 @@ fn inputs(r: &CalibrationReport) -> Vec<(String, String)> {
             },
         ));
     }
-    lines.push(("noise".to_string(), noise));
+    if r.touches > 0 {
+        lines.push(("noise".to_string(), touch_noise(&n)));
+    }
+    if let Some(noise) = r.position_noise() {
+        lines.push(("position noise".to_string(), noise));
+    }
     lines.push((
         "method, fixed set, seed".to_string(),
         format!(
@@ -323,4 +339,36 @@ fn inputs(r: &CalibrationReport) -> Vec<(String, String)> {
         ),
     ));
     lines
+}
+
+/// The touches' noise as stated, or that it was not.
+fn touch_noise(n: &crate::residuals::Noise) -> String {
+    match (n.encoder_rad, n.probe_mm) {
+        (None, None) => "not stated: the touch σ is estimated from the fit".to_string(),
+        (e, p) => format!(
+            "encoders {} deg, probe seating {} mm per axis; reference lengths {} mm unless the \
+             file states one",
+            e.map_or("0".to_string(), |v| format!("{}", v.to_degrees())),
+            p.map_or("0".to_string(), |v| format!("{v}")),
+            n.length_default_mm
+        ),
+    }
+}
+
+/// For held-out positions in frames the fit does not have, registered on
+/// themselves because the user asked: `; frame `X` registered on its own
+/// positions (--register-held-out): optimistic` (empty otherwise).
+pub(crate) fn registered_note(h: &crate::session::HeldOut) -> String {
+    let frames = &h.registered_on_itself;
+    if frames.is_empty() {
+        return String::new();
+    }
+    let names: Vec<String> = frames.iter().map(|f| format!("`{f}`")).collect();
+    format!(
+        "; frame{} {} not fitted, registered on {} own positions (--register-held-out): \
+         optimistic",
+        if frames.len() == 1 { "" } else { "s" },
+        names.join(", "),
+        if frames.len() == 1 { "its" } else { "their" }
+    )
 }

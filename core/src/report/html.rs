@@ -6,7 +6,8 @@ use super::data::Evaluated;
 use super::tables;
 use super::{
     BEYOND_SVG, CalibrationInput, EvaluationInput, Figure, IDENTIFIABILITY_SVG, LENGTHS_SVG,
-    PARAMETERS_SVG, RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG, UNCERTAINTY_MAP_SVG,
+    PARAMETERS_SVG, POSITIONS_SVG, RESIDUALS_SVG, SINGLE_POINT_SVG, SOLVER_SVG,
+    UNCERTAINTY_MAP_SVG,
 };
 use crate::calibrate::Calibration;
 use crate::plan::UncertaintyMap;
@@ -155,7 +156,11 @@ const RESIDUALS_CAPTION: &str = "How far each touch lies from its point's centro
      scale, so that before and after share one axis. After a good calibration what remains is \
      the touch noise: one narrow hump, with no tail of outlying touches.";
 
-/// The calibration report page.
+/// The calibration report page: the verdict, the summary, then a section
+/// per kind of evidence present — the 3-D errors at reference positions
+/// first, the touch sections (single point, lengths, residuals) only with
+/// touches — among those every calibration has (parameters,
+/// identifiability, solver), and those of what it has besides.
 pub(crate) fn calibration_page(
     input: &CalibrationInput,
     evaluated: &[Evaluated],
@@ -163,41 +168,100 @@ pub(crate) fn calibration_page(
 ) -> String {
     let cal = input.calibration;
     let json = input.calibration_json.as_deref();
-    let beyond = find(figures, BEYOND_SVG);
-    let nav = calibration_nav(beyond.is_some(), input.uncertainty_map.is_some());
-    // The map's section comes last, numbered after whichever came before.
-    let map = (input.uncertainty_map).map(|m| (m, nav.len() - 2));
+    let present = Present {
+        positions: !input.positions.is_empty(),
+        touches: !evaluated.is_empty(),
+        beyond: find(figures, BEYOND_SVG).is_some(),
+        map: input.uncertainty_map.is_some(),
+    };
+    let numbered = present.sections();
+    let number = |id: &str| {
+        numbered
+            .iter()
+            .position(|(i, _)| *i == id)
+            .map_or(0, |k| k + 1)
+    };
+    let mut nav: Vec<(&str, String)> = vec![
+        ("verdict", "Verdict".to_string()),
+        ("summary", "Summary".to_string()),
+    ];
+    nav.extend(
+        (numbered.iter().enumerate()).map(|(k, (id, name))| (*id, format!("{} {name}", k + 1))),
+    );
     let nav: Vec<(&str, &str)> = nav.iter().map(|(i, n)| (*i, n.as_str())).collect();
     let mut page = head(&input.title, &input.inputs, &nav);
     page += &super::verdict::section(input);
     page += &format!(
         "<section id=\"summary\">\n<h2>Summary</h2>\n{}{}</section>\n",
         tables::verdict(cal, evaluated, &input.arms, &input.validation),
-        tables::glance(evaluated, &input.arms)
+        if present.touches {
+            tables::glance(evaluated, &input.arms)
+        } else {
+            String::new()
+        }
     );
+    if present.positions {
+        page += &positions_section(input, find(figures, POSITIONS_SVG), number("positions"));
+    }
+    if present.touches {
+        page += &touch_sections(input, evaluated, figures);
+    }
+    page += &geometry_sections(input, figures, &number);
+    if present.touches {
+        page += &section(
+            "residuals",
+            &format!(
+                "{}. Residuals per touch, before and after",
+                number("residuals")
+            ),
+            "",
+            find(figures, RESIDUALS_SVG),
+            RESIDUALS_CAPTION,
+            &tables::residuals(evaluated, &input.arms),
+            "",
+        );
+    }
     page += &section(
-        "single-point",
-        "1. Single-point error per point, before and after",
+        "solver",
+        &format!("{}. Solver", number("solver")),
         "",
-        find(figures, SINGLE_POINT_SVG),
-        POINTS_CAPTION,
+        find(figures, SOLVER_SVG),
+        &solver_caption(present.touches),
+        &tables::solver(cal, json),
         "",
-        &tables::validation(&input.validation, &input.arms),
     );
-    page += &section(
-        "lengths",
-        "2. Length errors, before and after",
-        "",
-        find(figures, LENGTHS_SVG),
-        LENGTHS_CAPTION,
-        "",
-        &(tables::lengths(evaluated, &input.arms)
-            + &tables::references(evaluated, &input.arms, None)),
-    );
+    if present.beyond {
+        page += &beyond_section(cal, json, find(figures, BEYOND_SVG), number("beyond"));
+    }
+    if let Some(m) = input.uncertainty_map {
+        let json = input.uncertainty_map_json.as_deref();
+        page += &map_section(
+            m,
+            json,
+            find(figures, UNCERTAINTY_MAP_SVG),
+            number("uncertainty-map"),
+        );
+    }
+    page += &foot(figures);
+    page
+}
+
+/// The sections every calibration has on its geometry: the parameters'
+/// corrections and the identifiability, numbered as `number` says.
+fn geometry_sections(
+    input: &CalibrationInput,
+    figures: &[Figure],
+    number: &dyn Fn(&str) -> usize,
+) -> String {
+    let cal = input.calibration;
+    let json = input.calibration_json.as_deref();
     let truths = super::figures::parameters::true_errors(cal, input.truth);
-    page += &section(
+    section(
         "parameters",
-        "3. Parameters: corrections with ± 2σ",
+        &format!(
+            "{}. Parameters: corrections with ± 2σ",
+            number("parameters")
+        ),
         &tables::parameters_intro(cal),
         find(figures, PARAMETERS_SVG),
         "Correction = calibrated − nominal. Bars: ± 2σ (k = 2) from the covariance \
@@ -206,10 +270,9 @@ pub(crate) fn calibration_page(
          the data cannot determine them, so their errors are absorbed by the others.",
         "",
         &tables::parameters(cal, json, &truths),
-    );
-    page += &section(
+    ) + &section(
         "identifiability",
-        "4. Identifiability",
+        &format!("{}. Identifiability", number("identifiability")),
         "",
         find(figures, IDENTIFIABILITY_SVG),
         "Left: singular values of the weighted Jacobian with angle columns scaled by the reach \
@@ -219,76 +282,123 @@ pub(crate) fn calibration_page(
          cell.",
         &tables::identification(cal, json),
         "",
-    );
-    page += &section(
-        "residuals",
-        "5. Residuals per touch, before and after",
-        "",
-        find(figures, RESIDUALS_SVG),
-        RESIDUALS_CAPTION,
-        &tables::residuals(evaluated, &input.arms),
-        "",
-    );
-    page += &section(
-        "solver",
-        "6. Solver",
-        "",
-        find(figures, SOLVER_SVG),
-        "Left: the cost Σr² of the weighted residuals (touches against their centroids, \
-         reference lengths) at each iteration of the final Levenberg–Marquardt fit, from the \
-         start arm's cost (iteration 0; for hybrid and global their search runs between 0 and \
-         1); with the weights right it ends near m − p, the degrees of freedom. Right: for the annealing \
-         methods (sa, hybrid), the energy of the paper's SA (OA = e + 3σ, mm) as the \
-         temperature falls, and the share of moves accepted at each temperature; for global, \
-         the cost each start ended at.",
-        &tables::solver(cal, json),
-        "",
-    );
-    if beyond.is_some() {
-        page += &beyond_section(cal, json, beyond);
-    }
-    if let Some((m, number)) = map {
-        let json = input.uncertainty_map_json.as_deref();
-        page += &map_section(m, json, find(figures, UNCERTAINTY_MAP_SVG), number);
-    }
-    page += &foot(figures);
-    page
+    )
 }
 
-/// The calibration page's links: the verdict, the summary, the six sections every
-/// calibration has, then those of what it has besides, numbered on.
-fn calibration_nav(beyond: bool, map: bool) -> Vec<(&'static str, String)> {
-    let mut nav: Vec<(&str, String)> = [
-        ("verdict", "Verdict"),
-        ("summary", "Summary"),
-        ("single-point", "1 Single point"),
-        ("lengths", "2 Lengths"),
-        ("parameters", "3 Parameters"),
-        ("identifiability", "4 Identifiability"),
-        ("residuals", "5 Residuals"),
-        ("solver", "6 Solver"),
-    ]
-    .map(|(id, name)| (id, name.to_string()))
-    .to_vec();
-    if beyond {
-        nav.push(("beyond", "7 Beyond geometry".to_string()));
-    }
-    if map {
-        // Numbered after the sections before it (verdict and summary have
-        // no number).
-        nav.push((
-            "uncertainty-map",
-            format!("{} Uncertainty map", nav.len() - 1),
-        ));
-    }
-    nav
+/// The kinds of evidence and results a calibration page has sections for.
+struct Present {
+    /// Reference positions (fitted or held out).
+    positions: bool,
+    /// Touches (fitted or held out).
+    touches: bool,
+    /// Models beyond geometry.
+    beyond: bool,
+    /// An uncertainty map.
+    map: bool,
 }
 
-/// Section 7: the models beyond geometry, their table and figure.
-fn beyond_section(cal: &Calibration, json: Option<&str>, figure: Option<&Figure>) -> String {
+impl Present {
+    /// The numbered sections in page order, as (id, name in the links).
+    fn sections(&self) -> Vec<(&'static str, &'static str)> {
+        let mut s = Vec::new();
+        if self.positions {
+            s.push(("positions", "3-D errors"));
+        }
+        if self.touches {
+            s.extend([("single-point", "Single point"), ("lengths", "Lengths")]);
+        }
+        s.extend([
+            ("parameters", "Parameters"),
+            ("identifiability", "Identifiability"),
+        ]);
+        if self.touches {
+            s.push(("residuals", "Residuals"));
+        }
+        s.push(("solver", "Solver"));
+        if self.beyond {
+            s.push(("beyond", "Beyond geometry"));
+        }
+        if self.map {
+            s.push(("uncertainty-map", "Uncertainty map"));
+        }
+        s
+    }
+}
+
+/// The solver figure's caption: the residuals the cost sums are those of
+/// the evidence present.
+fn solver_caption(touches: bool) -> String {
+    let residuals = if touches {
+        "touches against their centroids, reference lengths"
+    } else {
+        "reference positions against the registered arm"
+    };
+    format!(
+        "Left: the cost Σr² of the weighted residuals ({residuals}) at each iteration of the \
+         final Levenberg–Marquardt fit, from the start arm's cost (iteration 0; for hybrid and \
+         global their search runs between 0 and 1); with the weights right it ends near m − p, \
+         the degrees of freedom. Right: for the annealing methods (sa, hybrid), the energy of \
+         the paper's SA (OA = e + 3σ, mm) as the temperature falls, and the share of moves \
+         accepted at each temperature; for global, the cost each start ended at."
+    )
+}
+
+/// Sections 1 and 2 of a page with touches: the single-point errors and
+/// the length errors.
+fn touch_sections(input: &CalibrationInput, evaluated: &[Evaluated], figures: &[Figure]) -> String {
+    let first = if input.positions.is_empty() { 1 } else { 2 };
+    section(
+        "single-point",
+        &format!("{first}. Single-point error per point, before and after"),
+        "",
+        find(figures, SINGLE_POINT_SVG),
+        POINTS_CAPTION,
+        "",
+        &tables::validation(&input.validation, &input.arms),
+    ) + &section(
+        "lengths",
+        &format!("{}. Length errors, before and after", first + 1),
+        "",
+        find(figures, LENGTHS_SVG),
+        LENGTHS_CAPTION,
+        "",
+        &(tables::lengths(evaluated, &input.arms)
+            + &tables::references(evaluated, &input.arms, None)),
+    )
+}
+
+/// The 3-D errors at the reference positions: the table (RMS, 95th
+/// percentile, max per data set and arm, and per frame when there are
+/// several) and the figure.
+fn positions_section(input: &CalibrationInput, figure: Option<&Figure>, number: usize) -> String {
+    section(
+        "positions",
+        &format!("{number}. 3-D errors at the reference positions, before and after"),
+        "The distance |R p + t − y| between where each arm puts the probe (p, registered \
+         into the instrument's frame by R, t) and where the instrument saw it (y). The nominal \
+         arm's frames are registered to it in closed form on the fitted positions, the \
+         calibrated arm's were fitted with it; a held-out frame is registered as the fitted \
+         frame of its name — or, only where the user asked (--register-held-out) and then said \
+         in its rows, on its own positions, which flatters the figures.",
+        figure,
+        "Left: the 3-D error of each pose against the probe's distance from the base axis. \
+         Right: their distribution. Grey: the nominal arm; colour: the calibrated arm (blue on \
+         the fitted positions, vermillion on held-out ones).",
+        "",
+        &tables::positions(&input.validation, &input.positions, &input.arms),
+    )
+}
+
+/// The models beyond geometry, their table and figure, numbered `number`.
+fn beyond_section(
+    cal: &Calibration,
+    json: Option<&str>,
+    figure: Option<&Figure>,
+    number: usize,
+) -> String {
     section(
         "beyond",
-        "7. Beyond geometry",
+        &format!("{number}. Beyond geometry"),
         "Models the fit estimated with the geometry: each column's value with its σ, or why \
          the data could not separate it (it is then held at its stated value).",
         figure,

@@ -81,7 +81,9 @@ pub const BEYOND_SVG: &str = "beyond-geometry.svg";
 /// a calibration whose covariance is not finite has none).
 pub const UNCERTAINTY_MAP_SVG: &str = "uncertainty-map.svg";
 
-/// Every file [`calibration_report`] writes, page first.
+/// Every file [`calibration_report`] writes for touches, page first
+/// (without touches, the three touch figures — [`SINGLE_POINT_SVG`],
+/// [`LENGTHS_SVG`], [`RESIDUALS_SVG`] — are left out).
 pub const CALIBRATION_FILES: [&str; 7] = [
     HTML_FILE,
     SINGLE_POINT_SVG,
@@ -286,6 +288,11 @@ pub struct PoseErrors {
     pub reach_mm: Vec<f64>,
     /// Per pose, `|R p + t − y|`, mm.
     pub error_mm: Vec<f64>,
+    /// Per pose, its frame: an index into `frame_names` (empty when the
+    /// series has no frames, as a model's effect beyond geometry).
+    pub frame: Vec<usize>,
+    /// The frames' names (`instrument`, a station's).
+    pub frame_names: Vec<String>,
 }
 
 /// What [`evaluation_report`] shows.
@@ -305,8 +312,11 @@ pub struct EvaluationInput<'a> {
 }
 
 /// The report of a calibration: the page and six figures
-/// ([`CALIBRATION_FILES`]), and those of what the input has besides
-/// (reference positions, models beyond geometry, an uncertainty map).
+/// ([`CALIBRATION_FILES`]; three without touches), and those of what the
+/// input has besides (reference positions, models beyond geometry, an
+/// uncertainty map). A section per kind of evidence present: reference
+/// positions lead with their 3-D errors; the touch sections only with
+/// touches.
 ///
 /// # Errors
 ///
@@ -348,15 +358,20 @@ pub struct EvaluationInput<'a> {
 /// ```
 pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportError> {
     let evaluated = data::evaluate_all(&input.measured, input.seed)?;
-    let figures = vec![
-        figures::points::figure(&evaluated, &input.arms)?,
-        figures::lengths::figure(&evaluated, &input.arms)?,
-        figures::parameters::figure(input.calibration, input.truth)?,
-        figures::identifiability::figure(input.calibration)?,
-        figures::residuals::figure(&evaluated, &input.arms)?,
-        figures::solver::figure(input.calibration)?,
-    ];
-    let mut figures = figures;
+    // The touch figures only where there are touches: reference positions
+    // alone have none to draw.
+    let touches = !evaluated.is_empty();
+    let mut figures = Vec::new();
+    if touches {
+        figures.push(figures::points::figure(&evaluated, &input.arms)?);
+        figures.push(figures::lengths::figure(&evaluated, &input.arms)?);
+    }
+    figures.push(figures::parameters::figure(input.calibration, input.truth)?);
+    figures.push(figures::identifiability::figure(input.calibration)?);
+    if touches {
+        figures.push(figures::residuals::figure(&evaluated, &input.arms)?);
+    }
+    figures.push(figures::solver::figure(input.calibration)?);
     if !input.positions.is_empty() {
         figures.push(figures::positions::figure(&input.positions)?);
     }

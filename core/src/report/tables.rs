@@ -5,8 +5,8 @@
 
 use super::data::{Evaluated, Stage, deltas, median};
 use super::html::escape;
-use super::{Arms, ValidationRow};
-use crate::calibrate::validate::Figures;
+use super::{Arms, PoseErrors, ValidationRow};
+use crate::calibrate::validate::{Figures, PositionErrors};
 use crate::calibrate::{Calibration, EstimateRecord, PriorReport};
 use crate::plan::UncertaintyMap;
 
@@ -159,8 +159,9 @@ pub(crate) fn verdict(
             escape(&s.stop.describe())
         );
     }
+    let touches = !evaluated.is_empty();
     p += &format!(
-        " σ̂0 = {:.4} with {} degrees of freedom ({}); touch σ {:.4} mm {}.",
+        " σ̂0 = {:.4} with {} degrees of freedom ({}); {} σ {:.4} mm {}.",
         d.sigma0,
         d.degrees_of_freedom,
         if (0.5..=2.0).contains(&d.sigma0) {
@@ -170,6 +171,7 @@ pub(crate) fn verdict(
         } else {
             "well below 1: the stated noise is larger than the residuals"
         },
+        if touches { "touch" } else { "position" },
         d.touch_sigma_mm,
         if d.touch_sigma_estimated {
             "(estimated from the fit)"
@@ -201,13 +203,122 @@ pub(crate) fn verdict(
             p += ".";
         }
     }
+    p += &positions_sentence(validation);
     // Cross-validation folds are held-out data too (section 1's table).
     if !evaluated.iter().any(|e| e.held_out) && !validation.iter().any(|r| r.held_out) {
-        p += " No held-out data were given (--validate): the figures after calibration are on \
-              the data the fit used.";
+        p += if touches {
+            " No held-out data were given (--validate): the figures after calibration are on \
+              the data the fit used."
+        } else {
+            " No held-out data were given (--validate-positions): the figures after \
+              calibration are on the data the fit used."
+        };
     }
     p += "</p>\n";
     p
+}
+
+/// Per data set with reference positions (not the folds: their table has
+/// them), how the RMS 3-D error changes.
+fn positions_sentence(validation: &[ValidationRow]) -> String {
+    let mut p = String::new();
+    for r in validation.iter().filter(|r| !r.name.starts_with("fold")) {
+        if let (Some(b), Some(a)) = (r.figures.before.positions, r.figures.after.positions) {
+            p += &format!(
+                " At the {} reference positions ({}), the RMS 3-D error falls from {:.4} mm \
+                 (nominal) to {:.4} mm (calibrated), the 95th percentile from {:.4} to {:.4} mm.",
+                a.count,
+                escape(&r.name),
+                b.rms,
+                a.rms,
+                b.p95,
+                a.p95
+            );
+        }
+    }
+    p
+}
+
+/// The 3-D errors at the reference positions, as `calibration.json` has
+/// them (per data set and arm), and per frame from `series` when a data
+/// set has several frames.
+pub(crate) fn positions(
+    validation: &[ValidationRow],
+    series: &[PoseErrors],
+    arms: &Arms,
+) -> String {
+    let mut out: Vec<(String, Vec<Cell>)> = Vec::new();
+    for r in validation {
+        let set = if r.name.starts_with("held out") {
+            Some("held out")
+        } else if r.name == "fitted" {
+            Some("fitted")
+        } else {
+            None
+        };
+        for (after, f, key, arm) in [
+            (false, &r.figures.before, "before", &arms.before),
+            (true, &r.figures.after, "after", &arms.after),
+        ] {
+            let Some(p) = f.positions else { continue };
+            let base = r.json.as_ref().map(|j| format!("{j}/{key}/positions"));
+            let class = match (after, r.held_out) {
+                (true, true) => "held after",
+                (true, false) => "after",
+                _ => "",
+            };
+            let name = format!("{}, {arm}", r.name);
+            let frames = series.iter().find(|s| {
+                s.after == after && set.is_some_and(|set| s.name.ends_with(&format!(", {set}")))
+            });
+            let several = frames.filter(|s| s.frame_names.len() > 1);
+            out.push((
+                class.to_string(),
+                position_cells(
+                    &name,
+                    if several.is_some() { "all" } else { "" },
+                    &p,
+                    base.as_deref(),
+                ),
+            ));
+            if let Some(s) = several {
+                for (k, frame) in s.frame_names.iter().enumerate() {
+                    let d: Vec<f64> = (s.frame.iter().zip(&s.error_mm))
+                        .filter(|(f, _)| **f == k)
+                        .map(|(_, e)| *e)
+                        .collect();
+                    let p = PositionErrors::of(&d);
+                    out.push((class.to_string(), position_cells(&name, frame, &p, None)));
+                }
+            }
+        }
+    }
+    table(
+        "3-D errors at the reference positions (mm)",
+        &[
+            "data, arm",
+            "frame",
+            "poses",
+            "RMS [mm]",
+            "95th percentile [mm]",
+            "max [mm]",
+            "mean [mm]",
+        ],
+        &out,
+    )
+}
+
+/// The cells of one row of the 3-D errors.
+fn position_cells(name: &str, frame: &str, p: &PositionErrors, base: Option<&str>) -> Vec<Cell> {
+    vec![
+        Cell::text(name),
+        Cell::text(frame),
+        Cell::int(p.count).at(base, "count", p.count as f64),
+        Cell::num(p.rms, 4).at(base, "rms", p.rms),
+        Cell::num(p.p95, 4).at(base, "p95", p.p95),
+        Cell::num(p.max, 4).at(base, "max", p.max),
+        Cell::num(p.mean, 4).at(base, "mean", p.mean),
+    ]
 }
 
 /// The headline figures per data set and arm.
@@ -828,15 +939,38 @@ fn solver_rows(cal: &Calibration, sb: Option<&str>) -> Vec<(String, Vec<Cell>)> 
 /// the dof's JSON Pointer).
 fn dof_rows(cal: &Calibration, db: Option<&str>) -> Vec<(String, Vec<Cell>)> {
     let d = &cal.dof;
-    vec![
-        figure_row(
-            "residual rows: touches (3 each) + lengths",
-            Cell::text(&format!("{} + {}", d.touch_rows, d.length_rows)),
-        ),
-        figure_row(
-            "unknowns: free parameters + centre coordinates",
-            Cell::text(&format!("{} + {}", d.free_parameters, d.centre_coordinates)),
-        ),
+    let others: Vec<String> = (d.other_rows.iter())
+        .map(|r| format!("{} {}", r.term, r.rows))
+        .collect();
+    // A row per kind of evidence present: the touch rows only with touches.
+    let touches = d.touch_rows > 0 || d.length_rows > 0;
+    let mut rows = if touches {
+        vec![
+            figure_row(
+                "residual rows: touches (3 each) + lengths",
+                Cell::text(&format!("{} + {}", d.touch_rows, d.length_rows)),
+            ),
+            figure_row(
+                "unknowns: free parameters + centre coordinates",
+                Cell::text(&format!("{} + {}", d.free_parameters, d.centre_coordinates)),
+            ),
+        ]
+    } else {
+        vec![
+            figure_row("residual rows", Cell::text(&others.join(", "))),
+            figure_row(
+                "unknowns: free parameters (the frames' included)",
+                Cell::int(d.free_parameters),
+            ),
+        ]
+    };
+    if touches && !others.is_empty() {
+        rows.insert(
+            1,
+            figure_row("other residual rows", Cell::text(&others.join(", "))),
+        );
+    }
+    rows.extend([
         figure_row(
             "degrees of freedom m − p",
             Cell::int(d.degrees_of_freedom).at(
@@ -850,10 +984,15 @@ fn dof_rows(cal: &Calibration, db: Option<&str>) -> Vec<(String, Vec<Cell>)> {
             Cell::num(d.sigma0, 4).at(db, "sigma0", d.sigma0),
         ),
         figure_row(
-            "touch σ behind the weights [mm]",
+            if touches {
+                "touch σ behind the weights [mm]"
+            } else {
+                "position σ behind the weights [mm]"
+            },
             Cell::num(d.touch_sigma_mm, 4).at(db, "touch_sigma_mm", d.touch_sigma_mm),
         ),
-    ]
+    ]);
+    rows
 }
 
 /// The evaluations of each phase.

@@ -22,6 +22,7 @@ pub(crate) mod evaluation;
 pub(crate) mod identification;
 mod map;
 mod outputs;
+mod position_evaluation;
 pub mod request;
 
 pub use map::MAP_POSES;
@@ -29,6 +30,7 @@ pub use outputs::{earlier_results, result_files};
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
+pub use position_evaluation::{FrameEvaluation, PositionEvaluation};
 pub use request::{Request, user_noise};
 
 use std::path::Path;
@@ -100,6 +102,9 @@ pub struct Problem {
     cross_validate: Option<usize>,
     sources: Sources,
     truth: Option<DhParams>,
+    /// Held-out positions in a frame the fit does not have may be
+    /// registered on themselves ([`Problem::registering_held_out_frames`]).
+    register_held_out: bool,
 }
 
 impl Problem {
@@ -155,14 +160,20 @@ impl Problem {
             cross_validate: None,
             sources: Sources::default(),
             truth: None,
+            register_held_out: false,
         })
     }
 
-    /// Validates on `held_out` too.
+    /// Validates on `held_out` too. Its reference positions are scored in
+    /// the fitted frames of their names; a frame the fit does not have is
+    /// refused, unless [`Problem::registering_held_out_frames`] was called
+    /// first.
     ///
     /// # Errors
     ///
-    /// [`CalibrationError::Joints`] when it has another joint count.
+    /// [`CalibrationError::Joints`] when it has another joint count;
+    /// [`CalibrationError::Positions`] naming the first line of a held-out
+    /// frame the fit does not have, and the fitted frames.
     pub fn with_held_out(mut self, held_out: HeldOutData) -> Result<Problem, CalibrationError> {
         if held_out.data.joints() != self.data.joints() {
             return Err(CalibrationError::Joints {
@@ -174,8 +185,22 @@ impl Problem {
             data: of_arm_shape(&self.arm, held_out.data)?,
             ..held_out
         };
+        if !self.register_held_out {
+            check_held_out_frames(&self.data, &held_out.data)?;
+        }
         self.held_out = Some(held_out);
         Ok(self)
+    }
+
+    /// Lets held-out reference positions in a frame the fit does not have
+    /// be registered on themselves (their own closed-form fit): their
+    /// figures are then optimistic — the registration absorbs part of the
+    /// arm's error —, and every output says which frames were so
+    /// registered ([`HeldOut::registered_on_itself`]). Call it before
+    /// [`Problem::with_held_out`].
+    pub fn registering_held_out_frames(mut self) -> Problem {
+        self.register_held_out = true;
+        self
     }
 
     /// Cross-validates over `k` folds of points (seeded by the solver
@@ -484,12 +509,69 @@ const POSITION_MISS_SHARE: f64 = 0.2;
 /// frame by frame: positions in another unit (their spread against the
 /// arm's), a mirror image (swapped axes: a mirrored registration fits much
 /// better than any rotation), or positions of another arm (the best
-/// registration misses by a large share of their spread).
+/// registration misses by a large share of their spread). When every
+/// reading, read as degrees, is within ±2π — radians read as degrees, as
+/// the touch readers ask ([`crate::io::poses::look_like_radians`]) — the
+/// refusal names the angle unit instead, and whether the numbers read as
+/// radians fit.
 fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationError> {
     let Some(positions) = data.positions() else {
         return Ok(());
     };
-    let registrations = crate::residuals::positions::register(layout.geometry(), positions)?;
+    let Some(refusal) = position_refusal(positions, layout.geometry())? else {
+        return Ok(());
+    };
+    let rows = positions.rows();
+    let to_deg = 1f64.to_degrees();
+    let shape = (rows.joints(), rows.prismatic_mask());
+    if !crate::io::poses::look_like_radians(rows.readings(), rows.len(), shape, to_deg) {
+        return Err(refusal);
+    }
+    let as_rad =
+        DataSet::from_positions(rows.revolute_scaled(to_deg), positions.file()).map_err(|e| {
+            CalibrationError::Term {
+                term: "positions".into(),
+                message: e.to_string(),
+            }
+        })?;
+    let fits = match as_rad.positions() {
+        Some(p) => position_refusal(p, layout.geometry())?.is_none(),
+        None => false,
+    };
+    // What reading them as degrees did, in numbers rather than the
+    // refusal's guesses (another unit, another arm).
+    let reg = &crate::residuals::positions::register(layout.geometry(), positions)?[0];
+    Err(CalibrationError::Positions {
+        file: positions.file().to_string(),
+        line: rows.line(0),
+        field: "q1".to_string(),
+        message: format!(
+            "every joint reading, read as degrees, is within ±6.28° in all {} rows: these angles \
+             look like radians read as degrees, not positions in another unit — read so, the \
+             nominal arm's probe spreads {:.4} mm about its centroid where the instrument saw \
+             {:.4} mm; {}{}",
+            rows.len(),
+            reg.arm_spread_mm,
+            reg.spread_mm,
+            crate::calibrate::ANGLE_UNITS_REMEDY,
+            if fits {
+                ": read so, the nominal arm fits these positions"
+            } else {
+                "; read so, the nominal arm still does not fit them: check the readings' order \
+                 and the positions' unit (mm) too"
+            }
+        ),
+    })
+}
+
+/// The first frame of `positions` that the nominal arm `params` cannot be
+/// registered to, as the refusal ([`check_positions`]); `None` when every
+/// frame can.
+fn position_refusal(
+    positions: &crate::dataset::PositionData,
+    params: &DhParams,
+) -> Result<Option<CalibrationError>, CalibrationError> {
+    let registrations = crate::residuals::positions::register(params, positions)?;
     let rows = positions.rows();
     for (f, (name, reg)) in rows.frames().iter().zip(registrations).enumerate() {
         let first = (0..rows.len()).find(|&i| rows.frame(i) == f).unwrap_or(0);
@@ -501,7 +583,7 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
         };
         let ratio = reg.spread_mm / reg.arm_spread_mm;
         if !(1.0 / POSITION_SPREAD_RATIO..=POSITION_SPREAD_RATIO).contains(&ratio) {
-            return Err(refuse(
+            return Ok(Some(refuse(
                 "x",
                 format!(
                     "the positions spread {:.4} mm about their centroid, the nominal arm's \
@@ -509,10 +591,10 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
                      mm; metres give 1e-3) or of another arm?",
                     reg.spread_mm, reg.arm_spread_mm
                 ),
-            ));
+            )));
         }
         if reg.mirrored_rms_mm < 0.5 * reg.rms_mm && reg.rms_mm > 0.01 * reg.spread_mm {
-            return Err(refuse(
+            return Ok(Some(refuse(
                 "y",
                 format!(
                     "a mirror image fits the nominal arm (RMS {:.4} mm) far better than any \
@@ -520,10 +602,10 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
                      of a right-handed frame",
                     reg.mirrored_rms_mm, reg.rms_mm
                 ),
-            ));
+            )));
         }
         if reg.rms_mm > POSITION_MISS_SHARE * reg.spread_mm {
-            return Err(refuse(
+            return Ok(Some(refuse(
                 "point",
                 format!(
                     "the nominal arm, best registered, misses these positions by RMS {:.4} mm \
@@ -531,10 +613,10 @@ fn check_positions(data: &DataSet, layout: &Layout) -> Result<(), CalibrationErr
                      another order or unit, or another tool?",
                     reg.rms_mm, reg.spread_mm
                 ),
-            ));
+            )));
         }
     }
-    Ok(())
+    Ok(None)
 }
 
 /// Units of the values in a [`CalibrationReport`] meant for people.
@@ -555,6 +637,66 @@ pub struct HeldOut {
     pub lengths_file: Option<String>,
     /// Before and after there.
     pub figures: BeforeAfter,
+    /// Its frames the fit does not have, each registered on its own
+    /// positions (closed form, for each arm) because the user asked
+    /// (`--register-held-out`): their figures are optimistic.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub registered_on_itself: Vec<String>,
+}
+
+/// The frames of `data`'s reference positions (none without them).
+fn frame_names(data: &DataSet) -> &[String] {
+    data.positions().map_or(&[], |p| p.rows().frames())
+}
+
+/// The frames of held-out positions that `fitted` has none of, in order.
+fn unfitted_frames<'a>(fitted: &DataSet, held: &'a DataSet) -> Vec<&'a String> {
+    let have = frame_names(fitted);
+    (frame_names(held).iter())
+        .filter(|f| !have.contains(f))
+        .collect()
+}
+
+/// Held-out positions are scored in the fitted frames of their names: a
+/// frame the fit does not have would be registered on its own positions,
+/// which absorbs part of the arm's error (an optimistic score), so it is
+/// refused by its first line, with the fitted frames.
+fn check_held_out_frames(fitted: &DataSet, held: &DataSet) -> Result<(), CalibrationError> {
+    let Some(p) = held.positions() else {
+        return Ok(());
+    };
+    let Some(frame) = unfitted_frames(fitted, held).into_iter().next() else {
+        return Ok(());
+    };
+    let rows = p.rows();
+    let first = (0..rows.len())
+        .find(|&i| &rows.frames()[rows.frame(i)] == frame)
+        .expect("a frame has a row");
+    let have = frame_names(fitted);
+    let fitted = if have.is_empty() {
+        "the fit has no reference positions, so no frame".to_string()
+    } else {
+        format!(
+            "the fitted frame{} {}",
+            if have.len() == 1 { " is" } else { "s are" },
+            have.iter()
+                .map(|f| format!("`{f}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    Err(CalibrationError::Positions {
+        file: p.file().to_string(),
+        line: rows.line(first),
+        field: "frame".to_string(),
+        message: format!(
+            "held-out frame `{frame}` was not fitted ({fitted}): its positions could only be \
+             registered on themselves, which hides part of the arm's error. Name the fitted \
+             frame they were measured in, fit this frame too (in --positions), or let it be \
+             registered on its own positions with --register-held-out (then every output says \
+             so)"
+        ),
+    })
 }
 
 /// Cross-validation over points.
@@ -1085,6 +1227,55 @@ impl CalibrationReport {
         t
     }
 
+    /// The reference positions' noise, `None` without them: the σ stated
+    /// (`--position-noise`, or each row's own), or that it was estimated,
+    /// with the σ the fit used; and an encoder noise stated without
+    /// touches, which weighs nothing.
+    pub fn position_noise(&self) -> Option<String> {
+        let r = self;
+        r.positions_file.as_ref()?;
+        let n = r.noise;
+        let d = &r.calibration.dof;
+        let mut s = match (n.position_mm, n.position_mm_per_m) {
+            (Some(a), Some(b)) if b > 0.0 => format!(
+                "stated: σ = {a} mm + {b} mm per metre from the instrument, per coordinate (where \
+                 a row states no uncertainty of its own)"
+            ),
+            (Some(a), _) => format!(
+                "stated: σ = {a} mm per coordinate (where a row states no uncertainty of its own)"
+            ),
+            // Alone, positions are weighed as stated only by their own column.
+            (None, _) if r.touches == 0 && !d.touch_sigma_estimated => {
+                "stated: each row's own uncertainty (the file's `uncertainty` column)".to_string()
+            }
+            (None, _) if r.touches == 0 => "not stated: σ is estimated from the fit".to_string(),
+            (None, _) => "no --position-noise: each row's own uncertainty where the file states \
+                          one, else a σ estimated from the fit"
+                .to_string(),
+        };
+        let noun = if r.touches > 0 {
+            "observation"
+        } else {
+            "position"
+        };
+        s += &format!(
+            "; the fit's {noun} σ {:.4} mm ({})",
+            d.touch_sigma_mm,
+            if d.touch_sigma_estimated {
+                "estimated from the fit"
+            } else {
+                "from the stated noise"
+            }
+        );
+        if let (Some(e), 0) = (n.encoder_rad, r.touches) {
+            s += &format!(
+                "; encoders {} deg stated, weighing no row: a position's σ is the instrument's",
+                e.to_degrees()
+            );
+        }
+        Some(s)
+    }
+
     /// The summary's head: what was calibrated on what, and how the solver
     /// went.
     fn summary_header(&self) -> String {
@@ -1107,6 +1298,9 @@ impl CalibrationReport {
                 r.positions,
                 if frames == 1 { "" } else { "s" }
             );
+        }
+        if let Some(noise) = r.position_noise() {
+            t += &format!("Position noise: {noise}\n");
         }
         t += "\n";
         t += &method_lines(s);
@@ -1289,6 +1483,9 @@ pub fn run(
             data_file: h.data_file.clone(),
             lengths_file: h.lengths_file.clone(),
             figures: before_after_of(before, after, &h.data)?,
+            registered_on_itself: (unfitted_frames(&problem.data, &h.data).into_iter())
+                .cloned()
+                .collect(),
         }),
         None => None,
     };
@@ -1714,13 +1911,28 @@ fn position_table(v: &Validation) -> String {
         if t.is_empty() {
             t += "\nReference positions (mm): 3-D error |R p + t - y| per pose\n";
             t += &format!(
-                "  {:<28} {:>8} {:>8} {:>8} {:>8}\n",
-                "data", "poses", "mean", "RMS", "max"
+                "  {:<28} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
+                "data", "poses", "mean", "RMS", "p95", "max"
             );
         }
         t += &format!(
-            "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4}\n",
-            name, p.count, p.mean, p.rms, p.max
+            "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
+            name, p.count, p.mean, p.rms, p.p95, p.max
+        );
+    }
+    if let Some(h) = v
+        .held_out
+        .as_ref()
+        .filter(|h| !h.registered_on_itself.is_empty())
+    {
+        t += &format!(
+            "  held out: {} not fitted, registered on its own positions as asked \
+             (--register-held-out): these held-out figures are optimistic\n",
+            h.registered_on_itself
+                .iter()
+                .map(|f| format!("frame `{f}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     t

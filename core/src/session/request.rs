@@ -53,6 +53,7 @@ pub struct Request {
     sources: Sources,
     unit: AngleUnit,
     held_out: Option<(HeldOutData, Vec<String>)>,
+    register_held_out: bool,
     cross_validate: Option<usize>,
     fix: String,
     noise: Noise,
@@ -117,6 +118,7 @@ impl Request {
             sources: Sources::default(),
             unit: AngleUnit::Rad,
             held_out: None,
+            register_held_out: false,
             cross_validate: None,
             fix: "auto".to_string(),
             noise: Noise::default(),
@@ -283,6 +285,14 @@ impl Request {
         };
         let warnings = warnings.iter().map(ToString::to_string).collect();
         Ok(self.validate_on(held_out, warnings))
+    }
+
+    /// Whether held-out positions in a frame the fit does not have are
+    /// registered on themselves (and said so) rather than refused
+    /// ([`Problem::registering_held_out_frames`]; default `false`).
+    pub fn register_held_out(mut self, yes: bool) -> Request {
+        self.register_held_out = yes;
+        self
     }
 
     /// Cross-validates over `k` folds of points (`None`: not).
@@ -579,6 +589,9 @@ impl Request {
                 e => e,
             })?
             .with_sources(sources);
+        if self.register_held_out {
+            problem = problem.registering_held_out_frames();
+        }
         if let Some((held_out, _)) = self.held_out {
             problem = problem.with_held_out(held_out)?;
         }

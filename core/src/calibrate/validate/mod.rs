@@ -17,7 +17,12 @@ use crate::metrics::evaluate_without_pairs;
 use crate::params::DhParams;
 
 /// The figures a calibration is judged by, mm.
+///
+/// In JSON, figures of reference positions alone (no touch, no length)
+/// leave the touch fields out: a section per kind of evidence present and
+/// none for a kind absent. Read back, the missing fields are 0 / `None`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(into = "FiguresJson", from = "FiguresJson")]
 pub struct Figures {
     /// Points evaluated (0 without touches: the touch figures are then 0).
     pub points: usize,
@@ -40,6 +45,65 @@ pub struct Figures {
     pub positions: Option<PositionErrors>,
 }
 
+/// [`Figures`] as `calibration.json` holds them: the touch fields are
+/// `None` (left out) when the figures are of reference positions alone.
+#[derive(Serialize, Deserialize)]
+struct FiguresJson {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    points: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    e_mean: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    e_max: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    two_s_mean: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    delta_max: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    lengths: Option<usize>,
+    // Present (possibly `null`) whenever the touch fields are.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    length_rms: Option<Option<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    length_max: Option<Option<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    positions: Option<PositionErrors>,
+}
+
+impl From<Figures> for FiguresJson {
+    fn from(f: Figures) -> FiguresJson {
+        // Touch figures of no touch are zeros that mean nothing: left out.
+        let touches = !(f.points == 0 && f.lengths == 0 && f.positions.is_some());
+        FiguresJson {
+            points: touches.then_some(f.points),
+            e_mean: touches.then_some(f.e_mean),
+            e_max: touches.then_some(f.e_max),
+            two_s_mean: touches.then_some(f.two_s_mean),
+            delta_max: touches.then_some(f.delta_max),
+            lengths: touches.then_some(f.lengths),
+            length_rms: touches.then_some(f.length_rms),
+            length_max: touches.then_some(f.length_max),
+            positions: f.positions,
+        }
+    }
+}
+
+impl From<FiguresJson> for Figures {
+    fn from(j: FiguresJson) -> Figures {
+        Figures {
+            points: j.points.unwrap_or(0),
+            e_mean: j.e_mean.unwrap_or(0.0),
+            e_max: j.e_max.unwrap_or(0.0),
+            two_s_mean: j.two_s_mean.unwrap_or(0.0),
+            delta_max: j.delta_max.unwrap_or(0.0),
+            lengths: j.lengths.unwrap_or(0),
+            length_rms: j.length_rms.flatten(),
+            length_max: j.length_max.flatten(),
+            positions: j.positions,
+        }
+    }
+}
+
 /// The 3-D distances between where an arm puts the probe, registered to
 /// each frame, and where the instrument saw it, mm.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -50,11 +114,66 @@ pub struct PositionErrors {
     pub mean: f64,
     /// RMS distance.
     pub rms: f64,
+    /// The 95th percentile of the distances ([`percentile_95`]); 0 in a
+    /// file written before it was recorded.
+    #[serde(default)]
+    pub p95: f64,
     /// Largest distance.
     pub max: f64,
 }
 
+impl PositionErrors {
+    /// The figures of the distances `d` (mm); all 0 for none.
+    pub fn of(d: &[f64]) -> PositionErrors {
+        let n = d.len().max(1) as f64;
+        PositionErrors {
+            count: d.len(),
+            mean: d.iter().sum::<f64>() / n,
+            rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
+            p95: percentile_95(d),
+            max: d.iter().copied().fold(0.0, f64::max),
+        }
+    }
+}
+
+/// The 95th percentile of `d` by nearest rank: the smallest value with at
+/// least 95 % of the values at or below it (0 for none; NaN sorts last).
+///
+/// ```
+/// use aacmm_core::calibrate::validate::percentile_95;
+/// let d: Vec<f64> = (1..=100).map(f64::from).collect();
+/// assert_eq!(percentile_95(&d), 95.0);
+/// assert_eq!(percentile_95(&[3.0, 1.0]), 3.0);
+/// assert_eq!(percentile_95(&[]), 0.0);
+/// ```
+pub fn percentile_95(d: &[f64]) -> f64 {
+    if d.is_empty() {
+        return 0.0;
+    }
+    let mut sorted = d.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    // Nearest rank: ⌈0.95 n⌉, 1-based, computed in integers (no rounding).
+    let rank = (95 * d.len()).div_ceil(100);
+    sorted[rank.max(1) - 1]
+}
+
 impl Figures {
+    /// The figures of data without touches: the touch figures 0 (and
+    /// left out of the JSON when there are `positions`).
+    pub fn without_touches(positions: Option<PositionErrors>) -> Figures {
+        Figures {
+            points: 0,
+            e_mean: 0.0,
+            e_max: 0.0,
+            two_s_mean: 0.0,
+            delta_max: 0.0,
+            lengths: 0,
+            length_rms: None,
+            length_max: None,
+            positions,
+        }
+    }
+
     /// The figure a calibration must not make worse on its own data: the
     /// mean `e` of the touches, or without touches the mean 3-D error at
     /// the reference positions.
@@ -90,13 +209,7 @@ pub fn position_errors(
     frames: &[FrameValues],
 ) -> Result<PositionErrors, CalibrationError> {
     let (_, d) = pose_errors(params, data, frames)?;
-    let n = d.len().max(1) as f64;
-    Ok(PositionErrors {
-        count: d.len(),
-        mean: d.iter().sum::<f64>() / n,
-        rms: (d.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
-        max: d.iter().copied().fold(0.0, f64::max),
-    })
+    Ok(PositionErrors::of(&d))
 }
 
 /// Per row of `data`, where `params` puts the probe (the arm's base frame,
@@ -160,17 +273,7 @@ pub fn figures_in(
         .map(|p| position_errors(params, p, frames))
         .transpose()?;
     if data.is_empty() {
-        return Ok(Figures {
-            points: 0,
-            e_mean: 0.0,
-            e_max: 0.0,
-            two_s_mean: 0.0,
-            delta_max: 0.0,
-            lengths: 0,
-            length_rms: None,
-            length_max: None,
-            positions,
-        });
+        return Ok(Figures::without_touches(positions));
     }
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
@@ -506,4 +609,56 @@ fn length_groups(data: &DataSet) -> Vec<Vec<usize>> {
         groups[index[r]].push(p);
     }
     groups
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Figures, PositionErrors};
+
+    fn touches() -> Figures {
+        Figures {
+            points: 3,
+            e_mean: 0.1,
+            e_max: 0.2,
+            two_s_mean: 0.3,
+            delta_max: 0.4,
+            lengths: 0,
+            length_rms: None,
+            length_max: None,
+            positions: None,
+        }
+    }
+
+    /// Touch figures keep every field (`null` lengths included), in the
+    /// order `calibration.json` has always had them.
+    #[test]
+    fn touch_figures_are_written_as_before() {
+        let json = serde_json::to_string(&touches()).unwrap();
+        assert_eq!(
+            json,
+            "{\"points\":3,\"e_mean\":0.1,\"e_max\":0.2,\"two_s_mean\":0.3,\"delta_max\":0.4,\
+             \"lengths\":0,\"length_rms\":null,\"length_max\":null}"
+        );
+        assert_eq!(serde_json::from_str::<Figures>(&json).unwrap(), touches());
+    }
+
+    /// Figures of reference positions alone hold the positions only, and
+    /// read back as they were.
+    #[test]
+    fn figures_of_positions_alone_have_no_touch_field() {
+        let positions = PositionErrors::of(&[1.0, 2.0, 4.0]);
+        assert_eq!(positions.p95, 4.0);
+        let f = Figures::without_touches(Some(positions));
+        let json = serde_json::to_value(f).unwrap();
+        let keys: Vec<&String> = json.as_object().unwrap().keys().collect();
+        assert_eq!(keys, ["positions"]);
+        assert_eq!(serde_json::from_value::<Figures>(json).unwrap(), f);
+        // With touches as well, both.
+        let both = Figures {
+            positions: Some(positions),
+            ..touches()
+        };
+        let json = serde_json::to_value(both).unwrap();
+        assert_eq!(json.as_object().unwrap().len(), 9);
+    }
 }
