@@ -21,6 +21,42 @@ use crate::residuals::{
 };
 use crate::tolerances::Tolerances;
 
+/// Every observation's standardised squared residual and its row count,
+/// in [`Objective::observations`]' order: a `k`-row observation's value is
+/// about `χ²_k` when it fits the noise model, so the robust loss weighs it
+/// on its `k`-dimensional norm and the outlier test holds it against the
+/// `χ²_k` quantile.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Observed {
+    /// Per observation, `rᵀ A r / (1 − h)`.
+    pub values: Vec<f64>,
+    /// Per observation, its rows `k`.
+    pub rows: Vec<usize>,
+}
+
+impl Observed {
+    /// Each value in the units of a three-row observation's law: times
+    /// `m₃/m_k` (`m_k` the median of `χ²_k`; exactly 1 for three rows), so
+    /// that one median serves observations of any row count.
+    pub(crate) fn as_three_rows(&self) -> Vec<f64> {
+        let mut factor: Vec<f64> = Vec::new();
+        (self.values.iter().zip(&self.rows))
+            .map(|(&v, &k)| {
+                if k == 3 {
+                    return v;
+                }
+                if factor.len() <= k {
+                    factor.resize(k + 1, f64::NAN);
+                }
+                if factor[k].is_nan() {
+                    factor[k] = crate::stats::CHI2_3_MEDIAN / crate::stats::chi_square_median(k);
+                }
+                v * factor[k]
+            })
+            .collect()
+    }
+}
+
 /// The terms of a calibration on the columns of a layout, with the worker
 /// threads their sums may use.
 #[derive(Clone, Debug)]
@@ -254,7 +290,8 @@ impl<'a> Objective<'a> {
     }
 
     /// Every observation's standardised squared residual at `x` (each
-    /// about `χ²₃` when it fits the noise model), in
+    /// about `χ²_k` when it fits the noise model, `k` its rows: 3 for a
+    /// touch, 1 for a distance, 6 for a pose), in
     /// [`Objective::observations`]' order; with `leverage` (the inverse of
     /// the normal matrix at these weights), corrected for the free
     /// parameters' share of each observation's leverage as well as for its
@@ -262,30 +299,36 @@ impl<'a> Objective<'a> {
     ///
     /// # Errors
     ///
-    /// The kernel's, and a term whose observations are not of 3 rows (the
-    /// robust loss and the outlier test are calibrated for `χ²₃`).
+    /// The kernel's, and a term whose standardised residuals do not match
+    /// its observations (their count, or no row).
     pub fn standardised(
         &self,
         x: &[f64],
         leverage: Option<&crate::residuals::ParameterLeverage>,
-    ) -> Result<Vec<f64>, TermError> {
+    ) -> Result<Observed, TermError> {
         self.at(x, |at| {
-            let mut out = Vec::with_capacity(self.observations());
+            let mut out = Observed {
+                values: Vec::with_capacity(self.observations()),
+                rows: Vec::with_capacity(self.observations()),
+            };
             for (_, term) in self.observing() {
                 let Some(s) = term.standardised(at, leverage)? else {
                     continue;
                 };
-                if s.rows != 3 {
+                if s.rows == 0 || s.values.len() != term.observations() {
                     return Err(TermError::invalid(
                         term.name(),
                         format!(
-                            "observations of {} rows: the robust loss and the outlier test \
-                             are for 3-D observations",
-                            s.rows
+                            "{} standardised residuals of {} rows for {} observations: one \
+                             per observation, of at least one row",
+                            s.values.len(),
+                            s.rows,
+                            term.observations()
                         ),
                     ));
                 }
-                out.extend(s.values);
+                out.rows.extend(std::iter::repeat_n(s.rows, s.values.len()));
+                out.values.extend(s.values);
             }
             Ok(out)
         })

@@ -629,9 +629,13 @@ fn implausible_blocks(fit: &Fit<'_>, setup: &Setup<'_>) -> Vec<String> {
 
 /// Every observation's standardised squared residual in units of its own
 /// σ — the stated noise, or (estimated) the fit's, robustly: the median of
-/// a χ²₃ variable is 2.366, and a few outliers do not move a median.
+/// a χ²₃ variable is 2.366 (other row counts taken in its units), and a
+/// few outliers do not move a median.
 #[inline(never)] // a stage of its own in profiles (README, "Measured speed")
-fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, CalibrationError> {
+fn standardised(
+    fit: &Fit<'_>,
+    setup: &Setup<'_>,
+) -> Result<crate::objective::Observed, CalibrationError> {
     // The full leverage: the normal matrix of the weights the objective has
     // now (rescaled by 1/σ² without them when the weights are still unit).
     let scale = if fit.unit_weights {
@@ -643,14 +647,14 @@ fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, Calibratio
     let mut t2 = fit.objective.standardised(&fit.x, leverage.as_ref())?;
     if let Some((_, w)) = &fit.robust {
         // In units of the observation's own σ, not of its robust weight.
-        t2.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
+        t2.values.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
     }
     if !setup.stated {
-        let mut sorted = t2.clone();
+        let mut sorted = t2.as_three_rows();
         let m = sorted.len() / 2;
         let median = crate::stats::kth_smallest(&mut sorted, m).unwrap_or(1.0);
         let s2 = (median / 2.366).max(f64::MIN_POSITIVE);
-        t2.iter_mut().for_each(|v| *v /= s2);
+        t2.values.iter_mut().for_each(|v| *v /= s2);
     }
     Ok(t2)
 }
