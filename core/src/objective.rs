@@ -16,8 +16,8 @@
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::residuals::{
-    At, Layout, LengthTerm, Noise, Normal, Origin, PositionTerm, PriorTerm, Sees, Shared, Term,
-    TermError, TouchTerm,
+    At, Layout, LengthTerm, Noise, Normal, Origin, PositionTerm, PriorTerm, Role, Sees, Shared,
+    Term, TermError, TouchTerm,
 };
 use crate::tolerances::Tolerances;
 
@@ -63,8 +63,9 @@ impl Observed {
 pub struct Objective<'a> {
     layout: Layout,
     terms: Vec<Box<dyn Term + 'a>>,
-    /// The prior among the terms, for its report.
-    prior: Option<PriorTerm>,
+    /// The prior of the stated tolerances, for its report, and its index
+    /// among the terms (the one [`Objective::set_prior`] replaces).
+    prior: Option<(PriorTerm, usize)>,
     threads: usize,
 }
 
@@ -113,10 +114,10 @@ impl<'a> Objective<'a> {
         }
         terms.extend(extra);
         let start = layout.start();
-        let prior = PriorTerm::new(tolerances, &layout, &start);
-        if let Some(prior) = &prior {
+        let prior = PriorTerm::new(tolerances, &layout, &start).map(|prior| {
             terms.push(Box::new(prior.clone()));
-        }
+            (prior, terms.len() - 1)
+        });
         let mut objective = Objective::new(layout, terms, threads);
         objective.prior = prior;
         objective.weigh(&start, unit_sigma)?;
@@ -138,9 +139,9 @@ impl<'a> Objective<'a> {
         self.threads
     }
 
-    /// The index of the first term named `name`.
-    pub fn position(&self, name: &str) -> Option<usize> {
-        self.terms.iter().position(|t| t.name() == name)
+    /// The index of the first term of role `role`.
+    pub fn position(&self, role: Role) -> Option<usize> {
+        self.terms.iter().position(|t| t.role() == role)
     }
 
     /// Whether stated tolerances (or an auxiliary block's) apply: a prior
@@ -151,12 +152,14 @@ impl<'a> Objective<'a> {
     }
 
     /// Replaces the prior of the stated tolerances by `prior` (the same
-    /// columns, other tolerances).
+    /// columns, other tolerances): the term this objective put in for
+    /// them, never another (an outside term of any name or role stays).
+    /// Without one, nothing changes.
     pub(crate) fn set_prior(&mut self, prior: PriorTerm) {
-        if let Some(t) = self.terms.iter_mut().find(|t| t.name() == "prior") {
-            *t = Box::new(prior.clone());
+        if let Some((old, at)) = &mut self.prior {
+            self.terms[*at] = Box::new(prior.clone());
+            *old = prior;
         }
-        self.prior = Some(prior);
     }
 
     /// Adds `term` after the others (a fit's held directions).
@@ -166,7 +169,7 @@ impl<'a> Objective<'a> {
 
     /// The prior of the stated tolerances, if any applies.
     pub(crate) fn prior(&self) -> Option<&PriorTerm> {
-        self.prior.as_ref()
+        self.prior.as_ref().map(|(p, _)| p)
     }
 
     /// Every column's start value.
@@ -526,4 +529,67 @@ pub fn weighted_cost(
     let layout = crate::residuals::positions::layout_for(weighed_at, data)?;
     let objective = Objective::of_data(layout, data, noise, Vec::new(), None, 1.0, 1)?;
     objective.data_cost(&params.to_vec(), &mut Vec::new())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::residuals::Role;
+
+    /// An outside term that happens to be named `prior`.
+    #[derive(Clone, Debug)]
+    struct NamedPrior;
+
+    impl Term for NamedPrior {
+        fn name(&self) -> &str {
+            "prior"
+        }
+        fn rows(&self, _free: &[usize]) -> usize {
+            1
+        }
+        fn accumulate(&self, _: &At<'_>, _: &mut Shared, _: &mut Normal) -> Result<f64, TermError> {
+            Ok(0.0)
+        }
+        fn add_cost(
+            &self,
+            _: &At<'_>,
+            _: &[usize],
+            _: &mut Shared,
+            _: &mut Vec<[f64; 3]>,
+            _: &mut f64,
+        ) -> Result<(), TermError> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn set_prior_replaces_its_own_term_not_one_named_prior() {
+        use crate::simulate::{CampaignSettings, ErrorModel, simulate};
+        let nominal = crate::Arm::without_limits("n", crate::params::DhParams::paper_nominal());
+        let c = simulate(&nominal, &CampaignSettings::new(2, ErrorModel::Paper, 4, 6)).unwrap();
+        let data = c.data_set().unwrap();
+        let layout = crate::residuals::positions::layout_for(&nominal.params, &data).unwrap();
+        let tolerances = |s| Tolerances::parse(s, 6).unwrap().unwrap();
+        let (few, more) = (
+            tolerances("length=0.5mm"),
+            tolerances("length=0.5mm,angle=0.1deg"),
+        );
+        let extra: Vec<Box<dyn Term>> = vec![Box::new(NamedPrior)];
+        let noise = Noise::default();
+        let mut objective =
+            Objective::of_data(layout.clone(), &data, &noise, extra, Some(&few), 1.0, 1).unwrap();
+        let free: Vec<usize> = (0..layout.len()).collect();
+        let rows_of =
+            |o: &Objective<'_>, role| o.terms().find(|t| t.role() == role).unwrap().rows(&free);
+        let before = rows_of(&objective, Role::Prior);
+        let wider = PriorTerm::new(Some(&more), &layout, &layout.start()).unwrap();
+        let wider_rows = wider.rows(&free);
+        assert!(wider_rows > before);
+        objective.set_prior(wider);
+        assert_eq!(rows_of(&objective, Role::Prior), wider_rows);
+        assert_eq!(rows_of(&objective, Role::Other), 1);
+        let other = objective.position(Role::Other).unwrap();
+        assert_eq!(objective.terms().nth(other).unwrap().name(), "prior");
+        assert_eq!(objective.terms().filter(|t| t.name() == "prior").count(), 2);
+    }
 }

@@ -15,6 +15,7 @@ use aacmm_core::residuals::{Origin, ParameterLeverage, Standardised};
 /// it), else three.
 #[derive(Clone, Debug)]
 struct Targets {
+    name: &'static str,
     poses: PreparedPoses,
     targets: Vec<[f64; 3]>,
     per: usize,
@@ -42,14 +43,15 @@ impl Targets {
 
     fn positions(&self, at: &At<'_>) -> Result<Vec<[f64; 3]>, TermError> {
         let mut p = vec![[0.0; 3]; self.poses.len()];
-        at.kernel.positions(&self.poses, 0..self.poses.len(), &mut p)?;
+        at.kernel
+            .positions(&self.poses, 0..self.poses.len(), &mut p)?;
         Ok(p)
     }
 }
 
 impl Term for Targets {
     fn name(&self) -> &str {
-        "targets"
+        self.name
     }
 
     fn rows(&self, _free: &[usize]) -> usize {
@@ -197,6 +199,7 @@ fn targets(c: &Campaign, per: usize, direction: Option<[f64; 3]>, gross: Option<
     }
     let owned: Vec<Vec<f64>> = rows.iter().map(|r| r.to_vec()).collect();
     Targets {
+        name: "targets",
         poses: PreparedPoses::new(6, &owned).unwrap(),
         targets: xyz,
         per,
@@ -207,7 +210,17 @@ fn targets(c: &Campaign, per: usize, direction: Option<[f64; 3]>, gross: Option<
 }
 
 fn fit(c: &Campaign, term: Targets, robust: bool) -> CalibrationReport {
+    fit_with(c, term, robust, None)
+}
+
+fn fit_with(
+    c: &Campaign,
+    term: Targets,
+    robust: bool,
+    prior: Option<aacmm_core::tolerances::Tolerances>,
+) -> CalibrationReport {
     let model = ModelOptions {
+        prior,
         noise: Noise {
             encoder_rad: Some(0.005f64.to_radians()),
             probe_mm: Some(0.01),
@@ -265,4 +278,32 @@ fn a_one_row_observation_with_a_gross_error_is_named() {
 #[test]
 fn a_six_row_observation_with_a_gross_error_is_named() {
     planted_error_is_found(2, None);
+}
+
+/// A term's name is only words: one named `prior`, beside stated
+/// tolerances, is neither counted as the prior nor replaced by it when the
+/// tolerances are carried onto redundant parameters' partners — the fit is
+/// the same bits as under any other name.
+#[test]
+fn an_outside_term_named_prior_is_not_the_prior() {
+    let c = campaign();
+    let prior = || aacmm_core::tolerances::Tolerances::parse("length=0.5mm,angle=0.1deg", 6);
+    let run = |name| {
+        let mut term = targets(&c, 1, Some([1.0, 0.0, 0.0]), None);
+        term.name = name;
+        fit_with(&c, term, false, prior().unwrap())
+    };
+    let (plain, named) = (run("targets"), run("prior"));
+    let (a, b) = (&plain.calibration, &named.calibration);
+    assert!(a.prior.is_some() && a.dof.prior_rows > 0);
+    assert_eq!(a.dof.prior_rows, b.dof.prior_rows);
+    let other = |d: &aacmm_core::calibrate::Dof| -> Vec<(String, usize)> {
+        (d.other_rows.iter())
+            .map(|r| (r.term.clone(), r.rows))
+            .collect()
+    };
+    assert_eq!(other(&a.dof), [("targets".to_string(), 40)]);
+    assert_eq!(other(&b.dof), [("prior".to_string(), 40)]);
+    assert_eq!(a.params.to_vec(), b.params.to_vec());
+    assert_eq!(a.dof.degrees_of_freedom, b.dof.degrees_of_freedom);
 }

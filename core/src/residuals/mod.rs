@@ -511,6 +511,35 @@ pub struct Origin {
     pub group: String,
 }
 
+/// What a term is to the pipeline: the built-in kinds it reports and
+/// treats by kind (the touches' and lengths' rows in the degrees of
+/// freedom, the prior a tolerance study replaces), or another kind of
+/// evidence. A term says its role; the pipeline never compares names, so a
+/// term of any name is what its role says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Role {
+    /// Same-point touches (the built-in touch term).
+    Touches,
+    /// Reference lengths between the touches' points.
+    Lengths,
+    /// Reference positions in an instrument's frame.
+    Positions,
+    /// Stated tolerances as pseudo-observations: prior knowledge, not data.
+    Prior,
+    /// Weak directions held at nominal: prior knowledge, not data.
+    Held,
+    /// Any other evidence (a term written outside the library).
+    Other,
+}
+
+impl Role {
+    /// Whether a term of this role is prior knowledge rather than data.
+    pub fn is_prior(self) -> bool {
+        matches!(self, Role::Prior | Role::Held)
+    }
+}
+
 /// One kind of evidence in the least squares: whitened residual rows on the
 /// parameter blocks' columns.
 ///
@@ -523,13 +552,22 @@ pub struct Origin {
 /// (its [`Shared::centres`]) comes after the touches.
 pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Short name, for reports: `touches`, `lengths`, `prior`, `plane`.
+    /// Only words: what the pipeline does with a term follows its
+    /// [`Term::role`].
     fn name(&self) -> &str;
+
+    /// What the term is to the pipeline; [`Role::Other`] unless it is one
+    /// of the built-in kinds.
+    fn role(&self) -> Role {
+        Role::Other
+    }
 
     /// Whether this is prior knowledge rather than data: left out of the
     /// data's cost (the start arm's cost, the grid of the global search)
-    /// and, in the covariance, not rescaled by the fit's σ̂.
+    /// and, in the covariance, not rescaled by the fit's σ̂. By default,
+    /// as its role says ([`Role::is_prior`]).
     fn is_prior(&self) -> bool {
-        false
+        self.role().is_prior()
     }
 
     /// Whitened residual rows over the free columns `free` (a prior has a

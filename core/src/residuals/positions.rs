@@ -302,6 +302,10 @@ impl Term for PositionTerm<'_> {
         "positions"
     }
 
+    fn role(&self) -> super::Role {
+        super::Role::Positions
+    }
+
     fn rows(&self, _free: &[usize]) -> usize {
         3 * self.data.len()
     }
