@@ -23,6 +23,8 @@ struct Targets {
     sigma: f64,
     /// Per observation, the robust fit's weight.
     weights: Vec<f64>,
+    /// A deliberate mistake: this column's Jacobian with the wrong sign.
+    wrong_column: Option<usize>,
 }
 
 impl Targets {
@@ -87,7 +89,9 @@ impl Term for Targets {
                 };
                 let cols: Vec<Vec<f64>> = (free.iter())
                     .map(|&c| {
-                        if c < geometry {
+                        if Some(c) == self.wrong_column {
+                            moved(c).iter().map(|v| -v).collect()
+                        } else if c < geometry {
                             moved(c)
                         } else {
                             vec![0.0; r.len()]
@@ -206,6 +210,7 @@ fn targets(c: &Campaign, per: usize, direction: Option<[f64; 3]>, gross: Option<
         direction,
         sigma,
         weights: vec![1.0; 40 / per],
+        wrong_column: None,
     }
 }
 
@@ -306,4 +311,39 @@ fn an_outside_term_named_prior_is_not_the_prior() {
     assert_eq!(other(&b.dof), [("prior".to_string(), 40)]);
     assert_eq!(a.params.to_vec(), b.params.to_vec());
     assert_eq!(a.dof.degrees_of_freedom, b.dof.degrees_of_freedom);
+}
+
+/// The public gradient checker passes this file's term and names it, its
+/// block and its column when one column of its Jacobian is wrong.
+#[test]
+fn the_gradient_checker_names_a_wrong_jacobian() {
+    use aacmm_core::objective::{CheckOptions, check_gradients};
+    let c = campaign();
+    let layout = Layout::new(nominal().params);
+    let x = layout.start();
+    let free: Vec<usize> = (0..layout.len()).collect();
+    let check = |term: Targets| {
+        let objective = Objective::new(layout.clone(), vec![Box::new(term)], 1);
+        check_gradients(&objective, &x, &free, &CheckOptions::default()).unwrap()
+    };
+    for (per, direction) in [(1, Some([0.6, 0.0, 0.8])), (2, None)] {
+        let good = check(targets(&c, per, direction, None));
+        assert!(good.passed(), "{good}");
+        let mut bad = targets(&c, per, direction, None);
+        bad.wrong_column = Some(1);
+        let bad = check(bad);
+        assert!(!bad.passed());
+        let failures = bad.failures();
+        assert_eq!(failures.len(), 1, "{bad}");
+        let (term, block) = failures[0];
+        assert_eq!(
+            (
+                term.term.as_str(),
+                block.block.as_str(),
+                block.column.as_str()
+            ),
+            ("targets", "geometry", "a2")
+        );
+        assert!(bad.to_string().contains("WRONG: term `targets`"), "{bad}");
+    }
 }

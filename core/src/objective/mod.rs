@@ -13,6 +13,10 @@
 //! are added in that order, so the same inputs give the same bits on any
 //! thread count.
 
+mod check;
+
+pub use check::{BlockCheck, CheckOptions, GradientCheck, TermCheck, check_gradients};
+
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::residuals::{
@@ -475,6 +479,53 @@ impl<'a> Objective<'a> {
     /// The kernel's.
     pub fn data_cost(&self, x: &[f64], scratch: &mut Vec<[f64; 3]>) -> Result<f64, TermError> {
         self.cost_of(x, &[], scratch, |t| !t.is_prior())
+    }
+
+    /// Each term's gradient `Jᵀr` over `free` (as its
+    /// [`Term::accumulate`] writes it, on normal equations of its own) and
+    /// its cost at `x`, in order; the terms pass what they share as in a
+    /// fit.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub(crate) fn term_gradients(
+        &self,
+        x: &[f64],
+        free: &[usize],
+    ) -> Result<Vec<(Vec<f64>, f64)>, TermError> {
+        self.at(x, |at| {
+            let mut shared = Shared {
+                want_centre_jacobians: self.terms.iter().any(|t| t.needs_centre_jacobians()),
+                ..Shared::default()
+            };
+            (self.terms.iter())
+                .map(|term| {
+                    let mut normal = Normal::new(free);
+                    let cost = term.accumulate(at, &mut shared, &mut normal)?;
+                    Ok((normal.jtr, cost))
+                })
+                .collect()
+        })
+    }
+
+    /// Each term's cost at `x` over `free` ([`Term::add_cost`]), in order.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub(crate) fn term_costs(&self, x: &[f64], free: &[usize]) -> Result<Vec<f64>, TermError> {
+        let mut scratch = Vec::new();
+        self.at(x, |at| {
+            let mut shared = Shared::default();
+            (self.terms.iter())
+                .map(|term| {
+                    let mut total = 0.0;
+                    term.add_cost(at, free, &mut shared, &mut scratch, &mut total)?;
+                    Ok(total)
+                })
+                .collect()
+        })
     }
 
     fn cost_of(
