@@ -254,13 +254,15 @@ fn offset_fit(limit: f64) -> (CalibrationReport, f64) {
     };
     let at = plane_x(&c);
     let mut problem = Problem::new(nominal(), data, model).unwrap();
-    let offset = problem.add_block(Scalar {
-        name: "plane.offset".into(),
-        unit: Unit::Length,
-        start: at + 2.0,
-        tolerance: None,
-        limit: Some(limit),
-    });
+    let offset = problem
+        .add_block(Scalar {
+            name: "plane.offset".into(),
+            unit: Unit::Length,
+            start: at + 2.0,
+            tolerance: None,
+            limit: Some(limit),
+        })
+        .unwrap();
     let plane = PlaneTerm {
         poses: plane_poses(&c, at),
         normal: [1.0, 0.0, 0.0],
@@ -324,4 +326,39 @@ fn a_block_beyond_its_limits_is_refused_by_name() {
         "{reasons}"
     );
     assert_eq!(report.calibration.checks.implausible_blocks.len(), 1);
+}
+
+/// A block held at its start is not fitted: the plane's offset, measured
+/// elsewhere, stays where it was put (0.5 mm off the true plane here, so a
+/// fit would move it), and the report says it was held and why.
+#[test]
+fn a_held_block_stays_at_its_start() {
+    let c = campaign(3);
+    let model = ModelOptions {
+        noise: stated(),
+        ..ModelOptions::default()
+    };
+    let at = plane_x(&c);
+    let mut problem = Problem::new(nominal(), c.data_set().unwrap(), model).unwrap();
+    let offset = problem
+        .add_block(Scalar {
+            name: "plane.offset".into(),
+            unit: Unit::Length,
+            start: at + 0.5,
+            tolerance: None,
+            limit: None,
+        })
+        .unwrap();
+    problem.hold_block(offset);
+    let plane = PlaneTerm {
+        poses: plane_poses(&c, at),
+        normal: [1.0, 0.0, 0.0],
+        offset: Offset::Fitted(offset),
+        sigma: 0.01,
+    };
+    let report = run(problem.with_term(plane));
+    let e = &report.calibration.auxiliary[0];
+    assert_eq!((e.calibrated, e.sigma), (at + 0.5, None));
+    let why = e.fixed.as_deref().unwrap_or_default();
+    assert!(why.contains("held at its start"), "{why}");
 }

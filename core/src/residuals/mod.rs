@@ -74,7 +74,7 @@ use crate::kernel::{ArmKernel, KernelError};
 use crate::params::DhParams;
 
 pub use beyond::{BLOCK_NAME, CorrectionBlock};
-pub use blocks::{Block, BlockId, Frame, Layout, Parameter, Scalar, Unit, Vector};
+pub use blocks::{Block, BlockId, Frame, Layout, LayoutError, Parameter, Scalar, Unit, Vector};
 pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
@@ -214,6 +214,9 @@ pub enum TermError {
     /// that are not finite numbers.
     #[error(transparent)]
     Kernel(#[from] KernelError),
+    /// A parameter block the layout cannot take.
+    #[error(transparent)]
+    Layout(#[from] LayoutError),
     /// The term's own inputs cannot be used as they are.
     #[error("{term}: {message}")]
     Invalid {
