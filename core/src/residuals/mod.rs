@@ -288,6 +288,89 @@ impl At<'_> {
         self.corrected(raw, conditions, false)
     }
 
+    /// The tool's position at every pose of `poses` (a term's readings;
+    /// `conditions`, what was recorded with them) as this point's arm puts
+    /// it, **with the layout's corrections beyond geometry applied**
+    /// (compliance, harmonics, backlash, expansion, drift: as the built-in
+    /// terms see the arm), into `out`, one per pose.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's; a correction whose conditions were not recorded (an
+    /// expansion without temperatures).
+    pub fn tool_positions(
+        &self,
+        poses: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        out: &mut [[f64; 3]],
+    ) -> Result<(), TermError> {
+        let effects = self.corrected_poses(poses, conditions)?;
+        let seen = effects.as_ref().map_or(poses, |e| &e.poses);
+        self.kernel.positions(seen, 0..seen.len(), out)?;
+        Ok(())
+    }
+
+    /// Calls `f(i, position, jacobian)` for every pose `i` of `range`, in
+    /// order: the tool's position with the corrections applied
+    /// ([`At::tool_positions`]) and its Jacobian over the arm's columns —
+    /// `jacobian[c] = ∂p/∂x_c` for every column `c` below
+    /// [`Layout::arm_columns`], the geometry's and then the corrections'.
+    /// A term that reads the tool through this cannot forget the
+    /// corrections.
+    ///
+    /// # Errors
+    ///
+    /// As [`At::tool_positions`].
+    pub fn for_each_tool(
+        &self,
+        poses: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+    ) -> Result<(), TermError> {
+        let effects = self.effects(poses, conditions)?;
+        let seen = effects.as_ref().map_or(poses, |e| &e.poses);
+        let mut ext = Vec::new();
+        self.kernel
+            .for_each_jacobian(seen, range, |i, p, jac| match &effects {
+                Some(e) => {
+                    e.extend(i, p, jac, &mut ext);
+                    f(i, p, &ext);
+                }
+                None => f(i, p, jac),
+            })?;
+        Ok(())
+    }
+
+    /// [`At::for_each_tool`] of the tool's whole pose (its frame: position
+    /// and orientation, [`crate::kernel::Pose`]) and its `6`-row Jacobian
+    /// (position rows, then rotation rows) over the arm's columns, the
+    /// corrections applied: what a term of 6-D targets reads.
+    ///
+    /// # Errors
+    ///
+    /// As [`At::tool_positions`].
+    pub fn for_each_tool_pose(
+        &self,
+        poses: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(usize, &crate::kernel::Pose, &[[f64; 6]]),
+    ) -> Result<(), TermError> {
+        let effects = self.effects(poses, conditions)?;
+        let seen = effects.as_ref().map_or(poses, |e| &e.poses);
+        let mut ext = Vec::new();
+        self.kernel
+            .for_each_pose_jacobian(seen, range, |i, t, jac| match &effects {
+                Some(e) => {
+                    e.extend_pose(i, &t.position, jac, &mut ext);
+                    f(i, t, &ext);
+                }
+                None => f(i, t, jac),
+            })?;
+        Ok(())
+    }
+
     /// [`At::effects`], with the factors of the fitted columns when
     /// `columns`.
     fn corrected(
