@@ -164,6 +164,16 @@ fn plane_poses(c: &Campaign, at: f64) -> PreparedPoses {
     PreparedPoses::new(6, &rows).unwrap()
 }
 
+/// The plane term of touches on `x = at` (σ 0.01 mm), its offset `offset`.
+fn plane_on_x(c: &Campaign, at: f64, offset: Offset) -> PlaneTerm {
+    PlaneTerm {
+        poses: plane_poses(c, at),
+        normal: [1.0, 0.0, 0.0],
+        offset,
+        sigma: 0.01,
+    }
+}
+
 /// A plane `x = const` through the middle of the sockets.
 fn plane_x(c: &Campaign) -> f64 {
     let xs: Vec<f64> = c.sockets.iter().map(|(_, s)| s[0]).collect();
@@ -201,12 +211,7 @@ fn a_known_plane_fixes_the_scale_the_touches_cannot_see() {
         ..ModelOptions::default()
     };
     let at = plane_x(&c);
-    let plane = PlaneTerm {
-        poses: plane_poses(&c, at),
-        normal: [1.0, 0.0, 0.0],
-        offset: Offset::Known(at),
-        sigma: 0.01,
-    };
+    let plane = plane_on_x(&c, at, Offset::Known(at));
     let rows = plane.poses.len();
     let bare = run(Problem::new(nominal(), data.clone(), model.clone()).unwrap());
     let with = run(Problem::new(nominal(), data, model)
@@ -266,12 +271,7 @@ fn offset_fit(limit: f64) -> (CalibrationReport, f64) {
             limit: Some(limit),
         })
         .unwrap();
-    let plane = PlaneTerm {
-        poses: plane_poses(&c, at),
-        normal: [1.0, 0.0, 0.0],
-        offset: Offset::Fitted(offset),
-        sigma: 0.01,
-    };
+    let plane = plane_on_x(&c, at, Offset::Fitted(offset));
     (run(problem.with_term(plane)), at)
 }
 
@@ -353,12 +353,7 @@ fn a_held_block_stays_at_its_start() {
         })
         .unwrap();
     problem.hold_block(offset);
-    let plane = PlaneTerm {
-        poses: plane_poses(&c, at),
-        normal: [1.0, 0.0, 0.0],
-        offset: Offset::Fitted(offset),
-        sigma: 0.01,
-    };
+    let plane = plane_on_x(&c, at, Offset::Fitted(offset));
     let report = run(problem.with_term(plane));
     let e = &report.calibration.auxiliary[0];
     assert_eq!((e.calibrated, e.sigma), (at + 0.5, None));
@@ -389,12 +384,7 @@ fn the_plane_term_sees_the_arms_compliance() {
     let layout =
         aacmm_core::residuals::positions::layout_with(&params, &data, &physics, &beyond).unwrap();
     let at = plane_x(&c);
-    let plane = PlaneTerm {
-        poses: plane_poses(&c, at),
-        normal: [1.0, 0.0, 0.0],
-        offset: Offset::Known(at),
-        sigma: 0.01,
-    };
+    let plane = plane_on_x(&c, at, Offset::Known(at));
     let x = layout.start();
     let free: Vec<usize> = (0..layout.len()).collect();
     let objective = Objective::new(layout.clone(), vec![Box::new(plane)], 1);

@@ -117,7 +117,7 @@ impl GradientCheck {
     pub fn failures(&self) -> Vec<(&TermCheck, &BlockCheck)> {
         (self.terms.iter())
             .flat_map(|t| t.blocks.iter().map(move |b| (t, b)))
-            .filter(|(_, b)| !(b.relative_error <= self.tolerance))
+            .filter(|(_, b)| b.relative_error.is_nan() || b.relative_error > self.tolerance)
             .collect()
     }
 }
@@ -250,7 +250,7 @@ fn judge(
         };
         match blocks.iter_mut().find(|b| b.block == block) {
             // Not a number is the worst of all.
-            Some(b) if !(error <= b.relative_error) => *b = check,
+            Some(b) if error.is_nan() || error > b.relative_error => *b = check,
             Some(_) => {}
             None => blocks.push(check),
         }

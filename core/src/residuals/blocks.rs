@@ -309,13 +309,12 @@ impl Layout {
     pub fn on_bounds(&self, x: &[f64]) -> Vec<(String, f64)> {
         let mut out = Vec::new();
         for (b, block) in self.blocks.iter().enumerate() {
-            let names = block.parameters();
-            for i in 0..block.len() {
-                let (c, name) = (self.starts[b] + i, &names[i].name);
+            for (i, p) in block.parameters().into_iter().enumerate() {
+                let c = self.starts[b] + i;
                 if let (Some((lo, hi)), Some(&v)) = (block.bounds(i), x.get(c))
                     && (v <= lo || v >= hi)
                 {
-                    out.push((name.clone(), v));
+                    out.push((p.name, v));
                 }
             }
         }
