@@ -36,6 +36,32 @@ pub fn chi_square_upper_quantile(alpha: f64, nu: usize) -> f64 {
     })
 }
 
+/// Median of `χ²₃` (the touches' law, kept as a constant so that their
+/// figures are the same bits whatever the quantile's iteration does).
+pub const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
+
+/// The median of the χ² law with `k ≥ 1` degrees of freedom: the law of a
+/// `k`-row observation's standardised squared residual.
+///
+/// ```
+/// use aacmm_core::stats::chi_square_median;
+/// assert!((chi_square_median(1) - 0.454_936_423_119_572_7).abs() < 1e-12);
+/// assert!((chi_square_median(3) - 2.365_973_884_375_338).abs() < 1e-15);
+/// ```
+pub fn chi_square_median(k: usize) -> f64 {
+    if k == 3 {
+        CHI2_3_MEDIAN
+    } else {
+        chi_square_quantile(0.5, k.max(1) as f64)
+    }
+}
+
+/// The density of the χ² law with `k ≥ 1` degrees of freedom at `x > 0`.
+pub fn chi_square_density(x: f64, k: usize) -> f64 {
+    let a = k.max(1) as f64 / 2.0;
+    ((a - 1.0) * x.ln() - x / 2.0 - a * std::f64::consts::LN_2 - ln_gamma(a)).exp()
+}
+
 /// The root of `f`, increasing in `x`: `f(x) = (value, s)`, the value of a
 /// function of a tail of the χ² law with `nu` degrees of freedom, whose
 /// derivative is `s` times the χ² density.
@@ -216,6 +242,22 @@ fn ln_gamma(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn medians_and_densities_of_any_row_count() {
+        // The constant for three rows is the quantile's own value.
+        assert!((chi_square_median(3) - chi_square_quantile(0.5, 3.0)).abs() < 1e-12);
+        for k in 1..=8 {
+            let m = chi_square_median(k);
+            assert!((chi_square_lower(m, k) - 0.5).abs() < 1e-12, "{k}");
+        }
+        // Two degrees of freedom: exp(−x/2)/2; one: exp(−x/2)/sqrt(2πx).
+        for x in [0.1, 1.0, 4.0] {
+            assert!((chi_square_density(x, 2) - (-x / 2.0).exp() / 2.0).abs() < 1e-14);
+            let one = (-x / 2.0).exp() / (2.0 * std::f64::consts::PI * x).sqrt();
+            assert!((chi_square_density(x, 1) / one - 1.0).abs() < 1e-13);
+        }
+    }
 
     /// Each tail against tables (and closed forms), far into the tails,
     /// where one minus the other would be 0 or 1.

@@ -4,8 +4,11 @@
 //! distance to the plane). A plane parallel to the arm's base axis, added
 //! to a campaign without reference lengths, fixes the scale the touches
 //! alone cannot see; with the plane's offset unknown, an auxiliary
-//! parameter block carries it.
+//! parameter block carries it. The term reads the probe through
+//! `At::for_each_tool`, so the arm's corrections beyond geometry
+//! (compliance, harmonics, …) apply to it as to the built-in terms.
 
+use aacmm_core::corrections::Conditions;
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::prelude::*;
 use aacmm_core::residuals::{Scalar, Unit};
@@ -80,24 +83,25 @@ impl Term for PlaneTerm {
         normal: &mut Normal,
     ) -> Result<f64, TermError> {
         let (offset, column) = self.offset(at);
-        let geometry = at.layout.geometry_columns();
+        // The arm's columns: the geometry's and its corrections'.
+        let arm = at.layout.arm_columns();
         let free = normal.free().to_vec();
         let mut rows = Vec::with_capacity(self.poses.len());
-        at.kernel
-            .for_each_jacobian(&self.poses, 0..self.poses.len(), |_, p, jac| {
-                let n = self.normal;
-                let row: Vec<f64> = free
-                    .iter()
-                    .map(|&c| match c {
-                        c if c < geometry => {
-                            (n[0] * jac[c][0] + n[1] * jac[c][1] + n[2] * jac[c][2]) / self.sigma
-                        }
-                        c if Some(c) == column => -1.0 / self.sigma,
-                        _ => 0.0,
-                    })
-                    .collect();
-                rows.push((row, self.residual(p, offset)));
-            })?;
+        let all = 0..self.poses.len();
+        at.for_each_tool(&self.poses, Conditions::default(), all, |_, p, jac| {
+            let n = self.normal;
+            let row: Vec<f64> = free
+                .iter()
+                .map(|&c| match c {
+                    c if c < arm => {
+                        (n[0] * jac[c][0] + n[1] * jac[c][1] + n[2] * jac[c][2]) / self.sigma
+                    }
+                    c if Some(c) == column => -1.0 / self.sigma,
+                    _ => 0.0,
+                })
+                .collect();
+            rows.push((row, self.residual(p, offset)));
+        })?;
         let mut cost = 0.0;
         for (row, r) in rows {
             normal.add_row(&row, r);
@@ -116,8 +120,7 @@ impl Term for PlaneTerm {
     ) -> Result<(), TermError> {
         let (offset, _) = self.offset(at);
         let mut xyz = vec![[0.0; 3]; self.poses.len()];
-        at.kernel
-            .positions(&self.poses, 0..self.poses.len(), &mut xyz)?;
+        at.tool_positions(&self.poses, Conditions::default(), &mut xyz)?;
         *total += xyz
             .iter()
             .map(|p| self.residual(p, offset).powi(2))
@@ -161,6 +164,16 @@ fn plane_poses(c: &Campaign, at: f64) -> PreparedPoses {
     PreparedPoses::new(6, &rows).unwrap()
 }
 
+/// The plane term of touches on `x = at` (σ 0.01 mm), its offset `offset`.
+fn plane_on_x(c: &Campaign, at: f64, offset: Offset) -> PlaneTerm {
+    PlaneTerm {
+        poses: plane_poses(c, at),
+        normal: [1.0, 0.0, 0.0],
+        offset,
+        sigma: 0.01,
+    }
+}
+
 /// A plane `x = const` through the middle of the sockets.
 fn plane_x(c: &Campaign) -> f64 {
     let xs: Vec<f64> = c.sockets.iter().map(|(_, s)| s[0]).collect();
@@ -198,12 +211,7 @@ fn a_known_plane_fixes_the_scale_the_touches_cannot_see() {
         ..ModelOptions::default()
     };
     let at = plane_x(&c);
-    let plane = PlaneTerm {
-        poses: plane_poses(&c, at),
-        normal: [1.0, 0.0, 0.0],
-        offset: Offset::Known(at),
-        sigma: 0.01,
-    };
+    let plane = plane_on_x(&c, at, Offset::Known(at));
     let rows = plane.poses.len();
     let bare = run(Problem::new(nominal(), data.clone(), model.clone()).unwrap());
     let with = run(Problem::new(nominal(), data, model)
@@ -254,19 +262,16 @@ fn offset_fit(limit: f64) -> (CalibrationReport, f64) {
     };
     let at = plane_x(&c);
     let mut problem = Problem::new(nominal(), data, model).unwrap();
-    let offset = problem.add_block(Scalar {
-        name: "plane.offset".into(),
-        unit: Unit::Length,
-        start: at + 2.0,
-        tolerance: None,
-        limit: Some(limit),
-    });
-    let plane = PlaneTerm {
-        poses: plane_poses(&c, at),
-        normal: [1.0, 0.0, 0.0],
-        offset: Offset::Fitted(offset),
-        sigma: 0.01,
-    };
+    let offset = problem
+        .add_block(Scalar {
+            name: "plane.offset".into(),
+            unit: Unit::Length,
+            start: at + 2.0,
+            tolerance: None,
+            limit: Some(limit),
+        })
+        .unwrap();
+    let plane = plane_on_x(&c, at, Offset::Fitted(offset));
     (run(problem.with_term(plane)), at)
 }
 
@@ -324,4 +329,83 @@ fn a_block_beyond_its_limits_is_refused_by_name() {
         "{reasons}"
     );
     assert_eq!(report.calibration.checks.implausible_blocks.len(), 1);
+}
+
+/// A block held at its start is not fitted: the plane's offset, measured
+/// elsewhere, stays where it was put (0.5 mm off the true plane here, so a
+/// fit would move it), and the report says it was held and why.
+#[test]
+fn a_held_block_stays_at_its_start() {
+    let c = campaign(3);
+    let model = ModelOptions {
+        noise: stated(),
+        ..ModelOptions::default()
+    };
+    let at = plane_x(&c);
+    let mut problem = Problem::new(nominal(), c.data_set().unwrap(), model).unwrap();
+    let offset = problem
+        .add_block(Scalar {
+            name: "plane.offset".into(),
+            unit: Unit::Length,
+            start: at + 0.5,
+            tolerance: None,
+            limit: None,
+        })
+        .unwrap();
+    problem.hold_block(offset);
+    let plane = plane_on_x(&c, at, Offset::Fitted(offset));
+    let report = run(problem.with_term(plane));
+    let e = &report.calibration.auxiliary[0];
+    assert_eq!((e.calibrated, e.sigma), (at + 0.5, None));
+    let why = e.fixed.as_deref().unwrap_or_default();
+    assert!(why.contains("held at its start"), "{why}");
+}
+
+/// With the arm's compliance fitted (`--compliance`), the plane term sees
+/// it: its gradient on the correction columns is not zero and agrees with
+/// its cost's (the public gradient checker), and a stated compliance moves
+/// its residuals. It read the bare chain before and saw neither.
+#[test]
+fn the_plane_term_sees_the_arms_compliance() {
+    use aacmm_core::corrections::{Beyond, Mass, Physics};
+    use aacmm_core::objective::{CheckOptions, check_gradients};
+    let c = campaign(0);
+    let data = c.data_set().unwrap();
+    let physics = Physics {
+        link_masses: vec![Some(Mass::at_middle(2.0)); 6],
+        probe_mass: Some(Mass::at_middle(0.5)),
+        ..Physics::default()
+    };
+    let beyond = Beyond {
+        compliance: vec![1, 2],
+        ..Beyond::default()
+    };
+    let params = nominal().params;
+    let layout =
+        aacmm_core::residuals::positions::layout_with(&params, &data, &physics, &beyond).unwrap();
+    let at = plane_x(&c);
+    let plane = plane_on_x(&c, at, Offset::Known(at));
+    let x = layout.start();
+    let free: Vec<usize> = (0..layout.len()).collect();
+    let objective = Objective::new(layout.clone(), vec![Box::new(plane)], 1);
+    let check = check_gradients(&objective, &x, &free, &CheckOptions::default()).unwrap();
+    assert!(check.passed(), "{check}");
+    let beyond = (check.terms[0].blocks.iter())
+        .find(|b| b.block == "beyond")
+        .unwrap();
+    assert!(beyond.analytic.abs() > 1.0, "{check}");
+    // A compliance of 10 µrad/(N·m) on joints 2 and 3 moves the cost.
+    let (a, b) = layout
+        .corrections()
+        .map(|(_, cols)| (cols.start, cols.end))
+        .unwrap();
+    let mut bent = x.clone();
+    bent[a..b].iter_mut().for_each(|v| *v = 10.0);
+    let cost = |x: &[f64]| objective.cost(x, &free, &mut Vec::new()).unwrap();
+    assert!(
+        (cost(&bent) - cost(&x)).abs() > 1.0,
+        "{} {}",
+        cost(&bent),
+        cost(&x)
+    );
 }

@@ -21,7 +21,7 @@ use crate::identify::{Identification, strong_correlations};
 use crate::kernel::ArmKernel;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind, wrap};
-use crate::residuals::Normal;
+use crate::residuals::{Normal, Role};
 use crate::stats::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 
 /// Largest relative change of the weights at the solution, against those of
@@ -37,6 +37,7 @@ const MAX_SIGMA_REFITS: usize = 6;
 #[derive(Clone, Debug)]
 struct TermCount {
     name: String,
+    role: Role,
     rows: usize,
     eliminated: usize,
     /// Its weights are in units of an estimated σ.
@@ -60,6 +61,7 @@ impl Counts {
                 .terms()
                 .map(|t| TermCount {
                     name: t.name().to_string(),
+                    role: t.role(),
                     rows: t.rows(free),
                     eliminated: t.eliminated(),
                     unit: t.unit_weighted(),
@@ -89,11 +91,11 @@ impl Counts {
         self.residuals().saturating_sub(self.unknowns()).max(1)
     }
 
-    /// The rows of the term named `name`.
-    fn rows_of(&self, name: &str) -> usize {
+    /// The rows of the terms of role `role`.
+    fn rows_of(&self, role: Role) -> usize {
         self.terms
             .iter()
-            .filter(|t| t.name == name)
+            .filter(|t| t.role == role)
             .map(|t| t.rows)
             .sum()
     }
@@ -131,25 +133,25 @@ impl Counts {
     /// touch σ `unit_sigma` (from the stated noise when `stated`).
     fn report(&self, sigma0: f64, unit_sigma: f64, stated: bool) -> Dof {
         Dof {
-            touch_rows: self.rows_of("touches"),
-            length_rows: self.rows_of("lengths"),
+            touch_rows: self.rows_of(Role::Touches),
+            length_rows: self.rows_of(Role::Lengths),
             free_parameters: self.free,
             centre_coordinates: self.eliminated(),
             degrees_of_freedom: self.dof(),
             sigma0,
             touch_sigma_mm: unit_sigma,
             touch_sigma_estimated: !stated,
-            prior_rows: self.rows_of("prior"),
+            prior_rows: self.rows_of(Role::Prior),
             other_rows: self.other_rows(),
         }
     }
 
     /// The rows of the terms that are neither touches, lengths nor the
-    /// prior, by name.
+    /// prior (by role), by name.
     fn other_rows(&self) -> Vec<TermRows> {
         self.terms
             .iter()
-            .filter(|t| !["touches", "lengths", "prior"].contains(&t.name.as_str()))
+            .filter(|t| ![Role::Touches, Role::Lengths, Role::Prior].contains(&t.role))
             .map(|t| TermRows {
                 term: t.name.clone(),
                 rows: t.rows,
@@ -629,9 +631,13 @@ fn implausible_blocks(fit: &Fit<'_>, setup: &Setup<'_>) -> Vec<String> {
 
 /// Every observation's standardised squared residual in units of its own
 /// σ — the stated noise, or (estimated) the fit's, robustly: the median of
-/// a χ²₃ variable is 2.366, and a few outliers do not move a median.
+/// a χ²₃ variable is 2.366 (other row counts taken in its units), and a
+/// few outliers do not move a median.
 #[inline(never)] // a stage of its own in profiles (README, "Measured speed")
-fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, CalibrationError> {
+fn standardised(
+    fit: &Fit<'_>,
+    setup: &Setup<'_>,
+) -> Result<crate::objective::Observed, CalibrationError> {
     // The full leverage: the normal matrix of the weights the objective has
     // now (rescaled by 1/σ² without them when the weights are still unit).
     let scale = if fit.unit_weights {
@@ -643,14 +649,14 @@ fn standardised(fit: &Fit<'_>, setup: &Setup<'_>) -> Result<Vec<f64>, Calibratio
     let mut t2 = fit.objective.standardised(&fit.x, leverage.as_ref())?;
     if let Some((_, w)) = &fit.robust {
         // In units of the observation's own σ, not of its robust weight.
-        t2.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
+        t2.values.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
     }
     if !setup.stated {
-        let mut sorted = t2.clone();
+        let mut sorted = t2.as_three_rows();
         let m = sorted.len() / 2;
         let median = crate::stats::kth_smallest(&mut sorted, m).unwrap_or(1.0);
         let s2 = (median / 2.366).max(f64::MIN_POSITIVE);
-        t2.iter_mut().for_each(|v| *v /= s2);
+        t2.values.iter_mut().for_each(|v| *v /= s2);
     }
     Ok(t2)
 }

@@ -333,24 +333,35 @@ impl OutlierScreen {
     }
 }
 
-/// The family-wise false-alarm rate of the outlier test: a touch is named
-/// when its standardised squared residual exceeds the `χ²₃` quantile at
-/// `1 − OUTLIER_ALPHA / touches` (Bonferroni), so a campaign without
-/// outliers names one with this probability.
+/// The family-wise false-alarm rate of the outlier test: an observation
+/// of `k` rows is named when its standardised squared residual exceeds the
+/// `χ²_k` quantile at `1 − OUTLIER_ALPHA / observations` (Bonferroni), so a
+/// campaign without outliers names one with this probability.
 pub(crate) const OUTLIER_ALPHA: f64 = 0.01;
 
-/// The observations (touches) whose standardised squared residual
-/// (`scaled`: already divided by `σ0²` when the noise was estimated)
-/// exceeds the Bonferroni threshold, largest first.
+/// The observations whose standardised squared residual (`scaled`: already
+/// divided by `σ0²` when the noise was estimated) exceeds the Bonferroni
+/// threshold of its row count, largest first; and the threshold, in σ, of
+/// the first observation's row count (the touches', when there are any).
 pub(crate) fn outliers(
     objective: &crate::objective::Objective<'_>,
-    scaled: &[f64],
+    scaled: &crate::objective::Observed,
 ) -> (f64, Vec<Outlier>) {
-    let alpha = OUTLIER_ALPHA / scaled.len().max(1) as f64;
-    let threshold = crate::stats::chi_square_upper_quantile(alpha, 3);
+    let alpha = OUTLIER_ALPHA / scaled.values.len().max(1) as f64;
+    // One quantile per row count present.
+    let mut thresholds: Vec<(usize, f64)> = Vec::new();
+    let mut threshold = |k: usize| match thresholds.iter().find(|(r, _)| *r == k) {
+        Some(&(_, t)) => t,
+        None => {
+            let t = crate::stats::chi_square_upper_quantile(alpha, k);
+            thresholds.push((k, t));
+            t
+        }
+    };
+    let first = threshold(scaled.rows.first().copied().unwrap_or(3));
     let mut found: Vec<Outlier> = Vec::new();
-    for (i, &s) in scaled.iter().enumerate() {
-        if s > threshold {
+    for (i, (&s, &k)) in scaled.values.iter().zip(&scaled.rows).enumerate() {
+        if s > threshold(k) {
             let origin = objective.origin(i);
             found.push(Outlier {
                 at: origin.at,
@@ -360,7 +371,7 @@ pub(crate) fn outliers(
         }
     }
     found.sort_by(|a, b| b.standardised.total_cmp(&a.standardised));
-    (threshold.sqrt(), found)
+    (first.sqrt(), found)
 }
 
 /// How well the data determine the calibrated arm where it was used: the

@@ -707,7 +707,7 @@ impl<'a, 'o> Search<'a, 'o> {
         phase.cost_evaluations += out.phase.cost_evaluations;
         phase.jacobian_evaluations += out.phase.jacobian_evaluations + out.fit.passes + 2;
         phase.seconds += timer.elapsed().as_secs_f64();
-        if !out.fit.within_floor(self.options.noise_floor_k) {
+        if !out.within_floor(self.options.noise_floor_k) {
             return Ok(None);
         }
         let fit = out.last;

@@ -245,6 +245,10 @@ impl From<TermError> for CalibrationError {
         match e {
             TermError::Kernel(k) => CalibrationError::Kernel(k),
             TermError::Invalid { term, message } => CalibrationError::Term { term, message },
+            TermError::Layout(e) => CalibrationError::Term {
+                term: "layout".to_string(),
+                message: e.to_string(),
+            },
         }
     }
 }
@@ -839,7 +843,8 @@ pub fn calibrate_with(
         reasons,
         holds,
     } = fixed_set(start, &objective, model, &full, data)?;
-    let (free, held) = correction_columns(&full, layout, free)?;
+    let (mut free, mut held) = correction_columns(&full, layout, free)?;
+    hold_blocks(layout, &mut free, &mut held);
     let (carried, holds) =
         complete_prior(&mut objective, identification.as_ref(), holds, start, &x0);
     if free.is_empty() {
@@ -981,6 +986,26 @@ fn fixed_set(
         reasons,
         holds,
     })
+}
+
+/// Takes the columns of the blocks the layout holds ([`Layout::hold`]) out
+/// of `free`, each with why in `held`.
+///
+/// [`Layout::hold`]: crate::residuals::Layout::hold
+fn hold_blocks(
+    layout: &crate::residuals::Layout,
+    free: &mut Vec<usize>,
+    held: &mut Vec<(usize, String)>,
+) {
+    for c in layout.held_columns() {
+        if let Some(at) = free.iter().position(|&f| f == c) {
+            free.remove(at);
+            held.push((
+                c,
+                "held at its start: the problem holds its block".to_string(),
+            ));
+        }
+    }
 }
 
 /// What the automatic fixed set adds to the prior: the tolerances of the

@@ -21,6 +21,14 @@
 //!   with the last refit's normal matrix), so each `u_i²` is about `χ²₃`
 //!   with no global dof factor. A few outliers do not move a median;
 //!   `σ̂ ≈ 1` when the weights (the stated noise) are right.
+//! - **Observations of any row count**: a term's observation of `k` rows
+//!   (a distance is one, a pose six) has `u² ≈ χ²_k`. Its loss is on its
+//!   own `k`-dimensional norm (`z = u/σ̂`); the scale's median takes each
+//!   `u²` in a touch's units (times `m₃/m_k`, `m_k` the median of `χ²_k`),
+//!   the median test uses the mean density of those laws, the sandwich's
+//!   terms are `ψ²/k` and `((k − 1)w + ψ')/k`, and the outlier test holds
+//!   each against the `χ²_k` quantile. The default constants are tuned for
+//!   `k = 3`; all-touch campaigns give the same bits as before.
 //! - **Losses**: Huber, `w = min(1, k/z)`; Cauchy, `w = 1/(1 + (z/k)²)`.
 //!   The usual constants 1.345 and 2.385 give 95 % efficiency under
 //!   Gaussian noise for a *scalar* residual; on a 3-D residual norm they
@@ -92,8 +100,8 @@ pub const DOWNWEIGHTED: f64 = 0.25;
 /// The smallest weight a touch gets (so that its matrix stays invertible
 /// in sums; a Cauchy weight of a touch thousands of σ off would underflow).
 pub(crate) const MIN_WEIGHT: f64 = 1e-9;
-/// Median of `χ²₃`.
-const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
+use crate::objective::Observed;
+use crate::stats::CHI2_3_MEDIAN;
 
 /// The loss of a robust fit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -185,17 +193,19 @@ impl Loss {
         }
     }
 
-    /// The sandwich's terms of a touch at `z`: `ψ²/3` (its score's
-    /// variance) and the curvature weight `b = (2w + ψ')/3` (module
-    /// documentation); 0 and the smallest weight for a `z` not a number.
-    pub(crate) fn sandwich_terms(self, z: f64, k: f64) -> (f64, f64) {
+    /// The sandwich's terms of an observation of `rows` rows at `z`:
+    /// `ψ²/d` (its score's variance) and the curvature weight
+    /// `b = ((d − 1)w + ψ')/d`, `d = rows` (module documentation: a touch's
+    /// `d` is 3); 0 and the smallest weight for a `z` not a number.
+    pub(crate) fn sandwich_terms(self, z: f64, k: f64, rows: usize) -> (f64, f64) {
+        let d = rows.max(1) as f64;
         if !z.is_finite() {
-            return (if z.is_nan() { 0.0 } else { k * k / 3.0 }, MIN_WEIGHT);
+            return (if z.is_nan() { 0.0 } else { k * k / d }, MIN_WEIGHT);
         }
         let w = self.weight(z, k);
         let psi = z * w;
-        let b = (2.0 * w + self.slope(z, k)) / 3.0;
-        (psi * psi / 3.0, b.max(MIN_WEIGHT))
+        let b = ((d - 1.0) * w + self.slope(z, k)) / d;
+        (psi * psi / d, b.max(MIN_WEIGHT))
     }
 }
 
@@ -355,6 +365,8 @@ pub(crate) struct Irls<'a> {
     pub(crate) phase: Phase,
     /// The report.
     pub(crate) fit: RobustFit,
+    /// Rows per observation (what law each standardised residual has).
+    rows: Vec<usize>,
     /// The normal equations under the curvature weights `b`: the
     /// sandwich's `J̃ᵀ B J̃`.
     pub(crate) curvature: Normal,
@@ -368,10 +380,17 @@ fn base_standardised(
     base: &Objective<'_>,
     w: &[f64],
     normal: &Normal,
-) -> Result<Vec<f64>, CalibrationError> {
+) -> Result<Observed, CalibrationError> {
     let leverage = ParameterLeverage::of(normal, 1.0);
-    let t2 = (base.with_observation_weights(w)).standardised(x, leverage.as_ref())?;
-    Ok(t2.iter().zip(w).map(|(t, w)| t / w).collect())
+    let mut t2 = (base.with_observation_weights(w)).standardised(x, leverage.as_ref())?;
+    t2.values.iter_mut().zip(w).for_each(|(t, w)| *t /= w);
+    Ok(t2)
+}
+
+/// `σ̂²` of the standardised residuals: their median in a three-row
+/// observation's units over the median of `χ²₃` (module documentation).
+fn scale_of(u2: &Observed) -> f64 {
+    (median(&u2.as_three_rows()) / CHI2_3_MEDIAN).max(f64::MIN_POSITIVE)
 }
 
 /// IRLS from `x` (the solver's minimum under `base`, whose normal
@@ -389,9 +408,9 @@ pub(crate) fn irls<'a>(
 ) -> Result<Irls<'a>, CalibrationError> {
     let timer = std::time::Instant::now();
     let n = base.observations();
-    let scale_of = |u2: &[f64]| (median(u2) / CHI2_3_MEDIAN).max(f64::MIN_POSITIVE);
-    let weights_of = |u2: &[f64], s2: f64| -> Vec<f64> {
-        u2.iter()
+    // Each observation's loss on its own k-dimensional norm.
+    let weights_of = |u2: &Observed, s2: f64| -> Vec<f64> {
+        (u2.values.iter())
             .map(|&q| robust.loss.weight((q.max(0.0) / s2).sqrt(), robust.scale_k))
             .collect()
     };
@@ -428,12 +447,12 @@ pub(crate) fn irls<'a>(
     let last = last.expect("at least one refit ran");
     // The scale at the end, under the weights the last refit used.
     let u2 = base_standardised(&x, base, &w, &last.normal)?;
-    let median_u2 = median(&u2);
+    let median_u2 = median(&u2.as_three_rows());
     let scale = scale_of(&u2).sqrt();
     let (sandwich, curvature) = sandwich(robust, (&u2, scale, ratio), (&x, base, free))?;
     let (p_upper, p_lower, verdict) = if stated && n > 0 {
-        // The sample median of χ²₃ against its asymptotic normal law.
-        let z = (median_u2 - CHI2_3_MEDIAN) / median_sd(n);
+        // The sample median (in χ²₃'s units) against its asymptotic law.
+        let z = (median_u2 - CHI2_3_MEDIAN) / median_sd(&u2.rows);
         let p_upper = crate::stats::normal_upper(z);
         let p_lower = crate::stats::normal_upper(-z);
         let verdict = ChiSquareVerdict::from_tails(p_upper, p_lower);
@@ -457,6 +476,7 @@ pub(crate) fn irls<'a>(
         touch_weights: w,
         last,
         phase,
+        rows: u2.rows,
         fit: RobustFit {
             loss: robust.loss,
             scale_k: robust.scale_k,
@@ -473,22 +493,34 @@ pub(crate) fn irls<'a>(
     })
 }
 
-/// The standard deviation of the sample median of `n` draws of `χ²₃`
-/// (asymptotically normal about [`CHI2_3_MEDIAN`]): `1/(2 f₃(m) √n)`.
-fn median_sd(n: usize) -> f64 {
-    let density =
-        CHI2_3_MEDIAN.sqrt() * (-CHI2_3_MEDIAN / 2.0).exp() / (2.0 * std::f64::consts::PI).sqrt();
+/// The standard deviation of the sample median of the standardised
+/// residuals of observations of `rows` rows each, in a three-row
+/// observation's units ([`Observed::as_three_rows`]; asymptotically normal
+/// about [`CHI2_3_MEDIAN`]): `1/(2 f̄ √n)`, `f̄` the mean density there —
+/// `f₃(m₃)` for touches, `f_k(m_k) m_k/m₃` for a `k`-row observation.
+fn median_sd(rows: &[usize]) -> f64 {
+    let n = rows.len();
+    let density = if rows.iter().all(|&k| k == 3) {
+        CHI2_3_MEDIAN.sqrt() * (-CHI2_3_MEDIAN / 2.0).exp() / (2.0 * std::f64::consts::PI).sqrt()
+    } else {
+        let at = |k: usize| {
+            let m = crate::stats::chi_square_median(k);
+            crate::stats::chi_square_density(m, k) * m / CHI2_3_MEDIAN
+        };
+        rows.iter().map(|&k| at(k)).sum::<f64>() / n.max(1) as f64
+    };
     1.0 / (2.0 * density * (n as f64).sqrt())
 }
 
-impl RobustFit {
+impl Irls<'_> {
     /// Whether the robust scale is within `k` standard deviations of the
     /// stated noise's (the median test's `z`): the robust counterpart of
     /// the global method's noise floor for χ² (`k` of its standard
     /// deviations).
     pub(crate) fn within_floor(&self, k: f64) -> bool {
-        let n = self.weights.len();
-        let z = (self.scale * self.scale * CHI2_3_MEDIAN - CHI2_3_MEDIAN) / median_sd(n);
+        let n = self.rows.len();
+        let scale = self.fit.scale;
+        let z = (scale * scale * CHI2_3_MEDIAN - CHI2_3_MEDIAN) / median_sd(&self.rows);
         n > 0 && z.abs() <= k
     }
 }
@@ -498,15 +530,14 @@ impl RobustFit {
 /// end, the robust scale and the unknowns per row (module documentation).
 fn sandwich(
     robust: Robust,
-    (u2, scale, ratio): (&[f64], f64, f64),
+    (u2, scale, ratio): (&Observed, f64, f64),
     (x, base, free): (&[f64], &Objective<'_>, &[usize]),
 ) -> Result<(f64, Normal), CalibrationError> {
     let (mut score, mut curve, mut curve2) = (0.0, 0.0, 0.0);
-    let b: Vec<f64> = u2
-        .iter()
-        .map(|&q| {
+    let b: Vec<f64> = (u2.values.iter().zip(&u2.rows))
+        .map(|(&q, &rows)| {
             let z = q.max(0.0).sqrt() / scale;
-            let (psi2, b) = robust.loss.sandwich_terms(z, robust.scale_k);
+            let (psi2, b) = robust.loss.sandwich_terms(z, robust.scale_k, rows);
             score += psi2;
             curve += b;
             curve2 += b * b;

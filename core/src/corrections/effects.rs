@@ -165,6 +165,26 @@ impl Effects {
     /// order when the correction block is its first.
     #[inline(always)]
     pub fn extend(&self, i: usize, pos: &[f64; 3], jac: &[[f64; 3]], out: &mut Vec<[f64; 3]>) {
+        self.extend_rows(i, pos, jac, out);
+    }
+
+    /// [`Effects::extend`] of a tool pose's `6 × (4n+3)` Jacobian (position
+    /// rows, then rotation rows): a joint's correction turns the tool as
+    /// the joint does; an expansion and a drift move its position only.
+    #[inline(always)]
+    pub fn extend_pose(&self, i: usize, pos: &[f64; 3], jac: &[[f64; 6]], out: &mut Vec<[f64; 6]>) {
+        self.extend_rows(i, pos, jac, out);
+    }
+
+    /// [`Effects::extend`] of a Jacobian of `N` rows, the position's first.
+    #[inline(always)]
+    fn extend_rows<const N: usize>(
+        &self,
+        i: usize,
+        pos: &[f64; 3],
+        jac: &[[f64; N]],
+        out: &mut Vec<[f64; N]>,
+    ) {
         out.clear();
         out.extend_from_slice(jac);
         let m = self.kinds.len();
@@ -172,7 +192,9 @@ impl Effects {
         for (kind, &f) in self.kinds.iter().zip(&self.factors[i * m..(i + 1) * m]) {
             out.push(match *kind {
                 Kind::Joint(c) => jac[c].map(|v| f * v),
-                Kind::Expansion => std::array::from_fn(|r| f * (pos[r] - offset[r])),
+                Kind::Expansion => {
+                    std::array::from_fn(|r| if r < 3 { f * (pos[r] - offset[r]) } else { 0.0 })
+                }
                 Kind::Axis(a) => std::array::from_fn(|r| if r == a { f } else { 0.0 }),
             });
         }

@@ -69,10 +69,6 @@ impl Block for CorrectionBlock {
         self.fit.len()
     }
 
-    fn corrections(&self) -> Option<&CorrectionBlock> {
-        Some(self)
-    }
-
     fn implausible(&self, _start: &[f64], x: &[f64]) -> Option<String> {
         let names = self.parameters();
         // No real joint gives a tenth of a degree per N·m, no encoder errs

@@ -82,6 +82,21 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
         self.parameters().len()
     }
 
+    /// Values the block stores ([`Block::start`]'s length): its ambient
+    /// size. A layout keeps one column per value, so it refuses a block
+    /// whose ambient and tangent sizes differ ([`LayoutError::Sizes`]); a
+    /// frame stores its rotation as a rotation vector for that reason.
+    fn ambient_len(&self) -> usize {
+        self.len()
+    }
+
+    /// The local update's dimension ([`Block::plus`]'s `delta`,
+    /// [`Block::minus`]'s result): its tangent size, the columns a fit
+    /// steps (6 for a frame).
+    fn tangent_len(&self) -> usize {
+        self.len()
+    }
+
     /// Whether the block has no column.
     fn is_empty(&self) -> bool {
         self.len() == 0
@@ -92,6 +107,28 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
         for ((o, v), d) in out.iter_mut().zip(x).zip(delta) {
             *o = v + d;
         }
+    }
+
+    /// `y ⊟ x` into `out`: the step that takes `x` to `y`, the inverse of
+    /// [`Block::plus`] (`x ⊞ (y ⊟ x) = y`, `(x ⊞ δ) ⊟ x = δ` for a small
+    /// enough `δ`). The default subtracts.
+    fn minus(&self, y: &[f64], x: &[f64], out: &mut [f64]) {
+        for ((o, a), b) in out.iter_mut().zip(y).zip(x) {
+            *o = a - b;
+        }
+    }
+
+    /// Column `i`'s bounds `(low, high)`, if it has any (mm, rad, or its
+    /// unit): a value no real instrument can take (a negative mass, a
+    /// compliance below zero). After every step the layout **clamps** a
+    /// value beyond a bound onto it ([`Layout::plus`]), rather than
+    /// refusing the step: a solver's trial step that overshoots is then
+    /// still a point it can evaluate, and the fit ends on the bound if the
+    /// data pull it there — [`Layout::on_bounds`] names such columns, so
+    /// that a result on its bound is said to be one.
+    fn bounds(&self, i: usize) -> Option<(f64, f64)> {
+        let _ = i;
+        None
     }
 
     /// The stated tolerance (1σ) of column `i`, if any: a prior row.
@@ -105,12 +142,6 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// names the block or its column.
     fn implausible(&self, start: &[f64], x: &[f64]) -> Option<String> {
         let _ = (start, x);
-        None
-    }
-
-    /// The block as the corrections beyond geometry, if it is them: the
-    /// terms read every pose through it ([`crate::corrections`]).
-    fn corrections(&self) -> Option<&super::CorrectionBlock> {
         None
     }
 
@@ -131,6 +162,56 @@ dyn_clone::clone_trait_object!(Block);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct BlockId(usize);
 
+/// Why a block cannot join a layout.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LayoutError {
+    /// The corrections beyond geometry come right after the geometry (a
+    /// pose's Jacobian over the arm is the chain's columns, then theirs),
+    /// once.
+    #[error(
+        "block `{block}`: the corrections beyond geometry must be the layout's first block, \
+         and only one"
+    )]
+    CorrectionsNotFirst {
+        /// The block refused.
+        block: String,
+    },
+    /// Two blocks of one name: the name finds a block.
+    #[error("block `{block}`: the layout already has a block of that name")]
+    Duplicate {
+        /// The block refused.
+        block: String,
+    },
+    /// A block whose values, columns and steps are not of one size.
+    #[error(
+        "block `{block}`: {values} start values, {ambient} stored and {tangent} step columns, \
+         {names} names: the layout keeps one column per value"
+    )]
+    Sizes {
+        /// The block refused.
+        block: String,
+        /// Its start values.
+        values: usize,
+        /// Its ambient size.
+        ambient: usize,
+        /// Its tangent size.
+        tangent: usize,
+        /// Its columns' names.
+        names: usize,
+    },
+    /// A bound that is not an interval of numbers, or a start outside it.
+    #[error("block `{block}`, column {column}: {why}")]
+    Bounds {
+        /// The block refused.
+        block: String,
+        /// The column's name.
+        column: String,
+        /// What is wrong.
+        why: String,
+    },
+}
+
 /// Where every column is: the geometry's, then each auxiliary block's.
 #[derive(Clone, Debug)]
 pub struct Layout {
@@ -138,6 +219,10 @@ pub struct Layout {
     blocks: Vec<Box<dyn Block>>,
     /// First column of each block.
     starts: Vec<usize>,
+    /// The corrections beyond geometry, when the first block is them.
+    corrections: Option<super::CorrectionBlock>,
+    /// Blocks held at their start values (no column of theirs is fitted).
+    held: Vec<BlockId>,
 }
 
 impl Layout {
@@ -148,22 +233,92 @@ impl Layout {
             geometry,
             blocks: Vec::new(),
             starts: Vec::new(),
+            corrections: None,
+            held: Vec::new(),
         }
     }
 
     /// Appends `block`'s columns; returns where they are.
     ///
-    /// # Panics
+    /// ```
+    /// use aacmm_core::residuals::{Frame, Layout, LayoutError};
+    /// let mut layout = Layout::new(aacmm_core::DhParams::paper_nominal());
+    /// layout.add(Box::new(Frame::identity("tracker"))).unwrap();
+    /// let twice = layout.add(Box::new(Frame::identity("tracker")));
+    /// assert!(matches!(twice, Err(LayoutError::Duplicate { .. })));
+    /// ```
     ///
-    /// A correction block after another block (it must come first).
-    pub fn add(&mut self, block: Box<dyn Block>) -> BlockId {
-        assert!(
-            block.corrections().is_none() || self.blocks.is_empty(),
-            "the corrections are the layout's first block"
-        );
+    /// # Errors
+    ///
+    /// A name already in the layout, sizes that disagree (start values,
+    /// names, ambient and tangent sizes), bounds that are not an interval
+    /// or do not hold the start.
+    pub fn add(&mut self, block: Box<dyn Block>) -> Result<BlockId, LayoutError> {
+        check_block(&*block)?;
+        if self.block_named(block.name()).is_some() {
+            return Err(LayoutError::Duplicate {
+                block: block.name().to_string(),
+            });
+        }
         self.starts.push(self.len());
         self.blocks.push(block);
-        BlockId(self.blocks.len() - 1)
+        Ok(BlockId(self.blocks.len() - 1))
+    }
+
+    /// Adds the corrections beyond geometry: the layout's first block, read
+    /// by every term that moves the tool ([`super::At::effects`]).
+    ///
+    /// # Errors
+    ///
+    /// Another block already in the layout (the corrections' columns come
+    /// right after the geometry's), and [`Layout::add`]'s.
+    pub fn add_corrections(
+        &mut self,
+        block: super::CorrectionBlock,
+    ) -> Result<BlockId, LayoutError> {
+        if !self.blocks.is_empty() {
+            return Err(LayoutError::CorrectionsNotFirst {
+                block: block.name().to_string(),
+            });
+        }
+        let id = self.add(Box::new(block.clone()))?;
+        self.corrections = Some(block);
+        Ok(id)
+    }
+
+    /// Holds block `id` at its start values: none of its columns is fitted
+    /// (the fit's free columns leave them out, and the report says they
+    /// were held and why). A known instrument pose, a plane whose offset
+    /// was measured elsewhere.
+    pub fn hold(&mut self, id: BlockId) {
+        if !self.held.contains(&id) {
+            self.held.push(id);
+        }
+    }
+
+    /// The columns of the blocks held at their start ([`Layout::hold`]),
+    /// in order.
+    pub fn held_columns(&self) -> Vec<usize> {
+        let mut cols: Vec<usize> = self.held.iter().flat_map(|&id| self.columns(id)).collect();
+        cols.sort_unstable();
+        cols
+    }
+
+    /// The columns of `x` that sit on one of their bounds
+    /// ([`Block::bounds`]): name and value.
+    pub fn on_bounds(&self, x: &[f64]) -> Vec<(String, f64)> {
+        let mut out = Vec::new();
+        for (b, block) in self.blocks.iter().enumerate() {
+            for (i, p) in block.parameters().into_iter().enumerate() {
+                let c = self.starts[b] + i;
+                if let (Some((lo, hi)), Some(&v)) = (block.bounds(i), x.get(c))
+                    && (v <= lo || v >= hi)
+                {
+                    out.push((p.name, v));
+                }
+            }
+        }
+        out
     }
 
     /// The start arm: the geometry's models and start values.
@@ -191,7 +346,7 @@ impl Layout {
     /// a pose's Jacobian over the arm is the chain's columns and then
     /// theirs).
     pub fn corrections(&self) -> Option<(&super::CorrectionBlock, Range<usize>)> {
-        let block = self.blocks.first()?.corrections()?;
+        let block = self.corrections.as_ref()?;
         Some((block, self.columns(BlockId(0))))
     }
 
@@ -271,7 +426,8 @@ impl Layout {
 
     /// `x` moved by `delta` over the columns `free` (`delta[k]` for column
     /// `free[k]`): the geometry's columns add, each auxiliary block takes
-    /// its own local update (its fixed columns a zero step).
+    /// its own local update (its fixed columns a zero step), and a value
+    /// beyond its column's bounds is clamped onto them ([`Block::bounds`]).
     pub fn plus(&self, x: &[f64], free: &[usize], delta: &[f64]) -> Vec<f64> {
         let mut out = x.to_vec();
         let geometry = self.geometry_columns();
@@ -297,11 +453,53 @@ impl Layout {
                 }
             }
             if moved {
-                block.plus(&x[cols.clone()], &step, &mut out[cols]);
+                block.plus(&x[cols.clone()], &step, &mut out[cols.clone()]);
+                for (i, v) in out[cols].iter_mut().enumerate() {
+                    if let Some((lo, hi)) = block.bounds(i) {
+                        *v = v.clamp(lo, hi);
+                    }
+                }
             }
         }
         out
     }
+}
+
+/// A block's sizes agree, and its bounds are intervals holding its start.
+fn check_block(block: &dyn Block) -> Result<(), LayoutError> {
+    let start = block.start();
+    let names = block.parameters();
+    let (ambient, tangent) = (block.ambient_len(), block.tangent_len());
+    if [start.len(), names.len(), ambient, tangent]
+        .iter()
+        .any(|&n| n != block.len())
+    {
+        return Err(LayoutError::Sizes {
+            block: block.name().to_string(),
+            values: start.len(),
+            ambient,
+            tangent,
+            names: names.len(),
+        });
+    }
+    for (i, (p, &v)) in names.iter().zip(&start).enumerate() {
+        let Some((lo, hi)) = block.bounds(i) else {
+            continue;
+        };
+        let why = if lo.is_nan() || hi.is_nan() || lo >= hi {
+            format!("bounds {lo}..{hi} are not an interval")
+        } else if !(lo..=hi).contains(&v) {
+            format!("starts at {v}, outside its bounds {lo}..{hi}")
+        } else {
+            continue;
+        };
+        return Err(LayoutError::Bounds {
+            block: block.name().to_string(),
+            column: p.name.clone(),
+            why,
+        });
+    }
+    Ok(())
 }
 
 /// One unknown number: a plane's offset, a scale, a compliance.
@@ -596,6 +794,11 @@ impl Block for Frame {
         ))
     }
 
+    /// `δω = log(R_y R_xᵀ)`, `δt = t_y − t_x` ([`Frame::difference`]).
+    fn minus(&self, y: &[f64], x: &[f64], out: &mut [f64]) {
+        out[..6].copy_from_slice(&Frame::difference(x, y));
+    }
+
     /// `R ← exp(δω) R`, `t ← t + δt`.
     fn plus(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
         let r = Frame::rotation(delta) * Frame::rotation(x);
@@ -680,14 +883,16 @@ mod tests {
     #[test]
     fn the_layout_places_and_moves_blocks() {
         let mut layout = Layout::new(DhParams::paper_nominal());
-        let s = layout.add(Box::new(Scalar {
-            name: "offset".into(),
-            unit: Unit::Length,
-            start: 3.0,
-            tolerance: None,
-            limit: None,
-        }));
-        let f = layout.add(Box::new(Frame::identity("tracker")));
+        let s = layout
+            .add(Box::new(Scalar {
+                name: "offset".into(),
+                unit: Unit::Length,
+                start: 3.0,
+                tolerance: None,
+                limit: None,
+            }))
+            .unwrap();
+        let f = layout.add(Box::new(Frame::identity("tracker"))).unwrap();
         assert_eq!(layout.columns(s), 27..28);
         assert_eq!(layout.columns(f), 28..34);
         assert_eq!(layout.len(), 34);
@@ -700,5 +905,149 @@ mod tests {
         assert!((moved[30] - 0.1).abs() < 1e-15 && moved[28] == 0.0);
         assert_eq!(moved[33], -2.0);
         assert_eq!(moved[1..27], x[1..27]);
+    }
+
+    /// `minus` undoes `plus`: `(x ⊞ δ) ⊟ x = δ` and `x ⊞ (y ⊟ x) = y`, to
+    /// 1e-12, for frames near the identity and turned by more than a right
+    /// angle, with steps small and large.
+    #[test]
+    fn a_frames_minus_undoes_its_plus() {
+        let frame = Frame::identity("f");
+        for x in [
+            [0.0; 6],
+            [0.3, -0.2, 0.1, 5.0, -7.0, 2.0],
+            [1.9, 0.4, -1.2, 100.0, 0.0, -50.0],
+        ] {
+            for d in [
+                [1e-9, 0.0, -2e-9, 1e-6, 0.0, 0.0],
+                [0.01, -0.02, 0.03, 1.0, 2.0, -3.0],
+                [0.7, 0.2, -0.5, -40.0, 10.0, 5.0],
+            ] {
+                let (mut y, mut back, mut again) = ([0.0; 6], [0.0; 6], [0.0; 6]);
+                frame.plus(&x, &d, &mut y);
+                frame.minus(&y, &x, &mut back);
+                for k in 0..6 {
+                    assert!((back[k] - d[k]).abs() < 1e-12, "{x:?} ⊞ {d:?}: {back:?}");
+                }
+                // The same frame, to the rounding of its storage: a
+                // rotation vector of angle θ is read back from a matrix
+                // through 1/sin θ, which near π (θ = 3.12 here) amplifies
+                // the matrix's rounding fiftyfold.
+                frame.plus(&x, &back, &mut again);
+                let th = (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]).sqrt();
+                let storage = 1e-12 * (0.1 / th.sin().abs()).max(1.0);
+                let apart = Frame::difference(&y, &again);
+                assert!(
+                    apart.iter().all(|v| v.abs() < storage),
+                    "{again:?} vs {y:?}"
+                );
+            }
+        }
+        // The default (adding) update's minus subtracts.
+        let s = Scalar {
+            name: "s".into(),
+            unit: Unit::Length,
+            start: 0.0,
+            tolerance: None,
+            limit: None,
+        };
+        let mut out = [0.0];
+        s.minus(&[5.5], &[2.0], &mut out);
+        assert_eq!(out, [3.5]);
+    }
+
+    /// A mass: one column bounded below by 0 (and above by 100 kg).
+    #[derive(Clone, Debug)]
+    struct Mass {
+        start: f64,
+        names: usize,
+    }
+
+    impl Block for Mass {
+        fn name(&self) -> &str {
+            "mass"
+        }
+        fn parameters(&self) -> Vec<Parameter> {
+            let p = Parameter {
+                name: "mass.kg".into(),
+                unit: Unit::Other("kg".into()),
+            };
+            vec![p; self.names]
+        }
+        fn start(&self) -> Vec<f64> {
+            vec![self.start]
+        }
+        fn len(&self) -> usize {
+            1
+        }
+        fn bounds(&self, _i: usize) -> Option<(f64, f64)> {
+            Some((0.0, 100.0))
+        }
+    }
+
+    /// The layout refuses, with a typed error naming the block, what it
+    /// used to panic on or take silently; it clamps a bounded column onto
+    /// its bound, says so, and holds a block's columns when asked.
+    #[test]
+    fn the_layout_refuses_by_name_and_clamps_to_bounds() {
+        let nominal = DhParams::paper_nominal();
+        let corrections = || super::super::CorrectionBlock {
+            fit: crate::corrections::Beyond {
+                harmonics: vec![(0, 1)],
+                ..Default::default()
+            },
+            physics: crate::corrections::Physics::default(),
+            joints: 6,
+            prismatic: 0,
+        };
+        let mut layout = Layout::new(nominal.clone());
+        let frame = layout.add(Box::new(Frame::identity("tracker"))).unwrap();
+        assert_eq!(
+            layout.add_corrections(corrections()),
+            Err(LayoutError::CorrectionsNotFirst {
+                block: "beyond".into()
+            })
+        );
+        assert!(matches!(
+            layout.add(Box::new(Frame::identity("tracker"))),
+            Err(LayoutError::Duplicate { block }) if block == "tracker"
+        ));
+        let two_names = layout.add(Box::new(Mass {
+            start: 1.0,
+            names: 2,
+        }));
+        assert!(matches!(
+            two_names,
+            Err(LayoutError::Sizes { names: 2, .. })
+        ));
+        let outside = layout.add(Box::new(Mass {
+            start: -1.0,
+            names: 1,
+        }));
+        let e = outside.unwrap_err();
+        assert!(e.to_string().contains("mass.kg: starts at -1"), "{e}");
+        let mass = layout
+            .add(Box::new(Mass {
+                start: 1.0,
+                names: 1,
+            }))
+            .unwrap();
+        let c = layout.columns(mass).start;
+        let x = layout.start();
+        let below = layout.plus(&x, &[c], &[-3.0]);
+        assert_eq!(below[c], 0.0);
+        assert_eq!(layout.on_bounds(&below), [("mass.kg".to_string(), 0.0)]);
+        assert!(layout.on_bounds(&layout.plus(&x, &[c], &[2.0])).is_empty());
+        // The corrections first, found by position, not by downcast.
+        let mut first = Layout::new(nominal);
+        let id = first.add_corrections(corrections()).unwrap();
+        let (block, cols) = first.corrections().unwrap();
+        assert_eq!((block.joints, cols), (6, first.columns(id)));
+        assert!(layout.corrections().is_none());
+        // Holding a block: its columns are the held ones.
+        assert!(layout.held_columns().is_empty());
+        layout.hold(frame);
+        layout.hold(frame);
+        assert_eq!(layout.held_columns(), (27..33).collect::<Vec<_>>());
     }
 }

@@ -113,8 +113,8 @@ impl Term for HoldTerm {
 
     /// Not data: left out of what the data alone see, added where the
     /// prior is.
-    fn is_prior(&self) -> bool {
-        true
+    fn role(&self) -> super::Role {
+        super::Role::Held
     }
 
     /// A row per held direction (its columns are free by construction).

@@ -133,6 +133,10 @@ impl Term for LengthTerm<'_> {
         "lengths"
     }
 
+    fn role(&self) -> super::Role {
+        super::Role::Lengths
+    }
+
     fn rows(&self, _free: &[usize]) -> usize {
         self.data.references().len()
     }

@@ -74,7 +74,7 @@ use crate::kernel::{ArmKernel, KernelError};
 use crate::params::DhParams;
 
 pub use beyond::{BLOCK_NAME, CorrectionBlock};
-pub use blocks::{Block, BlockId, Frame, Layout, Parameter, Scalar, Unit, Vector};
+pub use blocks::{Block, BlockId, Frame, Layout, LayoutError, Parameter, Scalar, Unit, Vector};
 pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
@@ -214,6 +214,9 @@ pub enum TermError {
     /// that are not finite numbers.
     #[error(transparent)]
     Kernel(#[from] KernelError),
+    /// A parameter block the layout cannot take.
+    #[error(transparent)]
+    Layout(#[from] LayoutError),
     /// The term's own inputs cannot be used as they are.
     #[error("{term}: {message}")]
     Invalid {
@@ -283,6 +286,89 @@ impl At<'_> {
         conditions: crate::corrections::Conditions<'_>,
     ) -> Result<Option<crate::corrections::Effects>, TermError> {
         self.corrected(raw, conditions, false)
+    }
+
+    /// The tool's position at every pose of `poses` (a term's readings;
+    /// `conditions`, what was recorded with them) as this point's arm puts
+    /// it, **with the layout's corrections beyond geometry applied**
+    /// (compliance, harmonics, backlash, expansion, drift: as the built-in
+    /// terms see the arm), into `out`, one per pose.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's; a correction whose conditions were not recorded (an
+    /// expansion without temperatures).
+    pub fn tool_positions(
+        &self,
+        poses: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        out: &mut [[f64; 3]],
+    ) -> Result<(), TermError> {
+        let effects = self.corrected_poses(poses, conditions)?;
+        let seen = effects.as_ref().map_or(poses, |e| &e.poses);
+        self.kernel.positions(seen, 0..seen.len(), out)?;
+        Ok(())
+    }
+
+    /// Calls `f(i, position, jacobian)` for every pose `i` of `range`, in
+    /// order: the tool's position with the corrections applied
+    /// ([`At::tool_positions`]) and its Jacobian over the arm's columns —
+    /// `jacobian[c] = ∂p/∂x_c` for every column `c` below
+    /// [`Layout::arm_columns`], the geometry's and then the corrections'.
+    /// A term that reads the tool through this cannot forget the
+    /// corrections.
+    ///
+    /// # Errors
+    ///
+    /// As [`At::tool_positions`].
+    pub fn for_each_tool(
+        &self,
+        poses: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
+    ) -> Result<(), TermError> {
+        let effects = self.effects(poses, conditions)?;
+        let seen = effects.as_ref().map_or(poses, |e| &e.poses);
+        let mut ext = Vec::new();
+        self.kernel
+            .for_each_jacobian(seen, range, |i, p, jac| match &effects {
+                Some(e) => {
+                    e.extend(i, p, jac, &mut ext);
+                    f(i, p, &ext);
+                }
+                None => f(i, p, jac),
+            })?;
+        Ok(())
+    }
+
+    /// [`At::for_each_tool`] of the tool's whole pose (its frame: position
+    /// and orientation, [`crate::kernel::Pose`]) and its `6`-row Jacobian
+    /// (position rows, then rotation rows) over the arm's columns, the
+    /// corrections applied: what a term of 6-D targets reads.
+    ///
+    /// # Errors
+    ///
+    /// As [`At::tool_positions`].
+    pub fn for_each_tool_pose(
+        &self,
+        poses: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        range: std::ops::Range<usize>,
+        mut f: impl FnMut(usize, &crate::kernel::Pose, &[[f64; 6]]),
+    ) -> Result<(), TermError> {
+        let effects = self.effects(poses, conditions)?;
+        let seen = effects.as_ref().map_or(poses, |e| &e.poses);
+        let mut ext = Vec::new();
+        self.kernel
+            .for_each_pose_jacobian(seen, range, |i, t, jac| match &effects {
+                Some(e) => {
+                    e.extend_pose(i, &t.position, jac, &mut ext);
+                    f(i, t, &ext);
+                }
+                None => f(i, t, jac),
+            })?;
+        Ok(())
     }
 
     /// [`At::effects`], with the factors of the fitted columns when
@@ -511,6 +597,35 @@ pub struct Origin {
     pub group: String,
 }
 
+/// What a term is to the pipeline: the built-in kinds it reports and
+/// treats by kind (the touches' and lengths' rows in the degrees of
+/// freedom, the prior a tolerance study replaces), or another kind of
+/// evidence. A term says its role; the pipeline never compares names, so a
+/// term of any name is what its role says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum Role {
+    /// Same-point touches (the built-in touch term).
+    Touches,
+    /// Reference lengths between the touches' points.
+    Lengths,
+    /// Reference positions in an instrument's frame.
+    Positions,
+    /// Stated tolerances as pseudo-observations: prior knowledge, not data.
+    Prior,
+    /// Weak directions held at nominal: prior knowledge, not data.
+    Held,
+    /// Any other evidence (a term written outside the library).
+    Other,
+}
+
+impl Role {
+    /// Whether a term of this role is prior knowledge rather than data.
+    pub fn is_prior(self) -> bool {
+        matches!(self, Role::Prior | Role::Held)
+    }
+}
+
 /// One kind of evidence in the least squares: whitened residual rows on the
 /// parameter blocks' columns.
 ///
@@ -523,13 +638,22 @@ pub struct Origin {
 /// (its [`Shared::centres`]) comes after the touches.
 pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Short name, for reports: `touches`, `lengths`, `prior`, `plane`.
+    /// Only words: what the pipeline does with a term follows its
+    /// [`Term::role`].
     fn name(&self) -> &str;
+
+    /// What the term is to the pipeline; [`Role::Other`] unless it is one
+    /// of the built-in kinds.
+    fn role(&self) -> Role {
+        Role::Other
+    }
 
     /// Whether this is prior knowledge rather than data: left out of the
     /// data's cost (the start arm's cost, the grid of the global search)
-    /// and, in the covariance, not rescaled by the fit's σ̂.
+    /// and, in the covariance, not rescaled by the fit's σ̂. By default,
+    /// as its role says ([`Role::is_prior`]).
     fn is_prior(&self) -> bool {
-        false
+        self.role().is_prior()
     }
 
     /// Whitened residual rows over the free columns `free` (a prior has a

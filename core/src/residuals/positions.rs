@@ -119,7 +119,7 @@ pub fn register(params: &DhParams, data: &PositionData) -> Result<Vec<Registrati
 /// # Errors
 ///
 /// The kernel's.
-pub fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, KernelError> {
+pub fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, TermError> {
     layout_with(params, data, &Physics::default(), &Beyond::default())
 }
 
@@ -130,25 +130,26 @@ pub fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, KernelErr
 ///
 /// # Errors
 ///
-/// The kernel's. A stated correction whose conditions `data` lack (an
-/// expansion without temperatures) is left out of the frames' start; the
-/// session refuses such data first.
+/// The kernel's; a frame named as the corrections' block
+/// ([`super::BLOCK_NAME`]) beside them. A stated correction whose
+/// conditions `data` lack (an expansion without temperatures) is left out
+/// of the frames' start; the session refuses such data first.
 pub fn layout_with(
     params: &DhParams,
     data: &DataSet,
     physics: &Physics,
     fit: &Beyond,
-) -> Result<Layout, KernelError> {
+) -> Result<Layout, TermError> {
     let mut layout = Layout::new(params.clone());
     // Masses alone change no position: no block (and no cost) without a
     // model fitted or a correction stated.
     if !fit.is_empty() || physics.corrects() {
-        layout.add(Box::new(CorrectionBlock {
+        layout.add_corrections(CorrectionBlock {
             fit: fit.clone(),
             physics: physics.clone(),
             joints: params.joint_count(),
             prismatic: params.shape().map_or(0, |s| s.prismatic_mask()),
-        }));
+        })?;
     }
     // The frames' start through the stated corrections (a copy of the data
     // only when there are any).
@@ -166,7 +167,7 @@ pub fn layout_with(
             layout.add(Box::new(Frame {
                 name: name.clone(),
                 start: reg.x,
-            }));
+            }))?;
         }
     }
     Ok(layout)
@@ -300,6 +301,10 @@ struct Part {
 impl Term for PositionTerm<'_> {
     fn name(&self) -> &str {
         "positions"
+    }
+
+    fn role(&self) -> super::Role {
+        super::Role::Positions
     }
 
     fn rows(&self, _free: &[usize]) -> usize {

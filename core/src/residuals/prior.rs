@@ -97,8 +97,8 @@ impl Term for PriorTerm {
         "prior"
     }
 
-    fn is_prior(&self) -> bool {
-        true
+    fn role(&self) -> super::Role {
+        super::Role::Prior
     }
 
     /// A row per free column with a tolerance.

@@ -415,3 +415,104 @@ fn the_full_leverage_is_the_hat_matrix_block() {
     }
     assert!((total - (3 * k + q) as f64).abs() < 1e-9, "{total}");
 }
+
+/// The tool's whole pose through the corrections: its position and the
+/// position rows of its Jacobian are the tool position's, and each
+/// correction column's rows (rotation too) are the derivative of the tool
+/// pose along that column.
+#[test]
+fn the_tool_pose_carries_the_corrections() {
+    use crate::corrections::{Beyond, Conditions, Mass, Physics};
+    let arm = DhParams::paper_nominal();
+    let q: Vec<Vec<f64>> = (0..5)
+        .map(|i| (0..6).map(|j| ((i * 6 + j) as f64 * 0.37).sin()).collect())
+        .collect();
+    let poses = crate::kernel::PreparedPoses::new(6, &q).unwrap();
+    let physics = Physics {
+        link_masses: vec![Some(Mass::at_middle(2.0)); 6],
+        ..Physics::default()
+    };
+    let beyond = Beyond {
+        compliance: vec![1],
+        harmonics: vec![(0, 1)],
+        ..Beyond::default()
+    };
+    let text = "point,q1,q2,q3,q4,q5,q6\nA,0,0,0,0,0,0\nA,0.1,0,0,0,0,0\nA,0.2,0,0,0,0,0\n";
+    let (touches, _) = parse_poses(text, "p.csv", AngleUnit::Rad, Some(6)).unwrap();
+    let data = DataSet::from_poses(&touches, "p.csv").unwrap();
+    let layout = super::positions::layout_with(&arm, &data, &physics, &beyond).unwrap();
+    let mut x = layout.start();
+    let (_, cols) = layout.corrections().unwrap();
+    x[cols.clone()].copy_from_slice(&[50.0, 1e-4, -2e-4]);
+    let with = |x: &[f64], f: &mut dyn FnMut(&At<'_>)| {
+        let arm = layout.arm(x).unwrap();
+        let kernel = ArmKernel::new(&arm).unwrap();
+        f(&At {
+            x,
+            arm: &arm,
+            kernel: &kernel,
+            layout: &layout,
+            threads: 1,
+        });
+    };
+    let none = Conditions::default();
+    let mut tools = Vec::new();
+    with(&x, &mut |at| {
+        at.for_each_tool_pose(&poses, none, 0..5, |_, t, jac| {
+            tools.push((*t, jac.to_vec()))
+        })
+        .unwrap();
+        let mut p = vec![[0.0; 3]; 5];
+        at.tool_positions(&poses, none, &mut p).unwrap();
+        let mut k = 0;
+        at.for_each_tool(&poses, none, 0..5, |i, pos, jac| {
+            assert_eq!(jac.len(), layout.arm_columns());
+            assert!((0..3).all(|r| (pos[r] - p[i][r]).abs() < 1e-9));
+            assert!((0..3).all(|r| (tools[i].0.position[r] - pos[r]).abs() < 1e-9));
+            for (c, col) in jac.iter().enumerate() {
+                assert!(
+                    (0..3).all(|r| (tools[i].1[c][r] - col[r]).abs() < 1e-9),
+                    "{c}"
+                );
+            }
+            k += 1;
+        })
+        .unwrap();
+        assert_eq!(k, 5);
+    });
+    // Each correction column's six rows against central differences of the
+    // tool pose (position, and the small rotation R' Rᵀ).
+    for c in cols {
+        let h = 1e-6 * x[c].abs().max(1.0);
+        let moved = |d: f64| {
+            let mut y = x.clone();
+            y[c] += d;
+            let mut out = Vec::new();
+            with(&y, &mut |at| {
+                at.for_each_tool_pose(&poses, none, 0..5, |_, t, _| out.push(*t))
+                    .unwrap();
+            });
+            out
+        };
+        let (up, down) = (moved(h), moved(-h));
+        for i in 0..5 {
+            let m = |t: &crate::kernel::Pose| nalgebra::Matrix3::from_fn(|r, s| t.rotation[r][s]);
+            let turn = (m(&up[i]) * m(&down[i]).transpose()).map(|v| v / (2.0 * h));
+            let numeric = [
+                (up[i].position[0] - down[i].position[0]) / (2.0 * h),
+                (up[i].position[1] - down[i].position[1]) / (2.0 * h),
+                (up[i].position[2] - down[i].position[2]) / (2.0 * h),
+                turn[(2, 1)],
+                turn[(0, 2)],
+                turn[(1, 0)],
+            ];
+            let analytic = tools[i].1[c];
+            for r in 0..6 {
+                assert!(
+                    (numeric[r] - analytic[r]).abs() < 1e-5 * (1.0 + analytic[r].abs()),
+                    "pose {i}, column {c}, row {r}: {numeric:?} vs {analytic:?}"
+                );
+            }
+        }
+    }
+}

@@ -387,6 +387,10 @@ impl Term for TouchTerm<'_> {
         "touches"
     }
 
+    fn role(&self) -> super::Role {
+        super::Role::Touches
+    }
+
     fn rows(&self, _free: &[usize]) -> usize {
         3 * self.data.len()
     }

@@ -218,9 +218,25 @@ impl Problem {
 
     /// Adds an auxiliary parameter block (a frame, a scalar) after the
     /// geometry and the blocks added before; returns where its columns are,
-    /// for the terms that use it. Every column of it is fitted.
-    pub fn add_block(&mut self, block: impl Block + 'static) -> BlockId {
+    /// for the terms that use it. Every column of it is fitted unless the
+    /// block is held ([`Problem::hold_block`]).
+    ///
+    /// # Errors
+    ///
+    /// As [`crate::residuals::Layout::add`]: a name already taken (a
+    /// frame of the positions file's), sizes or bounds that disagree.
+    pub fn add_block(
+        &mut self,
+        block: impl Block + 'static,
+    ) -> Result<BlockId, crate::residuals::LayoutError> {
         self.layout.add(Box::new(block))
+    }
+
+    /// Holds block `id` at its start values: its columns are not fitted,
+    /// and the report says so (a frame measured elsewhere, a plane whose
+    /// offset is known).
+    pub fn hold_block(&mut self, id: BlockId) {
+        self.layout.hold(id);
     }
 
     /// Adds a residual term of the caller's (a new kind of measurement),

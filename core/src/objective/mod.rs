@@ -13,13 +13,53 @@
 //! are added in that order, so the same inputs give the same bits on any
 //! thread count.
 
+mod check;
+
+pub use check::{BlockCheck, CheckOptions, GradientCheck, TermCheck, check_gradients};
+
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::residuals::{
-    At, Layout, LengthTerm, Noise, Normal, Origin, PositionTerm, PriorTerm, Sees, Shared, Term,
-    TermError, TouchTerm,
+    At, Layout, LengthTerm, Noise, Normal, Origin, PositionTerm, PriorTerm, Role, Sees, Shared,
+    Term, TermError, TouchTerm,
 };
 use crate::tolerances::Tolerances;
+
+/// Every observation's standardised squared residual and its row count,
+/// in [`Objective::observations`]' order: a `k`-row observation's value is
+/// about `χ²_k` when it fits the noise model, so the robust loss weighs it
+/// on its `k`-dimensional norm and the outlier test holds it against the
+/// `χ²_k` quantile.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Observed {
+    /// Per observation, `rᵀ A r / (1 − h)`.
+    pub values: Vec<f64>,
+    /// Per observation, its rows `k`.
+    pub rows: Vec<usize>,
+}
+
+impl Observed {
+    /// Each value in the units of a three-row observation's law: times
+    /// `m₃/m_k` (`m_k` the median of `χ²_k`; exactly 1 for three rows), so
+    /// that one median serves observations of any row count.
+    pub(crate) fn as_three_rows(&self) -> Vec<f64> {
+        let mut factor: Vec<f64> = Vec::new();
+        (self.values.iter().zip(&self.rows))
+            .map(|(&v, &k)| {
+                if k == 3 {
+                    return v;
+                }
+                if factor.len() <= k {
+                    factor.resize(k + 1, f64::NAN);
+                }
+                if factor[k].is_nan() {
+                    factor[k] = crate::stats::CHI2_3_MEDIAN / crate::stats::chi_square_median(k);
+                }
+                v * factor[k]
+            })
+            .collect()
+    }
+}
 
 /// The terms of a calibration on the columns of a layout, with the worker
 /// threads their sums may use.
@@ -27,8 +67,9 @@ use crate::tolerances::Tolerances;
 pub struct Objective<'a> {
     layout: Layout,
     terms: Vec<Box<dyn Term + 'a>>,
-    /// The prior among the terms, for its report.
-    prior: Option<PriorTerm>,
+    /// The prior of the stated tolerances, for its report, and its index
+    /// among the terms (the one [`Objective::set_prior`] replaces).
+    prior: Option<(PriorTerm, usize)>,
     threads: usize,
 }
 
@@ -77,10 +118,10 @@ impl<'a> Objective<'a> {
         }
         terms.extend(extra);
         let start = layout.start();
-        let prior = PriorTerm::new(tolerances, &layout, &start);
-        if let Some(prior) = &prior {
+        let prior = PriorTerm::new(tolerances, &layout, &start).map(|prior| {
             terms.push(Box::new(prior.clone()));
-        }
+            (prior, terms.len() - 1)
+        });
         let mut objective = Objective::new(layout, terms, threads);
         objective.prior = prior;
         objective.weigh(&start, unit_sigma)?;
@@ -102,9 +143,9 @@ impl<'a> Objective<'a> {
         self.threads
     }
 
-    /// The index of the first term named `name`.
-    pub fn position(&self, name: &str) -> Option<usize> {
-        self.terms.iter().position(|t| t.name() == name)
+    /// The index of the first term of role `role`.
+    pub fn position(&self, role: Role) -> Option<usize> {
+        self.terms.iter().position(|t| t.role() == role)
     }
 
     /// Whether stated tolerances (or an auxiliary block's) apply: a prior
@@ -115,12 +156,14 @@ impl<'a> Objective<'a> {
     }
 
     /// Replaces the prior of the stated tolerances by `prior` (the same
-    /// columns, other tolerances).
+    /// columns, other tolerances): the term this objective put in for
+    /// them, never another (an outside term of any name or role stays).
+    /// Without one, nothing changes.
     pub(crate) fn set_prior(&mut self, prior: PriorTerm) {
-        if let Some(t) = self.terms.iter_mut().find(|t| t.name() == "prior") {
-            *t = Box::new(prior.clone());
+        if let Some((old, at)) = &mut self.prior {
+            self.terms[*at] = Box::new(prior.clone());
+            *old = prior;
         }
-        self.prior = Some(prior);
     }
 
     /// Adds `term` after the others (a fit's held directions).
@@ -130,7 +173,7 @@ impl<'a> Objective<'a> {
 
     /// The prior of the stated tolerances, if any applies.
     pub(crate) fn prior(&self) -> Option<&PriorTerm> {
-        self.prior.as_ref()
+        self.prior.as_ref().map(|(p, _)| p)
     }
 
     /// Every column's start value.
@@ -254,7 +297,8 @@ impl<'a> Objective<'a> {
     }
 
     /// Every observation's standardised squared residual at `x` (each
-    /// about `χ²₃` when it fits the noise model), in
+    /// about `χ²_k` when it fits the noise model, `k` its rows: 3 for a
+    /// touch, 1 for a distance, 6 for a pose), in
     /// [`Objective::observations`]' order; with `leverage` (the inverse of
     /// the normal matrix at these weights), corrected for the free
     /// parameters' share of each observation's leverage as well as for its
@@ -262,30 +306,36 @@ impl<'a> Objective<'a> {
     ///
     /// # Errors
     ///
-    /// The kernel's, and a term whose observations are not of 3 rows (the
-    /// robust loss and the outlier test are calibrated for `χ²₃`).
+    /// The kernel's, and a term whose standardised residuals do not match
+    /// its observations (their count, or no row).
     pub fn standardised(
         &self,
         x: &[f64],
         leverage: Option<&crate::residuals::ParameterLeverage>,
-    ) -> Result<Vec<f64>, TermError> {
+    ) -> Result<Observed, TermError> {
         self.at(x, |at| {
-            let mut out = Vec::with_capacity(self.observations());
+            let mut out = Observed {
+                values: Vec::with_capacity(self.observations()),
+                rows: Vec::with_capacity(self.observations()),
+            };
             for (_, term) in self.observing() {
                 let Some(s) = term.standardised(at, leverage)? else {
                     continue;
                 };
-                if s.rows != 3 {
+                if s.rows == 0 || s.values.len() != term.observations() {
                     return Err(TermError::invalid(
                         term.name(),
                         format!(
-                            "observations of {} rows: the robust loss and the outlier test \
-                             are for 3-D observations",
-                            s.rows
+                            "{} standardised residuals of {} rows for {} observations: one \
+                             per observation, of at least one row",
+                            s.values.len(),
+                            s.rows,
+                            term.observations()
                         ),
                     ));
                 }
-                out.extend(s.values);
+                out.rows.extend(std::iter::repeat_n(s.rows, s.values.len()));
+                out.values.extend(s.values);
             }
             Ok(out)
         })
@@ -431,6 +481,53 @@ impl<'a> Objective<'a> {
         self.cost_of(x, &[], scratch, |t| !t.is_prior())
     }
 
+    /// Each term's gradient `Jᵀr` over `free` (as its
+    /// [`Term::accumulate`] writes it, on normal equations of its own) and
+    /// its cost at `x`, in order; the terms pass what they share as in a
+    /// fit.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub(crate) fn term_gradients(
+        &self,
+        x: &[f64],
+        free: &[usize],
+    ) -> Result<Vec<(Vec<f64>, f64)>, TermError> {
+        self.at(x, |at| {
+            let mut shared = Shared {
+                want_centre_jacobians: self.terms.iter().any(|t| t.needs_centre_jacobians()),
+                ..Shared::default()
+            };
+            (self.terms.iter())
+                .map(|term| {
+                    let mut normal = Normal::new(free);
+                    let cost = term.accumulate(at, &mut shared, &mut normal)?;
+                    Ok((normal.jtr, cost))
+                })
+                .collect()
+        })
+    }
+
+    /// Each term's cost at `x` over `free` ([`Term::add_cost`]), in order.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub(crate) fn term_costs(&self, x: &[f64], free: &[usize]) -> Result<Vec<f64>, TermError> {
+        let mut scratch = Vec::new();
+        self.at(x, |at| {
+            let mut shared = Shared::default();
+            (self.terms.iter())
+                .map(|term| {
+                    let mut total = 0.0;
+                    term.add_cost(at, free, &mut shared, &mut scratch, &mut total)?;
+                    Ok(total)
+                })
+                .collect()
+        })
+    }
+
     fn cost_of(
         &self,
         x: &[f64],
@@ -483,4 +580,67 @@ pub fn weighted_cost(
     let layout = crate::residuals::positions::layout_for(weighed_at, data)?;
     let objective = Objective::of_data(layout, data, noise, Vec::new(), None, 1.0, 1)?;
     objective.data_cost(&params.to_vec(), &mut Vec::new())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::residuals::Role;
+
+    /// An outside term that happens to be named `prior`.
+    #[derive(Clone, Debug)]
+    struct NamedPrior;
+
+    impl Term for NamedPrior {
+        fn name(&self) -> &str {
+            "prior"
+        }
+        fn rows(&self, _free: &[usize]) -> usize {
+            1
+        }
+        fn accumulate(&self, _: &At<'_>, _: &mut Shared, _: &mut Normal) -> Result<f64, TermError> {
+            Ok(0.0)
+        }
+        fn add_cost(
+            &self,
+            _: &At<'_>,
+            _: &[usize],
+            _: &mut Shared,
+            _: &mut Vec<[f64; 3]>,
+            _: &mut f64,
+        ) -> Result<(), TermError> {
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn set_prior_replaces_its_own_term_not_one_named_prior() {
+        use crate::simulate::{CampaignSettings, ErrorModel, simulate};
+        let nominal = crate::Arm::without_limits("n", crate::params::DhParams::paper_nominal());
+        let c = simulate(&nominal, &CampaignSettings::new(2, ErrorModel::Paper, 4, 6)).unwrap();
+        let data = c.data_set().unwrap();
+        let layout = crate::residuals::positions::layout_for(&nominal.params, &data).unwrap();
+        let tolerances = |s| Tolerances::parse(s, 6).unwrap().unwrap();
+        let (few, more) = (
+            tolerances("length=0.5mm"),
+            tolerances("length=0.5mm,angle=0.1deg"),
+        );
+        let extra: Vec<Box<dyn Term>> = vec![Box::new(NamedPrior)];
+        let noise = Noise::default();
+        let mut objective =
+            Objective::of_data(layout.clone(), &data, &noise, extra, Some(&few), 1.0, 1).unwrap();
+        let free: Vec<usize> = (0..layout.len()).collect();
+        let rows_of =
+            |o: &Objective<'_>, role| o.terms().find(|t| t.role() == role).unwrap().rows(&free);
+        let before = rows_of(&objective, Role::Prior);
+        let wider = PriorTerm::new(Some(&more), &layout, &layout.start()).unwrap();
+        let wider_rows = wider.rows(&free);
+        assert!(wider_rows > before);
+        objective.set_prior(wider);
+        assert_eq!(rows_of(&objective, Role::Prior), wider_rows);
+        assert_eq!(rows_of(&objective, Role::Other), 1);
+        let other = objective.position(Role::Other).unwrap();
+        assert_eq!(objective.terms().nth(other).unwrap().name(), "prior");
+        assert_eq!(objective.terms().filter(|t| t.name() == "prior").count(), 2);
+    }
 }
