@@ -1264,7 +1264,8 @@ impl CalibrationReport {
             (None, _) if r.touches == 0 && !d.touch_sigma_estimated => {
                 "stated: each row's own uncertainty (the file's `uncertainty` column)".to_string()
             }
-            (None, _) if r.touches == 0 => "not stated: σ is estimated from the fit".to_string(),
+            // The σ's source follows ("estimated from the fit").
+            (None, _) if r.touches == 0 => "not stated".to_string(),
             (None, _) => "no --position-noise: each row's own uncertainty where the file states \
                           one, else a σ estimated from the fit"
                 .to_string(),
