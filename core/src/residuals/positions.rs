@@ -474,8 +474,10 @@ impl Term for PositionTerm<'_> {
             .map(|i| {
                 let r = self.residual(&frames, i, &p[i]);
                 let h = (2.0 / self.per_frame[rows.frame(i)] as f64).min(0.999);
-                let w2 = self.robust[i];
-                (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) / w2.max(f64::MIN_POSITIVE) / (1.0 - h)
+                // At the weights in force, a robust fit's included (its
+                // residual carries `√w`), as a touch's `rᵀAr`: the robust
+                // fit divides by the weight once.
+                (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]) / (1.0 - h)
             })
             .collect();
         Ok(Some(Standardised { rows: 3, values }))
