@@ -335,6 +335,17 @@ impl Positions {
         *self.orientation.last_mut().expect("a row to orient") = q;
     }
 
+    /// These rows with the orientations `orientation` (per row, `[w, x, y,
+    /// z]` or none): a simulation's, or a file's rows re-oriented.
+    ///
+    /// # Panics
+    /// If `orientation` does not hold one entry per row.
+    pub fn with_orientations(mut self, orientation: Vec<Option<[f64; 4]>>) -> Positions {
+        assert_eq!(orientation.len(), self.len(), "one orientation per row");
+        self.orientation = orientation;
+        self
+    }
+
     /// Row `i`'s orientation seen (`[w, x, y, z]`, the tool frame in the
     /// row's frame), when the row gives one.
     pub fn orientation(&self, i: usize) -> Option<[f64; 4]> {
