@@ -107,7 +107,12 @@ pub struct Args {
     orientation: bool,
     /// σ of --orientation per axis, degrees (a tracker's 6-D target's,
     /// 0.01, the default).
-    #[arg(long, value_name = "DEG", requires = "orientation", default_value_t = 0.01)]
+    #[arg(
+        long,
+        value_name = "DEG",
+        requires = "orientation",
+        default_value_t = 0.01
+    )]
     orientation_noise: f64,
     /// A drift of the true arm's base against the instrument over the
     /// session, `X,Y,Z` mm/h (needs --session-hours).
