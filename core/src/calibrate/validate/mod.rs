@@ -43,6 +43,11 @@ pub struct Figures {
     /// The 3-D errors at the reference positions; absent without them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub positions: Option<PositionErrors>,
+    /// The orientation errors at the reference positions that give the
+    /// tool's orientation, **degrees** ([`orientation_errors`]); absent
+    /// without them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientations: Option<PositionErrors>,
 }
 
 /// [`Figures`] as `calibration.json` holds them: the touch fields are
@@ -68,6 +73,8 @@ struct FiguresJson {
     length_max: Option<Option<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     positions: Option<PositionErrors>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    orientations: Option<PositionErrors>,
 }
 
 impl From<Figures> for FiguresJson {
@@ -84,6 +91,7 @@ impl From<Figures> for FiguresJson {
             length_rms: touches.then_some(f.length_rms),
             length_max: touches.then_some(f.length_max),
             positions: f.positions,
+            orientations: f.orientations,
         }
     }
 }
@@ -100,6 +108,7 @@ impl From<FiguresJson> for Figures {
             length_rms: j.length_rms.flatten(),
             length_max: j.length_max.flatten(),
             positions: j.positions,
+            orientations: j.orientations,
         }
     }
 }
@@ -171,6 +180,7 @@ impl Figures {
             length_rms: None,
             length_max: None,
             positions,
+            orientations: None,
         }
     }
 
@@ -330,8 +340,15 @@ pub fn figures_in(
         .positions()
         .map(|p| position_errors(params, p, frames))
         .transpose()?;
+    let orientations = match data.positions() {
+        Some(p) => orientation_errors(params, p, frames)?,
+        None => None,
+    };
     if data.is_empty() {
-        return Ok(Figures::without_touches(positions));
+        return Ok(Figures {
+            orientations,
+            ..Figures::without_touches(positions)
+        });
     }
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
@@ -348,6 +365,7 @@ pub fn figures_in(
         length_rms: ev.reference_summary.map(|s| s.rms),
         length_max: ev.reference_summary.map(|s| s.max_abs),
         positions,
+        orientations,
     })
 }
 
@@ -684,6 +702,7 @@ mod tests {
             length_rms: None,
             length_max: None,
             positions: None,
+            orientations: None,
         }
     }
 
