@@ -267,13 +267,15 @@ fn tracker(
         + &frames_to_toml(&true_frames(&campaign));
     let arm_path = args.out.join(TRUE_ARM_FILE);
     write_file(&arm_path, true_arm.as_bytes())?;
+    let turned = if args.orientation {
+        format!(", orientations {}° per axis", args.orientation_noise)
+    } else {
+        String::new()
+    };
     note(format_args!(
-        "tracker: {poses} poses in each of {} frame(s), noise {a} mm{}{}; seed {}",
+        "tracker: {poses} poses in each of {} frame(s), noise {a} mm{}{turned}; seed {}",
         args.frames,
         b.map(|b| format!(" + {b} mm/m")).unwrap_or_default(),
-        (args.orientation)
-            .then(|| format!(", orientations {}° per axis", args.orientation_noise))
-            .unwrap_or_default(),
         args.seed
     ))?;
     note(format_args!("wrote {}", path.display()))?;
