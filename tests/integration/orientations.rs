@@ -194,20 +194,20 @@ fn simulate_orientations_then_calibrate() {
         "{text}"
     );
     let p = positions.to_str().unwrap();
-    let calibrate = |extra: &[&str], out: &str| {
+    let calibrate = |positions: &str, extra: &[&str], out: &str| {
         let out = dir.join(out);
-        let mut args = vec!["calibrate", "--arm", &arm, "--positions", p];
+        let mut args = vec!["calibrate", "--arm", &arm, "--positions", positions];
         args.extend(["--position-noise", "0.015+0.006/m"]);
         args.extend(extra);
         args.extend(["--out", out.to_str().unwrap()]);
         (aacmm(&args), out)
     };
-    let (o, _) = calibrate(&[], "refused");
+    let (o, _) = calibrate(p, &[], "refused");
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(e.contains("positions.csv:2: fields `qw,qx,qy,qz`"), "{e}");
     assert!(e.contains("--orientation-noise"), "{e}");
-    let (o, out) = calibrate(&["--orientation-noise", "0.01"], "out");
+    let (o, out) = calibrate(p, &["--orientation-noise", "0.01"], "out");
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);
     assert!(text.contains("consistent with the stated noise"), "{text}");
@@ -245,18 +245,7 @@ fn simulate_orientations_then_calibrate() {
         .collect();
     let plain_path = dir.join("plain.csv");
     std::fs::write(&plain_path, plain).unwrap();
-    let out = dir.join("plain");
-    let o = aacmm(&[
-        "calibrate",
-        "--arm",
-        &arm,
-        "--positions",
-        plain_path.to_str().unwrap(),
-        "--position-noise",
-        "0.015+0.006/m",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (o, _) = calibrate(plain_path.to_str().unwrap(), &[], "plain");
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);
     for word in ["Orientation noise", "Tool orientations", "orientations "] {

@@ -120,19 +120,7 @@ impl<'d> OrientationTerm<'d> {
                 ),
             ));
         };
-        let frames = (rows.frames().iter())
-            .map(|name| {
-                layout.block_named(name).ok_or_else(|| {
-                    TermError::invalid(
-                        NAME,
-                        format!(
-                            "frame {} has no block among the columns (a bug, not input)",
-                            crate::error::quoted(name)
-                        ),
-                    )
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let frames = super::positions::frame_blocks(data, layout, NAME)?;
         let mut per_frame = vec![0; frames.len()];
         for &i in &oriented {
             per_frame[rows.frame(i)] += 1;
