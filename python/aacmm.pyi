@@ -278,7 +278,10 @@ class Noise:
     reference length (1/mm; 0 or None: from the uncertainties), and the σ
     per coordinate of a reference position that states none, ``position_mm
     + position_mm_per_m · distance`` (mm, mm per metre from the instrument;
-    a laser tracker's 0.015 and 0.006). Checked by the library when made:
+    a laser tracker's 0.015 and 0.006), and the σ per axis of a tool
+    orientation a positions file gives (``qw,qx,qy,qz``), degrees
+    (``orientation_deg``; a file with orientations needs it). Checked by the
+    library when made:
     ValueError naming the argument (``encoder_deg`` at most 180). Noise so
     large or small that its weights overflow or vanish on the data is a
     ValueError in :func:`identify` and :func:`calibrate` alike."""
@@ -291,6 +294,7 @@ class Noise:
         length_weight: Optional[float] = None,
         position_mm: Optional[float] = None,
         position_mm_per_m: Optional[float] = None,
+        orientation_deg: Optional[float] = None,
     ) -> None: ...
     @property
     def encoder_deg(self) -> Optional[float]: ...
@@ -304,6 +308,8 @@ class Noise:
     def position_mm(self) -> Optional[float]: ...
     @property
     def position_mm_per_m(self) -> Optional[float]: ...
+    @property
+    def orientation_deg(self) -> Optional[float]: ...
     @property
     def stated(self) -> bool:
         """Whether any touch noise is stated."""

@@ -1197,6 +1197,21 @@ AacmmStatus aacmm_calibrate_options_set_position_noise_mm(AacmmCalibrateOptions 
                                                           double b_mm_per_m);
 
 /**
+ * σ per axis of a tool orientation seen (the `qw,qx,qy,qz` columns of a
+ * positions file: a 6-D target's orientation), rad, as the encoder's
+ * (`--orientation-noise`, which is in degrees; a tracker's about 0.01°).
+ * Finite and > 0, or
+ * 0 = not stated (the default: a positions file with orientations is then
+ * refused when calibrating, naming its first oriented row).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_orientation_noise_rad(AacmmCalibrateOptions *options,
+                                                              double rad);
+
+/**
  * Worker threads for the normal equations (`--threads`); 0 = one per
  * core (the default), otherwise at most 1024 (`AACMM_STATUS_INVALID_ARGUMENT`
  * above, the options unchanged). The results do not depend on it.

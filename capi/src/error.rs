@@ -138,13 +138,14 @@ impl From<CalibrationError> for Error {
 /// option as its setter names it (`…_set_probe_noise_mm` sets
 /// `probe_noise_mm`); settings the C API does not expose keep their library
 /// path.
-const OPTIONS: [(&str, &str); 16] = [
+const OPTIONS: [(&str, &str); 17] = [
     ("noise.encoder_rad", "encoder_noise_rad"),
     ("noise.probe_mm", "probe_noise_mm"),
     ("noise.length_default_mm", "length_uncertainty_mm"),
     ("noise.length_weight", "length_weight"),
     ("noise.position_mm", "position_noise a_mm"),
     ("noise.position_mm_per_m", "position_noise b_mm_per_m"),
+    ("noise.orientation_rad", "orientation_noise_rad"),
     ("fix", "fix"),
     ("prior", "prior"),
     ("threads", "threads"),

@@ -78,11 +78,12 @@ pub use options::{
     aacmm_calibrate_options_set_drift, aacmm_calibrate_options_set_encoder_noise_rad,
     aacmm_calibrate_options_set_fix, aacmm_calibrate_options_set_harmonics,
     aacmm_calibrate_options_set_length_uncertainty_mm, aacmm_calibrate_options_set_length_weight,
-    aacmm_calibrate_options_set_method, aacmm_calibrate_options_set_position_noise_mm,
-    aacmm_calibrate_options_set_positions, aacmm_calibrate_options_set_positions_file,
-    aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
-    aacmm_calibrate_options_set_robust, aacmm_calibrate_options_set_seed,
-    aacmm_calibrate_options_set_thermal, aacmm_calibrate_options_set_threads,
+    aacmm_calibrate_options_set_method, aacmm_calibrate_options_set_orientation_noise_rad,
+    aacmm_calibrate_options_set_position_noise_mm, aacmm_calibrate_options_set_positions,
+    aacmm_calibrate_options_set_positions_file, aacmm_calibrate_options_set_prior,
+    aacmm_calibrate_options_set_probe_noise_mm, aacmm_calibrate_options_set_robust,
+    aacmm_calibrate_options_set_seed, aacmm_calibrate_options_set_thermal,
+    aacmm_calibrate_options_set_threads,
 };
 
 /// The library's version (`MAJOR.MINOR.PATCH`, the workspace's version), as

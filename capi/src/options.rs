@@ -518,6 +518,28 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_position_noise_mm(
     })
 }
 
+/// σ per axis of a tool orientation seen (the `qw,qx,qy,qz` columns of a
+/// positions file: a 6-D target's orientation), rad, as the encoder's
+/// (`--orientation-noise`, which is in degrees; a tracker's about 0.01°).
+/// Finite and > 0, or
+/// 0 = not stated (the default: a positions file with orientations is then
+/// refused when calibrating, naming its first oriented row).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_orientation_noise_rad(
+    options: *mut AacmmCalibrateOptions,
+    rad: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        set_noise(o, |n| n.orientation_rad = stated(rad))
+    })
+}
+
 /// 0 = not stated; anything else is left to the library's check (which
 /// refuses negative and non-finite values).
 fn stated(v: f64) -> Option<f64> {
@@ -1079,6 +1101,10 @@ mod tests {
                  constant part too",
             );
             refused(
+                aacmm_calibrate_options_set_orientation_noise_rad(o, -0.01),
+                "orientation_noise_rad = -0.01: must be a finite number > 0",
+            );
+            refused(
                 aacmm_calibrate_options_set_robust(o, 9, 0.0),
                 "robust = 9: one of AACMM_ROBUST_NONE (0)",
             );
@@ -1286,6 +1312,15 @@ mod tests {
         unsafe { aacmm_calibrate_options_set_position_noise_mm(o, 0.0, 0.0) };
         let n = settings(&get(o), &arm).unwrap().model.noise;
         assert_eq!((n.position_mm, n.position_mm_per_m), (None, None));
+        // An orientation σ, rad; 0: not stated.
+        // SAFETY: as above.
+        unsafe { aacmm_calibrate_options_set_orientation_noise_rad(o, 2e-4) };
+        let n = settings(&get(o), &arm).unwrap().model.noise;
+        assert_eq!(n.orientation_rad, Some(2e-4));
+        // SAFETY: as above.
+        unsafe { aacmm_calibrate_options_set_orientation_noise_rad(o, 0.0) };
+        let n = settings(&get(o), &arm).unwrap().model.noise;
+        assert_eq!(n.orientation_rad, None);
         // A 7-joint name passes the setter but not a 6-joint arm.
         // SAFETY: as above.
         unsafe { aacmm_calibrate_options_set_fix(o, c"theta7".as_ptr()) };

@@ -1397,6 +1397,25 @@ mod tests {
     use super::*;
     use crate::io::{AngleUnit, parse_poses};
 
+    /// The orientations a positions file gives travel with its rows: into
+    /// the data set, through a shape that re-prepares the readings, and
+    /// into a subset (a fold).
+    #[test]
+    fn positions_keep_their_orientations() {
+        let text = "point,q1,q2,q3,x,y,z,qw,qx,qy,qz\n\
+                    A,0,1,2,100,0,0,0,1,0,0\n\
+                    B,1,0,2,0,100,0,,,,\n\
+                    C,1,1,2,0,0,100,0,0,0.6,0.8\n";
+        let rows = crate::io::parse_positions(text, "t.csv", AngleUnit::Deg, Some(3)).unwrap();
+        let data = DataSet::from_positions(rows, "t.csv").unwrap();
+        let data = data.for_shape("PRR".parse().unwrap()).unwrap();
+        let p = data.positions().unwrap();
+        assert_eq!(p.rows().orientation(0), Some([0.0, 1.0, 0.0, 0.0]));
+        let fold = p.subset(&[2, 1]);
+        let seen: Vec<_> = (0..2).map(|i| fold.rows().orientation(i)).collect();
+        assert_eq!(seen, [Some([0.0, 0.0, 0.6, 0.8]), None]);
+    }
+
     /// A slide's range is judged in mm against its own threshold: half a
     /// millimetre of carriage (28.6 "degrees" if taken for radians) with
     /// the revolute joints still is no articulation, and says so in mm;

@@ -191,7 +191,7 @@ impl From<aacmm_core::residuals::TermError> for Error {
 
 /// The Python argument of each library setting ([`OptionError::field`])
 /// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 19] = [
+const ARGUMENTS: [(&str, &str); 20] = [
     ("seed", "seed"),
     ("prior", "prior"),
     ("method", "method"),
@@ -202,6 +202,7 @@ const ARGUMENTS: [(&str, &str); 19] = [
     ("noise.length_weight", "length_weight"),
     ("noise.position_mm", "position_mm"),
     ("noise.position_mm_per_m", "position_mm_per_m"),
+    ("noise.orientation_rad", "orientation_deg"),
     ("fix", "fix"),
     ("threads", "threads"),
     ("cross_validate", "cross_validate"),

@@ -18,6 +18,8 @@ use crate::error::Result;
 pub struct Noise {
     pub(crate) noise: CoreNoise,
     encoder_deg: Option<f64>,
+    /// As given (the library keeps rad): its repr and getter show it.
+    orientation_deg: Option<f64>,
 }
 
 impl Noise {
@@ -31,14 +33,27 @@ impl Noise {
         length_weight: Option<f64>,
         position_mm: Option<f64>,
         position_mm_per_m: Option<f64>,
+        orientation_deg: Option<f64>,
     ) -> Result<Noise> {
+        // Judged here in the unit given: the library's check would show
+        // the value in rad under a name in degrees.
+        if let Some(d) = orientation_deg.filter(|d| !(d.is_finite() && *d > 0.0)) {
+            let field = "noise.orientation_rad";
+            let e = aacmm_core::error::OptionError::new(field, d, "must be a finite number > 0");
+            return Err(e.into());
+        }
         let noise = CoreNoise {
             position_mm,
             position_mm_per_m,
+            orientation_rad: orientation_deg.map(f64::to_radians),
             ..user_noise(encoder_deg, probe_mm, length_default_mm, length_weight)
         };
         noise.check()?;
-        Ok(Noise { noise, encoder_deg })
+        Ok(Noise {
+            noise,
+            encoder_deg,
+            orientation_deg,
+        })
     }
 }
 
@@ -52,11 +67,12 @@ impl Noise {
     /// reference position that states no uncertainty, `A + B·distance`
     /// with `A = position_mm` (mm) and `B = position_mm_per_m` (mm per
     /// metre from the instrument; a laser tracker's 0.015 and 0.006; `B`
-    /// needs `A`). Values must be finite and ≥ 0 (`position_mm` > 0), and
+    /// needs `A`); `orientation_deg`: σ per axis of a tool orientation a
+    /// positions file gives (`qw,qx,qy,qz`), degrees (> 0). Values must be finite and ≥ 0 (`position_mm` > 0), and
     /// stated touch noise not 0 on both counts (`ValueError`, from the
     /// library's check).
     #[new]
-    #[pyo3(signature = (encoder_deg = None, probe_mm = None, length_default_mm = DEFAULT_LENGTH_SIGMA_MM, length_weight = None, position_mm = None, position_mm_per_m = None))]
+    #[pyo3(signature = (encoder_deg = None, probe_mm = None, length_default_mm = DEFAULT_LENGTH_SIGMA_MM, length_weight = None, position_mm = None, position_mm_per_m = None, orientation_deg = None))]
     fn new(
         encoder_deg: Option<f64>,
         probe_mm: Option<f64>,
@@ -64,6 +80,7 @@ impl Noise {
         length_weight: Option<f64>,
         position_mm: Option<f64>,
         position_mm_per_m: Option<f64>,
+        orientation_deg: Option<f64>,
     ) -> PyResult<Noise> {
         Ok(Noise::checked(
             encoder_deg,
@@ -72,6 +89,7 @@ impl Noise {
             length_weight,
             position_mm,
             position_mm_per_m,
+            orientation_deg,
         )?)
     }
 
@@ -114,6 +132,13 @@ impl Noise {
         self.noise.position_mm_per_m
     }
 
+    /// σ per axis of a tool orientation seen, degrees (`None`: not
+    /// stated).
+    #[getter]
+    fn orientation_deg(&self) -> Option<f64> {
+        self.orientation_deg
+    }
+
     /// Whether any touch noise is stated.
     #[getter]
     fn stated(&self) -> bool {
@@ -125,13 +150,17 @@ impl Noise {
         let opt = |v: Option<f64>| v.map_or("None".to_string(), |v| format!("{v:?}"));
         format!(
             "Noise(encoder_deg={}, probe_mm={}, length_default_mm={:?}, length_weight={}, \
-             position_mm={}, position_mm_per_m={})",
+             position_mm={}, position_mm_per_m={}{})",
             opt(self.encoder_deg),
             opt(self.noise.probe_mm),
             self.noise.length_default_mm,
             opt(self.noise.length_weight),
             opt(self.noise.position_mm),
-            opt(self.noise.position_mm_per_m)
+            opt(self.noise.position_mm_per_m),
+            // Only when stated: the repr of every noise without it as before.
+            (self.orientation_deg)
+                .map(|o| format!(", orientation_deg={o:?}"))
+                .unwrap_or_default()
         )
     }
 }

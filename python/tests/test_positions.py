@@ -242,6 +242,15 @@ def test_noise_of_positions():
         aacmm.Noise(position_mm_per_m=0.006)
 
 
+def test_noise_of_orientations():
+    n = aacmm.Noise(position_mm=0.015, orientation_deg=0.01)
+    assert n.orientation_deg == 0.01
+    assert repr(n).endswith(", orientation_deg=0.01)")
+    assert aacmm.Noise().orientation_deg is None and "orientation" not in repr(aacmm.Noise())
+    with pytest.raises(ValueError, match="^orientation_deg = -1: must be a finite number > 0$"):
+        aacmm.Noise(orientation_deg=-1)
+
+
 @pytest.fixture
 def good():
     """Readings (rad) and positions of one frame, 5 rows."""

@@ -46,6 +46,11 @@ pub struct FitInput {
     /// the σ is estimated from the fit.
     #[arg(long, value_name = "MM[+MM/m]", value_parser = position_noise)]
     pub position_noise: Option<(f64, Option<f64>)>,
+    /// σ of a tool orientation seen, degrees per axis: what a positions
+    /// file's `qw,qx,qy,qz` columns (a 6-D target's orientation) are
+    /// weighed by. A file with orientations needs it.
+    #[arg(long, value_name = "DEG")]
+    pub orientation_noise: Option<f64>,
     /// σ of each encoder reading, degrees (with --probe-noise: the touch
     /// weights; without either, the touch σ is estimated from the fit).
     #[arg(long, value_name = "DEG")]
@@ -116,6 +121,7 @@ impl FitInput {
         Noise {
             position_mm: self.position_noise.map(|(a, _)| a),
             position_mm_per_m: self.position_noise.and_then(|(_, b)| b),
+            orientation_rad: self.orientation_noise.map(f64::to_radians),
             ..user_noise(
                 self.encoder_noise,
                 self.probe_noise,
@@ -206,7 +212,7 @@ pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 33] = [
+const FLAGS: [(&str, &str); 34] = [
     ("compliance", "--compliance"),
     ("harmonics", "--harmonics"),
     ("backlash", "--backlash"),
@@ -214,6 +220,7 @@ const FLAGS: [(&str, &str); 33] = [
     ("drift", "--drift"),
     ("noise.position_mm", "--position-noise"),
     ("noise.position_mm_per_m", "--position-noise"),
+    ("noise.orientation_rad", "--orientation-noise"),
     ("prior", "--prior"),
     ("method", "--method"),
     ("robust.loss", "--robust"),

@@ -100,6 +100,20 @@ pub struct Args {
     /// presses.
     #[arg(long, requires = "positions")]
     approach: bool,
+    /// The tool's orientation seen too (a 6-D target): written as the
+    /// `qw,qx,qy,qz` columns of positions.csv, the true tool frame in each
+    /// row's frame turned by --orientation-noise.
+    #[arg(long, requires = "positions")]
+    orientation: bool,
+    /// σ of --orientation per axis, degrees (a tracker's 6-D target's,
+    /// 0.01, the default).
+    #[arg(
+        long,
+        value_name = "DEG",
+        requires = "orientation",
+        default_value_t = 0.01
+    )]
+    orientation_noise: f64,
     /// A drift of the true arm's base against the instrument over the
     /// session, `X,Y,Z` mm/h (needs --session-hours).
     #[arg(long, value_name = "X,Y,Z", requires = "session_hours", value_parser = drift_vector)]
@@ -228,7 +242,21 @@ fn tracker(
             Err(e) => return Err(flag_error(e, None)),
         },
     };
-    let campaign = campaign.map_err(|e| anyhow!("--positions: {e}"))?;
+    let mut campaign = campaign.map_err(|e| anyhow!("--positions: {e}"))?;
+    if args.orientation {
+        // Its own stream (the truth has the seed, the positions the next):
+        // the positions are those of a campaign without orientations.
+        let sigma = args.orientation_noise.to_radians();
+        let seed = args.seed.wrapping_add(2);
+        campaign.positions = (aacmm_core::simulate::orient_positions(
+            &truth,
+            &campaign.positions,
+            &campaign.frames,
+            sigma,
+            seed,
+        ))
+        .map_err(|e| anyhow!("--orientation: {e}"))?;
+    }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
     let path = args.out.join(POSITIONS_FILE);
@@ -239,8 +267,13 @@ fn tracker(
         + &frames_to_toml(&true_frames(&campaign));
     let arm_path = args.out.join(TRUE_ARM_FILE);
     write_file(&arm_path, true_arm.as_bytes())?;
+    let turned = if args.orientation {
+        format!(", orientations {}° per axis", args.orientation_noise)
+    } else {
+        String::new()
+    };
     note(format_args!(
-        "tracker: {poses} poses in each of {} frame(s), noise {a} mm{}; seed {}",
+        "tracker: {poses} poses in each of {} frame(s), noise {a} mm{}{turned}; seed {}",
         args.frames,
         b.map(|b| format!(" + {b} mm/m")).unwrap_or_default(),
         args.seed

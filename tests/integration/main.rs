@@ -14,6 +14,7 @@ mod first_cause;
 mod house;
 mod import;
 mod mukca;
+mod orientations;
 mod out_paths;
 mod plan;
 mod plan_cli;

@@ -14,7 +14,7 @@ use aacmm_core::simulate::{
 use aacmm_core::{Calibration, DataSet, ModelOptions, Problem, SolverSettings};
 use rand::SeedableRng;
 
-fn tracker() -> Noise {
+pub(super) fn tracker() -> Noise {
     Noise {
         position_mm: Some(0.015),
         position_mm_per_m: Some(0.006),
@@ -22,7 +22,7 @@ fn tracker() -> Noise {
     }
 }
 
-fn settings(poses: usize, frames: usize, seed: u64) -> PositionSettings {
+pub(super) fn settings(poses: usize, frames: usize, seed: u64) -> PositionSettings {
     PositionSettings {
         poses,
         frames,
@@ -35,7 +35,12 @@ fn settings(poses: usize, frames: usize, seed: u64) -> PositionSettings {
 /// parameters a tracker campaign identifies (the ones `--fix auto` fixes
 /// stay nominal, so every free parameter and frame has a true value to be
 /// compared with) — and its campaign.
-fn campaign(nominal: &Arm, seed: u64, poses: usize, frames: usize) -> (Arm, PositionCampaign) {
+pub(super) fn campaign(
+    nominal: &Arm,
+    seed: u64,
+    poses: usize,
+    frames: usize,
+) -> (Arm, PositionCampaign) {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut truth = true_arm(nominal, &ErrorModel::random(1.0, false), &mut rng).unwrap();
     let first = simulate_positions(&truth, &settings(poses, frames, seed + 1000)).unwrap();
@@ -55,7 +60,7 @@ fn model() -> ModelOptions {
     }
 }
 
-fn lm() -> SolverSettings {
+pub(super) fn lm() -> SolverSettings {
     SolverSettings {
         method: aacmm_core::Method::Lm,
         ..SolverSettings::default()
@@ -148,7 +153,7 @@ fn campaigns_recover_the_truth(seeds: std::ops::Range<u64>) {
 
 /// `((estimate − truth)/σ)²` of every free geometry parameter and of every
 /// frame column (the frame's in its local step: `log(R_true R̂ᵀ)`).
-fn normalised_errors(cal: &Calibration, truth: &Arm, c: &PositionCampaign) -> Vec<f64> {
+pub(super) fn normalised_errors(cal: &Calibration, truth: &Arm, c: &PositionCampaign) -> Vec<f64> {
     let mut out = Vec::new();
     for e in cal.parameters.iter().filter(|e| e.fixed.is_none()) {
         let sigma = e.sigma.expect("a free parameter's σ");

@@ -1,8 +1,8 @@
 //! Reference-position files: where an instrument (a laser tracker, an
 //! optical CMM) saw the probe or target, or the certified centre of an
 //! artefact's sphere the arm touched — CSV with the header
-//! `point,q1,…,qn,x,y,z` and the optional columns `frame`,
-//! `uncertainty`, `temperature`, `time` and `approach`
+//! `point,q1,…,qn,x,y,z` and the optional columns `qw,qx,qy,qz`,
+//! `frame`, `uncertainty`, `temperature`, `time` and `approach`
 //! ([`super::approach`]), in that order.
 //!
 //! ```text
@@ -14,7 +14,11 @@
 //! `x,y,z` are mm in the instrument's (or the artefact placement's) own
 //! frame; every `frame` gets its own unknown rigid registration, found from
 //! the data. Without a `frame` column every row is in one frame named
-//! [`DEFAULT_FRAME`]. `uncertainty` is a standard uncertainty per
+//! [`DEFAULT_FRAME`]. `qw,qx,qy,qz` (all four or none) is the tool's
+//! orientation where the instrument sees it (a 6-D target, a rigid body):
+//! a unit quaternion (length 1 within [`UNIT_QUATERNION_TOLERANCE`]), the
+//! tool frame in the row's frame; a row with the four cells empty has a
+//! position only. `uncertainty` is a standard uncertainty per
 //! coordinate, mm, `> 0`; an empty cell means "not stated" (the noise model
 //! of the command line applies). Rows with the same `point` label in one
 //! frame are the same physical point (a sphere touched in several poses).
@@ -41,6 +45,14 @@ use crate::memory::{OutOfMemory, try_grow};
 /// The frame of a file without a `frame` column.
 pub const DEFAULT_FRAME: &str = "instrument";
 
+/// How far from 1 the length of an orientation's quaternion may be: a
+/// tracker writes unit quaternions to about 1e-9; a larger departure is a
+/// column mix-up or a hand-typed row, refused rather than normalised.
+pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-6;
+
+/// The orientation columns, in the order they follow `x,y,z`.
+const ORIENTATION: [&str; 4] = ["qw", "qx", "qy", "qz"];
+
 /// The fewest positions a frame's registration (six unknowns) can rest on.
 pub const MIN_FRAME_POSITIONS: usize = 3;
 
@@ -64,6 +76,9 @@ pub struct Positions {
     q: Vec<f64>,
     /// Per row, the position seen, mm.
     xyz: Vec<[f64; 3]>,
+    /// Per row, the tool's orientation seen (`[w, x, y, z]`, unit, as
+    /// read), when the row gives one.
+    orientation: Vec<Option<[f64; 4]>>,
     /// Per row, its stated standard uncertainty per coordinate, mm.
     uncertainty: Vec<Option<f64>>,
     /// Per row, its 1-based line.
@@ -89,6 +104,7 @@ impl Positions {
             frame_of: Vec::new(),
             q: Vec::new(),
             xyz: Vec::new(),
+            orientation: Vec::new(),
             uncertainty: Vec::new(),
             lines: Vec::new(),
             temperature: None,
@@ -220,6 +236,7 @@ impl Positions {
         self.frame_of.push(f);
         self.q.extend_from_slice(q);
         self.xyz.push(xyz);
+        self.orientation.push(None);
         self.uncertainty.push(uncertainty);
         self.lines.push(line);
         Ok(())
@@ -234,6 +251,7 @@ impl Positions {
         try_grow(&mut self.frame_of, what, 1)?;
         try_grow(&mut self.q, what, self.joints)?;
         try_grow(&mut self.xyz, what, 1)?;
+        try_grow(&mut self.orientation, what, 1)?;
         try_grow(&mut self.uncertainty, what, 1)?;
         try_grow(&mut self.lines, what, 1)?;
         for c in [&mut self.temperature, &mut self.time]
@@ -307,6 +325,38 @@ impl Positions {
         self.xyz[i]
     }
 
+    /// Sets the last row's orientation seen: the tool frame in the row's
+    /// frame as a quaternion `[w, x, y, z]` (unit: the reader refuses one
+    /// that is not, [`UNIT_QUATERNION_TOLERANCE`]), or none.
+    ///
+    /// # Panics
+    /// If there is no row.
+    pub fn set_orientation(&mut self, q: Option<[f64; 4]>) {
+        *self.orientation.last_mut().expect("a row to orient") = q;
+    }
+
+    /// These rows with the orientations `orientation` (per row, `[w, x, y,
+    /// z]` or none): a simulation's, or a file's rows re-oriented.
+    ///
+    /// # Panics
+    /// If `orientation` does not hold one entry per row.
+    pub fn with_orientations(mut self, orientation: Vec<Option<[f64; 4]>>) -> Positions {
+        assert_eq!(orientation.len(), self.len(), "one orientation per row");
+        self.orientation = orientation;
+        self
+    }
+
+    /// Row `i`'s orientation seen (`[w, x, y, z]`, the tool frame in the
+    /// row's frame), when the row gives one.
+    pub fn orientation(&self, i: usize) -> Option<[f64; 4]> {
+        self.orientation[i]
+    }
+
+    /// How many rows give an orientation.
+    pub fn oriented_rows(&self) -> usize {
+        self.orientation.iter().filter(|o| o.is_some()).count()
+    }
+
     /// Row `i`'s stated uncertainty, mm.
     pub fn uncertainty(&self, i: usize) -> Option<f64> {
         self.uncertainty[i]
@@ -347,6 +397,7 @@ impl Positions {
                 self.uncertainty[i],
                 self.lines[i],
             );
+            out.set_orientation(self.orientation[i]);
             out.record(
                 self.temperature.as_ref().map(|t| t[i]),
                 self.time.as_ref().map(|t| t[i]),
@@ -361,7 +412,8 @@ impl Positions {
 /// Writes positions in the file format, readings in `unit`: deterministic
 /// bytes, numbers in the shortest form that reads back to the same value.
 /// The `frame` column is written unless every row is in [`DEFAULT_FRAME`],
-/// the `uncertainty` column when any row states one.
+/// the `qw,qx,qy,qz` columns when any row gives an orientation, the
+/// `uncertainty` column when any row states one.
 ///
 /// ```
 /// use aacmm_core::io::{AngleUnit, Positions, positions::write_positions};
@@ -378,11 +430,15 @@ impl Positions {
 pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std::io::Result<()> {
     let with_frame = p.frames().iter().any(|f| f != DEFAULT_FRAME);
     let with_u = p.uncertainty.iter().any(Option::is_some);
+    let with_orientation = p.oriented_rows() > 0;
     let mut header = String::from("point");
     for j in 1..=p.joints {
         header.push_str(&format!(",q{j}"));
     }
     header.push_str(",x,y,z");
+    if with_orientation {
+        header.push_str(",qw,qx,qy,qz");
+    }
     if with_frame {
         header.push_str(",frame");
     }
@@ -413,6 +469,15 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
             line.push(',');
             line.push_str(&fmt_f64(v));
         }
+        if with_orientation {
+            match p.orientation(i) {
+                Some(o) => o.iter().for_each(|&v| {
+                    line.push(',');
+                    line.push_str(&fmt_f64(v));
+                }),
+                None => line.push_str(",,,,"),
+            }
+        }
         if with_frame {
             line.push(',');
             line.push_str(&quote(&p.frames()[p.frame(i)])?);
@@ -442,6 +507,8 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
 /// The columns after the joints: `x,y,z` and which optional ones.
 struct Layout {
     joints: usize,
+    /// The column of `qw` (`qx,qy,qz` follow it).
+    orientation: Option<usize>,
     frame: Option<usize>,
     uncertainty: Option<usize>,
     temperature: Option<usize>,
@@ -449,7 +516,8 @@ struct Layout {
     approach: Option<usize>,
 }
 
-const SHAPE: &str = "point,q1,...,qn,x,y,z[,frame][,uncertainty][,temperature][,time][,approach]";
+const SHAPE: &str =
+    "point,q1,...,qn,x,y,z[,qw,qx,qy,qz][,frame][,uncertainty][,temperature][,time][,approach]";
 
 /// Reads a reference-position file (standard input for `-`), readings in
 /// `unit` (a prismatic joint's in mm, [`JointColumns`]); messages name the
@@ -484,9 +552,12 @@ pub fn read_positions(
 ///
 /// # Errors
 ///
-/// A header other than `point,q1,...,qn,x,y,z[,frame][,uncertainty]` (or
-/// another joint count than `expected_joints`), an empty label or frame, a
-/// value that is not a finite number, an uncertainty that is not positive, and a frame with fewer
+/// A header other than `point,q1,...,qn,x,y,z[,qw,qx,qy,qz][,frame][,uncertainty]`
+/// (or another joint count than `expected_joints`, or only some of the
+/// orientation columns), an empty label or frame, a value that is not a
+/// finite number, an uncertainty that is not positive, a row with some but
+/// not all of its orientation cells, a quaternion whose length is not 1
+/// within [`UNIT_QUATERNION_TOLERANCE`], and a frame with fewer
 /// than [`MIN_FRAME_POSITIONS`] rows or with positions on one line (a
 /// registration needs three points that span a plane): each naming the
 /// line and field.
@@ -535,15 +606,20 @@ fn header_layout(
     let (frame, uncertainty) = (optional("frame"), optional("uncertainty"));
     let (temperature, time) = (optional("temperature"), optional("time"));
     let approach = optional(APPROACH);
+    let orientation = orientation_columns(h, file)?;
     let extra = [frame, uncertainty, temperature, time, approach]
         .iter()
         .filter(|c| c.is_some())
-        .count();
+        .count()
+        + 4 * usize::from(orientation);
     let joints = fields.len().saturating_sub(4 + extra);
     let want = expected_joints.unwrap_or(joints);
     let mut expected: Vec<String> = vec!["point".into()];
     expected.extend((1..=want).map(|j| format!("q{j}")));
     expected.extend(["x", "y", "z"].map(String::from));
+    if orientation {
+        expected.extend(ORIENTATION.map(String::from));
+    }
     if frame.is_some() {
         expected.push("frame".into());
     }
@@ -573,12 +649,63 @@ fn header_layout(
     }
     Ok(Layout {
         joints: want,
+        orientation: orientation.then_some(1 + want + 3),
         frame,
         uncertainty,
         temperature,
         time,
         approach,
     })
+}
+
+/// Whether the header has the orientation columns: all four, or none —
+/// some of them is an error naming the first missing.
+fn orientation_columns(h: &Record, file: &str) -> Result<bool, InputError> {
+    let present = ORIENTATION.map(|name| h.fields.iter().any(|f| f == name));
+    match present.iter().position(|&p| !p) {
+        None => Ok(true),
+        Some(_) if !present.contains(&true) => Ok(false),
+        Some(missing) => Err(InputError::field(
+            file,
+            h.line,
+            ORIENTATION[missing],
+            "orientation columns incomplete: a tool's orientation is the four columns \
+             `qw,qx,qy,qz` (a unit quaternion) after `x,y,z`; give all four or none",
+        )),
+    }
+}
+
+/// Row's orientation cells (from column `c`): all four empty is none, a
+/// quaternion of length 1 within [`UNIT_QUATERNION_TOLERANCE`] is read;
+/// anything else an error naming the line and field.
+fn parse_orientation(
+    f: &[&str],
+    c: usize,
+    (file, line): (&str, usize),
+) -> Result<Option<[f64; 4]>, InputError> {
+    let cells = &f[c..c + 4];
+    if cells.iter().all(|s| s.is_empty()) {
+        return Ok(None);
+    }
+    if let Some(k) = cells.iter().position(|s| s.is_empty()) {
+        let message = "empty: an orientation gives all four of `qw,qx,qy,qz` (or none)";
+        return Err(InputError::field(file, line, ORIENTATION[k], message));
+    }
+    let mut q = [0.0; 4];
+    for (k, name) in ORIENTATION.iter().enumerate() {
+        q[k] = parse_f64(cells[k], file, line, name)?;
+    }
+    let length = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+    if (length - 1.0).abs() > UNIT_QUATERNION_TOLERANCE {
+        let message = format!(
+            "the quaternion ({}) has length {length}, not 1 (within \
+             {UNIT_QUATERNION_TOLERANCE}): the orientation must be a unit quaternion, \
+             scalar first",
+            cells.join(", ")
+        );
+        return Err(InputError::field(file, line, "qw,qx,qy,qz", message));
+    }
+    Ok(Some(q))
 }
 
 /// One data row into `out`.
@@ -627,8 +754,13 @@ fn parse_row(
             }
         },
     };
+    let orientation = match l.orientation {
+        Some(c) => parse_orientation(f, c, (file, line))?,
+        None => None,
+    };
     (out.try_push(f[0], frame, q, xyz, uncertainty, line))
         .map_err(|e| InputError::memory(file, e))?;
+    out.set_orientation(orientation);
     let condition = |c: Option<usize>, name: &str| match c {
         None => Ok(None),
         Some(c) if f[c].is_empty() => Err(InputError::field(
@@ -846,6 +978,60 @@ mod tests {
         assert_at(&e, F, 5, Some("frame"), "empty frame");
         let e = parse("point,q1,x,y,z\nA,1,2,3,4\n").unwrap_err();
         assert_at(&e, F, 1, Some("x"), "expected `q2`");
+    }
+
+    const ORIENTED: &str = "point,q1,q2,x,y,z,qw,qx,qy,qz,frame\n\
+                            A,0,1,100,0,0,1,0,0,0,s1\n\
+                            B,1,0,0,100,0,0.6,0,0.8,0,s1\n\
+                            C,1,1,0,0,100,,,,,s1\n";
+
+    /// Orientation columns after `x,y,z`: read per row (a row of four
+    /// empty cells has none), kept by a subset, written back to the same
+    /// rows; a file without them writes none.
+    #[test]
+    fn orientations_are_read_kept_and_written() {
+        let p = parse(ORIENTED).unwrap();
+        assert_eq!(p.orientation(0), Some([1.0, 0.0, 0.0, 0.0]));
+        assert_eq!(p.orientation(1), Some([0.6, 0.0, 0.8, 0.0]));
+        assert_eq!((p.orientation(2), p.oriented_rows()), (None, 2));
+        assert_eq!(p.frames(), ["s1"]);
+        let s = p.subset(&[2, 1]);
+        assert_eq!(
+            (s.orientation(0), s.orientation(1)),
+            (None, p.orientation(1))
+        );
+        let mut out = Vec::new();
+        write_positions(&mut out, &p, AngleUnit::Rad).unwrap();
+        let written = String::from_utf8(out).unwrap();
+        assert!(written.starts_with("point,q1,q2,x,y,z,qw,qx,qy,qz,frame\n"));
+        assert!(written.contains(",100.0,,,,,s1\n"), "{written}");
+        assert_eq!(parse(&written).unwrap(), p);
+        let mut plain = Vec::new();
+        write_positions(&mut plain, &parse(GOOD).unwrap(), AngleUnit::Rad).unwrap();
+        assert!(!String::from_utf8(plain).unwrap().contains("qw"));
+    }
+
+    /// A quaternion off unit length beyond 1e-6, a row with some of its
+    /// orientation cells, a header with some of the columns: each refused
+    /// by line and field.
+    #[test]
+    fn bad_orientations_name_their_line_and_field() {
+        let long = ORIENTED.replace("0.6,0,0.8,0", "0.6,0,0.8,0.002");
+        let e = parse(&long).unwrap_err();
+        assert_at(&e, F, 3, Some("qw,qx,qy,qz"), "not 1");
+        // Within the tolerance: read as written.
+        let near = ORIENTED.replace("1,0,0,0,s1", "1.0000005,0,0,0,s1");
+        assert_eq!(parse(&near).unwrap().orientation(0).unwrap()[0], 1.0000005);
+        let e = parse(&ORIENTED.replace("0.6,0,0.8,0", "0.6,0,0.8,")).unwrap_err();
+        assert_at(&e, F, 3, Some("qz"), "all four");
+        let e = parse(&ORIENTED.replace("1,0,0,0,s1", "1,x,0,0,s1")).unwrap_err();
+        assert_at(&e, F, 2, Some("qx"), "");
+        let header = "point,q1,q2,x,y,z,qw,qx,qz\nA,0,1,1,0,0,1,0,0\n";
+        let e = parse(header).unwrap_err();
+        assert_at(&e, F, 1, Some("qy"), "orientation columns incomplete");
+        let misplaced = "point,q1,q2,x,y,z,frame,qw,qx,qy,qz\nA,0,1,1,0,0,s,1,0,0,0\n";
+        let e = parse(misplaced).unwrap_err();
+        assert_at(&e, F, 1, Some("frame"), "expected `qw`");
     }
 
     /// A frame column with one row per frame, and a frame on one line.

@@ -20,8 +20,8 @@ pub use check::{BlockCheck, CheckOptions, GradientCheck, TermCheck, check_gradie
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::residuals::{
-    At, Layout, LengthTerm, Noise, Normal, Origin, PositionTerm, PriorTerm, Role, Sees, Shared,
-    Term, TermError, TouchTerm,
+    At, Layout, LengthTerm, Noise, Normal, OrientationTerm, Origin, PositionTerm, PriorTerm, Role,
+    Sees, Shared, Term, TermError, TouchTerm,
 };
 use crate::tolerances::Tolerances;
 
@@ -115,6 +115,9 @@ impl<'a> Objective<'a> {
         }
         if let Some(positions) = data.positions() {
             terms.push(Box::new(PositionTerm::new(positions, &layout, noise)?));
+            if let Some(o) = OrientationTerm::new(positions, &layout, noise)? {
+                terms.push(Box::new(o));
+            }
         }
         terms.extend(extra);
         let start = layout.start();

@@ -235,6 +235,13 @@ fn positions_sentence(validation: &[ValidationRow]) -> String {
                 a.p95
             );
         }
+        if let (Some(b), Some(a)) = (r.figures.before.orientations, r.figures.after.orientations) {
+            p += &format!(
+                " Of the {} tool orientations seen there, the RMS orientation error falls from \
+                 {:.4}° (nominal) to {:.4}° (calibrated).",
+                a.count, b.rms, a.rms
+            );
+        }
     }
     p
 }

@@ -59,6 +59,7 @@ mod beyond;
 pub mod blocks;
 mod hold;
 mod lengths;
+mod orientations;
 pub mod positions;
 mod prior;
 mod schur;
@@ -78,6 +79,7 @@ pub use blocks::{Block, BlockId, Frame, Layout, LayoutError, Parameter, Scalar, 
 pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
+pub(crate) use orientations::OrientationTerm;
 pub(crate) use positions::PositionTerm;
 pub(crate) use prior::PriorTerm;
 pub use schur::Elimination;
@@ -109,6 +111,10 @@ pub struct Noise {
     /// instrument, `B`, mm per metre (a tracker's 0.006).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position_mm_per_m: Option<f64>,
+    /// σ of a tool orientation seen (a positions file's `qw,qx,qy,qz`)
+    /// about each axis, rad.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientation_rad: Option<f64>,
 }
 
 /// Largest σ of an encoder reading, degrees (in identification,
@@ -127,6 +133,7 @@ impl Default for Noise {
             length_weight: None,
             position_mm: None,
             position_mm_per_m: None,
+            orientation_rad: None,
         }
     }
 }
@@ -173,6 +180,21 @@ impl Noise {
         }
         if let Some(w) = self.length_weight {
             check_nonnegative("noise.length_weight", w, false)?;
+        }
+        if let Some(o) = self.orientation_rad {
+            check_nonnegative("noise.orientation_rad", o, false)?;
+            if o > MAX_ENCODER_SIGMA_RAD {
+                return Err(OptionError::new(
+                    "noise.orientation_rad",
+                    crate::error::short(o),
+                    format!(
+                        "σ = {}° is more than {}°: beyond half a turn an orientation's σ means \
+                         nothing (a tracker's 6-D target is about 0.01°)",
+                        crate::error::short(o.to_degrees()),
+                        MAX_ENCODER_SIGMA_DEG
+                    ),
+                ));
+            }
         }
         if let Some(v) = self.encoder_rad
             && v > MAX_ENCODER_SIGMA_RAD
@@ -611,6 +633,9 @@ pub enum Role {
     Lengths,
     /// Reference positions in an instrument's frame.
     Positions,
+    /// Tool orientations seen in an instrument's frame (the rows of a
+    /// positions file that give one).
+    Orientations,
     /// Stated tolerances as pseudo-observations: prior knowledge, not data.
     Prior,
     /// Weak directions held at nominal: prior knowledge, not data.

@@ -184,6 +184,28 @@ fn row_sigma(data: &PositionData, noise: &Noise, i: usize) -> Option<f64> {
     })
 }
 
+/// Per frame of `data`'s positions, its block in `layout` (one named as
+/// the frame); a frame without one is refused by the term `term`.
+pub(super) fn frame_blocks(
+    data: &PositionData,
+    layout: &Layout,
+    term: &str,
+) -> Result<Vec<BlockId>, TermError> {
+    (data.rows().frames().iter())
+        .map(|name| {
+            layout.block_named(name).ok_or_else(|| {
+                TermError::invalid(
+                    term,
+                    format!(
+                        "frame {} has no block among the columns (a bug, not input)",
+                        crate::error::quoted(name)
+                    ),
+                )
+            })
+        })
+        .collect()
+}
+
 /// The reference positions of a data set on its frames' blocks.
 #[derive(Clone)]
 pub(crate) struct PositionTerm<'d> {
@@ -224,21 +246,7 @@ impl<'d> PositionTerm<'d> {
         noise: &Noise,
     ) -> Result<PositionTerm<'d>, TermError> {
         let rows = data.rows();
-        let frames = rows
-            .frames()
-            .iter()
-            .map(|name| {
-                layout.block_named(name).ok_or_else(|| {
-                    TermError::invalid(
-                        "positions",
-                        format!(
-                            "frame {} has no block among the columns (a bug, not input)",
-                            crate::error::quoted(name)
-                        ),
-                    )
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let frames = frame_blocks(data, layout, "positions")?;
         let sigmas: Vec<Option<f64>> = (0..rows.len()).map(|i| row_sigma(data, noise, i)).collect();
         let sigma = match sigmas.iter().position(Option::is_none) {
             None => Some(sigmas.into_iter().flatten().collect()),

@@ -1319,6 +1319,20 @@ impl CalibrationReport {
         if let Some(noise) = r.position_noise() {
             t += &format!("Position noise: {noise}\n");
         }
+        // Only a file with orientations is weighed by it (without one the
+        // fit refuses them).
+        if let Some(o) = r
+            .noise
+            .orientation_rad
+            .filter(|_| r.positions_file.is_some())
+        {
+            t += &format!(
+                "Orientation noise: stated: σ = {}° per axis (the rows giving the tool's \
+                 orientation)\n",
+                // Rounded: the degrees given, not their trip through rad.
+                (o.to_degrees() * 1e9).round() / 1e9
+            );
+        }
         t += "\n";
         t += &method_lines(s);
         t += &format!(
@@ -1920,23 +1934,11 @@ fn position_table(v: &Validation) -> String {
         rows.push((format!("fold {}, before", i + 1), &fold.figures.before));
         rows.push((format!("fold {}, after", i + 1), &fold.figures.after));
     }
-    let mut t = String::new();
-    for (name, f) in rows {
-        let Some(p) = f.positions else {
-            continue;
-        };
-        if t.is_empty() {
-            t += "\nReference positions (mm): 3-D error |R p + t - y| per pose\n";
-            t += &format!(
-                "  {:<28} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
-                "data", "poses", "mean", "RMS", "p95", "max"
-            );
-        }
-        t += &format!(
-            "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
-            name, p.count, p.mean, p.rms, p.p95, p.max
-        );
-    }
+    let mut t = error_table(
+        &rows,
+        |f| f.positions,
+        "\nReference positions (mm): 3-D error |R p + t - y| per pose\n",
+    );
     if let Some(h) = v
         .held_out
         .as_ref()
@@ -1950,6 +1952,39 @@ fn position_table(v: &Validation) -> String {
                 .map(|f| format!("frame `{f}`"))
                 .collect::<Vec<_>>()
                 .join(", ")
+        );
+    }
+    t += &error_table(
+        &rows,
+        |f| f.orientations,
+        "\nTool orientations (deg): angle of the turn from the arm's tool frame to the one \
+         seen, per pose\n",
+    );
+    t
+}
+
+/// The rows of `rows` whose figures have the errors `of` picks, under
+/// `title` and a header; empty when none has them.
+fn error_table(
+    rows: &[(String, &Figures)],
+    of: impl Fn(&Figures) -> Option<crate::calibrate::validate::PositionErrors>,
+    title: &str,
+) -> String {
+    let mut t = String::new();
+    for (name, f) in rows {
+        let Some(p) = of(f) else {
+            continue;
+        };
+        if t.is_empty() {
+            t += title;
+            t += &format!(
+                "  {:<28} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
+                "data", "poses", "mean", "RMS", "p95", "max"
+            );
+        }
+        t += &format!(
+            "  {:<28} {:>8} {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
+            name, p.count, p.mean, p.rms, p.p95, p.max
         );
     }
     t

@@ -165,6 +165,71 @@ pub fn simulate_positions(
     Ok(PositionCampaign { positions, frames })
 }
 
+/// `positions` (rows of `truth`'s probe seen from `frames`, as
+/// [`simulate_positions`] draws them) with the tool's orientation seen on
+/// every row: the true tool frame turned into the row's frame, then by a
+/// small random rotation of σ `sigma_rad` per axis (seeded by `seed`, its
+/// own stream: the positions are what they were) — a 6-D target.
+///
+/// ```
+/// use aacmm_core::{io::Arm, params::DhParams, residuals::Noise, simulate::*};
+/// let arm = Arm::without_limits("t", DhParams::paper_nominal());
+/// let noise = Noise { position_mm: Some(0.015), ..Noise::default() };
+/// let s = PositionSettings { poses: 5, frames: 1, noise, seed: 3 };
+/// let c = simulate_positions(&arm, &s).unwrap();
+/// let p = orient_positions(&arm, &c.positions, &c.frames, 1e-4, 4).unwrap();
+/// assert_eq!((p.oriented_rows(), p.position(2)), (5, c.positions.position(2)));
+/// ```
+///
+/// # Errors
+///
+/// A σ that is not finite and positive, a row whose frame is not among
+/// `frames`, a true arm with corrections beyond geometry (their turn of
+/// the tool is not simulated), the kernel's.
+pub fn orient_positions(
+    truth: &Arm,
+    positions: &Positions,
+    frames: &[(String, [f64; 6])],
+    sigma_rad: f64,
+    seed: u64,
+) -> Result<Positions, SimError> {
+    if !(sigma_rad.is_finite() && sigma_rad > 0.0) {
+        return Err(SimError::setting(
+            "orientation",
+            "an orientation noise σ > 0 (a tracker's 6-D target: about 0.01°)",
+        ));
+    }
+    if truth.physics.corrects() {
+        return Err(SimError::setting(
+            "orientation",
+            "orientations of a true arm with corrections beyond geometry are not simulated",
+        ));
+    }
+    let model = |e: String| SimError::Model(e);
+    let kernel = ArmKernel::new(&truth.params).map_err(|e| model(e.to_string()))?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut seen = Vec::with_capacity(positions.len());
+    for i in 0..positions.len() {
+        let name = &positions.frames()[positions.frame(i)];
+        let Some((_, x)) = frames.iter().find(|(f, _)| f == name) else {
+            return Err(model(format!(
+                "row {} is in frame {name}, not simulated",
+                i + 1
+            )));
+        };
+        let tool = kernel
+            .pose(positions.reading(i))
+            .map_err(|e| model(e.to_string()))?;
+        let turned = Frame::apply_pose(x, &tool);
+        // The seen frame: the true one turned by a small rotation `n`.
+        let noise = [0; 3].map(|_| sigma_rad * normal(&mut rng));
+        let mut turn = [0.0; 6];
+        turn[..3].copy_from_slice(&noise);
+        seen.push(Some(Frame::apply_pose(&turn, &turned).quaternion()));
+    }
+    Ok(positions.clone().with_orientations(seen))
+}
+
 /// [`simulate_positions`] of a session recording `conditions`, the base
 /// drifting by `drift` (mm/h): the stations drawn as there, the rows as in
 /// [`simulate_positions_in`].

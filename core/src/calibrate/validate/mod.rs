@@ -43,6 +43,11 @@ pub struct Figures {
     /// The 3-D errors at the reference positions; absent without them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub positions: Option<PositionErrors>,
+    /// The orientation errors at the reference positions that give the
+    /// tool's orientation, **degrees** ([`orientation_errors`]); absent
+    /// without them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orientations: Option<PositionErrors>,
 }
 
 /// [`Figures`] as `calibration.json` holds them: the touch fields are
@@ -68,6 +73,8 @@ struct FiguresJson {
     length_max: Option<Option<f64>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     positions: Option<PositionErrors>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    orientations: Option<PositionErrors>,
 }
 
 impl From<Figures> for FiguresJson {
@@ -84,6 +91,7 @@ impl From<Figures> for FiguresJson {
             length_rms: touches.then_some(f.length_rms),
             length_max: touches.then_some(f.length_max),
             positions: f.positions,
+            orientations: f.orientations,
         }
     }
 }
@@ -100,6 +108,7 @@ impl From<FiguresJson> for Figures {
             length_rms: j.length_rms.flatten(),
             length_max: j.length_max.flatten(),
             positions: j.positions,
+            orientations: j.orientations,
         }
     }
 }
@@ -171,6 +180,7 @@ impl Figures {
             length_rms: None,
             length_max: None,
             positions,
+            orientations: None,
         }
     }
 
@@ -225,17 +235,7 @@ pub fn pose_errors(
     frames: &[FrameValues],
 ) -> Result<(Vec<[f64; 3]>, Vec<f64>), crate::kernel::KernelError> {
     let rows = data.rows();
-    let given = |name: &String| frames.iter().find(|(n, _)| n == name).map(|(_, v)| *v);
-    // The closed form only where a frame is not given (a fit's frames
-    // usually all are).
-    let closed = if rows.frames().iter().all(|n| given(n).is_some()) {
-        Vec::new()
-    } else {
-        crate::residuals::positions::register(params, data)?
-    };
-    let x: Vec<[f64; 6]> = (rows.frames().iter().enumerate())
-        .map(|(f, name)| given(name).unwrap_or_else(|| closed[f].x))
-        .collect();
+    let x = frame_values(params, data, frames)?;
     let k = ArmKernel::new(params)?;
     let mut p = vec![[0.0; 3]; data.len()];
     k.positions(data.poses(), 0..data.len(), &mut p)?;
@@ -246,6 +246,74 @@ pub fn pose_errors(
         })
         .collect();
     Ok((p, d))
+}
+
+/// Per frame of `data`'s positions (their order), its registration: as
+/// `frames` say, or (a frame not among them) its closed form of `params`.
+fn frame_values(
+    params: &DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[FrameValues],
+) -> Result<Vec<[f64; 6]>, crate::kernel::KernelError> {
+    let rows = data.rows();
+    let given = |name: &String| frames.iter().find(|(n, _)| n == name).map(|(_, v)| *v);
+    // The closed form only where a frame is not given (a fit's frames
+    // usually all are).
+    let closed = if rows.frames().iter().all(|n| given(n).is_some()) {
+        Vec::new()
+    } else {
+        crate::residuals::positions::register(params, data)?
+    };
+    Ok((rows.frames().iter().enumerate())
+        .map(|(f, name)| given(name).unwrap_or_else(|| closed[f].x))
+        .collect())
+}
+
+/// The orientation errors of `params` at the rows of `data` that give the
+/// tool's orientation, degrees: per row the angle of the small rotation
+/// from where the arm turns the tool frame (turned into the row's frame,
+/// registered as in [`position_errors`]) to the orientation seen. `None`
+/// when no row gives one. (The figures' fields are in degrees here.)
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn orientation_errors(
+    params: &DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[FrameValues],
+) -> Result<Option<PositionErrors>, CalibrationError> {
+    let rows = data.rows();
+    if rows.oriented_rows() == 0 {
+        return Ok(None);
+    }
+    let x = frame_values(params, data, frames)?;
+    let k = ArmKernel::new(params)?;
+    let mut tools = vec![crate::kernel::Pose::default(); data.len()];
+    k.poses(data.poses(), 0..data.len(), &mut tools)?;
+    let d: Vec<f64> = (0..data.len())
+        .filter_map(|i| {
+            let q = rows.orientation(i)?;
+            let seen = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+                q[0], q[1], q[2], q[3],
+            ));
+            let predicted = crate::residuals::Frame::apply_pose(&x[rows.frame(i)], &tools[i]);
+            let r = nalgebra::Matrix3::from_fn(|a, b| predicted.rotation[a][b]);
+            let turn = seen.to_rotation_matrix().matrix() * r.transpose();
+            // The angle from the trace, its sine from the antisymmetric
+            // part: exact near 0, where a calibrated arm's errors are.
+            let s = nalgebra::Vector3::new(
+                turn[(2, 1)] - turn[(1, 2)],
+                turn[(0, 2)] - turn[(2, 0)],
+                turn[(1, 0)] - turn[(0, 1)],
+            )
+            .norm()
+                / 2.0;
+            let c = (turn.trace() - 1.0) / 2.0;
+            Some(s.atan2(c).to_degrees())
+        })
+        .collect();
+    Ok(Some(PositionErrors::of(&d)))
 }
 
 /// The figures of `params` on `data`, each frame of its positions at its
@@ -272,8 +340,15 @@ pub fn figures_in(
         .positions()
         .map(|p| position_errors(params, p, frames))
         .transpose()?;
+    let orientations = match data.positions() {
+        Some(p) => orientation_errors(params, p, frames)?,
+        None => None,
+    };
     if data.is_empty() {
-        return Ok(Figures::without_touches(positions));
+        return Ok(Figures {
+            orientations,
+            ..Figures::without_touches(positions)
+        });
     }
     let k = ArmKernel::new(params)?;
     let mut xyz = vec![[0.0; 3]; data.len()];
@@ -290,6 +365,7 @@ pub fn figures_in(
         length_rms: ev.reference_summary.map(|s| s.rms),
         length_max: ev.reference_summary.map(|s| s.max_abs),
         positions,
+        orientations,
     })
 }
 
@@ -626,6 +702,7 @@ mod tests {
             length_rms: None,
             length_max: None,
             positions: None,
+            orientations: None,
         }
     }
 
