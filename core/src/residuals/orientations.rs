@@ -272,7 +272,9 @@ impl Term for OrientationTerm<'_> {
             .map(|(k, r)| {
                 let i = self.oriented[k];
                 let h = (1.0 / self.per_frame[rows.frame(i)] as f64).min(0.999);
-                r.norm_squared() / self.robust[k].max(f64::MIN_POSITIVE) / (1.0 - h)
+                // At the weights in force (the residual carries `√w`), as
+                // a touch's and a position's: the robust fit divides once.
+                r.norm_squared() / (1.0 - h)
             })
             .collect();
         Ok(Some(Standardised { rows: 3, values }))

@@ -517,16 +517,17 @@ fn the_tool_pose_carries_the_corrections() {
     }
 }
 
-/// A robust weight scales a position's standardised residual as it scales
-/// a touch's (`rᵀAr` at the weights in force; the robust fit then divides
-/// by the weight once): the positions term divided by it itself as well,
-/// so a robust fit's positions came out as `u²/w`.
+/// A robust weight scales a position's and an orientation's standardised
+/// residual as it scales a touch's (`rᵀAr` at the weights in force; the
+/// robust fit then divides by the weight once): the two terms divided by
+/// it themselves as well, so a robust fit judged them at `u²/w`.
 #[test]
 fn a_robust_weight_scales_a_positions_standardised_residual_as_a_touchs() {
-    use crate::simulate::{PositionSettings, simulate_positions};
+    use crate::simulate::{PositionSettings, orient_positions, simulate_positions};
     let truth = crate::io::Arm::without_limits("paper", DhParams::paper_nominal());
     let noise = Noise {
         position_mm: Some(0.02),
+        orientation_rad: Some(2e-4),
         ..Noise::default()
     };
     let settings = PositionSettings {
@@ -536,22 +537,29 @@ fn a_robust_weight_scales_a_positions_standardised_residual_as_a_touchs() {
         seed: 3,
     };
     let campaign = simulate_positions(&truth, &settings).unwrap();
-    let data = DataSet::from_positions(campaign.positions, "sim.csv").unwrap();
+    let oriented =
+        orient_positions(&truth, &campaign.positions, &campaign.frames, 2e-4, 4).unwrap();
+    let data = DataSet::from_positions(oriented, "sim.csv").unwrap();
     let layout = positions::layout_for(&truth.params, &data).unwrap();
     let objective =
         crate::objective::Objective::of_data(layout, &data, &noise, Vec::new(), None, 1.0, 1)
             .unwrap();
     let x = objective.start();
     let plain = objective.standardised(&x, None).unwrap();
-    let mut w = vec![1.0; plain.values.len()];
-    w[0] = 0.25;
-    let weighed = (objective.with_observation_weights(&w))
-        .standardised(&x, None)
-        .unwrap();
-    let (a, b) = (weighed.values[0], plain.values[0]);
-    assert!(
-        b > 0.0 && (a - 0.25 * b).abs() <= 1e-12 * b,
-        "{a} against 0.25 × {b}"
-    );
-    assert_eq!(weighed.values[1..], plain.values[1..]);
+    // 20 positions, then their 20 orientations.
+    assert_eq!(plain.values.len(), 40);
+    for i in [0, 20] {
+        let mut w = vec![1.0; plain.values.len()];
+        w[i] = 0.25;
+        let weighed = (objective.with_observation_weights(&w))
+            .standardised(&x, None)
+            .unwrap();
+        let (a, b) = (weighed.values[i], plain.values[i]);
+        assert!(
+            b > 0.0 && (a - 0.25 * b).abs() <= 1e-12 * b,
+            "observation {i}: {a} against 0.25 × {b}"
+        );
+        let others = |v: &[f64]| [&v[..i], &v[i + 1..]].concat();
+        assert_eq!(others(&weighed.values), others(&plain.values));
+    }
 }
