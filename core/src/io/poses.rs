@@ -21,7 +21,7 @@ use super::Warning;
 use super::approach::{APPROACH, approach_cell};
 use super::columns::JointColumns;
 use super::labels::Labels;
-use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
+use super::text::{Record, check_header, parse_f64, push_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
 use crate::error::InputError;
 use crate::memory::{OutOfMemory, try_grow, try_vec};
@@ -743,16 +743,18 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
     }
     header.push('\n');
     w.write_all(header.as_bytes())?;
+    // One line buffer, numbers formatted into it (`fmt_f64`'s `{:?}`): no
+    // allocation per cell.
+    let mut line = String::new();
     for (row, (label, q)) in poses.labels().zip(poses.rows()).enumerate() {
-        let mut line = quote(label)?.into_owned();
+        line.clear();
+        line.push_str(&quote(label)?);
         for (j, &x) in q.iter().enumerate() {
-            line.push(',');
             let written = JointColumns::to_written(poses.prismatic, j, x, unit);
-            line.push_str(&fmt_f64(written));
+            push_f64(&mut line, written);
         }
         for column in conditions.iter().filter_map(|(_, c)| *c) {
-            line.push(',');
-            line.push_str(&fmt_f64(column[row]));
+            push_f64(&mut line, column[row]);
         }
         if let Some(a) = &poses.approach {
             line.push(',');

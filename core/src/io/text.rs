@@ -213,6 +213,15 @@ pub(crate) fn fmt_f64(x: f64) -> String {
     format!("{x:?}")
 }
 
+/// `,` and [`fmt_f64`]'s form of `x` appended to `line`: a table's next
+/// cell, without a string of its own.
+pub(crate) fn push_f64(line: &mut String, x: f64) {
+    use std::fmt::Write as _;
+    line.push(',');
+    // Writing to a String cannot fail.
+    let _ = write!(line, "{x:?}");
+}
+
 /// One CSV record and its 1-based line.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Record {

@@ -71,45 +71,39 @@ pub fn solve_point(
             }
         })
         .collect();
-    let eval = |q: &[f64]| {
-        let mut jac = vec![[0.0; 3]; q.len()];
-        let p = k.joint_jacobian(q, &mut jac)?;
-        for (col, c) in jac.iter_mut().zip(&scale) {
-            *col = col.map(|v| v * c);
-        }
-        let r = Vector3::new(target[0] - p[0], target[1] - p[1], target[2] - p[2]);
-        Ok::<_, KernelError>((r, jac))
-    };
+    // Buffers for the current and the trial pose, swapped on a step that
+    // lowers the residual: nothing is allocated per iteration.
     let mut q = start.to_vec();
-    let (mut r, mut jac) = eval(&q)?;
+    let mut jac = vec![[0.0; 3]; q.len()];
+    let mut trial = q.clone();
+    let mut jac_trial = jac.clone();
+    let mut r = residual(k, target, &q, &scale, &mut jac)?;
     let mut err = r.norm();
     let mut mu = Damping::fixed_factors(1e-3 * jjt(&jac).trace() / 3.0, 3.0, 4.0);
     let mut iterations = 0;
     while err >= IK_TOLERANCE_MM && iterations < IK_MAX_ITERATIONS {
         iterations += 1;
         let a = jjt(&jac) + Matrix3::identity() * mu.value();
-        let lower = match a.lu().solve(&r) {
-            Some(y) => {
-                let trial: Vec<f64> = (0..q.len())
-                    .map(|j| {
-                        let c = &jac[j];
-                        if scale[j] == 1.0 {
-                            // The revolute step as it always was, to the bit.
-                            q[j] + c[0] * y[0] + c[1] * y[1] + c[2] * y[2]
-                        } else {
-                            q[j] + (c[0] * y[0] + c[1] * y[1] + c[2] * y[2]) * scale[j]
-                        }
-                    })
-                    .collect();
-                let (r_new, jac_new) = eval(&trial)?;
-                let err_new = r_new.norm();
-                (err_new < err).then_some((trial, r_new, jac_new, err_new))
+        let mut lower = None;
+        if let Some(y) = a.lu().solve(&r) {
+            for (j, t) in trial.iter_mut().enumerate() {
+                let c = &jac[j];
+                *t = if scale[j] == 1.0 {
+                    // The revolute step as it always was, to the bit.
+                    q[j] + c[0] * y[0] + c[1] * y[1] + c[2] * y[2]
+                } else {
+                    q[j] + (c[0] * y[0] + c[1] * y[1] + c[2] * y[2]) * scale[j]
+                };
             }
-            None => None,
-        };
+            let r_new = residual(k, target, &trial, &scale, &mut jac_trial)?;
+            let err_new = r_new.norm();
+            lower = (err_new < err).then_some((r_new, err_new));
+        }
         match lower {
-            Some(better) => {
-                (q, r, jac, err) = better;
+            Some((r_new, err_new)) => {
+                std::mem::swap(&mut q, &mut trial);
+                std::mem::swap(&mut jac, &mut jac_trial);
+                (r, err) = (r_new, err_new);
                 // The fixed factors do not look at the gain ratio.
                 mu.accept(f64::NAN);
             }
@@ -121,6 +115,25 @@ pub fn solve_point(
         residual_mm: err,
         iterations,
     })
+}
+
+/// `target − p(q)`, and the columns `∂p/∂q_j` (times `scale[j]`) in `jac`.
+fn residual(
+    k: &ArmKernel,
+    target: [f64; 3],
+    q: &[f64],
+    scale: &[f64],
+    jac: &mut [[f64; 3]],
+) -> Result<Vector3<f64>, KernelError> {
+    let p = k.joint_jacobian(q, jac)?;
+    for (col, c) in jac.iter_mut().zip(scale) {
+        *col = col.map(|v| v * c);
+    }
+    Ok(Vector3::new(
+        target[0] - p[0],
+        target[1] - p[1],
+        target[2] - p[2],
+    ))
 }
 
 /// `J Jᵀ` of the columns `∂p/∂q_j`.

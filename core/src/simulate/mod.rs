@@ -47,6 +47,7 @@ mod files;
 mod ik;
 mod lengths;
 mod positions;
+mod separation;
 mod settings;
 mod sockets;
 mod touches;

@@ -4,6 +4,7 @@
 use rand_chacha::ChaCha8Rng;
 
 use super::ik::solve_point;
+use super::separation::Accepted;
 use super::sockets::random_configuration;
 use super::truth::normal;
 use super::{SimError, SimStats};
@@ -61,7 +62,7 @@ pub(crate) fn find_touches(
     let budget = plan.poses * plan.starts_per_pose;
     let mut touches = Vec::with_capacity(sockets.len() * plan.poses);
     for (s, (label, centre)) in sockets.iter().enumerate() {
-        let mut accepted: Vec<Vec<f64>> = Vec::with_capacity(plan.poses);
+        let mut accepted = Accepted::new(&scales, plan.min_separation, plan.poses);
         let mut attempts = 0;
         while accepted.len() < plan.poses {
             let point: [f64; 3] =
@@ -89,10 +90,7 @@ pub(crate) fn find_touches(
                     stats.outside_limits += 1;
                     continue;
                 };
-                if accepted
-                    .iter()
-                    .any(|a| separation_scaled(a, &q, &scales) < plan.min_separation)
-                {
+                if accepted.too_close(&q) {
                     stats.too_close += 1;
                     continue;
                 }
