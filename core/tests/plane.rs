@@ -331,6 +331,31 @@ fn a_block_beyond_its_limits_is_refused_by_name() {
     assert_eq!(report.calibration.checks.implausible_blocks.len(), 1);
 }
 
+/// The annealer's energy is the touches' and lengths': with a plane term
+/// `sa` would ignore it while claiming a fit, so it is refused, naming the
+/// term.
+#[test]
+fn annealing_alone_refuses_evidence_its_energy_ignores() {
+    let c = campaign(0);
+    let problem = || {
+        let data = c.data_set().unwrap();
+        let at = plane_x(&c);
+        Problem::new(nominal(), data, ModelOptions::default())
+            .unwrap()
+            .with_term(plane_on_x(&c, at, Offset::Known(at)))
+    };
+    let sa = SolverSettings::default().with_method(Method::Sa);
+    let message = problem().run(&sa).unwrap_err().to_string();
+    assert!(
+        message.contains("which the `plane` evidence is no part of"),
+        "{message}"
+    );
+    // Without the term, the same campaign anneals.
+    let data = c.data_set().unwrap();
+    let bare = Problem::new(nominal(), data, ModelOptions::default()).unwrap();
+    assert!(bare.run(&sa).is_ok());
+}
+
 /// A block held at its start is not fitted: the plane's offset, measured
 /// elsewhere, stays where it was put (0.5 mm off the true plane here, so a
 /// fit would move it), and the report says it was held and why.

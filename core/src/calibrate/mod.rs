@@ -71,7 +71,7 @@ use crate::kernel::KernelError;
 use crate::metrics::MetricsError;
 use crate::objective::Objective;
 use crate::params::{DhParams, JointKind, ParamId};
-use crate::residuals::{Elimination, Layout, Normal, Term, TermError};
+use crate::residuals::{Elimination, Layout, Normal, Role, Term, TermError};
 
 /// What to do about readings in radians read as degrees, in each front
 /// end's words (the library serves all three).
@@ -831,6 +831,7 @@ pub fn calibrate_with(
         1.0,
         settings.threads,
     )?;
+    check_terms_for(solver.method(), &objective)?;
     let x0 = objective.start();
     // One pass over the data at the start serves the identifiability
     // analysis and, restricted to the free columns, the first step.
@@ -926,6 +927,33 @@ fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
         method.name(),
         format!("{why}: use lm or global (the default)"),
     ))
+}
+
+/// Refuses `sa` with evidence its energy does not measure: the annealer
+/// minimises the touches' and lengths' energy, so any other term — a tool
+/// orientation, a term written outside the library — would be ignored
+/// while the result claims to fit it. Prior knowledge is not evidence: the
+/// fit after the annealing carries it.
+fn check_terms_for(method: Method, objective: &Objective<'_>) -> Result<(), OptionError> {
+    if method != Method::Sa {
+        return Ok(());
+    }
+    let ignored = objective.terms().find(|t| {
+        let role = t.role();
+        !role.is_prior() && !matches!(role, Role::Touches | Role::Lengths)
+    });
+    match ignored {
+        None => Ok(()),
+        Some(t) => Err(OptionError::new(
+            "method",
+            method.name(),
+            format!(
+                "anneals the paper's touch energy (touches and reference lengths) alone, \
+                 which the `{}` evidence is no part of: use lm or global (the default)",
+                t.name()
+            ),
+        )),
+    }
 }
 
 /// The free columns, the identifiability analysis behind them (`fix =
