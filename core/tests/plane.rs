@@ -347,7 +347,7 @@ fn annealing_alone_refuses_evidence_its_energy_ignores() {
     let sa = SolverSettings::default().with_method(Method::Sa);
     let message = problem().run(&sa).unwrap_err().to_string();
     assert!(
-        message.contains("which the `plane` evidence is no part of"),
+        message.contains("which the term `plane` is no part of"),
         "{message}"
     );
     // Without the term, the same campaign anneals.

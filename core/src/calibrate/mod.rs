@@ -948,8 +948,8 @@ fn check_terms_for(method: Method, objective: &Objective<'_>) -> Result<(), Opti
             "method",
             method.name(),
             format!(
-                "anneals the paper's touch energy (touches and reference lengths) alone, \
-                 which the `{}` evidence is no part of: use lm or global (the default)",
+                "anneals the paper's touch energy alone, which the term `{}` is no part of: \
+                 use lm or global (the default)",
                 t.name()
             ),
         )),
