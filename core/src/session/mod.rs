@@ -1221,6 +1221,7 @@ impl CalibrationReport {
                 }),
                 None => start.physics.clone(),
             },
+            ball_diameter_mm: start.ball_diameter_mm,
         }
     }
 
