@@ -63,6 +63,7 @@ mod orientations;
 pub mod positions;
 mod prior;
 mod schur;
+pub mod spheres;
 mod sym3;
 #[cfg(test)]
 mod tests;
@@ -636,6 +637,8 @@ pub enum Role {
     /// Tool orientations seen in an instrument's frame (the rows of a
     /// positions file that give one).
     Orientations,
+    /// Points probed on the surface of reference spheres.
+    Spheres,
     /// Stated tolerances as pseudo-observations: prior knowledge, not data.
     Prior,
     /// Weak directions held at nominal: prior knowledge, not data.

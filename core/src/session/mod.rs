@@ -232,6 +232,19 @@ impl Problem {
         self.layout.add(Box::new(block))
     }
 
+    /// [`Problem::add_block`] of a block already boxed (what
+    /// [`crate::residuals::spheres::SphereTerm::new`] hands over).
+    ///
+    /// # Errors
+    ///
+    /// As [`Problem::add_block`].
+    pub fn add_boxed_block(
+        &mut self,
+        block: Box<dyn Block>,
+    ) -> Result<BlockId, crate::residuals::LayoutError> {
+        self.layout.add(block)
+    }
+
     /// Holds block `id` at its start values: its columns are not fitted,
     /// and the report says so (a frame measured elsewhere, a plane whose
     /// offset is known).
