@@ -28,6 +28,7 @@ mod robust;
 mod session;
 mod sim_messages;
 mod simulate;
+mod sphere_term;
 mod streams;
 mod util;
 mod verdict;

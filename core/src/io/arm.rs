@@ -1916,7 +1916,8 @@ z = 100.0
         let (plain, _) = parse_arm(GOOD, F).unwrap();
         assert_eq!(plain.ball_diameter_mm, None);
         assert!(!arm_to_toml(&plain, LengthUnit::Mm, AngleUnit::Deg).contains("ball"));
-        let with = |v: &str| GOOD.replace("[probe]\n", &format!("[probe]\nball_diameter_mm = {v}\n"));
+        let with =
+            |v: &str| GOOD.replace("[probe]\n", &format!("[probe]\nball_diameter_mm = {v}\n"));
         let (arm, _) = parse_arm(&with("6.0"), F).unwrap();
         assert_eq!(arm.ball_diameter_mm, Some(6.0));
         // In a file in metres the field is still mm.

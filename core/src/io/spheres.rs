@@ -160,7 +160,9 @@ impl Spheres {
 
     /// The rows of sphere `s`, in file order.
     pub fn rows_of(&self, s: usize) -> Vec<usize> {
-        (0..self.len()).filter(|&i| self.sphere_of[i] == s).collect()
+        (0..self.len())
+            .filter(|&i| self.sphere_of[i] == s)
+            .collect()
     }
 
     /// The rows `keep` (in that order; the spheres renumbered in order of
@@ -227,7 +229,12 @@ impl Spheres {
                     ""
                 }
             );
-            return Err(InputError::field(file, self.lines[rows[0]], "sphere", message));
+            return Err(InputError::field(
+                file,
+                self.lines[rows[0]],
+                "sphere",
+                message,
+            ));
         }
         Ok(())
     }
@@ -309,17 +316,20 @@ pub fn parse_spheres(
                 None => layout.insert(header_layout(h, file, expected)?),
             };
             let out = out.get_or_insert_with(|| Spheres::new(n, columns.prismatic_mask()));
-            parse_row(f, (file, line), (n, articulated), (unit, &columns), &mut q, out)
+            parse_row(
+                f,
+                (file, line),
+                (n, articulated),
+                (unit, &columns),
+                &mut q,
+                out,
+            )
         },
     )?;
     let out = out.unwrap_or_else(|| Spheres::new(0, 0));
     check_counts(&out, file)?;
-    let radians = super::poses::look_like_radians(
-        &out.q,
-        out.len(),
-        (out.joints, out.prismatic),
-        1.0,
-    );
+    let radians =
+        super::poses::look_like_radians(&out.q, out.len(), (out.joints, out.prismatic), 1.0);
     let warnings = match unit {
         AngleUnit::Deg if radians => vec![Warning {
             file: file.to_string(),
@@ -477,7 +487,9 @@ mod tests {
     }
 
     fn rows(label: &str, n: usize) -> String {
-        (0..n).map(|i| format!("{label},{},{}\n", 10 * i, 90 + i)).collect()
+        (0..n)
+            .map(|i| format!("{label},{},{}\n", 10 * i, 90 + i))
+            .collect()
     }
 
     fn assert_at(e: &InputError, line: usize, field: &str, needle: &str) {
@@ -500,7 +512,10 @@ mod tests {
         let s = parse(&format!("sphere,q1,q2,articulation\n{art}")).unwrap();
         assert_eq!((s.articulation(0), s.articulation(3)), (Some(1), Some(2)));
         let sub = s.subset(&[3, 1]);
-        assert_eq!((sub.len(), sub.line(0), sub.articulation(1)), (2, 5, Some(2)));
+        assert_eq!(
+            (sub.len(), sub.line(0), sub.articulation(1)),
+            (2, 5, Some(2))
+        );
     }
 
     #[test]
@@ -537,7 +552,11 @@ mod tests {
         let mut xyz: Vec<[f64; 3]> = (0..5)
             .map(|i| {
                 let (a, b) = (i as f64 * 1.2, 0.3 + 0.25 * i as f64);
-                [10.0 * b.sin() * a.cos(), 10.0 * b.sin() * a.sin(), 10.0 * b.cos()]
+                [
+                    10.0 * b.sin() * a.cos(),
+                    10.0 * b.sin() * a.sin(),
+                    10.0 * b.cos(),
+                ]
             })
             .collect();
         xyz.extend((0..4).map(|i| {
@@ -545,15 +564,25 @@ mod tests {
             [5.0 * a.cos(), 5.0 * a.sin(), 3.0 + 1e-4 * i as f64]
         }));
         let e = s.check_geometry(F, &xyz).unwrap_err();
-        assert_at(&e, 7, "sphere", "sphere `B`: its 4 points lie on one circle");
+        assert_at(
+            &e,
+            7,
+            "sphere",
+            "sphere `B`: its 4 points lie on one circle",
+        );
         assert!(!e.to_string().contains("radians"), "{e}");
         xyz[8][2] = 6.0;
         assert!(s.check_geometry(F, &xyz).is_ok());
         // Readings within ±6.28° read as degrees: said so, and warned of.
-        let small: String = (0..24).map(|i| format!("A,{},{}\n", i % 5, 1 + i % 3)).collect();
+        let small: String = (0..24)
+            .map(|i| format!("A,{},{}\n", i % 5, 1 + i % 3))
+            .collect();
         let (r, warnings) =
             parse_spheres(&format!("sphere,q1,q2\n{small}"), F, AngleUnit::Deg, 2).unwrap();
-        assert!(warnings[0].message.contains("look like radians"), "{warnings:?}");
+        assert!(
+            warnings[0].message.contains("look like radians"),
+            "{warnings:?}"
+        );
         let e = r.check_geometry(F, &vec![[1.0, 2.0, 3.0]; 24]).unwrap_err();
         assert!(e.to_string().contains("radians read as degrees"), "{e}");
     }

@@ -595,7 +595,9 @@ impl Term for SphereTerm {
 
 /// A layout's [`Layout::add`], for [`SphereTerm::new`]'s `add` in a
 /// layout built by hand.
-pub fn add_to(layout: &mut Layout) -> impl FnMut(Box<dyn Block>) -> Result<BlockId, LayoutError> + '_ {
+pub fn add_to(
+    layout: &mut Layout,
+) -> impl FnMut(Box<dyn Block>) -> Result<BlockId, LayoutError> + '_ {
     move |b| layout.add(b)
 }
 
@@ -644,7 +646,10 @@ mod tests {
             let pts: Vec<[f64; 3]> = c.spheres.rows_of(s).iter().map(|&i| p[i]).collect();
             let (fit, r) = algebraic_sphere(&pts).unwrap();
             assert!((r - 15.7).abs() < 0.05, "{r}");
-            assert!(crate::geometry::distance(&fit, centre) < 0.05, "{fit:?} {centre:?}");
+            assert!(
+                crate::geometry::distance(&fit, centre) < 0.05,
+                "{fit:?} {centre:?}"
+            );
         }
         // Deterministic per seed, another seed another campaign.
         assert_eq!(simulate_spheres(&arm, &settings(3, 4)).unwrap(), c);
@@ -717,18 +722,32 @@ mod tests {
         let c = simulate_spheres(&arm, &settings(1, 2)).unwrap();
         let make = |spheres: Spheres, size, ball| {
             let mut layout = Layout::new(arm.params.clone());
-            SphereTerm::new(spheres, "s.csv", &arm.params, size, ball, &stated(), add_to(&mut layout))
-                .map(|_| ())
-                .unwrap_err()
-                .to_string()
+            SphereTerm::new(
+                spheres,
+                "s.csv",
+                &arm.params,
+                size,
+                ball,
+                &stated(),
+                add_to(&mut layout),
+            )
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
         };
         let e = make(c.spheres.clone(), SphereSize::Known(25.4), None);
         assert!(e.contains("[probe] ball_diameter_mm"), "{e}");
         let e = make(c.spheres.clone(), SphereSize::Known(0.0254), Some(6.0));
-        assert!(e.contains("sphere_diameter_mm") && e.contains("metres"), "{e}");
+        assert!(
+            e.contains("sphere_diameter_mm") && e.contains("metres"),
+            "{e}"
+        );
         // The equator alone (rows 17–24): one circle.
         let ring = c.spheres.subset(&(17..25).collect::<Vec<_>>());
         let e = make(ring, SphereSize::Fitted, None);
-        assert!(e.contains("s.csv:19: field `sphere`: sphere `S1`: its 8 points lie on one circle"), "{e}");
+        assert!(
+            e.contains("s.csv:19: field `sphere`: sphere `S1`: its 8 points lie on one circle"),
+            "{e}"
+        );
     }
 }

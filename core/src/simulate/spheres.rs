@@ -105,7 +105,10 @@ const STARTS_PER_POINT: usize = 20;
 ///
 /// A setting out of range (no placement, a diameter not positive), the
 /// kernel's, and a placement whose points the arm cannot reach.
-pub fn simulate_spheres(truth: &Arm, settings: &SphereSettings) -> Result<SphereCampaign, SimError> {
+pub fn simulate_spheres(
+    truth: &Arm,
+    settings: &SphereSettings,
+) -> Result<SphereCampaign, SimError> {
     if settings.placements == 0 {
         return Err(SimError::setting("spheres", "at least one placement"));
     }
@@ -135,8 +138,9 @@ pub fn simulate_spheres(truth: &Arm, settings: &SphereSettings) -> Result<Sphere
         let top = kernel.position(&q0)?;
         let c = std::array::from_fn(|k| top[k] - offset * pole[k]);
         for d in turned(&pattern, pole) {
-            let target: [f64; 3] =
-                std::array::from_fn(|k| c[k] + offset * d[k] + settings.probe_mm * normal(&mut rng));
+            let target: [f64; 3] = std::array::from_fn(|k| {
+                c[k] + offset * d[k] + settings.probe_mm * normal(&mut rng)
+            });
             let q = reach(&kernel, target, &q0, &mut rng)?;
             let read: Vec<f64> = (q.iter().enumerate())
                 .map(|(j, v)| match shape.is_prismatic(j) {
