@@ -29,6 +29,7 @@ mod session;
 mod sim_messages;
 mod simulate;
 mod sphere_term;
+mod spheres;
 mod streams;
 mod util;
 mod verdict;

@@ -328,8 +328,12 @@ pub fn parse_spheres(
     )?;
     let out = out.unwrap_or_else(|| Spheres::new(0, 0));
     check_counts(&out, file)?;
-    let radians =
-        super::poses::look_like_radians(&out.q, out.len(), (out.joints, out.prismatic), 1.0);
+    let radians = super::poses::look_like_radians(
+        &out.q,
+        out.len(),
+        (out.joints, out.prismatic),
+        1f64.to_degrees(),
+    );
     let warnings = match unit {
         AngleUnit::Deg if radians => vec![Warning {
             file: file.to_string(),

@@ -307,6 +307,11 @@ impl SphereTerm {
         self.known_radius.is_some()
     }
 
+    /// The stated spheres' radius, mm (none when fitted).
+    pub fn stated_radius(&self) -> Option<f64> {
+        self.known_radius
+    }
+
     /// Sphere `s`'s radius at `at` (mm), and its column when fitted.
     pub fn radius(&self, at: &At<'_>, s: usize) -> (f64, Option<usize>) {
         match (self.known_radius, self.radii[s]) {

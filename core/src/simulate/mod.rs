@@ -80,7 +80,7 @@ use sockets::round_nm;
 pub use sockets::{place_sockets, shoulder};
 pub use spheres::{
     DEFAULT_SPHERE_DIAMETER_MM, SPHERES_FILE, SphereCampaign, SphereSettings, iso_sphere_pattern,
-    simulate_spheres,
+    simulate_sphere_campaign, simulate_spheres,
 };
 pub use touches::Touch;
 use touches::{TouchPlan, find_touches};

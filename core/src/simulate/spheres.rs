@@ -96,6 +96,11 @@ fn turned(pattern: &[[f64; 3]], pole: [f64; 3]) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// σ of the turn of each revolute joint from the placement's configuration
+/// where the inverse kinematics of a point starts, rad: a user probing a
+/// sphere turns the wrist and elbow between points.
+const SPREAD_RAD: f64 = 1.0;
+
 /// Tries per point before a placement is given up.
 const STARTS_PER_POINT: usize = 20;
 
@@ -131,23 +136,8 @@ pub fn simulate_spheres(
     let mut line = 2;
     for s in 0..settings.placements {
         let name = format!("S{}", s + 1);
-        let q0 = random_configuration(&limits, &mut rng);
-        let tilt = [0.6 * normal(&mut rng), 0.6 * normal(&mut rng), 1.0];
-        let norm = (tilt[0] * tilt[0] + tilt[1] * tilt[1] + 1.0).sqrt();
-        let pole = tilt.map(|v| v / norm);
-        let top = kernel.position(&q0)?;
-        let c = std::array::from_fn(|k| top[k] - offset * pole[k]);
-        for d in turned(&pattern, pole) {
-            let target: [f64; 3] = std::array::from_fn(|k| {
-                c[k] + offset * d[k] + settings.probe_mm * normal(&mut rng)
-            });
-            let q = reach(&kernel, target, &q0, &mut rng)?;
-            let read: Vec<f64> = (q.iter().enumerate())
-                .map(|(j, v)| match shape.is_prismatic(j) {
-                    true => *v,
-                    false => v + settings.encoder_rad * normal(&mut rng),
-                })
-                .collect();
+        let (c, rows) = place(&kernel, &limits, (offset, &pattern), settings, &mut rng)?;
+        for read in rows {
             spheres.push(&name, &read, line, None);
             line += 1;
         }
@@ -156,29 +146,105 @@ pub fn simulate_spheres(
     Ok(SphereCampaign { spheres, centres })
 }
 
+/// Draws of a placement before the campaign is given up.
+const DRAWS_PER_PLACEMENT: usize = 50;
+
+/// One placement whose every point the arm reaches: its centre and the
+/// readings of its points (a placement with a point out of reach, near the
+/// edge of the volume, is drawn again).
+fn place(
+    kernel: &ArmKernel,
+    limits: &[Option<[f64; 2]>],
+    (offset, pattern): (f64, &[[f64; 3]]),
+    settings: &SphereSettings,
+    rng: &mut ChaCha8Rng,
+) -> Result<([f64; 3], Vec<Vec<f64>>), SimError> {
+    let shape = kernel.shape();
+    'draw: for _ in 0..DRAWS_PER_PLACEMENT {
+        let q0 = random_configuration(limits, rng);
+        let tilt = [0.6 * normal(rng), 0.6 * normal(rng), 1.0];
+        let norm = (tilt[0] * tilt[0] + tilt[1] * tilt[1] + 1.0).sqrt();
+        let pole = tilt.map(|v| v / norm);
+        let top = kernel.position(&q0)?;
+        let c = std::array::from_fn(|k| top[k] - offset * pole[k]);
+        let mut rows = Vec::with_capacity(pattern.len());
+        for d in turned(pattern, pole) {
+            let target: [f64; 3] =
+                std::array::from_fn(|k| c[k] + offset * d[k] + settings.probe_mm * normal(rng));
+            let Some(q) = reach(kernel, target, &q0, rng)? else {
+                continue 'draw;
+            };
+            rows.push(
+                (q.iter().enumerate())
+                    .map(|(j, v)| match shape.is_prismatic(j) {
+                        true => *v,
+                        false => v + settings.encoder_rad * normal(rng),
+                    })
+                    .collect(),
+            );
+        }
+        return Ok((c, rows));
+    }
+    Err(SimError::Model(format!(
+        "no placement of a {} mm sphere whose 25 points the arm reaches in {DRAWS_PER_PLACEMENT} \
+         draws",
+        settings.diameter_mm
+    )))
+}
+
 /// The readings that put `kernel`'s probe centre at `target`, from `q0`
 /// turned by about 0.3 rad per revolute joint (another draw while the
-/// inverse kinematics does not converge).
+/// inverse kinematics does not converge); `None` when none does.
 fn reach(
     kernel: &ArmKernel,
     target: [f64; 3],
     q0: &[f64],
     rng: &mut ChaCha8Rng,
-) -> Result<Vec<f64>, SimError> {
+) -> Result<Option<Vec<f64>>, SimError> {
     let shape = kernel.shape();
     for _ in 0..STARTS_PER_POINT {
         let start: Vec<f64> = (q0.iter().enumerate())
             .map(|(j, v)| match shape.is_prismatic(j) {
                 true => *v,
-                false => v + 0.3 * normal(rng),
+                false => v + SPREAD_RAD * normal(rng),
             })
             .collect();
         let found = solve_point(kernel, target, &start)?;
         if found.converged() {
-            return Ok(found.q);
+            return Ok(Some(found.q));
         }
     }
-    Err(SimError::Model(format!(
-        "no configuration of the arm reaches the sphere point {target:?} mm"
-    )))
+    Ok(None)
+}
+
+/// A true arm drawn from `errors` about `nominal` (seeded by
+/// `settings.seed`, as [`super::simulate_tracker`] draws it) and its sphere
+/// campaign (seeded by `settings.seed + 3`): what `aacmm simulate
+/// --spheres` writes without sockets or positions.
+///
+/// # Errors
+///
+/// As [`super::true_arm`] and [`simulate_spheres`].
+pub fn simulate_sphere_campaign(
+    nominal: &Arm,
+    errors: &super::ErrorModel,
+    settings: &SphereSettings,
+) -> Result<(Arm, SphereCampaign), SimError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let truth = super::true_arm(nominal, errors, &mut rng)?;
+    let campaign = simulate_spheres(&truth, &settings.for_campaign())?;
+    Ok((truth, campaign))
+}
+
+impl SphereSettings {
+    /// The settings of the points' own stream: the seed + 3 (the truth has
+    /// the seed, a tracker's positions the next, their orientations the
+    /// one after), so that adding spheres to a campaign changes nothing
+    /// else of it.
+    pub fn for_campaign(&self) -> SphereSettings {
+        SphereSettings {
+            seed: self.seed.wrapping_add(3),
+            ..self.clone()
+        }
+    }
 }
