@@ -674,6 +674,16 @@ impl Request {
             })?
             .with_sources(sources);
         if let Some(s) = self.spheres {
+            if let Some(k) = self.cross_validate {
+                // Each fold would fit every sphere point and score none.
+                return Err(OptionError::new(
+                    "cross_validate",
+                    k,
+                    "does not split points on spheres yet (each fold would fit them all and \
+                     score none): calibrate without it, or hold a sphere file out by hand",
+                )
+                .into());
+            }
             problem = with_spheres(problem, s, ball_diameter_mm)?;
         }
         if self.register_held_out {
