@@ -124,12 +124,7 @@ impl Term for MySphereTerm {
                 rows.push((row, w * (d - self.rho)));
             },
         )?;
-        let mut cost = 0.0;
-        for (row, r) in rows {
-            normal.add_row(&row, r);
-            cost += r * r;
-        }
-        Ok(cost)
+        Ok(normal.add_rows(rows))
     }
 
     fn add_cost(

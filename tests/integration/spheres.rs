@@ -255,23 +255,27 @@ fn simulate_spheres_then_calibrate() {
     let arm = arm_file(&dir);
     let sim = dir.join("sim");
     let s = sim.to_str().unwrap();
-    let o = aacmm(&[
-        "simulate",
-        "--arm",
-        &arm,
-        "--errors",
-        "paper",
-        "--spheres",
-        "6",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--seed",
-        "3",
-        "--out",
-        s,
-    ]);
+    let simulate = |out: &str| {
+        let args = [
+            "simulate",
+            "--arm",
+            &arm,
+            "--errors",
+            "paper",
+            "--spheres",
+            "6",
+            "--encoder-noise",
+            "0.005",
+            "--probe-noise",
+            "0.01",
+            "--seed",
+            "3",
+            "--out",
+            out,
+        ];
+        aacmm(&args)
+    };
+    let o = simulate(s);
     assert!(o.status.success(), "{}", stderr(&o));
     let file = sim.join("spheres.csv");
     let text = std::fs::read_to_string(&file).unwrap();
@@ -279,23 +283,7 @@ fn simulate_spheres_then_calibrate() {
     assert_eq!(text.lines().count(), 1 + 6 * 25);
     // Same seed, same bytes.
     let again = dir.join("again");
-    let o = aacmm(&[
-        "simulate",
-        "--arm",
-        &arm,
-        "--errors",
-        "paper",
-        "--spheres",
-        "6",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--seed",
-        "3",
-        "--out",
-        again.to_str().unwrap(),
-    ]);
+    let o = simulate(again.to_str().unwrap());
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(
         std::fs::read_to_string(again.join("spheres.csv")).unwrap(),

@@ -523,12 +523,7 @@ impl Term for SphereTerm {
                 .collect();
             rows.push((row, r));
         })?;
-        let mut cost = 0.0;
-        for (row, r) in rows {
-            normal.add_row(&row, r);
-            cost += r * r;
-        }
-        Ok(cost)
+        Ok(normal.add_rows(rows))
     }
 
     fn add_cost(
