@@ -346,6 +346,7 @@ fn an_arm_files_prior_gives_the_command_lines_result() {
         limits: start.limits.clone(),
         prior: None,
         physics: start.physics.clone(),
+        ball_diameter_mm: start.ball_diameter_mm,
     };
     assert_eq!(
         arm_to_toml(&from_c, LengthUnit::Mm, AngleUnit::Deg),

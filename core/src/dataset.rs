@@ -932,6 +932,26 @@ impl DataSet {
         Ok(self)
     }
 
+    /// A data set without observations of its own, for an arm of `joints`
+    /// joints (`prismatic`: bit `j` for a slide): the evidence is in terms
+    /// added to the problem (points probed on spheres,
+    /// [`crate::residuals::spheres`]; a term of the caller's).
+    pub fn without_touches(joints: usize, prismatic: u16) -> DataSet {
+        DataSet {
+            joints,
+            points: Vec::new(),
+            q: Vec::new(),
+            poses: PreparedPoses::from_flat_with(joints, prismatic, 0, &[]),
+            references: Vec::new(),
+            source: SourceMap::default(),
+            positions: None,
+            temperature: None,
+            time: None,
+            approach: None,
+            repeats: Vec::new(),
+        }
+    }
+
     /// A data set of reference positions only (no touch): the rows of
     /// `positions`, read from `file`.
     ///

@@ -102,12 +102,7 @@ impl Term for PlaneTerm {
                 .collect();
             rows.push((row, self.residual(p, offset)));
         })?;
-        let mut cost = 0.0;
-        for (row, r) in rows {
-            normal.add_row(&row, r);
-            cost += r * r;
-        }
-        Ok(cost)
+        Ok(normal.add_rows(rows))
     }
 
     fn add_cost(

@@ -139,6 +139,7 @@ fn arm_of(urdf: &Urdf, chain: &Chain, dh: &DhConversion, args: &Args) -> Arm {
         limits,
         prior: None,
         physics: physics.into(),
+        ball_diameter_mm: None,
     }
 }
 

@@ -22,8 +22,8 @@ pub struct FitInput {
     #[arg(long)]
     pub arm: PathBuf,
     /// Poses file (CSV `point,q1,...,qn`: touches of points in many poses);
-    /// `-` reads standard input. Optional with --positions.
-    #[arg(long, required_unless_present = "positions")]
+    /// `-` reads standard input. Optional with --positions or --spheres.
+    #[arg(long, required_unless_present_any = ["positions", "spheres"])]
     pub data: Option<PathBuf>,
     /// Unit of the joint readings (q1..qn) in the poses and positions
     /// files (and calibrate's held-out --validate files); the arm file
@@ -40,6 +40,18 @@ pub struct FitInput {
     /// fitted. With --data too, both are fitted together.
     #[arg(long, value_name = "P.csv")]
     pub positions: Option<PathBuf>,
+    /// Points probed on the surface of reference spheres: CSV
+    /// `sphere,q1,...,qn` (one row per point, at least 4 per sphere, over
+    /// a cap rather than one circle); each sphere's centre is fitted. The
+    /// probe's ball diameter is the arm file's `[probe] ball_diameter_mm`.
+    /// Alone or with --data, --lengths, --positions.
+    #[arg(long, value_name = "S.csv")]
+    pub spheres: Option<PathBuf>,
+    /// The reference spheres' diameter, mm: fixes the arm's scale without
+    /// reference lengths. Without it each sphere's diameter is fitted, and
+    /// the scale needs --lengths or --positions.
+    #[arg(long, value_name = "MM", requires = "spheres")]
+    pub sphere_diameter: Option<f64>,
     /// σ per coordinate of a reference position whose file states none:
     /// `A` mm, or `A+B/m` (B mm per metre from the instrument: a tracker's
     /// `0.015+0.006/m`). Without it (and without an `uncertainty` column)
@@ -112,6 +124,7 @@ impl FitInput {
         v.extend(self.data.as_deref().map(|d| ("--data", d)));
         v.extend(self.lengths.as_deref().map(|l| ("--lengths", l)));
         v.extend(self.positions.as_deref().map(|l| ("--positions", l)));
+        v.extend(self.spheres.as_deref().map(|l| ("--spheres", l)));
         v
     }
 
@@ -137,10 +150,11 @@ impl FitInput {
     /// the request for the report), the noise, `--prior` and `--threads`.
     pub fn request(&self) -> Result<Request> {
         let unit = self.angle_unit;
-        let mut request = match (&self.data, &self.positions) {
-            (Some(data), _) => Request::read(&self.arm, data, unit)?,
-            (None, Some(positions)) => Request::read_positions_only(&self.arm, positions, unit)?,
-            (None, None) => return Err(anyhow!("give --data, --positions or both")),
+        let mut request = match (&self.data, &self.positions, &self.spheres) {
+            (Some(data), _, _) => Request::read(&self.arm, data, unit)?,
+            (None, Some(positions), _) => Request::read_positions_only(&self.arm, positions, unit)?,
+            (None, None, Some(spheres)) => Request::read_spheres_only(&self.arm, spheres, unit)?,
+            (None, None, None) => return Err(anyhow!("give --data, --positions or --spheres")),
         };
         // Shown before the lengths are read, so that a bad lengths file
         // does not hide them.
@@ -151,7 +165,14 @@ impl FitInput {
         if let (Some(_), Some(path)) = (&self.data, &self.positions) {
             request = request.read_positions(path)?;
         }
+        if let (true, Some(path)) = (
+            self.data.is_some() || self.positions.is_some(),
+            &self.spheres,
+        ) {
+            request = request.read_spheres(path)?;
+        }
         Ok(request
+            .sphere_diameter(self.sphere_diameter)
             .noise(self.noise())
             .beyond(
                 self.compliance.as_deref(),
@@ -212,7 +233,8 @@ pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 34] = [
+const FLAGS: [(&str, &str); 35] = [
+    ("sphere_diameter_mm", "--sphere-diameter"),
     ("compliance", "--compliance"),
     ("harmonics", "--harmonics"),
     ("backlash", "--backlash"),

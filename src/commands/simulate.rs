@@ -33,7 +33,7 @@ const DEFAULT_REFERENCE_LENGTHS: usize = 3;
 #[derive(clap::Args)]
 #[command(group(ArgGroup::new("nominal").required(true).args(["arm", "chain"])))]
 #[command(group(ArgGroup::new("truth").required(true).args(["true_arm", "errors"])))]
-#[command(group(ArgGroup::new("where").required(true).multiple(true).args(["sockets", "sockets_file", "positions"])))]
+#[command(group(ArgGroup::new("where").required(true).multiple(true).args(["sockets", "sockets_file", "positions", "spheres"])))]
 pub struct Args {
     /// Nominal arm file (TOML, 1 to 12 joints, revolute or prismatic); its
     /// joint limits, if any, bound every simulated reading (a prismatic
@@ -78,6 +78,17 @@ pub struct Args {
     /// true_arm.toml.
     #[arg(long, value_name = "N")]
     positions: Option<usize>,
+    /// Also (or instead) points probed on reference spheres: N placements
+    /// through the volume, each probed at ISO 10360-5's 25 points (pole, 4
+    /// at 22.5° below it, 8 at 45°, 4 at 67.5°, 8 on the equator) of its
+    /// upper hemisphere by the true arm, with --encoder-noise and
+    /// --probe-noise; writes spheres.csv. The probe ball is the arm file's
+    /// `[probe] ball_diameter_mm` (6 mm when it states none).
+    #[arg(long, value_name = "N")]
+    spheres: Option<usize>,
+    /// The spheres' diameter, mm.
+    #[arg(long, value_name = "MM", requires = "spheres", default_value_t = aacmm_core::simulate::DEFAULT_SPHERE_DIAMETER_MM)]
+    sphere_diameter: f64,
     /// Instrument stations of --positions, each with its own random pose.
     #[arg(long, value_name = "F", default_value_t = 1, requires = "positions")]
     frames: usize,
@@ -174,7 +185,11 @@ pub fn run(args: Args) -> Result<()> {
     let joints = nominal.params.joint_count();
     let errors = error_model(&args)?;
     if args.sockets.is_none() && args.sockets_file.is_none() {
-        return tracker(&args, &nominal, &errors, None);
+        let truth = match args.positions {
+            Some(_) => Some(tracker(&args, &nominal, &errors, None)?),
+            None => None,
+        };
+        return spheres(&args, &nominal, &errors, truth.as_ref());
     }
     let (sockets, file) = socket_plan(&args)?;
     let located = |e| flag_error(e, file.as_ref());
@@ -191,7 +206,63 @@ pub fn run(args: Args) -> Result<()> {
     if args.positions.is_some() {
         tracker(&args, &nominal, &errors, Some(&campaign.true_arm))?;
     }
-    Ok(())
+    spheres(&args, &nominal, &errors, Some(&campaign.true_arm))
+}
+
+/// The ball diameter `simulate --spheres` probes with when the arm file
+/// states none, mm.
+const DEFAULT_BALL_DIAMETER_MM: f64 = 6.0;
+
+/// The sphere campaign of --spheres (nothing without it): of `truth` (the
+/// touch or tracker campaign's true arm) or of a true arm drawn from
+/// `errors`, written to true_arm.toml; spheres.csv.
+fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>) -> Result<()> {
+    use aacmm_core::io::spheres::write_spheres;
+    use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml};
+    use aacmm_core::simulate::{SPHERES_FILE, SphereSettings, simulate_spheres};
+    let Some(placements) = args.spheres else {
+        return Ok(());
+    };
+    let ball = nominal.ball_diameter_mm.unwrap_or(DEFAULT_BALL_DIAMETER_MM);
+    let settings = SphereSettings {
+        placements,
+        diameter_mm: args.sphere_diameter,
+        ball_diameter_mm: ball,
+        encoder_rad: args.encoder_noise.to_radians(),
+        probe_mm: args.probe_noise,
+        seed: args.seed,
+    };
+    let located = |e| anyhow!("--spheres: {e}");
+    let campaign = match truth {
+        Some(t) => simulate_spheres(t, &settings.for_campaign()).map_err(located)?,
+        None => {
+            let (truth, campaign) =
+                aacmm_core::simulate::simulate_sphere_campaign(nominal, errors, &settings)
+                    .map_err(|e| flag_error(e, None))?;
+            std::fs::create_dir_all(&args.out)
+                .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
+            let text = arm_to_toml(&truth, LengthUnit::Mm, AngleUnit::Deg);
+            let arm_path = args.out.join(TRUE_ARM_FILE);
+            write_file(&arm_path, text.as_bytes())?;
+            note(format_args!("wrote {}", arm_path.display()))?;
+            campaign
+        }
+    };
+    let path = args.out.join(SPHERES_FILE);
+    let mut text = Vec::new();
+    write_spheres(&mut text, &campaign.spheres, AngleUnit::Deg)?;
+    write_file(&path, &text)?;
+    note(format_args!(
+        "spheres: {placements} placements of {} mm, 25 points each, probe ball {ball} mm{}; \
+         seed {}",
+        args.sphere_diameter,
+        match nominal.ball_diameter_mm {
+            Some(_) => "",
+            None => " (the arm file states none: add `ball_diameter_mm = 6` to its [probe])",
+        },
+        args.seed
+    ))?;
+    note(format_args!("wrote {}", path.display()))
 }
 
 /// The tracker campaign of --positions: of `truth` (the touch campaign's
@@ -202,7 +273,7 @@ fn tracker(
     nominal: &aacmm_core::io::Arm,
     errors: &ErrorModel,
     truth: Option<&aacmm_core::io::Arm>,
-) -> Result<()> {
+) -> Result<aacmm_core::io::Arm> {
     use aacmm_core::io::frames::frames_to_toml;
     use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, positions::write_positions};
     use aacmm_core::simulate::{POSITIONS_FILE, PositionSettings, true_frames};
@@ -282,7 +353,8 @@ fn tracker(
     note(format_args!(
         "wrote {} (with the true frames)",
         arm_path.display()
-    ))
+    ))?;
+    Ok(truth)
 }
 
 /// `--chain`'s value: a chain shape such as `PRRRRRR`.
@@ -340,6 +412,7 @@ fn check_paths(args: &Args) -> Result<()> {
         TRUE_ARM_FILE,
         CAMPAIGN_FILE,
         aacmm_core::simulate::POSITIONS_FILE,
+        aacmm_core::simulate::SPHERES_FILE,
         if args.chain.is_some() {
             NOMINAL_FILE
         } else {

@@ -28,6 +28,8 @@ mod robust;
 mod session;
 mod sim_messages;
 mod simulate;
+mod sphere_term;
+mod spheres;
 mod streams;
 mod util;
 mod verdict;

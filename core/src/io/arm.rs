@@ -89,7 +89,18 @@ pub struct Arm {
     /// corrections' values ([`crate::corrections`]); empty by default.
     /// Boxed: most arms have none, and an arm is moved by value often.
     pub physics: Box<Physics>,
+    /// The diameter of the probe's ball, mm (`[probe] ball_diameter_mm`),
+    /// if stated: points probed on a surface lie a ball radius from the
+    /// probe centre the chain ends in (sphere surfaces, [`crate::residuals::spheres`]).
+    pub ball_diameter_mm: Option<f64>,
 }
+
+/// The largest probe ball an arm file may state, mm: a stylus ball is
+/// 0.5–8 mm, a tracker's target 38.1 mm (1.5 in).
+pub const MAX_BALL_DIAMETER_MM: f64 = 100.0;
+/// The smallest, mm: below it the value was most likely written in metres
+/// (a 6 mm ball as `0.006`); the field is in mm whatever `length_unit` says.
+pub const MIN_BALL_DIAMETER_MM: f64 = 0.1;
 
 impl Arm {
     /// An arm without joint limits.
@@ -107,6 +118,7 @@ impl Arm {
             limits: vec![None; n],
             prior: None,
             physics: Box::default(),
+            ball_diameter_mm: None,
         }
     }
 }
@@ -475,6 +487,9 @@ struct ProbeFile {
     /// Its centre of mass in the last joint's frame, mm (default: the probe).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     com_mm: Option<Spanned<Vec<Spanned<f64>>>>,
+    /// The diameter of its ball, mm (whatever `length_unit` says).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ball_diameter_mm: Option<Spanned<f64>>,
 }
 
 /// A unit by its name.
@@ -610,6 +625,7 @@ impl ArmFile {
                 z: len(z),
                 mass_kg: physics.probe_mass.map(|m| new(m.kg)),
                 com_mm: physics.probe_mass.and_then(|m| m.com_mm).map(triple),
+                ball_diameter_mm: arm.ball_diameter_mm.map(new),
             },
             _prior: None,
             _frame: None,
@@ -671,6 +687,7 @@ impl ArmFile {
             limits: Vec::with_capacity(joints.len()),
             prior: None,
             physics: Box::default(),
+            ball_diameter_mm: self.ball_diameter(text, file)?,
         };
         for (i, (j, &(model, kind))) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate()
         {
@@ -680,6 +697,37 @@ impl ArmFile {
         }
         arm.physics = Box::new(self.physics(text, file)?);
         Ok((arm, self.unit_warnings(text, file)))
+    }
+
+    /// `[probe] ball_diameter_mm`, checked: in mm, between
+    /// [`MIN_BALL_DIAMETER_MM`] (below it, metres) and
+    /// [`MAX_BALL_DIAMETER_MM`]. (Finite: checked with every number first.)
+    fn ball_diameter(&self, text: &str, file: &str) -> Result<Option<f64>, InputError> {
+        let Some(d) = &self.probe.ball_diameter_mm else {
+            return Ok(None);
+        };
+        let v = *d.get_ref();
+        let why = if v <= 0.0 {
+            format!("[probe]: a ball's diameter is positive, got {v}")
+        } else if v < MIN_BALL_DIAMETER_MM {
+            format!(
+                "[probe]: a ball of {v} mm is no probe's (the smallest are {MIN_BALL_DIAMETER_MM} \
+                 mm): in metres? the field is in mm whatever length_unit says ({} mm)",
+                crate::error::short(v * 1000.0)
+            )
+        } else if v > MAX_BALL_DIAMETER_MM {
+            format!(
+                "[probe]: a ball of {v} mm is more than any probe's ({MAX_BALL_DIAMETER_MM} mm)"
+            )
+        } else {
+            return Ok(Some(v));
+        };
+        Err(InputError::field(
+            file,
+            line_of(text, d.span().start),
+            "ball_diameter_mm",
+            why,
+        ))
     }
 
     /// The masses, gravity and corrections the file states, checked.
@@ -867,6 +915,7 @@ impl ArmFile {
             ("cte_per_k", &self.cte_per_k),
             ("reference_temperature_c", &self.reference_temperature_c),
             ("mass_kg", &self.probe.mass_kg),
+            ("ball_diameter_mm", &self.probe.ball_diameter_mm),
         ] {
             if let Some(v) = v {
                 out.push((String::new(), field, v));
@@ -1600,6 +1649,7 @@ z = 100.0
                 limits,
                 prior: None,
                 physics: Box::default(),
+                ball_diameter_mm: None,
             };
             let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Rad);
             let (back, _) = parse_arm(&text, F).unwrap();
@@ -1856,5 +1906,39 @@ z = 100.0
         .unwrap_err();
         assert!(e.to_string().contains("no/such/dir.toml"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// `[probe] ball_diameter_mm`: read in mm whatever `length_unit` says,
+    /// written back only when stated (a file without it reads and writes as
+    /// before), and refused by line and field when it cannot be a ball's.
+    #[test]
+    fn the_probe_ball_diameter_round_trips_and_is_checked() {
+        let (plain, _) = parse_arm(GOOD, F).unwrap();
+        assert_eq!(plain.ball_diameter_mm, None);
+        assert!(!arm_to_toml(&plain, LengthUnit::Mm, AngleUnit::Deg).contains("ball"));
+        let with =
+            |v: &str| GOOD.replace("[probe]\n", &format!("[probe]\nball_diameter_mm = {v}\n"));
+        let (arm, _) = parse_arm(&with("6.0"), F).unwrap();
+        assert_eq!(arm.ball_diameter_mm, Some(6.0));
+        // In a file in metres the field is still mm.
+        let metres = with("6.0").replace("length_unit = \"mm\"", "length_unit = \"m\"");
+        assert_eq!(parse_arm(&metres, F).unwrap().0.ball_diameter_mm, Some(6.0));
+        for unit in [LengthUnit::Mm, LengthUnit::M] {
+            let text = arm_to_toml(&arm, unit, AngleUnit::Deg);
+            assert!(text.contains("ball_diameter_mm = 6.0"), "{text}");
+            assert_eq!(parse_arm(&text, F).unwrap().0.ball_diameter_mm, Some(6.0));
+        }
+        let line = GOOD[..GOOD.find("[probe]").unwrap()].lines().count() + 2;
+        for (v, why) in [
+            ("0.006", "in metres?"),
+            ("0", "positive"),
+            ("-2", "positive"),
+            ("150", "more than any probe"),
+        ] {
+            let e = parse_arm(&with(v), F).unwrap_err();
+            assert_at(&e, line, Some("ball_diameter_mm"), why);
+        }
+        let e = parse_arm(&with("nan"), F).unwrap_err();
+        assert_at(&e, line, Some("ball_diameter_mm"), "not a finite number");
     }
 }

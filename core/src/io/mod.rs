@@ -7,6 +7,7 @@
 //! | direction of approach (a column of poses and positions) | `+-0` per joint | [`approach`] |
 //! | reference lengths | CSV `point_a,point_b,distance[,uncertainty]` | [`lengths`] |
 //! | points (e.g. socket positions) | CSV `point,x,y,z` | [`points`] |
+//! | points probed on reference spheres | CSV `sphere,q1,...,qn` | [`spheres`] |
 //!
 //! Discipline shared by all readers: units are stated, never guessed; every
 //! error is an [`InputError`] naming the file and, where known, the 1-based line
@@ -46,6 +47,7 @@ pub mod points;
 pub mod poses;
 pub mod positions;
 pub mod prior;
+pub mod spheres;
 pub(crate) mod text;
 pub mod units;
 pub mod verdict;

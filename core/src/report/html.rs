@@ -173,6 +173,7 @@ pub(crate) fn calibration_page(
         touches: !evaluated.is_empty(),
         beyond: find(figures, BEYOND_SVG).is_some(),
         map: input.uncertainty_map.is_some(),
+        spheres: input.spheres.is_some(),
     };
     let numbered = present.sections();
     let number = |id: &str| {
@@ -202,6 +203,9 @@ pub(crate) fn calibration_page(
     );
     if present.positions {
         page += &positions_section(input, find(figures, POSITIONS_SVG), number("positions"));
+    }
+    if let Some(s) = input.spheres {
+        page += &spheres_section(s, number("spheres"));
     }
     if present.touches {
         page += &touch_sections(input, evaluated, figures);
@@ -295,6 +299,8 @@ struct Present {
     beyond: bool,
     /// An uncertainty map.
     map: bool,
+    /// Points probed on reference spheres.
+    spheres: bool,
 }
 
 impl Present {
@@ -303,6 +309,9 @@ impl Present {
         let mut s = Vec::new();
         if self.positions {
             s.push(("positions", "3-D errors"));
+        }
+        if self.spheres {
+            s.push(("spheres", "Sphere surfaces"));
         }
         if self.touches {
             s.extend([("single-point", "Single point"), ("lengths", "Lengths")]);
@@ -386,6 +395,63 @@ fn positions_section(input: &CalibrationInput, figure: Option<&Figure>, number: 
          the fitted positions, vermillion on held-out ones).",
         "",
         &tables::positions(&input.validation, &input.positions, &input.arms),
+    )
+}
+
+/// The points probed on reference spheres, numbered `number`: per sphere
+/// its fitted centre and diameter, and the radial residuals before and
+/// after (RMS, and their range: the form the arm sees).
+fn spheres_section(s: &crate::session::spheres::SphereReport, number: usize) -> String {
+    let mut rows = String::new();
+    for r in &s.spheres {
+        let sigma = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.4}"));
+        rows += &format!(
+            "<tr><td>{}</td><td>{}</td><td>{:.3}, {:.3}, {:.3}</td><td>{}</td><td>{:.4}</td>\
+             <td>{}</td><td>{:.4}</td><td class=\"after\">{:.4}</td><td>{:.4}</td>\
+             <td class=\"after\">{:.4}</td></tr>\n",
+            escape(&r.name),
+            r.points,
+            r.centre[0],
+            r.centre[1],
+            r.centre[2],
+            sigma(
+                r.centre_sigma
+                    .map(|v| v.iter().fold(0.0, |a: f64, b| a.max(*b)))
+            ),
+            r.diameter,
+            sigma(r.diameter_sigma),
+            r.before.rms,
+            r.after.rms,
+            r.before.form,
+            r.after.form
+        );
+    }
+    let table = format!(
+        "<table>\n<tr><th>sphere</th><th>points</th><th>centre (mm)</th><th>σ (largest)</th>\
+         <th>diameter (mm)</th><th>σ</th><th>RMS radial, nominal</th><th>calibrated</th>\
+         <th>form, nominal</th><th>calibrated</th></tr>\n{rows}</table>\n"
+    );
+    let size = match s.stated_diameter {
+        Some(d) => format!("the spheres' diameter is stated ({d} mm) and fixes the arm's size"),
+        None => "each sphere's diameter is fitted, so the spheres alone do not fix the arm's \
+                 size"
+            .to_string(),
+    };
+    section(
+        "spheres",
+        &format!("{number}. Sphere surfaces: radial residuals, before and after"),
+        &format!(
+            "Points probed on reference spheres ({}; probe ball {} mm): each residual is the \
+             distance of the probe ball's centre from the sphere's fitted centre less the two \
+             radii; {size}. The form is the range of a sphere's radial residuals. Before: the \
+             nominal arm with each sphere fitted to it; after: the calibrated arm.",
+            escape(&s.file),
+            s.ball_diameter
+        ),
+        None,
+        "",
+        "",
+        &table,
     )
 }
 

@@ -264,6 +264,8 @@ pub struct CalibrationInput<'a> {
     /// JSON Pointer of the map in the JSON written beside the report (e.g.
     /// `/uncertainty_map`), if any.
     pub uncertainty_map_json: Option<String>,
+    /// Points probed on reference spheres, when fitted: their section.
+    pub spheres: Option<&'a crate::session::spheres::SphereReport>,
     /// Whether the calibration may be used, and why not: the page opens
     /// with it. `None` for a calibration drawn outside a session, which
     /// the page then says has no verdict.
@@ -348,6 +350,7 @@ pub struct EvaluationInput<'a> {
 ///     beyond: Vec::new(),
 ///     uncertainty_map: None,
 ///     uncertainty_map_json: None,
+///     spheres: None,
 ///     verdict: None,
 ///     seed: 0,
 /// })

@@ -126,6 +126,7 @@ fn report_with(
         beyond: Vec::new(),
         uncertainty_map: map,
         uncertainty_map_json: map.map(|_| "/uncertainty_map".into()),
+        spheres: None,
         verdict: None,
         seed: 0,
     })

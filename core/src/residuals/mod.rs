@@ -63,6 +63,7 @@ mod orientations;
 pub mod positions;
 mod prior;
 mod schur;
+pub mod spheres;
 mod sym3;
 #[cfg(test)]
 mod tests;
@@ -511,6 +512,23 @@ impl Normal {
         }
     }
 
+    /// Adds whitened rows `(j, r)` ([`Normal::add_row`] each, in order) and
+    /// returns their cost `Σ r²`: what a term's `accumulate` ends with.
+    ///
+    /// ```
+    /// let mut n = aacmm_core::residuals::Normal::new(&[0]);
+    /// assert_eq!(n.add_rows([(vec![2.0], 1.0), (vec![1.0], 3.0)]), 10.0);
+    /// assert_eq!(n.gradient(0), 5.0);
+    /// ```
+    pub fn add_rows(&mut self, rows: impl IntoIterator<Item = (Vec<f64>, f64)>) -> f64 {
+        let mut cost = 0.0;
+        for (j, r) in rows {
+            self.add_row(&j, r);
+            cost += r * r;
+        }
+        cost
+    }
+
     /// `(JᵀJ)_ab` over the free columns.
     pub fn jtj_entry(&self, a: usize, b: usize) -> f64 {
         self.jtj[a * self.free.len() + b]
@@ -636,6 +654,8 @@ pub enum Role {
     /// Tool orientations seen in an instrument's frame (the rows of a
     /// positions file that give one).
     Orientations,
+    /// Points probed on the surface of reference spheres.
+    Spheres,
     /// Stated tolerances as pseudo-observations: prior knowledge, not data.
     Prior,
     /// Weak directions held at nominal: prior knowledge, not data.

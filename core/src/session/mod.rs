@@ -24,6 +24,7 @@ mod map;
 mod outputs;
 mod position_evaluation;
 pub mod request;
+pub mod spheres;
 
 pub use map::MAP_POSES;
 pub use outputs::{earlier_results, result_files};
@@ -50,6 +51,7 @@ use crate::dataset::DataSet;
 use crate::error::OptionError;
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
 use crate::params::DhParams;
+use crate::residuals::spheres::SphereTerm;
 use crate::residuals::{Block, BlockId, Layout, Noise, Term};
 
 /// The calibrated arm, in the arm-file schema.
@@ -105,6 +107,10 @@ pub struct Problem {
     /// Held-out positions in a frame the fit does not have may be
     /// registered on themselves ([`Problem::registering_held_out_frames`]).
     register_held_out: bool,
+    /// Points probed on reference spheres, when given
+    /// ([`Problem::with_spheres`]): a term among `terms`, kept here too
+    /// for its report.
+    spheres: Option<SphereTerm>,
 }
 
 impl Problem {
@@ -161,6 +167,7 @@ impl Problem {
             sources: Sources::default(),
             truth: None,
             register_held_out: false,
+            spheres: None,
         })
     }
 
@@ -232,6 +239,19 @@ impl Problem {
         self.layout.add(Box::new(block))
     }
 
+    /// [`Problem::add_block`] of a block already boxed (what
+    /// [`crate::residuals::spheres::SphereTerm::new`] hands over).
+    ///
+    /// # Errors
+    ///
+    /// As [`Problem::add_block`].
+    pub fn add_boxed_block(
+        &mut self,
+        block: Box<dyn Block>,
+    ) -> Result<BlockId, crate::residuals::LayoutError> {
+        self.layout.add(block)
+    }
+
     /// Holds block `id` at its start values: its columns are not fitted,
     /// and the report says so (a frame measured elsewhere, a plane whose
     /// offset is known).
@@ -256,6 +276,20 @@ impl Problem {
             model: &self.model,
             terms: &self.terms,
         }
+    }
+
+    /// Adds points probed on reference spheres (their blocks added with
+    /// [`SphereTerm::new`] through [`Problem::add_boxed_block`]): a term
+    /// like any added one, and a section of the report.
+    pub fn with_spheres(mut self, term: SphereTerm) -> Problem {
+        self.terms.push(Box::new(term.clone()));
+        self.spheres = Some(term);
+        self
+    }
+
+    /// The sphere term, if any.
+    pub fn spheres(&self) -> Option<&SphereTerm> {
+        self.spheres.as_ref()
     }
 
     /// Names the inputs in the report.
@@ -779,6 +813,10 @@ pub struct CalibrationReport {
     /// ([`crate::plan::map`]); absent when the covariance is not finite.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty_map: Option<crate::plan::UncertaintyMap>,
+    /// Points probed on reference spheres, when given: per sphere its
+    /// centre, diameter and radial residuals.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spheres: Option<spheres::SphereReport>,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -1221,6 +1259,7 @@ impl CalibrationReport {
                 }),
                 None => start.physics.clone(),
             },
+            ball_diameter_mm: start.ball_diameter_mm,
         }
     }
 
@@ -1240,6 +1279,9 @@ impl CalibrationReport {
         t += &parameter_table(c);
         t += &correlations_line(c);
         t += &validation_table(&self.validation);
+        if let Some(s) = &self.spheres {
+            t += &s.summary();
+        }
         t
     }
 
@@ -1550,6 +1592,9 @@ pub fn run(
         );
     }
     let uncertainty_map = map::workspace_map(&problem.arm, data, &calibration, settings.seed);
+    let spheres = (problem.spheres.as_ref())
+        .map(|t| spheres::sphere_report(t, &problem.layout, &calibration))
+        .transpose()?;
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
@@ -1576,6 +1621,7 @@ pub fn run(
         warnings: s.warnings.clone(),
         verdict,
         uncertainty_map,
+        spheres,
     })
 }
 

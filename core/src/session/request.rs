@@ -38,9 +38,13 @@ use crate::calibrate::{
 use crate::corrections::Beyond;
 use crate::dataset::DataSet;
 use crate::error::{InputError, OptionError};
-use crate::io::{AngleUnit, Arm, read_arm, read_lengths, read_positions, source_name};
+use crate::io::spheres::{Spheres, read_spheres};
+use crate::io::{
+    AngleUnit, Arm, JointColumns, read_arm, read_lengths, read_positions, source_name,
+};
 use crate::kernel::ArmKernel;
 use crate::residuals::Noise;
+use crate::residuals::spheres::{SphereSize, SphereTerm, check_sphere_diameter, check_spheres};
 use crate::tolerances::Tolerances;
 
 /// A calibration (or identification) as asked for: the inputs, their
@@ -69,6 +73,15 @@ pub struct Request {
     anneal: AnnealOptions,
     switch: SwitchRule,
     global: GlobalOptions,
+    spheres: Option<SphereInput>,
+}
+
+/// Points probed on reference spheres as read, and their size as asked.
+#[derive(Clone, Debug)]
+struct SphereInput {
+    rows: Spheres,
+    file: String,
+    diameter_mm: Option<f64>,
 }
 
 /// The models beyond geometry as asked for (parsed with the model).
@@ -134,6 +147,7 @@ impl Request {
             anneal: solver.anneal,
             switch: solver.switch,
             global: solver.global,
+            spheres: None,
         }
     }
 
@@ -186,6 +200,75 @@ impl Request {
             warnings: arm_warnings.iter().map(ToString::to_string).collect(),
         };
         Ok(Request::new(read, data).sources(sources).angle_unit(unit))
+    }
+
+    /// Reads the arm file and a sphere-surface file (readings in `unit`):
+    /// a calibration on points probed on reference spheres alone.
+    ///
+    /// # Errors
+    ///
+    /// The readers' errors, naming file, line and field, and points that
+    /// fix no sphere where the arm puts them ([`check_spheres`]).
+    pub fn read_spheres_only(
+        arm: impl AsRef<Path>,
+        spheres: impl AsRef<Path>,
+        unit: AngleUnit,
+    ) -> Result<Request, InputError> {
+        let arm = arm.as_ref();
+        let (read, arm_warnings) = read_arm(arm)?;
+        let data = DataSet::without_touches(
+            read.params.joint_count(),
+            JointColumns::from(&read).prismatic_mask(),
+        );
+        let sources = Sources {
+            arm_file: source_name(arm),
+            data_file: source_name(spheres.as_ref()),
+            lengths_file: None,
+            warnings: arm_warnings.iter().map(ToString::to_string).collect(),
+        };
+        Request::new(read, data)
+            .sources(sources)
+            .angle_unit(unit)
+            .read_spheres(spheres)
+    }
+
+    /// Adds the points probed on reference spheres of a sphere-surface file
+    /// (readings in the request's angle unit), fitted with the rest; their
+    /// size is [`Request::sphere_diameter`]'s.
+    ///
+    /// # Errors
+    ///
+    /// The reader's errors, naming file, line and field, and points that
+    /// fix no sphere where the arm puts them ([`check_spheres`]).
+    pub fn read_spheres(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
+        let path = path.as_ref();
+        let name = source_name(path);
+        let (rows, warnings) = read_spheres(path, self.unit, &self.arm)?;
+        check_spheres(&rows, &name, &self.arm.params)?;
+        (self.sources.warnings).extend(warnings.iter().map(ToString::to_string));
+        let diameter_mm = self.spheres.take().and_then(|s| s.diameter_mm);
+        self.spheres = Some(SphereInput {
+            rows,
+            file: name,
+            diameter_mm,
+        });
+        Ok(self)
+    }
+
+    /// The spheres' diameter, mm (`None`: fitted per sphere; the scale then
+    /// needs reference lengths or positions).
+    pub fn sphere_diameter(mut self, diameter_mm: Option<f64>) -> Request {
+        match &mut self.spheres {
+            Some(s) => s.diameter_mm = diameter_mm,
+            None => {
+                self.spheres = diameter_mm.map(|d| SphereInput {
+                    rows: Spheres::new(0, 0),
+                    file: String::new(),
+                    diameter_mm: Some(d),
+                })
+            }
+        }
+        self
     }
 
     /// Adds the reference positions of a positions file (readings in the
@@ -576,6 +659,7 @@ impl Request {
             ..self.sources
         };
         let arm_file = sources.arm_file.clone();
+        let ball_diameter_mm = self.arm.ball_diameter_mm;
         let mut problem = Problem::new(self.arm, self.data, model)
             .map_err(|e| match e {
                 // The arm file at fault, by the name the request knows.
@@ -589,6 +673,19 @@ impl Request {
                 e => e,
             })?
             .with_sources(sources);
+        if let Some(s) = self.spheres {
+            if let Some(k) = self.cross_validate {
+                // Each fold would fit every sphere point and score none.
+                return Err(OptionError::new(
+                    "cross_validate",
+                    k,
+                    "does not split points on spheres yet (each fold would fit them all and \
+                     score none): calibrate without it, or hold a sphere file out by hand",
+                )
+                .into());
+            }
+            problem = with_spheres(problem, s, ball_diameter_mm)?;
+        }
         if self.register_held_out {
             problem = problem.registering_held_out_frames();
         }
@@ -623,6 +720,18 @@ impl Request {
     /// [`IdentifyReport::new`].
     pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
+        if let Some(s) = &self.spheres {
+            // Not silently left out: the calibration's identification
+            // section is what they determine.
+            return Err(CalibrationError::Term {
+                term: "spheres".into(),
+                message: format!(
+                    "{}: identify does not take points on spheres yet; `aacmm calibrate \
+                     --spheres` reports what they determine (its identification section)",
+                    s.file
+                ),
+            });
+        }
         super::check_units(&self.arm.params, &self.data, &self.sources.arm_file)?;
         crate::identify::room_to_identify(&self.data)?;
         let prior = self.tolerances()?;
@@ -637,4 +746,56 @@ impl Request {
             &self.sources,
         )
     }
+}
+
+/// `problem` with the sphere term of `input` (its blocks added), probed
+/// with a ball of `ball_diameter_mm` (the arm file's).
+///
+/// # Errors
+///
+/// An [`OptionError`] on `sphere_diameter_mm`: out of range, without the
+/// points it sizes, or stated without the ball's diameter; the term's
+/// refusals.
+fn with_spheres(
+    mut problem: Problem,
+    input: SphereInput,
+    ball_diameter_mm: Option<f64>,
+) -> Result<Problem, CalibrationError> {
+    let size = match input.diameter_mm {
+        Some(d) => {
+            check_sphere_diameter(d)?;
+            if input.rows.is_empty() {
+                return Err(OptionError::new(
+                    "sphere_diameter_mm",
+                    d,
+                    "sizes the spheres of a sphere-surface file, and none was given",
+                )
+                .into());
+            }
+            if ball_diameter_mm.is_none() {
+                return Err(OptionError::new(
+                    "sphere_diameter_mm",
+                    d,
+                    "a stated sphere diameter needs the probe ball's: state `ball_diameter_mm` in \
+                     the arm file's [probe] table (the probe centre is a ball radius off the \
+                     surface)",
+                )
+                .into());
+            }
+            SphereSize::Known(d)
+        }
+        None => SphereSize::Fitted,
+    };
+    let arm = problem.arm().params.clone();
+    let noise = problem.model().noise;
+    let term = SphereTerm::new(
+        input.rows,
+        &input.file,
+        &arm,
+        size,
+        ball_diameter_mm,
+        &noise,
+        |b| problem.add_boxed_block(b),
+    )?;
+    Ok(problem.with_spheres(term))
 }

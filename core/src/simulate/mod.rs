@@ -50,6 +50,7 @@ mod positions;
 mod separation;
 mod settings;
 mod sockets;
+mod spheres;
 mod touches;
 mod truth;
 
@@ -78,6 +79,10 @@ pub use settings::{
 };
 use sockets::round_nm;
 pub use sockets::{place_sockets, shoulder};
+pub use spheres::{
+    DEFAULT_SPHERE_DIAMETER_MM, SPHERES_FILE, SphereCampaign, SphereSettings, iso_sphere_pattern,
+    simulate_sphere_campaign, simulate_spheres,
+};
 pub use touches::Touch;
 use touches::{TouchPlan, find_touches};
 pub use truth::true_arm;

@@ -1,0 +1,204 @@
+//! What a calibration with points probed on reference spheres reports of
+//! them: per sphere its fitted centre ± σ, its diameter (stated, or fitted
+//! ± σ), and the radial residuals before (the nominal arm, each sphere's
+//! centre and size fitted to it) and after (the calibrated arm): their RMS
+//! and their range — the sphere's form as the arm sees it.
+
+use serde::{Deserialize, Serialize};
+
+use crate::calibrate::Calibration;
+use crate::kernel::ArmKernel;
+use crate::residuals::spheres::SphereTerm;
+use crate::residuals::{At, Layout, TermError};
+
+/// The radial residuals of one sphere at one arm, mm.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RadialErrors {
+    /// RMS of `|p − c| − (R + r_ball)` over the sphere's points.
+    pub rms: f64,
+    /// Their range (largest less smallest): the form error seen.
+    pub form: f64,
+}
+
+impl RadialErrors {
+    fn of(e: &[f64]) -> RadialErrors {
+        let n = e.len().max(1) as f64;
+        let (lo, hi) = e
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        RadialErrors {
+            rms: (e.iter().map(|v| v * v).sum::<f64>() / n).sqrt(),
+            form: if e.is_empty() { 0.0 } else { hi - lo },
+        }
+    }
+}
+
+/// One sphere's results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SphereResult {
+    /// Its label.
+    pub name: String,
+    /// Points probed on it.
+    pub points: usize,
+    /// The fitted centre in the arm's base frame, mm.
+    pub centre: [f64; 3],
+    /// Its σ per coordinate, mm, when free.
+    pub centre_sigma: Option<[f64; 3]>,
+    /// Its diameter, mm: stated, or fitted.
+    pub diameter: f64,
+    /// The fitted diameter's σ, mm (none when stated).
+    pub diameter_sigma: Option<f64>,
+    /// The radial residuals at the start arm (its centre and size fitted
+    /// with it) and at the calibrated arm.
+    pub before: RadialErrors,
+    /// After.
+    pub after: RadialErrors,
+}
+
+/// The spheres of a calibration: `calibration.json`'s `spheres`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SphereReport {
+    /// The sphere-surface file.
+    pub file: String,
+    /// The spheres' stated diameter, mm (none: fitted per sphere).
+    pub stated_diameter: Option<f64>,
+    /// The probe ball's diameter, mm.
+    pub ball_diameter: f64,
+    /// Per sphere, in the file's order.
+    pub spheres: Vec<SphereResult>,
+}
+
+/// The calibrated point: the geometry's columns, then each auxiliary
+/// column's calibrated value back in internal units.
+fn calibrated_x(layout: &Layout, c: &Calibration) -> Vec<f64> {
+    let mut x = layout.start();
+    let g = layout.geometry_columns();
+    x[..g].copy_from_slice(&c.params.to_vec()[..g]);
+    for (k, e) in c.auxiliary.iter().enumerate() {
+        let col = g + k;
+        if let Some(p) = layout.parameter(col).filter(|p| p.name == e.name) {
+            x[col] = if p.unit.is_angle() {
+                e.calibrated.to_radians()
+            } else {
+                e.calibrated
+            };
+        }
+    }
+    x
+}
+
+/// The term's radial errors at `x` of `layout`.
+fn errors_at(term: &SphereTerm, layout: &Layout, x: &[f64]) -> Result<Vec<f64>, TermError> {
+    let arm = layout
+        .arm(x)
+        .ok_or_else(|| TermError::invalid("spheres", "a point of the wrong length"))?;
+    let kernel = ArmKernel::new(&arm)?;
+    let at = At {
+        x,
+        arm: &arm,
+        kernel: &kernel,
+        layout,
+        threads: 1,
+    };
+    term.radial_errors(&at)
+}
+
+/// The report of `term`'s spheres after `calibration` on `layout`.
+///
+/// # Errors
+///
+/// The kernel's.
+pub(crate) fn sphere_report(
+    term: &SphereTerm,
+    layout: &Layout,
+    calibration: &Calibration,
+) -> Result<SphereReport, TermError> {
+    let x0 = layout.start();
+    let x1 = calibrated_x(layout, calibration);
+    let (e0, e1) = (errors_at(term, layout, &x0)?, errors_at(term, layout, &x1)?);
+    let rows = term.spheres();
+    let estimate = |name: &str| calibration.auxiliary.iter().find(|e| e.name == name);
+    let spheres = (rows.spheres().iter().enumerate())
+        .map(|(s, name)| {
+            let of = rows.rows_of(s);
+            let pick = |e: &[f64]| of.iter().map(|&i| e[i]).collect::<Vec<f64>>();
+            let block = format!("sphere.{name}");
+            let axis = |k: &str| estimate(&format!("{block}.{k}"));
+            let coords = ["x", "y", "z"].map(axis);
+            let centre = coords.map(|e| e.map_or(f64::NAN, |e| e.calibrated));
+            let centre_sigma = match coords.map(|e| e.and_then(|e| e.sigma)) {
+                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                _ => None,
+            };
+            let radius = estimate(&format!("{block}.radius"));
+            SphereResult {
+                name: name.clone(),
+                points: of.len(),
+                centre,
+                centre_sigma,
+                diameter: match radius {
+                    Some(r) => 2.0 * r.calibrated,
+                    None => 2.0 * term.stated_radius().unwrap_or(f64::NAN),
+                },
+                diameter_sigma: radius.and_then(|r| r.sigma).map(|s| 2.0 * s),
+                before: RadialErrors::of(&pick(&e0)),
+                after: RadialErrors::of(&pick(&e1)),
+            }
+        })
+        .collect();
+    Ok(SphereReport {
+        file: term.file().to_string(),
+        stated_diameter: term.stated_radius().map(|r| 2.0 * r),
+        ball_diameter: 2.0 * term.ball_radius(),
+        spheres,
+    })
+}
+
+impl SphereReport {
+    /// The summary's lines: the spheres, their centres and diameters, and
+    /// the radial residuals before and after.
+    pub fn summary(&self) -> String {
+        let mut t = format!(
+            "\nSpheres ({}): diameter {}; probe ball {} mm\n",
+            self.file,
+            match self.stated_diameter {
+                Some(d) => format!("{d} mm (stated)"),
+                None => "fitted per sphere".to_string(),
+            },
+            self.ball_diameter
+        );
+        t += &format!(
+            "{:<10} {:>6} {:>32} {:>18} {:>21} {:>21}\n",
+            "sphere",
+            "points",
+            "centre (mm) ± sigma",
+            "diameter (mm)",
+            "RMS radial before/after",
+            "form before/after"
+        );
+        for s in &self.spheres {
+            let sig = s
+                .centre_sigma
+                .map_or(0.0, |v| v.iter().fold(0.0, |a: f64, b| a.max(*b)));
+            let d = match s.diameter_sigma {
+                Some(ds) => format!("{:.4} ± {:.4}", s.diameter, ds),
+                None => format!("{:.4}", s.diameter),
+            };
+            t += &format!(
+                "{:<10} {:>6} {:>24} ± {:.4} {:>18} {:>10.4} / {:<8.4} {:>10.4} / {:<8.4}\n",
+                s.name,
+                s.points,
+                format!("{:.3}, {:.3}, {:.3}", s.centre[0], s.centre[1], s.centre[2]),
+                sig,
+                d,
+                s.before.rms,
+                s.after.rms,
+                s.before.form,
+                s.after.form
+            );
+        }
+        t
+    }
+}
