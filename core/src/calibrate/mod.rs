@@ -820,7 +820,7 @@ pub fn calibrate_with(
     let start = layout.geometry();
     model.check_for(start)?;
     settings.check()?;
-    check_method_for(solver.method(), data, terms)?;
+    check_method_for(solver.method(), data)?;
     let extra = terms.iter().map(|t| dyn_clone::clone_box(&**t)).collect();
     let mut objective = Objective::of_data(
         layout.clone(),
@@ -911,25 +911,12 @@ pub fn calibrate_with(
 /// Refuses a method that cannot use the data: the paper's annealing
 /// minimises the touches' energy (its OA), so `sa` alone would ignore
 /// reference positions, and neither `sa` nor `hybrid` has anything to
-/// anneal without touches. Nor would `sa` weigh a term added to the data's
-/// (points on spheres, a caller's): refused, naming it.
-fn check_method_for(
-    method: Method,
-    data: &DataSet,
-    terms: &[Box<dyn Term>],
-) -> Result<(), OptionError> {
-    let added = terms.iter().find(|t| !t.is_prior());
-    let named;
+/// anneal without touches. Any other evidence `sa` would not weigh is
+/// refused by [`check_terms_for`], by its term's name.
+fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
     let why = match method {
         Method::Sa if data.positions().is_some() => {
             "anneals the paper's touch energy alone, which reference positions are no part of"
-        }
-        Method::Sa if added.is_some() => {
-            named = format!(
-                "anneals the paper's touch energy alone, which the term `{}` is no part of",
-                added.map_or("", |t| t.name())
-            );
-            &named
         }
         Method::Hybrid if data.is_empty() => {
             "anneals the paper's touch energy, and these data have no touches"
