@@ -4,8 +4,10 @@
 
 use aacmm_core::calibrate::validate::{orientation_errors, position_errors};
 use aacmm_core::io::Arm;
-use aacmm_core::residuals::Noise;
-use aacmm_core::simulate::{orient_positions, random_arm, simulate_positions_from};
+use aacmm_core::residuals::{Frame, MOUNT_BLOCK, Noise};
+use aacmm_core::simulate::{
+    OrientationSettings, orient_positions, random_arm, random_mount, simulate_positions_from,
+};
 use aacmm_core::{DataSet, ModelOptions, Problem};
 
 use super::positions::{campaign, lm, normalised_errors, settings, tracker};
@@ -53,8 +55,15 @@ struct Seed {
 /// station.
 fn one_seed(nominal: &Arm, seed: u64, poses: usize) -> Seed {
     let (truth, c) = campaign(nominal, seed, poses, 1);
-    let sigma = ORIENTATION_DEG.to_radians();
-    let with = orient_positions(&truth, &c.positions, &c.frames, sigma, seed + 2000).unwrap();
+    // A target mounted any way on the flange (as `simulate --orientation`
+    // draws it by default).
+    let mount = random_mount(std::f64::consts::PI, seed + 3000);
+    let turn = |seed| OrientationSettings {
+        mount,
+        sigma_rad: ORIENTATION_DEG.to_radians(),
+        seed,
+    };
+    let with = orient_positions(&truth, &c.positions, &c.frames, &turn(seed + 2000)).unwrap();
     let fit = |rows, noise: Noise| {
         let data = DataSet::from_positions(rows, "sim.csv").unwrap();
         let model = ModelOptions {
@@ -72,7 +81,7 @@ fn one_seed(nominal: &Arm, seed: u64, poses: usize) -> Seed {
     let six = fit(with, oriented());
     let three = fit(c.positions.clone(), tracker());
     let fresh = simulate_positions_from(&truth, &settings(30, 0, seed + 5000), &c.frames).unwrap();
-    let fresh = orient_positions(&truth, &fresh, &c.frames, sigma, seed + 6000).unwrap();
+    let fresh = orient_positions(&truth, &fresh, &c.frames, &turn(seed + 6000)).unwrap();
     let held = DataSet::from_positions(fresh, "held.csv").unwrap();
     let held = held.positions().unwrap();
     let mean = |cal: &aacmm_core::Calibration| {
@@ -84,14 +93,37 @@ fn one_seed(nominal: &Arm, seed: u64, poses: usize) -> Seed {
         let e = orientation_errors(params, held, frames).unwrap();
         e.expect("orientations held out").mean
     };
+    let mut z2 = normalised_errors(&six, &truth, &c);
+    z2.extend(mount_errors(&six, mount));
+    let mut true_frames = c.frames.clone();
+    true_frames.push((
+        MOUNT_BLOCK.into(),
+        [mount[0], mount[1], mount[2], 0.0, 0.0, 0.0],
+    ));
     Seed {
-        z2: normalised_errors(&six, &truth, &c),
+        z2,
         position: [mean(&six), mean(&three)],
         orientation: [
-            turned(&six.params, &six.frames()),
-            turned(&truth.params, &c.frames),
+            turned(&six.params, &six.frames_with_mount()),
+            turned(&truth.params, &true_frames),
         ],
     }
+}
+
+/// `((estimate − truth)/σ)²` of the fitted mount's three small rotations
+/// (its σ are of small rotations about the last frame's axes: the
+/// difference is taken as one, `log(R_est R_trueᵀ)`).
+fn mount_errors(cal: &aacmm_core::Calibration, mount: [f64; 3]) -> Vec<f64> {
+    let est = cal.mount().expect("a fitted mount").map(f64::to_radians);
+    let d = Frame::difference(
+        &[mount[0], mount[1], mount[2], 0.0, 0.0, 0.0],
+        &[est[0], est[1], est[2], 0.0, 0.0, 0.0],
+    );
+    let record = cal.mount_record().unwrap();
+    let sigma = record.small_rotation_sigma_deg.expect("the mount's σ");
+    (0..3)
+        .map(|k| (d[k] / sigma[k].to_radians()).powi(2))
+        .collect()
 }
 
 /// Over `seeds`, for the UR5 and the 8-joint track arm: the normalised

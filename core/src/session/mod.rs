@@ -1419,8 +1419,10 @@ impl CalibrationReport {
         } else {
             crate::io::verdict::rejected_header()
         };
+        let mount = (self.calibration.mount_record().as_ref())
+            .map_or_else(String::new, crate::io::frames::mount_to_toml);
         format!(
-            "{header}{}{}{}",
+            "{header}{}{}{mount}{}",
             arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg),
             crate::io::frames::frames_to_toml(&self.calibration.frame_records()),
             crate::io::verdict::verdict_to_toml(verdict)
@@ -1497,7 +1499,7 @@ pub fn run(
     // same stations are scored in those frames.
     let stated = &problem.arm.physics;
     let start_frames = registered_frames(start, &*seen_by(start, stated, data)?)?;
-    let frames = calibration.frames();
+    let frames = calibration.frames_with_mount();
     let before = ArmView {
         params: start,
         physics: stated,

@@ -63,7 +63,9 @@ impl PositionEvaluation {
                 message: "no reference positions to evaluate".into(),
             });
         };
-        let closed = registered_frames(&arm.params, &seen)?;
+        let mut closed = registered_frames(&arm.params, &seen)?;
+        // The frames alone (a mount of orientations after them: not here).
+        closed.truncate(p.rows().frames().len());
         let frames: Vec<(FrameValues, bool)> = (closed.into_iter())
             .map(|(name, x)| match stated.iter().find(|(n, _)| *n == name) {
                 Some(s) => (s.clone(), true),
