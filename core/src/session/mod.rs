@@ -1155,6 +1155,9 @@ fn noise_remedy(noise: &Noise, chi: &crate::calibrate::checks::ChiSquare) -> Str
             format!("--position-noise {:.4}", a * s0)
         });
     }
+    if let Some(o) = noise.orientation_rad {
+        flags.push(format!("--orientation-noise {:.4}", (o * s0).to_degrees()));
+    }
     let (how, other) = if s0 > 1.0 {
         (
             format!("{s0:.2} times larger"),
@@ -1685,12 +1688,32 @@ fn noun(c: &Calibration) -> &'static str {
     }
 }
 
+/// [`noun`], or `observation` when orientations are observed too.
+fn any_noun(c: &Calibration) -> &'static str {
+    match c.dof.other_rows.iter().any(|r| r.term == "orientations") {
+        true => "observation",
+        false => noun(c),
+    }
+}
+
+/// What the outliers `o` are: their one kind
+/// ([`crate::calibrate::checks::Outlier::noun`], `noun` for touches and
+/// positions), or `observation` when they are of several.
+fn outliers_noun<'a>(o: &'a [crate::calibrate::checks::Outlier], noun: &'a str) -> &'a str {
+    let first = o.first().map_or(noun, |x| x.noun(noun));
+    if o.iter().all(|x| x.noun(noun) == first) {
+        first
+    } else {
+        "observation"
+    }
+}
+
 /// The summary's outliers: the first 20 by `file:line`; after a screen by
 /// a robust refit, that the list keeps to the touches it weighs down, and
 /// how many the plain fit had beyond the threshold.
 fn outliers_line(c: &Calibration) -> String {
     let o = &c.checks.outliers;
-    let noun = noun(c);
+    let noun = any_noun(c);
     let threshold = c.checks.outlier_threshold;
     let screen = c.checks.outlier_screen;
     let below = crate::calibrate::robust::DOWNWEIGHTED;
@@ -1711,7 +1734,13 @@ fn outliers_line(c: &Calibration) -> String {
     let shown: Vec<String> = o
         .iter()
         .take(20)
-        .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
+        .map(|x| {
+            let kind = x.kind.as_ref().map_or(String::new(), |k| format!("{k}, "));
+            format!(
+                "{} (point {}, {kind}{:.1} sigma)",
+                x.at, x.point, x.standardised
+            )
+        })
         .collect();
     let screened = screen.map_or(String::new(), |s| {
         // What the screen says of the rest: pulled by the named touches,
@@ -1735,7 +1764,7 @@ fn outliers_line(c: &Calibration) -> String {
         "Outliers: {} {} beyond {threshold:.2} sigma{screened} — check them (remeasure, or \
          fix the label): {}{}\n",
         o.len(),
-        plural(noun),
+        plural(outliers_noun(o, self::noun(c))),
         shown.join(", "),
         if o.len() > shown.len() { ", …" } else { "" }
     )
