@@ -288,6 +288,28 @@ fn simulate_orientations_then_calibrate() {
     let after = &json["validation"]["fitted"]["after"]["orientations"];
     assert_eq!(after["count"], 120);
     assert!(after["rms"].as_f64().unwrap() < 0.03, "{after}");
+    // The page: the noise among the inputs, and a table of the orientation
+    // errors beside the 3-D errors' — per frame (two here), each cell
+    // marked with its place in calibration.json.
+    let page = text_of(&out.join("report.html"));
+    assert!(page.contains("orientation noise"), "no noise line");
+    let table = page
+        .split("Tool orientation errors at the reference positions (deg)")
+        .nth(1)
+        .expect("the orientation table");
+    let table = table.split("</table>").next().unwrap();
+    for row in [
+        "fitted, nominal",
+        "fitted, calibrated",
+        "station1",
+        "station2",
+    ] {
+        assert!(table.contains(row), "{row}: {table}");
+    }
+    assert!(
+        table.contains("/validation/fitted/after/orientations"),
+        "{table}"
+    );
     // Without orientations (the columns dropped): no word of them.
     let plain: String = (text_of(&positions).lines())
         .map(|l| {
@@ -303,6 +325,8 @@ fn simulate_orientations_then_calibrate() {
     for word in ["Orientation noise", "Tool orientations", "orientations "] {
         assert!(!text.contains(word), "{word}: {text}");
     }
+    let page = text_of(&dir.join("plain").join("report.html"));
+    assert!(!page.contains("Tool orientation errors"));
 }
 
 fn text_of(path: &std::path::Path) -> String {

@@ -1246,6 +1246,20 @@ impl CalibrationReport {
         t
     }
 
+    /// The orientation noise the tool orientations were weighed with, in
+    /// words; `None` without reference positions or a stated σ (only a file
+    /// with orientations is weighed by it: without one the fit refuses
+    /// them).
+    pub fn orientation_noise(&self) -> Option<String> {
+        let o = self.noise.orientation_rad?;
+        self.positions_file.as_ref()?;
+        Some(format!(
+            "stated: σ = {}° per axis (the rows giving the tool's orientation)",
+            // Rounded: the degrees given, not their trip through rad.
+            (o.to_degrees() * 1e9).round() / 1e9
+        ))
+    }
+
     /// The reference positions' noise, `None` without them: the σ stated
     /// (`--position-noise`, or each row's own), or that it was estimated,
     /// with the σ the fit used; and an encoder noise stated without
@@ -1322,19 +1336,8 @@ impl CalibrationReport {
         if let Some(noise) = r.position_noise() {
             t += &format!("Position noise: {noise}\n");
         }
-        // Only a file with orientations is weighed by it (without one the
-        // fit refuses them).
-        if let Some(o) = r
-            .noise
-            .orientation_rad
-            .filter(|_| r.positions_file.is_some())
-        {
-            t += &format!(
-                "Orientation noise: stated: σ = {}° per axis (the rows giving the tool's \
-                 orientation)\n",
-                // Rounded: the degrees given, not their trip through rad.
-                (o.to_degrees() * 1e9).round() / 1e9
-            );
+        if let Some(noise) = r.orientation_noise() {
+            t += &format!("Orientation noise: {noise}\n");
         }
         t += "\n";
         t += &method_lines(s);

@@ -290,9 +290,28 @@ pub fn orientation_errors(
     data: &crate::dataset::PositionData,
     frames: &[FrameValues],
 ) -> Result<Option<PositionErrors>, CalibrationError> {
+    let d: Vec<f64> = orientation_errors_per_row(params, data, frames)?
+        .into_iter()
+        .flatten()
+        .collect();
+    Ok((!d.is_empty()).then(|| PositionErrors::of(&d)))
+}
+
+/// Per row of `data`, its orientation error as [`orientation_errors`]
+/// takes it, degrees; `None` for a row without an orientation (every row
+/// when none gives one).
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn orientation_errors_per_row(
+    params: &DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[FrameValues],
+) -> Result<Vec<Option<f64>>, crate::kernel::KernelError> {
     let rows = data.rows();
     if rows.oriented_rows() == 0 {
-        return Ok(None);
+        return Ok(vec![None; data.len()]);
     }
     let x = frame_values(params, data, frames)?;
     let given = (frames.iter()).find(|(n, _)| n == crate::residuals::MOUNT_BLOCK);
@@ -304,8 +323,8 @@ pub fn orientation_errors(
     let k = ArmKernel::new(params)?;
     let mut tools = vec![crate::kernel::Pose::default(); data.len()];
     k.poses(data.poses(), 0..data.len(), &mut tools)?;
-    let d: Vec<f64> = (0..data.len())
-        .filter_map(|i| {
+    Ok((0..data.len())
+        .map(|i| {
             let q = rows.orientation(i)?;
             let seen = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
                 q[0], q[1], q[2], q[3],
@@ -325,8 +344,7 @@ pub fn orientation_errors(
             let c = (turn.trace() - 1.0) / 2.0;
             Some(s.atan2(c).to_degrees())
         })
-        .collect();
-    Ok(Some(PositionErrors::of(&d)))
+        .collect())
 }
 
 /// The figures of `params` on `data`, each frame of its positions at its
