@@ -407,6 +407,39 @@ fn the_mount_is_fitted_and_orientation_outliers_are_named_so() {
         truth.iter().map(|v| v * v).sum::<f64>().sqrt() > 1.0,
         "{truth:?}"
     );
+    // `evaluate --positions`: the orientation errors too, with the mount
+    // the calibrated arm file states, or in closed form (and said so).
+    let evaluate = |arm: &str| {
+        let o = aacmm(&[
+            "evaluate",
+            "--arm",
+            arm,
+            "--positions",
+            positions.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let text = evaluate(out.join("calibrated.toml").to_str().unwrap());
+    assert!(
+        text.contains("mount as the arm file states it ([mount])"),
+        "{text}"
+    );
+    let rms = |text: &str| -> f64 {
+        let table = text.split("Orientation error (deg)").nth(1).expect(text);
+        let line = table
+            .lines()
+            .find(|l| l.trim_start().starts_with("instrument"));
+        let line = line.expect("the frame's row");
+        line.split_whitespace().nth(3).unwrap().parse().unwrap()
+    };
+    assert!(rms(&text) < 0.03, "{text}");
+    let text = evaluate(&arm);
+    assert!(
+        text.contains("in closed form on these orientations"),
+        "{text}"
+    );
+    assert!(rms(&text) > 0.1, "{text}");
     // Row 6's orientation turned by a further 0.5° about its x axis.
     let text = text_of(&positions);
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();

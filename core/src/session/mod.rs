@@ -30,7 +30,7 @@ pub use outputs::{earlier_results, result_files};
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
-pub use position_evaluation::{FrameEvaluation, PositionEvaluation};
+pub use position_evaluation::{FrameEvaluation, MountEvaluation, PositionEvaluation};
 pub use request::{Request, user_noise};
 
 use std::path::Path;
