@@ -500,6 +500,26 @@ mod tests {
         let plain = crate::DataSet::from_positions(c.positions.clone(), "p.csv").unwrap();
         let layout = crate::residuals::positions::layout_for(&truth.params, &plain).unwrap();
         assert_eq!(layout.block_named(MOUNT_BLOCK), None);
+        // A frame named as the mount's block: refused by name with
+        // orientations, a frame like any other without.
+        let named = |p: &crate::io::Positions| {
+            let mut text = Vec::new();
+            crate::io::positions::write_positions(&mut text, p, crate::io::AngleUnit::Rad).unwrap();
+            let text = String::from_utf8(text).unwrap();
+            let text = text.replacen("\n", ",frame\n", 1).replace('\n', ",mount\n");
+            let text = text.replacen(",frame,mount\n", ",frame\n", 1);
+            let rows = crate::io::parse_positions(&text, "m.csv", crate::io::AngleUnit::Rad, 6);
+            crate::DataSet::from_positions(rows.unwrap(), "m.csv").unwrap()
+        };
+        let oriented = orient_positions(&truth, &c.positions, &c.frames, &o).unwrap();
+        let e = crate::residuals::positions::layout_for(&truth.params, &named(&oriented));
+        let e = e.unwrap_err().to_string();
+        assert!(
+            e.contains("frame `mount`: the name of the tool mount's block"),
+            "{e}"
+        );
+        let fine = crate::residuals::positions::layout_for(&truth.params, &named(&c.positions));
+        assert!(fine.unwrap().block_named(MOUNT_BLOCK).is_some());
     }
 
     /// Orientations without their σ are refused by file, line and fields,
