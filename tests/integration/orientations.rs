@@ -335,7 +335,9 @@ fn text_of(path: &std::path::Path) -> String {
 
 /// A 6-D campaign simulated with a target mounted turned on the flange:
 /// the fitted mount (`[mount]` of calibrated.toml) is the true one
-/// (true_arm.toml) within 5σ; an orientation displaced by 0.5° is named
+/// (true_arm.toml) seen from the fitted last frame within 5σ; `evaluate
+/// --positions` scores the orientations with it (or, from the nominal arm
+/// file, a closed-form mount, said so); an orientation displaced by 0.5° is named
 /// by `file:line` as an orientation, not a position; an orientation noise
 /// stated ten times too small is refused with the advice to scale
 /// `--orientation-noise`, not only `--position-noise`.

@@ -801,8 +801,7 @@ impl Block for Frame {
 
     /// `R ← exp(δω) R`, `t ← t + δt`.
     fn plus(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
-        let r = Frame::rotation(delta) * Frame::rotation(x);
-        out[..3].copy_from_slice(&rotation_vector(&r));
+        turn_left(x, delta, out);
         for i in 3..6 {
             out[i] = x[i] + delta[i];
         }
@@ -862,9 +861,16 @@ impl Block for Mount {
 
     /// `R ← exp(δ) R`.
     fn plus(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
-        let r = Frame::rotation(delta) * Frame::rotation(x);
-        out[..3].copy_from_slice(&rotation_vector(&r));
+        turn_left(x, delta, out);
     }
+}
+
+/// The rotation vector of `exp(δ) R` into `out[..3]`, for the rotation
+/// vectors `x[..3]` of `R` and `delta[..3]` of `δ`: a frame's and a
+/// mount's step.
+fn turn_left(x: &[f64], delta: &[f64], out: &mut [f64]) {
+    let r = Frame::rotation(delta) * Frame::rotation(x);
+    out[..3].copy_from_slice(&rotation_vector(&r));
 }
 
 #[cfg(test)]

@@ -169,7 +169,23 @@ impl PositionEvaluation {
                 f.name, r[0], r[1], r[2], tr[0], tr[1], tr[2]
             );
         }
-        t += "3-D error |R p + t - y| (mm)\n";
+        t += &self.table(
+            "3-D error |R p + t - y| (mm)",
+            |f| Some(&f.errors),
+            &self.errors,
+        );
+        t + &self.orientation_summary()
+    }
+
+    /// A table of errors under `title`: per frame (`of` it, a frame
+    /// without: no row), then over all (`all`) when there are several.
+    fn table(
+        &self,
+        title: &str,
+        of: impl Fn(&FrameEvaluation) -> Option<&PositionErrors>,
+        all: &PositionErrors,
+    ) -> String {
+        let mut t = format!("{title}\n");
         t += &format!(
             "  {:<20} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
             "frame", "poses", "mean", "RMS", "p95", "max"
@@ -181,12 +197,14 @@ impl PositionEvaluation {
             );
         };
         for f in &self.frames {
-            row(&f.name, &f.errors);
+            if let Some(e) = of(f) {
+                row(&f.name, e);
+            }
         }
         if self.frames.len() > 1 {
-            row("all", &self.errors);
+            row("all", all);
         }
-        t + &self.orientation_summary()
+        t
     }
 
     /// The orientation part of [`PositionEvaluation::summary`]: how the
@@ -203,31 +221,16 @@ impl PositionEvaluation {
              constant turn of the arm's error, so these figures are optimistic"
         };
         let r = m.rotation_deg;
-        let mut t = format!(
+        let t = format!(
             "Tool orientations: {} rows; the 6-D target's mount {how}; rotation vector ({:.6}, \
              {:.6}, {:.6}) deg\n",
             all.count, r[0], r[1], r[2]
         );
-        t += "Orientation error (deg): angle of the turn from the arm's target frame to the one seen\n";
-        t += &format!(
-            "  {:<20} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
-            "frame", "poses", "mean", "RMS", "p95", "max"
-        );
-        let mut row = |name: &str, e: &PositionErrors| {
-            t += &format!(
-                "  {:<20} {:>8} {:>8.4} {:>8.4} {:>8.4} {:>8.4}\n",
-                name, e.count, e.mean, e.rms, e.p95, e.max
-            );
-        };
-        for f in &self.frames {
-            if let Some(e) = &f.orientations {
-                row(&f.name, e);
-            }
-        }
-        if self.frames.len() > 1 {
-            row("all", all);
-        }
-        t
+        t + &self.table(
+            "Orientation error (deg): angle of the turn from the arm's target frame to the one seen",
+            |f| f.orientations.as_ref(),
+            all,
+        )
     }
 }
 
