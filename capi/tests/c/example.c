@@ -220,6 +220,27 @@ static size_t read_lengths(const char *path, AacmmReferenceLength *lengths) {
 
 /* ---- the program ---- */
 
+/* Prints the count of `c`'s auxiliary columns under `count_tag`, then per
+ * column `PREFIXNAME`: start, calibrated, sigma, and 1 or 0 for held or
+ * fitted; returns the count. */
+static size_t print_auxiliary(const AacmmCalibration *c, const char *count_tag,
+                              const char *prefix) {
+    size_t aux_count = 0, name_len = 0;
+    ok(aacmm_calibration_auxiliary_count(c, &aux_count), "aacmm_calibration_auxiliary_count");
+    printf("%s %zu\n", count_tag, aux_count);
+    for (size_t k = 0; k < aux_count; k++) {
+        AacmmAuxiliary column;
+        char name[32], tag[48];
+        ok(aacmm_calibration_auxiliary(c, k, &column, name, sizeof name, &name_len),
+           "aacmm_calibration_auxiliary");
+        snprintf(tag, sizeof tag, "%s%s", prefix, name);
+        const double values[4] = {column.start, column.calibrated, column.sigma,
+                                  column.fixed ? 1.0 : 0.0};
+        print_bits(tag, values, 4);
+    }
+    return aux_count;
+}
+
 /* r = a·b, 3 × 3 row-major. */
 static void mat_mul(const double a[9], const double b[9], double r[9]) {
     for (int i = 0; i < 3; i++) {
@@ -338,20 +359,7 @@ static void tool_poses(const AacmmArm *made, const double *tq, const double *txy
     AacmmCalibration *posed = NULL;
     ok(aacmm_calibrate(made, NULL, 0, NULL, 0, NULL, 0, sixd, &posed),
        "aacmm_calibrate (tool poses)");
-    size_t aux_count = 0, name_len = 0;
-    ok(aacmm_calibration_auxiliary_count(posed, &aux_count),
-       "aacmm_calibration_auxiliary_count");
-    printf("sixd_auxiliary %zu\n", aux_count);
-    for (size_t k = 0; k < aux_count; k++) {
-        AacmmAuxiliary column;
-        char name[32], tag[48];
-        ok(aacmm_calibration_auxiliary(posed, k, &column, name, sizeof name, &name_len),
-           "aacmm_calibration_auxiliary");
-        snprintf(tag, sizeof tag, "aux6_%s", name);
-        const double values[4] = {column.start, column.calibrated, column.sigma,
-                                  column.fixed ? 1.0 : 0.0};
-        print_bits(tag, values, 4);
-    }
+    print_auxiliary(posed, "sixd_auxiliary", "aux6_");
     aacmm_calibration_free(posed);
     aacmm_calibrate_options_free(sixd);
 }
@@ -695,20 +703,7 @@ int main(int argc, char **argv) {
            AACMM_STATUS_INVALID_ARGUMENT, "frame_index");
     /* The same frames as auxiliary columns, the general accessor (which
      * also gives the corrections beyond geometry, when fitted). */
-    size_t aux_count = 0;
-    ok(aacmm_calibration_auxiliary_count(tracked, &aux_count),
-       "aacmm_calibration_auxiliary_count");
-    printf("tracker_auxiliary %zu\n", aux_count);
-    for (size_t k = 0; k < aux_count; k++) {
-        AacmmAuxiliary column;
-        char name[32], tag[48];
-        ok(aacmm_calibration_auxiliary(tracked, k, &column, name, sizeof name, &name_len),
-           "aacmm_calibration_auxiliary");
-        snprintf(tag, sizeof tag, "aux_%s", name);
-        const double values[4] = {column.start, column.calibrated, column.sigma,
-                                  column.fixed ? 1.0 : 0.0};
-        print_bits(tag, values, 4);
-    }
+    const size_t aux_count = print_auxiliary(tracked, "tracker_auxiliary", "aux_");
     AacmmAuxiliary column;
     expect(aacmm_calibration_auxiliary(tracked, aux_count, &column, NULL, 0, &name_len),
            AACMM_STATUS_INVALID_ARGUMENT, "auxiliary_index");
