@@ -1419,6 +1419,35 @@ AacmmStatus aacmm_calibrate_options_set_positions(AacmmCalibrateOptions *options
                                                   size_t uncertainty_len);
 
 /**
+ * The tool's orientation seen at the reference positions set by
+ * `aacmm_calibrate_options_set_positions` (a 6-D target's, as a positions
+ * file's `qw,qx,qy,qz` columns): `quaternions[4·i ..]` is row `i`'s unit
+ * quaternion `w, x, y, z` (scalar first; the target's frame in the row's
+ * frame), or four `NAN` for a row without one (a target that lost its
+ * lock); `quaternions_len` = 4·n for the n rows set, or 0 to remove them.
+ * Weighed by the orientation noise
+ * (`aacmm_calibrate_options_set_orientation_noise_rad`, required when
+ * calibrating), with the target's mount on the flange fitted
+ * (`mount.rx` … in the calibration's auxiliary columns). Setting the
+ * positions again removes them.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or `quaternions` with a
+ * length), `AACMM_STATUS_INVALID_ARGUMENT` (no positions set as arrays),
+ * `AACMM_STATUS_LENGTH` (a length other than 0 or 4·n),
+ * `AACMM_STATUS_INPUT` — naming the array and index — for a value that is
+ * not finite in a row not all `NAN`, and a quaternion whose length is not
+ * 1 within 1e-6. On error the options keep their earlier orientations.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `quaternions` is `NULL` or
+ * points to `quaternions_len` values (it may be `NULL` when that is 0).
+ */
+AacmmStatus aacmm_calibrate_options_set_position_orientations(AacmmCalibrateOptions *options,
+                                                              const double *quaternions,
+                                                              size_t quaternions_len);
+
+/**
  * A reference-positions file (`--positions`: CSV
  * `point,q1,…,qn,x,y,z[,frame][,uncertainty]`, the readings in the unit
  * `aacmm_calibrate_files` is given for the poses file), fitted with the

@@ -920,6 +920,55 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_positions(
     })
 }
 
+/// The tool's orientation seen at the reference positions set by
+/// `aacmm_calibrate_options_set_positions` (a 6-D target's, as a positions
+/// file's `qw,qx,qy,qz` columns): `quaternions[4·i ..]` is row `i`'s unit
+/// quaternion `w, x, y, z` (scalar first; the target's frame in the row's
+/// frame), or four `NAN` for a row without one (a target that lost its
+/// lock); `quaternions_len` = 4·n for the n rows set, or 0 to remove them.
+/// Weighed by the orientation noise
+/// (`aacmm_calibrate_options_set_orientation_noise_rad`, required when
+/// calibrating), with the target's mount on the flange fitted
+/// (`mount.rx` … in the calibration's auxiliary columns). Setting the
+/// positions again removes them.
+///
+/// Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or `quaternions` with a
+/// length), `AACMM_STATUS_INVALID_ARGUMENT` (no positions set as arrays),
+/// `AACMM_STATUS_LENGTH` (a length other than 0 or 4·n),
+/// `AACMM_STATUS_INPUT` — naming the array and index — for a value that is
+/// not finite in a row not all `NAN`, and a quaternion whose length is not
+/// 1 within 1e-6. On error the options keep their earlier orientations.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `quaternions` is `NULL` or
+/// points to `quaternions_len` values (it may be `NULL` when that is 0).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_position_orientations(
+    options: *mut AacmmCalibrateOptions,
+    quaternions: *const f64,
+    quaternions_len: usize,
+) -> AacmmStatus {
+    guard(|| {
+        (Args::new().out("options", options))
+            .input("quaternions", quaternions, quaternions_len)?
+            .disjoint()?;
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let Some(PositionInput::Arrays(rows)) = &mut o.positions else {
+            return Err(Error::invalid(
+                "no positions set as arrays: set them first \
+                 (aacmm_calibrate_options_set_positions)",
+            ));
+        };
+        // SAFETY: by the contract.
+        let q = unsafe { ptr::input(quaternions, quaternions_len, "quaternions") }?;
+        let orientations = positions::orientations(q, rows.len())?;
+        **rows = (**rows).clone().with_orientations(orientations);
+        Ok(())
+    })
+}
+
 /// A reference-positions file (`--positions`: CSV
 /// `point,q1,…,qn,x,y,z[,frame][,uncertainty]`, the readings in the unit
 /// `aacmm_calibrate_files` is given for the poses file), fitted with the

@@ -125,6 +125,48 @@ pub(crate) unsafe fn frame_names(names: &[*const c_char]) -> Result<Vec<String>,
     Ok(out)
 }
 
+/// Per row of `n`, its orientation from `q` (4 values a row, `w, x, y, z`;
+/// empty: none at all): four `NAN` for none, else four finite numbers of
+/// unit length within the reader's tolerance — each refusal naming the
+/// index (`AACMM_STATUS_LENGTH` for a length other than 0 or `4 n`).
+pub(crate) fn orientations(q: &[f64], n: usize) -> Result<Vec<Option<[f64; 4]>>, Error> {
+    use aacmm_core::io::positions::UNIT_QUATERNION_TOLERANCE;
+    if q.is_empty() {
+        return Ok(vec![None; n]);
+    }
+    if q.len() != 4 * n {
+        return Err(Error::length(format!(
+            "quaternions_len = {}, expected 0 or {} (4 per row) for the {n} rows set",
+            q.len(),
+            4 * n
+        )));
+    }
+    (q.chunks_exact(4).enumerate())
+        .map(|(i, c)| {
+            if c.iter().all(|v| v.is_nan()) {
+                return Ok(None);
+            }
+            if let Some(k) = c.iter().position(|v| !v.is_finite()) {
+                return Err(input(format!(
+                    "quaternions[{}] = {}: a row gives four finite numbers or four NAN (row {i})",
+                    4 * i + k,
+                    c[k]
+                )));
+            }
+            let norm = c.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if (norm - 1.0).abs() > UNIT_QUATERNION_TOLERANCE {
+                return Err(input(format!(
+                    "quaternions[{}..{}]: has length {norm}, not 1 (a unit quaternion w, x, y, \
+                     z; row {i})",
+                    4 * i,
+                    4 * i + 4
+                )));
+            }
+            Ok(Some([c[0], c[1], c[2], c[3]]))
+        })
+        .collect()
+}
+
 fn input(message: String) -> Error {
     Error::new(AacmmStatus::Input, message)
 }

@@ -443,6 +443,7 @@ fn the_c_program_agrees_with_the_rust_api() {
     uncertainty_map(&out, &expected, &report);
 
     tracker_positions(&out);
+    tool_poses(&out);
 }
 
 /// The C program's uncertainty map: the session's, bit for bit, and the
@@ -588,6 +589,28 @@ fn tracker_positions(out: &Output) {
         assert_bits(&a.name, &out.doubles(&format!("aux_{}", a.name)), &expected);
         assert!(a.fixed.is_none() && a.sigma.is_some(), "{}", a.name);
     }
+}
+
+/// The program's tool poses: the target's mount fitted as three more
+/// auxiliary columns, the one the program mounted (0.3 rad about z, then
+/// 0.2 rad about x: the nominal arm is the true one, so its last frame is
+/// too), within what the ±0.02 mm noise on the positions leaves.
+fn tool_poses(out: &Output) {
+    use aacmm_core::residuals::Frame;
+    assert_eq!(out.get("sixd_auxiliary"), "15");
+    let q = out.doubles("sixd_quaternions");
+    assert_eq!(q.len(), 320);
+    assert!(q[20..24].iter().all(|v| v.is_nan()));
+    let column = |axis: &str| {
+        let v = out.doubles(&format!("aux6_mount.{axis}"));
+        assert_eq!(v[3], 0.0, "mount.{axis} held");
+        assert!(v[2] > 0.0, "mount.{axis}: σ {}", v[2]);
+        v[1].to_radians()
+    };
+    let fitted = Frame::rotation(&[column("rx"), column("ry"), column("rz")]);
+    let mounted = Frame::rotation(&[0.0, 0.0, 0.3]) * Frame::rotation(&[0.2, 0.0, 0.0]);
+    let apart = (fitted * mounted.inverse()).angle().to_degrees();
+    assert!(apart < 0.01, "the fitted mount {apart}° from the program's");
 }
 
 /// The shared library exports the C API and nothing else.

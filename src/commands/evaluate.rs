@@ -34,6 +34,9 @@ pub struct Args {
     /// 95th percentile, max per frame), each frame registered as the arm
     /// file's `[[frame]]` of its name (a calibrated arm's), else to this
     /// arm in closed form on these positions (optimistic) — and says which.
+    /// Rows with the tool's orientation (`qw,qx,qy,qz`) add its errors,
+    /// per frame, the 6-D target's mount as the arm file's `[mount]` states
+    /// it, else in closed form (said so too).
     /// Printed only: --json and --report are of the touches (--data).
     #[arg(long, value_name = "P.csv")]
     positions: Option<PathBuf>,
@@ -166,8 +169,16 @@ fn stated_frames(arm: &Path) -> Result<Vec<FrameValues>> {
     let text =
         std::fs::read_to_string(arm).with_context(|| format!("{}: cannot read", arm.display()))?;
     let frames = parse_frames(&text, &source_name(arm))?;
-    Ok(frames
+    let mut values: Vec<FrameValues> = frames
         .iter()
         .map(|f| (f.name.clone(), f.values()))
-        .collect())
+        .collect();
+    // A calibrated arm's mount of a 6-D target, where the orientations are
+    // evaluated.
+    if let Some(m) = aacmm_core::io::frames::parse_mount(&text, &source_name(arm))? {
+        let r = m.rotation_deg.map(f64::to_radians);
+        let name = aacmm_core::residuals::MOUNT_BLOCK.to_string();
+        values.push((name, [r[0], r[1], r[2], 0.0, 0.0, 0.0]));
+    }
+    Ok(values)
 }

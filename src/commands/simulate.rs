@@ -125,6 +125,18 @@ pub struct Args {
         default_value_t = 0.01
     )]
     orientation_noise: f64,
+    /// The largest angle of the 6-D target's random mount on the flange,
+    /// degrees: its axis uniform on the sphere, its angle uniform in
+    /// [0, DEG] (180, the default: any way; 0: mounted square). Written in
+    /// true_arm.toml as `[mount]`.
+    #[arg(
+        long,
+        value_name = "DEG",
+        requires = "orientation",
+        default_value_t = 180.0,
+        value_parser = mount_angle
+    )]
+    mount_deg: f64,
     /// A drift of the true arm's base against the instrument over the
     /// session, `X,Y,Z` mm/h (needs --session-hours).
     #[arg(long, value_name = "X,Y,Z", requires = "session_hours", value_parser = drift_vector)]
@@ -314,19 +326,28 @@ fn tracker(
         },
     };
     let mut campaign = campaign.map_err(|e| anyhow!("--positions: {e}"))?;
+    let mut mount = None;
     if args.orientation {
         // Its own stream (the truth has the seed, the positions the next):
         // the positions are those of a campaign without orientations.
-        let sigma = args.orientation_noise.to_radians();
-        let seed = args.seed.wrapping_add(2);
+        // The mount from a stream of its own too: --mount-deg 0 gives the
+        // orientations of a target mounted square, whatever the seed.
+        let settings = aacmm_core::simulate::OrientationSettings {
+            mount: aacmm_core::simulate::random_mount(
+                args.mount_deg.to_radians(),
+                args.seed.wrapping_add(3),
+            ),
+            sigma_rad: args.orientation_noise.to_radians(),
+            seed: args.seed.wrapping_add(2),
+        };
         campaign.positions = (aacmm_core::simulate::orient_positions(
             &truth,
             &campaign.positions,
             &campaign.frames,
-            sigma,
-            seed,
+            &settings,
         ))
         .map_err(|e| anyhow!("--orientation: {e}"))?;
+        mount = Some(settings.mount);
     }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
@@ -335,7 +356,13 @@ fn tracker(
     write_positions(&mut text, &campaign.positions, AngleUnit::Deg)?;
     write_file(&path, &text)?;
     let true_arm = arm_to_toml(&truth, LengthUnit::Mm, AngleUnit::Deg)
-        + &frames_to_toml(&true_frames(&campaign));
+        + &frames_to_toml(&true_frames(&campaign))
+        + &mount.map_or_else(String::new, |m| {
+            aacmm_core::io::frames::mount_to_toml(&aacmm_core::io::frames::MountRecord {
+                rotation_deg: m.map(f64::to_degrees),
+                small_rotation_sigma_deg: None,
+            })
+        });
     let arm_path = args.out.join(TRUE_ARM_FILE);
     write_file(&arm_path, true_arm.as_bytes())?;
     let turned = if args.orientation {
@@ -355,6 +382,17 @@ fn tracker(
         arm_path.display()
     ))?;
     Ok(truth)
+}
+
+/// `--mount-deg`'s value: an angle in [0, 180] degrees.
+fn mount_angle(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if (0.0..=180.0).contains(&v) => Ok(v),
+        Ok(v) => Err(format!(
+            "{v}: the mount's largest angle is 0 to 180 degrees"
+        )),
+        Err(e) => Err(format!("{text}: {e}")),
+    }
 }
 
 /// `--chain`'s value: a chain shape such as `PRRRRRR`.

@@ -4,8 +4,10 @@
 
 use aacmm_core::calibrate::validate::{orientation_errors, position_errors};
 use aacmm_core::io::Arm;
-use aacmm_core::residuals::Noise;
-use aacmm_core::simulate::{orient_positions, random_arm, simulate_positions_from};
+use aacmm_core::residuals::{Frame, MOUNT_BLOCK, Noise};
+use aacmm_core::simulate::{
+    OrientationSettings, orient_positions, random_arm, random_mount, simulate_positions_from,
+};
 use aacmm_core::{DataSet, ModelOptions, Problem};
 
 use super::positions::{campaign, lm, normalised_errors, settings, tracker};
@@ -53,8 +55,15 @@ struct Seed {
 /// station.
 fn one_seed(nominal: &Arm, seed: u64, poses: usize) -> Seed {
     let (truth, c) = campaign(nominal, seed, poses, 1);
-    let sigma = ORIENTATION_DEG.to_radians();
-    let with = orient_positions(&truth, &c.positions, &c.frames, sigma, seed + 2000).unwrap();
+    // A target mounted any way on the flange (as `simulate --orientation`
+    // draws it by default).
+    let mount = random_mount(std::f64::consts::PI, seed + 3000);
+    let turn = |seed| OrientationSettings {
+        mount,
+        sigma_rad: ORIENTATION_DEG.to_radians(),
+        seed,
+    };
+    let with = orient_positions(&truth, &c.positions, &c.frames, &turn(seed + 2000)).unwrap();
     let fit = |rows, noise: Noise| {
         let data = DataSet::from_positions(rows, "sim.csv").unwrap();
         let model = ModelOptions {
@@ -72,7 +81,7 @@ fn one_seed(nominal: &Arm, seed: u64, poses: usize) -> Seed {
     let six = fit(with, oriented());
     let three = fit(c.positions.clone(), tracker());
     let fresh = simulate_positions_from(&truth, &settings(30, 0, seed + 5000), &c.frames).unwrap();
-    let fresh = orient_positions(&truth, &fresh, &c.frames, sigma, seed + 6000).unwrap();
+    let fresh = orient_positions(&truth, &fresh, &c.frames, &turn(seed + 6000)).unwrap();
     let held = DataSet::from_positions(fresh, "held.csv").unwrap();
     let held = held.positions().unwrap();
     let mean = |cal: &aacmm_core::Calibration| {
@@ -84,14 +93,57 @@ fn one_seed(nominal: &Arm, seed: u64, poses: usize) -> Seed {
         let e = orientation_errors(params, held, frames).unwrap();
         e.expect("orientations held out").mean
     };
+    let mut z2 = normalised_errors(&six, &truth, &c);
+    z2.extend(mount_errors(&six, &truth, mount));
+    let mut true_frames = c.frames.clone();
+    true_frames.push((
+        MOUNT_BLOCK.into(),
+        [mount[0], mount[1], mount[2], 0.0, 0.0, 0.0],
+    ));
     Seed {
-        z2: normalised_errors(&six, &truth, &c),
+        z2,
         position: [mean(&six), mean(&three)],
         orientation: [
-            turned(&six.params, &six.frames()),
-            turned(&truth.params, &c.frames),
+            turned(&six.params, &six.frames_with_mount()),
+            turned(&truth.params, &true_frames),
         ],
     }
+}
+
+/// The mount a fit of arm `fitted` should find for a target mounted as
+/// `mount` (rotation vector, rad) on the arm `truth`: the true mount seen
+/// from the fitted last frame, `Rx(−α_f) Rz(θ_t − θ_f) Rx(α_t) R_m` (last
+/// joint, D-H) — the fitted mount absorbs any constant turn of the last
+/// frame, so with the last `alpha`, `theta` held at nominal it is not the
+/// true mount but this one.
+pub(super) fn equivalent_mount(
+    truth: &aacmm_core::DhParams,
+    fitted: &aacmm_core::DhParams,
+    mount: [f64; 3],
+) -> nalgebra::Rotation3<f64> {
+    use nalgebra::{Rotation3, Vector3};
+    let (t, f) = (truth.joints.last().unwrap(), fitted.joints.last().unwrap());
+    let x = |a: f64| Rotation3::from_axis_angle(&Vector3::x_axis(), a);
+    let z = Rotation3::from_axis_angle(&Vector3::z_axis(), t.theta - f.theta);
+    x(-f.alpha) * z * x(t.alpha) * Frame::rotation(&mount)
+}
+
+/// `((estimate − truth)/σ)²` of the fitted mount's three small rotations
+/// (its σ are of small rotations about the last frame's axes: the
+/// difference is taken as one, `log(R_est R_trueᵀ)`), the truth seen from
+/// the fitted last frame ([`equivalent_mount`]).
+fn mount_errors(cal: &aacmm_core::Calibration, truth: &Arm, mount: [f64; 3]) -> Vec<f64> {
+    let est = cal.mount().expect("a fitted mount").map(f64::to_radians);
+    let m = equivalent_mount(&truth.params, &cal.params, mount).scaled_axis();
+    let d = Frame::difference(
+        &[m[0], m[1], m[2], 0.0, 0.0, 0.0],
+        &[est[0], est[1], est[2], 0.0, 0.0, 0.0],
+    );
+    let record = cal.mount_record().unwrap();
+    let sigma = record.small_rotation_sigma_deg.expect("the mount's σ");
+    (0..3)
+        .map(|k| (d[k] / sigma[k].to_radians()).powi(2))
+        .collect()
 }
 
 /// Over `seeds`, for the UR5 and the 8-joint track arm: the normalised
@@ -236,6 +288,28 @@ fn simulate_orientations_then_calibrate() {
     let after = &json["validation"]["fitted"]["after"]["orientations"];
     assert_eq!(after["count"], 120);
     assert!(after["rms"].as_f64().unwrap() < 0.03, "{after}");
+    // The page: the noise among the inputs, and a table of the orientation
+    // errors beside the 3-D errors' — per frame (two here), each cell
+    // marked with its place in calibration.json.
+    let page = text_of(&out.join("report.html"));
+    assert!(page.contains("orientation noise"), "no noise line");
+    let table = page
+        .split("Tool orientation errors at the reference positions (deg)")
+        .nth(1)
+        .expect("the orientation table");
+    let table = table.split("</table>").next().unwrap();
+    for row in [
+        "fitted, nominal",
+        "fitted, calibrated",
+        "station1",
+        "station2",
+    ] {
+        assert!(table.contains(row), "{row}: {table}");
+    }
+    assert!(
+        table.contains("/validation/fitted/after/orientations"),
+        "{table}"
+    );
     // Without orientations (the columns dropped): no word of them.
     let plain: String = (text_of(&positions).lines())
         .map(|l| {
@@ -251,8 +325,154 @@ fn simulate_orientations_then_calibrate() {
     for word in ["Orientation noise", "Tool orientations", "orientations "] {
         assert!(!text.contains(word), "{word}: {text}");
     }
+    let page = text_of(&dir.join("plain").join("report.html"));
+    assert!(!page.contains("Tool orientation errors"));
 }
 
 fn text_of(path: &std::path::Path) -> String {
     std::fs::read_to_string(path).unwrap()
+}
+
+/// A 6-D campaign simulated with a target mounted turned on the flange:
+/// the fitted mount (`[mount]` of calibrated.toml) is the true one
+/// (true_arm.toml) seen from the fitted last frame within 5σ; `evaluate
+/// --positions` scores the orientations with it (or, from the nominal arm
+/// file, a closed-form mount, said so); an orientation displaced by 0.5° is named
+/// by `file:line` as an orientation, not a position; an orientation noise
+/// stated ten times too small is refused with the advice to scale
+/// `--orientation-noise`, not only `--position-noise`.
+#[test]
+fn the_mount_is_fitted_and_orientation_outliers_are_named_so() {
+    use crate::util::{aacmm, shipped_arm, stderr, stdout, temp_dir};
+    use aacmm_core::io::frames::parse_mount;
+    let dir = temp_dir("orientation-outliers");
+    let d = dir.to_str().unwrap();
+    let arm = shipped_arm();
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm,
+        "--errors",
+        "random",
+        "--positions",
+        "40",
+        "--orientation",
+        "--mount-deg",
+        "120",
+        "--seed",
+        "7",
+        "--out",
+        d,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let true_arm = dir.join("true_arm.toml");
+    let truth = parse_mount(&text_of(&true_arm), "t").unwrap();
+    let truth = truth.expect("the true mount").rotation_deg;
+    let true_params = aacmm_core::read_arm(&true_arm).unwrap().0.params;
+    let positions = dir.join("positions.csv");
+    let calibrate = |positions: &std::path::Path, noise: &str, out: &str| {
+        let out = dir.join(out);
+        let args = [
+            "calibrate",
+            "--arm",
+            &arm,
+            "--positions",
+            positions.to_str().unwrap(),
+            "--position-noise",
+            "0.015+0.006/m",
+            "--orientation-noise",
+            noise,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        (aacmm(&args), out)
+    };
+    let (o, out) = calibrate(&positions, "0.01", "fit");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let fitted = parse_mount(&text_of(&out.join("calibrated.toml")), "c").unwrap();
+    let fitted = fitted.expect("the fitted mount");
+    let sigma = fitted.small_rotation_sigma_deg.expect("its σ");
+    let r = |v: [f64; 3]| {
+        let v = v.map(f64::to_radians);
+        aacmm_core::residuals::Frame::rotation(&v)
+    };
+    let calibrated = aacmm_core::read_arm(&out.join("calibrated.toml"))
+        .unwrap()
+        .0;
+    let expected = equivalent_mount(&true_params, &calibrated.params, truth.map(f64::to_radians));
+    let apart = (r(fitted.rotation_deg) * expected.inverse())
+        .angle()
+        .to_degrees();
+    let largest = sigma.iter().copied().fold(0.0, f64::max);
+    assert!(apart < 5.0 * largest, "{apart}° apart, σ {sigma:?}");
+    assert!(
+        truth.iter().map(|v| v * v).sum::<f64>().sqrt() > 1.0,
+        "{truth:?}"
+    );
+    // `evaluate --positions`: the orientation errors too, with the mount
+    // the calibrated arm file states, or in closed form (and said so).
+    let evaluate = |arm: &str| {
+        let o = aacmm(&[
+            "evaluate",
+            "--arm",
+            arm,
+            "--positions",
+            positions.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let text = evaluate(out.join("calibrated.toml").to_str().unwrap());
+    assert!(
+        text.contains("mount as the arm file states it ([mount])"),
+        "{text}"
+    );
+    let rms = |text: &str| -> f64 {
+        let table = text.split("Orientation error (deg)").nth(1).expect(text);
+        let line = table
+            .lines()
+            .find(|l| l.trim_start().starts_with("instrument"));
+        let line = line.expect("the frame's row");
+        line.split_whitespace().nth(3).unwrap().parse().unwrap()
+    };
+    assert!(rms(&text) < 0.03, "{text}");
+    let text = evaluate(&arm);
+    assert!(
+        text.contains("in closed form on these orientations"),
+        "{text}"
+    );
+    assert!(rms(&text) > 0.1, "{text}");
+    // Row 6's orientation turned by a further 0.5° about its x axis.
+    let text = text_of(&positions);
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut f: Vec<String> = lines[6].split(',').map(str::to_string).collect();
+    let q: Vec<f64> = f[10..14].iter().map(|v| v.parse().unwrap()).collect();
+    let h = 0.25f64.to_radians();
+    let (c, s) = (h.cos(), h.sin());
+    // q ⊗ (c, s, 0, 0).
+    let turned = [
+        q[0] * c - q[1] * s,
+        q[1] * c + q[0] * s,
+        q[2] * c + q[3] * s,
+        q[3] * c - q[2] * s,
+    ];
+    for (k, v) in turned.iter().enumerate() {
+        f[10 + k] = format!("{v:.17}");
+    }
+    let label = f[0].clone();
+    lines[6] = f.join(",");
+    let gross = dir.join("gross.csv");
+    std::fs::write(&gross, lines.join("\n") + "\n").unwrap();
+    let (o, _) = calibrate(&gross, "0.01", "gross");
+    let text = stdout(&o);
+    assert!(text.contains("Outliers: 1 orientation(s) beyond"), "{text}");
+    assert!(
+        text.contains(&format!("gross.csv:7 (point {label}, orientation, ")),
+        "{text}"
+    );
+    // Ten times too small a σ: refused, with the orientation's flag.
+    let (o, _) = calibrate(&positions, "0.001", "small");
+    assert!(!o.status.success());
+    let all = stdout(&o) + &stderr(&o);
+    assert!(all.contains("--orientation-noise 0.0"), "{all}");
 }

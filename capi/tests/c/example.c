@@ -21,7 +21,9 @@
  *   sigma, and 1 or 0 for held or fitted), map (the calibration's
  *   uncertainty map: coverage, k_isotropic, rms, median, max), map_counts
  *   (its poses and bands), map_region_K (per band: reach from, to, poses,
- *   rms, max)
+ *   rms, max), sixd_quaternions (the tool poses' orientations, w x y z per
+ *   row), sixd_auxiliary (the count of auxiliary columns of their fit),
+ *   aux6_NAME (per column, as aux_NAME)
  *
  * Its own checks (expected error codes, arrays == files) make it exit with
  * status 1 and a message on stderr when they fail.
@@ -36,6 +38,7 @@
 
 #define PI 3.14159265358979323846
 #define POSES 13 /* not a multiple of the kernel's 4 lanes: the tail runs too */
+#define TRACKED 40 /* tracker positions per station */
 
 static int failures = 0;
 
@@ -216,6 +219,150 @@ static size_t read_lengths(const char *path, AacmmReferenceLength *lengths) {
 }
 
 /* ---- the program ---- */
+
+/* Prints the count of `c`'s auxiliary columns under `count_tag`, then per
+ * column `PREFIXNAME`: start, calibrated, sigma, and 1 or 0 for held or
+ * fitted; returns the count. */
+static size_t print_auxiliary(const AacmmCalibration *c, const char *count_tag,
+                              const char *prefix) {
+    size_t aux_count = 0, name_len = 0;
+    ok(aacmm_calibration_auxiliary_count(c, &aux_count), "aacmm_calibration_auxiliary_count");
+    printf("%s %zu\n", count_tag, aux_count);
+    for (size_t k = 0; k < aux_count; k++) {
+        AacmmAuxiliary column;
+        char name[32], tag[48];
+        ok(aacmm_calibration_auxiliary(c, k, &column, name, sizeof name, &name_len),
+           "aacmm_calibration_auxiliary");
+        snprintf(tag, sizeof tag, "%s%s", prefix, name);
+        const double values[4] = {column.start, column.calibrated, column.sigma,
+                                  column.fixed ? 1.0 : 0.0};
+        print_bits(tag, values, 4);
+    }
+    return aux_count;
+}
+
+/* r = a·b, 3 × 3 row-major. */
+static void mat_mul(const double a[9], const double b[9], double r[9]) {
+    for (int i = 0; i < 3; i++) {
+        for (int j = 0; j < 3; j++) {
+            r[3 * i + j] = 0;
+            for (int k = 0; k < 3; k++) {
+                r[3 * i + j] += a[3 * i + k] * b[3 * k + j];
+            }
+        }
+    }
+}
+
+/* A turn by `t` rad about the axis `axis` (0 = x, 2 = z), row-major. */
+static void turn_about(int axis, double t, double r[9]) {
+    const double c = cos(t), s = sin(t);
+    if (axis == 0) {
+        const double m[9] = {1, 0, 0, 0, c, -s, 0, s, c};
+        memcpy(r, m, sizeof m);
+    } else {
+        const double m[9] = {c, -s, 0, s, c, 0, 0, 0, 1};
+        memcpy(r, m, sizeof m);
+    }
+}
+
+/* The unit quaternion w, x, y, z of the rotation `r` (row-major). */
+static void quaternion_of(const double r[9], double q[4]) {
+    const double tr = r[0] + r[4] + r[8];
+    if (tr > 0) {
+        const double s = 2 * sqrt(tr + 1);
+        q[0] = s / 4;
+        q[1] = (r[7] - r[5]) / s;
+        q[2] = (r[2] - r[6]) / s;
+        q[3] = (r[3] - r[1]) / s;
+    } else if (r[0] > r[4] && r[0] > r[8]) {
+        const double s = 2 * sqrt(1 + r[0] - r[4] - r[8]);
+        q[0] = (r[7] - r[5]) / s;
+        q[1] = s / 4;
+        q[2] = (r[1] + r[3]) / s;
+        q[3] = (r[2] + r[6]) / s;
+    } else if (r[4] > r[8]) {
+        const double s = 2 * sqrt(1 + r[4] - r[0] - r[8]);
+        q[0] = (r[2] - r[6]) / s;
+        q[1] = (r[1] + r[3]) / s;
+        q[2] = s / 4;
+        q[3] = (r[5] + r[7]) / s;
+    } else {
+        const double s = 2 * sqrt(1 + r[8] - r[0] - r[4]);
+        q[0] = (r[3] - r[1]) / s;
+        q[1] = (r[2] + r[6]) / s;
+        q[2] = (r[5] + r[7]) / s;
+        q[3] = s / 4;
+    }
+}
+
+/* Tool poses: the tracker's positions (`tq`, `txyz`, `tframes` of the
+ * paper's nominal arm `made`, its twists ∓90°, no zero offsets) with the
+ * orientation of a 6-D target mounted on the flange turned by 0.3 rad
+ * about z then 0.2 rad about x, seen from each station (turned by `turn`
+ * about z); row 5's target lost its lock (four NAN). Bad quaternions are
+ * refused; the calibration fits the mount (three more auxiliary columns,
+ * `mount.rx` …), printed as sixd_auxiliary and aux6_NAME. */
+static void tool_poses(const AacmmArm *made, const double *tq, const double *txyz,
+                       const uint32_t *tframes, const char **stations, const double *turn) {
+    static double quats[2 * TRACKED * 4];
+    double mount[9], mz[9], mx[9];
+    turn_about(2, 0.3, mz);
+    turn_about(0, 0.2, mx);
+    mat_mul(mz, mx, mount);
+    for (size_t i = 0; i < 2 * TRACKED; i++) {
+        double r[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, link[9], z[9], x[9], next[9];
+        for (size_t j = 0; j < 6; j++) {
+            turn_about(2, tq[6 * i + j], z);
+            turn_about(0, (j % 2 == 0 ? -1 : 1) * PI / 2, x);
+            mat_mul(z, x, link);
+            mat_mul(r, link, next);
+            memcpy(r, next, sizeof next);
+        }
+        double station[9], seen[9];
+        turn_about(2, turn[tframes[i]], station);
+        mat_mul(station, r, next);
+        mat_mul(next, mount, seen);
+        quaternion_of(seen, quats + 4 * i);
+    }
+    for (size_t k = 0; k < 4; k++) {
+        quats[4 * 5 + k] = NAN;
+    }
+    print_bits("sixd_quaternions", quats, 2 * TRACKED * 4);
+    AacmmCalibrateOptions *sixd = NULL;
+    ok(aacmm_calibrate_options_new(&sixd), "aacmm_calibrate_options_new");
+    ok(aacmm_calibrate_options_set_method(sixd, AACMM_METHOD_LM),
+       "aacmm_calibrate_options_set_method");
+    ok(aacmm_calibrate_options_set_position_noise_mm(sixd, 0.015, 0.006),
+       "aacmm_calibrate_options_set_position_noise_mm");
+    ok(aacmm_calibrate_options_set_orientation_noise_rad(sixd, 0.01 * PI / 180),
+       "aacmm_calibrate_options_set_orientation_noise_rad");
+    /* Orientations need positions set as arrays first. */
+    expect(aacmm_calibrate_options_set_position_orientations(sixd, quats, 2 * TRACKED * 4),
+           AACMM_STATUS_INVALID_ARGUMENT, "orientations_without_positions");
+    ok(aacmm_calibrate_options_set_positions(sixd, 6, tq, 2 * TRACKED * 6, txyz,
+                                             2 * TRACKED * 3, tframes, 2 * TRACKED, stations, 2,
+                                             NULL, 0),
+       "aacmm_calibrate_options_set_positions");
+    expect(aacmm_calibrate_options_set_position_orientations(sixd, quats, 2 * TRACKED * 4 - 4),
+           AACMM_STATUS_LENGTH, "orientations_length");
+    const double w = quats[0];
+    quats[0] = 1.01 * w;
+    expect(aacmm_calibrate_options_set_position_orientations(sixd, quats, 2 * TRACKED * 4),
+           AACMM_STATUS_INPUT, "orientation_not_unit");
+    quats[0] = w;
+    quats[4 * 5] = 0.5; /* a row with some of its four NAN */
+    expect(aacmm_calibrate_options_set_position_orientations(sixd, quats, 2 * TRACKED * 4),
+           AACMM_STATUS_INPUT, "orientation_partly_nan");
+    quats[4 * 5] = NAN;
+    ok(aacmm_calibrate_options_set_position_orientations(sixd, quats, 2 * TRACKED * 4),
+       "aacmm_calibrate_options_set_position_orientations");
+    AacmmCalibration *posed = NULL;
+    ok(aacmm_calibrate(made, NULL, 0, NULL, 0, NULL, 0, sixd, &posed),
+       "aacmm_calibrate (tool poses)");
+    print_auxiliary(posed, "sixd_auxiliary", "aux6_");
+    aacmm_calibration_free(posed);
+    aacmm_calibrate_options_free(sixd);
+}
 
 int main(int argc, char **argv) {
     if (argc != 4) {
@@ -459,7 +606,6 @@ int main(int argc, char **argv) {
     /* Reference positions from arrays: a laser tracker at two stations sees
      * the probe of the nominal arm (`made`) in TRACKED poses each; the
      * calibration on the positions alone finds where the stations stood. */
-#define TRACKED 40
     static double tq[2 * TRACKED * 6], txyz[2 * TRACKED * 3];
     static uint32_t tframes[2 * TRACKED];
     const char *stations[3] = {"left", "right", "solo"};
@@ -557,20 +703,7 @@ int main(int argc, char **argv) {
            AACMM_STATUS_INVALID_ARGUMENT, "frame_index");
     /* The same frames as auxiliary columns, the general accessor (which
      * also gives the corrections beyond geometry, when fitted). */
-    size_t aux_count = 0;
-    ok(aacmm_calibration_auxiliary_count(tracked, &aux_count),
-       "aacmm_calibration_auxiliary_count");
-    printf("tracker_auxiliary %zu\n", aux_count);
-    for (size_t k = 0; k < aux_count; k++) {
-        AacmmAuxiliary column;
-        char name[32], tag[48];
-        ok(aacmm_calibration_auxiliary(tracked, k, &column, name, sizeof name, &name_len),
-           "aacmm_calibration_auxiliary");
-        snprintf(tag, sizeof tag, "aux_%s", name);
-        const double values[4] = {column.start, column.calibrated, column.sigma,
-                                  column.fixed ? 1.0 : 0.0};
-        print_bits(tag, values, 4);
-    }
+    const size_t aux_count = print_auxiliary(tracked, "tracker_auxiliary", "aux_");
     AacmmAuxiliary column;
     expect(aacmm_calibration_auxiliary(tracked, aux_count, &column, NULL, 0, &name_len),
            AACMM_STATUS_INVALID_ARGUMENT, "auxiliary_index");
@@ -591,6 +724,7 @@ int main(int argc, char **argv) {
     }
     aacmm_calibration_free(tracked);
     aacmm_calibrate_options_free(tracking);
+    tool_poses(made, tq, txyz, tframes, stations, turn);
 
     aacmm_calibration_free(from_arrays);
     aacmm_calibration_free(cal);

@@ -292,7 +292,8 @@ impl ChiSquare {
     }
 }
 
-/// A touch whose residual the noise model does not explain.
+/// A touch (or other observation) whose residual the noise model does not
+/// explain.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Outlier {
     /// Where it was read: `file:line`.
@@ -302,6 +303,20 @@ pub struct Outlier {
     /// Its standardised residual (`sqrt` of the leverage-corrected
     /// `rᵀ A r`, in units of its own σ).
     pub standardised: f64,
+    /// What it is when neither a touch nor a reference position (the rows
+    /// of a `file:line` that are): `orientation` for the tool orientation
+    /// of a position's row, a term's name for any other evidence; absent
+    /// for touches and positions.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<String>,
+}
+
+impl Outlier {
+    /// What it is, in words: a `touch` or `position` (by `noun`, the data's
+    /// own word), or its kind.
+    pub fn noun<'a>(&'a self, noun: &'a str) -> &'a str {
+        self.kind.as_deref().unwrap_or(noun)
+    }
 }
 
 /// How a plain fit's outlier list was screened: after a gross error (a
@@ -363,10 +378,18 @@ pub(crate) fn outliers(
     for (i, (&s, &k)) in scaled.values.iter().zip(&scaled.rows).enumerate() {
         if s > threshold(k) {
             let origin = objective.origin(i);
+            let kind = match objective.term_of(i) {
+                Some(t) if t.role() == crate::residuals::Role::Orientations => {
+                    Some("orientation".to_string())
+                }
+                Some(t) if t.role() == crate::residuals::Role::Other => Some(t.name().to_string()),
+                _ => None,
+            };
             found.push(Outlier {
                 at: origin.at,
                 point: origin.group,
                 standardised: s.sqrt(),
+                kind,
             });
         }
     }

@@ -684,6 +684,50 @@ impl Calibration {
             .collect()
     }
 
+    /// [`Calibration::frames`], then the fitted tool mount of orientations
+    /// when there is one, under its block's name
+    /// ([`validate::FrameValues`]): what the figures of orientations need.
+    pub fn frames_with_mount(&self) -> Vec<validate::FrameValues> {
+        let mut frames = self.frames();
+        if let Some(m) = self.mount() {
+            let r = m.map(f64::to_radians);
+            frames.push((
+                crate::residuals::MOUNT_BLOCK.to_string(),
+                [r[0], r[1], r[2], 0.0, 0.0, 0.0],
+            ));
+        }
+        frames
+    }
+
+    /// The fitted tool mount of orientations ([`crate::residuals::Mount`]),
+    /// its rotation vector in degrees; `None` when none was fitted.
+    pub fn mount(&self) -> Option<[f64; 3]> {
+        let cols = self.mount_columns()?;
+        Some(std::array::from_fn(|k| cols[k].calibrated))
+    }
+
+    /// The fitted tool mount as a calibrated arm file carries it
+    /// ([`crate::io::frames::MountRecord`]); `None` when none was fitted.
+    pub fn mount_record(&self) -> Option<crate::io::frames::MountRecord> {
+        let cols = self.mount_columns()?;
+        let sigma = [cols[0].sigma, cols[1].sigma, cols[2].sigma];
+        Some(crate::io::frames::MountRecord {
+            rotation_deg: std::array::from_fn(|k| cols[k].calibrated),
+            small_rotation_sigma_deg: sigma[0]
+                .zip(sigma[1])
+                .zip(sigma[2])
+                .map(|((a, b), c)| [a, b, c]),
+        })
+    }
+
+    /// The mount's three columns `mount.rx … mount.rz`, if fitted.
+    fn mount_columns(&self) -> Option<&[AuxiliaryEstimate]> {
+        let name = |k: &str| format!("{}.{k}", crate::residuals::MOUNT_BLOCK);
+        let i = (self.auxiliary.iter()).position(|c| c.name == name("rx"))?;
+        let cols = self.auxiliary.get(i..i + 3)?;
+        (cols[1].name == name("ry") && cols[2].name == name("rz")).then_some(cols)
+    }
+
     /// Each fitted frame as a calibrated arm file carries it
     /// ([`crate::io::frames`]): values and σ in deg and mm.
     pub fn frame_records(&self) -> Vec<crate::io::frames::FrameRecord> {

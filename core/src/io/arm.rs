@@ -267,6 +267,10 @@ pub(crate) struct ArmFile {
     /// never written here.
     #[serde(rename = "frame", default, skip_serializing)]
     _frame: Option<serde::de::IgnoredAny>,
+    /// A calibration's tool mount of orientations: read by
+    /// [`super::frames::parse_mount`], never written here.
+    #[serde(rename = "mount", default, skip_serializing)]
+    _mount: Option<serde::de::IgnoredAny>,
     /// A calibration's verdict: read by [`super::verdict`], never written
     /// here.
     #[serde(rename = "verdict", default, skip_serializing)]
@@ -629,6 +633,7 @@ impl ArmFile {
             },
             _prior: None,
             _frame: None,
+            _mount: None,
             _verdict: None,
         }
     }

@@ -115,6 +115,92 @@ pub fn frames_to_toml(frames: &[FrameRecord]) -> String {
     toml::to_string(&t).expect("strings and finite numbers always serialize to TOML")
 }
 
+/// The tool mount of a 6-D target as an arm file carries it (`[mount]`):
+/// the rotation from the target's frame to the arm's last frame, fitted
+/// when the positions give the tool's orientation
+/// ([`crate::residuals::Mount`]).
+///
+/// ```toml
+/// [mount]
+/// rotation_deg = [12.5, -3.25, 90.0]            # rotation vector (axis × angle)
+/// small_rotation_sigma_deg = [0.002, 0.002, 0.003] # about the last frame's x, y, z axes
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MountRecord {
+    /// Rotation vector of `R_m`, deg.
+    pub rotation_deg: [f64; 3],
+    /// σ (k = 1) of small rotations about the arm's last frame's x, y and z
+    /// axes, deg, when the fit determined them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub small_rotation_sigma_deg: Option<[f64; 3]>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct MountTable {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mount: Option<MountRecord>,
+}
+
+/// The `[mount]` table of an arm file's text, if any; `file` names it in
+/// messages.
+///
+/// ```
+/// use aacmm_core::io::frames::{MountRecord, mount_to_toml, parse_mount};
+/// let m = MountRecord { rotation_deg: [0.0, 0.0, 90.0], small_rotation_sigma_deg: None };
+/// let text = mount_to_toml(&m);
+/// assert_eq!(text, "[mount]\nrotation_deg = [0.0, 0.0, 90.0]\n");
+/// assert_eq!(parse_mount(&text, "c.toml").unwrap(), Some(m));
+/// assert_eq!(parse_mount("", "c.toml").unwrap(), None);
+/// ```
+///
+/// # Errors
+///
+/// TOML that does not parse, a `[mount]` table with a field missing,
+/// unknown or not a number, and a value that is not finite.
+pub fn parse_mount(text: &str, file: &str) -> Result<Option<MountRecord>, InputError> {
+    #[derive(Deserialize)]
+    struct Only {
+        #[serde(default)]
+        mount: Option<MountRecord>,
+    }
+    // Every other table is the arm's or the frames': read elsewhere.
+    let table: toml::Table = toml::from_str(text).map_err(|e| {
+        let line = e.span().map_or(0, |s| line_of(text, s.start));
+        InputError::field(file, line, "mount", e.message().to_string())
+    })?;
+    let Some(value) = table.get("mount") else {
+        return Ok(None);
+    };
+    let mut only = toml::Table::new();
+    only.insert("mount".into(), value.clone());
+    let mount = (only.try_into::<Only>())
+        .map_err(|e| {
+            let m = format!("a `[mount]` table: {}", e.message());
+            InputError::field(file, 0, "mount", m)
+        })?
+        .mount;
+    if let Some(m) = &mount {
+        let values = m
+            .rotation_deg
+            .iter()
+            .chain(m.small_rotation_sigma_deg.iter().flatten());
+        if values.clone().any(|v| !v.is_finite()) {
+            let m = "mount: a value that is not a finite number".to_string();
+            return Err(InputError::file_error(file, m));
+        }
+    }
+    Ok(mount)
+}
+
+/// The `[mount]` table of `mount`, to append to an arm file.
+pub fn mount_to_toml(mount: &MountRecord) -> String {
+    let t = MountTable {
+        mount: Some(mount.clone()),
+    };
+    toml::to_string(&t).expect("finite numbers always serialize to TOML")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -358,6 +358,15 @@ impl<'a> Objective<'a> {
             )
     }
 
+    /// The term of observation `i` ([`Objective::observations`]' order).
+    pub fn term_of(&self, i: usize) -> Option<&(dyn Term + 'a)> {
+        let (first, term) = self
+            .observing()
+            .take_while(|(first, _)| *first <= i)
+            .last()?;
+        (i - first < term.observations()).then_some(term)
+    }
+
     /// A copy whose observations' weights are multiplied by `w` (the robust
     /// fit's), the terms with observations taking theirs in order.
     pub(crate) fn with_observation_weights(&self, w: &[f64]) -> Objective<'a> {

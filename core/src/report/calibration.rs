@@ -195,6 +195,7 @@ fn beyond_effects(
             error_mm,
             frame: Vec::new(),
             frame_names: Vec::new(),
+            orientation_deg: Vec::new(),
         });
     }
     Ok(out)
@@ -216,7 +217,7 @@ fn pose_errors(
         start,
         &*seen_by(start, stated, problem.data()).map_err(Box::new)?,
     )?;
-    let frames = cal.frames();
+    let frames = cal.frames_with_mount();
     let mut sets = vec![("fitted", false, problem.data())];
     if let Some(h) = problem.held_out() {
         sets.push(("held out", true, &h.data));
@@ -236,6 +237,11 @@ fn pose_errors(
                 continue;
             };
             let (reach_mm, error_mm) = per_pose(params, p, f)?;
+            let mut orientation_deg =
+                crate::calibrate::validate::orientation_errors_per_row(params, p, f)?;
+            if orientation_deg.iter().all(Option::is_none) {
+                orientation_deg.clear();
+            }
             let arm = if after { "calibrated" } else { "nominal" };
             let rows = p.rows();
             out.push(PoseErrors {
@@ -246,6 +252,7 @@ fn pose_errors(
                 error_mm,
                 frame: (0..p.len()).map(|i| rows.frame(i)).collect(),
                 frame_names: rows.frames().to_vec(),
+                orientation_deg,
             });
         }
     }
@@ -316,6 +323,9 @@ fn inputs(r: &CalibrationReport) -> Vec<(String, String)> {
     }
     if let Some(noise) = r.position_noise() {
         lines.push(("position noise".to_string(), noise));
+    }
+    if let Some(noise) = r.orientation_noise() {
+        lines.push(("orientation noise".to_string(), noise));
     }
     lines.push((
         "method, fixed set, seed".to_string(),

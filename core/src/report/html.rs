@@ -394,7 +394,8 @@ fn positions_section(input: &CalibrationInput, figure: Option<&Figure>, number: 
          Right: their distribution. Grey: the nominal arm; colour: the calibrated arm (blue on \
          the fitted positions, vermillion on held-out ones).",
         "",
-        &tables::positions(&input.validation, &input.positions, &input.arms),
+        &(tables::positions(&input.validation, &input.positions, &input.arms)
+            + &tables::orientations(&input.validation, &input.positions, &input.arms)),
     )
 }
 

@@ -295,6 +295,9 @@ pub struct PoseErrors {
     pub frame: Vec<usize>,
     /// The frames' names (`instrument`, a station's).
     pub frame_names: Vec<String>,
+    /// Per pose, its orientation error, degrees, where the row gives the
+    /// tool's orientation (empty when none does).
+    pub orientation_deg: Vec<Option<f64>>,
 }
 
 /// What [`evaluation_report`] shows.

@@ -254,6 +254,80 @@ pub(crate) fn positions(
     series: &[PoseErrors],
     arms: &Arms,
 ) -> String {
+    let rows = error_rows(validation, series, arms, &POSITIONS);
+    table(
+        "3-D errors at the reference positions (mm)",
+        &[
+            "data, arm",
+            "frame",
+            "poses",
+            "RMS [mm]",
+            "95th percentile [mm]",
+            "max [mm]",
+            "mean [mm]",
+        ],
+        &rows,
+    )
+}
+
+/// The orientation errors at the reference positions that give the tool's
+/// orientation, as [`positions`] has the 3-D errors; empty when no data set
+/// has orientations.
+pub(crate) fn orientations(
+    validation: &[ValidationRow],
+    series: &[PoseErrors],
+    arms: &Arms,
+) -> String {
+    let rows = error_rows(validation, series, arms, &ORIENTATIONS);
+    if rows.is_empty() {
+        return String::new();
+    }
+    table(
+        "Tool orientation errors at the reference positions (deg): the angle of the turn \
+         from where each arm puts the 6-D target to where the instrument saw it",
+        &[
+            "data, arm",
+            "frame",
+            "poses",
+            "RMS [deg]",
+            "95th percentile [deg]",
+            "max [deg]",
+            "mean [deg]",
+        ],
+        &rows,
+    )
+}
+
+/// Which errors a table of errors at the reference positions shows.
+struct ErrorKind {
+    /// The figures' errors.
+    figures: fn(&Figures) -> Option<PositionErrors>,
+    /// The key in `calibration.json`'s figures.
+    key: &'static str,
+    /// Per pose of a series, its error (`None`: the pose has none).
+    per_pose: fn(&PoseErrors, usize) -> Option<f64>,
+}
+
+const POSITIONS: ErrorKind = ErrorKind {
+    figures: |f| f.positions,
+    key: "positions",
+    per_pose: |s, i| s.error_mm.get(i).copied(),
+};
+
+const ORIENTATIONS: ErrorKind = ErrorKind {
+    figures: |f| f.orientations,
+    key: "orientations",
+    per_pose: |s, i| s.orientation_deg.get(i).copied().flatten(),
+};
+
+/// The rows of a table of errors at the reference positions: per data set
+/// and arm, then per frame when the set has several.
+fn error_rows(
+    validation: &[ValidationRow],
+    series: &[PoseErrors],
+    arms: &Arms,
+    kind: &ErrorKind,
+) -> Vec<(String, Vec<Cell>)> {
     let mut out: Vec<(String, Vec<Cell>)> = Vec::new();
     for r in validation {
         let set = if r.name.starts_with("held out") {
@@ -267,8 +341,8 @@ pub(crate) fn positions(
             (false, &r.figures.before, "before", &arms.before),
             (true, &r.figures.after, "after", &arms.after),
         ] {
-            let Some(p) = f.positions else { continue };
-            let base = r.json.as_ref().map(|j| format!("{j}/{key}/positions"));
+            let Some(p) = (kind.figures)(f) else { continue };
+            let base = (r.json.as_ref()).map(|j| format!("{j}/{key}/{}", kind.key));
             let class = match (after, r.held_out) {
                 (true, true) => "held after",
                 (true, false) => "after",
@@ -290,9 +364,9 @@ pub(crate) fn positions(
             ));
             if let Some(s) = several {
                 for (k, frame) in s.frame_names.iter().enumerate() {
-                    let d: Vec<f64> = (s.frame.iter().zip(&s.error_mm))
-                        .filter(|(f, _)| **f == k)
-                        .map(|(_, e)| *e)
+                    let d: Vec<f64> = (0..s.frame.len())
+                        .filter(|&i| s.frame[i] == k)
+                        .filter_map(|i| (kind.per_pose)(s, i))
                         .collect();
                     let p = PositionErrors::of(&d);
                     out.push((class.to_string(), position_cells(&name, frame, &p, None)));
@@ -300,19 +374,7 @@ pub(crate) fn positions(
             }
         }
     }
-    table(
-        "3-D errors at the reference positions (mm)",
-        &[
-            "data, arm",
-            "frame",
-            "poses",
-            "RMS [mm]",
-            "95th percentile [mm]",
-            "max [mm]",
-            "mean [mm]",
-        ],
-        &out,
-    )
+    out
 }
 
 /// The cells of one row of the 3-D errors.

@@ -801,12 +801,76 @@ impl Block for Frame {
 
     /// `R ← exp(δω) R`, `t ← t + δt`.
     fn plus(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
-        let r = Frame::rotation(delta) * Frame::rotation(x);
-        out[..3].copy_from_slice(&rotation_vector(&r));
+        turn_left(x, delta, out);
         for i in 3..6 {
             out[i] = x[i] + delta[i];
         }
     }
+}
+
+/// The name of the tool mount's block ([`Mount`]).
+pub const MOUNT_BLOCK: &str = "mount";
+
+/// How a 6-D target (a tracker's, a motion-capture rigid body) is mounted
+/// on the arm: the rotation `R_m` from the target's frame to the arm's last
+/// frame, so that the target is seen turned by `R_f R_last R_m`. Its
+/// columns `mount.rx … mount.rz` hold the rotation vector (rad; deg in
+/// reports); a step `δ` turns it by `exp(δ)` on the left, `R_m ← exp(δ)
+/// R_m` — a small rotation about the arm's last frame's axes, which is what
+/// its σ is of. Added to a layout only when some position gives the tool's
+/// orientation ([`crate::residuals::positions::layout_with`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mount {
+    /// Start values `[rx, ry, rz]` (rad).
+    pub start: [f64; 3],
+}
+
+impl Block for Mount {
+    fn name(&self) -> &str {
+        MOUNT_BLOCK
+    }
+
+    fn parameters(&self) -> Vec<Parameter> {
+        ["rx", "ry", "rz"]
+            .iter()
+            .map(|c| Parameter {
+                name: format!("{MOUNT_BLOCK}.{c}"),
+                unit: Unit::Angle,
+            })
+            .collect()
+    }
+
+    fn start(&self) -> Vec<f64> {
+        self.start.to_vec()
+    }
+
+    /// As a frame's rotation: the step is a small rotation, about the arm's
+    /// last frame's axes.
+    fn sigma_of(&self, i: usize) -> Option<String> {
+        let axis = ["x", "y", "z"].get(i)?;
+        Some(format!(
+            "a small rotation about the arm's last frame's {axis} axis"
+        ))
+    }
+
+    /// `δ = log(R_y R_xᵀ)`.
+    fn minus(&self, y: &[f64], x: &[f64], out: &mut [f64]) {
+        let d = rotation_vector(&(Frame::rotation(y) * Frame::rotation(x).inverse()));
+        out[..3].copy_from_slice(&d);
+    }
+
+    /// `R ← exp(δ) R`.
+    fn plus(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
+        turn_left(x, delta, out);
+    }
+}
+
+/// The rotation vector of `exp(δ) R` into `out[..3]`, for the rotation
+/// vectors `x[..3]` of `R` and `delta[..3]` of `δ`: a frame's and a
+/// mount's step.
+fn turn_left(x: &[f64], delta: &[f64], out: &mut [f64]) {
+    let r = Frame::rotation(delta) * Frame::rotation(x);
+    out[..3].copy_from_slice(&rotation_vector(&r));
 }
 
 #[cfg(test)]
@@ -943,6 +1007,15 @@ mod tests {
                 );
             }
         }
+        // A mount's rotation steps and comes back as a frame's does.
+        let mount = Mount { start: [0.0; 3] };
+        let (x, d) = ([0.3, -0.2, 0.1], [0.7, 0.2, -0.5]);
+        let (mut y, mut back) = ([0.0; 3], [0.0; 3]);
+        mount.plus(&x, &d, &mut y);
+        mount.minus(&y, &x, &mut back);
+        assert!((0..3).all(|k| (back[k] - d[k]).abs() < 1e-12), "{back:?}");
+        let as_frame = Frame::rotation(&d) * Frame::rotation(&x);
+        assert!((Frame::rotation(&y).matrix() - as_frame.matrix()).norm() < 1e-12);
         // The default (adding) update's minus subtracts.
         let s = Scalar {
             name: "s".into(),

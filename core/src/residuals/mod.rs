@@ -76,11 +76,13 @@ use crate::kernel::{ArmKernel, KernelError};
 use crate::params::DhParams;
 
 pub use beyond::{BLOCK_NAME, CorrectionBlock};
-pub use blocks::{Block, BlockId, Frame, Layout, LayoutError, Parameter, Scalar, Unit, Vector};
+pub use blocks::{
+    Block, BlockId, Frame, Layout, LayoutError, MOUNT_BLOCK, Mount, Parameter, Scalar, Unit, Vector,
+};
 pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
-pub(crate) use orientations::OrientationTerm;
+pub(crate) use orientations::{OrientationTerm, mount_start};
 pub(crate) use positions::PositionTerm;
 pub(crate) use prior::PriorTerm;
 pub use schur::Elimination;

@@ -1,16 +1,27 @@
 //! Tool orientations: where an instrument that sees a 6-D target (a
-//! tracker's, a motion-capture rigid body) saw the tool frame turned, in
-//! its own frame. Row `i` of frame `f` with an orientation `R_i` seen:
+//! tracker's, a motion-capture rigid body) saw the target turned, in its
+//! own frame. Row `i` of frame `f` with an orientation `R_i` seen:
 //!
 //! ```text
-//! r_i = w · log(R_i · (R_f R_t(q_i; x))ᵀ)        (3 rows, rad · w)
+//! r_i = w · log(R_i · (R_f R_t(q_i; x) R_m)ᵀ)        (3 rows, rad · w)
 //! ```
 //!
-//! the small rotation from the predicted orientation (the tool frame `R_t`
-//! with the corrections applied, turned into the instrument's frame by the
-//! frame's registration `R_f`) to the one seen, whitened by `w = 1/σ`, the
+//! the small rotation from the predicted orientation (the arm's last frame
+//! `R_t` with the corrections applied, turned into the target's frame by
+//! the mount `R_m` and into the instrument's frame by the frame's
+//! registration `R_f`) to the one seen, whitened by `w = 1/σ`, the
 //! orientation noise per axis (`--orientation-noise`). Its position rows
 //! are the positions term's, unchanged ([`super::positions`]).
+//!
+//! The mount ([`Mount`](super::blocks::Mount), block `mount`) is how the target sits on the
+//! flange: fitted, as a real target is never mounted exactly square. It
+//! starts from the closed-form mean of `R_tᵀ R_fᵀ R_i` over the oriented
+//! rows at the start arm ([`mount_start`]). It absorbs every constant turn
+//! of the last frame: the last joint's `alpha` and `theta` then turn the
+//! target only as the mount does, and are seen through the positions
+//! alone (the identifiability analysis, the frames and the mount
+//! eliminated, finds it). A layout without the block (one a caller built)
+//! takes the mount as the identity.
 //!
 //! A separate term rather than 6-row observations in the positions term:
 //! its rows are in radians, not mm, so it has its own χ² and degrees of
@@ -19,20 +30,23 @@
 //! that lost its lock), and the positions term — and every output of data
 //! without orientations — stays as it is, bit for bit.
 //!
-//! Jacobians, with `e = log E`, `E = R_i (R_f R_t)ᵀ` and `J_r⁻¹(e)` the
-//! inverse right Jacobian of SO(3): an arm column `c` turns the tool by
-//! `ω_c` (base frame, [`crate::kernel::ArmKernel::pose_jacobian`]), so
-//! `R_f R_t ← exp(R_f ω_c δ) R_f R_t` and `∂r/∂x_c = −w J_r⁻¹(e) R_f ω_c`;
-//! the frame's step `R_f ← exp(δω) R_f` gives `∂r/∂δω = −w J_r⁻¹(e)`, and
-//! its translation nothing. The frame's rotation is thus seen directly,
-//! not only through the positions' lever arms.
+//! Jacobians, with `P = R_f R_t R_m`, `e = log E`, `E = R_i Pᵀ` and
+//! `J_r⁻¹(e)` the inverse right Jacobian of SO(3) (a turn `P ← exp(u) P`
+//! moves `e` by `−J_r⁻¹(e) u`): an arm column `c` turns the tool by `ω_c`
+//! (base frame, [`crate::kernel::ArmKernel::pose_jacobian`]), so `P ←
+//! exp(R_f ω_c δ) P` and `∂r/∂x_c = −w J_r⁻¹(e) R_f ω_c`; the frame's step
+//! `R_f ← exp(δω) R_f` gives `∂r/∂δω = −w J_r⁻¹(e)`, and its translation
+//! nothing; the mount's step `R_m ← exp(δ) R_m` turns `P` by `exp(R_f R_t
+//! δ)`: `∂r/∂δ = −w J_r⁻¹(e) R_f R_t`. The frame's rotation is thus seen
+//! directly, not only through the positions' lever arms.
 
 use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
-use super::blocks::{Frame, rotation_vector};
+use super::blocks::{Frame, MOUNT_BLOCK, rotation_vector};
 use super::{At, BlockId, Layout, Noise, Normal, Origin, Shared, Standardised, Term, TermError};
 use crate::dataset::PositionData;
-use crate::kernel::Pose;
+use crate::kernel::{ArmKernel, KernelError, Pose};
+use crate::params::DhParams;
 
 /// The name of the term, in reports and messages.
 const NAME: &str = "orientations";
@@ -43,6 +57,8 @@ pub(crate) struct OrientationTerm<'d> {
     data: &'d PositionData,
     /// Per frame, its block.
     frames: Vec<BlockId>,
+    /// The mount's block ([`Mount`](super::blocks::Mount)); the identity without one.
+    mount: Option<BlockId>,
     /// The rows that give an orientation, in file order (observation `k`
     /// is row `oriented[k]`).
     oriented: Vec<usize>,
@@ -62,6 +78,7 @@ impl std::fmt::Debug for OrientationTerm<'_> {
         f.debug_struct("OrientationTerm")
             .field("orientations", &self.oriented.len())
             .field("frames", &self.frames.len())
+            .field("mount", &self.mount.is_some())
             .field("sigma_rad", &self.sigma)
             .finish()
     }
@@ -86,6 +103,51 @@ fn inverse_right_jacobian(e: &Vector3<f64>) -> Matrix3<f64> {
         1.0 / (th * th) - (1.0 + th.cos()) / (2.0 * th * th.sin())
     };
     Matrix3::identity() + 0.5 * k + c * k * k
+}
+
+/// The rotation of a kernel pose (rows of the kernel's matrix are
+/// `rotation[row][col]`).
+fn rotation_of_pose(tool: &Pose) -> Rotation3<f64> {
+    Rotation3::from_matrix_unchecked(Matrix3::from_fn(|r, c| tool.rotation[r][c]))
+}
+
+/// The mount's start `[rx, ry, rz]` (rad): the rotation nearest, in the
+/// chordal (Frobenius) sense, to every oriented row's `R_tᵀ R_fᵀ R_i` — the
+/// sum's projection onto the rotations by its SVD — with `R_t` the arm
+/// `params`' last frame and `R_f` its frame's start `frames[f]`
+/// (`[rx, ry, rz, …]`); `None` when no row gives an orientation.
+///
+/// # Errors
+///
+/// The kernel's.
+pub(crate) fn mount_start(
+    params: &DhParams,
+    data: &PositionData,
+    frames: &[[f64; 6]],
+) -> Result<Option<[f64; 3]>, KernelError> {
+    let rows = data.rows();
+    if rows.oriented_rows() == 0 {
+        return Ok(None);
+    }
+    let kernel = ArmKernel::new(params)?;
+    let mut tools = vec![Pose::default(); data.len()];
+    kernel.poses(data.poses(), 0..data.len(), &mut tools)?;
+    let mut sum = Matrix3::zeros();
+    for (i, tool) in tools.iter().enumerate() {
+        if let Some(q) = rows.orientation(i) {
+            let r_f = Frame::rotation(&frames[rows.frame(i)]);
+            let m = rotation_of_pose(tool).inverse() * r_f.inverse() * rotation_of(q);
+            sum += m.matrix();
+        }
+    }
+    let svd = sum.svd(true, true);
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+        return Ok(Some([0.0; 3]));
+    };
+    // det = −1 would be a mirror: flip the weakest axis instead.
+    let d = (u * v_t).determinant().signum();
+    let r = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * v_t;
+    Ok(Some(rotation_vector(&Rotation3::from_matrix_unchecked(r))))
 }
 
 impl<'d> OrientationTerm<'d> {
@@ -121,6 +183,7 @@ impl<'d> OrientationTerm<'d> {
             ));
         };
         let frames = super::positions::frame_blocks(data, layout, NAME)?;
+        let mount = layout.block_named(MOUNT_BLOCK);
         let mut per_frame = vec![0; frames.len()];
         for &i in &oriented {
             per_frame[rows.frame(i)] += 1;
@@ -131,6 +194,7 @@ impl<'d> OrientationTerm<'d> {
         Ok(Some(OrientationTerm {
             data,
             frames,
+            mount,
             robust: vec![1.0; oriented.len()],
             oriented,
             seen,
@@ -139,19 +203,28 @@ impl<'d> OrientationTerm<'d> {
         }))
     }
 
-    /// Per frame, `R` at `at`.
-    fn rotations_at(&self, at: &At<'_>) -> Vec<Rotation3<f64>> {
-        (self.frames.iter())
+    /// Per frame, `R` at `at`; then the mount's `R_m` (the identity
+    /// without its block).
+    fn rotations_at(&self, at: &At<'_>) -> (Vec<Rotation3<f64>>, Rotation3<f64>) {
+        let frames = (self.frames.iter())
             .map(|&id| Frame::rotation(at.block(id)))
-            .collect()
+            .collect();
+        let mount = self
+            .mount
+            .map_or_else(Rotation3::identity, |id| Frame::rotation(at.block(id)));
+        (frames, mount)
     }
 
-    /// Row `i`'s unwhitened residual `log(R_i (R_f R_t)ᵀ)`, rad, for the
-    /// tool pose `tool`; `None` for a row without an orientation.
-    fn error(&self, frames: &[Rotation3<f64>], i: usize, tool: &Pose) -> Option<Vector3<f64>> {
+    /// Row `i`'s unwhitened residual `log(R_i (R_f R_t R_m)ᵀ)`, rad, for
+    /// the tool pose `tool`; `None` for a row without an orientation.
+    fn error(
+        &self,
+        (frames, mount): &(Vec<Rotation3<f64>>, Rotation3<f64>),
+        i: usize,
+        tool: &Pose,
+    ) -> Option<Vector3<f64>> {
         let seen = self.seen[i]?;
-        let r_t = Rotation3::from_matrix_unchecked(Matrix3::from_fn(|r, c| tool.rotation[r][c]));
-        let predicted = frames[self.data.rows().frame(i)] * r_t;
+        let predicted = frames[self.data.rows().frame(i)] * rotation_of_pose(tool) * mount;
         Some(Vector3::from(rotation_vector(
             &(seen * predicted.inverse()),
         )))
@@ -207,6 +280,7 @@ impl Term for OrientationTerm<'_> {
                 })
             })
             .collect();
+        let mount_cols = self.mount.map(|id| at.layout.columns(id));
         let rows = self.data.rows();
         let mut k = 0;
         let mut cost = 0.0;
@@ -223,10 +297,13 @@ impl Term for OrientationTerm<'_> {
                 k += 1;
                 let f = rows.frame(i);
                 let m = -w * inverse_right_jacobian(&e);
-                let mr = m * frames[f].matrix();
+                let mr = m * frames.0[f].matrix();
+                let mrt = mr * rotation_of_pose(tool).matrix();
                 for (a, &c) in free.iter().enumerate() {
                     let d = if c < arm {
                         mr * Vector3::new(jac[c][3], jac[c][4], jac[c][5])
+                    } else if let Some(cols) = mount_cols.as_ref().filter(|m| m.contains(&c)) {
+                        mrt.column(c - cols.start).into_owned()
                     } else {
                         match frame_of[a] {
                             Some((g, col)) if g == f && col < 3 => m.column(col).into_owned(),
@@ -307,7 +384,9 @@ mod tests {
     use crate::objective::{CheckOptions, Objective, check_gradients};
     use crate::residuals::Role;
     use crate::residuals::positions::layout_with;
-    use crate::simulate::{PositionSettings, orient_positions, simulate_positions};
+    use crate::simulate::{
+        OrientationSettings, PositionSettings, orient_positions, simulate_positions,
+    };
 
     /// Positions with orientations in two frames, on a layout with
     /// corrections beyond geometry (compliance, a harmonic), at a point off
@@ -329,8 +408,14 @@ mod tests {
             seed: 5,
         };
         let c = simulate_positions(&truth, &s).unwrap();
-        // Every other row oriented: a 6-D target that lost its lock.
-        let p = orient_positions(&truth, &c.positions, &c.frames, 2e-4, 6).unwrap();
+        // A target mounted turned by about a radian on the flange; every
+        // other row oriented: a 6-D target that lost its lock.
+        let o = OrientationSettings {
+            mount: [0.6, -0.5, 0.7],
+            sigma_rad: 2e-4,
+            seed: 6,
+        };
+        let p = orient_positions(&truth, &c.positions, &c.frames, &o).unwrap();
         let some = (0..p.len()).map(|i| p.orientation(i).filter(|_| i % 2 == 0));
         let p = p.clone().with_orientations(some.collect());
         let data = crate::DataSet::from_positions(p, "p.csv").unwrap();
@@ -364,7 +449,10 @@ mod tests {
         let blocks: Vec<&str> = (check.terms[1].blocks.iter())
             .map(|b| b.block.as_str())
             .collect();
-        assert_eq!(blocks, ["geometry", "beyond", "station1", "station2"]);
+        assert_eq!(
+            blocks,
+            ["geometry", "beyond", "station1", "station2", "mount"]
+        );
         // Beyond the checker's tolerance: where the gradient is not zero it
         // agrees to 1e-6 (a length's column turns nothing: its zero is
         // judged against the differences' noise floor, as the checker does).
@@ -372,6 +460,66 @@ mod tests {
             assert!(b.analytic.abs() > 0.0, "{check}");
             assert!(b.relative_error < 1e-6, "{check}");
         }
+    }
+
+    /// The mount starts at its closed form: at the true arm and frame, the
+    /// mean of the rows' `R_tᵀ R_fᵀ R_i` is the true mount to the noise's
+    /// σ/√n; the same positions without orientations have no mount block
+    /// (and a frame named as it is refused only where orientations are).
+    #[test]
+    fn the_mount_starts_at_its_closed_form_mean() {
+        let truth = crate::Arm::without_limits("t", crate::DhParams::paper_nominal());
+        let noise = Noise {
+            position_mm: Some(0.015),
+            ..Noise::default()
+        };
+        let s = PositionSettings {
+            poses: 25,
+            frames: 1,
+            noise,
+            seed: 9,
+        };
+        let c = simulate_positions(&truth, &s).unwrap();
+        let mount = [1.2, 0.4, -2.1];
+        let o = OrientationSettings {
+            mount,
+            sigma_rad: 1e-4,
+            seed: 10,
+        };
+        let p = orient_positions(&truth, &c.positions, &c.frames, &o).unwrap();
+        let data = crate::DataSet::from_positions(p, "p.csv").unwrap();
+        let layout = crate::residuals::positions::layout_for(&truth.params, &data).unwrap();
+        let id = layout.block_named(MOUNT_BLOCK).unwrap();
+        let start = &layout.start()[layout.columns(id)];
+        let apart = Frame::rotation(start) * Frame::rotation(&mount).inverse();
+        let angle = Vector3::from(rotation_vector(&apart)).norm();
+        // σ/√n per axis over 25 rows: 2e-5 rad; the registration's own
+        // error adds less.
+        assert!(angle < 1e-4, "{angle} rad from the true mount");
+        assert!(angle > 0.0);
+        let plain = crate::DataSet::from_positions(c.positions.clone(), "p.csv").unwrap();
+        let layout = crate::residuals::positions::layout_for(&truth.params, &plain).unwrap();
+        assert_eq!(layout.block_named(MOUNT_BLOCK), None);
+        // A frame named as the mount's block: refused by name with
+        // orientations, a frame like any other without.
+        let named = |p: &crate::io::Positions| {
+            let mut text = Vec::new();
+            crate::io::positions::write_positions(&mut text, p, crate::io::AngleUnit::Rad).unwrap();
+            let text = String::from_utf8(text).unwrap();
+            let text = text.replacen("\n", ",frame\n", 1).replace('\n', ",mount\n");
+            let text = text.replacen(",frame,mount\n", ",frame\n", 1);
+            let rows = crate::io::parse_positions(&text, "m.csv", crate::io::AngleUnit::Rad, 6);
+            crate::DataSet::from_positions(rows.unwrap(), "m.csv").unwrap()
+        };
+        let oriented = orient_positions(&truth, &c.positions, &c.frames, &o).unwrap();
+        let e = crate::residuals::positions::layout_for(&truth.params, &named(&oriented));
+        let e = e.unwrap_err().to_string();
+        assert!(
+            e.contains("frame `mount`: the name of the tool mount's block"),
+            "{e}"
+        );
+        let fine = crate::residuals::positions::layout_for(&truth.params, &named(&c.positions));
+        assert!(fine.unwrap().block_named(MOUNT_BLOCK).is_some());
     }
 
     /// Orientations without their σ are refused by file, line and fields,
@@ -390,7 +538,12 @@ mod tests {
             seed: 5,
         };
         let c = simulate_positions(&truth, &s).unwrap();
-        let p = orient_positions(&truth, &c.positions, &c.frames, 2e-4, 6).unwrap();
+        let o = OrientationSettings {
+            mount: [0.0; 3],
+            sigma_rad: 2e-4,
+            seed: 6,
+        };
+        let p = orient_positions(&truth, &c.positions, &c.frames, &o).unwrap();
         let data = crate::DataSet::from_positions(p, "p.csv").unwrap();
         let layout = layout_with(
             &truth.params,

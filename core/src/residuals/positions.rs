@@ -21,7 +21,8 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 use super::CorrectionBlock;
 use super::blocks::Frame;
 use super::{
-    At, BlockId, Layout, Noise, Normal, Origin, Sees, Shared, Standardised, Term, TermError,
+    At, BlockId, Layout, LayoutError, Noise, Normal, Origin, Sees, Shared, Standardised, Term,
+    TermError,
 };
 use crate::corrections::{Beyond, Effects, Physics};
 use crate::dataset::{DataSet, PositionData};
@@ -163,14 +164,35 @@ pub fn layout_with(
     };
     if let Some(positions) = data.positions() {
         let names = positions.rows().frames();
-        for (name, reg) in names.iter().zip(register(params, positions)?) {
+        let starts: Vec<[f64; 6]> = (register(params, positions)?.iter()).map(|r| r.x).collect();
+        for (name, &start) in names.iter().zip(&starts) {
             layout.add(Box::new(Frame {
                 name: name.clone(),
-                start: reg.x,
+                start,
             }))?;
+        }
+        if let Some(start) = super::orientations::mount_start(params, positions, &starts)? {
+            add_mount(&mut layout, start)?;
         }
     }
     Ok(layout)
+}
+
+/// Adds the tool mount's block ([`super::Mount`]) starting at `start`; a
+/// frame already named as it is refused by name (rename the frame).
+fn add_mount(layout: &mut Layout, start: [f64; 3]) -> Result<(), TermError> {
+    match layout.add(Box::new(super::Mount { start })) {
+        Ok(_) => Ok(()),
+        Err(LayoutError::Duplicate { block }) => Err(TermError::invalid(
+            "positions",
+            format!(
+                "frame {}: the name of the tool mount's block, fitted when the positions give \
+                 the tool's orientation: rename the frame",
+                crate::error::quoted(&block)
+            ),
+        )),
+        Err(e) => Err(e.into()),
+    }
 }
 
 /// σ of row `i`: its own, or the noise model's (`A + B·|y|`, `B` per metre).

@@ -523,7 +523,9 @@ fn the_tool_pose_carries_the_corrections() {
 /// it themselves as well, so a robust fit judged them at `u²/w`.
 #[test]
 fn a_robust_weight_scales_a_positions_standardised_residual_as_a_touchs() {
-    use crate::simulate::{PositionSettings, orient_positions, simulate_positions};
+    use crate::simulate::{
+        OrientationSettings, PositionSettings, orient_positions, simulate_positions,
+    };
     let truth = crate::io::Arm::without_limits("paper", DhParams::paper_nominal());
     let noise = Noise {
         position_mm: Some(0.02),
@@ -537,8 +539,12 @@ fn a_robust_weight_scales_a_positions_standardised_residual_as_a_touchs() {
         seed: 3,
     };
     let campaign = simulate_positions(&truth, &settings).unwrap();
-    let oriented =
-        orient_positions(&truth, &campaign.positions, &campaign.frames, 2e-4, 4).unwrap();
+    let o = OrientationSettings {
+        mount: [0.0; 3],
+        sigma_rad: 2e-4,
+        seed: 4,
+    };
+    let oriented = orient_positions(&truth, &campaign.positions, &campaign.frames, &o).unwrap();
     let data = DataSet::from_positions(oriented, "sim.csv").unwrap();
     let layout = positions::layout_for(&truth.params, &data).unwrap();
     let objective =

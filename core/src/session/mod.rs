@@ -31,7 +31,7 @@ pub use outputs::{earlier_results, result_files};
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
-pub use position_evaluation::{FrameEvaluation, PositionEvaluation};
+pub use position_evaluation::{FrameEvaluation, MountEvaluation, PositionEvaluation};
 pub use request::{Request, user_noise};
 
 use std::path::Path;
@@ -1193,6 +1193,9 @@ fn noise_remedy(noise: &Noise, chi: &crate::calibrate::checks::ChiSquare) -> Str
             format!("--position-noise {:.4}", a * s0)
         });
     }
+    if let Some(o) = noise.orientation_rad {
+        flags.push(format!("--orientation-noise {:.4}", (o * s0).to_degrees()));
+    }
     let (how, other) = if s0 > 1.0 {
         (
             format!("{s0:.2} times larger"),
@@ -1285,6 +1288,20 @@ impl CalibrationReport {
         t
     }
 
+    /// The orientation noise the tool orientations were weighed with, in
+    /// words; `None` without reference positions or a stated σ (only a file
+    /// with orientations is weighed by it: without one the fit refuses
+    /// them).
+    pub fn orientation_noise(&self) -> Option<String> {
+        let o = self.noise.orientation_rad?;
+        self.positions_file.as_ref()?;
+        Some(format!(
+            "stated: σ = {}° per axis (the rows giving the tool's orientation)",
+            // Rounded: the degrees given, not their trip through rad.
+            (o.to_degrees() * 1e9).round() / 1e9
+        ))
+    }
+
     /// The reference positions' noise, `None` without them: the σ stated
     /// (`--position-noise`, or each row's own), or that it was estimated,
     /// with the σ the fit used; and an encoder noise stated without
@@ -1361,19 +1378,8 @@ impl CalibrationReport {
         if let Some(noise) = r.position_noise() {
             t += &format!("Position noise: {noise}\n");
         }
-        // Only a file with orientations is weighed by it (without one the
-        // fit refuses them).
-        if let Some(o) = r
-            .noise
-            .orientation_rad
-            .filter(|_| r.positions_file.is_some())
-        {
-            t += &format!(
-                "Orientation noise: stated: σ = {}° per axis (the rows giving the tool's \
-                 orientation)\n",
-                // Rounded: the degrees given, not their trip through rad.
-                (o.to_degrees() * 1e9).round() / 1e9
-            );
+        if let Some(noise) = r.orientation_noise() {
+            t += &format!("Orientation noise: {noise}\n");
         }
         t += "\n";
         t += &method_lines(s);
@@ -1461,8 +1467,10 @@ impl CalibrationReport {
         } else {
             crate::io::verdict::rejected_header()
         };
+        let mount = (self.calibration.mount_record().as_ref())
+            .map_or_else(String::new, crate::io::frames::mount_to_toml);
         format!(
-            "{header}{}{}{}",
+            "{header}{}{}{mount}{}",
             arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg),
             crate::io::frames::frames_to_toml(&self.calibration.frame_records()),
             crate::io::verdict::verdict_to_toml(verdict)
@@ -1539,7 +1547,7 @@ pub fn run(
     // same stations are scored in those frames.
     let stated = &problem.arm.physics;
     let start_frames = registered_frames(start, &*seen_by(start, stated, data)?)?;
-    let frames = calibration.frames();
+    let frames = calibration.frames_with_mount();
     let before = ArmView {
         params: start,
         physics: stated,
@@ -1729,12 +1737,32 @@ fn noun(c: &Calibration) -> &'static str {
     }
 }
 
+/// [`noun`], or `observation` when orientations are observed too.
+fn any_noun(c: &Calibration) -> &'static str {
+    match c.dof.other_rows.iter().any(|r| r.term == "orientations") {
+        true => "observation",
+        false => noun(c),
+    }
+}
+
+/// What the outliers `o` are: their one kind
+/// ([`crate::calibrate::checks::Outlier::noun`], `noun` for touches and
+/// positions), or `observation` when they are of several.
+fn outliers_noun<'a>(o: &'a [crate::calibrate::checks::Outlier], noun: &'a str) -> &'a str {
+    let first = o.first().map_or(noun, |x| x.noun(noun));
+    if o.iter().all(|x| x.noun(noun) == first) {
+        first
+    } else {
+        "observation"
+    }
+}
+
 /// The summary's outliers: the first 20 by `file:line`; after a screen by
 /// a robust refit, that the list keeps to the touches it weighs down, and
 /// how many the plain fit had beyond the threshold.
 fn outliers_line(c: &Calibration) -> String {
     let o = &c.checks.outliers;
-    let noun = noun(c);
+    let noun = any_noun(c);
     let threshold = c.checks.outlier_threshold;
     let screen = c.checks.outlier_screen;
     let below = crate::calibrate::robust::DOWNWEIGHTED;
@@ -1755,7 +1783,13 @@ fn outliers_line(c: &Calibration) -> String {
     let shown: Vec<String> = o
         .iter()
         .take(20)
-        .map(|x| format!("{} (point {}, {:.1} sigma)", x.at, x.point, x.standardised))
+        .map(|x| {
+            let kind = x.kind.as_ref().map_or(String::new(), |k| format!("{k}, "));
+            format!(
+                "{} (point {}, {kind}{:.1} sigma)",
+                x.at, x.point, x.standardised
+            )
+        })
         .collect();
     let screened = screen.map_or(String::new(), |s| {
         // What the screen says of the rest: pulled by the named touches,
@@ -1779,7 +1813,7 @@ fn outliers_line(c: &Calibration) -> String {
         "Outliers: {} {} beyond {threshold:.2} sigma{screened} — check them (remeasure, or \
          fix the label): {}{}\n",
         o.len(),
-        plural(noun),
+        plural(outliers_noun(o, self::noun(c))),
         shown.join(", "),
         if o.len() > shown.len() { ", …" } else { "" }
     )

@@ -4,16 +4,21 @@
 //! else to this arm in closed form on these very positions — and which of
 //! the two, said with every figure: a frame registered on the positions it
 //! scores absorbs a rigid motion of the arm's error, so its figures are a
-//! lower bound of what a fixed registration would show.
+//! lower bound of what a fixed registration would show. Where rows give
+//! the tool's orientation, its errors too, per frame, with the mount of the
+//! 6-D target as the arm file states it (`[mount]`) or else in closed form
+//! on these orientations (optimistic, and said so).
 
 use serde::Serialize;
 
 use crate::calibrate::CalibrationError;
 use crate::calibrate::validate::{
-    FrameValues, PositionErrors, pose_errors, registered_frames, seen_by,
+    FrameValues, PositionErrors, orientation_errors_per_row, pose_errors, registered_frames,
+    seen_by,
 };
 use crate::dataset::DataSet;
 use crate::io::Arm;
+use crate::residuals::MOUNT_BLOCK;
 
 /// One frame's registration and the arm's 3-D errors in it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -29,6 +34,20 @@ pub struct FrameEvaluation {
     pub translation_mm: [f64; 3],
     /// The 3-D errors `|R p + t − y|` of its rows, mm.
     pub errors: PositionErrors,
+    /// The orientation errors of its rows that give the tool's
+    /// orientation, deg; absent when none does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientations: Option<PositionErrors>,
+}
+
+/// The mount of the 6-D target the orientations were evaluated with.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MountEvaluation {
+    /// As the arm file states it (`true`, `[mount]`), or in closed form on
+    /// the orientations evaluated (`false`: optimistic).
+    pub from_arm_file: bool,
+    /// Its rotation vector, deg.
+    pub rotation_deg: [f64; 3],
 }
 
 /// The 3-D errors of an arm at the reference positions of a file.
@@ -40,6 +59,14 @@ pub struct PositionEvaluation {
     pub errors: PositionErrors,
     /// Per frame, in the file's order.
     pub frames: Vec<FrameEvaluation>,
+    /// Over every row that gives the tool's orientation, deg; absent when
+    /// none does.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientations: Option<PositionErrors>,
+    /// The 6-D target's mount the orientations were evaluated with; absent
+    /// without orientations.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mount: Option<MountEvaluation>,
 }
 
 impl PositionEvaluation {
@@ -63,16 +90,32 @@ impl PositionEvaluation {
                 message: "no reference positions to evaluate".into(),
             });
         };
-        let closed = registered_frames(&arm.params, &seen)?;
+        let mut closed = registered_frames(&arm.params, &seen)?;
+        // The frames alone (a mount of orientations after them: not here).
+        closed.truncate(p.rows().frames().len());
         let frames: Vec<(FrameValues, bool)> = (closed.into_iter())
             .map(|(name, x)| match stated.iter().find(|(n, _)| *n == name) {
                 Some(s) => (s.clone(), true),
                 None => ((name, x), false),
             })
             .collect();
-        let values: Vec<FrameValues> = frames.iter().map(|(f, _)| f.clone()).collect();
+        let mut values: Vec<FrameValues> = frames.iter().map(|(f, _)| f.clone()).collect();
         let (_, d) = pose_errors(&arm.params, p, &values)?;
+        let mount = mount_of(&arm.params, p, &values, stated)?;
+        if let Some(m) = &mount {
+            let r = m.rotation_deg.map(f64::to_radians);
+            values.push((MOUNT_BLOCK.to_string(), [r[0], r[1], r[2], 0.0, 0.0, 0.0]));
+        }
+        let turned = orientation_errors_per_row(&arm.params, p, &values)?;
         let rows = p.rows();
+        let of = |k: Option<usize>| {
+            let mine = |i: &usize| k.is_none_or(|k| rows.frame(*i) == k);
+            let e: Vec<f64> = (0..d.len())
+                .filter(mine)
+                .filter_map(|i| turned[i])
+                .collect();
+            (!e.is_empty()).then(|| PositionErrors::of(&e))
+        };
         let per_frame = frames
             .into_iter()
             .enumerate()
@@ -87,6 +130,7 @@ impl PositionEvaluation {
                     rotation_deg: [x[0], x[1], x[2]].map(f64::to_degrees),
                     translation_mm: [x[3], x[4], x[5]],
                     errors: PositionErrors::of(&mine),
+                    orientations: of(Some(k)),
                 }
             })
             .collect();
@@ -94,6 +138,8 @@ impl PositionEvaluation {
             positions_file: p.file().to_string(),
             errors: PositionErrors::of(&d),
             frames: per_frame,
+            orientations: of(None),
+            mount,
         })
     }
 
@@ -123,7 +169,23 @@ impl PositionEvaluation {
                 f.name, r[0], r[1], r[2], tr[0], tr[1], tr[2]
             );
         }
-        t += "3-D error |R p + t - y| (mm)\n";
+        t += &self.table(
+            "3-D error |R p + t - y| (mm)",
+            |f| Some(&f.errors),
+            &self.errors,
+        );
+        t + &self.orientation_summary()
+    }
+
+    /// A table of errors under `title`: per frame (`of` it, a frame
+    /// without: no row), then over all (`all`) when there are several.
+    fn table(
+        &self,
+        title: &str,
+        of: impl Fn(&FrameEvaluation) -> Option<&PositionErrors>,
+        all: &PositionErrors,
+    ) -> String {
+        let mut t = format!("{title}\n");
         t += &format!(
             "  {:<20} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
             "frame", "poses", "mean", "RMS", "p95", "max"
@@ -135,11 +197,66 @@ impl PositionEvaluation {
             );
         };
         for f in &self.frames {
-            row(&f.name, &f.errors);
+            if let Some(e) = of(f) {
+                row(&f.name, e);
+            }
         }
         if self.frames.len() > 1 {
-            row("all", &self.errors);
+            row("all", all);
         }
         t
     }
+
+    /// The orientation part of [`PositionEvaluation::summary`]: how the
+    /// mount was taken, then the errors per frame and over all (nothing
+    /// without orientations).
+    fn orientation_summary(&self) -> String {
+        let (Some(all), Some(m)) = (&self.orientations, &self.mount) else {
+            return String::new();
+        };
+        let how = if m.from_arm_file {
+            "as the arm file states it ([mount])"
+        } else {
+            "in closed form on these orientations (the arm file has no [mount]): it absorbs a \
+             constant turn of the arm's error, so these figures are optimistic"
+        };
+        let r = m.rotation_deg;
+        let t = format!(
+            "Tool orientations: {} rows; the 6-D target's mount {how}; rotation vector ({:.6}, \
+             {:.6}, {:.6}) deg\n",
+            all.count, r[0], r[1], r[2]
+        );
+        t + &self.table(
+            "Orientation error (deg): angle of the turn from the arm's target frame to the one seen",
+            |f| f.orientations.as_ref(),
+            all,
+        )
+    }
+}
+
+/// The mount of the 6-D target: as `stated` gives it (the arm file's
+/// `[mount]`, under [`MOUNT_BLOCK`]), else in closed form on `data`'s
+/// orientations in the frames `frames`; `None` when no row gives one.
+fn mount_of(
+    params: &crate::params::DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[FrameValues],
+    stated: &[FrameValues],
+) -> Result<Option<MountEvaluation>, crate::kernel::KernelError> {
+    if data.rows().oriented_rows() == 0 {
+        return Ok(None);
+    }
+    if let Some((_, m)) = stated.iter().find(|(n, _)| n == MOUNT_BLOCK) {
+        return Ok(Some(MountEvaluation {
+            from_arm_file: true,
+            rotation_deg: [m[0], m[1], m[2]].map(f64::to_degrees),
+        }));
+    }
+    let x: Vec<[f64; 6]> = frames.iter().map(|(_, x)| *x).collect();
+    Ok(
+        crate::residuals::mount_start(params, data, &x)?.map(|m| MountEvaluation {
+            from_arm_file: false,
+            rotation_deg: m.map(f64::to_degrees),
+        }),
+    )
 }

@@ -67,9 +67,10 @@ pub use files::{
 pub use ik::{IkSolution, solve_point};
 pub use lengths::reference_lengths;
 pub use positions::{
-    ConditionSettings, POSITIONS_FILE, PositionCampaign, PositionSettings, orient_positions,
-    simulate_positions, simulate_positions_from, simulate_positions_in, simulate_session,
-    simulate_tracker, simulate_tracker_session, true_frames,
+    ConditionSettings, OrientationSettings, POSITIONS_FILE, PositionCampaign, PositionSettings,
+    orient_positions, random_mount, simulate_positions, simulate_positions_from,
+    simulate_positions_in, simulate_session, simulate_tracker, simulate_tracker_session,
+    true_frames,
 };
 pub use settings::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,

@@ -165,11 +165,46 @@ pub fn simulate_positions(
     Ok(PositionCampaign { positions, frames })
 }
 
+/// How a simulated 6-D target sees the tool's orientation
+/// ([`orient_positions`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OrientationSettings {
+    /// The target's mount on the flange, the rotation vector of `R_m`
+    /// (rad): the target's frame in the arm's last frame
+    /// ([`crate::residuals::Mount`]). `[0; 3]`: mounted square.
+    pub mount: [f64; 3],
+    /// σ per axis of the small rotation that turns each orientation seen,
+    /// rad.
+    pub sigma_rad: f64,
+    /// Seed of the noise (its own stream: the positions are what they
+    /// were).
+    pub seed: u64,
+}
+
+/// A random mount of a 6-D target, a rotation vector (rad): its axis
+/// uniform on the sphere, its angle uniform in `[0, max_rad]` (seeded by
+/// `seed`). `max_rad = 0` mounts it square (the identity); π, any way.
+///
+/// ```
+/// use aacmm_core::simulate::random_mount;
+/// let m = random_mount(0.5, 7);
+/// let angle = (m[0] * m[0] + m[1] * m[1] + m[2] * m[2]).sqrt();
+/// assert!(angle <= 0.5 && angle > 0.0);
+/// assert_eq!(random_mount(0.0, 7), [0.0; 3]);
+/// ```
+pub fn random_mount(max_rad: f64, seed: u64) -> [f64; 3] {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let v = [normal(&mut rng), normal(&mut rng), normal(&mut rng)];
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt().max(1e-12);
+    let angle = max_rad * rng.random_range(0.0..1.0);
+    v.map(|x| x / n * angle)
+}
+
 /// `positions` (rows of `truth`'s probe seen from `frames`, as
 /// [`simulate_positions`] draws them) with the tool's orientation seen on
-/// every row: the true tool frame turned into the row's frame, then by a
-/// small random rotation of σ `sigma_rad` per axis (seeded by `seed`, its
-/// own stream: the positions are what they were) — a 6-D target.
+/// every row: the true target's frame (the arm's last frame turned by
+/// `settings.mount`) turned into the row's frame, then by a small random
+/// rotation of σ `settings.sigma_rad` per axis — a 6-D target.
 ///
 /// ```
 /// use aacmm_core::{io::Arm, params::DhParams, residuals::Noise, simulate::*};
@@ -177,27 +212,31 @@ pub fn simulate_positions(
 /// let noise = Noise { position_mm: Some(0.015), ..Noise::default() };
 /// let s = PositionSettings { poses: 5, frames: 1, noise, seed: 3 };
 /// let c = simulate_positions(&arm, &s).unwrap();
-/// let p = orient_positions(&arm, &c.positions, &c.frames, 1e-4, 4).unwrap();
+/// let o = OrientationSettings { mount: [0.0, 0.0, 1.0], sigma_rad: 1e-4, seed: 4 };
+/// let p = orient_positions(&arm, &c.positions, &c.frames, &o).unwrap();
 /// assert_eq!((p.oriented_rows(), p.position(2)), (5, c.positions.position(2)));
 /// ```
 ///
 /// # Errors
 ///
-/// A σ that is not finite and positive, a row whose frame is not among
-/// `frames`, a true arm with corrections beyond geometry (their turn of
-/// the tool is not simulated), the kernel's.
+/// A σ that is not finite and positive, a mount that is not finite, a row
+/// whose frame is not among `frames`, a true arm with corrections beyond
+/// geometry (their turn of the tool is not simulated), the kernel's.
 pub fn orient_positions(
     truth: &Arm,
     positions: &Positions,
     frames: &[(String, [f64; 6])],
-    sigma_rad: f64,
-    seed: u64,
+    settings: &OrientationSettings,
 ) -> Result<Positions, SimError> {
+    let sigma_rad = settings.sigma_rad;
     if !(sigma_rad.is_finite() && sigma_rad > 0.0) {
         return Err(SimError::setting(
             "orientation",
             "an orientation noise σ > 0 (a tracker's 6-D target: about 0.01°)",
         ));
+    }
+    if !settings.mount.iter().all(|v| v.is_finite()) {
+        return Err(SimError::setting("orientation", "a finite mount"));
     }
     if truth.physics.corrects() {
         return Err(SimError::setting(
@@ -207,7 +246,9 @@ pub fn orient_positions(
     }
     let model = |e: String| SimError::Model(e);
     let kernel = ArmKernel::new(&truth.params).map_err(|e| model(e.to_string()))?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
+    let mut mount = [0.0; 6];
+    mount[..3].copy_from_slice(&settings.mount);
     let mut seen = Vec::with_capacity(positions.len());
     for i in 0..positions.len() {
         let name = &positions.frames()[positions.frame(i)];
@@ -220,7 +261,13 @@ pub fn orient_positions(
         let tool = kernel
             .pose(positions.reading(i))
             .map_err(|e| model(e.to_string()))?;
-        let turned = Frame::apply_pose(x, &tool);
+        // The target's frame, `R_t R_m`: the mount turns it on the right.
+        let mut target = tool;
+        let r = Frame::rotation(&mount);
+        target.rotation = std::array::from_fn(|a| {
+            std::array::from_fn(|b| (0..3).map(|k| tool.rotation[a][k] * r[(k, b)]).sum())
+        });
+        let turned = Frame::apply_pose(x, &target);
         // The seen frame: the true one turned by a small rotation `n`.
         let noise = [0; 3].map(|_| sigma_rad * normal(&mut rng));
         let mut turn = [0.0; 6];

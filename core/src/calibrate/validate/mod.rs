@@ -204,6 +204,11 @@ impl Figures {
 }
 
 /// A frame's registration by name: `[rx, ry, rz, tx, ty, tz]` (rad, mm).
+/// A list of them may also carry the tool mount of orientations
+/// ([`crate::residuals::Mount`]) under the mount's block name
+/// ([`crate::residuals::MOUNT_BLOCK`]), `[rx, ry, rz, 0, 0, 0]`
+/// ([`crate::Calibration::frames_with_mount`]); a frame cannot have that
+/// name where orientations are fitted.
 pub type FrameValues = (String, [f64; 6]);
 
 /// The 3-D errors of `params` at `data`'s positions, each frame registered
@@ -271,9 +276,11 @@ fn frame_values(
 
 /// The orientation errors of `params` at the rows of `data` that give the
 /// tool's orientation, degrees: per row the angle of the small rotation
-/// from where the arm turns the tool frame (turned into the row's frame,
-/// registered as in [`position_errors`]) to the orientation seen. `None`
-/// when no row gives one. (The figures' fields are in degrees here.)
+/// from where the arm turns the target (its last frame turned by the
+/// mount, then into the row's frame, registered as in [`position_errors`])
+/// to the orientation seen. The mount is the one `frames` carry
+/// ([`FrameValues`]), or its closed form on these rows. `None` when no row
+/// gives an orientation. (The figures' fields are in degrees here.)
 ///
 /// # Errors
 ///
@@ -283,22 +290,47 @@ pub fn orientation_errors(
     data: &crate::dataset::PositionData,
     frames: &[FrameValues],
 ) -> Result<Option<PositionErrors>, CalibrationError> {
+    let d: Vec<f64> = orientation_errors_per_row(params, data, frames)?
+        .into_iter()
+        .flatten()
+        .collect();
+    Ok((!d.is_empty()).then(|| PositionErrors::of(&d)))
+}
+
+/// Per row of `data`, its orientation error as [`orientation_errors`]
+/// takes it, degrees; `None` for a row without an orientation (every row
+/// when none gives one).
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn orientation_errors_per_row(
+    params: &DhParams,
+    data: &crate::dataset::PositionData,
+    frames: &[FrameValues],
+) -> Result<Vec<Option<f64>>, crate::kernel::KernelError> {
     let rows = data.rows();
     if rows.oriented_rows() == 0 {
-        return Ok(None);
+        return Ok(vec![None; data.len()]);
     }
     let x = frame_values(params, data, frames)?;
+    let given = (frames.iter()).find(|(n, _)| n == crate::residuals::MOUNT_BLOCK);
+    let mount = match given {
+        Some((_, m)) => [m[0], m[1], m[2]],
+        None => crate::residuals::mount_start(params, data, &x)?.unwrap_or_default(),
+    };
+    let mount = crate::residuals::Frame::rotation(&mount);
     let k = ArmKernel::new(params)?;
     let mut tools = vec![crate::kernel::Pose::default(); data.len()];
     k.poses(data.poses(), 0..data.len(), &mut tools)?;
-    let d: Vec<f64> = (0..data.len())
-        .filter_map(|i| {
+    Ok((0..data.len())
+        .map(|i| {
             let q = rows.orientation(i)?;
             let seen = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
                 q[0], q[1], q[2], q[3],
             ));
             let predicted = crate::residuals::Frame::apply_pose(&x[rows.frame(i)], &tools[i]);
-            let r = nalgebra::Matrix3::from_fn(|a, b| predicted.rotation[a][b]);
+            let r = nalgebra::Matrix3::from_fn(|a, b| predicted.rotation[a][b]) * mount.matrix();
             let turn = seen.to_rotation_matrix().matrix() * r.transpose();
             // The angle from the trace, its sine from the antisymmetric
             // part: exact near 0, where a calibrated arm's errors are.
@@ -312,8 +344,7 @@ pub fn orientation_errors(
             let c = (turn.trace() - 1.0) / 2.0;
             Some(s.atan2(c).to_degrees())
         })
-        .collect();
-    Ok(Some(PositionErrors::of(&d)))
+        .collect())
 }
 
 /// The figures of `params` on `data`, each frame of its positions at its
@@ -470,7 +501,9 @@ pub fn before_after_of(
 }
 
 /// Each frame of `data`'s positions, registered to `params` in closed
-/// form, by name (none without positions).
+/// form, by name (none without positions); then, when rows give the tool's
+/// orientation, the mount's closed form in those frames
+/// ([`FrameValues`]).
 ///
 /// # Errors
 ///
@@ -482,13 +515,15 @@ pub fn registered_frames(
     let Some(p) = data.positions() else {
         return Ok(Vec::new());
     };
-    let regs = crate::residuals::positions::register(params, p)?;
-    Ok(p.rows()
-        .frames()
-        .iter()
-        .cloned()
-        .zip(regs.into_iter().map(|r| r.x))
-        .collect())
+    let x: Vec<[f64; 6]> = (crate::residuals::positions::register(params, p)?.iter())
+        .map(|r| r.x)
+        .collect();
+    let mut frames: Vec<FrameValues> = p.rows().frames().iter().cloned().zip(x.clone()).collect();
+    if let Some(m) = crate::residuals::mount_start(params, p, &x)? {
+        let name = crate::residuals::MOUNT_BLOCK.to_string();
+        frames.push((name, [m[0], m[1], m[2], 0.0, 0.0, 0.0]));
+    }
+    Ok(frames)
 }
 
 /// One cross-validation fold: the points held out, and the figures there of
@@ -537,7 +572,7 @@ pub fn cross_validate(
             };
             let fit = calibrate_with(fold, settings, solver, &mut Context::new())?;
             let start_frames = registered_frames(start, &*seen_by(start, &stated, &train_data)?)?;
-            let fit_frames = fit.frames();
+            let fit_frames = fit.frames_with_mount();
             let mut held_out: Vec<String> = (point_folds[f].iter())
                 .map(|&p| data.points()[p].label.clone())
                 .collect();
