@@ -43,8 +43,8 @@ struct Seed {
     framed: Vec<Judged>,
     arm_only: Vec<Judged>,
     /// Per draw of an exactly honest error (drawn from the stated joint
-    /// covariance itself), its predictions' ratios.
-    ideal: Vec<Vec<f64>>,
+    /// covariance itself), its predictions judged.
+    ideal: Vec<Vec<Judged>>,
 }
 
 /// The campaign of `seed` with `frames` frames of `poses` poses each,
@@ -62,7 +62,8 @@ fn seed(nominal: &Arm, seed: u64, frames: usize, poses: usize, held: usize) -> S
         .unwrap();
     assert!(report.is_usable(), "seed {seed}: {:?}", report.verdict);
     let cal = &report.calibration;
-    let fresh = simulate_positions_from(&truth, &settings(held, 0, seed + 5000), &c.frames).unwrap();
+    let fresh =
+        simulate_positions_from(&truth, &settings(held, 0, seed + 5000), &c.frames).unwrap();
     let joints = nominal.params.joint_count();
     let true_kernel = ArmKernel::new(&truth.params).unwrap();
     let (free, cov) = cal.geometry_covariance().unwrap();
@@ -86,10 +87,11 @@ fn seed(nominal: &Arm, seed: u64, frames: usize, poses: usize, held: usize) -> S
             if out.ideal.len() <= d {
                 out.ideal.push(Vec::new());
             }
-            out.ideal[d].extend(draw.iter().zip(&framed).map(|(p, (at, s))| {
-                let e = Vector3::from(*p) - Vector3::from(*at);
-                e.norm() / radius(eigenvalues(*s))
-            }));
+            let judged = draw
+                .iter()
+                .zip(&framed)
+                .map(|(p, (at, s))| judge(*p, *at, *s));
+            out.ideal[d].extend(judged);
         }
         for (i, q) in rows.iter().enumerate() {
             let p = true_kernel.position(q).unwrap();
@@ -119,7 +121,11 @@ fn honest_draws(
 ) -> Vec<Vec<[f64; 3]>> {
     use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + 77);
-    let l = cov.clone().cholesky().expect("a positive definite covariance").l();
+    let l = cov
+        .clone()
+        .cholesky()
+        .expect("a positive definite covariance")
+        .l();
     let q = free.len();
     let r = Frame::rotation(x);
     (0..100)
@@ -156,70 +162,158 @@ fn quantile(v: &[f64], p: f64) -> f64 {
     s[((p * s.len() as f64).ceil() as usize).clamp(1, s.len()) - 1]
 }
 
-/// Over the seeds: the share whose 95th percentile of `|e| / r₉₅` is within
-/// 1, that percentile's mean and largest, and the normalised RMS
-/// `sqrt(mean(eᵀ Σ⁻¹ e) / 3)` over every prediction.
-#[derive(Debug)]
+/// Over the seeds: the share of every prediction within its 95 % radius
+/// (`covered`), the normalised RMS `sqrt(mean(eᵀ Σ⁻¹ e) / 3)` over them,
+/// and per seed the 95th percentile of `|e| / r₉₅` — its mean, largest and
+/// the share of seeds where it is within 1 (`within`: the issue's figure).
 struct Summary {
-    within: f64,
-    /// Share of every prediction within its radius.
     covered: f64,
+    nrms: f64,
+    within: f64,
     p95_mean: f64,
     p95_max: f64,
-    nrms: f64,
 }
 
-fn summary(seeds: &[Vec<Judged>]) -> Summary {
-    let p95: Vec<f64> = (seeds.iter())
-        .map(|s| quantile(&s.iter().map(|j| j.ratio).collect::<Vec<_>>(), 0.95))
-        .collect();
-    let all: Vec<f64> = seeds.iter().flatten().map(|j| j.mahalanobis).collect();
-    let ratios: Vec<f64> = seeds.iter().flatten().map(|j| j.ratio).collect();
+impl std::fmt::Debug for Summary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "covered {:.3}, normalised RMS {:.3}; per seed the 95th percentile of |e|/r95 \
+             within 1 in {:.2} of the seeds, mean {:.3}, max {:.3}",
+            self.covered, self.nrms, self.within, self.p95_mean, self.p95_max
+        )
+    }
+}
+
+fn ratios(judged: &[Judged]) -> Vec<f64> {
+    judged.iter().map(|j| j.ratio).collect()
+}
+
+fn summary<'a>(seeds: impl Iterator<Item = &'a [Judged]>) -> Summary {
+    let seeds: Vec<&[Judged]> = seeds.collect();
+    let p95: Vec<f64> = (seeds.iter()).map(|s| quantile(&ratios(s), 0.95)).collect();
+    let all: Vec<&Judged> = seeds.iter().copied().flatten().collect();
+    let share = |v: &mut dyn Iterator<Item = f64>, n: usize| {
+        v.filter(|&r| r <= 1.0).count() as f64 / n as f64
+    };
     Summary {
-        covered: ratios.iter().filter(|&&v| v <= 1.0).count() as f64 / ratios.len() as f64,
-        within: p95.iter().filter(|&&v| v <= 1.0).count() as f64 / p95.len() as f64,
+        covered: share(&mut all.iter().map(|j| j.ratio), all.len()),
+        nrms: (all.iter().map(|j| j.mahalanobis).sum::<f64>() / (3.0 * all.len() as f64)).sqrt(),
+        within: share(&mut p95.iter().copied(), p95.len()),
         p95_mean: p95.iter().sum::<f64>() / p95.len() as f64,
         p95_max: p95.iter().copied().fold(0.0, f64::max),
-        nrms: (all.iter().sum::<f64>() / (3.0 * all.len() as f64)).sqrt(),
     }
 }
 
-fn measure(seeds: std::ops::Range<u64>, poses: usize) -> Vec<(usize, Summary, Summary, Summary)> {
-    let nominal = match std::env::var("ARM").as_deref() {
-        Ok("panda") => super::positions::panda(),
-        Ok("ur5") => aacmm_core::read_arm(&super::util::example("ur5-tracker/arm.toml"))
-            .unwrap()
-            .0,
-        _ => Arm::without_limits("paper", DhParams::paper_nominal()),
-    };
-    let mut out = Vec::new();
-    for frames in 1..=3 {
-        let runs: Vec<Seed> = (seeds.clone())
-            .map(|s| seed(&nominal, s, frames, poses, 40))
-            .collect();
-        let pick = |f: fn(&Seed) -> &Vec<Judged>| -> Vec<Vec<Judged>> {
-            runs.iter().map(|r| f(r).clone()).collect()
-        };
-        let base = summary(&pick(|s| &s.base));
-        let framed = summary(&pick(|s| &s.framed));
-        let arm_only = summary(&pick(|s| &s.arm_only));
-        eprintln!(
-            "{frames} frame(s): base {base:?}\n  in the frame, with its registration \
-             {framed:?}\n  in the frame, the arm's covariance alone {arm_only:?}"
-        );
-        let ideal: Vec<f64> = (runs.iter())
-            .flat_map(|r| r.ideal.iter().map(|d| quantile(d, 0.95)))
-            .collect();
-        let share = ideal.iter().filter(|&&v| v <= 1.0).count() as f64 / ideal.len() as f64;
-        eprintln!("  an exactly honest covariance: 95th percentile within in {share:.3} of draws");
-        out.push((frames, base, framed, arm_only));
-    }
-    out
+/// One count of frames over the seeds: predictions in the base, in the
+/// frames with their registration, in the frames with the arm's covariance
+/// alone (before), and the share of draws of an exactly honest error whose
+/// 95th percentile of `|e| / r₉₅` is within 1.
+struct Measured {
+    frames: usize,
+    base: Summary,
+    framed: Summary,
+    arm_only: Summary,
+    honest_within: f64,
+    /// The exactly honest errors' own summary: the linear propagation
+    /// against the nonlinear draws.
+    honest: Summary,
 }
 
+fn measure(nominal: &Arm, seeds: std::ops::Range<u64>, poses: usize, held: usize) -> Vec<Measured> {
+    (1..=3)
+        .map(|frames| {
+            let runs: Vec<Seed> = (seeds.clone())
+                .map(|s| seed(nominal, s, frames, poses, held))
+                .collect();
+            let ideal: Vec<f64> = (runs.iter())
+                .flat_map(|r| r.ideal.iter().map(|d| quantile(&ratios(d), 0.95)))
+                .collect();
+            let m = Measured {
+                frames,
+                base: summary(runs.iter().map(|r| r.base.as_slice())),
+                framed: summary(runs.iter().map(|r| r.framed.as_slice())),
+                arm_only: summary(runs.iter().map(|r| r.arm_only.as_slice())),
+                honest_within: ideal.iter().filter(|&&v| v <= 1.0).count() as f64
+                    / ideal.len() as f64,
+                honest: summary(runs.iter().flat_map(|r| r.ideal.iter().map(Vec::as_slice))),
+            };
+            eprintln!(
+                "{}, {frames} frame(s), {} seeds:\n  base {:?}\n  in the frame, with its \
+                 registration {:?}\n  in the frame, the arm's covariance alone {:?}\n  an \
+                 exactly honest error: 95th percentile within in {:.3} of draws",
+                nominal.name,
+                seeds.end - seeds.start,
+                m.base,
+                m.framed,
+                m.arm_only,
+                m.honest_within
+            );
+            m
+        })
+        .collect()
+}
+
+/// 6 and 7 joints, 1, 2 and 3 frames (200 poses each), 50 seeds, 40
+/// held-out poses per frame: predictions in the instrument's frame are
+/// covered by their stated 95 % radius — at least 93 % of them, the
+/// normalised RMS 0.9–1.1 — and so are those in the base; with the arm's
+/// covariance alone (what the map stated before) they are not. Per seed
+/// the 95th percentile of `|e| / r₉₅` is within 1 about as often as for an
+/// exactly honest error (the draws of the stated covariance itself): not
+/// in 93 % of the seeds, which no honest radius gives — one seed's errors
+/// at every pose come from the same estimate's error, so they exceed
+/// together. `cargo test --release --test integration frame_uncertainty
+/// -- --ignored` (about 10 s).
 #[test]
-#[ignore = "experiment"]
-fn experiment() {
-    let poses = std::env::var("POSES").map_or(200, |p| p.parse().unwrap());
-    measure(0..50, poses);
+#[ignore = "50 seeds: run with --release -- --ignored"]
+fn fifty_seeds_of_predictions_in_a_frame_are_covered() {
+    for nominal in [
+        Arm::without_limits("paper", DhParams::paper_nominal()),
+        super::positions::panda(),
+    ] {
+        for m in measure(&nominal, 0..50, 200, 40) {
+            let what = format!("{}, {} frame(s)", nominal.name, m.frames);
+            for (kind, s) in [("base", &m.base), ("frame", &m.framed)] {
+                assert!(s.covered >= 0.93, "{what}, {kind}: {s:?}");
+                assert!((0.9..=1.1).contains(&s.nrms), "{what}, {kind}: {s:?}");
+            }
+            // Binomial: 50 seeds, p about 2/3, three standard deviations.
+            assert!(
+                m.framed.within >= m.honest_within - 0.2,
+                "{what}: {:?}",
+                m.framed
+            );
+            assert!(m.arm_only.covered < 0.93, "{what}: {:?}", m.arm_only);
+        }
+    }
+}
+
+/// The same on three seeds, what a debug suite affords (about 3 s): over
+/// the 1, 2 and 3 frames' 720 held-out predictions in the frame, the stated
+/// 95 % radius covers at least 92 % (with the arm's covariance alone it
+/// covered 80 %) and the normalised RMS is 0.85–1.15; and the stated
+/// covariance is what the predictions of arms and frames drawn from the
+/// fit's joint covariance spread by (normalised RMS 0.95–1.05: the
+/// frame's Jacobian, its turn and its step, right).
+#[test]
+fn predictions_in_a_frame_are_covered() {
+    let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
+    let runs = measure(&nominal, 0..3, 200, 40);
+    let pooled = |f: fn(&Measured) -> &Summary| {
+        let n = runs.len() as f64;
+        let mean = |g: fn(&Summary) -> f64| runs.iter().map(|m| g(f(m))).sum::<f64>() / n;
+        (mean(|s| s.covered), mean(|s| s.nrms.powi(2)).sqrt())
+    };
+    let (covered, nrms) = pooled(|m| &m.framed);
+    assert!(covered >= 0.92, "covered {covered}");
+    assert!((0.85..=1.15).contains(&nrms), "normalised RMS {nrms}");
+    let (covered, nrms) = pooled(|m| &m.base);
+    assert!(covered >= 0.92, "base: covered {covered}");
+    assert!((0.85..=1.15).contains(&nrms), "base: normalised RMS {nrms}");
+    let (_, nrms) = pooled(|m| &m.honest);
+    assert!(
+        (0.95..=1.05).contains(&nrms),
+        "honest draws: normalised RMS {nrms}"
+    );
 }

@@ -657,7 +657,11 @@ impl Calibration {
         let (free, mut columns) = self.free_geometry()?;
         let (_, cols) = (self.frame_columns().into_iter()).find(|(n, _)| *n == name)?;
         for (k, c) in cols.iter().enumerate() {
-            let sigma = if k < 3 { c.sigma.map(f64::to_radians) } else { c.sigma };
+            let sigma = if k < 3 {
+                c.sigma.map(f64::to_radians)
+            } else {
+                c.sigma
+            };
             columns.push((c.name.clone(), sigma));
         }
         let x = self.frames().into_iter().find(|(n, _)| n == name)?.1;
