@@ -317,3 +317,49 @@ fn predictions_in_a_frame_are_covered() {
         "honest draws: normalised RMS {nrms}"
     );
 }
+
+/// The map in an instrument's frame: each pose's radius that of
+/// `position_covariances` in the frame, the bands of reach the base map's
+/// (the same poses, the same places), and it says which frame and that
+/// the frame's registration is in it; the base map says neither and its
+/// JSON has no `frame`.
+#[test]
+fn the_map_in_a_frame_includes_the_registration_and_says_so() {
+    use aacmm_core::plan::{sample_poses, uncertainty_map, uncertainty_map_in_frame};
+    let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
+    let (_, c) = campaign(&nominal, 3, 100, 2);
+    let data = DataSet::from_positions(c.positions.clone(), "sim.csv").unwrap();
+    let model = ModelOptions {
+        noise: tracker(),
+        ..ModelOptions::default()
+    };
+    let report = Problem::new(nominal.clone(), data, model)
+        .unwrap()
+        .run(&lm())
+        .unwrap();
+    let cal = &report.calibration;
+    let poses = sample_poses(&[None; 6], 0, 300, 5);
+    let (free, cov) = cal.geometry_covariance().unwrap();
+    let base = uncertainty_map(&cal.params, &poses, &free, &cov, "full turns").unwrap();
+    let name = c.frames[1].0.as_str();
+    let (free, x, joint) = cal.frame_covariance(name).unwrap();
+    let frame = InFrame { name, x };
+    let map =
+        uncertainty_map_in_frame(&cal.params, &poses, &free, &joint, &frame, "full turns").unwrap();
+    let seen = position_covariances(&cal.params, &poses, &free, &joint, Some(&frame)).unwrap();
+    assert_eq!(map.points.len(), 300);
+    for ((p, b), (_, s)) in map.points.iter().zip(&base.points).zip(&seen) {
+        assert_eq!(p.radius_mm, radius(eigenvalues(*s)));
+        assert!((p.reach_mm - b.reach_mm).abs() < 1e-9 && (p.height_mm - b.height_mm).abs() < 1e-9);
+    }
+    assert_ne!(map.rms_mm, base.rms_mm);
+    assert_eq!(map.frame.as_deref(), Some(name));
+    let says = format!("in frame `{name}`, which includes the registration of frame `{name}`");
+    assert!(map.describe().contains(&says), "{}", map.describe());
+    assert!(
+        !base.describe().contains("registration"),
+        "{}",
+        base.describe()
+    );
+    assert!(!serde_json::to_string(&base).unwrap().contains("\"frame\""));
+}
