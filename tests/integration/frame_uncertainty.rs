@@ -363,3 +363,51 @@ fn the_map_in_a_frame_includes_the_registration_and_says_so() {
     );
     assert!(!serde_json::to_string(&base).unwrap().contains("\"frame\""));
 }
+
+/// A calibration against two frames reports the map in each frame beside
+/// the base one: in `calibration.json` (`uncertainty_maps_in_frames`), the
+/// summary and the page (a table each, its cells pointing into the JSON),
+/// each saying that the frame's registration is in it.
+#[test]
+fn a_calibration_with_frames_reports_a_map_in_each() {
+    let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
+    let (_, c) = campaign(&nominal, 4, 100, 2);
+    let data = DataSet::from_positions(c.positions.clone(), "sim.csv").unwrap();
+    let model = ModelOptions {
+        noise: tracker(),
+        ..ModelOptions::default()
+    };
+    let problem = Problem::new(nominal.clone(), data, model).unwrap();
+    let report = problem.run(&lm()).unwrap();
+    let base = report.uncertainty_map.as_ref().unwrap();
+    let maps = &report.uncertainty_maps_in_frames;
+    let names: Vec<&str> = maps.iter().map(|m| m.frame.as_deref().unwrap()).collect();
+    let frames: Vec<&str> = c.frames.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, frames);
+    let summary = report.summary();
+    let page = aacmm_core::report::session_report(&report, &problem)
+        .unwrap()
+        .html;
+    for (i, m) in maps.iter().enumerate() {
+        assert_eq!(
+            (m.poses, m.workspace.as_str()),
+            (base.poses, base.workspace.as_str())
+        );
+        assert_ne!(m.rms_mm, base.rms_mm);
+        let line = format!("Uncertainty map: {}\n", m.describe());
+        assert!(
+            line.contains("includes the registration of frame"),
+            "{line}"
+        );
+        assert!(summary.contains(&line), "{summary}");
+        let caption = format!(
+            "in frame `{}`, its registration included</caption>",
+            names[i]
+        );
+        assert!(page.contains(&caption), "no {caption}");
+        assert!(page.contains(&format!("/uncertainty_maps_in_frames/{i}/rms_mm")));
+    }
+    let json = report.to_json();
+    let back = aacmm_core::CalibrationReport::from_json(&json).unwrap();
+    assert_eq!(&back.uncertainty_maps_in_frames, maps);
+}

@@ -326,12 +326,12 @@ impl UncertaintyMap {
         let seen = match &self.frame {
             Some(name) => {
                 let name = crate::error::quoted(name);
-                format!(" in frame {name}, which includes the registration of frame {name}")
+                format!(" in frame {name}, which includes the registration of frame {name},")
             }
             None => String::new(),
         };
         let mut s = format!(
-            "predicted position uncertainty over {} poses of {}{seen} (radius holding the \
+            "predicted position uncertainty{seen} over {} poses of {} (radius holding the \
              error with {:.0} % probability; {:.2} σ for an isotropic 3-D error): RMS {:.4} \
              mm, median {:.4} mm, max {:.4} mm",
             self.poses,

@@ -95,6 +95,7 @@ pub fn session_report(
         beyond: beyond_effects(report, problem)?,
         uncertainty_map: report.uncertainty_map.as_ref(),
         uncertainty_map_json: Some("/uncertainty_map".to_string()),
+        uncertainty_maps_in_frames: &report.uncertainty_maps_in_frames,
         verdict: Some(&report.verdict),
         seed: report.seed,
     })

@@ -264,6 +264,11 @@ pub struct CalibrationInput<'a> {
     /// JSON Pointer of the map in the JSON written beside the report (e.g.
     /// `/uncertainty_map`), if any.
     pub uncertainty_map_json: Option<String>,
+    /// The same poses as each fitted frame's instrument sees the probe, its
+    /// registration included: a table each in the map's section (none
+    /// without frames). Their JSON Pointers are
+    /// `/uncertainty_maps_in_frames/<i>` when the map has one.
+    pub uncertainty_maps_in_frames: &'a [UncertaintyMap],
     /// Whether the calibration may be used, and why not: the page opens
     /// with it. `None` for a calibration drawn outside a session, which
     /// the page then says has no verdict.
@@ -348,6 +353,7 @@ pub struct EvaluationInput<'a> {
 ///     beyond: Vec::new(),
 ///     uncertainty_map: None,
 ///     uncertainty_map_json: None,
+///     uncertainty_maps_in_frames: &[],
 ///     verdict: None,
 ///     seed: 0,
 /// })

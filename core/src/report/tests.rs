@@ -126,6 +126,7 @@ fn report_with(
         beyond: Vec::new(),
         uncertainty_map: map,
         uncertainty_map_json: map.map(|_| "/uncertainty_map".into()),
+        uncertainty_maps_in_frames: &[],
         verdict: None,
         seed: 0,
     })

@@ -779,6 +779,11 @@ pub struct CalibrationReport {
     /// ([`crate::plan::map`]); absent when the covariance is not finite.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty_map: Option<crate::plan::UncertaintyMap>,
+    /// The same poses as each fitted frame's instrument sees the probe,
+    /// that frame's registration included
+    /// ([`crate::plan::uncertainty_map_in_frame`]); absent without frames.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub uncertainty_maps_in_frames: Vec<crate::plan::UncertaintyMap>,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -1231,7 +1236,11 @@ impl CalibrationReport {
         let mut t = self.summary_header();
         t += &dof_lines(c);
         t += &fit_quality_lines(c);
-        if let Some(m) = &self.uncertainty_map {
+        let maps = self
+            .uncertainty_map
+            .iter()
+            .chain(&self.uncertainty_maps_in_frames);
+        for m in maps {
             t += &format!("Uncertainty map: {}\n", m.describe());
         }
         t += &outliers_line(c);
@@ -1549,7 +1558,8 @@ pub fn run(
             ),
         );
     }
-    let uncertainty_map = map::workspace_map(&problem.arm, data, &calibration, settings.seed);
+    let (uncertainty_map, uncertainty_maps_in_frames) =
+        map::workspace_maps(&problem.arm, data, &calibration, settings.seed);
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
@@ -1576,6 +1586,7 @@ pub fn run(
         warnings: s.warnings.clone(),
         verdict,
         uncertainty_map,
+        uncertainty_maps_in_frames,
     })
 }
 
