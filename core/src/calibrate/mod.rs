@@ -670,7 +670,7 @@ impl Calibration {
 
     /// The free geometry parameters' columns (of the `4n + 3`), and each
     /// one's name and σ. `None` without one.
-    fn free_geometry(&self) -> Option<(Vec<usize>, Vec<(String, Option<f64>)>)> {
+    fn free_geometry(&self) -> Option<(Vec<usize>, NamedSigmas)> {
         let n = self.params.joint_count();
         let free: Vec<&Estimate> = (self.parameters.iter())
             .filter(|e| e.fixed.is_none())
@@ -779,6 +779,9 @@ impl Calibration {
         }
     }
 }
+
+/// Columns by name, each with its σ (`None`: not determined).
+type NamedSigmas = Vec<(String, Option<f64>)>;
 
 /// Whether every joint of `kinds` turns (nothing to write).
 fn all_revolute(kinds: &[JointKind]) -> bool {

@@ -154,6 +154,9 @@ pub struct InFrame<'a> {
     pub x: [f64; 6],
 }
 
+/// A predicted probe position (mm) and its covariance (mm²).
+pub type Prediction = ([f64; 3], [[f64; 3]; 3]);
+
 /// The predicted probe position at each of `poses` and its covariance
 /// (mm²): `Σ = J C Jᵀ`. In the arm's base frame (`frame` `None`) `J` is the
 /// position's Jacobian over the geometry columns `free` and `cov` their
@@ -178,7 +181,7 @@ pub fn position_covariances(
     free: &[usize],
     cov: &DMatrix<f64>,
     frame: Option<&InFrame<'_>>,
-) -> Result<Vec<([f64; 3], [[f64; 3]; 3])>, KernelError> {
+) -> Result<Vec<Prediction>, KernelError> {
     let (blocks, positions) = jacobians(params, poses, free, false)?;
     let q = free.len();
     let width = q + if frame.is_some() { 6 } else { 0 };
