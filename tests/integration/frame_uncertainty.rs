@@ -8,9 +8,9 @@ use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::params::DhParams;
 use aacmm_core::plan::{InFrame, position_covariances};
 use aacmm_core::residuals::Frame;
-use aacmm_core::simulate::simulate_positions_from;
+use aacmm_core::simulate::{PositionCampaign, simulate_positions_from};
 use aacmm_core::stats::coverage::{eigenvalues, radius};
-use aacmm_core::{DataSet, ModelOptions, Problem};
+use aacmm_core::{CalibrationReport, DataSet, ModelOptions, Problem};
 use nalgebra::{Matrix3, Vector3};
 
 use super::positions::{campaign, lm, settings, tracker};
@@ -47,20 +47,30 @@ struct Seed {
     ideal: Vec<Vec<Judged>>,
 }
 
-/// The campaign of `seed` with `frames` frames of `poses` poses each,
-/// calibrated; `held` new poses per frame seen from the same stations.
-fn seed(nominal: &Arm, seed: u64, frames: usize, poses: usize, held: usize) -> Seed {
+/// The true arm and campaign of `seed` with `frames` frames of `poses`
+/// poses each, its problem and the calibration (usable).
+fn fitted(
+    nominal: &Arm,
+    seed: u64,
+    poses: usize,
+    frames: usize,
+) -> (Arm, PositionCampaign, Problem, CalibrationReport) {
     let (truth, c) = campaign(nominal, seed, poses, frames);
     let data = DataSet::from_positions(c.positions.clone(), "sim.csv").unwrap();
     let model = ModelOptions {
         noise: tracker(),
         ..ModelOptions::default()
     };
-    let report = Problem::new(nominal.clone(), data, model)
-        .unwrap()
-        .run(&lm())
-        .unwrap();
+    let problem = Problem::new(nominal.clone(), data, model).unwrap();
+    let report = problem.run(&lm()).unwrap();
     assert!(report.is_usable(), "seed {seed}: {:?}", report.verdict);
+    (truth, c, problem, report)
+}
+
+/// The campaign of `seed` with `frames` frames of `poses` poses each,
+/// calibrated; `held` new poses per frame seen from the same stations.
+fn seed(nominal: &Arm, seed: u64, frames: usize, poses: usize, held: usize) -> Seed {
+    let (truth, c, _, report) = fitted(nominal, seed, poses, frames);
     let cal = &report.calibration;
     let fresh =
         simulate_positions_from(&truth, &settings(held, 0, seed + 5000), &c.frames).unwrap();
@@ -327,16 +337,7 @@ fn predictions_in_a_frame_are_covered() {
 fn the_map_in_a_frame_includes_the_registration_and_says_so() {
     use aacmm_core::plan::{sample_poses, uncertainty_map, uncertainty_map_in_frame};
     let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
-    let (_, c) = campaign(&nominal, 3, 100, 2);
-    let data = DataSet::from_positions(c.positions.clone(), "sim.csv").unwrap();
-    let model = ModelOptions {
-        noise: tracker(),
-        ..ModelOptions::default()
-    };
-    let report = Problem::new(nominal.clone(), data, model)
-        .unwrap()
-        .run(&lm())
-        .unwrap();
+    let (_, c, _, report) = fitted(&nominal, 3, 100, 2);
     let cal = &report.calibration;
     let poses = sample_poses(&[None; 6], 0, 300, 5);
     let (free, cov) = cal.geometry_covariance().unwrap();
@@ -371,14 +372,7 @@ fn the_map_in_a_frame_includes_the_registration_and_says_so() {
 #[test]
 fn a_calibration_with_frames_reports_a_map_in_each() {
     let nominal = Arm::without_limits("paper", DhParams::paper_nominal());
-    let (_, c) = campaign(&nominal, 4, 100, 2);
-    let data = DataSet::from_positions(c.positions.clone(), "sim.csv").unwrap();
-    let model = ModelOptions {
-        noise: tracker(),
-        ..ModelOptions::default()
-    };
-    let problem = Problem::new(nominal.clone(), data, model).unwrap();
-    let report = problem.run(&lm()).unwrap();
+    let (_, c, problem, report) = fitted(&nominal, 4, 100, 2);
     let base = report.uncertainty_map.as_ref().unwrap();
     let maps = &report.uncertainty_maps_in_frames;
     let names: Vec<&str> = maps.iter().map(|m| m.frame.as_deref().unwrap()).collect();
