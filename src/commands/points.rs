@@ -99,7 +99,10 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
     let u95 = match &args.uncertainty {
-        Some(dir) => Some(radii(dir, &arm, &poses, args.frame.as_deref())?),
+        Some(dir) => {
+            let named = args.frame.as_deref().zip(frame);
+            Some(radii(dir, &arm, &poses, named)?)
+        }
         None => None,
     };
     if args.pose {
@@ -128,8 +131,14 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 /// Each pose's 95 % radius from the calibration in `dir` (of `arm`): in
-/// the base, or in `frame` with its registration — and a note saying which.
-fn radii(dir: &Path, arm: &Arm, poses: &Poses, frame: Option<&str>) -> Result<Vec<f64>> {
+/// the base, or in `frame` (its name and the arm file's registration) with
+/// its registration — and a note saying which.
+fn radii(
+    dir: &Path,
+    arm: &Arm,
+    poses: &Poses,
+    frame: Option<(&str, [f64; 6])>,
+) -> Result<Vec<f64>> {
     let path = dir.join(REPORT_FILE);
     let text = std::fs::read_to_string(&path).with_context(|| {
         format!(
@@ -164,7 +173,7 @@ fn radii(dir: &Path, arm: &Arm, poses: &Poses, frame: Option<&str>) -> Result<Ve
             ))?;
             position_covariances(&cal.params, &prepared, &free, &cov, None)?
         }
-        Some(name) => {
+        Some((name, stated)) => {
             if !cal.frames().iter().any(|(n, _)| n == name) {
                 bail!(
                     "--frame {}: {} has no such frame",
@@ -173,6 +182,16 @@ fn radii(dir: &Path, arm: &Arm, poses: &Poses, frame: Option<&str>) -> Result<Ve
                 );
             }
             let (free, x, cov) = cal.frame_covariance(name).ok_or_else(unknown)?;
+            let q = free.len();
+            let d = Frame::difference(&x, &stated);
+            if (0..6).any(|k| d[k].abs() > 0.1 * cov[(q + k, q + k)].sqrt()) {
+                bail!(
+                    "--frame {}: the arm file's registration is not the one in {} (give the \
+                     directory that wrote this calibrated.toml)",
+                    shown(name),
+                    path.display()
+                );
+            }
             note(format_args!(
                 "u95_mm: the 95 % radius of each position in frame {0}, from the covariance in \
                  {1}; it includes the registration of frame {0}",

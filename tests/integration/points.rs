@@ -411,4 +411,25 @@ fn uncertainty_is_written_in_the_base_and_in_a_frame_with_its_registration() {
             "differs from the arm file's",
         ],
     );
+    // The frame moved by 1 mm in the arm file: not that calibration's.
+    let toml = std::fs::read_to_string(&arm).unwrap();
+    let moved: String = (toml.lines())
+        .map(|l| match l.strip_prefix("translation_mm = [") {
+            Some(rest) => {
+                let (x, rest) = rest.split_once(',').unwrap();
+                format!(
+                    "translation_mm = [{},{rest}\n",
+                    x.parse::<f64>().unwrap() + 1.0
+                )
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let moved = write(&dir, "moved.toml", &moved);
+    let args = ["--data", &data, "--frame", "instrument", "--uncertainty", u];
+    let o = aacmm(&[&["points", "--arm", &moved][..], &args].concat());
+    assert_clean_error(
+        &o,
+        &["--frame instrument:", "registration is not the one in"],
+    );
 }
