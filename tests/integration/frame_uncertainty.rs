@@ -355,6 +355,9 @@ fn the_map_in_a_frame_includes_the_registration_and_says_so() {
     }
     assert_ne!(map.rms_mm, base.rms_mm);
     assert_eq!(map.frame.as_deref(), Some(name));
+    // The arm's covariance alone where the joint one belongs: an error.
+    let wrong = position_covariances(&cal.params, &poses, &free, &cov, Some(&frame));
+    assert!(wrong.is_err());
     let says = format!("in frame `{name}`, which includes the registration of frame `{name}`");
     assert!(map.describe().contains(&says), "{}", map.describe());
     assert!(

@@ -170,11 +170,8 @@ pub type Prediction = ([f64; 3], [[f64; 3]; 3]);
 ///
 /// # Errors
 ///
-/// The kernel's.
-///
-/// # Panics
-///
-/// When `cov` is not `q × q` (`q + 6` square with a frame).
+/// The kernel's; [`KernelError::ParamCount`] when `cov` is not `q × q`
+/// (`(q + 6)²` with a frame).
 pub fn position_covariances(
     params: &DhParams,
     poses: &PreparedPoses,
@@ -185,7 +182,17 @@ pub fn position_covariances(
     let (blocks, positions) = jacobians(params, poses, free, false)?;
     let q = free.len();
     let width = q + if frame.is_some() { 6 } else { 0 };
-    assert_eq!(cov.shape(), (width, width), "the covariance's size");
+    if cov.shape() != (width, width) {
+        let got = if cov.nrows() == width {
+            cov.ncols()
+        } else {
+            cov.nrows()
+        };
+        return Err(KernelError::ParamCount {
+            expected: width,
+            got,
+        });
+    }
     Ok((0..blocks.len())
         .map(|i| match frame {
             None => (positions[i], sandwich(blocks.at(i), cov, q)),
