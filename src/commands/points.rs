@@ -1,14 +1,18 @@
 //! `aacmm points`: what a measuring arm's software does with every touch.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use aacmm_core::error::{quoted, shown};
 use aacmm_core::io::frames::parse_frames;
-use aacmm_core::io::{source_name, write_points, write_tool_poses};
+use aacmm_core::io::{Arm, Poses, source_name, write_points, write_points_u95, write_tool_poses};
+use aacmm_core::kernel::{ArmKernel, PreparedPoses};
+use aacmm_core::plan::{InFrame, position_covariances};
 use aacmm_core::residuals::Frame;
-use anyhow::{Context, Result, bail};
+use aacmm_core::session::{CalibrationReport, REPORT_FILE};
+use aacmm_core::stats::coverage::{eigenvalues, radius};
+use anyhow::{Context, Result, anyhow, bail};
 
-use crate::output::Stdout;
+use crate::output::{Stdout, note};
 use crate::paths::check_output_file;
 
 /// Forward kinematics for every row of a poses file, or of a positions file
@@ -35,6 +39,13 @@ pub struct Args {
     /// will see, for a verification run. Without it, the arm's base frame.
     #[arg(long, value_name = "NAME")]
     frame: Option<String>,
+    /// The directory `aacmm calibrate --out` wrote for this arm (its
+    /// calibration.json): add a column `u95_mm`, the radius holding each
+    /// position's error with 95 % probability, from the fit's covariance
+    /// of the geometry. With `--frame`, in that frame and including the
+    /// frame's registration (fitted with the arm, and correlated with it).
+    #[arg(long, value_name = "DIR")]
+    uncertainty: Option<PathBuf>,
     /// Write over earlier results: an output file that exists, or an
     /// output directory holding results of an aacmm command (this command's
     /// files are overwritten; nothing is deleted).
@@ -74,10 +85,12 @@ fn frame(path: &std::path::Path, name: &str) -> Result<[f64; 6]> {
 
 pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.out {
-        let inputs = [
+        let report = args.uncertainty.as_ref().map(|d| d.join(REPORT_FILE));
+        let mut inputs = vec![
             ("--arm", args.input.arm.as_path()),
             ("--data", args.input.data()?),
         ];
+        inputs.extend(report.as_deref().map(|p| ("--uncertainty", p)));
         check_output_file("--out", out, &inputs, args.force)?;
     }
     let (arm, poses) = args.input.read_readings()?;
@@ -85,10 +98,23 @@ pub fn run(args: Args) -> Result<()> {
         Some(name) => Some(frame(&args.input.arm, name)?),
         None => None,
     };
+    let u95 = match &args.uncertainty {
+        Some(dir) => {
+            let named = args.frame.as_deref().zip(frame);
+            Some(radii(dir, &arm, &poses, named)?)
+        }
+        None => None,
+    };
     if args.pose {
         let mut tools = args.input.tool_poses(&arm, &poses)?;
         if let Some(x) = frame {
             tools.iter_mut().for_each(|t| *t = Frame::apply_pose(&x, t));
+        }
+        if let Some(u95) = &u95 {
+            let xyz: Vec<[f64; 3]> = tools.iter().map(|t| t.position).collect();
+            return write(&args.out, |w| {
+                write_points_u95(w, poses.labels(), &xyz, Some(&tools), u95)
+            });
         }
         return write(&args.out, |w| write_tool_poses(w, poses.labels(), &tools));
     }
@@ -96,7 +122,118 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(x) = frame {
         xyz.iter_mut().for_each(|p| *p = Frame::apply(&x, *p));
     }
-    write(&args.out, |w| write_points(w, poses.labels(), &xyz))
+    match &u95 {
+        Some(u95) => write(&args.out, |w| {
+            write_points_u95(w, poses.labels(), &xyz, None, u95)
+        }),
+        None => write(&args.out, |w| write_points(w, poses.labels(), &xyz)),
+    }
+}
+
+/// Each pose's 95 % radius from the calibration in `dir` (of `arm`): in
+/// the base, or in `frame` (its name and the arm file's registration) with
+/// its registration — and a note saying which.
+fn radii(
+    dir: &Path,
+    arm: &Arm,
+    poses: &Poses,
+    frame: Option<(&str, [f64; 6])>,
+) -> Result<Vec<f64>> {
+    let path = dir.join(REPORT_FILE);
+    let text = std::fs::read_to_string(&path).with_context(|| {
+        format!(
+            "--uncertainty {}: cannot read {REPORT_FILE} (give the directory `aacmm calibrate \
+             --out` wrote)",
+            dir.display()
+        )
+    })?;
+    let mut report = CalibrationReport::from_json(&text)
+        .map_err(|e| anyhow!("{}: not a calibration report: {e}", path.display()))?;
+    let cal = &mut report.calibration;
+    same_arm(cal, arm, &path)?;
+    for (theirs, ours) in cal.params.joints.iter_mut().zip(&arm.params.joints) {
+        theirs.kind = ours.kind;
+    }
+    let unknown = || {
+        anyhow!(
+            "{}: a free parameter's σ is not finite, so the positions' uncertainty is unknown",
+            path.display()
+        )
+    };
+    let rows: Vec<&[f64]> = (0..poses.len()).map(|i| poses.reading(i)).collect();
+    let kernel = ArmKernel::new(&cal.params)?;
+    let prepared = PreparedPoses::for_shape(kernel.shape(), &rows)?;
+    let seen = match frame {
+        None => {
+            let (free, cov) = cal.geometry_covariance().ok_or_else(unknown)?;
+            note(format_args!(
+                "u95_mm: the 95 % radius of each position in the arm's base, from the \
+                 covariance in {}",
+                path.display()
+            ))?;
+            position_covariances(&cal.params, &prepared, &free, &cov, None)?
+        }
+        Some((name, stated)) => {
+            if !cal.frames().iter().any(|(n, _)| n == name) {
+                bail!(
+                    "--frame {}: {} has no such frame",
+                    shown(name),
+                    path.display()
+                );
+            }
+            let (free, x, cov) = cal.frame_covariance(name).ok_or_else(unknown)?;
+            let q = free.len();
+            let d = Frame::difference(&x, &stated);
+            if (0..6).any(|k| d[k].abs() > 0.1 * cov[(q + k, q + k)].sqrt()) {
+                bail!(
+                    "--frame {}: the arm file's registration is not the one in {} (give the \
+                     directory that wrote this calibrated.toml)",
+                    shown(name),
+                    path.display()
+                );
+            }
+            note(format_args!(
+                "u95_mm: the 95 % radius of each position in frame {0}, from the covariance in \
+                 {1}; it includes the registration of frame {0}",
+                quoted(name),
+                path.display()
+            ))?;
+            let frame = InFrame { name, x };
+            position_covariances(&cal.params, &prepared, &free, &cov, Some(&frame))?
+        }
+    };
+    Ok(seen.iter().map(|(_, s)| radius(eigenvalues(*s))).collect())
+}
+
+/// Refuses a calibration of another arm than the arm file's: another
+/// joint count, or a free parameter a tenth of its σ away (the arm file
+/// is that calibration's calibrated.toml, written to far finer decimals).
+fn same_arm(cal: &aacmm_core::Calibration, arm: &Arm, path: &Path) -> Result<()> {
+    let (theirs, ours) = (cal.params.joint_count(), arm.params.joint_count());
+    if theirs != ours {
+        bail!(
+            "--uncertainty: {} is of a {theirs}-joint arm, the arm file has {ours} joints",
+            path.display()
+        );
+    }
+    for e in cal.parameters.iter().filter(|e| e.fixed.is_none()) {
+        let mut d = arm.params.get(e.id) - e.calibrated;
+        if !e.id.kind.is_length() {
+            d = aacmm_core::simulate::wrap(d);
+        }
+        if let Some(sigma) = e.sigma
+            && d.abs() > 0.1 * sigma
+        {
+            bail!(
+                "--uncertainty: {} is not this arm file's calibration: its {} differs from the \
+                 arm file's by {:.3} σ (give the directory that wrote this calibrated.toml)",
+                path.display(),
+                e.id,
+                d / sigma
+            );
+        }
+    }
+    Ok(())
 }
 
 /// `write` into the file `out`, atomically, or to stdout.

@@ -11,6 +11,7 @@ mod edges;
 mod evaluate;
 mod export;
 mod first_cause;
+mod frame_uncertainty;
 mod house;
 mod import;
 mod mukca;

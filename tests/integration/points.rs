@@ -297,3 +297,139 @@ fn bad_files_name_file_line_and_field() {
     let o = aacmm(&["points", "--arm", "/nonexistent/arm.toml", "--data", &data]);
     assert_clean_error(&o, &["/nonexistent/arm.toml"]);
 }
+
+/// `--uncertainty DIR`: a column `u95_mm` beside the same positions' bytes
+/// — in the base from the geometry's covariance, with `--frame` in the
+/// frame with the frame's registration (the library's
+/// `position_covariances` of `frame_covariance`), and said so on stderr;
+/// the directory of another arm's calibration is refused by parameter.
+#[test]
+fn uncertainty_is_written_in_the_base_and_in_a_frame_with_its_registration() {
+    use aacmm_core::CalibrationReport;
+    use aacmm_core::kernel::PreparedPoses;
+    use aacmm_core::plan::{InFrame, position_covariances};
+    use aacmm_core::stats::coverage::{eigenvalues, radius};
+    let dir = temp_dir("points-uncertainty");
+    let positions = example("ur5-tracker/positions-random.csv");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        example("ur5-tracker/arm.toml").to_str().unwrap(),
+        "--positions",
+        positions.to_str().unwrap(),
+        "--method",
+        "lm",
+        "--out",
+        dir.join("cal").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let text = std::fs::read_to_string(&positions).unwrap();
+    let poses: String = (text.lines())
+        .map(|l| l.split(',').take(7).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    let data = write(&dir, "poses.csv", &poses);
+    let cal = dir.join("cal");
+    let arm = cal.join("calibrated.toml");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["points", "--arm", arm.to_str().unwrap(), "--data", &data];
+        args.extend_from_slice(extra);
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{}", crate::util::stderr(&o));
+        (stdout(&o), crate::util::stderr(&o))
+    };
+    let json = std::fs::read_to_string(cal.join("calibration.json")).unwrap();
+    let c = CalibrationReport::from_json(&json).unwrap().calibration;
+    let rows: Vec<Vec<f64>> = (text.lines().skip(1))
+        .map(|l| {
+            (l.split(',').skip(1).take(6))
+                .map(|v| v.parse::<f64>().unwrap().to_radians())
+                .collect()
+        })
+        .collect();
+    let prepared = PreparedPoses::new(6, &rows).unwrap();
+    let u = cal.to_str().unwrap();
+    for frame in [None, Some("instrument")] {
+        let mut extra = frame.map_or(vec![], |f| vec!["--frame", f]);
+        let (plain, _) = run(&extra);
+        extra.extend(["--uncertainty", u]);
+        let (text, note) = run(&extra);
+        let expected = match frame {
+            None => {
+                let (free, cov) = c.geometry_covariance().unwrap();
+                position_covariances(&c.params, &prepared, &free, &cov, None).unwrap()
+            }
+            Some(name) => {
+                let (free, x, cov) = c.frame_covariance(name).unwrap();
+                let f = InFrame { name, x };
+                position_covariances(&c.params, &prepared, &free, &cov, Some(&f)).unwrap()
+            }
+        };
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("point,x,y,z,u95_mm"));
+        assert_eq!(expected.len(), 20);
+        for ((line, before), (_, sigma)) in lines.zip(plain.lines().skip(1)).zip(&expected) {
+            let (xyz, u95) = line.rsplit_once(',').unwrap();
+            assert_eq!(xyz, before, "the positions' bytes");
+            assert_eq!(u95, format!("{:.6}", radius(eigenvalues(*sigma))));
+        }
+        let says = note.contains("includes the registration of frame `instrument`");
+        assert_eq!(says, frame.is_some(), "{note}");
+    }
+    // The frame's registration counted in changes the radii: here the
+    // tracker sees the probe better than the base frame places it.
+    let radii = |t: &str| -> Vec<f64> {
+        (t.lines().skip(1))
+            .map(|l| l.rsplit(',').next().unwrap().parse().unwrap())
+            .collect()
+    };
+    let base = radii(&run(&["--uncertainty", u]).0);
+    let framed = radii(&run(&["--frame", "instrument", "--uncertainty", u]).0);
+    assert!(
+        base.iter().zip(&framed).all(|(b, f)| f < b),
+        "{base:?} vs {framed:?}"
+    );
+    let (posed, _) = run(&["--pose", "--uncertainty", u]);
+    assert!(
+        posed.starts_with("point,x,y,z,qw,qx,qy,qz,u95_mm\n"),
+        "{posed}"
+    );
+    assert_eq!(radii(&posed), base);
+    let nominal = example("ur5-tracker/arm.toml");
+    let o = aacmm(&[
+        "points",
+        "--arm",
+        nominal.to_str().unwrap(),
+        "--data",
+        &data,
+        "--uncertainty",
+        u,
+    ]);
+    assert_clean_error(
+        &o,
+        &[
+            "is not this arm file's calibration",
+            "differs from the arm file's",
+        ],
+    );
+    // The frame moved by 1 mm in the arm file: not that calibration's.
+    let toml = std::fs::read_to_string(&arm).unwrap();
+    let moved: String = (toml.lines())
+        .map(|l| match l.strip_prefix("translation_mm = [") {
+            Some(rest) => {
+                let (x, rest) = rest.split_once(',').unwrap();
+                format!(
+                    "translation_mm = [{},{rest}\n",
+                    x.parse::<f64>().unwrap() + 1.0
+                )
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    let moved = write(&dir, "moved.toml", &moved);
+    let args = ["--data", &data, "--frame", "instrument", "--uncertainty", u];
+    let o = aacmm(&[&["points", "--arm", &moved][..], &args].concat());
+    assert_clean_error(
+        &o,
+        &["--frame instrument:", "registration is not the one in"],
+    );
+}

@@ -68,7 +68,7 @@ pub(super) fn lm() -> SolverSettings {
 }
 
 /// The 7-joint nominal: the shipped Franka Panda.
-fn panda() -> Arm {
+pub(super) fn panda() -> Arm {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/examples/mukca/panda-1/arm.toml"

@@ -62,7 +62,7 @@ pub use lengths::{
     ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
 };
 pub use limits::limit_warning;
-pub use points::{parse_points, read_points, write_points, write_tool_poses};
+pub use points::{parse_points, read_points, write_points, write_points_u95, write_tool_poses};
 pub use poses::{
     Poses, PosesOrPositions, parse_poses, parse_poses_or_positions, read_poses,
     read_poses_or_positions, write_poses,

@@ -34,28 +34,94 @@ const SHAPE: &str = "point,x,y,z";
 /// assert_eq!(String::from_utf8(out).unwrap(), "point,x,y,z\nS1,1.000000,-2.500000,0.333333\n");
 /// ```
 pub fn write_points<S: AsRef<str>>(
-    mut w: impl Write,
+    w: impl Write,
     labels: impl IntoIterator<Item = S, IntoIter: ExactSizeIterator>,
     xyz: &[[f64; 3]],
 ) -> std::io::Result<()> {
+    write_rows(w, labels, xyz.len(), SHAPE, |line, i| {
+        push_xyz(line, xyz[i])
+    })
+}
+
+/// [`write_points`] or, with `poses`, [`write_tool_poses`] (their
+/// positions), with one more column `u95_mm` from `u95`: the radius that
+/// holds each position's error with 95 % probability (mm, 6 decimals).
+/// Errors as [`write_points`], also for `u95` of another length.
+///
+/// ```
+/// let mut out = Vec::new();
+/// aacmm_core::io::write_points_u95(&mut out, &["S1"], &[[1.0, 2.0, 3.0]], None, &[0.0125]).unwrap();
+/// assert_eq!(String::from_utf8(out).unwrap(), "point,x,y,z,u95_mm\nS1,1.000000,2.000000,3.000000,0.012500\n");
+/// ```
+pub fn write_points_u95<S: AsRef<str>>(
+    w: impl Write,
+    labels: impl IntoIterator<Item = S, IntoIter: ExactSizeIterator>,
+    xyz: &[[f64; 3]],
+    poses: Option<&[Pose]>,
+    u95: &[f64],
+) -> std::io::Result<()> {
+    if u95.len() != xyz.len() || poses.is_some_and(|p| p.len() != xyz.len()) {
+        return Err(invalid(format!(
+            "{} radii for {} points",
+            u95.len(),
+            xyz.len()
+        )));
+    }
+    let header = match poses {
+        Some(_) => format!("{SHAPE},qw,qx,qy,qz,u95_mm"),
+        None => format!("{SHAPE},u95_mm"),
+    };
+    write_rows(w, labels, xyz.len(), &header, |line, i| {
+        match poses {
+            Some(p) => push_pose(line, &p[i]),
+            None => push_xyz(line, xyz[i]),
+        }
+        line.push(',');
+        push_fixed6(line, u95[i]);
+    })
+}
+
+/// Writes `header`, then per label its quoted label and what `row` adds
+/// for its index.
+fn write_rows<S: AsRef<str>>(
+    mut w: impl Write,
+    labels: impl IntoIterator<Item = S, IntoIter: ExactSizeIterator>,
+    n: usize,
+    header: &str,
+    row: impl Fn(&mut String, usize),
+) -> std::io::Result<()> {
     let labels = labels.into_iter();
-    if labels.len() != xyz.len() {
-        let message = format!("{} labels for {} points", labels.len(), xyz.len());
+    if labels.len() != n {
+        let message = format!("{} labels for {n} points", labels.len());
         return Err(invalid(message));
     }
-    w.write_all(format!("{SHAPE}\n").as_bytes())?;
+    w.write_all(format!("{header}\n").as_bytes())?;
     let mut line = String::new();
-    for (label, xyz) in labels.zip(xyz) {
+    for (i, label) in labels.enumerate() {
         line.clear();
         line.push_str(&quote(label.as_ref())?);
-        for &v in xyz {
-            line.push(',');
-            push_fixed6(&mut line, v);
-        }
+        row(&mut line, i);
         line.push('\n');
         w.write_all(line.as_bytes())?;
     }
     Ok(())
+}
+
+/// `,x,y,z`, 6 decimals.
+fn push_xyz(line: &mut String, xyz: [f64; 3]) {
+    for v in xyz {
+        line.push(',');
+        push_fixed6(line, v);
+    }
+}
+
+/// `,x,y,z,qw,qx,qy,qz`: 6 and 9 decimals.
+fn push_pose(line: &mut String, pose: &Pose) {
+    use std::fmt::Write as _;
+    push_xyz(line, pose.position);
+    for v in pose.quaternion() {
+        _ = write!(line, ",{v:.9}");
+    }
 }
 
 /// Writes labelled tool poses: `point,x,y,z,qw,qx,qy,qz`, the probe's
@@ -79,32 +145,14 @@ pub fn write_points<S: AsRef<str>>(
 /// );
 /// ```
 pub fn write_tool_poses<S: AsRef<str>>(
-    mut w: impl Write,
+    w: impl Write,
     labels: impl IntoIterator<Item = S, IntoIter: ExactSizeIterator>,
     poses: &[Pose],
 ) -> std::io::Result<()> {
-    use std::fmt::Write as _;
-    let labels = labels.into_iter();
-    if labels.len() != poses.len() {
-        let message = format!("{} labels for {} poses", labels.len(), poses.len());
-        return Err(invalid(message));
-    }
-    w.write_all(format!("{SHAPE},qw,qx,qy,qz\n").as_bytes())?;
-    let mut line = String::new();
-    for (label, pose) in labels.zip(poses) {
-        line.clear();
-        line.push_str(&quote(label.as_ref())?);
-        for &v in &pose.position {
-            line.push(',');
-            push_fixed6(&mut line, v);
-        }
-        for v in pose.quaternion() {
-            _ = write!(line, ",{v:.9}");
-        }
-        line.push('\n');
-        w.write_all(line.as_bytes())?;
-    }
-    Ok(())
+    let header = format!("{SHAPE},qw,qx,qy,qz");
+    write_rows(w, labels, poses.len(), &header, |line, i| {
+        push_pose(line, &poses[i]);
+    })
 }
 
 /// Appends `x` with 6 decimals, the bytes of `format!("{x:.6}")`: the

@@ -19,6 +19,7 @@ use super::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
 use super::rows::jacobians;
 use crate::kernel::{KernelError, PreparedPoses};
 use crate::params::DhParams;
+use crate::residuals::Frame;
 
 /// Bands of reach a map is summarised in.
 pub const BANDS: usize = 5;
@@ -36,6 +37,11 @@ pub struct UncertaintyMap {
     pub k_isotropic: f64,
     /// Where the poses come from, in words.
     pub workspace: String,
+    /// The instrument's frame the radii are in, when not the arm's base:
+    /// they then include that frame's registration
+    /// ([`uncertainty_map_in_frame`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<String>,
     /// Poses sampled.
     pub poses: usize,
     /// RMS of the 95 % radius over the poses, mm.
@@ -134,15 +140,127 @@ pub fn uncertainty_map(
     let radii: Vec<f64> = (0..blocks.len())
         .map(|i| radius(eigenvalues(sandwich(blocks.at(i), cov, q))))
         .collect();
+    Ok(summarise(&radii, &places(params, &positions), workspace))
+}
+
+/// An instrument's frame a prediction is expressed in: its name and its
+/// fitted registration `y = R p + t` (`[rx, ry, rz, tx, ty, tz]`, rad, mm,
+/// as [`crate::residuals::Frame::apply`] takes it).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InFrame<'a> {
+    /// The frame's name.
+    pub name: &'a str,
+    /// Its registration.
+    pub x: [f64; 6],
+}
+
+/// A predicted probe position (mm) and its covariance (mm²).
+pub type Prediction = ([f64; 3], [[f64; 3]; 3]);
+
+/// The predicted probe position at each of `poses` and its covariance
+/// (mm²): `Σ = J C Jᵀ`. In the arm's base frame (`frame` `None`) `J` is the
+/// position's Jacobian over the geometry columns `free` and `cov` their
+/// covariance (`q × q`, mm and rad). In an instrument's frame the position
+/// is `p_f = R p(q; x) + t` and it also carries the frame's registration
+/// error, correlated with the arm's (the two were fitted together): `J =
+/// [R ∂p/∂x, ∂p_f/∂δ]` over the free columns and the frame's local step
+/// `δ = [δω, δt]` (`R ← exp(δω) R`, the fit's), and `cov` is their joint
+/// covariance, `(q + 6) × (q + 6)`, the frame's six columns last
+/// ([`crate::Calibration::frame_covariance`]).
+///
+/// # Errors
+///
+/// The kernel's; [`KernelError::ParamCount`] when `cov` is not `q × q`
+/// (`(q + 6)²` with a frame).
+pub fn position_covariances(
+    params: &DhParams,
+    poses: &PreparedPoses,
+    free: &[usize],
+    cov: &DMatrix<f64>,
+    frame: Option<&InFrame<'_>>,
+) -> Result<Vec<Prediction>, KernelError> {
+    let (blocks, positions) = jacobians(params, poses, free, false)?;
+    let q = free.len();
+    let width = q + if frame.is_some() { 6 } else { 0 };
+    if cov.shape() != (width, width) {
+        let got = if cov.nrows() == width {
+            cov.ncols()
+        } else {
+            cov.nrows()
+        };
+        return Err(KernelError::ParamCount {
+            expected: width,
+            got,
+        });
+    }
+    Ok((0..blocks.len())
+        .map(|i| match frame {
+            None => (positions[i], sandwich(blocks.at(i), cov, q)),
+            Some(f) => {
+                let j = in_frame(blocks.at(i), positions[i], &f.x, q);
+                (Frame::apply(&f.x, positions[i]), sandwich(&j, cov, q + 6))
+            }
+        })
+        .collect())
+}
+
+/// The 3 × (q + 6) Jacobian of `R p + t` over the arm's columns (the
+/// base-frame block `j`, turned by `R`) and the frame's local step.
+fn in_frame(j: &[f64], p: [f64; 3], x: &[f64; 6], q: usize) -> Vec<f64> {
+    let r = Frame::rotation(x);
+    let step = Frame::jacobian(x, p);
+    let mut out = vec![0.0; 3 * (q + 6)];
+    for k in 0..3 {
+        let row = &mut out[k * (q + 6)..(k + 1) * (q + 6)];
+        for (a, v) in row[..q].iter_mut().enumerate() {
+            *v = (0..3).map(|m| r[(k, m)] * j[m * q + a]).sum();
+        }
+        row[q..].copy_from_slice(&step[k]);
+    }
+    out
+}
+
+/// The map of `params` over `poses` as the instrument of `frame` sees the
+/// probe: each pose's radius from [`position_covariances`] in that frame
+/// (`cov` the joint covariance of the free columns and the frame's six),
+/// so it includes the frame's registration; the bands of reach stay the
+/// arm's own (distance from the shoulder), where the levers are.
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn uncertainty_map_in_frame(
+    params: &DhParams,
+    poses: &PreparedPoses,
+    free: &[usize],
+    cov: &DMatrix<f64>,
+    frame: &InFrame<'_>,
+    workspace: &str,
+) -> Result<UncertaintyMap, KernelError> {
+    let seen = position_covariances(params, poses, free, cov, Some(frame))?;
+    let radii: Vec<f64> = seen.iter().map(|(_, s)| radius(eigenvalues(*s))).collect();
+    // Back in the base: `p = Rᵀ (p_f − t)`.
+    let r = Frame::rotation(&frame.x);
+    let t = nalgebra::Vector3::new(frame.x[3], frame.x[4], frame.x[5]);
+    let base: Vec<[f64; 3]> = (seen.iter())
+        .map(|(p, _)| (r.inverse() * (nalgebra::Vector3::from(*p) - t)).into())
+        .collect();
+    let mut map = summarise(&radii, &places(params, &base), workspace);
+    map.frame = Some(frame.name.to_string());
+    Ok(map)
+}
+
+/// Each position's distance from the shoulder (the base axis at the first
+/// joint's height) and height above it.
+fn places(params: &DhParams, positions: &[[f64; 3]]) -> Vec<(f64, f64)> {
     let shoulder = params.joints.first().map_or(0.0, |j| j.d);
-    let places: Vec<(f64, f64)> = positions
+    positions
         .iter()
         .map(|p| {
             let h = p[2] - shoulder;
             ((p[0] * p[0] + p[1] * p[1] + h * h).sqrt(), h)
         })
-        .collect();
-    Ok(summarise(&radii, &places, workspace))
+        .collect()
 }
 
 /// `J C Jᵀ` of one 3 × q block.
@@ -202,6 +320,7 @@ pub(crate) fn summarise(radii: &[f64], places: &[(f64, f64)], workspace: &str) -
         coverage: COVERAGE,
         k_isotropic: K_ISOTROPIC,
         workspace: workspace.to_string(),
+        frame: None,
         poses: n,
         rms_mm: rms(radii),
         median_mm: median,
@@ -214,10 +333,17 @@ pub(crate) fn summarise(radii: &[f64], places: &[(f64, f64)], workspace: &str) -
 impl UncertaintyMap {
     /// The map in words: one line, then one per band.
     pub fn describe(&self) -> String {
+        let seen = match &self.frame {
+            Some(name) => {
+                let name = crate::error::quoted(name);
+                format!(" in frame {name}, which includes the registration of frame {name},")
+            }
+            None => String::new(),
+        };
         let mut s = format!(
-            "predicted position uncertainty over {} poses of {} (radius holding the error \
-             with {:.0} % probability; {:.2} σ for an isotropic 3-D error): RMS {:.4} mm, \
-             median {:.4} mm, max {:.4} mm",
+            "predicted position uncertainty{seen} over {} poses of {} (radius holding the \
+             error with {:.0} % probability; {:.2} σ for an isotropic 3-D error): RMS {:.4} \
+             mm, median {:.4} mm, max {:.4} mm",
             self.poses,
             self.workspace,
             100.0 * self.coverage,

@@ -45,7 +45,10 @@ use nalgebra::DMatrix;
 use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 
-pub use map::{MapPoint, Region, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map};
+pub use map::{
+    InFrame, MapPoint, Prediction, Region, UncertaintyMap, position_covariances, reading_ranges,
+    sample_poses, uncertainty_map, uncertainty_map_in_frame,
+};
 pub use pool::{
     DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_touches, sample_touches_observed,
 };

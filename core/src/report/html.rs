@@ -240,7 +240,7 @@ pub(crate) fn calibration_page(
     if let Some(m) = input.uncertainty_map {
         let json = input.uncertainty_map_json.as_deref();
         page += &map_section(
-            m,
+            (m, input.uncertainty_maps_in_frames),
             json,
             find(figures, UNCERTAINTY_MAP_SVG),
             number("uncertainty-map"),
@@ -480,9 +480,10 @@ fn beyond_section(
 }
 
 /// The uncertainty map's section, numbered `number`: what the radius is
-/// in one plain sentence, the figure and the table per band.
+/// in one plain sentence, the figure and the table per band — and one per
+/// fitted frame (`maps.1`), as its instrument sees the probe.
 fn map_section(
-    map: &UncertaintyMap,
+    (map, in_frames): (&UncertaintyMap, &[UncertaintyMap]),
     json: Option<&str>,
     figure: Option<&Figure>,
     number: usize,
@@ -521,8 +522,29 @@ fn map_section(
             }
         ),
         &tables::uncertainty_map(map, json),
-        "",
+        &frame_maps(in_frames, json),
     )
+}
+
+/// Per fitted frame, its map's numbers in a sentence and its table: the
+/// frame's registration error is part of what that instrument sees.
+fn frame_maps(maps: &[UncertaintyMap], json: Option<&str>) -> String {
+    let mut out = String::new();
+    for (i, m) in maps.iter().enumerate() {
+        let name = escape(m.frame.as_deref().unwrap_or_default());
+        out += &format!(
+            "<p>As the instrument of frame <code>{name}</code> sees the probe, the same poses' \
+             radius includes that frame's registration, fitted with the arm (J C Jᵀ over the \
+             geometry and the frame's six columns together): RMS {rms:.4} mm, median \
+             {median:.4} mm, largest {max:.4} mm.</p>\n",
+            rms = m.rms_mm,
+            median = m.median_mm,
+            max = m.max_mm,
+        );
+        let pointer = json.map(|_| format!("/uncertainty_maps_in_frames/{i}"));
+        out += &tables::uncertainty_map(m, pointer.as_deref());
+    }
+    out
 }
 
 /// The evaluation report page.

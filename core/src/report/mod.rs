@@ -266,6 +266,11 @@ pub struct CalibrationInput<'a> {
     pub uncertainty_map_json: Option<String>,
     /// Points probed on reference spheres, when fitted: their section.
     pub spheres: Option<&'a crate::session::spheres::SphereReport>,
+    /// The same poses as each fitted frame's instrument sees the probe, its
+    /// registration included: a table each in the map's section (none
+    /// without frames). Their JSON Pointers are
+    /// `/uncertainty_maps_in_frames/<i>` when the map has one.
+    pub uncertainty_maps_in_frames: &'a [UncertaintyMap],
     /// Whether the calibration may be used, and why not: the page opens
     /// with it. `None` for a calibration drawn outside a session, which
     /// the page then says has no verdict.
@@ -354,6 +359,7 @@ pub struct EvaluationInput<'a> {
 ///     uncertainty_map: None,
 ///     uncertainty_map_json: None,
 ///     spheres: None,
+///     uncertainty_maps_in_frames: &[],
 ///     verdict: None,
 ///     seed: 0,
 /// })

@@ -685,10 +685,13 @@ pub(crate) fn uncertainty_map(map: &UncertaintyMap, json: Option<&str>) -> Strin
         "median [mm]",
         "max [mm]",
     ];
-    let caption = format!(
+    let mut caption = format!(
         "{:.0} % radius per band of distance from the shoulder",
         100.0 * map.coverage
     );
+    if let Some(name) = &map.frame {
+        caption += &format!(", in frame `{name}`, its registration included");
+    }
     table(&caption, &head, &rows)
 }
 

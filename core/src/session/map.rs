@@ -4,7 +4,11 @@
 use crate::calibrate::Calibration;
 use crate::dataset::DataSet;
 use crate::io::Arm;
-use crate::plan::{Given, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map};
+use crate::kernel::PreparedPoses;
+use crate::plan::{
+    Given, InFrame, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map,
+    uncertainty_map_in_frame,
+};
 
 use super::CalibrationReport;
 
@@ -14,14 +18,37 @@ pub const MAP_POSES: usize = 1000;
 /// The predicted position uncertainty of `calibration` over [`MAP_POSES`]
 /// poses drawn uniformly within the arm's joint limits — or, for a joint
 /// without, within the range the campaign turned it through — seeded by
-/// `seed`. `None` when the free geometry's covariance is not finite.
-pub(crate) fn workspace_map(
+/// `seed`, in the arm's base; and over the same poses as each fitted frame
+/// sees the probe, the frame's registration included
+/// ([`crate::plan::uncertainty_map_in_frame`]). `None` (and no frame's)
+/// when the free geometry's covariance is not finite; a frame's is left out
+/// when its own columns' is not.
+pub(crate) fn workspace_maps(
     arm: &Arm,
     data: &DataSet,
     calibration: &Calibration,
     seed: u64,
-) -> Option<UncertaintyMap> {
-    let (free, cov) = calibration.geometry_covariance()?;
+) -> (Option<UncertaintyMap>, Vec<UncertaintyMap>) {
+    let Some((free, cov)) = calibration.geometry_covariance() else {
+        return (None, Vec::new());
+    };
+    let (poses, workspace) = workspace(arm, data, seed);
+    let params = &calibration.params;
+    let Ok(base) = uncertainty_map(params, &poses, &free, &cov, &workspace) else {
+        return (None, Vec::new());
+    };
+    let frames = (calibration.frames().iter())
+        .filter_map(|(name, _)| {
+            let (free, x, cov) = calibration.frame_covariance(name)?;
+            let frame = InFrame { name, x };
+            uncertainty_map_in_frame(params, &poses, &free, &cov, &frame, &workspace).ok()
+        })
+        .collect();
+    (Some(base), frames)
+}
+
+/// The map's poses, seeded by `seed`, and where they come from in words.
+fn workspace(arm: &Arm, data: &DataSet, seed: u64) -> (PreparedPoses, String) {
     let n = arm.params.joint_count();
     let mut readings: Vec<&[f64]> = (0..data.len()).map(|i| data.reading(i)).collect();
     if let Some(p) = data.positions() {
@@ -38,8 +65,7 @@ pub(crate) fn workspace_map(
         _ => "the joint limits (the campaign's ranges where none is stated)".to_string(),
     };
     let prismatic = arm.params.shape().map_or(0, |s| s.prismatic_mask());
-    let poses = sample_poses(&ranges, prismatic, MAP_POSES, seed);
-    uncertainty_map(&calibration.params, &poses, &free, &cov, &workspace).ok()
+    (sample_poses(&ranges, prismatic, MAP_POSES, seed), workspace)
 }
 
 impl CalibrationReport {

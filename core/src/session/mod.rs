@@ -817,6 +817,11 @@ pub struct CalibrationReport {
     /// centre, diameter and radial residuals.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spheres: Option<spheres::SphereReport>,
+    /// The same poses as each fitted frame's instrument sees the probe,
+    /// that frame's registration included
+    /// ([`crate::plan::uncertainty_map_in_frame`]); absent without frames.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub uncertainty_maps_in_frames: Vec<crate::plan::UncertaintyMap>,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -1273,7 +1278,11 @@ impl CalibrationReport {
         let mut t = self.summary_header();
         t += &dof_lines(c);
         t += &fit_quality_lines(c);
-        if let Some(m) = &self.uncertainty_map {
+        let maps = self
+            .uncertainty_map
+            .iter()
+            .chain(&self.uncertainty_maps_in_frames);
+        for m in maps {
             t += &format!("Uncertainty map: {}\n", m.describe());
         }
         t += &outliers_line(c);
@@ -1599,7 +1608,8 @@ pub fn run(
             ),
         );
     }
-    let uncertainty_map = map::workspace_map(&problem.arm, data, &calibration, settings.seed);
+    let (uncertainty_map, uncertainty_maps_in_frames) =
+        map::workspace_maps(&problem.arm, data, &calibration, settings.seed);
     let spheres = (problem.spheres.as_ref())
         .map(|t| spheres::sphere_report(t, &problem.layout, &calibration))
         .transpose()?;
@@ -1630,6 +1640,7 @@ pub fn run(
         verdict,
         uncertainty_map,
         spheres,
+        uncertainty_maps_in_frames,
     })
 }
 
