@@ -371,6 +371,39 @@ fn simulate_spheres_then_calibrate() {
         summary.contains("Outliers: 1 ") && summary.contains("displaced.csv:40 (point S2"),
         "{summary}"
     );
+    // Plain least squares refuses it, naming it as a point on a sphere
+    // (not a touch) and the σ as a sphere point's.
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--spheres",
+        &bad,
+        "--sphere-diameter",
+        "25.4",
+        "--encoder-noise",
+        "0.005",
+        "--probe-noise",
+        "0.01",
+        "--method",
+        "lm",
+        "--out",
+        dir.join("plain-displaced").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let (summary, error) = (stdout(&o), stderr(&o));
+    assert!(
+        error.contains("displaced.csv:40 (point S2")
+            && error.contains("a mislabelled or displaced point on its sphere?"),
+        "{error}"
+    );
+    assert!(
+        summary.contains("(the spheres' included)")
+            && summary.contains("sphere point sigma")
+            && summary.contains("sphere point(s) beyond")
+            && !summary.contains("touch"),
+        "{summary}"
+    );
     // Without spheres, no word of them.
     let plain = dir.join("plain");
     let o = crate::util::calibrate_shipped(&plain, &[]);

@@ -305,8 +305,9 @@ pub struct Outlier {
     pub standardised: f64,
     /// What it is when neither a touch nor a reference position (the rows
     /// of a `file:line` that are): `orientation` for the tool orientation
-    /// of a position's row, a term's name for any other evidence; absent
-    /// for touches and positions.
+    /// of a position's row, `sphere point` for a point probed on a
+    /// sphere, a term's name for any other evidence; absent for touches
+    /// and positions.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kind: Option<String>,
 }
@@ -381,6 +382,9 @@ pub(crate) fn outliers(
             let kind = match objective.term_of(i) {
                 Some(t) if t.role() == crate::residuals::Role::Orientations => {
                     Some("orientation".to_string())
+                }
+                Some(t) if t.role() == crate::residuals::Role::Spheres => {
+                    Some("sphere point".to_string())
                 }
                 Some(t) if t.role() == crate::residuals::Role::Other => Some(t.name().to_string()),
                 _ => None,

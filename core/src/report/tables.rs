@@ -171,7 +171,7 @@ pub(crate) fn verdict(
         } else {
             "well below 1: the stated noise is larger than the residuals"
         },
-        if touches { "touch" } else { "position" },
+        evidence_noun(cal, touches),
         d.touch_sigma_mm,
         if d.touch_sigma_estimated {
             "(estimated from the fit)"
@@ -206,16 +206,35 @@ pub(crate) fn verdict(
     p += &positions_sentence(validation);
     // Cross-validation folds are held-out data too (section 1's table).
     if !evaluated.iter().any(|e| e.held_out) && !validation.iter().any(|r| r.held_out) {
-        p += if touches {
-            " No held-out data were given (--validate): the figures after calibration are on \
-              the data the fit used."
-        } else {
-            " No held-out data were given (--validate-positions): the figures after \
-              calibration are on the data the fit used."
+        p += match evidence_noun(cal, touches) {
+            "touch" => {
+                " No held-out data were given (--validate): the figures after calibration are \
+                 on the data the fit used."
+            }
+            "position" => {
+                " No held-out data were given (--validate-positions): the figures after \
+                 calibration are on the data the fit used."
+            }
+            _ => {
+                " No held-out data were given: the figures after calibration are on the data \
+                  the fit used."
+            }
         };
     }
     p += "</p>\n";
     p
+}
+
+/// What the σ behind the weights is of: a `touch` (with touches), a
+/// `sphere point` (points on spheres without reference positions), else a
+/// `position`.
+fn evidence_noun(cal: &Calibration, touches: bool) -> &'static str {
+    let has = |term: &str| cal.dof.other_rows.iter().any(|r| r.term == term);
+    match (touches, has("spheres") && !has("positions")) {
+        (true, _) => "touch",
+        (false, true) => "sphere point",
+        (false, false) => "position",
+    }
 }
 
 /// Per data set with reference positions (not the folds: their table has
@@ -1056,11 +1075,7 @@ fn dof_rows(cal: &Calibration, db: Option<&str>) -> Vec<(String, Vec<Cell>)> {
             Cell::num(d.sigma0, 4).at(db, "sigma0", d.sigma0),
         ),
         figure_row(
-            if touches {
-                "touch σ behind the weights [mm]"
-            } else {
-                "position σ behind the weights [mm]"
-            },
+            &format!("{} σ behind the weights [mm]", evidence_noun(cal, touches)),
             Cell::num(d.touch_sigma_mm, 4).at(db, "touch_sigma_mm", d.touch_sigma_mm),
         ),
     ]);

@@ -1030,11 +1030,19 @@ fn outlier_cause(c: &Calibration) -> Option<String> {
     if screen.is_some_and(|s| !s.explains(c.dof.sigma0)) {
         return None;
     }
-    let positions: usize = (c.dof.other_rows.iter())
-        .filter(|r| r.term == "positions")
-        .map(|r| r.rows / 3)
-        .sum();
-    let observations = (c.dof.touch_rows / 3 + positions).max(1);
+    // Observations, not rows: a position or an orientation is three rows,
+    // a point on a sphere one.
+    let observed = |term: &str, rows: usize| -> usize {
+        (c.dof.other_rows.iter())
+            .filter(|r| r.term == term)
+            .map(|r| r.rows / rows)
+            .sum()
+    };
+    let observations = (c.dof.touch_rows / 3
+        + observed("positions", 3)
+        + observed("orientations", 3)
+        + observed("spheres", 1))
+    .max(1);
     if o.is_empty() || o.len() as f64 > (FEW_OUTLIERS * observations as f64).max(1.0) {
         return None;
     }
@@ -1046,9 +1054,16 @@ fn outlier_cause(c: &Calibration) -> Option<String> {
     } else {
         ", or calibrate with --robust, which weighs them down"
     };
+    // Touches and positions keep the word they always had; other evidence
+    // is named as what it is.
+    let what = match outliers_noun(&c.checks.outliers, noun(c)) {
+        "sphere point" => "point on its sphere",
+        "orientation" => "orientation",
+        _ => "touch",
+    };
     Some(format!(
-        "{} outlying observation{} pull{} the fit: {}{} — a mislabelled or displaced touch? Check \
-         {}: fix the label or remove the row{robust}",
+        "{} outlying observation{} pull{} the fit: {}{} — a mislabelled or displaced {what}? \
+         Check {}: fix the label or remove the row{robust}",
         o.len(),
         if o.len() == 1 { "" } else { "s" },
         if o.len() == 1 { "s" } else { "" },
@@ -1648,9 +1663,14 @@ pub fn run(
 fn dof_lines(c: &Calibration) -> String {
     let d = &c.dof;
     let mut t = if d.touch_rows == 0 && d.length_rows == 0 {
+        let has = |term: &str| d.other_rows.iter().any(|r| r.term == term);
+        let included = match (has("positions"), has("spheres")) {
+            (false, true) => "the spheres' included",
+            (true, true) => "the frames' and the spheres' included",
+            _ => "the frames' included",
+        };
         format!(
-            "Residuals: {} rows; unknowns: {} parameters (the frames' included); {} degrees of \
-             freedom\n",
+            "Residuals: {} rows; unknowns: {} parameters ({included}); {} degrees of freedom\n",
             d.other_rows.iter().map(|r| r.rows).sum::<usize>(),
             d.free_parameters,
             d.degrees_of_freedom
@@ -1738,13 +1758,15 @@ fn plural(noun: &str) -> String {
     }
 }
 
-/// What the observations are: touches, reference positions, or both.
+/// What the observations are: touches, reference positions, points on
+/// spheres, or several of them.
 fn noun(c: &Calibration) -> &'static str {
-    let others = c.dof.other_rows.iter().any(|r| r.term == "positions");
-    match (c.dof.touch_rows > 0, others) {
-        (true, true) => "observation",
-        (false, true) => "position",
-        _ => "touch",
+    let has = |term: &str| c.dof.other_rows.iter().any(|r| r.term == term);
+    match (c.dof.touch_rows > 0, has("positions"), has("spheres")) {
+        (false, true, false) => "position",
+        (false, false, true) => "sphere point",
+        (true, false, false) | (false, false, false) => "touch",
+        _ => "observation",
     }
 }
 
