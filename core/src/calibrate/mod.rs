@@ -500,6 +500,17 @@ pub struct Dof {
     pub other_rows: Vec<TermRows>,
 }
 
+impl Dof {
+    /// The residual rows of the other term named `term` (`positions`,
+    /// `orientations`, `spheres`, a caller's), 0 when there is none.
+    pub fn rows_of(&self, term: &str) -> usize {
+        (self.other_rows.iter())
+            .filter(|r| r.term == term)
+            .map(|r| r.rows)
+            .sum()
+    }
+}
+
 fn is_zero(n: &usize) -> bool {
     *n == 0
 }

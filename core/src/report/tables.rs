@@ -229,8 +229,11 @@ pub(crate) fn verdict(
 /// `sphere point` (points on spheres without reference positions), else a
 /// `position`.
 fn evidence_noun(cal: &Calibration, touches: bool) -> &'static str {
-    let has = |term: &str| cal.dof.other_rows.iter().any(|r| r.term == term);
-    match (touches, has("spheres") && !has("positions")) {
+    let d = &cal.dof;
+    match (
+        touches,
+        d.rows_of("spheres") > 0 && d.rows_of("positions") == 0,
+    ) {
         (true, _) => "touch",
         (false, true) => "sphere point",
         (false, false) => "position",

@@ -1032,16 +1032,11 @@ fn outlier_cause(c: &Calibration) -> Option<String> {
     }
     // Observations, not rows: a position or an orientation is three rows,
     // a point on a sphere one.
-    let observed = |term: &str, rows: usize| -> usize {
-        (c.dof.other_rows.iter())
-            .filter(|r| r.term == term)
-            .map(|r| r.rows / rows)
-            .sum()
-    };
-    let observations = (c.dof.touch_rows / 3
-        + observed("positions", 3)
-        + observed("orientations", 3)
-        + observed("spheres", 1))
+    let d = &c.dof;
+    let observations = (d.touch_rows / 3
+        + d.rows_of("positions") / 3
+        + d.rows_of("orientations") / 3
+        + d.rows_of("spheres"))
     .max(1);
     if o.is_empty() || o.len() as f64 > (FEW_OUTLIERS * observations as f64).max(1.0) {
         return None;
@@ -1663,8 +1658,7 @@ pub fn run(
 fn dof_lines(c: &Calibration) -> String {
     let d = &c.dof;
     let mut t = if d.touch_rows == 0 && d.length_rows == 0 {
-        let has = |term: &str| d.other_rows.iter().any(|r| r.term == term);
-        let included = match (has("positions"), has("spheres")) {
+        let included = match (d.rows_of("positions") > 0, d.rows_of("spheres") > 0) {
             (false, true) => "the spheres' included",
             (true, true) => "the frames' and the spheres' included",
             _ => "the frames' included",
@@ -1761,7 +1755,7 @@ fn plural(noun: &str) -> String {
 /// What the observations are: touches, reference positions, points on
 /// spheres, or several of them.
 fn noun(c: &Calibration) -> &'static str {
-    let has = |term: &str| c.dof.other_rows.iter().any(|r| r.term == term);
+    let has = |term: &str| c.dof.rows_of(term) > 0;
     match (c.dof.touch_rows > 0, has("positions"), has("spheres")) {
         (false, true, false) => "position",
         (false, false, true) => "sphere point",
@@ -1772,7 +1766,7 @@ fn noun(c: &Calibration) -> &'static str {
 
 /// [`noun`], or `observation` when orientations are observed too.
 fn any_noun(c: &Calibration) -> &'static str {
-    match c.dof.other_rows.iter().any(|r| r.term == "orientations") {
+    match c.dof.rows_of("orientations") > 0 {
         true => "observation",
         false => noun(c),
     }
