@@ -346,25 +346,30 @@ fn simulate_spheres_then_calibrate() {
         })
         .collect();
     let bad = write(&dir, "displaced.csv", &displaced);
-    let o = aacmm(&[
-        "calibrate",
-        "--arm",
-        &arm,
-        "--spheres",
-        &bad,
-        "--sphere-diameter",
-        "25.4",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--method",
-        "lm",
-        "--robust",
-        "huber",
-        "--out",
-        dir.join("robust").to_str().unwrap(),
-    ]);
+    // The displaced file calibrated with the stated noise by LM, into `out`.
+    let calibrate_displaced = |out: &str, extra: &[&str]| {
+        let out = dir.join(out);
+        let mut args = vec![
+            "calibrate",
+            "--arm",
+            &arm,
+            "--spheres",
+            &bad,
+            "--sphere-diameter",
+            "25.4",
+            "--encoder-noise",
+            "0.005",
+            "--probe-noise",
+            "0.01",
+            "--method",
+            "lm",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        aacmm(&args)
+    };
+    let o = calibrate_displaced("robust", &["--robust", "huber"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let summary = stdout(&o);
     assert!(
@@ -373,23 +378,7 @@ fn simulate_spheres_then_calibrate() {
     );
     // Plain least squares refuses it, naming it as a point on a sphere
     // (not a touch) and the σ as a sphere point's.
-    let o = aacmm(&[
-        "calibrate",
-        "--arm",
-        &arm,
-        "--spheres",
-        &bad,
-        "--sphere-diameter",
-        "25.4",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--method",
-        "lm",
-        "--out",
-        dir.join("plain-displaced").to_str().unwrap(),
-    ]);
+    let o = calibrate_displaced("plain-displaced", &[]);
     assert!(!o.status.success());
     let (summary, error) = (stdout(&o), stderr(&o));
     assert!(

@@ -13,7 +13,7 @@
 //! are added in that order, so the same inputs give the same bits on any
 //! thread count.
 
-mod check;
+pub(crate) mod check;
 
 pub use check::{BlockCheck, CheckOptions, GradientCheck, TermCheck, check_gradients};
 

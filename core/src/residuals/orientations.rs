@@ -440,10 +440,7 @@ mod tests {
             (orientations.observations(), orientations.rows(&free)),
             (10, 30)
         );
-        let delta: Vec<f64> = (0..free.len())
-            .map(|a| 1e-3 * ((a as f64) * 0.7).sin())
-            .collect();
-        let x = o.plus(&start, &free, &delta);
+        let x = crate::objective::check::off_start(&o, &start, &free);
         let check = check_gradients(&o, &x, &free, &CheckOptions::default()).unwrap();
         assert!(check.passed(), "{check}");
         let blocks: Vec<&str> = (check.terms[1].blocks.iter())

@@ -690,10 +690,7 @@ mod tests {
             let free: Vec<usize> = (0..layout.len()).collect();
             let mut o = Objective::new(layout, vec![Box::new(term)], 1);
             o.weigh(&start, 1.0).unwrap();
-            let delta: Vec<f64> = (0..free.len())
-                .map(|a| 1e-3 * ((a as f64) * 0.7).sin())
-                .collect();
-            let x = o.plus(&start, &free, &delta);
+            let x = crate::objective::check::off_start(&o, &start, &free);
             let check = check_gradients(&o, &x, &free, &CheckOptions::default()).unwrap();
             assert!(check.passed(), "{check}");
             let seen: Vec<&str> = (check.terms[0].blocks.iter())
