@@ -459,6 +459,64 @@ fn simulate_positions_then_calibrate() {
     );
 }
 
+/// One tracker position displaced by 1 mm (the target not seated): the
+/// calibration is refused, and its first reason names the row by
+/// `file:line` as a displaced target, not a touch.
+#[test]
+fn a_displaced_target_is_named_as_one() {
+    use crate::util::{aacmm, shipped_arm, stderr, stdout, temp_dir};
+    let dir = temp_dir("displaced-target");
+    let d = dir.to_str().unwrap();
+    let arm = shipped_arm();
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm,
+        "--errors",
+        "random",
+        "--positions",
+        "60",
+        "--seed",
+        "5",
+        "--out",
+        d,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(dir.join("positions.csv")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let x = header.iter().position(|h| *h == "x").unwrap();
+    // Line 12 of the file (row 11 after the header).
+    let mut f: Vec<String> = lines[11].split(',').map(str::to_string).collect();
+    f[x] = format!("{}", f[x].parse::<f64>().unwrap() + 1.0);
+    let label = f[0].clone();
+    lines[11] = f.join(",");
+    let gross = dir.join("gross.csv");
+    std::fs::write(&gross, lines.join("\n") + "\n").unwrap();
+    let out = dir.join("out");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--positions",
+        gross.to_str().unwrap(),
+        "--position-noise",
+        "0.015+0.006/m",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success(), "{}", stdout(&o));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap())
+            .unwrap();
+    let first = json["verdict"]["reasons"][0].as_str().unwrap();
+    assert!(
+        first.contains(&format!("gross.csv:12 (point {label},"))
+            && first.contains("a mislabelled or displaced target? Check"),
+        "{first}"
+    );
+}
+
 /// One true arm measured three ways — touches with reference lengths, a
 /// tracker, and both in one fit — under one fixed set (the union of what
 /// each kind alone cannot see, so every parameter means the same in the

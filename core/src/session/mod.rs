@@ -1049,12 +1049,14 @@ fn outlier_cause(c: &Calibration) -> Option<String> {
     } else {
         ", or calibrate with --robust, which weighs them down"
     };
-    // Touches and positions keep the word they always had; other evidence
-    // is named as what it is.
+    // Each kind of evidence named as what was displaced: a touch, the
+    // tracker's target, a point on its sphere, an orientation.
     let what = match outliers_noun(&c.checks.outliers, noun(c)) {
         "sphere point" => "point on its sphere",
         "orientation" => "orientation",
-        _ => "touch",
+        "position" => "target",
+        "touch" => "touch",
+        _ => "observation",
     };
     Some(format!(
         "{} outlying observation{} pull{} the fit: {}{} — a mislabelled or displaced {what}? \
