@@ -193,7 +193,8 @@ enum Errors {
 
 pub fn run(args: Args) -> Result<()> {
     check_paths(&args)?;
-    let nominal = nominal_arm(&args)?;
+    let stated = nominal_arm(&args)?;
+    let nominal = with_ball(&args, &stated);
     let joints = nominal.params.joint_count();
     let errors = error_model(&args)?;
     if args.sockets.is_none() && args.sockets_file.is_none() {
@@ -201,7 +202,7 @@ pub fn run(args: Args) -> Result<()> {
             Some(_) => Some(tracker(&args, &nominal, &errors, None)?),
             None => None,
         };
-        return spheres(&args, &nominal, &errors, truth.as_ref());
+        return spheres(&args, &stated, &errors, truth.as_ref());
     }
     let (sockets, file) = socket_plan(&args)?;
     let located = |e| flag_error(e, file.as_ref());
@@ -218,7 +219,19 @@ pub fn run(args: Args) -> Result<()> {
     if args.positions.is_some() {
         tracker(&args, &nominal, &errors, Some(&campaign.true_arm))?;
     }
-    spheres(&args, &nominal, &errors, Some(&campaign.true_arm))
+    spheres(&args, &stated, &errors, Some(&campaign.true_arm))
+}
+
+/// The nominal arm a campaign with --spheres is drawn from: `stated` with
+/// the ball it probes with ([`DEFAULT_BALL_DIAMETER_MM`] where the arm file
+/// states none), so that true_arm.toml says the diameter spheres.csv was
+/// made with; `stated` itself without --spheres.
+fn with_ball(args: &Args, stated: &Arm) -> Arm {
+    let mut arm = stated.clone();
+    if args.spheres.is_some() {
+        arm.ball_diameter_mm = arm.ball_diameter_mm.or(Some(DEFAULT_BALL_DIAMETER_MM));
+    }
+    arm
 }
 
 /// The ball diameter `simulate --spheres` probes with when the arm file
@@ -227,7 +240,8 @@ const DEFAULT_BALL_DIAMETER_MM: f64 = 6.0;
 
 /// The sphere campaign of --spheres (nothing without it): of `truth` (the
 /// touch or tracker campaign's true arm) or of a true arm drawn from
-/// `errors`, written to true_arm.toml; spheres.csv.
+/// `errors` about `nominal` (as the arm file states it: the note says when
+/// it states no ball), written to true_arm.toml; spheres.csv.
 fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>) -> Result<()> {
     use aacmm_core::io::spheres::write_spheres;
     use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml};
@@ -248,9 +262,12 @@ fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>)
     let campaign = match truth {
         Some(t) => simulate_spheres(t, &settings.for_campaign()).map_err(located)?,
         None => {
-            let (truth, campaign) =
-                aacmm_core::simulate::simulate_sphere_campaign(nominal, errors, &settings)
-                    .map_err(|e| flag_error(e, None))?;
+            let (truth, campaign) = aacmm_core::simulate::simulate_sphere_campaign(
+                &with_ball(args, nominal),
+                errors,
+                &settings,
+            )
+            .map_err(|e| flag_error(e, None))?;
             std::fs::create_dir_all(&args.out)
                 .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
             let text = arm_to_toml(&truth, LengthUnit::Mm, AngleUnit::Deg);

@@ -487,3 +487,37 @@ fn bad_sphere_input_is_refused_by_name() {
     let empty = write(&dir, "empty.csv", "");
     assert_clean_error(&calibrate(&empty, &[]), &["empty.csv"]);
 }
+
+/// A sphere campaign simulated from an arm file that states no probe ball:
+/// spheres.csv is probed with the default 6 mm ball, and true_arm.toml
+/// says so (a calibration from the true arm file uses the ball the points
+/// were made with); the note tells the user to state it in theirs.
+#[test]
+fn simulate_spheres_writes_the_ball_it_probed_with() {
+    let dir = temp_dir("spheres-ball");
+    let d = dir.to_str().unwrap();
+    let arm = crate::util::shipped_arm();
+    let nominal = std::fs::read_to_string(&arm).unwrap();
+    assert!(!nominal.contains("ball_diameter_mm"), "{nominal}");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm,
+        "--errors",
+        "paper",
+        "--spheres",
+        "2",
+        "--seed",
+        "1",
+        "--out",
+        d,
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("add `ball_diameter_mm = 6` to its [probe]"),
+        "{}",
+        stderr(&o)
+    );
+    let truth = aacmm_core::read_arm(&dir.join("true_arm.toml")).unwrap().0;
+    assert_eq!(truth.ball_diameter_mm, Some(6.0));
+}

@@ -219,7 +219,7 @@ fn reach(
 
 /// A true arm drawn from `errors` about `nominal` (seeded by
 /// `settings.seed`, as [`super::simulate_tracker`] draws it) and its sphere
-/// campaign (seeded by `settings.seed + 3`): what `aacmm simulate
+/// campaign (seeded by `settings.seed + 4`): what `aacmm simulate
 /// --spheres` writes without sockets or positions.
 ///
 /// # Errors
@@ -237,13 +237,14 @@ pub fn simulate_sphere_campaign(
 }
 
 impl SphereSettings {
-    /// The settings of the points' own stream: the seed + 3 (the truth has
+    /// The settings of the points' own stream: the seed + 4 (the truth has
     /// the seed, a tracker's positions the next, their orientations the
-    /// one after), so that adding spheres to a campaign changes nothing
-    /// else of it.
+    /// one after, the 6-D target's mount the next), so that adding spheres
+    /// to a campaign changes nothing else of it, and no draw of theirs is
+    /// one of the mount's.
     pub fn for_campaign(&self) -> SphereSettings {
         SphereSettings {
-            seed: self.seed.wrapping_add(3),
+            seed: self.seed.wrapping_add(4),
             ..self.clone()
         }
     }
