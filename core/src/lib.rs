@@ -40,6 +40,7 @@ pub mod kernel;
 pub mod memory;
 pub mod metrics;
 pub mod objective;
+pub mod output;
 pub mod parallel;
 pub mod params;
 pub mod plan;

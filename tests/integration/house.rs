@@ -83,6 +83,10 @@ const RANKS: &[(&str, u8)] = &[
     // set to the session, so it sits on top with them; nothing in the
     // crate uses it (it is for programs), so nothing depends on its rank.
     ("prelude", 6),
+    // 7: what the front ends write — a session's files, the page drawn of
+    // them, and the rule that no output is overwritten silently: above both
+    // the session and the report, so that neither needs the other's half.
+    ("output", 7),
 ];
 
 /// The issue's rules between top-level directories, as (files whose module
@@ -101,14 +105,11 @@ const ISSUE_RULES: &[(&[&str], &[&str])] = &[
 const KNOWN_VIOLATIONS: &[(&str, &str)] = &[];
 
 /// The cycles between top-level modules found when the cycle check was
-/// written, each as its modules in name order: being removed. Must equal
+/// written, each as its modules in name order, being removed: must equal
 /// what the check finds (a new cycle fails, and so does one broken but
-/// still listed); never add one.
-///
-/// `session` renders its text summary and calls `report` for the HTML,
-/// while `report` reads `session`'s results: issue 42 moves every rendering
-/// into `report`, which ends this cycle.
-const KNOWN_CYCLES: &[&[&str]] = &[&["report", "session"]];
+/// left here); never add one. The last, {report, session}, went when what
+/// the session writes moved to `output`, above both.
+const KNOWN_CYCLES: &[&[&str]] = &[];
 
 /// The longest a function's body may be, in lines (from its `{` to its `}`).
 const MAX_FN_LINES: usize = 100;

@@ -36,8 +36,8 @@ pub struct EvaluationReport<'a> {
     pub lengths_file: Option<String>,
     /// Every figure (lengths in mm).
     pub evaluation: Evaluation,
-    data: &'a DataSet,
-    xyz: &'a [[f64; 3]],
+    pub(crate) data: &'a DataSet,
+    pub(crate) xyz: &'a [[f64; 3]],
     pairs: bool,
 }
 
@@ -151,64 +151,6 @@ impl<'a> EvaluationReport<'a> {
         self.write_json(&mut text)
             .expect("writing to memory cannot fail");
         String::from_utf8(text).expect("JSON is UTF-8")
-    }
-
-    /// The HTML report of the evaluation (the page and its figures);
-    /// `json_file` names the JSON written beside it, if any, whose numbers
-    /// the page then points to.
-    ///
-    /// # Errors
-    ///
-    /// When a figure cannot be drawn.
-    #[cfg(feature = "report")]
-    pub fn html(
-        &self,
-        json_file: Option<&str>,
-    ) -> Result<crate::report::Report, crate::report::ReportError> {
-        use crate::report::{EvaluationInput, Measured, evaluation_report};
-        let mut inputs = vec![
-            (
-                "arm".to_string(),
-                format!("`{}` ({})", self.arm, self.arm_file),
-            ),
-            (
-                "touches".to_string(),
-                format!(
-                    "{}: {} touches of {} points",
-                    self.data_file,
-                    self.data.len(),
-                    self.data.points().len()
-                ),
-            ),
-            (
-                "reference lengths".to_string(),
-                match &self.lengths_file {
-                    Some(l) => format!("{l}: {}", self.data.references().len()),
-                    None => "none (scale is not tested)".to_string(),
-                },
-            ),
-        ];
-        if let Some(json) = json_file {
-            inputs.push((
-                "written beside".to_string(),
-                format!(
-                    "{json} (every number of the tables that is also there is marked with its \
-                     place)"
-                ),
-            ));
-        }
-        evaluation_report(&EvaluationInput {
-            title: format!("Evaluation of arm `{}`", self.arm),
-            inputs,
-            measured: Measured {
-                data: self.data,
-                held_out: false,
-                before: None,
-                after: self.xyz,
-            },
-            arm: self.arm.clone(),
-            evaluation_json: json_file.map(|_| "/evaluation".to_string()),
-        })
     }
 }
 

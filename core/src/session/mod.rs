@@ -21,20 +21,16 @@
 pub(crate) mod evaluation;
 pub(crate) mod identification;
 mod map;
-mod outputs;
 mod position_evaluation;
 pub mod request;
 pub mod spheres;
 
 pub use map::MAP_POSES;
-pub use outputs::{earlier_results, result_files};
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
 pub use position_evaluation::{FrameEvaluation, MountEvaluation, PositionEvaluation};
 pub use request::{Request, user_noise};
-
-use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
@@ -1448,34 +1444,6 @@ impl CalibrationReport {
         s
     }
 
-    /// The files a session writes, by name: [`CALIBRATED_FILE`],
-    /// [`REPORT_FILE`], [`TIMING_FILE`] and (with the `report` feature) the
-    /// HTML report and its figures.
-    ///
-    /// # Errors
-    ///
-    /// [`WriteError::Report`], when a figure cannot be drawn.
-    pub fn files(
-        &self,
-        problem: &Problem,
-        total_seconds: f64,
-    ) -> Result<Vec<(String, String)>, WriteError> {
-        let mut files = vec![
-            (CALIBRATED_FILE.to_string(), self.calibrated_toml(problem)),
-            (REPORT_FILE.to_string(), self.to_json()),
-            (TIMING_FILE.to_string(), self.timing_json(total_seconds)),
-        ];
-        #[cfg(feature = "report")]
-        {
-            let page = crate::report::session_report(self, problem)?;
-            files.extend(
-                page.files()
-                    .map(|(name, text)| (name.to_string(), text.to_string())),
-            );
-        }
-        Ok(files)
-    }
-
     /// `calibrated.toml`: the calibrated arm, its frames, and the verdict
     /// (`[verdict]`; a refused calibration's file also opens with a comment
     /// saying so), which every reader of arm files checks
@@ -1497,49 +1465,6 @@ impl CalibrationReport {
             crate::io::verdict::verdict_to_toml(verdict)
         )
     }
-
-    /// Writes [`CalibrationReport::files`] into `dir` (which must exist);
-    /// returns the paths written.
-    ///
-    /// # Errors
-    ///
-    /// The first file that cannot be written, with its path.
-    pub fn write(
-        &self,
-        problem: &Problem,
-        dir: &Path,
-        total_seconds: f64,
-    ) -> Result<Vec<std::path::PathBuf>, WriteError> {
-        let files = self.files(problem, total_seconds)?;
-        let mut written = Vec::with_capacity(files.len());
-        for (name, text) in files {
-            let path = dir.join(name);
-            crate::io::write_atomic(&path, text).map_err(|source| WriteError::Io {
-                path: path.display().to_string(),
-                source,
-            })?;
-            written.push(path);
-        }
-        Ok(written)
-    }
-}
-
-/// Why a session's files could not be written.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum WriteError {
-    /// A file could not be written.
-    #[error("{path}: cannot write: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The system's reason.
-        source: std::io::Error,
-    },
-    /// The report could not be drawn.
-    #[cfg(feature = "report")]
-    #[error(transparent)]
-    Report(#[from] crate::report::ReportError),
 }
 
 /// Calibrates `problem` with `solver` under `settings` (threads, seed, the
@@ -2249,7 +2174,7 @@ mod tests {
 
     /// The shipped campaign (degrees), its lengths, and the nominal arm.
     fn shipped() -> (crate::io::Poses, Vec<crate::io::ReferenceLength>, Arm) {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
         let (poses, _) =
             crate::io::read_poses(&root.join("paper-campaign/poses.csv"), AngleUnit::Deg, None)
                 .unwrap();
