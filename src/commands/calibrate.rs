@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aacmm_core::calibrate::{
-    AnnealOptions, CalibrationError, Context, GlobalOptions, Loss, SolverSettings, SwitchRule,
+    AnnealOptions, CalibrationError, Cancel, Context, GlobalOptions, Loss, SolverSettings,
+    SwitchRule,
 };
 use aacmm_core::io::source_name;
 use aacmm_core::report::{
@@ -287,15 +288,36 @@ fn solve(
     let arm_file = &problem.sources().arm_file;
     let mut bar = super::progress::Bar::new();
     let mut show = |phase: &str, f: f64| bar.show(phase, f);
-    let mut ctx = Context::new().observed(&mut show);
+    let mut ctx = Context::new()
+        .observed(&mut show)
+        .cancelled_by(interrupt_cancels());
     let solver = settings.method.solver();
     session::run(problem, settings, &*solver, &mut ctx).map_err(|e| match e {
         CalibrationError::Option(_) => flag_error(e),
+        CalibrationError::Cancelled => {
+            anyhow::Error::new(e).context("interrupted (Ctrl-C): nothing was written")
+        }
         other => super::noise_flags(
             anyhow::Error::new(other).context(arm_file.clone()),
             &args.fit,
         ),
     })
+}
+
+/// A token that Ctrl-C sets: the first stops the calibration at the
+/// solver's next check (within milliseconds; nothing is written), a
+/// second ends the process at once. Where no handler can be installed the
+/// token is never set, and Ctrl-C ends the process as it always did.
+fn interrupt_cancels() -> Cancel {
+    let token = Cancel::new();
+    let set = token.clone();
+    let _ = ctrlc::set_handler(move || {
+        if set.is_cancelled() {
+            std::process::exit(130);
+        }
+        set.cancel();
+    });
+    token
 }
 
 /// Writes the calibration and its report into `out`; the lines that say

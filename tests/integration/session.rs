@@ -14,6 +14,12 @@ use crate::util::{calibrate_shipped, example, shipped, shipped_arm, temp_dir};
 
 /// The shipped campaign as the CLI reads it, with its noise stated.
 fn shipped_problem() -> Problem {
+    problem_stating(0.005, 0.01)
+}
+
+/// The shipped campaign as the CLI reads it, with the noise stated as
+/// `encoder_deg` and `probe_mm`.
+fn problem_stating(encoder_deg: f64, probe_mm: f64) -> Problem {
     let (arm, _) = read_arm(shipped_arm().as_ref()).unwrap();
     let lengths = shipped("lengths.csv");
     let (data, _) = DataSet::read(
@@ -25,8 +31,8 @@ fn shipped_problem() -> Problem {
     .unwrap();
     let options = ModelOptions {
         noise: Noise {
-            encoder_rad: Some(0.005f64.to_radians()),
-            probe_mm: Some(0.01),
+            encoder_rad: Some(encoder_deg.to_radians()),
+            probe_mm: Some(probe_mm),
             ..Noise::default()
         },
         ..ModelOptions::default()
@@ -281,4 +287,149 @@ fn a_request_gives_the_clis_calibration_with_the_arm_files_prior() {
             ),
         }
     }
+}
+
+/// A search that would run for minutes: the noise stated a thousand times
+/// too small (no start reaches its floor) and as many confirmations asked
+/// as there are starts.
+fn endless_search() -> (Problem, SolverSettings) {
+    let problem = problem_stating(0.000_005, 0.000_01);
+    let settings = SolverSettings {
+        method: Method::Global,
+        threads: 1,
+        global: aacmm_core::calibrate::GlobalOptions {
+            max_starts: 100_000,
+            confirmations: 100_000,
+            ..Default::default()
+        },
+        ..SolverSettings::default()
+    };
+    (problem, settings)
+}
+
+/// Every solver checks the cancellation token: set before the run, each
+/// method returns `Cancelled` (no result), and a run without the token set
+/// is untouched by having one.
+#[test]
+fn every_solver_stops_on_a_set_token() {
+    use aacmm_core::CalibrationError;
+    use aacmm_core::calibrate::{Cancel, Context};
+    let problem = shipped_problem();
+    for method in Method::ALL {
+        let settings = SolverSettings {
+            method,
+            threads: 1,
+            ..SolverSettings::default()
+        };
+        let token = Cancel::new();
+        token.cancel();
+        let mut ctx = Context::new().cancelled_by(token);
+        let r = aacmm_core::session::run(&problem, &settings, &*method.solver(), &mut ctx);
+        assert!(
+            matches!(r, Err(CalibrationError::Cancelled)),
+            "{}: {:?}",
+            method.name(),
+            r.map(|_| ())
+        );
+    }
+    let settings = SolverSettings {
+        method: Method::Lm,
+        threads: 1,
+        ..SolverSettings::default()
+    };
+    let mut ctx = Context::new().cancelled_by(Cancel::new());
+    let with = aacmm_core::session::run(&problem, &settings, &*Method::Lm.solver(), &mut ctx);
+    let without = problem.run(&settings).unwrap();
+    assert_eq!(with.unwrap().to_json(), without.to_json());
+}
+
+/// A global search that would run for minutes, cancelled from another
+/// thread after 300 ms, returns `Cancelled` promptly: every LM of the
+/// search checks the token before each iteration, and its torus grid every
+/// 64 cells. The issue asks 50 ms; the bound here is twice that, for a
+/// debug build beside other tests on a loaded machine (23 ms measured so,
+/// at load 7).
+#[test]
+fn a_global_search_cancelled_from_another_thread_returns_promptly() {
+    use aacmm_core::CalibrationError;
+    use aacmm_core::calibrate::{Cancel, Context};
+    use std::time::{Duration, Instant};
+    let (problem, settings) = endless_search();
+    let token = Cancel::new();
+    let stopper = token.clone();
+    let canceller = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(300));
+        let at = Instant::now();
+        stopper.cancel();
+        at
+    });
+    let mut ctx = Context::new().cancelled_by(token);
+    let r = aacmm_core::session::run(&problem, &settings, &*Method::Global.solver(), &mut ctx);
+    let ended = Instant::now();
+    let cancelled_at = canceller.join().unwrap();
+    assert!(
+        matches!(r, Err(CalibrationError::Cancelled)),
+        "{:?}",
+        r.map(|_| ())
+    );
+    let latency = ended.saturating_duration_since(cancelled_at);
+    eprintln!("cancelled global search returned {latency:?} after the token was set");
+    assert!(latency < Duration::from_millis(100), "{latency:?}");
+}
+
+/// Ctrl-C during `calibrate`: a search that would run for minutes stops at
+/// the solver's next check, says it was interrupted and that nothing was
+/// written, exits non-zero, and leaves no result behind.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_the_cli_calibration_and_writes_nothing() {
+    use std::time::{Duration, Instant};
+    let dir = temp_dir("session-interrupt");
+    let out = dir.join("out");
+    let mut child = crate::util::command(&[
+        "calibrate",
+        "--arm",
+        &shipped_arm(),
+        "--data",
+        &shipped("poses.csv"),
+        "--lengths",
+        &shipped("lengths.csv"),
+        "--encoder-noise",
+        "0.000005",
+        "--probe-noise",
+        "0.00001",
+        "--global-starts",
+        "100000",
+        "--global-confirmations",
+        "100000",
+        "--threads",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ])
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()
+    .unwrap();
+    // Well into the search (the data read, the handler installed).
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none(), "it ended by itself");
+    let pid = child.id().to_string();
+    let sent = Instant::now();
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let took = sent.elapsed();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("interrupted (Ctrl-C): nothing was written")
+            && err.contains("cancelled before the calibration finished"),
+        "{err}"
+    );
+    assert!(!out.join("calibration.json").exists());
+    assert!(took < Duration::from_secs(5), "{took:?}");
 }

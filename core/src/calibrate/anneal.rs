@@ -266,11 +266,12 @@ pub fn anneal<R: Rng>(
     switch: Option<&SwitchRule>,
     rng: &mut R,
 ) -> Result<(DhParams, AnnealTrace), CalibrationError> {
-    anneal_observed(start, data, free, options, switch, rng, &mut |_| {})
+    anneal_observed(start, data, free, options, switch, rng, &mut |_| Ok(()))
 }
 
 /// [`anneal`], reporting the fraction of the cooling schedule done after
-/// each temperature to `progress`.
+/// each temperature to `progress`, which stops the annealing with its
+/// error (a cancellation).
 pub(crate) fn anneal_observed<R: Rng>(
     start: &DhParams,
     data: &DataSet,
@@ -278,7 +279,7 @@ pub(crate) fn anneal_observed<R: Rng>(
     options: &AnnealOptions,
     switch: Option<&SwitchRule>,
     rng: &mut R,
-    progress: &mut dyn FnMut(f64),
+    progress: &mut dyn FnMut(f64) -> Result<(), CalibrationError>,
 ) -> Result<(DhParams, AnnealTrace), CalibrationError> {
     options.check()?;
     if let Some(rule) = switch {
@@ -353,7 +354,7 @@ pub(crate) fn anneal_observed<R: Rng>(
             acceptance: accepted as f64 / options.chain as f64,
         });
         fitness.push(1.0 / (1.0 + e_best));
-        progress(((options.t0 / t).ln() / span).clamp(0.0, 1.0));
+        progress(((options.t0 / t).ln() / span).clamp(0.0, 1.0))?;
         if let Some(rule) = switch
             && rule.switches(&fitness)
         {

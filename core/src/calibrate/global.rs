@@ -39,7 +39,7 @@
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
-use super::lm::{LmOptions, LmResult, levenberg_marquardt, levenberg_marquardt_from};
+use super::lm::{LmOptions, LmResult, levenberg_marquardt_cancellable, levenberg_marquardt_until};
 use super::{CalibrationError, Phase};
 use crate::error::OptionError;
 use crate::objective::Objective;
@@ -252,6 +252,8 @@ pub(crate) struct GlobalProblem<'a, 'o> {
     /// start whose plain minimum misses the noise floor is judged by its
     /// robust refit too ([`Search::robust_floor`]), as the final fit will be.
     pub(crate) robust: Option<super::robust::Robust>,
+    /// Set from another thread to stop the search: every LM of it checks.
+    pub(crate) cancel: Option<super::Cancel>,
 }
 
 impl GlobalProblem<'_, '_> {
@@ -264,7 +266,8 @@ impl GlobalProblem<'_, '_> {
         x
     }
 
-    /// LM of the objective `objective` from `x` over `free`.
+    /// LM of the objective `objective` from `x` over `free`, stopped
+    /// ([`CalibrationError::Cancelled`]) once the search is cancelled.
     fn lm(
         &self,
         objective: &Objective<'_>,
@@ -272,7 +275,7 @@ impl GlobalProblem<'_, '_> {
         free: &[usize],
         options: &LmOptions,
     ) -> Result<LmResult, CalibrationError> {
-        levenberg_marquardt(objective, x, free, options)
+        levenberg_marquardt_until(objective, x, free, options, self.cancel.as_ref())
     }
 }
 
@@ -502,7 +505,13 @@ impl<'a, 'o> Search<'a, 'o> {
         let (objective, x) = (problem.objective, problem.point(self.start));
         let timer = std::time::Instant::now();
         let first = match problem.start_normal.clone() {
-            Some(normal) => levenberg_marquardt_from(objective, &x, normal, &self.start_lm)?,
+            Some(normal) => levenberg_marquardt_cancellable(
+                objective,
+                &x,
+                normal,
+                &self.start_lm,
+                problem.cancel.as_ref(),
+            )?,
             None => problem.lm(objective, &x, problem.free, &self.start_lm)?,
         };
         let phase = &mut tally.phases[START_PHASE];
@@ -957,6 +966,10 @@ fn torus_grid(
     let mut xyz = Vec::new();
     let mut costs = Vec::with_capacity(cells);
     for cell in 0..cells {
+        // A cancellation is seen within 64 cells' costs.
+        if cell % 64 == 0 {
+            super::Cancel::check(problem.cancel.as_ref())?;
+        }
         place(&mut x, cell);
         // The data's cost (the prior does not steer the scan); never NaN:
         // a non-finite cost is +∞.

@@ -181,19 +181,35 @@ pub(crate) fn levenberg_marquardt(
     free: &[usize],
     options: &LmOptions,
 ) -> Result<LmResult, CalibrationError> {
+    levenberg_marquardt_until(objective, start, free, options, None)
+}
+
+/// [`levenberg_marquardt`], stopped with [`CalibrationError::Cancelled`]
+/// once `cancel` is set.
+pub(crate) fn levenberg_marquardt_until(
+    objective: &Objective<'_>,
+    start: &[f64],
+    free: &[usize],
+    options: &LmOptions,
+    cancel: Option<&super::Cancel>,
+) -> Result<LmResult, CalibrationError> {
+    super::Cancel::check(cancel)?;
     let normal = objective.normal(start, free)?;
-    let mut fit = levenberg_marquardt_from(objective, start, normal, options)?;
+    let mut fit = levenberg_marquardt_cancellable(objective, start, normal, options, cancel)?;
     fit.jacobian_evaluations += 1;
     Ok(fit)
 }
 
 /// [`levenberg_marquardt`] from the normal equations already computed at
-/// `start` (over the free columns `normal.free`), which it does not count.
-pub(crate) fn levenberg_marquardt_from(
+/// `start` (over the free columns `normal.free`), which it does not count;
+/// stopped with [`CalibrationError::Cancelled`] before any iteration once
+/// `cancel` is set.
+pub(crate) fn levenberg_marquardt_cancellable(
     objective: &Objective<'_>,
     start: &[f64],
     normal: Normal,
     options: &LmOptions,
+    cancel: Option<&super::Cancel>,
 ) -> Result<LmResult, CalibrationError> {
     if !normal.cost().is_finite() {
         return Err(CalibrationError::NonFiniteStart);
@@ -201,6 +217,7 @@ pub(crate) fn levenberg_marquardt_from(
     let mut descent = Descent::new(objective, start, normal, options);
     let mut termination = Termination::MaxIterations;
     for iteration in 1..=options.max_iterations {
+        super::Cancel::check(cancel)?;
         if let Some(stop) = descent.iterate(iteration)? {
             termination = stop;
             break;

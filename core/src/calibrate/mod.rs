@@ -63,7 +63,7 @@ pub use options::{
 };
 pub use prior::{CarriedTolerance, PriorConditioning, PriorEstimate, PriorReport};
 pub use robust::{Loss, Robust, RobustFit};
-pub use solver::{Anneal, Context, Global, Lm, Outcome, Solver, Stop, Task};
+pub use solver::{Anneal, Cancel, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
 use crate::identify::{Correlation, Identification, identify_from, open_directions_from};
@@ -100,6 +100,10 @@ fn angle_units_remedy(ratio_as_rad: f64, lengths_agree: bool) -> String {
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CalibrationError {
+    /// The calibration was cancelled (its [`Cancel`] token was set) before
+    /// it finished: there is no result.
+    #[error("cancelled before the calibration finished: no result")]
+    Cancelled,
     /// A setting out of range.
     #[error(transparent)]
     Option(#[from] OptionError),
@@ -986,6 +990,9 @@ pub fn calibrate_with(
         start_normal,
     };
     let mut outcome = solver.solve(task, ctx)?;
+    // A solver of another crate may not check the token: what follows
+    // (refits, covariance, leverage) is not started once it is set.
+    ctx.check()?;
     outcome.phases.insert(0, identify_phase);
     let setup = assess::Setup {
         start,

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use super::anneal::{self, AnnealStop, AnnealTrace};
 use super::global::{self, GlobalStop, GlobalTrace};
-use super::lm::{self, LmIteration, LmResult, Termination, levenberg_marquardt};
+use super::lm::{self, LmIteration, LmResult, Termination};
 use super::{CalibrationError, Method, ModelOptions, Phase, SolverSettings};
 use crate::dataset::DataSet;
 use crate::objective::Objective;
@@ -25,24 +25,28 @@ use crate::residuals::Normal;
 /// Told `(phase, fraction done)` as a solver runs.
 pub type Observer<'a> = &'a mut dyn FnMut(&str, f64);
 
-/// What a solver reports to while it runs: an observer told the phase
-/// running and the fraction of it done (for a progress bar). Threads and
-/// seed are settings ([`super::SolverSettings`]), not part of it.
+/// What a solver reports to while it runs, and what may stop it: an
+/// observer told the phase running and the fraction of it done (for a
+/// progress bar), and a [`Cancel`] token another thread (a GUI's stop
+/// button, a Ctrl-C handler) may set. Threads and seed are settings
+/// ([`super::SolverSettings`]), not part of it.
 #[derive(Default)]
 pub struct Context<'a> {
     /// Told `(phase, fraction done)`, if any.
     pub observer: Option<Observer<'a>>,
+    /// Checked by every solver between its steps, if any.
+    pub cancel: Option<Cancel>,
 }
 
 impl<'a> Context<'a> {
-    /// A context with no observer.
+    /// A context with no observer and no cancellation.
     ///
     /// ```
     /// let ctx = aacmm_core::calibrate::Context::new();
-    /// assert!(ctx.observer.is_none());
+    /// assert!(ctx.observer.is_none() && ctx.cancel.is_none());
     /// ```
     pub fn new() -> Context<'a> {
-        Context { observer: None }
+        Context::default()
     }
 
     /// This context, telling `observer` the progress.
@@ -51,10 +55,68 @@ impl<'a> Context<'a> {
         self
     }
 
+    /// This context, stopped when `cancel` is set.
+    pub fn cancelled_by(mut self, cancel: Cancel) -> Context<'a> {
+        self.cancel = Some(cancel);
+        self
+    }
+
     /// Tells the observer that `fraction` of `phase` is done.
     pub fn observe(&mut self, phase: &str, fraction: f64) {
         if let Some(o) = self.observer.as_mut() {
             o(phase, fraction);
+        }
+    }
+
+    /// [`CalibrationError::Cancelled`] once the token is set; else nothing.
+    ///
+    /// # Errors
+    ///
+    /// [`CalibrationError::Cancelled`].
+    pub fn check(&self) -> Result<(), CalibrationError> {
+        Cancel::check(self.cancel.as_ref())
+    }
+}
+
+/// A cancellation token: cheap to clone, shared between the thread that
+/// runs a calibration and any thread that may stop it. Every solver checks
+/// it between its steps (an LM iteration, a global search's start, an
+/// annealing temperature) and returns [`CalibrationError::Cancelled`]: a
+/// cancelled calibration has no result to judge or use.
+///
+/// ```
+/// use aacmm_core::calibrate::Cancel;
+/// let token = Cancel::new();
+/// let other = token.clone();
+/// assert!(!token.is_cancelled());
+/// other.cancel();
+/// assert!(token.is_cancelled());
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct Cancel(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+impl Cancel {
+    /// A token not yet set.
+    pub fn new() -> Cancel {
+        Cancel::default()
+    }
+
+    /// Sets the token: every calibration that checks it stops at its next
+    /// check. Safe from any thread, and from a signal handler's thread.
+    pub fn cancel(&self) {
+        self.0.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    /// Whether the token is set.
+    pub fn is_cancelled(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// [`CalibrationError::Cancelled`] when `token` is given and set.
+    pub(crate) fn check(token: Option<&Cancel>) -> Result<(), CalibrationError> {
+        match token.is_some_and(Cancel::is_cancelled) {
+            true => Err(CalibrationError::Cancelled),
+            false => Ok(()),
         }
     }
 }
@@ -310,14 +372,15 @@ impl Solver for Lm {
     fn solve(
         &self,
         task: Task<'_, '_>,
-        _ctx: &mut Context<'_>,
+        ctx: &mut Context<'_>,
     ) -> Result<Outcome, CalibrationError> {
         let timer = std::time::Instant::now();
-        let fit = lm::levenberg_marquardt_from(
+        let fit = lm::levenberg_marquardt_cancellable(
             task.objective,
             task.x,
             task.start_normal,
             &task.settings.lm,
+            ctx.cancel.as_ref(),
         )?;
         let mut phase = Phase::new("lm");
         phase.add_lm(&fit, timer.elapsed().as_secs_f64());
@@ -358,7 +421,10 @@ impl Solver for Anneal {
             &task.settings.anneal,
             self.hybrid.then_some(&task.settings.switch),
             &mut rng,
-            &mut |f| ctx.observe("anneal", f),
+            &mut |f| {
+                ctx.observe("anneal", f);
+                ctx.check()
+            },
         )?;
         let mut phases = vec![Phase {
             cost_evaluations: trace.evaluations,
@@ -367,11 +433,12 @@ impl Solver for Anneal {
         }];
         let mut outcome = if self.hybrid {
             let timer = std::time::Instant::now();
-            let fit = levenberg_marquardt(
+            let fit = lm::levenberg_marquardt_until(
                 task.objective,
                 &point(&task, &best),
                 task.free,
                 &task.settings.lm,
+                ctx.cancel.as_ref(),
             )?;
             let mut phase = Phase::new("lm");
             phase.add_lm(&fit, timer.elapsed().as_secs_f64());
@@ -423,6 +490,7 @@ impl Solver for Global {
             dof: task.dof,
             start_normal: Some(task.start_normal),
             robust: task.model.robust,
+            cancel: ctx.cancel.clone(),
         };
         let (fit, trace, phases) = global::global(
             task.start,

@@ -1516,6 +1516,8 @@ pub fn run(
         }),
         None => None,
     };
+    // The folds are calibrations of their own: not started once cancelled.
+    ctx.check()?;
     let cross_validation = match problem.cross_validate {
         Some(k) => Some(CrossValidation {
             folds: cross_validate(problem.inputs(), settings, solver, k)?,
