@@ -112,11 +112,29 @@ mod tests {
     use super::*;
     use std::path::PathBuf;
 
-    fn dir(name: &str) -> PathBuf {
+    /// A fresh directory of the system's temporary one, removed when the
+    /// test ends (pass or fail): one per test and process id, so that runs
+    /// do not pile up there.
+    struct Scratch(PathBuf);
+
+    impl std::ops::Deref for Scratch {
+        type Target = Path;
+        fn deref(&self) -> &Path {
+            &self.0
+        }
+    }
+
+    impl Drop for Scratch {
+        fn drop(&mut self) {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+
+    fn dir(name: &str) -> Scratch {
         let d = std::env::temp_dir().join(format!("aacmm-atomic-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).unwrap();
-        d
+        Scratch(d)
     }
 
     #[test]
@@ -131,7 +149,7 @@ mod tests {
         .unwrap_err();
         assert_eq!(e.to_string(), "no space left on device");
         assert_eq!(std::fs::read_to_string(&target).unwrap(), "old\n");
-        let left: Vec<_> = std::fs::read_dir(&d).unwrap().collect();
+        let left: Vec<_> = std::fs::read_dir(&*d).unwrap().collect();
         assert_eq!(left.len(), 1, "{left:?}");
         write_atomic(&target, "new\n").unwrap();
         assert_eq!(std::fs::read_to_string(&target).unwrap(), "new\n");
@@ -160,7 +178,7 @@ mod tests {
                 });
             }
         });
-        let left: Vec<_> = std::fs::read_dir(&d)
+        let left: Vec<_> = std::fs::read_dir(&*d)
             .unwrap()
             .map(|e| e.unwrap().file_name())
             .collect();
