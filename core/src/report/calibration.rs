@@ -96,6 +96,8 @@ pub fn session_report(
         uncertainty_map: report.uncertainty_map.as_ref(),
         uncertainty_map_json: Some("/uncertainty_map".to_string()),
         spheres: report.spheres.as_ref(),
+        folds: (v.cross_validation.as_ref()).map_or(&[], |cv| cv.folds.as_slice()),
+        held_out_spheres: v.held_out_spheres.as_ref(),
         uncertainty_maps_in_frames: &report.uncertainty_maps_in_frames,
         verdict: Some(&report.verdict),
         seed: report.seed,
