@@ -1690,6 +1690,12 @@ pub fn run(
     })
 }
 
+/// The fitted spheres' report and the held-out sphere file's figures.
+type SphereReports = (
+    Option<spheres::SphereReport>,
+    Option<spheres::HeldOutSpheres>,
+);
+
 /// The fitted spheres' report and the held-out sphere file's figures, each
 /// when given.
 ///
@@ -1699,7 +1705,7 @@ pub fn run(
 fn sphere_reports(
     problem: &Problem,
     calibration: &Calibration,
-) -> Result<(Option<spheres::SphereReport>, Option<spheres::HeldOutSpheres>), TermError> {
+) -> Result<SphereReports, TermError> {
     let layout = &problem.layout;
     Ok((
         (problem.spheres.as_ref())
