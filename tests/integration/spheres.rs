@@ -594,6 +594,33 @@ fn simulate_spheres_then_calibrate() {
     assert!(
         page.contains("Held out (") && page.contains("its diameter held at the stated 25.4 mm")
     );
+    // `evaluate --spheres` of the calibrated arm on the held-out file: the
+    // calibration's held-out figures; the nominal arm's far worse.
+    let evaluate = |arm: &str| {
+        let o = aacmm(&[
+            "evaluate",
+            "--arm",
+            arm,
+            "--spheres",
+            held.to_str().unwrap(),
+            "--sphere-diameter",
+            "25.4",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let calibrated = evaluate(out.join("calibrated.toml").to_str().unwrap());
+    let after = &value["validation"]["held_out_spheres"]["after"];
+    let rms = format!("RMS {:.4}", after["rms"].as_f64().unwrap());
+    assert!(
+        calibrated.contains("(its diameter stated, 25.4 mm) fitted on its points")
+            && calibrated.contains(&rms)
+            && calibrated.contains("(50 points)"),
+        "{calibrated} {rms}"
+    );
+    let before = &value["validation"]["held_out_spheres"]["before"];
+    let rms = format!("RMS {:.4}", before["rms"].as_f64().unwrap());
+    assert!(evaluate(&arm).contains(&rms), "{rms}");
     // `sa` anneals the touches alone: refused, naming the spheres.
     let o = aacmm(&[
         "calibrate",

@@ -307,3 +307,101 @@ impl HeldOutSpheres {
         t
     }
 }
+
+/// One arm on a sphere-surface file (`aacmm evaluate --spheres`): each
+/// sphere's centre — and its diameter unless stated — fitted on its points
+/// with the arm held fixed, the points' radial errors.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SphereEvaluation {
+    /// The sphere-surface file.
+    pub file: String,
+    /// The stated diameter, mm; none: fitted per sphere.
+    pub stated_diameter: Option<f64>,
+    /// Per sphere: its label, points, diameter (fitted or stated) and
+    /// radial residuals.
+    pub spheres: Vec<(String, usize, f64, RadialErrors)>,
+    /// `|radial error|` of every point, mm.
+    pub errors: crate::calibrate::validate::PositionErrors,
+}
+
+impl SphereEvaluation {
+    /// `arm` (through the corrections its file states) on the points
+    /// `rows` of `file`, of spheres `diameter_mm` across (stated) or fitted.
+    ///
+    /// # Errors
+    ///
+    /// A stated diameter out of range or without the arm file's ball;
+    /// points that fix no sphere where the arm puts them; the kernel's.
+    pub fn new(
+        arm: &crate::io::Arm,
+        rows: crate::io::spheres::Spheres,
+        file: &str,
+        diameter_mm: Option<f64>,
+    ) -> Result<SphereEvaluation, crate::calibrate::CalibrationError> {
+        use crate::residuals::spheres::SphereSize;
+        let empty = crate::DataSet::without_touches(rows.joints(), rows.prismatic_mask());
+        let beyond = crate::corrections::Beyond::default();
+        let mut layout =
+            crate::residuals::positions::layout_with(&arm.params, &empty, &arm.physics, &beyond)?;
+        let size = diameter_mm.map_or(SphereSize::Fitted, SphereSize::Known);
+        let term = SphereTerm::new(
+            rows,
+            file,
+            &arm.params,
+            size,
+            arm.ball_diameter_mm,
+            &crate::residuals::Noise::default(),
+            crate::residuals::spheres::add_to(&mut layout),
+        )?;
+        let (fitted, e) = At::with(&layout, &layout.start(), |at| {
+            Ok((term.refitted_spheres(at)?, term.refitted_errors(&term, at)?))
+        })?;
+        let r = term.spheres();
+        let spheres = (r.spheres().iter().enumerate())
+            .map(|(s, name)| {
+                let of = r.rows_of(s);
+                let pick: Vec<f64> = of.iter().map(|&i| e[i]).collect();
+                let d = 2.0 * (fitted[s].1 - term.ball_radius());
+                (name.clone(), of.len(), d, RadialErrors::of(&pick))
+            })
+            .collect();
+        let abs: Vec<f64> = e.iter().map(|v| v.abs()).collect();
+        Ok(SphereEvaluation {
+            file: file.to_string(),
+            stated_diameter: diameter_mm,
+            spheres,
+            errors: crate::calibrate::validate::PositionErrors::of(&abs),
+        })
+    }
+
+    /// What `evaluate --spheres` prints.
+    pub fn summary(&self) -> String {
+        let mut t = format!(
+            "Points on spheres ({}): each sphere's centre{} fitted on its points with the arm \
+             held fixed\n{:<10} {:>6} {:>14} {:>12} {:>10}\n",
+            self.file,
+            match self.stated_diameter {
+                Some(d) => format!(" (its diameter stated, {d} mm)"),
+                None => " and diameter".to_string(),
+            },
+            "sphere",
+            "points",
+            "diameter (mm)",
+            "RMS radial",
+            "form"
+        );
+        for (name, n, d, e) in &self.spheres {
+            t += &format!(
+                "{name:<10} {n:>6} {d:>14.4} {:>12.4} {:>10.4}\n",
+                e.rms, e.form
+            );
+        }
+        let e = &self.errors;
+        t += &format!(
+            "every point: |radial error| mean {:.4}, RMS {:.4}, p95 {:.4}, max {:.4} mm ({} \
+             points)\n",
+            e.mean, e.rms, e.p95, e.max, e.count
+        );
+        t
+    }
+}
