@@ -500,25 +500,25 @@ fn simulate_spheres_then_calibrate() {
     let held = held.join("spheres.csv");
     let out = dir.join("cal");
     let f = file.to_str().unwrap();
-    let o = aacmm(&[
+    // The spheres and their noise, as calibrate and identify take them.
+    let with_spheres = |command: &str, extra: &[&str]| {
+        let mut args = vec![command, "--arm", &arm, "--spheres", f];
+        args.extend(["--sphere-diameter", "25.4"]);
+        args.extend(["--encoder-noise", "0.005", "--probe-noise", "0.01"]);
+        args.extend(extra);
+        aacmm(&args)
+    };
+    let o = with_spheres(
         "calibrate",
-        "--arm",
-        &arm,
-        "--spheres",
-        f,
-        "--sphere-diameter",
-        "25.4",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--cross-validate",
-        "3",
-        "--validate-spheres",
-        held.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+        &[
+            "--cross-validate",
+            "3",
+            "--validate-spheres",
+            held.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let summary = stdout(&o);
     assert!(summary.contains("Verdict: usable"), "{summary}");
@@ -547,21 +547,7 @@ fn simulate_spheres_then_calibrate() {
     // `identify` sees the spheres (their centres eliminated): the fixed
     // set and rank of the calibration's own analysis.
     let id_json = dir.join("identify.json");
-    let o = aacmm(&[
-        "identify",
-        "--arm",
-        &arm,
-        "--spheres",
-        f,
-        "--sphere-diameter",
-        "25.4",
-        "--encoder-noise",
-        "0.005",
-        "--probe-noise",
-        "0.01",
-        "--json",
-        id_json.to_str().unwrap(),
-    ]);
+    let o = with_spheres("identify", &["--json", id_json.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(
         stdout(&o).contains("150 points on 6 spheres of")
