@@ -544,6 +544,13 @@ fn simulate_spheres_then_calibrate() {
     let page = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(page.contains("Sphere surfaces"), "no sphere section");
     assert!(page.contains("Cross-validation: held-out points on spheres"));
+    // The verdict names the folds' held-out points, not empty touch folds.
+    assert!(
+        page.contains("Held out, fold 3, spheres (50 held out): RMS |error|")
+            && page.contains("points on spheres): RMS radial error (each sphere refitted)")
+            && !page.contains("(0 points)"),
+        "{page}"
+    );
     // `identify` sees the spheres (their centres eliminated): the fixed
     // set and rank of the calibration's own analysis.
     let id_json = dir.join("identify.json");

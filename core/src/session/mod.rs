@@ -225,7 +225,8 @@ impl Problem {
     /// cannot be split, or not into `k`.
     pub fn with_cross_validation(mut self, k: usize) -> Result<Problem, OptionError> {
         check_folds(&self.data, k)?;
-        // The seed only orders the deal: any checks the counts.
+        // The counts do not depend on the seed, which orders the deal (the
+        // run deals again with its own, and checks that deal's shares).
         split_terms(&self.layout, &self.terms, k, 0)?;
         self.cross_validate = Some(k);
         Ok(self)
