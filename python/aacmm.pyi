@@ -462,9 +462,17 @@ class Calibration:
         an earlier run (a calibration's, a campaign's, a report's) and not
         ``force``; ValueError for an empty path."""
 
+#: Points probed on reference spheres: a sphere-surface file's path (CSV
+#: ``sphere,q1,…,qn[,articulation]``, as ``--spheres``), or a pair
+#: ``(labels, q)`` — per point its sphere's label and its readings,
+#: ``n × joints``, in rad (mm for a slide).
+SpherePoints = Union[
+    str, "os.PathLike[str]", Tuple[Sequence[str], npt.ArrayLike]
+]
+
 def calibrate(
     arm: Arm,
-    data: DataSet,
+    data: Optional[DataSet] = None,
     *,
     method: Literal["global", "lm", "sa", "hybrid"] = "global",
     fix: Union[str, Sequence[str], None] = None,
@@ -483,6 +491,10 @@ def calibrate(
     drift: bool = False,
     backlash: Optional[str] = None,
     register_held_out: bool = False,
+    spheres: Optional[SpherePoints] = None,
+    sphere_diameter: Optional[float] = None,
+    validate_spheres: Optional[SpherePoints] = None,
+    sphere_angle_unit: Literal["deg", "rad"] = "deg",
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
@@ -511,6 +523,15 @@ def calibrate(
     the arm's joint limits are a UserWarning (and in the report's
     warnings). ``seed`` is at most 2**63 − 1, as in :func:`simulate`;
     ``threads`` 1 to 1024, as in :func:`identify` (and ``--threads``).
+    ``spheres`` adds points probed on reference spheres (``--spheres``;
+    ``data`` may then be left out), ``sphere_diameter`` their stated
+    diameter in mm (``--sphere-diameter``: fixes the scale; needs the arm
+    file's ``[probe] ball_diameter_mm``), ``validate_spheres`` held-out
+    points on spheres (``--validate-spheres``: each sphere refitted on its
+    points with the arm fixed, in ``report["validation"]["held_out_spheres"]``);
+    a file's readings are in ``sphere_angle_unit``; with ``cross_validate``
+    each sphere's points are dealt to the folds
+    (``report["validation"]["cross_validation"]["folds"][i]["terms"]``).
     ValueError for a bad option (naming the argument),
     CalibrationError when the data cannot determine the free parameters; a
     calibration that is not usable is returned: check ``successful``."""

@@ -1466,6 +1466,42 @@ AacmmStatus aacmm_calibrate_options_set_position_orientations(AacmmCalibrateOpti
 AacmmStatus aacmm_calibrate_options_set_positions_file(AacmmCalibrateOptions *options,
                                                        const char *path);
 
+/**
+ * A sphere-surface file (`--spheres`: CSV `sphere,q1,…,qn[,articulation]`,
+ * the readings in the unit `aacmm_calibrate_files` is given for the poses
+ * file): points probed on reference spheres, fitted with the arm, each
+ * sphere's centre (and diameter, unless
+ * `aacmm_calibrate_options_set_sphere_diameter_mm` states it) fitted with
+ * it; `NULL` removes it (the default: none). The path is copied, the file
+ * read when calibrating by `aacmm_calibrate_files`, which may then be
+ * given no poses file (`poses_path` `NULL`): a calibration on the spheres
+ * alone (or with a positions file). With cross-validation each sphere's
+ * points are dealt to the folds. `aacmm_calibrate` refuses it.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `path` is `NULL` or a
+ * NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_spheres_file(AacmmCalibrateOptions *options,
+                                                     const char *path);
+
+/**
+ * The reference spheres' diameter, mm (`--sphere-diameter`): it fixes the
+ * arm's scale without reference lengths, and needs the arm file's
+ * `[probe] ball_diameter_mm`; `NAN` (the default) fits each sphere's.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_INVALID_ARGUMENT`
+ * for a diameter that is not `NAN` nor 1 to 1000 mm (below 1, most
+ * likely metres: the message says so).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_sphere_diameter_mm(AacmmCalibrateOptions *options,
+                                                           double diameter_mm);
+
 #ifdef __cplusplus
 }  // extern "C"
 #endif  // __cplusplus

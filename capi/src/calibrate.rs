@@ -310,16 +310,19 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
                 ));
             }
         };
-        // The command line's order: poses (or positions alone), lengths,
-        // positions.
-        let mut request = match (&poses_path, &positions) {
-            (Some(poses), _) => Request::read(&arm_path, poses, unit)?,
-            (None, Some(path)) => Request::read_positions_only(&arm_path, path, unit)?,
-            (None, None) => {
+        let spheres = o.spheres().map(std::path::Path::to_path_buf);
+        // The command line's order: poses (or positions alone, or spheres
+        // alone), lengths, positions, spheres.
+        let mut request = match (&poses_path, &positions, &spheres) {
+            (Some(poses), _, _) => Request::read(&arm_path, poses, unit)?,
+            (None, Some(path), _) => Request::read_positions_only(&arm_path, path, unit)?,
+            (None, None, Some(path)) => Request::read_spheres_only(&arm_path, path, unit)?,
+            (None, None, None) => {
                 return Err(Error::new(
                     AacmmStatus::NullPointer,
                     "`poses_path` is NULL: give a poses file, a positions file \
-                     (aacmm_calibrate_options_set_positions_file) or both",
+                     (aacmm_calibrate_options_set_positions_file), a sphere-surface file \
+                     (aacmm_calibrate_options_set_spheres_file) or more",
                 ));
             }
         };
@@ -328,6 +331,9 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
         }
         if let (Some(_), Some(path)) = (&poses_path, &positions) {
             request = request.read_positions(path)?;
+        }
+        if let (true, Some(path)) = (poses_path.is_some() || positions.is_some(), &spheres) {
+            request = request.read_spheres(path)?;
         }
         let result = run(options::request(&o, request))?;
         // SAFETY: checked writable above.
@@ -439,6 +445,12 @@ pub unsafe extern "C" fn aacmm_calibrate(
                 ));
             }
         };
+        if o.spheres().is_some() {
+            return Err(Error::invalid(
+                "a sphere-surface file (aacmm_calibrate_options_set_spheres_file) goes with \
+                 aacmm_calibrate_files",
+            ));
+        }
         let mut converted = ptr::try_vec("lengths_len", lengths.len())?;
         converted.extend(lengths.iter().map(ArrayLength::from));
         let lengths = converted;

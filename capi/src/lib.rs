@@ -83,7 +83,8 @@ pub use options::{
     aacmm_calibrate_options_set_position_orientations, aacmm_calibrate_options_set_positions,
     aacmm_calibrate_options_set_positions_file, aacmm_calibrate_options_set_prior,
     aacmm_calibrate_options_set_probe_noise_mm, aacmm_calibrate_options_set_robust,
-    aacmm_calibrate_options_set_seed, aacmm_calibrate_options_set_thermal,
+    aacmm_calibrate_options_set_seed, aacmm_calibrate_options_set_sphere_diameter_mm,
+    aacmm_calibrate_options_set_spheres_file, aacmm_calibrate_options_set_thermal,
     aacmm_calibrate_options_set_threads,
 };
 

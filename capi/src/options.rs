@@ -119,6 +119,10 @@ pub struct AacmmCalibrateOptions {
     drift: bool,
     /// `--positions`; `None`: no reference positions.
     positions: Option<PositionInput>,
+    /// `--spheres`: a sphere-surface file; `None`: none.
+    spheres: Option<std::path::PathBuf>,
+    /// `--sphere-diameter`, mm; `None`: fitted per sphere.
+    sphere_diameter_mm: Option<f64>,
 }
 
 impl AacmmCalibrateOptions {
@@ -126,6 +130,11 @@ impl AacmmCalibrateOptions {
     /// options (a copy [`read`] made: the caller's stay).
     pub(crate) fn take_positions(&mut self) -> Option<PositionInput> {
         self.positions.take()
+    }
+
+    /// The sphere-surface file, if one was set.
+    pub(crate) fn spheres(&self) -> Option<&std::path::Path> {
+        self.spheres.as_deref()
     }
 }
 
@@ -149,6 +158,8 @@ impl Default for AacmmCalibrateOptions {
             thermal: model.beyond.thermal,
             drift: model.beyond.drift,
             positions: None,
+            spheres: None,
+            sphere_diameter_mm: None,
         }
     }
 }
@@ -177,6 +188,7 @@ pub(crate) fn request(o: &AacmmCalibrateOptions, request: Request) -> Request {
         .threads(threads)
         .seed(o.seed)
         .cross_validate(folds)
+        .sphere_diameter(o.sphere_diameter_mm)
 }
 
 /// The options behind `options`, or the defaults for `NULL`.
@@ -996,6 +1008,68 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_positions_file(
             // SAFETY: by the contract.
             false => Some(PositionInput::File(unsafe { ptr::path(path, "path") }?)),
         };
+        Ok(())
+    })
+}
+
+/// A sphere-surface file (`--spheres`: CSV `sphere,q1,…,qn[,articulation]`,
+/// the readings in the unit `aacmm_calibrate_files` is given for the poses
+/// file): points probed on reference spheres, fitted with the arm, each
+/// sphere's centre (and diameter, unless
+/// `aacmm_calibrate_options_set_sphere_diameter_mm` states it) fitted with
+/// it; `NULL` removes it (the default: none). The path is copied, the file
+/// read when calibrating by `aacmm_calibrate_files`, which may then be
+/// given no poses file (`poses_path` `NULL`): a calibration on the spheres
+/// alone (or with a positions file). With cross-validation each sphere's
+/// points are dealt to the folds. `aacmm_calibrate` refuses it.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; `path` is `NULL` or a
+/// NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_spheres_file(
+    options: *mut AacmmCalibrateOptions,
+    path: *const c_char,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { builder_with_text(options, path, "path") }?;
+        o.spheres = match path.is_null() {
+            true => None,
+            // SAFETY: by the contract.
+            false => Some(unsafe { ptr::path(path, "path") }?),
+        };
+        Ok(())
+    })
+}
+
+/// The reference spheres' diameter, mm (`--sphere-diameter`): it fixes the
+/// arm's scale without reference lengths, and needs the arm file's
+/// `[probe] ball_diameter_mm`; `NAN` (the default) fits each sphere's.
+///
+/// Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_INVALID_ARGUMENT`
+/// for a diameter that is not `NAN` nor 1 to 1000 mm (below 1, most
+/// likely metres: the message says so).
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_sphere_diameter_mm(
+    options: *mut AacmmCalibrateOptions,
+    diameter_mm: f64,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        if diameter_mm.is_nan() {
+            o.sphere_diameter_mm = None;
+            return Ok(());
+        }
+        aacmm_core::residuals::spheres::check_sphere_diameter(diameter_mm)
+            .map_err(|e| Error::invalid(format!("sphere_diameter_mm: {e}")))?;
+        o.sphere_diameter_mm = Some(diameter_mm);
         Ok(())
     })
 }

@@ -49,7 +49,7 @@ use crate::dataset::DataSet;
 
 use crate::objective::Objective;
 use crate::params::{DhParams, JointModel, ParamId, ParamKind};
-use crate::residuals::{Hold, Noise, Sees, TermError, WEAK_RATIO};
+use crate::residuals::{Hold, Noise, Sees, Term, TermError, WEAK_RATIO};
 
 /// Relative singular-value threshold of the numerical rank.
 pub(crate) const RANK_TOLERANCE: f64 = 1e-7;
@@ -284,50 +284,86 @@ pub fn identify(
     noise: &Noise,
     threads: usize,
 ) -> Result<Identification, TermError> {
-    let (normal, sees) = data_normal(params, data, noise, threads)?;
-    Ok(identify_from(params, sees, normal, data))
+    identify_with(params, data, noise, None, threads)
 }
 
-/// The normal equations of the data alone over every geometry column at
-/// `params`, the auxiliary blocks (the frames of reference positions)
-/// fitted and eliminated, and what the data see.
+/// Evidence beyond a data set's, for the analysis: given the layout it
+/// works on (the geometry, the frames of reference positions), adds the
+/// terms' own blocks to it and returns the terms (points on spheres, their
+/// centres blocks of their own). Their blocks are fitted and eliminated
+/// with the frames ([`crate::residuals::Normal::geometry_only`]), so the
+/// geometry is judged with them.
+pub type AddedTerms<'a> =
+    &'a dyn Fn(&mut crate::residuals::Layout) -> Result<Vec<Box<dyn Term>>, TermError>;
+
+/// What an analysis sees: a data set, and the terms `added` makes.
+#[derive(Clone, Copy)]
+pub struct Evidence<'a> {
+    /// The touches, lengths and positions.
+    pub data: &'a DataSet,
+    /// The terms beyond them, if any.
+    pub added: Option<AddedTerms<'a>>,
+}
+
+/// [`identify`] of `data` and the terms `added` makes, if any.
 ///
 /// # Errors
 ///
-/// As [`identify`], and auxiliary blocks the data do not determine.
+/// As [`identify`]; the terms' refusals; auxiliary blocks the evidence
+/// does not determine.
+pub fn identify_with(
+    params: &DhParams,
+    data: &DataSet,
+    noise: &Noise,
+    added: Option<AddedTerms<'_>>,
+    threads: usize,
+) -> Result<Identification, TermError> {
+    let (normal, sees) = data_normal(params, data, noise, added, threads)?;
+    Ok(identify_from(params, sees, normal, data))
+}
+
+/// The normal equations of the data alone (and the terms `added` makes)
+/// over every geometry column at `params`, the auxiliary blocks (the
+/// frames of reference positions, the terms' own blocks) fitted and
+/// eliminated, and what the data see.
+///
+/// # Errors
+///
+/// As [`identify_with`].
 pub(crate) fn data_normal(
     params: &DhParams,
     data: &DataSet,
     noise: &Noise,
+    added: Option<AddedTerms<'_>>,
     threads: usize,
 ) -> Result<(crate::residuals::Normal, Sees), TermError> {
-    let objective = data_objective(params, data, noise, threads)?;
+    let objective = data_objective(params, data, noise, added, threads)?;
     let all: Vec<usize> = (0..objective.layout().len()).collect();
     let normal = objective.normal(&objective.start(), &all)?;
+    let what = if added.is_some() { "blocks" } else { "frames" };
     let normal = (normal.geometry_only(objective.layout()))
-        .map_err(|e| TermError::invalid("frames", e.to_string()))?;
+        .map_err(|e| TermError::invalid(what, e.to_string()))?;
     Ok((normal, objective.sees()))
 }
 
-/// The data's terms at `params` (no prior), touches without stated noise
-/// weighed as a 0.01 mm touch: what the analysis of the data alone sees.
+/// The data's terms at `params` (no prior), and those `added` makes,
+/// touches without stated noise weighed as a 0.01 mm touch: what the
+/// analysis of the data alone sees.
 pub(crate) fn data_objective<'d>(
     params: &DhParams,
     data: &'d DataSet,
     noise: &Noise,
+    added: Option<AddedTerms<'_>>,
     threads: usize,
 ) -> Result<Objective<'d>, TermError> {
     // Without stated noise, σ as for a 0.01 mm touch; reference positions
     // on their frames, each registered to `params` in closed form.
-    Objective::of_data(
-        crate::residuals::positions::layout_for(params, data)?,
-        data,
-        noise,
-        Vec::new(),
-        None,
-        0.01,
-        threads,
-    )
+    let mut layout = crate::residuals::positions::layout_for(params, data)?;
+    let terms = match added {
+        Some(add) => add(&mut layout)?,
+        None => Vec::new(),
+    };
+    Objective::of_data(layout, data, noise, terms, None, 0.01, threads)
 }
 
 /// [`identify`] from the normal equations of every geometry column at
@@ -1386,7 +1422,7 @@ mod tests {
         }
         let (poses, _) = parse_poses(&text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
         let data = DataSet::from_poses(&poses, "p.csv").unwrap();
-        let objective = data_objective(&params, &data, &Noise::default(), 1).unwrap();
+        let objective = data_objective(&params, &data, &Noise::default(), None, 1).unwrap();
         let all: Vec<usize> = (0..params.param_count()).collect();
         let mut normal = objective.normal(&params.to_vec(), &all).unwrap();
         normal.jtj[0] = f64::INFINITY;
@@ -1484,7 +1520,7 @@ mod exact_data_tests {
             .collect();
         let open = |noise: f64, lengths: usize| {
             let (truth, data) = campaign(noise, lengths);
-            let objective = data_objective(&truth, &data, &Noise::default(), 1).unwrap();
+            let objective = data_objective(&truth, &data, &Noise::default(), None, 1).unwrap();
             let normal = objective.normal(&truth.to_vec(), &all).unwrap();
             open_directions_from(&truth, objective.sees(), normal, &free)
         };

@@ -34,6 +34,8 @@ pub(crate) mod streams {
     pub(crate) const PAIRS: u64 = 11;
     /// The random nominal arm of a chain shape (`simulate --chain`).
     pub(crate) const CHAIN: u64 = 12;
+    /// The order in which cross-validation deals points on spheres.
+    pub(crate) const SPHERE_FOLDS: u64 = 13;
     /// The solvers: annealing moves, global starts.
     pub(crate) const SOLVER: u64 = 0x50_4c_56;
 }

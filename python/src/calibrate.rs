@@ -21,6 +21,7 @@ use crate::arm::{Arm, warn_all};
 use crate::data::DataSet;
 use crate::error::{Error, Kind, detached};
 use crate::noise::Noise;
+use crate::spheres::SphereArg;
 use crate::{to_dict, to_python};
 
 /// The result of `aacmm.calibrate`: the problem as checked and the
@@ -131,7 +132,12 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// (`"length=0.5mm,angle=0.1deg,theta5=0.05deg"`, entry by entry over the
 /// arm file's `[prior]`; `"none"` ignores the file's; default: the file's,
 /// if any); `accept_poor_fit`: call a poor χ² or a fit worse than nominal
-/// usable (never a wrong geometry). Models beyond geometry, fitted with
+/// usable (never a wrong geometry). `spheres`: points probed on reference
+/// spheres (`--spheres`; `data` may then be `None`) — a sphere-surface
+/// file's path (readings in `sphere_angle_unit`) or `(labels, q)` arrays
+/// (rad; mm for a slide) —, `sphere_diameter` their stated diameter in mm
+/// (`--sphere-diameter`), `validate_spheres` held-out points on spheres
+/// (`--validate-spheres`, given as `spheres`). Models beyond geometry, fitted with
 /// it, as the command line's flags: `compliance`, joints (from 1) whose
 /// compliance under the gravity torque of the arm file's masses is fitted
 /// (`"2,3"`, `--compliance`); `harmonics`, encoder harmonics
@@ -150,12 +156,12 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// parameters. A calibration that is not usable still gives a result:
 /// check `successful` (the verdict) and `report["verdict"]` for why.
 #[pyfunction]
-#[pyo3(signature = (arm, data, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None, register_held_out = false))]
+#[pyo3(signature = (arm, data = None, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None, register_held_out = false, spheres = None, sphere_diameter = None, validate_spheres = None, sphere_angle_unit = "deg"))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
     arm: &Arm,
-    data: &DataSet,
+    data: Option<&DataSet>,
     method: &str,
     fix: Option<&Bound<'_, PyAny>>,
     noise: Option<&Noise>,
@@ -173,7 +179,25 @@ pub fn calibrate(
     drift: bool,
     backlash: Option<&str>,
     register_held_out: bool,
+    spheres: Option<&Bound<'_, PyAny>>,
+    sphere_diameter: Option<f64>,
+    validate_spheres: Option<&Bound<'_, PyAny>>,
+    sphere_angle_unit: &str,
 ) -> PyResult<Calibration> {
+    let unit = crate::angle_unit(sphere_angle_unit)?;
+    let spheres = (spheres.map(|s| SphereArg::of(py, s, "spheres", arm, unit))).transpose()?;
+    let held_spheres = (validate_spheres)
+        .map(|s| SphereArg::of(py, s, "validate_spheres", arm, unit))
+        .transpose()?;
+    let none;
+    let data = match (data, &spheres) {
+        (Some(d), _) => d,
+        (None, Some(s)) => {
+            none = DataSet::without_touches(arm, s.name());
+            &none
+        }
+        (None, None) => return Err(Error::value("data: give a DataSet, spheres or both").into()),
+    };
     let fix = match fix {
         Some(f) => fix_text(f)?,
         None => "auto".to_string(),
@@ -191,6 +215,15 @@ pub fn calibrate(
         .beyond(compliance, harmonics, thermal, drift)
         .backlash(backlash)
         .register_held_out(register_held_out);
+    let request = match spheres {
+        Some(s) => s.fitted(request)?,
+        None => request,
+    };
+    let request = match held_spheres {
+        Some(s) => s.held_out(request)?,
+        None => request,
+    }
+    .sphere_diameter(sphere_diameter);
     // The readers' warnings were issued when the files were read; the
     // request adds those about the arm and the data together.
     let read: Vec<&String> = (arm.warnings.iter().chain(&data.warnings))

@@ -89,6 +89,21 @@ fn length_tuple(item: &Bound<'_, PyAny>, i: usize) -> PyResult<LengthTuple> {
     ))
 }
 
+impl DataSet {
+    /// No touch, no position, of `arm`'s joints: the data set of a
+    /// calibration on points on spheres alone, named by their source
+    /// `name` (as the command line's report names the sphere file).
+    pub(crate) fn without_touches(arm: &crate::arm::Arm, name: String) -> DataSet {
+        DataSet {
+            data: CoreDataSet::without_touches(arm.joints(), arm.prismatic()),
+            poses_file: name,
+            lengths_file: None,
+            warnings: Vec::new(),
+            unit: AngleUnit::Deg,
+        }
+    }
+}
+
 #[pymethods]
 impl DataSet {
     /// A data set from touches given as arrays: `labels` (one per touch; any

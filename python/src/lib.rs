@@ -16,6 +16,7 @@ mod noise;
 mod positions;
 mod readings;
 mod simulate;
+mod spheres;
 mod study;
 
 use aacmm_core::io::AngleUnit;

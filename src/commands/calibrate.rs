@@ -53,8 +53,16 @@ pub struct Args {
     /// flag: such figures are optimistic, and every output then says so).
     #[arg(long, requires = "validate_positions")]
     register_held_out: bool,
+    /// Held-out points on reference spheres to validate on (same CSV format
+    /// as --spheres): each sphere's centre, and its diameter unless
+    /// --sphere-diameter states it, refitted on its own points with the arm
+    /// held fixed; scored by the points' radial error.
+    #[arg(long, value_name = "S.csv")]
+    validate_spheres: Option<PathBuf>,
     /// K-fold cross-validation over points (points joined by a reference
-    /// length stay in one fold).
+    /// length stay in one fold), reference positions (dealt per frame) and
+    /// points on spheres (dealt per sphere, scored against the fold's
+    /// spheres).
     #[arg(long, value_name = "K")]
     cross_validate: Option<usize>,
     /// Exit 0 even when the fit's χ² is far outside the stated noise or the
@@ -226,6 +234,11 @@ fn check_paths(args: &Args) -> Result<()> {
             .as_deref()
             .map(|p| ("--validate-positions", p)),
     );
+    inputs.extend(
+        args.validate_spheres
+            .as_deref()
+            .map(|p| ("--validate-spheres", p)),
+    );
     check_output_dir(
         "--out",
         &args.out,
@@ -269,6 +282,9 @@ fn problem(args: &Args) -> Result<(Problem, SolverSettings)> {
     }
     if let Some(path) = &args.validate_positions {
         request = request.validate_on_positions(path)?;
+    }
+    if let Some(path) = &args.validate_spheres {
+        request = request.validate_on_spheres(path)?;
     }
     let arm_file = source_name(&args.fit.arm);
     request.build().map_err(|e| match e {

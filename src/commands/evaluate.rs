@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 use aacmm_core::calibrate::validate::FrameValues;
 use aacmm_core::dataset::DataSet;
 use aacmm_core::io::frames::parse_frames;
+use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{Arm, read_lengths, read_positions, source_name};
 use aacmm_core::report::EVALUATION_FILES;
+use aacmm_core::session::spheres::SphereEvaluation;
 use aacmm_core::session::{EvaluationReport, PositionEvaluation, Sources};
 use anyhow::{Context, Result, bail};
 
@@ -19,9 +21,9 @@ use crate::paths::{check_output_dir, check_output_file};
 #[derive(clap::Args)]
 #[command(mut_arg("data", |a| a
     .required(false)
-    .required_unless_present("positions")
+    .required_unless_present_any(["positions", "spheres"])
     .help("Poses file (CSV `point,q1,...,qn`: touches of points); `-` reads standard input. \
-           Optional with --positions")))]
+           Optional with --positions or --spheres")))]
 pub struct Args {
     #[command(flatten)]
     input: super::ArmAndPoses,
@@ -40,6 +42,17 @@ pub struct Args {
     /// Printed only: --json and --report are of the touches (--data).
     #[arg(long, value_name = "P.csv")]
     positions: Option<PathBuf>,
+    /// Points probed on reference spheres: CSV `sphere,q1,...,qn`, as
+    /// calibrate --spheres reads. Prints each sphere's diameter, RMS radial
+    /// residual and form with its centre (and diameter, unless
+    /// --sphere-diameter states it) fitted on its points, the arm held
+    /// fixed, and every point's radial errors. Printed only.
+    #[arg(long, value_name = "S.csv")]
+    spheres: Option<PathBuf>,
+    /// The spheres' stated diameter, mm (needs the arm file's `[probe]
+    /// ball_diameter_mm`).
+    #[arg(long, value_name = "MM", requires = "spheres")]
+    sphere_diameter: Option<f64>,
     /// Also write every figure as JSON (lengths in mm).
     #[arg(long)]
     json: Option<PathBuf>,
@@ -68,6 +81,7 @@ pub fn run(args: Args) -> Result<()> {
     inputs.extend(args.input.data.as_deref().map(|d| ("--data", d)));
     inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
     inputs.extend(args.positions.as_deref().map(|p| ("--positions", p)));
+    inputs.extend(args.spheres.as_deref().map(|p| ("--spheres", p)));
     if args.input.data.is_none() {
         for (given, flag) in [
             (args.json.is_some(), "--json"),
@@ -81,7 +95,9 @@ pub fn run(args: Args) -> Result<()> {
                 );
             }
         }
-        return print_positions(&args, &args.input.read_arm()?);
+        let arm = args.input.read_arm()?;
+        print_positions(&args, &arm)?;
+        return print_spheres(&args, &arm);
     }
     if let Some(json) = &args.json {
         check_output_file("--json", json, &inputs, args.force)?;
@@ -141,7 +157,23 @@ pub fn run(args: Args) -> Result<()> {
         super::report::write("--report", dir, &page)?;
     }
     printed?;
-    print_positions(&args, &arm)
+    print_positions(&args, &arm)?;
+    print_spheres(&args, &arm)
+}
+
+/// The arm on --spheres, if given, printed.
+fn print_spheres(args: &Args, arm: &Arm) -> Result<()> {
+    let Some(path) = &args.spheres else {
+        return Ok(());
+    };
+    let file = source_name(path);
+    let (rows, warnings) = read_spheres(path, args.input.angle_unit, arm)?;
+    super::report(&warnings)?;
+    let evaluation = SphereEvaluation::new(arm, rows, &file, args.sphere_diameter)
+        .map_err(super::shared_flags::flag_error)?;
+    let mut out = Stdout::new();
+    out.write_with(|w| w.write_all(evaluation.summary().as_bytes()))?;
+    out.finish()
 }
 
 /// The arm's 3-D errors at --positions, if given, printed.

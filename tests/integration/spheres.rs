@@ -69,6 +69,193 @@ fn fit(start: &Arm, c: &SphereCampaign, size: SphereSize) -> CalibrationReport {
     p.with_spheres(term).run(&lm()).unwrap()
 }
 
+/// The problem of fitting `c` from `start`, the diameter stated.
+fn sphere_problem(start: &Arm, c: &SphereCampaign) -> Problem {
+    let model = ModelOptions {
+        noise: noise(),
+        ..ModelOptions::default()
+    };
+    let mut p = Problem::new(start.clone(), DataSet::without_touches(6, 0), model).unwrap();
+    let term = SphereTerm::new(
+        c.spheres.clone(),
+        "spheres.csv",
+        &start.params,
+        SphereSize::Known(DIAMETER),
+        start.ball_diameter_mm,
+        &noise(),
+        |b| p.add_boxed_block(b),
+    )
+    .unwrap();
+    p.with_spheres(term)
+}
+
+/// Cross-validation deals each sphere's points to the folds (every point
+/// held out once, every fold's training keeping every sphere), and scores
+/// the held-out points against the fold's spheres: far better than the
+/// nominal arm, and as good as the fitted points within noise (honest:
+/// not the fit's own residuals).
+#[test]
+fn cross_validation_deals_sphere_points_and_scores_the_held_out_ones() {
+    let (_, c) = campaign(5, 6);
+    let report = sphere_problem(&nominal(), &c)
+        .with_cross_validation(3)
+        .unwrap()
+        .run(&lm())
+        .unwrap();
+    let cv = report.validation.cross_validation.as_ref().unwrap();
+    let mut seen: Vec<String> = (cv.folds.iter())
+        .flat_map(|f| f.terms[0].held_out.clone())
+        .collect();
+    assert_eq!(seen.len(), c.spheres.len());
+    seen.sort();
+    seen.dedup();
+    assert_eq!(seen.len(), c.spheres.len(), "a point held out twice");
+    let spheres = report.spheres.as_ref().unwrap();
+    let n = spheres.spheres.len() as f64;
+    let fitted = (spheres
+        .spheres
+        .iter()
+        .map(|s| s.after.rms.powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    for f in &cv.folds {
+        assert!(f.successful);
+        assert!(
+            f.held_out.is_empty(),
+            "no touch, no position: {:?}",
+            f.held_out
+        );
+        let t = &f.terms[0];
+        assert_eq!(
+            (t.term.as_str(), t.after.count),
+            ("spheres", t.held_out.len())
+        );
+        assert!(
+            t.held_out[0].starts_with("spheres.csv:"),
+            "{:?}",
+            t.held_out
+        );
+        eprintln!(
+            "fold: before {:.4} after {:.4} fitted {fitted:.4} mm",
+            t.before.rms, t.after.rms
+        );
+        assert!(t.after.rms < 0.5 * t.before.rms, "{t:?}");
+        assert!(
+            t.after.rms > 0.7 * fitted && t.after.rms < 2.0 * fitted,
+            "{t:?} against the fitted {fitted}"
+        );
+    }
+    // Three folds of 50 points each, the deal even.
+    assert!(cv.folds.iter().all(|f| f.terms[0].held_out.len() == 50));
+}
+
+/// The deal is the seed's: the same seed the same folds, another seed
+/// others; and a fold count that leaves a sphere fewer than 4 training
+/// points, or a fold nothing to hold out, is refused by name.
+#[test]
+fn sphere_folds_follow_the_seed_and_refuse_too_many_folds() {
+    use aacmm_core::residuals::{At, Layout, Term};
+    let start = nominal();
+    let c = simulate_spheres(&start, &sphere_settings(2, 4)).unwrap();
+    let mut layout = Layout::new(start.params.clone());
+    let make = |spheres, layout: &mut Layout| {
+        SphereTerm::new(
+            spheres,
+            "s.csv",
+            &start.params,
+            SphereSize::Fitted,
+            Some(BALL),
+            &noise(),
+            aacmm_core::residuals::spheres::add_to(layout),
+        )
+        .unwrap()
+    };
+    let term = make(c.spheres.clone(), &mut layout);
+    let x = layout.start();
+    let labels = |k: usize, seed: u64| -> Result<Vec<Vec<String>>, String> {
+        let folds = At::with(&layout, &x, |at| term.split(at, k, seed))
+            .map_err(|e| e.to_string())?
+            .unwrap();
+        Ok(folds.iter().map(|f| f.held_out.labels()).collect())
+    };
+    assert_eq!(labels(4, 1).unwrap(), labels(4, 1).unwrap());
+    assert_ne!(labels(4, 1).unwrap(), labels(4, 2).unwrap());
+    let e = labels(51, 1).unwrap_err();
+    assert!(e.contains("51 folds for 50 points"), "{e}");
+    // Six points a sphere: 2 folds leave 3 in a training share.
+    let few: Vec<usize> = (0..c.spheres.len())
+        .filter(|i| i % 25 < 24 && i % 4 == 0)
+        .collect();
+    let mut small = Layout::new(start.params.clone());
+    let term = make(c.spheres.subset(&few), &mut small);
+    let x = small.start();
+    let e = At::with(&small, &x, |at| term.split(at, 2, 1))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("sphere `S1` has 6 points: 2 folds leave fewer than 4"),
+        "{e}"
+    );
+}
+
+/// A held-out sphere file (new placements of the same true arm) is scored
+/// with each sphere refitted on its own points, the arm fixed: the
+/// calibrated arm's radial errors near the fit's own, far below the
+/// nominal's; a stated diameter held, a refitted one recovered.
+#[test]
+fn a_held_out_sphere_file_is_scored_with_its_spheres_refitted() {
+    use aacmm_core::residuals::Layout;
+    let (truth, c) = campaign(6, 6);
+    let held = simulate_spheres(&truth, &sphere_settings(3, 77)).unwrap();
+    let start = nominal();
+    for size in [SphereSize::Known(DIAMETER), SphereSize::Fitted] {
+        let mut own = Layout::new(start.params.clone());
+        let term = SphereTerm::new(
+            held.spheres.clone(),
+            "held.csv",
+            &start.params,
+            size,
+            Some(BALL),
+            &noise(),
+            aacmm_core::residuals::spheres::add_to(&mut own),
+        )
+        .unwrap();
+        let report = sphere_problem(&start, &c)
+            .with_held_out_spheres(term)
+            .unwrap()
+            .run(&lm())
+            .unwrap();
+        let fitted = report.spheres.as_ref().unwrap().spheres[0].after.rms;
+        let h = report.validation.held_out_spheres.as_ref().unwrap();
+        eprintln!(
+            "{size:?}: held out before {:.4} after {:.4}, fitted {fitted:.4} mm",
+            h.before.rms, h.after.rms
+        );
+        assert_eq!((h.file.as_str(), h.spheres.len()), ("held.csv", 3));
+        assert_eq!(h.after.count, 75);
+        assert!(h.after.rms < 0.2 * h.before.rms, "{h:?}");
+        assert!(h.after.rms < 2.0 * fitted, "{h:?} against {fitted}");
+        for s in &h.spheres {
+            match size {
+                SphereSize::Known(d) => {
+                    assert_eq!((s.diameter_before, s.diameter_after), (d, d));
+                    assert_eq!(h.stated_diameter, Some(d));
+                }
+                SphereSize::Fitted => {
+                    assert!((s.diameter_after - DIAMETER).abs() < 0.05, "{s:?}");
+                    assert_eq!(h.stated_diameter, None);
+                }
+            }
+        }
+        let summary = report.summary();
+        assert!(
+            summary.contains("Held-out points on spheres (held.csv): each sphere's centre"),
+            "{summary}"
+        );
+    }
+}
+
 /// The true arm of `seed` — random errors about the nominal in the
 /// parameters the sphere campaign identifies (those `--fix auto` fixes stay
 /// nominal, so every free parameter has a true value to compare with) —
@@ -289,26 +476,59 @@ fn simulate_spheres_then_calibrate() {
         std::fs::read_to_string(again.join("spheres.csv")).unwrap(),
         text
     );
-    let out = dir.join("cal");
-    let f = file.to_str().unwrap();
+    // New placements of the same true arm, to hold out.
+    let held = dir.join("held");
+    let truth = sim.join("true_arm.toml");
     let o = aacmm(&[
-        "calibrate",
+        "simulate",
         "--arm",
         &arm,
+        "--true",
+        truth.to_str().unwrap(),
         "--spheres",
-        f,
-        "--sphere-diameter",
-        "25.4",
+        "2",
         "--encoder-noise",
         "0.005",
         "--probe-noise",
         "0.01",
+        "--seed",
+        "8",
         "--out",
-        out.to_str().unwrap(),
+        held.to_str().unwrap(),
     ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let held = held.join("spheres.csv");
+    let out = dir.join("cal");
+    let f = file.to_str().unwrap();
+    // The spheres and their noise, as calibrate and identify take them.
+    let with_spheres = |command: &str, extra: &[&str]| {
+        let mut args = vec![command, "--arm", &arm, "--spheres", f];
+        args.extend(["--sphere-diameter", "25.4"]);
+        args.extend(["--encoder-noise", "0.005", "--probe-noise", "0.01"]);
+        args.extend(extra);
+        aacmm(&args)
+    };
+    let o = with_spheres(
+        "calibrate",
+        &[
+            "--cross-validate",
+            "3",
+            "--validate-spheres",
+            held.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     let summary = stdout(&o);
     assert!(summary.contains("Verdict: usable"), "{summary}");
+    // The folds' held-out points, per fold beside the spheres' fit.
+    assert!(
+        summary.contains("Held-out points on spheres (")
+            && summary.contains("fold 3, after")
+            && summary.contains("data                            count"),
+        "{summary}"
+    );
     assert!(
         summary.contains("diameter 25.4 mm (stated); probe ball 6 mm"),
         "{summary}"
@@ -317,8 +537,83 @@ fn simulate_spheres_then_calibrate() {
     assert!(!stderr(&o).contains("look like radians"), "{}", stderr(&o));
     let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
     assert!(json.contains("\"spheres\"") && json.contains("\"stated_diameter\": 25.4"));
+    let value: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let fold = &value["validation"]["cross_validation"]["folds"][2]["terms"][0];
+    assert_eq!(fold["term"], "spheres");
+    assert_eq!(fold["after"]["count"], 50);
     let page = std::fs::read_to_string(out.join("report.html")).unwrap();
     assert!(page.contains("Sphere surfaces"), "no sphere section");
+    assert!(page.contains("Cross-validation: held-out points on spheres"));
+    // The verdict names the folds' held-out points, not empty touch folds.
+    assert!(
+        page.contains("Held out, fold 3, spheres (50 held out): RMS |error|")
+            && page.contains("points on spheres): RMS radial error (each sphere refitted)")
+            && !page.contains("(0 points)"),
+        "{page}"
+    );
+    // `identify` sees the spheres (their centres eliminated): the fixed
+    // set and rank of the calibration's own analysis.
+    let id_json = dir.join("identify.json");
+    let o = with_spheres("identify", &["--json", id_json.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("150 points on 6 spheres of")
+            && stdout(&o).contains("its diameter stated as 25.4 mm"),
+        "{}",
+        stdout(&o)
+    );
+    let id: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&id_json).unwrap()).unwrap();
+    let names = |v: &serde_json::Value| -> Vec<String> {
+        (v["fixed"].as_array().unwrap().iter())
+            .map(|f| f["name"].as_str().unwrap().to_string())
+            .collect()
+    };
+    let own = &value["calibration"]["identification"];
+    assert!(!names(own).is_empty());
+    assert_eq!(names(&id["identification"]), names(own));
+    assert_eq!(id["identification"]["rank"], own["rank"]);
+    assert_eq!(id["spheres"]["points"], 150);
+    // The held-out file, its spheres refitted at each arm.
+    assert!(
+        summary.contains("Held-out points on spheres (")
+            && summary.contains("(its diameter stated, 25.4 mm) refitted on its own points"),
+        "{summary}"
+    );
+    assert_eq!(
+        value["validation"]["held_out_spheres"]["after"]["count"],
+        50
+    );
+    assert!(
+        page.contains("Held out (") && page.contains("its diameter held at the stated 25.4 mm")
+    );
+    // `evaluate --spheres` of the calibrated arm on the held-out file: the
+    // calibration's held-out figures; the nominal arm's far worse.
+    let evaluate = |arm: &str| {
+        let o = aacmm(&[
+            "evaluate",
+            "--arm",
+            arm,
+            "--spheres",
+            held.to_str().unwrap(),
+            "--sphere-diameter",
+            "25.4",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let calibrated = evaluate(out.join("calibrated.toml").to_str().unwrap());
+    let after = &value["validation"]["held_out_spheres"]["after"];
+    let rms = format!("RMS {:.4}", after["rms"].as_f64().unwrap());
+    assert!(
+        calibrated.contains("(its diameter stated, 25.4 mm) fitted on its points")
+            && calibrated.contains(&rms)
+            && calibrated.contains("(50 points)"),
+        "{calibrated} {rms}"
+    );
+    let before = &value["validation"]["held_out_spheres"]["before"];
+    let rms = format!("RMS {:.4}", before["rms"].as_f64().unwrap());
+    assert!(evaluate(&arm).contains(&rms), "{rms}");
     // `sa` anneals the touches alone: refused, naming the spheres.
     let o = aacmm(&[
         "calibrate",
@@ -476,10 +771,10 @@ fn bad_sphere_input_is_refused_by_name() {
         &o,
         &["metres.toml", "field `ball_diameter_mm`", "in metres?"],
     );
-    // Cross-validation does not split them yet: refused, not misleading.
+    // More folds than points: refused by the flag and the term.
     assert_clean_error(
-        &calibrate(&f, &["--sphere-diameter", "25.4", "--cross-validate", "3"]),
-        &["--cross-validate", "spheres"],
+        &calibrate(&f, &["--sphere-diameter", "25.4", "--cross-validate", "51"]),
+        &["--cross-validate", "spheres", "51 folds for 50 points"],
     );
     // A tool column, an unknown column, an empty file.
     let tool = write(&dir, "tool.csv", &good.replacen("q6\n", "q6,tool\n", 1));

@@ -717,6 +717,27 @@ impl Calibration {
         }))
     }
 
+    /// The calibrated point of `layout` (the layout it was fitted on): the
+    /// geometry's columns, then each auxiliary column's calibrated value
+    /// back in internal units (a column not reported keeps its start):
+    /// what a term is evaluated at after the fit.
+    pub fn point_in(&self, layout: &crate::residuals::Layout) -> Vec<f64> {
+        let mut x = layout.start();
+        let g = layout.geometry_columns();
+        x[..g].copy_from_slice(&self.params.to_vec()[..g]);
+        for (k, e) in self.auxiliary.iter().enumerate() {
+            let col = g + k;
+            if let Some(p) = layout.parameter(col).filter(|p| p.name == e.name) {
+                x[col] = if p.unit.is_angle() {
+                    e.calibrated.to_radians()
+                } else {
+                    e.calibrated
+                };
+            }
+        }
+        x
+    }
+
     /// The calibrated parameters as a vector in the fixed order (mm, rad):
     /// what [`DhParams::from_slice`] takes.
     pub fn calibrated_vector(&self) -> Vec<f64> {

@@ -263,9 +263,28 @@ pub fn conditioning(
     identification: &crate::identify::Identification,
     threads: usize,
 ) -> Result<PriorConditioning, crate::residuals::TermError> {
+    let evidence = crate::identify::Evidence { data, added: None };
+    conditioning_with(params, evidence, noise, tolerances, identification, threads)
+}
+
+/// [`conditioning`] of the data and the terms `evidence` adds (points on
+/// spheres, their own blocks eliminated).
+///
+/// # Errors
+///
+/// As [`conditioning`]; the terms' refusals.
+pub fn conditioning_with(
+    params: &DhParams,
+    evidence: crate::identify::Evidence<'_>,
+    noise: &crate::residuals::Noise,
+    tolerances: &Tolerances,
+    identification: &crate::identify::Identification,
+    threads: usize,
+) -> Result<PriorConditioning, crate::residuals::TermError> {
     use nalgebra::DMatrix;
     let n = params.joint_count();
-    let (full, _) = crate::identify::data_normal(params, data, noise, threads)?;
+    let (full, _) =
+        crate::identify::data_normal(params, evidence.data, noise, evidence.added, threads)?;
     let np = full.free.len();
     let reach = params.reach();
     let ids: Vec<ParamId> = params.param_ids().collect();

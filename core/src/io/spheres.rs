@@ -426,8 +426,12 @@ fn parse_row(
 }
 
 /// Refuses a sphere with fewer than [`MIN_SPHERE_POINTS`] points, at its
-/// first line.
-fn check_counts(s: &Spheres, file: &str) -> Result<(), InputError> {
+/// first line (the reader's check, for rows made in memory too).
+///
+/// # Errors
+///
+/// As above, naming `file`, the line and the field `sphere`.
+pub fn check_counts(s: &Spheres, file: &str) -> Result<(), InputError> {
     for (k, name) in s.names.iter().enumerate() {
         let rows = s.rows_of(k);
         if rows.len() < MIN_SPHERE_POINTS {

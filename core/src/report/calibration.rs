@@ -70,7 +70,10 @@ pub fn session_report(
         });
     }
     if let Some(cv) = &v.cross_validation {
-        for (i, f) in cv.folds.iter().enumerate() {
+        // A fold that held out no touch or position (points on spheres
+        // alone) has its figures in the spheres' section and the verdict.
+        let folds = cv.folds.iter().enumerate();
+        for (i, f) in folds.filter(|(_, f)| !f.held_out.is_empty()) {
             validation.push(ValidationRow {
                 name: format!("fold {} ({} points)", i + 1, f.held_out.len()),
                 held_out: true,
@@ -96,6 +99,8 @@ pub fn session_report(
         uncertainty_map: report.uncertainty_map.as_ref(),
         uncertainty_map_json: Some("/uncertainty_map".to_string()),
         spheres: report.spheres.as_ref(),
+        folds: (v.cross_validation.as_ref()).map_or(&[], |cv| cv.folds.as_slice()),
+        held_out_spheres: v.held_out_spheres.as_ref(),
         uncertainty_maps_in_frames: &report.uncertainty_maps_in_frames,
         verdict: Some(&report.verdict),
         seed: report.seed,

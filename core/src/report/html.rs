@@ -173,7 +173,7 @@ pub(crate) fn calibration_page(
         touches: !evaluated.is_empty(),
         beyond: find(figures, BEYOND_SVG).is_some(),
         map: input.uncertainty_map.is_some(),
-        spheres: input.spheres.is_some(),
+        spheres: input.spheres.is_some() || input.held_out_spheres.is_some(),
     };
     let numbered = present.sections();
     let number = |id: &str| {
@@ -205,7 +205,17 @@ pub(crate) fn calibration_page(
         page += &positions_section(input, find(figures, POSITIONS_SVG), number("positions"));
     }
     if let Some(s) = input.spheres {
-        page += &spheres_section(s, number("spheres"));
+        page += &spheres_section(s, input, number("spheres"));
+    } else if let Some(h) = input.held_out_spheres {
+        page += &section(
+            "spheres",
+            &format!("{}. Sphere surfaces held out", number("spheres")),
+            "",
+            None,
+            "",
+            "",
+            &held_out_sphere_file(h),
+        );
     }
     if present.touches {
         page += &touch_sections(input, evaluated, figures);
@@ -402,7 +412,11 @@ fn positions_section(input: &CalibrationInput, figure: Option<&Figure>, number: 
 /// The points probed on reference spheres, numbered `number`: per sphere
 /// its fitted centre and diameter, and the radial residuals before and
 /// after (RMS, and their range: the form the arm sees).
-fn spheres_section(s: &crate::session::spheres::SphereReport, number: usize) -> String {
+fn spheres_section(
+    s: &crate::session::spheres::SphereReport,
+    input: &CalibrationInput,
+    number: usize,
+) -> String {
     let mut rows = String::new();
     for r in &s.spheres {
         let sigma = |v: Option<f64>| v.map_or("–".to_string(), |v| format!("{v:.4}"));
@@ -452,7 +466,83 @@ fn spheres_section(s: &crate::session::spheres::SphereReport, number: usize) -> 
         None,
         "",
         "",
-        &table,
+        &(table
+            + &held_out_spheres(input.folds)
+            + &input
+                .held_out_spheres
+                .map_or_else(String::new, held_out_sphere_file)),
+    )
+}
+
+/// A held-out sphere file's table: per sphere its diameter and radial
+/// residuals, each arm's sphere refitted on the points with the arm fixed.
+fn held_out_sphere_file(h: &crate::session::spheres::HeldOutSpheres) -> String {
+    let mut rows = String::new();
+    for s in &h.spheres {
+        rows += &format!(
+            "<tr><td>{}</td><td>{}</td><td>{:.4}</td><td class=\"after\">{:.4}</td>\
+             <td>{:.4}</td><td class=\"after\">{:.4}</td><td>{:.4}</td>\
+             <td class=\"after\">{:.4}</td></tr>\n",
+            escape(&s.name),
+            s.points,
+            s.diameter_before,
+            s.diameter_after,
+            s.before.rms,
+            s.after.rms,
+            s.before.form,
+            s.after.form
+        );
+    }
+    let diameter = match h.stated_diameter {
+        Some(d) => format!("its diameter held at the stated {d} mm"),
+        None => "its diameter refitted too".to_string(),
+    };
+    format!(
+        "<p>Held out ({}): each sphere's centre refitted on its own points with the arm held \
+         fixed, {diameter}; every point's |radial error| RMS {:.4} mm nominal, {:.4} mm \
+         calibrated (p95 {:.4} / {:.4} mm).</p>\n<table>\n<tr><th>sphere</th><th>points</th>\
+         <th>diameter, nominal</th><th>calibrated</th><th>RMS radial, nominal</th>\
+         <th>calibrated</th><th>form, nominal</th><th>calibrated</th></tr>\n{rows}</table>\n",
+        escape(&h.file),
+        h.before.rms,
+        h.after.rms,
+        h.before.p95,
+        h.after.p95
+    )
+}
+
+/// The points on spheres each cross-validation fold held out: their
+/// `|radial error|` before and after, per fold; empty without them.
+fn held_out_spheres(folds: &[crate::calibrate::validate::Fold]) -> String {
+    let mut rows = String::new();
+    let mut what = "";
+    for (i, f) in folds.iter().enumerate() {
+        let of = |t: &&crate::calibrate::validate::TermHeldOut| {
+            t.term == crate::residuals::spheres::TERM
+        };
+        for t in f.terms.iter().filter(of) {
+            what = &t.what;
+            for (name, e) in [("before", &t.before), ("after", &t.after)] {
+                rows += &format!(
+                    "<tr><td>fold {} ({name})</td><td>{}</td>\
+                     <td>{:.4}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td></tr>\n",
+                    i + 1,
+                    e.count,
+                    e.mean,
+                    e.rms,
+                    e.p95,
+                    e.max
+                );
+            }
+        }
+    }
+    if rows.is_empty() {
+        return String::new();
+    }
+    format!(
+        "<p>Cross-validation: held-out {} (mm).</p>\n<table>\n<tr><th>fold</th><th>points</th>\
+         <th>mean</th><th>RMS</th><th>p95</th><th>max</th></tr>\n{rows}</table>\n",
+        escape(what)
     )
 }
 

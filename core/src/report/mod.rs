@@ -266,6 +266,14 @@ pub struct CalibrationInput<'a> {
     pub uncertainty_map_json: Option<String>,
     /// Points probed on reference spheres, when fitted: their section.
     pub spheres: Option<&'a crate::session::spheres::SphereReport>,
+    /// The cross-validation's folds (none without it): the spheres'
+    /// section shows the points each held out
+    /// ([`crate::calibrate::validate::Fold::terms`]).
+    pub folds: &'a [crate::calibrate::validate::Fold],
+    /// Points on reference spheres held out (`--validate-spheres`): a
+    /// table in the spheres' section (which it opens without fitted
+    /// spheres).
+    pub held_out_spheres: Option<&'a crate::session::spheres::HeldOutSpheres>,
     /// The same poses as each fitted frame's instrument sees the probe, its
     /// registration included: a table each in the map's section (none
     /// without frames). Their JSON Pointers are
@@ -359,6 +367,8 @@ pub struct EvaluationInput<'a> {
 ///     uncertainty_map: None,
 ///     uncertainty_map_json: None,
 ///     spheres: None,
+///     folds: &[],
+///     held_out_spheres: None,
 ///     uncertainty_maps_in_frames: &[],
 ///     verdict: None,
 ///     seed: 0,

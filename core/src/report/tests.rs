@@ -127,6 +127,8 @@ fn report_with(
         uncertainty_map: map,
         uncertainty_map_json: map.map(|_| "/uncertainty_map".into()),
         spheres: None,
+        folds: &[],
+        held_out_spheres: None,
         uncertainty_maps_in_frames: &[],
         verdict: None,
         seed: 0,

@@ -22,7 +22,7 @@ pub(crate) fn section(input: &CalibrationInput) -> String {
     s += "<ul>\n";
     s += &format!("<li>{}</li>\n", fit_quality(cal));
     s += &format!("<li>{}</li>\n", outliers(cal));
-    for line in held_out(&input.validation) {
+    for line in held_out(&input.validation, input) {
         s += &format!("<li>{line}</li>\n");
     }
     s += "</ul>\n</section>\n";
@@ -118,31 +118,54 @@ fn outliers(cal: &Calibration) -> String {
 
 /// One line per data set held out from the fit: its headline figure before
 /// and after, or that none was held out.
-fn held_out(rows: &[ValidationRow]) -> Vec<String> {
+fn held_out(rows: &[ValidationRow], input: &CalibrationInput) -> Vec<String> {
     let held: Vec<&ValidationRow> = rows.iter().filter(|r| r.held_out).collect();
-    if held.is_empty() {
+    let terms = held_out_terms(input);
+    if held.is_empty() && terms.is_empty() {
         return vec![
             "Held-out data: none (neither --validate nor --cross-validate): every figure after \
              calibration is on the data the fit used."
                 .to_string(),
         ];
     }
-    held.iter()
-        .map(|r| {
-            let (b, a) = (r.figures.before.headline(), r.figures.after.headline());
-            let what = r.figures.after.headline_name();
-            let class = if a.is_finite() && a <= b {
-                "good"
-            } else {
-                "bad"
-            };
-            format!(
-                "Held out, {}: {what} {b:.4} → <span class=\"{class}\">{a:.4}</span> mm \
-                 (nominal → calibrated).",
-                escape(&r.name)
-            )
-        })
-        .collect()
+    let lines = held.iter().map(|r| {
+        let (b, a) = (r.figures.before.headline(), r.figures.after.headline());
+        held_out_line(&r.name, r.figures.after.headline_name(), (b, a))
+    });
+    lines.chain(terms).collect()
+}
+
+/// `Held out, NAME: WHAT before → after mm`, the after good when not worse.
+fn held_out_line(name: &str, what: &str, (b, a): (f64, f64)) -> String {
+    let class = if a.is_finite() && a <= b {
+        "good"
+    } else {
+        "bad"
+    };
+    format!(
+        "Held out, {}: {what} {b:.4} → <span class=\"{class}\">{a:.4}</span> mm \
+         (nominal → calibrated).",
+        escape(name)
+    )
+}
+
+/// The lines of the added terms' held-out observations: each fold's (RMS
+/// of their errors) and a held-out sphere file's.
+fn held_out_terms(input: &CalibrationInput) -> Vec<String> {
+    let mut lines = Vec::new();
+    for (i, f) in input.folds.iter().enumerate() {
+        for t in &f.terms {
+            let name = format!("fold {}, {} ({} held out)", i + 1, t.term, t.after.count);
+            let what = "RMS |error|";
+            lines.push(held_out_line(&name, what, (t.before.rms, t.after.rms)));
+        }
+    }
+    if let Some(h) = input.held_out_spheres {
+        let name = format!("{} ({} points on spheres)", h.file, h.after.count);
+        let what = "RMS radial error (each sphere refitted)";
+        lines.push(held_out_line(&name, what, (h.before.rms, h.after.rms)));
+    }
+    lines
 }
 
 /// A power of ten as 10 and a superscript exponent: 1e-9 → `10⁻⁹`.

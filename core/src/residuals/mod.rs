@@ -57,6 +57,7 @@
 
 mod beyond;
 pub mod blocks;
+mod folds;
 mod hold;
 mod lengths;
 mod orientations;
@@ -79,6 +80,7 @@ pub use beyond::{BLOCK_NAME, CorrectionBlock};
 pub use blocks::{
     Block, BlockId, Frame, Layout, LayoutError, MOUNT_BLOCK, Mount, Parameter, Scalar, Unit, Vector,
 };
+pub use folds::{HeldOutScorer, TermFold};
 pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
@@ -278,6 +280,37 @@ pub struct At<'a> {
 }
 
 impl At<'_> {
+    /// Calls `f` at the point `x` of `layout` (its arm and kernel made
+    /// here, one thread): what a caller that holds only a point evaluates
+    /// a term with.
+    ///
+    /// # Errors
+    ///
+    /// `f`'s; a point of another length than the layout's; the kernel's
+    /// refusal of its arm.
+    pub fn with<R>(
+        layout: &Layout,
+        x: &[f64],
+        f: impl FnOnce(&At<'_>) -> Result<R, TermError>,
+    ) -> Result<R, TermError> {
+        let arm = (layout.arm(x))
+            .filter(|_| x.len() == layout.len())
+            .ok_or_else(|| {
+                TermError::invalid(
+                    "layout",
+                    format!("a point of {} columns for {}", x.len(), layout.len()),
+                )
+            })?;
+        let kernel = ArmKernel::new(&arm)?;
+        f(&At {
+            x,
+            arm: &arm,
+            kernel: &kernel,
+            layout,
+            threads: 1,
+        })
+    }
+
     /// The values of block `id`'s columns.
     pub fn block(&self, id: BlockId) -> &[f64] {
         &self.x[self.layout.columns(id)]
@@ -836,6 +869,24 @@ pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// weights (the report's touch σ), if it has one.
     fn typical_sigma(&self) -> Option<f64> {
         None
+    }
+
+    /// Its observations dealt to `k` folds for cross-validation, `at` the
+    /// point the fit starts from: per fold the term over the training
+    /// share (the same blocks) and a scorer of the share held out
+    /// ([`TermFold`]). `seed` is the run's; a term draws from a generator
+    /// of its own seeded by it. `None` (the default) when the term cannot
+    /// be split: cross-validation then refuses it by its name rather than
+    /// fit it whole in every fold and score it nowhere (prior knowledge
+    /// needs no split: it is passed whole).
+    ///
+    /// # Errors
+    ///
+    /// `k` folds that would leave a training share unable to fix the
+    /// term's own unknowns (saying why).
+    fn split(&self, at: &At<'_>, k: usize, seed: u64) -> Result<Option<Vec<TermFold>>, TermError> {
+        let _ = (at, k, seed);
+        Ok(None)
     }
 }
 

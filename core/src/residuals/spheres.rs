@@ -31,6 +31,10 @@
 //! own term would be (`tests/integration/sphere_term.rs` writes a minimal
 //! one outside the crate and gets the same fit).
 
+mod folds;
+
+pub use folds::{MIN_TRAINING_POINTS, fit_sphere};
+
 use crate::corrections::Conditions;
 use crate::error::InputError;
 use crate::io::spheres::Spheres;
@@ -581,6 +585,17 @@ impl Term for SphereTerm {
             *x *= v.sqrt();
         }
         true
+    }
+
+    /// Each sphere's points dealt to the folds (never a whole sphere):
+    /// see [`MIN_TRAINING_POINTS`]'s module.
+    fn split(
+        &self,
+        at: &At<'_>,
+        k: usize,
+        seed: u64,
+    ) -> Result<Option<Vec<crate::residuals::TermFold>>, TermError> {
+        folds::split(self, at, k, seed).map(Some)
     }
 
     fn typical_sigma(&self) -> Option<f64> {

@@ -8,11 +8,10 @@
 use serde::{Deserialize, Serialize};
 
 use super::Sources;
-use crate::calibrate::prior::conditioning;
+use crate::calibrate::prior::conditioning_with;
 use crate::calibrate::{CalibrationError, PriorConditioning};
 use crate::corrections::Beyond;
-use crate::dataset::DataSet;
-use crate::identify::{Identification, identify};
+use crate::identify::{Evidence, Identification, identify_with};
 use crate::io::{AngleUnit, Arm};
 use crate::residuals::Noise;
 use crate::tolerances::Tolerances;
@@ -54,6 +53,24 @@ pub struct IdentifyReport {
     /// the geometry: kept or held, with the σ the data predict.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub corrections: Vec<CorrectionColumn>,
+    /// Points probed on reference spheres analysed with the data (their
+    /// centres, and sizes unless stated, fitted and eliminated); absent
+    /// without them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spheres: Option<SphereCount>,
+}
+
+/// The points on spheres an analysis saw.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SphereCount {
+    /// Their file.
+    pub file: String,
+    /// Points.
+    pub points: usize,
+    /// Spheres.
+    pub spheres: usize,
+    /// The spheres' stated diameter, mm (none: fitted per sphere).
+    pub stated_diameter: Option<f64>,
 }
 
 /// A correction column beyond geometry as the data see it.
@@ -89,13 +106,14 @@ impl IdentifyReport {
     #[allow(clippy::too_many_arguments)] // the inputs of `aacmm identify`, each named
     pub fn new(
         arm: &Arm,
-        data: &DataSet,
+        evidence: Evidence<'_>,
         noise: &Noise,
         prior: Option<&Tolerances>,
         beyond: &Beyond,
         threads: usize,
         sources: &Sources,
     ) -> Result<IdentifyReport, CalibrationError> {
+        let data = evidence.data;
         noise.check()?;
         beyond.check(arm.params.joint_count())?;
         beyond.check_inputs(&arm.physics, &data.condition_sets())?;
@@ -107,16 +125,16 @@ impl IdentifyReport {
                 data: data.joints(),
             });
         }
-        let identification = identify(&arm.params, data, noise, threads)?;
+        let identification = identify_with(&arm.params, data, noise, evidence.added, threads)?;
         let corrections = if beyond.is_empty() {
             Vec::new()
         } else {
-            correction_columns(arm, data, noise, beyond, &identification, threads)?
+            correction_columns(arm, evidence, noise, beyond, &identification, threads)?
         };
         let prior = match prior {
-            Some(t) => Some(conditioning(
+            Some(t) => Some(conditioning_with(
                 &arm.params,
-                data,
+                evidence,
                 noise,
                 t,
                 &identification,
@@ -137,7 +155,15 @@ impl IdentifyReport {
             identification,
             prior,
             corrections,
+            spheres: None,
         })
+    }
+
+    /// Says which points on spheres the analysis saw (the evidence's added
+    /// term): the summary's first line and the JSON name them.
+    pub fn with_spheres(mut self, spheres: SphereCount) -> IdentifyReport {
+        self.spheres = Some(spheres);
+        self
     }
 
     /// The JSON `aacmm identify --json` writes: pretty, with a final
@@ -157,6 +183,19 @@ impl IdentifyReport {
         let positions = match self.positions {
             0 => String::new(),
             n => format!(", {n} reference positions (each frame's registration eliminated)"),
+        };
+        let positions = match &self.spheres {
+            Some(s) => format!(
+                "{positions}, {} points on {} spheres of {} (each sphere's centre{} eliminated)",
+                s.points,
+                s.spheres,
+                s.file,
+                match s.stated_diameter {
+                    Some(d) => format!(", its diameter stated as {d} mm,"),
+                    None => " and diameter".to_string(),
+                }
+            ),
+            None => positions,
         };
         let mut s = format!(
             "arm `{}` ({}) on {}: {} touches of {} points, {} reference lengths{positions}\nnoise: \
@@ -204,18 +243,24 @@ impl IdentifyReport {
 /// strongest correlation from the normal equations of everything fitted.
 fn correction_columns(
     arm: &Arm,
-    data: &DataSet,
+    evidence: Evidence<'_>,
     noise: &Noise,
     beyond: &Beyond,
     id: &Identification,
     threads: usize,
 ) -> Result<Vec<CorrectionColumn>, CalibrationError> {
-    let layout = crate::residuals::positions::layout_with(&arm.params, data, &arm.physics, beyond)?;
+    let data = evidence.data;
+    let mut layout =
+        crate::residuals::positions::layout_with(&arm.params, data, &arm.physics, beyond)?;
+    let terms = match evidence.added {
+        Some(add) => add(&mut layout)?,
+        None => Vec::new(),
+    };
     let objective = crate::objective::Objective::of_data(
         layout.clone(),
         data,
         noise,
-        Vec::new(),
+        terms,
         None,
         0.01,
         threads,

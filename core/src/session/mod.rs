@@ -36,7 +36,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::calibrate::validate::{
     ArmView, BeforeAfter, Figures, Fold, before_after_of, check_folds, cross_validate,
-    registered_frames, seen_by,
+    registered_frames, seen_by, split_terms,
 };
 use crate::calibrate::{
     Calibration, CalibrationError, Context, FitInputs, ModelOptions, Solver, SolverSettings,
@@ -48,7 +48,7 @@ use crate::error::OptionError;
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
 use crate::params::DhParams;
 use crate::residuals::spheres::SphereTerm;
-use crate::residuals::{Block, BlockId, Layout, Noise, Term};
+use crate::residuals::{Block, BlockId, Layout, Noise, Term, TermError};
 
 /// The calibrated arm, in the arm-file schema.
 pub const CALIBRATED_FILE: &str = "calibrated.toml";
@@ -107,6 +107,9 @@ pub struct Problem {
     /// ([`Problem::with_spheres`]): a term among `terms`, kept here too
     /// for its report.
     spheres: Option<SphereTerm>,
+    /// Points on reference spheres held out, to validate on
+    /// ([`Problem::with_held_out_spheres`]).
+    held_out_spheres: Option<SphereTerm>,
 }
 
 impl Problem {
@@ -164,6 +167,7 @@ impl Problem {
             truth: None,
             register_held_out: false,
             spheres: None,
+            held_out_spheres: None,
         })
     }
 
@@ -207,14 +211,19 @@ impl Problem {
     }
 
     /// Cross-validates over `k` folds of points (seeded by the solver
-    /// seed).
+    /// seed), each added term's observations dealt as the term says
+    /// ([`Term::split`]; add the terms first).
     ///
     /// # Errors
     ///
     /// An [`OptionError`] on `cross_validate` unless `2 ≤ k ≤` the groups
-    /// of points joined by reference lengths.
+    /// of points joined by reference lengths; naming an added term that
+    /// cannot be split, or not into `k`.
     pub fn with_cross_validation(mut self, k: usize) -> Result<Problem, OptionError> {
         check_folds(&self.data, k)?;
+        // The counts do not depend on the seed, which orders the deal (the
+        // run deals again with its own, and checks that deal's shares).
+        split_terms(&self.layout, &self.terms, k, 0)?;
         self.cross_validate = Some(k);
         Ok(self)
     }
@@ -281,6 +290,28 @@ impl Problem {
         self.terms.push(Box::new(term.clone()));
         self.spheres = Some(term);
         self
+    }
+
+    /// Validates on points probed on reference spheres too: `term`'s own
+    /// blocks are not fitted (make it on a layout of its own); each of its
+    /// spheres is refitted on its points with each arm held fixed, and the
+    /// points are scored by their radial error
+    /// ([`spheres::HeldOutSpheres`]).
+    ///
+    /// # Errors
+    ///
+    /// [`CalibrationError::Joints`] when its readings have another joint
+    /// count than the arm.
+    pub fn with_held_out_spheres(mut self, term: SphereTerm) -> Result<Problem, CalibrationError> {
+        let joints = term.spheres().joints();
+        if joints != self.data.joints() {
+            return Err(CalibrationError::Joints {
+                arm: self.arm.params.joint_count(),
+                data: joints,
+            });
+        }
+        self.held_out_spheres = Some(term);
+        Ok(self)
     }
 
     /// The sphere term, if any.
@@ -763,6 +794,10 @@ pub struct Validation {
     pub held_out: Option<HeldOut>,
     /// Cross-validation folds.
     pub cross_validation: Option<CrossValidation>,
+    /// Points on reference spheres held out (`--validate-spheres`); absent
+    /// without them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_out_spheres: Option<spheres::HeldOutSpheres>,
 }
 
 /// Everything a calibration session found: the schema of
@@ -1302,6 +1337,9 @@ impl CalibrationReport {
         if let Some(s) = &self.spheres {
             t += &s.summary();
         }
+        if let Some(h) = &self.validation.held_out_spheres {
+            t += &h.summary();
+        }
         t
     }
 
@@ -1549,9 +1587,7 @@ pub fn run(
     }
     let (uncertainty_map, uncertainty_maps_in_frames) =
         map::workspace_maps(&problem.arm, data, &calibration, settings.seed);
-    let spheres = (problem.spheres.as_ref())
-        .map(|t| spheres::sphere_report(t, &problem.layout, &calibration))
-        .transpose()?;
+    let (spheres, held_out_spheres) = sphere_reports(problem, &calibration)?;
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
@@ -1574,6 +1610,7 @@ pub fn run(
             fitted,
             held_out,
             cross_validation,
+            held_out_spheres,
         },
         warnings: s.warnings.clone(),
         verdict,
@@ -1581,6 +1618,33 @@ pub fn run(
         spheres,
         uncertainty_maps_in_frames,
     })
+}
+
+/// The fitted spheres' report and the held-out sphere file's figures.
+type SphereReports = (
+    Option<spheres::SphereReport>,
+    Option<spheres::HeldOutSpheres>,
+);
+
+/// The fitted spheres' report and the held-out sphere file's figures, each
+/// when given.
+///
+/// # Errors
+///
+/// The kernel's.
+fn sphere_reports(
+    problem: &Problem,
+    calibration: &Calibration,
+) -> Result<SphereReports, TermError> {
+    let layout = &problem.layout;
+    Ok((
+        (problem.spheres.as_ref())
+            .map(|t| spheres::sphere_report(t, layout, calibration))
+            .transpose()?,
+        (problem.held_out_spheres.as_ref())
+            .map(|t| spheres::held_out_spheres(t, layout, calibration))
+            .transpose()?,
+    ))
 }
 
 /// The summary's degrees of freedom and the σ behind the weights.
@@ -1996,6 +2060,7 @@ fn position_table(v: &Validation) -> String {
         "\nTool orientations (deg): angle of the turn from the arm's tool frame to the one \
          seen, per pose\n",
     );
+    t += &term_tables(v);
     t
 }
 
@@ -2006,16 +2071,53 @@ fn error_table(
     of: impl Fn(&Figures) -> Option<crate::calibrate::validate::PositionErrors>,
     title: &str,
 ) -> String {
+    let rows = (rows.iter()).filter_map(|(name, f)| of(f).map(|p| (name.clone(), p)));
+    errors_table(rows, title, "poses")
+}
+
+/// The held-out observations of each added term the folds scored (points
+/// on spheres): a table per term, its `|error|` before and after per fold;
+/// empty without any.
+fn term_tables(v: &Validation) -> String {
+    let folds = v.cross_validation.iter().flat_map(|cv| &cv.folds);
+    let mut names: Vec<&str> = Vec::new();
+    for t in folds.clone().flat_map(|f| &f.terms) {
+        if !names.contains(&t.term.as_str()) {
+            names.push(&t.term);
+        }
+    }
+    let mut out = String::new();
+    for name in names {
+        let mut rows = Vec::new();
+        for (i, f) in folds.clone().enumerate() {
+            for t in f.terms.iter().filter(|t| t.term == name) {
+                rows.push((format!("fold {}, before", i + 1), t.before));
+                rows.push((format!("fold {}, after", i + 1), t.after));
+            }
+        }
+        let what = (folds.clone().flat_map(|f| &f.terms))
+            .find(|t| t.term == name)
+            .map_or("", |t| t.what.as_str());
+        let title = format!("\nHeld-out {what} (mm)\n");
+        out += &errors_table(rows.into_iter(), &title, "count");
+    }
+    out
+}
+
+/// A table of error distributions `rows` (name, figures) under `title`,
+/// the count column headed `count`; empty without rows.
+fn errors_table(
+    rows: impl Iterator<Item = (String, crate::calibrate::validate::PositionErrors)>,
+    title: &str,
+    count: &str,
+) -> String {
     let mut t = String::new();
-    for (name, f) in rows {
-        let Some(p) = of(f) else {
-            continue;
-        };
+    for (name, p) in rows {
         if t.is_empty() {
             t += title;
             t += &format!(
                 "  {:<28} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
-                "data", "poses", "mean", "RMS", "p95", "max"
+                "data", count, "mean", "RMS", "p95", "max"
             );
         }
         t += &format!(

@@ -58,6 +58,8 @@ pub struct Request {
     unit: AngleUnit,
     held_out: Option<(HeldOutData, Vec<String>)>,
     register_held_out: bool,
+    /// Held-out points on spheres and their file.
+    held_out_spheres: Option<(Spheres, String)>,
     cross_validate: Option<usize>,
     fix: String,
     noise: Noise,
@@ -132,6 +134,7 @@ impl Request {
             unit: AngleUnit::Rad,
             held_out: None,
             register_held_out: false,
+            held_out_spheres: None,
             cross_validate: None,
             fix: "auto".to_string(),
             noise: Noise::default(),
@@ -242,16 +245,81 @@ impl Request {
     /// fix no sphere where the arm puts them ([`check_spheres`]).
     pub fn read_spheres(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
         let path = path.as_ref();
-        let name = source_name(path);
         let (rows, warnings) = read_spheres(path, self.unit, &self.arm)?;
-        check_spheres(&rows, &name, &self.arm.params)?;
         (self.sources.warnings).extend(warnings.iter().map(ToString::to_string));
+        self.spheres_of(rows, &source_name(path))
+    }
+
+    /// [`Request::read_spheres`] of rows in memory (readings in rad, mm
+    /// for a slide), named `name` in messages and the report (`<arrays>`).
+    ///
+    /// # Errors
+    ///
+    /// Another joint count than the arm's (named by `name`); points that
+    /// fix no sphere where the arm puts them ([`check_spheres`]).
+    pub fn spheres_of(mut self, rows: Spheres, name: &str) -> Result<Request, InputError> {
+        let rows = self.checked_spheres(rows, name)?;
         let diameter_mm = self.spheres.take().and_then(|s| s.diameter_mm);
         self.spheres = Some(SphereInput {
             rows,
-            file: name,
+            file: name.to_string(),
             diameter_mm,
         });
+        Ok(self)
+    }
+
+    /// `rows` of `name` for this request's arm: its joint count, its
+    /// slides, and points that fix a sphere where it puts them.
+    fn checked_spheres(&self, rows: Spheres, name: &str) -> Result<Spheres, InputError> {
+        let joints = self.arm.params.joint_count();
+        if rows.joints() != joints {
+            return Err(InputError::file_error(
+                name,
+                format!(
+                    "{} readings per point for an arm of {joints} joints",
+                    rows.joints()
+                ),
+            ));
+        }
+        let rows = match self.arm.params.shape() {
+            Ok(shape) => rows.with_shape(shape),
+            Err(_) => rows,
+        };
+        crate::io::spheres::check_counts(&rows, name)?;
+        check_spheres(&rows, name, &self.arm.params)?;
+        Ok(rows)
+    }
+
+    /// Validates on points probed on reference spheres of a sphere-surface
+    /// file (readings in the request's angle unit) too: each sphere
+    /// refitted on its points with the arm held fixed — its diameter the
+    /// stated one ([`Request::sphere_diameter`]) when stated, else
+    /// refitted as well.
+    ///
+    /// # Errors
+    ///
+    /// The reader's errors, naming file, line and field, and points that
+    /// fix no sphere where the arm puts them ([`check_spheres`]).
+    pub fn validate_on_spheres(mut self, path: impl AsRef<Path>) -> Result<Request, InputError> {
+        let path = path.as_ref();
+        let (rows, warnings) = read_spheres(path, self.unit, &self.arm)?;
+        (self.sources.warnings).extend(warnings.iter().map(ToString::to_string));
+        self.validate_on_spheres_of(rows, &source_name(path))
+    }
+
+    /// [`Request::validate_on_spheres`] of rows in memory (readings in rad,
+    /// mm for a slide), named `name`.
+    ///
+    /// # Errors
+    ///
+    /// As [`Request::spheres_of`].
+    pub fn validate_on_spheres_of(
+        mut self,
+        rows: Spheres,
+        name: &str,
+    ) -> Result<Request, InputError> {
+        let rows = self.checked_spheres(rows, name)?;
+        self.held_out_spheres = Some((rows, name.to_string()));
         Ok(self)
     }
 
@@ -340,6 +408,11 @@ impl Request {
     pub fn angle_unit(mut self, unit: AngleUnit) -> Request {
         self.unit = unit;
         self
+    }
+
+    /// The unit the readings are written in ([`Request::angle_unit`]).
+    pub fn unit(&self) -> AngleUnit {
+        self.unit
     }
 
     /// Validates on `held_out` too; `warnings` are its readers'.
@@ -673,17 +746,12 @@ impl Request {
                 e => e,
             })?
             .with_sources(sources);
+        let stated_diameter = self.spheres.as_ref().and_then(|s| s.diameter_mm);
+        if let Some((rows, file)) = self.held_out_spheres {
+            problem =
+                with_held_out_spheres(problem, rows, &file, stated_diameter, ball_diameter_mm)?;
+        }
         if let Some(s) = self.spheres {
-            if let Some(k) = self.cross_validate {
-                // Each fold would fit every sphere point and score none.
-                return Err(OptionError::new(
-                    "cross_validate",
-                    k,
-                    "does not split points on spheres yet (each fold would fit them all and \
-                     score none): calibrate without it, or hold a sphere file out by hand",
-                )
-                .into());
-            }
             problem = with_spheres(problem, s, ball_diameter_mm)?;
         }
         if self.register_held_out {
@@ -720,32 +788,124 @@ impl Request {
     /// [`IdentifyReport::new`].
     pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
-        if let Some(s) = &self.spheres {
-            // Not silently left out: the calibration's identification
-            // section is what they determine.
-            return Err(CalibrationError::Term {
-                term: "spheres".into(),
-                message: format!(
-                    "{}: identify does not take points on spheres yet; `aacmm calibrate \
-                     --spheres` reports what they determine (its identification section)",
-                    s.file
-                ),
-            });
-        }
         super::check_units(&self.arm.params, &self.data, &self.sources.arm_file)?;
         crate::identify::room_to_identify(&self.data)?;
         let prior = self.tolerances()?;
         let threads = self.threads.unwrap_or_else(available_threads);
-        IdentifyReport::new(
+        let ball = self.arm.ball_diameter_mm;
+        let spheres = match &self.spheres {
+            Some(s) => Some((s, sphere_size(s, ball)?)),
+            None => None,
+        };
+        // The sphere term on the analysis' layout, its centres (and sizes)
+        // blocks of their own there: eliminated with the frames.
+        let add = |layout: &mut crate::residuals::Layout| {
+            let Some((s, size)) = spheres else {
+                return Ok(Vec::new());
+            };
+            let term = SphereTerm::new(
+                s.rows.clone(),
+                &s.file,
+                &self.arm.params,
+                size,
+                ball,
+                &self.noise,
+                crate::residuals::spheres::add_to(layout),
+            )?;
+            Ok(vec![Box::new(term) as Box<dyn crate::residuals::Term>])
+        };
+        let evidence = crate::identify::Evidence {
+            data: &self.data,
+            added: spheres
+                .is_some()
+                .then_some(&add as crate::identify::AddedTerms<'_>),
+        };
+        let report = IdentifyReport::new(
             &self.arm,
-            &self.data,
+            evidence,
             &self.noise,
             prior.as_ref(),
             &self.beyond_options()?,
             threads,
             &self.sources,
-        )
+        )?;
+        Ok(match spheres {
+            Some((s, size)) => report.with_spheres(super::identification::SphereCount {
+                file: s.file.clone(),
+                points: s.rows.len(),
+                spheres: s.rows.spheres().len(),
+                stated_diameter: match size {
+                    SphereSize::Known(d) => Some(d),
+                    SphereSize::Fitted => None,
+                },
+            }),
+            None => report,
+        })
     }
+}
+
+/// The size of `input`'s spheres: stated, or fitted per sphere, probed
+/// with a ball of `ball_diameter_mm` (the arm file's).
+///
+/// # Errors
+///
+/// An [`OptionError`] on `sphere_diameter_mm`: out of range, without the
+/// points it sizes, or stated without the ball's diameter.
+fn sphere_size(
+    input: &SphereInput,
+    ball_diameter_mm: Option<f64>,
+) -> Result<SphereSize, CalibrationError> {
+    let Some(d) = input.diameter_mm else {
+        return Ok(SphereSize::Fitted);
+    };
+    check_sphere_diameter(d)?;
+    if input.rows.is_empty() {
+        return Err(OptionError::new(
+            "sphere_diameter_mm",
+            d,
+            "sizes the spheres of a sphere-surface file, and none was given",
+        )
+        .into());
+    }
+    if ball_diameter_mm.is_none() {
+        return Err(OptionError::new(
+            "sphere_diameter_mm",
+            d,
+            "a stated sphere diameter needs the probe ball's: state `ball_diameter_mm` in the arm \
+             file's [probe] table (the probe centre is a ball radius off the surface)",
+        )
+        .into());
+    }
+    Ok(SphereSize::Known(d))
+}
+
+/// `problem` validated on the held-out points on spheres `rows` of `file`
+/// too, the spheres of `diameter_mm` (stated) or refitted, probed with a
+/// ball of `ball_diameter_mm`.
+///
+/// # Errors
+///
+/// The term's refusals (a stated diameter without the ball's).
+fn with_held_out_spheres(
+    problem: Problem,
+    rows: Spheres,
+    file: &str,
+    diameter_mm: Option<f64>,
+    ball_diameter_mm: Option<f64>,
+) -> Result<Problem, CalibrationError> {
+    let arm = problem.arm().params.clone();
+    // Its blocks are never fitted: a layout of its own takes them.
+    let mut own = crate::residuals::Layout::new(arm.clone());
+    let term = SphereTerm::new(
+        rows,
+        file,
+        &arm,
+        diameter_mm.map_or(SphereSize::Fitted, SphereSize::Known),
+        ball_diameter_mm,
+        &problem.model().noise,
+        crate::residuals::spheres::add_to(&mut own),
+    )?;
+    problem.with_held_out_spheres(term)
 }
 
 /// `problem` with the sphere term of `input` (its blocks added), probed
@@ -761,31 +921,7 @@ fn with_spheres(
     input: SphereInput,
     ball_diameter_mm: Option<f64>,
 ) -> Result<Problem, CalibrationError> {
-    let size = match input.diameter_mm {
-        Some(d) => {
-            check_sphere_diameter(d)?;
-            if input.rows.is_empty() {
-                return Err(OptionError::new(
-                    "sphere_diameter_mm",
-                    d,
-                    "sizes the spheres of a sphere-surface file, and none was given",
-                )
-                .into());
-            }
-            if ball_diameter_mm.is_none() {
-                return Err(OptionError::new(
-                    "sphere_diameter_mm",
-                    d,
-                    "a stated sphere diameter needs the probe ball's: state `ball_diameter_mm` in \
-                     the arm file's [probe] table (the probe centre is a ball radius off the \
-                     surface)",
-                )
-                .into());
-            }
-            SphereSize::Known(d)
-        }
-        None => SphereSize::Fitted,
-    };
+    let size = sphere_size(&input, ball_diameter_mm)?;
     let arm = problem.arm().params.clone();
     let noise = problem.model().noise;
     let term = SphereTerm::new(

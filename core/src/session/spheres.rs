@@ -7,7 +7,6 @@
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::Calibration;
-use crate::kernel::ArmKernel;
 use crate::residuals::spheres::SphereTerm;
 use crate::residuals::{At, Layout, TermError};
 
@@ -70,39 +69,9 @@ pub struct SphereReport {
     pub spheres: Vec<SphereResult>,
 }
 
-/// The calibrated point: the geometry's columns, then each auxiliary
-/// column's calibrated value back in internal units.
-fn calibrated_x(layout: &Layout, c: &Calibration) -> Vec<f64> {
-    let mut x = layout.start();
-    let g = layout.geometry_columns();
-    x[..g].copy_from_slice(&c.params.to_vec()[..g]);
-    for (k, e) in c.auxiliary.iter().enumerate() {
-        let col = g + k;
-        if let Some(p) = layout.parameter(col).filter(|p| p.name == e.name) {
-            x[col] = if p.unit.is_angle() {
-                e.calibrated.to_radians()
-            } else {
-                e.calibrated
-            };
-        }
-    }
-    x
-}
-
 /// The term's radial errors at `x` of `layout`.
 fn errors_at(term: &SphereTerm, layout: &Layout, x: &[f64]) -> Result<Vec<f64>, TermError> {
-    let arm = layout
-        .arm(x)
-        .ok_or_else(|| TermError::invalid("spheres", "a point of the wrong length"))?;
-    let kernel = ArmKernel::new(&arm)?;
-    let at = At {
-        x,
-        arm: &arm,
-        kernel: &kernel,
-        layout,
-        threads: 1,
-    };
-    term.radial_errors(&at)
+    At::with(layout, x, |at| term.radial_errors(at))
 }
 
 /// The report of `term`'s spheres after `calibration` on `layout`.
@@ -116,7 +85,7 @@ pub(crate) fn sphere_report(
     calibration: &Calibration,
 ) -> Result<SphereReport, TermError> {
     let x0 = layout.start();
-    let x1 = calibrated_x(layout, calibration);
+    let x1 = calibration.point_in(layout);
     let (e0, e1) = (errors_at(term, layout, &x0)?, errors_at(term, layout, &x1)?);
     let rows = term.spheres();
     let estimate = |name: &str| calibration.auxiliary.iter().find(|e| e.name == name);
@@ -199,6 +168,240 @@ impl SphereReport {
                 s.after.form
             );
         }
+        t
+    }
+}
+
+/// One sphere of a held-out sphere file, refitted at each arm.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeldOutSphere {
+    /// Its label.
+    pub name: String,
+    /// Points probed on it.
+    pub points: usize,
+    /// Its diameter, mm, as refitted at the start arm (the stated one when
+    /// stated).
+    pub diameter_before: f64,
+    /// The same at the calibrated arm.
+    pub diameter_after: f64,
+    /// The radial residuals at the start arm, the sphere refitted with it.
+    pub before: RadialErrors,
+    /// The same at the calibrated arm.
+    pub after: RadialErrors,
+}
+
+/// Points on reference spheres held out from the fit
+/// (`--validate-spheres`): each sphere's centre — and its diameter unless
+/// stated — refitted on its own points with the arm held fixed, the
+/// points scored by their radial error (`calibration.json`'s
+/// `validation.held_out_spheres`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HeldOutSpheres {
+    /// The sphere-surface file.
+    pub file: String,
+    /// The spheres' diameter the refit held, mm; none: refitted per sphere.
+    pub stated_diameter: Option<f64>,
+    /// Per sphere, in the file's order.
+    pub spheres: Vec<HeldOutSphere>,
+    /// `|radial error|` of every point at the start arm, mm.
+    pub before: crate::calibrate::validate::PositionErrors,
+    /// The same at the calibrated arm.
+    pub after: crate::calibrate::validate::PositionErrors,
+}
+
+/// The figures of the held-out `term` (its own blocks unused: each sphere
+/// is refitted on its points) at the start of `layout` and after
+/// `calibration`.
+///
+/// # Errors
+///
+/// The kernel's; a sphere whose points fix none at an arm.
+pub(crate) fn held_out_spheres(
+    term: &SphereTerm,
+    layout: &Layout,
+    calibration: &Calibration,
+) -> Result<HeldOutSpheres, TermError> {
+    let refit = |x: &[f64]| {
+        At::with(layout, x, |at| {
+            Ok((term.refitted_spheres(at)?, term.refitted_errors(term, at)?))
+        })
+    };
+    let (s0, e0) = refit(&layout.start())?;
+    let (s1, e1) = refit(&calibration.point_in(layout))?;
+    let rows = term.spheres();
+    let diameter = |r: f64| 2.0 * (r - term.ball_radius());
+    let spheres = (rows.spheres().iter().enumerate())
+        .map(|(s, name)| {
+            let of = rows.rows_of(s);
+            let pick = |e: &[f64]| of.iter().map(|&i| e[i]).collect::<Vec<f64>>();
+            HeldOutSphere {
+                name: name.clone(),
+                points: of.len(),
+                diameter_before: diameter(s0[s].1),
+                diameter_after: diameter(s1[s].1),
+                before: RadialErrors::of(&pick(&e0)),
+                after: RadialErrors::of(&pick(&e1)),
+            }
+        })
+        .collect();
+    let abs = |e: &[f64]| {
+        crate::calibrate::validate::PositionErrors::of(
+            &e.iter().map(|v| v.abs()).collect::<Vec<_>>(),
+        )
+    };
+    Ok(HeldOutSpheres {
+        file: term.file().to_string(),
+        stated_diameter: term.stated_radius().map(|r| 2.0 * r),
+        spheres,
+        before: abs(&e0),
+        after: abs(&e1),
+    })
+}
+
+impl HeldOutSpheres {
+    /// The summary's lines: per sphere its refitted diameter and radial
+    /// residuals before and after, and every point's.
+    pub fn summary(&self) -> String {
+        let mut t = format!(
+            "\nHeld-out points on spheres ({}): each sphere's centre{} refitted on its own points \
+             with the arm held fixed\n",
+            self.file,
+            match self.stated_diameter {
+                Some(d) => format!(" (its diameter stated, {d} mm)"),
+                None => " and diameter".to_string(),
+            }
+        );
+        t += &format!(
+            "{:<10} {:>6} {:>23} {:>21} {:>21}\n",
+            "sphere",
+            "points",
+            "diameter before/after",
+            "RMS radial before/after",
+            "form before/after"
+        );
+        for s in &self.spheres {
+            t += &format!(
+                "{:<10} {:>6} {:>11.4} / {:<9.4} {:>10.4} / {:<8.4} {:>10.4} / {:<8.4}\n",
+                s.name,
+                s.points,
+                s.diameter_before,
+                s.diameter_after,
+                s.before.rms,
+                s.after.rms,
+                s.before.form,
+                s.after.form
+            );
+        }
+        t += &format!(
+            "every point: |radial error| mean {:.4} / {:.4}, RMS {:.4} / {:.4}, p95 {:.4} / {:.4}, \
+             max {:.4} / {:.4} mm (before / after)\n",
+            self.before.mean,
+            self.after.mean,
+            self.before.rms,
+            self.after.rms,
+            self.before.p95,
+            self.after.p95,
+            self.before.max,
+            self.after.max
+        );
+        t
+    }
+}
+
+/// One arm on a sphere-surface file (`aacmm evaluate --spheres`): each
+/// sphere's centre — and its diameter unless stated — fitted on its points
+/// with the arm held fixed, the points' radial errors.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SphereEvaluation {
+    /// The sphere-surface file.
+    pub file: String,
+    /// The stated diameter, mm; none: fitted per sphere.
+    pub stated_diameter: Option<f64>,
+    /// Per sphere: its label, points, diameter (fitted or stated) and
+    /// radial residuals.
+    pub spheres: Vec<(String, usize, f64, RadialErrors)>,
+    /// `|radial error|` of every point, mm.
+    pub errors: crate::calibrate::validate::PositionErrors,
+}
+
+impl SphereEvaluation {
+    /// `arm` (through the corrections its file states) on the points
+    /// `rows` of `file`, of spheres `diameter_mm` across (stated) or fitted.
+    ///
+    /// # Errors
+    ///
+    /// A stated diameter out of range or without the arm file's ball;
+    /// points that fix no sphere where the arm puts them; the kernel's.
+    pub fn new(
+        arm: &crate::io::Arm,
+        rows: crate::io::spheres::Spheres,
+        file: &str,
+        diameter_mm: Option<f64>,
+    ) -> Result<SphereEvaluation, crate::calibrate::CalibrationError> {
+        use crate::residuals::spheres::SphereSize;
+        let empty = crate::DataSet::without_touches(rows.joints(), rows.prismatic_mask());
+        let beyond = crate::corrections::Beyond::default();
+        let mut layout =
+            crate::residuals::positions::layout_with(&arm.params, &empty, &arm.physics, &beyond)?;
+        let size = diameter_mm.map_or(SphereSize::Fitted, SphereSize::Known);
+        let term = SphereTerm::new(
+            rows,
+            file,
+            &arm.params,
+            size,
+            arm.ball_diameter_mm,
+            &crate::residuals::Noise::default(),
+            crate::residuals::spheres::add_to(&mut layout),
+        )?;
+        let (fitted, e) = At::with(&layout, &layout.start(), |at| {
+            Ok((term.refitted_spheres(at)?, term.refitted_errors(&term, at)?))
+        })?;
+        let r = term.spheres();
+        let spheres = (r.spheres().iter().enumerate())
+            .map(|(s, name)| {
+                let of = r.rows_of(s);
+                let pick: Vec<f64> = of.iter().map(|&i| e[i]).collect();
+                let d = 2.0 * (fitted[s].1 - term.ball_radius());
+                (name.clone(), of.len(), d, RadialErrors::of(&pick))
+            })
+            .collect();
+        let abs: Vec<f64> = e.iter().map(|v| v.abs()).collect();
+        Ok(SphereEvaluation {
+            file: file.to_string(),
+            stated_diameter: diameter_mm,
+            spheres,
+            errors: crate::calibrate::validate::PositionErrors::of(&abs),
+        })
+    }
+
+    /// What `evaluate --spheres` prints.
+    pub fn summary(&self) -> String {
+        let mut t = format!(
+            "Points on spheres ({}): each sphere's centre{} fitted on its points with the arm \
+             held fixed\n{:<10} {:>6} {:>14} {:>12} {:>10}\n",
+            self.file,
+            match self.stated_diameter {
+                Some(d) => format!(" (its diameter stated, {d} mm)"),
+                None => " and diameter".to_string(),
+            },
+            "sphere",
+            "points",
+            "diameter (mm)",
+            "RMS radial",
+            "form"
+        );
+        for (name, n, d, e) in &self.spheres {
+            t += &format!(
+                "{name:<10} {n:>6} {d:>14.4} {:>12.4} {:>10.4}\n",
+                e.rms, e.form
+            );
+        }
+        let e = &self.errors;
+        t += &format!(
+            "every point: |radial error| mean {:.4}, RMS {:.4}, p95 {:.4}, max {:.4} mm ({} \
+             points)\n",
+            e.mean, e.rms, e.p95, e.max, e.count
+        );
         t
     }
 }

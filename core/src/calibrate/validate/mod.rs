@@ -536,6 +536,116 @@ pub struct Fold {
     pub figures: BeforeAfter,
     /// Whether the fold's fit converged.
     pub successful: bool,
+    /// The observations of the added terms the fold held out (points on
+    /// spheres), scored per term; absent when there is none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub terms: Vec<TermHeldOut>,
+}
+
+/// A term's observations one fold held out, scored
+/// ([`crate::residuals::HeldOutScorer`]): the distribution of `|error|`
+/// (mm; a point on a sphere's radial error) before and after.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TermHeldOut {
+    /// The term's name (`spheres`).
+    pub term: String,
+    /// What the figures are ([`crate::residuals::HeldOutScorer::what`]).
+    pub what: String,
+    /// Where each held-out observation came from (`file:line`).
+    pub held_out: Vec<String>,
+    /// The start arm, the term's own unknowns (a sphere's centre and
+    /// size) refitted with it on the fold's training observations.
+    pub before: PositionErrors,
+    /// The fold's fit, its own unknowns as it fitted them.
+    pub after: PositionErrors,
+}
+
+/// Per added term (`terms`, in order), its folds: `None` for prior
+/// knowledge, passed whole to every fold.
+type TermFolds = Vec<Option<Vec<crate::residuals::TermFold>>>;
+
+/// Each added term's observations dealt to `k` folds
+/// ([`crate::residuals::Term::split`]) at the start of `layout`.
+///
+/// # Errors
+///
+/// An [`OptionError`] on `cross_validate` naming a data term that cannot be
+/// split, or whose split refuses `k` (saying why).
+pub(crate) fn split_terms(
+    layout: &crate::residuals::Layout,
+    terms: &[Box<dyn crate::residuals::Term>],
+    k: usize,
+    seed: u64,
+) -> Result<TermFolds, OptionError> {
+    let refused = |why: String| OptionError::new("cross_validate", k, why);
+    let x = layout.start();
+    (terms.iter())
+        .map(|t| {
+            if t.is_prior() {
+                return Ok(None);
+            }
+            let split = crate::residuals::At::with(layout, &x, |at| t.split(at, k, seed))
+                .map_err(|e| refused(e.to_string()))?;
+            match split {
+                Some(folds) if folds.len() == k => Ok(Some(folds)),
+                _ => Err(refused(format!(
+                    "the term `{}` does not say how its observations split into folds (each fold \
+                     would fit them all and score none): calibrate without cross-validation",
+                    t.name()
+                ))),
+            }
+        })
+        .collect()
+}
+
+/// Fold `f`'s share of each added term: its training term, or the term
+/// whole (prior knowledge).
+fn fold_terms(
+    terms: &[Box<dyn crate::residuals::Term>],
+    split: &TermFolds,
+    f: usize,
+) -> Vec<Box<dyn crate::residuals::Term>> {
+    (terms.iter().zip(split))
+        .map(|(t, s)| match s {
+            Some(folds) => folds[f].training.clone(),
+            None => t.clone(),
+        })
+        .collect()
+}
+
+/// Fold `f`'s held-out observations of each split term, scored: before at
+/// the start of `layout` (the term's unknowns refitted), after at the
+/// fold's fit `fit`.
+///
+/// # Errors
+///
+/// A scorer's.
+fn score_terms(
+    layout: &crate::residuals::Layout,
+    terms: &[Box<dyn crate::residuals::Term>],
+    split: &TermFolds,
+    f: usize,
+    fit: &super::Calibration,
+) -> Result<Vec<TermHeldOut>, CalibrationError> {
+    let (x0, x1) = (layout.start(), fit.point_in(layout));
+    let of = |e: Vec<f64>| PositionErrors::of(&e.iter().map(|v| v.abs()).collect::<Vec<_>>());
+    let mut out = Vec::new();
+    for (t, s) in terms.iter().zip(split) {
+        let Some(folds) = s else { continue };
+        let scorer = &folds[f].held_out;
+        out.push(TermHeldOut {
+            term: t.name().to_string(),
+            what: scorer.what(),
+            held_out: scorer.labels(),
+            before: of(crate::residuals::At::with(layout, &x0, |at| {
+                scorer.refitted(at)
+            })?),
+            after: of(crate::residuals::At::with(layout, &x1, |at| {
+                scorer.fitted(at)
+            })?),
+        });
+    }
+    Ok(out)
 }
 
 /// `k`-fold cross-validation over points and reference positions: points
@@ -546,11 +656,15 @@ pub struct Fold {
 /// seed, and each fold is calibrated as `inputs` say (their data are the
 /// fold's training points and positions) by `solver`. Held-out positions
 /// are scored in the frames the fold fitted (the start arm in its closed-
-/// form registration on the fold's training positions).
+/// form registration on the fold's training positions). Each added term
+/// deals its own observations ([`crate::residuals::Term::split`]) and
+/// scores the held-out ones ([`Fold::terms`]); prior knowledge is passed
+/// whole.
 ///
 /// # Errors
 ///
-/// A fold count the data cannot split into; a fold's calibration's.
+/// A fold count the data cannot split into; an added data term that cannot
+/// be split, or not into `k`; a fold's calibration's.
 pub fn cross_validate(
     inputs: FitInputs<'_>,
     settings: &SolverSettings,
@@ -561,16 +675,20 @@ pub fn cross_validate(
     let stated =
         (inputs.layout.corrections()).map_or_else(Physics::default, |(b, _)| b.physics.clone());
     check_folds(data, k)?;
+    let split = split_terms(inputs.layout, inputs.terms, k, settings.seed)?;
     let point_folds = point_folds(data, k, settings.seed);
     let row_folds = position_folds(data, k, settings.seed);
     (0..k)
         .map(|f| {
             let (train_data, test_data) = fold_data(data, &point_folds[f], &row_folds[f]);
+            let terms = fold_terms(inputs.terms, &split, f);
             let fold = FitInputs {
                 data: &train_data,
+                terms: &terms,
                 ..inputs
             };
             let fit = calibrate_with(fold, settings, solver, &mut Context::new())?;
+            let scored = score_terms(inputs.layout, inputs.terms, &split, f, &fit)?;
             let start_frames = registered_frames(start, &*seen_by(start, &stated, &train_data)?)?;
             let fit_frames = fit.frames_with_mount();
             let mut held_out: Vec<String> = (point_folds[f].iter())
@@ -595,6 +713,7 @@ pub fn cross_validate(
                     &test_data,
                 )?,
                 successful: fit.solver.successful,
+                terms: scored,
             })
         })
         .collect()
