@@ -1278,6 +1278,7 @@ impl CalibrationReport {
                 None => start.physics.clone(),
             },
             ball_diameter_mm: start.ball_diameter_mm,
+            tools: start.tools.clone(),
         }
     }
 
