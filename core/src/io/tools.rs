@@ -79,6 +79,9 @@ pub(crate) fn name_refused(name: &str, seen: &[&str]) -> Option<String> {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ToolNames {
     names: Vec<String>,
+    /// Per name, its nominal offset (mm; `None` for the default tool,
+    /// whose offset is the arm's probe).
+    offsets: Vec<Option<[f64; 3]>>,
     index: HashMap<String, u32>,
 }
 
@@ -91,7 +94,26 @@ impl ToolNames {
         let index = (names.iter().enumerate())
             .map(|(k, n)| (n.clone(), k as u32))
             .collect();
-        ToolNames { names, index }
+        let offsets = std::iter::once(None)
+            .chain(tools.iter().map(|t| Some(t.offset)))
+            .collect();
+        ToolNames {
+            names,
+            offsets,
+            index,
+        }
+    }
+
+    /// The nominal offset of the tool named `name` (mm, last joint's
+    /// frame), `None` for the default tool or a name not known.
+    pub fn offset(&self, name: &str) -> Option<[f64; 3]> {
+        let k = *self.index.get(name)?;
+        self.offsets[k as usize]
+    }
+
+    /// Whether `name` is one of these tools.
+    pub fn knows(&self, name: &str) -> bool {
+        self.index.contains_key(name)
     }
 
     /// Every name, the default tool's first.

@@ -142,7 +142,7 @@ impl Problem {
                 data: data.joints(),
             });
         }
-        let data = of_arm_shape(&arm, data)?;
+        let data = of_arm_tools(&arm, of_arm_shape(&arm, data)?)?;
         model.check_for(&arm.params)?;
         model
             .beyond
@@ -189,7 +189,7 @@ impl Problem {
             });
         }
         let held_out = HeldOutData {
-            data: of_arm_shape(&self.arm, held_out.data)?,
+            data: of_arm_tools(&self.arm, of_arm_shape(&self.arm, held_out.data)?)?,
             ..held_out
         };
         if !self.register_held_out {
@@ -422,6 +422,31 @@ fn of_arm_shape(arm: &Arm, data: DataSet) -> Result<DataSet, CalibrationError> {
         arm: joints.0,
         data: joints.1,
     })
+}
+
+/// `data` with each tool its positions name given the arm's nominal
+/// offset; a tool the arm does not list is refused by file, line and field.
+fn of_arm_tools(arm: &Arm, data: DataSet) -> Result<DataSet, CalibrationError> {
+    data.with_tools(&crate::io::ToolNames::of(&arm.tools))
+        .map_err(|e| match e {
+            crate::error::InputError::Field {
+                file,
+                line,
+                field,
+                message,
+            } => CalibrationError::Positions {
+                file,
+                line,
+                field,
+                message,
+            },
+            e => CalibrationError::Positions {
+                file: String::new(),
+                line: 0,
+                field: "tool".into(),
+                message: e.to_string(),
+            },
+        })
 }
 
 /// Refuses reference lengths whose median ratio to the nominal arm's
@@ -1278,8 +1303,20 @@ impl CalibrationReport {
                 None => start.physics.clone(),
             },
             ball_diameter_mm: start.ball_diameter_mm,
-            tools: start.tools.clone(),
+            tools: self.calibrated_tools(start),
         }
+    }
+
+    /// The start arm's tools, each fitted one at its fitted offset (a tool
+    /// no row named keeps its own).
+    fn calibrated_tools(&self, start: &Arm) -> Vec<crate::io::Tool> {
+        let fitted = self.calibration.tool_offsets();
+        (start.tools.iter())
+            .map(|t| crate::io::Tool {
+                name: t.name.clone(),
+                offset: (fitted.iter().find(|(n, _)| *n == t.name)).map_or(t.offset, |(_, x)| *x),
+            })
+            .collect()
     }
 
     /// The summary every front end prints: the solver, the dof, every
