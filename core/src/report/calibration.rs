@@ -96,6 +96,7 @@ pub fn session_report(
         uncertainty_map: report.uncertainty_map.as_ref(),
         uncertainty_map_json: Some("/uncertainty_map".to_string()),
         spheres: report.spheres.as_ref(),
+        tools: report.tools.as_ref(),
         uncertainty_maps_in_frames: &report.uncertainty_maps_in_frames,
         verdict: Some(&report.verdict),
         seed: report.seed,

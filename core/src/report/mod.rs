@@ -266,6 +266,8 @@ pub struct CalibrationInput<'a> {
     pub uncertainty_map_json: Option<String>,
     /// Points probed on reference spheres, when fitted: their section.
     pub spheres: Option<&'a crate::session::spheres::SphereReport>,
+    /// Several tool points, when rows name them: their section.
+    pub tools: Option<&'a crate::session::tools::ToolReport>,
     /// The same poses as each fitted frame's instrument sees the probe, its
     /// registration included: a table each in the map's section (none
     /// without frames). Their JSON Pointers are
@@ -359,6 +361,7 @@ pub struct EvaluationInput<'a> {
 ///     uncertainty_map: None,
 ///     uncertainty_map_json: None,
 ///     spheres: None,
+///     tools: None,
 ///     uncertainty_maps_in_frames: &[],
 ///     verdict: None,
 ///     seed: 0,

@@ -127,6 +127,7 @@ fn report_with(
         uncertainty_map: map,
         uncertainty_map_json: map.map(|_| "/uncertainty_map".into()),
         spheres: None,
+        tools: None,
         uncertainty_maps_in_frames: &[],
         verdict: None,
         seed: 0,

@@ -25,6 +25,7 @@ mod outputs;
 mod position_evaluation;
 pub mod request;
 pub mod spheres;
+pub mod tools;
 
 pub use map::MAP_POSES;
 pub use outputs::{earlier_results, result_files};
@@ -842,6 +843,10 @@ pub struct CalibrationReport {
     /// centre, diameter and radial residuals.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spheres: Option<spheres::SphereReport>,
+    /// Several tool points, when rows name them: per tool its offset ± σ
+    /// and its rows' 3-D errors.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tools: Option<tools::ToolReport>,
     /// The same poses as each fitted frame's instrument sees the probe,
     /// that frame's registration included
     /// ([`crate::plan::uncertainty_map_in_frame`]); absent without frames.
@@ -1342,6 +1347,9 @@ impl CalibrationReport {
         if let Some(s) = &self.spheres {
             t += &s.summary();
         }
+        if let Some(s) = &self.tools {
+            t += &s.summary();
+        }
         t
     }
 
@@ -1616,6 +1624,7 @@ pub fn run(
         frames: &frames,
     };
     let fitted = before_after_of(before, after, data)?;
+    let tools = tools::tool_report(data, &calibration, (start, before, after))?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
             data_file: h.data_file.clone(),
@@ -1688,6 +1697,7 @@ pub fn run(
         verdict,
         uncertainty_map,
         spheres,
+        tools,
         uncertainty_maps_in_frames,
     })
 }
