@@ -128,3 +128,203 @@ fn identify_holds_the_unseen_probe_and_keeps_the_markers() {
         assert!(fixed.contains(&b.to_string()), "{b} not held: {fixed:?}");
     }
 }
+
+/// `simulate --positions N --tools K` writes the `tool` column, the
+/// nominal markers (nominal.toml) and the true ones (true_arm.toml), the
+/// same bytes for the same seed; `calibrate` fits each marker (summary,
+/// `calibration.json`, the report's section, the calibrated arm's
+/// `[[tool]]`), and a run without markers says nothing of tools.
+#[test]
+fn simulate_markers_then_calibrate() {
+    use crate::util::{aacmm, shipped_arm, stderr, stdout, temp_dir};
+    let dir = temp_dir("simulate-markers");
+    let arm = shipped_arm();
+    let simulate = |out: &std::path::Path| {
+        let args = [
+            "--errors",
+            "random",
+            "--positions",
+            "60",
+            "--tools",
+            "3",
+            "--seed",
+            "4",
+        ];
+        let mut all = vec!["simulate", "--arm", &arm];
+        all.extend(args);
+        all.extend(["--out", out.to_str().unwrap()]);
+        let o = aacmm(&all);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    let (sim, again) = (dir.join("sim"), dir.join("again"));
+    simulate(&sim);
+    simulate(&again);
+    for f in ["positions.csv", "true_arm.toml", "nominal.toml"] {
+        let read = |d: &std::path::Path| std::fs::read(d.join(f)).unwrap();
+        assert_eq!(read(&sim), read(&again), "{f} differs");
+    }
+    let text = std::fs::read_to_string(sim.join("positions.csv")).unwrap();
+    assert!(
+        text.starts_with("point,q1,q2,q3,q4,q5,q6,x,y,z,tool\n"),
+        "{text}"
+    );
+    assert_eq!(text.lines().count(), 1 + 3 * 60);
+    let nominal = std::fs::read_to_string(sim.join("nominal.toml")).unwrap();
+    let truth = std::fs::read_to_string(sim.join("true_arm.toml")).unwrap();
+    for m in ["m1", "m2", "m3"] {
+        let named = format!("[[tool]]\nname = \"{m}\"\noffset_mm = [");
+        assert!(nominal.contains(&named) && truth.contains(&named), "{m}");
+    }
+    let out = dir.join("cal");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        sim.join("nominal.toml").to_str().unwrap(),
+        "--positions",
+        sim.join("positions.csv").to_str().unwrap(),
+        "--position-noise",
+        "0.015+0.006/m",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = stdout(&o);
+    assert!(summary.contains("Tool points ("), "{summary}");
+    assert!(summary.contains("tool.m2.y"), "{summary}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("calibration.json")).unwrap())
+            .unwrap();
+    let tools = json["tools"]["tools"].as_array().unwrap();
+    assert_eq!(tools.len(), 3);
+    for t in tools {
+        assert_eq!(t["rows"], 60);
+        assert!(t["rms_after"].as_f64().unwrap() < 0.2 * t["rms_before"].as_f64().unwrap());
+    }
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(html.contains("Tool points: offsets and 3-D errors per tool"));
+    let calibrated = std::fs::read_to_string(out.join("calibrated.toml")).unwrap();
+    let fitted = json["tools"]["tools"][0]["offset"][0].as_f64().unwrap();
+    assert!(
+        calibrated.contains(&format!("name = \"m1\"\noffset_mm = [{fitted:?}, ")),
+        "{calibrated}"
+    );
+    // No markers: no word of tools.
+    let plain = dir.join("plain");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm,
+        "--errors",
+        "random",
+        "--positions",
+        "40",
+        "--seed",
+        "4",
+        "--out",
+        plain.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.join("plain-cal");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--positions",
+        plain.join("positions.csv").to_str().unwrap(),
+        "--position-noise",
+        "0.015+0.006/m",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stdout(&o).contains("Tool points"));
+    assert!(
+        !std::fs::read_to_string(out.join("calibration.json"))
+            .unwrap()
+            .contains("\"tools\"")
+    );
+    assert!(
+        !std::fs::read_to_string(out.join("report.html"))
+            .unwrap()
+            .contains("Tool points")
+    );
+}
+
+/// Bad input, each refused by file, line and field: a tool the arm does
+/// not know (the arm's tools named), a tool seen in one row, a `[[tool]]`
+/// named twice, an offset that is not a finite number.
+#[test]
+fn bad_tools_are_refused_by_file_line_and_field() {
+    use crate::util::{aacmm, assert_clean_error, temp_dir, write};
+    let dir = temp_dir("bad-tools");
+    let sim = dir.join("sim");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &crate::util::shipped_arm(),
+        "--errors",
+        "random",
+        "--positions",
+        "20",
+        "--tools",
+        "2",
+        "--seed",
+        "9",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let nominal = std::fs::read_to_string(sim.join("nominal.toml")).unwrap();
+    let text = std::fs::read_to_string(sim.join("positions.csv")).unwrap();
+    let calibrate = |arm: &str, positions: &str| {
+        let arm = write(&dir, "arm.toml", arm);
+        let p = write(&dir, "p.csv", positions);
+        let out = dir.join("out");
+        aacmm(&[
+            "calibrate",
+            "--arm",
+            &arm,
+            "--positions",
+            &p,
+            "--position-noise",
+            "0.015",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    // Line 3 names a marker the arm does not list.
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    assert!(lines[2].ends_with(",m2"), "{}", lines[2]);
+    lines[2] = lines[2].replace(",m2", ",m7");
+    let o = calibrate(&nominal, &(lines.join("\n") + "\n"));
+    assert_clean_error(&o, &["p.csv:3: field `tool`: `m7`", "`probe`, `m1`, `m2`"]);
+    // A marker seen once.
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    assert!(lines[4].ends_with(",m2"), "{}", lines[4]);
+    lines[4] = lines[4].replace(",m2", ",m9");
+    let arm = nominal.clone() + "\n[[tool]]\nname = \"m9\"\noffset_mm = [1, 2, 3]\n";
+    let o = calibrate(&arm, &(lines.join("\n") + "\n"));
+    assert_clean_error(
+        &o,
+        &["p.csv:5: field `tool`: tool `m9` is seen in 1 row(s)"],
+    );
+    // Arm files.
+    let twice = nominal.clone() + "\n[[tool]]\nname = \"m1\"\noffset_mm = [1, 2, 3]\n";
+    let line = nominal.lines().count() + 3;
+    let o = calibrate(&twice, &text);
+    assert_clean_error(
+        &o,
+        &[&format!(
+            "arm.toml:{line}: field `name`: [[tool]] `m1`: a second"
+        )],
+    );
+    let nan = nominal.clone() + "\n[[tool]]\nname = \"m5\"\noffset_mm = [1, nan, 3]\n";
+    let o = calibrate(&nan, &text);
+    assert_clean_error(
+        &o,
+        &[
+            &format!("arm.toml:{}: field `offset_mm`: [[tool]] `m5`: ", line + 1),
+            "not a finite number",
+        ],
+    );
+}
