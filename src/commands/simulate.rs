@@ -298,9 +298,7 @@ fn tracker(
 ) -> Result<aacmm_core::io::Arm> {
     use aacmm_core::io::frames::frames_to_toml;
     use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, positions::write_positions};
-    use aacmm_core::simulate::{
-        POSITIONS_FILE, PositionSettings, perturbed_tools, seen_at_markers, true_frames,
-    };
+    use aacmm_core::simulate::{POSITIONS_FILE, PositionSettings, true_frames};
     let Some(poses) = args.positions else {
         bail!("give --sockets K, --sockets-file FILE or --positions N");
     };
@@ -339,43 +337,9 @@ fn tracker(
     };
     let mut campaign = campaign.map_err(|e| anyhow!("--positions: {e}"))?;
     let mut truth = truth;
-    let mut mount = None;
-    if args.orientation {
-        // Its own stream (the truth has the seed, the positions the next):
-        // the positions are those of a campaign without orientations.
-        // The mount from a stream of its own too: --mount-deg 0 gives the
-        // orientations of a target mounted square, whatever the seed.
-        let settings = aacmm_core::simulate::OrientationSettings {
-            mount: aacmm_core::simulate::random_mount(
-                args.mount_deg.to_radians(),
-                args.seed.wrapping_add(3),
-            ),
-            sigma_rad: args.orientation_noise.to_radians(),
-            seed: args.seed.wrapping_add(2),
-        };
-        campaign.positions = (aacmm_core::simulate::orient_positions(
-            &truth,
-            &campaign.positions,
-            &campaign.frames,
-            &settings,
-        ))
-        .map_err(|e| anyhow!("--orientation: {e}"))?;
-        mount = Some(settings.mount);
-    }
+    let mount = orient(args, &truth, &mut campaign)?;
     if !nominal.tools.is_empty() {
-        // The markers' offsets and noise from streams of their own: the
-        // poses are those of a campaign without markers.
-        if args.true_arm.is_none() || truth.tools.is_empty() {
-            truth.tools = perturbed_tools(&nominal.tools, 0.5, args.seed.wrapping_add(5));
-        }
-        campaign.positions = seen_at_markers(
-            &truth,
-            &campaign,
-            &settings.noise,
-            1.0,
-            args.seed.wrapping_add(6),
-        )
-        .map_err(|e| anyhow!("--tools: {e}"))?;
+        see_markers(args, nominal, &mut truth, &mut campaign, &settings.noise)?;
     }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
@@ -413,6 +377,59 @@ fn tracker(
         arm_path.display()
     ))?;
     Ok(truth)
+}
+
+/// With --orientation, `campaign`'s rows given the true tool frame's
+/// orientation (a random mount, returned); nothing without.
+fn orient(
+    args: &Args,
+    truth: &Arm,
+    campaign: &mut aacmm_core::simulate::PositionCampaign,
+) -> Result<Option<[f64; 3]>> {
+    if !args.orientation {
+        return Ok(None);
+    }
+    // Its own stream (the truth has the seed, the positions the next):
+    // the positions are those of a campaign without orientations.
+    // The mount from a stream of its own too: --mount-deg 0 gives the
+    // orientations of a target mounted square, whatever the seed.
+    let settings = aacmm_core::simulate::OrientationSettings {
+        mount: aacmm_core::simulate::random_mount(
+            args.mount_deg.to_radians(),
+            args.seed.wrapping_add(3),
+        ),
+        sigma_rad: args.orientation_noise.to_radians(),
+        seed: args.seed.wrapping_add(2),
+    };
+    campaign.positions = (aacmm_core::simulate::orient_positions(
+        truth,
+        &campaign.positions,
+        &campaign.frames,
+        &settings,
+    ))
+    .map_err(|e| anyhow!("--orientation: {e}"))?;
+    Ok(Some(settings.mount))
+}
+
+/// `campaign`'s poses seen at the markers of `nominal` instead of the
+/// probe: the true markers `truth`'s own when a --true arm lists them, else
+/// each 0.5 mm off its nominal per axis.
+fn see_markers(
+    args: &Args,
+    nominal: &Arm,
+    truth: &mut Arm,
+    campaign: &mut aacmm_core::simulate::PositionCampaign,
+    noise: &aacmm_core::residuals::Noise,
+) -> Result<()> {
+    use aacmm_core::simulate::{perturbed_tools, seen_at_markers};
+    // The markers' offsets and noise from streams of their own: the poses
+    // are those of a campaign without markers.
+    if args.true_arm.is_none() || truth.tools.is_empty() {
+        truth.tools = perturbed_tools(&nominal.tools, 0.5, args.seed.wrapping_add(5));
+    }
+    campaign.positions = seen_at_markers(truth, campaign, noise, 1.0, args.seed.wrapping_add(6))
+        .map_err(|e| anyhow!("--tools: {e}"))?;
+    Ok(())
 }
 
 /// `--mount-deg`'s value: an angle in [0, 180] degrees.

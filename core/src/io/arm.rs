@@ -31,7 +31,13 @@
 //! x = 0.0
 //! y = 0.0
 //! z = 100.0
+//!
+//! [[tool]]                # optional: more tool points (markers, SMRs, styli)
+//! name = "smr2"
+//! offset_mm = [40.0, 0.0, 95.0]   # mm, in the last joint's frame
 //! ```
+//!
+//! `[[tool]]` tables are described in [`super::tools`].
 //!
 //! `name` is optional (default empty). Lengths (`a`, `d`, probe) are in
 //! `length_unit`, angles (`theta`, `alpha`, `hbeta`, `limits`) in `angle_unit`.

@@ -1624,7 +1624,7 @@ pub fn run(
         frames: &frames,
     };
     let fitted = before_after_of(before, after, data)?;
-    let tools = tools::tool_report(data, &calibration, (start, before, after))?;
+    let (spheres, tools) = evidence_reports(problem, &calibration, (before, after))?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
             data_file: h.data_file.clone(),
@@ -1667,9 +1667,6 @@ pub fn run(
     }
     let (uncertainty_map, uncertainty_maps_in_frames) =
         map::workspace_maps(&problem.arm, data, &calibration, settings.seed);
-    let spheres = (problem.spheres.as_ref())
-        .map(|t| spheres::sphere_report(t, &problem.layout, &calibration))
-        .transpose()?;
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
@@ -1700,6 +1697,26 @@ pub fn run(
         tools,
         uncertainty_maps_in_frames,
     })
+}
+
+/// The sections of the evidence beyond touches and positions that
+/// `problem` holds, after `calibration`: its spheres' and its tool points'
+/// (each arm seeing the data as `views` say).
+///
+/// # Errors
+///
+/// The kernel's; a correction whose conditions the data lack.
+fn evidence_reports(
+    problem: &Problem,
+    calibration: &Calibration,
+    (before, after): (ArmView<'_>, ArmView<'_>),
+) -> Result<(Option<spheres::SphereReport>, Option<tools::ToolReport>), CalibrationError> {
+    let spheres = (problem.spheres.as_ref())
+        .map(|t| spheres::sphere_report(t, &problem.layout, calibration))
+        .transpose()?;
+    let start = (&problem.arm.params, before, after);
+    let tools = tools::tool_report(&problem.data, calibration, start)?;
+    Ok((spheres, tools))
 }
 
 /// The summary's degrees of freedom and the σ behind the weights.
