@@ -210,12 +210,12 @@ pub(crate) fn nominal_positions(
     positions_at(params, data, &[])
 }
 
-/// [`nominal_positions`] with the offsets `fitted` gives by block name
-/// (`tool.NAME`, `[x, y, z, ..]` mm — a calibration's, among its frames:
-/// `crate::Calibration::frames_with_mount`); a tool not among them at its
-/// nominal offset. (A tool whose offset is not known at all is evaluated
-/// at the probe: every fit refuses such data first,
-/// [`add_tool_blocks`].)
+/// The position of every row of `data` at `params`, each row's tool at
+/// the offset `fitted` gives by block name (`tool.NAME`, `[x, y, z, ..]`
+/// mm — a calibration's, among its frames:
+/// [`crate::Calibration::frames_with_mount`]), else at its nominal offset,
+/// the default tool at the probe. (A tool whose offset is not known at all
+/// is evaluated at the probe: every fit refuses such data first.)
 ///
 /// # Errors
 ///
