@@ -347,6 +347,7 @@ fn an_arm_files_prior_gives_the_command_lines_result() {
         prior: None,
         physics: start.physics.clone(),
         ball_diameter_mm: start.ball_diameter_mm,
+        tools: start.tools.clone(),
     };
     assert_eq!(
         arm_to_toml(&from_c, LengthUnit::Mm, AngleUnit::Deg),

@@ -1070,6 +1070,21 @@ impl DataSet {
         self.positions.as_ref()
     }
 
+    /// These data with each tool their positions name given its nominal
+    /// offset from `tools` (an arm's, [`crate::io::tools`]).
+    ///
+    /// # Errors
+    ///
+    /// As [`crate::io::Positions::resolve_tools`]: a row naming a tool
+    /// `tools` does not have (with the known tools), a tool seen in one row
+    /// only.
+    pub fn with_tools(mut self, tools: &crate::io::ToolNames) -> Result<DataSet, InputError> {
+        if let Some(p) = &mut self.positions {
+            p.rows.resolve_tools(tools, &p.file)?;
+        }
+        Ok(self)
+    }
+
     /// This data set with its positions replaced by `positions` (none: the
     /// touches alone).
     pub fn with_position_data(mut self, positions: Option<PositionData>) -> DataSet {

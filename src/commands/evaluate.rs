@@ -31,8 +31,8 @@ pub struct Args {
     #[arg(long, requires = "data")]
     lengths: Option<PathBuf>,
     /// Reference positions an instrument saw (a laser tracker): CSV
-    /// `point,q1,...,qn,x,y,z[,frame][,uncertainty]`, as calibrate
-    /// --positions reads. Prints the arm's 3-D errors there (mean, RMS,
+    /// `point,q1,...,qn,x,y,z[,frame][,tool][,uncertainty]`, as calibrate
+    /// --positions reads (each tool at the arm file's `[[tool]]` offset). Prints the arm's 3-D errors there (mean, RMS,
     /// 95th percentile, max per frame), each frame registered as the arm
     /// file's `[[frame]]` of its name (a calibrated arm's), else to this
     /// arm in closed form on these positions (optimistic) — and says which.

@@ -140,6 +140,7 @@ fn arm_of(urdf: &Urdf, chain: &Chain, dh: &DhConversion, args: &Args) -> Arm {
         prior: None,
         physics: physics.into(),
         ball_diameter_mm: None,
+        tools: Vec::new(),
     }
 }
 

@@ -36,8 +36,10 @@ pub struct FitInput {
     pub lengths: Option<PathBuf>,
     /// Reference positions an instrument saw (a laser tracker) or an
     /// artefact's certified centres: CSV `point,q1,...,qn,x,y,z[,frame]
-    /// [,uncertainty]`, mm in the instrument's frame; each frame's pose is
-    /// fitted. With --data too, both are fitted together.
+    /// [,tool][,uncertainty]`, mm in the instrument's frame; each frame's
+    /// pose is fitted, and each tool the `tool` column names (the arm
+    /// file's `[[tool]]`: markers, SMRs; empty: the probe) its offset. With
+    /// --data too, both are fitted together.
     #[arg(long, value_name = "P.csv")]
     pub positions: Option<PathBuf>,
     /// Points probed on the surface of reference spheres: CSV

@@ -89,6 +89,16 @@ pub struct Args {
     /// The spheres' diameter, mm.
     #[arg(long, value_name = "MM", requires = "spheres", default_value_t = aacmm_core::simulate::DEFAULT_SPHERE_DIAMETER_MM)]
     sphere_diameter: f64,
+    /// --positions seen at K markers on one body instead of the probe
+    /// (SMRs on an end effector): each pose seen at every marker, written
+    /// as the `tool` column of positions.csv. The markers are the arm
+    /// file's `[[tool]]` when it lists some (then --tools may be left out);
+    /// else K drawn on the flange, 40–90 mm off the last axis, written with
+    /// the nominal arm to nominal.toml. The true markers (each 0.5 mm off
+    /// its nominal per axis, or a --true arm's `[[tool]]`) go into
+    /// true_arm.toml.
+    #[arg(long, value_name = "K", requires = "positions", value_parser = clap::value_parser!(u32).range(1..=64))]
+    tools: Option<u32>,
     /// Instrument stations of --positions, each with its own random pose.
     #[arg(long, value_name = "F", default_value_t = 1, requires = "positions")]
     frames: usize,
@@ -193,7 +203,7 @@ enum Errors {
 
 pub fn run(args: Args) -> Result<()> {
     check_paths(&args)?;
-    let stated = nominal_arm(&args)?;
+    let stated = with_markers(&args, nominal_arm(&args)?)?;
     let nominal = with_ball(&args, &stated);
     let joints = nominal.params.joint_count();
     let errors = error_model(&args)?;
@@ -343,28 +353,10 @@ fn tracker(
         },
     };
     let mut campaign = campaign.map_err(|e| anyhow!("--positions: {e}"))?;
-    let mut mount = None;
-    if args.orientation {
-        // Its own stream (the truth has the seed, the positions the next):
-        // the positions are those of a campaign without orientations.
-        // The mount from a stream of its own too: --mount-deg 0 gives the
-        // orientations of a target mounted square, whatever the seed.
-        let settings = aacmm_core::simulate::OrientationSettings {
-            mount: aacmm_core::simulate::random_mount(
-                args.mount_deg.to_radians(),
-                args.seed.wrapping_add(3),
-            ),
-            sigma_rad: args.orientation_noise.to_radians(),
-            seed: args.seed.wrapping_add(2),
-        };
-        campaign.positions = (aacmm_core::simulate::orient_positions(
-            &truth,
-            &campaign.positions,
-            &campaign.frames,
-            &settings,
-        ))
-        .map_err(|e| anyhow!("--orientation: {e}"))?;
-        mount = Some(settings.mount);
+    let mut truth = truth;
+    let mount = orient(args, &truth, &mut campaign)?;
+    if !nominal.tools.is_empty() {
+        see_markers(args, nominal, &mut truth, &mut campaign, &settings.noise)?;
     }
     std::fs::create_dir_all(&args.out)
         .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
@@ -382,11 +374,14 @@ fn tracker(
         });
     let arm_path = args.out.join(TRUE_ARM_FILE);
     write_file(&arm_path, true_arm.as_bytes())?;
-    let turned = if args.orientation {
+    let mut turned = if args.orientation {
         format!(", orientations {}° per axis", args.orientation_noise)
     } else {
         String::new()
     };
+    if !truth.tools.is_empty() {
+        turned += &format!(", each seen at {} marker(s)", truth.tools.len());
+    }
     note(format_args!(
         "tracker: {poses} poses in each of {} frame(s), noise {a} mm{}{turned}; seed {}",
         args.frames,
@@ -399,6 +394,59 @@ fn tracker(
         arm_path.display()
     ))?;
     Ok(truth)
+}
+
+/// With --orientation, `campaign`'s rows given the true tool frame's
+/// orientation (a random mount, returned); nothing without.
+fn orient(
+    args: &Args,
+    truth: &Arm,
+    campaign: &mut aacmm_core::simulate::PositionCampaign,
+) -> Result<Option<[f64; 3]>> {
+    if !args.orientation {
+        return Ok(None);
+    }
+    // Its own stream (the truth has the seed, the positions the next):
+    // the positions are those of a campaign without orientations.
+    // The mount from a stream of its own too: --mount-deg 0 gives the
+    // orientations of a target mounted square, whatever the seed.
+    let settings = aacmm_core::simulate::OrientationSettings {
+        mount: aacmm_core::simulate::random_mount(
+            args.mount_deg.to_radians(),
+            args.seed.wrapping_add(3),
+        ),
+        sigma_rad: args.orientation_noise.to_radians(),
+        seed: args.seed.wrapping_add(2),
+    };
+    campaign.positions = (aacmm_core::simulate::orient_positions(
+        truth,
+        &campaign.positions,
+        &campaign.frames,
+        &settings,
+    ))
+    .map_err(|e| anyhow!("--orientation: {e}"))?;
+    Ok(Some(settings.mount))
+}
+
+/// `campaign`'s poses seen at the markers of `nominal` instead of the
+/// probe: the true markers `truth`'s own when a --true arm lists them, else
+/// each 0.5 mm off its nominal per axis.
+fn see_markers(
+    args: &Args,
+    nominal: &Arm,
+    truth: &mut Arm,
+    campaign: &mut aacmm_core::simulate::PositionCampaign,
+    noise: &aacmm_core::residuals::Noise,
+) -> Result<()> {
+    use aacmm_core::simulate::{perturbed_tools, seen_at_markers};
+    // The markers' offsets and noise from streams of their own: the poses
+    // are those of a campaign without markers.
+    if args.true_arm.is_none() || truth.tools.is_empty() {
+        truth.tools = perturbed_tools(&nominal.tools, 0.5, args.seed.wrapping_add(5));
+    }
+    campaign.positions = seen_at_markers(truth, campaign, noise, 1.0, args.seed.wrapping_add(6))
+        .map_err(|e| anyhow!("--tools: {e}"))?;
+    Ok(())
 }
 
 /// `--mount-deg`'s value: an angle in [0, 180] degrees.
@@ -441,6 +489,24 @@ fn nominal_arm(args: &Args) -> Result<Arm> {
     }
 }
 
+/// `nominal` with `--tools K` markers drawn on its flange (written with it
+/// to nominal.toml) when it lists none; as it is otherwise.
+fn with_markers(args: &Args, mut nominal: Arm) -> Result<Arm> {
+    use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml};
+    use aacmm_core::simulate::random_tools;
+    let Some(k) = args.tools.filter(|_| nominal.tools.is_empty()) else {
+        return Ok(nominal);
+    };
+    nominal.tools = random_tools(k as usize, args.seed.wrapping_add(4));
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
+    let path = args.out.join(NOMINAL_FILE);
+    let text = arm_to_toml(&nominal, LengthUnit::Mm, AngleUnit::Deg);
+    write_file(&path, text.as_bytes())?;
+    note(format_args!("wrote {} (with {k} markers)", path.display()))?;
+    Ok(nominal)
+}
+
 /// The nominal arm's name in messages and campaign.toml: --arm's file, or
 /// the nominal.toml --chain writes.
 fn nominal_name(args: &Args) -> String {
@@ -468,7 +534,7 @@ fn check_paths(args: &Args) -> Result<()> {
         CAMPAIGN_FILE,
         aacmm_core::simulate::POSITIONS_FILE,
         aacmm_core::simulate::SPHERES_FILE,
-        if args.chain.is_some() {
+        if args.chain.is_some() || args.tools.is_some() {
             NOMINAL_FILE
         } else {
             CAMPAIGN_FILE

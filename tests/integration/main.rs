@@ -32,5 +32,6 @@ mod simulate;
 mod sphere_term;
 mod spheres;
 mod streams;
+mod tools;
 mod util;
 mod verdict;

@@ -772,7 +772,43 @@ impl Calibration {
                 [r[0], r[1], r[2], 0.0, 0.0, 0.0],
             ));
         }
+        for (name, x) in self.tool_offsets() {
+            frames.push((
+                crate::io::tools::block_name(&name),
+                [x[0], x[1], x[2], 0.0, 0.0, 0.0],
+            ));
+        }
         frames
+    }
+
+    /// Each fitted tool point's offset (`[[tool]]`, [`crate::io::tools`]):
+    /// its name and `[x, y, z]` (mm, the last joint's frame), with their
+    /// σ when determined, in the order of the columns.
+    pub fn tool_estimates(&self) -> Vec<(String, [f64; 3], Option<[f64; 3]>)> {
+        let aux = &self.auxiliary;
+        let prefix = crate::io::tools::TOOL_BLOCK_PREFIX;
+        (0..aux.len())
+            .filter_map(|i| {
+                let name = aux[i].name.strip_prefix(prefix)?.strip_suffix(".x")?;
+                let cols = aux.get(i..i + 3)?;
+                let named = (cols.iter().zip(["x", "y", "z"]))
+                    .all(|(c, axis)| c.name == format!("{prefix}{name}.{axis}"));
+                let sigma = [cols[0].sigma, cols[1].sigma, cols[2].sigma];
+                let sigma = match sigma {
+                    [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                    _ => None,
+                };
+                let x = std::array::from_fn(|k| cols[k].calibrated);
+                named.then(|| (name.to_string(), x, sigma))
+            })
+            .collect()
+    }
+
+    /// [`Calibration::tool_estimates`] without the σ.
+    pub fn tool_offsets(&self) -> Vec<(String, [f64; 3])> {
+        (self.tool_estimates().into_iter())
+            .map(|(n, x, _)| (n, x))
+            .collect()
     }
 
     /// The fitted tool mount of orientations ([`crate::residuals::Mount`]),

@@ -31,7 +31,13 @@
 //! x = 0.0
 //! y = 0.0
 //! z = 100.0
+//!
+//! [[tool]]                # optional: more tool points (markers, SMRs, styli)
+//! name = "smr2"
+//! offset_mm = [40.0, 0.0, 95.0]   # mm, in the last joint's frame
 //! ```
+//!
+//! `[[tool]]` tables are described in [`super::tools`].
 //!
 //! `name` is optional (default empty). Lengths (`a`, `d`, probe) are in
 //! `length_unit`, angles (`theta`, `alpha`, `hbeta`, `limits`) in `angle_unit`.
@@ -93,6 +99,9 @@ pub struct Arm {
     /// if stated: points probed on a surface lie a ball radius from the
     /// probe centre the chain ends in (sphere surfaces, [`crate::residuals::spheres`]).
     pub ball_diameter_mm: Option<f64>,
+    /// The named tool points beyond the probe (`[[tool]]`,
+    /// [`super::tools`]), in file order; empty for most arms.
+    pub tools: Vec<super::tools::Tool>,
 }
 
 /// The largest probe ball an arm file may state, mm: a stylus ball is
@@ -119,6 +128,7 @@ impl Arm {
             prior: None,
             physics: Box::default(),
             ball_diameter_mm: None,
+            tools: Vec::new(),
         }
     }
 }
@@ -260,6 +270,9 @@ pub(crate) struct ArmFile {
     reference_temperature_c: Option<Spanned<f64>>,
     joint: Spanned<Vec<Spanned<JointFile>>>,
     probe: ProbeFile,
+    /// The named tool points ([`super::tools`]); absent when none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    tool: Vec<Spanned<ToolFile>>,
     /// Stated tolerances: read by [`super::prior`], never written.
     #[serde(rename = "prior", default, skip_serializing)]
     _prior: Option<serde::de::IgnoredAny>,
@@ -496,6 +509,19 @@ struct ProbeFile {
     ball_diameter_mm: Option<Spanned<f64>>,
 }
 
+/// One `[[tool]]` table: a named tool point ([`super::tools`]).
+#[derive(Serialize, Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table ([[tool]] with name, offset_mm)"
+)]
+struct ToolFile {
+    name: Spanned<String>,
+    /// Its centre in the last joint's frame, mm (whatever `length_unit`
+    /// says).
+    offset_mm: Spanned<Vec<Spanned<f64>>>,
+}
+
 /// A unit by its name.
 fn by_name<S: serde::Serializer>(unit: &impl std::fmt::Display, s: S) -> Result<S::Ok, S::Error> {
     s.collect_str(unit)
@@ -631,6 +657,14 @@ impl ArmFile {
                 com_mm: physics.probe_mass.and_then(|m| m.com_mm).map(triple),
                 ball_diameter_mm: arm.ball_diameter_mm.map(new),
             },
+            tool: (arm.tools.iter())
+                .map(|t| {
+                    new(ToolFile {
+                        name: new(t.name.clone()),
+                        offset_mm: triple(t.offset),
+                    })
+                })
+                .collect(),
             _prior: None,
             _frame: None,
             _mount: None,
@@ -693,6 +727,7 @@ impl ArmFile {
             prior: None,
             physics: Box::default(),
             ball_diameter_mm: self.ball_diameter(text, file)?,
+            tools: self.tools(text, file)?,
         };
         for (i, (j, &(model, kind))) in joints.iter().map(Spanned::get_ref).zip(&models).enumerate()
         {
@@ -702,6 +737,42 @@ impl ArmFile {
         }
         arm.physics = Box::new(self.physics(text, file)?);
         Ok((arm, self.unit_warnings(text, file)))
+    }
+
+    /// The `[[tool]]` tables, checked: a name not empty, not the default
+    /// tool's, not repeated; an offset of three numbers (finite: checked
+    /// with every number first).
+    fn tools(&self, text: &str, file: &str) -> Result<Vec<super::tools::Tool>, InputError> {
+        let mut seen: Vec<&str> = Vec::new();
+        let mut out = Vec::with_capacity(self.tool.len());
+        for t in self.tool.iter().map(Spanned::get_ref) {
+            let name = t.name.get_ref();
+            if let Some(why) = super::tools::name_refused(name, &seen) {
+                let line = line_of(text, t.name.span().start);
+                return Err(InputError::field(file, line, "name", why));
+            }
+            seen.push(name);
+            let offset = match t.offset_mm.get_ref()[..] {
+                [ref x, ref y, ref z] => [x, y, z].map(|c| *c.get_ref()),
+                ref other => {
+                    return Err(InputError::field(
+                        file,
+                        line_of(text, t.offset_mm.span().start),
+                        "offset_mm",
+                        format!(
+                            "[[tool]] {}: expected [x, y, z] (mm), found {} values",
+                            quoted(name),
+                            other.len()
+                        ),
+                    ));
+                }
+            };
+            out.push(super::tools::Tool {
+                name: name.clone(),
+                offset,
+            });
+        }
+        Ok(out)
     }
 
     /// `[probe] ball_diameter_mm`, checked: in mm, between
@@ -935,6 +1006,12 @@ impl ArmFile {
         let p = &self.probe;
         for (field, v) in [("x", &p.x), ("y", &p.y), ("z", &p.z)] {
             out.push(("[probe]: ".to_string(), field, v));
+        }
+        for t in self.tool.iter().map(Spanned::get_ref) {
+            let ctx = format!("[[tool]] {}: ", quoted(t.name.get_ref()));
+            for v in t.offset_mm.get_ref() {
+                out.push((ctx.clone(), "offset_mm", v));
+            }
         }
         out
     }
@@ -1655,6 +1732,7 @@ z = 100.0
                 prior: None,
                 physics: Box::default(),
                 ball_diameter_mm: None,
+                tools: Vec::new(),
             };
             let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Rad);
             let (back, _) = parse_arm(&text, F).unwrap();

@@ -46,6 +46,9 @@ pub struct JointColumns {
     prismatic: u16,
     /// Per joint, the stroke `[min, max]` (mm) of a prismatic joint.
     strokes: Vec<Option<[f64; 2]>>,
+    /// The tools a `tool` cell may name, when an arm says
+    /// ([`super::tools`]); `None`: any name.
+    tools: Option<super::ToolNames>,
 }
 
 impl From<Option<usize>> for JointColumns {
@@ -69,6 +72,7 @@ impl From<ChainShape> for JointColumns {
             count: Some(shape.joints()),
             prismatic: shape.prismatic_mask(),
             strokes: Vec::new(),
+            tools: None,
         }
     }
 }
@@ -78,14 +82,19 @@ impl From<&Arm> for JointColumns {
     /// shape is not one — no joints, too many — asks for its joint count,
     /// all revolute, so that the header check names the mismatch).
     fn from(arm: &Arm) -> JointColumns {
+        let tools = Some(super::ToolNames::of(&arm.tools));
         let Ok(shape) = arm.params.shape() else {
-            return JointColumns::from(arm.params.joint_count());
+            return JointColumns {
+                tools,
+                ..JointColumns::from(arm.params.joint_count())
+            };
         };
         let strokes = (arm.limits.iter().enumerate())
             .map(|(j, l)| l.filter(|_| shape.is_prismatic(j)))
             .collect();
         JointColumns {
             strokes,
+            tools,
             ..JointColumns::from(shape)
         }
     }
@@ -100,6 +109,11 @@ impl JointColumns {
     /// The prismatic joints, bit `j` for joint `j`.
     pub fn prismatic_mask(&self) -> u16 {
         self.prismatic
+    }
+
+    /// The tools a `tool` cell may name (the arm's), when known.
+    pub fn tools(&self) -> Option<&super::ToolNames> {
+        self.tools.as_ref()
     }
 
     /// Whether joint `j` (0-based) is prismatic: its column is mm.

@@ -49,6 +49,7 @@ pub mod positions;
 pub mod prior;
 pub mod spheres;
 pub(crate) mod text;
+pub mod tools;
 pub mod units;
 pub mod verdict;
 
@@ -70,6 +71,7 @@ pub use poses::{
 pub use positions::{DEFAULT_FRAME, Positions, parse_positions, read_positions};
 pub use prior::parse_prior;
 pub use text::source_name;
+pub use tools::{DEFAULT_TOOL, Tool, ToolNames};
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
 pub use verdict::{ArmVerdict, Rejected};
 

@@ -2,7 +2,7 @@
 //! optical CMM) saw the probe or target, or the certified centre of an
 //! artefact's sphere the arm touched — CSV with the header
 //! `point,q1,…,qn,x,y,z` and the optional columns `qw,qx,qy,qz`,
-//! `frame`, `uncertainty`, `temperature`, `time` and `approach`
+//! `frame`, `tool`, `uncertainty`, `temperature`, `time` and `approach`
 //! ([`super::approach`]), in that order.
 //!
 //! ```text
@@ -26,7 +26,11 @@
 //! `temperature` (°C, of the arm when the row was taken) and `time` (s,
 //! from any origin) are what a thermal expansion or a drift is fitted
 //! against ([`crate::corrections`]); where a column is present every row
-//! gives it.
+//! gives it. `tool` names the tool point the instrument saw (a marker, an
+//! SMR, a stylus: the arm file's `[[tool]]`, [`super::tools`]); an empty
+//! cell, or no column, is the default tool (the arm's `[probe]`, named
+//! [`super::DEFAULT_TOOL`]); a name the arm does not know is an error
+//! naming the line, the field and the arm's tools.
 
 use std::path::Path;
 
@@ -52,6 +56,9 @@ pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-6;
 
 /// The orientation columns, in the order they follow `x,y,z`.
 const ORIENTATION: [&str; 4] = ["qw", "qx", "qy", "qz"];
+
+/// The fewest rows a named tool's offset (three unknowns) is fitted from.
+pub const MIN_TOOL_ROWS: usize = 2;
 
 /// The fewest positions a frame's registration (six unknowns) can rest on.
 pub const MIN_FRAME_POSITIONS: usize = 3;
@@ -79,6 +86,15 @@ pub struct Positions {
     /// Per row, the tool's orientation seen (`[w, x, y, z]`, unit, as
     /// read), when the row gives one.
     orientation: Vec<Option<[f64; 4]>>,
+    /// The tools rows name, in order of first appearance after the
+    /// default tool (always first, [`super::DEFAULT_TOOL`]).
+    tools: Vec<String>,
+    /// Per tool, its nominal offset (mm, the last joint's frame) once the
+    /// arm's tools are known ([`Positions::resolve_tools`]); `None` for the
+    /// default tool (the arm's probe).
+    tool_offsets: Vec<Option<[f64; 3]>>,
+    /// Per row, its tool (index into `tools`).
+    tool_of: Vec<u32>,
     /// Per row, its stated standard uncertainty per coordinate, mm.
     uncertainty: Vec<Option<f64>>,
     /// Per row, its 1-based line.
@@ -105,6 +121,9 @@ impl Positions {
             q: Vec::new(),
             xyz: Vec::new(),
             orientation: Vec::new(),
+            tools: vec![super::DEFAULT_TOOL.to_string()],
+            tool_offsets: vec![None],
+            tool_of: Vec::new(),
             uncertainty: Vec::new(),
             lines: Vec::new(),
             temperature: None,
@@ -237,6 +256,7 @@ impl Positions {
         self.q.extend_from_slice(q);
         self.xyz.push(xyz);
         self.orientation.push(None);
+        self.tool_of.push(0);
         self.uncertainty.push(uncertainty);
         self.lines.push(line);
         Ok(())
@@ -252,6 +272,7 @@ impl Positions {
         try_grow(&mut self.q, what, self.joints)?;
         try_grow(&mut self.xyz, what, 1)?;
         try_grow(&mut self.orientation, what, 1)?;
+        try_grow(&mut self.tool_of, what, 1)?;
         try_grow(&mut self.uncertainty, what, 1)?;
         try_grow(&mut self.lines, what, 1)?;
         for c in [&mut self.temperature, &mut self.time]
@@ -357,6 +378,82 @@ impl Positions {
         self.orientation.iter().filter(|o| o.is_some()).count()
     }
 
+    /// Sets the last row's tool by name: empty or [`super::DEFAULT_TOOL`]
+    /// is the default tool.
+    ///
+    /// # Panics
+    /// If there is no row.
+    pub fn set_tool(&mut self, name: &str) {
+        let k = if name.is_empty() {
+            0
+        } else {
+            match self.tools.iter().position(|t| t == name) {
+                Some(k) => k,
+                None => {
+                    self.tools.push(name.to_string());
+                    self.tool_offsets.push(None);
+                    self.tools.len() - 1
+                }
+            }
+        };
+        *self.tool_of.last_mut().expect("a row to name a tool of") = k as u32;
+    }
+
+    /// The tools named, the default tool ([`super::DEFAULT_TOOL`]) first,
+    /// the others in order of first appearance.
+    pub fn tools(&self) -> &[String] {
+        &self.tools
+    }
+
+    /// Row `i`'s tool (an index into [`Positions::tools`]; 0 the default).
+    pub fn tool(&self, i: usize) -> usize {
+        self.tool_of[i] as usize
+    }
+
+    /// Whether some row names a tool other than the default.
+    pub fn has_tools(&self) -> bool {
+        self.tool_of.iter().any(|&k| k != 0)
+    }
+
+    /// Tool `k`'s nominal offset (mm, the last joint's frame), once known
+    /// ([`Positions::resolve_tools`]); `None` for the default tool.
+    pub fn tool_offset(&self, k: usize) -> Option<[f64; 3]> {
+        self.tool_offsets[k]
+    }
+
+    /// Takes each named tool's nominal offset from `known` (an arm's
+    /// tools); `file` names the rows' file in messages.
+    ///
+    /// # Errors
+    ///
+    /// The first row naming a tool `known` does not have; a named tool
+    /// seen in fewer than [`MIN_TOOL_ROWS`] rows (its offset, three
+    /// unknowns, would absorb its one row whole and nothing would check
+    /// it) — each by line and field `tool`.
+    pub fn resolve_tools(
+        &mut self,
+        known: &super::ToolNames,
+        file: &str,
+    ) -> Result<(), InputError> {
+        let mut count = vec![0usize; self.tools.len()];
+        for i in 0..self.len() {
+            let name = &self.tools[self.tool(i)];
+            known.of_cell(name, file, self.lines[i])?;
+            count[self.tool(i)] += 1;
+        }
+        if let Some(k) = (1..count.len()).find(|&k| (1..MIN_TOOL_ROWS).contains(&count[k])) {
+            let first = (0..self.len()).find(|&i| self.tool(i) == k).unwrap_or(0);
+            let message = format!(
+                "tool {} is seen in {} row(s): its offset (three unknowns) would absorb them                  whole and no residual would check it; give it at least {MIN_TOOL_ROWS} rows",
+                crate::error::quoted(&self.tools[k]),
+                count[k]
+            );
+            return Err(InputError::field(file, self.lines[first], "tool", message));
+        }
+        self.tool_offsets = self.tools.iter().map(|t| known.offset(t)).collect();
+        Ok(())
+    }
+
     /// Row `i`'s stated uncertainty, mm.
     pub fn uncertainty(&self, i: usize) -> Option<f64> {
         self.uncertainty[i]
@@ -398,6 +495,9 @@ impl Positions {
                 self.lines[i],
             );
             out.set_orientation(self.orientation[i]);
+            out.set_tool(&self.tools[self.tool(i)]);
+            let k = out.tool_of[out.len() - 1] as usize;
+            out.tool_offsets[k] = self.tool_offsets[self.tool(i)];
             out.record(
                 self.temperature.as_ref().map(|t| t[i]),
                 self.time.as_ref().map(|t| t[i]),
@@ -431,6 +531,7 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
     let with_frame = p.frames().iter().any(|f| f != DEFAULT_FRAME);
     let with_u = p.uncertainty.iter().any(Option::is_some);
     let with_orientation = p.oriented_rows() > 0;
+    let with_tool = p.has_tools();
     let mut header = String::from("point");
     for j in 1..=p.joints {
         header.push_str(&format!(",q{j}"));
@@ -441,6 +542,9 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
     }
     if with_frame {
         header.push_str(",frame");
+    }
+    if with_tool {
+        header.push_str(",tool");
     }
     if with_u {
         header.push_str(",uncertainty");
@@ -482,6 +586,12 @@ pub fn write_positions(mut w: impl Write, p: &Positions, unit: AngleUnit) -> std
             line.push(',');
             line.push_str(&quote(&p.frames()[p.frame(i)])?);
         }
+        if with_tool {
+            line.push(',');
+            if p.tool(i) != 0 {
+                line.push_str(&quote(&p.tools()[p.tool(i)])?);
+            }
+        }
         if with_u {
             line.push(',');
             if let Some(u) = p.uncertainty(i) {
@@ -510,14 +620,14 @@ struct Layout {
     /// The column of `qw` (`qx,qy,qz` follow it).
     orientation: Option<usize>,
     frame: Option<usize>,
+    tool: Option<usize>,
     uncertainty: Option<usize>,
     temperature: Option<usize>,
     time: Option<usize>,
     approach: Option<usize>,
 }
 
-const SHAPE: &str =
-    "point,q1,...,qn,x,y,z[,qw,qx,qy,qz][,frame][,uncertainty][,temperature][,time][,approach]";
+const SHAPE: &str = "point,q1,...,qn,x,y,z[,qw,qx,qy,qz][,frame][,tool][,uncertainty][,temperature][,time][,approach]";
 
 /// Reads a reference-position file (standard input for `-`), readings in
 /// `unit` (a prismatic joint's in mm, [`JointColumns`]); messages name the
@@ -590,7 +700,10 @@ pub fn parse_positions(
             parse_row(l, f, (file, line), (unit, &columns), &mut q, out)
         },
     )?;
-    let out = out.unwrap_or_else(|| Positions::new(0));
+    let mut out = out.unwrap_or_else(|| Positions::new(0));
+    if let Some(known) = columns.tools() {
+        out.resolve_tools(known, file)?;
+    }
     check_frames(&out, file)?;
     Ok(out)
 }
@@ -604,10 +717,11 @@ fn header_layout(
     let fields = &h.fields;
     let optional = |name: &str| fields.iter().position(|f| f == name);
     let (frame, uncertainty) = (optional("frame"), optional("uncertainty"));
+    let tool = optional("tool");
     let (temperature, time) = (optional("temperature"), optional("time"));
     let approach = optional(APPROACH);
     let orientation = orientation_columns(h, file)?;
-    let extra = [frame, uncertainty, temperature, time, approach]
+    let extra = [frame, tool, uncertainty, temperature, time, approach]
         .iter()
         .filter(|c| c.is_some())
         .count()
@@ -622,6 +736,9 @@ fn header_layout(
     }
     if frame.is_some() {
         expected.push("frame".into());
+    }
+    if tool.is_some() {
+        expected.push("tool".into());
     }
     for (column, name) in [
         (uncertainty, "uncertainty"),
@@ -651,6 +768,7 @@ fn header_layout(
         joints: want,
         orientation: orientation.then_some(1 + want + 3),
         frame,
+        tool,
         uncertainty,
         temperature,
         time,
@@ -761,6 +879,13 @@ fn parse_row(
     (out.try_push(f[0], frame, q, xyz, uncertainty, line))
         .map_err(|e| InputError::memory(file, e))?;
     out.set_orientation(orientation);
+    if let Some(c) = l.tool {
+        let cell = f[c];
+        if let Some(known) = columns.tools() {
+            known.of_cell(cell, file, line)?;
+        }
+        out.set_tool(cell);
+    }
     let condition = |c: Option<usize>, name: &str| match c {
         None => Ok(None),
         Some(c) if f[c].is_empty() => Err(InputError::field(

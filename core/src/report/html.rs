@@ -174,6 +174,7 @@ pub(crate) fn calibration_page(
         beyond: find(figures, BEYOND_SVG).is_some(),
         map: input.uncertainty_map.is_some(),
         spheres: input.spheres.is_some() || input.held_out_spheres.is_some(),
+        tools: input.tools.is_some(),
     };
     let numbered = present.sections();
     let number = |id: &str| {
@@ -216,6 +217,9 @@ pub(crate) fn calibration_page(
             "",
             &held_out_sphere_file(h),
         );
+    }
+    if let Some(t) = input.tools {
+        page += &tools_section(t, number("tools"));
     }
     if present.touches {
         page += &touch_sections(input, evaluated, figures);
@@ -311,6 +315,8 @@ struct Present {
     map: bool,
     /// Points probed on reference spheres.
     spheres: bool,
+    /// Several tool points.
+    tools: bool,
 }
 
 impl Present {
@@ -322,6 +328,9 @@ impl Present {
         }
         if self.spheres {
             s.push(("spheres", "Sphere surfaces"));
+        }
+        if self.tools {
+            s.push(("tools", "Tool points"));
         }
         if self.touches {
             s.extend([("single-point", "Single point"), ("lengths", "Lengths")]);
@@ -543,6 +552,47 @@ fn held_out_spheres(folds: &[crate::calibrate::validate::Fold]) -> String {
         "<p>Cross-validation: held-out {} (mm).</p>\n<table>\n<tr><th>fold</th><th>points</th>\
          <th>mean</th><th>RMS</th><th>p95</th><th>max</th></tr>\n{rows}</table>\n",
         escape(what)
+    )
+}
+
+/// The tool points, numbered `number`: per tool its offset ± σ and its
+/// rows' 3-D error RMS before and after.
+fn tools_section(t: &crate::session::tools::ToolReport, number: usize) -> String {
+    let mut rows = String::new();
+    for r in &t.tools {
+        let three = |v: [f64; 3]| format!("{:.4}, {:.4}, {:.4}", v[0], v[1], v[2]);
+        rows += &format!(
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.4}</td>\
+             <td class=\"after\">{:.4}</td></tr>\n",
+            escape(&r.name),
+            r.rows,
+            three(r.nominal),
+            three(r.offset),
+            r.sigma.map_or("held".to_string(), three),
+            r.rms_before,
+            r.rms_after
+        );
+    }
+    let table = format!(
+        "<table>\n<tr><th>tool</th><th>rows</th><th>nominal offset (mm)</th>\
+         <th>fitted offset (mm)</th><th>σ (mm, k = 1)</th><th>RMS 3-D, nominal</th>\
+         <th>calibrated</th></tr>\n{rows}</table>\n"
+    );
+    section(
+        "tools",
+        &format!("{number}. Tool points: offsets and 3-D errors per tool"),
+        &format!(
+            "The tool points the rows of {} name (markers, SMRs, styli: the arm file's \
+             [[tool]]), each offset in the last joint's frame and fitted with the arm; `{}` is \
+             the arm's probe. RMS of each tool's rows' 3-D errors |R p + t − y|: before, the \
+             nominal arm with its nominal offsets; after, the calibrated arm.",
+            escape(&t.file),
+            crate::io::DEFAULT_TOOL
+        ),
+        None,
+        "",
+        "",
+        &table,
     )
 }
 

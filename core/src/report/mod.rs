@@ -274,6 +274,8 @@ pub struct CalibrationInput<'a> {
     /// table in the spheres' section (which it opens without fitted
     /// spheres).
     pub held_out_spheres: Option<&'a crate::session::spheres::HeldOutSpheres>,
+    /// Several tool points, when rows name them: their section.
+    pub tools: Option<&'a crate::session::tools::ToolReport>,
     /// The same poses as each fitted frame's instrument sees the probe, its
     /// registration included: a table each in the map's section (none
     /// without frames). Their JSON Pointers are
@@ -369,6 +371,7 @@ pub struct EvaluationInput<'a> {
 ///     spheres: None,
 ///     folds: &[],
 ///     held_out_spheres: None,
+///     tools: None,
 ///     uncertainty_maps_in_frames: &[],
 ///     verdict: None,
 ///     seed: 0,

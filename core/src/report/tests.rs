@@ -129,6 +129,7 @@ fn report_with(
         spheres: None,
         folds: &[],
         held_out_spheres: None,
+        tools: None,
         uncertainty_maps_in_frames: &[],
         verdict: None,
         seed: 0,

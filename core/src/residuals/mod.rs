@@ -68,6 +68,7 @@ pub mod spheres;
 mod sym3;
 #[cfg(test)]
 mod tests;
+pub mod tools;
 mod touches;
 
 use serde::{Deserialize, Serialize};

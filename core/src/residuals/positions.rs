@@ -20,13 +20,14 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use super::CorrectionBlock;
 use super::blocks::Frame;
+use super::tools::{ToolGroup, tool_columns, with_tool};
 use super::{
     At, BlockId, Layout, LayoutError, Noise, Normal, Origin, Sees, Shared, Standardised, Term,
     TermError,
 };
 use crate::corrections::{Beyond, Effects, Physics};
 use crate::dataset::{DataSet, PositionData};
-use crate::kernel::{ArmKernel, KernelError};
+use crate::kernel::KernelError;
 use crate::parallel::parallel_map;
 use crate::params::DhParams;
 
@@ -84,15 +85,14 @@ fn rms_spread(points: &[[f64; 3]]) -> f64 {
 }
 
 /// Each frame's closed-form registration of `params`' positions onto the
-/// data's (in the order of [`crate::io::Positions::frames`]).
+/// data's (in the order of [`crate::io::Positions::frames`]), each row's
+/// tool at its nominal offset ([`crate::io::tools`]).
 ///
 /// # Errors
 ///
 /// The kernel's.
 pub fn register(params: &DhParams, data: &PositionData) -> Result<Vec<Registration>, KernelError> {
-    let kernel = ArmKernel::new(params)?;
-    let mut p = vec![[0.0; 3]; data.len()];
-    kernel.positions(data.poses(), 0..data.len(), &mut p)?;
+    let p = super::tools::nominal_positions(params, data)?;
     let rows = data.rows();
     Ok((0..rows.frames().len())
         .map(|f| {
@@ -174,6 +174,7 @@ pub fn layout_with(
         if let Some(start) = super::orientations::mount_start(params, positions, &starts)? {
             add_mount(&mut layout, start)?;
         }
+        super::tools::add_tool_blocks(&mut layout, positions)?;
     }
     Ok(layout)
 }
@@ -242,6 +243,9 @@ pub(crate) struct PositionTerm<'d> {
     weights: Vec<f64>,
     /// Rows per frame (each frame's leverage).
     per_frame: Vec<usize>,
+    /// The rows by tool ([`super::tools`]): one group of every row when
+    /// no row names a tool.
+    groups: Vec<ToolGroup>,
 }
 
 impl std::fmt::Debug for PositionTerm<'_> {
@@ -295,7 +299,28 @@ impl<'d> PositionTerm<'d> {
             robust: vec![1.0; rows.len()],
             weights: Vec::new(),
             per_frame,
+            groups: super::tools::groups(data, layout, "positions")?,
         })
+    }
+
+    /// Every row's position at `at` (its tool's, the corrections applied).
+    fn positions_at(&self, at: &At<'_>) -> Result<Vec<[f64; 3]>, TermError> {
+        let mut p = vec![[0.0; 3]; self.data.len()];
+        for g in &self.groups {
+            with_tool(at, g.block, |at| {
+                let data = g.data(self.data);
+                let n = data.len();
+                let mut q = vec![[0.0; 3]; n];
+                let effects = at.corrected_poses(data.poses(), data.conditions())?;
+                let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
+                at.kernel.positions(poses, 0..n, &mut q)?;
+                for (i, v) in q.into_iter().enumerate() {
+                    p[g.row(i)] = v;
+                }
+                Ok(())
+            })?;
+        }
+        Ok(p)
     }
 
     /// Per frame, `R` and `t` at `at`.
@@ -413,7 +438,6 @@ impl Term for PositionTerm<'_> {
         let frames = self.frames_at(at);
         let free = normal.free.clone();
         let arm = at.layout.arm_columns();
-        let effects = at.effects(self.data.poses(), self.data.conditions())?;
         // Per free column: the arm's column (geometry or correction), or
         // (frame, its column 0..6).
         let geo: Vec<(usize, usize)> = free
@@ -434,30 +458,37 @@ impl Term for PositionTerm<'_> {
                     .collect()
             })
             .collect();
-        let n = self.data.len();
-        let chunks: Vec<std::ops::Range<usize>> = (0..n.div_ceil(ROWS_PER_CHUNK))
-            .map(|k| k * ROWS_PER_CHUNK..((k + 1) * ROWS_PER_CHUNK).min(n))
-            .collect();
         let p = free.len();
-        let parts = parallel_map(&chunks, at.threads, |range| {
-            let cols = Columns {
-                p,
-                geo: &geo,
-                frame_cols: &frame_cols,
-            };
-            self.part(at, effects.as_ref(), &frames, range.clone(), cols)
-        });
         let mut cost = 0.0;
-        for part in parts {
-            let part = part?;
-            cost += part.cost;
-            for a in 0..p {
-                normal.jtr[a] += part.jtr[a];
-                for b in a..p {
-                    let v = part.jtj[a * p + b];
-                    normal.jtj[a * p + b] += v;
-                    if b != a {
-                        normal.jtj[b * p + a] += v;
+        for g in &self.groups {
+            let geo = tool_columns(&geo, &free, at.layout, g.block);
+            let parts = with_tool(at, g.block, |at| {
+                let data = g.data(self.data);
+                let effects = at.effects(data.poses(), data.conditions())?;
+                let n = data.len();
+                let chunks: Vec<std::ops::Range<usize>> = (0..n.div_ceil(ROWS_PER_CHUNK))
+                    .map(|k| k * ROWS_PER_CHUNK..((k + 1) * ROWS_PER_CHUNK).min(n))
+                    .collect();
+                Ok(parallel_map(&chunks, at.threads, |range| {
+                    let cols = Columns {
+                        p,
+                        geo: &geo,
+                        frame_cols: &frame_cols,
+                    };
+                    self.part(at, (g, effects.as_ref()), &frames, range.clone(), cols)
+                }))
+            })?;
+            for part in parts {
+                let part = part?;
+                cost += part.cost;
+                for a in 0..p {
+                    normal.jtr[a] += part.jtr[a];
+                    for b in a..p {
+                        let v = part.jtj[a * p + b];
+                        normal.jtj[a * p + b] += v;
+                        if b != a {
+                            normal.jtj[b * p + a] += v;
+                        }
                     }
                 }
             }
@@ -476,9 +507,13 @@ impl Term for PositionTerm<'_> {
         let frames = self.frames_at(at);
         let n = self.data.len();
         scratch.resize(n, [0.0; 3]);
-        let effects = at.corrected_poses(self.data.poses(), self.data.conditions())?;
-        let poses = effects.as_ref().map_or(self.data.poses(), |e| &e.poses);
-        at.kernel.positions(poses, 0..n, &mut scratch[..n])?;
+        if self.groups.len() == 1 && self.groups[0].subset.is_none() {
+            let effects = at.corrected_poses(self.data.poses(), self.data.conditions())?;
+            let poses = effects.as_ref().map_or(self.data.poses(), |e| &e.poses);
+            at.kernel.positions(poses, 0..n, &mut scratch[..n])?;
+        } else {
+            scratch[..n].copy_from_slice(&self.positions_at(at)?);
+        }
         for (i, p) in scratch[..n].iter().enumerate() {
             let r = self.residual(&frames, i, p);
             *total += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
@@ -495,10 +530,7 @@ impl Term for PositionTerm<'_> {
     ) -> Result<Option<Standardised>, TermError> {
         let frames = self.frames_at(at);
         let n = self.data.len();
-        let mut p = vec![[0.0; 3]; n];
-        let effects = at.corrected_poses(self.data.poses(), self.data.conditions())?;
-        let poses = effects.as_ref().map_or(self.data.poses(), |e| &e.poses);
-        at.kernel.positions(poses, 0..n, &mut p)?;
+        let p = self.positions_at(at)?;
         let rows = self.data.rows();
         let values = (0..n)
             .map(|i| {
@@ -558,7 +590,7 @@ impl PositionTerm<'_> {
     fn part(
         &self,
         at: &At<'_>,
-        effects: Option<&Effects>,
+        (group, effects): (&ToolGroup, Option<&Effects>),
         frames: &[(Rotation3<f64>, [f64; 3])],
         range: std::ops::Range<usize>,
         cols: Columns<'_>,
@@ -571,16 +603,17 @@ impl PositionTerm<'_> {
         };
         let rows = self.data.rows();
         let mut d: Vec<(usize, [f64; 3])> = Vec::with_capacity(p);
-        let poses = effects.map_or(self.data.poses(), |e| &e.poses);
+        let poses = effects.map_or(group.data(self.data).poses(), |e| &e.poses);
         let mut ext = Vec::new();
-        at.kernel.for_each_jacobian(poses, range, |i, pos, jac| {
+        at.kernel.for_each_jacobian(poses, range, |k, pos, jac| {
             let jac = match effects {
                 Some(e) => {
-                    e.extend(i, pos, jac, &mut ext);
+                    e.extend(k, pos, jac, &mut ext);
                     &ext[..]
                 }
                 None => jac,
             };
+            let i = group.row(k);
             let f = rows.frame(i);
             let (rot, _) = &frames[f];
             let w = self.weights[i];

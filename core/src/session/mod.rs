@@ -24,6 +24,7 @@ mod map;
 mod position_evaluation;
 pub mod request;
 pub mod spheres;
+pub mod tools;
 
 pub use map::MAP_POSES;
 
@@ -48,7 +49,7 @@ use crate::error::OptionError;
 use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml};
 use crate::params::DhParams;
 use crate::residuals::spheres::SphereTerm;
-use crate::residuals::{Block, BlockId, Layout, Noise, Term, TermError};
+use crate::residuals::{Block, BlockId, Layout, Noise, Term};
 
 /// The calibrated arm, in the arm-file schema.
 pub const CALIBRATED_FILE: &str = "calibrated.toml";
@@ -141,7 +142,7 @@ impl Problem {
                 data: data.joints(),
             });
         }
-        let data = of_arm_shape(&arm, data)?;
+        let data = of_arm_tools(&arm, of_arm_shape(&arm, data)?)?;
         model.check_for(&arm.params)?;
         model
             .beyond
@@ -189,7 +190,7 @@ impl Problem {
             });
         }
         let held_out = HeldOutData {
-            data: of_arm_shape(&self.arm, held_out.data)?,
+            data: of_arm_tools(&self.arm, of_arm_shape(&self.arm, held_out.data)?)?,
             ..held_out
         };
         if !self.register_held_out {
@@ -449,6 +450,31 @@ fn of_arm_shape(arm: &Arm, data: DataSet) -> Result<DataSet, CalibrationError> {
         arm: joints.0,
         data: joints.1,
     })
+}
+
+/// `data` with each tool its positions name given the arm's nominal
+/// offset; a tool the arm does not list is refused by file, line and field.
+fn of_arm_tools(arm: &Arm, data: DataSet) -> Result<DataSet, CalibrationError> {
+    data.with_tools(&crate::io::ToolNames::of(&arm.tools))
+        .map_err(|e| match e {
+            crate::error::InputError::Field {
+                file,
+                line,
+                field,
+                message,
+            } => CalibrationError::Positions {
+                file,
+                line,
+                field,
+                message,
+            },
+            e => CalibrationError::Positions {
+                file: String::new(),
+                line: 0,
+                field: "tool".into(),
+                message: e.to_string(),
+            },
+        })
 }
 
 /// Refuses reference lengths whose median ratio to the nominal arm's
@@ -848,6 +874,10 @@ pub struct CalibrationReport {
     /// centre, diameter and radial residuals.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spheres: Option<spheres::SphereReport>,
+    /// Several tool points, when rows name them: per tool its offset ± σ
+    /// and its rows' 3-D errors.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tools: Option<tools::ToolReport>,
     /// The same poses as each fitted frame's instrument sees the probe,
     /// that frame's registration included
     /// ([`crate::plan::uncertainty_map_in_frame`]); absent without frames.
@@ -1311,7 +1341,20 @@ impl CalibrationReport {
                 None => start.physics.clone(),
             },
             ball_diameter_mm: start.ball_diameter_mm,
+            tools: self.calibrated_tools(start),
         }
+    }
+
+    /// The start arm's tools, each fitted one at its fitted offset (a tool
+    /// no row named keeps its own).
+    fn calibrated_tools(&self, start: &Arm) -> Vec<crate::io::Tool> {
+        let fitted = self.calibration.tool_offsets();
+        (start.tools.iter())
+            .map(|t| crate::io::Tool {
+                name: t.name.clone(),
+                offset: (fitted.iter().find(|(n, _)| *n == t.name)).map_or(t.offset, |(_, x)| *x),
+            })
+            .collect()
     }
 
     /// The summary every front end prints: the solver, the dof, every
@@ -1339,6 +1382,9 @@ impl CalibrationReport {
         }
         if let Some(h) = &self.validation.held_out_spheres {
             t += &h.summary();
+        }
+        if let Some(s) = &self.tools {
+            t += &s.summary();
         }
         t
     }
@@ -1543,6 +1589,11 @@ pub fn run(
         frames: &frames,
     };
     let fitted = before_after_of(before, after, data)?;
+    let Evidence {
+        spheres,
+        held_out_spheres,
+        tools,
+    } = evidence_reports(problem, &calibration, (before, after))?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
             data_file: h.data_file.clone(),
@@ -1587,7 +1638,6 @@ pub fn run(
     }
     let (uncertainty_map, uncertainty_maps_in_frames) =
         map::workspace_maps(&problem.arm, data, &calibration, settings.seed);
-    let (spheres, held_out_spheres) = sphere_reports(problem, &calibration)?;
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
         arm_file: s.arm_file.clone(),
@@ -1616,35 +1666,48 @@ pub fn run(
         verdict,
         uncertainty_map,
         spheres,
+        tools,
         uncertainty_maps_in_frames,
     })
 }
 
-/// The fitted spheres' report and the held-out sphere file's figures.
-type SphereReports = (
-    Option<spheres::SphereReport>,
-    Option<spheres::HeldOutSpheres>,
-);
+/// The sections of the evidence beyond touches and positions that a
+/// session's problem holds, each when given.
+struct Evidence {
+    /// The fitted spheres'.
+    spheres: Option<spheres::SphereReport>,
+    /// The held-out sphere file's figures.
+    held_out_spheres: Option<spheres::HeldOutSpheres>,
+    /// The tool points'.
+    tools: Option<tools::ToolReport>,
+}
 
-/// The fitted spheres' report and the held-out sphere file's figures, each
-/// when given.
+/// The sections of the evidence beyond touches and positions that
+/// `problem` holds, after `calibration`: its spheres' (fitted and held
+/// out) and its tool points' (each arm seeing the data as `views` say).
 ///
 /// # Errors
 ///
-/// The kernel's.
-fn sphere_reports(
+/// The kernel's; a correction whose conditions the data lack.
+fn evidence_reports(
     problem: &Problem,
     calibration: &Calibration,
-) -> Result<SphereReports, TermError> {
+    (before, after): (ArmView<'_>, ArmView<'_>),
+) -> Result<Evidence, CalibrationError> {
     let layout = &problem.layout;
-    Ok((
-        (problem.spheres.as_ref())
-            .map(|t| spheres::sphere_report(t, layout, calibration))
-            .transpose()?,
-        (problem.held_out_spheres.as_ref())
-            .map(|t| spheres::held_out_spheres(t, layout, calibration))
-            .transpose()?,
-    ))
+    let spheres = (problem.spheres.as_ref())
+        .map(|t| spheres::sphere_report(t, layout, calibration))
+        .transpose()?;
+    let held_out_spheres = (problem.held_out_spheres.as_ref())
+        .map(|t| spheres::held_out_spheres(t, layout, calibration))
+        .transpose()?;
+    let start = (&problem.arm.params, before, after);
+    let tools = tools::tool_report(&problem.data, calibration, start)?;
+    Ok(Evidence {
+        spheres,
+        held_out_spheres,
+        tools,
+    })
 }
 
 /// The summary's degrees of freedom and the σ behind the weights.

@@ -51,6 +51,7 @@ mod separation;
 mod settings;
 mod sockets;
 mod spheres;
+mod tools;
 mod touches;
 mod truth;
 
@@ -84,6 +85,7 @@ pub use spheres::{
     DEFAULT_SPHERE_DIAMETER_MM, SPHERES_FILE, SphereCampaign, SphereSettings, iso_sphere_pattern,
     simulate_sphere_campaign, simulate_spheres,
 };
+pub use tools::{perturbed_tools, random_tools, seen_at_markers};
 pub use touches::Touch;
 use touches::{TouchPlan, find_touches};
 pub use truth::true_arm;

@@ -241,9 +241,8 @@ pub fn pose_errors(
 ) -> Result<(Vec<[f64; 3]>, Vec<f64>), crate::kernel::KernelError> {
     let rows = data.rows();
     let x = frame_values(params, data, frames)?;
-    let k = ArmKernel::new(params)?;
-    let mut p = vec![[0.0; 3]; data.len()];
-    k.positions(data.poses(), 0..data.len(), &mut p)?;
+    // Each row's tool point at its fitted offset when `frames` carry it.
+    let p = crate::residuals::tools::positions_at(params, data, frames)?;
     let d = (0..data.len())
         .map(|i| {
             let seen = crate::residuals::Frame::apply(&x[rows.frame(i)], p[i]);
