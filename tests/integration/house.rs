@@ -53,6 +53,7 @@ const RANKS: &[(&str, u8)] = &[
     ("damping", 0),
     ("stats", 0),
     ("memory", 0),
+    ("simd", 0),
     // 1: the kernel, and the reference models it is checked against.
     ("kernel", 1),
     ("reference_model", 1),

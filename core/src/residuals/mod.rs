@@ -63,6 +63,7 @@ mod lengths;
 mod orientations;
 pub mod positions;
 mod prior;
+mod rank3;
 mod schur;
 pub mod spheres;
 mod sym3;

@@ -20,6 +20,7 @@ use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use super::CorrectionBlock;
 use super::blocks::Frame;
+use super::rank3::Rank3;
 use super::tools::{ToolGroup, tool_columns, with_tool};
 use super::{
     At, BlockId, Layout, LayoutError, Noise, Normal, Origin, Sees, Shared, Standardised, Term,
@@ -334,7 +335,11 @@ impl<'d> PositionTerm<'d> {
             .collect()
     }
 
-    /// Row `i`'s whitened residual for the arm's position `p`.
+    /// Row `i`'s whitened residual for the arm's position `p`. Inlined: a
+    /// call returned the three values through memory, which the caller read
+    /// back as a pair while the stores were still in flight (a stall per
+    /// position in every cost pass).
+    #[inline(always)]
     fn residual(&self, frames: &[(Rotation3<f64>, [f64; 3])], i: usize, p: &[f64; 3]) -> [f64; 3] {
         let rows = self.data.rows();
         let (r, t) = &frames[rows.frame(i)];
@@ -514,10 +519,13 @@ impl Term for PositionTerm<'_> {
         } else {
             scratch[..n].copy_from_slice(&self.positions_at(at)?);
         }
+        // Summed in a register, in the same order.
+        let mut sum = *total;
         for (i, p) in scratch[..n].iter().enumerate() {
             let r = self.residual(&frames, i, p);
-            *total += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+            sum += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
         }
+        *total = sum;
         Ok(())
     }
 
@@ -587,6 +595,12 @@ impl PositionTerm<'_> {
     /// Rows `range`'s share of the normal equations over `p` free columns:
     /// `geo` the free geometry columns, `frame_cols` each frame's free
     /// columns (index into the free list, column of the frame).
+    ///
+    /// The sums run over compact columns — the geometry's, then each
+    /// frame's — in blocks of rows ([`Rank3`]); each entry's terms are added
+    /// row by row in row order, as one row at a time into the free columns
+    /// would (the same bits). A row fills its frame's columns and zeros in
+    /// the other frames'.
     fn part(
         &self,
         at: &At<'_>,
@@ -596,55 +610,88 @@ impl PositionTerm<'_> {
         cols: Columns<'_>,
     ) -> Result<Part, TermError> {
         let Columns { p, geo, frame_cols } = cols;
+        let g = geo.len();
+        // Per frame, where its compact columns start.
+        let offsets: Vec<usize> = (frame_cols.iter())
+            .scan(g, |next, f| {
+                let at = *next;
+                *next += f.len();
+                Some(at)
+            })
+            .collect();
+        let m = g + frame_cols.iter().map(Vec::len).sum::<usize>();
+        let mut rank3 = Rank3::new(m);
+        let mut jtj = rank3.matrix();
+        let mut jtr = vec![0.0; m];
+        let mut cost = 0.0;
+        let rows = self.data.rows();
+        let poses = effects.map_or(group.data(self.data).poses(), |e| &e.poses);
+        let mut ext = Vec::new();
+        // Inlined into the kernel's loop, so that the accumulation is
+        // compiled with the same target features (AVX2 where the CPU has it).
+        at.kernel.for_each_jacobian(
+            poses,
+            range,
+            #[inline(always)]
+            |k, pos, jac| {
+                let jac = match effects {
+                    Some(e) => {
+                        e.extend(k, pos, jac, &mut ext);
+                        &ext[..]
+                    }
+                    None => jac,
+                };
+                let i = group.row(k);
+                let f = rows.frame(i);
+                let (rot, _) = &frames[f];
+                let w = self.weights[i];
+                let r = self.residual(frames, i, pos);
+                cost += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+                let mut slot = rank3.slot();
+                let (start, kf) = (offsets[f], frame_cols[f].len());
+                if g + kf < m {
+                    slot.clear();
+                }
+                // `J` and `A·J` alike: the rows are whitened (`A = I`).
+                for (u, &(_, c)) in geo.iter().enumerate() {
+                    let d: [f64; 3] = (rot * Vector3::from(jac[c]) * w).into();
+                    slot.set_both(u, d);
+                    jtr[u] += d[0] * r[0] + d[1] * r[1] + d[2] * r[2];
+                }
+                if kf > 0 {
+                    // Frame::jacobian with R already at hand: [−[Rp]× | I].
+                    let q = rot * Vector3::from(*pos);
+                    let jf = [
+                        [0.0, q[2], -q[1], 1.0, 0.0, 0.0],
+                        [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
+                        [q[1], -q[0], 0.0, 0.0, 0.0, 1.0],
+                    ];
+                    for (u, &(_, c)) in frame_cols[f].iter().enumerate() {
+                        let d: [f64; 3] = std::array::from_fn(|row| w * jf[row][c]);
+                        slot.set_both(start + u, d);
+                        jtr[start + u] += d[0] * r[0] + d[1] * r[1] + d[2] * r[2];
+                    }
+                }
+                rank3.add(&mut jtj);
+            },
+        )?;
+        rank3.flush(&mut jtj);
+        // Back to the free columns, upper triangle.
+        let index: Vec<usize> = (geo.iter().chain(frame_cols.iter().flatten()))
+            .map(|&(a, _)| a)
+            .collect();
         let mut part = Part {
             jtj: vec![0.0; p * p],
             jtr: vec![0.0; p],
-            cost: 0.0,
+            cost,
         };
-        let rows = self.data.rows();
-        let mut d: Vec<(usize, [f64; 3])> = Vec::with_capacity(p);
-        let poses = effects.map_or(group.data(self.data).poses(), |e| &e.poses);
-        let mut ext = Vec::new();
-        at.kernel.for_each_jacobian(poses, range, |k, pos, jac| {
-            let jac = match effects {
-                Some(e) => {
-                    e.extend(k, pos, jac, &mut ext);
-                    &ext[..]
-                }
-                None => jac,
-            };
-            let i = group.row(k);
-            let f = rows.frame(i);
-            let (rot, _) = &frames[f];
-            let w = self.weights[i];
-            let r = self.residual(frames, i, pos);
-            part.cost += r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-            d.clear();
-            for &(a, c) in geo {
-                let j = jac[c];
-                d.push((a, (rot * Vector3::from(j) * w).into()));
+        for (u, &a) in index.iter().enumerate() {
+            part.jtr[a] = jtr[u];
+            for (v, &b) in index.iter().enumerate().take(u + 1) {
+                let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
+                part.jtj[lo * p + hi] = rank3.entry(&jtj, u, v);
             }
-            if !frame_cols[f].is_empty() {
-                // Frame::jacobian with R already at hand: [−[Rp]× | I].
-                let q = rot * Vector3::from(*pos);
-                let jf = [
-                    [0.0, q[2], -q[1], 1.0, 0.0, 0.0],
-                    [-q[2], 0.0, q[0], 0.0, 1.0, 0.0],
-                    [q[1], -q[0], 0.0, 0.0, 0.0, 1.0],
-                ];
-                for &(a, k) in &frame_cols[f] {
-                    d.push((a, std::array::from_fn(|row| w * jf[row][k])));
-                }
-            }
-            for (u, &(a, da)) in d.iter().enumerate() {
-                part.jtr[a] += da[0] * r[0] + da[1] * r[1] + da[2] * r[2];
-                for &(b, db) in &d[u..] {
-                    let v = da[0] * db[0] + da[1] * db[1] + da[2] * db[2];
-                    let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-                    part.jtj[lo * p + hi] += v;
-                }
-            }
-        })?;
+        }
         Ok(part)
     }
 }

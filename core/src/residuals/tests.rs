@@ -1,8 +1,9 @@
 //! The built-in terms' sums: the same bits as the plain loops they stand
 //! for, on any thread count; the weights' streamed change is the built one.
 
+use super::rank3::BLOCK;
 use super::sym3::{sym_inv, sym_mul};
-use super::touches::{BLOCK, POINTS_PER_CHUNK, TOUCHES_PER_CHUNK};
+use super::touches::{POINTS_PER_CHUNK, TOUCHES_PER_CHUNK};
 use super::*;
 use crate::dataset::DataSet;
 use crate::io::{AngleUnit, parse_lengths, parse_poses};

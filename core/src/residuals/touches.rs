@@ -6,6 +6,7 @@
 
 use std::ops::Range;
 
+use super::rank3::Rank3;
 use super::sym3::{Sym3, centroid_cov, sym_inv, sym_mul};
 use super::{
     At, Centres, Noise, Normal, Origin, ParameterLeverage, Sees, Shared, Standardised, Term,
@@ -791,27 +792,11 @@ struct PointSums {
     s: Sym3,
     started: bool,
     origin: [f64; 3],
-    /// Row stride of the padded `JᵀAJ` and of the scratch: `p` rounded up to
-    /// a whole number of [`LANES`].
-    stride: usize,
-    /// Scratch, up to [`BLOCK`] touches of one point: the free columns of
-    /// `J` and of `A·J`, one padded row per touch and coordinate, so the
-    /// `JᵀAJ` update runs over whole lanes of contiguous memory.
-    j: [Vec<f64>; 3],
-    aj: [Vec<f64>; 3],
-    /// Touches held in the scratch, not yet in `JᵀAJ`.
-    pending: usize,
+    /// Up to [`super::rank3::BLOCK`] touches of one point not yet in `JᵀAJ`.
+    rank3: Rank3,
     /// Scratch: the point's `J̄ = S⁻¹ G`.
     mean: Vec<[f64; 3]>,
 }
-
-/// Touches whose `JᵀAJ` terms are added in one sweep over the matrix: each
-/// entry is loaded and stored once per block, the terms still added one
-/// touch at a time in touch order (the same bits as touch by touch).
-pub(super) const BLOCK: usize = 8;
-
-/// Entries of a `JᵀAJ` row updated together (one AVX2 register of f64).
-const LANES: usize = 4;
 
 /// What one chunk of points contributes.
 struct Partial {
@@ -825,7 +810,6 @@ struct Partial {
 
 impl PointSums {
     fn new(p: usize) -> PointSums {
-        let stride = p.div_ceil(LANES) * LANES;
         PointSums {
             g: vec![[0.0; 3]; p],
             jap: vec![0.0; p],
@@ -834,10 +818,7 @@ impl PointSums {
             s: [0.0; 6],
             started: false,
             origin: [0.0; 3],
-            stride,
-            j: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
-            aj: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
-            pending: 0,
+            rank3: Rank3::new(p),
             mean: vec![[0.0; 3]; p],
         }
     }
@@ -853,7 +834,7 @@ impl PointSums {
     }
 
     /// Adds one touch: position, weight, free Jacobian columns. `jtj` is
-    /// `p` rows of [`PointSums::stride`] (lower triangle meaningful).
+    /// `p` rows of [`Rank3::stride`] (lower triangle meaningful).
     #[inline(always)]
     fn add(&mut self, pos: &[f64; 3], a: &Sym3, jac: &[[f64; 3]], free: &[usize], jtj: &mut [f64]) {
         if !self.started {
@@ -869,12 +850,9 @@ impl PointSums {
         for (s, v) in self.s.iter_mut().zip(a) {
             *s += v;
         }
-        let at = self.pending * self.stride;
-        let end = at + free.len();
-        let [jx, jy, jz] = &mut self.j;
-        let [ax, ay, az] = &mut self.aj;
-        let (jx, jy, jz) = (&mut jx[at..end], &mut jy[at..end], &mut jz[at..end]);
-        let (ax, ay, az) = (&mut ax[at..end], &mut ay[at..end], &mut az[at..end]);
+        let slot = self.rank3.slot();
+        let [jx, jy, jz] = slot.j;
+        let [ax, ay, az] = slot.aj;
         for (i, &ci) in free.iter().enumerate() {
             let j = jac[ci];
             let wa = sym_mul(a, &j);
@@ -886,77 +864,16 @@ impl PointSums {
             (jx[i], jy[i], jz[i]) = (j[0], j[1], j[2]);
             (ax[i], ay[i], az[i]) = (wa[0], wa[1], wa[2]);
         }
-        self.pending += 1;
-        if self.pending == BLOCK {
-            self.flush(jtj);
-        }
-    }
-
-    /// The held touches' terms into the lower triangle of `jtj`: row `i`
-    /// gets `(AJ)_iᵀ J_b` for `b ≤ i`, a lane at a time (the entries past
-    /// the diagonal in a row's last lane are upper-triangle scratch).
-    #[inline(always)]
-    fn flush(&mut self, jtj: &mut [f64]) {
-        let (n, w) = (self.pending, self.stride);
-        if n == 0 {
-            return;
-        }
-        let p = self.jap.len();
-        for i in 0..p {
-            let row = &mut jtj[i * w..i * w + w];
-            // Up to four lanes at once: independent sums, so the additions'
-            // latency overlaps (one lane's sum is a chain over the touches).
-            let mut c = 0;
-            while c <= i {
-                c += match (i - c) / LANES + 1 {
-                    1 => self.lanes::<1>(row, i, c, n),
-                    2 => self.lanes::<2>(row, i, c, n),
-                    3 => self.lanes::<3>(row, i, c, n),
-                    _ => self.lanes::<4>(row, i, c, n),
-                };
-            }
-        }
-        self.pending = 0;
-    }
-
-    /// `K` lanes of `row` (row `i` of `JᵀAJ`) from column `c`, the `n` held
-    /// touches added in touch order; returns the columns done.
-    #[inline(always)]
-    fn lanes<const K: usize>(&self, row: &mut [f64], i: usize, c: usize, n: usize) -> usize {
-        let (w, m) = (self.stride, K * LANES);
-        let [jx, jy, jz] = &self.j;
-        let [ax, ay, az] = &self.aj;
-        let out = &mut row[c..c + m];
-        let mut r: [[f64; LANES]; K] =
-            std::array::from_fn(|k| std::array::from_fn(|l| out[k * LANES + l]));
-        for t in 0..n {
-            let o = t * w;
-            let (x, y, z) = (ax[o + i], ay[o + i], az[o + i]);
-            let (bx, by, bz) = (
-                &jx[o + c..o + c + m],
-                &jy[o + c..o + c + m],
-                &jz[o + c..o + c + m],
-            );
-            for (k, rk) in r.iter_mut().enumerate() {
-                for (l, v) in rk.iter_mut().enumerate() {
-                    let b = k * LANES + l;
-                    *v += x * bx[b] + y * by[b] + z * bz[b];
-                }
-            }
-        }
-        for (o, rk) in out.chunks_exact_mut(LANES).zip(&r) {
-            o.copy_from_slice(rk);
-        }
-        m
+        self.rank3.add(jtj);
     }
 
     /// Closes the point: its Schur term into the lower triangle of `jtj`
-    /// (rows of [`PointSums::stride`]), its gradient and cost; resets for
-    /// the next point.
+    /// (rows of [`Rank3::stride`]), its gradient and cost; resets for the
+    /// next point.
     #[inline(always)]
     fn finish(&mut self, part: &mut Partial, jtj: &mut [f64], need_mean: bool) {
-        self.flush(jtj);
-        let (p, w) = (self.jap.len(), self.stride);
+        self.rank3.flush(jtj);
+        let (p, w) = (self.jap.len(), self.rank3.stride());
         let cinv = sym_inv(&self.s);
         let c = sym_mul(&cinv, &self.ap);
         // Σ p̃ᵀAp̃ − cᵀ S c, with S c = Σ A p̃
@@ -1001,9 +918,8 @@ fn chunk(
     let all = data.points();
     let touches = all[points.start].touches.start..all[points.end - 1].touches.end;
     let mut sums = PointSums::new(p);
-    // The lower triangle, in padded rows (see [`PointSums::flush`]).
-    let w = sums.stride;
-    let mut jtj = vec![0.0; p * w];
+    // The lower triangle, in padded rows (see [`Rank3::flush`]).
+    let mut jtj = sums.rank3.matrix();
     let mut point = points.start;
     let mut finite = true;
     if let Some(effects) = effects {
@@ -1044,8 +960,9 @@ fn chunk(
     sums.finish(&mut part, &mut jtj, need_mean);
     for a in 0..p {
         for b in 0..=a {
-            part.jtj[a * p + b] = jtj[a * w + b];
-            part.jtj[b * p + a] = jtj[a * w + b];
+            let v = sums.rank3.entry(&jtj, a, b);
+            part.jtj[a * p + b] = v;
+            part.jtj[b * p + a] = v;
         }
     }
     if !finite {

@@ -1,0 +1,215 @@
+//! The normal matrix's rank-3 updates `Σ (AJ)ᵀ J` of one observation of a
+//! 3-D position after another, a block of observations per sweep over the
+//! matrix (the touches' `JᵀAJ`, the reference positions' `JᵀJ`).
+//!
+//! Each entry's terms are still added one observation at a time in
+//! observation order, every term `x·b₀ + y·b₁ + z·b₂` in that order: the
+//! same bits as the row-by-row loop, without loading and storing every entry
+//! once per observation, and over whole lanes of contiguous memory (four
+//! `f64` in one AVX2 register, where the caller's loop is compiled for it).
+
+/// Observations whose terms are added in one sweep over the matrix: each
+/// entry is loaded and stored once per block.
+pub(super) const BLOCK: usize = 8;
+
+/// Entries of a row updated together (one AVX2 register of f64).
+const LANES: usize = 4;
+
+/// Up to [`BLOCK`] observations' columns, not yet in the matrix: the
+/// columns of `J` and of `A·J`, one padded row per observation and
+/// coordinate, so the update runs over whole lanes of contiguous memory.
+pub(super) struct Rank3 {
+    /// Columns updated (`p`).
+    columns: usize,
+    /// Row stride of the padded matrix and of the scratch: `p` rounded up
+    /// to a whole number of [`LANES`].
+    stride: usize,
+    j: [Vec<f64>; 3],
+    aj: [Vec<f64>; 3],
+    /// Observations held in the scratch.
+    pending: usize,
+}
+
+/// The next observation's rows in a [`Rank3`]'s scratch, `p` columns each:
+/// `j[k]` is coordinate `k` of `J`, `aj[k]` of `A·J`.
+pub(super) struct Slot<'a> {
+    pub(super) j: [&'a mut [f64]; 3],
+    pub(super) aj: [&'a mut [f64]; 3],
+}
+
+impl Slot<'_> {
+    /// Column `u` of an observation whose weight `A` is the identity: the
+    /// same values in `J` and `A·J`.
+    #[inline(always)]
+    pub(super) fn set_both(&mut self, u: usize, d: [f64; 3]) {
+        for (k, &v) in d.iter().enumerate() {
+            self.j[k][u] = v;
+            self.aj[k][u] = v;
+        }
+    }
+
+    /// Zeros in every column (an observation that fills only some).
+    #[inline(always)]
+    pub(super) fn clear(&mut self) {
+        for c in self.j.iter_mut().chain(self.aj.iter_mut()) {
+            c.fill(0.0);
+        }
+    }
+}
+
+impl Rank3 {
+    /// Scratch for `p` columns.
+    pub(super) fn new(p: usize) -> Rank3 {
+        let stride = p.div_ceil(LANES) * LANES;
+        Rank3 {
+            columns: p,
+            stride,
+            j: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
+            aj: std::array::from_fn(|_| vec![0.0; BLOCK * stride]),
+            pending: 0,
+        }
+    }
+
+    /// Row stride of the padded lower triangle the updates go to: `p` rows
+    /// of this many entries.
+    pub(super) fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// A zeroed padded lower triangle for [`Rank3::add`].
+    pub(super) fn matrix(&self) -> Vec<f64> {
+        vec![0.0; self.columns * self.stride]
+    }
+
+    /// The next observation's rows to fill; [`Rank3::add`] takes them in.
+    #[inline(always)]
+    pub(super) fn slot(&mut self) -> Slot<'_> {
+        let at = self.pending * self.stride;
+        let end = at + self.columns;
+        let [jx, jy, jz] = &mut self.j;
+        let [ax, ay, az] = &mut self.aj;
+        Slot {
+            j: [&mut jx[at..end], &mut jy[at..end], &mut jz[at..end]],
+            aj: [&mut ax[at..end], &mut ay[at..end], &mut az[at..end]],
+        }
+    }
+
+    /// Takes in the slot just filled; a full block goes into `jtj` (the
+    /// padded lower triangle).
+    #[inline(always)]
+    pub(super) fn add(&mut self, jtj: &mut [f64]) {
+        self.pending += 1;
+        if self.pending == BLOCK {
+            self.flush(jtj);
+        }
+    }
+
+    /// The held observations' terms into the lower triangle of `jtj`: row
+    /// `i` gets `(AJ)_iᵀ J_b` for `b ≤ i`, a lane at a time (the entries
+    /// past the diagonal in a row's last lane are upper-triangle scratch).
+    #[inline(always)]
+    pub(super) fn flush(&mut self, jtj: &mut [f64]) {
+        let (n, w) = (self.pending, self.stride);
+        if n == 0 {
+            return;
+        }
+        for i in 0..self.columns {
+            let row = &mut jtj[i * w..i * w + w];
+            // Up to four lanes at once: independent sums, so the additions'
+            // latency overlaps (one lane's sum is a chain over the block).
+            let mut c = 0;
+            while c <= i {
+                c += match (i - c) / LANES + 1 {
+                    1 => self.lanes::<1>(row, i, c, n),
+                    2 => self.lanes::<2>(row, i, c, n),
+                    3 => self.lanes::<3>(row, i, c, n),
+                    _ => self.lanes::<4>(row, i, c, n),
+                };
+            }
+        }
+        self.pending = 0;
+    }
+
+    /// `K` lanes of `row` (row `i` of `JᵀAJ`) from column `c`, the `n` held
+    /// observations added in order; returns the columns done.
+    #[inline(always)]
+    fn lanes<const K: usize>(&self, row: &mut [f64], i: usize, c: usize, n: usize) -> usize {
+        let (w, m) = (self.stride, K * LANES);
+        let [jx, jy, jz] = &self.j;
+        let [ax, ay, az] = &self.aj;
+        let out = &mut row[c..c + m];
+        let mut r: [[f64; LANES]; K] =
+            std::array::from_fn(|k| std::array::from_fn(|l| out[k * LANES + l]));
+        for t in 0..n {
+            let o = t * w;
+            let (x, y, z) = (ax[o + i], ay[o + i], az[o + i]);
+            let (bx, by, bz) = (
+                &jx[o + c..o + c + m],
+                &jy[o + c..o + c + m],
+                &jz[o + c..o + c + m],
+            );
+            for (k, rk) in r.iter_mut().enumerate() {
+                for (l, v) in rk.iter_mut().enumerate() {
+                    let b = k * LANES + l;
+                    *v += x * bx[b] + y * by[b] + z * bz[b];
+                }
+            }
+        }
+        for (o, rk) in out.chunks_exact_mut(LANES).zip(&r) {
+            o.copy_from_slice(rk);
+        }
+        m
+    }
+
+    /// Entry `(a, b)`, `b ≤ a`, of the padded lower triangle `jtj`.
+    #[inline(always)]
+    pub(super) fn entry(&self, jtj: &[f64], a: usize, b: usize) -> f64 {
+        jtj[a * self.stride + b]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{BLOCK, Rank3};
+
+    /// Blocked, the sums are the row-by-row loop's bit for bit, for a
+    /// matrix whose rows are not whole lanes and more observations than a
+    /// block.
+    #[test]
+    fn blocked_sums_are_the_row_by_row_bits() {
+        let p = 7;
+        let n = 2 * BLOCK + 3;
+        let value = |t: usize, k: usize, c: usize| ((t * 31 + k * 7 + c * 3) as f64 * 0.37).sin();
+        let mut rank3 = Rank3::new(p);
+        let mut jtj = rank3.matrix();
+        let mut plain = vec![0.0; p * p];
+        for t in 0..n {
+            let slot = rank3.slot();
+            let [jx, jy, jz] = slot.j;
+            let [ax, ay, az] = slot.aj;
+            for c in 0..p {
+                (jx[c], jy[c], jz[c]) = (value(t, 0, c), value(t, 1, c), value(t, 2, c));
+                (ax[c], ay[c], az[c]) = (value(t, 3, c), value(t, 4, c), value(t, 5, c));
+            }
+            rank3.add(&mut jtj);
+            for a in 0..p {
+                for b in 0..=a {
+                    let v = value(t, 3, a) * value(t, 0, b)
+                        + value(t, 4, a) * value(t, 1, b)
+                        + value(t, 5, a) * value(t, 2, b);
+                    plain[a * p + b] += v;
+                }
+            }
+        }
+        rank3.flush(&mut jtj);
+        for a in 0..p {
+            for b in 0..=a {
+                assert_eq!(
+                    rank3.entry(&jtj, a, b).to_bits(),
+                    plain[a * p + b].to_bits(),
+                    "({a}, {b})"
+                );
+            }
+        }
+    }
+}
