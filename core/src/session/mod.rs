@@ -1615,27 +1615,7 @@ pub fn run(
         None => None,
     };
     let s = &problem.sources;
-    let mut verdict = Verdict::of(&calibration, &fitted, &model.noise, model.accept_poor_fit);
-    if !verdict.usable
-        && crate::io::poses::look_like_radians(
-            data.readings(),
-            data.len(),
-            (data.joints(), data.poses().prismatic_mask()),
-            1f64.to_degrees(),
-        )
-    {
-        // The reader warned; the reasons that follow (no confirmed minimum,
-        // χ²) are its consequences, so the cause leads.
-        verdict.reasons.insert(
-            0,
-            format!(
-                "every joint reading of {}, read as degrees, is within ±6.28°: these angles look \
-                 like radians read as degrees, and the reasons after this one follow from it — {}",
-                data.source().poses_file(),
-                crate::calibrate::ANGLE_UNITS_REMEDY
-            ),
-        );
-    }
+    let verdict = verdict_of(problem, &calibration, &fitted);
     let (uncertainty_map, uncertainty_maps_in_frames) =
         map::workspace_maps(&problem.arm, data, &calibration, settings.seed);
     Ok(CalibrationReport {
@@ -1669,6 +1649,34 @@ pub fn run(
         tools,
         uncertainty_maps_in_frames,
     })
+}
+
+/// The verdict on `calibration` of `problem` (its `fitted` figures), with
+/// readings that look like radians read as degrees as the first cause of a
+/// refusal: the reader warned, and the reasons that follow (no confirmed
+/// minimum, χ²) are its consequences.
+fn verdict_of(problem: &Problem, calibration: &Calibration, fitted: &BeforeAfter) -> Verdict {
+    let (data, model) = (&problem.data, &problem.model);
+    let mut verdict = Verdict::of(calibration, fitted, &model.noise, model.accept_poor_fit);
+    if !verdict.usable
+        && crate::io::poses::look_like_radians(
+            data.readings(),
+            data.len(),
+            (data.joints(), data.poses().prismatic_mask()),
+            1f64.to_degrees(),
+        )
+    {
+        verdict.reasons.insert(
+            0,
+            format!(
+                "every joint reading of {}, read as degrees, is within ±6.28°: these angles look \
+                 like radians read as degrees, and the reasons after this one follow from it — {}",
+                data.source().poses_file(),
+                crate::calibrate::ANGLE_UNITS_REMEDY
+            ),
+        );
+    }
+    verdict
 }
 
 /// The sections of the evidence beyond touches and positions that a
