@@ -12,7 +12,7 @@ use super::report;
 use aacmm_core::simulate::{
     CAMPAIGN_FILE, CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG,
     DEFAULT_ZERO_SIGMA_DEG, ErrorModel, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, SimError,
-    SocketPlan, TRUE_ARM_FILE, pair_count, random_arm, simulate_observed, write_campaign,
+    SocketPlan, TRUE_ARM_FILE, pair_count, random_arm, seeds, simulate_observed, write_campaign,
 };
 
 /// The nominal arm `--chain` draws, written into --out.
@@ -413,10 +413,10 @@ fn orient(
     let settings = aacmm_core::simulate::OrientationSettings {
         mount: aacmm_core::simulate::random_mount(
             args.mount_deg.to_radians(),
-            args.seed.wrapping_add(3),
+            seeds::of(args.seed, seeds::MOUNT),
         ),
         sigma_rad: args.orientation_noise.to_radians(),
-        seed: args.seed.wrapping_add(2),
+        seed: seeds::of(args.seed, seeds::ORIENTATIONS),
     };
     campaign.positions = (aacmm_core::simulate::orient_positions(
         truth,
@@ -442,10 +442,20 @@ fn see_markers(
     // The markers' offsets and noise from streams of their own: the poses
     // are those of a campaign without markers.
     if args.true_arm.is_none() || truth.tools.is_empty() {
-        truth.tools = perturbed_tools(&nominal.tools, 0.5, args.seed.wrapping_add(5));
+        truth.tools = perturbed_tools(
+            &nominal.tools,
+            0.5,
+            seeds::of(args.seed, seeds::MARKER_ERRORS),
+        );
     }
-    campaign.positions = seen_at_markers(truth, campaign, noise, 1.0, args.seed.wrapping_add(6))
-        .map_err(|e| anyhow!("--tools: {e}"))?;
+    campaign.positions = seen_at_markers(
+        truth,
+        campaign,
+        noise,
+        1.0,
+        seeds::of(args.seed, seeds::MARKER_NOISE),
+    )
+    .map_err(|e| anyhow!("--tools: {e}"))?;
     Ok(())
 }
 
@@ -497,7 +507,7 @@ fn with_markers(args: &Args, mut nominal: Arm) -> Result<Arm> {
     let Some(k) = args.tools.filter(|_| nominal.tools.is_empty()) else {
         return Ok(nominal);
     };
-    nominal.tools = random_tools(k as usize, args.seed.wrapping_add(4));
+    nominal.tools = random_tools(k as usize, seeds::of(args.seed, seeds::MARKERS));
     std::fs::create_dir_all(&args.out)
         .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
     let path = args.out.join(NOMINAL_FILE);

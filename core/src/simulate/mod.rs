@@ -58,6 +58,62 @@ mod truth;
 #[cfg(test)]
 mod tests;
 
+/// The seeds the parts of a campaign draw from, as offsets added to the
+/// user's seed (`aacmm simulate --seed`): each part its own generator, so
+/// that adding a part to a campaign changes nothing else of it, and no two
+/// parts share draws. The numbers are part of the output format: changing
+/// one changes every file made with that seed.
+pub mod seeds {
+    /// A tracker's positions (the true arm draws from the seed itself).
+    pub const POSITIONS: u64 = 1;
+    /// The noise of a 6-D target's orientations.
+    pub const ORIENTATIONS: u64 = 2;
+    /// The 6-D target's mount on the flange.
+    pub const MOUNT: u64 = 3;
+    /// The markers `--tools` places on the flange.
+    pub const MARKERS: u64 = 4;
+    /// The markers' true offsets about their nominal ones.
+    pub const MARKER_ERRORS: u64 = 5;
+    /// Which markers each pose sees, and their noise.
+    pub const MARKER_NOISE: u64 = 6;
+    /// The points on reference spheres.
+    pub const SPHERES: u64 = 7;
+
+    /// The seed of the part `offset` (one of the above) of a campaign
+    /// seeded by `seed`.
+    ///
+    /// ```
+    /// use aacmm_core::simulate::seeds;
+    /// assert_eq!(seeds::of(u64::MAX, seeds::POSITIONS), 0);
+    /// ```
+    pub fn of(seed: u64, offset: u64) -> u64 {
+        seed.wrapping_add(offset)
+    }
+
+    #[cfg(test)]
+    mod tests {
+        /// No two parts share a generator, nor the true arm's (offset 0).
+        #[test]
+        fn every_part_has_its_own_seed() {
+            use super::*;
+            let all = [
+                0,
+                POSITIONS,
+                ORIENTATIONS,
+                MOUNT,
+                MARKERS,
+                MARKER_ERRORS,
+                MARKER_NOISE,
+                SPHERES,
+            ];
+            let mut sorted = all.to_vec();
+            sorted.sort_unstable();
+            sorted.dedup();
+            assert_eq!(sorted.len(), all.len(), "{all:?}");
+        }
+    }
+}
+
 pub use crate::params::wrap;
 pub use chain::random_arm;
 pub use error::SimError;

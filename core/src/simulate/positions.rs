@@ -54,7 +54,7 @@ pub fn simulate_tracker(
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     let truth = super::true_arm(nominal, errors, &mut rng)?;
     let next = PositionSettings {
-        seed: settings.seed.wrapping_add(1),
+        seed: super::seeds::of(settings.seed, super::seeds::POSITIONS),
         ..settings.clone()
     };
     let campaign = simulate_positions(&truth, &next)?;
@@ -78,7 +78,7 @@ pub fn simulate_tracker_session(
     let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
     let truth = super::true_arm(nominal, errors, &mut rng)?;
     let next = PositionSettings {
-        seed: settings.seed.wrapping_add(1),
+        seed: super::seeds::of(settings.seed, super::seeds::POSITIONS),
         ..settings.clone()
     };
     let campaign = simulate_session(&truth, &next, conditions, drift)?;

@@ -219,7 +219,7 @@ fn reach(
 
 /// A true arm drawn from `errors` about `nominal` (seeded by
 /// `settings.seed`, as [`super::simulate_tracker`] draws it) and its sphere
-/// campaign (seeded by `settings.seed + 7`): what `aacmm simulate
+/// campaign (seeded by [`super::seeds::SPHERES`]): what `aacmm simulate
 /// --spheres` writes without sockets or positions.
 ///
 /// # Errors
@@ -237,15 +237,12 @@ pub fn simulate_sphere_campaign(
 }
 
 impl SphereSettings {
-    /// The settings of the points' own stream: the seed + 7 (the truth has
-    /// the seed, a tracker's positions the next, their orientations the
-    /// one after, the 6-D target's mount the next, then `simulate
-    /// --tools`' markers, their errors and their noise), so that adding spheres to a
-    /// campaign changes nothing else of it, and no draw of theirs is one of
-    /// another's.
+    /// The settings of the points' own stream ([`super::seeds::SPHERES`]),
+    /// so that adding spheres to a campaign changes nothing else of it, and
+    /// no draw of theirs is one of another part's.
     pub fn for_campaign(&self) -> SphereSettings {
         SphereSettings {
-            seed: self.seed.wrapping_add(7),
+            seed: super::seeds::of(self.seed, super::seeds::SPHERES),
             ..self.clone()
         }
     }
