@@ -22,6 +22,7 @@ mod plan_cli;
 mod points;
 mod positions;
 mod prior;
+mod probes;
 mod readme;
 mod real_robots;
 mod report;

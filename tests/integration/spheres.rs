@@ -777,9 +777,18 @@ fn bad_sphere_input_is_refused_by_name() {
         &calibrate(&f, &["--sphere-diameter", "25.4", "--cross-validate", "51"]),
         &["--cross-validate", "spheres", "51 folds for 50 points"],
     );
-    // A tool column, an unknown column, an empty file.
-    let tool = write(&dir, "tool.csv", &good.replacen("q6\n", "q6,tool\n", 1));
-    assert_clean_error(&calibrate(&tool, &[]), &["tool.csv:1: field `tool`"]);
+    // A tool the arm does not know, an empty file.
+    let named: String = (good.lines().enumerate())
+        .map(|(i, l)| format!("{l},{}\n", if i == 0 { "tool" } else { "long" }))
+        .collect();
+    let tool = write(&dir, "tool.csv", &named);
+    assert_clean_error(
+        &calibrate(&tool, &[]),
+        &[
+            "tool.csv:2: field `tool`",
+            "`long`: a tool the arm does not know",
+        ],
+    );
     let empty = write(&dir, "empty.csv", "");
     assert_clean_error(&calibrate(&empty, &[]), &["empty.csv"]);
 }

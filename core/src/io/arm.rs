@@ -520,6 +520,36 @@ struct ToolFile {
     /// Its centre in the last joint's frame, mm (whatever `length_unit`
     /// says).
     offset_mm: Spanned<Vec<Spanned<f64>>>,
+    /// The diameter of its ball when it is a probe's, mm (whatever
+    /// `length_unit` says).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    ball_diameter_mm: Option<Spanned<f64>>,
+}
+
+/// A ball diameter `d` of `ctx` (`[probe]`, a `[[tool]]`), checked: in mm,
+/// between [`MIN_BALL_DIAMETER_MM`] (below it, metres) and
+/// [`MAX_BALL_DIAMETER_MM`]. (Finite: checked with every number first.)
+fn checked_ball(d: &Spanned<f64>, ctx: &str, text: &str, file: &str) -> Result<f64, InputError> {
+    let v = *d.get_ref();
+    let why = if v <= 0.0 {
+        format!("{ctx}: a ball's diameter is positive, got {v}")
+    } else if v < MIN_BALL_DIAMETER_MM {
+        format!(
+            "{ctx}: a ball of {v} mm is no probe's (the smallest are {MIN_BALL_DIAMETER_MM} mm): \
+             in metres? the field is in mm whatever length_unit says ({} mm)",
+            crate::error::short(v * 1000.0)
+        )
+    } else if v > MAX_BALL_DIAMETER_MM {
+        format!("{ctx}: a ball of {v} mm is more than any probe's ({MAX_BALL_DIAMETER_MM} mm)")
+    } else {
+        return Ok(v);
+    };
+    Err(InputError::field(
+        file,
+        line_of(text, d.span().start),
+        "ball_diameter_mm",
+        why,
+    ))
 }
 
 /// A unit by its name.
@@ -662,6 +692,7 @@ impl ArmFile {
                     new(ToolFile {
                         name: new(t.name.clone()),
                         offset_mm: triple(t.offset),
+                        ball_diameter_mm: t.ball_diameter_mm.map(new),
                     })
                 })
                 .collect(),
@@ -767,9 +798,14 @@ impl ArmFile {
                     ));
                 }
             };
+            let ctx = format!("[[tool]] {}", quoted(name));
+            let ball = (t.ball_diameter_mm.as_ref())
+                .map(|d| checked_ball(d, &ctx, text, file))
+                .transpose()?;
             out.push(super::tools::Tool {
                 name: name.clone(),
                 offset,
+                ball_diameter_mm: ball,
             });
         }
         Ok(out)
@@ -779,31 +815,9 @@ impl ArmFile {
     /// [`MIN_BALL_DIAMETER_MM`] (below it, metres) and
     /// [`MAX_BALL_DIAMETER_MM`]. (Finite: checked with every number first.)
     fn ball_diameter(&self, text: &str, file: &str) -> Result<Option<f64>, InputError> {
-        let Some(d) = &self.probe.ball_diameter_mm else {
-            return Ok(None);
-        };
-        let v = *d.get_ref();
-        let why = if v <= 0.0 {
-            format!("[probe]: a ball's diameter is positive, got {v}")
-        } else if v < MIN_BALL_DIAMETER_MM {
-            format!(
-                "[probe]: a ball of {v} mm is no probe's (the smallest are {MIN_BALL_DIAMETER_MM} \
-                 mm): in metres? the field is in mm whatever length_unit says ({} mm)",
-                crate::error::short(v * 1000.0)
-            )
-        } else if v > MAX_BALL_DIAMETER_MM {
-            format!(
-                "[probe]: a ball of {v} mm is more than any probe's ({MAX_BALL_DIAMETER_MM} mm)"
-            )
-        } else {
-            return Ok(Some(v));
-        };
-        Err(InputError::field(
-            file,
-            line_of(text, d.span().start),
-            "ball_diameter_mm",
-            why,
-        ))
+        (self.probe.ball_diameter_mm.as_ref())
+            .map(|d| checked_ball(d, "[probe]", text, file))
+            .transpose()
     }
 
     /// The masses, gravity and corrections the file states, checked.
@@ -1011,6 +1025,9 @@ impl ArmFile {
             let ctx = format!("[[tool]] {}: ", quoted(t.name.get_ref()));
             for v in t.offset_mm.get_ref() {
                 out.push((ctx.clone(), "offset_mm", v));
+            }
+            if let Some(v) = &t.ball_diameter_mm {
+                out.push((ctx.clone(), "ball_diameter_mm", v));
             }
         }
         out

@@ -16,8 +16,11 @@
 //! ball_diameter_mm`). Joint readings are in the unit the caller declares,
 //! as in a poses file. `articulation` (a whole number ≥ 1, on every row or
 //! none) groups a placement's points by the arm's articulation, for the
-//! acceptance tests that need it; a fit ignores it. A `tool` column (one of
-//! several probes) is refused: the arm file's `[probe]` is the one probe.
+//! acceptance tests that need it; a fit ignores it. `tool` (after it, when
+//! both are there) names the probe of a row: one of the arm file's
+//! `[[tool]]` entries (its offset and `ball_diameter_mm`), an empty cell or
+//! `probe` the arm's `[probe]`. A placement is probed by one tool: a
+//! probe's placements are labelled apart from another's (`S1.long`).
 //!
 //! Refused by file, line and field: another header, an empty label, a value
 //! that is not a finite number, a sphere with fewer than
@@ -32,6 +35,7 @@ use std::path::Path;
 use super::Warning;
 use super::columns::JointColumns;
 use super::text::{Record, check_header, parse_f64, read_text, scan_table};
+use super::tools::{DEFAULT_TOOL, Tool, ToolNames};
 use super::units::AngleUnit;
 use crate::error::InputError;
 
@@ -48,7 +52,10 @@ pub const MIN_SPHERE_DEPTH_RATIO: f64 = 0.02;
 /// The optional column grouping a placement's points by articulation.
 pub const ARTICULATION: &str = "articulation";
 
-const SHAPE: &str = "sphere,q1,...,qn[,articulation]";
+/// The optional column naming a row's probe.
+pub const TOOL: &str = "tool";
+
+const SHAPE: &str = "sphere,q1,...,qn[,articulation][,tool]";
 
 /// The rows of a sphere-surface file, in file order.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,6 +73,11 @@ pub struct Spheres {
     lines: Vec<usize>,
     /// Per row, its articulation, when the file has the column.
     articulation: Option<Vec<u32>>,
+    /// The tools rows name: the default tool (the arm's `[probe]`) first,
+    /// then in order of first appearance.
+    tools: Vec<Tool>,
+    /// Per row, its tool (an index into `tools`).
+    tool_of: Vec<u32>,
 }
 
 impl Spheres {
@@ -79,6 +91,8 @@ impl Spheres {
             q: Vec::new(),
             lines: Vec::new(),
             articulation: None,
+            tools: vec![default_tool()],
+            tool_of: Vec::new(),
         }
     }
 
@@ -99,6 +113,7 @@ impl Spheres {
         };
         let first = self.sphere_of.is_empty();
         self.sphere_of.push(s);
+        self.tool_of.push(0);
         self.q.extend_from_slice(q);
         self.lines.push(line);
         match (articulation, &mut self.articulation) {
@@ -106,6 +121,46 @@ impl Spheres {
             (Some(a), None) if first => self.articulation = Some(vec![a]),
             _ => self.articulation = None,
         }
+    }
+
+    /// Sets the last row's tool: `tool` (one of the arm's `[[tool]]`, its
+    /// offset and ball); a row not set is the default tool's.
+    ///
+    /// # Panics
+    /// Without a row.
+    pub fn set_tool(&mut self, tool: &Tool) {
+        let k = match self.tools.iter().position(|t| t.name == tool.name) {
+            Some(k) => k,
+            None => {
+                self.tools.push(tool.clone());
+                self.tools.len() - 1
+            }
+        };
+        *self.tool_of.last_mut().expect("a row to name a tool of") = k as u32;
+    }
+
+    /// The tools rows name, the default tool first (named
+    /// [`DEFAULT_TOOL`]: the arm's `[probe]`, its offset and ball the
+    /// arm's — the `Tool`'s own fields unused).
+    pub fn tools(&self) -> &[Tool] {
+        &self.tools
+    }
+
+    /// Row `i`'s tool (an index into [`Spheres::tools`]; 0 the default).
+    pub fn tool(&self, i: usize) -> usize {
+        self.tool_of[i] as usize
+    }
+
+    /// Sphere `s`'s tool (the tool of its rows: one per placement).
+    pub fn tool_of_sphere(&self, s: usize) -> usize {
+        (0..self.len())
+            .find(|&i| self.sphere_of[i] == s)
+            .map_or(0, |i| self.tool(i))
+    }
+
+    /// Whether some row names a tool other than the default.
+    pub fn has_tools(&self) -> bool {
+        self.tool_of.iter().any(|&k| k != 0)
     }
 
     /// Rows.
@@ -176,6 +231,9 @@ impl Spheres {
                 self.lines[i],
                 self.articulation(i),
             );
+            if self.tool(i) != 0 {
+                out.set_tool(&self.tools[self.tool(i)]);
+            }
         }
         out
     }
@@ -301,7 +359,8 @@ pub fn parse_spheres(
 ) -> Result<(Spheres, Vec<Warning>), InputError> {
     let columns = joints.into();
     let expected = columns.expected();
-    let mut layout: Option<(usize, bool)> = None;
+    let mut layout: Option<Header> = None;
+    let tools = columns.tools().cloned().unwrap_or_else(|| ToolNames::of(&[]));
     let mut out: Option<Spheres> = None;
     let mut q = Vec::new();
     scan_table(
@@ -311,16 +370,17 @@ pub fn parse_spheres(
         "one row per point probed",
         |h| header_layout(h, file, expected).map(|_| ()),
         |h, line, f| {
-            let &mut (n, articulated) = match &mut layout {
-                Some(l) => l,
-                None => layout.insert(header_layout(h, file, expected)?),
+            let header = match &mut layout {
+                Some(l) => *l,
+                None => *layout.insert(header_layout(h, file, expected)?),
             };
-            let out = out.get_or_insert_with(|| Spheres::new(n, columns.prismatic_mask()));
+            let out =
+                out.get_or_insert_with(|| Spheres::new(header.joints, columns.prismatic_mask()));
             parse_row(
                 f,
                 (file, line),
-                (n, articulated),
-                (unit, &columns),
+                header,
+                (unit, &columns, &tools),
                 &mut q,
                 out,
             )
@@ -328,6 +388,7 @@ pub fn parse_spheres(
     )?;
     let out = out.unwrap_or_else(|| Spheres::new(0, 0));
     check_counts(&out, file)?;
+    check_one_tool_per_sphere(&out, file)?;
     let radians = super::poses::look_like_radians(
         &out.q,
         out.len(),
@@ -350,31 +411,43 @@ pub fn parse_spheres(
     Ok((out, warnings))
 }
 
-/// The header's joint count and whether it has the `articulation` column.
-fn header_layout(
-    h: &Record,
-    file: &str,
-    expected: Option<usize>,
-) -> Result<(usize, bool), InputError> {
-    if h.fields.iter().any(|f| f == "tool") {
-        return Err(InputError::field(
-            file,
-            h.line,
-            "tool",
-            "several tool points are not supported yet: the arm file's [probe] is the one \
-             probe; drop the column (the header must be `sphere,q1,...,qn[,articulation]`)",
-        ));
+/// What a header says: the joint count and the optional columns present.
+#[derive(Clone, Copy, Debug)]
+struct Header {
+    joints: usize,
+    articulated: bool,
+    tooled: bool,
+}
+
+/// The default tool as [`Spheres::tools`] lists it.
+fn default_tool() -> Tool {
+    Tool {
+        name: DEFAULT_TOOL.to_string(),
+        offset: [0.0; 3],
+        ball_diameter_mm: None,
     }
-    let articulated = h.fields.last().is_some_and(|f| f == ARTICULATION);
-    let joints = h.fields.len().saturating_sub(1 + usize::from(articulated));
+}
+
+/// The header's joint count and its optional columns (`articulation`,
+/// then `tool`).
+fn header_layout(h: &Record, file: &str, expected: Option<usize>) -> Result<Header, InputError> {
+    let tooled = h.fields.last().is_some_and(|f| f == TOOL);
+    let before_tool = h.fields.len() - usize::from(tooled);
+    let articulated = before_tool > 0 && h.fields[before_tool - 1] == ARTICULATION;
+    let joints = before_tool.saturating_sub(1 + usize::from(articulated));
     let want = expected.unwrap_or(joints);
     let mut names: Vec<String> = vec!["sphere".into()];
     names.extend((1..=want).map(|j| format!("q{j}")));
+    let mut tail = String::new();
     if articulated {
         names.push(ARTICULATION.into());
+        tail += ",articulation";
+    }
+    if tooled {
+        names.push(TOOL.into());
+        tail += ",tool";
     }
     let names: Vec<&str> = names.iter().map(String::as_str).collect();
-    let tail = if articulated { ",articulation" } else { "" };
     check_header(h, file, &names, &format!("sphere,q1,...,q{want}{tail}"))?;
     if want == 0 {
         return Err(InputError::field(
@@ -384,18 +457,23 @@ fn header_layout(
             format!("missing joint columns in the header; the header must be `{SHAPE}`"),
         ));
     }
-    Ok((want, articulated))
+    Ok(Header {
+        joints: want,
+        articulated,
+        tooled,
+    })
 }
 
 /// One data row into `out`.
 fn parse_row(
     f: &[&str],
     (file, line): (&str, usize),
-    (joints, articulated): (usize, bool),
-    (unit, columns): (AngleUnit, &JointColumns),
+    header: Header,
+    (unit, columns, tools): (AngleUnit, &JointColumns, &ToolNames),
     q: &mut Vec<f64>,
     out: &mut Spheres,
 ) -> Result<(), InputError> {
+    let joints = header.joints;
     if f[0].is_empty() {
         let message = "empty label: each row names the sphere (placement) probed";
         return Err(InputError::field(file, line, "sphere", message));
@@ -406,7 +484,7 @@ fn parse_row(
         columns.check_stroke(j, v, file, line)?;
         q.push(columns.to_internal(j, v, unit));
     }
-    let articulation = if articulated {
+    let articulation = if header.articulated {
         let cell = f[1 + joints];
         match cell.parse::<u32>() {
             Ok(a) if a >= 1 => Some(a),
@@ -422,6 +500,44 @@ fn parse_row(
         None
     };
     out.push(f[0], q, line, articulation);
+    if header.tooled {
+        let cell = f[1 + joints + usize::from(header.articulated)];
+        if tools.of_cell(cell, file, line)? != 0 {
+            out.set_tool(&Tool {
+                name: cell.to_string(),
+                offset: tools.offset(cell).unwrap_or([0.0; 3]),
+                ball_diameter_mm: tools.ball_diameter(cell),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a sphere probed by more than one tool, at the first row of a
+/// second tool: the fits take a placement's points as one probe's (one
+/// ball, one set of offsets to the sphere's centre).
+///
+/// # Errors
+///
+/// As above, naming `file`, the line and the field `tool`.
+pub fn check_one_tool_per_sphere(s: &Spheres, file: &str) -> Result<(), InputError> {
+    for (k, name) in s.names.iter().enumerate() {
+        let rows = s.rows_of(k);
+        let first = s.tool(rows[0]);
+        if let Some(&i) = rows.iter().find(|&&i| s.tool(i) != first) {
+            let message = format!(
+                "sphere {} is probed by {} (line {}) and by {}: each placement is one probe's; \
+                 label each probe's placements apart (e.g. `{}.{}`)",
+                crate::error::quoted(name),
+                crate::error::quoted(&s.tools[first].name),
+                s.lines[rows[0]],
+                crate::error::quoted(&s.tools[s.tool(i)].name),
+                name,
+                s.tools[s.tool(i)].name
+            );
+            return Err(InputError::field(file, s.lines[i], TOOL, message));
+        }
+    }
     Ok(())
 }
 
@@ -467,6 +583,10 @@ pub fn write_spheres(
     if s.articulation.is_some() {
         header.push_str(",articulation");
     }
+    let tooled = s.has_tools();
+    if tooled {
+        header.push_str(",tool");
+    }
     header.push('\n');
     w.write_all(header.as_bytes())?;
     for i in 0..s.len() {
@@ -477,6 +597,10 @@ pub fn write_spheres(
         }
         if let Some(a) = s.articulation(i) {
             line.push_str(&format!(",{a}"));
+        }
+        if tooled {
+            line.push(',');
+            line.push_str(&quote(&s.tools[s.tool(i)].name)?);
         }
         line.push('\n');
         w.write_all(line.as_bytes())?;
@@ -531,7 +655,9 @@ mod tests {
         let e = parse(&format!("sphere,q1,q2\n{}{}", rows("A", 4), rows("B", 3))).unwrap_err();
         assert_at(&e, 6, "sphere", "sphere `B` has 3 points");
         let e = parse(&format!("sphere,q1,q2,tool\n{}", "A,1,2,t\n")).unwrap_err();
-        assert_at(&e, 1, "tool", "not supported yet");
+        assert_at(&e, 2, "tool", "`t`: a tool the arm does not know (its tools: `probe`;");
+        let e = parse("sphere,q1,q2,tool,articulation\nA,1,2,,1\n").unwrap_err();
+        assert_at(&e, 1, "tool", "expected `articulation`");
         let e = parse("sphere,q1,q2,colour\nA,1,2,red\n").unwrap_err();
         assert!(e.to_string().contains("colour"), "{e}");
         let e = parse("point,q1,q2\nA,1,2\n").unwrap_err();

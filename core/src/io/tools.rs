@@ -6,6 +6,11 @@
 //! [[tool]]
 //! name = "smr2"
 //! offset_mm = [40.0, 0.0, 95.0]   # in the last joint's frame, like [probe]
+//!
+//! [[tool]]
+//! name = "long"
+//! offset_mm = [0.0, 0.0, 180.0]
+//! ball_diameter_mm = 3.0          # optional: a probe's ball (sphere files)
 //! ```
 //!
 //! `offset_mm` is the point's nominal centre in the last joint's frame
@@ -34,6 +39,9 @@ pub struct Tool {
     pub name: String,
     /// Its centre in the last joint's frame, mm.
     pub offset: [f64; 3],
+    /// The diameter of its ball when it is a probe's (a stylus touching
+    /// spheres), mm: what a sphere-surface row of this tool is offset by.
+    pub ball_diameter_mm: Option<f64>,
 }
 
 impl Tool {
@@ -82,6 +90,9 @@ pub struct ToolNames {
     /// Per name, its nominal offset (mm; `None` for the default tool,
     /// whose offset is the arm's probe).
     offsets: Vec<Option<[f64; 3]>>,
+    /// Per name, its ball's diameter when stated (mm; `None` for the
+    /// default tool, whose ball is the arm's `[probe]`'s).
+    balls: Vec<Option<f64>>,
     index: HashMap<String, u32>,
 }
 
@@ -97,11 +108,22 @@ impl ToolNames {
         let offsets = std::iter::once(None)
             .chain(tools.iter().map(|t| Some(t.offset)))
             .collect();
+        let balls = std::iter::once(None)
+            .chain(tools.iter().map(|t| t.ball_diameter_mm))
+            .collect();
         ToolNames {
             names,
             offsets,
+            balls,
             index,
         }
+    }
+
+    /// The ball diameter of the tool named `name` (mm), `None` for the
+    /// default tool, a tool without a ball, or a name not known.
+    pub fn ball_diameter(&self, name: &str) -> Option<f64> {
+        let k = *self.index.get(name)?;
+        self.balls[k as usize]
     }
 
     /// The nominal offset of the tool named `name` (mm, last joint's
@@ -162,13 +184,17 @@ mod tests {
     #[test]
     fn tools_round_trip_in_mm_whatever_the_length_unit() {
         let text = arm_text(
-            "\n[[tool]]\nname = \"smr2\"\noffset_mm = [40, 0.5, 95]\n\n[[tool]]\nname = \"m3\"\noffset_mm = [-1e-3, 0, 0]\n",
+            "\n[[tool]]\nname = \"smr2\"\noffset_mm = [40, 0.5, 95]\n\n[[tool]]\nname = \"m3\"\noffset_mm = [-1e-3, 0, 0]\nball_diameter_mm = 3\n",
         );
         let (arm, _) = parse_arm(&text, "a.toml").unwrap();
         assert_eq!(arm.tools.len(), 2);
         assert_eq!(arm.tools[0].name, "smr2");
         assert_eq!(arm.tools[0].offset, [40.0, 0.5, 95.0]);
         assert_eq!(arm.tools[1].offset, [-1e-3, 0.0, 0.0]);
+        assert_eq!(
+            (arm.tools[0].ball_diameter_mm, arm.tools[1].ball_diameter_mm),
+            (None, Some(3.0))
+        );
         assert_eq!(arm.tools[0].block_name(), "tool.smr2");
         for lu in [LengthUnit::Mm, LengthUnit::M] {
             let back = parse_arm(&arm_to_toml(&arm, lu, AngleUnit::Rad), "b.toml")
@@ -221,6 +247,15 @@ mod tests {
             e.contains("field `offset_mm`") && e.contains("found 2 values"),
             "{e}"
         );
+        let e =
+            refused("\n[[tool]]\nname = \"m\"\noffset_mm = [1, 2, 3]\nball_diameter_mm = 0.003\n");
+        assert!(
+            e.starts_with(&format!(
+                "a.toml:{}: field `ball_diameter_mm`: [[tool]] `m`: a ball of 0.003 mm",
+                line + 2
+            )) && e.contains("metres"),
+            "{e}"
+        );
         let e = refused("\n[[tool]]\nname = \"m\"\noffset = [1, 2, 3]\n");
         assert!(e.contains("offset"), "{e}");
     }
@@ -230,7 +265,10 @@ mod tests {
         let tools = ToolNames::of(&[Tool {
             name: "smr2".into(),
             offset: [1.0, 2.0, 3.0],
+            ball_diameter_mm: Some(3.0),
         }]);
+        assert_eq!(tools.ball_diameter("smr2"), Some(3.0));
+        assert_eq!(tools.ball_diameter("probe"), None);
         assert_eq!(tools.of_cell("", "p.csv", 3).unwrap(), 0);
         assert_eq!(tools.of_cell("probe", "p.csv", 3).unwrap(), 0);
         assert_eq!(tools.of_cell("smr2", "p.csv", 3).unwrap(), 1);

@@ -149,8 +149,11 @@ pub struct SphereTerm {
     radii: Vec<Option<BlockId>>,
     /// The stated spheres' radius, mm.
     known_radius: Option<f64>,
-    /// The probe ball's radius, mm (0 when not stated and not needed).
+    /// The probe ball's radius, mm (0 when not stated and not needed): the
+    /// default tool's.
     ball_radius: f64,
+    /// Per tool of the rows ([`Spheres::tools`]), its ball's radius, mm.
+    balls: Vec<f64>,
     /// σ of an encoder reading (rad) and of the probe's seating (mm).
     encoder: Option<f64>,
     probe: Option<f64>,
@@ -233,10 +236,13 @@ impl SphereTerm {
             SphereSize::Fitted => None,
         };
         let ball_radius = ball_diameter_mm.unwrap_or(0.0) / 2.0;
+        let balls = tool_balls(&spheres, ball_radius, known_radius.is_some())?;
+        add_tool_blocks(&spheres, &mut add)?;
         let p = positions_at(&spheres, arm)?;
         let (mut centres, mut radii) = (Vec::new(), Vec::new());
         for (s, name) in spheres.spheres().iter().enumerate() {
             let points: Vec<[f64; 3]> = spheres.rows_of(s).iter().map(|&i| p[i]).collect();
+            let ball = balls[spheres.tool_of_sphere(s)];
             let (c, r) = algebraic_sphere(&points).ok_or_else(|| {
                 TermError::invalid(TERM, format!("sphere `{name}`: no sphere fits its points"))
             })?;
@@ -253,7 +259,7 @@ impl SphereTerm {
                 None => Some(add(Box::new(Scalar {
                     name: format!("{block}.radius"),
                     unit: Unit::Length,
-                    start: r - ball_radius,
+                    start: r - ball,
                     tolerance: None,
                     limit: None,
                 }))?),
@@ -273,6 +279,7 @@ impl SphereTerm {
             radii,
             known_radius,
             ball_radius,
+            balls,
             encoder: noise.encoder_rad,
             probe: noise.probe_mm,
             robust: vec![1.0; n],
@@ -301,9 +308,14 @@ impl SphereTerm {
         &self.radii
     }
 
-    /// The probe ball's radius, mm.
+    /// The default probe's ball radius, mm (the arm file's `[probe]`).
     pub fn ball_radius(&self) -> f64 {
         self.ball_radius
+    }
+
+    /// The radius of the ball sphere `s` was probed with, mm (its tool's).
+    pub fn ball_radius_of(&self, s: usize) -> f64 {
+        self.balls[self.spheres.tool_of_sphere(s)]
     }
 
     /// Whether the spheres' diameter is stated.
@@ -339,15 +351,75 @@ impl SphereTerm {
     ///
     /// The kernel's.
     pub fn radial_errors(&self, at: &At<'_>) -> Result<Vec<f64>, TermError> {
-        let mut p = vec![[0.0; 3]; self.spheres.len()];
-        at.tool_positions(&self.poses, Conditions::default(), &mut p)?;
+        let p = self.positions(at)?;
         Ok((0..p.len())
             .map(|i| {
                 let s = self.spheres.sphere(i);
                 let (d, _) = self.offset(at, s, &p[i]);
-                d - self.radius(at, s).0 - self.ball_radius
+                d - self.radius(at, s).0 - self.balls[self.spheres.tool(i)]
             })
             .collect())
+    }
+
+    /// Where `at` puts each row's probe centre (its tool's; the arm's
+    /// corrections applied), mm.
+    ///
+    /// # Errors
+    ///
+    /// The kernel's.
+    pub fn positions(&self, at: &At<'_>) -> Result<Vec<[f64; 3]>, TermError> {
+        let mut p = vec![[0.0; 3]; self.spheres.len()];
+        if !self.spheres.has_tools() {
+            at.tool_positions(&self.poses, Conditions::default(), &mut p)?;
+            return Ok(p);
+        }
+        let mut q = vec![[0.0; 3]; self.spheres.len()];
+        self.per_tool(at, |at, k, _| {
+            at.tool_positions(&self.poses, Conditions::default(), &mut q)?;
+            for i in (0..q.len()).filter(|&i| self.spheres.tool(i) == k) {
+                p[i] = q[i];
+            }
+            Ok(())
+        })?;
+        Ok(p)
+    }
+
+    /// Calls `f(at, k, block)` for each tool `k` the rows name, `at` as the
+    /// tool sees it: the arm's probe replaced by the tool's offset (its
+    /// block's value when the layout fits one, `block`; else its nominal
+    /// offset). The default tool first, `at` itself.
+    fn per_tool(
+        &self,
+        at: &At<'_>,
+        mut f: impl FnMut(&At<'_>, usize, Option<BlockId>) -> Result<(), TermError>,
+    ) -> Result<(), TermError> {
+        for (k, tool) in self.spheres.tools().iter().enumerate() {
+            if !(0..self.spheres.len()).any(|i| self.spheres.tool(i) == k) {
+                continue;
+            }
+            if k == 0 {
+                f(at, 0, None)?;
+                continue;
+            }
+            let block = at
+                .layout
+                .block_named(&crate::io::tools::block_name(&tool.name));
+            let mut arm = at.arm.clone();
+            arm.probe = block.map_or(tool.offset, |id| {
+                let x = at.block(id);
+                [x[0], x[1], x[2]]
+            });
+            let kernel = ArmKernel::new(&arm)?;
+            let seen = At {
+                x: at.x,
+                arm: &arm,
+                kernel: &kernel,
+                layout: at.layout,
+                threads: at.threads,
+            };
+            f(&seen, k, block)?;
+        }
+        Ok(())
     }
 
     /// `|p − c_s|` and the unit vector from `c_s` to `p`.
@@ -372,17 +444,22 @@ impl SphereTerm {
             self.probe.unwrap_or(0.0).powi(2),
         );
         let n = self.spheres.len();
-        let mut p = vec![[0.0; 3]; n];
-        at.tool_positions(&self.poses, Conditions::default(), &mut p)?;
+        let p = self.positions(at)?;
         let mut out = vec![0.0; n];
-        at.kernel
-            .for_each_joint_jacobian(&self.poses, 0..n, |i, jq| {
-                let (_, u) = self.offset(at, self.spheres.sphere(i), &p[i]);
-                let along: f64 = (jq.iter())
-                    .map(|c| (u[0] * c[0] + u[1] * c[1] + u[2] * c[2]).powi(2))
-                    .sum();
-                out[i] = (p2 + e2 * along).sqrt();
-            })?;
+        self.per_tool(at, |seen, k, _| {
+            seen.kernel
+                .for_each_joint_jacobian(&self.poses, 0..n, |i, jq| {
+                    if self.spheres.tool(i) != k {
+                        return;
+                    }
+                    let (_, u) = self.offset(at, self.spheres.sphere(i), &p[i]);
+                    let along: f64 = (jq.iter())
+                        .map(|c| (u[0] * c[0] + u[1] * c[1] + u[2] * c[2]).powi(2))
+                        .sum();
+                    out[i] = (p2 + e2 * along).sqrt();
+                })?;
+            Ok(())
+        })?;
         Ok(out)
     }
 
@@ -402,10 +479,19 @@ impl SphereTerm {
     }
 
     /// Per free column, what it is to this term: the arm's column `c`, the
-    /// centre of sphere `s` (coordinate `k`), or the radius of sphere `s`.
+    /// centre of sphere `s` (coordinate `k`), the radius of sphere `s`, or
+    /// coordinate `k` of tool `t`'s offset.
     fn column_roles(&self, at: &At<'_>, free: &[usize]) -> Vec<Column> {
         let arm = at.layout.arm_columns();
         let mut of = vec![Column::None; at.layout.len()];
+        for (t, tool) in self.spheres.tools().iter().enumerate().skip(1) {
+            let name = crate::io::tools::block_name(&tool.name);
+            if let Some(id) = at.layout.block_named(&name) {
+                for (k, c) in at.layout.columns(id).enumerate() {
+                    of[c] = Column::Tool(t, k);
+                }
+            }
+        }
         for (s, &id) in self.centres.iter().enumerate() {
             for (k, c) in at.layout.columns(id).enumerate() {
                 of[c] = Column::Centre(s, k);
@@ -426,6 +512,7 @@ enum Column {
     Arm(usize),
     Centre(usize, usize),
     Radius(usize),
+    Tool(usize, usize),
     None,
 }
 
@@ -509,23 +596,34 @@ impl Term for SphereTerm {
         normal: &mut Normal,
     ) -> Result<f64, TermError> {
         let roles = self.column_roles(at, normal.free());
-        let mut rows = Vec::with_capacity(self.spheres.len());
-        let all = 0..self.spheres.len();
-        at.for_each_tool(&self.poses, Conditions::default(), all, |i, p, jac| {
-            let s = self.spheres.sphere(i);
-            let w = self.weights[i];
-            let (d, u) = self.offset(at, s, p);
-            let (radius, _) = self.radius(at, s);
-            let r = w * (d - radius - self.ball_radius);
-            let row: Vec<f64> = (roles.iter())
-                .map(|role| match *role {
-                    Column::Arm(c) => w * (u[0] * jac[c][0] + u[1] * jac[c][1] + u[2] * jac[c][2]),
-                    Column::Centre(t, k) if t == s => -w * u[k],
-                    Column::Radius(t) if t == s => -w,
-                    _ => 0.0,
-                })
-                .collect();
-            rows.push((row, r));
+        let probe = crate::residuals::tools::probe_columns(at.arm);
+        let n = self.spheres.len();
+        let mut rows: Vec<(Vec<f64>, f64)> = vec![(Vec::new(), 0.0); n];
+        self.per_tool(at, |seen, t, _| {
+            let cond = Conditions::default();
+            seen.for_each_tool(&self.poses, cond, 0..n, |i, p, jac| {
+                if self.spheres.tool(i) != t {
+                    return;
+                }
+                let s = self.spheres.sphere(i);
+                let w = self.weights[i];
+                let (d, u) = self.offset(at, s, p);
+                let (radius, _) = self.radius(at, s);
+                let r = w * (d - radius - self.balls[t]);
+                let along = |c: usize| w * (u[0] * jac[c][0] + u[1] * jac[c][1] + u[2] * jac[c][2]);
+                let row: Vec<f64> = (roles.iter())
+                    .map(|role| match *role {
+                        // A tool's rows move with its offset, not the probe's.
+                        Column::Arm(c) if t != 0 && probe.contains(&c) => 0.0,
+                        Column::Arm(c) => along(c),
+                        Column::Centre(q, k) if q == s => -w * u[k],
+                        Column::Radius(q) if q == s => -w,
+                        Column::Tool(q, k) if q == t => along(probe[k]),
+                        _ => 0.0,
+                    })
+                    .collect();
+                rows[i] = (row, r);
+            })
         })?;
         Ok(normal.add_rows(rows))
     }
@@ -606,6 +704,53 @@ impl Term for SphereTerm {
         s.sort_by(f64::total_cmp);
         s.get(s.len() / 2).copied()
     }
+}
+
+/// Per tool of `spheres`' rows, its ball's radius, mm: the default tool's
+/// `default` (the arm file's `[probe]`), another's its `[[tool]]`
+/// `ball_diameter_mm` — needed when the spheres' diameter is stated
+/// (`known`), else 0 (the fitted radius takes the ball in).
+fn tool_balls(spheres: &Spheres, default: f64, known: bool) -> Result<Vec<f64>, TermError> {
+    (spheres.tools().iter().enumerate())
+        .map(|(k, tool)| match (k, tool.ball_diameter_mm) {
+            (0, _) => Ok(default),
+            (_, Some(d)) => Ok(d / 2.0),
+            (_, None) if !known => Ok(0.0),
+            (_, None) => Err(TermError::invalid(
+                TERM,
+                format!(
+                    "tool {} probes spheres of a stated diameter and has no ball: state its \
+                     `ball_diameter_mm` in the arm file's [[tool]] (the probe centre is a ball \
+                     radius off the surface)",
+                    crate::error::quoted(&tool.name)
+                ),
+            )),
+        })
+        .collect()
+}
+
+/// Adds the offset block of each tool `spheres`' rows name (beyond the
+/// default), started at its nominal offset — or shares the block of that
+/// name already there (the same tool's positions).
+fn add_tool_blocks(
+    spheres: &Spheres,
+    add: &mut impl FnMut(Box<dyn Block>) -> Result<BlockId, LayoutError>,
+) -> Result<(), TermError> {
+    for tool in spheres.tools().iter().skip(1) {
+        let block = crate::io::tools::block_name(&tool.name);
+        let added = add(Box::new(Vector {
+            names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
+            name: block,
+            unit: Unit::Length,
+            start: tool.offset.to_vec(),
+            tolerances: vec![None; 3],
+        }));
+        match added {
+            Ok(_) | Err(LayoutError::Duplicate { .. }) => {}
+            Err(e) => return Err(e.into()),
+        }
+    }
+    Ok(())
 }
 
 /// A layout's [`Layout::add`], for [`SphereTerm::new`]'s `add` in a
@@ -724,6 +869,57 @@ mod tests {
                 assert!(b.analytic.abs() > 0.0, "{check}");
             }
         }
+    }
+
+    /// With a second sphere probed by a stylus of its own (`tool` rows),
+    /// the gradient passes on the stylus' offset block too, and the arm's
+    /// probe columns see only the probe's sphere.
+    #[test]
+    fn the_sphere_gradient_passes_on_a_stylus_block() {
+        let arm = nominal();
+        let c = simulate_spheres(&arm, &settings(2, 7)).unwrap();
+        let stylus = crate::io::Tool {
+            name: "long".into(),
+            offset: [10.0, 0.0, 160.0],
+            ball_diameter_mm: Some(3.0),
+        };
+        let mut rows = Spheres::new(6, 0);
+        for i in 0..c.spheres.len() {
+            let s = c.spheres.sphere(i);
+            rows.push(&c.spheres.spheres()[s], c.spheres.reading(i), i + 2, None);
+            if s == 1 {
+                rows.set_tool(&stylus);
+            }
+        }
+        let mut layout = Layout::new(arm.params.clone());
+        let size = SphereSize::Known(25.4);
+        let term = SphereTerm::new(
+            rows,
+            "s.csv",
+            &arm.params,
+            size,
+            Some(6.0),
+            &stated(),
+            add_to(&mut layout),
+        )
+        .unwrap();
+        assert_eq!((term.ball_radius_of(0), term.ball_radius_of(1)), (3.0, 1.5));
+        let start = layout.start();
+        let free: Vec<usize> = (0..layout.len()).collect();
+        let mut o = Objective::new(layout, vec![Box::new(term)], 1);
+        o.weigh(&start, 1.0).unwrap();
+        let x = crate::objective::check::off_start(&o, &start, &free);
+        let check = check_gradients(&o, &x, &free, &CheckOptions::default()).unwrap();
+        assert!(check.passed(), "{check}");
+        let seen: Vec<&str> = (check.terms[0].blocks.iter())
+            .map(|b| b.block.as_str())
+            .collect();
+        assert_eq!(
+            seen,
+            ["geometry", "tool.long", "sphere.S1", "sphere.S2"],
+            "{check}"
+        );
+        assert!(check.terms[0].blocks[1].analytic.abs() > 0.0, "{check}");
     }
 
     /// A stated sphere diameter needs the ball's; points on one circle and

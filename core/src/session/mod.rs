@@ -1353,6 +1353,7 @@ impl CalibrationReport {
             .map(|t| crate::io::Tool {
                 name: t.name.clone(),
                 offset: (fitted.iter().find(|(n, _)| *n == t.name)).map_or(t.offset, |(_, x)| *x),
+                ball_diameter_mm: t.ball_diameter_mm,
             })
             .collect()
     }

@@ -229,11 +229,11 @@ pub(crate) fn held_out_spheres(
     let (s0, e0) = refit(&layout.start())?;
     let (s1, e1) = refit(&calibration.point_in(layout))?;
     let rows = term.spheres();
-    let diameter = |r: f64| 2.0 * (r - term.ball_radius());
     let spheres = (rows.spheres().iter().enumerate())
         .map(|(s, name)| {
             let of = rows.rows_of(s);
             let pick = |e: &[f64]| of.iter().map(|&i| e[i]).collect::<Vec<f64>>();
+            let diameter = |r: f64| 2.0 * (r - term.ball_radius_of(s));
             HeldOutSphere {
                 name: name.clone(),
                 points: of.len(),
@@ -361,7 +361,7 @@ impl SphereEvaluation {
             .map(|(s, name)| {
                 let of = r.rows_of(s);
                 let pick: Vec<f64> = of.iter().map(|&i| e[i]).collect();
-                let d = 2.0 * (fitted[s].1 - term.ball_radius());
+                let d = 2.0 * (fitted[s].1 - term.ball_radius_of(s));
                 (name.clone(), of.len(), d, RadialErrors::of(&pick))
             })
             .collect();

@@ -29,6 +29,7 @@ pub fn random_tools(count: usize, seed: u64) -> Vec<Tool> {
                     r * angle.sin(),
                     rng.random_range(60.0..160.0),
                 ],
+                ball_diameter_mm: None,
             }
         })
         .collect()
@@ -42,6 +43,7 @@ pub fn perturbed_tools(tools: &[Tool], sigma_mm: f64, seed: u64) -> Vec<Tool> {
         .map(|t| Tool {
             name: t.name.clone(),
             offset: t.offset.map(|v| v + sigma_mm * normal(&mut rng)),
+            ball_diameter_mm: t.ball_diameter_mm,
         })
         .collect()
 }

@@ -16,7 +16,6 @@
 //! is refused by the sphere's name.
 
 use super::{SphereTerm, TERM, algebraic_sphere};
-use crate::corrections::Conditions;
 use crate::kernel::PreparedPoses;
 use crate::residuals::{At, HeldOutScorer, Term, TermError, TermFold};
 
@@ -50,8 +49,16 @@ impl SphereTerm {
                 Vec::new()
             }
         };
+        // The subset numbers its tools anew: each keeps its ball by name.
+        let balls = (spheres.tools().iter())
+            .map(|t| {
+                let k = self.spheres.tools().iter().position(|o| o.name == t.name);
+                k.map_or(0.0, |k| self.balls[k])
+            })
+            .collect();
         Ok(SphereTerm {
             centres: of.iter().map(|&s| self.centres[s]).collect(),
+            balls,
             radii: of.iter().map(|&s| self.radii[s]).collect(),
             robust: rows.iter().map(|&i| self.robust[i]).collect(),
             sigmas: pick(&self.sigmas),
@@ -71,10 +78,10 @@ impl SphereTerm {
     ///
     /// The kernel's; a sphere whose points fix no sphere.
     pub fn refitted_spheres(&self, at: &At<'_>) -> Result<Vec<([f64; 3], f64)>, TermError> {
-        let q = tool_positions(self, at)?;
-        let known = (self.known_radius).map(|r| r + self.ball_radius);
+        let q = self.positions(at)?;
         (self.spheres.spheres().iter().enumerate())
             .map(|(s, name)| {
+                let known = (self.known_radius).map(|r| r + self.ball_radius_of(s));
                 let points: Vec<[f64; 3]> = self.spheres.rows_of(s).iter().map(|&i| q[i]).collect();
                 fit_sphere(&points, known).ok_or_else(|| {
                     TermError::invalid(TERM, format!("sphere `{name}`: no sphere fits its points"))
@@ -95,7 +102,7 @@ impl SphereTerm {
     /// The kernel's; a sphere `fit_on` has no points of, or whose points
     /// fix no sphere.
     pub fn refitted_errors(&self, fit_on: &SphereTerm, at: &At<'_>) -> Result<Vec<f64>, TermError> {
-        let p = tool_positions(self, at)?;
+        let p = self.positions(at)?;
         let spheres = fit_on.refitted_spheres(at)?;
         let fitted = (self.spheres.spheres().iter())
             .map(|name| {
@@ -114,14 +121,6 @@ impl SphereTerm {
             })
             .collect())
     }
-}
-
-/// Where `at` puts the probe at each of `term`'s rows (its corrections
-/// applied), mm.
-fn tool_positions(term: &SphereTerm, at: &At<'_>) -> Result<Vec<[f64; 3]>, TermError> {
-    let mut p = vec![[0.0; 3]; term.spheres.len()];
-    at.tool_positions(&term.poses, Conditions::default(), &mut p)?;
-    Ok(p)
 }
 
 /// The sphere of least squared radial error through `points`: its centre
@@ -246,7 +245,7 @@ pub(super) fn split(
             ),
         ));
     }
-    let start = tool_positions(term, at)?;
+    let start = term.positions(at)?;
     deal(term, k, seed)
         .into_iter()
         .enumerate()

@@ -1,0 +1,212 @@
+//! Several probes on one measuring arm: sphere-surface rows naming their
+//! probe (`tool` column, the arm file's `[[tool]]` with its own ball), each
+//! probe's offset fitted beside the arm's geometry and recovered honestly.
+
+use aacmm_core::io::spheres::{Spheres, parse_spheres, write_spheres};
+use aacmm_core::io::{Arm, Tool};
+use aacmm_core::params::DhParams;
+use aacmm_core::prelude::*;
+use aacmm_core::residuals::spheres::{SphereSize, SphereTerm};
+use aacmm_core::simulate::{SphereSettings, simulate_spheres, true_arm};
+use rand::SeedableRng;
+
+const DIAMETER: f64 = 25.4;
+const BALL: f64 = 6.0;
+const LONG_BALL: f64 = 3.0;
+const ENCODER_DEG: f64 = 0.005;
+const PROBE_MM: f64 = 0.01;
+
+fn noise() -> Noise {
+    Noise {
+        encoder_rad: Some(ENCODER_DEG.to_radians()),
+        probe_mm: Some(PROBE_MM),
+        ..Noise::default()
+    }
+}
+
+/// The paper's arm with a 6 mm ball on its probe and a second, longer
+/// stylus `long` (a 3 mm ball, 60 mm further out and 15 mm aside).
+fn nominal() -> Arm {
+    let params = DhParams::paper_nominal();
+    let p = params.probe;
+    Arm {
+        ball_diameter_mm: Some(BALL),
+        tools: vec![Tool {
+            name: "long".into(),
+            offset: [p[0] + 15.0, p[1], p[2] + 60.0],
+            ball_diameter_mm: Some(LONG_BALL),
+        }],
+        ..Arm::without_limits("paper", params)
+    }
+}
+
+fn settings(placements: usize, ball: f64, seed: u64) -> SphereSettings {
+    SphereSettings {
+        placements,
+        diameter_mm: DIAMETER,
+        ball_diameter_mm: ball,
+        encoder_rad: ENCODER_DEG.to_radians(),
+        probe_mm: PROBE_MM,
+        seed,
+    }
+}
+
+/// `truth`'s sphere points by its probe (`S1`, …) and by its `long`
+/// stylus (`L1`, …, the rows naming it), in one file's rows.
+fn two_probe_points(truth: &Arm, placements: usize, seed: u64) -> Spheres {
+    let by_probe = simulate_spheres(truth, &settings(placements, BALL, seed)).unwrap();
+    let long = &truth.tools[0];
+    let stylus = Arm {
+        params: DhParams {
+            probe: long.offset,
+            ..truth.params.clone()
+        },
+        ball_diameter_mm: long.ball_diameter_mm,
+        ..truth.clone()
+    };
+    let by_long = simulate_spheres(&stylus, &settings(placements, LONG_BALL, seed + 1)).unwrap();
+    let mut out = by_probe.spheres.clone();
+    let b = &by_long.spheres;
+    for i in 0..b.len() {
+        let name = b.spheres()[b.sphere(i)].replacen('S', "L", 1);
+        out.push(&name, b.reading(i), out.len() + 2, None);
+        out.set_tool(long);
+    }
+    out
+}
+
+/// The fit of `rows` from `start`, the diameter stated.
+fn fit(start: &Arm, rows: &Spheres) -> CalibrationReport {
+    let model = ModelOptions {
+        noise: noise(),
+        ..ModelOptions::default()
+    };
+    let mut p = Problem::new(start.clone(), DataSet::without_touches(6, 0), model).unwrap();
+    let term = SphereTerm::new(
+        rows.clone(),
+        "spheres.csv",
+        &start.params,
+        SphereSize::Known(DIAMETER),
+        start.ball_diameter_mm,
+        &noise(),
+        |b| p.add_boxed_block(b),
+    )
+    .unwrap();
+    let settings = SolverSettings::default().with_method(Method::Lm);
+    p.with_spheres(term).run(&settings).unwrap()
+}
+
+/// A true arm of `seed` (geometry errors where the spheres see them; its
+/// stylus 0.3 mm per axis off the nominal) and its two probes' points.
+fn campaign(seed: u64) -> (Arm, Spheres) {
+    let nominal = nominal();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut truth = true_arm(&nominal, &ErrorModel::random(1.0, false), &mut rng).unwrap();
+    truth.tools[0].offset =
+        aacmm_core::simulate::perturbed_tools(&truth.tools, 0.3, seed + 7)[0].offset;
+    // What the spheres cannot see stays nominal, so every free parameter
+    // has its truth to compare with.
+    let first = fit(&nominal, &two_probe_points(&truth, 4, seed + 1000));
+    for e in (first.calibration.parameters.iter()).filter(|e| e.fixed.is_some()) {
+        *truth.params.get_mut(e.id) = nominal.params.get(e.id);
+    }
+    let rows = two_probe_points(&truth, 4, seed + 1000);
+    (truth, rows)
+}
+
+/// Over seeds, each probe's offset (the arm's `B` and the stylus' block)
+/// recovered within its σ: the normalised errors' RMS near 1, none beyond
+/// 4σ; the calibrated arm file carries the stylus' fitted offset and ball.
+#[test]
+fn two_probes_on_spheres_are_each_recovered() {
+    let mut z2 = Vec::new();
+    for seed in 0..6 {
+        let (truth, rows) = campaign(seed);
+        let report = fit(&nominal(), &rows);
+        assert!(report.verdict.usable, "seed {seed}: {:?}", report.verdict);
+        let c = &report.calibration;
+        let long = (c.tool_estimates().into_iter())
+            .find(|(n, _, _)| n == "long")
+            .expect("the stylus' offset fitted");
+        let sigma = long.2.expect("its σ");
+        for k in 0..3 {
+            z2.push(((long.1[k] - truth.tools[0].offset[k]) / sigma[k]).powi(2));
+        }
+        for e in (c.parameters.iter()).filter(|e| e.fixed.is_none() && e.id.kind.is_length()) {
+            z2.push(((e.calibrated - truth.params.get(e.id)) / e.sigma.unwrap()).powi(2));
+        }
+        let arm = report.calibrated_arm(&nominal());
+        assert_eq!(arm.tools[0].offset, long.1, "seed {seed}");
+        assert_eq!(arm.tools[0].ball_diameter_mm, Some(LONG_BALL));
+    }
+    let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    let worst = z2.iter().copied().fold(0.0, f64::max).sqrt();
+    eprintln!("normalised RMS {rms}, worst {worst}σ over {}", z2.len());
+    assert!(
+        (0.6..1.4).contains(&rms),
+        "normalised RMS {rms} over {}",
+        z2.len()
+    );
+    assert!(worst < 4.5, "worst {worst}σ");
+}
+
+/// A file's `tool` column round-trips, and what is refused is named by
+/// line and field: a tool the arm does not know, a placement probed by two
+/// tools, a stated diameter with a stylus that gives no ball.
+#[test]
+fn the_tool_column_is_read_written_and_checked() {
+    let arm = nominal();
+    let rows = two_probe_points(&arm, 1, 3);
+    let mut text = Vec::new();
+    write_spheres(&mut text, &rows, AngleUnit::Deg).unwrap();
+    let text = String::from_utf8(text).unwrap();
+    assert!(
+        text.starts_with("sphere,q1,q2,q3,q4,q5,q6,tool\n"),
+        "{text}"
+    );
+    assert!(text.lines().nth(1).unwrap().ends_with(",probe"), "{text}");
+    assert!(text.lines().last().unwrap().ends_with(",long"), "{text}");
+    let (back, _) = parse_spheres(&text, "s.csv", AngleUnit::Deg, &arm).unwrap();
+    assert_eq!(back.len(), rows.len());
+    assert_eq!((back.tool(0), back.tool(rows.len() - 1)), (0, 1));
+    assert_eq!(back.tools()[1], arm.tools[0]);
+    // An unknown tool, named with the known ones.
+    let unknown = text.replacen(",long\n", ",short\n", 1);
+    let e = parse_spheres(&unknown, "s.csv", AngleUnit::Deg, &arm)
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("s.csv:27: field `tool`: `short`"), "{e}");
+    assert!(e.contains("`probe`, `long`"), "{e}");
+    // One placement, two tools.
+    let mixed = text.replacen(",probe\n", ",long\n", 1);
+    let e = parse_spheres(&mixed, "s.csv", AngleUnit::Deg, &arm)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(
+            "s.csv:3: field `tool`: sphere `S1` is probed by `long` (line 2) and by `probe`"
+        ),
+        "{e}"
+    );
+    // A stylus without its ball, the diameter stated.
+    let mut bare = arm.clone();
+    bare.tools[0].ball_diameter_mm = None;
+    let (rows, _) = parse_spheres(&text, "s.csv", AngleUnit::Deg, &bare).unwrap();
+    let mut layout = aacmm_core::residuals::Layout::new(bare.params.clone());
+    let e = SphereTerm::new(
+        rows,
+        "s.csv",
+        &bare.params,
+        SphereSize::Known(DIAMETER),
+        bare.ball_diameter_mm,
+        &noise(),
+        aacmm_core::residuals::spheres::add_to(&mut layout),
+    )
+    .map(|_| ())
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("tool `long`") && e.contains("ball_diameter_mm"),
+        "{e}"
+    );
+}
