@@ -129,8 +129,8 @@ fn two_probes_on_spheres_are_each_recovered() {
             .find(|(n, _, _)| n == "long")
             .expect("the stylus' offset fitted");
         let sigma = long.2.expect("its σ");
-        for k in 0..3 {
-            z2.push(((long.1[k] - truth.tools[0].offset[k]) / sigma[k]).powi(2));
+        for ((x, t), s) in long.1.iter().zip(truth.tools[0].offset).zip(sigma) {
+            z2.push(((x - t) / s).powi(2));
         }
         for e in (c.parameters.iter()).filter(|e| e.fixed.is_none() && e.id.kind.is_length()) {
             z2.push(((e.calibrated - truth.params.get(e.id)) / e.sigma.unwrap()).powi(2));
@@ -141,7 +141,6 @@ fn two_probes_on_spheres_are_each_recovered() {
     }
     let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
     let worst = z2.iter().copied().fold(0.0, f64::max).sqrt();
-    eprintln!("normalised RMS {rms}, worst {worst}σ over {}", z2.len());
     assert!(
         (0.6..1.4).contains(&rms),
         "normalised RMS {rms} over {}",
