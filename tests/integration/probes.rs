@@ -15,6 +15,8 @@ const BALL: f64 = 6.0;
 const LONG_BALL: f64 = 3.0;
 const ENCODER_DEG: f64 = 0.005;
 const PROBE_MM: f64 = 0.01;
+const QUALIFY_ENCODER_DEG: f64 = 0.001;
+const QUALIFY_PROBE_MM: f64 = 0.005;
 
 fn noise() -> Noise {
     Noise {
@@ -207,5 +209,124 @@ fn the_tool_column_is_read_written_and_checked() {
     assert!(
         e.contains("tool `long`") && e.contains("ball_diameter_mm"),
         "{e}"
+    );
+}
+
+/// The stylus `long` of the nominal arm qualified on one sphere its true
+/// twin (offset `moved` mm off along x, effective ball `ball`) probed with
+/// the probing noise `probe_mm`.
+fn qualification(
+    seed: u64,
+    moved: f64,
+    ball: f64,
+    probe_mm: f64,
+    max_form_mm: Option<f64>,
+) -> (Tool, aacmm_core::session::probe::ProbeQualification) {
+    use aacmm_core::session::probe::{ProbeSettings, qualify_probe};
+    let nominal = nominal();
+    let mut truth = nominal.tools[0].clone();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let jitter = aacmm_core::simulate::perturbed_tools(&[truth.clone()], 0.01, seed + 11)[0].offset;
+    truth.offset = [jitter[0] + moved, jitter[1], jitter[2]];
+    truth.ball_diameter_mm = Some(ball);
+    let stylus = Arm {
+        params: DhParams {
+            probe: truth.offset,
+            ..nominal.params.clone()
+        },
+        ball_diameter_mm: Some(ball),
+        ..nominal.clone()
+    };
+    // A good arm's noise: the tip's σ (≈ 0.005 mm) well below the
+    // tolerance a bent stylus is told by.
+    let s = SphereSettings {
+        probe_mm,
+        encoder_rad: QUALIFY_ENCODER_DEG.to_radians(),
+        ..settings(1, ball, rand::RngExt::random(&mut rng))
+    };
+    let points = simulate_spheres(&stylus, &s).unwrap().spheres;
+    let q = qualify_probe(
+        &nominal,
+        points,
+        "ring.csv",
+        &ProbeSettings {
+            tool: "long".into(),
+            sphere_diameter_mm: DIAMETER,
+            noise: Noise {
+                encoder_rad: Some(QUALIFY_ENCODER_DEG.to_radians()),
+                probe_mm: Some(QUALIFY_PROBE_MM),
+                ..Noise::default()
+            },
+            tolerance_mm: 0.05,
+            max_form_mm,
+        },
+    )
+    .unwrap();
+    (truth, q)
+}
+
+/// Over 50 seeds the stylus' tip offset and effective ball diameter are
+/// recovered within their σ (normalised RMS near 1, none beyond 4.5σ), a
+/// clean probe qualifies without a warning, and the qualified arm carries
+/// them.
+#[test]
+fn probe_qualification_recovers_the_tip_and_the_ball() {
+    let mut z2 = Vec::new();
+    for seed in 0..50 {
+        let (truth, q) = qualification(seed, 0.0, 2.996, QUALIFY_PROBE_MM, None);
+        assert!(
+            q.usable() && q.warnings.is_empty(),
+            "seed {seed}: {}",
+            q.summary()
+        );
+        for k in 0..3 {
+            z2.push(((q.offset[k] - truth.offset[k]) / q.offset_sigma[k]).powi(2));
+        }
+        z2.push(((q.ball_diameter_mm - 2.996) / q.ball_sigma_mm).powi(2));
+        let arm = q.qualified_arm(&nominal());
+        assert_eq!(
+            (arm.tools[0].offset, arm.tools[0].ball_diameter_mm),
+            (q.offset, Some(q.ball_diameter_mm))
+        );
+    }
+    let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    let worst = z2.iter().copied().fold(0.0, f64::max).sqrt();
+    assert!(
+        (0.7..1.3).contains(&rms),
+        "normalised RMS {rms} over {}",
+        z2.len()
+    );
+    assert!(worst < 4.5, "worst {worst}σ");
+}
+
+/// A stylus bent by 0.1 mm is flagged (qualified, with the move named); a
+/// loose one — probing scatter five times the stated — is refused by the
+/// χ² test, and a form beyond a limit set by the form.
+#[test]
+fn a_bent_stylus_is_flagged_and_a_loose_one_refused() {
+    let (_, bent) = qualification(3, 0.1, 3.0, QUALIFY_PROBE_MM, None);
+    assert!(bent.usable(), "{}", bent.summary());
+    assert!((bent.moved_mm - 0.1).abs() < 0.02, "{}", bent.summary());
+    assert!(
+        bent.warnings
+            .iter()
+            .any(|w| w.contains(&format!("the tip moved {:.4} mm", bent.moved_mm))),
+        "{}",
+        bent.summary()
+    );
+    let (_, loose) = qualification(3, 0.0, 3.0, 5.0 * QUALIFY_PROBE_MM, None);
+    assert!(!loose.usable(), "{}", loose.summary());
+    assert!(
+        loose.summary().contains("NOT QUALIFIED"),
+        "{}",
+        loose.summary()
+    );
+    assert!(loose.refusals[0].contains("χ²"), "{}", loose.summary());
+    let (_, limited) = qualification(3, 0.0, 3.0, QUALIFY_PROBE_MM, Some(0.01));
+    assert!(!limited.usable(), "{}", limited.summary());
+    assert!(
+        limited.refusals.iter().any(|r| r.contains("form")),
+        "{}",
+        limited.summary()
     );
 }

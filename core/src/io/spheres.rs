@@ -360,7 +360,10 @@ pub fn parse_spheres(
     let columns = joints.into();
     let expected = columns.expected();
     let mut layout: Option<Header> = None;
-    let tools = columns.tools().cloned().unwrap_or_else(|| ToolNames::of(&[]));
+    let tools = columns
+        .tools()
+        .cloned()
+        .unwrap_or_else(|| ToolNames::of(&[]));
     let mut out: Option<Spheres> = None;
     let mut q = Vec::new();
     scan_table(
@@ -655,7 +658,12 @@ mod tests {
         let e = parse(&format!("sphere,q1,q2\n{}{}", rows("A", 4), rows("B", 3))).unwrap_err();
         assert_at(&e, 6, "sphere", "sphere `B` has 3 points");
         let e = parse(&format!("sphere,q1,q2,tool\n{}", "A,1,2,t\n")).unwrap_err();
-        assert_at(&e, 2, "tool", "`t`: a tool the arm does not know (its tools: `probe`;");
+        assert_at(
+            &e,
+            2,
+            "tool",
+            "`t`: a tool the arm does not know (its tools: `probe`;",
+        );
         let e = parse("sphere,q1,q2,tool,articulation\nA,1,2,,1\n").unwrap_err();
         assert_at(&e, 1, "tool", "expected `articulation`");
         let e = parse("sphere,q1,q2,colour\nA,1,2,red\n").unwrap_err();

@@ -22,6 +22,7 @@ pub(crate) mod evaluation;
 pub(crate) mod identification;
 mod map;
 mod position_evaluation;
+pub mod probe;
 pub mod request;
 pub mod spheres;
 pub mod tools;
