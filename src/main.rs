@@ -34,6 +34,9 @@ enum Command {
     /// Evaluate an arm on measured poses (single-point and length metrics) or at reference positions (3-D errors).
     #[command(allow_negative_numbers = true)]
     Evaluate(commands::evaluate::Args),
+    /// Qualify a probe on a reference sphere: its tip offset and effective ball diameter, the arm's geometry held.
+    #[command(allow_negative_numbers = true)]
+    Probe(commands::probe::Args),
     /// Identifiability: which parameters the data can determine, and which to fix.
     #[command(allow_negative_numbers = true)]
     Identify(commands::identify::Args),
@@ -81,6 +84,7 @@ fn main() -> ExitCode {
         Command::Points(args) => commands::points::run(args),
         Command::Simulate(args) => commands::simulate::run(args),
         Command::Evaluate(args) => commands::evaluate::run(args),
+        Command::Probe(args) => commands::probe::run(args),
         Command::Identify(args) => commands::identify::run(args),
         Command::Calibrate(args) => commands::calibrate::run(*args),
         Command::Import(args) => commands::import::run(args),

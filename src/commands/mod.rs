@@ -8,6 +8,7 @@ pub mod identify;
 pub mod import;
 pub mod plan;
 pub mod points;
+pub mod probe;
 pub mod progress;
 pub mod report;
 pub mod shared_flags;

@@ -330,3 +330,93 @@ fn a_bent_stylus_is_flagged_and_a_loose_one_refused() {
         limited.summary()
     );
 }
+
+/// `aacmm probe` on a stylus' sphere points: the summary, the qualified
+/// arm file (its [[tool]] at the fitted offset and ball) and exit 0; a
+/// probe the arm does not know is named; a refused qualification writes
+/// nothing and exits 1.
+#[test]
+fn the_probe_command_qualifies_and_refuses() {
+    use crate::util::{aacmm, assert_clean_error, stdout, temp_dir, write};
+    let dir = temp_dir("probe-cli");
+    let arm = write(
+        &dir,
+        "arm.toml",
+        &aacmm_core::io::arm_to_toml(&nominal(), aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg),
+    );
+    let file = |name: &str, probe_mm: f64| {
+        let nominal = nominal();
+        let stylus = Arm {
+            params: DhParams {
+                probe: nominal.tools[0].offset,
+                ..nominal.params.clone()
+            },
+            ..nominal.clone()
+        };
+        let s = SphereSettings {
+            probe_mm,
+            encoder_rad: QUALIFY_ENCODER_DEG.to_radians(),
+            ..settings(1, LONG_BALL, 5)
+        };
+        let mut text = Vec::new();
+        write_spheres(
+            &mut text,
+            &simulate_spheres(&stylus, &s).unwrap().spheres,
+            AngleUnit::Deg,
+        )
+        .unwrap();
+        write(&dir, name, &String::from_utf8(text).unwrap())
+    };
+    let (good, loose) = (
+        file("good.csv", QUALIFY_PROBE_MM),
+        file("loose.csv", 5.0 * QUALIFY_PROBE_MM),
+    );
+    let out = dir.join("qualified.toml");
+    let run = |points: &str, tool: &str| {
+        aacmm(&[
+            "probe",
+            "--arm",
+            &arm,
+            "--spheres",
+            points,
+            "--sphere-diameter",
+            "25.4",
+            "--tool",
+            tool,
+            "--encoder-noise",
+            "0.001",
+            "--probe-noise",
+            "0.005",
+            "--out",
+            out.to_str().unwrap(),
+            "--force",
+        ])
+    };
+    let o = run(&good, "long");
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    assert!(stdout(&o).contains("Verdict: QUALIFIED"), "{}", stdout(&o));
+    let (qualified, _) = aacmm_core::io::read_arm(&out).unwrap();
+    let t = &qualified.tools[0];
+    assert!(
+        aacmm_core::geometry::distance(&t.offset, &nominal().tools[0].offset) < 0.03,
+        "{t:?}"
+    );
+    assert!(
+        (t.ball_diameter_mm.unwrap() - LONG_BALL).abs() < 0.03,
+        "{t:?}"
+    );
+    assert_ne!(t.offset, nominal().tools[0].offset);
+    std::fs::remove_file(&out).unwrap();
+    assert_clean_error(
+        &run(&good, "short"),
+        &["--tool short: the arm has no such probe", "`probe`, `long`"],
+    );
+    let o = run(&loose, "long");
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        crate::util::stderr(&o).contains("nothing was written"),
+        "{}",
+        crate::util::stderr(&o)
+    );
+    assert!(!out.exists());
+}

@@ -249,7 +249,7 @@ fn judged(
     let (form, rms) = after.map_or((f64::NAN, f64::NAN), |a| (a.form, a.rms));
     let moved = crate::geometry::distance(&offset, &f.nominal_offset);
     let mut refusals: Vec<String> = report.verdict.reasons.clone();
-    if let Some(limit) = settings.max_form_mm.filter(|&m| !(form <= m)) {
+    if let Some(limit) = settings.max_form_mm.filter(|&m| form.is_nan() || form > m) {
         refusals.push(format!(
             "the sphere's form as the probe sees it is {form:.4} mm, beyond the limit of {} mm: \
              a loose or bent stylus, a dirty ball or sphere, or a touch off the surface — clean, \
@@ -257,7 +257,7 @@ fn judged(
             crate::error::short(limit)
         ));
     }
-    if !(ball > 0.0) {
+    if ball.is_nan() || ball <= 0.0 {
         refusals.push(format!(
             "the effective ball diameter {ball:.4} mm is not positive: the sphere's diameter \
              ({} mm) or the ball's is misstated",
