@@ -96,6 +96,11 @@ enum AacmmStatus
    */
   AACMM_STATUS_OUT_OF_MEMORY = 10,
   /**
+   * The calibration was stopped by its cancellation token
+   * (`aacmm_cancel_set`): no result.
+   */
+  AACMM_STATUS_CANCELLED = 11,
+  /**
    * An internal error (a bug in aacmm) was caught; the host process is
    * unaffected and the message says what happened.
    */
@@ -188,6 +193,14 @@ typedef struct AacmmCalibrateOptions AacmmCalibrateOptions;
  * `aacmm_calibration_free`. Never modified after it is made.
  */
 typedef struct AacmmCalibration AacmmCalibration;
+
+/**
+ * A cancellation token. Opaque; made by `aacmm_cancel_new`, set by
+ * `aacmm_cancel_set` (from any thread, at any time), released by
+ * `aacmm_cancel_free`. Once set it stays set: make a new one for the next
+ * calibration.
+ */
+typedef struct AacmmCancel AacmmCancel;
 
 /**
  * The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
@@ -998,6 +1011,57 @@ AacmmStatus aacmm_calibration_auxiliary(const AacmmCalibration *cal,
                                         char *buf,
                                         size_t buf_len,
                                         size_t *len);
+
+/**
+ * A new token, not set, at `*out` (release it with `aacmm_cancel_free`).
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`out`).
+ *
+ * # Safety
+ *
+ * `out` is `NULL` or points to writable memory for one pointer.
+ */
+AacmmStatus aacmm_cancel_new(AacmmCancel **out);
+
+/**
+ * Sets the token: every calibration given it stops at its next check and
+ * returns `AACMM_STATUS_CANCELLED`. Safe from any thread, also while a
+ * calibration runs with it.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`cancel`).
+ *
+ * # Safety
+ *
+ * `cancel` is `NULL` or a live token.
+ */
+AacmmStatus aacmm_cancel_set(const AacmmCancel *cancel);
+
+/**
+ * Releases a token. `NULL` is allowed (nothing happens). Options it was
+ * given to keep their own reference: a calibration running with them can
+ * still be stopped through another handle of it — not through this one,
+ * which must not be used afterwards.
+ *
+ * # Safety
+ *
+ * `cancel` is `NULL` or a live token, which must not be used afterwards.
+ */
+void aacmm_cancel_free(AacmmCancel *cancel);
+
+/**
+ * Calibrations with these options stop when `cancel` is set (`NULL`: none
+ * can be stopped, the default). The options hold their own reference to
+ * the token.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`options`).
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; `cancel` is `NULL` or a live
+ * token.
+ */
+AacmmStatus aacmm_calibrate_options_set_cancel(AacmmCalibrateOptions *options,
+                                               const AacmmCancel *cancel);
 
 /**
  * Copies the message of the last failed call on this thread into `buf`.

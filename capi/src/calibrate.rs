@@ -195,9 +195,19 @@ pub struct AacmmCalibration {
 
 /// Calibrates and builds the result: the library's request and session
 /// (what the command line runs), without held-out validation.
-fn run(request: Request) -> Result<AacmmCalibration, Error> {
+fn run(
+    request: Request,
+    cancel: Option<&aacmm_core::calibrate::Cancel>,
+) -> Result<AacmmCalibration, Error> {
     let arm_file = request.arm_file().to_string();
-    let (problem, report) = request.run().map_err(|e| in_file(e, &arm_file))?;
+    let (problem, settings) = request.build().map_err(|e| in_file(e, &arm_file))?;
+    let mut ctx = aacmm_core::calibrate::Context::new();
+    if let Some(token) = cancel {
+        ctx = ctx.cancelled_by(token.clone());
+    }
+    let solver = settings.method.solver();
+    let report = aacmm_core::session::run(&problem, &settings, &*solver, &mut ctx)
+        .map_err(|e| in_file(e, &arm_file))?;
     Ok(AacmmCalibration {
         calibrated: report.calibrated_arm(problem.arm()),
         json: report.to_json(),
@@ -335,7 +345,7 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
         if let (true, Some(path)) = (poses_path.is_some() || positions.is_some(), &spheres) {
             request = request.read_spheres(path)?;
         }
-        let result = run(options::request(&o, request))?;
+        let result = run(options::request(&o, request), o.cancel())?;
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })
@@ -472,7 +482,7 @@ pub unsafe extern "C" fn aacmm_calibrate(
                 .collect(),
         };
         let request = Request::new(start.arm.clone(), data).sources(sources);
-        let result = run(options::request(&o, request))?;
+        let result = run(options::request(&o, request), o.cancel())?;
         // SAFETY: checked writable above.
         unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
     })

@@ -61,6 +61,9 @@ pub enum AacmmStatus {
     /// seen, and ends the process later): nothing was computed, the host
     /// process is unaffected, and the message says how much was asked for.
     OutOfMemory = 10,
+    /// The calibration was stopped by its cancellation token
+    /// (`aacmm_cancel_set`): no result.
+    Cancelled = 11,
     /// An internal error (a bug in aacmm) was caught; the host process is
     /// unaffected and the message says what happened.
     Panic = 99,
@@ -128,6 +131,7 @@ impl From<CalibrationError> for Error {
             CalibrationError::Kernel(_) => AacmmStatus::Length,
             CalibrationError::Option(o) => return Error::from(o.clone()),
             CalibrationError::Memory(_) => AacmmStatus::OutOfMemory,
+            CalibrationError::Cancelled => AacmmStatus::Cancelled,
             _ => AacmmStatus::Calibration,
         };
         Error::new(status, e.to_string())

@@ -42,6 +42,7 @@
 
 mod arm;
 mod calibrate;
+mod cancel;
 mod error;
 mod map;
 mod options;
@@ -63,6 +64,10 @@ pub use calibrate::{
     aacmm_calibration_frame_count, aacmm_calibration_free, aacmm_calibration_params,
     aacmm_calibration_report, aacmm_calibration_sigmas, aacmm_calibration_summary,
     aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
+};
+pub use cancel::{
+    AacmmCancel, aacmm_calibrate_options_set_cancel, aacmm_cancel_free, aacmm_cancel_new,
+    aacmm_cancel_set,
 };
 pub use error::{AacmmStatus, aacmm_last_error_message};
 pub use map::{

@@ -123,6 +123,8 @@ pub struct AacmmCalibrateOptions {
     spheres: Option<std::path::PathBuf>,
     /// `--sphere-diameter`, mm; `None`: fitted per sphere.
     sphere_diameter_mm: Option<f64>,
+    /// The token that stops its calibrations (Ctrl-C's, for the CLI).
+    cancel: Option<aacmm_core::calibrate::Cancel>,
 }
 
 impl AacmmCalibrateOptions {
@@ -135,6 +137,16 @@ impl AacmmCalibrateOptions {
     /// The sphere-surface file, if one was set.
     pub(crate) fn spheres(&self) -> Option<&std::path::Path> {
         self.spheres.as_deref()
+    }
+
+    /// The token that stops its calibrations, if one was set.
+    pub(crate) fn cancel(&self) -> Option<&aacmm_core::calibrate::Cancel> {
+        self.cancel.as_ref()
+    }
+
+    /// Sets (or clears) the token that stops its calibrations.
+    pub(crate) fn set_cancel(&mut self, token: Option<aacmm_core::calibrate::Cancel>) {
+        self.cancel = token;
     }
 }
 
@@ -160,6 +172,7 @@ impl Default for AacmmCalibrateOptions {
             positions: None,
             spheres: None,
             sphere_diameter_mm: None,
+            cancel: None,
         }
     }
 }

@@ -19,7 +19,7 @@ use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::arm::{Arm, warn_all};
 use crate::data::DataSet;
-use crate::error::{Error, Kind, detached};
+use crate::error::{Error, Kind, detached, interruptible};
 use crate::noise::Noise;
 use crate::spheres::SphereArg;
 use crate::{to_dict, to_python};
@@ -153,7 +153,9 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 ///
 /// Raises `ValueError` for a bad option (naming the argument),
 /// `aacmm.CalibrationError` when the data cannot determine the free
-/// parameters. A calibration that is not usable still gives a result:
+/// parameters, `KeyboardInterrupt` on Ctrl-C (the solvers stop at their
+/// next check, within milliseconds; no result). A calibration that is not
+/// usable still gives a result:
 /// check `successful` (the verdict) and `report["verdict"]` for why.
 #[pyfunction]
 #[pyo3(signature = (arm, data = None, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None, register_held_out = false, spheres = None, sphere_diameter = None, validate_spheres = None, sphere_angle_unit = "deg"))]
@@ -233,11 +235,13 @@ pub fn calibrate(
         .filter(|w| !read.contains(&w))
         .collect();
     warn_all(py, &added)?;
-    detached(py, || {
+    let cancel = aacmm_core::calibrate::Cancel::new();
+    interruptible(py, &cancel, || {
         let (problem, settings) = request.build().map_err(|e| refusal(e, data, arm))?;
         let started = Instant::now();
         let solver = settings.method.solver();
-        let report = session::run(&problem, &settings, &*solver, &mut Context::new())
+        let mut ctx = Context::new().cancelled_by(cancel.clone());
+        let report = session::run(&problem, &settings, &*solver, &mut ctx)
             .map_err(|e| Error::from(e).prefixed(&arm.source))?;
         Ok(Calibration {
             problem,

@@ -313,6 +313,56 @@ pub(crate) fn guard<T>(body: impl FnOnce() -> Result<T>) -> Result<T> {
     })
 }
 
+/// How often a long calibration looks for Ctrl-C (Python's signal
+/// handlers run only on the main thread, between its bytecodes: this
+/// thread runs them while the work runs on another).
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(20);
+
+/// [`detached`] for a calibration that Ctrl-C may stop: `body` runs on a
+/// thread of its own with `cancel` (the token its solvers check) while this
+/// one, the caller's, wakes every [`SIGNAL_POLL`] to run Python's signal
+/// handlers. A `KeyboardInterrupt` (or any exception a handler raises)
+/// sets the token, waits for the work to stop at its next check, and is
+/// raised as it is — no half-finished result.
+pub(crate) fn interruptible<T: Send>(
+    py: pyo3::Python<'_>,
+    cancel: &aacmm_core::calibrate::Cancel,
+    body: impl FnOnce() -> Result<T> + Send,
+) -> pyo3::PyResult<T> {
+    let mut raised: Option<PyErr> = None;
+    let result = py.detach(|| {
+        std::thread::scope(|s| {
+            let (done, finished) = std::sync::mpsc::channel::<()>();
+            let work = s.spawn(move || {
+                let r = guard(body);
+                let _ = done.send(());
+                r
+            });
+            while raised.is_none() {
+                match finished.recv_timeout(SIGNAL_POLL) {
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                        if let Err(e) = pyo3::Python::attach(|py| py.check_signals()) {
+                            cancel.cancel();
+                            raised = Some(e);
+                        }
+                    }
+                    _ => break,
+                }
+            }
+            work.join().unwrap_or_else(|_| {
+                Err(Error::new(
+                    Kind::Internal,
+                    "internal error in aacmm: a worker died",
+                ))
+            })
+        })
+    });
+    match raised {
+        Some(e) => Err(e),
+        None => result.map_err(PyErr::from),
+    }
+}
+
 /// Runs `body` without the GIL (other Python threads run meanwhile), with
 /// panics caught.
 pub(crate) fn detached<T: Send>(

@@ -2,6 +2,9 @@
 the command line's outputs."""
 
 import json
+import threading
+import time
+
 import numpy as np
 import pytest
 
@@ -316,3 +319,27 @@ def test_a_child_forked_after_the_worker_threads_started_calibrates(arm):
             child.kill()
     assert child.exitcode == 0
     assert params == parent.params.tolist()
+
+
+def test_ctrl_c_stops_a_calibration_with_keyboard_interrupt(arm):
+    """Ctrl-C during a long calibration raises KeyboardInterrupt promptly:
+    the calling thread runs Python's signal handlers while the work runs
+    without the GIL, and sets the token every solver checks (annealing at
+    each temperature). No result comes back."""
+    import os
+    import signal
+
+    campaign = aacmm.simulate(arm, sockets=400, poses=10, seed=3, encoder_noise_deg=0.005, probe_noise_mm=0.01)
+    sent = []
+
+    def interrupt():
+        sent.append(time.monotonic())
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(0.3, interrupt)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        aacmm.calibrate(arm, campaign.data, method="sa", threads=1)
+    latency = time.monotonic() - sent[0]
+    timer.join()
+    assert latency < 1.0, latency
