@@ -343,6 +343,36 @@ fn every_solver_stops_on_a_set_token() {
     assert_eq!(with.unwrap().to_json(), without.to_json());
 }
 
+/// The folds of a cross-validation stop with the run: each fold's
+/// calibration checks the run's token (a fold of the endless search set
+/// from another thread returns promptly, not after its own search).
+#[test]
+fn the_folds_stop_with_the_run() {
+    use aacmm_core::CalibrationError;
+    use aacmm_core::calibrate::Cancel;
+    use aacmm_core::calibrate::validate::cross_validate_cancellable;
+    use std::time::{Duration, Instant};
+    let (problem, settings) = endless_search();
+    let token = Cancel::new();
+    let stopper = token.clone();
+    let canceller = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_millis(300));
+        let at = Instant::now();
+        stopper.cancel();
+        at
+    });
+    let solver = Method::Global.solver();
+    let r = cross_validate_cancellable(problem.inputs(), &settings, &*solver, 3, Some(&token));
+    let ended = Instant::now();
+    let cancelled_at = canceller.join().unwrap();
+    assert!(
+        matches!(r, Err(CalibrationError::Cancelled)),
+        "{:?}",
+        r.map(|_| ())
+    );
+    assert!(ended.saturating_duration_since(cancelled_at) < Duration::from_millis(100));
+}
+
 /// A global search that would run for minutes, cancelled from another
 /// thread after 300 ms, returns `Cancelled` promptly: every LM of the
 /// search checks the token before each iteration, and its torus grid every

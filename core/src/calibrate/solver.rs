@@ -76,6 +76,12 @@ impl<'a> Context<'a> {
     pub fn check(&self) -> Result<(), CalibrationError> {
         Cancel::check(self.cancel.as_ref())
     }
+
+    /// The cancellation token, if one was given: what the calibrations a
+    /// run makes of its own (the folds) check too.
+    pub fn cancel_token(&self) -> Option<&Cancel> {
+        self.cancel.as_ref()
+    }
 }
 
 /// A cancellation token: cheap to clone, shared between the thread that

@@ -37,7 +37,7 @@ pub use request::{Request, user_noise};
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::validate::{
-    ArmView, BeforeAfter, Figures, Fold, before_after_of, check_folds, cross_validate,
+    ArmView, BeforeAfter, Figures, Fold, before_after_of, check_folds, cross_validate_cancellable,
     registered_frames, seen_by, split_terms,
 };
 use crate::calibrate::{
@@ -1607,11 +1607,18 @@ pub fn run(
         }),
         None => None,
     };
-    // The folds are calibrations of their own: not started once cancelled.
+    // The folds are calibrations of their own: not started once cancelled,
+    // and each stops with the run.
     ctx.check()?;
     let cross_validation = match problem.cross_validate {
         Some(k) => Some(CrossValidation {
-            folds: cross_validate(problem.inputs(), settings, solver, k)?,
+            folds: cross_validate_cancellable(
+                problem.inputs(),
+                settings,
+                solver,
+                k,
+                ctx.cancel_token(),
+            )?,
             seed: settings.seed,
         }),
         None => None,

@@ -670,6 +670,22 @@ pub fn cross_validate(
     solver: &dyn Solver,
     k: usize,
 ) -> Result<Vec<Fold>, CalibrationError> {
+    cross_validate_cancellable(inputs, settings, solver, k, None)
+}
+
+/// [`cross_validate`], each fold's calibration stopped by `cancel` when it
+/// is set ([`CalibrationError::Cancelled`]): a run's folds stop with it.
+///
+/// # Errors
+///
+/// As [`cross_validate`]; [`CalibrationError::Cancelled`].
+pub fn cross_validate_cancellable(
+    inputs: FitInputs<'_>,
+    settings: &SolverSettings,
+    solver: &dyn Solver,
+    k: usize,
+    cancel: Option<&super::Cancel>,
+) -> Result<Vec<Fold>, CalibrationError> {
     let (start, data) = (inputs.layout.geometry(), inputs.data);
     let stated =
         (inputs.layout.corrections()).map_or_else(Physics::default, |(b, _)| b.physics.clone());
@@ -686,7 +702,11 @@ pub fn cross_validate(
                 terms: &terms,
                 ..inputs
             };
-            let fit = calibrate_with(fold, settings, solver, &mut Context::new())?;
+            let mut ctx = Context::new();
+            if let Some(token) = cancel {
+                ctx = ctx.cancelled_by(token.clone());
+            }
+            let fit = calibrate_with(fold, settings, solver, &mut ctx)?;
             let scored = score_terms(inputs.layout, inputs.terms, &split, f, &fit)?;
             let start_frames = registered_frames(start, &*seen_by(start, &stated, &train_data)?)?;
             let fit_frames = fit.frames_with_mount();
