@@ -137,6 +137,19 @@ fn two_probes_on_spheres_are_each_recovered() {
         for e in (c.parameters.iter()).filter(|e| e.fixed.is_none() && e.id.kind.is_length()) {
             z2.push(((e.calibrated - truth.params.get(e.id)) / e.sigma.unwrap()).powi(2));
         }
+        let spheres = report.spheres.as_ref().expect("the spheres' report");
+        let names: Vec<&str> = spheres.probes.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["probe", "long"]);
+        assert_eq!(spheres.probes[1].offset, long.1);
+        assert_eq!(spheres.probes[1].spheres, ["L1", "L2", "L3", "L4"]);
+        assert_eq!(
+            (
+                spheres.probes[0].ball_diameter,
+                spheres.probes[1].ball_diameter
+            ),
+            (BALL, LONG_BALL)
+        );
+        assert!(report.summary().contains("\nlong "), "{}", report.summary());
         let arm = report.calibrated_arm(&nominal());
         assert_eq!(arm.tools[0].offset, long.1, "seed {seed}");
         assert_eq!(arm.tools[0].ball_diameter_mm, Some(LONG_BALL));

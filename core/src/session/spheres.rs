@@ -67,6 +67,25 @@ pub struct SphereReport {
     pub ball_diameter: f64,
     /// Per sphere, in the file's order.
     pub spheres: Vec<SphereResult>,
+    /// Per probe the rows name (the default `probe` first), when some row
+    /// names a `[[tool]]`: its offset and ball.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub probes: Vec<ProbeResult>,
+}
+
+/// One probe of a sphere file whose rows name several.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ProbeResult {
+    /// Its name ([`crate::io::DEFAULT_TOOL`] for the arm's `[probe]`).
+    pub name: String,
+    /// The spheres it probed.
+    pub spheres: Vec<String>,
+    /// Its fitted offset, mm (the last joint's frame).
+    pub offset: [f64; 3],
+    /// Its σ per axis, mm, when fitted.
+    pub sigma: Option<[f64; 3]>,
+    /// Its ball's diameter, mm.
+    pub ball_diameter: f64,
 }
 
 /// The term's radial errors at `x` of `layout`.
@@ -122,7 +141,39 @@ pub(crate) fn sphere_report(
         stated_diameter: term.stated_radius().map(|r| 2.0 * r),
         ball_diameter: 2.0 * term.ball_radius(),
         spheres,
+        probes: probes_of(term, calibration),
     })
+}
+
+/// Per probe `term`'s rows name, its spheres, fitted offset ± σ and ball;
+/// empty when every row is the default probe's.
+fn probes_of(term: &SphereTerm, calibration: &Calibration) -> Vec<ProbeResult> {
+    let rows = term.spheres();
+    if !rows.has_tools() {
+        return Vec::new();
+    }
+    let fitted = calibration.tool_estimates();
+    let (probe, probe_sigma) = super::tools::probe_estimate(calibration);
+    (rows.tools().iter().enumerate())
+        .filter_map(|(k, tool)| {
+            let of: Vec<usize> = (0..rows.spheres().len())
+                .filter(|&s| rows.tool_of_sphere(s) == k)
+                .collect();
+            let first = *of.first()?;
+            let (offset, sigma) = match k {
+                0 => (probe, probe_sigma),
+                _ => (fitted.iter().find(|(n, _, _)| *n == tool.name))
+                    .map_or((tool.offset, None), |(_, x, s)| (*x, *s)),
+            };
+            Some(ProbeResult {
+                name: tool.name.clone(),
+                spheres: of.iter().map(|&s| rows.spheres()[s].clone()).collect(),
+                offset,
+                sigma,
+                ball_diameter: 2.0 * term.ball_radius_of(first),
+            })
+        })
+        .collect()
 }
 
 impl SphereReport {
@@ -166,6 +217,27 @@ impl SphereReport {
                 s.after.rms,
                 s.before.form,
                 s.after.form
+            );
+        }
+        if !self.probes.is_empty() {
+            t += &format!(
+                "{:<12} {:>38} {:>28} {:>10} {}\n",
+                "probe", "offset x, y, z (mm)", "sigma x, y, z (mm)", "ball (mm)", "spheres"
+            );
+        }
+        for p in &self.probes {
+            let o = p.offset;
+            let s = p.sigma.map_or_else(
+                || "held".to_string(),
+                |s| format!("{:.4}, {:.4}, {:.4}", s[0], s[1], s[2]),
+            );
+            t += &format!(
+                "{:<12} {:>38} {:>28} {:>10} {}\n",
+                p.name,
+                format!("{:.4}, {:.4}, {:.4}", o[0], o[1], o[2]),
+                s,
+                p.ball_diameter,
+                p.spheres.join(", ")
             );
         }
         t

@@ -51,7 +51,7 @@ fn row_errors(arm: ArmView<'_>, data: &DataSet) -> Result<Vec<f64>, CalibrationE
 }
 
 /// The probe's fitted `B` and its σ from the parameter table.
-fn probe_estimate(c: &Calibration) -> ([f64; 3], Option<[f64; 3]>) {
+pub(crate) fn probe_estimate(c: &Calibration) -> ([f64; 3], Option<[f64; 3]>) {
     let of = |k: usize| {
         (c.parameters.iter()).find(|e| {
             e.id.kind == crate::params::ParamKind::Probe && e.id.index == k && e.fixed.is_none()
