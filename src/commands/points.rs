@@ -46,6 +46,16 @@ pub struct Args {
     /// frame's registration (fitted with the arm, and correlated with it).
     #[arg(long, value_name = "DIR")]
     uncertainty: Option<PathBuf>,
+    /// The tool whose positions to compute: `probe` (the arm's `[probe]`,
+    /// the default) or one of the arm file's `[[tool]]` (a stylus, a
+    /// marker): its offset instead of the probe's.
+    #[arg(
+        long,
+        value_name = "NAME",
+        default_value = "probe",
+        conflicts_with = "uncertainty"
+    )]
+    tool: String,
     /// Write over earlier results: an output file that exists, or an
     /// output directory holding results of an aacmm command (this command's
     /// files are overwritten; nothing is deleted).
@@ -94,6 +104,8 @@ pub fn run(args: Args) -> Result<()> {
         check_output_file("--out", out, &inputs, args.force)?;
     }
     let (arm, poses) = args.input.read_readings()?;
+    let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
+        .map_err(|e| anyhow!("--tool {}: {}", shown(&args.tool), e.reason))?;
     let frame = match &args.frame {
         Some(name) => Some(frame(&args.input.arm, name)?),
         None => None,

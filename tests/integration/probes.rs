@@ -433,3 +433,55 @@ fn the_probe_command_qualifies_and_refuses() {
     );
     assert!(!out.exists());
 }
+
+/// `aacmm points --tool NAME`: the positions of the stylus' ball centre —
+/// the kernel's with the probe at the tool's offset; a tool the arm does
+/// not list is named with those it does.
+#[test]
+fn points_computes_a_named_probe() {
+    use crate::util::{aacmm, assert_clean_error, stdout, temp_dir, write};
+    let dir = temp_dir("probe-points");
+    let arm = nominal();
+    let arm_file = write(
+        &dir,
+        "arm.toml",
+        &aacmm_core::io::arm_to_toml(&arm, aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg),
+    );
+    let poses = write(
+        &dir,
+        "poses.csv",
+        "point,q1,q2,q3,q4,q5,q6\nA,10,20,30,40,50,60\n",
+    );
+    let o = aacmm(&[
+        "points", "--arm", &arm_file, "--data", &poses, "--tool", "long",
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let stylus = DhParams {
+        probe: arm.tools[0].offset,
+        ..arm.params.clone()
+    };
+    let q: Vec<f64> = [10.0, 20.0, 30.0, 40.0, 50.0, 60.0]
+        .map(f64::to_radians)
+        .to_vec();
+    let p = aacmm_core::kernel::ArmKernel::new(&stylus)
+        .unwrap()
+        .positions_of(&[&q[..]])
+        .unwrap()[0];
+    let line = stdout(&o).lines().nth(1).unwrap().to_string();
+    let got: Vec<f64> = line
+        .split(',')
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    for k in 0..3 {
+        assert!((got[k] - p[k]).abs() < 1e-6, "{line} vs {p:?}");
+    }
+    let plain = aacmm(&["points", "--arm", &arm_file, "--data", &poses]);
+    assert_ne!(stdout(&plain), stdout(&o));
+    assert_clean_error(
+        &aacmm(&[
+            "points", "--arm", &arm_file, "--data", &poses, "--tool", "short",
+        ]),
+        &["--tool short: the arm has no such tool", "`probe`, `long`"],
+    );
+}
