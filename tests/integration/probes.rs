@@ -422,7 +422,7 @@ fn the_probe_command_qualifies_and_refuses() {
     std::fs::remove_file(&out).unwrap();
     assert_clean_error(
         &run(&good, "short"),
-        &["--tool short: the arm has no such probe", "`probe`, `long`"],
+        &["--tool short: the arm has no such tool", "`probe`, `long`"],
     );
     let o = run(&loose, "long");
     assert_eq!(o.status.code(), Some(1));

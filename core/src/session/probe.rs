@@ -324,24 +324,8 @@ fn is_probe_column(n: usize, c: usize) -> bool {
 
 /// The stated offset and ball of the probe `tool` of `arm`.
 fn stated_probe(arm: &Arm, tool: &str) -> Result<([f64; 3], Option<f64>), OptionError> {
-    if tool == DEFAULT_TOOL {
-        return Ok((arm.params.probe, arm.ball_diameter_mm));
-    }
-    let t = arm.tools.iter().find(|t| t.name == tool).ok_or_else(|| {
-        let known: Vec<String> = std::iter::once(quoted(DEFAULT_TOOL))
-            .chain(arm.tools.iter().map(|t| quoted(&t.name)))
-            .collect();
-        OptionError::new(
-            "tool",
-            tool,
-            format!(
-                "the arm has no such probe (its probes: {}; list a probe in the arm file as a \
-                 [[tool]] with its name, offset_mm and ball_diameter_mm)",
-                known.join(", ")
-            ),
-        )
-    })?;
-    Ok((t.offset, t.ball_diameter_mm))
+    let seen = crate::io::tools::arm_with_tool(arm, tool)?;
+    Ok((seen.params.probe, seen.ball_diameter_mm))
 }
 
 /// The rows of `rows` the probe `tool` touched (each of them, when the
