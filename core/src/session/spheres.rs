@@ -226,15 +226,11 @@ impl SphereReport {
             );
         }
         for p in &self.probes {
-            let o = p.offset;
-            let s = p.sigma.map_or_else(
-                || "held".to_string(),
-                |s| format!("{:.4}, {:.4}, {:.4}", s[0], s[1], s[2]),
-            );
+            let (o, s) = super::tools::offset_cells(p.offset, p.sigma);
             t += &format!(
                 "{:<12} {:>38} {:>28} {:>10} {}\n",
                 p.name,
-                format!("{:.4}, {:.4}, {:.4}", o[0], o[1], o[2]),
+                o,
                 s,
                 p.ball_diameter,
                 p.spheres.join(", ")

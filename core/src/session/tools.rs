@@ -126,16 +126,12 @@ impl ToolReport {
             "tool", "rows", "offset x, y, z (mm)", "sigma x, y, z (mm)", "RMS 3-D before/after"
         );
         for r in &self.tools {
-            let o = r.offset;
-            let s = r.sigma.map_or_else(
-                || "held".to_string(),
-                |s| format!("{:.4}, {:.4}, {:.4}", s[0], s[1], s[2]),
-            );
+            let (o, s) = offset_cells(r.offset, r.sigma);
             t += &format!(
                 "{:<12} {:>6} {:>38} {:>28} {:>10.4} / {:<8.4}\n",
                 r.name,
                 r.rows,
-                format!("{:.4}, {:.4}, {:.4}", o[0], o[1], o[2]),
+                o,
                 s,
                 r.rms_before,
                 r.rms_after
@@ -143,4 +139,11 @@ impl ToolReport {
         }
         t
     }
+}
+
+/// A tool's offset and its σ as the summaries' cells (mm, 4 decimals; the
+/// σ `held` when not fitted).
+pub(crate) fn offset_cells(o: [f64; 3], sigma: Option<[f64; 3]>) -> (String, String) {
+    let three = |v: [f64; 3]| format!("{:.4}, {:.4}, {:.4}", v[0], v[1], v[2]);
+    (three(o), sigma.map_or_else(|| "held".to_string(), three))
 }
