@@ -44,6 +44,7 @@ mod compute;
 mod enclosing;
 mod fit;
 mod mpe;
+mod table;
 
 use serde::{Deserialize, Serialize};
 
