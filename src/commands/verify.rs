@@ -13,10 +13,11 @@ use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{Arm, read_lengths, source_name};
 use aacmm_core::kernel::PreparedPoses;
 use aacmm_core::metrics::Evaluation;
+use aacmm_core::report::{ACCEPTANCE_FILES, acceptance_report};
 use anyhow::{Result, anyhow, bail};
 
 use crate::output::Stdout;
-use crate::paths::check_output_file;
+use crate::paths::{check_output_dir, check_output_file};
 
 /// The acceptance tests of an arm: probing size and form, the articulated
 /// location test, length errors and the SPAT, each PASS, FAIL or
@@ -65,7 +66,14 @@ pub struct Args {
     /// Also write every figure as JSON (mm).
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Write over an output file that exists.
+    /// Also write a report into this directory: report.html (the tests'
+    /// table and every placement) and sphere_residuals.svg (each
+    /// placement's radial residuals).
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
+    /// Write over earlier results: an output file that exists, or an
+    /// output directory holding results of an aacmm command (this
+    /// command's files are overwritten; nothing is deleted).
     #[arg(long)]
     force: bool,
 }
@@ -79,6 +87,9 @@ pub fn run(args: Args) -> Result<()> {
     inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
     if let Some(json) = &args.json {
         check_output_file("--json", json, &inputs, args.force)?;
+    }
+    if let Some(dir) = &args.report {
+        check_output_dir("--report", dir, &ACCEPTANCE_FILES, &inputs, args.force)?;
     }
     let mpe = match &args.mpe {
         Some(spec) => parse_mpe(spec).map_err(super::shared_flags::flag_error)?,
@@ -112,6 +123,12 @@ pub fn run(args: Args) -> Result<()> {
     })();
     if let Some(path) = &args.json {
         super::write_json(path, &acceptance)?;
+    }
+    if let Some(dir) = &args.report {
+        let listed: Vec<(String, String)> = (inputs.iter())
+            .map(|(flag, path)| (flag.trim_start_matches('-').to_string(), source_name(path)))
+            .collect();
+        super::report::write("--report", dir, &acceptance_report(&acceptance, &listed))?;
     }
     printed?;
     let not = acceptance.not_passed();

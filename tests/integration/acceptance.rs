@@ -395,6 +395,10 @@ fn the_command_prints_decides_and_writes_json() {
         "1",
         "--ball-bar",
         "2",
+        "--sockets",
+        "3",
+        "--poses",
+        "8",
         "--seed",
         "3",
         "--encoder-noise",
@@ -436,6 +440,21 @@ fn the_command_prints_decides_and_writes_json() {
     assert!(o.status.success(), "{}", crate::util::stderr(&o));
     assert!(stdout(&o).contains("ACCEPTED"), "{}", stdout(&o));
     let a: Acceptance = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // --report: the page with the tests' table, and the residuals' figure.
+    let report = dir.join("report").display().to_string();
+    let mut with_report = args.clone();
+    with_report.extend(["--report", &report, "--force"]);
+    let o = aacmm(&with_report);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let page = std::fs::read_to_string(dir.join("report/report.html")).unwrap();
+    assert!(page.contains("P_Size.Sph.1x25::Art") && page.contains("L_Dia.5x5::Art"));
+    assert!(page.contains("ACCEPTED") && !page.contains("NOT ACCEPTED") && page.contains("<svg"));
+    let svg = std::fs::read_to_string(dir.join("report/sphere_residuals.svg")).unwrap();
+    assert_eq!(
+        svg.matches("<rect").count(),
+        25 * (2 + 1 + 4),
+        "a bar per point"
+    );
     assert_eq!(a.tests.len(), 2 + 1 + 2);
     assert!(a.tests.iter().all(|t| t.decision == Some(Decision::Pass)));
     // The same figures as the library on the kernel's centres.
@@ -464,6 +483,35 @@ fn the_command_prints_decides_and_writes_json() {
     for (x, y) in a.tests.iter().zip(&lib.tests) {
         assert!((x.value - y.value).abs() < 1e-12, "{x:?} {y:?}");
     }
+    // The SPAT of --data's cones: the largest δ_max, as computed here from
+    // `aacmm points` (6 decimals: to 1e-5 mm).
+    let poses = dir.join("poses.csv").display().to_string();
+    let mut args = base.to_vec();
+    args.extend([
+        "--data", &poses, "--mpe", "SPAT=1", "--json", &json, "--force",
+    ]);
+    let o = aacmm(&args);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let a: Acceptance = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let spat = a.tests.iter().find(|t| t.test == TestKind::Spat).unwrap();
+    let printed = stdout(&aacmm(&["points", "--arm", &truth, "--data", &poses]));
+    let mut by: std::collections::BTreeMap<String, Vec<Vector3<f64>>> = Default::default();
+    for line in printed.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let v: Vec<f64> = f[1..4].iter().map(|x| x.parse().unwrap()).collect();
+        by.entry(f[0].to_string())
+            .or_default()
+            .push(Vector3::new(v[0], v[1], v[2]));
+    }
+    let most = (by.values())
+        .map(|p| {
+            let mean = p.iter().sum::<Vector3<f64>>() / p.len() as f64;
+            p.iter().map(|x| (x - mean).norm()).fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max);
+    assert_eq!(by.len(), 3);
+    assert!((spat.value - most).abs() < 1e-5, "{} vs {most}", spat.value);
+    assert_eq!((spat.decision, a.spat.len()), (Some(Decision::Pass), 3));
     // A tight P_Form: not accepted, exit 1, the test named.
     let mut args = base.to_vec();
     args.extend(["--mpe", "P_Form=0.001,SPAT=0.1"]);
