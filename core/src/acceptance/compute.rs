@@ -283,6 +283,10 @@ fn worst_probing(placements: &[Placement]) -> Vec<TestResult> {
         .collect()
 }
 
+/// Per articulation, its number and fit; the points' summed squared
+/// residuals and degrees of freedom.
+type GroupFits = (Vec<(u32, super::SphereFit)>, f64, usize);
+
 /// Each articulation's centre of placement `s` (radius held at `held` or
 /// fitted), and the points' summed squared residuals and degrees of
 /// freedom.
@@ -290,7 +294,7 @@ fn group_centres(
     points: SpherePoints<'_>,
     s: usize,
     held: Option<f64>,
-) -> Result<(Vec<(u32, super::SphereFit)>, f64, usize), InputError> {
+) -> Result<GroupFits, InputError> {
     let rows = points.rows.rows_of(s);
     let (mut fits, mut ss, mut dof) = (Vec::new(), 0.0, 0);
     for g in groups(points, s) {

@@ -108,7 +108,7 @@ fn circumscribed(s: &[[f64; 3]]) -> Option<Ball> {
     // The Gram determinant against the scale: points on a line (3) or a
     // plane (4) within rounding.
     let det = a.determinant();
-    if !(det.abs() > 1e-10 * (2.0 * scale).powi(m as i32)) {
+    if det.is_nan() || det.abs() <= 1e-10 * (2.0 * scale).powi(m as i32) {
         return None;
     }
     let lambda = a.lu().solve(&b)?;

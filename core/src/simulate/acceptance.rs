@@ -162,10 +162,16 @@ struct Draw<'a> {
 /// A sphere's readings at its points: per point, readings.
 type Rows = Vec<Vec<f64>>;
 
+/// A placement's start: the configuration, the sphere's centre, its pole.
+type Placed = (Vec<f64>, [f64; 3], [f64; 3]);
+
+/// A touch: the exact readings, and as read (with the encoders' noise).
+type Touched = (Vec<f64>, Vec<f64>);
+
 impl Draw<'_> {
     /// A random sphere centre below the probe of a random configuration,
     /// its pole within about 35° of up: `(q0, centre, pole)`.
-    fn centre(&self, rng: &mut ChaCha8Rng) -> Result<(Vec<f64>, [f64; 3], [f64; 3]), SimError> {
+    fn centre(&self, rng: &mut ChaCha8Rng) -> Result<Placed, SimError> {
         let q0 = random_configuration(self.limits, rng);
         let tilt = [0.6 * normal(rng), 0.6 * normal(rng), 1.0];
         let norm = (tilt[0] * tilt[0] + tilt[1] * tilt[1] + 1.0).sqrt();
@@ -184,7 +190,7 @@ impl Draw<'_> {
         start: &[f64],
         spread: f64,
         rng: &mut ChaCha8Rng,
-    ) -> Result<Option<(Vec<f64>, Vec<f64>)>, SimError> {
+    ) -> Result<Option<Touched>, SimError> {
         let s = self.settings;
         let shape = self.kernel.shape();
         let target: [f64; 3] =
