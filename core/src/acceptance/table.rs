@@ -51,9 +51,14 @@ impl Acceptance {
              k = 1), probe ball {} mm; U expanded (k = 2)",
             self.sphere_file, self.sphere_diameter, self.sphere_uncertainty, self.ball_diameter
         );
+        // The `at` column as wide as its longest entry (a length's
+        // `a–b (file:line)`).
+        let w = (self.tests.iter())
+            .map(|r| r.at.chars().count())
+            .fold(8, usize::max);
         let _ = writeln!(
             t,
-            "{:<22} {:<28} {:>11} {:>10} {:>9}  decision",
+            "{:<22} {:<w$} {:>11} {:>10} {:>9}  decision",
             "test", "at", "value (mm)", "MPE (mm)", "U (mm)"
         );
         for r in &self.tests {
@@ -61,14 +66,14 @@ impl Acceptance {
             let decision = r.decision.map_or("not decided", |d| d.word());
             let _ = writeln!(
                 t,
-                "{:<22} {:<28} {:>11.4} {:>10} {:>9.4}  {decision}",
+                "{:<22} {:<w$} {:>11.4} {:>10} {:>9.4}  {decision}",
                 r.figure, r.at, r.value, mpe, r.u
             );
         }
         for u in &self.untested {
             let _ = writeln!(
                 t,
-                "{:<22} {:<28} an MPE is stated, no data tested it",
+                "{:<22} {:<w$} an MPE is stated, no data tested it",
                 u.key(),
                 "-"
             );
