@@ -27,6 +27,7 @@
 //! simulating, calibrating and the extension points (a new residual term,
 //! parameter block or solver) in one `use`.
 
+pub mod acceptance;
 pub mod calibrate;
 pub mod corrections;
 mod damping;

@@ -13,6 +13,7 @@ pub mod progress;
 pub mod report;
 pub mod shared_flags;
 pub mod simulate;
+pub mod verify;
 
 use std::path::PathBuf;
 

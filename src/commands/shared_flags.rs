@@ -235,8 +235,10 @@ pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
 }
 
 /// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 35] = [
+const FLAGS: [(&str, &str); 37] = [
     ("sphere_diameter_mm", "--sphere-diameter"),
+    ("sphere_uncertainty", "--sphere-uncertainty"),
+    ("mpe", "--mpe"),
     ("compliance", "--compliance"),
     ("harmonics", "--harmonics"),
     ("backlash", "--backlash"),

@@ -89,6 +89,22 @@ pub struct Args {
     /// The spheres' diameter, mm.
     #[arg(long, value_name = "MM", requires = "spheres", default_value_t = aacmm_core::simulate::DEFAULT_SPHERE_DIAMETER_MM)]
     sphere_diameter: f64,
+    /// With --spheres, also A placements for `verify`'s L_Dia (`L1`, …): a
+    /// sphere probed in five articulations (elbow and wrist turned between
+    /// them), five points each with the probe pointing about the same way;
+    /// spheres.csv then has an `articulation` column (1 on every other
+    /// placement's rows).
+    #[arg(long, value_name = "A", requires = "spheres", default_value_t = 0)]
+    articulated: usize,
+    /// With --spheres, also B positions of a ball bar for `verify`'s E_Uni
+    /// (placements `B1a`/`B1b`, …, 25 points each, the bar in a random
+    /// position and orientation); writes bar_lengths.csv naming each pair
+    /// with its true centre distance.
+    #[arg(long, value_name = "B", requires = "spheres", default_value_t = 0)]
+    ball_bar: usize,
+    /// The ball bar's length, centre to centre, mm.
+    #[arg(long, value_name = "MM", requires = "ball_bar", default_value_t = aacmm_core::simulate::DEFAULT_BAR_LENGTH_MM)]
+    bar_length: f64,
     /// --positions seen at K markers on one body instead of the probe
     /// (SMRs on an end effector): each pose seen at every marker, written
     /// as the `tool` column of positions.csv. The markers are the arm
@@ -269,8 +285,11 @@ fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>)
         seed: args.seed,
     };
     let located = |e| anyhow!("--spheres: {e}");
-    let campaign = match truth {
-        Some(t) => simulate_spheres(t, &settings.for_campaign()).map_err(located)?,
+    let (truth, campaign) = match truth {
+        Some(t) => (
+            t.clone(),
+            simulate_spheres(t, &settings.for_campaign()).map_err(located)?,
+        ),
         None => {
             let (truth, campaign) = aacmm_core::simulate::simulate_sphere_campaign(
                 &with_ball(args, nominal),
@@ -284,12 +303,13 @@ fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>)
             let arm_path = args.out.join(TRUE_ARM_FILE);
             write_file(&arm_path, text.as_bytes())?;
             note(format_args!("wrote {}", arm_path.display()))?;
-            campaign
+            (truth, campaign)
         }
     };
+    let (rows, lengths) = acceptance_placements(args, &truth, campaign, &settings)?;
     let path = args.out.join(SPHERES_FILE);
     let mut text = Vec::new();
-    write_spheres(&mut text, &campaign.spheres, AngleUnit::Deg)?;
+    write_spheres(&mut text, &rows, AngleUnit::Deg)?;
     write_file(&path, &text)?;
     note(format_args!(
         "spheres: {placements} placements of {} mm, 25 points each, probe ball {ball} mm{}; \
@@ -301,7 +321,51 @@ fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>)
         },
         args.seed
     ))?;
-    note(format_args!("wrote {}", path.display()))
+    note(format_args!("wrote {}", path.display()))?;
+    if let Some(lengths) = lengths {
+        use aacmm_core::simulate::BAR_LENGTHS_FILE;
+        let path = args.out.join(BAR_LENGTHS_FILE);
+        let mut text = Vec::new();
+        aacmm_core::io::write_lengths(&mut text, &lengths)?;
+        write_file(&path, &text)?;
+        note(format_args!(
+            "ball bar: {} positions of {} mm (placements B1a/B1b, …); wrote {}",
+            args.ball_bar,
+            args.bar_length,
+            path.display()
+        ))?;
+    }
+    Ok(())
+}
+
+/// The rows of spheres.csv: `campaign`'s, with --articulated's and
+/// --ball-bar's placements when asked (the bar's lengths too).
+fn acceptance_placements(
+    args: &Args,
+    truth: &Arm,
+    campaign: aacmm_core::simulate::SphereCampaign,
+    settings: &aacmm_core::simulate::SphereSettings,
+) -> Result<(
+    aacmm_core::io::spheres::Spheres,
+    Option<Vec<aacmm_core::io::ReferenceLength>>,
+)> {
+    use aacmm_core::simulate::{AcceptanceSettings, with_acceptance};
+    if args.articulated == 0 && args.ball_bar == 0 {
+        return Ok((campaign.spheres, None));
+    }
+    let more = AcceptanceSettings {
+        articulated: args.articulated,
+        bar_positions: args.ball_bar,
+        bar_length_mm: args.bar_length,
+    };
+    let out = with_acceptance(truth, campaign, settings, &more).map_err(|e| flag_error(e, None))?;
+    if args.articulated > 0 {
+        note(format_args!(
+            "L_Dia: {} placements (L1, …) of five articulations × five points",
+            args.articulated
+        ))?;
+    }
+    Ok((out.spheres, (args.ball_bar > 0).then_some(out.lengths)))
 }
 
 /// The tracker campaign of --positions: of `truth` (the touch campaign's

@@ -74,6 +74,9 @@ const RANKS: &[(&str, u8)] = &[
     ("simulate", 4),
     // 5: the solver, and what it identifies and plans.
     ("identify", 5),
+    // The acceptance tests read io, kernel, metrics and the sphere term's
+    // algebraic start; nothing above reads them yet.
+    ("acceptance", 5),
     ("calibrate", 5),
     ("hayati", 5),
     ("plan", 5),

@@ -1,6 +1,7 @@
 //! Integration tests of the whole toolkit, the CLI included: one binary, one
 //! module per command, and one per concern the commands share.
 
+mod acceptance;
 mod arm_checks;
 mod beyond;
 mod builds;

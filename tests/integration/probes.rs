@@ -485,3 +485,60 @@ fn points_computes_a_named_probe() {
         &["--tool short: the arm has no such tool", "`probe`, `long`"],
     );
 }
+
+/// `aacmm verify --tool NAME` verifies one probe: its offset and ball
+/// (the stylus' P_Size is its own sphere's, not off by the balls'
+/// difference); a file with another probe's rows is refused by line.
+#[test]
+fn verify_takes_one_probe_at_a_time() {
+    use crate::util::{aacmm, assert_clean_error, stdout, temp_dir, write};
+    let dir = temp_dir("probe-verify");
+    let arm = nominal();
+    let arm_file = write(
+        &dir,
+        "arm.toml",
+        &aacmm_core::io::arm_to_toml(&arm, aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg),
+    );
+    let rows = two_probe_points(&arm, 1, 3);
+    let csv = |rows: &Spheres| {
+        let mut text = Vec::new();
+        write_spheres(&mut text, rows, AngleUnit::Deg).unwrap();
+        String::from_utf8(text).unwrap()
+    };
+    let both = write(&dir, "both.csv", &csv(&rows));
+    let long: Vec<usize> = (0..rows.len()).filter(|&i| rows.tool(i) == 1).collect();
+    let long = write(&dir, "long.csv", &csv(&rows.subset(&long)));
+    let verify = |file: &str, tool: &str| {
+        let json = dir.join(format!("{tool}.json"));
+        let o = aacmm(&[
+            "verify",
+            "--arm",
+            &arm_file,
+            "--spheres",
+            file,
+            "--sphere-diameter",
+            "25.4",
+            "--tool",
+            tool,
+            "--json",
+            json.to_str().unwrap(),
+            "--force",
+        ]);
+        (o, json)
+    };
+    let (o, json) = verify(&long, "long");
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    assert!(stdout(&o).contains("P_Size"), "{}", stdout(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(json).unwrap()).unwrap();
+    let size = (v["tests"].as_array().unwrap().iter())
+        .find(|t| t["figure"].as_str().unwrap().starts_with("P_Size"))
+        .map(|t| t["value"].as_f64().unwrap())
+        .unwrap();
+    // The noise-driven size error of 25 points, not the 3 mm of a wrong ball.
+    assert!(size.abs() < 0.1, "P_Size {size}");
+    assert_clean_error(
+        &verify(&both, "probe").0,
+        &["both.csv:27: field `tool`", "`long`"],
+    );
+}

@@ -65,7 +65,7 @@ fn inline(svg: &str) -> &str {
 }
 
 /// The start of a page, through its heading and inputs.
-fn head(title: &str, inputs: &[(String, String)], nav: &[(&str, &str)]) -> String {
+pub(super) fn head(title: &str, inputs: &[(String, String)], nav: &[(&str, &str)]) -> String {
     let mut h = String::new();
     h += "<!DOCTYPE html>\n<html lang=\"en\" xmlns=\"http://www.w3.org/1999/xhtml\">\n<head>\n\
           <meta charset=\"utf-8\"/>\n\
@@ -89,7 +89,7 @@ fn head(title: &str, inputs: &[(String, String)], nav: &[(&str, &str)]) -> Strin
 }
 
 /// The end of a page: what wrote it and the figure files beside it.
-fn foot(figures: &[Figure]) -> String {
+pub(super) fn foot(figures: &[Figure]) -> String {
     let files: Vec<&str> = figures.iter().map(|f| f.file).collect();
     format!(
         "<footer>Written by aacmm {}. Every figure is also a file beside this page: {}. \
@@ -102,7 +102,7 @@ fn foot(figures: &[Figure]) -> String {
 
 /// A section: heading, an introduction, the figure with its caption, and
 /// what goes beside it (tables).
-fn section(
+pub(super) fn section(
     id: &str,
     heading: &str,
     intro: &str,

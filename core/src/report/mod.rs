@@ -35,6 +35,7 @@
 //! marker per pair only up to 2000 per series; beyond, as
 //! the mean per distance bin.
 
+mod acceptance;
 mod calibration;
 mod data;
 mod figures;
@@ -54,6 +55,7 @@ use crate::metrics::MetricsError;
 use crate::params::DhParams;
 use crate::plan::UncertaintyMap;
 
+pub use acceptance::{ACCEPTANCE_FILES, SPHERE_RESIDUALS_SVG, acceptance_report};
 pub use calibration::session_report;
 
 /// The page.

@@ -129,12 +129,7 @@ impl ToolReport {
             let (o, s) = offset_cells(r.offset, r.sigma);
             t += &format!(
                 "{:<12} {:>6} {:>38} {:>28} {:>10.4} / {:<8.4}\n",
-                r.name,
-                r.rows,
-                o,
-                s,
-                r.rms_before,
-                r.rms_after
+                r.name, r.rows, o, s, r.rms_before, r.rms_after
             );
         }
         t

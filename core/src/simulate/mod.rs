@@ -41,6 +41,7 @@
 //! assert!((0..3).all(|i| (p[4][i] - s2[i]).abs() < 1e-9));
 //! ```
 
+mod acceptance;
 mod chain;
 mod error;
 mod files;
@@ -78,6 +79,8 @@ pub mod seeds {
     pub const MARKER_NOISE: u64 = 6;
     /// The points on reference spheres.
     pub const SPHERES: u64 = 7;
+    /// The acceptance tests' placements (`L_Dia`, the ball bar).
+    pub const ACCEPTANCE: u64 = 8;
 
     /// The seed of the part `offset` (one of the above) of a campaign
     /// seeded by `seed`.
@@ -105,6 +108,7 @@ pub mod seeds {
                 MARKER_ERRORS,
                 MARKER_NOISE,
                 SPHERES,
+                ACCEPTANCE,
             ];
             let mut sorted = all.to_vec();
             sorted.sort_unstable();
@@ -115,6 +119,10 @@ pub mod seeds {
 }
 
 pub use crate::params::wrap;
+pub use acceptance::{
+    AcceptanceCampaign, AcceptanceSettings, BAR_LENGTHS_FILE, DEFAULT_BAR_LENGTH_MM,
+    with_acceptance,
+};
 pub use chain::random_arm;
 pub use error::SimError;
 pub use files::{

@@ -86,7 +86,7 @@ pub fn iso_sphere_pattern() -> Vec<[f64; 3]> {
 }
 
 /// The pattern turned so that its pole points along the unit vector `pole`.
-fn turned(pattern: &[[f64; 3]], pole: [f64; 3]) -> Vec<[f64; 3]> {
+pub(super) fn turned(pattern: &[[f64; 3]], pole: [f64; 3]) -> Vec<[f64; 3]> {
     let z = nalgebra::Vector3::new(0.0, 0.0, 1.0);
     let to = nalgebra::Unit::new_normalize(nalgebra::Vector3::from(pole));
     let r = nalgebra::Rotation3::rotation_between(&z, &to)
