@@ -56,13 +56,18 @@ pub use arm::{
     aacmm_arm_warnings, aacmm_jacobians, aacmm_joint_jacobian, aacmm_param_count, aacmm_positions,
 };
 pub use calibrate::{
-    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmAngleUnit, AacmmAuxiliary, AacmmCalibration,
-    AacmmCalibrationSummary, AacmmFrame, AacmmReferenceLength, AacmmTermination, aacmm_calibrate,
-    aacmm_calibrate_files, aacmm_calibration_arm, aacmm_calibration_auxiliary,
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_REASON_CHI_SQUARE, AACMM_REASON_DATA_DISAGREE_WITH_ARM,
+    AACMM_REASON_IMPLAUSIBLE_BLOCKS, AACMM_REASON_NOT_NOMINAL_GEOMETRY, AACMM_REASON_OTHER,
+    AACMM_REASON_OUTLIERS, AACMM_REASON_RADIANS_AS_DEGREES, AACMM_REASON_ROBUST_SCALE,
+    AACMM_REASON_UNCONFIRMED, AACMM_REASON_UNDETERMINED, AACMM_REASON_WORSE_AT_POSITIONS,
+    AACMM_REASON_WORSE_ON_DATA, AacmmAngleUnit, AacmmAuxiliary, AacmmCalibration,
+    AacmmCalibrationSummary, AacmmFrame, AacmmReasonKind, AacmmReferenceLength, AacmmTermination,
+    aacmm_calibrate, aacmm_calibrate_files, aacmm_calibration_arm, aacmm_calibration_auxiliary,
     aacmm_calibration_auxiliary_count, aacmm_calibration_fixed, aacmm_calibration_frame,
     aacmm_calibration_frame_count, aacmm_calibration_free, aacmm_calibration_params,
-    aacmm_calibration_report, aacmm_calibration_sigmas, aacmm_calibration_summary,
-    aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
+    aacmm_calibration_reason, aacmm_calibration_reason_count, aacmm_calibration_report,
+    aacmm_calibration_sigmas, aacmm_calibration_summary, aacmm_calibration_verdict,
+    aacmm_calibration_verdict_notes,
 };
 pub use error::{AacmmStatus, aacmm_last_error_message};
 pub use map::{
@@ -76,9 +81,10 @@ pub use options::{
     aacmm_calibrate_options_set_accept_poor_fit, aacmm_calibrate_options_set_backlash,
     aacmm_calibrate_options_set_compliance, aacmm_calibrate_options_set_cross_validate,
     aacmm_calibrate_options_set_drift, aacmm_calibrate_options_set_encoder_noise_rad,
-    aacmm_calibrate_options_set_fix, aacmm_calibrate_options_set_harmonics,
-    aacmm_calibrate_options_set_length_uncertainty_mm, aacmm_calibrate_options_set_length_weight,
-    aacmm_calibrate_options_set_method, aacmm_calibrate_options_set_orientation_noise_rad,
+    aacmm_calibrate_options_set_fix, aacmm_calibrate_options_set_global_starts,
+    aacmm_calibrate_options_set_harmonics, aacmm_calibrate_options_set_length_uncertainty_mm,
+    aacmm_calibrate_options_set_length_weight, aacmm_calibrate_options_set_method,
+    aacmm_calibrate_options_set_orientation_noise_rad,
     aacmm_calibrate_options_set_position_noise_mm,
     aacmm_calibrate_options_set_position_orientations, aacmm_calibrate_options_set_positions,
     aacmm_calibrate_options_set_positions_file, aacmm_calibrate_options_set_prior,

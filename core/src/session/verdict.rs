@@ -1,0 +1,1045 @@
+//! Whether a calibration may be used, typed: each reason for a refusal
+//! ([`Reason`]) and each note beside a verdict ([`Note`]) carries its data
+//! (the χ² figures, the parameters and their corrections, the outliers'
+//! `file:line`, the unconfirmed search's counts), and says itself in the
+//! words of the front end that asks ([`Spelling`]): the command line's
+//! flags, Python's keyword arguments or C's setters, each option named once
+//! ([`Setting`]). A program matches on the variants; a person reads
+//! [`Reason::describe`].
+//!
+//! `calibration.json`'s `/verdict` and `calibrated.toml`'s `[verdict]` keep
+//! the command line's sentences ([`Verdict::words`]): read back, a reason is
+//! the sentence it was written as ([`Reason::Recorded`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::{BeforeAfter, Calibration, Problem, noun, outliers_noun};
+use crate::calibrate::checks::{ChiSquare, ChiSquareVerdict, GrossCorrection, Outlier};
+use crate::io::ArmVerdict;
+use crate::residuals::Noise;
+
+/// Whose words a verdict is said in: the front end's own spelling of the
+/// options its remedies name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Spelling {
+    /// `aacmm calibrate`'s flags (`--robust`).
+    Cli,
+    /// The Python module's keyword arguments (`robust="huber"`).
+    Python,
+    /// The C API's setters (`aacmm_calibrate_options_set_robust`).
+    C,
+}
+
+/// An option a remedy names, once for every front end: [`Setting::name`]
+/// spells it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Setting {
+    /// The encoders' noise.
+    EncoderNoise,
+    /// The probe's noise.
+    ProbeNoise,
+    /// A reference position's noise.
+    PositionNoise,
+    /// A reference orientation's noise.
+    OrientationNoise,
+    /// A robust loss.
+    Robust,
+    /// Accepting a fit the χ² test refuses.
+    AcceptPoorFit,
+    /// The global search's starts.
+    GlobalStarts,
+    /// Tolerances for the parameters (a prior).
+    Prior,
+    /// The fixed set.
+    Fix,
+    /// Reference lengths.
+    Lengths,
+    /// The readings' angle unit, as radians.
+    AngleUnitRad,
+}
+
+impl Setting {
+    /// The option as `spelling` names it in a sentence: a flag, a keyword
+    /// argument (with a value where one is needed to read as code), a
+    /// setter.
+    pub fn name(self, spelling: Spelling) -> &'static str {
+        use Setting::*;
+        use Spelling::*;
+        match (self, spelling) {
+            (EncoderNoise, Cli) => "--encoder-noise",
+            (EncoderNoise, Python) => "Noise(encoder_deg=…)",
+            (EncoderNoise, C) => "aacmm_calibrate_options_set_encoder_noise_rad",
+            (ProbeNoise, Cli) => "--probe-noise",
+            (ProbeNoise, Python) => "Noise(probe_mm=…)",
+            (ProbeNoise, C) => "aacmm_calibrate_options_set_probe_noise_mm",
+            (PositionNoise, Cli) => "--position-noise",
+            (PositionNoise, Python) => "Noise(position_mm=…)",
+            (PositionNoise, C) => "aacmm_calibrate_options_set_position_noise_mm",
+            (OrientationNoise, Cli) => "--orientation-noise",
+            (OrientationNoise, Python) => "Noise(orientation_deg=…)",
+            (OrientationNoise, C) => "aacmm_calibrate_options_set_orientation_noise_rad",
+            (Robust, Cli) => "--robust",
+            (Robust, Python) => "robust=\"huber\"",
+            (Robust, C) => "aacmm_calibrate_options_set_robust",
+            (AcceptPoorFit, Cli) => "--accept-poor-fit",
+            (AcceptPoorFit, Python) => "accept_poor_fit=True",
+            (AcceptPoorFit, C) => "aacmm_calibrate_options_set_accept_poor_fit",
+            (GlobalStarts, Cli) => "--global-starts N",
+            (GlobalStarts, Python) => "global_starts=N",
+            (GlobalStarts, C) => "aacmm_calibrate_options_set_global_starts",
+            (Prior, Cli) => "--prior",
+            (Prior, Python) => "prior=…",
+            (Prior, C) => "aacmm_calibrate_options_set_prior",
+            (Fix, Cli) => "--fix",
+            (Fix, Python) => "fix=…",
+            (Fix, C) => "aacmm_calibrate_options_set_fix",
+            (Lengths, Cli) => "--lengths",
+            (Lengths, Python) => "the data set's lengths",
+            (Lengths, C) => "the lengths file of aacmm_calibrate_files",
+            (AngleUnitRad, Cli) => "--angle-unit rad",
+            (AngleUnitRad, Python) => "angle_unit=\"rad\"",
+            (AngleUnitRad, C) => "AACMM_ANGLE_RAD",
+        }
+    }
+
+    /// Every setting, for tests over them all.
+    #[cfg(test)]
+    const ALL: [Setting; 11] = [
+        Setting::EncoderNoise,
+        Setting::ProbeNoise,
+        Setting::PositionNoise,
+        Setting::OrientationNoise,
+        Setting::Robust,
+        Setting::AcceptPoorFit,
+        Setting::GlobalStarts,
+        Setting::Prior,
+        Setting::Fix,
+        Setting::Lengths,
+        Setting::AngleUnitRad,
+    ];
+}
+
+/// Whether a calibration may be used: exit 0 of the command line. Written
+/// into `calibration.json` and `calibrated.toml` in the command line's
+/// words ([`Verdict::words`], the [`ArmVerdict`] a reader of those files
+/// gets back).
+#[derive(Clone, Debug, Default, PartialEq)]
+#[non_exhaustive]
+pub struct Verdict {
+    /// Usable: no reason against it.
+    pub usable: bool,
+    /// Why not (empty when usable), the first cause first.
+    pub reasons: Vec<Reason>,
+    /// What a metrologist should know although the result is usable.
+    pub notes: Vec<Note>,
+}
+
+impl Verdict {
+    /// The verdict in `spelling`'s words: its reasons and notes as
+    /// sentences.
+    pub fn words(&self, spelling: Spelling) -> ArmVerdict {
+        ArmVerdict {
+            usable: self.usable,
+            reasons: self.reasons.iter().map(|r| r.describe(spelling)).collect(),
+            notes: self.notes.iter().map(|n| n.describe(spelling)).collect(),
+        }
+    }
+}
+
+impl Serialize for Verdict {
+    /// The command line's words: `calibration.json`'s `/verdict`.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.words(Spelling::Cli).serialize(s)
+    }
+}
+
+impl<'de> Deserialize<'de> for Verdict {
+    /// A verdict read back from its sentences: each a [`Reason::Recorded`]
+    /// or [`Note::Recorded`].
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Verdict, D::Error> {
+        let words = ArmVerdict::deserialize(d)?;
+        Ok(Verdict {
+            usable: words.usable,
+            reasons: (words.reasons.into_iter())
+                .map(|text| Reason::Recorded { text })
+                .collect(),
+            notes: (words.notes.into_iter())
+                .map(|text| Note::Recorded { text })
+                .collect(),
+        })
+    }
+}
+
+/// One reason a calibration is refused, with its data. Said in a front
+/// end's words by [`Reason::describe`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Reason {
+    /// Every joint reading is within ±2π read as degrees: radians read as
+    /// degrees, the cause of the reasons after it.
+    RadiansAsDegrees {
+        /// The poses file.
+        poses_file: String,
+    },
+    /// The data and the arm disagree: the global search found no arm of
+    /// the nominal's kind, or its best leaves residuals hundreds of times
+    /// the stated noise.
+    DataDisagreeWithArm {
+        /// The minima the search found when none was of the nominal's
+        /// kind.
+        minima_of_other_kinds: Option<usize>,
+        /// σ̂₀ of the best minimum when hundreds of times the noise.
+        far_sigma0: Option<f64>,
+        /// A touch's stated σ, mm.
+        touch_sigma_mm: f64,
+        /// The arm's joints.
+        joints: usize,
+    },
+    /// A few outliers pull the fit: the likely cause.
+    Outliers {
+        /// How many.
+        count: usize,
+        /// The first five.
+        named: Vec<Outlier>,
+        /// What each is of: `touch`, `target`, `point on its sphere`,
+        /// `orientation`, `observation`.
+        what: String,
+        /// A robust loss was in use (and is not recommended again).
+        robust_in_use: bool,
+    },
+    /// The solver did not reach a confirmed minimum.
+    Unconfirmed {
+        /// How it stopped, in words.
+        stop: String,
+        /// A global search that spent its starts: how many it had and
+        /// whether a prior was in use (the remedy).
+        search: Option<UnconfirmedSearch>,
+    },
+    /// Parameters the data determine moved implausibly far: a mirror
+    /// image, a collapse, a unit mistake.
+    NotNominalGeometry {
+        /// The moves.
+        moves: Vec<GrossCorrection>,
+    },
+    /// Parameters the data barely determine moved implausibly far.
+    Undetermined {
+        /// The moves, each with its σ (in its unit).
+        moves: Vec<(GrossCorrection, f64)>,
+        /// A prior was in use.
+        prior_in_use: bool,
+    },
+    /// An auxiliary block's values are physically impossible.
+    ImplausibleBlocks {
+        /// Each block's complaint.
+        blocks: Vec<String>,
+    },
+    /// The χ² test refuses the fit.
+    ChiSquare {
+        /// The test.
+        chi: ChiSquare,
+        /// The noise stated, when the fit is otherwise sound (a
+        /// misstated noise is then a possible cause: said with the Birge
+        /// ratio).
+        stated: Option<StatedNoise>,
+    },
+    /// The robust scale's test refuses the fit.
+    RobustScale {
+        /// The test, in words.
+        description: String,
+    },
+    /// Worse than nominal at its own reference positions.
+    WorseAtPositions {
+        /// Mean 3-D error before, mm.
+        before_mm: f64,
+        /// After, mm.
+        after_mm: f64,
+    },
+    /// Worse than nominal on its own data.
+    WorseOnData {
+        /// The headline figure's name.
+        what: String,
+        /// Before, mm.
+        before_mm: f64,
+        /// After, mm.
+        after_mm: f64,
+    },
+    /// A reason read back from a file: its sentence.
+    Recorded {
+        /// The sentence.
+        text: String,
+    },
+}
+
+/// A global search that spent its starts without confirming a minimum.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct UnconfirmedSearch {
+    /// The starts it had.
+    pub starts: usize,
+    /// A prior was in use.
+    pub prior_in_use: bool,
+}
+
+/// The noise a fit stated, as it holds it (rad, mm).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct StatedNoise {
+    /// The encoders', rad.
+    pub encoder_rad: Option<f64>,
+    /// The probe's, mm.
+    pub probe_mm: Option<f64>,
+    /// A reference position's, mm.
+    pub position_mm: Option<f64>,
+    /// Its growth with distance, mm per m.
+    pub position_mm_per_m: Option<f64>,
+    /// A reference orientation's, rad.
+    pub orientation_rad: Option<f64>,
+}
+
+impl StatedNoise {
+    fn of(noise: &Noise) -> StatedNoise {
+        StatedNoise {
+            encoder_rad: noise.encoder_rad,
+            probe_mm: noise.probe_mm,
+            position_mm: noise.position_mm,
+            position_mm_per_m: noise.position_mm_per_m,
+            orientation_rad: noise.orientation_rad,
+        }
+    }
+}
+
+/// A note beside a verdict, with its data. Said in a front end's words by
+/// [`Note::describe`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum Note {
+    /// A χ² outside its range but not refused.
+    ChiSquare {
+        /// The test.
+        chi: ChiSquare,
+    },
+    /// A robust scale outside its range but not refused, in words.
+    RobustScale {
+        /// The test, in words.
+        description: String,
+    },
+    /// The robust weights had not settled.
+    RobustUnsettled {
+        /// The weights' tolerance.
+        tolerance: f64,
+        /// The refits.
+        passes: usize,
+    },
+    /// The data determine the arm too weakly beside a touch's scatter.
+    WeakData {
+        /// RMS of the predicted radius, mm.
+        rms_mm: f64,
+        /// Its coverage.
+        coverage: f64,
+        /// A touch's own radius at that coverage, mm.
+        touch_mm: f64,
+    },
+    /// No reference length: the scale is the nominal's.
+    ScaleUndetermined {
+        /// The parameter held for scale.
+        parameter: String,
+        /// Its nominal value, mm.
+        nominal_mm: f64,
+        /// The arm's reach, mm.
+        reach_mm: f64,
+    },
+    /// Nearly parallel axes: a joint suits Hayati's model.
+    Hayati {
+        /// The recommendation, in words.
+        text: String,
+    },
+    /// A reason for refusal, accepted on request.
+    Accepted {
+        /// The reason.
+        reason: Box<Reason>,
+    },
+    /// A note read back from a file: its sentence.
+    Recorded {
+        /// The sentence.
+        text: String,
+    },
+}
+
+impl std::fmt::Display for Reason {
+    /// The command line's words.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.describe(Spelling::Cli))
+    }
+}
+
+impl std::fmt::Display for Note {
+    /// The command line's words.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.describe(Spelling::Cli))
+    }
+}
+
+impl Reason {
+    /// A short stable name of the variant: `chi_square`, `outliers`, …
+    /// (the `kind` of its JSON).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Reason::RadiansAsDegrees { .. } => "radians_as_degrees",
+            Reason::DataDisagreeWithArm { .. } => "data_disagree_with_arm",
+            Reason::Outliers { .. } => "outliers",
+            Reason::Unconfirmed { .. } => "unconfirmed",
+            Reason::NotNominalGeometry { .. } => "not_nominal_geometry",
+            Reason::Undetermined { .. } => "undetermined",
+            Reason::ImplausibleBlocks { .. } => "implausible_blocks",
+            Reason::ChiSquare { .. } => "chi_square",
+            Reason::RobustScale { .. } => "robust_scale",
+            Reason::WorseAtPositions { .. } => "worse_at_positions",
+            Reason::WorseOnData { .. } => "worse_on_data",
+            Reason::Recorded { .. } => "recorded",
+        }
+    }
+
+    /// The sentence, its remedies named as `spelling` names options.
+    pub fn describe(&self, spelling: Spelling) -> String {
+        let name = |s: Setting| s.name(spelling);
+        match self {
+            Reason::RadiansAsDegrees { poses_file } => format!(
+                "every joint reading of {poses_file}, read as degrees, is within ±6.28°: these \
+                 angles look like radians read as degrees, and the reasons after this one \
+                 follow from it — {}",
+                angle_units_remedy(spelling)
+            ),
+            Reason::DataDisagreeWithArm {
+                minima_of_other_kinds,
+                far_sigma0,
+                touch_sigma_mm,
+                joints,
+            } => disagreement_words(
+                *minima_of_other_kinds,
+                *far_sigma0,
+                *touch_sigma_mm,
+                *joints,
+            ),
+            Reason::Outliers {
+                count,
+                named,
+                what,
+                robust_in_use,
+            } => outliers_words(*count, named, what, *robust_in_use, spelling),
+            Reason::Unconfirmed { stop, search } => {
+                let remedy = search.map_or_else(String::new, |s| {
+                    let tolerances = if s.prior_in_use {
+                        "tighter tolerances for the parameters that differ between its minima \
+                         (the prior in use lets them wander)"
+                            .to_string()
+                    } else {
+                        format!(
+                            "state tolerances (`[prior]`, {}) for the parameters that differ \
+                             between its minima",
+                            name(Setting::Prior)
+                        )
+                    };
+                    format!(
+                        ": give it more starts than its {} ({}), or {tolerances}",
+                        s.starts,
+                        name(Setting::GlobalStarts)
+                    )
+                });
+                format!("the solver did not reach a confirmed minimum ({stop}){remedy}")
+            }
+            Reason::NotNominalGeometry { moves } => format!(
+                "the calibrated arm is not the nominal arm's geometry — a mirror image, a \
+                 collapsed arm or a unit mistake: {}",
+                moves
+                    .iter()
+                    .map(|g| g.describe())
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            ),
+            Reason::Undetermined {
+                moves,
+                prior_in_use,
+            } => undetermined_words(moves, *prior_in_use, spelling),
+            Reason::ImplausibleBlocks { blocks } => format!(
+                "an auxiliary block has values no real instrument could have: {}",
+                blocks.join("; ")
+            ),
+            Reason::ChiSquare { chi, stated } => match stated {
+                Some(noise) => {
+                    format!("{}; {}", chi.describe(), noise_remedy(noise, chi, spelling))
+                }
+                None => chi.describe(),
+            },
+            Reason::RobustScale { description } => description.clone(),
+            Reason::WorseAtPositions {
+                before_mm,
+                after_mm,
+            } => format!(
+                "the calibrated arm is worse than the nominal at its own reference positions \
+                 (mean 3-D error {before_mm:.4} → {after_mm:.4} mm): touches and positions \
+                 disagree?"
+            ),
+            Reason::WorseOnData {
+                what,
+                before_mm,
+                after_mm,
+            } => format!(
+                "the calibrated arm is worse than the nominal on its own data ({what} \
+                 {before_mm:.4} → {after_mm:.4} mm): a mislabelled observation or a wrong \
+                 minimum?"
+            ),
+            Reason::Recorded { text } => text.clone(),
+        }
+    }
+}
+
+impl Note {
+    /// A short stable name of the variant (the `kind` of its JSON).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Note::ChiSquare { .. } => "chi_square",
+            Note::RobustScale { .. } => "robust_scale",
+            Note::RobustUnsettled { .. } => "robust_unsettled",
+            Note::WeakData { .. } => "weak_data",
+            Note::ScaleUndetermined { .. } => "scale_undetermined",
+            Note::Hayati { .. } => "hayati",
+            Note::Accepted { .. } => "accepted",
+            Note::Recorded { .. } => "recorded",
+        }
+    }
+
+    /// The sentence, its remedies named as `spelling` names options.
+    pub fn describe(&self, spelling: Spelling) -> String {
+        match self {
+            Note::ChiSquare { chi } => chi.describe(),
+            Note::RobustScale { description } | Note::Hayati { text: description } => {
+                description.clone()
+            }
+            Note::RobustUnsettled { tolerance, passes } => format!(
+                "the robust weights still moved by more than {tolerance} after {passes} refits"
+            ),
+            Note::WeakData {
+                rms_mm,
+                coverage,
+                touch_mm,
+            } => format!(
+                "these data determine the arm to ±{rms_mm:.4} mm (RMS over the campaign's poses \
+                 of the {:.0} % radius in 3-D), enough to add more than 5 % to a touch's own \
+                 scatter (±{touch_mm:.4} mm at the same coverage): add sockets, poses or \
+                 reference lengths",
+                100.0 * coverage
+            ),
+            Note::ScaleUndetermined {
+                parameter,
+                nominal_mm,
+                reach_mm,
+            } => {
+                let relative = 0.1 / nominal_mm;
+                format!(
+                    "positions are determined only up to scale: no reference length fixes the \
+                     arm's size, so {parameter} is held at its nominal {nominal_mm:.3} mm and \
+                     every length follows it; each 0.1 mm it is off scales the arm by \
+                     {relative:.1e}, {:.3} mm at the reach ({reach_mm:.0} mm), an error no \
+                     uncertainty here includes. Add a reference length ({}) to fix the scale",
+                    relative * reach_mm,
+                    Setting::Lengths.name(spelling)
+                )
+            }
+            Note::Accepted { reason } => {
+                format!("accepted on request: {}", reason.describe(spelling))
+            }
+            Note::Recorded { text } => text.clone(),
+        }
+    }
+
+    /// Without a reference length the size of the arm is the nominal's:
+    /// what that leaves out of every uncertainty, per 0.1 mm the parameter
+    /// held for scale is off (the data cannot say by how much it is), and
+    /// the remedy.
+    pub(super) fn scale(c: &Calibration) -> Option<Note> {
+        let e = (c.parameters.iter())
+            .find(|e| e.fixed.as_deref().is_some_and(|r| r.starts_with("scale:")))?;
+        let value = e.nominal.abs();
+        if value.is_nan() || value <= 0.0 {
+            return None;
+        }
+        Some(Note::ScaleUndetermined {
+            parameter: e.id.to_string(),
+            nominal_mm: value,
+            reach_mm: c.params.reach(),
+        })
+    }
+}
+
+/// How each front end reads the poses as radians.
+fn angle_units_remedy(spelling: Spelling) -> String {
+    match spelling {
+        Spelling::Cli => crate::calibrate::ANGLE_UNITS_REMEDY.to_string(),
+        _ => format!(
+            "read the poses as radians ({})",
+            Setting::AngleUnitRad.name(spelling)
+        ),
+    }
+}
+
+/// [`Reason::DataDisagreeWithArm`] in words: no remedy names an option.
+fn disagreement_words(
+    minima_of_other_kinds: Option<usize>,
+    far_sigma0: Option<f64>,
+    touch_sigma_mm: f64,
+    joints: usize,
+) -> String {
+    let mut evidence = Vec::new();
+    if let Some(minima) = minima_of_other_kinds {
+        evidence.push(format!(
+            "none of the {minima} minima the global search found, from starts all over the zero \
+             offsets' circles, is an arm of the nominal's kind (each a mirror image, folded or \
+             rescaled)"
+        ));
+    }
+    if let Some(s0) = far_sigma0 {
+        evidence.push(format!(
+            "even the best minimum leaves residuals {s0:.0} times the stated noise (a touch \
+             scatters {:.3} mm where the noise says {touch_sigma_mm:.4} mm)",
+            s0 * touch_sigma_mm,
+        ));
+    }
+    format!(
+        "the data and the arm disagree: {} — check that the poses file's columns q1..q{joints} \
+         are this arm's joints in its order, that the touches are of this arm (not another \
+         robot's), and that readings and lengths are in the units stated (the readings' angle \
+         unit; lengths in mm)",
+        evidence.join("; "),
+    )
+}
+
+/// [`Reason::Outliers`] in words.
+fn outliers_words(
+    count: usize,
+    named: &[Outlier],
+    what: &str,
+    robust_in_use: bool,
+    spelling: Spelling,
+) -> String {
+    let listed: Vec<String> = (named.iter())
+        .map(|x| format!("{} (point {}, {:.1} σ)", x.at, x.point, x.standardised))
+        .collect();
+    let robust = if robust_in_use {
+        String::new()
+    } else {
+        format!(
+            ", or calibrate with {}, which weighs them down",
+            Setting::Robust.name(spelling)
+        )
+    };
+    format!(
+        "{count} outlying observation{} pull{} the fit: {}{} — a mislabelled or displaced \
+         {what}? Check {}: fix the label or remove the row{robust}",
+        if count == 1 { "" } else { "s" },
+        if count == 1 { "s" } else { "" },
+        listed.join(", "),
+        if count > listed.len() { ", …" } else { "" },
+        if count == 1 { "it" } else { "them" }
+    )
+}
+
+/// [`Reason::Undetermined`] in words.
+fn undetermined_words(
+    moves: &[(GrossCorrection, f64)],
+    prior_in_use: bool,
+    spelling: Spelling,
+) -> String {
+    let moves: Vec<String> = (moves.iter())
+        .map(|(g, s)| format!("{} (σ {s:.4} {})", g.describe(), g.unit))
+        .collect();
+    // With a prior in use, what it lacks: no option in use recommended.
+    let tolerances = if prior_in_use {
+        "give them tolerances (or tighter ones) in the prior".to_string()
+    } else {
+        format!(
+            "state tolerances for them (`[prior]` in the arm file, or {})",
+            Setting::Prior.name(spelling)
+        )
+    };
+    format!(
+        "the data barely determine parameters that moved implausibly far, so they followed \
+         noise and model error: {} — {tolerances} or fix them ({}), or add poses that turn the \
+         joints involved",
+        moves.join("; "),
+        Setting::Fix.name(spelling)
+    )
+}
+
+/// The ways out of a χ² far outside the stated noise: the factor σ̂₀ by
+/// which the noise would be misstated, the noise that factor gives (stated
+/// so, this fit is consistent, with the uncertainties it printed, which
+/// already carry σ̂₀), leaving it unstated (σ estimated) or accepting the
+/// fit; and, for residuals too large, the other causes.
+fn noise_remedy(noise: &StatedNoise, chi: &ChiSquare, spelling: Spelling) -> String {
+    let s0 = (chi.statistic / chi.dof.max(1) as f64).sqrt();
+    let mut flags = Vec::new();
+    if let Some(e) = noise.encoder_rad {
+        flags.push(format!("--encoder-noise {:.4}", (e * s0).to_degrees()));
+    }
+    if let Some(p) = noise.probe_mm {
+        flags.push(format!("--probe-noise {:.4}", p * s0));
+    }
+    if let Some(a) = noise.position_mm {
+        let b = noise.position_mm_per_m.unwrap_or(0.0);
+        flags.push(if b > 0.0 {
+            format!("--position-noise {:.4}+{:.4}/m", a * s0, b * s0)
+        } else {
+            format!("--position-noise {:.4}", a * s0)
+        });
+    }
+    if let Some(o) = noise.orientation_rad {
+        flags.push(format!("--orientation-noise {:.4}", (o * s0).to_degrees()));
+    }
+    let (how, other) = if s0 > 1.0 {
+        (
+            format!("{s0:.2} times larger"),
+            " If the noise is right, look for outliers (--robust names them) or a model error.",
+        )
+    } else {
+        (format!("{:.2} times smaller", 1.0 / s0), "")
+    };
+    let stated = if flags.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", flags.join(" "))
+    };
+    let _ = spelling;
+    format!(
+        "if the noise is misstated, the residuals say it is {how}: state that{stated}, and this \
+         fit is consistent with the uncertainties printed; or leave the noise unstated (σ is then \
+         estimated from the fit); or accept the fit as it is with --accept-poor-fit.{other}"
+    )
+}
+
+/// Most outliers, as a share of the observations, that can be the cause
+/// of a refusal rather than a symptom of it (a wrong minimum or a wrong
+/// model puts most observations beyond the threshold).
+const FEW_OUTLIERS: f64 = 0.1;
+
+/// The σ̂₀ from which the best minimum of a global search says the data
+/// and the arm disagree: residuals hundreds of times the stated noise are
+/// no noise misstatement, and a search that tried the whole torus of the
+/// zero offsets is no wrong start.
+const DISAGREE_SIGMA0: f64 = 100.0;
+
+impl Verdict {
+    /// The verdict on `calibration` and its validation on the fitted data.
+    fn of(
+        calibration: &Calibration,
+        fitted: &BeforeAfter,
+        noise: &Noise,
+        accept_poor_fit: bool,
+    ) -> Verdict {
+        let (mut reasons, mut notes) = (Vec::new(), Vec::new());
+        let solver = &calibration.solver;
+        // The data and the arm disagree: no search can help, so the
+        // solver's own failure is said last, without its remedy.
+        let disagree = disagreement(calibration);
+        let mut unconfirmed = None;
+        if !solver.is_solution_usable() {
+            let search = match solver.stop {
+                crate::calibrate::Stop::Global { search, .. }
+                    if !search.confirmed() && disagree.is_none() =>
+                {
+                    Some(UnconfirmedSearch {
+                        starts: (calibration.solver.global.as_ref())
+                            .map_or(0, |g| g.options.max_starts),
+                        prior_in_use: calibration.prior.is_some(),
+                    })
+                }
+                _ => None,
+            };
+            unconfirmed = Some(Reason::Unconfirmed {
+                stop: solver.stop.describe(),
+                search,
+            });
+        }
+        if disagree.is_none() {
+            reasons.extend(unconfirmed.take());
+        }
+        reasons.extend(gross_reasons(calibration));
+        let blocks = &calibration.checks.implausible_blocks;
+        if !blocks.is_empty() {
+            reasons.push(Reason::ImplausibleBlocks {
+                blocks: blocks.clone(),
+            });
+        }
+        let mut poor = Vec::new();
+        noise_checks(calibration, noise, &mut poor, &mut notes);
+        if let Some(u) = calibration.checks.position_uncertainty.filter(|u| u.weak()) {
+            notes.push(Note::WeakData {
+                rms_mm: u.rms_mm,
+                coverage: u.coverage,
+                touch_mm: u.touch_mm,
+            });
+        }
+        notes.extend(Note::scale(calibration));
+        // Nearly parallel axes in the D-H model: say which joint suits Hayati.
+        notes.extend(
+            crate::hayati::recommendations(&calibration.params)
+                .into_iter()
+                .map(|text| Note::Hayati { text }),
+        );
+        poor.extend(worse_than_nominal(fitted));
+        if accept_poor_fit {
+            notes.extend(poor.into_iter().map(|p| Note::Accepted {
+                reason: Box::new(p),
+            }));
+        } else {
+            reasons.extend(poor);
+        }
+        // A few gross outliers explain every other symptom: said first;
+        // else data that no arm of this kind fits (another arm's file,
+        // columns in another order, another unit).
+        reasons.extend(unconfirmed);
+        if !reasons.is_empty() {
+            if let Some(cause) = outlier_cause(calibration) {
+                reasons.insert(0, cause);
+            } else if let Some(cause) = disagree {
+                reasons.insert(0, cause);
+            }
+        }
+        Verdict {
+            usable: reasons.is_empty(),
+            reasons,
+            notes,
+        }
+    }
+}
+
+/// The calibrated arm worse than the nominal at its own reference
+/// positions, or on its own data.
+fn worse_than_nominal(fitted: &BeforeAfter) -> Vec<Reason> {
+    let mut poor = Vec::new();
+    if let (Some(b), Some(a)) = (fitted.before.positions, fitted.after.positions)
+        && fitted.after.points > 0
+        && (a.mean.is_nan() || a.mean > b.mean)
+    {
+        poor.push(Reason::WorseAtPositions {
+            before_mm: b.mean,
+            after_mm: a.mean,
+        });
+    }
+    let (before, after) = (fitted.before.headline(), fitted.after.headline());
+    if after.is_nan() || after > before {
+        poor.push(Reason::WorseOnData {
+            what: fitted.after.headline_name().to_string(),
+            before_mm: before,
+            after_mm: after,
+        });
+    }
+    poor
+}
+
+/// The data and the arm disagree — the first cause of a refusal, when the
+/// global search (which tries every basin of the zero offsets) ends on an
+/// arm not of the nominal's kind (gross corrections the data determine)
+/// having found no minimum of that kind, or leaving residuals hundreds of
+/// times the stated noise ([`DISAGREE_SIGMA0`]), and a few outliers do not
+/// explain it: the joint columns in another order, another arm's file, or
+/// another unit.
+fn disagreement(c: &Calibration) -> Option<Reason> {
+    let trace = c.solver.global.as_ref()?;
+    if !matches!(c.solver.stop, crate::calibrate::Stop::Global { .. }) {
+        return None;
+    }
+    // An arm of the nominal's kind at the end (only its fit poor) is a
+    // misstated noise or a model error: said by the χ² test.
+    if classify_gross(c).0.is_empty() {
+        return None;
+    }
+    let no_kind = trace.best_hits == 0;
+    let s0 = c.dof.sigma0;
+    let far = c.checks.chi_square.is_some() && s0 >= DISAGREE_SIGMA0;
+    if !(no_kind || far) {
+        return None;
+    }
+    Some(Reason::DataDisagreeWithArm {
+        minima_of_other_kinds: no_kind.then_some(trace.minima.len()),
+        far_sigma0: far.then_some(s0),
+        touch_sigma_mm: c.dof.touch_sigma_mm,
+        joints: c.params.joint_count(),
+    })
+}
+
+/// A refused fit with a few outliers: they are the likely cause (a
+/// mislabelled or displaced touch pulls the whole fit), named by
+/// `file:line`, with the remedy. After a robust fit, the touches it
+/// weighed down pull nothing — they are reported (the summary's robust
+/// and outlier lines), not blamed — and a robust loss is not recommended:
+/// it is in use.
+fn outlier_cause(c: &Calibration) -> Option<Reason> {
+    let weighed_out: Vec<&str> = (c.robust.iter())
+        .flat_map(|r| r.downweighted())
+        .map(|w| w.at.as_str())
+        .collect();
+    let o: Vec<&Outlier> = (c.checks.outliers.iter())
+        .filter(|x| !weighed_out.contains(&x.at.as_str()))
+        .collect();
+    // Named as the cause only when, weighed down, they leave the rest of
+    // the residuals small: not after a wrong minimum, whose residuals are
+    // all large and whose screen singles out one touch all the same.
+    let screen = c.checks.outlier_screen;
+    if screen.is_some_and(|s| !s.explains(c.dof.sigma0)) {
+        return None;
+    }
+    // Observations, not rows: a position or an orientation is three rows,
+    // a point on a sphere one.
+    let d = &c.dof;
+    let observations = (d.touch_rows / 3
+        + d.rows_of("positions") / 3
+        + d.rows_of("orientations") / 3
+        + d.rows_of("spheres"))
+    .max(1);
+    if o.is_empty() || o.len() as f64 > (FEW_OUTLIERS * observations as f64).max(1.0) {
+        return None;
+    }
+    // Each kind of evidence named as what was displaced: a touch, the
+    // tracker's target, a point on its sphere, an orientation.
+    let what = match outliers_noun(&c.checks.outliers, noun(c)) {
+        "sphere point" => "point on its sphere",
+        "orientation" => "orientation",
+        "position" => "target",
+        "touch" => "touch",
+        _ => "observation",
+    };
+    Some(Reason::Outliers {
+        count: o.len(),
+        named: o.iter().take(5).map(|x| (*x).clone()).collect(),
+        what: what.to_string(),
+        robust_in_use: c.robust.is_some(),
+    })
+}
+
+/// The fit against the noise: the χ² test (with the ways out of a misstated
+/// noise when the fit is otherwise sound) and the robust scale's test, as
+/// refusals (`poor`, unless a poor fit is accepted) or notes.
+fn noise_checks(
+    calibration: &Calibration,
+    noise: &Noise,
+    poor: &mut Vec<Reason>,
+    notes: &mut Vec<Note>,
+) {
+    if let Some(chi) = &calibration.checks.chi_square {
+        if chi.far_outside() {
+            // A misstated noise is the cause only of a fit otherwise
+            // sound: not of a wrong minimum or a wrong geometry.
+            let sound = calibration.solver.is_solution_usable()
+                && calibration.checks.gross_corrections.is_empty();
+            poor.push(Reason::ChiSquare {
+                chi: *chi,
+                stated: sound.then(|| StatedNoise::of(noise)),
+            });
+        } else if chi.verdict != ChiSquareVerdict::Consistent {
+            notes.push(Note::ChiSquare { chi: *chi });
+        }
+    }
+    if let Some(r) = &calibration.robust {
+        if let Some(description) = r.describe_scale() {
+            if r.far_outside() {
+                poor.push(Reason::RobustScale { description });
+            } else if r.verdict != Some(ChiSquareVerdict::Consistent) {
+                notes.push(Note::RobustScale { description });
+            }
+        }
+        if !r.converged {
+            notes.push(Note::RobustUnsettled {
+                tolerance: crate::calibrate::robust::WEIGHT_TOLERANCE,
+                passes: r.passes,
+            });
+        }
+    }
+}
+
+/// Why free parameters moved implausibly far. One whose σ is a third of
+/// the move accepted or more was not determined by the data (a weak
+/// direction the user left free, or that a tolerance did not cover): said
+/// so, with the remedy. The rest are what the check exists for — a mirror
+/// image, a collapsed arm or a unit mistake.
+fn gross_reasons(c: &Calibration) -> Vec<Reason> {
+    let (gross, weak) = classify_gross(c);
+    let mut reasons = Vec::new();
+    if !gross.is_empty() {
+        reasons.push(Reason::NotNominalGeometry { moves: gross });
+    }
+    if !weak.is_empty() {
+        reasons.push(Reason::Undetermined {
+            moves: weak,
+            prior_in_use: c.prior.is_some(),
+        });
+    }
+    reasons
+}
+
+/// The implausible moves of [`gross_reasons`]: those the data determine
+/// (gross: a mirror image, a collapse, a unit mistake), and those they
+/// barely do (weak, each with its σ).
+fn classify_gross(c: &Calibration) -> (Vec<GrossCorrection>, Vec<(GrossCorrection, f64)>) {
+    let (mut weak, mut gross) = (Vec::new(), Vec::new());
+    // The σ carry σ̂²: when the fit is far outside the stated noise (a wrong
+    // minimum), they are inflated by it and tell nothing.
+    let meaningful = (c.checks.chi_square.as_ref()).is_none_or(|chi| !chi.far_outside());
+    for g in &c.checks.gross_corrections {
+        let e = c.parameters.iter().find(|e| e.id.to_string() == g.name);
+        let sigma = e.and_then(|e| e.sigma.map(|s| e.id.to_user(s)));
+        match sigma {
+            Some(s) if meaningful && s >= g.tolerance / 3.0 => weak.push((g.clone(), s)),
+            _ => gross.push(g.clone()),
+        }
+    }
+    (gross, weak)
+}
+
+/// The verdict on `calibration` of `problem` (its `fitted` figures), with
+/// readings that look like radians read as degrees as the first cause of a
+/// refusal: the reader warned, and the reasons that follow (no confirmed
+/// minimum, χ²) are its consequences.
+pub(super) fn verdict_of(
+    problem: &Problem,
+    calibration: &Calibration,
+    fitted: &BeforeAfter,
+) -> Verdict {
+    let (data, model) = (&problem.data, &problem.model);
+    let mut verdict = Verdict::of(calibration, fitted, &model.noise, model.accept_poor_fit);
+    if !verdict.usable
+        && crate::io::poses::look_like_radians(
+            data.readings(),
+            data.len(),
+            (data.joints(), data.poses().prismatic_mask()),
+            1f64.to_degrees(),
+        )
+    {
+        verdict.reasons.insert(
+            0,
+            Reason::RadiansAsDegrees {
+                poses_file: data.source().poses_file().to_string(),
+            },
+        );
+    }
+    verdict
+}
+
+/// The verdict, and the notes that come with it (the same as the JSON's
+/// `/verdict`): a χ² outside its range that is not a refusal is said here,
+/// not only in the file.
+pub(super) fn verdict_line(v: &Verdict) -> String {
+    let words = v.words(Spelling::Cli);
+    let mut t = if v.usable {
+        "Verdict: usable\n".to_string()
+    } else {
+        format!("Verdict: NOT usable — {}\n", words.reasons.join("; "))
+    };
+    for n in &words.notes {
+        t += &format!("  note: {n}\n");
+    }
+    t + "\n"
+}
