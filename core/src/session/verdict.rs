@@ -674,50 +674,126 @@ fn undetermined_words(
     )
 }
 
-/// The ways out of a χ² far outside the stated noise: the factor σ̂₀ by
-/// which the noise would be misstated, the noise that factor gives (stated
-/// so, this fit is consistent, with the uncertainties it printed, which
-/// already carry σ̂₀), leaving it unstated (σ estimated) or accepting the
-/// fit; and, for residuals too large, the other causes.
+/// The χ² far outside the stated noise, as the Birge ratio σ̂₀ =
+/// √(χ²/dof): how many times the noise stated the residuals scatter. Not
+/// "state the noise σ̂₀ times larger": that makes the test pass by
+/// construction. The ways out: for residuals too large, outliers or a
+/// model error when the noise is right; leaving a guessed noise unstated
+/// (σ is then estimated from the residuals, as the uncertainties printed
+/// already are through σ̂₀, and nothing is tested); or accepting the fit.
 fn noise_remedy(noise: &StatedNoise, chi: &ChiSquare, spelling: Spelling) -> String {
     let s0 = (chi.statistic / chi.dof.max(1) as f64).sqrt();
-    let mut flags = Vec::new();
-    if let Some(e) = noise.encoder_rad {
-        flags.push(format!("--encoder-noise {:.4}", (e * s0).to_degrees()));
-    }
-    if let Some(p) = noise.probe_mm {
-        flags.push(format!("--probe-noise {:.4}", p * s0));
-    }
-    if let Some(a) = noise.position_mm {
-        let b = noise.position_mm_per_m.unwrap_or(0.0);
-        flags.push(if b > 0.0 {
-            format!("--position-noise {:.4}+{:.4}/m", a * s0, b * s0)
-        } else {
-            format!("--position-noise {:.4}", a * s0)
-        });
-    }
-    if let Some(o) = noise.orientation_rad {
-        flags.push(format!("--orientation-noise {:.4}", (o * s0).to_degrees()));
-    }
-    let (how, other) = if s0 > 1.0 {
-        (
-            format!("{s0:.2} times larger"),
-            " If the noise is right, look for outliers (--robust names them) or a model error.",
-        )
+    let (stated, unstated) = stated_noise_words(noise, spelling);
+    let stated = if stated.is_empty() {
+        "the stated noise".to_string()
     } else {
-        (format!("{:.2} times smaller", 1.0 / s0), "")
+        format!("the stated noise ({stated})")
     };
-    let stated = if flags.is_empty() {
+    let unstated = if unstated.is_empty() {
         String::new()
     } else {
-        format!(" ({})", flags.join(" "))
+        format!(" ({unstated})")
     };
-    let _ = spelling;
+    let (scatter, right) = if s0 > 1.0 {
+        (
+            format!("{s0:.2} times what {stated} explains"),
+            format!(
+                "If that noise is right, look for outliers ({} names them) or a model error; if \
+                 it is a guess",
+                Setting::Robust.name(spelling)
+            ),
+        )
+    } else {
+        (
+            format!(
+                "{:.2} times less than {stated} explains — an overstated noise, or a fit that \
+                 follows it",
+                1.0 / s0
+            ),
+            "If the noise is a guess".to_string(),
+        )
+    };
     format!(
-        "if the noise is misstated, the residuals say it is {how}: state that{stated}, and this \
-         fit is consistent with the uncertainties printed; or leave the noise unstated (σ is then \
-         estimated from the fit); or accept the fit as it is with --accept-poor-fit.{other}"
+        "the Birge ratio σ̂₀ = √(χ²/dof) = {s0:.2}: the residuals scatter {scatter}. {right}, \
+         leave it unstated{unstated}: σ is then estimated from these residuals (as the \
+         uncertainties printed here already are, through σ̂₀) and no χ² test is made; or \
+         accept the fit as it is with {}.",
+        Setting::AcceptPoorFit.name(spelling)
     )
+}
+
+/// The noise stated, as `spelling` sets it (in its units: degrees on the
+/// command line and in Python, radians in C), and how it leaves it
+/// unstated.
+fn stated_noise_words(noise: &StatedNoise, spelling: Spelling) -> (String, String) {
+    let deg = |r: f64| r.to_degrees();
+    let b = noise.position_mm_per_m.unwrap_or(0.0);
+    let mut set: Vec<String> = Vec::new();
+    let mut names: Vec<&str> = Vec::new();
+    match spelling {
+        Spelling::Python => {
+            let mut args = Vec::new();
+            if let Some(e) = noise.encoder_rad {
+                args.push(format!("encoder_deg={:.4}", deg(e)));
+            }
+            if let Some(p) = noise.probe_mm {
+                args.push(format!("probe_mm={p:.4}"));
+            }
+            if let Some(a) = noise.position_mm {
+                args.push(format!("position_mm={a:.4}"));
+                if b > 0.0 {
+                    args.push(format!("position_mm_per_m={b:.4}"));
+                }
+            }
+            if let Some(o) = noise.orientation_rad {
+                args.push(format!("orientation_deg={:.4}", deg(o)));
+            }
+            if !args.is_empty() {
+                set.push(format!("Noise({})", args.join(", ")));
+                names.push("noise=None");
+            }
+        }
+        _ => {
+            let c = spelling == Spelling::C;
+            let value = |v: f64, rad: bool| match (c, rad) {
+                (true, true) => format!("(o, {v:.4e})"),
+                (true, false) => format!("(o, {v:.4})"),
+                (false, true) => format!(" {:.4}", deg(v)),
+                (false, false) => format!(" {v:.4}"),
+            };
+            let mut add = |setting: Setting, v: String| {
+                set.push(format!("{}{v}", setting.name(spelling)));
+                names.push(setting.name(spelling));
+            };
+            if let Some(e) = noise.encoder_rad {
+                add(Setting::EncoderNoise, value(e, true));
+            }
+            if let Some(p) = noise.probe_mm {
+                add(Setting::ProbeNoise, value(p, false));
+            }
+            if let Some(a) = noise.position_mm {
+                add(
+                    Setting::PositionNoise,
+                    match (c, b > 0.0) {
+                        (true, _) => format!("(o, {a:.4}, {b:.4})"),
+                        (false, true) => format!(" {a:.4}+{b:.4}/m"),
+                        (false, false) => format!(" {a:.4}"),
+                    },
+                );
+            }
+            if let Some(o) = noise.orientation_rad {
+                add(Setting::OrientationNoise, value(o, true));
+            }
+        }
+    }
+    let unstated = match (spelling, names.is_empty()) {
+        (_, true) => String::new(),
+        (Spelling::C, false) => format!("0 in {}: not stated", names.join(", ")),
+        (Spelling::Python, false) => names.join(""),
+        (_, false) => format!("without {}", names.join(", ")),
+    };
+    let separator = if spelling == Spelling::C { ", " } else { " " };
+    (set.join(separator), unstated)
 }
 
 /// Most outliers, as a share of the observations, that can be the cause
