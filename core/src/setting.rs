@@ -143,6 +143,383 @@ const fn cli_only(path: &'static str, flag: &'static str) -> Names {
     row(Some(path), flag, None, None, [flag, path, path])
 }
 
+/// Every front end's name of each setting, one row per setting.
+const TABLE: [(Setting, Names); 39] = [
+    (
+        Setting::EncoderNoise,
+        row(
+            Some("noise.encoder_rad"),
+            "--encoder-noise",
+            Some("encoder_deg"),
+            Some("encoder_noise_rad"),
+            [
+                "--encoder-noise",
+                "Noise(encoder_deg=…)",
+                "aacmm_calibrate_options_set_encoder_noise_rad",
+            ],
+        ),
+    ),
+    (
+        Setting::ProbeNoise,
+        row(
+            Some("noise.probe_mm"),
+            "--probe-noise",
+            Some("probe_mm"),
+            Some("probe_noise_mm"),
+            [
+                "--probe-noise",
+                "Noise(probe_mm=…)",
+                "aacmm_calibrate_options_set_probe_noise_mm",
+            ],
+        ),
+    ),
+    (
+        Setting::LengthUncertainty,
+        row(
+            Some("noise.length_default_mm"),
+            "--length-uncertainty",
+            Some("length_default_mm"),
+            Some("length_uncertainty_mm"),
+            [
+                "--length-uncertainty",
+                "Noise(length_default_mm=…)",
+                "aacmm_calibrate_options_set_length_uncertainty_mm",
+            ],
+        ),
+    ),
+    (
+        Setting::LengthWeight,
+        row(
+            Some("noise.length_weight"),
+            "--length-weight",
+            Some("length_weight"),
+            Some("length_weight"),
+            [
+                "--length-weight",
+                "Noise(length_weight=…)",
+                "aacmm_calibrate_options_set_length_weight",
+            ],
+        ),
+    ),
+    (
+        Setting::PositionNoise,
+        row(
+            Some("noise.position_mm"),
+            "--position-noise",
+            Some("position_mm"),
+            Some("position_noise a_mm"),
+            [
+                "--position-noise",
+                "Noise(position_mm=…)",
+                "aacmm_calibrate_options_set_position_noise_mm",
+            ],
+        ),
+    ),
+    (
+        Setting::PositionNoisePerMetre,
+        row(
+            Some("noise.position_mm_per_m"),
+            "--position-noise",
+            Some("position_mm_per_m"),
+            Some("position_noise b_mm_per_m"),
+            [
+                "--position-noise",
+                "Noise(position_mm_per_m=…)",
+                "aacmm_calibrate_options_set_position_noise_mm",
+            ],
+        ),
+    ),
+    (
+        Setting::OrientationNoise,
+        row(
+            Some("noise.orientation_rad"),
+            "--orientation-noise",
+            Some("orientation_deg"),
+            Some("orientation_noise_rad"),
+            [
+                "--orientation-noise",
+                "Noise(orientation_deg=…)",
+                "aacmm_calibrate_options_set_orientation_noise_rad",
+            ],
+        ),
+    ),
+    (
+        Setting::Robust,
+        row(
+            Some("robust.loss"),
+            "--robust",
+            Some("robust"),
+            None,
+            [
+                "--robust",
+                "robust=\"huber\"",
+                "aacmm_calibrate_options_set_robust",
+            ],
+        ),
+    ),
+    (
+        Setting::RobustScale,
+        row(
+            Some("robust.scale_k"),
+            "--robust-scale",
+            Some("robust_scale"),
+            Some("robust scale"),
+            [
+                "--robust-scale",
+                "robust_scale=…",
+                "aacmm_calibrate_options_set_robust",
+            ],
+        ),
+    ),
+    (
+        Setting::AcceptPoorFit,
+        row(
+            None,
+            "--accept-poor-fit",
+            Some("accept_poor_fit"),
+            None,
+            [
+                "--accept-poor-fit",
+                "accept_poor_fit=True",
+                "aacmm_calibrate_options_set_accept_poor_fit",
+            ],
+        ),
+    ),
+    (
+        Setting::Method,
+        row(
+            Some("method"),
+            "--method",
+            Some("method"),
+            None,
+            ["--method", "method=…", "aacmm_calibrate_options_set_method"],
+        ),
+    ),
+    (
+        Setting::Seed,
+        row(
+            Some("seed"),
+            "--seed",
+            Some("seed"),
+            None,
+            ["--seed", "seed=…", "aacmm_calibrate_options_set_seed"],
+        ),
+    ),
+    (
+        Setting::Threads,
+        row(
+            Some("threads"),
+            "--threads",
+            Some("threads"),
+            Some("threads"),
+            [
+                "--threads",
+                "threads=…",
+                "aacmm_calibrate_options_set_threads",
+            ],
+        ),
+    ),
+    (
+        Setting::CrossValidate,
+        row(
+            Some("cross_validate"),
+            "--cross-validate",
+            Some("cross_validate"),
+            Some("cross_validate"),
+            [
+                "--cross-validate",
+                "cross_validate=…",
+                "aacmm_calibrate_options_set_cross_validate",
+            ],
+        ),
+    ),
+    (
+        Setting::Prior,
+        row(
+            Some("prior"),
+            "--prior",
+            Some("prior"),
+            Some("prior"),
+            ["--prior", "prior=…", "aacmm_calibrate_options_set_prior"],
+        ),
+    ),
+    (
+        Setting::Fix,
+        row(
+            Some("fix"),
+            "--fix",
+            Some("fix"),
+            Some("fix"),
+            ["--fix", "fix=…", "aacmm_calibrate_options_set_fix"],
+        ),
+    ),
+    (
+        Setting::Lengths,
+        row(
+            None,
+            "--lengths",
+            None,
+            None,
+            [
+                "--lengths",
+                "the data set's lengths",
+                "the lengths file of aacmm_calibrate_files",
+            ],
+        ),
+    ),
+    (
+        Setting::AngleUnitRad,
+        row(
+            None,
+            "--angle-unit",
+            Some("angle_unit"),
+            None,
+            ["--angle-unit rad", "angle_unit=\"rad\"", "AACMM_ANGLE_RAD"],
+        ),
+    ),
+    (
+        Setting::Compliance,
+        row(
+            Some("compliance"),
+            "--compliance",
+            Some("compliance"),
+            Some("compliance"),
+            [
+                "--compliance",
+                "compliance=…",
+                "aacmm_calibrate_options_set_compliance",
+            ],
+        ),
+    ),
+    (
+        Setting::Harmonics,
+        row(
+            Some("harmonics"),
+            "--harmonics",
+            Some("harmonics"),
+            Some("harmonics"),
+            [
+                "--harmonics",
+                "harmonics=…",
+                "aacmm_calibrate_options_set_harmonics",
+            ],
+        ),
+    ),
+    (
+        Setting::Backlash,
+        row(
+            Some("backlash"),
+            "--backlash",
+            Some("backlash"),
+            Some("backlash"),
+            [
+                "--backlash",
+                "backlash=…",
+                "aacmm_calibrate_options_set_backlash",
+            ],
+        ),
+    ),
+    (
+        Setting::Thermal,
+        row(
+            Some("thermal"),
+            "--thermal",
+            Some("thermal"),
+            Some("thermal"),
+            [
+                "--thermal",
+                "thermal=True",
+                "aacmm_calibrate_options_set_thermal",
+            ],
+        ),
+    ),
+    (
+        Setting::Drift,
+        row(
+            Some("drift"),
+            "--drift",
+            Some("drift"),
+            Some("drift"),
+            ["--drift", "drift=True", "aacmm_calibrate_options_set_drift"],
+        ),
+    ),
+    (
+        Setting::SphereDiameter,
+        row(
+            Some("sphere_diameter_mm"),
+            "--sphere-diameter",
+            None,
+            None,
+            [
+                "--sphere-diameter",
+                "sphere_diameter=…",
+                "aacmm_calibrate_options_set_sphere_diameter_mm",
+            ],
+        ),
+    ),
+    (
+        Setting::GlobalStarts,
+        row(
+            Some("global.max_starts"),
+            "--global-starts",
+            Some("global_starts"),
+            Some("global_starts"),
+            [
+                "--global-starts N",
+                "global_starts=N",
+                "aacmm_calibrate_options_set_global_starts",
+            ],
+        ),
+    ),
+    (
+        Setting::GlobalConfirmations,
+        cli_only("global.confirmations", "--global-confirmations"),
+    ),
+    (
+        Setting::GlobalStartIterations,
+        cli_only("global.start_iterations", "(LM iterations per start)"),
+    ),
+    (
+        Setting::LmIterations,
+        cli_only("lm.max_iterations", "(LM iteration limit)"),
+    ),
+    (Setting::AnnealT0, cli_only("anneal.t0", "--sa-t0")),
+    (
+        Setting::AnnealCooling,
+        cli_only("anneal.cooling", "--sa-cooling"),
+    ),
+    (Setting::AnnealChain, cli_only("anneal.chain", "--sa-chain")),
+    (Setting::AnnealTMin, cli_only("anneal.t_min", "--sa-t-min")),
+    (
+        Setting::AnnealTarget,
+        cli_only("anneal.target", "--sa-target"),
+    ),
+    (
+        Setting::AnnealStepMm,
+        cli_only("anneal.step_mm", "--sa-step-mm"),
+    ),
+    (
+        Setting::AnnealTwistStep,
+        cli_only("anneal.twist_step_deg", "--sa-twist-step"),
+    ),
+    (
+        Setting::AnnealZeroStep,
+        cli_only("anneal.zero_step_deg", "--sa-zero-step"),
+    ),
+    (
+        Setting::AnnealMaxEvaluations,
+        cli_only("anneal.max_evaluations", "--sa-max-evaluations"),
+    ),
+    (
+        Setting::SwitchWindow,
+        cli_only("switch.window", "--switch-window"),
+    ),
+    (
+        Setting::SwitchEpsilon,
+        cli_only("switch.epsilon", "--switch-epsilon"),
+    ),
+];
+
 impl Setting {
     /// Every setting.
     pub const ALL: [Setting; 39] = [
@@ -187,278 +564,11 @@ impl Setting {
         Setting::SwitchEpsilon,
     ];
 
-    /// The table: every front end's name of each setting.
-    fn names(self) -> Names {
-        use Setting::*;
-        match self {
-            EncoderNoise => row(
-                Some("noise.encoder_rad"),
-                "--encoder-noise",
-                Some("encoder_deg"),
-                Some("encoder_noise_rad"),
-                [
-                    "--encoder-noise",
-                    "Noise(encoder_deg=…)",
-                    "aacmm_calibrate_options_set_encoder_noise_rad",
-                ],
-            ),
-            ProbeNoise => row(
-                Some("noise.probe_mm"),
-                "--probe-noise",
-                Some("probe_mm"),
-                Some("probe_noise_mm"),
-                [
-                    "--probe-noise",
-                    "Noise(probe_mm=…)",
-                    "aacmm_calibrate_options_set_probe_noise_mm",
-                ],
-            ),
-            LengthUncertainty => row(
-                Some("noise.length_default_mm"),
-                "--length-uncertainty",
-                Some("length_default_mm"),
-                Some("length_uncertainty_mm"),
-                [
-                    "--length-uncertainty",
-                    "Noise(length_default_mm=…)",
-                    "aacmm_calibrate_options_set_length_uncertainty_mm",
-                ],
-            ),
-            LengthWeight => row(
-                Some("noise.length_weight"),
-                "--length-weight",
-                Some("length_weight"),
-                Some("length_weight"),
-                [
-                    "--length-weight",
-                    "Noise(length_weight=…)",
-                    "aacmm_calibrate_options_set_length_weight",
-                ],
-            ),
-            PositionNoise => row(
-                Some("noise.position_mm"),
-                "--position-noise",
-                Some("position_mm"),
-                Some("position_noise a_mm"),
-                [
-                    "--position-noise",
-                    "Noise(position_mm=…)",
-                    "aacmm_calibrate_options_set_position_noise_mm",
-                ],
-            ),
-            PositionNoisePerMetre => row(
-                Some("noise.position_mm_per_m"),
-                "--position-noise",
-                Some("position_mm_per_m"),
-                Some("position_noise b_mm_per_m"),
-                [
-                    "--position-noise",
-                    "Noise(position_mm_per_m=…)",
-                    "aacmm_calibrate_options_set_position_noise_mm",
-                ],
-            ),
-            OrientationNoise => row(
-                Some("noise.orientation_rad"),
-                "--orientation-noise",
-                Some("orientation_deg"),
-                Some("orientation_noise_rad"),
-                [
-                    "--orientation-noise",
-                    "Noise(orientation_deg=…)",
-                    "aacmm_calibrate_options_set_orientation_noise_rad",
-                ],
-            ),
-            Robust => row(
-                Some("robust.loss"),
-                "--robust",
-                Some("robust"),
-                None,
-                [
-                    "--robust",
-                    "robust=\"huber\"",
-                    "aacmm_calibrate_options_set_robust",
-                ],
-            ),
-            RobustScale => row(
-                Some("robust.scale_k"),
-                "--robust-scale",
-                Some("robust_scale"),
-                Some("robust scale"),
-                [
-                    "--robust-scale",
-                    "robust_scale=…",
-                    "aacmm_calibrate_options_set_robust",
-                ],
-            ),
-            AcceptPoorFit => row(
-                None,
-                "--accept-poor-fit",
-                Some("accept_poor_fit"),
-                None,
-                [
-                    "--accept-poor-fit",
-                    "accept_poor_fit=True",
-                    "aacmm_calibrate_options_set_accept_poor_fit",
-                ],
-            ),
-            Method => row(
-                Some("method"),
-                "--method",
-                Some("method"),
-                None,
-                ["--method", "method=…", "aacmm_calibrate_options_set_method"],
-            ),
-            Seed => row(
-                Some("seed"),
-                "--seed",
-                Some("seed"),
-                None,
-                ["--seed", "seed=…", "aacmm_calibrate_options_set_seed"],
-            ),
-            Threads => row(
-                Some("threads"),
-                "--threads",
-                Some("threads"),
-                Some("threads"),
-                [
-                    "--threads",
-                    "threads=…",
-                    "aacmm_calibrate_options_set_threads",
-                ],
-            ),
-            CrossValidate => row(
-                Some("cross_validate"),
-                "--cross-validate",
-                Some("cross_validate"),
-                Some("cross_validate"),
-                [
-                    "--cross-validate",
-                    "cross_validate=…",
-                    "aacmm_calibrate_options_set_cross_validate",
-                ],
-            ),
-            Prior => row(
-                Some("prior"),
-                "--prior",
-                Some("prior"),
-                Some("prior"),
-                ["--prior", "prior=…", "aacmm_calibrate_options_set_prior"],
-            ),
-            Fix => row(
-                Some("fix"),
-                "--fix",
-                Some("fix"),
-                Some("fix"),
-                ["--fix", "fix=…", "aacmm_calibrate_options_set_fix"],
-            ),
-            Lengths => row(
-                None,
-                "--lengths",
-                None,
-                None,
-                [
-                    "--lengths",
-                    "the data set's lengths",
-                    "the lengths file of aacmm_calibrate_files",
-                ],
-            ),
-            AngleUnitRad => row(
-                None,
-                "--angle-unit",
-                Some("angle_unit"),
-                None,
-                ["--angle-unit rad", "angle_unit=\"rad\"", "AACMM_ANGLE_RAD"],
-            ),
-            Compliance => row(
-                Some("compliance"),
-                "--compliance",
-                Some("compliance"),
-                Some("compliance"),
-                [
-                    "--compliance",
-                    "compliance=…",
-                    "aacmm_calibrate_options_set_compliance",
-                ],
-            ),
-            Harmonics => row(
-                Some("harmonics"),
-                "--harmonics",
-                Some("harmonics"),
-                Some("harmonics"),
-                [
-                    "--harmonics",
-                    "harmonics=…",
-                    "aacmm_calibrate_options_set_harmonics",
-                ],
-            ),
-            Backlash => row(
-                Some("backlash"),
-                "--backlash",
-                Some("backlash"),
-                Some("backlash"),
-                [
-                    "--backlash",
-                    "backlash=…",
-                    "aacmm_calibrate_options_set_backlash",
-                ],
-            ),
-            Thermal => row(
-                Some("thermal"),
-                "--thermal",
-                Some("thermal"),
-                Some("thermal"),
-                [
-                    "--thermal",
-                    "thermal=True",
-                    "aacmm_calibrate_options_set_thermal",
-                ],
-            ),
-            Drift => row(
-                Some("drift"),
-                "--drift",
-                Some("drift"),
-                Some("drift"),
-                ["--drift", "drift=True", "aacmm_calibrate_options_set_drift"],
-            ),
-            SphereDiameter => row(
-                Some("sphere_diameter_mm"),
-                "--sphere-diameter",
-                None,
-                None,
-                [
-                    "--sphere-diameter",
-                    "sphere_diameter=…",
-                    "aacmm_calibrate_options_set_sphere_diameter_mm",
-                ],
-            ),
-            GlobalStarts => row(
-                Some("global.max_starts"),
-                "--global-starts",
-                Some("global_starts"),
-                Some("global_starts"),
-                [
-                    "--global-starts N",
-                    "global_starts=N",
-                    "aacmm_calibrate_options_set_global_starts",
-                ],
-            ),
-            GlobalConfirmations => cli_only("global.confirmations", "--global-confirmations"),
-            GlobalStartIterations => {
-                cli_only("global.start_iterations", "(LM iterations per start)")
-            }
-            LmIterations => cli_only("lm.max_iterations", "(LM iteration limit)"),
-            AnnealT0 => cli_only("anneal.t0", "--sa-t0"),
-            AnnealCooling => cli_only("anneal.cooling", "--sa-cooling"),
-            AnnealChain => cli_only("anneal.chain", "--sa-chain"),
-            AnnealTMin => cli_only("anneal.t_min", "--sa-t-min"),
-            AnnealTarget => cli_only("anneal.target", "--sa-target"),
-            AnnealStepMm => cli_only("anneal.step_mm", "--sa-step-mm"),
-            AnnealTwistStep => cli_only("anneal.twist_step_deg", "--sa-twist-step"),
-            AnnealZeroStep => cli_only("anneal.zero_step_deg", "--sa-zero-step"),
-            AnnealMaxEvaluations => cli_only("anneal.max_evaluations", "--sa-max-evaluations"),
-            SwitchWindow => cli_only("switch.window", "--switch-window"),
-            SwitchEpsilon => cli_only("switch.epsilon", "--switch-epsilon"),
-        }
+    /// Its row of [`TABLE`].
+    fn names(self) -> &'static Names {
+        // Invariant: every setting has its row (tested).
+        let row = TABLE.iter().find(|(s, _)| *s == self);
+        &row.expect("a row for every setting").1
     }
 
     /// The option as `spelling` names it in a remedy: a flag (with a
