@@ -514,6 +514,28 @@ pub(crate) unsafe fn result<'a>(
     unsafe { ptr::object(cal, "cal") }
 }
 
+/// A count accessor's body: `of` the result behind `cal` into `*count`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+pub(crate) unsafe fn count_out(
+    cal: *const AacmmCalibration,
+    count: *mut usize,
+    of: impl FnOnce(&AacmmCalibration) -> usize,
+) -> AacmmStatus {
+    guard(|| {
+        Args::new()
+            .object("cal", cal)
+            .out("count", count)
+            .disjoint()?;
+        // SAFETY: forwarded contract.
+        let n = of(unsafe { result(cal) }?);
+        // SAFETY: forwarded contract.
+        unsafe { ptr::write(count, n, "count") }
+    })
+}
+
 /// Releases a calibration result. `NULL` is allowed (nothing happens).
 ///
 /// # Safety
@@ -870,16 +892,8 @@ pub unsafe extern "C" fn aacmm_calibration_reason_count(
     cal: *const AacmmCalibration,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new()
-            .object("cal", cal)
-            .out("count", count)
-            .disjoint()?;
-        // SAFETY: by the contract.
-        let verdict = &unsafe { result(cal) }?.report.verdict;
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, verdict.reasons.len(), "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| c.report.verdict.reasons.len()) }
 }
 
 /// Reason `index` (from 0, the first cause first) of a refused
@@ -933,16 +947,8 @@ pub unsafe extern "C" fn aacmm_calibration_frame_count(
     cal: *const AacmmCalibration,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new()
-            .object("cal", cal)
-            .out("count", count)
-            .disjoint()?;
-        // SAFETY: by the contract.
-        let c = unsafe { result(cal) }?;
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, c.report.calibration.frames().len(), "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| c.report.calibration.frames().len()) }
 }
 
 /// Frame `index` (`0 ≤ index < aacmm_calibration_frame_count`, in order of

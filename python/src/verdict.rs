@@ -61,28 +61,26 @@ fn data<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'
     Ok(d)
 }
 
+/// One entry: its `kind`, `value`'s data and its `text`.
+fn entry(
+    py: Python<'_>,
+    kind: &'static str,
+    value: &impl serde::Serialize,
+    text: String,
+) -> PyResult<Py<VerdictEntry>> {
+    let data = data(py, value)?.unbind();
+    Py::new(py, VerdictEntry { kind, data, text })
+}
+
 impl Verdict {
     /// `verdict` in Python's words.
     pub(crate) fn of(py: Python<'_>, verdict: &session::Verdict) -> PyResult<Verdict> {
+        let python = Spelling::Python;
         let reasons = (verdict.reasons.iter())
-            .map(|r| {
-                let entry = VerdictEntry {
-                    kind: r.kind(),
-                    data: data(py, r)?.unbind(),
-                    text: r.describe(Spelling::Python),
-                };
-                Py::new(py, entry)
-            })
+            .map(|r| entry(py, r.kind(), r, r.describe(python)))
             .collect::<PyResult<Vec<_>>>()?;
         let notes = (verdict.notes.iter())
-            .map(|n| {
-                let entry = VerdictEntry {
-                    kind: n.kind(),
-                    data: data(py, n)?.unbind(),
-                    text: n.describe(Spelling::Python),
-                };
-                Py::new(py, entry)
-            })
+            .map(|n| entry(py, n.kind(), n, n.describe(python)))
             .collect::<PyResult<Vec<_>>>()?;
         Ok(Verdict {
             usable: verdict.usable,
