@@ -1023,16 +1023,8 @@ pub unsafe extern "C" fn aacmm_calibration_auxiliary_count(
     cal: *const AacmmCalibration,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new()
-            .object("cal", cal)
-            .out("count", count)
-            .disjoint()?;
-        // SAFETY: by the contract.
-        let c = unsafe { result(cal) }?;
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, c.report.calibration.auxiliary.len(), "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| c.report.calibration.auxiliary.len()) }
 }
 
 /// Auxiliary column `index` (`0 ≤ index < aacmm_calibration_auxiliary_count`,
