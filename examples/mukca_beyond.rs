@@ -264,7 +264,11 @@ fn lopo(
                     nominal: figures.before,
                     calibrated: Ok(figures.after),
                     successful: c.solver.successful,
-                    refused: r.verdict.reasons.clone(),
+                    refused: r
+                        .verdict
+                        .words(aacmm_core::session::Spelling::Cli)
+                        .reasons
+                        .clone(),
                     fitted: (corrections.iter())
                         .filter(|a| a.fixed.is_none())
                         .map(|a| format!("{} = {:.4} {}", a.name, a.calibrated, a.unit))

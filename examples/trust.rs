@@ -101,7 +101,11 @@ fn main() -> Result<()> {
                 if ok {
                     "usable".to_string()
                 } else {
-                    report.verdict.reasons.join("; ")
+                    report
+                        .verdict
+                        .words(aacmm_core::session::Spelling::Cli)
+                        .reasons
+                        .join("; ")
                 }
             );
         }

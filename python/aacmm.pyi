@@ -376,6 +376,37 @@ def simulate(
     :func:`calibrate`; ``encoder_noise_deg`` at most 180, as
     ``Noise(encoder_deg=...)``."""
 
+class VerdictEntry:
+    """One reason (or note) of a :class:`Verdict`."""
+
+    @property
+    def kind(self) -> str:
+        """A short stable name of what it says: ``"chi_square"``,
+        ``"outliers"``, ``"unconfirmed"``, ``"data_disagree_with_arm"``,
+        ``"not_nominal_geometry"``, ``"undetermined"``, … (new kinds may be
+        added)."""
+    @property
+    def data(self) -> Dict[str, Any]:
+        """Its figures (the χ² test, the outliers' ``file:line``, the
+        parameters and their moves, the search's starts, …)."""
+    @property
+    def text(self) -> str:
+        """The sentence, its remedy naming this module's arguments
+        (``robust="huber"``, ``accept_poor_fit=True``), never a flag."""
+
+class Verdict:
+    """Whether a calibration may be used, and why not, typed."""
+
+    @property
+    def usable(self) -> bool:
+        """The calibration may be used (``Calibration.successful``)."""
+    @property
+    def reasons(self) -> List[VerdictEntry]:
+        """Why not, the first cause first (empty when usable)."""
+    @property
+    def notes(self) -> List[VerdictEntry]:
+        """What to know although it may be used."""
+
 class Calibration:
     """The result of :func:`calibrate`."""
 
@@ -438,6 +469,11 @@ class Calibration:
         a confirmed minimum, the nominal's kind of geometry, and (unless
         ``accept_poor_fit``) a χ² and fitted data that agree."""
     @property
+    def verdict(self) -> Verdict:
+        """The verdict, typed: each reason and note with its ``kind``, its
+        ``data`` and its ``text`` in Python's words; ``report["verdict"]``
+        has the command line's sentences."""
+    @property
     def summary(self) -> Dict[str, Any]:
         """``successful`` (the verdict, as the property), method, why it
         stopped (``stop``, and ``stop_text`` in words), ``converged`` (the
@@ -495,6 +531,7 @@ def calibrate(
     sphere_diameter: Optional[float] = None,
     validate_spheres: Optional[SpherePoints] = None,
     sphere_angle_unit: Literal["deg", "rad"] = "deg",
+    global_starts: Optional[int] = None,
 ) -> Calibration:
     """Calibrates ``arm`` on ``data``: the library's session, as ``aacmm
     calibrate`` runs it; the report is the command line's bit for bit.
@@ -532,6 +569,9 @@ def calibrate(
     a file's readings are in ``sphere_angle_unit``; with ``cross_validate``
     each sphere's points are dealt to the folds
     (``report["validation"]["cross_validation"]["folds"][i]["terms"]``).
+    ``global_starts`` is the global search's most random starts
+    (``--global-starts``, default 100; at least 1).
     ValueError for a bad option (naming the argument),
     CalibrationError when the data cannot determine the free parameters; a
-    calibration that is not usable is returned: check ``successful``."""
+    calibration that is not usable is returned: check ``successful`` and
+    ``verdict``."""

@@ -300,6 +300,13 @@ typedef struct {
 } AacmmCalibrationSummary;
 
 /**
+ * The kind of a reason a calibration is refused
+ * (`aacmm_calibration_reason`): one of the `AACMM_REASON_…` constants;
+ * new kinds may be added.
+ */
+typedef uint32_t AacmmReasonKind;
+
+/**
  * One fitted frame of reference positions, for `aacmm_calibration_frame`:
  * the rigid registration `y = R p + t` that maps the arm's base
  * coordinates `p` into the instrument's `y` (the `[[frame]]` table of the
@@ -454,6 +461,67 @@ typedef uint32_t AacmmRobust;
  * Angles in radians.
  */
 #define AACMM_ANGLE_RAD 1
+
+/**
+ * A kind the library added after this header (its text says it).
+ */
+#define AACMM_REASON_OTHER 0
+
+/**
+ * Every joint reading looks like radians read as degrees.
+ */
+#define AACMM_REASON_RADIANS_AS_DEGREES 1
+
+/**
+ * The data and the arm disagree (columns in another order, another
+ * arm's data, another unit).
+ */
+#define AACMM_REASON_DATA_DISAGREE_WITH_ARM 2
+
+/**
+ * A few outlying observations pull the fit (named by `file:line`).
+ */
+#define AACMM_REASON_OUTLIERS 3
+
+/**
+ * The solver did not reach a confirmed minimum.
+ */
+#define AACMM_REASON_UNCONFIRMED 4
+
+/**
+ * The calibrated arm is not the nominal arm's geometry.
+ */
+#define AACMM_REASON_NOT_NOMINAL_GEOMETRY 5
+
+/**
+ * Parameters the data barely determine moved implausibly far.
+ */
+#define AACMM_REASON_UNDETERMINED 6
+
+/**
+ * An auxiliary block's values are physically impossible.
+ */
+#define AACMM_REASON_IMPLAUSIBLE_BLOCKS 7
+
+/**
+ * The χ² test refuses the fit.
+ */
+#define AACMM_REASON_CHI_SQUARE 8
+
+/**
+ * The robust scale's test refuses the fit.
+ */
+#define AACMM_REASON_ROBUST_SCALE 9
+
+/**
+ * Worse than the nominal at its own reference positions.
+ */
+#define AACMM_REASON_WORSE_AT_POSITIONS 10
+
+/**
+ * Worse than the nominal on its own data.
+ */
+#define AACMM_REASON_WORSE_ON_DATA 11
 
 /**
  * Levenberg–Marquardt from the start arm (`--method lm`).
@@ -905,9 +973,10 @@ AacmmStatus aacmm_calibration_report(const AacmmCalibration *cal,
  * `*usable` (the summary's `successful`), and why not into `buf`: the
  * reasons, one per line (UTF-8; empty when usable), copied like
  * `aacmm_last_error_message`; `*len` gets the full length in bytes
- * without the NUL. The same as the report's `verdict.usable` and
- * `verdict.reasons`, and what the command line prints as `Verdict: NOT
- * usable — …` (exiting non-zero).
+ * without the NUL. The same reasons as the report's `verdict.reasons`
+ * and the command line's `Verdict: NOT usable — …` (exiting non-zero),
+ * in C's words: a remedy names the C setter (`…_set_robust`), not the
+ * command line's flag. Each reason's kind: `aacmm_calibration_reason`.
  *
  * Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the copy was truncated
  * (`buf` may be `NULL` with `buf_len` 0 to ask for the length; `*usable`
@@ -930,7 +999,7 @@ AacmmStatus aacmm_calibration_verdict(const AacmmCalibration *cal,
  * (a χ² outside its range, a poor fit accepted on request, data that
  * determine the arm weakly, a joint better modelled by Hayati's
  * parameters): the verdict's notes, one per line (empty when there are
- * none), copied like `aacmm_calibration_verdict`'s reasons.
+ * none), in C's words, copied like `aacmm_calibration_verdict`'s reasons.
  *
  * # Safety
  *
@@ -941,6 +1010,37 @@ AacmmStatus aacmm_calibration_verdict_notes(const AacmmCalibration *cal,
                                             char *buf,
                                             size_t buf_len,
                                             size_t *len);
+
+/**
+ * The number of reasons the calibration is refused (0 when usable) into
+ * `*count`.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_reason_count(const AacmmCalibration *cal, size_t *count);
+
+/**
+ * Reason `index` (from 0, the first cause first) of a refused
+ * calibration: its kind (`AACMM_REASON_…`) into `*kind`, and its sentence
+ * in C's words (a remedy names the C setter) into `buf`, copied like
+ * `aacmm_last_error_message`; `*len` gets the full length in bytes
+ * without the NUL. `AACMM_STATUS_INVALID_ARGUMENT` for an index at or
+ * beyond `aacmm_calibration_reason_count`.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `kind` is `NULL` or writable;
+ * `buf` is `NULL` or points to `buf_len` writable bytes; `len` is `NULL`
+ * or writable.
+ */
+AacmmStatus aacmm_calibration_reason(const AacmmCalibration *cal,
+                                     size_t index,
+                                     AacmmReasonKind *kind,
+                                     char *buf,
+                                     size_t buf_len,
+                                     size_t *len);
 
 /**
  * The number of frames fitted with the arm (one per frame of the
@@ -1183,6 +1283,18 @@ AacmmStatus aacmm_calibrate_options_set_fix(AacmmCalibrateOptions *options, cons
  * As `aacmm_calibrate_options_set_method`.
  */
 AacmmStatus aacmm_calibrate_options_set_seed(AacmmCalibrateOptions *options, uint64_t seed);
+
+/**
+ * Most random starts of the global search (`--global-starts`; default
+ * 100), ≥ 1: more when a refused calibration's reason says its search
+ * did not confirm a minimum.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`.
+ */
+AacmmStatus aacmm_calibrate_options_set_global_starts(AacmmCalibrateOptions *options,
+                                                      size_t starts);
 
 /**
  * `k`-fold cross-validation over points for the report

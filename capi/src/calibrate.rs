@@ -7,7 +7,7 @@ use aacmm_core::dataset::{ArrayLength, DataSet};
 use aacmm_core::io::{AngleUnit, Arm};
 use aacmm_core::params::ParamId;
 use aacmm_core::residuals::Frame;
-use aacmm_core::session::{CalibrationReport, Request, Sources};
+use aacmm_core::session::{CalibrationReport, Reason, Request, Sources, Spelling};
 
 use crate::arm::{AacmmArm, handle, pose_count, string_args, string_out};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
@@ -524,6 +524,28 @@ pub(crate) unsafe fn result<'a>(
     unsafe { ptr::object(cal, "cal") }
 }
 
+/// A count accessor's body: `of` the result behind `cal` into `*count`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+pub(crate) unsafe fn count_out(
+    cal: *const AacmmCalibration,
+    count: *mut usize,
+    of: impl FnOnce(&AacmmCalibration) -> usize,
+) -> AacmmStatus {
+    guard(|| {
+        Args::new()
+            .object("cal", cal)
+            .out("count", count)
+            .disjoint()?;
+        // SAFETY: forwarded contract.
+        let n = of(unsafe { result(cal) }?);
+        // SAFETY: forwarded contract.
+        unsafe { ptr::write(count, n, "count") }
+    })
+}
+
 /// Releases a calibration result. `NULL` is allowed (nothing happens).
 ///
 /// # Safety
@@ -753,9 +775,10 @@ fn lines(items: &[String]) -> String {
 /// `*usable` (the summary's `successful`), and why not into `buf`: the
 /// reasons, one per line (UTF-8; empty when usable), copied like
 /// `aacmm_last_error_message`; `*len` gets the full length in bytes
-/// without the NUL. The same as the report's `verdict.usable` and
-/// `verdict.reasons`, and what the command line prints as `Verdict: NOT
-/// usable — …` (exiting non-zero).
+/// without the NUL. The same reasons as the report's `verdict.reasons`
+/// and the command line's `Verdict: NOT usable — …` (exiting non-zero),
+/// in C's words: a remedy names the C setter (`…_set_robust`), not the
+/// command line's flag. Each reason's kind: `aacmm_calibration_reason`.
 ///
 /// Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the copy was truncated
 /// (`buf` may be `NULL` with `buf_len` 0 to ask for the length; `*usable`
@@ -782,7 +805,14 @@ pub unsafe extern "C" fn aacmm_calibration_verdict(
         // SAFETY: by the contract.
         unsafe { ptr::write(usable, verdict.usable, "usable") }?;
         // SAFETY: by the contract.
-        unsafe { string_out(&lines(&verdict.reasons), buf, buf_len, len) }
+        unsafe {
+            string_out(
+                &lines(&verdict.words(Spelling::C).reasons),
+                buf,
+                buf_len,
+                len,
+            )
+        }
     })
 }
 
@@ -790,7 +820,7 @@ pub unsafe extern "C" fn aacmm_calibration_verdict(
 /// (a χ² outside its range, a poor fit accepted on request, data that
 /// determine the arm weakly, a joint better modelled by Hayati's
 /// parameters): the verdict's notes, one per line (empty when there are
-/// none), copied like `aacmm_calibration_verdict`'s reasons.
+/// none), in C's words, copied like `aacmm_calibration_verdict`'s reasons.
 ///
 /// # Safety
 ///
@@ -808,7 +838,111 @@ pub unsafe extern "C" fn aacmm_calibration_verdict_notes(
         // SAFETY: by the contract.
         let verdict = &unsafe { result(cal) }?.report.verdict;
         // SAFETY: by the contract.
-        unsafe { string_out(&lines(&verdict.notes), buf, buf_len, len) }
+        unsafe { string_out(&lines(&verdict.words(Spelling::C).notes), buf, buf_len, len) }
+    })
+}
+
+/// The kind of a reason a calibration is refused
+/// (`aacmm_calibration_reason`): one of the `AACMM_REASON_…` constants;
+/// new kinds may be added.
+pub type AacmmReasonKind = u32;
+
+/// A kind the library added after this header (its text says it).
+pub const AACMM_REASON_OTHER: AacmmReasonKind = 0;
+/// Every joint reading looks like radians read as degrees.
+pub const AACMM_REASON_RADIANS_AS_DEGREES: AacmmReasonKind = 1;
+/// The data and the arm disagree (columns in another order, another
+/// arm's data, another unit).
+pub const AACMM_REASON_DATA_DISAGREE_WITH_ARM: AacmmReasonKind = 2;
+/// A few outlying observations pull the fit (named by `file:line`).
+pub const AACMM_REASON_OUTLIERS: AacmmReasonKind = 3;
+/// The solver did not reach a confirmed minimum.
+pub const AACMM_REASON_UNCONFIRMED: AacmmReasonKind = 4;
+/// The calibrated arm is not the nominal arm's geometry.
+pub const AACMM_REASON_NOT_NOMINAL_GEOMETRY: AacmmReasonKind = 5;
+/// Parameters the data barely determine moved implausibly far.
+pub const AACMM_REASON_UNDETERMINED: AacmmReasonKind = 6;
+/// An auxiliary block's values are physically impossible.
+pub const AACMM_REASON_IMPLAUSIBLE_BLOCKS: AacmmReasonKind = 7;
+/// The χ² test refuses the fit.
+pub const AACMM_REASON_CHI_SQUARE: AacmmReasonKind = 8;
+/// The robust scale's test refuses the fit.
+pub const AACMM_REASON_ROBUST_SCALE: AacmmReasonKind = 9;
+/// Worse than the nominal at its own reference positions.
+pub const AACMM_REASON_WORSE_AT_POSITIONS: AacmmReasonKind = 10;
+/// Worse than the nominal on its own data.
+pub const AACMM_REASON_WORSE_ON_DATA: AacmmReasonKind = 11;
+
+/// The C code of `reason`'s kind.
+fn reason_kind(reason: &Reason) -> AacmmReasonKind {
+    match reason {
+        Reason::RadiansAsDegrees { .. } => AACMM_REASON_RADIANS_AS_DEGREES,
+        Reason::DataDisagreeWithArm { .. } => AACMM_REASON_DATA_DISAGREE_WITH_ARM,
+        Reason::Outliers { .. } => AACMM_REASON_OUTLIERS,
+        Reason::Unconfirmed { .. } => AACMM_REASON_UNCONFIRMED,
+        Reason::NotNominalGeometry { .. } => AACMM_REASON_NOT_NOMINAL_GEOMETRY,
+        Reason::Undetermined { .. } => AACMM_REASON_UNDETERMINED,
+        Reason::ImplausibleBlocks { .. } => AACMM_REASON_IMPLAUSIBLE_BLOCKS,
+        Reason::ChiSquare { .. } => AACMM_REASON_CHI_SQUARE,
+        Reason::RobustScale { .. } => AACMM_REASON_ROBUST_SCALE,
+        Reason::WorseAtPositions { .. } => AACMM_REASON_WORSE_AT_POSITIONS,
+        Reason::WorseOnData { .. } => AACMM_REASON_WORSE_ON_DATA,
+        _ => AACMM_REASON_OTHER,
+    }
+}
+
+/// The number of reasons the calibration is refused (0 when usable) into
+/// `*count`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_reason_count(
+    cal: *const AacmmCalibration,
+    count: *mut usize,
+) -> AacmmStatus {
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| c.report.verdict.reasons.len()) }
+}
+
+/// Reason `index` (from 0, the first cause first) of a refused
+/// calibration: its kind (`AACMM_REASON_…`) into `*kind`, and its sentence
+/// in C's words (a remedy names the C setter) into `buf`, copied like
+/// `aacmm_last_error_message`; `*len` gets the full length in bytes
+/// without the NUL. `AACMM_STATUS_INVALID_ARGUMENT` for an index at or
+/// beyond `aacmm_calibration_reason_count`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `kind` is `NULL` or writable;
+/// `buf` is `NULL` or points to `buf_len` writable bytes; `len` is `NULL`
+/// or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_reason(
+    cal: *const AacmmCalibration,
+    index: usize,
+    kind: *mut AacmmReasonKind,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        let args = Args::new().object("cal", cal).out("kind", kind);
+        string_args(args, buf, buf_len, len)?;
+        // SAFETY: by the contract.
+        let reasons = &unsafe { result(cal) }?.report.verdict.reasons;
+        let reason = reasons.get(index).ok_or_else(|| {
+            Error::invalid(format!(
+                "index = {index}: the calibration has {} reason(s)",
+                reasons.len()
+            ))
+        })?;
+        // SAFETY: by the contract.
+        unsafe { ptr::write(kind, reason_kind(reason), "kind") }?;
+        let text = reason.describe(Spelling::C).replace('\n', " ");
+        // SAFETY: by the contract.
+        unsafe { string_out(&text, buf, buf_len, len) }
     })
 }
 
@@ -823,16 +957,8 @@ pub unsafe extern "C" fn aacmm_calibration_frame_count(
     cal: *const AacmmCalibration,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new()
-            .object("cal", cal)
-            .out("count", count)
-            .disjoint()?;
-        // SAFETY: by the contract.
-        let c = unsafe { result(cal) }?;
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, c.report.calibration.frames().len(), "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| c.report.calibration.frames().len()) }
 }
 
 /// Frame `index` (`0 ≤ index < aacmm_calibration_frame_count`, in order of
@@ -907,16 +1033,8 @@ pub unsafe extern "C" fn aacmm_calibration_auxiliary_count(
     cal: *const AacmmCalibration,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new()
-            .object("cal", cal)
-            .out("count", count)
-            .disjoint()?;
-        // SAFETY: by the contract.
-        let c = unsafe { result(cal) }?;
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, c.report.calibration.auxiliary.len(), "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| c.report.calibration.auxiliary.len()) }
 }
 
 /// Auxiliary column `index` (`0 ≤ index < aacmm_calibration_auxiliary_count`,

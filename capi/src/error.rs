@@ -12,6 +12,7 @@ use aacmm_core::error::InputError;
 use aacmm_core::error::OptionError;
 use aacmm_core::kernel::KernelError;
 use aacmm_core::parallel::WORKER_THREAD_NAME;
+use aacmm_core::setting::Spelling;
 
 use crate::ptr::copy_str;
 
@@ -138,38 +139,14 @@ impl From<CalibrationError> for Error {
     }
 }
 
-/// The C name of each library setting ([`OptionError::field`]): the
-/// option as its setter names it (`…_set_probe_noise_mm` sets
-/// `probe_noise_mm`); settings the C API does not expose keep their library
-/// path.
-const OPTIONS: [(&str, &str); 17] = [
-    ("noise.encoder_rad", "encoder_noise_rad"),
-    ("noise.probe_mm", "probe_noise_mm"),
-    ("noise.length_default_mm", "length_uncertainty_mm"),
-    ("noise.length_weight", "length_weight"),
-    ("noise.position_mm", "position_noise a_mm"),
-    ("noise.position_mm_per_m", "position_noise b_mm_per_m"),
-    ("noise.orientation_rad", "orientation_noise_rad"),
-    ("fix", "fix"),
-    ("prior", "prior"),
-    ("threads", "threads"),
-    ("cross_validate", "cross_validate"),
-    ("robust.scale_k", "robust scale"),
-    ("compliance", "compliance"),
-    ("harmonics", "harmonics"),
-    ("backlash", "backlash"),
-    ("thermal", "thermal"),
-    ("drift", "drift"),
-];
-
 impl From<OptionError> for Error {
     /// `AACMM_STATUS_INVALID_ARGUMENT`, naming the option as its setter
-    /// does (`probe_noise_mm = -1: …`).
+    /// does (`probe_noise_mm = -1: …`); settings the C API does not expose
+    /// keep their library path.
     fn from(o: OptionError) -> Error {
-        let option = OPTIONS
-            .iter()
-            .find(|(lib, _)| *lib == o.field)
-            .map_or(o.field, |(_, c)| *c);
+        let option = (o.setting())
+            .and_then(|s| s.argument(Spelling::C))
+            .unwrap_or(o.field);
         Error::invalid(format!("{option} = {}: {}", o.value, o.reason))
     }
 }

@@ -3,7 +3,7 @@
 
 use aacmm_core::plan::UncertaintyMap;
 
-use crate::calibrate::{AacmmCalibration, result};
+use crate::calibrate::{AacmmCalibration, count_out, result};
 use crate::error::{AacmmStatus, Error, guard};
 use crate::ptr::{self, Args};
 
@@ -106,21 +106,12 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_region_count(
     cal: *const AacmmCalibration,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new()
-            .object("cal", cal)
-            .out("count", count)
-            .disjoint()?;
-        // SAFETY: by the contract.
-        let c = unsafe { result(cal) }?;
-        let n = c
-            .report
-            .uncertainty_map
-            .as_ref()
-            .map_or(0, |m| m.regions.len());
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, n, "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe {
+        count_out(cal, count, |c| {
+            (c.report.uncertainty_map.as_ref()).map_or(0, |m| m.regions.len())
+        })
+    }
 }
 
 /// Band `index` of the calibration's uncertainty map (`0 ≤ index <

@@ -7,7 +7,8 @@ use std::ffi::c_char;
 use std::path::PathBuf;
 
 use aacmm_core::calibrate::{
-    FixSpec, Loss, MAX_THREADS, Method, ModelOptions, Robust, SolverSettings, check_threads,
+    FixSpec, GlobalOptions, Loss, MAX_THREADS, Method, ModelOptions, Robust, SolverSettings,
+    check_threads,
 };
 use aacmm_core::corrections::Beyond;
 use aacmm_core::error::OptionError;
@@ -125,6 +126,8 @@ pub struct AacmmCalibrateOptions {
     sphere_diameter_mm: Option<f64>,
     /// The token that stops its calibrations (Ctrl-C's, for the CLI).
     cancel: Option<aacmm_core::calibrate::Cancel>,
+    /// `--global-starts`: the global search's random starts.
+    global_starts: usize,
 }
 
 impl AacmmCalibrateOptions {
@@ -173,6 +176,7 @@ impl Default for AacmmCalibrateOptions {
             spheres: None,
             sphere_diameter_mm: None,
             cancel: None,
+            global_starts: GlobalOptions::default().max_starts,
         }
     }
 }
@@ -202,6 +206,7 @@ pub(crate) fn request(o: &AacmmCalibrateOptions, request: Request) -> Request {
         .seed(o.seed)
         .cross_validate(folds)
         .sphere_diameter(o.sphere_diameter_mm)
+        .global(GlobalOptions::default().max_starts(o.global_starts))
 }
 
 /// The options behind `options`, or the defaults for `NULL`.
@@ -401,6 +406,29 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_seed(
         // SAFETY: by the contract.
         let o = unsafe { ptr::object_mut(options, "options") }?;
         o.seed = seed;
+        Ok(())
+    })
+}
+
+/// Most random starts of the global search (`--global-starts`; default
+/// 100), ≥ 1: more when a refused calibration's reason says its search
+/// did not confirm a minimum.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_global_starts(
+    options: *mut AacmmCalibrateOptions,
+    starts: usize,
+) -> AacmmStatus {
+    guard(|| {
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        if starts == 0 {
+            return Err(Error::invalid("global_starts = 0: at least 1"));
+        }
+        o.global_starts = starts;
         Ok(())
     })
 }

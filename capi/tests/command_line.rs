@@ -18,18 +18,20 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use aacmm_capi::{
-    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AACMM_ROBUST_HUBER, AacmmAuxiliary,
-    AacmmCalibrateOptions, AacmmCalibration, AacmmCalibrationSummary, AacmmStatus, aacmm_arm_free,
-    aacmm_arm_from_file, aacmm_arm_from_file_accepting_rejected, aacmm_arm_warnings,
-    aacmm_calibrate_files, aacmm_calibrate_options_free, aacmm_calibrate_options_new,
+    AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AACMM_METHOD_LM, AACMM_REASON_CHI_SQUARE, AACMM_ROBUST_HUBER,
+    AacmmAuxiliary, AacmmCalibrateOptions, AacmmCalibration, AacmmCalibrationSummary,
+    AacmmReasonKind, AacmmStatus, aacmm_arm_free, aacmm_arm_from_file,
+    aacmm_arm_from_file_accepting_rejected, aacmm_arm_warnings, aacmm_calibrate_files,
+    aacmm_calibrate_options_free, aacmm_calibrate_options_new,
     aacmm_calibrate_options_set_accept_poor_fit, aacmm_calibrate_options_set_compliance,
     aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_method,
     aacmm_calibrate_options_set_position_noise_mm, aacmm_calibrate_options_set_positions_file,
     aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
     aacmm_calibrate_options_set_robust, aacmm_calibrate_options_set_thermal,
     aacmm_calibration_auxiliary, aacmm_calibration_auxiliary_count, aacmm_calibration_frame_count,
-    aacmm_calibration_free, aacmm_calibration_params, aacmm_calibration_report,
-    aacmm_calibration_summary, aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
+    aacmm_calibration_free, aacmm_calibration_params, aacmm_calibration_reason,
+    aacmm_calibration_reason_count, aacmm_calibration_report, aacmm_calibration_summary,
+    aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
 };
 use aacmm_core::io::positions::write_positions;
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm, write_poses};
@@ -268,6 +270,32 @@ impl Calibration {
             self.text(|b, n, len| unsafe { aacmm_calibration_verdict_notes(self.0, b, n, len) });
         (usable, reasons, notes)
     }
+
+    /// Each reason's kind and text, through the reason accessors.
+    fn reasons(&self) -> Vec<(AacmmReasonKind, String)> {
+        let mut count = usize::MAX;
+        // SAFETY: a live result; `count` writable.
+        let status = unsafe { aacmm_calibration_reason_count(self.0, &mut count) };
+        assert_eq!(status, AacmmStatus::Ok);
+        let reasons: Vec<(AacmmReasonKind, String)> = (0..count)
+            .map(|i| {
+                let mut kind = u32::MAX;
+                // SAFETY: a live result; the buffers are as stated.
+                let text = self.text(|b, n, len| unsafe {
+                    aacmm_calibration_reason(self.0, i, &mut kind, b, n, len)
+                });
+                (kind, text)
+            })
+            .collect();
+        // One past the last: refused, naming the count.
+        let (mut kind, mut len) = (0, 0);
+        // SAFETY: as above.
+        let status = unsafe {
+            aacmm_calibration_reason(self.0, count, &mut kind, std::ptr::null_mut(), 0, &mut len)
+        };
+        assert_eq!(status, AacmmStatus::InvalidArgument);
+        reasons
+    }
 }
 
 /// Bitwise equality with the index of the first difference.
@@ -390,8 +418,17 @@ fn an_arm_files_prior_gives_the_command_lines_result() {
     let (usable, reasons, notes) = c.verdict();
     assert_eq!(usable, v["usable"].as_bool().unwrap());
     assert_eq!((usable, c.summary().successful), (exit_ok, exit_ok));
-    assert_eq!(reasons, strings("reasons"));
-    assert_eq!(notes, strings("notes"));
+    // The same reasons and notes, in C's words: the same sentence where it
+    // names no option, no flag anywhere.
+    for (c_text, cli_text) in [(reasons, strings("reasons")), (notes, strings("notes"))] {
+        assert_eq!(c_text.lines().count(), cli_text.lines().count());
+        assert!(!c_text.contains("--"), "{c_text}");
+        for (a, b) in c_text.lines().zip(cli_text.lines()) {
+            if !b.contains("--") {
+                assert_eq!(a, b);
+            }
+        }
+    }
     assert!(
         !expected["calibration"]["prior"].is_null(),
         "the fit had a prior"
@@ -453,6 +490,22 @@ fn successful_is_the_verdict_not_the_solver() {
         reasons.lines().next().unwrap().contains("overstated"),
         "{reasons}"
     );
+    // Typed: the χ² test, said as the Birge ratio with C's remedies.
+    let typed = refused.reasons();
+    assert_eq!(typed.len(), reasons.lines().count());
+    let (kind, text) = &typed[0];
+    assert_eq!(*kind, AACMM_REASON_CHI_SQUARE, "{text}");
+    assert_eq!(text, reasons.lines().next().unwrap());
+    for want in [
+        "the Birge ratio σ̂₀ = √(χ²/dof) = ",
+        "times less than the stated noise (aacmm_calibrate_options_set_encoder_noise_rad(o, ",
+        "0 in aacmm_calibrate_options_set_encoder_noise_rad, \
+         aacmm_calibrate_options_set_probe_noise_mm: not stated",
+        "with aacmm_calibrate_options_set_accept_poor_fit.",
+    ] {
+        assert!(text.contains(want), "`{want}` missing: {text}");
+    }
+    assert!(!text.contains("--"), "{text}");
     let report: serde_json::Value = serde_json::from_str(&refused.report()).unwrap();
     assert_eq!(report["verdict"]["usable"], false);
 

@@ -234,6 +234,13 @@ impl OptionError {
             reason: bounded(reason.into()),
         }
     }
+
+    /// The setting refused, for a front end to name in its own words
+    /// ([`crate::setting::Setting::argument`]); `None` for a path no front
+    /// end sets.
+    pub fn setting(&self) -> Option<crate::setting::Setting> {
+        crate::setting::Setting::at_path(self.field)
+    }
 }
 
 /// `Ok` when `v` is finite and `> 0` (or `≥ 0` with `zero_ok`).

@@ -53,6 +53,7 @@ pub mod reference_model;
 pub mod report;
 pub mod residuals;
 pub mod session;
+pub mod setting;
 mod simd;
 pub mod simulate;
 pub mod stats;

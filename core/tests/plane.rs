@@ -318,7 +318,11 @@ fn a_block_beyond_its_limits_is_refused_by_name() {
     // Started 2 mm off, allowed to move 1 mm.
     let (report, _) = offset_fit(1.0);
     assert!(!report.is_usable());
-    let reasons = report.verdict.reasons.join("; ");
+    let reasons = report
+        .verdict
+        .words(aacmm_core::session::Spelling::Cli)
+        .reasons
+        .join("; ");
     assert!(
         reasons.contains("no real instrument could have: plane.offset moved by -1.99"),
         "{reasons}"

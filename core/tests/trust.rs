@@ -194,7 +194,11 @@ fn nothing_free_and_overstated_noise_are_refused() {
     let report = run(data.clone(), loud.clone());
     assert!(!report.is_usable());
     assert!(
-        report.verdict.reasons[0].contains("overstated"),
+        report
+            .verdict
+            .words(aacmm_core::session::Spelling::Cli)
+            .reasons[0]
+            .contains("overstated"),
         "{:?}",
         report.verdict
     );
@@ -209,7 +213,13 @@ fn nothing_free_and_overstated_noise_are_refused() {
         },
     );
     assert!(accepted.is_usable());
-    assert!(accepted.verdict.notes[0].starts_with("accepted on request"));
+    assert!(
+        accepted
+            .verdict
+            .words(aacmm_core::session::Spelling::Cli)
+            .notes[0]
+            .starts_with("accepted on request")
+    );
 }
 
 #[test]
@@ -229,11 +239,9 @@ fn a_weak_experiment_is_told_what_the_data_determine() {
         );
         let u = report.calibration.checks.position_uncertainty.unwrap();
         assert!(u.rms_mm > 0.0 && u.max_mm >= u.rms_mm, "{u:?}");
-        report
-            .verdict
-            .notes
-            .iter()
-            .any(|n| n.starts_with("these data determine the arm to"))
+        report.verdict.notes.iter().any(|n| {
+            n.kind() == "weak_data" && n.to_string().starts_with("these data determine the arm to")
+        })
     };
     assert!(note(5, 6, 1), "5 sockets x 6 touches, one length");
     assert!(!note(10, 10, 3), "10 x 10, three lengths");

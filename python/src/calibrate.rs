@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use aacmm_core::calibrate::Context;
+use aacmm_core::calibrate::{Context, GlobalOptions};
 use aacmm_core::io::Arm as CoreArm;
 use aacmm_core::plan::MapPoint;
 use aacmm_core::residuals::Frame;
@@ -137,7 +137,8 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// file's path (readings in `sphere_angle_unit`) or `(labels, q)` arrays
 /// (rad; mm for a slide) —, `sphere_diameter` their stated diameter in mm
 /// (`--sphere-diameter`), `validate_spheres` held-out points on spheres
-/// (`--validate-spheres`, given as `spheres`). Models beyond geometry, fitted with
+/// (`--validate-spheres`, given as `spheres`); `global_starts`, the
+/// global search's most random starts (`--global-starts`, default 100). Models beyond geometry, fitted with
 /// it, as the command line's flags: `compliance`, joints (from 1) whose
 /// compliance under the gravity torque of the arm file's masses is fitted
 /// (`"2,3"`, `--compliance`); `harmonics`, encoder harmonics
@@ -158,7 +159,7 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// usable still gives a result:
 /// check `successful` (the verdict) and `report["verdict"]` for why.
 #[pyfunction]
-#[pyo3(signature = (arm, data = None, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None, register_held_out = false, spheres = None, sphere_diameter = None, validate_spheres = None, sphere_angle_unit = "deg"))]
+#[pyo3(signature = (arm, data = None, *, method = "global", fix = None, noise = None, seed = 0, threads = None, cross_validate = None, validate = None, robust = None, robust_scale = None, prior = None, accept_poor_fit = false, compliance = None, harmonics = None, thermal = false, drift = false, backlash = None, register_held_out = false, spheres = None, sphere_diameter = None, validate_spheres = None, sphere_angle_unit = "deg", global_starts = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     py: Python<'_>,
@@ -185,7 +186,11 @@ pub fn calibrate(
     sphere_diameter: Option<f64>,
     validate_spheres: Option<&Bound<'_, PyAny>>,
     sphere_angle_unit: &str,
+    global_starts: Option<usize>,
 ) -> PyResult<Calibration> {
+    if global_starts == Some(0) {
+        return Err(Error::value("global_starts = 0: at least 1").into());
+    }
     let unit = crate::angle_unit(sphere_angle_unit)?;
     let spheres = (spheres.map(|s| SphereArg::of(py, s, "spheres", arm, unit))).transpose()?;
     let held_spheres = (validate_spheres)
@@ -217,6 +222,10 @@ pub fn calibrate(
         .beyond(compliance, harmonics, thermal, drift)
         .backlash(backlash)
         .register_held_out(register_held_out);
+    let request = match global_starts {
+        Some(n) => request.global(GlobalOptions::default().max_starts(n)),
+        None => request,
+    };
     let request = match spheres {
         Some(s) => s.fitted(request)?,
         None => request,
@@ -435,6 +444,15 @@ impl Calibration {
     #[getter]
     fn successful(&self) -> bool {
         self.report.is_usable()
+    }
+
+    /// The verdict, typed: `usable`, and each reason and note with its
+    /// `kind`, its `data` and its `text` in Python's words (a remedy names
+    /// the keyword argument: `robust="huber"`, `accept_poor_fit=True`).
+    /// `report["verdict"]` has the command line's sentences.
+    #[getter]
+    fn verdict(&self, py: Python<'_>) -> PyResult<crate::verdict::Verdict> {
+        crate::verdict::Verdict::of(py, &self.report.verdict)
     }
 
     /// The figures a program acts on: `successful` (the verdict, as the

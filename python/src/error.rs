@@ -10,6 +10,7 @@ use aacmm_core::error::InputError as CoreInputError;
 use aacmm_core::error::OptionError;
 use aacmm_core::kernel::KernelError;
 use aacmm_core::metrics::MetricsError;
+use aacmm_core::setting::{Setting, Spelling};
 use aacmm_core::simulate::SimError;
 use pyo3::PyErr;
 use pyo3::exceptions::{PyException, PyMemoryError, PyOSError, PyValueError};
@@ -189,42 +190,16 @@ impl From<aacmm_core::residuals::TermError> for Error {
     }
 }
 
-/// The Python argument of each library setting ([`OptionError::field`])
-/// the bindings expose; the others keep the library's path.
-const ARGUMENTS: [(&str, &str); 20] = [
-    ("seed", "seed"),
-    ("prior", "prior"),
-    ("method", "method"),
-    ("robust.loss", "robust"),
-    ("noise.encoder_rad", "encoder_deg"),
-    ("noise.probe_mm", "probe_mm"),
-    ("noise.length_default_mm", "length_default_mm"),
-    ("noise.length_weight", "length_weight"),
-    ("noise.position_mm", "position_mm"),
-    ("noise.position_mm_per_m", "position_mm_per_m"),
-    ("noise.orientation_rad", "orientation_deg"),
-    ("fix", "fix"),
-    ("threads", "threads"),
-    ("cross_validate", "cross_validate"),
-    ("robust.scale_k", "robust_scale"),
-    ("compliance", "compliance"),
-    ("harmonics", "harmonics"),
-    ("backlash", "backlash"),
-    ("thermal", "thermal"),
-    ("drift", "drift"),
-];
-
 /// A refused setting as a `ValueError` naming the Python argument. The
 /// encoder σ is refused in the library's radians, so its message gives the
 /// reason only (the caller knows the degrees it passed), as the command line
-/// does.
+/// does. Settings the bindings do not expose keep the library's path.
 impl From<OptionError> for Error {
     fn from(e: OptionError) -> Error {
-        let message = match ARGUMENTS.iter().find(|(field, _)| *field == e.field) {
-            Some((field, arg)) if field.starts_with("noise.encoder") => {
-                format!("{arg}: {}", e.reason)
-            }
-            Some((_, arg)) => format!("{arg} = {}: {}", e.value, e.reason),
+        let setting = e.setting();
+        let message = match setting.and_then(|s| s.argument(Spelling::Python)) {
+            Some(arg) if setting == Some(Setting::EncoderNoise) => format!("{arg}: {}", e.reason),
+            Some(arg) => format!("{arg} = {}: {}", e.value, e.reason),
             None => e.to_string(),
         };
         Error::value(message)

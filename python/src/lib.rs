@@ -18,6 +18,7 @@ mod readings;
 mod simulate;
 mod spheres;
 mod study;
+mod verdict;
 
 use aacmm_core::io::AngleUnit;
 use pyo3::prelude::*;
@@ -80,6 +81,8 @@ fn aacmm_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulate::Campaign>()?;
     m.add_class::<noise::Noise>()?;
     m.add_class::<calibrate::Calibration>()?;
+    m.add_class::<verdict::Verdict>()?;
+    m.add_class::<verdict::VerdictEntry>()?;
     m.add_function(wrap_pyfunction!(arm::param_names, m)?)?;
     m.add_function(wrap_pyfunction!(study::evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(study::identify, m)?)?;

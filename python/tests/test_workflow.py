@@ -122,6 +122,38 @@ def test_successful_is_the_verdict_not_the_solvers_convergence(arm, data):
             assert "overstated" in verdict["reasons"][0], verdict
 
 
+def test_the_verdict_is_typed_and_said_in_pythons_words(arm, data):
+    """A refused calibration's `verdict`: each reason's `kind`, its figures
+    as a dict, and its sentence naming Python's arguments, never a flag;
+    the report keeps the command line's sentences."""
+    loud = aacmm.Noise(encoder_deg=30, probe_mm=100)
+    cal = aacmm.calibrate(arm, data, noise=loud)
+    v = cal.verdict
+    assert isinstance(v, aacmm.Verdict) and not v.usable
+    assert len(v.reasons) == len(cal.report["verdict"]["reasons"])
+    first = v.reasons[0]
+    assert isinstance(first, aacmm.VerdictEntry)
+    assert first.kind == "chi_square", first
+    chi = first.data["chi"]
+    assert chi["dof"] > 0 and chi["verdict"] == "residuals_too_small"
+    assert first.data["stated"]["probe_mm"] == 100
+    assert "the Birge ratio σ̂₀ = √(χ²/dof) = " in first.text
+    assert "Noise(encoder_deg=30.0000, probe_mm=100.0000)" in first.text
+    assert "leave it unstated (noise=None)" in first.text
+    assert first.text.endswith("accept_poor_fit=True.")
+    for entry in v.reasons + v.notes:
+        assert "--" not in entry.text, entry.text
+    cli = cal.report["verdict"]["reasons"][0]
+    assert "--accept-poor-fit" in cli and "--" not in first.text
+    accepted = aacmm.calibrate(arm, data, noise=loud, accept_poor_fit=True)
+    assert accepted.verdict.usable and accepted.verdict.reasons == []
+    note = accepted.verdict.notes[0]
+    assert note.kind == "accepted" and note.data["reason"]["kind"] == "chi_square"
+    assert note.text.startswith("accepted on request: χ² = ")
+    with pytest.raises(ValueError, match="global_starts = 0"):
+        aacmm.calibrate(arm, data, global_starts=0)
+
+
 def test_readings_outside_the_joint_limits_are_warned_and_kept_as_the_cli_does(
     cli, data, tmp_path
 ):

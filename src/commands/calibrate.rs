@@ -389,7 +389,11 @@ fn print_results(report: &session::CalibrationReport, wrote: String, total: f64)
             "the calibration is not usable: {}\n  (the files were written for inspection, \
              marked so in calibration.json (/verdict), calibrated.toml ([verdict]: aacmm \
              refuses to read it unless asked) and report.html)",
-            report.verdict.reasons.join("\n  ")
+            report
+                .verdict
+                .words(aacmm_core::session::Spelling::Cli)
+                .reasons
+                .join("\n  ")
         );
     }
     Ok(())

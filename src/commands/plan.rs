@@ -296,7 +296,11 @@ fn read_given(dir: &Path, arm: &Arm, arm_file: &Path) -> Result<Start> {
             "{}: the calibration is not usable ({}); the plan starts from its covariance all \
              the same",
             path.display(),
-            report.verdict.reasons.join("; ")
+            report
+                .verdict
+                .words(aacmm_core::session::Spelling::Cli)
+                .reasons
+                .join("; ")
         ))?;
     }
     let note = GivenNote {

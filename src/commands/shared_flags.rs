@@ -9,6 +9,7 @@ use aacmm_core::calibrate::{CalibrationError, MAX_THREADS, check_threads};
 use aacmm_core::error::{OptionError, quoted};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::{Request, user_noise};
+use aacmm_core::setting::{Setting, Spelling};
 use anyhow::{Result, anyhow};
 
 use crate::output::warn;
@@ -234,47 +235,6 @@ pub fn position_noise(s: &str) -> Result<(f64, Option<f64>), String> {
     }
 }
 
-/// The command-line flag of each library setting ([`OptionError::field`]).
-const FLAGS: [(&str, &str); 37] = [
-    ("sphere_diameter_mm", "--sphere-diameter"),
-    ("sphere_uncertainty", "--sphere-uncertainty"),
-    ("mpe", "--mpe"),
-    ("compliance", "--compliance"),
-    ("harmonics", "--harmonics"),
-    ("backlash", "--backlash"),
-    ("thermal", "--thermal"),
-    ("drift", "--drift"),
-    ("noise.position_mm", "--position-noise"),
-    ("noise.position_mm_per_m", "--position-noise"),
-    ("noise.orientation_rad", "--orientation-noise"),
-    ("prior", "--prior"),
-    ("method", "--method"),
-    ("robust.loss", "--robust"),
-    ("noise.encoder_rad", "--encoder-noise"),
-    ("noise.probe_mm", "--probe-noise"),
-    ("noise.length_default_mm", "--length-uncertainty"),
-    ("noise.length_weight", "--length-weight"),
-    ("fix", "--fix"),
-    ("robust.scale_k", "--robust-scale"),
-    ("threads", "--threads"),
-    ("cross_validate", "--cross-validate"),
-    ("anneal.t0", "--sa-t0"),
-    ("anneal.cooling", "--sa-cooling"),
-    ("anneal.chain", "--sa-chain"),
-    ("anneal.t_min", "--sa-t-min"),
-    ("anneal.target", "--sa-target"),
-    ("anneal.step_mm", "--sa-step-mm"),
-    ("anneal.twist_step_deg", "--sa-twist-step"),
-    ("anneal.zero_step_deg", "--sa-zero-step"),
-    ("anneal.max_evaluations", "--sa-max-evaluations"),
-    ("switch.window", "--switch-window"),
-    ("switch.epsilon", "--switch-epsilon"),
-    ("global.max_starts", "--global-starts"),
-    ("global.confirmations", "--global-confirmations"),
-    ("lm.max_iterations", "(LM iteration limit)"),
-    ("global.start_iterations", "(LM iterations per start)"),
-];
-
 /// A library error in the command line's words: a refused setting names
 /// its flag (the value as typed is on the command line; the library's may
 /// be in internal units), anything else passes through.
@@ -286,10 +246,11 @@ pub fn flag_error(e: impl Into<CalibrationError>) -> anyhow::Error {
 }
 
 fn option_error(o: &OptionError) -> anyhow::Error {
-    match FLAGS.iter().find(|(field, _)| *field == o.field) {
+    let setting = o.setting();
+    match setting.and_then(|s| s.argument(Spelling::Cli)) {
         // The library holds the encoder noise in radians; the flag is in
         // degrees.
-        Some((_, flag)) if o.field == "noise.encoder_rad" => match o.value.parse::<f64>() {
+        Some(flag) if setting == Some(Setting::EncoderNoise) => match o.value.parse::<f64>() {
             Ok(rad) if rad.is_finite() => {
                 // Rounded back to what was typed where that is ordinary;
                 // `1e300`, not 301 digits, otherwise.
@@ -303,7 +264,7 @@ fn option_error(o: &OptionError) -> anyhow::Error {
             }
             _ => anyhow!("{flag} {}: {}", o.value, o.reason),
         },
-        Some((_, flag)) => anyhow!("{flag} {}: {}", o.value, o.reason),
+        Some(flag) => anyhow!("{flag} {}: {}", o.value, o.reason),
         None => anyhow!("{o}"),
     }
 }

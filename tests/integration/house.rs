@@ -54,6 +54,8 @@ const RANKS: &[(&str, u8)] = &[
     ("stats", 0),
     ("memory", 0),
     ("simd", 0),
+    // Every option's name in every front end's words.
+    ("setting", 0),
     // 1: the kernel, and the reference models it is checked against.
     ("kernel", 1),
     ("reference_model", 1),

@@ -189,24 +189,39 @@ fn with_noise(name: &str, factor: f64, extra: &[&str]) -> std::process::Output {
     aacmm(&args)
 }
 
-/// Noise stated 3 times too small or too large: refused, with the factor
-/// the residuals give, the noise that factor makes, and the ways out
-/// (leave it unstated, --accept-poor-fit); no advice to add data.
+/// Noise stated 3 times too small or too large: refused, with the Birge
+/// ratio σ̂₀ = √(χ²/dof) the residuals give (about 3, or about 1/3), the
+/// noise as stated, and the ways out (leave it unstated — what that does —,
+/// --accept-poor-fit); not "state the noise σ̂₀ times larger", which would
+/// pass the test by construction; no advice to add data.
 #[test]
 fn misstated_noise_is_answered_with_the_ways_out() {
-    for (factor, says) in [(1.0 / 3.0, "times larger"), (3.0, "times smaller")] {
+    for (factor, says) in [
+        (1.0 / 3.0, "times what the stated noise"),
+        (3.0, "times less than the stated noise"),
+    ] {
         let o = with_noise(&format!("noise-{factor}"), factor, &[]);
         let text = stdout(&o) + &stderr(&o);
         assert_eq!(o.status.code(), Some(1), "{text}");
         for want in [
+            "the Birge ratio σ̂₀ = √(χ²/dof) = ",
             says,
-            "--encoder-noise 0.005",
-            "--probe-noise 0.01",
-            "leave the noise unstated",
+            "--encoder-noise ",
+            "--probe-noise ",
+            "leave it unstated (without --encoder-noise, --probe-noise): σ is then estimated",
             "--accept-poor-fit",
         ] {
             assert!(text.contains(want), "{factor}: `{want}` missing: {text}");
         }
+        assert!(!text.contains("and this fit is consistent"), "{text}");
+        // The ratio is the factor the noise was misstated by.
+        let at = text.find("√(χ²/dof) = ").unwrap() + "√(χ²/dof) = ".len();
+        let ratio: f64 = text[at..].split(':').next().unwrap().parse().unwrap();
+        let expected = 1.0 / factor;
+        assert!(
+            (ratio / expected - 1.0).abs() < 0.25,
+            "{factor}: σ̂₀ {ratio}"
+        );
         assert!(!text.contains("add sockets"), "{factor}: {text}");
         let o = with_noise(
             &format!("noise-{factor}-ok"),

@@ -417,7 +417,11 @@ fn a_stated_diameter_fixes_the_scale_a_fitted_one_does_not() {
         "{:?}",
         rules(&fitted)
     );
-    let notes = fitted.verdict.notes.join("; ");
+    let notes = fitted
+        .verdict
+        .words(aacmm_core::session::Spelling::Cli)
+        .notes
+        .join("; ");
     assert!(notes.contains("only up to scale"), "{notes}");
     let spheres = fitted.spheres.as_ref().unwrap();
     assert!(spheres.stated_diameter.is_none() && spheres.spheres[0].diameter_sigma.is_some());

@@ -10,6 +10,7 @@ use super::html::escape;
 use super::{CalibrationInput, ValidationRow};
 use crate::calibrate::Calibration;
 use crate::calibrate::checks::{CHI_SQUARE_ALPHA, CHI_SQUARE_REFUSE};
+use crate::session::Spelling;
 
 /// Outliers listed by `file:line` (the rest are counted).
 const LISTED_OUTLIERS: usize = 20;
@@ -48,14 +49,17 @@ fn headline(verdict: Option<&crate::session::Verdict>) -> String {
                      1, and calibrated.toml is marked so); why:</p>\n<ul>\n"
             .to_string();
         for r in &v.reasons {
-            s += &format!("<li class=\"bad\">{}</li>\n", escape(r));
+            s += &format!(
+                "<li class=\"bad\">{}</li>\n",
+                escape(&r.describe(Spelling::Cli))
+            );
         }
         s + "</ul>\n"
     };
     if !v.notes.is_empty() {
         s += "<p>Notes:</p>\n<ul>\n";
         for n in &v.notes {
-            s += &format!("<li>{}</li>\n", escape(n));
+            s += &format!("<li>{}</li>\n", escape(&n.describe(Spelling::Cli)));
         }
         s += "</ul>\n";
     }

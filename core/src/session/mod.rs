@@ -26,6 +26,7 @@ pub mod probe;
 pub mod request;
 pub mod spheres;
 pub mod tools;
+mod verdict;
 
 pub use map::MAP_POSES;
 
@@ -33,6 +34,8 @@ pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
 pub use position_evaluation::{FrameEvaluation, MountEvaluation, PositionEvaluation};
 pub use request::{Request, user_noise};
+pub use verdict::{Note, Reason, Setting, Spelling, StatedNoise, UnconfirmedSearch, Verdict};
+use verdict::{verdict_line, verdict_of};
 
 use serde::{Deserialize, Serialize};
 
@@ -890,411 +893,6 @@ fn is_zero(n: &usize) -> bool {
     *n == 0
 }
 
-/// Whether a calibration may be used: exit 0 of the command line. The
-/// same type as the `[verdict]` table of `calibrated.toml`
-/// ([`crate::io::verdict`]), so the file records what the session decided.
-pub use crate::io::ArmVerdict as Verdict;
-
-impl Verdict {
-    /// The verdict on `calibration` and its validation on the fitted data.
-    fn of(
-        calibration: &Calibration,
-        fitted: &BeforeAfter,
-        noise: &Noise,
-        accept_poor_fit: bool,
-    ) -> Verdict {
-        let (mut reasons, mut notes) = (Vec::new(), Vec::new());
-        let solver = &calibration.solver;
-        // The data and the arm disagree: no search can help, so the
-        // solver's own failure is said last, without its remedy.
-        let disagree = disagreement(calibration);
-        let mut unconfirmed = None;
-        if !solver.is_solution_usable() {
-            let remedy = match solver.stop {
-                crate::calibrate::Stop::Global { search, .. }
-                    if !search.confirmed() && disagree.is_none() =>
-                {
-                    global_remedy(calibration)
-                }
-                _ => String::new(),
-            };
-            unconfirmed = Some(format!(
-                "the solver did not reach a confirmed minimum ({}){remedy}",
-                solver.stop.describe()
-            ));
-        }
-        if disagree.is_none() {
-            reasons.extend(unconfirmed.take());
-        }
-        reasons.extend(gross_reasons(calibration));
-        let blocks = &calibration.checks.implausible_blocks;
-        if !blocks.is_empty() {
-            reasons.push(format!(
-                "an auxiliary block has values no real instrument could have: {}",
-                blocks.join("; ")
-            ));
-        }
-        let mut poor = Vec::new();
-        noise_checks(calibration, noise, &mut poor, &mut notes);
-        if let Some(u) = calibration.checks.position_uncertainty.filter(|u| u.weak()) {
-            notes.push(format!(
-                "these data determine the arm to ±{:.4} mm (RMS over the campaign's poses of \
-                 the {:.0} % radius in 3-D), enough to add more than 5 % to a touch's own \
-                 scatter (±{:.4} mm at the same coverage): add sockets, poses or reference \
-                 lengths",
-                u.rms_mm,
-                100.0 * u.coverage,
-                u.touch_mm
-            ));
-        }
-        notes.extend(scale_note(calibration));
-        // Nearly parallel axes in the D-H model: say which joint suits Hayati.
-        notes.extend(crate::hayati::recommendations(&calibration.params));
-        if let (Some(b), Some(a)) = (fitted.before.positions, fitted.after.positions)
-            && fitted.after.points > 0
-            && (a.mean.is_nan() || a.mean > b.mean)
-        {
-            poor.push(format!(
-                "the calibrated arm is worse than the nominal at its own reference positions \
-                 (mean 3-D error {:.4} → {:.4} mm): touches and positions disagree?",
-                b.mean, a.mean
-            ));
-        }
-        let (before, after) = (fitted.before.headline(), fitted.after.headline());
-        if after.is_nan() || after > before {
-            let what = fitted.after.headline_name();
-            poor.push(format!(
-                "the calibrated arm is worse than the nominal on its own data ({what} \
-                 {before:.4} → {after:.4} mm): a mislabelled observation or a wrong minimum?"
-            ));
-        }
-        if accept_poor_fit {
-            notes.extend(
-                poor.into_iter()
-                    .map(|p| format!("accepted on request: {p}")),
-            );
-        } else {
-            reasons.extend(poor);
-        }
-        // A few gross outliers explain every other symptom: said first;
-        // else data that no arm of this kind fits (another arm's file,
-        // columns in another order, another unit).
-        reasons.extend(unconfirmed);
-        if !reasons.is_empty() {
-            if let Some(cause) = outlier_cause(calibration) {
-                reasons.insert(0, cause);
-            } else if let Some(cause) = disagree {
-                reasons.insert(0, cause);
-            }
-        }
-        Verdict {
-            usable: reasons.is_empty(),
-            reasons,
-            notes,
-        }
-    }
-}
-
-/// Most outliers, as a share of the observations, that can be the cause
-/// of a refusal rather than a symptom of it (a wrong minimum or a wrong
-/// model puts most observations beyond the threshold).
-const FEW_OUTLIERS: f64 = 0.1;
-
-/// The way out of a global search that spent its starts without
-/// confirming a minimum: more starts than it had, or tolerances for the
-/// parameters its minima differ in — tighter ones when a prior is already
-/// in use (no remedy names an option already in use as it is).
-fn global_remedy(c: &Calibration) -> String {
-    let starts = (c.solver.global.as_ref()).map_or(0, |g| g.options.max_starts);
-    let tolerances = if c.prior.is_some() {
-        "tighter tolerances for the parameters that differ between its minima (the prior in \
-         use lets them wander)"
-    } else {
-        "state tolerances (`[prior]`, --prior) for the parameters that differ between its minima"
-    };
-    format!(": give it more starts than its {starts} (--global-starts N), or {tolerances}")
-}
-
-/// The σ̂₀ from which the best minimum of a global search says the data
-/// and the arm disagree: residuals hundreds of times the stated noise are
-/// no noise misstatement, and a search that tried the whole torus of the
-/// zero offsets is no wrong start.
-const DISAGREE_SIGMA0: f64 = 100.0;
-
-/// The data and the arm disagree — the first cause of a refusal, when the
-/// global search (which tries every basin of the zero offsets) ends on an
-/// arm not of the nominal's kind (gross corrections the data determine)
-/// having found no minimum of that kind, or leaving residuals hundreds of
-/// times the stated noise ([`DISAGREE_SIGMA0`]), and a few outliers do not
-/// explain it: the joint columns in another order, another arm's file, or
-/// another unit.
-fn disagreement(c: &Calibration) -> Option<String> {
-    let trace = c.solver.global.as_ref()?;
-    if !matches!(c.solver.stop, crate::calibrate::Stop::Global { .. }) {
-        return None;
-    }
-    // An arm of the nominal's kind at the end (only its fit poor) is a
-    // misstated noise or a model error: said by the χ² test.
-    if classify_gross(c).0.is_empty() {
-        return None;
-    }
-    let no_kind = trace.best_hits == 0;
-    let s0 = c.dof.sigma0;
-    let far = c.checks.chi_square.is_some() && s0 >= DISAGREE_SIGMA0;
-    if !(no_kind || far) {
-        return None;
-    }
-    let mut evidence = Vec::new();
-    if no_kind {
-        evidence.push(format!(
-            "none of the {} minima the global search found, from starts all over the zero \
-             offsets' circles, is an arm of the nominal's kind (each a mirror image, folded or \
-             rescaled)",
-            trace.minima.len()
-        ));
-    }
-    if far {
-        evidence.push(format!(
-            "even the best minimum leaves residuals {s0:.0} times the stated noise (a touch \
-             scatters {:.3} mm where the noise says {:.4} mm)",
-            s0 * c.dof.touch_sigma_mm,
-            c.dof.touch_sigma_mm
-        ));
-    }
-    Some(format!(
-        "the data and the arm disagree: {} — check that the poses file's columns q1..q{} are \
-         this arm's joints in its order, that the touches are of this arm (not another \
-         robot's), and that readings and lengths are in the units stated (the readings' angle \
-         unit; lengths in mm)",
-        evidence.join("; "),
-        c.params.joint_count()
-    ))
-}
-
-/// A refused fit with a few outliers: they are the likely cause (a
-/// mislabelled or displaced touch pulls the whole fit), named by
-/// `file:line`, with the remedy. After a robust fit, the touches it
-/// weighed down pull nothing — they are reported (the summary's robust
-/// and outlier lines), not blamed — and `--robust` is not recommended:
-/// it is in use.
-fn outlier_cause(c: &Calibration) -> Option<String> {
-    let weighed_out: Vec<&str> = (c.robust.iter())
-        .flat_map(|r| r.downweighted())
-        .map(|w| w.at.as_str())
-        .collect();
-    let o: Vec<&crate::calibrate::checks::Outlier> = (c.checks.outliers.iter())
-        .filter(|x| !weighed_out.contains(&x.at.as_str()))
-        .collect();
-    // Named as the cause only when, weighed down, they leave the rest of
-    // the residuals small: not after a wrong minimum, whose residuals are
-    // all large and whose screen singles out one touch all the same.
-    let screen = c.checks.outlier_screen;
-    if screen.is_some_and(|s| !s.explains(c.dof.sigma0)) {
-        return None;
-    }
-    // Observations, not rows: a position or an orientation is three rows,
-    // a point on a sphere one.
-    let d = &c.dof;
-    let observations = (d.touch_rows / 3
-        + d.rows_of("positions") / 3
-        + d.rows_of("orientations") / 3
-        + d.rows_of("spheres"))
-    .max(1);
-    if o.is_empty() || o.len() as f64 > (FEW_OUTLIERS * observations as f64).max(1.0) {
-        return None;
-    }
-    let named: Vec<String> = (o.iter().take(5))
-        .map(|x| format!("{} (point {}, {:.1} σ)", x.at, x.point, x.standardised))
-        .collect();
-    let robust = if c.robust.is_some() {
-        ""
-    } else {
-        ", or calibrate with --robust, which weighs them down"
-    };
-    // Each kind of evidence named as what was displaced: a touch, the
-    // tracker's target, a point on its sphere, an orientation.
-    let what = match outliers_noun(&c.checks.outliers, noun(c)) {
-        "sphere point" => "point on its sphere",
-        "orientation" => "orientation",
-        "position" => "target",
-        "touch" => "touch",
-        _ => "observation",
-    };
-    Some(format!(
-        "{} outlying observation{} pull{} the fit: {}{} — a mislabelled or displaced {what}? \
-         Check {}: fix the label or remove the row{robust}",
-        o.len(),
-        if o.len() == 1 { "" } else { "s" },
-        if o.len() == 1 { "s" } else { "" },
-        named.join(", "),
-        if o.len() > named.len() { ", …" } else { "" },
-        if o.len() == 1 { "it" } else { "them" }
-    ))
-}
-
-/// The fit against the noise: the χ² test (with the ways out of a misstated
-/// noise when the fit is otherwise sound) and the robust scale's test, as
-/// refusals (`poor`, unless a poor fit is accepted) or notes.
-fn noise_checks(
-    calibration: &Calibration,
-    noise: &Noise,
-    poor: &mut Vec<String>,
-    notes: &mut Vec<String>,
-) {
-    if let Some(chi) = &calibration.checks.chi_square {
-        if chi.far_outside() {
-            // A misstated noise is the cause only of a fit otherwise
-            // sound: not of a wrong minimum or a wrong geometry.
-            let sound = calibration.solver.is_solution_usable()
-                && calibration.checks.gross_corrections.is_empty();
-            poor.push(if sound {
-                format!("{}; {}", chi.describe(), noise_remedy(noise, chi))
-            } else {
-                chi.describe()
-            });
-        } else if chi.verdict != crate::calibrate::checks::ChiSquareVerdict::Consistent {
-            notes.push(chi.describe());
-        }
-    }
-    if let Some(r) = &calibration.robust {
-        if let Some(d) = r.describe_scale() {
-            if r.far_outside() {
-                poor.push(d);
-            } else if r.verdict != Some(crate::calibrate::checks::ChiSquareVerdict::Consistent) {
-                notes.push(d);
-            }
-        }
-        if !r.converged {
-            notes.push(format!(
-                "the robust weights still moved by more than {} after {} refits",
-                crate::calibrate::robust::WEIGHT_TOLERANCE,
-                r.passes
-            ));
-        }
-    }
-}
-
-/// Why free parameters moved implausibly far. One whose σ is a third of
-/// the move accepted or more was not determined by the data (a weak
-/// direction the user left free, or that a tolerance did not cover): said
-/// so, with the remedy. The rest are what the check exists for — a mirror
-/// image, a collapsed arm or a unit mistake.
-fn gross_reasons(c: &Calibration) -> Vec<String> {
-    let (gross, weak) = classify_gross(c);
-    let mut reasons = Vec::new();
-    if !gross.is_empty() {
-        reasons.push(format!(
-            "the calibrated arm is not the nominal arm's geometry — a mirror image, a collapsed \
-             arm or a unit mistake: {}",
-            gross.join("; ")
-        ));
-    }
-    if !weak.is_empty() {
-        // With a prior in use, what it lacks: no option in use recommended.
-        let tolerances = if c.prior.is_some() {
-            "give them tolerances (or tighter ones) in the prior"
-        } else {
-            "state tolerances for them (`[prior]` in the arm file, or --prior)"
-        };
-        reasons.push(format!(
-            "the data barely determine parameters that moved implausibly far, so they followed \
-             noise and model error: {} — {tolerances} or fix them (--fix), or add poses that \
-             turn the joints involved",
-            weak.join("; ")
-        ));
-    }
-    reasons
-}
-
-/// The implausible moves of [`gross_reasons`], described: those the data
-/// determine (gross: a mirror image, a collapse, a unit mistake), and
-/// those they barely do (weak).
-fn classify_gross(c: &Calibration) -> (Vec<String>, Vec<String>) {
-    let (mut weak, mut gross) = (Vec::new(), Vec::new());
-    // The σ carry σ̂²: when the fit is far outside the stated noise (a wrong
-    // minimum), they are inflated by it and tell nothing.
-    let meaningful = (c.checks.chi_square.as_ref()).is_none_or(|chi| !chi.far_outside());
-    for g in &c.checks.gross_corrections {
-        let e = c.parameters.iter().find(|e| e.id.to_string() == g.name);
-        let sigma = e.and_then(|e| e.sigma.map(|s| e.id.to_user(s)));
-        match sigma {
-            Some(s) if meaningful && s >= g.tolerance / 3.0 => {
-                weak.push(format!("{} (σ {s:.4} {})", g.describe(), g.unit));
-            }
-            _ => gross.push(g.describe()),
-        }
-    }
-    (gross, weak)
-}
-
-/// Without a reference length the size of the arm is the nominal's: what
-/// that leaves out of every uncertainty, per 0.1 mm the parameter held for
-/// scale is off (the data cannot say by how much it is), and the remedy.
-fn scale_note(c: &Calibration) -> Option<String> {
-    let e = (c.parameters.iter())
-        .find(|e| e.fixed.as_deref().is_some_and(|r| r.starts_with("scale:")))?;
-    let value = e.nominal.abs();
-    if value.is_nan() || value <= 0.0 {
-        return None;
-    }
-    let reach = c.params.reach();
-    let relative = 0.1 / value;
-    Some(format!(
-        "positions are determined only up to scale: no reference length fixes the arm's size, so \
-         {} is held at its nominal {:.3} mm and every length follows it; each 0.1 mm it is off \
-         scales the arm by {relative:.1e}, {:.3} mm at the reach ({reach:.0} mm), an error no \
-         uncertainty here includes. Add a reference length (--lengths) to fix the scale",
-        e.id,
-        value,
-        relative * reach
-    ))
-}
-
-/// The ways out of a χ² far outside the stated noise: the factor σ̂₀ by
-/// which the noise would be misstated, the noise that factor gives (stated
-/// so, this fit is consistent, with the uncertainties it printed, which
-/// already carry σ̂₀), leaving it unstated (σ estimated) or accepting the
-/// fit; and, for residuals too large, the other causes.
-fn noise_remedy(noise: &Noise, chi: &crate::calibrate::checks::ChiSquare) -> String {
-    let s0 = (chi.statistic / chi.dof.max(1) as f64).sqrt();
-    let mut flags = Vec::new();
-    if let Some(e) = noise.encoder_rad {
-        flags.push(format!("--encoder-noise {:.4}", (e * s0).to_degrees()));
-    }
-    if let Some(p) = noise.probe_mm {
-        flags.push(format!("--probe-noise {:.4}", p * s0));
-    }
-    if let Some(a) = noise.position_mm {
-        let b = noise.position_mm_per_m.unwrap_or(0.0);
-        flags.push(if b > 0.0 {
-            format!("--position-noise {:.4}+{:.4}/m", a * s0, b * s0)
-        } else {
-            format!("--position-noise {:.4}", a * s0)
-        });
-    }
-    if let Some(o) = noise.orientation_rad {
-        flags.push(format!("--orientation-noise {:.4}", (o * s0).to_degrees()));
-    }
-    let (how, other) = if s0 > 1.0 {
-        (
-            format!("{s0:.2} times larger"),
-            " If the noise is right, look for outliers (--robust names them) or a model error.",
-        )
-    } else {
-        (format!("{:.2} times smaller", 1.0 / s0), "")
-    };
-    let stated = if flags.is_empty() {
-        String::new()
-    } else {
-        format!(" ({})", flags.join(" "))
-    };
-    format!(
-        "if the noise is misstated, the residuals say it is {how}: state that{stated}, and this \
-         fit is consistent with the uncertainties printed; or leave the noise unstated (σ is then \
-         estimated from the fit); or accept the fit as it is with --accept-poor-fit.{other}"
-    )
-}
-
 impl CalibrationReport {
     /// Whether the calibration is usable: the solver reached a confirmed
     /// minimum, the arm is the nominal arm's kind of geometry, and (unless
@@ -1548,7 +1146,7 @@ impl CalibrationReport {
             "{header}{}{}{mount}{}",
             arm_to_toml(&calibrated, LengthUnit::Mm, AngleUnit::Deg),
             crate::io::frames::frames_to_toml(&self.calibration.frame_records()),
-            crate::io::verdict::verdict_to_toml(verdict)
+            crate::io::verdict::verdict_to_toml(&verdict.words(Spelling::Cli))
         )
     }
 }
@@ -1658,34 +1256,6 @@ pub fn run(
         tools,
         uncertainty_maps_in_frames,
     })
-}
-
-/// The verdict on `calibration` of `problem` (its `fitted` figures), with
-/// readings that look like radians read as degrees as the first cause of a
-/// refusal: the reader warned, and the reasons that follow (no confirmed
-/// minimum, χ²) are its consequences.
-fn verdict_of(problem: &Problem, calibration: &Calibration, fitted: &BeforeAfter) -> Verdict {
-    let (data, model) = (&problem.data, &problem.model);
-    let mut verdict = Verdict::of(calibration, fitted, &model.noise, model.accept_poor_fit);
-    if !verdict.usable
-        && crate::io::poses::look_like_radians(
-            data.readings(),
-            data.len(),
-            (data.joints(), data.poses().prismatic_mask()),
-            1f64.to_degrees(),
-        )
-    {
-        verdict.reasons.insert(
-            0,
-            format!(
-                "every joint reading of {}, read as degrees, is within ±6.28°: these angles look \
-                 like radians read as degrees, and the reasons after this one follow from it — {}",
-                data.source().poses_file(),
-                crate::calibrate::ANGLE_UNITS_REMEDY
-            ),
-        );
-    }
-    verdict
 }
 
 /// The sections of the evidence beyond touches and positions that a
@@ -1811,8 +1381,8 @@ fn fit_quality_lines(c: &Calibration) -> String {
     if let Some(u) = &c.checks.position_uncertainty {
         t += &format!("Experiment: {}\n", u.describe());
     }
-    if let Some(s) = scale_note(c) {
-        t += &format!("Scale: {s}\n");
+    if let Some(s) = Note::scale(c) {
+        t += &format!("Scale: {}\n", s.describe(Spelling::Cli));
     }
     t
 }
@@ -1917,21 +1487,6 @@ fn outliers_line(c: &Calibration) -> String {
         shown.join(", "),
         if o.len() > shown.len() { ", …" } else { "" }
     )
-}
-
-/// The verdict, and the notes that come with it (the same as the JSON's
-/// `/verdict`): a χ² outside its range that is not a refusal is said here,
-/// not only in the file.
-fn verdict_line(v: &Verdict) -> String {
-    let mut t = if v.usable {
-        "Verdict: usable\n".to_string()
-    } else {
-        format!("Verdict: NOT usable — {}\n", v.reasons.join("; "))
-    };
-    for n in &v.notes {
-        t += &format!("  note: {n}\n");
-    }
-    t + "\n"
 }
 
 /// The summary's parameter table (user units), and the prior's if any.

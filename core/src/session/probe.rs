@@ -248,7 +248,11 @@ fn judged(
     let after = (report.spheres.as_ref()).and_then(|s| s.spheres.first().map(|s| s.after));
     let (form, rms) = after.map_or((f64::NAN, f64::NAN), |a| (a.form, a.rms));
     let moved = crate::geometry::distance(&offset, &f.nominal_offset);
-    let mut refusals: Vec<String> = report.verdict.reasons.clone();
+    // The fit's own refusals in the command line's words (its one front
+    // end so far).
+    let mut refusals: Vec<String> = (report.verdict.reasons.iter())
+        .map(|r| r.to_string())
+        .collect();
     if let Some(limit) = settings.max_form_mm.filter(|&m| form.is_nan() || form > m) {
         refusals.push(format!(
             "the sphere's form as the probe sees it is {form:.4} mm, beyond the limit of {} mm: \
