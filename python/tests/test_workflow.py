@@ -361,6 +361,8 @@ def test_ctrl_c_stops_a_calibration_with_keyboard_interrupt(arm):
     import os
     import signal
 
+    # Annealing 4 000 touches: seconds in a release build, half a minute
+    # in a debug one — far beyond the interrupt either way.
     campaign = aacmm.simulate(arm, sockets=400, poses=10, seed=3, encoder_noise_deg=0.005, probe_noise_mm=0.01)
     sent = []
 
