@@ -361,8 +361,9 @@ def test_ctrl_c_stops_a_calibration_with_keyboard_interrupt(arm):
     import os
     import signal
 
-    # Annealing 4 000 touches: seconds in a release build, half a minute
-    # in a debug one — far beyond the interrupt either way.
+    # Annealing 4 000 touches, then ten folds of it: 3–4 s in a release
+    # build (one anneal 0.33 s here), minutes in a debug one — far beyond
+    # the interrupt either way (the folds check the token too).
     campaign = aacmm.simulate(arm, sockets=400, poses=10, seed=3, encoder_noise_deg=0.005, probe_noise_mm=0.01)
     sent = []
 
@@ -373,7 +374,7 @@ def test_ctrl_c_stops_a_calibration_with_keyboard_interrupt(arm):
     timer = threading.Timer(0.3, interrupt)
     timer.start()
     with pytest.raises(KeyboardInterrupt):
-        aacmm.calibrate(arm, campaign.data, method="sa", threads=1)
+        aacmm.calibrate(arm, campaign.data, method="sa", cross_validate=10, threads=1)
     latency = time.monotonic() - sent[0]
     timer.join()
     assert latency < 1.0, latency
