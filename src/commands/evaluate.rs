@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::validate::FrameValues;
 use aacmm_core::dataset::DataSet;
+use aacmm_core::error::shown;
 use aacmm_core::io::frames::parse_frames;
 use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{Arm, read_lengths, read_positions, source_name};
@@ -69,6 +70,11 @@ pub struct Args {
     /// results do not depend on it.
     #[arg(long, value_name = "N", value_parser = super::shared_flags::threads_flag)]
     threads: Option<usize>,
+    /// The probe that touched --data: one of the arm file's `[[tool]]` (a
+    /// stylus) instead of its `[probe]` — its offset. (Positions and sphere
+    /// files name their rows' tools in their own `tool` column.)
+    #[arg(long, value_name = "NAME", requires = "data")]
+    tool: Option<String>,
     /// Write over earlier results: an output file that exists, or an
     /// output directory holding results of an aacmm command (this command's
     /// files are overwritten; nothing is deleted).
@@ -106,6 +112,11 @@ pub fn run(args: Args) -> Result<()> {
         check_output_dir("--report", dir, &EVALUATION_FILES, &inputs, args.force)?;
     }
     let (arm, poses) = args.input.read()?;
+    let arm = match &args.tool {
+        Some(name) => aacmm_core::io::tools::arm_with_tool(&arm, name)
+            .map_err(|e| anyhow::anyhow!("--tool {}: {}", shown(name), e.reason))?,
+        None => arm,
+    };
     let kernel = args.input.kernel(&arm)?;
     let data_path = args.input.data()?;
     let mut data = DataSet::from_poses_owned(poses, &source_name(data_path))?;

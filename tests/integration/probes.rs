@@ -484,6 +484,50 @@ fn points_computes_a_named_probe() {
         ]),
         &["--tool short: the arm has no such tool", "`probe`, `long`"],
     );
+    // evaluate --tool: the point's centroid is the stylus' positions' mean.
+    let rows = [
+        [10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
+        [12.0, 18.0, 33.0, 41.0, 48.0, 65.0],
+        [8.0, 22.0, 29.0, 37.0, 52.0, 55.0],
+    ];
+    let text: String = (rows.iter())
+        .map(|r| format!("A,{}\n", r.map(|v| v.to_string()).join(",")))
+        .collect();
+    let touches = write(
+        &dir,
+        "touches.csv",
+        &format!("point,q1,q2,q3,q4,q5,q6\n{text}"),
+    );
+    let json = dir.join("evaluation.json");
+    let o = aacmm(&[
+        "evaluate",
+        "--arm",
+        &arm_file,
+        "--data",
+        &touches,
+        "--tool",
+        "long",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", crate::util::stderr(&o));
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let kernel = aacmm_core::kernel::ArmKernel::new(&stylus).unwrap();
+    let q: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|r| r.map(f64::to_radians).to_vec())
+        .collect();
+    let refs: Vec<&[f64]> = q.iter().map(|r| &r[..]).collect();
+    let p = kernel.positions_of(&refs).unwrap();
+    let centroid = &v["evaluation"]["points"][0]["centroid"];
+    for k in 0..3 {
+        let mean = p.iter().map(|x| x[k]).sum::<f64>() / 3.0;
+        assert!(
+            (centroid[k].as_f64().unwrap() - mean).abs() < 1e-9,
+            "{centroid} vs {mean}"
+        );
+    }
 }
 
 /// `aacmm verify --tool NAME` verifies one probe: its offset and ball
