@@ -77,6 +77,8 @@ pub enum Setting {
     SphereUncertainty,
     /// The acceptance tests' maximum permissible errors (`aacmm verify`).
     Mpe,
+    /// The probe (a `[[tool]]`) a command computes with.
+    Tool,
     /// The global search's random starts.
     GlobalStarts,
     /// The global search's confirmations.
@@ -148,7 +150,7 @@ const fn cli_only(path: &'static str, flag: &'static str) -> Names {
 }
 
 /// Every front end's name of each setting, one row per setting.
-const TABLE: [(Setting, Names); 41] = [
+const TABLE: [(Setting, Names); 42] = [
     (
         Setting::EncoderNoise,
         row(
@@ -490,6 +492,20 @@ const TABLE: [(Setting, Names); 41] = [
         ),
     ),
     (
+        Setting::Tool,
+        row(
+            Some("tool"),
+            "--tool",
+            None,
+            None,
+            [
+                "--tool NAME",
+                "(the command line's only)",
+                "(the command line's only)",
+            ],
+        ),
+    ),
+    (
         Setting::GlobalStarts,
         row(
             Some("global.max_starts"),
@@ -554,7 +570,7 @@ const TABLE: [(Setting, Names); 41] = [
 
 impl Setting {
     /// Every setting.
-    pub const ALL: [Setting; 41] = [
+    pub const ALL: [Setting; 42] = [
         Setting::EncoderNoise,
         Setting::ProbeNoise,
         Setting::LengthUncertainty,
@@ -581,6 +597,7 @@ impl Setting {
         Setting::SphereDiameter,
         Setting::SphereUncertainty,
         Setting::Mpe,
+        Setting::Tool,
         Setting::GlobalStarts,
         Setting::GlobalConfirmations,
         Setting::GlobalStartIterations,

@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::validate::FrameValues;
 use aacmm_core::dataset::DataSet;
-use aacmm_core::error::shown;
 use aacmm_core::io::frames::parse_frames;
 use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{Arm, read_lengths, read_positions, source_name};
@@ -114,7 +113,7 @@ pub fn run(args: Args) -> Result<()> {
     let (arm, poses) = args.input.read()?;
     let arm = match &args.tool {
         Some(name) => aacmm_core::io::tools::arm_with_tool(&arm, name)
-            .map_err(|e| anyhow::anyhow!("--tool {}: {}", shown(name), e.reason))?,
+            .map_err(super::shared_flags::flag_error)?,
         None => arm,
     };
     let kernel = args.input.kernel(&arm)?;

@@ -105,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (arm, poses) = args.input.read_readings()?;
     let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
-        .map_err(|e| anyhow!("--tool {}: {}", shown(&args.tool), e.reason))?;
+        .map_err(super::shared_flags::flag_error)?;
     let frame = match &args.frame {
         Some(name) => Some(frame(&args.input.arm, name)?),
         None => None,

@@ -3,13 +3,11 @@
 
 use std::path::PathBuf;
 
-use aacmm_core::calibrate::CalibrationError;
-use aacmm_core::error::shown;
 use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{AngleUnit, LengthUnit, Rejected, arm_to_toml, read_arm_with, source_name};
 use aacmm_core::session::probe::{DEFAULT_TOLERANCE_MM, ProbeSettings, qualify_probe};
 use aacmm_core::session::user_noise;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 
 use crate::output::{Stdout, note};
 use crate::paths::check_output_file;
@@ -85,14 +83,8 @@ pub fn run(args: Args) -> Result<()> {
         tolerance_mm: args.tolerance,
         max_form_mm: args.max_form,
     };
-    let q =
-        qualify_probe(&arm, rows, &source_name(&args.spheres), &settings).map_err(|e| match e {
-            // The probe's name is this command's own flag.
-            CalibrationError::Option(o) if o.field == "tool" => {
-                anyhow!("--tool {}: {}", shown(&o.value), o.reason)
-            }
-            e => super::shared_flags::flag_error(e),
-        })?;
+    let q = qualify_probe(&arm, rows, &source_name(&args.spheres), &settings)
+        .map_err(super::shared_flags::flag_error)?;
     let mut out = Stdout::new();
     out.print(q.summary())?;
     out.finish()?;

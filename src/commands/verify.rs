@@ -9,7 +9,7 @@ use aacmm_core::acceptance::{
     Acceptance, AcceptanceError, LDiaRadius, Mpe, Settings, SpherePoints, parse_mpe, verify,
 };
 use aacmm_core::dataset::DataSet;
-use aacmm_core::error::{quoted, shown};
+use aacmm_core::error::quoted;
 use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{Arm, read_lengths, source_name};
 use aacmm_core::kernel::PreparedPoses;
@@ -103,7 +103,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let arm = args.input.read_arm()?;
     let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
-        .map_err(|e| anyhow!("--tool {}: {}", shown(&args.tool), e.reason))?;
+        .map_err(super::shared_flags::flag_error)?;
     let Some(ball) = arm.ball_diameter_mm else {
         bail!(
             "{}: field `ball_diameter_mm`: the arm file states no probe ball ([probe] \
