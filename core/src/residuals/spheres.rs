@@ -404,20 +404,11 @@ impl SphereTerm {
             let block = at
                 .layout
                 .block_named(&crate::io::tools::block_name(&tool.name));
-            let mut arm = at.arm.clone();
-            arm.probe = block.map_or(tool.offset, |id| {
+            let offset = block.map_or(tool.offset, |id| {
                 let x = at.block(id);
                 [x[0], x[1], x[2]]
             });
-            let kernel = ArmKernel::new(&arm)?;
-            let seen = At {
-                x: at.x,
-                arm: &arm,
-                kernel: &kernel,
-                layout: at.layout,
-                threads: at.threads,
-            };
-            f(&seen, k, block)?;
+            crate::residuals::tools::with_probe_at(at, offset, |seen| f(seen, k, block))?;
         }
         Ok(())
     }

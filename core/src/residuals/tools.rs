@@ -149,8 +149,22 @@ pub(crate) fn with_tool<R>(
         return f(at);
     };
     let x = at.block(id);
+    with_probe_at(at, [x[0], x[1], x[2]], f)
+}
+
+/// Calls `f` with the point `at` seen through a probe at `offset` (mm, the
+/// last joint's frame): the arm's probe replaced, its kernel built for it.
+///
+/// # Errors
+///
+/// The kernel's, and `f`'s.
+pub(crate) fn with_probe_at<R>(
+    at: &At<'_>,
+    offset: [f64; 3],
+    f: impl FnOnce(&At<'_>) -> Result<R, TermError>,
+) -> Result<R, TermError> {
     let mut arm = at.arm.clone();
-    arm.probe = [x[0], x[1], x[2]];
+    arm.probe = offset;
     let kernel = ArmKernel::new(&arm)?;
     f(&At {
         x: at.x,

@@ -32,7 +32,7 @@ use crate::error::{OptionError, quoted};
 use crate::io::Arm;
 use crate::io::spheres::Spheres;
 use crate::io::tools::DEFAULT_TOOL;
-use crate::params::{ParamId, ParamKind, param_count};
+use crate::params::param_count;
 use crate::residuals::Noise;
 use crate::residuals::spheres::{SphereSize, SphereTerm};
 
@@ -188,8 +188,9 @@ pub fn qualify_probe(
     let sphere = rows.spheres()[0].clone();
     let points = rows.len();
     let n = arm.params.joint_count();
+    let probe = crate::residuals::tools::probe_columns(&arm.params);
     let held: Vec<usize> = (0..param_count(n))
-        .filter(|&c| settings.tool != DEFAULT_TOOL || !is_probe_column(n, c))
+        .filter(|c| settings.tool != DEFAULT_TOOL || !probe.contains(c))
         .collect();
     let model = ModelOptions {
         fix: FixSpec::Columns(held),
@@ -299,31 +300,18 @@ fn judged(
     }
 }
 
-/// The fitted tip offset of `tool` and its σ (NaN where not determined).
+/// The fitted tip offset of `tool` and its σ (NaN where not determined):
+/// the probe's `B` or the tool's block, as the tools' report reads them.
 fn fitted_offset(report: &super::CalibrationReport, tool: &str) -> ([f64; 3], [f64; 3]) {
     let c = &report.calibration;
-    if tool == DEFAULT_TOOL {
-        let probe: Vec<_> = (c.parameters.iter())
-            .filter(|e| e.id.kind == ParamKind::Probe)
-            .collect();
-        let pick = |k: usize, f: &dyn Fn(&crate::calibrate::Estimate) -> f64| {
-            probe.get(k).map_or(f64::NAN, |e| f(e))
-        };
-        return (
-            std::array::from_fn(|k| pick(k, &|e| e.calibrated)),
-            std::array::from_fn(|k| pick(k, &|e| e.sigma.unwrap_or(f64::NAN))),
-        );
-    }
-    (c.tool_estimates().into_iter())
-        .find(|(n, _, _)| n == tool)
-        .map_or(([f64::NAN; 3], [f64::NAN; 3]), |(_, x, s)| {
-            (x, s.unwrap_or([f64::NAN; 3]))
-        })
-}
-
-/// Whether geometry column `c` of an `n`-joint arm is one of the probe's.
-fn is_probe_column(n: usize, c: usize) -> bool {
-    ParamId::from_column(n, c).is_some_and(|p| p.kind == ParamKind::Probe)
+    let (offset, sigma) = if tool == DEFAULT_TOOL {
+        super::tools::probe_estimate(c)
+    } else {
+        (c.tool_estimates().into_iter())
+            .find(|(n, _, _)| n == tool)
+            .map_or(([f64::NAN; 3], None), |(_, x, s)| (x, s))
+    };
+    (offset, sigma.unwrap_or([f64::NAN; 3]))
 }
 
 /// The stated offset and ball of the probe `tool` of `arm`.
