@@ -343,24 +343,30 @@ fn every_solver_stops_on_a_set_token() {
     assert_eq!(with.unwrap().to_json(), without.to_json());
 }
 
+/// Sets `token` 300 ms from now on another thread, which returns when.
+fn cancel_after_300_ms(
+    token: &aacmm_core::calibrate::Cancel,
+) -> std::thread::JoinHandle<std::time::Instant> {
+    let stopper = token.clone();
+    std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let at = std::time::Instant::now();
+        stopper.cancel();
+        at
+    })
+}
+
 /// The folds of a cross-validation stop with the run: each fold's
 /// calibration checks the run's token (a fold of the endless search set
 /// from another thread returns promptly, not after its own search).
 #[test]
 fn the_folds_stop_with_the_run() {
     use aacmm_core::CalibrationError;
-    use aacmm_core::calibrate::Cancel;
     use aacmm_core::calibrate::validate::cross_validate_cancellable;
     use std::time::{Duration, Instant};
     let (problem, settings) = endless_search();
-    let token = Cancel::new();
-    let stopper = token.clone();
-    let canceller = std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_millis(300));
-        let at = Instant::now();
-        stopper.cancel();
-        at
-    });
+    let token = aacmm_core::calibrate::Cancel::new();
+    let canceller = cancel_after_300_ms(&token);
     let solver = Method::Global.solver();
     let r = cross_validate_cancellable(problem.inputs(), &settings, &*solver, 3, Some(&token));
     let ended = Instant::now();
@@ -382,17 +388,11 @@ fn the_folds_stop_with_the_run() {
 #[test]
 fn a_global_search_cancelled_from_another_thread_returns_promptly() {
     use aacmm_core::CalibrationError;
-    use aacmm_core::calibrate::{Cancel, Context};
+    use aacmm_core::calibrate::Context;
     use std::time::{Duration, Instant};
     let (problem, settings) = endless_search();
-    let token = Cancel::new();
-    let stopper = token.clone();
-    let canceller = std::thread::spawn(move || {
-        std::thread::sleep(Duration::from_millis(300));
-        let at = Instant::now();
-        stopper.cancel();
-        at
-    });
+    let token = aacmm_core::calibrate::Cancel::new();
+    let canceller = cancel_after_300_ms(&token);
     let mut ctx = Context::new().cancelled_by(token);
     let r = aacmm_core::session::run(&problem, &settings, &*Method::Global.solver(), &mut ctx);
     let ended = Instant::now();
