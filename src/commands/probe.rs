@@ -85,10 +85,15 @@ pub fn run(args: Args) -> Result<()> {
     };
     let q = qualify_probe(&arm, rows, &source_name(&args.spheres), &settings)
         .map_err(super::shared_flags::flag_error)?;
-    let mut out = Stdout::new();
-    out.print(q.summary())?;
-    out.finish()?;
+    // The qualified arm is written even if stdout fails (`> /dev/full`):
+    // the summary's failure is reported after it.
+    let printed = (|| {
+        let mut out = Stdout::new();
+        out.print(q.summary())?;
+        out.finish()
+    })();
     if !q.usable() {
+        printed?;
         bail!(
             "{} is not qualified ({}): nothing was written",
             args.tool,
@@ -105,5 +110,6 @@ pub fn run(args: Args) -> Result<()> {
     );
     aacmm_core::io::write_atomic(&args.out, &text)
         .with_context(|| format!("{}: cannot write", args.out.display()))?;
-    note(format_args!("wrote {}", args.out.display()))
+    note(format_args!("wrote {}", args.out.display()))?;
+    printed
 }

@@ -432,6 +432,39 @@ fn the_probe_command_qualifies_and_refuses() {
         crate::util::stderr(&o)
     );
     assert!(!out.exists());
+    // A full stdout loses no result: the qualified arm is written, then
+    // the failed summary reported.
+    #[cfg(unix)]
+    {
+        let full = std::fs::File::create("/dev/full").unwrap();
+        let o = crate::util::command(&[
+            "probe",
+            "--arm",
+            &arm,
+            "--spheres",
+            &good,
+            "--sphere-diameter",
+            "25.4",
+            "--tool",
+            "long",
+            "--encoder-noise",
+            "0.001",
+            "--probe-noise",
+            "0.005",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(full)
+        .output()
+        .unwrap();
+        assert_eq!(o.status.code(), Some(1));
+        assert!(
+            crate::util::stderr(&o).contains("stdout"),
+            "{}",
+            crate::util::stderr(&o)
+        );
+        assert!(out.exists());
+    }
 }
 
 /// `aacmm points --tool NAME`: the positions of the stylus' ball centre —
