@@ -733,3 +733,125 @@ fn simulate_sphere_tools_then_calibrate() {
         &["--sphere-tools: an arm whose file lists styli as [[tool]]"],
     );
 }
+
+/// `calibrate --tool NAME`: a file without a `tool` column probed with one
+/// of the arm's styli calibrates as the same file whose every row names it
+/// (the same parameters and offsets, the stylus' written to the calibrated
+/// arm's `[[tool]]`, the probe's held as unseen); a file that names its
+/// probes already, and touches (no `tool` column read for them), are
+/// refused by the flag.
+#[test]
+fn calibrate_tool_is_the_tool_column_of_every_row() {
+    use crate::util::{aacmm, assert_clean_error, stdout, temp_dir, write};
+    let dir = temp_dir("calibrate-tool");
+    let text =
+        aacmm_core::io::arm_to_toml(&nominal(), aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg);
+    let arm = write(&dir, "arm.toml", &text);
+    let (_, rows) = campaign(2);
+    let long: Vec<usize> = (0..rows.len()).filter(|&i| rows.tool(i) == 1).collect();
+    let named = rows.subset(&long);
+    let mut bare = Spheres::new(named.joints(), named.prismatic_mask());
+    for i in 0..named.len() {
+        bare.push(
+            &named.spheres()[named.sphere(i)],
+            named.reading(i),
+            named.line(i),
+            None,
+        );
+    }
+    let csv = |rows: &Spheres| {
+        let mut text = Vec::new();
+        write_spheres(&mut text, rows, AngleUnit::Deg).unwrap();
+        String::from_utf8(text).unwrap()
+    };
+    let named_file = write(&dir, "named.csv", &csv(&named));
+    let bare_file = write(&dir, "bare.csv", &csv(&bare));
+    assert!(!csv(&bare).starts_with("sphere,q1,q2,q3,q4,q5,q6,tool"));
+    let fit = |file: &str, tool: &[&str], out: &str| {
+        let out = dir.join(out);
+        let args = [
+            &[
+                "calibrate",
+                "--arm",
+                &arm,
+                "--spheres",
+                file,
+                "--sphere-diameter",
+                "25.4",
+            ][..],
+            &[
+                "--encoder-noise",
+                "0.005",
+                "--probe-noise",
+                "0.01",
+                "--method",
+                "lm",
+            ][..],
+            &["--out", out.to_str().unwrap()][..],
+            tool,
+        ]
+        .concat();
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+        let toml = std::fs::read_to_string(out.join("calibrated.toml")).unwrap();
+        (
+            CalibrationReport::from_json(&json).unwrap(),
+            toml,
+            stdout(&o),
+        )
+    };
+    let (by_flag, toml, text) = fit(&bare_file, &["--tool", "long"], "flag");
+    let (by_column, _, _) = fit(&named_file, &[], "column");
+    assert_eq!(by_flag.calibration.params, by_column.calibration.params);
+    assert_eq!(
+        by_flag.calibration.tool_estimates(),
+        by_column.calibration.tool_estimates()
+    );
+    assert!(
+        text.contains("unseen: no row is measured with the arm's [probe]"),
+        "{text}"
+    );
+    let (back, _) = aacmm_core::io::parse_arm(&toml, "calibrated.toml").unwrap();
+    let (_, x, _) = by_flag.calibration.tool_estimates().remove(0);
+    assert_eq!(back.tools[0].offset, x);
+    assert_eq!(
+        back.params.probe,
+        nominal().params.probe,
+        "the probe is held"
+    );
+
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--spheres",
+        &named_file,
+        "--sphere-diameter",
+        "25.4",
+        "--tool",
+        "long",
+        "--out",
+        dir.join("named-flag").to_str().unwrap(),
+    ]);
+    assert_clean_error(
+        &o,
+        &["--tool long", "named.csv: the rows name their probes"],
+    );
+    let poses = crate::util::shipped("poses.csv");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--tool",
+        "long",
+        "--out",
+        dir.join("touches").to_str().unwrap(),
+    ]);
+    assert_clean_error(
+        &o,
+        &["--tool long", "touches give their tool in a `tool` column"],
+    );
+}
