@@ -738,20 +738,16 @@ mod tests {
     /// text names it so.
     #[test]
     fn a_setting_of_the_librarys_only_is_named_by_its_path() {
-        let library_only = [
-            Setting::LmFtol,
-            Setting::LmXtol,
-            Setting::LmGtol,
-            Setting::GlobalGridCells,
-            Setting::GlobalNoiseFloorK,
-            Setting::CtePerK,
-            Setting::Placements,
-            Setting::BallDiameter,
-        ];
+        let library_only: Vec<Setting> = (Setting::ALL.into_iter())
+            .filter(|s| s.argument(Spelling::Cli).is_none())
+            .collect();
+        assert_eq!(library_only.len(), 8, "{library_only:?}");
         for s in library_only {
-            for spelling in [Spelling::Cli, Spelling::Python, Spelling::C] {
+            for spelling in [Spelling::Python, Spelling::C] {
                 assert_eq!(s.argument(spelling), None, "{s:?}");
             }
+            let e = crate::error::OptionError::new(s, 1, "why");
+            assert_eq!(e.to_string(), format!("{} = 1: why", s.path()));
         }
         let e = crate::error::OptionError::new(Setting::LmFtol, -1, "must be ≥ 0");
         assert_eq!(e.field(), "lm.ftol");
