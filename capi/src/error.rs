@@ -144,9 +144,7 @@ impl From<OptionError> for Error {
     /// does (`probe_noise_mm = -1: …`); settings the C API does not expose
     /// keep their library path.
     fn from(o: OptionError) -> Error {
-        let option = (o.setting())
-            .and_then(|s| s.argument(Spelling::C))
-            .unwrap_or(o.field);
+        let option = (o.setting.argument(Spelling::C)).unwrap_or(o.field());
         Error::invalid(format!("{option} = {}: {}", o.value, o.reason))
     }
 }

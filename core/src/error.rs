@@ -5,6 +5,8 @@
 //! field (a TOML key or a CSV column). Readers never panic on bad input and
 //! never drop data silently: they either return the data or one of these.
 
+use crate::setting::Setting;
+
 /// A problem with user input, located precisely.
 ///
 /// [`Display`](std::fmt::Display) always starts with the file name, then the line
@@ -196,25 +198,29 @@ impl InputError {
     }
 }
 
-/// A setting out of range: which one (its path in the settings struct that
-/// holds it — `ModelOptions` or `SolverSettings` of [`crate::calibrate`](mod@crate::calibrate) —
-/// e.g. `noise.probe_mm`, `anneal.cooling`, `global.max_starts`, `fix`,
-/// `robust.scale_k`, `threads`, `cross_validate`) and why.
+/// A setting out of range: which one (a [`Setting`], named by its path
+/// in the settings struct that holds it — `ModelOptions` or
+/// `SolverSettings` of [`crate::calibrate`](mod@crate::calibrate) —, e.g.
+/// `noise.probe_mm`, `anneal.cooling`, `global.max_starts`, `fix`,
+/// `robust.scale_k`, `threads`, `cross_validate`) and why. A front end
+/// names the setting in its own words from the setting's row
+/// ([`Setting::argument`]).
 ///
 /// ```
-/// use aacmm_core::{calibrate::SolverSettings, error::OptionError};
+/// use aacmm_core::{calibrate::SolverSettings, error::OptionError, setting::Setting};
 /// let mut o = SolverSettings::default();
 /// o.anneal.cooling = 1.5;
 /// let e: OptionError = o.check().unwrap_err();
-/// assert_eq!(e.field, "anneal.cooling");
+/// assert_eq!(e.setting, Setting::AnnealCooling);
+/// assert_eq!(e.field(), "anneal.cooling");
 /// assert_eq!(e.to_string(), "anneal.cooling = 1.5: must lie strictly between 0 and 1");
 /// ```
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{field} = {value}: {reason}")]
+#[error("{} = {value}: {reason}", .setting.path())]
 #[non_exhaustive]
 pub struct OptionError {
-    /// The setting's path in its settings struct (or `cross_validate`).
-    pub field: &'static str,
+    /// The setting refused.
+    pub setting: Setting,
     /// The value refused, as text (in the setting's own unit).
     pub value: String,
     /// Why it is refused.
@@ -222,30 +228,30 @@ pub struct OptionError {
 }
 
 impl OptionError {
-    /// A refusal of `value` for `field`, because of `reason`.
+    /// A refusal of `value` for `setting`, because of `reason`.
     pub fn new(
-        field: &'static str,
+        setting: Setting,
         value: impl std::fmt::Display,
         reason: impl Into<String>,
     ) -> OptionError {
         OptionError {
-            field,
+            setting,
             value: shown(&value.to_string()),
             reason: bounded(reason.into()),
         }
     }
 
-    /// The setting refused, for a front end to name in its own words
-    /// ([`crate::setting::Setting::argument`]); `None` for a path no front
-    /// end sets.
-    pub fn setting(&self) -> Option<crate::setting::Setting> {
-        crate::setting::Setting::at_path(self.field)
+    /// The setting's path in its settings struct (`noise.probe_mm`,
+    /// `cross_validate`): how the library's own text names it
+    /// ([`Setting::path`]).
+    pub fn field(&self) -> &'static str {
+        self.setting.path()
     }
 }
 
 /// `Ok` when `v` is finite and `> 0` (or `≥ 0` with `zero_ok`).
 pub(crate) fn check_nonnegative(
-    field: &'static str,
+    setting: Setting,
     v: f64,
     zero_ok: bool,
 ) -> Result<(), OptionError> {
@@ -255,7 +261,7 @@ pub(crate) fn check_nonnegative(
     } else {
         let bound = if zero_ok { "≥ 0" } else { "> 0" };
         Err(OptionError::new(
-            field,
+            setting,
             short(v),
             format!("must be a finite number {bound}"),
         ))
@@ -373,7 +379,7 @@ pub(crate) fn bounded(message: String) -> String {
 /// ```
 /// use aacmm_core::{calibrate::SolverSettings, error::MAX_SEED};
 /// let s = SolverSettings { seed: MAX_SEED + 1, ..Default::default() };
-/// assert_eq!(s.check().unwrap_err().field, "seed");
+/// assert_eq!(s.check().unwrap_err().field(), "seed");
 /// assert!(SolverSettings { seed: MAX_SEED, ..Default::default() }.check().is_ok());
 /// ```
 pub const MAX_SEED: u64 = i64::MAX as u64;

@@ -109,14 +109,33 @@ pub enum Setting {
     SwitchWindow,
     /// The hybrid's switching threshold.
     SwitchEpsilon,
+    /// LM's relative cost tolerance (the library's only).
+    LmFtol,
+    /// LM's relative step tolerance (the library's only).
+    LmXtol,
+    /// LM's gradient tolerance (the library's only).
+    LmGtol,
+    /// The global search's grid cells per zero offset (the library's only).
+    GlobalGridCells,
+    /// The global search's noise floor, in stated σ (the library's only).
+    GlobalNoiseFloorK,
+    /// The arm's stated thermal expansion coefficient (its file's
+    /// `cte_per_k`).
+    CtePerK,
+    /// The placements leave-one-placement-out validation deals (the
+    /// points' labels).
+    Placements,
+    /// The probe's ball diameter the acceptance tests use.
+    BallDiameter,
 }
 
 /// One setting's names.
 struct Names {
     /// The library's path ([`crate::error::OptionError::field`]).
-    path: Option<&'static str>,
-    /// The command line's flag (or its words for what no flag sets).
-    flag: &'static str,
+    path: &'static str,
+    /// The command line's flag (or its words for what no flag sets);
+    /// `None` for a setting of the library's only.
+    flag: Option<&'static str>,
     /// The Python argument, where Python exposes it.
     python: Option<&'static str>,
     /// The C argument (as its setter names it), where C exposes it.
@@ -128,7 +147,7 @@ struct Names {
 
 /// A row of the table.
 const fn row(
-    path: Option<&'static str>,
+    path: &'static str,
     flag: &'static str,
     python: Option<&'static str>,
     c: Option<&'static str>,
@@ -136,7 +155,7 @@ const fn row(
 ) -> Names {
     Names {
         path,
-        flag,
+        flag: Some(flag),
         python,
         c,
         remedy,
@@ -146,15 +165,28 @@ const fn row(
 /// A setting only the command line sets: no Python or C name, its remedy
 /// the flag everywhere but in the library's path.
 const fn cli_only(path: &'static str, flag: &'static str) -> Names {
-    row(Some(path), flag, None, None, [flag, path, path])
+    row(path, flag, None, None, [flag, path, path])
+}
+
+/// A setting only the library's settings structs hold: no front end's
+/// argument sets it, and a refusal of it names its path.
+const fn library_only(path: &'static str) -> Names {
+    const WORDS: &str = "(the library's only)";
+    Names {
+        path,
+        flag: None,
+        python: None,
+        c: None,
+        remedy: [WORDS; 3],
+    }
 }
 
 /// Every front end's name of each setting, one row per setting.
-const TABLE: [(Setting, Names); 42] = [
+const TABLE: [(Setting, Names); 50] = [
     (
         Setting::EncoderNoise,
         row(
-            Some("noise.encoder_rad"),
+            "noise.encoder_rad",
             "--encoder-noise",
             Some("encoder_deg"),
             Some("encoder_noise_rad"),
@@ -168,7 +200,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::ProbeNoise,
         row(
-            Some("noise.probe_mm"),
+            "noise.probe_mm",
             "--probe-noise",
             Some("probe_mm"),
             Some("probe_noise_mm"),
@@ -182,7 +214,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::LengthUncertainty,
         row(
-            Some("noise.length_default_mm"),
+            "noise.length_default_mm",
             "--length-uncertainty",
             Some("length_default_mm"),
             Some("length_uncertainty_mm"),
@@ -196,7 +228,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::LengthWeight,
         row(
-            Some("noise.length_weight"),
+            "noise.length_weight",
             "--length-weight",
             Some("length_weight"),
             Some("length_weight"),
@@ -210,7 +242,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::PositionNoise,
         row(
-            Some("noise.position_mm"),
+            "noise.position_mm",
             "--position-noise",
             Some("position_mm"),
             Some("position_noise a_mm"),
@@ -224,7 +256,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::PositionNoisePerMetre,
         row(
-            Some("noise.position_mm_per_m"),
+            "noise.position_mm_per_m",
             "--position-noise",
             Some("position_mm_per_m"),
             Some("position_noise b_mm_per_m"),
@@ -238,7 +270,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::OrientationNoise,
         row(
-            Some("noise.orientation_rad"),
+            "noise.orientation_rad",
             "--orientation-noise",
             Some("orientation_deg"),
             Some("orientation_noise_rad"),
@@ -252,7 +284,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Robust,
         row(
-            Some("robust.loss"),
+            "robust.loss",
             "--robust",
             Some("robust"),
             None,
@@ -266,7 +298,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::RobustScale,
         row(
-            Some("robust.scale_k"),
+            "robust.scale_k",
             "--robust-scale",
             Some("robust_scale"),
             Some("robust scale"),
@@ -280,7 +312,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::AcceptPoorFit,
         row(
-            None,
+            "accept_poor_fit",
             "--accept-poor-fit",
             Some("accept_poor_fit"),
             None,
@@ -294,7 +326,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Method,
         row(
-            Some("method"),
+            "method",
             "--method",
             Some("method"),
             None,
@@ -304,7 +336,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Seed,
         row(
-            Some("seed"),
+            "seed",
             "--seed",
             Some("seed"),
             None,
@@ -314,7 +346,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Threads,
         row(
-            Some("threads"),
+            "threads",
             "--threads",
             Some("threads"),
             Some("threads"),
@@ -328,7 +360,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::CrossValidate,
         row(
-            Some("cross_validate"),
+            "cross_validate",
             "--cross-validate",
             Some("cross_validate"),
             Some("cross_validate"),
@@ -342,7 +374,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Prior,
         row(
-            Some("prior"),
+            "prior",
             "--prior",
             Some("prior"),
             Some("prior"),
@@ -352,7 +384,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Fix,
         row(
-            Some("fix"),
+            "fix",
             "--fix",
             Some("fix"),
             Some("fix"),
@@ -362,7 +394,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Lengths,
         row(
-            None,
+            "lengths",
             "--lengths",
             None,
             None,
@@ -376,7 +408,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::AngleUnitRad,
         row(
-            None,
+            "angle_unit",
             "--angle-unit",
             Some("angle_unit"),
             None,
@@ -386,7 +418,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Compliance,
         row(
-            Some("compliance"),
+            "compliance",
             "--compliance",
             Some("compliance"),
             Some("compliance"),
@@ -400,7 +432,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Harmonics,
         row(
-            Some("harmonics"),
+            "harmonics",
             "--harmonics",
             Some("harmonics"),
             Some("harmonics"),
@@ -414,7 +446,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Backlash,
         row(
-            Some("backlash"),
+            "backlash",
             "--backlash",
             Some("backlash"),
             Some("backlash"),
@@ -428,7 +460,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Thermal,
         row(
-            Some("thermal"),
+            "thermal",
             "--thermal",
             Some("thermal"),
             Some("thermal"),
@@ -442,7 +474,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Drift,
         row(
-            Some("drift"),
+            "drift",
             "--drift",
             Some("drift"),
             Some("drift"),
@@ -452,7 +484,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::SphereDiameter,
         row(
-            Some("sphere_diameter_mm"),
+            "sphere_diameter_mm",
             "--sphere-diameter",
             None,
             None,
@@ -466,7 +498,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::SphereUncertainty,
         row(
-            Some("sphere_uncertainty"),
+            "sphere_uncertainty",
             "--sphere-uncertainty",
             None,
             None,
@@ -480,7 +512,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Mpe,
         row(
-            Some("mpe"),
+            "mpe",
             "--mpe",
             None,
             None,
@@ -494,7 +526,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::Tool,
         row(
-            Some("tool"),
+            "tool",
             "--tool",
             None,
             None,
@@ -508,7 +540,7 @@ const TABLE: [(Setting, Names); 42] = [
     (
         Setting::GlobalStarts,
         row(
-            Some("global.max_starts"),
+            "global.max_starts",
             "--global-starts",
             Some("global_starts"),
             Some("global_starts"),
@@ -566,11 +598,22 @@ const TABLE: [(Setting, Names); 42] = [
         Setting::SwitchEpsilon,
         cli_only("switch.epsilon", "--switch-epsilon"),
     ),
+    (Setting::LmFtol, library_only("lm.ftol")),
+    (Setting::LmXtol, library_only("lm.xtol")),
+    (Setting::LmGtol, library_only("lm.gtol")),
+    (Setting::GlobalGridCells, library_only("global.grid_cells")),
+    (
+        Setting::GlobalNoiseFloorK,
+        library_only("global.noise_floor_k"),
+    ),
+    (Setting::CtePerK, library_only("cte_per_k")),
+    (Setting::Placements, library_only("placements")),
+    (Setting::BallDiameter, library_only("ball_diameter_mm")),
 ];
 
 impl Setting {
     /// Every setting.
-    pub const ALL: [Setting; 42] = [
+    pub const ALL: [Setting; 50] = [
         Setting::EncoderNoise,
         Setting::ProbeNoise,
         Setting::LengthUncertainty,
@@ -613,6 +656,14 @@ impl Setting {
         Setting::AnnealMaxEvaluations,
         Setting::SwitchWindow,
         Setting::SwitchEpsilon,
+        Setting::LmFtol,
+        Setting::LmXtol,
+        Setting::LmGtol,
+        Setting::GlobalGridCells,
+        Setting::GlobalNoiseFloorK,
+        Setting::CtePerK,
+        Setting::Placements,
+        Setting::BallDiameter,
     ];
 
     /// Its row of [`TABLE`].
@@ -640,21 +691,19 @@ impl Setting {
     pub fn argument(self, spelling: Spelling) -> Option<&'static str> {
         let n = self.names();
         match spelling {
-            Spelling::Cli => Some(n.flag),
+            Spelling::Cli => n.flag,
             Spelling::Python => n.python,
             Spelling::C => n.c,
         }
     }
 
-    /// The library's path of the setting (`noise.encoder_rad`,
-    /// `global.max_starts`), where a settings struct holds it.
-    pub fn path(self) -> Option<&'static str> {
+    /// The library's name of the setting: its path in the settings
+    /// struct that holds it (`noise.encoder_rad`, `global.max_starts`,
+    /// `accept_poor_fit`), or the input's that no struct holds (`lengths`,
+    /// `angle_unit`). A refused option is named by it
+    /// ([`crate::error::OptionError`]'s text).
+    pub fn path(self) -> &'static str {
         self.names().path
-    }
-
-    /// The setting at `path` ([`Setting::path`]).
-    pub fn at_path(path: &str) -> Option<Setting> {
-        Setting::ALL.into_iter().find(|s| s.path() == Some(path))
     }
 }
 
@@ -666,10 +715,8 @@ mod tests {
     fn each_path_names_one_setting_and_no_python_or_c_name_is_a_flag() {
         let mut paths = std::collections::BTreeSet::new();
         for s in Setting::ALL {
-            if let Some(p) = s.path() {
-                assert_eq!(Setting::at_path(p), Some(s));
-                paths.insert(p);
-            }
+            // A refusal is named by its path: two settings must not share one.
+            assert!(paths.insert(s.path()), "{s:?}: {} taken", s.path());
             for spelling in [Spelling::Python, Spelling::C] {
                 assert!(!s.name(spelling).contains("--"), "{s:?}");
                 assert!(!s.argument(spelling).unwrap_or("").contains("--"), "{s:?}");
@@ -677,9 +724,39 @@ mod tests {
             let cli = s.name(Spelling::Cli);
             assert!(cli.starts_with("--") || cli.starts_with('('), "{s:?}");
         }
-        assert!(paths.len() >= 35, "{}", paths.len());
+        assert_eq!(paths.len(), Setting::ALL.len());
         let distinct: std::collections::BTreeSet<String> =
             Setting::ALL.iter().map(|s| format!("{s:?}")).collect();
         assert_eq!(distinct.len(), Setting::ALL.len());
+        let rows: std::collections::BTreeSet<String> =
+            TABLE.iter().map(|(s, _)| format!("{s:?}")).collect();
+        assert_eq!(rows.len(), TABLE.len(), "a setting with two rows");
+    }
+
+    /// A setting no front end's argument sets is refused by its path in
+    /// every front end (none has its own word for it), and the library's
+    /// text names it so.
+    #[test]
+    fn a_setting_of_the_librarys_only_is_named_by_its_path() {
+        let library_only: Vec<Setting> = (Setting::ALL.into_iter())
+            .filter(|s| s.argument(Spelling::Cli).is_none())
+            .collect();
+        assert_eq!(library_only.len(), 8, "{library_only:?}");
+        for s in library_only {
+            for spelling in [Spelling::Python, Spelling::C] {
+                assert_eq!(s.argument(spelling), None, "{s:?}");
+            }
+            let e = crate::error::OptionError::new(s, 1, "why");
+            assert_eq!(e.to_string(), format!("{} = 1: why", s.path()));
+        }
+        let e = crate::error::OptionError::new(Setting::LmFtol, -1, "must be ≥ 0");
+        assert_eq!(e.field(), "lm.ftol");
+        assert_eq!(e.to_string(), "lm.ftol = -1: must be ≥ 0");
+        // A setting a front end sets keeps its argument there.
+        assert_eq!(
+            Setting::GlobalStarts.argument(Spelling::Cli),
+            Some("--global-starts")
+        );
+        assert_eq!(Setting::GlobalConfirmations.argument(Spelling::C), None);
     }
 }

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{OptionError, quoted, short};
 use crate::params::{DhParams, ParamId, ParamKind};
+use crate::setting::Setting;
 
 /// The kinds' names as targets (not a `match`, so that a new kind
 /// elsewhere does not break this file).
@@ -182,7 +183,7 @@ pub(crate) fn not_in_arm(target: Target, name: &str, params: &DhParams) -> Optio
 /// assert!((s[18].unwrap() - 0.1f64.to_radians()).abs() < 1e-18); // theta1
 /// assert_eq!(Tolerances::parse("none", 6).unwrap(), None);
 /// let e = Tolerances::parse("theta5=0.05mm", 6).unwrap_err();
-/// assert_eq!(e.field, "prior");
+/// assert_eq!(e.field(), "prior");
 /// assert!(e.reason.contains("theta5 is an angle"), "{e}");
 /// ```
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -260,7 +261,7 @@ impl Tolerances {
         if s.trim() == "none" {
             return Ok(None);
         }
-        let refuse = |why: String| OptionError::new("prior", s, why);
+        let refuse = |why: String| OptionError::new(Setting::Prior, s, why);
         let mut t = Tolerances::new();
         for item in s.split(',').map(str::trim).filter(|i| !i.is_empty()) {
             let (name, value) = item.split_once('=').ok_or_else(|| {
@@ -349,7 +350,7 @@ impl Tolerances {
         self.check(n)?;
         for (name, _) in &self.entries {
             if let Some(why) = Target::parse(name, n).and_then(|t| not_in_arm(t, name, params)) {
-                return Err(OptionError::new("prior", name, why));
+                return Err(OptionError::new(Setting::Prior, name, why));
             }
         }
         Ok(())
@@ -360,17 +361,21 @@ impl Tolerances {
     pub fn check(&self, n: usize) -> Result<(), OptionError> {
         for (name, s) in &self.entries {
             if Target::parse(name, n).is_none() {
-                return Err(OptionError::new("prior", name, unknown_target(name, n)));
+                return Err(OptionError::new(
+                    Setting::Prior,
+                    name,
+                    unknown_target(name, n),
+                ));
             }
             if !(s.is_finite() && *s > 0.0) {
                 return Err(OptionError::new(
-                    "prior",
+                    Setting::Prior,
                     format!("{name}={s}"),
                     "a tolerance must be a finite number > 0",
                 ));
             }
             if let Some(why) = out_of_range(*s) {
-                return Err(OptionError::new("prior", format!("{name}={s}"), why));
+                return Err(OptionError::new(Setting::Prior, format!("{name}={s}"), why));
             }
         }
         Ok(())

@@ -127,7 +127,7 @@ fn a_solver_of_another_crate_calibrates_through_the_session() {
     // It cannot be asked for by name: the library has no such solver.
     let named = problem.run(&settings.with_method(Method::External));
     match named {
-        Err(CalibrationError::Option(e)) => assert_eq!(e.field, "method"),
+        Err(CalibrationError::Option(e)) => assert_eq!(e.field(), "method"),
         other => panic!("an external method ran by name: {:?}", other.map(|_| ())),
     }
 }

@@ -356,7 +356,7 @@ fn a_tolerance_of_the_other_models_slot_is_refused() {
         o.prior = Tolerances::parse(spec, 6).unwrap();
         match Problem::new(arm.clone(), data.clone(), o.clone()) {
             Err(CalibrationError::Option(e)) => {
-                assert_eq!(e.field, "prior");
+                assert_eq!(e.field(), "prior");
                 assert!(e.reason.contains(needle), "{e}");
             }
             other => panic!("{spec} accepted: {:?}", other.map(|_| ())),

@@ -271,7 +271,7 @@ fn bad_tolerances_are_refused_where_they_are_written() {
         ("theta5=1e13rad", "above 1e12"),
     ] {
         let e = Tolerances::parse(spec, 6).unwrap_err();
-        assert_eq!(e.field, "prior");
+        assert_eq!(e.field(), "prior");
         assert!(e.reason.contains(needle), "{spec}: {e}");
     }
     // A later entry overrides; the command line overrides the file.
@@ -404,7 +404,7 @@ proptest::proptest! {
                 proptest::prop_assert_eq!(t.sigmas(joints).len(), 4 * joints + 3);
             }
             Err(e) => {
-                proptest::prop_assert_eq!(e.field, "prior");
+                proptest::prop_assert_eq!(e.field(), "prior");
                 proptest::prop_assert!(!e.reason.is_empty());
             }
         }

@@ -39,7 +39,7 @@ fn field_of<T>(result: Result<T, CalibrationError>) -> &'static str {
     match result {
         Err(CalibrationError::Option(e)) => {
             assert!(!e.to_string().contains("--"), "names a flag: {e}");
-            e.field
+            e.field()
         }
         Err(e) => panic!("refused for another reason: {e}"),
         Ok(_) => panic!("accepted"),

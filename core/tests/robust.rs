@@ -253,7 +253,7 @@ fn a_bad_tuning_constant_is_refused_by_its_field() {
             ..options(None)
         };
         match Problem::new(nominal(), c.data.clone(), o) {
-            Err(CalibrationError::Option(e)) => assert_eq!(e.field, "robust.scale_k"),
+            Err(CalibrationError::Option(e)) => assert_eq!(e.field(), "robust.scale_k"),
             other => panic!("k = {k} accepted: {:?}", other.map(|_| ())),
         }
     }

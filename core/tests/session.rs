@@ -29,7 +29,7 @@ fn field_of<T>(result: Result<T, CalibrationError>) -> &'static str {
                 !e.to_string().contains("--"),
                 "a library error names a flag: {e}"
             );
-            e.field
+            e.field()
         }
         Err(e) => panic!("refused for another reason: {e}"),
         Ok(_) => panic!("accepted"),
@@ -138,7 +138,7 @@ fn every_invalid_option_is_refused_by_its_field() {
     let problem = Problem::new(nominal(), small_data(), ModelOptions::default()).unwrap();
     for k in [0, 1, 6] {
         let e = problem.clone().with_cross_validation(k).unwrap_err();
-        assert_eq!(e.field, "cross_validate", "{k}");
+        assert_eq!(e.field(), "cross_validate", "{k}");
     }
     assert!(problem.with_cross_validation(2).is_ok());
     // Data read for another arm.

@@ -180,7 +180,7 @@ fn nothing_free_and_overstated_noise_are_refused() {
         .run(&SolverSettings::default())
         .unwrap_err();
     assert!(
-        matches!(e, CalibrationError::Option(ref o) if o.field == "fix"),
+        matches!(e, CalibrationError::Option(ref o) if o.field() == "fix"),
         "{e}"
     );
     let loud = ModelOptions {

@@ -196,9 +196,8 @@ impl From<aacmm_core::residuals::TermError> for Error {
 /// does. Settings the bindings do not expose keep the library's path.
 impl From<OptionError> for Error {
     fn from(e: OptionError) -> Error {
-        let setting = e.setting();
-        let message = match setting.and_then(|s| s.argument(Spelling::Python)) {
-            Some(arg) if setting == Some(Setting::EncoderNoise) => format!("{arg}: {}", e.reason),
+        let message = match e.setting.argument(Spelling::Python) {
+            Some(arg) if e.setting == Setting::EncoderNoise => format!("{arg}: {}", e.reason),
             Some(arg) => format!("{arg} = {}: {}", e.value, e.reason),
             None => e.to_string(),
         };

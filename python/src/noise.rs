@@ -5,6 +5,7 @@
 use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::residuals::Noise as CoreNoise;
 use aacmm_core::session::user_noise;
+use aacmm_core::setting::Setting;
 use pyo3::prelude::*;
 
 use crate::error::Result;
@@ -38,7 +39,7 @@ impl Noise {
         // Judged here in the unit given: the library's check would show
         // the value in rad under a name in degrees.
         if let Some(d) = orientation_deg.filter(|d| !(d.is_finite() && *d > 0.0)) {
-            let field = "noise.orientation_rad";
+            let field = Setting::OrientationNoise;
             let e = aacmm_core::error::OptionError::new(field, d, "must be a finite number > 0");
             return Err(e.into());
         }

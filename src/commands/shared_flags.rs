@@ -246,11 +246,10 @@ pub fn flag_error(e: impl Into<CalibrationError>) -> anyhow::Error {
 }
 
 fn option_error(o: &OptionError) -> anyhow::Error {
-    let setting = o.setting();
-    match setting.and_then(|s| s.argument(Spelling::Cli)) {
+    match o.setting.argument(Spelling::Cli) {
         // The library holds the encoder noise in radians; the flag is in
         // degrees.
-        Some(flag) if setting == Some(Setting::EncoderNoise) => match o.value.parse::<f64>() {
+        Some(flag) if o.setting == Setting::EncoderNoise => match o.value.parse::<f64>() {
             Ok(rad) if rad.is_finite() => {
                 // Rounded back to what was typed where that is ordinary;
                 // `1e300`, not 301 digits, otherwise.

@@ -1070,7 +1070,7 @@ fn the_bare_calibrate_fits_or_refuses_each_model() {
     });
     match aacmm_core::calibrate(&nominal.params, &data, &compliance, &settings) {
         Err(aacmm_core::calibrate::CalibrationError::Option(e)) => {
-            assert_eq!(e.field, "compliance");
+            assert_eq!(e.field(), "compliance");
             assert!(e.reason.contains("mass_kg"), "{}", e.reason);
         }
         other => panic!("a compliance without masses: {other:?}"),

@@ -641,7 +641,7 @@ fn cross_validation_folds_positions_by_pose() {
     let e = Problem::new(nominal, data, model())
         .unwrap()
         .with_cross_validation(3);
-    assert_eq!(e.unwrap_err().field, "cross_validate");
+    assert_eq!(e.unwrap_err().field(), "cross_validate");
 }
 
 /// The true arm's mean 3-D error on its own campaign (the noise's share).
@@ -668,7 +668,7 @@ fn annealing_is_refused_where_it_cannot_use_the_data() {
         };
         match problem.run(&settings) {
             Err(aacmm_core::CalibrationError::Option(e)) => {
-                assert_eq!(e.field, "method");
+                assert_eq!(e.field(), "method");
                 assert!(e.reason.contains("use lm or global"), "{e}");
             }
             other => panic!("{method:?} accepted: {:?}", other.map(|r| r.verdict)),

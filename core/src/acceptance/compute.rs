@@ -10,6 +10,7 @@ use super::{
 use crate::error::{InputError, OptionError, quoted};
 use crate::io::ReferenceLength;
 use crate::metrics::Evaluation;
+use crate::setting::Setting;
 
 /// The acceptance tests of `points` (with the reference lengths `lengths`
 /// of their file, and the cones' evaluation `cones` for the SPAT) under
@@ -91,12 +92,16 @@ fn check_settings(s: &Settings) -> Result<(), OptionError> {
     crate::residuals::spheres::check_sphere_diameter(s.sphere_diameter)?;
     if !(s.ball_diameter.is_finite() && s.ball_diameter >= 0.0) {
         let why = "the probe ball's diameter is a number of mm ≥ 0";
-        return Err(OptionError::new("ball_diameter_mm", s.ball_diameter, why));
+        return Err(OptionError::new(
+            Setting::BallDiameter,
+            s.ball_diameter,
+            why,
+        ));
     }
     if !(s.sphere_uncertainty.is_finite() && s.sphere_uncertainty >= 0.0) {
         let why = "the sphere's standard uncertainty is a number of mm ≥ 0";
         return Err(OptionError::new(
-            "sphere_uncertainty",
+            Setting::SphereUncertainty,
             s.sphere_uncertainty,
             why,
         ));

@@ -16,6 +16,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::OptionError;
+use crate::setting::Setting;
 
 /// The tests an MPE can be stated for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -216,7 +217,7 @@ fn number(token: &str) -> Result<f64, OptionError> {
 }
 
 fn bad(token: &str, why: impl Into<String>) -> OptionError {
-    OptionError::new("mpe", format!("`{token}`"), why)
+    OptionError::new(Setting::Mpe, format!("`{token}`"), why)
 }
 
 #[cfg(test)]
@@ -251,7 +252,7 @@ mod tests {
             ("P_Size=0.008,", "``"),
         ] {
             let e = parse_mpe(spec).unwrap_err();
-            assert_eq!(e.field, "mpe");
+            assert_eq!(e.field(), "mpe");
             assert!(e.to_string().contains(token), "{spec}: {e}");
         }
     }

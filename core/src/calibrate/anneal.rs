@@ -25,6 +25,7 @@ use crate::dataset::DataSet;
 use crate::error::{OptionError, check_nonnegative};
 use crate::kernel::ArmKernel;
 use crate::params::{DhParams, ParamId, ParamKind};
+use crate::setting::Setting;
 
 /// Settings of the annealer; a builder. Defaults (documented in
 /// docs/calibration.md): `T0 = 1 mm`, `α = 0.9`, `L = 100`,
@@ -89,36 +90,36 @@ impl AnnealOptions {
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
         for (field, v) in [
-            ("anneal.t0", self.t0),
-            ("anneal.t_min", self.t_min),
-            ("anneal.step_mm", self.step_mm),
-            ("anneal.twist_step_deg", self.twist_step_deg),
-            ("anneal.zero_step_deg", self.zero_step_deg),
+            (Setting::AnnealT0, self.t0),
+            (Setting::AnnealTMin, self.t_min),
+            (Setting::AnnealStepMm, self.step_mm),
+            (Setting::AnnealTwistStep, self.twist_step_deg),
+            (Setting::AnnealZeroStep, self.zero_step_deg),
         ] {
             check_nonnegative(field, v, false)?;
         }
         if !(self.cooling > 0.0 && self.cooling < 1.0) {
             return Err(OptionError::new(
-                "anneal.cooling",
+                Setting::AnnealCooling,
                 self.cooling,
                 "must lie strictly between 0 and 1",
             ));
         }
         if self.chain == 0 {
             return Err(OptionError::new(
-                "anneal.chain",
+                Setting::AnnealChain,
                 0,
                 "at least one move per temperature",
             ));
         }
         if self.max_evaluations == 0 {
             return Err(OptionError::new(
-                "anneal.max_evaluations",
+                Setting::AnnealMaxEvaluations,
                 0,
                 "at least one evaluation",
             ));
         }
-        check_nonnegative("anneal.target", self.target, true)
+        check_nonnegative(Setting::AnnealTarget, self.target, true)
     }
 }
 
@@ -154,12 +155,12 @@ impl SwitchRule {
     pub fn check(&self) -> Result<(), OptionError> {
         if self.window == 0 {
             return Err(OptionError::new(
-                "switch.window",
+                Setting::SwitchWindow,
                 0,
                 "at least one temperature",
             ));
         }
-        check_nonnegative("switch.epsilon", self.epsilon, true)
+        check_nonnegative(Setting::SwitchEpsilon, self.epsilon, true)
     }
 
     /// Whether the fitness history `p` (one per temperature, newest last)

@@ -44,6 +44,7 @@ use super::{CalibrationError, Phase};
 use crate::error::OptionError;
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId, ParamKind};
+use crate::setting::Setting;
 
 /// Settings of the global method; a builder. Defaults: a torus grid of at
 /// most 1296 cells (6 angles per circle for 4 circles), 8 grid
@@ -99,10 +100,10 @@ impl GlobalOptions {
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
         for (field, v) in [
-            ("global.grid_cells", self.grid_cells),
-            ("global.max_starts", self.max_starts),
-            ("global.confirmations", self.confirmations),
-            ("global.start_iterations", self.start_iterations),
+            (Setting::GlobalGridCells, self.grid_cells),
+            (Setting::GlobalStarts, self.max_starts),
+            (Setting::GlobalConfirmations, self.confirmations),
+            (Setting::GlobalStartIterations, self.start_iterations),
         ] {
             if v == 0 {
                 return Err(OptionError::new(field, 0, "at least 1"));
@@ -110,7 +111,7 @@ impl GlobalOptions {
         }
         if self.confirmations > self.max_starts + self.candidates + 1 {
             return Err(OptionError::new(
-                "global.confirmations",
+                Setting::GlobalConfirmations,
                 self.confirmations,
                 format!(
                     "more than the {} starts there can be ({} random, {} grid, the start arm)",
@@ -120,7 +121,7 @@ impl GlobalOptions {
                 ),
             ));
         }
-        crate::error::check_nonnegative("global.noise_floor_k", self.noise_floor_k, false)
+        crate::error::check_nonnegative(Setting::GlobalNoiseFloorK, self.noise_floor_k, false)
     }
 }
 

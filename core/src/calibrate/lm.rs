@@ -12,6 +12,7 @@ use crate::error::{OptionError, check_nonnegative};
 use crate::objective::Objective;
 use crate::params::DhParams;
 use crate::residuals::Normal;
+use crate::setting::Setting;
 
 /// Why the solver stopped, as MINPACK's `info` or Ceres' termination type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -116,16 +117,16 @@ impl LmOptions {
     /// ```
     /// use aacmm_core::calibrate::LmOptions;
     /// assert!(LmOptions::default().check().is_ok());
-    /// assert_eq!(LmOptions::default().max_iterations(0).check().unwrap_err().field, "lm.max_iterations");
+    /// assert_eq!(LmOptions::default().max_iterations(0).check().unwrap_err().field(), "lm.max_iterations");
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
         if self.max_iterations == 0 {
-            return Err(OptionError::new("lm.max_iterations", 0, "at least 1"));
+            return Err(OptionError::new(Setting::LmIterations, 0, "at least 1"));
         }
         for (field, v) in [
-            ("lm.ftol", self.ftol),
-            ("lm.xtol", self.xtol),
-            ("lm.gtol", self.gtol),
+            (Setting::LmFtol, self.ftol),
+            (Setting::LmXtol, self.xtol),
+            (Setting::LmGtol, self.gtol),
         ] {
             check_nonnegative(field, v, true)?;
         }

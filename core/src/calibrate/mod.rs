@@ -53,6 +53,7 @@ pub mod validate;
 use serde::{Deserialize, Serialize};
 
 use crate::error::OptionError;
+use crate::setting::Setting;
 pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub(crate) use lm::LmResult;
@@ -1009,7 +1010,7 @@ pub fn calibrate_with(
         complete_prior(&mut objective, identification.as_ref(), holds, start, &x0);
     if free.is_empty() {
         return Err(OptionError::new(
-            "fix",
+            Setting::Fix,
             model.fix.describe_for(start),
             "every parameter is fixed: nothing is left to calibrate",
         )
@@ -1086,7 +1087,7 @@ fn check_method_for(method: Method, data: &DataSet) -> Result<(), OptionError> {
         _ => return Ok(()),
     };
     Err(OptionError::new(
-        "method",
+        Setting::Method,
         method.name(),
         format!("{why}: use lm or global (the default)"),
     ))
@@ -1108,7 +1109,7 @@ fn check_terms_for(method: Method, objective: &Objective<'_>) -> Result<(), Opti
     match ignored {
         None => Ok(()),
         Some(t) => Err(OptionError::new(
-            "method",
+            Setting::Method,
             method.name(),
             format!(
                 "anneals the paper's touch energy alone, which the term `{}` is no part of: \

@@ -15,6 +15,7 @@ use super::{AnnealOptions, GlobalOptions, LmOptions, Method, SwitchRule};
 use crate::error::{MAX_SEED, OptionError, seed_bound};
 use crate::params::{ParamId, param_count};
 use crate::residuals::Noise;
+use crate::setting::Setting;
 
 /// Which parameters stay at their start values.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -35,7 +36,7 @@ impl FixSpec {
     /// assert_eq!(FixSpec::parse("auto", 6).unwrap(), FixSpec::Auto);
     /// assert_eq!(FixSpec::parse("theta1, d1,beta6", 6).unwrap(), FixSpec::Columns(vec![18, 6, 17]));
     /// let e = FixSpec::parse("theta9", 6).unwrap_err();
-    /// assert_eq!(e.field, "fix");
+    /// assert_eq!(e.field(), "fix");
     /// assert!(e.reason.contains("unknown parameter `theta9`"));
     /// let e = FixSpec::parse("auto,theta1", 6).unwrap_err();
     /// assert!(e.reason.contains("`auto` stands alone"), "{e}");
@@ -80,7 +81,7 @@ impl FixSpec {
                 }
                 _ => format!("joint {j} is a D-H joint: its d-slot is `d{j}`, not `{t}`"),
             };
-            return Err(OptionError::new("fix", s, reason));
+            return Err(OptionError::new(Setting::Fix, s, reason));
         }
         fix
     }
@@ -99,7 +100,7 @@ impl FixSpec {
             .map(|t| {
                 if t == "auto" {
                     return Err(OptionError::new(
-                        "fix",
+                        Setting::Fix,
                         s,
                         "`auto` stands alone (the recommended set); otherwise list the \
                          parameters to fix",
@@ -107,7 +108,7 @@ impl FixSpec {
                 }
                 column(t).ok_or_else(|| {
                     OptionError::new(
-                        "fix",
+                        Setting::Fix,
                         s,
                         format!(
                             "unknown parameter {}; parameters are {} … {}",
@@ -127,7 +128,7 @@ impl FixSpec {
                     .find(|(i, c)| columns[..*i].contains(c))
                 {
                     Some((_, &c)) => Err(OptionError::new(
-                        "fix",
+                        Setting::Fix,
                         s,
                         format!(
                             "`{}` is listed twice",
@@ -228,7 +229,7 @@ impl ModelOptions {
     /// use aacmm_core::calibrate::{FixSpec, ModelOptions};
     /// assert!(ModelOptions::default().check(6).is_ok());
     /// let o = ModelOptions { fix: FixSpec::Columns(vec![3, 27]), ..Default::default() };
-    /// assert_eq!(o.check(6).unwrap_err().field, "fix");
+    /// assert_eq!(o.check(6).unwrap_err().field(), "fix");
     /// ```
     pub fn check(&self, joints: usize) -> Result<(), OptionError> {
         self.noise.check()?;
@@ -263,7 +264,7 @@ fn check_fixed_columns(columns: &[usize], joints: usize) -> Result<(), OptionErr
     let count = param_count(joints);
     if let Some(&c) = columns.iter().find(|&&c| c >= count) {
         return Err(OptionError::new(
-            "fix",
+            Setting::Fix,
             c,
             format!(
                 "column {c}: a {joints}-joint arm has parameters 0 to {}",
@@ -276,7 +277,7 @@ fn check_fixed_columns(columns: &[usize], joints: usize) -> Result<(), OptionErr
     if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
         let name = ParamId::from_column(joints, w[0]).map_or(String::new(), |p| format!(" ({p})"));
         return Err(OptionError::new(
-            "fix",
+            Setting::Fix,
             w[0],
             format!("column {}{name} is listed twice", w[0]),
         ));
@@ -352,9 +353,9 @@ pub const MAX_THREADS: usize = 1024;
 /// ```
 pub fn check_threads(threads: usize) -> Result<(), OptionError> {
     match threads {
-        0 => Err(OptionError::new("threads", 0, "at least 1")),
+        0 => Err(OptionError::new(Setting::Threads, 0, "at least 1")),
         n if n > MAX_THREADS => Err(OptionError::new(
-            "threads",
+            Setting::Threads,
             n,
             format!("at most {MAX_THREADS} worker threads (more than the cores give no speed)"),
         )),
@@ -370,16 +371,20 @@ impl SolverSettings {
     /// use aacmm_core::calibrate::SolverSettings;
     /// assert!(SolverSettings::default().check().is_ok());
     /// let s = SolverSettings { threads: 0, ..Default::default() };
-    /// assert_eq!(s.check().unwrap_err().field, "threads");
+    /// assert_eq!(s.check().unwrap_err().field(), "threads");
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
         check_threads(self.threads)?;
         if self.seed > MAX_SEED {
-            return Err(OptionError::new("seed", self.seed, seed_bound(self.seed)));
+            return Err(OptionError::new(
+                Setting::Seed,
+                self.seed,
+                seed_bound(self.seed),
+            ));
         }
         if self.method == Method::External {
             return Err(OptionError::new(
-                "method",
+                Setting::Method,
                 self.method.name(),
                 "the library has no solver of that name: pass yours to session::run",
             ));

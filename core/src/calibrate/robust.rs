@@ -88,6 +88,7 @@ use super::lm::{LmOptions, LmResult, levenberg_marquardt};
 use super::{CalibrationError, OptionError, Phase};
 use crate::objective::Objective;
 use crate::residuals::{Normal, ParameterLeverage};
+use crate::setting::Setting;
 
 /// IRLS stops when no touch's weight moved by more than this.
 pub(crate) const WEIGHT_TOLERANCE: f64 = 1e-3;
@@ -234,10 +235,10 @@ impl Robust {
     /// ```
     /// use aacmm_core::calibrate::robust::{Loss, Robust};
     /// let e = Robust { loss: Loss::Huber, scale_k: -1.0 }.check().unwrap_err();
-    /// assert_eq!(e.field, "robust.scale_k");
+    /// assert_eq!(e.field(), "robust.scale_k");
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
-        crate::error::check_nonnegative("robust.scale_k", self.scale_k, false)
+        crate::error::check_nonnegative(Setting::RobustScale, self.scale_k, false)
     }
 }
 

@@ -64,6 +64,7 @@ use serde::{Deserialize, Serialize};
 pub use effects::{Conditions, Effects, angles_for, readings_for};
 
 use crate::error::OptionError;
+use crate::setting::Setting;
 
 /// ISO 1's reference temperature, °C: the calibrated lengths are at it.
 pub const REFERENCE_TEMPERATURE_C: f64 = 20.0;
@@ -331,7 +332,7 @@ impl Beyond {
     ///
     /// A joint that is not a positive integer, or one listed twice.
     pub fn parse_compliance(text: &str) -> Result<Vec<usize>, OptionError> {
-        parse_joints(text, "compliance")
+        parse_joints(text, Setting::Compliance)
     }
 
     /// Parses `2,3` (1-based joints) into backlashes.
@@ -339,14 +340,14 @@ impl Beyond {
     /// ```
     /// use aacmm_core::corrections::Beyond;
     /// assert_eq!(Beyond::parse_backlash("3, 2").unwrap(), vec![1, 2]);
-    /// assert_eq!(Beyond::parse_backlash("2,2").unwrap_err().field, "backlash");
+    /// assert_eq!(Beyond::parse_backlash("2,2").unwrap_err().field(), "backlash");
     /// ```
     ///
     /// # Errors
     ///
     /// A joint that is not a positive integer, or one listed twice.
     pub fn parse_backlash(text: &str) -> Result<Vec<usize>, OptionError> {
-        parse_joints(text, "backlash")
+        parse_joints(text, Setting::Backlash)
     }
 
     /// Parses `2:1,5:1-2` (joint:orders, orders a number or a range) into
@@ -355,7 +356,7 @@ impl Beyond {
     /// ```
     /// use aacmm_core::corrections::Beyond;
     /// assert_eq!(Beyond::parse_harmonics("2:1,5:1-2").unwrap(), vec![(1, 1), (4, 1), (4, 2)]);
-    /// assert_eq!(Beyond::parse_harmonics("2").unwrap_err().field, "harmonics");
+    /// assert_eq!(Beyond::parse_harmonics("2").unwrap_err().field(), "harmonics");
     /// ```
     ///
     /// # Errors
@@ -367,22 +368,26 @@ impl Beyond {
         for part in text.split(',').map(str::trim) {
             let Some((joint, orders)) = part.split_once(':') else {
                 return Err(OptionError::new(
-                    "harmonics",
+                    Setting::Harmonics,
                     part,
                     "expected JOINT:ORDERS, e.g. 2:1 or 5:1-2",
                 ));
             };
-            let j = parse_joint(joint.trim(), "harmonics")?;
+            let j = parse_joint(joint.trim(), Setting::Harmonics)?;
             let (lo, hi) = match orders.split_once('-') {
                 Some((a, b)) => (parse_order(a, part)?, parse_order(b, part)?),
                 None => (parse_order(orders, part)?, parse_order(orders, part)?),
             };
             if lo > hi {
-                return Err(OptionError::new("harmonics", part, "empty order range"));
+                return Err(OptionError::new(
+                    Setting::Harmonics,
+                    part,
+                    "empty order range",
+                ));
             }
             for k in lo..=hi {
                 if out.contains(&(j, k)) {
-                    return Err(OptionError::new("harmonics", part, "listed twice"));
+                    return Err(OptionError::new(Setting::Harmonics, part, "listed twice"));
                 }
                 out.push((j, k));
             }
@@ -406,11 +411,11 @@ impl Beyond {
             .find(|&&j| j >= joints);
         if let Some(&j) = last {
             let field = if self.compliance.contains(&j) {
-                "compliance"
+                Setting::Compliance
             } else if self.harmonics.iter().any(|h| h.0 == j) {
-                "harmonics"
+                Setting::Harmonics
             } else {
-                "backlash"
+                Setting::Backlash
             };
             return Err(OptionError::new(
                 field,
@@ -440,9 +445,12 @@ impl Beyond {
         for (file, c) in sets {
             if (self.thermal || stated_cte) && c.temperature_c.is_none() {
                 let (field, value) = if self.thermal {
-                    ("thermal", "on".to_string())
+                    (Setting::Thermal, "on".to_string())
                 } else {
-                    ("cte_per_k", format!("{}", physics.cte_per_k.unwrap_or(0.0)))
+                    (
+                        Setting::CtePerK,
+                        format!("{}", physics.cte_per_k.unwrap_or(0.0)),
+                    )
                 };
                 return Err(OptionError::new(
                     field,
@@ -455,7 +463,7 @@ impl Beyond {
             }
             if self.drift && c.time_s.is_none() {
                 return Err(OptionError::new(
-                    "drift",
+                    Setting::Drift,
                     "on",
                     format!(
                         "a drift needs the time of every pose: {file} has no `time` column (s)"
@@ -466,14 +474,14 @@ impl Beyond {
         if !physics.has_masses() {
             let stated = physics.backlash.iter().any(|b| b.is_some_and(|v| v != 0.0));
             let refused = [
-                ("compliance", joints_text(&self.compliance), ""),
+                (Setting::Compliance, joints_text(&self.compliance), ""),
                 (
-                    "backlash",
+                    Setting::Backlash,
                     joints_text(&self.backlash),
                     ", and their torque decides which flank a backlash takes",
                 ),
                 (
-                    "backlash",
+                    Setting::Backlash,
                     if stated {
                         "stated".into()
                     } else {
@@ -505,7 +513,7 @@ fn joints_text(joints: &[usize]) -> String {
 }
 
 /// Comma-separated 1-based joints, each once, into sorted 0-based ones.
-fn parse_joints(text: &str, field: &'static str) -> Result<Vec<usize>, OptionError> {
+fn parse_joints(text: &str, field: Setting) -> Result<Vec<usize>, OptionError> {
     let mut out = Vec::new();
     for part in text.split(',').map(str::trim) {
         let j = parse_joint(part, field)?;
@@ -518,7 +526,7 @@ fn parse_joints(text: &str, field: &'static str) -> Result<Vec<usize>, OptionErr
     Ok(out)
 }
 
-fn parse_joint(text: &str, field: &'static str) -> Result<usize, OptionError> {
+fn parse_joint(text: &str, field: Setting) -> Result<usize, OptionError> {
     match text.parse::<usize>() {
         Ok(j) if j >= 1 => Ok(j - 1),
         _ => Err(OptionError::new(
@@ -533,7 +541,7 @@ fn parse_order(text: &str, part: &str) -> Result<u32, OptionError> {
     match text.trim().parse::<u32>() {
         Ok(k) if (1..=MAX_HARMONIC_ORDER).contains(&k) => Ok(k),
         _ => Err(OptionError::new(
-            "harmonics",
+            Setting::Harmonics,
             part,
             format!("an order is a whole number from 1 to {MAX_HARMONIC_ORDER}"),
         )),

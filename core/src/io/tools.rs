@@ -25,6 +25,7 @@
 use std::collections::HashMap;
 
 use crate::error::{InputError, quoted};
+use crate::setting::Setting;
 
 /// The name of the default tool, the arm file's `[probe]`.
 pub const DEFAULT_TOOL: &str = "probe";
@@ -68,7 +69,7 @@ pub fn block_name(name: &str) -> String {
 /// assert_eq!((long.params.probe, long.ball_diameter_mm), ([0.0, 0.0, 200.0], Some(3.0)));
 /// assert_eq!(arm_with_tool(&arm, "probe").unwrap(), arm);
 /// let e = arm_with_tool(&arm, "short").unwrap_err();
-/// assert_eq!(e.field, "tool");
+/// assert_eq!(e.field(), "tool");
 /// assert!(e.reason.contains("`probe`, `long`"), "{e}");
 /// ```
 ///
@@ -88,7 +89,7 @@ pub fn arm_with_tool(
             .chain(arm.tools.iter().map(|t| quoted(&t.name)))
             .collect();
         return Err(crate::error::OptionError::new(
-            "tool",
+            Setting::Tool,
             name,
             format!(
                 "the arm has no such tool (its tools: {}; list one in the arm file as a [[tool]] \

@@ -77,6 +77,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{OptionError, check_nonnegative};
 use crate::kernel::{ArmKernel, KernelError};
 use crate::params::DhParams;
+use crate::setting::Setting;
 
 pub use beyond::{BLOCK_NAME, CorrectionBlock};
 pub use blocks::{
@@ -158,41 +159,41 @@ impl Noise {
     /// use aacmm_core::residuals::Noise;
     /// assert!(Noise::default().check().is_ok());
     /// let zero = Noise { encoder_rad: Some(0.0), probe_mm: Some(0.0), ..Noise::default() };
-    /// assert_eq!(zero.check().unwrap_err().field, "noise.probe_mm");
+    /// assert_eq!(zero.check().unwrap_err().field(), "noise.probe_mm");
     /// let negative = Noise { probe_mm: Some(-0.01), ..Noise::default() };
-    /// assert_eq!(negative.check().unwrap_err().field, "noise.probe_mm");
+    /// assert_eq!(negative.check().unwrap_err().field(), "noise.probe_mm");
     /// ```
     pub fn check(&self) -> Result<(), OptionError> {
         for (field, v) in [
-            ("noise.encoder_rad", self.encoder_rad),
-            ("noise.probe_mm", self.probe_mm),
+            (Setting::EncoderNoise, self.encoder_rad),
+            (Setting::ProbeNoise, self.probe_mm),
         ] {
             if let Some(v) = v {
                 check_nonnegative(field, v, true)?;
             }
         }
-        check_nonnegative("noise.length_default_mm", self.length_default_mm, true)?;
+        check_nonnegative(Setting::LengthUncertainty, self.length_default_mm, true)?;
         if let Some(a) = self.position_mm {
-            check_nonnegative("noise.position_mm", a, false)?;
+            check_nonnegative(Setting::PositionNoise, a, false)?;
         }
         if let Some(b) = self.position_mm_per_m {
-            check_nonnegative("noise.position_mm_per_m", b, true)?;
+            check_nonnegative(Setting::PositionNoisePerMetre, b, true)?;
             if self.position_mm.is_none() {
                 return Err(OptionError::new(
-                    "noise.position_mm_per_m",
+                    Setting::PositionNoisePerMetre,
                     b,
                     "a distance-dependent position σ needs its constant part too (A+B/m)",
                 ));
             }
         }
         if let Some(w) = self.length_weight {
-            check_nonnegative("noise.length_weight", w, false)?;
+            check_nonnegative(Setting::LengthWeight, w, false)?;
         }
         if let Some(o) = self.orientation_rad {
-            check_nonnegative("noise.orientation_rad", o, false)?;
+            check_nonnegative(Setting::OrientationNoise, o, false)?;
             if o > MAX_ENCODER_SIGMA_RAD {
                 return Err(OptionError::new(
-                    "noise.orientation_rad",
+                    Setting::OrientationNoise,
                     crate::error::short(o),
                     format!(
                         "σ = {}° is more than {}°: beyond half a turn an orientation's σ means \
@@ -207,7 +208,7 @@ impl Noise {
             && v > MAX_ENCODER_SIGMA_RAD
         {
             return Err(OptionError::new(
-                "noise.encoder_rad",
+                Setting::EncoderNoise,
                 crate::error::short(v),
                 format!(
                     "σ = {}° is more than {}°: beyond half a turn an angle's σ means nothing \
@@ -221,9 +222,9 @@ impl Noise {
         if self.stated() && zero(self.encoder_rad) && zero(self.probe_mm) {
             // Named by the setting given (the probe's when both were).
             let field = if self.probe_mm.is_some() {
-                "noise.probe_mm"
+                Setting::ProbeNoise
             } else {
-                "noise.encoder_rad"
+                Setting::EncoderNoise
             };
             return Err(OptionError::new(
                 field,

@@ -44,6 +44,7 @@ use crate::residuals::{
     At, Block, BlockId, Layout, LayoutError, Noise, Normal, Origin, Role, Scalar, Sees, Shared,
     Standardised, Term, TermError, Unit, Vector,
 };
+use crate::setting::Setting;
 
 /// The term's name in reports.
 pub const TERM: &str = "spheres";
@@ -62,7 +63,7 @@ pub const MAX_SPHERE_DIAMETER_MM: f64 = 1000.0;
 /// use aacmm_core::residuals::spheres::check_sphere_diameter;
 /// assert!(check_sphere_diameter(25.4).is_ok());
 /// let e = check_sphere_diameter(0.0254).unwrap_err();
-/// assert_eq!(e.field, "sphere_diameter_mm");
+/// assert_eq!(e.field(), "sphere_diameter_mm");
 /// assert!(e.to_string().contains("metres"), "{e}");
 /// ```
 ///
@@ -84,7 +85,7 @@ pub fn check_sphere_diameter(d: f64) -> Result<(), crate::error::OptionError> {
         return Ok(());
     };
     Err(crate::error::OptionError::new(
-        "sphere_diameter_mm",
+        Setting::SphereDiameter,
         crate::error::short(d),
         why,
     ))

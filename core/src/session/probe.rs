@@ -35,6 +35,7 @@ use crate::io::tools::DEFAULT_TOOL;
 use crate::params::param_count;
 use crate::residuals::Noise;
 use crate::residuals::spheres::{SphereSize, SphereTerm};
+use crate::setting::Setting;
 
 /// The default tolerance on the tip's move from its stated offset, mm.
 pub const DEFAULT_TOLERANCE_MM: f64 = 0.05;
@@ -341,7 +342,7 @@ fn rows_of_probe(
             None => rows,
         }
     };
-    let refuse = |why: String| OptionError::new("tool", tool, format!("{file}: {why}"));
+    let refuse = |why: String| OptionError::new(Setting::Tool, tool, format!("{file}: {why}"));
     match rows.spheres().len() {
         0 => Err(refuse("no point of this file was probed with it".to_string()).into()),
         1 => Ok(rows),

@@ -84,7 +84,7 @@ impl Problem {
     /// let mut model = ModelOptions::default();
     /// model.noise.probe_mm = Some(-1.0);
     /// match Problem::new(nominal, data, model) {
-    ///     Err(CalibrationError::Option(e)) => assert_eq!(e.field, "noise.probe_mm"),
+    ///     Err(CalibrationError::Option(e)) => assert_eq!(e.field(), "noise.probe_mm"),
     ///     _ => panic!("negative noise accepted"),
     /// }
     /// ```

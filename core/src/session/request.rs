@@ -23,7 +23,7 @@
 //! assert!(report.is_usable());
 //! // A refusal names the library's setting.
 //! let refused = read()?.fix("theta9").build().unwrap_err();
-//! assert!(matches!(refused, aacmm_core::CalibrationError::Option(ref o) if o.field == "fix"));
+//! assert!(matches!(refused, aacmm_core::CalibrationError::Option(ref o) if o.field() == "fix"));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -45,6 +45,7 @@ use crate::io::{
 use crate::kernel::ArmKernel;
 use crate::residuals::Noise;
 use crate::residuals::spheres::{SphereSize, SphereTerm, check_sphere_diameter, check_spheres};
+use crate::setting::Setting;
 use crate::tolerances::Tolerances;
 
 /// A calibration (or identification) as asked for: the inputs, their
@@ -649,7 +650,7 @@ impl Request {
             (None, None) => None,
             (None, Some(k)) => {
                 return Err(OptionError::new(
-                    "robust.scale_k",
+                    Setting::RobustScale,
                     k,
                     "needs a robust loss (huber or cauchy)",
                 ));
@@ -658,7 +659,7 @@ impl Request {
                 let loss = Loss::parse(name).ok_or_else(|| {
                     let names: Vec<&str> = Loss::ALL.iter().map(|l| l.name()).collect();
                     OptionError::new(
-                        "robust.loss",
+                        Setting::Robust,
                         format!("{name:?}"),
                         format!("one of {}", names.join(", ")),
                     )
@@ -711,7 +712,7 @@ impl Request {
         let method = Method::parse(&self.method).ok_or_else(|| {
             let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
             OptionError::new(
-                "method",
+                Setting::Method,
                 format!("{:?}", self.method),
                 format!("one of {}", names.join(", ")),
             )
@@ -884,7 +885,7 @@ fn sphere_size(
     check_sphere_diameter(d)?;
     if input.rows.is_empty() {
         return Err(OptionError::new(
-            "sphere_diameter_mm",
+            Setting::SphereDiameter,
             d,
             "sizes the spheres of a sphere-surface file, and none was given",
         )
@@ -892,7 +893,7 @@ fn sphere_size(
     }
     if ball_diameter_mm.is_none() {
         return Err(OptionError::new(
-            "sphere_diameter_mm",
+            Setting::SphereDiameter,
             d,
             "a stated sphere diameter needs the probe ball's: state `ball_diameter_mm` in the arm \
              file's [probe] table (the probe centre is a ball radius off the surface)",

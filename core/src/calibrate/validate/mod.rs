@@ -15,6 +15,7 @@ use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::metrics::evaluate_without_pairs;
 use crate::params::DhParams;
+use crate::setting::Setting;
 
 /// The figures a calibration is judged by, mm.
 ///
@@ -576,7 +577,7 @@ pub(crate) fn split_terms(
     k: usize,
     seed: u64,
 ) -> Result<TermFolds, OptionError> {
-    let refused = |why: String| OptionError::new("cross_validate", k, why);
+    let refused = |why: String| OptionError::new(Setting::CrossValidate, k, why);
     let x = layout.start();
     (terms.iter())
         .map(|t| {
@@ -802,7 +803,7 @@ pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
     let groups = length_groups(data).len();
     if k < 2 || (!data.is_empty() && k > groups) {
         return Err(OptionError::new(
-            "cross_validate",
+            Setting::CrossValidate,
             k,
             format!(
                 "needs 2 to {groups} folds ({groups} groups of points joined by reference \
@@ -816,7 +817,7 @@ pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
             let n = (0..rows.len()).filter(|&i| rows.frame(i) == f).count();
             if n - n.div_ceil(k) < crate::io::positions::MIN_FRAME_POSITIONS {
                 return Err(OptionError::new(
-                    "cross_validate",
+                    Setting::CrossValidate,
                     k,
                     format!(
                         "frame {} has {n} positions: {k} folds leave its registration \

@@ -21,6 +21,7 @@ use crate::calibrate::{CalibrationError, ModelOptions, SolverSettings, calibrate
 use crate::dataset::DataSet;
 use crate::error::OptionError;
 use crate::params::DhParams;
+use crate::setting::Setting;
 
 /// The placement of a point label: up to the last `-`.
 ///
@@ -137,7 +138,7 @@ pub fn leave_one_placement_out(
     }
     if placements.len() < 2 {
         return Err(OptionError::new(
-            "placements",
+            Setting::Placements,
             placements.len(),
             "leave one placement out needs two placements or more (a point's placement is its \
              label up to the last `-`)",

@@ -1,0 +1,345 @@
+//! The covariance of the fitted parameters and what is read from it: the
+//! geometry's block, the correlations, the predicted position uncertainty.
+
+use nalgebra::DMatrix;
+
+use crate::calibrate::CalibrationError;
+use crate::dataset::DataSet;
+use crate::kernel::ArmKernel;
+use crate::params::DhParams;
+use crate::residuals::Normal;
+use crate::stats::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
+
+use super::{Fit, Setup};
+
+/// The free columns' covariance and the variance factor σ̂.
+pub(super) struct Covariance {
+    pub(super) cov: DMatrix<f64>,
+    pub(super) sigma0: f64,
+    pub(super) dof: usize,
+}
+
+/// `σ̂² N⁻¹`, or with a prior `(N_data/σ̂² + P)⁻¹`; robust: the sandwich
+/// `σ̂² κ K² (J̃ᵀ B J̃)⁻¹` ([`crate::calibrate::robust`]), σ̂ the robust scale — in the
+/// same forms, with `J̃ᵀ B J̃` for `N` and `σ̂² κ K²` for `σ̂²`.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
+pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
+    let dof = setup.counts.dof();
+    let (sigma0, variance, normal) = match (&fit.robust, &fit.curvature) {
+        (Some((robust, _)), Some(curvature)) => (
+            robust.scale,
+            robust.scale * robust.scale * robust.sandwich,
+            curvature,
+        ),
+        _ => {
+            let s = (fit.normal.cost() / dof as f64).sqrt();
+            (s, s * s, &fit.normal)
+        }
+    };
+    let p = setup.free.len();
+    let n = DMatrix::from_row_slice(p, p, &normal.jtj);
+    let invert = |m: DMatrix<f64>| match m.cholesky() {
+        Some(ch) => crate::calibrate::inverse::cholesky_inverse(&ch),
+        None => DMatrix::from_element(p, p, f64::INFINITY),
+    };
+    let cov = match fit.objective.prior() {
+        // The stated tolerances are absolute: σ̂ rescales the data's
+        // information, not the prior's — (N_data/σ̂² + P)⁻¹. Scaling the
+        // whole σ̂²·N⁻¹ made a parameter the prior holds (data share 5 %)
+        // 30 % more certain than its tolerance under a robust scale of 0.68.
+        Some(term) if variance.is_finite() && variance > 0.0 => {
+            let mut m = n / variance;
+            for (a, &c) in setup.free.iter().enumerate() {
+                if let Some(s) = term.sigma(c) {
+                    m[(a, a)] += (1.0 - 1.0 / variance) / (s * s);
+                }
+            }
+            invert(m)
+        }
+        _ => invert(n) * variance,
+    };
+    Covariance { cov, sigma0, dof }
+}
+
+/// The free columns below `arm` — the geometry's and the corrections'
+/// beyond it — and their covariance: what moves a probe position.
+pub(super) fn geometry_covariance(
+    free: &[usize],
+    geometry: usize,
+    cov: &DMatrix<f64>,
+) -> (Vec<usize>, DMatrix<f64>) {
+    let at: Vec<usize> = (0..free.len()).filter(|&a| free[a] < geometry).collect();
+    let cols = at.iter().map(|&a| free[a]).collect();
+    let sub = DMatrix::from_fn(at.len(), at.len(), |a, b| cov[(at[a], at[b])]);
+    (cols, sub)
+}
+
+/// The correlation matrix of `cov` (0 where it is not a number).
+pub(super) fn correlations(cov: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    let p = cov.nrows();
+    (0..p)
+        .map(|a| {
+            (0..p)
+                .map(|b| {
+                    let r = cov[(a, b)] / (cov[(a, a)] * cov[(b, b)]).sqrt();
+                    if r.is_finite() { r } else { 0.0 }
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The held directions as reported, each with the σ the data alone give it
+/// at the fit: `σ̂ / sqrt(wᵀ N w − K)`, `w` its scaled unit vector in the
+/// columns' units, `N` the normal matrix at the solution (which carries the
+/// hold's own `K` along `w`, and no tolerance: held columns have none).
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
+pub(super) fn held_directions(
+    holds: Option<&crate::residuals::HoldTerm>,
+    normal: &Normal,
+    sigma0: f64,
+) -> Vec<crate::residuals::HeldDirection> {
+    let Some(term) = holds else {
+        return Vec::new();
+    };
+    let p = normal.free.len();
+    term.holds()
+        .iter()
+        .map(|h| {
+            let w: Vec<(usize, f64)> = (0..h.cols.len())
+                .filter_map(|i| {
+                    let a = normal.free.iter().position(|&f| f == h.cols[i])?;
+                    Some((a, h.v[i] * h.d[i]))
+                })
+                .collect();
+            let nww: f64 = (w.iter())
+                .flat_map(|&(a, wa)| w.iter().map(move |&(b, wb)| (a, b, wa * wb)))
+                .map(|(a, b, ww)| normal.jtj[a * p + b] * ww)
+                .sum();
+            let info = nww - term.stiffness();
+            crate::residuals::HeldDirection {
+                relation: h.text.clone(),
+                terms: h.terms.clone(),
+                ratio: h.ratio,
+                sigma_mm: (info > 0.0)
+                    .then(|| sigma0 / info.sqrt())
+                    .filter(|s| s.is_finite()),
+            }
+        })
+        .collect()
+}
+
+/// The predicted position uncertainty of `params` (the 95 % radius of each
+/// pose's 3-D error) over the poses of `data` (an even sample of at most [`crate::calibrate::checks::UNCERTAINTY_POSES`]),
+/// from the free parameters' covariance `cov`.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
+pub(super) fn position_uncertainty(
+    params: &DhParams,
+    data: &DataSet,
+    effects: Option<&crate::corrections::Effects>,
+    free: &[usize],
+    cov: &DMatrix<f64>,
+    touch_sigma: f64,
+) -> Result<Option<crate::calibrate::checks::PositionUncertainty>, CalibrationError> {
+    if data.is_empty() || cov.iter().any(|v| !v.is_finite()) {
+        return Ok(None);
+    }
+    let kernel = ArmKernel::new(params)?;
+    let step = data
+        .len()
+        .div_ceil(crate::calibrate::checks::UNCERTAINTY_POSES)
+        .max(1);
+    let q = free.len();
+    let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
+    let poses: Vec<usize> = (0..data.len()).step_by(step).collect();
+    let mut sums = UncertaintySums {
+        free,
+        c,
+        jf: vec![[[0.0; LANES]; 3]; q],
+        sum: 0.0,
+        max: 0.0,
+    };
+    // The Jacobians from the poses' stored sin/cos through the lanes kernel
+    // (the same bits as `position_jacobian` of the readings, without their
+    // trigonometry): every pose in one call when every pose is sampled.
+    // The sums are inlined into the kernel's loop, so they are compiled with
+    // its target features (AVX2 where the CPU has it; no FMA, so the same
+    // bits as without).
+    let last = |l: usize, i: usize| (l + 1 == LANES || i + step >= data.len()).then_some(l + 1);
+    if let Some(e) = effects {
+        // With corrections beyond geometry: the poses as the chain saw
+        // them, each Jacobian extended by the corrections' columns.
+        let mut ext = Vec::new();
+        if step == 1 {
+            kernel.for_each_jacobian(&e.poses, 0..data.len(), |i, pos, jac| {
+                e.extend(i, pos, jac, &mut ext);
+                sums.add(i % LANES, &ext, last(i % LANES, i));
+            })?;
+        } else {
+            for (k, &i) in poses.iter().enumerate() {
+                let l = k % LANES;
+                kernel.for_each_jacobian(&e.poses, i..i + 1, |i, pos, jac| {
+                    e.extend(i, pos, jac, &mut ext);
+                    sums.add(l, &ext, last(l, i));
+                })?;
+            }
+        }
+    } else if step == 1 {
+        kernel.for_each_jacobian(
+            data.poses(),
+            0..data.len(),
+            #[inline(always)]
+            |i, _, jac| sums.add(i % LANES, jac, last(i % LANES, i)),
+        )?;
+    } else {
+        for (k, &i) in poses.iter().enumerate() {
+            let l = k % LANES;
+            kernel.for_each_jacobian(
+                data.poses(),
+                i..i + 1,
+                #[inline(always)]
+                |_, _, jac| sums.add(l, jac, last(l, i)),
+            )?;
+        }
+    }
+    let (sum, max) = (sums.sum, sums.max);
+    let n = poses.len();
+    Ok(Some(crate::calibrate::checks::PositionUncertainty {
+        coverage: COVERAGE,
+        poses: n,
+        rms_mm: (sum / n as f64).sqrt(),
+        max_mm: max,
+        touch_mm: K_ISOTROPIC * touch_sigma,
+    }))
+}
+
+/// Poses whose uncertainties [`position_uncertainty`] sums side by side:
+/// independent chains, so they run together (each in its own order: the
+/// same bits as one at a time).
+const LANES: usize = 8;
+
+/// [`position_uncertainty`]'s running sums: the covariance row-major, the
+/// free columns of [`LANES`] poses' position Jacobians side by side.
+struct UncertaintySums<'a> {
+    free: &'a [usize],
+    c: Vec<f64>,
+    jf: Vec<[[f64; LANES]; 3]>,
+    sum: f64,
+    max: f64,
+}
+
+impl UncertaintySums<'_> {
+    /// Pose `l` of the group from its Jacobian; with the group's last, its
+    /// `n` poses' 95 % radii ([`radius`]) into the sums.
+    #[inline(always)]
+    fn add(&mut self, l: usize, jac: &[[f64; 3]], n: Option<usize>) {
+        let (jf, q) = (&mut self.jf, self.free.len());
+        for (a, &ca) in self.free.iter().enumerate() {
+            for k in 0..3 {
+                jf[a][k][l] = jac[ca][k];
+            }
+        }
+        let Some(n) = n else { return };
+        // The position's covariance J C Jᵀ, its six distinct entries (xx,
+        // yy, zz, xy, xz, yz) per lane: its eigenvalues, not only its trace,
+        // give the radius that covers 95 % of a 3-D error.
+        const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+        let mut m = [[0.0; LANES]; 6];
+        for a in 0..q {
+            let (ja, row) = (&jf[a], &self.c[a * q..(a + 1) * q]);
+            for (jb, &cab) in jf.iter().zip(row) {
+                for (e, &(r, s)) in PAIRS.iter().enumerate() {
+                    for l in 0..LANES {
+                        m[e][l] += cab * ja[r][l] * jb[s][l];
+                    }
+                }
+            }
+        }
+        for l in 0..n {
+            let [xx, yy, zz, xy, xz, yz] = m.map(|e| e[l]);
+            let u = radius(eigenvalues([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]));
+            self.sum += u * u;
+            self.max = self.max.max(u);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`position_uncertainty`] one pose at a time, as before the poses went
+    /// four at a time: the reference the lanes must match bit for bit.
+    fn one_at_a_time(
+        params: &DhParams,
+        data: &DataSet,
+        free: &[usize],
+        cov: &DMatrix<f64>,
+    ) -> (usize, f64, f64) {
+        let kernel = ArmKernel::new(params).unwrap();
+        let step = data
+            .len()
+            .div_ceil(crate::calibrate::checks::UNCERTAINTY_POSES)
+            .max(1);
+        let mut jac = vec![[0.0; 3]; params.param_count()];
+        let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
+        for i in (0..data.len()).step_by(step) {
+            kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
+            let mut m = [[0.0; 3]; 3];
+            for (a, &ca) in free.iter().enumerate() {
+                for (b, &cb) in free.iter().enumerate() {
+                    for (r, mr) in m.iter_mut().enumerate() {
+                        for (s, v) in mr.iter_mut().enumerate() {
+                            *v += cov[(a, b)] * jac[ca][r] * jac[cb][s];
+                        }
+                    }
+                }
+            }
+            // Symmetric as the lanes' (which sum the upper triangle only).
+            (m[1][0], m[2][0], m[2][1]) = (m[0][1], m[0][2], m[1][2]);
+            let u = radius(eigenvalues(m));
+            sum += u * u;
+            max = max.max(u);
+            n += 1;
+        }
+        (n, (sum / n as f64).sqrt(), max)
+    }
+
+    /// Pose counts that leave 1, 2, 3 and 4 poses in the last group, and one
+    /// sampled (more than UNCERTAINTY_POSES touches): the same bits.
+    #[test]
+    fn position_uncertainty_in_lanes_is_the_same_bits() {
+        let params = DhParams::paper_nominal();
+        let free: Vec<usize> = (2..params.param_count() - 2).collect();
+        let q = free.len();
+        // A symmetric positive-definite covariance with correlations.
+        let cov = DMatrix::from_fn(q, q, |a, b| {
+            let d = a.abs_diff(b) as f64;
+            if a == b {
+                1e-4 * (1.0 + a as f64)
+            } else {
+                1e-5 / (1.0 + d)
+            }
+        });
+        for touches in [3usize, 5, 6, 7, 9, 4003] {
+            // At least 3 touches a point.
+            let points = (touches / 3).min(3);
+            let labels: Vec<String> = (0..touches).map(|i| format!("p{}", i % points)).collect();
+            let readings: Vec<Vec<f64>> = (0..touches)
+                .map(|i| {
+                    (0..6)
+                        .map(|j| ((i * 7 + j * 13) % 31) as f64 * 0.2 - 3.0)
+                        .collect()
+                })
+                .collect();
+            let data = DataSet::from_touches(&labels, &readings, &[]).unwrap();
+            let u = position_uncertainty(&params, &data, None, &free, &cov, 0.01)
+                .unwrap()
+                .unwrap();
+            let (n, rms, max) = one_at_a_time(&params, &data, &free, &cov);
+            assert_eq!(u.poses, n, "{touches} touches");
+            assert_eq!(u.rms_mm.to_bits(), rms.to_bits(), "{touches} touches");
+            assert_eq!(u.max_mm.to_bits(), max.to_bits(), "{touches} touches");
+        }
+    }
+}
