@@ -943,10 +943,10 @@ impl Request {
         let Some(tool) = self.arm.tools.iter().find(|t| t.name == name).cloned() else {
             return Ok(self);
         };
-        let refused = |e: InputError| OptionError::new("tool", &name, e.to_string());
+        let refused = |e: InputError| OptionError::new(Setting::Tool, &name, e.to_string());
         if !self.data.is_empty() {
             return Err(OptionError::new(
-                "tool",
+                Setting::Tool,
                 &name,
                 format!(
                     "{}: touches give their tool in a `tool` column of the poses file, which \
@@ -961,7 +961,7 @@ impl Request {
         if let Some((mut held, warnings)) = self.held_out.take() {
             if !held.data.is_empty() {
                 return Err(OptionError::new(
-                    "tool",
+                    Setting::Tool,
                     &name,
                     format!(
                         "{}: held-out touches give their tool in a `tool` column of the poses \
