@@ -83,6 +83,7 @@ pub fn verify(
         placements,
         l_dia,
         spat,
+        prediction: None,
     })
 }
 
