@@ -79,6 +79,9 @@ pub enum Setting {
     Mpe,
     /// The probe (a `[[tool]]`) a command computes with.
     Tool,
+    /// The draws of an acceptance test's prediction (`aacmm verify
+    /// --calibration`).
+    PredictionDraws,
     /// The global search's random starts.
     GlobalStarts,
     /// The global search's confirmations.
@@ -150,7 +153,7 @@ const fn cli_only(path: &'static str, flag: &'static str) -> Names {
 }
 
 /// Every front end's name of each setting, one row per setting.
-const TABLE: [(Setting, Names); 42] = [
+const TABLE: [(Setting, Names); 43] = [
     (
         Setting::EncoderNoise,
         row(
@@ -492,6 +495,20 @@ const TABLE: [(Setting, Names); 42] = [
         ),
     ),
     (
+        Setting::PredictionDraws,
+        row(
+            Some("prediction.draws"),
+            "--draws",
+            None,
+            None,
+            [
+                "--draws N",
+                "(the command line's verify only)",
+                "(the command line's verify only)",
+            ],
+        ),
+    ),
+    (
         Setting::Tool,
         row(
             Some("tool"),
@@ -570,7 +587,7 @@ const TABLE: [(Setting, Names); 42] = [
 
 impl Setting {
     /// Every setting.
-    pub const ALL: [Setting; 42] = [
+    pub const ALL: [Setting; 43] = [
         Setting::EncoderNoise,
         Setting::ProbeNoise,
         Setting::LengthUncertainty,
@@ -598,6 +615,7 @@ impl Setting {
         Setting::SphereUncertainty,
         Setting::Mpe,
         Setting::Tool,
+        Setting::PredictionDraws,
         Setting::GlobalStarts,
         Setting::GlobalConfirmations,
         Setting::GlobalStartIterations,
