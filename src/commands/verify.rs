@@ -202,9 +202,14 @@ fn calibration(args: &Args, dir: &Path, arm: &Arm) -> Result<ForPrediction> {
         );
     }
     if !report.is_usable() {
-        let why = report.verdict.words(Spelling::Cli).reasons.join("; ");
+        let reasons = report.verdict.words(Spelling::Cli).reasons;
+        let why = if reasons.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", reasons.join("; "))
+        };
         bail!(
-            "{}: the calibration is not usable ({why}): it predicts nothing",
+            "{}: the calibration is not usable{why}: it predicts nothing",
             path.display()
         );
     }
