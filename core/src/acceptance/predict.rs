@@ -39,11 +39,13 @@
 //! spread, which is what the comparison shows the user.
 //!
 //! **Cost.** Per draw one kernel for `cal + δ`, one forward kinematics per
-//! point and one [`super::verify`] (a few sphere fits per placement): for
-//! 10 placements of 25 points and 20 lengths some 0.5 ms, 200 draws some
-//! 0.1 s on one core. Draws run in fixed chunks on up to `threads`
-//! threads; each draw has its own generator, seeded from the seed's stream
-//! in draw order, so the bytes do not depend on the thread count.
+//! point and one [`super::verify`] (a few sphere fits per placement): a
+//! draw costs about one verification. For 10 placements of 25 points and
+//! 20 ball-bar positions (`benches/acceptance.rs`) 200 draws took 209 ms
+//! on one thread (one verification 0.91 ms), on a loaded 2-core machine.
+//! Draws run in fixed chunks on up to `threads` threads; each draw has its
+//! own generator, seeded from the seed's stream in draw order, so the
+//! bytes do not depend on the thread count.
 //!
 //! `Σ` is factored by its symmetric eigen-decomposition, eigenvalues
 //! clamped to zero from below when they are negative by rounding only
@@ -599,9 +601,9 @@ mod tests {
     }
 
     /// `E_Uni`'s first-order variance: `dE = Σ_i h_iᵀ dp_i` through the two
-    /// free sphere fits (`dc = −[(JᵀJ)⁻¹Jᵀ]_c (n̂_iᵀ dp_i)`), `dp_i = −A_i δ
-    /// + J_q,i ε + n_i`: `uᵀΣu + σ_e² Σ|J_q,iᵀh_i|² + σ_p² Σ|h_i|²`, `u =
-    /// Σ A_iᵀ h_i`.
+    /// free sphere fits (`dc = −[(JᵀJ)⁻¹Jᵀ]_c (n̂_iᵀ dp_i)`), with
+    /// `dp_i = −A_i δ + J_q,i ε + n_i`, is
+    /// `uᵀΣu + σ_e² Σ|J_q,iᵀh_i|² + σ_p² Σ|h_i|²`, `u = Σ A_iᵀ h_i`.
     fn e_uni_variance(
         a: &Acceptance,
         poses: &PreparedPoses,
