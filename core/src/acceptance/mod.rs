@@ -39,6 +39,11 @@
 //! times the points' noise and the figure measures the fit, not the arm.
 //! [`LDiaRadius::Free`] fits it (as a reading of the standard that fits a
 //! full least-squares sphere to each set).
+//!
+//! **Prediction** ([`predict`]): each test's expected value and spread
+//! from a calibration — Monte Carlo through its covariance and the noise
+//! it stated, at the placements measured — and whether the measured value
+//! lies within two spreads of it.
 
 mod compute;
 mod enclosing;
@@ -55,7 +60,7 @@ pub use fit::{FitError, FitStop, MAX_ITERATIONS, SphereFit, fit_sphere_ls};
 pub use mpe::{Limit, Mpe, TestKind, parse_mpe};
 pub use predict::{
     Calibrated, DEFAULT_DRAWS, Draws, MAX_DRAWS, Measured, PSD_TOLERANCE, PredictError,
-    PredictionInfo, ReadingNoise, lengths_held, predict,
+    PredictionInfo, ReadingNoise, predict,
 };
 
 use crate::error::{InputError, OptionError};

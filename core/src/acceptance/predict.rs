@@ -384,7 +384,7 @@ const LENGTH_SWEEPS: usize = 1000;
 /// A length between two placements at one centre, or lengths that cannot
 /// all hold at once (no convergence in [`LENGTH_SWEEPS`] sweeps): by file
 /// and line of the length furthest from its value.
-pub fn lengths_held(
+pub(crate) fn lengths_held(
     centres: &mut [Vector3<f64>],
     names: &[String],
     lengths: &[ReferenceLength],
