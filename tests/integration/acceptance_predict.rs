@@ -12,72 +12,22 @@ use aacmm_core::acceptance::{
 };
 use aacmm_core::io::Arm;
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
-use aacmm_core::params::DhParams;
 use aacmm_core::prelude::*;
-use aacmm_core::residuals::spheres::{SphereSize, SphereTerm};
+use aacmm_core::residuals::spheres::SphereSize;
 use aacmm_core::simulate::{
-    AcceptanceCampaign, AcceptanceSettings, SphereSettings, simulate_spheres, true_arm,
-    with_acceptance,
+    AcceptanceCampaign, AcceptanceSettings, simulate_spheres, true_arm, with_acceptance,
 };
 use rand::SeedableRng;
 
+use crate::spheres::{BALL, DIAMETER, fit, nominal, sphere_settings};
 use crate::util::{aacmm, stderr, temp_dir};
 
-const DIAMETER: f64 = 25.4;
-const BALL: f64 = 6.0;
-const ENCODER_DEG: f64 = 0.002;
-const PROBE_MM: f64 = 0.005;
-
-fn noise() -> Noise {
-    Noise {
-        encoder_rad: Some(ENCODER_DEG.to_radians()),
-        probe_mm: Some(PROBE_MM),
-        ..Noise::default()
-    }
-}
-
-fn nominal() -> Arm {
-    Arm {
-        ball_diameter_mm: Some(BALL),
-        ..Arm::without_limits("paper", DhParams::paper_nominal())
-    }
-}
-
-fn sphere_settings(placements: usize, seed: u64) -> SphereSettings {
-    SphereSettings {
-        placements,
-        diameter_mm: DIAMETER,
-        ball_diameter_mm: BALL,
-        encoder_rad: ENCODER_DEG.to_radians(),
-        probe_mm: PROBE_MM,
-        seed,
-    }
-}
-
 /// The calibration of `truth` from `placements` sphere placements of
-/// `seed`, starting at the nominal arm.
+/// `seed` (the sphere tests' noise: 0.005° encoders, 0.01 mm probing),
+/// starting at the nominal arm.
 fn calibrate(truth: &Arm, placements: usize, seed: u64) -> CalibrationReport {
-    let rows = simulate_spheres(truth, &sphere_settings(placements, seed).for_campaign())
-        .unwrap()
-        .spheres;
-    let model = ModelOptions {
-        noise: noise(),
-        ..ModelOptions::default()
-    };
-    let start = nominal();
-    let mut p = Problem::new(start.clone(), DataSet::without_touches(6, 0), model).unwrap();
-    let term = SphereTerm::new(
-        rows,
-        "spheres.csv",
-        &start.params,
-        SphereSize::Known(DIAMETER),
-        start.ball_diameter_mm,
-        &noise(),
-        |b| p.add_boxed_block(b),
-    )
-    .unwrap();
-    let settings = SolverSettings::default().with_method(Method::Lm);
-    p.with_spheres(term).run(&settings).unwrap()
+    let c = simulate_spheres(truth, &sphere_settings(placements, seed).for_campaign()).unwrap();
+    fit(&nominal(), &c, SphereSize::Known(DIAMETER))
 }
 
 /// A true arm of `seed` with errors where sphere points see them: what a
