@@ -36,6 +36,8 @@ pub(crate) mod streams {
     pub(crate) const CHAIN: u64 = 12;
     /// The order in which cross-validation deals points on spheres.
     pub(crate) const SPHERE_FOLDS: u64 = 13;
+    /// The draws of an acceptance test's prediction from a calibration.
+    pub(crate) const PREDICTION: u64 = 14;
     /// The solvers: annealing moves, global starts.
     pub(crate) const SOLVER: u64 = 0x50_4c_56;
 }

@@ -79,6 +79,9 @@ pub enum Setting {
     Mpe,
     /// The probe (a `[[tool]]`) a command computes with.
     Tool,
+    /// The draws of an acceptance test's prediction (`aacmm verify
+    /// --calibration`).
+    PredictionDraws,
     /// The global search's random starts.
     GlobalStarts,
     /// The global search's confirmations.
@@ -182,7 +185,7 @@ const fn library_only(path: &'static str) -> Names {
 }
 
 /// Every front end's name of each setting, one row per setting.
-const TABLE: [(Setting, Names); 50] = [
+const TABLE: [(Setting, Names); 51] = [
     (
         Setting::EncoderNoise,
         row(
@@ -524,6 +527,20 @@ const TABLE: [(Setting, Names); 50] = [
         ),
     ),
     (
+        Setting::PredictionDraws,
+        row(
+            "prediction.draws",
+            "--draws",
+            None,
+            None,
+            [
+                "--draws N",
+                "(the command line's verify only)",
+                "(the command line's verify only)",
+            ],
+        ),
+    ),
+    (
         Setting::Tool,
         row(
             "tool",
@@ -613,7 +630,7 @@ const TABLE: [(Setting, Names); 50] = [
 
 impl Setting {
     /// Every setting.
-    pub const ALL: [Setting; 50] = [
+    pub const ALL: [Setting; 51] = [
         Setting::EncoderNoise,
         Setting::ProbeNoise,
         Setting::LengthUncertainty,
@@ -641,6 +658,7 @@ impl Setting {
         Setting::SphereUncertainty,
         Setting::Mpe,
         Setting::Tool,
+        Setting::PredictionDraws,
         Setting::GlobalStarts,
         Setting::GlobalConfirmations,
         Setting::GlobalStartIterations,

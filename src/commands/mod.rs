@@ -2,6 +2,7 @@
 //! warnings printed, never dropped, and probe positions that are numbers.
 
 pub mod calibrate;
+pub mod calibration;
 pub mod evaluate;
 pub mod export;
 pub mod identify;

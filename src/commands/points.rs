@@ -8,7 +8,7 @@ use aacmm_core::io::{Arm, Poses, source_name, write_points, write_points_u95, wr
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::plan::{InFrame, position_covariances};
 use aacmm_core::residuals::Frame;
-use aacmm_core::session::{CalibrationReport, REPORT_FILE};
+use aacmm_core::session::REPORT_FILE;
 use aacmm_core::stats::coverage::{eigenvalues, radius};
 use anyhow::{Context, Result, anyhow, bail};
 
@@ -151,21 +151,8 @@ fn radii(
     poses: &Poses,
     frame: Option<(&str, [f64; 6])>,
 ) -> Result<Vec<f64>> {
-    let path = dir.join(REPORT_FILE);
-    let text = std::fs::read_to_string(&path).with_context(|| {
-        format!(
-            "--uncertainty {}: cannot read {REPORT_FILE} (give the directory `aacmm calibrate \
-             --out` wrote)",
-            dir.display()
-        )
-    })?;
-    let mut report = CalibrationReport::from_json(&text)
-        .map_err(|e| anyhow!("{}: not a calibration report: {e}", path.display()))?;
-    let cal = &mut report.calibration;
-    same_arm(cal, arm, &path)?;
-    for (theirs, ours) in cal.params.joints.iter_mut().zip(&arm.params.joints) {
-        theirs.kind = ours.kind;
-    }
+    let (report, path) = super::calibration::read("--uncertainty", dir, arm)?;
+    let cal = &report.calibration;
     let unknown = || {
         anyhow!(
             "{}: a free parameter's σ is not finite, so the positions' uncertainty is unknown",
@@ -215,37 +202,6 @@ fn radii(
         }
     };
     Ok(seen.iter().map(|(_, s)| radius(eigenvalues(*s))).collect())
-}
-
-/// Refuses a calibration of another arm than the arm file's: another
-/// joint count, or a free parameter a tenth of its σ away (the arm file
-/// is that calibration's calibrated.toml, written to far finer decimals).
-fn same_arm(cal: &aacmm_core::Calibration, arm: &Arm, path: &Path) -> Result<()> {
-    let (theirs, ours) = (cal.params.joint_count(), arm.params.joint_count());
-    if theirs != ours {
-        bail!(
-            "--uncertainty: {} is of a {theirs}-joint arm, the arm file has {ours} joints",
-            path.display()
-        );
-    }
-    for e in cal.parameters.iter().filter(|e| e.fixed.is_none()) {
-        let mut d = arm.params.get(e.id) - e.calibrated;
-        if !e.id.kind.is_length() {
-            d = aacmm_core::simulate::wrap(d);
-        }
-        if let Some(sigma) = e.sigma
-            && d.abs() > 0.1 * sigma
-        {
-            bail!(
-                "--uncertainty: {} is not this arm file's calibration: its {} differs from the \
-                 arm file's by {:.3} σ (give the directory that wrote this calibrated.toml)",
-                path.display(),
-                e.id,
-                d / sigma
-            );
-        }
-    }
-    Ok(())
 }
 
 /// `write` into the file `out`, atomically, or to stdout.

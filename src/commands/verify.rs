@@ -3,21 +3,24 @@
 //! decided against stated MPEs (see `aacmm_core::acceptance` for every
 //! formula and uncertainty).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use aacmm_core::acceptance::{
-    Acceptance, AcceptanceError, LDiaRadius, Mpe, Settings, SpherePoints, parse_mpe, verify,
+    Acceptance, AcceptanceError, Calibrated, DEFAULT_DRAWS, Draws, LDiaRadius, Measured, Mpe,
+    PredictError, ReadingNoise, Settings, SpherePoints, parse_mpe, predict, verify,
 };
 use aacmm_core::dataset::DataSet;
-use aacmm_core::error::quoted;
+use aacmm_core::error::{quoted, short};
 use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{Arm, read_lengths, source_name};
 use aacmm_core::kernel::PreparedPoses;
 use aacmm_core::metrics::Evaluation;
 use aacmm_core::report::{ACCEPTANCE_FILES, acceptance_report};
+use aacmm_core::session::CalibrationReport;
+use aacmm_core::setting::Spelling;
 use anyhow::{Result, anyhow, bail};
 
-use crate::output::Stdout;
+use crate::output::{Stdout, note};
 use crate::paths::{check_output_dir, check_output_file};
 
 /// The acceptance tests of an arm: probing size and form, the articulated
@@ -82,6 +85,24 @@ pub struct Args {
     /// column names another probe is refused: verify one probe at a time.
     #[arg(long, value_name = "NAME", default_value = "probe")]
     tool: String,
+    /// The directory `aacmm calibrate --out` wrote for this arm (its
+    /// calibration.json): predict each test from it — its expected value
+    /// and spread (σ) by Monte Carlo through the calibration's covariance
+    /// and the noise it stated — printed beside the measured value, which
+    /// should lie within two spreads when the arm performs as its
+    /// calibration says. A calibration of another arm, one whose
+    /// covariance is unknown and one not usable are refused. The decisions
+    /// and the exit status do not depend on it.
+    #[arg(long, value_name = "DIR")]
+    calibration: Option<PathBuf>,
+    /// Draws of the prediction (2 to 100000; each verifies the placements
+    /// once).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_DRAWS, requires = "calibration")]
+    draws: usize,
+    /// Seed of the prediction's draws: the same seed gives the same bytes
+    /// on any number of cores.
+    #[arg(long, value_name = "N", default_value_t = 0, requires = "calibration")]
+    seed: u64,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -91,6 +112,8 @@ pub fn run(args: Args) -> Result<()> {
     ];
     inputs.extend(args.input.data.as_deref().map(|d| ("--data", d)));
     inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
+    let report_file = (args.calibration.as_ref()).map(|d| d.join(aacmm_core::session::REPORT_FILE));
+    inputs.extend(report_file.as_deref().map(|p| ("--calibration", p)));
     if let Some(json) = &args.json {
         check_output_file("--json", json, &inputs, args.force)?;
     }
@@ -102,6 +125,10 @@ pub fn run(args: Args) -> Result<()> {
         None => Mpe::default(),
     };
     let arm = args.input.read_arm()?;
+    let calibration = match &args.calibration {
+        Some(dir) => Some(calibration(&args, dir, &arm)?),
+        None => None,
+    };
     let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
         .map_err(super::shared_flags::flag_error)?;
     let Some(ball) = arm.ball_diameter_mm else {
@@ -122,7 +149,7 @@ pub fn run(args: Args) -> Result<()> {
         },
         mpe,
     };
-    let acceptance = acceptance(&args, &arm, &settings)?;
+    let acceptance = acceptance(&args, &arm, &settings, calibration.as_ref())?;
     // The JSON is written even if stdout fails (e.g. `| head -1`).
     let printed = (|| {
         let mut out = Stdout::new();
@@ -146,8 +173,67 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The tests computed from the files of `args`.
-fn acceptance(args: &Args, arm: &Arm, settings: &Settings) -> Result<Acceptance> {
+/// A calibration read for the prediction: its file, report and noise.
+struct ForPrediction {
+    path: PathBuf,
+    report: CalibrationReport,
+    noise: ReadingNoise,
+}
+
+/// Why the calibration in `path` has no covariance.
+fn unknown(path: &Path) -> anyhow::Error {
+    anyhow!(
+        "{}: the calibration's covariance is unknown (no free parameter, or one whose σ is not \
+         finite): nothing to predict from",
+        path.display()
+    )
+}
+
+/// The calibration in `dir` for `arm`, refused when it is another arm's,
+/// not usable, or of unknown covariance, or when another probe than the
+/// one it fitted is verified.
+fn calibration(args: &Args, dir: &Path, arm: &Arm) -> Result<ForPrediction> {
+    let (report, path) = super::calibration::read("--calibration", dir, arm)?;
+    if args.tool != aacmm_core::io::tools::DEFAULT_TOOL {
+        bail!(
+            "--calibration with --tool {}: the calibration's covariance is of the probe's offset \
+             (`probe`), not of this tool's; predict the probe it calibrated",
+            quoted(&args.tool)
+        );
+    }
+    if !report.is_usable() {
+        let reasons = report.verdict.words(Spelling::Cli).reasons;
+        let why = if reasons.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", reasons.join("; "))
+        };
+        bail!(
+            "{}: the calibration is not usable{why}: it predicts nothing",
+            path.display()
+        );
+    }
+    report
+        .calibration
+        .geometry_covariance()
+        .ok_or_else(|| unknown(&path))?;
+    let dof = &report.calibration.dof;
+    let noise = ReadingNoise::of_calibration(&report.noise, dof.touch_sigma_mm);
+    Ok(ForPrediction {
+        path,
+        report,
+        noise,
+    })
+}
+
+/// The tests computed from the files of `args`, predicted from
+/// `calibration` when given.
+fn acceptance(
+    args: &Args,
+    arm: &Arm,
+    settings: &Settings,
+    calibration: Option<&ForPrediction>,
+) -> Result<Acceptance> {
     let file = source_name(&args.spheres);
     let (rows, warnings) = read_spheres(&args.spheres, args.input.angle_unit, arm)?;
     super::report(&warnings)?;
@@ -191,10 +277,69 @@ fn acceptance(args: &Args, arm: &Arm, settings: &Settings) -> Result<Acceptance>
         centres: &centres,
     };
     let lengths = lengths.as_ref().map(|(l, f)| (l.as_slice(), f.as_str()));
-    verify(settings, points, lengths, cones.as_ref()).map_err(|e| match e {
-        AcceptanceError::Option(o) => super::shared_flags::flag_error(o),
-        other => anyhow!(other),
-    })
+    let mut acceptance =
+        verify(settings, points, lengths, cones.as_ref()).map_err(|e| match e {
+            AcceptanceError::Option(o) => super::shared_flags::flag_error(o),
+            other => anyhow!(other),
+        })?;
+    if let Some(c) = calibration {
+        let measured = Measured {
+            points,
+            poses: &prepared,
+            lengths,
+        };
+        predicted(args, &mut acceptance, settings, measured, arm, c)?;
+    }
+    Ok(acceptance)
+}
+
+/// `acceptance` with each test's prediction from `c`, and a note on what
+/// it was drawn from.
+fn predicted(
+    args: &Args,
+    acceptance: &mut Acceptance,
+    settings: &Settings,
+    measured: Measured<'_>,
+    arm: &Arm,
+    c: &ForPrediction,
+) -> Result<()> {
+    let (free, covariance) =
+        (c.report.calibration.geometry_covariance()).ok_or_else(|| unknown(&c.path))?;
+    let cal = Calibrated {
+        params: &arm.params,
+        free: &free,
+        covariance: &covariance,
+        noise: c.noise,
+    };
+    let draws = Draws {
+        count: args.draws,
+        seed: args.seed,
+        threads: aacmm_core::calibrate::available_threads(),
+    };
+    let source = c.path.display().to_string();
+    predict(acceptance, settings, measured, cal, draws, &source).map_err(|e| match e {
+        PredictError::Option(o) => super::shared_flags::flag_error(o),
+        other => anyhow!("--calibration {source}: {other}"),
+    })?;
+    let noise = if c.noise.stated {
+        format!(
+            "the noise it stated (encoders {}°, probe {} mm)",
+            short(c.noise.encoder_rad.to_degrees()),
+            short(c.noise.probe_mm)
+        )
+    } else {
+        format!(
+            "the touch σ its fit estimated, {} mm, as the probe's (it stated no noise)",
+            short(c.noise.probe_mm)
+        )
+    };
+    note(format_args!(
+        "predicted: {} draws (seed {}) through the covariance of {} free parameters in {source} \
+         and {noise}",
+        args.draws,
+        args.seed,
+        free.len()
+    ))
 }
 
 /// The cones of --data evaluated as `evaluate` does, if given.

@@ -2,6 +2,7 @@
 //! module per command, and one per concern the commands share.
 
 mod acceptance;
+mod acceptance_predict;
 mod arm_checks;
 mod beyond;
 mod builds;

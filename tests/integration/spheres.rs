@@ -13,12 +13,12 @@ use rand::SeedableRng;
 
 use crate::util::{aacmm, assert_clean_error, stderr, stdout, temp_dir, write};
 
-const DIAMETER: f64 = 25.4;
-const BALL: f64 = 6.0;
+pub(crate) const DIAMETER: f64 = 25.4;
+pub(crate) const BALL: f64 = 6.0;
 const ENCODER_DEG: f64 = 0.005;
 const PROBE_MM: f64 = 0.01;
 
-fn noise() -> Noise {
+pub(crate) fn noise() -> Noise {
     Noise {
         encoder_rad: Some(ENCODER_DEG.to_radians()),
         probe_mm: Some(PROBE_MM),
@@ -26,14 +26,14 @@ fn noise() -> Noise {
     }
 }
 
-fn nominal() -> Arm {
+pub(crate) fn nominal() -> Arm {
     Arm {
         ball_diameter_mm: Some(BALL),
         ..Arm::without_limits("paper", DhParams::paper_nominal())
     }
 }
 
-fn sphere_settings(placements: usize, seed: u64) -> SphereSettings {
+pub(crate) fn sphere_settings(placements: usize, seed: u64) -> SphereSettings {
     SphereSettings {
         placements,
         diameter_mm: DIAMETER,
@@ -49,7 +49,7 @@ fn lm() -> SolverSettings {
 }
 
 /// The fit of `c` from `start`: the diameter stated or fitted.
-fn fit(start: &Arm, c: &SphereCampaign, size: SphereSize) -> CalibrationReport {
+pub(crate) fn fit(start: &Arm, c: &SphereCampaign, size: SphereSize) -> CalibrationReport {
     let data = DataSet::without_touches(6, 0);
     let model = ModelOptions {
         noise: noise(),

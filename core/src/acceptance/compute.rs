@@ -84,6 +84,7 @@ pub fn verify(
         placements,
         l_dia,
         spat,
+        prediction: None,
     })
 }
 

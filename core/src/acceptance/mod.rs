@@ -39,11 +39,17 @@
 //! times the points' noise and the figure measures the fit, not the arm.
 //! [`LDiaRadius::Free`] fits it (as a reading of the standard that fits a
 //! full least-squares sphere to each set).
+//!
+//! **Prediction** ([`predict`]): each test's expected value and spread
+//! from a calibration — Monte Carlo through its covariance and the noise
+//! it stated, at the placements measured — and whether the measured value
+//! lies within two spreads of it.
 
 mod compute;
 mod enclosing;
 mod fit;
 mod mpe;
+mod predict;
 mod table;
 
 use serde::{Deserialize, Serialize};
@@ -52,6 +58,10 @@ pub use compute::verify;
 pub use enclosing::{Ball, enclosing_ball};
 pub use fit::{FitError, FitStop, MAX_ITERATIONS, SphereFit, fit_sphere_ls};
 pub use mpe::{Limit, Mpe, TestKind, parse_mpe};
+pub use predict::{
+    Calibrated, DEFAULT_DRAWS, Draws, MAX_DRAWS, Measured, PSD_TOLERANCE, PredictError,
+    PredictionInfo, ReadingNoise, predict,
+};
 
 use crate::error::{InputError, OptionError};
 use crate::io::spheres::Spheres;
@@ -128,14 +138,17 @@ impl Decision {
     }
 }
 
-/// A value and spread a calibration predicts for a test (room for a
-/// prediction from the calibration's covariance; not computed yet).
+/// A value and spread a calibration predicts for a test ([`predict`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Predicted {
     /// The expected value, mm.
     pub value: f64,
     /// Its standard deviation, mm.
     pub spread: f64,
+    /// Whether the measured value lies within two spreads of it:
+    /// `|measured − value| ≤ 2 spread` (the arm performs as its
+    /// calibration says).
+    pub agrees: bool,
 }
 
 /// One test's result.
@@ -275,6 +288,9 @@ pub struct Acceptance {
     pub l_dia: Vec<LDiaPlacement>,
     /// Every cone of the SPAT.
     pub spat: Vec<SpatPoint>,
+    /// What the predictions were made from; absent without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prediction: Option<PredictionInfo>,
 }
 
 impl Acceptance {

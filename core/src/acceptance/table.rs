@@ -56,9 +56,22 @@ impl Acceptance {
         let w = (self.tests.iter())
             .map(|r| r.at.chars().count())
             .fold(8, usize::max);
+        // The predicted column only when a prediction was made: the table
+        // of a verification without one is what it always was.
+        let predicted = self.prediction.is_some();
+        let column = |p: Option<super::Predicted>| match (predicted, p) {
+            (false, _) => String::new(),
+            (true, None) => format!(" {:>19}", "-"),
+            (true, Some(p)) => format!(" {:>19}", format!("{:.4} ± {:.4}", p.value, p.spread)),
+        };
+        let head = if predicted {
+            format!(" {:>19}", "predicted (mm)")
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             t,
-            "{:<22} {:<w$} {:>11} {:>10} {:>9}  decision",
+            "{:<22} {:<w$} {:>11} {:>10} {:>9}{head}  decision",
             "test", "at", "value (mm)", "MPE (mm)", "U (mm)"
         );
         for r in &self.tests {
@@ -66,8 +79,13 @@ impl Acceptance {
             let decision = r.decision.map_or("not decided", |d| d.word());
             let _ = writeln!(
                 t,
-                "{:<22} {:<w$} {:>11.4} {:>10} {:>9.4}  {decision}",
-                r.figure, r.at, r.value, mpe, r.u
+                "{:<22} {:<w$} {:>11.4} {:>10} {:>9.4}{}  {decision}",
+                r.figure,
+                r.at,
+                r.value,
+                mpe,
+                r.u,
+                column(r.predicted)
             );
         }
         for u in &self.untested {
@@ -78,6 +96,49 @@ impl Acceptance {
                 "-"
             );
         }
+        self.write_agreement(t);
+    }
+
+    /// One note on the predictions: which measured values lie within two
+    /// spreads of what the calibration predicts.
+    fn write_agreement(&self, t: &mut String) {
+        let Some(info) = &self.prediction else {
+            return;
+        };
+        let judged: Vec<_> = (self.tests.iter())
+            .filter_map(|r| r.predicted.map(|p| (r, p)))
+            .collect();
+        let beyond: Vec<String> = (judged.iter())
+            .filter(|(_, p)| !p.agrees)
+            .map(|(r, p)| {
+                let off = (r.value - p.value).abs();
+                if p.spread > 0.0 {
+                    format!(
+                        "{} at {} ({:.1} spreads off)",
+                        r.figure,
+                        r.at,
+                        off / p.spread
+                    )
+                } else {
+                    format!("{} at {} ({off:.4} mm off a spread of 0)", r.figure, r.at)
+                }
+            })
+            .collect();
+        let _ = writeln!(
+            t,
+            "Predicted from the calibration in {} ({} draws, seed {}; value ± spread, σ): {} of \
+             {} measured values within 2 spreads{}",
+            info.calibration,
+            info.draws,
+            info.seed,
+            judged.len() - beyond.len(),
+            judged.len(),
+            if beyond.is_empty() {
+                " — the arm performs as its calibration says.".to_string()
+            } else {
+                format!("; beyond: {}.", beyond.join("; "))
+            }
+        );
     }
 
     fn write_placements(&self, t: &mut String) {

@@ -22,6 +22,7 @@ pub const ACCEPTANCE_FILES: [&str; 2] = [HTML_FILE, SPHERE_RESIDUALS_SVG];
 ///     sphere_file: "s.csv".into(), sphere_diameter: 25.4, sphere_uncertainty: 0.0,
 ///     ball_diameter: 6.0, l_dia_radius: LDiaRadius::Held, mpe: Mpe::default(),
 ///     tests: vec![], untested: vec![], placements: vec![], l_dia: vec![], spat: vec![],
+///     prediction: None,
 /// };
 /// let r = acceptance_report(&a, &[]);
 /// let names: Vec<&str> = r.files().map(|(n, _)| n).collect();
@@ -85,7 +86,8 @@ fn tests_table(a: &Acceptance) -> String {
         let mpe = r.mpe.map_or("–".to_string(), |m| format!("{m:.4}"));
         let decision = r.decision.map_or("not decided", |d| d.word());
         let predicted = r.predicted.map_or("–".to_string(), |p| {
-            format!("{:.4} ± {:.4}", p.value, p.spread)
+            let seen = if p.agrees { "within 2σ" } else { "beyond 2σ" };
+            format!("{:.4} ± {:.4} ({seen})", p.value, p.spread)
         });
         t += &format!(
             "<tr><td>{}</td><td>{}</td><td>{:.4}</td><td>{mpe}</td><td>{:.4}</td><td>{decision}</td><td>{predicted}</td></tr>\n",
