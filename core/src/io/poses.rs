@@ -69,6 +69,13 @@ pub struct Poses {
     /// (`+1`, `−1`, `0` not known), row after row, when the file has the
     /// column ([`super::approach`]).
     approach: Option<Vec<i8>>,
+    /// Per row, the tool that touched (an index into `tools`; `0` the
+    /// default tool), when the file has a `tool` column.
+    tool_of: Option<Vec<u32>>,
+    /// The tools the rows name, the default ([`super::DEFAULT_TOOL`])
+    /// first, then in order of first appearance; resolved against the
+    /// arm's `[[tool]]` later ([`crate::DataSet::with_tools`]).
+    tools: Vec<String>,
 }
 
 impl Poses {
@@ -102,6 +109,8 @@ impl Poses {
             temperature: None,
             time: None,
             approach: None,
+            tool_of: None,
+            tools: vec![super::DEFAULT_TOOL.to_string()],
         })
     }
 
@@ -175,7 +184,108 @@ impl Poses {
             // A row pushed without directions: not known.
             a.extend(std::iter::repeat_n(0, q.len()));
         }
+        if let Some(t) = &mut self.tool_of {
+            // A row pushed without a tool: the default tool's.
+            t.push(0);
+        }
         Ok(())
+    }
+
+    /// Sets the last row's tool by name (empty or [`super::DEFAULT_TOOL`]:
+    /// the default tool); the poses gain a `tool` column if they had none.
+    ///
+    /// ```
+    /// use aacmm_core::io::Poses;
+    /// let mut poses = Poses::new(1);
+    /// poses.push("A", &[0.0], 2);
+    /// poses.push("A", &[1.0], 3);
+    /// poses.set_tool("long");
+    /// assert_eq!((poses.tool(0), poses.tool(1)), (0, 1));
+    /// assert_eq!(poses.tools(), ["probe", "long"]);
+    /// ```
+    ///
+    /// # Panics
+    /// If there is no row.
+    pub fn set_tool(&mut self, name: &str) {
+        let rows = self.len();
+        assert!(rows > 0, "a row to name a tool of");
+        let k = self.tool_index(name);
+        let of = self.tool_of.get_or_insert_with(|| vec![0; rows]);
+        of[rows - 1] = k;
+    }
+
+    /// The index of the tool named `name` among [`Poses::tools`], added if
+    /// new (empty or [`super::DEFAULT_TOOL`]: `0`).
+    fn tool_index(&mut self, name: &str) -> u32 {
+        if name.is_empty() || name == super::DEFAULT_TOOL {
+            return 0;
+        }
+        match self.tools.iter().position(|t| t == name) {
+            Some(k) => k as u32,
+            None => {
+                self.tools.push(name.to_string());
+                (self.tools.len() - 1) as u32
+            }
+        }
+    }
+
+    /// The tools the rows name, the default tool first, then in order of
+    /// first appearance.
+    pub fn tools(&self) -> &[String] {
+        &self.tools
+    }
+
+    /// Row `row`'s tool (an index into [`Poses::tools`]; `0` the default).
+    pub fn tool(&self, row: usize) -> usize {
+        self.tool_of.as_ref().map_or(0, |t| t[row] as usize)
+    }
+
+    /// Whether some row names a tool other than the default.
+    pub fn has_tools(&self) -> bool {
+        self.tool_of
+            .as_ref()
+            .is_some_and(|t| t.iter().any(|&k| k != 0))
+    }
+
+    /// These poses with each point touched by another tool made a point of
+    /// its own — a ball's centre in a socket depends on the ball, so the
+    /// touches of two probes do not share a centre —, the points ordered by
+    /// tool (the default first, then in order of first appearance) and in
+    /// order of first appearance within a tool; and per point its tool.
+    /// `None` when no row names a tool other than the default (the poses
+    /// as they are).
+    pub(crate) fn keyed_by_tool(&self) -> Result<Option<(Poses, Vec<u32>)>, OutOfMemory> {
+        let Some(of) = self.tool_of.as_ref().filter(|_| self.has_tools()) else {
+            return Ok(None);
+        };
+        let mut id: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+        let mut keys: Vec<(u32, u32)> = Vec::new();
+        for (row, &p) in self.point_of.iter().enumerate() {
+            let key = (of[row], p);
+            id.entry(key).or_insert_with(|| {
+                keys.push(key);
+                0
+            });
+        }
+        // Stable: first appearance kept within a tool.
+        keys.sort_by_key(|&(tool, _)| tool);
+        let mut points = Labels::default();
+        for (n, key) in keys.iter().enumerate() {
+            id.insert(*key, n as u32);
+            points.push_new(self.points.get(key.1 as usize), "the point labels")?;
+        }
+        let point_of = (self.point_of.iter().zip(of))
+            .map(|(&p, &t)| id[&(t, p)])
+            .collect();
+        let tools = keys.iter().map(|&(t, _)| t).collect();
+        Ok(Some((
+            Poses {
+                points,
+                point_of,
+                ..self.clone()
+            },
+            tools,
+        )))
     }
 
     /// The index of `label` in `points`, added if new. Rows of one point
@@ -431,7 +541,7 @@ pub fn parse_poses(
 ) -> Result<(Poses, Vec<Warning>), InputError> {
     let columns_of = joints.into();
     let expected_joints = columns_of.expected();
-    let shape = "point,q1,...,qn[,temperature][,time][,approach]";
+    let shape = "point,q1,...,qn[,tool][,temperature][,time][,approach]";
     let per_row = "one row per touch";
     // At most one row per line, and per 2 bytes a field (a digit or a
     // label, and its comma or line end): room for them all, so that the
@@ -448,14 +558,20 @@ pub fn parse_poses(
         |header, line, fields| {
             let (columns, approach) = split_approach(&header.fields);
             let extra = condition_columns(columns);
-            let joints = columns.len() - 1 - extra.len();
+            let tool = has_tool_column(columns, extra.len());
+            let joints = columns.len() - 1 - extra.len() - usize::from(tool);
             let poses = match poses {
                 Some(ref mut p) => p,
                 None => {
                     let rows = max_rows(header.fields.len());
-                    poses.insert(room(file, (joints, rows), &extra, approach)?)
+                    let mut p = room(file, (joints, rows), &extra, approach)?;
+                    if tool {
+                        p.tool_of = Some(try_vec("the rows' tools", rows).map_err(|e| InputError::memory(file, e))?);
+                    }
+                    poses.insert(p)
                 }
             };
+            let extra_at = 1 + joints + usize::from(tool);
             let label = fields[0];
             if label.is_empty() {
                 return Err(InputError::field(
@@ -470,7 +586,7 @@ pub fn parse_poses(
             read_readings(row, &columns_of, (file, line), &mut poses.q)?;
             let mut values = [0.0; 2];
             for (k, c) in extra.iter().enumerate() {
-                let v = fields[1 + joints + k];
+                let v = fields[extra_at + k];
                 values[k] = match parse_f64(v, file, line, c) {
                     Ok(t) if *c == "temperature" && !(-100.0..=200.0).contains(&t) => {
                         poses.q.truncate(start);
@@ -496,6 +612,12 @@ pub fn parse_poses(
                     column.push(values[k]);
                 }
             }
+            if tool {
+                let k = poses.tool_index(fields[1 + joints].trim());
+                if let Some(of) = &mut poses.tool_of {
+                    of.push(k);
+                }
+            }
             let id = poses
                 .intern(label)
                 .map_err(|e| InputError::memory(file, e))?;
@@ -506,9 +628,11 @@ pub fn parse_poses(
     )?;
     let (columns, approach) = split_approach(&header.fields);
     let extra = condition_columns(columns).len();
+    let tool = has_tool_column(columns, extra);
     let mut poses = poses.unwrap_or_else(|| Poses {
         approach: approach.then(Vec::new),
-        ..Poses::new(columns.len() - 1 - extra)
+        tool_of: tool.then(Vec::new),
+        ..Poses::new(columns.len() - 1 - extra - usize::from(tool))
     });
     poses.q.shrink_to_fit();
     poses.point_of.shrink_to_fit();
@@ -590,7 +714,14 @@ fn condition_columns(fields: &[String]) -> Vec<&'static str> {
     out
 }
 
-/// Checks the header `point,q1,...,qn[,temperature][,time][,approach]`,
+/// Whether the header's `columns` (without `approach`) have a `tool`
+/// column, just before their `extra` condition columns and after at least
+/// one joint's.
+fn has_tool_column(columns: &[String], extra: usize) -> bool {
+    columns.len() >= 3 + extra && columns[columns.len() - 1 - extra] == "tool"
+}
+
+/// Checks the header `point,q1,...,qn[,tool][,temperature][,time][,approach]`,
 /// and `n` against `expected_joints`.
 fn check_poses_header(
     header: &Record,
@@ -599,7 +730,11 @@ fn check_poses_header(
 ) -> Result<(), InputError> {
     let (fields, approach) = split_approach(&header.fields);
     let mut extra = condition_columns(fields);
-    let n = fields.len() - 1 - extra.len();
+    let tool = has_tool_column(fields, extra.len());
+    let n = fields.len() - 1 - extra.len() - usize::from(tool);
+    if tool {
+        extra.insert(0, "tool");
+    }
     if approach {
         extra.push(APPROACH);
     }
@@ -731,6 +866,9 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
         ("temperature", poses.temperatures()),
         ("time", poses.times()),
     ];
+    if poses.tool_of.is_some() {
+        header.push_str(",tool");
+    }
     for (name, column) in conditions {
         if column.is_some() {
             header.push(',');
@@ -752,6 +890,13 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
         for (j, &x) in q.iter().enumerate() {
             let written = JointColumns::to_written(poses.prismatic, j, x, unit);
             push_f64(&mut line, written);
+        }
+        if poses.tool_of.is_some() {
+            // The default tool's cell empty: as a file without tools reads.
+            line.push(',');
+            if poses.tool(row) != 0 {
+                line.push_str(&quote(&poses.tools[poses.tool(row)])?);
+            }
         }
         for column in conditions.iter().filter_map(|(_, c)| *c) {
             push_f64(&mut line, column[row]);

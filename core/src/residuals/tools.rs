@@ -265,3 +265,142 @@ pub fn positions_at(
     }
     Ok(p)
 }
+
+/// A tool's arm for a term's touches: the probe at the tool's offset (its
+/// block's value when the layout fits one, else its nominal offset), and
+/// its kernel — built once per evaluation, not per chunk.
+pub(crate) struct ToolView {
+    arm: DhParams,
+    kernel: ArmKernel,
+    /// The tool's offset block, when the layout fits one.
+    pub(crate) block: Option<BlockId>,
+}
+
+/// How a term's touches are seen: per run of points of one tool (in point
+/// order), the tool; per tool, its view (`None`: the default tool, `at`
+/// itself).
+pub(crate) struct TouchViews {
+    pub(crate) runs: Vec<(usize, std::ops::Range<usize>)>,
+    views: Vec<Option<ToolView>>,
+}
+
+impl TouchViews {
+    /// The views of `data`'s touches at `at`: one run of every point, the
+    /// default tool's, when no touch names a tool (today's path).
+    ///
+    /// # Errors
+    ///
+    /// A tool whose offset is not known (the data were not given the arm's
+    /// tools, [`crate::dataset::DataSet::with_tools`]); the kernel's.
+    pub(crate) fn of(data: &crate::dataset::DataSet, at: &At<'_>) -> Result<TouchViews, TermError> {
+        let Some(tools) = data.touch_tools() else {
+            return Ok(TouchViews {
+                runs: vec![(0, 0..data.points().len())],
+                views: vec![None],
+            });
+        };
+        let mut views = Vec::with_capacity(tools.names().len());
+        for (k, name) in tools.names().iter().enumerate() {
+            if k == 0 || !tools.used().contains(&k) {
+                views.push(None);
+                continue;
+            }
+            let block = at.layout.block_named(&block_name(name));
+            let offset = match block {
+                Some(id) => {
+                    let x = at.block(id);
+                    [x[0], x[1], x[2]]
+                }
+                None => tools.offset(k).ok_or_else(|| {
+                    TermError::invalid(
+                        "touches",
+                        format!(
+                            "tool {}: no offset known (the arm lists no such [[tool]])",
+                            crate::error::quoted(name)
+                        ),
+                    )
+                })?,
+            };
+            let mut arm = at.arm.clone();
+            arm.probe = offset;
+            let kernel = ArmKernel::new(&arm)?;
+            views.push(Some(ToolView { arm, kernel, block }));
+        }
+        Ok(TouchViews {
+            runs: tools.runs(),
+            views,
+        })
+    }
+
+    /// `at` as tool `k` sees it.
+    pub(crate) fn at<'a>(&'a self, at: &At<'a>, k: usize) -> At<'a> {
+        match &self.views[k] {
+            Some(v) => At {
+                x: at.x,
+                arm: &v.arm,
+                kernel: &v.kernel,
+                layout: at.layout,
+                threads: at.threads,
+            },
+            None => At {
+                x: at.x,
+                arm: at.arm,
+                kernel: at.kernel,
+                layout: at.layout,
+                threads: at.threads,
+            },
+        }
+    }
+
+    /// The kernel of tool `k`.
+    pub(crate) fn kernel<'a>(&'a self, at: &At<'a>, k: usize) -> &'a ArmKernel {
+        self.views[k].as_ref().map_or(at.kernel, |v| &v.kernel)
+    }
+
+    /// Tool `k`'s offset block (`None`: the default tool, or a tool the
+    /// layout fits no block of).
+    pub(crate) fn block(&self, k: usize) -> Option<BlockId> {
+        self.views[k].as_ref().and_then(|v| v.block)
+    }
+}
+
+/// Adds one offset block per tool `data`'s touches name (beyond the
+/// default), starting at its nominal offset, or shares the block of that
+/// name already there (the same tool's positions).
+///
+/// # Errors
+///
+/// A tool whose offset is not known ([`crate::dataset::DataSet::with_tools`]
+/// not called with the arm's tools).
+pub(crate) fn add_touch_tool_blocks(
+    layout: &mut Layout,
+    data: &crate::dataset::DataSet,
+) -> Result<(), TermError> {
+    let Some(tools) = data.touch_tools() else {
+        return Ok(());
+    };
+    for k in tools.used() {
+        let name = &tools.names()[k];
+        let block = block_name(name);
+        if layout.block_named(&block).is_some() {
+            continue;
+        }
+        let start = tools.offset(k).ok_or_else(|| {
+            TermError::invalid(
+                "touches",
+                format!(
+                    "tool {}: no offset known (the arm lists no such [[tool]])",
+                    crate::error::quoted(name)
+                ),
+            )
+        })?;
+        layout.add(Box::new(Vector {
+            names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
+            name: block,
+            unit: Unit::Length,
+            start: start.to_vec(),
+            tolerances: vec![None; 3],
+        }))?;
+    }
+    Ok(())
+}
