@@ -35,5 +35,6 @@ mod sphere_term;
 mod spheres;
 mod streams;
 mod tools;
+mod touch_tools;
 mod util;
 mod verdict;

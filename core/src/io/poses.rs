@@ -240,6 +240,20 @@ impl Poses {
         self.tool_of.as_ref().map_or(0, |t| t[row] as usize)
     }
 
+    /// Refuses rows naming a tool other than the default for `what` (a
+    /// command that sees every row through one probe), at `file`'s first
+    /// such row, field `tool`.
+    ///
+    /// # Errors
+    ///
+    /// The first row naming another tool.
+    pub fn refuse_tools(&self, file: &str, what: &str) -> Result<(), InputError> {
+        let Some(row) = (0..self.len()).find(|&r| self.tool(r) != 0) else {
+            return Ok(());
+        };
+        Err(tools_refused(file, self.line(row), &self.tools[self.tool(row)], what))
+    }
+
     /// Whether some row names a tool other than the default.
     pub fn has_tools(&self) -> bool {
         self.tool_of
@@ -712,6 +726,22 @@ fn condition_columns(fields: &[String]) -> Vec<&'static str> {
         }
     }
     out
+}
+
+/// The refusal of rows naming the tool `name` (first at `file:line`) by
+/// `what`, which sees every row through one probe.
+pub(crate) fn tools_refused(file: &str, line: usize, name: &str, what: &str) -> InputError {
+    InputError::field(
+        file,
+        line,
+        "tool",
+        format!(
+            "{}: touches by several tools are fitted by `calibrate` (each tool's offset), but \
+             {what} sees every row through one probe (--tool): give it one tool's rows, \
+             without a `tool` column",
+            crate::error::quoted(name)
+        ),
+    )
 }
 
 /// Whether the header's `columns` (without `approach`) have a `tool`

@@ -404,3 +404,41 @@ pub(crate) fn add_touch_tool_blocks(
     }
     Ok(())
 }
+
+/// Where `params` puts every touch of `data` (touch order, mm), each
+/// touch's tool at the offset `fitted` gives by block name (`tool.NAME`,
+/// as [`positions_at`]'s), else at its nominal offset, the default tool
+/// at the probe: what the figures of a calibration with several probes
+/// are computed from.
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn touch_positions_at(
+    params: &DhParams,
+    data: &crate::dataset::DataSet,
+    fitted: &[(String, [f64; 6])],
+) -> Result<Vec<[f64; 3]>, crate::kernel::KernelError> {
+    let kernel = ArmKernel::new(params)?;
+    let mut p = vec![[0.0; 3]; data.len()];
+    let Some(tools) = data.touch_tools() else {
+        kernel.positions(data.poses(), 0..data.len(), &mut p)?;
+        return Ok(p);
+    };
+    let points = data.points();
+    for (k, run) in tools.runs() {
+        let touches = points[run.start].touches.start..points[run.end - 1].touches.end;
+        let out = &mut p[touches.clone()];
+        if k == 0 {
+            kernel.positions(data.poses(), touches, out)?;
+            continue;
+        }
+        let block = block_name(&tools.names()[k]);
+        let given = (fitted.iter().find(|(n, _)| *n == block)).map(|(_, v)| [v[0], v[1], v[2]]);
+        let mut arm = params.clone();
+        // `with_tools` gave every tool its offset before any fit.
+        arm.probe = given.or(tools.offset(k)).unwrap_or(params.probe);
+        ArmKernel::new(&arm)?.positions(data.poses(), touches, out)?;
+    }
+    Ok(p)
+}
