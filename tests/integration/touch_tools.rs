@@ -7,7 +7,11 @@ use aacmm_core::calibrate::{Method, SolverSettings};
 use aacmm_core::io::tools::arm_with_tool;
 use aacmm_core::io::{AngleUnit, Arm, Poses, Tool, parse_lengths, parse_poses, write_poses};
 use aacmm_core::params::{DhParams, ParamKind};
-use aacmm_core::simulate::{Campaign, CampaignSettings, ErrorModel, simulate, true_arm};
+use aacmm_core::io::spheres::Spheres;
+use aacmm_core::residuals::spheres::{SphereSize, SphereTerm};
+use aacmm_core::simulate::{
+    Campaign, CampaignSettings, ErrorModel, SphereSettings, simulate, simulate_spheres, true_arm,
+};
 use aacmm_core::{Calibration, DataSet, ModelOptions, Problem};
 use rand::SeedableRng;
 
@@ -16,15 +20,20 @@ const LONG: [f64; 3] = [20.0, -10.0, 180.0];
 /// How far the true second probe is from its nominal offset, mm.
 const LONG_ERROR: [f64; 3] = [0.12, -0.08, 0.15];
 const ENCODER_DEG: f64 = 0.003;
+const BALL: f64 = 6.0;
+const LONG_BALL: f64 = 3.0;
+const SPHERE: f64 = 25.4;
 const PROBE_MM: f64 = 0.003;
 
-/// The paper's arm with a second probe, `long`.
+/// The paper's arm with a 6 mm ball and a second probe, `long` (a 3 mm
+/// ball).
 fn nominal() -> Arm {
     Arm {
+        ball_diameter_mm: Some(BALL),
         tools: vec![Tool {
             name: "long".into(),
             offset: LONG,
-            ball_diameter_mm: None,
+            ball_diameter_mm: Some(LONG_BALL),
         }],
         ..Arm::without_limits("paper", DhParams::paper_nominal())
     }
@@ -106,13 +115,77 @@ fn model() -> ModelOptions {
 }
 
 fn calibrate(nominal: &Arm, data: DataSet, threads: usize) -> Calibration {
+    calibrate_with(nominal, data, None, threads)
+}
+
+/// The fit of `data` and, when given, of `spheres`' points (the diameter
+/// stated) from `nominal`.
+fn calibrate_with(
+    nominal: &Arm,
+    data: DataSet,
+    spheres: Option<&Spheres>,
+    threads: usize,
+) -> Calibration {
     let mut settings = SolverSettings::default().with_method(Method::Lm);
     settings.threads = threads;
-    Problem::new(nominal.clone(), data, model())
-        .unwrap()
-        .run(&settings)
-        .unwrap()
-        .calibration
+    let mut p = Problem::new(nominal.clone(), data, model()).unwrap();
+    if let Some(rows) = spheres {
+        let term = SphereTerm::new(
+            rows.clone(),
+            "spheres.csv",
+            &nominal.params,
+            SphereSize::Known(SPHERE),
+            nominal.ball_diameter_mm,
+            &model().noise,
+            |b| p.add_boxed_block(b),
+        )
+        .unwrap();
+        p = p.with_spheres(term);
+    }
+    let report = p.run(&settings).unwrap();
+    assert!(report.verdict.usable, "{:?}", report.verdict);
+    report.calibration
+}
+
+/// `truth`'s points on spheres: `placements` by its probe (`S1`, …) and
+/// as many by its `long` stylus (`L1`, …, the rows naming it).
+fn sphere_points(truth: &Arm, placements: usize, seed: u64) -> Spheres {
+    let settings = |ball: f64, seed: u64| SphereSettings {
+        placements,
+        diameter_mm: SPHERE,
+        ball_diameter_mm: ball,
+        encoder_rad: ENCODER_DEG.to_radians(),
+        probe_mm: PROBE_MM,
+        seed,
+    };
+    let by_probe = simulate_spheres(truth, &settings(BALL, seed)).unwrap();
+    let stylus = arm_with_tool(truth, "long").unwrap();
+    let by_long = simulate_spheres(&stylus, &settings(LONG_BALL, seed + 1)).unwrap();
+    let mut out = by_probe.spheres.clone();
+    let b = &by_long.spheres;
+    for i in 0..b.len() {
+        let name = b.spheres()[b.sphere(i)].replacen('S', "L", 1);
+        out.push(&name, b.reading(i), out.len() + 2, None);
+        out.set_tool(&truth.tools[0]);
+    }
+    out
+}
+
+/// `(combined − alone)/σ_alone` of every parameter free in both fits.
+fn against(combined: &Calibration, alone: &Calibration) -> Vec<(String, f64)> {
+    let mut z = Vec::new();
+    for (e, one) in combined.parameters.iter().zip(&alone.parameters) {
+        assert_eq!(e.id, one.id);
+        let (Some(s), None, None) = (one.sigma, one.fixed.as_ref(), e.fixed.as_ref()) else {
+            continue;
+        };
+        z.push((format!("{:?}", e.id), (e.calibrated - one.calibrated) / s));
+    }
+    z
+}
+
+fn rms(z: &[(String, f64)]) -> f64 {
+    (z.iter().map(|(_, z)| z * z).sum::<f64>() / z.len().max(1) as f64).sqrt()
 }
 
 /// Per axis, `(estimate − truth)/σ` of the default probe's `B` and of
@@ -183,23 +256,48 @@ fn the_arm_agrees_with_one_probes_touches_alone() {
         1,
     );
     let alone = calibrate(&nominal, data_of(&poses_text(&[("probe", &a, "")]), Some(&a)), 1);
-    // Per free parameter, the difference in the one-probe fit's σ.
-    let mut z = Vec::new();
     for (e, one) in both.parameters.iter().zip(&alone.parameters) {
-        assert_eq!(e.id, one.id);
-        let (Some(s), None) = (one.sigma, one.fixed.as_ref()) else {
-            continue;
-        };
-        z.push((e.id, (e.calibrated - one.calibrated) / s));
         // The second probe's touches say more about the arm: every σ
         // smaller.
-        let both_sigma = e.sigma.expect("a free parameter's σ");
-        assert!(both_sigma < s, "{:?}: σ {both_sigma} with both, {s} alone", e.id);
+        if let (Some(b), Some(s), None) = (e.sigma, one.sigma, one.fixed.as_ref()) {
+            assert!(b < s, "{:?}: σ {b} with both, {s} alone", e.id);
+        }
     }
-    let rms = (z.iter().map(|(_, z)| z * z).sum::<f64>() / z.len() as f64).sqrt();
-    assert!(rms < 1.0 && rms > 0.0, "RMS {rms:.2} σ: {z:?}");
+    let z = against(&both, &alone);
+    assert!(rms(&z) < 1.0 && rms(&z) > 0.0, "RMS {:.2} σ: {z:?}", rms(&z));
     for (id, z) in &z {
-        assert!(z.abs() < 3.0, "{id:?}: {z:.2} σ of the one-probe fit");
+        assert!(z.abs() < 3.0, "{id}: {z:.2} σ of the one-probe fit");
+    }
+}
+
+/// Issue 41's combined calibration: two probes' touches, both probes'
+/// points on spheres (their `tool` column) and lengths in one fit — each
+/// probe's offset recovered within 3σ (one `tool.long` block, shared by
+/// the touches and the sphere points), the arm within σ of the touches
+/// alone and of the spheres alone.
+#[test]
+fn touches_spheres_and_lengths_of_two_probes_in_one_fit() {
+    let nominal = nominal();
+    let (truth, a, b) = campaigns(&nominal, 21);
+    let text = poses_text(&[("probe", &a, ""), ("long", &b, "L")]);
+    let spheres = sphere_points(&truth, 4, 2100);
+    let combined = calibrate_with(&nominal, data_of(&text, Some(&a)), Some(&spheres), 1);
+    for (name, z) in probe_errors(&combined, &truth) {
+        assert!(z.abs() < 3.0, "{name} off by {z:.2} σ");
+    }
+    let long: Vec<_> = (combined.auxiliary.iter())
+        .filter(|c| c.name.starts_with("tool.long."))
+        .collect();
+    assert_eq!(long.len(), 3, "one block for the stylus");
+    let touches = calibrate(&nominal, data_of(&text, Some(&a)), 1);
+    let alone = calibrate_with(&nominal, DataSet::without_touches(6, 0), Some(&spheres), 1);
+    for (kind, one) in [("touches", &touches), ("spheres", &alone)] {
+        let z = against(&combined, one);
+        assert!(z.len() > 10, "{kind}: {z:?}");
+        assert!(rms(&z) < 1.0, "{kind}: RMS {:.2} σ: {z:?}", rms(&z));
+        for (id, z) in &z {
+            assert!(z.abs() < 3.0, "{kind}: {id} {z:.2} σ");
+        }
     }
 }
 
