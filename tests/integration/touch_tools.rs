@@ -4,10 +4,10 @@
 //! on any thread count, and bad input refused by file, line and field.
 
 use aacmm_core::calibrate::{Method, SolverSettings};
+use aacmm_core::io::spheres::Spheres;
 use aacmm_core::io::tools::arm_with_tool;
 use aacmm_core::io::{AngleUnit, Arm, Poses, Tool, parse_lengths, parse_poses, write_poses};
 use aacmm_core::params::{DhParams, ParamKind};
-use aacmm_core::io::spheres::Spheres;
 use aacmm_core::residuals::spheres::{SphereSize, SphereTerm};
 use aacmm_core::simulate::{
     Campaign, CampaignSettings, ErrorModel, SphereSettings, simulate, simulate_spheres, true_arm,
@@ -228,7 +228,10 @@ fn each_probes_offset_is_recovered_within_three_sigma() {
     let nominal = nominal();
     for seed in 1..=4 {
         let (truth, a, b) = campaigns(&nominal, seed);
-        let data = data_of(&poses_text(&[("probe", &a, ""), ("long", &b, "L")]), Some(&a));
+        let data = data_of(
+            &poses_text(&[("probe", &a, ""), ("long", &b, "L")]),
+            Some(&a),
+        );
         assert_eq!(data.touch_tools().unwrap().names(), ["probe", "long"]);
         let cal = calibrate(&nominal, data, 1);
         for (name, z) in probe_errors(&cal, &truth) {
@@ -252,10 +255,17 @@ fn the_arm_agrees_with_one_probes_touches_alone() {
     let (_, a, b) = campaigns(&nominal, 7);
     let both = calibrate(
         &nominal,
-        data_of(&poses_text(&[("probe", &a, ""), ("long", &b, "L")]), Some(&a)),
+        data_of(
+            &poses_text(&[("probe", &a, ""), ("long", &b, "L")]),
+            Some(&a),
+        ),
         1,
     );
-    let alone = calibrate(&nominal, data_of(&poses_text(&[("probe", &a, "")]), Some(&a)), 1);
+    let alone = calibrate(
+        &nominal,
+        data_of(&poses_text(&[("probe", &a, "")]), Some(&a)),
+        1,
+    );
     for (e, one) in both.parameters.iter().zip(&alone.parameters) {
         // The second probe's touches say more about the arm: every σ
         // smaller.
@@ -264,7 +274,11 @@ fn the_arm_agrees_with_one_probes_touches_alone() {
         }
     }
     let z = against(&both, &alone);
-    assert!(rms(&z) < 1.0 && rms(&z) > 0.0, "RMS {:.2} σ: {z:?}", rms(&z));
+    assert!(
+        rms(&z) < 1.0 && rms(&z) > 0.0,
+        "RMS {:.2} σ: {z:?}",
+        rms(&z)
+    );
     for (id, z) in &z {
         assert!(z.abs() < 3.0, "{id}: {z:.2} σ of the one-probe fit");
     }
@@ -316,10 +330,7 @@ fn a_file_without_tools_reads_as_before_and_keeps_its_bytes() {
     let with_empty = with_empty.replacen("q6,tool,\n", "q6,tool\n", 1);
     let empty = data_of(&with_empty, None);
     assert!(empty.touch_tools().is_none());
-    let (x, y) = (
-        calibrate(&nominal, read, 1),
-        calibrate(&nominal, empty, 1),
-    );
+    let (x, y) = (calibrate(&nominal, read, 1), calibrate(&nominal, empty, 1));
     assert_eq!(x.calibrated_vector(), y.calibrated_vector());
 }
 
@@ -336,10 +347,12 @@ fn two_probes_give_the_same_bytes_on_one_and_two_threads() {
     let data = data_of(&text, Some(&a));
     let runs = data.touch_tools().unwrap().runs();
     assert_eq!(runs, [(0, 0..260), (1, 260..520)]);
-    assert!(aacmm_core::parallel::threads_for(
-        aacmm_core::residuals::point_chunks(data.points().len()),
-        2
-    ) == 2);
+    assert!(
+        aacmm_core::parallel::threads_for(
+            aacmm_core::residuals::point_chunks(data.points().len()),
+            2
+        ) == 2
+    );
     let one = calibrate(&nominal, data.clone(), 1);
     let two = calibrate(&nominal, data, 2);
     let bits = |c: &Calibration| -> Vec<u64> {
@@ -387,6 +400,12 @@ fn bad_tools_are_refused_by_file_line_and_field() {
         .to_string();
     assert!(e.contains("method") && e.contains("tool"), "{e}");
     // A one-probe stage refuses the rows of another, at the first one.
-    let e = poses.refuse_tools("p.csv", "points").unwrap_err().to_string();
-    assert!(e.starts_with(&format!("p.csv:{first}: field `tool`")), "{e}");
+    let e = poses
+        .refuse_tools("p.csv", "points")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(&format!("p.csv:{first}: field `tool`")),
+        "{e}"
+    );
 }

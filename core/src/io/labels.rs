@@ -56,7 +56,10 @@ impl Labels {
     pub(crate) fn intern(&mut self, label: &str, what: &str) -> Result<u32, OutOfMemory> {
         let hash = self.hasher.hash_one(label);
         let (text, ends) = (&self.text, &self.ends);
-        if let Some(&id) = self.table.find(hash, |&id| self::label(text, ends, id) == label) {
+        if let Some(&id) = self
+            .table
+            .find(hash, |&id| self::label(text, ends, id) == label)
+        {
             return Ok(id);
         }
         self.push_hashed(label, hash, what)

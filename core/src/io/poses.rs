@@ -10,8 +10,10 @@
 //! `point` labels the physical point (socket) touched; rows with the same
 //! label touch the same point. The angles are the encoder readings `q` in the
 //! unit the caller states (files do not carry it). Optional columns
-//! after the joints: `temperature` (°C), `time` (s), then `approach` (the
-//! direction each joint approached the touch from, [`super::approach`]).
+//! after the joints: `tool` (the probe that touched: one of the arm file's
+//! `[[tool]]`, [`super::tools`]; empty, the `[probe]`), `temperature`
+//! (°C), `time` (s), then `approach` (the direction each joint approached
+//! the touch from, [`super::approach`]).
 //! The CSV dialect is described in the [`io`](super) module docs.
 
 use std::io::Write;
@@ -251,7 +253,12 @@ impl Poses {
         let Some(row) = (0..self.len()).find(|&r| self.tool(r) != 0) else {
             return Ok(());
         };
-        Err(tools_refused(file, self.line(row), &self.tools[self.tool(row)], what))
+        Err(tools_refused(
+            file,
+            self.line(row),
+            &self.tools[self.tool(row)],
+            what,
+        ))
     }
 
     /// Whether some row names a tool other than the default.
@@ -580,7 +587,10 @@ pub fn parse_poses(
                     let rows = max_rows(header.fields.len());
                     let mut p = room(file, (joints, rows), &extra, approach)?;
                     if tool {
-                        p.tool_of = Some(try_vec("the rows' tools", rows).map_err(|e| InputError::memory(file, e))?);
+                        p.tool_of = Some(
+                            try_vec("the rows' tools", rows)
+                                .map_err(|e| InputError::memory(file, e))?,
+                        );
                     }
                     poses.insert(p)
                 }

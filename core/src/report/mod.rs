@@ -202,7 +202,11 @@ pub struct Measured<'a> {
 /// ```
 pub fn positions(params: &DhParams, data: &DataSet) -> Result<Vec<[f64; 3]>, ReportError> {
     // Touches by several tools each at its tool's nominal offset.
-    Ok(crate::residuals::tools::touch_positions_at(params, data, &[])?)
+    Ok(crate::residuals::tools::touch_positions_at(
+        params,
+        data,
+        &[],
+    )?)
 }
 
 /// Names of the two arms compared, for legends and tables.
