@@ -1208,7 +1208,7 @@ impl DataSet {
         }
         if let Some(t) = &self.tools {
             let mut offsets = vec![None; t.names.len()];
-            for k in 1..t.names.len() {
+            for (k, offset) in offsets.iter_mut().enumerate().skip(1) {
                 // The first touch (in file order) of the tool: where an
                 // unknown name is reported.
                 let line = (self.points.iter().zip(&t.of_point))
@@ -1218,7 +1218,7 @@ impl DataSet {
                     .min();
                 let Some(line) = line else { continue };
                 tools.of_cell(&t.names[k], &self.source.poses_file, line as usize)?;
-                offsets[k] = tools.offset(&t.names[k]);
+                *offset = tools.offset(&t.names[k]);
             }
             if let Some(t) = &mut self.tools {
                 t.offsets = offsets;

@@ -216,6 +216,14 @@ impl Poses {
         of[rows - 1] = k;
     }
 
+    /// Appends a row's tool by name (the reader's `tool` cell).
+    fn push_tool(&mut self, name: &str) {
+        let k = self.tool_index(name);
+        if let Some(of) = &mut self.tool_of {
+            of.push(k);
+        }
+    }
+
     /// The index of the tool named `name` among [`Poses::tools`], added if
     /// new (empty or [`super::DEFAULT_TOOL`]: `0`).
     fn tool_index(&mut self, name: &str) -> u32 {
@@ -585,14 +593,7 @@ pub fn parse_poses(
                 Some(ref mut p) => p,
                 None => {
                     let rows = max_rows(header.fields.len());
-                    let mut p = room(file, (joints, rows), &extra, approach)?;
-                    if tool {
-                        p.tool_of = Some(
-                            try_vec("the rows' tools", rows)
-                                .map_err(|e| InputError::memory(file, e))?,
-                        );
-                    }
-                    poses.insert(p)
+                    poses.insert(room(file, (joints, rows), &extra, (approach, tool))?)
                 }
             };
             let extra_at = 1 + joints + usize::from(tool);
@@ -637,10 +638,7 @@ pub fn parse_poses(
                 }
             }
             if tool {
-                let k = poses.tool_index(fields[1 + joints].trim());
-                if let Some(of) = &mut poses.tool_of {
-                    of.push(k);
-                }
+                poses.push_tool(fields[1 + joints].trim());
             }
             let id = poses
                 .intern(label)
@@ -696,12 +694,13 @@ fn read_readings(
 
 /// Empty poses of `joints` joints with room for `rows` rows, the
 /// condition columns `extra` and, if `approach`, the directions of
-/// approach, or an [`InputError::Memory`] for `file`.
+/// approach, if `tool`, the rows' tools, or an [`InputError::Memory`] for
+/// `file`.
 fn room(
     file: &str,
     (joints, rows): (usize, usize),
     extra: &[&str],
-    approach: bool,
+    (approach, tool): (bool, bool),
 ) -> Result<Poses, InputError> {
     let memory = |e| InputError::memory(file, e);
     let mut p = Poses::try_with_capacity(joints, rows).map_err(memory)?;
@@ -711,6 +710,9 @@ fn room(
     if approach {
         let directions = try_vec(APPROACH, rows.saturating_mul(joints)).map_err(memory)?;
         p.approach = Some(directions);
+    }
+    if tool {
+        p.tool_of = Some(try_vec("the rows' tools", rows).map_err(memory)?);
     }
     Ok(p)
 }
