@@ -189,24 +189,41 @@ pub(crate) fn add_tool_blocks(layout: &mut Layout, data: &PositionData) -> Resul
         if !(0..rows.len()).any(|i| rows.tool(i) == k) {
             continue;
         }
-        let start = rows.tool_offset(k).ok_or_else(|| {
-            TermError::invalid(
-                "positions",
-                format!(
-                    "tool {}: no offset known (the arm lists no such [[tool]])",
-                    crate::error::quoted(name)
-                ),
-            )
-        })?;
-        let block = block_name(name);
-        layout.add(Box::new(Vector {
-            names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
-            name: block,
-            unit: Unit::Length,
-            start: start.to_vec(),
-            tolerances: vec![None; 3],
-        }))?;
+        add_offset_block(layout, "positions", name, rows.tool_offset(k))?;
     }
+    Ok(())
+}
+
+/// Adds tool `name`'s offset block (`tool.NAME`, three length columns)
+/// starting at `start`, its nominal offset.
+///
+/// # Errors
+///
+/// No offset known (`term` names the caller); a block of the name already
+/// there.
+fn add_offset_block(
+    layout: &mut Layout,
+    term: &str,
+    name: &str,
+    start: Option<[f64; 3]>,
+) -> Result<(), TermError> {
+    let start = start.ok_or_else(|| {
+        TermError::invalid(
+            term,
+            format!(
+                "tool {}: no offset known (the arm lists no such [[tool]])",
+                crate::error::quoted(name)
+            ),
+        )
+    })?;
+    let block = block_name(name);
+    layout.add(Box::new(Vector {
+        names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
+        name: block,
+        unit: Unit::Length,
+        start: start.to_vec(),
+        tolerances: vec![None; 3],
+    }))?;
     Ok(())
 }
 
@@ -381,26 +398,10 @@ pub(crate) fn add_touch_tool_blocks(
     };
     for k in tools.used() {
         let name = &tools.names()[k];
-        let block = block_name(name);
-        if layout.block_named(&block).is_some() {
-            continue;
+        // The same tool's positions added its block already: shared.
+        if layout.block_named(&block_name(name)).is_none() {
+            add_offset_block(layout, "touches", name, tools.offset(k))?;
         }
-        let start = tools.offset(k).ok_or_else(|| {
-            TermError::invalid(
-                "touches",
-                format!(
-                    "tool {}: no offset known (the arm lists no such [[tool]])",
-                    crate::error::quoted(name)
-                ),
-            )
-        })?;
-        layout.add(Box::new(Vector {
-            names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
-            name: block,
-            unit: Unit::Length,
-            start: start.to_vec(),
-            tolerances: vec![None; 3],
-        }))?;
     }
     Ok(())
 }
