@@ -610,11 +610,21 @@ impl Term for TouchTerm<'_> {
         self.data.len()
     }
 
+    /// The touch's file:line; its group the point's label, and the tool's
+    /// name when another tool than the probe touched it (a label touched
+    /// by two tools is two points).
     fn origin(&self, i: usize) -> Origin {
-        let point = &self.data.points()[self.point_of(i)];
+        let p = self.point_of(i);
+        let point = &self.data.points()[p];
+        let group = match self.data.touch_tools() {
+            Some(t) if t.of_point(p) != 0 => {
+                format!("{} ({})", point.label, t.names()[t.of_point(p)])
+            }
+            _ => point.label.clone(),
+        };
         Origin {
             at: self.data.source().touch(i).to_string(),
-            group: point.label.clone(),
+            group,
         }
     }
 
