@@ -32,6 +32,10 @@ class _Positions(TypedDict):
     xyz: _Array
     uncertainty: _Array
 
+class _Tool(TypedDict):
+    offset_mm: _Array
+    sigma_mm: Optional[_Array]
+
 class _Frame(TypedDict):
     """A frame fitted with the arm: ``y = R p + t`` maps the arm's base
     coordinates into the instrument's."""
@@ -215,6 +219,7 @@ class DataSet:
         labels: Optional[Sequence[Any]] = None,
         angle_unit: _AngleUnit = "rad",
         joint_types: Optional[str] = None,
+        tools: Optional[_Names] = None,
     ) -> "DataSet":
         """Reference positions alone, from arrays: ``q`` n × joints readings
         (``joint_types`` ``"PRRRRRR"``: a slide's column in mm whatever
@@ -224,7 +229,9 @@ class DataSet:
         ``"instrument"``), each with its own fitted registration,
         ``uncertainty`` σ per coordinate (mm; one number or one per row; NaN:
         not stated), ``labels`` per row its point (default ``P1``, ``P2``,
-        …). ValueError naming the argument and row (0-based) for a wrong
+        …), ``tools`` per row the tool point seen (a ``[[tool]]`` of the arm
+        file, its offset fitted with the arm; ``""`` the arm's ``[probe]``;
+        a str for every row). ValueError naming the argument and row (0-based) for a wrong
         shape, a non-finite value, an uncertainty ≤ 0, an empty name, or a
         frame with fewer than 3 distinct positions or all on one line."""
     def with_positions(
@@ -235,6 +242,7 @@ class DataSet:
         uncertainty: Optional[npt.ArrayLike] = None,
         labels: Optional[Sequence[Any]] = None,
         angle_unit: _AngleUnit = "rad",
+        tools: Optional[_Names] = None,
     ) -> "DataSet":
         """These touches with reference positions from arrays (as
         :meth:`from_positions`, ``q`` with this data set's joints, a slide's
@@ -435,6 +443,12 @@ class Calibration:
         t``, their σ (k = 1; None where not determined) as calibrated.toml's
         ``[[frame]]`` tables, and ``R`` (3 × 3)."""
     @property
+    def tools(self) -> Dict[str, _Tool]:
+        """Each tool point fitted with the arm (a ``[[tool]]`` of the arm
+        file that rows named; empty when none did): ``offset_mm`` (x, y, z
+        in the last joint's frame) and ``sigma_mm`` (k = 1; None where not
+        determined), as calibrated.toml's ``[[tool]]`` tables."""
+    @property
     def auxiliary(self) -> Dict[str, _Auxiliary]:
         """Each auxiliary column, in the report's order: the corrections
         beyond geometry (``compliance2`` µrad/(N·m), ``harmonic2.sin1`` and
@@ -501,9 +515,14 @@ class Calibration:
 #: Points probed on reference spheres: a sphere-surface file's path (CSV
 #: ``sphere,q1,…,qn[,articulation]``, as ``--spheres``), or a pair
 #: ``(labels, q)`` — per point its sphere's label and its readings,
-#: ``n × joints``, in rad (mm for a slide).
+#: ``n × joints``, in rad (mm for a slide) — or a triple ``(labels, q,
+#: tools)``, ``tools`` per point the probe (a ``[[tool]]`` of the arm file;
+#: ``""`` its ``[probe]``) or one str for every point, one probe a sphere.
 SpherePoints = Union[
-    str, "os.PathLike[str]", Tuple[Sequence[str], npt.ArrayLike]
+    str,
+    "os.PathLike[str]",
+    Tuple[Sequence[str], npt.ArrayLike],
+    Tuple[Sequence[str], npt.ArrayLike, _Names],
 ]
 
 def calibrate(

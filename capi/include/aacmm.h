@@ -340,6 +340,23 @@ typedef struct {
 } AacmmFrame;
 
 /**
+ * A tool point fitted with the arm (`aacmm_calibration_tool`): its
+ * offset in the last joint's frame, like the arm's probe (the `[[tool]]`
+ * table of the command line's `calibrated.toml`).
+ */
+typedef struct {
+  /**
+   * The offset `x, y, z`, mm.
+   */
+  double offset_mm[3];
+  /**
+   * Their standard uncertainties (k = 1), mm; `NAN` where the data did
+   * not determine them.
+   */
+  double sigma_mm[3];
+} AacmmTool;
+
+/**
  * One column of a calibration's auxiliary blocks, for
  * `aacmm_calibration_auxiliary`: an unknown fitted with the arm beyond its
  * parameters — a correction beyond geometry (`--compliance`,
@@ -1076,6 +1093,41 @@ AacmmStatus aacmm_calibration_frame(const AacmmCalibration *cal,
                                     size_t *len);
 
 /**
+ * The number of tool points fitted with the arm (each `[[tool]]` of the
+ * arm file some reference position names: `aacmm_calibrate_options_set_position_tools`,
+ * or a positions or sphere file's `tool` column; 0 when none does) into
+ * `*count`.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_tool_count(const AacmmCalibration *cal, size_t *count);
+
+/**
+ * Tool `index` (`0 ≤ index < aacmm_calibration_tool_count`, in the
+ * order of the report's auxiliary columns `tool.NAME.x` …) into `*tool`,
+ * and its name (UTF-8, as the arm file's `[[tool]]`) into `buf`, copied
+ * like `aacmm_last_error_message`; `*len` gets the name's full length in
+ * bytes without the NUL. Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the
+ * name was truncated (`buf` may be `NULL` with `buf_len` 0 to ask for the
+ * length; `*tool` is written all the same), `AACMM_STATUS_INVALID_ARGUMENT`
+ * for an index out of range.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `tool` is `NULL` or points to
+ * writable memory for the struct; `buf` is `NULL` or points to `buf_len`
+ * writable bytes; `len` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_tool(const AacmmCalibration *cal,
+                                   size_t index,
+                                   AacmmTool *tool,
+                                   char *buf,
+                                   size_t buf_len,
+                                   size_t *len);
+
+/**
  * The number of auxiliary columns fitted with the arm (0 without
  * corrections beyond geometry and without reference positions) into
  * `*count`: the corrections' columns first, then six per frame.
@@ -1622,6 +1674,36 @@ AacmmStatus aacmm_calibrate_options_set_positions(AacmmCalibrateOptions *options
 AacmmStatus aacmm_calibrate_options_set_position_orientations(AacmmCalibrateOptions *options,
                                                               const double *quaternions,
                                                               size_t quaternions_len);
+
+/**
+ * The tool point seen at each reference position set by
+ * `aacmm_calibrate_options_set_positions` (a positions file's `tool`
+ * column): `tools[i]` is row `i`'s tool, 0 for the arm's `[probe]`, `k`
+ * for `tool_names[k - 1]` — a `[[tool]]` of the arm file, whose offset is
+ * fitted with the arm (`aacmm_calibration_tool`); `tools_len` = n for the
+ * n rows set, or 0 (with `tool_names_len` 0) for every row the probe.
+ * Setting the positions again removes them.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or an array or a name
+ * that is `NULL`), `AACMM_STATUS_INVALID_ARGUMENT` (no positions set as
+ * arrays, a name that is not UTF-8), `AACMM_STATUS_LENGTH` (`tools_len`
+ * other than 0 or n), `AACMM_STATUS_INPUT` — naming the array and index —
+ * for an index beyond `tool_names_len`, a name empty, given twice or
+ * unused. A name the arm file does not list is refused when calibrating,
+ * as a file's (`<arrays>:ROW: field \`tool\``). On error the options keep
+ * their earlier tools.
+ *
+ * # Safety
+ *
+ * As `aacmm_calibrate_options_set_method`; each array is `NULL` or points
+ * to its stated length of values (it may be `NULL` when its length is 0);
+ * each of the `tool_names_len` names is `NULL` or a NUL-terminated string.
+ */
+AacmmStatus aacmm_calibrate_options_set_position_tools(AacmmCalibrateOptions *options,
+                                                       const uint32_t *tools,
+                                                       size_t tools_len,
+                                                       const char *const *tool_names,
+                                                       size_t tool_names_len);
 
 /**
  * A reference-positions file (`--positions`: CSV

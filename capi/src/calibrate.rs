@@ -133,6 +133,19 @@ pub struct AacmmCalibrationSummary {
     pub final_cost: f64,
 }
 
+/// A tool point fitted with the arm (`aacmm_calibration_tool`): its
+/// offset in the last joint's frame, like the arm's probe (the `[[tool]]`
+/// table of the command line's `calibrated.toml`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct AacmmTool {
+    /// The offset `x, y, z`, mm.
+    pub offset_mm: [f64; 3],
+    /// Their standard uncertainties (k = 1), mm; `NAN` where the data did
+    /// not determine them.
+    pub sigma_mm: [f64; 3],
+}
+
 /// One fitted frame of reference positions, for `aacmm_calibration_frame`:
 /// the rigid registration `y = R p + t` that maps the arm's base
 /// coordinates `p` into the instrument's `y` (the `[[frame]]` table of the
@@ -1018,6 +1031,68 @@ pub unsafe extern "C" fn aacmm_calibration_frame(
         unsafe { ptr::write(frame, value, "frame") }?;
         // SAFETY: by the contract.
         unsafe { string_out(&record.name, buf, buf_len, len) }
+    })
+}
+
+/// The number of tool points fitted with the arm (each `[[tool]]` of the
+/// arm file some reference position names: `aacmm_calibrate_options_set_position_tools`,
+/// or a positions or sphere file's `tool` column; 0 when none does) into
+/// `*count`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_tool_count(
+    cal: *const AacmmCalibration,
+    count: *mut usize,
+) -> AacmmStatus {
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| c.report.calibration.tool_estimates().len()) }
+}
+
+/// Tool `index` (`0 ≤ index < aacmm_calibration_tool_count`, in the
+/// order of the report's auxiliary columns `tool.NAME.x` …) into `*tool`,
+/// and its name (UTF-8, as the arm file's `[[tool]]`) into `buf`, copied
+/// like `aacmm_last_error_message`; `*len` gets the name's full length in
+/// bytes without the NUL. Returns `AACMM_STATUS_BUFFER_TOO_SMALL` when the
+/// name was truncated (`buf` may be `NULL` with `buf_len` 0 to ask for the
+/// length; `*tool` is written all the same), `AACMM_STATUS_INVALID_ARGUMENT`
+/// for an index out of range.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `tool` is `NULL` or points to
+/// writable memory for the struct; `buf` is `NULL` or points to `buf_len`
+/// writable bytes; `len` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_tool(
+    cal: *const AacmmCalibration,
+    index: usize,
+    tool: *mut AacmmTool,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        let args = Args::new().object("cal", cal).out("tool", tool);
+        string_args(args, buf, buf_len, len)?;
+        // SAFETY: by the contract.
+        let tools = unsafe { result(cal) }?.report.calibration.tool_estimates();
+        let count = tools.len();
+        let Some((name, offset_mm, sigma)) = tools.into_iter().nth(index) else {
+            return Err(Error::invalid(format!(
+                "index = {index}: the calibration has {count} tool(s)"
+            )));
+        };
+        let value = AacmmTool {
+            offset_mm,
+            sigma_mm: sigma.unwrap_or([f64::NAN; 3]),
+        };
+        // SAFETY: by the contract.
+        unsafe { ptr::write(tool, value, "tool") }?;
+        // SAFETY: by the contract.
+        unsafe { string_out(&name, buf, buf_len, len) }
     })
 }
 

@@ -63,11 +63,12 @@ pub use calibrate::{
     AACMM_REASON_UNCONFIRMED, AACMM_REASON_UNDETERMINED, AACMM_REASON_WORSE_AT_POSITIONS,
     AACMM_REASON_WORSE_ON_DATA, AacmmAngleUnit, AacmmAuxiliary, AacmmCalibration,
     AacmmCalibrationSummary, AacmmFrame, AacmmReasonKind, AacmmReferenceLength, AacmmTermination,
-    aacmm_calibrate, aacmm_calibrate_files, aacmm_calibration_arm, aacmm_calibration_auxiliary,
-    aacmm_calibration_auxiliary_count, aacmm_calibration_fixed, aacmm_calibration_frame,
-    aacmm_calibration_frame_count, aacmm_calibration_free, aacmm_calibration_params,
-    aacmm_calibration_reason, aacmm_calibration_reason_count, aacmm_calibration_report,
-    aacmm_calibration_sigmas, aacmm_calibration_summary, aacmm_calibration_verdict,
+    AacmmTool, aacmm_calibrate, aacmm_calibrate_files, aacmm_calibration_arm,
+    aacmm_calibration_auxiliary, aacmm_calibration_auxiliary_count, aacmm_calibration_fixed,
+    aacmm_calibration_frame, aacmm_calibration_frame_count, aacmm_calibration_free,
+    aacmm_calibration_params, aacmm_calibration_reason, aacmm_calibration_reason_count,
+    aacmm_calibration_report, aacmm_calibration_sigmas, aacmm_calibration_summary,
+    aacmm_calibration_tool, aacmm_calibration_tool_count, aacmm_calibration_verdict,
     aacmm_calibration_verdict_notes,
 };
 pub use cancel::{
@@ -91,12 +92,12 @@ pub use options::{
     aacmm_calibrate_options_set_length_weight, aacmm_calibrate_options_set_method,
     aacmm_calibrate_options_set_orientation_noise_rad,
     aacmm_calibrate_options_set_position_noise_mm,
-    aacmm_calibrate_options_set_position_orientations, aacmm_calibrate_options_set_positions,
-    aacmm_calibrate_options_set_positions_file, aacmm_calibrate_options_set_prior,
-    aacmm_calibrate_options_set_probe_noise_mm, aacmm_calibrate_options_set_robust,
-    aacmm_calibrate_options_set_seed, aacmm_calibrate_options_set_sphere_diameter_mm,
-    aacmm_calibrate_options_set_spheres_file, aacmm_calibrate_options_set_thermal,
-    aacmm_calibrate_options_set_threads,
+    aacmm_calibrate_options_set_position_orientations, aacmm_calibrate_options_set_position_tools,
+    aacmm_calibrate_options_set_positions, aacmm_calibrate_options_set_positions_file,
+    aacmm_calibrate_options_set_prior, aacmm_calibrate_options_set_probe_noise_mm,
+    aacmm_calibrate_options_set_robust, aacmm_calibrate_options_set_seed,
+    aacmm_calibrate_options_set_sphere_diameter_mm, aacmm_calibrate_options_set_spheres_file,
+    aacmm_calibrate_options_set_thermal, aacmm_calibrate_options_set_threads,
 };
 
 /// The library's version (`MAJOR.MINOR.PATCH`, the workspace's version), as

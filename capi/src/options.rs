@@ -1022,6 +1022,63 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_position_orientations(
     })
 }
 
+/// The tool point seen at each reference position set by
+/// `aacmm_calibrate_options_set_positions` (a positions file's `tool`
+/// column): `tools[i]` is row `i`'s tool, 0 for the arm's `[probe]`, `k`
+/// for `tool_names[k - 1]` — a `[[tool]]` of the arm file, whose offset is
+/// fitted with the arm (`aacmm_calibration_tool`); `tools_len` = n for the
+/// n rows set, or 0 (with `tool_names_len` 0) for every row the probe.
+/// Setting the positions again removes them.
+///
+/// Errors: `AACMM_STATUS_NULL_POINTER` (`options`, or an array or a name
+/// that is `NULL`), `AACMM_STATUS_INVALID_ARGUMENT` (no positions set as
+/// arrays, a name that is not UTF-8), `AACMM_STATUS_LENGTH` (`tools_len`
+/// other than 0 or n), `AACMM_STATUS_INPUT` — naming the array and index —
+/// for an index beyond `tool_names_len`, a name empty, given twice or
+/// unused. A name the arm file does not list is refused when calibrating,
+/// as a file's (`<arrays>:ROW: field \`tool\``). On error the options keep
+/// their earlier tools.
+///
+/// # Safety
+///
+/// As `aacmm_calibrate_options_set_method`; each array is `NULL` or points
+/// to its stated length of values (it may be `NULL` when its length is 0);
+/// each of the `tool_names_len` names is `NULL` or a NUL-terminated string.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibrate_options_set_position_tools(
+    options: *mut AacmmCalibrateOptions,
+    tools: *const u32,
+    tools_len: usize,
+    tool_names: *const *const c_char,
+    tool_names_len: usize,
+) -> AacmmStatus {
+    guard(|| {
+        (Args::new().out("options", options))
+            .input("tools", tools, tools_len)?
+            .input("tool_names", tool_names, tool_names_len)?
+            .disjoint()?;
+        // SAFETY: by the contract.
+        let o = unsafe { ptr::object_mut(options, "options") }?;
+        let Some(PositionInput::Arrays(rows)) = &mut o.positions else {
+            return Err(Error::invalid(
+                "no positions set as arrays: set them first \
+                 (aacmm_calibrate_options_set_positions)",
+            ));
+        };
+        // SAFETY: by the contract.
+        let (of, names) = unsafe {
+            (
+                ptr::input(tools, tools_len, "tools")?,
+                ptr::input(tool_names, tool_names_len, "tool_names")?,
+            )
+        };
+        // SAFETY: each name is NULL or NUL-terminated, by the contract.
+        let names = unsafe { positions::tool_names(names) }?;
+        **rows = positions::with_tools((**rows).clone(), of, &names)?;
+        Ok(())
+    })
+}
+
 /// A reference-positions file (`--positions`: CSV
 /// `point,q1,…,qn,x,y,z[,frame][,uncertainty]`, the readings in the unit
 /// `aacmm_calibrate_files` is given for the poses file), fitted with the

@@ -125,6 +125,79 @@ pub(crate) unsafe fn frame_names(names: &[*const c_char]) -> Result<Vec<String>,
     Ok(out)
 }
 
+/// The names of `tool_names`: UTF-8, none empty, none given twice.
+///
+/// # Safety
+///
+/// Each pointer is `NULL` or a NUL-terminated string.
+pub(crate) unsafe fn tool_names(names: &[*const c_char]) -> Result<Vec<String>, Error> {
+    let mut out: Vec<String> = ptr::try_vec("tool_names_len", names.len())?;
+    for (k, &p) in names.iter().enumerate() {
+        let arg = format!("tool_names[{k}]");
+        // SAFETY: NULL or NUL-terminated, by the contract.
+        let s = unsafe { ptr::c_str(p, &arg) }?;
+        let s = s
+            .to_str()
+            .map_err(|_| Error::invalid(format!("{arg} is not valid UTF-8")))?;
+        if s.trim().is_empty() {
+            return Err(input(format!(
+                "{arg}: empty tool name: name a [[tool]] of the arm file (index 0 is its [probe])"
+            )));
+        }
+        if let Some(j) = out.iter().position(|n| n == s) {
+            return Err(input(format!(
+                "{arg}: {} is tool_names[{j}] too: give each tool once",
+                quoted(s)
+            )));
+        }
+        out.push(s.trim().to_string());
+    }
+    Ok(out)
+}
+
+/// `rows` with row `i`'s tool `of[i]` (0 the arm's probe, `k` the tool
+/// `names[k - 1]`), every name used; `of` empty: every row the probe.
+pub(crate) fn with_tools(
+    rows: Positions,
+    of: &[u32],
+    names: &[String],
+) -> Result<Positions, Error> {
+    let n = rows.len();
+    if of.len() != n && !(of.is_empty() && names.is_empty()) {
+        return Err(Error::length(format!(
+            "tools_len = {}: 0 or the {n} rows of the positions",
+            of.len()
+        )));
+    }
+    let mut rows = rows.without_tools();
+    let mut used = vec![false; names.len()];
+    for (i, &k) in of.iter().enumerate() {
+        let name = match k as usize {
+            0 => "",
+            k => {
+                let Some(name) = names.get(k - 1) else {
+                    return Err(input(format!(
+                        "tools[{i}] = {k}: tool_names holds {} name(s) (0 is the arm's [probe], \
+                         k is tool_names[k - 1])",
+                        names.len()
+                    )));
+                };
+                used[k - 1] = true;
+                name
+            }
+        };
+        rows.set_tool_of(i, name);
+    }
+    if let Some(k) = used.iter().position(|u| !u) {
+        return Err(input(format!(
+            "tool_names[{k}]: {} is no row's tool (tools[i] = {}): give the names the rows use",
+            quoted(&names[k]),
+            k + 1
+        )));
+    }
+    Ok(rows)
+}
+
 /// Per row of `n`, its orientation from `q` (4 values a row, `w, x, y, z`;
 /// empty: none at all): four `NAN` for none, else four finite numbers of
 /// unit length within the reader's tolerance — each refusal naming the

@@ -14,23 +14,25 @@ use std::mem::MaybeUninit;
 
 use aacmm_capi::{
     AACMM_ANGLE_DEG, AACMM_METHOD_LM, AacmmArm, AacmmCalibrateOptions, AacmmCalibration,
-    AacmmFrame, AacmmStatus, aacmm_arm_free, aacmm_arm_from_params, aacmm_calibrate,
-    aacmm_calibrate_files, aacmm_calibrate_options_free, aacmm_calibrate_options_new,
-    aacmm_calibrate_options_set_encoder_noise_rad, aacmm_calibrate_options_set_method,
-    aacmm_calibrate_options_set_position_noise_mm, aacmm_calibrate_options_set_positions,
+    AacmmFrame, AacmmStatus, AacmmTool, aacmm_arm_free, aacmm_arm_from_file, aacmm_arm_from_params,
+    aacmm_calibrate, aacmm_calibrate_files, aacmm_calibrate_options_free,
+    aacmm_calibrate_options_new, aacmm_calibrate_options_set_encoder_noise_rad,
+    aacmm_calibrate_options_set_method, aacmm_calibrate_options_set_position_noise_mm,
+    aacmm_calibrate_options_set_position_tools, aacmm_calibrate_options_set_positions,
     aacmm_calibrate_options_set_positions_file, aacmm_calibrate_options_set_probe_noise_mm,
     aacmm_calibration_frame, aacmm_calibration_frame_count, aacmm_calibration_free,
-    aacmm_calibration_report, aacmm_calibration_summary,
+    aacmm_calibration_report, aacmm_calibration_summary, aacmm_calibration_tool,
+    aacmm_calibration_tool_count,
 };
 use aacmm_core::dataset::DataSet;
 use aacmm_core::identify::identify;
-use aacmm_core::io::{Arm, Positions};
+use aacmm_core::io::{AngleUnit, Arm, LengthUnit, Positions, write_arm};
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::{Frame, Noise};
 use aacmm_core::session::{CalibrationReport, Request, Sources};
 use aacmm_core::simulate::{
-    CampaignSettings, ErrorModel, PositionCampaign, PositionSettings, simulate, simulate_positions,
-    simulate_tracker,
+    CampaignSettings, ErrorModel, PositionCampaign, PositionSettings, perturbed_tools,
+    random_tools, seen_at_markers, simulate, simulate_positions, simulate_tracker,
 };
 
 /// A failure with `status` whose message starts with `expected`.
@@ -758,4 +760,175 @@ fn files_and_arrays_are_not_mixed() {
          aacmm_calibrate_files",
     );
     assert!(out.is_null());
+}
+
+/// The arrays of `rows`' tools as C gives them: per row 0 (the probe) or
+/// `k` for `names[k - 1]`, and the names.
+fn tool_arrays(rows: &Positions) -> (Vec<u32>, Vec<CString>) {
+    let of = (0..rows.len()).map(|i| rows.tool(i) as u32).collect();
+    let names = (rows.tools()[1..].iter())
+        .map(|n| CString::new(n.as_str()).unwrap())
+        .collect();
+    (of, names)
+}
+
+/// `aacmm_calibrate_options_set_position_tools` of `of` and `names`.
+fn set_tools(o: &Options, of: &[u32], names: &[CString]) -> AacmmStatus {
+    let names: Vec<*const c_char> = names.iter().map(|n| n.as_ptr()).collect();
+    // SAFETY: live options; the arrays hold their stated lengths; the names
+    // are NUL-terminated.
+    unsafe {
+        aacmm_calibrate_options_set_position_tools(
+            o.0,
+            of.as_ptr(),
+            of.len(),
+            names.as_ptr(),
+            names.len(),
+        )
+    }
+}
+
+/// Positions seen at two markers (an arm file's `[[tool]]`s) through C:
+/// set by index, the library's report byte for byte, and each marker's
+/// offset and σ read back with `aacmm_calibration_tool` as the library's
+/// calibration has them; bad indices and names refused by array and index.
+#[test]
+fn tools_of_positions_are_set_by_index_and_read_back() {
+    let dir = std::env::temp_dir().join(format!("aacmm-capi-tools-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let arm_path = dir.join("arm.toml");
+    let start = Arm {
+        tools: random_tools(2, 17),
+        ..nominal()
+    };
+    write_arm(&arm_path, &start, LengthUnit::Mm, AngleUnit::Deg).unwrap();
+    let mut truth = start.clone();
+    truth.tools = perturbed_tools(&start.tools, 0.5, 23);
+    let campaign = tracker_campaign(31, 60, 1);
+    let rows = seen_at_markers(&truth, &campaign, &tracker(), 1.0, 5).unwrap();
+    let arrays = Arrays::of(&rows);
+    let (of, names) = tool_arrays(&rows);
+    assert_eq!(names.len(), 2);
+
+    let path = CString::new(arm_path.to_str().unwrap()).unwrap();
+    let mut handle = std::ptr::null_mut();
+    // SAFETY: a NUL-terminated path; a writable slot.
+    let status = unsafe { aacmm_arm_from_file(path.as_ptr(), &mut handle) };
+    assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+    let arm = ArmHandle(handle);
+    let o = Options::lm();
+    // Tools before positions: refused.
+    refused(
+        set_tools(&o, &of, &names),
+        AacmmStatus::InvalidArgument,
+        "no positions set as arrays",
+    );
+    assert_eq!(arrays.set(&o), AacmmStatus::Ok, "{}", last_error());
+    let mut bad = of.clone();
+    bad[3] = 3;
+    refused(
+        set_tools(&o, &bad, &names),
+        AacmmStatus::Input,
+        "tools[3] = 3: tool_names holds 2",
+    );
+    refused(
+        set_tools(&o, &of[1..], &names),
+        AacmmStatus::Length,
+        "tools_len = ",
+    );
+    let unused = [
+        names[0].clone(),
+        names[1].clone(),
+        CString::new("m9").unwrap(),
+    ];
+    refused(
+        set_tools(&o, &of, &unused),
+        AacmmStatus::Input,
+        "tool_names[2]: `m9` is no row's",
+    );
+    let twice = [names[0].clone(), names[0].clone()];
+    refused(
+        set_tools(&o, &of, &twice),
+        AacmmStatus::Input,
+        "tool_names[1]: ",
+    );
+    assert_eq!(
+        set_tools(&o, &of, &names),
+        AacmmStatus::Ok,
+        "{}",
+        last_error()
+    );
+    let cal = Calibration::run(&arm, &[], &[], &o).unwrap();
+    assert!(cal.successful());
+
+    // The library on the same rows, named as C names them.
+    let mut named = arrays.rows();
+    for (i, &k) in of.iter().enumerate() {
+        let name = if k == 0 {
+            ""
+        } else {
+            &rows.tools()[k as usize]
+        };
+        named.set_tool_of(i, name);
+    }
+    let data = DataSet::from_positions(named, "<arrays>").unwrap();
+    let sources = Sources {
+        arm_file: arm_path.to_str().unwrap().to_string(),
+        data_file: "<arrays>".to_string(),
+        lengths_file: None,
+        warnings: Vec::new(),
+    };
+    let read = aacmm_core::io::read_arm(&arm_path).unwrap().0;
+    let request = Request::new(read, data)
+        .sources(sources)
+        .noise(tracker())
+        .method("lm");
+    let library = request.run().unwrap().1;
+    assert_eq!(cal.report(), library.to_json());
+
+    let mut count = 0;
+    // SAFETY: a live result; `count` is writable.
+    let status = unsafe { aacmm_calibration_tool_count(cal.0, &mut count) };
+    assert_eq!(status, AacmmStatus::Ok);
+    let expected = library.calibration.tool_estimates();
+    assert_eq!(count, expected.len());
+    for (i, (name, offset, sigma)) in expected.iter().enumerate() {
+        let mut tool = MaybeUninit::<AacmmTool>::uninit();
+        let mut buf = [0 as c_char; 32];
+        let mut len = 0;
+        // SAFETY: a live result; room for the struct and 32 bytes.
+        let status = unsafe {
+            aacmm_calibration_tool(cal.0, i, tool.as_mut_ptr(), buf.as_mut_ptr(), 32, &mut len)
+        };
+        assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+        // SAFETY: written on success; NUL-terminated by the call.
+        let (tool, got) = unsafe { (tool.assume_init(), CStr::from_ptr(buf.as_ptr())) };
+        assert_eq!(got.to_str().unwrap(), name);
+        assert_eq!(tool.offset_mm, *offset);
+        assert_eq!(Some(tool.sigma_mm), *sigma);
+        // Recovered: within 4σ of the true marker.
+        let t = truth.tools.iter().find(|t| &t.name == name).unwrap();
+        for k in 0..3 {
+            let z = (tool.offset_mm[k] - t.offset[k]) / tool.sigma_mm[k];
+            assert!(z.abs() < 4.0, "{name}[{k}]: {z}");
+        }
+    }
+    let mut tool = MaybeUninit::<AacmmTool>::uninit();
+    // SAFETY: a live result; room for the struct; no name asked.
+    let status = unsafe {
+        aacmm_calibration_tool(
+            cal.0,
+            count,
+            tool.as_mut_ptr(),
+            std::ptr::null_mut(),
+            0,
+            &mut 0,
+        )
+    };
+    refused(
+        status,
+        AacmmStatus::InvalidArgument,
+        "index = 2: the calibration has 2 tool(s)",
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -933,6 +933,12 @@ fn fixed_reasons(
         }
         let reason = if scale_fixed.contains(&c) {
             "scale: no reference length fixes the arm's size".to_string()
+        } else if ids[c].kind == ParamKind::Probe && ns[(c, c)] == 0.0 {
+            // Not a relation between parameters: every term gives a row
+            // measured with the [probe] its B columns, so none has any when
+            // every row names a [[tool]]. (Other columns can vanish exactly
+            // once the tools' offsets are profiled out: those are relations.)
+            unseen_probe(ids[c])
         } else {
             let relation = dependence(ns, ids, d, c, free_cols);
             let reason = format!("redundant: {}", relation.text);
@@ -1050,6 +1056,14 @@ fn pivoted_cholesky(
         }
     }
     pivots
+}
+
+/// Why the probe's `id`, on which no observation depends, is held.
+fn unseen_probe(id: ParamId) -> String {
+    format!(
+        "unseen: no row is measured with the arm's [probe] (every row names a [[tool]]), so \
+         nothing depends on {id}"
+    )
 }
 
 /// Column `c` as a combination of the free columns (regression on the

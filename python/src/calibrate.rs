@@ -134,7 +134,7 @@ fn refusal(e: aacmm_core::CalibrationError, data: &DataSet, arm: &Arm) -> Error 
 /// if any); `accept_poor_fit`: call a poor χ² or a fit worse than nominal
 /// usable (never a wrong geometry). `spheres`: points probed on reference
 /// spheres (`--spheres`; `data` may then be `None`) — a sphere-surface
-/// file's path (readings in `sphere_angle_unit`) or `(labels, q)` arrays
+/// file's path (readings in `sphere_angle_unit`) or `(labels, q[, tools])` arrays
 /// (rad; mm for a slide) —, `sphere_diameter` their stated diameter in mm
 /// (`--sphere-diameter`), `validate_spheres` held-out points on spheres
 /// (`--validate-spheres`, given as `spheres`); `global_starts`, the
@@ -353,6 +353,25 @@ impl Calibration {
             )?;
             d.set_item("rotation_matrix", r.into_pyarray(py))?;
             out.set_item(record.name, d)?;
+        }
+        Ok(out)
+    }
+
+    /// Each tool point fitted with the arm (a `[[tool]]` of the arm file
+    /// that rows of the data named): name → dict of `offset_mm` (x, y, z
+    /// in the last joint's frame, as `calibrated.toml`'s `[[tool]]`) and
+    /// `sigma_mm` (k = 1; `None` where the data did not determine it).
+    /// Empty when no row named a tool: the arm's `[probe]` is `params`'
+    /// last three.
+    #[getter]
+    fn tools<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let three = |v: [f64; 3]| Array1::from(v.to_vec()).into_pyarray(py);
+        let out = PyDict::new(py);
+        for (name, offset, sigma) in self.report.calibration.tool_estimates() {
+            let d = PyDict::new(py);
+            d.set_item("offset_mm", three(offset))?;
+            d.set_item("sigma_mm", sigma.map(three))?;
+            out.set_item(name, d)?;
         }
         Ok(out)
     }

@@ -262,14 +262,16 @@ impl DataSet {
     /// row in `"instrument"`); `uncertainty` the standard uncertainty per
     /// coordinate, mm, one number or one per row (NaN: not stated, the
     /// noise model applies); `labels` per row its point (default `P1`,
-    /// `P2`, …; rows with one label in one frame are one physical point).
-    /// Checked as the library's reader checks a positions file: a
+    /// `P2`, …; rows with one label in one frame are one physical point);
+    /// `tools` per row the tool point seen — a `[[tool]]` of the arm file
+    /// (its offset fitted with the arm), `""` the arm's `[probe]` — or one
+    /// `str` for every row (default: every row the probe). Checked as the library's reader checks a positions file: a
     /// `ValueError` naming the argument and row (0-based) for a wrong
     /// shape, a value that is not finite, an uncertainty not positive, an
     /// empty name, and a frame with fewer than 3 distinct positions or all
     /// of them on one line. Reports name the rows `<arrays>:i+1`.
     #[staticmethod]
-    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad", joint_types = None))]
+    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad", joint_types = None, tools = None))]
     #[allow(clippy::too_many_arguments)]
     fn from_positions(
         py: Python<'_>,
@@ -280,6 +282,7 @@ impl DataSet {
         labels: Option<&Bound<'_, PyAny>>,
         angle_unit: &str,
         joint_types: Option<&str>,
+        tools: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<DataSet> {
         let unit = crate::angle_unit(angle_unit)?;
         // Only with types given: `read` names a wrong shape of `q` itself.
@@ -293,6 +296,7 @@ impl DataSet {
             frames,
             uncertainty,
             labels,
+            tools,
             unit,
             prismatic: shape.map_or(0, |s| s.prismatic_mask()),
         };
@@ -318,7 +322,7 @@ impl DataSet {
     /// fitted together: the arguments and checks of `from_positions`, `q`
     /// with the data set's joint count. A new data set; a data set that
     /// already has positions is refused (give them all at once).
-    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad"))]
+    #[pyo3(signature = (q, xyz, frames = None, uncertainty = None, labels = None, angle_unit = "rad", tools = None))]
     #[allow(clippy::too_many_arguments)]
     fn with_positions(
         &self,
@@ -329,6 +333,7 @@ impl DataSet {
         uncertainty: Option<&Bound<'_, PyAny>>,
         labels: Option<&Bound<'_, PyAny>>,
         angle_unit: &str,
+        tools: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<DataSet> {
         let unit = crate::angle_unit(angle_unit)?;
         if let Some(p) = self.data.positions() {
@@ -346,6 +351,7 @@ impl DataSet {
             frames,
             uncertainty,
             labels,
+            tools,
             unit,
             // The readings of the data set's own chain: its slides in mm.
             prismatic: self.data.shape().map_or(0, |s| s.prismatic_mask()),

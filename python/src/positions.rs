@@ -31,6 +31,9 @@ pub(crate) struct PositionArgs<'a, 'py> {
     pub(crate) frames: Option<&'a Bound<'py, PyAny>>,
     pub(crate) uncertainty: Option<&'a Bound<'py, PyAny>>,
     pub(crate) labels: Option<&'a Bound<'py, PyAny>>,
+    /// Per row the tool seen (an arm's `[[tool]]`; empty: its `[probe]`),
+    /// or one name for every row.
+    pub(crate) tools: Option<&'a Bound<'py, PyAny>>,
     pub(crate) unit: AngleUnit,
     /// Which columns of `q` are slides (bit j: joint j+1): read in mm,
     /// whatever `unit` says.
@@ -87,6 +90,10 @@ impl PositionArgs<'_, '_> {
             None => (1..=n).map(|i| format!("P{i}")).collect(),
             Some(l) => names(l, "labels", "label", n, false)?,
         };
+        let tools = match self.tools {
+            None => Vec::new(),
+            Some(t) => tool_names(t, "tools", n)?,
+        };
         let mut rows = Positions::new(j);
         for i in 0..n {
             let reading = &q[i * j..(i + 1) * j];
@@ -98,6 +105,9 @@ impl PositionArgs<'_, '_> {
                 uncertainty[i],
                 i + 1,
             );
+            if let Some(tool) = tools.get(i) {
+                rows.set_tool(tool.trim());
+            }
         }
         Ok(PositionArrays {
             rows,
@@ -215,6 +225,28 @@ fn uncertainties(u: &Bound<'_, PyAny>, n: usize) -> PyResult<Vec<Option<f64>>> {
     } else {
         Ok(vec![checked(0, values[0])?; n])
     }
+}
+
+/// Per row of `n` its tool's name (`arg` names the argument in errors): one `str` for every row, or a sequence
+/// of `n` (an empty name: the arm's `[probe]`). Whether the arm has such a
+/// tool is checked when the data meet it (`calibrate`), by row.
+pub(crate) fn tool_names(given: &Bound<'_, PyAny>, arg: &str, n: usize) -> PyResult<Vec<String>> {
+    if let Ok(s) = given.cast::<PyString>() {
+        return Ok(vec![s.to_string(); n]);
+    }
+    let names: Vec<String> = given
+        .try_iter()
+        .map_err(|_| {
+            Error::value(format!(
+                "{arg}: expected a str or a sequence of {n} tool names, one per row of q"
+            ))
+        })?
+        .map(|v| Ok(v?.str()?.to_string()))
+        .collect::<PyResult<_>>()?;
+    if names.len() != n {
+        return Err(Error::value(format!("{arg}: {} names for {n} rows of q", names.len())).into());
+    }
+    Ok(names)
 }
 
 /// `n` names of rows (any values, taken as `str`), none empty; with

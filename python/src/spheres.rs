@@ -1,6 +1,6 @@
 //! Points probed on reference spheres handed in from Python: the
 //! `spheres=` and `validate_spheres=` arguments of `aacmm.calibrate` — a
-//! sphere-surface file's path (`--spheres`), or `(labels, q)` arrays —
+//! sphere-surface file's path (`--spheres`), or `(labels, q[, tools])` arrays —
 //! given to the library's request, which checks them as it does the
 //! command line's.
 
@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use aacmm_core::io::AngleUnit;
 use aacmm_core::io::spheres::Spheres;
+use aacmm_core::io::tools::{Tool, ToolNames};
 use aacmm_core::session::Request;
 use pyo3::prelude::*;
 
@@ -30,7 +31,9 @@ impl SphereArg {
     /// `arg` (named `name` in messages) for `arm`: a path (`str` or
     /// `os.PathLike`, readings in `unit`), or a pair `(labels, q)` — per
     /// point its sphere's label and its readings, `n × joints`, in rad (mm
-    /// for a slide), each point named `<arrays>:ROW` (1-based).
+    /// for a slide), each point named `<arrays>:ROW` (1-based) — or a
+    /// triple `(labels, q, tools)`, `tools` per point its probe (an arm's
+    /// `[[tool]]`, `""` its `[probe]`) or one `str` for every point.
     pub(crate) fn of(
         py: Python<'_>,
         arg: &Bound<'_, PyAny>,
@@ -41,11 +44,20 @@ impl SphereArg {
         if let Ok(path) = arg.extract::<PathBuf>() {
             return Ok(SphereArg::File(crate::file_path(path), unit));
         }
-        let (labels, q): (Bound<'_, PyAny>, Bound<'_, PyAny>) = arg.extract().map_err(|_| {
+        let refused = || {
             Error::value(format!(
-                "{name}: a sphere-surface file's path, or a pair (labels, q) of arrays"
+                "{name}: a sphere-surface file's path, or a pair (labels, q) of arrays, or a \
+                 triple (labels, q, tools)"
             ))
-        })?;
+        };
+        let (labels, q, tools): (Bound<'_, PyAny>, Bound<'_, PyAny>, Option<Bound<'_, PyAny>>) =
+            match arg.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>() {
+                Ok((l, q)) => (l, q, None),
+                Err(_) => {
+                    let (l, q, t) = arg.extract().map_err(|_| refused())?;
+                    (l, q, Some(t))
+                }
+            };
         let labels: Vec<String> = (labels.try_iter()?)
             .map(|l| Ok(l?.str()?.to_string()))
             .collect::<PyResult<_>>()?;
@@ -60,6 +72,11 @@ impl SphereArg {
             ))
             .into());
         }
+        let tools = match tools {
+            None => Vec::new(),
+            Some(t) => crate::positions::tool_names(&t, &format!("{name}[2]"), labels.len())?,
+        };
+        let known = ToolNames::of(&arm.arm.tools);
         let mut rows = Spheres::new(joints, prismatic);
         readings.for_chunks(py, |range, chunk| {
             for (k, i) in range.enumerate() {
@@ -72,6 +89,15 @@ impl SphereArg {
                     )));
                 }
                 rows.push(&labels[i], q, i + 1, None);
+                if let Some(cell) = tools.get(i).map(|t| t.trim())
+                    && known.of_cell(cell, ARRAYS, i + 1)? != 0
+                {
+                    rows.set_tool(&Tool {
+                        name: cell.to_string(),
+                        offset: known.offset(cell).unwrap_or([0.0; 3]),
+                        ball_diameter_mm: known.ball_diameter(cell),
+                    });
+                }
             }
             Ok(())
         })?;

@@ -4,6 +4,7 @@ against them with each frame's registration fitted, held-out positions, and
 every bad input refused with a message naming the argument."""
 
 import json
+import pathlib
 
 import numpy as np
 import pytest
@@ -382,3 +383,52 @@ def test_held_out_positions_in_an_unfitted_frame(nominal):
     same = aacmm.DataSet.from_positions(q2, xyz2)
     cal = aacmm.calibrate(nominal, data, noise=noise, validate=same)
     assert "registered_on_itself" not in cal.report["validation"]["held_out"]
+
+
+def test_tool_points_from_arrays_are_fitted_and_read_back(nominal, tmp_path):
+    """Positions of two markers (`tools=` per row) and of the probe: each
+    marker's offset is fitted with the arm (`Calibration.tools`, within 4σ
+    of the truth) and an unknown tool name is refused by row."""
+    rng = np.random.default_rng(5)
+    truth = true_arm(nominal, rng)
+    markers = {"m1": np.array([40.0, 0.0, 95.0]), "m2": np.array([-30.0, 25.0, 60.0])}
+    nominal_at = {k: v + rng.normal(size=3) * 0.5 for k, v in markers.items()}
+    arm_file = tmp_path / "arm.toml"
+    arm_file.write_text(
+        (pathlib.Path(__file__).resolve().parents[2] / ARM).read_text()
+        + "".join(
+            f'\n[[tool]]\nname = "{k}"\noffset_mm = [{", ".join(repr(float(x)) for x in v)}]\n'
+            for k, v in nominal_at.items()
+        )
+    )
+    arm = aacmm.Arm.from_file(str(arm_file))
+    w, t = random_frame(rng)
+    qs, ys, tools = [], [], []
+    for name in ["", "m1", "m2"]:
+        params = truth.params.copy()
+        if name:
+            params[-3:] = markers[name]
+        seen_by = aacmm.Arm.from_params(truth.joints, params, name="seen")
+        q, y = seen(seen_by, w, t, 150, rng, 0.01)
+        qs.append(q)
+        ys.append(y)
+        tools += [name] * len(q)
+    q, xyz = np.vstack(qs), np.vstack(ys)
+    noise = aacmm.Noise(position_mm=0.01)
+    data = aacmm.DataSet.from_positions(q, xyz, tools=tools)
+    cal = aacmm.calibrate(arm, data, method="lm", noise=noise)
+    assert cal.successful, cal.verdict
+    assert sorted(cal.tools) == ["m1", "m2"]
+    for name, fitted in cal.tools.items():
+        err = fitted["offset_mm"] - markers[name]
+        assert np.all(np.abs(err) <= 4 * fitted["sigma_mm"]), (name, err, fitted["sigma_mm"])
+    # No tool named: nothing to report.
+    plain = aacmm.calibrate(arm, aacmm.DataSet.from_positions(qs[0], ys[0]), method="lm", noise=noise)
+    assert plain.tools == {}
+    # One name for every row, and a name the arm does not have.
+    one = aacmm.DataSet.from_positions(qs[1], ys[1], tools="m1")
+    assert aacmm.calibrate(arm, one, method="lm", noise=noise).tools.keys() == {"m1"}
+    with pytest.raises(aacmm.CalibrationError, match=r"<arrays>:1: field `tool`: `m3`"):
+        aacmm.calibrate(arm, aacmm.DataSet.from_positions(qs[1], ys[1], tools="m3"), method="lm")
+    with pytest.raises(ValueError, match=r"tools: 2 names for 150 rows of q"):
+        aacmm.DataSet.from_positions(qs[1], ys[1], tools=["m1", "m2"])

@@ -105,3 +105,40 @@ def test_bad_spheres_are_refused_by_name(campaign):
     bad[4, 2] = np.nan
     with pytest.raises(ValueError, match="spheres: row 5: q3 is not a finite number"):
         aacmm.calibrate(arm, spheres=(labels, bad))
+
+
+def test_a_tool_column_from_arrays_fits_that_tool(campaign, tmp_path):
+    """`(labels, q, tools)`: every point probed with a `[[tool]]` at the
+    probe's offset and ball gives the probe's fit, the offset reported as
+    the tool's (`Calibration.tools`); a tool the arm does not know, and a
+    sphere probed by two tools, are refused by row and field."""
+    arm_file, spheres, _ = campaign
+    text = pathlib_read(arm_file)
+    plain = aacmm.Arm.from_file(str(arm_file))
+    probe = ", ".join(repr(float(v)) for v in plain.params[-3:])
+    tooled = tmp_path / "tooled.toml"
+    tooled.write_text(
+        text + f'\n[[tool]]\nname = "long"\noffset_mm = [{probe}]\nball_diameter_mm = 6.0\n'
+    )
+    arm = aacmm.Arm.from_file(str(tooled))
+    labels, q = arrays(spheres)
+    common = dict(sphere_diameter=25.4, noise=NOISE, method="lm", threads=1)
+    by_probe = aacmm.calibrate(arm, spheres=(labels, q), **common)
+    by_tool = aacmm.calibrate(arm, spheres=(labels, q, "long"), **common)
+    assert by_probe.tools == {}
+    assert list(by_tool.tools) == ["long"]
+    # The same fit: the points where each puts the ball's centre. (The
+    # parameters held differ: the probe's Bx, By are redundant with the last
+    # link's, the tool's offset is fitted whole and the link held instead.)
+    seen = by_tool.params.copy()
+    seen[-3:] = by_tool.tools["long"]["offset_mm"]
+    as_tool = aacmm.Arm.from_params(arm.joints, seen)
+    np.testing.assert_allclose(as_tool.positions(q), by_probe.arm.positions(q), rtol=0, atol=1e-5)
+    assert all(by_tool.fixed[b].startswith("unseen") for b in ("Bx", "By", "Bz")), by_tool.fixed
+    with pytest.raises(aacmm.InputError, match=r"<arrays>:1: field `tool`: `short`"):
+        aacmm.calibrate(arm, spheres=(labels, q, "short"), **common)
+    two = ["long" if i == 3 else "" for i in range(len(labels))]
+    with pytest.raises(aacmm.InputError, match=r"<arrays>:4: field `tool`.*probed by `probe`"):
+        aacmm.calibrate(arm, spheres=(labels, q, two), **common)
+    with pytest.raises(ValueError, match=r"spheres\[2\]: 2 names for 100 rows"):
+        aacmm.calibrate(arm, spheres=(labels, q, ["long", "long"]), **common)

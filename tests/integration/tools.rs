@@ -132,6 +132,28 @@ fn identify_holds_the_unseen_probe_and_keeps_the_markers() {
     ];
     expected.sort();
     assert_eq!(held, expected, "{fixed:?}");
+    // The probe is held because no row uses it, and the reason says so
+    // (not a relation between parameters).
+    for f in id
+        .fixed
+        .iter()
+        .filter(|f| f.id.to_string().starts_with('B'))
+    {
+        assert!(
+            f.reason
+                .starts_with("unseen: no row is measured with the arm's [probe]"),
+            "{}: {}",
+            f.id,
+            f.reason
+        );
+    }
+    assert!(
+        (id.fixed.iter())
+            .filter(|f| !f.id.to_string().starts_with('B'))
+            .all(|f| !f.reason.starts_with("unseen")),
+        "{:?}",
+        id.fixed
+    );
 }
 
 /// `simulate --positions N --tools K` writes the `tool` column, the

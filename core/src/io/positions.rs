@@ -384,6 +384,17 @@ impl Positions {
     /// # Panics
     /// If there is no row.
     pub fn set_tool(&mut self, name: &str) {
+        let last = self.tool_of.len().checked_sub(1);
+        self.set_tool_of(last.expect("a row to name a tool of"), name);
+    }
+
+    /// Sets row `i`'s tool by name, as [`Positions::set_tool`] the last
+    /// row's (rows set in order keep the tools in order of first
+    /// appearance, as a file's reader has them).
+    ///
+    /// # Panics
+    /// If there is no row `i`.
+    pub fn set_tool_of(&mut self, i: usize, name: &str) {
         let k = if name.is_empty() {
             0
         } else {
@@ -396,7 +407,16 @@ impl Positions {
                 }
             }
         };
-        *self.tool_of.last_mut().expect("a row to name a tool of") = k as u32;
+        self.tool_of[i] = k as u32;
+    }
+
+    /// These rows with every row the default tool's (the tools named
+    /// forgotten): what [`Positions::set_tool_of`] names them from again.
+    pub fn without_tools(mut self) -> Positions {
+        self.tools.truncate(1);
+        self.tool_offsets.truncate(1);
+        self.tool_of.iter_mut().for_each(|k| *k = 0);
+        self
     }
 
     /// The tools named, the default tool ([`super::DEFAULT_TOOL`]) first,

@@ -129,7 +129,7 @@ impl IdentifyReport {
         // arm does not list refused by file, line and field.
         let resolved;
         let (data, evidence) = if data.touch_tools().is_some() {
-            resolved = super::of_arm_tools(arm, data.clone())?;
+            resolved = super::checks::of_arm_tools(arm, data.clone())?;
             let evidence = crate::identify::Evidence {
                 data: &resolved,
                 added: evidence.added,

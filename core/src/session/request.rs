@@ -286,6 +286,7 @@ impl Request {
             Err(_) => rows,
         };
         crate::io::spheres::check_counts(&rows, name)?;
+        crate::io::spheres::check_one_tool_per_sphere(&rows, name)?;
         check_spheres(&rows, name, &self.arm.params)?;
         Ok(rows)
     }
