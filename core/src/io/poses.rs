@@ -965,6 +965,30 @@ mod tests {
     /// `approach` after the conditions: one sign per joint read per row
     /// (`0`, `.` and an empty cell not known), written back as read; a
     /// cell of the wrong length or character refused by line and field.
+    /// `tool` after the joints, before the conditions: each row's probe
+    /// by name (empty or `probe`: the default), written back as read; the
+    /// points keyed by (label, tool), the default tool's first.
+    #[test]
+    fn the_tool_column_is_read_written_and_keys_the_points() {
+        let text = "point,q1,tool,time\nA,1,long,0\nA,2,,1\nB,3,probe,2\nA,4,long,3\n";
+        let (p, _) = parse_poses(text, F, AngleUnit::Rad, Some(1)).unwrap();
+        assert_eq!(p.tools(), ["probe", "long"]);
+        assert_eq!((0..4).map(|r| p.tool(r)).collect::<Vec<_>>(), [1, 0, 0, 1]);
+        assert_eq!(p.times(), Some(&[0.0, 1.0, 2.0, 3.0][..]));
+        let mut out = Vec::new();
+        write_poses(&mut out, &p, AngleUnit::Rad).unwrap();
+        let back = String::from_utf8(out).unwrap();
+        assert_eq!(back, "point,q1,tool,time\nA,1.0,long,0.0\nA,2.0,,1.0\nB,3.0,,2.0\nA,4.0,long,3.0\n");
+        let (keyed, of_point) = p.keyed_by_tool().unwrap().unwrap();
+        assert_eq!(keyed.points().collect::<Vec<_>>(), ["A", "B", "A"]);
+        assert_eq!(of_point, [0, 0, 1]);
+        assert_eq!((0..4).map(|r| keyed.point(r)).collect::<Vec<_>>(), [2, 0, 1, 2]);
+        // Without the column, or every cell empty: nothing keyed.
+        let (plain, _) = parse_poses("point,q1,tool\nA,1,\n", F, AngleUnit::Rad, None).unwrap();
+        assert_eq!((plain.joints(), plain.has_tools()), (1, false));
+        assert!(plain.keyed_by_tool().unwrap().is_none());
+    }
+
     #[test]
     fn the_approach_column_is_read_written_and_checked() {
         let text =
