@@ -978,11 +978,17 @@ mod tests {
         let mut out = Vec::new();
         write_poses(&mut out, &p, AngleUnit::Rad).unwrap();
         let back = String::from_utf8(out).unwrap();
-        assert_eq!(back, "point,q1,tool,time\nA,1.0,long,0.0\nA,2.0,,1.0\nB,3.0,,2.0\nA,4.0,long,3.0\n");
+        assert_eq!(
+            back,
+            "point,q1,tool,time\nA,1.0,long,0.0\nA,2.0,,1.0\nB,3.0,,2.0\nA,4.0,long,3.0\n"
+        );
         let (keyed, of_point) = p.keyed_by_tool().unwrap().unwrap();
         assert_eq!(keyed.points().collect::<Vec<_>>(), ["A", "B", "A"]);
         assert_eq!(of_point, [0, 0, 1]);
-        assert_eq!((0..4).map(|r| keyed.point(r)).collect::<Vec<_>>(), [2, 0, 1, 2]);
+        assert_eq!(
+            (0..4).map(|r| keyed.point(r)).collect::<Vec<_>>(),
+            [2, 0, 1, 2]
+        );
         // Without the column, or every cell empty: nothing keyed.
         let (plain, _) = parse_poses("point,q1,tool\nA,1,\n", F, AngleUnit::Rad, None).unwrap();
         assert_eq!((plain.joints(), plain.has_tools()), (1, false));
