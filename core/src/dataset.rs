@@ -1259,6 +1259,36 @@ impl DataSet {
         self.tools.as_ref()
     }
 
+    /// These data measured with the tool `name` (an arm's `[[tool]]`,
+    /// resolved by [`DataSet::with_tools`]): every reference position's
+    /// tool set to it — what a file without a `tool` column holds when
+    /// every row was seen at that tool point.
+    ///
+    /// # Errors
+    ///
+    /// Positions that name their tools already (a `tool` column): the tool
+    /// of every row is stated once, by the file or here.
+    pub fn measured_with(mut self, name: &str) -> Result<DataSet, InputError> {
+        if let Some(p) = &mut self.positions {
+            if p.rows.has_tools() {
+                return Err(InputError::file_error(
+                    &p.file,
+                    format!(
+                        "the rows name their tools (a `tool` column): a tool for every row, {}, \
+                         is for a file without one",
+                        crate::error::quoted(name)
+                    ),
+                ));
+            }
+            let mut rows = std::mem::replace(&mut p.rows, crate::io::Positions::new(0));
+            for i in 0..rows.len() {
+                rows.set_tool_of(i, name);
+            }
+            p.rows = rows;
+        }
+        Ok(self)
+    }
+
     /// This data set with its positions replaced by `positions` (none: the
     /// touches alone).
     pub fn with_position_data(mut self, positions: Option<PositionData>) -> DataSet {

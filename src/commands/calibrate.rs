@@ -65,6 +65,13 @@ pub struct Args {
     /// spheres).
     #[arg(long, value_name = "K")]
     cross_validate: Option<usize>,
+    /// The tool the rows that name none were measured with: `probe` (the
+    /// arm's `[probe]`, the default) or one of the arm file's `[[tool]]` (a
+    /// stylus, a marker), whose offset is then fitted and written to the
+    /// calibrated arm's `[[tool]]`, the probe's held. For positions and
+    /// points on spheres in files without a `tool` column.
+    #[arg(long, value_name = "NAME", default_value = "probe")]
+    tool: String,
     /// Exit 0 even when the fit's χ² is far outside the stated noise or the
     /// calibrated arm is worse than the nominal on its own data (never for
     /// a mirror-image or collapsed arm).
@@ -272,6 +279,7 @@ fn problem(args: &Args) -> Result<(Problem, SolverSettings)> {
         .switch(switch)
         .global(global)
         .accept_poor_fit(args.accept_poor_fit)
+        .tool(&args.tool)
         .robust(args.robust.map(|l| Loss::from(l).name()), args.robust_scale)
         .cross_validate(args.cross_validate)
         .register_held_out(args.register_held_out);

@@ -109,6 +109,17 @@ pub struct Args {
     /// radius, not the choice (with --given the calibration's own σ).
     #[arg(long, value_name = "MM", default_value_t = 0.01)]
     noise: f64,
+    /// The tool the campaign will measure with: `probe` (the arm's
+    /// `[probe]`, the default) or one of the arm file's `[[tool]]` (a
+    /// stylus, a marker): the plan is for its offset (sampled touches seat
+    /// its ball), and the calibration it predicts fits that offset.
+    #[arg(
+        long,
+        value_name = "NAME",
+        default_value = "probe",
+        conflicts_with = "given"
+    )]
+    tool: String,
     /// Seed of the sampled candidates and of the random subsets the plan is
     /// compared with.
     #[arg(long, value_name = "N", default_value_t = 1)]
@@ -167,6 +178,10 @@ pub fn run(args: Args) -> Result<()> {
     check_paths(&args)?;
     let (arm, warnings) = read_arm(&args.arm)?;
     report(&warnings)?;
+    // A tool's plan is its offset's: the probe replaced by it, as `points`
+    // and `evaluate` compute with a `--tool`.
+    let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
+        .map_err(super::shared_flags::flag_error)?;
     let start = match &args.given {
         Some(dir) => Some(read_given(dir, &arm, &args.arm)?),
         None => None,

@@ -102,6 +102,14 @@ pub struct Args {
     /// with its true centre distance.
     #[arg(long, value_name = "B", requires = "spheres", default_value_t = 0)]
     ball_bar: usize,
+    /// With --spheres alone (no sockets, no positions): each of the arm
+    /// file's `[[tool]]` styli probes N placements of its own too (`S1.NAME`,
+    /// …, the `tool` column of spheres.csv), with its `ball_diameter_mm` (the
+    /// probe's when it states none) at its true offset — each 0.3 mm off its
+    /// nominal per axis, written to true_arm.toml: what `aacmm probe` and a
+    /// calibration of several probes are tried on.
+    #[arg(long, requires = "spheres", conflicts_with_all = ["sockets", "sockets_file", "positions"])]
+    sphere_tools: bool,
     /// The ball bar's length, centre to centre, mm.
     #[arg(long, value_name = "MM", requires = "ball_bar", default_value_t = aacmm_core::simulate::DEFAULT_BAR_LENGTH_MM)]
     bar_length: f64,
@@ -291,12 +299,18 @@ fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>)
             simulate_spheres(t, &settings.for_campaign()).map_err(located)?,
         ),
         None => {
-            let (truth, campaign) = aacmm_core::simulate::simulate_sphere_campaign(
+            let (mut truth, campaign) = aacmm_core::simulate::simulate_sphere_campaign(
                 &with_ball(args, nominal),
                 errors,
                 &settings,
             )
             .map_err(|e| flag_error(e, None))?;
+            if args.sphere_tools {
+                // From a stream of their own: the arm and its points are
+                // those of the campaign without them.
+                let seed = seeds::of(args.seed, seeds::SPHERE_TOOLS);
+                truth.tools = aacmm_core::simulate::perturbed_tools(&nominal.tools, 0.3, seed);
+            }
             std::fs::create_dir_all(&args.out)
                 .map_err(|e| anyhow!("--out {}: cannot create: {e}", args.out.display()))?;
             let text = arm_to_toml(&truth, LengthUnit::Mm, AngleUnit::Deg);
@@ -307,6 +321,23 @@ fn spheres(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>)
         }
     };
     let (rows, lengths) = acceptance_placements(args, &truth, campaign, &settings)?;
+    let rows = match args.sphere_tools {
+        true => {
+            let settings = settings.for_campaign();
+            let located = |e| flag_error(e, None);
+            let rows = aacmm_core::simulate::with_tool_placements(&truth, rows, &settings)
+                .map_err(located)?
+                .spheres;
+            let names: Vec<&str> = truth.tools.iter().map(|t| t.name.as_str()).collect();
+            note(format_args!(
+                "--sphere-tools: {placements} placements by each stylus too ({}; S1.NAME, …), \
+                 at its true offset in {TRUE_ARM_FILE}",
+                names.join(", ")
+            ))?;
+            rows
+        }
+        false => rows,
+    };
     let path = args.out.join(SPHERES_FILE);
     let mut text = Vec::new();
     write_spheres(&mut text, &rows, AngleUnit::Deg)?;
@@ -843,6 +874,7 @@ fn flag_error(e: SimError, file: Option<&SocketsFile>) -> anyhow::Error {
         "probe_noise_mm" => "--probe-noise",
         "reference_lengths" => "--reference-lengths",
         "length_uncertainty_mm" => "--length-uncertainty",
+        "sphere_tools" => "--sphere-tools",
         n if n.starts_with("errors.") => "--error-scale",
         _ => return e.into(),
     };

@@ -315,3 +315,63 @@ fn a_sampled_workspace_is_said_with_why_and_how_to_change_it() {
     );
     assert_clean_error(&o, &["--workspace-poses 0: at least 1"]);
 }
+
+/// `--tool NAME` plans for one of the arm's `[[tool]]` styli: the rows it
+/// chooses are those of an arm file whose probe is that stylus; a tool
+/// the arm does not have is refused by the flag, with the arm's tools.
+#[test]
+fn a_plan_for_a_stylus_is_the_plan_of_its_offset() {
+    let dir = temp_dir("plan-tool");
+    let text = std::fs::read_to_string(shipped_arm()).unwrap();
+    let (arm, _) = aacmm_core::io::parse_arm(&text, "arm.toml").unwrap();
+    let p = arm.params.probe;
+    let long = [p[0] + 15.0, p[1] - 5.0, p[2] + 60.0];
+    let tooled = aacmm_core::io::Arm {
+        tools: vec![aacmm_core::io::Tool {
+            name: "long".into(),
+            offset: long,
+            ball_diameter_mm: None,
+        }],
+        ..arm.clone()
+    };
+    let mut moved = arm.clone();
+    moved.params.probe = long;
+    let toml = |a: &aacmm_core::io::Arm| {
+        aacmm_core::io::arm_to_toml(a, aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg)
+    };
+    let tooled = write(&dir, "tooled.toml", &toml(&tooled));
+    let moved = write(&dir, "moved.toml", &toml(&moved));
+    let chosen = |arm: &str, tool: &[&str], out: &str| {
+        let out = dir.join(out);
+        let args = [
+            &["plan", "--arm", arm, "--sample", "200", "--count", "12"][..],
+            &["--measure", "touches", "--out", out.to_str().unwrap()][..],
+            tool,
+        ]
+        .concat();
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read_to_string(out).unwrap()
+    };
+    let by_tool = chosen(&tooled, &["--tool", "long"], "tool.csv");
+    assert_eq!(by_tool, chosen(&moved, &[], "moved.csv"));
+    assert_ne!(
+        by_tool,
+        chosen(&tooled, &[], "probe.csv"),
+        "the probe's plan is another"
+    );
+    let o = aacmm(&[
+        "plan",
+        "--arm",
+        &tooled,
+        "--sample",
+        "50",
+        "--count",
+        "5",
+        "--measure",
+        "touches",
+        "--tool",
+        "short",
+    ]);
+    assert_clean_error(&o, &["--tool short", "`probe`, `long`"]);
+}

@@ -7,7 +7,7 @@ use aacmm_core::io::{Arm, Tool};
 use aacmm_core::params::DhParams;
 use aacmm_core::prelude::*;
 use aacmm_core::residuals::spheres::{SphereSize, SphereTerm};
-use aacmm_core::simulate::{SphereSettings, simulate_spheres, true_arm};
+use aacmm_core::simulate::{SphereSettings, simulate_spheres, true_arm, with_tool_placements};
 use rand::SeedableRng;
 
 const DIAMETER: f64 = 25.4;
@@ -54,27 +54,14 @@ fn settings(placements: usize, ball: f64, seed: u64) -> SphereSettings {
 }
 
 /// `truth`'s sphere points by its probe (`S1`, …) and by its `long`
-/// stylus (`L1`, …, the rows naming it), in one file's rows.
+/// stylus (`S1.long`, …, the rows naming it), in one file's rows: what
+/// `simulate --spheres N --sphere-tools` writes.
 fn two_probe_points(truth: &Arm, placements: usize, seed: u64) -> Spheres {
-    let by_probe = simulate_spheres(truth, &settings(placements, BALL, seed)).unwrap();
-    let long = &truth.tools[0];
-    let stylus = Arm {
-        params: DhParams {
-            probe: long.offset,
-            ..truth.params.clone()
-        },
-        ball_diameter_mm: long.ball_diameter_mm,
-        ..truth.clone()
-    };
-    let by_long = simulate_spheres(&stylus, &settings(placements, LONG_BALL, seed + 1)).unwrap();
-    let mut out = by_probe.spheres.clone();
-    let b = &by_long.spheres;
-    for i in 0..b.len() {
-        let name = b.spheres()[b.sphere(i)].replacen('S', "L", 1);
-        out.push(&name, b.reading(i), out.len() + 2, None);
-        out.set_tool(long);
-    }
-    out
+    let s = settings(placements, BALL, seed);
+    let by_probe = simulate_spheres(truth, &s).unwrap();
+    with_tool_placements(truth, by_probe.spheres, &s)
+        .unwrap()
+        .spheres
 }
 
 /// The fit of `rows` from `start`, the diameter stated.
@@ -141,7 +128,10 @@ fn two_probes_on_spheres_are_each_recovered() {
         let names: Vec<&str> = spheres.probes.iter().map(|p| p.name.as_str()).collect();
         assert_eq!(names, ["probe", "long"]);
         assert_eq!(spheres.probes[1].offset, long.1);
-        assert_eq!(spheres.probes[1].spheres, ["L1", "L2", "L3", "L4"]);
+        assert_eq!(
+            spheres.probes[1].spheres,
+            ["S1.long", "S2.long", "S3.long", "S4.long"]
+        );
         assert_eq!(
             (
                 spheres.probes[0].ball_diameter,
@@ -617,5 +607,251 @@ fn verify_takes_one_probe_at_a_time() {
     assert_clean_error(
         &verify(&both, "probe").0,
         &["both.csv:27: field `tool`", "`long`"],
+    );
+}
+
+/// `simulate --spheres N --sphere-tools`: each `[[tool]]` stylus probes N
+/// placements of its own (`S1.long`, …, the `tool` column), the same bytes
+/// for the same seed, the probe's rows those of the run without the flag;
+/// the true stylus (0.3 mm off) is in true_arm.toml, and a calibration of
+/// the file recovers it within 4σ. An arm without `[[tool]]` is refused by
+/// the flag.
+#[test]
+fn simulate_sphere_tools_then_calibrate() {
+    use crate::util::{aacmm, assert_clean_error, temp_dir, write};
+    let dir = temp_dir("sphere-tools");
+    let text =
+        aacmm_core::io::arm_to_toml(&nominal(), aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg);
+    let arm = write(&dir, "arm.toml", &text);
+    let run = |out: &str, tools: bool| {
+        let out = dir.join(out);
+        let mut args = vec![
+            "simulate",
+            "--arm",
+            &arm,
+            "--errors",
+            "paper",
+            "--spheres",
+            "4",
+            "--seed",
+            "6",
+            "--encoder-noise",
+            "0.001",
+            "--probe-noise",
+            "0.003",
+        ];
+        if tools {
+            args.push("--sphere-tools");
+        }
+        let out_s = out.to_str().unwrap().to_string();
+        args.extend(["--out", &out_s]);
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let read = |f: &str| std::fs::read_to_string(out.join(f)).unwrap();
+        (read("spheres.csv"), read("true_arm.toml"), out)
+    };
+    let (with, truth, out) = run("with", true);
+    let (again, _, _) = run("again", true);
+    let (plain, _, _) = run("plain", false);
+    assert_eq!(with, again, "the same seed, the same bytes");
+    let lines: Vec<&str> = with.lines().collect();
+    assert_eq!(lines[0], "sphere,q1,q2,q3,q4,q5,q6,tool");
+    assert_eq!(lines.len(), 1 + 2 * 4 * 25);
+    for (a, b) in plain.lines().skip(1).zip(&lines[1..]) {
+        assert_eq!(format!("{a},probe"), *b);
+    }
+    assert!(lines[101].starts_with("S1.long,") && lines[101].ends_with(",long"));
+    let (true_arm, _) = aacmm_core::io::parse_arm(&truth, "true_arm.toml").unwrap();
+    let true_long = true_arm.tools[0].offset;
+    let shift: f64 = (true_long.iter().zip(nominal().tools[0].offset))
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(shift > 0.1, "the true stylus is off its nominal: {shift}");
+
+    let fitted = dir.join("fit");
+    let spheres = out.join("spheres.csv");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--spheres",
+        spheres.to_str().unwrap(),
+        "--sphere-diameter",
+        "25.4",
+        "--encoder-noise",
+        "0.001",
+        "--probe-noise",
+        "0.003",
+        "--method",
+        "lm",
+        "--out",
+        fitted.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json = std::fs::read_to_string(fitted.join("calibration.json")).unwrap();
+    let report = CalibrationReport::from_json(&json).unwrap();
+    let (name, x, sigma) = report.calibration.tool_estimates().remove(0);
+    assert_eq!(name, "long");
+    let sigma = sigma.expect("the stylus' σ");
+    for k in 0..3 {
+        let z = (x[k] - true_long[k]) / sigma[k];
+        assert!(
+            z.abs() < 4.0,
+            "long[{k}]: {} vs {} (σ {})",
+            x[k],
+            true_long[k],
+            sigma[k]
+        );
+    }
+
+    let bare = aacmm_core::io::arm_to_toml(
+        &Arm {
+            tools: Vec::new(),
+            ..nominal()
+        },
+        aacmm_core::io::LengthUnit::Mm,
+        AngleUnit::Deg,
+    );
+    let bare = write(&dir, "bare.toml", &bare);
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &bare,
+        "--spheres",
+        "2",
+        "--sphere-tools",
+        "--errors",
+        "paper",
+        "--seed",
+        "1",
+        "--out",
+        dir.join("bare").to_str().unwrap(),
+    ]);
+    assert_clean_error(
+        &o,
+        &["--sphere-tools: an arm whose file lists styli as [[tool]]"],
+    );
+}
+
+/// `calibrate --tool NAME`: a file without a `tool` column probed with one
+/// of the arm's styli calibrates as the same file whose every row names it
+/// (the same parameters and offsets, the stylus' written to the calibrated
+/// arm's `[[tool]]`, the probe's held as unseen); a file that names its
+/// probes already, and touches (no `tool` column read for them), are
+/// refused by the flag.
+#[test]
+fn calibrate_tool_is_the_tool_column_of_every_row() {
+    use crate::util::{aacmm, assert_clean_error, stdout, temp_dir, write};
+    let dir = temp_dir("calibrate-tool");
+    let text =
+        aacmm_core::io::arm_to_toml(&nominal(), aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg);
+    let arm = write(&dir, "arm.toml", &text);
+    let (_, rows) = campaign(2);
+    let long: Vec<usize> = (0..rows.len()).filter(|&i| rows.tool(i) == 1).collect();
+    let named = rows.subset(&long);
+    let mut bare = Spheres::new(named.joints(), named.prismatic_mask());
+    for i in 0..named.len() {
+        bare.push(
+            &named.spheres()[named.sphere(i)],
+            named.reading(i),
+            named.line(i),
+            None,
+        );
+    }
+    let csv = |rows: &Spheres| {
+        let mut text = Vec::new();
+        write_spheres(&mut text, rows, AngleUnit::Deg).unwrap();
+        String::from_utf8(text).unwrap()
+    };
+    let named_file = write(&dir, "named.csv", &csv(&named));
+    let bare_file = write(&dir, "bare.csv", &csv(&bare));
+    assert!(!csv(&bare).starts_with("sphere,q1,q2,q3,q4,q5,q6,tool"));
+    let fit = |file: &str, tool: &[&str], out: &str| {
+        let out = dir.join(out);
+        let args = [
+            &[
+                "calibrate",
+                "--arm",
+                &arm,
+                "--spheres",
+                file,
+                "--sphere-diameter",
+                "25.4",
+            ][..],
+            &[
+                "--encoder-noise",
+                "0.005",
+                "--probe-noise",
+                "0.01",
+                "--method",
+                "lm",
+            ][..],
+            &["--out", out.to_str().unwrap()][..],
+            tool,
+        ]
+        .concat();
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+        let toml = std::fs::read_to_string(out.join("calibrated.toml")).unwrap();
+        (
+            CalibrationReport::from_json(&json).unwrap(),
+            toml,
+            stdout(&o),
+        )
+    };
+    let (by_flag, toml, text) = fit(&bare_file, &["--tool", "long"], "flag");
+    let (by_column, _, _) = fit(&named_file, &[], "column");
+    assert_eq!(by_flag.calibration.params, by_column.calibration.params);
+    assert_eq!(
+        by_flag.calibration.tool_estimates(),
+        by_column.calibration.tool_estimates()
+    );
+    assert!(
+        text.contains("unseen: no row is measured with the arm's [probe]"),
+        "{text}"
+    );
+    let (back, _) = aacmm_core::io::parse_arm(&toml, "calibrated.toml").unwrap();
+    let (_, x, _) = by_flag.calibration.tool_estimates().remove(0);
+    assert_eq!(back.tools[0].offset, x);
+    assert_eq!(
+        back.params.probe,
+        nominal().params.probe,
+        "the probe is held"
+    );
+
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--spheres",
+        &named_file,
+        "--sphere-diameter",
+        "25.4",
+        "--tool",
+        "long",
+        "--out",
+        dir.join("named-flag").to_str().unwrap(),
+    ]);
+    assert_clean_error(
+        &o,
+        &["--tool long", "named.csv: the rows name their probes"],
+    );
+    let poses = crate::util::shipped("poses.csv");
+    let o = aacmm(&[
+        "calibrate",
+        "--arm",
+        &arm,
+        "--data",
+        &poses,
+        "--tool",
+        "long",
+        "--out",
+        dir.join("touches").to_str().unwrap(),
+    ]);
+    assert_clean_error(
+        &o,
+        &["--tool long", "touches give their tool in a `tool` column"],
     );
 }

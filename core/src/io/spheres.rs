@@ -158,6 +158,23 @@ impl Spheres {
             .map_or(0, |i| self.tool(i))
     }
 
+    /// These rows, each probed by `tool` (one of an arm's `[[tool]]`):
+    /// what a file without a `tool` column holds when every point was
+    /// touched with that probe.
+    pub fn as_tool(&self, tool: &Tool) -> Spheres {
+        let mut out = Spheres::new(self.joints, self.prismatic);
+        for i in 0..self.len() {
+            out.push(
+                &self.names[self.sphere_of[i]],
+                self.reading(i),
+                self.line(i),
+                self.articulation(i),
+            );
+            out.set_tool(tool);
+        }
+        out
+    }
+
     /// Whether some row names a tool other than the default.
     pub fn has_tools(&self) -> bool {
         self.tool_of.iter().any(|&k| k != 0)

@@ -19,7 +19,7 @@
 //! | `σ` | `sqrt((1/n) Σ (δ_i − e)²)` (population) | paper eq. 11 |
 //! | `OA` | `e + 3σ` | paper eq. 12 (the calibration objective) |
 //! | `δ_max` | `max δ_i` | ASME B89.4.22 single-point articulation test (SPAT) |
-//! | `2s` | `2·sqrt(Σ δ_i² / (n − 1))` | SPAT (unverified whether vendors quote `δ_max` or `2s`) |
+//! | `2s` | `2·sqrt(Σ δ_i² / (n − 1))` | SPAT (makers quote either `δ_max` or `2s`; [`crate::acceptance`] decides on `δ_max`) |
 //! | half-range | `(max − min)/2` of X, Y and Z separately | FARO's SPAT routine |
 //!
 //! Across points, [`Summary`] gives min, mean, max and population standard
@@ -301,7 +301,7 @@ pub struct Evaluation {
     pub single_point_e: Summary,
     /// `δ_max` across points (SPAT).
     pub single_point_delta_max: Summary,
-    /// `2s` across points (SPAT, unverified which figure vendors quote).
+    /// `2s` across points (SPAT; makers quote it or `δ_max`).
     pub single_point_two_s: Summary,
     /// `d_error` (eq. 19) across all pairs of points (Fig. 7), or across
     /// [`Evaluation::pair_sample`]; `None` with a single point.

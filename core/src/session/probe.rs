@@ -336,7 +336,10 @@ fn rows_of_probe(
     } else if tool == DEFAULT_TOOL {
         rows
     } else {
-        as_tool(&rows, arm, tool)
+        match arm.tools.iter().find(|t| t.name == tool) {
+            Some(t) => rows.as_tool(t),
+            None => rows,
+        }
     };
     let refuse = |why: String| OptionError::new("tool", tool, format!("{file}: {why}"));
     match rows.spheres().len() {
@@ -349,22 +352,4 @@ fn rows_of_probe(
         ))
         .into()),
     }
-}
-
-/// Every row of `rows` as the tool `tool`'s.
-fn as_tool(rows: &Spheres, arm: &Arm, tool: &str) -> Spheres {
-    let Some(t) = arm.tools.iter().find(|t| t.name == tool) else {
-        return rows.clone();
-    };
-    let mut out = Spheres::new(rows.joints(), rows.prismatic_mask());
-    for i in 0..rows.len() {
-        out.push(
-            &rows.spheres()[rows.sphere(i)],
-            rows.reading(i),
-            rows.line(i),
-            rows.articulation(i),
-        );
-        out.set_tool(t);
-    }
-    out
 }

@@ -76,6 +76,9 @@ pub struct Request {
     switch: SwitchRule,
     global: GlobalOptions,
     spheres: Option<SphereInput>,
+    /// The tool every row that names none was measured with (`None`: the
+    /// arm's `[probe]`).
+    tool: Option<String>,
 }
 
 /// Points probed on reference spheres as read, and their size as asked.
@@ -151,6 +154,7 @@ impl Request {
             switch: solver.switch,
             global: solver.global,
             spheres: None,
+            tool: None,
         }
     }
 
@@ -517,6 +521,18 @@ impl Request {
         self
     }
 
+    /// Every row the data do not give a tool was measured with the arm's
+    /// `[[tool]]` `name` (a stylus, a marker; `probe`: the arm's `[probe]`,
+    /// the default): that tool's offset is fitted, the probe's held as
+    /// unseen, and the calibrated arm writes the fitted offset to its
+    /// `[[tool]]`. Checked when built: a tool the arm does not have, data
+    /// files that name their tools already (a `tool` column), and touches
+    /// (their tool is a poses file's column) are refused.
+    pub fn tool(mut self, name: &str) -> Request {
+        self.tool = (name != crate::io::tools::DEFAULT_TOOL).then(|| name.to_string());
+        self
+    }
+
     /// Calls a poor χ² or a fit worse than nominal usable (never a wrong
     /// geometry).
     pub fn accept_poor_fit(mut self, accept: bool) -> Request {
@@ -724,6 +740,12 @@ impl Request {
     /// unit than the arm.
     pub fn build(self) -> Result<(Problem, SolverSettings), CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
+        let tooled = self.measured_with_tool()?;
+        tooled.build_measured()
+    }
+
+    /// [`Request::build`] once the data say their tools.
+    fn build_measured(self) -> Result<(Problem, SolverSettings), CalibrationError> {
         // Refusals come in the order of the settings' homes: the problem's,
         // then the run's.
         let settings = self.settings();
@@ -907,6 +929,72 @@ fn with_held_out_spheres(
         crate::residuals::spheres::add_to(&mut own),
     )?;
     problem.with_held_out_spheres(term)
+}
+
+impl Request {
+    /// The data as [`Request::tool`] says they were measured: every row
+    /// without a tool given the tool.
+    fn measured_with_tool(mut self) -> Result<Request, CalibrationError> {
+        let Some(name) = self.tool.clone() else {
+            return Ok(self);
+        };
+        crate::io::tools::arm_with_tool(&self.arm, &name)?;
+        let Some(tool) = self.arm.tools.iter().find(|t| t.name == name).cloned() else {
+            return Ok(self);
+        };
+        let refused = |e: InputError| OptionError::new("tool", &name, e.to_string());
+        if !self.data.is_empty() {
+            return Err(OptionError::new(
+                "tool",
+                &name,
+                format!(
+                    "{}: touches give their probe in the poses file's `tool` column, row by \
+                     row (a name of the arm's [[tool]]): add the column rather than one tool \
+                     for every touch",
+                    self.sources.data_file
+                ),
+            )
+            .into());
+        }
+        self.data = self.data.measured_with(&name).map_err(refused)?;
+        if let Some((mut held, warnings)) = self.held_out.take() {
+            if !held.data.is_empty() {
+                return Err(OptionError::new(
+                    "tool",
+                    &name,
+                    format!(
+                        "{}: held-out touches give their probe in the poses file's `tool` \
+                         column, row by row: add the column rather than one tool for every touch",
+                        held.data_file
+                    ),
+                )
+                .into());
+            }
+            held.data = held.data.measured_with(&name).map_err(refused)?;
+            self.held_out = Some((held, warnings));
+        }
+        let as_tool = |rows: Spheres, file: &str| {
+            if rows.has_tools() {
+                return Err(InputError::file_error(
+                    file,
+                    format!(
+                        "the rows name their probes (a `tool` column): a probe for every row, \
+                         {}, is for a file without one",
+                        crate::error::quoted(&name)
+                    ),
+                ));
+            }
+            Ok(rows.as_tool(&tool))
+        };
+        if let Some(mut s) = self.spheres.take() {
+            s.rows = as_tool(s.rows, &s.file).map_err(refused)?;
+            self.spheres = Some(s);
+        }
+        if let Some((rows, file)) = self.held_out_spheres.take() {
+            self.held_out_spheres = Some((as_tool(rows, &file).map_err(refused)?, file));
+        }
+        Ok(self)
+    }
 }
 
 /// `problem` with the sphere term of `input` (its blocks added), probed

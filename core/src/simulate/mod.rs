@@ -81,6 +81,8 @@ pub mod seeds {
     pub const SPHERES: u64 = 7;
     /// The acceptance tests' placements (`L_Dia`, the ball bar).
     pub const ACCEPTANCE: u64 = 8;
+    /// The placements each `[[tool]]` stylus probes (`--sphere-tools`).
+    pub const SPHERE_TOOLS: u64 = 9;
 
     /// The seed of the part `offset` (one of the above) of a campaign
     /// seeded by `seed`.
@@ -147,7 +149,7 @@ use sockets::round_nm;
 pub use sockets::{place_sockets, shoulder};
 pub use spheres::{
     DEFAULT_SPHERE_DIAMETER_MM, SPHERES_FILE, SphereCampaign, SphereSettings, iso_sphere_pattern,
-    simulate_sphere_campaign, simulate_spheres,
+    simulate_sphere_campaign, simulate_spheres, with_tool_placements,
 };
 pub use tools::{perturbed_tools, random_tools, seen_at_markers};
 pub use touches::Touch;

@@ -146,6 +146,53 @@ pub fn simulate_spheres(
     Ok(SphereCampaign { spheres, centres })
 }
 
+/// `spheres` (a campaign's rows) with `placements` more probed by each of
+/// `truth`'s `[[tool]]` styli, at its true offset and with its ball (the
+/// probe's when it states none): `S1.NAME`, `S2.NAME`, …, each row naming
+/// its tool, each tool's placements drawn from a stream of its own (the
+/// seed's [`super::seeds::SPHERE_TOOLS`] part, and the tool's place among
+/// the arm's). The rows before keep their bytes; the new ones get an
+/// articulation `1` when the rows before have the column. Returns every
+/// row and the new placements' true centres.
+///
+/// # Errors
+///
+/// An arm without `[[tool]]`; as [`simulate_spheres`].
+pub fn with_tool_placements(
+    truth: &Arm,
+    mut spheres: Spheres,
+    settings: &SphereSettings,
+) -> Result<SphereCampaign, SimError> {
+    if truth.tools.is_empty() {
+        return Err(SimError::setting(
+            "sphere_tools",
+            "an arm whose file lists styli as [[tool]] (with their ball_diameter_mm)",
+        ));
+    }
+    let articulated = spheres.articulation(0).map(|_| 1);
+    let base = super::seeds::of(settings.seed, super::seeds::SPHERE_TOOLS);
+    let mut centres = Vec::new();
+    for (k, tool) in truth.tools.iter().enumerate() {
+        let seen = crate::io::tools::arm_with_tool(truth, &tool.name)
+            .map_err(|e| SimError::Model(e.to_string()))?;
+        let own = SphereSettings {
+            ball_diameter_mm: tool.ball_diameter_mm.unwrap_or(settings.ball_diameter_mm),
+            seed: base.wrapping_add((k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15)),
+            ..settings.clone()
+        };
+        let drawn = simulate_spheres(&seen, &own)?;
+        let rows = &drawn.spheres;
+        for i in 0..rows.len() {
+            let name = format!("{}.{}", rows.spheres()[rows.sphere(i)], tool.name);
+            let line = spheres.len() + 2;
+            spheres.push(&name, rows.reading(i), line, articulated);
+            spheres.set_tool(tool);
+        }
+        centres.extend((drawn.centres.into_iter()).map(|(n, c)| (format!("{n}.{}", tool.name), c)));
+    }
+    Ok(SphereCampaign { spheres, centres })
+}
+
 /// Draws of a placement before the campaign is given up.
 const DRAWS_PER_PLACEMENT: usize = 50;
 
