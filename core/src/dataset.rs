@@ -308,6 +308,62 @@ pub struct DataSet {
     /// One warning per point some of whose rows repeated the row before
     /// them and were counted once ([`DataSet::repeat_warnings`]).
     repeats: Vec<crate::io::Warning>,
+    /// Which tool touched each point, when some touch names a tool other
+    /// than the default (a `tool` column, [`crate::io::tools`]).
+    tools: Option<TouchTools>,
+}
+
+/// The tools that touched a data set's points: several probes. A point
+/// touched by two tools is two points (the ball's centre in a socket
+/// depends on the ball), each tool's points contiguous, the default
+/// tool's first ([`crate::io::Poses`]'s order of tools).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TouchTools {
+    /// The tools' names, the default ([`crate::io::DEFAULT_TOOL`]) first.
+    names: Vec<String>,
+    /// Per tool, its nominal offset (mm, the last joint's frame) once
+    /// resolved against the arm's ([`DataSet::with_tools`]); `None` for
+    /// the default tool (the arm's probe) and before.
+    offsets: Vec<Option<[f64; 3]>>,
+    /// Per point, its tool (an index into `names`).
+    of_point: Vec<u32>,
+}
+
+impl TouchTools {
+    /// The tools' names, the default first.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Point `p`'s tool (an index into [`TouchTools::names`]).
+    pub fn of_point(&self, p: usize) -> usize {
+        self.of_point[p] as usize
+    }
+
+    /// Tool `k`'s nominal offset (mm), `None` for the default tool or
+    /// before [`DataSet::with_tools`].
+    pub fn offset(&self, k: usize) -> Option<[f64; 3]> {
+        self.offsets[k]
+    }
+
+    /// The runs of points of one tool, in point order: `(tool, points)`.
+    pub fn runs(&self) -> Vec<(usize, Range<usize>)> {
+        let mut out: Vec<(usize, Range<usize>)> = Vec::new();
+        for (p, &k) in self.of_point.iter().enumerate() {
+            match out.last_mut() {
+                Some((last, r)) if *last == k as usize => r.end = p + 1,
+                _ => out.push((k as usize, p..p + 1)),
+            }
+        }
+        out
+    }
+
+    /// The tools some point has, other than the default, in order.
+    pub fn used(&self) -> Vec<usize> {
+        (1..self.names.len())
+            .filter(|k| self.of_point.iter().any(|&t| t as usize == *k))
+            .collect()
+    }
 }
 
 /// Reference positions prepared for the kernel: the rows of a
@@ -510,7 +566,26 @@ impl DataSet {
     /// assert!(e.to_string().starts_with("f.csv:2: field `point`: point `A` has 2 touches"));
     /// ```
     pub fn from_poses(poses: &Poses, file: &str) -> Result<DataSet, InputError> {
-        Ok(DataSet::grouped(poses, file)?.prepared())
+        match poses
+            .keyed_by_tool()
+            .map_err(|e| InputError::memory(file, e))?
+        {
+            Some((keyed, of_point)) => Ok(DataSet::grouped(&keyed, file)?
+                .touched_by(poses, of_point)
+                .prepared()),
+            None => Ok(DataSet::grouped(poses, file)?.prepared()),
+        }
+    }
+
+    /// This data set with its points' tools `of_point` (per point, an
+    /// index into `poses`' tools).
+    fn touched_by(mut self, poses: &Poses, of_point: Vec<u32>) -> DataSet {
+        self.tools = Some(TouchTools {
+            names: poses.tools().to_vec(),
+            offsets: vec![None; poses.tools().len()],
+            of_point,
+        });
+        self
     }
 
     /// As [`DataSet::from_poses`], taking the poses: they are freed before
@@ -520,6 +595,9 @@ impl DataSet {
     /// # Errors
     /// As [`DataSet::from_poses`].
     pub fn from_poses_owned(poses: Poses, file: &str) -> Result<DataSet, InputError> {
+        if poses.has_tools() {
+            return DataSet::from_poses(&poses, file);
+        }
         let grouped = DataSet::grouped(&poses, file)?;
         drop(poses);
         Ok(grouped.prepared())
@@ -615,6 +693,7 @@ impl DataSet {
             time,
             approach,
             repeats: warnings,
+            tools: None,
         })
     }
 
@@ -913,6 +992,7 @@ impl DataSet {
     ) -> Result<DataSet, InputError> {
         let labels: Vec<&str> = self.points.iter().map(|p| p.label.as_str()).collect();
         crate::io::check_lengths_against(lengths, &labels, file)?;
+        self.check_lengths_unambiguous(lengths, file)?;
         let index: HashMap<&str, usize> = labels.iter().enumerate().map(|(i, l)| (*l, i)).collect();
         // The file reader already refused a point joined to itself and a
         // pair given twice; what is left is whether the labels exist.
@@ -932,6 +1012,48 @@ impl DataSet {
         Ok(self)
     }
 
+    /// Refuses a length naming a label touched by several tools: two
+    /// points, whose ball centres differ (the balls' sizes), so which one
+    /// the length ends at is not known.
+    fn check_lengths_unambiguous(
+        &self,
+        lengths: &[ReferenceLength],
+        file: &str,
+    ) -> Result<(), InputError> {
+        let Some(t) = &self.tools else {
+            return Ok(());
+        };
+        let mut tools_of: HashMap<&str, Vec<&str>> = HashMap::new();
+        for (p, point) in self.points.iter().enumerate() {
+            tools_of
+                .entry(point.label.as_str())
+                .or_default()
+                .push(t.names[t.of_point(p)].as_str());
+        }
+        for l in lengths {
+            for (field, label) in [("point_a", &l.a), ("point_b", &l.b)] {
+                let Some(named) = tools_of.get(label.as_str()).filter(|n| n.len() > 1) else {
+                    continue;
+                };
+                let named: Vec<String> = named.iter().map(|n| crate::error::quoted(n)).collect();
+                return Err(InputError::field(
+                    file,
+                    l.line,
+                    field,
+                    format!(
+                        "point {} was touched by several tools ({}): each tool's touches are \
+                         a point of their own (a ball's centre in a socket depends on the \
+                         ball), so which one the length ends at is ambiguous; touch the \
+                         lengths' points with one tool",
+                        crate::error::quoted(label),
+                        named.join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// A data set without observations of its own, for an arm of `joints`
     /// joints (`prismatic`: bit `j` for a slide): the evidence is in terms
     /// added to the problem (points probed on spheres,
@@ -949,6 +1071,7 @@ impl DataSet {
             time: None,
             approach: None,
             repeats: Vec::new(),
+            tools: None,
         }
     }
 
@@ -979,6 +1102,7 @@ impl DataSet {
             time: None,
             approach: None,
             repeats: Vec::new(),
+            tools: None,
         })
     }
 
@@ -1082,7 +1206,57 @@ impl DataSet {
         if let Some(p) = &mut self.positions {
             p.rows.resolve_tools(tools, &p.file)?;
         }
+        if let Some(t) = &self.tools {
+            let mut offsets = vec![None; t.names.len()];
+            for (k, offset) in offsets.iter_mut().enumerate().skip(1) {
+                // The first touch (in file order) of the tool: where an
+                // unknown name is reported.
+                let line = (self.points.iter().zip(&t.of_point))
+                    .filter(|(_, of)| **of as usize == k)
+                    .flat_map(|(p, _)| p.touches.clone())
+                    .map(|i| self.source.touch_lines[i])
+                    .min();
+                let Some(line) = line else { continue };
+                tools.of_cell(&t.names[k], &self.source.poses_file, line as usize)?;
+                *offset = tools.offset(&t.names[k]);
+            }
+            if let Some(t) = &mut self.tools {
+                t.offsets = offsets;
+            }
+        }
         Ok(self)
+    }
+
+    /// Refuses touches by a tool other than the default for `what` (a
+    /// stage that sees every touch through the arm's probe), at the poses
+    /// file's first such touch, field `tool`.
+    ///
+    /// # Errors
+    ///
+    /// The first touch (in file order) by another tool.
+    pub fn refuse_touch_tools(&self, what: &str) -> Result<(), InputError> {
+        let Some(t) = &self.tools else {
+            return Ok(());
+        };
+        let first = (self.points.iter().zip(&t.of_point))
+            .filter(|(_, k)| **k != 0)
+            .flat_map(|(p, k)| p.touches.clone().map(move |i| (i, *k)))
+            .min_by_key(|&(i, _)| self.source.touch_lines[i]);
+        let Some((i, k)) = first else {
+            return Ok(());
+        };
+        Err(crate::io::poses::tools_refused(
+            &self.source.poses_file,
+            self.source.touch_lines[i] as usize,
+            &t.names[k as usize],
+            what,
+        ))
+    }
+
+    /// The tools that touched the points, when some touch names a tool
+    /// other than the default (the arm's probe).
+    pub fn touch_tools(&self) -> Option<&TouchTools> {
+        self.tools.as_ref()
     }
 
     /// These data measured with the tool `name` (an arm's `[[tool]]`,
@@ -1266,6 +1440,10 @@ impl DataSet {
                     .collect()
             }),
             repeats: self.repeats.clone(),
+            tools: self.tools.as_ref().map(|t| TouchTools {
+                of_point: keep.iter().map(|&p| t.of_point[p]).collect(),
+                ..t.clone()
+            }),
         }
     }
 

@@ -132,6 +132,9 @@ impl ArmAndPoses {
         let (poses, more) = read(self.data()?, self.angle_unit, &arm)?;
         warnings.extend(more);
         let file = source_name(self.data()?);
+        // Every command reading poses here computes each row with one
+        // probe: rows of several tools are `calibrate`'s alone.
+        poses.refuse_tools(&file, "this command")?;
         warnings.extend(limit_warning(&arm, &poses, &file, self.angle_unit));
         report(&warnings)?;
         Ok((arm, poses))

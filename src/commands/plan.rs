@@ -370,6 +370,7 @@ fn candidates(args: &Args, arm: &Arm) -> Result<Candidates> {
 /// printed.
 fn read_candidates(flag: &str, path: &Path, args: &Args, arm: &Arm) -> Result<Poses> {
     let (poses, mut warnings, _) = read_poses_or_positions(path, args.angle_unit, arm)?;
+    poses.refuse_tools(&source_name(path), "plan")?;
     let file = source_name(path);
     if poses.is_empty() {
         bail!("{flag} {file}: no poses");

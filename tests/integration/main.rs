@@ -36,5 +36,6 @@ mod sphere_term;
 mod spheres;
 mod streams;
 mod tools;
+mod touch_tools;
 mod util;
 mod verdict;

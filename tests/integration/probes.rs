@@ -852,6 +852,9 @@ fn calibrate_tool_is_the_tool_column_of_every_row() {
     ]);
     assert_clean_error(
         &o,
-        &["--tool long", "touches give their tool in a `tool` column"],
+        &[
+            "--tool long",
+            "touches give their probe in the poses file's `tool` column",
+        ],
     );
 }

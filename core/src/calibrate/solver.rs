@@ -409,6 +409,16 @@ impl Solver for Anneal {
         task: Task<'_, '_>,
         ctx: &mut Context<'_>,
     ) -> Result<Outcome, CalibrationError> {
+        // The paper's energy sees every touch through the arm's probe.
+        if task.data.touch_tools().is_some() {
+            return Err(crate::error::OptionError::new(
+                "method",
+                self.method().name(),
+                "the annealing energy sees every touch through the arm's probe: touches by \
+                 several tools (a `tool` column) are fitted by lm or global",
+            )
+            .into());
+        }
         let timer = std::time::Instant::now();
         let mut rng = rng(task.settings.seed, streams::SOLVER);
         // The paper's energy is the touches' and lengths': it moves the

@@ -55,20 +55,37 @@ impl Labels {
     /// room cannot be had, or past 2³² labels (`what` names them).
     pub(crate) fn intern(&mut self, label: &str, what: &str) -> Result<u32, OutOfMemory> {
         let hash = self.hasher.hash_one(label);
+        let (text, ends) = (&self.text, &self.ends);
+        if let Some(&id) = self
+            .table
+            .find(hash, |&id| self::label(text, ends, id) == label)
+        {
+            return Ok(id);
+        }
+        self.push_hashed(label, hash, what)
+    }
+
+    /// Adds `label` as a new number even if it was seen: labels of points
+    /// keyed by more than their label (a point touched by two tools is
+    /// two points, [`super::Poses::keyed_by_tool`]). [`Labels::intern`]
+    /// of such a label later finds one of its numbers.
+    pub(crate) fn push_new(&mut self, label: &str, what: &str) -> Result<u32, OutOfMemory> {
+        let hash = self.hasher.hash_one(label);
+        self.push_hashed(label, hash, what)
+    }
+
+    /// Adds `label`, of hash `hash`, as a new number.
+    fn push_hashed(&mut self, label: &str, hash: u64, what: &str) -> Result<u32, OutOfMemory> {
         let Labels {
             text,
             ends,
             table,
             hasher,
         } = self;
-        if let Some(&id) = table.find(hash, |&id| self::label(text, ends, id) == label) {
-            return Ok(id);
-        }
         let id = u32::try_from(ends.len()).map_err(|_| OutOfMemory::new(what, usize::MAX))?;
         let rehash = |&id: &u32| hasher.hash_one(self::label(text, ends, id));
         table
             .try_reserve(1, rehash)
-            // A u32 and a control byte a slot, the table doubled.
             .map_err(|_| OutOfMemory::new(what, (table.len() + 1).saturating_mul(2 * 5)))?;
         text.try_reserve(label.len())
             .map_err(|_| OutOfMemory::new(what, text.len().saturating_add(label.len())))?;

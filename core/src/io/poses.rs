@@ -10,8 +10,10 @@
 //! `point` labels the physical point (socket) touched; rows with the same
 //! label touch the same point. The angles are the encoder readings `q` in the
 //! unit the caller states (files do not carry it). Optional columns
-//! after the joints: `temperature` (°C), `time` (s), then `approach` (the
-//! direction each joint approached the touch from, [`super::approach`]).
+//! after the joints: `tool` (the probe that touched: one of the arm file's
+//! `[[tool]]`, [`super::tools`]; empty, the `[probe]`), `temperature`
+//! (°C), `time` (s), then `approach` (the direction each joint approached
+//! the touch from, [`super::approach`]).
 //! The CSV dialect is described in the [`io`](super) module docs.
 
 use std::io::Write;
@@ -69,6 +71,13 @@ pub struct Poses {
     /// (`+1`, `−1`, `0` not known), row after row, when the file has the
     /// column ([`super::approach`]).
     approach: Option<Vec<i8>>,
+    /// Per row, the tool that touched (an index into `tools`; `0` the
+    /// default tool), when the file has a `tool` column.
+    tool_of: Option<Vec<u32>>,
+    /// The tools the rows name, the default ([`super::DEFAULT_TOOL`])
+    /// first, then in order of first appearance; resolved against the
+    /// arm's `[[tool]]` later ([`crate::DataSet::with_tools`]).
+    tools: Vec<String>,
 }
 
 impl Poses {
@@ -102,6 +111,8 @@ impl Poses {
             temperature: None,
             time: None,
             approach: None,
+            tool_of: None,
+            tools: vec![super::DEFAULT_TOOL.to_string()],
         })
     }
 
@@ -175,7 +186,135 @@ impl Poses {
             // A row pushed without directions: not known.
             a.extend(std::iter::repeat_n(0, q.len()));
         }
+        if let Some(t) = &mut self.tool_of {
+            // A row pushed without a tool: the default tool's.
+            t.push(0);
+        }
         Ok(())
+    }
+
+    /// Sets the last row's tool by name (empty or [`super::DEFAULT_TOOL`]:
+    /// the default tool); the poses gain a `tool` column if they had none.
+    ///
+    /// ```
+    /// use aacmm_core::io::Poses;
+    /// let mut poses = Poses::new(1);
+    /// poses.push("A", &[0.0], 2);
+    /// poses.push("A", &[1.0], 3);
+    /// poses.set_tool("long");
+    /// assert_eq!((poses.tool(0), poses.tool(1)), (0, 1));
+    /// assert_eq!(poses.tools(), ["probe", "long"]);
+    /// ```
+    ///
+    /// # Panics
+    /// If there is no row.
+    pub fn set_tool(&mut self, name: &str) {
+        let rows = self.len();
+        assert!(rows > 0, "a row to name a tool of");
+        let k = self.tool_index(name);
+        let of = self.tool_of.get_or_insert_with(|| vec![0; rows]);
+        of[rows - 1] = k;
+    }
+
+    /// Appends a row's tool by name (the reader's `tool` cell).
+    fn push_tool(&mut self, name: &str) {
+        let k = self.tool_index(name);
+        if let Some(of) = &mut self.tool_of {
+            of.push(k);
+        }
+    }
+
+    /// The index of the tool named `name` among [`Poses::tools`], added if
+    /// new (empty or [`super::DEFAULT_TOOL`]: `0`).
+    fn tool_index(&mut self, name: &str) -> u32 {
+        if name.is_empty() || name == super::DEFAULT_TOOL {
+            return 0;
+        }
+        match self.tools.iter().position(|t| t == name) {
+            Some(k) => k as u32,
+            None => {
+                self.tools.push(name.to_string());
+                (self.tools.len() - 1) as u32
+            }
+        }
+    }
+
+    /// The tools the rows name, the default tool first, then in order of
+    /// first appearance.
+    pub fn tools(&self) -> &[String] {
+        &self.tools
+    }
+
+    /// Row `row`'s tool (an index into [`Poses::tools`]; `0` the default).
+    pub fn tool(&self, row: usize) -> usize {
+        self.tool_of.as_ref().map_or(0, |t| t[row] as usize)
+    }
+
+    /// Refuses rows naming a tool other than the default for `what` (a
+    /// command that sees every row through one probe), at `file`'s first
+    /// such row, field `tool`.
+    ///
+    /// # Errors
+    ///
+    /// The first row naming another tool.
+    pub fn refuse_tools(&self, file: &str, what: &str) -> Result<(), InputError> {
+        let Some(row) = (0..self.len()).find(|&r| self.tool(r) != 0) else {
+            return Ok(());
+        };
+        Err(tools_refused(
+            file,
+            self.line(row),
+            &self.tools[self.tool(row)],
+            what,
+        ))
+    }
+
+    /// Whether some row names a tool other than the default.
+    pub fn has_tools(&self) -> bool {
+        self.tool_of
+            .as_ref()
+            .is_some_and(|t| t.iter().any(|&k| k != 0))
+    }
+
+    /// These poses with each point touched by another tool made a point of
+    /// its own — a ball's centre in a socket depends on the ball, so the
+    /// touches of two probes do not share a centre —, the points ordered by
+    /// tool (the default first, then in order of first appearance) and in
+    /// order of first appearance within a tool; and per point its tool.
+    /// `None` when no row names a tool other than the default (the poses
+    /// as they are).
+    pub(crate) fn keyed_by_tool(&self) -> Result<Option<(Poses, Vec<u32>)>, OutOfMemory> {
+        let Some(of) = self.tool_of.as_ref().filter(|_| self.has_tools()) else {
+            return Ok(None);
+        };
+        let mut id: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+        let mut keys: Vec<(u32, u32)> = Vec::new();
+        for (row, &p) in self.point_of.iter().enumerate() {
+            let key = (of[row], p);
+            id.entry(key).or_insert_with(|| {
+                keys.push(key);
+                0
+            });
+        }
+        // Stable: first appearance kept within a tool.
+        keys.sort_by_key(|&(tool, _)| tool);
+        let mut points = Labels::default();
+        for (n, key) in keys.iter().enumerate() {
+            id.insert(*key, n as u32);
+            points.push_new(self.points.get(key.1 as usize), "the point labels")?;
+        }
+        let point_of = (self.point_of.iter().zip(of))
+            .map(|(&p, &t)| id[&(t, p)])
+            .collect();
+        let tools = keys.iter().map(|&(t, _)| t).collect();
+        Ok(Some((
+            Poses {
+                points,
+                point_of,
+                ..self.clone()
+            },
+            tools,
+        )))
     }
 
     /// The index of `label` in `points`, added if new. Rows of one point
@@ -431,7 +570,7 @@ pub fn parse_poses(
 ) -> Result<(Poses, Vec<Warning>), InputError> {
     let columns_of = joints.into();
     let expected_joints = columns_of.expected();
-    let shape = "point,q1,...,qn[,temperature][,time][,approach]";
+    let shape = "point,q1,...,qn[,tool][,temperature][,time][,approach]";
     let per_row = "one row per touch";
     // At most one row per line, and per 2 bytes a field (a digit or a
     // label, and its comma or line end): room for them all, so that the
@@ -448,14 +587,16 @@ pub fn parse_poses(
         |header, line, fields| {
             let (columns, approach) = split_approach(&header.fields);
             let extra = condition_columns(columns);
-            let joints = columns.len() - 1 - extra.len();
+            let tool = has_tool_column(columns, extra.len());
+            let joints = columns.len() - 1 - extra.len() - usize::from(tool);
             let poses = match poses {
                 Some(ref mut p) => p,
                 None => {
                     let rows = max_rows(header.fields.len());
-                    poses.insert(room(file, (joints, rows), &extra, approach)?)
+                    poses.insert(room(file, (joints, rows), &extra, (approach, tool))?)
                 }
             };
+            let extra_at = 1 + joints + usize::from(tool);
             let label = fields[0];
             if label.is_empty() {
                 return Err(InputError::field(
@@ -470,7 +611,7 @@ pub fn parse_poses(
             read_readings(row, &columns_of, (file, line), &mut poses.q)?;
             let mut values = [0.0; 2];
             for (k, c) in extra.iter().enumerate() {
-                let v = fields[1 + joints + k];
+                let v = fields[extra_at + k];
                 values[k] = match parse_f64(v, file, line, c) {
                     Ok(t) if *c == "temperature" && !(-100.0..=200.0).contains(&t) => {
                         poses.q.truncate(start);
@@ -496,6 +637,9 @@ pub fn parse_poses(
                     column.push(values[k]);
                 }
             }
+            if tool {
+                poses.push_tool(fields[1 + joints].trim());
+            }
             let id = poses
                 .intern(label)
                 .map_err(|e| InputError::memory(file, e))?;
@@ -506,9 +650,11 @@ pub fn parse_poses(
     )?;
     let (columns, approach) = split_approach(&header.fields);
     let extra = condition_columns(columns).len();
+    let tool = has_tool_column(columns, extra);
     let mut poses = poses.unwrap_or_else(|| Poses {
         approach: approach.then(Vec::new),
-        ..Poses::new(columns.len() - 1 - extra)
+        tool_of: tool.then(Vec::new),
+        ..Poses::new(columns.len() - 1 - extra - usize::from(tool))
     });
     poses.q.shrink_to_fit();
     poses.point_of.shrink_to_fit();
@@ -548,12 +694,13 @@ fn read_readings(
 
 /// Empty poses of `joints` joints with room for `rows` rows, the
 /// condition columns `extra` and, if `approach`, the directions of
-/// approach, or an [`InputError::Memory`] for `file`.
+/// approach, if `tool`, the rows' tools, or an [`InputError::Memory`] for
+/// `file`.
 fn room(
     file: &str,
     (joints, rows): (usize, usize),
     extra: &[&str],
-    approach: bool,
+    (approach, tool): (bool, bool),
 ) -> Result<Poses, InputError> {
     let memory = |e| InputError::memory(file, e);
     let mut p = Poses::try_with_capacity(joints, rows).map_err(memory)?;
@@ -563,6 +710,9 @@ fn room(
     if approach {
         let directions = try_vec(APPROACH, rows.saturating_mul(joints)).map_err(memory)?;
         p.approach = Some(directions);
+    }
+    if tool {
+        p.tool_of = Some(try_vec("the rows' tools", rows).map_err(memory)?);
     }
     Ok(p)
 }
@@ -590,7 +740,30 @@ fn condition_columns(fields: &[String]) -> Vec<&'static str> {
     out
 }
 
-/// Checks the header `point,q1,...,qn[,temperature][,time][,approach]`,
+/// The refusal of rows naming the tool `name` (first at `file:line`) by
+/// `what`, which sees every row through one probe.
+pub(crate) fn tools_refused(file: &str, line: usize, name: &str, what: &str) -> InputError {
+    InputError::field(
+        file,
+        line,
+        "tool",
+        format!(
+            "{}: touches by several tools are fitted by `calibrate` (each tool's offset), but \
+             {what} sees every row through one probe (--tool): give it one tool's rows, \
+             without a `tool` column",
+            crate::error::quoted(name)
+        ),
+    )
+}
+
+/// Whether the header's `columns` (without `approach`) have a `tool`
+/// column, just before their `extra` condition columns and after at least
+/// one joint's.
+fn has_tool_column(columns: &[String], extra: usize) -> bool {
+    columns.len() >= 3 + extra && columns[columns.len() - 1 - extra] == "tool"
+}
+
+/// Checks the header `point,q1,...,qn[,tool][,temperature][,time][,approach]`,
 /// and `n` against `expected_joints`.
 fn check_poses_header(
     header: &Record,
@@ -599,7 +772,11 @@ fn check_poses_header(
 ) -> Result<(), InputError> {
     let (fields, approach) = split_approach(&header.fields);
     let mut extra = condition_columns(fields);
-    let n = fields.len() - 1 - extra.len();
+    let tool = has_tool_column(fields, extra.len());
+    let n = fields.len() - 1 - extra.len() - usize::from(tool);
+    if tool {
+        extra.insert(0, "tool");
+    }
     if approach {
         extra.push(APPROACH);
     }
@@ -731,6 +908,9 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
         ("temperature", poses.temperatures()),
         ("time", poses.times()),
     ];
+    if poses.tool_of.is_some() {
+        header.push_str(",tool");
+    }
     for (name, column) in conditions {
         if column.is_some() {
             header.push(',');
@@ -752,6 +932,13 @@ pub fn write_poses(mut w: impl Write, poses: &Poses, unit: AngleUnit) -> std::io
         for (j, &x) in q.iter().enumerate() {
             let written = JointColumns::to_written(poses.prismatic, j, x, unit);
             push_f64(&mut line, written);
+        }
+        if poses.tool_of.is_some() {
+            // The default tool's cell empty: as a file without tools reads.
+            line.push(',');
+            if poses.tool(row) != 0 {
+                line.push_str(&quote(&poses.tools[poses.tool(row)])?);
+            }
         }
         for column in conditions.iter().filter_map(|(_, c)| *c) {
             push_f64(&mut line, column[row]);
@@ -778,6 +965,36 @@ mod tests {
     /// `approach` after the conditions: one sign per joint read per row
     /// (`0`, `.` and an empty cell not known), written back as read; a
     /// cell of the wrong length or character refused by line and field.
+    /// `tool` after the joints, before the conditions: each row's probe
+    /// by name (empty or `probe`: the default), written back as read; the
+    /// points keyed by (label, tool), the default tool's first.
+    #[test]
+    fn the_tool_column_is_read_written_and_keys_the_points() {
+        let text = "point,q1,tool,time\nA,1,long,0\nA,2,,1\nB,3,probe,2\nA,4,long,3\n";
+        let (p, _) = parse_poses(text, F, AngleUnit::Rad, Some(1)).unwrap();
+        assert_eq!(p.tools(), ["probe", "long"]);
+        assert_eq!((0..4).map(|r| p.tool(r)).collect::<Vec<_>>(), [1, 0, 0, 1]);
+        assert_eq!(p.times(), Some(&[0.0, 1.0, 2.0, 3.0][..]));
+        let mut out = Vec::new();
+        write_poses(&mut out, &p, AngleUnit::Rad).unwrap();
+        let back = String::from_utf8(out).unwrap();
+        assert_eq!(
+            back,
+            "point,q1,tool,time\nA,1.0,long,0.0\nA,2.0,,1.0\nB,3.0,,2.0\nA,4.0,long,3.0\n"
+        );
+        let (keyed, of_point) = p.keyed_by_tool().unwrap().unwrap();
+        assert_eq!(keyed.points().collect::<Vec<_>>(), ["A", "B", "A"]);
+        assert_eq!(of_point, [0, 0, 1]);
+        assert_eq!(
+            (0..4).map(|r| keyed.point(r)).collect::<Vec<_>>(),
+            [2, 0, 1, 2]
+        );
+        // Without the column, or every cell empty: nothing keyed.
+        let (plain, _) = parse_poses("point,q1,tool\nA,1,\n", F, AngleUnit::Rad, None).unwrap();
+        assert_eq!((plain.joints(), plain.has_tools()), (1, false));
+        assert!(plain.keyed_by_tool().unwrap().is_none());
+    }
+
     #[test]
     fn the_approach_column_is_read_written_and_checked() {
         let text =

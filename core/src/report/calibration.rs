@@ -4,7 +4,7 @@
 
 use super::{
     Arms, CalibrationInput, Measured, PoseErrors, Report, ReportError, ValidationRow,
-    calibration_report, positions,
+    calibration_report,
 };
 use crate::corrections::Physics;
 use crate::session::{CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE};
@@ -24,19 +24,24 @@ pub fn session_report(
     let stated: &Physics = &problem.arm().physics;
     let fitted = cal.physics.as_ref().unwrap_or(stated);
     // Each arm sees the touches through its own corrections beyond geometry.
-    let seen = |params, physics, data| -> Result<Vec<[f64; 3]>, ReportError> {
+    // Each touch through its tool: at its nominal offset before, at its
+    // fitted one after (the fit's tool blocks, among its frames).
+    let tools = cal.frames_with_mount();
+    let seen = |params, physics, data, tools| -> Result<Vec<[f64; 3]>, ReportError> {
         let seen = crate::calibrate::validate::seen_by(params, physics, data).map_err(Box::new)?;
-        positions(params, &seen)
+        Ok(crate::residuals::tools::touch_positions_at(
+            params, &seen, tools,
+        )?)
     };
-    let fitted_before = seen(start, stated, data)?;
-    let fitted_after = seen(&cal.params, fitted, data)?;
+    let fitted_before = seen(start, stated, data, &[])?;
+    let fitted_after = seen(&cal.params, fitted, data, &tools)?;
     let held = problem
         .held_out()
         .map(|h| {
             Ok::<_, ReportError>((
                 &h.data,
-                seen(start, stated, &h.data)?,
-                seen(&cal.params, fitted, &h.data)?,
+                seen(start, stated, &h.data, &[])?,
+                seen(&cal.params, fitted, &h.data, &tools)?,
             ))
         })
         .transpose()?;

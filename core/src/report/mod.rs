@@ -50,7 +50,7 @@ mod tests;
 use crate::calibrate::Calibration;
 use crate::calibrate::validate::BeforeAfter;
 use crate::dataset::DataSet;
-use crate::kernel::{ArmKernel, KernelError};
+use crate::kernel::KernelError;
 use crate::metrics::MetricsError;
 use crate::params::DhParams;
 use crate::plan::UncertaintyMap;
@@ -201,10 +201,12 @@ pub struct Measured<'a> {
 /// assert_eq!(xyz.len(), 3);
 /// ```
 pub fn positions(params: &DhParams, data: &DataSet) -> Result<Vec<[f64; 3]>, ReportError> {
-    let kernel = ArmKernel::new(params)?;
-    let mut xyz = vec![[0.0; 3]; data.len()];
-    kernel.positions(data.poses(), 0..data.len(), &mut xyz)?;
-    Ok(xyz)
+    // Touches by several tools each at its tool's nominal offset.
+    Ok(crate::residuals::tools::touch_positions_at(
+        params,
+        data,
+        &[],
+    )?)
 }
 
 /// Names of the two arms compared, for legends and tables.

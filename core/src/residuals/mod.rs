@@ -643,15 +643,21 @@ impl ParameterLeverage {
             })
     }
 
-    /// The free columns below `below` (those a term's rows depend on, e.g.
-    /// the arm's) and the block of `N⁻¹` over them, row-major.
-    pub(crate) fn restricted(&self, below: usize) -> (Vec<usize>, Vec<f64>) {
+    /// The columns `pairs` (free index, the Jacobian column that holds its
+    /// derivative — a tool's offset block held by the probe's columns,
+    /// [`tools::tool_columns`]): those Jacobian columns and their block of
+    /// `N⁻¹`, row-major.
+    pub(crate) fn restricted_to(&self, pairs: &[(usize, usize)]) -> (Vec<usize>, Vec<f64>) {
         let p = self.free.len();
-        let at: Vec<usize> = (0..p).filter(|&a| self.free[a] < below).collect();
-        let block = (at.iter())
-            .flat_map(|&a| at.iter().map(move |&b| self.n_inv[a * p + b]))
+        let block = (pairs.iter())
+            .flat_map(|&(a, _)| pairs.iter().map(move |&(b, _)| self.n_inv[a * p + b]))
             .collect();
-        (at.iter().map(|&a| self.free[a]).collect(), block)
+        (pairs.iter().map(|&(_, c)| c).collect(), block)
+    }
+
+    /// The normal matrix's free columns, in order.
+    pub(crate) fn free(&self) -> &[usize] {
+        &self.free
     }
 }
 

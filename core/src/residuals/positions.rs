@@ -177,6 +177,7 @@ pub fn layout_with(
         }
         super::tools::add_tool_blocks(&mut layout, positions)?;
     }
+    super::tools::add_touch_tool_blocks(&mut layout, data)?;
     Ok(layout)
 }
 

@@ -189,24 +189,41 @@ pub(crate) fn add_tool_blocks(layout: &mut Layout, data: &PositionData) -> Resul
         if !(0..rows.len()).any(|i| rows.tool(i) == k) {
             continue;
         }
-        let start = rows.tool_offset(k).ok_or_else(|| {
-            TermError::invalid(
-                "positions",
-                format!(
-                    "tool {}: no offset known (the arm lists no such [[tool]])",
-                    crate::error::quoted(name)
-                ),
-            )
-        })?;
-        let block = block_name(name);
-        layout.add(Box::new(Vector {
-            names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
-            name: block,
-            unit: Unit::Length,
-            start: start.to_vec(),
-            tolerances: vec![None; 3],
-        }))?;
+        add_offset_block(layout, "positions", name, rows.tool_offset(k))?;
     }
+    Ok(())
+}
+
+/// Adds tool `name`'s offset block (`tool.NAME`, three length columns)
+/// starting at `start`, its nominal offset.
+///
+/// # Errors
+///
+/// No offset known (`term` names the caller); a block of the name already
+/// there.
+fn add_offset_block(
+    layout: &mut Layout,
+    term: &str,
+    name: &str,
+    start: Option<[f64; 3]>,
+) -> Result<(), TermError> {
+    let start = start.ok_or_else(|| {
+        TermError::invalid(
+            term,
+            format!(
+                "tool {}: no offset known (the arm lists no such [[tool]])",
+                crate::error::quoted(name)
+            ),
+        )
+    })?;
+    let block = block_name(name);
+    layout.add(Box::new(Vector {
+        names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
+        name: block,
+        unit: Unit::Length,
+        start: start.to_vec(),
+        tolerances: vec![None; 3],
+    }))?;
     Ok(())
 }
 
@@ -262,6 +279,167 @@ pub fn positions_at(
         for i in of {
             p[i] = q[i];
         }
+    }
+    Ok(p)
+}
+
+/// A tool's arm for a term's touches: the probe at the tool's offset (its
+/// block's value when the layout fits one, else its nominal offset), and
+/// its kernel — built once per evaluation, not per chunk.
+pub(crate) struct ToolView {
+    arm: DhParams,
+    kernel: ArmKernel,
+    /// The tool's offset block, when the layout fits one.
+    pub(crate) block: Option<BlockId>,
+}
+
+/// How a term's touches are seen: per run of points of one tool (in point
+/// order), the tool; per tool, its view (`None`: the default tool, `at`
+/// itself).
+pub(crate) struct TouchViews {
+    pub(crate) runs: Vec<(usize, std::ops::Range<usize>)>,
+    views: Vec<Option<ToolView>>,
+}
+
+impl TouchViews {
+    /// The views of `data`'s touches at `at`: one run of every point, the
+    /// default tool's, when no touch names a tool (today's path).
+    ///
+    /// # Errors
+    ///
+    /// A tool whose offset is not known (the data were not given the arm's
+    /// tools, [`crate::dataset::DataSet::with_tools`]); the kernel's.
+    pub(crate) fn of(data: &crate::dataset::DataSet, at: &At<'_>) -> Result<TouchViews, TermError> {
+        let Some(tools) = data.touch_tools() else {
+            return Ok(TouchViews {
+                runs: vec![(0, 0..data.points().len())],
+                views: vec![None],
+            });
+        };
+        let mut views = Vec::with_capacity(tools.names().len());
+        for (k, name) in tools.names().iter().enumerate() {
+            if k == 0 || !tools.used().contains(&k) {
+                views.push(None);
+                continue;
+            }
+            let block = at.layout.block_named(&block_name(name));
+            let offset = match block {
+                Some(id) => {
+                    let x = at.block(id);
+                    [x[0], x[1], x[2]]
+                }
+                None => tools.offset(k).ok_or_else(|| {
+                    TermError::invalid(
+                        "touches",
+                        format!(
+                            "tool {}: no offset known (the arm lists no such [[tool]])",
+                            crate::error::quoted(name)
+                        ),
+                    )
+                })?,
+            };
+            let mut arm = at.arm.clone();
+            arm.probe = offset;
+            let kernel = ArmKernel::new(&arm)?;
+            views.push(Some(ToolView { arm, kernel, block }));
+        }
+        Ok(TouchViews {
+            runs: tools.runs(),
+            views,
+        })
+    }
+
+    /// `at` as tool `k` sees it.
+    pub(crate) fn at<'a>(&'a self, at: &At<'a>, k: usize) -> At<'a> {
+        match &self.views[k] {
+            Some(v) => At {
+                x: at.x,
+                arm: &v.arm,
+                kernel: &v.kernel,
+                layout: at.layout,
+                threads: at.threads,
+            },
+            None => At {
+                x: at.x,
+                arm: at.arm,
+                kernel: at.kernel,
+                layout: at.layout,
+                threads: at.threads,
+            },
+        }
+    }
+
+    /// The kernel of tool `k`.
+    pub(crate) fn kernel<'a>(&'a self, at: &At<'a>, k: usize) -> &'a ArmKernel {
+        self.views[k].as_ref().map_or(at.kernel, |v| &v.kernel)
+    }
+
+    /// Tool `k`'s offset block (`None`: the default tool, or a tool the
+    /// layout fits no block of).
+    pub(crate) fn block(&self, k: usize) -> Option<BlockId> {
+        self.views[k].as_ref().and_then(|v| v.block)
+    }
+}
+
+/// Adds one offset block per tool `data`'s touches name (beyond the
+/// default), starting at its nominal offset, or shares the block of that
+/// name already there (the same tool's positions).
+///
+/// # Errors
+///
+/// A tool whose offset is not known ([`crate::dataset::DataSet::with_tools`]
+/// not called with the arm's tools).
+pub(crate) fn add_touch_tool_blocks(
+    layout: &mut Layout,
+    data: &crate::dataset::DataSet,
+) -> Result<(), TermError> {
+    let Some(tools) = data.touch_tools() else {
+        return Ok(());
+    };
+    for k in tools.used() {
+        let name = &tools.names()[k];
+        // The same tool's positions added its block already: shared.
+        if layout.block_named(&block_name(name)).is_none() {
+            add_offset_block(layout, "touches", name, tools.offset(k))?;
+        }
+    }
+    Ok(())
+}
+
+/// Where `params` puts every touch of `data` (touch order, mm), each
+/// touch's tool at the offset `fitted` gives by block name (`tool.NAME`,
+/// as [`positions_at`]'s), else at its nominal offset, the default tool
+/// at the probe: what the figures of a calibration with several probes
+/// are computed from.
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn touch_positions_at(
+    params: &DhParams,
+    data: &crate::dataset::DataSet,
+    fitted: &[(String, [f64; 6])],
+) -> Result<Vec<[f64; 3]>, crate::kernel::KernelError> {
+    let kernel = ArmKernel::new(params)?;
+    let mut p = vec![[0.0; 3]; data.len()];
+    let Some(tools) = data.touch_tools() else {
+        kernel.positions(data.poses(), 0..data.len(), &mut p)?;
+        return Ok(p);
+    };
+    let points = data.points();
+    for (k, run) in tools.runs() {
+        let touches = points[run.start].touches.start..points[run.end - 1].touches.end;
+        let out = &mut p[touches.clone()];
+        if k == 0 {
+            kernel.positions(data.poses(), touches, out)?;
+            continue;
+        }
+        let block = block_name(&tools.names()[k]);
+        let given = (fitted.iter().find(|(n, _)| *n == block)).map(|(_, v)| [v[0], v[1], v[2]]);
+        let mut arm = params.clone();
+        // `with_tools` gave every tool its offset before any fit.
+        arm.probe = given.or(tools.offset(k)).unwrap_or(params.probe);
+        ArmKernel::new(&arm)?.positions(data.poses(), touches, out)?;
     }
     Ok(p)
 }

@@ -18,6 +18,8 @@ use crate::error::short;
 use crate::kernel::{ArmKernel, KernelError, NoiseOf};
 use crate::parallel::parallel_map;
 
+use super::tools::{TouchViews, tool_columns};
+
 /// Touches per work item of the weights (about 0.1 ms of work: enough to pay
 /// for handing it out).
 pub(super) const TOUCHES_PER_CHUNK: usize = 1024;
@@ -156,32 +158,39 @@ impl<'d> TouchTerm<'d> {
         TouchWeight::new(kernel, self.data, &self.noise, unit_sigma).each(range, f)
     }
 
-    /// Every touch's weight at `kernel`, the joint Jacobians on up to
-    /// `threads` threads in chunks of fixed size: each touch's weight is its
-    /// own, so the result is the same bits whatever `threads`.
+    /// Every touch's weight as its tool sees it (`views` at `at`), the
+    /// joint Jacobians on up to `at.threads` threads in chunks of fixed
+    /// size within each run of one tool: each touch's weight is its own, so
+    /// the result is the same bits whatever the thread count.
     fn weights_at(
         &self,
-        kernel: &ArmKernel,
+        at: &At<'_>,
+        views: &TouchViews,
         unit_sigma: f64,
-        threads: usize,
     ) -> Result<Vec<Sym3>, KernelError> {
         if !self.noise.stated() {
             let w = 1.0 / (unit_sigma * unit_sigma);
             return Ok(vec![[w, w, w, 0.0, 0.0, 0.0]; self.data.len()]);
         }
         let mut touch = vec![[0.0; 6]; self.data.len()];
-        let parts = touch
-            .chunks_mut(TOUCHES_PER_CHUNK)
-            .enumerate()
-            .collect::<Vec<_>>();
-        let parts: Vec<std::sync::Mutex<(usize, &mut [Sym3])>> =
-            parts.into_iter().map(std::sync::Mutex::new).collect();
-        let results = parallel_map(&parts, threads, |part| {
+        let mut parts = Vec::new();
+        let mut rest = touch.as_mut_slice();
+        for (k, run) in &views.runs {
+            let touches = self.touches_of(run);
+            let (mine, tail) = std::mem::take(&mut rest).split_at_mut(touches.len());
+            rest = tail;
+            for (c, out) in mine.chunks_mut(TOUCHES_PER_CHUNK).enumerate() {
+                let start = touches.start + c * TOUCHES_PER_CHUNK;
+                parts.push(std::sync::Mutex::new((*k, start, out)));
+            }
+        }
+        let results = parallel_map(&parts, at.threads, |part| {
             let mut part = part
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
-            let (k, out) = &mut *part;
-            let start = *k * TOUCHES_PER_CHUNK;
+            let (k, start, out) = &mut *part;
+            let (k, start) = (*k, *start);
+            let kernel = views.kernel(at, k);
             self.each_weight(kernel, start..start + out.len(), unit_sigma, |i, w| {
                 out[i - start] = w;
                 Ok(())
@@ -190,6 +199,15 @@ impl<'d> TouchTerm<'d> {
         drop(parts);
         results.into_iter().collect::<Result<(), KernelError>>()?;
         Ok(touch)
+    }
+
+    /// The touches of the points `run` (contiguous).
+    fn touches_of(&self, run: &Range<usize>) -> Range<usize> {
+        let points = &self.data.points()[run.clone()];
+        match (points.first(), points.last()) {
+            (Some(a), Some(b)) => a.touches.start..b.touches.end,
+            _ => 0..0,
+        }
     }
 
     /// Refuses weights that are not finite numbers, naming the noise that
@@ -244,24 +262,28 @@ impl<'d> TouchTerm<'d> {
     /// second set of weights would be 48 MB.
     fn streamed_change(
         &self,
-        kernel: &ArmKernel,
+        at: &At<'_>,
+        views: &TouchViews,
         unit_sigma: f64,
-        threads: usize,
     ) -> Result<(f64, Vec<Sym3>), KernelError> {
         let data = self.data;
-        // Chunks of whole points, so that each chunk's centroid covariances
-        // are its own.
+        // Chunks of whole points of one tool, so that each chunk's centroid
+        // covariances are its own.
         let mut chunks = Vec::new();
-        let mut first = 0;
-        for (k, p) in data.points().iter().enumerate() {
-            if p.touches.end - data.points()[first].touches.start >= TOUCHES_PER_CHUNK
-                || k + 1 == data.points().len()
-            {
-                chunks.push(first..k + 1);
-                first = k + 1;
+        for (tool, run) in &views.runs {
+            let mut first = run.start;
+            for k in run.clone() {
+                let p = &data.points()[k];
+                if p.touches.end - data.points()[first].touches.start >= TOUCHES_PER_CHUNK
+                    || k + 1 == run.end
+                {
+                    chunks.push((*tool, first..k + 1));
+                    first = k + 1;
+                }
             }
         }
-        let results = parallel_map(&chunks, threads, |points| {
+        let results = parallel_map(&chunks, at.threads, |(tool, points)| {
+            let kernel = views.kernel(at, *tool);
             let all = &data.points()[points.clone()];
             let mut change = 0.0_f64;
             let mut covs = Vec::with_capacity(points.len());
@@ -424,7 +446,8 @@ impl Term for TouchTerm<'_> {
         unit_sigma: f64,
     ) -> Result<(), TermError> {
         self.weights = Vec::new();
-        let weights = self.weights_at(at.kernel, unit_sigma, at.threads)?;
+        let views = TouchViews::of(self.data, at)?;
+        let weights = self.weights_at(at, &views, unit_sigma)?;
         self.check(&weights, unit_sigma)?;
         shared.centre_covariances = Some(self.centre_covariances(&weights));
         self.weights = weights;
@@ -442,7 +465,8 @@ impl Term for TouchTerm<'_> {
             shared.centre_covariances = None;
             return Ok(f64::INFINITY);
         }
-        let (change, covs) = self.streamed_change(at.kernel, unit_sigma, at.threads)?;
+        let views = TouchViews::of(self.data, at)?;
+        let (change, covs) = self.streamed_change(at, &views, unit_sigma)?;
         shared.centre_covariances = Some(covs);
         Ok(change)
     }
@@ -453,8 +477,8 @@ impl Term for TouchTerm<'_> {
         shared: &mut Shared,
         normal: &mut Normal,
     ) -> Result<f64, TermError> {
-        let effects = at.effects(self.data.poses(), self.data.conditions())?;
-        Ok(accumulate(self, at, effects.as_ref(), shared, normal)?)
+        let views = TouchViews::of(self.data, at)?;
+        accumulate(self, at, &views, shared, normal)
     }
 
     fn add_cost(
@@ -468,9 +492,17 @@ impl Term for TouchTerm<'_> {
         let data = self.data;
         scratch.resize(data.len(), [0.0; 3]);
         let xyz = &mut scratch[..];
-        let effects = at.corrected_poses(data.poses(), data.conditions())?;
-        let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
-        at.kernel.positions(poses, 0..data.len(), xyz)?;
+        let views = TouchViews::of(data, at)?;
+        for (k, run) in &views.runs {
+            // Each tool's touches through its arm (one run of every touch
+            // when no touch names a tool).
+            let seen = views.at(at, *k);
+            let effects = seen.corrected_poses(data.poses(), data.conditions())?;
+            let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
+            let touches = self.touches_of(run);
+            seen.kernel
+                .positions(poses, touches.clone(), &mut xyz[touches])?;
+        }
         let mut centroids = Vec::with_capacity(data.points().len());
         for point in data.points() {
             let origin = xyz[point.touches.start];
@@ -514,39 +546,54 @@ impl Term for TouchTerm<'_> {
         leverage: Option<&ParameterLeverage>,
     ) -> Result<Option<Standardised>, TermError> {
         let data = self.data;
-        let (cols, m) = leverage.map_or((Vec::new(), Vec::new()), |l| {
-            l.restricted(at.layout.arm_columns())
-        });
-        // The corrections' Jacobian factors too when the leverage needs
-        // their columns (as the normal equations have them).
-        let effects = if cols.is_empty() {
-            at.corrected_poses(data.poses(), data.conditions())?
-        } else {
-            at.effects(data.poses(), data.conditions())?
-        };
-        let np = data.points().len();
-        // Chunks of points, on up to `at.threads` threads: each point's
-        // values depend on that point alone, so the same bits on any count.
-        let chunks: Vec<Range<usize>> = (0..point_chunks(np))
-            .map(|c| c * POINTS_PER_CHUNK..((c + 1) * POINTS_PER_CHUNK).min(np))
+        let views = TouchViews::of(data, at)?;
+        let arm = at.layout.arm_columns();
+        // Per run of one tool: its arm, corrected poses, leverage columns.
+        let mut runs = Vec::with_capacity(views.runs.len());
+        for (k, run) in &views.runs {
+            let seen = views.at(at, *k);
+            let (cols, m) = leverage.map_or((Vec::new(), Vec::new()), |l| {
+                let geo: Vec<(usize, usize)> = (l.free().iter().enumerate())
+                    .filter(|(_, c)| **c < arm)
+                    .map(|(a, &c)| (a, c))
+                    .collect();
+                l.restricted_to(&tool_columns(&geo, l.free(), at.layout, views.block(*k)))
+            });
+            // The corrections' Jacobian factors too when the leverage needs
+            // their columns (as the normal equations have them).
+            let effects = if cols.is_empty() {
+                seen.corrected_poses(data.poses(), data.conditions())?
+            } else {
+                seen.effects(data.poses(), data.conditions())?
+            };
+            runs.push((seen, effects, cols, m, run.clone()));
+        }
+        // Chunks of points of one tool, on up to `at.threads` threads: each
+        // point's values depend on that point alone, so the same bits on
+        // any count.
+        let chunks: Vec<(usize, Range<usize>)> = (runs.iter().enumerate())
+            .flat_map(|(r, (.., run))| {
+                (0..point_chunks(run.len())).map(move |c| {
+                    let first = run.start + c * POINTS_PER_CHUNK;
+                    (r, first..(first + POINTS_PER_CHUNK).min(run.end))
+                })
+            })
             .collect();
         // Each chunk writes its own touches' slice of the output (a point's
         // touches are contiguous, in point order): no second copy of the
         // values, which at 10⁶ touches would be 8 MB more at the peak.
         let mut values = vec![0.0; data.len()];
-        let mut slots: Vec<(Range<usize>, std::sync::Mutex<&mut [f64]>)> = Vec::new();
+        let mut slots = Vec::new();
         let mut rest = values.as_mut_slice();
-        for c in chunks {
-            let touches = data.points()[c.clone()]
-                .iter()
-                .map(|p| p.touches.len())
-                .sum::<usize>();
+        for (r, c) in chunks {
+            let touches = self.touches_of(&c).len();
             let (slot, tail) = std::mem::take(&mut rest).split_at_mut(touches);
             rest = tail;
-            slots.push((c, std::sync::Mutex::new(slot)));
+            slots.push((r, c, std::sync::Mutex::new(slot)));
         }
-        let run = |(c, slot): &(Range<usize>, std::sync::Mutex<&mut [f64]>)| {
-            let part = self.standardised_points(at, effects.as_ref(), (&cols, &m), c)?;
+        let run = |(r, c, slot): &(usize, Range<usize>, std::sync::Mutex<&mut [f64]>)| {
+            let (seen, effects, cols, m, _) = &runs[*r];
+            let part = self.standardised_points(seen, effects.as_ref(), (cols, m), c)?;
             let mut slot = slot
                 .lock()
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -563,11 +610,21 @@ impl Term for TouchTerm<'_> {
         self.data.len()
     }
 
+    /// The touch's file:line; its group the point's label, and the tool's
+    /// name when another tool than the probe touched it (a label touched
+    /// by two tools is two points).
     fn origin(&self, i: usize) -> Origin {
-        let point = &self.data.points()[self.point_of(i)];
+        let p = self.point_of(i);
+        let point = &self.data.points()[p];
+        let group = match self.data.touch_tools() {
+            Some(t) if t.of_point(p) != 0 => {
+                format!("{} ({})", point.label, t.names()[t.of_point(p)])
+            }
+            _ => point.label.clone(),
+        };
         Origin {
             at: self.data.source().touch(i).to_string(),
-            group: point.label.clone(),
+            group,
         }
     }
 
@@ -721,37 +778,53 @@ fn rows_times<const R: usize>(
 fn accumulate(
     term: &TouchTerm<'_>,
     at: &At<'_>,
-    effects: Option<&Effects>,
+    views: &TouchViews,
     shared: &mut Shared,
     normal: &mut Normal,
-) -> Result<f64, KernelError> {
+) -> Result<f64, TermError> {
     let data = term.data;
     let np = data.points().len();
-    // Counted by `point_chunks`, so that what it tells the tests holds here.
-    let chunks: Vec<Range<usize>> = (0..point_chunks(np))
-        .map(|c| c * POINTS_PER_CHUNK..((c + 1) * POINTS_PER_CHUNK).min(np))
-        .collect();
     let need_mean = shared.want_centre_jacobians;
     // Touches move with the arm only: their sums run over the free
     // geometry and correction columns, placed at those columns' rows of
-    // `normal` (the identity when no other column is free).
+    // `normal` (the identity when no other column is free); a tool's
+    // touches over its offset block's columns instead of the probe's.
     let arm = at.layout.arm_columns();
-    let (at_free, free): (Vec<usize>, Vec<usize>) = (normal.free.iter().enumerate())
+    let geo: Vec<(usize, usize)> = (normal.free.iter().enumerate())
         .filter(|(_, c)| **c < arm)
         .map(|(a, &c)| (a, c))
-        .unzip();
+        .collect();
+    let mut runs = Vec::with_capacity(views.runs.len());
+    let mut chunks: Vec<(usize, Range<usize>)> = Vec::new();
+    for (r, (k, points)) in views.runs.iter().enumerate() {
+        let pairs = tool_columns(&geo, &normal.free, at.layout, views.block(*k));
+        let (at_free, free): (Vec<usize>, Vec<usize>) = pairs.into_iter().unzip();
+        let effects = views.at(at, *k).effects(data.poses(), data.conditions())?;
+        runs.push((views.kernel(at, *k), effects, at_free, free));
+        // Counted by `point_chunks`, so that what it tells the tests holds
+        // here.
+        chunks.extend((0..point_chunks(points.len())).map(|c| {
+            let first = points.start + c * POINTS_PER_CHUNK;
+            (r, first..(first + POINTS_PER_CHUNK).min(points.end))
+        }));
+    }
     let p = normal.free.len();
-    let run = |c: &Range<usize>| chunk(at.kernel, term, effects, &free, c.clone(), need_mean);
+    let run = |(r, c): &(usize, Range<usize>)| {
+        let (kernel, effects, _, free) = &runs[*r];
+        let part = chunk(kernel, term, effects.as_ref(), free, c.clone(), need_mean);
+        (*r, part)
+    };
     let partials = parallel_map(&chunks, at.threads, run);
     let mut cost = 0.0;
     let mut centres = Centres {
         points: Vec::with_capacity(np),
         jacobians: Vec::with_capacity(if need_mean { np } else { 0 }),
     };
-    let q = free.len();
-    for part in partials {
+    for (r, part) in partials {
         let part = part?;
-        if q == p {
+        let at_free = &runs[r].2;
+        let q = at_free.len();
+        if at_free.iter().enumerate().all(|(i, &a)| i == a) && q == p {
             for (o, v) in normal.jtj.iter_mut().zip(&part.jtj) {
                 *o += v;
             }

@@ -125,6 +125,19 @@ impl IdentifyReport {
                 data: data.joints(),
             });
         }
+        // Each tool's touches seen through its nominal offset, a tool the
+        // arm does not list refused by file, line and field.
+        let resolved;
+        let (data, evidence) = if data.touch_tools().is_some() {
+            resolved = super::checks::of_arm_tools(arm, data.clone())?;
+            let evidence = crate::identify::Evidence {
+                data: &resolved,
+                added: evidence.added,
+            };
+            (&resolved, evidence)
+        } else {
+            (data, evidence)
+        };
         let identification = identify_with(&arm.params, data, noise, evidence.added, threads)?;
         let corrections = if beyond.is_empty() {
             Vec::new()

@@ -949,9 +949,9 @@ impl Request {
                 Setting::Tool,
                 &name,
                 format!(
-                    "{}: touches give their tool in a `tool` column of the poses file, which \
-                     this version does not read: calibrate a stylus from points on spheres or \
-                     reference positions",
+                    "{}: touches give their probe in the poses file's `tool` column, row by \
+                     row (a name of the arm's [[tool]]): add the column rather than one tool \
+                     for every touch",
                     self.sources.data_file
                 ),
             )
@@ -964,8 +964,8 @@ impl Request {
                     Setting::Tool,
                     &name,
                     format!(
-                        "{}: held-out touches give their tool in a `tool` column of the poses \
-                         file, which this version does not read",
+                        "{}: held-out touches give their probe in the poses file's `tool` \
+                         column, row by row: add the column rather than one tool for every touch",
                         held.data_file
                     ),
                 )

@@ -381,9 +381,8 @@ pub fn figures_in(
             ..Figures::without_touches(positions)
         });
     }
-    let k = ArmKernel::new(params)?;
-    let mut xyz = vec![[0.0; 3]; data.len()];
-    k.positions(data.poses(), 0..data.len(), &mut xyz)?;
+    // Each touch through its tool (the probe's when no touch names one).
+    let xyz = crate::residuals::tools::touch_positions_at(params, data, frames)?;
     // The figures use no pair of points (eq. 19): not computed.
     let ev = evaluate_without_pairs(data, &xyz)?;
     Ok(Figures {
