@@ -412,7 +412,7 @@ impl Solver for Anneal {
         // The paper's energy sees every touch through the arm's probe.
         if task.data.touch_tools().is_some() {
             return Err(crate::error::OptionError::new(
-                "method",
+                crate::setting::Setting::Method,
                 self.method().name(),
                 "the annealing energy sees every touch through the arm's probe: touches by \
                  several tools (a `tool` column) are fitted by lm or global",
