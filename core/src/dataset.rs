@@ -1260,15 +1260,33 @@ impl DataSet {
     }
 
     /// These data measured with the tool `name` (an arm's `[[tool]]`,
-    /// resolved by [`DataSet::with_tools`]): every reference position's
-    /// tool set to it — what a file without a `tool` column holds when
-    /// every row was seen at that tool point.
+    /// resolved by [`DataSet::with_tools`]): every touch's and reference
+    /// position's tool set to it — what files without a `tool` column hold
+    /// when every row was made with that tool.
     ///
     /// # Errors
     ///
-    /// Positions that name their tools already (a `tool` column): the tool
-    /// of every row is stated once, by the file or here.
+    /// Touches or positions that name their tools already (a `tool`
+    /// column): the tool of every row is stated once, by the file or here.
     pub fn measured_with(mut self, name: &str) -> Result<DataSet, InputError> {
+        if self.tools.is_some() {
+            return Err(InputError::file_error(
+                &self.source.poses_file,
+                format!(
+                    "the touches name their probes (a `tool` column): a probe for every touch, \
+                     {}, is for a file without one",
+                    crate::error::quoted(name)
+                ),
+            ));
+        }
+        if !self.points.is_empty() {
+            // Every point the tool's: one run of points, in today's order.
+            self.tools = Some(TouchTools {
+                names: vec![crate::io::DEFAULT_TOOL.to_string(), name.to_string()],
+                offsets: vec![None, None],
+                of_point: vec![1; self.points.len()],
+            });
+        }
         if let Some(p) = &mut self.positions {
             if p.rows.has_tools() {
                 return Err(InputError::file_error(

@@ -68,8 +68,8 @@ pub struct Args {
     /// The tool the rows that name none were measured with: `probe` (the
     /// arm's `[probe]`, the default) or one of the arm file's `[[tool]]` (a
     /// stylus, a marker), whose offset is then fitted and written to the
-    /// calibrated arm's `[[tool]]`, the probe's held. For positions and
-    /// points on spheres in files without a `tool` column.
+    /// calibrated arm's `[[tool]]`, the probe's held. For touches,
+    /// positions and points on spheres in files without a `tool` column.
     #[arg(long, value_name = "NAME", default_value = "probe")]
     tool: String,
     /// Exit 0 even when the fit's χ² is far outside the stated noise or the

@@ -737,9 +737,9 @@ fn simulate_sphere_tools_then_calibrate() {
 /// `calibrate --tool NAME`: a file without a `tool` column probed with one
 /// of the arm's styli calibrates as the same file whose every row names it
 /// (the same parameters and offsets, the stylus' written to the calibrated
-/// arm's `[[tool]]`, the probe's held as unseen); a file that names its
-/// probes already, and touches (no `tool` column read for them), are
-/// refused by the flag.
+/// arm's `[[tool]]`, the probe's held as unseen), for points on spheres
+/// and touches alike; a file that names its probes already is refused by
+/// the flag.
 #[test]
 fn calibrate_tool_is_the_tool_column_of_every_row() {
     use crate::util::{aacmm, assert_clean_error, stdout, temp_dir, write};
@@ -838,23 +838,68 @@ fn calibrate_tool_is_the_tool_column_of_every_row() {
         &o,
         &["--tool long", "named.csv: the rows name their probes"],
     );
+    // Touches: the shipped campaign without a column and --tool, as the
+    // same file whose every row names the stylus (here at the probe's own
+    // offset and ball, so that the shipped touches fit it).
+    let mut same = nominal();
+    same.tools[0].offset = same.params.probe;
+    let same_arm = write(
+        &dir,
+        "same.toml",
+        &aacmm_core::io::arm_to_toml(&same, aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg),
+    );
     let poses = crate::util::shipped("poses.csv");
+    let text = std::fs::read_to_string(&poses).unwrap();
+    let mut lines = text.lines();
+    let mut named = format!("{},tool\n", lines.next().unwrap());
+    for l in lines {
+        named += &format!("{l},long\n");
+    }
+    let named_poses = write(&dir, "named-poses.csv", &named);
+    let lengths = crate::util::shipped("lengths.csv");
+    let touches = |data: &str, tool: &[&str], out: &str| {
+        let out = dir.join(out);
+        let args = [
+            &[
+                "calibrate",
+                "--arm",
+                &same_arm,
+                "--data",
+                data,
+                "--method",
+                "lm",
+            ][..],
+            &["--lengths", &lengths][..],
+            &["--out", out.to_str().unwrap()][..],
+            tool,
+        ]
+        .concat();
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+        CalibrationReport::from_json(&json).unwrap().calibration
+    };
+    let by_flag = touches(&poses, &["--tool", "long"], "touches-flag");
+    let by_column = touches(&named_poses, &[], "touches-column");
+    assert_eq!(by_flag.params, by_column.params);
+    assert_eq!(by_flag.tool_estimates(), by_column.tool_estimates());
+    assert_eq!(by_flag.tool_estimates()[0].0, "long");
     let o = aacmm(&[
         "calibrate",
         "--arm",
-        &arm,
+        &same_arm,
         "--data",
-        &poses,
+        &named_poses,
         "--tool",
         "long",
         "--out",
-        dir.join("touches").to_str().unwrap(),
+        dir.join("touches-both").to_str().unwrap(),
     ]);
     assert_clean_error(
         &o,
         &[
             "--tool long",
-            "touches give their probe in the poses file's `tool` column",
+            "named-poses.csv: the touches name their probes",
         ],
     );
 }

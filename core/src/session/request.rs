@@ -526,9 +526,9 @@ impl Request {
     /// `[[tool]]` `name` (a stylus, a marker; `probe`: the arm's `[probe]`,
     /// the default): that tool's offset is fitted, the probe's held as
     /// unseen, and the calibrated arm writes the fitted offset to its
-    /// `[[tool]]`. Checked when built: a tool the arm does not have, data
-    /// files that name their tools already (a `tool` column), and touches
-    /// (their tool is a poses file's column) are refused.
+    /// `[[tool]]`. Checked when built: a tool the arm does not have, and
+    /// data files that name their tools already (a `tool` column), are
+    /// refused.
     pub fn tool(mut self, name: &str) -> Request {
         self.tool = (name != crate::io::tools::DEFAULT_TOOL).then(|| name.to_string());
         self
@@ -944,33 +944,8 @@ impl Request {
             return Ok(self);
         };
         let refused = |e: InputError| OptionError::new(Setting::Tool, &name, e.to_string());
-        if !self.data.is_empty() {
-            return Err(OptionError::new(
-                Setting::Tool,
-                &name,
-                format!(
-                    "{}: touches give their probe in the poses file's `tool` column, row by \
-                     row (a name of the arm's [[tool]]): add the column rather than one tool \
-                     for every touch",
-                    self.sources.data_file
-                ),
-            )
-            .into());
-        }
         self.data = self.data.measured_with(&name).map_err(refused)?;
         if let Some((mut held, warnings)) = self.held_out.take() {
-            if !held.data.is_empty() {
-                return Err(OptionError::new(
-                    Setting::Tool,
-                    &name,
-                    format!(
-                        "{}: held-out touches give their probe in the poses file's `tool` \
-                         column, row by row: add the column rather than one tool for every touch",
-                        held.data_file
-                    ),
-                )
-                .into());
-            }
             held.data = held.data.measured_with(&name).map_err(refused)?;
             self.held_out = Some((held, warnings));
         }
