@@ -101,56 +101,52 @@ impl Lengths {
 ///
 /// Each pointer is `NULL` or points to a NUL-terminated string.
 pub(crate) unsafe fn frame_names(names: &[*const c_char]) -> Result<Vec<String>, Error> {
-    let mut out: Vec<String> = ptr::try_vec("frame_names_len", names.len())?;
-    for (k, &p) in names.iter().enumerate() {
-        let arg = format!("frame_names[{k}]");
-        // SAFETY: NULL or NUL-terminated, by the contract.
-        let s = unsafe { ptr::c_str(p, &arg) }?;
-        let s = s
-            .to_str()
-            .map_err(|_| Error::invalid(format!("{arg} is not valid UTF-8")))?;
-        if s.trim().is_empty() {
-            return Err(input(format!(
-                "{arg}: empty frame name: name the station or placement"
-            )));
-        }
-        if let Some(j) = out.iter().position(|n| n == s) {
-            return Err(input(format!(
-                "{arg}: {} is frame_names[{j}] too: give each frame once",
-                quoted(s)
-            )));
-        }
-        out.push(s.to_string());
-    }
-    Ok(out)
+    let empty = "empty frame name: name the station or placement";
+    // SAFETY: by the contract.
+    unsafe { distinct_names(names, ("frame_names", "frame"), empty) }
 }
 
-/// The names of `tool_names`: UTF-8, none empty, none given twice.
+/// The names of `tool_names`: as [`frame_names`], each trimmed.
 ///
 /// # Safety
 ///
 /// Each pointer is `NULL` or a NUL-terminated string.
 pub(crate) unsafe fn tool_names(names: &[*const c_char]) -> Result<Vec<String>, Error> {
-    let mut out: Vec<String> = ptr::try_vec("tool_names_len", names.len())?;
+    let empty = "empty tool name: name a [[tool]] of the arm file (index 0 is its [probe])";
+    // SAFETY: by the contract.
+    let names = unsafe { distinct_names(names, ("tool_names", "tool"), empty) }?;
+    Ok(names.into_iter().map(|n| n.trim().to_string()).collect())
+}
+
+/// The names of the array `array` (`what` each names): UTF-8, none empty
+/// (refused with `empty`), none given twice.
+///
+/// # Safety
+///
+/// Each pointer is `NULL` or points to a NUL-terminated string.
+unsafe fn distinct_names(
+    names: &[*const c_char],
+    (array, what): (&str, &str),
+    empty: &str,
+) -> Result<Vec<String>, Error> {
+    let mut out: Vec<String> = ptr::try_vec(&format!("{array}_len"), names.len())?;
     for (k, &p) in names.iter().enumerate() {
-        let arg = format!("tool_names[{k}]");
+        let arg = format!("{array}[{k}]");
         // SAFETY: NULL or NUL-terminated, by the contract.
         let s = unsafe { ptr::c_str(p, &arg) }?;
         let s = s
             .to_str()
             .map_err(|_| Error::invalid(format!("{arg} is not valid UTF-8")))?;
         if s.trim().is_empty() {
-            return Err(input(format!(
-                "{arg}: empty tool name: name a [[tool]] of the arm file (index 0 is its [probe])"
-            )));
+            return Err(input(format!("{arg}: {empty}")));
         }
         if let Some(j) = out.iter().position(|n| n == s) {
             return Err(input(format!(
-                "{arg}: {} is tool_names[{j}] too: give each tool once",
+                "{arg}: {} is {array}[{j}] too: give each {what} once",
                 quoted(s)
             )));
         }
-        out.push(s.trim().to_string());
+        out.push(s.to_string());
     }
     Ok(out)
 }
