@@ -1298,11 +1298,9 @@ impl DataSet {
                     ),
                 ));
             }
-            let mut rows = std::mem::replace(&mut p.rows, crate::io::Positions::new(0));
-            for i in 0..rows.len() {
-                rows.set_tool_of(i, name);
+            for i in 0..p.rows.len() {
+                p.rows.set_tool_of(i, name);
             }
-            p.rows = rows;
         }
         Ok(self)
     }
