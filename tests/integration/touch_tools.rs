@@ -409,3 +409,63 @@ fn bad_tools_are_refused_by_file_line_and_field() {
         "{e}"
     );
 }
+
+/// The session's report has a table of the probes the touches name: per
+/// probe its touches, its fitted offset (the stylus's the fit's own, with
+/// σ) and its touches' spread about their points' centres — far smaller
+/// after than before, and after of the noise's size (0.003° per encoder
+/// at a 0.6–1 m reach, 0.003 mm of probe: ≈ 0.04 mm in 3-D); the summary
+/// and the page show it, and a file naming no probe has none.
+#[test]
+fn the_report_has_a_row_per_probe_of_the_touches() {
+    use aacmm_core::session::Request;
+    let nominal = nominal();
+    let (_, a, b) = campaigns(&nominal, 5);
+    let text = poses_text(&[("probe", &a, ""), ("long", &b, "L")]);
+    let run = |text: &str| {
+        let request = Request::new(nominal.clone(), data_of(text, Some(&a)));
+        (request.noise(model().noise).method("lm").threads(Some(1)))
+            .run()
+            .unwrap()
+    };
+    let (problem, report) = run(&text);
+    let t = report.touch_tools.as_ref().expect("a table of the probes");
+    assert_eq!(t.file, "p.csv");
+    let names: Vec<&str> = t.tools.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, ["probe", "long"]);
+    assert_eq!(
+        (t.tools[0].rows, t.tools[1].rows),
+        (a.poses.len(), b.poses.len())
+    );
+    let long = &report.calibration.tool_estimates()[0];
+    assert_eq!((t.tools[1].offset, t.tools[1].sigma), (long.1, long.2));
+    assert_eq!(t.tools[1].nominal, LONG);
+    for r in &t.tools {
+        assert!(
+            r.rms_after < 0.05 * r.rms_before && r.rms_after < 0.08,
+            "{}: {} → {} mm",
+            r.name,
+            r.rms_before,
+            r.rms_after
+        );
+    }
+    assert!(report.tools.is_none(), "no positions");
+    let summary = report.summary();
+    assert!(summary.contains("Tool points (p.csv)"), "{summary}");
+    assert!(report.to_json().contains("\"touch_tools\""));
+    // The page has the section, and its sections are numbered 1, 2, … in
+    // order (the touches' were numbered as if no section came before).
+    let page = aacmm_core::report::session_report(&report, &problem)
+        .unwrap()
+        .html;
+    assert!(page.contains("<th>RMS from the centre, nominal</th>"));
+    let numbers: Vec<usize> = (page.split("<h2>").skip(1))
+        .filter_map(|h| h.split_once(". ")?.0.parse().ok())
+        .collect();
+    assert!(numbers.len() > 5, "{numbers:?}");
+    assert_eq!(numbers, (1..=numbers.len()).collect::<Vec<_>>());
+    let plain = run(&poses_text(&[("probe", &a, "")])).1;
+    assert!(plain.touch_tools.is_none());
+    assert!(!plain.summary().contains("Tool points"));
+    assert!(!plain.to_json().contains("touch_tools"));
+}

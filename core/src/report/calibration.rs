@@ -107,6 +107,7 @@ pub fn session_report(
         folds: (v.cross_validation.as_ref()).map_or(&[], |cv| cv.folds.as_slice()),
         held_out_spheres: v.held_out_spheres.as_ref(),
         tools: report.tools.as_ref(),
+        touch_tools: report.touch_tools.as_ref(),
         uncertainty_maps_in_frames: &report.uncertainty_maps_in_frames,
         verdict: Some(&report.verdict),
         seed: report.seed,

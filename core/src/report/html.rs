@@ -174,7 +174,7 @@ pub(crate) fn calibration_page(
         beyond: find(figures, BEYOND_SVG).is_some(),
         map: input.uncertainty_map.is_some(),
         spheres: input.spheres.is_some() || input.held_out_spheres.is_some(),
-        tools: input.tools.is_some(),
+        tools: input.tools.is_some() || input.touch_tools.is_some(),
     };
     let numbered = present.sections();
     let number = |id: &str| {
@@ -218,11 +218,11 @@ pub(crate) fn calibration_page(
             &held_out_sphere_file(h),
         );
     }
-    if let Some(t) = input.tools {
-        page += &tools_section(t, number("tools"));
+    if present.tools {
+        page += &tools_section(input.tools, input.touch_tools, number("tools"));
     }
     if present.touches {
-        page += &touch_sections(input, evaluated, figures);
+        page += &touch_sections(input, evaluated, figures, number("single-point"));
     }
     page += &geometry_sections(input, figures, &number);
     if present.touches {
@@ -371,10 +371,15 @@ fn solver_caption(touches: bool) -> String {
     )
 }
 
-/// Sections 1 and 2 of a page with touches: the single-point errors and
-/// the length errors.
-fn touch_sections(input: &CalibrationInput, evaluated: &[Evaluated], figures: &[Figure]) -> String {
-    let first = if input.positions.is_empty() { 1 } else { 2 };
+/// The sections of a page with touches, numbered from `first` (after the
+/// positions', spheres' and tools' sections when present): the
+/// single-point errors and the length errors.
+fn touch_sections(
+    input: &CalibrationInput,
+    evaluated: &[Evaluated],
+    figures: &[Figure],
+    first: usize,
+) -> String {
     section(
         "single-point",
         &format!("{first}. Single-point error per point, before and after"),
@@ -556,8 +561,58 @@ fn held_out_spheres(folds: &[crate::calibrate::validate::Fold]) -> String {
 }
 
 /// The tool points, numbered `number`: per tool its offset ± σ and its
-/// rows' 3-D error RMS before and after.
-fn tools_section(t: &crate::session::tools::ToolReport, number: usize) -> String {
+/// rows' error RMS before and after, a table for the positions' tools and
+/// one for the touches', each when present.
+fn tools_section(
+    positions: Option<&crate::session::tools::ToolReport>,
+    touches: Option<&crate::session::tools::ToolReport>,
+    number: usize,
+) -> String {
+    let mut words = String::new();
+    let mut tables = String::new();
+    if let Some(t) = positions {
+        words += &format!(
+            "The tool points the rows of {} name (markers, SMRs, styli: the arm file's \
+             [[tool]]), each offset in the last joint's frame and fitted with the arm; `{}` is \
+             the arm's probe. RMS of each tool's rows' 3-D errors |R p + t − y|: before, the \
+             nominal arm with its nominal offsets; after, the calibrated arm.",
+            escape(&t.file),
+            crate::io::DEFAULT_TOOL
+        );
+        tables += &tool_table(t, "RMS 3-D, nominal");
+    }
+    if let Some(t) = touches {
+        if !words.is_empty() {
+            words += " ";
+        }
+        words += &format!(
+            "The probes the touches of {} name (the arm file's [[tool]]; `{}` is the arm's \
+             probe), each offset in the last joint's frame and fitted with the arm. RMS of each \
+             probe's touches' distances from their points' centres (the mean of each point's \
+             touches): before, the nominal arm with its nominal offsets; after, the calibrated \
+             arm.",
+            escape(&t.file),
+            crate::io::DEFAULT_TOOL
+        );
+        tables += &tool_table(t, "RMS from the centre, nominal");
+    }
+    section(
+        "tools",
+        &format!(
+            "{number}. Tool points: offsets and {}errors per tool",
+            if touches.is_some() { "" } else { "3-D " }
+        ),
+        &words,
+        None,
+        "",
+        "",
+        &tables,
+    )
+}
+
+/// One tool report's table, its RMS column before calibration headed
+/// `before`.
+fn tool_table(t: &crate::session::tools::ToolReport, before: &str) -> String {
     let mut rows = String::new();
     for r in &t.tools {
         let three = |v: [f64; 3]| format!("{:.4}, {:.4}, {:.4}", v[0], v[1], v[2]);
@@ -573,26 +628,10 @@ fn tools_section(t: &crate::session::tools::ToolReport, number: usize) -> String
             r.rms_after
         );
     }
-    let table = format!(
+    format!(
         "<table>\n<tr><th>tool</th><th>rows</th><th>nominal offset (mm)</th>\
-         <th>fitted offset (mm)</th><th>σ (mm, k = 1)</th><th>RMS 3-D, nominal</th>\
+         <th>fitted offset (mm)</th><th>σ (mm, k = 1)</th><th>{before}</th>\
          <th>calibrated</th></tr>\n{rows}</table>\n"
-    );
-    section(
-        "tools",
-        &format!("{number}. Tool points: offsets and 3-D errors per tool"),
-        &format!(
-            "The tool points the rows of {} name (markers, SMRs, styli: the arm file's \
-             [[tool]]), each offset in the last joint's frame and fitted with the arm; `{}` is \
-             the arm's probe. RMS of each tool's rows' 3-D errors |R p + t − y|: before, the \
-             nominal arm with its nominal offsets; after, the calibrated arm.",
-            escape(&t.file),
-            crate::io::DEFAULT_TOOL
-        ),
-        None,
-        "",
-        "",
-        &table,
     )
 }
 

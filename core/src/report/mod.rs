@@ -280,6 +280,9 @@ pub struct CalibrationInput<'a> {
     pub held_out_spheres: Option<&'a crate::session::spheres::HeldOutSpheres>,
     /// Several tool points, when rows name them: their section.
     pub tools: Option<&'a crate::session::tools::ToolReport>,
+    /// Touches by several probes, when the poses name them: a table in
+    /// the tool points' section (which it opens without positions').
+    pub touch_tools: Option<&'a crate::session::tools::ToolReport>,
     /// The same poses as each fitted frame's instrument sees the probe, its
     /// registration included: a table each in the map's section (none
     /// without frames). Their JSON Pointers are

@@ -130,6 +130,7 @@ fn report_with(
         folds: &[],
         held_out_spheres: None,
         tools: None,
+        touch_tools: None,
         uncertainty_maps_in_frames: &[],
         verdict: None,
         seed: 0,

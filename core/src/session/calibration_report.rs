@@ -111,6 +111,10 @@ pub struct CalibrationReport {
     /// and its rows' 3-D errors.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tools: Option<tools::ToolReport>,
+    /// Touches by several probes, when the poses name them: per probe its
+    /// offset ± σ and its touches' distances from their points' centres.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub touch_tools: Option<tools::ToolReport>,
     /// The same poses as each fitted frame's instrument sees the probe,
     /// that frame's registration included
     /// ([`crate::plan::uncertainty_map_in_frame`]); absent without frames.

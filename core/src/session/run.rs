@@ -57,6 +57,7 @@ pub fn run(
         spheres,
         held_out_spheres,
         tools,
+        touch_tools,
     } = evidence_reports(problem, &calibration, (before, after))?;
     let held_out = match &problem.held_out {
         Some(h) => Some(HeldOut {
@@ -118,6 +119,7 @@ pub fn run(
         uncertainty_map,
         spheres,
         tools,
+        touch_tools,
         uncertainty_maps_in_frames,
     })
 }
@@ -129,8 +131,10 @@ struct Evidence {
     spheres: Option<spheres::SphereReport>,
     /// The held-out sphere file's figures.
     held_out_spheres: Option<spheres::HeldOutSpheres>,
-    /// The tool points'.
+    /// The tool points' the positions name.
     tools: Option<tools::ToolReport>,
+    /// The tool points' the touches name.
+    touch_tools: Option<tools::ToolReport>,
 }
 
 /// The sections of the evidence beyond touches and positions that
@@ -153,10 +157,11 @@ fn evidence_reports(
         .map(|t| spheres::held_out_spheres(t, layout, calibration))
         .transpose()?;
     let start = (&problem.arm.params, before, after);
-    let tools = tools::tool_report(&problem.data, calibration, start)?;
+    let (tools, touch_tools) = tools::tool_reports(&problem.data, calibration, start)?;
     Ok(Evidence {
         spheres,
         held_out_spheres,
         tools,
+        touch_tools,
     })
 }

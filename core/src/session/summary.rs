@@ -33,7 +33,7 @@ impl CalibrationReport {
         if let Some(h) = &self.validation.held_out_spheres {
             t += &h.summary();
         }
-        if let Some(s) = &self.tools {
+        for s in self.tools.iter().chain(&self.touch_tools) {
             t += &s.summary();
         }
         t
