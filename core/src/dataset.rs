@@ -1227,32 +1227,6 @@ impl DataSet {
         Ok(self)
     }
 
-    /// Refuses touches by a tool other than the default for `what` (a
-    /// stage that sees every touch through the arm's probe), at the poses
-    /// file's first such touch, field `tool`.
-    ///
-    /// # Errors
-    ///
-    /// The first touch (in file order) by another tool.
-    pub fn refuse_touch_tools(&self, what: &str) -> Result<(), InputError> {
-        let Some(t) = &self.tools else {
-            return Ok(());
-        };
-        let first = (self.points.iter().zip(&t.of_point))
-            .filter(|(_, k)| **k != 0)
-            .flat_map(|(p, k)| p.touches.clone().map(move |i| (i, *k)))
-            .min_by_key(|&(i, _)| self.source.touch_lines[i]);
-        let Some((i, k)) = first else {
-            return Ok(());
-        };
-        Err(crate::io::poses::tools_refused(
-            &self.source.poses_file,
-            self.source.touch_lines[i] as usize,
-            &t.names[k as usize],
-            what,
-        ))
-    }
-
     /// The tools that touched the points, when some touch names a tool
     /// other than the default (the arm's probe).
     pub fn touch_tools(&self) -> Option<&TouchTools> {

@@ -902,4 +902,55 @@ fn calibrate_tool_is_the_tool_column_of_every_row() {
             "named-poses.csv: the touches name their probes",
         ],
     );
+    // Reference positions: a tracker campaign of the stylus (simulate
+    // names it on every row), and the same rows without the column.
+    let sim = dir.join("sim");
+    let o = aacmm(&[
+        "simulate",
+        "--arm",
+        &arm,
+        "--errors",
+        "paper",
+        "--positions",
+        "40",
+        "--seed",
+        "3",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let named = std::fs::read_to_string(sim.join("positions.csv")).unwrap();
+    assert!(named.lines().skip(1).all(|l| l.ends_with(",long")));
+    let bare: String = (named.lines())
+        .map(|l| format!("{}\n", l.rsplit_once(',').unwrap().0))
+        .collect();
+    let bare_positions = write(&dir, "bare-positions.csv", &bare);
+    let tracked = |file: &str, tool: &[&str], out: &str| {
+        let out = dir.join(out);
+        let args = [
+            &["calibrate", "--arm", &arm, "--positions", file][..],
+            &["--method", "lm", "--out", out.to_str().unwrap()][..],
+            tool,
+        ]
+        .concat();
+        let o = aacmm(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json = std::fs::read_to_string(out.join("calibration.json")).unwrap();
+        CalibrationReport::from_json(&json).unwrap()
+    };
+    let by_flag = tracked(&bare_positions, &["--tool", "long"], "positions-flag");
+    let named_file = sim.join("positions.csv");
+    let by_column = tracked(named_file.to_str().unwrap(), &[], "positions-column");
+    assert_eq!(by_flag.calibration.params, by_column.calibration.params);
+    assert_eq!(
+        by_flag.calibration.tool_estimates(),
+        by_column.calibration.tool_estimates()
+    );
+    assert_eq!(by_flag.calibration.tool_estimates()[0].0, "long");
+    let tools = by_flag.tools.as_ref().expect("the positions' tool table");
+    assert!(tools.file.ends_with("bare-positions.csv"), "{}", tools.file);
+    assert_eq!(
+        (tools.tools.iter().map(|t| (t.name.as_str(), t.rows))).collect::<Vec<_>>(),
+        [("long", 40)]
+    );
 }

@@ -67,6 +67,11 @@ pub struct Spheres {
     names: Vec<String>,
     /// Per row, its sphere (an index into `names`).
     sphere_of: Vec<usize>,
+    /// Per sphere, its index's inverse: the sphere of a label (so that
+    /// reading a file is linear in its rows whatever the spheres).
+    index: std::collections::HashMap<String, usize>,
+    /// Per sphere, its rows in file order.
+    rows: Vec<Vec<usize>>,
     /// Readings, rad (mm for a slide), row-major.
     q: Vec<f64>,
     /// Per row, its 1-based line.
@@ -88,6 +93,8 @@ impl Spheres {
             prismatic,
             names: Vec::new(),
             sphere_of: Vec::new(),
+            index: std::collections::HashMap::new(),
+            rows: Vec::new(),
             q: Vec::new(),
             lines: Vec::new(),
             articulation: None,
@@ -104,14 +111,17 @@ impl Spheres {
     /// If `q` has another joint count than the rows.
     pub fn push(&mut self, sphere: &str, q: &[f64], line: usize, articulation: Option<u32>) {
         assert_eq!(q.len(), self.joints, "a row of {} joints", self.joints);
-        let s = match self.names.iter().position(|n| n == sphere) {
-            Some(s) => s,
+        let s = match self.index.get(sphere) {
+            Some(&s) => s,
             None => {
                 self.names.push(sphere.to_string());
+                self.index.insert(sphere.to_string(), self.names.len() - 1);
+                self.rows.push(Vec::new());
                 self.names.len() - 1
             }
         };
         let first = self.sphere_of.is_empty();
+        self.rows[s].push(self.sphere_of.len());
         self.sphere_of.push(s);
         self.tool_of.push(0);
         self.q.extend_from_slice(q);
@@ -153,9 +163,7 @@ impl Spheres {
 
     /// Sphere `s`'s tool (the tool of its rows: one per placement).
     pub fn tool_of_sphere(&self, s: usize) -> usize {
-        (0..self.len())
-            .find(|&i| self.sphere_of[i] == s)
-            .map_or(0, |i| self.tool(i))
+        self.rows[s].first().map_or(0, |&i| self.tool(i))
     }
 
     /// These rows, each probed by `tool` (one of an arm's `[[tool]]`):
@@ -232,9 +240,7 @@ impl Spheres {
 
     /// The rows of sphere `s`, in file order.
     pub fn rows_of(&self, s: usize) -> Vec<usize> {
-        (0..self.len())
-            .filter(|&i| self.sphere_of[i] == s)
-            .collect()
+        self.rows[s].clone()
     }
 
     /// The rows `keep` (in that order; the spheres renumbered in order of
