@@ -24,7 +24,7 @@ pub(crate) enum SphereArg {
     /// A sphere-surface file, its readings in the given unit.
     File(PathBuf, AngleUnit),
     /// Rows from arrays (readings in rad; mm for a slide).
-    Rows(Spheres),
+    Rows(Box<Spheres>),
 }
 
 impl SphereArg {
@@ -101,7 +101,7 @@ impl SphereArg {
             }
             Ok(())
         })?;
-        Ok(SphereArg::Rows(rows))
+        Ok(SphereArg::Rows(Box::new(rows)))
     }
 
     /// What the report calls them: the file as given, or `<arrays>`.
@@ -122,7 +122,7 @@ impl SphereArg {
                     .read_spheres(path)?
                     .angle_unit(back)
             }
-            SphereArg::Rows(rows) => request.spheres_of(rows, ARRAYS)?,
+            SphereArg::Rows(rows) => request.spheres_of(*rows, ARRAYS)?,
         })
     }
 
@@ -133,7 +133,7 @@ impl SphereArg {
                 let back = request.unit();
                 (request.angle_unit(unit).validate_on_spheres(path)?).angle_unit(back)
             }
-            SphereArg::Rows(rows) => request.validate_on_spheres_of(rows, ARRAYS)?,
+            SphereArg::Rows(rows) => request.validate_on_spheres_of(*rows, ARRAYS)?,
         })
     }
 }

@@ -3,6 +3,7 @@
 //! one design, and a plan's held-out error against random subsets and
 //! greedy D-optimality of the same pool.
 
+use super::util::normal;
 use aacmm_core::calibrate::Method;
 use aacmm_core::io::{Arm, DEFAULT_FRAME, Poses, Positions, read_arm};
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
@@ -145,13 +146,6 @@ fn the_uncertainty_map_matches_monte_carlo() {
             m.radius_mm
         );
     }
-}
-
-/// A standard normal draw (Box–Muller).
-fn normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
-    use rand::RngExt;
-    let (u, v): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
-    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
 }
 
 /// A pool of 400 positions of a true UR5 seen by a tracker (σ 0.02 mm),

@@ -134,3 +134,10 @@ pub fn mislabelled_poses(dir: &Path) -> String {
     lines[17] = lines[17].replacen("S2,", "S1,", 1);
     write(dir, "poses.csv", &(lines.join("\n") + "\n"))
 }
+
+/// A standard normal draw (Box–Muller).
+pub fn normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
+    use rand::RngExt;
+    let (u, v): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+}

@@ -71,7 +71,7 @@ use crate::identify::{Correlation, Identification, identify_from, open_direction
 use crate::kernel::KernelError;
 use crate::metrics::MetricsError;
 use crate::objective::Objective;
-use crate::params::{DhParams, JointKind, ParamId};
+use crate::params::{DhParams, JointKind, ParamId, ParamKind};
 use crate::residuals::{Elimination, Layout, Normal, Role, Term, TermError};
 
 /// What to do about readings in radians read as degrees, in each front
@@ -682,6 +682,53 @@ impl Calibration {
         }
         let x = self.frames().into_iter().find(|(n, _)| n == name)?.1;
         Some((free, x, self.covariance_of(&columns)?))
+    }
+
+    /// What a prediction at the tool point `name` (a `[[tool]]` whose
+    /// offset was fitted, block `tool.NAME`) needs: the free geometry's
+    /// columns but the probe's (the tool replaces the probe), then the
+    /// probe's three — the kernel's derivative over the probe's offset,
+    /// which at the tool's offset is the derivative over the tool's —; the
+    /// tool's fitted offset (mm, the last joint's frame); and the joint
+    /// covariance of those geometry columns and the tool's `x, y, z` (mm
+    /// and rad), their correlation counted in. `None` when the tool's
+    /// offset was not fitted or a σ is not finite, or without free
+    /// geometry.
+    pub fn tool_covariance(
+        &self,
+        name: &str,
+    ) -> Option<(Vec<usize>, [f64; 3], nalgebra::DMatrix<f64>)> {
+        let n = self.params.joint_count();
+        let (free, named) = self.free_geometry()?;
+        let probe = |c: usize| {
+            (0..3).any(|k| {
+                ParamId {
+                    kind: ParamKind::Probe,
+                    index: k,
+                }
+                .column(n)
+                    == c
+            })
+        };
+        let (mut columns, mut sigmas): (Vec<usize>, NamedSigmas) = (free.iter().zip(named))
+            .filter(|(c, _)| !probe(**c))
+            .map(|(c, s)| (*c, s))
+            .unzip();
+        let prefix = crate::io::tools::TOOL_BLOCK_PREFIX;
+        for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
+            let full = format!("{prefix}{name}.{axis}");
+            let c = self.auxiliary.iter().find(|c| c.name == full)?;
+            sigmas.push((full, Some(c.sigma?)));
+            columns.push(
+                ParamId {
+                    kind: ParamKind::Probe,
+                    index: k,
+                }
+                .column(n),
+            );
+        }
+        let (_, x, _) = (self.tool_estimates().into_iter()).find(|(t, _, _)| t == name)?;
+        Some((columns, x, self.covariance_of(&sigmas)?))
     }
 
     /// The free geometry parameters' columns (of the `4n + 3`), and each

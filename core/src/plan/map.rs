@@ -42,6 +42,11 @@ pub struct UncertaintyMap {
     /// ([`uncertainty_map_in_frame`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub frame: Option<String>,
+    /// The tool point the radii are at, when not the arm's probe (a
+    /// `[[tool]]` whose offset was fitted: [`uncertainty_map_at_tool`]);
+    /// they then include its offset's uncertainty.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tool: Option<String>,
     /// Poses sampled.
     pub poses: usize,
     /// RMS of the 95 % radius over the poses, mm.
@@ -141,6 +146,31 @@ pub fn uncertainty_map(
         .map(|i| radius(eigenvalues(sandwich(blocks.at(i), cov, q))))
         .collect();
     Ok(summarise(&radii, &places(params, &positions), workspace))
+}
+
+/// The map of `params` over `poses` at the tool point `tool` (its name and
+/// fitted offset, mm): the probe replaced by the tool, `free` the geometry
+/// columns with the probe's three last standing for the tool's offset and
+/// `cov` their joint covariance ([`crate::Calibration::tool_covariance`]),
+/// so each radius includes the offset's own uncertainty and its
+/// correlation with the arm's.
+///
+/// # Errors
+///
+/// The kernel's.
+pub fn uncertainty_map_at_tool(
+    params: &DhParams,
+    poses: &PreparedPoses,
+    free: &[usize],
+    cov: &DMatrix<f64>,
+    tool: (&str, [f64; 3]),
+    workspace: &str,
+) -> Result<UncertaintyMap, KernelError> {
+    let mut at = params.clone();
+    at.probe = tool.1;
+    let mut map = uncertainty_map(&at, poses, free, cov, workspace)?;
+    map.tool = Some(tool.0.to_string());
+    Ok(map)
 }
 
 /// An instrument's frame a prediction is expressed in: its name and its
@@ -321,6 +351,7 @@ pub(crate) fn summarise(radii: &[f64], places: &[(f64, f64)], workspace: &str) -
         k_isotropic: K_ISOTROPIC,
         workspace: workspace.to_string(),
         frame: None,
+        tool: None,
         poses: n,
         rms_mm: rms(radii),
         median_mm: median,
@@ -333,12 +364,16 @@ pub(crate) fn summarise(radii: &[f64], places: &[(f64, f64)], workspace: &str) -
 impl UncertaintyMap {
     /// The map in words: one line, then one per band.
     pub fn describe(&self) -> String {
-        let seen = match &self.frame {
-            Some(name) => {
+        let seen = match (&self.frame, &self.tool) {
+            (Some(name), _) => {
                 let name = crate::error::quoted(name);
                 format!(" in frame {name}, which includes the registration of frame {name},")
             }
-            None => String::new(),
+            (None, Some(tool)) => {
+                let tool = crate::error::quoted(tool);
+                format!(" at tool point {tool}, which includes the uncertainty of its offset,")
+            }
+            (None, None) => String::new(),
         };
         let mut s = format!(
             "predicted position uncertainty{seen} over {} poses of {} (radius holding the \

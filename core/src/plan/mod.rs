@@ -47,7 +47,7 @@ use serde::{Deserialize, Serialize};
 
 pub use map::{
     InFrame, MapPoint, Prediction, Region, UncertaintyMap, position_covariances, reading_ranges,
-    sample_poses, uncertainty_map, uncertainty_map_in_frame,
+    sample_poses, uncertainty_map, uncertainty_map_at_tool, uncertainty_map_in_frame,
 };
 pub use pool::{
     DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_touches, sample_touches_observed,

@@ -109,6 +109,7 @@ pub fn session_report(
         tools: report.tools.as_ref(),
         touch_tools: report.touch_tools.as_ref(),
         uncertainty_maps_in_frames: &report.uncertainty_maps_in_frames,
+        uncertainty_maps_at_tools: &report.uncertainty_maps_at_tools,
         verdict: Some(&report.verdict),
         seed: report.seed,
     })

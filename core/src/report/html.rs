@@ -254,7 +254,11 @@ pub(crate) fn calibration_page(
     if let Some(m) = input.uncertainty_map {
         let json = input.uncertainty_map_json.as_deref();
         page += &map_section(
-            (m, input.uncertainty_maps_in_frames),
+            (
+                m,
+                input.uncertainty_maps_in_frames,
+                input.uncertainty_maps_at_tools,
+            ),
             json,
             find(figures, UNCERTAINTY_MAP_SVG),
             number("uncertainty-map"),
@@ -660,9 +664,10 @@ fn beyond_section(
 
 /// The uncertainty map's section, numbered `number`: what the radius is
 /// in one plain sentence, the figure and the table per band — and one per
-/// fitted frame (`maps.1`), as its instrument sees the probe.
+/// fitted frame (`maps.1`), as its instrument sees the probe, and one per
+/// fitted tool point (`maps.2`).
 fn map_section(
-    (map, in_frames): (&UncertaintyMap, &[UncertaintyMap]),
+    (map, in_frames, at_tools): (&UncertaintyMap, &[UncertaintyMap], &[UncertaintyMap]),
     json: Option<&str>,
     figure: Option<&Figure>,
     number: usize,
@@ -701,8 +706,29 @@ fn map_section(
             }
         ),
         &tables::uncertainty_map(map, json),
-        &frame_maps(in_frames, json),
+        &(frame_maps(in_frames, json) + &tool_maps(at_tools, json)),
     )
+}
+
+/// Per fitted tool point, its map's numbers in a sentence and its table:
+/// the offset's own uncertainty is part of what that tool measures.
+fn tool_maps(maps: &[UncertaintyMap], json: Option<&str>) -> String {
+    let mut out = String::new();
+    for (i, m) in maps.iter().enumerate() {
+        let name = escape(m.tool.as_deref().unwrap_or_default());
+        out += &format!(
+            "<p>At the tool point <code>{name}</code> (its fitted offset in place of the \
+             probe's), the same poses' radius includes the offset's uncertainty, fitted with the \
+             arm (J C Jᵀ over the geometry and the offset's three columns together): RMS \
+             {rms:.4} mm, median {median:.4} mm, largest {max:.4} mm.</p>\n",
+            rms = m.rms_mm,
+            median = m.median_mm,
+            max = m.max_mm,
+        );
+        let pointer = json.map(|_| format!("/uncertainty_maps_at_tools/{i}"));
+        out += &tables::uncertainty_map(m, pointer.as_deref());
+    }
+    out
 }
 
 /// Per fitted frame, its map's numbers in a sentence and its table: the

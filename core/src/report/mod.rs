@@ -288,6 +288,11 @@ pub struct CalibrationInput<'a> {
     /// without frames). Their JSON Pointers are
     /// `/uncertainty_maps_in_frames/<i>` when the map has one.
     pub uncertainty_maps_in_frames: &'a [UncertaintyMap],
+    /// The same poses at each fitted tool point, its offset's uncertainty
+    /// included: a table each in the map's section (none without). Their
+    /// JSON Pointers are `/uncertainty_maps_at_tools/<i>` when the map has
+    /// one.
+    pub uncertainty_maps_at_tools: &'a [UncertaintyMap],
     /// Whether the calibration may be used, and why not: the page opens
     /// with it. `None` for a calibration drawn outside a session, which
     /// the page then says has no verdict.
@@ -379,7 +384,9 @@ pub struct EvaluationInput<'a> {
 ///     folds: &[],
 ///     held_out_spheres: None,
 ///     tools: None,
+///     touch_tools: None,
 ///     uncertainty_maps_in_frames: &[],
+///     uncertainty_maps_at_tools: &[],
 ///     verdict: None,
 ///     seed: 0,
 /// })

@@ -132,6 +132,7 @@ fn report_with(
         tools: None,
         touch_tools: None,
         uncertainty_maps_in_frames: &[],
+        uncertainty_maps_at_tools: &[],
         verdict: None,
         seed: 0,
     })

@@ -120,6 +120,11 @@ pub struct CalibrationReport {
     /// ([`crate::plan::uncertainty_map_in_frame`]); absent without frames.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub uncertainty_maps_in_frames: Vec<crate::plan::UncertaintyMap>,
+    /// The same poses at each tool point whose offset was fitted, its
+    /// offset's uncertainty included
+    /// ([`crate::plan::uncertainty_map_at_tool`]); absent without one.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub uncertainty_maps_at_tools: Vec<crate::plan::UncertaintyMap>,
 }
 
 fn is_zero(n: &usize) -> bool {

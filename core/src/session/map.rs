@@ -7,7 +7,7 @@ use crate::io::Arm;
 use crate::kernel::PreparedPoses;
 use crate::plan::{
     Given, InFrame, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map,
-    uncertainty_map_in_frame,
+    uncertainty_map_at_tool, uncertainty_map_in_frame,
 };
 
 use super::CalibrationReport;
@@ -20,23 +20,35 @@ pub const MAP_POSES: usize = 1000;
 /// without, within the range the campaign turned it through — seeded by
 /// `seed`, in the arm's base; and over the same poses as each fitted frame
 /// sees the probe, the frame's registration included
-/// ([`crate::plan::uncertainty_map_in_frame`]). `None` (and no frame's)
-/// when the free geometry's covariance is not finite; a frame's is left out
-/// when its own columns' is not.
+/// ([`crate::plan::uncertainty_map_in_frame`]); and at each tool point
+/// whose offset was fitted ([`crate::plan::uncertainty_map_at_tool`]).
+/// `None` (and no frame's or tool's) when the free geometry's covariance is
+/// not finite; a frame's or tool's is left out when its own columns' is
+/// not.
 pub(crate) fn workspace_maps(
     arm: &Arm,
     data: &DataSet,
     calibration: &Calibration,
     seed: u64,
-) -> (Option<UncertaintyMap>, Vec<UncertaintyMap>) {
+) -> (
+    Option<UncertaintyMap>,
+    Vec<UncertaintyMap>,
+    Vec<UncertaintyMap>,
+) {
     let Some((free, cov)) = calibration.geometry_covariance() else {
-        return (None, Vec::new());
+        return (None, Vec::new(), Vec::new());
     };
     let (poses, workspace) = workspace(arm, data, seed);
     let params = &calibration.params;
     let Ok(base) = uncertainty_map(params, &poses, &free, &cov, &workspace) else {
-        return (None, Vec::new());
+        return (None, Vec::new(), Vec::new());
     };
+    let tools = (calibration.tool_offsets().iter())
+        .filter_map(|(name, _)| {
+            let (free, x, cov) = calibration.tool_covariance(name)?;
+            uncertainty_map_at_tool(params, &poses, &free, &cov, (name, x), &workspace).ok()
+        })
+        .collect();
     let frames = (calibration.frames().iter())
         .filter_map(|(name, _)| {
             let (free, x, cov) = calibration.frame_covariance(name)?;
@@ -44,7 +56,7 @@ pub(crate) fn workspace_maps(
             uncertainty_map_in_frame(params, &poses, &free, &cov, &frame, &workspace).ok()
         })
         .collect();
-    (Some(base), frames)
+    (Some(base), frames, tools)
 }
 
 /// The map's poses, seeded by `seed`, and where they come from in words.

@@ -88,7 +88,7 @@ pub fn run(
     };
     let s = &problem.sources;
     let verdict = verdict_of(problem, &calibration, &fitted);
-    let (uncertainty_map, uncertainty_maps_in_frames) =
+    let (uncertainty_map, uncertainty_maps_in_frames, uncertainty_maps_at_tools) =
         map::workspace_maps(&problem.arm, data, &calibration, settings.seed);
     Ok(CalibrationReport {
         arm: problem.arm.name.clone(),
@@ -121,6 +121,7 @@ pub fn run(
         tools,
         touch_tools,
         uncertainty_maps_in_frames,
+        uncertainty_maps_at_tools,
     })
 }
 

@@ -17,7 +17,8 @@ impl CalibrationReport {
         let maps = self
             .uncertainty_map
             .iter()
-            .chain(&self.uncertainty_maps_in_frames);
+            .chain(&self.uncertainty_maps_in_frames)
+            .chain(&self.uncertainty_maps_at_tools);
         for m in maps {
             t += &format!("Uncertainty map: {}\n", m.describe());
         }
