@@ -106,25 +106,7 @@ fn the_uncertainty_map_matches_monte_carlo() {
     }
     let map = map.unwrap();
     let n = rows.len();
-    let mut q95 = Vec::new();
-    for j in 0..n {
-        let mean: [f64; 3] = std::array::from_fn(|k| {
-            predicted.iter().map(|p| p[j][k]).sum::<f64>() / predicted.len() as f64
-        });
-        let mut d: Vec<f64> = predicted
-            .iter()
-            .map(|p| {
-                (0..3)
-                    .map(|k| (p[j][k] - mean[k]).powi(2))
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .collect();
-        d.sort_by(f64::total_cmp);
-        q95.push(d[(0.95 * d.len() as f64) as usize]);
-    }
-    let rms_of = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
-    let empirical = rms_of(&q95);
+    let (q95, empirical) = super::util::spread_95(&predicted);
     let ratio = empirical / map.rms_mm;
     println!(
         "Monte Carlo 95 % radius RMS {empirical:.5} mm, map {:.5} mm",

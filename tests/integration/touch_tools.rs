@@ -581,24 +581,7 @@ fn the_map_at_a_stylus_matches_monte_carlo() {
         );
     }
     let map = map.unwrap();
-    let q95: Vec<f64> = (0..rows.len())
-        .map(|j| {
-            let n = predicted.len() as f64;
-            let mean: [f64; 3] =
-                std::array::from_fn(|k| predicted.iter().map(|p| p[j][k]).sum::<f64>() / n);
-            let mut d: Vec<f64> = (predicted.iter())
-                .map(|p| {
-                    (0..3)
-                        .map(|k| (p[j][k] - mean[k]).powi(2))
-                        .sum::<f64>()
-                        .sqrt()
-                })
-                .collect();
-            d.sort_by(f64::total_cmp);
-            d[(0.95 * n) as usize]
-        })
-        .collect();
-    let empirical = (q95.iter().map(|x| x * x).sum::<f64>() / q95.len() as f64).sqrt();
+    let (_, empirical) = crate::util::spread_95(&predicted);
     let ratio = empirical / map.rms_mm;
     eprintln!(
         "stylus map: Monte Carlo 95 % radius RMS {empirical:.5} mm, map {:.5} mm",

@@ -141,3 +141,29 @@ pub fn normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
     let (u, v): (f64, f64) = (rng.random_range(f64::EPSILON..1.0), rng.random());
     (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
 }
+
+/// Per pose, the empirical 95 % radius of `predicted` (per campaign, a
+/// position per pose, mm) about the campaigns' mean position; and the RMS
+/// of those radii over the poses: what an uncertainty map predicts.
+pub fn spread_95(predicted: &[Vec<[f64; 3]>]) -> (Vec<f64>, f64) {
+    let n = predicted.len() as f64;
+    let poses = predicted.first().map_or(0, Vec::len);
+    let q95: Vec<f64> = (0..poses)
+        .map(|j| {
+            let mean: [f64; 3] =
+                std::array::from_fn(|k| predicted.iter().map(|p| p[j][k]).sum::<f64>() / n);
+            let mut d: Vec<f64> = (predicted.iter())
+                .map(|p| {
+                    (0..3)
+                        .map(|k| (p[j][k] - mean[k]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect();
+            d.sort_by(f64::total_cmp);
+            d[(0.95 * n) as usize]
+        })
+        .collect();
+    let rms = (q95.iter().map(|x| x * x).sum::<f64>() / q95.len().max(1) as f64).sqrt();
+    (q95, rms)
+}

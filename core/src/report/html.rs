@@ -713,41 +713,61 @@ fn map_section(
 /// Per fitted tool point, its map's numbers in a sentence and its table:
 /// the offset's own uncertainty is part of what that tool measures.
 fn tool_maps(maps: &[UncertaintyMap], json: Option<&str>) -> String {
-    let mut out = String::new();
-    for (i, m) in maps.iter().enumerate() {
-        let name = escape(m.tool.as_deref().unwrap_or_default());
-        out += &format!(
-            "<p>At the tool point <code>{name}</code> (its fitted offset in place of the \
-             probe's), the same poses' radius includes the offset's uncertainty, fitted with the \
-             arm (J C Jᵀ over the geometry and the offset's three columns together): RMS \
-             {rms:.4} mm, median {median:.4} mm, largest {max:.4} mm.</p>\n",
-            rms = m.rms_mm,
-            median = m.median_mm,
-            max = m.max_mm,
-        );
-        let pointer = json.map(|_| format!("/uncertainty_maps_at_tools/{i}"));
-        out += &tables::uncertainty_map(m, pointer.as_deref());
-    }
-    out
+    let words = |name: &str| {
+        format!(
+            "At the tool point <code>{name}</code> (its fitted offset in place of the probe's), \
+             the same poses' radius includes the offset's uncertainty, fitted with the arm (J C \
+             Jᵀ over the geometry and the offset's three columns together)"
+        )
+    };
+    map_tables(
+        maps,
+        json,
+        "/uncertainty_maps_at_tools",
+        |m| m.tool.as_deref(),
+        words,
+    )
 }
 
 /// Per fitted frame, its map's numbers in a sentence and its table: the
 /// frame's registration error is part of what that instrument sees.
 fn frame_maps(maps: &[UncertaintyMap], json: Option<&str>) -> String {
+    let words = |name: &str| {
+        format!(
+            "As the instrument of frame <code>{name}</code> sees the probe, the same poses' \
+             radius includes that frame's registration, fitted with the arm (J C Jᵀ over the \
+             geometry and the frame's six columns together)"
+        )
+    };
+    map_tables(
+        maps,
+        json,
+        "/uncertainty_maps_in_frames",
+        |m| m.frame.as_deref(),
+        words,
+    )
+}
+
+/// Per map of `maps`, a sentence (`words` of its escaped `name`, then its
+/// figures) and its table, its JSON Pointer `pointer/<i>`.
+fn map_tables(
+    maps: &[UncertaintyMap],
+    json: Option<&str>,
+    pointer: &str,
+    name: impl Fn(&UncertaintyMap) -> Option<&str>,
+    words: impl Fn(&str) -> String,
+) -> String {
     let mut out = String::new();
     for (i, m) in maps.iter().enumerate() {
-        let name = escape(m.frame.as_deref().unwrap_or_default());
         out += &format!(
-            "<p>As the instrument of frame <code>{name}</code> sees the probe, the same poses' \
-             radius includes that frame's registration, fitted with the arm (J C Jᵀ over the \
-             geometry and the frame's six columns together): RMS {rms:.4} mm, median \
-             {median:.4} mm, largest {max:.4} mm.</p>\n",
+            "<p>{}: RMS {rms:.4} mm, median {median:.4} mm, largest {max:.4} mm.</p>\n",
+            words(&escape(name(m).unwrap_or_default())),
             rms = m.rms_mm,
             median = m.median_mm,
             max = m.max_mm,
         );
-        let pointer = json.map(|_| format!("/uncertainty_maps_in_frames/{i}"));
-        out += &tables::uncertainty_map(m, pointer.as_deref());
+        let at = json.map(|_| format!("{pointer}/{i}"));
+        out += &tables::uncertainty_map(m, at.as_deref());
     }
     out
 }
