@@ -144,6 +144,9 @@ pub struct SphereTerm {
     spheres: Spheres,
     file: String,
     poses: PreparedPoses,
+    /// When rows name tools, per tool its rows (ascending) and their poses:
+    /// each tool's kernel evaluates its own rows only. Empty without tools.
+    by_tool: Vec<(Vec<usize>, PreparedPoses)>,
     /// Per sphere, its centre block.
     centres: Vec<BlockId>,
     /// Per sphere, its radius block when fitted.
@@ -175,6 +178,35 @@ impl std::fmt::Debug for SphereTerm {
             .field("known_radius", &self.known_radius)
             .finish()
     }
+}
+
+/// When `spheres`' rows name tools, per tool its rows (ascending) and their
+/// poses for a chain of `shape` (`None`: revolute joints); else nothing.
+///
+/// # Errors
+///
+/// The kernel's refusal of the readings.
+fn by_tool(
+    spheres: &Spheres,
+    shape: Option<crate::params::ChainShape>,
+) -> Result<Vec<(Vec<usize>, PreparedPoses)>, TermError> {
+    if !spheres.has_tools() {
+        return Ok(Vec::new());
+    }
+    let mut rows = vec![Vec::new(); spheres.tools().len()];
+    for i in 0..spheres.len() {
+        rows[spheres.tool(i)].push(i);
+    }
+    (rows.into_iter())
+        .map(|of| {
+            let readings: Vec<&[f64]> = of.iter().map(|&i| spheres.reading(i)).collect();
+            let poses = match shape {
+                Some(shape) => PreparedPoses::for_shape(shape, &readings)?,
+                None => PreparedPoses::new(spheres.joints(), &readings)?,
+            };
+            Ok((of, poses))
+        })
+        .collect()
 }
 
 /// The nominal positions of every row of `spheres` at `arm`, mm.
@@ -273,6 +305,7 @@ impl SphereTerm {
         let poses = PreparedPoses::for_shape(shape, &rows)?;
         let n = spheres.len();
         Ok(SphereTerm {
+            by_tool: by_tool(&spheres, Some(shape))?,
             spheres,
             file: file.to_string(),
             poses,
@@ -374,32 +407,39 @@ impl SphereTerm {
             at.tool_positions(&self.poses, Conditions::default(), &mut p)?;
             return Ok(p);
         }
-        let mut q = vec![[0.0; 3]; self.spheres.len()];
-        self.per_tool(at, |at, k, _| {
-            at.tool_positions(&self.poses, Conditions::default(), &mut q)?;
-            for i in (0..q.len()).filter(|&i| self.spheres.tool(i) == k) {
-                p[i] = q[i];
+        let mut q = Vec::new();
+        self.per_tool(at, |at, _, poses, rows| {
+            q.resize(poses.len(), [0.0; 3]);
+            at.tool_positions(poses, Conditions::default(), &mut q)?;
+            for (j, x) in q.iter().enumerate() {
+                p[rows.map_or(j, |r| r[j])] = *x;
             }
             Ok(())
         })?;
         Ok(p)
     }
 
-    /// Calls `f(at, k, block)` for each tool `k` the rows name, `at` as the
-    /// tool sees it: the arm's probe replaced by the tool's offset (its
-    /// block's value when the layout fits one, `block`; else its nominal
-    /// offset). The default tool first, `at` itself.
+    /// Calls `f(at, k, poses, rows)` for each tool `k` the rows name, `at`
+    /// as the tool sees it — the arm's probe replaced by the tool's offset
+    /// (its block's value when the layout fits one; else its nominal
+    /// offset) —, `poses` the tool's rows' and `rows` their indices
+    /// (`None`: every row, `poses` all of them). The default tool first,
+    /// `at` itself.
     fn per_tool(
         &self,
         at: &At<'_>,
-        mut f: impl FnMut(&At<'_>, usize, Option<BlockId>) -> Result<(), TermError>,
+        mut f: impl FnMut(&At<'_>, usize, &PreparedPoses, Option<&[usize]>) -> Result<(), TermError>,
     ) -> Result<(), TermError> {
+        if self.by_tool.is_empty() {
+            return f(at, 0, &self.poses, None);
+        }
         for (k, tool) in self.spheres.tools().iter().enumerate() {
-            if !(0..self.spheres.len()).any(|i| self.spheres.tool(i) == k) {
+            let (rows, poses) = &self.by_tool[k];
+            if rows.is_empty() {
                 continue;
             }
             if k == 0 {
-                f(at, 0, None)?;
+                f(at, 0, poses, Some(rows))?;
                 continue;
             }
             let block = at
@@ -409,7 +449,9 @@ impl SphereTerm {
                 let x = at.block(id);
                 [x[0], x[1], x[2]]
             });
-            crate::residuals::tools::with_probe_at(at, offset, |seen| f(seen, k, block))?;
+            crate::residuals::tools::with_probe_at(at, offset, |seen| {
+                f(seen, k, poses, Some(rows))
+            })?;
         }
         Ok(())
     }
@@ -438,12 +480,10 @@ impl SphereTerm {
         let n = self.spheres.len();
         let p = self.positions(at)?;
         let mut out = vec![0.0; n];
-        self.per_tool(at, |seen, k, _| {
+        self.per_tool(at, |seen, _, poses, rows| {
             seen.kernel
-                .for_each_joint_jacobian(&self.poses, 0..n, |i, jq| {
-                    if self.spheres.tool(i) != k {
-                        return;
-                    }
+                .for_each_joint_jacobian(poses, 0..poses.len(), |j, jq| {
+                    let i = rows.map_or(j, |r| r[j]);
                     let (_, u) = self.offset(at, self.spheres.sphere(i), &p[i]);
                     let along: f64 = (jq.iter())
                         .map(|c| (u[0] * c[0] + u[1] * c[1] + u[2] * c[2]).powi(2))
@@ -591,12 +631,10 @@ impl Term for SphereTerm {
         let probe = crate::residuals::tools::probe_columns(at.arm);
         let n = self.spheres.len();
         let mut rows: Vec<(Vec<f64>, f64)> = vec![(Vec::new(), 0.0); n];
-        self.per_tool(at, |seen, t, _| {
+        self.per_tool(at, |seen, t, poses, of| {
             let cond = Conditions::default();
-            seen.for_each_tool(&self.poses, cond, 0..n, |i, p, jac| {
-                if self.spheres.tool(i) != t {
-                    return;
-                }
+            seen.for_each_tool(poses, cond, 0..poses.len(), |j, p, jac| {
+                let i = of.map_or(j, |r| r[j]);
                 let s = self.spheres.sphere(i);
                 let w = self.weights[i];
                 let (d, u) = self.offset(at, s, p);

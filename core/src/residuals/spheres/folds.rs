@@ -57,6 +57,7 @@ impl SphereTerm {
             })
             .collect();
         Ok(SphereTerm {
+            by_tool: super::by_tool(&spheres, self.poses.shape())?,
             centres: of.iter().map(|&s| self.centres[s]).collect(),
             balls,
             radii: of.iter().map(|&s| self.radii[s]).collect(),
