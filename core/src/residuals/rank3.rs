@@ -140,14 +140,25 @@ impl Rank3 {
         let out = &mut row[c..c + m];
         let mut r: [[f64; LANES]; K] =
             std::array::from_fn(|k| std::array::from_fn(|l| out[k * LANES + l]));
-        for t in 0..n {
-            let o = t * w;
-            let (x, y, z) = (ax[o + i], ay[o + i], az[o + i]);
-            let (bx, by, bz) = (
-                &jx[o + c..o + c + m],
-                &jy[o + c..o + c + m],
-                &jz[o + c..o + c + m],
-            );
+        // One observation's padded rows at a time: the column ranges are
+        // checked once here, not once per observation.
+        assert!(
+            i < w && c + m <= w,
+            "row {i}, columns {c}.. within the stride {w}"
+        );
+        let rows = (jx
+            .chunks_exact(w)
+            .zip(jy.chunks_exact(w))
+            .zip(jz.chunks_exact(w)))
+        .zip(
+            ax.chunks_exact(w)
+                .zip(ay.chunks_exact(w))
+                .zip(az.chunks_exact(w)),
+        )
+        .take(n);
+        for (((jx, jy), jz), ((ax, ay), az)) in rows {
+            let (x, y, z) = (ax[i], ay[i], az[i]);
+            let (bx, by, bz) = (&jx[c..c + m], &jy[c..c + m], &jz[c..c + m]);
             for (k, rk) in r.iter_mut().enumerate() {
                 for (l, v) in rk.iter_mut().enumerate() {
                     let b = k * LANES + l;
