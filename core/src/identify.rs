@@ -133,7 +133,7 @@ pub struct Rule {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Relation {
     /// Singular value of the direction (scaled), or 0 for a structural one.
-    pub singular_value: f64,
+    pub(crate) singular_value: f64,
     /// `(parameter, coefficient)`: moving the parameters by these amounts
     /// (mm, rad) together moves no touch — for a null relation, the first
     /// is the dependent parameter with coefficient 1; for a weak direction, a
@@ -198,14 +198,14 @@ pub struct Identification {
     /// Identifiable parameter combinations.
     pub rank: usize,
     /// `s_max / s_min` over the identifiable part.
-    pub condition_number: f64,
+    pub(crate) condition_number: f64,
     /// Structural rules that fired.
     pub rules: Vec<Rule>,
     /// Unidentifiable directions among the analysed parameters, one per
     /// redundant fixed parameter (the structural ones are in `rules`).
     pub null_relations: Vec<Relation>,
     /// Weak directions (singular value below 1e-3 of `s_max`, above the threshold).
-    pub weak_relations: Vec<Relation>,
+    pub(crate) weak_relations: Vec<Relation>,
     /// The recommended fixed set, with reasons.
     pub fixed: Vec<Fixed>,
     /// The free parameters with predicted σ.
@@ -222,7 +222,7 @@ pub struct Identification {
 
 impl Identification {
     /// Column indices of the recommended free parameters.
-    pub fn free_columns(&self) -> Vec<usize> {
+    pub(crate) fn free_columns(&self) -> Vec<usize> {
         let joints = (self.parameters.len().saturating_sub(3)) / 4;
         self.free.iter().map(|f| f.id.column(joints)).collect()
     }
@@ -293,7 +293,7 @@ pub fn identify(
 /// centres blocks of their own). Their blocks are fitted and eliminated
 /// with the frames ([`crate::residuals::Normal::geometry_only`]), so the
 /// geometry is judged with them.
-pub type AddedTerms<'a> =
+pub(crate) type AddedTerms<'a> =
     &'a dyn Fn(&mut crate::residuals::Layout) -> Result<Vec<Box<dyn Term>>, TermError>;
 
 /// What an analysis sees: a data set, and the terms `added` makes.
@@ -311,7 +311,7 @@ pub struct Evidence<'a> {
 ///
 /// As [`identify`]; the terms' refusals; auxiliary blocks the evidence
 /// does not determine.
-pub fn identify_with(
+pub(crate) fn identify_with(
     params: &DhParams,
     data: &DataSet,
     noise: &Noise,

@@ -34,7 +34,7 @@ pub enum FitStop {
 }
 
 /// Steps of the fit before it stops.
-pub const MAX_ITERATIONS: usize = 200;
+pub(crate) const MAX_ITERATIONS: usize = 200;
 
 /// Why there is no sphere.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -60,7 +60,7 @@ pub struct SphereFit {
     /// The radius, mm: fitted, or the held one.
     pub radius: f64,
     /// Whether the radius was held.
-    pub radius_held: bool,
+    pub(crate) radius_held: bool,
     /// Per point, `|p_i − c| − R`, mm, in the points' order.
     pub residuals: Vec<f64>,
     /// `σ̂ = sqrt(Σ r_i² / (n − p))`, mm; `None` without degrees of
@@ -68,7 +68,7 @@ pub struct SphereFit {
     pub sigma: Option<f64>,
     /// `(JᵀJ)⁻¹` of the unknowns `(c_x, c_y, c_z, R)` (the `R` row and
     /// column zero when held), mm² per mm² of σ: times `σ²` the covariance.
-    pub normal_inverse: [[f64; 4]; 4],
+    pub(crate) normal_inverse: [[f64; 4]; 4],
     /// Why the fit stopped.
     pub stop: FitStop,
     /// Steps taken.

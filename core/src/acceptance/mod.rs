@@ -55,12 +55,14 @@ mod table;
 use serde::{Deserialize, Serialize};
 
 pub use compute::verify;
-pub use enclosing::{Ball, enclosing_ball};
-pub use fit::{FitError, FitStop, MAX_ITERATIONS, SphereFit, fit_sphere_ls};
+pub use enclosing::enclosing_ball;
+pub use fit::FitError;
+pub use fit::SphereFit;
+pub use fit::fit_sphere_ls;
 pub use mpe::{Limit, Mpe, TestKind, parse_mpe};
+pub use predict::PredictionInfo;
 pub use predict::{
-    Calibrated, DEFAULT_DRAWS, Draws, MAX_DRAWS, Measured, PSD_TOLERANCE, PredictError,
-    PredictionInfo, ReadingNoise, predict,
+    Calibrated, DEFAULT_DRAWS, Draws, MAX_DRAWS, Measured, PredictError, ReadingNoise, predict,
 };
 
 use crate::error::{InputError, OptionError};
@@ -68,18 +70,18 @@ use crate::io::spheres::Spheres;
 
 /// Points a sphere placement needs for `P_Size` and `P_Form` (ISO
 /// 10360-12's 25-point pattern).
-pub const P_TEST_POINTS: usize = 25;
+pub(crate) const P_TEST_POINTS: usize = 25;
 /// Articulations of an `L_Dia` placement.
-pub const L_DIA_GROUPS: usize = 5;
+pub(crate) const L_DIA_GROUPS: usize = 5;
 
 /// The figures' names, as the standards name them.
 pub const P_SIZE: &str = "P_Size.Sph.1x25::Art";
 /// See [`P_SIZE`].
-pub const P_FORM: &str = "P_Form.Sph.1x25::Art";
+pub(crate) const P_FORM: &str = "P_Form.Sph.1x25::Art";
 /// See [`P_SIZE`].
-pub const L_DIA: &str = "L_Dia.5x5::Art";
+pub(crate) const L_DIA: &str = "L_Dia.5x5::Art";
 /// See [`P_SIZE`].
-pub const E_UNI: &str = "E_Uni::Art";
+pub(crate) const E_UNI: &str = "E_Uni::Art";
 /// See [`P_SIZE`].
 pub const SPAT: &str = "SPAT";
 
@@ -205,7 +207,7 @@ impl TestResult {
 
 /// What each placement is used for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Use {
+pub(crate) enum Use {
     /// `P_Size` and `P_Form`.
     Probing,
     /// `L_Dia` (an articulation column with 5 groups).
@@ -222,7 +224,7 @@ pub struct Placement {
     /// Its first line in the sphere file.
     pub line: usize,
     /// What it is used for.
-    pub used_for: Use,
+    pub(crate) used_for: Use,
     /// Points.
     pub points: usize,
     /// The fit.
@@ -242,7 +244,7 @@ pub struct LDiaPlacement {
     /// centre, mm.
     pub centres: Vec<(u32, [f64; 3])>,
     /// The smallest sphere enclosing them: centre, mm.
-    pub enclosing_centre: [f64; 3],
+    pub(crate) enclosing_centre: [f64; 3],
     /// σ̂ pooled over the placement's points, mm.
     pub sigma: f64,
 }

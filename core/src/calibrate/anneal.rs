@@ -229,7 +229,7 @@ pub struct AnnealTrace {
     /// Settings.
     pub options: AnnealOptions,
     /// The switching rule, if the hybrid ran.
-    pub switch_rule: Option<SwitchRule>,
+    pub(crate) switch_rule: Option<SwitchRule>,
     /// Why it stopped.
     pub stop: AnnealStop,
     /// Energy of the start, mm.

@@ -158,7 +158,7 @@ pub fn gross_corrections(
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ChiSquare {
     /// `Σr²` (weighted cost).
-    pub statistic: f64,
+    pub(crate) statistic: f64,
     /// Degrees of freedom.
     pub dof: usize,
     /// `P(χ²_dof ≥ statistic)`: small when the residuals are larger than
@@ -315,7 +315,7 @@ pub struct Outlier {
 impl Outlier {
     /// What it is, in words: a `touch` or `position` (by `noun`, the data's
     /// own word), or its kind.
-    pub fn noun<'a>(&'a self, noun: &'a str) -> &'a str {
+    pub(crate) fn noun<'a>(&'a self, noun: &'a str) -> &'a str {
         self.kind.as_deref().unwrap_or(noun)
     }
 }
@@ -424,7 +424,7 @@ pub struct PositionUncertainty {
     /// A single touch's own scatter at the same coverage: the 95 % radius
     /// of an isotropic 3-D error of the touch's σ per coordinate,
     /// `2.7955·σ_touch`, mm: what the arm's uncertainty is compared with.
-    pub touch_mm: f64,
+    pub(crate) touch_mm: f64,
 }
 
 impl PositionUncertainty {

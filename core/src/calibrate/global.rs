@@ -169,18 +169,18 @@ pub struct GlobalTrace {
     /// The zero offsets searched on their circles.
     pub circles: Vec<String>,
     /// Angles per circle of the grid (0 when the start sufficed).
-    pub grid_angles: usize,
+    pub(crate) grid_angles: usize,
     /// Cost of each start's minimum, in order (the first from the start
     /// arm, then the grid candidates, then random starts), with the weights
     /// at that minimum.
     pub minima: Vec<f64>,
     /// Grid cells refined (after the start arm).
-    pub grid_starts: usize,
+    pub(crate) grid_starts: usize,
     /// Random starts refined (after the grid).
-    pub random_starts: usize,
+    pub(crate) random_starts: usize,
     /// Restarts from the nominal geometry with the zeros of a mirror-image
     /// minimum (after the random starts).
-    pub twin_restarts: usize,
+    pub(crate) twin_restarts: usize,
     /// Starts that reached the lowest cost.
     pub best_hits: usize,
     /// Of `best_hits`, those whose minimum agreed with the lowest at the

@@ -54,16 +54,22 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::OptionError;
 use crate::setting::Setting;
-pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
-pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
+pub use anneal::AnnealStep;
+pub use anneal::AnnealTrace;
+pub use anneal::{AnnealOptions, AnnealStop, SwitchRule};
+pub use global::GlobalTrace;
+pub use global::{GlobalOptions, GlobalStop};
+pub use lm::LmIteration;
 pub(crate) use lm::LmResult;
-pub use lm::{LmIteration, LmOptions, Termination};
+pub use lm::{LmOptions, Termination};
 pub use options::{
     DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads,
     check_threads,
 };
-pub use prior::{CarriedTolerance, PriorConditioning, PriorEstimate, PriorReport};
-pub use robust::{Loss, Robust, RobustFit};
+pub use prior::PriorConditioning;
+pub use prior::PriorReport;
+pub use robust::RobustFit;
+pub use robust::{Loss, Robust};
 pub use solver::{Anneal, Cancel, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
@@ -586,7 +592,7 @@ pub struct Checks {
     /// beyond `outlier_threshold`), largest first.
     pub outliers: Vec<checks::Outlier>,
     /// The threshold of the outlier test, in σ of a touch.
-    pub outlier_threshold: f64,
+    pub(crate) outlier_threshold: f64,
     /// When a plain fit named more than one touch, the robust refit that
     /// screened the list (`outliers` then keeps to the touches it weighs
     /// down); `None` otherwise.
@@ -722,7 +728,7 @@ impl Calibration {
     /// geometry's columns, then each auxiliary column's calibrated value
     /// back in internal units (a column not reported keeps its start):
     /// what a term is evaluated at after the fit.
-    pub fn point_in(&self, layout: &crate::residuals::Layout) -> Vec<f64> {
+    pub(crate) fn point_in(&self, layout: &crate::residuals::Layout) -> Vec<f64> {
         let mut x = layout.start();
         let g = layout.geometry_columns();
         x[..g].copy_from_slice(&self.params.to_vec()[..g]);

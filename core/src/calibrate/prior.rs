@@ -199,7 +199,7 @@ impl PriorReport {
     /// A note when the data contradict the tolerances: the prior's cost
     /// above `rows + 3·sqrt(2·rows)` (its χ² expectation plus three
     /// standard deviations), naming the parameter moved farthest.
-    pub fn conflict(&self) -> Option<String> {
+    pub(crate) fn conflict(&self) -> Option<String> {
         let rows = self.rows as f64;
         if self.rows == 0 || self.cost <= rows + 3.0 * (2.0 * rows).sqrt() {
             return None;
@@ -273,7 +273,7 @@ pub fn conditioning(
 /// # Errors
 ///
 /// As [`conditioning`]; the terms' refusals.
-pub fn conditioning_with(
+pub(crate) fn conditioning_with(
     params: &DhParams,
     evidence: crate::identify::Evidence<'_>,
     noise: &crate::residuals::Noise,

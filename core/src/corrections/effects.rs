@@ -172,7 +172,13 @@ impl Effects {
     /// rows, then rotation rows): a joint's correction turns the tool as
     /// the joint does; an expansion and a drift move its position only.
     #[inline(always)]
-    pub fn extend_pose(&self, i: usize, pos: &[f64; 3], jac: &[[f64; 6]], out: &mut Vec<[f64; 6]>) {
+    pub(crate) fn extend_pose(
+        &self,
+        i: usize,
+        pos: &[f64; 3],
+        jac: &[[f64; 6]],
+        out: &mut Vec<[f64; 6]>,
+    ) {
         self.extend_rows(i, pos, jac, out);
     }
 

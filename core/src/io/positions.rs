@@ -155,7 +155,7 @@ impl Positions {
     ///
     /// # Panics
     /// If `signs` has another joint count than the rows.
-    pub fn record_approach(&mut self, signs: Option<&[i8]>) {
+    pub(crate) fn record_approach(&mut self, signs: Option<&[i8]>) {
         let n = self.len();
         match signs {
             Some(s) if n == 1 => self.approach = Some(s.to_vec()),
@@ -352,7 +352,7 @@ impl Positions {
     ///
     /// # Panics
     /// If there is no row.
-    pub fn set_orientation(&mut self, q: Option<[f64; 4]>) {
+    pub(crate) fn set_orientation(&mut self, q: Option<[f64; 4]>) {
         *self.orientation.last_mut().expect("a row to orient") = q;
     }
 
@@ -431,7 +431,7 @@ impl Positions {
     }
 
     /// Whether some row names a tool other than the default.
-    pub fn has_tools(&self) -> bool {
+    pub(crate) fn has_tools(&self) -> bool {
         self.tool_of.iter().any(|&k| k != 0)
     }
 

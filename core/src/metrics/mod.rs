@@ -83,12 +83,19 @@ mod pairs;
 mod point;
 pub(crate) mod table;
 
-pub use length::{
-    PairLengthError, ReferenceError, ReferenceSummary, pair_length_error, pair_length_errors,
-};
-pub use pairs::{DEFAULT_PAIR_SEED, PAIR_TOUCH_BUDGET, PairSample};
+pub use length::PairLengthError;
+
+pub use length::ReferenceError;
+
+pub use length::ReferenceSummary;
+
+pub use length::{pair_length_error, pair_length_errors};
+pub use pairs::DEFAULT_PAIR_SEED;
+pub use pairs::PAIR_TOUCH_BUDGET;
+pub use pairs::PairSample;
 pub(crate) use pairs::{PairSet, pair_set};
-pub use point::{PointStats, point_stats};
+pub use point::PointStats;
+pub use point::point_stats;
 pub use table::write_pair_table;
 
 use crate::dataset::DataSet;
@@ -300,9 +307,9 @@ pub struct Evaluation {
     /// `e` across points: the paper's single-point repeatability (Fig. 6).
     pub single_point_e: Summary,
     /// `δ_max` across points (SPAT).
-    pub single_point_delta_max: Summary,
+    pub(crate) single_point_delta_max: Summary,
     /// `2s` across points (SPAT; makers quote it or `δ_max`).
-    pub single_point_two_s: Summary,
+    pub(crate) single_point_two_s: Summary,
     /// `d_error` (eq. 19) across all pairs of points (Fig. 7), or across
     /// [`Evaluation::pair_sample`]; `None` with a single point.
     pub pair_length_summary: Option<Summary>,

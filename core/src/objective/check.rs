@@ -74,9 +74,9 @@ pub struct BlockCheck {
     /// The term's `Jᵀr` there.
     pub analytic: f64,
     /// Half the central difference of its cost there.
-    pub numeric: f64,
+    pub(crate) numeric: f64,
     /// Their relative error (module documentation).
-    pub relative_error: f64,
+    pub(crate) relative_error: f64,
 }
 
 /// One term's check: its worst column per block.

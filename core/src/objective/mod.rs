@@ -15,7 +15,9 @@
 
 pub(crate) mod check;
 
-pub use check::{BlockCheck, CheckOptions, GradientCheck, TermCheck, check_gradients};
+pub use check::{CheckOptions, check_gradients};
+
+pub use check::GradientCheck;
 
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
@@ -154,7 +156,7 @@ impl<'a> Objective<'a> {
     /// Whether stated tolerances (or an auxiliary block's) apply: a prior
     /// that weighs against the data. (Held weak directions are not one:
     /// they are stiff, whatever the data's weights.)
-    pub fn has_prior(&self) -> bool {
+    pub(crate) fn has_prior(&self) -> bool {
         self.prior.is_some()
     }
 
@@ -359,7 +361,7 @@ impl<'a> Objective<'a> {
     }
 
     /// The term of observation `i` ([`Objective::observations`]' order).
-    pub fn term_of(&self, i: usize) -> Option<&(dyn Term + 'a)> {
+    pub(crate) fn term_of(&self, i: usize) -> Option<&(dyn Term + 'a)> {
         let (first, term) = self
             .observing()
             .take_while(|(first, _)| *first <= i)

@@ -46,13 +46,16 @@ use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 
 pub use map::{
-    InFrame, MapPoint, Prediction, Region, UncertaintyMap, position_covariances, reading_ranges,
-    sample_poses, uncertainty_map, uncertainty_map_in_frame,
+    InFrame, MapPoint, Prediction, Region, UncertaintyMap, position_covariances, sample_poses,
+    uncertainty_map, uncertainty_map_in_frame,
 };
+
+pub(crate) use map::reading_ranges;
 pub use pool::{
     DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_touches, sample_touches_observed,
 };
-pub use summary::{GivenNote, KNEE, Knee, SummaryContext, knee, summary};
+pub use summary::Knee;
+pub use summary::{GivenNote, SummaryContext, knee, summary};
 
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};
@@ -87,7 +90,7 @@ pub enum Criterion {
 }
 
 /// Touches a plan gives each socket it uses at least.
-pub const MIN_TOUCHES_PER_SOCKET: usize = 3;
+pub(crate) const MIN_TOUCHES_PER_SOCKET: usize = 3;
 
 /// Workspace poses the criterion and the reported spreads use at most (an
 /// even sample of a larger workspace).
@@ -157,7 +160,7 @@ pub struct Given {
     pub sigma0: Option<f64>,
     /// Whether it fitted an instrument frame: new positions are taken in
     /// that frame, as known.
-    pub frame_known: bool,
+    pub(crate) frame_known: bool,
 }
 
 /// Why a plan cannot be made.
@@ -197,7 +200,7 @@ pub struct Step {
     /// this one (plain, without the hedge), as the 95 % radius of an
     /// isotropic error of that variance, mm; `None` while the rows do not
     /// determine every free parameter.
-    pub criterion_mm: Option<f64>,
+    pub(crate) criterion_mm: Option<f64>,
 }
 
 /// The predicted uncertainty after the first `rows` choices.
@@ -216,9 +219,9 @@ pub struct JointSpan {
     /// Joint, from 1.
     pub joint: usize,
     /// Range of the chosen readings, degrees (mm for a prismatic joint).
-    pub chosen_deg: f64,
+    pub(crate) chosen_deg: f64,
     /// Range of the pool's, degrees (mm for a prismatic joint).
-    pub pool_deg: f64,
+    pub(crate) pool_deg: f64,
     /// Whether the joint is prismatic: its spans are mm.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub prismatic: bool,
@@ -267,7 +270,7 @@ pub struct Plan {
     /// [`Plan::workspace_poses`] when an even sample of them was used
     /// ([`PlanSettings::workspace_limit`]).
     #[serde(default)]
-    pub workspace_total: usize,
+    pub(crate) workspace_total: usize,
     /// The predicted uncertainty with the chosen rows.
     pub planned: Option<Spread>,
     /// With every candidate.

@@ -55,7 +55,8 @@ use crate::metrics::MetricsError;
 use crate::params::DhParams;
 use crate::plan::UncertaintyMap;
 
-pub use acceptance::{ACCEPTANCE_FILES, SPHERE_RESIDUALS_SVG, acceptance_report};
+pub use acceptance::{ACCEPTANCE_FILES, acceptance_report};
+
 pub use calibration::session_report;
 
 /// The page.
@@ -308,7 +309,7 @@ pub struct PoseErrors {
     /// Per pose, the probe's distance from the base axis, mm.
     pub reach_mm: Vec<f64>,
     /// Per pose, `|R p + t − y|`, mm.
-    pub error_mm: Vec<f64>,
+    pub(crate) error_mm: Vec<f64>,
     /// Per pose, its frame: an index into `frame_names` (empty when the
     /// series has no frames, as a model's effect beyond geometry).
     pub frame: Vec<usize>,

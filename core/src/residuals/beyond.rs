@@ -30,7 +30,7 @@ pub const BLOCK_NAME: &str = "beyond";
 
 impl CorrectionBlock {
     /// The physics at the block's values `x` (internal units).
-    pub fn physics_at(&self, x: &[f64]) -> Physics {
+    pub(crate) fn physics_at(&self, x: &[f64]) -> Physics {
         self.physics.with_fitted(&self.fit, x, self.joints)
     }
 }

@@ -52,7 +52,7 @@ impl Unit {
 
     /// Whether the column is an angle (the identifiability analysis scales
     /// it by the arm's reach, as it does the geometry's angles).
-    pub fn is_angle(&self) -> bool {
+    pub(crate) fn is_angle(&self) -> bool {
         matches!(self, Unit::Angle)
     }
 }
@@ -272,7 +272,7 @@ impl Layout {
     ///
     /// Another block already in the layout (the corrections' columns come
     /// right after the geometry's), and [`Layout::add`]'s.
-    pub fn add_corrections(
+    pub(crate) fn add_corrections(
         &mut self,
         block: super::CorrectionBlock,
     ) -> Result<BlockId, LayoutError> {
@@ -298,7 +298,7 @@ impl Layout {
 
     /// The columns of the blocks held at their start ([`Layout::hold`]),
     /// in order.
-    pub fn held_columns(&self) -> Vec<usize> {
+    pub(crate) fn held_columns(&self) -> Vec<usize> {
         let mut cols: Vec<usize> = self.held.iter().flat_map(|&id| self.columns(id)).collect();
         cols.sort_unstable();
         cols
@@ -362,7 +362,7 @@ impl Layout {
     }
 
     /// The auxiliary block named `name`, if any.
-    pub fn block_named(&self, name: &str) -> Option<BlockId> {
+    pub(crate) fn block_named(&self, name: &str) -> Option<BlockId> {
         self.blocks
             .iter()
             .position(|b| b.name() == name)

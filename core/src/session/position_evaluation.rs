@@ -27,7 +27,7 @@ pub struct FrameEvaluation {
     pub name: String,
     /// Registered as the arm file states it (`true`), or in closed form on
     /// the positions evaluated (`false`: optimistic).
-    pub from_arm_file: bool,
+    pub(crate) from_arm_file: bool,
     /// Its rotation vector, deg.
     pub rotation_deg: [f64; 3],
     /// Its translation, mm.
@@ -45,7 +45,7 @@ pub struct FrameEvaluation {
 pub struct MountEvaluation {
     /// As the arm file states it (`true`, `[mount]`), or in closed form on
     /// the orientations evaluated (`false`: optimistic).
-    pub from_arm_file: bool,
+    pub(crate) from_arm_file: bool,
     /// Its rotation vector, deg.
     pub rotation_deg: [f64; 3],
 }

@@ -44,7 +44,7 @@ pub struct SphereResult {
     /// The fitted centre in the arm's base frame, mm.
     pub centre: [f64; 3],
     /// Its σ per coordinate, mm, when free.
-    pub centre_sigma: Option<[f64; 3]>,
+    pub(crate) centre_sigma: Option<[f64; 3]>,
     /// Its diameter, mm: stated, or fitted.
     pub diameter: f64,
     /// The fitted diameter's σ, mm (none when stated).

@@ -184,7 +184,7 @@ pub struct UnconfirmedSearch {
     /// The starts it had.
     pub starts: usize,
     /// A prior was in use.
-    pub prior_in_use: bool,
+    pub(crate) prior_in_use: bool,
 }
 
 /// The noise a fit stated, as it holds it (rad, mm).

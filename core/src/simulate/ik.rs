@@ -26,7 +26,7 @@ pub struct IkSolution {
     /// Encoder readings reached, rad (not wrapped).
     pub q: Vec<f64>,
     /// Distance from the probe centre to the target, mm.
-    pub residual_mm: f64,
+    pub(crate) residual_mm: f64,
     /// Iterations used.
     pub iterations: usize,
 }

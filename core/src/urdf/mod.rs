@@ -117,7 +117,7 @@ pub struct UrdfJoint {
     /// The joint's name.
     pub name: String,
     /// The `type` attribute as written.
-    pub type_name: String,
+    pub(crate) type_name: String,
     /// What the type means here.
     pub kind: JointKind,
     /// Parent link.

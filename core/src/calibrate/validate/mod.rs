@@ -30,9 +30,9 @@ pub struct Figures {
     /// Mean over points of the paper's `e` (single-point repeatability).
     pub e_mean: f64,
     /// Largest `e`.
-    pub e_max: f64,
+    pub(crate) e_max: f64,
     /// Mean over points of the SPAT `2s`.
-    pub two_s_mean: f64,
+    pub(crate) two_s_mean: f64,
     /// Largest `δ_max` over points (SPAT).
     pub delta_max: f64,
     /// Reference lengths evaluated.
@@ -196,7 +196,7 @@ impl Figures {
     }
 
     /// What [`Figures::headline`] is, in words.
-    pub fn headline_name(&self) -> &'static str {
+    pub(crate) fn headline_name(&self) -> &'static str {
         match (self.points, self.positions) {
             (0, Some(_)) => "mean 3-D position error",
             _ => "mean e",
@@ -235,7 +235,7 @@ pub fn position_errors(
 /// # Errors
 ///
 /// The kernel's.
-pub fn pose_errors(
+pub(crate) fn pose_errors(
     params: &DhParams,
     data: &crate::dataset::PositionData,
     frames: &[FrameValues],
@@ -304,7 +304,7 @@ pub fn orientation_errors(
 /// # Errors
 ///
 /// The kernel's.
-pub fn orientation_errors_per_row(
+pub(crate) fn orientation_errors_per_row(
     params: &DhParams,
     data: &crate::dataset::PositionData,
     frames: &[FrameValues],
@@ -362,7 +362,7 @@ pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, Calibration
 /// # Errors
 ///
 /// As [`figures`].
-pub fn figures_in(
+pub(crate) fn figures_in(
     params: &DhParams,
     data: &DataSet,
     frames: &[FrameValues],
@@ -428,7 +428,7 @@ pub fn before_after(
 /// # Errors
 ///
 /// As [`figures`].
-pub fn before_after_in(
+pub(crate) fn before_after_in(
     start: &DhParams,
     start_frames: &[FrameValues],
     calibrated: &DhParams,
@@ -444,7 +444,7 @@ pub fn before_after_in(
 /// An arm as it sees data: its geometry, its physics (the corrections
 /// beyond geometry it applies, [`crate::corrections`]) and its frames.
 #[derive(Clone, Copy, Debug)]
-pub struct ArmView<'a> {
+pub(crate) struct ArmView<'a> {
     /// The geometry.
     pub params: &'a DhParams,
     /// The corrections it applies.
@@ -459,7 +459,7 @@ pub struct ArmView<'a> {
 /// # Errors
 ///
 /// A correction whose conditions the data lack.
-pub fn seen_by<'d>(
+pub(crate) fn seen_by<'d>(
     params: &DhParams,
     physics: &Physics,
     data: &'d DataSet,
@@ -481,7 +481,7 @@ pub fn seen_by<'d>(
 /// # Errors
 ///
 /// As [`figures`], and [`seen_by`]'s.
-pub fn before_after_of(
+pub(crate) fn before_after_of(
     before: ArmView<'_>,
     after: ArmView<'_>,
     data: &DataSet,
@@ -507,7 +507,7 @@ pub fn before_after_of(
 /// # Errors
 ///
 /// The kernel's.
-pub fn registered_frames(
+pub(crate) fn registered_frames(
     params: &DhParams,
     data: &DataSet,
 ) -> Result<Vec<FrameValues>, crate::kernel::KernelError> {
