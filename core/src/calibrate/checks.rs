@@ -26,6 +26,7 @@ pub(crate) const TWIST_TOLERANCE_DEG: f64 = 15.0;
 /// A free parameter (or a combination of the last link's) that moved
 /// implausibly far from nominal.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct GrossCorrection {
     /// The parameter's name, or the last link's combination
     /// (`probe radius about axis 6`, `probe height along axis 6`).
@@ -156,6 +157,7 @@ pub fn gross_corrections(
 /// The χ² test of the fit under stated noise: is `Σr²` what `dof` degrees
 /// of freedom of residuals at the stated noise give?
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct ChiSquare {
     /// `Σr²` (weighted cost).
     pub(crate) statistic: f64,
@@ -295,6 +297,7 @@ impl ChiSquare {
 /// A touch (or other observation) whose residual the noise model does not
 /// explain.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Outlier {
     /// Where it was read: `file:line`.
     pub at: String,
@@ -328,6 +331,7 @@ impl Outlier {
 /// the list keeps to the named touches it weighs below
 /// [`super::robust::DOWNWEIGHTED`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct OutlierScreen {
     /// The robust refit's loss.
     pub loss: super::robust::Loss,
@@ -412,6 +416,7 @@ pub(crate) fn outliers(
 /// along a single direction, where the 95 % radii are `2.80 σ` and
 /// `1.96 σ`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct PositionUncertainty {
     /// Probability each radius covers (0.95).
     pub coverage: f64,

@@ -314,6 +314,7 @@ impl Method {
 /// Work and time of one phase of a solver. The time is not serialised, so
 /// that the same seed gives the same `calibration.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Phase {
     /// What ran: `anneal`, `lm`, `circle sweeps`, …
     pub name: String,
@@ -349,6 +350,7 @@ impl Phase {
 /// converts degrees to radians (exact to the last bit or two).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(into = "EstimateRecord", try_from = "EstimateRecord")]
+#[non_exhaustive]
 pub struct Estimate {
     /// The parameter.
     pub id: ParamId,
@@ -445,6 +447,7 @@ impl TryFrom<EstimateRecord> for Estimate {
 
 /// An auxiliary block's column as estimated, in the unit users see.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct AuxiliaryEstimate {
     /// Its name (`tracker.tx`).
     pub name: String,
@@ -483,6 +486,7 @@ pub struct TermRows {
 
 /// Residual and unknown counts, and the a-posteriori variance factor.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Dof {
     /// Touch residual rows (3 per touch).
     pub touch_rows: usize,
@@ -528,6 +532,7 @@ fn is_zero(n: &usize) -> bool {
 
 /// The solver's account of itself.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct SolverSummary {
     /// The method that ran.
     pub method: Method,
@@ -567,6 +572,7 @@ impl SolverSummary {
 
 /// The correlation matrix of the free parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct CorrelationMatrix {
     /// The free parameters' names, in column order.
     pub parameters: Vec<String>,
@@ -576,6 +582,7 @@ pub struct CorrelationMatrix {
 
 /// The checks a metrologist makes before signing off ([`checks`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Checks {
     /// Free parameters moved implausibly far from nominal: a mirror image
     /// of the arm, a collapsed arm, or a unit mistake. Empty when the arm is
@@ -603,8 +610,10 @@ pub struct Checks {
     pub position_uncertainty: Option<checks::PositionUncertainty>,
 }
 
-/// What [`calibrate`] returns.
+/// What [`calibrate`] returns: read it through its fields and accessors
+/// ([`Calibration::estimate`]); only the library builds one.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Calibration {
     /// The calibrated geometry (mm, rad; zero offsets wrapped to ±π):
     /// `parameters`' calibrated values (rebuilt from them when read back).
@@ -656,6 +665,12 @@ pub struct Calibration {
 }
 
 impl Calibration {
+    /// Parameter `id`'s estimate: `None` when the arm has no such parameter
+    /// (a joint beyond its count, the `d` of a Hayati joint).
+    pub fn estimate(&self, id: ParamId) -> Option<&Estimate> {
+        self.parameters.iter().find(|e| e.id == id)
+    }
+
     /// The free geometry's columns (of the `4n + 3`) and their covariance
     /// (mm, rad): the parameters' σ with the correlation matrix. `None`
     /// without a free parameter, or with one whose σ is not finite.

@@ -119,6 +119,7 @@ pub fn run(
         spheres,
         tools,
         uncertainty_maps_in_frames,
+        start: Some(Box::new(problem.arm.clone())),
     })
 }
 

@@ -72,7 +72,7 @@ impl CalibrationReport {
     /// saying so), which every reader of arm files checks
     /// ([`crate::io::verdict`]).
     pub(crate) fn calibrated_toml(&self, problem: &Problem) -> String {
-        let calibrated = self.calibrated_arm(problem.arm());
+        let calibrated = self.calibrated_arm_from(problem.arm());
         let verdict = &self.verdict;
         let header = if verdict.usable {
             ""

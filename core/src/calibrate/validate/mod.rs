@@ -24,6 +24,7 @@ use crate::setting::Setting;
 /// none for a kind absent. Read back, the missing fields are 0 / `None`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(into = "FiguresJson", from = "FiguresJson")]
+#[non_exhaustive]
 pub struct Figures {
     /// Points evaluated (0 without touches: the touch figures are then 0).
     pub points: usize,
@@ -117,6 +118,7 @@ impl From<FiguresJson> for Figures {
 /// The 3-D distances between where an arm puts the probe, registered to
 /// each frame, and where the instrument saw it, mm.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct PositionErrors {
     /// Positions evaluated.
     pub count: usize,
@@ -401,6 +403,7 @@ pub(crate) fn figures_in(
 
 /// Before and after on one data set.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct BeforeAfter {
     /// With the start (nominal) arm.
     pub before: Figures,
@@ -528,6 +531,7 @@ pub(crate) fn registered_frames(
 /// One cross-validation fold: the points held out, and the figures there of
 /// the arm fitted without them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Fold {
     /// Labels of the held-out points.
     pub held_out: Vec<String>,
@@ -545,6 +549,7 @@ pub struct Fold {
 /// ([`crate::residuals::HeldOutScorer`]): the distribution of `|error|`
 /// (mm; a point on a sphere's radial error) before and after.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct TermHeldOut {
     /// The term's name (`spheres`).
     pub term: String,
