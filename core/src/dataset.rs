@@ -118,7 +118,7 @@ impl SourceMap {
     }
 
     /// The poses file's name.
-    pub fn poses_file(&self) -> &str {
+    pub(crate) fn poses_file(&self) -> &str {
         &self.poses_file
     }
 }

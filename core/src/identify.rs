@@ -165,18 +165,18 @@ pub struct FreeParameter {
     pub sigma: f64,
     /// Cosine between the parameter's axis and the identifiable subspace
     /// (1 = fully identifiable), in scaled units.
-    pub identifiability: f64,
+    pub(crate) identifiability: f64,
 }
 
 /// A strong correlation between two free parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Correlation {
+pub(crate) struct Correlation {
     /// First parameter.
     pub a: String,
     /// Second parameter.
     pub b: String,
     /// Correlation coefficient.
-    pub rho: f64,
+    pub(crate) rho: f64,
 }
 
 /// The result of [`identify`].
@@ -185,16 +185,16 @@ pub struct Identification {
     /// Parameter names in the fixed order.
     pub parameters: Vec<String>,
     /// The reach `R` dividing angle columns, mm.
-    pub reach_mm: f64,
+    pub(crate) reach_mm: f64,
     /// How columns were scaled, in words.
-    pub scaling: String,
+    pub(crate) scaling: String,
     /// Singular values of the scaled Jacobian, descending, all columns.
-    pub singular_values: Vec<f64>,
+    pub(crate) singular_values: Vec<f64>,
     /// Singular values after the structural rules (removed columns and
     /// projected directions), descending.
     pub analysed_singular_values: Vec<f64>,
     /// Threshold: `1e-7 × s_max` (the numerical rank's relative tolerance).
-    pub threshold: f64,
+    pub(crate) threshold: f64,
     /// Identifiable parameter combinations.
     pub rank: usize,
     /// `s_max / s_min` over the identifiable part.
@@ -211,7 +211,7 @@ pub struct Identification {
     /// The free parameters with predicted σ.
     pub free: Vec<FreeParameter>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
-    pub correlations: Vec<Correlation>,
+    pub(crate) correlations: Vec<Correlation>,
     /// Model changes to consider: the D-H joints with nearly parallel axes
     /// that the Hayati parameterisation suits
     /// ([`hayati::recommendations`](crate::hayati::recommendations)).
@@ -302,7 +302,7 @@ pub struct Evidence<'a> {
     /// The touches, lengths and positions.
     pub data: &'a DataSet,
     /// The terms beyond them, if any.
-    pub added: Option<AddedTerms<'a>>,
+    pub(crate) added: Option<AddedTerms<'a>>,
 }
 
 /// [`identify`] of `data` and the terms `added` makes, if any.

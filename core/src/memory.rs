@@ -76,9 +76,9 @@ pub const fn data_set_bytes_per_touch(joints: usize, conditions: usize) -> usize
 )]
 pub struct OutOfMemory {
     /// What the memory was for (names the input that sized it).
-    pub what: String,
+    pub(crate) what: String,
     /// The bytes asked for (`usize::MAX` when the size itself overflowed).
-    pub bytes: usize,
+    pub(crate) bytes: usize,
 }
 
 impl OutOfMemory {

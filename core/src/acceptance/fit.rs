@@ -72,18 +72,18 @@ pub struct SphereFit {
     /// Why the fit stopped.
     pub stop: FitStop,
     /// Steps taken.
-    pub iterations: usize,
+    pub(crate) iterations: usize,
 }
 
 impl SphereFit {
     /// The covariance of `(c_x, c_y, c_z, R)` at a point noise `sigma`, mm².
-    pub fn covariance(&self, sigma: f64) -> Matrix4<f64> {
+    pub(crate) fn covariance(&self, sigma: f64) -> Matrix4<f64> {
         Matrix4::from_fn(|i, j| self.normal_inverse[i][j]) * (sigma * sigma)
     }
 
     /// The fitted diameter's σ at the fit's own σ̂, mm (`0` with the radius
     /// held or without degrees of freedom).
-    pub fn diameter_sigma(&self) -> f64 {
+    pub(crate) fn diameter_sigma(&self) -> f64 {
         match (self.radius_held, self.sigma) {
             (false, Some(s)) => 2.0 * s * self.normal_inverse[3][3].max(0.0).sqrt(),
             _ => 0.0,
@@ -91,7 +91,7 @@ impl SphereFit {
     }
 
     /// The range of the radial residuals, mm: the form seen.
-    pub fn form(&self) -> f64 {
+    pub(crate) fn form(&self) -> f64 {
         let (lo, hi) = min_max(&self.residuals);
         hi - lo
     }

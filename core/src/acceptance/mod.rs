@@ -56,9 +56,7 @@ use serde::{Deserialize, Serialize};
 
 pub use compute::verify;
 pub use enclosing::enclosing_ball;
-pub use fit::FitError;
-pub use fit::SphereFit;
-pub use fit::fit_sphere_ls;
+pub use fit::{FitError, SphereFit, fit_sphere_ls};
 pub use mpe::{Limit, Mpe, TestKind, parse_mpe};
 pub use predict::PredictionInfo;
 pub use predict::{
@@ -131,7 +129,7 @@ impl Decision {
     }
 
     /// As printed.
-    pub fn word(self) -> &'static str {
+    pub(crate) fn word(self) -> &'static str {
         match self {
             Decision::Pass => "PASS",
             Decision::Inconclusive => "INCONCLUSIVE",
@@ -228,9 +226,9 @@ pub struct Placement {
     /// Points.
     pub points: usize,
     /// The fit.
-    pub fit: SphereFit,
+    pub(crate) fit: SphereFit,
     /// The sphere's diameter seen, `2 (R_fit − r_ball)`, mm.
-    pub diameter: f64,
+    pub(crate) diameter: f64,
     /// `P_Size` and `P_Form` here (a probing placement's).
     pub tests: Vec<TestResult>,
 }

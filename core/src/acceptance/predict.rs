@@ -145,7 +145,7 @@ pub struct PredictionInfo {
     /// The seed.
     pub seed: u64,
     /// Free parameters drawn.
-    pub free_parameters: usize,
+    pub(crate) free_parameters: usize,
     /// The readings' noise drawn.
     pub noise: ReadingNoise,
 }

@@ -38,7 +38,7 @@ pub struct GrossCorrection {
     /// Calibrated value, in `unit`.
     pub calibrated: f64,
     /// The largest move accepted, in `unit`.
-    pub tolerance: f64,
+    pub(crate) tolerance: f64,
 }
 
 impl GrossCorrection {
@@ -162,7 +162,7 @@ pub struct ChiSquare {
     /// `Σr²` (weighted cost).
     pub(crate) statistic: f64,
     /// Degrees of freedom.
-    pub dof: usize,
+    pub(crate) dof: usize,
     /// `P(χ²_dof ≥ statistic)`: small when the residuals are larger than
     /// the noise explains.
     pub p_upper: f64,
@@ -341,14 +341,14 @@ pub struct OutlierScreen {
     /// `sigma0`): far below `sigma0` when the touches it weighs down are
     /// what made the plain fit's residuals large; about `sigma0` when
     /// every residual is large (a wrong minimum, a wrong model).
-    pub scale: f64,
+    pub(crate) scale: f64,
 }
 
 impl OutlierScreen {
     /// Whether the touches the screen weighs down explain the plain fit's
     /// misfit: without them the residuals' scale is less than half the
     /// plain fit's `sigma0`.
-    pub fn explains(&self, sigma0: f64) -> bool {
+    pub(crate) fn explains(&self, sigma0: f64) -> bool {
         self.scale.is_finite() && self.scale < sigma0 / 2.0
     }
 }
@@ -437,7 +437,7 @@ impl PositionUncertainty {
     /// single measurement's scatter (`sqrt(1 + (U/T)²) > 1.05`, i.e. `U`
     /// above a third of a touch's `T`, both 95 % radii): the data, not the
     /// noise, limit the arm.
-    pub fn weak(&self) -> bool {
+    pub(crate) fn weak(&self) -> bool {
         self.rms_mm > WEAK_FRACTION * self.touch_mm
     }
 

@@ -54,11 +54,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::OptionError;
 use crate::setting::Setting;
-pub use anneal::AnnealStep;
-pub use anneal::AnnealTrace;
-pub use anneal::{AnnealOptions, AnnealStop, SwitchRule};
-pub use global::GlobalTrace;
-pub use global::{GlobalOptions, GlobalStop};
+pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
+pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub use lm::LmIteration;
 pub(crate) use lm::LmResult;
 pub use lm::{LmOptions, Termination};
@@ -66,10 +63,8 @@ pub use options::{
     DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads,
     check_threads,
 };
-pub use prior::PriorConditioning;
-pub use prior::PriorReport;
-pub use robust::RobustFit;
-pub use robust::{Loss, Robust};
+pub use prior::{PriorConditioning, PriorReport};
+pub use robust::{Loss, Robust, RobustFit};
 pub use solver::{Anneal, Cancel, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
 use crate::dataset::DataSet;
@@ -319,9 +314,9 @@ pub struct Phase {
     /// What ran: `anneal`, `lm`, `circle sweeps`, …
     pub name: String,
     /// Cost or energy evaluations (positions only).
-    pub cost_evaluations: usize,
+    pub(crate) cost_evaluations: usize,
     /// Jacobian evaluations.
-    pub jacobian_evaluations: usize,
+    pub(crate) jacobian_evaluations: usize,
     /// Wall time, s.
     #[serde(skip)]
     pub seconds: f64,
@@ -481,7 +476,7 @@ pub struct TermRows {
     /// Its residual rows.
     pub rows: usize,
     /// Unknowns it eliminates.
-    pub eliminated: usize,
+    pub(crate) eliminated: usize,
 }
 
 /// Residual and unknown counts, and the a-posteriori variance factor.
@@ -554,7 +549,7 @@ pub struct SolverSummary {
     /// Cost per iteration of the final fit.
     pub history: Vec<LmIteration>,
     /// The tolerances.
-    pub options: LmOptions,
+    pub(crate) options: LmOptions,
     /// Work per phase, in order.
     pub phases: Vec<Phase>,
     /// The annealing (`sa`, `hybrid`).
@@ -627,13 +622,13 @@ pub struct Calibration {
     /// a revolute arm's JSON is what it always was and the chain read back
     /// ([`Calibration::restore_params`]) is the one fitted.
     #[serde(default, skip_serializing_if = "all_revolute")]
-    pub joint_types: Vec<JointKind>,
+    pub(crate) joint_types: Vec<JointKind>,
     /// Per column of the auxiliary blocks (a frame, a scalar), in the
     /// layout's order; absent when there is none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub auxiliary: Vec<AuxiliaryEstimate>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
-    pub correlations: Vec<Correlation>,
+    pub(crate) correlations: Vec<Correlation>,
     /// Every correlation of the free parameters.
     pub correlation_matrix: CorrelationMatrix,
     /// Counts and the variance factor.
@@ -906,7 +901,7 @@ impl Calibration {
     /// Restores [`Calibration::params`] from the estimates, after reading a
     /// calibration back from JSON: each value to the parameter it names (a
     /// joint with an `hbeta…` is a Hayati joint).
-    pub fn restore_params(&mut self) {
+    pub(crate) fn restore_params(&mut self) {
         if let Some(mut p) =
             DhParams::from_named(self.parameters.iter().map(|e| (e.id, e.calibrated)))
         {

@@ -57,7 +57,7 @@ pub struct PriorEstimate {
     pub data_share: f64,
     /// `(calibrated − nominal) / tolerance`: how far the data moved it, in
     /// tolerances.
-    pub shift: f64,
+    pub(crate) shift: f64,
 }
 
 /// A stated tolerance of a parameter `fix = auto` holds as redundant,
@@ -228,7 +228,7 @@ impl PriorReport {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PriorConditioning {
     /// The tolerances, in words.
-    pub tolerances: String,
+    pub(crate) tolerances: String,
     /// Parameters with a tolerance.
     pub parameters_with_tolerance: usize,
     /// Parameters in all.

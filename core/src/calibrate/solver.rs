@@ -266,15 +266,15 @@ pub struct Outcome {
     /// Why it stopped.
     pub stop: Stop,
     /// Iterations of the final LM (0 without one).
-    pub iterations: usize,
+    pub(crate) iterations: usize,
     /// Cost per iteration of the final LM.
-    pub history: Vec<LmIteration>,
+    pub(crate) history: Vec<LmIteration>,
     /// Work per phase, in order.
-    pub phases: Vec<Phase>,
+    pub(crate) phases: Vec<Phase>,
     /// The annealing's account (`sa`, `hybrid`).
     pub anneal: Option<AnnealTrace>,
     /// The global search's account.
-    pub global: Option<GlobalTrace>,
+    pub(crate) global: Option<GlobalTrace>,
     /// The normal equations at `params` under the task's weights.
     pub(crate) normal: Normal,
 }
@@ -343,7 +343,7 @@ pub struct Lm;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Anneal {
     /// Switch to LM by the paper's rule.
-    pub hybrid: bool,
+    pub(crate) hybrid: bool,
 }
 
 /// Converges from encoder zeros unknown in ±180° ([`super::global`]).

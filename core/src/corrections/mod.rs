@@ -61,11 +61,7 @@ pub mod gravity;
 
 use serde::{Deserialize, Serialize};
 
-pub use effects::{Conditions, Effects};
-
-pub use effects::angles_for;
-
-pub use effects::readings_for;
+pub use effects::{Conditions, Effects, angles_for, readings_for};
 
 use crate::error::OptionError;
 use crate::setting::Setting;

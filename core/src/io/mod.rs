@@ -37,7 +37,7 @@
 
 pub mod approach;
 pub mod arm;
-pub mod atomic;
+pub(crate) mod atomic;
 pub mod columns;
 pub mod frames;
 mod labels;
@@ -50,7 +50,7 @@ pub mod prior;
 pub mod spheres;
 pub(crate) mod text;
 pub mod tools;
-pub mod units;
+pub(crate) mod units;
 pub mod verdict;
 
 use std::fmt;
@@ -59,22 +59,21 @@ pub use crate::error::InputError;
 pub use arm::{Arm, arm_to_toml, parse_arm, read_arm, read_arm_with, write_arm};
 pub use atomic::{write_atomic, write_atomic_with};
 pub use columns::JointColumns;
-pub use lengths::check_lengths_against;
-pub use lengths::{ReferenceLength, parse_lengths, read_lengths, write_lengths};
+pub use lengths::{
+    ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
+};
 pub use limits::limit_warning;
 pub use points::{parse_points, read_points, write_points, write_points_u95, write_tool_poses};
 pub use poses::{
     Poses, PosesOrPositions, parse_poses, parse_poses_or_positions, read_poses,
     read_poses_or_positions, write_poses,
 };
-pub use positions::parse_positions;
-pub use positions::{DEFAULT_FRAME, Positions, read_positions};
+pub use positions::{DEFAULT_FRAME, Positions, parse_positions, read_positions};
 pub use prior::parse_prior;
 pub use text::source_name;
 pub use tools::{DEFAULT_TOOL, Tool, ToolNames};
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
-pub use verdict::ArmVerdict;
-pub use verdict::Rejected;
+pub use verdict::{ArmVerdict, Rejected};
 
 /// Legal but suspicious input, located like an [`InputError`]. Readers
 /// return warnings; the caller prints them.

@@ -126,7 +126,7 @@ impl Poses {
     }
 
     /// Per row, the temperature (°C), when recorded.
-    pub fn temperatures(&self) -> Option<&[f64]> {
+    pub(crate) fn temperatures(&self) -> Option<&[f64]> {
         self.temperature.as_deref()
     }
 

@@ -134,7 +134,7 @@ impl Positions {
 
     /// Records the last row's temperature (°C) and time (s); a column is
     /// kept only when every row has it (the reader's rule).
-    pub fn record(&mut self, temperature: Option<f64>, time: Option<f64>) {
+    pub(crate) fn record(&mut self, temperature: Option<f64>, time: Option<f64>) {
         let n = self.len();
         for (column, v) in [(&mut self.temperature, temperature), (&mut self.time, time)] {
             match v {
@@ -191,7 +191,7 @@ impl Positions {
     }
 
     /// Per row, the temperature (°C), when recorded.
-    pub fn temperatures(&self) -> Option<&[f64]> {
+    pub(crate) fn temperatures(&self) -> Option<&[f64]> {
         self.temperature.as_deref()
     }
 
@@ -369,7 +369,7 @@ impl Positions {
 
     /// Row `i`'s orientation seen (`[w, x, y, z]`, the tool frame in the
     /// row's frame), when the row gives one.
-    pub fn orientation(&self, i: usize) -> Option<[f64; 4]> {
+    pub(crate) fn orientation(&self, i: usize) -> Option<[f64; 4]> {
         self.orientation[i]
     }
 
@@ -437,7 +437,7 @@ impl Positions {
 
     /// Tool `k`'s nominal offset (mm, the last joint's frame), once known
     /// ([`Positions::resolve_tools`]); `None` for the default tool.
-    pub fn tool_offset(&self, k: usize) -> Option<[f64; 3]> {
+    pub(crate) fn tool_offset(&self, k: usize) -> Option<[f64; 3]> {
         self.tool_offsets[k]
     }
 

@@ -174,11 +174,6 @@ impl ToolNames {
         self.offsets[k as usize]
     }
 
-    /// Whether `name` is one of these tools.
-    pub fn knows(&self, name: &str) -> bool {
-        self.index.contains_key(name)
-    }
-
     /// Every name, the default tool's first.
     pub fn names(&self) -> &[String] {
         &self.names

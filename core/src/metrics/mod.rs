@@ -83,19 +83,12 @@ mod pairs;
 mod point;
 pub(crate) mod table;
 
-pub use length::PairLengthError;
-
-pub use length::ReferenceError;
-
-pub use length::ReferenceSummary;
-
-pub use length::{pair_length_error, pair_length_errors};
-pub use pairs::DEFAULT_PAIR_SEED;
-pub use pairs::PAIR_TOUCH_BUDGET;
-pub use pairs::PairSample;
+pub use length::{
+    PairLengthError, ReferenceError, ReferenceSummary, pair_length_error, pair_length_errors,
+};
+pub use pairs::{DEFAULT_PAIR_SEED, PAIR_TOUCH_BUDGET, PairSample};
 pub(crate) use pairs::{PairSet, pair_set};
-pub use point::PointStats;
-pub use point::point_stats;
+pub use point::{PointStats, point_stats};
 pub use table::write_pair_table;
 
 use crate::dataset::DataSet;

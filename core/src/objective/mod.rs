@@ -15,9 +15,7 @@
 
 pub(crate) mod check;
 
-pub use check::{CheckOptions, check_gradients};
-
-pub use check::GradientCheck;
+pub use check::{CheckOptions, GradientCheck, check_gradients};
 
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
@@ -193,7 +191,7 @@ impl<'a> Objective<'a> {
     }
 
     /// What the data's terms let the identifiability rules assume.
-    pub fn sees(&self) -> Sees {
+    pub(crate) fn sees(&self) -> Sees {
         self.terms
             .iter()
             .filter(|t| !t.is_prior())
@@ -222,11 +220,6 @@ impl<'a> Objective<'a> {
     /// Residual rows of every term over `free`.
     pub fn rows(&self, free: &[usize]) -> usize {
         self.terms.iter().map(|t| t.rows(free)).sum()
-    }
-
-    /// Unknowns eliminated inside the terms.
-    pub fn eliminated(&self) -> usize {
-        self.terms.iter().map(|t| t.eliminated()).sum()
     }
 
     /// Evaluates `f` with the point `x` prepared: its arm and kernel.
@@ -491,7 +484,11 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's.
-    pub fn data_cost(&self, x: &[f64], scratch: &mut Vec<[f64; 3]>) -> Result<f64, TermError> {
+    pub(crate) fn data_cost(
+        &self,
+        x: &[f64],
+        scratch: &mut Vec<[f64; 3]>,
+    ) -> Result<f64, TermError> {
         self.cost_of(x, &[], scratch, |t| !t.is_prior())
     }
 

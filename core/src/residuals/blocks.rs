@@ -290,7 +290,7 @@ impl Layout {
     /// (the fit's free columns leave them out, and the report says they
     /// were held and why). A known instrument pose, a plane whose offset
     /// was measured elsewhere.
-    pub fn hold(&mut self, id: BlockId) {
+    pub(crate) fn hold(&mut self, id: BlockId) {
         if !self.held.contains(&id) {
             self.held.push(id);
         }
@@ -416,7 +416,7 @@ impl Layout {
 
     /// What column `c`'s standard uncertainty is of, when not of its value
     /// ([`Block::sigma_of`]).
-    pub fn sigma_of(&self, c: usize) -> Option<String> {
+    pub(crate) fn sigma_of(&self, c: usize) -> Option<String> {
         if c < self.geometry_columns() {
             return None;
         }

@@ -84,10 +84,8 @@ pub use blocks::Mount;
 pub use blocks::{
     Block, BlockId, Frame, Layout, LayoutError, MOUNT_BLOCK, Parameter, Scalar, Unit, Vector,
 };
-pub use folds::HeldOutScorer;
-pub use folds::TermFold;
-pub use hold::HeldDirection;
-pub use hold::WEAK_RATIO;
+pub use folds::{HeldOutScorer, TermFold};
+pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
 pub(crate) use lengths::LengthTerm;
 pub(crate) use orientations::{OrientationTerm, mount_start};
@@ -262,7 +260,7 @@ pub enum TermError {
 
 impl TermError {
     /// A refusal by the term `term`.
-    pub fn invalid(term: &str, message: impl Into<String>) -> TermError {
+    pub(crate) fn invalid(term: &str, message: impl Into<String>) -> TermError {
         TermError::Invalid {
             term: term.to_string(),
             message: message.into(),
@@ -331,7 +329,7 @@ impl At<'_> {
     ///
     /// A correction whose conditions were not recorded (an expansion
     /// without temperatures).
-    pub fn effects(
+    pub(crate) fn effects(
         &self,
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
@@ -414,7 +412,7 @@ impl At<'_> {
     /// # Errors
     ///
     /// As [`At::tool_positions`].
-    pub fn for_each_tool_pose(
+    pub(crate) fn for_each_tool_pose(
         &self,
         poses: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,

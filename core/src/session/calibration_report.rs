@@ -15,9 +15,9 @@ use super::{Verdict, spheres, tools};
 #[non_exhaustive]
 pub struct Units {
     /// `mm`.
-    pub lengths: String,
+    pub(crate) lengths: String,
     /// `deg`.
-    pub angles: String,
+    pub(crate) angles: String,
 }
 
 /// Held-out validation.
@@ -27,7 +27,7 @@ pub struct HeldOut {
     /// Its poses file.
     pub data_file: String,
     /// Its lengths file.
-    pub lengths_file: Option<String>,
+    pub(crate) lengths_file: Option<String>,
     /// Before and after there.
     pub figures: BeforeAfter,
     /// Its frames the fit does not have, each registered on its own
@@ -75,7 +75,7 @@ pub struct CalibrationReport {
     /// The poses file.
     pub data_file: String,
     /// The lengths file.
-    pub lengths_file: Option<String>,
+    pub(crate) lengths_file: Option<String>,
     /// The fixed set: `auto` or the names fixed.
     pub fix: String,
     /// The noise (internal units: rad, mm).
@@ -83,7 +83,7 @@ pub struct CalibrationReport {
     /// Seed of every random draw.
     pub seed: u64,
     /// Units of the parameter tables.
-    pub units: Units,
+    pub(crate) units: Units,
     /// Touches fitted.
     pub touches: usize,
     /// Points fitted.
@@ -92,7 +92,7 @@ pub struct CalibrationReport {
     pub reference_lengths: usize,
     /// The reference-positions file, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub positions_file: Option<String>,
+    pub(crate) positions_file: Option<String>,
     /// Reference positions fitted.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub positions: usize,

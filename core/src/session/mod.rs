@@ -36,20 +36,11 @@ mod writing;
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
-pub use position_evaluation::FrameEvaluation;
-pub use position_evaluation::MountEvaluation;
-pub use position_evaluation::PositionEvaluation;
+pub use position_evaluation::{FrameEvaluation, MountEvaluation, PositionEvaluation};
 pub use request::{Request, user_noise};
-pub use verdict::Note;
-pub use verdict::StatedNoise;
-pub use verdict::UnconfirmedSearch;
-pub use verdict::{Reason, Setting, Spelling, Verdict};
+pub use verdict::{Note, Reason, Setting, Spelling, StatedNoise, UnconfirmedSearch, Verdict};
 
-pub use calibration_report::{CalibrationReport, Units, Validation};
-
-pub use calibration_report::CrossValidation;
-
-pub use calibration_report::HeldOut;
+pub use calibration_report::{CalibrationReport, CrossValidation, HeldOut, Units, Validation};
 pub use checks::check_units;
 pub use problem::{HeldOutData, Problem, Sources, room_to_calibrate};
 pub use run::run;

@@ -78,7 +78,7 @@ pub struct ProbeQualification {
     /// `|offset − nominal_offset|`, mm.
     pub moved_mm: f64,
     /// The tolerance on that move, mm.
-    pub tolerance_mm: f64,
+    pub(crate) tolerance_mm: f64,
     /// The ball diameter stated in the arm file, mm (none: taken as 0).
     pub(crate) nominal_ball_mm: Option<f64>,
     /// The effective ball diameter, mm.
@@ -86,13 +86,13 @@ pub struct ProbeQualification {
     /// Its σ, mm.
     pub ball_sigma_mm: f64,
     /// The reference sphere's certified diameter, mm.
-    pub sphere_diameter_mm: f64,
+    pub(crate) sphere_diameter_mm: f64,
     /// The range of the radial residuals at the qualified probe, mm.
     pub(crate) form_mm: f64,
     /// Their RMS, mm.
-    pub rms_mm: f64,
+    pub(crate) rms_mm: f64,
     /// The limit on the form, mm, when one was set.
-    pub max_form_mm: Option<f64>,
+    pub(crate) max_form_mm: Option<f64>,
     /// Why the qualification cannot be used (empty: it can).
     pub refusals: Vec<String>,
     /// What the user should know of a usable one.

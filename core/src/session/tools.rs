@@ -26,9 +26,9 @@ pub struct ToolResult {
     /// Its σ per axis, mm, when determined (none when held).
     pub sigma: Option<[f64; 3]>,
     /// RMS of its rows' 3-D errors at the start arm, mm.
-    pub rms_before: f64,
+    pub(crate) rms_before: f64,
     /// The same at the calibrated arm, mm.
-    pub rms_after: f64,
+    pub(crate) rms_after: f64,
 }
 
 /// The tool points of a calibration: `calibration.json`'s `tools`.

@@ -28,7 +28,7 @@ pub struct IkSolution {
     /// Distance from the probe centre to the target, mm.
     pub(crate) residual_mm: f64,
     /// Iterations used.
-    pub iterations: usize,
+    pub(crate) iterations: usize,
 }
 
 impl IkSolution {

@@ -131,8 +131,7 @@ pub use files::{
     CAMPAIGN_FILE, LENGTHS_FILE, POSES_FILE, SOCKETS_FILE, TRUE_ARM_FILE, parse_campaign,
     read_campaign, write_campaign,
 };
-pub use ik::IkSolution;
-pub use ik::solve_point;
+pub use ik::{IkSolution, solve_point};
 pub use lengths::reference_lengths;
 pub use positions::{
     ConditionSettings, OrientationSettings, POSITIONS_FILE, PositionCampaign, PositionSettings,

@@ -37,7 +37,7 @@ pub struct Figures {
     /// Largest `δ_max` over points (SPAT).
     pub delta_max: f64,
     /// Reference lengths evaluated.
-    pub lengths: usize,
+    pub(crate) lengths: usize,
     /// RMS of the reference-length errors; `None` without lengths.
     pub length_rms: Option<f64>,
     /// Largest `|error|`; `None` without lengths.
@@ -49,7 +49,7 @@ pub struct Figures {
     /// tool's orientation, **degrees** ([`orientation_errors`]); absent
     /// without them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub orientations: Option<PositionErrors>,
+    pub(crate) orientations: Option<PositionErrors>,
 }
 
 /// [`Figures`] as `calibration.json` holds them: the touch fields are
@@ -190,7 +190,7 @@ impl Figures {
     /// The figure a calibration must not make worse on its own data: the
     /// mean `e` of the touches, or without touches the mean 3-D error at
     /// the reference positions.
-    pub fn headline(&self) -> f64 {
+    pub(crate) fn headline(&self) -> f64 {
         match (self.points, self.positions) {
             (0, Some(p)) => p.mean,
             _ => self.e_mean,
@@ -451,7 +451,7 @@ pub(crate) struct ArmView<'a> {
     /// The geometry.
     pub params: &'a DhParams,
     /// The corrections it applies.
-    pub physics: &'a Physics,
+    pub(crate) physics: &'a Physics,
     /// Its frames (a frame not given: its closed form on the data).
     pub frames: &'a [FrameValues],
 }
@@ -554,7 +554,7 @@ pub struct TermHeldOut {
     /// The term's name (`spheres`).
     pub term: String,
     /// What the figures are ([`crate::residuals::HeldOutScorer::what`]).
-    pub what: String,
+    pub(crate) what: String,
     /// Where each held-out observation came from (`file:line`).
     pub held_out: Vec<String>,
     /// The start arm, the term's own unknowns (a sphere's centre and

@@ -30,7 +30,7 @@ impl SphereTerm {
     /// # Errors
     ///
     /// The kernel's refusal of the readings.
-    pub fn restricted(&self, rows: &[usize]) -> Result<SphereTerm, TermError> {
+    pub(crate) fn restricted(&self, rows: &[usize]) -> Result<SphereTerm, TermError> {
         let spheres = self.spheres.subset(rows);
         // Per sphere of the subset, the whole term's sphere of that name.
         let mut of = vec![0; spheres.spheres().len()];
