@@ -385,15 +385,18 @@ impl Estimate {
     /// The estimate in user units.
     ///
     /// ```
-    /// use aacmm_core::calibrate::Estimate;
-    /// use aacmm_core::params::{ParamId, ParamKind};
-    /// let e = Estimate {
-    ///     id: ParamId { kind: ParamKind::Theta, index: 1 },
-    ///     nominal: 0.0, calibrated: std::f64::consts::FRAC_PI_2, correction: std::f64::consts::FRAC_PI_2,
-    ///     sigma: None, fixed: None,
-    /// };
+    /// use aacmm_core::calibrate::{Estimate, EstimateRecord};
+    /// // Only the library makes an `Estimate` (`#[non_exhaustive]`); one
+    /// // read back from a record (as from `calibration.json`) is in rad:
+    /// let e = Estimate::try_from(EstimateRecord {
+    ///     name: "theta2".into(), unit: "deg".into(),
+    ///     nominal: 0.0, calibrated: 90.0, correction: 90.0, sigma: None, fixed: None,
+    /// })?;
+    /// assert!((e.calibrated - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
     /// let r = e.user();
-    /// assert_eq!((r.name.as_str(), r.unit.as_str(), r.calibrated), ("theta2", "deg", 90.0));
+    /// assert_eq!((r.name.as_str(), r.unit.as_str()), ("theta2", "deg"));
+    /// assert!((r.calibrated - 90.0).abs() < 1e-12);
+    /// # Ok::<(), String>(())
     /// ```
     pub fn user(&self) -> EstimateRecord {
         let u = |v: f64| self.id.to_user(v);
