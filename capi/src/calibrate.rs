@@ -221,8 +221,11 @@ fn run(
     let solver = settings.method.solver();
     let report = aacmm_core::session::run(&problem, &settings, &*solver, &mut ctx)
         .map_err(|e| in_file(e, &arm_file))?;
+    // A run's report keeps its start arm.
+    let calibrated = (report.calibrated_arm())
+        .ok_or_else(|| Error::new(AacmmStatus::Panic, "internal: the report has no start arm"))?;
     Ok(AacmmCalibration {
-        calibrated: report.calibrated_arm(problem.arm()),
+        calibrated,
         json: report.to_json(),
         report,
     })

@@ -37,7 +37,7 @@ pub const MIN_ARTICULATION_DEG: f64 = 1.0;
 /// 10⁴ times a linear scale's noise (1 µm, as the simulator's), where 1° is
 /// 200 times an angle encoder's (0.005°). Compared with the degrees
 /// threshold, a slide's range in mm would count 0.02 mm as a degree.
-pub const MIN_SLIDE_ARTICULATION_MM: f64 = 10.0;
+pub(crate) const MIN_SLIDE_ARTICULATION_MM: f64 = 10.0;
 
 /// One physical point (cone socket) and its touches.
 #[derive(Clone, Debug, PartialEq)]
@@ -105,7 +105,7 @@ impl SourceMap {
 
     /// The row of the poses file that touch `i` (data-set order) was read
     /// from, 0-based: how to put results back in file order.
-    pub fn touch_row(&self, i: usize) -> usize {
+    pub(crate) fn touch_row(&self, i: usize) -> usize {
         self.touch_rows[i] as usize
     }
 
@@ -118,7 +118,7 @@ impl SourceMap {
     }
 
     /// The poses file's name.
-    pub fn poses_file(&self) -> &str {
+    pub(crate) fn poses_file(&self) -> &str {
         &self.poses_file
     }
 }
@@ -336,7 +336,7 @@ impl TouchTools {
     }
 
     /// Point `p`'s tool (an index into [`TouchTools::names`]).
-    pub fn of_point(&self, p: usize) -> usize {
+    pub(crate) fn of_point(&self, p: usize) -> usize {
         self.of_point[p] as usize
     }
 
@@ -1242,7 +1242,7 @@ impl DataSet {
     ///
     /// Touches or positions that name their tools already (a `tool`
     /// column): the tool of every row is stated once, by the file or here.
-    pub fn measured_with(mut self, name: &str) -> Result<DataSet, InputError> {
+    pub(crate) fn measured_with(mut self, name: &str) -> Result<DataSet, InputError> {
         if self.tools.is_some() {
             return Err(InputError::file_error(
                 &self.source.poses_file,
@@ -1288,7 +1288,7 @@ impl DataSet {
 
     /// Touches and reference positions: the observations a fit weighs
     /// (lengths aside).
-    pub fn observation_count(&self) -> usize {
+    pub(crate) fn observation_count(&self) -> usize {
         self.len() + self.positions().map_or(0, |p| p.len())
     }
 
@@ -1445,7 +1445,7 @@ impl DataSet {
     /// Each set of poses — the touches, the reference positions — by its
     /// file's name, with its conditions: what a model beyond geometry is
     /// checked against ([`crate::corrections::Beyond::check_inputs`]).
-    pub fn condition_sets(&self) -> Vec<(String, Conditions<'_>)> {
+    pub(crate) fn condition_sets(&self) -> Vec<(String, Conditions<'_>)> {
         let mut sets = Vec::new();
         if !self.is_empty() {
             sets.push((self.source.poses_file.clone(), self.conditions()));

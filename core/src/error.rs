@@ -385,6 +385,6 @@ pub(crate) fn bounded(message: String) -> String {
 pub const MAX_SEED: u64 = i64::MAX as u64;
 
 /// Why `seed` (above [`MAX_SEED`]) is refused.
-pub fn seed_bound(seed: u64) -> String {
+pub(crate) fn seed_bound(seed: u64) -> String {
     format!("at most {MAX_SEED} (seeds are written as TOML integers), got {seed}")
 }

@@ -59,9 +59,9 @@ pub struct RigidMotion {
     /// The rotation (`det = −1`, a mirror, when one was asked for).
     pub rotation: Matrix3<f64>,
     /// The centroid of the points moved.
-    pub from: Vector3<f64>,
+    pub(crate) from: Vector3<f64>,
     /// The centroid of the points they are moved onto.
-    pub to: Vector3<f64>,
+    pub(crate) to: Vector3<f64>,
 }
 
 impl RigidMotion {

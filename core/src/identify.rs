@@ -133,7 +133,7 @@ pub struct Rule {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Relation {
     /// Singular value of the direction (scaled), or 0 for a structural one.
-    pub singular_value: f64,
+    pub(crate) singular_value: f64,
     /// `(parameter, coefficient)`: moving the parameters by these amounts
     /// (mm, rad) together moves no touch — for a null relation, the first
     /// is the dependent parameter with coefficient 1; for a weak direction, a
@@ -165,18 +165,18 @@ pub struct FreeParameter {
     pub sigma: f64,
     /// Cosine between the parameter's axis and the identifiable subspace
     /// (1 = fully identifiable), in scaled units.
-    pub identifiability: f64,
+    pub(crate) identifiability: f64,
 }
 
 /// A strong correlation between two free parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Correlation {
+pub(crate) struct Correlation {
     /// First parameter.
     pub a: String,
     /// Second parameter.
     pub b: String,
     /// Correlation coefficient.
-    pub rho: f64,
+    pub(crate) rho: f64,
 }
 
 /// The result of [`identify`].
@@ -185,33 +185,33 @@ pub struct Identification {
     /// Parameter names in the fixed order.
     pub parameters: Vec<String>,
     /// The reach `R` dividing angle columns, mm.
-    pub reach_mm: f64,
+    pub(crate) reach_mm: f64,
     /// How columns were scaled, in words.
-    pub scaling: String,
+    pub(crate) scaling: String,
     /// Singular values of the scaled Jacobian, descending, all columns.
-    pub singular_values: Vec<f64>,
+    pub(crate) singular_values: Vec<f64>,
     /// Singular values after the structural rules (removed columns and
     /// projected directions), descending.
     pub analysed_singular_values: Vec<f64>,
     /// Threshold: `1e-7 × s_max` (the numerical rank's relative tolerance).
-    pub threshold: f64,
+    pub(crate) threshold: f64,
     /// Identifiable parameter combinations.
     pub rank: usize,
     /// `s_max / s_min` over the identifiable part.
-    pub condition_number: f64,
+    pub(crate) condition_number: f64,
     /// Structural rules that fired.
     pub rules: Vec<Rule>,
     /// Unidentifiable directions among the analysed parameters, one per
     /// redundant fixed parameter (the structural ones are in `rules`).
     pub null_relations: Vec<Relation>,
     /// Weak directions (singular value below 1e-3 of `s_max`, above the threshold).
-    pub weak_relations: Vec<Relation>,
+    pub(crate) weak_relations: Vec<Relation>,
     /// The recommended fixed set, with reasons.
     pub fixed: Vec<Fixed>,
     /// The free parameters with predicted σ.
     pub free: Vec<FreeParameter>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
-    pub correlations: Vec<Correlation>,
+    pub(crate) correlations: Vec<Correlation>,
     /// Model changes to consider: the D-H joints with nearly parallel axes
     /// that the Hayati parameterisation suits
     /// ([`hayati::recommendations`](crate::hayati::recommendations)).
@@ -222,7 +222,7 @@ pub struct Identification {
 
 impl Identification {
     /// Column indices of the recommended free parameters.
-    pub fn free_columns(&self) -> Vec<usize> {
+    pub(crate) fn free_columns(&self) -> Vec<usize> {
         let joints = (self.parameters.len().saturating_sub(3)) / 4;
         self.free.iter().map(|f| f.id.column(joints)).collect()
     }
@@ -293,7 +293,7 @@ pub fn identify(
 /// centres blocks of their own). Their blocks are fitted and eliminated
 /// with the frames ([`crate::residuals::Normal::geometry_only`]), so the
 /// geometry is judged with them.
-pub type AddedTerms<'a> =
+pub(crate) type AddedTerms<'a> =
     &'a dyn Fn(&mut crate::residuals::Layout) -> Result<Vec<Box<dyn Term>>, TermError>;
 
 /// What an analysis sees: a data set, and the terms `added` makes.
@@ -302,7 +302,7 @@ pub struct Evidence<'a> {
     /// The touches, lengths and positions.
     pub data: &'a DataSet,
     /// The terms beyond them, if any.
-    pub added: Option<AddedTerms<'a>>,
+    pub(crate) added: Option<AddedTerms<'a>>,
 }
 
 /// [`identify`] of `data` and the terms `added` makes, if any.
@@ -311,7 +311,7 @@ pub struct Evidence<'a> {
 ///
 /// As [`identify`]; the terms' refusals; auxiliary blocks the evidence
 /// does not determine.
-pub fn identify_with(
+pub(crate) fn identify_with(
     params: &DhParams,
     data: &DataSet,
     noise: &Noise,

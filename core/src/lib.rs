@@ -5,9 +5,44 @@
 //! Data flows one way: files → typed data set → kernel → residuals/metrics →
 //! solver → report; no module reaches back up that chain.
 //!
-//! The front door: a [`Request`] — read an arm and its touches, say what to
-//! fit and how as text and values, run it (the README's Rust example, run
-//! from the repository's root):
+//! # The front door
+//!
+//! A [`Problem`] — an arm, its touches (a [`DataSet`]) and what to fit
+//! ([`ModelOptions`]) — run with a solver's [`SolverSettings`] gives a
+//! [`CalibrationReport`]: the calibration, read by parameter
+//! ([`Calibration::estimate`]); the calibrated arm
+//! ([`CalibrationReport::calibrated_arm`]); and the verdict
+//! ([`session::Verdict`]), whose reasons ([`session::Reason`]) are data a
+//! program matches on, not sentences:
+//!
+//! ```
+//! use aacmm_core::session::Reason;
+//! use aacmm_core::simulate::{CampaignSettings, ErrorModel};
+//! use aacmm_core::{Arm, DhParams, FixSpec, Method, ModelOptions, Problem, SolverSettings, simulate};
+//!
+//! // An arm and its touches, from memory: here a campaign simulated on it.
+//! let nominal = Arm::without_limits("mine", DhParams::paper_nominal());
+//! let campaign = CampaignSettings { reference_lengths: 2, ..CampaignSettings::new(1, ErrorModel::Paper, 5, 6) };
+//! let data = simulate(&nominal, &campaign)?.data_set()?;
+//! let model = ModelOptions { fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6)?, ..ModelOptions::default() };
+//! let settings = SolverSettings { method: Method::Lm, ..SolverSettings::default() };
+//! let report = Problem::new(nominal, data, model)?.run(&settings)?;
+//! for reason in &report.verdict.reasons {
+//!     match reason {
+//!         Reason::ChiSquare { .. } => println!("the residuals and the stated noise disagree"),
+//!         other => println!("refused: {other:?}"),
+//!     }
+//! }
+//! assert!(report.is_usable(), "{:?}", report.verdict);
+//! let theta5 = report.calibration.estimate("theta5".parse()?).unwrap();
+//! println!("θ5 corrected by {:.4}°", theta5.correction.to_degrees());
+//! assert_eq!(report.calibrated_arm().unwrap().name, "mine-calibrated");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! From files, a [`Request`] reads the arm and its touches and takes what
+//! to fit and how as text and values, as the command line does (the
+//! README's Rust example, run from the repository's root):
 //!
 //! ```
 //! # std::env::set_current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/..")).unwrap();

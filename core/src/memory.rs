@@ -76,9 +76,9 @@ pub const fn data_set_bytes_per_touch(joints: usize, conditions: usize) -> usize
 )]
 pub struct OutOfMemory {
     /// What the memory was for (names the input that sized it).
-    pub what: String,
+    pub(crate) what: String,
     /// The bytes asked for (`usize::MAX` when the size itself overflowed).
-    pub bytes: usize,
+    pub(crate) bytes: usize,
 }
 
 impl OutOfMemory {
@@ -151,7 +151,7 @@ pub fn room_for(what: &str, bytes: usize) -> Result<(), OutOfMemory> {
 /// `lengths` reference lengths allocates beyond the data set: `per_touch`
 /// bytes a touch (e.g. [`WORK_BYTES_PER_TOUCH`]) and
 /// [`WORK_BYTES_PER_LENGTH`] a length, saturated at `usize::MAX`.
-pub fn work_bytes(touches: usize, lengths: usize, per_touch: usize) -> usize {
+pub(crate) fn work_bytes(touches: usize, lengths: usize, per_touch: usize) -> usize {
     (touches.saturating_mul(per_touch))
         .saturating_add(lengths.saturating_mul(WORK_BYTES_PER_LENGTH))
 }

@@ -45,7 +45,7 @@ impl JointKind {
 
     /// The unit of the joint's reading in files and reports: `deg` for a
     /// revolute joint, `mm` for a prismatic one (whatever the angle unit).
-    pub fn reading_unit(self) -> &'static str {
+    pub(crate) fn reading_unit(self) -> &'static str {
         match self {
             JointKind::Revolute => "deg",
             JointKind::Prismatic => "mm",
@@ -142,7 +142,7 @@ impl ChainShape {
 
     /// A shape from its joint count and its prismatic joints (bit `i` for
     /// joint `i`).
-    pub fn from_mask(joints: usize, prismatic: u16) -> Result<ChainShape, ShapeError> {
+    pub(crate) fn from_mask(joints: usize, prismatic: u16) -> Result<ChainShape, ShapeError> {
         if !(1..=MAX_JOINTS).contains(&joints) {
             return Err(ShapeError::Joints(joints));
         }
@@ -184,11 +184,6 @@ impl ChainShape {
     /// Whether joint `i` (0-based) is prismatic.
     pub fn is_prismatic(self, i: usize) -> bool {
         i < MAX_JOINTS && self.prismatic & (1 << i) != 0
-    }
-
-    /// Whether every joint is revolute.
-    pub fn is_revolute(self) -> bool {
-        self.prismatic == 0
     }
 
     /// Joint `i`'s kind.
@@ -332,7 +327,7 @@ impl DhJoint {
 
     /// The joint's d-slot parameter kind: [`ParamKind::D`] or, for a Hayati
     /// joint, [`ParamKind::Beta`].
-    pub fn slot_kind(&self) -> ParamKind {
+    pub(crate) fn slot_kind(&self) -> ParamKind {
         match self.model {
             JointModel::Dh => ParamKind::D,
             JointModel::Hayati => ParamKind::Beta,
@@ -371,7 +366,7 @@ impl ParamKind {
     }
 
     /// Whether the parameter sits in a joint's d-slot (`d` or Hayati `β`).
-    pub fn is_d_slot(self) -> bool {
+    pub(crate) fn is_d_slot(self) -> bool {
         matches!(self, ParamKind::D | ParamKind::Beta)
     }
 }
@@ -725,7 +720,7 @@ impl DhParams {
 
     /// Whether `id` is a parameter of this arm: in range, and `d…`/`hbeta…`
     /// only for a joint of that model.
-    pub fn has_param(&self, id: ParamId) -> bool {
+    pub(crate) fn has_param(&self, id: ParamId) -> bool {
         let n = self.joint_count();
         match id.kind {
             ParamKind::Probe => id.index < 3,
@@ -742,11 +737,6 @@ impl DhParams {
         name.parse::<ParamId>()
             .ok()
             .filter(|&id| self.has_param(id))
-    }
-
-    /// Whether any joint is [`JointModel::Hayati`].
-    pub fn has_hayati(&self) -> bool {
-        self.joints.iter().any(|j| j.model == JointModel::Hayati)
     }
 
     /// The models of the joints, base to probe.

@@ -58,8 +58,9 @@ pub use crate::io::{AngleUnit, Arm, LengthUnit, read_arm};
 pub use crate::metrics::evaluate;
 pub use crate::objective::Objective;
 pub use crate::params::{DhParams, ParamId};
+pub use crate::residuals::Role;
 pub use crate::residuals::{
-    At, Block, BlockId, Layout, Noise, Normal, Role, Sees, Shared, Term, TermError,
+    At, Block, BlockId, Layout, Noise, Normal, Sees, Shared, Term, TermError,
 };
 pub use crate::session::{CalibrationReport, Problem, Request};
 pub use crate::simulate::{Campaign, CampaignSettings, ErrorModel, simulate};

@@ -9,7 +9,7 @@ pub mod coverage;
 
 /// The `p` quantile of the χ² law with `nu > 0` degrees of freedom
 /// (Newton on [`gamma_p`] inside a bisection bracket, to 1e-12 relative).
-pub fn chi_square_quantile(p: f64, nu: f64) -> f64 {
+pub(crate) fn chi_square_quantile(p: f64, nu: f64) -> f64 {
     let a = nu / 2.0;
     quantile(nu, |x| (gamma_p(a, x / 2.0) - p, 1.0))
 }
@@ -38,7 +38,7 @@ pub fn chi_square_upper_quantile(alpha: f64, nu: usize) -> f64 {
 
 /// Median of `χ²₃` (the touches' law, kept as a constant so that their
 /// figures are the same bits whatever the quantile's iteration does).
-pub const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
+pub(crate) const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
 
 /// The median of the χ² law with `k ≥ 1` degrees of freedom: the law of a
 /// `k`-row observation's standardised squared residual.
@@ -57,7 +57,7 @@ pub fn chi_square_median(k: usize) -> f64 {
 }
 
 /// The density of the χ² law with `k ≥ 1` degrees of freedom at `x > 0`.
-pub fn chi_square_density(x: f64, k: usize) -> f64 {
+pub(crate) fn chi_square_density(x: f64, k: usize) -> f64 {
     let a = k.max(1) as f64 / 2.0;
     ((a - 1.0) * x.ln() - x / 2.0 - a * std::f64::consts::LN_2 - ln_gamma(a)).exp()
 }
@@ -103,12 +103,12 @@ fn quantile(nu: f64, f: impl Fn(f64) -> (f64, f64)) -> f64 {
 /// The regularised lower incomplete gamma function `P(a, x)`: its series
 /// below `x < a + 1`, the continued fraction (Lentz) above (Numerical
 /// Recipes §6.2).
-pub fn gamma_p(a: f64, x: f64) -> f64 {
+pub(crate) fn gamma_p(a: f64, x: f64) -> f64 {
     gamma_pq(a, x).0
 }
 
 /// `Q(a, x) = 1 − P(a, x)`, computed directly (the upper tail).
-pub fn gamma_q(a: f64, x: f64) -> f64 {
+pub(crate) fn gamma_q(a: f64, x: f64) -> f64 {
     gamma_pq(a, x).1
 }
 
@@ -181,7 +181,7 @@ pub fn chi_square_upper(x: f64, k: usize) -> f64 {
 }
 
 /// `P(χ²_k ≤ x)`, the lower tail.
-pub fn chi_square_lower(x: f64, k: usize) -> f64 {
+pub(crate) fn chi_square_lower(x: f64, k: usize) -> f64 {
     gamma_p(k.max(1) as f64 / 2.0, x / 2.0)
 }
 

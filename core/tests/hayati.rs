@@ -249,9 +249,7 @@ fn dh_model_shows_the_singularity() {
     )
     .unwrap();
     let sigma = |cal: &Calibration, name: &str| {
-        cal.parameters
-            .iter()
-            .find(|e| e.id.to_string() == name)
+        (cal.estimate(name.parse().unwrap()))
             .and_then(|e| e.sigma)
             .unwrap()
     };

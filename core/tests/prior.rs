@@ -151,11 +151,7 @@ fn a_direction_without_data_stays_at_nominal_with_the_prior_sigma() {
     )
     .unwrap();
     assert!(map.solver.successful, "{:?}", map.solver.stop);
-    let d1 = map
-        .parameters
-        .iter()
-        .find(|p| p.id.to_string() == "d1")
-        .unwrap();
+    let d1 = map.estimate("d1".parse().unwrap()).unwrap();
     assert!(d1.fixed.is_none());
     assert!(
         d1.correction.abs() < 1e-6,

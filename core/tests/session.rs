@@ -166,3 +166,46 @@ fn the_same_seed_gives_the_same_report_at_1_2_and_4_threads() {
     assert_eq!(one, report(2), "2 threads");
     assert_eq!(one, report(4), "4 threads");
 }
+
+/// The report answers by parameter and gives the calibrated arm on its own:
+/// a front end passes neither a name to search for nor the start arm back.
+#[test]
+fn a_report_looks_up_estimates_and_builds_the_calibrated_arm() {
+    use aacmm_core::{CalibrationReport, ParamId};
+    let mut start = nominal();
+    start.name = "mine".into();
+    let model = ModelOptions {
+        fix: FixSpec::parse("theta1,d1,theta6,alpha6,Bx,By", 6).unwrap(),
+        ..ModelOptions::default()
+    };
+    let settings = SolverSettings {
+        method: aacmm_core::Method::Lm,
+        ..SolverSettings::default()
+    };
+    let report = (Problem::new(start.clone(), small_data(), model).unwrap())
+        .run(&settings)
+        .unwrap();
+    let cal = &report.calibration;
+    let theta5: ParamId = "theta5".parse().unwrap();
+    let e = cal.estimate(theta5).unwrap();
+    assert_eq!(e.id, theta5);
+    assert!(
+        cal.estimate("theta1".parse().unwrap())
+            .unwrap()
+            .fixed
+            .is_some()
+    );
+    assert!(
+        cal.estimate("theta7".parse().unwrap()).is_none(),
+        "a sixth joint"
+    );
+    let arm = report.calibrated_arm().unwrap();
+    assert_eq!(arm.name, "mine-calibrated");
+    assert_eq!(arm.params, cal.params);
+    assert_eq!(arm, report.calibrated_arm_from(&start));
+    // Read back from calibration.json the start arm is not there: asked for
+    // by name, it is refused rather than guessed.
+    let back = CalibrationReport::from_json(&report.to_json()).unwrap();
+    assert!(back.calibrated_arm().is_none());
+    assert_eq!(back.calibrated_arm_from(&start).name, "mine-calibrated");
+}

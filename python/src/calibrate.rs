@@ -266,7 +266,10 @@ impl Calibration {
     /// limits).
     #[getter]
     fn arm(&self) -> PyResult<Arm> {
-        let arm: CoreArm = self.report.calibrated_arm(self.problem.arm());
+        // A run's report keeps its start arm (one read back from JSON does
+        // not, and never reaches Python).
+        let arm: CoreArm = (self.report.calibrated_arm())
+            .ok_or_else(|| Error::new(Kind::Internal, "internal: the report has no start arm"))?;
         Ok(Arm::new(arm, "<calibration>".to_string(), Vec::new())?)
     }
 

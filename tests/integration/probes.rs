@@ -140,7 +140,7 @@ fn two_probes_on_spheres_are_each_recovered() {
             (BALL, LONG_BALL)
         );
         assert!(report.summary().contains("\nlong "), "{}", report.summary());
-        let arm = report.calibrated_arm(&nominal());
+        let arm = report.calibrated_arm().unwrap();
         assert_eq!(arm.tools[0].offset, long.1, "seed {seed}");
         assert_eq!(arm.tools[0].ball_diameter_mm, Some(LONG_BALL));
     }

@@ -52,11 +52,7 @@ fn an_off_axis_ball_is_held_not_refused_as_a_mirror_image() {
         assert!(h.sigma_mm.unwrap() > 10.0, "{h:?}");
     }
     // Held, they stay at nominal; fitted freely, they would not.
-    let theta5 = c
-        .parameters
-        .iter()
-        .find(|e| e.id.to_string() == "theta5")
-        .unwrap();
+    let theta5 = c.estimate("theta5".parse().unwrap()).unwrap();
     assert!(theta5.correction.abs().to_degrees() < 0.1, "{theta5:?}");
     // Tolerances cover them: nothing is held, the prior regularises instead.
     let tolerant = ModelOptions {

@@ -34,7 +34,7 @@ pub enum FitStop {
 }
 
 /// Steps of the fit before it stops.
-pub const MAX_ITERATIONS: usize = 200;
+pub(crate) const MAX_ITERATIONS: usize = 200;
 
 /// Why there is no sphere.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -60,7 +60,7 @@ pub struct SphereFit {
     /// The radius, mm: fitted, or the held one.
     pub radius: f64,
     /// Whether the radius was held.
-    pub radius_held: bool,
+    pub(crate) radius_held: bool,
     /// Per point, `|p_i − c| − R`, mm, in the points' order.
     pub residuals: Vec<f64>,
     /// `σ̂ = sqrt(Σ r_i² / (n − p))`, mm; `None` without degrees of
@@ -68,22 +68,22 @@ pub struct SphereFit {
     pub sigma: Option<f64>,
     /// `(JᵀJ)⁻¹` of the unknowns `(c_x, c_y, c_z, R)` (the `R` row and
     /// column zero when held), mm² per mm² of σ: times `σ²` the covariance.
-    pub normal_inverse: [[f64; 4]; 4],
+    pub(crate) normal_inverse: [[f64; 4]; 4],
     /// Why the fit stopped.
     pub stop: FitStop,
     /// Steps taken.
-    pub iterations: usize,
+    pub(crate) iterations: usize,
 }
 
 impl SphereFit {
     /// The covariance of `(c_x, c_y, c_z, R)` at a point noise `sigma`, mm².
-    pub fn covariance(&self, sigma: f64) -> Matrix4<f64> {
+    pub(crate) fn covariance(&self, sigma: f64) -> Matrix4<f64> {
         Matrix4::from_fn(|i, j| self.normal_inverse[i][j]) * (sigma * sigma)
     }
 
     /// The fitted diameter's σ at the fit's own σ̂, mm (`0` with the radius
     /// held or without degrees of freedom).
-    pub fn diameter_sigma(&self) -> f64 {
+    pub(crate) fn diameter_sigma(&self) -> f64 {
         match (self.radius_held, self.sigma) {
             (false, Some(s)) => 2.0 * s * self.normal_inverse[3][3].max(0.0).sqrt(),
             _ => 0.0,
@@ -91,7 +91,7 @@ impl SphereFit {
     }
 
     /// The range of the radial residuals, mm: the form seen.
-    pub fn form(&self) -> f64 {
+    pub(crate) fn form(&self) -> f64 {
         let (lo, hi) = min_max(&self.residuals);
         hi - lo
     }

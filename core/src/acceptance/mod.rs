@@ -55,12 +55,12 @@ mod table;
 use serde::{Deserialize, Serialize};
 
 pub use compute::verify;
-pub use enclosing::{Ball, enclosing_ball};
-pub use fit::{FitError, FitStop, MAX_ITERATIONS, SphereFit, fit_sphere_ls};
+pub use enclosing::enclosing_ball;
+pub use fit::{FitError, SphereFit, fit_sphere_ls};
 pub use mpe::{Limit, Mpe, TestKind, parse_mpe};
+pub use predict::PredictionInfo;
 pub use predict::{
-    Calibrated, DEFAULT_DRAWS, Draws, MAX_DRAWS, Measured, PSD_TOLERANCE, PredictError,
-    PredictionInfo, ReadingNoise, predict,
+    Calibrated, DEFAULT_DRAWS, Draws, MAX_DRAWS, Measured, PredictError, ReadingNoise, predict,
 };
 
 use crate::error::{InputError, OptionError};
@@ -68,18 +68,18 @@ use crate::io::spheres::Spheres;
 
 /// Points a sphere placement needs for `P_Size` and `P_Form` (ISO
 /// 10360-12's 25-point pattern).
-pub const P_TEST_POINTS: usize = 25;
+pub(crate) const P_TEST_POINTS: usize = 25;
 /// Articulations of an `L_Dia` placement.
-pub const L_DIA_GROUPS: usize = 5;
+pub(crate) const L_DIA_GROUPS: usize = 5;
 
 /// The figures' names, as the standards name them.
 pub const P_SIZE: &str = "P_Size.Sph.1x25::Art";
 /// See [`P_SIZE`].
-pub const P_FORM: &str = "P_Form.Sph.1x25::Art";
+pub(crate) const P_FORM: &str = "P_Form.Sph.1x25::Art";
 /// See [`P_SIZE`].
-pub const L_DIA: &str = "L_Dia.5x5::Art";
+pub(crate) const L_DIA: &str = "L_Dia.5x5::Art";
 /// See [`P_SIZE`].
-pub const E_UNI: &str = "E_Uni::Art";
+pub(crate) const E_UNI: &str = "E_Uni::Art";
 /// See [`P_SIZE`].
 pub const SPAT: &str = "SPAT";
 
@@ -129,7 +129,7 @@ impl Decision {
     }
 
     /// As printed.
-    pub fn word(self) -> &'static str {
+    pub(crate) fn word(self) -> &'static str {
         match self {
             Decision::Pass => "PASS",
             Decision::Inconclusive => "INCONCLUSIVE",
@@ -205,7 +205,7 @@ impl TestResult {
 
 /// What each placement is used for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Use {
+pub(crate) enum Use {
     /// `P_Size` and `P_Form`.
     Probing,
     /// `L_Dia` (an articulation column with 5 groups).
@@ -222,13 +222,13 @@ pub struct Placement {
     /// Its first line in the sphere file.
     pub line: usize,
     /// What it is used for.
-    pub used_for: Use,
+    pub(crate) used_for: Use,
     /// Points.
     pub points: usize,
     /// The fit.
-    pub fit: SphereFit,
+    pub(crate) fit: SphereFit,
     /// The sphere's diameter seen, `2 (R_fit − r_ball)`, mm.
-    pub diameter: f64,
+    pub(crate) diameter: f64,
     /// `P_Size` and `P_Form` here (a probing placement's).
     pub tests: Vec<TestResult>,
 }
@@ -242,7 +242,7 @@ pub struct LDiaPlacement {
     /// centre, mm.
     pub centres: Vec<(u32, [f64; 3])>,
     /// The smallest sphere enclosing them: centre, mm.
-    pub enclosing_centre: [f64; 3],
+    pub(crate) enclosing_centre: [f64; 3],
     /// σ̂ pooled over the placement's points, mm.
     pub sigma: f64,
 }

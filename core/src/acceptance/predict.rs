@@ -73,7 +73,7 @@ pub const MAX_DRAWS: usize = 100_000;
 const CHUNK: usize = 8;
 /// A negative eigenvalue of `Σ` within this fraction of the largest is
 /// rounding, clamped to zero; beyond it `Σ` is refused.
-pub const PSD_TOLERANCE: f64 = 1e-9;
+pub(crate) const PSD_TOLERANCE: f64 = 1e-9;
 
 /// The noise of each reading, internal units.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -145,7 +145,7 @@ pub struct PredictionInfo {
     /// The seed.
     pub seed: u64,
     /// Free parameters drawn.
-    pub free_parameters: usize,
+    pub(crate) free_parameters: usize,
     /// The readings' noise drawn.
     pub noise: ReadingNoise,
 }

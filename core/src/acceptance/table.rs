@@ -19,7 +19,7 @@ impl Acceptance {
 
     /// The outcome in one line: accepted, not accepted (and why), or
     /// nothing decided.
-    pub fn outcome(&self) -> String {
+    pub(crate) fn outcome(&self) -> String {
         if !self.decided() {
             return "\nNo MPE stated (--mpe): the figures above are printed, nothing is decided \
                     (PASS, FAIL or INCONCLUSIVE needs an MPE).\n"

@@ -214,22 +214,22 @@ impl AnnealStop {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AnnealStep {
     /// Temperature, mm.
-    pub temperature: f64,
+    pub(crate) temperature: f64,
     /// Energy of the current state after the chain, mm.
-    pub energy: f64,
+    pub(crate) energy: f64,
     /// Best energy so far, mm.
     pub best: f64,
     /// Fraction of the chain's moves accepted.
-    pub acceptance: f64,
+    pub(crate) acceptance: f64,
 }
 
 /// The account of an annealing run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AnnealTrace {
     /// Settings.
-    pub options: AnnealOptions,
+    pub(crate) options: AnnealOptions,
     /// The switching rule, if the hybrid ran.
-    pub switch_rule: Option<SwitchRule>,
+    pub(crate) switch_rule: Option<SwitchRule>,
     /// Why it stopped.
     pub stop: AnnealStop,
     /// Energy of the start, mm.
@@ -237,7 +237,7 @@ pub struct AnnealTrace {
     /// Best energy, mm.
     pub best_energy: f64,
     /// Energy evaluations.
-    pub evaluations: usize,
+    pub(crate) evaluations: usize,
     /// One entry per temperature.
     pub temperatures: Vec<AnnealStep>,
 }

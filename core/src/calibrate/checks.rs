@@ -26,6 +26,7 @@ pub(crate) const TWIST_TOLERANCE_DEG: f64 = 15.0;
 /// A free parameter (or a combination of the last link's) that moved
 /// implausibly far from nominal.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct GrossCorrection {
     /// The parameter's name, or the last link's combination
     /// (`probe radius about axis 6`, `probe height along axis 6`).
@@ -37,7 +38,7 @@ pub struct GrossCorrection {
     /// Calibrated value, in `unit`.
     pub calibrated: f64,
     /// The largest move accepted, in `unit`.
-    pub tolerance: f64,
+    pub(crate) tolerance: f64,
 }
 
 impl GrossCorrection {
@@ -156,11 +157,12 @@ pub fn gross_corrections(
 /// The χ² test of the fit under stated noise: is `Σr²` what `dof` degrees
 /// of freedom of residuals at the stated noise give?
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct ChiSquare {
     /// `Σr²` (weighted cost).
-    pub statistic: f64,
+    pub(crate) statistic: f64,
     /// Degrees of freedom.
-    pub dof: usize,
+    pub(crate) dof: usize,
     /// `P(χ²_dof ≥ statistic)`: small when the residuals are larger than
     /// the noise explains.
     pub p_upper: f64,
@@ -295,6 +297,7 @@ impl ChiSquare {
 /// A touch (or other observation) whose residual the noise model does not
 /// explain.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Outlier {
     /// Where it was read: `file:line`.
     pub at: String,
@@ -315,7 +318,7 @@ pub struct Outlier {
 impl Outlier {
     /// What it is, in words: a `touch` or `position` (by `noun`, the data's
     /// own word), or its kind.
-    pub fn noun<'a>(&'a self, noun: &'a str) -> &'a str {
+    pub(crate) fn noun<'a>(&'a self, noun: &'a str) -> &'a str {
         self.kind.as_deref().unwrap_or(noun)
     }
 }
@@ -328,6 +331,7 @@ impl Outlier {
 /// the list keeps to the named touches it weighs below
 /// [`super::robust::DOWNWEIGHTED`].
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct OutlierScreen {
     /// The robust refit's loss.
     pub loss: super::robust::Loss,
@@ -337,14 +341,14 @@ pub struct OutlierScreen {
     /// `sigma0`): far below `sigma0` when the touches it weighs down are
     /// what made the plain fit's residuals large; about `sigma0` when
     /// every residual is large (a wrong minimum, a wrong model).
-    pub scale: f64,
+    pub(crate) scale: f64,
 }
 
 impl OutlierScreen {
     /// Whether the touches the screen weighs down explain the plain fit's
     /// misfit: without them the residuals' scale is less than half the
     /// plain fit's `sigma0`.
-    pub fn explains(&self, sigma0: f64) -> bool {
+    pub(crate) fn explains(&self, sigma0: f64) -> bool {
         self.scale.is_finite() && self.scale < sigma0 / 2.0
     }
 }
@@ -412,6 +416,7 @@ pub(crate) fn outliers(
 /// along a single direction, where the 95 % radii are `2.80 σ` and
 /// `1.96 σ`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct PositionUncertainty {
     /// Probability each radius covers (0.95).
     pub coverage: f64,
@@ -424,7 +429,7 @@ pub struct PositionUncertainty {
     /// A single touch's own scatter at the same coverage: the 95 % radius
     /// of an isotropic 3-D error of the touch's σ per coordinate,
     /// `2.7955·σ_touch`, mm: what the arm's uncertainty is compared with.
-    pub touch_mm: f64,
+    pub(crate) touch_mm: f64,
 }
 
 impl PositionUncertainty {
@@ -432,7 +437,7 @@ impl PositionUncertainty {
     /// single measurement's scatter (`sqrt(1 + (U/T)²) > 1.05`, i.e. `U`
     /// above a third of a touch's `T`, both 95 % radii): the data, not the
     /// noise, limit the arm.
-    pub fn weak(&self) -> bool {
+    pub(crate) fn weak(&self) -> bool {
         self.rms_mm > WEAK_FRACTION * self.touch_mm
     }
 

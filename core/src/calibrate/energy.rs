@@ -17,7 +17,7 @@ pub struct Energy {
     xyz: Vec<[f64; 3]>,
     centroids: Vec<[f64; 3]>,
     /// Energy evaluations so far.
-    pub evaluations: usize,
+    pub(crate) evaluations: usize,
 }
 
 impl Energy {

@@ -154,7 +154,7 @@ impl GlobalStop {
     }
 
     /// Whether the minimum is confirmed.
-    pub fn confirmed(self) -> bool {
+    pub(crate) fn confirmed(self) -> bool {
         !matches!(self, GlobalStop::StartBudget)
     }
 }
@@ -163,35 +163,35 @@ impl GlobalStop {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct GlobalTrace {
     /// Settings.
-    pub options: GlobalOptions,
+    pub(crate) options: GlobalOptions,
     /// Why it stopped.
     pub stop: GlobalStop,
     /// The zero offsets searched on their circles.
-    pub circles: Vec<String>,
+    pub(crate) circles: Vec<String>,
     /// Angles per circle of the grid (0 when the start sufficed).
-    pub grid_angles: usize,
+    pub(crate) grid_angles: usize,
     /// Cost of each start's minimum, in order (the first from the start
     /// arm, then the grid candidates, then random starts), with the weights
     /// at that minimum.
     pub minima: Vec<f64>,
     /// Grid cells refined (after the start arm).
-    pub grid_starts: usize,
+    pub(crate) grid_starts: usize,
     /// Random starts refined (after the grid).
-    pub random_starts: usize,
+    pub(crate) random_starts: usize,
     /// Restarts from the nominal geometry with the zeros of a mirror-image
     /// minimum (after the random starts).
-    pub twin_restarts: usize,
+    pub(crate) twin_restarts: usize,
     /// Starts that reached the lowest cost.
     pub best_hits: usize,
     /// Of `best_hits`, those whose minimum agreed with the lowest at the
     /// fit's noise level only (cost within `cost/dof`, arm within its
     /// joint uncertainty), not to LM's convergence.
     #[serde(default, skip_serializing_if = "is_zero")]
-    pub noise_level_hits: usize,
+    pub(crate) noise_level_hits: usize,
     /// The noise-floor cost, when the noise is stated.
     pub noise_floor_cost: Option<f64>,
     /// Parameters whose sign was changed to the nominal convention.
-    pub sign_changes: Vec<String>,
+    pub(crate) sign_changes: Vec<String>,
 }
 
 /// Two costs from one minimum (equal within LM's convergence).

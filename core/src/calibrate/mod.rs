@@ -56,13 +56,14 @@ use crate::error::OptionError;
 use crate::setting::Setting;
 pub use anneal::{AnnealOptions, AnnealStep, AnnealStop, AnnealTrace, SwitchRule};
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
+pub use lm::LmIteration;
 pub(crate) use lm::LmResult;
-pub use lm::{LmIteration, LmOptions, Termination};
+pub use lm::{LmOptions, Termination};
 pub use options::{
     DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads,
     check_threads,
 };
-pub use prior::{CarriedTolerance, PriorConditioning, PriorEstimate, PriorReport};
+pub use prior::{PriorConditioning, PriorReport};
 pub use robust::{Loss, Robust, RobustFit};
 pub use solver::{Anneal, Cancel, Context, Global, Lm, Outcome, Solver, Stop, Task};
 
@@ -308,13 +309,14 @@ impl Method {
 /// Work and time of one phase of a solver. The time is not serialised, so
 /// that the same seed gives the same `calibration.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Phase {
     /// What ran: `anneal`, `lm`, `circle sweeps`, …
     pub name: String,
     /// Cost or energy evaluations (positions only).
-    pub cost_evaluations: usize,
+    pub(crate) cost_evaluations: usize,
     /// Jacobian evaluations.
-    pub jacobian_evaluations: usize,
+    pub(crate) jacobian_evaluations: usize,
     /// Wall time, s.
     #[serde(skip)]
     pub seconds: f64,
@@ -343,6 +345,7 @@ impl Phase {
 /// converts degrees to radians (exact to the last bit or two).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(into = "EstimateRecord", try_from = "EstimateRecord")]
+#[non_exhaustive]
 pub struct Estimate {
     /// The parameter.
     pub id: ParamId,
@@ -382,15 +385,18 @@ impl Estimate {
     /// The estimate in user units.
     ///
     /// ```
-    /// use aacmm_core::calibrate::Estimate;
-    /// use aacmm_core::params::{ParamId, ParamKind};
-    /// let e = Estimate {
-    ///     id: ParamId { kind: ParamKind::Theta, index: 1 },
-    ///     nominal: 0.0, calibrated: std::f64::consts::FRAC_PI_2, correction: std::f64::consts::FRAC_PI_2,
-    ///     sigma: None, fixed: None,
-    /// };
+    /// use aacmm_core::calibrate::{Estimate, EstimateRecord};
+    /// // Only the library makes an `Estimate` (`#[non_exhaustive]`); one
+    /// // read back from a record (as from `calibration.json`) is in rad:
+    /// let e = Estimate::try_from(EstimateRecord {
+    ///     name: "theta2".into(), unit: "deg".into(),
+    ///     nominal: 0.0, calibrated: 90.0, correction: 90.0, sigma: None, fixed: None,
+    /// })?;
+    /// assert!((e.calibrated - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
     /// let r = e.user();
-    /// assert_eq!((r.name.as_str(), r.unit.as_str(), r.calibrated), ("theta2", "deg", 90.0));
+    /// assert_eq!((r.name.as_str(), r.unit.as_str()), ("theta2", "deg"));
+    /// assert!((r.calibrated - 90.0).abs() < 1e-12);
+    /// # Ok::<(), String>(())
     /// ```
     pub fn user(&self) -> EstimateRecord {
         let u = |v: f64| self.id.to_user(v);
@@ -439,6 +445,7 @@ impl TryFrom<EstimateRecord> for Estimate {
 
 /// An auxiliary block's column as estimated, in the unit users see.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct AuxiliaryEstimate {
     /// Its name (`tracker.tx`).
     pub name: String,
@@ -472,11 +479,12 @@ pub struct TermRows {
     /// Its residual rows.
     pub rows: usize,
     /// Unknowns it eliminates.
-    pub eliminated: usize,
+    pub(crate) eliminated: usize,
 }
 
 /// Residual and unknown counts, and the a-posteriori variance factor.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Dof {
     /// Touch residual rows (3 per touch).
     pub touch_rows: usize,
@@ -522,6 +530,7 @@ fn is_zero(n: &usize) -> bool {
 
 /// The solver's account of itself.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct SolverSummary {
     /// The method that ran.
     pub method: Method,
@@ -543,7 +552,7 @@ pub struct SolverSummary {
     /// Cost per iteration of the final fit.
     pub history: Vec<LmIteration>,
     /// The tolerances.
-    pub options: LmOptions,
+    pub(crate) options: LmOptions,
     /// Work per phase, in order.
     pub phases: Vec<Phase>,
     /// The annealing (`sa`, `hybrid`).
@@ -561,6 +570,7 @@ impl SolverSummary {
 
 /// The correlation matrix of the free parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct CorrelationMatrix {
     /// The free parameters' names, in column order.
     pub parameters: Vec<String>,
@@ -570,6 +580,7 @@ pub struct CorrelationMatrix {
 
 /// The checks a metrologist makes before signing off ([`checks`]).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Checks {
     /// Free parameters moved implausibly far from nominal: a mirror image
     /// of the arm, a collapsed arm, or a unit mistake. Empty when the arm is
@@ -586,7 +597,7 @@ pub struct Checks {
     /// beyond `outlier_threshold`), largest first.
     pub outliers: Vec<checks::Outlier>,
     /// The threshold of the outlier test, in σ of a touch.
-    pub outlier_threshold: f64,
+    pub(crate) outlier_threshold: f64,
     /// When a plain fit named more than one touch, the robust refit that
     /// screened the list (`outliers` then keeps to the touches it weighs
     /// down); `None` otherwise.
@@ -597,8 +608,10 @@ pub struct Checks {
     pub position_uncertainty: Option<checks::PositionUncertainty>,
 }
 
-/// What [`calibrate`] returns.
+/// What [`calibrate`] returns: read it through its fields and accessors
+/// ([`Calibration::estimate`]); only the library builds one.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Calibration {
     /// The calibrated geometry (mm, rad; zero offsets wrapped to ±π):
     /// `parameters`' calibrated values (rebuilt from them when read back).
@@ -612,13 +625,13 @@ pub struct Calibration {
     /// a revolute arm's JSON is what it always was and the chain read back
     /// ([`Calibration::restore_params`]) is the one fitted.
     #[serde(default, skip_serializing_if = "all_revolute")]
-    pub joint_types: Vec<JointKind>,
+    pub(crate) joint_types: Vec<JointKind>,
     /// Per column of the auxiliary blocks (a frame, a scalar), in the
     /// layout's order; absent when there is none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub auxiliary: Vec<AuxiliaryEstimate>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
-    pub correlations: Vec<Correlation>,
+    pub(crate) correlations: Vec<Correlation>,
     /// Every correlation of the free parameters.
     pub correlation_matrix: CorrelationMatrix,
     /// Counts and the variance factor.
@@ -650,6 +663,12 @@ pub struct Calibration {
 }
 
 impl Calibration {
+    /// Parameter `id`'s estimate: `None` when the arm has no such parameter
+    /// (a joint beyond its count, the `d` of a Hayati joint).
+    pub fn estimate(&self, id: ParamId) -> Option<&Estimate> {
+        self.parameters.iter().find(|e| e.id == id)
+    }
+
     /// The free geometry's columns (of the `4n + 3`) and their covariance
     /// (mm, rad): the parameters' σ with the correlation matrix. `None`
     /// without a free parameter, or with one whose σ is not finite.
@@ -769,7 +788,7 @@ impl Calibration {
     /// geometry's columns, then each auxiliary column's calibrated value
     /// back in internal units (a column not reported keeps its start):
     /// what a term is evaluated at after the fit.
-    pub fn point_in(&self, layout: &crate::residuals::Layout) -> Vec<f64> {
+    pub(crate) fn point_in(&self, layout: &crate::residuals::Layout) -> Vec<f64> {
         let mut x = layout.start();
         let g = layout.geometry_columns();
         x[..g].copy_from_slice(&self.params.to_vec()[..g]);
@@ -932,7 +951,7 @@ impl Calibration {
     /// Restores [`Calibration::params`] from the estimates, after reading a
     /// calibration back from JSON: each value to the parameter it names (a
     /// joint with an `hbeta…` is a Hayati joint).
-    pub fn restore_params(&mut self) {
+    pub(crate) fn restore_params(&mut self) {
         if let Some(mut p) =
             DhParams::from_named(self.parameters.iter().map(|e| (e.id, e.calibrated)))
         {

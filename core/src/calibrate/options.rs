@@ -162,7 +162,7 @@ impl FixSpec {
 
     /// [`FixSpec::describe`] with `arm`'s names (`hbeta…` for a Hayati
     /// joint's d-slot).
-    pub fn describe_for(&self, arm: &crate::params::DhParams) -> String {
+    pub(crate) fn describe_for(&self, arm: &crate::params::DhParams) -> String {
         match self {
             FixSpec::Auto => "auto".to_string(),
             FixSpec::Columns(c) => c
@@ -398,11 +398,6 @@ impl SolverSettings {
     /// These settings with `method`.
     pub fn with_method(self, method: Method) -> SolverSettings {
         SolverSettings { method, ..self }
-    }
-
-    /// These settings on `threads` threads.
-    pub fn with_threads(self, threads: usize) -> SolverSettings {
-        SolverSettings { threads, ..self }
     }
 
     /// These settings with `seed`.

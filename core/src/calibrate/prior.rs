@@ -57,7 +57,7 @@ pub struct PriorEstimate {
     pub data_share: f64,
     /// `(calibrated − nominal) / tolerance`: how far the data moved it, in
     /// tolerances.
-    pub shift: f64,
+    pub(crate) shift: f64,
 }
 
 /// A stated tolerance of a parameter `fix = auto` holds as redundant,
@@ -199,7 +199,7 @@ impl PriorReport {
     /// A note when the data contradict the tolerances: the prior's cost
     /// above `rows + 3·sqrt(2·rows)` (its χ² expectation plus three
     /// standard deviations), naming the parameter moved farthest.
-    pub fn conflict(&self) -> Option<String> {
+    pub(crate) fn conflict(&self) -> Option<String> {
         let rows = self.rows as f64;
         if self.rows == 0 || self.cost <= rows + 3.0 * (2.0 * rows).sqrt() {
             return None;
@@ -228,7 +228,7 @@ impl PriorReport {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PriorConditioning {
     /// The tolerances, in words.
-    pub tolerances: String,
+    pub(crate) tolerances: String,
     /// Parameters with a tolerance.
     pub parameters_with_tolerance: usize,
     /// Parameters in all.
@@ -273,7 +273,7 @@ pub fn conditioning(
 /// # Errors
 ///
 /// As [`conditioning`]; the terms' refusals.
-pub fn conditioning_with(
+pub(crate) fn conditioning_with(
     params: &DhParams,
     evidence: crate::identify::Evidence<'_>,
     noise: &crate::residuals::Noise,

@@ -305,7 +305,7 @@ impl RobustFit {
     }
 
     /// The scale test in words (`None` without stated noise).
-    pub fn describe_scale(&self) -> Option<String> {
+    pub(crate) fn describe_scale(&self) -> Option<String> {
         let (v, up, lo) = (self.verdict?, self.p_upper?, self.p_lower?);
         let head = format!(
             "robust {} fit, scale {:.3} of the stated noise (median test, P above {:.3}, below \

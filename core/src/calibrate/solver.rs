@@ -23,7 +23,7 @@ use crate::random::{rng, streams};
 use crate::residuals::Normal;
 
 /// Told `(phase, fraction done)` as a solver runs.
-pub type Observer<'a> = &'a mut dyn FnMut(&str, f64);
+pub(crate) type Observer<'a> = &'a mut dyn FnMut(&str, f64);
 
 /// What a solver reports to while it runs, and what may stop it: an
 /// observer told the phase running and the fraction of it done (for a
@@ -62,7 +62,7 @@ impl<'a> Context<'a> {
     }
 
     /// Tells the observer that `fraction` of `phase` is done.
-    pub fn observe(&mut self, phase: &str, fraction: f64) {
+    pub(crate) fn observe(&mut self, phase: &str, fraction: f64) {
         if let Some(o) = self.observer.as_mut() {
             o(phase, fraction);
         }
@@ -79,7 +79,7 @@ impl<'a> Context<'a> {
 
     /// The cancellation token, if one was given: what the calibrations a
     /// run makes of its own (the folds) check too.
-    pub fn cancel_token(&self) -> Option<&Cancel> {
+    pub(crate) fn cancel_token(&self) -> Option<&Cancel> {
         self.cancel.as_ref()
     }
 }
@@ -266,15 +266,15 @@ pub struct Outcome {
     /// Why it stopped.
     pub stop: Stop,
     /// Iterations of the final LM (0 without one).
-    pub iterations: usize,
+    pub(crate) iterations: usize,
     /// Cost per iteration of the final LM.
-    pub history: Vec<LmIteration>,
+    pub(crate) history: Vec<LmIteration>,
     /// Work per phase, in order.
-    pub phases: Vec<Phase>,
+    pub(crate) phases: Vec<Phase>,
     /// The annealing's account (`sa`, `hybrid`).
     pub anneal: Option<AnnealTrace>,
     /// The global search's account.
-    pub global: Option<GlobalTrace>,
+    pub(crate) global: Option<GlobalTrace>,
     /// The normal equations at `params` under the task's weights.
     pub(crate) normal: Normal,
 }
@@ -343,7 +343,7 @@ pub struct Lm;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Anneal {
     /// Switch to LM by the paper's rule.
-    pub hybrid: bool,
+    pub(crate) hybrid: bool,
 }
 
 /// Converges from encoder zeros unknown in ±180° ([`super::global`]).

@@ -44,7 +44,7 @@ pub struct Effects {
 }
 
 /// Why the corrections cannot be applied to a set of poses.
-pub type EffectsError = String;
+pub(crate) type EffectsError = String;
 
 /// A pose set's conditions as the corrections need them: per pose the
 /// temperature from the reference (K) and the time from the first (h).
@@ -164,7 +164,13 @@ impl Effects {
     /// corrected pose, position `pos`), then the corrections' — the layout's
     /// order when the correction block is its first.
     #[inline(always)]
-    pub fn extend(&self, i: usize, pos: &[f64; 3], jac: &[[f64; 3]], out: &mut Vec<[f64; 3]>) {
+    pub(crate) fn extend(
+        &self,
+        i: usize,
+        pos: &[f64; 3],
+        jac: &[[f64; 3]],
+        out: &mut Vec<[f64; 3]>,
+    ) {
         self.extend_rows(i, pos, jac, out);
     }
 
@@ -172,7 +178,13 @@ impl Effects {
     /// rows, then rotation rows): a joint's correction turns the tool as
     /// the joint does; an expansion and a drift move its position only.
     #[inline(always)]
-    pub fn extend_pose(&self, i: usize, pos: &[f64; 3], jac: &[[f64; 6]], out: &mut Vec<[f64; 6]>) {
+    pub(crate) fn extend_pose(
+        &self,
+        i: usize,
+        pos: &[f64; 3],
+        jac: &[[f64; 6]],
+        out: &mut Vec<[f64; 6]>,
+    ) {
         self.extend_rows(i, pos, jac, out);
     }
 

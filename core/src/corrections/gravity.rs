@@ -21,7 +21,7 @@ use super::{Mass, Physics};
 use crate::params::{DhJoint, DhParams, JointKind, JointModel};
 
 /// Standard gravity, m/s².
-pub const STANDARD_GRAVITY: f64 = 9.80665;
+pub(crate) const STANDARD_GRAVITY: f64 = 9.80665;
 
 /// A rigid transform: rotation (rows) and translation, mm.
 #[derive(Clone, Copy)]
@@ -143,7 +143,7 @@ impl Link {
 
 /// Gravity `g` (m/s², in the base frame) of `physics`: its stated
 /// direction scaled to [`STANDARD_GRAVITY`], else −z.
-pub fn gravity_vector(physics: &Physics) -> [f64; 3] {
+pub(crate) fn gravity_vector(physics: &Physics) -> [f64; 3] {
     let dir = physics.gravity.unwrap_or([0.0, 0.0, -1.0]);
     let norm = dot(&dir, &dir).sqrt();
     dir.map(|v| STANDARD_GRAVITY * v / norm)
@@ -152,7 +152,7 @@ pub fn gravity_vector(physics: &Physics) -> [f64; 3] {
 /// An arm's chain and masses, prepared once for the gravity torques of
 /// many poses.
 #[derive(Clone, Debug)]
-pub struct Loads {
+pub(crate) struct Loads {
     links: Vec<Link>,
     probe: [f64; 3],
     masses: Vec<Option<Mass>>,
@@ -177,7 +177,12 @@ impl Loads {
     /// joint's reading, mm, as `cq(j)`). A prismatic joint's entry is the
     /// gravity force along its axis, N (what presses a slide's flank: its
     /// backlash follows it; the compliance model refuses slides).
-    pub fn torques(&self, cq: impl Fn(usize) -> f64, sq: impl Fn(usize) -> f64, out: &mut [f64]) {
+    pub(crate) fn torques(
+        &self,
+        cq: impl Fn(usize) -> f64,
+        sq: impl Fn(usize) -> f64,
+        out: &mut [f64],
+    ) {
         let n = self.links.len();
         // Frames o_0..o_n (origins and the z axes of 0..n−1) and the
         // masses' centres, base to tip.
@@ -230,7 +235,8 @@ impl Loads {
 /// Gravity torque about each joint's axis at readings `q` (rad; mm for a
 /// prismatic joint), N·m (a slide's: the force along it, N), into `out` (one per joint): [`Loads::torques`]
 /// of one pose.
-pub fn torques(arm: &DhParams, physics: &Physics, q: &[f64], out: &mut [f64]) {
+#[cfg(test)]
+pub(crate) fn torques(arm: &DhParams, physics: &Physics, q: &[f64], out: &mut [f64]) {
     let loads = Loads::new(arm, physics);
     let slides = |j: usize| arm.joints[j].kind == JointKind::Prismatic;
     let cq = |j: usize| if slides(j) { q[j] } else { q[j].cos() };

@@ -148,7 +148,7 @@ impl Physics {
     }
 
     /// Whether any mass is stated.
-    pub fn has_masses(&self) -> bool {
+    pub(crate) fn has_masses(&self) -> bool {
         self.probe_mass.is_some() || self.link_masses.iter().any(Option::is_some)
     }
 
@@ -172,7 +172,7 @@ impl Physics {
     }
 
     /// The reference temperature, °C.
-    pub fn reference_c(&self) -> f64 {
+    pub(crate) fn reference_c(&self) -> f64 {
         self.reference_temperature_c
             .unwrap_or(REFERENCE_TEMPERATURE_C)
     }
@@ -181,7 +181,7 @@ impl Physics {
     /// [`crate::residuals::CorrectionBlock`]'s columns, internal units) of
     /// the models `fit` in place of the stated ones, for an arm of `joints`
     /// joints.
-    pub fn with_fitted(&self, fit: &Beyond, values: &[f64], joints: usize) -> Physics {
+    pub(crate) fn with_fitted(&self, fit: &Beyond, values: &[f64], joints: usize) -> Physics {
         let mut out = self.clone();
         if !fit.compliance.is_empty() {
             out.compliance.resize(joints, None);
@@ -222,7 +222,7 @@ impl Physics {
 
     /// The stated values of the models `fit` estimates, as the block's
     /// start (internal units): what a fit starts from.
-    pub fn start_of(&self, fit: &Beyond) -> Vec<f64> {
+    pub(crate) fn start_of(&self, fit: &Beyond) -> Vec<f64> {
         let harmonic =
             |j: usize, k: u32| (self.harmonics.iter()).find(|h| (h.joint, h.order) == (j, k));
         (fit.columns().into_iter())
@@ -436,7 +436,7 @@ impl Beyond {
     ///
     /// The first model its inputs cannot support, by its field, with what
     /// to add.
-    pub fn check_inputs(
+    pub(crate) fn check_inputs(
         &self,
         physics: &Physics,
         sets: &[(String, Conditions<'_>)],

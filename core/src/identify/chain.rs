@@ -131,7 +131,7 @@ pub struct KinematicRank {
     /// Singular values of the scaled Jacobian, descending.
     pub singular_values: Vec<f64>,
     /// `1e-7 × s_max`.
-    pub threshold: f64,
+    pub(crate) threshold: f64,
     /// Singular values above the threshold: the identifiable combinations
     /// of the arm, the frame and the tool rotation together.
     pub rank: usize,

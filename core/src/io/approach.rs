@@ -31,7 +31,7 @@
 use crate::error::{InputError, quoted};
 
 /// The column's name in a header.
-pub const APPROACH: &str = "approach";
+pub(crate) const APPROACH: &str = "approach";
 
 /// Appends the directions of one cell `cell` (a row of `joints` joints) to
 /// `out` as `+1`, `−1` or `0` (not known); on an error `out` is as it was.

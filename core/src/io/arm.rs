@@ -106,10 +106,10 @@ pub struct Arm {
 
 /// The largest probe ball an arm file may state, mm: a stylus ball is
 /// 0.5–8 mm, a tracker's target 38.1 mm (1.5 in).
-pub const MAX_BALL_DIAMETER_MM: f64 = 100.0;
+pub(crate) const MAX_BALL_DIAMETER_MM: f64 = 100.0;
 /// The smallest, mm: below it the value was most likely written in metres
 /// (a 6 mm ball as `0.006`); the field is in mm whatever `length_unit` says.
-pub const MIN_BALL_DIAMETER_MM: f64 = 0.1;
+pub(crate) const MIN_BALL_DIAMETER_MM: f64 = 0.1;
 
 impl Arm {
     /// An arm without joint limits.
@@ -185,7 +185,7 @@ pub fn parse_arm(text: &str, file: &str) -> Result<(Arm, Vec<Warning>), InputErr
 
 /// [`parse_arm`], with a file whose `[verdict]` says NOT usable refused or
 /// read with a warning ([`super::verdict`]).
-pub fn parse_arm_with(
+pub(crate) fn parse_arm_with(
     text: &str,
     file: &str,
     rejected: Rejected,

@@ -37,7 +37,7 @@
 
 pub mod approach;
 pub mod arm;
-pub mod atomic;
+pub(crate) mod atomic;
 pub mod columns;
 pub mod frames;
 mod labels;
@@ -50,13 +50,13 @@ pub mod prior;
 pub mod spheres;
 pub(crate) mod text;
 pub mod tools;
-pub mod units;
+pub(crate) mod units;
 pub mod verdict;
 
 use std::fmt;
 
 pub use crate::error::InputError;
-pub use arm::{Arm, arm_to_toml, parse_arm, parse_arm_with, read_arm, read_arm_with, write_arm};
+pub use arm::{Arm, arm_to_toml, parse_arm, read_arm, read_arm_with, write_arm};
 pub use atomic::{write_atomic, write_atomic_with};
 pub use columns::JointColumns;
 pub use lengths::{

@@ -126,7 +126,7 @@ impl Poses {
     }
 
     /// Per row, the temperature (°C), when recorded.
-    pub fn temperatures(&self) -> Option<&[f64]> {
+    pub(crate) fn temperatures(&self) -> Option<&[f64]> {
         self.temperature.as_deref()
     }
 
@@ -270,7 +270,7 @@ impl Poses {
     }
 
     /// Whether some row names a tool other than the default.
-    pub fn has_tools(&self) -> bool {
+    pub(crate) fn has_tools(&self) -> bool {
         self.tool_of
             .as_ref()
             .is_some_and(|t| t.iter().any(|&k| k != 0))
@@ -415,7 +415,7 @@ impl Poses {
     }
 
     /// The label of point `p` (an index into [`Poses::points`]).
-    pub fn point_label(&self, p: usize) -> &str {
+    pub(crate) fn point_label(&self, p: usize) -> &str {
         self.points.get(p)
     }
 

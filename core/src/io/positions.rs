@@ -134,7 +134,7 @@ impl Positions {
 
     /// Records the last row's temperature (°C) and time (s); a column is
     /// kept only when every row has it (the reader's rule).
-    pub fn record(&mut self, temperature: Option<f64>, time: Option<f64>) {
+    pub(crate) fn record(&mut self, temperature: Option<f64>, time: Option<f64>) {
         let n = self.len();
         for (column, v) in [(&mut self.temperature, temperature), (&mut self.time, time)] {
             match v {
@@ -155,7 +155,7 @@ impl Positions {
     ///
     /// # Panics
     /// If `signs` has another joint count than the rows.
-    pub fn record_approach(&mut self, signs: Option<&[i8]>) {
+    pub(crate) fn record_approach(&mut self, signs: Option<&[i8]>) {
         let n = self.len();
         match signs {
             Some(s) if n == 1 => self.approach = Some(s.to_vec()),
@@ -191,7 +191,7 @@ impl Positions {
     }
 
     /// Per row, the temperature (°C), when recorded.
-    pub fn temperatures(&self) -> Option<&[f64]> {
+    pub(crate) fn temperatures(&self) -> Option<&[f64]> {
         self.temperature.as_deref()
     }
 
@@ -352,7 +352,7 @@ impl Positions {
     ///
     /// # Panics
     /// If there is no row.
-    pub fn set_orientation(&mut self, q: Option<[f64; 4]>) {
+    pub(crate) fn set_orientation(&mut self, q: Option<[f64; 4]>) {
         *self.orientation.last_mut().expect("a row to orient") = q;
     }
 
@@ -369,7 +369,7 @@ impl Positions {
 
     /// Row `i`'s orientation seen (`[w, x, y, z]`, the tool frame in the
     /// row's frame), when the row gives one.
-    pub fn orientation(&self, i: usize) -> Option<[f64; 4]> {
+    pub(crate) fn orientation(&self, i: usize) -> Option<[f64; 4]> {
         self.orientation[i]
     }
 
@@ -431,13 +431,13 @@ impl Positions {
     }
 
     /// Whether some row names a tool other than the default.
-    pub fn has_tools(&self) -> bool {
+    pub(crate) fn has_tools(&self) -> bool {
         self.tool_of.iter().any(|&k| k != 0)
     }
 
     /// Tool `k`'s nominal offset (mm, the last joint's frame), once known
     /// ([`Positions::resolve_tools`]); `None` for the default tool.
-    pub fn tool_offset(&self, k: usize) -> Option<[f64; 3]> {
+    pub(crate) fn tool_offset(&self, k: usize) -> Option<[f64; 3]> {
         self.tool_offsets[k]
     }
 

@@ -50,10 +50,10 @@ pub const MIN_SPHERE_POINTS: usize = 4;
 pub const MIN_SPHERE_DEPTH_RATIO: f64 = 0.02;
 
 /// The optional column grouping a placement's points by articulation.
-pub const ARTICULATION: &str = "articulation";
+pub(crate) const ARTICULATION: &str = "articulation";
 
 /// The optional column naming a row's probe.
-pub const TOOL: &str = "tool";
+pub(crate) const TOOL: &str = "tool";
 
 const SHAPE: &str = "sphere,q1,...,qn[,articulation][,tool]";
 
@@ -162,14 +162,14 @@ impl Spheres {
     }
 
     /// Sphere `s`'s tool (the tool of its rows: one per placement).
-    pub fn tool_of_sphere(&self, s: usize) -> usize {
+    pub(crate) fn tool_of_sphere(&self, s: usize) -> usize {
         self.rows[s].first().map_or(0, |&i| self.tool(i))
     }
 
     /// These rows, each probed by `tool` (one of an arm's `[[tool]]`):
     /// what a file without a `tool` column holds when every point was
     /// touched with that probe.
-    pub fn as_tool(&self, tool: &Tool) -> Spheres {
+    pub(crate) fn as_tool(&self, tool: &Tool) -> Spheres {
         let mut out = Spheres::new(self.joints, self.prismatic);
         for i in 0..self.len() {
             out.push(
@@ -184,7 +184,7 @@ impl Spheres {
     }
 
     /// Whether some row names a tool other than the default.
-    pub fn has_tools(&self) -> bool {
+    pub(crate) fn has_tools(&self) -> bool {
         self.tool_of.iter().any(|&k| k != 0)
     }
 
@@ -546,7 +546,7 @@ fn parse_row(
 /// # Errors
 ///
 /// As above, naming `file`, the line and the field `tool`.
-pub fn check_one_tool_per_sphere(s: &Spheres, file: &str) -> Result<(), InputError> {
+pub(crate) fn check_one_tool_per_sphere(s: &Spheres, file: &str) -> Result<(), InputError> {
     for (k, name) in s.names.iter().enumerate() {
         let rows = s.rows_of(k);
         let first = s.tool(rows[0]);
@@ -573,7 +573,7 @@ pub fn check_one_tool_per_sphere(s: &Spheres, file: &str) -> Result<(), InputErr
 /// # Errors
 ///
 /// As above, naming `file`, the line and the field `sphere`.
-pub fn check_counts(s: &Spheres, file: &str) -> Result<(), InputError> {
+pub(crate) fn check_counts(s: &Spheres, file: &str) -> Result<(), InputError> {
     for (k, name) in s.names.iter().enumerate() {
         let rows = s.rows_of(k);
         if rows.len() < MIN_SPHERE_POINTS {

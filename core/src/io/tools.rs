@@ -31,7 +31,7 @@ use crate::setting::Setting;
 pub const DEFAULT_TOOL: &str = "probe";
 
 /// The prefix of a tool's parameter block: `tool.NAME`.
-pub const TOOL_BLOCK_PREFIX: &str = "tool.";
+pub(crate) const TOOL_BLOCK_PREFIX: &str = "tool.";
 
 /// One named tool point of an arm.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,15 +45,8 @@ pub struct Tool {
     pub ball_diameter_mm: Option<f64>,
 }
 
-impl Tool {
-    /// The name of its parameter block (`tool.NAME`).
-    pub fn block_name(&self) -> String {
-        block_name(&self.name)
-    }
-}
-
 /// The name of tool `name`'s parameter block.
-pub fn block_name(name: &str) -> String {
+pub(crate) fn block_name(name: &str) -> String {
     format!("{TOOL_BLOCK_PREFIX}{name}")
 }
 
@@ -181,11 +174,6 @@ impl ToolNames {
         self.offsets[k as usize]
     }
 
-    /// Whether `name` is one of these tools.
-    pub fn knows(&self, name: &str) -> bool {
-        self.index.contains_key(name)
-    }
-
     /// Every name, the default tool's first.
     pub fn names(&self) -> &[String] {
         &self.names
@@ -243,7 +231,7 @@ mod tests {
             (arm.tools[0].ball_diameter_mm, arm.tools[1].ball_diameter_mm),
             (None, Some(3.0))
         );
-        assert_eq!(arm.tools[0].block_name(), "tool.smr2");
+        assert_eq!(block_name(&arm.tools[0].name), "tool.smr2");
         for lu in [LengthUnit::Mm, LengthUnit::M] {
             let back = parse_arm(&arm_to_toml(&arm, lu, AngleUnit::Rad), "b.toml")
                 .unwrap()

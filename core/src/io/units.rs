@@ -40,9 +40,9 @@ pub enum LengthUnit {
 )]
 pub struct UnknownUnit {
     /// `"angle"` or `"length"`.
-    pub quantity: &'static str,
+    pub(crate) quantity: &'static str,
     /// What was given.
-    pub given: String,
+    pub(crate) given: String,
     /// The accepted spellings.
     pub accepted: &'static [&'static str],
 }
@@ -57,7 +57,7 @@ fn accepted_list(accepted: &[&str]) -> String {
 
 impl AngleUnit {
     /// The accepted spellings, in the order of [`AngleUnit::ALL`].
-    pub const NAMES: &'static [&'static str] = &["deg", "rad"];
+    pub(crate) const NAMES: &'static [&'static str] = &["deg", "rad"];
     /// All angle units.
     pub const ALL: [AngleUnit; 2] = [AngleUnit::Deg, AngleUnit::Rad];
 
@@ -121,7 +121,7 @@ impl AngleUnit {
 
 impl LengthUnit {
     /// The accepted spellings, in the order of [`LengthUnit::ALL`].
-    pub const NAMES: &'static [&'static str] = &["mm", "m"];
+    pub(crate) const NAMES: &'static [&'static str] = &["mm", "m"];
     /// All length units.
     pub const ALL: [LengthUnit; 2] = [LengthUnit::Mm, LengthUnit::M];
 

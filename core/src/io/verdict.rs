@@ -91,7 +91,7 @@ pub fn verdict_to_toml(verdict: &ArmVerdict) -> String {
 
 /// A comment for the top of a refused calibration's arm file: the first
 /// thing anyone opening it reads.
-pub fn rejected_header() -> &'static str {
+pub(crate) fn rejected_header() -> &'static str {
     "# NOT USABLE: this arm comes from a calibration that was refused — see [verdict] at the \
      end. Do not use it as a calibrated arm.\n"
 }

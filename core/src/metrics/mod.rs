@@ -300,9 +300,9 @@ pub struct Evaluation {
     /// `e` across points: the paper's single-point repeatability (Fig. 6).
     pub single_point_e: Summary,
     /// `δ_max` across points (SPAT).
-    pub single_point_delta_max: Summary,
+    pub(crate) single_point_delta_max: Summary,
     /// `2s` across points (SPAT; makers quote it or `δ_max`).
-    pub single_point_two_s: Summary,
+    pub(crate) single_point_two_s: Summary,
     /// `d_error` (eq. 19) across all pairs of points (Fig. 7), or across
     /// [`Evaluation::pair_sample`]; `None` with a single point.
     pub pair_length_summary: Option<Summary>,

@@ -44,11 +44,11 @@ use crate::residuals::{Layout, TermError};
 pub struct CheckOptions {
     /// Relative step of the central differences (`h = step · max(1,
     /// |x_c|)`, in the column's own units: mm, rad), and half of it.
-    pub step: f64,
+    pub(crate) step: f64,
     /// Largest relative error that passes.
-    pub tolerance: f64,
+    pub(crate) tolerance: f64,
     /// The error's floor, relative to the term's largest gradient entry.
-    pub floor: f64,
+    pub(crate) floor: f64,
 }
 
 impl Default for CheckOptions {
@@ -74,9 +74,9 @@ pub struct BlockCheck {
     /// The term's `Jᵀr` there.
     pub analytic: f64,
     /// Half the central difference of its cost there.
-    pub numeric: f64,
+    pub(crate) numeric: f64,
     /// Their relative error (module documentation).
-    pub relative_error: f64,
+    pub(crate) relative_error: f64,
 }
 
 /// One term's check: its worst column per block.
@@ -92,7 +92,8 @@ pub struct TermCheck {
 
 impl TermCheck {
     /// The worst relative error over the blocks (0 without any).
-    pub fn worst(&self) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn worst(&self) -> f64 {
         (self.blocks.iter()).fold(0.0, |w, b| w.max(b.relative_error))
     }
 }
@@ -101,7 +102,7 @@ impl TermCheck {
 #[derive(Clone, Debug, PartialEq)]
 pub struct GradientCheck {
     /// The tolerance it was judged by.
-    pub tolerance: f64,
+    pub(crate) tolerance: f64,
     /// Per term.
     pub terms: Vec<TermCheck>,
 }

@@ -15,7 +15,7 @@
 
 pub(crate) mod check;
 
-pub use check::{BlockCheck, CheckOptions, GradientCheck, TermCheck, check_gradients};
+pub use check::{CheckOptions, GradientCheck, check_gradients};
 
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
@@ -154,7 +154,7 @@ impl<'a> Objective<'a> {
     /// Whether stated tolerances (or an auxiliary block's) apply: a prior
     /// that weighs against the data. (Held weak directions are not one:
     /// they are stiff, whatever the data's weights.)
-    pub fn has_prior(&self) -> bool {
+    pub(crate) fn has_prior(&self) -> bool {
         self.prior.is_some()
     }
 
@@ -191,7 +191,7 @@ impl<'a> Objective<'a> {
     }
 
     /// What the data's terms let the identifiability rules assume.
-    pub fn sees(&self) -> Sees {
+    pub(crate) fn sees(&self) -> Sees {
         self.terms
             .iter()
             .filter(|t| !t.is_prior())
@@ -220,11 +220,6 @@ impl<'a> Objective<'a> {
     /// Residual rows of every term over `free`.
     pub fn rows(&self, free: &[usize]) -> usize {
         self.terms.iter().map(|t| t.rows(free)).sum()
-    }
-
-    /// Unknowns eliminated inside the terms.
-    pub fn eliminated(&self) -> usize {
-        self.terms.iter().map(|t| t.eliminated()).sum()
     }
 
     /// Evaluates `f` with the point `x` prepared: its arm and kernel.
@@ -359,7 +354,7 @@ impl<'a> Objective<'a> {
     }
 
     /// The term of observation `i` ([`Objective::observations`]' order).
-    pub fn term_of(&self, i: usize) -> Option<&(dyn Term + 'a)> {
+    pub(crate) fn term_of(&self, i: usize) -> Option<&(dyn Term + 'a)> {
         let (first, term) = self
             .observing()
             .take_while(|(first, _)| *first <= i)
@@ -489,7 +484,11 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's.
-    pub fn data_cost(&self, x: &[f64], scratch: &mut Vec<[f64; 3]>) -> Result<f64, TermError> {
+    pub(crate) fn data_cost(
+        &self,
+        x: &[f64],
+        scratch: &mut Vec<[f64; 3]>,
+    ) -> Result<f64, TermError> {
         self.cost_of(x, &[], scratch, |t| !t.is_prior())
     }
 

@@ -22,7 +22,7 @@ use crate::params::DhParams;
 use crate::residuals::Frame;
 
 /// Bands of reach a map is summarised in.
-pub const BANDS: usize = 5;
+pub(crate) const BANDS: usize = 5;
 
 /// Poses a map's figure shows at most (an even sample of the workspace).
 const FIGURE_POINTS: usize = 1000;
@@ -114,7 +114,7 @@ pub fn sample_poses(
 }
 
 /// Each joint's range of readings over `poses` (rad).
-pub fn reading_ranges(poses: &[&[f64]], joints: usize) -> Vec<Option<[f64; 2]>> {
+pub(crate) fn reading_ranges(poses: &[&[f64]], joints: usize) -> Vec<Option<[f64; 2]>> {
     (0..joints)
         .map(|j| {
             let mut r: Option<[f64; 2]> = None;

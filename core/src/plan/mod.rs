@@ -36,7 +36,7 @@
 pub use crate::stats::coverage;
 mod greedy;
 pub mod map;
-pub mod pool;
+pub(crate) mod pool;
 mod rows;
 mod strata;
 pub mod summary;
@@ -46,13 +46,15 @@ use rand::seq::SliceRandom;
 use serde::{Deserialize, Serialize};
 
 pub use map::{
-    InFrame, MapPoint, Prediction, Region, UncertaintyMap, position_covariances, reading_ranges,
-    sample_poses, uncertainty_map, uncertainty_map_at_tool, uncertainty_map_in_frame,
+    InFrame, MapPoint, Prediction, Region, UncertaintyMap, position_covariances, sample_poses,
+    uncertainty_map, uncertainty_map_at_tool, uncertainty_map_in_frame,
 };
+
+pub(crate) use map::reading_ranges;
 pub use pool::{
     DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_touches, sample_touches_observed,
 };
-pub use summary::{GivenNote, KNEE, Knee, SummaryContext, knee, summary};
+pub use summary::{GivenNote, Knee, SummaryContext, knee, summary};
 
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};
@@ -87,7 +89,7 @@ pub enum Criterion {
 }
 
 /// Touches a plan gives each socket it uses at least.
-pub const MIN_TOUCHES_PER_SOCKET: usize = 3;
+pub(crate) const MIN_TOUCHES_PER_SOCKET: usize = 3;
 
 /// Workspace poses the criterion and the reported spreads use at most (an
 /// even sample of a larger workspace).
@@ -103,7 +105,7 @@ pub struct PlanSettings {
     /// Rows to choose.
     pub count: usize,
     /// Touches or positions.
-    pub measure: Measure,
+    pub(crate) measure: Measure,
     /// What is optimised.
     pub criterion: Criterion,
     /// `τ`: the unexplained error at a pose of average leverage, in units
@@ -150,14 +152,14 @@ pub struct Given {
     /// Its free geometry columns.
     pub free: Vec<usize>,
     /// Their covariance, mm and rad.
-    pub cov: DMatrix<f64>,
+    pub(crate) cov: DMatrix<f64>,
     /// σ of one new row per coordinate (its own estimate), mm.
-    pub sigma_mm: f64,
+    pub(crate) sigma_mm: f64,
     /// Its `σ̂₀` (residuals against the stated noise), when noise was stated.
-    pub sigma0: Option<f64>,
+    pub(crate) sigma0: Option<f64>,
     /// Whether it fitted an instrument frame: new positions are taken in
     /// that frame, as known.
-    pub frame_known: bool,
+    pub(crate) frame_known: bool,
 }
 
 /// Why a plan cannot be made.
@@ -179,11 +181,11 @@ pub enum PlanError {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Spread {
     /// RMS over the workspace, mm.
-    pub rms_mm: f64,
+    pub(crate) rms_mm: f64,
     /// Median, mm.
-    pub median_mm: f64,
+    pub(crate) median_mm: f64,
     /// Largest, mm.
-    pub max_mm: f64,
+    pub(crate) max_mm: f64,
 }
 
 /// One chosen row, in the order chosen.
@@ -197,7 +199,7 @@ pub struct Step {
     /// this one (plain, without the hedge), as the 95 % radius of an
     /// isotropic error of that variance, mm; `None` while the rows do not
     /// determine every free parameter.
-    pub criterion_mm: Option<f64>,
+    pub(crate) criterion_mm: Option<f64>,
 }
 
 /// The predicted uncertainty after the first `rows` choices.
@@ -207,7 +209,7 @@ pub struct CurvePoint {
     pub rows: usize,
     /// The workspace's RMS 95 % radius, mm; `None` while the rows do not
     /// yet determine every free parameter.
-    pub rms_mm: Option<f64>,
+    pub(crate) rms_mm: Option<f64>,
 }
 
 /// How far a joint turns over the chosen rows against the pool.
@@ -216,34 +218,34 @@ pub struct JointSpan {
     /// Joint, from 1.
     pub joint: usize,
     /// Range of the chosen readings, degrees (mm for a prismatic joint).
-    pub chosen_deg: f64,
+    pub(crate) chosen_deg: f64,
     /// Range of the pool's, degrees (mm for a prismatic joint).
-    pub pool_deg: f64,
+    pub(crate) pool_deg: f64,
     /// Whether the joint is prismatic: its spans are mm.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub prismatic: bool,
+    pub(crate) prismatic: bool,
 }
 
 /// The random subsets a plan is compared with.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RandomBaseline {
+pub(crate) struct RandomBaseline {
     /// Subsets drawn.
-    pub sets: usize,
+    pub(crate) sets: usize,
     /// Those whose rows determine every free parameter.
-    pub determined: usize,
+    pub(crate) determined: usize,
     /// The median subset's spread (undetermined ones count as worst).
-    pub median: Option<Spread>,
+    pub(crate) median: Option<Spread>,
 }
 
 /// A plan.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
     /// What is measured.
-    pub measure: Measure,
+    pub(crate) measure: Measure,
     /// What was optimised.
-    pub criterion: Criterion,
+    pub(crate) criterion: Criterion,
     /// Candidates in the pool.
-    pub candidates: usize,
+    pub(crate) candidates: usize,
     /// Rows chosen (the first `count` of [`Plan::steps`]).
     pub count: usize,
     /// The rows chosen, then those the curve continued with.
@@ -251,23 +253,23 @@ pub struct Plan {
     /// The parameters the design is for (free geometry, then the frame's).
     pub parameters: Vec<String>,
     /// Noise of a row per coordinate, mm.
-    pub sigma_mm: f64,
+    pub(crate) sigma_mm: f64,
     /// `τ` of the robust criterion (0 for the others).
-    pub hedge: f64,
+    pub(crate) hedge: f64,
     /// Strata the robust criterion took one row from each of (0 for the
     /// others).
-    pub strata: usize,
+    pub(crate) strata: usize,
     /// Whether a previous calibration's knowledge was the start.
-    pub given: bool,
+    pub(crate) given: bool,
     /// The workspace the spreads are over, in words, and its poses.
-    pub workspace: String,
+    pub(crate) workspace: String,
     /// Poses of the workspace used.
-    pub workspace_poses: usize,
+    pub(crate) workspace_poses: usize,
     /// Poses of the workspace given (or candidates): more than
     /// [`Plan::workspace_poses`] when an even sample of them was used
     /// ([`PlanSettings::workspace_limit`]).
     #[serde(default)]
-    pub workspace_total: usize,
+    pub(crate) workspace_total: usize,
     /// The predicted uncertainty with the chosen rows.
     pub planned: Option<Spread>,
     /// With every candidate.
@@ -277,9 +279,9 @@ pub struct Plan {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub start: Option<Spread>,
     /// With random subsets of the same size.
-    pub random: RandomBaseline,
+    pub(crate) random: RandomBaseline,
     /// The predicted uncertainty as rows are added.
-    pub curve: Vec<CurvePoint>,
+    pub(crate) curve: Vec<CurvePoint>,
     /// Touches per socket chosen (touches only).
     pub sockets: Vec<(String, usize)>,
     /// How far each joint turns over the chosen rows.

@@ -25,9 +25,9 @@ pub struct Pool {
     pub poses: Poses,
     /// Where they come from, in words, for the summary (`from pool.csv`,
     /// `drawn uniformly within …`).
-    pub origin: String,
+    pub(crate) origin: String,
     /// Whether the rows are lines of a file (the ranking then names them).
-    pub from_file: bool,
+    pub(crate) from_file: bool,
 }
 
 impl Pool {

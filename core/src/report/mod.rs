@@ -55,7 +55,8 @@ use crate::metrics::MetricsError;
 use crate::params::DhParams;
 use crate::plan::UncertaintyMap;
 
-pub use acceptance::{ACCEPTANCE_FILES, SPHERE_RESIDUALS_SVG, acceptance_report};
+pub use acceptance::{ACCEPTANCE_FILES, acceptance_report};
+
 pub use calibration::session_report;
 
 /// The page.
@@ -314,17 +315,17 @@ pub struct PoseErrors {
     /// The calibrated arm's (else the start arm's).
     pub after: bool,
     /// Per pose, the probe's distance from the base axis, mm.
-    pub reach_mm: Vec<f64>,
+    pub(crate) reach_mm: Vec<f64>,
     /// Per pose, `|R p + t − y|`, mm.
-    pub error_mm: Vec<f64>,
+    pub(crate) error_mm: Vec<f64>,
     /// Per pose, its frame: an index into `frame_names` (empty when the
     /// series has no frames, as a model's effect beyond geometry).
-    pub frame: Vec<usize>,
+    pub(crate) frame: Vec<usize>,
     /// The frames' names (`instrument`, a station's).
-    pub frame_names: Vec<String>,
+    pub(crate) frame_names: Vec<String>,
     /// Per pose, its orientation error, degrees, where the row gives the
     /// tool's orientation (empty when none does).
-    pub orientation_deg: Vec<Option<f64>>,
+    pub(crate) orientation_deg: Vec<Option<f64>>,
 }
 
 /// What [`evaluation_report`] shows.

@@ -9,28 +9,28 @@ use crate::corrections::{Beyond, Column, Physics};
 #[derive(Clone, Debug, PartialEq)]
 pub struct CorrectionBlock {
     /// What is fitted.
-    pub fit: Beyond,
+    pub(crate) fit: Beyond,
     /// The arm's physics: masses, and the stated values of what is not.
-    pub physics: Physics,
+    pub(crate) physics: Physics,
     /// Joints of the arm.
     pub joints: usize,
     /// Its prismatic joints (bit `j`: joint `j` slides): their backlash is
     /// a length.
-    pub prismatic: u16,
+    pub(crate) prismatic: u16,
 }
 
 /// The largest plausible backlash of a revolute joint: 0.5°, rad.
-pub const MAX_BACKLASH_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+pub(crate) const MAX_BACKLASH_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
 
 /// The largest plausible backlash of a slide, mm.
-pub const MAX_SLIDE_BACKLASH_MM: f64 = 0.5;
+pub(crate) const MAX_SLIDE_BACKLASH_MM: f64 = 0.5;
 
 /// The name of the correction block in a layout.
 pub const BLOCK_NAME: &str = "beyond";
 
 impl CorrectionBlock {
     /// The physics at the block's values `x` (internal units).
-    pub fn physics_at(&self, x: &[f64]) -> Physics {
+    pub(crate) fn physics_at(&self, x: &[f64]) -> Physics {
         self.physics.with_fitted(&self.fit, x, self.joints)
     }
 }

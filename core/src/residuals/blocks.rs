@@ -52,7 +52,7 @@ impl Unit {
 
     /// Whether the column is an angle (the identifiability analysis scales
     /// it by the arm's reach, as it does the geometry's angles).
-    pub fn is_angle(&self) -> bool {
+    pub(crate) fn is_angle(&self) -> bool {
         matches!(self, Unit::Angle)
     }
 }
@@ -272,7 +272,7 @@ impl Layout {
     ///
     /// Another block already in the layout (the corrections' columns come
     /// right after the geometry's), and [`Layout::add`]'s.
-    pub fn add_corrections(
+    pub(crate) fn add_corrections(
         &mut self,
         block: super::CorrectionBlock,
     ) -> Result<BlockId, LayoutError> {
@@ -290,7 +290,7 @@ impl Layout {
     /// (the fit's free columns leave them out, and the report says they
     /// were held and why). A known instrument pose, a plane whose offset
     /// was measured elsewhere.
-    pub fn hold(&mut self, id: BlockId) {
+    pub(crate) fn hold(&mut self, id: BlockId) {
         if !self.held.contains(&id) {
             self.held.push(id);
         }
@@ -298,7 +298,7 @@ impl Layout {
 
     /// The columns of the blocks held at their start ([`Layout::hold`]),
     /// in order.
-    pub fn held_columns(&self) -> Vec<usize> {
+    pub(crate) fn held_columns(&self) -> Vec<usize> {
         let mut cols: Vec<usize> = self.held.iter().flat_map(|&id| self.columns(id)).collect();
         cols.sort_unstable();
         cols
@@ -362,7 +362,7 @@ impl Layout {
     }
 
     /// The auxiliary block named `name`, if any.
-    pub fn block_named(&self, name: &str) -> Option<BlockId> {
+    pub(crate) fn block_named(&self, name: &str) -> Option<BlockId> {
         self.blocks
             .iter()
             .position(|b| b.name() == name)
@@ -416,7 +416,7 @@ impl Layout {
 
     /// What column `c`'s standard uncertainty is of, when not of its value
     /// ([`Block::sigma_of`]).
-    pub fn sigma_of(&self, c: usize) -> Option<String> {
+    pub(crate) fn sigma_of(&self, c: usize) -> Option<String> {
         if c < self.geometry_columns() {
             return None;
         }

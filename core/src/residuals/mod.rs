@@ -80,8 +80,9 @@ use crate::params::DhParams;
 use crate::setting::Setting;
 
 pub use beyond::{BLOCK_NAME, CorrectionBlock};
+pub use blocks::Mount;
 pub use blocks::{
-    Block, BlockId, Frame, Layout, LayoutError, MOUNT_BLOCK, Mount, Parameter, Scalar, Unit, Vector,
+    Block, BlockId, Frame, Layout, LayoutError, MOUNT_BLOCK, Parameter, Scalar, Unit, Vector,
 };
 pub use folds::{HeldOutScorer, TermFold};
 pub use hold::{HeldDirection, WEAK_RATIO};
@@ -90,7 +91,7 @@ pub(crate) use lengths::LengthTerm;
 pub(crate) use orientations::{OrientationTerm, mount_start};
 pub(crate) use positions::PositionTerm;
 pub(crate) use prior::PriorTerm;
-pub use schur::Elimination;
+pub(crate) use schur::Elimination;
 pub(crate) use sym3::Sym3;
 pub(crate) use touches::TouchTerm;
 pub use touches::point_chunks;
@@ -128,9 +129,9 @@ pub struct Noise {
 /// Largest σ of an encoder reading, degrees (in identification,
 /// calibration and simulation alike): beyond half a turn the σ of an angle
 /// means nothing, and the weights it gives vanish.
-pub const MAX_ENCODER_SIGMA_DEG: f64 = 180.0;
+pub(crate) const MAX_ENCODER_SIGMA_DEG: f64 = 180.0;
 /// [`MAX_ENCODER_SIGMA_DEG`] in rad.
-pub const MAX_ENCODER_SIGMA_RAD: f64 = std::f64::consts::PI;
+pub(crate) const MAX_ENCODER_SIGMA_RAD: f64 = std::f64::consts::PI;
 
 impl Default for Noise {
     fn default() -> Self {
@@ -259,7 +260,7 @@ pub enum TermError {
 
 impl TermError {
     /// A refusal by the term `term`.
-    pub fn invalid(term: &str, message: impl Into<String>) -> TermError {
+    pub(crate) fn invalid(term: &str, message: impl Into<String>) -> TermError {
         TermError::Invalid {
             term: term.to_string(),
             message: message.into(),
@@ -328,7 +329,7 @@ impl At<'_> {
     ///
     /// A correction whose conditions were not recorded (an expansion
     /// without temperatures).
-    pub fn effects(
+    pub(crate) fn effects(
         &self,
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
@@ -341,7 +342,7 @@ impl At<'_> {
     /// # Errors
     ///
     /// As [`At::effects`].
-    pub fn corrected_poses(
+    pub(crate) fn corrected_poses(
         &self,
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
@@ -411,7 +412,7 @@ impl At<'_> {
     /// # Errors
     ///
     /// As [`At::tool_positions`].
-    pub fn for_each_tool_pose(
+    pub(crate) fn for_each_tool_pose(
         &self,
         poses: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
@@ -583,16 +584,11 @@ impl Normal {
         self.costs.iter().sum()
     }
 
-    /// The cost of the term at `index` of the objective.
-    pub fn cost_of(&self, index: usize) -> f64 {
-        self.costs.get(index).copied().unwrap_or(0.0)
-    }
-
     /// The normal equations over `cols`, a subset of these columns: every
     /// term is bilinear in the columns (the centres' elimination too), so
     /// the reduced system of a subset is the principal submatrix. `None`
     /// when a column is not among these.
-    pub fn restrict(&self, cols: &[usize]) -> Option<Normal> {
+    pub(crate) fn restrict(&self, cols: &[usize]) -> Option<Normal> {
         let at: Vec<usize> = cols
             .iter()
             .map(|c| self.free.iter().position(|f| f == c))

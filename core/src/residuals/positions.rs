@@ -46,11 +46,11 @@ pub struct Registration {
     pub rms_mm: f64,
     /// The same with a mirror image allowed (`det R = −1`): far below
     /// [`Registration::rms_mm`] when two axes were swapped.
-    pub mirrored_rms_mm: f64,
+    pub(crate) mirrored_rms_mm: f64,
     /// RMS distance of the instrument's positions from their centroid, mm.
-    pub spread_mm: f64,
+    pub(crate) spread_mm: f64,
     /// The same of the arm's positions.
-    pub arm_spread_mm: f64,
+    pub(crate) arm_spread_mm: f64,
 }
 
 /// The rigid transform `y ≈ R p + t` of least squares

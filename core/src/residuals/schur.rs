@@ -8,7 +8,7 @@ use super::{Layout, Normal};
 
 /// Why the auxiliary columns could not be eliminated.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum Elimination {
+pub(crate) enum Elimination {
     /// The layout and the normal equations disagree (a bug, not input).
     #[error("internal: parameter vector of the wrong length")]
     Shape,
@@ -29,7 +29,7 @@ impl Normal {
     /// [`Elimination::Undetermined`] when the auxiliary columns' own
     /// equations are singular; [`Elimination::Shape`] when `layout` is not
     /// these equations'.
-    pub fn geometry_only(&self, layout: &Layout) -> Result<Normal, Elimination> {
+    pub(crate) fn geometry_only(&self, layout: &Layout) -> Result<Normal, Elimination> {
         let corrections = layout.corrections().map_or(0..0, |(_, c)| c);
         let keep: Vec<usize> = (0..layout.len())
             .filter(|c| !corrections.contains(c))

@@ -47,7 +47,7 @@ use crate::residuals::{
 use crate::setting::Setting;
 
 /// The term's name in reports.
-pub const TERM: &str = "spheres";
+pub(crate) const TERM: &str = "spheres";
 
 /// The smallest stated sphere diameter, mm: below it the value was most
 /// likely given in metres (a 25 mm sphere as `0.025`).
@@ -332,33 +332,18 @@ impl SphereTerm {
         &self.file
     }
 
-    /// Per sphere, its centre block.
-    pub fn centre_blocks(&self) -> &[BlockId] {
-        &self.centres
-    }
-
-    /// Per sphere, its radius block (when the size is fitted).
-    pub fn radius_blocks(&self) -> &[Option<BlockId>] {
-        &self.radii
-    }
-
     /// The default probe's ball radius, mm (the arm file's `[probe]`).
-    pub fn ball_radius(&self) -> f64 {
+    pub(crate) fn ball_radius(&self) -> f64 {
         self.ball_radius
     }
 
     /// The radius of the ball sphere `s` was probed with, mm (its tool's).
-    pub fn ball_radius_of(&self, s: usize) -> f64 {
+    pub(crate) fn ball_radius_of(&self, s: usize) -> f64 {
         self.balls[self.spheres.tool_of_sphere(s)]
     }
 
-    /// Whether the spheres' diameter is stated.
-    pub fn size_known(&self) -> bool {
-        self.known_radius.is_some()
-    }
-
     /// The stated spheres' radius, mm (none when fitted).
-    pub fn stated_radius(&self) -> Option<f64> {
+    pub(crate) fn stated_radius(&self) -> Option<f64> {
         self.known_radius
     }
 
@@ -384,7 +369,7 @@ impl SphereTerm {
     /// # Errors
     ///
     /// The kernel's.
-    pub fn radial_errors(&self, at: &At<'_>) -> Result<Vec<f64>, TermError> {
+    pub(crate) fn radial_errors(&self, at: &At<'_>) -> Result<Vec<f64>, TermError> {
         let p = self.positions(at)?;
         Ok((0..p.len())
             .map(|i| {

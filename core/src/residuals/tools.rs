@@ -251,7 +251,7 @@ pub(crate) fn nominal_positions(
 /// # Errors
 ///
 /// The kernel's.
-pub fn positions_at(
+pub(crate) fn positions_at(
     params: &DhParams,
     data: &PositionData,
     fitted: &[(String, [f64; 6])],
@@ -415,7 +415,7 @@ pub(crate) fn add_touch_tool_blocks(
 /// # Errors
 ///
 /// The kernel's.
-pub fn touch_positions_at(
+pub(crate) fn touch_positions_at(
     params: &DhParams,
     data: &crate::dataset::DataSet,
     fitted: &[(String, [f64; 6])],

@@ -12,20 +12,22 @@ use super::{Verdict, spheres, tools};
 
 /// Units of the values in a [`CalibrationReport`] meant for people.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Units {
     /// `mm`.
-    pub lengths: String,
+    pub(crate) lengths: String,
     /// `deg`.
-    pub angles: String,
+    pub(crate) angles: String,
 }
 
 /// Held-out validation.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct HeldOut {
     /// Its poses file.
     pub data_file: String,
     /// Its lengths file.
-    pub lengths_file: Option<String>,
+    pub(crate) lengths_file: Option<String>,
     /// Before and after there.
     pub figures: BeforeAfter,
     /// Its frames the fit does not have, each registered on its own
@@ -37,6 +39,7 @@ pub struct HeldOut {
 
 /// Cross-validation over points.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct CrossValidation {
     /// One entry per fold.
     pub folds: Vec<Fold>,
@@ -46,6 +49,7 @@ pub struct CrossValidation {
 
 /// The figures of the start and calibrated arms on the data.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Validation {
     /// On the fitted data.
     pub fitted: BeforeAfter,
@@ -62,6 +66,7 @@ pub struct Validation {
 /// Everything a calibration session found: the schema of
 /// `calibration.json`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct CalibrationReport {
     /// The start arm's name.
     pub arm: String,
@@ -70,7 +75,7 @@ pub struct CalibrationReport {
     /// The poses file.
     pub data_file: String,
     /// The lengths file.
-    pub lengths_file: Option<String>,
+    pub(crate) lengths_file: Option<String>,
     /// The fixed set: `auto` or the names fixed.
     pub fix: String,
     /// The noise (internal units: rad, mm).
@@ -78,7 +83,7 @@ pub struct CalibrationReport {
     /// Seed of every random draw.
     pub seed: u64,
     /// Units of the parameter tables.
-    pub units: Units,
+    pub(crate) units: Units,
     /// Touches fitted.
     pub touches: usize,
     /// Points fitted.
@@ -87,7 +92,7 @@ pub struct CalibrationReport {
     pub reference_lengths: usize,
     /// The reference-positions file, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub positions_file: Option<String>,
+    pub(crate) positions_file: Option<String>,
     /// Reference positions fitted.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub positions: usize,
@@ -125,6 +130,11 @@ pub struct CalibrationReport {
     /// ([`crate::plan::uncertainty_map_at_tool`]); absent without one.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub uncertainty_maps_at_tools: Vec<crate::plan::UncertaintyMap>,
+    /// The start arm, for [`CalibrationReport::calibrated_arm`]: its name,
+    /// limits, physics and tools are not in `calibration.json`, so a
+    /// report read back has none.
+    #[serde(skip)]
+    pub(super) start: Option<Box<Arm>>,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -141,8 +151,18 @@ impl CalibrationReport {
 
     /// The calibrated arm: named `<start>-calibrated`, with the start arm's
     /// joint limits and no tolerances (those were the nominal's; the
-    /// calibration's σ are in the report).
-    pub fn calibrated_arm(&self, start: &Arm) -> Arm {
+    /// calibration's σ are in the report). `None` for a report read back
+    /// from `calibration.json`, which does not carry the start arm: give it
+    /// to [`CalibrationReport::calibrated_arm_from`] then.
+    pub fn calibrated_arm(&self) -> Option<Arm> {
+        self.start
+            .as_deref()
+            .map(|start| self.calibrated_arm_from(start))
+    }
+
+    /// [`CalibrationReport::calibrated_arm`] from the start arm `start`
+    /// (that of a report read back from `calibration.json`).
+    pub fn calibrated_arm_from(&self, start: &Arm) -> Arm {
         Arm {
             name: format!("{}-calibrated", start.name),
             params: self.calibration.params.clone(),

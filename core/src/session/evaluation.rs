@@ -33,9 +33,9 @@ pub struct EvaluationReport<'a> {
     /// The poses file.
     pub data_file: String,
     /// The lengths file, if any.
-    pub lengths_file: Option<String>,
+    pub(crate) lengths_file: Option<String>,
     /// Every figure (lengths in mm).
-    pub evaluation: Evaluation,
+    pub(crate) evaluation: Evaluation,
     pub(crate) data: &'a DataSet,
     pub(crate) xyz: &'a [[f64; 3]],
     pairs: bool,

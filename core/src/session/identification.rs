@@ -31,7 +31,7 @@ pub struct IdentifyReport {
     /// The poses file.
     pub data_file: String,
     /// The lengths file, if any.
-    pub lengths_file: Option<String>,
+    pub(crate) lengths_file: Option<String>,
     /// Touches.
     pub touches: usize,
     /// Points.
@@ -44,15 +44,15 @@ pub struct IdentifyReport {
     /// The noise the touches are weighed with, in words (degrees and mm).
     pub noise: String,
     /// The analysis.
-    pub identification: Identification,
+    pub(crate) identification: Identification,
     /// The rank and conditioning with the arm's tolerances, when it has
     /// any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub prior: Option<PriorConditioning>,
+    pub(crate) prior: Option<PriorConditioning>,
     /// The columns of the models beyond geometry asked for, judged after
     /// the geometry: kept or held, with the σ the data predict.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub corrections: Vec<CorrectionColumn>,
+    pub(crate) corrections: Vec<CorrectionColumn>,
     /// Points probed on reference spheres analysed with the data (their
     /// centres, and sizes unless stated, fitted and eliminated); absent
     /// without them.
@@ -70,12 +70,12 @@ pub struct SphereCount {
     /// Spheres.
     pub spheres: usize,
     /// The spheres' stated diameter, mm (none: fitted per sphere).
-    pub stated_diameter: Option<f64>,
+    pub(crate) stated_diameter: Option<f64>,
 }
 
 /// A correction column beyond geometry as the data see it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CorrectionColumn {
+pub(crate) struct CorrectionColumn {
     /// Its name (`compliance2`, `harmonic5.sin1`).
     pub name: String,
     /// Its unit.
@@ -85,11 +85,11 @@ pub struct CorrectionColumn {
     pub sigma: Option<f64>,
     /// The fitted column it correlates with most, and `ρ`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub most_correlated: Option<(String, f64)>,
+    pub(crate) most_correlated: Option<(String, f64)>,
     /// Why it is held at its stated value, when the data cannot separate
     /// it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub held: Option<String>,
+    pub(crate) held: Option<String>,
 }
 
 impl IdentifyReport {

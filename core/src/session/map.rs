@@ -13,7 +13,7 @@ use crate::plan::{
 use super::CalibrationReport;
 
 /// Poses an uncertainty map samples.
-pub const MAP_POSES: usize = 1000;
+pub(crate) const MAP_POSES: usize = 1000;
 
 /// The predicted position uncertainty of `calibration` over [`MAP_POSES`]
 /// poses drawn uniformly within the arm's joint limits — or, for a joint

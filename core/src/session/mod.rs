@@ -34,8 +34,6 @@ pub mod tools;
 mod verdict;
 mod writing;
 
-pub use map::MAP_POSES;
-
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
 pub use position_evaluation::{FrameEvaluation, MountEvaluation, PositionEvaluation};

@@ -122,6 +122,7 @@ pub fn run(
         touch_tools,
         uncertainty_maps_in_frames,
         uncertainty_maps_at_tools,
+        start: Some(Box::new(problem.arm.clone())),
     })
 }
 

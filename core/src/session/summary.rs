@@ -44,7 +44,7 @@ impl CalibrationReport {
     /// words; `None` without reference positions or a stated σ (only a file
     /// with orientations is weighed by it: without one the fit refuses
     /// them).
-    pub fn orientation_noise(&self) -> Option<String> {
+    pub(crate) fn orientation_noise(&self) -> Option<String> {
         let o = self.noise.orientation_rad?;
         self.positions_file.as_ref()?;
         Some(format!(
@@ -58,7 +58,7 @@ impl CalibrationReport {
     /// (`--position-noise`, or each row's own), or that it was estimated,
     /// with the σ the fit used; and an encoder noise stated without
     /// touches, which weighs nothing.
-    pub fn position_noise(&self) -> Option<String> {
+    pub(crate) fn position_noise(&self) -> Option<String> {
         let r = self;
         r.positions_file.as_ref()?;
         let n = r.noise;

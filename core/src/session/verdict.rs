@@ -182,9 +182,9 @@ pub enum Reason {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct UnconfirmedSearch {
     /// The starts it had.
-    pub starts: usize,
+    pub(crate) starts: usize,
     /// A prior was in use.
-    pub prior_in_use: bool,
+    pub(crate) prior_in_use: bool,
 }
 
 /// The noise a fit stated, as it holds it (rad, mm).
@@ -199,7 +199,7 @@ pub struct StatedNoise {
     /// Its growth with distance, mm per m.
     pub position_mm_per_m: Option<f64>,
     /// A reference orientation's, rad.
-    pub orientation_rad: Option<f64>,
+    pub(crate) orientation_rad: Option<f64>,
 }
 
 impl StatedNoise {

@@ -38,7 +38,7 @@ impl CalibrationReport {
     }
 
     /// `timing.json`: the wall time of every phase, ms.
-    pub fn timing_json(&self, total_seconds: f64) -> String {
+    pub(crate) fn timing_json(&self, total_seconds: f64) -> String {
         #[derive(Serialize)]
         struct PhaseTime<'a> {
             name: &'a str,
@@ -71,8 +71,8 @@ impl CalibrationReport {
     /// (`[verdict]`; a refused calibration's file also opens with a comment
     /// saying so), which every reader of arm files checks
     /// ([`crate::io::verdict`]).
-    pub fn calibrated_toml(&self, problem: &Problem) -> String {
-        let calibrated = self.calibrated_arm(problem.arm());
+    pub(crate) fn calibrated_toml(&self, problem: &Problem) -> String {
+        let calibrated = self.calibrated_arm_from(problem.arm());
         let verdict = &self.verdict;
         let header = if verdict.usable {
             ""

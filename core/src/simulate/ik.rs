@@ -26,9 +26,9 @@ pub struct IkSolution {
     /// Encoder readings reached, rad (not wrapped).
     pub q: Vec<f64>,
     /// Distance from the probe centre to the target, mm.
-    pub residual_mm: f64,
+    pub(crate) residual_mm: f64,
     /// Iterations used.
-    pub iterations: usize,
+    pub(crate) iterations: usize,
 }
 
 impl IkSolution {

@@ -140,11 +140,10 @@ pub use positions::{
     true_frames,
 };
 pub use settings::{
-    CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_MIN_POSE_SEPARATION_DEG,
-    DEFAULT_STARTS_PER_POSE, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG, ErrorModel,
-    MAX_ERROR_SCALE, MAX_POSES_PER_SOCKET, MAX_SOCKETS, MAX_STARTS_PER_POSE, MIN_POSES_PER_SOCKET,
-    SocketPlan, SocketPoint, pair_count,
+    CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG,
+    ErrorModel, SocketPlan, SocketPoint, pair_count,
 };
+pub use settings::{MAX_ERROR_SCALE, MIN_POSES_PER_SOCKET};
 use sockets::round_nm;
 pub use sockets::{place_sockets, shoulder};
 pub use spheres::{
@@ -169,7 +168,7 @@ pub struct SimStats {
     /// Inverse-kinematics starts tried.
     pub ik_starts: usize,
     /// Iterations over all starts.
-    pub ik_iterations: usize,
+    pub(crate) ik_iterations: usize,
     /// Starts that did not converge.
     pub not_converged: usize,
     /// Converged solutions outside the joint limits.

@@ -26,14 +26,14 @@ pub const DEFAULT_TWIST_SIGMA_DEG: f64 = 0.07;
 pub const DEFAULT_ZERO_SIGMA_DEG: f64 = 0.45;
 /// Default minimum difference between two touches of one socket: some joint
 /// must differ by at least this much (degrees, wrapped to ±180°).
-pub const DEFAULT_MIN_POSE_SEPARATION_DEG: f64 = 20.0;
+pub(crate) const DEFAULT_MIN_POSE_SEPARATION_DEG: f64 = 20.0;
 /// Default budget of inverse-kinematics starts per requested touch.
-pub const DEFAULT_STARTS_PER_POSE: usize = 50;
+pub(crate) const DEFAULT_STARTS_PER_POSE: usize = 50;
 /// Fewest touches per socket: a mean and a spread need at least three.
 pub const MIN_POSES_PER_SOCKET: usize = 3;
 /// Most sockets of a campaign (a bound on time and memory, far beyond any
 /// real campaign).
-pub const MAX_SOCKETS: usize = 1000;
+pub(crate) const MAX_SOCKETS: usize = 1000;
 /// Most touches per socket.
 ///
 /// Every touch of a socket must differ from all the others by at least
@@ -46,9 +46,9 @@ pub const MAX_SOCKETS: usize = 1000;
 /// or within joint limits — and the random search slows with the square of
 /// the count as the family fills up. 1000 is well within reach and takes
 /// seconds; real campaigns use tens.
-pub const MAX_POSES_PER_SOCKET: usize = 1000;
+pub(crate) const MAX_POSES_PER_SOCKET: usize = 1000;
 /// Most IK starts per touch (a bound on time).
-pub const MAX_STARTS_PER_POSE: usize = 10_000;
+pub(crate) const MAX_STARTS_PER_POSE: usize = 10_000;
 
 /// How the true arm differs from the nominal one.
 ///

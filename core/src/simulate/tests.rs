@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use super::files::{CAMPAIGN_FORMAT, campaign_to_toml};
 use super::ik::IK_TOLERANCE_MM;
+use super::settings::MAX_POSES_PER_SOCKET;
 use super::sockets::round_nm;
 use super::touches::separation;
 use super::*;

@@ -16,7 +16,7 @@ use crate::params::wrap;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Touch {
     /// Index of the socket touched.
-    pub socket: usize,
+    pub(crate) socket: usize,
     /// Where the probe centre actually sat (socket centre plus seating
     /// noise), mm.
     pub point: [f64; 3],

@@ -15,7 +15,7 @@ pub const COVERAGE: f64 = 0.95;
 
 /// The 95 % radius of an isotropic 3-D Gaussian in units of its
 /// per-coordinate σ: `sqrt(χ²₃(0.95))`.
-pub const K_ISOTROPIC: f64 = 2.795_483_482_915_108;
+pub(crate) const K_ISOTROPIC: f64 = 2.795_483_482_915_108;
 
 /// The radius covering [`COVERAGE`] of a 3-D Gaussian error whose
 /// covariance has the eigenvalues `lambda` (mm²): 0 for no error.

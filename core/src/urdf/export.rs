@@ -24,9 +24,9 @@ use crate::params::{DhJoint, DhParams, JointModel};
 #[derive(Clone, Debug, PartialEq)]
 pub struct UrdfNames {
     /// The robot's name.
-    pub robot: String,
+    pub(crate) robot: String,
     /// `n + 1` links: the base, then the one after each joint.
-    pub links: Vec<String>,
+    pub(crate) links: Vec<String>,
     /// `n` movable joints.
     pub joints: Vec<String>,
     /// Per joint, `[lower, upper]` in the arm's units (rad, mm for a

@@ -117,17 +117,17 @@ pub struct UrdfJoint {
     /// The joint's name.
     pub name: String,
     /// The `type` attribute as written.
-    pub type_name: String,
+    pub(crate) type_name: String,
     /// What the type means here.
     pub kind: JointKind,
     /// Parent link.
-    pub parent: String,
+    pub(crate) parent: String,
     /// Child link.
-    pub child: String,
+    pub(crate) child: String,
     /// The child frame in the parent frame (metres), after snapping.
-    pub origin: Isometry3<f64>,
+    pub(crate) origin: Isometry3<f64>,
     /// Unit axis in the child frame.
-    pub axis: Vector3<f64>,
+    pub(crate) axis: Vector3<f64>,
     /// `[lower, upper]` of a `revolute` (rad) or `prismatic` (m) joint,
     /// when its `<limit>` states them and `lower < upper`.
     pub limits: Option<[f64; 2]>,
@@ -137,20 +137,20 @@ pub struct UrdfJoint {
 
 /// A link's `<inertial>`: its mass and where its centre is.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Inertial {
+pub(crate) struct Inertial {
     /// `<mass value>`, kg (finite, ≥ 0).
-    pub kg: f64,
+    pub(crate) kg: f64,
     /// The centre of mass in the link frame (`<origin xyz>`), metres.
-    pub com: Vector3<f64>,
+    pub(crate) com: Vector3<f64>,
 }
 
 /// One `<link>` element of a URDF file.
 #[derive(Clone, Debug, PartialEq)]
-pub struct UrdfLink {
+pub(crate) struct UrdfLink {
     /// The link's name.
     pub name: String,
     /// Its mass, when it has an `<inertial>`.
-    pub inertial: Option<Inertial>,
+    pub(crate) inertial: Option<Inertial>,
     /// 1-based line of the `<link>` element.
     pub line: usize,
 }
@@ -165,7 +165,7 @@ pub struct Urdf {
     /// Every joint.
     pub joints: Vec<UrdfJoint>,
     /// Every `<link>` element (a link named only by joints has none).
-    pub links: Vec<UrdfLink>,
+    pub(crate) links: Vec<UrdfLink>,
     /// One note per `rpy` component [`UrdfOptions::snap_rad`] rounded:
     /// `line 12: joint_3 roll -3.1416 → -π (7.3e-6 rad)`.
     pub snapped: Vec<String>,
@@ -660,7 +660,7 @@ pub struct ChainMass {
     /// Its mass, kg.
     pub kg: f64,
     /// Its centre of mass in the root frame with every reading zero, m.
-    pub com: Point3<f64>,
+    pub(crate) com: Point3<f64>,
     /// The joints off the chain between it and the chain that are not
     /// `fixed` (each taken at its zero), nearest the link first.
     pub moving: Vec<String>,

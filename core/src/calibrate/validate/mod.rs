@@ -24,19 +24,20 @@ use crate::setting::Setting;
 /// none for a kind absent. Read back, the missing fields are 0 / `None`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(into = "FiguresJson", from = "FiguresJson")]
+#[non_exhaustive]
 pub struct Figures {
     /// Points evaluated (0 without touches: the touch figures are then 0).
     pub points: usize,
     /// Mean over points of the paper's `e` (single-point repeatability).
     pub e_mean: f64,
     /// Largest `e`.
-    pub e_max: f64,
+    pub(crate) e_max: f64,
     /// Mean over points of the SPAT `2s`.
-    pub two_s_mean: f64,
+    pub(crate) two_s_mean: f64,
     /// Largest `δ_max` over points (SPAT).
     pub delta_max: f64,
     /// Reference lengths evaluated.
-    pub lengths: usize,
+    pub(crate) lengths: usize,
     /// RMS of the reference-length errors; `None` without lengths.
     pub length_rms: Option<f64>,
     /// Largest `|error|`; `None` without lengths.
@@ -48,7 +49,7 @@ pub struct Figures {
     /// tool's orientation, **degrees** ([`orientation_errors`]); absent
     /// without them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub orientations: Option<PositionErrors>,
+    pub(crate) orientations: Option<PositionErrors>,
 }
 
 /// [`Figures`] as `calibration.json` holds them: the touch fields are
@@ -117,6 +118,7 @@ impl From<FiguresJson> for Figures {
 /// The 3-D distances between where an arm puts the probe, registered to
 /// each frame, and where the instrument saw it, mm.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct PositionErrors {
     /// Positions evaluated.
     pub count: usize,
@@ -188,7 +190,7 @@ impl Figures {
     /// The figure a calibration must not make worse on its own data: the
     /// mean `e` of the touches, or without touches the mean 3-D error at
     /// the reference positions.
-    pub fn headline(&self) -> f64 {
+    pub(crate) fn headline(&self) -> f64 {
         match (self.points, self.positions) {
             (0, Some(p)) => p.mean,
             _ => self.e_mean,
@@ -196,7 +198,7 @@ impl Figures {
     }
 
     /// What [`Figures::headline`] is, in words.
-    pub fn headline_name(&self) -> &'static str {
+    pub(crate) fn headline_name(&self) -> &'static str {
         match (self.points, self.positions) {
             (0, Some(_)) => "mean 3-D position error",
             _ => "mean e",
@@ -235,7 +237,7 @@ pub fn position_errors(
 /// # Errors
 ///
 /// The kernel's.
-pub fn pose_errors(
+pub(crate) fn pose_errors(
     params: &DhParams,
     data: &crate::dataset::PositionData,
     frames: &[FrameValues],
@@ -304,7 +306,7 @@ pub fn orientation_errors(
 /// # Errors
 ///
 /// The kernel's.
-pub fn orientation_errors_per_row(
+pub(crate) fn orientation_errors_per_row(
     params: &DhParams,
     data: &crate::dataset::PositionData,
     frames: &[FrameValues],
@@ -362,7 +364,7 @@ pub fn figures(params: &DhParams, data: &DataSet) -> Result<Figures, Calibration
 /// # Errors
 ///
 /// As [`figures`].
-pub fn figures_in(
+pub(crate) fn figures_in(
     params: &DhParams,
     data: &DataSet,
     frames: &[FrameValues],
@@ -401,6 +403,7 @@ pub fn figures_in(
 
 /// Before and after on one data set.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct BeforeAfter {
     /// With the start (nominal) arm.
     pub before: Figures,
@@ -428,7 +431,7 @@ pub fn before_after(
 /// # Errors
 ///
 /// As [`figures`].
-pub fn before_after_in(
+pub(crate) fn before_after_in(
     start: &DhParams,
     start_frames: &[FrameValues],
     calibrated: &DhParams,
@@ -444,11 +447,11 @@ pub fn before_after_in(
 /// An arm as it sees data: its geometry, its physics (the corrections
 /// beyond geometry it applies, [`crate::corrections`]) and its frames.
 #[derive(Clone, Copy, Debug)]
-pub struct ArmView<'a> {
+pub(crate) struct ArmView<'a> {
     /// The geometry.
     pub params: &'a DhParams,
     /// The corrections it applies.
-    pub physics: &'a Physics,
+    pub(crate) physics: &'a Physics,
     /// Its frames (a frame not given: its closed form on the data).
     pub frames: &'a [FrameValues],
 }
@@ -459,7 +462,7 @@ pub struct ArmView<'a> {
 /// # Errors
 ///
 /// A correction whose conditions the data lack.
-pub fn seen_by<'d>(
+pub(crate) fn seen_by<'d>(
     params: &DhParams,
     physics: &Physics,
     data: &'d DataSet,
@@ -481,7 +484,7 @@ pub fn seen_by<'d>(
 /// # Errors
 ///
 /// As [`figures`], and [`seen_by`]'s.
-pub fn before_after_of(
+pub(crate) fn before_after_of(
     before: ArmView<'_>,
     after: ArmView<'_>,
     data: &DataSet,
@@ -507,7 +510,7 @@ pub fn before_after_of(
 /// # Errors
 ///
 /// The kernel's.
-pub fn registered_frames(
+pub(crate) fn registered_frames(
     params: &DhParams,
     data: &DataSet,
 ) -> Result<Vec<FrameValues>, crate::kernel::KernelError> {
@@ -528,6 +531,7 @@ pub fn registered_frames(
 /// One cross-validation fold: the points held out, and the figures there of
 /// the arm fitted without them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct Fold {
     /// Labels of the held-out points.
     pub held_out: Vec<String>,
@@ -545,11 +549,12 @@ pub struct Fold {
 /// ([`crate::residuals::HeldOutScorer`]): the distribution of `|error|`
 /// (mm; a point on a sphere's radial error) before and after.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[non_exhaustive]
 pub struct TermHeldOut {
     /// The term's name (`spheres`).
     pub term: String,
     /// What the figures are ([`crate::residuals::HeldOutScorer::what`]).
-    pub what: String,
+    pub(crate) what: String,
     /// Where each held-out observation came from (`file:line`).
     pub held_out: Vec<String>,
     /// The start arm, the term's own unknowns (a sphere's centre and

@@ -30,7 +30,7 @@ impl SphereTerm {
     /// # Errors
     ///
     /// The kernel's refusal of the readings.
-    pub fn restricted(&self, rows: &[usize]) -> Result<SphereTerm, TermError> {
+    pub(crate) fn restricted(&self, rows: &[usize]) -> Result<SphereTerm, TermError> {
         let spheres = self.spheres.subset(rows);
         // Per sphere of the subset, the whole term's sphere of that name.
         let mut of = vec![0; spheres.spheres().len()];
@@ -78,7 +78,7 @@ impl SphereTerm {
     /// # Errors
     ///
     /// The kernel's; a sphere whose points fix no sphere.
-    pub fn refitted_spheres(&self, at: &At<'_>) -> Result<Vec<([f64; 3], f64)>, TermError> {
+    pub(crate) fn refitted_spheres(&self, at: &At<'_>) -> Result<Vec<([f64; 3], f64)>, TermError> {
         let q = self.positions(at)?;
         (self.spheres.spheres().iter().enumerate())
             .map(|(s, name)| {
@@ -102,7 +102,11 @@ impl SphereTerm {
     ///
     /// The kernel's; a sphere `fit_on` has no points of, or whose points
     /// fix no sphere.
-    pub fn refitted_errors(&self, fit_on: &SphereTerm, at: &At<'_>) -> Result<Vec<f64>, TermError> {
+    pub(crate) fn refitted_errors(
+        &self,
+        fit_on: &SphereTerm,
+        at: &At<'_>,
+    ) -> Result<Vec<f64>, TermError> {
         let p = self.positions(at)?;
         let spheres = fit_on.refitted_spheres(at)?;
         let fitted = (self.spheres.spheres().iter())

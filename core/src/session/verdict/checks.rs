@@ -296,7 +296,7 @@ fn classify_gross(c: &Calibration) -> (Vec<GrossCorrection>, Vec<(GrossCorrectio
     // minimum), they are inflated by it and tell nothing.
     let meaningful = (c.checks.chi_square.as_ref()).is_none_or(|chi| !chi.far_outside());
     for g in &c.checks.gross_corrections {
-        let e = c.parameters.iter().find(|e| e.id.to_string() == g.name);
+        let e = (c.params.parse_param(&g.name)).and_then(|id| c.estimate(id));
         let sigma = e.and_then(|e| e.sigma.map(|s| e.id.to_user(s)));
         match sigma {
             Some(s) if meaningful && s >= g.tolerance / 3.0 => weak.push((g.clone(), s)),
