@@ -205,18 +205,8 @@ pub(crate) fn calibration_page(
     if present.positions {
         page += &positions_section(input, find(figures, POSITIONS_SVG), number("positions"));
     }
-    if let Some(s) = input.spheres {
-        page += &spheres_section(s, input, number("spheres"));
-    } else if let Some(h) = input.held_out_spheres {
-        page += &section(
-            "spheres",
-            &format!("{}. Sphere surfaces held out", number("spheres")),
-            "",
-            None,
-            "",
-            "",
-            &held_out_sphere_file(h),
-        );
+    if present.spheres {
+        page += &sphere_sections(input, number("spheres"));
     }
     if present.tools {
         page += &tools_section(input.tools, input.touch_tools, number("tools"));
@@ -562,6 +552,24 @@ fn held_out_spheres(folds: &[crate::calibrate::validate::Fold]) -> String {
          <th>mean</th><th>RMS</th><th>p95</th><th>max</th></tr>\n{rows}</table>\n",
         escape(what)
     )
+}
+
+/// The spheres' section, numbered `number`: the fitted spheres' (with the
+/// held-out file's table when given), else the held-out file's alone.
+fn sphere_sections(input: &CalibrationInput, number: usize) -> String {
+    match (input.spheres, input.held_out_spheres) {
+        (Some(s), _) => spheres_section(s, input, number),
+        (None, Some(h)) => section(
+            "spheres",
+            &format!("{number}. Sphere surfaces held out"),
+            "",
+            None,
+            "",
+            "",
+            &held_out_sphere_file(h),
+        ),
+        (None, None) => String::new(),
+    }
 }
 
 /// The tool points, numbered `number`: per tool its offset ± σ and its
