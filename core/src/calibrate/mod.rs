@@ -719,34 +719,27 @@ impl Calibration {
     ) -> Option<(Vec<usize>, [f64; 3], nalgebra::DMatrix<f64>)> {
         let n = self.params.joint_count();
         let (free, named) = self.free_geometry()?;
-        let probe = |c: usize| {
-            (0..3).any(|k| {
-                ParamId {
-                    kind: ParamKind::Probe,
-                    index: k,
-                }
-                .column(n)
-                    == c
-            })
-        };
+        // The probe's columns: the tool's offset takes their place.
+        let probe: [usize; 3] = std::array::from_fn(|k| {
+            let id = ParamId {
+                kind: ParamKind::Probe,
+                index: k,
+            };
+            id.column(n)
+        });
         let (mut columns, mut sigmas): (Vec<usize>, NamedSigmas) = (free.iter().zip(named))
-            .filter(|(c, _)| !probe(**c))
+            .filter(|(c, _)| !probe.contains(c))
             .map(|(c, s)| (*c, s))
             .unzip();
         let prefix = crate::io::tools::TOOL_BLOCK_PREFIX;
+        let mut x = [0.0; 3];
         for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
             let full = format!("{prefix}{name}.{axis}");
             let c = self.auxiliary.iter().find(|c| c.name == full)?;
+            x[k] = c.calibrated;
             sigmas.push((full, Some(c.sigma?)));
-            columns.push(
-                ParamId {
-                    kind: ParamKind::Probe,
-                    index: k,
-                }
-                .column(n),
-            );
+            columns.push(probe[k]);
         }
-        let (_, x, _) = (self.tool_estimates().into_iter()).find(|(t, _, _)| t == name)?;
         Some((columns, x, self.covariance_of(&sigmas)?))
     }
 

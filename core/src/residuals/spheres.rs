@@ -199,14 +199,28 @@ fn by_tool(
     }
     (rows.into_iter())
         .map(|of| {
-            let readings: Vec<&[f64]> = of.iter().map(|&i| spheres.reading(i)).collect();
-            let poses = match shape {
-                Some(shape) => PreparedPoses::for_shape(shape, &readings)?,
-                None => PreparedPoses::new(spheres.joints(), &readings)?,
-            };
+            let poses = prepared(spheres, &of, shape)?;
             Ok((of, poses))
         })
         .collect()
+}
+
+/// The poses of `spheres`' rows `rows` for a chain of `shape` (`None`:
+/// revolute joints).
+///
+/// # Errors
+///
+/// The kernel's refusal of the readings.
+fn prepared(
+    spheres: &Spheres,
+    rows: &[usize],
+    shape: Option<crate::params::ChainShape>,
+) -> Result<PreparedPoses, TermError> {
+    let readings: Vec<&[f64]> = rows.iter().map(|&i| spheres.reading(i)).collect();
+    Ok(match shape {
+        Some(shape) => PreparedPoses::for_shape(shape, &readings)?,
+        None => PreparedPoses::new(spheres.joints(), &readings)?,
+    })
 }
 
 /// The nominal positions of every row of `spheres` at `arm`, mm.

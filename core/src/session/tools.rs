@@ -99,10 +99,9 @@ fn touch_errors(arm: ArmView<'_>, data: &DataSet) -> Result<Vec<f64>, Calibratio
     let mut e = vec![0.0; xyz.len()];
     for point in seen.points() {
         let at = &xyz[point.touches.clone()];
-        let n = at.len().max(1) as f64;
-        let c: [f64; 3] = std::array::from_fn(|k| at.iter().map(|p| p[k]).sum::<f64>() / n);
+        let c = crate::geometry::centroid(at);
         for (i, p) in point.touches.clone().zip(at) {
-            e[i] = (0..3).map(|k| (p[k] - c[k]).powi(2)).sum::<f64>().sqrt();
+            e[i] = crate::geometry::distance(p, &c);
         }
     }
     Ok(e)

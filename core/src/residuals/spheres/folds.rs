@@ -16,7 +16,6 @@
 //! is refused by the sphere's name.
 
 use super::{SphereTerm, TERM, algebraic_sphere};
-use crate::kernel::PreparedPoses;
 use crate::residuals::{At, HeldOutScorer, Term, TermError, TermFold};
 
 /// The fewest points a sphere keeps in a fold's training: its centre and
@@ -37,11 +36,8 @@ impl SphereTerm {
         for (k, &i) in rows.iter().enumerate() {
             of[spheres.sphere(k)] = self.spheres.sphere(i);
         }
-        let readings: Vec<&[f64]> = (0..spheres.len()).map(|i| spheres.reading(i)).collect();
-        let poses = match self.poses.shape() {
-            Some(shape) => PreparedPoses::for_shape(shape, &readings)?,
-            None => PreparedPoses::new(spheres.joints(), &readings)?,
-        };
+        let all: Vec<usize> = (0..spheres.len()).collect();
+        let poses = super::prepared(&spheres, &all, self.poses.shape())?;
         let pick = |v: &[f64]| -> Vec<f64> {
             if v.len() == self.spheres.len() {
                 rows.iter().map(|&i| v[i]).collect()
