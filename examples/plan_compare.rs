@@ -174,6 +174,7 @@ fn world(case: &Case, seed: u64) -> Result<World> {
                 lengths: c.lengths,
             })
         }
+        other => bail!("plan_compare compares positions and touches, not {other:?}"),
     }
 }
 

@@ -5,20 +5,22 @@
 //!
 //! Without `--out` only the summary is printed (the ranking names the rows
 //! of the candidates file); with `--out` the chosen rows are written too, as
-//! a poses file in the order chosen, so that a sampled pool's poses can be
-//! measured.
+//! a poses file in the order chosen (a sphere-surface file for `--measure
+//! spheres`), so that a sampled pool's poses can be measured.
 
 use std::path::{Path, PathBuf};
 
+use aacmm_core::io::spheres::{Spheres, read_spheres, write_spheres};
 use aacmm_core::io::{
     AngleUnit, Arm, Poses, limit_warning, read_arm, read_poses_or_positions, source_name,
 };
 use aacmm_core::plan::{
     Criterion, DEFAULT_SOCKETS, Given, GivenNote, Measure, Plan, PlanError, PlanSettings, Pool,
-    SampleError, SummaryContext, plan, sample_positions, sample_touches_observed, summary,
+    SampleError, SummaryContext, plan, sample_positions, sample_sphere_points,
+    sample_touches_observed, summary,
 };
 use aacmm_core::session::{CalibrationReport, REPORT_FILE};
-use aacmm_core::simulate::{SimError, SocketPlan};
+use aacmm_core::simulate::{DEFAULT_SPHERE_DIAMETER_MM, SimError, SocketPlan};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};
 
@@ -45,13 +47,15 @@ pub struct Args {
     /// Candidate poses (CSV `point,q1,...,qn`), or a reference-positions
     /// file (`point,q1,...,qn,x,y,z[,frame][,uncertainty]`) whose readings
     /// are taken, its positions ignored; for touches the `point` labels are
-    /// the sockets. `-` reads standard input.
+    /// the sockets. For sphere points a sphere-surface file (`sphere,q1,...,
+    /// qn`, as calibrate --spheres reads). `-` reads standard input.
     #[arg(long, value_name = "POOL.csv")]
     candidates: Option<PathBuf>,
     /// Draw N candidates instead: positions uniformly within the joint
     /// limits; touches of sockets placed as `aacmm simulate` places them,
     /// found on the arm itself by inverse kinematics (N rounded up to a
-    /// multiple of the sockets).
+    /// multiple of the sockets); sphere points as `aacmm simulate
+    /// --spheres` places and probes them, 25 a sphere (N rounded up).
     #[arg(long, value_name = "N")]
     sample: Option<usize>,
     /// The sockets of sampled touches (CSV `point,x,y,z`, mm).
@@ -70,9 +74,17 @@ pub struct Args {
     #[arg(long, value_name = "K", required_unless_present = "given")]
     count: Option<usize>,
     /// What the campaign measures: reference positions an instrument sees
-    /// (its frame fitted with the arm) or touches of sockets.
+    /// (its frame fitted with the arm), touches of sockets, or points
+    /// probed on reference spheres (each one's centre fitted, and its
+    /// diameter unless --sphere-diameter states it).
     #[arg(long, value_enum)]
     measure: MeasureFlag,
+    /// Sphere points: the spheres' diameter, mm, as calibrate will be told
+    /// it (each sphere's size then known, so the points fix the arm's
+    /// scale); --sample draws spheres of this size [default: 25.4, the
+    /// diameter fitted].
+    #[arg(long, value_name = "MM")]
+    sphere_diameter: Option<f64>,
     /// Unit of the joint readings (q1..qn) of the poses files read
     /// (--candidates, --workspace) and written (--out); the arm file states
     /// its own (`angle_unit`).
@@ -145,6 +157,8 @@ enum MeasureFlag {
     Positions,
     /// Touches of sockets.
     Touches,
+    /// Points probed on reference spheres.
+    Spheres,
 }
 
 /// Values of --criterion.
@@ -332,7 +346,10 @@ fn read_given(dir: &Path, arm: &Arm, arm_file: &Path) -> Result<Start> {
 /// The pool: read (--candidates) or drawn (--sample).
 fn candidates(args: &Args, arm: &Arm) -> Result<Candidates> {
     if let Some(path) = &args.candidates {
-        let poses = read_candidates("--candidates", path, args, arm)?;
+        let poses = match args.measure {
+            MeasureFlag::Spheres => read_sphere_candidates(path, args, arm)?,
+            _ => read_candidates("--candidates", path, args, arm)?,
+        };
         return Ok(Candidates {
             pool: Pool::from_file(poses, &source_name(path)),
             name: format!("--candidates {}", source_name(path)),
@@ -344,6 +361,10 @@ fn candidates(args: &Args, arm: &Arm) -> Result<Candidates> {
     let pool = match args.measure {
         MeasureFlag::Positions => sample_positions(arm, n, args.seed, &source_name(&args.arm))
             .map_err(|e| anyhow!("--sample {n}: {e}"))?,
+        MeasureFlag::Spheres => {
+            let d = args.sphere_diameter.unwrap_or(DEFAULT_SPHERE_DIAMETER_MM);
+            sample_sphere_points(arm, n, d, args.seed).map_err(|e| anyhow!("--sample {n}: {e}"))?
+        }
         MeasureFlag::Touches => {
             let sockets = match &args.sockets {
                 Some(path) => SocketPlan::from_file(path)?,
@@ -380,6 +401,38 @@ fn read_candidates(flag: &str, path: &Path, args: &Args, arm: &Arm) -> Result<Po
     Ok(poses)
 }
 
+/// A sphere-surface file's rows as candidates (each labelled by its
+/// sphere), refused by file, line and field where its points fix no
+/// sphere on the arm, its warnings printed.
+fn read_sphere_candidates(path: &Path, args: &Args, arm: &Arm) -> Result<Poses> {
+    let file = source_name(path);
+    let (rows, warnings) = read_spheres(path, args.angle_unit, arm)?;
+    report(&warnings)?;
+    if (0..rows.len()).any(|i| rows.tool(i) != 0) {
+        bail!(
+            "--candidates {file}: its `tool` column names the probe of each row; plan for one \
+             tool at a time with --tool NAME and a file without the column"
+        );
+    }
+    aacmm_core::residuals::spheres::check_spheres(&rows, &file, &arm.params)?;
+    let mut poses = Poses::with_capacity(rows.joints(), rows.len());
+    if let Ok(shape) = arm.params.shape() {
+        poses = poses.with_shape(shape);
+    }
+    for i in 0..rows.len() {
+        poses.push(
+            &rows.spheres()[rows.sphere(i)],
+            rows.reading(i),
+            rows.line(i),
+        );
+    }
+    let warnings: Vec<_> = limit_warning(arm, &poses, &file, args.angle_unit)
+        .into_iter()
+        .collect();
+    report(&warnings)?;
+    Ok(poses)
+}
+
 /// The library's refusal to draw touches, in terms of the flags.
 fn sample_error(e: SampleError, args: &Args, n: usize) -> anyhow::Error {
     let flag = match &e {
@@ -407,8 +460,17 @@ fn settings(args: &Args, given: bool) -> Result<PlanSettings> {
     let measure = match args.measure {
         MeasureFlag::Positions => Measure::Positions,
         MeasureFlag::Touches => Measure::Touches,
+        MeasureFlag::Spheres => Measure::Spheres,
     };
     let mut s = PlanSettings::new(count, measure);
+    if let Some(d) = args.sphere_diameter {
+        if measure != Measure::Spheres {
+            bail!("--sphere-diameter {d}: applies to --measure spheres only");
+        }
+        aacmm_core::residuals::spheres::check_sphere_diameter(d)
+            .map_err(super::shared_flags::flag_error)?;
+        s.sphere_diameter_stated = true;
+    }
     s.criterion = match args.criterion {
         CriterionFlag::Robust => Criterion::Robust,
         CriterionFlag::Prediction => Criterion::Prediction,
@@ -439,13 +501,22 @@ fn settings(args: &Args, given: bool) -> Result<PlanSettings> {
     Ok(s)
 }
 
-/// The chosen rows of `pool` in the order chosen, as a poses file.
+/// The chosen rows of `pool` in the order chosen, as a poses file (a
+/// sphere-surface file for sphere points).
 fn write_chosen(path: &Path, plan: &Plan, pool: &Poses, unit: AngleUnit) -> Result<()> {
     // The pool's prismatic joints are written as read: mm.
-    let mut chosen = pool.empty_like(plan.count);
-    for (rank, row) in plan.chosen().into_iter().enumerate() {
-        chosen.push(pool.label(row), pool.reading(row), rank + 2);
-    }
-    aacmm_core::io::write_atomic_with(path, |w| aacmm_core::io::write_poses(w, &chosen, unit))
-        .with_context(|| format!("{}: cannot write", path.display()))
+    let written = if plan.measure() == Measure::Spheres {
+        let mut chosen = Spheres::new(pool.joints(), pool.prismatic_mask());
+        for (rank, row) in plan.chosen().into_iter().enumerate() {
+            chosen.push(pool.label(row), pool.reading(row), rank + 2, None);
+        }
+        aacmm_core::io::write_atomic_with(path, |w| write_spheres(w, &chosen, unit))
+    } else {
+        let mut chosen = pool.empty_like(plan.count);
+        for (rank, row) in plan.chosen().into_iter().enumerate() {
+            chosen.push(pool.label(row), pool.reading(row), rank + 2);
+        }
+        aacmm_core::io::write_atomic_with(path, |w| aacmm_core::io::write_poses(w, &chosen, unit))
+    };
+    written.with_context(|| format!("{}: cannot write", path.display()))
 }

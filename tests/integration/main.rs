@@ -21,6 +21,7 @@ mod orientations;
 mod out_paths;
 mod plan;
 mod plan_cli;
+mod plan_spheres;
 mod points;
 mod positions;
 mod prior;

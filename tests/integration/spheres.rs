@@ -427,8 +427,8 @@ fn a_stated_diameter_fixes_the_scale_a_fitted_one_does_not() {
     assert!(spheres.stated_diameter.is_none() && spheres.spheres[0].diameter_sigma.is_some());
 }
 
-/// An arm file with a probe ball.
-fn arm_file(dir: &std::path::Path) -> String {
+/// An arm file with a probe ball (the shipped arm, a 6 mm ball).
+pub(crate) fn arm_file(dir: &std::path::Path) -> String {
     let text = std::fs::read_to_string(crate::util::shipped_arm()).unwrap();
     write(
         dir,

@@ -52,7 +52,8 @@ pub use map::{
 
 pub(crate) use map::reading_ranges;
 pub use pool::{
-    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_touches, sample_touches_observed,
+    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_sphere_points, sample_touches,
+    sample_touches_observed,
 };
 pub use summary::{GivenNote, Knee, SummaryContext, knee, summary};
 
@@ -67,11 +68,17 @@ use rows::{Blocks, jacobians, mean_gram, scaled, unit_scale};
 /// What the campaign will measure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[non_exhaustive]
 pub enum Measure {
     /// Positions an instrument sees (laser tracker, artefact), in its frame.
     Positions,
     /// Touches of sockets; the candidates' labels are the sockets.
     Touches,
+    /// Points probed on the surface of reference spheres; the candidates'
+    /// labels are the spheres (placements), each one's centre — and its
+    /// diameter unless [`PlanSettings::sphere_diameter_stated`] — fitted
+    /// with the arm.
+    Spheres,
 }
 
 /// What a plan optimises.
@@ -125,6 +132,9 @@ pub struct PlanSettings {
     /// (an even sample of a larger workspace): each costs a Jacobian and
     /// its share of every step's work.
     pub workspace_limit: usize,
+    /// Spheres: their diameter will be stated to the calibration, so that
+    /// only each sphere's centre is fitted, not its size (default: fitted).
+    pub sphere_diameter_stated: bool,
 }
 
 impl PlanSettings {
@@ -142,6 +152,7 @@ impl PlanSettings {
             curve_to: 2 * count,
             seed: 1,
             workspace_limit: WORKSPACE_POSES,
+            sphere_diameter_stated: false,
         }
     }
 }
@@ -186,6 +197,23 @@ pub struct Spread {
     pub(crate) median_mm: f64,
     /// Largest, mm.
     pub(crate) max_mm: f64,
+}
+
+impl Spread {
+    /// RMS of the 95 % radius over the workspace, mm.
+    pub fn rms_mm(&self) -> f64 {
+        self.rms_mm
+    }
+
+    /// Its median, mm.
+    pub fn median_mm(&self) -> f64 {
+        self.median_mm
+    }
+
+    /// Its largest, mm.
+    pub fn max_mm(&self) -> f64 {
+        self.max_mm
+    }
 }
 
 /// One chosen row, in the order chosen.
@@ -282,7 +310,7 @@ pub struct Plan {
     pub(crate) random: RandomBaseline,
     /// The predicted uncertainty as rows are added.
     pub(crate) curve: Vec<CurvePoint>,
-    /// Touches per socket chosen (touches only).
+    /// Rows chosen per socket or sphere (touches and sphere points only).
     pub sockets: Vec<(String, usize)>,
     /// How far each joint turns over the chosen rows.
     pub joints: Vec<JointSpan>,
@@ -291,6 +319,18 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// What the plan is for: positions, touches or sphere points.
+    pub fn measure(&self) -> Measure {
+        self.measure
+    }
+
+    /// The spread of the median random subset of the plan's size
+    /// (undetermined subsets counted as the worst); `None` when none was
+    /// drawn or the median one does not determine every parameter.
+    pub fn random_median(&self) -> Option<Spread> {
+        self.random.median
+    }
+
     /// The chosen rows of the pool, in the order chosen.
     pub fn chosen(&self) -> Vec<usize> {
         self.steps[..self.count].iter().map(|s| s.row).collect()
@@ -317,10 +357,10 @@ impl Plan {
             self.candidates,
             self.parameters.len(),
             self.parameters.join(", "),
-            if self.measure == Measure::Touches {
-                ", or touches of more sockets"
-            } else {
-                ""
+            match self.measure {
+                Measure::Touches => ", or touches of more sockets",
+                Measure::Spheres => ", or points on more spheres",
+                Measure::Positions => "",
             }
         ))
     }
@@ -337,8 +377,24 @@ struct Design {
     group: Vec<usize>,
     sockets: Vec<String>,
     touches: bool,
+    /// Rows a group (socket, sphere) opens with; `None` for positions.
+    seeds: Option<usize>,
+    /// Columns each sphere adds after the geometry's (0 for touches and
+    /// positions).
+    per_sphere: usize,
+    /// The candidates' nominal probe positions (spheres only: their seeds
+    /// are spread over the surface).
+    positions: Vec<[f64; 3]>,
     geometry: usize,
     sigma: f64,
+}
+
+impl Design {
+    /// Whether group `s`'s rows tell the arm anything when `n` of them are
+    /// chosen: a sphere's only beyond its own unknowns.
+    fn informs(&self, n: usize) -> bool {
+        n > self.per_sphere
+    }
 }
 
 /// Chooses `settings.count` rows of `pool` for `params`; `workspace` is
@@ -418,7 +474,11 @@ pub fn plan(
         candidates: pool.len(),
         count: settings.count,
         steps,
-        parameters: parameter_names(params, &free, frame),
+        parameters: [
+            parameter_names(params, &free, frame),
+            sphere_parameter_names(&design),
+        ]
+        .concat(),
         sigma_mm: design.sigma,
         hedge,
         strata: design.stratum.iter().max().map_or(0, |m| m + 1),
@@ -463,6 +523,19 @@ fn parameter_names(params: &DhParams, free: &[usize], frame: bool) -> Vec<String
     names
 }
 
+/// The spheres' own columns by name, after the geometry's: each centre's
+/// `x, y, z` and, when fitted, its radius.
+fn sphere_parameter_names(design: &Design) -> Vec<String> {
+    let mut names = Vec::new();
+    for s in design.sockets.iter().filter(|_| design.per_sphere > 0) {
+        names.extend(["x", "y", "z"].map(|k| format!("sphere.{s}.{k}")));
+        if design.per_sphere == 4 {
+            names.push(format!("sphere.{s}.radius"));
+        }
+    }
+    names
+}
+
 fn check(
     params: &DhParams,
     pool: &Poses,
@@ -500,6 +573,16 @@ fn check(
             settings.count
         )));
     }
+    if let (Measure::Spheres, Some(min)) = (settings.measure, seeds(settings))
+        && settings.count < min
+    {
+        return Err(PlanError::Invalid(format!(
+            "count {}: points on a sphere tell the arm something beyond the sphere's {} \
+             unknowns from the next; a plan gives a sphere at least {min}",
+            settings.count,
+            min - SPHERE_ROWS_BEYOND
+        )));
+    }
     Ok(())
 }
 
@@ -515,13 +598,17 @@ fn columns(
     if let Some(g) = given {
         return Ok((g.free.clone(), positions && !g.frame_known));
     }
-    let data = pool_data(params, pool, positions)?;
-    let noise = Noise {
-        position_mm: Some(settings.sigma_mm),
-        ..Noise::default()
+    let id = if settings.measure == Measure::Spheres {
+        sphere_identification(params, pool, settings)?
+    } else {
+        let data = pool_data(params, pool, positions)?;
+        let noise = Noise {
+            position_mm: Some(settings.sigma_mm),
+            ..Noise::default()
+        };
+        crate::identify::identify(params, &data, &noise, 1)
+            .map_err(|e| PlanError::Identify(e.to_string()))?
     };
-    let id = crate::identify::identify(params, &data, &noise, 1)
-        .map_err(|e| PlanError::Identify(e.to_string()))?;
     let free = id.free_columns();
     if free.is_empty() {
         return Err(PlanError::Invalid(
@@ -529,6 +616,46 @@ fn columns(
         ));
     }
     Ok((free, positions))
+}
+
+/// What points on the pool's spheres determine: the analysis of the
+/// sphere term alone, each sphere's centre (and, unless stated, its size)
+/// eliminated. The stated size's value does not matter (the rows' normals
+/// do not depend on it): the term is given one in range and a ball of 0.
+fn sphere_identification(
+    params: &DhParams,
+    pool: &Poses,
+    settings: &PlanSettings,
+) -> Result<crate::identify::Identification, PlanError> {
+    use crate::residuals::spheres::{SphereSize, SphereTerm, add_to};
+    let mut spheres = crate::io::spheres::Spheres::new(pool.joints(), pool.prismatic_mask());
+    for i in 0..pool.len() {
+        spheres.push(pool.label(i), pool.reading(i), pool.line(i), None);
+    }
+    let size = if settings.sphere_diameter_stated {
+        SphereSize::Known(crate::simulate::DEFAULT_SPHERE_DIAMETER_MM)
+    } else {
+        SphereSize::Fitted
+    };
+    let noise = Noise {
+        probe_mm: Some(settings.sigma_mm),
+        ..Noise::default()
+    };
+    let add = |layout: &mut crate::residuals::Layout| {
+        let term = SphereTerm::new(
+            spheres.clone(),
+            "<candidates>",
+            params,
+            size,
+            Some(0.0),
+            &noise,
+            add_to(layout),
+        )?;
+        Ok(vec![Box::new(term) as Box<dyn crate::residuals::Term>])
+    };
+    let data = DataSet::without_touches(pool.joints(), pool.prismatic_mask());
+    crate::identify::identify_with(params, &data, &noise, Some(&add), 1)
+        .map_err(|e| PlanError::Identify(e.to_string()))
 }
 
 /// The pool as a data set the identifiability analysis reads: touches as
@@ -574,7 +701,18 @@ fn design(
     given: Option<&Given>,
     settings: &PlanSettings,
 ) -> Result<Design, PlanError> {
-    let (raw, _) = jacobians(params, &prepared(pool), free, frame)?;
+    let (group, sockets) = groups(pool);
+    let spheres = settings.measure == Measure::Spheres;
+    let stated = settings.sphere_diameter_stated;
+    let (raw, positions) = if spheres {
+        let (b, at) = rows::sphere_rows(params, &prepared(pool), free, &group, &sockets, stated)?;
+        (b, at)
+    } else {
+        (
+            jacobians(params, &prepared(pool), free, frame)?.0,
+            Vec::new(),
+        )
+    };
     let scale = unit_scale(&raw);
     let blocks = scaled(raw, &scale);
     let ws = workspace.unwrap_or(pool);
@@ -583,7 +721,8 @@ fn design(
     for i in (0..ws.len()).step_by(step) {
         sample.push(ws.label(i), ws.reading(i), ws.line(i));
     }
-    let (mut wraw, _) = jacobians(params, &prepared(&sample), free, frame)?;
+    let (wraw, _) = jacobians(params, &prepared(&sample), free, frame)?;
+    let mut wraw = rows::widened(wraw, blocks.p);
     // Where the arm is used, only the geometry moves the probe: the frame
     // is the instrument's, not the arm's.
     let g = free.len();
@@ -592,16 +731,6 @@ fn design(
     }
     let workspace = scaled(wraw, &scale);
     let w = mean_gram(&workspace);
-    let mut sockets: Vec<String> = Vec::new();
-    let group = (0..pool.len())
-        .map(|i| {
-            let l = pool.label(i);
-            sockets.iter().position(|s| s == l).unwrap_or_else(|| {
-                sockets.push(l.to_string());
-                sockets.len() - 1
-            })
-        })
-        .collect();
     let stratum = match settings.criterion {
         Criterion::Robust => strata::strata(
             pool,
@@ -619,9 +748,50 @@ fn design(
         group,
         sockets,
         touches: settings.measure == Measure::Touches,
+        seeds: seeds(settings),
+        per_sphere: if spheres {
+            rows::sphere_columns(stated)
+        } else {
+            0
+        },
+        positions,
         geometry: g,
         sigma: given.map_or(settings.sigma_mm, |g| g.sigma_mm),
     })
+}
+
+/// Rows a group opens with: [`MIN_TOUCHES_PER_SOCKET`] touches of a
+/// socket; a sphere's own unknowns and [`SPHERE_ROWS_BEYOND`] points more;
+/// `None` for positions.
+fn seeds(settings: &PlanSettings) -> Option<usize> {
+    match settings.measure {
+        Measure::Positions => None,
+        Measure::Touches => Some(MIN_TOUCHES_PER_SOCKET),
+        Measure::Spheres => {
+            Some(rows::sphere_columns(settings.sphere_diameter_stated) + SPHERE_ROWS_BEYOND)
+        }
+    }
+}
+
+/// Points a plan gives each sphere beyond its own unknowns at least: the
+/// rows that inform the arm (and show a point off the sphere).
+pub(crate) const SPHERE_ROWS_BEYOND: usize = 2;
+
+/// Each candidate's group (its label's place among the labels, in order
+/// of first appearance), and the labels.
+fn groups(pool: &Poses) -> (Vec<usize>, Vec<String>) {
+    let mut labels: Vec<String> = Vec::new();
+    let mut index: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    let group = (0..pool.len())
+        .map(|i| {
+            let l = pool.label(i);
+            *index.entry(l.to_string()).or_insert_with(|| {
+                labels.push(l.to_string());
+                labels.len() - 1
+            })
+        })
+        .collect();
+    (group, labels)
 }
 
 /// Each candidate's weight `1/(1 + τ² h_i/h̄)`, `h_i` its leverage within
@@ -716,20 +886,29 @@ fn prior_information(given: &Given, design: &Design) -> DMatrix<f64> {
 }
 
 /// The greedy's choices up to `to` rows (the first `count` exchanged);
-/// touches open their sockets (most candidates first) with
-/// [`MIN_TOUCHES_PER_SOCKET`] seeds each, as many sockets as the count
-/// allows, and open the next when the open ones run out of candidates.
+/// touches and sphere points open their sockets or spheres (most
+/// candidates first) with [`Design::seeds`] rows each, as many as the count
+/// allows (spheres: as many as half the count seeds), and open the next
+/// when the open ones run out of candidates. Measured on the paper's arm,
+/// 200 candidates on 8 spheres: opening every sphere the count allows left
+/// 40 and 60 points undetermined; seeds of half the count gave 0.040 and
+/// 0.027 mm (diameter fitted), a third of it 0.048 and 0.030 mm.
 fn choose(greedy: &mut Greedy, design: &Design, count: usize, to: usize) -> Vec<usize> {
     let sockets = design.sockets.len();
     let mut order = Vec::with_capacity(to);
-    let mut open = vec![!design.touches; sockets];
+    let mut open = vec![design.seeds.is_none(); sockets];
     let mut queue: Vec<usize> = Vec::new();
-    if design.touches {
-        let size = |s: usize| design.group.iter().filter(|&&g| g == s).count();
-        queue = (0..sockets).filter(|&s| size(s) >= 2).collect();
-        queue.sort_by_key(|&s| std::cmp::Reverse(size(s)));
+    if let Some(min) = design.seeds {
+        let mut size = vec![0usize; sockets];
+        design.group.iter().for_each(|&g| size[g] += 1);
+        queue = (0..sockets).filter(|&s| size[s] >= 2).collect();
+        queue.sort_by_key(|&s| std::cmp::Reverse(size[s]));
         queue.reverse();
-        let first = (count / MIN_TOUCHES_PER_SOCKET).clamp(1, sockets);
+        // A sphere's seeds are mostly its own unknowns: spheres open so
+        // that their seeds take half the count, leaving the rest to
+        // inform the arm.
+        let share = if design.per_sphere > 0 { 2 * min } else { min };
+        let first = (count / share).clamp(1, sockets);
         for _ in 0..first {
             if let Some(s) = queue.pop() {
                 open[s] = true;
@@ -800,11 +979,11 @@ fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], op
         let mut changed = false;
         for slot in order.iter_mut() {
             let k = slot.0;
-            // A socket at its fewest touches swaps within itself (its seeds
-            // were chosen by distance, not by the criterion); other rows
-            // within their stratum, when there are strata.
+            // A socket (sphere) at its fewest rows swaps within itself (its
+            // seeds were chosen by distance, not by the criterion); other
+            // rows within their stratum, when there are strata.
             let g = design.group[k];
-            let least = design.touches && greedy.members(g).len() <= MIN_TOUCHES_PER_SOCKET;
+            let least = design.seeds.is_some_and(|m| greedy.members(g).len() <= m);
             let before = greedy.value();
             greedy.remove(k);
             let same = |i: usize| {
@@ -838,11 +1017,15 @@ fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], op
 }
 
 /// A socket's first touches: the candidate farthest (in its rows) from the
-/// socket's mean, the one farthest from that, then the best third.
+/// socket's mean, the one farthest from that, then the best third. A
+/// sphere's: spread over its surface ([`seed_sphere`]).
 fn seed(greedy: &mut Greedy, design: &Design, s: usize, order: &mut Vec<(usize, f64)>) {
     let members: Vec<usize> = (0..design.group.len())
         .filter(|&i| design.group[i] == s && !greedy.is_taken(i))
         .collect();
+    if !design.positions.is_empty() {
+        return seed_sphere(greedy, design, s, &members, order);
+    }
     let p3 = 3 * design.blocks.p;
     let mut mean = vec![0.0; p3];
     for &i in &members {
@@ -867,6 +1050,45 @@ fn seed(greedy: &mut Greedy, design: &Design, s: usize, order: &mut Vec<(usize, 
         };
         greedy.add(c);
         order.push((c, greedy.criterion));
+    }
+}
+
+/// A sphere's first points, [`Design::seeds`] of them, as far apart as its
+/// candidates allow: the one farthest from their centroid, then each the
+/// one farthest from those taken (the largest least distance). Until a
+/// sphere has more points than its own unknowns the criterion cannot tell
+/// them apart; points spread over the surface fix the sphere best.
+fn seed_sphere(
+    greedy: &mut Greedy,
+    design: &Design,
+    s: usize,
+    members: &[usize],
+    order: &mut Vec<(usize, f64)>,
+) {
+    let at = |i: usize| &design.positions[i];
+    let points: Vec<[f64; 3]> = members.iter().map(|&i| *at(i)).collect();
+    let mut from = vec![crate::geometry::centroid(&points)];
+    let want = design.seeds.unwrap_or(0);
+    while greedy.members(s).len() < want {
+        let far = |i: usize| {
+            from.iter()
+                .map(|f| crate::geometry::distance(at(i), f))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let next = (members.iter().copied())
+            .filter(|&i| !greedy.is_taken(i))
+            .map(|i| (i, far(i)))
+            .fold(None, |best: Option<(usize, f64)>, (i, d)| match best {
+                Some((_, b)) if b >= d => best,
+                _ => Some((i, d)),
+            });
+        let Some((i, _)) = next else { return };
+        if greedy.members(s).is_empty() {
+            from.clear();
+        }
+        from.push(*at(i));
+        greedy.add(i);
+        order.push((i, greedy.criterion));
     }
 }
 
@@ -895,17 +1117,48 @@ impl Evaluation<'_> {
     /// and the prior; `None` when they do not determine every column.
     fn covariance(&self, rows: &[usize]) -> Option<DMatrix<f64>> {
         let d = self.design;
+        if d.per_sphere > 0 {
+            return self.sphere_covariance(rows);
+        }
         let p = d.blocks.p;
         let mut m = gram(&deviations(d, rows), p);
         if let Some(prior) = self.prior {
             m += prior;
         }
-        // Determined: every pivot well above rounding of the largest.
-        let top = m.diagonal().max();
-        let chol = m.cholesky()?;
-        let l = chol.l_dirty();
-        let determined = top > 0.0 && (0..p).all(|a| l[(a, a)].powi(2) > 1e-12 * top);
-        determined.then(|| chol.inverse())
+        determined_inverse(m)
+    }
+
+    /// [`Evaluation::covariance`] of sphere points: a sphere with no more
+    /// points than its own unknowns tells the arm nothing (they fit any
+    /// points so few), so its rows and columns are left out; the others'
+    /// unknowns are estimated with the arm. Their columns in the result
+    /// are zero for the left-out spheres.
+    fn sphere_covariance(&self, rows: &[usize]) -> Option<DMatrix<f64>> {
+        let d = self.design;
+        let mut count = vec![0usize; d.sockets.len()];
+        rows.iter().for_each(|&i| count[d.group[i]] += 1);
+        let kept: Vec<usize> = (rows.iter().copied())
+            .filter(|&i| d.informs(count[d.group[i]]))
+            .collect();
+        let mut columns: Vec<usize> = (0..d.geometry).collect();
+        for (s, &n) in count.iter().enumerate() {
+            if d.informs(n) {
+                columns.extend(d.geometry + d.per_sphere * s..d.geometry + d.per_sphere * (s + 1));
+            }
+        }
+        let p = d.blocks.p;
+        let mut m = gram(&deviations(d, &kept), p);
+        if let Some(prior) = self.prior {
+            m += prior;
+        }
+        let c = determined_inverse(m.select_rows(&columns).select_columns(&columns))?;
+        let mut full = DMatrix::zeros(p, p);
+        for (a, &ca) in columns.iter().enumerate() {
+            for (b, &cb) in columns.iter().enumerate() {
+                full[(ca, cb)] = c[(a, b)];
+            }
+        }
+        Some(full)
     }
 
     /// `tr(W C)` of the covariance `c`, as an isotropic 95 % radius (mm).
@@ -967,6 +1220,17 @@ impl Evaluation<'_> {
     }
 }
 
+/// The inverse of the information `m`; `None` when it does not determine
+/// every column (a pivot not well above rounding of the largest).
+fn determined_inverse(m: DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let p = m.nrows();
+    let top = m.diagonal().max();
+    let chol = m.cholesky()?;
+    let l = chol.l_dirty();
+    let determined = top > 0.0 && (0..p).all(|a| l[(a, a)].powi(2) > 1e-12 * top);
+    determined.then(|| chol.inverse())
+}
+
 /// Row counts the curve is evaluated at: eighths of `to`, and `count`.
 fn checkpoints(count: usize, to: usize) -> Vec<usize> {
     let mut k: Vec<usize> = (1..=8).map(|i| (to * i).div_ceil(8)).collect();
@@ -999,9 +1263,9 @@ fn joint_spans(pool: &Poses, chosen: &[usize]) -> Vec<JointSpan> {
         .collect()
 }
 
-/// Touches chosen per socket (touches only).
+/// Rows chosen per socket or sphere (touches and sphere points only).
 fn socket_counts(design: &Design, chosen: &[usize]) -> Vec<(String, usize)> {
-    if !design.touches {
+    if design.seeds.is_none() {
         return Vec::new();
     }
     design

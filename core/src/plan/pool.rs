@@ -174,6 +174,57 @@ pub fn sample_touches_observed(
     })
 }
 
+/// Points on about `n` / 25 spheres of `diameter_mm` (`n` rounded up to
+/// a multiple of 25), placed and probed as `aacmm simulate --spheres`
+/// places and probes them (ISO 10360-5's 25 directions each), found on
+/// `arm` itself by inverse kinematics with its ball (none when the arm
+/// file states none), without noise: labels `S1`, `S2`, ….
+///
+/// # Errors
+///
+/// [`SampleError::Nothing`] for `n` = 0; the simulator's (a diameter out
+/// of range, spheres it cannot place or probe).
+pub fn sample_sphere_points(
+    arm: &Arm,
+    n: usize,
+    diameter_mm: f64,
+    seed: u64,
+) -> Result<Pool, SampleError> {
+    if n == 0 {
+        return Err(SampleError::Nothing);
+    }
+    let per = crate::simulate::iso_sphere_pattern().len();
+    let settings = crate::simulate::SphereSettings {
+        placements: n.div_ceil(per),
+        diameter_mm,
+        ball_diameter_mm: arm.ball_diameter_mm.unwrap_or(0.0),
+        encoder_rad: 0.0,
+        probe_mm: 0.0,
+        seed,
+    };
+    let spheres = crate::simulate::simulate_spheres(arm, &settings)?.spheres;
+    let mut poses = Poses::with_capacity(spheres.joints(), spheres.len());
+    if let Ok(shape) = arm.params.shape() {
+        poses = poses.with_shape(shape);
+    }
+    for i in 0..spheres.len() {
+        poses.push(
+            &spheres.spheres()[spheres.sphere(i)],
+            spheres.reading(i),
+            i + 2,
+        );
+    }
+    Ok(Pool {
+        origin: format!(
+            "{} spheres of {diameter_mm} mm placed through the arm's volume, {per} points each \
+             found on the arm by inverse kinematics (seed {seed})",
+            settings.placements
+        ),
+        poses,
+        from_file: false,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -111,3 +111,79 @@ pub(crate) fn mean_gram(blocks: &Blocks) -> Vec<f64> {
     w.iter_mut().for_each(|v| *v /= n);
     w
 }
+
+/// The rows of points probed on spheres, one per candidate in its block's
+/// first row (the other two zero): the probe's move along its sphere's
+/// normal `nᵀ J` over `free`, then per sphere its centre's columns (`−nᵀ`)
+/// and, unless the diameter is stated, its radius's (`−1`). The spheres'
+/// own unknowns are columns of the design that nothing but the weak prior
+/// knows, so that a sphere's first points — which fix the sphere, not the
+/// arm — gain the arm nothing, as the fit's elimination of them gives.
+/// Each sphere's centre and normals are those of the algebraic sphere
+/// through its candidates' nominal probe positions. `group` is each
+/// candidate's sphere of `names`; returns the blocks and the positions.
+pub(crate) fn sphere_rows(
+    params: &DhParams,
+    poses: &PreparedPoses,
+    free: &[usize],
+    group: &[usize],
+    names: &[String],
+    stated: bool,
+) -> Result<(Blocks, Vec<[f64; 3]>), super::PlanError> {
+    let (raw, positions) = jacobians(params, poses, free, false)?;
+    let (g, per) = (free.len(), sphere_columns(stated));
+    let p = g + per * names.len();
+    let mut centres = Vec::with_capacity(names.len());
+    for (s, name) in names.iter().enumerate() {
+        let points: Vec<[f64; 3]> = (0..positions.len())
+            .filter(|&i| group[i] == s)
+            .map(|i| positions[i])
+            .collect();
+        let (c, _) = crate::residuals::spheres::algebraic_sphere(&points).ok_or_else(|| {
+            super::PlanError::Invalid(format!(
+                "sphere `{name}`: its {} candidates fix no sphere (fewer than 4, or on one \
+                 circle)",
+                points.len()
+            ))
+        })?;
+        centres.push(c);
+    }
+    let mut j = vec![0.0; 3 * p * positions.len()];
+    for (i, pos) in positions.iter().enumerate() {
+        let s = group[i];
+        let d = crate::geometry::distance(pos, &centres[s]);
+        let n: [f64; 3] =
+            std::array::from_fn(|k| (pos[k] - centres[s][k]) / d.max(f64::MIN_POSITIVE));
+        let row = &mut j[3 * i * p..3 * i * p + p];
+        let jac = raw.at(i);
+        for (a, v) in row[..g].iter_mut().enumerate() {
+            *v = (0..3).map(|k| n[k] * jac[k * g + a]).sum();
+        }
+        let own = &mut row[g + per * s..g + per * (s + 1)];
+        own[..3].copy_from_slice(&n.map(|v| -v));
+        if !stated {
+            own[3] = -1.0;
+        }
+    }
+    Ok((Blocks { p, j }, positions))
+}
+
+/// The columns a sphere adds to the design: its centre's three, and its
+/// radius unless the diameter is stated.
+pub(crate) fn sphere_columns(stated: bool) -> usize {
+    if stated { 3 } else { 4 }
+}
+
+/// `blocks` (`g` columns) widened to `p`, the new columns zero: the
+/// workspace's rows, on which the spheres' own unknowns do not act.
+pub(crate) fn widened(blocks: Blocks, p: usize) -> Blocks {
+    if blocks.p == p {
+        return blocks;
+    }
+    let g = blocks.p;
+    let mut j = vec![0.0; blocks.j.len() / g.max(1) * p];
+    for (out, row) in j.chunks_exact_mut(p).zip(blocks.j.chunks_exact(g)) {
+        out[..g].copy_from_slice(row);
+    }
+    Blocks { p, j }
+}

@@ -97,7 +97,11 @@ pub fn summary(plan: &Plan, context: SummaryContext<'_>) -> String {
         let s: Vec<String> = (plan.sockets.iter())
             .map(|(label, n)| format!("{label} {n}"))
             .collect();
-        t += &format!("Touches per socket: {}\n", s.join(", "));
+        let per = match plan.measure {
+            Measure::Spheres => "Points per sphere",
+            _ => "Touches per socket",
+        };
+        t += &format!("{per}: {}\n", s.join(", "));
     }
     let spans: Vec<String> = (plan.joints.iter())
         .map(|j| {
@@ -141,6 +145,7 @@ fn header(plan: &Plan, context: SummaryContext<'_>) -> String {
     let what = match plan.measure {
         Measure::Positions => "positions",
         Measure::Touches => "touches",
+        Measure::Spheres => "sphere points",
     };
     let mut t = format!(
         "Plan: {} of {} candidate {what}, {}\n",
@@ -160,16 +165,25 @@ fn header(plan: &Plan, context: SummaryContext<'_>) -> String {
     let frame = (plan.parameters.iter())
         .filter(|p| p.starts_with("frame "))
         .count();
-    let geometry = plan.parameters.len() - frame;
+    let spheres = (plan.parameters.iter())
+        .filter(|p| p.starts_with("sphere."))
+        .count();
+    let geometry = plan.parameters.len() - frame - spheres;
     let frame = if frame > 0 {
         format!(" and the instrument frame's {frame}")
+    } else if spheres > 0 {
+        format!(" and the spheres' own {spheres}")
     } else {
         String::new()
     };
     let given = context.given.is_some();
+    let row = match plan.measure {
+        Measure::Spheres => "of a point along its sphere's normal",
+        _ => "per coordinate of a row",
+    };
     t += &format!(
         "Optimised: {}\n  workspace: {workspace}; parameters: {geometry} of the \
-         geometry{frame}; noise σ {} mm per coordinate of a row{}\n",
+         geometry{frame}; noise σ {} mm {row}{}\n",
         criterion_text(plan),
         if given {
             format!("{:.4}", plan.sigma_mm)
