@@ -82,7 +82,7 @@ pub struct Args {
     /// Sphere points: the spheres' diameter, mm, as calibrate will be told
     /// it (each sphere's size then known, so the points fix the arm's
     /// scale); --sample draws spheres of this size [default: 25.4, the
-    /// diameter fitted].
+    /// diameter fitted, unless the --given calibration stated one].
     #[arg(long, value_name = "MM")]
     sphere_diameter: Option<f64>,
     /// Unit of the joint readings (q1..qn) of the poses files read
@@ -204,7 +204,12 @@ pub fn run(args: Args) -> Result<()> {
         .as_ref()
         .map_or(&arm.params, |s| &s.report.calibration.params);
     // Bad settings are refused before a pool is drawn.
-    let settings = settings(&args, start.is_some())?;
+    let mut settings = settings(&args, start.is_some())?;
+    // Points added to a calibration that stated its spheres' diameter are
+    // planned as its next campaign will be fitted: the diameter stated.
+    if let Some(spheres) = start.as_ref().and_then(|s| s.report.spheres.as_ref()) {
+        settings.sphere_diameter_stated |= spheres.stated_diameter.is_some();
+    }
     let candidates = candidates(&args, &arm)?;
     let workspace = match &args.workspace {
         Some(path) => Some(read_candidates("--workspace", path, &args, &arm)?),

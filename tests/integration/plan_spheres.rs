@@ -169,11 +169,13 @@ fn a_planned_sphere_file_calibrates() {
     let (pool, chosen) = (pool.to_str().unwrap(), dir.join("chosen.csv"));
     let plan = |extra: &[&str]| {
         let mut args = vec!["plan", "--arm", &arm, "--measure", "spheres"];
-        args.extend(["--candidates", pool, "--count", "80"]);
+        args.extend(["--candidates", pool]);
         args.extend(extra);
         aacmm(&args)
     };
     let o = plan(&[
+        "--count",
+        "80",
         "--sphere-diameter",
         "25.4",
         "--out",
@@ -222,6 +224,13 @@ fn a_planned_sphere_file_calibrates() {
     let o = aacmm(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("Verdict: usable"), "{}", stdout(&o));
+    // The next points, added to that calibration: its stated diameter is
+    // the plan's, so each sphere has 3 unknowns of its own.
+    let o = plan(&["--given", out.to_str().unwrap(), "--count", "12"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("the spheres' own 24"), "{text}");
+    assert!(text.contains("Adding to the calibration in"), "{text}");
 
     // Refusals.
     let o = aacmm(&[
