@@ -10,12 +10,22 @@
 
 use aacmm_core::kernel::{
     self, ArmKernel, Chain, Generic, Jacobians, KernelKind, Pose, PreparedParams, PreparedPoses,
-    SHIPPED_SHAPES, shipped,
+    SHIPPED_SHAPES,
 };
 use aacmm_core::params::{ChainShape, DhJoint, DhParams, JointKind, JointModel};
 use aacmm_core::reference_model;
 use proptest::prelude::*;
 use std::f64::consts::PI;
+
+/// The shipped 6- and 7-joint chains, D-H and extended, generated here by
+/// the generator the library's own (internal) kernels come from: the same
+/// code.
+mod shipped {
+    aacmm_core::dh_kernel! { pub mod arm6 { joints = "RRRRRR" } }
+    aacmm_core::dh_kernel! { pub mod arm6h { joints = "RRRRRR", hayati = true } }
+    aacmm_core::dh_kernel! { pub mod arm7 { joints = "RRRRRRR" } }
+    aacmm_core::dh_kernel! { pub mod arm7h { joints = "RRRRRRR", hayati = true } }
+}
 
 /// A 7-joint arm: the paper's 6 plus a short wrist link.
 fn nominal(n: usize) -> DhParams {

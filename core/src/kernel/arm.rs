@@ -206,7 +206,7 @@ pub enum KernelKind {
     User,
 }
 
-/// The shapes with generated kernels, their modules in [`shipped`]
+/// The shapes with generated kernels, their modules in `shipped`
 /// (`…h`: the extended chain, for arms with Hayati joints), and the
 /// arm's prepared parameters by joint count. Every count of 1 to
 /// [`MAX_JOINTS`](crate::params::MAX_JOINTS) has a variant; a shape
@@ -222,8 +222,12 @@ macro_rules! chains {
     ) => {
         /// The generated kernels of the shipped shapes ([`SHIPPED_SHAPES`]):
         /// for each a D-H chain and an extended one (`…h`), which also
-        /// computes Hayati joints.
-        pub mod shipped {
+        /// computes Hayati joints. Internal: [`ArmKernel::new`] chooses
+        /// among them, and a user's own chain is made with
+        /// [`dh_kernel!`](crate::dh_kernel) (the same generator, so the same
+        /// code and bits).
+        #[allow(dead_code)]
+        pub(crate) mod shipped {
             $($(
                 aacmm_dh_macros::dh_chain! {
                     #[doc = concat!("The generated kernel of ", $what, " (`", $shape, "`), D-H joints.")]

@@ -40,7 +40,7 @@ use thiserror::Error;
 pub use crate::params::ChainShape;
 use crate::params::{DhParams, JointKind, JointModel};
 
-pub use arm::{ArmKernel, KernelKind, SHIPPED_SHAPES, shipped};
+pub use arm::{ArmKernel, KernelKind, SHIPPED_SHAPES};
 pub use batch::Jacobians;
 pub use generic::Generic;
 pub use poses::{Post, PreparedPoses};
@@ -431,9 +431,10 @@ impl Pose {
 /// joint) on chain `C`.
 ///
 /// ```
-/// use aacmm_core::{kernel::{self, shipped}, params::DhParams};
+/// use aacmm_core::{kernel, params::DhParams};
+/// aacmm_core::dh_kernel! { pub mod arm6 { joints = "RRRRRR" } }
 /// let k = kernel::PreparedParams::<6>::new(&DhParams::paper_nominal()).unwrap();
-/// let p = kernel::position::<shipped::arm6::Kernel, 6>(&k, &[0.0; 6]);
+/// let p = kernel::position::<arm6::Kernel, 6>(&k, &[0.0; 6]);
 /// assert!((p[2] - 995.0).abs() < 1e-9);
 /// ```
 pub fn position<C: Chain<N>, const N: usize>(k: &PreparedParams<N>, q: &[f64; N]) -> [f64; 3] {
@@ -499,12 +500,12 @@ pub use aacmm_dh_macros::dh_chain as __dh_chain;
 
 #[cfg(test)]
 mod tests {
+    use super::arm::shipped::{arm6, arm6h, scara, scarah, track6, track6h};
     use super::batch::{
         for_each_lane_jacobian, for_each_lane_pose_jacobian, jacobians_impl, poses_impl,
         positions_impl,
     };
     use super::lanes::Lanes;
-    use super::shipped::{arm6, arm6h, scara, scarah, track6, track6h};
     use super::*;
     use crate::params::DhJoint;
 

@@ -49,11 +49,13 @@ impl ArmKernel {
     /// Hayati joint when `C` is not extended.
     ///
     /// ```
-    /// use aacmm_core::{kernel::{ArmKernel, KernelKind, shipped}, params::DhParams};
+    /// use aacmm_core::{kernel::{ArmKernel, KernelKind}, params::DhParams};
+    /// aacmm_core::dh_kernel! { pub mod arm6 { joints = "RRRRRR" } }
+    /// aacmm_core::dh_kernel! { pub mod scara { joints = "RRPR" } }
     /// let arm = DhParams::paper_nominal();
-    /// let k = ArmKernel::with_chain::<shipped::arm6::Kernel, 6>(&arm).unwrap();
+    /// let k = ArmKernel::with_chain::<arm6::Kernel, 6>(&arm).unwrap();
     /// assert_eq!(k.kind(), KernelKind::User);
-    /// assert!(ArmKernel::with_chain::<shipped::scara::Kernel, 4>(&arm).is_err());
+    /// assert!(ArmKernel::with_chain::<scara::Kernel, 4>(&arm).is_err());
     /// ```
     pub fn with_chain<C: Chain<N> + 'static, const N: usize>(
         params: &DhParams,
@@ -675,7 +677,7 @@ mod tests {
 
     #[test]
     fn a_users_chain_must_fit_the_arm() {
-        use crate::kernel::shipped::{arm6, arm6h, track6};
+        use crate::kernel::arm::shipped::{arm6, arm6h, track6};
         let mut arm = DhParams::paper_nominal();
         let k = ArmKernel::with_chain::<arm6::Kernel, 6>(&arm).unwrap();
         assert_eq!(k, k.clone());
