@@ -290,14 +290,14 @@ pub fn short(v: f64) -> String {
 
 /// Most characters of a user's text (a label, a token, a field, a value)
 /// that a message echoes; longer text is cut, its length said.
-pub const MAX_SHOWN: usize = 80;
+pub(crate) const MAX_SHOWN: usize = 80;
 
 /// Most characters of a whole message: a safety net for user text echoed
 /// without [`shown`] (a message of the library's own words is far shorter).
-pub const MAX_MESSAGE: usize = 4000;
+pub(crate) const MAX_MESSAGE: usize = 4000;
 
 /// User text as a message shows it: control characters escaped (`\r`,
-/// `\n`, `\0`, `\u{1b}`), cut after [`MAX_SHOWN`] characters with its full
+/// `\n`, `\0`, `\u{1b}`), cut after `MAX_SHOWN` characters with its full
 /// length said, so that a hostile input cannot make a huge or garbled
 /// message.
 ///
@@ -375,16 +375,32 @@ pub(crate) fn bounded(message: String) -> String {
 
 /// Largest seed, in calibration and simulation alike: seeds are written to
 /// TOML files (`campaign.toml`), whose integers stop at `i64::MAX`.
-///
-/// ```
-/// use aacmm_core::{calibrate::SolverSettings, error::MAX_SEED};
-/// let s = SolverSettings { seed: MAX_SEED + 1, ..Default::default() };
-/// assert_eq!(s.check().unwrap_err().field(), "seed");
-/// assert!(SolverSettings { seed: MAX_SEED, ..Default::default() }.check().is_ok());
-/// ```
-pub const MAX_SEED: u64 = i64::MAX as u64;
+pub(crate) const MAX_SEED: u64 = i64::MAX as u64;
 
 /// Why `seed` (above [`MAX_SEED`]) is refused.
 pub(crate) fn seed_bound(seed: u64) -> String {
     format!("at most {MAX_SEED} (seeds are written as TOML integers), got {seed}")
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn error_max_seed() {
+        use crate::{calibrate::SolverSettings, error::MAX_SEED};
+        let s = SolverSettings {
+            seed: MAX_SEED + 1,
+            ..Default::default()
+        };
+        assert_eq!(s.check().unwrap_err().field(), "seed");
+        assert!(
+            SolverSettings {
+                seed: MAX_SEED,
+                ..Default::default()
+            }
+            .check()
+            .is_ok()
+        );
+    }
 }

@@ -53,7 +53,7 @@ pub fn rigid_distance(a: &[[f64; 3]], b: &[[f64; 3]], reflect: bool) -> f64 {
 }
 
 /// The best rigid motion of one point set onto another
-/// ([`best_rigid_motion`]): `y ≈ rotation (x − from) + to`.
+/// (`best_rigid_motion`): `y ≈ rotation (x − from) + to`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RigidMotion {
     /// The rotation (`det = −1`, a mirror, when one was asked for).
@@ -74,16 +74,11 @@ impl RigidMotion {
 /// The rigid motion of `a` onto `b` (pairwise) of least squares (Kabsch,
 /// Horn: the SVD of their cross-covariance): a proper rotation, or with
 /// `mirrored` one with `det = −1`. `None` when the SVD fails.
-///
-/// ```
-/// use aacmm_core::geometry::best_rigid_motion;
-/// let a = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 3.0]];
-/// let b: Vec<[f64; 3]> = a.iter().map(|p| [-p[1] + 1.0, p[0], p[2] - 2.0]).collect();
-/// let m = best_rigid_motion(&a, &b, false).unwrap();
-/// assert!((m.rotation.determinant() - 1.0).abs() < 1e-12);
-/// assert!((m.translation() - nalgebra::Vector3::new(1.0, 0.0, -2.0)).norm() < 1e-12);
-/// ```
-pub fn best_rigid_motion(a: &[[f64; 3]], b: &[[f64; 3]], mirrored: bool) -> Option<RigidMotion> {
+pub(crate) fn best_rigid_motion(
+    a: &[[f64; 3]],
+    b: &[[f64; 3]],
+    mirrored: bool,
+) -> Option<RigidMotion> {
     let mean = |p: &[[f64; 3]]| {
         p.iter()
             .fold(Vector3::zeros(), |s, x| s + Vector3::from(*x))
@@ -107,4 +102,24 @@ pub fn best_rigid_motion(a: &[[f64; 3]], b: &[[f64; 3]], mirrored: bool) -> Opti
         from,
         to,
     })
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn geometry_best_rigid_motion() {
+        use crate::geometry::best_rigid_motion;
+        let a = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 2.0, 0.0],
+            [0.0, 0.0, 3.0],
+        ];
+        let b: Vec<[f64; 3]> = a.iter().map(|p| [-p[1] + 1.0, p[0], p[2] - 2.0]).collect();
+        let m = best_rigid_motion(&a, &b, false).unwrap();
+        assert!((m.rotation.determinant() - 1.0).abs() < 1e-12);
+        assert!((m.translation() - nalgebra::Vector3::new(1.0, 0.0, -2.0)).norm() < 1e-12);
+    }
 }

@@ -261,7 +261,7 @@ impl Scaled {
 
 /// Checks, before any work, that an identification of `data` can have the
 /// memory it needs beyond the data set
-/// ([`crate::memory::IDENTIFY_BYTES_PER_TOUCH`]).
+/// (`crate::memory::IDENTIFY_BYTES_PER_TOUCH`).
 ///
 /// # Errors
 ///

@@ -5,17 +5,17 @@
 //! a host program (Python, a C program) would simply die. Two means keep
 //! that from happening, and they protect against different things:
 //!
-//! - **Fallible reservations** ([`try_vec`], [`try_grow`]): every buffer
+//! - **Fallible reservations** ([`try_vec`], `try_grow`): every buffer
 //!   whose size follows from the input (a file's text, its rows, the data
 //!   set's arrays, the C API's copies) is reserved with `try_reserve`, and
 //!   the input limits (a line of at most 1 MiB, an arm or campaign file of
-//!   at most 16 MiB, [`bytes_for`]'s overflow check) bound what one input
+//!   at most 16 MiB, `bytes_for`'s overflow check) bound what one input
 //!   can ask for. A size that overflows or exceeds `isize::MAX` is refused
 //!   everywhere, deterministically.
-//! - **Probes** ([`room_for`], [`room_for_work`]): work whose buffers are
+//! - **Probes** ([`room_for`], `room_for_work`): work whose buffers are
 //!   made deep inside the solver or the report asks, before it starts, for
 //!   what it holds at its peak (measured and rounded up:
-//!   [`data_set_bytes_per_touch`], [`WORK_BYTES_PER_TOUCH`]) and gives it
+//!   `data_set_bytes_per_touch`, `WORK_BYTES_PER_TOUCH`) and gives it
 //!   back at once. A probe is refused — and the work with it, with a
 //!   message — exactly when the system refuses the address space:
 //!   under an address-space limit (`ulimit -v`, `RLIMIT_AS`: exact enough
@@ -41,30 +41,25 @@
 /// data set's [`data_set_bytes_per_touch`] — 122 bytes (`calibrate`, the
 /// global method), 77 (`--method lm`), 50 (`identify`), 18 (`evaluate`) —
 /// and rounded up for a 7-joint arm's wider Jacobian rows.
-pub const WORK_BYTES_PER_TOUCH: usize = 160;
+pub(crate) const WORK_BYTES_PER_TOUCH: usize = 160;
 
 /// The same per reference length, rounded up.
 pub const WORK_BYTES_PER_LENGTH: usize = 128;
 
 /// What an identification allocates per touch beyond its data set: 50
 /// measured (as [`WORK_BYTES_PER_TOUCH`]), rounded up.
-pub const IDENTIFY_BYTES_PER_TOUCH: usize = 96;
+pub(crate) const IDENTIFY_BYTES_PER_TOUCH: usize = 96;
 
 /// What an evaluation allocates per touch beyond its data set, the
 /// positions the caller computes first (24 bytes) included: 18 measured
 /// besides them, rounded up.
-pub const EVALUATE_BYTES_PER_TOUCH: usize = 64;
+pub(crate) const EVALUATE_BYTES_PER_TOUCH: usize = 64;
 
 /// What a data set holds per touch of `joints` joints with `conditions`
 /// condition columns (temperature, time): the readings in touch order (8
 /// bytes a joint), their sin and cos (16), the touch order while sorting
 /// (8), the source lines and rows (8), 8 bytes per condition.
-///
-/// ```
-/// use aacmm_core::memory::data_set_bytes_per_touch;
-/// assert_eq!(data_set_bytes_per_touch(6, 0), 160);
-/// ```
-pub const fn data_set_bytes_per_touch(joints: usize, conditions: usize) -> usize {
+pub(crate) const fn data_set_bytes_per_touch(joints: usize, conditions: usize) -> usize {
     24 * joints + 16 + 8 * conditions
 }
 
@@ -93,13 +88,7 @@ impl OutOfMemory {
 
 /// `count × size`, or an [`OutOfMemory`] for `what` when it overflows or
 /// exceeds what one allocation may be (`isize::MAX`).
-///
-/// ```
-/// use aacmm_core::memory::bytes_for;
-/// assert_eq!(bytes_for("q", 10, 8), Ok(80));
-/// assert!(bytes_for("q", usize::MAX / 4, 8).is_err());
-/// ```
-pub fn bytes_for(what: &str, count: usize, size: usize) -> Result<usize, OutOfMemory> {
+pub(crate) fn bytes_for(what: &str, count: usize, size: usize) -> Result<usize, OutOfMemory> {
     count
         .checked_mul(size)
         .filter(|&b| b <= isize::MAX as usize)
@@ -123,7 +112,11 @@ pub fn try_vec<T>(what: &str, len: usize) -> Result<Vec<T>, OutOfMemory> {
 
 /// Room for `additional` more elements in `v` (amortised growth, as
 /// `push`), or an [`OutOfMemory`] naming `what`.
-pub fn try_grow<T>(v: &mut Vec<T>, what: &str, additional: usize) -> Result<(), OutOfMemory> {
+pub(crate) fn try_grow<T>(
+    v: &mut Vec<T>,
+    what: &str,
+    additional: usize,
+) -> Result<(), OutOfMemory> {
     v.try_reserve(additional).map_err(|_| {
         let bytes = (v.len().saturating_add(additional)).saturating_mul(size_of::<T>());
         OutOfMemory::new(what, bytes)
@@ -160,14 +153,7 @@ pub(crate) fn work_bytes(touches: usize, lengths: usize, per_touch: usize) -> us
 /// `lengths` reference lengths, `per_touch` bytes a touch (e.g.
 /// [`WORK_BYTES_PER_TOUCH`]) and [`WORK_BYTES_PER_LENGTH`] a length, and
 /// `extra` bytes besides; the message counts them.
-///
-/// ```
-/// use aacmm_core::memory::{WORK_BYTES_PER_TOUCH, room_for_work};
-/// assert!(room_for_work("identifying from", 100, 2, WORK_BYTES_PER_TOUCH, 0).is_ok());
-/// let e = room_for_work("identifying from", usize::MAX / 2, 0, 96, 0).unwrap_err();
-/// assert!(e.to_string().starts_with("out of memory: identifying from 9223372036854775807 observations"));
-/// ```
-pub fn room_for_work(
+pub(crate) fn room_for_work(
     what: &str,
     touches: usize,
     lengths: usize,
@@ -212,5 +198,34 @@ mod tests {
         assert_eq!(work_bytes(10, 2, WORK_BYTES_PER_TOUCH), 10 * 160 + 2 * 128);
         assert_eq!(calibration_bytes(10, 2, 6), 10 * 320 + 2 * 128);
         assert_eq!(calibration_bytes(usize::MAX, 1, 6), usize::MAX);
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn memory_data_set_bytes_per_touch() {
+        use crate::memory::data_set_bytes_per_touch;
+        assert_eq!(data_set_bytes_per_touch(6, 0), 160);
+    }
+
+    #[test]
+    fn memory_bytes_for() {
+        use crate::memory::bytes_for;
+        assert_eq!(bytes_for("q", 10, 8), Ok(80));
+        assert!(bytes_for("q", usize::MAX / 4, 8).is_err());
+    }
+
+    #[test]
+    fn memory_room_for_work() {
+        use crate::memory::{WORK_BYTES_PER_TOUCH, room_for_work};
+        assert!(room_for_work("identifying from", 100, 2, WORK_BYTES_PER_TOUCH, 0).is_ok());
+        let e = room_for_work("identifying from", usize::MAX / 2, 0, 96, 0).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("out of memory: identifying from 9223372036854775807 observations")
+        );
     }
 }

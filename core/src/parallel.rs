@@ -26,10 +26,10 @@ pub const WORKER_THREAD_NAME: &str = "aacmm-worker";
 /// and a thread's share must outweigh handing it over — on a loaded
 /// machine, waiting for a worker to be scheduled. The UR5 tracker's 1000
 /// positions are 4 chunks: one thread.
-pub const MIN_ITEMS_PER_THREAD: usize = 4;
+pub(crate) const MIN_ITEMS_PER_THREAD: usize = 4;
 
 /// The threads a call of `items` work items asked to run on `threads`
-/// uses: at most one per [`MIN_ITEMS_PER_THREAD`] items, at least one. What
+/// uses: at most one per `MIN_ITEMS_PER_THREAD` items, at least one. What
 /// a test of thread-independence asks, to know that the work really splits
 /// (with [`crate::residuals::point_chunks`]).
 ///

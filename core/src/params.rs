@@ -405,14 +405,7 @@ impl ParamId {
     /// The parameter at `column` of an `n`-joint D-H chain, if there is one
     /// (the d-slot is always [`ParamKind::D`] here; an arm with Hayati joints
     /// names its columns with [`DhParams::param_id`]).
-    ///
-    /// ```
-    /// use aacmm_core::params::{ParamId, ParamKind};
-    /// assert_eq!(ParamId::from_column(6, 7).unwrap().to_string(), "d2");
-    /// assert!(ParamId::from_column(6, 27).is_none());
-    /// assert!(ParamId::from_column(0, 0).is_none());
-    /// ```
-    pub fn from_column(n: usize, column: usize) -> Option<ParamId> {
+    pub(crate) fn from_column(n: usize, column: usize) -> Option<ParamId> {
         // A chain without joints has no columns (and `column / 0` no value).
         let (kind, index) = match column.checked_div(n)? {
             0 => (ParamKind::A, column % n),
@@ -694,15 +687,7 @@ impl DhParams {
 
     /// The parameter at `column` of this arm: [`ParamId::from_column`] with
     /// a Hayati joint's d-slot named [`ParamKind::Beta`].
-    ///
-    /// ```
-    /// use aacmm_core::params::{DhParams, JointModel};
-    /// let mut arm = DhParams::paper_nominal();
-    /// arm.joints[2].model = JointModel::Hayati;
-    /// assert_eq!(arm.param_id(8).unwrap().to_string(), "hbeta3");
-    /// assert_eq!(arm.param_id(7).unwrap().to_string(), "d2");
-    /// ```
-    pub fn param_id(&self, column: usize) -> Option<ParamId> {
+    pub(crate) fn param_id(&self, column: usize) -> Option<ParamId> {
         let id = ParamId::from_column(self.joint_count(), column)?;
         Some(match id.kind {
             ParamKind::D => ParamId {
@@ -713,7 +698,7 @@ impl DhParams {
         })
     }
 
-    /// This arm's parameters in the fixed order (see [`DhParams::param_id`]).
+    /// This arm's parameters in the fixed order (see `DhParams::param_id`).
     pub fn param_ids(&self) -> impl Iterator<Item = ParamId> + '_ {
         (0..self.param_count()).filter_map(|c| self.param_id(c))
     }
@@ -808,17 +793,7 @@ impl DhParams {
     /// names, and a joint named with an `hbeta…` is a Hayati joint (its `d`
     /// structurally 0). `None` unless the names are exactly the `4n + 3` of
     /// an `n`-joint arm, each once.
-    ///
-    /// ```
-    /// use aacmm_core::params::{DhParams, JointModel};
-    /// let mut arm = DhParams::paper_nominal();
-    /// arm.joints[1].model = JointModel::Hayati;
-    /// arm.joints[1].beta = 0.01;
-    /// arm.joints[1].d = 0.0;
-    /// let named = arm.param_ids().map(|id| (id, arm.get(id)));
-    /// assert_eq!(DhParams::from_named(named), Some(arm));
-    /// ```
-    pub fn from_named(values: impl IntoIterator<Item = (ParamId, f64)>) -> Option<DhParams> {
+    pub(crate) fn from_named(values: impl IntoIterator<Item = (ParamId, f64)>) -> Option<DhParams> {
         let values: Vec<(ParamId, f64)> = values.into_iter().collect();
         let n = values.len().checked_sub(3)? / 4;
         if n == 0 || values.len() != param_count(n) {
@@ -886,5 +861,38 @@ pub fn wrap(x: f64) -> f64 {
         x
     } else {
         (x + PI).rem_euclid(TAU) - PI
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn params_paramid_from_column() {
+        use crate::params::ParamId;
+        assert_eq!(ParamId::from_column(6, 7).unwrap().to_string(), "d2");
+        assert!(ParamId::from_column(6, 27).is_none());
+        assert!(ParamId::from_column(0, 0).is_none());
+    }
+
+    #[test]
+    fn params_dhparams_param_id() {
+        use crate::params::{DhParams, JointModel};
+        let mut arm = DhParams::paper_nominal();
+        arm.joints[2].model = JointModel::Hayati;
+        assert_eq!(arm.param_id(8).unwrap().to_string(), "hbeta3");
+        assert_eq!(arm.param_id(7).unwrap().to_string(), "d2");
+    }
+
+    #[test]
+    fn params_dhparams_from_named() {
+        use crate::params::{DhParams, JointModel};
+        let mut arm = DhParams::paper_nominal();
+        arm.joints[1].model = JointModel::Hayati;
+        arm.joints[1].beta = 0.01;
+        arm.joints[1].d = 0.0;
+        let named = arm.param_ids().map(|id| (id, arm.get(id)));
+        assert_eq!(DhParams::from_named(named), Some(arm));
     }
 }

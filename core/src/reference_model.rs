@@ -35,7 +35,7 @@ pub fn position<D: DualNum<Primitive = f64> + Copy>(params: &[D], q: &[D]) -> [D
 ///
 /// # Panics
 /// As [`position`], or if `models.len() != q.len()`.
-pub fn position_with<D: DualNum<Primitive = f64> + Copy>(
+pub(crate) fn position_with<D: DualNum<Primitive = f64> + Copy>(
     params: &[D],
     q: &[D],
     models: &[JointModel],
@@ -50,7 +50,7 @@ pub fn position_with<D: DualNum<Primitive = f64> + Copy>(
 /// angle is `θ` alone.
 ///
 /// # Panics
-/// As [`position_with`], or if `kinds.len() != q.len()`.
+/// As `position_with`, or if `kinds.len() != q.len()`.
 ///
 /// ```
 /// use aacmm_core::{params::{DhParams, JointKind, JointModel}, reference_model};

@@ -18,13 +18,7 @@ pub(crate) fn chi_square_quantile(p: f64, nu: f64) -> f64 {
 /// probability `alpha`, found on the upper tail itself: exact for an
 /// `alpha` of 1e-300, where `1 − alpha` is 1. Above 10⁶ (an `alpha` of 0)
 /// it stops.
-///
-/// ```
-/// use aacmm_core::stats::{chi_square_upper, chi_square_upper_quantile};
-/// let x = chi_square_upper_quantile(1e-12, 3);
-/// assert!((chi_square_upper(x, 3) / 1e-12 - 1.0).abs() < 1e-10);
-/// ```
-pub fn chi_square_upper_quantile(alpha: f64, nu: usize) -> f64 {
+pub(crate) fn chi_square_upper_quantile(alpha: f64, nu: usize) -> f64 {
     let nu = nu.max(1) as f64;
     let a = nu / 2.0;
     // On the logarithm of the tail, nearly straight in `x`: on the tail
@@ -42,13 +36,7 @@ pub(crate) const CHI2_3_MEDIAN: f64 = 2.365_973_884_375_338;
 
 /// The median of the χ² law with `k ≥ 1` degrees of freedom: the law of a
 /// `k`-row observation's standardised squared residual.
-///
-/// ```
-/// use aacmm_core::stats::chi_square_median;
-/// assert!((chi_square_median(1) - 0.454_936_423_119_572_7).abs() < 1e-12);
-/// assert!((chi_square_median(3) - 2.365_973_884_375_338).abs() < 1e-15);
-/// ```
-pub fn chi_square_median(k: usize) -> f64 {
+pub(crate) fn chi_square_median(k: usize) -> f64 {
     if k == 3 {
         CHI2_3_MEDIAN
     } else {
@@ -176,7 +164,7 @@ fn gamma_pq(a: f64, x: f64) -> (f64, f64) {
 }
 
 /// `P(χ²_k ≥ x)`, the upper tail of the χ² law with `k` degrees of freedom.
-pub fn chi_square_upper(x: f64, k: usize) -> f64 {
+pub(crate) fn chi_square_upper(x: f64, k: usize) -> f64 {
     gamma_q(k.max(1) as f64 / 2.0, x / 2.0)
 }
 
@@ -188,14 +176,7 @@ pub(crate) fn chi_square_lower(x: f64, k: usize) -> f64 {
 /// `P(Z ≥ z)`, the upper tail of the standard normal law: `Z²` is χ² with
 /// one degree of freedom, so half its upper tail for `z ≥ 0` and one less
 /// that (the lower χ² tail, computed directly) below.
-///
-/// ```
-/// use aacmm_core::stats::normal_upper;
-/// assert_eq!(normal_upper(0.0), 0.5);
-/// assert!((normal_upper(1.959_963_984_540_054) - 0.025).abs() < 1e-15);
-/// assert!((normal_upper(-1.0) - 0.841_344_746_068_542_9).abs() < 1e-15);
-/// ```
-pub fn normal_upper(z: f64) -> f64 {
+pub(crate) fn normal_upper(z: f64) -> f64 {
     let (p, q) = gamma_pq(0.5, z * z / 2.0);
     if z.is_nan() {
         f64::NAN
@@ -447,5 +428,32 @@ mod tests {
             }
         }
         assert!(bad.is_empty(), "{}", bad.join("\n"));
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn stats_chi_square_upper_quantile() {
+        use crate::stats::{chi_square_upper, chi_square_upper_quantile};
+        let x = chi_square_upper_quantile(1e-12, 3);
+        assert!((chi_square_upper(x, 3) / 1e-12 - 1.0).abs() < 1e-10);
+    }
+
+    #[test]
+    fn stats_chi_square_median() {
+        use crate::stats::chi_square_median;
+        assert!((chi_square_median(1) - 0.454_936_423_119_572_7).abs() < 1e-12);
+        assert!((chi_square_median(3) - 2.365_973_884_375_338).abs() < 1e-15);
+    }
+
+    #[test]
+    fn stats_normal_upper() {
+        use crate::stats::normal_upper;
+        assert_eq!(normal_upper(0.0), 0.5);
+        assert!((normal_upper(1.959_963_984_540_054) - 0.025).abs() < 1e-15);
+        assert!((normal_upper(-1.0) - 0.841_344_746_068_542_9).abs() < 1e-15);
     }
 }

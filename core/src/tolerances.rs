@@ -333,19 +333,7 @@ impl Tolerances {
     /// exists in it: a Hayati joint's d-slot is `hbeta…` and has no `d…`
     /// (a D-H joint no `hbeta…`), so a tolerance of the other model would
     /// hold nothing — and the fit would count its direction as held.
-    ///
-    /// ```
-    /// use aacmm_core::{tolerances::Tolerances, params::{DhParams, JointModel}};
-    /// let mut arm = DhParams::paper_nominal();
-    /// arm.joints[1].model = JointModel::Hayati;
-    /// let t = Tolerances::parse("hbeta2=0.1deg", 6).unwrap().unwrap();
-    /// assert!(t.check_for(&arm).is_ok());
-    /// let e = Tolerances::parse("d2=1mm", 6).unwrap().unwrap().check_for(&arm).unwrap_err();
-    /// assert!(e.reason.contains("joint 2 is a Hayati joint: its d-slot is `hbeta2`"), "{e}");
-    /// let e = t.check_for(&DhParams::paper_nominal()).unwrap_err();
-    /// assert!(e.reason.contains("joint 2 is a D-H joint: its d-slot is `d2`"), "{e}");
-    /// ```
-    pub fn check_for(&self, params: &DhParams) -> Result<(), OptionError> {
+    pub(crate) fn check_for(&self, params: &DhParams) -> Result<(), OptionError> {
         let n = params.joint_count();
         self.check(n)?;
         for (name, _) in &self.entries {
@@ -425,5 +413,38 @@ mod tests {
         assert_eq!(t.describe(6), "length=1mm, angle=0.1deg");
         let e = Tolerances::parse("length=2furlong", 6).unwrap_err();
         assert!(e.reason.contains("furlong"), "{e}");
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn tolerances_tolerances_check_for() {
+        use crate::{
+            params::{DhParams, JointModel},
+            tolerances::Tolerances,
+        };
+        let mut arm = DhParams::paper_nominal();
+        arm.joints[1].model = JointModel::Hayati;
+        let t = Tolerances::parse("hbeta2=0.1deg", 6).unwrap().unwrap();
+        assert!(t.check_for(&arm).is_ok());
+        let e = Tolerances::parse("d2=1mm", 6)
+            .unwrap()
+            .unwrap()
+            .check_for(&arm)
+            .unwrap_err();
+        assert!(
+            e.reason
+                .contains("joint 2 is a Hayati joint: its d-slot is `hbeta2`"),
+            "{e}"
+        );
+        let e = t.check_for(&DhParams::paper_nominal()).unwrap_err();
+        assert!(
+            e.reason
+                .contains("joint 2 is a D-H joint: its d-slot is `d2`"),
+            "{e}"
+        );
     }
 }

@@ -32,13 +32,7 @@ impl Ball {
 }
 
 /// The smallest ball enclosing `points` (the empty ball for none).
-///
-/// ```
-/// use aacmm_core::acceptance::enclosing_ball;
-/// let b = enclosing_ball(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.5, 0.0]]);
-/// assert_eq!((b.centre, b.radius), ([1.0, 0.0, 0.0], 1.0));
-/// ```
-pub fn enclosing_ball(points: &[[f64; 3]]) -> Ball {
+pub(crate) fn enclosing_ball(points: &[[f64; 3]]) -> Ball {
     let mut list: Vec<[f64; 3]> = Vec::with_capacity(points.len());
     for p in points {
         if !list.contains(p) {
@@ -185,5 +179,17 @@ mod tests {
         assert!((b.radius - 1.0).abs() < 1e-12 && (b.centre[2] - 5.0).abs() < 1e-12);
         assert_eq!(enclosing_ball(&[[2.0, 3.0, 4.0]; 3]).radius, 0.0);
         assert!(enclosing_ball(&[]).radius < 0.0);
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn acceptance_enclosing_enclosing_ball() {
+        use crate::acceptance::enclosing_ball;
+        let b = enclosing_ball(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.5, 0.0]]);
+        assert_eq!((b.centre, b.radius), ([1.0, 0.0, 0.0], 1.0));
     }
 }

@@ -111,18 +111,10 @@ pub(crate) fn min_max(v: &[f64]) -> (f64, f64) {
 /// The least-squares sphere through `points` (mm), its radius `held` when
 /// given, else fitted: see the module's documentation.
 ///
-/// ```
-/// use aacmm_core::acceptance::fit_sphere_ls;
-/// let p = [[11.0, 2.0, 3.0], [1.0, 12.0, 3.0], [1.0, 2.0, 13.0], [-9.0, 2.0, 3.0], [1.0, -8.0, 3.0]];
-/// let s = fit_sphere_ls(&p, None).unwrap();
-/// assert!((s.centre[0] - 1.0).abs() < 1e-12 && (s.radius - 10.0).abs() < 1e-12);
-/// assert!(s.residuals.iter().all(|r| r.abs() < 1e-12));
-/// ```
-///
 /// # Errors
 ///
 /// Fewer points than the unknowns, or points that fix no sphere.
-pub fn fit_sphere_ls(points: &[[f64; 3]], held: Option<f64>) -> Result<SphereFit, FitError> {
+pub(crate) fn fit_sphere_ls(points: &[[f64; 3]], held: Option<f64>) -> Result<SphereFit, FitError> {
     let unknowns = if held.is_some() { 3 } else { 4 };
     if points.len() < unknowns.max(4) {
         return Err(FitError::TooFewPoints {
@@ -343,5 +335,25 @@ mod tests {
             })
             .collect();
         assert_eq!(fit_sphere_ls(&circle, None), Err(FitError::Degenerate));
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn acceptance_fit_fit_sphere_ls() {
+        use crate::acceptance::fit_sphere_ls;
+        let p = [
+            [11.0, 2.0, 3.0],
+            [1.0, 12.0, 3.0],
+            [1.0, 2.0, 13.0],
+            [-9.0, 2.0, 3.0],
+            [1.0, -8.0, 3.0],
+        ];
+        let s = fit_sphere_ls(&p, None).unwrap();
+        assert!((s.centre[0] - 1.0).abs() < 1e-12 && (s.radius - 10.0).abs() < 1e-12);
+        assert!(s.residuals.iter().all(|r| r.abs() < 1e-12));
     }
 }

@@ -6,7 +6,7 @@
 //! The points are probe-ball **centres** (the arm's forward kinematics of
 //! each touch); a sphere fitted to them has radius `R + r_ball`, `R` the
 //! reference sphere's and `r_ball` the probe ball's. Every fit is the
-//! geometric least-squares sphere ([`fit_sphere_ls`]).
+//! geometric least-squares sphere (`fit_sphere_ls`).
 //!
 //! | figure | value | expanded uncertainty `U` (k = 2) |
 //! |---|---|---|
@@ -55,12 +55,13 @@ mod table;
 use serde::{Deserialize, Serialize};
 
 pub use compute::verify;
-pub use enclosing::enclosing_ball;
-pub use fit::{FitError, SphereFit, fit_sphere_ls};
+pub(crate) use enclosing::enclosing_ball;
+pub(crate) use fit::fit_sphere_ls;
+pub use fit::{FitError, SphereFit};
 pub use mpe::{Limit, Mpe, TestKind, parse_mpe};
 pub use predict::PredictionInfo;
 pub use predict::{
-    Calibrated, DEFAULT_DRAWS, Draws, MAX_DRAWS, Measured, PredictError, ReadingNoise, predict,
+    Calibrated, DEFAULT_DRAWS, Draws, Measured, PredictError, ReadingNoise, predict,
 };
 
 use crate::error::{InputError, OptionError};
@@ -73,14 +74,14 @@ pub(crate) const P_TEST_POINTS: usize = 25;
 pub(crate) const L_DIA_GROUPS: usize = 5;
 
 /// The figures' names, as the standards name them.
-pub const P_SIZE: &str = "P_Size.Sph.1x25::Art";
+pub(crate) const P_SIZE: &str = "P_Size.Sph.1x25::Art";
 /// See [`P_SIZE`].
 pub(crate) const P_FORM: &str = "P_Form.Sph.1x25::Art";
 /// See [`P_SIZE`].
 pub(crate) const L_DIA: &str = "L_Dia.5x5::Art";
 /// See [`P_SIZE`].
 pub(crate) const E_UNI: &str = "E_Uni::Art";
-/// See [`P_SIZE`].
+/// See `P_SIZE`.
 pub const SPAT: &str = "SPAT";
 
 /// How each articulation's centre of an `L_Dia` placement is fitted.

@@ -68,7 +68,7 @@ use crate::params::DhParams;
 /// Draws when none is asked for.
 pub const DEFAULT_DRAWS: usize = 200;
 /// Most draws one prediction makes (bounded work: some minutes at most).
-pub const MAX_DRAWS: usize = 100_000;
+pub(crate) const MAX_DRAWS: usize = 100_000;
 /// Draws per work item handed to a thread.
 const CHUNK: usize = 8;
 /// A negative eigenvalue of `Σ` within this fraction of the largest is
@@ -127,7 +127,7 @@ pub struct Calibrated<'a> {
 /// How many draws, from which seed, on how many threads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Draws {
-    /// Draws (2 to [`MAX_DRAWS`]).
+    /// Draws (2 to `MAX_DRAWS`).
     pub count: usize,
     /// The seed.
     pub seed: u64,

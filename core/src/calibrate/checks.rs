@@ -7,7 +7,7 @@
 //! the same for an arm and for its mirror image, and an arm folded to a
 //! point scatters nothing: neither can be told from the right arm by the fit
 //! alone. What tells them apart is the nominal geometry: after the sign
-//! convention is restored ([`super::global::normalize_signs`]), a proper
+//! convention is restored (`super::global::normalize_signs`), a proper
 //! calibration moves lengths by millimetres and twists by fractions of a
 //! degree; a mirror twin flips the signs of link lengths or turns twists by
 //! about 180°, and a collapse takes links to zero.
@@ -242,12 +242,12 @@ impl ChiSquare {
     }
 
     /// Whether the fit is far outside the stated noise, in either tail.
-    pub fn far_outside(&self) -> bool {
+    pub(crate) fn far_outside(&self) -> bool {
         self.p_upper < CHI_SQUARE_REFUSE || self.p_lower < CHI_SQUARE_REFUSE
     }
 
     /// In words. A tail below 0.001 but not below 10⁻⁹ (the refusal
-    /// level, [`ChiSquare::far_outside`]) is a note, and its sentence says so — with
+    /// level, `ChiSquare::far_outside`) is a note, and its sentence says so — with
     /// what it suggests — so that it cannot read as a refusal beside
     /// "Verdict: usable".
     pub fn describe(&self) -> String {

@@ -34,7 +34,7 @@
 //!    start budget is spent (then the result is flagged unconfirmed).
 //!
 //! The result is reported in the nominal arm's sign convention
-//! ([`normalize_signs`]).
+//! (`normalize_signs`).
 
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
@@ -1012,25 +1012,11 @@ fn torus_grid(
 /// through the next joint by negating its `a` and `α`, or reaches the probe
 /// as `(−Bx, −By)`. Only free parameters (`free`, columns) are changed, so a
 /// fixed one keeps its value; probe positions are unchanged.
-///
-/// ```
-/// use aacmm_core::{calibrate::global::normalize_signs, kernel::ArmKernel, params::DhParams};
-/// let nominal = DhParams::paper_nominal();
-/// let mut flipped = nominal.clone();
-/// flipped.joints[2].theta += std::f64::consts::PI;
-/// flipped.joints[2].a = -flipped.joints[2].a;
-/// flipped.joints[2].alpha = -flipped.joints[2].alpha;
-/// flipped.joints[3].theta += std::f64::consts::PI;
-/// let q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
-/// let before = ArmKernel::new(&flipped).unwrap().position(&q).unwrap();
-/// let all: Vec<usize> = (0..27).collect();
-/// let changed = normalize_signs(&mut flipped, &nominal, &all);
-/// assert_eq!(changed, ["theta3", "a3", "alpha3", "theta4"]);
-/// assert!((flipped.joints[2].alpha - nominal.joints[2].alpha).abs() < 1e-12);
-/// let after = ArmKernel::new(&flipped).unwrap().position(&q).unwrap();
-/// assert!((0..3).all(|k| (before[k] - after[k]).abs() < 1e-9));
-/// ```
-pub fn normalize_signs(params: &mut DhParams, nominal: &DhParams, free: &[usize]) -> Vec<String> {
+pub(crate) fn normalize_signs(
+    params: &mut DhParams,
+    nominal: &DhParams,
+    free: &[usize],
+) -> Vec<String> {
     let n = params.joint_count();
     let id = |kind, index| ParamId { kind, index };
     let is_free = |p: ParamId| free.contains(&p.column(n));
@@ -1189,5 +1175,29 @@ mod tests {
             !agree_at_noise((0.0, 0.0), &n, 100, &[0.0, 0.0]),
             "no noise level"
         );
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn calibrate_global_normalize_signs() {
+        use crate::{calibrate::global::normalize_signs, kernel::ArmKernel, params::DhParams};
+        let nominal = DhParams::paper_nominal();
+        let mut flipped = nominal.clone();
+        flipped.joints[2].theta += std::f64::consts::PI;
+        flipped.joints[2].a = -flipped.joints[2].a;
+        flipped.joints[2].alpha = -flipped.joints[2].alpha;
+        flipped.joints[3].theta += std::f64::consts::PI;
+        let q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+        let before = ArmKernel::new(&flipped).unwrap().position(&q).unwrap();
+        let all: Vec<usize> = (0..27).collect();
+        let changed = normalize_signs(&mut flipped, &nominal, &all);
+        assert_eq!(changed, ["theta3", "a3", "alpha3", "theta4"]);
+        assert!((flipped.joints[2].alpha - nominal.joints[2].alpha).abs() < 1e-12);
+        let after = ArmKernel::new(&flipped).unwrap().position(&q).unwrap();
+        assert!((0..3).all(|k| (before[k] - after[k]).abs() < 1e-9));
     }
 }

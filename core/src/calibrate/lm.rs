@@ -46,14 +46,6 @@ pub(crate) const MACHINE_PRECISION_GTOL: f64 = 1e-6;
 
 impl Termination {
     /// Whether the result is a converged minimum.
-    ///
-    /// ```
-    /// use aacmm_core::calibrate::Termination;
-    /// assert!(Termination::CostTolerance.was_successful());
-    /// assert!(!Termination::MaxIterations.was_successful());
-    /// assert!(!Termination::NoProgress.was_successful());
-    /// assert!(Termination::MachinePrecision.was_successful());
-    /// ```
     pub fn was_successful(self) -> bool {
         !matches!(self, Termination::MaxIterations | Termination::NoProgress)
     }
@@ -470,5 +462,19 @@ fn stalled(gmax: f64) -> Termination {
         Termination::MachinePrecision
     } else {
         Termination::NoProgress
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn calibrate_lm_termination_was_successful() {
+        use crate::calibrate::Termination;
+        assert!(Termination::CostTolerance.was_successful());
+        assert!(!Termination::MaxIterations.was_successful());
+        assert!(!Termination::NoProgress.was_successful());
+        assert!(Termination::MachinePrecision.was_successful());
     }
 }

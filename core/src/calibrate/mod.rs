@@ -537,7 +537,7 @@ pub struct SolverSummary {
     /// Why it stopped: the method's own reason and the final LM's.
     pub stop: Stop,
     /// Whether the result is a usable solution
-    /// ([`Stop::is_solution_usable`]).
+    /// (`Stop::is_solution_usable`).
     pub successful: bool,
     /// Iterations of the final fit.
     pub iterations: usize,
@@ -1022,7 +1022,7 @@ pub struct FitInputs<'p> {
 
 /// [`calibrate`] with a given solver and context (a progress observer), on
 /// `inputs` (which may add parameter blocks and residual terms). Checks
-/// every setting first ([`ModelOptions::check_for`],
+/// every setting first (`ModelOptions::check_for`,
 /// [`SolverSettings::check`]).
 pub fn calibrate_with(
     inputs: FitInputs<'_>,

@@ -53,16 +53,10 @@ impl FixSpec {
     /// [`FixSpec::parse`] for `arm`: a Hayati joint's d-slot is `hbeta…`
     /// and has no `d…` (and a D-H joint no `hbeta…`), so a name of the
     /// other model is refused rather than fixing the slot silently.
-    ///
-    /// ```
-    /// use aacmm_core::{calibrate::FixSpec, params::{DhParams, JointModel}};
-    /// let mut arm = DhParams::paper_nominal();
-    /// arm.joints[1].model = JointModel::Hayati;
-    /// assert_eq!(FixSpec::parse_for("hbeta2", &arm).unwrap(), FixSpec::Columns(vec![7]));
-    /// let e = FixSpec::parse_for("d2", &arm).unwrap_err();
-    /// assert!(e.reason.contains("joint 2 is a Hayati joint: its d-slot is `hbeta2`"), "{e}");
-    /// ```
-    pub fn parse_for(s: &str, arm: &crate::params::DhParams) -> Result<FixSpec, OptionError> {
+    pub(crate) fn parse_for(
+        s: &str,
+        arm: &crate::params::DhParams,
+    ) -> Result<FixSpec, OptionError> {
         let names: Vec<String> = arm.param_ids().map(|p| p.to_string()).collect();
         let n = arm.joint_count();
         let fix = FixSpec::parse_names(s, &names, |t| arm.parse_param(t).map(|id| id.column(n)));
@@ -249,7 +243,7 @@ impl ModelOptions {
     /// [`ModelOptions::check`] for the arm `arm`, and the prior's
     /// parameters are the arm's ([`crate::tolerances::Tolerances::check_for`]:
     /// a Hayati joint has `hbeta…`, not `d…`).
-    pub fn check_for(&self, arm: &crate::params::DhParams) -> Result<(), OptionError> {
+    pub(crate) fn check_for(&self, arm: &crate::params::DhParams) -> Result<(), OptionError> {
         self.check(arm.joint_count())?;
         match &self.prior {
             Some(t) => t.check_for(arm),
@@ -403,5 +397,30 @@ impl SolverSettings {
     /// These settings with `seed`.
     pub fn with_seed(self, seed: u64) -> SolverSettings {
         SolverSettings { seed, ..self }
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn calibrate_options_fixspec_parse_for() {
+        use crate::{
+            calibrate::FixSpec,
+            params::{DhParams, JointModel},
+        };
+        let mut arm = DhParams::paper_nominal();
+        arm.joints[1].model = JointModel::Hayati;
+        assert_eq!(
+            FixSpec::parse_for("hbeta2", &arm).unwrap(),
+            FixSpec::Columns(vec![7])
+        );
+        let e = FixSpec::parse_for("d2", &arm).unwrap_err();
+        assert!(
+            e.reason
+                .contains("joint 2 is a Hayati joint: its d-slot is `hbeta2`"),
+            "{e}"
+        );
     }
 }

@@ -299,7 +299,7 @@ impl RobustFit {
 
     /// Whether the scale test is far outside the stated noise (either
     /// tail), as [`super::checks::ChiSquare::far_outside`].
-    pub fn far_outside(&self) -> bool {
+    pub(crate) fn far_outside(&self) -> bool {
         self.p_upper.is_some_and(|p| p < CHI_SQUARE_REFUSE)
             || self.p_lower.is_some_and(|p| p < CHI_SQUARE_REFUSE)
     }

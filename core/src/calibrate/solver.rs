@@ -188,14 +188,6 @@ impl Stop {
     /// Whether the result is a usable solution (Ceres'
     /// `IsSolutionUsable`): the final LM converged, and the method's own
     /// stop is not a spent budget.
-    ///
-    /// ```
-    /// use aacmm_core::calibrate::{GlobalStop, Stop, Termination};
-    /// assert!(Stop::Lm(Termination::CostTolerance).is_solution_usable());
-    /// assert!(!Stop::Lm(Termination::NoProgress).is_solution_usable());
-    /// let unconfirmed = Stop::Global { search: GlobalStop::StartBudget, lm: Termination::CostTolerance };
-    /// assert!(!unconfirmed.is_solution_usable());
-    /// ```
     pub fn is_solution_usable(self) -> bool {
         match self {
             Stop::Lm(t) => t.was_successful(),
@@ -531,4 +523,21 @@ fn point(task: &Task<'_, '_>, arm: &DhParams) -> Vec<f64> {
     let mut x = arm.to_vec();
     x.extend(&task.x[task.objective.layout().geometry_columns()..]);
     x
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn calibrate_solver_stop_is_solution_usable() {
+        use crate::calibrate::{GlobalStop, Stop, Termination};
+        assert!(Stop::Lm(Termination::CostTolerance).is_solution_usable());
+        assert!(!Stop::Lm(Termination::NoProgress).is_solution_usable());
+        let unconfirmed = Stop::Global {
+            search: GlobalStop::StartBudget,
+            lm: Termination::CostTolerance,
+        };
+        assert!(!unconfirmed.is_solution_usable());
+    }
 }

@@ -265,7 +265,7 @@ fn check_prismatic(arm: &DhParams, physics: &Physics, fit: &Beyond) -> Result<()
 /// change with `q` smaller still, so a few rounds reach round-off. A
 /// prismatic joint's reading (mm) is its own: nothing corrects it (see
 /// [`Effects::new`]).
-pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
+pub(crate) fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
     let loads = loads_of(arm, physics);
     let mut q = angles.to_vec();
     for _ in 0..8 {
@@ -280,20 +280,7 @@ pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f6
 /// The joint angles the chain sees at the encoder readings `readings`
 /// (harmonics and compliance, as [`Effects`] corrects a pose): the inverse
 /// of [`readings_for`], to round-off.
-///
-/// ```
-/// use aacmm_core::corrections::{Harmonic, Physics, angles_for, readings_for};
-/// use aacmm_core::params::DhParams;
-/// let arm = DhParams::paper_nominal();
-/// let mut physics = Physics::default();
-/// physics.harmonics.push(Harmonic { joint: 1, order: 1, sin: 2e-4, cos: -1e-4 });
-/// let pose = [0.1, -0.4, 0.7, 0.2, -0.3, 0.5];
-/// let q = readings_for(&arm, &physics, &pose);
-/// assert!((q[1] - pose[1]).abs() > 1e-5, "the harmonic moves joint 2's reading");
-/// let back = angles_for(&arm, &physics, &q);
-/// assert!(back.iter().zip(&pose).all(|(a, b)| (a - b).abs() < 1e-15));
-/// ```
-pub fn angles_for(arm: &DhParams, physics: &Physics, readings: &[f64]) -> Vec<f64> {
+pub(crate) fn angles_for(arm: &DhParams, physics: &Physics, readings: &[f64]) -> Vec<f64> {
     let delta = pose_corrections(arm, physics, loads_of(arm, physics).as_ref(), readings);
     readings.iter().zip(&delta).map(|(q, d)| q + d).collect()
 }
@@ -769,5 +756,32 @@ mod tests {
         };
         let e = Effects::new(&arm, &physics, &fit, &raw, none).unwrap();
         assert_eq!(e.poses.shape(), "RPRRRR".parse::<ChainShape>().ok());
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn corrections_effects_angles_for() {
+        use crate::corrections::{Harmonic, Physics, angles_for, readings_for};
+        use crate::params::DhParams;
+        let arm = DhParams::paper_nominal();
+        let mut physics = Physics::default();
+        physics.harmonics.push(Harmonic {
+            joint: 1,
+            order: 1,
+            sin: 2e-4,
+            cos: -1e-4,
+        });
+        let pose = [0.1, -0.4, 0.7, 0.2, -0.3, 0.5];
+        let q = readings_for(&arm, &physics, &pose);
+        assert!(
+            (q[1] - pose[1]).abs() > 1e-5,
+            "the harmonic moves joint 2's reading"
+        );
+        let back = angles_for(&arm, &physics, &q);
+        assert!(back.iter().zip(&pose).all(|(a, b)| (a - b).abs() < 1e-15));
     }
 }

@@ -61,13 +61,15 @@ pub mod gravity;
 
 use serde::{Deserialize, Serialize};
 
-pub use effects::{Conditions, Effects, angles_for, readings_for};
+pub(crate) use effects::angles_for;
+pub(crate) use effects::readings_for;
+pub use effects::{Conditions, Effects};
 
 use crate::error::OptionError;
 use crate::setting::Setting;
 
 /// ISO 1's reference temperature, °C: the calibrated lengths are at it.
-pub const REFERENCE_TEMPERATURE_C: f64 = 20.0;
+pub(crate) const REFERENCE_TEMPERATURE_C: f64 = 20.0;
 
 /// A mass and where it is.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -128,7 +130,7 @@ pub struct Physics {
     #[serde(default)]
     pub cte_per_k: Option<f64>,
     /// The temperature the geometry is at, °C (default
-    /// [`REFERENCE_TEMPERATURE_C`]).
+    /// `REFERENCE_TEMPERATURE_C`).
     #[serde(default)]
     pub reference_temperature_c: Option<f64>,
     /// Drift of the base against the instrument, mm/h (a fit's result,
@@ -278,7 +280,7 @@ pub enum Column {
 
 /// Harmonic orders above this are refused: an encoder's errors of interest
 /// are the first few; beyond, a term fits the data's noise.
-pub const MAX_HARMONIC_ORDER: u32 = 16;
+pub(crate) const MAX_HARMONIC_ORDER: u32 = 16;
 
 impl Beyond {
     /// Whether no model is switched on.
@@ -361,7 +363,7 @@ impl Beyond {
     ///
     /// # Errors
     ///
-    /// A malformed entry, an order outside 1..=[`MAX_HARMONIC_ORDER`], or
+    /// A malformed entry, an order outside 1..=`MAX_HARMONIC_ORDER`, or
     /// a harmonic listed twice.
     pub fn parse_harmonics(text: &str) -> Result<Vec<(usize, u32)>, OptionError> {
         let mut out = Vec::new();

@@ -36,22 +36,11 @@ pub(crate) const APPROACH: &str = "approach";
 /// Appends the directions of one cell `cell` (a row of `joints` joints) to
 /// `out` as `+1`, `−1` or `0` (not known); on an error `out` is as it was.
 ///
-/// ```
-/// use aacmm_core::io::approach::parse_approach;
-/// let mut out = Vec::new();
-/// parse_approach("+-0.", 4, ("p.csv", 2), &mut out).unwrap();
-/// assert_eq!(out, [1, -1, 0, 0]);
-/// parse_approach("", 2, ("p.csv", 3), &mut out).unwrap();
-/// assert_eq!(out[4..], [0, 0]);
-/// let e = parse_approach("+-", 3, ("p.csv", 4), &mut out).unwrap_err();
-/// assert!(e.to_string().starts_with("p.csv:4: field `approach`: `+-` has 2 directions"));
-/// ```
-///
 /// # Errors
 ///
 /// A cell of another length than `joints` (unless empty), a character
 /// other than `+`, `-`, `0`, `.`: each naming the file, line and column.
-pub fn parse_approach(
+pub(crate) fn parse_approach(
     cell: &str,
     joints: usize,
     (file, line): (&str, usize),
@@ -93,11 +82,7 @@ pub fn parse_approach(
 
 /// The cell of one row's directions (`+`, `-`, `0`), as
 /// [`parse_approach`] reads it back.
-///
-/// ```
-/// assert_eq!(aacmm_core::io::approach::approach_cell(&[1, 0, -1]), "+0-");
-/// ```
-pub fn approach_cell(signs: &[i8]) -> String {
+pub(crate) fn approach_cell(signs: &[i8]) -> String {
     (signs.iter())
         .map(|s| match s.signum() {
             1 => '+',
@@ -105,4 +90,29 @@ pub fn approach_cell(signs: &[i8]) -> String {
             _ => '0',
         })
         .collect()
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn io_approach_parse_approach() {
+        use crate::io::approach::parse_approach;
+        let mut out = Vec::new();
+        parse_approach("+-0.", 4, ("p.csv", 2), &mut out).unwrap();
+        assert_eq!(out, [1, -1, 0, 0]);
+        parse_approach("", 2, ("p.csv", 3), &mut out).unwrap();
+        assert_eq!(out[4..], [0, 0]);
+        let e = parse_approach("+-", 3, ("p.csv", 4), &mut out).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("p.csv:4: field `approach`: `+-` has 2 directions")
+        );
+    }
+
+    #[test]
+    fn io_approach_approach_cell() {
+        assert_eq!(crate::io::approach::approach_cell(&[1, 0, -1]), "+0-");
+    }
 }

@@ -141,15 +141,7 @@ pub fn parse_lengths(text: &str, file: &str) -> Result<Vec<ReferenceLength>, Inp
 /// Checks that every point of `lengths` is among `known` (e.g. the labels of
 /// a poses file); the error names `file` (the lengths file), the line and the
 /// field (`point_a` or `point_b`) of the first unknown point.
-///
-/// ```
-/// use aacmm_core::io::{check_lengths_against, parse_lengths};
-/// let l = parse_lengths("point_a,point_b,distance\nS1,S2,500\nS1,S9,300\n", "l.csv").unwrap();
-/// assert!(check_lengths_against(&l, &["S1", "S2", "S9"], "l.csv").is_ok());
-/// let e = check_lengths_against(&l, &["S1", "S2"], "l.csv").unwrap_err();
-/// assert!(e.to_string().starts_with("l.csv:3: field `point_b`: unknown point `S9`"));
-/// ```
-pub fn check_lengths_against<S: AsRef<str>>(
+pub(crate) fn check_lengths_against<S: AsRef<str>>(
     lengths: &[ReferenceLength],
     known: &[S],
     file: &str,
@@ -390,5 +382,22 @@ mod tests {
         padded[1].b = "\tA".into();
         let e = write_lengths(Vec::new(), &padded).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn io_lengths_check_lengths_against() {
+        use crate::io::{check_lengths_against, parse_lengths};
+        let l = parse_lengths("point_a,point_b,distance\nS1,S2,500\nS1,S9,300\n", "l.csv").unwrap();
+        assert!(check_lengths_against(&l, &["S1", "S2", "S9"], "l.csv").is_ok());
+        let e = check_lengths_against(&l, &["S1", "S2"], "l.csv").unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("l.csv:3: field `point_b`: unknown point `S9`")
+        );
     }
 }

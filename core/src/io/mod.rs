@@ -59,16 +59,15 @@ pub use crate::error::InputError;
 pub use arm::{Arm, arm_to_toml, parse_arm, read_arm, read_arm_with, write_arm};
 pub use atomic::{write_atomic, write_atomic_with};
 pub use columns::JointColumns;
-pub use lengths::{
-    ReferenceLength, check_lengths_against, parse_lengths, read_lengths, write_lengths,
-};
+pub(crate) use lengths::check_lengths_against;
+pub use lengths::{ReferenceLength, parse_lengths, read_lengths, write_lengths};
 pub use limits::limit_warning;
 pub use points::{parse_points, read_points, write_points, write_points_u95, write_tool_poses};
 pub use poses::{
-    Poses, PosesOrPositions, parse_poses, parse_poses_or_positions, read_poses,
-    read_poses_or_positions, write_poses,
+    Poses, PosesOrPositions, parse_poses, read_poses, read_poses_or_positions, write_poses,
 };
-pub use positions::{DEFAULT_FRAME, Positions, parse_positions, read_positions};
+pub(crate) use positions::parse_positions;
+pub use positions::{DEFAULT_FRAME, Positions, read_positions};
 pub use prior::parse_prior;
 pub use text::source_name;
 pub use tools::{DEFAULT_TOOL, Tool, ToolNames};

@@ -89,7 +89,7 @@ impl Poses {
     /// No rows, with room for `rows` rows.
     ///
     /// # Panics
-    /// If the room cannot be allocated (see [`Poses::try_with_capacity`]).
+    /// If the room cannot be allocated (see `Poses::try_with_capacity`).
     pub fn with_capacity(joints: usize, rows: usize) -> Poses {
         match Poses::try_with_capacity(joints, rows) {
             Ok(p) => p,
@@ -99,7 +99,7 @@ impl Poses {
 
     /// No rows, with room for `rows` rows, or an [`OutOfMemory`] when
     /// that cannot be allocated.
-    pub fn try_with_capacity(joints: usize, rows: usize) -> Result<Poses, OutOfMemory> {
+    pub(crate) fn try_with_capacity(joints: usize, rows: usize) -> Result<Poses, OutOfMemory> {
         let what = "the rows' readings";
         Ok(Poses {
             joints,
@@ -484,15 +484,15 @@ pub fn read_poses(
 
 /// What a file of joint readings held: the readings as [`Poses`] (a touch
 /// per row, of the row's `point`), and, for a reference-positions file, its
-/// rows whole (positions, frames; [`super::parse_positions`]).
+/// rows whole (positions, frames; `super::parse_positions`).
 pub type PosesOrPositions = (Poses, Vec<Warning>, Option<super::Positions>);
 
 /// Reads a poses file or a reference-positions file (standard input for
-/// `-`): [`parse_poses_or_positions`].
+/// `-`): `parse_poses_or_positions`.
 ///
 /// # Errors
 ///
-/// As [`parse_poses_or_positions`].
+/// As `parse_poses_or_positions`.
 pub fn read_poses_or_positions(
     path: &Path,
     unit: AngleUnit,
@@ -510,22 +510,11 @@ pub fn read_poses_or_positions(
 /// ([`super::parse_positions`]), and its readings warned about as a poses
 /// file's.
 ///
-/// ```
-/// use aacmm_core::io::{AngleUnit, parse_poses_or_positions};
-/// let text = "point,q1,q2,x,y,z\nP,0,90,1,2,3\nQ,10,0,4,5,6\nR,0,45,0,9,1\n";
-/// let (poses, warnings, positions) = parse_poses_or_positions(text, "t.csv", AngleUnit::Deg, Some(2)).unwrap();
-/// assert_eq!(poses.labels().collect::<Vec<_>>(), ["P", "Q", "R"]);
-/// assert_eq!((poses.reading(0)[1], poses.line(2)), (std::f64::consts::FRAC_PI_2, 4));
-/// assert!(warnings.is_empty() && positions.unwrap().len() == 3);
-/// let (poses, _, positions) = parse_poses_or_positions("point,q1\nS,1\n", "p.csv", AngleUnit::Deg, None).unwrap();
-/// assert!(poses.len() == 1 && positions.is_none());
-/// ```
-///
 /// # Errors
 ///
 /// As [`parse_poses`] or [`super::parse_positions`], naming file, line
 /// and field.
-pub fn parse_poses_or_positions(
+pub(crate) fn parse_poses_or_positions(
     text: &str,
     file: &str,
     unit: AngleUnit,
@@ -1509,5 +1498,27 @@ mod tests {
         assert!(matches!(e, InputError::Io { .. }));
         assert!(e.to_string().starts_with(&missing.display().to_string()));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn io_poses_parse_poses_or_positions() {
+        use crate::io::{AngleUnit, poses::parse_poses_or_positions};
+        let text = "point,q1,q2,x,y,z\nP,0,90,1,2,3\nQ,10,0,4,5,6\nR,0,45,0,9,1\n";
+        let (poses, warnings, positions) =
+            parse_poses_or_positions(text, "t.csv", AngleUnit::Deg, Some(2)).unwrap();
+        assert_eq!(poses.labels().collect::<Vec<_>>(), ["P", "Q", "R"]);
+        assert_eq!(
+            (poses.reading(0)[1], poses.line(2)),
+            (std::f64::consts::FRAC_PI_2, 4)
+        );
+        assert!(warnings.is_empty() && positions.unwrap().len() == 3);
+        let (poses, _, positions) =
+            parse_poses_or_positions("point,q1\nS,1\n", "p.csv", AngleUnit::Deg, None).unwrap();
+        assert!(poses.len() == 1 && positions.is_none());
     }
 }

@@ -58,7 +58,7 @@ pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-6;
 const ORIENTATION: [&str; 4] = ["qw", "qx", "qy", "qz"];
 
 /// The fewest rows a named tool's offset (three unknowns) is fitted from.
-pub const MIN_TOOL_ROWS: usize = 2;
+pub(crate) const MIN_TOOL_ROWS: usize = 2;
 
 /// The fewest positions a frame's registration (six unknowns) can rest on.
 pub const MIN_FRAME_POSITIONS: usize = 3;
@@ -374,7 +374,7 @@ impl Positions {
     }
 
     /// How many rows give an orientation.
-    pub fn oriented_rows(&self) -> usize {
+    pub(crate) fn oriented_rows(&self) -> usize {
         self.orientation.iter().filter(|o| o.is_some()).count()
     }
 
@@ -450,7 +450,7 @@ impl Positions {
     /// seen in fewer than [`MIN_TOOL_ROWS`] rows (its offset, three
     /// unknowns, would absorb its one row whole and nothing would check
     /// it) — each by line and field `tool`.
-    pub fn resolve_tools(
+    pub(crate) fn resolve_tools(
         &mut self,
         known: &super::ToolNames,
         file: &str,
@@ -655,7 +655,7 @@ const SHAPE: &str = "point,q1,...,qn,x,y,z[,qw,qx,qy,qz][,frame][,tool][,uncerta
 ///
 /// # Errors
 ///
-/// As [`parse_positions`].
+/// As `parse_positions`.
 pub fn read_positions(
     path: &Path,
     unit: AngleUnit,
@@ -668,18 +668,6 @@ pub fn read_positions(
 /// Parses the text of a reference-position file; `file` names it in
 /// messages.
 ///
-/// ```
-/// use aacmm_core::io::{AngleUnit, parse_positions};
-/// let text = "point,q1,q2,x,y,z\nP,0,90,1,2,3\nQ,10,0,4,5,6\nR,0,45,0,9,1\n";
-/// let p = parse_positions(text, "t.csv", AngleUnit::Deg, Some(2)).unwrap();
-/// assert_eq!((p.len(), p.frames()), (3, &["instrument".to_string()][..]));
-/// assert_eq!(p.reading(0)[1], std::f64::consts::FRAC_PI_2);
-/// assert_eq!((p.position(1), p.line(1)), ([4.0, 5.0, 6.0], 3));
-///
-/// let e = parse_positions("point,q1,q2,x,y,z\nP,0,90,1,NaN,3\n", "t.csv", AngleUnit::Deg, None);
-/// assert!(e.unwrap_err().to_string().starts_with("t.csv:2: field `y`: `NaN` is not a finite number"));
-/// ```
-///
 /// # Errors
 ///
 /// A header other than `point,q1,...,qn,x,y,z[,qw,qx,qy,qz][,frame][,uncertainty]`
@@ -691,7 +679,7 @@ pub fn read_positions(
 /// than [`MIN_FRAME_POSITIONS`] rows or with positions on one line (a
 /// registration needs three points that span a plane): each naming the
 /// line and field.
-pub fn parse_positions(
+pub(crate) fn parse_positions(
     text: &str,
     file: &str,
     unit: AngleUnit,
@@ -1196,5 +1184,32 @@ mod tests {
         // The same sphere seen three times is one position.
         let same = "point,q1,q2,x,y,z\nA,0,1,1,2,3\nA,1,0,1,2,3\nA,1,1,1,2,3\n";
         assert_at(&parse(same).unwrap_err(), F, 2, Some("frame"), "1 distinct");
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn io_positions_parse_positions() {
+        use crate::io::{AngleUnit, parse_positions};
+        let text = "point,q1,q2,x,y,z\nP,0,90,1,2,3\nQ,10,0,4,5,6\nR,0,45,0,9,1\n";
+        let p = parse_positions(text, "t.csv", AngleUnit::Deg, Some(2)).unwrap();
+        assert_eq!((p.len(), p.frames()), (3, &["instrument".to_string()][..]));
+        assert_eq!(p.reading(0)[1], std::f64::consts::FRAC_PI_2);
+        assert_eq!((p.position(1), p.line(1)), ([4.0, 5.0, 6.0], 3));
+
+        let e = parse_positions(
+            "point,q1,q2,x,y,z\nP,0,90,1,NaN,3\n",
+            "t.csv",
+            AngleUnit::Deg,
+            None,
+        );
+        assert!(
+            e.unwrap_err()
+                .to_string()
+                .starts_with("t.csv:2: field `y`: `NaN` is not a finite number")
+        );
     }
 }

@@ -24,8 +24,8 @@
 //!
 //! Refused by file, line and field: another header, an empty label, a value
 //! that is not a finite number, a sphere with fewer than
-//! [`MIN_SPHERE_POINTS`] points (at its first line); where the arm puts the
-//! points is checked by [`Spheres::check_geometry`] (all of a sphere's
+//! `MIN_SPHERE_POINTS` points (at its first line); where the arm puts the
+//! points is checked by `Spheres::check_geometry` (all of a sphere's
 //! points on one circle or line cannot fix a sphere). Readings that, as
 //! degrees, are all within ±2π give a warning (radians read as degrees), as
 //! the poses reader's.
@@ -40,14 +40,14 @@ use super::units::AngleUnit;
 use crate::error::InputError;
 
 /// The fewest points that can fix a sphere of unknown centre and diameter.
-pub const MIN_SPHERE_POINTS: usize = 4;
+pub(crate) const MIN_SPHERE_POINTS: usize = 4;
 
 /// Below this ratio of the smallest to the largest spread of a sphere's
 /// points (the centred points' singular values), they lie on one circle (or
 /// a line) and fix no sphere: the least squares would pick a centre
 /// anywhere along the circle's axis. A 25-point ISO 10360-5 pattern over a
 /// hemisphere has about 0.6; a cap of ±10° about its pole about 0.06.
-pub const MIN_SPHERE_DEPTH_RATIO: f64 = 0.02;
+pub(crate) const MIN_SPHERE_DEPTH_RATIO: f64 = 0.02;
 
 /// The optional column grouping a placement's points by articulation.
 pub(crate) const ARTICULATION: &str = "articulation";
@@ -279,7 +279,11 @@ impl Spheres {
     /// # Errors
     ///
     /// As above, naming `file`.
-    pub fn check_geometry(&self, file: &str, positions: &[[f64; 3]]) -> Result<(), InputError> {
+    pub(crate) fn check_geometry(
+        &self,
+        file: &str,
+        positions: &[[f64; 3]],
+    ) -> Result<(), InputError> {
         for (s, name) in self.names.iter().enumerate() {
             let rows = self.rows_of(s);
             let points: Vec<[f64; 3]> = rows.iter().map(|&i| positions[i]).collect();
@@ -373,7 +377,7 @@ pub fn read_spheres(
 /// count than `joints` asks, or a `tool` column), an empty label, a value
 /// that is not a finite number, an articulation that is not a whole number
 /// from 1, a file without rows, and a sphere with fewer than
-/// [`MIN_SPHERE_POINTS`] points: each naming the line and field.
+/// `MIN_SPHERE_POINTS` points: each naming the line and field.
 pub fn parse_spheres(
     text: &str,
     file: &str,

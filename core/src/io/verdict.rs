@@ -64,15 +64,7 @@ const QUOTED_CHARS: usize = 300;
 
 /// The `[verdict]` table of `verdict`, preceded (when NOT usable) by a
 /// comment that says so at the top of what a reader sees of it.
-///
-/// ```
-/// use aacmm_core::io::verdict::{ArmVerdict, verdict_to_toml};
-/// let v = ArmVerdict { usable: false, reasons: vec!["worse than \"nominal\"".into()], notes: vec![] };
-/// let t = verdict_to_toml(&v);
-/// assert!(t.contains("[verdict]\nusable = false\n"));
-/// assert!(t.starts_with("\n# NOT USABLE") && t.contains(r#"worse than "nominal""#));
-/// ```
-pub fn verdict_to_toml(verdict: &ArmVerdict) -> String {
+pub(crate) fn verdict_to_toml(verdict: &ArmVerdict) -> String {
     #[derive(Serialize)]
     struct File<'a> {
         verdict: &'a ArmVerdict,
@@ -224,5 +216,23 @@ mod tests {
             m.len() < 500 && m.contains("(10000 characters in the file)"),
             "{m}"
         );
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn io_verdict_verdict_to_toml() {
+        use crate::io::verdict::{ArmVerdict, verdict_to_toml};
+        let v = ArmVerdict {
+            usable: false,
+            reasons: vec!["worse than \"nominal\"".into()],
+            notes: vec![],
+        };
+        let t = verdict_to_toml(&v);
+        assert!(t.contains("[verdict]\nusable = false\n"));
+        assert!(t.starts_with("\n# NOT USABLE") && t.contains(r#"worse than "nominal""#));
     }
 }

@@ -210,7 +210,7 @@ impl<const N: usize> Consts<f64, N> {
 
     /// Whether some joint is Hayati, so that only an extended chain
     /// computes this arm.
-    pub fn has_hayati(&self) -> bool {
+    pub(crate) fn has_hayati(&self) -> bool {
         self.hayati.contains(&true)
     }
 
@@ -222,7 +222,7 @@ impl<const N: usize> Consts<f64, N> {
     }
 
     /// The same constants in another scalar type (every lane the same).
-    pub fn splat<S: From<f64>>(&self) -> Consts<S, N> {
+    pub(crate) fn splat<S: From<f64>>(&self) -> Consts<S, N> {
         let s = |v: &[f64; N]| v.map(S::from);
         Consts {
             ct: s(&self.ct),

@@ -173,7 +173,7 @@ impl PreparedPoses {
     /// # Panics
     ///
     /// When `post` has another length than the poses (a bug, not input).
-    pub fn with_post(mut self, post: Post) -> Self {
+    pub(crate) fn with_post(mut self, post: Post) -> Self {
         assert!(
             post.scale.len() == self.len && post.offset.len() == self.len,
             "one scale and offset per pose"
@@ -183,7 +183,7 @@ impl PreparedPoses {
     }
 
     /// The transform after the chain, if any.
-    pub fn post(&self) -> Option<&Post> {
+    pub(crate) fn post(&self) -> Option<&Post> {
         self.post.as_deref()
     }
 

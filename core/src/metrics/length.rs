@@ -48,7 +48,7 @@ pub struct PairLengthError {
 ///
 /// # Errors
 ///
-/// As [`super::point_stats`], for either point.
+/// As `super::point_stats`, for either point.
 ///
 /// ```
 /// use aacmm_core::metrics::pair_length_error;
@@ -154,20 +154,7 @@ fn excess_sums_avx2(a: &[[f64; 3]], b: &[[f64; 3]], c: f64) -> (f64, f64) {
 /// order), computed as the iterator is advanced: the pairs grow as the square
 /// of the points, so they are streamed, never collected. `stats` are the
 /// points' figures from [`super::evaluate`] (for their centroids).
-///
-/// ```
-/// use aacmm_core::{dataset::DataSet, metrics::{evaluate, pair_length_errors}};
-/// let labels = ["a", "b", "c"].repeat(3);
-/// let xyz: Vec<[f64; 3]> = (0..9).map(|r| [(r % 3) as f64 * 10.0, 0.0, 0.0]).collect();
-/// let data = DataSet::from_labels(&labels, "m.csv").unwrap();
-/// let xyz = data.to_touch_order(&xyz);
-/// let ev = evaluate(&data, &xyz).unwrap();
-/// let pairs: Vec<_> = pair_length_errors(&data, &xyz, &ev.points).collect();
-/// assert_eq!(pairs.len(), 3);
-/// assert_eq!((pairs[2].a.as_str(), pairs[2].b.as_str()), ("b", "c"));
-/// assert_eq!(pairs[2].centroid_distance, 10.0);
-/// ```
-pub fn pair_length_errors<'a>(
+pub(crate) fn pair_length_errors<'a>(
     data: &'a DataSet,
     xyz: &'a [[f64; 3]],
     stats: &'a [PointStats],
@@ -394,5 +381,27 @@ mod tests {
         assert!((s.rms - 0.0005f64.sqrt()).abs() < 1e-15);
         assert!((s.two_rms - 2.0 * 0.0005f64.sqrt()).abs() < 1e-15);
         assert_eq!(ReferenceSummary::of(&[]), None);
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn metrics_length_pair_length_errors() {
+        use crate::{
+            dataset::DataSet,
+            metrics::{evaluate, pair_length_errors},
+        };
+        let labels = ["a", "b", "c"].repeat(3);
+        let xyz: Vec<[f64; 3]> = (0..9).map(|r| [(r % 3) as f64 * 10.0, 0.0, 0.0]).collect();
+        let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+        let xyz = data.to_touch_order(&xyz);
+        let ev = evaluate(&data, &xyz).unwrap();
+        let pairs: Vec<_> = pair_length_errors(&data, &xyz, &ev.points).collect();
+        assert_eq!(pairs.len(), 3);
+        assert_eq!((pairs[2].a.as_str(), pairs[2].b.as_str()), ("b", "c"));
+        assert_eq!(pairs[2].centroid_distance, 10.0);
     }
 }

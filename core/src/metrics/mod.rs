@@ -8,9 +8,9 @@
 //! order labels first appear, so every list in the report has a deterministic
 //! order; "touch k" of a point is its k-th row in input order.
 //!
-//! # Per point (socket) — [`point_stats`]
+//! # Per point (socket) — `point_stats`
 //!
-//! With touches `x_1..x_n` (n ≥ [`MIN_TOUCHES`]), centroid `x̄ = (1/n) Σ x_i`
+//! With touches `x_1..x_n` (n ≥ `MIN_TOUCHES`), centroid `x̄ = (1/n) Σ x_i`
 //! and `δ_i = |x_i − x̄|`:
 //!
 //! | figure | formula | source |
@@ -83,16 +83,19 @@ mod pairs;
 mod point;
 pub(crate) mod table;
 
-pub use length::{
-    PairLengthError, ReferenceError, ReferenceSummary, pair_length_error, pair_length_errors,
-};
-pub use pairs::{DEFAULT_PAIR_SEED, PAIR_TOUCH_BUDGET, PairSample};
+pub use length::pair_length_error;
+pub(crate) use length::pair_length_errors;
+pub use length::{PairLengthError, ReferenceError, ReferenceSummary};
+pub(crate) use pairs::DEFAULT_PAIR_SEED;
+pub(crate) use pairs::PAIR_TOUCH_BUDGET;
+pub use pairs::PairSample;
 pub(crate) use pairs::{PairSet, pair_set};
-pub use point::{PointStats, point_stats};
-pub use table::write_pair_table;
+pub use point::PointStats;
+pub(crate) use point::point_stats;
+pub(crate) use table::write_pair_table;
 
 use crate::dataset::DataSet;
-pub use crate::dataset::MIN_TOUCHES;
+pub(crate) use crate::dataset::MIN_TOUCHES;
 pub(crate) use crate::geometry::{centroid, distance};
 use serde::{Deserialize, Serialize};
 
@@ -121,10 +124,10 @@ pub enum MetricsError {
         /// Label of the offending touch.
         label: String,
         /// Where the touch came from (`file:line`), or its index among the
-        /// touches passed to [`point_stats`].
+        /// touches passed to `point_stats`.
         at: String,
     },
-    /// A point has fewer than [`MIN_TOUCHES`] touches.
+    /// A point has fewer than `MIN_TOUCHES` touches.
     #[error(
         "point {} has {touches} touch(es); at least {MIN_TOUCHES} are needed",
         crate::error::quoted(label)
@@ -292,7 +295,7 @@ impl Running {
 
 /// Everything [`evaluate`] computes; lists are in the data set's point order
 /// (references in file order). Per-pair eq. 19 rows, which grow as the
-/// square of the points, are not kept: [`pair_length_errors`] streams them.
+/// square of the points, are not kept: `pair_length_errors` streams them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Evaluation {
     /// Per-point figures (paper eq. 9–12, SPAT).
@@ -309,7 +312,7 @@ pub struct Evaluation {
     /// `d_error_abs` across pairs; `None` with a single point.
     pub pair_length_abs_summary: Option<Summary>,
     /// The pairs the two summaries are over when not all of them: a seeded
-    /// sample above [`PAIR_TOUCH_BUDGET`] touch distances (`None`: every
+    /// sample above `PAIR_TOUCH_BUDGET` touch distances (`None`: every
     /// pair, or none computed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pair_sample: Option<PairSample>,
@@ -323,8 +326,8 @@ pub struct Evaluation {
 /// data set's touches (in its touch order; see the module documentation for
 /// the formulas). Memory is linear in the touches: pairs are summarised as
 /// they are computed, on up to two threads;
-/// [`evaluate_threads`] takes the count. Above [`PAIR_TOUCH_BUDGET`] touch
-/// distances the pairs are a sample (seed [`DEFAULT_PAIR_SEED`];
+/// `evaluate_threads` takes the count. Above `PAIR_TOUCH_BUDGET` touch
+/// distances the pairs are a sample (seed `DEFAULT_PAIR_SEED`;
 /// [`evaluate_seeded`] takes one), stated in [`Evaluation::pair_sample`].
 ///
 /// # Errors
@@ -355,8 +358,8 @@ pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsE
 
 /// Checks, before any work, that an evaluation of `data` can have the
 /// memory it needs beyond the data set, the positions its caller computes
-/// first included ([`crate::memory::EVALUATE_BYTES_PER_TOUCH`]): callers
-/// check before they compute them, [`evaluate_threads`] again.
+/// first included (`crate::memory::EVALUATE_BYTES_PER_TOUCH`): callers
+/// check before they compute them, `evaluate_threads` again.
 ///
 /// # Errors
 ///
@@ -378,18 +381,7 @@ pub(crate) const DEFAULT_THREADS: usize = 2;
 /// # Errors
 ///
 /// As [`evaluate`].
-///
-/// ```
-/// use aacmm_core::{dataset::DataSet, metrics::{evaluate, evaluate_threads}};
-/// let labels: Vec<String> = (0..600).map(|i| format!("s{}", i % 200)).collect();
-/// let xyz: Vec<[f64; 3]> = (0..600).map(|i| [(i as f64).sin() * 500.0, i as f64, 0.0]).collect();
-/// let data = DataSet::from_labels(&labels, "m.csv").unwrap();
-/// let xyz = data.to_touch_order(&xyz);
-/// let one = evaluate_threads(&data, &xyz, 1).unwrap();
-/// assert_eq!(one, evaluate_threads(&data, &xyz, 3).unwrap());
-/// assert_eq!(one, evaluate(&data, &xyz).unwrap());
-/// ```
-pub fn evaluate_threads(
+pub(crate) fn evaluate_threads(
     data: &DataSet,
     xyz: &[[f64; 3]],
     threads: usize,
@@ -398,7 +390,7 @@ pub fn evaluate_threads(
     evaluate_with(data, xyz, Some((threads, DEFAULT_PAIR_SEED)))
 }
 
-/// [`evaluate_threads`] with the pairs, when sampled, drawn with `seed`
+/// `evaluate_threads` with the pairs, when sampled, drawn with `seed`
 /// (a session's, so that its outputs agree).
 ///
 /// # Errors
@@ -1032,5 +1024,27 @@ pub(crate) mod tests {
             }
             _ => a == b,
         }
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn metrics_evaluate_threads() {
+        use crate::{
+            dataset::DataSet,
+            metrics::{evaluate, evaluate_threads},
+        };
+        let labels: Vec<String> = (0..600).map(|i| format!("s{}", i % 200)).collect();
+        let xyz: Vec<[f64; 3]> = (0..600)
+            .map(|i| [(i as f64).sin() * 500.0, i as f64, 0.0])
+            .collect();
+        let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+        let xyz = data.to_touch_order(&xyz);
+        let one = evaluate_threads(&data, &xyz, 1).unwrap();
+        assert_eq!(one, evaluate_threads(&data, &xyz, 3).unwrap());
+        assert_eq!(one, evaluate(&data, &xyz).unwrap());
     }
 }

@@ -17,11 +17,11 @@ use crate::dataset::Point;
 /// 1000, is summarised over every pair; above, the sampled pairs cost about
 /// this much, whatever the points, so the cost grows no faster than the
 /// touches (which the per-point figures visit once).
-pub const PAIR_TOUCH_BUDGET: u64 = 10_000_000;
+pub(crate) const PAIR_TOUCH_BUDGET: u64 = 10_000_000;
 
 /// The seed of the pair sample where no session gives one (`aacmm
 /// evaluate`, [`super::evaluate`]).
-pub const DEFAULT_PAIR_SEED: u64 = 0;
+pub(crate) const DEFAULT_PAIR_SEED: u64 = 0;
 
 /// The pairs of points eq. 19 was summarised over, when not all: a seeded
 /// sample, each pair kept with the same probability.

@@ -35,22 +35,7 @@ pub struct PointStats {
 ///
 /// [`MetricsError::TooFewTouches`] below [`super::MIN_TOUCHES`] touches;
 /// [`MetricsError::NonFinite`] naming the index into `touches`.
-///
-/// ```
-/// use aacmm_core::metrics::point_stats;
-/// // Corners of a square of side 2 around (5, 5, 5): δ = √2 for each touch.
-/// let touches = [[6.0, 6.0, 5.0], [4.0, 6.0, 5.0], [4.0, 4.0, 5.0], [6.0, 4.0, 5.0]];
-/// let p = point_stats("socket", &touches).unwrap();
-/// let r2 = 2f64.sqrt();
-/// assert_eq!(p.centroid, [5.0, 5.0, 5.0]);
-/// assert!((p.e - r2).abs() < 1e-12);
-/// assert!(p.sigma.abs() < 1e-12);
-/// assert!((p.oa - r2).abs() < 1e-12); // e + 3·0
-/// assert!((p.delta_max - r2).abs() < 1e-12);
-/// assert!((p.two_s - 2.0 * (4.0 * 2.0 / 3.0f64).sqrt()).abs() < 1e-12);
-/// assert_eq!(p.half_range, [1.0, 1.0, 0.0]);
-/// ```
-pub fn point_stats(label: &str, touches: &[[f64; 3]]) -> Result<PointStats, MetricsError> {
+pub(crate) fn point_stats(label: &str, touches: &[[f64; 3]]) -> Result<PointStats, MetricsError> {
     check_touches(label, touches)?;
     let n = touches.len();
     let centroid = centroid(touches);
@@ -154,5 +139,31 @@ mod tests {
                 at: "touch 2".into()
             })
         );
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn metrics_point_point_stats() {
+        use crate::metrics::point_stats;
+        // Corners of a square of side 2 around (5, 5, 5): δ = √2 for each touch.
+        let touches = [
+            [6.0, 6.0, 5.0],
+            [4.0, 6.0, 5.0],
+            [4.0, 4.0, 5.0],
+            [6.0, 4.0, 5.0],
+        ];
+        let p = point_stats("socket", &touches).unwrap();
+        let r2 = 2f64.sqrt();
+        assert_eq!(p.centroid, [5.0, 5.0, 5.0]);
+        assert!((p.e - r2).abs() < 1e-12);
+        assert!(p.sigma.abs() < 1e-12);
+        assert!((p.oa - r2).abs() < 1e-12); // e + 3·0
+        assert!((p.delta_max - r2).abs() < 1e-12);
+        assert!((p.two_s - 2.0 * (4.0 * 2.0 / 3.0f64).sqrt()).abs() < 1e-12);
+        assert_eq!(p.half_range, [1.0, 1.0, 0.0]);
     }
 }

@@ -7,19 +7,7 @@ use crate::dataset::Point;
 
 /// Writes eq. 19 for every pair as a table, row by row as `pairs` yields
 /// them: the column widths come from the labels, so nothing is collected.
-///
-/// ```
-/// use aacmm_core::{dataset::DataSet, metrics::{evaluate, pair_length_errors, write_pair_table}};
-/// let data = DataSet::from_labels(&["a", "a", "a", "bb", "bb", "bb"], "m.csv").unwrap();
-/// let xyz = [[0.0; 3], [0.0; 3], [0.0; 3], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0], [3.0, 4.0, 0.0]];
-/// let ev = evaluate(&data, &xyz).unwrap();
-/// let mut out = Vec::new();
-/// write_pair_table(&mut out, pair_length_errors(&data, &xyz, &ev.points), data.points()).unwrap();
-/// let text = String::from_utf8(out).unwrap();
-/// assert!(text.lines().nth(2).unwrap().starts_with("  a   bb  3"), "{text}");
-/// assert!(text.contains("5.0000"));
-/// ```
-pub fn write_pair_table<W: Write + ?Sized>(
+pub(crate) fn write_pair_table<W: Write + ?Sized>(
     w: &mut W,
     pairs: impl Iterator<Item = PairLengthError>,
     points: &[Point],
@@ -447,5 +435,41 @@ mod tests {
         let t = eval(&["p"; 3], &[[0.0; 3]; 3], &[]).unwrap().to_table();
         assert!(t.contains("no pairs"));
         assert!(t.contains("none given"));
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn metrics_table_write_pair_table() {
+        use crate::{
+            dataset::DataSet,
+            metrics::{evaluate, pair_length_errors, write_pair_table},
+        };
+        let data = DataSet::from_labels(&["a", "a", "a", "bb", "bb", "bb"], "m.csv").unwrap();
+        let xyz = [
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+            [3.0, 4.0, 0.0],
+            [3.0, 4.0, 0.0],
+            [3.0, 4.0, 0.0],
+        ];
+        let ev = evaluate(&data, &xyz).unwrap();
+        let mut out = Vec::new();
+        write_pair_table(
+            &mut out,
+            pair_length_errors(&data, &xyz, &ev.points),
+            data.points(),
+        )
+        .unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(
+            text.lines().nth(2).unwrap().starts_with("  a   bb  3"),
+            "{text}"
+        );
+        assert!(text.contains("5.0000"));
     }
 }

@@ -51,11 +51,12 @@ pub use map::{
 };
 
 pub(crate) use map::reading_ranges;
+pub use pool::sample_touches;
 pub use pool::{
-    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_sphere_points, sample_touches,
+    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_sphere_points,
     sample_touches_observed,
 };
-pub use summary::{GivenNote, Knee, SummaryContext, knee, summary};
+pub use summary::{GivenNote, Knee, SummaryContext, summary};
 
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};

@@ -119,7 +119,7 @@ pub fn sample_positions(
 ///
 /// # Errors
 ///
-/// No socket, fewer than [`MIN_POSES_PER_SOCKET`] touches a socket, the
+/// No socket, fewer than `MIN_POSES_PER_SOCKET` touches a socket, the
 /// simulator's (sockets it cannot place or touch).
 pub fn sample_touches(
     arm: &Arm,

@@ -11,19 +11,19 @@ use crate::error::short;
 
 /// More rows stop paying where doubling them lowers the RMS radius by less
 /// than this fraction.
-pub const KNEE: f64 = 0.10;
+pub(crate) const KNEE: f64 = 0.10;
 
-/// Where more rows stop paying, read off a plan's curve ([`knee`]).
+/// Where more rows stop paying, read off a plan's curve (`knee`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Knee {
-    /// Doubling from `rows` lowers the RMS by `gain` (< [`KNEE`]).
+    /// Doubling from `rows` lowers the RMS by `gain` (< `KNEE`).
     At {
-        /// Rows from which doubling gains less than [`KNEE`].
+        /// Rows from which doubling gains less than `KNEE`.
         rows: usize,
         /// The fraction doubling them lowers the RMS radius by.
         gain: f64,
     },
-    /// Every doubling the curve shows still gains [`KNEE`] or more; the
+    /// Every doubling the curve shows still gains `KNEE` or more; the
     /// last from `rows`, by `gain`.
     Beyond {
         /// Rows of the last doubling the curve shows.
@@ -38,7 +38,7 @@ pub enum Knee {
 /// The first determined point of `curve` from which doubling the rows
 /// lowers the RMS radius by less than [`KNEE`] (the RMS at twice the rows
 /// interpolated between the curve's points).
-pub fn knee(curve: &[CurvePoint]) -> Knee {
+pub(crate) fn knee(curve: &[CurvePoint]) -> Knee {
     let points: Vec<(usize, f64)> = curve
         .iter()
         .filter_map(|c| c.rms_mm.map(|r| (c.rows, r)))

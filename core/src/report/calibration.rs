@@ -13,7 +13,7 @@ use crate::session::{CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, T
 ///
 /// # Errors
 ///
-/// As [`calibration_report`].
+/// As `calibration_report`.
 pub fn session_report(
     report: &CalibrationReport,
     problem: &Problem,

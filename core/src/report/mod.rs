@@ -10,12 +10,12 @@
 //!
 //! | figure | file | calibration | evaluation |
 //! |---|---|---|---|
-//! | single-point error `e` per point (paper Fig. 6) | [`SINGLE_POINT_SVG`] | ✓ | ✓ |
-//! | length errors: eq. 19 `\|d\|_error` per pair, reference lengths (Fig. 7) | [`LENGTHS_SVG`] | ✓ | ✓ |
-//! | parameter corrections ± 2σ, fixed ones with the reason | [`PARAMETERS_SVG`] | ✓ | |
-//! | singular values and threshold; correlation heat map | [`IDENTIFIABILITY_SVG`] | ✓ | |
-//! | histogram of the per-touch residual lengths `δ = \|x − x̄\|` | [`RESIDUALS_SVG`] | ✓ | ✓ |
-//! | LM cost per iteration; annealing energy against temperature | [`SOLVER_SVG`] | ✓ | |
+//! | single-point error `e` per point (paper Fig. 6) | `SINGLE_POINT_SVG` | ✓ | ✓ |
+//! | length errors: eq. 19 `\|d\|_error` per pair, reference lengths (Fig. 7) | `LENGTHS_SVG` | ✓ | ✓ |
+//! | parameter corrections ± 2σ, fixed ones with the reason | `PARAMETERS_SVG` | ✓ | |
+//! | singular values and threshold; correlation heat map | `IDENTIFIABILITY_SVG` | ✓ | |
+//! | histogram of the per-touch residual lengths `δ = \|x − x̄\|` | `RESIDUALS_SVG` | ✓ | ✓ |
+//! | LM cost per iteration; annealing energy against temperature | `SOLVER_SVG` | ✓ | |
 //! | predicted 95 % radius of the position error per sampled pose against the distance from the shoulder, RMS per band | [`UNCERTAINTY_MAP_SVG`] | ✓ (with a map) | |
 //!
 //! Before calibration is drawn grey, after in colour (blue for fitted
@@ -62,17 +62,17 @@ pub use calibration::session_report;
 /// The page.
 pub const HTML_FILE: &str = "report.html";
 /// Single-point error `e` per point, before and after (paper Fig. 6).
-pub const SINGLE_POINT_SVG: &str = "single-point-errors.svg";
+pub(crate) const SINGLE_POINT_SVG: &str = "single-point-errors.svg";
 /// Length errors: eq. 19 per pair and against reference lengths (Fig. 7).
-pub const LENGTHS_SVG: &str = "length-errors.svg";
+pub(crate) const LENGTHS_SVG: &str = "length-errors.svg";
 /// Parameter corrections with ± 2σ.
-pub const PARAMETERS_SVG: &str = "parameter-corrections.svg";
+pub(crate) const PARAMETERS_SVG: &str = "parameter-corrections.svg";
 /// Singular values and the correlation matrix.
-pub const IDENTIFIABILITY_SVG: &str = "identifiability.svg";
+pub(crate) const IDENTIFIABILITY_SVG: &str = "identifiability.svg";
 /// Per-touch residual lengths, before and after.
-pub const RESIDUALS_SVG: &str = "residuals.svg";
+pub(crate) const RESIDUALS_SVG: &str = "residuals.svg";
 /// The solver's progress.
-pub const SOLVER_SVG: &str = "solver-progress.svg";
+pub(crate) const SOLVER_SVG: &str = "solver-progress.svg";
 /// The 3-D errors at reference positions, when the calibration had them
 /// (not among [`CALIBRATION_FILES`], which every calibration writes).
 pub const POSITIONS_SVG: &str = "position-errors.svg";
@@ -84,9 +84,9 @@ pub const BEYOND_SVG: &str = "beyond-geometry.svg";
 /// a calibration whose covariance is not finite has none).
 pub const UNCERTAINTY_MAP_SVG: &str = "uncertainty-map.svg";
 
-/// Every file [`calibration_report`] writes for touches, page first
-/// (without touches, the three touch figures — [`SINGLE_POINT_SVG`],
-/// [`LENGTHS_SVG`], [`RESIDUALS_SVG`] — are left out).
+/// Every file `calibration_report` writes for touches, page first
+/// (without touches, the three touch figures — `SINGLE_POINT_SVG`,
+/// `LENGTHS_SVG`, `RESIDUALS_SVG` — are left out).
 pub const CALIBRATION_FILES: [&str; 7] = [
     HTML_FILE,
     SINGLE_POINT_SVG,
@@ -97,7 +97,7 @@ pub const CALIBRATION_FILES: [&str; 7] = [
     SOLVER_SVG,
 ];
 
-/// Every file [`evaluation_report`] writes, page first.
+/// Every file `evaluation_report` writes, page first.
 pub const EVALUATION_FILES: [&str; 4] = [HTML_FILE, SINGLE_POINT_SVG, LENGTHS_SVG, RESIDUALS_SVG];
 
 /// Eq. 19 pairs drawn one marker each, per series; more are drawn as the
@@ -159,16 +159,6 @@ pub struct Report {
 
 impl Report {
     /// Every file of the report as (file name, content), page first.
-    ///
-    /// ```
-    /// use aacmm_core::report::{Figure, Report, RESIDUALS_SVG};
-    /// let r = Report {
-    ///     html: "<!DOCTYPE html>".into(),
-    ///     figures: vec![Figure { file: RESIDUALS_SVG, title: "t".into(), svg: "<svg/>".into() }],
-    /// };
-    /// let names: Vec<&str> = r.files().map(|(name, _)| name).collect();
-    /// assert_eq!(names, ["report.html", "residuals.svg"]);
-    /// ```
     pub fn files(&self) -> impl Iterator<Item = (&str, &str)> {
         std::iter::once((HTML_FILE, self.html.as_str()))
             .chain(self.figures.iter().map(|f| (f.file, f.svg.as_str())))
@@ -234,7 +224,7 @@ pub struct ValidationRow<'a> {
     pub json: Option<String>,
 }
 
-/// What [`calibration_report`] shows.
+/// What `calibration_report` shows.
 #[derive(Clone, Debug)]
 pub struct CalibrationInput<'a> {
     /// The page's heading.
@@ -328,7 +318,7 @@ pub struct PoseErrors {
     pub(crate) orientation_deg: Vec<Option<f64>>,
 }
 
-/// What [`evaluation_report`] shows.
+/// What `evaluation_report` shows.
 #[derive(Clone, Debug)]
 pub struct EvaluationInput<'a> {
     /// The page's heading.
@@ -356,47 +346,7 @@ pub struct EvaluationInput<'a> {
 /// [`ReportError::Positions`] when positions do not fit their data set;
 /// [`ReportError::Metrics`] for positions the metrics refuse;
 /// [`ReportError::Draw`] if plotters fails.
-///
-/// ```
-/// use aacmm_core::{calibrate::*, io::Arm, params::DhParams, report::*, simulate::*};
-/// let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
-/// let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 5, 6);
-/// settings.reference_lengths = 2;
-/// let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
-/// let settings = SolverSettings::default().with_method(Method::Lm);
-/// let cal = calibrate(&nominal.params, &data, &ModelOptions::default(), &settings).unwrap();
-/// let before = positions(&nominal.params, &data).unwrap();
-/// let after = positions(&cal.params, &data).unwrap();
-/// let fitted = validate::before_after(&nominal.params, &cal.params, &data).unwrap();
-/// let report = calibration_report(&CalibrationInput {
-///     title: "Calibration".into(),
-///     inputs: vec![],
-///     calibration: &cal,
-///     calibration_json: None,
-///     measured: vec![Measured { data: &data, held_out: false, before: Some(&before), after: &after }],
-///     arms: Arms { before: "nominal".into(), after: "calibrated".into() },
-///     validation: vec![ValidationRow { name: "fitted".into(), held_out: false, figures: &fitted, json: None }],
-///     truth: None,
-///     positions: Vec::new(),
-///     beyond: Vec::new(),
-///     uncertainty_map: None,
-///     uncertainty_map_json: None,
-///     spheres: None,
-///     folds: &[],
-///     held_out_spheres: None,
-///     tools: None,
-///     touch_tools: None,
-///     uncertainty_maps_in_frames: &[],
-///     uncertainty_maps_at_tools: &[],
-///     verdict: None,
-///     seed: 0,
-/// })
-/// .unwrap();
-/// assert_eq!(report.files().count(), CALIBRATION_FILES.len());
-/// assert!(report.html.starts_with("<!DOCTYPE html>"));
-/// assert!(!report.html.contains("<script"));
-/// ```
-pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportError> {
+pub(crate) fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportError> {
     let evaluated = data::evaluate_all(&input.measured, input.seed)?;
     // The touch figures only where there are touches: reference positions
     // alone have none to draw.
@@ -431,27 +381,7 @@ pub fn calibration_report(input: &CalibrationInput) -> Result<Report, ReportErro
 /// # Errors
 ///
 /// As [`calibration_report`].
-///
-/// ```
-/// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}, params::DhParams, report::*};
-/// let text = "point,q1,q2,q3,q4,q5,q6\n\
-///     A,0,0,0,0,0,0\nA,0,0,0,0,0,1\nA,0,0,0,0,1,0\n\
-///     B,10,20,30,40,50,60\nB,10,20,30,40,50,61\nB,10,20,30,40,51,61\n";
-/// let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
-/// let data = DataSet::from_poses(&poses, "p.csv").unwrap();
-/// let xyz = positions(&DhParams::paper_nominal(), &data).unwrap();
-/// let report = evaluation_report(&EvaluationInput {
-///     title: "Evaluation".into(),
-///     inputs: vec![("poses".into(), "p.csv".into())],
-///     measured: Measured { data: &data, held_out: false, before: None, after: &xyz },
-///     arm: "nominal".into(),
-///     evaluation_json: None,
-/// })
-/// .unwrap();
-/// let names: Vec<&str> = report.files().map(|(name, _)| name).collect();
-/// assert_eq!(names, EVALUATION_FILES);
-/// ```
-pub fn evaluation_report(input: &EvaluationInput) -> Result<Report, ReportError> {
+pub(crate) fn evaluation_report(input: &EvaluationInput) -> Result<Report, ReportError> {
     let measured = [input.measured];
     // The pairs `aacmm evaluate`'s figures are over too.
     let evaluated = data::evaluate_all(&measured, crate::metrics::DEFAULT_PAIR_SEED)?;
@@ -466,4 +396,109 @@ pub fn evaluation_report(input: &EvaluationInput) -> Result<Report, ReportError>
     ];
     let html = html::evaluation_page(input, &evaluated, &figures);
     Ok(Report { html, figures })
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn report_report_files() {
+        use crate::report::{Figure, RESIDUALS_SVG, Report};
+        let r = Report {
+            html: "<!DOCTYPE html>".into(),
+            figures: vec![Figure {
+                file: RESIDUALS_SVG,
+                title: "t".into(),
+                svg: "<svg/>".into(),
+            }],
+        };
+        let names: Vec<&str> = r.files().map(|(name, _)| name).collect();
+        assert_eq!(names, ["report.html", "residuals.svg"]);
+    }
+
+    #[test]
+    fn report_calibration_report() {
+        use crate::{calibrate::*, io::Arm, params::DhParams, report::*, simulate::*};
+        let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
+        let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 5, 6);
+        settings.reference_lengths = 2;
+        let data = simulate(&nominal, &settings).unwrap().data_set().unwrap();
+        let settings = SolverSettings::default().with_method(Method::Lm);
+        let cal = calibrate(&nominal.params, &data, &ModelOptions::default(), &settings).unwrap();
+        let before = positions(&nominal.params, &data).unwrap();
+        let after = positions(&cal.params, &data).unwrap();
+        let fitted = validate::before_after(&nominal.params, &cal.params, &data).unwrap();
+        let report = calibration_report(&CalibrationInput {
+            title: "Calibration".into(),
+            inputs: vec![],
+            calibration: &cal,
+            calibration_json: None,
+            measured: vec![Measured {
+                data: &data,
+                held_out: false,
+                before: Some(&before),
+                after: &after,
+            }],
+            arms: Arms {
+                before: "nominal".into(),
+                after: "calibrated".into(),
+            },
+            validation: vec![ValidationRow {
+                name: "fitted".into(),
+                held_out: false,
+                figures: &fitted,
+                json: None,
+            }],
+            truth: None,
+            positions: Vec::new(),
+            beyond: Vec::new(),
+            uncertainty_map: None,
+            uncertainty_map_json: None,
+            spheres: None,
+            folds: &[],
+            held_out_spheres: None,
+            tools: None,
+            touch_tools: None,
+            uncertainty_maps_in_frames: &[],
+            uncertainty_maps_at_tools: &[],
+            verdict: None,
+            seed: 0,
+        })
+        .unwrap();
+        assert_eq!(report.files().count(), CALIBRATION_FILES.len());
+        assert!(report.html.starts_with("<!DOCTYPE html>"));
+        assert!(!report.html.contains("<script"));
+    }
+
+    #[test]
+    fn report_evaluation_report() {
+        use crate::{
+            dataset::DataSet,
+            io::{AngleUnit, parse_poses},
+            params::DhParams,
+            report::*,
+        };
+        let text = "point,q1,q2,q3,q4,q5,q6\n\
+            A,0,0,0,0,0,0\nA,0,0,0,0,0,1\nA,0,0,0,0,1,0\n\
+            B,10,20,30,40,50,60\nB,10,20,30,40,50,61\nB,10,20,30,40,51,61\n";
+        let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, Some(6)).unwrap();
+        let data = DataSet::from_poses(&poses, "p.csv").unwrap();
+        let xyz = positions(&DhParams::paper_nominal(), &data).unwrap();
+        let report = evaluation_report(&EvaluationInput {
+            title: "Evaluation".into(),
+            inputs: vec![("poses".into(), "p.csv".into())],
+            measured: Measured {
+                data: &data,
+                held_out: false,
+                before: None,
+                after: &xyz,
+            },
+            arm: "nominal".into(),
+            evaluation_json: None,
+        })
+        .unwrap();
+        let names: Vec<&str> = report.files().map(|(name, _)| name).collect();
+        assert_eq!(names, EVALUATION_FILES);
+    }
 }

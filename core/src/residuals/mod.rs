@@ -79,7 +79,7 @@ use crate::kernel::{ArmKernel, KernelError};
 use crate::params::DhParams;
 use crate::setting::Setting;
 
-pub use beyond::{BLOCK_NAME, CorrectionBlock};
+pub use beyond::CorrectionBlock;
 pub use blocks::Mount;
 pub use blocks::{
     Block, BlockId, Frame, Layout, LayoutError, MOUNT_BLOCK, Parameter, Scalar, Unit, Vector,
@@ -706,7 +706,7 @@ pub enum Role {
 
 impl Role {
     /// Whether a term of this role is prior knowledge rather than data.
-    pub fn is_prior(self) -> bool {
+    pub(crate) fn is_prior(self) -> bool {
         matches!(self, Role::Prior | Role::Held)
     }
 }
@@ -736,7 +736,7 @@ pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Whether this is prior knowledge rather than data: left out of the
     /// data's cost (the start arm's cost, the grid of the global search)
     /// and, in the covariance, not rescaled by the fit's σ̂. By default,
-    /// as its role says ([`Role::is_prior`]).
+    /// as its role says (`Role::is_prior`).
     fn is_prior(&self) -> bool {
         self.role().is_prior()
     }

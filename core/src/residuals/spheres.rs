@@ -33,8 +33,6 @@
 
 mod folds;
 
-pub use folds::{MIN_TRAINING_POINTS, fit_sphere};
-
 use crate::corrections::Conditions;
 use crate::error::InputError;
 use crate::io::spheres::Spheres;
@@ -51,13 +49,13 @@ pub(crate) const TERM: &str = "spheres";
 
 /// The smallest stated sphere diameter, mm: below it the value was most
 /// likely given in metres (a 25 mm sphere as `0.025`).
-pub const MIN_SPHERE_DIAMETER_MM: f64 = 1.0;
+pub(crate) const MIN_SPHERE_DIAMETER_MM: f64 = 1.0;
 /// The largest, mm: no reference sphere an arm probes is a metre across.
-pub const MAX_SPHERE_DIAMETER_MM: f64 = 1000.0;
+pub(crate) const MAX_SPHERE_DIAMETER_MM: f64 = 1000.0;
 
 /// Checks a stated sphere diameter (mm): finite, between
-/// [`MIN_SPHERE_DIAMETER_MM`] (below it, metres) and
-/// [`MAX_SPHERE_DIAMETER_MM`].
+/// `MIN_SPHERE_DIAMETER_MM` (below it, metres) and
+/// `MAX_SPHERE_DIAMETER_MM`.
 ///
 /// ```
 /// use aacmm_core::residuals::spheres::check_sphere_diameter;
@@ -231,11 +229,11 @@ fn positions_at(spheres: &Spheres, arm: &DhParams) -> Result<Vec<[f64; 3]>, Term
 }
 
 /// Refuses spheres whose points, where `arm` puts them, fix no sphere
-/// ([`Spheres::check_geometry`]), naming `file`'s line and field.
+/// (`Spheres::check_geometry`), naming `file`'s line and field.
 ///
 /// # Errors
 ///
-/// As [`Spheres::check_geometry`]; a kernel that refuses the arm (as the
+/// As `Spheres::check_geometry`; a kernel that refuses the arm (as the
 /// file's error, naming the file).
 pub fn check_spheres(spheres: &Spheres, file: &str, arm: &DhParams) -> Result<(), InputError> {
     let p = positions_at(spheres, arm).map_err(|e| InputError::file_error(file, e.to_string()))?;
@@ -715,7 +713,7 @@ impl Term for SphereTerm {
     }
 
     /// Each sphere's points dealt to the folds (never a whole sphere):
-    /// see [`MIN_TRAINING_POINTS`]'s module.
+    /// see `MIN_TRAINING_POINTS`'s module.
     fn split(
         &self,
         at: &At<'_>,

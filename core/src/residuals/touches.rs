@@ -31,7 +31,7 @@ pub(super) const POINTS_PER_CHUNK: usize = 64;
 
 /// How many chunks of work the normal equations of `points` points split
 /// into: chunks of a fixed number of points, shared between threads from
-/// [`MIN_ITEMS_PER_THREAD`](crate::parallel::MIN_ITEMS_PER_THREAD) chunks
+/// `MIN_ITEMS_PER_THREAD` chunks
 /// a thread up ([`threads_for`](crate::parallel::threads_for); below that,
 /// on the calling thread whatever the thread count). What a test of
 /// thread-independence asks, to know that the work really splits.

@@ -71,7 +71,7 @@ pub enum SimError {
 
 impl SimError {
     /// A [`SimError::Setting`] error (its message bounded as every message
-    /// of the library is: [`crate::error::MAX_MESSAGE`]).
+    /// of the library is: `crate::error::MAX_MESSAGE`).
     pub fn setting(name: impl Into<String>, message: impl Into<String>) -> SimError {
         SimError::Setting {
             name: name.into(),

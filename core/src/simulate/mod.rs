@@ -66,7 +66,7 @@ mod tests;
 /// one changes every file made with that seed.
 pub mod seeds {
     /// A tracker's positions (the true arm draws from the seed itself).
-    pub const POSITIONS: u64 = 1;
+    pub(crate) const POSITIONS: u64 = 1;
     /// The noise of a 6-D target's orientations.
     pub const ORIENTATIONS: u64 = 2;
     /// The 6-D target's mount on the flange.
@@ -78,19 +78,14 @@ pub mod seeds {
     /// Which markers each pose sees, and their noise.
     pub const MARKER_NOISE: u64 = 6;
     /// The points on reference spheres.
-    pub const SPHERES: u64 = 7;
+    pub(crate) const SPHERES: u64 = 7;
     /// The acceptance tests' placements (`L_Dia`, the ball bar).
-    pub const ACCEPTANCE: u64 = 8;
+    pub(crate) const ACCEPTANCE: u64 = 8;
     /// The placements each `[[tool]]` stylus probes (`--sphere-tools`).
     pub const SPHERE_TOOLS: u64 = 9;
 
     /// The seed of the part `offset` (one of the above) of a campaign
     /// seeded by `seed`.
-    ///
-    /// ```
-    /// use aacmm_core::simulate::seeds;
-    /// assert_eq!(seeds::of(u64::MAX, seeds::POSITIONS), 0);
-    /// ```
     pub fn of(seed: u64, offset: u64) -> u64 {
         seed.wrapping_add(offset)
     }
@@ -139,15 +134,16 @@ pub use positions::{
     simulate_positions_in, simulate_session, simulate_tracker, simulate_tracker_session,
     true_frames,
 };
+pub(crate) use settings::MIN_POSES_PER_SOCKET;
 pub use settings::{
     CampaignSettings, DEFAULT_LENGTH_SIGMA_MM, DEFAULT_TWIST_SIGMA_DEG, DEFAULT_ZERO_SIGMA_DEG,
     ErrorModel, SocketPlan, SocketPoint, pair_count,
 };
-pub use settings::{MAX_ERROR_SCALE, MIN_POSES_PER_SOCKET};
 use sockets::round_nm;
 pub use sockets::{place_sockets, shoulder};
+pub(crate) use spheres::iso_sphere_pattern;
 pub use spheres::{
-    DEFAULT_SPHERE_DIAMETER_MM, SPHERES_FILE, SphereCampaign, SphereSettings, iso_sphere_pattern,
+    DEFAULT_SPHERE_DIAMETER_MM, SPHERES_FILE, SphereCampaign, SphereSettings,
     simulate_sphere_campaign, simulate_spheres, with_tool_placements,
 };
 pub use tools::{perturbed_tools, random_tools, seen_at_markers};
@@ -408,5 +404,16 @@ pub(crate) fn check_strokes(arm: &Arm) -> Result<(), SimError> {
             j + 1
         ))),
         None => Ok(()),
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn simulate_seeds_of() {
+        use crate::simulate::seeds;
+        assert_eq!(seeds::of(u64::MAX, seeds::POSITIONS), 0);
     }
 }

@@ -206,17 +206,6 @@ pub fn random_mount(max_rad: f64, seed: u64) -> [f64; 3] {
 /// `settings.mount`) turned into the row's frame, then by a small random
 /// rotation of σ `settings.sigma_rad` per axis — a 6-D target.
 ///
-/// ```
-/// use aacmm_core::{io::Arm, params::DhParams, residuals::Noise, simulate::*};
-/// let arm = Arm::without_limits("t", DhParams::paper_nominal());
-/// let noise = Noise { position_mm: Some(0.015), ..Noise::default() };
-/// let s = PositionSettings { poses: 5, frames: 1, noise, seed: 3 };
-/// let c = simulate_positions(&arm, &s).unwrap();
-/// let o = OrientationSettings { mount: [0.0, 0.0, 1.0], sigma_rad: 1e-4, seed: 4 };
-/// let p = orient_positions(&arm, &c.positions, &c.frames, &o).unwrap();
-/// assert_eq!((p.oriented_rows(), p.position(2)), (5, c.positions.position(2)));
-/// ```
-///
 /// # Errors
 ///
 /// A σ that is not finite and positive, a mount that is not finite, a row
@@ -448,4 +437,36 @@ fn draw_rows(
         }
     }
     Ok(positions)
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn simulate_positions_orient_positions() {
+        use crate::{io::Arm, params::DhParams, residuals::Noise, simulate::*};
+        let arm = Arm::without_limits("t", DhParams::paper_nominal());
+        let noise = Noise {
+            position_mm: Some(0.015),
+            ..Noise::default()
+        };
+        let s = PositionSettings {
+            poses: 5,
+            frames: 1,
+            noise,
+            seed: 3,
+        };
+        let c = simulate_positions(&arm, &s).unwrap();
+        let o = OrientationSettings {
+            mount: [0.0, 0.0, 1.0],
+            sigma_rad: 1e-4,
+            seed: 4,
+        };
+        let p = orient_positions(&arm, &c.positions, &c.frames, &o).unwrap();
+        assert_eq!(
+            (p.oriented_rows(), p.position(2)),
+            (5, c.positions.position(2))
+        );
+    }
 }

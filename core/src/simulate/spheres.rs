@@ -63,14 +63,7 @@ pub struct SphereCampaign {
 /// ISO 10360-5's 25 directions about the pole `+z`: the pole, 4 at 22.5°
 /// from it, 8 at 45°, 4 at 67.5°, 8 on the equator, each ring turned 22.5°
 /// from the one above.
-///
-/// ```
-/// let d = aacmm_core::simulate::iso_sphere_pattern();
-/// assert_eq!(d.len(), 25);
-/// assert_eq!(d[0], [0.0, 0.0, 1.0]);
-/// assert!(d[24][2].abs() < 1e-12); // the last on the equator
-/// ```
-pub fn iso_sphere_pattern() -> Vec<[f64; 3]> {
+pub(crate) fn iso_sphere_pattern() -> Vec<[f64; 3]> {
     let rings: [(f64, usize); 4] = [(22.5, 4), (45.0, 8), (67.5, 4), (90.0, 8)];
     let mut out = vec![[0.0, 0.0, 1.0]];
     for (k, &(polar, count)) in rings.iter().enumerate() {
@@ -266,7 +259,7 @@ fn reach(
 
 /// A true arm drawn from `errors` about `nominal` (seeded by
 /// `settings.seed`, as [`super::simulate_tracker`] draws it) and its sphere
-/// campaign (seeded by [`super::seeds::SPHERES`]): what `aacmm simulate
+/// campaign (seeded by `super::seeds::SPHERES`): what `aacmm simulate
 /// --spheres` writes without sockets or positions.
 ///
 /// # Errors
@@ -284,7 +277,7 @@ pub fn simulate_sphere_campaign(
 }
 
 impl SphereSettings {
-    /// The settings of the points' own stream ([`super::seeds::SPHERES`]),
+    /// The settings of the points' own stream (`super::seeds::SPHERES`),
     /// so that adding spheres to a campaign changes nothing else of it, and
     /// no draw of theirs is one of another part's.
     pub fn for_campaign(&self) -> SphereSettings {
@@ -292,5 +285,18 @@ impl SphereSettings {
             seed: super::seeds::of(self.seed, super::seeds::SPHERES),
             ..self.clone()
         }
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn simulate_spheres_iso_sphere_pattern() {
+        let d = crate::simulate::iso_sphere_pattern();
+        assert_eq!(d.len(), 25);
+        assert_eq!(d[0], [0.0, 0.0, 1.0]);
+        assert!(d[24][2].abs() < 1e-12); // the last on the equator
     }
 }

@@ -29,7 +29,7 @@
 //! first axis; where two consecutive axes are parallel, the common normal is
 //! taken through the previous frame's origin (`d = 0`, the textbook choice);
 //! where they are nearly parallel, so that their common normal is more than
-//! [`HAYATI_BEYOND_M`] away and D-H would need a `d` of that size (unbounded
+//! `HAYATI_BEYOND_M` away and D-H would need a `d` of that size (unbounded
 //! as the axes become parallel), the joint gets the Hayati convention
 //! (`Rz(θ + q)·Tx(a)·Rx(α)·Ry(β)`, [`crate::params::JointModel::Hayati`]):
 //! its next frame's origin is where the next axis crosses the plane normal
@@ -931,7 +931,7 @@ impl DhMasses {
 /// Farther than this (m) from the previous frame, a common normal means two
 /// axes meant to be parallel — no arm is that large — and D-H would need a
 /// `d` of that size: the joint gets the Hayati convention instead.
-pub const HAYATI_BEYOND_M: f64 = 10.0;
+pub(crate) const HAYATI_BEYOND_M: f64 = 10.0;
 
 /// A joint axis: a point on it and its unit direction.
 type Axis = (Point3<f64>, Vector3<f64>);
@@ -1019,7 +1019,7 @@ impl Chain {
     /// # Errors
     /// A chain without movable joints or with more than
     /// [`MAX_JOINTS`]; two consecutive axes whose common
-    /// normal is more than [`HAYATI_BEYOND_M`] away while they are not
+    /// normal is more than `HAYATI_BEYOND_M` away while they are not
     /// nearly parallel (a robot kilometres wide).
     ///
     /// ```

@@ -126,7 +126,7 @@ pub struct PositionErrors {
     pub mean: f64,
     /// RMS distance.
     pub rms: f64,
-    /// The 95th percentile of the distances ([`percentile_95`]); 0 in a
+    /// The 95th percentile of the distances (`percentile_95`); 0 in a
     /// file written before it was recorded.
     #[serde(default)]
     pub p95: f64,
@@ -150,15 +150,7 @@ impl PositionErrors {
 
 /// The 95th percentile of `d` by nearest rank: the smallest value with at
 /// least 95 % of the values at or below it (0 for none; NaN sorts last).
-///
-/// ```
-/// use aacmm_core::calibrate::validate::percentile_95;
-/// let d: Vec<f64> = (1..=100).map(f64::from).collect();
-/// assert_eq!(percentile_95(&d), 95.0);
-/// assert_eq!(percentile_95(&[3.0, 1.0]), 3.0);
-/// assert_eq!(percentile_95(&[]), 0.0);
-/// ```
-pub fn percentile_95(d: &[f64]) -> f64 {
+pub(crate) fn percentile_95(d: &[f64]) -> f64 {
     if d.is_empty() {
         return 0.0;
     }
@@ -411,12 +403,14 @@ pub struct BeforeAfter {
     pub after: Figures,
 }
 
-/// Before and after of `start` → `calibrated` on `data`.
+/// Before and after of `start` → `calibrated` on `data` (the report's
+/// tests compare with it).
 ///
 /// # Errors
 ///
 /// As [`figures`].
-pub fn before_after(
+#[cfg(test)]
+pub(crate) fn before_after(
     start: &DhParams,
     calibrated: &DhParams,
     data: &DataSet,
@@ -431,6 +425,7 @@ pub fn before_after(
 /// # Errors
 ///
 /// As [`figures`].
+#[cfg(test)]
 pub(crate) fn before_after_in(
     start: &DhParams,
     start_frames: &[FrameValues],
@@ -478,7 +473,7 @@ pub(crate) fn seen_by<'d>(
         })
 }
 
-/// [`before_after_in`] of two arms each with its physics: each sees the
+/// Before and after of two arms, each with its physics: each sees the
 /// data through its own corrections.
 ///
 /// # Errors
@@ -915,5 +910,19 @@ mod tests {
         };
         let json = serde_json::to_value(both).unwrap();
         assert_eq!(json.as_object().unwrap().len(), 9);
+    }
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn calibrate_validate_percentile_95() {
+        use crate::calibrate::validate::percentile_95;
+        let d: Vec<f64> = (1..=100).map(f64::from).collect();
+        assert_eq!(percentile_95(&d), 95.0);
+        assert_eq!(percentile_95(&[3.0, 1.0]), 3.0);
+        assert_eq!(percentile_95(&[]), 0.0);
     }
 }

@@ -265,7 +265,7 @@ impl ArmKernel {
 
     /// Refuses poses of another chain (joint count or shape) than this
     /// arm's, and a range beyond them.
-    pub fn check_poses(
+    pub(crate) fn check_poses(
         &self,
         poses: &PreparedPoses,
         range: &Range<usize>,

@@ -20,7 +20,7 @@ use crate::residuals::{At, HeldOutScorer, Term, TermError, TermFold};
 
 /// The fewest points a sphere keeps in a fold's training: its centre and
 /// radius are 4 unknowns.
-pub const MIN_TRAINING_POINTS: usize = 4;
+pub(crate) const MIN_TRAINING_POINTS: usize = 4;
 
 impl SphereTerm {
     /// The term of rows `rows` (ascending) of this one, on the same blocks
@@ -128,15 +128,7 @@ impl SphereTerm {
 /// and its radius (`radius` when given, else fitted), by Gauss–Newton from
 /// the algebraic fit ([`algebraic_sphere`]). `None` for points that fix no
 /// sphere.
-///
-/// ```
-/// use aacmm_core::residuals::spheres::fit_sphere;
-/// let p = [[11.0, 2.0, 3.0], [1.0, 12.0, 3.0], [1.0, 2.0, 13.0], [-9.0, 2.0, 3.0], [1.0, -8.0, 3.1]];
-/// let (c, r) = fit_sphere(&p, None).unwrap();
-/// let (_, known) = fit_sphere(&p, Some(10.0)).unwrap();
-/// assert!((c[0] - 1.0).abs() < 0.05 && (r - 10.0).abs() < 0.05 && known == 10.0);
-/// ```
-pub fn fit_sphere(points: &[[f64; 3]], radius: Option<f64>) -> Option<([f64; 3], f64)> {
+pub(crate) fn fit_sphere(points: &[[f64; 3]], radius: Option<f64>) -> Option<([f64; 3], f64)> {
     let (start, r0) = algebraic_sphere(points)?;
     let n = if radius.is_some() { 3 } else { 4 };
     let mut c = nalgebra::Vector3::from(start);
@@ -269,4 +261,24 @@ pub(super) fn split(
             })
         })
         .collect()
+}
+
+/// The examples these items' documentation gave while they were public,
+/// kept as tests.
+#[cfg(test)]
+mod examples {
+    #[test]
+    fn residuals_spheres_folds_fit_sphere() {
+        use super::fit_sphere;
+        let p = [
+            [11.0, 2.0, 3.0],
+            [1.0, 12.0, 3.0],
+            [1.0, 2.0, 13.0],
+            [-9.0, 2.0, 3.0],
+            [1.0, -8.0, 3.1],
+        ];
+        let (c, r) = fit_sphere(&p, None).unwrap();
+        let (_, known) = fit_sphere(&p, Some(10.0)).unwrap();
+        assert!((c[0] - 1.0).abs() < 0.05 && (r - 10.0).abs() < 0.05 && known == 10.0);
+    }
 }
