@@ -46,3 +46,56 @@ pub(crate) fn beyond(cal: &Calibration, json: Option<&str>) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::AuxiliaryEstimate;
+    use crate::report::tables::fixture;
+
+    fn column(name: &str, sigma: Option<f64>, fixed: Option<&str>) -> AuxiliaryEstimate {
+        AuxiliaryEstimate {
+            name: name.into(),
+            unit: "deg".into(),
+            start: 0.0,
+            calibrated: 0.5,
+            sigma,
+            sigma_of: None,
+            fixed: fixed.map(Into::into),
+        }
+    }
+
+    #[test]
+    fn a_table_per_model_with_columns_and_nothing_without() {
+        let mut cal = fixture::case().cal.clone();
+        cal.auxiliary.clear();
+        assert_eq!(beyond(&cal, Some("/calibration")), "");
+        cal.auxiliary = vec![
+            column("frame_x", Some(0.1), None),
+            column("harmonic_3_sin", None, Some("not seen <here>")),
+            column("compliance_2", Some(0.01), None),
+        ];
+        let t = beyond(&cal, Some("/calibration"));
+        assert_eq!(t.matches("<table>").count(), 2, "{t}");
+        // In the models' order, not the columns'.
+        assert!(
+            t.find("Joint compliance under gravity").unwrap()
+                < t.find("Encoder harmonics").unwrap(),
+            "{t}"
+        );
+        assert!(
+            t.contains("data-json=\"/calibration/auxiliary/2/calibrated\""),
+            "{t}"
+        );
+        assert!(
+            t.contains("data-json=\"/calibration/auxiliary/2/sigma\""),
+            "{t}"
+        );
+        assert!(!t.contains("auxiliary/1/sigma"), "{t}");
+        assert!(
+            t.contains("<td class=\"n\">-</td><td>not seen &lt;here&gt;</td></tr>"),
+            "{t}"
+        );
+        assert!(!t.contains("frame_x"), "{t}");
+    }
+}

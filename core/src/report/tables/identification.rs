@@ -73,3 +73,52 @@ pub(crate) fn identification(cal: &Calibration, json: Option<&str>) -> String {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::{Relation, Rule};
+    use crate::report::tables::fixture;
+
+    #[test]
+    fn the_figures_then_what_the_data_cannot_see_or_the_users_choice() {
+        let mut cal = fixture::case().cal.clone();
+        let id = cal.identification.as_mut().expect("an automatic fixed set");
+        id.rules = vec![Rule {
+            name: "base <z>".into(),
+            explanation: "θ1 & d1".into(),
+        }];
+        id.null_relations = vec![Relation {
+            singular_value: 1e-9,
+            terms: Vec::new(),
+            text: "∂p/∂Bx = +1.0000 ∂p/∂a6".into(),
+        }];
+        let rank = id.rank;
+        let t = identification(&cal, Some("/calibration"));
+        assert!(
+            t.contains(&format!(
+                "<tr><td>rank (identifiable combinations)</td><td class=\"n\" \
+                 data-json=\"/calibration/identification/rank\" data-value=\"{:?}\">{rank}</td>",
+                rank as f64
+            )),
+            "{t}"
+        );
+        assert!(
+            t.contains("<caption>What the data cannot see</caption>"),
+            "{t}"
+        );
+        assert!(t.contains("<tr><td>base &lt;z&gt;</td><td>θ1 &amp; d1</td></tr>"));
+        assert!(t.contains("<tr><td>redundant (s = 1.0e-9)</td><td>∂p/∂Bx = +1.0000 ∂p/∂a6</td>"));
+        let id = cal.identification.as_mut().unwrap();
+        id.rules.clear();
+        id.null_relations.clear();
+        let t = identification(&cal, None);
+        assert_eq!(t.matches("<table>").count(), 1, "{t}");
+        assert_eq!(fixture::rows(&t), 5, "{t}");
+        cal.identification = None;
+        assert!(
+            identification(&cal, None)
+                .starts_with("<p class=\"note\">The fixed set was given by the user")
+        );
+    }
+}

@@ -105,3 +105,70 @@ pub(crate) fn references(evaluated: &[Evaluated], arms: &Arms, json: Option<&str
         &rows,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::tables::fixture::{self, arms, evaluated};
+
+    #[test]
+    fn eq_19_over_all_pairs_or_a_note_without_pairs() {
+        let ev = evaluated();
+        let t = lengths(&ev, &arms());
+        assert!(
+            t.contains("<caption>Eq. 19 over all pairs of points (paper Fig. 7: "),
+            "{t}"
+        );
+        let n = ev[1].ev.points.len();
+        assert_eq!(fixture::rows(&t), 3, "{t}");
+        assert!(
+            t.contains(&format!(
+                "<tr class=\"after\"><td>calibrated, fitted</td><td class=\"n\">{}</td>",
+                n * (n - 1) / 2
+            )),
+            "{t}"
+        );
+        assert!(!t.contains("Pairs sampled"), "{t}");
+        let mut none = ev.clone();
+        for e in &mut none {
+            e.ev.pair_length_abs_summary = None;
+        }
+        assert_eq!(
+            lengths(&none, &arms()),
+            "<p class=\"note\">No pairs of points: eq. 19 needs two points.</p>\n"
+        );
+    }
+
+    #[test]
+    fn a_row_per_reference_length_and_arm_or_a_note_without_any() {
+        let ev = evaluated();
+        let t = references(&ev, &arms(), Some("/evaluation"));
+        let n = ev[1].ev.reference.len();
+        assert_eq!(n, 2);
+        assert_eq!(fixture::rows(&t), 1 + 2 * n, "{t}");
+        let r = &ev[1].ev.reference[1];
+        assert!(
+            t.contains(&format!(
+                "<tr class=\"after\"><td>calibrated, fitted</td><td>{}</td><td>{}</td>",
+                escape(&r.a),
+                escape(&r.b)
+            )),
+            "{t}"
+        );
+        assert!(
+            t.contains(&format!(
+                "data-json=\"/evaluation/reference/1/error\" data-value=\"{:?}\"",
+                r.error
+            )),
+            "{t}"
+        );
+        assert!(!references(&ev, &arms(), None).contains("data-json"));
+        let mut none = ev.clone();
+        for e in &mut none {
+            e.ev.reference.clear();
+        }
+        assert!(
+            references(&none, &arms(), None).starts_with("<p class=\"note\">No reference lengths")
+        );
+    }
+}

@@ -50,3 +50,61 @@ pub(crate) fn uncertainty_map(map: &UncertaintyMap, json: Option<&str>) -> Strin
     }
     table(&caption, &head, &rows)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plan::map::Region;
+    use crate::report::tables::fixture;
+
+    #[test]
+    fn a_row_per_band_then_every_pose() {
+        let band = |from, to, poses, rms| Region {
+            reach_from_mm: from,
+            reach_to_mm: to,
+            poses,
+            rms_mm: rms,
+            max_mm: 2.0 * rms,
+        };
+        let mut map = UncertaintyMap {
+            coverage: 0.95,
+            k_isotropic: 2.8,
+            workspace: "sampled".into(),
+            frame: None,
+            tool: None,
+            poses: 5,
+            rms_mm: 0.05,
+            median_mm: 0.04,
+            max_mm: 0.1,
+            regions: vec![band(0.0, 300.0, 2, 0.03), band(300.0, 600.0, 3, 0.06)],
+            points: Vec::new(),
+        };
+        let t = uncertainty_map(&map, Some("/uncertainty_map"));
+        assert!(
+            t.contains("<caption>95 % radius per band of distance from the shoulder</caption>"),
+            "{t}"
+        );
+        assert_eq!(fixture::rows(&t), 4, "{t}");
+        assert!(
+            t.contains(
+                "<tr><td class=\"n\" data-json=\"/uncertainty_map/regions/1/reach_from_mm\" \
+                 data-value=\"300.0\">300</td>"
+            ),
+            "{t}"
+        );
+        assert!(
+            t.contains(
+                "<tr class=\"after\"><td>all poses</td><td></td><td class=\"n\" \
+                 data-json=\"/uncertainty_map/poses\" data-value=\"5.0\">5</td>"
+            ),
+            "{t}"
+        );
+        // A band has no median: a missing number in each.
+        assert_eq!(t.matches("<td class=\"n\">-</td>").count(), 2, "{t}");
+        map.frame = Some("laser <1>".into());
+        assert!(
+            uncertainty_map(&map, None)
+                .contains(", in frame `laser &lt;1&gt;`, its registration included</caption>")
+        );
+    }
+}

@@ -7,6 +7,8 @@
 //! table they are all made of.
 
 mod beyond;
+#[cfg(test)]
+mod fixture;
 mod identification;
 mod lengths;
 mod map;
@@ -167,5 +169,65 @@ fn evidence_noun(cal: &Calibration, touches: bool) -> &'static str {
         (true, _) => "touch",
         (false, true) => "sphere point",
         (false, false) => "position",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cell_escapes_its_text_and_carries_its_json_pointer() {
+        assert_eq!(Cell::text("a<b & c").html(), "<td>a&lt;b &amp; c</td>");
+        assert_eq!(Cell::markup("<b>x</b>".into()).html(), "<td><b>x</b></td>");
+        assert_eq!(Cell::none().html(), "<td class=\"n\">-</td>");
+        assert_eq!(
+            Cell::num(1.23456, 2).at(Some("/c"), "x", 1.23456).html(),
+            "<td class=\"n\" data-json=\"/c/x\" data-value=\"1.23456\">1.23</td>"
+        );
+        // Without a JSON beside the report, no pointer.
+        assert_eq!(
+            Cell::int(7).at(None, "x", 7.0).html(),
+            "<td class=\"n\">7</td>"
+        );
+        assert_eq!(Cell::num(f64::NAN, 2).text, "-");
+        assert_eq!(Cell::sci(f64::INFINITY, 2).text, "-");
+        assert_eq!(Cell::sci(1234.5, 2).text, "1.23e3");
+    }
+
+    #[test]
+    fn a_table_escapes_caption_and_header_and_classes_its_rows() {
+        let rows = vec![
+            (String::new(), vec![Cell::text("a"), Cell::int(1)]),
+            ("after".to_string(), vec![Cell::text("b"), Cell::int(2)]),
+        ];
+        assert_eq!(
+            table("x < y", &["name", "n [\"]"], &rows),
+            "<table>\n<caption>x &lt; y</caption>\n<tr><th>name</th><th>n [&quot;]</th></tr>\n\
+             <tr><td>a</td><td class=\"n\">1</td></tr>\n\
+             <tr class=\"after\"><td>b</td><td class=\"n\">2</td></tr>\n</table>\n"
+        );
+    }
+
+    #[test]
+    fn the_evidence_is_named_by_what_the_fit_had() {
+        let mut cal = fixture::case().cal.clone();
+        assert_eq!(evidence_noun(&cal, true), "touch");
+        assert_eq!(evidence_noun(&cal, false), "position");
+        cal.dof.other_rows.push(crate::calibrate::TermRows {
+            term: "spheres".into(),
+            rows: 12,
+            eliminated: 0,
+        });
+        assert_eq!(evidence_noun(&cal, false), "sphere point");
+    }
+
+    #[test]
+    fn a_series_row_is_classed_by_its_arm_and_data() {
+        let mut e = fixture::evaluated();
+        assert_eq!(row_class(&e[0]), "");
+        assert_eq!(row_class(&e[1]), "after");
+        e[1].held_out = true;
+        assert_eq!(row_class(&e[1]), "held after");
     }
 }

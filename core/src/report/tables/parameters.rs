@@ -168,3 +168,102 @@ fn correlations_note(cal: &Calibration) -> String {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::Correlation;
+    use crate::report::tables::fixture;
+
+    #[test]
+    fn a_row_per_parameter_in_its_units_table() {
+        let cal = &fixture::case().cal;
+        let t = parameters(cal, Some("/calibration"), &[]);
+        assert_eq!(t.matches("<table>").count(), 2, "{t}");
+        assert!(t.contains("<caption>Lengths a, d and the probe B</caption>"));
+        assert!(t.contains("<caption>Angles: twists alpha, zero offsets theta</caption>"));
+        assert_eq!(fixture::rows(&t), 2 + cal.parameters.len(), "{t}");
+        // No truth, no prior: no columns of theirs.
+        assert!(!t.contains("true error") && !t.contains("tolerance"), "{t}");
+        let user: Vec<EstimateRecord> = cal.parameters.iter().map(|p| p.user()).collect();
+        let (i, free) = (user.iter().enumerate())
+            .find(|(_, p)| p.sigma.is_some())
+            .unwrap();
+        assert!(
+            t.contains(&format!(
+                "<tr><td>{}</td><td class=\"n\" data-json=\"/calibration/parameters/{i}/nominal\"",
+                free.name
+            )),
+            "{t}"
+        );
+        assert!(
+            t.contains(&format!(
+                "data-json=\"/calibration/parameters/{i}/sigma\" data-value=\"{:?}\"",
+                free.sigma.unwrap()
+            )),
+            "{t}"
+        );
+        let fixed = user.iter().find(|p| p.fixed.is_some()).unwrap();
+        assert!(t.contains(&format!(
+            "<span class=\"note\">{}</span>",
+            escape(fixed.fixed.as_deref().unwrap())
+        )));
+        let n = user.len();
+        let held = user.iter().filter(|p| p.fixed.is_some()).count();
+        assert!(parameters_intro(cal).starts_with(&format!(
+            "{} of {n} parameters were fitted; {held} were held",
+            n - held
+        )));
+    }
+
+    #[test]
+    fn known_true_errors_add_their_columns() {
+        let cal = &fixture::case().cal;
+        // The truth is the correction itself: every free z is 0.
+        let truths: Vec<(String, Option<f64>)> = (cal.parameters.iter())
+            .map(|p| (String::new(), Some(p.user().correction)))
+            .collect();
+        let t = parameters(cal, None, &truths);
+        assert!(
+            t.contains("<th>true error [mm]</th><th>(correction − true)/σ</th>"),
+            "{t}"
+        );
+        let free = cal.parameters.iter().filter(|p| p.sigma.is_some()).count();
+        assert_eq!(t.matches("<td class=\"n\">0.00</td>").count(), free, "{t}");
+        assert!(!t.contains("data-json"), "{t}");
+    }
+
+    #[test]
+    fn the_header_has_truth_and_prior_columns_only_when_there_are_some() {
+        assert_eq!(parameter_head("deg", false, false).len(), 7);
+        let h = parameter_head("mm", true, true);
+        assert_eq!(
+            h[6..],
+            [
+                "true error [mm]",
+                "(correction − true)/σ",
+                "tolerance [mm]",
+                "data share",
+                "fixed because"
+            ]
+        );
+    }
+
+    #[test]
+    fn strong_correlations_are_listed_and_none_is_said() {
+        let mut cal = fixture::case().cal.clone();
+        cal.correlations = vec![Correlation {
+            a: "a1".into(),
+            b: "d<2".into(),
+            rho: -0.95,
+        }];
+        assert_eq!(
+            correlations_note(&cal),
+            "<p class=\"note\">Correlations |ρ| &gt; 0.9: a1/d&lt;2 -0.950.</p>\n"
+        );
+        cal.correlations.clear();
+        assert!(correlations_note(&cal).contains("No pair of free parameters"));
+        cal.held.clear();
+        assert_eq!(held_note(&cal), "");
+    }
+}

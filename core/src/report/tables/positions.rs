@@ -148,3 +148,114 @@ fn position_cells(name: &str, frame: &str, p: &PositionErrors, base: Option<&str
         Cell::num(p.mean, 4).at(base, "mean", p.mean),
     ]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::validate::BeforeAfter;
+    use crate::report::tables::fixture::{self, arms, figures};
+
+    /// A series of three poses in two frames (`laser`: the first, the
+    /// other two in `station <2>`).
+    fn series(after: bool, error_mm: Vec<f64>) -> PoseErrors {
+        PoseErrors {
+            name: format!("{}, fitted", if after { "calibrated" } else { "nominal" }),
+            held_out: false,
+            after,
+            reach_mm: vec![0.0; 3],
+            error_mm,
+            frame: vec![0, 1, 1],
+            frame_names: vec!["laser".into(), "station <2>".into()],
+            orientation_deg: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_row_per_set_and_arm_then_one_per_frame() {
+        let ba = BeforeAfter {
+            before: figures(0, 0.0, Some(&[3.0, 4.0, 5.0])),
+            after: figures(0, 0.0, Some(&[0.1, 0.2, 0.3])),
+        };
+        let rows = [ValidationRow {
+            name: "fitted".into(),
+            held_out: false,
+            figures: &ba,
+            json: Some("/validation/fitted".into()),
+        }];
+        let s = [
+            series(false, vec![3.0, 4.0, 5.0]),
+            series(true, vec![0.1, 0.2, 0.3]),
+        ];
+        let t = positions(&rows, &s, &arms());
+        // The header, then per arm: all frames, and each frame.
+        assert_eq!(fixture::rows(&t), 7, "{t}");
+        assert!(
+            t.contains(
+                "<tr><td>fitted, nominal</td><td>all</td><td class=\"n\" \
+                 data-json=\"/validation/fitted/before/positions/count\" data-value=\"3.0\">3</td>"
+            ),
+            "{t}"
+        );
+        assert!(
+            t.contains(
+                "<tr class=\"after\"><td>fitted, calibrated</td><td>laser</td><td class=\"n\">1</td>\
+                 <td class=\"n\">0.1000</td>"
+            ),
+            "{t}"
+        );
+        assert!(
+            t.contains(
+                "<tr class=\"after\"><td>fitted, calibrated</td><td>station &lt;2&gt;</td>\
+                 <td class=\"n\">2</td>"
+            ),
+            "{t}"
+        );
+        // No set has orientations: no table.
+        assert_eq!(orientations(&rows, &s, &arms()), "");
+
+        // One frame: no per-frame rows, no `all`.
+        let one: Vec<PoseErrors> = (s.iter().cloned())
+            .map(|mut p| {
+                p.frame = vec![0; 3];
+                p.frame_names.truncate(1);
+                p
+            })
+            .collect();
+        let t = positions(&rows, &one, &arms());
+        assert_eq!(fixture::rows(&t), 3, "{t}");
+        assert!(t.contains("<td>fitted, nominal</td><td></td>"), "{t}");
+    }
+
+    #[test]
+    fn orientations_point_at_their_own_figures() {
+        let mut ba = BeforeAfter {
+            before: figures(0, 0.0, Some(&[3.0])),
+            after: figures(0, 0.0, Some(&[0.1])),
+        };
+        ba.before.orientations = Some(PositionErrors::of(&[1.0]));
+        ba.after.orientations = Some(PositionErrors::of(&[0.5]));
+        let rows = [ValidationRow {
+            name: "held out (v.csv)".into(),
+            held_out: true,
+            figures: &ba,
+            json: Some("/validation/held_out".into()),
+        }];
+        let t = orientations(&rows, &[], &arms());
+        assert!(t.contains("<th>RMS [deg]</th>"), "{t}");
+        assert_eq!(fixture::rows(&t), 3, "{t}");
+        assert!(
+            t.contains(
+                "<tr class=\"held after\"><td>held out (v.csv), calibrated</td><td></td>\
+                 <td class=\"n\" data-json=\"/validation/held_out/after/orientations/count\""
+            ),
+            "{t}"
+        );
+        assert!(
+            t.contains(
+                "data-json=\"/validation/held_out/after/orientations/rms\" \
+                 data-value=\"0.5\">0.5000</td>"
+            ),
+            "{t}"
+        );
+    }
+}

@@ -185,3 +185,77 @@ fn global_rows(cal: &Calibration) -> Vec<(String, Vec<Cell>)> {
     }
     rows
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::TermRows;
+    use crate::report::tables::fixture;
+
+    #[test]
+    fn how_the_solver_stopped_and_the_touch_rows() {
+        let cal = &fixture::case().cal;
+        let t = solver(cal, Some("/calibration"));
+        assert!(t.contains("<tr><td>method</td><td>lm</td></tr>"), "{t}");
+        assert!(
+            t.contains(&format!(
+                "<tr><td>iterations of the final LM</td><td class=\"n\" \
+                 data-json=\"/calibration/solver/iterations\" data-value=\"{:?}\">{}</td>",
+                cal.solver.iterations as f64, cal.solver.iterations
+            )),
+            "{t}"
+        );
+        let d = &cal.dof;
+        assert!(
+            t.contains(&format!(
+                "<tr><td>residual rows: touches (3 each) + lengths</td><td>{} + {}</td></tr>",
+                d.touch_rows, d.length_rows
+            )),
+            "{t}"
+        );
+        assert!(t.contains("data-json=\"/calibration/dof/sigma0\""), "{t}");
+        assert!(
+            t.contains("<tr><td>touch σ behind the weights [mm]</td>"),
+            "{t}"
+        );
+        // LM alone: neither annealing nor a global search.
+        assert!(!t.contains("annealing") && !t.contains("global"), "{t}");
+        let others = usize::from(!d.other_rows.is_empty());
+        let phases = cal.solver.phases.len();
+        assert_eq!(fixture::rows(&t), 1 + 8 + 5 + others + phases, "{t}");
+    }
+
+    #[test]
+    fn without_touches_the_rows_are_the_terms() {
+        let mut cal = fixture::case().cal.clone();
+        cal.dof.touch_rows = 0;
+        cal.dof.length_rows = 0;
+        cal.dof.other_rows = vec![
+            TermRows {
+                term: "positions".into(),
+                rows: 30,
+                eliminated: 6,
+            },
+            TermRows {
+                term: "orientations".into(),
+                rows: 9,
+                eliminated: 0,
+            },
+        ];
+        let t = solver(&cal, None);
+        assert!(
+            t.contains("<tr><td>residual rows</td><td>positions 30, orientations 9</td></tr>"),
+            "{t}"
+        );
+        assert!(
+            t.contains("<td>unknowns: free parameters (the frames&#39; included)</td>"),
+            "{t}"
+        );
+        assert!(
+            t.contains("<td>position σ behind the weights [mm]</td>"),
+            "{t}"
+        );
+        assert!(!t.contains("touches (3 each)"), "{t}");
+        assert!(!t.contains("data-json"), "{t}");
+    }
+}

@@ -161,3 +161,96 @@ pub(crate) fn glance(evaluated: &[Evaluated], arms: &Arms) -> String {
         &rows,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::validate::BeforeAfter;
+    use crate::report::tables::fixture::{self, arms, evaluated, figures};
+
+    #[test]
+    fn the_verdict_says_how_the_fit_went_and_what_its_figures_are_on() {
+        let c = fixture::case();
+        let ev = evaluated();
+        let p = verdict(&c.cal, &ev, &arms(), &[]);
+        assert!(
+            p.starts_with("<p><span class=\"good\">The solver converged</span> (lm: "),
+            "{p}"
+        );
+        assert!(p.contains(" touch σ "), "{p}");
+        assert!(p.contains(" On the fitted points, e falls from "), "{p}");
+        assert!(
+            p.contains("the RMS error of its 2 reference lengths from"),
+            "{p}"
+        );
+        assert!(
+            p.contains(" No held-out data were given (--validate): "),
+            "{p}"
+        );
+        assert!(p.ends_with(".</p>\n"), "{p}");
+
+        let mut cal = c.cal.clone();
+        cal.solver.successful = false;
+        let mut held = ev.clone();
+        held[1].held_out = true;
+        let p = verdict(&cal, &held, &arms(), &[]);
+        assert!(p.contains("<span class=\"bad\">The solver did not converge</span>"));
+        assert!(!p.contains("No held-out data"), "{p}");
+
+        // Without touches the σ is a position's, and nothing falls.
+        let p = verdict(&c.cal, &[], &arms(), &[]);
+        assert!(p.contains(" position σ "), "{p}");
+        assert!(p.contains("(--validate-positions)"), "{p}");
+        assert!(!p.contains("e falls"), "{p}");
+    }
+
+    #[test]
+    fn the_positions_sentence_skips_folds_and_sets_without_positions() {
+        let ba = BeforeAfter {
+            before: figures(0, 0.0, Some(&[3.0, 4.0])),
+            after: figures(0, 0.0, Some(&[0.3, 0.4])),
+        };
+        let row = |name: &str, figures| ValidationRow {
+            name: name.into(),
+            held_out: true,
+            figures,
+            json: None,
+        };
+        let s = positions_sentence(&[row("held <1>", &ba), row("fold 1 (2 points)", &ba)]);
+        assert_eq!(s.matches(" At the 2 reference positions").count(), 1, "{s}");
+        assert!(
+            s.contains(
+                "(held &lt;1&gt;), the RMS 3-D error falls from 3.5355 mm (nominal) to 0.3536 mm \
+                 (calibrated), the 95th percentile from 4.0000 to 0.4000 mm."
+            ),
+            "{s}"
+        );
+        assert!(!s.contains("orientation"), "{s}");
+        let none = BeforeAfter {
+            before: figures(1, 0.1, None),
+            after: figures(1, 0.1, None),
+        };
+        assert_eq!(positions_sentence(&[row("fitted", &none)]), "");
+    }
+
+    #[test]
+    fn glance_has_a_row_per_series_the_calibrated_one_classed() {
+        let ev = evaluated();
+        let t = glance(&ev, &arms());
+        let points = ev[0].ev.points.len();
+        assert_eq!(fixture::rows(&t), 3, "{t}");
+        assert!(
+            t.contains(&format!(
+                "<tr><td>nominal, fitted</td><td class=\"n\">{points}</td>"
+            )),
+            "{t}"
+        );
+        assert!(
+            t.contains(&format!(
+                "<tr class=\"after\"><td>calibrated, fitted</td><td class=\"n\">{points}</td>"
+            )),
+            "{t}"
+        );
+        assert_eq!(fixture::rows(&glance(&[], &arms())), 1);
+    }
+}

@@ -188,3 +188,102 @@ pub(crate) fn points(e: &Evaluated, json: Option<&str>) -> String {
         &rows,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::validate::BeforeAfter;
+    use crate::report::html::escape;
+    use crate::report::tables::fixture::{self, arms, evaluated, figures};
+
+    #[test]
+    fn validation_has_both_arms_per_set_and_notes_folds() {
+        let ba = BeforeAfter {
+            before: figures(4, 1.5, None),
+            after: figures(4, 0.1, None),
+        };
+        let row = |name: &str, held_out| ValidationRow {
+            name: name.into(),
+            held_out,
+            figures: &ba,
+            json: Some(format!("/validation/{name}")),
+        };
+        let t = validation(&[row("fitted", false)], &arms());
+        assert_eq!(fixture::rows(&t), 3, "{t}");
+        assert!(
+            t.contains(
+                "<tr><td>fitted, nominal</td><td class=\"n\" \
+                 data-json=\"/validation/fitted/before/points\" data-value=\"4.0\">4</td>\
+                 <td class=\"n\" data-json=\"/validation/fitted/before/e_mean\" \
+                 data-value=\"1.5\">1.5000</td>"
+            ),
+            "{t}"
+        );
+        // Without lengths, their figures are missing numbers.
+        assert!(
+            t.contains(">0</td><td class=\"n\">-</td><td class=\"n\">-</td></tr>"),
+            "{t}"
+        );
+        assert!(!t.contains("Folds:"), "{t}");
+        let t = validation(&[row("fitted", false), row("fold 1", true)], &arms());
+        assert!(t.contains("<tr class=\"held after\"><td>fold 1, calibrated</td>"));
+        assert!(
+            t.contains(" Folds: k-fold cross-validation over points"),
+            "{t}"
+        );
+    }
+
+    #[test]
+    fn points_have_a_row_each_and_their_summary_the_pairs_when_there_are_some() {
+        let ev = evaluated();
+        let e = &ev[1];
+        let t = points(e, Some("/evaluation"));
+        assert_eq!(fixture::rows(&t), 1 + e.ev.points.len(), "{t}");
+        let p = &e.ev.points[0];
+        assert!(
+            t.contains(&format!(
+                "<tr><td>{}</td><td class=\"n\" data-json=\"/evaluation/points/0/touches\" \
+                 data-value=\"{:?}\">{}</td>",
+                escape(&p.label),
+                p.touches as f64,
+                p.touches
+            )),
+            "{t}"
+        );
+        let s = points_summary(e, None);
+        assert_eq!(fixture::rows(&s), 6, "{s}");
+        assert!(s.contains("<td>|d|_error (eq. 19, abs.)</td>"), "{s}");
+        assert!(!s.contains("data-json"), "{s}");
+        let mut lone = e.clone();
+        lone.ev.pair_length_abs_summary = None;
+        lone.ev.pair_length_summary = None;
+        let s = points_summary(&lone, Some("/evaluation"));
+        assert_eq!(fixture::rows(&s), 4, "{s}");
+        assert!(!s.contains("eq. 19"), "{s}");
+        assert!(
+            s.contains("data-json=\"/evaluation/single_point_e/mean\""),
+            "{s}"
+        );
+    }
+
+    #[test]
+    fn residuals_count_every_touch_of_each_series() {
+        let ev = evaluated();
+        let n = fixture::case().data.len();
+        let t = residuals(&ev, &arms());
+        assert_eq!(fixture::rows(&t), 3, "{t}");
+        assert!(
+            t.contains(&format!(
+                "<tr><td>nominal, fitted</td><td class=\"n\">{n}</td>"
+            )),
+            "{t}"
+        );
+        assert!(
+            t.contains(&format!(
+                "<tr class=\"after\"><td>calibrated, fitted</td><td class=\"n\">{n}</td>"
+            )),
+            "{t}"
+        );
+        assert_eq!(fixture::rows(&residuals(&[], &arms())), 1);
+    }
+}
