@@ -1,0 +1,228 @@
+//! The fixed set: which columns a calibration fits — the identifiability
+//! analysis behind the automatic fixed set, or the user's fixed set checked
+//! against what the data see; the weak directions held at nominal; the
+//! corrections beyond geometry the data cannot separate; the tolerances
+//! carried onto the free partners of redundant parameters.
+
+use super::{CalibrationError, FixSpec, ModelOptions, prior};
+use crate::dataset::DataSet;
+use crate::identify::{Identification, identify_from, open_directions_from};
+use crate::objective::Objective;
+use crate::params::{DhParams, ParamId};
+use crate::residuals::{Elimination, Layout, Normal};
+
+/// The free columns, the identifiability analysis behind them (`fix =
+/// auto`), why each fixed parameter is fixed and the weak directions to
+/// hold; a user's fixed set that leaves a direction the data (and the
+/// tolerances) cannot see is refused.
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
+pub(super) fn fixed_set(
+    start: &DhParams,
+    objective: &Objective<'_>,
+    model: &ModelOptions,
+    full: &Normal,
+    data: &DataSet,
+) -> Result<FixedSet, CalibrationError> {
+    let layout = objective.layout();
+    let geometry = layout.geometry_columns();
+    // Every auxiliary column is free: the geometry is analysed with them
+    // fitted too (their elimination, as the centres' is).
+    let aux: Vec<usize> = (geometry..layout.len()).collect();
+    let full = full.geometry_only(layout).map_err(|e| match e {
+        Elimination::Shape => CalibrationError::Shape,
+        Elimination::Undetermined(_) => CalibrationError::Unidentifiable {
+            directions: vec![e.to_string()],
+        },
+    })?;
+    let sees = objective.sees();
+    let mut holds = Vec::new();
+    let (mut free, identification, reasons) = match &model.fix {
+        FixSpec::Auto => {
+            let id = identify_from(start, sees, full.clone(), data);
+            let free = id.free_columns();
+            let reasons: Vec<(ParamId, String)> =
+                id.fixed.iter().map(|f| (f.id, f.reason.clone())).collect();
+            holds = weak_untoleranced(start, full, &free, model, &id);
+            (free, Some(id), reasons)
+        }
+        FixSpec::Columns(fixed) => {
+            let free: Vec<usize> = (0..start.param_count())
+                .filter(|c| !fixed.contains(c))
+                .collect();
+            let unknown = untoleranced(start, model, &free);
+            let directions = open_directions_from(start, sees, full, &unknown);
+            if !directions.is_empty() {
+                return Err(CalibrationError::Unidentifiable { directions });
+            }
+            let reasons = fixed
+                .iter()
+                .filter_map(|&c| start.param_id(c))
+                .map(|id| (id, "fixed by the user".to_string()))
+                .collect();
+            (free, None, reasons)
+        }
+    };
+    free.extend(aux);
+    Ok(FixedSet {
+        free,
+        identification,
+        reasons,
+        holds,
+    })
+}
+
+/// Takes the columns of the blocks the layout holds ([`Layout::hold`]) out
+/// of `free`, each with why in `held`.
+///
+/// [`Layout::hold`]: crate::residuals::Layout::hold
+pub(super) fn hold_blocks(
+    layout: &crate::residuals::Layout,
+    free: &mut Vec<usize>,
+    held: &mut Vec<(usize, String)>,
+) {
+    for c in layout.held_columns() {
+        if let Some(at) = free.iter().position(|&f| f == c) {
+            free.remove(at);
+            held.push((
+                c,
+                "held at its start: the problem holds its block".to_string(),
+            ));
+        }
+    }
+}
+
+/// What the automatic fixed set adds to the prior: the tolerances of the
+/// redundant fixed parameters carried onto their free partners, and the
+/// weak directions `holds` held at `x0` (as a term of the objective).
+#[inline(never)] // a stage of its own in profiles (README, "Measured speed")
+pub(super) fn complete_prior(
+    objective: &mut Objective<'_>,
+    identification: Option<&Identification>,
+    holds: Vec<crate::residuals::Hold>,
+    start: &DhParams,
+    x0: &[f64],
+) -> (
+    Vec<prior::CarriedTolerance>,
+    Option<crate::residuals::HoldTerm>,
+) {
+    let Some(id) = identification else {
+        return (Vec::new(), None);
+    };
+    let carried = prior::carry_redundant(objective, id, start);
+    let s_max = id.analysed_singular_values.first().copied().unwrap_or(0.0);
+    let holds = (!holds.is_empty()).then(|| crate::residuals::HoldTerm::new(holds, x0, s_max));
+    if let Some(h) = &holds {
+        objective.push_term(Box::new(h.clone()));
+    }
+    (carried, holds)
+}
+
+/// The free columns, the identifiability analysis behind them (`fix =
+/// auto`), why each fixed parameter is fixed, and the weak directions held
+/// at nominal.
+pub(super) struct FixedSet {
+    pub(super) free: Vec<usize>,
+    pub(super) identification: Option<Identification>,
+    pub(super) reasons: Vec<(ParamId, String)>,
+    pub(super) holds: Vec<crate::residuals::Hold>,
+}
+
+/// The weak directions among the free parameters that no tolerance covers
+/// (a parameter with a tolerance is determined by it, as in the user's
+/// fixed set): with them free, noise and model error would move the arm
+/// along them by tens of millimetres, so they are held at nominal
+/// ([`crate::residuals::HoldTerm`]).
+fn weak_untoleranced(
+    start: &DhParams,
+    full: Normal,
+    free: &[usize],
+    model: &ModelOptions,
+    id: &Identification,
+) -> Vec<crate::residuals::Hold> {
+    let s_max = id.analysed_singular_values.first().copied().unwrap_or(0.0);
+    crate::identify::weak_holds(start, full, &untoleranced(start, model, free), s_max)
+}
+
+/// The columns of `free` without a stated tolerance. A tolerance
+/// determines its parameter as a fixed value would (the prior sees every
+/// direction that moves it): only directions among these are open.
+fn untoleranced(start: &DhParams, model: &ModelOptions, free: &[usize]) -> Vec<usize> {
+    let sigmas = model.prior.as_ref().map(|t| t.sigmas_for(start));
+    free.iter()
+        .copied()
+        .filter(|&c| sigmas.as_ref().is_none_or(|s| s[c].is_none()))
+        .collect()
+}
+
+/// A correction column whose information, once the free geometry, the
+/// frames and the corrections accepted before it are fitted, is below this
+/// share of its own is held at its stated value: its effect is (to one part
+/// in 10⁶ of its variance) what the others already do, and fitting it
+/// would only trade it against them.
+pub(crate) const CORRECTION_SEPARATION: f64 = 1e-6;
+
+/// The free columns with the correction columns beyond geometry judged one
+/// at a time, in the block's order, against the `free` geometry, the frames
+/// and the corrections kept before: kept when the data separate it
+/// ([`CORRECTION_SEPARATION`]), else held with why (by column).
+#[allow(clippy::type_complexity)] // the free columns and the held ones
+pub(crate) fn correction_columns(
+    full: &Normal,
+    layout: &Layout,
+    free: Vec<usize>,
+) -> Result<(Vec<usize>, Vec<(usize, String)>), CalibrationError> {
+    let Some((_, corrections)) = layout.corrections() else {
+        return Ok((free, Vec::new()));
+    };
+    let mut base: Vec<usize> = free
+        .iter()
+        .copied()
+        .filter(|c| !corrections.contains(c))
+        .collect();
+    let mut held = Vec::new();
+    let name = |c: usize| layout.parameter(c).map_or(String::new(), |p| p.name);
+    for c in corrections.clone() {
+        let cols: Vec<usize> = base.iter().copied().chain([c]).collect();
+        let n = full.restrict(&cols).ok_or(CalibrationError::Shape)?;
+        let k = cols.len();
+        let m = nalgebra::DMatrix::from_row_slice(k, k, &n.jtj);
+        let diag: Vec<f64> = (0..k).map(|i| m[(i, i)]).collect();
+        // Round-off of a column that is nil (a joint's turn that moves no
+        // probe) is not information: judged against the largest column.
+        let largest = diag.iter().copied().fold(0.0, f64::max);
+        if !(diag[k - 1] > 1e-20 * largest && diag[k - 1].is_finite()) {
+            held.push((c, "moves no residual: these data do not see it".to_string()));
+            continue;
+        }
+        let s = nalgebra::DMatrix::from_fn(k, k, |i, j| {
+            let d = (diag[i] * diag[j]).sqrt();
+            if d > 0.0 { m[(i, j)] / d } else { 0.0 }
+        });
+        let bb = s.view((0, 0), (k - 1, k - 1)).into_owned();
+        let bc = s.view((0, k - 1), (k - 1, 1)).into_owned();
+        let share = match bb.clone().cholesky() {
+            Some(ch) => 1.0 - (bc.transpose() * ch.solve(&bc))[(0, 0)],
+            None => 0.0,
+        };
+        if share >= CORRECTION_SEPARATION {
+            base.push(c);
+            continue;
+        }
+        // The column it is most like, by the cosine of their columns.
+        let like = (0..k - 1)
+            .max_by(|&a, &b| bc[(a, 0)].abs().total_cmp(&bc[(b, 0)].abs()))
+            .map(|a| format!(" (most like {}: cos {:+.4})", name(cols[a]), bc[(a, 0)]))
+            .unwrap_or_default();
+        held.push((
+            c,
+            format!(
+                "not separable from the fitted parameters by these data: {:.1e} of its \
+                 information is its own{like}",
+                share.max(0.0)
+            ),
+        ));
+    }
+    let mut out: Vec<usize> = base;
+    out.sort_unstable();
+    Ok((out, held))
+}
