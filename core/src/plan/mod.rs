@@ -445,8 +445,7 @@ pub fn plan(
     // the curve's checkpoints (the count among them) its spread.
     let marks = checkpoints(settings.count, to);
     let (mut steps, mut curve, mut planned) = (Vec::new(), Vec::new(), None);
-    for k in 1..=rows.len() {
-        let c = report.covariance(&rows[..k]);
+    for (k, c) in (1..=rows.len()).zip(report.prefix_covariances(&rows)) {
         steps.push(Step {
             row: rows[k - 1],
             label: pool.label(rows[k - 1]).to_string(),
@@ -855,19 +854,25 @@ fn deviations(design: &Design, chosen: &[usize]) -> Vec<(usize, Vec<f64>)> {
 fn gram(rows: &[(usize, Vec<f64>)], p: usize) -> DMatrix<f64> {
     let mut m = DMatrix::zeros(p, p);
     for (_, d) in rows {
-        for k in 0..3 {
-            let r = &d[k * p..(k + 1) * p];
-            for a in 0..p {
-                if r[a] == 0.0 {
-                    continue;
-                }
-                for b in 0..p {
-                    m[(a, b)] += r[a] * r[b];
-                }
+        add_block(&mut m, d, p);
+    }
+    m
+}
+
+/// `m += dᵀ d` of one 3 × p block, row by row (so that adding blocks one at
+/// a time is [`gram`]'s sum, bit for bit).
+fn add_block(m: &mut DMatrix<f64>, d: &[f64], p: usize) {
+    for k in 0..3 {
+        let r = &d[k * p..(k + 1) * p];
+        for a in 0..p {
+            if r[a] == 0.0 {
+                continue;
+            }
+            for b in 0..p {
+                m[(a, b)] += r[a] * r[b];
             }
         }
     }
-    m
 }
 
 /// A given calibration's information in the plan's scaled columns (unit
@@ -976,6 +981,8 @@ const EXCHANGE_PASSES: usize = 3;
 /// revisits them once they do.
 fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], open: &[bool]) {
     let stratified = !design.stratum.is_empty();
+    // The state with the slot's row, gone back to when no swap is kept.
+    let mut kept = greedy.snapshot();
     for _ in 0..EXCHANGE_PASSES {
         let mut changed = false;
         for slot in order.iter_mut() {
@@ -986,6 +993,7 @@ fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], op
             let g = design.group[k];
             let least = design.seeds.is_some_and(|m| greedy.members(g).len() <= m);
             let before = greedy.value();
+            greedy.snapshot_into(&mut kept);
             greedy.remove(k);
             let same = |i: usize| {
                 if least {
@@ -1004,11 +1012,10 @@ fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], op
                         slot.0 = b;
                         changed = true;
                     } else {
-                        greedy.remove(b);
-                        greedy.add(k);
+                        greedy.restore(&mut kept);
                     }
                 }
-                _ => greedy.add(k),
+                _ => greedy.restore(&mut kept),
             }
         }
         if !changed {
@@ -1127,6 +1134,33 @@ impl Evaluation<'_> {
             m += prior;
         }
         determined_inverse(m)
+    }
+
+    /// [`Evaluation::covariance`] of each prefix `rows[..k]`, `k` from 1.
+    /// Positions' rows are as they are, so each prefix's information is
+    /// the one before it and one more block (the same sums in the same
+    /// order as [`gram`]'s, so the same bits); touches' and spheres' are
+    /// made anew (a socket's mean, a sphere's unknowns, change with the
+    /// set).
+    fn prefix_covariances(&self, rows: &[usize]) -> Vec<Option<DMatrix<f64>>> {
+        let d = self.design;
+        if d.touches || d.per_sphere > 0 {
+            return (1..=rows.len())
+                .map(|k| self.covariance(&rows[..k]))
+                .collect();
+        }
+        let p = d.blocks.p;
+        let mut m = DMatrix::zeros(p, p);
+        (rows.iter())
+            .map(|&i| {
+                add_block(&mut m, d.blocks.at(i), p);
+                let mut with = m.clone();
+                if let Some(prior) = self.prior {
+                    with += prior;
+                }
+                determined_inverse(with)
+            })
+            .collect()
     }
 
     /// [`Evaluation::covariance`] of sphere points: a sphere with no more
