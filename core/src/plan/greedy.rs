@@ -60,20 +60,6 @@ pub(crate) struct Greedy<'a> {
     rows: std::cell::RefCell<Vec<f64>>,
 }
 
-/// A copy of the greedy's state, to go back to exactly (an exchange that
-/// takes a row out, finds nothing better, and would otherwise put it back
-/// by two more updates of every candidate, each rounding anew).
-pub(crate) struct Snapshot {
-    c: Vec<f64>,
-    u: Vec<f64>,
-    y: Vec<f64>,
-    members: Vec<Vec<usize>>,
-    means: Vec<[Vec<f64>; 3]>,
-    taken: Vec<bool>,
-    criterion: f64,
-    log_det: f64,
-}
-
 /// The rows a candidate would add, and their `C`- and `CW`-images.
 struct Direction {
     d: Vec<f64>,
@@ -136,46 +122,6 @@ impl<'a> Greedy<'a> {
             log_det: 0.0,
             rows: std::cell::RefCell::new(vec![0.0; 9 * p]),
         })
-    }
-
-    /// A snapshot of the state now, to [`Greedy::restore`].
-    pub(crate) fn snapshot(&self) -> Snapshot {
-        Snapshot {
-            c: self.c.clone(),
-            u: self.u.clone(),
-            y: self.y.clone(),
-            members: self.members.clone(),
-            means: self.means.clone(),
-            taken: self.taken.clone(),
-            criterion: self.criterion,
-            log_det: self.log_det,
-        }
-    }
-
-    /// `into` made the state now, its buffers reused (no allocation once
-    /// sized).
-    pub(crate) fn snapshot_into(&self, into: &mut Snapshot) {
-        into.c.clone_from(&self.c);
-        into.u.clone_from(&self.u);
-        into.y.clone_from(&self.y);
-        into.members.clone_from(&self.members);
-        into.means.clone_from(&self.means);
-        into.taken.clone_from(&self.taken);
-        into.criterion = self.criterion;
-        into.log_det = self.log_det;
-    }
-
-    /// Back to the state `snapshot` holds, bit for bit; `snapshot` gets
-    /// the state it replaces (its buffers, to reuse).
-    pub(crate) fn restore(&mut self, snapshot: &mut Snapshot) {
-        std::mem::swap(&mut self.c, &mut snapshot.c);
-        std::mem::swap(&mut self.u, &mut snapshot.u);
-        std::mem::swap(&mut self.y, &mut snapshot.y);
-        std::mem::swap(&mut self.members, &mut snapshot.members);
-        std::mem::swap(&mut self.means, &mut snapshot.means);
-        std::mem::swap(&mut self.taken, &mut snapshot.taken);
-        self.criterion = snapshot.criterion;
-        self.log_det = snapshot.log_det;
     }
 
     /// What the gain lowers: `tr(W C)`, or `−ln det M`.

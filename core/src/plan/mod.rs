@@ -981,8 +981,6 @@ const EXCHANGE_PASSES: usize = 3;
 /// revisits them once they do.
 fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], open: &[bool]) {
     let stratified = !design.stratum.is_empty();
-    // The state with the slot's row, gone back to when no swap is kept.
-    let mut kept = greedy.snapshot();
     for _ in 0..EXCHANGE_PASSES {
         let mut changed = false;
         for slot in order.iter_mut() {
@@ -993,7 +991,6 @@ fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], op
             let g = design.group[k];
             let least = design.seeds.is_some_and(|m| greedy.members(g).len() <= m);
             let before = greedy.value();
-            greedy.snapshot_into(&mut kept);
             greedy.remove(k);
             let same = |i: usize| {
                 if least {
@@ -1012,10 +1009,11 @@ fn exchange(greedy: &mut Greedy, design: &Design, order: &mut [(usize, f64)], op
                         slot.0 = b;
                         changed = true;
                     } else {
-                        greedy.restore(&mut kept);
+                        greedy.remove(b);
+                        greedy.add(k);
                     }
                 }
-                _ => greedy.restore(&mut kept),
+                _ => greedy.add(k),
             }
         }
         if !changed {
