@@ -594,3 +594,28 @@ def calibrate(
     CalibrationError when the data cannot determine the free parameters; a
     calibration that is not usable is returned: check ``successful`` and
     ``verdict``."""
+
+def qualify_probe(
+    arm: Arm,
+    spheres: Union[_Path, Tuple[Sequence[str], _Readings], Tuple[Sequence[str], _Readings, Union[str, Sequence[str]]]],
+    sphere_diameter_mm: float,
+    *,
+    tool: str = "probe",
+    noise: Optional[Noise] = None,
+    tolerance_mm: float = 0.05,
+    max_form_mm: Optional[float] = None,
+    angle_unit: _AngleUnit = "deg",
+) -> Tuple[Dict[str, Any], Optional[Arm]]:
+    """Qualifies the probe ``tool`` (``"probe"``, the arm's ``[probe]``, or a
+    ``[[tool]]``'s name) on points touched on one reference sphere of
+    certified diameter ``sphere_diameter_mm``, the arm's geometry held
+    (``aacmm probe``): its tip offset and effective ball diameter with their
+    σ, the sphere's form as the probe sees it. ``spheres`` is a
+    sphere-surface file's path (readings in ``angle_unit``) or ``(labels,
+    q[, tools])`` arrays (rad); other probes' rows are left out. Returns the
+    qualification (``usable``; ``refusals`` why not, in this module's words;
+    ``warnings``; ``offset``, ``offset_sigma``, ``ball_diameter_mm``,
+    ``ball_sigma_mm``, ``moved_mm``) and the arm with the qualified probe, or
+    ``None`` when it may not be used. ValueError or InputError for a probe
+    the arm does not know, a sphere diameter out of range, rows on more than
+    one sphere."""

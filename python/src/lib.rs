@@ -14,6 +14,7 @@ mod data;
 mod error;
 mod noise;
 mod positions;
+mod probe;
 mod readings;
 mod simulate;
 mod spheres;
@@ -88,5 +89,6 @@ fn aacmm_py(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::identify, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate::calibrate, m)?)?;
+    m.add_function(wrap_pyfunction!(probe::qualify_probe, m)?)?;
     Ok(())
 }

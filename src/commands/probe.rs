@@ -82,6 +82,7 @@ pub fn run(args: Args) -> Result<()> {
         noise: user_noise(args.encoder_noise, args.probe_noise, 0.0, None),
         tolerance_mm: args.tolerance,
         max_form_mm: args.max_form,
+        spelling: aacmm_core::session::Spelling::Cli,
     };
     let q = qualify_probe(&arm, rows, &source_name(&args.spheres), &settings)
         .map_err(super::shared_flags::flag_error)?;

@@ -262,6 +262,7 @@ fn qualification(
             },
             tolerance_mm: 0.05,
             max_form_mm,
+            spelling: aacmm_core::session::Spelling::Cli,
         },
     )
     .unwrap();

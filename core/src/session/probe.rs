@@ -55,6 +55,9 @@ pub struct ProbeSettings {
     /// The largest form of the sphere as the probe sees it, mm (none: the
     /// form is judged by the stated noise alone, the fit's χ² test).
     pub max_form_mm: Option<f64>,
+    /// Whose words the fit's refusals are in (their remedies name the
+    /// front end's options: flags, keyword arguments or setters).
+    pub spelling: crate::setting::Spelling,
 }
 
 /// A probe's qualification: its tip offset and effective ball diameter
@@ -250,11 +253,8 @@ fn judged(
     let after = (report.spheres.as_ref()).and_then(|s| s.spheres.first().map(|s| s.after));
     let (form, rms) = after.map_or((f64::NAN, f64::NAN), |a| (a.form, a.rms));
     let moved = crate::geometry::distance(&offset, &f.nominal_offset);
-    // The fit's own refusals in the command line's words (its one front
-    // end so far).
-    let mut refusals: Vec<String> = (report.verdict.reasons.iter())
-        .map(|r| r.to_string())
-        .collect();
+    // The fit's own refusals in the caller's front end's words.
+    let mut refusals = report.verdict.words(settings.spelling).reasons;
     if let Some(limit) = settings.max_form_mm.filter(|&m| form.is_nan() || form > m) {
         refusals.push(format!(
             "the sphere's form as the probe sees it is {form:.4} mm, beyond the limit of {} mm: \
