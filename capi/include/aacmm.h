@@ -84,7 +84,8 @@ enum AacmmStatus
   AACMM_STATUS_BUFFER_TOO_SMALL = 8,
   /**
    * The result has no such thing: an uncertainty map of a calibration
-   * whose covariance is not finite.
+   * whose covariance is not finite, the arm of a refused probe
+   * qualification.
    */
   AACMM_STATUS_NOT_AVAILABLE = 9,
   /**
@@ -201,6 +202,19 @@ typedef struct AacmmCalibration AacmmCalibration;
  * calibration.
  */
 typedef struct AacmmCancel AacmmCancel;
+
+/**
+ * What a probe qualification is asked. Opaque; made by
+ * `aacmm_probe_options_new`, changed by its setters, released by
+ * `aacmm_probe_options_free`.
+ */
+typedef struct AacmmProbeOptions AacmmProbeOptions;
+
+/**
+ * A probe qualification. Opaque; made by `aacmm_qualify_probe`, read by
+ * its accessors, released by `aacmm_probe_qualification_free`.
+ */
+typedef struct AacmmProbeQualification AacmmProbeQualification;
 
 /**
  * The unit of the angles in a poses file: `AACMM_ANGLE_DEG` or
@@ -468,6 +482,40 @@ typedef struct {
  * `_CAUCHY` (`--robust`).
  */
 typedef uint32_t AacmmRobust;
+
+/**
+ * A qualification's figures, for `aacmm_probe_qualification_figures`.
+ */
+typedef struct {
+  /**
+   * Whether the qualified probe may be used (no refusal).
+   */
+  bool usable;
+  /**
+   * Points fitted.
+   */
+  size_t points;
+  /**
+   * The qualified tip offset, mm (the last joint's frame).
+   */
+  double offset_mm[3];
+  /**
+   * Its σ per coordinate, mm.
+   */
+  double offset_sigma_mm[3];
+  /**
+   * How far the tip moved from the arm's stated offset, mm.
+   */
+  double moved_mm;
+  /**
+   * The effective ball diameter, mm.
+   */
+  double ball_diameter_mm;
+  /**
+   * Its σ, mm.
+   */
+  double ball_sigma_mm;
+} AacmmProbeFigures;
 
 /**
  * Angles in degrees (the command line's default).
@@ -1759,6 +1807,189 @@ AacmmStatus aacmm_calibrate_options_set_spheres_file(AacmmCalibrateOptions *opti
  */
 AacmmStatus aacmm_calibrate_options_set_sphere_diameter_mm(AacmmCalibrateOptions *options,
                                                            double diameter_mm);
+
+/**
+ * New options for a sphere of certified diameter `sphere_diameter_mm` at
+ * `*out` (release them with `aacmm_probe_options_free`): the arm's
+ * `[probe]`, noise not stated (estimated), a tolerance of 0.05 mm on the
+ * tip's move, no limit on the sphere's form.
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER` (`out`),
+ * `AACMM_STATUS_INVALID_ARGUMENT` for a diameter out of range (in metres?).
+ *
+ * # Safety
+ *
+ * `out` is `NULL` or points to writable memory for one pointer.
+ */
+AacmmStatus aacmm_probe_options_new(double sphere_diameter_mm, AacmmProbeOptions **out);
+
+/**
+ * Releases options. `NULL` is allowed (nothing happens).
+ *
+ * # Safety
+ *
+ * `options` is `NULL` or a live options handle, not used afterwards.
+ */
+void aacmm_probe_options_free(AacmmProbeOptions *options);
+
+/**
+ * The probe qualified: `"probe"` (the arm's `[probe]`, the default) or a
+ * `[[tool]]`'s name (`--tool`); the arm's own check names an unknown one.
+ *
+ * Errors (for every setter): `AACMM_STATUS_NULL_POINTER`,
+ * `AACMM_STATUS_INVALID_ARGUMENT` for a value out of range (the options
+ * keep their earlier value).
+ *
+ * # Safety
+ *
+ * `options` is `NULL` or a live options handle no other thread uses
+ * during the call; `tool` is `NULL` or a NUL-terminated string.
+ */
+AacmmStatus aacmm_probe_options_set_tool(AacmmProbeOptions *options, const char *tool);
+
+/**
+ * σ of each encoder reading, rad, and of the probe's seating per axis, mm
+ * (`--encoder-noise`, in degrees there, and `--probe-noise`); 0 = not
+ * stated (the default: the σ is estimated and no χ² test is made).
+ * Finite and ≥ 0.
+ *
+ * # Safety
+ *
+ * As `aacmm_probe_options_set_tool`.
+ */
+AacmmStatus aacmm_probe_options_set_noise(AacmmProbeOptions *options,
+                                          double encoder_rad,
+                                          double probe_mm);
+
+/**
+ * The largest move of the tip from the arm's stated offset not warned
+ * of, mm (`--tolerance`, default 0.05), and the largest form of the
+ * sphere as the probe sees it, mm (`--max-form`; 0 = no limit, the
+ * default: the form is judged by the stated noise alone). Finite and ≥ 0.
+ *
+ * # Safety
+ *
+ * As `aacmm_probe_options_set_tool`.
+ */
+AacmmStatus aacmm_probe_options_set_limits(AacmmProbeOptions *options,
+                                           double tolerance_mm,
+                                           double max_form_mm);
+
+/**
+ * Qualifies a probe of `arm` on the points of the sphere-surface file
+ * `spheres_path` (`sphere,q1,...,qn[,articulation][,tool]`, readings in
+ * `spheres_unit`; other probes' rows left out) as `options` ask (`NULL`:
+ * the defaults need a sphere diameter, so `NULL` is refused): the result
+ * handle at `*out`, usable or not (`aacmm_probe_qualification_figures`
+ * says which, `aacmm_probe_qualification_refusal` why not).
+ *
+ * Errors: `AACMM_STATUS_NULL_POINTER`, `AACMM_STATUS_IO`,
+ * `AACMM_STATUS_INPUT` (the file's content, named by file, line and
+ * field), `AACMM_STATUS_INVALID_ARGUMENT` (a probe the arm does not know,
+ * a unit out of range), `AACMM_STATUS_CALIBRATION` (the fit's own). On
+ * error `*out` is `NULL`.
+ *
+ * # Safety
+ *
+ * `arm` is `NULL` or a live arm handle; `spheres_path` is `NULL` or a
+ * NUL-terminated string; `options` is `NULL` or a live options handle no
+ * setter changes during the call; `out` is `NULL` or points to writable
+ * memory for one pointer.
+ */
+AacmmStatus aacmm_qualify_probe(const AacmmArm *arm,
+                                const char *spheres_path,
+                                AacmmAngleUnit spheres_unit,
+                                const AacmmProbeOptions *options,
+                                AacmmProbeQualification **out);
+
+/**
+ * Releases a qualification. `NULL` is allowed (nothing happens).
+ *
+ * # Safety
+ *
+ * `q` is `NULL` or a live qualification handle, not used afterwards.
+ */
+void aacmm_probe_qualification_free(AacmmProbeQualification *q);
+
+/**
+ * The qualification's figures into `*out`.
+ *
+ * # Safety
+ *
+ * `q` is `NULL` or a live qualification handle; `out` is `NULL` or
+ * writable.
+ */
+AacmmStatus aacmm_probe_qualification_figures(const AacmmProbeQualification *q,
+                                              AacmmProbeFigures *out);
+
+/**
+ * The number of reasons the qualification is refused (0 when usable)
+ * into `*count`.
+ *
+ * # Safety
+ *
+ * `q` is `NULL` or a live qualification handle; `count` is `NULL` or
+ * writable.
+ */
+AacmmStatus aacmm_probe_qualification_refusal_count(const AacmmProbeQualification *q,
+                                                    size_t *count);
+
+/**
+ * Refusal `index` (from 0) in C's words (a remedy names the C setter),
+ * copied into `buf` like `aacmm_last_error_message`; `*len` gets its full
+ * length in bytes without the NUL. `AACMM_STATUS_INVALID_ARGUMENT` for an
+ * index at or beyond `aacmm_probe_qualification_refusal_count`.
+ *
+ * # Safety
+ *
+ * `q` is `NULL` or a live qualification handle; `buf` is `NULL` or points
+ * to `buf_len` writable bytes; `len` is `NULL` or writable.
+ */
+AacmmStatus aacmm_probe_qualification_refusal(const AacmmProbeQualification *q,
+                                              size_t index,
+                                              char *buf,
+                                              size_t buf_len,
+                                              size_t *len);
+
+/**
+ * The number of warnings of the qualification into `*count`: the sphere
+ * file's (readings that look like radians), and a tip moved beyond the
+ * tolerance (a bent or changed stylus; the qualified offset is still
+ * given).
+ *
+ * # Safety
+ *
+ * As `aacmm_probe_qualification_refusal_count`.
+ */
+AacmmStatus aacmm_probe_qualification_warning_count(const AacmmProbeQualification *q,
+                                                    size_t *count);
+
+/**
+ * Warning `index` (from 0), copied as `aacmm_probe_qualification_refusal`
+ * copies a refusal.
+ *
+ * # Safety
+ *
+ * As `aacmm_probe_qualification_refusal`.
+ */
+AacmmStatus aacmm_probe_qualification_warning(const AacmmProbeQualification *q,
+                                              size_t index,
+                                              char *buf,
+                                              size_t buf_len,
+                                              size_t *len);
+
+/**
+ * The arm with the qualified probe (its offset and ball diameter) as a new
+ * arm handle at `*out` (release it with `aacmm_arm_free`). Returns
+ * `AACMM_STATUS_NOT_AVAILABLE` (and `*out` `NULL`) for a refused
+ * qualification: a refused probe is not to be used.
+ *
+ * # Safety
+ *
+ * `q` is `NULL` or a live qualification handle; `out` is `NULL` or points
+ * to writable memory for one pointer.
+ */
+AacmmStatus aacmm_probe_qualification_arm(const AacmmProbeQualification *q, AacmmArm **out);
 
 #ifdef __cplusplus
 }  // extern "C"

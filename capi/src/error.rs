@@ -54,7 +54,8 @@ pub enum AacmmStatus {
     /// copy was written and the full length reported.
     BufferTooSmall = 8,
     /// The result has no such thing: an uncertainty map of a calibration
-    /// whose covariance is not finite.
+    /// whose covariance is not finite, the arm of a refused probe
+    /// qualification.
     NotAvailable = 9,
     /// Memory for a result or a temporary sized by the input could not be
     /// allocated (under an address-space limit, or more than the machine

@@ -47,6 +47,7 @@ mod error;
 mod map;
 mod options;
 mod positions;
+mod probe;
 mod ptr;
 
 use std::ffi::c_char;
@@ -98,6 +99,14 @@ pub use options::{
     aacmm_calibrate_options_set_robust, aacmm_calibrate_options_set_seed,
     aacmm_calibrate_options_set_sphere_diameter_mm, aacmm_calibrate_options_set_spheres_file,
     aacmm_calibrate_options_set_thermal, aacmm_calibrate_options_set_threads,
+};
+pub use probe::{
+    AacmmProbeFigures, AacmmProbeOptions, AacmmProbeQualification, aacmm_probe_options_free,
+    aacmm_probe_options_new, aacmm_probe_options_set_limits, aacmm_probe_options_set_noise,
+    aacmm_probe_options_set_tool, aacmm_probe_qualification_arm, aacmm_probe_qualification_figures,
+    aacmm_probe_qualification_free, aacmm_probe_qualification_refusal,
+    aacmm_probe_qualification_refusal_count, aacmm_probe_qualification_warning,
+    aacmm_probe_qualification_warning_count, aacmm_qualify_probe,
 };
 
 /// The library's version (`MAJOR.MINOR.PATCH`, the workspace's version), as
