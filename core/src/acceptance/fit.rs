@@ -38,7 +38,7 @@ pub(crate) const MAX_ITERATIONS: usize = 200;
 
 /// Why there is no sphere.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum FitError {
+pub(crate) enum FitError {
     /// Too few points for the unknowns (3 with the radius held, 4 free).
     #[error("{points} points fix no sphere: at least {needed} are needed")]
     TooFewPoints {
@@ -54,7 +54,7 @@ pub enum FitError {
 
 /// A fitted sphere.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SphereFit {
+pub(crate) struct SphereFit {
     /// The centre, mm.
     pub centre: [f64; 3],
     /// The radius, mm: fitted, or the held one.

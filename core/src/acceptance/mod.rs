@@ -56,8 +56,7 @@ use serde::{Deserialize, Serialize};
 
 pub use compute::verify;
 pub(crate) use enclosing::enclosing_ball;
-pub(crate) use fit::fit_sphere_ls;
-pub use fit::{FitError, SphereFit};
+pub(crate) use fit::{FitError, SphereFit, fit_sphere_ls};
 pub use mpe::{Limit, Mpe, TestKind, parse_mpe};
 pub use predict::PredictionInfo;
 pub use predict::{

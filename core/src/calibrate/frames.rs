@@ -72,7 +72,7 @@ impl Calibration {
             .collect()
     }
 
-    /// The fitted tool mount of orientations ([`crate::residuals::Mount`]),
+    /// The fitted tool mount of orientations (`crate::residuals::Mount`),
     /// its rotation vector in degrees; `None` when none was fitted.
     pub fn mount(&self) -> Option<[f64; 3]> {
         let cols = self.mount_columns()?;

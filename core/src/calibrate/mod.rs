@@ -72,9 +72,8 @@ pub(crate) use error::ANGLE_UNITS_REMEDY;
 pub use error::CalibrationError;
 pub(crate) use fixed::correction_columns;
 pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
-pub use lm::LmIteration;
 pub(crate) use lm::LmResult;
-pub use lm::{LmOptions, Termination};
+pub use lm::{LmIteration, LmOptions, Termination};
 pub use options::{
     DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads,
     check_threads,

@@ -32,7 +32,7 @@ enum Kind {
 }
 
 /// Poses under the corrections: the readings the chain sees (with the
-/// expansion and drift after it, [`Post`]) and, per pose, the factors of
+/// expansion and drift after it, `Post`) and, per pose, the factors of
 /// the fitted corrections' Jacobian columns.
 #[derive(Clone, Debug)]
 pub struct Effects {

@@ -118,7 +118,7 @@ pub fn frames_to_toml(frames: &[FrameRecord]) -> String {
 /// The tool mount of a 6-D target as an arm file carries it (`[mount]`):
 /// the rotation from the target's frame to the arm's last frame, fitted
 /// when the positions give the tool's orientation
-/// ([`crate::residuals::Mount`]).
+/// (`crate::residuals::Mount`).
 ///
 /// ```toml
 /// [mount]

@@ -63,9 +63,7 @@ pub(crate) use lengths::check_lengths_against;
 pub use lengths::{ReferenceLength, parse_lengths, read_lengths, write_lengths};
 pub use limits::limit_warning;
 pub use points::{parse_points, read_points, write_points, write_points_u95, write_tool_poses};
-pub use poses::{
-    Poses, PosesOrPositions, parse_poses, read_poses, read_poses_or_positions, write_poses,
-};
+pub use poses::{Poses, parse_poses, read_poses, read_poses_or_positions, write_poses};
 pub(crate) use positions::parse_positions;
 pub use positions::{DEFAULT_FRAME, Positions, read_positions};
 pub use prior::parse_prior;

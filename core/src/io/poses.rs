@@ -485,7 +485,7 @@ pub fn read_poses(
 /// What a file of joint readings held: the readings as [`Poses`] (a touch
 /// per row, of the row's `point`), and, for a reference-positions file, its
 /// rows whole (positions, frames; `super::parse_positions`).
-pub type PosesOrPositions = (Poses, Vec<Warning>, Option<super::Positions>);
+pub(crate) type PosesOrPositions = (Poses, Vec<Warning>, Option<super::Positions>);
 
 /// Reads a poses file or a reference-positions file (standard input for
 /// `-`): `parse_poses_or_positions`.

@@ -43,7 +43,8 @@ use crate::params::{DhParams, JointKind, JointModel};
 pub use arm::{ArmKernel, KernelKind, SHIPPED_SHAPES};
 pub use batch::Jacobians;
 pub use generic::Generic;
-pub use poses::{Post, PreparedPoses};
+pub(crate) use poses::Post;
+pub use poses::PreparedPoses;
 
 /// Wrong shapes handed to the kernel.
 #[derive(Debug, Error, Clone, PartialEq, Eq)]

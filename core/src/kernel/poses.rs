@@ -37,7 +37,7 @@ pub struct PreparedPoses {
 /// orientation, and the rotation rows of a pose Jacobian, it leaves alone
 /// (neither scaling nor translation turns anything).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Post {
+pub(crate) struct Post {
     /// Per pose, the scale (1 when none).
     pub scale: Vec<f64>,
     /// Per pose, the offset, mm.

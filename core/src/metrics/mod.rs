@@ -83,13 +83,10 @@ mod pairs;
 mod point;
 pub(crate) mod table;
 
-pub use length::pair_length_error;
 pub(crate) use length::pair_length_errors;
-pub use length::{PairLengthError, ReferenceError, ReferenceSummary};
-pub(crate) use pairs::DEFAULT_PAIR_SEED;
-pub(crate) use pairs::PAIR_TOUCH_BUDGET;
+pub use length::{PairLengthError, ReferenceError, ReferenceSummary, pair_length_error};
 pub use pairs::PairSample;
-pub(crate) use pairs::{PairSet, pair_set};
+pub(crate) use pairs::{DEFAULT_PAIR_SEED, PAIR_TOUCH_BUDGET, PairSet, pair_set};
 pub use point::PointStats;
 pub(crate) use point::point_stats;
 pub(crate) use table::write_pair_table;

@@ -56,7 +56,7 @@ pub use pool::{
     DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_sphere_points,
     sample_touches_observed,
 };
-pub use summary::{GivenNote, Knee, SummaryContext, summary};
+pub use summary::{GivenNote, SummaryContext, summary};
 
 use crate::dataset::DataSet;
 use crate::io::{DEFAULT_FRAME, Poses, Positions};
@@ -233,7 +233,7 @@ pub struct Step {
 
 /// The predicted uncertainty after the first `rows` choices.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CurvePoint {
+pub(crate) struct CurvePoint {
     /// Rows chosen.
     pub rows: usize,
     /// The workspace's RMS 95 % radius, mm; `None` while the rows do not

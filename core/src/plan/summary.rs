@@ -15,7 +15,7 @@ pub(crate) const KNEE: f64 = 0.10;
 
 /// Where more rows stop paying, read off a plan's curve (`knee`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Knee {
+pub(crate) enum Knee {
     /// Doubling from `rows` lowers the RMS by `gain` (< `KNEE`).
     At {
         /// Rows from which doubling gains less than `KNEE`.

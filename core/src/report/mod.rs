@@ -202,7 +202,7 @@ pub fn positions(params: &DhParams, data: &DataSet) -> Result<Vec<[f64; 3]>, Rep
 
 /// Names of the two arms compared, for legends and tables.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Arms {
+pub(crate) struct Arms {
     /// The arm before calibration (`nominal`).
     pub before: String,
     /// The arm after calibration (`calibrated`), or the one arm evaluated.
@@ -212,7 +212,7 @@ pub struct Arms {
 /// One row pair of the validation table: figures of the arm before and
 /// after calibration on one data set.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ValidationRow<'a> {
+pub(crate) struct ValidationRow<'a> {
     /// What the data are (`fitted`, `held out (v.csv)`, `fold 1 (3 points)`).
     pub name: String,
     /// Whether the data were held out from the fit.
@@ -226,7 +226,7 @@ pub struct ValidationRow<'a> {
 
 /// What `calibration_report` shows.
 #[derive(Clone, Debug)]
-pub struct CalibrationInput<'a> {
+pub(crate) struct CalibrationInput<'a> {
     /// The page's heading.
     pub title: String,
     /// What went in, as (what, value) lines: files, noise, method, seed.
@@ -297,7 +297,7 @@ pub struct CalibrationInput<'a> {
 /// The 3-D errors of one arm at one data set's reference positions, each
 /// frame registered (the before arm's closed form, the fit's frames).
 #[derive(Clone, Debug, PartialEq)]
-pub struct PoseErrors {
+pub(crate) struct PoseErrors {
     /// The series' name (`nominal, fitted`).
     pub name: String,
     /// Held out from the fit.
@@ -320,7 +320,7 @@ pub struct PoseErrors {
 
 /// What `evaluation_report` shows.
 #[derive(Clone, Debug)]
-pub struct EvaluationInput<'a> {
+pub(crate) struct EvaluationInput<'a> {
     /// The page's heading.
     pub title: String,
     /// What went in, as (what, value) lines.

@@ -808,7 +808,7 @@ impl Block for Frame {
     }
 }
 
-/// The name of the tool mount's block ([`Mount`]).
+/// The name of the tool mount's block (`Mount`).
 pub const MOUNT_BLOCK: &str = "mount";
 
 /// How a 6-D target (a tracker's, a motion-capture rigid body) is mounted
@@ -820,7 +820,7 @@ pub const MOUNT_BLOCK: &str = "mount";
 /// its σ is of. Added to a layout only when some position gives the tool's
 /// orientation ([`crate::residuals::positions::layout_with`]).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Mount {
+pub(crate) struct Mount {
     /// Start values `[rx, ry, rz]` (rad).
     pub start: [f64; 3],
 }

@@ -80,7 +80,7 @@ use crate::params::DhParams;
 use crate::setting::Setting;
 
 pub use beyond::CorrectionBlock;
-pub use blocks::Mount;
+pub(crate) use blocks::Mount;
 pub use blocks::{
     Block, BlockId, Frame, Layout, LayoutError, MOUNT_BLOCK, Parameter, Scalar, Unit, Vector,
 };

@@ -7,7 +7,7 @@
 //! its block, and the arm's own `B` sees only the default tool's rows. Rows
 //! of the default tool keep the kernel's probe and today's code path.
 //!
-//! A row's orientation (a 6-D target's, [`super::Mount`]) belongs to the
+//! A row's orientation (a 6-D target's, `super::Mount`) belongs to the
 //! body the markers are on, not to a point of it: the orientation term
 //! reads it whatever tool the row names.
 

@@ -171,7 +171,7 @@ pub fn simulate_positions(
 pub struct OrientationSettings {
     /// The target's mount on the flange, the rotation vector of `R_m`
     /// (rad): the target's frame in the arm's last frame
-    /// ([`crate::residuals::Mount`]). `[0; 3]`: mounted square.
+    /// (`crate::residuals::Mount`). `[0; 3]`: mounted square.
     pub mount: [f64; 3],
     /// σ per axis of the small rotation that turns each orientation seen,
     /// rad.

@@ -200,7 +200,7 @@ impl Figures {
 
 /// A frame's registration by name: `[rx, ry, rz, tx, ty, tz]` (rad, mm).
 /// A list of them may also carry the tool mount of orientations
-/// ([`crate::residuals::Mount`]) under the mount's block name
+/// (`crate::residuals::Mount`) under the mount's block name
 /// ([`crate::residuals::MOUNT_BLOCK`]), `[rx, ry, rz, 0, 0, 0]`
 /// ([`crate::Calibration::frames_with_mount`]); a frame cannot have that
 /// name where orientations are fitted.
