@@ -61,9 +61,8 @@ pub mod gravity;
 
 use serde::{Deserialize, Serialize};
 
-pub(crate) use effects::angles_for;
-pub(crate) use effects::readings_for;
 pub use effects::{Conditions, Effects};
+pub(crate) use effects::{angles_for, readings_for};
 
 use crate::error::OptionError;
 use crate::setting::Setting;
