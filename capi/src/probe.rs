@@ -313,13 +313,8 @@ pub unsafe extern "C" fn aacmm_probe_qualification_refusal_count(
     q: *const AacmmProbeQualification,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new().object("q", q).out("count", count).disjoint()?;
-        // SAFETY: by the contract.
-        let n = unsafe { ptr::object(q, "q") }?.q.refusals.len();
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, n, "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe { count_out(q, |q| &q.refusals, count) }
 }
 
 /// Refusal `index` (from 0) in C's words (a remedy names the C setter),
@@ -356,10 +351,24 @@ pub unsafe extern "C" fn aacmm_probe_qualification_warning_count(
     q: *const AacmmProbeQualification,
     count: *mut usize,
 ) -> AacmmStatus {
+    // SAFETY: by the contract.
+    unsafe { count_out(q, |q| &q.warnings, count) }
+}
+
+/// The length of the list `of` picks into `*count`.
+///
+/// # Safety
+///
+/// As `aacmm_probe_qualification_refusal_count`.
+unsafe fn count_out(
+    q: *const AacmmProbeQualification,
+    of: impl Fn(&ProbeQualification) -> &Vec<String>,
+    count: *mut usize,
+) -> AacmmStatus {
     guard(|| {
         Args::new().object("q", q).out("count", count).disjoint()?;
         // SAFETY: by the contract.
-        let n = unsafe { ptr::object(q, "q") }?.q.warnings.len();
+        let n = of(&unsafe { ptr::object(q, "q") }?.q).len();
         // SAFETY: by the contract.
         unsafe { ptr::write(count, n, "count") }
     })
