@@ -89,6 +89,10 @@ class _UncertaintyMap(TypedDict):
     max_mm: float
     regions: List[_Region]
     points: _MapPoints
+    # In Calibration.uncertainty_maps_in_frames and _at_tools only: the
+    # frame or tool point the radii are in or at.
+    frame: str
+    tool: str
 
 class AacmmError(Exception):
     """Base class of the errors aacmm raises (besides OSError for unreadable
@@ -476,6 +480,16 @@ class Calibration:
         ``regions`` per band of distance from the shoulder, and ``points``
         (the figure's sample) as arrays ``reach_mm``, ``height_mm``,
         ``radius_mm``."""
+    @property
+    def uncertainty_maps_in_frames(self) -> List[_UncertaintyMap]:
+        """The map in each instrument frame fitted (``frame`` its name; the
+        radii include the frame's registration), as
+        ``report["uncertainty_maps_in_frames"]``."""
+    @property
+    def uncertainty_maps_at_tools(self) -> List[_UncertaintyMap]:
+        """The map at each tool point whose offset was fitted (``tool`` its
+        name; the radii include the offset's uncertainty), as
+        ``report["uncertainty_maps_at_tools"]``."""
     @property
     def successful(self) -> bool:
         """Whether the calibration is usable: the verdict

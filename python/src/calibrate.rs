@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use aacmm_core::calibrate::{Context, GlobalOptions};
 use aacmm_core::io::Arm as CoreArm;
-use aacmm_core::plan::MapPoint;
+use aacmm_core::plan::{MapPoint, UncertaintyMap};
 use aacmm_core::residuals::Frame;
 use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Request, Sources};
 use numpy::ndarray::{Array1, Array2};
@@ -437,26 +437,34 @@ impl Calibration {
     /// poses as numpy arrays `reach_mm`, `height_mm`, `radius_mm`.
     #[getter]
     fn uncertainty_map<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let Some(m) = &self.report.uncertainty_map else {
-            return Ok(None);
-        };
-        let d = PyDict::new(py);
-        d.set_item("coverage", m.coverage)?;
-        d.set_item("k_isotropic", m.k_isotropic)?;
-        d.set_item("workspace", &m.workspace)?;
-        d.set_item("poses", m.poses)?;
-        d.set_item("rms_mm", m.rms_mm)?;
-        d.set_item("median_mm", m.median_mm)?;
-        d.set_item("max_mm", m.max_mm)?;
-        d.set_item("regions", to_python(py, &m.regions)?)?;
-        // Columns rather than a list of dicts: what a plot takes.
-        let column = |f: fn(&MapPoint) -> f64| Array1::from_iter(m.points.iter().map(f));
-        let points = PyDict::new(py);
-        points.set_item("reach_mm", column(|p| p.reach_mm).into_pyarray(py))?;
-        points.set_item("height_mm", column(|p| p.height_mm).into_pyarray(py))?;
-        points.set_item("radius_mm", column(|p| p.radius_mm).into_pyarray(py))?;
-        d.set_item("points", points)?;
-        Ok(Some(d))
+        (self.report.uncertainty_map.as_ref())
+            .map(|m| map_dict(py, m))
+            .transpose()
+    }
+
+    /// The map in each instrument frame the calibration fitted, as
+    /// `report["uncertainty_maps_in_frames"]`: each as
+    /// :attr:`uncertainty_map`, with `frame` its name; the radii include
+    /// the frame's registration (empty without reference positions).
+    #[getter]
+    fn uncertainty_maps_in_frames<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        (self.report.uncertainty_maps_in_frames.iter())
+            .map(|m| map_dict(py, m))
+            .collect()
+    }
+
+    /// The map at each tool point whose offset was fitted (an arm file's
+    /// `[[tool]]`), as `report["uncertainty_maps_at_tools"]`: each as
+    /// :attr:`uncertainty_map`, with `tool` its name; the radii include
+    /// the offset's own uncertainty (empty without such tools).
+    #[getter]
+    fn uncertainty_maps_at_tools<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        (self.report.uncertainty_maps_at_tools.iter())
+            .map(|m| map_dict(py, m))
+            .collect()
     }
 
     /// Whether the calibration is usable — the verdict (`report["verdict"]`,
@@ -578,4 +586,32 @@ impl Calibration {
             c.dof.sigma0
         )
     }
+}
+
+/// A map as a dict: its figures, `frame` or `tool` when it is in a frame
+/// or at a tool point, and the figure's sample as numpy columns.
+fn map_dict<'py>(py: Python<'py>, m: &UncertaintyMap) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("coverage", m.coverage)?;
+    d.set_item("k_isotropic", m.k_isotropic)?;
+    d.set_item("workspace", &m.workspace)?;
+    if let Some(f) = &m.frame {
+        d.set_item("frame", f)?;
+    }
+    if let Some(t) = &m.tool {
+        d.set_item("tool", t)?;
+    }
+    d.set_item("poses", m.poses)?;
+    d.set_item("rms_mm", m.rms_mm)?;
+    d.set_item("median_mm", m.median_mm)?;
+    d.set_item("max_mm", m.max_mm)?;
+    d.set_item("regions", to_python(py, &m.regions)?)?;
+    // Columns rather than a list of dicts: what a plot takes.
+    let column = |f: fn(&MapPoint) -> f64| Array1::from_iter(m.points.iter().map(f));
+    let points = PyDict::new(py);
+    points.set_item("reach_mm", column(|p| p.reach_mm).into_pyarray(py))?;
+    points.set_item("height_mm", column(|p| p.height_mm).into_pyarray(py))?;
+    points.set_item("radius_mm", column(|p| p.radius_mm).into_pyarray(py))?;
+    d.set_item("points", points)?;
+    Ok(d)
 }

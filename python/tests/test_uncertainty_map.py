@@ -62,3 +62,23 @@ def test_the_command_line_writes_the_same_map_and_its_figure(cli, cal, tmp_path)
     html = (ours / "report.html").read_text()
     assert 'id="uncertainty-map"' in html
     assert "2.80 σ for an isotropic 3-D error, not 2 σ" in html
+
+
+def test_the_maps_in_frames_and_at_tools_are_the_reports():
+    """The UR5 tracker campaign: its one instrument frame's map (the radii
+    with the frame's registration) number for number as the report's, and
+    no map at a tool point (no [[tool]] was fitted)."""
+    arm = aacmm.Arm.from_file("examples/ur5-tracker/arm.toml")
+    data = aacmm.DataSet.from_files(positions="examples/ur5-tracker/positions-grid.csv")
+    ur5 = aacmm.calibrate(arm, data, method="lm")
+    maps = ur5.uncertainty_maps_in_frames
+    j = ur5.report["uncertainty_maps_in_frames"]
+    assert len(maps) == len(j) == 1
+    assert maps[0]["frame"] == j[0]["frame"] == "instrument"
+    for key in ("coverage", "workspace", "poses", "rms_mm", "median_mm", "max_mm", "regions"):
+        assert maps[0][key] == j[0][key], key
+    assert np.array_equal(maps[0]["points"]["radius_mm"], [p["radius_mm"] for p in j[0]["points"]])
+    # Another map than the base frame's: the instrument sees the positions
+    # through the fitted frame, whose registration it includes.
+    assert 0 < maps[0]["rms_mm"] != ur5.uncertainty_map["rms_mm"]
+    assert ur5.uncertainty_maps_at_tools == [] and "uncertainty_maps_at_tools" not in ur5.report
