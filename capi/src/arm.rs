@@ -39,11 +39,6 @@ impl AacmmArm {
     pub(crate) fn joints(&self) -> usize {
         self.kernel.joints()
     }
-
-    /// Hands the arm to C.
-    pub(crate) fn into_raw(self) -> *mut AacmmArm {
-        Box::into_raw(Box::new(self))
-    }
 }
 
 impl Error {
@@ -175,7 +170,7 @@ unsafe fn from_file(
         let warnings = warnings.iter().map(ToString::to_string).collect();
         let handle = AacmmArm::new(arm, source, warnings)?;
         // SAFETY: checked writable above.
-        unsafe { ptr::write(out, handle.into_raw(), "out") }
+        unsafe { ptr::hand_out(out, handle, "out") }
     })
 }
 
@@ -237,7 +232,7 @@ pub unsafe extern "C" fn aacmm_arm_from_params(
         let arm = Arm::without_limits("arm", dh);
         let handle = AacmmArm::new(arm, "<parameters>".to_string(), Vec::new())?;
         // SAFETY: checked writable above.
-        unsafe { ptr::write(out, handle.into_raw(), "out") }
+        unsafe { ptr::hand_out(out, handle, "out") }
     })
 }
 
@@ -299,13 +294,8 @@ pub unsafe extern "C" fn aacmm_arm_set_joint_types(
 /// `arm` is `NULL` or a live handle, which must not be used afterwards.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_arm_free(arm: *mut AacmmArm) {
-    guard_value((), || {
-        if !arm.is_null() {
-            // SAFETY: a live handle made by `Box::into_raw`, given up by
-            // the caller.
-            drop(unsafe { Box::from_raw(arm) });
-        }
-    })
+    // SAFETY: by the contract.
+    guard_value((), || unsafe { ptr::release(arm) })
 }
 
 /// The number of joints of the arm, into `*joints`.

@@ -363,7 +363,7 @@ pub unsafe extern "C" fn aacmm_calibrate_files(
         }
         let result = run(options::request(&o, request), o.cancel())?;
         // SAFETY: checked writable above.
-        unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
+        unsafe { ptr::hand_out(out, result, "out") }
     })
 }
 
@@ -500,7 +500,7 @@ pub unsafe extern "C" fn aacmm_calibrate(
         let request = Request::new(start.arm.clone(), data).sources(sources);
         let result = run(options::request(&o, request), o.cancel())?;
         // SAFETY: checked writable above.
-        unsafe { ptr::write(out, Box::into_raw(Box::new(result)), "out") }
+        unsafe { ptr::hand_out(out, result, "out") }
     })
 }
 
@@ -570,13 +570,8 @@ pub(crate) unsafe fn count_out(
 /// afterwards.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_calibration_free(cal: *mut AacmmCalibration) {
-    guard_value((), || {
-        if !cal.is_null() {
-            // SAFETY: a live handle made by `Box::into_raw`, given up by
-            // the caller.
-            drop(unsafe { Box::from_raw(cal) });
-        }
-    })
+    // SAFETY: by the contract.
+    guard_value((), || unsafe { ptr::release(cal) })
 }
 
 /// Copies one value per parameter into `out`, the caller's array `name`
@@ -745,7 +740,7 @@ pub unsafe extern "C" fn aacmm_calibration_arm(
         let c = unsafe { result(cal) }?;
         let arm = AacmmArm::new(c.calibrated.clone(), "<calibration>".into(), Vec::new())?;
         // SAFETY: checked writable above.
-        unsafe { ptr::write(out, arm.into_raw(), "out") }
+        unsafe { ptr::hand_out(out, arm, "out") }
     })
 }
 

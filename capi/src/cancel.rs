@@ -31,14 +31,8 @@ pub struct AacmmCancel {
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_cancel_new(out: *mut *mut AacmmCancel) -> AacmmStatus {
     guard(|| {
-        let token = Box::into_raw(Box::new(AacmmCancel::default()));
         // SAFETY: by the contract.
-        let written = unsafe { ptr::write(out, token, "out") };
-        if written.is_err() {
-            // SAFETY: made just above and never handed out.
-            drop(unsafe { Box::from_raw(token) });
-        }
-        written
+        unsafe { ptr::hand_out(out, AacmmCancel::default(), "out") }
     })
 }
 
@@ -71,13 +65,8 @@ pub unsafe extern "C" fn aacmm_cancel_set(cancel: *const AacmmCancel) -> AacmmSt
 /// `cancel` is `NULL` or a live token, which must not be used afterwards.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_cancel_free(cancel: *mut AacmmCancel) {
-    guard_value((), || {
-        if !cancel.is_null() {
-            // SAFETY: a live handle made by `Box::into_raw`, given up by
-            // the caller.
-            drop(unsafe { Box::from_raw(cancel) });
-        }
-    })
+    // SAFETY: by the contract.
+    guard_value((), || unsafe { ptr::release(cancel) })
 }
 
 /// Calibrations with these options stop when `cancel` is set (`NULL`: none

@@ -303,14 +303,8 @@ pub unsafe extern "C" fn aacmm_calibrate_options_new(
     out: *mut *mut AacmmCalibrateOptions,
 ) -> AacmmStatus {
     guard(|| {
-        let options = Box::into_raw(Box::new(AacmmCalibrateOptions::default()));
         // SAFETY: by the contract.
-        let written = unsafe { ptr::write(out, options, "out") };
-        if written.is_err() {
-            // SAFETY: made just above and never handed out.
-            drop(unsafe { Box::from_raw(options) });
-        }
-        written
+        unsafe { ptr::hand_out(out, AacmmCalibrateOptions::default(), "out") }
     })
 }
 
@@ -322,13 +316,8 @@ pub unsafe extern "C" fn aacmm_calibrate_options_new(
 /// afterwards.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_calibrate_options_free(options: *mut AacmmCalibrateOptions) {
-    guard_value((), || {
-        if !options.is_null() {
-            // SAFETY: a live handle made by `Box::into_raw`, given up by
-            // the caller.
-            drop(unsafe { Box::from_raw(options) });
-        }
-    })
+    // SAFETY: by the contract.
+    guard_value((), || unsafe { ptr::release(options) })
 }
 
 /// The solver: `AACMM_METHOD_GLOBAL` (default), `_LM`, `_SA` or `_HYBRID`

@@ -72,7 +72,7 @@ pub unsafe extern "C" fn aacmm_probe_options_new(
 ) -> AacmmStatus {
     guard(|| {
         aacmm_core::residuals::spheres::check_sphere_diameter(sphere_diameter_mm)?;
-        let options = Box::into_raw(Box::new(AacmmProbeOptions {
+        let options = AacmmProbeOptions {
             settings: ProbeSettings {
                 tool: DEFAULT_TOOL.to_string(),
                 sphere_diameter_mm,
@@ -81,14 +81,9 @@ pub unsafe extern "C" fn aacmm_probe_options_new(
                 max_form_mm: None,
                 spelling: Spelling::C,
             },
-        }));
+        };
         // SAFETY: by the contract.
-        let written = unsafe { ptr::write(out, options, "out") };
-        if written.is_err() {
-            // SAFETY: made just above and never handed out.
-            drop(unsafe { Box::from_raw(options) });
-        }
-        written
+        unsafe { ptr::hand_out(out, options, "out") }
     })
 }
 
@@ -99,13 +94,8 @@ pub unsafe extern "C" fn aacmm_probe_options_new(
 /// `options` is `NULL` or a live options handle, not used afterwards.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_probe_options_free(options: *mut AacmmProbeOptions) {
-    guard_value((), || {
-        if !options.is_null() {
-            // SAFETY: a live handle made by `Box::into_raw`, given up by
-            // the caller.
-            drop(unsafe { Box::from_raw(options) });
-        }
-    })
+    // SAFETY: by the contract.
+    guard_value((), || unsafe { ptr::release(options) })
 }
 
 /// The probe qualified: `"probe"` (the arm's `[probe]`, the default) or a
@@ -250,9 +240,9 @@ pub unsafe extern "C" fn aacmm_qualify_probe(
         let read = read.iter().map(|w| w.to_string());
         q.warnings = read.chain(std::mem::take(&mut q.warnings)).collect();
         let qualified = q.qualified_arm(&a.arm);
-        let result = Box::into_raw(Box::new(AacmmProbeQualification { q, qualified }));
+        let result = AacmmProbeQualification { q, qualified };
         // SAFETY: checked writable above.
-        unsafe { ptr::write(out, result, "out") }
+        unsafe { ptr::hand_out(out, result, "out") }
     })
 }
 
@@ -263,13 +253,8 @@ pub unsafe extern "C" fn aacmm_qualify_probe(
 /// `q` is `NULL` or a live qualification handle, not used afterwards.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn aacmm_probe_qualification_free(q: *mut AacmmProbeQualification) {
-    guard_value((), || {
-        if !q.is_null() {
-            // SAFETY: a live handle made by `Box::into_raw`, given up by
-            // the caller.
-            drop(unsafe { Box::from_raw(q) });
-        }
-    })
+    // SAFETY: by the contract.
+    guard_value((), || unsafe { ptr::release(q) })
 }
 
 /// The qualification's figures into `*out`.
@@ -447,6 +432,6 @@ pub unsafe extern "C" fn aacmm_probe_qualification_arm(
         }
         let arm = AacmmArm::new(q.qualified.clone(), "<qualified>".into(), Vec::new())?;
         // SAFETY: checked writable above.
-        unsafe { ptr::write(out, arm.into_raw(), "out") }
+        unsafe { ptr::hand_out(out, arm, "out") }
     })
 }

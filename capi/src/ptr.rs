@@ -290,6 +290,38 @@ pub(crate) unsafe fn write<T>(ptr: *mut T, value: T, name: &str) -> Result<(), E
     Ok(())
 }
 
+/// `value` boxed and handed to the caller at `*out`, a handle its
+/// `aacmm_…_free` releases ([`release`]); dropped again when `out` cannot
+/// take it, so a failed call leaks nothing.
+///
+/// # Safety
+///
+/// `out` is `NULL` or points to memory writable as a pointer.
+pub(crate) unsafe fn hand_out<T>(out: *mut *mut T, value: T, name: &str) -> Result<(), Error> {
+    let handle = Box::into_raw(Box::new(value));
+    // SAFETY: by the contract.
+    let written = unsafe { write(out, handle, name) };
+    if written.is_err() {
+        // SAFETY: made just above and never handed out.
+        drop(unsafe { Box::from_raw(handle) });
+    }
+    written
+}
+
+/// Releases a handle [`hand_out`] made; `NULL` does nothing.
+///
+/// # Safety
+///
+/// `handle` is `NULL` or a live handle of type `T`, which the caller gives
+/// up.
+pub(crate) unsafe fn release<T>(handle: *mut T) {
+    if !handle.is_null() {
+        // SAFETY: a live handle made by `Box::into_raw`, given up by the
+        // caller.
+        drop(unsafe { Box::from_raw(handle) });
+    }
+}
+
 /// A C string argument.
 ///
 /// # Safety
