@@ -17,7 +17,7 @@ use aacmm_core::io::{
 use aacmm_core::plan::{
     Criterion, DEFAULT_SOCKETS, Given, GivenNote, Measure, Plan, PlanError, PlanSettings, Pool,
     SampleError, SummaryContext, plan, sample_positions, sample_sphere_points,
-    sample_touches_observed, summary,
+    sample_touches_observed, sphere_candidates, summary,
 };
 use aacmm_core::session::{CalibrationReport, REPORT_FILE};
 use aacmm_core::simulate::{DEFAULT_SPHERE_DIAMETER_MM, SimError, SocketPlan};
@@ -420,17 +420,7 @@ fn read_sphere_candidates(path: &Path, args: &Args, arm: &Arm) -> Result<Poses> 
         );
     }
     aacmm_core::residuals::spheres::check_spheres(&rows, &file, &arm.params)?;
-    let mut poses = Poses::with_capacity(rows.joints(), rows.len());
-    if let Ok(shape) = arm.params.shape() {
-        poses = poses.with_shape(shape);
-    }
-    for i in 0..rows.len() {
-        poses.push(
-            &rows.spheres()[rows.sphere(i)],
-            rows.reading(i),
-            rows.line(i),
-        );
-    }
+    let poses = sphere_candidates(&rows);
     let warnings: Vec<_> = limit_warning(arm, &poses, &file, args.angle_unit)
         .into_iter()
         .collect();

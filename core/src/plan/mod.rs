@@ -51,10 +51,9 @@ pub use map::{
 };
 
 pub(crate) use map::reading_ranges;
-pub use pool::sample_touches;
 pub use pool::{
-    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_sphere_points,
-    sample_touches_observed,
+    DEFAULT_SOCKETS, Pool, SampleError, sample_positions, sample_sphere_points, sample_touches,
+    sample_touches_observed, sphere_candidates,
 };
 pub use summary::{GivenNote, SummaryContext, summary};
 
@@ -391,8 +390,9 @@ struct Design {
 }
 
 impl Design {
-    /// Whether group `s`'s rows tell the arm anything when `n` of them are
-    /// chosen: a sphere's only beyond its own unknowns.
+    /// Whether a group's rows tell the arm anything when `n` of them are
+    /// chosen: a sphere's only beyond its own unknowns (spheres only ask:
+    /// a socket's mean is eliminated through its deviations instead).
     fn informs(&self, n: usize) -> bool {
         n > self.per_sphere
     }
@@ -526,10 +526,14 @@ fn parameter_names(params: &DhParams, free: &[usize], frame: bool) -> Vec<String
 /// The spheres' own columns by name, after the geometry's: each centre's
 /// `x, y, z` and, when fitted, its radius.
 fn sphere_parameter_names(design: &Design) -> Vec<String> {
+    if design.per_sphere == 0 {
+        return Vec::new();
+    }
+    let fitted = design.per_sphere == rows::sphere_columns(false);
     let mut names = Vec::new();
-    for s in design.sockets.iter().filter(|_| design.per_sphere > 0) {
+    for s in &design.sockets {
         names.extend(["x", "y", "z"].map(|k| format!("sphere.{s}.{k}")));
-        if design.per_sphere == 4 {
+        if fitted {
             names.push(format!("sphere.{s}.radius"));
         }
     }
@@ -1029,7 +1033,7 @@ fn seed(greedy: &mut Greedy, design: &Design, s: usize, order: &mut Vec<(usize, 
     let members: Vec<usize> = (0..design.group.len())
         .filter(|&i| design.group[i] == s && !greedy.is_taken(i))
         .collect();
-    if !design.positions.is_empty() {
+    if design.per_sphere > 0 {
         return seed_sphere(greedy, design, s, &members, order);
     }
     let p3 = 3 * design.blocks.p;

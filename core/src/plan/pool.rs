@@ -8,7 +8,9 @@
 //! ([`crate::identify`]), so no noise is added to keep the residuals off
 //! zero.
 
+use crate::io::spheres::Spheres;
 use crate::io::{Arm, Poses};
+use crate::params::ChainShape;
 use crate::residuals::Noise;
 use crate::simulate::{
     CampaignSettings, ErrorModel, MIN_POSES_PER_SOCKET, PositionSettings, SimError, SocketPlan,
@@ -203,17 +205,7 @@ pub fn sample_sphere_points(
         seed,
     };
     let spheres = crate::simulate::simulate_spheres(arm, &settings)?.spheres;
-    let mut poses = Poses::with_capacity(spheres.joints(), spheres.len());
-    if let Ok(shape) = arm.params.shape() {
-        poses = poses.with_shape(shape);
-    }
-    for i in 0..spheres.len() {
-        poses.push(
-            &spheres.spheres()[spheres.sphere(i)],
-            spheres.reading(i),
-            i + 2,
-        );
-    }
+    let poses = sphere_candidates(&spheres);
     Ok(Pool {
         origin: format!(
             "{} spheres of {diameter_mm} mm placed through the arm's volume, {per} points each \
@@ -223,6 +215,23 @@ pub fn sample_sphere_points(
         poses,
         from_file: false,
     })
+}
+
+/// Points on spheres as a plan's candidates ([`super::Measure::Spheres`]):
+/// each row labelled by its sphere, with its readings and line.
+pub fn sphere_candidates(rows: &Spheres) -> Poses {
+    let mut poses = Poses::with_capacity(rows.joints(), rows.len());
+    if let Ok(shape) = ChainShape::from_mask(rows.joints(), rows.prismatic_mask()) {
+        poses = poses.with_shape(shape);
+    }
+    for i in 0..rows.len() {
+        poses.push(
+            &rows.spheres()[rows.sphere(i)],
+            rows.reading(i),
+            rows.line(i),
+        );
+    }
+    poses
 }
 
 #[cfg(test)]

@@ -133,13 +133,14 @@ pub(crate) fn sphere_rows(
     let (raw, positions) = jacobians(params, poses, free, false)?;
     let (g, per) = (free.len(), sphere_columns(stated));
     let p = g + per * names.len();
+    // Each sphere's points, in one pass over the candidates.
+    let mut points: Vec<Vec<[f64; 3]>> = vec![Vec::new(); names.len()];
+    for (pos, &s) in positions.iter().zip(group) {
+        points[s].push(*pos);
+    }
     let mut centres = Vec::with_capacity(names.len());
-    for (s, name) in names.iter().enumerate() {
-        let points: Vec<[f64; 3]> = (0..positions.len())
-            .filter(|&i| group[i] == s)
-            .map(|i| positions[i])
-            .collect();
-        let (c, _) = crate::residuals::spheres::algebraic_sphere(&points).ok_or_else(|| {
+    for (name, points) in names.iter().zip(&points) {
+        let (c, _) = crate::residuals::spheres::algebraic_sphere(points).ok_or_else(|| {
             super::PlanError::Invalid(format!(
                 "sphere `{name}`: its {} candidates fix no sphere (fewer than 4, or on one \
                  circle)",
