@@ -584,7 +584,7 @@ pub unsafe extern "C" fn aacmm_calibrate_options_set_orientation_noise_rad(
 
 /// 0 = not stated; anything else is left to the library's check (which
 /// refuses negative and non-finite values).
-fn stated(v: f64) -> Option<f64> {
+pub(crate) fn stated(v: f64) -> Option<f64> {
     (v != 0.0).then_some(v)
 }
 

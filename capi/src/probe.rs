@@ -16,6 +16,7 @@ use aacmm_core::session::probe::{
 use crate::arm::{AacmmArm, handle, string_args, string_out};
 use crate::calibrate::{AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmAngleUnit};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
+use crate::options::stated;
 use crate::ptr::{self, Args};
 
 /// What a probe qualification is asked. Opaque; made by
@@ -145,8 +146,8 @@ pub unsafe extern "C" fn aacmm_probe_options_set_noise(
         // SAFETY: by the contract.
         let o = unsafe { ptr::object_mut(options, "options") }?;
         let noise = Noise {
-            encoder_rad: (encoder_rad != 0.0).then_some(encoder_rad),
-            probe_mm: (probe_mm != 0.0).then_some(probe_mm),
+            encoder_rad: stated(encoder_rad),
+            probe_mm: stated(probe_mm),
             ..Noise::default()
         };
         noise.check()?;
