@@ -478,6 +478,15 @@ typedef struct {
 } AacmmUncertaintyRegion;
 
 /**
+ * Which of a calibration's uncertainty maps: `AACMM_MAP_BASE` (the arm's
+ * base frame, at its probe: the report's `uncertainty_map`, at most one),
+ * `AACMM_MAP_FRAME` (one per fitted instrument frame, with its
+ * registration: `uncertainty_maps_in_frames`) or `AACMM_MAP_TOOL` (one per
+ * tool point whose offset was fitted: `uncertainty_maps_at_tools`).
+ */
+typedef uint32_t AacmmMapKind;
+
+/**
  * The robust fit of a calibration: `AACMM_ROBUST_NONE`, `_HUBER` or
  * `_CAUCHY` (`--robust`).
  */
@@ -587,6 +596,21 @@ typedef struct {
  * Worse than the nominal on its own data.
  */
 #define AACMM_REASON_WORSE_ON_DATA 11
+
+/**
+ * The base frame's map, at the probe.
+ */
+#define AACMM_MAP_BASE 0
+
+/**
+ * The maps as each fitted instrument frame sees the probe.
+ */
+#define AACMM_MAP_FRAME 1
+
+/**
+ * The maps at each fitted tool point.
+ */
+#define AACMM_MAP_TOOL 2
 
 /**
  * Levenberg–Marquardt from the start arm (`--method lm`).
@@ -1319,6 +1343,72 @@ AacmmStatus aacmm_calibration_uncertainty_region_count(const AacmmCalibration *c
 AacmmStatus aacmm_calibration_uncertainty_region(const AacmmCalibration *cal,
                                                  size_t index,
                                                  AacmmUncertaintyRegion *out);
+
+/**
+ * The number of uncertainty maps of kind `kind` (`AACMM_MAP_BASE`,
+ * `AACMM_MAP_FRAME`, `AACMM_MAP_TOOL`) into `*count`: 0 or 1 for the base
+ * frame's, one per fitted instrument frame, one per fitted tool point.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_uncertainty_map_count(const AacmmCalibration *cal,
+                                                    AacmmMapKind kind,
+                                                    size_t *count);
+
+/**
+ * Uncertainty map `index` of kind `kind` (`0 ≤ index <
+ * aacmm_calibration_uncertainty_map_count`, in the report's order) into
+ * `*out`; for the base frame's, as `aacmm_calibration_uncertainty_map`.
+ * A frame's radii include its registration's uncertainty, a tool's its
+ * offset's. `AACMM_STATUS_INVALID_ARGUMENT` for an unknown kind or an
+ * index out of range (`*out` is then left as it was).
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `out` is `NULL` or points to
+ * writable memory for the struct.
+ */
+AacmmStatus aacmm_calibration_uncertainty_map_at(const AacmmCalibration *cal,
+                                                 AacmmMapKind kind,
+                                                 size_t index,
+                                                 AacmmUncertaintyMap *out);
+
+/**
+ * The name of uncertainty map `index` of kind `kind` — its instrument
+ * frame's or its tool's; empty for the base frame's — copied into `buf`
+ * like `aacmm_last_error_message`; `*len` gets its full length in bytes
+ * without the NUL.
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `buf` is `NULL` or points to
+ * `buf_len` writable bytes; `len` is `NULL` or writable.
+ */
+AacmmStatus aacmm_calibration_uncertainty_map_name(const AacmmCalibration *cal,
+                                                   AacmmMapKind kind,
+                                                   size_t index,
+                                                   char *buf,
+                                                   size_t buf_len,
+                                                   size_t *len);
+
+/**
+ * Band `band` of uncertainty map `index` of kind `kind` (nearest the
+ * shoulder first; `AacmmUncertaintyMap::regions` of them) into `*out`.
+ * `AACMM_STATUS_INVALID_ARGUMENT` for an unknown kind or an index out of
+ * range (`*out` is then left as it was).
+ *
+ * # Safety
+ *
+ * `cal` is `NULL` or a live result handle; `out` is `NULL` or points to
+ * writable memory for the struct.
+ */
+AacmmStatus aacmm_calibration_uncertainty_map_region(const AacmmCalibration *cal,
+                                                     AacmmMapKind kind,
+                                                     size_t index,
+                                                     size_t band,
+                                                     AacmmUncertaintyRegion *out);
 
 /**
  * New options with the defaults of `aacmm calibrate`, at `*out` (release

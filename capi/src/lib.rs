@@ -78,7 +78,10 @@ pub use cancel::{
 };
 pub use error::{AacmmStatus, aacmm_last_error_message};
 pub use map::{
-    AacmmUncertaintyMap, AacmmUncertaintyRegion, aacmm_calibration_uncertainty_map,
+    AACMM_MAP_BASE, AACMM_MAP_FRAME, AACMM_MAP_TOOL, AacmmMapKind, AacmmUncertaintyMap,
+    AacmmUncertaintyRegion, aacmm_calibration_uncertainty_map,
+    aacmm_calibration_uncertainty_map_at, aacmm_calibration_uncertainty_map_count,
+    aacmm_calibration_uncertainty_map_name, aacmm_calibration_uncertainty_map_region,
     aacmm_calibration_uncertainty_region, aacmm_calibration_uncertainty_region_count,
 };
 pub use options::{

@@ -1,11 +1,30 @@
 //! A calibration's uncertainty map: the predicted position uncertainty over
 //! a sampled workspace (the report's `uncertainty_map`), as plain structs.
 
+use std::ffi::c_char;
+
 use aacmm_core::plan::UncertaintyMap;
 
+use crate::arm::{string_args, string_out};
 use crate::calibrate::{AacmmCalibration, count_out, result};
 use crate::error::{AacmmStatus, Error, guard};
 use crate::ptr::{self, Args};
+
+/// Which of a calibration's uncertainty maps: `AACMM_MAP_BASE` (the arm's
+/// base frame, at its probe: the report's `uncertainty_map`, at most one),
+/// `AACMM_MAP_FRAME` (one per fitted instrument frame, with its
+/// registration: `uncertainty_maps_in_frames`) or `AACMM_MAP_TOOL` (one per
+/// tool point whose offset was fitted: `uncertainty_maps_at_tools`).
+pub type AacmmMapKind = u32;
+
+/// The base frame's map, at the probe.
+pub const AACMM_MAP_BASE: AacmmMapKind = 0;
+
+/// The maps as each fitted instrument frame sees the probe.
+pub const AACMM_MAP_FRAME: AacmmMapKind = 1;
+
+/// The maps at each fitted tool point.
+pub const AACMM_MAP_TOOL: AacmmMapKind = 2;
 
 /// A calibration's uncertainty map, for
 /// `aacmm_calibration_uncertainty_map`: the radius that holds the
@@ -53,14 +72,70 @@ pub struct AacmmUncertaintyRegion {
     pub max_mm: f64,
 }
 
-/// The map of `cal`, or `AACMM_STATUS_NOT_AVAILABLE`.
-fn map_of(cal: &AacmmCalibration) -> Result<&UncertaintyMap, Error> {
-    cal.report.uncertainty_map.as_ref().ok_or_else(|| {
-        Error::new(
+/// The maps of kind `kind` of `cal` (the base frame's: none or one).
+fn maps_of(cal: &AacmmCalibration, kind: AacmmMapKind) -> Result<&[UncertaintyMap], Error> {
+    let r = &cal.report;
+    match kind {
+        AACMM_MAP_BASE => Ok(r.uncertainty_map.as_slice()),
+        AACMM_MAP_FRAME => Ok(&r.uncertainty_maps_in_frames),
+        AACMM_MAP_TOOL => Ok(&r.uncertainty_maps_at_tools),
+        _ => Err(Error::invalid(format!(
+            "kind = {kind}: not AACMM_MAP_BASE (0), AACMM_MAP_FRAME (1) or AACMM_MAP_TOOL (2)"
+        ))),
+    }
+}
+
+/// Map `index` of kind `kind` of `cal`: `AACMM_STATUS_NOT_AVAILABLE` for
+/// the base frame's when the calibration has none, an invalid argument for
+/// an index beyond the others.
+fn map_at(
+    cal: &AacmmCalibration,
+    kind: AacmmMapKind,
+    index: usize,
+) -> Result<&UncertaintyMap, Error> {
+    let maps = maps_of(cal, kind)?;
+    if kind == AACMM_MAP_BASE && maps.is_empty() && index == 0 {
+        return Err(Error::new(
             AacmmStatus::NotAvailable,
             "the calibration has no uncertainty map: the covariance of its free geometry \
              is not finite",
-        )
+        ));
+    }
+    maps.get(index).ok_or_else(|| {
+        Error::invalid(format!(
+            "index = {index}: the calibration has {} uncertainty map(s) of kind {kind}",
+            maps.len()
+        ))
+    })
+}
+
+/// A map's figures as C's struct.
+fn summary(m: &UncertaintyMap) -> AacmmUncertaintyMap {
+    AacmmUncertaintyMap {
+        coverage: m.coverage,
+        k_isotropic: m.k_isotropic,
+        poses: m.poses,
+        rms_mm: m.rms_mm,
+        median_mm: m.median_mm,
+        max_mm: m.max_mm,
+        regions: m.regions.len(),
+    }
+}
+
+/// Band `index` of map `m` as C's struct, or an invalid argument.
+fn region(m: &UncertaintyMap, index: usize) -> Result<AacmmUncertaintyRegion, Error> {
+    let Some(r) = m.regions.get(index) else {
+        return Err(Error::invalid(format!(
+            "index = {index}: the uncertainty map has {} region(s)",
+            m.regions.len()
+        )));
+    };
+    Ok(AacmmUncertaintyRegion {
+        reach_from_mm: r.reach_from_mm,
+        reach_to_mm: r.reach_to_mm,
+        poses: r.poses,
+        rms_mm: r.rms_mm,
+        max_mm: r.max_mm,
     })
 }
 
@@ -80,18 +155,9 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_map(
     guard(|| {
         Args::new().object("cal", cal).out("out", out).disjoint()?;
         // SAFETY: by the contract.
-        let m = map_of(unsafe { result(cal) }?)?;
-        let value = AacmmUncertaintyMap {
-            coverage: m.coverage,
-            k_isotropic: m.k_isotropic,
-            poses: m.poses,
-            rms_mm: m.rms_mm,
-            median_mm: m.median_mm,
-            max_mm: m.max_mm,
-            regions: m.regions.len(),
-        };
+        let m = map_at(unsafe { result(cal) }?, AACMM_MAP_BASE, 0)?;
         // SAFETY: by the contract.
-        unsafe { ptr::write(out, value, "out") }
+        unsafe { ptr::write(out, summary(m), "out") }
     })
 }
 
@@ -133,20 +199,115 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_region(
     guard(|| {
         Args::new().object("cal", cal).out("out", out).disjoint()?;
         // SAFETY: by the contract.
-        let m = map_of(unsafe { result(cal) }?)?;
-        let Some(r) = m.regions.get(index) else {
-            return Err(Error::invalid(format!(
-                "index = {index}: the uncertainty map has {} region(s)",
-                m.regions.len()
-            )));
-        };
-        let value = AacmmUncertaintyRegion {
-            reach_from_mm: r.reach_from_mm,
-            reach_to_mm: r.reach_to_mm,
-            poses: r.poses,
-            rms_mm: r.rms_mm,
-            max_mm: r.max_mm,
-        };
+        let m = map_at(unsafe { result(cal) }?, AACMM_MAP_BASE, 0)?;
+        let value = region(m, index)?;
+        // SAFETY: by the contract.
+        unsafe { ptr::write(out, value, "out") }
+    })
+}
+
+/// The number of uncertainty maps of kind `kind` (`AACMM_MAP_BASE`,
+/// `AACMM_MAP_FRAME`, `AACMM_MAP_TOOL`) into `*count`: 0 or 1 for the base
+/// frame's, one per fitted instrument frame, one per fitted tool point.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_count(
+    cal: *const AacmmCalibration,
+    kind: AacmmMapKind,
+    count: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        Args::new()
+            .object("cal", cal)
+            .out("count", count)
+            .disjoint()?;
+        // SAFETY: by the contract.
+        let n = maps_of(unsafe { result(cal) }?, kind)?.len();
+        // SAFETY: by the contract.
+        unsafe { ptr::write(count, n, "count") }
+    })
+}
+
+/// Uncertainty map `index` of kind `kind` (`0 ≤ index <
+/// aacmm_calibration_uncertainty_map_count`, in the report's order) into
+/// `*out`; for the base frame's, as `aacmm_calibration_uncertainty_map`.
+/// A frame's radii include its registration's uncertainty, a tool's its
+/// offset's. `AACMM_STATUS_INVALID_ARGUMENT` for an unknown kind or an
+/// index out of range (`*out` is then left as it was).
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `out` is `NULL` or points to
+/// writable memory for the struct.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_at(
+    cal: *const AacmmCalibration,
+    kind: AacmmMapKind,
+    index: usize,
+    out: *mut AacmmUncertaintyMap,
+) -> AacmmStatus {
+    guard(|| {
+        Args::new().object("cal", cal).out("out", out).disjoint()?;
+        // SAFETY: by the contract.
+        let m = map_at(unsafe { result(cal) }?, kind, index)?;
+        // SAFETY: by the contract.
+        unsafe { ptr::write(out, summary(m), "out") }
+    })
+}
+
+/// The name of uncertainty map `index` of kind `kind` — its instrument
+/// frame's or its tool's; empty for the base frame's — copied into `buf`
+/// like `aacmm_last_error_message`; `*len` gets its full length in bytes
+/// without the NUL.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `buf` is `NULL` or points to
+/// `buf_len` writable bytes; `len` is `NULL` or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_name(
+    cal: *const AacmmCalibration,
+    kind: AacmmMapKind,
+    index: usize,
+    buf: *mut c_char,
+    buf_len: usize,
+    len: *mut usize,
+) -> AacmmStatus {
+    guard(|| {
+        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
+        // SAFETY: by the contract.
+        let m = map_at(unsafe { result(cal) }?, kind, index)?;
+        let name = m.frame.as_deref().or(m.tool.as_deref()).unwrap_or("");
+        // SAFETY: by the contract.
+        unsafe { string_out(name, buf, buf_len, len) }
+    })
+}
+
+/// Band `band` of uncertainty map `index` of kind `kind` (nearest the
+/// shoulder first; `AacmmUncertaintyMap::regions` of them) into `*out`.
+/// `AACMM_STATUS_INVALID_ARGUMENT` for an unknown kind or an index out of
+/// range (`*out` is then left as it was).
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `out` is `NULL` or points to
+/// writable memory for the struct.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_region(
+    cal: *const AacmmCalibration,
+    kind: AacmmMapKind,
+    index: usize,
+    band: usize,
+    out: *mut AacmmUncertaintyRegion,
+) -> AacmmStatus {
+    guard(|| {
+        Args::new().object("cal", cal).out("out", out).disjoint()?;
+        // SAFETY: by the contract.
+        let m = map_at(unsafe { result(cal) }?, kind, index)?;
+        let value = region(m, band)?;
         // SAFETY: by the contract.
         unsafe { ptr::write(out, value, "out") }
     })

@@ -24,10 +24,17 @@ use aacmm_capi::{
     aacmm_calibration_report, aacmm_calibration_summary, aacmm_calibration_tool,
     aacmm_calibration_tool_count,
 };
+use aacmm_capi::{
+    AACMM_MAP_BASE, AACMM_MAP_FRAME, AACMM_MAP_TOOL, AacmmMapKind, AacmmUncertaintyMap,
+    AacmmUncertaintyRegion, aacmm_calibration_uncertainty_map,
+    aacmm_calibration_uncertainty_map_at, aacmm_calibration_uncertainty_map_count,
+    aacmm_calibration_uncertainty_map_name, aacmm_calibration_uncertainty_map_region,
+};
 use aacmm_core::dataset::DataSet;
 use aacmm_core::identify::identify;
 use aacmm_core::io::{AngleUnit, Arm, LengthUnit, Positions, write_arm};
 use aacmm_core::params::DhParams;
+use aacmm_core::plan::UncertaintyMap;
 use aacmm_core::residuals::{Frame, Noise};
 use aacmm_core::session::{CalibrationReport, Request, Sources};
 use aacmm_core::simulate::{
@@ -452,6 +459,20 @@ fn a_tracker_campaign_from_arrays_recovers_its_frames() {
             "`count` is NULL",
         );
     }
+
+    // The maps as each station sees the probe, and the base frame's.
+    let in_frames = &expected.uncertainty_maps_in_frames;
+    assert_eq!(in_frames.len(), 2);
+    maps_match(cal.0, AACMM_MAP_FRAME, in_frames);
+    maps_match(cal.0, AACMM_MAP_BASE, expected.uncertainty_map.as_slice());
+    maps_match(cal.0, AACMM_MAP_TOOL, &[]);
+    let mut base = MaybeUninit::uninit();
+    // SAFETY: a live result; room for the struct.
+    let status = unsafe { aacmm_calibration_uncertainty_map(cal.0, base.as_mut_ptr()) };
+    assert_eq!(status, AacmmStatus::Ok);
+    // SAFETY: written on success.
+    let base = unsafe { base.assume_init() };
+    assert_eq!(base, map_at(cal.0, AACMM_MAP_BASE, 0));
 
     // Bad arrays: each refused with its argument named, and the options
     // keep the good positions (the same calibration again at the end).
@@ -913,6 +934,9 @@ fn tools_of_positions_are_set_by_index_and_read_back() {
             assert!(z.abs() < 4.0, "{name}[{k}]: {z}");
         }
     }
+    let at_tools = &library.uncertainty_maps_at_tools;
+    assert_eq!(at_tools.len(), expected.len());
+    maps_match(cal.0, AACMM_MAP_TOOL, at_tools);
     let mut tool = MaybeUninit::<AacmmTool>::uninit();
     // SAFETY: a live result; room for the struct; no name asked.
     let status = unsafe {
@@ -931,4 +955,106 @@ fn tools_of_positions_are_set_by_index_and_read_back() {
         "index = 2: the calibration has 2 tool(s)",
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Map `index` of kind `kind` through the C API (it must exist).
+fn map_at(cal: *const AacmmCalibration, kind: AacmmMapKind, index: usize) -> AacmmUncertaintyMap {
+    let mut out = MaybeUninit::uninit();
+    // SAFETY: a live result; room for the struct.
+    let status =
+        unsafe { aacmm_calibration_uncertainty_map_at(cal, kind, index, out.as_mut_ptr()) };
+    assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+    // SAFETY: written on success.
+    unsafe { out.assume_init() }
+}
+
+/// The C API's maps of kind `kind` are the library's `maps`, figure for
+/// figure and band for band, named by their frame or tool; one index beyond
+/// them and an unknown kind are refused.
+fn maps_match(cal: *const AacmmCalibration, kind: AacmmMapKind, maps: &[UncertaintyMap]) {
+    let mut count = 99;
+    // SAFETY: a live result; `count` is writable.
+    let status = unsafe { aacmm_calibration_uncertainty_map_count(cal, kind, &mut count) };
+    assert_eq!((status, count), (AacmmStatus::Ok, maps.len()));
+    for (i, m) in maps.iter().enumerate() {
+        let got = map_at(cal, kind, i);
+        assert_eq!(
+            (got.coverage, got.k_isotropic, got.poses, got.regions),
+            (m.coverage, m.k_isotropic, m.poses, m.regions.len())
+        );
+        assert_eq!(
+            (got.rms_mm, got.median_mm, got.max_mm),
+            (m.rms_mm, m.median_mm, m.max_mm)
+        );
+        let mut buf = [0x7f as c_char; 64];
+        let mut len = 0;
+        // SAFETY: a live result; 64 writable bytes; `len` is writable.
+        let status = unsafe {
+            aacmm_calibration_uncertainty_map_name(cal, kind, i, buf.as_mut_ptr(), 64, &mut len)
+        };
+        assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+        // SAFETY: NUL-terminated by the call.
+        let name = unsafe { CStr::from_ptr(buf.as_ptr()) }.to_str().unwrap();
+        let want = m.frame.as_deref().or(m.tool.as_deref()).unwrap_or("");
+        assert_eq!((name, len), (want, want.len()));
+        assert_eq!(want.is_empty(), kind == AACMM_MAP_BASE);
+        for (b, r) in m.regions.iter().enumerate() {
+            let mut out = MaybeUninit::<AacmmUncertaintyRegion>::uninit();
+            // SAFETY: a live result; room for the struct.
+            let status = unsafe {
+                aacmm_calibration_uncertainty_map_region(cal, kind, i, b, out.as_mut_ptr())
+            };
+            assert_eq!(status, AacmmStatus::Ok, "{}", last_error());
+            // SAFETY: written on success.
+            let got = unsafe { out.assume_init() };
+            assert_eq!(
+                (
+                    got.reach_from_mm,
+                    got.reach_to_mm,
+                    got.poses,
+                    got.rms_mm,
+                    got.max_mm
+                ),
+                (r.reach_from_mm, r.reach_to_mm, r.poses, r.rms_mm, r.max_mm)
+            );
+        }
+        let mut out = MaybeUninit::<AacmmUncertaintyRegion>::uninit();
+        // SAFETY: a live result; room for the struct.
+        let status = unsafe {
+            aacmm_calibration_uncertainty_map_region(
+                cal,
+                kind,
+                i,
+                m.regions.len(),
+                out.as_mut_ptr(),
+            )
+        };
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            &format!("index = {}: the uncertainty map has", m.regions.len()),
+        );
+    }
+    let mut out = MaybeUninit::uninit();
+    // SAFETY: a live result; room for the struct.
+    let status =
+        unsafe { aacmm_calibration_uncertainty_map_at(cal, kind, maps.len(), out.as_mut_ptr()) };
+    if kind != AACMM_MAP_BASE || !maps.is_empty() {
+        refused(
+            status,
+            AacmmStatus::InvalidArgument,
+            &format!(
+                "index = {}: the calibration has {} uncertainty map(s)",
+                maps.len(),
+                maps.len()
+            ),
+        );
+    }
+    // SAFETY: a live result; `count` is writable.
+    let status = unsafe { aacmm_calibration_uncertainty_map_count(cal, 7, &mut count) };
+    refused(
+        status,
+        AacmmStatus::InvalidArgument,
+        "kind = 7: not AACMM_MAP_BASE",
+    );
 }
