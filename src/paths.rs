@@ -4,7 +4,7 @@
 //! One rule for every command that writes (README, "Writing"): an output
 //! is never overwritten silently. An output file that exists, or an output
 //! directory that holds results of any aacmm command
-//! ([`aacmm_core::output::result_files`]), is refused unless `--force`;
+//! ([`aacmm_core::output::earlier_results`] names them), is refused unless `--force`;
 //! `--force` overwrites the command's own files and deletes nothing.
 //! Devices (`/dev/stdout`) are always written.
 

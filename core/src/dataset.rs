@@ -110,7 +110,7 @@ impl SourceMap {
     }
 
     /// Where reference `r` came from.
-    pub fn reference(&self, r: usize) -> Location<'_> {
+    pub(crate) fn reference(&self, r: usize) -> Location<'_> {
         Location {
             file: &self.lengths_file,
             line: self.reference_lines.get(r).copied().unwrap_or(0),
@@ -342,7 +342,7 @@ impl TouchTools {
 
     /// Tool `k`'s nominal offset (mm), `None` for the default tool or
     /// before [`DataSet::with_tools`].
-    pub fn offset(&self, k: usize) -> Option<[f64; 3]> {
+    pub(crate) fn offset(&self, k: usize) -> Option<[f64; 3]> {
         self.offsets[k]
     }
 
@@ -359,7 +359,7 @@ impl TouchTools {
     }
 
     /// The tools some point has, other than the default, in order.
-    pub fn used(&self) -> Vec<usize> {
+    pub(crate) fn used(&self) -> Vec<usize> {
         (1..self.names.len())
             .filter(|k| self.of_point.iter().any(|&t| t as usize == *k))
             .collect()
@@ -383,7 +383,7 @@ impl PositionData {
     }
 
     /// Their readings with sin/cos, for the kernel.
-    pub fn poses(&self) -> &PreparedPoses {
+    pub(crate) fn poses(&self) -> &PreparedPoses {
         &self.poses
     }
 
@@ -393,7 +393,7 @@ impl PositionData {
     }
 
     /// Where row `i` came from.
-    pub fn at(&self, i: usize) -> Location<'_> {
+    pub(crate) fn at(&self, i: usize) -> Location<'_> {
         Location {
             file: &self.file,
             line: self.rows.line(i),
@@ -411,7 +411,7 @@ impl PositionData {
     }
 
     /// The rows `keep`, in that order.
-    pub fn subset(&self, keep: &[usize]) -> PositionData {
+    pub(crate) fn subset(&self, keep: &[usize]) -> PositionData {
         PositionData::new(
             self.rows.subset(keep),
             &self.file,
@@ -420,7 +420,7 @@ impl PositionData {
     }
 
     /// The temperature and time of every row, when recorded.
-    pub fn conditions(&self) -> Conditions<'_> {
+    pub(crate) fn conditions(&self) -> Conditions<'_> {
         Conditions {
             temperature_c: self.rows.temperatures(),
             time_s: self.rows.times(),
@@ -1438,7 +1438,7 @@ impl DataSet {
     }
 
     /// The readings of every touch (rad), touch-major.
-    pub fn readings(&self) -> &[f64] {
+    pub(crate) fn readings(&self) -> &[f64] {
         &self.q
     }
 

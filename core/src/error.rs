@@ -126,7 +126,7 @@ impl InputError {
     }
 
     /// An [`InputError::Io`] error.
-    pub fn io(file: impl Into<String>, source: std::io::Error) -> InputError {
+    pub(crate) fn io(file: impl Into<String>, source: std::io::Error) -> InputError {
         InputError::Io {
             file: file_shown(file.into()),
             error: source,
@@ -134,7 +134,7 @@ impl InputError {
     }
 
     /// An [`InputError::Memory`] error.
-    pub fn memory(file: impl Into<String>, error: crate::memory::OutOfMemory) -> InputError {
+    pub(crate) fn memory(file: impl Into<String>, error: crate::memory::OutOfMemory) -> InputError {
         InputError::Memory {
             file: file_shown(file.into()),
             error,
@@ -243,7 +243,7 @@ impl OptionError {
 
     /// The setting's path in its settings struct (`noise.probe_mm`,
     /// `cross_validate`): how the library's own text names it
-    /// ([`Setting::path`]).
+    /// (`Setting::path`).
     pub fn field(&self) -> &'static str {
         self.setting.path()
     }

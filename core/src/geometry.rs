@@ -66,7 +66,7 @@ pub(crate) struct RigidMotion {
 
 impl RigidMotion {
     /// The translation `t` of `y ≈ R x + t`.
-    pub fn translation(&self) -> Vector3<f64> {
+    pub(crate) fn translation(&self) -> Vector3<f64> {
         self.to - self.rotation * self.from
     }
 }

@@ -11,7 +11,7 @@
 //!
 //! This module converts a D-H joint to a Hayati one exactly where that is
 //! exact ([`DhParams::with_hayati`], parallel axes), and says which joints a
-//! user should switch ([`candidates`], [`recommendations`]), which
+//! user should switch ([`candidates`], `recommendations`), which
 //! [`identify`](crate::identify) and the calibration report print.
 
 use thiserror::Error;
@@ -163,7 +163,7 @@ pub fn candidates(params: &DhParams) -> Vec<usize> {
 }
 
 /// One sentence per [`candidates`] joint: what to do and why.
-pub fn recommendations(params: &DhParams) -> Vec<String> {
+pub(crate) fn recommendations(params: &DhParams) -> Vec<String> {
     candidates(params)
         .into_iter()
         .map(|i| {

@@ -214,7 +214,7 @@ pub struct Identification {
     pub(crate) correlations: Vec<Correlation>,
     /// Model changes to consider: the D-H joints with nearly parallel axes
     /// that the Hayati parameterisation suits
-    /// ([`hayati::recommendations`](crate::hayati::recommendations)).
+    /// (`hayati::recommendations`).
     /// Absent from JSON when empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub recommendations: Vec<String>,
@@ -300,7 +300,7 @@ pub(crate) type AddedTerms<'a> =
 #[derive(Clone, Copy)]
 pub struct Evidence<'a> {
     /// The touches, lengths and positions.
-    pub data: &'a DataSet,
+    pub(crate) data: &'a DataSet,
     /// The terms beyond them, if any.
     pub(crate) added: Option<AddedTerms<'a>>,
 }

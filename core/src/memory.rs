@@ -78,7 +78,7 @@ pub struct OutOfMemory {
 
 impl OutOfMemory {
     /// The error for `bytes` bytes for `what`.
-    pub fn new(what: impl Into<String>, bytes: usize) -> OutOfMemory {
+    pub(crate) fn new(what: impl Into<String>, bytes: usize) -> OutOfMemory {
         OutOfMemory {
             what: what.into(),
             bytes,

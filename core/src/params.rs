@@ -28,7 +28,7 @@ pub enum JointKind {
 
 impl JointKind {
     /// The name in files: `revolute` or `prismatic`.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             JointKind::Revolute => "revolute",
             JointKind::Prismatic => "prismatic",
@@ -249,7 +249,7 @@ pub enum JointModel {
 
 impl JointModel {
     /// The name in arm files: `dh` or `hayati`.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             JointModel::Dh => "dh",
             JointModel::Hayati => "hayati",

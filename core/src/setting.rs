@@ -694,7 +694,7 @@ impl Setting {
     /// The option as `spelling` names it in a remedy: a flag (with a
     /// placeholder value where the flag needs one), a keyword argument, a
     /// setter.
-    pub fn name(self, spelling: Spelling) -> &'static str {
+    pub(crate) fn name(self, spelling: Spelling) -> &'static str {
         let [cli, python, c] = self.names().remedy;
         match spelling {
             Spelling::Cli => cli,
@@ -720,7 +720,7 @@ impl Setting {
     /// `accept_poor_fit`), or the input's that no struct holds (`lengths`,
     /// `angle_unit`). A refused option is named by it
     /// ([`crate::error::OptionError`]'s text).
-    pub fn path(self) -> &'static str {
+    pub(crate) fn path(self) -> &'static str {
         self.names().path
     }
 }

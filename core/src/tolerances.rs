@@ -38,7 +38,7 @@ impl Target {
     /// Parses a target name for an `n`-joint arm: `length`, `angle`, `a`,
     /// `d`, `alpha` (or `beta`), `theta`, `probe`, or a parameter name
     /// (`a1`, `theta5`, `Bz`).
-    pub fn parse(name: &str, n: usize) -> Option<Target> {
+    pub(crate) fn parse(name: &str, n: usize) -> Option<Target> {
         if let Some((_, k)) = KINDS.iter().find(|(k, _)| *k == name) {
             return Some(Target::Kind(*k));
         }
@@ -52,7 +52,7 @@ impl Target {
     }
 
     /// Whether the target is lengths (mm) rather than angles.
-    pub fn is_length(self) -> bool {
+    pub(crate) fn is_length(self) -> bool {
         match self {
             Target::Length => true,
             Target::Angle => false,
@@ -81,7 +81,7 @@ impl Target {
     }
 
     /// The name users write.
-    pub fn name(self) -> String {
+    pub(crate) fn name(self) -> String {
         match self {
             Target::Length => "length".into(),
             Target::Angle => "angle".into(),

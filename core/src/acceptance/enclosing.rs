@@ -11,7 +11,7 @@ use nalgebra::{Matrix3, Vector3};
 
 /// A ball: centre and radius, mm.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ball {
+pub(crate) struct Ball {
     /// Centre, mm.
     pub centre: [f64; 3],
     /// Radius, mm (negative for the empty ball).
@@ -25,7 +25,7 @@ impl Ball {
     };
 
     /// Whether `p` lies in the ball, to rounding (1e-12 relative).
-    pub fn contains(&self, p: &[f64; 3]) -> bool {
+    pub(crate) fn contains(&self, p: &[f64; 3]) -> bool {
         let d = crate::geometry::distance(&self.centre, p);
         self.radius >= 0.0 && d <= self.radius * (1.0 + 1e-12) + 1e-12
     }

@@ -23,7 +23,7 @@ use crate::residuals::spheres::algebraic_sphere;
 
 /// Why a sphere fit stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum FitStop {
+pub(crate) enum FitStop {
     /// The step fell below 1e-13 of the centre's size (plus 1 mm): the
     /// minimum, to the last bits.
     Converged,

@@ -81,7 +81,7 @@ pub(crate) const L_DIA: &str = "L_Dia.5x5::Art";
 /// See [`P_SIZE`].
 pub(crate) const E_UNI: &str = "E_Uni::Art";
 /// See `P_SIZE`.
-pub const SPAT: &str = "SPAT";
+pub(crate) const SPAT: &str = "SPAT";
 
 /// How each articulation's centre of an `L_Dia` placement is fitted.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -295,7 +295,7 @@ pub struct Acceptance {
 
 impl Acceptance {
     /// Whether any MPE was stated (else nothing is decided).
-    pub fn decided(&self) -> bool {
+    pub(crate) fn decided(&self) -> bool {
         !self.mpe.is_empty()
     }
 

@@ -51,7 +51,7 @@ impl Termination {
     }
 
     /// A sentence for summaries.
-    pub fn describe(self) -> &'static str {
+    pub(crate) fn describe(self) -> &'static str {
         match self {
             Termination::CostTolerance => "relative cost reduction below ftol",
             Termination::StepTolerance => "relative step below xtol",
@@ -130,13 +130,13 @@ impl LmOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LmIteration {
     /// 1-based.
-    pub iteration: usize,
+    pub(crate) iteration: usize,
     /// Cost `Σ r²` after the iteration.
-    pub cost: f64,
+    pub(crate) cost: f64,
     /// Damping used.
-    pub lambda: f64,
+    pub(crate) lambda: f64,
     /// Whether the step was taken.
-    pub accepted: bool,
+    pub(crate) accepted: bool,
 }
 
 /// What a Levenberg–Marquardt fit returns.

@@ -33,7 +33,7 @@ pub struct Phase {
 
 impl Phase {
     /// An empty phase.
-    pub fn new(name: &str) -> Phase {
+    pub(crate) fn new(name: &str) -> Phase {
         Phase {
             name: name.to_string(),
             cost_evaluations: 0,
@@ -225,7 +225,7 @@ pub struct Dof {
 impl Dof {
     /// The residual rows of the other term named `term` (`positions`,
     /// `orientations`, `spheres`, a caller's), 0 when there is none.
-    pub fn rows_of(&self, term: &str) -> usize {
+    pub(crate) fn rows_of(&self, term: &str) -> usize {
         (self.other_rows.iter())
             .filter(|r| r.term == term)
             .map(|r| r.rows)

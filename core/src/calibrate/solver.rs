@@ -73,7 +73,7 @@ impl<'a> Context<'a> {
     /// # Errors
     ///
     /// [`CalibrationError::Cancelled`].
-    pub fn check(&self) -> Result<(), CalibrationError> {
+    pub(crate) fn check(&self) -> Result<(), CalibrationError> {
         Cancel::check(self.cancel.as_ref())
     }
 
@@ -252,11 +252,11 @@ impl Stop {
 #[derive(Clone, Debug)]
 pub struct Outcome {
     /// The arm found (fixed parameters unchanged).
-    pub params: DhParams,
+    pub(crate) params: DhParams,
     /// Every column found (the geometry's, then the auxiliary blocks').
-    pub x: Vec<f64>,
+    pub(crate) x: Vec<f64>,
     /// Why it stopped.
-    pub stop: Stop,
+    pub(crate) stop: Stop,
     /// Iterations of the final LM (0 without one).
     pub(crate) iterations: usize,
     /// Cost per iteration of the final LM.
@@ -264,7 +264,7 @@ pub struct Outcome {
     /// Work per phase, in order.
     pub(crate) phases: Vec<Phase>,
     /// The annealing's account (`sa`, `hybrid`).
-    pub anneal: Option<AnnealTrace>,
+    pub(crate) anneal: Option<AnnealTrace>,
     /// The global search's account.
     pub(crate) global: Option<GlobalTrace>,
     /// The normal equations at `params` under the task's weights.

@@ -156,7 +156,7 @@ impl Effects {
     }
 
     /// Columns of the fitted corrections.
-    pub fn columns(&self) -> usize {
+    pub(crate) fn columns(&self) -> usize {
         self.kinds.len()
     }
 

@@ -162,7 +162,7 @@ pub(crate) struct Loads {
 
 impl Loads {
     /// The loads of `physics`' masses on the chain of `arm`.
-    pub fn new(arm: &DhParams, physics: &Physics) -> Loads {
+    pub(crate) fn new(arm: &DhParams, physics: &Physics) -> Loads {
         Loads {
             links: arm.joints.iter().map(Link::new).collect(),
             probe: arm.probe,

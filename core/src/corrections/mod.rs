@@ -262,7 +262,7 @@ pub struct Beyond {
 /// One column of the models a fit switches on: what the block's names,
 /// start, fitted values and Jacobian all follow ([`Beyond::columns`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Column {
+pub(crate) enum Column {
     /// Joint `j`'s compliance (µrad/(N·m)).
     Compliance(usize),
     /// The sine amplitude of joint `j`'s harmonic of order `k` (rad).
@@ -293,7 +293,7 @@ impl Beyond {
 
     /// The block's columns, in order: the compliances, each harmonic's sine
     /// and cosine, the backlashes, the expansion, the drift's three axes.
-    pub fn columns(&self) -> Vec<Column> {
+    pub(crate) fn columns(&self) -> Vec<Column> {
         let mut out: Vec<Column> = self
             .compliance
             .iter()
@@ -403,7 +403,7 @@ impl Beyond {
     /// # Errors
     ///
     /// The first refused setting, by its field.
-    pub fn check(&self, joints: usize) -> Result<(), OptionError> {
+    pub(crate) fn check(&self, joints: usize) -> Result<(), OptionError> {
         let last = self
             .compliance
             .iter()

@@ -107,17 +107,17 @@ impl JointColumns {
     }
 
     /// The prismatic joints, bit `j` for joint `j`.
-    pub fn prismatic_mask(&self) -> u16 {
+    pub(crate) fn prismatic_mask(&self) -> u16 {
         self.prismatic
     }
 
     /// The tools a `tool` cell may name (the arm's), when known.
-    pub fn tools(&self) -> Option<&super::ToolNames> {
+    pub(crate) fn tools(&self) -> Option<&super::ToolNames> {
         self.tools.as_ref()
     }
 
     /// Whether joint `j` (0-based) is prismatic: its column is mm.
-    pub fn is_prismatic(&self, j: usize) -> bool {
+    pub(crate) fn is_prismatic(&self, j: usize) -> bool {
         j < 16 && self.prismatic & (1 << j) != 0
     }
 

@@ -42,7 +42,7 @@ pub mod columns;
 pub mod frames;
 mod labels;
 pub mod lengths;
-pub mod limits;
+pub(crate) mod limits;
 pub mod points;
 pub mod poses;
 pub mod positions;

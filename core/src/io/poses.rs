@@ -131,7 +131,7 @@ impl Poses {
     }
 
     /// Per row, the time (s), when recorded.
-    pub fn times(&self) -> Option<&[f64]> {
+    pub(crate) fn times(&self) -> Option<&[f64]> {
         self.time.as_deref()
     }
 
@@ -345,7 +345,7 @@ impl Poses {
     }
 
     /// The prismatic joints, bit `j` for joint `j` (none unless read for
-    /// such an arm or set by [`Poses::with_shape`]): their readings are mm.
+    /// such an arm or set by `Poses::with_shape`): their readings are mm.
     pub fn prismatic_mask(&self) -> u16 {
         self.prismatic
     }
@@ -357,7 +357,7 @@ impl Poses {
     /// # Errors
     ///
     /// When the rows' memory cannot be had.
-    pub fn from_positions(p: &super::Positions) -> Result<Poses, OutOfMemory> {
+    pub(crate) fn from_positions(p: &super::Positions) -> Result<Poses, OutOfMemory> {
         let mut out = Poses {
             prismatic: p.prismatic_mask(),
             ..Poses::try_with_capacity(p.joints(), p.len())?
@@ -402,7 +402,7 @@ impl Poses {
     ///
     /// # Panics
     /// If `shape` has another joint count than the poses.
-    pub fn with_shape(mut self, shape: crate::params::ChainShape) -> Poses {
+    pub(crate) fn with_shape(mut self, shape: crate::params::ChainShape) -> Poses {
         assert_eq!(shape.joints(), self.joints, "joints of the shape");
         self.prismatic = shape.prismatic_mask();
         self

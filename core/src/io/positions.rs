@@ -61,7 +61,7 @@ const ORIENTATION: [&str; 4] = ["qw", "qx", "qy", "qz"];
 pub(crate) const MIN_TOOL_ROWS: usize = 2;
 
 /// The fewest positions a frame's registration (six unknowns) can rest on.
-pub const MIN_FRAME_POSITIONS: usize = 3;
+pub(crate) const MIN_FRAME_POSITIONS: usize = 3;
 
 /// The rows of a reference-position file, in file order.
 #[derive(Clone, Debug, PartialEq)]
@@ -196,7 +196,7 @@ impl Positions {
     }
 
     /// Per row, the time (s), when recorded.
-    pub fn times(&self) -> Option<&[f64]> {
+    pub(crate) fn times(&self) -> Option<&[f64]> {
         self.time.as_deref()
     }
 
@@ -301,7 +301,7 @@ impl Positions {
 
     /// The prismatic joints, bit `j` for joint `j` (none unless read for
     /// such an arm or set by [`Positions::with_shape`]): readings in mm.
-    pub fn prismatic_mask(&self) -> u16 {
+    pub(crate) fn prismatic_mask(&self) -> u16 {
         self.prismatic
     }
 
@@ -310,7 +310,7 @@ impl Positions {
     ///
     /// # Panics
     /// If `shape` has another joint count than the rows.
-    pub fn with_shape(mut self, shape: crate::params::ChainShape) -> Positions {
+    pub(crate) fn with_shape(mut self, shape: crate::params::ChainShape) -> Positions {
         assert_eq!(shape.joints(), self.joints, "joints of the shape");
         self.prismatic = shape.prismatic_mask();
         self
@@ -480,7 +480,7 @@ impl Positions {
     }
 
     /// Row `i`'s line.
-    pub fn line(&self, i: usize) -> usize {
+    pub(crate) fn line(&self, i: usize) -> usize {
         self.lines[i]
     }
 
@@ -932,7 +932,7 @@ fn check_frames(p: &Positions, file: &str) -> Result<(), InputError> {
 
 impl Positions {
     /// The first frame whose rows cannot determine its registration (six
-    /// unknowns) — fewer than [`MIN_FRAME_POSITIONS`] distinct positions
+    /// unknowns) — fewer than `MIN_FRAME_POSITIONS` distinct positions
     /// (a sphere touched in several poses counts once), or all on one line
     /// — with its first row and why; `None` when every frame can be
     /// registered. Linear in the rows.

@@ -216,7 +216,7 @@ impl<const N: usize> Consts<f64, N> {
     }
 
     /// The prismatic joints: bit `i` for joint `i`.
-    pub fn prismatic_mask(&self) -> u16 {
+    pub(crate) fn prismatic_mask(&self) -> u16 {
         (self.prismatic.iter().enumerate())
             .filter(|(_, p)| **p)
             .fold(0, |m, (i, _)| m | (1 << i))

@@ -47,7 +47,7 @@ pub(crate) struct Post {
 impl Post {
     /// Pose `i`'s position `p` of the chain as seen: `scale_i·p + offset_i`.
     #[inline]
-    pub fn at(&self, i: usize, p: &[f64; 3]) -> [f64; 3] {
+    pub(crate) fn at(&self, i: usize, p: &[f64; 3]) -> [f64; 3] {
         let (s, off) = (self.scale[i], self.offset[i]);
         std::array::from_fn(|r| s * p[r] + off[r])
     }
@@ -214,7 +214,7 @@ impl PreparedPoses {
     }
 
     /// The prismatic joints: bit `j` for joint `j` (0 for revolute data).
-    pub fn prismatic_mask(&self) -> u16 {
+    pub(crate) fn prismatic_mask(&self) -> u16 {
         self.prismatic
     }
 

@@ -20,8 +20,8 @@ pub use check::{CheckOptions, GradientCheck, check_gradients};
 use crate::dataset::DataSet;
 use crate::kernel::ArmKernel;
 use crate::residuals::{
-    At, Layout, LengthTerm, Noise, Normal, OrientationTerm, Origin, PositionTerm, PriorTerm, Role,
-    Sees, Shared, Term, TermError, TouchTerm,
+    At, Layout, LengthTerm, Noise, Normal, OrientationTerm, Origin, PositionTerm, PriorTerm, Sees,
+    Shared, Term, TermError, TouchTerm,
 };
 use crate::tolerances::Tolerances;
 
@@ -31,11 +31,11 @@ use crate::tolerances::Tolerances;
 /// on its `k`-dimensional norm and the outlier test holds it against the
 /// `χ²_k` quantile.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Observed {
+pub(crate) struct Observed {
     /// Per observation, `rᵀ A r / (1 − h)`.
-    pub values: Vec<f64>,
+    pub(crate) values: Vec<f64>,
     /// Per observation, its rows `k`.
-    pub rows: Vec<usize>,
+    pub(crate) rows: Vec<usize>,
 }
 
 impl Observed {
@@ -76,7 +76,7 @@ pub struct Objective<'a> {
 impl<'a> Objective<'a> {
     /// `terms` on the columns of `layout`, their sums on up to `threads`
     /// threads (results do not depend on it). The terms are not weighed
-    /// yet: see [`Objective::weigh`].
+    /// yet: see `Objective::weigh`.
     pub fn new(layout: Layout, terms: Vec<Box<dyn Term + 'a>>, threads: usize) -> Objective<'a> {
         Objective {
             layout,
@@ -132,23 +132,13 @@ impl<'a> Objective<'a> {
     }
 
     /// The columns.
-    pub fn layout(&self) -> &Layout {
+    pub(crate) fn layout(&self) -> &Layout {
         &self.layout
     }
 
     /// The terms, in the order they are evaluated.
-    pub fn terms(&self) -> impl Iterator<Item = &(dyn Term + 'a)> {
+    pub(crate) fn terms(&self) -> impl Iterator<Item = &(dyn Term + 'a)> {
         self.terms.iter().map(|t| &**t)
-    }
-
-    /// The worker threads.
-    pub fn threads(&self) -> usize {
-        self.threads
-    }
-
-    /// The index of the first term of role `role`.
-    pub fn position(&self, role: Role) -> Option<usize> {
-        self.terms.iter().position(|t| t.role() == role)
     }
 
     /// Whether stated tolerances (or an auxiliary block's) apply: a prior
@@ -180,7 +170,7 @@ impl<'a> Objective<'a> {
     }
 
     /// Every column's start value.
-    pub fn start(&self) -> Vec<f64> {
+    pub(crate) fn start(&self) -> Vec<f64> {
         self.layout.start()
     }
 
@@ -208,18 +198,13 @@ impl<'a> Objective<'a> {
     /// Whether every term with data states its noise (none is weighed by a
     /// σ the fit estimates): the χ² test applies, and the covariance is not
     /// rescaled by σ̂.
-    pub fn stated(&self) -> bool {
+    pub(crate) fn stated(&self) -> bool {
         let data: Vec<_> = self
             .terms
             .iter()
             .filter(|t| !t.is_prior() && t.rows(&[]) > 0)
             .collect();
         !data.is_empty() && data.iter().all(|t| !t.unit_weighted())
-    }
-
-    /// Residual rows of every term over `free`.
-    pub fn rows(&self, free: &[usize]) -> usize {
-        self.terms.iter().map(|t| t.rows(free)).sum()
     }
 
     /// Evaluates `f` with the point `x` prepared: its arm and kernel.
@@ -250,7 +235,7 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's, and weights that are not finite numbers.
-    pub fn weigh(&mut self, x: &[f64], unit_sigma: f64) -> Result<(), TermError> {
+    pub(crate) fn weigh(&mut self, x: &[f64], unit_sigma: f64) -> Result<(), TermError> {
         let layout = &self.layout;
         let threads = self.threads;
         let arm = layout.arm(x).ok_or_else(|| {
@@ -276,7 +261,7 @@ impl<'a> Objective<'a> {
 
     /// Observations a robust loss may downweight, over every term that has
     /// them (in term order).
-    pub fn observations(&self) -> usize {
+    pub(crate) fn observations(&self) -> usize {
         self.terms.iter().map(|t| t.observations()).sum()
     }
 
@@ -306,7 +291,7 @@ impl<'a> Objective<'a> {
     ///
     /// The kernel's, and a term whose standardised residuals do not match
     /// its observations (their count, or no row).
-    pub fn standardised(
+    pub(crate) fn standardised(
         &self,
         x: &[f64],
         leverage: Option<&crate::residuals::ParameterLeverage>,
@@ -340,7 +325,7 @@ impl<'a> Objective<'a> {
     }
 
     /// Where observation `i` came from.
-    pub fn origin(&self, i: usize) -> Origin {
+    pub(crate) fn origin(&self, i: usize) -> Origin {
         self.observing()
             .take_while(|(first, _)| *first <= i)
             .last()
@@ -650,8 +635,8 @@ mod tests {
         objective.set_prior(wider);
         assert_eq!(rows_of(&objective, Role::Prior), wider_rows);
         assert_eq!(rows_of(&objective, Role::Other), 1);
-        let other = objective.position(Role::Other).unwrap();
-        assert_eq!(objective.terms().nth(other).unwrap().name(), "prior");
+        let other = objective.terms().find(|t| t.role() == Role::Other).unwrap();
+        assert_eq!(other.name(), "prior");
         assert_eq!(objective.terms().filter(|t| t.name() == "prior").count(), 2);
     }
 }

@@ -39,7 +39,7 @@ pub mod map;
 pub(crate) mod pool;
 mod rows;
 mod strata;
-pub mod summary;
+pub(crate) mod summary;
 
 use nalgebra::DMatrix;
 use rand::seq::SliceRandom;
@@ -161,7 +161,7 @@ impl PlanSettings {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Given {
     /// Its free geometry columns.
-    pub free: Vec<usize>,
+    pub(crate) free: Vec<usize>,
     /// Their covariance, mm and rad.
     pub(crate) cov: DMatrix<f64>,
     /// σ of one new row per coordinate (its own estimate), mm.
@@ -218,11 +218,11 @@ impl Spread {
 
 /// One chosen row, in the order chosen.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Step {
+pub(crate) struct Step {
     /// Row of the pool (0-based).
-    pub row: usize,
+    pub(crate) row: usize,
     /// Its label.
-    pub label: String,
+    pub(crate) label: String,
     /// The mean predicted variance over the workspace with the rows up to
     /// this one (plain, without the hedge), as the 95 % radius of an
     /// isotropic error of that variance, mm; `None` while the rows do not
@@ -242,9 +242,9 @@ pub(crate) struct CurvePoint {
 
 /// How far a joint turns over the chosen rows against the pool.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct JointSpan {
+pub(crate) struct JointSpan {
     /// Joint, from 1.
-    pub joint: usize,
+    pub(crate) joint: usize,
     /// Range of the chosen readings, degrees (mm for a prismatic joint).
     pub(crate) chosen_deg: f64,
     /// Range of the pool's, degrees (mm for a prismatic joint).
@@ -274,10 +274,10 @@ pub struct Plan {
     pub(crate) criterion: Criterion,
     /// Candidates in the pool.
     pub(crate) candidates: usize,
-    /// Rows chosen (the first `count` of [`Plan::steps`]).
+    /// Rows chosen (the first `count` of `Plan::steps`).
     pub count: usize,
     /// The rows chosen, then those the curve continued with.
-    pub steps: Vec<Step>,
+    pub(crate) steps: Vec<Step>,
     /// The parameters the design is for (free geometry, then the frame's).
     pub parameters: Vec<String>,
     /// Noise of a row per coordinate, mm.
@@ -301,11 +301,11 @@ pub struct Plan {
     /// The predicted uncertainty with the chosen rows.
     pub planned: Option<Spread>,
     /// With every candidate.
-    pub all: Option<Spread>,
+    pub(crate) all: Option<Spread>,
     /// With the given calibration alone, before any new row (`None`
     /// without one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub start: Option<Spread>,
+    pub(crate) start: Option<Spread>,
     /// With random subsets of the same size.
     pub(crate) random: RandomBaseline,
     /// The predicted uncertainty as rows are added.
@@ -313,7 +313,7 @@ pub struct Plan {
     /// Rows chosen per socket or sphere (touches and sphere points only).
     pub sockets: Vec<(String, usize)>,
     /// How far each joint turns over the chosen rows.
-    pub joints: Vec<JointSpan>,
+    pub(crate) joints: Vec<JointSpan>,
     /// What the user should know.
     pub warnings: Vec<String>,
 }

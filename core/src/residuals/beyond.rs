@@ -13,7 +13,7 @@ pub struct CorrectionBlock {
     /// The arm's physics: masses, and the stated values of what is not.
     pub(crate) physics: Physics,
     /// Joints of the arm.
-    pub joints: usize,
+    pub(crate) joints: usize,
     /// Its prismatic joints (bit `j`: joint `j` slides): their backlash is
     /// a length.
     pub(crate) prismatic: u16,

@@ -28,7 +28,7 @@ pub enum Unit {
 
 impl Unit {
     /// The unit users see: `mm`, `deg`, or the other unit's name.
-    pub fn name(&self) -> &str {
+    pub(crate) fn name(&self) -> &str {
         match self {
             Unit::Length => "mm",
             Unit::Angle => "deg",
@@ -61,9 +61,9 @@ impl Unit {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Parameter {
     /// Its name in reports (`frame.tracker.tx`).
-    pub name: String,
+    pub(crate) name: String,
     /// Its unit.
-    pub unit: Unit,
+    pub(crate) unit: Unit,
 }
 
 /// An auxiliary block of unknowns.
@@ -121,7 +121,7 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Column `i`'s bounds `(low, high)`, if it has any (mm, rad, or its
     /// unit): a value no real instrument can take (a negative mass, a
     /// compliance below zero). After every step the layout **clamps** a
-    /// value beyond a bound onto it ([`Layout::plus`]), rather than
+    /// value beyond a bound onto it (`Layout::plus`), rather than
     /// refusing the step: a solver's trial step that overshoots is then
     /// still a point it can evaluate, and the fit ends on the bound if the
     /// data pull it there — [`Layout::on_bounds`] names such columns, so
@@ -322,7 +322,7 @@ impl Layout {
     }
 
     /// The start arm: the geometry's models and start values.
-    pub fn geometry(&self) -> &DhParams {
+    pub(crate) fn geometry(&self) -> &DhParams {
         &self.geometry
     }
 
@@ -357,7 +357,7 @@ impl Layout {
     }
 
     /// The auxiliary blocks, in order.
-    pub fn blocks(&self) -> impl Iterator<Item = &dyn Block> {
+    pub(crate) fn blocks(&self) -> impl Iterator<Item = &dyn Block> {
         self.blocks.iter().map(|b| &**b)
     }
 
@@ -392,12 +392,12 @@ impl Layout {
     }
 
     /// The arm of `x`'s geometry columns.
-    pub fn arm(&self, x: &[f64]) -> Option<DhParams> {
+    pub(crate) fn arm(&self, x: &[f64]) -> Option<DhParams> {
         self.geometry.with_values(x.get(..self.geometry_columns())?)
     }
 
     /// Column `c`'s name and unit.
-    pub fn parameter(&self, c: usize) -> Option<Parameter> {
+    pub(crate) fn parameter(&self, c: usize) -> Option<Parameter> {
         if c < self.geometry_columns() {
             let id = self.geometry.param_id(c)?;
             let unit = if id.kind.is_length() {
@@ -428,7 +428,7 @@ impl Layout {
     /// `free[k]`): the geometry's columns add, each auxiliary block takes
     /// its own local update (its fixed columns a zero step), and a value
     /// beyond its column's bounds is clamped onto them ([`Block::bounds`]).
-    pub fn plus(&self, x: &[f64], free: &[usize], delta: &[f64]) -> Vec<f64> {
+    pub(crate) fn plus(&self, x: &[f64], free: &[usize], delta: &[f64]) -> Vec<f64> {
         let mut out = x.to_vec();
         let geometry = self.geometry_columns();
         let mut aux = false;
@@ -599,14 +599,14 @@ impl Block for Vector {
 /// frame, an artefact's placement): values `[rx, ry, rz, tx, ty, tz]`, the
 /// rotation vector (rad) of `R` and the translation (mm). A step `δ` turns
 /// the frame by `exp(δω)` on the left and moves it by `δt`, so the
-/// Jacobian of [`Frame::jacobian`] is with respect to that local step and
+/// Jacobian of `Frame::jacobian` is with respect to that local step and
 /// no angle of the chart ever wraps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// The frame's name (`tracker`, `placement 2`).
-    pub name: String,
+    pub(crate) name: String,
     /// Start values `[rx, ry, rz, tx, ty, tz]` (rad, mm).
-    pub start: [f64; 6],
+    pub(crate) start: [f64; 6],
 }
 
 /// `R = exp([ω]×)` (Rodrigues).
@@ -734,7 +734,7 @@ impl Frame {
 
     /// `∂(R p + t)/∂δ` for the local step `δ = [δω, δt]` at `x`: row `i` is
     /// the derivative of coordinate `i`, `[−[Rp]× | I]`.
-    pub fn jacobian(x: &[f64], p: [f64; 3]) -> [[f64; 6]; 3] {
+    pub(crate) fn jacobian(x: &[f64], p: [f64; 3]) -> [[f64; 6]; 3] {
         let q = Frame::rotation(x) * Vector3::from(p);
         // δω × q = −[q]× δω.
         [

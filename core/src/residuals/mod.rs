@@ -272,15 +272,15 @@ impl TermError {
 /// from it once (the arm of the geometry columns and its kernel).
 pub struct At<'a> {
     /// Every column, the geometry's first (mm, rad; the layout's order).
-    pub x: &'a [f64],
+    pub(crate) x: &'a [f64],
     /// The arm of the geometry columns.
-    pub arm: &'a DhParams,
+    pub(crate) arm: &'a DhParams,
     /// Its kernel.
     pub kernel: &'a ArmKernel,
     /// Where each block's columns are.
     pub layout: &'a Layout,
     /// Worker threads a term may use (results never depend on them).
-    pub threads: usize,
+    pub(crate) threads: usize,
 }
 
 impl At<'_> {
@@ -460,12 +460,12 @@ impl At<'_> {
 /// eliminates, which later terms measure between (a reference length, an
 /// artefact's certified distance).
 #[derive(Clone, Debug, Default)]
-pub struct Centres {
+pub(crate) struct Centres {
     /// Per point (data-set order), its weighted centroid, mm.
-    pub points: Vec<[f64; 3]>,
+    pub(crate) points: Vec<[f64; 3]>,
     /// Per point, `∂c/∂x` over the free columns (`J̄ = S⁻¹G`), when a later
     /// term asked for it ([`Term::needs_centre_jacobians`]).
-    pub jacobians: Vec<Vec<[f64; 3]>>,
+    pub(crate) jacobians: Vec<Vec<[f64; 3]>>,
 }
 
 /// What a term evaluated earlier leaves for the terms after it, in the
@@ -473,7 +473,7 @@ pub struct Centres {
 #[derive(Clone, Debug, Default)]
 pub struct Shared {
     /// The point centres, once the touch term has run.
-    pub centres: Option<Centres>,
+    pub(crate) centres: Option<Centres>,
     /// Per point, the covariance `(Σ A_i)⁻¹` of its centre under the touch
     /// weights, once the touch term has been weighed.
     pub(crate) centre_covariances: Option<Vec<Sym3>>,
@@ -580,7 +580,7 @@ impl Normal {
 
     /// The whole cost `Σ r²` (a χ² when the weights are right): the terms'
     /// costs added in order.
-    pub fn cost(&self) -> f64 {
+    pub(crate) fn cost(&self) -> f64 {
         self.costs.iter().sum()
     }
 
@@ -625,7 +625,7 @@ impl ParameterLeverage {
     /// equations were rescaled by without the weights: 1 when they agree);
     /// `None` when it is not positive definite (then only the eliminated
     /// unknowns' leverage is corrected).
-    pub fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
+    pub(crate) fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
         let p = normal.free.len();
         let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj) / scale;
         let inv = n.cholesky()?.inverse();
@@ -720,7 +720,7 @@ impl Role {
 /// depend on the arm, that fix scale and base motion as
 /// [`Term::sees`] says, and that a robust loss leaves alone. A term is
 /// evaluated in the objective's order: one that needs the point centres
-/// (its [`Shared::centres`]) comes after the touches.
+/// (its `Shared::centres`) comes after the touches.
 pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Short name, for reports: `touches`, `lengths`, `prior`, `plane`.
     /// Only words: what the pipeline does with a term follows its
@@ -757,7 +757,7 @@ pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     }
 
     /// Whether the term needs `∂c/∂x` of the point centres
-    /// ([`Centres::jacobians`]) when accumulating.
+    /// (`Centres::jacobians`) when accumulating.
     fn needs_centre_jacobians(&self) -> bool {
         false
     }

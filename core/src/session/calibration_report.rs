@@ -25,7 +25,7 @@ pub struct Units {
 #[non_exhaustive]
 pub struct HeldOut {
     /// Its poses file.
-    pub data_file: String,
+    pub(crate) data_file: String,
     /// Its lengths file.
     pub(crate) lengths_file: Option<String>,
     /// Before and after there.
@@ -44,7 +44,7 @@ pub struct CrossValidation {
     /// One entry per fold.
     pub folds: Vec<Fold>,
     /// Seed of the fold assignment.
-    pub seed: u64,
+    pub(crate) seed: u64,
 }
 
 /// The figures of the start and calibrated arms on the data.
@@ -69,33 +69,33 @@ pub struct Validation {
 #[non_exhaustive]
 pub struct CalibrationReport {
     /// The start arm's name.
-    pub arm: String,
+    pub(crate) arm: String,
     /// Its file.
-    pub arm_file: String,
+    pub(crate) arm_file: String,
     /// The poses file.
-    pub data_file: String,
+    pub(crate) data_file: String,
     /// The lengths file.
     pub(crate) lengths_file: Option<String>,
     /// The fixed set: `auto` or the names fixed.
-    pub fix: String,
+    pub(crate) fix: String,
     /// The noise (internal units: rad, mm).
     pub noise: Noise,
     /// Seed of every random draw.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Units of the parameter tables.
     pub(crate) units: Units,
     /// Touches fitted.
-    pub touches: usize,
+    pub(crate) touches: usize,
     /// Points fitted.
-    pub points: usize,
+    pub(crate) points: usize,
     /// Reference lengths fitted.
-    pub reference_lengths: usize,
+    pub(crate) reference_lengths: usize,
     /// The reference-positions file, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) positions_file: Option<String>,
     /// Reference positions fitted.
     #[serde(default, skip_serializing_if = "is_zero")]
-    pub positions: usize,
+    pub(crate) positions: usize,
     /// The calibration.
     pub calibration: Calibration,
     /// Before and after.

@@ -25,24 +25,24 @@ use crate::tolerances::Tolerances;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IdentifyReport {
     /// The arm's name.
-    pub arm: String,
+    pub(crate) arm: String,
     /// Its file.
-    pub arm_file: String,
+    pub(crate) arm_file: String,
     /// The poses file.
-    pub data_file: String,
+    pub(crate) data_file: String,
     /// The lengths file, if any.
     pub(crate) lengths_file: Option<String>,
     /// Touches.
-    pub touches: usize,
+    pub(crate) touches: usize,
     /// Points.
-    pub points: usize,
+    pub(crate) points: usize,
     /// Reference lengths.
-    pub reference_lengths: usize,
+    pub(crate) reference_lengths: usize,
     /// Reference positions (their frames fitted and eliminated).
     #[serde(default, skip_serializing_if = "is_zero")]
-    pub positions: usize,
+    pub(crate) positions: usize,
     /// The noise the touches are weighed with, in words (degrees and mm).
-    pub noise: String,
+    pub(crate) noise: String,
     /// The analysis.
     pub(crate) identification: Identification,
     /// The rank and conditioning with the arm's tolerances, when it has
@@ -57,12 +57,12 @@ pub struct IdentifyReport {
     /// centres, and sizes unless stated, fitted and eliminated); absent
     /// without them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub spheres: Option<SphereCount>,
+    pub(crate) spheres: Option<SphereCount>,
 }
 
 /// The points on spheres an analysis saw.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SphereCount {
+pub(crate) struct SphereCount {
     /// Their file.
     pub file: String,
     /// Points.
@@ -104,7 +104,7 @@ impl IdentifyReport {
     /// [`CalibrationError::Joints`] when the data have another joint count;
     /// the kernel's refusal of the arm or of weights that are not finite.
     #[allow(clippy::too_many_arguments)] // the inputs of `aacmm identify`, each named
-    pub fn new(
+    pub(crate) fn new(
         arm: &Arm,
         evidence: Evidence<'_>,
         noise: &Noise,
@@ -174,7 +174,7 @@ impl IdentifyReport {
 
     /// Says which points on spheres the analysis saw (the evidence's added
     /// term): the summary's first line and the JSON name them.
-    pub fn with_spheres(mut self, spheres: SphereCount) -> IdentifyReport {
+    pub(crate) fn with_spheres(mut self, spheres: SphereCount) -> IdentifyReport {
         self.spheres = Some(spheres);
         self
     }

@@ -65,9 +65,9 @@ pub struct ProbeSettings {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProbeQualification {
     /// The probe qualified.
-    pub tool: String,
+    pub(crate) tool: String,
     /// The points' file.
-    pub file: String,
+    pub(crate) file: String,
     /// The sphere placement used.
     pub sphere: String,
     /// Points fitted.

@@ -273,11 +273,6 @@ impl Problem {
         Ok(self)
     }
 
-    /// The sphere term, if any.
-    pub fn spheres(&self) -> Option<&SphereTerm> {
-        self.spheres.as_ref()
-    }
-
     /// Names the inputs in the report.
     pub fn with_sources(mut self, sources: Sources) -> Problem {
         self.sources = sources;
@@ -292,7 +287,7 @@ impl Problem {
     }
 
     /// The true arm, if known.
-    pub fn truth(&self) -> Option<&DhParams> {
+    pub(crate) fn truth(&self) -> Option<&DhParams> {
         self.truth.as_ref()
     }
 
@@ -302,7 +297,7 @@ impl Problem {
     }
 
     /// The data fitted.
-    pub fn data(&self) -> &DataSet {
+    pub(crate) fn data(&self) -> &DataSet {
         &self.data
     }
 
@@ -312,7 +307,7 @@ impl Problem {
     }
 
     /// The held-out data, if any.
-    pub fn held_out(&self) -> Option<&HeldOutData> {
+    pub(crate) fn held_out(&self) -> Option<&HeldOutData> {
         self.held_out.as_ref()
     }
 

@@ -588,11 +588,6 @@ impl Request {
         &self.arm
     }
 
-    /// The data to fit.
-    pub fn data(&self) -> &DataSet {
-        &self.data
-    }
-
     /// The arm file's name as the report gives it (empty when not named).
     pub fn arm_file(&self) -> &str {
         &self.sources.arm_file
@@ -809,7 +804,7 @@ impl Request {
     ///
     /// An [`OptionError`] on `prior`, `noise.…` or `threads`; reference
     /// lengths in another unit than the arm ([`super::check_units`]); as
-    /// [`IdentifyReport::new`].
+    /// `IdentifyReport::new`.
     pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
         super::check_units(&self.arm.params, &self.data, &self.sources.arm_file)?;

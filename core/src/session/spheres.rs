@@ -60,7 +60,7 @@ pub struct SphereResult {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SphereReport {
     /// The sphere-surface file.
-    pub file: String,
+    pub(crate) file: String,
     /// The spheres' stated diameter, mm (none: fitted per sphere).
     pub stated_diameter: Option<f64>,
     /// The probe ball's diameter, mm.
@@ -179,7 +179,7 @@ fn probes_of(term: &SphereTerm, calibration: &Calibration) -> Vec<ProbeResult> {
 impl SphereReport {
     /// The summary's lines: the spheres, their centres and diameters, and
     /// the radial residuals before and after.
-    pub fn summary(&self) -> String {
+    pub(crate) fn summary(&self) -> String {
         let mut t = format!(
             "\nSpheres ({}): diameter {}; probe ball {} mm\n",
             self.file,
@@ -329,7 +329,7 @@ pub(crate) fn held_out_spheres(
 impl HeldOutSpheres {
     /// The summary's lines: per sphere its refitted diameter and radial
     /// residuals before and after, and every point's.
-    pub fn summary(&self) -> String {
+    pub(crate) fn summary(&self) -> String {
         let mut t = format!(
             "\nHeld-out points on spheres ({}): each sphere's centre{} refitted on its own points \
              with the arm held fixed\n",
@@ -382,7 +382,7 @@ impl HeldOutSpheres {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SphereEvaluation {
     /// The sphere-surface file.
-    pub file: String,
+    pub(crate) file: String,
     /// The stated diameter, mm; none: fitted per sphere.
     pub(crate) stated_diameter: Option<f64>,
     /// Per sphere: its label, points, diameter (fitted or stated) and

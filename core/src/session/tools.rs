@@ -37,7 +37,7 @@ pub struct ToolResult {
 /// What a tool report's rows are.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum ToolRows {
+pub(crate) enum ToolRows {
     /// Reference positions: the RMS is of their 3-D errors `|R p + t − y|`.
     #[default]
     Positions,
@@ -61,7 +61,7 @@ pub struct ToolReport {
     /// What its rows are (absent in JSON for positions, as before touches
     /// could name tools).
     #[serde(default, skip_serializing_if = "ToolRows::is_positions")]
-    pub of: ToolRows,
+    pub(crate) of: ToolRows,
     /// Per tool with rows, the default tool first, then in order of first
     /// appearance.
     pub tools: Vec<ToolResult>,
@@ -200,7 +200,7 @@ impl ToolReport {
     /// The summary's lines: per tool its offset ± σ and its rows' error
     /// RMS before and after (3-D errors of positions; of touches, their
     /// distances from their points' centres).
-    pub fn summary(&self) -> String {
+    pub(crate) fn summary(&self) -> String {
         let mut t = format!(
             "\nTool points ({}): offsets in the last joint's frame (mm), sigma k = 1{}\n",
             self.file,

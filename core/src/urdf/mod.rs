@@ -132,7 +132,7 @@ pub struct UrdfJoint {
     /// when its `<limit>` states them and `lower < upper`.
     pub limits: Option<[f64; 2]>,
     /// 1-based line of the `<joint>` element.
-    pub line: usize,
+    pub(crate) line: usize,
 }
 
 /// A link's `<inertial>`: its mass and where its centre is.
@@ -159,7 +159,7 @@ pub(crate) struct UrdfLink {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Urdf {
     /// The file name used in messages.
-    pub file: String,
+    pub(crate) file: String,
     /// The robot's `name` attribute.
     pub name: String,
     /// Every joint.

@@ -136,7 +136,7 @@ pub struct PositionErrors {
 
 impl PositionErrors {
     /// The figures of the distances `d` (mm); all 0 for none.
-    pub fn of(d: &[f64]) -> PositionErrors {
+    pub(crate) fn of(d: &[f64]) -> PositionErrors {
         let n = d.len().max(1) as f64;
         PositionErrors {
             count: d.len(),
@@ -164,7 +164,7 @@ pub(crate) fn percentile_95(d: &[f64]) -> f64 {
 impl Figures {
     /// The figures of data without touches: the touch figures 0 (and
     /// left out of the JSON when there are `positions`).
-    pub fn without_touches(positions: Option<PositionErrors>) -> Figures {
+    pub(crate) fn without_touches(positions: Option<PositionErrors>) -> Figures {
         Figures {
             points: 0,
             e_mean: 0.0,
