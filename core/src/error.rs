@@ -242,8 +242,7 @@ impl OptionError {
     }
 
     /// The setting's path in its settings struct (`noise.probe_mm`,
-    /// `cross_validate`): how the library's own text names it
-    /// (`Setting::path`).
+    /// `cross_validate`): how the library's own text names it.
     pub fn field(&self) -> &'static str {
         self.setting.path()
     }

@@ -11,7 +11,7 @@
 //!
 //! This module converts a D-H joint to a Hayati one exactly where that is
 //! exact ([`DhParams::with_hayati`], parallel axes), and says which joints a
-//! user should switch ([`candidates`], `recommendations`), which
+//! user should switch ([`candidates`], and the recommendations made of them), which
 //! [`identify`](crate::identify) and the calibration report print.
 
 use thiserror::Error;

@@ -213,8 +213,7 @@ pub struct Identification {
     /// Free-parameter pairs with `|ρ| > 0.9`.
     pub(crate) correlations: Vec<Correlation>,
     /// Model changes to consider: the D-H joints with nearly parallel axes
-    /// that the Hayati parameterisation suits
-    /// (`hayati::recommendations`).
+    /// that the Hayati parameterisation suits ([`crate::hayati`]).
     /// Absent from JSON when empty.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub recommendations: Vec<String>,

@@ -1,10 +1,10 @@
 //! What the front ends write, above both the session (its results) and
-//! the report (its page): a calibration's files (`CalibrationReport::files`,
+//! the report (its page): a calibration's files ([`CalibrationReport::files`],
 //! [`CalibrationReport::write`]), an evaluation's page, and the one rule
 //! of every command that writes: an output is never
 //! overwritten silently. An output file that exists, or an output
 //! directory that holds results of any aacmm command (a calibration's, a
-//! campaign's, a report's — `result_files`), is refused unless the user
+//! campaign's, a report's — [`result_files`]), is refused unless the user
 //! says to overwrite (`--force` on the command line, `force=True` in
 //! Python); overwriting replaces the command's own files and deletes
 //! nothing. A directory that holds other files only is written into.
@@ -20,7 +20,7 @@ use crate::simulate::{
 /// calibration's (`calibrate --out`, Python's `Calibration.write`), a
 /// campaign's (`simulate --out`, `Campaign.write`) and a report's
 /// (`evaluate --report`, and the calibration's own).
-pub(crate) fn result_files() -> Vec<&'static str> {
+pub fn result_files() -> Vec<&'static str> {
     let mut files = vec![
         CALIBRATED_FILE,
         REPORT_FILE,
@@ -48,7 +48,7 @@ pub(crate) fn result_files() -> Vec<&'static str> {
 }
 
 /// The results of an earlier run of any aacmm command that `dir` holds
-/// (the names of `result_files` present there), in that order; empty for
+/// (the names of [`result_files`] present there), in that order; empty for
 /// a directory that holds none, or does not exist.
 ///
 /// ```
@@ -76,7 +76,7 @@ impl CalibrationReport {
     /// # Errors
     ///
     /// [`WriteError::Report`], when a figure cannot be drawn.
-    pub(crate) fn files(
+    pub fn files(
         &self,
         problem: &Problem,
         total_seconds: f64,
@@ -97,7 +97,7 @@ impl CalibrationReport {
         Ok(files)
     }
 
-    /// Writes `CalibrationReport::files` into `dir` (which must exist);
+    /// Writes [`CalibrationReport::files`] into `dir` (which must exist);
     /// returns the paths written.
     ///
     /// # Errors

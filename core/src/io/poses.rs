@@ -345,7 +345,7 @@ impl Poses {
     }
 
     /// The prismatic joints, bit `j` for joint `j` (none unless read for
-    /// such an arm or set by `Poses::with_shape`): their readings are mm.
+    /// such an arm's): their readings are mm.
     pub fn prismatic_mask(&self) -> u16 {
         self.prismatic
     }

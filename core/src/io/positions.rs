@@ -61,7 +61,7 @@ const ORIENTATION: [&str; 4] = ["qw", "qx", "qy", "qz"];
 pub(crate) const MIN_TOOL_ROWS: usize = 2;
 
 /// The fewest positions a frame's registration (six unknowns) can rest on.
-pub(crate) const MIN_FRAME_POSITIONS: usize = 3;
+pub const MIN_FRAME_POSITIONS: usize = 3;
 
 /// The rows of a reference-position file, in file order.
 #[derive(Clone, Debug, PartialEq)]
@@ -932,7 +932,7 @@ fn check_frames(p: &Positions, file: &str) -> Result<(), InputError> {
 
 impl Positions {
     /// The first frame whose rows cannot determine its registration (six
-    /// unknowns) — fewer than `MIN_FRAME_POSITIONS` distinct positions
+    /// unknowns) — fewer than [`MIN_FRAME_POSITIONS`] distinct positions
     /// (a sphere touched in several poses counts once), or all on one line
     /// — with its first row and why; `None` when every frame can be
     /// registered. Linear in the rows.

@@ -76,7 +76,7 @@ pub struct Objective<'a> {
 impl<'a> Objective<'a> {
     /// `terms` on the columns of `layout`, their sums on up to `threads`
     /// threads (results do not depend on it). The terms are not weighed
-    /// yet: see `Objective::weigh`.
+    /// yet: see [`Objective::weigh`].
     pub fn new(layout: Layout, terms: Vec<Box<dyn Term + 'a>>, threads: usize) -> Objective<'a> {
         Objective {
             layout,
@@ -235,7 +235,7 @@ impl<'a> Objective<'a> {
     /// # Errors
     ///
     /// The kernel's, and weights that are not finite numbers.
-    pub(crate) fn weigh(&mut self, x: &[f64], unit_sigma: f64) -> Result<(), TermError> {
+    pub fn weigh(&mut self, x: &[f64], unit_sigma: f64) -> Result<(), TermError> {
         let layout = &self.layout;
         let threads = self.threads;
         let arm = layout.arm(x).ok_or_else(|| {

@@ -274,7 +274,7 @@ pub struct Plan {
     pub(crate) criterion: Criterion,
     /// Candidates in the pool.
     pub(crate) candidates: usize,
-    /// Rows chosen (the first `count` of `Plan::steps`).
+    /// Rows chosen (the first `count` of the curve's rows, [`Plan::chosen`]).
     pub count: usize,
     /// The rows chosen, then those the curve continued with.
     pub(crate) steps: Vec<Step>,

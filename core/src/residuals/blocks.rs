@@ -121,7 +121,7 @@ pub trait Block: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Column `i`'s bounds `(low, high)`, if it has any (mm, rad, or its
     /// unit): a value no real instrument can take (a negative mass, a
     /// compliance below zero). After every step the layout **clamps** a
-    /// value beyond a bound onto it (`Layout::plus`), rather than
+    /// value beyond a bound onto it ([`Layout::plus`]), rather than
     /// refusing the step: a solver's trial step that overshoots is then
     /// still a point it can evaluate, and the fit ends on the bound if the
     /// data pull it there — [`Layout::on_bounds`] names such columns, so
@@ -428,7 +428,7 @@ impl Layout {
     /// `free[k]`): the geometry's columns add, each auxiliary block takes
     /// its own local update (its fixed columns a zero step), and a value
     /// beyond its column's bounds is clamped onto them ([`Block::bounds`]).
-    pub(crate) fn plus(&self, x: &[f64], free: &[usize], delta: &[f64]) -> Vec<f64> {
+    pub fn plus(&self, x: &[f64], free: &[usize], delta: &[f64]) -> Vec<f64> {
         let mut out = x.to_vec();
         let geometry = self.geometry_columns();
         let mut aux = false;
@@ -599,7 +599,7 @@ impl Block for Vector {
 /// frame, an artefact's placement): values `[rx, ry, rz, tx, ty, tz]`, the
 /// rotation vector (rad) of `R` and the translation (mm). A step `δ` turns
 /// the frame by `exp(δω)` on the left and moves it by `δt`, so the
-/// Jacobian of `Frame::jacobian` is with respect to that local step and
+/// Jacobian of [`Frame::jacobian`] is with respect to that local step and
 /// no angle of the chart ever wraps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
@@ -734,7 +734,7 @@ impl Frame {
 
     /// `∂(R p + t)/∂δ` for the local step `δ = [δω, δt]` at `x`: row `i` is
     /// the derivative of coordinate `i`, `[−[Rp]× | I]`.
-    pub(crate) fn jacobian(x: &[f64], p: [f64; 3]) -> [[f64; 6]; 3] {
+    pub fn jacobian(x: &[f64], p: [f64; 3]) -> [[f64; 6]; 3] {
         let q = Frame::rotation(x) * Vector3::from(p);
         // δω × q = −[q]× δω.
         [

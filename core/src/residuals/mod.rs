@@ -460,12 +460,12 @@ impl At<'_> {
 /// eliminates, which later terms measure between (a reference length, an
 /// artefact's certified distance).
 #[derive(Clone, Debug, Default)]
-pub(crate) struct Centres {
+pub struct Centres {
     /// Per point (data-set order), its weighted centroid, mm.
-    pub(crate) points: Vec<[f64; 3]>,
+    pub points: Vec<[f64; 3]>,
     /// Per point, `∂c/∂x` over the free columns (`J̄ = S⁻¹G`), when a later
     /// term asked for it ([`Term::needs_centre_jacobians`]).
-    pub(crate) jacobians: Vec<Vec<[f64; 3]>>,
+    pub jacobians: Vec<Vec<[f64; 3]>>,
 }
 
 /// What a term evaluated earlier leaves for the terms after it, in the
@@ -473,7 +473,7 @@ pub(crate) struct Centres {
 #[derive(Clone, Debug, Default)]
 pub struct Shared {
     /// The point centres, once the touch term has run.
-    pub(crate) centres: Option<Centres>,
+    pub centres: Option<Centres>,
     /// Per point, the covariance `(Σ A_i)⁻¹` of its centre under the touch
     /// weights, once the touch term has been weighed.
     pub(crate) centre_covariances: Option<Vec<Sym3>>,
@@ -720,7 +720,7 @@ impl Role {
 /// depend on the arm, that fix scale and base motion as
 /// [`Term::sees`] says, and that a robust loss leaves alone. A term is
 /// evaluated in the objective's order: one that needs the point centres
-/// (its `Shared::centres`) comes after the touches.
+/// (its [`Shared::centres`]) comes after the touches.
 pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Short name, for reports: `touches`, `lengths`, `prior`, `plane`.
     /// Only words: what the pipeline does with a term follows its
@@ -757,7 +757,7 @@ pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     }
 
     /// Whether the term needs `∂c/∂x` of the point centres
-    /// (`Centres::jacobians`) when accumulating.
+    /// ([`Centres::jacobians`]) when accumulating.
     fn needs_centre_jacobians(&self) -> bool {
         false
     }

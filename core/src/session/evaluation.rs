@@ -20,7 +20,7 @@ use crate::metrics::{
 /// The figures of an arm on a data set, with the positions they were
 /// computed from (borrowed: a campaign's touches are not copied): what
 /// `evaluate` reports, built once for every front end, as the JSON of
-/// `aacmm evaluate --json` (`EvaluationReport::write_json`) and the tables
+/// `aacmm evaluate --json` ([`EvaluationReport::to_json`]) and the tables
 /// it prints ([`EvaluationReport::write_summary`]). The eq. 19 rows of every
 /// pair of points, which grow as the square of the points, are streamed
 /// into both, never collected.
@@ -135,7 +135,7 @@ impl<'a> EvaluationReport<'a> {
         w.write_all(b"\n")
     }
 
-    /// `EvaluationReport::write_json` as text.
+    /// The JSON `aacmm evaluate --json` writes, as text.
     pub fn to_json(&self) -> String {
         let mut text = Vec::new();
         self.write_json(&mut text)

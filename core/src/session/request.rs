@@ -803,8 +803,8 @@ impl Request {
     /// # Errors
     ///
     /// An [`OptionError`] on `prior`, `noise.…` or `threads`; reference
-    /// lengths in another unit than the arm ([`super::check_units`]); as
-    /// `IdentifyReport::new`.
+    /// lengths in another unit than the arm ([`super::check_units`]); a
+    /// data set the identification cannot analyse.
     pub fn identify(&self) -> Result<IdentifyReport, CalibrationError> {
         ArmKernel::new(&self.arm.params)?;
         super::check_units(&self.arm.params, &self.data, &self.sources.arm_file)?;
