@@ -540,7 +540,8 @@ pub(crate) unsafe fn result<'a>(
     unsafe { ptr::object(cal, "cal") }
 }
 
-/// A count accessor's body: `of` the result behind `cal` into `*count`.
+/// A count accessor's body: `of` the result behind `cal` (or its refusal
+/// of the arguments) into `*count`.
 ///
 /// # Safety
 ///
@@ -548,7 +549,7 @@ pub(crate) unsafe fn result<'a>(
 pub(crate) unsafe fn count_out(
     cal: *const AacmmCalibration,
     count: *mut usize,
-    of: impl FnOnce(&AacmmCalibration) -> usize,
+    of: impl FnOnce(&AacmmCalibration) -> Result<usize, Error>,
 ) -> AacmmStatus {
     guard(|| {
         Args::new()
@@ -556,9 +557,31 @@ pub(crate) unsafe fn count_out(
             .out("count", count)
             .disjoint()?;
         // SAFETY: forwarded contract.
-        let n = of(unsafe { result(cal) }?);
+        let n = of(unsafe { result(cal) }?)?;
         // SAFETY: forwarded contract.
         unsafe { ptr::write(count, n, "count") }
+    })
+}
+
+/// A string accessor's body: the text `of` the result behind `cal` (or
+/// its refusal of the arguments) copied into `buf` like
+/// `aacmm_last_error_message`, its full length into `*len`.
+///
+/// # Safety
+///
+/// `cal` is `NULL` or a live result handle; `buf` is `NULL` or points to
+/// `buf_len` writable bytes; `len` is `NULL` or writable.
+pub(crate) unsafe fn text_out(
+    cal: *const AacmmCalibration,
+    (buf, buf_len, len): (*mut c_char, usize, *mut usize),
+    of: impl FnOnce(&AacmmCalibration) -> Result<std::borrow::Cow<'_, str>, Error>,
+) -> AacmmStatus {
+    guard(|| {
+        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
+        // SAFETY: forwarded contract.
+        let text = of(unsafe { result(cal) }?)?;
+        // SAFETY: forwarded contract.
+        unsafe { string_out(&text, buf, buf_len, len) }
     })
 }
 
@@ -765,13 +788,8 @@ pub unsafe extern "C" fn aacmm_calibration_report(
     buf_len: usize,
     len: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
-        // SAFETY: by the contract.
-        let c = unsafe { result(cal) }?;
-        // SAFETY: by the contract.
-        unsafe { string_out(&c.json, buf, buf_len, len) }
-    })
+    // SAFETY: by the contract.
+    unsafe { text_out(cal, (buf, buf_len, len), |c| Ok(c.json.as_str().into())) }
 }
 
 /// `items` one per line, for a C caller to split at `\n`: an item's own
@@ -844,13 +862,12 @@ pub unsafe extern "C" fn aacmm_calibration_verdict_notes(
     buf_len: usize,
     len: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
-        // SAFETY: by the contract.
-        let verdict = &unsafe { result(cal) }?.report.verdict;
-        // SAFETY: by the contract.
-        unsafe { string_out(&lines(&verdict.words(Spelling::C).notes), buf, buf_len, len) }
-    })
+    // SAFETY: by the contract.
+    unsafe {
+        text_out(cal, (buf, buf_len, len), |c| {
+            Ok(lines(&c.report.verdict.words(Spelling::C).notes).into())
+        })
+    }
 }
 
 /// The kind of a reason a calibration is refused
@@ -914,7 +931,7 @@ pub unsafe extern "C" fn aacmm_calibration_reason_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| c.report.verdict.reasons.len()) }
+    unsafe { count_out(cal, count, |c| Ok(c.report.verdict.reasons.len())) }
 }
 
 /// Reason `index` (from 0, the first cause first) of a refused
@@ -969,7 +986,7 @@ pub unsafe extern "C" fn aacmm_calibration_frame_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| c.report.calibration.frames().len()) }
+    unsafe { count_out(cal, count, |c| Ok(c.report.calibration.frames().len())) }
 }
 
 /// Frame `index` (`0 ≤ index < aacmm_calibration_frame_count`, in order of
@@ -1046,7 +1063,11 @@ pub unsafe extern "C" fn aacmm_calibration_tool_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| c.report.calibration.tool_estimates().len()) }
+    unsafe {
+        count_out(cal, count, |c| {
+            Ok(c.report.calibration.tool_estimates().len())
+        })
+    }
 }
 
 /// Tool `index` (`0 ≤ index < aacmm_calibration_tool_count`, in the
@@ -1107,7 +1128,7 @@ pub unsafe extern "C" fn aacmm_calibration_auxiliary_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| c.report.calibration.auxiliary.len()) }
+    unsafe { count_out(cal, count, |c| Ok(c.report.calibration.auxiliary.len())) }
 }
 
 /// Auxiliary column `index` (`0 ≤ index < aacmm_calibration_auxiliary_count`,

@@ -5,8 +5,7 @@ use std::ffi::c_char;
 
 use aacmm_core::plan::UncertaintyMap;
 
-use crate::arm::{string_args, string_out};
-use crate::calibrate::{AacmmCalibration, count_out, result};
+use crate::calibrate::{AacmmCalibration, count_out, result, text_out};
 use crate::error::{AacmmStatus, Error, guard};
 use crate::ptr::{self, Args};
 
@@ -175,7 +174,7 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_region_count(
     // SAFETY: by the contract.
     unsafe {
         count_out(cal, count, |c| {
-            (c.report.uncertainty_map.as_ref()).map_or(0, |m| m.regions.len())
+            Ok((c.report.uncertainty_map.as_ref()).map_or(0, |m| m.regions.len()))
         })
     }
 }
@@ -219,16 +218,8 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_count(
     kind: AacmmMapKind,
     count: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new()
-            .object("cal", cal)
-            .out("count", count)
-            .disjoint()?;
-        // SAFETY: by the contract.
-        let n = maps_of(unsafe { result(cal) }?, kind)?.len();
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, n, "count") }
-    })
+    // SAFETY: by the contract.
+    unsafe { count_out(cal, count, |c| Ok(maps_of(c, kind)?.len())) }
 }
 
 /// Uncertainty map `index` of kind `kind` (`0 ≤ index <
@@ -276,14 +267,17 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_name(
     buf_len: usize,
     len: *mut usize,
 ) -> AacmmStatus {
-    guard(|| {
-        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
-        // SAFETY: by the contract.
-        let m = map_at(unsafe { result(cal) }?, kind, index)?;
-        let name = m.frame.as_deref().or(m.tool.as_deref()).unwrap_or("");
-        // SAFETY: by the contract.
-        unsafe { string_out(name, buf, buf_len, len) }
-    })
+    // SAFETY: by the contract.
+    unsafe {
+        text_out(cal, (buf, buf_len, len), |c| {
+            let m = map_at(c, kind, index)?;
+            Ok(m.frame
+                .as_deref()
+                .or(m.tool.as_deref())
+                .unwrap_or("")
+                .into())
+        })
+    }
 }
 
 /// Band `band` of uncertainty map `index` of kind `kind` (nearest the
