@@ -110,7 +110,7 @@ impl SourceMap {
     }
 
     /// Where reference `r` came from.
-    pub(crate) fn reference(&self, r: usize) -> Location<'_> {
+    pub fn reference(&self, r: usize) -> Location<'_> {
         Location {
             file: &self.lengths_file,
             line: self.reference_lines.get(r).copied().unwrap_or(0),
@@ -383,7 +383,7 @@ impl PositionData {
     }
 
     /// Their readings with sin/cos, for the kernel.
-    pub(crate) fn poses(&self) -> &PreparedPoses {
+    pub fn poses(&self) -> &PreparedPoses {
         &self.poses
     }
 
@@ -393,7 +393,7 @@ impl PositionData {
     }
 
     /// Where row `i` came from.
-    pub(crate) fn at(&self, i: usize) -> Location<'_> {
+    pub fn at(&self, i: usize) -> Location<'_> {
         Location {
             file: &self.file,
             line: self.rows.line(i),
@@ -420,7 +420,7 @@ impl PositionData {
     }
 
     /// The temperature and time of every row, when recorded.
-    pub(crate) fn conditions(&self) -> Conditions<'_> {
+    pub fn conditions(&self) -> Conditions<'_> {
         Conditions {
             temperature_c: self.rows.temperatures(),
             time_s: self.rows.times(),

@@ -297,7 +297,7 @@ pub(crate) type AddedTerms<'a> =
 
 /// What an analysis sees: a data set, and the terms `added` makes.
 #[derive(Clone, Copy)]
-pub struct Evidence<'a> {
+pub(crate) struct Evidence<'a> {
     /// The touches, lengths and positions.
     pub(crate) data: &'a DataSet,
     /// The terms beyond them, if any.

@@ -38,7 +38,7 @@ impl Target {
     /// Parses a target name for an `n`-joint arm: `length`, `angle`, `a`,
     /// `d`, `alpha` (or `beta`), `theta`, `probe`, or a parameter name
     /// (`a1`, `theta5`, `Bz`).
-    pub(crate) fn parse(name: &str, n: usize) -> Option<Target> {
+    pub fn parse(name: &str, n: usize) -> Option<Target> {
         if let Some((_, k)) = KINDS.iter().find(|(k, _)| *k == name) {
             return Some(Target::Kind(*k));
         }
@@ -81,7 +81,7 @@ impl Target {
     }
 
     /// The name users write.
-    pub(crate) fn name(self) -> String {
+    pub fn name(self) -> String {
         match self {
             Target::Length => "length".into(),
             Target::Angle => "angle".into(),

@@ -49,7 +49,7 @@ impl TestKind {
     ];
 
     /// The name an MPE spec uses.
-    pub(crate) fn key(self) -> &'static str {
+    pub fn key(self) -> &'static str {
         match self {
             TestKind::PSize => "P_Size",
             TestKind::PForm => "P_Form",

@@ -139,15 +139,15 @@ pub struct Draws {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PredictionInfo {
     /// Where the calibration came from (its file).
-    pub(crate) calibration: String,
+    pub calibration: String,
     /// Draws.
     pub draws: usize,
     /// The seed.
-    pub(crate) seed: u64,
+    pub seed: u64,
     /// Free parameters drawn.
     pub(crate) free_parameters: usize,
     /// The readings' noise drawn.
-    pub(crate) noise: ReadingNoise,
+    pub noise: ReadingNoise,
 }
 
 /// Why there is no prediction.

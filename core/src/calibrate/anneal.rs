@@ -200,7 +200,7 @@ pub enum AnnealStop {
 
 impl AnnealStop {
     /// A sentence for summaries.
-    pub(crate) fn describe(self) -> &'static str {
+    pub fn describe(self) -> &'static str {
         match self {
             AnnealStop::EnergyTarget => "energy below the stopping value",
             AnnealStop::Cooled => "temperature below the minimum",

@@ -43,7 +43,7 @@ pub struct GrossCorrection {
 
 impl GrossCorrection {
     /// In words.
-    pub(crate) fn describe(&self) -> String {
+    pub fn describe(&self) -> String {
         format!(
             "{} {:.4} → {:.4} {} (more than ±{:.4})",
             self.name, self.nominal, self.calibrated, self.unit, self.tolerance
@@ -250,7 +250,7 @@ impl ChiSquare {
     /// level, `ChiSquare::far_outside`) is a note, and its sentence says so — with
     /// what it suggests — so that it cannot read as a refusal beside
     /// "Verdict: usable".
-    pub(crate) fn describe(&self) -> String {
+    pub fn describe(&self) -> String {
         let s0 = (self.statistic / self.dof.max(1) as f64).sqrt();
         let head = format!(
             "χ² = {:.1} on {} dof (sigma0 {s0:.3})",
@@ -442,7 +442,7 @@ impl PositionUncertainty {
     }
 
     /// In words.
-    pub(crate) fn describe(&self) -> String {
+    pub fn describe(&self) -> String {
         format!(
             "predicted position uncertainty of the calibrated arm over the campaign's poses \
              ({:.0} % radius in 3-D): RMS {:.4} mm, max {:.4} mm (one touch scatters ±{:.4} \

@@ -142,7 +142,7 @@ pub enum GlobalStop {
 
 impl GlobalStop {
     /// A sentence for summaries.
-    pub(crate) fn describe(self) -> &'static str {
+    pub fn describe(self) -> &'static str {
         match self {
             GlobalStop::NoiseFloor => "fit at the stated noise floor",
             GlobalStop::RobustFloor => {

@@ -51,7 +51,7 @@ impl Termination {
     }
 
     /// A sentence for summaries.
-    pub(crate) fn describe(self) -> &'static str {
+    pub fn describe(self) -> &'static str {
         match self {
             Termination::CostTolerance => "relative cost reduction below ftol",
             Termination::StepTolerance => "relative step below xtol",
@@ -130,13 +130,13 @@ impl LmOptions {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LmIteration {
     /// 1-based.
-    pub(crate) iteration: usize,
+    pub iteration: usize,
     /// Cost `Σ r²` after the iteration.
-    pub(crate) cost: f64,
+    pub cost: f64,
     /// Damping used.
-    pub(crate) lambda: f64,
+    pub lambda: f64,
     /// Whether the step was taken.
-    pub(crate) accepted: bool,
+    pub accepted: bool,
 }
 
 /// What a Levenberg–Marquardt fit returns.

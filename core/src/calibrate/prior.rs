@@ -80,7 +80,7 @@ pub struct CarriedTolerance {
 
 impl CarriedTolerance {
     /// In words: `a5 carries theta5: ±0.9599 mm, now ±1.0824 mm`.
-    pub(crate) fn describe(&self) -> String {
+    pub fn describe(&self) -> String {
         format!(
             "{} carries {}: ±{:.4} {u}, now ±{:.4} {u}",
             self.to,

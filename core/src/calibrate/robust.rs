@@ -17,7 +17,7 @@
 //!   squared standardised residuals over the median of `χ²₃` (2.366) — the
 //!   analogue, for a 3-D residual norm, of the MAD of a scalar one (which
 //!   is `χ₁`-based). The leverage `h_i` is the full one (the point's centre
-//!   and the free parameters, the objective's standardised residuals
+//!   and the free parameters, [`crate::objective::Objective::standardised`]
 //!   with the last refit's normal matrix), so each `u_i²` is about `χ²₃`
 //!   with no global dof factor. A few outliers do not move a median;
 //!   `σ̂ ≈ 1` when the weights (the stated noise) are right.

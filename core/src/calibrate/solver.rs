@@ -73,7 +73,7 @@ impl<'a> Context<'a> {
     /// # Errors
     ///
     /// [`CalibrationError::Cancelled`].
-    pub(crate) fn check(&self) -> Result<(), CalibrationError> {
+    pub fn check(&self) -> Result<(), CalibrationError> {
         Cancel::check(self.cancel.as_ref())
     }
 
@@ -252,11 +252,11 @@ impl Stop {
 #[derive(Clone, Debug)]
 pub struct Outcome {
     /// The arm found (fixed parameters unchanged).
-    pub(crate) params: DhParams,
+    pub params: DhParams,
     /// Every column found (the geometry's, then the auxiliary blocks').
-    pub(crate) x: Vec<f64>,
+    pub x: Vec<f64>,
     /// Why it stopped.
-    pub(crate) stop: Stop,
+    pub stop: Stop,
     /// Iterations of the final LM (0 without one).
     pub(crate) iterations: usize,
     /// Cost per iteration of the final LM.
@@ -264,7 +264,7 @@ pub struct Outcome {
     /// Work per phase, in order.
     pub(crate) phases: Vec<Phase>,
     /// The annealing's account (`sa`, `hybrid`).
-    pub(crate) anneal: Option<AnnealTrace>,
+    pub anneal: Option<AnnealTrace>,
     /// The global search's account.
     pub(crate) global: Option<GlobalTrace>,
     /// The normal equations at `params` under the task's weights.

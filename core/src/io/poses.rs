@@ -345,7 +345,7 @@ impl Poses {
     }
 
     /// The prismatic joints, bit `j` for joint `j` (none unless read for
-    /// such an arm's): their readings are mm.
+    /// such an arm or set by [`Poses::with_shape`]): their readings are mm.
     pub fn prismatic_mask(&self) -> u16 {
         self.prismatic
     }
@@ -402,7 +402,7 @@ impl Poses {
     ///
     /// # Panics
     /// If `shape` has another joint count than the poses.
-    pub(crate) fn with_shape(mut self, shape: crate::params::ChainShape) -> Poses {
+    pub fn with_shape(mut self, shape: crate::params::ChainShape) -> Poses {
         assert_eq!(shape.joints(), self.joints, "joints of the shape");
         self.prismatic = shape.prismatic_mask();
         self

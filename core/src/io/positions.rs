@@ -196,7 +196,7 @@ impl Positions {
     }
 
     /// Per row, the time (s), when recorded.
-    pub(crate) fn times(&self) -> Option<&[f64]> {
+    pub fn times(&self) -> Option<&[f64]> {
         self.time.as_deref()
     }
 
@@ -301,7 +301,7 @@ impl Positions {
 
     /// The prismatic joints, bit `j` for joint `j` (none unless read for
     /// such an arm or set by [`Positions::with_shape`]): readings in mm.
-    pub(crate) fn prismatic_mask(&self) -> u16 {
+    pub fn prismatic_mask(&self) -> u16 {
         self.prismatic
     }
 
@@ -310,7 +310,7 @@ impl Positions {
     ///
     /// # Panics
     /// If `shape` has another joint count than the rows.
-    pub(crate) fn with_shape(mut self, shape: crate::params::ChainShape) -> Positions {
+    pub fn with_shape(mut self, shape: crate::params::ChainShape) -> Positions {
         assert_eq!(shape.joints(), self.joints, "joints of the shape");
         self.prismatic = shape.prismatic_mask();
         self
@@ -480,7 +480,7 @@ impl Positions {
     }
 
     /// Row `i`'s line.
-    pub(crate) fn line(&self, i: usize) -> usize {
+    pub fn line(&self, i: usize) -> usize {
         self.lines[i]
     }
 

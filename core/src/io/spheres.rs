@@ -262,7 +262,7 @@ impl Spheres {
     }
 
     /// The same rows with the slides of `shape` (their readings in mm).
-    pub(crate) fn with_shape(mut self, shape: crate::params::ChainShape) -> Spheres {
+    pub fn with_shape(mut self, shape: crate::params::ChainShape) -> Spheres {
         self.prismatic = shape.prismatic_mask();
         self
     }

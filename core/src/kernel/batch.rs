@@ -39,7 +39,7 @@ impl Jacobians {
     }
 
     /// Number of poses.
-    pub(crate) fn len(&self) -> usize {
+    pub fn len(&self) -> usize {
         self.len
     }
 
@@ -49,7 +49,7 @@ impl Jacobians {
     }
 
     /// Number of parameters (columns).
-    pub(crate) fn params(&self) -> usize {
+    pub fn params(&self) -> usize {
         self.params
     }
 

@@ -31,11 +31,11 @@ use crate::tolerances::Tolerances;
 /// on its `k`-dimensional norm and the outlier test holds it against the
 /// `χ²_k` quantile.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub(crate) struct Observed {
+pub struct Observed {
     /// Per observation, `rᵀ A r / (1 − h)`.
-    pub(crate) values: Vec<f64>,
+    pub values: Vec<f64>,
     /// Per observation, its rows `k`.
-    pub(crate) rows: Vec<usize>,
+    pub rows: Vec<usize>,
 }
 
 impl Observed {
@@ -132,7 +132,7 @@ impl<'a> Objective<'a> {
     }
 
     /// The columns.
-    pub(crate) fn layout(&self) -> &Layout {
+    pub fn layout(&self) -> &Layout {
         &self.layout
     }
 
@@ -261,7 +261,7 @@ impl<'a> Objective<'a> {
 
     /// Observations a robust loss may downweight, over every term that has
     /// them (in term order).
-    pub(crate) fn observations(&self) -> usize {
+    pub fn observations(&self) -> usize {
         self.terms.iter().map(|t| t.observations()).sum()
     }
 
@@ -291,7 +291,7 @@ impl<'a> Objective<'a> {
     ///
     /// The kernel's, and a term whose standardised residuals do not match
     /// its observations (their count, or no row).
-    pub(crate) fn standardised(
+    pub fn standardised(
         &self,
         x: &[f64],
         leverage: Option<&crate::residuals::ParameterLeverage>,
@@ -325,7 +325,7 @@ impl<'a> Objective<'a> {
     }
 
     /// Where observation `i` came from.
-    pub(crate) fn origin(&self, i: usize) -> Origin {
+    pub fn origin(&self, i: usize) -> Origin {
         self.observing()
             .take_while(|(first, _)| *first <= i)
             .last()

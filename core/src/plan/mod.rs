@@ -218,11 +218,11 @@ impl Spread {
 
 /// One chosen row, in the order chosen.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct Step {
+pub struct Step {
     /// Row of the pool (0-based).
-    pub(crate) row: usize,
+    pub row: usize,
     /// Its label.
-    pub(crate) label: String,
+    pub label: String,
     /// The mean predicted variance over the workspace with the rows up to
     /// this one (plain, without the hedge), as the 95 % radius of an
     /// isotropic error of that variance, mm; `None` while the rows do not
@@ -242,9 +242,9 @@ pub(crate) struct CurvePoint {
 
 /// How far a joint turns over the chosen rows against the pool.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct JointSpan {
+pub struct JointSpan {
     /// Joint, from 1.
-    pub(crate) joint: usize,
+    pub joint: usize,
     /// Range of the chosen readings, degrees (mm for a prismatic joint).
     pub(crate) chosen_deg: f64,
     /// Range of the pool's, degrees (mm for a prismatic joint).
@@ -274,10 +274,10 @@ pub struct Plan {
     pub(crate) criterion: Criterion,
     /// Candidates in the pool.
     pub(crate) candidates: usize,
-    /// Rows chosen (the first `count` of the curve's rows, [`Plan::chosen`]).
+    /// Rows chosen (the first `count` of [`Plan::steps`]).
     pub count: usize,
     /// The rows chosen, then those the curve continued with.
-    pub(crate) steps: Vec<Step>,
+    pub steps: Vec<Step>,
     /// The parameters the design is for (free geometry, then the frame's).
     pub parameters: Vec<String>,
     /// Noise of a row per coordinate, mm.
@@ -301,11 +301,11 @@ pub struct Plan {
     /// The predicted uncertainty with the chosen rows.
     pub planned: Option<Spread>,
     /// With every candidate.
-    pub(crate) all: Option<Spread>,
+    pub all: Option<Spread>,
     /// With the given calibration alone, before any new row (`None`
     /// without one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub(crate) start: Option<Spread>,
+    pub start: Option<Spread>,
     /// With random subsets of the same size.
     pub(crate) random: RandomBaseline,
     /// The predicted uncertainty as rows are added.
@@ -313,7 +313,7 @@ pub struct Plan {
     /// Rows chosen per socket or sphere (touches and sphere points only).
     pub sockets: Vec<(String, usize)>,
     /// How far each joint turns over the chosen rows.
-    pub(crate) joints: Vec<JointSpan>,
+    pub joints: Vec<JointSpan>,
     /// What the user should know.
     pub warnings: Vec<String>,
 }

@@ -28,7 +28,7 @@ pub enum Unit {
 
 impl Unit {
     /// The unit users see: `mm`, `deg`, or the other unit's name.
-    pub(crate) fn name(&self) -> &str {
+    pub fn name(&self) -> &str {
         match self {
             Unit::Length => "mm",
             Unit::Angle => "deg",
@@ -61,9 +61,9 @@ impl Unit {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Parameter {
     /// Its name in reports (`frame.tracker.tx`).
-    pub(crate) name: String,
+    pub name: String,
     /// Its unit.
-    pub(crate) unit: Unit,
+    pub unit: Unit,
 }
 
 /// An auxiliary block of unknowns.
@@ -322,7 +322,7 @@ impl Layout {
     }
 
     /// The start arm: the geometry's models and start values.
-    pub(crate) fn geometry(&self) -> &DhParams {
+    pub fn geometry(&self) -> &DhParams {
         &self.geometry
     }
 
@@ -357,7 +357,7 @@ impl Layout {
     }
 
     /// The auxiliary blocks, in order.
-    pub(crate) fn blocks(&self) -> impl Iterator<Item = &dyn Block> {
+    pub fn blocks(&self) -> impl Iterator<Item = &dyn Block> {
         self.blocks.iter().map(|b| &**b)
     }
 
@@ -392,12 +392,12 @@ impl Layout {
     }
 
     /// The arm of `x`'s geometry columns.
-    pub(crate) fn arm(&self, x: &[f64]) -> Option<DhParams> {
+    pub fn arm(&self, x: &[f64]) -> Option<DhParams> {
         self.geometry.with_values(x.get(..self.geometry_columns())?)
     }
 
     /// Column `c`'s name and unit.
-    pub(crate) fn parameter(&self, c: usize) -> Option<Parameter> {
+    pub fn parameter(&self, c: usize) -> Option<Parameter> {
         if c < self.geometry_columns() {
             let id = self.geometry.param_id(c)?;
             let unit = if id.kind.is_length() {
@@ -604,9 +604,9 @@ impl Block for Vector {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// The frame's name (`tracker`, `placement 2`).
-    pub(crate) name: String,
+    pub name: String,
     /// Start values `[rx, ry, rz, tx, ty, tz]` (rad, mm).
-    pub(crate) start: [f64; 6],
+    pub start: [f64; 6],
 }
 
 /// `R = exp([ω]×)` (Rodrigues).

@@ -185,7 +185,7 @@ pub struct HeldDirection {
 
 impl HeldDirection {
     /// In words, for a summary line.
-    pub(crate) fn describe(&self) -> String {
+    pub fn describe(&self) -> String {
         let sigma = match self.sigma_mm {
             Some(s) => format!("σ {s:.3} mm at the reach"),
             None => "not determined at all".to_string(),

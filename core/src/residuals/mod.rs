@@ -272,15 +272,15 @@ impl TermError {
 /// from it once (the arm of the geometry columns and its kernel).
 pub struct At<'a> {
     /// Every column, the geometry's first (mm, rad; the layout's order).
-    pub(crate) x: &'a [f64],
+    pub x: &'a [f64],
     /// The arm of the geometry columns.
-    pub(crate) arm: &'a DhParams,
+    pub arm: &'a DhParams,
     /// Its kernel.
     pub kernel: &'a ArmKernel,
     /// Where each block's columns are.
     pub layout: &'a Layout,
     /// Worker threads a term may use (results never depend on them).
-    pub(crate) threads: usize,
+    pub threads: usize,
 }
 
 impl At<'_> {
@@ -412,7 +412,7 @@ impl At<'_> {
     /// # Errors
     ///
     /// As [`At::tool_positions`].
-    pub(crate) fn for_each_tool_pose(
+    pub fn for_each_tool_pose(
         &self,
         poses: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
@@ -580,7 +580,7 @@ impl Normal {
 
     /// The whole cost `Σ r²` (a χ² when the weights are right): the terms'
     /// costs added in order.
-    pub(crate) fn cost(&self) -> f64 {
+    pub fn cost(&self) -> f64 {
         self.costs.iter().sum()
     }
 
@@ -625,7 +625,7 @@ impl ParameterLeverage {
     /// equations were rescaled by without the weights: 1 when they agree);
     /// `None` when it is not positive definite (then only the eliminated
     /// unknowns' leverage is corrected).
-    pub(crate) fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
+    pub fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
         let p = normal.free.len();
         let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj) / scale;
         let inv = n.cholesky()?.inverse();

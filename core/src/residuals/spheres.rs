@@ -360,7 +360,7 @@ impl SphereTerm {
     }
 
     /// Sphere `s`'s radius at `at` (mm), and its column when fitted.
-    pub(crate) fn radius(&self, at: &At<'_>, s: usize) -> (f64, Option<usize>) {
+    pub fn radius(&self, at: &At<'_>, s: usize) -> (f64, Option<usize>) {
         match (self.known_radius, self.radii[s]) {
             (Some(r), _) => (r, None),
             (None, Some(id)) => (at.block(id)[0], Some(at.layout.columns(id).start)),
@@ -369,7 +369,7 @@ impl SphereTerm {
     }
 
     /// Sphere `s`'s centre at `at`, mm.
-    pub(crate) fn centre(&self, at: &At<'_>, s: usize) -> [f64; 3] {
+    pub fn centre(&self, at: &At<'_>, s: usize) -> [f64; 3] {
         let c = at.block(self.centres[s]);
         [c[0], c[1], c[2]]
     }
@@ -398,7 +398,7 @@ impl SphereTerm {
     /// # Errors
     ///
     /// The kernel's.
-    pub(crate) fn positions(&self, at: &At<'_>) -> Result<Vec<[f64; 3]>, TermError> {
+    pub fn positions(&self, at: &At<'_>) -> Result<Vec<[f64; 3]>, TermError> {
         let mut p = vec![[0.0; 3]; self.spheres.len()];
         if !self.spheres.has_tools() {
             at.tool_positions(&self.poses, Conditions::default(), &mut p)?;

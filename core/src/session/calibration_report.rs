@@ -25,7 +25,7 @@ pub struct Units {
 #[non_exhaustive]
 pub struct HeldOut {
     /// Its poses file.
-    pub(crate) data_file: String,
+    pub data_file: String,
     /// Its lengths file.
     pub(crate) lengths_file: Option<String>,
     /// Before and after there.
@@ -44,7 +44,7 @@ pub struct CrossValidation {
     /// One entry per fold.
     pub folds: Vec<Fold>,
     /// Seed of the fold assignment.
-    pub(crate) seed: u64,
+    pub seed: u64,
 }
 
 /// The figures of the start and calibrated arms on the data.
@@ -69,33 +69,33 @@ pub struct Validation {
 #[non_exhaustive]
 pub struct CalibrationReport {
     /// The start arm's name.
-    pub(crate) arm: String,
+    pub arm: String,
     /// Its file.
-    pub(crate) arm_file: String,
+    pub arm_file: String,
     /// The poses file.
-    pub(crate) data_file: String,
+    pub data_file: String,
     /// The lengths file.
     pub(crate) lengths_file: Option<String>,
     /// The fixed set: `auto` or the names fixed.
-    pub(crate) fix: String,
+    pub fix: String,
     /// The noise (internal units: rad, mm).
     pub noise: Noise,
     /// Seed of every random draw.
-    pub(crate) seed: u64,
+    pub seed: u64,
     /// Units of the parameter tables.
     pub(crate) units: Units,
     /// Touches fitted.
-    pub(crate) touches: usize,
+    pub touches: usize,
     /// Points fitted.
-    pub(crate) points: usize,
+    pub points: usize,
     /// Reference lengths fitted.
-    pub(crate) reference_lengths: usize,
+    pub reference_lengths: usize,
     /// The reference-positions file, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) positions_file: Option<String>,
     /// Reference positions fitted.
     #[serde(default, skip_serializing_if = "is_zero")]
-    pub(crate) positions: usize,
+    pub positions: usize,
     /// The calibration.
     pub calibration: Calibration,
     /// Before and after.

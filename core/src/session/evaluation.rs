@@ -20,18 +20,18 @@ use crate::metrics::{
 /// The figures of an arm on a data set, with the positions they were
 /// computed from (borrowed: a campaign's touches are not copied): what
 /// `evaluate` reports, built once for every front end, as the JSON of
-/// `aacmm evaluate --json` ([`EvaluationReport::to_json`]) and the tables
+/// `aacmm evaluate --json` ([`EvaluationReport::write_json`]) and the tables
 /// it prints ([`EvaluationReport::write_summary`]). The eq. 19 rows of every
 /// pair of points, which grow as the square of the points, are streamed
 /// into both, never collected.
 #[derive(Clone, Debug)]
 pub struct EvaluationReport<'a> {
     /// The arm's name.
-    pub(crate) arm: String,
+    pub arm: String,
     /// Its file.
-    pub(crate) arm_file: String,
+    pub arm_file: String,
     /// The poses file.
-    pub(crate) data_file: String,
+    pub data_file: String,
     /// The lengths file, if any.
     pub(crate) lengths_file: Option<String>,
     /// Every figure (lengths in mm).
@@ -130,12 +130,12 @@ impl<'a> EvaluationReport<'a> {
     /// # Errors
     ///
     /// The writer's.
-    pub(crate) fn write_json(&self, mut w: impl Write) -> io::Result<()> {
+    pub fn write_json(&self, mut w: impl Write) -> io::Result<()> {
         serde_json::to_writer_pretty(&mut w, self).map_err(io::Error::from)?;
         w.write_all(b"\n")
     }
 
-    /// The JSON `aacmm evaluate --json` writes, as text.
+    /// [`EvaluationReport::write_json`] as text.
     pub fn to_json(&self) -> String {
         let mut text = Vec::new();
         self.write_json(&mut text)

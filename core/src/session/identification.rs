@@ -25,24 +25,24 @@ use crate::tolerances::Tolerances;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IdentifyReport {
     /// The arm's name.
-    pub(crate) arm: String,
+    pub arm: String,
     /// Its file.
-    pub(crate) arm_file: String,
+    pub arm_file: String,
     /// The poses file.
-    pub(crate) data_file: String,
+    pub data_file: String,
     /// The lengths file, if any.
     pub(crate) lengths_file: Option<String>,
     /// Touches.
-    pub(crate) touches: usize,
+    pub touches: usize,
     /// Points.
-    pub(crate) points: usize,
+    pub points: usize,
     /// Reference lengths.
-    pub(crate) reference_lengths: usize,
+    pub reference_lengths: usize,
     /// Reference positions (their frames fitted and eliminated).
     #[serde(default, skip_serializing_if = "is_zero")]
-    pub(crate) positions: usize,
+    pub positions: usize,
     /// The noise the touches are weighed with, in words (degrees and mm).
-    pub(crate) noise: String,
+    pub noise: String,
     /// The analysis.
     pub(crate) identification: Identification,
     /// The rank and conditioning with the arm's tolerances, when it has
@@ -57,12 +57,12 @@ pub struct IdentifyReport {
     /// centres, and sizes unless stated, fitted and eliminated); absent
     /// without them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub(crate) spheres: Option<SphereCount>,
+    pub spheres: Option<SphereCount>,
 }
 
 /// The points on spheres an analysis saw.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct SphereCount {
+pub struct SphereCount {
     /// Their file.
     pub file: String,
     /// Points.

@@ -65,9 +65,9 @@ pub struct ProbeSettings {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProbeQualification {
     /// The probe qualified.
-    pub(crate) tool: String,
+    pub tool: String,
     /// The points' file.
-    pub(crate) file: String,
+    pub file: String,
     /// The sphere placement used.
     pub sphere: String,
     /// Points fitted.

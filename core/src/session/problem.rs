@@ -297,7 +297,7 @@ impl Problem {
     }
 
     /// The data fitted.
-    pub(crate) fn data(&self) -> &DataSet {
+    pub fn data(&self) -> &DataSet {
         &self.data
     }
 

@@ -60,7 +60,7 @@ pub struct SphereResult {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SphereReport {
     /// The sphere-surface file.
-    pub(crate) file: String,
+    pub file: String,
     /// The spheres' stated diameter, mm (none: fitted per sphere).
     pub stated_diameter: Option<f64>,
     /// The probe ball's diameter, mm.
@@ -382,7 +382,7 @@ impl HeldOutSpheres {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SphereEvaluation {
     /// The sphere-surface file.
-    pub(crate) file: String,
+    pub file: String,
     /// The stated diameter, mm; none: fitted per sphere.
     pub(crate) stated_diameter: Option<f64>,
     /// Per sphere: its label, points, diameter (fitted or stated) and

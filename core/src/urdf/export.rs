@@ -28,10 +28,10 @@ pub struct UrdfNames {
     /// `n + 1` links: the base, then the one after each joint.
     pub(crate) links: Vec<String>,
     /// `n` movable joints.
-    pub(crate) joints: Vec<String>,
+    pub joints: Vec<String>,
     /// Per joint, `[lower, upper]` in the arm's units (rad, mm for a
     /// prismatic joint), where known.
-    pub(crate) limits: Vec<Option<[f64; 2]>>,
+    pub limits: Vec<Option<[f64; 2]>>,
 }
 
 impl UrdfNames {
