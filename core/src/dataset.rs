@@ -5,7 +5,7 @@
 //! in order of first appearance, touches in file order within a point), their
 //! readings with sin/cos prepared once for the kernel, and the reference
 //! lengths by point index. Labels are checked once, here: every point has at
-//! least `MIN_TOUCHES` touches and every reference names known points (the
+//! least [`MIN_TOUCHES`] touches and every reference names known points (the
 //! lengths reader refuses self-pairs and repeated pairs). Where each value came from lives
 //! in a separate [`SourceMap`], so a later stage (metrics, a solver) can
 //! report a problem at `file:line` without the caller translating errors.
@@ -22,13 +22,13 @@ use crate::params::DhParams;
 
 /// Fewest touches a point needs: the sample spread `2s` divides by `n − 1`,
 /// and fewer than three touches say next to nothing about articulation error.
-pub(crate) const MIN_TOUCHES: usize = 3;
+pub const MIN_TOUCHES: usize = 3;
 
 /// Least joint-angle range (degrees) that counts as articulation: a data set
 /// in which no point's touches span this much in any joint was taken
 /// without moving the arm (the same pose read again, encoder noise at most),
 /// and cannot say anything about its geometry.
-pub(crate) const MIN_ARTICULATION_DEG: f64 = 1.0;
+pub const MIN_ARTICULATION_DEG: f64 = 1.0;
 
 /// Least range of a prismatic joint's readings (mm) that counts as
 /// articulation, the slide's counterpart of [`MIN_ARTICULATION_DEG`]: a 1°
@@ -547,9 +547,9 @@ impl DataSet {
     /// Groups the rows of a poses file by point; `file` names it in errors.
     ///
     /// # Errors
-    /// A point with fewer than `MIN_TOUCHES` touches (at its first line,
+    /// A point with fewer than [`MIN_TOUCHES`] touches (at its first line,
     /// field `point`); an empty file; readings without articulation (no
-    /// point's touches span `MIN_ARTICULATION_DEG` in any joint).
+    /// point's touches span [`MIN_ARTICULATION_DEG`] in any joint).
     ///
     /// ```
     /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}};
@@ -913,7 +913,7 @@ impl DataSet {
     /// # Errors
     ///
     /// `q` of another length than `joints · points.len()`, no touches,
-    /// non-finite readings, a point with fewer than `MIN_TOUCHES`
+    /// non-finite readings, a point with fewer than [`MIN_TOUCHES`]
     /// touches, readings without articulation, a length that names an
     /// unknown point, joins a point to itself, repeats a pair, or has a
     /// distance that is not positive or an uncertainty below 0.

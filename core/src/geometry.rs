@@ -53,7 +53,7 @@ pub fn rigid_distance(a: &[[f64; 3]], b: &[[f64; 3]], reflect: bool) -> f64 {
 }
 
 /// The best rigid motion of one point set onto another
-/// (`best_rigid_motion`): `y ≈ rotation (x − from) + to`.
+/// ([`best_rigid_motion`]): `y ≈ rotation (x − from) + to`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct RigidMotion {
     /// The rotation (`det = −1`, a mirror, when one was asked for).

@@ -133,7 +133,7 @@ pub struct Rule {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Relation {
     /// Singular value of the direction (scaled), or 0 for a structural one.
-    pub(crate) singular_value: f64,
+    pub singular_value: f64,
     /// `(parameter, coefficient)`: moving the parameters by these amounts
     /// (mm, rad) together moves no touch — for a null relation, the first
     /// is the dependent parameter with coefficient 1; for a weak direction, a
@@ -165,12 +165,12 @@ pub struct FreeParameter {
     pub sigma: f64,
     /// Cosine between the parameter's axis and the identifiable subspace
     /// (1 = fully identifiable), in scaled units.
-    pub(crate) identifiability: f64,
+    pub identifiability: f64,
 }
 
 /// A strong correlation between two free parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct Correlation {
+pub struct Correlation {
     /// First parameter.
     pub a: String,
     /// Second parameter.
@@ -185,33 +185,33 @@ pub struct Identification {
     /// Parameter names in the fixed order.
     pub parameters: Vec<String>,
     /// The reach `R` dividing angle columns, mm.
-    pub(crate) reach_mm: f64,
+    pub reach_mm: f64,
     /// How columns were scaled, in words.
-    pub(crate) scaling: String,
+    pub scaling: String,
     /// Singular values of the scaled Jacobian, descending, all columns.
-    pub(crate) singular_values: Vec<f64>,
+    pub singular_values: Vec<f64>,
     /// Singular values after the structural rules (removed columns and
     /// projected directions), descending.
     pub analysed_singular_values: Vec<f64>,
     /// Threshold: `1e-7 × s_max` (the numerical rank's relative tolerance).
-    pub(crate) threshold: f64,
+    pub threshold: f64,
     /// Identifiable parameter combinations.
     pub rank: usize,
     /// `s_max / s_min` over the identifiable part.
-    pub(crate) condition_number: f64,
+    pub condition_number: f64,
     /// Structural rules that fired.
     pub rules: Vec<Rule>,
     /// Unidentifiable directions among the analysed parameters, one per
     /// redundant fixed parameter (the structural ones are in `rules`).
     pub null_relations: Vec<Relation>,
     /// Weak directions (singular value below 1e-3 of `s_max`, above the threshold).
-    pub(crate) weak_relations: Vec<Relation>,
+    pub weak_relations: Vec<Relation>,
     /// The recommended fixed set, with reasons.
     pub fixed: Vec<Fixed>,
     /// The free parameters with predicted σ.
     pub free: Vec<FreeParameter>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
-    pub(crate) correlations: Vec<Correlation>,
+    pub correlations: Vec<Correlation>,
     /// Model changes to consider: the D-H joints with nearly parallel axes
     /// that the Hayati parameterisation suits ([`crate::hayati`]).
     /// Absent from JSON when empty.

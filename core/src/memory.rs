@@ -71,9 +71,9 @@ pub(crate) const fn data_set_bytes_per_touch(joints: usize, conditions: usize) -
 )]
 pub struct OutOfMemory {
     /// What the memory was for (names the input that sized it).
-    pub(crate) what: String,
+    pub what: String,
     /// The bytes asked for (`usize::MAX` when the size itself overflowed).
-    pub(crate) bytes: usize,
+    pub bytes: usize,
 }
 
 impl OutOfMemory {

@@ -142,7 +142,7 @@ impl ChainShape {
 
     /// A shape from its joint count and its prismatic joints (bit `i` for
     /// joint `i`).
-    pub(crate) fn from_mask(joints: usize, prismatic: u16) -> Result<ChainShape, ShapeError> {
+    pub fn from_mask(joints: usize, prismatic: u16) -> Result<ChainShape, ShapeError> {
         if !(1..=MAX_JOINTS).contains(&joints) {
             return Err(ShapeError::Joints(joints));
         }
@@ -685,9 +685,9 @@ impl DhParams {
         }
     }
 
-    /// The parameter at `column` of this arm: [`ParamId::from_column`] with
+    /// The parameter at `column` of this arm: `ParamId::from_column` with
     /// a Hayati joint's d-slot named [`ParamKind::Beta`].
-    pub(crate) fn param_id(&self, column: usize) -> Option<ParamId> {
+    pub fn param_id(&self, column: usize) -> Option<ParamId> {
         let id = ParamId::from_column(self.joint_count(), column)?;
         Some(match id.kind {
             ParamKind::D => ParamId {
@@ -698,7 +698,7 @@ impl DhParams {
         })
     }
 
-    /// This arm's parameters in the fixed order (see `DhParams::param_id`).
+    /// This arm's parameters in the fixed order (see [`DhParams::param_id`]).
     pub fn param_ids(&self) -> impl Iterator<Item = ParamId> + '_ {
         (0..self.param_count()).filter_map(|c| self.param_id(c))
     }
@@ -793,7 +793,7 @@ impl DhParams {
     /// names, and a joint named with an `hbeta…` is a Hayati joint (its `d`
     /// structurally 0). `None` unless the names are exactly the `4n + 3` of
     /// an `n`-joint arm, each once.
-    pub(crate) fn from_named(values: impl IntoIterator<Item = (ParamId, f64)>) -> Option<DhParams> {
+    pub fn from_named(values: impl IntoIterator<Item = (ParamId, f64)>) -> Option<DhParams> {
         let values: Vec<(ParamId, f64)> = values.into_iter().collect();
         let n = values.len().checked_sub(3)? / 4;
         if n == 0 || values.len() != param_count(n) {

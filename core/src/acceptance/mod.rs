@@ -80,7 +80,7 @@ pub(crate) const P_FORM: &str = "P_Form.Sph.1x25::Art";
 pub(crate) const L_DIA: &str = "L_Dia.5x5::Art";
 /// See [`P_SIZE`].
 pub(crate) const E_UNI: &str = "E_Uni::Art";
-/// See `P_SIZE`.
+/// See [`P_SIZE`].
 pub(crate) const SPAT: &str = "SPAT";
 
 /// How each articulation's centre of an `L_Dia` placement is fitted.

@@ -38,7 +38,7 @@ pub struct GrossCorrection {
     /// Calibrated value, in `unit`.
     pub calibrated: f64,
     /// The largest move accepted, in `unit`.
-    pub(crate) tolerance: f64,
+    pub tolerance: f64,
 }
 
 impl GrossCorrection {
@@ -160,9 +160,9 @@ pub fn gross_corrections(
 #[non_exhaustive]
 pub struct ChiSquare {
     /// `Σr²` (weighted cost).
-    pub(crate) statistic: f64,
+    pub statistic: f64,
     /// Degrees of freedom.
-    pub(crate) dof: usize,
+    pub dof: usize,
     /// `P(χ²_dof ≥ statistic)`: small when the residuals are larger than
     /// the noise explains.
     pub p_upper: f64,
@@ -242,12 +242,12 @@ impl ChiSquare {
     }
 
     /// Whether the fit is far outside the stated noise, in either tail.
-    pub(crate) fn far_outside(&self) -> bool {
+    pub fn far_outside(&self) -> bool {
         self.p_upper < CHI_SQUARE_REFUSE || self.p_lower < CHI_SQUARE_REFUSE
     }
 
     /// In words. A tail below 0.001 but not below 10⁻⁹ (the refusal
-    /// level, `ChiSquare::far_outside`) is a note, and its sentence says so — with
+    /// level, [`ChiSquare::far_outside`]) is a note, and its sentence says so — with
     /// what it suggests — so that it cannot read as a refusal beside
     /// "Verdict: usable".
     pub fn describe(&self) -> String {
@@ -341,7 +341,7 @@ pub struct OutlierScreen {
     /// `sigma0`): far below `sigma0` when the touches it weighs down are
     /// what made the plain fit's residuals large; about `sigma0` when
     /// every residual is large (a wrong minimum, a wrong model).
-    pub(crate) scale: f64,
+    pub scale: f64,
 }
 
 impl OutlierScreen {
@@ -429,7 +429,7 @@ pub struct PositionUncertainty {
     /// A single touch's own scatter at the same coverage: the 95 % radius
     /// of an isotropic 3-D error of the touch's σ per coordinate,
     /// `2.7955·σ_touch`, mm: what the arm's uncertainty is compared with.
-    pub(crate) touch_mm: f64,
+    pub touch_mm: f64,
 }
 
 impl PositionUncertainty {

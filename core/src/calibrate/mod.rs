@@ -197,7 +197,7 @@ pub struct FitInputs<'p> {
 
 /// [`calibrate`] with a given solver and context (a progress observer), on
 /// `inputs` (which may add parameter blocks and residual terms). Checks
-/// every setting first (`ModelOptions::check_for`,
+/// every setting first ([`ModelOptions::check_for`],
 /// [`SolverSettings::check`]).
 pub fn calibrate_with(
     inputs: FitInputs<'_>,

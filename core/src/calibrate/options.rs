@@ -241,9 +241,9 @@ impl ModelOptions {
     }
 
     /// [`ModelOptions::check`] for the arm `arm`, and the prior's
-    /// parameters are the arm's ([`crate::tolerances::Tolerances::check_for`]:
+    /// parameters are the arm's (`crate::tolerances::Tolerances::check_for`:
     /// a Hayati joint has `hbeta…`, not `d…`).
-    pub(crate) fn check_for(&self, arm: &crate::params::DhParams) -> Result<(), OptionError> {
+    pub fn check_for(&self, arm: &crate::params::DhParams) -> Result<(), OptionError> {
         self.check(arm.joint_count())?;
         match &self.prior {
             Some(t) => t.check_for(arm),

@@ -23,9 +23,9 @@ pub struct Phase {
     /// What ran: `anneal`, `lm`, `circle sweeps`, …
     pub name: String,
     /// Cost or energy evaluations (positions only).
-    pub(crate) cost_evaluations: usize,
+    pub cost_evaluations: usize,
     /// Jacobian evaluations.
-    pub(crate) jacobian_evaluations: usize,
+    pub jacobian_evaluations: usize,
     /// Wall time, s.
     #[serde(skip)]
     pub seconds: f64,
@@ -33,7 +33,7 @@ pub struct Phase {
 
 impl Phase {
     /// An empty phase.
-    pub(crate) fn new(name: &str) -> Phase {
+    pub fn new(name: &str) -> Phase {
         Phase {
             name: name.to_string(),
             cost_evaluations: 0,
@@ -188,7 +188,7 @@ pub struct TermRows {
     /// Its residual rows.
     pub rows: usize,
     /// Unknowns it eliminates.
-    pub(crate) eliminated: usize,
+    pub eliminated: usize,
 }
 
 /// Residual and unknown counts, and the a-posteriori variance factor.
@@ -306,7 +306,7 @@ pub struct Checks {
     /// beyond `outlier_threshold`), largest first.
     pub outliers: Vec<checks::Outlier>,
     /// The threshold of the outlier test, in σ of a touch.
-    pub(crate) outlier_threshold: f64,
+    pub outlier_threshold: f64,
     /// When a plain fit named more than one touch, the robust refit that
     /// screened the list (`outliers` then keeps to the touches it weighs
     /// down); `None` otherwise.
@@ -334,13 +334,13 @@ pub struct Calibration {
     /// a revolute arm's JSON is what it always was and the chain read back
     /// ([`Calibration::restore_params`]) is the one fitted.
     #[serde(default, skip_serializing_if = "all_revolute")]
-    pub(crate) joint_types: Vec<JointKind>,
+    pub joint_types: Vec<JointKind>,
     /// Per column of the auxiliary blocks (a frame, a scalar), in the
     /// layout's order; absent when there is none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub auxiliary: Vec<AuxiliaryEstimate>,
     /// Free-parameter pairs with `|ρ| > 0.9`.
-    pub(crate) correlations: Vec<Correlation>,
+    pub correlations: Vec<Correlation>,
     /// Every correlation of the free parameters.
     pub correlation_matrix: CorrelationMatrix,
     /// Counts and the variance factor.
@@ -408,7 +408,7 @@ impl Calibration {
     /// Restores [`Calibration::params`] from the estimates, after reading a
     /// calibration back from JSON: each value to the parameter it names (a
     /// joint with an `hbeta…` is a Hayati joint).
-    pub(crate) fn restore_params(&mut self) {
+    pub fn restore_params(&mut self) {
         if let Some(mut p) =
             DhParams::from_named(self.parameters.iter().map(|e| (e.id, e.calibrated)))
         {

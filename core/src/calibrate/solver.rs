@@ -258,15 +258,15 @@ pub struct Outcome {
     /// Why it stopped.
     pub stop: Stop,
     /// Iterations of the final LM (0 without one).
-    pub(crate) iterations: usize,
+    pub iterations: usize,
     /// Cost per iteration of the final LM.
-    pub(crate) history: Vec<LmIteration>,
+    pub history: Vec<LmIteration>,
     /// Work per phase, in order.
-    pub(crate) phases: Vec<Phase>,
+    pub phases: Vec<Phase>,
     /// The annealing's account (`sa`, `hybrid`).
     pub anneal: Option<AnnealTrace>,
     /// The global search's account.
-    pub(crate) global: Option<GlobalTrace>,
+    pub global: Option<GlobalTrace>,
     /// The normal equations at `params` under the task's weights.
     pub(crate) normal: Normal,
 }

@@ -265,7 +265,7 @@ fn check_prismatic(arm: &DhParams, physics: &Physics, fit: &Beyond) -> Result<()
 /// change with `q` smaller still, so a few rounds reach round-off. A
 /// prismatic joint's reading (mm) is its own: nothing corrects it (see
 /// [`Effects::new`]).
-pub(crate) fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
+pub fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) -> Vec<f64> {
     let loads = loads_of(arm, physics);
     let mut q = angles.to_vec();
     for _ in 0..8 {
@@ -280,7 +280,7 @@ pub(crate) fn readings_for(arm: &DhParams, physics: &Physics, angles: &[f64]) ->
 /// The joint angles the chain sees at the encoder readings `readings`
 /// (harmonics and compliance, as [`Effects`] corrects a pose): the inverse
 /// of [`readings_for`], to round-off.
-pub(crate) fn angles_for(arm: &DhParams, physics: &Physics, readings: &[f64]) -> Vec<f64> {
+pub fn angles_for(arm: &DhParams, physics: &Physics, readings: &[f64]) -> Vec<f64> {
     let delta = pose_corrections(arm, physics, loads_of(arm, physics).as_ref(), readings);
     readings.iter().zip(&delta).map(|(q, d)| q + d).collect()
 }

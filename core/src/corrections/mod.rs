@@ -68,7 +68,7 @@ use crate::error::OptionError;
 use crate::setting::Setting;
 
 /// ISO 1's reference temperature, °C: the calibrated lengths are at it.
-pub(crate) const REFERENCE_TEMPERATURE_C: f64 = 20.0;
+pub const REFERENCE_TEMPERATURE_C: f64 = 20.0;
 
 /// A mass and where it is.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -129,7 +129,7 @@ pub struct Physics {
     #[serde(default)]
     pub cte_per_k: Option<f64>,
     /// The temperature the geometry is at, °C (default
-    /// `REFERENCE_TEMPERATURE_C`).
+    /// [`REFERENCE_TEMPERATURE_C`]).
     #[serde(default)]
     pub reference_temperature_c: Option<f64>,
     /// Drift of the base against the instrument, mm/h (a fit's result,
@@ -173,7 +173,7 @@ impl Physics {
     }
 
     /// The reference temperature, °C.
-    pub(crate) fn reference_c(&self) -> f64 {
+    pub fn reference_c(&self) -> f64 {
         self.reference_temperature_c
             .unwrap_or(REFERENCE_TEMPERATURE_C)
     }
@@ -279,7 +279,7 @@ pub(crate) enum Column {
 
 /// Harmonic orders above this are refused: an encoder's errors of interest
 /// are the first few; beyond, a term fits the data's noise.
-pub(crate) const MAX_HARMONIC_ORDER: u32 = 16;
+pub const MAX_HARMONIC_ORDER: u32 = 16;
 
 impl Beyond {
     /// Whether no model is switched on.
@@ -362,7 +362,7 @@ impl Beyond {
     ///
     /// # Errors
     ///
-    /// A malformed entry, an order outside 1..=`MAX_HARMONIC_ORDER`, or
+    /// A malformed entry, an order outside 1..=[`MAX_HARMONIC_ORDER`], or
     /// a harmonic listed twice.
     pub fn parse_harmonics(text: &str) -> Result<Vec<(usize, u32)>, OptionError> {
         let mut out = Vec::new();

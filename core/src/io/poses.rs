@@ -89,7 +89,7 @@ impl Poses {
     /// No rows, with room for `rows` rows.
     ///
     /// # Panics
-    /// If the room cannot be allocated (see `Poses::try_with_capacity`).
+    /// If the room cannot be allocated (see [`Poses::try_with_capacity`]).
     pub fn with_capacity(joints: usize, rows: usize) -> Poses {
         match Poses::try_with_capacity(joints, rows) {
             Ok(p) => p,
@@ -99,7 +99,7 @@ impl Poses {
 
     /// No rows, with room for `rows` rows, or an [`OutOfMemory`] when
     /// that cannot be allocated.
-    pub(crate) fn try_with_capacity(joints: usize, rows: usize) -> Result<Poses, OutOfMemory> {
+    pub fn try_with_capacity(joints: usize, rows: usize) -> Result<Poses, OutOfMemory> {
         let what = "the rows' readings";
         Ok(Poses {
             joints,
@@ -126,7 +126,7 @@ impl Poses {
     }
 
     /// Per row, the temperature (°C), when recorded.
-    pub(crate) fn temperatures(&self) -> Option<&[f64]> {
+    pub fn temperatures(&self) -> Option<&[f64]> {
         self.temperature.as_deref()
     }
 
@@ -484,15 +484,15 @@ pub fn read_poses(
 
 /// What a file of joint readings held: the readings as [`Poses`] (a touch
 /// per row, of the row's `point`), and, for a reference-positions file, its
-/// rows whole (positions, frames; `super::parse_positions`).
+/// rows whole (positions, frames; [`super::parse_positions`]).
 pub(crate) type PosesOrPositions = (Poses, Vec<Warning>, Option<super::Positions>);
 
 /// Reads a poses file or a reference-positions file (standard input for
-/// `-`): `parse_poses_or_positions`.
+/// `-`): [`parse_poses_or_positions`].
 ///
 /// # Errors
 ///
-/// As `parse_poses_or_positions`.
+/// As [`parse_poses_or_positions`].
 pub fn read_poses_or_positions(
     path: &Path,
     unit: AngleUnit,
@@ -514,7 +514,7 @@ pub fn read_poses_or_positions(
 ///
 /// As [`parse_poses`] or [`super::parse_positions`], naming file, line
 /// and field.
-pub(crate) fn parse_poses_or_positions(
+pub fn parse_poses_or_positions(
     text: &str,
     file: &str,
     unit: AngleUnit,

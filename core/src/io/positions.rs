@@ -191,7 +191,7 @@ impl Positions {
     }
 
     /// Per row, the temperature (°C), when recorded.
-    pub(crate) fn temperatures(&self) -> Option<&[f64]> {
+    pub fn temperatures(&self) -> Option<&[f64]> {
         self.temperature.as_deref()
     }
 
@@ -369,12 +369,12 @@ impl Positions {
 
     /// Row `i`'s orientation seen (`[w, x, y, z]`, the tool frame in the
     /// row's frame), when the row gives one.
-    pub(crate) fn orientation(&self, i: usize) -> Option<[f64; 4]> {
+    pub fn orientation(&self, i: usize) -> Option<[f64; 4]> {
         self.orientation[i]
     }
 
     /// How many rows give an orientation.
-    pub(crate) fn oriented_rows(&self) -> usize {
+    pub fn oriented_rows(&self) -> usize {
         self.orientation.iter().filter(|o| o.is_some()).count()
     }
 
@@ -655,7 +655,7 @@ const SHAPE: &str = "point,q1,...,qn,x,y,z[,qw,qx,qy,qz][,frame][,tool][,uncerta
 ///
 /// # Errors
 ///
-/// As `parse_positions`.
+/// As [`parse_positions`].
 pub fn read_positions(
     path: &Path,
     unit: AngleUnit,
@@ -679,7 +679,7 @@ pub fn read_positions(
 /// than [`MIN_FRAME_POSITIONS`] rows or with positions on one line (a
 /// registration needs three points that span a plane): each naming the
 /// line and field.
-pub(crate) fn parse_positions(
+pub fn parse_positions(
     text: &str,
     file: &str,
     unit: AngleUnit,

@@ -24,7 +24,7 @@
 //!
 //! Refused by file, line and field: another header, an empty label, a value
 //! that is not a finite number, a sphere with fewer than
-//! `MIN_SPHERE_POINTS` points (at its first line); where the arm puts the
+//! [`MIN_SPHERE_POINTS`] points (at its first line); where the arm puts the
 //! points is checked by `Spheres::check_geometry` (all of a sphere's
 //! points on one circle or line cannot fix a sphere). Readings that, as
 //! degrees, are all within ±2π give a warning (radians read as degrees), as
@@ -40,7 +40,7 @@ use super::units::AngleUnit;
 use crate::error::InputError;
 
 /// The fewest points that can fix a sphere of unknown centre and diameter.
-pub(crate) const MIN_SPHERE_POINTS: usize = 4;
+pub const MIN_SPHERE_POINTS: usize = 4;
 
 /// Below this ratio of the smallest to the largest spread of a sphere's
 /// points (the centred points' singular values), they lie on one circle (or
@@ -377,7 +377,7 @@ pub fn read_spheres(
 /// count than `joints` asks, or a `tool` column), an empty label, a value
 /// that is not a finite number, an articulation that is not a whole number
 /// from 1, a file without rows, and a sphere with fewer than
-/// `MIN_SPHERE_POINTS` points: each naming the line and field.
+/// [`MIN_SPHERE_POINTS`] points: each naming the line and field.
 pub fn parse_spheres(
     text: &str,
     file: &str,

@@ -206,7 +206,7 @@ pub enum KernelKind {
     User,
 }
 
-/// The shapes with generated kernels, their modules in `shipped`
+/// The shapes with generated kernels, their modules in [`shipped`]
 /// (`…h`: the extended chain, for arms with Hayati joints), and the
 /// arm's prepared parameters by joint count. Every count of 1 to
 /// [`MAX_JOINTS`](crate::params::MAX_JOINTS) has a variant; a shape

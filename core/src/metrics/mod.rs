@@ -10,7 +10,7 @@
 //!
 //! # Per point (socket) — `point_stats`
 //!
-//! With touches `x_1..x_n` (n ≥ `MIN_TOUCHES`), centroid `x̄ = (1/n) Σ x_i`
+//! With touches `x_1..x_n` (n ≥ [`MIN_TOUCHES`]), centroid `x̄ = (1/n) Σ x_i`
 //! and `δ_i = |x_i − x̄|`:
 //!
 //! | figure | formula | source |
@@ -124,7 +124,7 @@ pub enum MetricsError {
         /// touches passed to `point_stats`.
         at: String,
     },
-    /// A point has fewer than `MIN_TOUCHES` touches.
+    /// A point has fewer than [`MIN_TOUCHES`] touches.
     #[error(
         "point {} has {touches} touch(es); at least {MIN_TOUCHES} are needed",
         crate::error::quoted(label)
@@ -300,9 +300,9 @@ pub struct Evaluation {
     /// `e` across points: the paper's single-point repeatability (Fig. 6).
     pub single_point_e: Summary,
     /// `δ_max` across points (SPAT).
-    pub(crate) single_point_delta_max: Summary,
+    pub single_point_delta_max: Summary,
     /// `2s` across points (SPAT; makers quote it or `δ_max`).
-    pub(crate) single_point_two_s: Summary,
+    pub single_point_two_s: Summary,
     /// `d_error` (eq. 19) across all pairs of points (Fig. 7), or across
     /// [`Evaluation::pair_sample`]; `None` with a single point.
     pub pair_length_summary: Option<Summary>,
@@ -323,7 +323,7 @@ pub struct Evaluation {
 /// data set's touches (in its touch order; see the module documentation for
 /// the formulas). Memory is linear in the touches: pairs are summarised as
 /// they are computed, on up to two threads;
-/// `evaluate_threads` takes the count. Above `PAIR_TOUCH_BUDGET` touch
+/// [`evaluate_threads`] takes the count. Above `PAIR_TOUCH_BUDGET` touch
 /// distances the pairs are a sample (seed `DEFAULT_PAIR_SEED`;
 /// [`evaluate_seeded`] takes one), stated in [`Evaluation::pair_sample`].
 ///
@@ -356,7 +356,7 @@ pub fn evaluate(data: &DataSet, xyz: &[[f64; 3]]) -> Result<Evaluation, MetricsE
 /// Checks, before any work, that an evaluation of `data` can have the
 /// memory it needs beyond the data set, the positions its caller computes
 /// first included (`crate::memory::EVALUATE_BYTES_PER_TOUCH`): callers
-/// check before they compute them, `evaluate_threads` again.
+/// check before they compute them, [`evaluate_threads`] again.
 ///
 /// # Errors
 ///
@@ -378,7 +378,7 @@ pub(crate) const DEFAULT_THREADS: usize = 2;
 /// # Errors
 ///
 /// As [`evaluate`].
-pub(crate) fn evaluate_threads(
+pub fn evaluate_threads(
     data: &DataSet,
     xyz: &[[f64; 3]],
     threads: usize,
@@ -387,7 +387,7 @@ pub(crate) fn evaluate_threads(
     evaluate_with(data, xyz, Some((threads, DEFAULT_PAIR_SEED)))
 }
 
-/// `evaluate_threads` with the pairs, when sampled, drawn with `seed`
+/// [`evaluate_threads`] with the pairs, when sampled, drawn with `seed`
 /// (a session's, so that its outputs agree).
 ///
 /// # Errors

@@ -44,11 +44,11 @@ use crate::residuals::{Layout, TermError};
 pub struct CheckOptions {
     /// Relative step of the central differences (`h = step · max(1,
     /// |x_c|)`, in the column's own units: mm, rad), and half of it.
-    pub(crate) step: f64,
+    pub step: f64,
     /// Largest relative error that passes.
-    pub(crate) tolerance: f64,
+    pub tolerance: f64,
     /// The error's floor, relative to the term's largest gradient entry.
-    pub(crate) floor: f64,
+    pub floor: f64,
 }
 
 impl Default for CheckOptions {
@@ -74,9 +74,9 @@ pub struct BlockCheck {
     /// The term's `Jᵀr` there.
     pub analytic: f64,
     /// Half the central difference of its cost there.
-    pub(crate) numeric: f64,
+    pub numeric: f64,
     /// Their relative error (module documentation).
-    pub(crate) relative_error: f64,
+    pub relative_error: f64,
 }
 
 /// One term's check: its worst column per block.
@@ -102,7 +102,7 @@ impl TermCheck {
 #[derive(Clone, Debug, PartialEq)]
 pub struct GradientCheck {
     /// The tolerance it was judged by.
-    pub(crate) tolerance: f64,
+    pub tolerance: f64,
     /// Per term.
     pub terms: Vec<TermCheck>,
 }

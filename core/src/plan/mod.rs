@@ -227,12 +227,12 @@ pub struct Step {
     /// this one (plain, without the hedge), as the 95 % radius of an
     /// isotropic error of that variance, mm; `None` while the rows do not
     /// determine every free parameter.
-    pub(crate) criterion_mm: Option<f64>,
+    pub criterion_mm: Option<f64>,
 }
 
 /// The predicted uncertainty after the first `rows` choices.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct CurvePoint {
+pub struct CurvePoint {
     /// Rows chosen.
     pub rows: usize,
     /// The workspace's RMS 95 % radius, mm; `None` while the rows do not
@@ -246,12 +246,12 @@ pub struct JointSpan {
     /// Joint, from 1.
     pub joint: usize,
     /// Range of the chosen readings, degrees (mm for a prismatic joint).
-    pub(crate) chosen_deg: f64,
+    pub chosen_deg: f64,
     /// Range of the pool's, degrees (mm for a prismatic joint).
-    pub(crate) pool_deg: f64,
+    pub pool_deg: f64,
     /// Whether the joint is prismatic: its spans are mm.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub(crate) prismatic: bool,
+    pub prismatic: bool,
 }
 
 /// The random subsets a plan is compared with.
@@ -309,7 +309,7 @@ pub struct Plan {
     /// With random subsets of the same size.
     pub(crate) random: RandomBaseline,
     /// The predicted uncertainty as rows are added.
-    pub(crate) curve: Vec<CurvePoint>,
+    pub curve: Vec<CurvePoint>,
     /// Rows chosen per socket or sphere (touches and sphere points only).
     pub sockets: Vec<(String, usize)>,
     /// How far each joint turns over the chosen rows.

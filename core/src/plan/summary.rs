@@ -13,17 +13,17 @@ use crate::error::short;
 /// than this fraction.
 pub(crate) const KNEE: f64 = 0.10;
 
-/// Where more rows stop paying, read off a plan's curve (`knee`).
+/// Where more rows stop paying, read off a plan's curve ([`knee`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Knee {
-    /// Doubling from `rows` lowers the RMS by `gain` (< `KNEE`).
+    /// Doubling from `rows` lowers the RMS by `gain` (< [`KNEE`]).
     At {
-        /// Rows from which doubling gains less than `KNEE`.
+        /// Rows from which doubling gains less than [`KNEE`].
         rows: usize,
         /// The fraction doubling them lowers the RMS radius by.
         gain: f64,
     },
-    /// Every doubling the curve shows still gains `KNEE` or more; the
+    /// Every doubling the curve shows still gains [`KNEE`] or more; the
     /// last from `rows`, by `gain`.
     Beyond {
         /// Rows of the last doubling the curve shows.

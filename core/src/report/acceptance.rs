@@ -8,7 +8,7 @@ use super::{Figure, HTML_FILE, Report};
 use crate::acceptance::{Acceptance, Use};
 
 /// The figure of every placement's radial residuals.
-pub(crate) const SPHERE_RESIDUALS_SVG: &str = "sphere_residuals.svg";
+pub const SPHERE_RESIDUALS_SVG: &str = "sphere_residuals.svg";
 
 /// Every file `aacmm verify --report` writes, page first.
 pub const ACCEPTANCE_FILES: [&str; 2] = [HTML_FILE, SPHERE_RESIDUALS_SVG];

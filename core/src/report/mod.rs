@@ -10,12 +10,12 @@
 //!
 //! | figure | file | calibration | evaluation |
 //! |---|---|---|---|
-//! | single-point error `e` per point (paper Fig. 6) | `SINGLE_POINT_SVG` | ✓ | ✓ |
-//! | length errors: eq. 19 `\|d\|_error` per pair, reference lengths (Fig. 7) | `LENGTHS_SVG` | ✓ | ✓ |
-//! | parameter corrections ± 2σ, fixed ones with the reason | `PARAMETERS_SVG` | ✓ | |
-//! | singular values and threshold; correlation heat map | `IDENTIFIABILITY_SVG` | ✓ | |
-//! | histogram of the per-touch residual lengths `δ = \|x − x̄\|` | `RESIDUALS_SVG` | ✓ | ✓ |
-//! | LM cost per iteration; annealing energy against temperature | `SOLVER_SVG` | ✓ | |
+//! | single-point error `e` per point (paper Fig. 6) | [`SINGLE_POINT_SVG`] | ✓ | ✓ |
+//! | length errors: eq. 19 `\|d\|_error` per pair, reference lengths (Fig. 7) | [`LENGTHS_SVG`] | ✓ | ✓ |
+//! | parameter corrections ± 2σ, fixed ones with the reason | [`PARAMETERS_SVG`] | ✓ | |
+//! | singular values and threshold; correlation heat map | [`IDENTIFIABILITY_SVG`] | ✓ | |
+//! | histogram of the per-touch residual lengths `δ = \|x − x̄\|` | [`RESIDUALS_SVG`] | ✓ | ✓ |
+//! | LM cost per iteration; annealing energy against temperature | [`SOLVER_SVG`] | ✓ | |
 //! | predicted 95 % radius of the position error per sampled pose against the distance from the shoulder, RMS per band | [`UNCERTAINTY_MAP_SVG`] | ✓ (with a map) | |
 //!
 //! Before calibration is drawn grey, after in colour (blue for fitted
@@ -62,17 +62,17 @@ pub use calibration::session_report;
 /// The page.
 pub const HTML_FILE: &str = "report.html";
 /// Single-point error `e` per point, before and after (paper Fig. 6).
-pub(crate) const SINGLE_POINT_SVG: &str = "single-point-errors.svg";
+pub const SINGLE_POINT_SVG: &str = "single-point-errors.svg";
 /// Length errors: eq. 19 per pair and against reference lengths (Fig. 7).
-pub(crate) const LENGTHS_SVG: &str = "length-errors.svg";
+pub const LENGTHS_SVG: &str = "length-errors.svg";
 /// Parameter corrections with ± 2σ.
-pub(crate) const PARAMETERS_SVG: &str = "parameter-corrections.svg";
+pub const PARAMETERS_SVG: &str = "parameter-corrections.svg";
 /// Singular values and the correlation matrix.
-pub(crate) const IDENTIFIABILITY_SVG: &str = "identifiability.svg";
+pub const IDENTIFIABILITY_SVG: &str = "identifiability.svg";
 /// Per-touch residual lengths, before and after.
-pub(crate) const RESIDUALS_SVG: &str = "residuals.svg";
+pub const RESIDUALS_SVG: &str = "residuals.svg";
 /// The solver's progress.
-pub(crate) const SOLVER_SVG: &str = "solver-progress.svg";
+pub const SOLVER_SVG: &str = "solver-progress.svg";
 /// The 3-D errors at reference positions, when the calibration had them
 /// (not among [`CALIBRATION_FILES`], which every calibration writes).
 pub const POSITIONS_SVG: &str = "position-errors.svg";
@@ -85,8 +85,8 @@ pub const BEYOND_SVG: &str = "beyond-geometry.svg";
 pub const UNCERTAINTY_MAP_SVG: &str = "uncertainty-map.svg";
 
 /// Every file `calibration_report` writes for touches, page first
-/// (without touches, the three touch figures — `SINGLE_POINT_SVG`,
-/// `LENGTHS_SVG`, `RESIDUALS_SVG` — are left out).
+/// (without touches, the three touch figures — [`SINGLE_POINT_SVG`],
+/// [`LENGTHS_SVG`], [`RESIDUALS_SVG`] — are left out).
 pub const CALIBRATION_FILES: [&str; 7] = [
     HTML_FILE,
     SINGLE_POINT_SVG,
@@ -224,7 +224,7 @@ pub(crate) struct ValidationRow<'a> {
     pub json: Option<String>,
 }
 
-/// What `calibration_report` shows.
+/// What [`calibration_report`] shows.
 #[derive(Clone, Debug)]
 pub(crate) struct CalibrationInput<'a> {
     /// The page's heading.
@@ -318,7 +318,7 @@ pub(crate) struct PoseErrors {
     pub(crate) orientation_deg: Vec<Option<f64>>,
 }
 
-/// What `evaluation_report` shows.
+/// What [`evaluation_report`] shows.
 #[derive(Clone, Debug)]
 pub(crate) struct EvaluationInput<'a> {
     /// The page's heading.

@@ -26,7 +26,7 @@ pub(crate) const MAX_BACKLASH_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
 pub(crate) const MAX_SLIDE_BACKLASH_MM: f64 = 0.5;
 
 /// The name of the correction block in a layout.
-pub(crate) const BLOCK_NAME: &str = "beyond";
+pub const BLOCK_NAME: &str = "beyond";
 
 impl CorrectionBlock {
     /// The physics at the block's values `x` (internal units).

@@ -2,7 +2,7 @@
 //!
 //! The arm's geometry comes first, in the paper's fixed order (`a1..an,
 //! d1..dn, α1..αn, θ1..θn, Bx, By, Bz`; a Hayati joint's second slot is
-//! its `β`, named `hbeta…` — `crate::params::DhParams::param_id`), then
+//! its `β`, named `hbeta…` — [`crate::params::DhParams::param_id`]), then
 //! any auxiliary [`Block`]: a rigid [`Frame`] (an instrument station, an
 //! artefact placement), a [`Scalar`], a [`Vector`] (one value per joint).
 //! Each knows its columns' names and units, its start values, how a step

@@ -11,7 +11,7 @@ use super::{At, Term, TermError};
 pub struct TermFold {
     /// The term over the fold's training observations, on the same blocks
     /// as the whole term (the fold fits the same layout).
-    pub(crate) training: Box<dyn Term>,
+    pub training: Box<dyn Term>,
     /// Scores the observations the fold holds out.
     pub held_out: Box<dyn HeldOutScorer>,
 }

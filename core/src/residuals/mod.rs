@@ -706,7 +706,7 @@ pub enum Role {
 
 impl Role {
     /// Whether a term of this role is prior knowledge rather than data.
-    pub(crate) fn is_prior(self) -> bool {
+    pub fn is_prior(self) -> bool {
         matches!(self, Role::Prior | Role::Held)
     }
 }
@@ -736,7 +736,7 @@ pub trait Term: dyn_clone::DynClone + Send + Sync + std::fmt::Debug {
     /// Whether this is prior knowledge rather than data: left out of the
     /// data's cost (the start arm's cost, the grid of the global search)
     /// and, in the covariance, not rescaled by the fit's σ̂. By default,
-    /// as its role says (`Role::is_prior`).
+    /// as its role says ([`Role::is_prior`]).
     fn is_prior(&self) -> bool {
         self.role().is_prior()
     }

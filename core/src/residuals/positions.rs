@@ -121,11 +121,11 @@ pub fn register(params: &DhParams, data: &PositionData) -> Result<Vec<Registrati
 /// # Errors
 ///
 /// The kernel's.
-pub(crate) fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, TermError> {
+pub fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, TermError> {
     layout_with(params, data, &Physics::default(), &Beyond::default())
 }
 
-/// `layout_for` of an arm with `physics` whose fit estimates the models
+/// [`layout_for`] of an arm with `physics` whose fit estimates the models
 /// `fit` beyond geometry: their [`CorrectionBlock`] first (when anything is
 /// fitted or stated), the frames registered with the stated corrections
 /// applied.
@@ -133,7 +133,7 @@ pub(crate) fn layout_for(params: &DhParams, data: &DataSet) -> Result<Layout, Te
 /// # Errors
 ///
 /// The kernel's; a frame named as the corrections' block
-/// (`BLOCK_NAME`) beside them. A stated correction whose
+/// (`super::beyond::BLOCK_NAME`) beside them. A stated correction whose
 /// conditions `data` lack (an expansion without temperatures) is left out
 /// of the frames' start; the session refuses such data first.
 pub fn layout_with(

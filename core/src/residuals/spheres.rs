@@ -49,13 +49,13 @@ pub(crate) const TERM: &str = "spheres";
 
 /// The smallest stated sphere diameter, mm: below it the value was most
 /// likely given in metres (a 25 mm sphere as `0.025`).
-pub(crate) const MIN_SPHERE_DIAMETER_MM: f64 = 1.0;
+pub const MIN_SPHERE_DIAMETER_MM: f64 = 1.0;
 /// The largest, mm: no reference sphere an arm probes is a metre across.
-pub(crate) const MAX_SPHERE_DIAMETER_MM: f64 = 1000.0;
+pub const MAX_SPHERE_DIAMETER_MM: f64 = 1000.0;
 
 /// Checks a stated sphere diameter (mm): finite, between
-/// `MIN_SPHERE_DIAMETER_MM` (below it, metres) and
-/// `MAX_SPHERE_DIAMETER_MM`.
+/// [`MIN_SPHERE_DIAMETER_MM`] (below it, metres) and
+/// [`MAX_SPHERE_DIAMETER_MM`].
 ///
 /// ```
 /// use aacmm_core::residuals::spheres::check_sphere_diameter;
@@ -713,7 +713,7 @@ impl Term for SphereTerm {
     }
 
     /// Each sphere's points dealt to the folds (never a whole sphere):
-    /// see `MIN_TRAINING_POINTS`'s module.
+    /// see `folds::MIN_TRAINING_POINTS`'s module.
     fn split(
         &self,
         at: &At<'_>,

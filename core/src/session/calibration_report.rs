@@ -15,9 +15,9 @@ use super::{Verdict, spheres, tools};
 #[non_exhaustive]
 pub struct Units {
     /// `mm`.
-    pub(crate) lengths: String,
+    pub lengths: String,
     /// `deg`.
-    pub(crate) angles: String,
+    pub angles: String,
 }
 
 /// Held-out validation.
@@ -83,7 +83,7 @@ pub struct CalibrationReport {
     /// Seed of every random draw.
     pub seed: u64,
     /// Units of the parameter tables.
-    pub(crate) units: Units,
+    pub units: Units,
     /// Touches fitted.
     pub touches: usize,
     /// Points fitted.

@@ -49,7 +49,7 @@ impl<'a> EvaluationReport<'a> {
     ///
     /// # Errors
     ///
-    /// The metrics' (`evaluate_threads`): positions that do not fit the
+    /// The metrics' ([`evaluate_threads`]): positions that do not fit the
     /// data, or are not finite, or figures that overflow.
     ///
     /// ```

@@ -44,15 +44,15 @@ pub struct IdentifyReport {
     /// The noise the touches are weighed with, in words (degrees and mm).
     pub noise: String,
     /// The analysis.
-    pub(crate) identification: Identification,
+    pub identification: Identification,
     /// The rank and conditioning with the arm's tolerances, when it has
     /// any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub(crate) prior: Option<PriorConditioning>,
+    pub prior: Option<PriorConditioning>,
     /// The columns of the models beyond geometry asked for, judged after
     /// the geometry: kept or held, with the σ the data predict.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub(crate) corrections: Vec<CorrectionColumn>,
+    pub corrections: Vec<CorrectionColumn>,
     /// Points probed on reference spheres analysed with the data (their
     /// centres, and sizes unless stated, fitted and eliminated); absent
     /// without them.
@@ -75,7 +75,7 @@ pub struct SphereCount {
 
 /// A correction column beyond geometry as the data see it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub(crate) struct CorrectionColumn {
+pub struct CorrectionColumn {
     /// Its name (`compliance2`, `harmonic5.sin1`).
     pub name: String,
     /// Its unit.

@@ -27,17 +27,17 @@ pub struct FrameEvaluation {
     pub name: String,
     /// Registered as the arm file states it (`true`), or in closed form on
     /// the positions evaluated (`false`: optimistic).
-    pub(crate) from_arm_file: bool,
+    pub from_arm_file: bool,
     /// Its rotation vector, deg.
     pub rotation_deg: [f64; 3],
     /// Its translation, mm.
-    pub(crate) translation_mm: [f64; 3],
+    pub translation_mm: [f64; 3],
     /// The 3-D errors `|R p + t − y|` of its rows, mm.
-    pub(crate) errors: PositionErrors,
+    pub errors: PositionErrors,
     /// The orientation errors of its rows that give the tool's
     /// orientation, deg; absent when none does.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) orientations: Option<PositionErrors>,
+    pub orientations: Option<PositionErrors>,
 }
 
 /// The mount of the 6-D target the orientations were evaluated with.
@@ -54,15 +54,15 @@ pub struct MountEvaluation {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PositionEvaluation {
     /// The positions file.
-    pub(crate) positions_file: String,
+    pub positions_file: String,
     /// Over every row, mm.
-    pub(crate) errors: PositionErrors,
+    pub errors: PositionErrors,
     /// Per frame, in the file's order.
     pub frames: Vec<FrameEvaluation>,
     /// Over every row that gives the tool's orientation, deg; absent when
     /// none does.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) orientations: Option<PositionErrors>,
+    pub orientations: Option<PositionErrors>,
     /// The 6-D target's mount the orientations were evaluated with; absent
     /// without orientations.
     #[serde(skip_serializing_if = "Option::is_none")]

@@ -73,7 +73,7 @@ pub struct ProbeQualification {
     /// Points fitted.
     pub points: usize,
     /// The tip offset stated in the arm file, mm (last joint's frame).
-    pub(crate) nominal_offset: [f64; 3],
+    pub nominal_offset: [f64; 3],
     /// The qualified tip offset, mm.
     pub offset: [f64; 3],
     /// Its σ per coordinate, mm.
@@ -81,21 +81,21 @@ pub struct ProbeQualification {
     /// `|offset − nominal_offset|`, mm.
     pub moved_mm: f64,
     /// The tolerance on that move, mm.
-    pub(crate) tolerance_mm: f64,
+    pub tolerance_mm: f64,
     /// The ball diameter stated in the arm file, mm (none: taken as 0).
-    pub(crate) nominal_ball_mm: Option<f64>,
+    pub nominal_ball_mm: Option<f64>,
     /// The effective ball diameter, mm.
     pub ball_diameter_mm: f64,
     /// Its σ, mm.
     pub ball_sigma_mm: f64,
     /// The reference sphere's certified diameter, mm.
-    pub(crate) sphere_diameter_mm: f64,
+    pub sphere_diameter_mm: f64,
     /// The range of the radial residuals at the qualified probe, mm.
-    pub(crate) form_mm: f64,
+    pub form_mm: f64,
     /// Their RMS, mm.
-    pub(crate) rms_mm: f64,
+    pub rms_mm: f64,
     /// The limit on the form, mm, when one was set.
-    pub(crate) max_form_mm: Option<f64>,
+    pub max_form_mm: Option<f64>,
     /// Why the qualification cannot be used (empty: it can).
     pub refusals: Vec<String>,
     /// What the user should know of a usable one.

@@ -128,7 +128,7 @@ impl Problem {
 
     /// Validates on `held_out` too. Its reference positions are scored in
     /// the fitted frames of their names; a frame the fit does not have is
-    /// refused, unless `Problem::registering_held_out_frames` was called
+    /// refused, unless [`Problem::registering_held_out_frames`] was called
     /// first.
     ///
     /// # Errors
@@ -162,7 +162,7 @@ impl Problem {
     /// [`Problem::with_held_out`].
     ///
     /// [`HeldOut::registered_on_itself`]: super::HeldOut::registered_on_itself
-    pub(crate) fn registering_held_out_frames(mut self) -> Problem {
+    pub fn registering_held_out_frames(mut self) -> Problem {
         self.register_held_out = true;
         self
     }

@@ -451,7 +451,7 @@ impl Request {
 
     /// Whether held-out positions in a frame the fit does not have are
     /// registered on themselves (and said so) rather than refused
-    /// (`Problem::registering_held_out_frames`; default `false`).
+    /// ([`Problem::registering_held_out_frames`]; default `false`).
     pub fn register_held_out(mut self, yes: bool) -> Request {
         self.register_held_out = yes;
         self

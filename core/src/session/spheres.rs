@@ -16,7 +16,7 @@ pub struct RadialErrors {
     /// RMS of `|p − c| − (R + r_ball)` over the sphere's points.
     pub rms: f64,
     /// Their range (largest less smallest): the form error seen.
-    pub(crate) form: f64,
+    pub form: f64,
 }
 
 impl RadialErrors {
@@ -44,9 +44,9 @@ pub struct SphereResult {
     /// The fitted centre in the arm's base frame, mm.
     pub centre: [f64; 3],
     /// Its σ per coordinate, mm, when free.
-    pub(crate) centre_sigma: Option<[f64; 3]>,
+    pub centre_sigma: Option<[f64; 3]>,
     /// Its diameter, mm: stated, or fitted.
-    pub(crate) diameter: f64,
+    pub diameter: f64,
     /// The fitted diameter's σ, mm (none when stated).
     pub diameter_sigma: Option<f64>,
     /// The radial residuals at the start arm (its centre and size fitted
@@ -389,7 +389,7 @@ pub struct SphereEvaluation {
     /// radial residuals.
     pub spheres: Vec<(String, usize, f64, RadialErrors)>,
     /// `|radial error|` of every point, mm.
-    pub(crate) errors: crate::calibrate::validate::PositionErrors,
+    pub errors: crate::calibrate::validate::PositionErrors,
 }
 
 impl SphereEvaluation {

@@ -182,9 +182,9 @@ pub enum Reason {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct UnconfirmedSearch {
     /// The starts it had.
-    pub(crate) starts: usize,
+    pub starts: usize,
     /// A prior was in use.
-    pub(crate) prior_in_use: bool,
+    pub prior_in_use: bool,
 }
 
 /// The noise a fit stated, as it holds it (rad, mm).

@@ -67,7 +67,7 @@ const DRAWS: usize = 50;
 
 /// `base` (the probing placements of `settings`, by `truth`) with the
 /// placements of `more`, drawn from the stream of `settings.seed` +
-/// `super::seeds::ACCEPTANCE` (the user's seed, as `base`'s own stream is
+/// [`super::seeds::ACCEPTANCE`] (the user's seed, as `base`'s own stream is
 /// derived from it).
 ///
 /// # Errors

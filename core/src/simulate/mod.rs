@@ -66,7 +66,7 @@ mod tests;
 /// one changes every file made with that seed.
 pub mod seeds {
     /// A tracker's positions (the true arm draws from the seed itself).
-    pub(crate) const POSITIONS: u64 = 1;
+    pub const POSITIONS: u64 = 1;
     /// The noise of a 6-D target's orientations.
     pub const ORIENTATIONS: u64 = 2;
     /// The 6-D target's mount on the flange.
@@ -78,9 +78,9 @@ pub mod seeds {
     /// Which markers each pose sees, and their noise.
     pub const MARKER_NOISE: u64 = 6;
     /// The points on reference spheres.
-    pub(crate) const SPHERES: u64 = 7;
+    pub const SPHERES: u64 = 7;
     /// The acceptance tests' placements (`L_Dia`, the ball bar).
-    pub(crate) const ACCEPTANCE: u64 = 8;
+    pub const ACCEPTANCE: u64 = 8;
     /// The placements each `[[tool]]` stylus probes (`--sphere-tools`).
     pub const SPHERE_TOOLS: u64 = 9;
 

@@ -17,7 +17,7 @@ use crate::io::{Arm, read_points};
 pub const DEFAULT_LENGTH_SIGMA_MM: f64 = 0.4;
 
 /// The largest scale of the random errors' σ ([`ErrorModel::check_scale`]).
-pub(crate) const MAX_ERROR_SCALE: f64 = 1000.0;
+pub const MAX_ERROR_SCALE: f64 = 1000.0;
 /// Default standard deviation of the random twist errors, degrees: the RMS of
 /// the paper's Table 2 `Δβ` (0.07°).
 pub const DEFAULT_TWIST_SIGMA_DEG: f64 = 0.07;
@@ -30,7 +30,7 @@ pub(crate) const DEFAULT_MIN_POSE_SEPARATION_DEG: f64 = 20.0;
 /// Default budget of inverse-kinematics starts per requested touch.
 pub(crate) const DEFAULT_STARTS_PER_POSE: usize = 50;
 /// Fewest touches per socket: a mean and a spread need at least three.
-pub(crate) const MIN_POSES_PER_SOCKET: usize = 3;
+pub const MIN_POSES_PER_SOCKET: usize = 3;
 /// Most sockets of a campaign (a bound on time and memory, far beyond any
 /// real campaign).
 pub(crate) const MAX_SOCKETS: usize = 1000;

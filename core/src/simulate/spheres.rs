@@ -259,7 +259,7 @@ fn reach(
 
 /// A true arm drawn from `errors` about `nominal` (seeded by
 /// `settings.seed`, as [`super::simulate_tracker`] draws it) and its sphere
-/// campaign (seeded by `super::seeds::SPHERES`): what `aacmm simulate
+/// campaign (seeded by [`super::seeds::SPHERES`]): what `aacmm simulate
 /// --spheres` writes without sockets or positions.
 ///
 /// # Errors
@@ -277,7 +277,7 @@ pub fn simulate_sphere_campaign(
 }
 
 impl SphereSettings {
-    /// The settings of the points' own stream (`super::seeds::SPHERES`),
+    /// The settings of the points' own stream ([`super::seeds::SPHERES`]),
     /// so that adding spheres to a campaign changes nothing else of it, and
     /// no draw of theirs is one of another part's.
     pub fn for_campaign(&self) -> SphereSettings {

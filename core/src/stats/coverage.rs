@@ -11,13 +11,13 @@
 //! function.
 
 /// Coverage probability of every radius aacmm reports.
-pub(crate) const COVERAGE: f64 = 0.95;
+pub const COVERAGE: f64 = 0.95;
 
 /// The 95 % radius of an isotropic 3-D Gaussian in units of its
 /// per-coordinate σ: `sqrt(χ²₃(0.95))`.
 pub(crate) const K_ISOTROPIC: f64 = 2.795_483_482_915_108;
 
-/// The radius covering `COVERAGE` of a 3-D Gaussian error whose
+/// The radius covering [`COVERAGE`] of a 3-D Gaussian error whose
 /// covariance has the eigenvalues `lambda` (mm²): 0 for no error.
 pub fn radius(lambda: [f64; 3]) -> f64 {
     let l = lambda.map(|v| v.max(0.0));

@@ -29,7 +29,7 @@
 //! first axis; where two consecutive axes are parallel, the common normal is
 //! taken through the previous frame's origin (`d = 0`, the textbook choice);
 //! where they are nearly parallel, so that their common normal is more than
-//! `HAYATI_BEYOND_M` away and D-H would need a `d` of that size (unbounded
+//! [`HAYATI_BEYOND_M`] away and D-H would need a `d` of that size (unbounded
 //! as the axes become parallel), the joint gets the Hayati convention
 //! (`Rz(θ + q)·Tx(a)·Rx(α)·Ry(β)`, [`crate::params::JointModel::Hayati`]):
 //! its next frame's origin is where the next axis crosses the plane normal
@@ -121,13 +121,13 @@ pub struct UrdfJoint {
     /// What the type means here.
     pub kind: JointKind,
     /// Parent link.
-    pub(crate) parent: String,
+    pub parent: String,
     /// Child link.
-    pub(crate) child: String,
+    pub child: String,
     /// The child frame in the parent frame (metres), after snapping.
-    pub(crate) origin: Isometry3<f64>,
+    pub origin: Isometry3<f64>,
     /// Unit axis in the child frame.
-    pub(crate) axis: Vector3<f64>,
+    pub axis: Vector3<f64>,
     /// `[lower, upper]` of a `revolute` (rad) or `prismatic` (m) joint,
     /// when its `<limit>` states them and `lower < upper`.
     pub limits: Option<[f64; 2]>,
@@ -146,7 +146,7 @@ pub(crate) struct Inertial {
 
 /// One `<link>` element of a URDF file.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct UrdfLink {
+pub struct UrdfLink {
     /// The link's name.
     pub name: String,
     /// Its mass, when it has an `<inertial>`.
@@ -165,7 +165,7 @@ pub struct Urdf {
     /// Every joint.
     pub joints: Vec<UrdfJoint>,
     /// Every `<link>` element (a link named only by joints has none).
-    pub(crate) links: Vec<UrdfLink>,
+    pub links: Vec<UrdfLink>,
     /// One note per `rpy` component [`UrdfOptions::snap_rad`] rounded:
     /// `line 12: joint_3 roll -3.1416 → -π (7.3e-6 rad)`.
     pub snapped: Vec<String>,
@@ -660,7 +660,7 @@ pub struct ChainMass {
     /// Its mass, kg.
     pub kg: f64,
     /// Its centre of mass in the root frame with every reading zero, m.
-    pub(crate) com: Point3<f64>,
+    pub com: Point3<f64>,
     /// The joints off the chain between it and the chain that are not
     /// `fixed` (each taken at its zero), nearest the link first.
     pub moving: Vec<String>,
@@ -931,7 +931,7 @@ impl DhMasses {
 /// Farther than this (m) from the previous frame, a common normal means two
 /// axes meant to be parallel — no arm is that large — and D-H would need a
 /// `d` of that size: the joint gets the Hayati convention instead.
-pub(crate) const HAYATI_BEYOND_M: f64 = 10.0;
+pub const HAYATI_BEYOND_M: f64 = 10.0;
 
 /// A joint axis: a point on it and its unit direction.
 type Axis = (Point3<f64>, Vector3<f64>);
@@ -1019,7 +1019,7 @@ impl Chain {
     /// # Errors
     /// A chain without movable joints or with more than
     /// [`MAX_JOINTS`]; two consecutive axes whose common
-    /// normal is more than `HAYATI_BEYOND_M` away while they are not
+    /// normal is more than [`HAYATI_BEYOND_M`] away while they are not
     /// nearly parallel (a robot kilometres wide).
     ///
     /// ```

@@ -31,13 +31,13 @@ pub struct Figures {
     /// Mean over points of the paper's `e` (single-point repeatability).
     pub e_mean: f64,
     /// Largest `e`.
-    pub(crate) e_max: f64,
+    pub e_max: f64,
     /// Mean over points of the SPAT `2s`.
-    pub(crate) two_s_mean: f64,
+    pub two_s_mean: f64,
     /// Largest `δ_max` over points (SPAT).
     pub delta_max: f64,
     /// Reference lengths evaluated.
-    pub(crate) lengths: usize,
+    pub lengths: usize,
     /// RMS of the reference-length errors; `None` without lengths.
     pub length_rms: Option<f64>,
     /// Largest `|error|`; `None` without lengths.
@@ -49,7 +49,7 @@ pub struct Figures {
     /// tool's orientation, **degrees** ([`orientation_errors`]); absent
     /// without them.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub(crate) orientations: Option<PositionErrors>,
+    pub orientations: Option<PositionErrors>,
 }
 
 /// [`Figures`] as `calibration.json` holds them: the touch fields are
