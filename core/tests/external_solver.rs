@@ -4,8 +4,11 @@
 //! assesses it as it does its own (weights at the solution, covariance,
 //! verdict, validation).
 
+use std::sync::Mutex;
+
 use aacmm_core::calibrate::{
-    CalibrationError, Context, Method, ModelOptions, Outcome, Solver, SolverSettings, Stop, Task,
+    CalibrationError, Context, Lm, Method, ModelOptions, Outcome, Phase, Solver, SolverSettings,
+    Stop, Task,
 };
 use aacmm_core::io::{AngleUnit, read_arm};
 use aacmm_core::residuals::Noise;
@@ -130,4 +133,78 @@ fn a_solver_of_another_crate_calibrates_through_the_session() {
         Err(CalibrationError::Option(e)) => assert_eq!(e.field(), "method"),
         other => panic!("an external method ran by name: {:?}", other.map(|_| ())),
     }
+}
+
+/// A solver that wraps the library's LM and reports on it, as a timing or
+/// logging wrapper in another crate would: it reads the task's layout (its
+/// columns' names), the inner outcome (its stop, iterations, per-iteration
+/// history) and adds a phase of its own. Everything it touches is public
+/// API a third-party solver needs; this test stops a visibility sweep from
+/// hiding it again.
+struct Wrapped {
+    seen: Mutex<Vec<String>>,
+}
+
+impl Solver for Wrapped {
+    fn method(&self) -> Method {
+        Method::External
+    }
+
+    fn solve(
+        &self,
+        task: Task<'_, '_>,
+        ctx: &mut Context<'_>,
+    ) -> Result<Outcome, CalibrationError> {
+        let layout = task.objective.layout();
+        let names: Vec<String> = (0..layout.len())
+            .filter_map(|c| layout.parameter(c))
+            .map(|p| p.name)
+            .collect();
+        assert_eq!(names.len(), layout.len());
+        assert_eq!(layout.arm(task.x).as_ref(), Some(layout.geometry()));
+        let mut out = Lm.solve(task, ctx)?;
+        assert!(matches!(out.stop, Stop::Lm(_)), "{:?}", out.stop);
+        assert!(out.iterations > 0 && !out.history.is_empty());
+        // The costs of the steps LM took only fall.
+        let taken: Vec<f64> = (out.history.iter())
+            .filter(|i| i.accepted)
+            .map(|i| i.cost)
+            .collect();
+        assert!(taken.windows(2).all(|w| w[1] <= w[0]), "{taken:?}");
+        assert_eq!(
+            out.phases
+                .iter()
+                .map(|p| p.name.as_str())
+                .collect::<Vec<_>>(),
+            ["lm"]
+        );
+        assert!(out.phases[0].jacobian_evaluations > 0);
+        out.phases.push(Phase::new("wrapper"));
+        *self.seen.lock().unwrap() = names;
+        Ok(out)
+    }
+}
+
+#[test]
+fn a_solver_of_another_crate_can_wrap_the_librarys_lm_and_read_its_work() {
+    let (arm, data) = shipped();
+    let model = ModelOptions {
+        noise: Noise {
+            encoder_rad: Some(0.005f64.to_radians()),
+            probe_mm: Some(0.01),
+            ..Noise::default()
+        },
+        ..ModelOptions::default()
+    };
+    let problem = Problem::new(arm, data, model).unwrap();
+    let settings = SolverSettings::default().with_method(Method::Lm);
+    let wrapped = Wrapped {
+        seen: Mutex::new(Vec::new()),
+    };
+    let report = run(&problem, &settings, &wrapped, &mut Context::new()).unwrap();
+    assert!(report.is_usable(), "{:?}", report.verdict);
+    let seen = wrapped.seen.lock().unwrap();
+    assert!(seen.iter().any(|n| n == "theta2"), "{seen:?}");
+    let phases = &report.calibration.solver.phases;
+    assert!(phases.iter().any(|p| p.name == "wrapper"), "{phases:?}");
 }
