@@ -151,13 +151,8 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_map(
     cal: *const AacmmCalibration,
     out: *mut AacmmUncertaintyMap,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new().object("cal", cal).out("out", out).disjoint()?;
-        // SAFETY: by the contract.
-        let m = map_at(unsafe { result(cal) }?, AACMM_MAP_BASE, 0)?;
-        // SAFETY: by the contract.
-        unsafe { ptr::write(out, summary(m), "out") }
-    })
+    // SAFETY: by the contract.
+    unsafe { aacmm_calibration_uncertainty_map_at(cal, AACMM_MAP_BASE, 0, out) }
 }
 
 /// The number of bands of the calibration's uncertainty map into `*count`
@@ -195,14 +190,8 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_region(
     index: usize,
     out: *mut AacmmUncertaintyRegion,
 ) -> AacmmStatus {
-    guard(|| {
-        Args::new().object("cal", cal).out("out", out).disjoint()?;
-        // SAFETY: by the contract.
-        let m = map_at(unsafe { result(cal) }?, AACMM_MAP_BASE, 0)?;
-        let value = region(m, index)?;
-        // SAFETY: by the contract.
-        unsafe { ptr::write(out, value, "out") }
-    })
+    // SAFETY: by the contract.
+    unsafe { aacmm_calibration_uncertainty_map_region(cal, AACMM_MAP_BASE, 0, index, out) }
 }
 
 /// The number of uncertainty maps of kind `kind` (`AACMM_MAP_BASE`,
