@@ -8,6 +8,9 @@
 
 mod common;
 use common::last_error;
+#[path = "common/sphere_files.rs"]
+mod sphere_files;
+use sphere_files::arm;
 
 use std::ffi::{CString, c_char};
 
@@ -21,31 +24,18 @@ use aacmm_capi::{
     aacmm_probe_qualification_warning, aacmm_probe_qualification_warning_count,
     aacmm_qualify_probe,
 };
-use aacmm_core::io::{AngleUnit, Arm, spheres::write_spheres};
-use aacmm_core::params::DhParams;
+use aacmm_core::io::AngleUnit;
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::Spelling;
 use aacmm_core::session::probe::{ProbeSettings, qualify_probe};
-use aacmm_core::simulate::{SphereSettings, simulate_spheres};
+use aacmm_core::simulate::SphereSettings;
 
 const ENCODER_RAD: f64 = 0.001 * std::f64::consts::PI / 180.0;
 const PROBE_MM: f64 = 0.005;
 
-fn arm() -> Arm {
-    Arm {
-        ball_diameter_mm: Some(6.0),
-        ..Arm::without_limits("paper", DhParams::paper_nominal())
-    }
-}
-
 /// The arm file and one sphere probed by that very arm with the seating
 /// noise `probe_mm`, in a directory of their own.
 fn files(name: &str, probe_mm: f64) -> (CString, CString, std::path::PathBuf) {
-    let dir = std::env::temp_dir().join(format!("aacmm-capi-probe-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let arm_path = dir.join("arm.toml");
-    let text = aacmm_core::io::arm_to_toml(&arm(), aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg);
-    std::fs::write(&arm_path, text).unwrap();
     let settings = SphereSettings {
         placements: 1,
         diameter_mm: 25.4,
@@ -54,13 +44,7 @@ fn files(name: &str, probe_mm: f64) -> (CString, CString, std::path::PathBuf) {
         probe_mm,
         seed: 5,
     };
-    let c = simulate_spheres(&arm(), &settings).unwrap();
-    let mut text = Vec::new();
-    write_spheres(&mut text, &c.spheres, AngleUnit::Deg).unwrap();
-    let spheres = dir.join("spheres.csv");
-    std::fs::write(&spheres, text).unwrap();
-    let cs = |p: &std::path::Path| CString::new(p.to_str().unwrap()).unwrap();
-    (cs(&arm_path), cs(&spheres), dir)
+    sphere_files::files(&format!("probe-{name}"), &settings)
 }
 
 /// Options for the 25.4 mm sphere at the stated noise.

@@ -8,6 +8,8 @@
 
 mod common;
 use common::last_error;
+#[path = "common/sphere_files.rs"]
+mod sphere_files;
 
 use std::ffi::CString;
 
@@ -19,27 +21,13 @@ use aacmm_capi::{
     aacmm_calibrate_options_set_sphere_diameter_mm, aacmm_calibrate_options_set_spheres_file,
     aacmm_calibration_free, aacmm_calibration_report,
 };
-use aacmm_core::io::{AngleUnit, Arm, spheres::write_spheres};
-use aacmm_core::params::DhParams;
+use aacmm_core::io::AngleUnit;
 use aacmm_core::session::Request;
-use aacmm_core::simulate::{SphereSettings, simulate_spheres};
+use aacmm_core::simulate::SphereSettings;
 
 /// An arm file with a probe ball and a simulated sphere file, in a
 /// directory of their own.
 fn files() -> (CString, CString, std::path::PathBuf) {
-    let dir = std::env::temp_dir().join(format!("aacmm-capi-spheres-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let arm = Arm {
-        ball_diameter_mm: Some(6.0),
-        ..Arm::without_limits("paper", DhParams::paper_nominal())
-    };
-    let arm_path = dir.join("arm.toml");
-    let text = aacmm_core::io::arm_to_toml(
-        &arm,
-        aacmm_core::io::LengthUnit::Mm,
-        aacmm_core::io::AngleUnit::Deg,
-    );
-    std::fs::write(&arm_path, text).unwrap();
     let settings = SphereSettings {
         placements: 4,
         diameter_mm: 25.4,
@@ -48,13 +36,7 @@ fn files() -> (CString, CString, std::path::PathBuf) {
         probe_mm: 0.01,
         seed: 5,
     };
-    let c = simulate_spheres(&arm, &settings).unwrap();
-    let mut text = Vec::new();
-    write_spheres(&mut text, &c.spheres, AngleUnit::Deg).unwrap();
-    let spheres = dir.join("spheres.csv");
-    std::fs::write(&spheres, text).unwrap();
-    let cs = |p: &std::path::Path| CString::new(p.to_str().unwrap()).unwrap();
-    (cs(&arm_path), cs(&spheres), dir)
+    sphere_files::files("spheres", &settings)
 }
 
 #[test]
