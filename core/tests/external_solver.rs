@@ -6,14 +6,14 @@
 
 use std::sync::Mutex;
 
+#[path = "common/shipped.rs"]
+mod shipped;
+use shipped::{shipped, stated_noise};
+
 use aacmm_core::calibrate::{
-    CalibrationError, Context, Lm, Method, ModelOptions, Outcome, Phase, Solver, SolverSettings,
-    Stop, Task,
+    CalibrationError, Context, Lm, Method, Outcome, Phase, Solver, SolverSettings, Stop, Task,
 };
-use aacmm_core::io::{AngleUnit, read_arm};
-use aacmm_core::residuals::Noise;
 use aacmm_core::session::{Problem, run};
-use aacmm_core::{Arm, DataSet};
 use nalgebra::{DMatrix, DVector};
 
 /// Gauss–Newton with step halving: the least a solver needs of the
@@ -71,35 +71,10 @@ impl Solver for GaussNewton {
     }
 }
 
-fn root(file: &str) -> String {
-    format!("{}/../examples/{file}", env!("CARGO_MANIFEST_DIR"))
-}
-
-fn shipped() -> (Arm, DataSet) {
-    let (arm, _) = read_arm(root("paper-table-1.toml").as_ref()).unwrap();
-    let lengths = root("paper-campaign/lengths.csv");
-    let (data, warnings) = DataSet::read(
-        root("paper-campaign/poses.csv").as_ref(),
-        Some(lengths.as_ref()),
-        AngleUnit::Deg,
-        6,
-    )
-    .unwrap();
-    assert!(warnings.is_empty());
-    (arm, data)
-}
-
 #[test]
 fn a_solver_of_another_crate_calibrates_through_the_session() {
     let (arm, data) = shipped();
-    let model = ModelOptions {
-        noise: Noise {
-            encoder_rad: Some(0.005f64.to_radians()),
-            probe_mm: Some(0.01),
-            ..Noise::default()
-        },
-        ..ModelOptions::default()
-    };
+    let model = stated_noise();
     let problem = Problem::new(arm, data, model)
         .unwrap()
         .with_cross_validation(3)
@@ -188,14 +163,7 @@ impl Solver for Wrapped {
 #[test]
 fn a_solver_of_another_crate_can_wrap_the_librarys_lm_and_read_its_work() {
     let (arm, data) = shipped();
-    let model = ModelOptions {
-        noise: Noise {
-            encoder_rad: Some(0.005f64.to_radians()),
-            probe_mm: Some(0.01),
-            ..Noise::default()
-        },
-        ..ModelOptions::default()
-    };
+    let model = stated_noise();
     let problem = Problem::new(arm, data, model).unwrap();
     let settings = SolverSettings::default().with_method(Method::Lm);
     let wrapped = Wrapped {

@@ -6,8 +6,11 @@
 //! are public API for such terms; this test stops a visibility sweep from
 //! hiding them again.)
 
-use aacmm_core::io::{AngleUnit, read_arm};
 use aacmm_core::prelude::*;
+
+#[path = "common/shipped.rs"]
+mod shipped;
+use shipped::{shipped, stated_noise};
 
 /// `(x[column] − target) / σ`: one row.
 #[derive(Clone, Debug)]
@@ -68,28 +71,10 @@ impl Term for Pin {
     }
 }
 
-fn root(file: &str) -> String {
-    format!("{}/../examples/{file}", env!("CARGO_MANIFEST_DIR"))
-}
-
 #[test]
 fn a_term_of_another_crate_reads_the_columns_and_the_arm_it_is_evaluated_at() {
-    let (arm, _) = read_arm(root("paper-table-1.toml").as_ref()).unwrap();
-    let (data, _) = DataSet::read(
-        root("paper-campaign/poses.csv").as_ref(),
-        Some(root("paper-campaign/lengths.csv").as_ref()),
-        AngleUnit::Deg,
-        6,
-    )
-    .unwrap();
-    let model = ModelOptions {
-        noise: Noise {
-            encoder_rad: Some(0.005f64.to_radians()),
-            probe_mm: Some(0.01),
-            ..Noise::default()
-        },
-        ..ModelOptions::default()
-    };
+    let (arm, data) = shipped();
+    let model = stated_noise();
     let settings = SolverSettings::default().with_method(Method::Lm);
     let plain = Problem::new(arm.clone(), data.clone(), model.clone())
         .unwrap()
