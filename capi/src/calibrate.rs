@@ -540,46 +540,49 @@ pub(crate) unsafe fn result<'a>(
     unsafe { ptr::object(cal, "cal") }
 }
 
-/// A count accessor's body: `of` the result behind `cal` (or its refusal
-/// of the arguments) into `*count`.
+/// A count accessor's body: `of` the value behind the handle `handle`
+/// (named `name` in messages) into `*count`, or `of`'s refusal of the
+/// arguments.
 ///
 /// # Safety
 ///
-/// `cal` is `NULL` or a live result handle; `count` is `NULL` or writable.
-pub(crate) unsafe fn count_out(
-    cal: *const AacmmCalibration,
+/// `handle` is `NULL` or a live handle of a `T`; `count` is `NULL` or
+/// writable.
+pub(crate) unsafe fn count_out<T>(
+    (handle, name): (*const T, &str),
     count: *mut usize,
-    of: impl FnOnce(&AacmmCalibration) -> Result<usize, Error>,
+    of: impl FnOnce(&T) -> Result<usize, Error>,
 ) -> AacmmStatus {
     guard(|| {
         Args::new()
-            .object("cal", cal)
+            .object(name, handle)
             .out("count", count)
             .disjoint()?;
         // SAFETY: forwarded contract.
-        let n = of(unsafe { result(cal) }?)?;
+        let n = of(unsafe { ptr::object(handle, name) }?)?;
         // SAFETY: forwarded contract.
         unsafe { ptr::write(count, n, "count") }
     })
 }
 
-/// A string accessor's body: the text `of` the result behind `cal` (or
-/// its refusal of the arguments) copied into `buf` like
-/// `aacmm_last_error_message`, its full length into `*len`.
+/// A string accessor's body: the text `of` the value behind the handle
+/// `handle` (named `name` in messages), or `of`'s refusal of the
+/// arguments, copied into `buf` like `aacmm_last_error_message`, its full
+/// length into `*len`.
 ///
 /// # Safety
 ///
-/// `cal` is `NULL` or a live result handle; `buf` is `NULL` or points to
-/// `buf_len` writable bytes; `len` is `NULL` or writable.
-pub(crate) unsafe fn text_out(
-    cal: *const AacmmCalibration,
+/// `handle` is `NULL` or a live handle of a `T`; `buf` is `NULL` or points
+/// to `buf_len` writable bytes; `len` is `NULL` or writable.
+pub(crate) unsafe fn text_out<T>(
+    (handle, name): (*const T, &str),
     (buf, buf_len, len): (*mut c_char, usize, *mut usize),
-    of: impl FnOnce(&AacmmCalibration) -> Result<std::borrow::Cow<'_, str>, Error>,
+    of: impl FnOnce(&T) -> Result<std::borrow::Cow<'_, str>, Error>,
 ) -> AacmmStatus {
     guard(|| {
-        string_args(Args::new().object("cal", cal), buf, buf_len, len)?;
+        string_args(Args::new().object(name, handle), buf, buf_len, len)?;
         // SAFETY: forwarded contract.
-        let text = of(unsafe { result(cal) }?)?;
+        let text = of(unsafe { ptr::object(handle, name) }?)?;
         // SAFETY: forwarded contract.
         unsafe { string_out(&text, buf, buf_len, len) }
     })
@@ -789,7 +792,11 @@ pub unsafe extern "C" fn aacmm_calibration_report(
     len: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { text_out(cal, (buf, buf_len, len), |c| Ok(c.json.as_str().into())) }
+    unsafe {
+        text_out((cal, "cal"), (buf, buf_len, len), |c| {
+            Ok(c.json.as_str().into())
+        })
+    }
 }
 
 /// `items` one per line, for a C caller to split at `\n`: an item's own
@@ -864,7 +871,7 @@ pub unsafe extern "C" fn aacmm_calibration_verdict_notes(
 ) -> AacmmStatus {
     // SAFETY: by the contract.
     unsafe {
-        text_out(cal, (buf, buf_len, len), |c| {
+        text_out((cal, "cal"), (buf, buf_len, len), |c| {
             Ok(lines(&c.report.verdict.words(Spelling::C).notes).into())
         })
     }
@@ -931,7 +938,7 @@ pub unsafe extern "C" fn aacmm_calibration_reason_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| Ok(c.report.verdict.reasons.len())) }
+    unsafe { count_out((cal, "cal"), count, |c| Ok(c.report.verdict.reasons.len())) }
 }
 
 /// Reason `index` (from 0, the first cause first) of a refused
@@ -986,7 +993,11 @@ pub unsafe extern "C" fn aacmm_calibration_frame_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| Ok(c.report.calibration.frames().len())) }
+    unsafe {
+        count_out((cal, "cal"), count, |c| {
+            Ok(c.report.calibration.frames().len())
+        })
+    }
 }
 
 /// Frame `index` (`0 ≤ index < aacmm_calibration_frame_count`, in order of
@@ -1064,7 +1075,7 @@ pub unsafe extern "C" fn aacmm_calibration_tool_count(
 ) -> AacmmStatus {
     // SAFETY: by the contract.
     unsafe {
-        count_out(cal, count, |c| {
+        count_out((cal, "cal"), count, |c| {
             Ok(c.report.calibration.tool_estimates().len())
         })
     }
@@ -1128,7 +1139,11 @@ pub unsafe extern "C" fn aacmm_calibration_auxiliary_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| Ok(c.report.calibration.auxiliary.len())) }
+    unsafe {
+        count_out((cal, "cal"), count, |c| {
+            Ok(c.report.calibration.auxiliary.len())
+        })
+    }
 }
 
 /// Auxiliary column `index` (`0 ≤ index < aacmm_calibration_auxiliary_count`,

@@ -168,7 +168,7 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_region_count(
 ) -> AacmmStatus {
     // SAFETY: by the contract.
     unsafe {
-        count_out(cal, count, |c| {
+        count_out((cal, "cal"), count, |c| {
             Ok((c.report.uncertainty_map.as_ref()).map_or(0, |m| m.regions.len()))
         })
     }
@@ -208,7 +208,7 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(cal, count, |c| Ok(maps_of(c, kind)?.len())) }
+    unsafe { count_out((cal, "cal"), count, |c| Ok(maps_of(c, kind)?.len())) }
 }
 
 /// Uncertainty map `index` of kind `kind` (`0 ≤ index <
@@ -258,7 +258,7 @@ pub unsafe extern "C" fn aacmm_calibration_uncertainty_map_name(
 ) -> AacmmStatus {
     // SAFETY: by the contract.
     unsafe {
-        text_out(cal, (buf, buf_len, len), |c| {
+        text_out((cal, "cal"), (buf, buf_len, len), |c| {
             let m = map_at(c, kind, index)?;
             Ok(m.frame
                 .as_deref()

@@ -13,8 +13,8 @@ use aacmm_core::session::probe::{
     DEFAULT_TOLERANCE_MM, ProbeQualification, ProbeSettings, qualify_probe,
 };
 
-use crate::arm::{AacmmArm, handle, string_args, string_out};
-use crate::calibrate::{AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmAngleUnit};
+use crate::arm::{AacmmArm, handle};
+use crate::calibrate::{AACMM_ANGLE_DEG, AACMM_ANGLE_RAD, AacmmAngleUnit, count_out, text_out};
 use crate::error::{AacmmStatus, Error, guard, guard_value};
 use crate::options::stated;
 use crate::ptr::{self, Args};
@@ -300,7 +300,7 @@ pub unsafe extern "C" fn aacmm_probe_qualification_refusal_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(q, |q| &q.refusals, count) }
+    unsafe { count_out((q, "q"), count, |q| Ok(q.q.refusals.len())) }
 }
 
 /// Refusal `index` (from 0) in C's words (a remedy names the C setter),
@@ -338,26 +338,7 @@ pub unsafe extern "C" fn aacmm_probe_qualification_warning_count(
     count: *mut usize,
 ) -> AacmmStatus {
     // SAFETY: by the contract.
-    unsafe { count_out(q, |q| &q.warnings, count) }
-}
-
-/// The length of the list `of` picks into `*count`.
-///
-/// # Safety
-///
-/// As `aacmm_probe_qualification_refusal_count`.
-unsafe fn count_out(
-    q: *const AacmmProbeQualification,
-    of: impl Fn(&ProbeQualification) -> &Vec<String>,
-    count: *mut usize,
-) -> AacmmStatus {
-    guard(|| {
-        Args::new().object("q", q).out("count", count).disjoint()?;
-        // SAFETY: by the contract.
-        let n = of(&unsafe { ptr::object(q, "q") }?.q).len();
-        // SAFETY: by the contract.
-        unsafe { ptr::write(count, n, "count") }
-    })
+    unsafe { count_out((q, "q"), count, |q| Ok(q.q.warnings.len())) }
 }
 
 /// Warning `index` (from 0), copied as `aacmm_probe_qualification_refusal`
@@ -388,21 +369,21 @@ unsafe fn message_out(
     of: impl Fn(&ProbeQualification) -> &Vec<String>,
     what: &str,
     index: usize,
-    (buf, buf_len, len): (*mut c_char, usize, *mut usize),
+    buf: (*mut c_char, usize, *mut usize),
 ) -> AacmmStatus {
-    guard(|| {
-        string_args(Args::new().object("q", q), buf, buf_len, len)?;
-        // SAFETY: by the contract.
-        let list = of(&unsafe { ptr::object(q, "q") }?.q);
-        let text = list.get(index).ok_or_else(|| {
-            Error::invalid(format!(
-                "index = {index}: the qualification has {} {what}(s)",
-                list.len()
-            ))
-        })?;
-        // SAFETY: by the contract.
-        unsafe { string_out(&text.replace('\n', " "), buf, buf_len, len) }
-    })
+    // SAFETY: by the contract.
+    unsafe {
+        text_out((q, "q"), buf, |q| {
+            let list = of(&q.q);
+            let text = list.get(index).ok_or_else(|| {
+                Error::invalid(format!(
+                    "index = {index}: the qualification has {} {what}(s)",
+                    list.len()
+                ))
+            })?;
+            Ok(text.replace('\n', " ").into())
+        })
+    }
 }
 
 /// The arm with the qualified probe (its offset and ball diameter) as a new
