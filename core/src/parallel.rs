@@ -42,6 +42,13 @@ pub fn threads_for(items: usize, threads: usize) -> usize {
     threads.min(items / MIN_ITEMS_PER_THREAD).max(1)
 }
 
+/// The cores of the machine (at least one): the threads a data file's
+/// reading shares its work on, before any setting of the fit's threads
+/// exists — the same values on any count, as everything here.
+pub(crate) fn every_core() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 /// `f` over `items` on up to `threads` threads (the caller and the pool's
 /// workers; fewer for few items, [`threads_for`]), results in item order.
 ///
@@ -131,7 +138,7 @@ fn in_item_order<R>(len: usize, done: Vec<(usize, R)>) -> Vec<R> {
 fn pool() -> Option<&'static rayon::ThreadPool> {
     static POOL: OnceLock<(u32, Option<rayon::ThreadPool>)> = OnceLock::new();
     let (started_in, pool) = POOL.get_or_init(|| {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let cores = every_core();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(cores.saturating_sub(1).max(1))
             .thread_name(|_| WORKER_THREAD_NAME.to_string())

@@ -48,6 +48,7 @@ pub mod poses;
 pub mod positions;
 pub mod prior;
 pub mod spheres;
+mod split;
 pub(crate) mod text;
 pub mod tools;
 pub(crate) mod units;

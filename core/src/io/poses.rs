@@ -23,7 +23,8 @@ use super::Warning;
 use super::approach::{APPROACH, approach_cell};
 use super::columns::JointColumns;
 use super::labels::Labels;
-use super::text::{Record, check_header, parse_f64, push_f64, quote, read_text, scan_table};
+use super::split::{PIECE, TableReader, scan_table_on};
+use super::text::{Record, check_header, parse_f64, push_f64, quote, read_text};
 use super::units::AngleUnit;
 use crate::error::InputError;
 use crate::memory::{OutOfMemory, try_grow, try_vec};
@@ -317,6 +318,45 @@ impl Poses {
         )))
     }
 
+    /// Appends the rows of `rows` (of the same columns): their points and
+    /// tools are these poses' if the labels are (a new one is added, in
+    /// order of first appearance), so reading a file in pieces and
+    /// appending them gives the poses read whole.
+    fn append(&mut self, rows: Poses) -> Result<(), OutOfMemory> {
+        let what = "the rows' readings";
+        try_grow(&mut self.point_of, what, rows.len())?;
+        try_grow(&mut self.q, what, rows.q.len())?;
+        try_grow(&mut self.lines, what, rows.len())?;
+        let mut point = Vec::with_capacity(rows.points.len());
+        for label in rows.points.iter() {
+            point.push(self.points.intern(label, "the point labels")?);
+        }
+        let tool: Vec<u32> = rows.tools.iter().map(|t| self.tool_index(t)).collect();
+        self.point_of
+            .extend(rows.point_of.iter().map(|&p| point[p as usize]));
+        self.q.extend_from_slice(&rows.q);
+        self.lines.extend_from_slice(&rows.lines);
+        let pairs = [
+            (&mut self.temperature, &rows.temperature),
+            (&mut self.time, &rows.time),
+        ];
+        for (into, from) in pairs {
+            if let (Some(into), Some(from)) = (into, from) {
+                try_grow(into, what, from.len())?;
+                into.extend_from_slice(from);
+            }
+        }
+        if let (Some(into), Some(from)) = (&mut self.approach, &rows.approach) {
+            try_grow(into, what, from.len())?;
+            into.extend_from_slice(from);
+        }
+        if let (Some(into), Some(from)) = (&mut self.tool_of, &rows.tool_of) {
+            try_grow(into, what, from.len())?;
+            into.extend(from.iter().map(|&k| tool[k as usize]));
+        }
+        Ok(())
+    }
+
     /// The index of `label` in `points`, added if new. Rows of one point
     /// usually follow each other: the previous row's point is tried first.
     #[inline]
@@ -557,93 +597,57 @@ pub fn parse_poses(
     unit: AngleUnit,
     joints: impl Into<JointColumns>,
 ) -> Result<(Poses, Vec<Warning>), InputError> {
-    let columns_of = joints.into();
+    let pieces = (crate::parallel::every_core(), PIECE);
+    parse_poses_on(text, (file, unit), joints.into(), pieces)
+}
+
+/// [`parse_poses`] on up to `threads` threads, in pieces of about `piece`
+/// bytes ([`scan_table_on`]): the same poses, warnings and errors.
+pub(crate) fn parse_poses_on(
+    text: &str,
+    (file, unit): (&str, AngleUnit),
+    columns_of: JointColumns,
+    (threads, piece): (usize, usize),
+) -> Result<(Poses, Vec<Warning>), InputError> {
     let expected_joints = columns_of.expected();
     let shape = "point,q1,...,qn[,tool][,temperature][,time][,approach]";
     let per_row = "one row per touch";
     // At most one row per line, and per 2 bytes a field (a digit or a
     // label, and its comma or line end): room for them all, so that the
     // readings are never copied to grow; the unused room is given back.
-    let lines = 1 + text.bytes().filter(|&b| b == b'\n').count();
-    let max_rows = |fields: usize| lines.min(1 + text.len() / (2 * fields).max(1));
-    let mut poses: Option<Poses> = None;
-    let header = scan_table(
-        text,
-        file,
-        shape,
-        per_row,
-        |h| check_poses_header(h, file, expected_joints),
-        |header, line, fields| {
-            let (columns, approach) = split_approach(&header.fields);
-            let extra = condition_columns(columns);
-            let tool = has_tool_column(columns, extra.len());
-            let joints = columns.len() - 1 - extra.len() - usize::from(tool);
-            let poses = match poses {
-                Some(ref mut p) => p,
-                None => {
-                    let rows = max_rows(header.fields.len());
-                    poses.insert(room(file, (joints, rows), &extra, (approach, tool))?)
-                }
-            };
-            let extra_at = 1 + joints + usize::from(tool);
-            let label = fields[0];
-            if label.is_empty() {
-                return Err(InputError::field(
-                    file,
-                    line,
-                    "point",
-                    "empty label: each row must name the point touched",
-                ));
-            }
-            let start = poses.q.len();
-            let row = (&fields[1..=joints], &columns[1..=joints]);
-            read_readings(row, &columns_of, (file, line), &mut poses.q)?;
-            let mut values = [0.0; 2];
-            for (k, c) in extra.iter().enumerate() {
-                let v = fields[extra_at + k];
-                values[k] = match parse_f64(v, file, line, c) {
-                    Ok(t) if *c == "temperature" && !(-100.0..=200.0).contains(&t) => {
-                        poses.q.truncate(start);
-                        let message = format!("{t} °C: not an arm's temperature (°C, −100 to 200)");
-                        return Err(InputError::field(file, line, *c, message));
-                    }
-                    Ok(t) => t,
-                    Err(e) => {
-                        poses.q.truncate(start);
-                        return Err(e);
-                    }
-                };
-            }
-            if let Some(signs) = &mut poses.approach {
-                let cell = fields[columns.len()];
-                if let Err(e) = super::approach::parse_approach(cell, joints, (file, line), signs) {
-                    poses.q.truncate(start);
-                    return Err(e);
-                }
-            }
-            for (k, c) in extra.iter().enumerate() {
-                if let Some(column) = poses.condition_mut(c) {
-                    column.push(values[k]);
-                }
-            }
-            if tool {
-                poses.push_tool(fields[1 + joints].trim());
-            }
-            let id = poses
-                .intern(label)
-                .map_err(|e| InputError::memory(file, e))?;
-            poses.point_of.push(id);
-            poses.lines.push(line);
-            Ok(())
+    let rows_bound = |header: &Record, (bytes, lines): (usize, usize)| {
+        lines.min(1 + bytes / (2 * header.fields.len()).max(1))
+    };
+    let reader = TableReader {
+        new: |header: &Record, rows| {
+            let l = PosesLayout::of(header);
+            room(file, (l.joints, rows), l.extra, (l.approach, l.tool))
         },
+        row: |poses: &mut Poses, header: &Record, line, fields: &[&str]| {
+            read_row(
+                poses,
+                (file, &columns_of),
+                PosesLayout::of(header),
+                (line, fields),
+            )
+        },
+    };
+    let append = |into: &mut Poses, rows: Poses| {
+        (into.append(rows)).map_err(|e| InputError::memory(file, e))
+    };
+    let (header, poses) = scan_table_on(
+        text,
+        (file, shape, per_row),
+        |h| check_poses_header(h, file, expected_joints),
+        reader,
+        (rows_bound, append),
+        (threads, piece),
     )?;
-    let (columns, approach) = split_approach(&header.fields);
-    let extra = condition_columns(columns).len();
-    let tool = has_tool_column(columns, extra);
+    let l = PosesLayout::of(&header);
     let mut poses = poses.unwrap_or_else(|| Poses {
-        approach: approach.then(Vec::new),
-        tool_of: tool.then(Vec::new),
-        ..Poses::new(columns.len() - 1 - extra - usize::from(tool))
+        approach: l.approach.then(Vec::new),
+        tool_of: l.tool.then(Vec::new),
+        ..Poses::new(l.joints)
     });
     poses.q.shrink_to_fit();
     poses.point_of.shrink_to_fit();
@@ -655,6 +659,94 @@ pub fn parse_poses(
         *x = columns_of.to_internal(i % joints, *x, unit);
     }
     Ok((poses, warnings))
+}
+
+/// Where a poses file's header puts its columns.
+#[derive(Clone, Copy)]
+struct PosesLayout<'h> {
+    /// The header's fields before `approach`.
+    columns: &'h [String],
+    joints: usize,
+    /// The condition columns after the joints (and the tool), in order.
+    extra: &'static [&'static str],
+    tool: bool,
+    approach: bool,
+}
+
+impl PosesLayout<'_> {
+    fn of(header: &Record) -> PosesLayout<'_> {
+        let (columns, approach) = split_approach(&header.fields);
+        let extra = condition_columns(columns);
+        let tool = has_tool_column(columns, extra.len());
+        PosesLayout {
+            columns,
+            joints: columns.len() - 1 - extra.len() - usize::from(tool),
+            extra,
+            tool,
+            approach,
+        }
+    }
+}
+
+/// Reads the data row `fields` on `line` into `poses`; on an error the
+/// poses are as they were.
+fn read_row(
+    poses: &mut Poses,
+    (file, columns_of): (&str, &JointColumns),
+    l: PosesLayout,
+    (line, fields): (usize, &[&str]),
+) -> Result<(), InputError> {
+    let joints = l.joints;
+    let extra_at = 1 + joints + usize::from(l.tool);
+    let label = fields[0];
+    if label.is_empty() {
+        return Err(InputError::field(
+            file,
+            line,
+            "point",
+            "empty label: each row must name the point touched",
+        ));
+    }
+    let start = poses.q.len();
+    let row = (&fields[1..=joints], &l.columns[1..=joints]);
+    read_readings(row, columns_of, (file, line), &mut poses.q)?;
+    let mut values = [0.0; 2];
+    for (k, c) in l.extra.iter().enumerate() {
+        let v = fields[extra_at + k];
+        values[k] = match parse_f64(v, file, line, c) {
+            Ok(t) if *c == "temperature" && !(-100.0..=200.0).contains(&t) => {
+                poses.q.truncate(start);
+                let message = format!("{t} °C: not an arm's temperature (°C, −100 to 200)");
+                return Err(InputError::field(file, line, *c, message));
+            }
+            Ok(t) => t,
+            Err(e) => {
+                poses.q.truncate(start);
+                return Err(e);
+            }
+        };
+    }
+    if let Some(signs) = &mut poses.approach {
+        let cell = fields[l.columns.len()];
+        if let Err(e) = super::approach::parse_approach(cell, joints, (file, line), signs) {
+            poses.q.truncate(start);
+            return Err(e);
+        }
+    }
+    for (k, c) in l.extra.iter().enumerate() {
+        if let Some(column) = poses.condition_mut(c) {
+            column.push(values[k]);
+        }
+    }
+    if l.tool {
+        poses.push_tool(fields[1 + joints].trim());
+    }
+    let id = poses
+        .intern(label)
+        .map_err(|e| InputError::memory(file, e))?;
+    poses.point_of.push(id);
+    poses.lines.push(line);
+    Ok(())
 }
 
 /// Appends a row's readings `fields` (columns named `names`) as written to
@@ -717,16 +809,21 @@ fn split_approach(fields: &[String]) -> (&[String], bool) {
 
 /// The optional columns after the joints' a header ends with, in order:
 /// `temperature` (°C) then `time` (s).
-fn condition_columns(fields: &[String]) -> Vec<&'static str> {
-    let mut out = Vec::new();
-    let mut rest = fields;
-    for name in ["time", "temperature"] {
-        if rest.len() > 1 && rest.last().is_some_and(|f| f == name) {
-            out.insert(0, name);
-            rest = &rest[..rest.len() - 1];
+fn condition_columns(fields: &[String]) -> &'static [&'static str] {
+    let ends =
+        |name: &str, rest: &[String]| rest.len() > 1 && rest.last().is_some_and(|f| f == name);
+    let n = fields.len();
+    if ends("time", fields) {
+        if ends("temperature", &fields[..n - 1]) {
+            &["temperature", "time"]
+        } else {
+            &["time"]
         }
+    } else if ends("temperature", fields) {
+        &["temperature"]
+    } else {
+        &[]
     }
-    out
 }
 
 /// The refusal of rows naming the tool `name` (first at `file:line`) by
@@ -760,7 +857,7 @@ fn check_poses_header(
     expected_joints: Option<usize>,
 ) -> Result<(), InputError> {
     let (fields, approach) = split_approach(&header.fields);
-    let mut extra = condition_columns(fields);
+    let mut extra = condition_columns(fields).to_vec();
     let tool = has_tool_column(fields, extra.len());
     let n = fields.len() - 1 - extra.len() - usize::from(tool);
     if tool {

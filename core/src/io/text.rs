@@ -304,22 +304,91 @@ pub(crate) fn scan_table(
 pub(crate) fn each_record(
     text: &str,
     file: &str,
-    mut f: impl FnMut(usize, &[&str]),
+    f: impl FnMut(usize, &[&str]),
 ) -> Result<(), InputError> {
     let original = text;
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let (body, mut blank) = preamble(text);
+    let (body, blank) = preamble(text);
     // The first line, and the header's (past comments).
     cr_only(text, 0, file)?;
     cr_only(text, body, file)?;
-    let bytes = text.as_bytes();
-    if bytes[body..].contains(&b'"') {
+    if text.as_bytes()[body..].contains(&b'"') {
         return each_quoted(original, file, f);
     }
-    let (mut pos, mut line) = (body, line_of(text, body));
-    let mut any = false;
+    let blanks = records_in(text, (body, text.len()), (line_of(text, body), blank), f);
+    Blanks::check_all(text, file, [blanks], (blank, false))
+}
+
+/// The blank lines about the records of a stretch of lines: where a record
+/// follows one, the text has a blank line before more data (an error), and
+/// only the stretches around it tell whether one does.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Blanks {
+    /// The line of the first record, if any.
+    first: Option<usize>,
+    /// The first blank line (its byte) before the first record, or in a
+    /// stretch without records.
+    lead: Option<usize>,
+    /// The first blank line (its byte) before a later record, and that
+    /// record's line: the stretch was read up to it, not past.
+    inner: Option<(usize, usize)>,
+    /// The first blank line (its byte) after the last record.
+    trail: Option<usize>,
+}
+
+impl Blanks {
+    /// The first blank line before more data in stretches of lines that
+    /// follow each other (`pending`: a blank line before them, if any;
+    /// `any`: whether a record came before them), as the error of
+    /// [`each_record`].
+    pub(super) fn check_all(
+        text: &str,
+        file: &str,
+        stretches: impl IntoIterator<Item = Blanks>,
+        (mut pending, mut any): (Option<usize>, bool),
+    ) -> Result<(), InputError> {
+        for b in stretches {
+            (pending, any) = b.check(text, file, (pending, any))?;
+        }
+        Ok(())
+    }
+
+    /// [`Blanks::check_all`] of one stretch: the blank line pending after
+    /// it and whether a record came before its end.
+    pub(super) fn check(
+        self,
+        text: &str,
+        file: &str,
+        (pending, any): (Option<usize>, bool),
+    ) -> Result<(Option<usize>, bool), InputError> {
+        let Some(first) = self.first else {
+            return Ok((pending.or(self.lead), any));
+        };
+        if let Some(blank) = pending.or(self.lead) {
+            return Err(blank_line(text, file, blank, first, any));
+        }
+        if let Some((blank, line)) = self.inner {
+            return Err(blank_line(text, file, blank, line, true));
+        }
+        Ok((self.trail, true))
+    }
+}
+
+/// Calls `f` with the line and the trimmed fields of every record of the
+/// lines of unquoted `text` in `from..to` (whole lines; the first is line
+/// `line`; `pending`, a blank line before them), in order, up to the first
+/// record after a blank line; returns the blank lines about them.
+pub(super) fn records_in(
+    text: &str,
+    (from, to): (usize, usize),
+    (mut line, pending): (usize, Option<usize>),
+    mut f: impl FnMut(usize, &[&str]),
+) -> Blanks {
+    let bytes = text.as_bytes();
+    let (mut out, mut blank) = (Blanks::default(), pending);
+    let mut pos = from;
     let mut fields: Vec<&str> = Vec::with_capacity(16);
-    while pos < bytes.len() {
+    while pos < to {
         // One pass over the line for its commas and its end.
         fields.clear();
         let (mut start, mut end) = (pos, pos);
@@ -333,17 +402,32 @@ pub(crate) fn each_record(
         if fields.is_empty() && is_blank(&text[pos..end]) {
             blank.get_or_insert(pos);
         } else {
-            if let Some(blank) = blank {
-                return Err(blank_line(text, file, blank, line, any));
+            // A record after a blank line is an error, whatever came
+            // before: read no further.
+            match (out.first, blank.take()) {
+                (None, Some(b)) => {
+                    (out.first, out.lead) = (Some(line), Some(b));
+                    return out;
+                }
+                (None, None) => out.first = Some(line),
+                (Some(_), Some(b)) => {
+                    out.inner = Some((b, line));
+                    return out;
+                }
+                (Some(_), None) => {}
             }
-            any = true;
             fields.push(trim(&text[start..end]));
             f(line, &fields);
         }
         pos = end + 1;
         line += 1;
     }
-    Ok(())
+    if out.first.is_none() {
+        out.lead = blank;
+    } else {
+        out.trail = blank;
+    }
+    out
 }
 
 /// The message for lines ended by a carriage return alone.
@@ -354,7 +438,7 @@ const CR_ONLY: &str = "the file's lines end with a carriage return alone (CR, cl
 /// Refuses text whose line starting at byte `body` holds a carriage
 /// return before its end: lines ended by CR alone (classic Mac OS), which
 /// would read as one long line whose fields run into each other.
-fn cr_only(text: &str, body: usize, file: &str) -> Result<(), InputError> {
+pub(super) fn cr_only(text: &str, body: usize, file: &str) -> Result<(), InputError> {
     let rest = &text.as_bytes()[body..];
     let line = &rest[..rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len())];
     match line.iter().position(|&b| b == b'\r') {
@@ -367,7 +451,7 @@ fn cr_only(text: &str, body: usize, file: &str) -> Result<(), InputError> {
 
 /// Whether a line is blank (whitespace only).
 #[inline]
-fn is_blank(line: &str) -> bool {
+pub(super) fn is_blank(line: &str) -> bool {
     match line.as_bytes().first() {
         None => true,
         Some(b) if b.is_ascii_graphic() => false,
@@ -378,7 +462,7 @@ fn is_blank(line: &str) -> bool {
 /// A field without surrounding whitespace (`str::trim`, as the `csv`
 /// crate's `Trim::All`), quick when there is none.
 #[inline]
-fn trim(field: &str) -> &str {
+pub(super) fn trim(field: &str) -> &str {
     match field.as_bytes() {
         [first, .., last] if first.is_ascii_graphic() && last.is_ascii_graphic() => field,
         [only] if only.is_ascii_graphic() => field,
@@ -390,7 +474,7 @@ fn trim(field: &str) -> &str {
 /// the header, and byte-order marks starting the header), and the first
 /// blank line before it, if any. Comments are not tokenized: a quote in one
 /// would open a field.
-fn preamble(text: &str) -> (usize, Option<usize>) {
+pub(super) fn preamble(text: &str) -> (usize, Option<usize>) {
     let (mut body, mut blank) = (0, None);
     for l in text.split_inclusive('\n') {
         match l.trim() {
@@ -408,7 +492,7 @@ fn preamble(text: &str) -> (usize, Option<usize>) {
 
 /// The error for a blank line (at byte `blank`) before the record on
 /// `line`; `after_records` when a record came before it.
-fn blank_line(
+pub(super) fn blank_line(
     text: &str,
     file: &str,
     blank: usize,
