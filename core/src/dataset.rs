@@ -704,7 +704,10 @@ impl DataSet {
         // every touch (also when there are no joints, `from_labels`).
         let touches = self.source.touch_rows.len();
         let mask = self.poses.prismatic_mask();
-        self.poses = PreparedPoses::from_flat_with(self.joints, mask, touches, &self.q);
+        // Every core: the sin and cos of a large file's readings are a
+        // good part of reading it, and the same bits on any thread count.
+        let threads = crate::parallel::every_core();
+        self.poses = PreparedPoses::from_flat_on(self.joints, mask, touches, &self.q, threads);
         self
     }
 
