@@ -348,6 +348,70 @@ fn normal_equations_are_the_same_bits_on_any_thread_count() {
     assert_eq!(bits(4), one);
 }
 
+/// The cost pass, a chunk of points at a time into a slot of scratch per
+/// thread, is the plain pass to the bit — every touch's position at once,
+/// then the points summed in order — on 1, 2 and 4 threads, and so are
+/// the centres it leaves.
+#[test]
+fn the_cost_pass_is_the_plain_one_on_any_thread_count() {
+    let n = 3000;
+    let data = points_of_three_touches(n);
+    assert_eq!(
+        crate::parallel::threads_for(n.div_ceil(POINTS_PER_CHUNK), 4),
+        4
+    );
+    let noise = Noise {
+        encoder_rad: Some(1e-4),
+        probe_mm: Some(0.01),
+        length_default_mm: 0.001,
+        length_weight: None,
+        ..Noise::default()
+    };
+    let mut arm = DhParams::paper_nominal();
+    let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
+    arm.joints[1].d += 0.3;
+    arm.joints[2].theta += 0.002;
+    let kernel = ArmKernel::new(&arm).unwrap();
+    let mut xyz = vec![[0.0; 3]; data.len()];
+    kernel
+        .positions(data.poses(), 0..data.len(), &mut xyz)
+        .unwrap();
+    let (mut want, mut centres) = (0.0, Vec::new());
+    for point in data.points() {
+        let origin = xyz[point.touches.start];
+        let (mut ap, mut pap, mut sum) = ([0.0; 3], 0.0, [0.0; 6]);
+        for i in point.touches.clone() {
+            let a = &t.weights()[i];
+            let d: [f64; 3] = std::array::from_fn(|k| xyz[i][k] - origin[k]);
+            let ad = sym_mul(a, &d);
+            (0..3).for_each(|k| ap[k] += ad[k]);
+            pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+            (0..6).for_each(|k| sum[k] += a[k]);
+        }
+        let c = sym_mul(&sym_inv(&sum), &ap);
+        want += pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
+        centres.push(std::array::from_fn::<f64, 3, _>(|k| c[k] + origin[k]));
+    }
+    assert!(want > 1.0, "the arm moved: {want}");
+    let mut scratch = Vec::new();
+    for threads in [1, 2, 4, 1] {
+        let (total, got) = at(&arm, threads, |at| {
+            let (mut shared, mut total) = (Shared::default(), 0.0);
+            t.add_cost(at, &[], &mut shared, &mut scratch, &mut total)?;
+            Ok((total, shared.centres.unwrap().points))
+        })
+        .unwrap();
+        assert_eq!(total.to_bits(), want.to_bits(), "{threads} threads");
+        assert_eq!(got, centres, "{threads} threads");
+    }
+    // The scratch holds a few chunks' positions, not every touch's.
+    assert!(
+        scratch.len() < data.len() / 4,
+        "{} positions",
+        scratch.len()
+    );
+}
+
 /// A touch's full leverage is its block of the hat matrix of the whole
 /// problem — the free columns and every point's centre carried as unknowns
 /// — against a dense computation: `h_i = tr(A_i X_i (Xᵀ A X)⁻¹ X_iᵀ)/3`,

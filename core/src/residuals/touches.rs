@@ -202,6 +202,53 @@ impl<'d> TouchTerm<'d> {
     }
 
     /// The touches of the points `run` (contiguous).
+    /// The chunks of points of one tool each (the run's index, its points),
+    /// in point order: the work items of the passes over touches, each
+    /// point's values depending on that point alone (the same bits on any
+    /// number of threads).
+    fn chunks_of(&self, views: &TouchViews) -> Vec<(usize, Range<usize>)> {
+        (views.runs.iter().enumerate())
+            .flat_map(|(r, (_, run))| {
+                (0..point_chunks(run.len())).map(move |c| {
+                    let first = run.start + c * POINTS_PER_CHUNK;
+                    (r, first..(first + POINTS_PER_CHUNK).min(run.end))
+                })
+            })
+            .collect()
+    }
+
+    /// Each of `points`' cost `Σ dᵀA d − cᵀ(Σ A d)` (its touches' offsets
+    /// `d` from the first, at the weighted centroid `c` of the offsets) and
+    /// centroid, from the positions `xyz` of the touches from `first` on.
+    fn point_costs(
+        &self,
+        points: &[crate::dataset::Point],
+        xyz: &[[f64; 3]],
+        first: usize,
+    ) -> Vec<(f64, [f64; 3])> {
+        let mut out = Vec::with_capacity(points.len());
+        for point in points {
+            let origin = xyz[point.touches.start - first];
+            let (mut ap, mut pap, mut sum) = ([0.0; 3], 0.0, [0.0; 6]);
+            for i in point.touches.clone() {
+                let a = &self.weights[i];
+                let d: [f64; 3] = std::array::from_fn(|k| xyz[i - first][k] - origin[k]);
+                let ad = sym_mul(a, &d);
+                for (s, v) in ap.iter_mut().zip(&ad) {
+                    *s += v;
+                }
+                pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
+                for (s, v) in sum.iter_mut().zip(a) {
+                    *s += v;
+                }
+            }
+            let c = sym_mul(&sym_inv(&sum), &ap);
+            let cost = pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
+            out.push((cost, std::array::from_fn(|k| c[k] + origin[k])));
+        }
+        out
+    }
+
     fn touches_of(&self, run: &Range<usize>) -> Range<usize> {
         let points = &self.data.points()[run.clone()];
         match (points.first(), points.last()) {
@@ -490,38 +537,54 @@ impl Term for TouchTerm<'_> {
         total: &mut f64,
     ) -> Result<(), TermError> {
         let data = self.data;
-        scratch.resize(data.len(), [0.0; 3]);
-        let xyz = &mut scratch[..];
         let views = TouchViews::of(data, at)?;
-        for (k, run) in &views.runs {
-            // Each tool's touches through its arm (one run of every touch
-            // when no touch names a tool).
+        // Per run of one tool: its arm and corrected poses.
+        let mut runs = Vec::with_capacity(views.runs.len());
+        for (k, _) in &views.runs {
             let seen = views.at(at, *k);
             let effects = seen.corrected_poses(data.poses(), data.conditions())?;
-            let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
-            let touches = self.touches_of(run);
-            seen.kernel
-                .positions(poses, touches.clone(), &mut xyz[touches])?;
+            runs.push((seen, effects));
         }
+        let chunks = self.chunks_of(&views);
+        // The positions a chunk at a time, into one slot of the scratch per
+        // thread: memory a few chunks' positions, not every touch's (24 MB
+        // at 10⁶ touches), and the passes on every thread.
+        let most = (chunks.iter())
+            .map(|(_, c)| self.touches_of(c).len())
+            .max()
+            .unwrap_or(0)
+            .max(1);
+        let slots = crate::parallel::threads_for(chunks.len(), at.threads);
+        scratch.resize(slots * most, [0.0; 3]);
+        let slots: Vec<std::sync::Mutex<&mut [[f64; 3]]>> = scratch
+            .chunks_mut(most)
+            .map(std::sync::Mutex::new)
+            .collect();
+        let run = |(r, c): &(usize, Range<usize>)| {
+            let (seen, effects) = &runs[*r];
+            let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
+            let touches = self.touches_of(c);
+            // As many slots as threads take chunks: one is free.
+            let mut own = Vec::new();
+            let mut slot = slots.iter().find_map(|s| s.try_lock().ok());
+            let xyz = match &mut slot {
+                Some(slot) => &mut slot[..touches.len()],
+                None => {
+                    own.resize(touches.len(), [0.0; 3]);
+                    &mut own[..]
+                }
+            };
+            seen.kernel.positions(poses, touches.clone(), xyz)?;
+            let points = &data.points()[c.clone()];
+            Ok::<_, KernelError>(self.point_costs(points, xyz, touches.start))
+        };
         let mut centroids = Vec::with_capacity(data.points().len());
-        for point in data.points() {
-            let origin = xyz[point.touches.start];
-            let (mut ap, mut pap, mut sum) = ([0.0; 3], 0.0, [0.0; 6]);
-            for i in point.touches.clone() {
-                let a = &self.weights[i];
-                let d: [f64; 3] = std::array::from_fn(|k| xyz[i][k] - origin[k]);
-                let ad = sym_mul(a, &d);
-                for (s, v) in ap.iter_mut().zip(&ad) {
-                    *s += v;
-                }
-                pap += d[0] * ad[0] + d[1] * ad[1] + d[2] * ad[2];
-                for (s, v) in sum.iter_mut().zip(a) {
-                    *s += v;
-                }
+        for part in parallel_map(&chunks, at.threads, run) {
+            // Point by point in order, as one loop over the points adds.
+            for (cost, centroid) in part? {
+                *total += cost;
+                centroids.push(centroid);
             }
-            let c = sym_mul(&sym_inv(&sum), &ap);
-            *total += pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
-            centroids.push(std::array::from_fn(|k| c[k] + origin[k]));
         }
         shared.centres = Some(Centres {
             points: centroids,
@@ -571,14 +634,7 @@ impl Term for TouchTerm<'_> {
         // Chunks of points of one tool, on up to `at.threads` threads: each
         // point's values depend on that point alone, so the same bits on
         // any count.
-        let chunks: Vec<(usize, Range<usize>)> = (runs.iter().enumerate())
-            .flat_map(|(r, (.., run))| {
-                (0..point_chunks(run.len())).map(move |c| {
-                    let first = run.start + c * POINTS_PER_CHUNK;
-                    (r, first..(first + POINTS_PER_CHUNK).min(run.end))
-                })
-            })
-            .collect();
+        let chunks = self.chunks_of(&views);
         // Each chunk writes its own touches' slice of the output (a point's
         // touches are contiguous, in point order): no second copy of the
         // values, which at 10⁶ touches would be 8 MB more at the peak.
