@@ -378,9 +378,9 @@ pub(crate) fn outliers(
             t
         }
     };
-    let first = threshold(scaled.rows.first().copied().unwrap_or(3));
+    let first = threshold(scaled.rows.first().unwrap_or(3));
     let mut found: Vec<Outlier> = Vec::new();
-    for (i, (&s, &k)) in scaled.values.iter().zip(&scaled.rows).enumerate() {
+    for (i, (&s, k)) in scaled.values.iter().zip(scaled.rows.iter()).enumerate() {
         if s > threshold(k) {
             let origin = objective.origin(i);
             let kind = match objective.term_of(i) {

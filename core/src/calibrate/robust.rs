@@ -101,7 +101,7 @@ pub const DOWNWEIGHTED: f64 = 0.25;
 /// The smallest weight a touch gets (so that its matrix stays invertible
 /// in sums; a Cauchy weight of a touch thousands of σ off would underflow).
 pub(crate) const MIN_WEIGHT: f64 = 1e-9;
-use crate::objective::Observed;
+use crate::objective::{Observed, RowCounts};
 use crate::stats::CHI2_3_MEDIAN;
 
 /// The loss of a robust fit.
@@ -367,7 +367,7 @@ pub(crate) struct Irls<'a> {
     /// The report.
     pub(crate) fit: RobustFit,
     /// Rows per observation (what law each standardised residual has).
-    rows: Vec<usize>,
+    rows: RowCounts,
     /// The normal equations under the curvature weights `b`: the
     /// sandwich's `J̃ᵀ B J̃`.
     pub(crate) curvature: Normal,
@@ -499,16 +499,16 @@ pub(crate) fn irls<'a>(
 /// observation's units ([`Observed::as_three_rows`]; asymptotically normal
 /// about [`CHI2_3_MEDIAN`]): `1/(2 f̄ √n)`, `f̄` the mean density there —
 /// `f₃(m₃)` for touches, `f_k(m_k) m_k/m₃` for a `k`-row observation.
-fn median_sd(rows: &[usize]) -> f64 {
+fn median_sd(rows: &RowCounts) -> f64 {
     let n = rows.len();
-    let density = if rows.iter().all(|&k| k == 3) {
+    let density = if rows.iter().all(|k| k == 3) {
         CHI2_3_MEDIAN.sqrt() * (-CHI2_3_MEDIAN / 2.0).exp() / (2.0 * std::f64::consts::PI).sqrt()
     } else {
         let at = |k: usize| {
             let m = crate::stats::chi_square_median(k);
             crate::stats::chi_square_density(m, k) * m / CHI2_3_MEDIAN
         };
-        rows.iter().map(|&k| at(k)).sum::<f64>() / n.max(1) as f64
+        rows.iter().map(at).sum::<f64>() / n.max(1) as f64
     };
     1.0 / (2.0 * density * (n as f64).sqrt())
 }
@@ -535,8 +535,8 @@ fn sandwich(
     (x, base, free): (&[f64], &Objective<'_>, &[usize]),
 ) -> Result<(f64, Normal), CalibrationError> {
     let (mut score, mut curve, mut curve2) = (0.0, 0.0, 0.0);
-    let b: Vec<f64> = (u2.values.iter().zip(&u2.rows))
-        .map(|(&q, &rows)| {
+    let b: Vec<f64> = (u2.values.iter().zip(u2.rows.iter()))
+        .map(|(&q, rows)| {
             let z = q.max(0.0).sqrt() / scale;
             let (psi2, b) = robust.loss.sandwich_terms(z, robust.scale_k, rows);
             score += psi2;

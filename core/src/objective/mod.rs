@@ -34,18 +34,58 @@ use crate::tolerances::Tolerances;
 pub struct Observed {
     /// Per observation, `rᵀ A r / (1 − h)`.
     pub values: Vec<f64>,
-    /// Per observation, its rows `k`.
-    pub rows: Vec<usize>,
+    /// Per observation, its rows `k` ([`Observed::rows`]).
+    pub(crate) rows: RowCounts,
+}
+
+/// Each observation's rows, in runs of one count (a term's observations
+/// share theirs): a million touches' threes are one run, not 8 MB.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct RowCounts {
+    /// (observations, rows each), in order.
+    runs: Vec<(usize, usize)>,
+}
+
+impl RowCounts {
+    /// Appends `n` observations of `k` rows each.
+    fn push(&mut self, n: usize, k: usize) {
+        match self.runs.last_mut() {
+            Some((m, last)) if *last == k => *m += n,
+            _ if n > 0 => self.runs.push((n, k)),
+            _ => {}
+        }
+    }
+
+    /// Observations.
+    pub(crate) fn len(&self) -> usize {
+        self.runs.iter().map(|&(n, _)| n).sum()
+    }
+
+    /// Each observation's rows, in order.
+    pub(crate) fn iter(&self) -> impl Iterator<Item = usize> + '_ {
+        (self.runs.iter()).flat_map(|&(n, k)| std::iter::repeat_n(k, n))
+    }
+
+    /// The first observation's rows.
+    pub(crate) fn first(&self) -> Option<usize> {
+        self.runs.first().map(|&(_, k)| k)
+    }
 }
 
 impl Observed {
+    /// Per observation, its rows `k` (3 for a touch, 1 for a distance, 6
+    /// for a pose), in [`Objective::observations`]' order.
+    pub fn rows(&self) -> impl Iterator<Item = usize> + '_ {
+        self.rows.iter()
+    }
+
     /// Each value in the units of a three-row observation's law: times
     /// `m₃/m_k` (`m_k` the median of `χ²_k`; exactly 1 for three rows), so
     /// that one median serves observations of any row count.
     pub(crate) fn as_three_rows(&self) -> Vec<f64> {
         let mut factor: Vec<f64> = Vec::new();
-        (self.values.iter().zip(&self.rows))
-            .map(|(&v, &k)| {
+        (self.values.iter().zip(self.rows.iter()))
+            .map(|(&v, k)| {
                 if k == 3 {
                     return v;
                 }
@@ -297,10 +337,7 @@ impl<'a> Objective<'a> {
         leverage: Option<&crate::residuals::ParameterLeverage>,
     ) -> Result<Observed, TermError> {
         self.at(x, |at| {
-            let mut out = Observed {
-                values: Vec::with_capacity(self.observations()),
-                rows: Vec::with_capacity(self.observations()),
-            };
+            let mut out = Observed::default();
             for (_, term) in self.observing() {
                 let Some(s) = term.standardised(at, leverage)? else {
                     continue;
@@ -317,8 +354,14 @@ impl<'a> Objective<'a> {
                         ),
                     ));
                 }
-                out.rows.extend(std::iter::repeat_n(s.rows, s.values.len()));
-                out.values.extend(s.values);
+                out.rows.push(s.values.len(), s.rows);
+                if out.values.is_empty() {
+                    // The first term's values as they are: no second copy
+                    // of every touch's at the peak of memory.
+                    out.values = s.values;
+                } else {
+                    out.values.extend(s.values);
+                }
             }
             Ok(out)
         })
