@@ -459,7 +459,7 @@ fn evaluate_with(
         .collect::<Result<Vec<_>, _>>()?;
     let (signed, abs, pair_sample) = match pairs {
         Some((threads, seed)) => {
-            let set = pairs::pair_set(data.points(), seed);
+            let set = pairs::pair_set(data.points(), seed, threads);
             let (signed, abs) = pair_summaries(data, xyz, &stats, threads, &set);
             (signed.summary(), abs.summary(), set.sample())
         }

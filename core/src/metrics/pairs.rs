@@ -90,7 +90,9 @@ fn pair_work(points: &[Point]) -> u64 {
 /// [`PAIR_TOUCH_BUDGET`] touch distances, else each pair kept with
 /// probability budget / cost (seeded by `seed`), drawn in row order by
 /// geometric gaps — time and memory in the pairs kept, not in all pairs.
-pub(crate) fn pair_set(points: &[Point], seed: u64) -> PairSet {
+/// The gaps are drawn on up to `threads` threads ([`gaps`]): the same pairs
+/// on any count.
+pub(crate) fn pair_set(points: &[Point], seed: u64, threads: usize) -> PairSet {
     let work = pair_work(points);
     if work <= PAIR_TOUCH_BUDGET {
         return PairSet::All;
@@ -98,29 +100,33 @@ pub(crate) fn pair_set(points: &[Point], seed: u64) -> PairSet {
     let n = points.len() as u64;
     let total = n * (n - 1) / 2;
     let p = PAIR_TOUCH_BUDGET as f64 / work as f64;
-    let ln_miss = (-p).ln_1p();
-    let mut rng = crate::random::rng(seed, crate::random::streams::PAIRS);
     let mut pairs = Vec::with_capacity((p * total as f64 * 1.1) as usize + 16);
+    let mut draws = Gaps::new(seed, p);
     let (mut k, mut row, mut row_start) = (0u64, 0u64, 0u64);
-    loop {
-        // The pairs skipped before the next kept one: Geometric(p).
-        let u: f64 = rng.random();
-        let gap = ((-u).ln_1p() / ln_miss).floor();
-        // `gap` is finite or +∞ (u near 1), never NaN: 0 < p < 1.
-        if gap >= (total - k) as f64 {
-            break;
-        }
-        k += gap as u64;
-        while k >= row_start + (n - 1 - row) {
-            row_start += n - 1 - row;
-            row += 1;
-        }
-        let col = row + 1 + (k - row_start);
-        // Points are fewer than 2³² (the data set's indices are u32).
-        pairs.push((row as u32, col as u32));
-        k += 1;
-        if k >= total {
-            break;
+    'draws: loop {
+        // Draws for the pairs still to come, but in one case of about 10⁴
+        // (the kept pairs are binomial: 4 σ past their mean), at most a
+        // few chunks a thread at a time (their memory).
+        let rest = p * (total - k) as f64;
+        let wave =
+            ((rest + 4.0 * rest.sqrt()) as u64 + 1).min(GAP_CHUNK * 8 * threads.max(1) as u64);
+        for gap in draws.next_wave(wave, threads).into_iter().flatten() {
+            // `gap` is finite or +∞ (u near 1), never NaN: 0 < p < 1.
+            if gap >= (total - k) as f64 {
+                break 'draws;
+            }
+            k += gap as u64;
+            while k >= row_start + (n - 1 - row) {
+                row_start += n - 1 - row;
+                row += 1;
+            }
+            let col = row + 1 + (k - row_start);
+            // Points are fewer than 2³² (the data set's indices are u32).
+            pairs.push((row as u32, col as u32));
+            k += 1;
+            if k >= total {
+                break 'draws;
+            }
         }
     }
     let sample = PairSample {
@@ -129,6 +135,50 @@ pub(crate) fn pair_set(points: &[Point], seed: u64) -> PairSet {
         seed,
     };
     PairSet::Sampled { pairs, sample }
+}
+
+/// Draws of a gap a work item.
+const GAP_CHUNK: u64 = 1 << 14;
+
+/// The pairs skipped before each kept one, Geometric(p): draw `i` is
+/// `⌊ln(1 − u_i) / ln(1 − p)⌋`, `u_i` the `i`-th uniform of the pairs'
+/// stream. A uniform is two words of the stream, so a chunk of draws
+/// starts its own copy of the stream at its first draw's words and draws
+/// the same values as one stream read from the start.
+struct Gaps {
+    stream: rand_chacha::ChaCha8Rng,
+    ln_miss: f64,
+    /// Draws made.
+    drawn: u64,
+}
+
+impl Gaps {
+    fn new(seed: u64, p: f64) -> Gaps {
+        Gaps {
+            stream: crate::random::rng(seed, crate::random::streams::PAIRS),
+            ln_miss: (-p).ln_1p(),
+            drawn: 0,
+        }
+    }
+
+    /// The next `count` draws (rounded up to whole chunks), in order, a
+    /// chunk at a time.
+    fn next_wave(&mut self, count: u64, threads: usize) -> Vec<Vec<f64>> {
+        let starts: Vec<u64> = (0..count.div_ceil(GAP_CHUNK))
+            .map(|c| self.drawn + c * GAP_CHUNK)
+            .collect();
+        self.drawn += starts.len() as u64 * GAP_CHUNK;
+        crate::parallel::parallel_map(&starts, threads, |&first| {
+            let mut stream = self.stream.clone();
+            stream.set_word_pos(2 * u128::from(first));
+            (0..GAP_CHUNK)
+                .map(|_| {
+                    let u: f64 = stream.random();
+                    ((-u).ln_1p() / self.ln_miss).floor()
+                })
+                .collect::<Vec<f64>>()
+        })
+    }
 }
 
 #[cfg(test)]
@@ -148,6 +198,62 @@ mod tests {
             .collect()
     }
 
+    /// The pairs drawn from one stream read from its start, a gap at a
+    /// time (the loop before the draws were shared between threads).
+    fn drawn_in_one_stream(points: &[Point], seed: u64) -> Vec<(u32, u32)> {
+        let n = points.len() as u64;
+        let total = n * (n - 1) / 2;
+        let ln_miss = (-(PAIR_TOUCH_BUDGET as f64 / pair_work(points) as f64)).ln_1p();
+        let mut rng = crate::random::rng(seed, crate::random::streams::PAIRS);
+        let (mut pairs, mut k) = (Vec::new(), 0u64);
+        loop {
+            let u: f64 = rng.random();
+            let gap = ((-u).ln_1p() / ln_miss).floor();
+            if gap >= (total - k) as f64 {
+                return pairs;
+            }
+            k += gap as u64;
+            let (mut row, mut row_start) = (0, 0);
+            while k >= row_start + (n - 1 - row) {
+                row_start += n - 1 - row;
+                row += 1;
+            }
+            pairs.push((row as u32, (row + 1 + k - row_start) as u32));
+            k += 1;
+            if k >= total {
+                return pairs;
+            }
+        }
+    }
+
+    /// 1500 points of 100 touches keep about 9·10⁴ of their 1.1·10⁶
+    /// pairs: 6 chunks of draws, shared by 2 and 4 threads. The pairs are
+    /// those one stream read from its start gives, for several seeds.
+    #[test]
+    fn the_pairs_drawn_in_chunks_are_those_of_one_stream() {
+        let many = points(&[100; 1500]);
+        for seed in [0, 1, 7] {
+            let want = drawn_in_one_stream(&many, seed);
+            assert!(want.len() as u64 > 5 * GAP_CHUNK, "{}", want.len());
+            for threads in [1, 2, 4] {
+                let PairSet::Sampled { pairs, .. } = pair_set(&many, seed, threads) else {
+                    panic!("sampled");
+                };
+                assert_eq!(pairs, want, "seed {seed}, {threads} threads");
+            }
+        }
+        // Waves of any size continue the stream where the last one ended.
+        let mut one = Gaps::new(3, 0.01);
+        let whole = one.next_wave(5 * GAP_CHUNK, 1).concat();
+        let mut waves = Gaps::new(3, 0.01);
+        let mut parts = Vec::new();
+        for (count, threads) in [(1, 2), (GAP_CHUNK + 1, 4), (GAP_CHUNK, 1)] {
+            parts.extend(waves.next_wave(count, threads).concat());
+        }
+        assert_eq!(parts.len() as u64, 4 * GAP_CHUNK);
+        assert_eq!(parts[..], whole[..parts.len()]);
+    }
+
     #[test]
     fn work_is_the_sum_of_pairwise_minima() {
         let counts = [3, 7, 5, 5, 1000];
@@ -165,9 +271,9 @@ mod tests {
     /// and another for another seed.
     #[test]
     fn large_campaigns_sample_their_pairs() {
-        assert_eq!(pair_set(&points(&[10; 1000]), 1), PairSet::All);
+        assert_eq!(pair_set(&points(&[10; 1000]), 1, 2), PairSet::All);
         let big = points(&[1000; 1000]);
-        let PairSet::Sampled { pairs, sample } = pair_set(&big, 1) else {
+        let PairSet::Sampled { pairs, sample } = pair_set(&big, 1, 2) else {
             panic!("10⁶ touches summarised over every pair");
         };
         assert_eq!(sample.pairs, 499_500);
@@ -186,12 +292,12 @@ mod tests {
             "{early}"
         );
         assert_eq!(
-            pair_set(&big, 1),
+            pair_set(&big, 1, 1),
             PairSet::Sampled {
                 pairs: pairs.clone(),
                 sample
             }
         );
-        assert_ne!(pair_set(&big, 2), PairSet::Sampled { pairs, sample });
+        assert_ne!(pair_set(&big, 2, 2), PairSet::Sampled { pairs, sample });
     }
 }

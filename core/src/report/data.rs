@@ -168,7 +168,7 @@ fn evaluate_with_pairs(
     seed: u64,
 ) -> Result<(Evaluation, Pairs), ReportError> {
     let mut ev = evaluate_without_pairs(data, xyz)?;
-    let set = pair_set(data.points(), seed);
+    let set = pair_set(data.points(), seed, DEFAULT_THREADS);
     let n = ev.points.len();
     let count = match &set {
         PairSet::All => n * n.saturating_sub(1) / 2,
