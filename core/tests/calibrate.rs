@@ -469,3 +469,47 @@ fn the_hybrid_anneals_then_switches_to_lm() {
     assert_eq!(sa.solver.anneal.as_ref().unwrap().stop, AnnealStop::Cooled);
     assert!(sa.solver.final_cost > 10.0 * hybrid.solver.final_cost);
 }
+
+/// The global method's torus grid shares its cells' costs between threads
+/// in chunks of 64 (the UR5 tracker's 1000 cells are 16 chunks: two
+/// threads): the calibration on 1 and 2 threads is the same, to the bit,
+/// and the grid costed every cell.
+#[test]
+fn the_global_search_is_the_same_on_one_and_two_threads() {
+    use aacmm_core::DataSet;
+    use aacmm_core::io::{AngleUnit, read_positions};
+    let file = |f: &str| format!("{}/../examples/ur5-tracker/{f}", env!("CARGO_MANIFEST_DIR"));
+    let arm = aacmm_core::read_arm(std::path::Path::new(&file("arm.toml")))
+        .unwrap()
+        .0;
+    let rows = read_positions(
+        std::path::Path::new(&file("positions-grid.csv")),
+        AngleUnit::Deg,
+        Some(6),
+    )
+    .unwrap();
+    let data = DataSet::from_positions(rows, "positions-grid.csv").unwrap();
+    let on = |threads: usize| {
+        let settings = SolverSettings {
+            threads,
+            ..SolverSettings::default()
+        };
+        calibrate(&arm.params, &data, &ModelOptions::default(), &settings).unwrap()
+    };
+    let one = on(1);
+    let grid = (one.solver.phases.iter()).find(|p| p.name == "torus grid");
+    assert_eq!(
+        grid.map(|p| p.cost_evaluations),
+        Some(1000),
+        "{:?}",
+        one.solver.phases
+    );
+    assert_eq!(
+        aacmm_core::parallel::threads_for(1000usize.div_ceil(64), 2),
+        2
+    );
+    let two = on(2);
+    assert_eq!(two.params, one.params);
+    assert_eq!(two.solver.stop, one.solver.stop);
+    assert_eq!(two.solver.phases.len(), one.solver.phases.len());
+}

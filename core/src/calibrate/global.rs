@@ -963,18 +963,27 @@ fn torus_grid(
             );
         }
     };
-    let mut x = start.clone();
-    let mut xyz = Vec::new();
+    // Chunks of 64 cells on the objective's threads: a cell's cost depends
+    // on that cell alone, so the same costs on any count. A cancellation is
+    // seen within a chunk's costs.
+    const CELLS: usize = 64;
+    let chunks: Vec<usize> = (0..cells.div_ceil(CELLS)).collect();
+    let threads = problem.objective.threads();
+    let parts = crate::parallel::parallel_map(&chunks, threads, |&chunk| {
+        super::Cancel::check(problem.cancel.as_ref())?;
+        let (mut x, mut xyz) = (start.clone(), Vec::new());
+        (chunk * CELLS..((chunk + 1) * CELLS).min(cells))
+            .map(|cell| {
+                place(&mut x, cell);
+                // The data's cost (the prior does not steer the scan);
+                // never NaN: a non-finite cost is +∞.
+                Ok(problem.objective.data_cost(&problem.point(&x), &mut xyz)?)
+            })
+            .collect::<Result<Vec<f64>, CalibrationError>>()
+    });
     let mut costs = Vec::with_capacity(cells);
-    for cell in 0..cells {
-        // A cancellation is seen within 64 cells' costs.
-        if cell % 64 == 0 {
-            super::Cancel::check(problem.cancel.as_ref())?;
-        }
-        place(&mut x, cell);
-        // The data's cost (the prior does not steer the scan); never NaN:
-        // a non-finite cost is +∞.
-        costs.push(problem.objective.data_cost(&problem.point(&x), &mut xyz)?);
+    for part in parts {
+        costs.extend(part?);
     }
     let mut minima: Vec<usize> = (0..cells)
         .filter(|&cell| {

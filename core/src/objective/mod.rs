@@ -319,6 +319,11 @@ impl<'a> Objective<'a> {
             })
     }
 
+    /// The threads its sums may use.
+    pub(crate) fn threads(&self) -> usize {
+        self.threads
+    }
+
     /// Every observation's standardised squared residual at `x` (each
     /// about `χ²_k` when it fits the noise model, `k` its rows: 3 for a
     /// touch, 1 for a distance, 6 for a pose), in
