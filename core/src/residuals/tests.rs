@@ -35,6 +35,17 @@ fn weighed<'d>(
     (touches, lengths)
 }
 
+/// Stated encoder (1e-4 rad) and probe (0.01 mm) noise, lengths of 1 µm.
+fn stated_noise() -> Noise {
+    Noise {
+        encoder_rad: Some(1e-4),
+        probe_mm: Some(0.01),
+        length_default_mm: 0.001,
+        length_weight: None,
+        ..Noise::default()
+    }
+}
+
 /// `f` at the arm `arm`.
 fn at<R>(
     arm: &DhParams,
@@ -273,13 +284,7 @@ fn the_streamed_change_of_weights_is_the_built_one() {
     let mut there = DhParams::paper_nominal();
     there.joints[1].d += 3.0;
     there.joints[2].theta += 0.02;
-    let stated = Noise {
-        encoder_rad: Some(1e-4),
-        probe_mm: Some(0.01),
-        length_default_mm: 0.001,
-        length_weight: None,
-        ..Noise::default()
-    };
+    let stated = stated_noise();
     let unstated = Noise {
         encoder_rad: None,
         probe_mm: None,
@@ -319,13 +324,7 @@ fn normal_equations_are_the_same_bits_on_any_thread_count() {
         "points split"
     );
     let arm = DhParams::paper_nominal();
-    let noise = Noise {
-        encoder_rad: Some(1e-4),
-        probe_mm: Some(0.01),
-        length_default_mm: 0.001,
-        length_weight: None,
-        ..Noise::default()
-    };
+    let noise = stated_noise();
     let (t, l) = weighed(&data, &noise, &arm, 1.0, 1);
     let weight_chunks = data.len() / TOUCHES_PER_CHUNK;
     assert_eq!(threads_for(weight_chunks, 2), 2, "weights split too");
@@ -360,13 +359,7 @@ fn the_cost_pass_is_the_plain_one_on_any_thread_count() {
         crate::parallel::threads_for(n.div_ceil(POINTS_PER_CHUNK), 4),
         4
     );
-    let noise = Noise {
-        encoder_rad: Some(1e-4),
-        probe_mm: Some(0.01),
-        length_default_mm: 0.001,
-        length_weight: None,
-        ..Noise::default()
-    };
+    let noise = stated_noise();
     let mut arm = DhParams::paper_nominal();
     let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
     arm.joints[1].d += 0.3;
