@@ -45,8 +45,11 @@ pub fn threads_for(items: usize, threads: usize) -> usize {
 /// The cores of the machine (at least one): the threads a data file's
 /// reading shares its work on, before any setting of the fit's threads
 /// exists — the same values on any count, as everything here.
+/// Asked once per process: the standard library reads the cgroup's quota
+/// files on every call.
 pub(crate) fn every_core() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+    static CORES: OnceLock<usize> = OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
 }
 
 /// `f` over `items` on up to `threads` threads (the caller and the pool's

@@ -322,7 +322,7 @@ impl Default for SolverSettings {
 /// assert!((1..=MAX_THREADS).contains(&available_threads()));
 /// ```
 pub fn available_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get().min(MAX_THREADS))
+    crate::parallel::every_core().min(MAX_THREADS)
 }
 
 /// Most worker threads a caller may ask for (`threads`, `--threads`), in
