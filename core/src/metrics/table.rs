@@ -322,9 +322,10 @@ fn render(
                 .unwrap_or(0)
         })
         .collect();
-    use std::fmt::Write as _;
     let mut out = format!("{title}\n");
-    // One line's cells written into one buffer (no string per cell).
+    // One line's cells written into one buffer (no string per cell), each
+    // padded to its column's width in characters as `{:<w$}` / `{:>w$}`
+    // pad, without the formatter.
     let mut text = String::new();
     for line in &lines {
         text.clear();
@@ -332,12 +333,14 @@ fn render(
             if c > 0 {
                 text.push_str("  ");
             }
-            // Writing into a String cannot fail.
-            let _ = if c < left {
-                write!(text, "{cell:<w$}")
-            } else {
-                write!(text, "{cell:>w$}")
-            };
+            let pad = w.saturating_sub(cell.chars().count());
+            if c >= left {
+                text.extend(std::iter::repeat_n(' ', pad));
+            }
+            text.push_str(cell);
+            if c < left {
+                text.extend(std::iter::repeat_n(' ', pad));
+            }
         }
         out.push_str("  ");
         out.push_str(text.trim_end());
@@ -350,6 +353,35 @@ fn render(
 mod tests {
     use super::super::tests::eval;
     use super::*;
+
+    /// Cells are padded as the formatter pads them: to the column's width
+    /// in characters, left of `left` to the left, the others to the right.
+    #[test]
+    fn cells_are_padded_as_the_formatter_pads() {
+        let rows = vec![
+            vec!["Ω₁".to_string(), "1.5".to_string(), "x".to_string()],
+            vec![
+                "point-long".to_string(),
+                "-12.25".to_string(),
+                "éé".to_string(),
+            ],
+        ];
+        let got = render("T", &["pt", "value", "n"], 1, rows.clone());
+        let widths = [10, 6, 2];
+        let mut want = String::from("T\n");
+        for line in [vec!["pt".to_string(), "value".into(), "n".into()]]
+            .iter()
+            .chain(&rows)
+        {
+            let cells = [
+                format!("{:<w$}", line[0], w = widths[0]),
+                format!("{:>w$}", line[1], w = widths[1]),
+                format!("{:>w$}", line[2], w = widths[2]),
+            ];
+            want.push_str(&format!("  {}\n", cells.join("  ").trim_end()));
+        }
+        assert_eq!(got, want);
+    }
 
     #[test]
     fn negative_zero_is_printed_as_zero() {
