@@ -618,21 +618,19 @@ pub(crate) fn parse_poses_on(
     let rows_bound = |header: &Record, (bytes, lines): (usize, usize)| {
         lines.min(1 + bytes / (2 * header.fields.len()).max(1))
     };
+    // Each table keeps its header's layout, found once.
     let reader = TableReader {
         new: |header: &Record, rows| {
             let l = PosesLayout::of(header);
-            room(file, (l.joints, rows), l.extra, (l.approach, l.tool))
+            let poses = room(file, (l.joints, rows), l.extra, (l.approach, l.tool))?;
+            Ok((poses, l))
         },
-        row: |poses: &mut Poses, header: &Record, line, fields: &[&str]| {
-            read_row(
-                poses,
-                (file, &columns_of),
-                PosesLayout::of(header),
-                (line, fields),
-            )
+        row: |(poses, l): &mut (Poses, PosesLayout), header: &Record, line, fields: &[&str]| {
+            let names = &header.fields[..l.columns];
+            read_row(poses, (file, &columns_of), (*l, names), (line, fields))
         },
     };
-    let append = |into: &mut Poses, rows: Poses| {
+    let append = |(into, _): &mut (Poses, PosesLayout), (rows, _): (Poses, PosesLayout)| {
         (into.append(rows)).map_err(|e| InputError::memory(file, e))
     };
     let (header, poses) = scan_table_on(
@@ -644,7 +642,7 @@ pub(crate) fn parse_poses_on(
         (threads, piece),
     )?;
     let l = PosesLayout::of(&header);
-    let mut poses = poses.unwrap_or_else(|| Poses {
+    let mut poses = poses.map(|(p, _)| p).unwrap_or_else(|| Poses {
         approach: l.approach.then(Vec::new),
         tool_of: l.tool.then(Vec::new),
         ..Poses::new(l.joints)
@@ -663,9 +661,9 @@ pub(crate) fn parse_poses_on(
 
 /// Where a poses file's header puts its columns.
 #[derive(Clone, Copy)]
-struct PosesLayout<'h> {
+struct PosesLayout {
     /// The header's fields before `approach`.
-    columns: &'h [String],
+    columns: usize,
     joints: usize,
     /// The condition columns after the joints (and the tool), in order.
     extra: &'static [&'static str],
@@ -673,13 +671,13 @@ struct PosesLayout<'h> {
     approach: bool,
 }
 
-impl PosesLayout<'_> {
-    fn of(header: &Record) -> PosesLayout<'_> {
+impl PosesLayout {
+    fn of(header: &Record) -> PosesLayout {
         let (columns, approach) = split_approach(&header.fields);
         let extra = condition_columns(columns);
         let tool = has_tool_column(columns, extra.len());
         PosesLayout {
-            columns,
+            columns: columns.len(),
             joints: columns.len() - 1 - extra.len() - usize::from(tool),
             extra,
             tool,
@@ -688,12 +686,13 @@ impl PosesLayout<'_> {
     }
 }
 
-/// Reads the data row `fields` on `line` into `poses`; on an error the
-/// poses are as they were.
+/// Reads the data row `fields` on `line` into `poses` (`names`: the
+/// header's columns before `approach`); on an error the poses are as they
+/// were.
 fn read_row(
     poses: &mut Poses,
     (file, columns_of): (&str, &JointColumns),
-    l: PosesLayout,
+    (l, names): (PosesLayout, &[String]),
     (line, fields): (usize, &[&str]),
 ) -> Result<(), InputError> {
     let joints = l.joints;
@@ -708,7 +707,7 @@ fn read_row(
         ));
     }
     let start = poses.q.len();
-    let row = (&fields[1..=joints], &l.columns[1..=joints]);
+    let row = (&fields[1..=joints], &names[1..=joints]);
     read_readings(row, columns_of, (file, line), &mut poses.q)?;
     let mut values = [0.0; 2];
     for (k, c) in l.extra.iter().enumerate() {
@@ -727,7 +726,7 @@ fn read_row(
         };
     }
     if let Some(signs) = &mut poses.approach {
-        let cell = fields[l.columns.len()];
+        let cell = fields[l.columns];
         if let Err(e) = super::approach::parse_approach(cell, joints, (file, line), signs) {
             poses.q.truncate(start);
             return Err(e);

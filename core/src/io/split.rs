@@ -5,13 +5,15 @@
 //! [`scan_table`] gives reading the text from its start: the pieces only
 //! change who reads a line, and every error is chosen as it would choose
 //! it (a blank line before more data first, then the first row of the
-//! wrong width, then the first row refused; see [`merge`]).
+//! wrong width, then the first row refused; see [`Merged`]).
 //!
 //! Text with a double quote past the comments, a blank line before the
 //! header, a header the caller refuses, or too small to share is read by
 //! [`scan_table`] itself.
 
-use super::text::{Blanks, Record, check_row_width, line_of, preamble, records_in, scan_table};
+use super::text::{
+    Blanks, Record, check_row_width, cr_only, line_of, preamble, records_in, scan_table,
+};
 use crate::error::InputError;
 
 /// Bytes of text a piece is cut at (then at the next line end): about
@@ -23,7 +25,7 @@ pub(crate) const PIECE: usize = 1 << 18;
 const WAVE: usize = 32;
 
 /// How a table's rows are read: a table with room for some rows (for the
-/// header), a row read into it, a table appended to another.
+/// header), and a row read into it.
 pub(crate) struct TableReader<New, Row> {
     /// An empty table for the header with room for this many rows.
     pub new: New,
@@ -138,20 +140,12 @@ fn split_header(
     if blank.is_some() || body >= text.len() || bytes[body..].contains(&b'"') {
         return None;
     }
-    let line_end = |from: usize| {
-        (bytes[from..].iter().position(|&b| b == b'\n')).map_or(text.len(), |n| from + n)
-    };
-    // Lines ended by a carriage return alone (which `scan_table` refuses,
-    // looking at the first line and the header's).
-    let cr_only = |from: usize| {
-        text[from..line_end(from)]
-            .trim_end_matches('\r')
-            .contains('\r')
-    };
-    if cr_only(0) || cr_only(body) {
+    // Lines ended by a carriage return alone, which `scan_table` refuses
+    // (the file is named there; here only whether it is refused counts).
+    if cr_only(text, 0, "").is_err() || cr_only(text, body, "").is_err() {
         return None;
     }
-    let end = line_end(body);
+    let end = (bytes[body..].iter().position(|&b| b == b'\n')).map_or(text.len(), |n| body + n);
     let mut header = None;
     records_in(text, (body, end), (line_of(text, body), None), |line, f| {
         header = Some(Record {

@@ -316,7 +316,7 @@ pub(crate) fn each_record(
         return each_quoted(original, file, f);
     }
     let blanks = records_in(text, (body, text.len()), (line_of(text, body), blank), f);
-    Blanks::check_all(text, file, [blanks], (blank, false))
+    blanks.check(text, file, (blank, false)).map(|_| ())
 }
 
 /// The blank lines about the records of a stretch of lines: where a record
@@ -337,24 +337,11 @@ pub(super) struct Blanks {
 }
 
 impl Blanks {
-    /// The first blank line before more data in stretches of lines that
-    /// follow each other (`pending`: a blank line before them, if any;
-    /// `any`: whether a record came before them), as the error of
-    /// [`each_record`].
-    pub(super) fn check_all(
-        text: &str,
-        file: &str,
-        stretches: impl IntoIterator<Item = Blanks>,
-        (mut pending, mut any): (Option<usize>, bool),
-    ) -> Result<(), InputError> {
-        for b in stretches {
-            (pending, any) = b.check(text, file, (pending, any))?;
-        }
-        Ok(())
-    }
-
-    /// [`Blanks::check_all`] of one stretch: the blank line pending after
-    /// it and whether a record came before its end.
+    /// The first blank line before more data in this stretch of lines
+    /// (`pending`: a blank line before it, if any; `any`: whether a record
+    /// came before it), as the error of [`each_record`]; else the blank
+    /// line pending after it and whether a record came before its end.
+    /// Stretches that follow each other are checked in turn.
     pub(super) fn check(
         self,
         text: &str,
@@ -451,7 +438,7 @@ pub(super) fn cr_only(text: &str, body: usize, file: &str) -> Result<(), InputEr
 
 /// Whether a line is blank (whitespace only).
 #[inline]
-pub(super) fn is_blank(line: &str) -> bool {
+fn is_blank(line: &str) -> bool {
     match line.as_bytes().first() {
         None => true,
         Some(b) if b.is_ascii_graphic() => false,
@@ -462,7 +449,7 @@ pub(super) fn is_blank(line: &str) -> bool {
 /// A field without surrounding whitespace (`str::trim`, as the `csv`
 /// crate's `Trim::All`), quick when there is none.
 #[inline]
-pub(super) fn trim(field: &str) -> &str {
+fn trim(field: &str) -> &str {
     match field.as_bytes() {
         [first, .., last] if first.is_ascii_graphic() && last.is_ascii_graphic() => field,
         [only] if only.is_ascii_graphic() => field,
@@ -492,7 +479,7 @@ pub(super) fn preamble(text: &str) -> (usize, Option<usize>) {
 
 /// The error for a blank line (at byte `blank`) before the record on
 /// `line`; `after_records` when a record came before it.
-pub(super) fn blank_line(
+fn blank_line(
     text: &str,
     file: &str,
     blank: usize,
