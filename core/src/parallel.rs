@@ -117,6 +117,20 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(
     )
 }
 
+/// [`parallel_map`] handing `f` each item to change (a slice of an output
+/// the caller split into disjoint parts, say); each item is handed out
+/// once, so its lock is never contended.
+pub(crate) fn parallel_map_mut<T: Send, R: Send>(
+    items: &mut [T],
+    threads: usize,
+    f: impl Fn(&mut T) -> R + Sync,
+) -> Vec<R> {
+    let cells: Vec<Mutex<&mut T>> = items.iter_mut().map(Mutex::new).collect();
+    parallel_map(&cells, threads, |cell| {
+        f(&mut cell.lock().unwrap_or_else(PoisonError::into_inner))
+    })
+}
+
 /// The results `(item, result)` in item order.
 fn in_item_order<R>(len: usize, done: Vec<(usize, R)>) -> Vec<R> {
     let mut slots: Vec<Option<R>> = (0..len).map(|_| None).collect();

@@ -53,6 +53,11 @@ impl Post {
     }
 }
 
+/// Whether joint `j` is among the prismatic joints `prismatic` (bit `j`).
+fn slides(prismatic: u16, j: usize) -> bool {
+    j < MAX_JOINTS && prismatic & (1 << j) != 0
+}
+
 impl PreparedPoses {
     /// Prepares readings (rad) of revolute joints, one row of `joints`
     /// readings per pose. (A chain with prismatic joints prepares its
@@ -113,7 +118,7 @@ impl PreparedPoses {
         len: usize,
         column: impl Fn(usize) -> I,
     ) -> Self {
-        let slides = |j: usize| j < MAX_JOINTS && prismatic & (1 << j) != 0;
+        let slides = |j| slides(prismatic, j);
         PreparedPoses {
             joints,
             prismatic,
@@ -216,7 +221,7 @@ impl PreparedPoses {
             return PreparedPoses::from_flat_with(joints, prismatic, len, q);
         }
         assert_eq!(q.len(), joints * len, "readings of {len} poses");
-        let slides = |j: usize| j < MAX_JOINTS && prismatic & (1 << j) != 0;
+        let slides = |j| slides(prismatic, j);
         let mut cos: Vec<Vec<f64>> = (0..joints).map(|_| vec![0.0; len]).collect();
         let mut sin: Vec<Vec<f64>> = (0..joints)
             .map(|j| {
@@ -229,36 +234,27 @@ impl PreparedPoses {
             .collect();
         // Work item `c`: chunk `c` of every column (a prismatic joint's sin
         // column is empty, its part too).
-        type Parts<'a> = (Vec<&'a mut [f64]>, Vec<&'a mut [f64]>);
-        let mut items: Vec<Parts> = (0..chunks).map(|_| (Vec::new(), Vec::new())).collect();
+        type Parts<'a> = (usize, Vec<&'a mut [f64]>, Vec<&'a mut [f64]>);
+        let mut items: Vec<Parts> = (0..chunks).map(|c| (c, Vec::new(), Vec::new())).collect();
         for (column, is_cos) in
             (cos.iter_mut().map(|c| (c, true))).chain(sin.iter_mut().map(|s| (s, false)))
         {
             let mut parts = column.chunks_mut(CHUNK);
             for item in &mut items {
                 let part = parts.next().unwrap_or_default();
-                if is_cos { &mut item.0 } else { &mut item.1 }.push(part);
+                if is_cos { &mut item.1 } else { &mut item.2 }.push(part);
             }
         }
-        let items: Vec<std::sync::Mutex<Parts>> =
-            items.into_iter().map(std::sync::Mutex::new).collect();
-        let fill = |c: usize, (cos, sin): &mut Parts| {
+        crate::parallel::parallel_map_mut(&mut items, threads, |(c, cos, sin)| {
             for j in 0..joints {
-                let rows = (c * CHUNK..).zip(cos[j].iter_mut());
-                for (i, cos) in rows {
+                for (i, cos) in (*c * CHUNK..).zip(cos[j].iter_mut()) {
                     let x = q[i * joints + j];
                     *cos = if slides(j) { x } else { x.cos() };
                 }
-                for (i, sin) in (c * CHUNK..).zip(sin[j].iter_mut()) {
+                for (i, sin) in (*c * CHUNK..).zip(sin[j].iter_mut()) {
                     *sin = q[i * joints + j].sin();
                 }
             }
-        };
-        let index: Vec<usize> = (0..chunks).collect();
-        crate::parallel::parallel_map(&index, threads, |&c| {
-            // Each item is taken once: its lock is never contended.
-            let mut parts = items[c].lock().unwrap_or_else(|e| e.into_inner());
-            fill(c, &mut parts);
         });
         drop(items);
         PreparedPoses::from_trig(joints, prismatic, len, cos, sin)

@@ -181,14 +181,11 @@ impl<'d> TouchTerm<'d> {
             rest = tail;
             for (c, out) in mine.chunks_mut(TOUCHES_PER_CHUNK).enumerate() {
                 let start = touches.start + c * TOUCHES_PER_CHUNK;
-                parts.push(std::sync::Mutex::new((*k, start, out)));
+                parts.push((*k, start, out));
             }
         }
-        let results = parallel_map(&parts, at.threads, |part| {
-            let mut part = part
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
-            let (k, start, out) = &mut *part;
+        let results = crate::parallel::parallel_map_mut(&mut parts, at.threads, |part| {
+            let (k, start, out) = part;
             let (k, start) = (*k, *start);
             let kernel = views.kernel(at, k);
             self.each_weight(kernel, start..start + out.len(), unit_sigma, |i, w| {
@@ -201,11 +198,11 @@ impl<'d> TouchTerm<'d> {
         Ok(touch)
     }
 
-    /// The touches of the points `run` (contiguous).
     /// The chunks of points of one tool each (the run's index, its points),
     /// in point order: the work items of the passes over touches, each
     /// point's values depending on that point alone (the same bits on any
-    /// number of threads).
+    /// number of threads). Counted by [`point_chunks`], so that what it
+    /// tells the tests holds here.
     fn chunks_of(&self, views: &TouchViews) -> Vec<(usize, Range<usize>)> {
         (views.runs.iter().enumerate())
             .flat_map(|(r, (_, run))| {
@@ -249,6 +246,7 @@ impl<'d> TouchTerm<'d> {
         out
     }
 
+    /// The touches of the points `run` (contiguous).
     fn touches_of(&self, run: &Range<usize>) -> Range<usize> {
         let points = &self.data.points()[run.clone()];
         match (points.first(), points.last()) {
@@ -613,7 +611,7 @@ impl Term for TouchTerm<'_> {
         let arm = at.layout.arm_columns();
         // Per run of one tool: its arm, corrected poses, leverage columns.
         let mut runs = Vec::with_capacity(views.runs.len());
-        for (k, run) in &views.runs {
+        for (k, _) in &views.runs {
             let seen = views.at(at, *k);
             let (cols, m) = leverage.map_or((Vec::new(), Vec::new()), |l| {
                 let geo: Vec<(usize, usize)> = (l.free().iter().enumerate())
@@ -629,7 +627,7 @@ impl Term for TouchTerm<'_> {
             } else {
                 seen.effects(data.poses(), data.conditions())?
             };
-            runs.push((seen, effects, cols, m, run.clone()));
+            runs.push((seen, effects, cols, m));
         }
         // Chunks of points of one tool, on up to `at.threads` threads: each
         // point's values depend on that point alone, so the same bits on
@@ -645,18 +643,15 @@ impl Term for TouchTerm<'_> {
             let touches = self.touches_of(&c).len();
             let (slot, tail) = std::mem::take(&mut rest).split_at_mut(touches);
             rest = tail;
-            slots.push((r, c, std::sync::Mutex::new(slot)));
+            slots.push((r, c, slot));
         }
-        let run = |(r, c, slot): &(usize, Range<usize>, std::sync::Mutex<&mut [f64]>)| {
-            let (seen, effects, cols, m, _) = &runs[*r];
+        let run = |(r, c, slot): &mut (usize, Range<usize>, &mut [f64])| {
+            let (seen, effects, cols, m) = &runs[*r];
             let part = self.standardised_points(seen, effects.as_ref(), (cols, m), c)?;
-            let mut slot = slot
-                .lock()
-                .unwrap_or_else(std::sync::PoisonError::into_inner);
             slot.copy_from_slice(&part);
             Ok::<(), KernelError>(())
         };
-        let done = parallel_map(&slots, at.threads, run);
+        let done = crate::parallel::parallel_map_mut(&mut slots, at.threads, run);
         done.into_iter().collect::<Result<(), KernelError>>()?;
         drop(slots);
         Ok(Some(Standardised { rows: 3, values }))
@@ -851,19 +846,13 @@ fn accumulate(
         .map(|(a, &c)| (a, c))
         .collect();
     let mut runs = Vec::with_capacity(views.runs.len());
-    let mut chunks: Vec<(usize, Range<usize>)> = Vec::new();
-    for (r, (k, points)) in views.runs.iter().enumerate() {
+    for (k, _) in &views.runs {
         let pairs = tool_columns(&geo, &normal.free, at.layout, views.block(*k));
         let (at_free, free): (Vec<usize>, Vec<usize>) = pairs.into_iter().unzip();
         let effects = views.at(at, *k).effects(data.poses(), data.conditions())?;
         runs.push((views.kernel(at, *k), effects, at_free, free));
-        // Counted by `point_chunks`, so that what it tells the tests holds
-        // here.
-        chunks.extend((0..point_chunks(points.len())).map(|c| {
-            let first = points.start + c * POINTS_PER_CHUNK;
-            (r, first..(first + POINTS_PER_CHUNK).min(points.end))
-        }));
     }
+    let chunks = term.chunks_of(views);
     let p = normal.free.len();
     let run = |(r, c): &(usize, Range<usize>)| {
         let (kernel, effects, _, free) = &runs[*r];
