@@ -90,7 +90,7 @@ fn pair_work(points: &[Point]) -> u64 {
 /// [`PAIR_TOUCH_BUDGET`] touch distances, else each pair kept with
 /// probability budget / cost (seeded by `seed`), drawn in row order by
 /// geometric gaps — time and memory in the pairs kept, not in all pairs.
-/// The gaps are drawn on up to `threads` threads ([`gaps`]): the same pairs
+/// The gaps are drawn on up to `threads` threads ([`Gaps`]): the same pairs
 /// on any count.
 pub(crate) fn pair_set(points: &[Point], seed: u64, threads: usize) -> PairSet {
     let work = pair_work(points);
