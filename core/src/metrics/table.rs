@@ -96,13 +96,7 @@ impl Evaluation {
     }
 
     fn points_table(&self) -> String {
-        let rows = self.points.iter().map(|p| {
-            let mut row = vec![p.label.clone(), p.touches.to_string()];
-            row.extend(p.centroid.iter().chain(&p.half_range).map(|&v| mm(v)));
-            row
-        });
-        render(
-            "Points: centroid and per-axis half-range (max - min)/2 (FARO SPAT routine)",
+        let mut table = Table::new(
             &[
                 "point",
                 "n",
@@ -114,19 +108,19 @@ impl Evaluation {
                 "hr Z [mm]",
             ],
             1,
-            rows,
-        )
+        );
+        for p in &self.points {
+            table.cell(&p.label);
+            table.count(p.touches);
+            for &v in p.centroid.iter().chain(&p.half_range) {
+                table.mm(v);
+            }
+        }
+        table.render("Points: centroid and per-axis half-range (max - min)/2 (FARO SPAT routine)")
     }
 
     fn spread_table(&self) -> String {
-        let rows = self.points.iter().map(|p| {
-            let mut row = vec![p.label.clone(), p.touches.to_string()];
-            row.extend([p.e, p.sigma, p.oa, p.delta_max, p.two_s].map(mm));
-            row
-        });
-        let per_point = render(
-            "Single-point articulation: paper eq. 9-12 (e, sigma, OA) and ASME B89.4.22 SPAT \
-             (delta_max, 2s: makers quote either; aacmm verify decides on delta_max)",
+        let mut table = Table::new(
             &[
                 "point",
                 "n",
@@ -137,7 +131,17 @@ impl Evaluation {
                 "2s [mm]",
             ],
             1,
-            rows,
+        );
+        for p in &self.points {
+            table.cell(&p.label);
+            table.count(p.touches);
+            for v in [p.e, p.sigma, p.oa, p.delta_max, p.two_s] {
+                table.mm(v);
+            }
+        }
+        let per_point = table.render(
+            "Single-point articulation: paper eq. 9-12 (e, sigma, OA) and ASME B89.4.22 SPAT \
+             (delta_max, 2s: makers quote either; aacmm verify decides on delta_max)",
         );
         let summaries = [
             ("e (paper Fig. 6)", &self.single_point_e),
@@ -227,22 +231,40 @@ fn summary_row(name: &str, s: &Summary) -> Vec<String> {
 
 /// A length in mm to 4 decimals, without a "-0.0000".
 fn mm(v: f64) -> String {
-    let s = fixed4(v);
-    if s == "-0.0000" {
-        "0.0000".to_owned()
-    } else {
-        s
+    let mut s = String::new();
+    push_mm(&mut s, v);
+    s
+}
+
+/// [`mm`] written at the end of `out`.
+fn push_mm(out: &mut String, v: f64) {
+    let start = out.len();
+    push_fixed4(out, v);
+    if &out[start..] == "-0.0000" {
+        out.remove(start);
     }
+}
+
+/// [`push_fixed4`] as a string of its own.
+#[cfg(test)]
+fn fixed4(v: f64) -> String {
+    let mut s = String::new();
+    push_fixed4(&mut s, v);
+    s
 }
 
 /// `format!("{v:.4}")`, the same string (a test compares them), from the
 /// exact binary value in integer arithmetic: the general formatter's
 /// exact mode fell back to big-number arithmetic for most values, a third
-/// of `evaluate` on 10⁴ points (6 of these per point).
-fn fixed4(v: f64) -> String {
+/// of `evaluate` on 10⁴ points (6 of these per point). Written at the end
+/// of `out`.
+fn push_fixed4(out: &mut String, v: f64) {
     // Beyond 2⁴⁷ mm the scaled value may not fit below; no length is.
     if !v.is_finite() || v.abs() >= (1u64 << 47) as f64 {
-        return format!("{v:.4}");
+        use std::fmt::Write as _;
+        // Writing into a `String` does not fail.
+        _ = write!(out, "{v:.4}");
+        return;
     }
     let bits = v.to_bits();
     let negative = bits >> 63 == 1;
@@ -272,13 +294,14 @@ fn fixed4(v: f64) -> String {
         }
     };
     // Below 2⁴⁷·10⁴ < 2⁶⁴: u64 prints faster than u128.
-    decimal4(n as u64, negative)
+    push_decimal4(out, n as u64, negative);
 }
 
 /// `n / 10⁴` written with four decimals, `-` first when `negative`: the
 /// digits by hand — the formatter's machinery cost ten times the
 /// arithmetic (`format!` was a tenth of `evaluate` on 10⁴ points).
-fn decimal4(n: u64, negative: bool) -> String {
+/// Written at the end of `out`.
+fn push_decimal4(out: &mut String, n: u64, negative: bool) {
     // 20 digits of a u64, the point, the sign.
     let mut buf = [0u8; 22];
     let mut i = buf.len();
@@ -299,8 +322,8 @@ fn decimal4(n: u64, negative: bool) -> String {
         i -= 1;
         buf[i] = b'-';
     }
-    // ASCII digits, a point and a sign.
-    String::from_utf8_lossy(&buf[i..]).into_owned()
+    // ASCII digits, a point and a sign: one char a byte.
+    out.extend(buf[i..].iter().map(|&b| char::from(b)));
 }
 
 /// A titled table: each column as wide as its widest cell, the first `left`
@@ -311,42 +334,111 @@ fn render(
     left: usize,
     rows: impl IntoIterator<Item = Vec<String>>,
 ) -> String {
-    let mut lines: Vec<Vec<String>> = vec![header.iter().map(|h| h.to_string()).collect()];
-    lines.extend(rows);
-    let widths: Vec<usize> = (0..header.len())
-        .map(|c| {
-            lines
-                .iter()
-                .map(|l| l[c].chars().count())
-                .max()
-                .unwrap_or(0)
-        })
-        .collect();
-    let mut out = format!("{title}\n");
-    // One line's cells written into one buffer (no string per cell), each
-    // padded to its column's width in characters as `{:<w$}` / `{:>w$}`
-    // pad, without the formatter.
-    let mut text = String::new();
-    for line in &lines {
-        text.clear();
-        for (c, (cell, &w)) in line.iter().zip(&widths).enumerate() {
-            if c > 0 {
-                text.push_str("  ");
-            }
-            let pad = w.saturating_sub(cell.chars().count());
-            if c >= left {
-                text.extend(std::iter::repeat_n(' ', pad));
-            }
-            text.push_str(cell);
-            if c < left {
-                text.extend(std::iter::repeat_n(' ', pad));
-            }
+    let mut table = Table::new(header, left);
+    for row in rows {
+        for cell in &row {
+            table.cell(cell);
         }
-        out.push_str("  ");
-        out.push_str(text.trim_end());
-        out.push('\n');
     }
-    out
+    table.render(title)
+}
+
+/// A table's cells, row after row, in one buffer — no string per cell
+/// (the per-point tables of 10⁴ points were 1.5·10⁵ of them, allocated
+/// and freed, most of the time writing them took) — with each column's
+/// width in characters so far.
+struct Table<'h> {
+    header: &'h [&'h str],
+    /// The first `left` columns are left-aligned.
+    left: usize,
+    text: String,
+    /// Where each cell ends in `text`.
+    ends: Vec<usize>,
+    widths: Vec<usize>,
+}
+
+impl<'h> Table<'h> {
+    fn new(header: &'h [&'h str], left: usize) -> Table<'h> {
+        Table {
+            header,
+            left,
+            text: String::new(),
+            ends: Vec::new(),
+            widths: header.iter().map(|h| chars(h)).collect(),
+        }
+    }
+
+    /// The next cell; rows are `header.len()` cells each.
+    fn cell(&mut self, cell: &str) {
+        self.text.push_str(cell);
+        self.ended();
+    }
+
+    /// A count as the next cell.
+    fn count(&mut self, n: usize) {
+        use std::fmt::Write as _;
+        // Writing into a `String` does not fail.
+        _ = write!(self.text, "{n}");
+        self.ended();
+    }
+
+    /// A length in mm to 4 decimals ([`mm`]) as the next cell.
+    fn mm(&mut self, v: f64) {
+        push_mm(&mut self.text, v);
+        self.ended();
+    }
+
+    fn ended(&mut self) {
+        let start = self.ends.last().copied().unwrap_or(0);
+        let column = self.ends.len() % self.header.len();
+        let width = chars(&self.text[start..]);
+        self.widths[column] = self.widths[column].max(width);
+        self.ends.push(self.text.len());
+    }
+
+    /// The table under `title`, each cell padded to its column's width in
+    /// characters as `{:<w$}` / `{:>w$}` pad, without the formatter.
+    fn render(&self, title: &str) -> String {
+        let mut out = format!("{title}\n");
+        let cells = (self.ends.iter().scan(0, |start, &end| {
+            let cell = &self.text[*start..end];
+            *start = end;
+            Some(cell)
+        }))
+        .collect::<Vec<&str>>();
+        let lines = std::iter::once(self.header).chain(cells.chunks(self.header.len()));
+        // One line written into one buffer, its trailing blanks trimmed.
+        let mut text = String::new();
+        for line in lines {
+            text.clear();
+            for (c, (cell, &w)) in line.iter().zip(&self.widths).enumerate() {
+                if c > 0 {
+                    text.push_str("  ");
+                }
+                let pad = w.saturating_sub(chars(cell));
+                if c >= self.left {
+                    text.extend(std::iter::repeat_n(' ', pad));
+                }
+                text.push_str(cell);
+                if c < self.left {
+                    text.extend(std::iter::repeat_n(' ', pad));
+                }
+            }
+            out.push_str("  ");
+            out.push_str(text.trim_end());
+            out.push('\n');
+        }
+        out
+    }
+}
+
+/// A cell's width in characters (as the formatter pads), at once for ASCII.
+fn chars(s: &str) -> usize {
+    if s.is_ascii() {
+        s.len()
+    } else {
+        s.chars().count()
+    }
 }
 
 #[cfg(test)]
