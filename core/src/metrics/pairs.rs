@@ -90,8 +90,8 @@ fn pair_work(points: &[Point]) -> u64 {
 /// [`PAIR_TOUCH_BUDGET`] touch distances, else each pair kept with
 /// probability budget / cost (seeded by `seed`), drawn in row order by
 /// geometric gaps — time and memory in the pairs kept, not in all pairs.
-/// The gaps are drawn on up to `threads` threads ([`Gaps`]): the same pairs
-/// on any count.
+/// The gaps are drawn, and turned into pairs ([`pairs_from`]), on up to
+/// `threads` threads ([`Gaps`]): the same pairs on any count.
 pub(crate) fn pair_set(points: &[Point], seed: u64, threads: usize) -> PairSet {
     let work = pair_work(points);
     if work <= PAIR_TOUCH_BUDGET {
@@ -102,31 +102,35 @@ pub(crate) fn pair_set(points: &[Point], seed: u64, threads: usize) -> PairSet {
     let p = PAIR_TOUCH_BUDGET as f64 / work as f64;
     let mut pairs = Vec::with_capacity((p * total as f64 * 1.1) as usize + 16);
     let mut draws = Gaps::new(seed, p);
-    let (mut k, mut row, mut row_start) = (0u64, 0u64, 0u64);
-    'draws: loop {
+    // The index, in row-major order, of the pair the next gap counts from.
+    let mut k = 0u64;
+    while k < total {
         // Draws for the pairs still to come, but in one case of about 10⁴
         // (the kept pairs are binomial: 4 σ past their mean), at most a
         // few chunks a thread at a time (their memory).
         let rest = p * (total - k) as f64;
         let wave =
             ((rest + 4.0 * rest.sqrt()) as u64 + 1).min(GAP_CHUNK * 8 * threads.max(1) as u64);
-        for gap in draws.next_wave(wave, threads).into_iter().flatten() {
-            // `gap` is finite or +∞ (u near 1), never NaN: 0 < p < 1.
-            if gap >= (total - k) as f64 {
-                break 'draws;
-            }
-            k += gap as u64;
-            while k >= row_start + (n - 1 - row) {
-                row_start += n - 1 - row;
-                row += 1;
-            }
-            let col = row + 1 + (k - row_start);
-            // Points are fewer than 2³² (the data set's indices are u32).
-            pairs.push((row as u32, col as u32));
-            k += 1;
-            if k >= total {
-                break 'draws;
-            }
+        let chunks = draws.next_wave(wave, threads);
+        // Where each chunk's first gap counts from: the chunks before it
+        // span their gaps and a kept pair each.
+        let starts: Vec<u64> = (chunks.iter())
+            .scan(k, |k, chunk| {
+                let start = *k;
+                *k = k.saturating_add(chunk.span);
+                Some(start)
+            })
+            .collect();
+        k = (chunks.last().zip(starts.last())).map_or(k, |(c, &s)| s.saturating_add(c.span));
+        let work: Vec<(u64, &[u64])> = starts
+            .into_iter()
+            .zip(chunks.iter().map(|c| &c.gaps[..]))
+            .collect();
+        let kept = crate::parallel::parallel_map(&work, threads, |&(start, gaps)| {
+            pairs_from(start, gaps, n, total)
+        });
+        for chunk in kept {
+            pairs.extend_from_slice(&chunk);
         }
     }
     let sample = PairSample {
@@ -139,6 +143,67 @@ pub(crate) fn pair_set(points: &[Point], seed: u64, threads: usize) -> PairSet {
 
 /// Draws of a gap a work item.
 const GAP_CHUNK: u64 = 1 << 14;
+
+/// The pairs `gaps` keep, the first gap counted from pair `k` (row-major
+/// index): pair `k + gap` is kept and the next gap counts from the pair
+/// after it, until a gap reaches past the last pair. A chunk's pairs are
+/// found from its start alone, so the chunks are turned into pairs side
+/// by side — the same pairs as one loop over every gap.
+fn pairs_from(mut k: u64, gaps: &[u64], n: u64, total: u64) -> Vec<(u32, u32)> {
+    let mut pairs = Vec::with_capacity(gaps.len());
+    if k >= total {
+        return pairs;
+    }
+    let (mut row, mut row_start) = row_of(k, n);
+    for &gap in gaps {
+        if gap >= total - k {
+            break;
+        }
+        k += gap;
+        while k >= row_start + (n - 1 - row) {
+            row_start += n - 1 - row;
+            row += 1;
+        }
+        let col = row + 1 + (k - row_start);
+        // Points are fewer than 2³² (the data set's indices are u32).
+        pairs.push((row as u32, col as u32));
+        k += 1;
+        if k >= total {
+            break;
+        }
+    }
+    pairs
+}
+
+/// The row `i` of pair `k` (row-major over `i < j < n`) and the index of
+/// that row's first pair: the last row whose first pair is at most `k`.
+/// Row `r` starts at `r (n − 1) − r (r − 1) / 2`, increasing in `r`.
+fn row_of(k: u64, n: u64) -> (u64, u64) {
+    let start = |r: u64| {
+        let (r, n) = (u128::from(r), u128::from(n));
+        // At most n²/2 < 2⁶⁴ (points are fewer than 2³²).
+        (r * (n - 1) - r * r.saturating_sub(1) / 2) as u64
+    };
+    // The first row past `k`'s, in 1..n − 1 (row n − 2 holds the last pair).
+    let (mut low, mut high) = (0u64, n - 1);
+    while high - low > 1 {
+        let mid = low + (high - low) / 2;
+        if start(mid) <= k {
+            low = mid;
+        } else {
+            high = mid;
+        }
+    }
+    (low, start(low))
+}
+
+/// A chunk of gaps, each as a count of pairs skipped (`u64::MAX` for one
+/// past any count: a uniform near 1), and the pairs they span with a kept
+/// pair after each (saturating).
+struct Drawn {
+    gaps: Vec<u64>,
+    span: u64,
+}
 
 /// The pairs skipped before each kept one, Geometric(p): draw `i` is
 /// `⌊ln(1 − u_i) / ln(1 − p)⌋`, `u_i` the `i`-th uniform of the pairs'
@@ -163,7 +228,7 @@ impl Gaps {
 
     /// The next `count` draws (rounded up to whole chunks), in order, a
     /// chunk at a time.
-    fn next_wave(&mut self, count: u64, threads: usize) -> Vec<Vec<f64>> {
+    fn next_wave(&mut self, count: u64, threads: usize) -> Vec<Drawn> {
         let starts: Vec<u64> = (0..count.div_ceil(GAP_CHUNK))
             .map(|c| self.drawn + c * GAP_CHUNK)
             .collect();
@@ -171,12 +236,19 @@ impl Gaps {
         crate::parallel::parallel_map(&starts, threads, |&first| {
             let mut stream = self.stream.clone();
             stream.set_word_pos(2 * u128::from(first));
-            (0..GAP_CHUNK)
+            let gaps: Vec<u64> = (0..GAP_CHUNK)
                 .map(|_| {
                     let u: f64 = stream.random();
-                    ((-u).ln_1p() / self.ln_miss).floor()
+                    // ≥ 0 (both logarithms ≤ 0), finite or +∞ (u near 1),
+                    // never NaN: 0 < p < 1. The cast truncates, which is
+                    // the floor for x ≥ 0 (and a floor call was a sixth of
+                    // a draw's time), and saturates at 2⁶⁴ − 1, past any
+                    // count of pairs.
+                    ((-u).ln_1p() / self.ln_miss) as u64
                 })
-                .collect::<Vec<f64>>()
+                .collect();
+            let span = (gaps.iter()).fold(0u64, |s, &g| s.saturating_add(g).saturating_add(1));
+            Drawn { gaps, span }
         })
     }
 }
@@ -244,14 +316,34 @@ mod tests {
         }
         // Waves of any size continue the stream where the last one ended.
         let mut one = Gaps::new(3, 0.01);
-        let whole = one.next_wave(5 * GAP_CHUNK, 1).concat();
+        let gaps = |wave: Vec<Drawn>| wave.into_iter().flat_map(|d| d.gaps).collect::<Vec<u64>>();
+        let whole = gaps(one.next_wave(5 * GAP_CHUNK, 1));
         let mut waves = Gaps::new(3, 0.01);
         let mut parts = Vec::new();
         for (count, threads) in [(1, 2), (GAP_CHUNK + 1, 4), (GAP_CHUNK, 1)] {
-            parts.extend(waves.next_wave(count, threads).concat());
+            parts.extend(gaps(waves.next_wave(count, threads)));
         }
         assert_eq!(parts.len() as u64, 4 * GAP_CHUNK);
         assert_eq!(parts[..], whole[..parts.len()]);
+    }
+
+    /// The row of every pair, found by halving, is the one counting rows
+    /// from the first finds.
+    #[test]
+    fn the_row_of_a_pair_is_found_by_halving() {
+        for n in [2u64, 3, 4, 7, 50] {
+            let (mut row, mut row_start, total) = (0, 0, n * (n - 1) / 2);
+            for k in 0..total {
+                while k >= row_start + (n - 1 - row) {
+                    row_start += n - 1 - row;
+                    row += 1;
+                }
+                assert_eq!(row_of(k, n), (row, row_start), "pair {k} of {n} points");
+            }
+        }
+        // 2³² − 1 points: the last pair's row, without overflow.
+        let n = u64::from(u32::MAX);
+        assert_eq!(row_of(n * (n - 1) / 2 - 1, n).0, n - 2);
     }
 
     #[test]
