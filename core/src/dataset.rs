@@ -10,6 +10,7 @@
 //! in a separate [`SourceMap`], so a later stage (metrics, a solver) can
 //! report a problem at `file:line` without the caller translating errors.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::fmt;
 use std::ops::Range;
@@ -570,10 +571,10 @@ impl DataSet {
             .keyed_by_tool()
             .map_err(|e| InputError::memory(file, e))?
         {
-            Some((keyed, of_point)) => Ok(DataSet::grouped(&keyed, file)?
+            Some((keyed, of_point)) => Ok(DataSet::grouped(Cow::Owned(keyed), file)?
                 .touched_by(poses, of_point)
                 .prepared()),
-            None => Ok(DataSet::grouped(poses, file)?.prepared()),
+            None => Ok(DataSet::grouped(Cow::Borrowed(poses), file)?.prepared()),
         }
     }
 
@@ -598,30 +599,31 @@ impl DataSet {
         if poses.has_tools() {
             return DataSet::from_poses(&poses, file);
         }
-        let grouped = DataSet::grouped(&poses, file)?;
-        drop(poses);
-        Ok(grouped.prepared())
+        Ok(DataSet::grouped(Cow::Owned(poses), file)?.prepared())
     }
 
     /// The rows grouped by point, readings copied in touch order; the trig
-    /// not prepared yet (an empty [`PreparedPoses`]).
-    fn grouped(poses: &Poses, file: &str) -> Result<DataSet, InputError> {
+    /// not prepared yet (an empty [`PreparedPoses`]). Poses given to keep
+    /// are freed before this returns, their readings kept as they are when
+    /// the rows are in touch order already (each point's rows together, no
+    /// repeats: a logger's or the simulator's file) rather than copied.
+    fn grouped(poses: Cow<'_, Poses>, file: &str) -> Result<DataSet, InputError> {
         if poses.is_empty() {
             return Err(InputError::file_error(file, "no touches"));
         }
-        room_for_touches(poses, file)?;
+        room_for_touches(&poses, file)?;
         // A campaign without articulation is refused as such before its
         // repeated rows are counted once (a static campaign is all repeats).
-        check_articulation(poses, file)?;
+        check_articulation(&poses, file)?;
         // Rows that repeat the readings of their point's row before them
         // are counted once (see `Repeats`), in the counts and the order.
-        let repeats = Repeats::of(poses);
+        let repeats = Repeats::of(&poses);
         let is_repeat = |row: usize| repeats.contains(row);
         // The poses' points are in order of first appearance already: a
         // counting sort by point puts the rows in touch order.
         let labels = poses.points();
-        let count = repeats.touch_counts(poses, file)?;
-        let warnings = repeats.warnings(poses, file);
+        let count = repeats.touch_counts(&poses, file)?;
+        let warnings = repeats.warnings(&poses, file);
         let mut start = 0;
         let points: Vec<Point> = (labels.zip(&count))
             .map(|(label, &n)| {
@@ -643,10 +645,6 @@ impl DataSet {
             next[p] += 1;
         }
         let joints = poses.joints();
-        let mut q = Vec::with_capacity(order.len() * joints);
-        for &row in &order {
-            q.extend_from_slice(poses.reading(row));
-        }
         let too_many = |what: &str| {
             InputError::file_error(
                 file,
@@ -674,13 +672,26 @@ impl DataSet {
                 .copied()
                 .collect()
         });
+        let mask = poses.prismatic_mask();
+        let in_order =
+            order.len() == poses.len() && order.iter().enumerate().all(|(i, &row)| i == row);
+        let q = match poses {
+            Cow::Owned(poses) if in_order => poses.into_readings(),
+            poses => {
+                let mut q = Vec::with_capacity(order.len() * joints);
+                for &row in &order {
+                    q.extend_from_slice(poses.reading(row));
+                }
+                q
+            }
+        };
         drop(order);
         Ok(DataSet {
             joints,
             points,
             q,
             // Empty, but of the poses' shape, which `prepared` keeps.
-            poses: PreparedPoses::from_flat_with(joints, poses.prismatic_mask(), 0, &[]),
+            poses: PreparedPoses::from_flat_with(joints, mask, 0, &[]),
             references: Vec::new(),
             source: SourceMap {
                 poses_file: file.to_string(),
@@ -1650,6 +1661,27 @@ mod tests {
         let fold = p.subset(&[2, 1]);
         let seen: Vec<_> = (0..2).map(|i| fold.rows().orientation(i)).collect();
         assert_eq!(seen, [Some([0.0, 0.0, 0.6, 0.8]), None]);
+    }
+
+    /// A data set made from poses it keeps is the one made from poses it
+    /// borrows: rows already in touch order (whose readings it keeps as
+    /// they are), rows of points interleaved, a repeated row last (fewer
+    /// touches than rows, the rows otherwise in order) or first.
+    #[test]
+    fn poses_kept_or_borrowed_make_the_same_data_set() {
+        let files = [
+            "point,q1,q2\nA,0,0\nA,10,5\nA,20,9\nB,1,2\nB,30,4\nB,12,40\n",
+            "point,q1,q2\nA,0,0\nB,1,2\nA,10,5\nB,30,4\nA,20,9\nB,12,40\n",
+            "point,q1,q2\nA,0,0\nA,10,5\nA,20,9\nB,1,2\nB,30,4\nB,12,40\nB,12,40\n",
+            "point,q1,q2\nA,0,0\nA,0,0\nA,10,5\nA,20,9\nB,1,2\nB,30,4\nB,12,40\n",
+        ];
+        for text in files {
+            let (poses, _) = parse_poses(text, "p.csv", AngleUnit::Deg, 2usize).unwrap();
+            let borrowed = DataSet::from_poses(&poses, "p.csv").unwrap();
+            let kept = DataSet::from_poses_owned(poses, "p.csv").unwrap();
+            assert_eq!(kept, borrowed, "{text}");
+            assert_eq!(kept.len(), 6, "{text}");
+        }
     }
 
     /// A slide's range is judged in mm against its own threshold: half a

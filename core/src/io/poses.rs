@@ -474,6 +474,13 @@ impl Poses {
         self.point_of.iter().map(|&p| self.points.get(p as usize))
     }
 
+    /// Every row's readings, row after row, the rest of the poses freed
+    /// (a data set keeps a file's readings this way when its rows are in
+    /// touch order already).
+    pub(crate) fn into_readings(self) -> Vec<f64> {
+        self.q
+    }
+
     /// The readings (rad) of row `row`.
     pub fn reading(&self, row: usize) -> &[f64] {
         &self.q[row * self.joints..(row + 1) * self.joints]
