@@ -21,6 +21,9 @@ use crate::io::{Poses, Positions, ReferenceLength};
 use crate::kernel::PreparedPoses;
 use crate::params::DhParams;
 
+mod origins;
+use origins::{Origins, TooMany};
+
 /// Fewest touches a point needs: the sample spread `2s` divides by `n − 1`,
 /// and fewer than three touches say next to nothing about articulation error.
 pub const MIN_TOUCHES: usize = 3;
@@ -84,12 +87,10 @@ impl fmt::Display for Location<'_> {
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SourceMap {
     poses_file: String,
-    /// Per touch (data-set order), its line in the poses file. `u32`: half
-    /// the memory of `usize` at a million touches; a data set is refused
-    /// past `u32::MAX` rows or lines (see [`DataSet::from_poses`]).
-    touch_lines: Vec<u32>,
-    /// Per touch (data-set order), its row in the poses file (0-based).
-    touch_rows: Vec<u32>,
+    /// Per touch (data-set order), its row in the poses file (0-based) and
+    /// line. A data set is refused past `u32::MAX` rows or lines (see
+    /// [`DataSet::from_poses`]).
+    touches: Origins,
     lengths_file: String,
     /// Per reference, its line in the lengths file.
     reference_lines: Vec<usize>,
@@ -100,14 +101,14 @@ impl SourceMap {
     pub fn touch(&self, i: usize) -> Location<'_> {
         Location {
             file: &self.poses_file,
-            line: self.touch_lines.get(i).map_or(0, |&l| l as usize),
+            line: self.touches.line(i),
         }
     }
 
     /// The row of the poses file that touch `i` (data-set order) was read
     /// from, 0-based: how to put results back in file order.
     pub(crate) fn touch_row(&self, i: usize) -> usize {
-        self.touch_rows[i] as usize
+        self.touches.row(i)
     }
 
     /// Where reference `r` came from.
@@ -645,22 +646,16 @@ impl DataSet {
             next[p] += 1;
         }
         let joints = poses.joints();
-        let too_many = |what: &str| {
+        let touches = Origins::new(&order, poses.len(), |r| poses.line(r)).map_err(|e| {
+            let what = match e {
+                TooMany::Touches => "touches",
+                TooMany::Lines => "lines",
+            };
             InputError::file_error(
                 file,
                 format!("more than {} {what}: split the campaign", u32::MAX),
             )
-        };
-        let touch_lines = order
-            .iter()
-            .map(|&r| u32::try_from(poses.line(r)))
-            .collect::<Result<Vec<u32>, _>>()
-            .map_err(|_| too_many("lines"))?;
-        let touch_rows = order
-            .iter()
-            .map(|&r| u32::try_from(r))
-            .collect::<Result<Vec<u32>, _>>()
-            .map_err(|_| too_many("touches"))?;
+        })?;
         let in_touch_order = |c: Option<&[f64]>| c.map(|c| order.iter().map(|&r| c[r]).collect());
         let (temperature, time) = (
             in_touch_order(poses.temperatures()),
@@ -695,8 +690,7 @@ impl DataSet {
             references: Vec::new(),
             source: SourceMap {
                 poses_file: file.to_string(),
-                touch_lines,
-                touch_rows,
+                touches,
                 ..SourceMap::default()
             },
             positions: None,
@@ -713,7 +707,7 @@ impl DataSet {
     fn prepared(mut self) -> DataSet {
         // `len()` counts the prepared poses: not yet; the source map has
         // every touch (also when there are no joints, `from_labels`).
-        let touches = self.source.touch_rows.len();
+        let touches = self.source.touches.len();
         let mask = self.poses.prismatic_mask();
         // Every core: the sin and cos of a large file's readings are a
         // good part of reading it, and the same bits on any thread count.
@@ -972,11 +966,7 @@ impl DataSet {
 
     /// Values given per row of the poses file, put in touch order.
     pub fn to_touch_order<T: Copy>(&self, by_row: &[T]) -> Vec<T> {
-        self.source
-            .touch_rows
-            .iter()
-            .map(|&r| by_row[r as usize])
-            .collect()
+        self.source.touches.rows().map(|r| by_row[r]).collect()
     }
 
     /// Adds reference lengths read from `file`, naming the points by label.
@@ -1228,10 +1218,10 @@ impl DataSet {
                 let line = (self.points.iter().zip(&t.of_point))
                     .filter(|(_, of)| **of as usize == k)
                     .flat_map(|(p, _)| p.touches.clone())
-                    .map(|i| self.source.touch_lines[i])
+                    .map(|i| self.source.touches.line(i))
                     .min();
                 let Some(line) = line else { continue };
-                tools.of_cell(&t.names[k], &self.source.poses_file, line as usize)?;
+                tools.of_cell(&t.names[k], &self.source.poses_file, line)?;
                 *offset = tools.offset(&t.names[k]);
             }
             if let Some(t) = &mut self.tools {
@@ -1424,11 +1414,7 @@ impl DataSet {
             references,
             source: SourceMap {
                 poses_file: self.source.poses_file.clone(),
-                touch_lines: touches
-                    .iter()
-                    .map(|&i| self.source.touch_lines[i])
-                    .collect(),
-                touch_rows: touches.iter().map(|&i| self.source.touch_rows[i]).collect(),
+                touches: self.source.touches.subset(&touches),
                 lengths_file: self.source.lengths_file.clone(),
                 reference_lines,
             },
