@@ -244,9 +244,14 @@ fn blocked_normal_equations_are_the_plain_loops_bits() {
 /// `n` points of 3 touches each, spread in joint space, with 20
 /// reference lengths between them.
 fn points_of_three_touches(n: usize) -> DataSet {
+    points_of_touches(n, |_| 3)
+}
+
+/// `n` points, point `p` of `touches(p)` touches, and 20 lengths.
+fn points_of_touches(n: usize, touches: impl Fn(usize) -> usize) -> DataSet {
     let mut text = String::from("point,q1,q2,q3,q4,q5,q6\n");
     for p in 0..n {
-        for k in 0..3 {
+        for k in 0..touches(p) {
             let q: Vec<String> = (0..6)
                 .map(|j| {
                     let base = ((p * 7 + j * 13) as f64 * 0.37).sin() * 120.0;
@@ -353,15 +358,23 @@ fn normal_equations_are_the_same_bits_on_any_thread_count() {
 /// the centres it leaves.
 #[test]
 fn the_cost_pass_is_the_plain_one_on_any_thread_count() {
-    let n = 3000;
-    let data = points_of_three_touches(n);
-    assert_eq!(
-        crate::parallel::threads_for(n.div_ceil(POINTS_PER_CHUNK), 4),
-        4
-    );
+    // Points of three touches; and points of up to 1100 touches, whose
+    // chunks of 64 points are costed in batches of about 1024 touches, a
+    // point of more in a batch of its own.
+    let mixed = |p: usize| [3, 300, 1100, 40, 3, 3, 3, 3][p % 8];
+    for (n, data) in [
+        (3000usize, points_of_three_touches(3000)),
+        (600, points_of_touches(600, mixed)),
+    ] {
+        assert!(crate::parallel::threads_for(n.div_ceil(POINTS_PER_CHUNK), 4) >= 2);
+        the_cost_pass_is_the_plain_one_on(&data);
+    }
+}
+
+fn the_cost_pass_is_the_plain_one_on(data: &DataSet) {
     let noise = stated_noise();
     let mut arm = DhParams::paper_nominal();
-    let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
+    let (t, _) = weighed(data, &noise, &arm, 1.0, 1);
     arm.joints[1].d += 0.3;
     arm.joints[2].theta += 0.002;
     let kernel = ArmKernel::new(&arm).unwrap();
@@ -397,7 +410,7 @@ fn the_cost_pass_is_the_plain_one_on_any_thread_count() {
         assert_eq!(total.to_bits(), want.to_bits(), "{threads} threads");
         assert_eq!(got, centres, "{threads} threads");
     }
-    // The scratch holds a few chunks' positions, not every touch's.
+    // The scratch holds a few batches' positions, not every touch's.
     assert!(
         scratch.len() < data.len() / 4,
         "{} positions",

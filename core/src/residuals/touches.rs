@@ -29,6 +29,12 @@ pub(super) const TOUCHES_PER_CHUNK: usize = 1024;
 /// any machine).
 pub(super) const POINTS_PER_CHUNK: usize = 64;
 
+/// The touches whose positions a cost pass computes at a time (whole
+/// points, or one point of more): enough for the kernel's lanes, and a
+/// batch's positions (24 KiB) stay in the core's cache — a chunk of 64
+/// points of 1000 touches was 1.5 MB a thread.
+const TOUCH_BATCH: usize = 1024;
+
 /// How many chunks of work the normal equations of `points` points split
 /// into: chunks of a fixed number of points, shared between threads from
 /// `MIN_ITEMS_PER_THREAD` chunks
@@ -74,16 +80,17 @@ impl std::fmt::Debug for TouchTerm<'_> {
 }
 
 impl<'d> TouchTerm<'d> {
-    /// [`Term::standardised`] of the points `points` (their touches' values
-    /// in order), with `(cols, m)` the free arm columns and their block of
-    /// `N⁻¹` (empty: the centres' leverage only).
+    /// [`Term::standardised`] of the points `points`, their touches' values
+    /// in order into `out`, with `(cols, m)` the free arm columns and their
+    /// block of `N⁻¹` (empty: the centres' leverage only).
     fn standardised_points(
         &self,
         at: &At<'_>,
         effects: Option<&Effects>,
         (cols, m): (&[usize], &[f64]),
         points: &Range<usize>,
-    ) -> Result<Vec<f64>, KernelError> {
+        out: &mut [f64],
+    ) -> Result<(), KernelError> {
         let (data, q) = (self.data, cols.len());
         // `M` transposed, once: [`PointScratch::parameter_share`] reads its
         // rows side by side.
@@ -93,7 +100,8 @@ impl<'d> TouchTerm<'d> {
         let most = all.iter().map(|p| p.touches.len()).max().unwrap_or(0);
         let mut scratch = PointScratch::new(most, q);
         let poses = effects.map_or(data.poses(), |e| &e.poses);
-        let mut out = Vec::with_capacity(all.iter().map(|p| p.touches.len()).sum());
+        // `out` holds these points' touches, from the first one's.
+        let offset = all.first().map_or(0, |p| p.touches.start);
         let mut ext = Vec::new();
         for point in all {
             let first = point.touches.start;
@@ -117,9 +125,11 @@ impl<'d> TouchTerm<'d> {
                         }
                     })?;
             }
-            out.extend_from_slice(scratch.point(&self.weights[point.touches.clone()], m));
+            let values = scratch.point(&self.weights[point.touches.clone()], m);
+            let at = point.touches.start - offset;
+            out[at..at + values.len()].copy_from_slice(values);
         }
-        Ok(out)
+        Ok(())
     }
 
     /// The touches of `data` under `noise` (its touch part), not weighed
@@ -216,14 +226,15 @@ impl<'d> TouchTerm<'d> {
 
     /// Each of `points`' cost `Σ dᵀA d − cᵀ(Σ A d)` (its touches' offsets
     /// `d` from the first, at the weighted centroid `c` of the offsets) and
-    /// centroid, from the positions `xyz` of the touches from `first` on.
+    /// centroid, from the positions `xyz` of the touches from `first` on,
+    /// handed to `each` point by point.
     fn point_costs(
         &self,
         points: &[crate::dataset::Point],
         xyz: &[[f64; 3]],
         first: usize,
-    ) -> Vec<(f64, [f64; 3])> {
-        let mut out = Vec::with_capacity(points.len());
+        mut each: impl FnMut(f64, [f64; 3]),
+    ) {
         for point in points {
             let origin = xyz[point.touches.start - first];
             let (mut ap, mut pap, mut sum) = ([0.0; 3], 0.0, [0.0; 6]);
@@ -241,9 +252,36 @@ impl<'d> TouchTerm<'d> {
             }
             let c = sym_mul(&sym_inv(&sum), &ap);
             let cost = pap - (c[0] * ap[0] + c[1] * ap[1] + c[2] * ap[2]);
-            out.push((cost, std::array::from_fn(|k| c[k] + origin[k])));
+            each(cost, std::array::from_fn(|k| c[k] + origin[k]));
         }
-        out
+    }
+
+    /// [`TouchTerm::point_costs`] of the points `points` seen by
+    /// `(at, poses)`, their positions computed a batch of whole points of
+    /// at most [`TOUCH_BATCH`] touches at a time (or one larger point) into
+    /// `xyz`, which holds such a batch.
+    fn chunk_costs(
+        &self,
+        (at, poses): (&At<'_>, &crate::kernel::PreparedPoses),
+        points: Range<usize>,
+        xyz: &mut [[f64; 3]],
+        each: &mut dyn FnMut(f64, [f64; 3]),
+    ) -> Result<(), KernelError> {
+        let all = self.data.points();
+        let mut p = points.start;
+        while p < points.end {
+            let first = all[p].touches.start;
+            let mut end = p + 1;
+            while end < points.end && all[end].touches.end - first <= TOUCH_BATCH {
+                end += 1;
+            }
+            let touches = first..all[end - 1].touches.end;
+            at.kernel
+                .positions(poses, touches.clone(), &mut xyz[..touches.len()])?;
+            self.point_costs(&all[p..end], xyz, first, &mut *each);
+            p = end;
+        }
+        Ok(())
     }
 
     /// The touches of the points `run` (contiguous).
@@ -544,44 +582,61 @@ impl Term for TouchTerm<'_> {
             runs.push((seen, effects));
         }
         let chunks = self.chunks_of(&views);
-        // The positions a chunk at a time, into one slot of the scratch per
-        // thread: memory a few chunks' positions, not every touch's (24 MB
-        // at 10⁶ touches), and the passes on every thread.
-        let most = (chunks.iter())
-            .map(|(_, c)| self.touches_of(c).len())
-            .max()
-            .unwrap_or(0)
+        // The positions a batch of touches at a time ([`TOUCH_BATCH`]), into
+        // one slot of the scratch per thread: memory a few batches'
+        // positions, not every touch's (24 MB at 10⁶ touches), and the
+        // chunks on every thread.
+        let largest = (data.points().iter()).map(|p| p.touches.len()).max();
+        let widest = (chunks.iter()).map(|(_, c)| self.touches_of(c).len()).max();
+        let most = TOUCH_BATCH
+            .min(widest.unwrap_or(0))
+            .max(largest.unwrap_or(0))
             .max(1);
         let slots = crate::parallel::threads_for(chunks.len(), at.threads);
         scratch.resize(slots * most, [0.0; 3]);
-        let slots: Vec<std::sync::Mutex<&mut [[f64; 3]]>> = scratch
-            .chunks_mut(most)
-            .map(std::sync::Mutex::new)
-            .collect();
-        let run = |(r, c): &(usize, Range<usize>)| {
+        let mut centroids = Vec::with_capacity(data.points().len());
+        // Point by point in order, as one loop over the points adds.
+        let mut add = |cost: f64, centroid| {
+            *total += cost;
+            centroids.push(centroid);
+        };
+        let chunk = |(r, c): &(usize, Range<usize>),
+                     xyz: &mut [[f64; 3]],
+                     each: &mut dyn FnMut(f64, [f64; 3])| {
             let (seen, effects) = &runs[*r];
             let poses = effects.as_ref().map_or(data.poses(), |e| &e.poses);
-            let touches = self.touches_of(c);
-            // As many slots as threads take chunks: one is free.
-            let mut own = Vec::new();
-            let mut slot = slots.iter().find_map(|s| s.try_lock().ok());
-            let xyz = match &mut slot {
-                Some(slot) => &mut slot[..touches.len()],
-                None => {
-                    own.resize(touches.len(), [0.0; 3]);
-                    &mut own[..]
-                }
-            };
-            seen.kernel.positions(poses, touches.clone(), xyz)?;
-            let points = &data.points()[c.clone()];
-            Ok::<_, KernelError>(self.point_costs(points, xyz, touches.start))
+            self.chunk_costs((seen, poses), c.clone(), xyz, each)
         };
-        let mut centroids = Vec::with_capacity(data.points().len());
-        for part in parallel_map(&chunks, at.threads, run) {
-            // Point by point in order, as one loop over the points adds.
-            for (cost, centroid) in part? {
-                *total += cost;
-                centroids.push(centroid);
+        if slots == 1 {
+            // One thread (a small problem): each chunk's points summed as
+            // they are costed, nothing allocated per pass.
+            for c in &chunks {
+                chunk(c, &mut scratch[..most], &mut add)?;
+            }
+        } else {
+            let slots: Vec<std::sync::Mutex<&mut [[f64; 3]]>> = scratch
+                .chunks_mut(most)
+                .map(std::sync::Mutex::new)
+                .collect();
+            let run = |c: &(usize, Range<usize>)| {
+                // As many slots as threads take chunks: one is free.
+                let mut own = Vec::new();
+                let mut slot = slots.iter().find_map(|s| s.try_lock().ok());
+                let xyz = match &mut slot {
+                    Some(slot) => &mut slot[..],
+                    None => {
+                        own.resize(most, [0.0; 3]);
+                        &mut own[..]
+                    }
+                };
+                let mut part = Vec::with_capacity(c.1.len());
+                chunk(c, xyz, &mut |cost, centroid| part.push((cost, centroid)))?;
+                Ok::<_, KernelError>(part)
+            };
+            for part in parallel_map(&chunks, at.threads, run) {
+                for (cost, centroid) in part? {
+                    add(cost, centroid);
+                }
             }
         }
         shared.centres = Some(Centres {
@@ -647,9 +702,7 @@ impl Term for TouchTerm<'_> {
         }
         let run = |(r, c, slot): &mut (usize, Range<usize>, &mut [f64])| {
             let (seen, effects, cols, m) = &runs[*r];
-            let part = self.standardised_points(seen, effects.as_ref(), (cols, m), c)?;
-            slot.copy_from_slice(&part);
-            Ok::<(), KernelError>(())
+            self.standardised_points(seen, effects.as_ref(), (cols, m), c, slot)
         };
         let done = crate::parallel::parallel_map_mut(&mut slots, at.threads, run);
         done.into_iter().collect::<Result<(), KernelError>>()?;
