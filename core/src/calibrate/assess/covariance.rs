@@ -170,18 +170,30 @@ pub(super) fn position_uncertainty(
         // With corrections beyond geometry: the poses as the chain saw
         // them, each Jacobian extended by the corrections' columns.
         let mut ext = Vec::new();
+        // Inlined as well: out of line, the sums ran without the kernel's
+        // target features, a seventh of a fit with harmonics.
         if step == 1 {
-            kernel.for_each_jacobian(&e.poses, 0..data.len(), |i, pos, jac| {
-                e.extend(i, pos, jac, &mut ext);
-                sums.add(i % LANES, &ext, last(i % LANES, i));
-            })?;
+            kernel.for_each_jacobian(
+                &e.poses,
+                0..data.len(),
+                #[inline(always)]
+                |i, pos, jac| {
+                    e.extend(i, pos, jac, &mut ext);
+                    sums.add(i % LANES, &ext, last(i % LANES, i));
+                },
+            )?;
         } else {
             for (k, &i) in poses.iter().enumerate() {
                 let l = k % LANES;
-                kernel.for_each_jacobian(&e.poses, i..i + 1, |i, pos, jac| {
-                    e.extend(i, pos, jac, &mut ext);
-                    sums.add(l, &ext, last(l, i));
-                })?;
+                kernel.for_each_jacobian(
+                    &e.poses,
+                    i..i + 1,
+                    #[inline(always)]
+                    |i, pos, jac| {
+                        e.extend(i, pos, jac, &mut ext);
+                        sums.add(l, &ext, last(l, i));
+                    },
+                )?;
             }
         }
     } else if step == 1 {
