@@ -23,42 +23,128 @@ use crate::params::{DhJoint, DhParams, JointKind, JointModel};
 /// Standard gravity, m/s².
 pub(crate) const STANDARD_GRAVITY: f64 = 9.80665;
 
-/// A rigid transform: rotation (rows) and translation, mm.
-#[derive(Clone, Copy)]
-struct Pose3 {
-    r: [[f64; 3]; 3],
-    t: [f64; 3],
+/// The numbers the torques are computed in: `f64`, one pose, or [`X4`],
+/// four poses side by side — each lane the same IEEE operations in the
+/// same order as one pose, so the same bits.
+pub(crate) trait Num:
+    Copy
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::Neg<Output = Self>
+{
+    fn splat(v: f64) -> Self;
 }
 
-impl Pose3 {
-    const IDENTITY: Pose3 = Pose3 {
-        r: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-        t: [0.0; 3],
-    };
+impl Num for f64 {
+    #[inline(always)]
+    fn splat(v: f64) -> f64 {
+        v
+    }
+}
 
-    fn apply(&self, v: &[f64; 3]) -> [f64; 3] {
-        std::array::from_fn(|k| dot(&self.r[k], v) + self.t[k])
+/// Four poses' values, lane by lane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct X4(pub(crate) [f64; 4]);
+
+macro_rules! lanewise {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl std::ops::$trait for X4 {
+            type Output = X4;
+            #[inline(always)]
+            fn $method(self, b: X4) -> X4 {
+                let (a, b) = (self.0, b.0);
+                X4([a[0] $op b[0], a[1] $op b[1], a[2] $op b[2], a[3] $op b[3]])
+            }
+        }
+    };
+}
+lanewise!(Add, add, +);
+lanewise!(Sub, sub, -);
+lanewise!(Mul, mul, *);
+lanewise!(Div, div, /);
+
+impl std::ops::Neg for X4 {
+    type Output = X4;
+    #[inline(always)]
+    fn neg(self) -> X4 {
+        let a = self.0;
+        X4([-a[0], -a[1], -a[2], -a[3]])
+    }
+}
+
+impl Num for X4 {
+    #[inline(always)]
+    fn splat(v: f64) -> X4 {
+        X4([v; 4])
+    }
+}
+
+/// A rigid transform: rotation (rows) and translation, mm.
+#[derive(Clone, Copy)]
+pub(crate) struct Pose3<T> {
+    r: [[T; 3]; 3],
+    t: [T; 3],
+}
+
+impl<T: Num> Pose3<T> {
+    #[inline(always)]
+    fn identity() -> Pose3<T> {
+        let (o, z) = (T::splat(1.0), T::splat(0.0));
+        Pose3 {
+            r: [[o, z, z], [z, o, z], [z, z, o]],
+            t: [z; 3],
+        }
     }
 
-    fn then(&self, b: &Pose3) -> Pose3 {
+    #[inline(always)]
+    fn apply(&self, v: &[T; 3]) -> [T; 3] {
+        // Written out (as below): `from_fn` of four-pose values was not
+        // inlined.
+        let (r, t) = (&self.r, &self.t);
+        [
+            dot(&r[0], v) + t[0],
+            dot(&r[1], v) + t[1],
+            dot(&r[2], v) + t[2],
+        ]
+    }
+
+    #[inline(always)]
+    fn then(&self, b: &Pose3<T>) -> Pose3<T> {
         Pose3 {
-            r: std::array::from_fn(|i| {
-                std::array::from_fn(|j| (0..3).map(|k| self.r[i][k] * b.r[k][j]).sum())
-            }),
+            // `(0..3).map(..).sum()` as it was: a float sum starts at −0.0,
+            // and −0.0 + x is x, so it is `(x₀ + x₁) + x₂`.
+            r: [
+                self.row_times(0, b),
+                self.row_times(1, b),
+                self.row_times(2, b),
+            ],
             t: self.apply(&b.t),
         }
     }
 
-    fn z(&self) -> [f64; 3] {
+    /// Row `i` of `self.r · b.r`.
+    #[inline(always)]
+    fn row_times(&self, i: usize, b: &Pose3<T>) -> [T; 3] {
+        let (a, r) = (&self.r[i], &b.r);
+        let at = |j: usize| a[0] * r[0][j] + a[1] * r[1][j] + a[2] * r[2][j];
+        [at(0), at(1), at(2)]
+    }
+
+    #[inline(always)]
+    fn z(&self) -> [T; 3] {
         [self.r[0][2], self.r[1][2], self.r[2][2]]
     }
 }
 
-fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+#[inline(always)]
+fn dot<T: Num>(a: &[T; 3], b: &[T; 3]) -> T {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+#[inline(always)]
+fn cross<T: Num>(a: &[T; 3], b: &[T; 3]) -> [T; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
@@ -108,35 +194,37 @@ impl Link {
     /// joint angle `q + θ` through the angle sum, no transcendental call.
     /// A prismatic joint's reading (mm) comes as `cq` (`sq` unused): its
     /// angle is θ, its offset `d + q`.
-    fn at(&self, cq: f64, sq: f64) -> Pose3 {
+    #[inline(always)]
+    fn at<T: Num>(&self, cq: T, sq: T) -> Pose3<T> {
+        let k = T::splat;
         let (ct, st, d) = if self.prismatic {
-            (self.ct, self.st, self.d + cq)
+            (k(self.ct), k(self.st), k(self.d) + cq)
         } else {
             (
-                cq * self.ct - sq * self.st,
-                sq * self.ct + cq * self.st,
-                self.d,
+                cq * k(self.ct) - sq * k(self.st),
+                sq * k(self.ct) + cq * k(self.st),
+                k(self.d),
             )
         };
-        let (ca, sa) = (self.ca, self.sa);
+        let (ca, sa) = (k(self.ca), k(self.sa));
         let a = Pose3 {
             r: [
                 [ct, -ca * st, sa * st],
                 [st, ca * ct, -sa * ct],
-                [0.0, sa, ca],
+                [k(0.0), sa, ca],
             ],
-            t: [self.a * ct, self.a * st, d],
+            t: [k(self.a) * ct, k(self.a) * st, d],
         };
         if !self.hayati {
             return a;
         }
         a.then(&Pose3 {
             r: [
-                [self.cb, 0.0, self.sb],
-                [0.0, 1.0, 0.0],
-                [-self.sb, 0.0, self.cb],
+                [k(self.cb), k(0.0), k(self.sb)],
+                [k(0.0), k(1.0), k(0.0)],
+                [-k(self.sb), k(0.0), k(self.cb)],
             ],
-            t: [0.0; 3],
+            t: [k(0.0); 3],
         })
     }
 }
@@ -177,56 +265,68 @@ impl Loads {
     /// joint's reading, mm, as `cq(j)`). A prismatic joint's entry is the
     /// gravity force along its axis, N (what presses a slide's flank: its
     /// backlash follows it; the compliance model refuses slides).
-    pub(crate) fn torques(
+    #[inline(always)]
+    pub(crate) fn torques<T: Num>(
         &self,
-        cq: impl Fn(usize) -> f64,
-        sq: impl Fn(usize) -> f64,
-        out: &mut [f64],
+        cq: impl Fn(usize) -> T,
+        sq: impl Fn(usize) -> T,
+        out: &mut [T],
+    ) {
+        self.torques_with(cq, sq, out, &mut Vec::new());
+    }
+
+    /// [`Loads::torques`] with the chain's frames in `frames`, kept by a
+    /// caller of many poses.
+    #[inline(always)]
+    pub(crate) fn torques_with<T: Num>(
+        &self,
+        cq: impl Fn(usize) -> T,
+        sq: impl Fn(usize) -> T,
+        out: &mut [T],
+        frames: &mut Vec<Pose3<T>>,
     ) {
         let n = self.links.len();
+        let k = T::splat;
         // Frames o_0..o_n (origins and the z axes of 0..n−1) and the
         // masses' centres, base to tip.
-        let mut fixed = [Pose3::IDENTITY; 9];
-        let mut long = Vec::new();
-        let frames: &mut [Pose3] = if n < fixed.len() {
-            &mut fixed[..=n]
-        } else {
-            long.resize(n + 1, Pose3::IDENTITY);
-            &mut long
-        };
+        frames.resize(n + 1, Pose3::identity());
+        frames[0] = Pose3::identity();
         for (j, link) in self.links.iter().enumerate() {
             frames[j + 1] = frames[j].then(&link.at(cq(j), sq(j)));
         }
-        let centre = |m: &Mass, frame: &Pose3, default: [f64; 3]| match m.com_mm {
-            Some(c) => frame.apply(&c),
+        let centre = |m: &Mass, frame: &Pose3<T>, default: [T; 3]| match m.com_mm {
+            Some(c) => frame.apply(&c.map(k)),
             None => default,
         };
         // Running sums from the tip: S = Σ m r (kg·mm), M = Σ m (kg).
-        let (mut s, mut m) = ([0.0; 3], 0.0);
+        let (mut s, mut m) = ([k(0.0); 3], k(0.0));
         if let Some(tool) = &self.tool {
-            let tip = frames[n].apply(&self.probe);
+            let tip = frames[n].apply(&self.probe.map(k));
             let r = centre(tool, &frames[n], tip);
-            s = r.map(|v| tool.kg * v);
-            m = tool.kg;
+            s = r.map(|v| k(tool.kg) * v);
+            m = k(tool.kg);
         }
+        let g = self.g.map(k);
         for j in (0..n).rev() {
             if let Some(Some(link)) = self.masses.get(j) {
                 let (a, b) = (frames[j].t, frames[j + 1].t);
-                let mid = std::array::from_fn(|k| 0.5 * (a[k] + b[k]));
+                let half = |i: usize| k(0.5) * (a[i] + b[i]);
+                let mid = [half(0), half(1), half(2)];
                 let r = centre(link, &frames[j + 1], mid);
-                for k in 0..3 {
-                    s[k] += link.kg * r[k];
+                for i in 0..3 {
+                    s[i] = s[i] + k(link.kg) * r[i];
                 }
-                m += link.kg;
+                m = m + k(link.kg);
             }
             let z = frames[j].z();
             out[j] = if self.links[j].prismatic {
                 // A slide carries the force along its axis, not a torque.
-                m * dot(&z, &self.g)
+                m * dot(&z, &g)
             } else {
                 let o = frames[j].t;
-                let arm_of: [f64; 3] = std::array::from_fn(|k| s[k] - m * o[k]);
-                dot(&z, &cross(&arm_of, &self.g)) / 1000.0
+                let lever = |i: usize| s[i] - m * o[i];
+                let arm_of: [T; 3] = [lever(0), lever(1), lever(2)];
+                dot(&z, &cross(&arm_of, &g)) / k(1000.0)
             };
         }
     }
