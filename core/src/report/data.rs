@@ -40,9 +40,17 @@ pub(crate) struct Evaluated<'a> {
     pub(crate) ev: Evaluation,
     /// Eq. 19 for the figure, from the same pass as the metrics' summaries.
     pub(crate) pairs: Pairs,
+    /// [`Evaluated::median_delta`], once found (a figure and a table show
+    /// it).
+    pub(crate) median: std::sync::OnceLock<Option<f64>>,
 }
 
 impl Evaluated<'_> {
+    /// The median δ of the touches ([`median_delta`]), found once.
+    pub(crate) fn median_delta(&self) -> Option<f64> {
+        *self.median.get_or_init(|| median_delta(self))
+    }
+
     /// The series' name: the arm and the data (`nominal, fitted`).
     pub(crate) fn name(&self, arms: &Arms) -> String {
         let arm = match self.stage {
@@ -127,6 +135,7 @@ pub(crate) fn evaluate_all<'a>(
                 xyz,
                 ev,
                 pairs,
+                median: std::sync::OnceLock::new(),
             });
         }
     }
@@ -225,10 +234,69 @@ fn evaluate_with_pairs(
 }
 
 /// `δ_i = |x_i − x̄|` of every touch of `e`, touch order, mm.
+#[cfg(test)]
 pub(crate) fn deltas(e: &Evaluated) -> Vec<f64> {
     let mut out = Vec::with_capacity(e.xyz.len());
     for_each_delta(e, |d| out.push(d));
     out
+}
+
+/// [`median`] of the δ of `e` ([`for_each_delta`]), without holding them
+/// all (10⁶ touches' are 8 MB, at the peak of a large calibration's
+/// report): a first visit counts them by the top 16 bits of their order
+/// key, a second keeps only those of the one or two groups that hold the
+/// middle ranks, and the same selection picks the same values there.
+pub(crate) fn median_delta(e: &Evaluated) -> Option<f64> {
+    // `f64::total_cmp`'s order as an unsigned key.
+    let key = |v: f64| {
+        let b = v.to_bits();
+        if b >> 63 == 1 { !b } else { b | 1 << 63 }
+    };
+    let group = |v: f64| (key(v) >> 48) as usize;
+    let mut counts = vec![0u64; 1 << 16];
+    for_each_delta(e, |v| {
+        if v.is_finite() {
+            counts[group(v)] += 1;
+        }
+    });
+    let n: u64 = counts.iter().sum();
+    let m = n / 2;
+    // The middle ranks: the m-th smallest, and the (m − 1)-th for an even
+    // count.
+    let first_rank = if n % 2 == 0 { m.checked_sub(1)? } else { m };
+    let (mut below, mut lo) = (0u64, None);
+    let mut hi = 0;
+    for (g, &c) in counts.iter().enumerate() {
+        if lo.is_none() && below + c > first_rank {
+            lo = Some((g, below));
+        }
+        if below + c > m {
+            hi = g;
+            break;
+        }
+        below += c;
+    }
+    let (lo, before) = lo?;
+    let mut middle = Vec::new();
+    for_each_delta(e, |v| {
+        if v.is_finite() && (lo..=hi).contains(&group(v)) {
+            middle.push(v);
+        }
+    });
+    // Ranks within `middle`: it starts at rank `before`.
+    let at = usize::try_from(m - before).ok()?;
+    let upper = crate::stats::kth_smallest(&mut middle, at)?;
+    Some(if n % 2 == 1 {
+        upper
+    } else {
+        // As `median`: the largest below the upper middle value.
+        let lower = middle[..at]
+            .iter()
+            .copied()
+            .max_by(f64::total_cmp)
+            .unwrap_or(upper);
+        (lower + upper) / 2.0
+    })
 }
 
 /// Hands [`deltas`] to `f` one by one, touch order: for figures that need
@@ -242,6 +310,7 @@ pub(crate) fn for_each_delta(e: &Evaluated, mut f: impl FnMut(f64)) {
 /// The median of the finite `values` (none: `None`). Takes the values so
 /// that 10⁶ touches' δ are selected where they are, not copied; selection,
 /// not a sort: the same two middle values in linear time.
+#[cfg(test)]
 pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
     let m = v.len() / 2;
@@ -287,6 +356,53 @@ mod tests {
         assert_eq!(median(vec![f64::INFINITY]), None);
     }
 
+    /// The median of δ visited twice is that of the list, to the bit: odd
+    /// and even counts, repeated values, values spread over many groups of
+    /// the key and crowded into one (the evaluation refuses a position that
+    /// is not finite).
+    #[test]
+    fn the_median_delta_is_the_lists() {
+        let mut rng = crate::random::rng(9, 0);
+        for (touches, spread) in [
+            (9usize, 1.0),
+            (10, 1.0),
+            (13, 0.0),
+            (210, 1e-6),
+            (211, 1e3),
+            (1000, 1.0),
+        ] {
+            let labels: Vec<String> = (0..touches).map(|r| format!("p{}", r % 3)).collect();
+            let data = DataSet::from_labels(&labels, "m.csv").unwrap();
+            let rows: Vec<[f64; 3]> = (0..touches)
+                .map(|r| {
+                    let v: f64 = rand::RngExt::random_range(&mut rng, 0.0..1.0);
+                    // A few values repeat exactly.
+                    let v = if r % 5 == 0 { 0.25 } else { v };
+                    [(r % 3) as f64 * 100.0 + spread * v, 0.0, 0.0]
+                })
+                .collect();
+            let xyz = data.to_touch_order(&rows);
+            let ev = evaluate(&data, &xyz).unwrap();
+            let e = Evaluated {
+                set: 0,
+                set_name: "fitted".into(),
+                data: &data,
+                held_out: false,
+                stage: Stage::After,
+                xyz: &xyz,
+                ev,
+                pairs: Pairs::Each(Vec::new()),
+                median: std::sync::OnceLock::new(),
+            };
+            let want = median(deltas(&e)).map(f64::to_bits);
+            assert_eq!(
+                median_delta(&e).map(f64::to_bits),
+                want,
+                "{touches} touches"
+            );
+        }
+    }
+
     #[test]
     fn many_pairs_are_binned_with_every_pair_counted() {
         // 70 points: 2415 pairs, more than MAX_PAIR_MARKERS.
@@ -326,6 +442,7 @@ mod tests {
             xyz: &xyz,
             ev,
             pairs,
+            median: std::sync::OnceLock::new(),
         };
         let Pairs::Binned { bins, count } = e.pairs.clone() else {
             panic!("expected bins")
@@ -395,6 +512,7 @@ mod tests {
             xyz: &xyz,
             ev,
             pairs,
+            median: std::sync::OnceLock::new(),
         };
         let arms = Arms {
             before: String::new(),

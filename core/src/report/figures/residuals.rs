@@ -5,7 +5,7 @@
 use plotters::prelude::*;
 
 use super::{frame, header_height, short};
-use crate::report::data::{Evaluated, deltas, for_each_delta, median};
+use crate::report::data::{Evaluated, for_each_delta};
 use crate::report::svg::{Axis, Class, Key, WIDTH, chart, dashed, group, render};
 use crate::report::{Arms, Figure, RESIDUALS_SVG, ReportError};
 
@@ -52,15 +52,13 @@ pub(crate) fn figure(evaluated: &[Evaluated], arms: &Arms) -> Result<Figure, Rep
     let entries: Vec<(Key, String)> = evaluated
         .iter()
         .map(|e| {
-            // One series' list at a time, for its median.
-            let d = deltas(e);
             (
                 Key::Line(e.color(), 2, e.held_out),
                 format!(
                     "{}: {} touches, median δ {} mm",
                     e.name(arms),
-                    d.len(),
-                    short(median(d).unwrap_or(f64::NAN))
+                    e.xyz.len(),
+                    short(e.median_delta().unwrap_or(f64::NAN))
                 ),
             )
         })

@@ -4,7 +4,7 @@
 
 use super::{Cell, row_class, table};
 use crate::calibrate::validate::Figures;
-use crate::report::data::{Evaluated, deltas, median};
+use crate::report::data::{Evaluated, for_each_delta};
 use crate::report::{Arms, ValidationRow};
 
 /// The validation table, as `calibration.json` has it.
@@ -76,16 +76,20 @@ pub(crate) fn residuals(evaluated: &[Evaluated], arms: &Arms) -> String {
     let rows: Vec<(String, Vec<Cell>)> = evaluated
         .iter()
         .map(|e| {
-            let d = deltas(e);
-            let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len().max(1) as f64).sqrt();
-            let max = d.iter().copied().fold(0.0, f64::max);
-            let touches = d.len();
+            // Summed in touch order from −0.0, as a float sum folds.
+            let (mut squares, mut max, mut touches) = (-0.0, 0.0, 0usize);
+            for_each_delta(e, |v| {
+                squares += v * v;
+                max = f64::max(max, v);
+                touches += 1;
+            });
+            let rms = (squares / touches.max(1) as f64).sqrt();
             (
                 row_class(e),
                 vec![
                     Cell::text(&e.name(arms)),
                     Cell::int(touches),
-                    Cell::num(median(d).unwrap_or(f64::NAN), 4),
+                    Cell::num(e.median_delta().unwrap_or(f64::NAN), 4),
                     Cell::num(rms, 4),
                     Cell::num(max, 4),
                 ],
