@@ -263,7 +263,11 @@ pub(crate) fn median_delta(e: &Evaluated) -> Option<f64> {
     let m = n / 2;
     // The middle ranks: the m-th smallest, and the (m − 1)-th for an even
     // count.
-    let first_rank = if n.is_multiple_of(2) { m.checked_sub(1)? } else { m };
+    let first_rank = if n.is_multiple_of(2) {
+        m.checked_sub(1)?
+    } else {
+        m
+    };
     let (mut below, mut lo) = (0u64, None);
     let mut hi = 0;
     for (g, &c) in counts.iter().enumerate() {
