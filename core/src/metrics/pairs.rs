@@ -112,20 +112,13 @@ pub(crate) fn pair_set(points: &[Point], seed: u64, threads: usize) -> PairSet {
         let wave =
             ((rest + 4.0 * rest.sqrt()) as u64 + 1).min(GAP_CHUNK * 8 * threads.max(1) as u64);
         let chunks = draws.next_wave(wave, threads);
-        // Where each chunk's first gap counts from: the chunks before it
-        // span their gaps and a kept pair each.
-        let starts: Vec<u64> = (chunks.iter())
-            .scan(k, |k, chunk| {
-                let start = *k;
-                *k = k.saturating_add(chunk.span);
-                Some(start)
-            })
-            .collect();
-        k = (chunks.last().zip(starts.last())).map_or(k, |(c, &s)| s.saturating_add(c.span));
-        let work: Vec<(u64, &[u64])> = starts
-            .into_iter()
-            .zip(chunks.iter().map(|c| &c.gaps[..]))
-            .collect();
+        // Each chunk's gaps with where its first gap counts from: the
+        // chunks before it span their gaps and a kept pair each.
+        let mut work: Vec<(u64, &[u64])> = Vec::with_capacity(chunks.len());
+        for chunk in &chunks {
+            work.push((k, &chunk.gaps));
+            k = k.saturating_add(chunk.span);
+        }
         let kept = crate::parallel::parallel_map(&work, threads, |&(start, gaps)| {
             pairs_from(start, gaps, n, total)
         });
