@@ -289,12 +289,19 @@ pub(crate) fn median_delta(e: &Evaluated) -> Option<f64> {
     });
     // Ranks within `middle`: it starts at rank `before`.
     let at = usize::try_from(m - before).ok()?;
-    let upper = crate::stats::kth_smallest(&mut middle, at)?;
-    Some(if n % 2 == 1 {
+    middle_value(&mut middle, at, n % 2 == 1)
+}
+
+/// The median whose upper middle value has rank `at` in `v` (a count
+/// `odd` or not): that value, or its mean with the value below it.
+fn middle_value(v: &mut [f64], at: usize, odd: bool) -> Option<f64> {
+    let upper = crate::stats::kth_smallest(v, at)?;
+    Some(if odd {
         upper
     } else {
-        // As `median`: the largest below the upper middle value.
-        let lower = middle[..at]
+        // After the selection the values below rank `at` are `v[..at]`:
+        // their largest is the lower middle value.
+        let lower = v[..at]
             .iter()
             .copied()
             .max_by(f64::total_cmp)
@@ -313,24 +320,12 @@ pub(crate) fn for_each_delta(e: &Evaluated, mut f: impl FnMut(f64)) {
 
 /// The median of the finite `values` (none: `None`), by selection over the
 /// whole list: what [`median_delta`] found before it stopped holding the
-/// list, kept as it was as the tests' reference for it.
+/// list, kept as the tests' reference for its grouping.
 #[cfg(test)]
 pub(crate) fn median(mut v: Vec<f64>) -> Option<f64> {
     v.retain(|x| x.is_finite());
-    let m = v.len() / 2;
-    let upper = crate::stats::kth_smallest(&mut v, m)?;
-    Some(if v.len() % 2 == 1 {
-        upper
-    } else {
-        // After the selection the lower half is `v[..m]`: its largest is
-        // the lower middle value.
-        let lower = v[..m]
-            .iter()
-            .copied()
-            .max_by(f64::total_cmp)
-            .unwrap_or(upper);
-        (lower + upper) / 2.0
-    })
+    let (at, odd) = (v.len() / 2, v.len() % 2 == 1);
+    middle_value(&mut v, at, odd)
 }
 
 /// The data sets of `evaluated`, in order, once each: (set index, name,
