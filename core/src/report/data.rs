@@ -347,6 +347,26 @@ mod tests {
     use super::*;
     use crate::metrics::{evaluate, pair_length_errors};
 
+    /// The after-fit series `name` of `data` at `xyz`, the only data set.
+    fn after<'a>(
+        name: &str,
+        data: &'a DataSet,
+        xyz: &'a [[f64; 3]],
+        (ev, pairs): (Evaluation, Pairs),
+    ) -> Evaluated<'a> {
+        Evaluated {
+            set: 0,
+            set_name: name.into(),
+            data,
+            held_out: false,
+            stage: Stage::After,
+            xyz,
+            ev,
+            pairs,
+            median: std::sync::OnceLock::new(),
+        }
+    }
+
     #[test]
     fn median_of_odd_and_even_counts() {
         assert_eq!(median(vec![3.0, 1.0, 2.0]), Some(2.0));
@@ -382,17 +402,7 @@ mod tests {
                 .collect();
             let xyz = data.to_touch_order(&rows);
             let ev = evaluate(&data, &xyz).unwrap();
-            let e = Evaluated {
-                set: 0,
-                set_name: "fitted".into(),
-                data: &data,
-                held_out: false,
-                stage: Stage::After,
-                xyz: &xyz,
-                ev,
-                pairs: Pairs::Each(Vec::new()),
-                median: std::sync::OnceLock::new(),
-            };
+            let e = after("fitted", &data, &xyz, (ev, Pairs::Each(Vec::new())));
             let want = median(deltas(&e)).map(f64::to_bits);
             assert_eq!(
                 median_delta(&e).map(f64::to_bits),
@@ -432,17 +442,7 @@ mod tests {
             expected[k].0 += p.d_error_abs;
             expected[k].1 += 1;
         }
-        let e = Evaluated {
-            set: 0,
-            set_name: "fitted".into(),
-            data: &data,
-            held_out: false,
-            stage: Stage::After,
-            xyz: &xyz,
-            ev,
-            pairs,
-            median: std::sync::OnceLock::new(),
-        };
+        let e = after("fitted", &data, &xyz, (ev, pairs));
         let Pairs::Binned { bins, count } = e.pairs.clone() else {
             panic!("expected bins")
         };
@@ -502,17 +502,7 @@ mod tests {
             s.mean,
             f.mean
         );
-        let e = Evaluated {
-            set: 0,
-            set_name: "measured".into(),
-            data: &data,
-            held_out: false,
-            stage: Stage::After,
-            xyz: &xyz,
-            ev,
-            pairs,
-            median: std::sync::OnceLock::new(),
-        };
+        let e = after("measured", &data, &xyz, (ev, pairs));
         let arms = Arms {
             before: String::new(),
             after: "arm".into(),
