@@ -43,6 +43,11 @@ use crate::params::{DhParams, JointKind, JointModel};
 pub use arm::{ArmKernel, KernelKind, SHIPPED_SHAPES};
 pub use batch::Jacobians;
 pub use generic::Generic;
+#[cfg(test)]
+pub(crate) use lanes::Lanes;
+/// The token-gated lanes, for batch loops outside the kernel (the plan's
+/// rank-3 updates): the same bits on any lane type.
+pub(crate) use lanes::{Batch, LaneOp, run as run_lanes};
 pub(crate) use poses::Post;
 pub use poses::PreparedPoses;
 

@@ -13,7 +13,9 @@
 //! candidate. After a choice `d*`, with `B = C d*ᵀ` and `T = I + d* B`,
 //! `C ← C − B T⁻¹ Bᵀ` and every `U_i ← U_i − (U_i d*ᵀ) T⁻¹ (d* C)` (and the
 //! same for `Y_i`): O(p) per candidate again, so a step costs O(N p) and
-//! choosing K of N poses O(K N p + p³).
+//! choosing K of N poses O(K N p + p³). The steps reach `U` and `Y` in the
+//! next search's sweep over the candidates ([`super::pending`]), not one
+//! sweep each.
 //!
 //! Touches see the arm only through how they differ within a socket (its
 //! centre is eliminated): a socket whose `n` chosen touches have mean row
@@ -25,7 +27,9 @@
 
 use nalgebra::DMatrix;
 
+use super::pending::{Pending, Visit, product_by_entry, product_pair};
 use super::rows::Blocks;
+use crate::kernel::Batch;
 
 /// What a step maximises.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,8 +60,137 @@ pub(crate) struct Greedy<'a> {
     pub(crate) criterion: f64,
     /// `ln det M` now, less its start's.
     log_det: f64,
-    /// [`Greedy::gain_of`]'s buffer: a candidate's `d`, `d C`, `d C W`.
-    rows: std::cell::RefCell<Vec<f64>>,
+    /// The steps not yet applied to every candidate's `U` and `Y`.
+    pending: Pending,
+}
+
+/// What a candidate's gain reads besides its own `U` and `Y`.
+struct Gains<'s> {
+    p: usize,
+    j: &'s [f64],
+    weight: &'s [f64],
+    group: &'s [usize],
+    members: &'s [Vec<usize>],
+    means: &'s [[Vec<f64>; 3]],
+    touches: bool,
+    gain: Gain,
+}
+
+/// A candidate's rows scaled (and centred), as the gain reads them: `d`
+/// and `d C` by entry (`[x₀ᵢ, x₁ᵢ, x₂ᵢ, 0]`), `d C` and `d C W` by row.
+struct GainRows {
+    dj: Vec<f64>,
+    d_by_entry: Vec<[f64; 4]>,
+    ud_by_entry: Vec<[f64; 4]>,
+    ud: Vec<f64>,
+    yd: Vec<f64>,
+}
+
+impl GainRows {
+    fn new(p: usize) -> GainRows {
+        GainRows {
+            dj: vec![0.0; 3 * p],
+            d_by_entry: vec![[0.0; 4]; p],
+            ud_by_entry: vec![[0.0; 4]; p],
+            ud: vec![0.0; 3 * p],
+            yd: vec![0.0; 3 * p],
+        }
+    }
+}
+
+impl Gains<'_> {
+    /// What adding candidate `k` (its blocks `uk`, `yk`) gains now: its
+    /// rows made in `rows` (kept between calls) as [`Greedy::direction`]
+    /// makes them, and their products by entry (the same sums as
+    /// [`product`]'s, so the same bits, on lanes).
+    #[inline(always)]
+    fn of<L: Batch>(&self, k: usize, uk: &[f64], yk: &[f64], rows: &mut GainRows) -> f64 {
+        let p = self.p;
+        let mut f = self.weight[k].sqrt();
+        let means = if self.touches {
+            let g = self.group[k];
+            let n = self.members[g].len() as f64;
+            f *= (n / (n + 1.0)).sqrt();
+            Some(&self.means[g])
+        } else {
+            None
+        };
+        if !(f > 0.0 && f.is_finite()) {
+            return 0.0;
+        }
+        let jk = &self.j[3 * k * p..3 * (k + 1) * p];
+        // The rows scaled as `Greedy::rows_of` scales them: `(v − m) f`
+        // centred, `v f` not.
+        let scale = |out: &mut [f64], src: &[f64], which: usize| match means {
+            Some(m) => {
+                for ((o, v), m) in out.iter_mut().zip(src).zip(&m[which]) {
+                    *o = (v - m) * f;
+                }
+            }
+            None => {
+                for (o, v) in out.iter_mut().zip(src) {
+                    *o = v * f;
+                }
+            }
+        };
+        scale(&mut rows.dj, jk, 0);
+        scale(&mut rows.ud, uk, 1);
+        scale(&mut rows.yd, yk, 2);
+        for r in 0..3 {
+            let row = r * p..(r + 1) * p;
+            let by_entry = rows.d_by_entry.iter_mut().zip(rows.ud_by_entry.iter_mut());
+            for ((dj, du), (&v, &x)) in by_entry.zip(rows.dj[row.clone()].iter().zip(&rows.ud[row]))
+            {
+                dj[r] = v;
+                du[r] = x;
+            }
+        }
+        let GainRows {
+            dj: _,
+            d_by_entry,
+            ud_by_entry,
+            ud,
+            yd,
+        } = rows;
+        match self.gain {
+            Gain::Determinant => {
+                let a = plus_identity(product_by_entry::<L>(ud, d_by_entry, p));
+                det3(&a).max(1e-300).ln()
+            }
+            Gain::Prediction => {
+                let [a, b] = product_pair::<L>([ud, yd], [d_by_entry, ud_by_entry], p);
+                let Some(ai) = inverse3(&plus_identity(a)) else {
+                    return 0.0;
+                };
+                (0..3)
+                    .map(|i| (0..3).map(|l| ai[i][l] * b[l][i]).sum::<f64>())
+                    .sum()
+            }
+        }
+    }
+}
+
+/// The eligible candidate of the largest gain (the first of equals), as the
+/// sweep hands the candidates over.
+struct Search<'s, F> {
+    gains: Gains<'s>,
+    taken: &'s [bool],
+    eligible: F,
+    rows: GainRows,
+    best: Option<(usize, f64)>,
+}
+
+impl<F: Fn(usize) -> bool> Visit for Search<'_, F> {
+    #[inline(always)]
+    fn visit<L: Batch>(&mut self, k: usize, uk: &[f64], yk: &[f64]) {
+        if self.taken[k] || !(self.eligible)(k) {
+            return;
+        }
+        let g = self.gains.of::<L>(k, uk, yk, &mut self.rows);
+        if g.is_finite() && self.best.is_none_or(|(_, b)| g > b) {
+            self.best = Some((k, g));
+        }
+    }
 }
 
 /// The rows a candidate would add, and their `C`- and `CW`-images.
@@ -120,7 +253,7 @@ impl<'a> Greedy<'a> {
             gain,
             criterion,
             log_det: 0.0,
-            rows: std::cell::RefCell::new(vec![0.0; 9 * p]),
+            pending: Pending::new(n, p),
         })
     }
 
@@ -188,91 +321,38 @@ impl<'a> Greedy<'a> {
         Some(Direction { d, ud, yd })
     }
 
-    /// What adding candidate `k` gains now: the rows of [`Greedy::direction`]
-    /// made in a buffer kept between calls (the same operations, so the
-    /// same bits, without three allocations per candidate and step).
-    #[inline(always)]
-    pub(crate) fn gain_of(&self, k: usize) -> f64 {
-        let p = self.p;
-        let r = 3 * k * p..3 * (k + 1) * p;
-        let mut f = self.weight[k].sqrt();
-        let means = if self.touches {
-            let g = self.group[k];
-            let n = self.members[g].len() as f64;
-            f *= (n / (n + 1.0)).sqrt();
-            Some(&self.means[g])
-        } else {
-            None
+    /// The eligible candidate of the largest gain (the first of equals),
+    /// in the sweep that applies the pending steps.
+    pub(crate) fn best(&mut self, eligible: impl Fn(usize) -> bool) -> Option<(usize, f64)> {
+        let gains = Gains {
+            p: self.p,
+            j: &self.j.j,
+            weight: self.weight,
+            group: self.group,
+            members: &self.members,
+            means: &self.means,
+            touches: self.touches,
+            gain: self.gain,
         };
-        if !(f > 0.0 && f.is_finite()) {
-            return 0.0;
-        }
-        let mut rows = self.rows.borrow_mut();
-        rows.resize(9 * p, 0.0);
-        let (d, rest) = rows.split_at_mut(3 * p);
-        let (ud, yd) = rest.split_at_mut(3 * p);
-        let sources = [
-            (&self.j.j[r.clone()], d),
-            (&self.u[r.clone()], ud),
-            (&self.y[r], yd),
-        ];
-        for (which, (src, out)) in sources.into_iter().enumerate() {
-            match means {
-                Some(m) => {
-                    for ((o, v), m) in out.iter_mut().zip(src).zip(&m[which]) {
-                        *o = (v - m) * f;
-                    }
-                }
-                None => {
-                    for (o, v) in out.iter_mut().zip(src) {
-                        *o = v * f;
-                    }
-                }
-            }
-        }
-        let (d, ud, yd) = (&rows[..3 * p], &rows[3 * p..6 * p], &rows[6 * p..]);
-        let a = plus_identity(product(ud, d, p));
-        match self.gain {
-            Gain::Determinant => det3(&a).max(1e-300).ln(),
-            Gain::Prediction => {
-                let Some(ai) = inverse3(&a) else { return 0.0 };
-                let b = product(yd, ud, p);
-                (0..3)
-                    .map(|i| (0..3).map(|l| ai[i][l] * b[l][i]).sum::<f64>())
-                    .sum()
-            }
-        }
-    }
-
-    /// The eligible candidate of the largest gain (the first of equals).
-    /// (Compiled for AVX2 where the CPU has it: the same bits, fewer
-    /// instructions.)
-    pub(crate) fn best(&self, eligible: impl Fn(usize) -> bool) -> Option<(usize, f64)> {
-        crate::simd::with_avx2(
-            #[inline(always)]
-            || {
-                let mut best: Option<(usize, f64)> = None;
-                for k in 0..self.taken.len() {
-                    if self.taken[k] || !eligible(k) {
-                        continue;
-                    }
-                    let g = self.gain_of(k);
-                    if g.is_finite() && best.is_none_or(|(_, b)| g > b) {
-                        best = Some((k, g));
-                    }
-                }
-                best
-            },
-        )
+        let mut search = Search {
+            gains,
+            taken: &self.taken,
+            eligible,
+            rows: GainRows::new(self.p),
+            best: None,
+        };
+        self.pending.sweep(&mut self.u, &mut self.y, &mut search);
+        search.best
     }
 
     /// Chooses candidate `k`: its rows into `C`, every `U` and `Y`.
     pub(crate) fn add(&mut self, k: usize) {
         let p = self.p;
+        self.pending.catch_up(k, &mut self.u, &mut self.y);
         if let Some(dir) = self.direction(k) {
             let t = plus_identity(product(&dir.ud, &dir.d, p));
             if let Some(ti) = inverse3(&t) {
-                self.update(&dir, &ti, 1.0);
+                self.update(dir, &ti, 1.0);
                 self.log_det += det3(&t).max(1e-300).ln();
             }
         }
@@ -286,13 +366,14 @@ impl<'a> Greedy<'a> {
     /// `C ← C + B (I − d B)⁻¹ Bᵀ`.
     pub(crate) fn remove(&mut self, k: usize) {
         let p = self.p;
+        self.pending.catch_up(k, &mut self.u, &mut self.y);
         if let Some(dir) = self.rows_of(k, true) {
             let s = product(&dir.ud, &dir.d, p);
             let t: [[f64; 3]; 3] = std::array::from_fn(|i| {
                 std::array::from_fn(|j| f64::from(u8::from(i == j)) - s[i][j])
             });
             if let Some(ti) = inverse3(&t) {
-                self.update(&dir, &ti, -1.0);
+                self.update(dir, &ti, -1.0);
                 self.log_det += det3(&t).max(1e-300).ln();
             }
         }
@@ -302,9 +383,9 @@ impl<'a> Greedy<'a> {
         self.refresh_means();
     }
 
-    /// `C`, `U`, `Y` and the criterion after rows `dir` added (`sign` 1)
-    /// or taken away (−1), `ti = (I ± d C dᵀ)⁻¹`.
-    fn update(&mut self, dir: &Direction, ti: &[[f64; 3]; 3], sign: f64) {
+    /// `C` and the criterion after rows `dir` added (`sign` 1) or taken
+    /// away (−1), `ti = (I ± d C dᵀ)⁻¹`; the step pending for `U` and `Y`.
+    fn update(&mut self, dir: Direction, ti: &[[f64; 3]; 3], sign: f64) {
         let p = self.p;
         // C ∓= (d C)ᵀ T⁻¹ (d C).
         let ti = &ti.map(|r| r.map(|v| sign * v));
@@ -315,21 +396,7 @@ impl<'a> Greedy<'a> {
                 self.c[a * p + b] -= v;
             }
         }
-        // Every candidate (compiled for AVX2 where the CPU has it).
-        let (u, y) = (&mut self.u, &mut self.y);
-        crate::simd::with_avx2(
-            #[inline(always)]
-            || {
-                for (ui, yi) in u.chunks_exact_mut(3 * p).zip(y.chunks_exact_mut(3 * p)) {
-                    let g = mul3(&product(ui, &dir.d, p), ti);
-                    for (block, src) in [(ui, &dir.ud), (yi, &dir.yd)] {
-                        for (k, row) in block.chunks_exact_mut(p).enumerate() {
-                            subtract_rows(row, &g[k], src, p);
-                        }
-                    }
-                }
-            },
-        );
+        self.pending.push(&dir.d, dir.ud, dir.yd, *ti);
         self.criterion = (0..p * p).map(|i| self.w[i] * self.c[i]).sum();
     }
 
@@ -339,6 +406,9 @@ impl<'a> Greedy<'a> {
             return;
         }
         let p = self.p;
+        for &i in self.members.iter().flatten() {
+            self.pending.catch_up(i, &mut self.u, &mut self.y);
+        }
         for (g, members) in self.members.iter().enumerate() {
             let n = members.len().max(1) as f64;
             for (m, src) in self.means[g].iter_mut().zip([&self.j.j, &self.u, &self.y]) {
@@ -389,7 +459,7 @@ fn product(a: &[f64], b: &[f64], p: usize) -> [[f64; 3]; 3] {
 /// three terms subtracted one after the other and a zero factor's skipped,
 /// in one sweep over the row.
 #[inline(always)]
-fn subtract_rows(row: &mut [f64], f: &[f64; 3], src: &[f64], p: usize) {
+pub(super) fn subtract_rows(row: &mut [f64], f: &[f64; 3], src: &[f64], p: usize) {
     let (s0, s1, s2) = (&src[..p], &src[p..2 * p], &src[2 * p..3 * p]);
     match (f[0] != 0.0, f[1] != 0.0, f[2] != 0.0) {
         (true, true, true) => {
@@ -433,7 +503,7 @@ fn plus_identity(mut s: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 }
 
 #[inline(always)]
-fn mul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+pub(super) fn mul3(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
 }
 
@@ -508,6 +578,78 @@ mod tests {
         }
     }
 
+    /// Steps applied lazily (in the next search's sweep, or to one
+    /// candidate when its rows are needed) leave every candidate's `U` and
+    /// `Y` the same bits as steps applied at once, and the searches pick
+    /// the same candidates with the same gains. Thirteen candidates: a pair
+    /// sweep's odd one out, and pairs whose two have had different steps.
+    #[test]
+    fn lazy_steps_are_the_same_bits_as_steps_at_once() {
+        let (p, n) = (7, 13);
+        let mut rng = crate::random::rng(11, 0);
+        let j = Blocks {
+            p,
+            j: (0..3 * p * n)
+                .map(|_| rand::RngExt::random_range(&mut rng, -1.0..1.0))
+                .collect(),
+        };
+        let w = super::super::rows::mean_gram(&j);
+        let weight: Vec<f64> = (0..n)
+            .map(|i| {
+                if i == 4 {
+                    0.0
+                } else {
+                    1.0 / (1 + i % 3) as f64
+                }
+            })
+            .collect();
+        let group: Vec<usize> = (0..n).map(|i| i % 3).collect();
+        for (touches, gain) in [
+            (false, Gain::Prediction),
+            (true, Gain::Prediction),
+            (true, Gain::Determinant),
+        ] {
+            let make = || Greedy::new(&j, &w, &weight, &group, touches, None, 1e-3, gain).unwrap();
+            let (mut lazy, mut eager) = (make(), make());
+            let mut picks = Vec::new();
+            let script: [(bool, usize); 12] = [
+                (true, 0),
+                (true, 3),
+                (true, 7),
+                (true, 1),
+                (false, 3),
+                (true, 12),
+                (true, 5),
+                (false, 0),
+                (true, 9),
+                (true, 3),
+                (false, 12),
+                (true, 11),
+            ];
+            for (adding, k) in script {
+                for g in [&mut lazy, &mut eager] {
+                    if adding { g.add(k) } else { g.remove(k) }
+                }
+                // At once: every step swept in before the next.
+                eager.best(|_| false);
+                if k % 2 == 1 {
+                    let got = lazy.best(|i| i != 2);
+                    assert_eq!(
+                        got.map(|(i, v)| (i, v.to_bits())),
+                        eager.best(|i| i != 2).map(|(i, v)| (i, v.to_bits()))
+                    );
+                    picks.extend(got.map(|b| b.0));
+                }
+            }
+            assert!(picks.len() >= 5, "{picks:?}");
+            lazy.best(|_| false);
+            let bits =
+                |g: &Greedy| -> Vec<u64> { g.u.iter().chain(&g.y).map(|v| v.to_bits()).collect() };
+            assert_eq!(bits(&lazy), bits(&eager), "{touches} {gain:?}");
+            assert_eq!(lazy.criterion.to_bits(), eager.criterion.to_bits());
+        }
+    }
+
     /// The rank-3 updates and downdates agree with the criterion recomputed
     /// from scratch.
     #[test]
@@ -538,7 +680,7 @@ mod tests {
             let picks = [0, 2, 1, 5, 3, 4, 7];
             for &k in &picks {
                 let before = g.criterion;
-                let gain = g.gain_of(k);
+                let gain = g.best(|i| i == k).map_or(0.0, |(_, gain)| gain);
                 g.add(k);
                 assert!((before - gain - g.criterion).abs() < 1e-9 * before.abs().max(1.0));
             }

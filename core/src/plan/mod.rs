@@ -36,6 +36,7 @@
 pub use crate::stats::coverage;
 mod greedy;
 pub mod map;
+mod pending;
 pub(crate) mod pool;
 mod rows;
 mod strata;
