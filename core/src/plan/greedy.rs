@@ -27,7 +27,7 @@
 
 use nalgebra::DMatrix;
 
-use super::pending::{Pending, Visit, product_by_entry, product_pair};
+use super::pending::{Pending, Visit, by_entry, product_by_entry, product_pair};
 use super::rows::Blocks;
 use crate::kernel::Batch;
 
@@ -46,6 +46,9 @@ pub(crate) struct Greedy<'a> {
     c: Vec<f64>,
     w: &'a [f64],
     j: &'a Blocks,
+    /// Every candidate's `U` and `Y` (3p each), which may lag the steps in
+    /// `pending`: read one only after `pending.catch_up`, or inside
+    /// `pending.sweep`.
     u: Vec<f64>,
     y: Vec<f64>,
     weight: &'a [f64],
@@ -136,15 +139,8 @@ impl Gains<'_> {
         scale(&mut rows.dj, jk, 0);
         scale(&mut rows.ud, uk, 1);
         scale(&mut rows.yd, yk, 2);
-        for r in 0..3 {
-            let row = r * p..(r + 1) * p;
-            let by_entry = rows.d_by_entry.iter_mut().zip(rows.ud_by_entry.iter_mut());
-            for ((dj, du), (&v, &x)) in by_entry.zip(rows.dj[row.clone()].iter().zip(&rows.ud[row]))
-            {
-                dj[r] = v;
-                du[r] = x;
-            }
-        }
+        by_entry(&rows.dj, &mut rows.d_by_entry);
+        by_entry(&rows.ud, &mut rows.ud_by_entry);
         let GainRows {
             dj: _,
             d_by_entry,
@@ -606,6 +602,7 @@ mod tests {
         let group: Vec<usize> = (0..n).map(|i| i % 3).collect();
         for (touches, gain) in [
             (false, Gain::Prediction),
+            (false, Gain::Determinant),
             (true, Gain::Prediction),
             (true, Gain::Determinant),
         ] {

@@ -48,10 +48,8 @@ impl Pending {
 
     /// A step of rows `d` (3 × p) with images `ud`, `yd` and signed `ti`.
     pub(super) fn push(&mut self, d: &[f64], ud: Vec<f64>, yd: Vec<f64>, ti: [[f64; 3]; 3]) {
-        let p = self.p;
-        let d_by_entry = (0..p)
-            .map(|i| [d[i], d[p + i], d[2 * p + i], 0.0])
-            .collect();
+        let mut d_by_entry = vec![[0.0; 4]; self.p];
+        by_entry(d, &mut d_by_entry);
         self.steps.push(Step {
             d_by_entry,
             ud,
@@ -187,6 +185,14 @@ fn downdate(u: &mut [f64], y: &mut [f64], product: &[[f64; 3]; 3], step: &Step, 
         for (k, row) in block.chunks_exact_mut(p).enumerate() {
             subtract_rows(row, &g[k], src, p);
         }
+    }
+}
+
+/// A 3 × p block `b` by entry into `out` (p long): `[b₀ᵢ, b₁ᵢ, b₂ᵢ, 0]`.
+pub(super) fn by_entry(b: &[f64], out: &mut [[f64; 4]]) {
+    let p = out.len();
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = [b[i], b[p + i], b[2 * p + i], 0.0];
     }
 }
 
