@@ -528,9 +528,41 @@ fn inverse3(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernel::LaneOp;
 
-    /// The side-by-side sums and the one-sweep subtraction are the same
-    /// bits as the sums one at a time (`Iterator::sum`) and the three
+    /// The pending steps' products of `a` (two candidates' 3 × p blocks):
+    /// the first's alone, then both side by side.
+    struct Products<'a> {
+        a: &'a [f64],
+        b: &'a [[f64; 4]],
+        p: usize,
+    }
+
+    impl LaneOp for Products<'_> {
+        type Output = [[[f64; 3]; 3]; 3];
+        fn run<L: Batch>(self) -> Self::Output {
+            let (p, b) = (self.p, self.b);
+            let (first, second) = self.a.split_at(3 * p);
+            let [x, y] = product_pair::<L>([first, second], [b, b], p);
+            [product_by_entry::<L>(first, b, p), x, y]
+        }
+    }
+
+    /// `n` candidates' blocks of `p` columns, entries in ±1.
+    fn random_blocks(seed: u64, p: usize, n: usize) -> Blocks {
+        let mut rng = crate::random::rng(seed, 0);
+        Blocks {
+            p,
+            j: (0..3 * p * n)
+                .map(|_| rand::RngExt::random_range(&mut rng, -1.0..1.0))
+                .collect(),
+        }
+    }
+
+    /// The side-by-side sums (the eager products, and the pending steps'
+    /// products by entry, one candidate or two, on the portable lanes and
+    /// on the widest the CPU has) and the one-sweep subtraction are the
+    /// same bits as the sums one at a time (`Iterator::sum`) and the three
     /// subtractions one after the other.
     #[test]
     fn the_vectorised_loops_are_the_same_bits() {
@@ -541,21 +573,36 @@ mod tests {
                 .collect()
         };
         for p in [1, 3, 7, 24, 31] {
-            let (a, b) = (draw(3 * p), draw(3 * p));
-            let want: [[f64; 3]; 3] = std::array::from_fn(|k| {
-                std::array::from_fn(|l| {
-                    (a[k * p..(k + 1) * p].iter().zip(&b[l * p..(l + 1) * p]))
-                        .map(|(x, y)| x * y)
-                        .sum()
+            let (a, b) = (draw(6 * p), draw(3 * p));
+            let sums = |a: &[f64]| -> [[u64; 3]; 3] {
+                std::array::from_fn(|k| {
+                    std::array::from_fn(|l| {
+                        (a[k * p..(k + 1) * p].iter().zip(&b[l * p..(l + 1) * p]))
+                            .map(|(x, y)| x * y)
+                            .sum::<f64>()
+                            .to_bits()
+                    })
                 })
-            });
-            let got = product(&a, &b, p);
-            assert_eq!(
-                got.map(|r| r.map(f64::to_bits)),
-                want.map(|r| r.map(f64::to_bits))
-            );
+            };
+            let (first, second) = a.split_at(3 * p);
+            let bits = |m: [[f64; 3]; 3]| m.map(|r| r.map(f64::to_bits));
+            assert_eq!(bits(product(first, &b, p)), sums(first), "p = {p}");
+            let mut b_by_entry = vec![[0.0; 4]; p];
+            by_entry(&b, &mut b_by_entry);
+            let op = || Products {
+                a: &a,
+                b: &b_by_entry,
+                p,
+            };
+            let want = [sums(first), sums(first), sums(second)];
+            for got in [
+                op().run::<crate::kernel::Lanes>(),
+                crate::kernel::run_lanes(op()),
+            ] {
+                assert_eq!(got.map(bits), want, "p = {p}");
+            }
             for f in [[0.5, -2.0, 3.0], [0.0, 1.5, 0.0], [-1.0, 0.0, 2.0]] {
-                let mut want = a[..p].to_vec();
+                let mut want = first[..p].to_vec();
                 for (l, &fl) in f.iter().enumerate() {
                     if fl != 0.0 {
                         for (v, x) in want.iter_mut().zip(&b[l * p..(l + 1) * p]) {
@@ -563,7 +610,7 @@ mod tests {
                         }
                     }
                 }
-                let mut got = a[..p].to_vec();
+                let mut got = first[..p].to_vec();
                 subtract_rows(&mut got, &f, &b, p);
                 assert!(
                     got.iter()
@@ -582,13 +629,7 @@ mod tests {
     #[test]
     fn lazy_steps_are_the_same_bits_as_steps_at_once() {
         let (p, n) = (7, 13);
-        let mut rng = crate::random::rng(11, 0);
-        let j = Blocks {
-            p,
-            j: (0..3 * p * n)
-                .map(|_| rand::RngExt::random_range(&mut rng, -1.0..1.0))
-                .collect(),
-        };
+        let j = random_blocks(11, p, n);
         let w = super::super::rows::mean_gram(&j);
         let weight: Vec<f64> = (0..n)
             .map(|i| {
@@ -652,13 +693,7 @@ mod tests {
     #[test]
     fn the_updates_match_a_fresh_inverse() {
         let (p, n) = (5, 12);
-        let mut rng = crate::random::rng(3, 0);
-        let j = Blocks {
-            p,
-            j: (0..3 * p * n)
-                .map(|_| rand::RngExt::random_range(&mut rng, -1.0..1.0))
-                .collect(),
-        };
+        let j = random_blocks(3, p, n);
         let w = super::super::rows::mean_gram(&j);
         let weight = vec![1.0; n];
         let group: Vec<usize> = (0..n).map(|i| i % 2).collect();
