@@ -955,12 +955,13 @@ fn torus_grid(
     // Cell index = Σ digit_axis · k^axis; digit i is the angle −π + 2πi/k.
     let strides: Vec<usize> = (0..c).map(|axis| k.pow(axis)).collect();
     let digit = |cell: usize, stride: usize| cell / stride % k;
+    let angle = |cell: usize, stride: usize| {
+        let i = digit(cell, stride);
+        crate::params::wrap(std::f64::consts::TAU * i as f64 / k as f64 - std::f64::consts::PI)
+    };
     let place = |x: &mut DhParams, cell: usize| {
         for (id, &stride) in ids.iter().zip(&strides) {
-            let i = digit(cell, stride);
-            *x.get_mut(*id) = crate::params::wrap(
-                std::f64::consts::TAU * i as f64 / k as f64 - std::f64::consts::PI,
-            );
+            *x.get_mut(*id) = angle(cell, stride);
         }
     };
     // Chunks of 64 cells on the objective's threads: a cell's cost depends
@@ -971,13 +972,17 @@ fn torus_grid(
     let threads = problem.objective.threads();
     let parts = crate::parallel::parallel_map(&chunks, threads, |&chunk| {
         super::Cancel::check(problem.cancel.as_ref())?;
-        let (mut x, mut xyz) = (start.clone(), Vec::new());
+        // The start's point, its circles' columns set cell by cell (the
+        // point of the arm `place` makes, without building it each time).
+        let (mut x, mut xyz) = (problem.point(start), Vec::new());
         (chunk * CELLS..((chunk + 1) * CELLS).min(cells))
             .map(|cell| {
-                place(&mut x, cell);
+                for (&column, &stride) in circles.iter().zip(&strides) {
+                    x[column] = angle(cell, stride);
+                }
                 // The data's cost (the prior does not steer the scan);
                 // never NaN: a non-finite cost is +∞.
-                Ok(problem.objective.data_cost(&problem.point(&x), &mut xyz)?)
+                Ok(problem.objective.data_cost(&x, &mut xyz)?)
             })
             .collect::<Result<Vec<f64>, CalibrationError>>()
     });
