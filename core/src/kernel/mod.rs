@@ -47,7 +47,7 @@ pub use generic::Generic;
 pub(crate) use lanes::Lanes;
 /// The token-gated lanes, for batch loops outside the kernel (the plan's
 /// rank-3 updates): the same bits on any lane type.
-pub(crate) use lanes::{Batch, LaneOp, run as run_lanes};
+pub(crate) use lanes::{Batch, LANES, LaneOp, run as run_lanes};
 pub(crate) use poses::Post;
 pub use poses::PreparedPoses;
 
