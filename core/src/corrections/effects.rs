@@ -1,8 +1,9 @@
 //! A set of poses as the chain sees them under the corrections, and the
 //! corrections' Jacobian columns.
 
-use super::gravity::{Loads, X4};
+use super::gravity::Loads;
 use super::{Beyond, Column, Physics};
+use crate::kernel::Lanes;
 use crate::kernel::{Post, PreparedPoses};
 use crate::params::{DhParams, JointKind};
 
@@ -527,7 +528,7 @@ fn factors(
 
 /// Per pose and joint (pose-major, into `tau`), the gravity torque of
 /// `loads` at the poses whose columns of cos and sin are `trig`: four poses
-/// at a time side by side ([`X4`]: the same bits as one at a time), in a
+/// at a time side by side ([`Lanes`]: the same bits as one at a time), in a
 /// function compiled for AVX2 where the CPU has it — they were a quarter
 /// of a fit with compliance.
 fn gravity_torques(loads: &Loads, trig: &[(&[f64], &[f64])], tau: &mut [f64]) {
@@ -540,14 +541,14 @@ fn gravity_torques(loads: &Loads, trig: &[(&[f64], &[f64])], tau: &mut [f64]) {
     crate::simd::with_avx2(
         #[inline(always)]
         || {
-            let mut four = vec![X4([0.0; 4]); n];
+            let mut four = vec![Lanes([0.0; 4]); n];
             let (mut frames, mut one) = (Vec::new(), Vec::new());
             let first = (tau.len() / n) / 4 * 4;
             let mut groups = tau.chunks_exact_mut(4 * n);
             for (g, t) in (&mut groups).enumerate() {
                 let i = 4 * g;
-                let cq = |j: usize| X4(std::array::from_fn(|l| trig[j].0[i + l]));
-                let sq = |j: usize| X4(std::array::from_fn(|l| sin(j, i + l)));
+                let cq = |j: usize| Lanes(std::array::from_fn(|l| trig[j].0[i + l]));
+                let sq = |j: usize| Lanes(std::array::from_fn(|l| sin(j, i + l)));
                 loads.torques_with(cq, sq, &mut four, &mut frames);
                 for (j, v) in four.iter().enumerate() {
                     for (l, &x) in v.0.iter().enumerate() {

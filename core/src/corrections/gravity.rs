@@ -18,68 +18,24 @@
 //! inside, so the sum is N·mm and is returned in N·m.
 
 use super::{Mass, Physics};
+use crate::kernel::Scalar;
 use crate::params::{DhJoint, DhParams, JointKind, JointModel};
 
 /// Standard gravity, m/s².
 pub(crate) const STANDARD_GRAVITY: f64 = 9.80665;
 
-/// The numbers the torques are computed in: `f64`, one pose, or [`X4`],
-/// four poses side by side — each lane the same IEEE operations in the
-/// same order as one pose, so the same bits.
-pub(crate) trait Num:
-    Copy
-    + std::ops::Add<Output = Self>
-    + std::ops::Sub<Output = Self>
-    + std::ops::Mul<Output = Self>
-    + std::ops::Div<Output = Self>
-    + std::ops::Neg<Output = Self>
-{
-    fn splat(v: f64) -> Self;
-}
-
-impl Num for f64 {
+/// The numbers the torques are computed in: `f64`, one pose, or the
+/// kernel's portable [`Lanes`](crate::kernel::Lanes), four poses side by side — each lane the
+/// same IEEE operations in the same order as one pose, so the same bits.
+pub(crate) trait Num: Scalar + std::ops::Div<Output = Self> {
+    /// `v` in every lane.
     #[inline(always)]
-    fn splat(v: f64) -> f64 {
-        v
+    fn splat(v: f64) -> Self {
+        Self::from(v)
     }
 }
 
-/// Four poses' values, lane by lane.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct X4(pub(crate) [f64; 4]);
-
-macro_rules! lanewise {
-    ($trait:ident, $method:ident, $op:tt) => {
-        impl std::ops::$trait for X4 {
-            type Output = X4;
-            #[inline(always)]
-            fn $method(self, b: X4) -> X4 {
-                let (a, b) = (self.0, b.0);
-                X4([a[0] $op b[0], a[1] $op b[1], a[2] $op b[2], a[3] $op b[3]])
-            }
-        }
-    };
-}
-lanewise!(Add, add, +);
-lanewise!(Sub, sub, -);
-lanewise!(Mul, mul, *);
-lanewise!(Div, div, /);
-
-impl std::ops::Neg for X4 {
-    type Output = X4;
-    #[inline(always)]
-    fn neg(self) -> X4 {
-        let a = self.0;
-        X4([-a[0], -a[1], -a[2], -a[3]])
-    }
-}
-
-impl Num for X4 {
-    #[inline(always)]
-    fn splat(v: f64) -> X4 {
-        X4([v; 4])
-    }
-}
+impl<T: Scalar + std::ops::Div<Output = T>> Num for T {}
 
 /// A rigid transform: rotation (rows) and translation, mm.
 #[derive(Clone, Copy)]

@@ -12,7 +12,7 @@
 //! feature detection: no safe function of the crate, public or not, can
 //! execute an AVX instruction on a CPU that lacks it.
 
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::Scalar;
 
@@ -73,6 +73,9 @@ macro_rules! lanewise {
 lanewise!(Add, add, +);
 lanewise!(Sub, sub, -);
 lanewise!(Mul, mul, *);
+// (For the gravity torques' four poses; the generated kernel divides
+// nothing.)
+lanewise!(Div, div, /);
 
 impl Neg for Lanes {
     type Output = Lanes;

@@ -43,11 +43,10 @@ use crate::params::{DhParams, JointKind, JointModel};
 pub use arm::{ArmKernel, KernelKind, SHIPPED_SHAPES};
 pub use batch::Jacobians;
 pub use generic::Generic;
-#[cfg(test)]
-pub(crate) use lanes::Lanes;
 /// The token-gated lanes, for batch loops outside the kernel (the plan's
-/// rank-3 updates): the same bits on any lane type.
-pub(crate) use lanes::{Batch, LANES, LaneOp, run as run_lanes};
+/// rank-3 updates, the position term's cost), and the portable lanes (the
+/// gravity torques' four poses): the same bits on any lane type.
+pub(crate) use lanes::{Batch, LANES, LaneOp, Lanes, run as run_lanes};
 pub(crate) use poses::Post;
 pub use poses::PreparedPoses;
 
