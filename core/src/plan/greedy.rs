@@ -122,23 +122,10 @@ impl Gains<'_> {
             return 0.0;
         }
         let jk = &self.j[3 * k * p..3 * (k + 1) * p];
-        // The rows scaled as `Greedy::rows_of` scales them: `(v − m) f`
-        // centred, `v f` not.
-        let scale = |out: &mut [f64], src: &[f64], which: usize| match means {
-            Some(m) => {
-                for ((o, v), m) in out.iter_mut().zip(src).zip(&m[which]) {
-                    *o = (v - m) * f;
-                }
-            }
-            None => {
-                for (o, v) in out.iter_mut().zip(src) {
-                    *o = v * f;
-                }
-            }
-        };
-        scale(&mut rows.dj, jk, 0);
-        scale(&mut rows.ud, uk, 1);
-        scale(&mut rows.yd, yk, 2);
+        let mean = |which: usize| means.map(|m| &m[which][..]);
+        scale_rows(&mut rows.dj, jk, mean(0), f);
+        scale_rows(&mut rows.ud, uk, mean(1), f);
+        scale_rows(&mut rows.yd, yk, mean(2), f);
         by_entry(&rows.dj, &mut rows.d_by_entry);
         by_entry(&rows.ud, &mut rows.ud_by_entry);
         let GainRows {
@@ -161,6 +148,24 @@ impl Gains<'_> {
                 (0..3)
                     .map(|i| (0..3).map(|l| ai[i][l] * b[l][i]).sum::<f64>())
                     .sum()
+            }
+        }
+    }
+}
+
+/// A candidate's rows `src` as they add to the information, into `out`:
+/// `(v − m) f` about its socket's `mean`, `v f` without one.
+#[inline(always)]
+fn scale_rows(out: &mut [f64], src: &[f64], mean: Option<&[f64]>, f: f64) {
+    match mean {
+        Some(m) => {
+            for ((o, v), m) in out.iter_mut().zip(src).zip(m) {
+                *o = (v - m) * f;
+            }
+        }
+        None => {
+            for (o, v) in out.iter_mut().zip(src) {
+                *o = v * f;
             }
         }
     }
@@ -284,12 +289,7 @@ impl<'a> Greedy<'a> {
         let p = self.p;
         let r = 3 * k * p..3 * (k + 1) * p;
         let mut f = self.weight[k].sqrt();
-        let (mut d, mut ud, mut yd) = (
-            self.j.j[r.clone()].to_vec(),
-            self.u[r.clone()].to_vec(),
-            self.y[r].to_vec(),
-        );
-        if self.touches {
+        let means = if self.touches {
             let g = self.group[k];
             let n = self.members[g].len() as f64;
             f *= if removing {
@@ -297,24 +297,24 @@ impl<'a> Greedy<'a> {
             } else {
                 (n / (n + 1.0)).sqrt()
             };
-            let [jm, um, ym] = &self.means[g];
-            for (v, m) in d.iter_mut().zip(jm) {
-                *v -= m;
-            }
-            for (v, m) in ud.iter_mut().zip(um) {
-                *v -= m;
-            }
-            for (v, m) in yd.iter_mut().zip(ym) {
-                *v -= m;
-            }
-        }
+            Some(&self.means[g])
+        } else {
+            None
+        };
         if !(f > 0.0 && f.is_finite()) {
             return None;
         }
-        for v in d.iter_mut().chain(ud.iter_mut()).chain(yd.iter_mut()) {
-            *v *= f;
-        }
-        Some(Direction { d, ud, yd })
+        let mean = |which: usize| means.map(|m| &m[which][..]);
+        let rows = |src: &[f64], which: usize| {
+            let mut out = vec![0.0; 3 * p];
+            scale_rows(&mut out, src, mean(which), f);
+            out
+        };
+        Some(Direction {
+            d: rows(&self.j.j[r.clone()], 0),
+            ud: rows(&self.u[r.clone()], 1),
+            yd: rows(&self.y[r], 2),
+        })
     }
 
     /// The eligible candidate of the largest gain (the first of equals),
