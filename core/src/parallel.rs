@@ -63,7 +63,23 @@ pub(crate) fn parallel_map<T: Sync, R: Send>(
     threads: usize,
     f: impl Fn(&T) -> R + Sync,
 ) -> Vec<R> {
-    let threads = threads_for(items.len(), threads);
+    share(items, threads_for(items.len(), threads), f)
+}
+
+/// [`parallel_map`] of items each worth a thread of its own (an LM from
+/// one start, milliseconds of work): shared on up to `threads` threads
+/// however few there are.
+pub(crate) fn parallel_map_each<T: Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    f: impl Fn(&T) -> R + Sync,
+) -> Vec<R> {
+    share(items, threads.min(items.len()).max(1), f)
+}
+
+/// `f` over `items` on exactly `threads` threads (the caller's and the
+/// pool's), results in item order.
+fn share<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
     let Some(pool) = (threads > 1).then(pool).flatten() else {
         return items.iter().map(f).collect();
     };

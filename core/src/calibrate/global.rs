@@ -544,18 +544,28 @@ impl<'a, 'o> Search<'a, 'o> {
         tally: &mut Tally,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Option<GlobalStop>, CalibrationError> {
-        for x in cells {
-            tally.grid_starts += 1;
-            progress(tally.started() as f64 / planned as f64);
-            let m = self.refine(&x, &mut tally.phases)?;
-            if let Some(stop) = self.judge_start(tally, m)? {
-                return Ok(Some(stop));
+        // Only the noise floor stops the grid early: without one, every
+        // cell is refined, all of them side by side.
+        let window = match self.floor {
+            Some(_) => self.problem.objective.threads(),
+            None => cells.len(),
+        };
+        for cells in cells.chunks(window.max(1)) {
+            let count = &mut |tally: &mut Tally| {
+                tally.grid_starts += 1;
+                progress(tally.started() as f64 / planned as f64);
+            };
+            let judged = self.refine_in_order(cells, tally, count, &|_| None)?;
+            if judged.is_some() {
+                return Ok(judged);
             }
         }
         Ok(self.agreement(&tally.found))
     }
 
-    /// Random starts until the lowest cost is confirmed.
+    /// Random starts until the lowest cost is confirmed, as many at a time
+    /// as the objective has threads (the draws are this search's own: the
+    /// stream ends with it, so a window's unused draws change nothing else).
     fn random_starts<R: Rng>(
         &self,
         planned: usize,
@@ -564,21 +574,67 @@ impl<'a, 'o> Search<'a, 'o> {
         progress: &mut dyn FnMut(f64),
     ) -> Result<Option<GlobalStop>, CalibrationError> {
         let joints = self.start.joint_count();
-        let mut x = self.start.clone();
-        for _ in 0..self.options.max_starts {
-            tally.random_starts += 1;
-            progress(tally.started() as f64 / planned as f64);
-            x.clone_from(self.start);
-            for &c in &self.circles {
-                let id = ParamId::from_column(joints, c).ok_or(CalibrationError::Shape)?;
-                *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+        let threads = self.problem.objective.threads().max(1);
+        let mut left = self.options.max_starts;
+        while left > 0 {
+            let window = threads.min(left);
+            left -= window;
+            let mut starts = vec![self.start.clone(); window];
+            for x in &mut starts {
+                for &c in &self.circles {
+                    let id = ParamId::from_column(joints, c).ok_or(CalibrationError::Shape)?;
+                    *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+                }
             }
-            let m = self.refine(&x, &mut tally.phases)?;
+            let count = &mut |tally: &mut Tally| {
+                tally.random_starts += 1;
+                progress(tally.started() as f64 / planned as f64);
+            };
+            let confirmed = |tally: &Tally| {
+                (tally.found.hits >= self.options.confirmations).then_some(GlobalStop::Agreement)
+            };
+            let judged = self.refine_in_order(&starts, tally, count, &confirmed)?;
+            if judged.is_some() {
+                return Ok(judged);
+            }
+        }
+        Ok(None)
+    }
+
+    /// Refines `starts` side by side on the objective's threads and judges
+    /// their minima one after the other in order: each minimum depends on
+    /// its start alone, so the same minima are judged in the same order as
+    /// one at a time. `before` runs before each judgement (the counts, the
+    /// progress), `after` after it (a stop of the caller's). A stop leaves
+    /// the window's later starts unjudged and their evaluations uncounted,
+    /// as if they had never run.
+    fn refine_in_order(
+        &self,
+        starts: &[DhParams],
+        tally: &mut Tally,
+        before: &mut dyn FnMut(&mut Tally),
+        after: &dyn Fn(&Tally) -> Option<GlobalStop>,
+    ) -> Result<Option<GlobalStop>, CalibrationError> {
+        let timer = std::time::Instant::now();
+        let threads = self.problem.objective.threads();
+        let refined = crate::parallel::parallel_map_each(starts, threads, |x| {
+            let mut phases: Vec<Phase> =
+                (tally.phases.iter()).map(|p| Phase::new(&p.name)).collect();
+            self.refine(x, &mut phases).map(|m| (m, phases))
+        });
+        let wall = wall_share(&refined, timer.elapsed().as_secs_f64());
+        for m in refined {
+            before(tally);
+            let (m, mut phases) = m?;
+            for (all, one) in tally.phases.iter_mut().zip(&mut phases) {
+                one.seconds *= wall;
+                all.add(one);
+            }
             if let Some(stop) = self.judge_start(tally, m)? {
                 return Ok(Some(stop));
             }
-            if tally.found.hits >= self.options.confirmations {
-                return Ok(Some(GlobalStop::Agreement));
+            if let Some(stop) = after(tally) {
+                return Ok(Some(stop));
             }
         }
         Ok(None)
@@ -927,6 +983,16 @@ fn reweigh(
     phase.add_lm(&refit, timer.elapsed().as_secs_f64());
     let cost = refit.normal.cost();
     Ok(Minimum { fit: refit, cost })
+}
+
+/// The factor that turns the threads' times of refined starts into their
+/// share of the `wall` time they took side by side, so that the phases'
+/// times add up to the fit's.
+fn wall_share(refined: &[Result<(Minimum, Vec<Phase>), CalibrationError>], wall: f64) -> f64 {
+    let threads: f64 = (refined.iter().flatten())
+        .flat_map(|(_, phases)| phases.iter().map(|p| p.seconds))
+        .sum();
+    if threads > 0.0 { wall / threads } else { 1.0 }
 }
 
 /// The cost on a grid of `K` angles per circle (everything else at the

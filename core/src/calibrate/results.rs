@@ -42,6 +42,13 @@ impl Phase {
         }
     }
 
+    /// Adds `other`'s evaluations and time.
+    pub(crate) fn add(&mut self, other: &Phase) {
+        self.cost_evaluations += other.cost_evaluations;
+        self.jacobian_evaluations += other.jacobian_evaluations;
+        self.seconds += other.seconds;
+    }
+
     pub(crate) fn add_lm(&mut self, fit: &LmResult, seconds: f64) {
         self.cost_evaluations += fit.cost_evaluations;
         self.jacobian_evaluations += fit.jacobian_evaluations;
