@@ -6,6 +6,7 @@ use super::{Beyond, Column, Physics};
 use crate::kernel::Lanes;
 use crate::kernel::{Post, PreparedPoses};
 use crate::params::{DhParams, JointKind};
+use std::sync::Arc;
 
 /// What was recorded with each pose beyond its readings.
 #[derive(Clone, Copy, Debug, Default)]
@@ -114,24 +115,44 @@ impl Effects {
         raw: &PreparedPoses,
         conditions: Conditions<'_>,
     ) -> Result<Effects, EffectsError> {
+        Effects::new_cached(arm, physics, fit, raw, conditions, None)
+    }
+
+    /// [`Effects::new`], the corrected readings taken from `cache` (that
+    /// of the poses `raw` recorded under `conditions`, and of no others)
+    /// when they were corrected for the same arm and physics before.
+    pub(crate) fn new_cached(
+        arm: &DhParams,
+        physics: &Physics,
+        fit: &Beyond,
+        raw: &PreparedPoses,
+        conditions: Conditions<'_>,
+        cache: Option<&SeenCache>,
+    ) -> Result<Effects, EffectsError> {
         let (n, len) = (arm.joints.len(), raw.len());
         check_prismatic(arm, physics, fit)?;
         let elapsed = Elapsed::of(physics, fit, len, conditions)?;
         let trig: Vec<(&[f64], &[f64])> = (0..n).map(|j| raw.column_trig(j)).collect();
-        let loads = (physics.needs_loads(fit) || physics.compliance.iter().any(|c| c.is_some()))
-            .then(|| Loads::new(arm, physics));
-        // Per pose and joint (pose-major), the gravity torque.
-        let mut tau = vec![0.0; if loads.is_some() { len * n } else { 0 }];
-        if let Some(loads) = &loads {
-            gravity_torques(loads, &trig, &mut tau);
-        }
+        let loads = physics.needs_loads(fit) || physics.compliance.iter().any(|c| c.is_some());
+        let make = || Seen::new(arm, physics, loads, raw, &trig, conditions.approach);
+        // Kept only with the gravity torques, what costs: the rest costs
+        // about what the key and a copy of the readings do.
+        let kept =
+            (cache.filter(|_| loads)).map(|c| c.get(seen_key(arm, physics, loads, raw), make));
+        let fresh_tau;
+        let (tau, cos, sin) = match &kept {
+            Some(seen) => (&seen.tau[..], seen.cos.clone(), seen.sin.clone()),
+            None => {
+                let Seen { tau, cos, sin } = make();
+                fresh_tau = tau;
+                (&fresh_tau[..], cos, sin)
+            }
+        };
         let flanks = Flanks {
-            tau: &tau,
+            tau,
             approach: conditions.approach,
             joints: n,
         };
-        let delta = reading_corrections(physics, &trig, &flanks, len);
-        let (cos, sin) = corrected_trig(&trig, &delta, len, raw.prismatic_mask());
         let mut poses = PreparedPoses::from_trig(n, raw.prismatic_mask(), len, cos, sin);
         let (cte, drift) = (
             physics.cte_per_k.unwrap_or(0.0),
@@ -207,6 +228,132 @@ impl Effects {
                 Kind::Axis(a) => std::array::from_fn(|r| if r == a { f } else { 0.0 }),
             });
         }
+    }
+}
+
+/// What the corrections of one set of poses depend on beyond the fit's
+/// columns: per pose and joint the gravity torque, and the readings' cos
+/// and sin corrected (by the harmonics, compliance and backlash).
+#[derive(Debug)]
+pub(crate) struct Seen {
+    /// Per pose and joint (pose-major), the gravity torque (empty when no
+    /// correction needs the loads).
+    tau: Vec<f64>,
+    cos: Vec<Vec<f64>>,
+    sin: Vec<Vec<f64>>,
+}
+
+impl Seen {
+    /// The poses `raw` (their columns of cos and sin `trig`, the joints'
+    /// approach `approach`) under `physics`, with the gravity torques when
+    /// `loads`.
+    fn new(
+        arm: &DhParams,
+        physics: &Physics,
+        loads: bool,
+        raw: &PreparedPoses,
+        trig: &[(&[f64], &[f64])],
+        approach: Option<&[i8]>,
+    ) -> Seen {
+        let (n, len) = (trig.len(), raw.len());
+        let loads = loads.then(|| Loads::new(arm, physics));
+        let mut tau = vec![0.0; if loads.is_some() { len * n } else { 0 }];
+        if let Some(loads) = &loads {
+            gravity_torques(loads, trig, &mut tau);
+        }
+        let flanks = Flanks {
+            tau: &tau,
+            approach,
+            joints: n,
+        };
+        let delta = reading_corrections(physics, trig, &flanks, len);
+        let (cos, sin) = corrected_trig(trig, &delta, len, raw.prismatic_mask());
+        Seen { tau, cos, sin }
+    }
+}
+
+/// The bits of everything [`Seen::new`] reads besides the poses and their
+/// conditions: the arm's chain and probe, the masses and gravity, each
+/// joint's compliance and backlash, the harmonics in order, and whether the
+/// loads are wanted.
+fn seen_key(arm: &DhParams, physics: &Physics, loads: bool, raw: &PreparedPoses) -> Vec<u64> {
+    let n = arm.joints.len();
+    let mut key = Vec::with_capacity(16 * n + 32);
+    key.extend([u64::from(loads), raw.len() as u64, n as u64]);
+    for j in &arm.joints {
+        key.extend([j.a, j.d, j.alpha, j.theta, j.beta].map(f64::to_bits));
+        key.extend([j.model as u64, j.kind as u64]);
+    }
+    key.extend(arm.probe.map(f64::to_bits));
+    let mut mass = |m: &Option<super::Mass>| match m {
+        None => key.push(0),
+        Some(m) => {
+            let com = m.com_mm;
+            key.extend([1, u64::from(com.is_some()), m.kg.to_bits()]);
+            key.extend(com.unwrap_or_default().map(f64::to_bits));
+        }
+    };
+    physics.link_masses.iter().for_each(&mut mass);
+    mass(&physics.probe_mass);
+    key.push(physics.link_masses.len() as u64);
+    key.extend(super::gravity::gravity_vector(physics).map(f64::to_bits));
+    for j in 0..n {
+        key.extend([physics.compliance_of(j), physics.backlash_of(j)].map(f64::to_bits));
+    }
+    for h in &physics.harmonics {
+        key.extend([h.joint as u64, u64::from(h.order)]);
+        key.extend([h.sin, h.cos].map(f64::to_bits));
+    }
+    key
+}
+
+/// The corrected readings of one set of poses for the last few arms and
+/// physics they were corrected at, most recent last: a fit asks for them
+/// again and again at the same point (LM's cost at a trial point and its
+/// normal equations there once accepted; every pass of the assessment at
+/// the solution), and they are what costs in [`Effects::new`]. A value
+/// taken from here is the one computed afresh, to the bit. Up to
+/// [`SEEN_ENTRIES`] entries, of at most [`SEEN_MAX_POSES`] poses (a larger
+/// set is corrected afresh each time, not held twice in memory).
+#[derive(Debug, Default)]
+pub(crate) struct SeenCache(std::sync::Mutex<Vec<(Vec<u64>, Arc<Seen>)>>);
+
+/// [`SeenCache`]'s entries: a touch term asks for one arm per tool.
+const SEEN_ENTRIES: usize = 4;
+
+/// [`SeenCache`]'s largest set of poses: its entries then hold at most
+/// 4 × 6 MB (7 joints' cos, sin and torque at 8 B each).
+const SEEN_MAX_POSES: usize = 1 << 15;
+
+impl Clone for SeenCache {
+    fn clone(&self) -> SeenCache {
+        SeenCache(std::sync::Mutex::new(self.entries().clone()))
+    }
+}
+
+impl SeenCache {
+    /// The entries (a panic elsewhere while they were held left them whole:
+    /// each is replaced whole).
+    fn entries(&self) -> std::sync::MutexGuard<'_, Vec<(Vec<u64>, Arc<Seen>)>> {
+        self.0
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    /// The entry of `key`, made by `make` (and kept) when there is none.
+    fn get(&self, key: Vec<u64>, make: impl FnOnce() -> Seen) -> Arc<Seen> {
+        if let Some((_, seen)) = self.entries().iter().find(|(k, _)| *k == key) {
+            return Arc::clone(seen);
+        }
+        let seen = Arc::new(make());
+        if seen.cos.first().is_some_and(|c| c.len() <= SEEN_MAX_POSES) {
+            let mut entries = self.entries();
+            if entries.len() == SEEN_ENTRIES {
+                entries.remove(0);
+            }
+            entries.push((key, Arc::clone(&seen)));
+        }
+        seen
     }
 }
 
@@ -679,6 +826,85 @@ mod tests {
     /// slide by `b` mm along the gravity force on it. The fitted column is
     /// the zero offset's (the slide's `d`'s) times `sgn τ`, and the
     /// simulator's inverse gives back the readings.
+    /// Every bit of the poses as corrected and of the Jacobian factors.
+    fn bits_of(e: &Effects) -> Vec<u64> {
+        let mut out: Vec<u64> = e.factors.iter().map(|v| v.to_bits()).collect();
+        for j in 0..e.poses.joints() {
+            let (c, s) = e.poses.column_trig(j);
+            out.extend(c.iter().chain(s).map(|v| v.to_bits()));
+        }
+        out
+    }
+
+    /// Corrections taken from the cache are those computed afresh, to the
+    /// bit; a change of anything they depend on (a compliance, a mass, the
+    /// arm's geometry, gravity) is computed afresh, not taken from the
+    /// entry of another; the oldest entry goes when a fifth comes.
+    #[test]
+    fn corrections_kept_are_those_computed_afresh() {
+        use crate::corrections::Mass;
+        let arm = sliding();
+        let physics = Physics {
+            link_masses: vec![Some(Mass::at_middle(2.0)); 6],
+            probe_mass: Some(Mass::at_middle(0.5)),
+            // Across the base axis, so that every joint carries some.
+            gravity: Some([0.3, -1.0, -0.2]),
+            compliance: vec![None, None, Some(2e-5), Some(1e-5), None, None],
+            backlash: vec![None, Some(0.05), None, None, Some(1e-4), None],
+            harmonics: vec![Harmonic {
+                joint: 2,
+                order: 2,
+                sin: 1e-4,
+                cos: -2e-4,
+            }],
+            ..Physics::default()
+        };
+        let fit = Beyond {
+            compliance: vec![2, 3],
+            ..Beyond::default()
+        };
+        let raw = poses(&arm);
+        let cache = SeenCache::default();
+        let fresh = |arm: &DhParams, physics: &Physics, fit: &Beyond| {
+            bits_of(&Effects::new(arm, physics, fit, &raw, Conditions::default()).unwrap())
+        };
+        let kept = |arm: &DhParams, physics: &Physics, fit: &Beyond| {
+            let e =
+                Effects::new_cached(arm, physics, fit, &raw, Conditions::default(), Some(&cache));
+            bits_of(&e.unwrap())
+        };
+        let none = Beyond::default();
+        let expected = fresh(&arm, &physics, &fit);
+        assert_eq!(kept(&arm, &physics, &fit), expected, "kept");
+        assert_eq!(cache.entries().len(), 1);
+        // The same arm and physics, without the columns (a cost): a hit.
+        assert_eq!(kept(&arm, &physics, &none), fresh(&arm, &physics, &none));
+        assert_eq!(kept(&arm, &physics, &fit), expected, "taken");
+        assert_eq!(cache.entries().len(), 1, "the same corrections");
+        let mut stiffer = physics.clone();
+        stiffer.compliance[2] = Some(1e-5);
+        let mut heavier = physics.clone();
+        heavier.link_masses[3] = Some(Mass::at_middle(2.5));
+        let mut tilted = physics.clone();
+        tilted.gravity = Some([0.0, 0.1, -1.0]);
+        let mut longer = arm.clone();
+        longer.joints[2].a += 1e-9;
+        let changed = [
+            (&arm, &stiffer),
+            (&arm, &heavier),
+            (&arm, &tilted),
+            (&longer, &physics),
+        ];
+        for (k, (arm, physics)) in changed.into_iter().enumerate() {
+            let want = fresh(arm, physics, &fit);
+            assert_ne!(want, expected, "change {k} changes the corrections");
+            assert_eq!(kept(arm, physics, &fit), want, "change {k}");
+        }
+        assert_eq!(cache.entries().len(), SEEN_ENTRIES);
+        // The first entry went when the fifth came: computed afresh again.
+        assert_eq!(kept(&arm, &physics, &fit), expected);
+    }
+
     #[test]
     fn a_backlash_follows_the_gravity_torque() {
         use crate::corrections::{Mass, gravity};

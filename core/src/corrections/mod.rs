@@ -62,7 +62,7 @@ pub mod gravity;
 use serde::{Deserialize, Serialize};
 
 pub use effects::{Conditions, Effects};
-pub(crate) use effects::{angles_for, readings_for};
+pub(crate) use effects::{SeenCache, angles_for, readings_for};
 
 use crate::error::OptionError;
 use crate::setting::Setting;

@@ -334,7 +334,36 @@ impl At<'_> {
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
     ) -> Result<Option<crate::corrections::Effects>, TermError> {
-        self.corrected(raw, conditions, true)
+        self.corrected(raw, conditions, true, None)
+    }
+
+    /// [`At::effects`] of a term's own poses, their corrected readings
+    /// kept in the term's `cache` between evaluations at the same point.
+    ///
+    /// # Errors
+    ///
+    /// As [`At::effects`].
+    pub(crate) fn effects_in(
+        &self,
+        raw: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        cache: &crate::corrections::SeenCache,
+    ) -> Result<Option<crate::corrections::Effects>, TermError> {
+        self.corrected(raw, conditions, true, Some(cache))
+    }
+
+    /// [`At::corrected_poses`] with a term's `cache` ([`At::effects_in`]).
+    ///
+    /// # Errors
+    ///
+    /// As [`At::effects`].
+    pub(crate) fn corrected_poses_in(
+        &self,
+        raw: &crate::kernel::PreparedPoses,
+        conditions: crate::corrections::Conditions<'_>,
+        cache: &crate::corrections::SeenCache,
+    ) -> Result<Option<crate::corrections::Effects>, TermError> {
+        self.corrected(raw, conditions, false, Some(cache))
     }
 
     /// [`At::effects`] without the Jacobian factors: what a cost needs.
@@ -347,7 +376,7 @@ impl At<'_> {
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
     ) -> Result<Option<crate::corrections::Effects>, TermError> {
-        self.corrected(raw, conditions, false)
+        self.corrected(raw, conditions, false, None)
     }
 
     /// The tool's position at every pose of `poses` (a term's readings;
@@ -434,12 +463,13 @@ impl At<'_> {
     }
 
     /// [`At::effects`], with the factors of the fitted columns when
-    /// `columns`.
+    /// `columns`, the corrected readings from `cache` when given.
     fn corrected(
         &self,
         raw: &crate::kernel::PreparedPoses,
         conditions: crate::corrections::Conditions<'_>,
         columns: bool,
+        cache: Option<&crate::corrections::SeenCache>,
     ) -> Result<Option<crate::corrections::Effects>, TermError> {
         let Some((block, cols)) = self.layout.corrections() else {
             return Ok(None);
@@ -450,7 +480,7 @@ impl At<'_> {
         if fit.is_empty() && !physics.corrects() {
             return Ok(None);
         }
-        crate::corrections::Effects::new(self.arm, &physics, fit, raw, conditions)
+        crate::corrections::Effects::new_cached(self.arm, &physics, fit, raw, conditions, cache)
             .map(Some)
             .map_err(|e| TermError::invalid("beyond", e))
     }

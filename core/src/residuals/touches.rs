@@ -65,6 +65,8 @@ pub(crate) struct TouchTerm<'d> {
     unit_sigma: f64,
     /// Per touch (data-set order), `A_i = Σ_i⁻¹`, 1/mm²; empty until weighed.
     weights: Vec<Sym3>,
+    /// The touches' corrected readings at the last points evaluated.
+    seen: crate::corrections::SeenCache,
 }
 
 impl std::fmt::Debug for TouchTerm<'_> {
@@ -140,6 +142,7 @@ impl<'d> TouchTerm<'d> {
             noise,
             unit_sigma: 1.0,
             weights: Vec::new(),
+            seen: Default::default(),
         }
     }
 
@@ -578,7 +581,7 @@ impl Term for TouchTerm<'_> {
         let mut runs = Vec::with_capacity(views.runs.len());
         for (k, _) in &views.runs {
             let seen = views.at(at, *k);
-            let effects = seen.corrected_poses(data.poses(), data.conditions())?;
+            let effects = seen.corrected_poses_in(data.poses(), data.conditions(), &self.seen)?;
             runs.push((seen, effects));
         }
         let chunks = self.chunks_of(&views);
@@ -678,9 +681,9 @@ impl Term for TouchTerm<'_> {
             // The corrections' Jacobian factors too when the leverage needs
             // their columns (as the normal equations have them).
             let effects = if cols.is_empty() {
-                seen.corrected_poses(data.poses(), data.conditions())?
+                seen.corrected_poses_in(data.poses(), data.conditions(), &self.seen)?
             } else {
-                seen.effects(data.poses(), data.conditions())?
+                seen.effects_in(data.poses(), data.conditions(), &self.seen)?
             };
             runs.push((seen, effects, cols, m));
         }
@@ -902,7 +905,7 @@ fn accumulate(
     for (k, _) in &views.runs {
         let pairs = tool_columns(&geo, &normal.free, at.layout, views.block(*k));
         let (at_free, free): (Vec<usize>, Vec<usize>) = pairs.into_iter().unzip();
-        let effects = views.at(at, *k).effects(data.poses(), data.conditions())?;
+        let effects = (views.at(at, *k)).effects_in(data.poses(), data.conditions(), &term.seen)?;
         runs.push((views.kernel(at, *k), effects, at_free, free));
     }
     let chunks = term.chunks_of(views);
