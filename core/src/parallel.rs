@@ -79,9 +79,20 @@ pub(crate) fn parallel_map_each<T: Sync, R: Send>(
 
 /// `f` over `items` on exactly `threads` threads (the caller's and the
 /// pool's), results in item order.
+///
+/// Inside an item shared so, every call runs on its own thread
+/// ([`Sharing`]): a caller that is not one of the pool's workers waits at
+/// the end of a nested call until a worker has run the helper it handed
+/// over, and a worker busy with the outer items does not take it until
+/// they are done — the caller would sit idle. The items already keep
+/// every thread busy.
 fn share<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let Some(pool) = (threads > 1).then(pool).flatten() else {
+    let Some(pool) = (threads > 1 && !Sharing::inside()).then(pool).flatten() else {
         return items.iter().map(f).collect();
+    };
+    let f = |item: &T| {
+        let _inside = Sharing::enter();
+        f(item)
     };
     let next = AtomicUsize::new(0);
     let done = Mutex::new(Vec::with_capacity(items.len()));
@@ -162,6 +173,38 @@ fn in_item_order<R>(len: usize, done: Vec<(usize, R)>) -> Vec<R> {
         .collect()
 }
 
+/// Whether this thread is running an item of a call shared between
+/// threads ([`share`]).
+struct Sharing {
+    /// Whether it was before this item (a call on one thread inside one
+    /// shared: nothing changes).
+    was: bool,
+}
+
+thread_local! {
+    static INSIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+impl Sharing {
+    fn inside() -> bool {
+        INSIDE.with(std::cell::Cell::get)
+    }
+
+    /// Marks this thread as inside a shared item until the guard drops
+    /// (a panic included).
+    fn enter() -> Sharing {
+        Sharing {
+            was: INSIDE.with(|c| c.replace(true)),
+        }
+    }
+}
+
+impl Drop for Sharing {
+    fn drop(&mut self) {
+        INSIDE.with(|c| c.set(self.was));
+    }
+}
+
 /// The process's pool, started on first use with a worker per core beyond
 /// the caller's own (at least one); `None` when the system refuses its
 /// threads (every call then runs on its caller), and in a child forked
@@ -199,8 +242,14 @@ mod tests {
         assert_eq!(threads_for(1000, 0), 1);
     }
 
+    /// Held by the tests that count the pool's threads: the pool has one
+    /// worker on two cores, and another such test keeping it busy would
+    /// leave a caller to do all its items itself.
+    static POOL: Mutex<()> = Mutex::new(());
+
     /// Which threads ran each item, and the results in item order.
     fn traced(items: usize, threads: usize, each: std::time::Duration) -> HashSet<ThreadId> {
+        let _pool = POOL.lock().unwrap_or_else(PoisonError::into_inner);
         let v: Vec<usize> = (0..items).collect();
         let out = parallel_map(&v, threads, |&i| {
             std::thread::sleep(each);
@@ -224,6 +273,40 @@ mod tests {
     fn a_large_problem_is_shared_with_the_pool() {
         let ran = traced(64, 2, std::time::Duration::from_millis(1));
         assert_eq!(ran.len(), 2, "{ran:?}");
+    }
+
+    /// A call inside an item of a shared call runs on that item's thread
+    /// alone, and the caller goes on to further items: shared, its first
+    /// item's nested call would wait at its end for the worker to run the
+    /// helper it handed over, which the worker does only once it has run
+    /// every other outer item. Once the outer call is done a call is
+    /// shared again.
+    #[test]
+    fn a_call_inside_a_shared_item_runs_on_its_thread() {
+        let caller = std::thread::current().id();
+        let outer: Vec<usize> = (0..4).collect();
+        let inner: Vec<usize> = (0..16).collect();
+        let each = std::time::Duration::from_millis(1);
+        let pool = POOL.lock().unwrap_or_else(PoisonError::into_inner);
+        let runs = parallel_map_each(&outer, 2, |_| {
+            let me = std::thread::current().id();
+            let threads: HashSet<ThreadId> = parallel_map(&inner, 2, |_| {
+                std::thread::sleep(each);
+                std::thread::current().id()
+            })
+            .into_iter()
+            .collect();
+            (me, threads)
+        });
+        for (me, threads) in &runs {
+            assert_eq!(threads, &HashSet::from([*me]));
+        }
+        let outer_threads: HashSet<ThreadId> = runs.iter().map(|r| r.0).collect();
+        assert_eq!(outer_threads.len(), 2, "the outer items were shared");
+        let by_caller = runs.iter().filter(|r| r.0 == caller).count();
+        assert!(by_caller >= 2, "the caller ran {by_caller} of 4 items");
+        drop(pool);
+        assert_eq!(traced(64, 2, each).len(), 2, "shared again after it");
     }
 
     /// The pool's threads carry the name the C API's panic hook looks for,

@@ -544,13 +544,10 @@ impl<'a, 'o> Search<'a, 'o> {
         tally: &mut Tally,
         progress: &mut dyn FnMut(f64),
     ) -> Result<Option<GlobalStop>, CalibrationError> {
-        // Only the noise floor stops the grid early: without one, every
-        // cell is refined, all of them side by side.
-        let window = match self.floor {
-            Some(_) => self.problem.objective.threads(),
-            None => cells.len(),
-        };
-        for cells in cells.chunks(window.max(1)) {
+        // As many cells side by side as there are threads, so that the
+        // progress moves on; the noise floor can stop the grid after any.
+        let window = self.problem.objective.threads().max(1);
+        for cells in cells.chunks(window) {
             let count = &mut |tally: &mut Tally| {
                 tally.grid_starts += 1;
                 progress(tally.started() as f64 / planned as f64);
@@ -987,7 +984,8 @@ fn reweigh(
 
 /// The factor that turns the threads' times of refined starts into their
 /// share of the `wall` time they took side by side, so that the phases'
-/// times add up to the fit's.
+/// times add up to the fit's (but for the share of a start refined in vain
+/// beside one that stopped the search).
 fn wall_share(refined: &[Result<(Minimum, Vec<Phase>), CalibrationError>], wall: f64) -> f64 {
     let threads: f64 = (refined.iter().flatten())
         .flat_map(|(_, phases)| phases.iter().map(|p| p.seconds))

@@ -285,6 +285,7 @@ fn seen_key(arm: &DhParams, physics: &Physics, loads: bool, raw: &PreparedPoses)
         key.extend([j.model as u64, j.kind as u64]);
     }
     key.extend(arm.probe.map(f64::to_bits));
+    key.push(physics.link_masses.len() as u64);
     let mut mass = |m: &Option<super::Mass>| match m {
         None => key.push(0),
         Some(m) => {
@@ -295,11 +296,11 @@ fn seen_key(arm: &DhParams, physics: &Physics, loads: bool, raw: &PreparedPoses)
     };
     physics.link_masses.iter().for_each(&mut mass);
     mass(&physics.probe_mass);
-    key.push(physics.link_masses.len() as u64);
     key.extend(super::gravity::gravity_vector(physics).map(f64::to_bits));
     for j in 0..n {
         key.extend([physics.compliance_of(j), physics.backlash_of(j)].map(f64::to_bits));
     }
+    key.push(physics.harmonics.len() as u64);
     for h in &physics.harmonics {
         key.extend([h.joint as u64, u64::from(h.order)]);
         key.extend([h.sin, h.cos].map(f64::to_bits));
@@ -341,12 +342,17 @@ impl SeenCache {
     }
 
     /// The entry of `key`, made by `make` (and kept) when there is none.
+    /// An entry taken becomes the most recent; the least recent goes
+    /// when a new one comes to a full cache.
     fn get(&self, key: Vec<u64>, make: impl FnOnce() -> Seen) -> Arc<Seen> {
-        if let Some((_, seen)) = self.entries().iter().find(|(k, _)| *k == key) {
-            return Arc::clone(seen);
+        if let Some(seen) = self.take(&key) {
+            return seen;
         }
+        // Made without the lock: another thread may make the same entry
+        // meanwhile (the same values), and only one is kept.
         let seen = Arc::new(make());
-        if seen.cos.first().is_some_and(|c| c.len() <= SEEN_MAX_POSES) {
+        if seen.cos.first().is_some_and(|c| c.len() <= SEEN_MAX_POSES) && self.take(&key).is_none()
+        {
             let mut entries = self.entries();
             if entries.len() == SEEN_ENTRIES {
                 entries.remove(0);
@@ -354,6 +360,16 @@ impl SeenCache {
             entries.push((key, Arc::clone(&seen)));
         }
         seen
+    }
+
+    /// The entry of `key`, made the most recent.
+    fn take(&self, key: &[u64]) -> Option<Arc<Seen>> {
+        let mut entries = self.entries();
+        let at = entries.iter().position(|(k, _)| k == key)?;
+        let entry = entries.remove(at);
+        let seen = Arc::clone(&entry.1);
+        entries.push(entry);
+        Some(seen)
     }
 }
 
@@ -821,11 +837,6 @@ mod tests {
         }
     }
 
-    /// A play of `b` on two joints: each reading is off by `b` along its
-    /// gravity torque (`sgn τ`), a vertical axis (no torque) by nothing; a
-    /// slide by `b` mm along the gravity force on it. The fitted column is
-    /// the zero offset's (the slide's `d`'s) times `sgn τ`, and the
-    /// simulator's inverse gives back the readings.
     /// Every bit of the poses as corrected and of the Jacobian factors.
     fn bits_of(e: &Effects) -> Vec<u64> {
         let mut out: Vec<u64> = e.factors.iter().map(|v| v.to_bits()).collect();
@@ -881,30 +892,86 @@ mod tests {
         assert_eq!(kept(&arm, &physics, &none), fresh(&arm, &physics, &none));
         assert_eq!(kept(&arm, &physics, &fit), expected, "taken");
         assert_eq!(cache.entries().len(), 1, "the same corrections");
-        let mut stiffer = physics.clone();
-        stiffer.compliance[2] = Some(1e-5);
-        let mut heavier = physics.clone();
-        heavier.link_masses[3] = Some(Mass::at_middle(2.5));
-        let mut tilted = physics.clone();
-        tilted.gravity = Some([0.0, 0.1, -1.0]);
-        let mut longer = arm.clone();
-        longer.joints[2].a += 1e-9;
-        let changed = [
-            (&arm, &stiffer),
-            (&arm, &heavier),
-            (&arm, &tilted),
-            (&longer, &physics),
+        type Change = fn(&mut DhParams, &mut Physics);
+        let changes: [(&str, Change); 15] = [
+            ("compliance", |_, p| p.compliance[2] = Some(1e-5)),
+            ("backlash", |_, p| p.backlash[4] = Some(2e-4)),
+            ("harmonic sin", |_, p| p.harmonics[0].sin = 2e-4),
+            ("harmonic order", |_, p| p.harmonics[0].order = 3),
+            ("mass", |_, p| p.link_masses[3] = Some(Mass::at_middle(2.5))),
+            ("centre", |_, p| {
+                p.link_masses[3] = Some(Mass {
+                    kg: 2.0,
+                    com_mm: Some([0.0, 10.0, 0.0]),
+                })
+            }),
+            ("probe mass", |_, p| {
+                p.probe_mass = Some(Mass::at_middle(0.6))
+            }),
+            ("gravity", |_, p| p.gravity = Some([0.0, 0.1, -1.0])),
+            ("a", |a, _| a.joints[2].a += 1e-9),
+            ("d", |a, _| a.joints[3].d += 1e-9),
+            ("alpha", |a, _| a.joints[0].alpha += 1e-9),
+            ("theta", |a, _| a.joints[4].theta += 1e-9),
+            ("beta", |a, _| {
+                let j = &a.joints[2];
+                a.joints[2] = crate::params::DhJoint::hayati(j.theta, j.a, j.alpha, 1e-3)
+            }),
+            ("probe", |a, _| a.probe[0] += 1e-6),
+            ("a second harmonic", |_, p| {
+                p.harmonics.push(Harmonic {
+                    joint: 4,
+                    order: 1,
+                    sin: 1e-4,
+                    cos: 0.0,
+                })
+            }),
         ];
-        for (k, (arm, physics)) in changed.into_iter().enumerate() {
-            let want = fresh(arm, physics, &fit);
-            assert_ne!(want, expected, "change {k} changes the corrections");
-            assert_eq!(kept(arm, physics, &fit), want, "change {k}");
+        for (what, change) in changes {
+            let (mut arm, mut physics) = (arm.clone(), physics.clone());
+            change(&mut arm, &mut physics);
+            let want = fresh(&arm, &physics, &fit);
+            assert_ne!(want, expected, "{what}: changes the corrections");
+            assert_eq!(kept(&arm, &physics, &fit), want, "{what}");
         }
         assert_eq!(cache.entries().len(), SEEN_ENTRIES);
         // The first entry went when the fifth came: computed afresh again.
         assert_eq!(kept(&arm, &physics, &fit), expected);
     }
 
+    /// The cache keeps the entries taken most recently: one taken again
+    /// stays when a new one comes to a full cache, the least recent goes.
+    #[test]
+    fn the_least_recently_taken_entry_goes() {
+        let cache = SeenCache::default();
+        let made = std::cell::Cell::new(0);
+        let get = |k: u64| {
+            cache.get(vec![k], || {
+                made.set(made.get() + 1);
+                Seen {
+                    tau: vec![k as f64],
+                    cos: vec![vec![0.0]],
+                    sin: vec![vec![0.0]],
+                }
+            })
+        };
+        for k in 0..SEEN_ENTRIES as u64 {
+            get(k);
+        }
+        assert_eq!(get(0).tau, [0.0]);
+        assert_eq!(made.get(), SEEN_ENTRIES, "0 was kept");
+        get(99);
+        get(0);
+        assert_eq!(made.get(), SEEN_ENTRIES + 1, "0 stayed");
+        get(1);
+        assert_eq!(made.get(), SEEN_ENTRIES + 2, "1 went");
+    }
+
+    /// A play of `b` on two joints: each reading is off by `b` along its
+    /// gravity torque (`sgn τ`), a vertical axis (no torque) by nothing; a
+    /// slide by `b` mm along the gravity force on it. The fitted column is
+    /// the zero offset's (the slide's `d`'s) times `sgn τ`, and the
+    /// simulator's inverse gives back the readings.
     #[test]
     fn a_backlash_follows_the_gravity_torque() {
         use crate::corrections::{Mass, gravity};
