@@ -10,7 +10,8 @@
 //! fit took 350–430 ms on the default threads against 79 ms on one). A
 //! problem too small to share ([`threads_for`]) runs on the calling thread
 //! alone, and the calling thread always takes items itself: work never
-//! waits for a worker to be scheduled when the caller could do it.
+//! waits for a worker to be scheduled when the caller could do it. Inside
+//! an item of a call shared so, a call runs on that item's thread alone.
 
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::atomic::{AtomicUsize, Ordering};
