@@ -137,8 +137,7 @@ impl Effects {
         let make = || Seen::new(arm, physics, loads, raw, &trig, conditions.approach);
         // Kept only with the gravity torques, what costs: the rest costs
         // about what the key and a copy of the readings do.
-        let kept =
-            (cache.filter(|_| loads)).map(|c| c.get(seen_key(arm, physics, loads, raw), make));
+        let kept = (cache.filter(|_| loads)).map(|c| c.get(seen_key(arm, physics, raw), make));
         let fresh_tau;
         let (tau, cos, sin) = match &kept {
             Some(seen) => (&seen.tau[..], seen.cos.clone(), seen.sin.clone()),
@@ -272,14 +271,14 @@ impl Seen {
     }
 }
 
-/// The bits of everything [`Seen::new`] reads besides the poses and their
-/// conditions: the arm's chain and probe, the masses and gravity, each
-/// joint's compliance and backlash, the harmonics in order, and whether the
-/// loads are wanted.
-fn seen_key(arm: &DhParams, physics: &Physics, loads: bool, raw: &PreparedPoses) -> Vec<u64> {
+/// The bits of everything [`Seen::new`] with the loads reads besides the
+/// poses and their conditions: the arm's chain and probe, the masses and
+/// gravity, each joint's compliance and backlash, the harmonics in order.
+/// (Only corrections with the loads are kept.)
+fn seen_key(arm: &DhParams, physics: &Physics, raw: &PreparedPoses) -> Vec<u64> {
     let n = arm.joints.len();
     let mut key = Vec::with_capacity(16 * n + 32);
-    key.extend([u64::from(loads), raw.len() as u64, n as u64]);
+    key.extend([raw.len() as u64, n as u64]);
     for j in &arm.joints {
         key.extend([j.a, j.d, j.alpha, j.theta, j.beta].map(f64::to_bits));
         key.extend([j.model as u64, j.kind as u64]);
