@@ -547,12 +547,12 @@ impl<'a, 'o> Search<'a, 'o> {
         // As many cells side by side as there are threads, so that the
         // progress moves on; the noise floor can stop the grid after any.
         let window = self.problem.objective.threads().max(1);
+        let mut count = |tally: &mut Tally| {
+            tally.grid_starts += 1;
+            progress(tally.started() as f64 / planned as f64);
+        };
         for cells in cells.chunks(window) {
-            let count = &mut |tally: &mut Tally| {
-                tally.grid_starts += 1;
-                progress(tally.started() as f64 / planned as f64);
-            };
-            let judged = self.refine_in_order(cells, tally, count, &|_| None)?;
+            let judged = self.refine_in_order(cells, tally, &mut count, &|_| None)?;
             if judged.is_some() {
                 return Ok(judged);
             }
@@ -572,6 +572,13 @@ impl<'a, 'o> Search<'a, 'o> {
     ) -> Result<Option<GlobalStop>, CalibrationError> {
         let joints = self.start.joint_count();
         let threads = self.problem.objective.threads().max(1);
+        let mut count = |tally: &mut Tally| {
+            tally.random_starts += 1;
+            progress(tally.started() as f64 / planned as f64);
+        };
+        let confirmed = |tally: &Tally| {
+            (tally.found.hits >= self.options.confirmations).then_some(GlobalStop::Agreement)
+        };
         let mut left = self.options.max_starts;
         while left > 0 {
             let window = threads.min(left);
@@ -583,14 +590,7 @@ impl<'a, 'o> Search<'a, 'o> {
                     *x.get_mut(id) = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
                 }
             }
-            let count = &mut |tally: &mut Tally| {
-                tally.random_starts += 1;
-                progress(tally.started() as f64 / planned as f64);
-            };
-            let confirmed = |tally: &Tally| {
-                (tally.found.hits >= self.options.confirmations).then_some(GlobalStop::Agreement)
-            };
-            let judged = self.refine_in_order(&starts, tally, count, &confirmed)?;
+            let judged = self.refine_in_order(&starts, tally, &mut count, &confirmed)?;
             if judged.is_some() {
                 return Ok(judged);
             }
