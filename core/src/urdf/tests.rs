@@ -1,4 +1,3 @@
-
 use super::parse::snap;
 use super::*;
 use crate::reference_model::position;
