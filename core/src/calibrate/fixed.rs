@@ -4,12 +4,103 @@
 //! corrections beyond geometry the data cannot separate; the tolerances
 //! carried onto the free partners of redundant parameters.
 
-use super::{CalibrationError, FixSpec, ModelOptions, prior};
+use super::{CalibrationError, FixSpec, ModelOptions, Phase, assess, prior};
 use crate::dataset::DataSet;
+use crate::error::OptionError;
 use crate::identify::{Identification, identify_from, open_directions_from};
 use crate::objective::Objective;
 use crate::params::{DhParams, ParamId};
 use crate::residuals::{Elimination, Layout, Normal};
+use crate::setting::Setting;
+
+/// What the fixed set's stage leaves for the solver and the assessment.
+pub(super) struct Settled {
+    /// The columns fitted.
+    pub(super) free: Vec<usize>,
+    pub(super) identification: Option<Identification>,
+    /// Why each fixed parameter is fixed.
+    pub(super) reasons: Vec<(ParamId, String)>,
+    /// Auxiliary columns held at their start, with why.
+    pub(super) held: Vec<(usize, String)>,
+    /// Tolerances carried onto free partners of redundant parameters.
+    pub(super) carried: Vec<prior::CarriedTolerance>,
+    /// The weak directions held at nominal, if any.
+    pub(super) holds: Option<crate::residuals::HoldTerm>,
+    pub(super) counts: assess::Counts,
+    /// Whether every data term states its noise (else σ is estimated).
+    pub(super) stated: bool,
+    /// The normal equations at the start over `free`, prior included: the
+    /// solver's first step.
+    pub(super) start_normal: Normal,
+    /// This stage's work.
+    pub(super) phase: Phase,
+}
+
+/// The fixed set's stage at `x0`: one pass over the data (every column)
+/// serves the identifiability analysis and, restricted to the free
+/// columns, the solver's first step; then the corrections the data cannot
+/// separate and the held blocks are taken out, and the prior completed
+/// (tolerances carried, weak directions held). Refuses a fit with nothing
+/// free, or with no more residuals than unknowns.
+pub(super) fn settle_fixed_set(
+    objective: &mut Objective<'_>,
+    layout: &Layout,
+    x0: &[f64],
+    model: &ModelOptions,
+    data: &DataSet,
+) -> Result<Settled, CalibrationError> {
+    let start = layout.geometry();
+    let timer = std::time::Instant::now();
+    let all: Vec<usize> = (0..layout.len()).collect();
+    let full = objective.normal_of(x0, &all, |t| !t.is_prior())?;
+    let FixedSet {
+        free,
+        identification,
+        reasons,
+        holds,
+    } = fixed_set(start, objective, model, &full, data)?;
+    let (mut free, mut held) = correction_columns(&full, layout, free)?;
+    hold_blocks(layout, &mut free, &mut held);
+    let (carried, holds) = complete_prior(objective, identification.as_ref(), holds, start, x0);
+    if free.is_empty() {
+        return Err(OptionError::new(
+            Setting::Fix,
+            model.fix.describe_for(start),
+            "every parameter is fixed: nothing is left to calibrate",
+        )
+        .into());
+    }
+    // The fixed set is the data's own (see [`prior`]); the prior joins
+    // every fit from here on.
+    let counts = assess::Counts::of(objective, &free);
+    let stated = objective.stated();
+    if counts.residuals() <= counts.unknowns() {
+        return Err(CalibrationError::TooFewResiduals {
+            residuals: counts.residuals(),
+            unknowns: counts.unknowns(),
+            free: free.len(),
+        });
+    }
+    let phase = Phase {
+        jacobian_evaluations: 1,
+        seconds: timer.elapsed().as_secs_f64(),
+        ..Phase::new("identify")
+    };
+    let mut start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
+    objective.add_terms(&mut start_normal, x0, |t| t.is_prior())?;
+    Ok(Settled {
+        free,
+        identification,
+        reasons,
+        held,
+        carried,
+        holds,
+        counts,
+        stated,
+        start_normal,
+        phase,
+    })
+}
 
 /// The free columns, the identifiability analysis behind them (`fix =
 /// auto`), why each fixed parameter is fixed and the weak directions to

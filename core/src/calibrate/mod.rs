@@ -90,7 +90,7 @@ use crate::dataset::DataSet;
 use crate::objective::Objective;
 use crate::params::DhParams;
 use crate::residuals::{Layout, Role, Term};
-use fixed::{FixedSet, complete_prior, fixed_set, hold_blocks};
+use fixed::settle_fixed_set;
 
 /// The solvers of [`calibrate`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -227,65 +227,24 @@ pub fn calibrate_with(
     )?;
     check_terms_for(solver.method(), &objective)?;
     let x0 = objective.start();
-    // One pass over the data at the start serves the identifiability
-    // analysis and, restricted to the free columns, the first step.
-    let timer = std::time::Instant::now();
-    let all: Vec<usize> = (0..layout.len()).collect();
-    let full = objective.normal_of(&x0, &all, |t| !t.is_prior())?;
-    let FixedSet {
-        free,
-        identification,
-        reasons,
-        holds,
-    } = fixed_set(start, &objective, model, &full, data)?;
-    let (mut free, mut held) = correction_columns(&full, layout, free)?;
-    hold_blocks(layout, &mut free, &mut held);
-    let (carried, holds) =
-        complete_prior(&mut objective, identification.as_ref(), holds, start, &x0);
-    if free.is_empty() {
-        return Err(OptionError::new(
-            Setting::Fix,
-            model.fix.describe_for(start),
-            "every parameter is fixed: nothing is left to calibrate",
-        )
-        .into());
-    }
-    // The fixed set is the data's own (see [`prior`]); the prior joins
-    // every fit from here on.
-    let counts = assess::Counts::of(&objective, &free);
-    // Whether every data term states its noise (else σ is estimated).
-    let stated = objective.stated();
-    if counts.residuals() <= counts.unknowns() {
-        return Err(CalibrationError::TooFewResiduals {
-            residuals: counts.residuals(),
-            unknowns: counts.unknowns(),
-            free: free.len(),
-        });
-    }
-    let identify_phase = Phase {
-        jacobian_evaluations: 1,
-        seconds: timer.elapsed().as_secs_f64(),
-        ..Phase::new("identify")
-    };
-    let mut start_normal = full.restrict(&free).ok_or(CalibrationError::Shape)?;
-    objective.add_terms(&mut start_normal, &x0, |t| t.is_prior())?;
+    let fixed = settle_fixed_set(&mut objective, layout, &x0, model, data)?;
     let task = Task {
         start,
         x: &x0,
         data,
         objective: &objective,
-        free: &free,
+        free: &fixed.free,
         model,
         settings,
-        stated_dof: stated.then_some(counts.dof()),
-        dof: counts.dof(),
-        start_normal,
+        stated_dof: fixed.stated.then_some(fixed.counts.dof()),
+        dof: fixed.counts.dof(),
+        start_normal: fixed.start_normal,
     };
     let mut outcome = solver.solve(task, ctx)?;
     // A solver of another crate may not check the token: what follows
     // (refits, covariance, leverage) is not started once it is set.
     ctx.check()?;
-    outcome.phases.insert(0, identify_phase);
+    outcome.phases.insert(0, fixed.phase);
     let setup = assess::Setup {
         start,
         x0: &x0,
@@ -293,14 +252,14 @@ pub fn calibrate_with(
         model,
         settings,
         method: solver.method(),
-        free,
-        identification,
-        reasons,
-        held,
-        counts,
-        stated,
-        carried,
-        holds,
+        free: fixed.free,
+        identification: fixed.identification,
+        reasons: fixed.reasons,
+        held: fixed.held,
+        counts: fixed.counts,
+        stated: fixed.stated,
+        carried: fixed.carried,
+        holds: fixed.holds,
     };
     assess::assess(setup, objective, outcome)
 }
