@@ -7,7 +7,9 @@ use super::{
     calibration_report,
 };
 use crate::corrections::Physics;
-use crate::session::{CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE};
+use crate::session::{
+    CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE, Validation,
+};
 
 /// The report (page and figures) of `report`, the session run on `problem`.
 ///
@@ -60,33 +62,7 @@ pub fn session_report(
         });
     }
     let v = &report.validation;
-    let mut validation = vec![ValidationRow {
-        name: "fitted".to_string(),
-        held_out: false,
-        figures: &v.fitted,
-        json: Some("/validation/fitted".to_string()),
-    }];
-    if let Some(h) = &v.held_out {
-        validation.push(ValidationRow {
-            name: format!("held out ({}{})", h.data_file, registered_note(h)),
-            held_out: true,
-            figures: &h.figures,
-            json: Some("/validation/held_out/figures".to_string()),
-        });
-    }
-    if let Some(cv) = &v.cross_validation {
-        // A fold that held out no touch or position (points on spheres
-        // alone) has its figures in the spheres' section and the verdict.
-        let folds = cv.folds.iter().enumerate();
-        for (i, f) in folds.filter(|(_, f)| !f.held_out.is_empty()) {
-            validation.push(ValidationRow {
-                name: format!("fold {} ({} points)", i + 1, f.held_out.len()),
-                held_out: true,
-                figures: &f.figures,
-                json: Some(format!("/validation/cross_validation/folds/{i}/figures")),
-            });
-        }
-    }
+    let validation = validation_rows(v);
     calibration_report(&CalibrationInput {
         title: format!("Calibration of arm `{}`", report.arm),
         inputs: inputs(report),
@@ -113,6 +89,39 @@ pub fn session_report(
         verdict: Some(&report.verdict),
         seed: report.seed,
     })
+}
+
+/// The validation table's rows: the fitted data, the held-out set, each
+/// cross-validation fold that held out touches or positions.
+fn validation_rows(v: &Validation) -> Vec<ValidationRow<'_>> {
+    let mut rows = vec![ValidationRow {
+        name: "fitted".to_string(),
+        held_out: false,
+        figures: &v.fitted,
+        json: Some("/validation/fitted".to_string()),
+    }];
+    if let Some(h) = &v.held_out {
+        rows.push(ValidationRow {
+            name: format!("held out ({}{})", h.data_file, registered_note(h)),
+            held_out: true,
+            figures: &h.figures,
+            json: Some("/validation/held_out/figures".to_string()),
+        });
+    }
+    if let Some(cv) = &v.cross_validation {
+        // A fold that held out no touch or position (points on spheres
+        // alone) has its figures in the spheres' section and the verdict.
+        let folds = cv.folds.iter().enumerate();
+        for (i, f) in folds.filter(|(_, f)| !f.held_out.is_empty()) {
+            rows.push(ValidationRow {
+                name: format!("fold {} ({} points)", i + 1, f.held_out.len()),
+                held_out: true,
+                figures: &f.figures,
+                json: Some(format!("/validation/cross_validation/folds/{i}/figures")),
+            });
+        }
+    }
+    rows
 }
 
 /// Per model beyond geometry the fit switched on, how far its fitted
