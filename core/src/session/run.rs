@@ -59,33 +59,11 @@ pub fn run(
         tools,
         touch_tools,
     } = evidence_reports(problem, &calibration, (before, after))?;
-    let held_out = match &problem.held_out {
-        Some(h) => Some(HeldOut {
-            data_file: h.data_file.clone(),
-            lengths_file: h.lengths_file.clone(),
-            figures: before_after_of(before, after, &h.data)?,
-            registered_on_itself: (unfitted_frames(&problem.data, &h.data).into_iter())
-                .cloned()
-                .collect(),
-        }),
-        None => None,
-    };
+    let held_out = held_out_of(problem, before, after)?;
     // The folds are calibrations of their own: not started once cancelled,
     // and each stops with the run.
     ctx.check()?;
-    let cross_validation = match problem.cross_validate {
-        Some(k) => Some(CrossValidation {
-            folds: cross_validate_cancellable(
-                problem.inputs(),
-                settings,
-                solver,
-                k,
-                ctx.cancel_token(),
-            )?,
-            seed: settings.seed,
-        }),
-        None => None,
-    };
+    let cross_validation = cross_validation_of(problem, settings, solver, ctx)?;
     let s = &problem.sources;
     let verdict = verdict_of(problem, &calibration, &fitted);
     let (uncertainty_map, uncertainty_maps_in_frames, uncertainty_maps_at_tools) =
@@ -124,6 +102,49 @@ pub fn run(
         uncertainty_maps_at_tools,
         start: Some(Box::new(problem.arm.clone())),
     })
+}
+
+/// The held-out data's figures for both arms, with the frames registered
+/// on the held-out data itself (none fitted saw them).
+fn held_out_of(
+    problem: &Problem,
+    before: ArmView<'_>,
+    after: ArmView<'_>,
+) -> Result<Option<HeldOut>, CalibrationError> {
+    let Some(h) = &problem.held_out else {
+        return Ok(None);
+    };
+    Ok(Some(HeldOut {
+        data_file: h.data_file.clone(),
+        lengths_file: h.lengths_file.clone(),
+        figures: before_after_of(before, after, &h.data)?,
+        registered_on_itself: (unfitted_frames(&problem.data, &h.data).into_iter())
+            .cloned()
+            .collect(),
+    }))
+}
+
+/// The cross-validation the problem asks for: its folds calibrated with the
+/// same solver, each stopped with the run.
+fn cross_validation_of(
+    problem: &Problem,
+    settings: &SolverSettings,
+    solver: &dyn Solver,
+    ctx: &Context,
+) -> Result<Option<CrossValidation>, CalibrationError> {
+    let Some(k) = problem.cross_validate else {
+        return Ok(None);
+    };
+    Ok(Some(CrossValidation {
+        folds: cross_validate_cancellable(
+            problem.inputs(),
+            settings,
+            solver,
+            k,
+            ctx.cancel_token(),
+        )?,
+        seed: settings.seed,
+    }))
 }
 
 /// The sections of the evidence beyond touches and positions that a
