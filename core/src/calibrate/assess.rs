@@ -5,14 +5,16 @@
 //! outliers, the predicted position uncertainty, the plausibility checks);
 //! and the assembly of the [`Calibration`].
 
+use nalgebra::DMatrix;
+
 use super::anneal::AnnealTrace;
-use super::checks::{ChiSquare, gross_corrections};
+use super::checks::{ChiSquare, PositionUncertainty, gross_corrections};
 use super::global::GlobalTrace;
 use super::lm::{LmIteration, LmResult, levenberg_marquardt};
 use super::robust::RobustFit;
 use super::{
     Calibration, CalibrationError, Checks, CorrelationMatrix, Method, ModelOptions, Outcome, Phase,
-    SolverSettings, SolverSummary, Stop,
+    PriorReport, SolverSettings, SolverSummary, Stop,
 };
 use crate::dataset::DataSet;
 use crate::identify::{Identification, strong_correlations};
@@ -204,18 +206,7 @@ fn assemble(
 ) -> Result<Calibration, CalibrationError> {
     let Covariance { cov, sigma0, dof } = covariance;
     let stated = setup.stated;
-    let prior = match (&setup.model.prior, fit.objective.prior()) {
-        (Some(t), Some(term)) => Some(super::PriorReport::new(
-            t,
-            term,
-            &fit.x,
-            &setup.free,
-            &cov,
-            setup.start,
-            setup.carried.clone(),
-        )),
-        _ => None,
-    };
+    let prior = prior_report(&fit, &setup, &cov);
     let parameters = estimates(&mut fit, &setup, &cov);
     let auxiliary = auxiliary(&fit, &setup, &cov);
     let layout = fit.objective.layout();
@@ -230,19 +221,7 @@ fn assemble(
     fit.extra_jacobians += 1;
     let (outlier_threshold, outliers) = super::checks::outliers(&fit.objective, &t2);
     let (outliers, outlier_screen, screen_phase) = screen_outliers(&fit, &setup, outliers)?;
-    // The columns that move a probe: the geometry's and the corrections'
-    // (whose Jacobian columns follow the chain's, at the fitted values).
-    let (geometry_free, geometry_cov) =
-        geometry_covariance(&setup.free, layout.arm_columns(), &cov);
-    let effects = touch_effects(&fit, &setup)?;
-    let position_uncertainty = position_uncertainty(
-        &fit.params,
-        setup.data,
-        effects.as_ref(),
-        &geometry_free,
-        &geometry_cov,
-        touch_sigma_found(fit.unit_sigma, stated, sigma0),
-    )?;
+    let position_uncertainty = predicted_uncertainty(&fit, &setup, &cov, sigma0)?;
     let implausible = implausible_blocks(&fit, &setup);
     let physics = (layout.corrections()).map(|(block, cols)| block.physics_at(&fit.x[cols]));
     fit.phases.extend(screen_phase);
@@ -295,4 +274,43 @@ fn assemble(
         robust: fit.robust.map(|(robust, _)| robust),
         prior,
     })
+}
+
+/// What the prior did, when the fit had one.
+fn prior_report(fit: &Fit<'_>, setup: &Setup<'_>, cov: &DMatrix<f64>) -> Option<PriorReport> {
+    match (&setup.model.prior, fit.objective.prior()) {
+        (Some(t), Some(term)) => Some(PriorReport::new(
+            t,
+            term,
+            &fit.x,
+            &setup.free,
+            cov,
+            setup.start,
+            setup.carried.clone(),
+        )),
+        _ => None,
+    }
+}
+
+/// The predicted uncertainty of a probed position over the data's poses,
+/// from the covariance of the columns that move a probe: the geometry's
+/// and the corrections' (whose Jacobian columns follow the chain's, at the
+/// fitted values).
+fn predicted_uncertainty(
+    fit: &Fit<'_>,
+    setup: &Setup<'_>,
+    cov: &DMatrix<f64>,
+    sigma0: f64,
+) -> Result<Option<PositionUncertainty>, CalibrationError> {
+    let layout = fit.objective.layout();
+    let (geometry_free, geometry_cov) = geometry_covariance(&setup.free, layout.arm_columns(), cov);
+    let effects = touch_effects(fit, setup)?;
+    position_uncertainty(
+        &fit.params,
+        setup.data,
+        effects.as_ref(),
+        &geometry_free,
+        &geometry_cov,
+        touch_sigma_found(fit.unit_sigma, setup.stated, sigma0),
+    )
 }
