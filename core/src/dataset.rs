@@ -793,7 +793,7 @@ impl DataSet {
     /// use aacmm_core::{DataSet, io::ReferenceLength};
     /// let labels = ["A", "A", "A", "B", "B", "B"];
     /// let q: Vec<Vec<f64>> = (0..6).map(|i| vec![0.1 * i as f64; 6]).collect();
-    /// let ab = ReferenceLength { a: "A".into(), b: "B".into(), distance: 500.0, uncertainty: None, line: 1 };
+    /// let ab = ReferenceLength::new("A", "B", 500.0, None);
     /// let data = DataSet::from_touches(&labels, &q, &[ab]).unwrap();
     /// assert_eq!((data.len(), data.points().len(), data.references().len()), (6, 2, 1));
     /// let e = DataSet::from_touches(&labels[..5], &q[..5], &[]).unwrap_err();

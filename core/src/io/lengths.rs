@@ -31,8 +31,37 @@ pub struct ReferenceLength {
     pub distance: f64,
     /// Standard uncertainty of the distance, mm, `>= 0`, if stated.
     pub uncertainty: Option<f64>,
-    /// 1-based line in the source file (for messages).
+    /// 1-based line in the source file, for messages; 0 for a length made
+    /// in memory ([`ReferenceLength::new`]): messages then name the source
+    /// alone.
     pub line: usize,
+}
+
+impl ReferenceLength {
+    /// A length made in memory, from no file's line: between the points
+    /// labelled `a` and `b`, `distance_mm` apart, with the standard
+    /// uncertainty `uncertainty_mm` if stated. The values are checked where
+    /// a data set takes them ([`crate::DataSet::with_lengths`]).
+    ///
+    /// ```
+    /// use aacmm_core::io::ReferenceLength;
+    /// let l = ReferenceLength::new("S1", "S2", 500.0, Some(0.002));
+    /// assert_eq!((l.distance, l.line), (500.0, 0));
+    /// ```
+    pub fn new(
+        a: impl Into<String>,
+        b: impl Into<String>,
+        distance_mm: f64,
+        uncertainty_mm: Option<f64>,
+    ) -> ReferenceLength {
+        ReferenceLength {
+            a: a.into(),
+            b: b.into(),
+            distance: distance_mm,
+            uncertainty: uncertainty_mm,
+            line: 0,
+        }
+    }
 }
 
 const COLUMNS: [&str; 4] = ["point_a", "point_b", "distance", "uncertainty"];
@@ -171,7 +200,7 @@ pub(crate) fn check_lengths_against<S: AsRef<str>>(
 ///
 /// ```
 /// use aacmm_core::io::{ReferenceLength, write_lengths};
-/// let l = ReferenceLength { a: "S1".into(), b: "S2".into(), distance: 500.0, uncertainty: None, line: 0 };
+/// let l = ReferenceLength::new("S1", "S2", 500.0, None);
 /// let mut out = Vec::new();
 /// write_lengths(&mut out, &[l]).unwrap();
 /// assert_eq!(String::from_utf8(out).unwrap(), "point_a,point_b,distance\nS1,S2,500.0\n");
@@ -322,6 +351,17 @@ mod tests {
         // Pairs sharing a point are distinct.
         let l = parse_lengths(&format!("{h}S1,S2,1\nS2,S3,1\nS3,S1,1\n"), F).unwrap();
         assert_eq!(l.len(), 3);
+    }
+
+    #[test]
+    fn a_length_made_in_memory_is_named_by_its_source_alone() {
+        let l = [ReferenceLength::new("A", "Z", 500.0, Some(0.002))];
+        assert_eq!(l[0].line, 0);
+        let e = check_lengths_against(&l, &["A", "B"], "<arrays>").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "<arrays>: field `point_b`: unknown point `Z`; known points: `A`, `B`"
+        );
     }
 
     #[test]
