@@ -770,3 +770,18 @@ fn the_probe_ball_diameter_round_trips_and_is_checked() {
     let e = parse_arm(&with("nan"), F).unwrap_err();
     assert_at(&e, line, Some("ball_diameter_mm"), "not a finite number");
 }
+
+#[test]
+fn a_harmonic_of_no_whole_order_is_refused_in_one_line() {
+    let text = edit(
+        "a = 35.0\nd = 250.0\n",
+        "a = 35.0\nd = 250.0\nharmonics = [[1.5, 0.01, 0.0]]\n",
+    );
+    let e = err(&text).to_string();
+    let max = crate::corrections::MAX_HARMONIC_ORDER;
+    let want = format!(
+        "field `harmonics`: joint 3: expected [order, sin, cos] with a whole order from 1 to {max} \
+         and amplitudes in deg"
+    );
+    assert!(e.ends_with(&want), "{e}");
+}

@@ -151,14 +151,7 @@ impl ArmFile {
         };
         let au = self.angle_unit;
         let mut physics = Physics::default();
-        for (i, j) in self
-            .joint
-            .get_ref()
-            .iter()
-            .map(Spanned::get_ref)
-            .enumerate()
-        {
-            let ctx = format!("joint {}: ", i + 1);
+        for (i, (ctx, j)) in self.joints_in_context().enumerate() {
             physics.link_masses.push(mass(&j.mass_kg, &j.com_mm, &ctx)?);
             physics
                 .compliance
@@ -174,7 +167,7 @@ impl ArmFile {
                         h.span(),
                         "harmonics",
                         format!(
-                            "{ctx}expected [order, sin, cos] with a whole order from 1 to                              {MAX_HARMONIC_ORDER} and amplitudes in {au}"
+                            "{ctx}expected [order, sin, cos] with a whole order from 1 to {MAX_HARMONIC_ORDER} and amplitudes in {au}"
                         ),
                     ));
                 }
@@ -254,17 +247,17 @@ impl ArmFile {
         Ok(())
     }
 
+    /// The joints, base to probe, each with the context its messages start
+    /// with (`joint 3: `).
+    fn joints_in_context(&self) -> impl Iterator<Item = (String, &JointFile)> {
+        let joints = self.joint.get_ref().iter().map(Spanned::get_ref);
+        (joints.enumerate()).map(|(i, j)| (format!("joint {}: ", i + 1), j))
+    }
+
     /// Every number of the file, base to probe, with its context and key.
     fn numbers(&self) -> Vec<(String, &'static str, &Spanned<f64>)> {
         let mut out = Vec::new();
-        for (i, j) in self
-            .joint
-            .get_ref()
-            .iter()
-            .map(Spanned::get_ref)
-            .enumerate()
-        {
-            let ctx = format!("joint {}: ", i + 1);
+        for (ctx, j) in self.joints_in_context() {
             for (field, v) in [("theta", &j.theta), ("alpha", &j.alpha), ("a", &j.a)] {
                 out.push((ctx.clone(), field, v));
             }
