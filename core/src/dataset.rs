@@ -842,49 +842,7 @@ impl DataSet {
             }
             poses.try_push(label.as_ref(), row, i + 1).map_err(memory)?;
         }
-        let mut pairs = std::collections::HashSet::new();
-        for (i, l) in lengths.iter().enumerate() {
-            let bad = |field: &str, m: String| Err(InputError::field(FILE, i + 1, field, m));
-            let pair = if l.a < l.b {
-                (&l.a, &l.b)
-            } else {
-                (&l.b, &l.a)
-            };
-            if !pairs.insert(pair) {
-                return bad(
-                    "point_b",
-                    format!(
-                        "the pair {}–{} is given twice",
-                        crate::error::shown(&l.a),
-                        crate::error::shown(&l.b)
-                    ),
-                );
-            }
-            if !(l.distance.is_finite() && l.distance > 0.0) {
-                return bad(
-                    "distance",
-                    format!(
-                        "{}: must be a positive number",
-                        crate::error::short(l.distance)
-                    ),
-                );
-            }
-            if let Some(u) = l.uncertainty.filter(|u| !(u.is_finite() && *u >= 0.0)) {
-                return bad(
-                    "uncertainty",
-                    format!("{}: must be a finite number ≥ 0", crate::error::short(u)),
-                );
-            }
-            if l.a == l.b {
-                return bad(
-                    "point_b",
-                    format!(
-                        "{} again: a length needs two points",
-                        crate::error::quoted(&l.a)
-                    ),
-                );
-            }
-        }
+        check_length_values(lengths, FILE, |i, _| i + 1)?;
         let lengths: Vec<ReferenceLength> = lengths
             .iter()
             .enumerate()
@@ -972,9 +930,11 @@ impl DataSet {
     /// Adds reference lengths read from `file`, naming the points by label.
     ///
     /// # Errors
-    /// An unknown point (field `point_a` or `point_b`). (A length joining a
-    /// point to itself, or a pair given twice, is refused by
-    /// [`parse_lengths`](crate::io::parse_lengths) already.)
+    /// An unknown point (field `point_a` or `point_b`); a pair given twice, a
+    /// length from a point to itself, a distance that is not positive or an
+    /// uncertainty that is not a finite number ≥ 0 (which
+    /// [`parse_lengths`](crate::io::parse_lengths) refuses already, and
+    /// lengths made in memory meet here).
     ///
     /// ```
     /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_lengths, parse_poses}};
@@ -994,12 +954,13 @@ impl DataSet {
         lengths: &[ReferenceLength],
         file: &str,
     ) -> Result<DataSet, InputError> {
+        // Lengths made in memory have met no reader: their values are
+        // checked here as a file's are when it is read.
+        check_length_values(lengths, file, |_, l| l.line)?;
         let labels: Vec<&str> = self.points.iter().map(|p| p.label.as_str()).collect();
         crate::io::check_lengths_against(lengths, &labels, file)?;
         self.check_lengths_unambiguous(lengths, file)?;
         let index: HashMap<&str, usize> = labels.iter().enumerate().map(|(i, l)| (*l, i)).collect();
-        // The file reader already refused a point joined to itself and a
-        // pair given twice; what is left is whether the labels exist.
         let mut references = Vec::with_capacity(lengths.len());
         for l in lengths {
             let (a, b) = (index[l.a.as_str()], index[l.b.as_str()]);
@@ -1625,10 +1586,97 @@ fn room_for_touches(poses: &Poses, file: &str) -> Result<(), InputError> {
         .map_err(|e| InputError::memory(file, e))
 }
 
+/// Refuses a pair of points given twice (either order), a distance that is
+/// not a positive number, an uncertainty that is not a finite number ≥ 0,
+/// and a length from a point to itself; `line(i, l)` places length `i` in
+/// `file` for the message.
+fn check_length_values(
+    lengths: &[ReferenceLength],
+    file: &str,
+    line: impl Fn(usize, &ReferenceLength) -> usize,
+) -> Result<(), InputError> {
+    let mut pairs = std::collections::HashSet::new();
+    for (i, l) in lengths.iter().enumerate() {
+        let bad = |field: &str, m: String| Err(InputError::field(file, line(i, l), field, m));
+        let pair = if l.a < l.b {
+            (&l.a, &l.b)
+        } else {
+            (&l.b, &l.a)
+        };
+        if !pairs.insert(pair) {
+            return bad(
+                "point_b",
+                format!(
+                    "the pair {}–{} is given twice",
+                    crate::error::shown(&l.a),
+                    crate::error::shown(&l.b)
+                ),
+            );
+        }
+        if !(l.distance.is_finite() && l.distance > 0.0) {
+            return bad(
+                "distance",
+                format!(
+                    "{}: must be a positive number",
+                    crate::error::short(l.distance)
+                ),
+            );
+        }
+        if let Some(u) = l.uncertainty.filter(|u| !(u.is_finite() && *u >= 0.0)) {
+            return bad(
+                "uncertainty",
+                format!("{}: must be a finite number ≥ 0", crate::error::short(u)),
+            );
+        }
+        if l.a == l.b {
+            return bad(
+                "point_b",
+                format!(
+                    "{} again: a length needs two points",
+                    crate::error::quoted(&l.a)
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::io::{AngleUnit, parse_poses};
+
+    /// Lengths made in memory meet the checks a file's reader makes, each
+    /// refusal naming the source alone (they have no line).
+    #[test]
+    fn lengths_made_in_memory_are_checked_as_a_files_are() {
+        let data = || DataSet::from_labels(&["A", "A", "A", "B", "B", "B"], "m").unwrap();
+        let refused = |lengths: &[ReferenceLength]| {
+            data()
+                .with_lengths(lengths, "<memory>")
+                .unwrap_err()
+                .to_string()
+        };
+        let l = |a: &str, b: &str, d: f64, u: Option<f64>| ReferenceLength::new(a, b, d, u);
+        assert_eq!(
+            refused(&[l("A", "B", -1.0, None)]),
+            "<memory>: field `distance`: -1: must be a positive number"
+        );
+        assert_eq!(
+            refused(&[l("A", "B", 500.0, Some(f64::NAN))]),
+            "<memory>: field `uncertainty`: NaN: must be a finite number ≥ 0"
+        );
+        assert_eq!(
+            refused(&[l("A", "A", 500.0, None)]),
+            "<memory>: field `point_b`: `A` again: a length needs two points"
+        );
+        assert_eq!(
+            refused(&[l("A", "B", 500.0, None), l("B", "A", 500.0, None)]),
+            "<memory>: field `point_b`: the pair B–A is given twice"
+        );
+        let ok = data().with_lengths(&[l("A", "B", 500.0, Some(0.002))], "<memory>");
+        assert_eq!(ok.unwrap().references().len(), 1);
+    }
 
     /// The orientations a positions file gives travel with its rows: into
     /// the data set, through a shape that re-prepares the readings, and

@@ -40,8 +40,9 @@ pub struct ReferenceLength {
 impl ReferenceLength {
     /// A length made in memory, from no file's line: between the points
     /// labelled `a` and `b`, `distance_mm` apart, with the standard
-    /// uncertainty `uncertainty_mm` if stated. The values are checked where
-    /// a data set takes them ([`crate::DataSet::with_lengths`]).
+    /// uncertainty `uncertainty_mm` if stated. A data set checks the
+    /// values when it takes them, as a file's reader does
+    /// ([`crate::DataSet::with_lengths`], [`crate::DataSet::from_touches`]).
     ///
     /// ```
     /// use aacmm_core::io::ReferenceLength;

@@ -147,7 +147,7 @@ pub(super) fn schema_error(
 }
 
 /// What to say about the missing key `key` (`ctx`: the joint it is missing from).
-pub(super) fn missing(key: &str, ctx: &str) -> String {
+fn missing(key: &str, ctx: &str) -> String {
     match key {
         "joint" => "no joints: add one [[joint]] table per joint, base to probe".to_string(),
         "probe" => "missing [probe] table: the probe centre `x`, `y`, `z` in the last joint's \
@@ -166,7 +166,7 @@ pub(super) fn missing(key: &str, ctx: &str) -> String {
 /// "expected …, found …" for a value of the wrong type; `found` and
 /// `expected` are serde's words (`integer `7``, `f64`, `a sequence`) or a
 /// TOML type name; `in_angle_unit` (` in deg`) completes the limits' shape.
-pub(super) fn invalid_type(key: &str, found: &str, expected: &str, in_angle_unit: &str) -> String {
+fn invalid_type(key: &str, found: &str, expected: &str, in_angle_unit: &str) -> String {
     let expected = match (expected, key) {
         ("a sequence", "joint") => "[[joint]] tables (an array of tables, one per joint)".into(),
         ("a sequence", _) => format!("`[min, max]`{in_angle_unit}"),

@@ -54,8 +54,9 @@
 //! `min >= max`. A unit that looks wrong (lengths over 10 m in metres, angles
 //! over a full turn in radians) gives a [`Warning`].
 //!
-//! The schema is a serde type; serde's messages are reworded here so that
-//! every error names the key, its line, and the joint or table it is in.
+//! The schema is a serde type (`schema`); serde's messages are reworded
+//! (`messages`) so that every error names the key, its line, and the joint
+//! or table it is in.
 
 use std::path::Path;
 

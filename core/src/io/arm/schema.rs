@@ -39,21 +39,21 @@ pub(crate) struct ArmFile {
     reference_temperature_c: Option<Spanned<f64>>,
     joint: Spanned<Vec<Spanned<JointFile>>>,
     probe: ProbeFile,
-    /// The named tool points ([`super::tools`]); absent when none.
+    /// The named tool points ([`crate::io::tools`]); absent when none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     tool: Vec<Spanned<ToolFile>>,
-    /// Stated tolerances: read by [`super::prior`], never written.
+    /// Stated tolerances: read by [`crate::io::prior`], never written.
     #[serde(rename = "prior", default, skip_serializing)]
     _prior: Option<serde::de::IgnoredAny>,
-    /// A calibration's frame registrations: read by [`super::frames`],
+    /// A calibration's frame registrations: read by [`crate::io::frames`],
     /// never written here.
     #[serde(rename = "frame", default, skip_serializing)]
     _frame: Option<serde::de::IgnoredAny>,
     /// A calibration's tool mount of orientations: read by
-    /// [`super::frames::parse_mount`], never written here.
+    /// [`crate::io::frames::parse_mount`], never written here.
     #[serde(rename = "mount", default, skip_serializing)]
     _mount: Option<serde::de::IgnoredAny>,
-    /// A calibration's verdict: read by [`super::verdict`], never written
+    /// A calibration's verdict: read by [`crate::io::verdict`], never written
     /// here.
     #[serde(rename = "verdict", default, skip_serializing)]
     _verdict: Option<serde::de::IgnoredAny>,
@@ -278,7 +278,7 @@ struct ProbeFile {
     ball_diameter_mm: Option<Spanned<f64>>,
 }
 
-/// One `[[tool]]` table: a named tool point ([`super::tools`]).
+/// One `[[tool]]` table: a named tool point ([`crate::io::tools`]).
 #[derive(Serialize, Deserialize)]
 #[serde(
     deny_unknown_fields,
