@@ -136,50 +136,7 @@ fn beyond_effects(
     let (Some(fitted), false) = (&report.calibration.physics, fit.is_empty()) else {
         return Ok(Vec::new());
     };
-    let bare = Physics {
-        compliance: Vec::new(),
-        harmonics: Vec::new(),
-        backlash: Vec::new(),
-        cte_per_k: None,
-        drift_mm_per_h: None,
-        ..fitted.clone()
-    };
-    let mut models: Vec<(&str, Physics)> = Vec::new();
-    if !fit.compliance.is_empty() {
-        let only = Physics {
-            compliance: fitted.compliance.clone(),
-            ..bare.clone()
-        };
-        models.push(("joint compliance", only));
-    }
-    if !fit.harmonics.is_empty() {
-        let only = Physics {
-            harmonics: fitted.harmonics.clone(),
-            ..bare.clone()
-        };
-        models.push(("encoder harmonics", only));
-    }
-    if !fit.backlash.is_empty() {
-        let only = Physics {
-            backlash: fitted.backlash.clone(),
-            ..bare.clone()
-        };
-        models.push(("backlash", only));
-    }
-    if fit.thermal {
-        let only = Physics {
-            cte_per_k: fitted.cte_per_k,
-            ..bare.clone()
-        };
-        models.push(("thermal expansion", only));
-    }
-    if fit.drift {
-        let only = Physics {
-            drift_mm_per_h: fitted.drift_mm_per_h,
-            ..bare.clone()
-        };
-        models.push(("drift", only));
-    }
+    let models = each_model_alone(fitted, fit);
     let params = &report.calibration.params;
     let kernel = crate::kernel::ArmKernel::new(params)?;
     let data = problem.data();
@@ -222,6 +179,60 @@ fn beyond_effects(
         });
     }
     Ok(out)
+}
+
+/// Per model beyond geometry the fit switched on (`fit`), the fitted arm's
+/// physics with that model's fitted values alone: compliance, harmonics,
+/// backlash, thermal expansion, drift, in that order.
+fn each_model_alone(
+    fitted: &Physics,
+    fit: &crate::corrections::Beyond,
+) -> Vec<(&'static str, Physics)> {
+    let bare = Physics {
+        compliance: Vec::new(),
+        harmonics: Vec::new(),
+        backlash: Vec::new(),
+        cte_per_k: None,
+        drift_mm_per_h: None,
+        ..fitted.clone()
+    };
+    let mut models: Vec<(&'static str, Physics)> = Vec::new();
+    if !fit.compliance.is_empty() {
+        let only = Physics {
+            compliance: fitted.compliance.clone(),
+            ..bare.clone()
+        };
+        models.push(("joint compliance", only));
+    }
+    if !fit.harmonics.is_empty() {
+        let only = Physics {
+            harmonics: fitted.harmonics.clone(),
+            ..bare.clone()
+        };
+        models.push(("encoder harmonics", only));
+    }
+    if !fit.backlash.is_empty() {
+        let only = Physics {
+            backlash: fitted.backlash.clone(),
+            ..bare.clone()
+        };
+        models.push(("backlash", only));
+    }
+    if fit.thermal {
+        let only = Physics {
+            cte_per_k: fitted.cte_per_k,
+            ..bare.clone()
+        };
+        models.push(("thermal expansion", only));
+    }
+    if fit.drift {
+        let only = Physics {
+            drift_mm_per_h: fitted.drift_mm_per_h,
+            ..bare.clone()
+        };
+        models.push(("drift", only));
+    }
+    models
 }
 
 /// The 3-D errors at the reference positions of the fitted and held-out
