@@ -851,7 +851,7 @@ impl DataSet {
                 ..l.clone()
             })
             .collect();
-        DataSet::from_poses(&poses, FILE)?.with_lengths(&lengths, FILE)
+        DataSet::from_poses(&poses, FILE)?.with_checked_lengths(&lengths, FILE)
     }
 
     /// A data set from flat arrays, as a C caller holds them: `q` the
@@ -902,7 +902,7 @@ impl DataSet {
         if lengths.is_empty() {
             return Ok(data);
         }
-        data.with_lengths(&array_lengths(lengths, &touches)?, "lengths")
+        data.with_checked_lengths(&array_lengths(lengths, &touches)?, "lengths")
     }
 
     /// A data set of labelled points without readings (`joints() == 0`): for
@@ -950,13 +950,25 @@ impl DataSet {
     /// assert!(e.to_string().starts_with("l.csv:2: field `point_b`: unknown point `C`"));
     /// ```
     pub fn with_lengths(
-        mut self,
+        self,
         lengths: &[ReferenceLength],
         file: &str,
     ) -> Result<DataSet, InputError> {
         // Lengths made in memory have met no reader: their values are
         // checked here as a file's are when it is read.
         check_length_values(lengths, file, |_, l| l.line)?;
+        self.with_checked_lengths(lengths, file)
+    }
+
+    /// [`DataSet::with_lengths`] of lengths whose values the caller has
+    /// checked already (the arrays' constructors check theirs with their
+    /// own row numbers and names): what is left is whether the labels
+    /// exist and name one point each.
+    fn with_checked_lengths(
+        mut self,
+        lengths: &[ReferenceLength],
+        file: &str,
+    ) -> Result<DataSet, InputError> {
         let labels: Vec<&str> = self.points.iter().map(|p| p.label.as_str()).collect();
         crate::io::check_lengths_against(lengths, &labels, file)?;
         self.check_lengths_unambiguous(lengths, file)?;
