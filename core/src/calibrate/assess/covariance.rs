@@ -254,16 +254,23 @@ impl UncertaintySums<'_> {
         let Some(n) = n else { return };
         // The position's covariance J C Jᵀ, its six distinct entries (xx,
         // yy, zz, xy, xz, yz) per lane: its eigenvalues, not only its trace,
-        // give the radius that covers 95 % of a 3-D error.
+        // give the radius that covers 95 % of a 3-D error. As J (C Jᵀ), one
+        // row of C Jᵀ at a time: 3q² + 6q products a pose, not the 12q² of
+        // each entry's double sum.
         const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
         let mut m = [[0.0; LANES]; 6];
-        for a in 0..q {
-            let (ja, row) = (&jf[a], &self.c[a * q..(a + 1) * q]);
-            for (jb, &cab) in jf.iter().zip(row) {
-                for (e, &(r, s)) in PAIRS.iter().enumerate() {
+        for (b, jb) in jf.iter().enumerate() {
+            let mut y = [[0.0; LANES]; 3];
+            for (ja, &cba) in jf.iter().zip(&self.c[b * q..(b + 1) * q]) {
+                for s in 0..3 {
                     for l in 0..LANES {
-                        m[e][l] += cab * ja[r][l] * jb[s][l];
+                        y[s][l] += cba * ja[s][l];
                     }
+                }
+            }
+            for (e, &(r, s)) in PAIRS.iter().enumerate() {
+                for l in 0..LANES {
+                    m[e][l] += jb[r][l] * y[s][l];
                 }
             }
         }
@@ -297,13 +304,18 @@ mod tests {
         let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
         for i in (0..data.len()).step_by(step) {
             kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
+            // J (C Jᵀ): row b of C Jᵀ summed over a in order, then m over b.
             let mut m = [[0.0; 3]; 3];
-            for (a, &ca) in free.iter().enumerate() {
-                for (b, &cb) in free.iter().enumerate() {
-                    for (r, mr) in m.iter_mut().enumerate() {
-                        for (s, v) in mr.iter_mut().enumerate() {
-                            *v += cov[(a, b)] * jac[ca][r] * jac[cb][s];
-                        }
+            for (b, &cb) in free.iter().enumerate() {
+                let mut y = [0.0; 3];
+                for (a, &ca) in free.iter().enumerate() {
+                    for (s, v) in y.iter_mut().enumerate() {
+                        *v += cov[(b, a)] * jac[ca][s];
+                    }
+                }
+                for (r, mr) in m.iter_mut().enumerate() {
+                    for (s, v) in mr.iter_mut().enumerate() {
+                        *v += jac[cb][r] * y[s];
                     }
                 }
             }
