@@ -4,7 +4,7 @@
 //! One rule for every command that writes (README, "Writing"): an output
 //! is never overwritten silently. An output file that exists, or an output
 //! directory that holds results of any aacmm command
-//! ([`aacmm_core::output::earlier_results`] names them), is refused unless `--force`;
+//! ([`aacmm_core::report::earlier_results`] names them), is refused unless `--force`;
 //! `--force` overwrites the command's own files and deletes nothing.
 //! Devices (`/dev/stdout`) are always written.
 
@@ -90,7 +90,7 @@ pub fn check_output_dir(
         }
         not_an_input(flag, &path, inputs)?;
     }
-    let found = aacmm_core::output::earlier_results(dir);
+    let found = aacmm_core::report::earlier_results(dir);
     if !force && !found.is_empty() {
         let shown: Vec<&str> = found.iter().take(4).copied().collect();
         bail!(

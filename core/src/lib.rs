@@ -76,7 +76,6 @@ pub mod kernel;
 pub mod memory;
 pub mod metrics;
 pub mod objective;
-pub mod output;
 pub mod parallel;
 pub mod params;
 pub mod plan;
@@ -84,7 +83,6 @@ pub mod prelude;
 pub(crate) mod random;
 #[cfg(feature = "reference-model")]
 pub mod reference_model;
-#[cfg(feature = "report")]
 pub mod report;
 pub mod residuals;
 pub mod session;

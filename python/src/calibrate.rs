@@ -570,7 +570,7 @@ impl Calibration {
             self.report
                 .write(&self.problem, &dir, self.seconds)
                 .map_err(|e| match e {
-                    aacmm_core::output::WriteError::Report(e) => Error::from(e),
+                    aacmm_core::report::WriteError::Report(e) => Error::from(e),
                     e => Error::new(Kind::Io, e.to_string()),
                 })
         })

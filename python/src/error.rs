@@ -66,7 +66,7 @@ pub(crate) enum Kind {
 
 /// Refuses an output directory `dir` that is empty (the current directory
 /// by accident) or that holds results of any aacmm command (the library's
-/// rule, [`aacmm_core::output::earlier_results`]: a calibration's, a
+/// rule, [`aacmm_core::report::earlier_results`]: a calibration's, a
 /// campaign's, a report's) unless `force`, as the command line refuses
 /// without `--force`.
 pub(crate) fn check_out_dir(dir: &std::path::Path, force: bool) -> Result<()> {
@@ -76,7 +76,7 @@ pub(crate) fn check_out_dir(dir: &std::path::Path, force: bool) -> Result<()> {
             "dir: empty; give a directory (\".\" for the current one)",
         ));
     }
-    let found = aacmm_core::output::earlier_results(dir);
+    let found = aacmm_core::report::earlier_results(dir);
     if !force && let Some(name) = found.first() {
         return Err(Error::new(
             Kind::Io,

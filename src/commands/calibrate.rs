@@ -13,7 +13,8 @@ use aacmm_core::io::source_name;
 use aacmm_core::report::{
     BEYOND_SVG, CALIBRATION_FILES, HTML_FILE, POSITIONS_SVG, UNCERTAINTY_MAP_SVG,
 };
-use aacmm_core::session::{self, CALIBRATED_FILE, Problem, REPORT_FILE, TIMING_FILE};
+use aacmm_core::report::{CALIBRATED_FILE, REPORT_FILE, TIMING_FILE};
+use aacmm_core::session::{self, Problem};
 use anyhow::{Context as _, Result, bail};
 use clap::ValueEnum;
 

@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use aacmm_core::io::Arm;
-use aacmm_core::session::{CalibrationReport, REPORT_FILE};
+use aacmm_core::report::REPORT_FILE;
+use aacmm_core::session::CalibrationReport;
 use anyhow::{Context, Result, anyhow, bail};
 
 /// The report in `dir` (given as `flag`) and its file's path; refused, by

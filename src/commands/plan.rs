@@ -19,7 +19,8 @@ use aacmm_core::plan::{
     SampleError, SummaryContext, plan, sample_positions, sample_sphere_points,
     sample_touches_observed, sphere_candidates, summary,
 };
-use aacmm_core::session::{CalibrationReport, REPORT_FILE};
+use aacmm_core::report::REPORT_FILE;
+use aacmm_core::session::CalibrationReport;
 use aacmm_core::simulate::{DEFAULT_SPHERE_DIAMETER_MM, SimError, SocketPlan};
 use anyhow::{Context, Result, anyhow, bail};
 use clap::{ArgGroup, ValueEnum};

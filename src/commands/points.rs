@@ -7,8 +7,8 @@ use aacmm_core::io::frames::parse_frames;
 use aacmm_core::io::{Arm, Poses, source_name, write_points, write_points_u95, write_tool_poses};
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::plan::{InFrame, position_covariances};
+use aacmm_core::report::REPORT_FILE;
 use aacmm_core::residuals::Frame;
-use aacmm_core::session::REPORT_FILE;
 use aacmm_core::stats::coverage::{eigenvalues, radius};
 use anyhow::{Context, Result, anyhow, bail};
 

@@ -112,7 +112,7 @@ pub fn run(args: Args) -> Result<()> {
     ];
     inputs.extend(args.input.data.as_deref().map(|d| ("--data", d)));
     inputs.extend(args.lengths.as_deref().map(|l| ("--lengths", l)));
-    let report_file = (args.calibration.as_ref()).map(|d| d.join(aacmm_core::session::REPORT_FILE));
+    let report_file = (args.calibration.as_ref()).map(|d| d.join(aacmm_core::report::REPORT_FILE));
     inputs.extend(report_file.as_deref().map(|p| ("--calibration", p)));
     if let Some(json) = &args.json {
         check_output_file("--json", json, &inputs, args.force)?;

@@ -6,10 +6,9 @@ use super::{
     Arms, CalibrationInput, Measured, PoseErrors, Report, ReportError, ValidationRow,
     calibration_report,
 };
+use super::{CALIBRATED_FILE, REPORT_FILE, TIMING_FILE};
 use crate::corrections::Physics;
-use crate::session::{
-    CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE, Validation,
-};
+use crate::session::{CalibrationReport, Problem, Validation};
 
 /// The report (page and figures) of `report`, the session run on `problem`.
 ///

@@ -7,9 +7,12 @@ use std::sync::OnceLock;
 use roxmltree::{Document, Node};
 
 use super::*;
+use crate::calibrate::Calibration;
 use crate::calibrate::validate::before_after;
 use crate::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
+use crate::dataset::DataSet;
 use crate::io::Arm;
+use crate::params::DhParams;
 use crate::residuals::Noise;
 use crate::simulate::{CampaignSettings, ErrorModel, simulate};
 

@@ -23,16 +23,15 @@ mod checks;
 pub(crate) mod evaluation;
 pub(crate) mod identification;
 mod map;
+mod nouns;
 mod position_evaluation;
 pub mod probe;
 mod problem;
 pub mod request;
 mod run;
 pub mod spheres;
-mod summary;
 pub mod tools;
 mod verdict;
-mod writing;
 
 pub use evaluation::EvaluationReport;
 pub use identification::IdentifyReport;
@@ -44,9 +43,8 @@ pub use calibration_report::{CalibrationReport, CrossValidation, HeldOut, Units,
 pub use checks::check_units;
 pub use problem::{HeldOutData, Problem, Sources, room_to_calibrate};
 pub use run::run;
-pub use writing::{CALIBRATED_FILE, REPORT_FILE, TIMING_FILE};
 
 // What the session's other modules use from these, by `super::`.
 use crate::calibrate::Calibration;
 use crate::calibrate::validate::BeforeAfter;
-use summary::{noun, outliers_noun};
+pub(crate) use nouns::{noun, outliers_noun};

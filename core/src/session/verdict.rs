@@ -24,7 +24,6 @@ mod tests;
 mod words;
 
 pub(super) use checks::verdict_of;
-pub(super) use words::verdict_line;
 
 /// Whether a calibration may be used: exit 0 of the command line. Written
 /// into `calibration.json` and `calibrated.toml` in the command line's

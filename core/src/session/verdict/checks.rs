@@ -12,7 +12,7 @@ impl Note {
     /// what that leaves out of every uncertainty, per 0.1 mm the parameter
     /// held for scale is off (the data cannot say by how much it is), and
     /// the remedy.
-    pub(in crate::session) fn scale(c: &Calibration) -> Option<Note> {
+    pub(crate) fn scale(c: &Calibration) -> Option<Note> {
         let e = (c.parameters.iter())
             .find(|e| e.fixed.as_deref().is_some_and(|r| r.starts_with("scale:")))?;
         let value = e.nominal.abs();

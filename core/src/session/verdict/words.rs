@@ -3,7 +3,7 @@
 
 use crate::calibrate::checks::{ChiSquare, GrossCorrection, Outlier};
 
-use super::{Note, Reason, Setting, Spelling, StatedNoise, Verdict};
+use super::{Note, Reason, Setting, Spelling, StatedNoise};
 
 impl std::fmt::Display for Reason {
     /// The command line's words.
@@ -412,20 +412,4 @@ fn stated_noise_words(noise: &StatedNoise, spelling: Spelling) -> (String, Strin
     };
     let separator = if spelling == Spelling::C { ", " } else { " " };
     (set.join(separator), unstated)
-}
-
-/// The verdict, and the notes that come with it (the same as the JSON's
-/// `/verdict`): a χ² outside its range that is not a refusal is said here,
-/// not only in the file.
-pub(in crate::session) fn verdict_line(v: &Verdict) -> String {
-    let words = v.words(Spelling::Cli);
-    let mut t = if v.usable {
-        "Verdict: usable\n".to_string()
-    } else {
-        format!("Verdict: NOT usable — {}\n", words.reasons.join("; "))
-    };
-    for n in &words.notes {
-        t += &format!("  note: {n}\n");
-    }
-    t + "\n"
 }

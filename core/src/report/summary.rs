@@ -3,8 +3,7 @@
 use crate::calibrate::Calibration;
 use crate::calibrate::validate::Figures;
 
-use super::verdict::verdict_line;
-use super::{CalibrationReport, Note, Spelling, Validation};
+use crate::session::{CalibrationReport, Note, Spelling, Validation, Verdict, noun, outliers_noun};
 
 impl CalibrationReport {
     /// The summary every front end prints: the solver, the dof, every
@@ -248,38 +247,11 @@ fn plural(noun: &str) -> String {
     }
 }
 
-/// What the observations are: touches, reference positions, points on
-/// spheres, or several of them.
-pub(super) fn noun(c: &Calibration) -> &'static str {
-    let has = |term: &str| c.dof.rows_of(term) > 0;
-    match (c.dof.touch_rows > 0, has("positions"), has("spheres")) {
-        (false, true, false) => "position",
-        (false, false, true) => "sphere point",
-        (true, false, false) | (false, false, false) => "touch",
-        _ => "observation",
-    }
-}
-
 /// [`noun`], or `observation` when orientations are observed too.
 fn any_noun(c: &Calibration) -> &'static str {
     match c.dof.rows_of("orientations") > 0 {
         true => "observation",
         false => noun(c),
-    }
-}
-
-/// What the outliers `o` are: their one kind
-/// ([`crate::calibrate::checks::Outlier::noun`], `noun` for touches and
-/// positions), or `observation` when they are of several.
-pub(super) fn outliers_noun<'a>(
-    o: &'a [crate::calibrate::checks::Outlier],
-    noun: &'a str,
-) -> &'a str {
-    let first = o.first().map_or(noun, |x| x.noun(noun));
-    if o.iter().all(|x| x.noun(noun) == first) {
-        first
-    } else {
-        "observation"
     }
 }
 
@@ -760,4 +732,20 @@ fn prior_table(p: &crate::calibrate::PriorReport) -> String {
         );
     }
     t
+}
+
+/// The verdict, and the notes that come with it (the same as the JSON's
+/// `/verdict`): a χ² outside its range that is not a refusal is said here,
+/// not only in the file.
+fn verdict_line(v: &Verdict) -> String {
+    let words = v.words(Spelling::Cli);
+    let mut t = if v.usable {
+        "Verdict: usable\n".to_string()
+    } else {
+        format!("Verdict: NOT usable — {}\n", words.reasons.join("; "))
+    };
+    for n in &words.notes {
+        t += &format!("  note: {n}\n");
+    }
+    t + "\n"
 }

@@ -5,7 +5,7 @@ use serde::Serialize;
 
 use crate::io::{AngleUnit, LengthUnit, arm_to_toml};
 
-use super::{CalibrationReport, Problem, Spelling};
+use crate::session::{CalibrationReport, Problem, Spelling};
 
 /// The calibrated arm, in the arm-file schema.
 pub const CALIBRATED_FILE: &str = "calibrated.toml";

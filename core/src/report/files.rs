@@ -11,7 +11,8 @@
 
 use std::path::Path;
 
-use crate::session::{CALIBRATED_FILE, CalibrationReport, Problem, REPORT_FILE, TIMING_FILE};
+use super::{CALIBRATED_FILE, REPORT_FILE, TIMING_FILE};
+use crate::session::{CalibrationReport, Problem};
 use crate::simulate::{
     CAMPAIGN_FILE, LENGTHS_FILE, POSES_FILE, POSITIONS_FILE, SOCKETS_FILE, TRUE_ARM_FILE,
 };
@@ -54,11 +55,11 @@ pub fn result_files() -> Vec<&'static str> {
 /// ```
 /// let dir = std::env::temp_dir().join(format!("aacmm-doc-earlier-{}", std::process::id()));
 /// std::fs::create_dir_all(&dir).unwrap();
-/// assert!(aacmm_core::output::earlier_results(&dir).is_empty());
+/// assert!(aacmm_core::report::earlier_results(&dir).is_empty());
 /// std::fs::write(dir.join("notes.txt"), "mine").unwrap();
-/// assert!(aacmm_core::output::earlier_results(&dir).is_empty());
+/// assert!(aacmm_core::report::earlier_results(&dir).is_empty());
 /// std::fs::write(dir.join("campaign.toml"), "").unwrap();
-/// assert_eq!(aacmm_core::output::earlier_results(&dir), ["campaign.toml"]);
+/// assert_eq!(aacmm_core::report::earlier_results(&dir), ["campaign.toml"]);
 /// std::fs::remove_dir_all(&dir).unwrap();
 /// ```
 pub fn earlier_results(dir: &Path) -> Vec<&'static str> {
