@@ -67,6 +67,7 @@ mod tests;
 mod files;
 mod json;
 mod summary;
+mod text;
 
 #[cfg(feature = "report")]
 pub use acceptance::{ACCEPTANCE_FILES, acceptance_report};
