@@ -127,7 +127,14 @@ impl<'d> TouchTerm<'d> {
                         }
                     })?;
             }
-            let values = scratch.point(&self.weights[point.touches.clone()], m);
+            // On AVX2's wider registers where the CPU has them (the same
+            // bits: no fused multiply-add): the parameter share's sums are
+            // most of a point's work.
+            let weights = &self.weights[point.touches.clone()];
+            let values = crate::simd::with_avx2(
+                #[inline(always)]
+                || scratch.point(weights, m),
+            );
             let at = point.touches.start - offset;
             out[at..at + values.len()].copy_from_slice(values);
         }
@@ -779,6 +786,7 @@ impl PointScratch {
     /// The point's standardised residuals from its touches' positions (and
     /// Jacobians, when `mt`, the `q × q` block of `N⁻¹` transposed, is not
     /// empty) under their weights `a`.
+    #[inline(always)]
     fn point(&mut self, a: &[Sym3], mt: &[f64]) -> &[f64] {
         let (n, q) = (a.len(), self.mean.len());
         let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
@@ -826,6 +834,7 @@ impl PointScratch {
     /// so the same bits as one row at a time — without its three dependent
     /// chains of `q` additions per row, which left the arithmetic units
     /// idle on their latency.
+    #[inline(always)]
     fn parameter_share(&mut self, a: &Sym3, t: usize, mt: &[f64]) -> f64 {
         let q = self.mean.len();
         let j = &self.jac[t * q..(t + 1) * q];
