@@ -54,7 +54,6 @@ mod error;
 mod fixed;
 mod frames;
 pub mod global;
-mod inverse;
 pub(crate) mod lm;
 pub mod options;
 pub mod prior;

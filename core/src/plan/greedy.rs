@@ -221,7 +221,7 @@ impl<'a> Greedy<'a> {
         for a in 0..p {
             m[(a, a)] += epsilon;
         }
-        let inv = m.cholesky()?.inverse();
+        let inv = crate::residuals::cholesky_inverse(&m.cholesky()?);
         let c: Vec<f64> = (0..p * p).map(|i| inv[(i / p, i % p)]).collect();
         let n = j.len();
         let mut u = vec![0.0; 3 * p * n];

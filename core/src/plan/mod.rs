@@ -810,7 +810,7 @@ fn hedge_weights(design: &Design, tau: f64) -> Vec<f64> {
     let rows = deviations(design, &(0..n).collect::<Vec<_>>());
     let p = design.blocks.p;
     let m = gram(&rows, p) + DMatrix::identity(p, p) * EPSILON;
-    let Some(c) = m.cholesky().map(|c| c.inverse()) else {
+    let Some(c) = m.cholesky().map(|c| crate::residuals::cholesky_inverse(&c)) else {
         return vec![1.0; n];
     };
     let h: Vec<f64> = rows
@@ -1266,7 +1266,7 @@ fn determined_inverse(m: DMatrix<f64>) -> Option<DMatrix<f64>> {
     let chol = m.cholesky()?;
     let l = chol.l_dirty();
     let determined = top > 0.0 && (0..p).all(|a| l[(a, a)].powi(2) > 1e-12 * top);
-    determined.then(|| chol.inverse())
+    determined.then(|| crate::residuals::cholesky_inverse(&chol))
 }
 
 /// Row counts the curve is evaluated at: eighths of `to`, and `count`.

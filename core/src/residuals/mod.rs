@@ -59,6 +59,7 @@ mod beyond;
 pub mod blocks;
 mod folds;
 mod hold;
+mod inverse;
 mod lengths;
 mod orientations;
 pub mod positions;
@@ -87,6 +88,7 @@ pub use blocks::{
 pub use folds::{HeldOutScorer, TermFold};
 pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
+pub(crate) use inverse::cholesky_inverse;
 pub(crate) use lengths::LengthTerm;
 pub(crate) use orientations::{OrientationTerm, mount_start};
 pub(crate) use positions::PositionTerm;
@@ -658,7 +660,7 @@ impl ParameterLeverage {
     pub fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
         let p = normal.free.len();
         let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj) / scale;
-        let inv = n.cholesky()?.inverse();
+        let inv = inverse::cholesky_inverse(&n.cholesky()?);
         let n_inv: Vec<f64> = (0..p * p).map(|i| inv[(i / p, i % p)]).collect();
         n_inv
             .iter()

@@ -39,7 +39,7 @@ pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
     let p = setup.free.len();
     let n = DMatrix::from_row_slice(p, p, &normal.jtj);
     let invert = |m: DMatrix<f64>| match m.cholesky() {
-        Some(ch) => crate::calibrate::inverse::cholesky_inverse(&ch),
+        Some(ch) => crate::residuals::cholesky_inverse(&ch),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
     let cov = match fit.objective.prior() {

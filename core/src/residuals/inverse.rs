@@ -13,8 +13,18 @@
 use nalgebra::DMatrix;
 use nalgebra::linalg::Cholesky;
 
-/// `N⁻¹` from `ch`, the Cholesky factorisation of `N` (p × p).
+/// `N⁻¹` from `ch`, the Cholesky factorisation of `N` (p × p): in the AVX2
+/// copy where the CPU has it (the same operations, no fused multiply-add:
+/// the same bits), the columns four to a register.
 pub(crate) fn cholesky_inverse(ch: &Cholesky<f64, nalgebra::Dyn>) -> DMatrix<f64> {
+    crate::simd::with_avx2(
+        #[inline(always)]
+        || inverse_of(ch),
+    )
+}
+
+#[inline(always)]
+fn inverse_of(ch: &Cholesky<f64, nalgebra::Dyn>) -> DMatrix<f64> {
     let l = ch.l_dirty();
     let d = l.nrows();
     // x[r * d + k]: row r of the solution's column k (the identity at first).
