@@ -1,5 +1,4 @@
-//! What the front ends write, above both the session (its results) and
-//! the report (its page): a calibration's files ([`CalibrationReport::files`],
+//! The files a command writes: a calibration's ([`CalibrationReport::files`],
 //! [`CalibrationReport::write`]), an evaluation's page, and the one rule
 //! of every command that writes: an output is never
 //! overwritten silently. An output file that exists, or an output
@@ -151,7 +150,6 @@ impl crate::session::EvaluationReport<'_> {
     /// # Errors
     ///
     /// When a figure cannot be drawn.
-    #[cfg(feature = "report")]
     pub fn html(
         &self,
         json_file: Option<&str>,

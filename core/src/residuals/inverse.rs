@@ -1,4 +1,5 @@
-//! The covariance `N⁻¹` from the Cholesky factor of `N`, bit for bit what
+//! `N⁻¹` from the Cholesky factor of `N` — the covariance, the outlier
+//! test's leverage, the plan's information inverses — bit for bit what
 //! nalgebra's `Cholesky::inverse` returns, but with the columns of the
 //! identity solved side by side.
 //!

@@ -1,9 +1,10 @@
 //! What `evaluate` reports, built once for every front end: the figures of
 //! an arm on measured touches ([`crate::metrics`]) with what was evaluated,
 //! as the JSON of `aacmm evaluate --json` ([`EvaluationReport::write_json`])
-//! and the tables it prints ([`EvaluationReport::write_summary`]). The
-//! eq. 19 rows of every pair of points, which grow as the square of the
-//! points, are streamed into both, never collected.
+//! and the tables it prints ([`EvaluationReport::write_summary`]), both
+//! rendered in [`crate::report`]. The eq. 19 rows of every pair of points,
+//! which grow as the square of the points, are streamed into both, never
+//! collected.
 
 use super::Sources;
 use crate::dataset::DataSet;

@@ -3,7 +3,7 @@
 //! ([`crate::identify`]), with the prior's rank and conditioning when the arm
 //! has tolerances ([`crate::calibrate::prior::conditioning`]), as the JSON of
 //! `aacmm identify --json` ([`IdentifyReport::to_json`]) and the tables it
-//! prints ([`IdentifyReport::summary`]).
+//! prints ([`IdentifyReport::summary`]), both rendered in [`crate::report`].
 
 use serde::{Deserialize, Serialize};
 

@@ -47,4 +47,5 @@ pub use run::run;
 // What the session's other modules use from these, by `super::`.
 use crate::calibrate::Calibration;
 use crate::calibrate::validate::BeforeAfter;
+// What the observations are called: the verdict's words and the report's.
 pub(crate) use nouns::{noun, outliers_noun};

@@ -288,7 +288,7 @@ mod tests {
     use super::*;
 
     /// [`position_uncertainty`] one pose at a time, as before the poses went
-    /// four at a time: the reference the lanes must match bit for bit.
+    /// eight at a time: the reference the lanes must match bit for bit.
     fn one_at_a_time(
         params: &DhParams,
         data: &DataSet,
