@@ -1,5 +1,5 @@
 //! The files a command writes: a calibration's ([`CalibrationReport::files`],
-//! [`CalibrationReport::write`]), an evaluation's page, and the one rule
+//! [`CalibrationReport::write`]), and the one rule
 //! of every command that writes: an output is never
 //! overwritten silently. An output file that exists, or an output
 //! directory that holds results of any aacmm command (a calibration's, a
@@ -139,64 +139,4 @@ pub enum WriteError {
     #[cfg(feature = "report")]
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
-}
-
-#[cfg(feature = "report")]
-impl crate::session::EvaluationReport<'_> {
-    /// The HTML report of the evaluation (the page and its figures);
-    /// `json_file` names the JSON written beside it, if any, whose numbers
-    /// the page then points to.
-    ///
-    /// # Errors
-    ///
-    /// When a figure cannot be drawn.
-    pub fn html(
-        &self,
-        json_file: Option<&str>,
-    ) -> Result<crate::report::Report, crate::report::ReportError> {
-        use crate::report::{EvaluationInput, Measured, evaluation_report};
-        let mut inputs = vec![
-            (
-                "arm".to_string(),
-                format!("`{}` ({})", self.arm, self.arm_file),
-            ),
-            (
-                "touches".to_string(),
-                format!(
-                    "{}: {} touches of {} points",
-                    self.data_file,
-                    self.data.len(),
-                    self.data.points().len()
-                ),
-            ),
-            (
-                "reference lengths".to_string(),
-                match &self.lengths_file {
-                    Some(l) => format!("{l}: {}", self.data.references().len()),
-                    None => "none (scale is not tested)".to_string(),
-                },
-            ),
-        ];
-        if let Some(json) = json_file {
-            inputs.push((
-                "written beside".to_string(),
-                format!(
-                    "{json} (every number of the tables that is also there is marked with its \
-                     place)"
-                ),
-            ));
-        }
-        evaluation_report(&EvaluationInput {
-            title: format!("Evaluation of arm `{}`", self.arm),
-            inputs,
-            measured: Measured {
-                data: self.data,
-                held_out: false,
-                before: None,
-                after: self.xyz,
-            },
-            arm: self.arm.clone(),
-            evaluation_json: json_file.map(|_| "/evaluation".to_string()),
-        })
-    }
 }

@@ -350,6 +350,61 @@ pub(crate) fn evaluation_report(input: &EvaluationInput) -> Result<Report, Repor
     Ok(Report { html, figures })
 }
 
+impl crate::session::EvaluationReport<'_> {
+    /// The HTML report of the evaluation (the page and its figures);
+    /// `json_file` names the JSON written beside it, if any, whose numbers
+    /// the page then points to.
+    ///
+    /// # Errors
+    ///
+    /// When a figure cannot be drawn.
+    pub fn html(&self, json_file: Option<&str>) -> Result<Report, ReportError> {
+        let mut inputs = vec![
+            (
+                "arm".to_string(),
+                format!("`{}` ({})", self.arm, self.arm_file),
+            ),
+            (
+                "touches".to_string(),
+                format!(
+                    "{}: {} touches of {} points",
+                    self.data_file,
+                    self.data.len(),
+                    self.data.points().len()
+                ),
+            ),
+            (
+                "reference lengths".to_string(),
+                match &self.lengths_file {
+                    Some(l) => format!("{l}: {}", self.data.references().len()),
+                    None => "none (scale is not tested)".to_string(),
+                },
+            ),
+        ];
+        if let Some(json) = json_file {
+            inputs.push((
+                "written beside".to_string(),
+                format!(
+                    "{json} (every number of the tables that is also there is marked with its \
+                     place)"
+                ),
+            ));
+        }
+        evaluation_report(&EvaluationInput {
+            title: format!("Evaluation of arm `{}`", self.arm),
+            inputs,
+            measured: Measured {
+                data: self.data,
+                held_out: false,
+                before: None,
+                after: self.xyz,
+            },
+            arm: self.arm.clone(),
+            evaluation_json: json_file.map(|_| "/evaluation".to_string()),
+        })
+    }
+}
+
 /// The examples these items' documentation gave while they were public,
 /// kept as tests.
 #[cfg(test)]
