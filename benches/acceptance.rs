@@ -10,7 +10,7 @@ use aacmm_core::acceptance::{
     Calibrated, Draws, LDiaRadius, Measured, ReadingNoise, Settings, SpherePoints, parse_mpe,
     predict, verify,
 };
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::params::DhParams;
 use aacmm_core::simulate::{AcceptanceSettings, SphereSettings, simulate_spheres, with_acceptance};

@@ -49,7 +49,7 @@ use aacmm_core::calibrate::{
     Task, calibrate,
 };
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::{Noise, Normal};
@@ -438,7 +438,7 @@ fn beyond_positions(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement
 }
 
 fn plan(c: &mut Criterion) {
-    use aacmm_core::io::Poses;
+    use aacmm_core::domain::Poses;
     use aacmm_core::plan::{Measure, PlanSettings, plan};
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/ur5-tracker/arm.toml");
     let ur5 = aacmm_core::read_arm(std::path::Path::new(path))
@@ -470,11 +470,11 @@ fn plan(c: &mut Criterion) {
 }
 
 /// `n` random poses of `arm` within its limits, as a poses file holds them.
-fn positions_pool(arm: &Arm, n: usize) -> aacmm_core::io::Poses {
+fn positions_pool(arm: &Arm, n: usize) -> aacmm_core::domain::Poses {
     use rand::{RngExt, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     let joints = arm.params.joint_count();
-    let mut pool = aacmm_core::io::Poses::new(joints);
+    let mut pool = aacmm_core::domain::Poses::new(joints);
     for i in 0..n {
         let q: Vec<f64> = (0..joints)
             .map(|j| match arm.limits.get(j).copied().flatten() {

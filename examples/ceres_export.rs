@@ -21,7 +21,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use aacmm_core::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};

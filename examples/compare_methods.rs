@@ -23,7 +23,7 @@
 use std::time::Instant;
 
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings, calibrate, validate};
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::objective::weighted_cost;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;

@@ -56,7 +56,8 @@ use aacmm_core::calibrate::validate::placements::{leave_one_placement_out, place
 use aacmm_core::calibrate::{ModelOptions, SolverSettings};
 use aacmm_core::corrections::Beyond;
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{AngleUnit, Arm, read_arm, read_lengths, read_poses};
+use aacmm_core::domain::Arm;
+use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses};
 use aacmm_core::session::{CalibrationReport, HeldOutData, Problem};
 use anyhow::{Context as _, bail};
 

@@ -26,7 +26,8 @@ use std::path::Path;
 
 use aacmm_core::calibrate::{Method, ModelOptions, SolverSettings};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{Arm, Poses, Positions, read_arm};
+use aacmm_core::domain::{Arm, Poses, Positions};
+use aacmm_core::io::read_arm;
 use aacmm_core::plan::{Criterion, Measure, PlanSettings, plan};
 use aacmm_core::residuals::Noise;
 use aacmm_core::residuals::positions::register;
@@ -59,7 +60,7 @@ struct World {
     pool: Poses,
     /// Positions: the pool's measured rows; touches: the campaign.
     positions: Option<Positions>,
-    lengths: Vec<aacmm_core::io::ReferenceLength>,
+    lengths: Vec<aacmm_core::domain::ReferenceLength>,
 }
 
 fn arm(path: &str) -> Result<Arm> {

@@ -23,8 +23,8 @@
 
 use aacmm_core::calibrate::validate::figures;
 use aacmm_core::calibrate::{Loss, Method, ModelOptions, Robust, SolverSettings};
+use aacmm_core::domain::Arm;
 use aacmm_core::geometry::rigid_distance;
-use aacmm_core::io::Arm;
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId, ParamKind, wrap};
 use aacmm_core::residuals::Noise;

@@ -3,7 +3,8 @@
 
 use std::ffi::c_char;
 
-use aacmm_core::io::{Arm, Rejected, read_arm_with, source_name};
+use aacmm_core::domain::Arm;
+use aacmm_core::io::{Rejected, read_arm_with, source_name};
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::params::{ChainShape, DhParams, ParamId, param_count};
 

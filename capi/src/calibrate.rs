@@ -4,7 +4,8 @@ use std::ffi::c_char;
 
 use aacmm_core::calibrate::Termination;
 use aacmm_core::dataset::{ArrayLength, DataSet};
-use aacmm_core::io::{AngleUnit, Arm};
+use aacmm_core::domain::Arm;
+use aacmm_core::io::AngleUnit;
 use aacmm_core::params::ParamId;
 use aacmm_core::residuals::Frame;
 use aacmm_core::session::{CalibrationReport, Reason, Request, Sources, Spelling};

@@ -11,8 +11,8 @@ use aacmm_core::calibrate::{
     check_threads,
 };
 use aacmm_core::corrections::Beyond;
+use aacmm_core::domain::Positions;
 use aacmm_core::error::OptionError;
-use aacmm_core::io::Positions;
 use aacmm_core::params::{MAX_JOINTS, supported_joints_text};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::Request;
@@ -1166,7 +1166,8 @@ mod tests {
     use super::*;
     use crate::error::aacmm_last_error_message;
     use aacmm_core::dataset::DataSet;
-    use aacmm_core::io::{Arm, read_arm};
+    use aacmm_core::domain::Arm;
+    use aacmm_core::io::read_arm;
     use aacmm_core::params::DhParams;
 
     /// What the library's request makes of `o` for `arm`.

@@ -5,8 +5,8 @@
 
 use std::ffi::c_char;
 
+use aacmm_core::domain::{DEFAULT_FRAME, Positions};
 use aacmm_core::error::quoted;
-use aacmm_core::io::{DEFAULT_FRAME, Positions};
 use aacmm_core::params::{supported_joints_text, supports_joints};
 
 use crate::error::{AacmmStatus, Error};
@@ -199,7 +199,7 @@ pub(crate) fn with_tools(
 /// unit length within the reader's tolerance — each refusal naming the
 /// index (`AACMM_STATUS_LENGTH` for a length other than 0 or `4 n`).
 pub(crate) fn orientations(q: &[f64], n: usize) -> Result<Vec<Option<[f64; 4]>>, Error> {
-    use aacmm_core::io::positions::UNIT_QUATERNION_TOLERANCE;
+    use aacmm_core::domain::UNIT_QUATERNION_TOLERANCE;
     if q.is_empty() {
         return Ok(vec![None; n]);
     }

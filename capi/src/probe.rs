@@ -5,8 +5,9 @@
 
 use std::ffi::c_char;
 
+use aacmm_core::domain::{Arm, DEFAULT_TOOL};
 use aacmm_core::io::spheres::read_spheres;
-use aacmm_core::io::{AngleUnit, Arm, DEFAULT_TOOL, source_name};
+use aacmm_core::io::{AngleUnit, source_name};
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::Spelling;
 use aacmm_core::session::probe::{

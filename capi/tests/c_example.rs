@@ -13,7 +13,8 @@ use std::process::Command;
 
 use aacmm_core::calibrate::{FixSpec, ModelOptions, SolverSettings, Termination, calibrate};
 use aacmm_core::dataset::DataSet;
-use aacmm_core::io::{AngleUnit, Arm, Positions, read_arm, read_lengths, read_poses, source_name};
+use aacmm_core::domain::{Arm, Positions};
+use aacmm_core::io::{AngleUnit, read_arm, read_lengths, read_poses, source_name};
 use aacmm_core::kernel::{ArmKernel, Jacobians, PreparedPoses};
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;

@@ -33,8 +33,9 @@ use aacmm_capi::{
     aacmm_calibration_reason_count, aacmm_calibration_report, aacmm_calibration_summary,
     aacmm_calibration_verdict, aacmm_calibration_verdict_notes,
 };
+use aacmm_core::domain::Arm;
 use aacmm_core::io::positions::write_positions;
-use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, read_arm, write_poses};
+use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, read_arm, write_poses};
 use aacmm_core::simulate::{
     CampaignSettings, ErrorModel, PositionSettings, simulate, simulate_positions,
 };

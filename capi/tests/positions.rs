@@ -31,8 +31,9 @@ use aacmm_capi::{
     aacmm_calibration_uncertainty_map_name, aacmm_calibration_uncertainty_map_region,
 };
 use aacmm_core::dataset::DataSet;
+use aacmm_core::domain::{Arm, Positions};
 use aacmm_core::identify::identify;
-use aacmm_core::io::{AngleUnit, Arm, LengthUnit, Positions, write_arm};
+use aacmm_core::io::{AngleUnit, LengthUnit, write_arm};
 use aacmm_core::params::DhParams;
 use aacmm_core::plan::UncertaintyMap;
 use aacmm_core::residuals::{Frame, Noise};

@@ -16,8 +16,8 @@ use std::fmt;
 use std::ops::Range;
 
 use crate::corrections::{Beyond, Conditions, Effects, Physics};
+use crate::domain::{Poses, Positions, ReferenceLength};
 use crate::error::InputError;
-use crate::io::{Poses, Positions, ReferenceLength};
 use crate::kernel::PreparedPoses;
 use crate::params::DhParams;
 
@@ -318,10 +318,10 @@ pub struct DataSet {
 /// The tools that touched a data set's points: several probes. A point
 /// touched by two tools is two points (the ball's centre in a socket
 /// depends on the ball), each tool's points contiguous, the default
-/// tool's first ([`crate::io::Poses`]'s order of tools).
+/// tool's first ([`crate::domain::Poses`]'s order of tools).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TouchTools {
-    /// The tools' names, the default ([`crate::io::DEFAULT_TOOL`]) first.
+    /// The tools' names, the default ([`crate::domain::DEFAULT_TOOL`]) first.
     names: Vec<String>,
     /// Per tool, its nominal offset (mm, the last joint's frame) once
     /// resolved against the arm's ([`DataSet::with_tools`]); `None` for
@@ -790,7 +790,7 @@ impl DataSet {
     /// row (touch) or length.
     ///
     /// ```
-    /// use aacmm_core::{DataSet, io::ReferenceLength};
+    /// use aacmm_core::{DataSet, domain::ReferenceLength};
     /// let labels = ["A", "A", "A", "B", "B", "B"];
     /// let q: Vec<Vec<f64>> = (0..6).map(|i| vec![0.1 * i as f64; 6]).collect();
     /// let ab = ReferenceLength::new("A", "B", 500.0, None);
@@ -1176,7 +1176,7 @@ impl DataSet {
     ///
     /// # Errors
     ///
-    /// As `crate::io::Positions::resolve_tools`: a row naming a tool
+    /// As `crate::domain::Positions::resolve_tools`: a row naming a tool
     /// `tools` does not have (with the known tools), a tool seen in one row
     /// only.
     pub fn with_tools(mut self, tools: &crate::io::ToolNames) -> Result<DataSet, InputError> {
@@ -1233,7 +1233,7 @@ impl DataSet {
         if !self.points.is_empty() {
             // Every point the tool's: one run of points, in today's order.
             self.tools = Some(TouchTools {
-                names: vec![crate::io::DEFAULT_TOOL.to_string(), name.to_string()],
+                names: vec![crate::domain::DEFAULT_TOOL.to_string(), name.to_string()],
                 offsets: vec![None, None],
                 of_point: vec![1; self.points.len()],
             });

@@ -16,7 +16,7 @@
 
 use thiserror::Error;
 
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::params::{DhParams, JointModel};
 
 /// A D-H joint whose `|α|` is within this many degrees of 0 or 180° is

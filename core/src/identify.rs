@@ -1469,7 +1469,7 @@ mod exact_data_tests {
     use crate::simulate::{CampaignSettings, ErrorModel, simulate};
 
     fn campaign(encoder_noise_deg: f64, lengths: usize) -> (DhParams, DataSet) {
-        let nominal = crate::io::Arm::without_limits("t", DhParams::paper_nominal());
+        let nominal = crate::domain::Arm::without_limits("t", DhParams::paper_nominal());
         let mut settings = CampaignSettings::new(2, ErrorModel::Paper, 6, 10);
         settings.reference_lengths = lengths;
         settings.encoder_noise_deg = encoder_noise_deg;
@@ -1555,7 +1555,7 @@ mod plainly_closed_tests {
     /// on campaigns of several sizes and arms; both answers occur.
     #[test]
     fn the_shortcut_never_closes_what_the_analysis_finds_open() {
-        let nominal = crate::io::Arm::without_limits("t", DhParams::paper_nominal());
+        let nominal = crate::domain::Arm::without_limits("t", DhParams::paper_nominal());
         let (mut shortcut, mut open, mut agreed_closed) = (0, 0, 0);
         for (seed, sockets, touches, errors) in [
             (1, 10, 10, ErrorModel::Paper),

@@ -67,6 +67,7 @@ pub mod calibrate;
 pub mod corrections;
 mod damping;
 pub mod dataset;
+pub mod domain;
 pub mod error;
 pub mod geometry;
 pub mod hayati;
@@ -97,7 +98,8 @@ pub use calibrate::{
     Calibration, CalibrationError, FixSpec, Method, ModelOptions, SolverSettings, calibrate,
 };
 pub use dataset::DataSet;
-pub use io::{Arm, read_arm};
+pub use domain::Arm;
+pub use io::read_arm;
 pub use metrics::evaluate;
 pub use params::{DhParams, ParamId};
 pub use residuals::Noise;

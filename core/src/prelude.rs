@@ -53,8 +53,9 @@ pub use crate::calibrate::{
     Robust, Solver, SolverSettings, Stop, Task, calibrate, calibrate_with,
 };
 pub use crate::dataset::DataSet;
+pub use crate::domain::Arm;
 pub use crate::error::{InputError, OptionError};
-pub use crate::io::{AngleUnit, Arm, LengthUnit, read_arm};
+pub use crate::io::{AngleUnit, LengthUnit, read_arm};
 pub use crate::metrics::evaluate;
 pub use crate::objective::Objective;
 pub use crate::params::{DhParams, ParamId};

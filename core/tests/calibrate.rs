@@ -3,8 +3,8 @@
 use aacmm_core::calibrate::{
     Calibration, FixSpec, ModelOptions, SolverSettings, calibrate, validate,
 };
+use aacmm_core::domain::Arm;
 use aacmm_core::identify::identify;
-use aacmm_core::io::Arm;
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId};
 use aacmm_core::residuals::Noise;

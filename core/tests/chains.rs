@@ -12,9 +12,9 @@
 use std::f64::consts::PI;
 
 use aacmm_core::calibrate::validate::position_errors;
+use aacmm_core::domain::{Positions, ReferenceLength};
 use aacmm_core::identify::chain::{Evidence, Seen, kinematic_rank, theory};
 use aacmm_core::identify::{Identification, identify};
-use aacmm_core::io::{Positions, ReferenceLength};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{ChainShape, DhJoint, DhParams, JointKind, JointModel};
 use aacmm_core::residuals::Frame;

@@ -6,8 +6,8 @@
 use aacmm_core::calibrate::{
     Calibration, FixSpec, ModelOptions, SolverSettings, calibrate, validate,
 };
+use aacmm_core::domain::Arm;
 use aacmm_core::identify::identify;
-use aacmm_core::io::Arm;
 use aacmm_core::params::{DhJoint, DhParams, JointModel, ParamKind, wrap};
 use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{Campaign, CampaignSettings, ErrorModel, simulate};

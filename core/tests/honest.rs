@@ -13,7 +13,7 @@
 
 use aacmm_core::calibrate::robust::{Loss, Robust};
 use aacmm_core::calibrate::{Calibration, Method, ModelOptions, SolverSettings, calibrate};
-use aacmm_core::io::ReferenceLength;
+use aacmm_core::domain::ReferenceLength;
 use aacmm_core::params::{DhParams, ParamKind, wrap};
 use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{Campaign, CampaignSettings, ErrorModel, simulate};

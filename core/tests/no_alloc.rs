@@ -4,7 +4,7 @@
 //! links).
 
 use aacmm_core::calibrate::energy::Energy;
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId};
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};

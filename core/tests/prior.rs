@@ -308,7 +308,7 @@ fn identify_shows_the_rank_the_prior_adds() {
 /// put it, with lengths or without.
 #[test]
 fn with_unstated_noise_the_prior_weighs_against_the_estimated_touch_sigma() {
-    use aacmm_core::io::Arm;
+    use aacmm_core::domain::Arm;
     use aacmm_core::simulate::{CampaignSettings, ErrorModel, simulate};
     let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
     for lengths in [3, 0] {

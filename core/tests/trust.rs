@@ -3,7 +3,8 @@
 //! model does not explain, named by where they were read.
 
 use aacmm_core::calibrate::{CalibrationError, FixSpec, ModelOptions, SolverSettings};
-use aacmm_core::io::{AngleUnit, ReferenceLength, read_lengths, read_poses};
+use aacmm_core::domain::ReferenceLength;
+use aacmm_core::io::{AngleUnit, read_lengths, read_poses};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::DhParams;
 use aacmm_core::residuals::Noise;

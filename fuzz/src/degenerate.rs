@@ -6,10 +6,9 @@ use std::sync::OnceLock;
 use aacmm_core::calibrate::robust::{Loss, Robust};
 use aacmm_core::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
 use aacmm_core::dataset::DataSet;
+use aacmm_core::domain::{Arm, Poses, ReferenceLength};
 use aacmm_core::identify::identify;
-use aacmm_core::io::{
-    AngleUnit, Arm, Poses, ReferenceLength, parse_arm, parse_lengths, parse_poses,
-};
+use aacmm_core::io::{AngleUnit, parse_arm, parse_lengths, parse_poses};
 use aacmm_core::params::{DhParams, JointModel, ParamId, ParamKind};
 use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{CampaignSettings, ErrorModel, SocketPlan, SocketPoint, simulate};

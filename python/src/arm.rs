@@ -3,9 +3,8 @@
 
 use std::path::PathBuf;
 
-use aacmm_core::io::{
-    AngleUnit, Arm as CoreArm, LengthUnit, Rejected, arm_to_toml, read_arm_with, source_name,
-};
+use aacmm_core::domain::Arm as CoreArm;
+use aacmm_core::io::{AngleUnit, LengthUnit, Rejected, arm_to_toml, read_arm_with, source_name};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId, param_count, supported_joints_text, supports_joints};
 use numpy::ndarray::{Array1, ArrayD};

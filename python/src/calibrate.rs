@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use aacmm_core::calibrate::{Context, GlobalOptions};
-use aacmm_core::io::Arm as CoreArm;
+use aacmm_core::domain::Arm as CoreArm;
 use aacmm_core::plan::{MapPoint, UncertaintyMap};
 use aacmm_core::residuals::Frame;
 use aacmm_core::session::{self, CalibrationReport, HeldOutData, Problem, Request, Sources};

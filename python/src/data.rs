@@ -4,8 +4,9 @@
 use std::path::PathBuf;
 
 use aacmm_core::dataset::DataSet as CoreDataSet;
+use aacmm_core::domain::ReferenceLength;
 use aacmm_core::io::{
-    AngleUnit, JointColumns, ReferenceLength, read_lengths, read_poses, read_positions, source_name,
+    AngleUnit, JointColumns, read_lengths, read_poses, read_positions, source_name,
 };
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;

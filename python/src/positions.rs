@@ -3,7 +3,8 @@
 //! library's reader checks a positions file, each refusal a `ValueError`
 //! naming the argument and the row (0-based, as numpy indexes it).
 
-use aacmm_core::io::{AngleUnit, DEFAULT_FRAME, Positions};
+use aacmm_core::domain::{DEFAULT_FRAME, Positions};
+use aacmm_core::io::AngleUnit;
 use numpy::{AllowTypeChange, PyArrayLikeDyn, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyString;

@@ -1,7 +1,8 @@
 //! `aacmm.qualify_probe`: one probe of a measuring arm qualified on a
 //! reference sphere, the arm's geometry held — `aacmm probe` from Python.
 
-use aacmm_core::io::spheres::{Spheres, read_spheres};
+use aacmm_core::domain::Spheres;
+use aacmm_core::io::spheres::read_spheres;
 use aacmm_core::io::{AngleUnit, source_name};
 use aacmm_core::residuals::Noise as CoreNoise;
 use aacmm_core::session::probe::{DEFAULT_TOLERANCE_MM, ProbeSettings, qualify_probe as core};

@@ -6,9 +6,10 @@
 
 use std::path::PathBuf;
 
+use aacmm_core::domain::Spheres;
+use aacmm_core::domain::Tool;
 use aacmm_core::io::AngleUnit;
-use aacmm_core::io::spheres::Spheres;
-use aacmm_core::io::tools::{Tool, ToolNames};
+use aacmm_core::io::tools::ToolNames;
 use aacmm_core::session::Request;
 use pyo3::prelude::*;
 

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::report::REPORT_FILE;
 use aacmm_core::session::CalibrationReport;
 use anyhow::{Context, Result, anyhow, bail};

@@ -6,9 +6,10 @@ use std::path::{Path, PathBuf};
 
 use aacmm_core::calibrate::validate::FrameValues;
 use aacmm_core::dataset::DataSet;
+use aacmm_core::domain::Arm;
 use aacmm_core::io::frames::parse_frames;
 use aacmm_core::io::spheres::read_spheres;
-use aacmm_core::io::{Arm, read_lengths, read_positions, source_name};
+use aacmm_core::io::{read_lengths, read_positions, source_name};
 use aacmm_core::report::EVALUATION_FILES;
 use aacmm_core::session::spheres::SphereEvaluation;
 use aacmm_core::session::{EvaluationReport, PositionEvaluation, Sources};
@@ -112,7 +113,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let (arm, poses) = args.input.read()?;
     let arm = match &args.tool {
-        Some(name) => aacmm_core::io::tools::arm_with_tool(&arm, name)
+        Some(name) => aacmm_core::domain::arm_with_tool(&arm, name)
             .map_err(super::shared_flags::flag_error)?,
         None => arm,
     };

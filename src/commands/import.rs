@@ -14,7 +14,8 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use aacmm_core::corrections::{Mass, Physics};
-use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, source_name};
+use aacmm_core::domain::Arm;
+use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, source_name};
 use aacmm_core::params::{JointKind, JointModel};
 use aacmm_core::urdf::{Carrier, Chain, DhConversion, DhMass, Urdf, UrdfOptions, parse_urdf};
 use anyhow::{Context, Result, bail};

@@ -18,9 +18,10 @@ pub mod verify;
 
 use std::path::PathBuf;
 
+use aacmm_core::domain::{Arm, Poses};
 use aacmm_core::error::short;
 use aacmm_core::io::{
-    AngleUnit, Arm, Poses, Rejected, Warning, limit_warning, read_arm_with, read_poses,
+    AngleUnit, Rejected, Warning, limit_warning, read_arm_with, read_poses,
     read_poses_or_positions, source_name,
 };
 use aacmm_core::kernel::{ArmKernel, KernelError, NoiseOf, Pose, PreparedPoses};

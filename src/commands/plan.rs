@@ -10,10 +10,10 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::io::spheres::{Spheres, read_spheres, write_spheres};
-use aacmm_core::io::{
-    AngleUnit, Arm, Poses, limit_warning, read_arm, read_poses_or_positions, source_name,
-};
+use aacmm_core::domain::Spheres;
+use aacmm_core::domain::{Arm, Poses};
+use aacmm_core::io::spheres::{read_spheres, write_spheres};
+use aacmm_core::io::{AngleUnit, limit_warning, read_arm, read_poses_or_positions, source_name};
 use aacmm_core::plan::{
     Criterion, DEFAULT_SOCKETS, Given, GivenNote, Measure, Plan, PlanError, PlanSettings, Pool,
     SampleError, SummaryContext, plan, sample_positions, sample_sphere_points,
@@ -195,7 +195,7 @@ pub fn run(args: Args) -> Result<()> {
     report(&warnings)?;
     // A tool's plan is its offset's: the probe replaced by it, as `points`
     // and `evaluate` compute with a `--tool`.
-    let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
+    let arm = aacmm_core::domain::arm_with_tool(&arm, &args.tool)
         .map_err(super::shared_flags::flag_error)?;
     let start = match &args.given {
         Some(dir) => Some(read_given(dir, &arm, &args.arm)?),

@@ -2,9 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
+use aacmm_core::domain::{Arm, Poses};
 use aacmm_core::error::{quoted, shown};
 use aacmm_core::io::frames::parse_frames;
-use aacmm_core::io::{Arm, Poses, source_name, write_points, write_points_u95, write_tool_poses};
+use aacmm_core::io::{source_name, write_points, write_points_u95, write_tool_poses};
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::plan::{InFrame, position_covariances};
 use aacmm_core::report::REPORT_FILE;
@@ -104,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
         check_output_file("--out", out, &inputs, args.force)?;
     }
     let (arm, poses) = args.input.read_readings()?;
-    let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
+    let arm = aacmm_core::domain::arm_with_tool(&arm, &args.tool)
         .map_err(super::shared_flags::flag_error)?;
     let frame = match &args.frame {
         Some(name) => Some(frame(&args.input.arm, name)?),

@@ -4,8 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
+use aacmm_core::domain::Arm;
 use aacmm_core::error::quoted;
-use aacmm_core::io::{Arm, read_arm, source_name};
+use aacmm_core::io::{read_arm, source_name};
 use aacmm_core::params::ChainShape;
 
 use super::report;
@@ -377,8 +378,8 @@ fn acceptance_placements(
     campaign: aacmm_core::simulate::SphereCampaign,
     settings: &aacmm_core::simulate::SphereSettings,
 ) -> Result<(
-    aacmm_core::io::spheres::Spheres,
-    Option<Vec<aacmm_core::io::ReferenceLength>>,
+    aacmm_core::domain::Spheres,
+    Option<Vec<aacmm_core::domain::ReferenceLength>>,
 )> {
     use aacmm_core::simulate::{AcceptanceSettings, with_acceptance};
     if args.articulated == 0 && args.ball_bar == 0 {
@@ -404,10 +405,10 @@ fn acceptance_placements(
 /// true_arm.toml with the true frames.
 fn tracker(
     args: &Args,
-    nominal: &aacmm_core::io::Arm,
+    nominal: &aacmm_core::domain::Arm,
     errors: &ErrorModel,
-    truth: Option<&aacmm_core::io::Arm>,
-) -> Result<aacmm_core::io::Arm> {
+    truth: Option<&aacmm_core::domain::Arm>,
+) -> Result<aacmm_core::domain::Arm> {
     use aacmm_core::io::frames::frames_to_toml;
     use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, positions::write_positions};
     use aacmm_core::simulate::{POSITIONS_FILE, PositionSettings, true_frames};
@@ -430,7 +431,7 @@ fn tracker(
         session_h: args.session_hours,
         approach: args.approach,
     };
-    let session = |t: &aacmm_core::io::Arm| {
+    let session = |t: &aacmm_core::domain::Arm| {
         aacmm_core::simulate::simulate_session(t, &settings, &conditions, args.drift)
     };
     let (truth, campaign) = match truth {
@@ -708,7 +709,7 @@ fn campaign_settings(args: &Args, errors: ErrorModel, sockets: SocketPlan) -> Ca
 /// What was simulated and written, on stderr.
 fn describe(
     args: &Args,
-    nominal: &aacmm_core::io::Arm,
+    nominal: &aacmm_core::domain::Arm,
     settings: &CampaignSettings,
     campaign: &aacmm_core::simulate::Campaign,
     written: &[PathBuf],

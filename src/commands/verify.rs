@@ -10,9 +10,10 @@ use aacmm_core::acceptance::{
     PredictError, ReadingNoise, Settings, SpherePoints, parse_mpe, predict, verify,
 };
 use aacmm_core::dataset::DataSet;
+use aacmm_core::domain::Arm;
 use aacmm_core::error::{quoted, short};
 use aacmm_core::io::spheres::read_spheres;
-use aacmm_core::io::{Arm, read_lengths, source_name};
+use aacmm_core::io::{read_lengths, source_name};
 use aacmm_core::kernel::PreparedPoses;
 use aacmm_core::metrics::Evaluation;
 use aacmm_core::report::{ACCEPTANCE_FILES, acceptance_report};
@@ -129,7 +130,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(dir) => Some(calibration(&args, dir, &arm)?),
         None => None,
     };
-    let arm = aacmm_core::io::tools::arm_with_tool(&arm, &args.tool)
+    let arm = aacmm_core::domain::arm_with_tool(&arm, &args.tool)
         .map_err(super::shared_flags::flag_error)?;
     let Some(ball) = arm.ball_diameter_mm else {
         bail!(
@@ -194,7 +195,7 @@ fn unknown(path: &Path) -> anyhow::Error {
 /// one it fitted is verified.
 fn calibration(args: &Args, dir: &Path, arm: &Arm) -> Result<ForPrediction> {
     let (report, path) = super::calibration::read("--calibration", dir, arm)?;
-    if args.tool != aacmm_core::io::tools::DEFAULT_TOOL {
+    if args.tool != aacmm_core::domain::DEFAULT_TOOL {
         bail!(
             "--calibration with --tool {}: the calibration's covariance is of the probe's offset \
              (`probe`), not of this tool's; predict the probe it calibrated",

@@ -10,7 +10,7 @@ use aacmm_core::acceptance::{
     Acceptance, Calibrated, Draws, LDiaRadius, Measured, Mpe, ReadingNoise, Settings, SpherePoints,
     TestKind, predict, verify,
 };
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::prelude::*;
 use aacmm_core::residuals::spheres::SphereSize;

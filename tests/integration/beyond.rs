@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use aacmm_core::calibrate::validate::position_errors;
 use aacmm_core::corrections::{Beyond, Harmonic, Physics};
 use aacmm_core::dataset::DataSet;
+use aacmm_core::domain::{Arm, Positions};
 use aacmm_core::identify::identify;
-use aacmm_core::io::{Arm, Positions};
 use aacmm_core::residuals::Noise;
 use aacmm_core::simulate::{
     ConditionSettings, ErrorModel, PositionSettings, simulate_positions_in, true_arm,

@@ -3,7 +3,7 @@
 //! arm's base and in each instrument's frame against the truth, judged by
 //! the stated 95 % radius.
 
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::params::DhParams;
 use aacmm_core::plan::{InFrame, position_covariances};

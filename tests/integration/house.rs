@@ -24,7 +24,8 @@ use std::path::Path;
 /// under `core/src`). A module may reference only modules of its own rank
 /// or below.
 ///
-/// Data flow one way, down this chain: files (`io`) → data set
+/// Data flow one way, down this chain: the nouns (`domain`) and their files
+/// (`io`) → data set
 /// (`dataset`) → residual terms and measures of an arm (`residuals`,
 /// `objective`, `metrics`, `simulate`) → the solver and what it identifies
 /// (`calibrate`, `identify`, `hayati`) → the assessment and
@@ -64,7 +65,10 @@ const RANKS: &[(&str, u8)] = &[
     // harmonics, expansion) and the poses it makes of readings: the
     // kernel's input, used by the files, the data set and the terms.
     ("corrections", 1),
-    // 2: files.
+    // 2: the nouns (an arm, the evidence recorded on it), and the files
+    // they are read from and written to; the files use the nouns, never
+    // the other way round.
+    ("domain", 2),
     ("io", 2),
     // 3: the typed data set made of them.
     ("dataset", 3),
@@ -753,7 +757,7 @@ fn the_ranks_imply_the_issues_rules() {
 #[test]
 fn the_layering_scan_sees_code_not_comments_strings_or_tests() {
     let src = r##"
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::{dataset::DataSet, kernel::{A, B}, params};
 // use crate::comment;
 /// [`x`](crate::doc)
@@ -784,7 +788,7 @@ pub(crate) mod more_tests {
     assert_eq!(
         names,
         [
-            ("io", 2),
+            ("domain", 2),
             ("dataset", 3),
             ("kernel", 3),
             ("params", 3),
@@ -807,12 +811,16 @@ fn a_file_module_of_cfg_test_is_test_code() {
 #[test]
 fn the_crate_roots_reexports_name_their_module() {
     let r = root_reexports(&blank(
-        "pub use calibrate::{Method, calibrate as run};\npub use io::Arm;\nuse x::Y;\n",
+        "pub use calibrate::{Method, calibrate as run};\npub use domain::Arm;\nuse x::Y;\n",
     ));
     let r: Vec<(&str, &str)> = r.iter().map(|(a, b)| (a.as_str(), b.as_str())).collect();
     assert_eq!(
         r,
-        [("Arm", "io"), ("Method", "calibrate"), ("run", "calibrate")]
+        [
+            ("Arm", "domain"),
+            ("Method", "calibrate"),
+            ("run", "calibrate")
+        ]
     );
 }
 

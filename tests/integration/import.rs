@@ -5,7 +5,8 @@
 
 use std::path::Path;
 
-use aacmm_core::io::{Arm, read_arm};
+use aacmm_core::domain::Arm;
+use aacmm_core::io::read_arm;
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{JointKind, JointModel};
 use aacmm_core::urdf::{Chain, UrdfOptions, parse_urdf};

@@ -17,7 +17,7 @@ use aacmm_core::urdf::{UrdfOptions, parse_urdf};
 use crate::util::example;
 
 /// A shipped MUKCa folder: its arm file and its touches with lengths.
-pub(crate) fn load(name: &str) -> (aacmm_core::io::Arm, DataSet) {
+pub(crate) fn load(name: &str) -> (aacmm_core::domain::Arm, DataSet) {
     let dir = example("mukca").join(name);
     let (arm, _) = read_arm(&dir.join("arm.toml")).unwrap();
     let (poses, _) = read_poses(

@@ -3,7 +3,7 @@
 //! poses' positions alone.
 
 use aacmm_core::calibrate::validate::{orientation_errors, position_errors};
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::residuals::{Frame, MOUNT_BLOCK, Noise};
 use aacmm_core::simulate::{
     OrientationSettings, orient_positions, random_arm, random_mount, simulate_positions_from,

@@ -5,7 +5,8 @@
 
 use super::util::normal;
 use aacmm_core::calibrate::Method;
-use aacmm_core::io::{Arm, DEFAULT_FRAME, Poses, Positions, read_arm};
+use aacmm_core::domain::{Arm, DEFAULT_FRAME, Poses, Positions};
+use aacmm_core::io::read_arm;
 use aacmm_core::kernel::{ArmKernel, PreparedPoses};
 use aacmm_core::plan::{Criterion, Measure, PlanSettings, plan, uncertainty_map};
 use aacmm_core::residuals::Noise;

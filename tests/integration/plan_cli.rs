@@ -5,7 +5,8 @@
 
 use std::path::Path;
 
-use aacmm_core::io::{AngleUnit, Poses, read_poses};
+use aacmm_core::domain::Poses;
+use aacmm_core::io::{AngleUnit, read_poses};
 
 use crate::util::{
     aacmm, assert_clean_error, calibrate_shipped, shipped, shipped_arm, stderr, stdout, temp_dir,
@@ -326,8 +327,8 @@ fn a_plan_for_a_stylus_is_the_plan_of_its_offset() {
     let (arm, _) = aacmm_core::io::parse_arm(&text, "arm.toml").unwrap();
     let p = arm.params.probe;
     let long = [p[0] + 15.0, p[1] - 5.0, p[2] + 60.0];
-    let tooled = aacmm_core::io::Arm {
-        tools: vec![aacmm_core::io::Tool {
+    let tooled = aacmm_core::domain::Arm {
+        tools: vec![aacmm_core::domain::Tool {
             name: "long".into(),
             offset: long,
             ball_diameter_mm: None,
@@ -336,7 +337,7 @@ fn a_plan_for_a_stylus_is_the_plan_of_its_offset() {
     };
     let mut moved = arm.clone();
     moved.params.probe = long;
-    let toml = |a: &aacmm_core::io::Arm| {
+    let toml = |a: &aacmm_core::domain::Arm| {
         aacmm_core::io::arm_to_toml(a, aacmm_core::io::LengthUnit::Mm, AngleUnit::Deg)
     };
     let tooled = write(&dir, "tooled.toml", &toml(&tooled));

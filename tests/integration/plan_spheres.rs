@@ -4,7 +4,7 @@
 //! the scale is a parameter only with a stated diameter, and the command
 //! line writes a sphere file the calibration reads.
 
-use aacmm_core::io::spheres::Spheres;
+use aacmm_core::domain::Spheres;
 use aacmm_core::kernel::PreparedPoses;
 use aacmm_core::plan::{Measure, Plan, PlanSettings, plan, sample_sphere_points, uncertainty_map};
 use aacmm_core::prelude::*;
@@ -17,7 +17,7 @@ use crate::util::{aacmm, assert_clean_error, stderr, stdout, temp_dir, write};
 const SIGMA: f64 = 0.01;
 
 /// The plan of `count` of `pool`'s points at σ = [`SIGMA`].
-fn sphere_plan(pool: &aacmm_core::io::Poses, count: usize, stated: bool) -> Plan {
+fn sphere_plan(pool: &aacmm_core::domain::Poses, count: usize, stated: bool) -> Plan {
     let mut s = PlanSettings::new(count, Measure::Spheres);
     s.sigma_mm = SIGMA;
     s.sphere_diameter_stated = stated;
@@ -25,7 +25,7 @@ fn sphere_plan(pool: &aacmm_core::io::Poses, count: usize, stated: bool) -> Plan
 }
 
 /// The chosen rows as a campaign on the nominal arm (exact readings).
-fn chosen(pool: &aacmm_core::io::Poses, plan: &Plan) -> SphereCampaign {
+fn chosen(pool: &aacmm_core::domain::Poses, plan: &Plan) -> SphereCampaign {
     let mut spheres = Spheres::new(6, 0);
     for (line, i) in plan.chosen().into_iter().enumerate() {
         spheres.push(pool.label(i), pool.reading(i), line + 2, None);

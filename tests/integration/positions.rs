@@ -3,8 +3,8 @@
 //! bad input refused by file, line and field.
 
 use aacmm_core::calibrate::validate::position_errors;
+use aacmm_core::domain::Arm;
 use aacmm_core::identify::identify;
-use aacmm_core::io::Arm;
 use aacmm_core::params::{DhParams, ParamId};
 use aacmm_core::residuals::{Frame, Noise};
 use aacmm_core::simulate::{

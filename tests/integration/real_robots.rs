@@ -11,7 +11,7 @@ use aacmm_core::tolerances::Tolerances;
 
 use crate::util::{aacmm, example, shipped, shipped_arm, stderr, stdout, temp_dir};
 
-fn kinova_1() -> (aacmm_core::io::Arm, DataSet) {
+fn kinova_1() -> (aacmm_core::domain::Arm, DataSet) {
     crate::mukca::load("kinova-1")
 }
 

@@ -3,7 +3,7 @@
 //! diameter and said to be unfixed without one, the command line's
 //! outputs, and bad input refused by file, line and field.
 
-use aacmm_core::io::Arm;
+use aacmm_core::domain::Arm;
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::DhParams;
 use aacmm_core::prelude::*;

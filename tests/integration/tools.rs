@@ -3,8 +3,9 @@
 //! offset recovered within 3σ, the normalised errors honest — and bad input
 //! refused by file, line and field.
 
+use aacmm_core::domain::Arm;
 use aacmm_core::identify::identify;
-use aacmm_core::io::{Arm, ToolNames};
+use aacmm_core::io::ToolNames;
 use aacmm_core::params::DhParams;
 use aacmm_core::simulate::{
     ErrorModel, PositionCampaign, perturbed_tools, random_tools, seen_at_markers,

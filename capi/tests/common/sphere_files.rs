@@ -4,7 +4,8 @@
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
 
-use aacmm_core::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, spheres::write_spheres};
+use aacmm_core::domain::Arm;
+use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, spheres::write_spheres};
 use aacmm_core::params::DhParams;
 use aacmm_core::simulate::{SphereSettings, simulate_spheres};
 

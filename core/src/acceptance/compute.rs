@@ -7,8 +7,8 @@ use super::{
     P_SIZE, P_TEST_POINTS, Placement, SPAT, Settings, SpatPoint, SpherePoints, TestKind,
     TestResult, Use, enclosing_ball, fit_sphere_ls,
 };
+use crate::domain::ReferenceLength;
 use crate::error::{InputError, OptionError, quoted};
-use crate::io::ReferenceLength;
 use crate::metrics::Evaluation;
 use crate::setting::Setting;
 
@@ -436,7 +436,7 @@ fn spat_points(ev: &Evaluation) -> Vec<SpatPoint> {
 mod tests {
     use super::*;
     use crate::acceptance::{Decision, parse_mpe};
-    use crate::io::spheres::Spheres;
+    use crate::domain::Spheres;
 
     /// Probe centres on a sphere of radius 15.7 (a 25.4 mm sphere, a 6 mm
     /// ball) about `c`, `n` of them.

@@ -63,8 +63,8 @@ pub use predict::{
     Calibrated, DEFAULT_DRAWS, Draws, Measured, PredictError, ReadingNoise, predict,
 };
 
+use crate::domain::Spheres;
 use crate::error::{InputError, OptionError};
-use crate::io::spheres::Spheres;
 
 /// Points a sphere placement needs for `P_Size` and `P_Form` (ISO
 /// 10360-12's 25-point pattern).

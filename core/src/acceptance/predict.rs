@@ -60,8 +60,8 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use super::{Acceptance, AcceptanceError, Predicted, Settings, SpherePoints};
+use crate::domain::ReferenceLength;
 use crate::error::{InputError, OptionError, quoted};
-use crate::io::ReferenceLength;
 use crate::kernel::{ArmKernel, KernelError, PreparedPoses};
 use crate::params::DhParams;
 
@@ -511,7 +511,7 @@ mod tests {
 
     use super::*;
     use crate::acceptance::{LDiaRadius, Mpe, TestKind, verify};
-    use crate::io::Arm;
+    use crate::domain::Arm;
     use crate::simulate::{AcceptanceSettings, SphereSettings, simulate_spheres, with_acceptance};
 
     const D: f64 = 25.4;

@@ -246,7 +246,7 @@ pub struct AnnealTrace {
 /// where the hybrid hands over. Returns the best parameters seen.
 ///
 /// ```
-/// use aacmm_core::{calibrate::*, calibrate::anneal::anneal, io::Arm, params::DhParams, simulate::*};
+/// use aacmm_core::{calibrate::*, calibrate::anneal::anneal, domain::Arm, params::DhParams, simulate::*};
 /// use rand::SeedableRng;
 /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
 /// let campaign = simulate(&nominal, &CampaignSettings::new(3, ErrorModel::Paper, 6, 8)).unwrap();

@@ -67,7 +67,7 @@ impl Calibration {
             .filter(|(c, _)| !probe.contains(c))
             .map(|(c, s)| (*c, s))
             .unzip();
-        let prefix = crate::io::tools::TOOL_BLOCK_PREFIX;
+        let prefix = crate::domain::TOOL_BLOCK_PREFIX;
         let mut x = [0.0; 3];
         for (k, axis) in ["x", "y", "z"].into_iter().enumerate() {
             let full = format!("{prefix}{name}.{axis}");

@@ -33,7 +33,7 @@ impl Energy {
     /// The energy of `params` on `data`, mm; `+∞` when not finite.
     ///
     /// ```
-    /// use aacmm_core::{calibrate::energy::Energy, io::Arm, params::DhParams, simulate::*};
+    /// use aacmm_core::{calibrate::energy::Energy, domain::Arm, params::DhParams, simulate::*};
     /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
     /// let campaign = simulate(&nominal, &CampaignSettings::new(1, ErrorModel::Paper, 4, 6)).unwrap();
     /// let data = campaign.data_set().unwrap();

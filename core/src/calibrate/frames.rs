@@ -35,7 +35,7 @@ impl Calibration {
         }
         for (name, x) in self.tool_offsets() {
             frames.push((
-                crate::io::tools::block_name(&name),
+                crate::domain::block_name(&name),
                 [x[0], x[1], x[2], 0.0, 0.0, 0.0],
             ));
         }
@@ -47,7 +47,7 @@ impl Calibration {
     /// σ when determined, in the order of the columns.
     pub fn tool_estimates(&self) -> Vec<(String, [f64; 3], Option<[f64; 3]>)> {
         let aux = &self.auxiliary;
-        let prefix = crate::io::tools::TOOL_BLOCK_PREFIX;
+        let prefix = crate::domain::TOOL_BLOCK_PREFIX;
         (0..aux.len())
             .filter_map(|i| {
                 let name = aux[i].name.strip_prefix(prefix)?.strip_suffix(".x")?;

@@ -144,7 +144,7 @@ impl Method {
 /// [`crate::session::Problem`] of an arm file with masses fits one).
 ///
 /// ```
-/// use aacmm_core::{calibrate::*, io::Arm, params::DhParams, simulate::*};
+/// use aacmm_core::{calibrate::*, domain::Arm, params::DhParams, simulate::*};
 /// let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
 /// let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 8, 10);
 /// settings.reference_lengths = 3;

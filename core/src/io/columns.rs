@@ -14,8 +14,9 @@
 //! that states no limits for a prismatic joint leaves its readings
 //! unchecked.
 
+use super::InputError;
 use super::units::AngleUnit;
-use super::{Arm, InputError};
+use crate::domain::Arm;
 use crate::params::ChainShape;
 
 /// Readings this far (mm) beyond a prismatic joint's stroke are still

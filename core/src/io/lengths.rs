@@ -18,52 +18,8 @@ use std::io::Write;
 use std::path::Path;
 
 use super::text::{check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
+use crate::domain::ReferenceLength;
 use crate::error::{InputError, quoted, shown};
-
-/// One reference length between two labelled points.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReferenceLength {
-    /// Label of the first point.
-    pub a: String,
-    /// Label of the second point (different from `a`).
-    pub b: String,
-    /// Distance, mm, `> 0`.
-    pub distance: f64,
-    /// Standard uncertainty of the distance, mm, `>= 0`, if stated.
-    pub uncertainty: Option<f64>,
-    /// 1-based line in the source file, for messages; 0 for a length made
-    /// in memory ([`ReferenceLength::new`]): messages then name the source
-    /// alone.
-    pub line: usize,
-}
-
-impl ReferenceLength {
-    /// A length made in memory, from no file's line: between the points
-    /// labelled `a` and `b`, `distance_mm` apart, with the standard
-    /// uncertainty `uncertainty_mm` if stated. A data set checks the
-    /// values when it takes them, as a file's reader does
-    /// ([`crate::DataSet::with_lengths`], [`crate::DataSet::from_touches`]).
-    ///
-    /// ```
-    /// use aacmm_core::io::ReferenceLength;
-    /// let l = ReferenceLength::new("S1", "S2", 500.0, Some(0.002));
-    /// assert_eq!((l.distance, l.line), (500.0, 0));
-    /// ```
-    pub fn new(
-        a: impl Into<String>,
-        b: impl Into<String>,
-        distance_mm: f64,
-        uncertainty_mm: Option<f64>,
-    ) -> ReferenceLength {
-        ReferenceLength {
-            a: a.into(),
-            b: b.into(),
-            distance: distance_mm,
-            uncertainty: uncertainty_mm,
-            line: 0,
-        }
-    }
-}
 
 const COLUMNS: [&str; 4] = ["point_a", "point_b", "distance", "uncertainty"];
 const SHAPE: &str = "point_a,point_b,distance` or `point_a,point_b,distance,uncertainty";
@@ -200,7 +156,8 @@ pub(crate) fn check_lengths_against<S: AsRef<str>>(
 /// it) gives an [`std::io::ErrorKind::InvalidInput`] error.
 ///
 /// ```
-/// use aacmm_core::io::{ReferenceLength, write_lengths};
+/// use aacmm_core::domain::ReferenceLength;
+/// use aacmm_core::io::write_lengths;
 /// let l = ReferenceLength::new("S1", "S2", 500.0, None);
 /// let mut out = Vec::new();
 /// write_lengths(&mut out, &[l]).unwrap();

@@ -3,7 +3,8 @@
 //! arm file or shifted encoder zeros — so one [`Warning`] says how many and
 //! where the first one is, for every front end alike.
 
-use super::{AngleUnit, Arm, Poses, Warning};
+use super::{AngleUnit, Warning};
+use crate::domain::{Arm, Poses};
 
 /// Readings this far (rad) beyond a limit are still within it: a limit and a
 /// reading written in different units may differ by rounding.
@@ -15,7 +16,8 @@ const LIMIT_SLACK: f64 = 1e-12;
 /// written in, so the reading is shown as written).
 ///
 /// ```
-/// use aacmm_core::io::{AngleUnit, Arm, Poses, limit_warning};
+/// use aacmm_core::domain::{Arm, Poses};
+/// use aacmm_core::io::{AngleUnit, limit_warning};
 /// use aacmm_core::params::DhParams;
 /// let mut arm = Arm::without_limits("n", DhParams::paper_nominal());
 /// arm.limits = vec![None, None, Some([-1.0, 1.0]), None, None, None];

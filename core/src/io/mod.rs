@@ -1,4 +1,5 @@
-//! Reading and writing the toolkit's files.
+//! Reading and writing the toolkit's files: the nouns of [`crate::domain`]
+//! (an arm, its touches, lengths, positions and spheres) from and to text.
 //!
 //! | file | format | module |
 //! |---|---|---|
@@ -40,7 +41,6 @@ pub mod arm;
 pub(crate) mod atomic;
 pub mod columns;
 pub mod frames;
-mod labels;
 pub mod lengths;
 pub(crate) mod limits;
 pub mod points;
@@ -57,21 +57,21 @@ pub mod verdict;
 use std::fmt;
 
 pub use crate::error::InputError;
-pub use arm::{Arm, arm_to_toml, parse_arm, read_arm, read_arm_with, write_arm};
+pub use arm::{arm_to_toml, parse_arm, read_arm, read_arm_with, write_arm};
 pub use atomic::{write_atomic, write_atomic_with};
 pub use columns::JointColumns;
 pub(crate) use lengths::check_lengths_against;
-pub use lengths::{ReferenceLength, parse_lengths, read_lengths, write_lengths};
+pub use lengths::{parse_lengths, read_lengths, write_lengths};
 pub use limits::limit_warning;
 pub use points::{parse_points, read_points, write_points, write_points_u95, write_tool_poses};
-pub use poses::{Poses, parse_poses, read_poses, read_poses_or_positions, write_poses};
+pub use poses::{parse_poses, read_poses, read_poses_or_positions, write_poses};
 pub(crate) use positions::parse_positions;
-pub use positions::{DEFAULT_FRAME, Positions, read_positions};
+pub use positions::read_positions;
 pub use prior::parse_prior;
 pub use text::source_name;
-pub use tools::{DEFAULT_TOOL, Tool, ToolNames};
+pub use tools::ToolNames;
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
-pub use verdict::{ArmVerdict, Rejected};
+pub use verdict::Rejected;
 
 /// Legal but suspicious input, located like an [`InputError`]. Readers
 /// return warnings; the caller prints them.
@@ -115,6 +115,7 @@ impl fmt::Display for Warning {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::domain::Arm;
     use rand::{RngExt, SeedableRng};
 
     /// Random edits of valid files never panic, and every error names the file.

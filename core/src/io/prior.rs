@@ -12,7 +12,7 @@
 //! A key without a unit, with the wrong kind of unit, an unknown name, and a
 //! value that is not a finite number > 0 are errors naming the file, line
 //! and key. [`crate::io::read_arm`] reads the table into
-//! [`crate::io::Arm::prior`].
+//! [`crate::domain::Arm::prior`].
 
 use toml::Spanned;
 use toml::de::DeValue;

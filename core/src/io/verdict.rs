@@ -22,24 +22,8 @@ use toml::de::{DeTable, DeValue};
 
 use super::Warning;
 use super::text::line_of;
+use crate::domain::ArmVerdict;
 use crate::error::InputError;
-
-/// Whether a calibration may be used (exit 0 of the command line), as the
-/// session decides it ([`crate::session::Verdict`] is this type) and its
-/// arm file records it.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ArmVerdict {
-    /// Usable.
-    pub usable: bool,
-    /// Why not (empty when usable).
-    #[serde(default)]
-    pub reasons: Vec<String>,
-    /// What a metrologist should know although the result is usable (a χ²
-    /// verdict outside its range, a poor fit accepted on request).
-    #[serde(default)]
-    pub notes: Vec<String>,
-}
 
 /// How a reader treats an arm file whose `[verdict]` says NOT usable.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -225,7 +209,8 @@ mod tests {
 mod examples {
     #[test]
     fn io_verdict_verdict_to_toml() {
-        use crate::io::verdict::{ArmVerdict, verdict_to_toml};
+        use crate::domain::ArmVerdict;
+        use crate::io::verdict::verdict_to_toml;
         let v = ArmVerdict {
             usable: false,
             reasons: vec!["worse than \"nominal\"".into()],

@@ -667,7 +667,7 @@ fn check_touches(label: &str, touches: &[[f64; 3]]) -> Result<(), MetricsError> 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::io::ReferenceLength;
+    use crate::domain::ReferenceLength;
 
     /// A point label echoed in an error is bounded and escaped (issue 29):
     /// CR/LF/NUL, or 10 000 characters, make a short single-line message;

@@ -59,7 +59,7 @@ pub use pool::{
 pub use summary::{GivenNote, SummaryContext, summary};
 
 use crate::dataset::DataSet;
-use crate::io::{DEFAULT_FRAME, Poses, Positions};
+use crate::domain::{DEFAULT_FRAME, Poses, Positions};
 use crate::kernel::{ArmKernel, PreparedPoses};
 use crate::params::{ChainShape, DhParams};
 use crate::residuals::Noise;
@@ -633,7 +633,7 @@ fn sphere_identification(
     settings: &PlanSettings,
 ) -> Result<crate::identify::Identification, PlanError> {
     use crate::residuals::spheres::{SphereSize, SphereTerm, add_to};
-    let mut spheres = crate::io::spheres::Spheres::new(pool.joints(), pool.prismatic_mask());
+    let mut spheres = crate::domain::Spheres::new(pool.joints(), pool.prismatic_mask());
     for i in 0..pool.len() {
         spheres.push(pool.label(i), pool.reading(i), pool.line(i), None);
     }

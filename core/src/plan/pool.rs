@@ -8,8 +8,8 @@
 //! ([`crate::identify`]), so no noise is added to keep the residuals off
 //! zero.
 
-use crate::io::spheres::Spheres;
-use crate::io::{Arm, Poses};
+use crate::domain::Spheres;
+use crate::domain::{Arm, Poses};
 use crate::params::ChainShape;
 use crate::residuals::Noise;
 use crate::simulate::{

@@ -10,7 +10,7 @@
 
 use rand::RngExt;
 
-use crate::io::Poses;
+use crate::domain::Poses;
 
 /// Lloyd iterations at most.
 const ITERATIONS: usize = 20;

@@ -589,7 +589,7 @@ fn tools_section(
              the arm's probe. RMS of each tool's rows' 3-D errors |R p + t − y|: before, the \
              nominal arm with its nominal offsets; after, the calibrated arm.",
             escape(&t.file),
-            crate::io::DEFAULT_TOOL
+            crate::domain::DEFAULT_TOOL
         );
         tables += &tool_table(t, "RMS 3-D, nominal");
     }
@@ -604,7 +604,7 @@ fn tools_section(
              touches): before, the nominal arm with its nominal offsets; after, the calibrated \
              arm.",
             escape(&t.file),
-            crate::io::DEFAULT_TOOL
+            crate::domain::DEFAULT_TOOL
         );
         tables += &tool_table(t, "RMS from the centre, nominal");
     }

@@ -426,7 +426,7 @@ mod examples {
 
     #[test]
     fn report_calibration_report() {
-        use crate::{calibrate::*, io::Arm, params::DhParams, report::*, simulate::*};
+        use crate::{calibrate::*, domain::Arm, params::DhParams, report::*, simulate::*};
         let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
         let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 5, 6);
         settings.reference_lengths = 2;

@@ -11,7 +11,7 @@ use crate::calibrate::Calibration;
 use crate::calibrate::validate::before_after;
 use crate::calibrate::{FixSpec, Method, ModelOptions, SolverSettings, calibrate};
 use crate::dataset::DataSet;
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::params::DhParams;
 use crate::residuals::Noise;
 use crate::simulate::{CampaignSettings, ErrorModel, simulate};

@@ -499,7 +499,7 @@ mod tests {
         assert_eq!(layout.block_named(MOUNT_BLOCK), None);
         // A frame named as the mount's block: refused by name with
         // orientations, a frame like any other without.
-        let named = |p: &crate::io::Positions| {
+        let named = |p: &crate::domain::Positions| {
             let mut text = Vec::new();
             crate::io::positions::write_positions(&mut text, p, crate::io::AngleUnit::Rad).unwrap();
             let text = String::from_utf8(text).unwrap();

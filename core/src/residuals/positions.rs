@@ -86,7 +86,7 @@ fn rms_spread(points: &[[f64; 3]]) -> f64 {
 }
 
 /// Each frame's closed-form registration of `params`' positions onto the
-/// data's (in the order of [`crate::io::Positions::frames`]), each row's
+/// data's (in the order of [`crate::domain::Positions::frames`]), each row's
 /// tool at its nominal offset ([`crate::io::tools`]).
 ///
 /// # Errors

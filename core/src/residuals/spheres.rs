@@ -34,8 +34,8 @@
 mod folds;
 
 use crate::corrections::Conditions;
+use crate::domain::Spheres;
 use crate::error::InputError;
-use crate::io::spheres::Spheres;
 use crate::kernel::{ArmKernel, PreparedPoses};
 use crate::params::DhParams;
 use crate::residuals::{
@@ -441,7 +441,7 @@ impl SphereTerm {
             }
             let block = at
                 .layout
-                .block_named(&crate::io::tools::block_name(&tool.name));
+                .block_named(&crate::domain::block_name(&tool.name));
             let offset = block.map_or(tool.offset, |id| {
                 let x = at.block(id);
                 [x[0], x[1], x[2]]
@@ -514,7 +514,7 @@ impl SphereTerm {
         let arm = at.layout.arm_columns();
         let mut of = vec![Column::None; at.layout.len()];
         for (t, tool) in self.spheres.tools().iter().enumerate().skip(1) {
-            let name = crate::io::tools::block_name(&tool.name);
+            let name = crate::domain::block_name(&tool.name);
             if let Some(id) = at.layout.block_named(&name) {
                 for (k, c) in at.layout.columns(id).enumerate() {
                     of[c] = Column::Tool(t, k);
@@ -764,7 +764,7 @@ fn add_tool_blocks(
     add: &mut impl FnMut(Box<dyn Block>) -> Result<BlockId, LayoutError>,
 ) -> Result<(), TermError> {
     for tool in spheres.tools().iter().skip(1) {
-        let block = crate::io::tools::block_name(&tool.name);
+        let block = crate::domain::block_name(&tool.name);
         let added = add(Box::new(Vector {
             names: ["x", "y", "z"].map(|c| format!("{block}.{c}")).to_vec(),
             name: block,
@@ -905,7 +905,7 @@ mod tests {
     fn the_sphere_gradient_passes_on_a_stylus_block() {
         let arm = nominal();
         let c = simulate_spheres(&arm, &settings(2, 7)).unwrap();
-        let stylus = crate::io::Tool {
+        let stylus = crate::domain::Tool {
             name: "long".into(),
             offset: [10.0, 0.0, 160.0],
             ball_diameter_mm: Some(3.0),

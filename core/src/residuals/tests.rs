@@ -138,7 +138,7 @@ fn built_change(
 /// arm.
 fn simulated(seed: u64, sockets: usize, touches: usize, lengths: usize) -> (DataSet, Noise) {
     use crate::simulate::{CampaignSettings, ErrorModel, simulate};
-    let nominal = crate::io::Arm::without_limits("n", DhParams::paper_nominal());
+    let nominal = crate::domain::Arm::without_limits("n", DhParams::paper_nominal());
     let mut settings = CampaignSettings::new(seed, ErrorModel::Paper, sockets, touches);
     settings.reference_lengths = lengths;
     settings.encoder_noise_deg = 0.005;
@@ -597,7 +597,7 @@ fn a_robust_weight_scales_a_positions_standardised_residual_as_a_touchs() {
     use crate::simulate::{
         OrientationSettings, PositionSettings, orient_positions, simulate_positions,
     };
-    let truth = crate::io::Arm::without_limits("paper", DhParams::paper_nominal());
+    let truth = crate::domain::Arm::without_limits("paper", DhParams::paper_nominal());
     let noise = Noise {
         position_mm: Some(0.02),
         orientation_rad: Some(2e-4),

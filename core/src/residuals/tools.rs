@@ -16,7 +16,7 @@ use std::sync::Arc;
 use super::blocks::{Unit, Vector};
 use super::{At, BlockId, Layout, TermError};
 use crate::dataset::PositionData;
-use crate::io::tools::block_name;
+use crate::domain::block_name;
 use crate::kernel::ArmKernel;
 use crate::params::{DhParams, ParamId, ParamKind};
 

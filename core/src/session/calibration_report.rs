@@ -5,7 +5,7 @@ use serde::{Deserialize, Serialize};
 use crate::calibrate::Calibration;
 use crate::calibrate::validate::{BeforeAfter, Fold};
 use crate::corrections::Physics;
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::residuals::Noise;
 
 use super::{Verdict, spheres, tools};
@@ -183,10 +183,10 @@ impl CalibrationReport {
 
     /// The start arm's tools, each fitted one at its fitted offset (a tool
     /// no row named keeps its own).
-    fn calibrated_tools(&self, start: &Arm) -> Vec<crate::io::Tool> {
+    fn calibrated_tools(&self, start: &Arm) -> Vec<crate::domain::Tool> {
         let fitted = self.calibration.tool_offsets();
         (start.tools.iter())
-            .map(|t| crate::io::Tool {
+            .map(|t| crate::domain::Tool {
                 name: t.name.clone(),
                 offset: (fitted.iter().find(|(n, _)| *n == t.name)).map_or(t.offset, |(_, x)| *x),
                 ball_diameter_mm: t.ball_diameter_mm,

@@ -3,7 +3,7 @@
 
 use crate::calibrate::CalibrationError;
 use crate::dataset::DataSet;
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::params::DhParams;
 use crate::residuals::Layout;
 
@@ -80,7 +80,7 @@ pub(super) fn of_arm_tools(arm: &Arm, data: DataSet) -> Result<DataSet, Calibrat
 /// As above; a kernel that refuses the arm.
 ///
 /// ```
-/// use aacmm_core::{calibrate::CalibrationError, io::Arm, params::DhParams, simulate::*};
+/// use aacmm_core::{calibrate::CalibrationError, domain::Arm, params::DhParams, simulate::*};
 /// use aacmm_core::session::check_units;
 /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
 /// let mut settings = CampaignSettings::new(1, ErrorModel::Paper, 4, 6);
@@ -372,7 +372,11 @@ mod tests {
     use crate::{calibrate::ModelOptions, session::Problem};
 
     /// The shipped campaign (degrees), its lengths, and the nominal arm.
-    fn shipped() -> (crate::io::Poses, Vec<crate::io::ReferenceLength>, Arm) {
+    fn shipped() -> (
+        crate::domain::Poses,
+        Vec<crate::domain::ReferenceLength>,
+        Arm,
+    ) {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples");
         let (poses, _) =
             crate::io::read_poses(&root.join("paper-campaign/poses.csv"), AngleUnit::Deg, None)

@@ -8,7 +8,7 @@
 
 use super::Sources;
 use crate::dataset::DataSet;
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::metrics::{
     Evaluation, MetricsError, PairLengthError, evaluate_threads, pair_length_errors,
 };

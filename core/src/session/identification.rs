@@ -11,8 +11,9 @@ use super::Sources;
 use crate::calibrate::prior::conditioning_with;
 use crate::calibrate::{CalibrationError, PriorConditioning};
 use crate::corrections::Beyond;
+use crate::domain::Arm;
 use crate::identify::{Evidence, Identification, identify_with};
-use crate::io::{AngleUnit, Arm};
+use crate::io::AngleUnit;
 use crate::residuals::Noise;
 use crate::tolerances::Tolerances;
 

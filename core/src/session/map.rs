@@ -3,7 +3,7 @@
 
 use crate::calibrate::Calibration;
 use crate::dataset::DataSet;
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::kernel::PreparedPoses;
 use crate::plan::{
     Given, InFrame, UncertaintyMap, reading_ranges, sample_poses, uncertainty_map,

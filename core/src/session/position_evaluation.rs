@@ -17,7 +17,7 @@ use crate::calibrate::validate::{
     seen_by,
 };
 use crate::dataset::DataSet;
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::residuals::MOUNT_BLOCK;
 
 /// One frame's registration and the arm's 3-D errors in it.

@@ -28,10 +28,10 @@
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::{CalibrationError, FixSpec, Method, ModelOptions, SolverSettings};
+use crate::domain::Arm;
+use crate::domain::DEFAULT_TOOL;
+use crate::domain::Spheres;
 use crate::error::OptionError;
-use crate::io::Arm;
-use crate::io::spheres::Spheres;
-use crate::io::tools::DEFAULT_TOOL;
 use crate::params::param_count;
 use crate::residuals::Noise;
 use crate::residuals::spheres::{SphereSize, SphereTerm};
@@ -268,7 +268,7 @@ fn fitted_offset(report: &super::CalibrationReport, tool: &str) -> ([f64; 3], [f
 
 /// The stated offset and ball of the probe `tool` of `arm`.
 fn stated_probe(arm: &Arm, tool: &str) -> Result<([f64; 3], Option<f64>), OptionError> {
-    let seen = crate::io::tools::arm_with_tool(arm, tool)?;
+    let seen = crate::domain::arm_with_tool(arm, tool)?;
     Ok((seen.params.probe, seen.ball_diameter_mm))
 }
 

@@ -4,8 +4,8 @@
 use crate::calibrate::validate::{check_folds, split_terms};
 use crate::calibrate::{CalibrationError, Context, FitInputs, ModelOptions, SolverSettings};
 use crate::dataset::DataSet;
+use crate::domain::Arm;
 use crate::error::OptionError;
-use crate::io::Arm;
 use crate::params::DhParams;
 use crate::residuals::spheres::SphereTerm;
 use crate::residuals::{Block, BlockId, Layout, Term};

@@ -37,11 +37,11 @@ use crate::calibrate::{
 };
 use crate::corrections::Beyond;
 use crate::dataset::DataSet;
+use crate::domain::Arm;
+use crate::domain::Spheres;
 use crate::error::{InputError, OptionError};
-use crate::io::spheres::{Spheres, read_spheres};
-use crate::io::{
-    AngleUnit, Arm, JointColumns, read_arm, read_lengths, read_positions, source_name,
-};
+use crate::io::spheres::read_spheres;
+use crate::io::{AngleUnit, JointColumns, read_arm, read_lengths, read_positions, source_name};
 use crate::kernel::ArmKernel;
 use crate::residuals::Noise;
 use crate::residuals::spheres::{SphereSize, SphereTerm, check_sphere_diameter, check_spheres};
@@ -530,7 +530,7 @@ impl Request {
     /// data files that name their tools already (a `tool` column), are
     /// refused.
     pub fn tool(mut self, name: &str) -> Request {
-        self.tool = (name != crate::io::tools::DEFAULT_TOOL).then(|| name.to_string());
+        self.tool = (name != crate::domain::DEFAULT_TOOL).then(|| name.to_string());
         self
     }
 
@@ -934,7 +934,7 @@ impl Request {
         let Some(name) = self.tool.clone() else {
             return Ok(self);
         };
-        crate::io::tools::arm_with_tool(&self.arm, &name)?;
+        crate::domain::arm_with_tool(&self.arm, &name)?;
         let Some(tool) = self.arm.tools.iter().find(|t| t.name == name).cloned() else {
             return Ok(self);
         };

@@ -76,7 +76,7 @@ pub struct SphereReport {
 /// One probe of a sphere file whose rows name several.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ProbeResult {
-    /// Its name ([`crate::io::DEFAULT_TOOL`] for the arm's `[probe]`).
+    /// Its name ([`crate::domain::DEFAULT_TOOL`] for the arm's `[probe]`).
     pub name: String,
     /// The spheres it probed.
     pub spheres: Vec<String>,
@@ -287,8 +287,8 @@ impl SphereEvaluation {
     /// A stated diameter out of range or without the arm file's ball;
     /// points that fix no sphere where the arm puts them; the kernel's.
     pub fn new(
-        arm: &crate::io::Arm,
-        rows: crate::io::spheres::Spheres,
+        arm: &crate::domain::Arm,
+        rows: crate::domain::Spheres,
         file: &str,
         diameter_mm: Option<f64>,
     ) -> Result<SphereEvaluation, crate::calibrate::CalibrationError> {

@@ -17,7 +17,7 @@ use crate::dataset::DataSet;
 /// One tool point's results.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ToolResult {
-    /// Its name ([`crate::io::DEFAULT_TOOL`] for the arm's probe).
+    /// Its name ([`crate::domain::DEFAULT_TOOL`] for the arm's probe).
     pub name: String,
     /// Rows that name it.
     pub rows: usize,

@@ -14,7 +14,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::checks::{ChiSquare, GrossCorrection, Outlier};
-use crate::io::ArmVerdict;
+use crate::domain::ArmVerdict;
 use crate::residuals::Noise;
 pub use crate::setting::{Setting, Spelling};
 

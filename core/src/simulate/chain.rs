@@ -22,7 +22,8 @@
 
 use rand::RngExt;
 
-use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, parse_arm};
+use crate::domain::Arm;
+use crate::io::{AngleUnit, LengthUnit, arm_to_toml, parse_arm};
 use crate::params::{ChainShape, DhJoint, DhParams, JointKind};
 use crate::random::{rng, streams};
 

@@ -6,10 +6,11 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::{Campaign, CampaignSettings, SimError};
+use crate::domain::Arm;
 use crate::error::InputError;
 use crate::io::arm::ArmFile;
 use crate::io::{
-    AngleUnit, Arm, LengthUnit, arm_to_toml, parse_arm, write_lengths, write_points, write_poses,
+    AngleUnit, LengthUnit, arm_to_toml, parse_arm, write_lengths, write_points, write_poses,
 };
 
 /// The `format` key of `campaign.toml` (2: arms are TOML tables, no longer
@@ -127,7 +128,7 @@ pub fn read_campaign(path: &Path) -> Result<(Arm, CampaignSettings), SimError> {
 /// and `campaign.toml`. Returns the paths written. Deterministic bytes.
 ///
 /// ```no_run
-/// use aacmm_core::{io::Arm, params::DhParams, simulate::*};
+/// use aacmm_core::{domain::Arm, params::DhParams, simulate::*};
 /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
 /// let settings = CampaignSettings::new(1, ErrorModel::Paper, 10, 10);
 /// let campaign = simulate(&nominal, &settings)?;

@@ -6,9 +6,9 @@ use rand_chacha::ChaCha8Rng;
 
 use super::SimError;
 use super::truth::normal;
+use crate::domain::ReferenceLength;
 use crate::error::quoted;
 use crate::geometry::distance;
-use crate::io::ReferenceLength;
 
 /// `count` distinct socket pairs and their true distances (mm), chosen with
 /// `rng` among the longer half of all pairs (at least `count` of them), the

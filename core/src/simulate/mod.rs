@@ -28,7 +28,7 @@
 //! sockets.
 //!
 //! ```
-//! use aacmm_core::{io::Arm, kernel, params::DhParams, simulate::*};
+//! use aacmm_core::{domain::Arm, kernel, params::DhParams, simulate::*};
 //! let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
 //! let settings = CampaignSettings::new(42, ErrorModel::Paper, 3, 4);
 //! let c = simulate(&nominal, &settings).unwrap();
@@ -152,8 +152,9 @@ use touches::{TouchPlan, find_touches};
 pub use truth::true_arm;
 
 use crate::dataset::DataSet;
+use crate::domain::{Arm, Poses, ReferenceLength};
 use crate::error::InputError;
-use crate::io::{AngleUnit, Arm, Poses, ReferenceLength};
+use crate::io::AngleUnit;
 use crate::kernel::ArmKernel;
 
 pub(crate) use crate::random::{rng, streams};
@@ -229,7 +230,7 @@ fn check_probe_noise(nominal: &Arm, sigma_mm: f64) -> Result<(), SimError> {
 /// never panics, on bad settings or an impossible campaign.
 ///
 /// ```
-/// use aacmm_core::{io::Arm, params::DhParams, simulate::*};
+/// use aacmm_core::{domain::Arm, params::DhParams, simulate::*};
 /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
 /// let bad = CampaignSettings::new(1, ErrorModel::Paper, 0, 10);
 /// let e = simulate(&nominal, &bad).unwrap_err();
@@ -345,7 +346,7 @@ impl Campaign {
     /// files ([`POSES_FILE`], [`LENGTHS_FILE`]) with their lines.
     ///
     /// ```
-    /// use aacmm_core::{io::Arm, params::DhParams, simulate::*};
+    /// use aacmm_core::{domain::Arm, params::DhParams, simulate::*};
     /// let nominal = Arm::without_limits("nominal", DhParams::paper_nominal());
     /// let mut settings = CampaignSettings::new(3, ErrorModel::Paper, 3, 4);
     /// settings.reference_lengths = 2;

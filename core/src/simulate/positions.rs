@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 use super::SimError;
 use super::sockets::random_configuration;
 use super::truth::normal;
-use crate::io::{Arm, DEFAULT_FRAME, Positions};
+use crate::domain::{Arm, DEFAULT_FRAME, Positions};
 use crate::kernel::{ArmKernel, PreparedPoses};
 use crate::residuals::{Frame, Noise};
 
@@ -17,7 +17,7 @@ pub struct PositionSettings {
     /// Poses per frame.
     pub poses: usize,
     /// Frames (instrument stations): one is named
-    /// [`crate::io::DEFAULT_FRAME`], several `station1`, `station2`, ….
+    /// [`crate::domain::DEFAULT_FRAME`], several `station1`, `station2`, ….
     pub frames: usize,
     /// The noise: `position_mm` (A) and `position_mm_per_m` (B) of
     /// `σ = A + B·distance` per coordinate.
@@ -127,7 +127,7 @@ fn random_frame(rng: &mut ChaCha8Rng) -> [f64; 6] {
 /// noise model's σ per coordinate. Labels `P1`, `P2`, … per frame.
 ///
 /// ```
-/// use aacmm_core::{io::Arm, params::DhParams, residuals::Noise, simulate::*};
+/// use aacmm_core::{domain::Arm, params::DhParams, residuals::Noise, simulate::*};
 /// let arm = Arm::without_limits("t", DhParams::paper_nominal());
 /// let noise = Noise { position_mm: Some(0.015), position_mm_per_m: Some(0.006), ..Noise::default() };
 /// let s = PositionSettings { poses: 50, frames: 2, noise, seed: 3 };
@@ -445,7 +445,7 @@ fn draw_rows(
 mod examples {
     #[test]
     fn simulate_positions_orient_positions() {
-        use crate::{io::Arm, params::DhParams, residuals::Noise, simulate::*};
+        use crate::{domain::Arm, params::DhParams, residuals::Noise, simulate::*};
         let arm = Arm::without_limits("t", DhParams::paper_nominal());
         let noise = Noise {
             position_mm: Some(0.015),

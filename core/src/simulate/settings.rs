@@ -9,8 +9,9 @@ use serde::{Deserialize, Serialize};
 
 use super::SimError;
 use super::sockets::round_nm;
+use crate::domain::Arm;
 use crate::error::quoted;
-use crate::io::{Arm, read_points};
+use crate::io::read_points;
 
 /// Default standard deviation of the random length errors (`a`, `d`, probe),
 /// mm: the RMS of the paper's Table 2 length errors (0.40 mm).

@@ -7,8 +7,8 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
 use super::SimError;
+use crate::domain::Arm;
 use crate::geometry::distance;
-use crate::io::Arm;
 use crate::kernel::ArmKernel;
 
 /// Random configurations whose probe centres are the candidate positions

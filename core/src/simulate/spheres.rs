@@ -23,8 +23,8 @@ use super::SimError;
 use super::ik::solve_point;
 use super::sockets::random_configuration;
 use super::truth::normal;
-use crate::io::Arm;
-use crate::io::spheres::Spheres;
+use crate::domain::Arm;
+use crate::domain::Spheres;
 use crate::kernel::ArmKernel;
 
 /// The file a simulated sphere campaign writes its points to.
@@ -166,7 +166,7 @@ pub fn with_tool_placements(
     let base = super::seeds::of(settings.seed, super::seeds::SPHERE_TOOLS);
     let mut centres = Vec::new();
     for (k, tool) in truth.tools.iter().enumerate() {
-        let seen = crate::io::tools::arm_with_tool(truth, &tool.name)
+        let seen = crate::domain::arm_with_tool(truth, &tool.name)
             .map_err(|e| SimError::Model(e.to_string()))?;
         let own = SphereSettings {
             ball_diameter_mm: tool.ball_diameter_mm.unwrap_or(settings.ball_diameter_mm),

@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use super::SimError;
 use super::positions::PositionCampaign;
 use super::truth::normal;
-use crate::io::{Arm, Positions, Tool};
+use crate::domain::{Arm, Positions, Tool};
 use crate::kernel::ArmKernel;
 use crate::residuals::{Frame, Noise};
 

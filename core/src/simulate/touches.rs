@@ -8,7 +8,7 @@ use super::separation::Accepted;
 use super::sockets::random_configuration;
 use super::truth::normal;
 use super::{SimError, SimStats};
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::kernel::ArmKernel;
 use crate::params::wrap;
 

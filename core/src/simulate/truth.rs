@@ -7,7 +7,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use super::{ErrorModel, SimError};
-use crate::io::{AngleUnit, Arm, LengthUnit, arm_to_toml, parse_arm};
+use crate::domain::Arm;
+use crate::io::{AngleUnit, LengthUnit, arm_to_toml, parse_arm};
 use crate::params::{JointModel, wrap};
 
 /// The paper's identified errors (method.md §7, Table 2), per joint:
@@ -31,7 +32,7 @@ pub(crate) const PAPER_PROBE_ERROR: [f64; 3] = [0.0, 0.0, 0.094];
 /// true arm its own where it states them.
 ///
 /// ```
-/// use aacmm_core::{io::Arm, params::DhParams, simulate::{ErrorModel, true_arm}};
+/// use aacmm_core::{domain::Arm, params::DhParams, simulate::{ErrorModel, true_arm}};
 /// use rand::SeedableRng;
 /// let nominal = Arm::without_limits("n", DhParams::paper_nominal());
 /// let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0);

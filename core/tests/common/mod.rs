@@ -1,7 +1,7 @@
 //! Data shared by the core's integration tests.
 
 use aacmm_core::calibrate::{FixSpec, LmOptions, Method, ModelOptions, SolverSettings};
-use aacmm_core::io::ReferenceLength;
+use aacmm_core::domain::ReferenceLength;
 use aacmm_core::session::Problem;
 use aacmm_core::{Arm, DataSet};
 

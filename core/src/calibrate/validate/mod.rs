@@ -814,7 +814,7 @@ pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
         let rows = p.rows();
         for (f, name) in rows.frames().iter().enumerate() {
             let n = (0..rows.len()).filter(|&i| rows.frame(i) == f).count();
-            if n - n.div_ceil(k) < crate::io::positions::MIN_FRAME_POSITIONS {
+            if n - n.div_ceil(k) < crate::domain::MIN_FRAME_POSITIONS {
                 return Err(OptionError::new(
                     Setting::CrossValidate,
                     k,
@@ -822,7 +822,7 @@ pub(crate) fn check_folds(data: &DataSet, k: usize) -> Result<(), OptionError> {
                         "frame {} has {n} positions: {k} folds leave its registration \
                          fewer than {} in a fold's training",
                         crate::error::quoted(name),
-                        crate::io::positions::MIN_FRAME_POSITIONS
+                        crate::domain::MIN_FRAME_POSITIONS
                     ),
                 ));
             }

@@ -66,10 +66,8 @@ use super::Warning;
 use super::text::{parse_toml, read_settings};
 use super::units::{AngleUnit, LengthUnit};
 use super::verdict::Rejected;
-use crate::corrections::Physics;
+use crate::domain::Arm;
 use crate::error::InputError;
-use crate::params::DhParams;
-use crate::tolerances::Tolerances;
 
 mod messages;
 mod schema;
@@ -81,61 +79,12 @@ pub(crate) use schema::ArmFile;
 /// measuring arm is that long, so the lengths are likely millimetres.
 pub(crate) const PLAUSIBLE_METRES: f64 = 10.0;
 
-/// An arm: its name, its geometry (mm, rad) and its optional joint limits.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Arm {
-    /// Free-form name (may be empty).
-    pub name: String,
-    /// Geometry, mm and rad.
-    pub params: DhParams,
-    /// Per joint, the optional `[min, max]` of the encoder reading `q`, rad.
-    /// Has one entry per joint when read from a file.
-    pub limits: Vec<Option<[f64; 2]>>,
-    /// The stated tolerances of the nominal geometry (the arm file's
-    /// `[prior]` table), if any: a fit uses them as a prior unless told
-    /// otherwise.
-    pub prior: Option<Tolerances>,
-    /// What the arm states beyond its geometry: masses, gravity and the
-    /// corrections' values ([`crate::corrections`]); empty by default.
-    /// Boxed: most arms have none, and an arm is moved by value often.
-    pub physics: Box<Physics>,
-    /// The diameter of the probe's ball, mm (`[probe] ball_diameter_mm`),
-    /// if stated: points probed on a surface lie a ball radius from the
-    /// probe centre the chain ends in (sphere surfaces, [`crate::residuals::spheres`]).
-    pub ball_diameter_mm: Option<f64>,
-    /// The named tool points beyond the probe (`[[tool]]`,
-    /// [`super::tools`]), in file order; empty for most arms.
-    pub tools: Vec<super::tools::Tool>,
-}
-
 /// The largest probe ball an arm file may state, mm: a stylus ball is
 /// 0.5–8 mm, a tracker's target 38.1 mm (1.5 in).
 pub(crate) const MAX_BALL_DIAMETER_MM: f64 = 100.0;
 /// The smallest, mm: below it the value was most likely written in metres
 /// (a 6 mm ball as `0.006`); the field is in mm whatever `length_unit` says.
 pub(crate) const MIN_BALL_DIAMETER_MM: f64 = 0.1;
-
-impl Arm {
-    /// An arm without joint limits.
-    ///
-    /// ```
-    /// use aacmm_core::{io::Arm, params::DhParams};
-    /// let arm = Arm::without_limits("nominal", DhParams::paper_nominal());
-    /// assert_eq!(arm.limits, vec![None; 6]);
-    /// ```
-    pub fn without_limits(name: impl Into<String>, params: DhParams) -> Arm {
-        let n = params.joint_count();
-        Arm {
-            name: name.into(),
-            params,
-            limits: vec![None; n],
-            prior: None,
-            physics: Box::default(),
-            ball_diameter_mm: None,
-            tools: Vec::new(),
-        }
-    }
-}
 
 /// Reads an arm file (standard input for `-`); returns the arm and any
 /// warnings (for the caller to print). Messages name the file as
@@ -220,7 +169,8 @@ pub(crate) fn parse_arm_with(
 /// reader rejects.
 ///
 /// ```
-/// use aacmm_core::io::{Arm, AngleUnit, LengthUnit, arm_to_toml, parse_arm};
+/// use aacmm_core::domain::Arm;
+/// use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, parse_arm};
 /// use aacmm_core::params::DhParams;
 /// let arm = Arm::without_limits("nominal", DhParams::paper_nominal());
 /// let text = arm_to_toml(&arm, LengthUnit::Mm, AngleUnit::Deg);
@@ -237,7 +187,8 @@ pub fn arm_to_toml(arm: &Arm, length_unit: LengthUnit, angle_unit: AngleUnit) ->
 /// Writes an arm file (see [`arm_to_toml`]).
 ///
 /// ```no_run
-/// use aacmm_core::io::{Arm, AngleUnit, LengthUnit, write_arm};
+/// use aacmm_core::domain::Arm;
+/// use aacmm_core::io::{AngleUnit, LengthUnit, write_arm};
 /// let arm = Arm::without_limits("nominal", aacmm_core::params::DhParams::paper_nominal());
 /// write_arm(std::path::Path::new("arm.toml"), &arm, LengthUnit::Mm, AngleUnit::Deg)?;
 /// # Ok::<(), aacmm_core::error::InputError>(())

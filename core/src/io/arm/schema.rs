@@ -7,8 +7,9 @@ use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
 use super::messages::unsupported;
-use super::{Arm, MAX_BALL_DIAMETER_MM, MIN_BALL_DIAMETER_MM, PLAUSIBLE_METRES};
+use super::{MAX_BALL_DIAMETER_MM, MIN_BALL_DIAMETER_MM, PLAUSIBLE_METRES};
 use crate::corrections::{Harmonic, MAX_HARMONIC_ORDER, Mass, Physics};
+use crate::domain::Arm;
 use crate::error::{InputError, quoted};
 use crate::io::Warning;
 use crate::io::text::line_of;

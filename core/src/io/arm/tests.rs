@@ -1,6 +1,6 @@
 use super::messages::unsupported;
 use super::*;
-use crate::params::{DhJoint, JointKind, JointModel};
+use crate::params::{DhJoint, DhParams, JointKind, JointModel};
 use rand::{RngExt, SeedableRng};
 
 const F: &str = "my-arm.toml";

@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 use crate::calibrate::validate::{Figures, PositionErrors};
 use crate::calibrate::{Calibration, Method, ModelOptions, SolverSettings, calibrate};
 use crate::dataset::DataSet;
-use crate::io::Arm;
+use crate::domain::Arm;
 use crate::params::DhParams;
 use crate::report::data::{Evaluated, evaluate_all};
 use crate::report::{Arms, Measured, positions};

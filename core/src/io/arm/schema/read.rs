@@ -65,7 +65,7 @@ impl ArmFile {
     /// The `[[tool]]` tables, checked: a name not empty, not the default
     /// tool's, not repeated; an offset of three numbers (finite: checked
     /// with every number first).
-    fn tools(&self, text: &str, file: &str) -> Result<Vec<crate::io::tools::Tool>, InputError> {
+    fn tools(&self, text: &str, file: &str) -> Result<Vec<crate::domain::Tool>, InputError> {
         let mut seen: Vec<&str> = Vec::new();
         let mut out = Vec::with_capacity(self.tool.len());
         for t in self.tool.iter().map(Spanned::get_ref) {
@@ -94,7 +94,7 @@ impl ArmFile {
             let ball = (t.ball_diameter_mm.as_ref())
                 .map(|d| checked_ball(d, &ctx, text, file))
                 .transpose()?;
-            out.push(crate::io::tools::Tool {
+            out.push(crate::domain::Tool {
                 name: name.clone(),
                 offset,
                 ball_diameter_mm: ball,
