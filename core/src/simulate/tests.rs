@@ -244,6 +244,34 @@ fn newly_assembled_arm_campaign_reproduces_sockets() {
     assert!(big >= 3, "{:?}", c.true_arm.params.joints);
 }
 
+/// The poses are streamed into their file: the bytes of `write_poses` into
+/// memory; a campaign without lengths written over one with them removes
+/// the stale `lengths.csv`, and the paths written start with the poses.
+#[test]
+fn poses_stream_into_their_file_and_a_stale_lengths_file_goes() {
+    let mut s = CampaignSettings::new(3, ErrorModel::Paper, 4, 6);
+    s.reference_lengths = 2;
+    let dir = temp_dir("stream");
+    let c = simulate(&paper(), &s).unwrap();
+    write_campaign(&dir, &c, &s).unwrap();
+    let mut poses = Vec::new();
+    crate::io::write_poses(&mut poses, &c.poses, AngleUnit::Deg).unwrap();
+    assert_eq!(std::fs::read(dir.join(POSES_FILE)).unwrap(), poses);
+    assert!(dir.join(LENGTHS_FILE).exists());
+    s.reference_lengths = 0;
+    let c = simulate(&paper(), &s).unwrap();
+    let written = write_campaign(&dir, &c, &s).unwrap();
+    assert!(!dir.join(LENGTHS_FILE).exists());
+    let names: Vec<_> = (written.iter())
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        [POSES_FILE, SOCKETS_FILE, TRUE_ARM_FILE, CAMPAIGN_FILE]
+    );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 fn files(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
     let mut out: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
         .unwrap()
