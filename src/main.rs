@@ -69,7 +69,11 @@ enum Command {
     /// Acceptance tests of a measuring arm (ISO 10360-12 / ASME B89.4.22): P_Size, P_Form, L_Dia, E_Uni, SPAT, decided against MPEs.
     #[command(
         allow_negative_numbers = true,
-        after_help = "Exit status: 0 when every test with a stated MPE passes (|value| ≤ MPE − U,                       ISO 14253-1), or when no MPE is stated (the figures are printed and the                       output says that nothing was decided); 1 for an error, or when a test                       with a stated MPE fails or is inconclusive, or an MPE is stated for a test                       no data performs (each named); 2 for a command line that cannot be parsed."
+        after_help = "Exit status: 0 when every test with a stated MPE passes (|value| ≤ MPE − U, \
+                      ISO 14253-1), or when no MPE is stated (the figures are printed and the \
+                      output says that nothing was decided); 1 for an error, or when a test \
+                      with a stated MPE fails or is inconclusive, or an MPE is stated for a test \
+                      no data performs (each named); 2 for a command line that cannot be parsed."
     )]
     Verify(Box<commands::verify::Args>),
 }

@@ -10,7 +10,10 @@
 //!   brace-matched, test modules skipped), with the same figure for every
 //!   function both see, and two corrections: a `;` inside the signature
 //!   (`[T; N]`) does not make a function a declaration, and a test module
-//!   with a visibility (`pub(crate) mod tests {`) is a test module.
+//!   with a visibility (`pub(crate) mod tests {`) is a test module;
+//! - no string literal outside tests holds a run of more than
+//!   [`MAX_SPACES_IN_TEXT`] spaces inside a line: a line continuation lost,
+//!   which a user reads as a gap in a message or a command's help.
 //!
 //! Each check holds the exceptions found when it was written
 //! ([`KNOWN_VIOLATIONS`], [`KNOWN_LONG`]) and demands that they equal what
@@ -1024,4 +1027,122 @@ pub(crate) mod more_tests {
             ("array_argument", 22, 4),
         ]
     );
+}
+
+// ---------------------------------------------------------------------------
+// Text a user reads.
+
+/// More spaces than this between two characters of one line inside a string
+/// literal are a line continuation lost: a `\` at a line's end taken out
+/// and the next line's indentation left in the text, so that a message
+/// reads "would absorb them                  whole" (two such were found
+/// when this check was written, a refusal and a command's `--help`, with
+/// runs of 18 and 22). Text laid out in columns (`"stated (mm):         {}"`)
+/// has runs of up to 9.
+const MAX_SPACES_IN_TEXT: usize = 12;
+
+/// The ordinary (not raw) string literals of `s` outside comments and char
+/// literals, as spans of their text (quotes excluded): the scan of
+/// [`blank`], keeping the spans it blanks.
+fn string_literals(s: &[char]) -> Vec<(usize, usize)> {
+    let n = s.len();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < n {
+        if starts_with(s, i, "//") {
+            i = find(s, "\n", i).unwrap_or(n);
+        } else if starts_with(s, i, "/*") {
+            i = find(s, "*/", i + 2).map_or(n, |j| j + 2);
+        } else if starts_with(s, i, "r#\"") || starts_with(s, i, "r\"") {
+            let h = s[i + 1..].iter().position(|&c| c == '"').unwrap_or(0);
+            let term: String = std::iter::once('"')
+                .chain(std::iter::repeat_n('#', h))
+                .collect();
+            i = find(s, &term, i + 2 + h).map_or(n, |j| j + h + 1);
+        } else if s[i] == '"' {
+            let mut j = i + 1;
+            while j < n && s[j] != '"' {
+                j += if s[j] == '\\' { 2 } else { 1 };
+            }
+            out.push((i + 1, j.min(n)));
+            i = j + 1;
+        } else if let Some(len) = char_literal(s, i) {
+            i += len;
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Where `text` (a literal's) has more than [`MAX_SPACES_IN_TEXT`] spaces
+/// between two characters of one line, the first of them not the `n` of a
+/// `\n` escape (indentation after an escaped newline is text laid out on
+/// purpose).
+fn lost_continuation(text: &[char]) -> Option<usize> {
+    let mut k = 0;
+    while k < text.len() {
+        let run = text[k..].iter().take_while(|&&c| c == ' ').count();
+        if run > MAX_SPACES_IN_TEXT && k > 0 && k + run < text.len() {
+            let before = text[k - 1];
+            let escaped_newline = before == 'n' && k >= 2 && text[k - 2] == '\\';
+            if !before.is_whitespace() && !escaped_newline && !text[k + run].is_whitespace() {
+                return Some(k);
+            }
+        }
+        k += run.max(1);
+    }
+    None
+}
+
+/// The lost continuations of `src`'s string literals outside its test
+/// modules, by line.
+fn lost_continuations(src: &str) -> Vec<usize> {
+    let s: Vec<char> = src.chars().collect();
+    let tests: Vec<(usize, usize)> = test_modules(&blank(src))
+        .iter()
+        .filter_map(|t| t.body)
+        .collect();
+    string_literals(&s)
+        .into_iter()
+        .filter(|&(a, _)| !tests.iter().any(|&(t0, t1)| t0 <= a && a <= t1))
+        .filter_map(|(a, b)| lost_continuation(&s[a..b]).map(|k| line_of(&s, a + k)))
+        .collect()
+}
+
+#[test]
+fn no_text_holds_a_lost_line_continuation() {
+    let mut found = Vec::new();
+    for dir in FN_DIRS {
+        for file in measured_files(dir) {
+            for line in lost_continuations(&read(&file)) {
+                found.push(format!("{file}:{line}"));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "string literals with a run of spaces inside a line (a `\\` at a line's end lost?): {found:?}"
+    );
+}
+
+#[test]
+fn the_continuation_scan_sees_text_not_layout_comments_or_tests() {
+    let src = r##"
+fn f() {
+    let lost = "would absorb them                whole";
+    let kept = "one line \
+                the next";
+    let table = "a\n                b  stated (mm):         {}";
+    let raw = r#"x                y"#;
+    // "a comment                with spaces"
+    let tail = "ends in spaces                ";
+    let c = '"'; let after = "after a quote char                here";
+}
+#[cfg(test)]
+mod tests {
+    const T: &str = "aligned                columns";
+}
+"##;
+    assert_eq!(lost_continuations(src), [3, 10]);
 }

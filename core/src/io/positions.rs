@@ -465,7 +465,8 @@ impl Positions {
         if let Some(k) = (1..count.len()).find(|&k| (1..MIN_TOOL_ROWS).contains(&count[k])) {
             let first = (0..self.len()).find(|&i| self.tool(i) == k).unwrap_or(0);
             let message = format!(
-                "tool {} is seen in {} row(s): its offset (three unknowns) would absorb them                  whole and no residual would check it; give it at least {MIN_TOOL_ROWS} rows",
+                "tool {} is seen in {} row(s): its offset (three unknowns) would absorb them \
+                 whole and no residual would check it; give it at least {MIN_TOOL_ROWS} rows",
                 crate::error::quoted(&self.tools[k]),
                 count[k]
             );
