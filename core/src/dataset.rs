@@ -1176,10 +1176,10 @@ impl DataSet {
     ///
     /// # Errors
     ///
-    /// As `crate::domain::Positions::resolve_tools`: a row naming a tool
-    /// `tools` does not have (with the known tools), a tool seen in one row
-    /// only.
-    pub fn with_tools(mut self, tools: &crate::io::ToolNames) -> Result<DataSet, InputError> {
+    /// As `Positions::resolve_tools` (in [`crate::io::positions`]): a row
+    /// naming a tool `tools` does not have (with the known tools), a tool
+    /// seen in one row only.
+    pub fn with_tools(mut self, tools: &crate::domain::ToolNames) -> Result<DataSet, InputError> {
         if let Some(p) = &mut self.positions {
             p.rows.resolve_tools(tools, &p.file)?;
         }

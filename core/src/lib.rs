@@ -2,8 +2,9 @@
 //! evaluates it — parameters, the reference (autodiff) model, the generated
 //! kernel, data files, metrics, the campaign simulator.
 //!
-//! Data flows one way: files → typed data set → kernel → residuals/metrics →
-//! solver → report; no module reaches back up that chain.
+//! Data flows one way: the nouns (`domain`) and their files (`io`) → typed
+//! data set → kernel → residuals/metrics → solver → report; no module
+//! reaches back up that chain.
 //!
 //! # The front door
 //!

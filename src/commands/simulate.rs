@@ -405,10 +405,10 @@ fn acceptance_placements(
 /// true_arm.toml with the true frames.
 fn tracker(
     args: &Args,
-    nominal: &aacmm_core::domain::Arm,
+    nominal: &Arm,
     errors: &ErrorModel,
-    truth: Option<&aacmm_core::domain::Arm>,
-) -> Result<aacmm_core::domain::Arm> {
+    truth: Option<&Arm>,
+) -> Result<Arm> {
     use aacmm_core::io::frames::frames_to_toml;
     use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, positions::write_positions};
     use aacmm_core::simulate::{POSITIONS_FILE, PositionSettings, true_frames};
@@ -431,7 +431,7 @@ fn tracker(
         session_h: args.session_hours,
         approach: args.approach,
     };
-    let session = |t: &aacmm_core::domain::Arm| {
+    let session = |t: &Arm| {
         aacmm_core::simulate::simulate_session(t, &settings, &conditions, args.drift)
     };
     let (truth, campaign) = match truth {
@@ -709,7 +709,7 @@ fn campaign_settings(args: &Args, errors: ErrorModel, sockets: SocketPlan) -> Ca
 /// What was simulated and written, on stderr.
 fn describe(
     args: &Args,
-    nominal: &aacmm_core::domain::Arm,
+    nominal: &Arm,
     settings: &CampaignSettings,
     campaign: &aacmm_core::simulate::Campaign,
     written: &[PathBuf],

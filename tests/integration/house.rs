@@ -66,7 +66,8 @@ const RANKS: &[(&str, u8)] = &[
     ("urdf", 1),
     // What an arm is beyond its chain (masses, compliance, encoder
     // harmonics, expansion) and the poses it makes of readings: the
-    // kernel's input, used by the files, the data set and the terms.
+    // kernel's input, used by an arm (`domain`), the files, the data set
+    // and the terms.
     ("corrections", 1),
     // 2: the nouns (an arm, the evidence recorded on it), and the files
     // they are read from and written to; the files use the nouns, never
@@ -83,8 +84,8 @@ const RANKS: &[(&str, u8)] = &[
     ("simulate", 4),
     // 5: the solver, and what it identifies and plans.
     ("identify", 5),
-    // The acceptance tests read io, kernel, metrics and the sphere term's
-    // algebraic start; nothing above reads them yet.
+    // The acceptance tests read the nouns (`domain`), kernel, metrics and
+    // the sphere term's algebraic start; nothing above reads them yet.
     ("acceptance", 5),
     ("calibrate", 5),
     ("hayati", 5),
@@ -106,8 +107,12 @@ const RANKS: &[(&str, u8)] = &[
 /// is one of these, may not reference these modules): the ranks must imply
 /// them (checked by `the_ranks_imply_the_issues_rules`).
 const ISSUE_RULES: &[(&[&str], &[&str])] = &[
-    // core/src/{residuals*, dataset.rs, io/*, kernel/*} ↛ crate::calibrate
-    (&["residuals", "dataset", "io", "kernel"], &["calibrate"]),
+    // core/src/{residuals*, dataset.rs, io/*, kernel/*} ↛ crate::calibrate;
+    // domain/* was part of io/* when the rule was written.
+    (
+        &["residuals", "dataset", "domain", "io", "kernel"],
+        &["calibrate"],
+    ),
     // core/src/calibrate/*, core/src/identify.rs ↛ crate::report, crate::session
     (&["calibrate", "identify"], &["report", "session"]),
 ];

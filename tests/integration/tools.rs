@@ -4,8 +4,8 @@
 //! refused by file, line and field.
 
 use aacmm_core::domain::Arm;
+use aacmm_core::domain::ToolNames;
 use aacmm_core::identify::identify;
-use aacmm_core::io::ToolNames;
 use aacmm_core::params::DhParams;
 use aacmm_core::simulate::{
     ErrorModel, PositionCampaign, perturbed_tools, random_tools, seen_at_markers,

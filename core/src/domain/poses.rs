@@ -4,8 +4,10 @@
 use super::labels::Labels;
 use crate::memory::{OutOfMemory, try_grow, try_vec};
 
-/// The touches of a poses file, stored compactly: each point label once
-/// (rows name their point by index), the readings in one row-major array.
+/// The touches of points, row by row — what a poses file
+/// ([`crate::io::poses`]) is read into — stored compactly: each point label
+/// once (rows name their point by index), the readings in one row-major
+/// array.
 ///
 /// ```
 /// use aacmm_core::domain::Poses;
@@ -29,17 +31,18 @@ pub struct Poses {
     pub(crate) prismatic: u16,
     /// The labels of the points touched, each once, in order of first
     /// appearance.
-    pub(crate) points: Labels,
+    points: Labels,
     /// Per row, the index of its point in `points`.
     pub(crate) point_of: Vec<u32>,
     /// Per row, the `joints` encoder readings, rad, row after row.
     pub(crate) q: Vec<f64>,
-    /// Per row, its 1-based line in the source file (for messages).
+    /// Per row, its 1-based line in the source file (for messages); 0 for
+    /// a row made in memory.
     pub(crate) lines: Vec<usize>,
     /// Per row, the temperature (°C) and time (s), when the file has the
     /// columns ([`crate::corrections`]).
-    pub(crate) temperature: Option<Vec<f64>>,
-    pub(crate) time: Option<Vec<f64>>,
+    temperature: Option<Vec<f64>>,
+    time: Option<Vec<f64>>,
     /// Per row, the direction each joint approached its reading from
     /// (`+1`, `−1`, `0` not known), row after row, when the file has the
     /// column ([`crate::io::approach`]).
@@ -433,7 +436,7 @@ impl Poses {
         (0..self.len()).map(|row| self.reading(row))
     }
 
-    /// The 1-based line of row `row` in its file.
+    /// The 1-based line of row `row` in its file (0: made in memory).
     pub fn line(&self, row: usize) -> usize {
         self.lines[row]
     }

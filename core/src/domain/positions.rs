@@ -7,7 +7,7 @@ use std::collections::HashMap;
 use super::labels::Labels;
 use crate::memory::{OutOfMemory, try_grow};
 
-/// The frame of a file without a `frame` column.
+/// The frame of rows that name none (a file without a `frame` column).
 pub const DEFAULT_FRAME: &str = "instrument";
 
 /// How far from 1 the length of an orientation's quaternion may be: a
@@ -15,51 +15,50 @@ pub const DEFAULT_FRAME: &str = "instrument";
 /// column mix-up or a hand-typed row, refused rather than normalised.
 pub const UNIT_QUATERNION_TOLERANCE: f64 = 1e-6;
 
-/// The fewest rows a named tool's offset (three unknowns) is fitted from.
-pub(crate) const MIN_TOOL_ROWS: usize = 2;
-
 /// The fewest positions a frame's registration (six unknowns) can rest on.
 pub const MIN_FRAME_POSITIONS: usize = 3;
 
-/// The rows of a reference-position file, in file order.
+/// The positions an instrument saw, row by row, with the readings they
+/// were seen at — what a reference-position file
+/// ([`crate::io::positions`]) is read into, in file order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Positions {
     pub(crate) joints: usize,
     /// The prismatic joints (bit `j` for joint `j`): readings in mm.
     pub(crate) prismatic: u16,
     /// The point labels, each once.
-    pub(crate) labels: Labels,
+    labels: Labels,
     /// Per row, its point label (an index into `labels`).
-    pub(crate) label_of: Vec<u32>,
+    label_of: Vec<u32>,
     /// The frames, in order of first appearance.
-    pub(crate) frames: Vec<String>,
+    frames: Vec<String>,
     /// Each frame's index in `frames` (a file may hold many stations).
-    pub(crate) frame_index: HashMap<String, usize>,
+    frame_index: HashMap<String, usize>,
     /// Per row, its frame (index into `frames`).
-    pub(crate) frame_of: Vec<usize>,
+    frame_of: Vec<usize>,
     /// Readings, rad, row-major.
-    pub(crate) q: Vec<f64>,
+    q: Vec<f64>,
     /// Per row, the position seen, mm.
-    pub(crate) xyz: Vec<[f64; 3]>,
+    xyz: Vec<[f64; 3]>,
     /// Per row, the tool's orientation seen (`[w, x, y, z]`, unit, as
     /// read), when the row gives one.
-    pub(crate) orientation: Vec<Option<[f64; 4]>>,
+    orientation: Vec<Option<[f64; 4]>>,
     /// The tools rows name, in order of first appearance after the
     /// default tool (always first, [`super::DEFAULT_TOOL`]).
     pub(crate) tools: Vec<String>,
     /// Per tool, its nominal offset (mm, the last joint's frame) once the
-    /// arm's tools are known ([`Positions::resolve_tools`]); `None` for the
-    /// default tool (the arm's probe).
+    /// arm's tools are known (`resolve_tools`, in [`crate::io::positions`]);
+    /// `None` for the default tool (the arm's probe).
     pub(crate) tool_offsets: Vec<Option<[f64; 3]>>,
     /// Per row, its tool (index into `tools`).
-    pub(crate) tool_of: Vec<u32>,
+    tool_of: Vec<u32>,
     /// Per row, its stated standard uncertainty per coordinate, mm.
     pub(crate) uncertainty: Vec<Option<f64>>,
     /// Per row, its 1-based line.
     pub(crate) lines: Vec<usize>,
     /// Per row, the temperature (°C) and time (s), when recorded.
-    pub(crate) temperature: Option<Vec<f64>>,
-    pub(crate) time: Option<Vec<f64>>,
+    temperature: Option<Vec<f64>>,
+    time: Option<Vec<f64>>,
     /// Per row and joint (row after row), the direction of approach (`+1`,
     /// `−1`, `0` not known), when recorded ([`crate::io::approach`]).
     pub(crate) approach: Option<Vec<i8>>,
@@ -394,7 +393,8 @@ impl Positions {
     }
 
     /// Tool `k`'s nominal offset (mm, the last joint's frame), once known
-    /// ([`Positions::resolve_tools`]); `None` for the default tool.
+    /// (`resolve_tools`, in [`crate::io::positions`]); `None` for the
+    /// default tool.
     pub(crate) fn tool_offset(&self, k: usize) -> Option<[f64; 3]> {
         self.tool_offsets[k]
     }

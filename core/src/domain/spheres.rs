@@ -6,32 +6,34 @@ use super::{DEFAULT_TOOL, Tool};
 /// The fewest points that can fix a sphere of unknown centre and diameter.
 pub const MIN_SPHERE_POINTS: usize = 4;
 
-/// The rows of a sphere-surface file, in file order.
+/// Points probed on reference spheres, row by row: per row, the sphere
+/// and the readings — what a sphere-surface file ([`crate::io::spheres`])
+/// is read into, in file order.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Spheres {
-    pub(crate) joints: usize,
+    joints: usize,
     /// The prismatic joints (bit `j` for joint `j`): readings in mm.
-    pub(crate) prismatic: u16,
+    prismatic: u16,
     /// The sphere labels, in order of first appearance.
-    pub(crate) names: Vec<String>,
+    names: Vec<String>,
     /// Per row, its sphere (an index into `names`).
-    pub(crate) sphere_of: Vec<usize>,
+    sphere_of: Vec<usize>,
     /// Per sphere, its index's inverse: the sphere of a label (so that
     /// reading a file is linear in its rows whatever the spheres).
-    pub(crate) index: std::collections::HashMap<String, usize>,
+    index: std::collections::HashMap<String, usize>,
     /// Per sphere, its rows in file order.
-    pub(crate) rows: Vec<Vec<usize>>,
+    rows: Vec<Vec<usize>>,
     /// Readings, rad (mm for a slide), row-major.
-    pub(crate) q: Vec<f64>,
+    q: Vec<f64>,
     /// Per row, its 1-based line.
-    pub(crate) lines: Vec<usize>,
+    lines: Vec<usize>,
     /// Per row, its articulation, when the file has the column.
-    pub(crate) articulation: Option<Vec<u32>>,
+    articulation: Option<Vec<u32>>,
     /// The tools rows name: the default tool (the arm's `[probe]`) first,
     /// then in order of first appearance.
-    pub(crate) tools: Vec<Tool>,
+    tools: Vec<Tool>,
     /// Per row, its tool (an index into `tools`).
-    pub(crate) tool_of: Vec<u32>,
+    tool_of: Vec<u32>,
 }
 
 impl Spheres {
@@ -177,9 +179,14 @@ impl Spheres {
         &self.q
     }
 
-    /// Row `i`'s 1-based line in its file.
+    /// Row `i`'s 1-based line in its file (0: made in memory).
     pub fn line(&self, i: usize) -> usize {
         self.lines[i]
+    }
+
+    /// Whether the rows carry an articulation (the file's column).
+    pub(crate) fn has_articulation(&self) -> bool {
+        self.articulation.is_some()
     }
 
     /// Row `i`'s articulation, when the file has the column.

@@ -1,6 +1,8 @@
 //! Several tool points on one arm: markers on one rigid body, SMRs,
 //! styli. Their `[[tool]]` tables are described in [`crate::io::tools`].
 
+use std::collections::HashMap;
+
 use crate::error::quoted;
 use crate::setting::Setting;
 
@@ -72,4 +74,66 @@ pub fn arm_with_tool(
     out.params.probe = tool.offset;
     out.ball_diameter_mm = tool.ball_diameter_mm;
     Ok(out)
+}
+
+/// The tools rows may name: per name, its index
+/// (`0` the default tool, `k` the arm's `k`-th `[[tool]]`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ToolNames {
+    names: Vec<String>,
+    /// Per name, its nominal offset (mm; `None` for the default tool,
+    /// whose offset is the arm's probe).
+    offsets: Vec<Option<[f64; 3]>>,
+    /// Per name, its ball's diameter when stated (mm; `None` for the
+    /// default tool, whose ball is the arm's `[probe]`'s).
+    balls: Vec<Option<f64>>,
+    index: HashMap<String, u32>,
+}
+
+impl ToolNames {
+    /// The default tool and `tools`, in order.
+    pub fn of(tools: &[Tool]) -> ToolNames {
+        let names: Vec<String> = std::iter::once(DEFAULT_TOOL.to_string())
+            .chain(tools.iter().map(|t| t.name.clone()))
+            .collect();
+        let index = (names.iter().enumerate())
+            .map(|(k, n)| (n.clone(), k as u32))
+            .collect();
+        let offsets = std::iter::once(None)
+            .chain(tools.iter().map(|t| Some(t.offset)))
+            .collect();
+        let balls = std::iter::once(None)
+            .chain(tools.iter().map(|t| t.ball_diameter_mm))
+            .collect();
+        ToolNames {
+            names,
+            offsets,
+            balls,
+            index,
+        }
+    }
+
+    /// The ball diameter of the tool named `name` (mm), `None` for the
+    /// default tool, a tool without a ball, or a name not known.
+    pub fn ball_diameter(&self, name: &str) -> Option<f64> {
+        let k = *self.index.get(name)?;
+        self.balls[k as usize]
+    }
+
+    /// The nominal offset of the tool named `name` (mm, last joint's
+    /// frame), `None` for the default tool or a name not known.
+    pub fn offset(&self, name: &str) -> Option<[f64; 3]> {
+        let k = *self.index.get(name)?;
+        self.offsets[k as usize]
+    }
+
+    /// Every name, the default tool's first.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// The index of the tool named `name`, if known.
+    pub(crate) fn index_of(&self, name: &str) -> Option<u32> {
+        self.index.get(name).copied()
+    }
 }

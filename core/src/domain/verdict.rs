@@ -4,9 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Whether a calibration may be used (exit 0 of the command line), as the
-/// session decides it ([`crate::session::Verdict`] is this type) and its
-/// arm file records it.
+/// Whether a calibration may be used (exit 0 of the command line), in
+/// words: the session's typed verdict as its arm file records it
+/// ([`crate::session::Verdict::words`]), and as a reader reads it back.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArmVerdict {

@@ -49,7 +49,7 @@ pub struct JointColumns {
     strokes: Vec<Option<[f64; 2]>>,
     /// The tools a `tool` cell may name, when an arm says
     /// ([`super::tools`]); `None`: any name.
-    tools: Option<super::ToolNames>,
+    tools: Option<crate::domain::ToolNames>,
 }
 
 impl From<Option<usize>> for JointColumns {
@@ -83,7 +83,7 @@ impl From<&Arm> for JointColumns {
     /// shape is not one — no joints, too many — asks for its joint count,
     /// all revolute, so that the header check names the mismatch).
     fn from(arm: &Arm) -> JointColumns {
-        let tools = Some(super::ToolNames::of(&arm.tools));
+        let tools = Some(crate::domain::ToolNames::of(&arm.tools));
         let Ok(shape) = arm.params.shape() else {
             return JointColumns {
                 tools,
@@ -113,7 +113,7 @@ impl JointColumns {
     }
 
     /// The tools a `tool` cell may name (the arm's), when known.
-    pub(crate) fn tools(&self) -> Option<&super::ToolNames> {
+    pub(crate) fn tools(&self) -> Option<&crate::domain::ToolNames> {
         self.tools.as_ref()
     }
 

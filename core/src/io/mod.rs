@@ -9,6 +9,8 @@
 //! | reference lengths | CSV `point_a,point_b,distance[,uncertainty]` | [`lengths`] |
 //! | points (e.g. socket positions) | CSV `point,x,y,z` | [`points`] |
 //! | points probed on reference spheres | CSV `sphere,q1,...,qn` | [`spheres`] |
+//! | positions an instrument saw | CSV `point,q1,...,qn,x,y,z[,qw,qx,qy,qz]…` | [`positions`] |
+//! | tool points of an arm | the arm file's `[[tool]]` | [`tools`] |
 //!
 //! Discipline shared by all readers: units are stated, never guessed; every
 //! error is an [`InputError`] naming the file and, where known, the 1-based line
@@ -69,7 +71,7 @@ pub(crate) use positions::parse_positions;
 pub use positions::read_positions;
 pub use prior::parse_prior;
 pub use text::source_name;
-pub use tools::ToolNames;
+
 pub use units::{AngleUnit, LengthUnit, UnknownUnit};
 pub use verdict::Rejected;
 

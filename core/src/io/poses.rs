@@ -25,7 +25,7 @@ use super::columns::JointColumns;
 use super::split::{PIECE, TableReader, scan_table_on};
 use super::text::{Record, check_header, parse_f64, push_f64, quote, read_text};
 use super::units::AngleUnit;
-use crate::domain::Poses;
+use crate::domain::{Poses, Positions};
 use crate::error::InputError;
 use crate::memory::try_vec;
 
@@ -96,7 +96,7 @@ pub fn read_poses(
 /// What a file of joint readings held: the readings as [`Poses`] (a touch
 /// per row, of the row's `point`), and, for a reference-positions file, its
 /// rows whole (positions, frames; [`super::parse_positions`]).
-pub(crate) type PosesOrPositions = (Poses, Vec<Warning>, Option<crate::domain::Positions>);
+pub(crate) type PosesOrPositions = (Poses, Vec<Warning>, Option<Positions>);
 
 /// Reads a poses file or a reference-positions file (standard input for
 /// `-`): [`parse_poses_or_positions`].
@@ -213,10 +213,11 @@ pub(crate) fn parse_poses_on(
         (threads, piece),
     )?;
     let l = PosesLayout::of(&header);
-    let mut poses = poses.map(|(p, _)| p).unwrap_or_else(|| Poses {
-        approach: l.approach.then(Vec::new),
-        tool_of: l.tool.then(Vec::new),
-        ..Poses::new(l.joints)
+    let mut poses = poses.map(|(p, _)| p).unwrap_or_else(|| {
+        let mut empty = Poses::new(l.joints);
+        empty.approach = l.approach.then(Vec::new);
+        empty.tool_of = l.tool.then(Vec::new);
+        empty
     });
     poses.q.shrink_to_fit();
     poses.point_of.shrink_to_fit();

@@ -40,8 +40,11 @@ use super::approach::{APPROACH, approach_cell};
 use super::columns::JointColumns;
 use super::text::{Record, check_header, fmt_f64, parse_f64, quote, read_text, scan_table};
 use super::units::AngleUnit;
-use crate::domain::{DEFAULT_FRAME, MIN_TOOL_ROWS, Positions, UNIT_QUATERNION_TOLERANCE};
+use crate::domain::{DEFAULT_FRAME, Positions, UNIT_QUATERNION_TOLERANCE};
 use crate::error::InputError;
+
+/// The fewest rows a named tool's offset (three unknowns) is fitted from.
+pub(crate) const MIN_TOOL_ROWS: usize = 2;
 
 /// The orientation columns, in the order they follow `x,y,z`.
 const ORIENTATION: [&str; 4] = ["qw", "qx", "qy", "qz"];
@@ -219,9 +222,10 @@ pub fn parse_positions(
                 Some(l) => l,
                 None => layout.insert(header_layout(h, file, expected_joints)?),
             };
-            let out = out.get_or_insert_with(|| Positions {
-                prismatic: columns.prismatic_mask(),
-                ..Positions::new(l.joints)
+            let out = out.get_or_insert_with(|| {
+                let mut first = Positions::new(l.joints);
+                first.prismatic = columns.prismatic_mask();
+                first
             });
             parse_row(l, f, (file, line), (unit, &columns), &mut q, out)
         },
@@ -453,7 +457,7 @@ impl Positions {
     /// it) — each by line and field `tool`.
     pub(crate) fn resolve_tools(
         &mut self,
-        known: &super::ToolNames,
+        known: &crate::domain::ToolNames,
         file: &str,
     ) -> Result<(), InputError> {
         let mut count = vec![0usize; self.tools.len()];

@@ -35,8 +35,8 @@ use std::path::Path;
 use super::Warning;
 use super::columns::JointColumns;
 use super::text::{Record, check_header, parse_f64, read_text, scan_table};
-use super::tools::ToolNames;
 use super::units::AngleUnit;
+use crate::domain::ToolNames;
 use crate::domain::{MIN_SPHERE_POINTS, Spheres, Tool};
 use crate::error::InputError;
 
@@ -75,7 +75,7 @@ impl Spheres {
         file: &str,
         positions: &[[f64; 3]],
     ) -> Result<(), InputError> {
-        for (s, name) in self.names.iter().enumerate() {
+        for (s, name) in self.spheres().iter().enumerate() {
             let rows = self.rows_of(s);
             let points: Vec<[f64; 3]> = rows.iter().map(|&i| positions[i]).collect();
             let (depth, spread) = depth_and_spread(&points);
@@ -83,9 +83,9 @@ impl Spheres {
                 continue;
             }
             let radians = super::poses::look_like_radians(
-                &self.q,
+                self.readings(),
                 self.len(),
-                (self.joints, self.prismatic),
+                (self.joints(), self.prismatic_mask()),
                 1f64.to_degrees(),
             );
             let message = format!(
@@ -107,7 +107,7 @@ impl Spheres {
             );
             return Err(InputError::field(
                 file,
-                self.lines[rows[0]],
+                self.line(rows[0]),
                 "sphere",
                 message,
             ));
@@ -211,9 +211,9 @@ pub fn parse_spheres(
     check_counts(&out, file)?;
     check_one_tool_per_sphere(&out, file)?;
     let radians = super::poses::look_like_radians(
-        &out.q,
+        out.readings(),
         out.len(),
-        (out.joints, out.prismatic),
+        (out.joints(), out.prismatic_mask()),
         1f64.to_degrees(),
     );
     let warnings = match unit {
@@ -333,7 +333,7 @@ fn parse_row(
 ///
 /// As above, naming `file`, the line and the field `tool`.
 pub(crate) fn check_one_tool_per_sphere(s: &Spheres, file: &str) -> Result<(), InputError> {
-    for (k, name) in s.names.iter().enumerate() {
+    for (k, name) in s.spheres().iter().enumerate() {
         let rows = s.rows_of(k);
         let first = s.tool(rows[0]);
         if let Some(&i) = rows.iter().find(|&&i| s.tool(i) != first) {
@@ -341,13 +341,13 @@ pub(crate) fn check_one_tool_per_sphere(s: &Spheres, file: &str) -> Result<(), I
                 "sphere {} is probed by {} (line {}) and by {}: each placement is one probe's; \
                  label each probe's placements apart (e.g. `{}.{}`)",
                 crate::error::quoted(name),
-                crate::error::quoted(&s.tools[first].name),
-                s.lines[rows[0]],
-                crate::error::quoted(&s.tools[s.tool(i)].name),
+                crate::error::quoted(&s.tools()[first].name),
+                s.line(rows[0]),
+                crate::error::quoted(&s.tools()[s.tool(i)].name),
                 name,
-                s.tools[s.tool(i)].name
+                s.tools()[s.tool(i)].name
             );
-            return Err(InputError::field(file, s.lines[i], TOOL, message));
+            return Err(InputError::field(file, s.line(i), TOOL, message));
         }
     }
     Ok(())
@@ -360,7 +360,7 @@ pub(crate) fn check_one_tool_per_sphere(s: &Spheres, file: &str) -> Result<(), I
 ///
 /// As above, naming `file`, the line and the field `sphere`.
 pub(crate) fn check_counts(s: &Spheres, file: &str) -> Result<(), InputError> {
-    for (k, name) in s.names.iter().enumerate() {
+    for (k, name) in s.spheres().iter().enumerate() {
         let rows = s.rows_of(k);
         if rows.len() < MIN_SPHERE_POINTS {
             let message = format!(
@@ -370,7 +370,7 @@ pub(crate) fn check_counts(s: &Spheres, file: &str) -> Result<(), InputError> {
                 rows.len(),
                 if rows.len() == 1 { "" } else { "s" }
             );
-            return Err(InputError::field(file, s.lines[rows[0]], "sphere", message));
+            return Err(InputError::field(file, s.line(rows[0]), "sphere", message));
         }
     }
     Ok(())
@@ -389,10 +389,10 @@ pub fn write_spheres(
 ) -> std::io::Result<()> {
     use super::text::{fmt_f64, quote};
     let mut header = String::from("sphere");
-    for j in 1..=s.joints {
+    for j in 1..=s.joints() {
         header.push_str(&format!(",q{j}"));
     }
-    if s.articulation.is_some() {
+    if s.has_articulation() {
         header.push_str(",articulation");
     }
     let tooled = s.has_tools();
@@ -402,17 +402,22 @@ pub fn write_spheres(
     header.push('\n');
     w.write_all(header.as_bytes())?;
     for i in 0..s.len() {
-        let mut line = quote(&s.names[s.sphere(i)])?.into_owned();
+        let mut line = quote(&s.spheres()[s.sphere(i)])?.into_owned();
         for (j, &x) in s.reading(i).iter().enumerate() {
             line.push(',');
-            line.push_str(&fmt_f64(JointColumns::to_written(s.prismatic, j, x, unit)));
+            line.push_str(&fmt_f64(JointColumns::to_written(
+                s.prismatic_mask(),
+                j,
+                x,
+                unit,
+            )));
         }
         if let Some(a) = s.articulation(i) {
             line.push_str(&format!(",{a}"));
         }
         if tooled {
             line.push(',');
-            line.push_str(&quote(&s.tools[s.tool(i)].name)?);
+            line.push_str(&quote(&s.tools()[s.tool(i)].name)?);
         }
         line.push('\n');
         w.write_all(line.as_bytes())?;

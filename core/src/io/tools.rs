@@ -1,4 +1,7 @@
-//! Several tool points on one arm: markers on one rigid body, SMRs, styli.
+//! The `[[tool]]` tables of an arm file, and the tool names a data file's
+//! `tool` column may use ([`ToolNames`]). The tools themselves
+//! ([`crate::domain::Tool`]): several tool points on one arm — markers on
+//! one rigid body, SMRs, styli.
 //!
 //! An arm file lists them after its `[probe]`:
 //!
@@ -22,9 +25,7 @@
 //! `tool.NAME.x/y/z`) and writes it back to the calibrated arm's
 //! `[[tool]]`; an arm without `[[tool]]` reads and writes as before.
 
-use std::collections::HashMap;
-
-use crate::domain::{DEFAULT_TOOL, Tool};
+use crate::domain::{DEFAULT_TOOL, ToolNames};
 use crate::error::{InputError, quoted};
 
 /// Why the name `name` of a `[[tool]]` is refused (`None`: accepted),
@@ -53,62 +54,9 @@ pub(crate) fn name_refused(name: &str, seen: &[&str]) -> Option<String> {
     }
 }
 
-/// The tools a data file may name, for its reader: per name, its index
-/// (`0` the default tool, `k` the arm's `k`-th `[[tool]]`).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ToolNames {
-    names: Vec<String>,
-    /// Per name, its nominal offset (mm; `None` for the default tool,
-    /// whose offset is the arm's probe).
-    offsets: Vec<Option<[f64; 3]>>,
-    /// Per name, its ball's diameter when stated (mm; `None` for the
-    /// default tool, whose ball is the arm's `[probe]`'s).
-    balls: Vec<Option<f64>>,
-    index: HashMap<String, u32>,
-}
-
+/// What a data file's reader adds to [`ToolNames`]: a `tool` cell resolved
+/// in the file's words.
 impl ToolNames {
-    /// The default tool and `tools`, in order.
-    pub fn of(tools: &[Tool]) -> ToolNames {
-        let names: Vec<String> = std::iter::once(DEFAULT_TOOL.to_string())
-            .chain(tools.iter().map(|t| t.name.clone()))
-            .collect();
-        let index = (names.iter().enumerate())
-            .map(|(k, n)| (n.clone(), k as u32))
-            .collect();
-        let offsets = std::iter::once(None)
-            .chain(tools.iter().map(|t| Some(t.offset)))
-            .collect();
-        let balls = std::iter::once(None)
-            .chain(tools.iter().map(|t| t.ball_diameter_mm))
-            .collect();
-        ToolNames {
-            names,
-            offsets,
-            balls,
-            index,
-        }
-    }
-
-    /// The ball diameter of the tool named `name` (mm), `None` for the
-    /// default tool, a tool without a ball, or a name not known.
-    pub fn ball_diameter(&self, name: &str) -> Option<f64> {
-        let k = *self.index.get(name)?;
-        self.balls[k as usize]
-    }
-
-    /// The nominal offset of the tool named `name` (mm, last joint's
-    /// frame), `None` for the default tool or a name not known.
-    pub fn offset(&self, name: &str) -> Option<[f64; 3]> {
-        let k = *self.index.get(name)?;
-        self.offsets[k as usize]
-    }
-
-    /// Every name, the default tool's first.
-    pub fn names(&self) -> &[String] {
-        &self.names
-    }
-
     /// The index of the tool of cell `cell` (empty: the default tool), or
     /// an error at `file:line` naming the field `tool` and the known tools.
     ///
@@ -119,8 +67,8 @@ impl ToolNames {
         if cell.is_empty() {
             return Ok(0);
         }
-        self.index.get(cell).copied().ok_or_else(|| {
-            let known: Vec<String> = self.names.iter().map(|n| quoted(n)).collect();
+        self.index_of(cell).ok_or_else(|| {
+            let known: Vec<String> = self.names().iter().map(|n| quoted(n)).collect();
             InputError::field(
                 file,
                 line,
@@ -139,7 +87,7 @@ impl ToolNames {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::domain::{Arm, block_name};
+    use crate::domain::{Arm, Tool, block_name};
     use crate::io::{AngleUnit, LengthUnit, arm_to_toml, parse_arm};
     use crate::params::DhParams;
 

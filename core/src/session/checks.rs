@@ -38,7 +38,7 @@ pub(super) fn of_arm_shape(arm: &Arm, data: DataSet) -> Result<DataSet, Calibrat
 /// `data` with each tool its positions name given the arm's nominal
 /// offset; a tool the arm does not list is refused by file, line and field.
 pub(super) fn of_arm_tools(arm: &Arm, data: DataSet) -> Result<DataSet, CalibrationError> {
-    data.with_tools(&crate::io::ToolNames::of(&arm.tools))
+    data.with_tools(&crate::domain::ToolNames::of(&arm.tools))
         .map_err(|e| match e {
             crate::error::InputError::Field {
                 file,
