@@ -403,12 +403,7 @@ fn acceptance_placements(
 /// The tracker campaign of --positions: of `truth` (the touch campaign's
 /// true arm) or of a true arm drawn from `errors`; positions.csv and
 /// true_arm.toml with the true frames.
-fn tracker(
-    args: &Args,
-    nominal: &Arm,
-    errors: &ErrorModel,
-    truth: Option<&Arm>,
-) -> Result<Arm> {
+fn tracker(args: &Args, nominal: &Arm, errors: &ErrorModel, truth: Option<&Arm>) -> Result<Arm> {
     use aacmm_core::io::frames::frames_to_toml;
     use aacmm_core::io::{AngleUnit, LengthUnit, arm_to_toml, positions::write_positions};
     use aacmm_core::simulate::{POSITIONS_FILE, PositionSettings, true_frames};
@@ -431,9 +426,8 @@ fn tracker(
         session_h: args.session_hours,
         approach: args.approach,
     };
-    let session = |t: &Arm| {
-        aacmm_core::simulate::simulate_session(t, &settings, &conditions, args.drift)
-    };
+    let session =
+        |t: &Arm| aacmm_core::simulate::simulate_session(t, &settings, &conditions, args.drift);
     let (truth, campaign) = match truth {
         Some(t) => (t.clone(), session(t)),
         None if conditions != Default::default() => {

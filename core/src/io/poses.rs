@@ -637,7 +637,7 @@ fn push_row(
     conditions: [Option<&[f64]>; 2],
 ) -> std::io::Result<()> {
     let start = out.len();
-    let pushed = push_cells(out, poses, row, unit, conditions);
+    let pushed = push_cells(out, poses, row, (unit, conditions));
     if pushed.is_err() {
         out.truncate(start);
     }
@@ -649,8 +649,7 @@ fn push_cells(
     out: &mut String,
     poses: &Poses,
     row: usize,
-    unit: AngleUnit,
-    conditions: [Option<&[f64]>; 2],
+    (unit, conditions): (AngleUnit, [Option<&[f64]>; 2]),
 ) -> std::io::Result<()> {
     out.push_str(&quote(poses.label(row))?);
     for (j, &x) in poses.reading(row).iter().enumerate() {
