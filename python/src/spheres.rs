@@ -6,9 +6,7 @@
 
 use std::path::PathBuf;
 
-use aacmm_core::domain::Spheres;
-use aacmm_core::domain::Tool;
-use aacmm_core::domain::ToolNames;
+use aacmm_core::domain::{Spheres, Tool, ToolNames};
 use aacmm_core::io::AngleUnit;
 use aacmm_core::session::Request;
 use pyo3::prelude::*;

@@ -10,8 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::domain::Spheres;
-use aacmm_core::domain::{Arm, Poses};
+use aacmm_core::domain::{Arm, Poses, Spheres};
 use aacmm_core::io::spheres::{read_spheres, write_spheres};
 use aacmm_core::io::{AngleUnit, limit_warning, read_arm, read_poses_or_positions, source_name};
 use aacmm_core::plan::{

@@ -9,8 +9,7 @@
 use aacmm_core::acceptance::{
     Acceptance, Decision, LDiaRadius, Limit, Mpe, Settings, SpherePoints, TestKind, verify,
 };
-use aacmm_core::domain::Spheres;
-use aacmm_core::domain::{Arm, ReferenceLength};
+use aacmm_core::domain::{Arm, ReferenceLength, Spheres};
 use aacmm_core::kernel::ArmKernel;
 use aacmm_core::params::{DhParams, ParamId, ParamKind};
 use aacmm_core::simulate::{

@@ -2,8 +2,7 @@
 //! probe (`tool` column, the arm file's `[[tool]]` with its own ball), each
 //! probe's offset fitted beside the arm's geometry and recovered honestly.
 
-use aacmm_core::domain::Spheres;
-use aacmm_core::domain::{Arm, Tool};
+use aacmm_core::domain::{Arm, Spheres, Tool};
 use aacmm_core::io::spheres::{parse_spheres, write_spheres};
 use aacmm_core::params::DhParams;
 use aacmm_core::prelude::*;

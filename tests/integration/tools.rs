@@ -3,8 +3,7 @@
 //! offset recovered within 3σ, the normalised errors honest — and bad input
 //! refused by file, line and field.
 
-use aacmm_core::domain::Arm;
-use aacmm_core::domain::ToolNames;
+use aacmm_core::domain::{Arm, ToolNames};
 use aacmm_core::identify::identify;
 use aacmm_core::params::DhParams;
 use aacmm_core::simulate::{

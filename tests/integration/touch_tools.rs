@@ -4,9 +4,7 @@
 //! on any thread count, and bad input refused by file, line and field.
 
 use aacmm_core::calibrate::{Method, SolverSettings};
-use aacmm_core::domain::Spheres;
-use aacmm_core::domain::arm_with_tool;
-use aacmm_core::domain::{Arm, Poses, Tool};
+use aacmm_core::domain::{Arm, Poses, Spheres, Tool, arm_with_tool};
 use aacmm_core::io::{AngleUnit, parse_lengths, parse_poses, write_poses};
 use aacmm_core::params::{DhParams, ParamKind};
 use aacmm_core::residuals::spheres::{SphereSize, SphereTerm};

@@ -36,8 +36,7 @@ use super::Warning;
 use super::columns::JointColumns;
 use super::text::{Record, check_header, parse_f64, read_text, scan_table};
 use super::units::AngleUnit;
-use crate::domain::ToolNames;
-use crate::domain::{MIN_SPHERE_POINTS, Spheres, Tool};
+use crate::domain::{MIN_SPHERE_POINTS, Spheres, Tool, ToolNames};
 use crate::error::InputError;
 
 /// The optional column grouping a placement's points by articulation.

@@ -8,8 +8,7 @@
 //! ([`crate::identify`]), so no noise is added to keep the residuals off
 //! zero.
 
-use crate::domain::Spheres;
-use crate::domain::{Arm, Poses};
+use crate::domain::{Arm, Poses, Spheres};
 use crate::params::ChainShape;
 use crate::residuals::Noise;
 use crate::simulate::{

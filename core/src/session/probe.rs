@@ -28,9 +28,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::calibrate::{CalibrationError, FixSpec, Method, ModelOptions, SolverSettings};
-use crate::domain::Arm;
-use crate::domain::DEFAULT_TOOL;
-use crate::domain::Spheres;
+use crate::domain::{Arm, DEFAULT_TOOL, Spheres};
 use crate::error::OptionError;
 use crate::params::param_count;
 use crate::residuals::Noise;

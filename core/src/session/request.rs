@@ -37,8 +37,7 @@ use crate::calibrate::{
 };
 use crate::corrections::Beyond;
 use crate::dataset::DataSet;
-use crate::domain::Arm;
-use crate::domain::Spheres;
+use crate::domain::{Arm, Spheres};
 use crate::error::{InputError, OptionError};
 use crate::io::spheres::read_spheres;
 use crate::io::{AngleUnit, JointColumns, read_arm, read_lengths, read_positions, source_name};

@@ -27,8 +27,7 @@ use super::ik::solve_point;
 use super::sockets::random_configuration;
 use super::spheres::{SphereCampaign, SphereSettings, iso_sphere_pattern, turned};
 use super::truth::normal;
-use crate::domain::Spheres;
-use crate::domain::{Arm, ReferenceLength};
+use crate::domain::{Arm, ReferenceLength, Spheres};
 use crate::kernel::ArmKernel;
 
 /// The lengths file of a simulated ball bar.

@@ -23,8 +23,7 @@ use super::SimError;
 use super::ik::solve_point;
 use super::sockets::random_configuration;
 use super::truth::normal;
-use crate::domain::Arm;
-use crate::domain::Spheres;
+use crate::domain::{Arm, Spheres};
 use crate::kernel::ArmKernel;
 
 /// The file a simulated sphere campaign writes its points to.
