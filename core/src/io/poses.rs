@@ -607,8 +607,11 @@ fn write_rows(
             .collect();
         let texts = crate::parallel::parallel_map(&blocks, threads, |rows| {
             let mut text = String::new();
-            let refused =
-                (rows.clone()).try_for_each(|row| push_row(&mut text, poses, row, unit, columns));
+            // A refused row is cut whole.
+            let refused = (rows.clone()).try_for_each(|row| {
+                let start = text.len();
+                push_row(&mut text, poses, row, unit, columns).inspect_err(|_| text.truncate(start))
+            });
             (text, refused)
         });
         for (text, refused) in texts {
@@ -626,30 +629,15 @@ fn write_rows(
 const WRITE_BLOCK_ROWS: usize = 8192;
 
 /// Row `row` of `poses` as a line of the file (readings in `unit`, then the
-/// tool, the `conditions` recorded and the approach) appended to `out`;
-/// nothing appended when a label (the point's, the tool's) does not read
-/// back.
+/// tool, the `conditions` recorded and the approach) appended to `out`; a
+/// label (the point's, the tool's) that does not read back ends it part
+/// way, for the caller to cut.
 fn push_row(
     out: &mut String,
     poses: &Poses,
     row: usize,
     unit: AngleUnit,
     conditions: [Option<&[f64]>; 2],
-) -> std::io::Result<()> {
-    let start = out.len();
-    let pushed = push_cells(out, poses, row, (unit, conditions));
-    if pushed.is_err() {
-        out.truncate(start);
-    }
-    pushed
-}
-
-/// [`push_row`]'s cells, up to a label refused.
-fn push_cells(
-    out: &mut String,
-    poses: &Poses,
-    row: usize,
-    (unit, conditions): (AngleUnit, [Option<&[f64]>; 2]),
 ) -> std::io::Result<()> {
     out.push_str(&quote(poses.label(row))?);
     for (j, &x) in poses.reading(row).iter().enumerate() {
@@ -1135,6 +1123,17 @@ mod tests {
         let mut out = Vec::new();
         let e = write_rows(&mut out, &bad, AngleUnit::Deg, 7).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::InvalidInput);
+        assert_eq!(String::from_utf8(out).unwrap(), before);
+        // A tool's name refused after the row's readings: the row is cut
+        // whole all the same.
+        let mut bad = random_poses(11, 6, 50);
+        bad.set_tool("smr");
+        let before = one_by_one(&bad, 0..50);
+        bad.push("S9", &[0.0; 6], 60);
+        bad.set_tool(" pad ");
+        bad.push("S9", &[0.0; 6], 61);
+        let mut out = Vec::new();
+        write_rows(&mut out, &bad, AngleUnit::Deg, 7).unwrap_err();
         assert_eq!(String::from_utf8(out).unwrap(), before);
     }
 
