@@ -154,9 +154,16 @@ fn root() -> &'static Path {
 /// unterminated raw string runs to the end of the file (where the Python
 /// tool would loop).
 fn blank(src: &str) -> Vec<char> {
+    lex(src).0
+}
+
+/// [`blank`]'s text, and the spans of the ordinary (not raw) string
+/// literals it blanked, quotes excluded.
+fn lex(src: &str) -> (Vec<char>, Vec<(usize, usize)>) {
     let s: Vec<char> = src.chars().collect();
     let n = s.len();
     let mut out = Vec::with_capacity(n);
+    let mut strings = Vec::new();
     let spaces = |out: &mut Vec<char>, part: &[char]| {
         out.extend(part.iter().map(|&c| if c == '\n' { '\n' } else { ' ' }));
     };
@@ -185,6 +192,7 @@ fn blank(src: &str) -> Vec<char> {
                 while j < n && s[j] != '"' {
                     j += if s[j] == '\\' { 2 } else { 1 };
                 }
+                strings.push((i + 1, j.min(n)));
                 (j + 1).min(n)
             };
             spaces(&mut out, &s[i..j]);
@@ -197,7 +205,7 @@ fn blank(src: &str) -> Vec<char> {
             i += 1;
         }
     }
-    out
+    (out, strings)
 }
 
 /// The length of the char literal at `i` as fnlen.py's `'(\\.|[^\\'])'`
@@ -1046,40 +1054,6 @@ pub(crate) mod more_tests {
 /// has runs of up to 9.
 const MAX_SPACES_IN_TEXT: usize = 12;
 
-/// The ordinary (not raw) string literals of `s` outside comments and char
-/// literals, as spans of their text (quotes excluded): the scan of
-/// [`blank`], keeping the spans it blanks.
-fn string_literals(s: &[char]) -> Vec<(usize, usize)> {
-    let n = s.len();
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < n {
-        if starts_with(s, i, "//") {
-            i = find(s, "\n", i).unwrap_or(n);
-        } else if starts_with(s, i, "/*") {
-            i = find(s, "*/", i + 2).map_or(n, |j| j + 2);
-        } else if starts_with(s, i, "r#\"") || starts_with(s, i, "r\"") {
-            let h = s[i + 1..].iter().position(|&c| c == '"').unwrap_or(0);
-            let term: String = std::iter::once('"')
-                .chain(std::iter::repeat_n('#', h))
-                .collect();
-            i = find(s, &term, i + 2 + h).map_or(n, |j| j + h + 1);
-        } else if s[i] == '"' {
-            let mut j = i + 1;
-            while j < n && s[j] != '"' {
-                j += if s[j] == '\\' { 2 } else { 1 };
-            }
-            out.push((i + 1, j.min(n)));
-            i = j + 1;
-        } else if let Some(len) = char_literal(s, i) {
-            i += len;
-        } else {
-            i += 1;
-        }
-    }
-    out
-}
-
 /// Where `text` (a literal's) has more than [`MAX_SPACES_IN_TEXT`] spaces
 /// between two characters of one line, the first of them not the `n` of a
 /// `\n` escape (indentation after an escaped newline is text laid out on
@@ -1104,11 +1078,12 @@ fn lost_continuation(text: &[char]) -> Option<usize> {
 /// modules, by line.
 fn lost_continuations(src: &str) -> Vec<usize> {
     let s: Vec<char> = src.chars().collect();
-    let tests: Vec<(usize, usize)> = test_modules(&blank(src))
+    let (blanked, strings) = lex(src);
+    let tests: Vec<(usize, usize)> = test_modules(&blanked)
         .iter()
         .filter_map(|t| t.body)
         .collect();
-    string_literals(&s)
+    strings
         .into_iter()
         .filter(|&(a, _)| !tests.iter().any(|&(t0, t1)| t0 <= a && a <= t1))
         .filter_map(|(a, b)| lost_continuation(&s[a..b]).map(|k| line_of(&s, a + k)))
