@@ -161,7 +161,10 @@ pub(crate) fn poses_impl<const N: usize, C: Chain<N>, L: Batch>(
 /// Lanes of `[R | p]` to one [`Pose`] per lane.
 #[inline(always)]
 fn pose_lanes<L: Batch>(t: [[L; 4]; 3]) -> [Pose; LANES] {
-    let rows = t.map(|row| row.map(L::to_array));
+    let mut rows = [[[0.0; LANES]; 4]; 3];
+    for (r, row) in rows.iter_mut().zip(&t) {
+        *r = super::to_arrays(row);
+    }
     std::array::from_fn(|l| Pose::from_transform(rows.map(|row| row.map(|v| v[l]))))
 }
 
@@ -312,7 +315,7 @@ fn transpose6<L: Batch>(cols: &[[L; 6]], dst: &mut [[f64; 6]]) {
     let c_count = cols.len();
     let dst = &mut dst[..LANES * c_count];
     for (c, col) in cols.iter().enumerate() {
-        let rows = col.map(L::to_array);
+        let rows = super::to_arrays(col);
         for l in 0..LANES {
             dst[l * c_count + c] = rows.map(|r| r[l]);
         }

@@ -19,6 +19,19 @@ use super::Scalar;
 /// Poses per batch.
 pub(crate) const LANES: usize = 4;
 
+/// The lanes of each of `v`'s values, as arrays. Inlined, with a loop of
+/// its own rather than `array::map`, which LLVM kept out of line and so
+/// compiled without the batch loop's target features: each AVX store there
+/// was a call.
+#[inline(always)]
+pub(crate) fn to_arrays<L: Batch, const M: usize>(v: &[L; M]) -> [[f64; LANES]; M] {
+    let mut out = [[0.0; LANES]; M];
+    for (o, x) in out.iter_mut().zip(v) {
+        *o = x.to_array();
+    }
+    out
+}
+
 /// A lane type the batch loops can run the generated code on.
 pub(crate) trait Batch: Scalar {
     /// Loads `LANES` values (a fixed-size array, so the batch loops do

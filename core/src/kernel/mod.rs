@@ -46,7 +46,7 @@ pub use generic::Generic;
 /// The token-gated lanes, for batch loops outside the kernel (the plan's
 /// rank-3 updates, the position term's cost), and the portable lanes (the
 /// gravity torques' four poses): the same bits on any lane type.
-pub(crate) use lanes::{Batch, LANES, LaneOp, Lanes, run as run_lanes};
+pub(crate) use lanes::{Batch, LANES, LaneOp, Lanes, run as run_lanes, to_arrays};
 pub(crate) use poses::Post;
 pub use poses::PreparedPoses;
 
@@ -178,6 +178,16 @@ pub struct Consts<S, const N: usize> {
 /// A parameter set prepared for the kernel: trig computed once.
 pub type PreparedParams<const N: usize> = Consts<f64, N>;
 
+/// `v` in scalar type `S`, one value per lane set; inlined into its caller
+/// (see [`Consts::splat`]).
+#[inline(always)]
+fn each<S: From<f64> + Copy, const M: usize>(v: &[f64; M]) -> [S; M] {
+    let mut out = [S::from(0.0); M];
+    for (o, &x) in out.iter_mut().zip(v) {
+        *o = S::from(x);
+    }
+    out
+}
 impl<const N: usize> Consts<f64, N> {
     /// Prepares `params`; fails if the arm does not have `N` joints.
     ///
@@ -227,8 +237,12 @@ impl<const N: usize> Consts<f64, N> {
     }
 
     /// The same constants in another scalar type (every lane the same).
-    pub(crate) fn splat<S: From<f64>>(&self) -> Consts<S, N> {
-        let s = |v: &[f64; N]| v.map(S::from);
+    /// Inlined, with a loop of its own rather than `array::map`: out of
+    /// line it was compiled without the batch loop's target features, so
+    /// each of its AVX broadcasts was a call (2 % of a 10⁴-touch fit).
+    #[inline(always)]
+    pub(crate) fn splat<S: From<f64> + Copy>(&self) -> Consts<S, N> {
+        let s = |v: &[f64; N]| each(v);
         Consts {
             ct: s(&self.ct),
             st: s(&self.st),
@@ -240,7 +254,7 @@ impl<const N: usize> Consts<f64, N> {
             sb: s(&self.sb),
             hayati: self.hayati,
             prismatic: self.prismatic,
-            b: self.b.map(S::from),
+            b: each(&self.b),
         }
     }
 
