@@ -15,7 +15,7 @@ use super::{
 use crate::corrections::Effects;
 use crate::dataset::DataSet;
 use crate::error::short;
-use crate::kernel::{ArmKernel, KernelError, NoiseOf};
+use crate::kernel::{ArmKernel, Batch, KernelError, LANES, LaneOp, NoiseOf, run_lanes, to_arrays};
 use crate::parallel::parallel_map;
 
 use super::tools::{TouchViews, tool_columns};
@@ -94,9 +94,9 @@ impl<'d> TouchTerm<'d> {
         out: &mut [f64],
     ) -> Result<(), KernelError> {
         let (data, q) = (self.data, cols.len());
-        // `M` transposed, once: [`PointScratch::parameter_share`] reads its
-        // rows side by side.
-        let mt: Vec<f64> = (0..q * q).map(|i| m[(i % q) * q + i / q]).collect();
+        // `M` transposed and padded, once: [`PointScratch::parameter_share`]
+        // reads its rows side by side.
+        let mt = transposed_padded(m, q);
         let m = &mt[..];
         let all = &data.points()[points.clone()];
         let most = all.iter().map(|p| p.touches.len()).max().unwrap_or(0);
@@ -127,14 +127,14 @@ impl<'d> TouchTerm<'d> {
                         }
                     })?;
             }
-            // On AVX2's wider registers where the CPU has them (the same
-            // bits: no fused multiply-add): the parameter share's sums are
-            // most of a point's work.
+            // On the kernel's lanes (AVX where the CPU has it; the same
+            // bits): the parameter share's sums are most of a point's work.
             let weights = &self.weights[point.touches.clone()];
-            let values = crate::simd::with_avx2(
-                #[inline(always)]
-                || scratch.point(weights, m),
-            );
+            let values = run_lanes(OnePoint {
+                scratch: &mut scratch,
+                a: weights,
+                mt: m,
+            });
             let at = point.touches.start - offset;
             out[at..at + values.len()].copy_from_slice(values);
         }
@@ -784,10 +784,11 @@ impl PointScratch {
     }
 
     /// The point's standardised residuals from its touches' positions (and
-    /// Jacobians, when `mt`, the `q × q` block of `N⁻¹` transposed, is not
-    /// empty) under their weights `a`.
+    /// Jacobians, when `mt`, the `q × q` block of `N⁻¹` transposed and
+    /// padded by [`transposed_padded`], is not empty) under their weights
+    /// `a`, the parameter share on lanes `L`.
     #[inline(always)]
-    fn point(&mut self, a: &[Sym3], mt: &[f64]) -> &[f64] {
+    fn point<L: Batch>(&mut self, a: &[Sym3], mt: &[[f64; LANES]]) -> &[f64] {
         let (n, q) = (a.len(), self.mean.len());
         let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
         self.mean.fill([0.0; 3]);
@@ -819,7 +820,7 @@ impl PointScratch {
                 + a[2] * inv[2]
                 + 2.0 * (a[3] * inv[3] + a[4] * inv[4] + a[5] * inv[5]);
             if q > 0 {
-                tr += self.parameter_share(a, t, mt);
+                tr += self.parameter_share::<L>(a, t, mt);
             }
             let h = (tr / 3.0).clamp(0.0, 0.999);
             self.out[t] = quad / (1.0 - h);
@@ -828,63 +829,96 @@ impl PointScratch {
     }
 
     /// `tr(A J̃ M J̃ᵀ)` of touch `t`, `J̃ = J − J̄`: `3q²` operations.
-    /// `mt` is `M` transposed (its column `a` is row `a` of `M`, so that
-    /// [`ROWS`] rows run side by side over contiguous memory): each row's
-    /// sums keep their order, and the rows' terms are added in row order,
-    /// so the same bits as one row at a time — without its three dependent
-    /// chains of `q` additions per row, which left the arithmetic units
-    /// idle on their latency.
+    /// `mt` is `M` transposed and padded ([`transposed_padded`]: its column
+    /// `a` is row `a` of `M`, so that [`ROWS`] rows run side by side over
+    /// contiguous memory, and a last group of fewer rows is padded with
+    /// zeros): each row's sums keep their order, and the rows' terms are
+    /// added in row order, so the same bits as one row at a time — without
+    /// its three dependent chains of `q` additions per row, which left the
+    /// arithmetic units idle on their latency. Two registers of lanes per
+    /// coordinate: six independent chains, enough to cover an addition's
+    /// latency.
     #[inline(always)]
-    fn parameter_share(&mut self, a: &Sym3, t: usize, mt: &[f64]) -> f64 {
+    fn parameter_share<L: Batch>(&mut self, a: &Sym3, t: usize, mt: &[[f64; LANES]]) -> f64 {
         let q = self.mean.len();
+        let stride = q.next_multiple_of(ROWS);
         let j = &self.jac[t * q..(t + 1) * q];
         for ((aj, j), mean) in self.aj.iter_mut().zip(j).zip(&self.mean) {
             *aj = sym_mul(a, &std::array::from_fn(|k| j[k] - mean[k]));
         }
         let mut share = 0.0;
-        let mut first = 0;
-        while first < q {
-            let y = if q - first >= ROWS {
-                rows_times::<ROWS>(mt, q, first, &self.aj)
-            } else {
-                let mut y = [[0.0; 3]; ROWS];
-                for (r, yr) in y.iter_mut().enumerate().take(q - first) {
-                    *yr = rows_times::<1>(mt, q, first + r, &self.aj)[0];
-                }
-                y
-            };
-            for (r, yr) in y.iter().enumerate().take((q - first).min(ROWS)) {
-                let (ja, mean) = (j[first + r], self.mean[first + r]);
-                share += (0..3).map(|k| (ja[k] - mean[k]) * yr[k]).sum::<f64>();
+        for first in (0..q).step_by(ROWS) {
+            let y = rows_times::<L>(mt, stride / LANES, first / LANES, &self.aj);
+            let rows = j[first..].iter().zip(&self.mean[first..]).take(ROWS);
+            for (r, (ja, mean)) in rows.enumerate() {
+                let yr = &y[r / LANES];
+                share += (0..3)
+                    .map(|k| (ja[k] - mean[k]) * yr[k][r % LANES])
+                    .sum::<f64>();
             }
-            first += ROWS;
         }
         share
     }
 }
 
-/// Rows of `M` a touch's parameter share runs side by side.
-const ROWS: usize = 4;
+/// What [`TouchTerm::standardised_points`] runs on the lanes for one point.
+struct OnePoint<'s> {
+    scratch: &'s mut PointScratch,
+    a: &'s [Sym3],
+    mt: &'s [[f64; LANES]],
+}
 
-/// `y_r = Σ_b M[first + r][b] · aj[b]` for the `R` rows from `first`, each
-/// sum over `b` in order; `mt` is `M` (`q × q`) transposed.
-#[inline(always)]
-fn rows_times<const R: usize>(
-    mt: &[f64],
-    q: usize,
-    first: usize,
-    aj: &[[f64; 3]],
-) -> [[f64; 3]; ROWS] {
-    let mut y = [[0.0; 3]; ROWS];
-    for (b, ajb) in aj.iter().enumerate() {
-        let m = &mt[b * q + first..b * q + first + R];
-        for (yr, &mab) in y.iter_mut().zip(m) {
-            for k in 0..3 {
-                yr[k] += mab * ajb[k];
-            }
+impl<'s> LaneOp for OnePoint<'s> {
+    type Output = &'s [f64];
+    #[inline(always)]
+    fn run<L: Batch>(self) -> &'s [f64] {
+        self.scratch.point::<L>(self.a, self.mt)
+    }
+}
+
+/// Rows of `M` a touch's parameter share runs side by side: two registers
+/// of lanes.
+const ROWS: usize = 2 * LANES;
+
+/// `M` (`q × q`, row-major) transposed, each of its `q` rows padded with
+/// zeros to a multiple of [`ROWS`] and cut into lanes: the layout
+/// [`PointScratch::parameter_share`] reads. Empty when `m` is.
+fn transposed_padded(m: &[f64], q: usize) -> Vec<[f64; LANES]> {
+    let stride = q.next_multiple_of(ROWS);
+    if stride == 0 {
+        return Vec::new();
+    }
+    let mut mt = vec![[0.0; LANES]; q * stride / LANES];
+    for (b, row) in mt.chunks_exact_mut(stride / LANES).enumerate() {
+        for a in 0..q {
+            row[a / LANES][a % LANES] = m[a * q + b];
         }
     }
-    y
+    mt
+}
+
+/// `y[h][k][l] = Σ_b M[r][b] · aj[b][k]` for the [`ROWS`] rows `r = (group
+/// + h)·LANES + l`, as two registers of lanes per coordinate, each sum over
+/// `b` in order; `mt` is `M` transposed and padded, `width` lane groups a
+/// row.
+#[inline(always)]
+fn rows_times<L: Batch>(
+    mt: &[[f64; LANES]],
+    width: usize,
+    group: usize,
+    aj: &[[f64; 3]],
+) -> [[[f64; LANES]; 3]; 2] {
+    let zero = L::from(0.0);
+    let (mut y0, mut y1) = ([zero; 3], [zero; 3]);
+    for (row, ajb) in mt.chunks_exact(width).zip(aj) {
+        let (m0, m1) = (L::load(&row[group]), L::load(&row[group + 1]));
+        let bk = [L::from(ajb[0]), L::from(ajb[1]), L::from(ajb[2])];
+        for k in 0..3 {
+            y0[k] = y0[k] + m0 * bk[k];
+            y1[k] = y1[k] + m1 * bk[k];
+        }
+    }
+    [to_arrays(&y0), to_arrays(&y1)]
 }
 
 /// The touches' contribution at `at` over `normal.free()`: chunks of points
@@ -1178,13 +1212,28 @@ fn slide_moves(data: &DataSet) -> bool {
 mod share_tests {
     use super::*;
 
-    /// The parameter share with rows side by side is the same bits as one
-    /// row at a time (three chains of sums per row, rows in order).
+    /// The share of touch 1 on the lanes the CPU has.
+    struct Share<'a> {
+        s: &'a mut PointScratch,
+        a: Sym3,
+        mt: &'a [[f64; LANES]],
+    }
+
+    impl LaneOp for Share<'_> {
+        type Output = f64;
+        fn run<L: Batch>(self) -> f64 {
+            self.s.parameter_share::<L>(&self.a, 1, self.mt)
+        }
+    }
+
+    /// The parameter share with rows side by side, on the portable lanes
+    /// and on the CPU's, is the same bits as one row at a time (three
+    /// chains of sums per row, rows in order).
     #[test]
     fn the_parameter_share_is_the_same_bits_as_row_by_row() {
         let mut rng = crate::random::rng(9, 0);
         let mut draw = || rand::RngExt::random_range(&mut rng, -1.0..1.0);
-        for q in [1, 3, 4, 5, 21, 27] {
+        for q in [1, 3, 4, 5, 7, 8, 9, 16, 21, 27] {
             let mut s = PointScratch::new(2, q);
             let jac: Vec<[f64; 3]> = (0..2 * q).map(|_| [draw(), draw(), draw()]).collect();
             s.jac.copy_from_slice(&jac);
@@ -1211,12 +1260,19 @@ mod share_tests {
                 }
                 want += (0..3).map(|k| (j[k] - mean[k]) * y[k]).sum::<f64>();
             }
-            let mt: Vec<f64> = (0..q * q).map(|i| m[(i % q) * q + i / q]).collect();
+            let mt = transposed_padded(&m, q);
             assert_eq!(
-                s.parameter_share(&a, 1, &mt).to_bits(),
+                s.parameter_share::<crate::kernel::Lanes>(&a, 1, &mt)
+                    .to_bits(),
                 want.to_bits(),
-                "q {q}"
+                "q {q}, portable lanes"
             );
+            let got = run_lanes(Share {
+                s: &mut s,
+                a,
+                mt: &mt,
+            });
+            assert_eq!(got.to_bits(), want.to_bits(), "q {q}, the CPU's lanes");
         }
     }
 }
