@@ -187,6 +187,29 @@ impl PreparedPoses {
         self
     }
 
+    /// Every `step`-th of these poses (`step` ≥ 1), from the first: the
+    /// same cos, sin and transform after the chain, so the kernel gives
+    /// each the same bits as in the whole set — in one call, four to a
+    /// batch, where a call per sampled pose would fill one lane of four.
+    pub(crate) fn every(&self, step: usize) -> PreparedPoses {
+        fn pick<T: Copy>(v: &[T], step: usize) -> Vec<T> {
+            v.iter().step_by(step).copied().collect()
+        }
+        PreparedPoses {
+            joints: self.joints,
+            prismatic: self.prismatic,
+            len: self.len.div_ceil(step),
+            cos: self.cos.iter().map(|c| pick(c, step)).collect(),
+            sin: self.sin.iter().map(|s| pick(s, step)).collect(),
+            post: self.post.as_ref().map(|p| {
+                Box::new(Post {
+                    scale: pick(&p.scale, step),
+                    offset: pick(&p.offset, step),
+                })
+            }),
+        }
+    }
+
     /// The transform after the chain, if any.
     pub(crate) fn post(&self) -> Option<&Post> {
         self.post.as_deref()
@@ -353,7 +376,48 @@ impl<const N: usize> Batches<'_, N> {
 
 #[cfg(test)]
 mod tests {
-    use super::PreparedPoses;
+    use super::{Post, PreparedPoses};
+
+    /// Every `step`-th pose, taken out with its transform after the chain,
+    /// has the same position and Jacobian bits through the kernel as in the
+    /// whole set (in another lane of another batch), prismatic joint or not.
+    #[test]
+    fn every_step_th_pose_is_the_same_bits_as_in_the_whole_set() {
+        use crate::kernel::ArmKernel;
+        use crate::params::DhParams;
+        let params = DhParams::paper_nominal();
+        let kernel = ArmKernel::new(&params).unwrap();
+        let len = 23;
+        let q: Vec<f64> = (0..len * 6)
+            .map(|i| (i as f64 * 0.37).sin() * 3.0)
+            .collect();
+        let post = Post {
+            scale: (0..len).map(|i| 1.0 + i as f64 * 1e-5).collect(),
+            offset: (0..len).map(|i| [i as f64 * 0.01, -0.02, 0.5]).collect(),
+        };
+        let all = PreparedPoses::from_flat_with(6, 0, len, &q).with_post(post);
+        let mut whole = Vec::new();
+        kernel
+            .for_each_jacobian(&all, 0..len, |_, p, j| whole.push((*p, j.to_vec())))
+            .unwrap();
+        for step in [1, 2, 3, 5, 22, 23, 40] {
+            let some = all.every(step);
+            assert_eq!(some.len(), len.div_ceil(step), "step {step}");
+            let mut k = 0;
+            kernel
+                .for_each_jacobian(&some, 0..some.len(), |i, p, j| {
+                    let (wp, wj) = &whole[i * step];
+                    assert_eq!(p.map(f64::to_bits), wp.map(f64::to_bits), "step {step}");
+                    let bits = |j: &[[f64; 3]]| -> Vec<[u64; 3]> {
+                        j.iter().map(|c| c.map(f64::to_bits)).collect()
+                    };
+                    assert_eq!(bits(j), bits(wj), "step {step}, pose {i}");
+                    k += 1;
+                })
+                .unwrap();
+            assert_eq!(k, some.len());
+        }
+    }
 
     /// The sin and cos shared between threads in chunks of poses are those
     /// of one thread, to the bit, a prismatic joint's column its readings:

@@ -5,7 +5,7 @@ use nalgebra::DMatrix;
 
 use crate::calibrate::CalibrationError;
 use crate::dataset::DataSet;
-use crate::kernel::ArmKernel;
+use crate::kernel::{ArmKernel, PreparedPoses};
 use crate::params::DhParams;
 use crate::residuals::Normal;
 use crate::stats::coverage::{COVERAGE, K_ISOTROPIC, eigenvalues, radius};
@@ -151,7 +151,8 @@ pub(super) fn position_uncertainty(
         .max(1);
     let q = free.len();
     let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
-    let poses: Vec<usize> = (0..data.len()).step_by(step).collect();
+    // Every `step`-th pose from the first.
+    let n = data.len().div_ceil(step);
     let mut sums = UncertaintySums {
         free,
         c,
@@ -161,61 +162,39 @@ pub(super) fn position_uncertainty(
     };
     // The Jacobians from the poses' stored sin/cos through the lanes kernel
     // (the same bits as `position_jacobian` of the readings, without their
-    // trigonometry): every pose in one call when every pose is sampled.
-    // The sums are inlined into the kernel's loop, so they are compiled with
-    // its target features (AVX2 where the CPU has it; no FMA, so the same
-    // bits as without).
-    let last = |l: usize, i: usize| (l + 1 == LANES || i + step >= data.len()).then_some(l + 1);
+    // trigonometry), the sampled poses in one call. The sums are inlined
+    // into the kernel's loop, so they are compiled with its target
+    // features (AVX2 where the CPU has it; no FMA, so the same bits as
+    // without).
+    let last = |l: usize, k: usize| (l + 1 == LANES || k + 1 == n).then_some(l + 1);
+    let sample = |all: &PreparedPoses| (step > 1).then(|| all.every(step));
     if let Some(e) = effects {
         // With corrections beyond geometry: the poses as the chain saw
-        // them, each Jacobian extended by the corrections' columns.
+        // them, each Jacobian extended by the corrections' columns (of pose
+        // `k · step` of the data).
         let mut ext = Vec::new();
+        let sampled = sample(&e.poses);
         // Inlined as well: out of line, the sums ran without the kernel's
         // target features, a seventh of a fit with harmonics.
-        if step == 1 {
-            kernel.for_each_jacobian(
-                &e.poses,
-                0..data.len(),
-                #[inline(always)]
-                |i, pos, jac| {
-                    e.extend(i, pos, jac, &mut ext);
-                    sums.add(i % LANES, &ext, last(i % LANES, i));
-                },
-            )?;
-        } else {
-            for (k, &i) in poses.iter().enumerate() {
-                let l = k % LANES;
-                kernel.for_each_jacobian(
-                    &e.poses,
-                    i..i + 1,
-                    #[inline(always)]
-                    |i, pos, jac| {
-                        e.extend(i, pos, jac, &mut ext);
-                        sums.add(l, &ext, last(l, i));
-                    },
-                )?;
-            }
-        }
-    } else if step == 1 {
         kernel.for_each_jacobian(
-            data.poses(),
-            0..data.len(),
+            sampled.as_ref().unwrap_or(&e.poses),
+            0..n,
             #[inline(always)]
-            |i, _, jac| sums.add(i % LANES, jac, last(i % LANES, i)),
+            |k, pos, jac| {
+                e.extend(k * step, pos, jac, &mut ext);
+                sums.add(k % LANES, &ext, last(k % LANES, k));
+            },
         )?;
     } else {
-        for (k, &i) in poses.iter().enumerate() {
-            let l = k % LANES;
-            kernel.for_each_jacobian(
-                data.poses(),
-                i..i + 1,
-                #[inline(always)]
-                |_, _, jac| sums.add(l, jac, last(l, i)),
-            )?;
-        }
+        let sampled = sample(data.poses());
+        kernel.for_each_jacobian(
+            sampled.as_ref().unwrap_or(data.poses()),
+            0..n,
+            #[inline(always)]
+            |k, _, jac| sums.add(k % LANES, jac, last(k % LANES, k)),
+        )?;
     }
     let (sum, max) = (sums.sum, sums.max);
-    let n = poses.len();
     Ok(Some(crate::calibrate::checks::PositionUncertainty {
         coverage: COVERAGE,
         poses: n,
