@@ -897,10 +897,10 @@ fn transposed_padded(m: &[f64], q: usize) -> Vec<[f64; LANES]> {
     mt
 }
 
-/// `y[h][k][l] = Σ_b M[r][b] · aj[b][k]` for the [`ROWS`] rows `r = (group
-/// + h)·LANES + l`, as two registers of lanes per coordinate, each sum over
-/// `b` in order; `mt` is `M` transposed and padded, `width` lane groups a
-/// row.
+/// `y[h][k][l] = Σ_b M[r][b] · aj[b][k]` for the [`ROWS`] rows from lane
+/// group `group` (row `r = (group + h)·LANES + l`), as two registers of
+/// lanes per coordinate, each sum over `b` in order; `mt` is `M` transposed
+/// and padded, `width` lane groups a row.
 #[inline(always)]
 fn rows_times<L: Batch>(
     mt: &[[f64; LANES]],
