@@ -282,6 +282,13 @@ mod tests {
     /// helper it handed over, which the worker does only once it has run
     /// every other outer item. Once the outer call is done a call is
     /// shared again.
+    ///
+    /// Which thread takes which outer item must not depend on how soon the
+    /// OS schedules the worker (on a loaded machine the caller once took
+    /// all four before it ran): each item waits, up to 10 s, until two
+    /// threads have taken one, and the worker's items take 30 ms longer, so
+    /// that a caller that is not stuck takes a further item even if it is
+    /// itself descheduled for a while. Stuck, it still takes one only.
     #[test]
     fn a_call_inside_a_shared_item_runs_on_its_thread() {
         let caller = std::thread::current().id();
@@ -289,14 +296,24 @@ mod tests {
         let inner: Vec<usize> = (0..16).collect();
         let each = std::time::Duration::from_millis(1);
         let pool = POOL.lock().unwrap_or_else(PoisonError::into_inner);
+        let seen = Mutex::new(HashSet::new());
         let runs = parallel_map_each(&outer, 2, |_| {
             let me = std::thread::current().id();
+            let lock = || seen.lock().unwrap_or_else(PoisonError::into_inner);
+            lock().insert(me);
+            let start = std::time::Instant::now();
+            while lock().len() < 2 && start.elapsed() < std::time::Duration::from_secs(10) {
+                std::thread::sleep(each);
+            }
             let threads: HashSet<ThreadId> = parallel_map(&inner, 2, |_| {
                 std::thread::sleep(each);
                 std::thread::current().id()
             })
             .into_iter()
             .collect();
+            if me != caller {
+                std::thread::sleep(30 * each);
+            }
             (me, threads)
         });
         for (me, threads) in &runs {
