@@ -248,11 +248,32 @@ mod tests {
     /// leave a caller to do all its items itself.
     static POOL: Mutex<()> = Mutex::new(());
 
-    /// Which threads ran each item, and the results in item order.
-    fn traced(items: usize, threads: usize, each: std::time::Duration) -> HashSet<ThreadId> {
+    /// Waits, up to 10 s from `start`, until `n` threads have been `seen`
+    /// (this one added): which threads share a call must not depend on how
+    /// soon the OS schedules the pool's worker, which on a loaded machine
+    /// once took longer than a test's 64 ms of work.
+    fn meet(seen: &Mutex<HashSet<ThreadId>>, start: std::time::Instant, n: usize) {
+        let lock = || seen.lock().unwrap_or_else(PoisonError::into_inner);
+        lock().insert(std::thread::current().id());
+        while lock().len() < n && start.elapsed() < std::time::Duration::from_secs(10) {
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+    }
+
+    /// Which threads ran the items (`items` of `each` on up to `threads`),
+    /// each item first [`meet`]ing `n` threads; the results checked in item
+    /// order.
+    fn traced(
+        items: usize,
+        threads: usize,
+        each: std::time::Duration,
+        n: usize,
+    ) -> HashSet<ThreadId> {
         let _pool = POOL.lock().unwrap_or_else(PoisonError::into_inner);
         let v: Vec<usize> = (0..items).collect();
+        let (seen, start) = (Mutex::new(HashSet::new()), std::time::Instant::now());
         let out = parallel_map(&v, threads, |&i| {
+            meet(&seen, start, n);
             std::thread::sleep(each);
             (i * i, std::thread::current().id())
         });
@@ -264,15 +285,16 @@ mod tests {
     #[test]
     fn a_small_problem_runs_on_the_calling_thread() {
         let me = std::thread::current().id();
-        let ran = traced(MIN_ITEMS_PER_THREAD, 8, std::time::Duration::ZERO);
+        let ran = traced(MIN_ITEMS_PER_THREAD, 8, std::time::Duration::ZERO, 1);
         assert_eq!(ran, HashSet::from([me]));
     }
 
     /// 64 items of a millisecond each on 2 threads: the pool's worker takes
-    /// some of them while the caller works (it has 64 ms to be scheduled).
+    /// some of them while the caller works (each item waits for it to have
+    /// taken one, up to 10 s).
     #[test]
     fn a_large_problem_is_shared_with_the_pool() {
-        let ran = traced(64, 2, std::time::Duration::from_millis(1));
+        let ran = traced(64, 2, std::time::Duration::from_millis(1), 2);
         assert_eq!(ran.len(), 2, "{ran:?}");
     }
 
@@ -285,10 +307,10 @@ mod tests {
     ///
     /// Which thread takes which outer item must not depend on how soon the
     /// OS schedules the worker (on a loaded machine the caller once took
-    /// all four before it ran): each item waits, up to 10 s, until two
-    /// threads have taken one, and the worker's items take 30 ms longer, so
-    /// that a caller that is not stuck takes a further item even if it is
-    /// itself descheduled for a while. Stuck, it still takes one only.
+    /// all four before it ran): each item [`meet`]s two threads, and the
+    /// worker's items take 30 ms longer, so that a caller that is not stuck
+    /// takes a further item even if it is itself descheduled for a while.
+    /// Stuck, it still takes one only.
     #[test]
     fn a_call_inside_a_shared_item_runs_on_its_thread() {
         let caller = std::thread::current().id();
@@ -296,15 +318,10 @@ mod tests {
         let inner: Vec<usize> = (0..16).collect();
         let each = std::time::Duration::from_millis(1);
         let pool = POOL.lock().unwrap_or_else(PoisonError::into_inner);
-        let seen = Mutex::new(HashSet::new());
+        let (seen, start) = (Mutex::new(HashSet::new()), std::time::Instant::now());
         let runs = parallel_map_each(&outer, 2, |_| {
             let me = std::thread::current().id();
-            let lock = || seen.lock().unwrap_or_else(PoisonError::into_inner);
-            lock().insert(me);
-            let start = std::time::Instant::now();
-            while lock().len() < 2 && start.elapsed() < std::time::Duration::from_secs(10) {
-                std::thread::sleep(each);
-            }
+            meet(&seen, start, 2);
             let threads: HashSet<ThreadId> = parallel_map(&inner, 2, |_| {
                 std::thread::sleep(each);
                 std::thread::current().id()
@@ -324,7 +341,7 @@ mod tests {
         let by_caller = runs.iter().filter(|r| r.0 == caller).count();
         assert!(by_caller >= 2, "the caller ran {by_caller} of 4 items");
         drop(pool);
-        assert_eq!(traced(64, 2, each).len(), 2, "shared again after it");
+        assert_eq!(traced(64, 2, each, 2).len(), 2, "shared again after it");
     }
 
     /// The pool's threads carry the name the C API's panic hook looks for,
