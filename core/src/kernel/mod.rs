@@ -188,6 +188,7 @@ fn each<S: From<f64> + Copy, const M: usize>(v: &[f64; M]) -> [S; M] {
     }
     out
 }
+
 impl<const N: usize> Consts<f64, N> {
     /// Prepares `params`; fails if the arm does not have `N` joints.
     ///
@@ -242,16 +243,15 @@ impl<const N: usize> Consts<f64, N> {
     /// each of its AVX broadcasts was a call (2 % of a 10⁴-touch fit).
     #[inline(always)]
     pub(crate) fn splat<S: From<f64> + Copy>(&self) -> Consts<S, N> {
-        let s = |v: &[f64; N]| each(v);
         Consts {
-            ct: s(&self.ct),
-            st: s(&self.st),
-            ca: s(&self.ca),
-            sa: s(&self.sa),
-            a: s(&self.a),
-            d: s(&self.d),
-            cb: s(&self.cb),
-            sb: s(&self.sb),
+            ct: each(&self.ct),
+            st: each(&self.st),
+            ca: each(&self.ca),
+            sa: each(&self.sa),
+            a: each(&self.a),
+            d: each(&self.d),
+            cb: each(&self.cb),
+            sb: each(&self.sb),
             hayati: self.hayati,
             prismatic: self.prismatic,
             b: each(&self.b),
