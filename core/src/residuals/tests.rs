@@ -640,3 +640,50 @@ fn a_robust_weight_scales_a_positions_standardised_residual_as_a_touchs() {
         assert_eq!(others(&weighed.values), others(&plain.values));
     }
 }
+
+/// A thread keeps its chunk buffers from one normal pass to the next, of
+/// another width between (a fit's start of every column, then its steps'
+/// free ones): each pass is the bits of one on a fresh thread, which keeps
+/// nothing yet.
+#[test]
+fn kept_chunk_buffers_give_the_bits_of_fresh_ones() {
+    let params = DhParams::paper_nominal();
+    // Three chunks of points, the last part-full; four touches a point.
+    let points = 2 * POINTS_PER_CHUNK + 5;
+    let touches = 4 * points;
+    let labels: Vec<String> = (0..touches).map(|i| format!("p{}", i % points)).collect();
+    let readings: Vec<Vec<f64>> = (0..touches)
+        .map(|i| {
+            (0..6)
+                .map(|j| ((i * 7 + j * 13) % 31) as f64 * 0.2 - 3.0)
+                .collect()
+        })
+        .collect();
+    let data = DataSet::from_touches(&labels, &readings, &[]).unwrap();
+    let layout = positions::layout_for(&params, &data).unwrap();
+    let noise = Noise::default();
+    let objective =
+        crate::objective::Objective::of_data(layout, &data, &noise, Vec::new(), None, 1.0, 1)
+            .unwrap();
+    let x = objective.start();
+    let narrow: Vec<usize> = (2..20).collect();
+    let wide: Vec<usize> = (0..x.len()).collect();
+    let fresh = |free: &[usize]| {
+        std::thread::scope(|s| {
+            s.spawn(|| objective.normal(&x, free).unwrap())
+                .join()
+                .unwrap()
+        })
+    };
+    let bits = |n: &Normal| {
+        let all = n.jtj.iter().chain(&n.jtr).chain(&n.costs);
+        all.map(|v| v.to_bits()).collect::<Vec<_>>()
+    };
+    let want = [bits(&fresh(&narrow)), bits(&fresh(&wide))];
+    for pass in 0..3 {
+        for (free, want) in [&narrow, &wide].into_iter().zip(&want) {
+            let n = objective.normal(&x, free).unwrap();
+            assert_eq!(&bits(&n), want, "pass {pass}, {} columns", free.len());
+        }
+    }
+}

@@ -1114,6 +1114,58 @@ impl PointSums {
     }
 }
 
+/// A chunk's buffers, kept by its thread from one normal pass to the next:
+/// a fit makes a pass per step, and the point sums' dozen buffers were
+/// allocated and zeroed afresh each time (a tenth of a 100-touch pass in
+/// the allocator). Taken back only in the state a new one starts in.
+struct ChunkScratch {
+    sums: PointSums,
+    /// The padded lower triangle (see [`Rank3::flush`]).
+    jtj: Vec<f64>,
+}
+
+/// Buffers of different widths a thread keeps: a fit's start normal is of
+/// every column, its steps' of the free ones.
+const KEPT_WIDTHS: usize = 4;
+
+thread_local! {
+    static SCRATCH: std::cell::RefCell<Vec<ChunkScratch>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+impl ChunkScratch {
+    /// This thread's buffers for `p` columns, as new: the sums reset (every
+    /// chunk ends with a point's [`PointSums::finish`]), the triangle
+    /// zeroed.
+    fn take(p: usize) -> ChunkScratch {
+        let kept = SCRATCH.with_borrow_mut(|kept| {
+            let at = kept.iter().position(|s| s.sums.jap.len() == p)?;
+            Some(kept.swap_remove(at))
+        });
+        match kept {
+            Some(mut s) => {
+                s.jtj.fill(0.0);
+                s
+            }
+            None => {
+                let sums = PointSums::new(p);
+                let jtj = sums.rank3.matrix();
+                ChunkScratch { sums, jtj }
+            }
+        }
+    }
+
+    /// Keeps the buffers for the thread's next chunk of this width (another
+    /// width makes room when [`KEPT_WIDTHS`] are kept).
+    fn keep(self) {
+        SCRATCH.with_borrow_mut(|kept| {
+            if kept.len() == KEPT_WIDTHS {
+                kept.remove(0);
+            }
+            kept.push(self);
+        });
+    }
+}
+
 /// One chunk of points' sums over the geometry columns `free`.
 fn chunk(
     kernel: &ArmKernel,
@@ -1134,9 +1186,10 @@ fn chunk(
     };
     let all = data.points();
     let touches = all[points.start].touches.start..all[points.end - 1].touches.end;
-    let mut sums = PointSums::new(p);
-    // The lower triangle, in padded rows (see [`Rank3::flush`]).
-    let mut jtj = sums.rank3.matrix();
+    // A chunk that fails part-way leaves its buffers mid-sum: they are
+    // dropped, not kept (`?` returns before `keep`).
+    let mut scratch = ChunkScratch::take(p);
+    let ChunkScratch { sums, jtj } = &mut scratch;
     let mut point = points.start;
     let mut finite = true;
     if let Some(effects) = effects {
@@ -1149,12 +1202,12 @@ fn chunk(
             #[inline(always)]
             |i, pos, jac| {
                 if i == all[point].touches.end {
-                    sums.finish(&mut part, &mut jtj, need_mean);
+                    sums.finish(&mut part, jtj, need_mean);
                     point += 1;
                 }
                 finite &= pos.iter().all(|v| v.is_finite());
                 effects.extend(i, pos, jac, &mut ext);
-                sums.add(pos, &weights[i], &ext, free, &mut jtj);
+                sums.add(pos, &weights[i], &ext, free, jtj);
             },
         )?;
     } else {
@@ -1166,22 +1219,23 @@ fn chunk(
             #[inline(always)]
             |i, pos, jac| {
                 if i == all[point].touches.end {
-                    sums.finish(&mut part, &mut jtj, need_mean);
+                    sums.finish(&mut part, jtj, need_mean);
                     point += 1;
                 }
                 finite &= pos.iter().all(|v| v.is_finite());
-                sums.add(pos, &weights[i], jac, free, &mut jtj);
+                sums.add(pos, &weights[i], jac, free, jtj);
             },
         )?;
     }
-    sums.finish(&mut part, &mut jtj, need_mean);
+    sums.finish(&mut part, jtj, need_mean);
     for a in 0..p {
         for b in 0..=a {
-            let v = sums.rank3.entry(&jtj, a, b);
+            let v = sums.rank3.entry(jtj, a, b);
             part.jtj[a * p + b] = v;
             part.jtj[b * p + a] = v;
         }
     }
+    scratch.keep();
     if !finite {
         part.cost = f64::INFINITY;
     }
