@@ -270,50 +270,233 @@ pub(crate) fn correction_columns(
         .copied()
         .filter(|c| !corrections.contains(c))
         .collect();
-    let mut held = Vec::new();
+    let judged = judge_corrections(full, &mut base, corrections)?;
     let name = |c: usize| layout.parameter(c).map_or(String::new(), |p| p.name);
-    for c in corrections.clone() {
-        let cols: Vec<usize> = base.iter().copied().chain([c]).collect();
-        let n = full.restrict(&cols).ok_or(CalibrationError::Shape)?;
-        let k = cols.len();
-        let m = nalgebra::DMatrix::from_row_slice(k, k, &n.jtj);
-        let diag: Vec<f64> = (0..k).map(|i| m[(i, i)]).collect();
+    let held = (judged.into_iter())
+        .filter_map(|j| match j.share {
+            None => Some((
+                j.column,
+                "moves no residual: these data do not see it".to_string(),
+            )),
+            Some(share) if share < CORRECTION_SEPARATION => {
+                let like = (j.like)
+                    .map(|(a, cos)| format!(" (most like {}: cos {cos:+.4})", name(a)))
+                    .unwrap_or_default();
+                Some((
+                    j.column,
+                    format!(
+                        "not separable from the fitted parameters by these data: {:.1e} of \
+                         its information is its own{like}",
+                        share.max(0.0)
+                    ),
+                ))
+            }
+            Some(_) => None,
+        })
+        .collect();
+    base.sort_unstable();
+    Ok((base, held))
+}
+
+/// One correction column as [`judge_corrections`] found it.
+#[derive(Debug)]
+struct Judged {
+    column: usize,
+    /// Its information's own share; `None`: it moves nothing.
+    share: Option<f64>,
+    /// The column kept before it that it is most like, with their cosine.
+    like: Option<(usize, f64)>,
+}
+
+/// Each column of `corrections` judged in order against `base` (the free
+/// columns beside them), each kept one pushed onto `base`.
+///
+/// The kept columns' block of the normal matrix is scaled once, grown by
+/// each kept column and factored once per growth: every candidate is
+/// judged against the same factor of the same matrix as a restricted,
+/// scaled and factored copy per candidate gave (the same bits, tested),
+/// without that copy, its square root per entry and its factor.
+fn judge_corrections(
+    full: &Normal,
+    base: &mut Vec<usize>,
+    corrections: std::ops::Range<usize>,
+) -> Result<Vec<Judged>, CalibrationError> {
+    let p = full.free.len();
+    let index = |c: usize| (full.free.iter().position(|f| *f == c)).ok_or(CalibrationError::Shape);
+    // Entry (a, b) of the normal matrix scaled to a unit diagonal, from its
+    // rows `a` and `b` and their diagonal entries.
+    let scaled = |(a, da): (usize, f64), (b, db): (usize, f64)| {
+        let d = (da * db).sqrt();
+        if d > 0.0 {
+            full.jtj[a * p + b] / d
+        } else {
+            0.0
+        }
+    };
+    let mut judged = Vec::with_capacity(corrections.len());
+    if corrections.is_empty() {
+        return Ok(judged);
+    }
+    // The kept columns: their rows in `full` with their diagonal entries.
+    let mut kept: Vec<(usize, f64)> = (base.iter())
+        .map(|&c| index(c).map(|a| (a, full.jtj[a * p + a])))
+        .collect::<Result<_, _>>()?;
+    let mut bb =
+        nalgebra::DMatrix::from_fn(kept.len(), kept.len(), |i, j| scaled(kept[i], kept[j]));
+    let mut factor = None;
+    for column in corrections {
+        let a = index(column)?;
+        let col = (a, full.jtj[a * p + a]);
         // Round-off of a column that is nil (a joint's turn that moves no
         // probe) is not information: judged against the largest column.
-        let largest = diag.iter().copied().fold(0.0, f64::max);
-        if !(diag[k - 1] > 1e-20 * largest && diag[k - 1].is_finite()) {
-            held.push((c, "moves no residual: these data do not see it".to_string()));
+        let largest = (kept.iter().map(|k| k.1))
+            .chain([col.1])
+            .fold(0.0, f64::max);
+        if !(col.1 > 1e-20 * largest && col.1.is_finite()) {
+            judged.push(Judged {
+                column,
+                share: None,
+                like: None,
+            });
             continue;
         }
-        let s = nalgebra::DMatrix::from_fn(k, k, |i, j| {
-            let d = (diag[i] * diag[j]).sqrt();
-            if d > 0.0 { m[(i, j)] / d } else { 0.0 }
-        });
-        let bb = s.view((0, 0), (k - 1, k - 1)).into_owned();
-        let bc = s.view((0, k - 1), (k - 1, 1)).into_owned();
-        let share = match bb.clone().cholesky() {
+        let k = kept.len() + 1;
+        let bc = nalgebra::DMatrix::from_fn(k - 1, 1, |i, _| scaled(kept[i], col));
+        let share = match factor.get_or_insert_with(|| bb.clone().cholesky()) {
             Some(ch) => 1.0 - (bc.transpose() * ch.solve(&bc))[(0, 0)],
             None => 0.0,
         };
-        if share >= CORRECTION_SEPARATION {
-            base.push(c);
-            continue;
-        }
         // The column it is most like, by the cosine of their columns.
         let like = (0..k - 1)
             .max_by(|&a, &b| bc[(a, 0)].abs().total_cmp(&bc[(b, 0)].abs()))
-            .map(|a| format!(" (most like {}: cos {:+.4})", name(cols[a]), bc[(a, 0)]))
-            .unwrap_or_default();
-        held.push((
-            c,
-            format!(
-                "not separable from the fitted parameters by these data: {:.1e} of its \
-                 information is its own{like}",
-                share.max(0.0)
-            ),
-        ));
+            .map(|a| (base[a], bc[(a, 0)]));
+        judged.push(Judged {
+            column,
+            share: Some(share),
+            like,
+        });
+        if share >= CORRECTION_SEPARATION {
+            bb = bb.resize(k, k, 0.0);
+            for i in 0..k - 1 {
+                bb[(i, k - 1)] = bc[(i, 0)];
+                bb[(k - 1, i)] = scaled(col, kept[i]);
+            }
+            bb[(k - 1, k - 1)] = scaled(col, col);
+            factor = None;
+            kept.push(col);
+            base.push(column);
+        }
     }
-    let mut out: Vec<usize> = base;
-    out.sort_unstable();
-    Ok((out, held))
+    Ok(judged)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::corrections::{Beyond, Physics};
+    use crate::residuals::CorrectionBlock;
+
+    /// The judgement as it was: each candidate against a restricted copy of
+    /// the normal matrix, scaled and factored afresh. The reference the
+    /// grown, once-factored block must match bit for bit. Per candidate:
+    /// its share (`None`: moves nothing) and the column it is most like.
+    #[allow(clippy::type_complexity)]
+    fn one_at_a_time(
+        full: &Normal,
+        corrections: std::ops::Range<usize>,
+        base: &mut Vec<usize>,
+    ) -> Vec<(usize, Option<u64>, Option<(usize, u64)>)> {
+        let mut out = Vec::new();
+        for c in corrections {
+            let cols: Vec<usize> = base.iter().copied().chain([c]).collect();
+            let n = full.restrict(&cols).unwrap();
+            let k = cols.len();
+            let m = nalgebra::DMatrix::from_row_slice(k, k, &n.jtj);
+            let diag: Vec<f64> = (0..k).map(|i| m[(i, i)]).collect();
+            let largest = diag.iter().copied().fold(0.0, f64::max);
+            if !(diag[k - 1] > 1e-20 * largest && diag[k - 1].is_finite()) {
+                out.push((c, None, None));
+                continue;
+            }
+            let s = nalgebra::DMatrix::from_fn(k, k, |i, j| {
+                let d = (diag[i] * diag[j]).sqrt();
+                if d > 0.0 { m[(i, j)] / d } else { 0.0 }
+            });
+            let bb = s.view((0, 0), (k - 1, k - 1)).into_owned();
+            let bc = s.view((0, k - 1), (k - 1, 1)).into_owned();
+            let share = match bb.cholesky() {
+                Some(ch) => 1.0 - (bc.transpose() * ch.solve(&bc))[(0, 0)],
+                None => 0.0,
+            };
+            let like = (0..k - 1)
+                .max_by(|&a, &b| bc[(a, 0)].abs().total_cmp(&bc[(b, 0)].abs()))
+                .map(|a| (cols[a], bc[(a, 0)].to_bits()));
+            out.push((c, Some(share.to_bits()), like));
+            if share >= CORRECTION_SEPARATION {
+                base.push(c);
+            }
+        }
+        out
+    }
+
+    /// A normal matrix of correlated columns where some corrections repeat
+    /// geometry columns (exactly or nearly) and one moves nothing, with a
+    /// geometry column fixed: every candidate's share and likeness are the
+    /// bits of a fresh copy's, and some are kept, some held for each cause.
+    #[test]
+    fn the_grown_block_judges_with_a_fresh_copys_bits() {
+        let mut layout = Layout::new(DhParams::paper_nominal());
+        let fit = Beyond {
+            harmonics: vec![(0, 1), (1, 1), (2, 2), (3, 1), (4, 1)],
+            ..Default::default()
+        };
+        layout
+            .add_corrections(CorrectionBlock {
+                fit,
+                physics: Physics::default(),
+                joints: 6,
+                prismatic: 0,
+            })
+            .unwrap();
+        let (_, corrections) = layout.corrections().unwrap();
+        let p = layout.len();
+        assert!(corrections.len() >= 8, "{corrections:?}");
+        let first = corrections.start;
+        let value =
+            |r: usize, c: usize| (((r + 1) * (c + 3)) as f64 * 0.7137 + (c * c) as f64).sin();
+        let column = |c: usize, r: usize| match c.wrapping_sub(first) {
+            0 => 0.0,
+            2 => value(r, first + 7),
+            4 => value(r, first + 9) * 3.0 + 1e-9 * value(r, c),
+            _ => value(r, c),
+        };
+        let all: Vec<usize> = (0..p).collect();
+        let mut full = Normal::new(&all);
+        for a in 0..p {
+            for b in 0..p {
+                full.jtj[a * p + b] = (0..3 * p).map(|r| column(a, r) * column(b, r)).sum();
+            }
+        }
+        let free: Vec<usize> = all.iter().copied().filter(|&c| c != 5).collect();
+        let start: Vec<usize> = (free.iter().copied())
+            .filter(|c| !corrections.contains(c))
+            .collect();
+        let (mut grown, mut fresh) = (start.clone(), start);
+        let judged = judge_corrections(&full, &mut grown, corrections.clone()).unwrap();
+        let want = one_at_a_time(&full, corrections.clone(), &mut fresh);
+        assert_eq!(grown, fresh);
+        let got: Vec<_> = (judged.iter())
+            .map(|j| {
+                let like = j.like.map(|(a, cos)| (a, cos.to_bits()));
+                (j.column, j.share.map(f64::to_bits), like)
+            })
+            .collect();
+        assert_eq!(got, want);
+        let (kept, held) = correction_columns(&full, &layout, free).unwrap();
+        let nil = held.iter().filter(|h| h.1.contains("moves no residual"));
+        let alike = held.iter().filter(|h| h.1.contains("not separable"));
+        assert_eq!((nil.count(), alike.count()), (1, 2), "{held:?}");
+        assert!(kept.iter().any(|c| corrections.contains(c)), "{kept:?}");
+        assert!(!kept.contains(&5));
+    }
 }
