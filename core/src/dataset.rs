@@ -1653,6 +1653,26 @@ fn check_length_values(
     Ok(())
 }
 
+/// Data sets the tests of other modules share.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::DataSet;
+
+    /// `touches` touches of `points` points in turn (`p0`, `p1`, …), six
+    /// readings each spread over ±3 rad without trigonometry of their own.
+    pub(crate) fn spread_touches(touches: usize, points: usize) -> DataSet {
+        let labels: Vec<String> = (0..touches).map(|i| format!("p{}", i % points)).collect();
+        let readings: Vec<Vec<f64>> = (0..touches)
+            .map(|i| {
+                (0..6)
+                    .map(|j| ((i * 7 + j * 13) % 31) as f64 * 0.2 - 3.0)
+                    .collect()
+            })
+            .collect();
+        DataSet::from_touches(&labels, &readings, &[]).unwrap()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -650,16 +650,7 @@ fn kept_chunk_buffers_give_the_bits_of_fresh_ones() {
     let params = DhParams::paper_nominal();
     // Three chunks of points, the last part-full; four touches a point.
     let points = 2 * POINTS_PER_CHUNK + 5;
-    let touches = 4 * points;
-    let labels: Vec<String> = (0..touches).map(|i| format!("p{}", i % points)).collect();
-    let readings: Vec<Vec<f64>> = (0..touches)
-        .map(|i| {
-            (0..6)
-                .map(|j| ((i * 7 + j * 13) % 31) as f64 * 0.2 - 3.0)
-                .collect()
-        })
-        .collect();
-    let data = DataSet::from_touches(&labels, &readings, &[]).unwrap();
+    let data = crate::dataset::testing::spread_touches(4 * points, points);
     let layout = positions::layout_for(&params, &data).unwrap();
     let noise = Noise::default();
     let objective =

@@ -327,15 +327,7 @@ mod tests {
         for touches in [3usize, 5, 6, 7, 9, 4003] {
             // At least 3 touches a point.
             let points = (touches / 3).min(3);
-            let labels: Vec<String> = (0..touches).map(|i| format!("p{}", i % points)).collect();
-            let readings: Vec<Vec<f64>> = (0..touches)
-                .map(|i| {
-                    (0..6)
-                        .map(|j| ((i * 7 + j * 13) % 31) as f64 * 0.2 - 3.0)
-                        .collect()
-                })
-                .collect();
-            let data = DataSet::from_touches(&labels, &readings, &[]).unwrap();
+            let data = crate::dataset::testing::spread_touches(touches, points);
             let u = position_uncertainty(&params, &data, None, &free, &cov, 0.01)
                 .unwrap()
                 .unwrap();
