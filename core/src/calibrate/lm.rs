@@ -233,6 +233,10 @@ struct Descent<'a, 'o> {
     normal: Normal,
     n: DMatrix<f64>,
     g: DVector<f64>,
+    /// Buffers of the damped solve and of `N δ`, kept from one trial to the
+    /// next (a fit makes a dozen trials; each made five allocations).
+    damped: DMatrix<f64>,
+    n_delta: DVector<f64>,
     /// Marquardt's diagonal scale: per column, the largest diagonal of N
     /// seen so far (so mm and rad need no hand-tuned units).
     scale: Vec<f64>,
@@ -297,6 +301,8 @@ impl<'a, 'o> Descent<'a, 'o> {
             x: start.to_vec(),
             initial_cost: normal.cost(),
             normal,
+            damped: n.clone(),
+            n_delta: DVector::zeros(p),
             n,
             g,
             scale: vec![0.0f64; p],
@@ -360,14 +366,25 @@ impl<'a, 'o> Descent<'a, 'o> {
     }
 
     /// The step `δ` of `(N + λ·diag(scale)) δ = −g`, if it solves to finite
-    /// numbers.
-    fn damped_step(&self) -> Option<DVector<f64>> {
-        let mut a = self.n.clone();
+    /// numbers. The damped matrix is factored in the kept buffer, which the
+    /// factor gives back: the same operations as on a fresh copy.
+    fn damped_step(&mut self) -> Option<DVector<f64>> {
+        // (A failed factorisation consumed the buffer: made again here.)
+        let mut a = std::mem::replace(&mut self.damped, DMatrix::zeros(0, 0));
+        if a.shape() == self.n.shape() {
+            a.copy_from(&self.n);
+        } else {
+            a = self.n.clone();
+        }
         for c in 0..self.free.len() {
             a[(c, c)] += self.damping.value() * self.scale[c];
         }
-        let step = a.cholesky().map(|ch| -ch.solve(&self.g));
-        step.filter(|d| d.iter().all(|v| v.is_finite()))
+        let ch = a.cholesky()?;
+        let mut step = self.g.clone();
+        ch.solve_mut(&mut step);
+        step.neg_mut();
+        self.damped = ch.unpack_dirty();
+        step.iter().all(|v| v.is_finite()).then_some(step)
     }
 
     /// The cost after the step `delta` from cost `f` (positions only), and
@@ -378,7 +395,8 @@ impl<'a, 'o> Descent<'a, 'o> {
         let f_new = self.objective.cost(&x, &self.free, &mut self.xyz)?;
         self.cost_evaluations += 1;
         // |r + Jδ|² = f + 2δᵀg + δᵀNδ
-        let predicted = -(2.0 * delta.dot(&self.g) + delta.dot(&(&self.n * delta)));
+        self.n.mul_to(delta, &mut self.n_delta);
+        let predicted = -(2.0 * delta.dot(&self.g) + delta.dot(&self.n_delta));
         let actual = f - f_new;
         let rho = if predicted > 0.0 {
             actual / predicted
