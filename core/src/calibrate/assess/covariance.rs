@@ -150,7 +150,7 @@ pub(super) fn position_uncertainty(
         .div_ceil(crate::calibrate::checks::UNCERTAINTY_POSES)
         .max(1);
     let q = free.len();
-    let c: Vec<f64> = (0..q * q).map(|i| cov[(i / q, i % q)]).collect();
+    let c = Factor::of(cov);
     // Every `step`-th pose from the first.
     let n = data.len().div_ceil(step);
     let mut sums = UncertaintySums {
@@ -209,38 +209,103 @@ pub(super) fn position_uncertainty(
 /// same bits as one at a time).
 const LANES: usize = 8;
 
-/// [`position_uncertainty`]'s running sums: the covariance row-major, the
+/// The covariance as [`UncertaintySums`] reads it.
+enum Factor {
+    /// `Lᵀ` row-major (`C = L Lᵀ`, `L` lower triangular): a pose's
+    /// `J C Jᵀ` is `Z Zᵀ` with `Z = J L`, whose row `b` needs `J`'s columns
+    /// from `b` on only.
+    Cholesky(Vec<f64>),
+    /// `C` itself, row-major: a covariance too near singular for its
+    /// Cholesky factor (never so for a fit's, which is `N⁻¹` scaled).
+    Full(Vec<f64>),
+}
+
+impl Factor {
+    fn of(cov: &DMatrix<f64>) -> Factor {
+        let q = cov.nrows();
+        match cov.clone().cholesky() {
+            Some(ch) => {
+                let l = ch.l_dirty();
+                Factor::Cholesky((0..q * q).map(|i| l[(i % q, i / q)]).collect())
+            }
+            None => Factor::Full((0..q * q).map(|i| cov[(i / q, i % q)]).collect()),
+        }
+    }
+}
+
+/// [`position_uncertainty`]'s running sums: the covariance's factor, the
 /// free columns of [`LANES`] poses' position Jacobians side by side.
 struct UncertaintySums<'a> {
     free: &'a [usize],
-    c: Vec<f64>,
+    c: Factor,
     jf: Vec<[[f64; LANES]; 3]>,
     sum: f64,
     max: f64,
 }
+
+/// The six distinct entries (xx, yy, zz, xy, xz, yz) of a position's 3 × 3
+/// covariance, as pairs of coordinates.
+const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
 impl UncertaintySums<'_> {
     /// Pose `l` of the group from its Jacobian; with the group's last, its
     /// `n` poses' 95 % radii ([`radius`]) into the sums.
     #[inline(always)]
     fn add(&mut self, l: usize, jac: &[[f64; 3]], n: Option<usize>) {
-        let (jf, q) = (&mut self.jf, self.free.len());
         for (a, &ca) in self.free.iter().enumerate() {
             for k in 0..3 {
-                jf[a][k][l] = jac[ca][k];
+                self.jf[a][k][l] = jac[ca][k];
             }
         }
         let Some(n) = n else { return };
-        // The position's covariance J C Jᵀ, its six distinct entries (xx,
-        // yy, zz, xy, xz, yz) per lane: its eigenvalues, not only its trace,
-        // give the radius that covers 95 % of a 3-D error. As J (C Jᵀ), one
-        // row of C Jᵀ at a time: 3q² + 6q products a pose, not the 12q² of
-        // each entry's double sum.
-        const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+        // The position's covariance J C Jᵀ, its six distinct entries per
+        // lane: its eigenvalues, not only its trace, give the radius that
+        // covers 95 % of a 3-D error.
+        let m = match &self.c {
+            Factor::Cholesky(lt) => self.factored(lt),
+            Factor::Full(c) => self.full(c),
+        };
+        for l in 0..n {
+            let [xx, yy, zz, xy, xz, yz] = m.map(|e| e[l]);
+            let u = radius(eigenvalues([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]));
+            self.sum += u * u;
+            self.max = self.max.max(u);
+        }
+    }
+
+    /// `Z Zᵀ` with `Z = J L`, one column `b` of `Z` at a time (`Σ_{a ≥ b}
+    /// J_a L_ab`): 1.5q² + 6q products a pose, half of `J (C Jᵀ)`'s, and a
+    /// sum of squares, so never an indefinite result from rounding.
+    #[inline(always)]
+    fn factored(&self, lt: &[f64]) -> [[f64; LANES]; 6] {
+        let (jf, q) = (&self.jf, self.free.len());
+        let mut m = [[0.0; LANES]; 6];
+        for (b, row) in lt.chunks_exact(q).enumerate() {
+            let mut z = [[0.0; LANES]; 3];
+            for (ja, &lab) in jf[b..].iter().zip(&row[b..]) {
+                for s in 0..3 {
+                    for l in 0..LANES {
+                        z[s][l] += lab * ja[s][l];
+                    }
+                }
+            }
+            for (e, &(r, s)) in PAIRS.iter().enumerate() {
+                for l in 0..LANES {
+                    m[e][l] += z[r][l] * z[s][l];
+                }
+            }
+        }
+        m
+    }
+
+    /// `J (C Jᵀ)`, one row of `C Jᵀ` at a time: 3q² + 6q products a pose.
+    #[inline(always)]
+    fn full(&self, c: &[f64]) -> [[f64; LANES]; 6] {
+        let (jf, q) = (&self.jf, self.free.len());
         let mut m = [[0.0; LANES]; 6];
         for (b, jb) in jf.iter().enumerate() {
             let mut y = [[0.0; LANES]; 3];
-            for (ja, &cba) in jf.iter().zip(&self.c[b * q..(b + 1) * q]) {
+            for (ja, &cba) in jf.iter().zip(&c[b * q..(b + 1) * q]) {
                 for s in 0..3 {
                     for l in 0..LANES {
                         y[s][l] += cba * ja[s][l];
@@ -253,12 +318,7 @@ impl UncertaintySums<'_> {
                 }
             }
         }
-        for l in 0..n {
-            let [xx, yy, zz, xy, xz, yz] = m.map(|e| e[l]);
-            let u = radius(eigenvalues([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]));
-            self.sum += u * u;
-            self.max = self.max.max(u);
-        }
+        m
     }
 }
 
@@ -268,33 +328,52 @@ mod tests {
 
     /// [`position_uncertainty`] one pose at a time, as before the poses went
     /// eight at a time: the reference the lanes must match bit for bit.
+    /// With `factored`, `J C Jᵀ` as `Z Zᵀ` (`Z = J L`, `C = L Lᵀ`), else as
+    /// `J (C Jᵀ)`.
     fn one_at_a_time(
         params: &DhParams,
         data: &DataSet,
         free: &[usize],
         cov: &DMatrix<f64>,
+        factored: bool,
     ) -> (usize, f64, f64) {
         let kernel = ArmKernel::new(params).unwrap();
         let step = data
             .len()
             .div_ceil(crate::calibrate::checks::UNCERTAINTY_POSES)
             .max(1);
+        let l = cov.clone().cholesky().map(|ch| ch.l());
         let mut jac = vec![[0.0; 3]; params.param_count()];
         let (mut sum, mut max, mut n) = (0.0, 0.0f64, 0usize);
         for i in (0..data.len()).step_by(step) {
             kernel.position_jacobian(data.reading(i), &mut jac).unwrap();
-            // J (C Jᵀ): row b of C Jᵀ summed over a in order, then m over b.
             let mut m = [[0.0; 3]; 3];
             for (b, &cb) in free.iter().enumerate() {
                 let mut y = [0.0; 3];
-                for (a, &ca) in free.iter().enumerate() {
-                    for (s, v) in y.iter_mut().enumerate() {
-                        *v += cov[(b, a)] * jac[ca][s];
+                if factored {
+                    // Column b of Z = J L: rows a ≥ b of L, in order.
+                    let l = l.as_ref().expect("positive definite");
+                    for (a, &ca) in free.iter().enumerate().skip(b) {
+                        for (s, v) in y.iter_mut().enumerate() {
+                            *v += l[(a, b)] * jac[ca][s];
+                        }
                     }
-                }
-                for (r, mr) in m.iter_mut().enumerate() {
-                    for (s, v) in mr.iter_mut().enumerate() {
-                        *v += jac[cb][r] * y[s];
+                    for (r, mr) in m.iter_mut().enumerate() {
+                        for (s, v) in mr.iter_mut().enumerate() {
+                            *v += y[r] * y[s];
+                        }
+                    }
+                } else {
+                    // Row b of C Jᵀ summed over a in order, then m over b.
+                    for (a, &ca) in free.iter().enumerate() {
+                        for (s, v) in y.iter_mut().enumerate() {
+                            *v += cov[(b, a)] * jac[ca][s];
+                        }
+                    }
+                    for (r, mr) in m.iter_mut().enumerate() {
+                        for (s, v) in mr.iter_mut().enumerate() {
+                            *v += jac[cb][r] * y[s];
+                        }
                     }
                 }
             }
@@ -308,22 +387,25 @@ mod tests {
         (n, (sum / n as f64).sqrt(), max)
     }
 
-    /// Pose counts that leave 1, 2, 3 and 4 poses in the last group, and one
-    /// sampled (more than UNCERTAINTY_POSES touches): the same bits.
-    #[test]
-    fn position_uncertainty_in_lanes_is_the_same_bits() {
-        let params = DhParams::paper_nominal();
-        let free: Vec<usize> = (2..params.param_count() - 2).collect();
-        let q = free.len();
-        // A symmetric positive-definite covariance with correlations.
-        let cov = DMatrix::from_fn(q, q, |a, b| {
+    /// A symmetric positive-definite covariance with correlations.
+    fn correlated(q: usize) -> DMatrix<f64> {
+        DMatrix::from_fn(q, q, |a, b| {
             let d = a.abs_diff(b) as f64;
             if a == b {
                 1e-4 * (1.0 + a as f64)
             } else {
                 1e-5 / (1.0 + d)
             }
-        });
+        })
+    }
+
+    /// Pose counts that leave 1, 2, 3 and 4 poses in the last group, and one
+    /// sampled (more than UNCERTAINTY_POSES touches): the same bits.
+    #[test]
+    fn position_uncertainty_in_lanes_is_the_same_bits() {
+        let params = DhParams::paper_nominal();
+        let free: Vec<usize> = (2..params.param_count() - 2).collect();
+        let cov = correlated(free.len());
         for touches in [3usize, 5, 6, 7, 9, 4003] {
             // At least 3 touches a point.
             let points = (touches / 3).min(3);
@@ -331,10 +413,46 @@ mod tests {
             let u = position_uncertainty(&params, &data, None, &free, &cov, 0.01)
                 .unwrap()
                 .unwrap();
-            let (n, rms, max) = one_at_a_time(&params, &data, &free, &cov);
+            let (n, rms, max) = one_at_a_time(&params, &data, &free, &cov, true);
             assert_eq!(u.poses, n, "{touches} touches");
             assert_eq!(u.rms_mm.to_bits(), rms.to_bits(), "{touches} touches");
             assert_eq!(u.max_mm.to_bits(), max.to_bits(), "{touches} touches");
+            // The factor changes only the rounding: J (C Jᵀ) agrees to
+            // within a few ulp of the radii.
+            let (_, rms_full, max_full) = one_at_a_time(&params, &data, &free, &cov, false);
+            assert!(
+                (u.rms_mm - rms_full).abs() <= 1e-13 * rms_full,
+                "{touches} touches"
+            );
+            assert!(
+                (u.max_mm - max_full).abs() <= 1e-13 * max_full,
+                "{touches} touches"
+            );
         }
+    }
+
+    /// A covariance without a Cholesky factor (singular: one parameter a
+    /// copy of another) is summed as `J (C Jᵀ)`, with that reference's bits.
+    #[test]
+    fn a_singular_covariance_is_summed_whole() {
+        let params = DhParams::paper_nominal();
+        let free: Vec<usize> = (2..params.param_count() - 2).collect();
+        let q = free.len();
+        let mut cov = correlated(q);
+        for k in 0..q {
+            cov[(q - 1, k)] = cov[(0, k)];
+            cov[(k, q - 1)] = cov[(k, 0)];
+        }
+        cov[(q - 1, q - 1)] = cov[(0, 0)];
+        assert!(cov.clone().cholesky().is_none(), "singular");
+        assert!(matches!(Factor::of(&cov), Factor::Full(_)));
+        let data = crate::dataset::testing::spread_touches(9, 3);
+        let u = position_uncertainty(&params, &data, None, &free, &cov, 0.01)
+            .unwrap()
+            .unwrap();
+        let (n, rms, max) = one_at_a_time(&params, &data, &free, &cov, false);
+        assert_eq!(u.poses, n);
+        assert_eq!(u.rms_mm.to_bits(), rms.to_bits());
+        assert_eq!(u.max_mm.to_bits(), max.to_bits());
     }
 }
