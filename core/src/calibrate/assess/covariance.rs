@@ -253,8 +253,8 @@ impl UncertaintySums<'_> {
     #[inline(always)]
     fn add(&mut self, l: usize, jac: &[[f64; 3]], n: Option<usize>) {
         for (a, &ca) in self.free.iter().enumerate() {
-            for k in 0..3 {
-                self.jf[a][k][l] = jac[ca][k];
+            for (lane, &jk) in self.jf[a].iter_mut().zip(&jac[ca]) {
+                lane[l] = jk;
             }
         }
         let Some(n) = n else { return };
