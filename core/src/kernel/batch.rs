@@ -4,6 +4,13 @@
 
 use super::lanes::{Batch, LANES, Two};
 use super::{Chain, Consts, Pose, Post, PreparedParams, PreparedPoses};
+use crate::params::MAX_JOINTS;
+
+/// Room for any chain's parameter columns (`4 n + 3` for `n` ≤
+/// [`MAX_JOINTS`]): the per-visit lane and tile buffers live on the stack,
+/// because a visit is one chunk of a pass and allocating and zeroing them on
+/// the heap each time was 2–3 % of a 100-touch calibration (callgrind).
+const MAX_PARAMS: usize = 4 * MAX_JOINTS + 3;
 
 /// What [`for_each_lane_jacobian`] calls per pose: its index, position
 /// and parameter Jacobian.
@@ -158,6 +165,13 @@ pub(crate) fn poses_impl<const N: usize, C: Chain<N>, L: Batch>(
     }
 }
 
+/// Chain `C`'s parameter count, checked at compile time to fit
+/// [`MAX_PARAMS`].
+const fn room<const N: usize, C: Chain<N>>() -> usize {
+    assert!(C::PARAMS <= MAX_PARAMS, "a chain with more columns than MAX_PARAMS");
+    C::PARAMS
+}
+
 /// Lanes of `[R | p]` to one [`Pose`] per lane.
 #[inline(always)]
 fn pose_lanes<L: Batch>(t: [[L; 4]; 3]) -> [Pose; LANES] {
@@ -213,16 +227,18 @@ pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
 ) {
     let kl: Consts<L, N> = k.splat();
-    let params = <C as Chain<N>>::PARAMS;
-    let mut jl = vec![[L::from(0.0); 3]; params];
-    let mut tile = vec![[0.0; 3]; LANES * params];
+    let params = const { room::<N, C>() };
+    let mut jl_room = [[L::from(0.0); 3]; MAX_PARAMS];
+    let jl = &mut jl_room[..params];
+    let mut tile_room = [[0.0; 3]; LANES * MAX_PARAMS];
+    let tile = &mut tile_room[..LANES * params];
     let mut pos = [[0.0; 3]; LANES];
     let batches = poses.batches::<N>(range.start, range.len() / LANES);
     for b in 0..batches.count {
         let (cq, sq) = batches.get::<L>(b);
-        let p = C::position_jacobian(&kl, &cq, &sq, &mut jl);
+        let p = C::position_jacobian(&kl, &cq, &sq, jl);
         transpose(&[p], &mut pos);
-        transpose(&jl, &mut tile);
+        transpose(jl, tile);
         let i = range.start + b * LANES;
         for (l, cols) in tile.chunks_exact(params).enumerate() {
             f(i + l, &pos[l], cols);
@@ -275,14 +291,16 @@ pub(crate) fn for_each_lane_pose_jacobian<const N: usize, C: Chain<N>, L: Batch>
     f: &mut PoseJacobianVisitor<'_>,
 ) {
     let kl: Consts<L, N> = k.splat();
-    let params = <C as Chain<N>>::PARAMS;
-    let mut jl = vec![[L::from(0.0); 6]; params];
-    let mut tile = vec![[0.0; 6]; LANES * params];
+    let params = const { room::<N, C>() };
+    let mut jl_room = [[L::from(0.0); 6]; MAX_PARAMS];
+    let jl = &mut jl_room[..params];
+    let mut tile_room = [[0.0; 6]; LANES * MAX_PARAMS];
+    let tile = &mut tile_room[..LANES * params];
     let batches = poses.batches::<N>(range.start, range.len() / LANES);
     for b in 0..batches.count {
         let (cq, sq) = batches.get::<L>(b);
-        let pose = pose_lanes(C::pose_jacobian(&kl, &cq, &sq, &mut jl));
-        transpose6(&jl, &mut tile);
+        let pose = pose_lanes(C::pose_jacobian(&kl, &cq, &sq, jl));
+        transpose6(jl, tile);
         let i = range.start + b * LANES;
         for (l, cols) in tile.chunks_exact(params).enumerate() {
             f(i + l, &pose[l], cols);
