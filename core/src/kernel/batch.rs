@@ -168,7 +168,10 @@ pub(crate) fn poses_impl<const N: usize, C: Chain<N>, L: Batch>(
 /// Chain `C`'s parameter count, checked at compile time to fit
 /// [`MAX_PARAMS`].
 const fn room<const N: usize, C: Chain<N>>() -> usize {
-    assert!(C::PARAMS <= MAX_PARAMS, "a chain with more columns than MAX_PARAMS");
+    assert!(
+        C::PARAMS <= MAX_PARAMS,
+        "a chain with more columns than MAX_PARAMS"
+    );
     C::PARAMS
 }
 
