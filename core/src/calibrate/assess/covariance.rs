@@ -281,19 +281,8 @@ impl UncertaintySums<'_> {
         let (jf, q) = (&self.jf, self.free.len());
         let mut m = [[0.0; LANES]; 6];
         for (b, row) in lt.chunks_exact(q).enumerate() {
-            let mut z = [[0.0; LANES]; 3];
-            for (ja, &lab) in jf[b..].iter().zip(&row[b..]) {
-                for s in 0..3 {
-                    for l in 0..LANES {
-                        z[s][l] += lab * ja[s][l];
-                    }
-                }
-            }
-            for (e, &(r, s)) in PAIRS.iter().enumerate() {
-                for l in 0..LANES {
-                    m[e][l] += z[r][l] * z[s][l];
-                }
-            }
+            let z = combination(&jf[b..], &row[b..]);
+            add_pairs(&mut m, &z, &z);
         }
         m
     }
@@ -304,21 +293,35 @@ impl UncertaintySums<'_> {
         let (jf, q) = (&self.jf, self.free.len());
         let mut m = [[0.0; LANES]; 6];
         for (b, jb) in jf.iter().enumerate() {
-            let mut y = [[0.0; LANES]; 3];
-            for (ja, &cba) in jf.iter().zip(&c[b * q..(b + 1) * q]) {
-                for s in 0..3 {
-                    for l in 0..LANES {
-                        y[s][l] += cba * ja[s][l];
-                    }
-                }
-            }
-            for (e, &(r, s)) in PAIRS.iter().enumerate() {
-                for l in 0..LANES {
-                    m[e][l] += jb[r][l] * y[s][l];
-                }
-            }
+            let y = combination(jf, &c[b * q..(b + 1) * q]);
+            add_pairs(&mut m, jb, &y);
         }
         m
+    }
+}
+
+/// `Σ_a w_a J_a` over the lanes' Jacobian columns `jf`, in column order.
+#[inline(always)]
+fn combination(jf: &[[[f64; LANES]; 3]], w: &[f64]) -> [[f64; LANES]; 3] {
+    let mut y = [[0.0; LANES]; 3];
+    for (ja, &wa) in jf.iter().zip(w) {
+        for s in 0..3 {
+            for l in 0..LANES {
+                y[s][l] += wa * ja[s][l];
+            }
+        }
+    }
+    y
+}
+
+/// `m[e] += u[r] v[s]` for each of the six distinct entries `(r, s)`
+/// ([`PAIRS`]), per lane.
+#[inline(always)]
+fn add_pairs(m: &mut [[f64; LANES]; 6], u: &[[f64; LANES]; 3], v: &[[f64; LANES]; 3]) {
+    for (e, &(r, s)) in PAIRS.iter().enumerate() {
+        for l in 0..LANES {
+            m[e][l] += u[r][l] * v[s][l];
+        }
     }
 }
 
