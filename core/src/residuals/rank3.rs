@@ -12,8 +12,9 @@
 /// entry is loaded and stored once per block.
 pub(super) const BLOCK: usize = 8;
 
-/// Entries of a row updated together (one AVX2 register of f64).
-const LANES: usize = 4;
+/// Entries of a row updated together (one AVX2 register of f64); the
+/// stride is a whole number of them.
+pub(super) const LANES: usize = 4;
 
 /// Up to [`BLOCK`] observations' columns, not yet in the matrix: the
 /// columns of `J` and of `A·J`, one padded row per observation and
@@ -94,6 +95,21 @@ impl Rank3 {
         }
     }
 
+    /// The next observation's rows to fill, each [`Rank3::stride`] long:
+    /// the padding columns past `p` are zero (nothing writes them), so a
+    /// caller may run whole lanes over them.
+    #[inline(always)]
+    pub(super) fn padded_slot(&mut self) -> Slot<'_> {
+        let at = self.pending * self.stride;
+        let end = at + self.stride;
+        let [jx, jy, jz] = &mut self.j;
+        let [ax, ay, az] = &mut self.aj;
+        Slot {
+            j: [&mut jx[at..end], &mut jy[at..end], &mut jz[at..end]],
+            aj: [&mut ax[at..end], &mut ay[at..end], &mut az[at..end]],
+        }
+    }
+
     /// Takes in the slot just filled; a full block goes into `jtj` (the
     /// padded lower triangle).
     #[inline(always)]
@@ -113,41 +129,37 @@ impl Rank3 {
         if n == 0 {
             return;
         }
+        // The observations' rows, walked once per lane group: made here and
+        // copied for each, since making them (six slices cut into rows,
+        // zipped) cost more than a small group's sums.
+        let rows = self.rows(n);
         for i in 0..self.columns {
             let row = &mut jtj[i * w..i * w + w];
             // Up to four lanes at once: independent sums, so the additions'
             // latency overlaps (one lane's sum is a chain over the block).
             let mut c = 0;
             while c <= i {
+                let at = At { i, c, w };
                 c += match (i - c) / LANES + 1 {
-                    1 => self.lanes::<1>(row, i, c, n),
-                    2 => self.lanes::<2>(row, i, c, n),
-                    3 => self.lanes::<3>(row, i, c, n),
-                    _ => self.lanes::<4>(row, i, c, n),
+                    1 => lanes::<1>(rows.clone(), row, at),
+                    2 => lanes::<2>(rows.clone(), row, at),
+                    3 => lanes::<3>(rows.clone(), row, at),
+                    _ => lanes::<4>(rows.clone(), row, at),
                 };
             }
         }
+        drop(rows);
         self.pending = 0;
     }
 
-    /// `K` lanes of `row` (row `i` of `JᵀAJ`) from column `c`, the `n` held
-    /// observations added in order; returns the columns done.
+    /// The first `n` observations' padded rows: `((J_x, J_y, J_z), (AJ_x,
+    /// AJ_y, AJ_z))`.
     #[inline(always)]
-    fn lanes<const K: usize>(&self, row: &mut [f64], i: usize, c: usize, n: usize) -> usize {
-        let (w, m) = (self.stride, K * LANES);
+    fn rows(&self, n: usize) -> impl Iterator<Item = Rows<'_>> + Clone {
+        let w = self.stride;
         let [jx, jy, jz] = &self.j;
         let [ax, ay, az] = &self.aj;
-        let out = &mut row[c..c + m];
-        let mut r: [[f64; LANES]; K] =
-            std::array::from_fn(|k| std::array::from_fn(|l| out[k * LANES + l]));
-        // One observation's padded rows at a time: the column ranges are
-        // checked once here, not once per observation.
-        assert!(
-            i < w && c + m <= w,
-            "row {i}, columns {c}.. within the stride {w}"
-        );
-        let rows = (jx
-            .chunks_exact(w)
+        (jx.chunks_exact(w)
             .zip(jy.chunks_exact(w))
             .zip(jz.chunks_exact(w)))
         .zip(
@@ -155,21 +167,7 @@ impl Rank3 {
                 .zip(ay.chunks_exact(w))
                 .zip(az.chunks_exact(w)),
         )
-        .take(n);
-        for (((jx, jy), jz), ((ax, ay), az)) in rows {
-            let (x, y, z) = (ax[i], ay[i], az[i]);
-            let (bx, by, bz) = (&jx[c..c + m], &jy[c..c + m], &jz[c..c + m]);
-            for (k, rk) in r.iter_mut().enumerate() {
-                for (l, v) in rk.iter_mut().enumerate() {
-                    let b = k * LANES + l;
-                    *v += x * bx[b] + y * by[b] + z * bz[b];
-                }
-            }
-        }
-        for (o, rk) in out.chunks_exact_mut(LANES).zip(&r) {
-            o.copy_from_slice(rk);
-        }
-        m
+        .take(n)
     }
 
     /// Entry `(a, b)`, `b ≤ a`, of the padded lower triangle `jtj`.
@@ -177,6 +175,54 @@ impl Rank3 {
     pub(super) fn entry(&self, jtj: &[f64], a: usize, b: usize) -> f64 {
         jtj[a * self.stride + b]
     }
+}
+
+/// One observation's padded rows, as [`Rank3::rows`] gives them.
+type Rows<'a> = (
+    ((&'a [f64], &'a [f64]), &'a [f64]),
+    ((&'a [f64], &'a [f64]), &'a [f64]),
+);
+
+/// Where a lane group is: row `i`, from column `c`, in rows of stride `w`.
+#[derive(Clone, Copy)]
+struct At {
+    i: usize,
+    c: usize,
+    w: usize,
+}
+
+/// `K` lanes of `row` (row `i` of `JᵀAJ`) from column `c`, the observations
+/// `rows` added in order; returns the columns done.
+#[inline(always)]
+fn lanes<'a, const K: usize>(
+    rows: impl Iterator<Item = Rows<'a>>,
+    row: &mut [f64],
+    At { i, c, w }: At,
+) -> usize {
+    let m = K * LANES;
+    let out = &mut row[c..c + m];
+    let mut r: [[f64; LANES]; K] =
+        std::array::from_fn(|k| std::array::from_fn(|l| out[k * LANES + l]));
+    // One observation's padded rows at a time: the column ranges are
+    // checked once here, not once per observation.
+    assert!(
+        i < w && c + m <= w,
+        "row {i}, columns {c}.. within the stride {w}"
+    );
+    for (((jx, jy), jz), ((ax, ay), az)) in rows {
+        let (x, y, z) = (ax[i], ay[i], az[i]);
+        let (bx, by, bz) = (&jx[c..c + m], &jy[c..c + m], &jz[c..c + m]);
+        for (k, rk) in r.iter_mut().enumerate() {
+            for (l, v) in rk.iter_mut().enumerate() {
+                let b = k * LANES + l;
+                *v += x * bx[b] + y * by[b] + z * bz[b];
+            }
+        }
+    }
+    for (o, rk) in out.chunks_exact_mut(LANES).zip(&r) {
+        o.copy_from_slice(rk);
+    }
+    m
 }
 
 #[cfg(test)]

@@ -1001,8 +1001,15 @@ fn accumulate(
 /// Per-point sums: `G = Σ A J` (3 × p), `Σ Jᵀ A p̃`, `Σ A p̃`, `Σ p̃ᵀA p̃`,
 /// `S = Σ A`, with `p̃` the position relative to the point's first touch (no
 /// cancellation of metre-sized coordinates).
+///
+/// The per-column sums are held by coordinate (`g[k]` is row `k` of `G`),
+/// each padded to the [`Rank3::stride`], so that a touch's columns are
+/// updated a whole lane at a time: every entry still gets the same
+/// operations in the same order as one column at a time.
 struct PointSums {
-    g: Vec<[f64; 3]>,
+    /// Columns summed (`p`).
+    columns: usize,
+    g: [Vec<f64>; 3],
     jap: Vec<f64>,
     ap: [f64; 3],
     pap: f64,
@@ -1011,8 +1018,8 @@ struct PointSums {
     origin: [f64; 3],
     /// Up to [`super::rank3::BLOCK`] touches of one point not yet in `JᵀAJ`.
     rank3: Rank3,
-    /// Scratch: the point's `J̄ = S⁻¹ G`.
-    mean: Vec<[f64; 3]>,
+    /// Scratch: the point's `J̄ = S⁻¹ G`, by coordinate like `g`.
+    mean: [Vec<f64>; 3],
 }
 
 /// What one chunk of points contributes.
@@ -1027,22 +1034,27 @@ struct Partial {
 
 impl PointSums {
     fn new(p: usize) -> PointSums {
+        let rank3 = Rank3::new(p);
+        let w = rank3.stride();
         PointSums {
-            g: vec![[0.0; 3]; p],
-            jap: vec![0.0; p],
+            columns: p,
+            g: std::array::from_fn(|_| vec![0.0; w]),
+            jap: vec![0.0; w],
             ap: [0.0; 3],
             pap: 0.0,
             s: [0.0; 6],
             started: false,
             origin: [0.0; 3],
-            rank3: Rank3::new(p),
-            mean: vec![[0.0; 3]; p],
+            rank3,
+            mean: std::array::from_fn(|_| vec![0.0; w]),
         }
     }
 
     /// Ready for the next point, keeping the buffers.
     fn reset(&mut self) {
-        self.g.fill([0.0; 3]);
+        for g in &mut self.g {
+            g.fill(0.0);
+        }
         self.jap.fill(0.0);
         self.ap = [0.0; 3];
         self.pap = 0.0;
@@ -1067,19 +1079,36 @@ impl PointSums {
         for (s, v) in self.s.iter_mut().zip(a) {
             *s += v;
         }
-        let slot = self.rank3.slot();
+        let slot = self.rank3.padded_slot();
         let [jx, jy, jz] = slot.j;
+        let n = free.len();
+        for (((x, y), z), &ci) in (jx[..n].iter_mut().zip(&mut jy[..n]).zip(&mut jz[..n])).zip(free)
+        {
+            (*x, *y, *z) = (jac[ci][0], jac[ci][1], jac[ci][2]);
+        }
+        // Whole lanes over the padded rows (the padding's `J` is zero):
+        // `A·J` as `sym_mul` forms it, then `G` and `Jᵀ A p̃`. Lanes of
+        // arrays, each loaded before any is stored, so the loop needs no
+        // check of whether the ten rows overlap.
+        let k = self.jap.len() / LANES;
         let [ax, ay, az] = slot.aj;
-        for (i, &ci) in free.iter().enumerate() {
-            let j = jac[ci];
-            let wa = sym_mul(a, &j);
-            let g = &mut self.g[i];
-            g[0] += wa[0];
-            g[1] += wa[1];
-            g[2] += wa[2];
-            self.jap[i] += wa[0] * d[0] + wa[1] * d[1] + wa[2] * d[2];
-            (jx[i], jy[i], jz[i]) = (j[0], j[1], j[2]);
-            (ax[i], ay[i], az[i]) = (wa[0], wa[1], wa[2]);
+        let (jx, jy, jz) = (lanes(jx, k), lanes(jy, k), lanes(jz, k));
+        let (ax, ay, az) = (lanes_mut(ax, k), lanes_mut(ay, k), lanes_mut(az, k));
+        let [gx, gy, gz] = &mut self.g;
+        let (gx, gy, gz) = (lanes_mut(gx, k), lanes_mut(gy, k), lanes_mut(gz, k));
+        let jap = lanes_mut(&mut self.jap, k);
+        for c in 0..k {
+            let (x, y, z) = (jx[c], jy[c], jz[c]);
+            let (mut g, mut p) = ([gx[c], gy[c], gz[c]], jap[c]);
+            let mut wa = [[0.0; LANES]; 3];
+            for l in 0..LANES {
+                let [wx, wy, wz] = sym_mul(a, &[x[l], y[l], z[l]]);
+                (g[0][l], g[1][l], g[2][l]) = (g[0][l] + wx, g[1][l] + wy, g[2][l] + wz);
+                p[l] += wx * d[0] + wy * d[1] + wz * d[2];
+                (wa[0][l], wa[1][l], wa[2][l]) = (wx, wy, wz);
+            }
+            (gx[c], gy[c], gz[c], jap[c]) = (g[0], g[1], g[2], p);
+            (ax[c], ay[c], az[c]) = (wa[0], wa[1], wa[2]);
         }
         self.rank3.add(jtj);
     }
@@ -1090,28 +1119,66 @@ impl PointSums {
     #[inline(always)]
     fn finish(&mut self, part: &mut Partial, jtj: &mut [f64], need_mean: bool) {
         self.rank3.flush(jtj);
-        let (p, w) = (self.jap.len(), self.rank3.stride());
+        let (p, w) = (self.columns, self.jap.len());
         let cinv = sym_inv(&self.s);
         let c = sym_mul(&cinv, &self.ap);
         // Σ p̃ᵀAp̃ − cᵀ S c, with S c = Σ A p̃
         part.cost += self.pap - (c[0] * self.ap[0] + c[1] * self.ap[1] + c[2] * self.ap[2]);
-        for (m, g) in self.mean.iter_mut().zip(&self.g) {
-            *m = sym_mul(&cinv, g);
+        let k = w / LANES;
+        let [gx, gy, gz] = &self.g;
+        let (gx, gy, gz) = (lanes(gx, k), lanes(gy, k), lanes(gz, k));
+        let [mx, my, mz] = &mut self.mean;
+        let (mx, my, mz) = (lanes_mut(mx, k), lanes_mut(my, k), lanes_mut(mz, k));
+        for q in 0..k {
+            let (x, y, z) = (gx[q], gy[q], gz[q]);
+            let mut m = [[0.0; LANES]; 3];
+            for l in 0..LANES {
+                [m[0][l], m[1][l], m[2][l]] = sym_mul(&cinv, &[x[l], y[l], z[l]]);
+            }
+            (mx[q], my[q], mz[q]) = (m[0], m[1], m[2]);
         }
         for i in 0..p {
-            let gi = self.g[i];
+            let gi = [
+                gx[i / LANES][i % LANES],
+                gy[i / LANES][i % LANES],
+                gz[i / LANES][i % LANES],
+            ];
             part.jtr[i] += self.jap[i] - (gi[0] * c[0] + gi[1] * c[1] + gi[2] * c[2]);
-            for (b, mb) in self.mean.iter().enumerate().take(i + 1) {
-                jtj[i * w + b] -= gi[0] * mb[0] + gi[1] * mb[1] + gi[2] * mb[2];
+            // Columns `b ≤ i`, in whole lanes: the entries past the diagonal
+            // in the last lane are the upper triangle's scratch.
+            let end = i / LANES + 1;
+            let row = lanes_mut(&mut jtj[i * w..(i + 1) * w], end);
+            for (r, ((x, y), z)) in row.iter_mut().zip(mx.iter().zip(my.iter()).zip(mz.iter())) {
+                for l in 0..LANES {
+                    r[l] -= gi[0] * x[l] + gi[1] * y[l] + gi[2] * z[l];
+                }
             }
         }
         part.centroids
             .push(std::array::from_fn(|k| c[k] + self.origin[k]));
         if need_mean {
-            part.mean_j.push(self.mean.clone());
+            let at = |m: &[[f64; LANES]], i: usize| m[i / LANES][i % LANES];
+            part.mean_j
+                .push((0..p).map(|i| [at(mx, i), at(my, i), at(mz, i)]).collect());
         }
         self.reset();
     }
+}
+
+// The point sums' lanes are the padded rows' (`Rank3::stride` is a whole
+// number of them).
+const _: () = assert!(super::rank3::LANES == LANES);
+
+/// The first `k` lanes of `v` (whose length is a whole number of lanes).
+#[inline(always)]
+fn lanes(v: &[f64], k: usize) -> &[[f64; LANES]] {
+    &v.as_chunks::<LANES>().0[..k]
+}
+
+/// [`lanes`], to write.
+#[inline(always)]
+fn lanes_mut(v: &mut [f64], k: usize) -> &mut [[f64; LANES]] {
+    &mut v.as_chunks_mut::<LANES>().0[..k]
 }
 
 /// A chunk's buffers, kept by its thread from one normal pass to the next:
@@ -1138,7 +1205,7 @@ impl ChunkScratch {
     /// zeroed.
     fn take(p: usize) -> ChunkScratch {
         let kept = SCRATCH.with_borrow_mut(|kept| {
-            let at = kept.iter().position(|s| s.sums.jap.len() == p)?;
+            let at = kept.iter().position(|s| s.sums.columns == p)?;
             Some(kept.swap_remove(at))
         });
         match kept {
