@@ -1294,19 +1294,50 @@ fn chunk(
             },
         )?;
     }
-    sums.finish(&mut part, jtj, need_mean);
-    for a in 0..p {
-        for b in 0..=a {
-            let v = sums.rank3.entry(jtj, a, b);
-            part.jtj[a * p + b] = v;
-            part.jtj[b * p + a] = v;
-        }
-    }
+    run_lanes(ChunkTail {
+        sums,
+        jtj,
+        part: &mut part,
+        need_mean,
+    });
     scratch.keep();
     if !finite {
         part.cost = f64::INFINITY;
     }
     Ok(part)
+}
+
+/// A chunk's last point closed and its padded triangle copied out whole:
+/// on the lanes, so that this tail compiles with the same target features
+/// as the kernel's loop that ran the chunk's other points (the same
+/// operations, so the same bits either way).
+struct ChunkTail<'s> {
+    sums: &'s mut PointSums,
+    jtj: &'s mut [f64],
+    part: &'s mut Partial,
+    need_mean: bool,
+}
+
+impl LaneOp for ChunkTail<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let ChunkTail {
+            sums,
+            jtj,
+            part,
+            need_mean,
+        } = self;
+        sums.finish(part, jtj, need_mean);
+        let p = sums.columns;
+        for a in 0..p {
+            for b in 0..=a {
+                let v = sums.rank3.entry(jtj, a, b);
+                part.jtj[a * p + b] = v;
+                part.jtj[b * p + a] = v;
+            }
+        }
+    }
 }
 
 /// Whether some prismatic joint's reading differs between two touches of
