@@ -85,23 +85,23 @@ impl Rank3 {
     /// The next observation's rows to fill; [`Rank3::add`] takes them in.
     #[inline(always)]
     pub(super) fn slot(&mut self) -> Slot<'_> {
-        let at = self.pending * self.stride;
-        let end = at + self.columns;
-        let [jx, jy, jz] = &mut self.j;
-        let [ax, ay, az] = &mut self.aj;
-        Slot {
-            j: [&mut jx[at..end], &mut jy[at..end], &mut jz[at..end]],
-            aj: [&mut ax[at..end], &mut ay[at..end], &mut az[at..end]],
-        }
+        self.slot_of(self.columns)
     }
 
-    /// The next observation's rows to fill, each [`Rank3::stride`] long:
-    /// the padding columns past `p` are zero (nothing writes them), so a
-    /// caller may run whole lanes over them.
+    /// The next observation's rows to fill, each [`Rank3::stride`] long: a
+    /// caller may run whole lanes over them. Their padding columns past
+    /// `p` in `J` are zero (only a padded slot's `A·J` is written there,
+    /// and the sums never read it).
     #[inline(always)]
     pub(super) fn padded_slot(&mut self) -> Slot<'_> {
+        self.slot_of(self.stride)
+    }
+
+    /// The next observation's rows, `width` columns each.
+    #[inline(always)]
+    fn slot_of(&mut self, width: usize) -> Slot<'_> {
         let at = self.pending * self.stride;
-        let end = at + self.stride;
+        let end = at + width;
         let [jx, jy, jz] = &mut self.j;
         let [ax, ay, az] = &mut self.aj;
         Slot {
