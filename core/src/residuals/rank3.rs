@@ -71,6 +71,11 @@ impl Rank3 {
         }
     }
 
+    /// Columns updated (`p`).
+    pub(super) fn columns(&self) -> usize {
+        self.columns
+    }
+
     /// Row stride of the padded lower triangle the updates go to: `p` rows
     /// of this many entries.
     pub(super) fn stride(&self) -> usize {
@@ -139,15 +144,15 @@ impl Rank3 {
             // latency overlaps (one lane's sum is a chain over the block).
             let mut c = 0;
             while c <= i {
-                let at = At { i, c, w };
                 c += match (i - c) / LANES + 1 {
-                    1 => lanes::<1>(rows.clone(), row, at),
-                    2 => lanes::<2>(rows.clone(), row, at),
-                    3 => lanes::<3>(rows.clone(), row, at),
-                    _ => lanes::<4>(rows.clone(), row, at),
+                    1 => lanes::<1>(rows.clone(), row, i, c, w),
+                    2 => lanes::<2>(rows.clone(), row, i, c, w),
+                    3 => lanes::<3>(rows.clone(), row, i, c, w),
+                    _ => lanes::<4>(rows.clone(), row, i, c, w),
                 };
             }
         }
+        // The rows borrow the scratch, which the count below belongs to.
         drop(rows);
         self.pending = 0;
     }
@@ -183,21 +188,15 @@ type Rows<'a> = (
     ((&'a [f64], &'a [f64]), &'a [f64]),
 );
 
-/// Where a lane group is: row `i`, from column `c`, in rows of stride `w`.
-#[derive(Clone, Copy)]
-struct At {
-    i: usize,
-    c: usize,
-    w: usize,
-}
-
-/// `K` lanes of `row` (row `i` of `JᵀAJ`) from column `c`, the observations
-/// `rows` added in order; returns the columns done.
+/// `K` lanes of `row` (row `i` of `JᵀAJ`, of stride `w`) from column `c`,
+/// the observations `rows` added in order; returns the columns done.
 #[inline(always)]
 fn lanes<'a, const K: usize>(
     rows: impl Iterator<Item = Rows<'a>>,
     row: &mut [f64],
-    At { i, c, w }: At,
+    i: usize,
+    c: usize,
+    w: usize,
 ) -> usize {
     let m = K * LANES;
     let out = &mut row[c..c + m];

@@ -1007,8 +1007,6 @@ fn accumulate(
 /// updated a whole lane at a time: every entry still gets the same
 /// operations in the same order as one column at a time.
 struct PointSums {
-    /// Columns summed (`p`).
-    columns: usize,
     g: [Vec<f64>; 3],
     jap: Vec<f64>,
     ap: [f64; 3],
@@ -1037,7 +1035,6 @@ impl PointSums {
         let rank3 = Rank3::new(p);
         let w = rank3.stride();
         PointSums {
-            columns: p,
             g: std::array::from_fn(|_| vec![0.0; w]),
             jap: vec![0.0; w],
             ap: [0.0; 3],
@@ -1119,7 +1116,7 @@ impl PointSums {
     #[inline(always)]
     fn finish(&mut self, part: &mut Partial, jtj: &mut [f64], need_mean: bool) {
         self.rank3.flush(jtj);
-        let (p, w) = (self.columns, self.jap.len());
+        let (p, w) = (self.rank3.columns(), self.jap.len());
         let cinv = sym_inv(&self.s);
         let c = sym_mul(&cinv, &self.ap);
         // Σ p̃ᵀAp̃ − cᵀ S c, with S c = Σ A p̃
@@ -1138,11 +1135,7 @@ impl PointSums {
             (mx[q], my[q], mz[q]) = (m[0], m[1], m[2]);
         }
         for i in 0..p {
-            let gi = [
-                gx[i / LANES][i % LANES],
-                gy[i / LANES][i % LANES],
-                gz[i / LANES][i % LANES],
-            ];
+            let gi = [self.g[0][i], self.g[1][i], self.g[2][i]];
             part.jtr[i] += self.jap[i] - (gi[0] * c[0] + gi[1] * c[1] + gi[2] * c[2]);
             // Columns `b ≤ i`, in whole lanes: the entries past the diagonal
             // in the last lane are the upper triangle's scratch.
@@ -1157,9 +1150,9 @@ impl PointSums {
         part.centroids
             .push(std::array::from_fn(|k| c[k] + self.origin[k]));
         if need_mean {
-            let at = |m: &[[f64; LANES]], i: usize| m[i / LANES][i % LANES];
+            let [mx, my, mz] = &self.mean;
             part.mean_j
-                .push((0..p).map(|i| [at(mx, i), at(my, i), at(mz, i)]).collect());
+                .push((0..p).map(|i| [mx[i], my[i], mz[i]]).collect());
         }
         self.reset();
     }
@@ -1205,7 +1198,7 @@ impl ChunkScratch {
     /// zeroed.
     fn take(p: usize) -> ChunkScratch {
         let kept = SCRATCH.with_borrow_mut(|kept| {
-            let at = kept.iter().position(|s| s.sums.columns == p)?;
+            let at = kept.iter().position(|s| s.sums.rank3.columns() == p)?;
             Some(kept.swap_remove(at))
         });
         match kept {
@@ -1329,7 +1322,7 @@ impl LaneOp for ChunkTail<'_> {
             need_mean,
         } = self;
         sums.finish(part, jtj, need_mean);
-        let p = sums.columns;
+        let p = sums.rank3.columns();
         for a in 0..p {
             for b in 0..=a {
                 let v = sums.rank3.entry(jtj, a, b);
