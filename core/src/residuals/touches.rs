@@ -15,7 +15,7 @@ use super::{
 use crate::corrections::Effects;
 use crate::dataset::DataSet;
 use crate::error::short;
-use crate::kernel::{ArmKernel, Batch, KernelError, LANES, LaneOp, NoiseOf, run_lanes, to_arrays};
+use crate::kernel::{ArmKernel, Batch, KernelError, LANES, LaneOp, NoiseOf, run_lanes};
 use crate::parallel::parallel_map;
 
 use super::tools::{TouchViews, tool_columns};
@@ -94,10 +94,6 @@ impl<'d> TouchTerm<'d> {
         out: &mut [f64],
     ) -> Result<(), KernelError> {
         let (data, q) = (self.data, cols.len());
-        // `M` transposed and padded, once: [`PointScratch::parameter_share`]
-        // reads its rows side by side.
-        let mt = transposed_padded(m, q);
-        let m = &mt[..];
         let all = &data.points()[points.clone()];
         let most = all.iter().map(|p| p.touches.len()).max().unwrap_or(0);
         let mut scratch = PointScratch::new(most, q);
@@ -130,14 +126,19 @@ impl<'d> TouchTerm<'d> {
             // On the kernel's lanes (AVX where the CPU has it; the same
             // bits): the parameter share's sums are most of a point's work.
             let weights = &self.weights[point.touches.clone()];
-            let values = run_lanes(OnePoint {
+            run_lanes(OnePoint {
                 scratch: &mut scratch,
                 a: weights,
-                mt: m,
+                m,
+                out: &mut *out,
+                at: point.touches.start - offset,
             });
-            let at = point.touches.start - offset;
-            out[at..at + values.len()].copy_from_slice(values);
         }
+        run_lanes(Flush {
+            group: &mut scratch.group,
+            m,
+            out,
+        });
         Ok(())
     }
 
@@ -762,14 +763,14 @@ impl Term for TouchTerm<'_> {
     }
 }
 
-/// [`TouchTerm::standardised`]'s buffers for one point: positions, the
-/// free columns of the touches' Jacobians (`q` per touch), `J̄`, the values.
+/// [`TouchTerm::standardised`]'s buffers for a chunk of points: one
+/// point's positions, the free columns of its touches' Jacobians (`q` per
+/// touch) and `J̄`; and the touches waiting for their parameter shares.
 struct PointScratch {
     xyz: Vec<[f64; 3]>,
     jac: Vec<[f64; 3]>,
     mean: Vec<[f64; 3]>,
-    aj: Vec<[f64; 3]>,
-    out: Vec<f64>,
+    group: ShareGroup,
 }
 
 impl PointScratch {
@@ -778,18 +779,19 @@ impl PointScratch {
             xyz: vec![[0.0; 3]; touches],
             jac: vec![[0.0; 3]; touches * q],
             mean: vec![[0.0; 3]; q],
-            aj: vec![[0.0; 3]; q],
-            out: vec![0.0; touches],
+            group: ShareGroup::new(q),
         }
     }
 
-    /// The point's standardised residuals from its touches' positions (and
-    /// Jacobians, when `mt`, the `q × q` block of `N⁻¹` transposed and
-    /// padded by [`transposed_padded`], is not empty) under their weights
-    /// `a`, the parameter share on lanes `L`.
+    /// The standardised residuals of the point's touches, from their
+    /// positions (and Jacobians, when `m`, the `q × q` block of `N⁻¹`
+    /// row-major, is not empty) under their weights `a`, into `out` from
+    /// `at` on: at once without `m`; with it, as their parameter shares are
+    /// computed, [`LANES`] touches at a time on lanes `L` (a last group
+    /// waits for the next point's touches, or for [`ShareGroup::flush`]).
     #[inline(always)]
-    fn point<L: Batch>(&mut self, a: &[Sym3], mt: &[[f64; LANES]]) -> &[f64] {
-        let (n, q) = (a.len(), self.mean.len());
+    fn point<L: Batch>(&mut self, a: &[Sym3], m: &[f64], out: &mut [f64], at: usize) {
+        let q = self.mean.len();
         let (mut sum_a, mut sum_ap) = ([0.0; 6], [0.0; 3]);
         self.mean.fill([0.0; 3]);
         for (t, a) in a.iter().enumerate() {
@@ -815,49 +817,100 @@ impl PointScratch {
             let ar = sym_mul(a, &r);
             let quad = r[0] * ar[0] + r[1] * ar[1] + r[2] * ar[2];
             // tr(A·inv) for symmetric A and inv: the centroid's share.
-            let mut tr = a[0] * inv[0]
+            let tr = a[0] * inv[0]
                 + a[1] * inv[1]
                 + a[2] * inv[2]
                 + 2.0 * (a[3] * inv[3] + a[4] * inv[4] + a[5] * inv[5]);
-            if q > 0 {
-                tr += self.parameter_share::<L>(a, t, mt);
+            if q == 0 {
+                out[at + t] = standardised(quad, tr);
+                continue;
             }
-            let h = (tr / 3.0).clamp(0.0, 0.999);
-            self.out[t] = quad / (1.0 - h);
+            let jac = &self.jac[t * q..(t + 1) * q];
+            if self.group.push(at + t, quad, tr, a, jac, &self.mean) {
+                self.group.flush::<L>(m, out);
+            }
         }
-        &self.out[..n]
+    }
+}
+
+/// `rᵀ A r / (1 − h)`, `h` the leverage from `tr`, the trace of the
+/// touch's hat-matrix block (its centroid's and its parameters' shares).
+#[inline(always)]
+fn standardised(quad: f64, tr: f64) -> f64 {
+    let h = (tr / 3.0).clamp(0.0, 0.999);
+    quad / (1.0 - h)
+}
+
+/// Up to [`LANES`] touches, of one point or several, waiting for their
+/// parameter shares `tr(A J̃ M J̃ᵀ)`, `J̃ = J − J̄` (`3q²` operations a
+/// touch): their `J̃` and `A J̃` as lanes (a touch a lane), and per lane
+/// where its value goes, its `rᵀ A r` and its centroid's share.
+///
+/// Each lane does what one touch alone would, in its order — `y = M (A
+/// J̃)ᵀ` a row at a time, each entry summed over the columns in order, then
+/// the rows' terms `J̃_r · y_r` added in row order — so the same bits as
+/// one touch at a time. Before, the lanes held eight rows of `M` for one
+/// touch: each row's `J̃_r · y_r` was then a scalar tail as long as the
+/// sums it closed. Touches of consecutive points share a group: a point
+/// has few touches, and padding each point's last group wasted a fifth of
+/// the lanes.
+struct ShareGroup {
+    d: Vec<[[f64; LANES]; 3]>,
+    aj: Vec<[[f64; LANES]; 3]>,
+    waiting: [(usize, f64, f64); LANES],
+    len: usize,
+}
+
+impl ShareGroup {
+    fn new(q: usize) -> ShareGroup {
+        ShareGroup {
+            d: vec![[[0.0; LANES]; 3]; q],
+            aj: vec![[[0.0; LANES]; 3]; q],
+            waiting: [(0, 0.0, 0.0); LANES],
+            len: 0,
+        }
     }
 
-    /// `tr(A J̃ M J̃ᵀ)` of touch `t`, `J̃ = J − J̄`: `3q²` operations.
-    /// `mt` is `M` transposed and padded ([`transposed_padded`]: its column
-    /// `a` is row `a` of `M`, so that [`ROWS`] rows run side by side over
-    /// contiguous memory, and a last group of fewer rows is padded with
-    /// zeros): each row's sums keep their order, and the rows' terms are
-    /// added in row order, so the same bits as one row at a time — without
-    /// its three dependent chains of `q` additions per row, which left the
-    /// arithmetic units idle on their latency. Two registers of lanes per
-    /// coordinate: six independent chains, enough to cover an addition's
-    /// latency.
+    /// Touch `index` (of the output) into the next lane: its `rᵀ A r`
+    /// `quad`, centroid share `tr`, weight `a`, Jacobian's free columns
+    /// `jac` and its point's `J̄` `mean`. True when the group is full.
     #[inline(always)]
-    fn parameter_share<L: Batch>(&mut self, a: &Sym3, t: usize, mt: &[[f64; LANES]]) -> f64 {
-        let q = self.mean.len();
-        let stride = q.next_multiple_of(ROWS);
-        let j = &self.jac[t * q..(t + 1) * q];
-        for ((aj, j), mean) in self.aj.iter_mut().zip(j).zip(&self.mean) {
-            *aj = sym_mul(a, &std::array::from_fn(|k| j[k] - mean[k]));
-        }
-        let mut share = 0.0;
-        for first in (0..q).step_by(ROWS) {
-            let y = rows_times::<L>(mt, stride / LANES, first / LANES, &self.aj);
-            let rows = j[first..].iter().zip(&self.mean[first..]).take(ROWS);
-            for (r, (ja, mean)) in rows.enumerate() {
-                let yr = &y[r / LANES];
-                share += (0..3)
-                    .map(|k| (ja[k] - mean[k]) * yr[k][r % LANES])
-                    .sum::<f64>();
+    fn push(
+        &mut self,
+        index: usize,
+        quad: f64,
+        tr: f64,
+        a: &Sym3,
+        jac: &[[f64; 3]],
+        mean: &[[f64; 3]],
+    ) -> bool {
+        let l = self.len;
+        for (b, (j, mean)) in jac.iter().zip(mean).enumerate() {
+            let d: [f64; 3] = std::array::from_fn(|k| j[k] - mean[k]);
+            let aj = sym_mul(a, &d);
+            for k in 0..3 {
+                self.d[b][k][l] = d[k];
+                self.aj[b][k][l] = aj[k];
             }
         }
-        share
+        self.waiting[l] = (index, quad, tr);
+        self.len += 1;
+        self.len == LANES
+    }
+
+    /// The waiting touches' values into `out`, `m` the `q × q` block of
+    /// `N⁻¹` row-major; the group empty after. Lanes past the waiting ones
+    /// hold an earlier group's touches: computed, not read.
+    #[inline(always)]
+    fn flush<L: Batch>(&mut self, m: &[f64], out: &mut [f64]) {
+        if self.len == 0 {
+            return;
+        }
+        let shares = group_shares::<L>(m, &self.d, &self.aj);
+        for (&(index, quad, tr), share) in self.waiting[..self.len].iter().zip(shares) {
+            out[index] = standardised(quad, tr + share);
+        }
+        self.len = 0;
     }
 }
 
@@ -865,60 +918,92 @@ impl PointScratch {
 struct OnePoint<'s> {
     scratch: &'s mut PointScratch,
     a: &'s [Sym3],
-    mt: &'s [[f64; LANES]],
+    m: &'s [f64],
+    out: &'s mut [f64],
+    at: usize,
 }
 
-impl<'s> LaneOp for OnePoint<'s> {
-    type Output = &'s [f64];
+impl LaneOp for OnePoint<'_> {
+    type Output = ();
     #[inline(always)]
-    fn run<L: Batch>(self) -> &'s [f64] {
-        self.scratch.point::<L>(self.a, self.mt)
+    fn run<L: Batch>(self) {
+        self.scratch.point::<L>(self.a, self.m, self.out, self.at)
     }
 }
 
-/// Rows of `M` a touch's parameter share runs side by side: two registers
-/// of lanes.
-const ROWS: usize = 2 * LANES;
-
-/// `M` (`q × q`, row-major) transposed, each of its `q` rows padded with
-/// zeros to a multiple of [`ROWS`] and cut into lanes: the layout
-/// [`PointScratch::parameter_share`] reads. Empty when `m` is.
-fn transposed_padded(m: &[f64], q: usize) -> Vec<[f64; LANES]> {
-    let stride = q.next_multiple_of(ROWS);
-    if stride == 0 {
-        return Vec::new();
-    }
-    let mut mt = vec![[0.0; LANES]; q * stride / LANES];
-    for (b, row) in mt.chunks_exact_mut(stride / LANES).enumerate() {
-        for a in 0..q {
-            row[a / LANES][a % LANES] = m[a * q + b];
-        }
-    }
-    mt
+/// What [`TouchTerm::standardised_points`] runs on the lanes after a
+/// chunk's last point: its last touches' values.
+struct Flush<'s> {
+    group: &'s mut ShareGroup,
+    m: &'s [f64],
+    out: &'s mut [f64],
 }
 
-/// `y[h][k][l] = Σ_b M[r][b] · aj[b][k]` for the [`ROWS`] rows from lane
-/// group `group` (row `r = (group + h)·LANES + l`), as two registers of
-/// lanes per coordinate, each sum over `b` in order; `mt` is `M` transposed
-/// and padded, `width` lane groups a row.
+impl LaneOp for Flush<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        self.group.flush::<L>(self.m, self.out)
+    }
+}
+
+/// Rows of `M` that [`group_shares`] runs together: their `3 · SHARE_ROWS`
+/// chains of additions hide each other's latency.
+const SHARE_ROWS: usize = 3;
+
+/// A group of touches' parameter shares `Σ_r J̃_r · (M (A J̃)ᵀ)_r` (see
+/// [`ShareGroup`]), `d` their `J̃` and `aj` their
+/// `A J̃` as lanes, `m` row-major `q × q`.
 #[inline(always)]
-fn rows_times<L: Batch>(
-    mt: &[[f64; LANES]],
-    width: usize,
-    group: usize,
-    aj: &[[f64; 3]],
-) -> [[[f64; LANES]; 3]; 2] {
-    let zero = L::from(0.0);
-    let (mut y0, mut y1) = ([zero; 3], [zero; 3]);
-    for (row, ajb) in mt.chunks_exact(width).zip(aj) {
-        let (m0, m1) = (L::load(&row[group]), L::load(&row[group + 1]));
-        let bk = [L::from(ajb[0]), L::from(ajb[1]), L::from(ajb[2])];
-        for k in 0..3 {
-            y0[k] = y0[k] + m0 * bk[k];
-            y1[k] = y1[k] + m1 * bk[k];
+fn group_shares<L: Batch>(
+    m: &[f64],
+    d: &[[[f64; LANES]; 3]],
+    aj: &[[[f64; LANES]; 3]],
+) -> [f64; LANES] {
+    let q = d.len();
+    let mut share = L::from(0.0);
+    let whole = q - q % SHARE_ROWS;
+    for first in (0..whole).step_by(SHARE_ROWS) {
+        let y = rows_times::<L, SHARE_ROWS>(m, first, aj);
+        for (d, y) in d[first..].iter().zip(&y) {
+            share = share + row_term(d, y);
         }
     }
-    [to_arrays(&y0), to_arrays(&y1)]
+    for r in whole..q {
+        let [y] = rows_times::<L, 1>(m, r, aj);
+        share = share + row_term(&d[r], &y);
+    }
+    share.to_array()
+}
+
+/// `J̃_r · y_r` on the lanes, summed in coordinate order.
+#[inline(always)]
+fn row_term<L: Batch>(d: &[[f64; LANES]; 3], y: &[L; 3]) -> L {
+    (L::load(&d[0]) * y[0] + L::load(&d[1]) * y[1]) + L::load(&d[2]) * y[2]
+}
+
+/// `y[i][k] = Σ_b M[first + i][b] · aj[b][k]` for `R` rows of `M`
+/// (row-major, `q × q`), each summed over `b` in order, on the lanes.
+#[inline(always)]
+fn rows_times<L: Batch, const R: usize>(
+    m: &[f64],
+    first: usize,
+    aj: &[[[f64; LANES]; 3]],
+) -> [[L; 3]; R] {
+    let q = aj.len();
+    let rows: [&[f64]; R] = std::array::from_fn(|i| &m[(first + i) * q..][..q]);
+    let zero = L::from(0.0);
+    let mut y = [[zero; 3]; R];
+    for (b, ajb) in aj.iter().enumerate() {
+        let v = [L::load(&ajb[0]), L::load(&ajb[1]), L::load(&ajb[2])];
+        for (y, row) in y.iter_mut().zip(&rows) {
+            let mb = L::from(row[b]);
+            for k in 0..3 {
+                y[k] = y[k] + mb * v[k];
+            }
+        }
+    }
+    y
 }
 
 /// The touches' contribution at `at` over `normal.free()`: chunks of points
@@ -1357,67 +1442,104 @@ fn slide_moves(data: &DataSet) -> bool {
 mod share_tests {
     use super::*;
 
-    /// The share of touch 1 on the lanes the CPU has.
-    struct Share<'a> {
-        s: &'a mut PointScratch,
-        a: Sym3,
-        mt: &'a [[f64; LANES]],
+    /// A group's parameter shares on the lanes the CPU has.
+    struct Shares<'a> {
+        g: &'a ShareGroup,
+        m: &'a [f64],
     }
 
-    impl LaneOp for Share<'_> {
-        type Output = f64;
-        fn run<L: Batch>(self) -> f64 {
-            self.s.parameter_share::<L>(&self.a, 1, self.mt)
+    impl LaneOp for Shares<'_> {
+        type Output = [f64; LANES];
+        fn run<L: Batch>(self) -> [f64; LANES] {
+            group_shares::<L>(self.m, &self.g.d, &self.g.aj)
         }
     }
 
-    /// The parameter share with rows side by side, on the portable lanes
-    /// and on the CPU's, is the same bits as one row at a time (three
-    /// chains of sums per row, rows in order).
+    /// The parameter shares with touches side by side (each with its own
+    /// `J̄`, as touches of consecutive points), on the portable lanes and
+    /// on the CPU's, are the same bits as one touch and one row at a time
+    /// (three chains of sums per row, rows in order) — with every count of
+    /// rows left over from [`SHARE_ROWS`] and of touches in a group; and a
+    /// flushed group writes each touch's value where it belongs.
     #[test]
-    fn the_parameter_share_is_the_same_bits_as_row_by_row() {
+    fn the_parameter_shares_are_the_same_bits_as_row_by_row() {
         let mut rng = crate::random::rng(9, 0);
         let mut draw = || rand::RngExt::random_range(&mut rng, -1.0..1.0);
-        for q in [1, 3, 4, 5, 7, 8, 9, 16, 21, 27] {
-            let mut s = PointScratch::new(2, q);
-            let jac: Vec<[f64; 3]> = (0..2 * q).map(|_| [draw(), draw(), draw()]).collect();
-            s.jac.copy_from_slice(&jac);
-            s.mean = (0..q).map(|_| [draw(), draw(), draw()]).collect();
+        for (q, n) in [
+            (1, 1),
+            (3, 4),
+            (4, 2),
+            (5, 3),
+            (7, 4),
+            (8, 2),
+            (9, 1),
+            (16, 3),
+            (21, 4),
+            (27, 3),
+        ] {
+            let jac: Vec<[f64; 3]> = (0..n * q).map(|_| [draw(), draw(), draw()]).collect();
+            let mean: Vec<[f64; 3]> = (0..n * q).map(|_| [draw(), draw(), draw()]).collect();
             let m: Vec<f64> = (0..q * q).map(|_| draw()).collect();
-            let a: Sym3 = [
-                2.0 + draw(),
-                2.0 + draw(),
-                2.0 + draw(),
-                draw(),
-                draw(),
-                draw(),
-            ];
-            // One row at a time, as before.
-            let j = &jac[q..2 * q];
-            let aj: Vec<[f64; 3]> = (j.iter().zip(&s.mean))
-                .map(|(j, mean)| sym_mul(&a, &std::array::from_fn(|k| j[k] - mean[k])))
+            let a: Vec<Sym3> = (0..n)
+                .map(|_| {
+                    [
+                        2.0 + draw(),
+                        2.0 + draw(),
+                        2.0 + draw(),
+                        draw(),
+                        draw(),
+                        draw(),
+                    ]
+                })
                 .collect();
-            let mut want = 0.0;
-            for (row, (j, mean)) in m.chunks_exact(q).zip(j.iter().zip(&s.mean)) {
-                let mut y = [0.0; 3];
-                for (&mab, aj) in row.iter().zip(&aj) {
-                    (0..3).for_each(|k| y[k] += mab * aj[k]);
-                }
-                want += (0..3).map(|k| (j[k] - mean[k]) * y[k]).sum::<f64>();
+            // One touch and one row at a time, as before.
+            let want: Vec<f64> = (0..n)
+                .map(|t| {
+                    let (j, mean) = (&jac[t * q..(t + 1) * q], &mean[t * q..(t + 1) * q]);
+                    let aj: Vec<[f64; 3]> = (j.iter().zip(mean))
+                        .map(|(j, mean)| sym_mul(&a[t], &std::array::from_fn(|k| j[k] - mean[k])))
+                        .collect();
+                    let mut want = 0.0;
+                    for (row, (j, mean)) in m.chunks_exact(q).zip(j.iter().zip(mean)) {
+                        let mut y = [0.0; 3];
+                        for (&mab, aj) in row.iter().zip(&aj) {
+                            (0..3).for_each(|k| y[k] += mab * aj[k]);
+                        }
+                        want += (0..3).map(|k| (j[k] - mean[k]) * y[k]).sum::<f64>();
+                    }
+                    want
+                })
+                .collect();
+            let mut g = ShareGroup::new(q);
+            // Values written in reverse order, from the centroid shares 0.1 t.
+            let tr = |t: usize| 0.1 * t as f64;
+            for t in 0..n {
+                let (j, mean) = (&jac[t * q..(t + 1) * q], &mean[t * q..(t + 1) * q]);
+                assert_eq!(
+                    g.push(n - 1 - t, 1.0 + t as f64, tr(t), &a[t], j, mean),
+                    t + 1 == LANES
+                );
             }
-            let mt = transposed_padded(&m, q);
+            let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            let portable = group_shares::<crate::kernel::Lanes>(&m, &g.d, &g.aj);
             assert_eq!(
-                s.parameter_share::<crate::kernel::Lanes>(&a, 1, &mt)
-                    .to_bits(),
-                want.to_bits(),
-                "q {q}, portable lanes"
+                bits(&portable[..n]),
+                bits(&want),
+                "q {q}, {n} touches, portable lanes"
             );
-            let got = run_lanes(Share {
-                s: &mut s,
-                a,
-                mt: &mt,
-            });
-            assert_eq!(got.to_bits(), want.to_bits(), "q {q}, the CPU's lanes");
+            let cpu = run_lanes(Shares { g: &g, m: &m });
+            assert_eq!(
+                bits(&cpu[..n]),
+                bits(&want),
+                "q {q}, {n} touches, the CPU's lanes"
+            );
+            let mut out = vec![f64::NAN; n];
+            g.flush::<crate::kernel::Lanes>(&m, &mut out);
+            let values: Vec<f64> = (0..n)
+                .map(|i| standardised(1.0 + (n - 1 - i) as f64, tr(n - 1 - i) + want[n - 1 - i]))
+                .collect();
+            assert_eq!(bits(&out), bits(&values), "q {q}, {n} touches, the values");
+            assert_eq!(g.len, 0);
         }
     }
 }
