@@ -969,9 +969,9 @@ fn group_shares<L: Batch>(
             share = share + row_term(d, y);
         }
     }
-    for r in whole..q {
+    for (r, d) in d.iter().enumerate().skip(whole) {
         let [y] = rows_times::<L, 1>(m, r, aj);
-        share = share + row_term(&d[r], &y);
+        share = share + row_term(d, &y);
     }
     share.to_array()
 }
