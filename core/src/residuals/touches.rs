@@ -118,8 +118,11 @@ impl<'d> TouchTerm<'d> {
                             None => j,
                         };
                         xyz[i - first] = *pos;
-                        for (a, &c) in cols.iter().enumerate() {
-                            jac[(i - first) * q + a] = j[c];
+                        // A row's slice once: indexing `jac` per column
+                        // reloaded and checked it each time.
+                        let row = &mut jac[(i - first) * q..][..q];
+                        for (dst, &c) in row.iter_mut().zip(cols) {
+                            *dst = j[c];
                         }
                     })?;
             }
@@ -843,7 +846,8 @@ fn standardised(quad: f64, tr: f64) -> f64 {
 
 /// Up to [`LANES`] touches, of one point or several, waiting for their
 /// parameter shares `tr(A J̃ M J̃ᵀ)`, `J̃ = J − J̄` (`3q²` operations a
-/// touch): their `J̃` and `A J̃` as lanes (a touch a lane), and per lane
+/// touch): their `J̃` and weights `A` as lanes (a touch a lane; `A J̃` is
+/// made from them on the lanes when the group is full), and per lane
 /// where its value goes, its `rᵀ A r` and its centroid's share.
 ///
 /// Each lane does what one touch alone would, in its order — `y = M (A
@@ -857,6 +861,7 @@ fn standardised(quad: f64, tr: f64) -> f64 {
 struct ShareGroup {
     d: Vec<[[f64; LANES]; 3]>,
     aj: Vec<[[f64; LANES]; 3]>,
+    a: [[f64; LANES]; 6],
     waiting: [(usize, f64, f64); LANES],
     len: usize,
 }
@@ -866,6 +871,7 @@ impl ShareGroup {
         ShareGroup {
             d: vec![[[0.0; LANES]; 3]; q],
             aj: vec![[[0.0; LANES]; 3]; q],
+            a: [[0.0; LANES]; 6],
             waiting: [(0, 0.0, 0.0); LANES],
             len: 0,
         }
@@ -885,13 +891,13 @@ impl ShareGroup {
         mean: &[[f64; 3]],
     ) -> bool {
         let l = self.len;
-        for (b, (j, mean)) in jac.iter().zip(mean).enumerate() {
-            let d: [f64; 3] = std::array::from_fn(|k| j[k] - mean[k]);
-            let aj = sym_mul(a, &d);
+        for (d, (j, mean)) in self.d.iter_mut().zip(jac.iter().zip(mean)) {
             for k in 0..3 {
-                self.d[b][k][l] = d[k];
-                self.aj[b][k][l] = aj[k];
+                d[k][l] = j[k] - mean[k];
             }
+        }
+        for (lanes, a) in self.a.iter_mut().zip(a) {
+            lanes[l] = *a;
         }
         self.waiting[l] = (index, quad, tr);
         self.len += 1;
@@ -906,11 +912,29 @@ impl ShareGroup {
         if self.len == 0 {
             return;
         }
-        let shares = group_shares::<L>(m, &self.d, &self.aj);
+        let shares = self.shares::<L>(m);
         for (&(index, quad, tr), share) in self.waiting[..self.len].iter().zip(shares) {
             out[index] = standardised(quad, tr + share);
         }
         self.len = 0;
+    }
+
+    /// Every lane's parameter share, `m` the `q × q` block of `N⁻¹`
+    /// row-major.
+    #[inline(always)]
+    fn shares<L: Batch>(&mut self, m: &[f64]) -> [f64; LANES] {
+        // `A J̃` on the lanes: what `sym_mul` does for each touch.
+        let a = self.a.map(|v| L::load(&v));
+        for (aj, d) in self.aj.iter_mut().zip(&self.d) {
+            let d = [L::load(&d[0]), L::load(&d[1]), L::load(&d[2])];
+            let y = [
+                a[0] * d[0] + a[3] * d[1] + a[4] * d[2],
+                a[3] * d[0] + a[1] * d[1] + a[5] * d[2],
+                a[4] * d[0] + a[5] * d[1] + a[2] * d[2],
+            ];
+            (0..3).for_each(|k| y[k].store(&mut aj[k]));
+        }
+        group_shares::<L>(m, &self.d, &self.aj)
     }
 }
 
@@ -1444,14 +1468,14 @@ mod share_tests {
 
     /// A group's parameter shares on the lanes the CPU has.
     struct Shares<'a> {
-        g: &'a ShareGroup,
+        g: &'a mut ShareGroup,
         m: &'a [f64],
     }
 
     impl LaneOp for Shares<'_> {
         type Output = [f64; LANES];
         fn run<L: Batch>(self) -> [f64; LANES] {
-            group_shares::<L>(self.m, &self.g.d, &self.g.aj)
+            self.g.shares::<L>(self.m)
         }
     }
 
@@ -1521,13 +1545,13 @@ mod share_tests {
                 );
             }
             let bits = |v: &[f64]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-            let portable = group_shares::<crate::kernel::Lanes>(&m, &g.d, &g.aj);
+            let portable = g.shares::<crate::kernel::Lanes>(&m);
             assert_eq!(
                 bits(&portable[..n]),
                 bits(&want),
                 "q {q}, {n} touches, portable lanes"
             );
-            let cpu = run_lanes(Shares { g: &g, m: &m });
+            let cpu = run_lanes(Shares { g: &mut g, m: &m });
             assert_eq!(
                 bits(&cpu[..n]),
                 bits(&want),
