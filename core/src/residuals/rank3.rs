@@ -12,9 +12,10 @@
 /// entry is loaded and stored once per block.
 pub(super) const BLOCK: usize = 8;
 
-/// Entries of a row updated together (one AVX2 register of f64); the
-/// stride is a whole number of them.
-pub(super) const LANES: usize = 4;
+// Entries of a row are updated a lane group at a time (one AVX2 register
+// of f64, the kernel's lanes); the stride is a whole number of lanes, so
+// a caller may run the kernel's lanes over a padded slot.
+use crate::kernel::LANES;
 
 /// Up to [`BLOCK`] observations' columns, not yet in the matrix: the
 /// columns of `J` and of `A·J`, one padded row per observation and

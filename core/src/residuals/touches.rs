@@ -1267,10 +1267,6 @@ impl PointSums {
     }
 }
 
-// The point sums' lanes are the padded rows' (`Rank3::stride` is a whole
-// number of them).
-const _: () = assert!(super::rank3::LANES == LANES);
-
 /// The first `k` lanes of `v` (whose length is a whole number of lanes).
 #[inline(always)]
 fn lanes(v: &[f64], k: usize) -> &[[f64; LANES]] {
