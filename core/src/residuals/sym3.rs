@@ -1,14 +1,11 @@
 //! Symmetric 3 × 3 matrices: a touch's weight, a centre's covariance.
 
-use crate::kernel::Scalar;
-
 /// A symmetric 3 × 3 matrix: `[xx, yy, zz, xy, xz, yz]`.
 pub(crate) type Sym3 = [f64; 6];
 
-/// `A·v` for a symmetric `A`: of one value each, or of lanes (the same
-/// operations in the same order in each lane).
+/// `A·v` for a symmetric `A`.
 #[inline(always)]
-pub(crate) fn sym_mul<S: Scalar>(a: &[S; 6], v: &[S; 3]) -> [S; 3] {
+pub(crate) fn sym_mul(a: &Sym3, v: &[f64; 3]) -> [f64; 3] {
     [
         a[0] * v[0] + a[3] * v[1] + a[4] * v[2],
         a[3] * v[0] + a[1] * v[1] + a[5] * v[2],
