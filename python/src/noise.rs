@@ -2,7 +2,7 @@
 //! command line uses (degrees for encoders, mm otherwise; mm per metre for
 //! the distance-dependent part of a reference position's σ).
 
-use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
+use aacmm_core::residuals::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::residuals::Noise as CoreNoise;
 use aacmm_core::session::user_noise;
 use aacmm_core::setting::Setting;

@@ -4,9 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
-use aacmm_core::calibrate::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::calibrate::{CalibrationError, MAX_THREADS, check_threads};
 use aacmm_core::error::{OptionError, quoted};
+use aacmm_core::residuals::DEFAULT_LENGTH_SIGMA_MM;
 use aacmm_core::residuals::Noise;
 use aacmm_core::session::{Request, user_noise};
 use aacmm_core::setting::{Setting, Spelling};

@@ -74,8 +74,7 @@ pub use global::{GlobalOptions, GlobalStop, GlobalTrace};
 pub(crate) use lm::LmResult;
 pub use lm::{LmIteration, LmOptions, Termination};
 pub use options::{
-    DEFAULT_LENGTH_SIGMA_MM, FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads,
-    check_threads,
+    FixSpec, MAX_THREADS, ModelOptions, SolverSettings, available_threads, check_threads,
 };
 pub use prior::{PriorConditioning, PriorReport};
 pub use results::{

@@ -169,9 +169,6 @@ impl FixSpec {
     }
 }
 
-/// σ of a reference length whose file states none, mm.
-pub const DEFAULT_LENGTH_SIGMA_MM: f64 = crate::residuals::DEFAULT_LENGTH_SIGMA_MM;
-
 /// What a calibration fits and how its result is judged: the model's side
 /// of the settings, which the problem holds (the data's noise, the fixed
 /// set, the loss, the stated tolerances, the verdict's policy). How it is
