@@ -264,7 +264,7 @@ fn lopo(
                     placement: name.clone(),
                     nominal: figures.before,
                     calibrated: Ok(figures.after),
-                    successful: c.solver.successful,
+                    successful: c.solver.is_solution_usable(),
                     refused: r
                         .verdict
                         .words(aacmm_core::session::Spelling::Cli)

@@ -181,7 +181,11 @@ fn main() -> Result<()> {
         println!(
             "{:<8} {:>9} {:>10} {:>5.1} ms {:>10.4} {:>22.2} {:>19.4} mm",
             method.name(),
-            if cal.solver.successful { "yes" } else { "no" },
+            if cal.solver.is_solution_usable() {
+                "yes"
+            } else {
+                "no"
+            },
             cal.solver.iterations,
             seconds * 1e3,
             cal.dof.sigma0,

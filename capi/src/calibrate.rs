@@ -733,7 +733,7 @@ pub unsafe extern "C" fn aacmm_calibration_summary(
             method: method_code(c.solver.method),
             termination: c.solver.stop.lm().into(),
             successful: report.verdict.usable,
-            converged: c.solver.successful,
+            converged: c.solver.is_solution_usable(),
             iterations: c.solver.iterations,
             free_parameters: c.dof.free_parameters,
             degrees_of_freedom: c.dof.degrees_of_freedom,

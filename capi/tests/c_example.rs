@@ -372,7 +372,7 @@ fn the_c_program_agrees_with_the_rust_api() {
     };
     let settings = SolverSettings::default();
     let cal = calibrate(&arm.params, &data, &options, &settings).unwrap();
-    assert!(cal.solver.successful);
+    assert!(cal.solver.is_solution_usable());
     assert_bits(
         "files_params",
         &out.doubles("files_params"),

@@ -505,7 +505,7 @@ fn fit(
     let cal = calibrate(nominal, data, &model, &settings).unwrap();
     let shape = nominal.shape().unwrap();
     assert!(
-        cal.solver.successful,
+        cal.solver.is_solution_usable(),
         "{shape} seed {seed}: {:?}",
         cal.solver
     );

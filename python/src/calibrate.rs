@@ -503,7 +503,7 @@ impl Calibration {
         d.set_item("stop", to_python(py, &c.solver.stop)?)?;
         d.set_item("stop_text", c.solver.stop.describe())?;
         d.set_item("successful", self.report.is_usable())?;
-        d.set_item("converged", c.solver.successful)?;
+        d.set_item("converged", c.solver.is_solution_usable())?;
         d.set_item("iterations", c.solver.iterations)?;
         d.set_item("cost_evaluations", c.solver.cost_evaluations)?;
         d.set_item("jacobian_evaluations", c.solver.jacobian_evaluations)?;

@@ -253,8 +253,9 @@ pub struct SolverSummary {
     /// Why it stopped: the method's own reason and the final LM's.
     pub stop: Stop,
     /// Whether the result is a usable solution
-    /// ([`Stop::is_solution_usable`]).
-    pub successful: bool,
+    /// ([`Stop::is_solution_usable`]; read it through
+    /// [`SolverSummary::is_solution_usable`]).
+    pub(crate) successful: bool,
     /// Iterations of the final fit.
     pub iterations: usize,
     /// Cost evaluations (positions only), all fits.
