@@ -24,7 +24,7 @@ pub(crate) enum Stage {
 /// One data set measured by one arm, with its metrics.
 #[derive(Clone, Debug)]
 pub(crate) struct Evaluated<'a> {
-    /// Index of the data set among the [`Measured`].
+    /// Index of the data set among the `Measured`.
     pub(crate) set: usize,
     /// Its name (`fitted`, `held out`, `held out 2`, or `measured`).
     pub(crate) set_name: String,

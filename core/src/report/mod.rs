@@ -9,7 +9,7 @@
 //!
 //! Data flows one way (files → data set → kernel → residuals → solver →
 //! report): this module takes plain data — a [`Calibration`](crate::calibrate::Calibration), the data sets
-//! with the probe positions the compared arms give for them ([`Measured`]),
+//! with the probe positions the compared arms give for them,
 //! the validation figures ([`BeforeAfter`](crate::calibrate::validate::BeforeAfter)) — and computes nothing but what
 //! it shows, with [`crate::metrics`]. It never runs a solver.
 //!

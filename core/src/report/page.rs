@@ -120,7 +120,7 @@ impl Report {
 /// One data set as measured by the arms compared: probe positions (mm) of
 /// its touches in the data set's touch order.
 #[derive(Clone, Copy, Debug)]
-pub struct Measured<'a> {
+pub(crate) struct Measured<'a> {
     /// The touches (points, reference lengths, where they came from).
     pub data: &'a DataSet,
     /// Whether the data were held out from the fit (drawn as triangles).
@@ -133,7 +133,7 @@ pub struct Measured<'a> {
 }
 
 /// Probe positions of every touch of `data` (its touch order) with the arm
-/// `params`, mm: what [`Measured`] holds.
+/// `params`, mm: what the report draws for a data set.
 ///
 /// ```
 /// use aacmm_core::{dataset::DataSet, io::{AngleUnit, parse_poses}, params::DhParams, report};
