@@ -204,7 +204,12 @@ fn assemble(
     covariance: Covariance,
     initial_cost: f64,
 ) -> Result<Calibration, CalibrationError> {
-    let Covariance { cov, sigma0, dof } = covariance;
+    let Covariance {
+        cov,
+        sigma0,
+        dof,
+        normal_inverse,
+    } = covariance;
     let stated = setup.stated;
     let prior = prior_report(&fit, &setup, &cov);
     let parameters = estimates(&mut fit, &setup, &cov);
@@ -216,7 +221,7 @@ fn assemble(
         .collect();
     let p = setup.free.len();
     let rho = correlations(&cov);
-    let t2 = standardised(&fit, &setup)?;
+    let t2 = standardised(&fit, &setup, normal_inverse.as_ref())?;
     // Its full leverage evaluates the touches' Jacobians.
     fit.extra_jacobians += 1;
     let (outlier_threshold, outliers) = super::checks::outliers(&fit.objective, &t2);

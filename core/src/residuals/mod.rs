@@ -660,7 +660,16 @@ impl ParameterLeverage {
     pub fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
         let p = normal.free.len();
         let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj) / scale;
-        let inv = inverse::cholesky_inverse(&n.cholesky()?);
+        ParameterLeverage::from_inverse(normal, &inverse::cholesky_inverse(&n.cholesky()?))
+    }
+
+    /// From `normal` and `inv`, its matrix's inverse (made elsewhere, by
+    /// the same Cholesky); `None` when `inv` is not finite.
+    pub(crate) fn from_inverse(
+        normal: &Normal,
+        inv: &nalgebra::DMatrix<f64>,
+    ) -> Option<ParameterLeverage> {
+        let p = normal.free.len();
         let n_inv: Vec<f64> = (0..p * p).map(|i| inv[(i / p, i % p)]).collect();
         n_inv
             .iter()

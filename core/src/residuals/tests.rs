@@ -418,6 +418,34 @@ fn the_cost_pass_is_the_plain_one_on(data: &DataSet) {
     );
 }
 
+/// The outlier test takes the covariance's `N⁻¹` when its leverage is
+/// unscaled (`calibrate::assess`): the same Cholesky of the same entries,
+/// so the same bits as a leverage of its own; an inverse that failed (the
+/// covariance's infinite matrix) is no leverage, as a failed Cholesky is.
+#[test]
+fn a_leverage_from_the_covariances_inverse_is_the_same_bits() {
+    let (data, noise) = simulated(4, 4, 6, 0);
+    let arm = DhParams::paper_nominal();
+    let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
+    let free: Vec<usize> = vec![1, 3, 7, 12, 16, 19, 23];
+    let normal = normal_equations(&arm, &t, None, &free, 1).0;
+    let p = free.len();
+    let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj);
+    let inverse = cholesky_inverse(&n.cholesky().unwrap());
+    let shared = ParameterLeverage::from_inverse(&normal, &inverse).unwrap();
+    let own = ParameterLeverage::of(&normal, 1.0).unwrap();
+    let bits = |l: &ParameterLeverage| l.n_inv.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&shared), bits(&own));
+    assert_eq!(shared.free(), own.free());
+    // Scaled, it is another matrix: not what the covariance inverted.
+    assert_ne!(
+        bits(&ParameterLeverage::of(&normal, 4.0).unwrap()),
+        bits(&own)
+    );
+    let failed = nalgebra::DMatrix::from_element(p, p, f64::INFINITY);
+    assert!(ParameterLeverage::from_inverse(&normal, &failed).is_none());
+}
+
 /// A touch's full leverage is its block of the hat matrix of the whole
 /// problem — the free columns and every point's centre carried as unknowns
 /// — against a dense computation: `h_i = tr(A_i X_i (Xᵀ A X)⁻¹ X_iᵀ)/3`,

@@ -17,6 +17,10 @@ pub(super) struct Covariance {
     pub(super) cov: DMatrix<f64>,
     pub(super) sigma0: f64,
     pub(super) dof: usize,
+    /// `N⁻¹` of the fit's own normal equations, when the covariance is
+    /// `σ̂² N⁻¹` of them (no prior, no robust sandwich): the outlier test's
+    /// leverage needs the same inverse and takes it from here.
+    pub(super) normal_inverse: Option<DMatrix<f64>>,
 }
 
 /// `σ̂² N⁻¹`, or with a prior `(N_data/σ̂² + P)⁻¹`; robust: the sandwich
@@ -25,15 +29,16 @@ pub(super) struct Covariance {
 #[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
     let dof = setup.counts.dof();
-    let (sigma0, variance, normal) = match (&fit.robust, &fit.curvature) {
+    let (sigma0, variance, normal, own) = match (&fit.robust, &fit.curvature) {
         (Some((robust, _)), Some(curvature)) => (
             robust.scale,
             robust.scale * robust.scale * robust.sandwich,
             curvature,
+            false,
         ),
         _ => {
             let s = (fit.normal.cost() / dof as f64).sqrt();
-            (s, s * s, &fit.normal)
+            (s, s * s, &fit.normal, true)
         }
     };
     let p = setup.free.len();
@@ -42,6 +47,7 @@ pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
         Some(ch) => crate::residuals::cholesky_inverse(&ch),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
+    let mut normal_inverse = None;
     let cov = match fit.objective.prior() {
         // The stated tolerances are absolute: σ̂ rescales the data's
         // information, not the prior's — (N_data/σ̂² + P)⁻¹. Scaling the
@@ -56,9 +62,19 @@ pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
             }
             invert(m)
         }
-        _ => invert(n) * variance,
+        _ => {
+            let inverse = invert(n);
+            let cov = &inverse * variance;
+            normal_inverse = own.then_some(inverse);
+            cov
+        }
     };
-    Covariance { cov, sigma0, dof }
+    Covariance {
+        cov,
+        sigma0,
+        dof,
+        normal_inverse,
+    }
 }
 
 /// The free columns below `arm` — the geometry's and the corrections'

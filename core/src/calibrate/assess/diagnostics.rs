@@ -107,12 +107,15 @@ pub(super) fn implausible_blocks(fit: &Fit<'_>, setup: &Setup<'_>) -> Vec<String
 /// Every observation's standardised squared residual in units of its own
 /// σ — the stated noise, or (estimated) the fit's, robustly: the median of
 /// a χ²₃ variable is 2.366 (other row counts taken in its units), and a
-/// few outliers do not move a median.
+/// few outliers do not move a median. `normal_inverse`: the covariance's
+/// `N⁻¹` of the fit's normal equations, when it made one.
 #[inline(never)] // a stage of its own in profiles (README, "Measured speed")
 pub(super) fn standardised(
     fit: &Fit<'_>,
     setup: &Setup<'_>,
+    normal_inverse: Option<&DMatrix<f64>>,
 ) -> Result<crate::objective::Observed, CalibrationError> {
+    use crate::residuals::ParameterLeverage;
     // The full leverage: the normal matrix of the weights the objective has
     // now (rescaled by 1/σ² without them when the weights are still unit).
     let scale = if fit.unit_weights {
@@ -120,7 +123,12 @@ pub(super) fn standardised(
     } else {
         1.0
     };
-    let leverage = crate::residuals::ParameterLeverage::of(&fit.normal, scale);
+    // Unscaled, it is the covariance's matrix: the same Cholesky of the
+    // same entries (a division by 1 is exact), so the same bits, once.
+    let leverage = match normal_inverse {
+        Some(inverse) if scale == 1.0 => ParameterLeverage::from_inverse(&fit.normal, inverse),
+        _ => ParameterLeverage::of(&fit.normal, scale),
+    };
     let mut t2 = fit.objective.standardised(&fit.x, leverage.as_ref())?;
     if let Some((_, w)) = &fit.robust {
         // In units of the observation's own σ, not of its robust weight.
