@@ -418,6 +418,21 @@ fn the_cost_pass_is_the_plain_one_on(data: &DataSet) {
     );
 }
 
+/// The leverage tests' free columns.
+const LEVERAGE_FREE: [usize; 7] = [1, 3, 7, 12, 16, 19, 23];
+
+/// The leverage tests' touches, unit-weighted, and their normal equations
+/// over [`LEVERAGE_FREE`] at `arm`.
+fn leverage_problem<'d>(
+    data: &'d DataSet,
+    noise: &Noise,
+    arm: &DhParams,
+) -> (TouchTerm<'d>, Normal) {
+    let (t, _) = weighed(data, noise, arm, 1.0, 1);
+    let normal = normal_equations(arm, &t, None, &LEVERAGE_FREE, 1).0;
+    (t, normal)
+}
+
 /// The outlier test takes the covariance's `N⁻¹` when its leverage is
 /// unscaled (`calibrate::assess`): the same Cholesky of the same entries,
 /// so the same bits as a leverage of its own; an inverse that failed (the
@@ -425,11 +440,8 @@ fn the_cost_pass_is_the_plain_one_on(data: &DataSet) {
 #[test]
 fn a_leverage_from_the_covariances_inverse_is_the_same_bits() {
     let (data, noise) = simulated(4, 4, 6, 0);
-    let arm = DhParams::paper_nominal();
-    let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
-    let free: Vec<usize> = vec![1, 3, 7, 12, 16, 19, 23];
-    let normal = normal_equations(&arm, &t, None, &free, 1).0;
-    let p = free.len();
+    let (_, normal) = leverage_problem(&data, &noise, &DhParams::paper_nominal());
+    let p = LEVERAGE_FREE.len();
     let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj);
     let inverse = cholesky_inverse(&n.cholesky().unwrap());
     let shared = ParameterLeverage::from_inverse(&normal, &inverse).unwrap();
@@ -456,9 +468,8 @@ fn the_full_leverage_is_the_hat_matrix_block() {
     use nalgebra::{DMatrix, Matrix3};
     let (data, noise) = simulated(4, 4, 6, 0);
     let arm = DhParams::paper_nominal();
-    let (t, _) = weighed(&data, &noise, &arm, 1.0, 1);
-    let free: Vec<usize> = vec![1, 3, 7, 12, 16, 19, 23];
-    let normal = normal_equations(&arm, &t, None, &free, 1).0;
+    let (t, normal) = leverage_problem(&data, &noise, &arm);
+    let free = LEVERAGE_FREE;
     let leverage = ParameterLeverage::of(&normal, 1.0).unwrap();
     let got = at(&arm, 1, |at| t.standardised(at, Some(&leverage)))
         .unwrap()
