@@ -151,7 +151,7 @@ impl Method {
 /// let data = campaign.data_set().unwrap();
 /// let model = ModelOptions::default();
 /// let c = calibrate(&nominal.params, &data, &model, &SolverSettings::default()).unwrap();
-/// assert!(c.solver.successful);
+/// assert!(c.solver.is_solution_usable());
 /// assert_eq!(c.parameters.iter().filter(|p| p.fixed.is_none()).count(), 21);
 /// ```
 pub fn calibrate(
