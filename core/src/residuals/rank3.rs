@@ -8,14 +8,14 @@
 //! once per observation, and over whole lanes of contiguous memory (four
 //! `f64` in one AVX2 register, where the caller's loop is compiled for it).
 
-/// Observations whose terms are added in one sweep over the matrix: each
-/// entry is loaded and stored once per block.
-pub(super) const BLOCK: usize = 8;
-
 // Entries of a row are updated a lane group at a time (one AVX2 register
 // of f64, the kernel's lanes); the stride is a whole number of lanes, so
 // a caller may run the kernel's lanes over a padded slot.
 use crate::kernel::LANES;
+
+/// Observations whose terms are added in one sweep over the matrix: each
+/// entry is loaded and stored once per block.
+pub(super) const BLOCK: usize = 8;
 
 /// Up to [`BLOCK`] observations' columns, not yet in the matrix: the
 /// columns of `J` and of `A·J`, one padded row per observation and

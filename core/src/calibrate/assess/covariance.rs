@@ -47,8 +47,7 @@ pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
         Some(ch) => crate::residuals::cholesky_inverse(&ch),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
-    let mut normal_inverse = None;
-    let cov = match fit.objective.prior() {
+    let (cov, normal_inverse) = match fit.objective.prior() {
         // The stated tolerances are absolute: σ̂ rescales the data's
         // information, not the prior's — (N_data/σ̂² + P)⁻¹. Scaling the
         // whole σ̂²·N⁻¹ made a parameter the prior holds (data share 5 %)
@@ -60,13 +59,11 @@ pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
                     m[(a, a)] += (1.0 - 1.0 / variance) / (s * s);
                 }
             }
-            invert(m)
+            (invert(m), None)
         }
         _ => {
             let inverse = invert(n);
-            let cov = &inverse * variance;
-            normal_inverse = own.then_some(inverse);
-            cov
+            (&inverse * variance, own.then_some(inverse))
         }
     };
     Covariance {
