@@ -894,7 +894,7 @@ fn exact_scale_column(structure: &Structure, v: &DVector<f64>, pivots: &[usize])
     let m = &structure.unprojected;
     let q = pivots.len();
     let nf = DMatrix::from_fn(q, q, |a, b| m[(pivots[a], pivots[b])]);
-    let ch = nf.cholesky()?;
+    let ch = crate::residuals::cholesky(nf)?;
     let mut best: Option<(usize, f64)> = None;
     for c in (0..m.nrows()).filter(|c| !pivots.contains(c)) {
         let coef = ch.solve(&DVector::from_fn(q, |a, _| m[(pivots[a], c)]));
@@ -1074,8 +1074,7 @@ fn dependence(ns: &DMatrix<f64>, ids: &[ParamId], d: &[f64], c: usize, free: &[u
     let q = free.len();
     let nf = DMatrix::from_fn(q, q, |a, b| ns[(free[a], free[b])]);
     let rhs = nalgebra::DVector::from_fn(q, |a, _| ns[(free[a], c)]);
-    let coef = nf
-        .cholesky()
+    let coef = crate::residuals::cholesky(nf)
         .map(|ch| ch.solve(&rhs))
         .unwrap_or_else(|| nalgebra::DVector::zeros(q));
     // Scaled direction: e_c − Σ coef_a e_a.

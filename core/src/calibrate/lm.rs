@@ -379,9 +379,9 @@ impl<'a, 'o> Descent<'a, 'o> {
         for c in 0..self.free.len() {
             a[(c, c)] += self.damping.value() * self.scale[c];
         }
-        let ch = a.cholesky()?;
+        let ch = crate::residuals::cholesky(a)?;
         let mut step = self.g.clone();
-        ch.solve_mut(&mut step);
+        crate::residuals::cholesky_solve(&ch, step.as_mut_slice());
         step.neg_mut();
         self.damped = ch.unpack_dirty();
         step.iter().all(|v| v.is_finite()).then_some(step)

@@ -88,7 +88,7 @@ pub use blocks::{
 pub use folds::{HeldOutScorer, TermFold};
 pub use hold::{HeldDirection, WEAK_RATIO};
 pub(crate) use hold::{Hold, HoldTerm};
-pub(crate) use inverse::cholesky_inverse;
+pub(crate) use inverse::{cholesky, cholesky_inverse, cholesky_solve};
 pub(crate) use lengths::LengthTerm;
 pub(crate) use orientations::{OrientationTerm, mount_start};
 pub(crate) use positions::PositionTerm;
@@ -660,7 +660,7 @@ impl ParameterLeverage {
     pub fn of(normal: &Normal, scale: f64) -> Option<ParameterLeverage> {
         let p = normal.free.len();
         let n = nalgebra::DMatrix::from_row_slice(p, p, &normal.jtj) / scale;
-        ParameterLeverage::from_inverse(normal, &inverse::cholesky_inverse(&n.cholesky()?))
+        ParameterLeverage::from_inverse(normal, &cholesky_inverse(&cholesky(n)?))
     }
 
     /// From `normal` and `inv`, its matrix's inverse (made elsewhere, by

@@ -43,7 +43,7 @@ pub(super) fn covariance(fit: &Fit<'_>, setup: &Setup<'_>) -> Covariance {
     };
     let p = setup.free.len();
     let n = DMatrix::from_row_slice(p, p, &normal.jtj);
-    let invert = |m: DMatrix<f64>| match m.cholesky() {
+    let invert = |m: DMatrix<f64>| match crate::residuals::cholesky(m) {
         Some(ch) => crate::residuals::cholesky_inverse(&ch),
         None => DMatrix::from_element(p, p, f64::INFINITY),
     };
@@ -236,7 +236,7 @@ enum Factor {
 impl Factor {
     fn of(cov: &DMatrix<f64>) -> Factor {
         let q = cov.nrows();
-        match cov.clone().cholesky() {
+        match crate::residuals::cholesky(cov.clone()) {
             Some(ch) => {
                 let l = ch.l_dirty();
                 Factor::Cholesky((0..q * q).map(|i| l[(i % q, i / q)]).collect())
