@@ -253,9 +253,20 @@ mod tests {
     use super::*;
     use rand::RngExt;
 
-    /// The same bits as nalgebra's inverse, on symmetric positive-definite
-    /// matrices of every size up to 30 (chunks of eight and the rest),
-    /// badly scaled and well, and on one with exact zeros off the diagonal.
+    /// A random symmetric positive-definite `d × d` matrix whose scales
+    /// span `10^spread`.
+    fn spd(rng: &mut impl rand::Rng, d: usize, spread: f64) -> DMatrix<f64> {
+        let a = DMatrix::from_fn(d + 3, d, |_, _| rng.random_range(-1.0..1.0));
+        let s = DMatrix::from_fn(d, d, |r, c| {
+            if r == c {
+                10f64.powf(spread * (r as f64 / d as f64 - 0.5))
+            } else {
+                0.0
+            }
+        });
+        &s * a.transpose() * &a * &s + DMatrix::identity(d, d) * 1e-9
+    }
+
     /// The same bits as nalgebra's factor, on symmetric positive-definite
     /// matrices of every size up to 30, badly scaled and well; the same
     /// refusal of matrices nalgebra refuses (a zero, a negative and a NaN
@@ -266,15 +277,7 @@ mod tests {
         let bits = |m: &DMatrix<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         for d in 1..=30 {
             for scale_spread in [0.0, 6.0] {
-                let a = DMatrix::from_fn(d + 3, d, |_, _| rng.random_range(-1.0..1.0));
-                let s = DMatrix::from_fn(d, d, |r, c| {
-                    if r == c {
-                        10f64.powf(scale_spread * (r as f64 / d as f64 - 0.5))
-                    } else {
-                        0.0
-                    }
-                });
-                let mut n = &s * a.transpose() * &a * &s + DMatrix::identity(d, d) * 1e-9;
+                let mut n = spd(&mut rng, d, scale_spread);
                 // An upper triangle unlike the lower: neither reads it.
                 for c in 1..d {
                     n[(0, c)] = 7.0 + c as f64;
@@ -326,20 +329,15 @@ mod tests {
         }
     }
 
+    /// The same bits as nalgebra's inverse, on symmetric positive-definite
+    /// matrices of every size up to 30 (chunks of eight and the rest),
+    /// badly scaled and well, and on one with exact zeros off the diagonal.
     #[test]
     fn the_same_bits_as_nalgebras_inverse() {
         let mut rng = crate::random::rng(5, 0);
         for d in 1..=30 {
             for scale_spread in [0.0, 6.0] {
-                let a = DMatrix::from_fn(d + 3, d, |_, _| rng.random_range(-1.0..1.0));
-                let s = DMatrix::from_fn(d, d, |r, c| {
-                    if r == c {
-                        10f64.powf(scale_spread * (r as f64 / d as f64 - 0.5))
-                    } else {
-                        0.0
-                    }
-                });
-                let n = &s * a.transpose() * &a * &s + DMatrix::identity(d, d) * 1e-9;
+                let n = spd(&mut rng, d, scale_spread);
                 let ch = n.clone().cholesky().expect("positive definite");
                 let (ours, theirs) = (cholesky_inverse(&ch), ch.inverse());
                 let bits = |m: &DMatrix<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
