@@ -44,7 +44,9 @@ pub(crate) fn cholesky(mut m: DMatrix<f64>) -> Option<Cholesky<f64, Dyn>> {
 /// `n × n` slice `m`: column `j` gets, for each `k < j` in order, the
 /// axpy `y ← (−L_jk)·L_·k·1 + 1·y` over its rows `j..` (the factors `1`
 /// are exact, so they are left out), then its pivot's square root and the
-/// division of the rows below by it. `false` at a pivot `try_sqrt` refuses.
+/// division of the rows below by it. `false` at a pivot nalgebra refuses
+/// (zero by `is_zero`, else negative or NaN by `try_sqrt`); `m` is then
+/// left as it was (the caller drops it).
 ///
 /// Each entry's updates are a chain of its own, so here they run entry by
 /// entry, four rows side by side in registers, the `k` in nalgebra's
@@ -60,8 +62,8 @@ fn factor_in_place(m: &mut [f64], n: usize, padded: &mut Vec<f64>) -> bool {
     // Kept by the thread from one factorisation to the next: a fit makes
     // one per LM trial (zeroing a fresh copy cost a third as much as the
     // factorisation). Only the rows each column reads are written: the
-    // lower triangle, and zeros in the scratch rows, which therefore stay
-    // zeros (no stale value can be slow to compute with).
+    // lower triangle, and zeros in the scratch rows, so no stale value
+    // enters a call (scratch rows feed only scratch rows).
     if padded.len() < n * stride {
         padded.resize(n * stride, 0.0);
     }
@@ -72,10 +74,10 @@ fn factor_in_place(m: &mut [f64], n: usize, padded: &mut Vec<f64>) -> bool {
         col[n..].fill(0.0);
     }
     let ok = factor_padded(w, n, stride);
-    // Back, as far as nalgebra had got: the columns from the failed pivot
-    // on as their updates left them.
-    for j in 0..n {
-        m[j * n + j..(j + 1) * n].copy_from_slice(&w[j * stride + j..j * stride + n]);
+    if ok {
+        for j in 0..n {
+            m[j * n + j..(j + 1) * n].copy_from_slice(&w[j * stride + j..j * stride + n]);
+        }
     }
     ok
 }
@@ -95,7 +97,7 @@ fn factor_padded(w: &mut [f64], n: usize, stride: usize) -> bool {
         while r < n {
             let four: &mut [f64; LANES] = (&mut col_j[r..r + LANES]).try_into().expect("four");
             let mut acc = *four;
-            // (Checked once here, not in the loop.)
+            // (Checked here, so that the loop over `k` checks nothing.)
             assert!(j < stride && r + LANES <= stride);
             for col_k in finished.chunks_exact(stride) {
                 // The axpy's factor `−L_jk`, and its rows `r..r+4` of `L_·k`.
@@ -157,16 +159,25 @@ pub(crate) fn cholesky_solve(ch: &Cholesky<f64, Dyn>, b: &mut [f64]) {
                 acc[k] += c[k] * v[k];
             }
         }
-        let mut dot = 0.0;
-        dot += acc[0] + acc[4];
-        dot += acc[1] + acc[5];
-        dot += acc[2] + acc[6];
-        dot += acc[3] + acc[7];
+        let mut dot = dot_of_accumulators(&acc);
         for (c, v) in col[whole..].iter().zip(&rest[whole..]) {
             dot += c * v;
         }
         b[i] = (b[i] - dot) / l[i * d + i];
     }
+}
+
+/// nalgebra's `dotx` closing its eight accumulators: (0+4), (1+5), (2+6),
+/// (3+7) added in turn to a sum started at zero. The bits of every dot
+/// product here depend on this order.
+#[inline(always)]
+fn dot_of_accumulators(a: &[f64; 8]) -> f64 {
+    let mut res = 0.0;
+    res += a[0] + a[4];
+    res += a[1] + a[5];
+    res += a[2] + a[6];
+    res += a[3] + a[7];
+    res
 }
 
 /// `N⁻¹` from `ch`, the Cholesky factorisation of `N` (p × p): in the AVX2
@@ -225,12 +236,7 @@ fn inverse_of(ch: &Cholesky<f64, nalgebra::Dyn>) -> DMatrix<f64> {
             }
         }
         for (s, a) in dot.iter_mut().zip(&acc) {
-            let mut res = 0.0;
-            res += a[0] + a[4];
-            res += a[1] + a[5];
-            res += a[2] + a[6];
-            res += a[3] + a[7];
-            *s = res;
+            *s = dot_of_accumulators(a);
         }
         for m in whole..len {
             let r = i + 1 + m;
@@ -315,9 +321,7 @@ mod tests {
     fn the_same_solve_as_nalgebras() {
         let mut rng = crate::random::rng(7, 0);
         for d in 1..=30 {
-            let a = DMatrix::from_fn(d + 3, d, |_, _| rng.random_range(-1.0..1.0));
-            let n = a.transpose() * &a + DMatrix::identity(d, d) * 1e-6;
-            let ch = n.cholesky().expect("positive definite");
+            let ch = spd(&mut rng, d, 6.0).cholesky().expect("positive definite");
             let b = nalgebra::DVector::from_fn(d, |_, _| rng.random_range(-1e3..1e3));
             let mut theirs = b.clone();
             ch.solve_mut(&mut theirs);
