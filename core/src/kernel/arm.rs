@@ -10,9 +10,9 @@ use std::marker::PhantomData;
 use std::ops::Range;
 
 use super::batch::{
-    JacobianVisitor, Jacobians, PoseJacobianVisitor, for_each_lane_jacobian,
-    for_each_lane_joint_jacobian, for_each_lane_pose_jacobian, jacobians_impl, poses_impl,
-    positions_impl,
+    FreeRows, JacobianVisitor, Jacobians, PoseJacobianVisitor, for_each_lane_free_jacobian,
+    for_each_lane_jacobian, for_each_lane_joint_jacobian, for_each_lane_pose_jacobian,
+    jacobians_impl, poses_impl, positions_impl,
 };
 use super::lanes::{self, Batch, LaneOp};
 use super::{Chain, ChainShape, Generic, KernelError, Pose, PreparedParams, PreparedPoses};
@@ -353,6 +353,36 @@ impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[f64; 3], &[[f64; 3]])> LaneO
     fn run<L: Batch>(self) {
         let EachJacobianInlined { poses, range, f } = self.op;
         for_each_lane_jacobian::<N, C, L>(self.k, poses, range, f)
+    }
+}
+
+/// [`ArmKernel::for_each_free_jacobian`]'s loop with the caller's closure.
+pub(crate) struct EachFreeJacobianInlined<'a, F> {
+    pub(crate) poses: &'a PreparedPoses,
+    pub(crate) range: Range<usize>,
+    pub(crate) free: &'a [usize],
+    pub(crate) f: F,
+}
+
+impl<F: FnMut(usize, &[f64; 3], FreeRows<'_>)> InlinedOp for EachFreeJacobianInlined<'_, F> {
+    fn run<const N: usize, C: Chain<N>>(self, k: &PreparedParams<N>) {
+        lanes::run(OnChain::<N, C, _>::new(k, self))
+    }
+}
+
+impl<const N: usize, C: Chain<N>, F: FnMut(usize, &[f64; 3], FreeRows<'_>)> LaneOp
+    for OnChain<'_, N, C, EachFreeJacobianInlined<'_, F>>
+{
+    type Output = ();
+    #[inline(always)]
+    fn run<L: Batch>(self) {
+        let EachFreeJacobianInlined {
+            poses,
+            range,
+            free,
+            f,
+        } = self.op;
+        for_each_lane_free_jacobian::<N, C, L>(self.k, poses, range, free, f)
     }
 }
 

@@ -254,6 +254,100 @@ pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     }
 }
 
+/// What [`for_each_lane_free_jacobian`] hands over per pose: the chosen
+/// columns of its parameter Jacobian by coordinate (`rows[k][g]` holds
+/// coordinate `k` of columns `4g..4g+4`), the last group padded with zeros.
+pub(crate) type FreeRows<'a> = [&'a [[f64; LANES]]; 3];
+
+/// [`for_each_lane_jacobian`] of the columns `free` only (each below the
+/// chain's column count), compacted by coordinate: what a solver's `JᵀAJ`
+/// over its free columns reads. Four free columns of four poses are one
+/// 4 × 4 transpose of the kernel's lanes, where a pose's whole Jacobian
+/// transposed and then picked column by column cost about four times the
+/// instructions. The values are the kernel's, moved only.
+#[inline(always)]
+pub(crate) fn for_each_lane_free_jacobian<const N: usize, C: Chain<N>, L: Batch>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses,
+    range: std::ops::Range<usize>,
+    free: &[usize],
+    mut f: impl FnMut(usize, &[f64; 3], FreeRows<'_>),
+) {
+    const GROUPS: usize = MAX_PARAMS.div_ceil(LANES);
+    let kl: Consts<L, N> = k.splat();
+    let params = const { room::<N, C>() };
+    let groups = free.len().div_ceil(LANES);
+    let mut jl_room = [[L::from(0.0); 3]; MAX_PARAMS];
+    let jl = &mut jl_room[..params];
+    // Per pose, per coordinate, the free columns in groups of four lanes.
+    let mut tile = [[[[0.0; LANES]; GROUPS]; 3]; LANES];
+    let mut pos = [[0.0; 3]; LANES];
+    let batches = poses.batches::<N>(range.start, range.len() / LANES);
+    for b in 0..batches.count {
+        let (cq, sq) = batches.get::<L>(b);
+        let p = C::position_jacobian(&kl, &cq, &sq, jl);
+        transpose(&[p], &mut pos);
+        // Whole groups of four columns, then the last one padded; `c` is
+        // a coordinate of each column of the group.
+        let (whole, last) = free.as_chunks::<LANES>();
+        for (g, cols) in whole.iter().enumerate() {
+            for c in [0, 1, 2] {
+                put_group(&mut tile, c, g, cols.map(|j| jl[j][c]));
+            }
+        }
+        if !last.is_empty() {
+            for c in [0, 1, 2] {
+                let v = std::array::from_fn(|u| last.get(u).map_or(L::from(0.0), |&j| jl[j][c]));
+                put_group(&mut tile, c, whole.len(), v);
+            }
+        }
+        let i = range.start + b * LANES;
+        for (l, (rows, pos)) in tile.iter().zip(&pos).enumerate() {
+            f(i + l, pos, rows.each_ref().map(|r| &r[..groups]));
+        }
+    }
+    let tail = range.start + batches.count * LANES..range.end;
+    if tail.is_empty() {
+        return;
+    }
+    let mut cols = [[0.0; 3]; MAX_PARAMS];
+    let cols = &mut cols[..params];
+    for i in tail {
+        let (cq, sq) = poses.trig::<N>(i);
+        let p = C::position_jacobian(k, &cq, &sq, cols);
+        gather_free(cols, free, tile[0].each_mut().map(|r| &mut r[..]));
+        f(i, &p, tile[0].each_ref().map(|r| &r[..groups]));
+    }
+}
+
+/// Coordinate `c` of four poses' free columns `4g..4g+4` (`v`, a lane per
+/// column) into each pose's row of `tile`. A function of its own, not a
+/// closure: LLVM kept the closure out of line, compiled without the batch
+/// loop's target features, each intrinsic a call.
+#[inline(always)]
+fn put_group<L: Batch, const G: usize>(
+    tile: &mut [[[[f64; LANES]; G]; 3]; LANES],
+    c: usize,
+    g: usize,
+    v: [L; LANES],
+) {
+    for (t, row) in L::transpose4(v).into_iter().zip(tile) {
+        t.store(&mut row[c][g]);
+    }
+}
+
+/// `jac`'s columns `free` into `rows` as [`FreeRows`] lays them out (one
+/// pose's): for the batch loop's tail, and for the chains whose batch loops
+/// call a `dyn` visitor.
+#[inline(always)]
+pub(crate) fn gather_free(jac: &[[f64; 3]], free: &[usize], rows: [&mut [[f64; LANES]]; 3]) {
+    for (c, row) in rows.into_iter().enumerate() {
+        for (dst, cols) in row.iter_mut().zip(free.chunks(LANES)) {
+            *dst = std::array::from_fn(|u| cols.get(u).map_or(0.0, |&j| jac[j][c]));
+        }
+    }
+}
+
 /// [`for_each_lane_jacobian`] for `∂p/∂q`: each pose's joint Jacobian
 /// (`N` columns) to `f`, in pose order, a batch of lanes at a time.
 #[inline(always)]

@@ -41,6 +41,9 @@ pub(crate) trait Batch: Scalar {
     fn to_array(self) -> [f64; LANES];
     /// Stores the lanes into `dst`.
     fn store(self, dst: &mut [f64; LANES]);
+    /// The 4 × 4 transpose: lane `l` of output `r` is lane `r` of input
+    /// `l`. Moves values only, so every bit is kept.
+    fn transpose4(v: [Self; LANES]) -> [Self; LANES];
 }
 
 /// Portable lanes: one value per pose.
@@ -61,6 +64,11 @@ impl Batch for Lanes {
     #[inline(always)]
     fn store(self, dst: &mut [f64; LANES]) {
         *dst = self.0;
+    }
+
+    #[inline(always)]
+    fn transpose4(v: [Lanes; LANES]) -> [Lanes; LANES] {
+        std::array::from_fn(|r| Lanes(std::array::from_fn(|l| v[l].0[r])))
     }
 }
 
@@ -233,6 +241,25 @@ mod avx {
             // SAFETY: AVX is present (type invariant); `dst` holds 4 values.
             unsafe { _mm256_storeu_pd(dst.as_mut_ptr(), self.0) };
         }
+
+        #[inline(always)]
+        fn transpose4([a, b, c, d]: [Avx; LANES]) -> [Avx; LANES] {
+            // SAFETY: AVX is present (type invariant). Pairs within each
+            // 128-bit half, then the halves swapped across: the usual
+            // eight-shuffle 4 × 4 transpose.
+            unsafe {
+                let ab_even = _mm256_unpacklo_pd(a.0, b.0); // a0 b0 a2 b2
+                let ab_odd = _mm256_unpackhi_pd(a.0, b.0); // a1 b1 a3 b3
+                let cd_even = _mm256_unpacklo_pd(c.0, d.0); // c0 d0 c2 d2
+                let cd_odd = _mm256_unpackhi_pd(c.0, d.0); // c1 d1 c3 d3
+                [
+                    Avx(_mm256_permute2f128_pd(ab_even, cd_even, 0x20)),
+                    Avx(_mm256_permute2f128_pd(ab_odd, cd_odd, 0x20)),
+                    Avx(_mm256_permute2f128_pd(ab_even, cd_even, 0x31)),
+                    Avx(_mm256_permute2f128_pd(ab_odd, cd_odd, 0x31)),
+                ]
+            }
+        }
     }
 
     impl From<f64> for Avx {
@@ -269,5 +296,41 @@ mod avx {
             // SAFETY: AVX is present (type invariant).
             Avx(unsafe { _mm256_xor_pd(self.0, _mm256_set1_pd(-0.0)) })
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Batch, LANES, LaneOp, Lanes};
+
+    /// Transposes four lanes of distinct values with whichever lane type
+    /// runs.
+    struct Transpose([[f64; LANES]; LANES]);
+
+    impl LaneOp for Transpose {
+        type Output = [[f64; LANES]; LANES];
+        fn run<L: Batch>(self) -> Self::Output {
+            L::transpose4(self.0.map(|r| L::load(&r))).map(L::to_array)
+        }
+    }
+
+    /// Both lane types move lane `l` of row `r` to lane `r` of row `l`,
+    /// every bit kept (a NaN's payload, −0).
+    #[test]
+    fn transpose4_moves_every_value_to_its_place() {
+        let nan = f64::from_bits(0x7ff8_0000_dead_beef);
+        let mut rows = [[0.0; LANES]; LANES];
+        for (r, row) in rows.iter_mut().enumerate() {
+            for (l, v) in row.iter_mut().enumerate() {
+                *v = (r * LANES + l) as f64 + 0.25;
+            }
+        }
+        (rows[1][2], rows[3][0]) = (nan, -0.0);
+        let want: [[u64; LANES]; LANES] =
+            std::array::from_fn(|r| std::array::from_fn(|l| rows[l][r].to_bits()));
+        let bits = |t: [[f64; LANES]; LANES]| t.map(|r| r.map(f64::to_bits));
+        assert_eq!(bits(Transpose(rows).run::<Lanes>()), want);
+        // AVX where this CPU has it, else the portable lanes again.
+        assert_eq!(bits(super::run(Transpose(rows))), want);
     }
 }

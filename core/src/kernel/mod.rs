@@ -41,6 +41,7 @@ pub use crate::params::ChainShape;
 use crate::params::{DhParams, JointKind, JointModel};
 
 pub use arm::{ArmKernel, KernelKind, SHIPPED_SHAPES};
+pub(crate) use batch::FreeRows;
 pub use batch::Jacobians;
 pub use generic::Generic;
 /// The token-gated lanes, for batch loops outside the kernel (the plan's
@@ -521,8 +522,8 @@ pub use aacmm_dh_macros::dh_chain as __dh_chain;
 mod tests {
     use super::arm::shipped::{arm6, arm6h, scara, scarah, track6, track6h};
     use super::batch::{
-        for_each_lane_jacobian, for_each_lane_pose_jacobian, jacobians_impl, poses_impl,
-        positions_impl,
+        for_each_lane_free_jacobian, for_each_lane_jacobian, for_each_lane_pose_jacobian,
+        jacobians_impl, poses_impl, positions_impl,
     };
     use super::lanes::Lanes;
     use super::*;
@@ -621,6 +622,7 @@ mod tests {
             seen += 1;
         });
         assert_eq!(seen, q.len());
+        free_columns_bits::<C, N>(&k, &poses, &batch);
         let mut six = Vec::new();
         for_each_lane_pose_jacobian::<N, C, Lanes>(&k, &poses, 0..q.len(), &mut |i, t, cols| {
             assert_eq!(*t, tools[i]);
@@ -640,6 +642,45 @@ mod tests {
             assert_eq!(Pose::from_transform(t), tools[i]);
             assert_eq!(Pose::from_transform(C::pose(&k, &cq, &sq)), tools[i]);
             assert_eq!(cols6, six[i]);
+        }
+    }
+
+    /// The free columns, compacted by coordinate in groups of four and
+    /// padded with zeros, are the batch's columns: every column, some in
+    /// another order (a partial last group), none; from pose 1, so that
+    /// the range ends in a tail.
+    fn free_columns_bits<C: Chain<N>, const N: usize>(
+        k: &PreparedParams<N>,
+        poses: &PreparedPoses,
+        batch: &Jacobians,
+    ) {
+        let all: Vec<usize> = (0..C::PARAMS).collect();
+        let some: Vec<usize> = (0..C::PARAMS).rev().step_by(3).collect();
+        for free in [all, some, Vec::new()] {
+            let range = 1..poses.len();
+            let mut seen = Vec::new();
+            for_each_lane_free_jacobian::<N, C, Lanes>(
+                k,
+                poses,
+                range.clone(),
+                &free,
+                |i, p, rows| {
+                    assert_eq!(*p, batch.position(i));
+                    for (c, row) in rows.iter().enumerate() {
+                        assert_eq!(row.len(), free.len().div_ceil(LANES));
+                        for (u, &v) in row.as_flattened().iter().enumerate() {
+                            let want = free.get(u).map_or(0.0, |&j| batch.column(i, j)[c]);
+                            assert_eq!(
+                                v.to_bits(),
+                                want.to_bits(),
+                                "pose {i}, column {u}, row {c}"
+                            );
+                        }
+                    }
+                    seen.push(i);
+                },
+            );
+            assert_eq!(seen, range.collect::<Vec<_>>());
         }
     }
 

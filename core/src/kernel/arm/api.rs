@@ -4,10 +4,11 @@
 use std::ops::Range;
 
 use super::{
-    ArmKernel, BatchOp, DynChain, EachJacobianInlined, EachJointJacobianInlined, KernelKind,
-    OnUser, Op, Prepared, UserChain, check_len,
+    ArmKernel, BatchOp, DynChain, EachFreeJacobianInlined, EachJacobianInlined,
+    EachJointJacobianInlined, KernelKind, OnUser, Op, Prepared, UserChain, check_len,
 };
-use crate::kernel::batch::JacobianVisitor;
+use crate::kernel::batch::{FreeRows, JacobianVisitor, gather_free};
+use crate::kernel::lanes::LANES;
 use crate::kernel::{
     Chain, ChainShape, Jacobians, KernelError, Pose, Post, PreparedParams, PreparedPoses, computes,
 };
@@ -443,6 +444,49 @@ impl ArmKernel {
         }
     }
 
+    /// [`ArmKernel::for_each_jacobian`] of the columns `free` only (each
+    /// below [`ArmKernel::param_count`]), handed over compacted by
+    /// coordinate ([`FreeRows`]): on the measuring arms' inlined loops, four
+    /// poses' free columns are moved out of the kernel's lanes at once. The
+    /// same values in the same pose order as picking them out of
+    /// [`ArmKernel::for_each_jacobian`]'s columns.
+    pub(crate) fn for_each_free_jacobian(
+        &self,
+        poses: &PreparedPoses,
+        range: Range<usize>,
+        free: &[usize],
+        mut f: impl FnMut(usize, &[f64; 3], FreeRows<'_>),
+    ) -> Result<(), KernelError> {
+        self.check_poses(poses, &range)?;
+        let range = if poses.post().is_none() {
+            let op = EachFreeJacobianInlined {
+                poses,
+                range,
+                free,
+                f,
+            };
+            match self.inner.run_inlined(op) {
+                Ok(()) => return Ok(()),
+                Err(op) => {
+                    f = op.f;
+                    op.range
+                }
+            }
+        } else {
+            range
+        };
+        let groups = free.len().div_ceil(LANES);
+        let mut rows = vec![[0.0; LANES]; 3 * groups];
+        self.for_each_jacobian(poses, range, |i, pos, jac| {
+            let (x, rest) = rows.split_at_mut(groups);
+            let (y, z) = rest.split_at_mut(groups);
+            gather_free(jac, free, [x, y, z]);
+            let (x, rest) = rows.split_at(groups);
+            let (y, z) = rest.split_at(groups);
+            f(i, pos, [x, y, z]);
+        })
+    }
+
     /// [`ArmKernel::for_each_jacobian`] of poses with a transform after the
     /// chain (a model beyond geometry is on): one copy of the columns per
     /// pose, scaled. Out of line, so that the plain path compiles as before.
@@ -705,5 +749,43 @@ mod tests {
             e.to_string(),
             "the arm's chain is RRRRRRR but the chain type is PRRRRRR"
         );
+    }
+
+    /// The free columns by coordinate are [`ArmKernel::for_each_jacobian`]'s
+    /// columns picked out, on the inlined 6R loop (AVX where the CPU has
+    /// it), a 5R chain's `dyn` loop and a user's chain; a range with a tail.
+    #[test]
+    fn free_jacobian_rows_are_the_picked_columns() {
+        let six = DhParams::paper_nominal();
+        let mut five = six.clone();
+        five.joints.pop();
+        let kernels = [
+            ArmKernel::new(&six).unwrap(),
+            ArmKernel::new(&five).unwrap(),
+            ArmKernel::with_chain::<crate::kernel::Generic, 6>(&six).unwrap(),
+        ];
+        for k in &kernels {
+            let n = k.joints();
+            let q: Vec<Vec<f64>> = (0..11)
+                .map(|i| (0..n).map(|j| ((i * 7 + j) as f64 * 0.37).sin()).collect())
+                .collect();
+            let poses = PreparedPoses::new(n, &q).unwrap();
+            let free: Vec<usize> = (0..k.param_count()).filter(|c| c % 4 != 1).rev().collect();
+            let mut want = Vec::new();
+            k.for_each_jacobian(&poses, 2..11, |i, p, jac| {
+                let cols: Vec<[f64; 3]> = free.iter().map(|&c| jac[c]).collect();
+                want.push((i, *p, cols));
+            })
+            .unwrap();
+            let mut got = Vec::new();
+            k.for_each_free_jacobian(&poses, 2..11, &free, |i, p, rows| {
+                let [x, y, z] = rows.map(|r| r.as_flattened());
+                assert!(x[free.len()..].iter().all(|v| v.to_bits() == 0));
+                let cols: Vec<[f64; 3]> = (0..free.len()).map(|u| [x[u], y[u], z[u]]).collect();
+                got.push((i, *p, cols));
+            })
+            .unwrap();
+            assert_eq!(got, want, "{}", k.shape());
+        }
     }
 }
