@@ -1278,10 +1278,15 @@ impl PointSums {
             // in the last lane are the upper triangle's scratch.
             let end = i / LANES + 1;
             let row = lanes_mut(&mut jtj[i * w..(i + 1) * w], end);
+            // Each lane loaded whole before it is stored: written into the
+            // row in place, LLVM could not tell the row from `J̄` and ran
+            // rows shorter than four lanes a value at a time.
             for (r, ((x, y), z)) in row.iter_mut().zip(mx.iter().zip(my.iter()).zip(mz.iter())) {
+                let (x, y, z, mut v) = (*x, *y, *z, *r);
                 for l in 0..LANES {
-                    r[l] -= gi[0] * x[l] + gi[1] * y[l] + gi[2] * z[l];
+                    v[l] -= gi[0] * x[l] + gi[1] * y[l] + gi[2] * z[l];
                 }
+                *r = v;
             }
         }
         part.centroids
