@@ -203,6 +203,10 @@ impl Term for LengthTerm<'_> {
         let centres = centres(shared)?;
         let p = normal.free.len();
         let mut cost = 0.0;
+        // One `g` for every length, and rows of `JᵀJ` walked as slices:
+        // indexed entry by entry, each addition was bounds-checked and the
+        // loop stayed scalar.
+        let mut g = vec![0.0; p];
         for (r, &w) in self.data.references().iter().zip(&self.weights) {
             let (ca, cb) = (centres.points[r.a], centres.points[r.b]);
             let d: [f64; 3] = std::array::from_fn(|k| ca[k] - cb[k]);
@@ -210,16 +214,14 @@ impl Term for LengthTerm<'_> {
             let res = w * (len - r.distance);
             cost += res * res;
             let u = d.map(|v| v / len);
-            let g: Vec<f64> = (0..p)
-                .map(|c| {
-                    let (ja, jb) = (centres.jacobians[r.a][c], centres.jacobians[r.b][c]);
-                    w * (0..3).map(|k| u[k] * (ja[k] - jb[k])).sum::<f64>()
-                })
-                .collect();
-            for a in 0..p {
-                normal.jtr[a] += g[a] * res;
-                for b in 0..p {
-                    normal.jtj[a * p + b] += g[a] * g[b];
+            let (ja, jb) = (&centres.jacobians[r.a], &centres.jacobians[r.b]);
+            for ((gc, ja), jb) in g.iter_mut().zip(ja).zip(jb) {
+                *gc = w * (0..3).map(|k| u[k] * (ja[k] - jb[k])).sum::<f64>();
+            }
+            for (a, (jtr, &ga)) in normal.jtr.iter_mut().zip(&g).enumerate() {
+                *jtr += ga * res;
+                for (o, &gb) in normal.jtj[a * p..(a + 1) * p].iter_mut().zip(&g) {
+                    *o += ga * gb;
                 }
             }
         }
