@@ -222,6 +222,31 @@ pub(crate) fn jacobians_impl<const N: usize, C: Chain<N>, L: Batch>(
     }
 }
 
+/// The whole batches of `range`: each one's first pose, positions (one
+/// per pose) and Jacobian lanes to `each`; returns where the scalar tail
+/// starts.
+#[inline(always)]
+fn each_batch<const N: usize, C: Chain<N>, L: Batch>(
+    k: &PreparedParams<N>,
+    poses: &PreparedPoses,
+    range: &std::ops::Range<usize>,
+    mut each: impl FnMut(usize, &[[f64; 3]; LANES], &[[L; 3]]),
+) -> usize {
+    let kl: Consts<L, N> = k.splat();
+    let params = const { room::<N, C>() };
+    let mut jl_room = [[L::from(0.0); 3]; MAX_PARAMS];
+    let jl = &mut jl_room[..params];
+    let mut pos = [[0.0; 3]; LANES];
+    let batches = poses.batches::<N>(range.start, range.len() / LANES);
+    for b in 0..batches.count {
+        let (cq, sq) = batches.get::<L>(b);
+        let p = C::position_jacobian(&kl, &cq, &sq, jl);
+        transpose(&[p], &mut pos);
+        each(range.start + b * LANES, &pos, jl);
+    }
+    range.start + batches.count * LANES
+}
+
 #[inline(always)]
 pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     k: &PreparedParams<N>,
@@ -229,25 +254,22 @@ pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     range: std::ops::Range<usize>,
     mut f: impl FnMut(usize, &[f64; 3], &[[f64; 3]]),
 ) {
-    let kl: Consts<L, N> = k.splat();
     let params = const { room::<N, C>() };
-    let mut jl_room = [[L::from(0.0); 3]; MAX_PARAMS];
-    let jl = &mut jl_room[..params];
     let mut tile_room = [[0.0; 3]; LANES * MAX_PARAMS];
     let tile = &mut tile_room[..LANES * params];
-    let mut pos = [[0.0; 3]; LANES];
-    let batches = poses.batches::<N>(range.start, range.len() / LANES);
-    for b in 0..batches.count {
-        let (cq, sq) = batches.get::<L>(b);
-        let p = C::position_jacobian(&kl, &cq, &sq, jl);
-        transpose(&[p], &mut pos);
-        transpose(jl, tile);
-        let i = range.start + b * LANES;
-        for (l, cols) in tile.chunks_exact(params).enumerate() {
-            f(i + l, &pos[l], cols);
-        }
-    }
-    for i in range.start + batches.count * LANES..range.end {
+    let tail = each_batch::<N, C, L>(
+        k,
+        poses,
+        &range,
+        #[inline(always)]
+        |i, pos, jl| {
+            transpose(jl, tile);
+            for (l, cols) in tile.chunks_exact(params).enumerate() {
+                f(i + l, &pos[l], cols);
+            }
+        },
+    );
+    for i in tail..range.end {
         let (cq, sq) = poses.trig::<N>(i);
         let p = C::position_jacobian(k, &cq, &sq, &mut tile[..params]);
         f(i, &p, &tile[..params]);
@@ -274,39 +296,37 @@ pub(crate) fn for_each_lane_free_jacobian<const N: usize, C: Chain<N>, L: Batch>
     mut f: impl FnMut(usize, &[f64; 3], FreeRows<'_>),
 ) {
     const GROUPS: usize = MAX_PARAMS.div_ceil(LANES);
-    let kl: Consts<L, N> = k.splat();
     let params = const { room::<N, C>() };
     let groups = free.len().div_ceil(LANES);
-    let mut jl_room = [[L::from(0.0); 3]; MAX_PARAMS];
-    let jl = &mut jl_room[..params];
     // Per pose, per coordinate, the free columns in groups of four lanes.
     let mut tile = [[[[0.0; LANES]; GROUPS]; 3]; LANES];
-    let mut pos = [[0.0; 3]; LANES];
-    let batches = poses.batches::<N>(range.start, range.len() / LANES);
-    for b in 0..batches.count {
-        let (cq, sq) = batches.get::<L>(b);
-        let p = C::position_jacobian(&kl, &cq, &sq, jl);
-        transpose(&[p], &mut pos);
-        // Whole groups of four columns, then the last one padded; `c` is
-        // a coordinate of each column of the group.
-        let (whole, last) = free.as_chunks::<LANES>();
-        for (g, cols) in whole.iter().enumerate() {
-            for c in [0, 1, 2] {
-                put_group(&mut tile, c, g, cols.map(|j| jl[j][c]));
+    let tail = each_batch::<N, C, L>(
+        k,
+        poses,
+        &range,
+        #[inline(always)]
+        |i, pos, jl| {
+            // Whole groups of four columns, then the last one padded; `c` is
+            // a coordinate of each column of the group.
+            let (whole, last) = free.as_chunks::<LANES>();
+            for (g, cols) in whole.iter().enumerate() {
+                for c in [0, 1, 2] {
+                    put_group(&mut tile, c, g, cols.map(|j| jl[j][c]));
+                }
             }
-        }
-        if !last.is_empty() {
-            for c in [0, 1, 2] {
-                let v = std::array::from_fn(|u| last.get(u).map_or(L::from(0.0), |&j| jl[j][c]));
-                put_group(&mut tile, c, whole.len(), v);
+            if !last.is_empty() {
+                for c in [0, 1, 2] {
+                    let v =
+                        std::array::from_fn(|u| last.get(u).map_or(L::from(0.0), |&j| jl[j][c]));
+                    put_group(&mut tile, c, whole.len(), v);
+                }
             }
-        }
-        let i = range.start + b * LANES;
-        for (l, (rows, pos)) in tile.iter().zip(&pos).enumerate() {
-            f(i + l, pos, rows.each_ref().map(|r| &r[..groups]));
-        }
-    }
-    let tail = range.start + batches.count * LANES..range.end;
+            for (l, (rows, pos)) in tile.iter().zip(pos).enumerate() {
+                f(i + l, pos, rows.each_ref().map(|r| &r[..groups]));
+            }
+        },
+    );
+    let tail = tail..range.end;
     if tail.is_empty() {
         return;
     }
