@@ -278,15 +278,18 @@ pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
 
 /// What [`for_each_lane_free_jacobian`] hands over per pose: the chosen
 /// columns of its parameter Jacobian by coordinate (`rows[k][g]` holds
-/// coordinate `k` of columns `4g..4g+4`), the last group padded with zeros.
+/// coordinate `k` of the columns `free[4g..4g + 4]`), the last group padded
+/// with zeros.
 pub(crate) type FreeRows<'a> = [&'a [[f64; LANES]]; 3];
 
 /// [`for_each_lane_jacobian`] of the columns `free` only (each below the
-/// chain's column count), compacted by coordinate: what a solver's `JᵀAJ`
-/// over its free columns reads. Four free columns of four poses are one
-/// 4 × 4 transpose of the kernel's lanes, where a pose's whole Jacobian
-/// transposed and then picked column by column cost about four times the
-/// instructions. The values are the kernel's, moved only.
+/// chain's column count, none twice), compacted by coordinate: what a
+/// solver's `JᵀAJ` over its free columns reads. Four free columns of four
+/// poses are one 4 × 4 transpose of the kernel's lanes; a pose's whole
+/// Jacobian transposed and then picked column by column cost over twice
+/// the instructions (callgrind, `lm-solve/100`: about 320 a touch against
+/// 140 with the copy into the rank-3 slot). The values are the kernel's,
+/// moved only.
 #[inline(always)]
 pub(crate) fn for_each_lane_free_jacobian<const N: usize, C: Chain<N>, L: Batch>(
     k: &PreparedParams<N>,
@@ -358,7 +361,7 @@ fn put_group<L: Batch, const G: usize>(
 
 /// `jac`'s columns `free` into `rows` as [`FreeRows`] lays them out (one
 /// pose's): for the batch loop's tail, and for the chains whose batch loops
-/// call a `dyn` visitor.
+/// call a `dyn` visitor or whose poses have a transform after the chain.
 #[inline(always)]
 pub(crate) fn gather_free(jac: &[[f64; 3]], free: &[usize], rows: [&mut [[f64; LANES]]; 3]) {
     for (c, row) in rows.into_iter().enumerate() {

@@ -213,8 +213,13 @@ impl Term for LengthTerm<'_> {
             let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             let res = w * (len - r.distance);
             cost += res * res;
+            if p == 0 {
+                // No free column: the cost alone (and no centre Jacobians
+                // to read: a cost pass leaves none).
+                continue;
+            }
             let u = d.map(|v| v / len);
-            let (ja, jb) = (&centres.jacobians[r.a], &centres.jacobians[r.b]);
+            let (ja, jb) = (&centres.jacobians[r.a][..p], &centres.jacobians[r.b][..p]);
             for ((gc, ja), jb) in g.iter_mut().zip(ja).zip(jb) {
                 *gc = w * (0..3).map(|k| u[k] * (ja[k] - jb[k])).sum::<f64>();
             }

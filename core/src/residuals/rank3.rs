@@ -96,8 +96,9 @@ impl Rank3 {
 
     /// The next observation's rows to fill, each [`Rank3::stride`] long: a
     /// caller may run whole lanes over them. Their padding columns past
-    /// `p` in `J` are zero (only a padded slot's `A·J` is written there,
-    /// and the sums never read it).
+    /// `p` in `J` must stay zero: a caller writes zeros there or nothing
+    /// (only `A·J`'s padding may hold other values, and the sums never
+    /// read it).
     #[inline(always)]
     pub(super) fn padded_slot(&mut self) -> Slot<'_> {
         self.slot_of(self.stride)
@@ -132,7 +133,10 @@ impl Rank3 {
     #[inline(always)]
     pub(super) fn flush(&mut self, jtj: &mut [f64]) {
         let (n, w) = (self.pending, self.stride);
-        if n == 0 {
+        if n == 0 || w == 0 {
+            // Nothing held, or no column to update (rows of stride 0
+            // cannot be cut).
+            self.pending = 0;
             return;
         }
         // The observations' rows, walked once per lane group: made here and

@@ -169,6 +169,28 @@ fn the_free_columns_system_is_the_restriction_of_the_full_one() {
     assert!(direct.restrict(&[2]).is_none());
 }
 
+/// With no free column the touches and the lengths give their costs
+/// alone (the touches' rank-3 rows of stride 0 are not cut; the lengths
+/// read no centre Jacobians, which a pass that did not ask for them
+/// leaves none of): the lengths' cost of the pass over every column, to
+/// the bit.
+#[test]
+fn lengths_without_free_columns_give_their_cost() {
+    let (data, noise) = simulated(9, 10, 10, 3);
+    let arm = DhParams::paper_nominal();
+    let (t, l) = weighed(&data, &noise, &arm, 1.0, 1);
+    let l = l.expect("lengths");
+    let all: Vec<usize> = (0..27).collect();
+    let full = normal_equations(&arm, &t, Some(&l), &all, 1).0;
+    let none = at(&arm, 1, |at| {
+        let (mut normal, mut shared) = (Normal::new(&[]), Shared::default());
+        t.accumulate(at, &mut shared, &mut normal)?;
+        l.accumulate(at, &mut shared, &mut normal)
+    })
+    .unwrap();
+    assert_eq!(none.to_bits(), full.costs[1].to_bits());
+}
+
 /// The blocked, lane-wise accumulation adds every product in the order
 /// of the plain loops it replaced (touch by touch, `b ≤ i`, then the
 /// point's Schur term): the same bits, with points of more touches than

@@ -1213,10 +1213,11 @@ impl PointSums {
         }
         let slot = self.rank3.padded_slot();
         let [jx, jy, jz] = slot.j;
-        // Whole lanes over the padded rows (the padding's `J` is zero):
-        // `A·J` as `sym_mul` forms it, then `G` and `Jᵀ A p̃`. Lanes of
-        // arrays, each loaded before any is stored, so the loop needs no
-        // check of whether the ten rows overlap.
+        // Whole lanes over the padded rows (the padding's `J` is zero, in
+        // the slot and in `given`): `A·J` as `sym_mul` forms it, then `G`
+        // and `Jᵀ A p̃`. Lanes of arrays, each loaded into a local before
+        // it is used, so the loop needs no check of whether the rows
+        // overlap.
         let k = self.jap.len() / LANES;
         let [ax, ay, az] = slot.aj;
         let (jx, jy, jz) = (lanes_mut(jx, k), lanes_mut(jy, k), lanes_mut(jz, k));
