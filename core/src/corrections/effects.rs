@@ -3,7 +3,7 @@
 
 use super::gravity::Loads;
 use super::{Beyond, Column, Physics};
-use crate::kernel::Lanes;
+use crate::kernel::{FreeRows, LANES, Lanes};
 use crate::kernel::{Post, PreparedPoses};
 use crate::params::{DhParams, JointKind};
 use std::sync::Arc;
@@ -172,11 +172,6 @@ impl Effects {
         })
     }
 
-    /// Columns of the fitted corrections.
-    pub(crate) fn columns(&self) -> usize {
-        self.kinds.len()
-    }
-
     /// Pose `i`'s Jacobian into `out`: the chain's columns `jac` (at the
     /// corrected pose, position `pos`), then the corrections' — the layout's
     /// order when the correction block is its first.
@@ -205,6 +200,66 @@ impl Effects {
         self.extend_rows(i, pos, jac, out);
     }
 
+    /// How the columns `free` of [`Effects::extend`]'s layout (the chain's
+    /// `params` columns, then the corrections') come out of the kernel's
+    /// [`ArmKernel::for_each_free_jacobian`](crate::kernel::ArmKernel):
+    /// the chain's columns to ask it for, one per free column (a joint's
+    /// correction asks for the joint's column, which it scales; the others
+    /// for any, which they replace), and the corrections to finish in
+    /// place per pose ([`Effects::finish_free`]).
+    pub(crate) fn free_plan(&self, free: &[usize], params: usize) -> FreePlan {
+        let mut chain = Vec::with_capacity(free.len());
+        let mut fixes = Vec::new();
+        for (a, &c) in free.iter().enumerate() {
+            match c.checked_sub(params) {
+                None => chain.push(c),
+                Some(k) => {
+                    chain.push(match self.kinds[k] {
+                        Kind::Joint(c) => c,
+                        Kind::Expansion | Kind::Axis(_) => 0,
+                    });
+                    fixes.push((a, k));
+                }
+            }
+        }
+        FreePlan { chain, fixes }
+    }
+
+    /// Pose `i`'s free columns (`rows`, as the kernel hands them over for
+    /// `plan.chain`, at position `pos`) finished: each correction's column
+    /// as [`Effects::extend`] forms it, the same operations on the same
+    /// values.
+    #[inline(always)]
+    pub(crate) fn finish_free(
+        &self,
+        plan: &FreePlan,
+        i: usize,
+        pos: &[f64; 3],
+        mut rows: FreeRows<'_>,
+    ) {
+        let m = self.kinds.len();
+        let factors = &self.factors[i * m..(i + 1) * m];
+        let offset = self.poses.post().map_or([0.0; 3], |p| p.offset[i]);
+        for &(a, k) in &plan.fixes {
+            let (g, u) = (a / LANES, a % LANES);
+            let f = factors[k];
+            for (r, row) in rows.iter_mut().enumerate() {
+                let v: &mut f64 = &mut row[g][u];
+                *v = match self.kinds[k] {
+                    Kind::Joint(_) => f * *v,
+                    Kind::Expansion => f * (pos[r] - offset[r]),
+                    Kind::Axis(ax) => {
+                        if r == ax {
+                            f
+                        } else {
+                            0.0
+                        }
+                    }
+                };
+            }
+        }
+    }
+
     /// [`Effects::extend`] of a Jacobian of `N` rows, the position's first.
     #[inline(always)]
     fn extend_rows<const N: usize>(
@@ -228,6 +283,15 @@ impl Effects {
             });
         }
     }
+}
+
+/// [`Effects::free_plan`]: per free column, the chain's column the kernel
+/// hands over in its place, and the corrections among them (their free
+/// index, their column among the corrections').
+#[derive(Clone, Debug)]
+pub(crate) struct FreePlan {
+    pub(crate) chain: Vec<usize>,
+    fixes: Vec<(usize, usize)>,
 }
 
 /// What the corrections of one set of poses depend on beyond the fit's
@@ -1141,6 +1205,101 @@ mod tests {
         };
         let e = Effects::new(&arm, &physics, &fit, &raw, none).unwrap();
         assert_eq!(e.poses.shape(), "RPRRRR".parse::<ChainShape>().ok());
+    }
+
+    /// The free columns the kernel hands over for [`Effects::free_plan`]'s
+    /// chain columns, finished by [`Effects::finish_free`], are those picked
+    /// out of [`Effects::extend`], to the bit: every kind of correction (a
+    /// joint's, the expansion, the drift's axes), free columns out of order
+    /// with geometry and corrections mixed and a partial last group; on the
+    /// inlined 6R loop (no transform after the chain), with the transform
+    /// (the fallback), and on a chain with a slide.
+    #[test]
+    fn free_columns_finished_are_those_extended() {
+        use crate::corrections::Mass;
+        let physics = Physics {
+            link_masses: vec![Some(Mass::at_middle(1.5)); 6],
+            probe_mass: Some(Mass::at_middle(0.4)),
+            gravity: Some([0.2, -0.4, -1.0]),
+            compliance: vec![None, Some(2e-5), Some(1e-5), None, None, None],
+            ..Physics::default()
+        };
+        // At the fit's point: the expansion's column is of the position
+        // before the drift moved it.
+        let moving = Physics {
+            cte_per_k: Some(8e-6),
+            drift_mm_per_h: Some([0.02, -0.01, 0.03]),
+            ..physics.clone()
+        };
+        let n = 11;
+        let q: Vec<Vec<f64>> = (0..n)
+            .map(|i| (0..6).map(|j| ((i * 5 + j) as f64 * 0.71).sin()).collect())
+            .collect();
+        let t: Vec<f64> = (0..n).map(|i| 15.0 + i as f64).collect();
+        let h: Vec<f64> = (0..n).map(|i| 600.0 * i as f64).collect();
+        let conditions = Conditions {
+            temperature_c: Some(&t),
+            time_s: Some(&h),
+            approach: None,
+        };
+        let geometric = Beyond {
+            compliance: vec![1, 2],
+            harmonics: vec![(3, 1), (0, 2)],
+            backlash: vec![4],
+            ..Beyond::default()
+        };
+        let all = Beyond {
+            thermal: true,
+            drift: true,
+            ..geometric.clone()
+        };
+        // The slide's play moves it as its offset `d` does; it has no
+        // compliance.
+        let slide = Physics {
+            compliance: vec![None, None, Some(1e-5), None, None, None],
+            ..moving.clone()
+        };
+        let slides = Beyond {
+            compliance: vec![2],
+            backlash: vec![1, 4],
+            ..all.clone()
+        };
+        for (arm, physics, fit) in [
+            (DhParams::paper_nominal(), &physics, &geometric),
+            (DhParams::paper_nominal(), &moving, &all),
+            (sliding(), &slide, &slides),
+        ] {
+            let raw = PreparedPoses::for_shape(arm.shape().unwrap(), &q).unwrap();
+            let e = Effects::new(&arm, physics, fit, &raw, conditions).unwrap();
+            assert_eq!(e.poses.post().is_some(), fit.thermal);
+            let k = ArmKernel::new(&arm).unwrap();
+            let params = k.param_count();
+            let free: Vec<usize> = (0..params + e.kinds.len())
+                .filter(|&c| c >= params || c % 4 != 2)
+                .rev()
+                .collect();
+            assert_ne!(free.len() % LANES, 0);
+            let mut want = Vec::new();
+            let mut ext = Vec::new();
+            k.for_each_jacobian(&e.poses, 1..n, |i, pos, jac| {
+                e.extend(i, pos, jac, &mut ext);
+                let cols: Vec<[u64; 3]> = free.iter().map(|&c| ext[c].map(f64::to_bits)).collect();
+                want.push((i, *pos, cols));
+            })
+            .unwrap();
+            let plan = e.free_plan(&free, params);
+            let mut got = Vec::new();
+            k.for_each_free_jacobian(&e.poses, 1..n, &plan.chain, |i, pos, mut rows| {
+                e.finish_free(&plan, i, pos, rows.each_mut().map(|r| &mut **r));
+                let [x, y, z] = rows.map(|r| r.as_flattened());
+                let cols: Vec<[u64; 3]> = (0..free.len())
+                    .map(|u| [x[u], y[u], z[u]].map(f64::to_bits))
+                    .collect();
+                got.push((i, *pos, cols));
+            })
+            .unwrap();
+            assert_eq!(got, want, "{fit:?}");
+        }
     }
 }
 

@@ -279,11 +279,13 @@ pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
 /// What [`for_each_lane_free_jacobian`] hands over per pose: the chosen
 /// columns of its parameter Jacobian by coordinate (`rows[k][g]` holds
 /// coordinate `k` of the columns `free[4g..4g + 4]`), the last group padded
-/// with zeros.
-pub(crate) type FreeRows<'a> = [&'a [[f64; LANES]]; 3];
+/// with zeros. Mutable, so that a caller may finish some columns in place
+/// before it reads them (a model beyond geometry scales a chain column
+/// into its correction's): the loop writes every group afresh per pose.
+pub(crate) type FreeRows<'a> = [&'a mut [[f64; LANES]]; 3];
 
 /// [`for_each_lane_jacobian`] of the columns `free` only (each below the
-/// chain's column count, none twice), compacted by coordinate: what a
+/// chain's column count, a column twice if asked), compacted by coordinate: what a
 /// solver's `JᵀAJ` over its free columns reads. Four free columns of four
 /// poses are one 4 × 4 transpose of the kernel's lanes; a pose's whole
 /// Jacobian transposed and then picked column by column cost over twice
@@ -324,8 +326,8 @@ pub(crate) fn for_each_lane_free_jacobian<const N: usize, C: Chain<N>, L: Batch>
                     put_group(&mut tile, c, whole.len(), v);
                 }
             }
-            for (l, (rows, pos)) in tile.iter().zip(pos).enumerate() {
-                f(i + l, pos, rows.each_ref().map(|r| &r[..groups]));
+            for (l, (rows, pos)) in tile.iter_mut().zip(pos).enumerate() {
+                f(i + l, pos, rows.each_mut().map(|r| &mut r[..groups]));
             }
         },
     );
@@ -339,7 +341,7 @@ pub(crate) fn for_each_lane_free_jacobian<const N: usize, C: Chain<N>, L: Batch>
         let (cq, sq) = poses.trig::<N>(i);
         let p = C::position_jacobian(k, &cq, &sq, cols);
         gather_free(cols, free, tile[0].each_mut().map(|r| &mut r[..]));
-        f(i, &p, tile[0].each_ref().map(|r| &r[..groups]));
+        f(i, &p, tile[0].each_mut().map(|r| &mut r[..groups]));
     }
 }
 

@@ -15,7 +15,7 @@ use super::{
 use crate::corrections::Effects;
 use crate::dataset::DataSet;
 use crate::error::short;
-use crate::kernel::{ArmKernel, Batch, FreeRows, KernelError, LANES, LaneOp, NoiseOf, run_lanes};
+use crate::kernel::{ArmKernel, Batch, KernelError, LANES, LaneOp, NoiseOf, run_lanes};
 use crate::parallel::parallel_map;
 
 use super::tools::{TouchViews, tool_columns};
@@ -1171,33 +1171,14 @@ impl PointSums {
         self.started = false;
     }
 
-    /// Adds one touch: position, weight, free Jacobian columns. `jtj` is
-    /// `p` rows of [`Rank3::stride`] (lower triangle meaningful).
+    /// Adds one touch: position, weight, and its free Jacobian columns
+    /// compacted by coordinate, as [`ArmKernel::for_each_free_jacobian`]
+    /// hands them over (their padding is zeros): read as the slot's rows
+    /// are, and written into it in the same sweep, not copied first (a
+    /// `memcpy` call per row). `jtj` is `p` rows of [`Rank3::stride`]
+    /// (lower triangle meaningful).
     #[inline(always)]
-    fn add(&mut self, pos: &[f64; 3], a: &Sym3, jac: &[[f64; 3]], free: &[usize], jtj: &mut [f64]) {
-        let [jx, jy, jz] = self.rank3.padded_slot().j;
-        let n = free.len();
-        for (((x, y), z), &ci) in (jx[..n].iter_mut().zip(&mut jy[..n]).zip(&mut jz[..n])).zip(free)
-        {
-            (*x, *y, *z) = (jac[ci][0], jac[ci][1], jac[ci][2]);
-        }
-        self.add_slot(pos, a, None, jtj);
-    }
-
-    /// [`PointSums::add`] of a touch whose free columns come compacted by
-    /// coordinate, as [`ArmKernel::for_each_free_jacobian`] hands them
-    /// over (their padding is zeros): read as the slot's rows are, and
-    /// written into it in the same sweep, not copied first (a `memcpy` call
-    /// per row).
-    #[inline(always)]
-    fn add_rows(&mut self, pos: &[f64; 3], a: &Sym3, rows: FreeRows<'_>, jtj: &mut [f64]) {
-        self.add_slot(pos, a, Some(rows), jtj);
-    }
-
-    /// [`PointSums::add`] of a touch whose `J` is `given`, or already in
-    /// the rank-3 slot.
-    #[inline(always)]
-    fn add_slot(&mut self, pos: &[f64; 3], a: &Sym3, given: Option<FreeRows<'_>>, jtj: &mut [f64]) {
+    fn add(&mut self, pos: &[f64; 3], a: &Sym3, rows: [&[[f64; LANES]]; 3], jtj: &mut [f64]) {
         if !self.started {
             self.origin = *pos;
             self.started = true;
@@ -1214,26 +1195,21 @@ impl PointSums {
         let slot = self.rank3.padded_slot();
         let [jx, jy, jz] = slot.j;
         // Whole lanes over the padded rows (the padding's `J` is zero, in
-        // the slot and in `given`): `A·J` as `sym_mul` forms it, then `G`
+        // the slot and in `rows`): `A·J` as `sym_mul` forms it, then `G`
         // and `Jᵀ A p̃`. Lanes of arrays, each loaded into a local before
         // it is used, so the loop needs no check of whether the rows
         // overlap.
         let k = self.jap.len() / LANES;
         let [ax, ay, az] = slot.aj;
         let (jx, jy, jz) = (lanes_mut(jx, k), lanes_mut(jy, k), lanes_mut(jz, k));
-        let given = given.map(|r| r.map(|r| &r[..k]));
+        let [rx, ry, rz] = rows.map(|r| &r[..k]);
         let (ax, ay, az) = (lanes_mut(ax, k), lanes_mut(ay, k), lanes_mut(az, k));
         let [gx, gy, gz] = &mut self.g;
         let (gx, gy, gz) = (lanes_mut(gx, k), lanes_mut(gy, k), lanes_mut(gz, k));
         let jap = lanes_mut(&mut self.jap, k);
         for c in 0..k {
-            let (x, y, z) = match given {
-                Some([rx, ry, rz]) => {
-                    (jx[c], jy[c], jz[c]) = (rx[c], ry[c], rz[c]);
-                    (rx[c], ry[c], rz[c])
-                }
-                None => (jx[c], jy[c], jz[c]),
-            };
+            let (x, y, z) = (rx[c], ry[c], rz[c]);
+            (jx[c], jy[c], jz[c]) = (x, y, z);
             let (mut g, mut p) = ([gx[c], gy[c], gz[c]], jap[c]);
             let mut wa = [[0.0; LANES]; 3];
             for l in 0..LANES {
@@ -1391,42 +1367,32 @@ fn chunk(
     let ChunkScratch { sums, jtj } = &mut scratch;
     let mut point = points.start;
     let mut finite = true;
-    if let Some(effects) = effects {
-        // A model beyond geometry is on: each touch's columns extended by
-        // the corrections' (off the hot path of a geometric fit).
-        let mut ext = Vec::with_capacity(kernel.param_count() + effects.columns());
-        kernel.for_each_jacobian(
-            &effects.poses,
-            touches,
-            #[inline(always)]
-            |i, pos, jac| {
-                if i == all[point].touches.end {
-                    sums.finish(&mut part, jtj, need_mean);
-                    point += 1;
-                }
-                finite &= pos.iter().all(|v| v.is_finite());
-                effects.extend(i, pos, jac, &mut ext);
-                sums.add(pos, &weights[i], &ext, free, jtj);
-            },
-        )?;
-    } else {
-        // Inlined into the kernel's loop, so the accumulation is compiled
-        // with the same target features (AVX2 where the CPU has it).
-        kernel.for_each_free_jacobian(
-            data.poses(),
-            touches,
-            free,
-            #[inline(always)]
-            |i, pos, rows| {
-                if i == all[point].touches.end {
-                    sums.finish(&mut part, jtj, need_mean);
-                    point += 1;
-                }
-                finite &= pos.iter().all(|v| v.is_finite());
-                sums.add_rows(pos, &weights[i], rows, jtj);
-            },
-        )?;
-    }
+    // Inlined into the kernel's loop, so the accumulation is compiled with
+    // the same target features (AVX2 where the CPU has it). A model beyond
+    // geometry asks the kernel for the chain's columns its corrections
+    // scale and finishes them in place.
+    let beyond = effects.map(|e| (e, e.free_plan(free, kernel.param_count())));
+    let (poses, chain) = match &beyond {
+        Some((e, plan)) => (&e.poses, &plan.chain[..]),
+        None => (data.poses(), free),
+    };
+    kernel.for_each_free_jacobian(
+        poses,
+        touches,
+        chain,
+        #[inline(always)]
+        |i, pos, mut rows| {
+            if i == all[point].touches.end {
+                sums.finish(&mut part, jtj, need_mean);
+                point += 1;
+            }
+            finite &= pos.iter().all(|v| v.is_finite());
+            if let Some((e, plan)) = &beyond {
+                e.finish_free(plan, i, pos, rows.each_mut().map(|r| &mut **r));
+            }
+            sums.add(pos, &weights[i], rows.each_ref().map(|r| &**r), jtj);
+        },
+    )?;
     run_lanes(ChunkTail {
         sums,
         jtj,

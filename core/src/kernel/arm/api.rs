@@ -445,11 +445,11 @@ impl ArmKernel {
     }
 
     /// [`ArmKernel::for_each_jacobian`] of the columns `free` only (each
-    /// below [`ArmKernel::param_count`], none twice), handed over compacted by
-    /// coordinate ([`FreeRows`]): on the measuring arms' inlined loops, four
-    /// poses' free columns are moved out of the kernel's lanes at once. The
-    /// same values in the same pose order as picking them out of
-    /// [`ArmKernel::for_each_jacobian`]'s columns.
+    /// below [`ArmKernel::param_count`], a column twice if asked), handed
+    /// over compacted by coordinate ([`FreeRows`]): on the measuring arms'
+    /// inlined loops, four poses' free columns are moved out of the
+    /// kernel's lanes at once. The same values in the same pose order as
+    /// picking them out of [`ArmKernel::for_each_jacobian`]'s columns.
     pub(crate) fn for_each_free_jacobian(
         &self,
         poses: &PreparedPoses,
@@ -480,9 +480,7 @@ impl ArmKernel {
         self.for_each_jacobian(poses, range, |i, pos, jac| {
             let (x, rest) = rows.split_at_mut(groups);
             let (y, z) = rest.split_at_mut(groups);
-            gather_free(jac, free, [x, y, z]);
-            let (x, rest) = rows.split_at(groups);
-            let (y, z) = rest.split_at(groups);
+            gather_free(jac, free, [&mut *x, &mut *y, &mut *z]);
             f(i, pos, [x, y, z]);
         })
     }
