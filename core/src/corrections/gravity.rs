@@ -25,8 +25,9 @@ use crate::params::{DhJoint, DhParams, JointKind, JointModel};
 pub(crate) const STANDARD_GRAVITY: f64 = 9.80665;
 
 /// The numbers the torques are computed in: `f64`, one pose, or the
-/// kernel's portable [`Lanes`](crate::kernel::Lanes), four poses side by side — each lane the
-/// same IEEE operations in the same order as one pose, so the same bits.
+/// kernel's lanes ([`Batch`](crate::kernel::Batch)), four poses side by
+/// side — each lane the same IEEE operations in the same order as one
+/// pose, so the same bits.
 pub(crate) trait Num: Scalar + std::ops::Div<Output = Self> {
     /// `v` in every lane.
     #[inline(always)]

@@ -32,8 +32,9 @@ pub(crate) fn to_arrays<L: Batch, const M: usize>(v: &[L; M]) -> [[f64; LANES]; 
     out
 }
 
-/// A lane type the batch loops can run the generated code on.
-pub(crate) trait Batch: Scalar {
+/// A lane type the batch loops can run the generated code on (and the
+/// gravity torques, which divide).
+pub(crate) trait Batch: Scalar + Div<Output = Self> {
     /// Loads `LANES` values (a fixed-size array, so the batch loops do
     /// their bounds checks once per call, not once per load).
     fn load(v: &[f64; LANES]) -> Self;
@@ -94,8 +95,7 @@ macro_rules! lanewise {
 lanewise!(Add, add, +);
 lanewise!(Sub, sub, -);
 lanewise!(Mul, mul, *);
-// (For the gravity torques' four poses; the generated kernel divides
-// nothing.)
+// (For the gravity torques; the generated kernel divides nothing.)
 lanewise!(Div, div, /);
 
 impl Neg for Lanes {
@@ -181,7 +181,7 @@ pub(crate) fn run<O: LaneOp>(op: O) -> O::Output {
 mod avx {
     use super::{Batch, LANES, LaneOp};
     use std::arch::x86_64::*;
-    use std::ops::{Add, Mul, Neg, Sub};
+    use std::ops::{Add, Div, Mul, Neg, Sub};
 
     /// Proof that the CPU supports AVX2: made only by [`AvxToken::detect`].
     /// Zero-sized, so carrying it costs nothing.
@@ -287,6 +287,7 @@ mod avx {
     avx_op!(Add, add, _mm256_add_pd);
     avx_op!(Sub, sub, _mm256_sub_pd);
     avx_op!(Mul, mul, _mm256_mul_pd);
+    avx_op!(Div, div, _mm256_div_pd);
 
     impl Neg for Avx {
         type Output = Avx;

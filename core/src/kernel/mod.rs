@@ -47,7 +47,9 @@ pub use generic::Generic;
 /// The token-gated lanes, for batch loops outside the kernel (the plan's
 /// rank-3 updates, the position term's cost), and the portable lanes (the
 /// gravity torques' four poses): the same bits on any lane type.
-pub(crate) use lanes::{Batch, LANES, LaneOp, Lanes, run as run_lanes, to_arrays};
+#[cfg(test)]
+pub(crate) use lanes::Lanes;
+pub(crate) use lanes::{Batch, LANES, LaneOp, run as run_lanes, to_arrays};
 pub(crate) use poses::Post;
 pub use poses::PreparedPoses;
 
