@@ -159,12 +159,17 @@ impl Effects {
             physics.cte_per_k.unwrap_or(0.0),
             physics.drift_mm_per_h.unwrap_or([0.0; 3]),
         );
-        let post = Post {
+        // Only where something acts after the chain: a fit of harmonics or
+        // compliance alone asks for its corrections at every trial point.
+        let moves = fit.thermal || fit.drift || cte != 0.0 || physics.drift_mm_per_h.is_some();
+        let post = moves.then(|| Post {
             scale: elapsed.kelvin.iter().map(|k| 1.0 + cte * k).collect(),
             offset: elapsed.hours.iter().map(|h| drift.map(|v| v * h)).collect(),
-        };
-        let factors = factors(fit, &trig, &flanks, &elapsed, &post.scale);
-        if fit.thermal || fit.drift || cte != 0.0 || physics.drift_mm_per_h.is_some() {
+        });
+        // The expansion's column (fitted: `moves`) divides by the scale.
+        let scale = post.as_ref().map_or(&[][..], |p| &p.scale[..]);
+        let factors = factors(fit, &trig, &flanks, &elapsed, scale, len);
+        if let Some(post) = post {
             poses = poses.with_post(post);
         }
         Ok(Effects {
@@ -724,17 +729,20 @@ fn kinds(fit: &Beyond, arm: &DhParams) -> Vec<Kind> {
         .collect()
 }
 
-/// Per pose (pose-major), the factor of each fitted column ([`kinds`]).
+/// Per pose (pose-major, `len` poses), the factor of each fitted column
+/// ([`kinds`]); `scale`, the expansion's per pose, is read only by its
+/// column.
 fn factors(
     fit: &Beyond,
     trig: &[(&[f64], &[f64])],
     flanks: &Flanks<'_>,
     elapsed: &Elapsed,
     scale: &[f64],
+    len: usize,
 ) -> Vec<f64> {
     let (tau, n) = (flanks.tau, flanks.joints);
     let columns = fit.columns();
-    let (m, len) = (columns.len(), scale.len());
+    let m = columns.len();
     let mut factors = vec![0.0; len * m];
     if m == 0 {
         return factors;
