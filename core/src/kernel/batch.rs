@@ -12,6 +12,10 @@ use crate::params::MAX_JOINTS;
 /// the heap each time was 2–3 % of a 100-touch calibration (callgrind).
 const MAX_PARAMS: usize = 4 * MAX_JOINTS + 3;
 
+/// The most columns [`for_each_lane_free_jacobian`]'s stack tile holds
+/// (a model beyond geometry may ask for a chain column more than once).
+pub(crate) const MAX_FREE: usize = MAX_PARAMS.div_ceil(LANES) * LANES;
+
 /// What [`for_each_lane_jacobian`] calls per pose: its index, position
 /// and parameter Jacobian.
 pub(crate) type JacobianVisitor<'a> = dyn FnMut(usize, &[f64; 3], &[[f64; 3]]) + 'a;
@@ -285,7 +289,8 @@ pub(crate) fn for_each_lane_jacobian<const N: usize, C: Chain<N>, L: Batch>(
 pub(crate) type FreeRows<'a> = [&'a mut [[f64; LANES]]; 3];
 
 /// [`for_each_lane_jacobian`] of the columns `free` only (each below the
-/// chain's column count, a column twice if asked), compacted by coordinate: what a
+/// chain's column count, a column twice if asked, at most [`MAX_FREE`]),
+/// compacted by coordinate: what a
 /// solver's `JᵀAJ` over its free columns reads. Four free columns of four
 /// poses are one 4 × 4 transpose of the kernel's lanes; a pose's whole
 /// Jacobian transposed and then picked column by column cost over twice

@@ -44,11 +44,13 @@ pub use arm::{ArmKernel, KernelKind, SHIPPED_SHAPES};
 pub(crate) use batch::FreeRows;
 pub use batch::Jacobians;
 pub use generic::Generic;
-/// The token-gated lanes, for batch loops outside the kernel (the plan's
-/// rank-3 updates, the position term's cost), and the portable lanes (the
-/// gravity torques' four poses): the same bits on any lane type.
+/// The portable lanes, for tests that run a lane loop on them whatever
+/// the CPU has.
 #[cfg(test)]
 pub(crate) use lanes::Lanes;
+/// The token-gated lanes, for batch loops outside the kernel (the plan's
+/// rank-3 updates, the position term's cost, the gravity torques): the
+/// same bits on any lane type.
 pub(crate) use lanes::{Batch, LANES, LaneOp, run as run_lanes, to_arrays};
 pub(crate) use poses::Post;
 pub use poses::PreparedPoses;

@@ -1368,7 +1368,8 @@ fn chunk(
     let mut point = points.start;
     let mut finite = true;
     // Inlined into the kernel's loop, so the accumulation is compiled with
-    // the same target features (AVX2 where the CPU has it).
+    // the same target features (AVX2 where the CPU has it; a transform
+    // after the chain or a chain not inlined takes the kernel's fallback).
     // (`identity`: an attribute on a closure is accepted as an argument.)
     let mut add = std::convert::identity(
         #[inline(always)]

@@ -7,7 +7,7 @@ use super::{
     ArmKernel, BatchOp, DynChain, EachFreeJacobianInlined, EachJacobianInlined,
     EachJointJacobianInlined, KernelKind, OnUser, Op, Prepared, UserChain, check_len,
 };
-use crate::kernel::batch::{FreeRows, JacobianVisitor, gather_free};
+use crate::kernel::batch::{FreeRows, JacobianVisitor, MAX_FREE, gather_free};
 use crate::kernel::lanes::LANES;
 use crate::kernel::{
     Chain, ChainShape, Jacobians, KernelError, Pose, Post, PreparedParams, PreparedPoses, computes,
@@ -458,7 +458,10 @@ impl ArmKernel {
         mut f: impl FnMut(usize, &[f64; 3], FreeRows<'_>),
     ) -> Result<(), KernelError> {
         self.check_poses(poses, &range)?;
-        let range = if poses.post().is_none() {
+        // More columns than the inlined loop's stack tile holds (a model
+        // beyond geometry asks for one per fitted correction too): the
+        // fallback's rows are sized to them.
+        let range = if poses.post().is_none() && free.len() <= MAX_FREE {
             let op = EachFreeJacobianInlined {
                 poses,
                 range,
@@ -769,26 +772,30 @@ mod tests {
                 .collect();
             let poses = PreparedPoses::new(n, &q).unwrap();
             // Not a whole number of groups of four: the last one padded.
-            let free: Vec<usize> = (0..k.param_count()).filter(|c| c % 3 != 1).rev().collect();
-            assert_ne!(free.len() % 4, 0, "{}", k.shape());
-            let mut want = Vec::new();
-            k.for_each_jacobian(&poses, 2..11, |i, p, jac| {
-                let cols: Vec<[f64; 3]> = free.iter().map(|&c| jac[c]).collect();
-                want.push((i, *p, cols));
-            })
-            .unwrap();
-            let mut got = Vec::new();
-            k.for_each_free_jacobian(&poses, 2..11, &free, |i, p, rows| {
-                let [x, y, z] = rows.map(|r| r.as_flattened());
-                for row in [x, y, z] {
-                    assert_eq!(row.len(), free.len().div_ceil(4) * 4);
-                    assert!(row[free.len()..].iter().all(|v| v.to_bits() == 0));
-                }
-                let cols: Vec<[f64; 3]> = (0..free.len()).map(|u| [x[u], y[u], z[u]]).collect();
-                got.push((i, *p, cols));
-            })
-            .unwrap();
-            assert_eq!(got, want, "{}", k.shape());
+            let some: Vec<usize> = (0..k.param_count()).filter(|c| c % 3 != 1).rev().collect();
+            assert_ne!(some.len() % 4, 0, "{}", k.shape());
+            // Each column asked for twice and more: past the stack tile.
+            let repeated: Vec<usize> = (0..k.param_count()).cycle().take(MAX_FREE + 3).collect();
+            for free in [some, repeated] {
+                let mut want = Vec::new();
+                k.for_each_jacobian(&poses, 2..11, |i, p, jac| {
+                    let cols: Vec<[f64; 3]> = free.iter().map(|&c| jac[c]).collect();
+                    want.push((i, *p, cols));
+                })
+                .unwrap();
+                let mut got = Vec::new();
+                k.for_each_free_jacobian(&poses, 2..11, &free, |i, p, rows| {
+                    let [x, y, z] = rows.map(|r| r.as_flattened());
+                    for row in [x, y, z] {
+                        assert_eq!(row.len(), free.len().div_ceil(4) * 4);
+                        assert!(row[free.len()..].iter().all(|v| v.to_bits() == 0));
+                    }
+                    let cols: Vec<[f64; 3]> = (0..free.len()).map(|u| [x[u], y[u], z[u]]).collect();
+                    got.push((i, *p, cols));
+                })
+                .unwrap();
+                assert_eq!(got, want, "{}", k.shape());
+            }
         }
     }
 }
