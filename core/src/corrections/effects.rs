@@ -33,6 +33,23 @@ enum Kind {
     Axis(usize),
 }
 
+impl Kind {
+    /// Row `r` of this correction's column at factor `f`: `v` is the
+    /// chain column's entry in that row (read by a joint's correction
+    /// only), `pos` the position before the expansion, `offset` the
+    /// drift's origin. [`Effects::extend`] and [`Effects::finish_free`]
+    /// both form their entries here, so they agree to the bit.
+    #[inline(always)]
+    fn entry(self, r: usize, f: f64, v: f64, pos: &[f64; 3], offset: &[f64; 3]) -> f64 {
+        match self {
+            Kind::Joint(_) => f * v,
+            Kind::Expansion if r < 3 => f * (pos[r] - offset[r]),
+            Kind::Axis(a) if r == a => f,
+            Kind::Expansion | Kind::Axis(_) => 0.0,
+        }
+    }
+}
+
 /// Poses under the corrections: the readings the chain sees (with the
 /// expansion and drift after it, `Post`) and, per pose, the factors of
 /// the fitted corrections' Jacobian columns.
@@ -252,17 +269,7 @@ impl Effects {
             let f = factors[k];
             for (r, row) in rows.iter_mut().enumerate() {
                 let v: &mut f64 = &mut row[g][u];
-                *v = match self.kinds[k] {
-                    Kind::Joint(_) => f * *v,
-                    Kind::Expansion => f * (pos[r] - offset[r]),
-                    Kind::Axis(ax) => {
-                        if r == ax {
-                            f
-                        } else {
-                            0.0
-                        }
-                    }
-                };
+                *v = self.kinds[k].entry(r, f, *v, pos, &offset);
             }
         }
     }
@@ -281,13 +288,13 @@ impl Effects {
         let m = self.kinds.len();
         let offset = self.poses.post().map_or([0.0; 3], |p| p.offset[i]);
         for (kind, &f) in self.kinds.iter().zip(&self.factors[i * m..(i + 1) * m]) {
-            out.push(match *kind {
-                Kind::Joint(c) => jac[c].map(|v| f * v),
-                Kind::Expansion => {
-                    std::array::from_fn(|r| if r < 3 { f * (pos[r] - offset[r]) } else { 0.0 })
-                }
-                Kind::Axis(a) => std::array::from_fn(|r| if r == a { f } else { 0.0 }),
-            });
+            let chain = match *kind {
+                Kind::Joint(c) => jac[c],
+                Kind::Expansion | Kind::Axis(_) => [0.0; N],
+            };
+            out.push(std::array::from_fn(|r| {
+                kind.entry(r, f, chain[r], pos, &offset)
+            }));
         }
     }
 }

@@ -305,7 +305,7 @@ pub(crate) fn for_each_lane_free_jacobian<const N: usize, C: Chain<N>, L: Batch>
     free: &[usize],
     mut f: impl FnMut(usize, &[f64; 3], FreeRows<'_>),
 ) {
-    const GROUPS: usize = MAX_PARAMS.div_ceil(LANES);
+    const GROUPS: usize = MAX_FREE / LANES;
     let params = const { room::<N, C>() };
     let groups = free.len().div_ceil(LANES);
     // Per pose, per coordinate, the free columns in groups of four lanes.
