@@ -233,12 +233,18 @@ fn lanes<'a, const K: usize>(
 mod tests {
     use super::{BLOCK, Rank3};
 
-    /// Blocked, the sums are the row-by-row loop's bit for bit, for a
-    /// matrix whose rows are not whole lanes and more observations than a
+    /// Blocked, the sums are the row-by-row loop's bit for bit, for
+    /// matrices whose rows are not whole lanes, narrower and wider than the
+    /// four lane groups a row runs at once, and more observations than a
     /// block.
     #[test]
     fn blocked_sums_are_the_row_by_row_bits() {
-        let p = 7;
+        for p in [1, 7, 8, 21, 27] {
+            blocked_sums_of(p);
+        }
+    }
+
+    fn blocked_sums_of(p: usize) {
         let n = 2 * BLOCK + 3;
         let value = |t: usize, k: usize, c: usize| ((t * 31 + k * 7 + c * 3) as f64 * 0.37).sin();
         let mut rank3 = Rank3::new(p);
