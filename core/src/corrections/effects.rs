@@ -37,8 +37,9 @@ impl Kind {
     /// Row `r` of this correction's column at factor `f`: `v` is the
     /// chain column's entry in that row (read by a joint's correction
     /// only), `pos` the position before the expansion, `offset` the
-    /// drift's origin. [`Effects::extend`] and [`Effects::finish_free`]
-    /// both form their entries here, so they agree to the bit.
+    /// drift's origin. [`Effects::extend`], [`Effects::extend_pose`] and
+    /// [`Effects::finish_free`] all form their entries here, so they agree
+    /// to the bit.
     #[inline(always)]
     fn entry(self, r: usize, f: f64, v: f64, pos: &[f64; 3], offset: &[f64; 3]) -> f64 {
         match self {
