@@ -71,6 +71,9 @@ pub(crate) type EffectsError = String;
 struct Elapsed {
     kelvin: Vec<f64>,
     hours: Vec<f64>,
+    /// Whether an expansion or a drift acts (fitted or stated): the
+    /// position then moves after the chain.
+    moves: bool,
 }
 
 impl Elapsed {
@@ -102,7 +105,11 @@ impl Elapsed {
             }
             _ => vec![0.0; len],
         };
-        Ok(Elapsed { kelvin, hours })
+        Ok(Elapsed {
+            kelvin,
+            hours,
+            moves: thermal || drift,
+        })
     }
 }
 
@@ -179,12 +186,11 @@ impl Effects {
         );
         // Only where something acts after the chain: a fit of harmonics or
         // compliance alone asks for its corrections at every trial point.
-        let moves = fit.thermal || fit.drift || cte != 0.0 || physics.drift_mm_per_h.is_some();
-        let post = moves.then(|| Post {
+        let post = elapsed.moves.then(|| Post {
             scale: elapsed.kelvin.iter().map(|k| 1.0 + cte * k).collect(),
             offset: elapsed.hours.iter().map(|h| drift.map(|v| v * h)).collect(),
         });
-        // The expansion's column (fitted: `moves`) divides by the scale.
+        // The expansion's column (fitted: it moves) divides by the scale.
         let scale = post.as_ref().map_or(&[][..], |p| &p.scale[..]);
         let factors = factors(fit, &trig, &flanks, &elapsed, scale, len);
         if let Some(post) = post {
@@ -264,7 +270,7 @@ impl Effects {
     ) {
         let m = self.kinds.len();
         let factors = &self.factors[i * m..(i + 1) * m];
-        let offset = self.poses.post().map_or([0.0; 3], |p| p.offset[i]);
+        let offset = self.drift_offset(i);
         for &(a, k) in &plan.fixes {
             let (g, u) = (a / LANES, a % LANES);
             let f = factors[k];
@@ -273,6 +279,13 @@ impl Effects {
                 *v = self.kinds[k].entry(r, f, *v, pos, &offset);
             }
         }
+    }
+
+    /// Pose `i`'s drift offset (zero where nothing moves after the chain),
+    /// the origin of its expansion column.
+    #[inline(always)]
+    fn drift_offset(&self, i: usize) -> [f64; 3] {
+        self.poses.post().map_or([0.0; 3], |p| p.offset[i])
     }
 
     /// [`Effects::extend`] of a Jacobian of `N` rows, the position's first.
@@ -287,7 +300,7 @@ impl Effects {
         out.clear();
         out.extend_from_slice(jac);
         let m = self.kinds.len();
-        let offset = self.poses.post().map_or([0.0; 3], |p| p.offset[i]);
+        let offset = self.drift_offset(i);
         for (kind, &f) in self.kinds.iter().zip(&self.factors[i * m..(i + 1) * m]) {
             let chain = match *kind {
                 Kind::Joint(c) => jac[c],
